@@ -1,0 +1,13 @@
+"""Errors a user can fix. The CLI and the console print them as one line, never a traceback."""
+
+
+class UserError(Exception):
+    """Bad input (profile, file, argument): the message names what, where, and the fix."""
+
+
+class ProfileError(UserError):
+    """A profile that does not validate."""
+
+
+class SafetyRefusal(UserError):
+    """The safety gate refused a plan or a relay switch; the message says why."""

@@ -1,0 +1,144 @@
+"""The HapTable plugin contract: every hook a plugin may implement, documented here.
+
+A plugin is a module (or object) with functions decorated by ``@hookimpl`` whose names
+are the hooks below. Every hook takes keyword arguments and a ``register`` callback;
+the plugin calls ``register`` once per thing it provides. Built-in plugins use the same
+hooks and the same manager as third-party ones (installed through the ``haptable``
+entry-point group).
+
+``register`` for the device and content kinds (cameras, classifiers, effects, audio
+outputs, relay boards, scenes, panels) is::
+
+    register(name: str, factory: Callable[[Profile], object], *,
+             description: str = "", probe: Callable[[Profile], DeviceStatus] | None = None)
+
+``name`` is what a profile's ``driver = "..."`` (or a scene list, or the console) uses to
+pick it. ``factory(profile)`` builds the thing only when it is needed, so a driver's
+hardware library is imported inside the factory, never at module import. ``probe``
+lets ``haptable doctor`` say whether the device is there and what fixes it, without
+opening it.
+
+Every sample and relay switch produced by anything registered here goes through the
+safety gate (``console.safety``); a plugin receives no handle to a driver.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import pluggy
+
+PROJECT = "haptable"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+Register = Callable[..., None]
+
+
+@hookspec
+def haptable_register_cameras(register: Register) -> None:
+    """Register camera drivers.
+
+    The factory returns a ``console.types.Camera``: ``read(timeout_s) -> Frame | None``
+    (640 x 480 uint8 by default), ``close()``, ``status() -> dict`` with at least
+    ``fps`` and ``dropped``. Selected by ``[camera] driver`` in the profile.
+    """
+
+
+@hookspec
+def haptable_register_classifiers(register: Register) -> None:
+    """Register gesture classifiers.
+
+    The factory returns an object with ``classify(frames: list[Frame]) -> Gesture | None``
+    and ``names: tuple[str, ...]`` (the gestures it knows). Selected by
+    ``[gestures] classifier`` in the profile.
+    """
+
+
+@hookspec
+def haptable_register_effects(register: Register) -> None:
+    """Register effect renderers (vibrotactile, electrostatic ...).
+
+    The factory returns an object with ``render(**request) -> OutputPlan`` (a finite
+    stimulus) and optionally ``stream(**request) -> StreamSource`` (a live one). Plans
+    are in volts at the actuator; the safety gate refuses any plan out of limits.
+    """
+
+
+@hookspec
+def haptable_register_audio_outputs(register: Register) -> None:
+    """Register audio output drivers (left channel: piezo amplifier, right: screen).
+
+    The factory returns a ``console.types.AudioOutput``: ``start(source)`` pulls blocks
+    from ``source.fill(out)`` (the safety gate) until ``stop()``; ``status()`` reports
+    ``latency_s`` and ``underruns``. Selected by ``[audio] driver``.
+    """
+
+
+@hookspec
+def haptable_register_relay_boards(register: Register) -> None:
+    """Register relay board drivers.
+
+    The factory returns a ``console.types.RelayBoard``: ``channels``, ``set(channel,
+    closed)``, ``states()``, ``close()``, ``status()``. Only the safety gate calls
+    ``set``, and only while both output channels are silent. Selected by
+    ``[relays] driver``.
+    """
+
+
+@hookspec
+def haptable_register_scenes(register: Register) -> None:
+    """Register projected scenes.
+
+    The factory returns a scene with ``needs`` (what the runtime must prepare: e.g.
+    ``{"tables": [...points], "flow_regions": [...], "knob": True, "contacts": True}``),
+    ``update(event: dict) -> None`` and ``state() -> dict`` (JSON the projector draws).
+    """
+
+
+@hookspec
+def haptable_register_panels(register: Register) -> None:
+    """Register console panels (extra Textual screens).
+
+    The factory takes the running app instead of a profile and returns a Textual
+    ``Screen``; the console lists it in its command palette.
+    """
+
+
+@hookspec
+def haptable_register_commands(register: Register) -> None:
+    """Register ``haptable`` sub-commands.
+
+    ``register(name, configure, run, *, help="")``: ``configure(parser)`` adds the
+    arguments to an ``argparse.ArgumentParser``; ``run(args, ctx) -> int`` does the work
+    (``ctx`` gives the loaded profile and plugin manager) and returns the exit status.
+    """
+
+
+@hookspec
+def haptable_register_benchmarks(register: Register) -> None:
+    """Register ``haptable bench NAME`` benchmarks.
+
+    ``register(name, run, *, help="")``: ``run(ctx, quick: bool) -> dict`` returns the
+    measured numbers (medians, p99, errors, machine); ``--json`` prints that dict.
+    """
+
+
+def documented_hooks() -> dict[str, Any]:
+    """Every hook of the contract with its docstring (used by docs and tests)."""
+    return {
+        name: fn.__doc__
+        for name, fn in globals().items()
+        if name.startswith("haptable_") and callable(fn)
+    }
+
+
+@hookspec
+def haptable_profile_sections(register: Register) -> None:
+    """Declare the profile sections a plugin reads, so profiles are validated.
+
+    ``register(section: str, fields: dict[str, console.schema.Field], *,
+    per_item: bool = False, help: str = "")``. With ``per_item`` the section holds named
+    sub-tables (``[patches.PA]``) that each have ``fields``. A key no plugin declares is
+    an error naming the file and the closest known key.
+    """

@@ -1,0 +1,199 @@
+"""Values that cross plugin boundaries: plain frozen dataclasses and numpy arrays.
+
+Units are in the names: ``_mm`` table millimetres from the glass corner (x along the
+long edge, y along the short edge), ``_px`` camera pixels, ``_s`` seconds on the
+``time.monotonic()`` clock, ``_v`` volts at the actuator, ``_hz`` hertz.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+#: Names of the piezo excitations. ``PALL`` means the four patches in parallel.
+PATCHES: tuple[str, ...] = ("PA", "PB", "PC", "PD")
+EXCITATIONS: tuple[str, ...] = (*PATCHES, "PALL")
+
+
+def patches_of(excitation: str) -> frozenset[str]:
+    """The patches whose relays close for an excitation name (``PALL`` -> all four)."""
+    if excitation == "PALL":
+        return frozenset(PATCHES)
+    if excitation in PATCHES:
+        return frozenset({excitation})
+    raise ValueError(f"unknown excitation {excitation!r}: use one of {', '.join(EXCITATIONS)}")
+
+
+# --------------------------------------------------------------------------- camera
+@dataclass(frozen=True)
+class Frame:
+    """One camera image. ``stamps_s`` collects the time each pipeline stage finished."""
+
+    image: np.ndarray  # (H, W) uint8, rear-DI infrared
+    seq: int
+    t_capture_s: float
+    source: str = ""
+    stamps_s: dict[str, float] = field(default_factory=dict, compare=False)
+
+    def stamp(self, stage: str, t_s: float) -> None:
+        """Record when ``stage`` finished with this frame (the latency monitor reads it)."""
+        self.stamps_s[stage] = t_s
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A touching fingertip or blob."""
+
+    id: int
+    pos_px: tuple[float, float]
+    pos_mm: tuple[float, float] | None = None
+    area_px: float = 0.0
+
+
+@dataclass(frozen=True)
+class Hand:
+    """A segmented hand: its outline, canonical pose and descriptors."""
+
+    contour_px: np.ndarray  # (N, 2) float
+    center_px: tuple[float, float]
+    radius_px: float
+    angle_deg: float  # rotation that brings the hand to the canonical orientation
+    descriptors: np.ndarray  # invariant Fourier descriptor magnitudes
+    finger_count: int
+    contacts: tuple[Contact, ...] = ()
+    center_mm: tuple[float, float] | None = None
+
+
+GestureKind = Literal["static", "dynamic"]
+
+
+@dataclass(frozen=True)
+class Gesture:
+    """A recognised gesture."""
+
+    name: str
+    kind: GestureKind
+    confidence: float
+    t_s: float
+    hand: Hand | None = None
+
+
+# --------------------------------------------------------------------------- outputs
+@dataclass(frozen=True)
+class Segment:
+    """A stretch of output: both channels in volts at the actuator, same length.
+
+    ``patches`` are the piezo patches whose relays are closed while it plays (the
+    piezo channel reaches only those); ``screen`` says whether the screen relay is
+    closed. Relays change only in the silent gap between segments (the safety gate
+    enforces it).
+    """
+
+    piezo_v: np.ndarray  # (n,) float, volts at the patch terminals
+    screen_v: np.ndarray  # (n,) float, volts at the screen electrode
+    patches: frozenset[str] = frozenset()
+    screen: bool = False
+    label: str = ""
+
+    @property
+    def n_samples(self) -> int:
+        return int(len(self.piezo_v))
+
+
+@dataclass(frozen=True)
+class OutputPlan:
+    """Timed segments an effect asks to play, with a silent gap between them."""
+
+    sample_rate_hz: int
+    segments: tuple[Segment, ...]
+    name: str = ""
+    gap_s: float = 0.0  # extra silence between segments beyond the relay guard gap
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def duration_s(self) -> float:
+        return sum(s.n_samples for s in self.segments) / self.sample_rate_hz
+
+
+@dataclass(frozen=True)
+class RelayState:
+    """Which relay channels (1-based) are closed."""
+
+    closed: frozenset[int] = frozenset()
+
+
+@runtime_checkable
+class StreamSource(Protocol):
+    """A live output (e.g. the knob): produces the next block in volts at the actuator.
+
+    ``next_block`` returns ``(piezo_v, screen_v)`` arrays of length ``n`` or ``None``
+    when the stream has finished (after ramping down to zero).
+    """
+
+    patches: frozenset[str]
+    screen: bool
+
+    def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None: ...
+
+    def request_stop(self) -> None: ...
+
+
+# --------------------------------------------------------------------------- drivers
+class BlockSource(Protocol):
+    """What an audio output pulls from: the safety gate. Fills ``out`` (frames, 2),
+    float32 sound-card units in [-1, 1]; column 0 = left (piezo), 1 = right (screen)."""
+
+    def fill(self, out: np.ndarray) -> None: ...
+
+    @property
+    def idle(self) -> bool: ...
+
+
+class AudioOutput(Protocol):
+    """An audio device plugin. It never generates samples itself."""
+
+    sample_rate_hz: int
+    block_size: int
+
+    def start(self, source: BlockSource) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+class RelayBoard(Protocol):
+    """A relay board plugin; channels are 1-based. Only the safety gate calls ``set``."""
+
+    channels: int
+
+    def set(self, channel: int, closed: bool) -> None: ...
+
+    def states(self) -> tuple[bool, ...]: ...
+
+    def close(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+class Camera(Protocol):
+    """A camera plugin: ``read`` returns the next frame or ``None`` if none is ready."""
+
+    def read(self, timeout_s: float = 0.1) -> Frame | None: ...
+
+    def close(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+@dataclass(frozen=True)
+class DeviceStatus:
+    """One line of ``haptable doctor``."""
+
+    kind: str
+    name: str
+    state: Literal["ok", "missing", "error", "simulated"]
+    why: str = ""
+    fix: str = ""
