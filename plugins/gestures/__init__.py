@@ -1,0 +1,1 @@
+"""Gestures plugin: rear-DI vision pipeline, static/dynamic classifiers, touch calibration."""

@@ -1,0 +1,509 @@
+"""Rear-DI vision pipeline: background, subtraction, high-pass, hands, wrist, canonical
+pose, descriptors, finger count and contact points. Pure functions of arrays (numpy +
+OpenCV 5) plus one small stateful background model.
+
+Steps for one frame (paper section 3, Fig. 4):
+
+1. ``check_frame``: 2-D uint8 of the expected size, else a ``UserError``.
+2. ``subtract``: frame minus the background, after matching the global brightness
+   (a sudden illumination change is a gain on the whole frame: the median ratio of
+   frame to background estimates it; the hands cover a minority of the pixels).
+3. ``body_mask``: smoothed difference above ``body_threshold``: hands and forearms,
+   including the dim, blurred parts above the glass.
+4. ``highpass`` (difference minus its blur) above ``contact_threshold``: the sharp bright
+   parts touching the glass -> contact blobs.
+5. per body component: palm centre (maximum of the distance transform), the wrist arc
+   (where the forearm crosses a circle about the palm, or the image border), the angle
+   that turns the wrist to the reference edge (image bottom), the hand rotated about the
+   centre, the wrist and forearm cut off, the smallest enclosing circle, Fourier
+   descriptors of the canonical silhouette and the number of extended fingers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from console.errors import UserError
+from console.types import Contact, Hand
+
+from .descriptors import fourier_descriptors
+
+
+@dataclass(frozen=True)
+class VisionParams:
+    """Pipeline settings (profile section ``[vision]``)."""
+
+    width_px: int = 640
+    height_px: int = 480
+    body_threshold: float = 14.0  # grey levels above background
+    contact_threshold: float = 30.0  # grey levels of the high-pass image
+    highpass_sigma_px: float = 6.0
+    smooth_px: int = 5
+    min_hand_area_px: int = 600
+    min_contact_area_px: int = 3
+    max_contact_area_px: int = 2500
+    max_contact_size_px: int = 45
+    wrist_radius: float = 1.6  # circle about the palm where the forearm is looked for, palm radii
+    wrist_cut: float = 1.15  # canonical silhouette cut this many palm radii below the palm centre
+    finger_radius: float = 1.75  # circle where extended fingers are counted, palm radii
+    finger_width: float = 0.55  # one finger's width, palm radii
+    n_harmonics: int = 12
+    rotation_invariant: bool = True
+    illumination_tolerance: float = 0.15  # |gain - 1| above this flags an illumination change
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.height_px, self.width_px)
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What the pipeline found in one frame."""
+
+    hands: tuple[Hand, ...]
+    contacts: tuple[Contact, ...]  # all contact blobs, hands or not
+    gain: float = 1.0  # frame / background brightness ratio
+    illumination_changed: bool = False
+    masks: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+
+
+# --------------------------------------------------------------------------- input
+def check_frame(image: object, shape: tuple[int, int] | None = (480, 640)) -> np.ndarray:
+    """The frame as a 2-D uint8 array; a ``UserError`` naming what is wrong otherwise."""
+    if not isinstance(image, np.ndarray):
+        raise UserError(
+            f"camera frame: got {type(image).__name__}, not an image array; "
+            "pass a 2-D uint8 numpy array"
+        )
+    if image.ndim == 3 and image.shape[2] == 1:
+        image = image[:, :, 0]
+    if image.ndim != 2:
+        raise UserError(
+            f"camera frame: shape {image.shape} is not a grayscale image; "
+            "convert to 8-bit grayscale (cv2.cvtColor(..., cv2.COLOR_BGR2GRAY))"
+        )
+    if image.dtype != np.uint8:
+        raise UserError(
+            f"camera frame: dtype {image.dtype} is not uint8; "
+            "use 8-bit grayscale frames (scale and convert with np.clip(...).astype(np.uint8))"
+        )
+    if shape is not None and image.shape != tuple(shape):
+        raise UserError(
+            f"camera frame: size {image.shape[1]} x {image.shape[0]} px does not match "
+            f"[vision] width_px x height_px = {shape[1]} x {shape[0]}; "
+            "set the profile to the camera's size or resize the frames"
+        )
+    return image
+
+
+# --------------------------------------------------------------------------- background
+class Background:
+    """Background image: captured on demand (median of frames), then slowly updated by a
+    running average where no hand is seen."""
+
+    def __init__(self, image: np.ndarray | None = None, alpha: float = 0.02) -> None:
+        self.alpha = float(alpha)
+        self.image: np.ndarray | None = None if image is None else image.astype(np.float32)
+
+    def capture(self, frames: list[np.ndarray]) -> None:
+        """Set the background to the per-pixel median of ``frames`` (an empty table)."""
+        if not frames:
+            raise UserError("background capture: no frames; show the empty table for a moment")
+        self.image = np.median(np.stack(frames).astype(np.float32), axis=0)
+
+    def update(self, frame: np.ndarray, foreground: np.ndarray | None = None) -> None:
+        """Blend ``frame`` in with weight ``alpha``, except under ``foreground`` (mask)."""
+        f = frame.astype(np.float32)
+        if self.image is None:
+            self.image = f
+            return
+        if foreground is None:
+            cv2.accumulateWeighted(f, self.image, self.alpha)
+        else:
+            keep = (foreground == 0).astype(np.uint8)
+            cv2.accumulateWeighted(f, self.image, self.alpha, mask=keep)
+
+    def as_uint8(self) -> np.ndarray:
+        if self.image is None:
+            raise UserError("background: none captured yet; capture the empty table first")
+        return np.clip(self.image + 0.5, 0, 255).astype(np.uint8)
+
+
+def brightness_gain(frame: np.ndarray, background: np.ndarray, step: int = 8) -> float:
+    """Global frame / background brightness ratio (median over a pixel grid)."""
+    f = frame[::step, ::step].astype(np.float32)
+    b = background[::step, ::step].astype(np.float32)
+    ok = b > 4
+    if not np.any(ok):
+        return 1.0
+    return float(np.median(f[ok] / b[ok]))
+
+
+def subtract(frame: np.ndarray, background: np.ndarray, gain: float = 1.0) -> np.ndarray:
+    """``frame - gain * background`` clipped at 0, as uint8."""
+    if gain == 1.0 and background.dtype == np.uint8:
+        return cv2.subtract(frame, background)
+    b = np.clip(background.astype(np.float32) * gain + 0.5, 0, 255).astype(np.uint8)
+    return cv2.subtract(frame, b)
+
+
+def highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
+    """Image minus its Gaussian blur, clipped at 0 (uint8). The blur is computed at a
+    quarter of the resolution, which for sigma >= 4 px is indistinguishable and faster."""
+    h, w = diff.shape
+    if sigma_px >= 4:
+        small = cv2.resize(diff, (w // 4, h // 4), interpolation=cv2.INTER_AREA)
+        small = cv2.GaussianBlur(small, (0, 0), sigma_px / 4)
+        blur = cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR)
+    else:
+        blur = cv2.GaussianBlur(diff, (0, 0), sigma_px)
+    return cv2.subtract(diff, blur)
+
+
+def body_mask(diff: np.ndarray, threshold: float, smooth_px: int = 5) -> np.ndarray:
+    """Hands and forearms: the smoothed difference above ``threshold`` (uint8 0/255)."""
+    if smooth_px > 1:
+        diff = cv2.blur(diff, (smooth_px, smooth_px))
+    _, m = cv2.threshold(diff, threshold, 255, cv2.THRESH_BINARY)
+    return m
+
+
+# --------------------------------------------------------------------------- contacts
+def find_contacts(
+    hp: np.ndarray,
+    threshold: float,
+    min_area_px: int = 3,
+    max_area_px: int = 2500,
+    to_mm=None,
+    max_size_px: int = 45,
+) -> list[Contact]:
+    """Bright blobs of the high-pass image: intensity-weighted centroid and area.
+
+    Pixels above ``threshold`` are grouped after a 5 px dilation, so the broken rim
+    that a flat palm leaves in the high-pass image becomes one large blob, rejected by
+    ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
+    """
+    _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
+    ys, xs = np.nonzero(m)
+    if len(xs) == 0:
+        return []
+    md = cv2.dilate(m, _DISK5)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(md, connectivity=8)
+    lab = labels[ys, xs]
+    w = hp[ys, xs].astype(np.float64)
+    area = np.bincount(lab, minlength=n)
+    sw = np.bincount(lab, weights=w, minlength=n)
+    sx = np.bincount(lab, weights=w * xs, minlength=n)
+    sy = np.bincount(lab, weights=w * ys, minlength=n)
+    out: list[Contact] = []
+    for i in range(1, n):
+        if area[i] < min_area_px or area[i] > max_area_px or sw[i] <= 0:
+            continue
+        if max(stats[i, cv2.CC_STAT_WIDTH], stats[i, cv2.CC_STAT_HEIGHT]) > max_size_px:
+            continue
+        out.append(
+            Contact(id=len(out), pos_px=(sx[i] / sw[i], sy[i] / sw[i]), area_px=float(area[i]))
+        )
+    if to_mm is not None and out:
+        mm = np.asarray(to_mm(np.array([c.pos_px for c in out])))
+        out = [
+            Contact(c.id, c.pos_px, (float(q[0]), float(q[1])), c.area_px)
+            for c, q in zip(out, mm, strict=True)
+        ]
+    return out
+
+
+_DISK5 = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
+# --------------------------------------------------------------------------- geometry
+def palm(mask: np.ndarray) -> tuple[tuple[float, float], float]:
+    """Palm centre and radius: the maximum of the distance transform inside ``mask``."""
+    d = cv2.distanceTransform(mask, cv2.DIST_L2, 3)
+    _, r, _, loc = cv2.minMaxLoc(d)
+    return (float(loc[0]), float(loc[1])), float(r)
+
+
+def _runs(on: np.ndarray) -> list[tuple[int, int]]:
+    """Circular runs of True in ``on``: (start index, length)."""
+    n = len(on)
+    if not np.any(on):
+        return []
+    if np.all(on):
+        return [(0, n)]
+    start = int(np.argmin(on))  # rotate so index 0 is off
+    r = np.roll(on, -start)
+    d = np.diff(np.concatenate([[0], r.astype(np.int8), [0]]))
+    s = np.flatnonzero(d == 1)
+    e = np.flatnonzero(d == -1)
+    return [((int(a) + start) % n, int(b - a)) for a, b in zip(s, e, strict=True)]
+
+
+def circle_samples(
+    mask: np.ndarray, center: tuple[float, float], radius: float, n: int = 180
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angles (rad, image axes: x right, y down), on-mask and outside-image flags of ``n``
+    points on a circle."""
+    a = np.arange(n) * (2 * math.pi / n)
+    x = np.rint(center[0] + radius * np.cos(a)).astype(int)
+    y = np.rint(center[1] + radius * np.sin(a)).astype(int)
+    h, w = mask.shape
+    out = (x < 0) | (x >= w) | (y < 0) | (y >= h)
+    on = np.zeros(n, dtype=bool)
+    inside = ~out
+    on[inside] = mask[y[inside], x[inside]] > 0
+    return a, on, out
+
+
+def _ray_reaches_border(
+    mask: np.ndarray, center: tuple[float, float], angle: float, r0: float
+) -> bool:
+    h, w = mask.shape
+    step = 2.0
+    r = r0
+    gaps = 0
+    while True:
+        x = int(round(center[0] + r * math.cos(angle)))
+        y = int(round(center[1] + r * math.sin(angle)))
+        if x < 0 or y < 0 or x >= w or y >= h:
+            return True
+        if mask[y, x] == 0:
+            gaps += 1
+            if gaps > 3:
+                return False
+        else:
+            gaps = 0
+        r += step
+
+
+@dataclass(frozen=True)
+class WristArc:
+    """Where the forearm leaves the hand: arc on a circle about the palm (radians)."""
+
+    start_rad: float
+    width_rad: float
+    found: str  # "forearm", "border", "widest", "fallback"
+
+    @property
+    def mid_rad(self) -> float:
+        return self.start_rad + 0.5 * self.width_rad
+
+
+def wrist_arc(
+    mask: np.ndarray,
+    center: tuple[float, float],
+    palm_radius: float,
+    params: VisionParams,
+    contour: np.ndarray | None = None,
+) -> WristArc:
+    """The arc where the forearm crosses a circle of ``wrist_radius`` palm radii about the
+    palm centre, or where that circle leaves the image (a hand cut by the border).
+
+    Among the runs of the circle lying on the mask or off the image, the forearm is the
+    widest run whose outward ray stays in the mask up to the image border. With no such
+    run, the widest run at least as wide as the palm; with none, the direction opposite
+    the contour point farthest from the palm (fingers point away from the wrist).
+    """
+    r = params.wrist_radius * palm_radius
+    n = 180
+    a, on, out = circle_samples(mask, center, r, n)
+    runs = _runs(on | out)
+    dang = 2 * math.pi / n
+    best: tuple[float, int, int] | None = None
+    for s, length in runs:
+        idx = (s + np.arange(length)) % n
+        mid = a[s] + 0.5 * (length - 1) * dang
+        via_border = bool(np.any(out[idx]))
+        reach = via_border or _ray_reaches_border(mask, center, mid, r)
+        if reach and (best is None or length > best[1]):
+            best = (mid, length, s)
+    if best is not None:
+        _, length, s = best
+        found = "border" if np.any(out[(s + np.arange(length)) % n]) else "forearm"
+        return WristArc(float(a[s]), float(length * dang), found)
+    widest = max(runs, key=lambda t: t[1], default=None)
+    if widest is not None and widest[1] * dang * r >= 2 * palm_radius and widest[1] < n:
+        s, length = widest
+        return WristArc(float(a[s]), float(length * dang), "widest")
+    if contour is not None and len(contour):
+        d = contour - np.asarray(center)
+        far = d[np.argmax(np.hypot(d[:, 0], d[:, 1]))]
+        ang = math.atan2(-far[1], -far[0])
+        return WristArc(ang, 0.0, "fallback")
+    return WristArc(math.pi / 2, 0.0, "fallback")
+
+
+def canonical_angle_deg(wrist_mid_rad: float) -> float:
+    """Counter-clockwise rotation (degrees, as the image is displayed, for
+    ``cv2.getRotationMatrix2D``) that brings the wrist direction to straight down (the
+    reference edge at the image bottom)."""
+    # cv2 positive angle = counter-clockwise on screen = clockwise in (x right, y down) math
+    # a point at image angle phi (y down) moves to phi - angle.
+    deg = math.degrees(wrist_mid_rad) - 90.0
+    return (deg + 180.0) % 360.0 - 180.0
+
+
+def canonical_silhouette(
+    mask: np.ndarray,
+    center: tuple[float, float],
+    palm_radius: float,
+    angle_deg: float,
+    params: VisionParams,
+) -> np.ndarray | None:
+    """The hand rotated about the palm centre so the wrist points down, forearm cut off
+    ``wrist_cut`` palm radii below the centre: its largest outer contour (N, 2) float in
+    a frame whose origin is the palm centre. None if nothing is left."""
+    h, w = mask.shape
+    corners = np.array([[0, 0], [w, 0], [0, h], [w, h]], np.float64) - np.asarray(center)
+    half = int(math.ceil(float(np.hypot(corners[:, 0], corners[:, 1]).max()))) + 2
+    size = 2 * half + 1
+    m = cv2.getRotationMatrix2D((float(center[0]), float(center[1])), angle_deg, 1.0)
+    m[0, 2] += half - center[0]
+    m[1, 2] += half - center[1]
+    rot = cv2.warpAffine(mask, m, (size, size), flags=cv2.INTER_NEAREST)
+    cut = int(round(half + params.wrist_cut * palm_radius))
+    if cut < size:
+        rot[max(cut, 0) :, :] = 0
+    contours, _ = cv2.findContours(rot, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return None
+    c = max(contours, key=cv2.contourArea)
+    return c.reshape(-1, 2).astype(np.float64) - half
+
+
+def count_fingers(silhouette: np.ndarray, palm_radius: float, params: VisionParams) -> int:
+    """Extended fingers of a canonical silhouette (wrist down, palm centre at origin):
+    how wide the silhouette is where it crosses a circle of ``finger_radius`` palm radii,
+    excluding the wrist sector, in finger widths."""
+    if silhouette is None or len(silhouette) < 3 or palm_radius <= 0:
+        return 0
+    r = params.finger_radius * palm_radius
+    half = int(math.ceil(np.abs(silhouette).max())) + 2
+    size = 2 * half + 1
+    m = np.zeros((size, size), np.uint8)
+    cv2.fillPoly(m, [np.rint(silhouette + half).astype(np.int32)], 255)
+    a, on, out = circle_samples(m, (half, half), r, 180)
+    # wrist sector: straight down (+y) +- 60 degrees
+    down = np.abs(((a - math.pi / 2) + math.pi) % (2 * math.pi) - math.pi) < math.radians(60)
+    on &= ~down
+    count = 0
+    dang = 2 * math.pi / 180
+    width = params.finger_width * palm_radius
+    for _, length in _runs(on):
+        chord = length * dang * r
+        if chord < 0.25 * width:
+            continue
+        count += max(1, int(round(chord / width)))
+    return min(count, 5)
+
+
+# --------------------------------------------------------------------------- one frame
+def analyse_hand(
+    contour: np.ndarray,
+    full_mask: np.ndarray,
+    params: VisionParams,
+    contacts: list[Contact] | None = None,
+    to_mm=None,
+) -> Hand | None:
+    """Everything about one hand component (contour from ``cv2.findContours``)."""
+    x0, y0, w, h = cv2.boundingRect(contour)
+    pad = 2
+    H, W = full_mask.shape
+    xa, ya = max(x0 - pad, 0), max(y0 - pad, 0)
+    xb, yb = min(x0 + w + pad, W), min(y0 + h + pad, H)
+    roi = np.zeros((yb - ya, xb - xa), np.uint8)
+    cv2.drawContours(roi, [contour], -1, 255, thickness=cv2.FILLED, offset=(-xa, -ya))
+    (pcx, pcy), pr = palm(roi)
+    if pr < 1.0:
+        return None
+    center = (pcx + xa, pcy + ya)
+    pts = contour.reshape(-1, 2).astype(np.float64)
+    arc = wrist_arc(full_mask, center, pr, params, pts)
+    angle = canonical_angle_deg(arc.mid_rad)
+    roi_center = (pcx, pcy)
+    sil = canonical_silhouette(roi, roi_center, pr, angle, params)
+    if sil is None or len(sil) < 3:
+        return None
+    (ecx, ecy), er = cv2.minEnclosingCircle(sil.astype(np.float32))
+    # enclosing circle centre back in image coordinates (inverse rotation about the palm)
+    t = math.radians(angle)
+    ex = center[0] + ecx * math.cos(t) - ecy * math.sin(t)
+    ey = center[1] + ecx * math.sin(t) + ecy * math.cos(t)
+    desc = fourier_descriptors(
+        sil, params.n_harmonics, rotation_invariant=params.rotation_invariant
+    )
+    fingers = count_fingers(sil, pr, params)
+    mine: tuple[Contact, ...] = ()
+    if contacts:
+        mine = tuple(
+            c
+            for c in contacts
+            if 0 <= int(c.pos_px[1]) < H
+            and 0 <= int(c.pos_px[0]) < W
+            and cv2.pointPolygonTest(contour, (float(c.pos_px[0]), float(c.pos_px[1])), True) >= -3
+        )
+    center_mm = None
+    if to_mm is not None:
+        cm = np.asarray(to_mm(np.array([[ex, ey]])))[0]
+        center_mm = (float(cm[0]), float(cm[1]))
+    return Hand(
+        contour_px=pts,
+        center_px=(float(ex), float(ey)),
+        radius_px=float(er),
+        angle_deg=float(angle),
+        descriptors=desc,
+        finger_count=fingers,
+        contacts=mine,
+        center_mm=center_mm,
+    )
+
+
+def process_frame(
+    image: np.ndarray,
+    background: np.ndarray,
+    params: VisionParams | None = None,
+    *,
+    to_mm=None,
+    keep_masks: bool = False,
+) -> FrameResult:
+    """Run the whole pipeline on one frame against a background image (uint8 or float)."""
+    p = params or VisionParams()
+    img = check_frame(image, p.shape)
+    bg = np.asarray(background)
+    if bg.shape != img.shape:
+        raise UserError(
+            f"background: size {bg.shape[1]} x {bg.shape[0]} px does not match the frame "
+            f"({img.shape[1]} x {img.shape[0]}); capture the background again"
+        )
+    gain = brightness_gain(img, bg)
+    changed = abs(gain - 1.0) > p.illumination_tolerance
+    if abs(gain - 1.0) < 0.02:
+        gain = 1.0
+    if bg.dtype != np.uint8 and gain == 1.0:
+        bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
+    diff = subtract(img, bg, gain)
+    body = body_mask(diff, p.body_threshold, p.smooth_px)
+    hp = highpass(diff, p.highpass_sigma_px)
+    contacts = find_contacts(
+        hp,
+        p.contact_threshold,
+        p.min_contact_area_px,
+        p.max_contact_area_px,
+        to_mm,
+        p.max_contact_size_px,
+    )
+    contours, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    hands = []
+    for c in contours:
+        if cv2.contourArea(c) < p.min_hand_area_px:
+            continue
+        hand = analyse_hand(c, body, p, contacts, to_mm)
+        if hand is not None:
+            hands.append(hand)
+    hands.sort(key=lambda hd: -cv2.contourArea(hd.contour_px.astype(np.float32)))
+    masks = {"diff": diff, "body": body, "highpass": hp} if keep_masks else {}
+    return FrameResult(tuple(hands), tuple(contacts), float(gain), bool(changed), masks)

@@ -1,0 +1,146 @@
+"""Vision pipeline on plain cv2-drawn frames, including the hard cases."""
+
+import math
+
+import numpy as np
+import pytest
+
+from console.errors import UserError
+from plugins.gestures import sketch
+from plugins.gestures.vision import Background, VisionParams, check_frame, process_frame
+
+BG = sketch.background()
+P = VisionParams()
+
+
+def frame(*hands, noise=2.0, seed=0):
+    return sketch.draw(list(hands), BG, noise=noise, rng=np.random.default_rng(seed))
+
+
+def pose(name="open_hand", pos=(320, 240), theta=-90.0, **kw):
+    return sketch.HandPose(pos, theta, name, flat=name in ("closed_hand", "open_hand"), **kw)
+
+
+def angle_diff(a, b):
+    return abs((a - b + 180) % 360 - 180)
+
+
+def test_empty_frame_has_no_hands_and_no_contacts():
+    r = process_frame(frame(), BG, P)
+    assert r.hands == () and r.contacts == ()
+    assert not r.illumination_changed
+
+
+@pytest.mark.parametrize("name,fingers", [("one_finger", 1), ("two_finger", 2), ("open_hand", 5)])
+def test_finger_count_and_contacts(name, fingers):
+    r = process_frame(frame(pose(name)), BG, P)
+    (hand,) = r.hands
+    assert hand.finger_count == fingers
+    if name != "open_hand":
+        assert len(hand.contacts) == fingers
+        tips = sketch.fingertips_px(pose(name))
+        for tip in tips:
+            d = min(math.dist(tip, c.pos_px) for c in hand.contacts)
+            assert d < 2.0
+
+
+@pytest.mark.parametrize("theta", [-90.0, -30.0, 0.0, 45.0, 90.0, 137.0, 180.0])
+def test_canonical_angle_turns_the_wrist_to_the_reference_edge(theta):
+    (hand,) = process_frame(frame(pose("two_finger", theta=theta)), BG, P).hands
+    # fingers at image angle theta -> wrist at theta+180; rotating by angle_deg (ccw on
+    # screen) brings the wrist to straight down (+90 deg image angle)
+    wrist = theta + 180.0
+    assert angle_diff(wrist - hand.angle_deg, 90.0) < 6.0
+
+
+def test_hand_rotated_180_degrees_has_the_same_descriptors():
+    a = process_frame(frame(pose("l_shape", theta=-90.0)), BG, P).hands[0]
+    b = process_frame(frame(pose("l_shape", theta=90.0)), BG, P).hands[0]
+    other = process_frame(frame(pose("open_hand", theta=-90.0)), BG, P).hands[0]
+    assert angle_diff(a.angle_deg, b.angle_deg) == pytest.approx(180.0, abs=4.0)
+    same = np.linalg.norm(a.descriptors - b.descriptors)
+    assert same < 0.3 * np.linalg.norm(a.descriptors - other.descriptors)
+
+
+def test_two_hands_are_two_hands():
+    r = process_frame(
+        frame(pose("one_finger", (170, 240), -90.0), pose("open_hand", (470, 240), -90.0)),
+        BG,
+        P,
+    )
+    assert len(r.hands) == 2
+    xs = sorted(h.center_px[0] for h in r.hands)
+    assert xs[0] < 320 < xs[1]
+    assert sorted(h.finger_count for h in r.hands) == [1, 5]
+
+
+def test_hand_cut_by_the_image_border():
+    # palm near the right border, fingers pointing left: arm and part of palm off image
+    r = process_frame(frame(pose("open_hand", (615, 240), 180.0)), BG, P)
+    (hand,) = r.hands
+    assert angle_diff(0.0 - hand.angle_deg, 90.0) < 15.0  # wrist towards the border
+    assert np.all(np.isfinite(hand.descriptors))
+
+
+def test_fingertip_only_blob_of_a_few_pixels():
+    img = BG.copy()
+    img[200:203, 300:302] = 250  # 6 bright pixels, no hand
+    r = process_frame(img, BG, P)
+    assert r.hands == ()
+    assert len(r.contacts) == 1
+    x, y = r.contacts[0].pos_px
+    assert abs(x - 300.5) < 1 and abs(y - 201) < 1
+
+
+def test_sudden_illumination_change_is_flagged_and_tolerated():
+    f = frame(pose("two_finger"))
+    bright = np.clip(f.astype(np.float32) * 1.5, 0, 255).astype(np.uint8)
+    r0 = process_frame(f, BG, P)
+    r1 = process_frame(bright, BG, P)
+    assert r1.illumination_changed and r1.gain == pytest.approx(1.5, abs=0.05)
+    assert len(r1.hands) == 1 and r1.hands[0].finger_count == r0.hands[0].finger_count
+    assert len(r1.contacts) == len(r0.contacts)
+    # without compensation the whole table would be foreground: check it is not
+    assert r1.hands[0].radius_px < 200
+
+
+def test_background_capture_and_slow_update():
+    rng = np.random.default_rng(1)
+    frames = [np.clip(BG + rng.normal(0, 3, BG.shape), 0, 255).astype(np.uint8) for _ in range(9)]
+    bg = Background(alpha=0.1)
+    bg.capture(frames)
+    assert np.abs(bg.image - BG).mean() < 1.5
+    f = frame(pose("one_finger"))
+    r = process_frame(f, bg.as_uint8(), P, keep_masks=True)
+    before = bg.image.copy()
+    bg.update(f, r.masks["body"])
+    under = r.masks["body"] > 0
+    assert np.array_equal(bg.image[under], before[under])  # the hand is not learned
+    with pytest.raises(UserError, match="empty table"):
+        Background().capture([])
+
+
+@pytest.mark.parametrize(
+    "bad,match",
+    [
+        (np.zeros((480, 640), np.float32), "dtype float32"),
+        (np.zeros((480, 640, 3), np.uint8), "grayscale"),
+        (np.zeros((240, 320), np.uint8), "320 x 240"),
+        ([[0, 1]], "list"),
+    ],
+)
+def test_wrong_frame_is_a_clear_user_error(bad, match):
+    with pytest.raises(UserError, match=match):
+        check_frame(bad, (480, 640))
+    with pytest.raises(UserError):
+        process_frame(bad, BG, P)
+
+
+def test_contacts_in_table_mm_through_a_mapping():
+    def to_mm(px):
+        return np.asarray(px) * 1.2 + 5.0
+
+    r = process_frame(frame(pose("one_finger")), BG, P, to_mm=to_mm)
+    (c,) = r.contacts
+    assert c.pos_mm == pytest.approx((c.pos_px[0] * 1.2 + 5, c.pos_px[1] * 1.2 + 5))
+    assert r.hands[0].center_mm is not None
