@@ -1,0 +1,236 @@
+"""The GL side: draw a scene state (table mm) through the calibration with moderngl.
+
+One program draws coloured triangles in millimetres; the homography is applied in the
+vertex shader as a projective clip-space transform, so keystone corrections stay exact
+(and texture interpolation perspective-correct). Text is one textured quad per string.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from typing import Any
+
+import numpy as np
+
+from plugins.projector.draw import Layer, build_layer, primitives
+from plugins.projector.geometry import Calibration
+from plugins.projector.text import text_bitmap
+
+_HOMOG = """
+uniform mat3 H;        // table mm -> pixels (y down)
+uniform vec2 size_px;
+vec4 to_clip(vec2 mm) {
+    vec3 p = H * vec3(mm, 1.0);
+    return vec4(2.0 * p.x / size_px.x - p.z, p.z - 2.0 * p.y / size_px.y, 0.0, p.z);
+}
+"""
+
+VS_FILL = (
+    "#version 330\n"
+    + _HOMOG
+    + """
+in vec2 in_mm;
+in vec4 in_rgba;
+out vec4 v_rgba;
+void main() { gl_Position = to_clip(in_mm); v_rgba = in_rgba; }
+"""
+)
+FS_FILL = """#version 330
+in vec4 v_rgba; out vec4 f_color;
+void main() { f_color = v_rgba; }
+"""
+VS_TEXT = (
+    "#version 330\n"
+    + _HOMOG
+    + """
+in vec2 in_mm;
+in vec2 in_uv;
+out vec2 v_uv;
+void main() { gl_Position = to_clip(in_mm); v_uv = in_uv; }
+"""
+)
+FS_TEXT = """#version 330
+uniform sampler2D tex; uniform vec4 rgba;
+in vec2 v_uv; out vec4 f_color;
+void main() { f_color = vec4(rgba.rgb, rgba.a * texture(tex, v_uv).r); }
+"""
+
+
+def state_key(state: dict | None) -> str:
+    """Hash of a state's JSON (the tessellation cache key)."""
+    return hashlib.sha1(
+        json.dumps(state, sort_keys=True, separators=(",", ":")).encode()
+    ).hexdigest()
+
+
+class Renderer:
+    """Draws scene states into the bound framebuffer of ``ctx`` (a window or an FBO)."""
+
+    def __init__(self, ctx: Any, size_px: tuple[int, int], calibration: Calibration) -> None:
+        import moderngl
+
+        self.ctx = ctx
+        self.size_px = (int(size_px[0]), int(size_px[1]))
+        self.fill = ctx.program(vertex_shader=VS_FILL, fragment_shader=FS_FILL)
+        self.textp = ctx.program(vertex_shader=VS_TEXT, fragment_shader=FS_TEXT)
+        self._blend = moderngl.BLEND
+        self._textures: dict[tuple[str, int], tuple[Any, float]] = {}
+        self._key: str | None = None
+        self._vao = None
+        self._vbo = None
+        self._n = 0
+        self._text_vaos: list[tuple[Any, Any, Any, tuple]] = []
+        self.layer: Layer | None = None
+        self.set_calibration(calibration)
+
+    def set_calibration(self, cal: Calibration) -> None:
+        self.cal = cal
+        h = cal.h_for(self.size_px)
+        for p in (self.fill, self.textp):
+            p["H"].write(h.T.astype("f4").tobytes())
+            p["size_px"].value = self.size_px
+        self._px_per_mm = 1.0 / cal.mm_per_px() * self.size_px[0] / cal.frame_px[0]
+
+    def set_state(self, state: dict | None) -> bool:
+        """Tessellate ``state`` unless it is the one already drawn; True if it changed."""
+        key = state_key(state)
+        if key == self._key:
+            return False
+        self._key = key
+        self.layer = build_layer(primitives(state))
+        self._upload(self.layer)
+        return True
+
+    def _release_geometry(self) -> None:
+        for obj in (self._vao, self._vbo):
+            if obj is not None:
+                obj.release()
+        self._vao = self._vbo = None
+        for vao, vbo, _, _ in self._text_vaos:
+            vao.release()
+            vbo.release()
+        self._text_vaos = []
+
+    def _texture(self, text: str, px: int):
+        key = (text, px)
+        if key not in self._textures:
+            if len(self._textures) > 512:
+                for tex, _ in self._textures.values():
+                    tex.release()
+                self._textures.clear()
+            bmp = text_bitmap(text, px)
+            tex = self.ctx.texture((bmp.shape[1], bmp.shape[0]), 1, bmp.tobytes(), alignment=1)
+            tex.repeat_x = tex.repeat_y = False
+            self._textures[key] = (tex, bmp.shape[1] / bmp.shape[0])
+        return self._textures[key]
+
+    def _upload(self, layer: Layer) -> None:
+        self._release_geometry()
+        self._n = len(layer.xy_mm)
+        if self._n:
+            data = np.hstack([layer.xy_mm, layer.rgba]).astype("f4")
+            self._vbo = self.ctx.buffer(data.tobytes())
+            self._vao = self.ctx.vertex_array(self.fill, [(self._vbo, "2f 4f", "in_mm", "in_rgba")])
+        for t in layer.texts:
+            px = int(round(t.size_mm * self._px_per_mm * 1.25))
+            tex, aspect = self._texture(t.text, px)
+            h = t.size_mm
+            w = h * aspect
+            x = t.xy_mm[0] - {"l": 0.0, "c": w / 2, "r": w}.get(t.anchor, 0.0)
+            y = t.xy_mm[1] - h / 2
+            quad = np.array(
+                [
+                    [x, y, 0, 0],
+                    [x + w, y, 1, 0],
+                    [x + w, y + h, 1, 1],
+                    [x, y, 0, 0],
+                    [x + w, y + h, 1, 1],
+                    [x, y + h, 0, 1],
+                ],
+                "f4",
+            )
+            vbo = self.ctx.buffer(quad.tobytes())
+            vao = self.ctx.vertex_array(self.textp, [(vbo, "2f 2f", "in_mm", "in_uv")])
+            self._text_vaos.append((vao, vbo, tex, t.rgba))
+
+    def draw(self) -> None:
+        """Clear to black and draw the current state into the bound framebuffer."""
+        ctx = self.ctx
+        ctx.viewport = (0, 0, *self.size_px)
+        ctx.clear(0.0, 0.0, 0.0, 1.0)
+        ctx.enable(self._blend)
+        ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+        if self._vao is not None:
+            self._vao.render()
+        for vao, _, tex, rgba in self._text_vaos:
+            tex.use(0)
+            self.textp["rgba"].value = rgba
+            vao.render()
+
+    def release(self) -> None:
+        self._release_geometry()
+        for tex, _ in self._textures.values():
+            tex.release()
+        self._textures.clear()
+
+
+# --------------------------------------------------------------------------- headless
+def egl_context():
+    """A standalone OpenGL 3.3 context through EGL (Mesa llvmpipe works without a GPU)."""
+    import moderngl
+
+    return moderngl.create_standalone_context(require=330, backend="egl")
+
+
+def egl_available() -> tuple[bool, str]:
+    """Whether a headless EGL context can be made here, and why not."""
+    try:
+        ctx = egl_context()
+    except Exception as e:  # noqa: BLE001 - any failure means "not here"
+        return (
+            False,
+            f"no EGL OpenGL 3.3 context ({type(e).__name__}: {e}); install Mesa EGL (libegl1 libegl-mesa0 libgl1-mesa-dri)",
+        )
+    ctx.release()
+    return True, ""
+
+
+class Offscreen:
+    """A renderer drawing into an offscreen framebuffer of ``size_px``."""
+
+    def __init__(self, size_px: tuple[int, int], calibration: Calibration, ctx: Any = None) -> None:
+        self.ctx = ctx or egl_context()
+        self.size_px = (int(size_px[0]), int(size_px[1]))
+        self.fbo = self.ctx.simple_framebuffer(self.size_px, components=4)
+        self.renderer = Renderer(self.ctx, self.size_px, calibration)
+
+    def render(self, state: dict | None) -> None:
+        self.fbo.use()
+        self.renderer.set_state(state)
+        self.renderer.draw()
+
+    def finish(self) -> None:
+        self.ctx.finish()
+
+    def read_rgb(self) -> np.ndarray:
+        """(H, W, 3) uint8, top row first (as projected)."""
+        raw = self.fbo.read(components=3, alignment=1)
+        img = np.frombuffer(raw, np.uint8).reshape(self.size_px[1], self.size_px[0], 3)
+        return img[::-1].copy()
+
+    def release(self) -> None:
+        self.renderer.release()
+        self.fbo.release()
+
+
+def write_png(path: str, rgb: np.ndarray) -> None:
+    """Write an RGB image as PNG (OpenCV wants BGR)."""
+    import cv2
+
+    from console.errors import UserError
+
+    if not cv2.imwrite(str(path), np.ascontiguousarray(rgb[:, :, ::-1])):
+        raise UserError(
+            f"{path}: cannot write the screenshot; check the folder exists and is writable"
+        )
