@@ -1,0 +1,290 @@
+"""Sound-card output through PortAudio (the ``sounddevice`` package).
+
+Two float32 channels (left: piezo amplifier, right: screen amplifier). The PortAudio
+callback pulls every block from the source (the safety gate) and never raises: an
+exception or a bad sample from the source silences the output for the rest of the
+stream (state ``fault``). A device that disappears ends the stream (state ``lost``).
+``sounddevice`` is imported only when a stream is opened or probed, so machines without
+PortAudio can still run the twin.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from console.types import BlockSource, DeviceStatus
+from plugins.drivers.errors import DeviceError
+
+PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
+
+_open_streams = 0  # streams this process holds open; PortAudio is only rescanned when 0
+_open_lock = threading.Lock()
+
+
+def load_sounddevice() -> Any:
+    """Import ``sounddevice``; a missing PortAudio becomes a DeviceError with the fix."""
+    try:
+        import sounddevice
+    except OSError as exc:  # sounddevice raises OSError when libportaudio is absent
+        raise DeviceError(f"sounddevice: PortAudio not found ({exc}); {PORTAUDIO_FIX}") from None
+    return sounddevice
+
+
+def _label(dev: dict, hostapis: Sequence[dict]) -> str:
+    api = hostapis[dev["hostapi"]]["name"] if dev["hostapi"] < len(hostapis) else "?"
+    return f"{dev['name']} ({api})"
+
+
+def output_devices(devices: Sequence[dict], hostapis: Sequence[dict]) -> list[tuple[int, str]]:
+    """``(index, "name (host API)")`` of every device with at least two output channels."""
+    return [
+        (i, _label(d, hostapis))
+        for i, d in enumerate(devices)
+        if int(d.get("max_output_channels", 0)) >= 2
+    ]
+
+
+def find_output_device(
+    devices: Sequence[dict], hostapis: Sequence[dict], name: str, default_index: int = -1
+) -> int:
+    """Index of the stereo output whose name matches ``name``.
+
+    An exact name (case-insensitive) wins; else a unique substring of "name (host API)".
+    An empty name means the system default output. Raises DeviceError listing the
+    available outputs when nothing or several things match.
+    """
+    outputs = output_devices(devices, hostapis)
+    listing = ", ".join(repr(label) for _, label in outputs) or "none"
+    if not name:
+        if any(i == default_index for i, _ in outputs):
+            return default_index
+        raise DeviceError(
+            f"[sounddevice] device = '': there is no default stereo output; "
+            f"available outputs: {listing}; set [sounddevice] device to one of them"
+        )
+    wanted = name.casefold()
+    exact = [i for i, _ in outputs if str(devices[i]["name"]).casefold() == wanted]
+    if exact:
+        return exact[0]
+    matches = [(i, label) for i, label in outputs if wanted in label.casefold()]
+    if len(matches) == 1:
+        return matches[0][0]
+    if not matches:
+        raise DeviceError(
+            f"[sounddevice] device = {name!r}: no stereo output device matches; "
+            f"available outputs: {listing}; plug in the sound card or set "
+            f"[sounddevice] device to one of them"
+        )
+    several = ", ".join(repr(label) for _, label in matches)
+    raise DeviceError(
+        f"[sounddevice] device = {name!r}: matches several outputs ({several}); "
+        f"use a longer part of the name"
+    )
+
+
+def _rescan(sd: Any) -> None:
+    """Make PortAudio list devices plugged in (or servers started) since it started."""
+    with _open_lock:
+        if _open_streams == 0:
+            sd._terminate()
+            sd._initialize()
+
+
+def locate(sd: Any, name: str) -> tuple[int, str]:
+    """``(index, label)`` of the device named ``name``, rescanning once if not found."""
+
+    def attempt() -> tuple[int, str]:
+        devices = list(sd.query_devices())
+        hostapis = list(sd.query_hostapis())
+        default = sd.default.device[1]
+        idx = find_output_device(devices, hostapis, name, -1 if default is None else int(default))
+        return idx, _label(devices[idx], hostapis)
+
+    try:
+        return attempt()
+    except DeviceError:
+        _rescan(sd)
+        return attempt()
+
+
+class SounddeviceOutput:
+    """A PortAudio output stream fed block by block from the safety gate."""
+
+    def __init__(
+        self,
+        device: str = "",
+        sample_rate_hz: int = 48000,
+        block_size: int = 256,
+        latency_s: float = 0.0,
+        sd: Any = None,
+    ) -> None:
+        self.device = device
+        self.sample_rate_hz = int(sample_rate_hz)
+        self.block_size = int(block_size)
+        self.latency_s = float(latency_s)
+        self._sd = sd
+        self._lock = threading.Lock()
+        self._stream: Any = None
+        self._source: BlockSource | None = None
+        self._silent = True
+        self._stopping = False
+        self._state = "stopped"
+        self._error = ""
+        self._label = ""
+        self._underruns = 0
+        self._blocks = 0
+        self._callback_errors = 0
+
+    # ------------------------------------------------------------------ lifecycle
+    def start(self, source: BlockSource) -> None:
+        """Open the device and start pulling blocks from ``source``."""
+        if self._stream is not None:
+            raise DeviceError(f"audio output {self._label!r} is already started; stop() it first")
+        global _open_streams
+        sd = self._sd or load_sounddevice()
+        index, self._label = locate(sd, self.device)
+        self._source = source
+        self._silent = False
+        self._stopping = False
+        self._error = ""
+        try:
+            stream = sd.OutputStream(
+                samplerate=self.sample_rate_hz,
+                blocksize=self.block_size,
+                device=index,
+                channels=2,
+                dtype="float32",
+                latency=self.latency_s if self.latency_s > 0 else "low",
+                callback=self._callback,
+                finished_callback=self._finished,
+            )
+        except Exception as exc:  # PortAudioError, ValueError for bad settings
+            self._silent = True
+            raise DeviceError(
+                f"audio device {self._label!r}: cannot open at {self.sample_rate_hz} Hz, "
+                f"block {self.block_size}, 2 channels float32 ({exc}); check "
+                f"[audio] sample_rate_hz / block_size match what the device supports"
+            ) from None
+        with _open_lock:
+            _open_streams += 1
+        self._stream = stream
+        try:
+            stream.start()
+        except Exception as exc:
+            self.stop()
+            self._state = "lost"
+            self._error = f"cannot start: {exc}"
+            raise DeviceError(
+                f"audio device {self._label!r}: cannot start the stream ({exc}); "
+                f"check it is plugged in and not used by another program"
+            ) from None
+        self._state = "running"
+
+    def stop(self) -> None:
+        """Silence and close the stream. Safe to call twice, from any thread."""
+        global _open_streams
+        self._silent = True
+        with self._lock:
+            stream, self._stream = self._stream, None
+        if stream is None:
+            return
+        self._stopping = True
+        try:
+            stream.abort(ignore_errors=True)  # drop queued blocks: silent now
+            stream.close(ignore_errors=True)
+        except Exception as exc:  # a vanished device may refuse even this
+            self._error = self._error or f"closing: {exc}"
+        finally:
+            with _open_lock:
+                _open_streams -= 1
+        if self._state in ("running", "fault"):
+            self._state = "stopped" if self._state == "running" else "fault"
+
+    # ------------------------------------------------------------------ callbacks
+    def _callback(self, outdata: np.ndarray, frames: int, time_info: Any, status: Any) -> None:
+        if getattr(status, "output_underflow", False):
+            self._underruns += 1
+        self._blocks += 1
+        if self._silent or self._source is None:
+            outdata.fill(0.0)
+            return
+        try:
+            self._source.fill(outdata)
+            if not np.all(np.isfinite(outdata)) or float(np.max(np.abs(outdata))) > 1.0:
+                raise ValueError("source produced samples outside [-1, 1] or not finite")
+        except Exception as exc:  # never let the audio thread die with signal on the wire
+            outdata.fill(0.0)
+            self._silent = True
+            self._callback_errors += 1
+            self._state = "fault"
+            self._error = f"source failed in the audio callback: {type(exc).__name__}: {exc}"
+
+    def _finished(self) -> None:
+        self._silent = True
+        if not self._stopping:
+            self._state = "lost"
+            self._error = self._error or (
+                f"audio device {self._label!r} stopped by itself (unplugged or its server "
+                f"died); plug it in and restart the outputs"
+            )
+
+    # ------------------------------------------------------------------ status
+    def status(self) -> dict[str, Any]:
+        """State, measured output latency and underrun count."""
+        stream = self._stream
+        latency_s = float("nan")
+        if stream is not None:
+            try:
+                latency_s = float(stream.latency)
+                if self._state == "running" and not stream.active and not self._stopping:
+                    self._finished()
+            except Exception as exc:  # PortAudioError from a vanished device
+                self._state = "lost"
+                self._error = self._error or f"audio device {self._label!r}: {exc}"
+                self._silent = True
+        return {
+            "driver": "sounddevice",
+            "device": self._label or self.device,
+            "state": self._state,
+            "sample_rate_hz": self.sample_rate_hz,
+            "block_size": self.block_size,
+            "latency_s": latency_s,
+            "underruns": self._underruns,
+            "blocks": self._blocks,
+            "callback_errors": self._callback_errors,
+            "error": self._error,
+        }
+
+
+def from_profile(profile: Any) -> SounddeviceOutput:
+    """Factory registered as audio output ``sounddevice``."""
+    return SounddeviceOutput(
+        device=profile.get("sounddevice.device"),
+        sample_rate_hz=profile.get("audio.sample_rate_hz"),
+        block_size=profile.get("audio.block_size"),
+        latency_s=profile.get("sounddevice.latency_s"),
+    )
+
+
+def probe(profile: Any, sd: Any = None) -> DeviceStatus:
+    """Is PortAudio there and does the profile's device exist? (does not open it)"""
+    name = profile.get("sounddevice.device")
+    try:
+        sd = sd or load_sounddevice()
+    except DeviceError as exc:
+        return DeviceStatus("audio_output", "sounddevice", "missing", str(exc), PORTAUDIO_FIX)
+    try:
+        _, label = locate(sd, name)
+    except DeviceError as exc:
+        return DeviceStatus(
+            "audio_output",
+            "sounddevice",
+            "missing",
+            str(exc),
+            "plug in the sound card, or set [sounddevice] device to one of the listed outputs",
+        )
+    return DeviceStatus("audio_output", "sounddevice", "ok", f"output {label!r}")

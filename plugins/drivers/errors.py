@@ -1,0 +1,13 @@
+"""The error a real device raises when it is missing, busy or vanishes mid-use."""
+
+from __future__ import annotations
+
+from console.errors import UserError
+
+
+class DeviceError(UserError):
+    """A device that cannot be opened or stopped answering; the message names it and the fix.
+
+    A ``UserError`` so the CLI prints it as one line: the fix is always something a person
+    does (plug it in, free it, install a library, change the profile).
+    """

@@ -1,0 +1,237 @@
+"""Fixtures for the real drivers: a JACK dummy server PortAudio can play into, a stub profile.
+
+``jack_server`` starts ``jackd --no-realtime -d dummy -r 48000 -p 256`` under a unique
+server name for the test session (PortAudio then lists a correctly paced output device
+``system``), and tears it down. ``jack_server.capture()`` loops every PortAudio output
+port back into an input stream so a test sees exactly the samples that reached JACK.
+Tests using it are ``@pytest.mark.hardware`` and skip with the reason when jackd,
+the JACK tools or PortAudio are missing.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+JACK_RATE_HZ = 48000
+JACK_PERIOD = 256
+
+
+class StubProfile:
+    """The part of ``console.profile.Profile`` the drivers read: ``get("section.key")``."""
+
+    DEFAULTS: dict[str, Any] = {
+        "audio.sample_rate_hz": 48000,
+        "audio.block_size": 256,
+        "sounddevice.device": "",
+        "sounddevice.latency_s": 0.0,
+        "relays.channels": 8,
+        "yoctopuce.hub_url": "usb",
+        "yoctopuce.serial": "",
+        "usbrelay.serial": "",
+        "camera.device": "0",
+        "camera.width_px": 640,
+        "camera.height_px": 480,
+        "camera.fps": 60.0,
+        "camera.exposure": -1.0,
+        "camera.gain": -1.0,
+    }
+
+    def __init__(self, **overrides: Any) -> None:
+        self.values = dict(self.DEFAULTS)
+        self.values.update({k.replace("__", "."): v for k, v in overrides.items()})
+
+    def get(self, key: str) -> Any:
+        return self.values[key]
+
+
+@pytest.fixture
+def stub_profile() -> type[StubProfile]:
+    """``stub_profile(sounddevice__device="system")`` -> an object with ``get(key)``."""
+    return StubProfile
+
+
+def _jack_tool(tool: str) -> str:
+    path = shutil.which(tool)
+    if path is None:
+        pytest.skip(f"{tool} not found: apt-get install jackd2")
+    return path
+
+
+@dataclass
+class JackCapture:
+    """An input stream on the JACK device fed by the PortAudio output ports (a loopback)."""
+
+    server: JackServer
+    stream: Any = None
+    blocks: list[np.ndarray] = field(default_factory=list)
+
+    def _callback(self, indata: np.ndarray, frames: int, time_info: Any, status: Any) -> None:
+        self.blocks.append(indata.copy())
+
+    def attach(self) -> None:
+        """Connect every PortAudio output port to this capture (call after the output started)."""
+        ports = self.server.ports()
+        ins = sorted(p for p in ports if p.startswith("PortAudio") and ":in_" in p)
+        outs = sorted(p for p in ports if p.startswith("PortAudio") and ":out_" in p)
+        assert len(ins) == 2 and len(outs) == 2, f"unexpected JACK ports: {ports}"
+        for src, dst in zip(("system:capture_1", "system:capture_2"), ins, strict=True):
+            self.server.jack("jack_disconnect", src, dst, check=False)
+        for src, dst in zip(outs, ins, strict=True):
+            self.server.jack("jack_connect", src, dst)
+
+    def samples(self) -> np.ndarray:
+        """Everything captured so far, (n, 2) float32."""
+        blocks = list(self.blocks)
+        return np.concatenate(blocks) if blocks else np.zeros((0, 2), np.float32)
+
+    def close(self) -> None:
+        if self.stream is not None:
+            self.stream.abort(ignore_errors=True)
+            self.stream.close(ignore_errors=True)
+            self.stream = None
+
+
+@dataclass
+class JackServer:
+    """A running ``jackd`` dummy server and the PortAudio device that reaches it."""
+
+    name: str
+    process: subprocess.Popen
+    log_path: Path
+    device: str = "system"  # the PortAudio output device name to put in a profile
+    sample_rate_hz: int = JACK_RATE_HZ
+    block_size: int = JACK_PERIOD
+
+    def jack(self, tool: str, *args: str, check: bool = True) -> str:
+        """Run a JACK command-line tool against this server; returns its stdout."""
+        done = subprocess.run(
+            [_jack_tool(tool), "-s", self.name, *args],
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
+        if check and done.returncode != 0:
+            raise AssertionError(f"{tool} {' '.join(args)} failed: {done.stderr.strip()}")
+        return done.stdout
+
+    def ports(self) -> list[str]:
+        return [p.strip() for p in self.jack("jack_lsp").splitlines() if p.strip()]
+
+    def capture(self) -> JackCapture:
+        """Open an input stream for a loopback of the PortAudio outputs (see ``attach``)."""
+        import sounddevice as sd
+
+        cap = JackCapture(self)
+        cap.stream = sd.InputStream(
+            device=self.device,
+            samplerate=self.sample_rate_hz,
+            blocksize=self.block_size,
+            channels=2,
+            dtype="float32",
+            callback=cap._callback,
+        )
+        cap.stream.start()
+        return cap
+
+    def log(self) -> str:
+        return self.log_path.read_text(errors="replace")
+
+
+def _portaudio() -> Any:
+    try:
+        import sounddevice as sd
+    except OSError as exc:
+        pytest.skip(f"PortAudio missing ({exc}): apt-get install libportaudio2")
+    return sd
+
+
+def _jack_output_present(sd: Any) -> bool:
+    """Rescan PortAudio; True once its JACK host API lists a stereo output."""
+    sd._terminate()
+    sd._initialize()
+    apis = sd.query_hostapis()
+    return any(
+        "JACK" in apis[d["hostapi"]]["name"] and d["max_output_channels"] >= 2
+        for d in sd.query_devices()
+    )
+
+
+def _server_up(name: str) -> bool:
+    done = subprocess.run(
+        [_jack_tool("jack_lsp"), "-s", name], capture_output=True, text=True, timeout=10
+    )
+    return done.returncode == 0 and "system:playback_1" in done.stdout
+
+
+@pytest.fixture(scope="session")
+def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer]:
+    """A ``jackd`` dummy server at 48 kHz / 256 frames for the session (see module doc)."""
+    jackd = shutil.which("jackd")
+    if jackd is None:
+        pytest.skip("jackd not found: apt-get install jackd2")
+    sd = _portaudio()
+    name = f"haptable-test-{os.getpid()}"
+    saved = {k: os.environ.get(k) for k in ("JACK_DEFAULT_SERVER", "JACK_NO_START_SERVER")}
+    os.environ["JACK_DEFAULT_SERVER"] = name  # PortAudio's libjack client reads these
+    os.environ["JACK_NO_START_SERVER"] = "1"
+    log_path = tmp_path_factory.mktemp("jack") / "jackd.log"
+    with open(log_path, "wb") as log:
+        proc = subprocess.Popen(
+            [jackd, "-n", name, "--no-realtime", "-d", "dummy"]
+            + ["-r", str(JACK_RATE_HZ), "-p", str(JACK_PERIOD)],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,
+        )
+    server = JackServer(name, proc, log_path)
+    try:
+        deadline = time.monotonic() + 15.0
+        while not _server_up(name):
+            if proc.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"jackd did not come up; its log:\n{server.log()}")
+            time.sleep(0.2)
+        if not _jack_output_present(sd):
+            pytest.skip(
+                "jackd runs but this PortAudio has no JACK host API: use Debian's libportaudio2"
+            )
+        yield server
+    finally:
+        sd._terminate()  # close PortAudio's JACK client before its server goes away
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5)
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+        sd._initialize()
+
+
+def wait_until(predicate: Any, timeout_s: float = 10.0, what: str = "condition") -> None:
+    """Poll ``predicate`` (not a timing assertion: a generous bound on a wait)."""
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(0.01)
+
+
+@pytest.fixture
+def wait() -> Any:
+    """``wait(predicate, timeout_s, what)``: poll until true, fail after the timeout."""
+    return wait_until

@@ -1,0 +1,317 @@
+"""The sounddevice driver against a fake ``sounddevice`` module (no PortAudio needed)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from plugins.drivers import audio_sounddevice as asd
+from plugins.drivers.audio_sounddevice import SounddeviceOutput, find_output_device
+from plugins.drivers.errors import DeviceError
+
+HOSTAPIS = [{"name": "ALSA"}, {"name": "JACK Audio Connection Kit"}]
+DEVICES = [
+    {"name": "HDA Intel PCH: ALC3246 Analog (hw:0,0)", "hostapi": 0, "max_output_channels": 2},
+    {"name": "USB Audio CODEC: Audio (hw:1,0)", "hostapi": 0, "max_output_channels": 2},
+    {"name": "USB Audio mic", "hostapi": 0, "max_output_channels": 0},
+    {"name": "system", "hostapi": 1, "max_output_channels": 2},
+    {"name": "mono out", "hostapi": 0, "max_output_channels": 1},
+]
+
+
+class FakeStream:
+    def __init__(self, sd: FakeSd, **kw: Any) -> None:
+        self.sd, self.kw = sd, kw
+        self.active = False
+        self.closed = False
+        self.latency = 0.0107
+        sd.streams.append(self)
+
+    def start(self) -> None:
+        if self.sd.fail_start:
+            raise self.sd.PortAudioError("Device unavailable [PaErrorCode -9985]")
+        self.active = True
+
+    def abort(self, ignore_errors: bool = True) -> None:
+        if self.active:
+            self.active = False
+            self.kw["finished_callback"]()
+
+    def close(self, ignore_errors: bool = True) -> None:
+        self.closed = True
+
+    def pump(self, n_blocks: int = 1, underflow: bool = False) -> np.ndarray:
+        """Run the callback like PortAudio would; returns what it wrote."""
+        frames = self.kw["blocksize"]
+        outs = []
+        for _ in range(n_blocks):
+            out = np.full((frames, 2), 7.0, np.float32)  # garbage, must be overwritten
+            self.kw["callback"](out, frames, None, SimpleNamespace(output_underflow=underflow))
+            outs.append(out)
+        return np.concatenate(outs)
+
+    def vanish(self) -> None:
+        """The device is unplugged: PortAudio ends the stream by itself."""
+        self.active = False
+        self.kw["finished_callback"]()
+
+
+class FakeSd:
+    class PortAudioError(Exception):
+        pass
+
+    def __init__(self, devices: list[dict] | None = None) -> None:
+        self.devices = list(DEVICES if devices is None else devices)
+        self.default = SimpleNamespace(device=[-1, 1])
+        self.streams: list[FakeStream] = []
+        self.fail_start = False
+        self.rescans = 0
+        self.plugged_on_rescan: list[dict] = []
+
+    def query_devices(self) -> list[dict]:
+        return self.devices
+
+    def query_hostapis(self) -> list[dict]:
+        return HOSTAPIS
+
+    def _terminate(self) -> None:
+        self.rescans += 1
+
+    def _initialize(self) -> None:
+        self.devices += self.plugged_on_rescan
+        self.plugged_on_rescan = []
+
+    def OutputStream(self, **kw: Any) -> FakeStream:  # noqa: N802 (mirrors sounddevice)
+        if kw["samplerate"] not in (44100, 48000):
+            raise self.PortAudioError("Invalid sample rate [PaErrorCode -9997]")
+        return FakeStream(self, **kw)
+
+
+class RampSource:
+    idle = False
+
+    def __init__(self) -> None:
+        self.n = 0
+
+    def fill(self, out: np.ndarray) -> None:
+        k = np.arange(self.n, self.n + len(out), dtype=np.float32)
+        out[:, 0] = k / 1e4
+        out[:, 1] = -k / 1e4
+        self.n += len(out)
+
+
+# ---------------------------------------------------------------- device by name
+def test_exact_then_unique_substring_then_default():
+    assert find_output_device(DEVICES, HOSTAPIS, "system") == 3
+    assert find_output_device(DEVICES, HOSTAPIS, "SYSTEM") == 3
+    assert find_output_device(DEVICES, HOSTAPIS, "codec") == 1
+    assert find_output_device(DEVICES, HOSTAPIS, "jack") == 3  # host API name matches too
+    assert find_output_device(DEVICES, HOSTAPIS, "", default_index=1) == 1
+
+
+def test_unknown_name_lists_the_stereo_outputs_and_the_fix():
+    with pytest.raises(DeviceError) as err:
+        find_output_device(DEVICES, HOSTAPIS, "Focusrite")
+    msg = str(err.value)
+    assert "[sounddevice] device = 'Focusrite'" in msg
+    assert "'system (JACK Audio Connection Kit)'" in msg
+    assert "'USB Audio CODEC: Audio (hw:1,0) (ALSA)'" in msg
+    assert "mic" not in msg and "mono out" not in msg  # inputs and mono devices are no use
+    assert "plug in" in msg
+
+
+def test_ambiguous_name_names_the_candidates():
+    with pytest.raises(DeviceError, match="several outputs.*HDA Intel.*USB Audio CODEC"):
+        find_output_device(DEVICES, HOSTAPIS, "hw:")
+
+
+def test_mono_device_is_refused_even_by_exact_name():
+    with pytest.raises(DeviceError, match="no stereo output"):
+        find_output_device(DEVICES, HOSTAPIS, "mono out")
+
+
+def test_no_default_output():
+    with pytest.raises(DeviceError, match="no default stereo output"):
+        find_output_device(DEVICES, HOSTAPIS, "", default_index=-1)
+
+
+def test_device_plugged_in_after_start_is_found_by_a_rescan():
+    sd = FakeSd(devices=DEVICES[:2])
+    sd.plugged_on_rescan = [DEVICES[3]]
+    out = SounddeviceOutput("system", 48000, 256, sd=sd)
+    out.start(RampSource())
+    assert sd.rescans == 1
+    assert sd.streams[0].kw["device"] == 2
+    out.stop()
+
+
+# ---------------------------------------------------------------- streaming
+def test_stream_settings_and_callback_pulls_from_the_source():
+    sd = FakeSd()
+    out = SounddeviceOutput("system", 48000, 128, sd=sd)
+    src = RampSource()
+    out.start(src)
+    stream = sd.streams[0]
+    kw = stream.kw
+    assert (kw["device"], kw["samplerate"], kw["blocksize"]) == (3, 48000, 128)
+    assert (kw["channels"], kw["dtype"]) == (2, "float32")
+    played = stream.pump(3)
+    k = np.arange(3 * 128, dtype=np.float32)
+    np.testing.assert_array_equal(played[:, 0], k / 1e4)
+    np.testing.assert_array_equal(played[:, 1], -k / 1e4)
+    st = out.status()
+    assert st["state"] == "running" and st["blocks"] == 3
+    assert st["latency_s"] == pytest.approx(0.0107)
+    assert st["device"] == "system (JACK Audio Connection Kit)"
+    out.stop()
+
+
+def test_underruns_are_counted():
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(RampSource())
+    stream = sd.streams[0]
+    stream.pump(5)
+    stream.pump(2, underflow=True)
+    stream.pump(1)
+    assert out.status()["underruns"] == 2
+    out.stop()
+
+
+def test_exception_in_source_gives_silence_for_the_rest_of_the_stream():
+    class Bad(RampSource):
+        def fill(self, out: np.ndarray) -> None:
+            super().fill(out)
+            if self.n > 256:
+                out[:] = 0.3  # half-written garbage, then it dies
+                raise RuntimeError("effect crashed")
+
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    src = Bad()
+    out.start(src)
+    stream = sd.streams[0]
+    first = stream.pump(1)
+    assert np.any(first != 0)
+    rest = stream.pump(10)  # the callback itself never raises
+    assert np.all(rest == 0)
+    assert src.n == 512  # the failed source is not called again
+    st = out.status()
+    assert st["state"] == "fault" and st["callback_errors"] == 1
+    assert "effect crashed" in st["error"]
+    out.stop()
+    assert out.status()["state"] == "fault"
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1.5, -1.01])
+def test_out_of_range_or_non_finite_block_is_silenced(bad):
+    class Wild(RampSource):
+        def fill(self, out: np.ndarray) -> None:
+            super().fill(out)
+            out[17, 1] = bad
+
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(Wild())
+    played = sd.streams[0].pump(2)
+    assert np.all(played == 0)
+    assert out.status()["state"] == "fault"
+    out.stop()
+
+
+def test_stop_is_idempotent_and_silences_before_closing():
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(RampSource())
+    stream = sd.streams[0]
+    out.stop()
+    assert stream.closed and not stream.active
+    assert np.all(stream.pump(2) == 0)  # a late callback after stop writes zeros
+    out.stop()
+    out.stop()
+    st = out.status()
+    assert st["state"] == "stopped" and st["error"] == ""
+    SounddeviceOutput("system", sd=sd).stop()  # never started: fine too
+
+
+def test_restart_after_stop_opens_a_new_stream():
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(RampSource())
+    with pytest.raises(DeviceError, match="already started"):
+        out.start(RampSource())
+    out.stop()
+    out.start(RampSource())
+    assert len(sd.streams) == 2 and out.status()["state"] == "running"
+    out.stop()
+
+
+def test_vanished_device_is_reported_and_silenced():
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(RampSource())
+    stream = sd.streams[0]
+    stream.pump(2)
+    stream.vanish()
+    st = out.status()
+    assert st["state"] == "lost"
+    assert "unplugged" in st["error"]
+    assert np.all(stream.pump(1) == 0)
+    out.stop()
+    assert out.status()["state"] == "lost"
+
+
+def test_device_that_cannot_start_gives_a_clear_error():
+    sd = FakeSd()
+    sd.fail_start = True
+    out = SounddeviceOutput("system", sd=sd)
+    with pytest.raises(DeviceError, match="cannot start the stream.*Device unavailable"):
+        out.start(RampSource())
+    assert out.status()["state"] == "lost"
+    assert sd.streams[0].closed
+    assert asd._open_streams == 0
+
+
+def test_unsupported_sample_rate_names_the_profile_keys():
+    out = SounddeviceOutput("system", sample_rate_hz=12345, sd=FakeSd())
+    with pytest.raises(DeviceError, match=r"12345 Hz.*\[audio\] sample_rate_hz"):
+        out.start(RampSource())
+
+
+# ---------------------------------------------------------------- factory and probe
+def test_factory_reads_the_profile(stub_profile):
+    p = stub_profile(
+        sounddevice__device="USB Audio CODEC",
+        audio__sample_rate_hz=44100,
+        audio__block_size=512,
+        sounddevice__latency_s=0.02,
+    )
+    out = asd.from_profile(p)
+    assert (out.device, out.sample_rate_hz, out.block_size, out.latency_s) == (
+        "USB Audio CODEC",
+        44100,
+        512,
+        0.02,
+    )
+
+
+def test_probe_ok_and_missing(stub_profile):
+    ok = asd.probe(stub_profile(sounddevice__device="codec"), sd=FakeSd())
+    assert ok.state == "ok" and "USB Audio CODEC" in ok.why
+    gone = asd.probe(stub_profile(sounddevice__device="Focusrite"), sd=FakeSd())
+    assert gone.state == "missing"
+    assert "system (JACK Audio Connection Kit)" in gone.why
+    assert "plug in" in gone.fix
+
+
+def test_probe_without_portaudio_says_what_to_install(stub_profile, monkeypatch):
+    def no_portaudio() -> Any:
+        raise DeviceError("sounddevice: PortAudio not found (PortAudio library not found)")
+
+    monkeypatch.setattr(asd, "load_sounddevice", no_portaudio)
+    st = asd.probe(stub_profile())
+    assert st.state == "missing"
+    assert st.fix == "install PortAudio: apt-get install libportaudio2"
