@@ -63,8 +63,8 @@ def find_output_device(
         if any(i == default_index for i, _ in outputs):
             return default_index
         raise DeviceError(
-            f"[sounddevice] device = '': there is no default stereo output; "
-            f"available outputs: {listing}; set [sounddevice] device to one of them"
+            f"[audio] device = '': there is no default stereo output; "
+            f"available outputs: {listing}; set [audio] device to one of them"
         )
     wanted = name.casefold()
     exact = [i for i, _ in outputs if str(devices[i]["name"]).casefold() == wanted]
@@ -75,13 +75,13 @@ def find_output_device(
         return matches[0][0]
     if not matches:
         raise DeviceError(
-            f"[sounddevice] device = {name!r}: no stereo output device matches; "
+            f"[audio] device = {name!r}: no stereo output device matches; "
             f"available outputs: {listing}; plug in the sound card or set "
-            f"[sounddevice] device to one of them"
+            f"[audio] device to one of them"
         )
     several = ", ".join(repr(label) for _, label in matches)
     raise DeviceError(
-        f"[sounddevice] device = {name!r}: matches several outputs ({several}); "
+        f"[audio] device = {name!r}: matches several outputs ({several}); "
         f"use a longer part of the name"
     )
 
@@ -263,7 +263,7 @@ class SounddeviceOutput:
 def from_profile(profile: Any) -> SounddeviceOutput:
     """Factory registered as audio output ``sounddevice``."""
     return SounddeviceOutput(
-        device=profile.get("sounddevice.device"),
+        device=profile.get("audio.device"),
         sample_rate_hz=profile.get("audio.sample_rate_hz"),
         block_size=profile.get("audio.block_size"),
         latency_s=profile.get("sounddevice.latency_s"),
@@ -272,7 +272,7 @@ def from_profile(profile: Any) -> SounddeviceOutput:
 
 def probe(profile: Any, sd: Any = None) -> DeviceStatus:
     """Is PortAudio there and does the profile's device exist? (does not open it)"""
-    name = profile.get("sounddevice.device")
+    name = profile.get("audio.device")
     try:
         sd = sd or load_sounddevice()
     except DeviceError as exc:
@@ -285,6 +285,6 @@ def probe(profile: Any, sd: Any = None) -> DeviceStatus:
             "sounddevice",
             "missing",
             str(exc),
-            "plug in the sound card, or set [sounddevice] device to one of the listed outputs",
+            "plug in the sound card, or set [audio] device to one of the listed outputs",
         )
     return DeviceStatus("audio_output", "sounddevice", "ok", f"output {label!r}")

@@ -32,12 +32,11 @@ class StubProfile:
     DEFAULTS: dict[str, Any] = {
         "audio.sample_rate_hz": 48000,
         "audio.block_size": 256,
-        "sounddevice.device": "",
+        "audio.device": "",
         "sounddevice.latency_s": 0.0,
         "relays.channels": 8,
-        "yoctopuce.hub_url": "usb",
-        "yoctopuce.serial": "",
-        "usbrelay.serial": "",
+        "relays.url": "usb",
+        "relays.serial": "",
         "camera.device": "0",
         "camera.width_px": 640,
         "camera.height_px": 480,
@@ -56,7 +55,7 @@ class StubProfile:
 
 @pytest.fixture
 def stub_profile() -> type[StubProfile]:
-    """``stub_profile(sounddevice__device="system")`` -> an object with ``get(key)``."""
+    """``stub_profile(audio__device="system")`` -> an object with ``get(key)``."""
     return StubProfile
 
 

@@ -116,7 +116,7 @@ def test_unknown_name_lists_the_stereo_outputs_and_the_fix():
     with pytest.raises(DeviceError) as err:
         find_output_device(DEVICES, HOSTAPIS, "Focusrite")
     msg = str(err.value)
-    assert "[sounddevice] device = 'Focusrite'" in msg
+    assert "[audio] device = 'Focusrite'" in msg
     assert "'system (JACK Audio Connection Kit)'" in msg
     assert "'USB Audio CODEC: Audio (hw:1,0) (ALSA)'" in msg
     assert "mic" not in msg and "mono out" not in msg  # inputs and mono devices are no use
@@ -284,7 +284,7 @@ def test_unsupported_sample_rate_names_the_profile_keys():
 # ---------------------------------------------------------------- factory and probe
 def test_factory_reads_the_profile(stub_profile):
     p = stub_profile(
-        sounddevice__device="USB Audio CODEC",
+        audio__device="USB Audio CODEC",
         audio__sample_rate_hz=44100,
         audio__block_size=512,
         sounddevice__latency_s=0.02,
@@ -299,9 +299,9 @@ def test_factory_reads_the_profile(stub_profile):
 
 
 def test_probe_ok_and_missing(stub_profile):
-    ok = asd.probe(stub_profile(sounddevice__device="codec"), sd=FakeSd())
+    ok = asd.probe(stub_profile(audio__device="codec"), sd=FakeSd())
     assert ok.state == "ok" and "USB Audio CODEC" in ok.why
-    gone = asd.probe(stub_profile(sounddevice__device="Focusrite"), sd=FakeSd())
+    gone = asd.probe(stub_profile(audio__device="Focusrite"), sd=FakeSd())
     assert gone.state == "missing"
     assert "system (JACK Audio Connection Kit)" in gone.why
     assert "plug in" in gone.fix

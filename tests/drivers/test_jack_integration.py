@@ -52,7 +52,7 @@ class KnownSource:
 def test_known_sequence_reaches_jack_paced_and_bit_exact(jack_server, stub_profile, wait):
     n_blocks = 150  # 0.8 s at 48 kHz / 256
     profile = stub_profile(
-        sounddevice__device=jack_server.device,
+        audio__device=jack_server.device,
         audio__sample_rate_hz=jack_server.sample_rate_hz,
         audio__block_size=jack_server.block_size,
     )
