@@ -24,7 +24,8 @@ safety gate (``console.safety``); a plugin receives no handle to a driver.
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import pluggy
 

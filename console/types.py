@@ -150,6 +150,9 @@ class BlockSource(Protocol):
     @property
     def idle(self) -> bool: ...
 
+    def estop(self, reason: str) -> None:
+        """Drivers call this when the device fails (vanished, stream error)."""
+
 
 class AudioOutput(Protocol):
     """An audio device plugin. It never generates samples itself."""

@@ -1,0 +1,99 @@
+"""The ``haptable`` command. Sub-commands come from plugins (the core's included)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import os
+import sys
+from collections.abc import Iterator
+from functools import cached_property
+
+from console.errors import UserError
+
+
+class Context:
+    """What a command gets: the profile (loaded on first use), plugins, outputs."""
+
+    def __init__(self, profile_arg: str | None, plugins):
+        self.profile_arg = profile_arg
+        self.pm = plugins
+
+    @cached_property
+    def profile(self):
+        from console.profile import load_profile
+
+        return load_profile(self.profile_arg, self.pm)
+
+    @contextlib.contextmanager
+    def outputs(self, fast: bool | None = None) -> Iterator:
+        """The profile's outputs behind the safety gate; silent and open on leaving."""
+        from console.runtime.outputs import open_outputs
+
+        out = open_outputs(self.profile, self.pm, fast=fast)
+        try:
+            yield out
+        finally:
+            out.close()
+
+
+def build_parser(plugins) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="haptable",
+        description="HapTable operator console. Without a command: start the console.",
+    )
+    parser.add_argument(
+        "--profile", "-p", help="profile name or .toml path (default: sim, or $HAPTABLE_PROFILE)"
+    )
+    parser.add_argument("--verbose", "-v", action="store_true")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, cmd in sorted(plugins.commands.items()):
+        p = sub.add_parser(name, help=cmd.help, description=cmd.help)
+        p.add_argument("--profile", "-p", dest="profile_sub", default=None, help=argparse.SUPPRESS)
+        cmd.configure(p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    debug = os.environ.get("HAPTABLE_DEBUG") == "1"
+    try:
+        from console.plugins import load_plugins
+
+        plugins = load_plugins()
+        parser = build_parser(plugins)
+        args = parser.parse_args(argv)
+        logging.basicConfig(
+            level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s"
+        )
+        command = args.command or "console"
+        ctx = Context(getattr(args, "profile_sub", None) or args.profile, plugins)
+        if command == "console" and args.command is None:
+            args = parser.parse_args([*argv, "console"])
+        return int(plugins.commands[command].run(args, ctx) or 0)
+    except UserError as exc:
+        print(f"haptable: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("haptable: interrupted (outputs silenced)", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+    except Exception as exc:
+        if debug:
+            raise
+        print(
+            f"haptable: internal error: {type(exc).__name__}: {exc} "
+            f"(outputs silenced; HAPTABLE_DEBUG=1 shows the traceback; please report it)",
+            file=sys.stderr,
+        )
+        return 3
+    finally:
+        from console.safety import estop_all
+
+        estop_all("command finished")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

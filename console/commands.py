@@ -1,0 +1,264 @@
+"""The core ``haptable`` commands: plugins, doctor, play, estop, bench, console."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import wave
+
+import numpy as np
+
+from console.errors import UserError
+from console.types import DeviceStatus
+
+DEVICE_KINDS = (("audio", "audio_output"), ("relays", "relay_board"), ("camera", "camera"))
+
+
+# ---------------------------------------------------------------------- plugins
+def configure_plugins(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def run_plugins(args, ctx) -> int:
+    plugins = ctx.pm
+    rows = []
+    for kind, regs in sorted(plugins.registrations.items()):
+        for name, reg in sorted(regs.items()):
+            rows.append(
+                {"kind": kind, "name": name, "plugin": reg.plugin, "description": reg.description}
+            )
+    data = {
+        "plugins": plugins.plugin_names(),
+        "provides": rows,
+        "commands": sorted(plugins.commands),
+        "benchmarks": sorted(plugins.benchmarks),
+        "profile_sections": sorted(plugins.sections),
+    }
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    print("plugins: " + ", ".join(data["plugins"]))
+    width = max((len(r["kind"]) for r in rows), default=4)
+    for r in rows:
+        print(f"  {r['kind']:<{width}}  {r['name']:<14} [{r['plugin']}] {r['description']}")
+    print("commands: " + ", ".join(data["commands"]))
+    print("benchmarks: " + (", ".join(data["benchmarks"]) or "none"))
+    return 0
+
+
+# ---------------------------------------------------------------------- doctor
+def diagnose(profile, plugins) -> list[DeviceStatus]:
+    """One status per device the profile uses: ok / simulated / missing / error, with a fix."""
+    out = []
+    for section, kind in DEVICE_KINDS:
+        name = profile.get(f"{section}.driver")
+        reg = plugins.of(kind).get(name)
+        if reg is None:
+            out.append(
+                DeviceStatus(
+                    section,
+                    name,
+                    "error",
+                    "driver not registered",
+                    "install the plugin that provides it, or fix the profile",
+                )
+            )
+            continue
+        if reg.probe is None:
+            out.append(DeviceStatus(section, name, "ok", "no probe: assumed present"))
+            continue
+        try:
+            out.append(reg.probe(profile))
+        except Exception as exc:
+            out.append(
+                DeviceStatus(
+                    section,
+                    name,
+                    "error",
+                    f"probe failed: {exc}",
+                    f"report this to the {reg.plugin} plugin",
+                )
+            )
+    return out
+
+
+def configure_doctor(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true")
+
+
+def run_doctor(args, ctx) -> int:
+    statuses = diagnose(ctx.profile, ctx.pm)
+    bad = [s for s in statuses if s.state in ("missing", "error")]
+    if args.json:
+        print(
+            json.dumps(
+                {
+                    "profile": str(ctx.profile.path),
+                    "devices": [s.__dict__ for s in statuses],
+                    "ok": not bad,
+                },
+                indent=2,
+            )
+        )
+    else:
+        print(f"profile: {ctx.profile.path}")
+        for s in statuses:
+            line = f"  {s.kind:<7} {s.name:<12} {s.state:<9} {s.why}"
+            print(line.rstrip())
+            if s.fix:
+                print(f"  {'':<7} {'':<12} fix: {s.fix}")
+    return 1 if bad else 0
+
+
+# ---------------------------------------------------------------------- play
+def configure_play(p: argparse.ArgumentParser) -> None:
+    p.add_argument("name", nargs="?", help="test stimulus (see --list)")
+    p.add_argument("--list", action="store_true", help="list the test stimuli")
+    p.add_argument("--out", help="also write the plan as a 2-channel WAV (volts / full scale)")
+    p.add_argument("--dry-run", action="store_true", help="check the plan, do not play it")
+    p.add_argument("--fast", action="store_true", help="twin: fast-forward instead of real time")
+
+
+def write_plan_wav(plan, path: str, piezo_card_v: float, screen_card_v: float) -> None:
+    """Write a plan as the sound card would play it (gaps not included), 16-bit stereo."""
+    left = np.concatenate([s.piezo_v for s in plan.segments]) / piezo_card_v
+    right = np.concatenate([s.screen_v for s in plan.segments]) / screen_card_v
+    pcm = (np.clip(np.stack([left, right], 1), -1, 1) * 32767).astype("<i2")
+    with wave.open(path, "wb") as w:
+        w.setnchannels(2)
+        w.setsampwidth(2)
+        w.setframerate(plan.sample_rate_hz)
+        w.writeframes(pcm.tobytes())
+
+
+def play_and_report(
+    ctx, plan, *, fast: bool = False, out: str | None = None, dry_run: bool = False
+) -> int:
+    """Check a plan through the gate, optionally write it, play it, and say what happened."""
+    from console.safety import Limits, check_plan
+
+    limits = Limits.from_profile(ctx.profile)
+    check_plan(plan, limits)
+    if out:
+        write_plan_wav(plan, out, limits.piezo_card_v, limits.screen_card_v)
+        print(f"wrote {out}")
+    if dry_run:
+        print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")
+        return 0
+    with ctx.outputs(fast=fast) as outputs:
+        report = outputs.play(plan)
+        print(f"played {plan.name}: {plan.duration_s:.2f} s in {len(plan.segments)} segment(s)")
+        log = outputs.relay_log()
+        if log is not None:
+            for r in log:
+                state = "closed" if r.closed else "opened"
+                print(
+                    f"  relay {r.channel} {state} at sample {r.clock} "
+                    f"(outputs {r.level_v[0]:.1f} V / {r.level_v[1]:.1f} V)"
+                )
+        del report
+    return 0
+
+
+def run_play(args, ctx) -> int:
+    from console.stimuli import STIMULI, make_stimulus
+
+    if args.list or not args.name:
+        for name, (desc, _) in STIMULI.items():
+            print(f"  {name:<14} {desc}")
+        return 0 if args.list else 2
+    plan = make_stimulus(args.name, int(ctx.profile.get("audio.sample_rate_hz")))
+    return play_and_report(ctx, plan, fast=args.fast, out=args.out, dry_run=args.dry_run)
+
+
+# ---------------------------------------------------------------------- estop
+def configure_estop(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true")
+
+
+def run_estop(args, ctx) -> int:
+    """E-stop a running console (over its control socket) and open the profile's relays."""
+    from console.runtime.control import send_command
+    from console.safety import Limits, SafetyGate
+
+    console_reply = send_command(ctx.profile, "estop")
+    relays = "not opened"
+    try:
+        reg = ctx.pm.get("relay_board", ctx.profile.get("relays.driver"))
+        board = reg.factory(ctx.profile)
+        gate = SafetyGate(Limits.from_profile(ctx.profile), board)
+        gate.estop("haptable estop")
+        board.close()
+        relays = "all open"
+    except Exception as exc:  # the console may hold the board (one process at a time)
+        relays = (
+            f"not reachable here ({exc}); the console opened them"
+            if console_reply
+            else f"not reachable: {exc}"
+        )
+    result = {"console": console_reply or "no console running", "relays": relays}
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"e-stop: console: {result['console']}; relays: {result['relays']}")
+    return 0
+
+
+# ---------------------------------------------------------------------- bench
+def configure_bench(p: argparse.ArgumentParser) -> None:
+    p.add_argument("name", nargs="?", help="benchmark to run (omit to list them)")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--quick", action="store_true", help="fewer repetitions")
+    p.add_argument("--report", help="write a Markdown report (and plots) into this folder")
+
+
+def run_bench(args, ctx) -> int:
+    benches = ctx.pm.benchmarks
+    if not args.name:
+        for name, b in sorted(benches.items()):
+            print(f"  {name:<12} {b.help}")
+        return 0
+    if args.name not in benches:
+        raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
+    run = benches[args.name].run
+    kwargs = {"report_dir": args.report} if args.report else {}
+    result = run(ctx, args.quick, **kwargs)
+    if args.json:
+        print(json.dumps(result, indent=2, default=float))
+    else:
+        _print_nested(result)
+    return 0
+
+
+def _print_nested(d, indent: int = 0) -> None:
+    for k, v in d.items():
+        if isinstance(v, dict):
+            print(" " * indent + f"{k}:")
+            _print_nested(v, indent + 2)
+        else:
+            print(" " * indent + f"{k}: {v}")
+
+
+# ---------------------------------------------------------------------- console
+def configure_console(p: argparse.ArgumentParser) -> None:
+    pass
+
+
+def run_console(args, ctx) -> int:
+    from console.tui.app import run_app
+
+    return run_app(ctx)
+
+
+def register_core(register) -> None:
+    register("plugins", configure_plugins, run_plugins, help="list plugins and what they provide")
+    register("doctor", configure_doctor, run_doctor, help="check each device of the profile")
+    register("play", configure_play, run_play, help="play a named test stimulus through the gate")
+    register("estop", configure_estop, run_estop, help="silence the outputs and open every relay")
+    register("bench", configure_bench, run_bench, help="run a benchmark (timing + accuracy)")
+    register("console", configure_console, run_console, help="the operator console (default)")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("use the `haptable` command")

@@ -1,0 +1,233 @@
+"""The core's own plugin: the profile sections every table has, and the core commands.
+
+Registered on the same manager as every other plugin (name ``core``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from console.errors import ProfileError
+from console.hookspecs import hookimpl
+from console.schema import Field
+from console.types import PATCHES
+
+if TYPE_CHECKING:
+    from console.profile import Profile
+
+SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
+    "profile": (
+        {
+            "title": Field("str", "", help="a line shown in the console header"),
+            "description": Field("str", ""),
+        },
+        False,
+        "what this profile describes",
+    ),
+    "table": (
+        {
+            "width_mm": Field("float", 743.46, min=50, max=5000, help="glass long side (x)"),
+            "height_mm": Field("float", 447.29, min=50, max=5000, help="glass short side (y)"),
+            "thickness_mm": Field("float", 3.18, min=0.1, max=50),
+        },
+        False,
+        "the touch screen glass (3M SCT-3250 by default)",
+    ),
+    "grid": (
+        {
+            "rows": Field("int", 7, min=1, max=100),
+            "columns": Field("int", 12, min=1, max=100),
+            "pitch_mm": Field("float", 60.0, min=1, max=1000),
+            "origin_mm": Field(
+                "floats",
+                [41.73, 43.645],
+                length=2,
+                min=0,
+                help="x, y of grid point 1; points run row by row",
+            ),
+        },
+        False,
+        "the vibration-map measurement grid",
+    ),
+    "patches": (
+        {
+            "center_mm": Field("floats", length=2, help="patch centre on the glass, x, y"),
+            "size_mm": Field(
+                "floats", [61.0, 35.0], length=2, min=1, max=500, help="extent along x, y"
+            ),
+            "relay_channel": Field("int", min=1, max=64, help="relay channel feeding this patch"),
+        },
+        True,
+        "piezo patches PA..PD (PI-876.A12 DuraAct by default)",
+    ),
+    "screen": (
+        {
+            "relay_channel": Field(
+                "int", 5, min=1, max=64, help="relay channel of the screen electrode"
+            )
+        },
+        False,
+        "the screen's conductive layer (electrovibration)",
+    ),
+    "audio": (
+        {
+            "driver": Field("str", "twin", help="audio output driver (see `haptable plugins`)"),
+            "device": Field("str", "", help="device name (substring) for real drivers"),
+            "sample_rate_hz": Field("int", 48000, min=8000, max=192000),
+            "block_size": Field("int", 64, min=16, max=8192, help="frames per callback"),
+            "full_scale_v": Field(
+                "float",
+                2.0,
+                min=0.01,
+                max=20,
+                help="sound-card output volts (peak) at sample value 1.0",
+            ),
+            "paced": Field("bool", True, help="twin: play in real time (false: fast-forward)"),
+        },
+        False,
+        "the two-channel sound card: left = piezo amplifier, right = screen amplifier",
+    ),
+    "amplifiers": (
+        {
+            "piezo_gain": Field("float", 50.0, min=1, max=1000, help="volts out per volt in"),
+            "screen_gain": Field("float", 50.0, min=1, max=1000),
+        },
+        False,
+        "high-voltage amplifiers (PI E413.D2, gain 50)",
+    ),
+    "relays": (
+        {
+            "driver": Field("str", "twin", help="relay board driver (see `haptable plugins`)"),
+            "serial": Field("str", "", help="board serial number; empty: the first found"),
+            "url": Field("str", "usb", help="yoctopuce hub: 'usb' or a VirtualHub URL"),
+            "channels": Field("int", 8, min=1, max=64),
+            "switch_time_ms": Field(
+                "float", 2.0, min=0, max=1000, help="time for a contact to settle after a command"
+            ),
+            "guard_ms": Field(
+                "float", 5.0, min=0, max=1000, help="silence required before and after any switch"
+            ),
+            "rating_vpp": Field("float", 350.0, min=1, max=5000, help="contact rating"),
+        },
+        False,
+        "USB relays that route the piezo amplifier to patches and the screen amplifier",
+    ),
+    "limits": (
+        {
+            "piezo_min_v": Field("float", -100.0, min=-1000, max=0, help="patch minimum volts"),
+            "piezo_max_v": Field("float", 250.0, min=0, max=1000, help="patch maximum volts"),
+            "screen_max_vpp": Field(
+                "float", 200.0, min=0, max=2000, help="screen electrode peak-to-peak volts"
+            ),
+            "ramp_min_ms": Field(
+                "float",
+                5.0,
+                min=0.1,
+                max=1000,
+                help="every output starts and ends with a ramp this long",
+            ),
+            "max_plan_s": Field("float", 60.0, min=0.01, max=3600),
+            "estop_timeout_ms": Field(
+                "float", 50.0, min=1, max=5000, help="longest wait for silence before relays open"
+            ),
+        },
+        False,
+        "safety limits, in volts at the actuator",
+    ),
+    "camera": (
+        {
+            "driver": Field("str", "twin", help="camera driver (see `haptable plugins`)"),
+            "device": Field("str", "0", help="V4L2 index or path for real cameras"),
+            "width_px": Field("int", 640, min=16, max=8192),
+            "height_px": Field("int", 480, min=16, max=8192),
+            "fps": Field("float", 60.0, min=1, max=1000),
+            "exposure": Field("float", -1.0, help="driver exposure; -1 = automatic"),
+            "gain": Field("float", -1.0, help="driver gain; -1 = automatic"),
+            "calibration_file": Field(
+                "path",
+                "",
+                help="touch calibration (pixels -> mm), relative to the profile; empty: none yet",
+            ),
+        },
+        False,
+        "the infrared camera under the glass",
+    ),
+}
+
+
+@hookimpl
+def haptable_profile_sections(register):
+    for name, (fields, per_item, help_) in SECTIONS.items():
+        register(name, fields, per_item=per_item, help=help_)
+
+
+@hookimpl
+def haptable_register_commands(register):
+    from console import commands
+
+    commands.register_core(register)
+
+
+def _fail(profile: Profile, msg: str) -> None:
+    raise ProfileError(f"{profile.path}: {msg}")
+
+
+def check_consistency(profile: Profile) -> None:
+    """Checks across keys: relay wiring, geometry, limits against the relay rating."""
+    channels = profile.get("relays.channels")
+    used: dict[int, str] = {}
+    patches = profile.items("patches")
+    w, h = profile.get("table.width_mm"), profile.get("table.height_mm")
+    for name, p in patches.items():
+        if name not in PATCHES:
+            _fail(profile, f"[patches.{name}] unknown patch; use {', '.join(PATCHES)}")
+        cx, cy = p["center_mm"]
+        if not (0 <= cx <= w and 0 <= cy <= h):
+            _fail(
+                profile,
+                f"[patches.{name}] center_mm = {p['center_mm']}: outside the {w} x {h} mm glass",
+            )
+        used.setdefault(p["relay_channel"], f"patches.{name}")
+        if used[p["relay_channel"]] != f"patches.{name}":
+            _fail(
+                profile,
+                f"[patches.{name}] relay_channel = {p['relay_channel']}: already "
+                f"used by [{used[p['relay_channel']]}]; give each output its own channel",
+            )
+    missing = [n for n in PATCHES if n not in patches]
+    if patches and missing:
+        _fail(profile, f"[patches] missing {', '.join(missing)}: PALL needs all four patches")
+    sc = profile.get("screen.relay_channel")
+    if sc in used:
+        _fail(profile, f"[screen] relay_channel = {sc}: already used by [{used[sc]}]")
+    for ch, who in [*used.items(), (sc, "screen")]:
+        if ch > channels:
+            _fail(
+                profile,
+                f"[{who}] relay_channel = {ch}: the board has {channels} channels "
+                f"([relays] channels)",
+            )
+    rating = profile.get("relays.rating_vpp")
+    lo, hi = profile.get("limits.piezo_min_v"), profile.get("limits.piezo_max_v")
+    if hi - lo > rating:
+        _fail(
+            profile,
+            f"[limits] piezo range {lo}..{hi} V ({hi - lo:g} Vpp) exceeds the relay "
+            f"rating {rating:g} Vpp; narrow the limits",
+        )
+    if profile.get("limits.screen_max_vpp") > rating:
+        _fail(
+            profile,
+            f"[limits] screen_max_vpp = {profile.get('limits.screen_max_vpp')}: "
+            f"exceeds the relay rating {rating:g} Vpp",
+        )
+    gx0, gy0 = profile.get("grid.origin_mm")
+    pitch = profile.get("grid.pitch_mm")
+    gx1 = gx0 + (profile.get("grid.columns") - 1) * pitch
+    gy1 = gy0 + (profile.get("grid.rows") - 1) * pitch
+    if gx1 > w or gy1 > h:
+        _fail(
+            profile,
+            f"[grid] the grid reaches ({gx1:g}, {gy1:g}) mm, beyond the {w} x {h} "
+            f"mm glass; fix origin_mm, pitch_mm, rows or columns",
+        )

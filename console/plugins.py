@@ -1,0 +1,233 @@
+"""Plugin manager: built-in plugins and the ``haptable`` entry-point group, one code path.
+
+Built-ins are registered with ``pm.register`` exactly like third-party plugins found in
+the ``haptable`` entry-point group. ``HAPTABLE_BLOCK_PLUGINS=name,name`` blocks plugins
+by name (a name also blocks its dotted children: ``twin`` blocks ``twin.plate``).
+``HAPTABLE_LOAD_ENTRYPOINTS=0`` keeps installed third-party plugins out (tests do this).
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import importlib.util
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import Any
+
+import pluggy
+
+from console import hookspecs
+from console.errors import UserError
+
+ENTRY_POINT_GROUP = "haptable"
+
+#: Built-in plugins: name -> module. Registered like any third-party plugin.
+BUILTIN_PLUGINS: dict[str, str] = {
+    "twin": "plugins.twin",
+    "twin.plate": "plugins.twin.plate",
+    "twin.camera": "plugins.twin.camera",
+    "vibrotactile": "plugins.vibrotactile",
+    "gestures": "plugins.gestures",
+    "electrostatic": "plugins.electrostatic",
+    "projector": "plugins.projector",
+    "drivers": "plugins.drivers",
+}
+
+#: Registration kinds and the hook that fills each.
+KINDS: dict[str, str] = {
+    "camera": "haptable_register_cameras",
+    "classifier": "haptable_register_classifiers",
+    "effect": "haptable_register_effects",
+    "audio_output": "haptable_register_audio_outputs",
+    "relay_board": "haptable_register_relay_boards",
+    "scene": "haptable_register_scenes",
+    "panel": "haptable_register_panels",
+}
+
+
+@dataclass(frozen=True)
+class Registration:
+    """Something a plugin provides: a factory and how to describe and probe it."""
+
+    kind: str
+    name: str
+    plugin: str
+    factory: Callable[..., Any]
+    description: str = ""
+    probe: Callable[..., Any] | None = None
+
+
+@dataclass(frozen=True)
+class Command:
+    name: str
+    plugin: str
+    configure: Callable[..., None]
+    run: Callable[..., int]
+    help: str = ""
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    name: str
+    plugin: str
+    run: Callable[..., dict]
+    help: str = ""
+
+
+@dataclass
+class Plugins:
+    """The loaded plugin manager and everything its plugins registered."""
+
+    pm: pluggy.PluginManager
+    registrations: dict[str, dict[str, Registration]] = field(default_factory=dict)
+    commands: dict[str, Command] = field(default_factory=dict)
+    benchmarks: dict[str, Benchmark] = field(default_factory=dict)
+    sections: dict[str, tuple[dict, bool, str, str]] = field(default_factory=dict)
+
+    def of(self, kind: str) -> dict[str, Registration]:
+        """Registrations of one kind (``camera``, ``audio_output`` ...) by name."""
+        return self.registrations.get(kind, {})
+
+    def get(self, kind: str, name: str) -> Registration:
+        regs = self.of(kind)
+        if name not in regs:
+            known = ", ".join(sorted(regs)) or "none"
+            raise UserError(f"no {kind.replace('_', ' ')} named {name!r}; available: {known}")
+        return regs[name]
+
+    def plugin_names(self) -> list[str]:
+        return sorted(n for n, _ in self.pm.list_name_plugin() if n)
+
+
+def blocked_names() -> set[str]:
+    raw = os.environ.get("HAPTABLE_BLOCK_PLUGINS", "")
+    return {n.strip() for n in raw.split(",") if n.strip()}
+
+
+def is_blocked(name: str, blocked: set[str]) -> bool:
+    return any(name == b or name.startswith(b + ".") for b in blocked)
+
+
+def _plugin_name(pm: pluggy.PluginManager, impl: Any) -> str:
+    return pm.get_name(impl.plugin) or repr(impl.plugin)
+
+
+def _check_hooks(pm: pluggy.PluginManager) -> None:
+    """Fail at start-up, naming the plugin, when a hook implementation matches no spec."""
+    known = [n for n in dir(hookspecs) if n.startswith("haptable_")]
+    for name in dir(pm.hook):
+        if not name.startswith("haptable_"):
+            continue
+        caller = getattr(pm.hook, name)
+        if caller.spec is None:
+            impls = caller.get_hookimpls()
+            who = ", ".join(sorted({_plugin_name(pm, i) for i in impls}))
+            guess = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+            raise UserError(
+                f"plugin {who!r} implements unknown hook {name!r}{hint}; "
+                f"the hooks are listed in console/hookspecs.py"
+            )
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        raise UserError(f"plugin {exc.plugin!r}: {exc}") from None
+
+
+def _collect(plugins: Plugins) -> None:
+    pm = plugins.pm
+    for kind, hook_name in KINDS.items():
+        hook = getattr(pm.hook, hook_name)
+        regs: dict[str, Registration] = {}
+        for impl in reversed(hook.get_hookimpls()):
+            owner = _plugin_name(pm, impl)
+
+            def register(
+                name: str,
+                factory: Callable[..., Any],
+                *,
+                description: str = "",
+                probe: Callable[..., Any] | None = None,
+                _owner: str = owner,
+                _kind: str = kind,
+            ) -> None:
+                regs[name] = Registration(_kind, name, _owner, factory, description, probe)
+
+            impl.function(register=register)
+        plugins.registrations[kind] = regs
+
+    for impl in reversed(pm.hook.haptable_register_commands.get_hookimpls()):
+        owner = _plugin_name(pm, impl)
+
+        def reg_cmd(name, configure, run, *, help="", _owner=owner):  # noqa: A002
+            plugins.commands[name] = Command(name, _owner, configure, run, help)
+
+        impl.function(register=reg_cmd)
+
+    for impl in reversed(pm.hook.haptable_register_benchmarks.get_hookimpls()):
+        owner = _plugin_name(pm, impl)
+
+        def reg_bench(name, run, *, help="", _owner=owner):  # noqa: A002
+            plugins.benchmarks[name] = Benchmark(name, _owner, run, help)
+
+        impl.function(register=reg_bench)
+
+    for impl in reversed(pm.hook.haptable_profile_sections.get_hookimpls()):
+        owner = _plugin_name(pm, impl)
+
+        def reg_section(section, fields, *, per_item=False, help="", _owner=owner):  # noqa: A002
+            plugins.sections[section] = (fields, per_item, help, _owner)
+
+        impl.function(register=reg_section)
+
+
+def load_plugins(
+    *,
+    builtins: dict[str, str] | None = None,
+    entrypoints: bool | None = None,
+    extra: dict[str, Any] | None = None,
+) -> Plugins:
+    """Build the manager: core hooks, built-in plugins, then entry-point plugins.
+
+    ``extra`` registers plugin objects by name (tests use it to add a plugin).
+    """
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    blocked = blocked_names()
+    for name in blocked:
+        pm.set_blocked(name)
+
+    from console import core_plugin
+
+    pm.register(core_plugin, name="core")
+    for name, module in (BUILTIN_PLUGINS if builtins is None else builtins).items():
+        if is_blocked(name, blocked) or importlib.util.find_spec(module) is None:
+            continue
+        pm.register(importlib.import_module(module), name=name)
+
+    if entrypoints is None:
+        entrypoints = os.environ.get("HAPTABLE_LOAD_ENTRYPOINTS", "1") != "0"
+    if entrypoints:
+        for ep in entry_points(group=ENTRY_POINT_GROUP):
+            if is_blocked(ep.name, blocked) or pm.get_plugin(ep.name) is not None:
+                continue
+            try:
+                plugin = ep.load()
+            except Exception as exc:  # a broken third-party plugin must not hide the rest
+                raise UserError(
+                    f"plugin {ep.name!r} (entry point {ep.value}) failed to import: {exc}; "
+                    f"fix or uninstall it, or block it with HAPTABLE_BLOCK_PLUGINS={ep.name}"
+                ) from None
+            pm.register(plugin, name=ep.name)
+
+    for name, plugin in (extra or {}).items():
+        if not is_blocked(name, blocked):
+            pm.register(plugin, name=name)
+
+    _check_hooks(pm)
+    plugins = Plugins(pm)
+    _collect(plugins)
+    return plugins

@@ -1,0 +1,156 @@
+"""The outputs of a profile behind the safety gate: what commands and the console use.
+
+``open_outputs(profile, plugins)`` builds the profile's audio output and relay board,
+puts the safety gate between them and everything else, and starts the scheduler.
+Nothing outside this module holds a driver.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from console.errors import SafetyRefusal, UserError
+from console.runtime.scheduler import PlayReport, Scheduler
+from console.safety import Limits, SafetyGate, install_emergency_hooks
+from console.types import OutputPlan, StreamSource
+
+log = logging.getLogger("haptable.outputs")
+
+
+class Outputs:
+    """Play plans and streams, switch relays, e-stop. Always through the gate."""
+
+    def __init__(self, profile, plugins, *, fast: bool | None = None):
+        self.profile = profile
+        self.limits = Limits.from_profile(profile)
+        audio_reg = plugins.get("audio_output", profile.get("audio.driver"))
+        relay_reg = plugins.get("relay_board", profile.get("relays.driver"))
+        try:
+            board = relay_reg.factory(profile)
+        except UserError:
+            raise
+        except Exception as exc:
+            raise UserError(
+                f"relay board {relay_reg.name!r} failed to open: {exc}; "
+                f"run `haptable doctor` for the fix"
+            ) from None
+        try:
+            audio = audio_reg.factory(profile)
+        except UserError:
+            board.close()
+            raise
+        except Exception as exc:
+            board.close()
+            raise UserError(
+                f"audio output {audio_reg.name!r} failed to open: {exc}; "
+                f"run `haptable doctor` for the fix"
+            ) from None
+        if fast is not None and hasattr(audio, "paced"):
+            audio.paced = not fast
+        self._audio = audio
+        self._board = board
+        relay_channels = {n: p["relay_channel"] for n, p in profile.items("patches").items()}
+        screen_channel = int(profile.get("screen.relay_channel"))
+        self.gate = SafetyGate(
+            self.limits, board, relay_channels=relay_channels, latency_samples=int(audio.block_size)
+        )
+        self.scheduler = Scheduler(
+            self.gate, relay_channels=relay_channels, screen_channel=screen_channel
+        )
+        install_emergency_hooks()
+        try:
+            audio.start(self.gate)
+        except Exception as exc:
+            self.gate.estop("audio output failed to start")
+            board.close()
+            raise UserError(
+                f"audio output {audio_reg.name!r} failed to start: {exc}; "
+                f"run `haptable doctor` for the fix"
+            ) from None
+        lat = audio.status().get("latency_s") or 0.0
+        self.gate.latency_samples = max(
+            int(audio.block_size), int(round(lat * self.limits.sample_rate_hz))
+        )
+        self._closed = False
+
+    # ------------------------------------------------------------------ playing
+    def play(
+        self, plan: OutputPlan, *, wait: bool = True, timeout_s: float | None = None
+    ) -> PlayReport:
+        """Check and play a plan; with ``wait`` return when it finished (or raise)."""
+        report = self.scheduler.play(plan)
+        if wait:
+            report.wait(timeout_s if timeout_s is not None else 3 * plan.duration_s + 10)
+            if report.error:
+                raise SafetyRefusal(f"{report.name}: {report.error}")
+        return report
+
+    def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
+        return self.scheduler.stream(source, name)
+
+    def set_relays(self, closed: frozenset[int] | set[int], *, wait: bool = True) -> PlayReport:
+        report = self.scheduler.set_relays(frozenset(closed))
+        if wait:
+            report.wait(5.0)
+            if report.error:
+                raise SafetyRefusal(report.error)
+        return report
+
+    def toggle_relay(self, channel: int, *, wait: bool = True) -> PlayReport:
+        closed = set(self.gate.relay_state())
+        closed ^= {channel}
+        return self.set_relays(closed, wait=wait)
+
+    # ------------------------------------------------------------------ safety
+    def estop(self, reason: str = "operator e-stop") -> None:
+        self.gate.estop(reason)
+
+    def reset(self) -> None:
+        self.gate.reset()
+
+    # ------------------------------------------------------------------ twin recordings
+    def recording(self) -> np.ndarray | None:
+        """What the twin amplifiers received, (n, 2) volts; ``None`` on real hardware."""
+        fn = getattr(self._audio, "recording_v", None)
+        return fn() if fn else None
+
+    def relay_log(self) -> list | None:
+        return getattr(self._board, "log", None)
+
+    def status(self) -> dict[str, Any]:
+        return {
+            "gate": self.gate.status(),
+            "audio": self._audio.status(),
+            "relays": self._board.status(),
+            "busy": self.scheduler.busy,
+        }
+
+    def close(self) -> None:
+        """Silence, open every relay, stop the audio device. Safe to call twice."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.gate.estop("outputs closed", quiet=True)
+        finally:
+            try:
+                self._audio.stop()
+            finally:
+                self.scheduler.close()
+                try:
+                    self._board.close()
+                except Exception:
+                    log.exception("relay board close failed")
+
+    def __enter__(self) -> Outputs:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def open_outputs(profile, plugins, *, fast: bool | None = None) -> Outputs:
+    return Outputs(profile, plugins, fast=fast)

@@ -1,0 +1,325 @@
+"""Output scheduler: plays plans and live streams sample-accurately through the gate.
+
+The audio driver pulls blocks from the gate, the gate pulls them from here. A plan
+becomes steps: set relays (in silence) -> play the segment's samples -> gap -> ... ->
+open the relays. Relay switches run on a worker thread (USB is slow) while the audio
+path emits silence; the gate itself refuses any switch that is not in silence.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from console.errors import SafetyRefusal
+from console.safety import Limits, SafetyGate, Source, check_plan
+from console.types import OutputPlan, StreamSource
+
+log = logging.getLogger("haptable.scheduler")
+
+
+@dataclass
+class PlayReport:
+    """What happened to a plan: the gate clock at each segment's first and last sample."""
+
+    name: str
+    segment_start: list[int] = field(default_factory=list)
+    segment_end: list[int] = field(default_factory=list)
+    error: str = ""
+    done: threading.Event = field(default_factory=threading.Event, repr=False)
+
+    def wait(self, timeout_s: float | None = None) -> PlayReport:
+        if not self.done.wait(timeout_s):
+            raise TimeoutError(f"{self.name}: still playing after {timeout_s} s")
+        return self
+
+
+@dataclass
+class _Step:
+    kind: str  # "relays", "play", "silence", "stream"
+    relays: frozenset[int] = frozenset()
+    piezo: np.ndarray | None = None
+    screen: np.ndarray | None = None
+    n: int = 0
+    pos: int = 0
+    stream: StreamSource | None = None
+    phase: str = ""  # relays: "", "switching", "settling"
+    segment: int = -1
+
+
+@dataclass
+class _Job:
+    steps: deque[_Step]
+    report: PlayReport
+
+
+def stream_start_problem(x: np.ndarray, k0: int, ramp: int, vmax: float) -> str | None:
+    """A live stream must rise from zero no faster than the start ramp allows."""
+    if k0 >= ramp or x.size == 0:
+        return None
+    k = np.arange(k0, min(ramp, k0 + x.size))
+    env = vmax * (k / ramp) * 1.02 + 1e-9
+    over = np.flatnonzero(np.abs(x[: k.size]) > env)
+    if over.size:
+        return f"live stream jumps to {x[over[0]]:.1f} V at sample {k0 + over[0]} (no start ramp)"
+    return None
+
+
+class Scheduler(Source):
+    def __init__(self, gate: SafetyGate, *, relay_channels: dict[str, int], screen_channel: int):
+        self.gate = gate
+        self.limits: Limits = gate.limits
+        self.relay_channels = relay_channels
+        self.screen_channel = screen_channel
+        self._lock = threading.Lock()
+        self._jobs: deque[_Job] = deque()
+        self._job: _Job | None = None
+        self._switch_q: queue.Queue = queue.Queue()
+        self._switch_result: queue.Queue = queue.Queue()
+        self._stream_k = 0
+        self._stream_last = (0.0, 0.0)
+        self._worker = threading.Thread(
+            target=self._relay_worker, name="haptable-relays", daemon=True
+        )
+        self._worker.start()
+        gate.attach(self)
+
+    # ------------------------------------------------------------------ API
+    def relays_for(self, patches: frozenset[str], screen: bool) -> frozenset[int]:
+        chans = {self.relay_channels[p] for p in patches}
+        if screen:
+            chans.add(self.screen_channel)
+        return frozenset(chans)
+
+    def play(self, plan: OutputPlan) -> PlayReport:
+        """Check and queue a plan. Raises ``SafetyRefusal`` (nothing queued) if refused."""
+        if self.gate.estopped:
+            raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
+        check_plan(plan, self.limits)
+        steps: deque[_Step] = deque()
+        gap = round(plan.gap_s * plan.sample_rate_hz)
+        for i, seg in enumerate(plan.segments):
+            steps.append(_Step("relays", relays=self.relays_for(seg.patches, seg.screen)))
+            steps.append(
+                _Step(
+                    "play",
+                    piezo=np.asarray(seg.piezo_v, float),
+                    screen=np.asarray(seg.screen_v, float),
+                    n=seg.n_samples,
+                    segment=i,
+                )
+            )
+            if gap and i < len(plan.segments) - 1:
+                steps.append(_Step("silence", n=gap))
+        steps.append(_Step("relays", relays=frozenset()))
+        report = PlayReport(plan.name or "plan")
+        self._enqueue(_Job(steps, report))
+        return report
+
+    def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
+        """Queue a live stream; it plays until it returns ``None`` (after its ramp-down)."""
+        if self.gate.estopped:
+            raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
+        steps = deque(
+            [
+                _Step(
+                    "relays", relays=self.relays_for(frozenset(source.patches), bool(source.screen))
+                ),
+                _Step("stream", stream=source, segment=0),
+                _Step("relays", relays=frozenset()),
+            ]
+        )
+        report = PlayReport(name)
+        self._enqueue(_Job(steps, report))
+        return report
+
+    def set_relays(self, closed: frozenset[int], name: str = "relays") -> PlayReport:
+        """Switch relays by hand (console toggles): queued, done in silence."""
+        report = PlayReport(name)
+        self._enqueue(_Job(deque([_Step("relays", relays=frozenset(closed))]), report))
+        return report
+
+    def _enqueue(self, job: _Job) -> None:
+        with self._lock:
+            self._jobs.append(job)
+
+    def abort(self, reason: str) -> None:
+        with self._lock:
+            jobs = list(self._jobs)
+            if self._job is not None:
+                jobs.insert(0, self._job)
+            self._jobs.clear()
+            self._job = None
+        for job in jobs:
+            for st in job.steps:
+                if st.stream is not None:
+                    try:
+                        st.stream.request_stop()
+                    except Exception:
+                        log.exception("stream stop failed")
+            job.report.error = job.report.error or f"stopped: {reason}"
+            job.report.done.set()
+
+    @property
+    def idle(self) -> bool:
+        with self._lock:
+            job = self._job or (self._jobs[0] if self._jobs else None)
+        if job is None:
+            return True
+        st = job.steps[0] if job.steps else None
+        # Waiting on the relay worker: nothing changes until it answers.
+        return (
+            st is not None
+            and st.kind == "relays"
+            and st.phase == "switching"
+            and self._switch_result.empty()
+        )
+
+    @property
+    def busy(self) -> bool:
+        with self._lock:
+            return self._job is not None or bool(self._jobs)
+
+    # ------------------------------------------------------------------ audio thread
+    def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+        piezo = np.zeros(n)
+        screen = np.zeros(n)
+        pos = 0
+        any_signal = False
+        while pos < n:
+            with self._lock:
+                if self._job is None and self._jobs:
+                    self._job = self._jobs.popleft()
+                job = self._job
+            if job is None:
+                break
+            if not job.steps:
+                self._finish(job)
+                continue
+            st = job.steps[0]
+            if st.kind == "play":
+                if st.pos == 0:
+                    job.report.segment_start.append(self.gate.clock + pos)
+                k = min(n - pos, st.n - st.pos)
+                piezo[pos : pos + k] = st.piezo[st.pos : st.pos + k]
+                screen[pos : pos + k] = st.screen[st.pos : st.pos + k]
+                st.pos += k
+                pos += k
+                any_signal = True
+                if st.pos >= st.n:
+                    job.report.segment_end.append(self.gate.clock + pos)
+                    job.steps.popleft()
+            elif st.kind == "silence":
+                k = min(n - pos, st.n - st.pos)
+                st.pos += k
+                pos += k
+                if st.pos >= st.n:
+                    job.steps.popleft()
+            elif st.kind == "stream":
+                done = self._pull_stream(job, st, piezo, screen, pos, n)
+                any_signal = True
+                if done is None:
+                    pos = n
+                else:
+                    job.steps.popleft()
+                    pos = done
+            else:  # relays: only at a block boundary, in silence
+                if pos > 0:
+                    break
+                if not self._relay_step(job, st):
+                    break
+        return (piezo, screen) if any_signal else None
+
+    def _pull_stream(self, job, st, piezo, screen, pos, n) -> int | None:
+        """Copy stream samples; return the position where the stream ended, or None."""
+        src = st.stream
+        if st.pos == 0:
+            job.report.segment_start.append(self.gate.clock + pos)
+            self._stream_k = 0
+        while pos < n:
+            blk = src.next_block(n - pos)
+            if blk is None:
+                last = self._stream_last
+                if last != (0.0, 0.0):  # a stream that stops mid-signal: ramp it down
+                    ramp = np.linspace(1.0, 0.0, self.limits.ramp_samples)[1:]
+                    k = min(ramp.size, n - pos)
+                    piezo[pos : pos + k] = last[0] * ramp[:k]
+                    screen[pos : pos + k] = last[1] * ramp[:k]
+                    pos += k
+                    self._stream_last = (0.0, 0.0)
+                job.report.segment_end.append(self.gate.clock + pos)
+                return pos
+            p, s = (np.asarray(a, float) for a in blk)
+            k = p.size
+            if k == 0 or k > n - pos or s.size != k:
+                raise ValueError(f"stream returned {k} samples, asked for at most {n - pos}")
+            for x, lim in (
+                (p, max(map(abs, self.limits.piezo_range()))),
+                (s, self.limits.screen_range()[1]),
+            ):
+                if prob := stream_start_problem(x, self._stream_k, self.limits.ramp_samples, lim):
+                    raise ValueError(prob)
+            piezo[pos : pos + k] = p
+            screen[pos : pos + k] = s
+            self._stream_k += k
+            st.pos += k
+            pos += k
+            self._stream_last = (float(p[-1]), float(s[-1]))
+        return None
+
+    def _relay_step(self, job: _Job, st: _Step) -> bool:
+        """Advance a relay step; True when done (the block may continue)."""
+        gate = self.gate
+        if st.phase == "":
+            if gate.relay_state() == st.relays:
+                job.steps.popleft()
+                return True
+            need = self.limits.guard_samples + gate.latency_samples
+            if gate.quiet_samples() < need:
+                return False  # emit silence until the guard gap has passed
+            st.phase = "switching"
+            self._switch_q.put(st.relays)
+            return False
+        if st.phase == "switching":
+            try:
+                ok, msg = self._switch_result.get_nowait()
+            except queue.Empty:
+                return False
+            if not ok:
+                job.report.error = msg
+                self._finish(job)
+                return False
+            st.phase = "settling"
+        if st.phase == "settling":
+            if not gate.settled():
+                return False
+            job.steps.popleft()
+            return True
+        return False
+
+    def _finish(self, job: _Job) -> None:
+        with self._lock:
+            if self._job is job:
+                self._job = None
+        job.report.done.set()
+
+    def _relay_worker(self) -> None:
+        while True:
+            target = self._switch_q.get()
+            if target is None:
+                return
+            try:
+                self.gate.switch_relays(target)
+                self._switch_result.put((True, ""))
+            except SafetyRefusal as exc:
+                self._switch_result.put((False, str(exc)))
+            except Exception as exc:  # never let the worker die silently
+                self._switch_result.put((False, f"relay switch failed: {exc!r}"))
+
+    def close(self) -> None:
+        self._switch_q.put(None)
