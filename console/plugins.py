@@ -137,26 +137,25 @@ def _check_hooks(pm: pluggy.PluginManager) -> None:
         raise UserError(f"plugin {exc.plugin!r}: {exc}") from None
 
 
+def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> Callable[..., None]:
+    def register(
+        name: str,
+        factory: Callable[..., Any],
+        *,
+        description: str = "",
+        probe: Callable[..., Any] | None = None,
+    ) -> None:
+        regs[name] = Registration(kind, name, owner, factory, description, probe)
+
+    return register
+
+
 def _collect(plugins: Plugins) -> None:
     pm = plugins.pm
     for kind, hook_name in KINDS.items():
-        hook = getattr(pm.hook, hook_name)
         regs: dict[str, Registration] = {}
-        for impl in reversed(hook.get_hookimpls()):
-            owner = _plugin_name(pm, impl)
-
-            def register(
-                name: str,
-                factory: Callable[..., Any],
-                *,
-                description: str = "",
-                probe: Callable[..., Any] | None = None,
-                _owner: str = owner,
-                _kind: str = kind,
-            ) -> None:
-                regs[name] = Registration(_kind, name, _owner, factory, description, probe)
-
-            impl.function(register=register)
+        for impl in reversed(getattr(pm.hook, hook_name).get_hookimpls()):
+            impl.function(register=_registrar(regs, kind, _plugin_name(pm, impl)))
         plugins.registrations[kind] = regs
 
     for impl in reversed(pm.hook.haptable_register_commands.get_hookimpls()):

@@ -6,6 +6,7 @@ one line out. No network listener.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import socket
@@ -65,10 +66,8 @@ class ControlServer:
                     reply = "pong" if line == "ping" else self.handler(line)
                     conn.sendall(reply.encode() + b"\n")
                 except Exception as exc:
-                    try:
+                    with contextlib.suppress(OSError):
                         conn.sendall(f"error: {exc}\n".encode())
-                    except OSError:
-                        pass
 
     def close(self) -> None:
         try:
