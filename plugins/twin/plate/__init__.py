@@ -1,0 +1,129 @@
+"""Plate twin plugin: glass modes, piezo coupling, FRFs and a simulated vibrometer.
+
+Profile sections declared here: [glass], [plate], [piezo]. The geometry comes from the
+core's [table], [grid] and [patches.*].
+"""
+
+from __future__ import annotations
+
+from console.hookspecs import hookimpl
+
+from . import defaults as dflt
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    from console.schema import Field
+
+    register(
+        "glass",
+        {
+            "youngs_modulus_gpa": Field(
+                "float",
+                dflt.GLASS_E_GPA,
+                min=1.0,
+                max=500.0,
+                help="glass Young's modulus (soda-lime ~72 GPa, recalled)",
+            ),
+            "poisson_ratio": Field(
+                "float", dflt.GLASS_NU, min=0.0, max=0.49, help="glass Poisson ratio (~0.22)"
+            ),
+            "density_kg_m3": Field(
+                "float", dflt.GLASS_RHO, min=100.0, max=20000.0, help="glass density (~2500)"
+            ),
+        },
+        help="Touch-screen glass material (FACTS: recalled defaults).",
+    )
+    register(
+        "plate",
+        {
+            "damping_ratio": Field(
+                "float",
+                dflt.DAMPING_RATIO,
+                min=1e-5,
+                max=0.3,
+                help="modal damping ratio, all modes (no sourced value; 0.5-3 % plausible)",
+            ),
+            "seal_translational_n_per_m2": Field(
+                "float",
+                dflt.SEAL_KT_N_PER_M2,
+                min=0.0,
+                help="rubber seal stiffness per metre of edge against deflection (N/m per m)",
+            ),
+            "seal_rotational_n_per_rad": Field(
+                "float",
+                dflt.SEAL_KR_N_PER_RAD,
+                min=0.0,
+                help="rubber seal stiffness per metre of edge against edge rotation (N m/rad per m)",
+            ),
+            "band_max_hz": Field(
+                "float",
+                dflt.BAND_MAX_HZ,
+                min=1.0,
+                max=20000.0,
+                help="top of the band the FRFs are used in (the sweep's top)",
+            ),
+            "mode_margin": Field(
+                "float",
+                dflt.MODE_MARGIN,
+                min=1.0,
+                max=20.0,
+                help="keep modes up to mode_margin x band_max_hz",
+            ),
+            "static_residual": Field(
+                "bool", True, help="add the static response of the modes left out"
+            ),
+            "basis_order": Field(
+                "int",
+                dflt.BASIS_ORDER,
+                min=8,
+                max=40,
+                help="Legendre polynomials per direction in the Ritz basis",
+            ),
+        },
+        help="Plate twin: seals, damping, modal truncation.",
+    )
+    register(
+        "piezo",
+        {
+            "d31_pc_per_n": Field(
+                "float",
+                dflt.D31_PC_PER_N,
+                min=-2000.0,
+                max=2000.0,
+                help="piezo charge constant d31 (DuraAct ~-180 pC/N, recalled)",
+            ),
+            "ceramic_thickness_mm": Field(
+                "float",
+                dflt.CERAMIC_THICKNESS_MM,
+                min=0.01,
+                max=5.0,
+                help="active ceramic thickness (DuraAct ~0.2 mm)",
+            ),
+            "youngs_modulus_gpa": Field(
+                "float",
+                dflt.CERAMIC_E_GPA,
+                min=1.0,
+                max=500.0,
+                help="ceramic Young's modulus (PZT ~62 GPa, recalled)",
+            ),
+        },
+        help="Piezo patches: pin-force coupling constants.",
+    )
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    from . import cli
+
+    register("plate", cli.configure, cli.run, help="plate twin: natural modes")
+
+
+@hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def run(ctx, quick: bool) -> dict:
+        from .bench import run_bench
+
+        return run_bench(getattr(ctx, "profile", None), quick)
+
+    register("plate", run, help="modal solve vs basis size, FRF truncation, vibrometer time")

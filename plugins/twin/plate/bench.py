@@ -1,0 +1,112 @@
+"""``haptable bench plate``: accuracy next to speed for the plate twin."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from console.bench import machine_info, summarize_s
+
+from . import ritz
+from .model import build_twin, default_params, grid_points_mm, params_from_profile
+from .reference import LAMBDA_TABLE
+from .vibrometer import SweepSettings, measure
+
+
+def _timed(fn, repeat: int) -> tuple[object, list[float]]:
+    out, times = None, []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return out, times
+
+
+def modal_solve_table(orders: tuple[int, ...], repeat: int) -> list[dict]:
+    """Solve time and worst lambda error vs FACTS per basis order and edge case."""
+    rows = []
+    for n in orders:
+        for (edges, aspect, nu), ref in LAMBDA_TABLE.items():
+            plate = ritz.nondim_plate(aspect, nu)
+
+            def solve(plate=plate, edges=edges, n=n):
+                ritz.cache_clear()
+                return ritz.solve_modes(plate, edges, n)
+
+            modes, times = _timed(solve, repeat)
+            lam = modes.lam[modes.n_rigid : modes.n_rigid + 6]
+            rows.append(
+                {
+                    "basis_order": n,
+                    "edges": edges,
+                    "aspect": round(aspect, 5),
+                    "max_rel_error": float(np.max(np.abs(lam / np.array(ref) - 1))),
+                    "solve_ms_p50": summarize_s(times)["p50_ms"],
+                }
+            )
+    return rows
+
+
+def run_bench(profile=None, quick: bool = False) -> dict:
+    repeat = 2 if quick else 5
+    params = params_from_profile(profile) if profile is not None else default_params()
+    out: dict = {"machine": machine_info()}
+    orders = (12, 16, 20) if quick else (10, 12, 14, 16, 18, 20, 22, 24)
+    out["modal_solve"] = modal_solve_table(orders, repeat)
+
+    # sim plate: convergence of the first 10 frequencies with the basis order
+    ref = build_twin(replace(params, basis_order=28)).freq_hz[:10]
+    conv = []
+    for n in orders:
+        ritz.cache_clear()
+        t = time.perf_counter()
+        tw = build_twin(replace(params, basis_order=n))
+        dt = time.perf_counter() - t
+        conv.append(
+            {
+                "basis_order": n,
+                "max_rel_freq_error_vs_n28": float(np.max(np.abs(tw.freq_hz[:10] / ref - 1))),
+                "build_ms": dt * 1e3,
+            }
+        )
+    out["sim_convergence"] = conv
+    twin = build_twin(params)
+    out["sim_first_freqs_hz"] = [round(float(f), 2) for f in twin.freq_hz[:12]]
+    out["sim_modes_kept"] = int(twin.freq_hz.size)
+
+    # FRF: truncation error vs modes kept vs time (84 points x 2501 bins x 5 excitations)
+    from .model import truncation_error
+
+    trunc = truncation_error(params)
+    x, y = grid_points_mm(profile)
+    f = np.linspace(0.0, params.band_max_hz, 2501)
+    for row in trunc:
+        tw = build_twin(
+            replace(params, mode_margin=row["mode_margin"], static_residual=row["static_residual"])
+        )
+        _, times = _timed(lambda tw=tw: tw.frf_um_per_v(x, y, f), repeat)
+        row["frf_84pts_2501bins_ms_p50"] = summarize_s(times)["p50_ms"]
+    out["frf_truncation"] = trunc
+    h = twin.frf_um_per_v(x, y, f[f >= 5.0])
+    out["sim_peak_frf_um_per_v"] = {
+        e: float(np.abs(h[i]).max()) for i, e in enumerate(("PA", "PB", "PC", "PD", "PALL"))
+    }
+
+    # many points (the flow / interpolation code's use)
+    xs = np.random.default_rng(0).uniform(0, params.plate.a_m * 1e3, 10000)
+    ys = np.random.default_rng(1).uniform(0, params.plate.b_m * 1e3, 10000)
+    _, times = _timed(lambda: twin.frf_um_per_v(xs, ys, np.array([465.0])), repeat)
+    out["frf_10k_points_1_bin_ms"] = summarize_s(times)
+
+    # vibrometer: 84 points x 5 excitations x 3 sweeps
+    s = SweepSettings(record_s=4.0, sweep_s=3.0) if quick else SweepSettings()
+    _, times = _timed(lambda: measure(twin, x, y, s), 1 if quick else 2)
+    out["vibrometer"] = {
+        "points": int(x.size),
+        "record_s": s.record_s,
+        "sweeps": s.sweeps,
+        "time": summarize_s(times),
+    }
+    return out
