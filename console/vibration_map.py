@@ -134,7 +134,9 @@ def make_map(
     return m
 
 
-def validate_map(m: VibrationMap, *, where: str = "vibration map", require_all: bool = True) -> None:
+def validate_map(
+    m: VibrationMap, *, where: str = "vibration map", require_all: bool = True
+) -> None:
     """Raise a one-line ``UserError`` for anything a consumer could trip on."""
     frf, f = m.frf_um_per_v, m.freq_hz
     if f.ndim != 1 or f.size < 2:
@@ -142,7 +144,9 @@ def validate_map(m: VibrationMap, *, where: str = "vibration map", require_all: 
     if not np.all(np.isfinite(f)):
         raise UserError(f"{where}: freq_hz holds NaN or inf; re-export the frequency axis")
     if f[0] < 0:
-        raise UserError(f"{where}: freq_hz has a negative frequency ({f[0]:g} Hz); frequencies must be >= 0")
+        raise UserError(
+            f"{where}: freq_hz has a negative frequency ({f[0]:g} Hz); frequencies must be >= 0"
+        )
     if np.any(np.diff(f) <= 0):
         i = int(np.flatnonzero(np.diff(f) <= 0)[0])
         raise UserError(
@@ -213,15 +217,21 @@ def load_map(path: str | os.PathLike, *, require_all: bool = True) -> VibrationM
     p = Path(path)
     where = str(p)
     if not p.exists():
-        raise UserError(f"{where}: no such vibration map; run `haptable frf measure` or `haptable frf import`")
+        raise UserError(
+            f"{where}: no such vibration map; run `haptable frf measure` or `haptable frf import`"
+        )
     try:
         with np.load(p, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
     except (OSError, ValueError) as exc:
-        raise UserError(f"{where}: not a vibration map (.npz) ({exc}); pass the file `frf import` wrote") from None
+        raise UserError(
+            f"{where}: not a vibration map (.npz) ({exc}); pass the file `frf import` wrote"
+        ) from None
     missing = [k for k in KEYS if k not in data]
     if missing:
-        raise UserError(f"{where}: not a vibration map, key {missing[0]!r} is missing; re-create it")
+        raise UserError(
+            f"{where}: not a vibration map, key {missing[0]!r} is missing; re-create it"
+        )
     try:
         meta = json.loads(str(data["meta_json"]))
     except json.JSONDecodeError:
@@ -229,7 +239,9 @@ def load_map(path: str | os.PathLike, *, require_all: bool = True) -> VibrationM
     if meta.get("format") != FORMAT:
         raise UserError(f"{where}: format is {meta.get('format')!r}, expected {FORMAT!r}")
     if int(meta.get("version", 0)) > VERSION:
-        raise UserError(f"{where}: map version {meta.get('version')} is newer than this console ({VERSION}); upgrade")
+        raise UserError(
+            f"{where}: map version {meta.get('version')} is newer than this console ({VERSION}); upgrade"
+        )
     units = meta.get("units", {})
     for key, want in UNITS.items():
         if units.get(key) != want:
@@ -238,7 +250,9 @@ def load_map(path: str | os.PathLike, *, require_all: bool = True) -> VibrationM
                 f"(the FRF must be displacement in um per volt at the piezo)"
             )
     if not np.iscomplexobj(data["frf_um_per_v"]):
-        raise UserError(f"{where}: frf_um_per_v must be complex (magnitudes lose the phase needed to interpolate)")
+        raise UserError(
+            f"{where}: frf_um_per_v must be complex (magnitudes lose the phase needed to interpolate)"
+        )
     m = VibrationMap(
         frf_um_per_v=data["frf_um_per_v"].astype(np.complex128),
         freq_hz=data["freq_hz"].astype(np.float64),
@@ -252,7 +266,9 @@ def load_map(path: str | os.PathLike, *, require_all: bool = True) -> VibrationM
     return m
 
 
-def grid_points_mm(rows: int, columns: int, pitch_mm: float, origin_mm: tuple[float, float]) -> np.ndarray:
+def grid_points_mm(
+    rows: int, columns: int, pitch_mm: float, origin_mm: tuple[float, float]
+) -> np.ndarray:
     """Coordinates (P, 2) of grid points 1..rows*columns, row by row: point n at column
     (n-1) % columns, row (n-1) // columns, x = origin_x + column*pitch, y = origin_y + row*pitch."""
     n = np.arange(rows * columns)

@@ -1,0 +1,144 @@
+"""Localized vibrotactile feedback: vibration map I/O, interpolation, excitation lookup
+tables, flow stimuli (between two points, under a hand) and the ``vibration`` benchmark.
+
+Commands: ``haptable frf import|export|info``, ``haptable tables build|query``,
+``haptable flow``, ``haptable point``. Profile sections: ``[vibrotactile]`` and
+``[perception]`` (the human threshold curve, as data).
+"""
+
+from __future__ import annotations
+
+from console.hookspecs import hookimpl
+from console.schema import Field
+
+
+def _sections() -> dict:
+    from plugins.vibrotactile.perception import DEFAULT_FREQ_HZ, DEFAULT_THRESHOLD_DB, SOURCES
+
+    return {
+        "perception": (
+            {
+                "freq_hz": Field(
+                    "floats",
+                    list(DEFAULT_FREQ_HZ),
+                    min=0.1,
+                    max=20000,
+                    min_length=2,
+                    help="frequencies of the threshold curve (ascending)",
+                ),
+                "threshold_db_re_1um": Field(
+                    "floats",
+                    list(DEFAULT_THRESHOLD_DB),
+                    min=-80,
+                    max=80,
+                    min_length=2,
+                    help="palm detection threshold, dB re 1 um peak, per frequency",
+                ),
+                "fingertip_offset_db": Field(
+                    "float", 6.0, min=-40, max=40, help="fingertip threshold above the palm's"
+                ),
+                "jnd_db": Field(
+                    "float", 1.5, min=0.1, max=10, help="intensity just-noticeable difference"
+                ),
+                "sources": Field("str", SOURCES, help="where the curve comes from"),
+            },
+            "human vibrotactile sensitivity: threshold vs frequency (palm), fingertip offset, JND",
+        ),
+        "vibrotactile": (
+            {
+                "band_hz": Field(
+                    "float", 650.0, min=1, max=20000, help="usable band for tables and flows"
+                ),
+                "mask_below_hz": Field(
+                    "float",
+                    5.0,
+                    min=0,
+                    max=1000,
+                    help="UFF import: bins below are masked (near-DC)",
+                ),
+                "interpolation": Field(
+                    "str",
+                    "spline",
+                    choices=("spline", "bilinear"),
+                    help="FRF interpolation off the grid",
+                ),
+                "part_s": Field("float", 1.5, min=0.05, max=30, help="duration of each flow part"),
+                "pulse_s": Field("float", 0.5, min=0.05, max=30, help="duration of a point pulse"),
+                "ramp_ms": Field(
+                    "float", 100.0, min=5, max=5000, help="linear ramp at each end of a part"
+                ),
+                "gap_ms": Field(
+                    "float",
+                    0.0,
+                    min=0,
+                    max=5000,
+                    help="extra silence between the parts (beyond the relay guard)",
+                ),
+                "sensation_level_db": Field(
+                    "float", 20.0, min=0, max=60, help="target level above the fingertip threshold"
+                ),
+                "drive_max_v": Field(
+                    "float",
+                    95.0,
+                    min=1,
+                    max=1000,
+                    help="largest sine amplitude at the piezo (also capped by [limits])",
+                ),
+                "hand_mm": Field(
+                    "float", 120.0, min=20, max=400, help="side of the area under a hand"
+                ),
+                "hand_squares": Field(
+                    "int", 3, min=2, max=9, help="squares per side under the hand"
+                ),
+                "hand_subgrid": Field(
+                    "int", 15, min=1, max=60, help="subgrid points per square side"
+                ),
+                "cache_dir": Field(
+                    "str", "", help="cache for tables/flow maps; empty: ~/.cache/haptable"
+                ),
+            },
+            "vibration map use: tables, interpolation, flow stimuli",
+        ),
+    }
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    for name, (fields, help_) in _sections().items():
+        register(name, fields, help=help_)
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    from plugins.vibrotactile import cli
+
+    register(
+        "frf", cli.configure_frf, cli.run_frf, help="vibration map: import/export UFF 58, info"
+    )
+    register(
+        "tables",
+        cli.configure_tables,
+        cli.run_tables,
+        help="excitation lookup tables: build, query",
+    )
+    register(
+        "flow",
+        cli.configure_flow,
+        cli.run_flow,
+        help="vibrotactile flow between points or under a hand",
+    )
+    register("point", cli.configure_point, cli.run_point, help="localized pulse at one point")
+
+
+@hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def run(ctx, quick: bool, report_dir: str | None = None) -> dict:
+        from plugins.vibrotactile.bench import run_bench
+
+        return run_bench(ctx, quick, report_dir=report_dir)
+
+    register(
+        "vibration",
+        run,
+        help="interpolation error vs time, table build/query, flow-under-hand precompute",
+    )

@@ -1,0 +1,60 @@
+"""Explicit on-disk cache for derived arrays, keyed by a hash of their inputs.
+
+``cached(cache_dir, kind, key, compute)`` returns ``compute()``'s dict of arrays (and
+JSON-able scalars), storing it as ``<cache_dir>/<kind>-<sha256(key)[:24]>.npz``. The key
+is any JSON-able dict; it must contain everything the result depends on (the map's
+``content_hash()``, parameters, code version). ``cache_dir=None`` disables caching.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+CODE_VERSION = 1
+
+
+def default_cache_dir() -> Path:
+    """``$HAPTABLE_CACHE_DIR`` or ``$XDG_CACHE_HOME/haptable`` (``~/.cache/haptable``)."""
+    env = os.environ.get("HAPTABLE_CACHE_DIR")
+    if env:
+        return Path(env)
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "haptable"
+
+
+def key_hash(key: dict) -> str:
+    blob = json.dumps({"v": CODE_VERSION, **key}, sort_keys=True, default=str).encode()
+    return hashlib.sha256(blob).hexdigest()[:24]
+
+
+def cached(
+    cache_dir: str | os.PathLike | None, kind: str, key: dict, compute: Callable[[], dict]
+) -> dict:
+    if cache_dir is None:
+        return compute()
+    path = Path(cache_dir) / f"{kind}-{key_hash(key)}.npz"
+    if path.exists():
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                out = {k: z[k] for k in z.files}
+            return {k: (json.loads(str(v)) if k.endswith("_json") else v) for k, v in out.items()}
+        except (OSError, ValueError):
+            path.unlink(missing_ok=True)  # a torn write: recompute
+    result = compute()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as fh:
+        np.savez(
+            fh,
+            **{
+                k: (np.array(json.dumps(v)) if k.endswith("_json") else v)
+                for k, v in result.items()
+            },
+        )
+    os.replace(tmp, path)
+    return result

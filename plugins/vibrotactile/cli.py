@@ -1,0 +1,437 @@
+"""``haptable frf``, ``tables``, ``flow`` and ``point`` commands."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from console.errors import UserError
+
+
+# ---------------------------------------------------------------------- helpers
+def progress_printer(min_s: float = 1.0):
+    """A progress callback for the CLI: prints to stderr once the work passed ``min_s``."""
+    t0 = time.perf_counter()
+    state = {"shown": False}
+
+    def cb(frac: float, msg: str) -> None:
+        if time.perf_counter() - t0 < min_s and frac < 1.0:
+            return
+        if frac >= 1.0 and not state["shown"]:
+            return
+        state["shown"] = True
+        bar = "#" * int(frac * 30)
+        end = "\n" if frac >= 1.0 else ""
+        print(f"\r{msg} [{bar:<30}] {frac * 100:3.0f}%", end=end, file=sys.stderr, flush=True)
+
+    return cb
+
+
+def _vt(ctx) -> dict:
+    return ctx.profile.section("vibrotactile")
+
+
+def settings_of(ctx):
+    from plugins.vibrotactile.stimuli import StimulusSettings
+
+    vt = _vt(ctx)
+    return StimulusSettings(
+        sample_rate_hz=int(ctx.profile.get("audio.sample_rate_hz")),
+        part_s=vt["part_s"],
+        ramp_ms=max(vt["ramp_ms"], ctx.profile.get("limits.ramp_min_ms")),
+        gap_s=vt["gap_ms"] / 1e3,
+        pulse_s=vt["pulse_s"],
+        sensation_level_db=vt["sensation_level_db"],
+        drive_max_v=vt["drive_max_v"],
+        interpolation=vt["interpolation"],
+    )
+
+
+def perception_of(ctx):
+    from plugins.vibrotactile.perception import Perception
+
+    return Perception.from_section(ctx.profile.section("perception"))
+
+
+def cache_dir_of(args, ctx) -> Path | None:
+    from plugins.vibrotactile.cache import default_cache_dir
+
+    raw = getattr(args, "cache_dir", None) or _vt(ctx)["cache_dir"]
+    if raw == "none":
+        return None
+    return Path(raw).expanduser() if raw else default_cache_dir()
+
+
+def parse_point(text: str, vmap):
+    """``51`` (grid number) -> map index; ``x,y`` (mm) -> (x, y)."""
+    t = text.strip()
+    if "," in t:
+        try:
+            x, y = (float(v) for v in t.split(","))
+        except ValueError:
+            raise UserError(
+                f"point {text!r}: give a grid number 1..84 or x,y in mm (e.g. 300,200)"
+            ) from None
+        return (x, y)
+    try:
+        n = int(t)
+    except ValueError:
+        raise UserError(
+            f"point {text!r}: give a grid number 1..84 or x,y in mm (e.g. 300,200)"
+        ) from None
+    return vmap.point_index(n)
+
+
+def tables_for(path: str, ctx, args, band_hz: float | None = None):
+    """Tables from a tables file, or built (and cached) from a vibration map."""
+    from plugins.vibrotactile.cache import cached
+    from plugins.vibrotactile.tables import Tables, build_tables, load_tables
+    from plugins.vibrotactile.vibration_io import is_tables_file
+
+    if is_tables_file(path):
+        return load_tables(path)
+    from console.vibration_map import load_map
+
+    vm = load_map(path, require_all=not getattr(args, "allow_missing", False))
+    band = band_hz or _vt(ctx)["band_hz"]
+    res = cached(
+        cache_dir_of(args, ctx),
+        "tables",
+        {"map": vm.content_hash(), "band_hz": band},
+        lambda: _tables_arrays(build_tables(vm, band, progress_printer())),
+    )
+    return Tables(res["max_diff_um_per_v"], res["freq_hz"], res["actuator"], band, vm)
+
+
+def _tables_arrays(t) -> dict:
+    return {"max_diff_um_per_v": t.max_diff_um_per_v, "freq_hz": t.freq_hz, "actuator": t.actuator}
+
+
+def emit_plan(plan, args, ctx, summary: dict) -> int:
+    from plugins.vibrotactile.stimuli import plan_to_wav
+
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if out.suffix.lower() != ".wav":
+            raise UserError(
+                f"--out {out}: give a .wav path (the plan summary goes beside it as .json)"
+            )
+        fs = ctx.profile.get("amplifiers.piezo_gain") * ctx.profile.get("audio.full_scale_v")
+        guard = (
+            2 * ctx.profile.get("relays.guard_ms") + ctx.profile.get("relays.switch_time_ms")
+        ) / 1e3
+        plan_to_wav(plan, out, volts_full_scale=fs, guard_s=guard)
+        out.with_suffix(".json").write_text(json.dumps(summary, indent=2, default=float))
+        summary["wav"] = str(out)
+    if getattr(args, "play", False):
+        with ctx.outputs() as o:
+            o.play(plan)
+        summary["played"] = True
+    if args.json:
+        print(json.dumps(summary, indent=2, default=float))
+    else:
+        for k, v in summary.items():
+            print(f"{k}: {v}")
+    return 0
+
+
+def plan_summary(plan) -> dict:
+    return {
+        "name": plan.name,
+        "duration_s": plan.duration_s,
+        "segments": [
+            {
+                "label": s.label,
+                "patches": sorted(s.patches),
+                "peak_v": float(np.abs(s.piezo_v).max()),
+            }
+            for s in plan.segments
+        ],
+        **{k: v for k, v in plan.meta.items()},
+    }
+
+
+# ---------------------------------------------------------------------- frf
+def configure_frf(p: argparse.ArgumentParser) -> None:
+    sub = p.add_subparsers(dest="frf_cmd", metavar="ACTION", required=True)
+    i = sub.add_parser("import", help="UFF 58/58b files, one per excitation -> vibration map")
+    i.add_argument(
+        "files", nargs="+", metavar="EXC=FILE", help="PA=pa.uff PB=pb.uff ... PALL=all.uff"
+    )
+    i.add_argument("--out", required=True, help="vibration map (.npz) to write")
+    i.add_argument(
+        "--gain",
+        type=float,
+        default=None,
+        help="amplifier gain: the UFF reference is generator volts (default: profile amplifiers.piezo_gain)",
+    )
+    i.add_argument(
+        "--mask-below-hz", type=float, default=None, help="mask bins below (default: profile)"
+    )
+    i.add_argument(
+        "--allow-missing", action="store_true", help="accept fewer than five excitations"
+    )
+    e = sub.add_parser("export", help="vibration map -> one UFF 58 file per excitation")
+    e.add_argument("map")
+    e.add_argument("--out", required=True, help="folder for PA.uff ... PALL.uff")
+    e.add_argument("--binary", action="store_true", help="write binary 58b")
+    e.add_argument(
+        "--gain", type=float, default=1.0, help="reference volts per piezo volt (1: piezo volts)"
+    )
+    s = sub.add_parser("info", help="summarise a vibration map")
+    s.add_argument("map")
+    s.add_argument("--json", action="store_true")
+
+
+def run_frf(args, ctx) -> int:
+    if args.frf_cmd == "import":
+        from console.vibration_map import grid_points_mm, save_map
+        from plugins.vibrotactile.uff_io import import_uff
+
+        files = {}
+        for item in args.files:
+            if "=" not in item:
+                raise UserError(f"{item!r}: write EXC=FILE, e.g. PA=pa.uff")
+            exc, path = item.split("=", 1)
+            files[exc.strip().upper()] = path
+        g = ctx.profile.section("grid")
+        grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
+        gain = args.gain if args.gain is not None else ctx.profile.get("amplifiers.piezo_gain")
+        mask = args.mask_below_hz if args.mask_below_hz is not None else _vt(ctx)["mask_below_hz"]
+        m = import_uff(
+            files, gain=gain, mask_below_hz=mask, grid_mm=grid, require_all=not args.allow_missing
+        )
+        save_map(args.out, m)
+        print(
+            f"wrote {args.out}: {len(m.excitations)} excitations x {m.points.size} points x "
+            f"{m.freq_hz.size} bins ({m.freq_hz[0]:g}-{m.freq_hz[-1]:g} Hz), gain {gain:g}"
+            + (f"; note: {m.provenance['note']}" if m.provenance.get("note") else "")
+        )
+        return 0
+    from console.vibration_map import load_map
+
+    if args.frf_cmd == "export":
+        from plugins.vibrotactile.uff_io import export_uff
+
+        m = load_map(args.map, require_all=False)
+        for path in export_uff(m, args.out, binary=args.binary, gain=args.gain):
+            print(f"wrote {path}")
+        return 0
+    m = load_map(args.map, require_all=False)
+    info = {
+        "excitations": list(m.excitations),
+        "points": int(m.points.size),
+        "bins": int(m.freq_hz.size),
+        "freq_hz": [float(m.freq_hz[0]), float(m.freq_hz[-1])],
+        "masked_bins": int(m.masked.sum()),
+        "peak_um_per_v": float(np.abs(m.frf_um_per_v).max()),
+        "provenance": m.provenance,
+    }
+    print(
+        json.dumps(info, indent=2) if args.json else "\n".join(f"{k}: {v}" for k, v in info.items())
+    )
+    return 0
+
+
+# ---------------------------------------------------------------------- tables
+def configure_tables(p: argparse.ArgumentParser) -> None:
+    sub = p.add_subparsers(dest="tables_cmd", metavar="ACTION", required=True)
+    b = sub.add_parser("build", help="vibration map -> lookup tables (paper Fig. 8)")
+    b.add_argument("map")
+    b.add_argument("--out", required=True)
+    b.add_argument(
+        "--band-hz", type=float, default=None, help="usable band (default: profile, 650 Hz)"
+    )
+    b.add_argument(
+        "--allow-missing", action="store_true", help="build from the excitations present"
+    )
+    q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
+    q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
+    q.add_argument("--active", required=True, help="grid number 1..84 (row by row) or x,y in mm")
+    q.add_argument("--passive", required=True, help="grid number 1..84 or x,y in mm")
+    q.add_argument(
+        "--method", choices=("spline", "bilinear"), default=None, help="off-grid interpolation"
+    )
+    q.add_argument("--extrapolate", action="store_true", help="allow points outside the grid")
+    q.add_argument("--cache-dir", default=None)
+    q.add_argument("--json", action="store_true")
+
+
+def run_tables(args, ctx) -> int:
+    from plugins.vibrotactile.tables import build_tables, query_indices, query_points, save_tables
+
+    if args.tables_cmd == "build":
+        from console.vibration_map import load_map
+
+        m = load_map(args.map, require_all=not args.allow_missing)
+        t0 = time.perf_counter()
+        t = build_tables(m, args.band_hz or _vt(ctx)["band_hz"], progress_printer())
+        dt = time.perf_counter() - t0
+        save_tables(args.out, t)
+        print(
+            f"wrote {args.out}: {m.points.size} x {m.points.size} pairs x {len(m.excitations)} "
+            f"excitations up to {t.band_hz:g} Hz in {dt * 1e3:.0f} ms"
+        )
+        return 0
+    t = tables_for(args.tables, ctx, args)
+    a, b = parse_point(args.active, t.vmap), parse_point(args.passive, t.vmap)
+    if isinstance(a, int) and isinstance(b, int):
+        ans = query_indices(t, a, b)
+    else:
+        xy = [t.vmap.points_mm[p] if isinstance(p, int) else p for p in (a, b)]
+        ans = query_points(
+            t,
+            tuple(xy[0]),
+            tuple(xy[1]),
+            method=args.method or _vt(ctx)["interpolation"],
+            extrapolate=args.extrapolate,
+        )
+    if args.json:
+        print(json.dumps(ans))
+    elif ans["actuator"] is None:
+        print(ans["note"])
+    else:
+        print(
+            f"{ans['max_difference_um_per_v']:.4g} um/V at {ans['frequency_hz']:g} Hz with {ans['actuator']}"
+        )
+    return 0
+
+
+# ---------------------------------------------------------------------- flow / point
+def configure_flow(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", metavar="TABLES|MAP", help="tables file, or a vibration map")
+    p.add_argument("--from", dest="from_", help="start point: grid number 1..84 or x,y mm")
+    p.add_argument("--to", help="end point: grid number 1..84 or x,y mm")
+    p.add_argument("--hand", help="hand centre x,y in mm (flow under a hand)")
+    p.add_argument(
+        "--direction", choices=("left", "right", "up", "down"), help="flow direction under the hand"
+    )
+    p.add_argument(
+        "--hand-mm", type=float, default=None, help="hand area side (default: profile, 120 mm)"
+    )
+    p.add_argument("--out", help="write the plan as a .wav (sound-card units) + .json summary")
+    p.add_argument("--play", action="store_true", help="play through the safety gate")
+    p.add_argument("--cache-dir", default=None, help="cache folder ('none' to disable)")
+    p.add_argument("--json", action="store_true")
+
+
+def run_flow(args, ctx) -> int:
+    from plugins.vibrotactile.stimuli import flow_plan
+
+    lim = dict(
+        piezo_min_v=ctx.profile.get("limits.piezo_min_v"),
+        piezo_max_v=ctx.profile.get("limits.piezo_max_v"),
+    )
+    if args.hand:
+        if not args.direction:
+            raise UserError("--hand needs --direction left|right|up|down")
+        plan, summary = hand_plan(args, ctx, lim)
+        return emit_plan(plan, args, ctx, summary)
+    if not (args.from_ and args.to):
+        raise UserError(
+            "give --from P --to Q (grid numbers or x,y mm), or --hand X,Y --direction D"
+        )
+    t = tables_for(args.source, ctx, args)
+    a, b = parse_point(args.from_, t.vmap), parse_point(args.to, t.vmap)
+    plan = flow_plan(
+        t, a, b, perception_of(ctx), settings_of(ctx), name=f"flow {args.from_}->{args.to}", **lim
+    )
+    return emit_plan(plan, args, ctx, plan_summary(plan))
+
+
+def hand_plan(args, ctx, lim):
+    from console.types import OutputPlan, patches_of
+    from plugins.vibrotactile.cache import cached
+    from plugins.vibrotactile.hand import hand_flow
+    from plugins.vibrotactile.stimuli import drive_cap_v, tone_segment
+    from plugins.vibrotactile.tables import load_map_or_tables
+
+    vm = load_map_or_tables(args.source, require_all=False)
+    vt = _vt(ctx)
+    try:
+        cx, cy = (float(v) for v in args.hand.split(","))
+    except ValueError:
+        raise UserError(f"--hand {args.hand!r}: give the hand centre as x,y in mm") from None
+    st, per = settings_of(ctx), perception_of(ctx)
+    kw = dict(
+        cap_v=drive_cap_v(st, **lim),
+        hand_mm=args.hand_mm or vt["hand_mm"],
+        squares=vt["hand_squares"],
+        subgrid=vt["hand_subgrid"],
+        band_hz=vt["band_hz"],
+        method=st.interpolation,
+    )
+    key = {
+        "map": vm.content_hash(),
+        "center": [cx, cy],
+        "direction": args.direction,
+        "perception": repr(per),
+        **kw,
+    }
+    res = cached(
+        cache_dir_of(args, ctx),
+        "handflow",
+        key,
+        lambda: {"result_json": hand_flow(vm, (cx, cy), args.direction, per, **kw)},
+    )["result_json"]
+    if not res["ok"]:
+        raise UserError(
+            f"no flow {args.direction} under a hand at {cx:g},{cy:g} mm: {res['reason']}; try another spot"
+        )
+    segs = tuple(
+        tone_segment(
+            p["frequency_hz"],
+            p["amplitude_v"],
+            st.part_s,
+            st.ramp_ms / 1e3,
+            st.sample_rate_hz,
+            patches_of(p["actuator"]),
+            label=f"part {i + 1} {p['actuator']}",
+        )
+        for i, p in enumerate(res["parts"])
+    )
+    plan = OutputPlan(
+        st.sample_rate_hz,
+        segs,
+        name=f"hand flow {args.direction} at {cx:g},{cy:g}",
+        gap_s=st.gap_s,
+        meta={"kind": "hand_flow", **res},
+    )
+    summary = plan_summary(plan)
+    for p in summary.get("parts", []):
+        for k in ("e", "k", "qa", "qb", "x_um"):
+            p.pop(k, None)
+    summary.pop("candidates", None)
+    return plan, summary
+
+
+def configure_point(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", metavar="TABLES|MAP")
+    p.add_argument("point", help="grid number 1..84 or x,y in mm")
+    p.add_argument("--out", help="write the plan as a .wav + .json summary")
+    p.add_argument("--play", action="store_true")
+    p.add_argument("--cache-dir", default=None)
+    p.add_argument("--json", action="store_true")
+
+
+def run_point(args, ctx) -> int:
+    from plugins.vibrotactile.stimuli import point_plan
+
+    t = tables_for(args.source, ctx, args)
+    a = parse_point(args.point, t.vmap)
+    plan = point_plan(
+        t,
+        a,
+        perception_of(ctx),
+        settings_of(ctx),
+        name=f"point {args.point}",
+        piezo_min_v=ctx.profile.get("limits.piezo_min_v"),
+        piezo_max_v=ctx.profile.get("limits.piezo_max_v"),
+    )
+    return emit_plan(plan, args, ctx, plan_summary(plan))

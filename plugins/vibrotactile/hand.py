@@ -1,0 +1,268 @@
+"""Vibrotactile flow under a hand (paper 5.2.2, Figs. 11 and 14).
+
+The hand covers a ``hand_mm`` square centred at C, divided into ``squares x squares``
+squares of ``subgrid x subgrid`` points (FRFs interpolated there). At drive amplitude V
+a square is *active* when at least half of its subgrid points vibrate ``3 JND`` above
+the palm threshold at that frequency: ``q_s V >= X(f)``, with ``q_s`` the
+``ceil(n/2)``-th largest subgrid displacement per volt of the square and
+``X = threshold_palm(f) * 10^(3 jnd/20)``.
+
+For a flow in direction d the axis of symmetry passes through C across the flow
+(vertical for left/right, horizontal for up/down). Part 1 needs the trailing side (the
+squares where the flow starts: left column for ``right``) active and its mirror image,
+the leading side, entirely passive; part 2 the reverse. Squares on the axis are free. So
+for each excitation and frequency a part is possible when ``max_A q > max_B q``
+(A: the side to activate, B: its mirror) and ``X / max_A q`` is within the drive cap.
+Among possible candidates the one with the largest margin ``20 log10(max_A q / max_B q)``
+wins. Both parts then get the same level ``s`` dB above the 3-JND line at their strongest
+active square (equal sensation), with ``s`` at most half of each part's margin so the
+passive side stays below the line. ``up`` is increasing y (mm), ``right`` increasing x.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from console.errors import UserError
+from console.vibration_map import VibrationMap
+from plugins.vibrotactile.interp import interpolate_lattice
+from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.tables import usable_bins
+
+DIRECTIONS = ("left", "right", "up", "down")
+
+
+def side_masks(direction: str, squares: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """(start side, end side) boolean masks (squares, squares) indexed [row(y), col(x)]."""
+    lo = np.zeros((squares, squares), bool)
+    hi = np.zeros((squares, squares), bool)
+    if direction in ("left", "right"):
+        lo[:, 0], hi[:, -1] = True, True
+    elif direction in ("up", "down"):
+        lo[0, :], hi[-1, :] = True, True
+    else:
+        raise UserError(f"--direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
+    return (lo, hi) if direction in ("right", "up") else (hi, lo)
+
+
+def square_levels(
+    m: VibrationMap,
+    center_mm,
+    *,
+    hand_mm: float = 120.0,
+    squares: int = 3,
+    subgrid: int = 15,
+    band_hz: float = 650.0,
+    method: str = "spline",
+    stride: int = 1,
+    bins: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``q`` (E, squares, squares, K) um/V and the bin indices (K,) into ``m.freq_hz``.
+
+    ``stride`` > 1 keeps every stride-th subgrid point per direction (a fast screen).
+    """
+    keep = usable_bins(m, band_hz) if bins is None else np.asarray(bins)
+    cx, cy = (float(v) for v in center_mm)
+    sub = hand_mm / (squares * subgrid)
+    local = np.arange(subgrid)[stride // 2 :: stride]
+    n = local.size
+    offs = (
+        (np.arange(squares)[:, None] * subgrid + local[None, :]).ravel() + 0.5
+    ) * sub - hand_mm / 2
+    h = interpolate_lattice(m, cx + offs, cy + offs, method, frf=m.frf_um_per_v[:, :, keep])
+    amp = np.abs(h).astype(np.float32)  # (E, S*n, S*n, K)
+    e, _, _, k = amp.shape
+    amp = (
+        amp.reshape(e, squares, n, squares, n, k)
+        .transpose(0, 1, 3, 2, 4, 5)
+        .reshape(e, squares, squares, n * n, k)
+    )
+    rank = math.ceil(n * n / 2)  # at least half the points
+    q = -np.partition(-amp, rank - 1, axis=3)[:, :, :, rank - 1]
+    return q, keep
+
+
+def part_scores(
+    q: np.ndarray, side_a: np.ndarray, side_b: np.ndarray, x_um: np.ndarray, cap_v: float
+):
+    """(margin_db (E, K) with -inf where impossible, max_A q, max_B q)."""
+    qa = q[:, side_a].max(axis=1)
+    qb = q[:, side_b].max(axis=1)
+    with np.errstate(divide="ignore"):
+        margin = 20 * np.log10(qa / np.maximum(qb, 1e-30))
+    ok = (qa > qb) & (x_um[None, :] / np.maximum(qa, 1e-30) <= cap_v)
+    return np.where(ok, margin, -np.inf), qa, qb
+
+
+def choose(
+    q: np.ndarray,
+    keep: np.ndarray,
+    m: VibrationMap,
+    direction: str,
+    perception: Perception,
+    cap_v: float,
+    *,
+    top: int = 0,
+) -> dict:
+    """The two parts for ``direction`` from square levels ``q``; ``top`` > 0 also returns
+    the ``top`` best candidate bins per part (for exact re-scoring after a screen)."""
+    squares = q.shape[1]
+    start, end = side_masks(direction, squares)
+    f = m.freq_hz[keep]
+    x_um = perception.threshold_um(f, "palm") * 10 ** (3 * perception.jnd_db / 20)
+    parts, cands = [], []
+    for a, b in ((start, end), (end, start)):
+        score, qa, qb = part_scores(q, a, b, x_um, cap_v)
+        flat = int(np.argmax(score))
+        e, k = np.unravel_index(flat, score.shape)
+        if top:
+            order = np.argsort(score, axis=None)[::-1][:top]
+            cands.extend(keep[np.unravel_index(order, score.shape)[1]].tolist())
+        if not np.isfinite(score[e, k]):
+            parts.append(None)
+            continue
+        parts.append(
+            {
+                "actuator": m.excitations[e],
+                "frequency_hz": float(f[k]),
+                "margin_db": float(score[e, k]),
+                "qa": float(qa[e, k]),
+                "qb": float(qb[e, k]),
+                "x_um": float(x_um[k]),
+                "e": int(e),
+                "k": int(k),
+            }
+        )
+    out = {
+        "direction": direction,
+        "ok": all(p is not None for p in parts),
+        "candidates": sorted(set(cands)),
+    }
+    if not out["ok"]:
+        which = [i + 1 for i, p in enumerate(parts) if p is None]
+        out["reason"] = (
+            f"part {which[0]}: no excitation/frequency makes the {('start', 'end')[which[0] - 1]} side "
+            f"active with its mirror passive within {cap_v:g} V"
+        )
+        out["parts"] = [p for p in parts if p is not None]
+        return out
+    s = min(min(p["margin_db"] / 2, 20 * np.log10(cap_v * p["qa"] / p["x_um"])) for p in parts)
+    for p in parts:
+        v = p["x_um"] / p["qa"] * 10 ** (s / 20)
+        p["amplitude_v"] = float(v)
+        p["active"] = (q[p["e"], :, :, p["k"]] * v >= p["x_um"]).tolist()
+    out["level_above_3jnd_db"] = float(s)
+    out["parts"] = parts
+    return out
+
+
+def hand_flow(
+    m: VibrationMap,
+    center_mm,
+    direction: str,
+    perception: Perception,
+    *,
+    cap_v: float = 95.0,
+    hand_mm: float = 120.0,
+    squares: int = 3,
+    subgrid: int = 15,
+    band_hz: float = 650.0,
+    method: str = "spline",
+    screen_stride: int = 1,
+    top: int = 8,
+) -> dict:
+    """Flow under a hand at ``center_mm`` in ``direction``: the two parts and their
+    active-square maps. ``screen_stride`` > 1: screen every bin on a sparser subgrid, then
+    re-score the ``top`` candidates per part exactly (what the whole-table sweep uses)."""
+    kw = dict(hand_mm=hand_mm, squares=squares, subgrid=subgrid, band_hz=band_hz, method=method)
+    if screen_stride > 1:
+        q, keep = square_levels(m, center_mm, stride=screen_stride, **kw)
+        bins = choose(q, keep, m, direction, perception, cap_v, top=top)["candidates"]
+        q, keep = square_levels(m, center_mm, bins=np.array(bins), **kw)
+    else:
+        q, keep = square_levels(m, center_mm, **kw)
+    out = choose(q, keep, m, direction, perception, cap_v)
+    out["center_mm"] = [float(c) for c in center_mm]
+    out["hand_mm"] = hand_mm
+    return out
+
+
+def region_centers(m: VibrationMap, hand_mm: float, step_mm: float) -> np.ndarray:
+    """Hand centres (N, 2) at ``step_mm`` steps where the hand lies inside the grid."""
+    lo = m.points_mm.min(axis=0) + hand_mm / 2
+    hi = m.points_mm.max(axis=0) - hand_mm / 2
+    if np.any(hi < lo):
+        raise UserError(f"a {hand_mm:g} mm hand does not fit inside the measured grid")
+    xs = np.arange(lo[0], hi[0] + 1e-9, step_mm)
+    ys = np.arange(lo[1], hi[1] + 1e-9, step_mm)
+    return np.array([(x, y) for y in ys for x in xs])
+
+
+def hand_flow_table(
+    m: VibrationMap,
+    perception: Perception,
+    *,
+    step_mm: float = 10.0,
+    cap_v: float = 95.0,
+    hand_mm: float = 120.0,
+    squares: int = 3,
+    subgrid: int = 15,
+    band_hz: float = 650.0,
+    method: str = "spline",
+    screen_stride: int = 3,
+    top: int = 8,
+    centers: np.ndarray | None = None,
+    progress: Callable[[float, str], None] | None = None,
+) -> dict:
+    """Every region at ``step_mm`` steps, all four directions: arrays for a cache file.
+
+    Returns ``centers_mm`` (N, 2), and per direction d (index in ``DIRECTIONS``):
+    ``ok`` (N, 4), ``actuator`` (N, 4, 2) excitation index or -1, ``frequency_hz``,
+    ``amplitude_v``, ``margin_db`` (N, 4, 2), ``active`` (N, 4, 2, S, S).
+    """
+    c = region_centers(m, hand_mm, step_mm) if centers is None else np.asarray(centers, float)
+    n = len(c)
+    ok = np.zeros((n, 4), bool)
+    act = np.full((n, 4, 2), -1, np.int8)
+    freq = np.full((n, 4, 2), np.nan)
+    volt = np.full((n, 4, 2), np.nan)
+    margin = np.full((n, 4, 2), np.nan)
+    active = np.zeros((n, 4, 2, squares, squares), bool)
+    kw = dict(hand_mm=hand_mm, squares=squares, subgrid=subgrid, band_hz=band_hz, method=method)
+    for i, cen in enumerate(c):
+        if screen_stride > 1:
+            q, keep = square_levels(m, cen, stride=screen_stride, **kw)
+            bins = sorted(
+                {
+                    b
+                    for d in DIRECTIONS
+                    for b in choose(q, keep, m, d, perception, cap_v, top=top)["candidates"]
+                }
+            )
+            q, keep = square_levels(m, cen, bins=np.array(bins), **kw)
+        else:
+            q, keep = square_levels(m, cen, **kw)
+        for j, d in enumerate(DIRECTIONS):
+            r = choose(q, keep, m, d, perception, cap_v)
+            ok[i, j] = r["ok"]
+            if r["ok"]:
+                for p_i, p in enumerate(r["parts"]):
+                    act[i, j, p_i] = p["e"]
+                    freq[i, j, p_i] = p["frequency_hz"]
+                    volt[i, j, p_i] = p["amplitude_v"]
+                    margin[i, j, p_i] = p["margin_db"]
+                    active[i, j, p_i] = p["active"]
+        if progress and (i % 10 == 0 or i == n - 1):
+            progress((i + 1) / n, f"flow-under-hand maps {i + 1}/{n}")
+    return {
+        "centers_mm": c,
+        "ok": ok,
+        "actuator": act,
+        "frequency_hz": freq,
+        "amplitude_v": volt,
+        "margin_db": margin,
+        "active": active,
+    }
