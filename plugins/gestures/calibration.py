@@ -29,7 +29,7 @@ import numpy as np
 from console.errors import UserError
 
 #: Smoothing candidates for the residual RBF (thin-plate kernel on pixel distances).
-SMOOTHING = (0.0, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4)
+SMOOTHING = (0.0, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6)
 MIN_PAIRS_FOR_CORRECTION = 8
 
 
@@ -163,24 +163,40 @@ def _rbf_pred(px, resid, smoothing, query):
     return rbf(query)
 
 
-def _loo(px: np.ndarray, mm: np.ndarray, smoothing: float | None) -> float:
-    """Leave-one-out RMS (mm) of homography (+ RBF with ``smoothing``)."""
+def _loo(px: np.ndarray, mm: np.ndarray, smoothing: float | None) -> np.ndarray:
+    """Leave-one-out errors (mm) of homography (+ RBF with ``smoothing``), per point."""
     n = len(px)
-    errs = []
+    errs = np.full(n, np.inf)
     for i in range(n):
         keep = np.arange(n) != i
         h = _fit_h(px[keep], mm[keep])
         if h is None:
-            return math.inf
+            continue
         pred = apply_homography(h, px[i : i + 1])
         if smoothing is not None:
             resid = mm[keep] - apply_homography(h, px[keep])
             try:
                 pred = pred + _rbf_pred(px[keep], resid, smoothing, px[i : i + 1])
             except (np.linalg.LinAlgError, ValueError):
-                return math.inf
-        errs.append(float(np.sum((pred[0] - mm[i]) ** 2)))
-    return math.sqrt(float(np.mean(errs)))
+                continue
+        errs[i] = float(np.hypot(*(pred[0] - mm[i])))
+    return errs
+
+
+def _rms(e: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(e**2)))
+
+
+def _best_model(px, mm, correction) -> tuple[float | None, np.ndarray, np.ndarray]:
+    """(smoothing or None, LOO errors of that model, LOO errors of the homography)."""
+    loo_h = _loo(px, mm, None)
+    best: tuple[float | None, np.ndarray] = (None, loo_h)
+    if correction and len(px) >= MIN_PAIRS_FOR_CORRECTION:
+        for s in SMOOTHING:
+            e = _loo(px, mm, s)
+            if _rms(e) < _rms(best[1]) * 0.98:  # a correction must earn its place
+                best = (s, e)
+    return best[0], best[1], loo_h
 
 
 def calibrate(
@@ -193,7 +209,10 @@ def calibrate(
 ) -> Calibration:
     """Fit the pixel -> mm mapping from touched pixels and their target positions.
 
-    ``outlier_mm``: a touch whose homography error exceeds this is an outlier (RANSAC).
+    Outliers: RANSAC on the homography with a loose ``3 * outlier_mm`` threshold drops
+    gross mistakes (lens distortion alone can move the corners by more than
+    ``outlier_mm``); then, while the worst leave-one-out error of the full model exceeds
+    ``outlier_mm`` and three times the median, that touch is dropped too.
     At least 4 pairs (8 for the residual correction), not all on one line.
     """
     px = np.asarray(pairs_px, dtype=np.float64).reshape(-1, 2)
@@ -208,44 +227,48 @@ def calibrate(
         )
     if not (np.all(np.isfinite(px)) and np.all(np.isfinite(mm))):
         raise UserError("touch calibration: a touch or target is not a finite number; redo it")
-    h, mask = cv2.findHomography(px, mm, cv2.RANSAC, outlier_mm, maxIters=4000, confidence=0.999)
+    h, mask = cv2.findHomography(
+        px, mm, cv2.RANSAC, 3 * outlier_mm, maxIters=4000, confidence=0.999
+    )
     if h is None or not np.all(np.isfinite(h)):
         raise UserError(
             "touch calibration: the touches are degenerate (on one line or repeated); "
             "touch targets spread over the whole table"
         )
     inl = mask.ravel().astype(bool)
-    if inl.sum() < 4:
-        raise UserError(
-            f"touch calibration: only {int(inl.sum())} touches agree with each other; redo it"
-        )
+    for _ in range(max(1, len(px) // 8) + 1):
+        if inl.sum() < 4:
+            raise UserError(
+                f"touch calibration: only {int(inl.sum())} touches agree with each other; redo it"
+            )
+        idx = np.flatnonzero(inl)
+        smoothing, loo, loo_h = _best_model(px[idx], mm[idx], correction)
+        worst = int(np.argmax(loo))
+        if len(idx) > 6 and loo[worst] > outlier_mm and loo[worst] > 3 * np.median(loo):
+            inl[idx[worst]] = False
+            continue
+        break
     pin, tin = px[inl], mm[inl]
     h = _fit_h(pin, tin)  # least squares on the inliers
-    if h is None:
-        raise UserError("touch calibration: the inlier touches are degenerate; redo it")
-    resid = tin - apply_homography(h, pin)
-    loo_h = _loo(pin, tin, None)
-    smoothing: float | None = None
-    loo_best = loo_h
-    if correction and len(pin) >= MIN_PAIRS_FOR_CORRECTION:
-        for s in SMOOTHING:
-            e = _loo(pin, tin, s)
-            if e < loo_best * 0.98:  # a correction must earn its place
-                smoothing, loo_best = s, e
+    if h is None or not np.all(np.isfinite(loo_h)):
+        raise UserError(
+            "touch calibration: the touches are degenerate (on one line or repeated); "
+            "touch targets spread over the whole table"
+        )
     cal = Calibration(
         homography=h,
         centers_px=pin,
-        residuals_mm=resid,
+        residuals_mm=tin - apply_homography(h, pin),
         smoothing=smoothing,
         inliers=inl,
         rms_mm=0.0,
         max_mm=0.0,
-        loo_rms_mm=loo_best,
-        loo_rms_homography_mm=loo_h,
+        loo_rms_mm=_rms(loo),
+        loo_rms_homography_mm=_rms(loo_h),
         image_px=image_px,
     )
     err = np.hypot(*(cal.px_to_mm(pin) - tin).T)
-    cal.rms_mm = float(np.sqrt(np.mean(err**2)))
+    cal.rms_mm = _rms(err)
     cal.max_mm = float(err.max())
     return cal
 
