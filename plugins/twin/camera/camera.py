@@ -1,0 +1,409 @@
+"""The streaming camera twin: a ``console.types.Camera`` driven by a script.
+
+Scripts say which hands are where at frame ``k``:
+
+- ``IdleScript``: the empty table.
+- ``SequenceScript``: gestures one after another with idle gaps (loops).
+- ``TouchScript``: a finger touches given table points in turn (touch calibration);
+  ``TwinCamera.set_target(pos_mm)`` switches to touching one projected target on
+  demand, like an operator reacting to the projector.
+
+Touches land with a realistic error: the contact pad sits a little behind where the
+person aims (``bias_mm`` back along the finger) plus a random scatter (``error_mm``
+standard deviation per axis). ``camera.truth`` holds the ground truth of the last frame
+(contacts in px and mm, hand centre and angle, gesture label, touch target).
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from console.types import Frame
+
+from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose
+from .hand import FingerPose, HandPose, Subject, hand_pieces, make_subject
+from .render import Rig
+from .sample import DYNAMIC_FRAMES, render_frame
+
+Hands = list[tuple[Subject, HandPose]]
+
+
+class Script(Protocol):
+    """What the camera shows at frame ``k`` (time ``t_s``): hands, label, extra truth."""
+
+    def hands(self, k: int, t_s: float, rng: np.random.Generator) -> tuple[Hands, str, dict]: ...
+
+
+class IdleScript:
+    """The empty table."""
+
+    name = "idle"
+
+    def hands(self, k, t_s, rng):
+        return [], "idle", {}
+
+
+@dataclass
+class _Item:
+    gesture: str
+    subject: Subject
+    side: str | None
+    n_frames: int
+    start: int = 0
+    take: Any = None
+
+
+class SequenceScript:
+    """Gestures in turn, ``gap_frames`` of empty table before each; loops if asked.
+
+    ``items``: (gesture, subject name, hand side or None, frames or None) tuples."""
+
+    name = "sequence"
+
+    def __init__(
+        self,
+        items: list[tuple[str, str, str | None, int | None]],
+        *,
+        table_mm: tuple[float, float],
+        fps: float = 60.0,
+        gap_frames: int = 30,
+        loop: bool = True,
+        subject_seed: int = 0,
+        seed: int = 0,
+    ) -> None:
+        self.items: list[_Item] = []
+        self.table_mm, self.fps, self.gap, self.loop = table_mm, fps, gap_frames, loop
+        self._rng = np.random.default_rng(seed)
+        self._subject_seed = subject_seed
+        self._end = 0
+        for it in items:
+            self.add(*it)
+
+    def add(
+        self,
+        gesture: str,
+        subject: str = "s1",
+        side: str | None = None,
+        n_frames: int | None = None,
+        *,
+        at: int | None = None,
+    ) -> None:
+        """Append a gesture (starting after a gap, no earlier than frame ``at``)."""
+        if gesture not in GESTURES:
+            raise ValueError(f"unknown gesture {gesture!r}; use one of {', '.join(GESTURES)}")
+        n = n_frames or (2 * DYNAMIC_FRAMES if gesture in DYNAMIC else 45)
+        start = max(self._end, at or 0) + self.gap
+        subj = make_subject(subject, self._subject_seed)
+        item = _Item(gesture, subj, side, n, start)
+        item.take = plan_take(
+            gesture, subj, self._rng, self.table_mm, side=side, duration_s=n / self.fps
+        )
+        self.items.append(item)
+        self._end = start + n
+
+    def hands(self, k, t_s, rng):
+        if not self.items:
+            return [], "idle", {}
+        if self.loop and self._end > 0:
+            k = k % self._end
+        for it in self.items:
+            if it.start <= k < it.start + it.n_frames:
+                t = (k - it.start) / self.fps
+                return (
+                    [(it.subject, take_pose(it.take, t, rng))],
+                    it.gesture,
+                    {"gesture_frame": k - it.start},
+                )
+        return [], "idle", {}
+
+
+def _touch_pose(
+    subject: Subject,
+    target_mm: np.ndarray,
+    heading_deg: float,
+    side: str,
+    touching: bool,
+    hover_mm: float,
+) -> HandPose:
+    """A pointing hand whose index contact (or hovering tip) is at ``target_mm``."""
+    curl = FingerPose((70, 95, 45), 0.0, False, subject.lift_mm)
+    thumb = FingerPose((25, 35, 25), -5, False, subject.lift_mm + 6)
+    index = (
+        FingerPose((0, 15, 10), 0.0, True)
+        if touching
+        else FingerPose((0, 15, 10), 0.0, False, hover_mm)
+    )
+    hp = subject.palm_lift_mm
+    pose = HandPose((0.0, 0.0), heading_deg, side, (hp + 5, hp), (thumb, index, curl, curl, curl))
+    geo = hand_pieces(subject, pose)
+    if touching and geo.contacts:
+        at = np.array(geo.contacts[0]["pos_mm"])
+    else:
+        at = np.array(geo.tips_mm["index"][:2])
+    d = np.asarray(target_mm, dtype=float) - at
+    return pose.moved((float(d[0]), float(d[1])))
+
+
+def _heading_towards(p_mm: np.ndarray, table_mm: tuple[float, float]) -> float:
+    """The operator reaches from the nearest table edge."""
+    w, h = table_mm
+    dist = {"bottom": p_mm[1], "top": h - p_mm[1], "left": p_mm[0], "right": w - p_mm[0]}
+    edge = min(dist, key=dist.get)
+    return dict(SIDES)[edge]
+
+
+class TouchScript:
+    """A finger touches each point in turn: hover ``approach_frames``, touch
+    ``dwell_frames``, then ``gap_frames`` of empty table. Loops over the points."""
+
+    name = "touch"
+
+    def __init__(
+        self,
+        points_mm,
+        *,
+        table_mm: tuple[float, float],
+        subject: str = "s1",
+        side: str = "right",
+        dwell_frames: int = 20,
+        approach_frames: int = 6,
+        gap_frames: int = 12,
+        error_mm: float = 1.5,
+        bias_mm: float = 2.0,
+        subject_seed: int = 0,
+        seed: int = 0,
+        loop: bool = True,
+    ) -> None:
+        self.points = np.asarray(points_mm, dtype=float).reshape(-1, 2)
+        self.table_mm = table_mm
+        self.subject = make_subject(subject, subject_seed)
+        self.side = side
+        self.dwell, self.approach, self.gap = dwell_frames, approach_frames, gap_frames
+        self.loop = loop
+        rng = np.random.default_rng(seed)
+        self.headings = [_heading_towards(p, table_mm) + rng.normal(0, 10) for p in self.points]
+        self.hits = []  # where each touch really lands (mm)
+        for p, hd in zip(self.points, self.headings, strict=True):
+            back = -np.array([np.cos(np.radians(hd)), np.sin(np.radians(hd))])
+            self.hits.append(p + bias_mm * back + rng.normal(0, error_mm, 2))
+        self.period = self.approach + self.dwell + self.gap
+
+    def hands(self, k, t_s, rng):
+        n = len(self.points)
+        if n == 0:
+            return [], "idle", {}
+        i, j = divmod(k, self.period)
+        if i >= n and not self.loop:
+            return [], "idle", {}
+        i %= n
+        extra = {"target_index": int(i), "target_mm": [float(v) for v in self.points[i]]}
+        if j >= self.approach + self.dwell:
+            return [], "idle", extra
+        touching = j >= self.approach
+        hover = 3.0 + 4.0 * (self.approach - j) if not touching else 0.0
+        pose = _touch_pose(self.subject, self.hits[i], self.headings[i], self.side, touching, hover)
+        pose = pose.moved(tuple(rng.normal(0, 0.15, 2)))
+        extra["touching"] = touching
+        return [(self.subject, pose)], "touch" if touching else "hover", extra
+
+
+class TwinCamera:
+    """The IR camera twin: ``read()`` paced at ``fps`` (or as fast as asked when
+    ``realtime=False``), ``status()`` with measured fps and dropped frames."""
+
+    def __init__(
+        self,
+        rig: Rig | None = None,
+        script: Script | None = None,
+        *,
+        fps: float = 60.0,
+        realtime: bool = True,
+        seed: int = 0,
+        subject_seed: int = 0,
+        noise: bool = True,
+        touch_error_mm: float = 1.5,
+        touch_bias_mm: float = 2.0,
+    ) -> None:
+        self.rig = rig or Rig()
+        self.fps = float(fps)
+        self.realtime = realtime
+        self.script: Script = script or IdleScript()
+        self.noise = noise
+        self.subject_seed = subject_seed
+        self.touch_error_mm, self.touch_bias_mm = touch_error_mm, touch_bias_mm
+        self._rng = np.random.default_rng(seed)
+        self._seed = seed
+        self._lock = threading.Lock()
+        self._k = 0  # next frame index
+        self._t0: float | None = None
+        self._dropped = 0
+        self._frames = 0
+        self._times: collections.deque[float] = collections.deque(maxlen=61)
+        self._closed = False
+        self.truth: dict[str, Any] | None = None
+
+    # ------------------------------------------------------------------ scripting
+    def set_script(self, script: Script) -> None:
+        with self._lock:
+            self.script = script
+
+    def perform(
+        self,
+        gesture: str,
+        subject: str = "s1",
+        side: str | None = None,
+        n_frames: int | None = None,
+        gap_frames: int = 0,
+    ) -> int:
+        """Perform one gesture from the next frame on; returns its first frame index
+        (after ``gap_frames`` of empty table). Used by ``gestures record``."""
+        with self._lock:
+            seq = SequenceScript(
+                [],
+                table_mm=self.rig.mapping.table_mm,
+                fps=self.fps,
+                gap_frames=gap_frames,
+                loop=False,
+                subject_seed=self.subject_seed,
+                seed=int(self._rng.integers(2**31)),
+            )
+            seq.add(gesture, subject, side, n_frames, at=self._k)
+            self.script = seq
+            return self._k + gap_frames
+
+    def set_target(
+        self,
+        pos_mm: tuple[float, float] | None,
+        subject: str = "s1",
+        side: str = "right",
+        reaction_frames: int = 12,
+    ) -> None:
+        """Show a projected target: the operator's finger touches it after a reaction
+        time and stays until the next target (``None``: hands off the table)."""
+        with self._lock:
+            if pos_mm is None:
+                self.script = IdleScript()
+                return
+            ts = TouchScript(
+                [pos_mm],
+                table_mm=self.rig.mapping.table_mm,
+                subject=subject,
+                side=side,
+                dwell_frames=10**9,
+                approach_frames=6,
+                gap_frames=0,
+                error_mm=self.touch_error_mm,
+                bias_mm=self.touch_bias_mm,
+                subject_seed=self.subject_seed,
+                seed=int(self._rng.integers(2**31)),
+                loop=False,
+            )
+            self.script = _Delayed(ts, self._k + reaction_frames)
+
+    # ------------------------------------------------------------------ Camera protocol
+    def read(self, timeout_s: float = 0.1) -> Frame | None:
+        if self._closed:
+            return None
+        now = time.monotonic()
+        if self.realtime:
+            if self._t0 is None:
+                self._t0 = now - self._k / self.fps
+            due = self._t0 + self._k / self.fps
+            wait = due - now
+            if wait > timeout_s:
+                time.sleep(max(timeout_s, 0.0))
+                return None
+            if wait > 0:
+                time.sleep(wait)
+            elif -wait >= 1.0 / self.fps:  # we are late: those frames were lost
+                missed = int(-wait * self.fps)
+                self._dropped += missed
+                self._k += missed
+                due = self._t0 + self._k / self.fps
+            t_capture = due
+        else:
+            t_capture = now
+        with self._lock:
+            k = self._k
+            self._k += 1
+            t_s = k / self.fps
+            hands, label, extra = self.script.hands(k, t_s, self._rng)
+            img, truth = render_frame(
+                hands, self.rig, t_s, self._rng, label=label, noise=self.noise
+            )
+        truth.update(extra)
+        truth["seq"] = k
+        self.truth = truth
+        self._frames += 1
+        self._times.append(time.monotonic())
+        return Frame(image=img, seq=k, t_capture_s=t_capture, source="twin")
+
+    def background(self) -> np.ndarray:
+        """The empty table now (for a background capture without lifting the hands)."""
+        return render_frame([], self.rig, self._k / self.fps, self._rng, noise=self.noise)[0]
+
+    def close(self) -> None:
+        self._closed = True
+
+    def measured_fps(self) -> float:
+        """Frames delivered per second over the last (up to) 60 frames."""
+        if len(self._times) < 2 or self._times[-1] <= self._times[0]:
+            return 0.0
+        return (len(self._times) - 1) / (self._times[-1] - self._times[0])
+
+    def status(self) -> dict[str, Any]:
+        return {
+            "driver": "twin",
+            "fps": round(self.measured_fps(), 2),
+            "nominal_fps": self.fps,
+            "dropped": self._dropped,
+            "frames": self._frames,
+            "realtime": self.realtime,
+            "script": getattr(self.script, "name", type(self.script).__name__),
+            "size_px": list(self.rig.mapping.image_px),
+            "lens_distortion": self.rig.mapping.distorted,
+            "closed": self._closed,
+        }
+
+
+class _Delayed:
+    """Run ``inner`` from frame ``start`` on (empty table before)."""
+
+    def __init__(self, inner: Script, start: int) -> None:
+        self.inner, self.start = inner, start
+        self.name = getattr(inner, "name", "script")
+
+    def hands(self, k, t_s, rng):
+        if k < self.start:
+            return [], "idle", {}
+        return self.inner.hands(k - self.start, t_s, rng)
+
+
+def demo_script(
+    table_mm,
+    fps: float,
+    subject: str = "s1",
+    side: str | None = None,
+    gap_frames: int = 30,
+    subject_seed: int = 0,
+    seed: int = 0,
+) -> SequenceScript:
+    """Every gesture once, in the paper's order, looping (the console's default view)."""
+    items = [(g, subject, side, None) for g in GESTURES]
+    return SequenceScript(
+        items,
+        table_mm=table_mm,
+        fps=fps,
+        gap_frames=gap_frames,
+        subject_seed=subject_seed,
+        seed=seed,
+    )
+
+
+__all__ = ["IdleScript", "SequenceScript", "TouchScript", "TwinCamera", "demo_script"]

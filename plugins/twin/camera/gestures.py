@@ -1,0 +1,275 @@
+"""Scripted gestures of the camera twin (paper Fig. 3): poses over time, per subject.
+
+A *take* is one performance of a gesture: where on the table, from which side, which
+hand, how fast, in which direction. ``plan_take`` draws one from a subject's style and
+a generator; ``take_pose(take, t_s)`` gives the hand pose ``t_s`` seconds after the
+gesture's first frame (the first frame already shows the gesture: contact made, and
+for dynamic gestures motion under way).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .hand import FingerPose, HandPose, Subject, hand_pieces
+
+STATIC: tuple[str, ...] = ("one_finger", "two_finger", "l_shape", "closed_hand", "open_hand")
+DYNAMIC: tuple[str, ...] = ("drag", "rotate", "spread_pile", "wipe", "zoom")
+GESTURES: tuple[str, ...] = STATIC + DYNAMIC
+
+
+@dataclass(frozen=True)
+class Take:
+    """One performance of a gesture."""
+
+    gesture: str
+    subject: Subject
+    side: str
+    wrist_mm: tuple[float, float]
+    angle_deg: float
+    rate: float  # motion speed (mm/s, deg/s, or pose fraction per second)
+    direction: float  # path direction (deg, relative to the hand) or +-1
+    variant: str = ""  # "in"/"out", "spread"/"pile", "cw"/"ccw"
+    jitter: tuple[float, ...] = field(default=(0.0,) * 8)  # per-take pose variation
+    tremor: bool = True
+    seed: int = 0
+
+
+def _curled(s: Subject, j: float, lift_extra: float = 0.0) -> FingerPose:
+    return FingerPose((70 + 8 * j, 95 - 6 * j, 45), 0.0, False, s.lift_mm + lift_extra)
+
+
+def _point(j: float, abd: float = 0.0) -> FingerPose:
+    return FingerPose((0.0, 12 + 8 * j, 8 + 4 * j), abd, True)
+
+
+def _flat(abd: float) -> FingerPose:
+    return FingerPose((0.0, 2.0, 2.0), abd, True)
+
+
+def static_pose(gesture: str, s: Subject, j: tuple[float, ...]) -> tuple:
+    """(palm heights, finger poses) of a static gesture; ``j`` = per-take jitter in [-1, 1]."""
+    sp = s.spread_deg
+    hp = s.palm_lift_mm + 4 * j[0]
+    thumb_up = FingerPose((25, 35, 25), -5 + 5 * j[1], False, s.lift_mm + 6)
+    if gesture == "one_finger":
+        return (hp + 5, hp), (
+            thumb_up,
+            _point(j[2]),
+            _curled(s, j[3]),
+            _curled(s, j[3]),
+            _curled(s, j[4]),
+        )
+    if gesture == "two_finger":
+        return (hp + 5, hp), (
+            thumb_up,
+            _point(j[2], -4 * sp + 2 * j[5]),
+            _point(j[3], 4 * sp + 2 * j[6]),
+            _curled(s, j[4], 3),
+            _curled(s, j[4], 3),
+        )
+    if gesture == "l_shape":
+        hl = 10 + 3 * j[0]
+        return (hl + 4, hl), (
+            _flat(-38 * sp + 4 * j[1]),
+            _flat(-2 + 2 * j[2]),
+            _curled(s, j[3]),
+            _curled(s, j[3]),
+            _curled(s, j[4]),
+        )
+    if gesture == "closed_hand":
+        return (0.0, 0.0), (
+            _flat(22 + 3 * j[1]),
+            _flat(5 + j[2]),
+            _flat(0.0),
+            _flat(-4 + j[3]),
+            _flat(-10 + j[4]),
+        )
+    if gesture == "open_hand":
+        return (0.0, 0.0), (
+            _flat(-25 * sp + 4 * j[1]),
+            _flat(-12 * sp + 2 * j[2]),
+            _flat(j[5]),
+            _flat(9 * sp + 2 * j[3]),
+            _flat(20 * sp + 3 * j[4]),
+        )
+    raise ValueError(f"not a static gesture: {gesture!r}")
+
+
+def _lerp(a: float, b: float, p: float) -> float:
+    return a + (b - a) * p
+
+
+def _pinch_fingers(s: Subject, p: float, j) -> tuple:
+    """Thumb and index touching; ``p`` = 0 pinched together .. 1 spread apart."""
+    thumb = FingerPose(
+        (_lerp(25, 5, p), _lerp(30, 5, p), _lerp(25, 5, p)), _lerp(20, -25, p) + 3 * j[1], True
+    )
+    index = FingerPose((0.0, _lerp(55, 10, p), _lerp(35, 5, p)), _lerp(-8, 0, p), True)
+    c = _curled(s, j[3], 4)
+    return (thumb, index, c, c, c)
+
+
+def _five_fingers(s: Subject, p: float, j) -> tuple:
+    """All five tips touching; ``p`` = 0 piled together .. 1 spread out."""
+    sp = s.spread_deg
+    f = []
+    for k, abd_open in enumerate((-28 * sp, -12 * sp, 0.0, 10 * sp, 22 * sp)):
+        flex = (0.0, _lerp(70, 12, p), _lerp(40, 8, p))
+        abd = _lerp(abd_open * 0.1 + (12 if k == 0 else 0), abd_open, p)
+        f.append(FingerPose(flex, abd + j[k] * 1.5, True))
+    return tuple(f)
+
+
+def _unit(deg: float) -> np.ndarray:
+    a = np.radians(deg)
+    return np.array([np.cos(a), np.sin(a)])
+
+
+def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) -> HandPose:
+    """The hand pose ``t_s`` seconds into a take (tremor from ``rng`` when given)."""
+    s, j, g = take.subject, take.jitter, take.gesture
+    base = HandPose(take.wrist_mm, take.angle_deg, take.side)
+    if g in STATIC:
+        palm, fingers = static_pose(g, s, j)
+        pose = replace(base, palm_h_mm=palm, fingers=fingers)
+    elif g == "drag":
+        palm, fingers = static_pose("one_finger", s, j)
+        d = np.radians(take.angle_deg + take.direction)
+        dist = take.rate * t_s
+        curv = s.curvature + 0.002 * j[6]
+        # arc of curvature ``curv`` starting along ``d``
+        if abs(curv) < 1e-6:
+            off = dist * np.array([np.cos(d), np.sin(d)])
+        else:
+            r = 1 / curv
+            off = r * np.array(
+                [np.sin(d + dist * curv) - np.sin(d), np.cos(d) - np.cos(d + dist * curv)]
+            )
+        pose = replace(base, palm_h_mm=palm, fingers=fingers).moved(tuple(off), 8 * j[7] * t_s)
+    elif g == "rotate":
+        hp = s.palm_lift_mm - 5
+        c = _curled(s, j[3], 2)
+        thumb = FingerPose((10, 15, 10), -15 + 4 * j[1], True)
+        fingers = (thumb, _point(j[2], -6), c, c, c)
+        pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=fingers)
+        pivot = np.array(_tip(s, pose, "thumb"))
+        w = take.direction * take.rate * t_s
+        pose = _rotate_about(pose, pivot, w)
+    elif g == "zoom":
+        p0 = 0.15 + 0.1 * j[0] if take.variant == "in" else 0.85 + 0.1 * j[0]
+        p = float(np.clip(p0 + take.direction * take.rate * t_s, 0, 1))
+        hp = 0.7 * s.palm_lift_mm
+        pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_pinch_fingers(s, p, j))
+    elif g == "spread_pile":
+        p0 = 0.1 + 0.08 * j[0] if take.variant == "spread" else 0.9 + 0.08 * j[0]
+        p = float(np.clip(p0 + take.direction * take.rate * t_s, 0, 1))
+        hp = 0.6 * s.palm_lift_mm
+        pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_five_fingers(s, p, j))
+        # the fingertips move, the hand keeps its middle tip roughly in place
+    elif g == "wipe":
+        palm, fingers = static_pose("closed_hand", s, j)
+        pose = replace(base, palm_h_mm=palm, fingers=fingers)
+        d = np.radians(take.angle_deg + take.direction)
+        dist = take.rate * t_s
+        off = dist * np.array([np.cos(d), np.sin(d)])
+        pose = pose.moved(tuple(off), 25 * j[7] * t_s)
+    else:
+        raise ValueError(f"unknown gesture {g!r}")
+    if take.tremor and rng is not None:
+        pose = pose.moved(tuple(rng.normal(0, s.tremor_mm, 2)), float(rng.normal(0, 0.15)))
+    return pose
+
+
+def _tip(s: Subject, pose: HandPose, finger: str) -> tuple[float, float]:
+    geo = hand_pieces(s, pose)
+    for c in geo.contacts:
+        if c["finger"] == finger:
+            return c["pos_mm"]
+    x, y, _ = geo.tips_mm[finger]
+    return (x, y)
+
+
+def _rotate_about(pose: HandPose, pivot: np.ndarray, d_deg: float) -> HandPose:
+    a = np.radians(d_deg)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    w = pivot + rot @ (np.asarray(pose.wrist_mm) - pivot)
+    return replace(pose, wrist_mm=(float(w[0]), float(w[1])), angle_deg=pose.angle_deg + d_deg)
+
+
+#: Speeds (per second) at subject speed 1: mm/s, deg/s, or pose fraction/s.
+RATES = {
+    "drag": (150.0, 380.0),
+    "rotate": (120.0, 300.0),
+    "zoom": (1.6, 3.2),
+    "spread_pile": (1.6, 3.2),
+    "wipe": (300.0, 650.0),
+}
+
+#: Approach sides: (edge, heading of the fingers in the table frame).
+SIDES = (("bottom", 90.0), ("top", 270.0), ("left", 0.0), ("right", 180.0))
+
+
+def plan_take(
+    gesture: str,
+    subject: Subject,
+    rng: np.random.Generator,
+    table_mm: tuple[float, float],
+    *,
+    side: str | None = None,
+    wrist_mm: tuple[float, float] | None = None,
+    angle_deg: float | None = None,
+    duration_s: float = 0.2,
+    tremor: bool = True,
+) -> Take:
+    """Draw a take: position, approach side, speed and direction in the subject's style."""
+    if gesture not in GESTURES:
+        raise ValueError(f"unknown gesture {gesture!r}; use one of {', '.join(GESTURES)}")
+    side = side or subject.side
+    w, h = table_mm
+    jitter = tuple(float(x) for x in rng.uniform(-1, 1, 8))
+    edge_p = np.array([w, w, h, h]) / (2 * (w + h))
+    _, heading = SIDES[int(rng.choice(4, p=edge_p))]
+    angle = float(heading + rng.normal(0, 20)) if angle_deg is None else float(angle_deg)
+    rate, direction, variant = 0.0, 0.0, ""
+    if gesture in RATES:
+        lo, hi = RATES[gesture]
+        rate = float(rng.uniform(lo, hi) * subject.speed)
+    if gesture == "drag":
+        direction = float(rng.uniform(0, 360))
+    elif gesture == "rotate":
+        direction = float(rng.choice([-1.0, 1.0]))
+        variant = "ccw" if direction > 0 else "cw"
+    elif gesture == "zoom":
+        variant = str(rng.choice(["in", "out"]))
+        direction = 1.0 if variant == "in" else -1.0
+    elif gesture == "spread_pile":
+        variant = str(rng.choice(["spread", "pile"]))
+        direction = 1.0 if variant == "spread" else -1.0
+    elif gesture == "wipe":
+        direction = float(rng.choice([-90.0, 90.0]) + rng.normal(0, 12))
+    if wrist_mm is None:
+        reach = subject.length_mm * 0.55
+        travel = rate * duration_s if gesture in ("drag", "wipe") else 20.0
+        margin = reach + travel + 25.0
+        mx, my = min(margin, w / 2 - 1), min(margin, h / 2 - 1)
+        center = np.array([rng.uniform(mx, w - mx), rng.uniform(my, h - my)])
+        wrist = center - reach * _unit(angle)
+        if gesture in ("drag", "wipe"):  # start behind so the path stays centred
+            wrist -= 0.5 * travel * _unit(angle + direction)
+        wrist_mm = (float(wrist[0]), float(wrist[1]))
+    return Take(
+        gesture,
+        subject,
+        side,
+        wrist_mm,
+        angle,
+        rate,
+        direction,
+        variant,
+        jitter,
+        tremor,
+        int(rng.integers(0, 2**31)),
+    )

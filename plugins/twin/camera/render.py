@@ -1,0 +1,228 @@
+"""Rear-DI image formation for the camera twin (numpy + cv2).
+
+Light model: the glass carries a diffuser lit from below by IR LEDs. Skin pressed on
+the glass reflects strongly and sharply; skin above it reflects less and is blurred by
+the diffuser, both growing with height (``contrast(h)``, ``blur_mm(h)``). The reflected
+light is scaled by the LED illumination (hot spots, vignetting); the empty glass shows
+its own glow with LED hot spots; the table frame outside the glass is dark. Then the
+slow ambient drift (gain and offset), optional sudden illumination steps, and sensor
+noise (read noise plus shot noise) give the 8-bit frame.
+
+Pieces are grouped in height bands; each band is painted lowest-last (a lower piece
+hides what is above it, seen from below), blurred once with the band's blur, and
+composited over the bands above it.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .geometry import TableMapping
+from .hand import Piece
+
+#: Height bands (mm): [lo, hi). Pieces above the last edge are invisible.
+BAND_EDGES_MM = (0.0, 0.5, 4.0, 9.0, 16.0, 28.0, 45.0, 75.0, 130.0)
+CONTACT_LEVEL = 175.0  # grey levels added by touching skin at illumination 1
+HOVER_LEVEL = 105.0  # just above the glass, decaying with height
+HOVER_DECAY_MM = 32.0
+
+
+def contrast(h_mm: float) -> float:
+    """Grey levels added by skin at height ``h_mm`` (illumination 1)."""
+    if h_mm <= BAND_EDGES_MM[1]:
+        return CONTACT_LEVEL
+    return HOVER_LEVEL * float(np.exp(-h_mm / HOVER_DECAY_MM))
+
+
+def blur_mm(h_mm: float) -> float:
+    """Diffuser blur (Gaussian sigma, mm) of skin at height ``h_mm``."""
+    return 0.5 + 0.4 * h_mm
+
+
+@dataclass(frozen=True)
+class Rig:
+    """The camera set-up: mapping, LEDs, noise and drift. Seeded, hashable."""
+
+    mapping: TableMapping = field(default_factory=TableMapping)
+    seed: int = 0
+    glow_level: float = 28.0  # empty-glass grey level
+    hotspot_level: float = 60.0  # LED reflections in the empty glass
+    n_hotspots: int = 6
+    vignetting: float = 0.35  # illumination loss at the image corners
+    noise_sigma: float = 1.8  # read noise, grey levels
+    shot_gain: float = 0.04  # shot-noise variance per grey level
+    drift_gain: float = 0.03  # slow ambient gain drift amplitude
+    drift_offset: float = 3.0  # slow ambient offset drift amplitude (grey levels)
+    drift_period_s: float = 40.0
+    frame_level: float = 8.0  # the table frame seen outside the glass
+
+
+@functools.lru_cache(maxsize=8)
+def rig_maps(rig: Rig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(illumination gain, empty-glass glow, glass mask) images, float32; cached per rig."""
+    w, h = rig.mapping.image_px
+    rng = np.random.default_rng(rig.seed)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    cx, cy = (w - 1) / 2, (h - 1) / 2
+    r2 = ((xx - cx) ** 2 + (yy - cy) ** 2) / (cx**2 + cy**2)
+    vig = 1.0 - rig.vignetting * r2
+    # three LED rows (paper Fig. 1b): broad lobes along the top and across the middle
+    lobes = np.zeros((h, w), np.float32)
+    for row_y in (0.12, 0.5, 0.88):
+        for _ in range(3):
+            x0 = rng.uniform(0.1, 0.9) * w
+            y0 = (row_y + rng.normal(0, 0.04)) * h
+            s = rng.uniform(0.18, 0.3) * w
+            lobes += np.exp(-((xx - x0) ** 2 + (yy - y0) ** 2) / (2 * s * s))
+    lobes /= lobes.max()
+    illum = vig * (0.8 + 0.3 * lobes)
+    glow = rig.glow_level * illum
+    for _ in range(rig.n_hotspots):
+        x0, y0 = rng.uniform(0.05, 0.95) * w, rng.uniform(0.05, 0.95) * h
+        s = rng.uniform(8, 22)
+        glow += (
+            rig.hotspot_level
+            * rng.uniform(0.4, 1.0)
+            * np.exp(-((xx - x0) ** 2 + (yy - y0) ** 2) / (2 * s * s))
+        )
+    mask = np.zeros((h, w), np.uint8)
+    poly = np.round(rig.mapping.table_polygon_px() * 16).astype(np.int32)
+    cv2.fillPoly(mask, [poly], 255, lineType=cv2.LINE_AA, shift=4)
+    maskf = mask.astype(np.float32) / 255.0
+    glow = glow * maskf + rig.frame_level * (1 - maskf)
+    for a in (illum, glow, maskf):
+        a.setflags(write=False)
+    return illum.astype(np.float32), glow.astype(np.float32), maskf
+
+
+def drift(rig: Rig, t_s: float) -> tuple[float, float]:
+    """Slow ambient (gain, offset) at time ``t_s``: two incommensurate sinusoids."""
+    ph = np.random.default_rng(rig.seed + 1).uniform(0, 2 * np.pi, 4)
+    w1 = 2 * np.pi / rig.drift_period_s
+    w2 = w1 * 3.7
+    g = 1 + rig.drift_gain * (0.7 * np.sin(w1 * t_s + ph[0]) + 0.3 * np.sin(w2 * t_s + ph[1]))
+    o = rig.drift_offset * (0.7 * np.sin(w1 * t_s + ph[2]) + 0.3 * np.sin(w2 * t_s + ph[3]))
+    return float(g), float(o)
+
+
+def _band_of(h_mm: float) -> int:
+    for i in range(len(BAND_EDGES_MM) - 1):
+        if h_mm < BAND_EDGES_MM[i + 1]:
+            return i
+    return -1
+
+
+def _blur_roi(img: np.ndarray, sigma_px: float, roi: tuple[int, int, int, int]) -> None:
+    """Gaussian blur of ``img[roi]`` in place (down-sampled for wide blurs)."""
+    x0, y0, x1, y1 = roi
+    sub = img[y0:y1, x0:x1]
+    if sigma_px < 0.6 or sub.size == 0:
+        return
+    if sigma_px > 6 and min(sub.shape) >= 16:
+        f = 4 if sigma_px > 12 else 2
+        small = cv2.resize(
+            sub,
+            (max(sub.shape[1] // f, 1), max(sub.shape[0] // f, 1)),
+            interpolation=cv2.INTER_AREA,
+        )
+        small = cv2.GaussianBlur(small, (0, 0), sigma_px / f)
+        img[y0:y1, x0:x1] = cv2.resize(
+            small, (sub.shape[1], sub.shape[0]), interpolation=cv2.INTER_LINEAR
+        )
+    else:
+        img[y0:y1, x0:x1] = cv2.GaussianBlur(sub, (0, 0), sigma_px)
+
+
+def hand_layer(pieces: list[Piece], mapping: TableMapping) -> np.ndarray:
+    """Grey levels the hands add at illumination 1 (float32 image)."""
+    w, h = mapping.image_px
+    out = np.zeros((h, w), np.float32)
+    ppm = mapping.px_per_mm()
+    bands: dict[int, list[tuple[np.ndarray, float, float]]] = {}
+    visible = [(p, _band_of(p.h_mm)) for p in pieces]
+    visible = [(p, b) for p, b in visible if b >= 0]
+    if not visible:
+        return out
+    sizes = [len(p.poly_mm) for p, _ in visible]
+    allpx = mapping.mm_to_px(np.vstack([p.poly_mm for p, _ in visible]))
+    for (p, b), poly in zip(visible, np.split(allpx, np.cumsum(sizes)[:-1]), strict=True):
+        bands.setdefault(b, []).append((poly, p.h_mm, p.refl))
+    mask = np.zeros((h, w), np.float32)
+    val = np.zeros((h, w), np.float32)
+    for b in sorted(bands, reverse=True):  # highest band first, lower ones composite over
+        items = sorted(bands[b], key=lambda it: -it[1])  # lower pieces paint last
+        h_mid = 0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])
+        sigma = blur_mm(h_mid) * ppm
+        pad = int(3 * sigma + 3)
+        allp = np.vstack([it[0] for it in items])
+        x0 = int(max(np.floor(allp[:, 0].min()) - pad, 0))
+        y0 = int(max(np.floor(allp[:, 1].min()) - pad, 0))
+        x1 = int(min(np.ceil(allp[:, 0].max()) + pad + 1, w))
+        y1 = int(min(np.ceil(allp[:, 1].max()) + pad + 1, h))
+        if x1 <= x0 or y1 <= y0:
+            continue
+        m = mask[y0:y1, x0:x1]
+        v = val[y0:y1, x0:x1]
+        m[:] = 0
+        v[:] = 0
+        off = np.array([x0, y0])
+        for poly, hp, refl in items:
+            pts = np.round((poly - off) * 16).astype(np.int32)
+            cv2.fillPoly(m, [pts], 1.0, lineType=cv2.LINE_AA, shift=4)
+            cv2.fillPoly(v, [pts], contrast(hp) * refl, lineType=cv2.LINE_8, shift=4)
+        v *= m  # antialiased edges
+        _blur_roi(mask, sigma, (x0, y0, x1, y1))
+        _blur_roi(val, sigma, (x0, y0, x1, y1))
+        o = out[y0:y1, x0:x1]
+        o *= 1 - m
+        o += v
+    return out
+
+
+@functools.lru_cache(maxsize=2)
+def _noise_bank(shape: tuple[int, int], seed: int) -> np.ndarray:
+    """Standard-normal noise tiles; a frame takes a random crop (fast, seeded)."""
+    rng = np.random.default_rng(seed + 7)
+    bank = rng.standard_normal((4, shape[0] + NOISE_PAD, shape[1] + NOISE_PAD), np.float32)
+    bank.setflags(write=False)
+    return bank
+
+
+NOISE_PAD = 64
+
+
+def compose(
+    layer: np.ndarray,
+    rig: Rig,
+    t_s: float,
+    rng: np.random.Generator,
+    *,
+    step_gain: float = 1.0,
+    step_offset: float = 0.0,
+    noise: bool = True,
+) -> np.ndarray:
+    """Illumination, glow, drift, steps and sensor noise -> uint8 frame."""
+    illum, glow, maskf = rig_maps(rig)
+    g, o = drift(rig, t_s)
+    img = layer * illum
+    img *= maskf
+    img += glow
+    img *= g * step_gain
+    img += o + step_offset
+    if noise:
+        h, w = img.shape
+        k, dy, dx = rng.integers(0, 4), rng.integers(0, NOISE_PAD), rng.integers(0, NOISE_PAD)
+        n = _noise_bank((h, w), rig.seed)[k, dy : dy + h, dx : dx + w]
+        sd = np.maximum(img, 0)
+        sd *= rig.shot_gain
+        sd += rig.noise_sigma**2
+        np.sqrt(sd, out=sd)
+        sd *= n
+        img += sd
+    img += 0.5
+    np.clip(img, 0, 255, out=img)
+    return img.astype(np.uint8)
