@@ -99,7 +99,7 @@ class Plugins:
         return regs[name]
 
     def plugin_names(self) -> list[str]:
-        return sorted(n for n, _ in self.pm.list_name_plugin() if n)
+        return sorted(n for n, p in self.pm.list_name_plugin() if n and p is not None)
 
 
 def blocked_names() -> set[str]:

@@ -220,6 +220,9 @@ class SafetyGate:
         self.level_v = (0.0, 0.0)  # last sample handed out, volts at the actuators
         self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
         self.events: deque[GateEvent] = deque(maxlen=1000)
+        self._safe = threading.Event()
+        self._safe.set()
+        self._audio_thread: threading.Thread | None = None
         self.listeners: list[Callable[[GateEvent], None]] = []
         self._piezo_scale = 1.0 / limits.piezo_card_v
         self._screen_scale = 1.0 / limits.screen_card_v
@@ -270,6 +273,7 @@ class SafetyGate:
             src = self._source
             hold = self._estopped or self._switching
             clock = self.clock
+        self._audio_thread = threading.current_thread()
         block = None
         if not hold and src is not None:
             try:
@@ -329,7 +333,7 @@ class SafetyGate:
 
     def _fault(self, message: str) -> None:
         self._event("fault", message)
-        self.estop(f"fault: {message}")
+        self.estop(f"fault: {message}", wait=threading.current_thread() is not self._audio_thread)
 
     # ------------------------------------------------------------------ relays
     def switch_relays(self, closed: frozenset[int]) -> None:
@@ -393,10 +397,11 @@ class SafetyGate:
             self._event("fault", f"relay board state unreadable: {exc!r}")
 
     # ------------------------------------------------------------------ e-stop
-    def estop(self, reason: str = "e-stop", *, quiet: bool = False) -> None:
+    def estop(self, reason: str = "e-stop", *, quiet: bool = False, wait: bool = True) -> None:
         """Silence from the next block, drop the queue, then open every relay. Idempotent.
 
         ``quiet`` logs it as an ordinary shutdown (closing the outputs), not an alarm.
+        ``wait=False`` (used from the audio thread) opens the relays on another thread.
         """
         with self._lock:
             first = not self._estopped
@@ -404,6 +409,7 @@ class SafetyGate:
             if first:
                 self.estop_reason = reason
             src = self._source
+            self._safe.clear()
         if src is not None:
             try:
                 src.abort(reason)
@@ -411,7 +417,15 @@ class SafetyGate:
                 log.exception("source abort failed")
         if first:
             self._event("shutdown" if quiet else "estop", reason)
-        # Wait (bounded) for the silence to reach the relays, then open them.
+        if wait:
+            self._open_when_silent()
+        else:
+            threading.Thread(
+                target=self._open_when_silent, name="haptable-estop", daemon=True
+            ).start()
+
+    def _open_when_silent(self) -> None:
+        """Wait (bounded) for the silence to reach the relays, then open them all."""
         deadline = time.monotonic() + self.limits.estop_timeout_s
         need = self.limits.guard_samples + self.latency_samples
         while self.quiet_samples() < need and time.monotonic() < deadline:
@@ -424,6 +438,11 @@ class SafetyGate:
             with self._lock:
                 self._switching = False
                 self._quiet_until = self.clock + self.limits.settle_samples
+            self._safe.set()
+
+    def wait_safe(self, timeout_s: float = 5.0) -> bool:
+        """Block until an e-stop has opened the relays; True if it did in time."""
+        return self._safe.wait(timeout_s)
 
     def reset(self) -> None:
         """Clear the e-stop (an operator action). Relays stay open until a plan asks."""

@@ -1,0 +1,140 @@
+"""The plugin contract: built-ins, entry points, blocking, misspelled hooks, documentation."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+import venv
+
+import pytest
+
+from console import hookspecs
+from console.cli import main
+from console.errors import UserError
+from console.hookspecs import hookimpl
+from console.plugins import load_plugins
+
+
+def test_plugins_json_lists_builtins_with_kinds(capsys):
+    assert main(["plugins", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    kinds = {(r["kind"], r["name"]) for r in data["provides"]}
+    assert ("audio_output", "twin") in kinds
+    assert ("relay_board", "twin") in kinds
+    assert "twin" in data["plugins"] and "core" in data["plugins"]
+    assert {"plugins", "doctor", "play", "estop", "bench"} <= set(data["commands"])
+
+
+def test_misspelled_hook_fails_naming_the_plugin():
+    class Typo:
+        @hookimpl
+        def haptable_register_camera(self, register):  # missing the "s"
+            pass
+
+    with pytest.raises(UserError) as err:
+        load_plugins(extra={"typo-cam": Typo()})
+    msg = str(err.value)
+    assert "typo-cam" in msg and "haptable_register_camera" in msg
+    assert "haptable_register_cameras" in msg  # the suggestion
+    assert "\n" not in msg
+
+
+def test_block_env_var_removes_a_plugin_and_its_children(monkeypatch):
+    monkeypatch.setenv("HAPTABLE_BLOCK_PLUGINS", "twin")
+    plugins = load_plugins()
+    assert not any(n == "twin" or n.startswith("twin.") for n in plugins.plugin_names())
+    assert "twin" not in plugins.of("audio_output")
+
+
+def test_extra_plugin_registers_like_a_builtin():
+    class Cam:
+        @hookimpl
+        def haptable_register_cameras(self, register):
+            register("toy", lambda profile: "camera", description="a toy camera")
+
+    plugins = load_plugins(extra={"toy": Cam()})
+    reg = plugins.get("camera", "toy")
+    assert reg.plugin == "toy" and reg.factory(None) == "camera"
+
+
+def test_every_hook_is_documented():
+    hooks = hookspecs.documented_hooks()
+    assert len(hooks) >= 8
+    for name, doc in hooks.items():
+        assert doc and len(doc.split()) >= 12, f"{name} lacks documentation"
+        assert "factory" in doc or "register(" in doc, f"{name}: document what register() takes"
+    module_doc = hookspecs.__doc__ or ""
+    assert "register(" in module_doc
+
+
+def test_unknown_hook_without_docs_would_be_caught():
+    """A spec added without a docstring fails the documentation check."""
+
+    def haptable_register_undocumented(register):
+        pass
+
+    doc = haptable_register_undocumented.__doc__
+    assert not doc  # the check above would reject exactly this
+
+
+@pytest.mark.slow
+def test_out_of_tree_distribution_shows_up(tmp_path):
+    """A tiny distribution with a `haptable` entry point, installed into a fresh venv."""
+    pkg = tmp_path / "src"
+    (pkg / "haptable_toycam").mkdir(parents=True)
+    (pkg / "pyproject.toml").write_text(
+        textwrap.dedent("""
+        [build-system]
+        requires = ["setuptools"]
+        build-backend = "setuptools.build_meta"
+        [project]
+        name = "haptable-toycam"
+        version = "0.1"
+        [project.entry-points.haptable]
+        toycam = "haptable_toycam"
+    """)
+    )
+    (pkg / "haptable_toycam" / "__init__.py").write_text(
+        textwrap.dedent("""
+        from console.hookspecs import hookimpl
+
+        @hookimpl
+        def haptable_register_cameras(register):
+            register("toycam", lambda profile: None, description="out-of-tree camera")
+    """)
+    )
+    env_dir = tmp_path / "venv"
+    venv.EnvBuilder(system_site_packages=True, with_pip=False).create(env_dir)
+    py = env_dir / "bin" / "python"
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            str(py),
+            "install",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            str(pkg),
+        ],
+        check=True,
+    )
+    out = subprocess.run(
+        [str(py), "-m", "console.cli", "plugins", "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"PATH": "/usr/bin:/bin", "HAPTABLE_LOAD_ENTRYPOINTS": "1", "HOME": str(tmp_path)},
+    )
+    data = json.loads(out.stdout)
+    assert "toycam" in data["plugins"]
+    assert {
+        "kind": "camera",
+        "name": "toycam",
+        "plugin": "toycam",
+        "description": "out-of-tree camera",
+    } in data["provides"]
