@@ -1,0 +1,782 @@
+"""The console side of the projector: start, watch and restart the projector process, and
+keep it showing the active scene.
+
+The projector is its own process (``python -m plugins.projector``, i.e. ``haptable
+projector``) in its own session, serving a Unix-domain socket (no network listener).
+The console connects as a client. Messages are newline-delimited JSON objects:
+
+console -> projector
+  ``{"type": "hello", "role": "console", "pid": int, "protocol": 1}``
+  ``{"type": "state", "seq": int, "scene": str, "state": {...}}`` - the FULL scene
+  state (idempotent: the projector just draws the newest one); re-sent after a reconnect.
+  ``{"type": "heartbeat", "t_s": float}``  ``{"type": "quit"}``
+projector -> console
+  ``{"type": "hello", "role": "projector", "pid", "size_px", "headless", "scene"}``
+  ``{"type": "ack", "seq", "t_recv_s"}`` when a state arrives,
+  ``{"type": "drawn", "seq", "t_drawn_s"}`` when the first frame showing it is finished,
+  ``{"type": "heartbeat", "fps", "frames", "scene", "t_s"}`` (only while frames advance).
+
+Either side that hears nothing for ``peer_timeout_s`` treats the peer as hung: the
+projector drops the connection and shows black; the console drops it and the supervisor
+kills and restarts the projector. EOF / broken pipe are noticed at once. Times are
+``time.monotonic()`` (CLOCK_MONOTONIC, shared by processes on one machine), so
+``t_recv_s - t_send`` is the one-way message latency.
+
+What the console calls (see ``ProjectorService``)::
+
+    svc = ProjectorService.from_profile(profile, plugins)   # plugins: console.plugins.Plugins
+    svc.start()                        # spawn (or adopt) the projector, connect
+    svc.start_scene("knob")            # build the scene, prepare its needs, show it
+    svc.update({"type": "rotate", "delta_deg": 45})   # events go to the active scene
+    svc.stop_scene()                   # black
+    svc.status()                       # connected, heartbeat age, fps, restarts, pid ...
+    svc.close()                        # stop the projector
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import logging
+import os
+import select
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+
+log = logging.getLogger("haptable.projector")
+
+PROTOCOL = 1
+MAX_LINE_BYTES = 16 * 1024 * 1024
+HEARTBEAT_S = 0.25
+PEER_TIMEOUT_S = 2.0
+#: Longest path a Unix socket address takes (sun_path is 108 bytes with the NUL).
+MAX_SOCKET_PATH = 107
+
+
+# --------------------------------------------------------------------------- protocol
+def encode(msg: dict) -> bytes:
+    """One message as a line of JSON (UTF-8, no embedded newlines)."""
+    return json.dumps(msg, separators=(",", ":"), allow_nan=False).encode() + b"\n"
+
+
+class LineBuffer:
+    """Splits a byte stream into JSON messages; bad lines are counted and skipped."""
+
+    def __init__(self, max_line_bytes: int = MAX_LINE_BYTES) -> None:
+        self.buf = bytearray()
+        self.max = max_line_bytes
+        self.bad_lines = 0
+
+    def feed(self, data: bytes) -> list[dict]:
+        self.buf += data
+        out = []
+        while True:
+            i = self.buf.find(b"\n")
+            if i < 0:
+                if len(self.buf) > self.max:  # a runaway line: drop it, keep the link
+                    self.buf.clear()
+                    self.bad_lines += 1
+                return out
+            line = bytes(self.buf[:i])
+            del self.buf[: i + 1]
+            if not line.strip():
+                continue
+            try:
+                msg = json.loads(line)
+            except (ValueError, UnicodeDecodeError):
+                self.bad_lines += 1
+                continue
+            if isinstance(msg, dict):
+                out.append(msg)
+            else:
+                self.bad_lines += 1
+
+
+def default_socket_path() -> Path:
+    """``$XDG_RUNTIME_DIR/haptable/projector.sock``, else ``/tmp/haptable-<uid>/...``."""
+    base = os.environ.get("XDG_RUNTIME_DIR")
+    d = Path(base) / "haptable" if base else Path(f"/tmp/haptable-{os.getuid()}")
+    return d / "projector.sock"
+
+
+def prepare_socket_dir(path: Path) -> Path:
+    """Check the path fits a Unix socket address and make its folder private (0700)."""
+    path = Path(path)
+    if len(os.fsencode(str(path))) > MAX_SOCKET_PATH:
+        raise UserError(
+            f"projector socket {path}: longer than {MAX_SOCKET_PATH} bytes; "
+            "set [projector] socket_path to a shorter path"
+        )
+    try:
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except OSError as e:
+        raise UserError(
+            f"projector socket {path}: cannot create its folder ({e}); choose another socket_path"
+        ) from None
+    return path
+
+
+def socket_path_for(profile: Any) -> Path:
+    """The link socket: ``[projector] socket_path`` or the per-user default."""
+    p = profile.get("projector.socket_path", "") if profile is not None else ""
+    return Path(p).expanduser() if p else default_socket_path()
+
+
+def calibration_path_for(profile: Any) -> Path | None:
+    """The projector calibration JSON: ``[projector] calibration_path`` (relative to the
+    profile) or ``<profile name>.projector.json`` beside the profile."""
+    if profile is None:
+        return None
+    p = profile.get("projector.calibration_path", "")
+    if p:
+        return profile.resolve(p)
+    return Path(profile.path).with_name(f"{Path(profile.path).stem}.projector.json")
+
+
+def peer_pid(sock: socket.socket) -> int | None:
+    """The pid of the process at the other end of a Unix socket (Linux SO_PEERCRED)."""
+    so_peercred = getattr(socket, "SO_PEERCRED", None)
+    if so_peercred is None:
+        return None
+    try:
+        raw = sock.getsockopt(socket.SOL_SOCKET, so_peercred, struct.calcsize("3i"))
+        pid, _, _ = struct.unpack("3i", raw)
+        return pid or None
+    except OSError:
+        return None
+
+
+def probe(socket_path: Path, timeout_s: float = 0.5) -> int | None:
+    """The pid of a projector serving ``socket_path``, or None if nothing answers."""
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.settimeout(timeout_s)
+    try:
+        s.connect(str(socket_path))
+        return peer_pid(s) or -1
+    except OSError:
+        return None
+    finally:
+        s.close()
+
+
+# --------------------------------------------------------------------------- link
+class ProjectorLink:
+    """The console's connection to the projector: one I/O thread, reconnects by itself.
+
+    ``send_state`` never blocks: it records the newest full state and wakes the thread,
+    which sends it (and re-sends it after every reconnect).
+    """
+
+    def __init__(
+        self,
+        socket_path: Path | str,
+        *,
+        heartbeat_s: float = HEARTBEAT_S,
+        peer_timeout_s: float = PEER_TIMEOUT_S,
+        on_hung: Callable[[int | None], None] | None = None,
+    ) -> None:
+        self.socket_path = Path(socket_path)
+        self.heartbeat_s = float(heartbeat_s)
+        self.peer_timeout_s = float(peer_timeout_s)
+        self.on_hung = on_hung
+        self._cond = threading.Condition()
+        self._state: dict | None = None
+        self._seq = 0
+        self._dirty = False
+        self._quit = False
+        self._stop = threading.Event()
+        self._wake_r, self._wake_w = socket.socketpair()
+        self._wake_r.setblocking(False)
+        self._thread: threading.Thread | None = None
+        self._sent_t: dict[int, float] = {}
+        # status
+        self.connected = False
+        self.peer_pid: int | None = None
+        self.peer: dict = {}
+        self.last_rx_s: float | None = None
+        self.last_heartbeat_s: float | None = None
+        self.fps = 0.0
+        self.frames = 0
+        self.shown_scene: str | None = None
+        self.acked_seq = 0
+        self.drawn_seq = 0
+        self.connects = 0  # socket connections made
+        self.handshakes = 0  # of which the projector answered
+        self.hangs = 0
+        self.last_drop = ""
+        self.latency_s: collections.deque[float] = collections.deque(maxlen=4096)
+        self.drawn_latency_s: collections.deque[float] = collections.deque(maxlen=4096)
+
+    # ---- public API
+    def start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="projector-link", daemon=True)
+            self._thread.start()
+
+    def send_state(self, scene: str, state: dict) -> int:
+        """Make ``state`` the one the projector shows; returns its sequence number."""
+        json.dumps(state, allow_nan=False)  # fail here, in the caller, if not JSON
+        with self._cond:
+            self._seq += 1
+            self._state = {"type": "state", "seq": self._seq, "scene": scene, "state": state}
+            self._dirty = True
+            seq = self._seq
+        self._wake()
+        return seq
+
+    def send_quit(self) -> None:
+        """Ask the projector process to exit (the supervisor does this on stop)."""
+        with self._cond:
+            self._quit = True
+        self._wake()
+
+    def wait_drawn(self, seq: int | None = None, timeout_s: float = 5.0) -> bool:
+        """Wait until the projector has drawn state ``seq`` (default: the newest)."""
+        deadline = time.monotonic() + timeout_s
+        with self._cond:
+            seq = self._seq if seq is None else seq
+            while self.drawn_seq < seq:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+            return True
+
+    def wait_connected(self, timeout_s: float = 10.0) -> bool:
+        deadline = time.monotonic() + timeout_s
+        with self._cond:
+            while not self.connected:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+            return True
+
+    def status(self) -> dict:
+        now = time.monotonic()
+        return {
+            "connected": self.connected,
+            "projector_pid": self.peer_pid,
+            "last_heartbeat_age_s": None
+            if self.last_heartbeat_s is None
+            else now - self.last_heartbeat_s,
+            "fps": self.fps,
+            "frames": self.frames,
+            "shown_scene": self.shown_scene,
+            "seq": self._seq,
+            "drawn_seq": self.drawn_seq,
+            "connects": self.handshakes,
+            "hangs": self.hangs,
+            "last_drop": self.last_drop,
+        }
+
+    def close(self) -> None:
+        self._stop.set()
+        self._wake()
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+            self._thread = None
+        for s in (self._wake_r, self._wake_w):
+            s.close()
+
+    # ---- I/O thread
+    def _wake(self) -> None:
+        with contextlib.suppress(OSError):
+            self._wake_w.send(b"\0")
+
+    def _set_connected(self, on: bool) -> None:
+        with self._cond:
+            self.connected = on
+            self._cond.notify_all()
+
+    def _run(self) -> None:
+        backoff = 0.02
+        sock: socket.socket | None = None
+        rx = LineBuffer()
+        out = bytearray()
+        last_tx = 0.0
+        while not self._stop.is_set():
+            if sock is None:
+                s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                try:
+                    s.settimeout(1.0)
+                    s.connect(str(self.socket_path))
+                    s.setblocking(False)
+                except OSError:
+                    s.close()
+                    self._idle(backoff)
+                    backoff = min(backoff * 2, 0.5)
+                    continue
+                sock, rx, out = s, LineBuffer(), bytearray()
+                backoff = 0.02
+                self.peer_pid = peer_pid(s)
+                self.connects += 1
+                self.last_rx_s = time.monotonic()
+                out += encode(
+                    {"type": "hello", "role": "console", "pid": os.getpid(), "protocol": PROTOCOL}
+                )
+                with self._cond:
+                    self._dirty = self._state is not None  # re-send the full state
+            now = time.monotonic()
+            with self._cond:
+                if self._dirty and self._state is not None:
+                    self._sent_t[self._state["seq"]] = now
+                    out += encode({**self._state, "t_send_s": now})
+                    self._dirty = False
+                if self._quit:
+                    out += encode({"type": "quit"})
+                    self._quit = False
+            if now - last_tx >= self.heartbeat_s:
+                out += encode({"type": "heartbeat", "t_s": now})
+                last_tx = now
+            wait = max(0.0, min(self.heartbeat_s - (now - last_tx), self.heartbeat_s))
+            try:
+                r, w, _ = select.select([sock, self._wake_r], [sock] if out else [], [], wait)
+            except (OSError, ValueError):
+                sock = self._drop(sock, "select failed")
+                continue
+            if self._wake_r in r:
+                try:
+                    while self._wake_r.recv(4096):
+                        pass
+                except (BlockingIOError, OSError):
+                    pass
+            try:
+                if sock in w and out:
+                    n = sock.send(out)
+                    del out[:n]
+                if sock in r:
+                    data = sock.recv(1 << 16)
+                    if not data:
+                        sock = self._drop(sock, "projector closed the link")
+                        continue
+                    self.last_rx_s = time.monotonic()
+                    for msg in rx.feed(data):
+                        self._handle(msg)
+            except BlockingIOError:
+                pass
+            except OSError as e:
+                sock = self._drop(sock, f"link error: {e}")
+                continue
+            if (
+                len(out) > MAX_LINE_BYTES
+                or time.monotonic() - (self.last_rx_s or 0) > self.peer_timeout_s
+            ):
+                self.hangs += 1
+                pid = self.peer_pid
+                sock = self._drop(sock, f"no word from the projector for {self.peer_timeout_s:g} s")
+                if self.on_hung is not None:
+                    self.on_hung(pid)
+        if sock is not None:
+            sock.close()
+        self._set_connected(False)
+
+    def _idle(self, seconds: float) -> None:
+        try:
+            r, _, _ = select.select([self._wake_r], [], [], seconds)
+            if r:
+                self._wake_r.recv(4096)
+        except OSError:
+            time.sleep(seconds)
+
+    def _drop(self, sock: socket.socket | None, why: str) -> None:
+        if sock is not None:
+            sock.close()
+        self.last_drop = why
+        self._set_connected(False)
+        log.warning("projector link: %s", why)
+        return None
+
+    def _handle(self, msg: dict) -> None:
+        t = msg.get("type")
+        now = time.monotonic()
+        if t == "heartbeat":
+            self.last_heartbeat_s = now
+            self.fps = float(msg.get("fps", 0.0))
+            self.frames = int(msg.get("frames", 0))
+            self.shown_scene = msg.get("scene")
+        elif t == "hello":  # the handshake: only now is the link "connected"
+            self.peer = msg
+            self.last_heartbeat_s = now
+            if msg.get("pid"):
+                self.peer_pid = int(msg["pid"])
+            self.handshakes += 1
+            self._set_connected(True)
+            log.info("projector link: connected (pid %s)", self.peer_pid)
+        elif t == "ack":
+            seq = int(msg.get("seq", 0))
+            sent = self._sent_t.get(seq)
+            if sent is not None and "t_recv_s" in msg:
+                self.latency_s.append(float(msg["t_recv_s"]) - sent)
+            self.acked_seq = max(self.acked_seq, seq)
+        elif t == "drawn":
+            seq = int(msg.get("seq", 0))
+            sent = self._sent_t.pop(seq, None)
+            if sent is not None and "t_drawn_s" in msg:
+                self.drawn_latency_s.append(float(msg["t_drawn_s"]) - sent)
+            for old in [k for k in self._sent_t if k < seq]:
+                self._sent_t.pop(old, None)
+            with self._cond:
+                self.drawn_seq = max(self.drawn_seq, seq)
+                self._cond.notify_all()
+
+
+# --------------------------------------------------------------------------- supervisor
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # a zombie is dead for our purposes
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return True
+
+
+def kill_projector(pid: int, sig: int = signal.SIGKILL) -> None:
+    """Signal the projector: its whole process group when it leads one (we started it so)."""
+    try:
+        if os.getpgid(pid) == pid:
+            os.killpg(pid, sig)
+        else:
+            os.kill(pid, sig)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+class ProjectorSupervisor:
+    """Starts the projector process (own session), restarts it when it dies or hangs.
+
+    If a projector already serves the socket (the console was restarted), it is adopted
+    instead of starting a second one.
+    """
+
+    def __init__(
+        self,
+        command: list[str],
+        socket_path: Path | str,
+        link: ProjectorLink | None = None,
+        *,
+        backoff_max_s: float = 5.0,
+        start_timeout_s: float = 20.0,
+        log_path: Path | str | None = None,
+        env: dict[str, str] | None = None,
+    ) -> None:
+        self.command = list(command)
+        self.socket_path = Path(socket_path)
+        self.link = link
+        self.backoff_max_s = backoff_max_s
+        self.start_timeout_s = start_timeout_s
+        self.log_path = Path(log_path) if log_path else None
+        self.env = env
+        self.proc: subprocess.Popen | None = None
+        self.pid: int | None = None
+        self.adopted = False
+        self.restarts = 0
+        self.last_exit: int | None = None
+        self.last_reason = ""
+        self._started_t = 0.0
+        self._connects_at_start = 0
+        self._next_start_t = 0.0
+        self._backoff = 0.25
+        self._hung = threading.Event()
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        if link is not None:
+            link.on_hung = self.notify_hung
+
+    def start(self) -> None:
+        prepare_socket_dir(self.socket_path)
+        pid = probe(self.socket_path)
+        with self._lock:
+            if pid is not None and pid > 0:
+                self.pid, self.adopted, self._started_t = pid, True, time.monotonic()
+                self._connects_at_start = self.link.handshakes if self.link is not None else 0
+                log.info("projector: adopted the running projector (pid %d)", pid)
+            else:
+                self._spawn()
+        self._thread = threading.Thread(
+            target=self._watch, name="projector-supervisor", daemon=True
+        )
+        self._thread.start()
+
+    def notify_hung(self, pid: int | None) -> None:
+        """The link heard nothing for too long: kill and restart the projector."""
+        self._hung.set()
+
+    def _spawn(self) -> None:
+        out = open(self.log_path, "ab") if self.log_path else subprocess.DEVNULL  # noqa: SIM115
+        try:
+            self.proc = subprocess.Popen(
+                self.command,
+                stdin=subprocess.DEVNULL,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,  # own session + process group: survives the console
+                close_fds=True,
+                env=self.env,
+            )
+        except OSError as e:
+            raise UserError(
+                f"projector: cannot start {self.command[0]!r} ({e}); check the projector command"
+            ) from None
+        finally:
+            if out is not subprocess.DEVNULL:
+                out.close()
+        self.pid, self.adopted = self.proc.pid, False
+        self._started_t = time.monotonic()
+        self._connects_at_start = self.link.handshakes if self.link is not None else 0
+        log.info("projector: started pid %d", self.pid)
+
+    def _is_alive(self) -> bool:
+        if self.proc is not None:
+            code = self.proc.poll()
+            if code is not None:
+                self.last_exit = code
+                return False
+            return True
+        return self.pid is not None and _alive(self.pid)
+
+    def _watch(self) -> None:
+        while not self._stop.wait(0.05):
+            with self._lock:
+                now = time.monotonic()
+                if self.pid is None:
+                    if now >= self._next_start_t:
+                        self.restarts += 1
+                        self._spawn()
+                    continue
+                connected = self.link is not None and self.link.connected
+                stuck = (
+                    self.link is not None
+                    and not connected
+                    and self.link.handshakes == self._connects_at_start
+                    and now - self._started_t > self.start_timeout_s
+                )
+                reason = ""
+                if self._hung.is_set() or stuck:
+                    self._hung.clear()
+                    reason = "did not connect" if stuck else "hung (no heartbeat)"
+                    kill_projector(self.pid)
+                    if self.proc is not None:
+                        with contextlib.suppress(subprocess.TimeoutExpired):
+                            self.proc.wait(timeout=2.0)
+                if not self._is_alive():
+                    if not reason:
+                        reason = (
+                            f"exited ({self.last_exit})" if self.proc is not None else "vanished"
+                        )
+                    self.last_reason = reason
+                    ran = now - self._started_t
+                    self._backoff = (
+                        0.25 if ran > 10.0 else min(self._backoff * 2, self.backoff_max_s)
+                    )
+                    self._next_start_t = now + (0.0 if ran > 10.0 else self._backoff)
+                    log.warning("projector: pid %s %s; restarting", self.pid, reason)
+                    self.pid, self.proc = None, None
+
+    def status(self) -> dict:
+        return {
+            "pid": self.pid,
+            "adopted": self.adopted,
+            "restarts": self.restarts,
+            "last_exit": self.last_exit,
+            "last_reason": self.last_reason,
+            "uptime_s": time.monotonic() - self._started_t if self.pid else 0.0,
+        }
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        """Stop watching and end the projector (quit, then SIGTERM, then SIGKILL)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        with self._lock:
+            pid, proc = self.pid, self.proc
+            if pid is None:
+                return
+            if self.link is not None and self.link.connected:
+                self.link.send_quit()
+            deadline = time.monotonic() + timeout_s
+            sent_term = False
+            while time.monotonic() < deadline:
+                if (proc.poll() is not None) if proc else not _alive(pid):
+                    break
+                if not sent_term and time.monotonic() > deadline - timeout_s / 2:
+                    kill_projector(pid, signal.SIGTERM)
+                    sent_term = True
+                time.sleep(0.02)
+            else:
+                kill_projector(pid, signal.SIGKILL)
+                if proc is not None:
+                    proc.wait(timeout=2.0)
+            self.pid = self.proc = None
+
+
+# --------------------------------------------------------------------------- service
+def prepare_needs(
+    needs: dict, providers: dict[str, Callable[[Any], Any]]
+) -> tuple[dict, list[str]]:
+    """Prepare only what a scene declares: call ``providers[kind](value)`` for each
+    declared need. Returns (prepared, kinds with no provider)."""
+    prepared, missing = {}, []
+    for kind, value in (needs or {}).items():
+        if not value:
+            continue
+        if kind in providers:
+            prepared[kind] = providers[kind](value)
+        else:
+            missing.append(kind)
+    return prepared, missing
+
+
+def projector_command(
+    socket_path: Path,
+    *,
+    profile_path: Path | None = None,
+    headless: bool = False,
+    extra: Iterable[str] = (),
+) -> list[str]:
+    """The command line of a supervised projector (``haptable projector`` without the
+    full console start-up)."""
+    cmd = [sys.executable, "-m", "plugins.projector", "--socket", str(socket_path)]
+    if profile_path is not None:
+        cmd += ["--profile", str(profile_path)]
+    if headless:
+        cmd.append("--headless")
+    return cmd + list(extra)
+
+
+class ProjectorService:
+    """What the console uses: the supervised projector plus the active scene."""
+
+    def __init__(
+        self,
+        *,
+        socket_path: Path | str,
+        command: list[str] | None,
+        scenes: dict[str, Callable[[Any], Any]],
+        profile: Any = None,
+        providers: dict[str, Callable[[Any], Any]] | None = None,
+        heartbeat_s: float = HEARTBEAT_S,
+        peer_timeout_s: float = PEER_TIMEOUT_S,
+        backoff_max_s: float = 5.0,
+        log_path: Path | str | None = None,
+    ) -> None:
+        self.socket_path = Path(socket_path)
+        self.scenes = dict(scenes)
+        self.profile = profile
+        self.providers = dict(providers or {})
+        self.link = ProjectorLink(
+            self.socket_path, heartbeat_s=heartbeat_s, peer_timeout_s=peer_timeout_s
+        )
+        self.supervisor = (
+            ProjectorSupervisor(
+                command, self.socket_path, self.link, backoff_max_s=backoff_max_s, log_path=log_path
+            )
+            if command
+            else None
+        )
+        self.scene: Any = None
+        self.scene_name: str | None = None
+        self.prepared: dict = {}
+        self.unprepared: list[str] = []
+
+    @classmethod
+    def from_profile(
+        cls,
+        profile: Any,
+        plugins: Any,
+        *,
+        headless: bool = False,
+        providers: dict[str, Callable[[Any], Any]] | None = None,
+        log_path: Path | str | None = None,
+    ) -> ProjectorService:
+        """Settings from the profile's [projector] section, scenes from the plugins."""
+        sock = socket_path_for(profile)
+        get = (
+            (lambda k, d: profile.get(f"projector.{k}", d))
+            if profile is not None
+            else (lambda k, d: d)
+        )
+        return cls(
+            socket_path=sock,
+            command=projector_command(
+                sock, profile_path=getattr(profile, "path", None), headless=headless
+            ),
+            scenes={name: reg.factory for name, reg in plugins.of("scene").items()},
+            profile=profile,
+            providers=providers,
+            heartbeat_s=get("heartbeat_s", HEARTBEAT_S),
+            peer_timeout_s=get("peer_timeout_s", PEER_TIMEOUT_S),
+            backoff_max_s=get("restart_backoff_max_s", 5.0),
+            log_path=log_path,
+        )
+
+    def start(self) -> None:
+        """Start (or adopt) the projector and connect; showing black until a scene starts."""
+        if self.supervisor is not None:
+            self.supervisor.start()
+        self.link.start()
+
+    def start_scene(self, name: str, events: Iterable[dict] = ()) -> dict:
+        """Make ``name`` the active scene: prepare what it needs, apply ``events``, show it."""
+        if name not in self.scenes:
+            raise UserError(
+                f"no scene named {name!r}; available: {', '.join(sorted(self.scenes)) or 'none'}"
+            )
+        scene = self.scenes[name](self.profile)
+        prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers)
+        for ev in events:
+            scene.update(ev)
+        self.scene, self.scene_name = scene, name
+        self.prepared, self.unprepared = prepared, missing
+        return self._push()
+
+    def update(self, event: dict) -> dict:
+        """Pass an event to the active scene and show its new state."""
+        if self.scene is None:
+            raise UserError("no active scene: start one first (start_scene)")
+        self.scene.update(event)
+        return self._push()
+
+    def stop_scene(self) -> None:
+        """Show black."""
+        self.scene, self.scene_name, self.prepared = None, None, {}
+        self.link.send_state("black", {"kind": "black"})
+
+    def _push(self) -> dict:
+        state = self.scene.state()
+        self.link.send_state(self.scene_name, state)
+        return state
+
+    def wait_drawn(self, timeout_s: float = 5.0) -> bool:
+        """Wait until the projector shows the newest state."""
+        return self.link.wait_drawn(None, timeout_s)
+
+    def status(self) -> dict:
+        st = {"scene": self.scene_name, "unprepared_needs": self.unprepared, **self.link.status()}
+        if self.supervisor is not None:
+            st.update(self.supervisor.status())
+        return st
+
+    def close(self, stop_projector: bool = True) -> None:
+        if stop_projector and self.supervisor is not None:
+            self.supervisor.stop()
+        elif self.supervisor is not None:
+            self.supervisor._stop.set()
+        self.link.close()

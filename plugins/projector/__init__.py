@@ -1,0 +1,50 @@
+"""Projected scenes: a separate projector process (pyglet + moderngl, or EGL headless)
+driven from the console over a Unix-socket link (``console.runtime.projector_link``).
+
+Scenes are registered here (``haptable_register_scenes``), drawn in table millimetres
+(``draw``) through the projector calibration (``geometry``), and rendered by
+``renderer``. Heavy libraries (moderngl, pyglet, cv2) are imported inside functions.
+"""
+
+from __future__ import annotations
+
+from console.hookspecs import hookimpl
+
+
+@hookimpl
+def haptable_register_scenes(register) -> None:
+    from plugins.projector.scenes import BUILTIN_SCENES
+
+    for name, (cls, description) in BUILTIN_SCENES.items():
+        register(name, cls, description=description)
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    from plugins.projector.settings import FIELDS
+
+    register(
+        "projector", FIELDS, help="the projector process, its link, calibration and scene layout"
+    )
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    from plugins.projector import cli
+
+    register(
+        "projector",
+        cli.configure,
+        cli.run,
+        help="projector: full-screen scenes, screenshots, calibration",
+    )
+
+
+@hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def run(ctx, quick: bool) -> dict:
+        from plugins.projector.bench import run_bench
+
+        return run_bench(ctx, quick)
+
+    register("projector", run, help="frame time per scene at 1920x1080 headless; link latency")

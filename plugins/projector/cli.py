@@ -1,0 +1,330 @@
+"""``haptable projector``: run the projector, take a screenshot, or adjust its calibration."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+from console.runtime.projector_link import (
+    calibration_path_for,
+    default_socket_path,
+    socket_path_for,
+)
+from plugins.projector import layout
+from plugins.projector.settings import DEFAULTS
+
+EPILOG = """examples:
+  haptable projector                      full screen on screen 0, waits for the console
+  haptable projector --headless --scene knob --screenshot knob.png
+  haptable projector --scene grid --event '{"type":"audition","point":51}' --screenshot g.png
+  haptable projector --show-calibration
+  haptable projector --set-corner 2 1275 3   glass corner 2 (x=W, y=0) lands on pixel (1275, 3)
+"""
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+        if w < 16 or h < 16 or w > 16384 or h > 16384:
+            raise ValueError
+        return w, h
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: write WIDTHxHEIGHT in pixels, e.g. 1920x1080"
+        ) from None
+
+
+def _event(text: str) -> dict:
+    try:
+        ev = json.loads(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(f"--event {text!r}: not JSON ({e})") from None
+    if not isinstance(ev, dict):
+        raise argparse.ArgumentTypeError(f'--event {text!r}: must be a JSON object with a "type"')
+    return ev
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.epilog = EPILOG
+    parser.add_argument(
+        "--screen", type=int, default=None, help="screen index for the full-screen window"
+    )
+    parser.add_argument(
+        "--scene", default=None, help="scene to show until a console connects (see --list-scenes)"
+    )
+    parser.add_argument(
+        "--event",
+        type=_event,
+        action="append",
+        default=[],
+        help="JSON event for --scene (repeatable)",
+    )
+    parser.add_argument("--socket", default=None, help="Unix socket of the console link")
+    parser.add_argument(
+        "--headless", action="store_true", help="render offscreen through EGL (no window)"
+    )
+    parser.add_argument(
+        "--screenshot", metavar="PNG", default=None, help="render --scene once into PNG and exit"
+    )
+    parser.add_argument(
+        "--size", type=_size, default=None, help="WIDTHxHEIGHT for headless rendering"
+    )
+    parser.add_argument("--fps", type=float, default=None, help="headless frame rate")
+    parser.add_argument(
+        "--calibration", default=None, help="calibration JSON (default: beside the profile)"
+    )
+    parser.add_argument("--heartbeat-s", type=float, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--peer-timeout-s", type=float, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--exit-without-console-s", type=float, default=0.0, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--list-scenes", action="store_true", help="list the scenes and what they need"
+    )
+    g = parser.add_argument_group("calibration (table mm -> projector pixels)")
+    g.add_argument(
+        "--show-calibration", action="store_true", help="print the calibration and its residuals"
+    )
+    g.add_argument(
+        "--set-corner",
+        nargs=3,
+        type=float,
+        metavar=("N", "U_PX", "V_PX"),
+        help="put glass corner N (1..4) on pixel U, V",
+    )
+    g.add_argument(
+        "--add-point",
+        nargs=4,
+        type=float,
+        metavar=("X_MM", "Y_MM", "U_PX", "V_PX"),
+        help="add or move a calibration point",
+    )
+    g.add_argument(
+        "--reset-calibration",
+        action="store_true",
+        help="back to the default (glass corners on frame corners)",
+    )
+
+
+def _opt(args: Any, ctx: Any, attr: str, key: str) -> Any:
+    """An option: the command line first, then the profile, then the default."""
+    v = getattr(args, attr, None)
+    if v is not None:
+        return v
+    return layout.get(_profile(ctx), f"projector.{key}", DEFAULTS[key])
+
+
+def _profile(ctx: Any) -> Any:
+    return getattr(ctx, "profile", None) if ctx is not None else None
+
+
+def scene_factories(ctx: Any) -> dict[str, Any]:
+    """Scenes registered by all plugins (through the plugin manager)."""
+    pm = getattr(ctx, "pm", None)
+    if pm is not None:
+        return {name: reg.factory for name, reg in pm.of("scene").items()}
+    from plugins.projector.scenes import BUILTIN_SCENES
+
+    return {name: cls for name, (cls, _) in BUILTIN_SCENES.items()}
+
+
+def build_state(ctx: Any, name: str, events: list[dict]) -> dict:
+    scenes = scene_factories(ctx)
+    if name not in scenes:
+        raise UserError(f"--scene {name!r}: no such scene; available: {', '.join(sorted(scenes))}")
+    scene = scenes[name](_profile(ctx))
+    for ev in events:
+        scene.update(ev)
+    state = scene.state()
+    json.dumps(state)
+    return state
+
+
+def _frame_px(args: Any, ctx: Any) -> tuple[int, int]:
+    return (int(_opt(None, ctx, "", "width_px")), int(_opt(None, ctx, "", "height_px")))
+
+
+def _calibration_path(args: Any, ctx: Any) -> Path | None:
+    if args.calibration:
+        return Path(args.calibration)
+    return calibration_path_for(_profile(ctx))
+
+
+def calibrate(args: Any, ctx: Any) -> int:
+    from plugins.projector.geometry import glass_corners_mm, load_calibration, save_calibration
+
+    path = _calibration_path(args, ctx)
+    table = layout.table_mm(_profile(ctx))
+    frame = _frame_px(args, ctx)
+    if args.reset_calibration:
+        if path is not None and path.exists():
+            path.unlink()
+        print(
+            f"calibration reset to the default (glass corners on the {frame[0]}x{frame[1]} frame corners)"
+        )
+        return 0
+    cal = load_calibration(path, frame, table)
+    if args.set_corner or args.add_point:
+        if path is None:
+            raise UserError(
+                "projector calibration: no file to store it in; give --calibration PATH or a --profile"
+            )
+        if args.set_corner:
+            n, u, v = args.set_corner
+            if int(n) != n or not 1 <= n <= 4:
+                raise UserError(
+                    f"--set-corner {n:g}: corners are 1 (0,0), 2 (W,0), 3 (W,H), 4 (0,H)"
+                )
+            mm = tuple(glass_corners_mm(table)[int(n) - 1])
+            cal = cal.with_point(mm, (u, v))
+        else:
+            x, y, u, v = args.add_point
+            cal = cal.with_point((x, y), (u, v))
+        save_calibration(cal, path)
+        print(f"saved {path}")
+    print(
+        json.dumps(
+            {
+                "path": str(path) if path else None,
+                **cal.to_json(),
+                "residuals_px": cal.residuals_px().round(3).tolist(),
+            },
+            indent=2,
+        )
+    )
+    return 0
+
+
+def screenshot(args: Any, ctx: Any) -> int:
+    from plugins.projector.geometry import load_calibration
+    from plugins.projector.renderer import Offscreen, egl_available, write_png
+
+    state = build_state(ctx, args.scene or "alignment", args.event)
+    size = args.size or _frame_px(args, ctx)
+    cal = load_calibration(
+        _calibration_path(args, ctx), _frame_px(args, ctx), layout.table_mm(_profile(ctx))
+    )
+    ok, why = egl_available()
+    if not ok:
+        raise UserError(f"projector --screenshot: {why}")
+    off = Offscreen(size, cal)
+    off.render(state)
+    write_png(args.screenshot, off.read_rgb())
+    off.release()
+    print(f"wrote {args.screenshot} ({size[0]}x{size[1]}, scene {args.scene or 'alignment'})")
+    return 0
+
+
+def run(args: Any, ctx: Any) -> int:
+    if args.list_scenes:
+        for name, f in sorted(scene_factories(ctx).items()):
+            scene = f(_profile(ctx))
+            needs = getattr(scene, "needs", {})
+            short = {k: (f"{len(v)} items" if isinstance(v, list) else v) for k, v in needs.items()}
+            print(
+                f"{name:18s} {(type(scene).__doc__ or '').strip().splitlines()[0]}  needs: {short or 'nothing'}"
+            )
+        return 0
+    if args.show_calibration or args.set_corner or args.add_point or args.reset_calibration:
+        return calibrate(args, ctx)
+    if args.screenshot:
+        return screenshot(args, ctx)
+    from plugins.projector.app import ProjectorOptions
+    from plugins.projector.app import run as run_projector
+
+    prof = _profile(ctx) if args.socket is None or args.scene else None
+    sock = (
+        Path(args.socket)
+        if args.socket
+        else (socket_path_for(prof) if prof is not None else default_socket_path())
+    )
+    frame = _frame_px(args, ctx)
+    opts = ProjectorOptions(
+        socket_path=sock,
+        size_px=args.size or frame,
+        headless=args.headless,
+        screen=int(_opt(args, ctx, "screen", "screen")),
+        fps=float(_opt(args, ctx, "fps", "fps")),
+        calibration_path=_calibration_path(args, ctx),
+        frame_px=frame,
+        table_mm=layout.table_mm(prof),
+        heartbeat_s=float(_opt(args, ctx, "heartbeat_s", "heartbeat_s")),
+        peer_timeout_s=float(_opt(args, ctx, "peer_timeout_s", "peer_timeout_s")),
+        initial_state=build_state(ctx, args.scene, args.event) if args.scene else None,
+        exit_without_console_s=args.exit_without_console_s,
+    )
+    return run_projector(opts)
+
+
+class StandaloneContext:
+    """``python -m plugins.projector``: the profile and plugins load only when used, so a
+    supervised projector given every option on its command line starts fast and alone."""
+
+    def __init__(self, profile_arg: str | None, use_profile: bool) -> None:
+        self._arg, self._use = profile_arg, use_profile
+        self._profile: Any = None
+        self._pm: Any = None
+
+    @property
+    def pm(self) -> Any:
+        if self._pm is None:
+            from console.plugins import load_plugins
+
+            self._pm = load_plugins()
+        return self._pm
+
+    @property
+    def profile(self) -> Any:
+        if not self._use:
+            return None
+        if self._profile is None:
+            from console.profile import load_profile
+
+            self._profile = load_profile(self._arg, self.pm)
+        return self._profile
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m plugins.projector", description="HapTable projector process"
+    )
+    parser.add_argument(
+        "--profile",
+        "-p",
+        default=None,
+        help="profile name or path (default: none, built-in defaults)",
+    )
+    configure(parser)
+    args = parser.parse_args(argv)
+    import logging
+
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
+    ctx = StandaloneContext(args.profile, use_profile=args.profile is not None)
+    if args.profile is None:
+        ctx._pm = _builtin_only()
+    try:
+        return run(args, ctx)
+    except UserError as e:
+        print(f"haptable projector: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+class _builtin_only:
+    """Scenes of this plugin only (no profile, no other plugins)."""
+
+    @staticmethod
+    def of(kind: str) -> dict:
+        from types import SimpleNamespace
+
+        from plugins.projector.scenes import BUILTIN_SCENES
+
+        if kind != "scene":
+            return {}
+        return {
+            n: SimpleNamespace(factory=cls, description=d) for n, (cls, d) in BUILTIN_SCENES.items()
+        }
