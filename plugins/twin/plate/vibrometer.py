@@ -162,6 +162,8 @@ def measure(
         "twin_key": twin.key,
         "damping_ratio": twin.params.damping_ratio,
         "modes_kept": int(twin.freq_hz.size),
+        # ring-down of the slowest mode left at the end of the record: leakage if not ~0
+        "ringdown_left": ringdown_left(twin, s),
         "elapsed_s": time.perf_counter() - t0,
     }
     return {
@@ -174,6 +176,20 @@ def measure(
         "excitations": tuple(excitations),
         "meta": meta,
     }
+
+
+def ringdown_left(twin: Twin, s: SweepSettings) -> float:
+    """Largest amplitude fraction of a mode still ringing when the record ends.
+
+    Mode r is last driven when the sweep passes f_r (or at the sweep's end for modes
+    above it) and then decays as exp(-zeta omega_r t). Keep this below ~1e-3, else
+    lengthen ``record_s`` (light damping rings for 1 / (zeta omega) seconds).
+    """
+    f_r = twin.modes.freq_hz
+    frac = np.clip((f_r - s.f_start_hz) / (s.f_stop_hz - s.f_start_hz), 0.0, 1.0)
+    t_left = s.record_s - s.sweep_s * frac
+    decay = twin.params.damping_ratio * twin.modes.omega_rad_s * t_left
+    return float(np.exp(-decay).max())
 
 
 def noise_std_um_per_v(gen: np.ndarray, freqs_hz: np.ndarray, s: SweepSettings) -> np.ndarray:
