@@ -1,0 +1,96 @@
+"""A knob session: tracker -> knob -> stream for one grip, fed frame by frame.
+
+The live loop and the twin use the same object: ``feed(t_s, contacts)`` per camera
+frame, ``render_until(t_s)`` pulls audio blocks (offline) up to a time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .knob import Crossing, Knob
+from .rotation import RotationState, RotationTracker
+from .synth import KnobStream
+
+
+class KnobSession:
+    def __init__(
+        self,
+        condition: str,
+        *,
+        sectors: int,
+        settings: Mapping[str, Any],
+        limits: Mapping[str, float] | None = None,
+        sample_rate_hz: int = 48000,
+        block: int = 64,
+        start_item: int = 0,
+        n_items: int | None = None,
+        record: bool = True,
+    ) -> None:
+        s = dict(settings)
+        self.knob = Knob(sectors, s["hysteresis_deg"], start_item=start_item, n_items=n_items)
+        self.tracker = RotationTracker(
+            s["filter_alpha"],
+            s["filter_beta"],
+            s["max_hold_frames"],
+            start_angle_deg=self.knob.center_deg(start_item),
+        )
+        self.stream = KnobStream(condition, sample_rate_hz, s, limits, sectors=sectors)
+        self.fs, self.block, self.record = int(sample_rate_hz), int(block), record
+        self.states: list[RotationState] = []
+        self.crossings: list[Crossing] = []
+        self.crossing_ids: list[int] = []
+        self.items: list[int] = []
+        self._piezo: list[np.ndarray] = []
+        self._screen: list[np.ndarray] = []
+
+    @property
+    def t_audio_s(self) -> float:
+        return self.stream.samples_out / self.fs
+
+    def feed(self, t_s: float, contacts: Sequence[Any]) -> list[Crossing]:
+        st = self.tracker.update(t_s, contacts)
+        cr = self.knob.update(t_s, st.angle_deg) if st.touching else []
+        ids = self.stream.post(len(cr), st.angle_deg, st.velocity_deg_s, st.touching)
+        if self.record:
+            self.states.append(st)
+        self.crossings += cr
+        self.crossing_ids += ids
+        self.items.append(self.knob.item)
+        return cr
+
+    def render_block(self) -> bool:
+        b = self.stream.next_block(self.block)
+        if b is None:
+            return False
+        if self.record:
+            self._piezo.append(b[0])
+            self._screen.append(b[1])
+        return True
+
+    def render_until(self, t_s: float) -> None:
+        """Render every block that starts before ``t_s``."""
+        while self.t_audio_s < t_s and self.render_block():
+            pass
+
+    def finish(self) -> None:
+        self.stream.request_stop()
+        while self.render_block():
+            pass
+
+    def output(self) -> tuple[np.ndarray, np.ndarray]:
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0)  # noqa: E731
+        return cat(self._piezo), cat(self._screen)
+
+    def latency_samples(self) -> np.ndarray:
+        start = dict(self.stream.detent_log)
+        return np.array(
+            [
+                start[i] - c.t_s * self.fs
+                for c, i in zip(self.crossings, self.crossing_ids, strict=True)
+                if i in start
+            ]
+        )
