@@ -1,0 +1,259 @@
+"""Synthetic gesture datasets from the camera twin, and recording from any camera.
+
+``synth(out, subjects=5, reps=40)`` writes the paper's set (5 subjects x 10 gestures x
+40 repetitions = 2000 samples) in the dataset format (``dataset.py``). Every sample has
+its own seed derived from (seed, subject, gesture, rep), so the result does not depend
+on the number of worker processes or their order. Static samples get
+``STATIC_FRAMES`` frames, dynamic ones ``DYNAMIC_FRAMES`` (the classifier reads four).
+Each sample gets its own ``background.png`` (the empty table half a second before, so
+the slow ambient drift matches; ``per_sample_background=False`` leaves only the dataset's
+``background.png``) and a ``truth.json`` (contacts, hand centre, angle).
+
+``record(camera, out, gesture, subject)`` records from any ``console.types.Camera``
+into the same format (the twin acts the gesture out when asked).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from console.errors import UserError
+
+from .dataset import (
+    DYNAMIC,
+    GESTURES,
+    STATIC,
+    kind_of,
+    next_sample_name,
+    write_background,
+    write_png,
+    write_sample,
+)
+
+STATIC_FRAMES = 3
+DYNAMIC_FRAMES = 8
+BACKGROUND_LEAD_S = 0.5
+
+
+def subject_names(n: int) -> list[str]:
+    return [f"s{i + 1}" for i in range(n)]
+
+
+def _sample_seed(seed: int, subject: int, gesture: int, rep: int) -> np.random.SeedSequence:
+    return np.random.SeedSequence([seed, subject, gesture, rep])
+
+
+def _session_t0(subject: int, gesture: int, rep: int) -> float:
+    """When in the recording session a sample starts (seconds): drift continuity."""
+    return 3600.0 * subject + 300.0 * gesture + 6.0 * rep + 1.0
+
+
+def _render_job(job: tuple) -> tuple[int, int]:
+    """Render and write the samples of one (subject, gesture): returns (samples, frames)."""
+    out, seed, si, gi, reps, static_frames, dynamic_frames, rig_kw, per_sample_bg = job
+    from plugins.twin.camera import Rig, TableMapping, render_background, render_sample
+
+    rig = Rig(mapping=TableMapping(**rig_kw.pop("mapping")), **rig_kw)
+    subject = subject_names(si + 1)[si]
+    gesture = GESTURES[gi]
+    n = static_frames if gesture in STATIC else dynamic_frames
+    frames_total = 0
+    for rep in range(reps):
+        rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
+        t0 = _session_t0(si, gi, rep)
+        frames, truth = render_sample(
+            gesture, subject, rep, rng, n_frames=n, rig=rig, t0_s=t0, subject_seed=seed
+        )
+        bg = render_background(rig, t0 - BACKGROUND_LEAD_S, rng) if per_sample_bg else None
+        extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
+        write_sample(
+            out,
+            gesture,
+            f"{subject}_{rep:03d}",
+            frames,
+            subject=subject,
+            hand=truth["hand"],
+            fps=truth["fps"],
+            background=bg,
+            truth=truth,
+            extra=extra,
+        )
+        frames_total += len(frames)
+    return reps, frames_total
+
+
+def synth(
+    out: str | Path,
+    subjects: int = 5,
+    reps: int = 40,
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    gestures: tuple[str, ...] = GESTURES,
+    static_frames: int = STATIC_FRAMES,
+    dynamic_frames: int = DYNAMIC_FRAMES,
+    lens_distortion: bool = False,
+    per_sample_background: bool = True,
+    force: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, Any]:
+    """Write a synthetic dataset; returns counts and the wall time."""
+    out = Path(out)
+    bad = [g for g in gestures if g not in GESTURES]
+    if bad:
+        raise UserError(f"gestures {bad}: unknown; use {', '.join(GESTURES)}")
+    if subjects < 1 or reps < 1:
+        raise UserError(f"--subjects {subjects} --reps {reps}: both must be at least 1")
+    if static_frames < 1 or dynamic_frames < 4:
+        raise UserError("frames: static samples need >= 1 frame, dynamic >= 4")
+    if out.exists() and not out.is_dir():
+        raise UserError(f"{out}: exists and is not a folder; choose another --out")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise UserError(f"{out}: folder is not empty; choose a new --out (or --force to add to it)")
+    out.mkdir(parents=True, exist_ok=True)
+    from plugins.twin.camera import Rig, TableMapping, render_background
+
+    mapping = TableMapping(k1=-0.18, k2=0.03) if lens_distortion else TableMapping()
+    rig = Rig(mapping=mapping, seed=seed)
+    rig_kw = {"seed": seed, "mapping": {"k1": mapping.k1, "k2": mapping.k2}}
+    t_start = time.perf_counter()
+    write_background(out, render_background(rig, 0.0, np.random.default_rng(seed)))
+    jobs = [
+        (
+            str(out),
+            seed,
+            si,
+            GESTURES.index(g),
+            reps,
+            static_frames,
+            dynamic_frames,
+            json.loads(json.dumps(rig_kw)),
+            per_sample_background,
+        )
+        for si in range(subjects)
+        for g in gestures
+    ]
+    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
+    done = n_frames = 0
+    total = len(jobs) * reps
+    if workers == 1:
+        results = map(_render_job, jobs)
+        for s, f in results:
+            done, n_frames = done + s, n_frames + f
+            if progress:
+                progress(done, total)
+    else:
+        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as ex:
+            for s, f in ex.map(_render_job, jobs):
+                done, n_frames = done + s, n_frames + f
+                if progress:
+                    progress(done, total)
+    seconds = time.perf_counter() - t_start
+    info = {
+        "out": str(out),
+        "samples": done,
+        "frames": n_frames,
+        "subjects": subject_names(subjects),
+        "gestures": list(gestures),
+        "reps": reps,
+        "seed": seed,
+        "static_frames": static_frames,
+        "dynamic_frames": dynamic_frames,
+        "lens_distortion": lens_distortion,
+        "per_sample_background": per_sample_background,
+        "mapping": mapping.to_dict(),
+        "workers": workers,
+        "seconds": round(seconds, 2),
+    }
+    (out / "synth.json").write_text(json.dumps(info, indent=1) + "\n")
+    return info
+
+
+def _read_frame(camera: Any, timeout_s: float) -> Any:
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        f = camera.read(min(0.1, timeout_s))
+        if f is not None:
+            return f
+    raise UserError(
+        f"camera gave no frame for {timeout_s:g} s; check `haptable doctor` and "
+        "the [camera] section of the profile"
+    )
+
+
+def capture_background(camera: Any, n_frames: int = 15, timeout_s: float = 2.0) -> np.ndarray:
+    """The empty table: the median of ``n_frames`` (the twin renders it directly)."""
+    if hasattr(camera, "background"):
+        return camera.background()
+    imgs = [np.asarray(_read_frame(camera, timeout_s).image) for _ in range(n_frames)]
+    return np.median(np.stack(imgs), axis=0).astype(np.uint8)
+
+
+def record(
+    camera: Any,
+    out: str | Path,
+    gesture: str,
+    subject: str,
+    *,
+    hand: str = "right",
+    frames: int | None = None,
+    name: str | None = None,
+    fps: float | None = None,
+    background: np.ndarray | None = None,
+    timeout_s: float = 2.0,
+) -> Path:
+    """Record ``frames`` frames of one gesture from ``camera`` into ``out``; returns the
+    sample folder. The twin (it has ``perform``) acts the gesture out first."""
+    if gesture not in GESTURES:
+        raise UserError(f"--gesture {gesture!r}: unknown; use one of {', '.join(GESTURES)}")
+    if hand not in ("left", "right"):
+        raise UserError(f"--hand {hand!r}: must be left or right")
+    if not subject or not str(subject).strip():
+        raise UserError("--subject: give a name like s1")
+    n = frames or (STATIC_FRAMES if gesture in STATIC else DYNAMIC_FRAMES)
+    need = 1 if kind_of(gesture) == "static" else 4
+    if n < need:
+        raise UserError(f"--frames {n}: a {kind_of(gesture)} gesture needs at least {need}")
+    out = Path(out)
+    first = None
+    if hasattr(camera, "perform"):
+        first = camera.perform(
+            gesture, subject, hand, max(n, 2 * DYNAMIC_FRAMES) if gesture in DYNAMIC else max(n, 10)
+        )
+    imgs = []
+    while len(imgs) < n:
+        f = _read_frame(camera, timeout_s)
+        if first is not None and f.seq < first:
+            continue
+        imgs.append(np.asarray(f.image))
+    status = camera.status() if hasattr(camera, "status") else {}
+    fps = fps or status.get("nominal_fps") or status.get("fps") or 60
+    if background is not None and background.shape != imgs[0].shape:
+        raise UserError(
+            f"background is {background.shape[1]} x {background.shape[0]} px but "
+            f"the camera gives {imgs[0].shape[1]} x {imgs[0].shape[0]} px"
+        )
+    name = name or next_sample_name(out, gesture, subject)
+    return write_sample(
+        out,
+        gesture,
+        name,
+        imgs,
+        subject=str(subject),
+        hand=hand,
+        fps=fps,
+        background=background,
+        extra={"source": status.get("driver", "camera")},
+    )
+
+
+__all__ = ["capture_background", "record", "synth", "write_png"]
