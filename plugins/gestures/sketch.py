@@ -145,9 +145,20 @@ def draw(
         for tip, ext in _fingers(h):
             if ext:
                 cv2.circle(touch, (int(tip[0]), int(tip[1])), max(int(7 * k), 2), contact_level, -1)
-        if h.flat:
+        if h.flat:  # palm and extended fingers pressed on the glass
             c = np.asarray(h.pos_px)
             cv2.circle(touch, (int(c[0]), int(c[1])), int(30 * k), contact_level // 2, -1)
+            fwd, side = _dirs(h.theta_deg, h.left)
+            for i, (tip, ext) in enumerate(_fingers(h)):
+                if ext:
+                    base = c + k * (_BASES[i][0] * fwd + _BASES[i][1] * side)
+                    cv2.line(
+                        touch,
+                        tuple(int(v) for v in base),
+                        tuple(int(v) for v in tip),
+                        contact_level // 2,
+                        max(int(_WIDTHS[i] * k * 0.8), 2),
+                    )
     body = cv2.GaussianBlur(body, (0, 0), 3.0)
     touch = cv2.GaussianBlur(touch, (0, 0), 1.0)
     img = bg.astype(np.float32) + body + touch

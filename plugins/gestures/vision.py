@@ -244,40 +244,45 @@ def _runs(on: np.ndarray) -> list[tuple[int, int]]:
 
 
 def circle_samples(
-    mask: np.ndarray, center: tuple[float, float], radius: float, n: int = 180
+    mask: np.ndarray,
+    center: tuple[float, float],
+    radius: float,
+    n: int = 180,
+    offset: tuple[int, int] = (0, 0),
+    image_shape: tuple[int, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Angles (rad, image axes: x right, y down), on-mask and outside-image flags of ``n``
-    points on a circle."""
+    points on a circle. ``mask`` may be a crop of the image at ``offset`` (x, y) of an
+    image of ``image_shape`` (default: the mask is the whole image)."""
     a = np.arange(n) * (2 * math.pi / n)
     x = np.rint(center[0] + radius * np.cos(a)).astype(int)
     y = np.rint(center[1] + radius * np.sin(a)).astype(int)
     h, w = mask.shape
-    out = (x < 0) | (x >= w) | (y < 0) | (y >= h)
+    ih, iw = image_shape or (h, w)
+    gx, gy = x + offset[0], y + offset[1]
+    out = (gx < 0) | (gx >= iw) | (gy < 0) | (gy >= ih)
+    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
     on = np.zeros(n, dtype=bool)
-    inside = ~out
     on[inside] = mask[y[inside], x[inside]] > 0
     return a, on, out
 
 
-def _ray_reaches_border(
-    mask: np.ndarray, center: tuple[float, float], angle: float, r0: float
-) -> bool:
-    h, w = mask.shape
-    step = 2.0
-    r = r0
-    gaps = 0
-    while True:
-        x = int(round(center[0] + r * math.cos(angle)))
-        y = int(round(center[1] + r * math.sin(angle)))
-        if x < 0 or y < 0 or x >= w or y >= h:
-            return True
-        if mask[y, x] == 0:
-            gaps += 1
-            if gaps > 3:
-                return False
-        else:
-            gaps = 0
-        r += step
+def brightness_axis(mask: np.ndarray, diff: np.ndarray, min_shift_px: float = 1.0) -> float | None:
+    """Direction (rad) from the brightness-weighted centroid of a hand to its plain
+    centroid: towards the dimmer forearm. None if the two nearly coincide."""
+    m0 = cv2.moments(mask, binaryImage=True)
+    if m0["m00"] <= 0:
+        return None
+    w = cv2.multiply(diff, diff, dtype=cv2.CV_32F)
+    w[mask == 0] = 0
+    m1 = cv2.moments(w)
+    if m1["m00"] <= 0:
+        return None
+    dx = m0["m10"] / m0["m00"] - m1["m10"] / m1["m00"]
+    dy = m0["m01"] / m0["m00"] - m1["m01"] / m1["m00"]
+    if math.hypot(dx, dy) < min_shift_px:
+        return None
+    return math.atan2(dy, dx)
 
 
 @dataclass(frozen=True)
@@ -286,10 +291,14 @@ class WristArc:
 
     start_rad: float
     width_rad: float
-    found: str  # "forearm", "border", "widest", "fallback"
+    found: str  # "forearm", "border" (forearm leaving the image), "fallback"
+    direction_rad: float  # the forearm direction from the palm centre
 
     @property
     def mid_rad(self) -> float:
+        """Midpoint of the arc (the forearm direction if no arc was found)."""
+        if self.width_rad <= 0 or self.width_rad > 2 * math.pi / 3:
+            return self.direction_rad
         return self.start_rad + 0.5 * self.width_rad
 
 
@@ -299,42 +308,75 @@ def wrist_arc(
     palm_radius: float,
     params: VisionParams,
     contour: np.ndarray | None = None,
+    offset: tuple[int, int] = (0, 0),
+    image_shape: tuple[int, int] | None = None,
+    hint_rad: float | None = None,
 ) -> WristArc:
     """The arc where the forearm crosses a circle of ``wrist_radius`` palm radii about the
-    palm centre, or where that circle leaves the image (a hand cut by the border).
+    palm centre (``mask`` is this hand's mask, ``center`` in its coordinates).
 
-    Among the runs of the circle lying on the mask or off the image, the forearm is the
-    widest run whose outward ray stays in the mask up to the image border. With no such
-    run, the widest run at least as wide as the palm; with none, the direction opposite
-    the contour point farthest from the palm (fingers point away from the wrist).
+    The forearm is the thick part reaching farthest from the palm: the mask opened with
+    a disk of ``finger_width`` palm radii (fingers vanish, palm and forearm stay), and
+    the opened pixel farthest from the palm gives its direction (a forearm fading with
+    height, or leaving the image, is still longer than any finger group). The arc is the
+    run of the circle (on the mask or off the image) around that direction. With no
+    thick part beyond the circle (a fingertip alone, a fist), the direction opposite the
+    contour point farthest from the palm (fingers point away from the wrist).
+
+    ``hint_rad`` (from ``brightness_axis``: the forearm is higher above the glass, hence
+    dimmer, than the hand) settles the sign: a direction more than 90 degrees from the
+    hint is turned round; with no direction found, the hint is used.
     """
     r = params.wrist_radius * palm_radius
+    h, w = mask.shape
+    k = 4 if palm_radius >= 12 else 1
+    small = cv2.resize(mask, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
+    _, small = cv2.threshold(small, 127, 255, cv2.THRESH_BINARY)
+    rad = max(int(round(params.finger_width * palm_radius / k)), 1)
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
+    opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disk)
+    ys, xs = np.nonzero(opened)
+    direction: float | None = None
+    found = "fallback"
+    if len(xs):
+        px = (xs + 0.5) * k - 0.5
+        py = (ys + 0.5) * k - 0.5
+        dx, dy = px - center[0], py - center[1]
+        d2 = dx * dx + dy * dy
+        i = int(np.argmax(d2))
+        ih, iw = image_shape or (h, w)
+        gx, gy = px + offset[0], py + offset[1]
+        edge = (gx < k + 1) | (gy < k + 1) | (gx > iw - k - 2) | (gy > ih - k - 2)
+        if np.any(edge):  # the thick part leaves the image: the forearm goes that way
+            direction = math.atan2(float(dy[edge].mean()), float(dx[edge].mean()))
+            found = "border"
+        elif d2[i] > r * r:
+            # mean direction of the thick pixels beyond the circle near the farthest one
+            far = math.atan2(dy[i], dx[i])
+            ang = np.arctan2(dy, dx)
+            near = (d2 > r * r) & (np.cos(ang - far) > math.cos(math.radians(35)))
+            direction = math.atan2(float(np.sin(ang[near]).sum()), float(np.cos(ang[near]).sum()))
+            found = "forearm"
+    if hint_rad is not None:
+        if direction is None:
+            direction, found = hint_rad, "brightness"
+        elif math.cos(direction - hint_rad) < 0:
+            direction += math.pi
+    if direction is None:
+        if contour is not None and len(contour):
+            d = contour - np.asarray(center)
+            far = d[np.argmax(np.hypot(d[:, 0], d[:, 1]))]
+            direction = math.atan2(-far[1], -far[0])
+        else:
+            direction = math.pi / 2
     n = 180
-    a, on, out = circle_samples(mask, center, r, n)
-    runs = _runs(on | out)
+    a, on, out = circle_samples(mask, center, r, n, offset, image_shape)
     dang = 2 * math.pi / n
-    best: tuple[float, int, int] | None = None
-    for s, length in runs:
-        idx = (s + np.arange(length)) % n
-        mid = a[s] + 0.5 * (length - 1) * dang
-        via_border = bool(np.any(out[idx]))
-        reach = via_border or _ray_reaches_border(mask, center, mid, r)
-        if reach and (best is None or length > best[1]):
-            best = (mid, length, s)
-    if best is not None:
-        _, length, s = best
-        found = "border" if np.any(out[(s + np.arange(length)) % n]) else "forearm"
-        return WristArc(float(a[s]), float(length * dang), found)
-    widest = max(runs, key=lambda t: t[1], default=None)
-    if widest is not None and widest[1] * dang * r >= 2 * palm_radius and widest[1] < n:
-        s, length = widest
-        return WristArc(float(a[s]), float(length * dang), "widest")
-    if contour is not None and len(contour):
-        d = contour - np.asarray(center)
-        far = d[np.argmax(np.hypot(d[:, 0], d[:, 1]))]
-        ang = math.atan2(-far[1], -far[0])
-        return WristArc(ang, 0.0, "fallback")
-    return WristArc(math.pi / 2, 0.0, "fallback")
+    j = int(round((direction % (2 * math.pi)) / dang)) % n
+    for s0, length in _runs(on | out):
+        if (j - s0) % n < length:
+            return WristArc(float(a[s0]), float(length * dang), found, direction)
+    return WristArc(direction, 0.0, found, direction)
 
 
 def canonical_angle_deg(wrist_mid_rad: float) -> float:
@@ -406,6 +448,7 @@ def analyse_hand(
     contour: np.ndarray,
     full_mask: np.ndarray,
     params: VisionParams,
+    diff: np.ndarray | None = None,
     contacts: list[Contact] | None = None,
     to_mm=None,
 ) -> Hand | None:
@@ -422,7 +465,10 @@ def analyse_hand(
         return None
     center = (pcx + xa, pcy + ya)
     pts = contour.reshape(-1, 2).astype(np.float64)
-    arc = wrist_arc(full_mask, center, pr, params, pts)
+    hint = None
+    if diff is not None:
+        hint = brightness_axis(roi, diff[ya:yb, xa:xb], 0.1 * pr)
+    arc = wrist_arc(roi, (pcx, pcy), pr, params, pts - (xa, ya), (xa, ya), (H, W), hint)
     angle = canonical_angle_deg(arc.mid_rad)
     roi_center = (pcx, pcy)
     sil = canonical_silhouette(roi, roi_center, pr, angle, params)
@@ -501,7 +547,7 @@ def process_frame(
     for c in contours:
         if cv2.contourArea(c) < p.min_hand_area_px:
             continue
-        hand = analyse_hand(c, body, p, contacts, to_mm)
+        hand = analyse_hand(c, body, p, diff, contacts, to_mm)
         if hand is not None:
             hands.append(hand)
     hands.sort(key=lambda hd: -cv2.contourArea(hd.contour_px.astype(np.float32)))
