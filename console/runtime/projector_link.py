@@ -427,6 +427,8 @@ class ProjectorLink:
                 self.drawn_latency_s.append(float(msg["t_drawn_s"]) - sent)
             for old in [k for k in self._sent_t if k < seq]:
                 self._sent_t.pop(old, None)
+            if "scene" in msg:
+                self.shown_scene = msg["scene"]
             with self._cond:
                 self.drawn_seq = max(self.drawn_seq, seq)
                 self._cond.notify_all()

@@ -42,6 +42,19 @@ def _normaliser(p: np.ndarray) -> np.ndarray:
     return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
 
 
+def _three_collinear(p: np.ndarray, rel_tol: float = 1e-6) -> bool:
+    """Whether any three of the points lie on a line (area tiny against the spread)."""
+    scale = float(np.ptp(p, axis=0).max()) or 1.0
+    for i in range(len(p)):
+        for j in range(i + 1, len(p)):
+            for k in range(j + 1, len(p)):
+                a, b, c = p[i], p[j], p[k]
+                area2 = abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+                if area2 <= rel_tol * scale * scale:
+                    return True
+    return False
+
+
 def fit_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     """Homography H (3x3, H[2,2] = 1) with dst ~ H src, least squares over 4+ pairs.
 
@@ -54,6 +67,11 @@ def fit_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     if n < 4 or len(dst) != n:
         raise UserError(
             f"projector calibration: {n} point pairs; give at least 4 (the glass corners)"
+        )
+    if n == 4 and (_three_collinear(src) or _three_collinear(dst)):
+        raise UserError(
+            "projector calibration: the points are degenerate (three of the four on a line); "
+            "use four points near the glass corners"
         )
     ts, td = _normaliser(src), _normaliser(dst)
     s = (ts @ np.c_[src, np.ones(n)].T).T
@@ -73,8 +91,11 @@ def fit_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
         )
     hn = vt[-1].reshape(3, 3)
     h = np.linalg.inv(td) @ hn @ ts
-    if abs(h[2, 2]) < 1e-12:
-        raise UserError("projector calibration: the homography is singular; re-enter the corners")
+    if abs(h[2, 2]) < 1e-12 or abs(np.linalg.det(hn)) < 1e-9:
+        raise UserError(
+            "projector calibration: the points are degenerate (the mapping is singular); "
+            "re-enter four points near the glass corners"
+        )
     return h / h[2, 2]
 
 

@@ -7,6 +7,7 @@ hung to the console. The protocol is described in ``console.runtime.projector_li
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import logging
 import os
@@ -84,6 +85,7 @@ class LinkServer:
         self.frames = 0
         self.fps = 0.0
         self._last_frame_t = time.monotonic()
+        self._frame_ts: collections.deque[float] = collections.deque()
         self._drawn_seq = 0
         self._drawn_t = 0.0
         self.connected = False
@@ -98,9 +100,13 @@ class LinkServer:
     def frame_done(self, version: int, t_s: float) -> None:
         """The render loop finished a frame drawn from snapshot ``version``."""
         with self._lock:
-            dt = t_s - self._last_frame_t
-            if dt > 0:
-                self.fps = 0.9 * self.fps + 0.1 / dt if self.fps else 1.0 / dt
+            self._frame_ts.append(t_s)
+            while t_s - self._frame_ts[0] > 1.0:
+                self._frame_ts.popleft()
+            n = len(self._frame_ts)
+            self.fps = (
+                (n - 1) / (t_s - self._frame_ts[0]) if n > 1 and t_s > self._frame_ts[0] else 0.0
+            )
             self._last_frame_t = t_s
             self.frames += 1
             if version >= self._state_version and self._seq > self._drawn_seq:
@@ -155,7 +161,9 @@ class LinkServer:
                     drawn, drawn_t, frame_t = self._drawn_seq, self._drawn_t, self._last_frame_t
                     scene, fps, frames = self._scene, self.fps, self.frames
                 if drawn > sent_drawn:
-                    out += encode({"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t})
+                    out += encode(
+                        {"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t, "scene": scene}
+                    )
                     sent_drawn = drawn
                 # heartbeats only while the render loop is alive
                 if now - last_tx >= self.heartbeat_s and now - frame_t < self.peer_timeout_s:
