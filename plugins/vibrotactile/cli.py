@@ -52,6 +52,14 @@ def settings_of(ctx):
     )
 
 
+def piezo_limits(ctx) -> dict:
+    """The piezo range the safety gate allows (profile limits and amplifier/card reach)."""
+    from console.safety import Limits
+
+    lo, hi = Limits.from_profile(ctx.profile).piezo_range()
+    return {"piezo_min_v": lo, "piezo_max_v": hi}
+
+
 def perception_of(ctx):
     from plugins.vibrotactile.perception import Perception
 
@@ -251,6 +259,9 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     b.add_argument(
         "--allow-missing", action="store_true", help="build from the excitations present"
     )
+    b.add_argument(
+        "--zeta", type=float, default=0.01, help="damping assumed by the resolution check"
+    )
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
     q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
     q.add_argument("--active", required=True, help="grid number 1..84 (row by row) or x,y in mm")
@@ -274,6 +285,18 @@ def run_tables(args, ctx) -> int:
         t = build_tables(m, args.band_hz or _vt(ctx)["band_hz"], progress_printer())
         dt = time.perf_counter() - t0
         save_tables(args.out, t)
+        from plugins.vibrotactile.tables import coarse_peaks
+
+        missed = coarse_peaks(m, args.zeta, t.band_hz)
+        if missed:
+            worst = max(missed, key=lambda d: d["worst_loss_pct"])
+            print(
+                f"warning: {len(missed)} resonance peaks are narrower than the bin spacing (zeta "
+                f"{args.zeta:g}); e.g. {worst['excitation']} at {worst['frequency_hz']:g} Hz may lose up "
+                f"to {worst['worst_loss_pct']:.0f} % (df {worst['df_hz']:g} Hz > bandwidth "
+                f"{worst['half_power_bw_hz']:.2f} Hz): measure with finer lines",
+                file=sys.stderr,
+            )
         print(
             f"wrote {args.out}: {m.points.size} x {m.points.size} pairs x {len(m.excitations)} "
             f"excitations up to {t.band_hz:g} Hz in {dt * 1e3:.0f} ms"
@@ -324,10 +347,7 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
 def run_flow(args, ctx) -> int:
     from plugins.vibrotactile.stimuli import flow_plan
 
-    lim = dict(
-        piezo_min_v=ctx.profile.get("limits.piezo_min_v"),
-        piezo_max_v=ctx.profile.get("limits.piezo_max_v"),
-    )
+    lim = piezo_limits(ctx)
     if args.hand:
         if not args.direction:
             raise UserError("--hand needs --direction left|right|up|down")
@@ -431,7 +451,6 @@ def run_point(args, ctx) -> int:
         perception_of(ctx),
         settings_of(ctx),
         name=f"point {args.point}",
-        piezo_min_v=ctx.profile.get("limits.piezo_min_v"),
-        piezo_max_v=ctx.profile.get("limits.piezo_max_v"),
+        **piezo_limits(ctx),
     )
     return emit_plan(plan, args, ctx, plan_summary(plan))

@@ -194,3 +194,37 @@ def load_map_or_tables(path: str | os.PathLike, *, require_all: bool = True) -> 
         if is_tables:
             return load_tables(p).vmap
     return load_map(p, require_all=require_all)
+
+
+def coarse_peaks(m: VibrationMap, zeta: float = 0.01, band_hz: float = 650.0) -> list[dict]:
+    """Resonance peaks the frequency grid is too coarse to resolve.
+
+    Peaks are local maxima of the map's spatial RMS per excitation. A peak at f with
+    modal damping ``zeta`` has half-power bandwidth ``2 zeta f``; where the local bin
+    spacing df exceeds it, a peak can fall between bins and lose up to
+    ``1 - 1/sqrt(1 + (df / 2 / (zeta f))^2)`` of its height (FACTS). Returns one entry
+    per such peak: excitation, frequency_hz, df_hz, half_power_bw_hz, worst_loss_pct.
+    """
+    keep = usable_bins(m, band_hz)
+    f = m.freq_hz[keep]
+    if f.size < 3:
+        return []
+    df = np.gradient(f)
+    rms = np.sqrt(np.mean(np.abs(m.frf_um_per_v[:, :, keep]) ** 2, axis=1))  # (E, F)
+    out = []
+    for e, r in enumerate(rms):
+        peaks = np.flatnonzero((r[1:-1] > r[:-2]) & (r[1:-1] >= r[2:])) + 1
+        for k in peaks:
+            bw = 2 * zeta * f[k]
+            if df[k] > bw:
+                loss = 1 - 1 / np.sqrt(1 + (df[k] / 2 / (zeta * f[k])) ** 2)
+                out.append(
+                    {
+                        "excitation": m.excitations[e],
+                        "frequency_hz": float(f[k]),
+                        "df_hz": float(df[k]),
+                        "half_power_bw_hz": float(bw),
+                        "worst_loss_pct": float(100 * loss),
+                    }
+                )
+    return out

@@ -17,7 +17,8 @@ Layout (one file per excitation, as a vibrometer session measures one at a time)
   number = grid number; metres, or the file's unit system when a dataset 164 gives the
   length factor), else from the profile's [grid].
 
-Export writes ``DIR/<EXC>.uff`` with a dataset 164 (SI), a dataset 15 (coordinates, m)
+Export writes ``DIR/<EXC>.uff`` with a dataset 164 (SI), a dataset 15 (coordinates, m;
+both ASCII first: pyuff 2.5 writes an unreadable file when a binary 58b set comes first)
 and one dataset 58 per point: displacement (type 8) in m per volt at the piezo times
 ``gain`` (default 1), so ``import`` with the same ``gain`` reads it back.
 """

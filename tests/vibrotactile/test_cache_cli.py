@@ -1,0 +1,120 @@
+"""Disk cache keyed by inputs, and the commands end to end (default profile values)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from console.errors import UserError
+from console.vibration_map import save_map
+from plugins.vibrotactile import cli
+from plugins.vibrotactile.cache import cached
+
+
+def test_cache_computes_once_per_key(tmp_path):
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return {"x": np.arange(3), "info_json": {"a": 1}}
+
+    a = cached(tmp_path, "k", {"map": "h1", "p": 1}, compute)
+    b = cached(tmp_path, "k", {"map": "h1", "p": 1}, compute)
+    assert len(calls) == 1 and np.array_equal(a["x"], b["x"]) and b["info_json"] == {"a": 1}
+    cached(tmp_path, "k", {"map": "h2", "p": 1}, compute)
+    assert len(calls) == 2
+    for f in tmp_path.glob("*.npz"):
+        f.write_bytes(b"torn")
+    cached(tmp_path, "k", {"map": "h1", "p": 1}, compute)
+    assert len(calls) == 3
+    cached(None, "k", {"map": "h1"}, compute)
+    assert len(calls) == 4
+
+
+def run(configure, runner, argv, ctx):
+    p = argparse.ArgumentParser()
+    configure(p)
+    return runner(p.parse_args(argv), ctx)
+
+
+def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
+    mp = save_map(tmp_path / "map.npz", ss_map)
+    tp = tmp_path / "tables.npz"
+    assert run(cli.configure_tables, cli.run_tables, ["build", str(mp), "--out", str(tp)], ctx) == 0
+    capsys.readouterr()
+    run(
+        cli.configure_tables,
+        cli.run_tables,
+        ["query", str(tp), "--active", "51", "--passive", "52", "--json"],
+        ctx,
+    )
+    ans = json.loads(capsys.readouterr().out)
+    assert set(ans) == {"max_difference_um_per_v", "frequency_hz", "actuator"}
+    # the same answer from the map itself (tables built lazily and cached)
+    run(
+        cli.configure_tables,
+        cli.run_tables,
+        ["query", str(mp), "--active", "51", "--passive", "52", "--json"],
+        ctx,
+    )
+    assert json.loads(capsys.readouterr().out) == ans
+    assert list((tmp_path / "cache").glob("tables-*.npz"))
+    run(
+        cli.configure_tables,
+        cli.run_tables,
+        ["query", str(tp), "--active", "300,200", "--passive", "52", "--json"],
+        ctx,
+    )
+    assert json.loads(capsys.readouterr().out)["actuator"] in ("PA", "PB", "PC", "PD", "PALL")
+    with pytest.raises(UserError, match="grid point 99"):
+        run(
+            cli.configure_tables,
+            cli.run_tables,
+            ["query", str(tp), "--active", "99", "--passive", "1"],
+            ctx,
+        )
+    # UFF export -> import through the commands
+    run(
+        cli.configure_frf,
+        cli.run_frf,
+        ["export", str(mp), "--out", str(tmp_path / "uff"), "--binary"],
+        ctx,
+    )
+    files = [f"{e}={tmp_path / 'uff' / e}.uff" for e in ("PA", "PB", "PC", "PD", "PALL")]
+    run(
+        cli.configure_frf,
+        cli.run_frf,
+        ["import", *files, "--out", str(tmp_path / "m2.npz"), "--gain", "1"],
+        ctx,
+    )
+    assert "wrote" in capsys.readouterr().out
+    # a flow plan written as WAV + JSON, a point pulse, a flow under a hand
+    wav = tmp_path / "flow.wav"
+    run(
+        cli.configure_flow,
+        cli.run_flow,
+        [str(tp), "--from", "51", "--to", "52", "--out", str(wav), "--json"],
+        ctx,
+    )
+    summary = json.loads(capsys.readouterr().out)
+    assert wav.exists() and len(summary["segments"]) == 2
+    from scipy.io import wavfile
+
+    fs, data = wavfile.read(wav)
+    assert fs == 48000 and data.shape[1] == 2 and np.abs(data).max() <= 1.0
+    run(cli.configure_point, cli.run_point, [str(tp), "51", "--json"], ctx)
+    assert json.loads(capsys.readouterr().out)["kind"] == "point"
+    run(
+        cli.configure_flow,
+        cli.run_flow,
+        [str(mp), "--hand", "300,200", "--direction", "left", "--json"],
+        ctx,
+    )
+    hand = json.loads(capsys.readouterr().out)
+    assert hand["kind"] == "hand_flow" and hand["ok"]
+    with pytest.raises(UserError, match="needs --direction"):
+        run(cli.configure_flow, cli.run_flow, [str(mp), "--hand", "300,200"], ctx)
