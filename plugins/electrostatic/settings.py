@@ -118,7 +118,7 @@ KNOB_DEFAULTS: dict[str, Any] = {
     "vf_freq_at_rest_hz": 60.0,
     "vf_freq_at_speed_hz": 180.0,
     "vf_full_speed_deg_s": 180.0,
-    "bf_min_vpp": 20.0,
+    "bf_min_vpp": 40.0,
     "bf_max_vpp": 100.0,
     "bf_exponent": 2.0,
     "detent_vpp": 100.0,

@@ -72,7 +72,7 @@ class Envelope:
 
     @property
     def level(self) -> float:
-        return 0.5 - 0.5 * math.cos(math.pi * self.k / self.edge_n)
+        return 0.5 - 0.5 * math.cos(math.pi * max(self.k, 0.0) / self.edge_n)
 
     @property
     def active(self) -> bool:
@@ -183,9 +183,13 @@ class KnobStream:
         self.screen = c.detent == "screen" or c.friction != "none"
 
         ms = self.fs / 1000.0
-        ramp_ms = max(float(s["ramp_ms"]), float(lim.get("ramp_min_ms", 5.0)), 5.0)
+        # a raised cosine of length L stays under the gate's linear ramp of length R
+        # (at full scale) when L >= pi/2 R: its steepest slope is pi / (2 L)
+        ramp_min = max(float(lim.get("ramp_min_ms", 5.0)), 5.0)
+        ramp_ms = max(float(s["ramp_ms"]), math.pi / 2 * ramp_min)
         self._master = Envelope(round(ramp_ms * ms), None)
         self._master.trigger()
+        self._master.k = -1.0  # the first sample is exactly zero (the gate's start rule)
         edge_n = max(round(s["detent_edge_ms"] * ms), 1)
         self._detent = Envelope(edge_n, max(round(s["detent_ms"] * ms) - 2 * edge_n, 0))
         vd_n = max(round(s["vd_ms"] * ms), 4)

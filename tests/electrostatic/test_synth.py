@@ -47,7 +47,7 @@ def test_start_and_stop_ramps():
     s = KnobStream("HD+CF", FS, {**KNOB_DEFAULTS, "ramp_ms": 10.0})
     _, x = render(s, 60)
     ramp_n = 480
-    assert abs(x[0]) < 0.5
+    assert x[0] == 0.0  # the gate requires a live stream to start from zero
     # the envelope of the first 10 ms grows; after it the sine has full amplitude
     assert np.abs(x[:48]).max() < 0.1 * np.abs(x[ramp_n : ramp_n + 480]).max()
     assert np.abs(x[ramp_n:]).max() == pytest.approx(50.0, abs=0.5)
@@ -101,7 +101,7 @@ def test_boundary_variant_is_stronger_at_boundaries():
     _, mid = render(s, 100, {0: {"angle_deg": 22.5}})
     s2 = KnobStream("HD+BF", FS, sectors=8)
     _, edge = render(s2, 100, {0: {"angle_deg": 44.0}})
-    assert np.abs(edge[-2000:]).max() > 3 * np.abs(mid[-2000:]).max()
+    assert np.abs(edge[-2000:]).max() > 2 * np.abs(mid[-2000:]).max()
     assert np.abs(mid[-2000:]).max() == pytest.approx(KNOB_DEFAULTS["bf_min_vpp"] / 2, rel=0.02)
 
 

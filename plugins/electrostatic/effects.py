@@ -1,0 +1,161 @@
+"""Effect renderers: a single electrovibration stimulus and the knob (finite or live)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from console.errors import UserError
+from console.types import OutputPlan, Segment
+
+from .force import Material, expected_force, threshold_check
+from .settings import audio, electrostatic_settings, knob_settings, limits
+from .simulate import canned_rotation, run_pipeline
+from .synth import KnobStream, parse_condition
+
+
+def raised_cosine_ramps(n: int, ramp_n: int) -> np.ndarray:
+    g = np.ones(n)
+    r = min(ramp_n, n // 2)
+    if r > 0:
+        up = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, r + 1) / (r + 1))
+        g[:r] = up
+        g[n - r :] = up[::-1]
+    return g
+
+
+def friction_stimulus(
+    vpp: float,
+    freq_hz: float,
+    duration_s: float,
+    *,
+    waveform: str = "sine",
+    sample_rate_hz: int = 48000,
+    ramp_ms: float = 10.0,
+    edge_ms: float = 0.5,
+) -> np.ndarray:
+    """Screen voltage of a plain electrovibration stimulus with start/stop ramps."""
+    n = max(int(round(duration_s * sample_rate_hz)), 1)
+    ph = 2 * np.pi * freq_hz * np.arange(n) / sample_rate_hz
+    if waveform == "sine":
+        x = np.sin(ph)
+    elif waveform == "square":
+        from .synth import smooth_square
+
+        x = smooth_square(ph, edge_ms * 1e-3 * freq_hz)
+    else:
+        raise UserError(f"waveform {waveform!r}: unknown; use sine or square")
+    return (vpp / 2) * x * raised_cosine_ramps(n, int(round(ramp_ms * sample_rate_hz / 1000)))
+
+
+def stimulus_report(
+    vpp: float, freq_hz: float, profile: Any = None, waveform: str = "sine"
+) -> dict[str, Any]:
+    """Expected force and threshold margin of a stimulus (what the console shows)."""
+    es = electrostatic_settings(profile)
+    fs = audio(profile)["sample_rate_hz"]
+    v = friction_stimulus(vpp, freq_hz, 0.2, waveform=waveform, sample_rate_hz=fs, ramp_ms=0)
+    out = expected_force(v, fs, Material.from_settings(es), freq_hz=freq_hz)
+    try:
+        th = threshold_check(vpp, freq_hz, es, waveform)
+    except ValueError as exc:
+        raise UserError(
+            f"[electrostatic] threshold table: {exc}; give equal-length lists"
+        ) from None
+    return {"vpp": vpp, "waveform": waveform, **out, **th}
+
+
+def condition_report(condition: str, profile: Any = None) -> list[dict[str, Any]]:
+    """The signals a knob condition plays, each with expected force and threshold check."""
+    c = parse_condition(condition)
+    k = knob_settings(profile)
+    rows = []
+    if c.detent == "screen":
+        f = k["detent_freq_hz"] or 1000.0 / (2 * k["detent_ms"])
+        rows.append(("detent", stimulus_report(k["detent_vpp"], f, profile, "square")))
+    if c.friction == "constant":
+        rows.append(("friction", stimulus_report(k["carrier_vpp"], k["cf_freq_hz"], profile)))
+    if c.friction == "velocity":
+        for key in ("vf_freq_at_rest_hz", "vf_freq_at_speed_hz"):
+            rows.append((key, stimulus_report(k["carrier_vpp"], k[key], profile)))
+    if c.friction == "boundary":
+        for key in ("bf_min_vpp", "bf_max_vpp"):
+            rows.append((key, stimulus_report(k[key], k["cf_freq_hz"], profile)))
+    return [{"signal": name, **r} for name, r in rows]
+
+
+class ElectrostaticEffect:
+    """``render(vpp=, freq_hz=, duration_s=, waveform=)`` -> OutputPlan on the screen."""
+
+    def __init__(self, profile: Any = None) -> None:
+        self.profile = profile
+
+    def render(
+        self,
+        vpp: float = 100.0,
+        freq_hz: float = 180.0,
+        duration_s: float = 1.0,
+        waveform: str = "sine",
+    ) -> OutputPlan:
+        lim = limits(self.profile)
+        if vpp > lim["screen_max_vpp"]:
+            raise UserError(
+                f"electrostatic vpp = {vpp:g}: above [limits] screen_max_vpp = "
+                f"{lim['screen_max_vpp']:g}; lower it"
+            )
+        fs = audio(self.profile)["sample_rate_hz"]
+        ramp_ms = max(knob_settings(self.profile)["ramp_ms"], lim["ramp_min_ms"])
+        v = friction_stimulus(
+            vpp, freq_hz, duration_s, waveform=waveform, sample_rate_hz=fs, ramp_ms=ramp_ms
+        )
+        seg = Segment(
+            np.zeros_like(v), v, frozenset(), True, f"{waveform} {vpp:g} Vpp {freq_hz:g} Hz"
+        )
+        meta = stimulus_report(vpp, freq_hz, self.profile, waveform)
+        return OutputPlan(fs, (seg,), name="electrostatic", meta=meta)
+
+
+class KnobEffect:
+    """The knob: ``render(condition=)`` plays a canned rotation as a finite plan;
+    ``stream(condition=, sectors=)`` returns the live ``KnobStream``."""
+
+    def __init__(self, profile: Any = None) -> None:
+        self.profile = profile
+
+    def stream(self, condition: str = "HD+VF", sectors: int | None = None) -> KnobStream:
+        k = knob_settings(self.profile)
+        return KnobStream(
+            condition,
+            audio(self.profile)["sample_rate_hz"],
+            k,
+            limits(self.profile),
+            sectors=sectors or k["sectors"],
+        )
+
+    def render(
+        self, condition: str = "HD+VF", sectors: int | None = None, seed: int = 0
+    ) -> OutputPlan:
+        k = knob_settings(self.profile)
+        a = audio(self.profile)
+        c = parse_condition(condition)
+        r = run_pipeline(
+            canned_rotation(seed=seed),
+            c.name,
+            sample_rate_hz=a["sample_rate_hz"],
+            block=a["block_size"],
+            settings=k,
+            limits=limits(self.profile),
+            sectors=sectors or k["sectors"],
+        )
+        patches = KnobStream(c, a["sample_rate_hz"], k, limits(self.profile)).patches
+        seg = Segment(
+            r.piezo_v,
+            r.screen_v,
+            patches,
+            c.detent == "screen" or c.friction != "none",
+            f"knob {c.name}",
+        )
+        return OutputPlan(
+            a["sample_rate_hz"], (seg,), name=f"knob {c.name}", meta={"crossings": len(r.crossings)}
+        )

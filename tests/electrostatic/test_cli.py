@@ -1,0 +1,95 @@
+"""`haptable knob` and `haptable bench knob` as a user runs them, and the stream through the gate."""
+
+import json
+import threading
+import time
+
+import numpy as np
+import pytest
+from scipy.io import wavfile
+
+from console.cli import main
+from plugins.electrostatic.effects import KnobEffect
+from plugins.electrostatic.task import read_jsonl
+
+
+def test_knob_task_runs_and_logs_each_trial(tmp_path, capsys):
+    log = tmp_path / "knob.jsonl"
+    rc = main(
+        ["knob", "--sectors", "16", "--condition", "HD+VF", "--trials", "4", "--log", str(log)]
+    )
+    assert rc == 0
+    out = capsys.readouterr().out
+    assert "trial   4/4" in out and f"logged 4 trials to {log}" in out
+    rows = read_jsonl(log)
+    assert len(rows) == 4 and all(r["condition"] == "HD+VF" and r["sectors"] == 16 for r in rows)
+    assert main(["knob", "--trials", "2", "--log", str(log), "--json"]) == 0
+    assert len(read_jsonl(log)) == 6  # appended, never truncated
+
+
+def test_bad_arguments_are_one_line_errors(tmp_path, capsys):
+    assert main(["knob", "--condition", "HD+XY", "--log", str(tmp_path / "x.jsonl")]) == 2
+    err = capsys.readouterr().err
+    assert "HD+VF" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert main(["knob", "--sectors", "200", "--log", str(tmp_path / "x.jsonl")]) == 2
+    assert main(["knob", "--input", "live"]) == 2
+    assert main(["knob", "--audition", "nope"]) == 2
+
+
+def test_forces_show_expected_force_and_threshold(capsys):
+    assert main(["knob", "--forces", "--condition", "HD+VF", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["signal"] for r in rows] == ["detent", "vf_freq_at_rest_hz", "vf_freq_at_speed_hz"]
+    assert all(0 < r["force_mean_n"] < 0.1 and not r["below"] for r in rows)
+
+
+def test_audition_to_a_wav_file(tmp_path, capsys):
+    path = tmp_path / "hdvf.wav"
+    assert main(["knob", "--audition", "HD+VF", "--out", str(path)]) == 0
+    fs, data = wavfile.read(path)
+    assert fs == 48000 and data.shape[1] == 2 and np.all(np.isfinite(data))
+    assert np.abs(data[:, 1]).max() > 0.3 and not np.any(data[:, 0])
+    assert "16 detents" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("condition", ["HD+CF", "VD+VF"])
+def test_live_stream_plays_through_the_safety_gate(outputs, profile, condition):
+    stream = KnobEffect(profile).stream(condition)
+    report = outputs.stream(stream, name="knob")
+
+    def feed():
+        for k in range(20):
+            stream.post(
+                crossings=1 if k % 4 == 0 else 0, velocity_deg_s=10.0 * k, angle_deg=5.0 * k
+            )
+            time.sleep(0.005)
+        stream.request_stop()
+
+    th = threading.Thread(target=feed)
+    th.start()
+    report.wait(10.0)
+    th.join()
+    assert report.error == ""
+    rec = outputs.recording()
+    assert rec is not None and np.abs(rec[:, 1]).max() == pytest.approx(50.0, abs=0.5)
+    if condition == "VD+VF":
+        assert np.abs(rec[:, 0]).max() > 10.0
+
+
+def test_effect_render_is_accepted_by_the_gate(outputs, profile, plugins):
+    eff = plugins.get("effect", "electrostatic").factory(profile)
+    plan = eff.render(vpp=100.0, freq_hz=80.0, duration_s=0.3)
+    assert plan.meta["below"] is False and plan.meta["force_mean_n"] > 0
+    outputs.play(plan)
+    knob_plan = plugins.get("effect", "knob").factory(profile).render(condition="HD+BF")
+    outputs.play(knob_plan)
+
+
+def test_bench_knob_quick(capsys):
+    from plugins.electrostatic.bench import run
+
+    r = run(None, quick=True)
+    sim = r["crossing_to_detent_simulated"]
+    assert sim["missed"] == 0 and sim["within_one_block"]
+    assert r["crossing_to_detent_threaded"]["unconsumed"] == 0
+    assert set(r["synth_cpu_per_block"]["per_condition"]) >= {"V", "HD", "HD+CF", "HD+VF"}
