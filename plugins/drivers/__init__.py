@@ -41,3 +41,33 @@ def haptable_register_audio_outputs(register: Any) -> None:
         description="sound card through PortAudio (sounddevice), 2 channels float32",
         probe=audio_sounddevice.probe,
     )
+
+
+@hookimpl
+def haptable_register_relay_boards(register: Any) -> None:
+    from plugins.drivers import relay_hid, relay_yocto
+
+    register(
+        "yoctopuce",
+        relay_yocto.from_profile,
+        description="Yocto-MaxiCoupler, 8 relays, through the official yoctopuce library",
+        probe=relay_yocto.probe,
+    )
+    register(
+        "hid",
+        relay_hid.from_profile,
+        description="generic 0x16c0:0x05df USB HID relay board through pyusb",
+        probe=relay_hid.probe,
+    )
+
+
+@hookimpl
+def haptable_register_cameras(register: Any) -> None:
+    from plugins.drivers import camera_opencv
+
+    register(
+        "opencv",
+        camera_opencv.from_profile,
+        description="V4L2/OpenCV camera (PS3 Eye), 8-bit grayscale, reconnects after unplug",
+        probe=camera_opencv.probe,
+    )

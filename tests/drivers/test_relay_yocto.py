@@ -1,0 +1,238 @@
+"""The Yocto-MaxiCoupler driver against a fake of the yoctopuce API objects, and the real
+library with no module attached (probe says "missing" cleanly)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from plugins.drivers import relay_yocto
+from plugins.drivers.errors import DeviceError
+from plugins.drivers.relay_yocto import YoctoRelayBoard, choose_module
+
+
+class YAPI_Exception(Exception):  # noqa: N801 (the library's name)
+    pass
+
+
+class SimModule:
+    def __init__(self, serial: str, product: str = "Yocto-MaxiCoupler", n_relays: int = 8):
+        self.serial, self.product = serial, product
+        self.online = True
+        self.states = {f"relay{i}": 1 for i in range(1, n_relays + 1)}  # left closed
+        self.stuck: set[str] = set()
+        self.calls: list[tuple[str, int]] = []
+
+
+class FakeApi:
+    """YAPI, YModule, YRefParam, YRelay as the driver uses them, over simulated modules."""
+
+    SUCCESS = 0
+
+    def __init__(self, *modules: SimModule, hub_error: str = "") -> None:
+        self.modules = list(modules)
+        self.hub_error = hub_error
+        self.registered: list[str] = []
+        self.freed = 0
+        api = self
+
+        class YRefParam:
+            def __init__(self) -> None:
+                self.value = ""
+
+        class YAPI:
+            SUCCESS = 0
+
+            @staticmethod
+            def RegisterHub(url, errmsg):  # noqa: N802
+                if api.hub_error:
+                    errmsg.value = api.hub_error
+                    return -8
+                api.registered.append(url)
+                return 0
+
+            @staticmethod
+            def TestHub(url, ms, errmsg):  # noqa: N802
+                return YAPI.RegisterHub(url, errmsg)
+
+            @staticmethod
+            def FreeAPI():  # noqa: N802
+                api.freed += 1
+
+        class Module:
+            def __init__(self, i: int) -> None:
+                self.i = i
+
+            def get_serialNumber(self):  # noqa: N802
+                return api._online()[self.i].serial
+
+            def get_productName(self):  # noqa: N802
+                return api._online()[self.i].product
+
+            def nextModule(self):  # noqa: N802
+                return Module(self.i + 1) if self.i + 1 < len(api._online()) else None
+
+        class YModule:
+            @staticmethod
+            def FirstModule():  # noqa: N802
+                return Module(0) if api._online() else None
+
+        class Relay:
+            def __init__(self, hwid: str) -> None:
+                self.serial, self.func = hwid.split(".")
+
+            def _module(self) -> SimModule:
+                for m in api.modules:
+                    if m.serial == self.serial and m.online and self.func in m.states:
+                        return m
+                raise YAPI_Exception(f"Device not found ({self.serial}.{self.func})")
+
+            def isOnline(self):  # noqa: N802
+                try:
+                    self._module()
+                    return True
+                except YAPI_Exception:
+                    return False
+
+            def set_state(self, v):
+                m = self._module()
+                m.calls.append((self.func, v))
+                if self.func not in m.stuck:
+                    m.states[self.func] = v
+                return 0
+
+            def get_state(self):
+                return self._module().states[self.func]
+
+            def get_errorMessage(self):  # noqa: N802
+                return ""
+
+        class YRelay:
+            STATE_A, STATE_B = 0, 1
+
+            @staticmethod
+            def FindRelay(hwid):  # noqa: N802
+                return Relay(hwid)
+
+        self.ns = SimpleNamespace(YAPI=YAPI, YModule=YModule, YRefParam=YRefParam, YRelay=YRelay)
+
+    def _online(self) -> list[SimModule]:
+        return [m for m in self.modules if m.online]
+
+
+def test_opens_all_eight_relays_at_start_and_maps_channels():
+    sim = SimModule("MAXICPL1-1A2B3")
+    fake = FakeApi(SimModule("YLTCHRL1-00001", "Yocto-LatchedRelay"), sim)
+    board = YoctoRelayBoard(api=fake.ns)
+    assert board.serial == "MAXICPL1-1A2B3" and board.channels == 8
+    assert all(v == 0 for v in sim.states.values())
+    assert board.states() == (False,) * 8
+    board.set(3, True)
+    assert sim.calls[-1] == ("relay3", 1) and sim.states["relay3"] == 1
+    board.set(8, True)
+    assert board.states() == (False, False, True, False, False, False, False, True)
+    assert board.status()["closed"] == [3, 8]
+    board.set(3, False)
+    assert sim.states["relay3"] == 0
+    board.close()
+    assert all(v == 0 for v in sim.states.values())
+    assert fake.registered == ["usb"] and fake.freed == 1
+    board.close()  # twice is fine
+    assert fake.freed == 1 and board.status()["state"] == "stopped"
+
+
+def test_serial_and_url_from_the_profile(stub_profile):
+    a, b = SimModule("MAXICPL1-AAAAA"), SimModule("MAXICPL1-BBBBB")
+    fake = FakeApi(a, b)
+    p = stub_profile(relays__serial="MAXICPL1-BBBBB", relays__url="127.0.0.1")
+    board = YoctoRelayBoard(p.get("relays.url"), p.get("relays.serial"), api=fake.ns)
+    board.set(1, True)
+    assert (a.states["relay1"], b.states["relay1"]) == (1, 1)  # a untouched (left as found)
+    assert b.calls[-1] == ("relay1", 1) and not a.calls
+    assert fake.registered == ["127.0.0.1"]
+    board.close()
+
+
+def test_module_unplugged_mid_use_is_a_clear_error_and_state_lost():
+    sim = SimModule("MAXICPL1-1A2B3")
+    board = YoctoRelayBoard(api=FakeApi(sim).ns)
+    board.set(2, True)
+    sim.online = False
+    with pytest.raises(DeviceError, match="MAXICPL1-1A2B3: switching relay 4 failed.*gone: replug"):
+        board.set(4, True)
+    st = board.status()
+    assert st["state"] == "lost" and "Device not found" in st["error"]
+    with pytest.raises(DeviceError, match="is lost"):
+        board.set(1, False)
+    board.close()  # no exception
+
+
+def test_relay_that_does_not_follow_is_detected():
+    sim = SimModule("MAXICPL1-1A2B3")
+    board = YoctoRelayBoard(api=FakeApi(sim).ns)
+    sim.stuck.add("relay5")
+    with pytest.raises(DeviceError, match="relay 5 reads state 0, expected 1"):
+        board.set(5, True)
+    assert board.status()["state"] == "error"
+    board.close()
+
+
+@pytest.mark.parametrize("bad", [0, 9, 1.0, None])
+def test_channel_out_of_range(bad):
+    sim = SimModule("MAXICPL1-1A2B3")
+    board = YoctoRelayBoard(api=FakeApi(sim).ns)
+    n = len(sim.calls)
+    with pytest.raises(DeviceError, match=r"channels 1\.\.8"):
+        board.set(bad, True)
+    assert len(sim.calls) == n
+    board.close()
+
+
+def test_choose_module_errors_name_what_is_online():
+    mods = [("MAXICPL1-AAAAA", "Yocto-MaxiCoupler"), ("MAXICPL1-BBBBB", "Yocto-MaxiCoupler")]
+    with pytest.raises(DeviceError, match="several Yocto-MaxiCouplers"):
+        choose_module(mods, "")
+    with pytest.raises(DeviceError, match=r"'MAXICPL1-CCCCC'.*online: MAXICPL1-AAAAA"):
+        choose_module(mods, "MAXICPL1-CCCCC")
+    with pytest.raises(DeviceError, match=r"no Yocto-MaxiCoupler online \(online: none\)"):
+        choose_module([], "")
+    assert choose_module([("MAXICPL2-XX", "Yocto-MaxiCoupler-V2")], "") == "MAXICPL2-XX"
+
+
+def test_hub_errors_carry_the_fix():
+    fake = FakeApi(hub_error="Another process is already using yAPI")
+    with pytest.raises(DeviceError, match="VirtualHub"):
+        YoctoRelayBoard(api=fake.ns)
+    fake = FakeApi(hub_error="ytcp:1008:tcp(111):Connection refused")
+    with pytest.raises(DeviceError, match=r"start VirtualHub .* at '10.0.0.9'"):
+        YoctoRelayBoard(url="10.0.0.9", api=fake.ns)
+
+
+def test_no_module_releases_the_usb_for_other_processes():
+    fake = FakeApi()
+    with pytest.raises(DeviceError, match="no Yocto-MaxiCoupler online"):
+        YoctoRelayBoard(api=fake.ns)
+    assert fake.freed == 1 and relay_yocto._users == 0
+
+
+def test_probe_with_the_fake(stub_profile):
+    ok = relay_yocto.probe(stub_profile(), api=FakeApi(SimModule("MAXICPL1-1A2B3")).ns)
+    assert ok.state == "ok" and "MAXICPL1-1A2B3" in ok.why
+    gone = relay_yocto.probe(stub_profile(relays__serial="MAXICPL1-ZZZZZ"), api=FakeApi().ns)
+    assert gone.state == "missing" and "MAXICPL1-ZZZZZ" in gone.fix
+
+
+def test_probe_with_the_real_library_and_nothing_attached(stub_profile):
+    """The installed yoctopuce + libusb, no module: "missing", no exception, USB released."""
+    pytest.importorskip("yoctopuce")
+    st = relay_yocto.probe(stub_profile())
+    assert st.kind == "relay_board" and st.name == "yoctopuce"
+    assert st.state == "missing", st
+    assert "Yocto-MaxiCoupler" in st.why and st.fix
+
+
+def test_probe_of_an_unreachable_virtualhub_is_missing(stub_profile):
+    pytest.importorskip("yoctopuce")
+    st = relay_yocto.probe(stub_profile(relays__url="127.0.0.1:1"))
+    assert st.state == "missing" and "VirtualHub" in st.fix
