@@ -758,7 +758,7 @@ class ProjectorService:
 
     def stop_scene(self) -> None:
         """Show black."""
-        self.scene, self.scene_name, self.prepared = None, None, {}
+        self.scene, self.scene_name, self.prepared, self.unprepared = None, None, {}, []
         self.link.send_state("black", {"kind": "black"})
 
     def _push(self) -> dict:

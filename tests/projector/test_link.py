@@ -1,0 +1,290 @@
+"""The console <-> projector link: protocol, black on console loss, and SIGKILL on each side.
+
+The subprocess tests start real projector processes (headless, EGL) through the
+supervisor and kill them; generous timeouts only bound the wait (no timing asserts).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from console.errors import UserError
+from console.runtime.projector_link import (
+    LineBuffer,
+    ProjectorService,
+    encode,
+    probe,
+    projector_command,
+)
+from plugins.projector.scenes import BUILTIN_SCENES
+from plugins.projector.server import LinkServer
+
+SCENES = {n: cls for n, (cls, _) in BUILTIN_SCENES.items()}
+FAST = ["--size", "320x200", "--fps", "30", "--heartbeat-s", "0.1", "--peer-timeout-s", "1.0"]
+
+
+def wait_until(cond, timeout_s=20.0, what="condition"):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if cond():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    with open(f"/proc/{pid}/stat") as f:
+        return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+
+
+@pytest.fixture
+def sock_path(tmp_path):
+    return tmp_path / "p.sock"
+
+
+@pytest.fixture
+def reaper():
+    """Pids this test started; SIGKILLed at teardown if still there."""
+    pids: list[int] = []
+    yield pids
+    for pid in pids:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+
+
+def service(sock_path, tmp_path) -> ProjectorService:
+    return ProjectorService(
+        socket_path=sock_path,
+        command=projector_command(sock_path, headless=True, extra=FAST),
+        scenes=SCENES,
+        heartbeat_s=0.1,
+        peer_timeout_s=1.0,
+        backoff_max_s=0.5,
+        log_path=tmp_path / "projector.log",
+    )
+
+
+# --------------------------------------------------------------------------- protocol
+def test_line_buffer_joins_split_messages_and_skips_bad_lines():
+    rx = LineBuffer(max_line_bytes=100)
+    data = (
+        encode({"type": "state", "seq": 1})
+        + b"not json\n"
+        + b"[1,2]\n"
+        + encode({"type": "heartbeat"})
+    )
+    msgs = rx.feed(data[:7]) + rx.feed(data[7:])
+    assert [m["type"] for m in msgs] == ["state", "heartbeat"]
+    assert rx.bad_lines == 2
+    assert rx.feed(b"x" * 200) == [] and rx.bad_lines == 3  # a runaway line is dropped
+    assert rx.feed(encode({"type": "ok"})) == [{"type": "ok"}]
+
+
+def test_state_must_be_json_in_the_caller(sock_path):
+    svc = ProjectorService(socket_path=sock_path, command=None, scenes=SCENES)
+    with pytest.raises(ValueError):
+        svc.link.send_state("x", {"v": float("nan")})
+    svc.link.close()
+
+
+def _fake_console(path):
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.connect(str(path))
+    s.settimeout(5.0)
+    return s, s.makefile("rb")
+
+
+def test_projector_end_draws_newest_state_and_goes_black_when_the_console_leaves(sock_path):
+    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=0.5, initial={"kind": "alignment"})
+    srv.start()
+    try:
+        assert srv.snapshot()[3] == {"kind": "alignment"}  # shown until a console comes
+        s, f = _fake_console(sock_path)
+        hello = json.loads(f.readline())
+        assert hello["type"] == "hello" and hello["pid"] == os.getpid()
+        s.sendall(
+            encode({"type": "state", "seq": 1, "scene": "knob", "state": {"kind": "knob", "n": 1}})
+        )
+        s.sendall(
+            encode({"type": "state", "seq": 2, "scene": "knob", "state": {"kind": "knob", "n": 2}})
+        )
+        wait_until(lambda: srv.snapshot()[1] == 2, 5, "state 2")
+        assert srv.snapshot()[3] == {"kind": "knob", "n": 2}
+        srv.frame_done(srv.snapshot()[0], time.monotonic())
+        seen = []
+        while not any(m["type"] == "drawn" for m in seen) and len(seen) < 50:
+            seen.append(json.loads(f.readline()))
+        acks = [m["seq"] for m in seen if m["type"] == "ack"]
+        assert acks == [1, 2] and seen[-1]["seq"] == 2  # each state acked; the newest drawn
+        s.close()  # the console dies: EOF
+        wait_until(lambda: srv.snapshot()[3] is None, 5, "black after EOF")
+        # a console that goes silent (hung) is dropped after the timeout: black again
+        s, f = _fake_console(sock_path)
+        s.sendall(encode({"type": "state", "seq": 1, "scene": "grid", "state": {"kind": "grid"}}))
+        wait_until(lambda: srv.snapshot()[3] == {"kind": "grid"}, 5, "grid state")
+        wait_until(lambda: srv.snapshot()[3] is None, 5, "black after silence")
+        s.close()
+    finally:
+        srv.close()
+    assert not sock_path.exists()
+
+
+def test_second_projector_on_a_live_socket_is_refused_and_a_stale_one_replaced(sock_path):
+    srv = LinkServer(sock_path)
+    try:
+        with pytest.raises(UserError, match="already running"):
+            LinkServer(sock_path)
+    finally:
+        srv.close()
+    stale = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    stale.bind(str(sock_path))  # a socket file nobody listens on (a killed projector's)
+    stale.close()
+    assert sock_path.exists() and probe(sock_path) is None
+    srv = LinkServer(sock_path)
+    assert probe(sock_path) == os.getpid()
+    srv.close()
+
+
+# --------------------------------------------------------------------------- processes
+def test_projector_killed_with_sigkill_is_restarted_and_shows_the_scene_again(
+    sock_path, tmp_path, reaper
+):
+    svc = service(sock_path, tmp_path)
+    try:
+        svc.start()
+        reaper.append(svc.supervisor.pid)
+        svc.start_scene("knob")
+        assert svc.wait_drawn(20), (tmp_path / "projector.log").read_text()
+        first = svc.supervisor.pid
+        os.kill(first, signal.SIGKILL)
+        wait_until(
+            lambda: svc.supervisor.pid not in (None, first) and svc.link.connected,
+            30,
+            "a new projector",
+        )
+        reaper.append(svc.supervisor.pid)
+        # the full state is re-sent after the reconnect: the new process draws the knob
+        wait_until(lambda: svc.status()["shown_scene"] == "knob", 20, "knob shown again")
+        st = svc.status()
+        assert st["restarts"] == 1 and st["connected"] and st["last_exit"] == -signal.SIGKILL
+        svc.update({"type": "rotate", "delta_deg": 45})
+        assert svc.wait_drawn(20)
+    finally:
+        svc.close()
+    assert not alive(reaper[-1])
+
+
+def test_hung_projector_is_detected_by_heartbeat_and_replaced(sock_path, tmp_path, reaper):
+    svc = service(sock_path, tmp_path)
+    try:
+        svc.start()
+        reaper.append(svc.supervisor.pid)
+        svc.start_scene("grid", [{"type": "audition", "point": 51}])
+        assert svc.wait_drawn(20)
+        first = svc.supervisor.pid
+        os.kill(first, signal.SIGSTOP)  # alive but silent
+        wait_until(
+            lambda: svc.supervisor.pid not in (None, first) and svc.link.connected,
+            30,
+            "replacement",
+        )
+        reaper.append(svc.supervisor.pid)
+        wait_until(lambda: svc.status()["shown_scene"] == "grid", 20, "grid shown again")
+        assert svc.status()["hangs"] >= 1 and "hung" in svc.status()["last_reason"]
+        assert not alive(first)  # the hung one was killed, not left behind
+    finally:
+        svc.close()
+
+
+CONSOLE = """
+import sys, time
+from console.runtime.projector_link import ProjectorService, projector_command
+from plugins.projector.scenes import BUILTIN_SCENES
+sock, log = sys.argv[1], sys.argv[2]
+svc = ProjectorService(socket_path=sock, command=projector_command(sock, headless=True, extra={fast!r}),
+                       scenes={{n: c for n, (c, _) in BUILTIN_SCENES.items()}},
+                       heartbeat_s=0.1, peer_timeout_s=1.0, log_path=log)
+svc.start()
+svc.start_scene("knob")
+assert svc.wait_drawn(30)
+print(svc.supervisor.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def test_console_killed_with_sigkill_leaves_the_projector_black_and_a_new_console_adopts_it(
+    sock_path, tmp_path, reaper
+):
+    console = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            CONSOLE.format(fast=FAST),
+            str(sock_path),
+            str(tmp_path / "projector.log"),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    reaper.append(console.pid)
+    line = console.stdout.readline()
+    assert line.strip().isdigit(), "the console did not get its projector drawing"
+    projector = int(line)
+    reaper.append(projector)
+    console.kill()
+    console.wait()
+    # the projector lives on (own session) and turns black once its console is gone
+    time.sleep(0.3)
+    assert alive(projector)
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.settimeout(5.0)
+    wait_until(lambda: probe(sock_path) == projector, 10, "the projector answering")
+    s.connect(str(sock_path))
+    hello = json.loads(s.makefile("rb").readline())
+    s.close()
+    assert hello["pid"] == projector and hello["scene"] is None  # black
+    # a new console adopts the running projector instead of starting a second one
+    svc = service(sock_path, tmp_path)
+    try:
+        svc.start()
+        assert svc.supervisor.adopted and svc.supervisor.pid == projector
+        svc.start_scene("flow_hand")
+        assert svc.wait_drawn(20)
+        assert svc.status()["shown_scene"] == "flow_hand" and svc.status()["restarts"] == 0
+    finally:
+        svc.close()
+    wait_until(lambda: not alive(projector), 10, "the projector to stop")
+    assert not sock_path.exists()
+
+
+def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path, reaper):
+    svc = service(sock_path, tmp_path)
+    try:
+        svc.start()
+        reaper.append(svc.supervisor.pid)
+        assert svc.link.wait_connected(20)
+        svc.start_scene("contacts")
+        assert svc.wait_drawn(20)
+        svc.stop_scene()
+        assert svc.wait_drawn(20)
+        st = svc.status()
+        assert st["shown_scene"] == "black" and st["scene"] is None
+        assert st["connected"] and st["pid"] == st["projector_pid"]
+        assert st["unprepared_needs"] == []
+        with pytest.raises(UserError, match="available"):
+            svc.start_scene("no-such-scene")
+    finally:
+        svc.close()
