@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
 TABLE_MM = (743.46, 447.29)  # 3M SCT-3250 active glass, paper section 2
@@ -22,6 +21,17 @@ IMAGE_PX = (640, 480)
 #: about 0.82 px/mm, with a little keystone. Seen from below, so mirrored: table x runs
 #: right-to-left and table y bottom-to-top in the image (x left, y up is a reflection).
 DEFAULT_CORNERS_PX = ((627.0, 429.0), (13.0, 421.0), (21.0, 52.0), (617.0, 57.0))
+
+
+def homography_4pt(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """The 3x3 homography taking four points ``src`` to ``dst`` (float64 solve)."""
+    a = np.zeros((8, 8))
+    b = np.zeros(8)
+    for i, ((x, y), (u, v)) in enumerate(zip(src, dst, strict=True)):
+        a[2 * i] = [x, y, 1, 0, 0, 0, -u * x, -u * y]
+        a[2 * i + 1] = [0, 0, 0, x, y, 1, -v * x, -v * y]
+        b[2 * i], b[2 * i + 1] = u, v
+    return np.append(np.linalg.solve(a, b), 1.0).reshape(3, 3)
 
 
 @dataclass(frozen=True)
@@ -39,9 +49,8 @@ class TableMapping:
 
     def __post_init__(self) -> None:
         w, h = self.table_mm
-        src = np.float32([[0, 0], [w, 0], [w, h], [0, h]])
-        dst = np.float32(self.corners_px)
-        hm = cv2.getPerspectiveTransform(src, dst).astype(np.float64)
+        src = np.array([[0, 0], [w, 0], [w, h], [0, h]], dtype=np.float64)
+        hm = homography_4pt(src, np.asarray(self.corners_px, dtype=np.float64))
         object.__setattr__(self, "_h", hm)
         object.__setattr__(self, "_hinv", np.linalg.inv(hm))
 

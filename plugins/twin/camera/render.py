@@ -81,9 +81,11 @@ def rig_maps(rig: Rig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lobes /= lobes.max()
     illum = vig * (0.8 + 0.3 * lobes)
     glow = rig.glow_level * illum
-    for _ in range(rig.n_hotspots):
-        x0, y0 = rng.uniform(0.05, 0.95) * w, rng.uniform(0.05, 0.95) * h
-        s = rng.uniform(8, 22)
+    # LED reflections in the glass: small spots along the LED rows, irregular strength
+    for i in range(rig.n_hotspots):
+        x0 = (i + 0.5) / rig.n_hotspots * w + rng.normal(0, 0.04 * w)
+        y0 = (0.15 if i % 2 else 0.85) * h + rng.normal(0, 0.03 * h)
+        s = rng.uniform(7, 14)
         glow += (
             rig.hotspot_level
             * rng.uniform(0.4, 1.0)

@@ -1,0 +1,155 @@
+"""CLI wiring for ``haptable gestures synth`` and ``haptable gestures record``.
+
+Each sub-command is a ``configure(parser)`` / ``run(args, ctx) -> int`` pair; ``COMMANDS``
+lists them by name for the ``gestures`` command's sub-parsers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from .dataset import GESTURES
+
+
+def configure_synth(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--subjects", type=int, default=5, help="number of subjects (5)")
+    parser.add_argument("--reps", type=int, default=40, help="repetitions per gesture (40)")
+    parser.add_argument("--out", required=True, type=Path, help="dataset folder to create")
+    parser.add_argument("--seed", type=int, default=0, help="seed (same seed, same dataset)")
+    parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    parser.add_argument(
+        "--gestures", default=None, help="comma-separated subset of: " + ", ".join(GESTURES)
+    )
+    parser.add_argument(
+        "--static-frames", type=int, default=None, help="frames per static sample (3)"
+    )
+    parser.add_argument(
+        "--dynamic-frames",
+        type=int,
+        default=None,
+        help="frames per dynamic sample (8; the classifier reads 4)",
+    )
+    parser.add_argument(
+        "--lens-distortion",
+        action="store_true",
+        help="render with the twin's barrel lens distortion",
+    )
+    parser.add_argument(
+        "--no-sample-background",
+        action="store_true",
+        help="only the dataset's background.png, none per sample",
+    )
+    parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+
+
+def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
+    from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, synth
+
+    gestures = GESTURES
+    if args.gestures:
+        gestures = tuple(g.strip() for g in args.gestures.split(",") if g.strip())
+    quiet = args.json or not sys.stderr.isatty()
+
+    def progress(done: int, total: int) -> None:
+        if not quiet:
+            print(f"\r{done}/{total} samples", end="", file=sys.stderr, flush=True)
+
+    info = synth(
+        args.out,
+        subjects=args.subjects,
+        reps=args.reps,
+        seed=args.seed,
+        workers=args.workers,
+        gestures=gestures,
+        static_frames=args.static_frames or STATIC_FRAMES,
+        dynamic_frames=args.dynamic_frames or DYNAMIC_FRAMES,
+        lens_distortion=args.lens_distortion,
+        per_sample_background=not args.no_sample_background,
+        force=args.force,
+        progress=progress,
+    )
+    if not quiet:
+        print(file=sys.stderr)
+    if args.json:
+        print(json.dumps(info))
+    else:
+        print(
+            f"wrote {info['samples']} samples ({info['frames']} frames) to {info['out']} "
+            f"in {info['seconds']:.1f} s with {info['workers']} process(es)"
+        )
+    return 0
+
+
+def configure_record(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--gesture", required=True, choices=GESTURES, help="gesture label")
+    parser.add_argument("--subject", required=True, help="subject name, e.g. s1")
+    parser.add_argument("--out", required=True, type=Path, help="dataset folder")
+    parser.add_argument(
+        "--frames", type=int, default=None, help="frames to record (static 3, dynamic 8)"
+    )
+    parser.add_argument("--hand", choices=("right", "left"), default="right")
+    parser.add_argument("--name", default=None, help="sample folder name (default subject_NNN)")
+    parser.add_argument(
+        "--background",
+        action="store_true",
+        help="first capture the empty table into the sample's background.png",
+    )
+    parser.add_argument(
+        "--camera", default=None, help="camera driver (default: the profile's [camera] driver)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the sample path as JSON")
+
+
+def open_camera(ctx: Any, driver: str | None = None) -> Any:
+    """The profile's camera (or ``driver``) through the plugin registry."""
+    profile = ctx.profile
+    name = driver or profile.get("camera.driver")
+    return ctx.pm.get("camera", name).factory(profile)
+
+
+def run_record(args: argparse.Namespace, ctx: Any) -> int:
+    from .synth import capture_background, record
+
+    camera = open_camera(ctx, args.camera)
+    try:
+        bg = None
+        if args.background:
+            if not hasattr(camera, "background"):
+                print("clear the table: capturing the background ...", file=sys.stderr)
+            bg = capture_background(camera)
+        path = record(
+            camera,
+            args.out,
+            args.gesture,
+            args.subject,
+            hand=args.hand,
+            frames=args.frames,
+            name=args.name,
+            background=bg,
+        )
+    finally:
+        camera.close()
+    if args.json:
+        print(json.dumps({"sample": str(path)}))
+    else:
+        print(f"recorded {path}")
+    return 0
+
+
+COMMANDS = {
+    "synth": (
+        configure_synth,
+        run_synth,
+        "make a synthetic dataset from the camera twin (paper: 5 x 10 x 40)",
+    ),
+    "record": (
+        configure_record,
+        run_record,
+        "record one gesture sample from the camera into a dataset folder",
+    ),
+}
