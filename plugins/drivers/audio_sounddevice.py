@@ -4,12 +4,14 @@ Two float32 channels (left: piezo amplifier, right: screen amplifier). The PortA
 callback pulls every block from the source (the safety gate) and never raises: an
 exception or a bad sample from the source silences the output for the rest of the
 stream (state ``fault``). A device that disappears ends the stream (state ``lost``).
+In both cases a source with ``estop(reason, wait=False)`` (the gate) is told.
 ``sounddevice`` is imported only when a stream is opened or probed, so machines without
 PortAudio can still run the twin.
 """
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Sequence
 from typing import Any
@@ -222,15 +224,29 @@ class SounddeviceOutput:
             self._callback_errors += 1
             self._state = "fault"
             self._error = f"source failed in the audio callback: {type(exc).__name__}: {exc}"
+            self._alarm(self._error)
+
+    def _alarm(self, reason: str) -> None:
+        """Tell the source (the safety gate's ``estop(reason, wait=False)``) if it listens."""
+        estop = getattr(self._source, "estop", None)
+        if callable(estop):
+            with contextlib.suppress(Exception):  # the audio thread must survive a broken gate
+                estop(reason, wait=False)
 
     def _finished(self) -> None:
         self._silent = True
         if not self._stopping:
-            self._state = "lost"
-            self._error = self._error or (
+            self._lose(
                 f"audio device {self._label!r} stopped by itself (unplugged or its server "
                 f"died); plug it in and restart the outputs"
             )
+
+    def _lose(self, why: str) -> None:
+        self._silent = True
+        if self._state != "lost":
+            self._state = "lost"
+            self._error = self._error or why
+            self._alarm(self._error)
 
     # ------------------------------------------------------------------ status
     def status(self) -> dict[str, Any]:
@@ -243,9 +259,7 @@ class SounddeviceOutput:
                 if self._state == "running" and not stream.active and not self._stopping:
                     self._finished()
             except Exception as exc:  # PortAudioError from a vanished device
-                self._state = "lost"
-                self._error = self._error or f"audio device {self._label!r}: {exc}"
-                self._silent = True
+                self._lose(f"audio device {self._label!r}: {exc}")
         return {
             "driver": "sounddevice",
             "device": self._label or self.device,

@@ -184,8 +184,9 @@ class HidRelayBoard:
         self._check(0, "opening all relays")
 
     # ------------------------------------------------------------------ I/O
-    def _io(self, fn: Any, what: str) -> Any:
-        if self._state != "running":
+    def _io(self, fn: Any, what: str, opening: bool = False) -> Any:
+        # after a readback mismatch only opening and reading are still attempted
+        if self._state != "running" and not (opening and self._state == "error"):
             raise DeviceError(
                 f"USB relay board {getattr(self, 'serial', '?')!r} is {self._state}"
                 f"{': ' + self._error if self._error else ''}; plug it in and restart the outputs"
@@ -203,7 +204,9 @@ class HidRelayBoard:
             ) from None
 
     def _mask(self) -> int:
-        return parse_report(self._io(self._board.read, "reading the relay states"))[1]
+        # reading is harmless: allowed after a mismatch too
+        data = self._io(self._board.read, "reading the relay states", opening=True)
+        return parse_report(data)[1]
 
     def _check(self, want_mask: int, what: str) -> None:
         mask = self._mask() & ((1 << self.channels) - 1)
@@ -214,19 +217,25 @@ class HidRelayBoard:
 
     # ------------------------------------------------------------------ RelayBoard
     def set(self, channel: int, closed: bool) -> None:
-        """Close (True) or open (False) relay ``channel`` and check the board agrees."""
+        """Close (True) or open (False) relay ``channel`` and check the board agrees.
+
+        After a readback mismatch (state ``error``) closing is refused but opening is
+        still attempted, so an e-stop can always try to open everything.
+        """
         if not isinstance(channel, int) or not 1 <= channel <= self.channels:
             raise DeviceError(
                 f"relay channel {channel!r} does not exist: board {self.serial!r} has "
                 f"channels 1..{self.channels}"
             )
+        opening = not closed
         before = self._mask()
         code = CMD_ON if closed else CMD_OFF
-        self._io(lambda: self._board.write(command(code, channel)), f"switching relay {channel}")
+        what = f"switching relay {channel}"
+        self._io(lambda: self._board.write(command(code, channel)), what, opening)
         bit = 1 << (channel - 1)
         want = (before | bit) if closed else (before & ~bit)
         self._switches += 1
-        self._check(want & ((1 << self.channels) - 1), f"switching relay {channel}")
+        self._check(want & ((1 << self.channels) - 1), what)
 
     def states(self) -> tuple[bool, ...]:
         """Closed state of channels 1..N, read back from the board."""
@@ -250,7 +259,7 @@ class HidRelayBoard:
 
     def status(self) -> dict[str, Any]:
         closed: list[int] = []
-        if self._state == "running":
+        if self._state in ("running", "error"):
             with contextlib.suppress(DeviceError):
                 closed = [i + 1 for i, c in enumerate(self.states()) if c]
         return {

@@ -191,13 +191,18 @@ class YoctoRelayBoard:
 
     # ------------------------------------------------------------------ RelayBoard
     def set(self, channel: int, closed: bool) -> None:
-        """Close (state B) or open (state A) relay ``channel`` and read it back."""
+        """Close (state B) or open (state A) relay ``channel`` and read it back.
+
+        After a readback mismatch (state ``error``) closing is refused but opening is
+        still attempted, so an e-stop can always try to open everything.
+        """
         if not isinstance(channel, int) or not 1 <= channel <= self.channels:
             raise DeviceError(
                 f"relay channel {channel!r} does not exist: Yocto-MaxiCoupler has channels "
                 f"1..{self.channels}"
             )
-        if self._state != "running":
+        # after a readback mismatch only opening is still attempted (e-stop must try)
+        if self._state != "running" and not (self._state == "error" and not closed):
             raise DeviceError(
                 f"Yocto-MaxiCoupler {self.serial} is {self._state}: {self._error}; "
                 f"restart the outputs"
@@ -207,7 +212,7 @@ class YoctoRelayBoard:
 
     def states(self) -> tuple[bool, ...]:
         """Closed state of channels 1..N as read from the module."""
-        if self._state != "running":
+        if self._state not in ("running", "error"):
             raise DeviceError(f"Yocto-MaxiCoupler {self.serial} is {self._state}: {self._error}")
         b = self._api.YRelay.STATE_B
         try:

@@ -95,6 +95,11 @@ class RampSource:
 
     def __init__(self) -> None:
         self.n = 0
+        self.alarms: list[tuple[str, bool]] = []
+
+    def estop(self, reason: str, *, wait: bool = True) -> None:
+        """Like the safety gate's: the driver must call it without waiting."""
+        self.alarms.append((reason, wait))
 
     def fill(self, out: np.ndarray) -> None:
         k = np.arange(self.n, self.n + len(out), dtype=np.float32)
@@ -202,6 +207,8 @@ def test_exception_in_source_gives_silence_for_the_rest_of_the_stream():
     st = out.status()
     assert st["state"] == "fault" and st["callback_errors"] == 1
     assert "effect crashed" in st["error"]
+    assert len(src.alarms) == 1 and "effect crashed" in src.alarms[0][0]
+    assert src.alarms[0][1] is False  # never block the audio thread
     out.stop()
     assert out.status()["state"] == "fault"
 
@@ -225,7 +232,8 @@ def test_out_of_range_or_non_finite_block_is_silenced(bad):
 def test_stop_is_idempotent_and_silences_before_closing():
     sd = FakeSd()
     out = SounddeviceOutput("system", sd=sd)
-    out.start(RampSource())
+    src = RampSource()
+    out.start(src)
     stream = sd.streams[0]
     out.stop()
     assert stream.closed and not stream.active
@@ -234,6 +242,7 @@ def test_stop_is_idempotent_and_silences_before_closing():
     out.stop()
     st = out.status()
     assert st["state"] == "stopped" and st["error"] == ""
+    assert src.alarms == []  # an ordinary stop is no alarm
     SounddeviceOutput("system", sd=sd).stop()  # never started: fine too
 
 
@@ -252,12 +261,14 @@ def test_restart_after_stop_opens_a_new_stream():
 def test_vanished_device_is_reported_and_silenced():
     sd = FakeSd()
     out = SounddeviceOutput("system", sd=sd)
-    out.start(RampSource())
+    src = RampSource()
+    out.start(src)
     stream = sd.streams[0]
     stream.pump(2)
     stream.vanish()
     st = out.status()
     assert st["state"] == "lost"
+    assert [wait for _, wait in src.alarms] == [False]  # the gate is told once
     assert "unplugged" in st["error"]
     assert np.all(stream.pump(1) == 0)
     out.stop()

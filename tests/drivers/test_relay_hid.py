@@ -247,9 +247,17 @@ def test_board_not_obeying_is_detected_by_readback():
     with pytest.raises(DeviceError, match="board reports 00000000, expected 00000100"):
         board.set(3, True)
     assert board.status()["state"] == "error"
-    with pytest.raises(DeviceError):
-        board.set(1, True)  # refused after a mismatch: restart the outputs
+    n = len(commands_of(sim))
+    with pytest.raises(DeviceError, match="is error"):
+        board.set(1, True)  # closing is refused after a mismatch: restart the outputs
+    assert len(commands_of(sim)) == n
+    sim.ignore_commands = False
+    sim.mask = 0b100  # say relay 3 did close after all
+    board.set(3, False)  # an e-stop may still open relays
+    assert commands_of(sim)[-1] == command(0xFD, 3) and sim.mask == 0
+    assert board.states() == (False,) * 8
     board.close()
+    assert commands_of(sim)[-1] == command(0xFC)
 
 
 def test_picks_the_board_by_serial_among_several():

@@ -175,6 +175,12 @@ def test_relay_that_does_not_follow_is_detected():
     with pytest.raises(DeviceError, match="relay 5 reads state 0, expected 1"):
         board.set(5, True)
     assert board.status()["state"] == "error"
+    with pytest.raises(DeviceError, match="is error"):
+        board.set(2, True)  # closing is refused after a mismatch
+    assert sim.states["relay2"] == 0
+    board.set(5, False)  # an e-stop may still open relays
+    assert sim.calls[-1] == ("relay5", 0)
+    assert board.states() == (False,) * 8
     board.close()
 
 
