@@ -107,8 +107,9 @@ def _forces(args: argparse.Namespace, ctx: Any) -> int:
         print(f"{parse_condition(args.condition).name}: no screen signal")
     for r in rows:
         flag = "BELOW threshold" if r["below"] else f"{r['margin_db']:+.1f} dB over threshold"
+        what = r.get("note") or f"{r['vpp']:g} Vpp {r['waveform']} at {r['freq_hz']:g} Hz"
         print(
-            f"{r['signal']:>20}: {r['vpp']:g} Vpp {r['waveform']} at {r['freq_hz']:g} Hz -> "
+            f"{r['signal']:>20}: {what} -> "
             f"mean {r['force_mean_n'] * 1e3:.2f} mN, peak {r['force_peak_n'] * 1e3:.2f} mN attraction, "
             f"friction +{r['friction_change_mean_n'] * 1e3:.2f} mN (base {r['friction_base_n'] * 1e3:.0f} mN); {flag}"
         )
@@ -265,6 +266,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         for key, v in summary.items():
             print(
                 f"  {key:22s} n={v['n']:2d} time {v['completion_time_s']:.2f} s, "
-                f"overshoots {v['overshoots']:.2f}, recovery {v['recovery_time_s']:.2f} s"
+                f"overshoots {v['overshoots']:.2f}, recovery "
+                + ("-" if math.isnan(v["recovery_time_s"]) else f"{v['recovery_time_s']:.2f} s")
             )
     return 0

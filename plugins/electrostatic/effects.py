@@ -72,8 +72,16 @@ def condition_report(condition: str, profile: Any = None) -> list[dict[str, Any]
     k = knob_settings(profile)
     rows = []
     if c.detent == "screen":
+        # a rectangular pulse of +-vpp/2 (polarity alternates) is judged as the square
+        # wave whose half period is the pulse (or as the burst's own square wave)
         f = k["detent_freq_hz"] or 1000.0 / (2 * k["detent_ms"])
-        rows.append(("detent", stimulus_report(k["detent_vpp"], f, profile, "square")))
+        r = stimulus_report(k["detent_vpp"], f, profile, "square")
+        r["note"] = (
+            f"{k['detent_ms']:g} ms square burst at {f:g} Hz"
+            if k["detent_freq_hz"]
+            else f"{k['detent_ms']:g} ms pulses of +-{k['detent_vpp'] / 2:g} V, alternating (judged as a {f:.0f} Hz square)"
+        )
+        rows.append(("detent", r))
     if c.friction == "constant":
         rows.append(("friction", stimulus_report(k["carrier_vpp"], k["cf_freq_hz"], profile)))
     if c.friction == "velocity":

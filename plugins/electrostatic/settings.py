@@ -332,6 +332,15 @@ def limits(profile: Any = None) -> dict[str, float]:
     """Output limits from [limits] (fallbacks when the core section is absent)."""
     d = {"screen_max_vpp": 200.0, "piezo_min_v": -100.0, "piezo_max_v": 250.0, "ramp_min_ms": 5.0}
     d.update({k: float(v) for k, v in _section(profile, "limits").items() if k in d})
+    # the sound card and amplifier cannot exceed full scale times the gain either
+    full = _section(profile, "audio").get("full_scale_v")
+    amps = _section(profile, "amplifiers")
+    if full is not None and amps.get("screen_gain") is not None:
+        d["screen_max_vpp"] = min(d["screen_max_vpp"], 2 * float(full) * float(amps["screen_gain"]))
+    if full is not None and amps.get("piezo_gain") is not None:
+        card = float(full) * float(amps["piezo_gain"])
+        d["piezo_max_v"] = min(d["piezo_max_v"], card)
+        d["piezo_min_v"] = max(d["piezo_min_v"], -card)
     return d
 
 
