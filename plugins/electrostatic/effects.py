@@ -141,6 +141,23 @@ class KnobEffect:
             sectors=sectors or k["sectors"],
         )
 
+    def session(self, condition: str = "HD+VF", sectors: int | None = None) -> Any:
+        """A live ``KnobSession``: ``feed(t_s, contacts)`` per camera frame drives
+        ``.stream`` (the StreamSource to give ``out.stream``) and ``.knob.item``."""
+        from .session import KnobSession
+
+        k = knob_settings(self.profile)
+        a = audio(self.profile)
+        return KnobSession(
+            parse_condition(condition).name,
+            sectors=sectors or k["sectors"],
+            settings=k,
+            limits=limits(self.profile),
+            sample_rate_hz=a["sample_rate_hz"],
+            block=a["block_size"],
+            record=False,
+        )
+
     def render(
         self, condition: str = "HD+VF", sectors: int | None = None, seed: int = 0
     ) -> OutputPlan:

@@ -93,3 +93,24 @@ def test_bench_knob_quick(capsys):
     assert sim["missed"] == 0 and sim["within_one_block"]
     assert r["crossing_to_detent_threaded"]["unconsumed"] == 0
     assert set(r["synth_cpu_per_block"]["per_condition"]) >= {"V", "HD", "HD+CF", "HD+VF"}
+
+
+def test_live_session_from_the_effect_drives_its_stream(profile, plugins):
+    from plugins.electrostatic.simulate import canned_rotation
+
+    ses = plugins.get("effect", "knob").factory(profile).session("HD", sectors=8)
+    for t, cs in canned_rotation():
+        ses.feed(t, cs)
+        ses.stream.next_block(64)
+    assert ses.knob.item == 180 // 45  # +270 then -90 deg from item 0
+    assert len(ses.stream.detent_log) == len(ses.crossings) > 0
+
+
+def test_limits_include_what_the_card_and_amplifier_can_reach(profile):
+    from plugins.electrostatic.settings import limits
+
+    lim = limits(profile)
+    full, gain = profile.get("audio.full_scale_v"), profile.get("amplifiers.screen_gain")
+    assert lim["screen_max_vpp"] == min(profile.get("limits.screen_max_vpp"), 2 * full * gain)
+    assert lim["piezo_max_v"] <= full * profile.get("amplifiers.piezo_gain")
+    assert limits(None)["screen_max_vpp"] == 200.0
