@@ -236,3 +236,14 @@ def test_coarse_grid_reports_the_peaks_it_misses(sim):
     assert all(m["peak_kept"] < 0.97 for m in missed)
     coarse = frf.missed_peaks(np.arange(0.0, 626.0, 5.0), sim.freq_hz, 0.01)
     assert len(coarse) >= len(sim.freq_hz[sim.freq_hz < 625]) // 2
+
+
+def test_many_points_path_equals_the_mode_shape_path(sim):
+    """Few (excitation, frequency) pairs are summed in coefficient space: same result."""
+    rng = np.random.default_rng(7)
+    x, y = rng.uniform(0, 743.46, 500), rng.uniform(0, 447.29, 500)
+    few = sim.frf_um_per_v(x, y, np.array([94.4, 465.0]), ("PA", "PALL"))  # 4 < modes
+    many = sim.frf_um_per_v(x, y, np.linspace(94.4, 465.0, 60))[[0, 4]][:, :, [0, -1]]
+    np.testing.assert_allclose(few, many, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="outside"):
+        sim.frf_um_per_v([800.0], [10.0], [100.0])

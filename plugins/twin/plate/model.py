@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from . import defaults as dflt
-from .frf import displacement_frf, static_residual
+from .frf import displacement_frf, modal_receptance, static_residual
 from .piezo import PiezoPatch, modal_forces, patch_loads, pin_force_moment
 from .ritz import Modes, Plate, Springs, solve_modes
 
@@ -70,28 +70,48 @@ class Twin:
         idx = [EXCITATIONS.index(e) for e in excitations]
         x_m = np.asarray(x_mm, dtype=float).ravel() / 1e3
         y_m = np.asarray(y_mm, dtype=float).ravel() / 1e3
-        phi = self.modes.shapes(x_m, y_m)
-        res = None
-        if self.residual_coeffs is not None:
-            res = _eval_coeffs(self, self.residual_coeffs[idx], x_m, y_m)
+        freqs_hz = np.atleast_1d(np.asarray(freqs_hz, dtype=float))
+        zeta = self.params.damping_ratio
         with np.errstate(divide="ignore", invalid="ignore"):
-            h = displacement_frf(
-                phi,
-                self.q[:, idx],
-                self.modes.omega_rad_s,
-                freqs_hz,
-                self.params.damping_ratio,
-                res,
-            )
+            if len(idx) * freqs_hz.size < self.modes.omega_rad_s.size:
+                # few (excitation, frequency) pairs, maybe many points: sum the modes in
+                # coefficient space first, then evaluate one field per pair
+                g = modal_receptance(self.modes.omega_rad_s, freqs_hz, zeta)  # (R, F)
+                amp = self.q[:, idx][:, :, None] * g[:, None, :]  # (R, E, F)
+                field = np.einsum("rij,ref->efij", self.modes.coeffs, amp, optimize=True)
+                if self.residual_coeffs is not None:
+                    field = field + self.residual_coeffs[idx][:, None]
+                h = _eval_fields(self, field, x_m, y_m)  # (E, F, P)
+                h = np.moveaxis(h, -1, 1)
+            else:
+                phi = self.modes.shapes(x_m, y_m)
+                res = None
+                if self.residual_coeffs is not None:
+                    res = _eval_coeffs(self, self.residual_coeffs[idx], x_m, y_m)
+                h = displacement_frf(
+                    phi, self.q[:, idx], self.modes.omega_rad_s, freqs_hz, zeta, res
+                )
         return h * 1e6
+
+
+def _eval_fields(twin: Twin, coeffs: np.ndarray, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+    """Evaluate coefficient fields (..., mx, my) at points: (..., P)."""
+    s = twin.modes.system
+    if np.any(np.abs(2 * x_m / s.plate.a_m - 1) > 1 + 1e-9) or np.any(
+        np.abs(2 * y_m / s.plate.b_m - 1) > 1 + 1e-9
+    ):
+        raise ValueError("point outside the plate")
+    vx = s.bx.values(2 * x_m / s.plate.a_m - 1)  # (P, mx)
+    vy = s.by.values(2 * y_m / s.plate.b_m - 1)  # (P, my)
+    lead = coeffs.shape[:-2]
+    c = coeffs.reshape(-1, *coeffs.shape[-2:])  # (K, mx, my)
+    t = vx @ c  # (K, P, my)
+    return np.einsum("kpj,pj->kp", t, vy).reshape(*lead, -1)
 
 
 def _eval_coeffs(twin: Twin, coeffs: np.ndarray, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
     """Evaluate coefficient fields (E, mx, my) at points: (E, P)."""
-    s = twin.modes.system
-    vx = s.bx.values(2 * x_m / s.plate.a_m - 1)
-    vy = s.by.values(2 * y_m / s.plate.b_m - 1)
-    return np.einsum("pi,eij,pj->ep", vx, coeffs, vy, optimize=True)
+    return _eval_fields(twin, coeffs, x_m, y_m)
 
 
 _CACHE: OrderedDict[str, Twin] = OrderedDict()

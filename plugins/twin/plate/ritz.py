@@ -274,8 +274,8 @@ def evaluate(modes: Modes, x_m: np.ndarray, y_m: np.ndarray, what: str = "w") ->
     for dx, dy, scale in orders[what]:
         vx = modes.system.bx.values(xi, dx)  # (P, mx)
         vy = modes.system.by.values(eta, dy)  # (P, my)
-        tmp = np.einsum("pi,rij->prj", vx, modes.coeffs, optimize=True)
-        out = out + scale * np.einsum("prj,pj->pr", tmp, vy, optimize=True)
+        tmp = vx @ modes.coeffs  # (R, P, my): one BLAS call per mode
+        out = out + scale * np.einsum("rpj,pj->pr", tmp, vy)
     return out
 
 
