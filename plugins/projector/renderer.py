@@ -46,14 +46,16 @@ VS_TEXT = (
     + """
 in vec2 in_mm;
 in vec2 in_uv;
+in vec4 in_rgba;
 out vec2 v_uv;
-void main() { gl_Position = to_clip(in_mm); v_uv = in_uv; }
+out vec4 v_rgba;
+void main() { gl_Position = to_clip(in_mm); v_uv = in_uv; v_rgba = in_rgba; }
 """
 )
 FS_TEXT = """#version 330
-uniform sampler2D tex; uniform vec4 rgba;
-in vec2 v_uv; out vec4 f_color;
-void main() { f_color = vec4(rgba.rgb, rgba.a * texture(tex, v_uv).r); }
+uniform sampler2D tex;
+in vec2 v_uv; in vec4 v_rgba; out vec4 f_color;
+void main() { f_color = vec4(v_rgba.rgb, v_rgba.a * texture(tex, v_uv).r); }
 """
 
 
@@ -75,12 +77,13 @@ class Renderer:
         self.fill = ctx.program(vertex_shader=VS_FILL, fragment_shader=FS_FILL)
         self.textp = ctx.program(vertex_shader=VS_TEXT, fragment_shader=FS_TEXT)
         self._blend = moderngl.BLEND
-        self._textures: dict[tuple[str, int], tuple[Any, float]] = {}
         self._key: str | None = None
         self._vao = None
         self._vbo = None
         self._n = 0
-        self._text_vaos: list[tuple[Any, Any, Any, tuple]] = []
+        self._text_vao = None
+        self._text_vbo = None
+        self._atlas = None
         self.layer: Layer | None = None
         self.set_calibration(calibration)
 
@@ -103,27 +106,10 @@ class Renderer:
         return True
 
     def _release_geometry(self) -> None:
-        for obj in (self._vao, self._vbo):
+        for obj in (self._vao, self._vbo, self._text_vao, self._text_vbo, self._atlas):
             if obj is not None:
                 obj.release()
-        self._vao = self._vbo = None
-        for vao, vbo, _, _ in self._text_vaos:
-            vao.release()
-            vbo.release()
-        self._text_vaos = []
-
-    def _texture(self, text: str, px: int):
-        key = (text, px)
-        if key not in self._textures:
-            if len(self._textures) > 512:
-                for tex, _ in self._textures.values():
-                    tex.release()
-                self._textures.clear()
-            bmp = text_bitmap(text, px)
-            tex = self.ctx.texture((bmp.shape[1], bmp.shape[0]), 1, bmp.tobytes(), alignment=1)
-            tex.repeat_x = tex.repeat_y = False
-            self._textures[key] = (tex, bmp.shape[1] / bmp.shape[0])
-        return self._textures[key]
+        self._vao = self._vbo = self._text_vao = self._text_vbo = self._atlas = None
 
     def _upload(self, layer: Layer) -> None:
         self._release_geometry()
@@ -132,27 +118,38 @@ class Renderer:
             data = np.hstack([layer.xy_mm, layer.rgba]).astype("f4")
             self._vbo = self.ctx.buffer(data.tobytes())
             self._vao = self.ctx.vertex_array(self.fill, [(self._vbo, "2f 4f", "in_mm", "in_rgba")])
-        for t in layer.texts:
-            px = int(round(t.size_mm * self._px_per_mm * 1.25))
-            tex, aspect = self._texture(t.text, px)
+        if layer.texts:
+            self._upload_texts(layer)
+
+    def _upload_texts(self, layer: Layer) -> None:
+        """All strings of the layer in one atlas texture and one vertex buffer."""
+        bmps = [
+            text_bitmap(t.text, int(round(t.size_mm * self._px_per_mm * 1.25))) for t in layer.texts
+        ]
+        atlas, boxes = pack_atlas(bmps)
+        ah, aw = atlas.shape
+        self._atlas = self.ctx.texture((aw, ah), 1, atlas.tobytes(), alignment=1)
+        quads = []
+        for t, bmp, (bx, by) in zip(layer.texts, bmps, boxes, strict=True):
+            bh, bw = bmp.shape
             h = t.size_mm
-            w = h * aspect
+            w = h * bw / bh
             x = t.xy_mm[0] - {"l": 0.0, "c": w / 2, "r": w}.get(t.anchor, 0.0)
             y = t.xy_mm[1] - h / 2
-            quad = np.array(
-                [
-                    [x, y, 0, 0],
-                    [x + w, y, 1, 0],
-                    [x + w, y + h, 1, 1],
-                    [x, y, 0, 0],
-                    [x + w, y + h, 1, 1],
-                    [x, y + h, 0, 1],
-                ],
-                "f4",
-            )
-            vbo = self.ctx.buffer(quad.tobytes())
-            vao = self.ctx.vertex_array(self.textp, [(vbo, "2f 2f", "in_mm", "in_uv")])
-            self._text_vaos.append((vao, vbo, tex, t.rgba))
+            u0, v0, u1, v1 = bx / aw, by / ah, (bx + bw) / aw, (by + bh) / ah
+            corners = [
+                (x, y, u0, v0),
+                (x + w, y, u1, v0),
+                (x + w, y + h, u1, v1),
+                (x, y + h, u0, v1),
+            ]
+            for i in (0, 1, 2, 0, 2, 3):
+                quads.append((*corners[i], *t.rgba))
+        data = np.array(quads, "f4")
+        self._text_vbo = self.ctx.buffer(data.tobytes())
+        self._text_vao = self.ctx.vertex_array(
+            self.textp, [(self._text_vbo, "2f 2f 4f", "in_mm", "in_uv", "in_rgba")]
+        )
 
     def draw(self) -> None:
         """Clear to black and draw the current state into the bound framebuffer."""
@@ -163,16 +160,29 @@ class Renderer:
         ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
         if self._vao is not None:
             self._vao.render()
-        for vao, _, tex, rgba in self._text_vaos:
-            tex.use(0)
-            self.textp["rgba"].value = rgba
-            vao.render()
+        if self._text_vao is not None:
+            self._atlas.use(0)
+            self._text_vao.render()
 
     def release(self) -> None:
         self._release_geometry()
-        for tex, _ in self._textures.values():
-            tex.release()
-        self._textures.clear()
+
+
+def pack_atlas(bmps: list[np.ndarray], width: int = 2048, pad: int = 2) -> tuple[np.ndarray, list]:
+    """Shelf-pack bitmaps into one (H, W) uint8 atlas; returns it and each (x, y) corner."""
+    width = max(width, max(b.shape[1] for b in bmps) + 2 * pad)
+    boxes, x, y, shelf = [], pad, pad, 0
+    for b in bmps:
+        h, w = b.shape
+        if x + w + pad > width:
+            x, y, shelf = pad, y + shelf + pad, 0
+        boxes.append((x, y))
+        x += w + pad
+        shelf = max(shelf, h)
+    atlas = np.zeros((y + shelf + pad, width), np.uint8)
+    for b, (bx, by) in zip(bmps, boxes, strict=True):
+        atlas[by : by + b.shape[0], bx : bx + b.shape[1]] = b
+    return atlas, boxes
 
 
 # --------------------------------------------------------------------------- headless
@@ -196,6 +206,44 @@ def egl_available() -> tuple[bool, str]:
     return True, ""
 
 
+def egl_fence_wait():
+    """``wait()`` that blocks until the GL commands issued so far are done, through
+    glFenceSync/glClientWaitSync called via ctypes, which releases the GIL while it waits
+    (moderngl's ``finish`` holds it, stalling the link thread for a whole frame).
+    None if EGL does not give the entry points."""
+    import ctypes
+
+    try:
+        egl = ctypes.CDLL("libEGL.so.1")
+        egl.eglGetProcAddress.restype = ctypes.c_void_p
+        egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+        addr = [
+            egl.eglGetProcAddress(n) for n in (b"glFenceSync", b"glClientWaitSync", b"glDeleteSync")
+        ]
+    except (OSError, AttributeError):
+        return None
+    if not all(addr):
+        return None
+    fence = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint)(addr[0])
+    client_wait = ctypes.CFUNCTYPE(ctypes.c_uint, ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint64)(
+        addr[1]
+    )
+    delete = ctypes.CFUNCTYPE(None, ctypes.c_void_p)(addr[2])
+    gl_sync_gpu_commands_complete, gl_sync_flush_commands_bit = 0x9117, 0x1
+    ok = (0x911A, 0x911C)  # ALREADY_SIGNALED, CONDITION_SATISFIED
+
+    def wait(timeout_s: float = 5.0) -> bool:
+        sync = fence(gl_sync_gpu_commands_complete, 0)
+        if not sync:
+            return False
+        try:
+            return client_wait(sync, gl_sync_flush_commands_bit, int(timeout_s * 1e9)) in ok
+        finally:
+            delete(sync)
+
+    return wait
+
+
 class Offscreen:
     """A renderer drawing into an offscreen framebuffer of ``size_px``."""
 
@@ -204,6 +252,7 @@ class Offscreen:
         self.size_px = (int(size_px[0]), int(size_px[1]))
         self.fbo = self.ctx.simple_framebuffer(self.size_px, components=4)
         self.renderer = Renderer(self.ctx, self.size_px, calibration)
+        self._fence = None
 
     def render(self, state: dict | None) -> None:
         self.fbo.use()
@@ -211,7 +260,11 @@ class Offscreen:
         self.renderer.draw()
 
     def finish(self) -> None:
-        self.ctx.finish()
+        """Wait until the frame is rendered (without holding the GIL when possible)."""
+        if self._fence is None:
+            self._fence = egl_fence_wait() or False
+        if not (self._fence and self._fence()):
+            self.ctx.finish()
 
     def read_rgb(self) -> np.ndarray:
         """(H, W, 3) uint8, top row first (as projected)."""
