@@ -22,6 +22,7 @@ import numpy as np
 
 FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little")
 PAD_MM = 2.0  # skin within this height of the glass is pressed flat on it (contact)
+REST_MM = 4.0  # a curled finger this close to the glass rests on it (a knuckle contact)
 
 
 @dataclass(frozen=True)
@@ -183,7 +184,7 @@ def _solve_mcp(z0, lens, flex, radii, target_mm, n_sub, theta_max, contact):
     th = np.linspace(lo, hi, 64)
     for _ in range(3):  # scan, then refine twice inside the bracket
         f = np.column_stack([th, np.full_like(th, flex[1]), np.full_like(th, flex[2])])
-        low = (_chains(z0, lens, f, n_sub)[:, :, 1] - radii).min(axis=1)
+        low = (_chains(z0, lens, f, n_sub)[:, 1:, 1] - radii[1:]).min(axis=1)  # past the MCP
         ok = low <= target_mm if contact else low >= target_mm
         if contact:
             if not ok.any():
@@ -264,7 +265,7 @@ def _clip_strip(poly: np.ndarray, v0: float, v1: float) -> np.ndarray:
 @dataclass
 class HandGeometry:
     pieces: list[Piece]
-    contacts: list[dict]  # {"finger", "pos_mm"} of touching fingertips
+    contacts: list[dict]  # {"finger", "kind": "tip"|"knuckle", "pos_mm"} touching the glass
     palm_contact: bool
     center_mm: tuple[float, float]
     tips_mm: dict[str, tuple[float, float, float]]  # finger -> (x, y, lowest height)
@@ -328,7 +329,7 @@ def hand_pieces(subject: Subject, pose: HandPose) -> HandGeometry:
         touching = []
         for i in range(len(xy) - 1):
             h = float(min(low[i], low[i + 1]))
-            if h <= PAD_MM:
+            if h <= (PAD_MM if fp.contact else REST_MM):
                 rs = pose.tip_radius_scale * 0.62
                 pieces.append(
                     Piece(_capsule(xy[i], xy[i + 1], radii[i] * rs, radii[i + 1] * rs), 0.0, 1.0)
@@ -343,7 +344,14 @@ def hand_pieces(subject: Subject, pose: HandPose) -> HandGeometry:
         if fp.contact and touching:
             distal = [i for i in touching if i >= len(xy) - 1 - 3] or touching[-1:]
             pts = np.vstack([xy[i] for i in distal] + [xy[i + 1] for i in distal])
-            contacts.append({"finger": name, "pos_mm": tuple(map(float, pts.mean(axis=0)))})
+            contacts.append(
+                {"finger": name, "kind": "tip", "pos_mm": tuple(map(float, pts.mean(axis=0)))}
+            )
+        elif touching:  # a curled finger resting on the glass: a real contact too
+            pts = np.vstack([xy[i] for i in touching] + [xy[i + 1] for i in touching])
+            contacts.append(
+                {"finger": name, "kind": "knuckle", "pos_mm": tuple(map(float, pts.mean(axis=0)))}
+            )
 
     # a hovering piece never hides a touching one: draw order is decided by the renderer
     center = to_table(palm.mean(axis=0, keepdims=True))[0]

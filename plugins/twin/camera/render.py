@@ -27,7 +27,7 @@ from .hand import Piece
 #: Height bands (mm): [lo, hi). Pieces above the last edge are invisible.
 BAND_EDGES_MM = (0.0, 0.5, 4.0, 9.0, 16.0, 28.0, 45.0, 75.0, 130.0)
 CONTACT_LEVEL = 175.0  # grey levels added by touching skin at illumination 1
-HOVER_LEVEL = 105.0  # just above the glass, decaying with height
+HOVER_LEVEL = 90.0  # skin just above the glass (an air gap), decaying with height
 HOVER_DECAY_MM = 32.0
 
 
@@ -40,7 +40,7 @@ def contrast(h_mm: float) -> float:
 
 def blur_mm(h_mm: float) -> float:
     """Diffuser blur (Gaussian sigma, mm) of skin at height ``h_mm``."""
-    return 0.5 + 0.4 * h_mm
+    return 0.5 + 0.6 * h_mm
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,7 @@ def frame_truth(
             contacts.append(
                 {
                     "finger": c["finger"],
+                    "kind": c["kind"],
                     "pos_mm": [round(c["pos_mm"][0], 3), round(c["pos_mm"][1], 3)],
                     "pos_px": [round(float(p[0]), 3), round(float(p[1]), 3)],
                     "in_image": bool(0 <= p[0] < w and 0 <= p[1] < h),
