@@ -97,27 +97,17 @@ def parse_point(text: str, vmap):
 
 def tables_for(path: str, ctx, args, band_hz: float | None = None):
     """Tables from a tables file, or built (and cached) from a vibration map."""
-    from plugins.vibrotactile.cache import cached
-    from plugins.vibrotactile.tables import Tables, build_tables, load_tables
+    from console.vibration_map import load_map
+    from plugins.vibrotactile.lazy import tables_cached
+    from plugins.vibrotactile.tables import load_tables
     from plugins.vibrotactile.vibration_io import is_tables_file
 
     if is_tables_file(path):
         return load_tables(path)
-    from console.vibration_map import load_map
-
     vm = load_map(path, require_all=not getattr(args, "allow_missing", False))
-    band = band_hz or _vt(ctx)["band_hz"]
-    res = cached(
-        cache_dir_of(args, ctx),
-        "tables",
-        {"map": vm.content_hash(), "band_hz": band},
-        lambda: _tables_arrays(build_tables(vm, band, progress_printer())),
+    return tables_cached(
+        vm, band_hz or _vt(ctx)["band_hz"], cache_dir_of(args, ctx), progress_printer()
     )
-    return Tables(res["max_diff_um_per_v"], res["freq_hz"], res["actuator"], band, vm)
-
-
-def _tables_arrays(t) -> dict:
-    return {"max_diff_um_per_v": t.max_diff_um_per_v, "freq_hz": t.freq_hz, "actuator": t.actuator}
 
 
 def emit_plan(plan, args, ctx, summary: dict) -> int:
@@ -367,8 +357,7 @@ def run_flow(args, ctx) -> int:
 
 def hand_plan(args, ctx, lim):
     from console.types import OutputPlan, patches_of
-    from plugins.vibrotactile.cache import cached
-    from plugins.vibrotactile.hand import hand_flow
+    from plugins.vibrotactile.lazy import hand_flow_cached
     from plugins.vibrotactile.stimuli import drive_cap_v, tone_segment
     from plugins.vibrotactile.tables import load_map_or_tables
 
@@ -387,19 +376,7 @@ def hand_plan(args, ctx, lim):
         band_hz=vt["band_hz"],
         method=st.interpolation,
     )
-    key = {
-        "map": vm.content_hash(),
-        "center": [cx, cy],
-        "direction": args.direction,
-        "perception": repr(per),
-        **kw,
-    }
-    res = cached(
-        cache_dir_of(args, ctx),
-        "handflow",
-        key,
-        lambda: {"result_json": hand_flow(vm, (cx, cy), args.direction, per, **kw)},
-    )["result_json"]
+    res = hand_flow_cached(vm, (cx, cy), args.direction, per, cache_dir_of(args, ctx), **kw)
     if not res["ok"]:
         raise UserError(
             f"no flow {args.direction} under a hand at {cx:g},{cy:g} mm: {res['reason']}; try another spot"

@@ -48,6 +48,22 @@ def side_masks(direction: str, squares: int = 3) -> tuple[np.ndarray, np.ndarray
     return (lo, hi) if direction in ("right", "up") else (hi, lo)
 
 
+_BAND: dict[tuple, tuple] = {}
+
+
+def _band_frf(m: VibrationMap, keep: np.ndarray) -> np.ndarray:
+    """The map's FRFs at bins ``keep`` as complex64, cached per (map array, bins)."""
+    key = (id(m.frf_um_per_v), keep.tobytes())
+    hit = _BAND.get(key)
+    if hit is not None and hit[0] is m.frf_um_per_v:
+        return hit[1]
+    arr = np.ascontiguousarray(m.frf_um_per_v[:, :, keep].astype(np.complex64))
+    if len(_BAND) >= 4:
+        _BAND.pop(next(iter(_BAND)))
+    _BAND[key] = (m.frf_um_per_v, arr)
+    return arr
+
+
 def square_levels(
     m: VibrationMap,
     center_mm,
@@ -72,8 +88,10 @@ def square_levels(
     offs = (
         (np.arange(squares)[:, None] * subgrid + local[None, :]).ravel() + 0.5
     ) * sub - hand_mm / 2
-    h = interpolate_lattice(m, cx + offs, cy + offs, method, frf=m.frf_um_per_v[:, :, keep])
-    amp = np.abs(h).astype(np.float32)  # (E, S*n, S*n, K)
+    full = bins is None
+    frf = _band_frf(m, keep) if full else m.frf_um_per_v[:, :, keep].astype(np.complex64)
+    h = interpolate_lattice(m, cx + offs, cy + offs, method, frf=frf, cache=full)
+    amp = np.abs(h)  # (E, S*n, S*n, K) float32
     e, _, _, k = amp.shape
     amp = (
         amp.reshape(e, squares, n, squares, n, k)

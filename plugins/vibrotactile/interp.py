@@ -90,7 +90,7 @@ def bilinear_weights_1d(knots: np.ndarray, v: np.ndarray) -> np.ndarray:
     return w
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=64)
 def _spline_basis(knots: tuple[float, ...], k: int):
     x = np.asarray(knots)
     return make_interp_spline(x, np.eye(x.size), k=min(k, x.size - 1))
@@ -130,12 +130,53 @@ def point_weights(
     return w
 
 
-def interpolate(
-    m: VibrationMap, xy_mm: np.ndarray, method: str = "spline", *, extrapolate: bool = False
+_PREPARED: dict[tuple, tuple] = {}  # explicit cache keyed by the identity of the FRF array
+
+
+def _prepared(
+    frf: np.ndarray, layout: str, grid: Grid | None = None, cache: bool = True
 ) -> np.ndarray:
-    """Complex FRFs (E, N, F) in um/V at points ``xy_mm`` (N, 2)."""
+    """The FRFs rearranged for real-valued BLAS products, cached per array object.
+
+    ``points``: (P, E*F*2) float (real/imag interleaved); ``grid``: (E, R, C, F*2) float.
+    The cache holds a reference to ``frf``, so its id cannot be reused while cached.
+    """
+    key = (id(frf), layout)
+    hit = _PREPARED.get(key)
+    if hit is not None and hit[0] is frf:
+        return hit[1]
+    if layout == "points":
+        arr = (
+            np.ascontiguousarray(frf.transpose(1, 0, 2))
+            .view(frf.real.dtype)
+            .reshape(frf.shape[1], -1)
+        )
+    else:
+        arr = np.ascontiguousarray(frf[:, grid.index]).view(frf.real.dtype)
+    if not cache:
+        return arr
+    if len(_PREPARED) >= 8:
+        _PREPARED.pop(next(iter(_PREPARED)))
+    _PREPARED[key] = (frf, arr)
+    return arr
+
+
+def interpolate(
+    m: VibrationMap,
+    xy_mm: np.ndarray,
+    method: str = "spline",
+    *,
+    extrapolate: bool = False,
+    frf: np.ndarray | None = None,
+) -> np.ndarray:
+    """Complex FRFs (E, N, F) in um/V at points ``xy_mm`` (N, 2).
+
+    ``frf`` may pass a band-limited copy of the map's FRFs (E, P, F') to work on.
+    """
+    h = m.frf_um_per_v if frf is None else frf
     w = point_weights(grid_of(m), xy_mm, method, extrapolate=extrapolate, n_points=m.points.size)
-    return np.einsum("np,epf->enf", w, m.frf_um_per_v, optimize=True)
+    out = (w.astype(h.real.dtype) @ _prepared(h, "points")).view(h.dtype)  # (N, E*F)
+    return out.reshape(w.shape[0], h.shape[0], h.shape[2]).transpose(1, 0, 2)
 
 
 def interpolate_lattice(
@@ -146,6 +187,7 @@ def interpolate_lattice(
     *,
     extrapolate: bool = False,
     frf: np.ndarray | None = None,
+    cache: bool = True,
 ) -> np.ndarray:
     """Complex FRFs (E, Ny, Nx, F') on the lattice ``ys x xs`` (separable: fast).
 
@@ -155,7 +197,12 @@ def interpolate_lattice(
     xs, ys = np.asarray(xs_mm, float), np.asarray(ys_mm, float)
     _check_inside(xs, grid.xs_mm, "x", extrapolate)
     _check_inside(ys, grid.ys_mm, "y", extrapolate)
-    h = (m.frf_um_per_v if frf is None else frf)[:, grid.index]  # (E, R, C, F)
-    wx = weights_1d(grid.xs_mm, xs, method)
-    wy = weights_1d(grid.ys_mm, ys, method)
-    return np.einsum("yr,xc,ercf->eyxf", wy, wx, h, optimize=True)
+    h = m.frf_um_per_v if frf is None else frf
+    hr = _prepared(h, "grid", grid, cache)  # (E, R, C, 2F) real
+    dt = hr.dtype
+    wx = weights_1d(grid.xs_mm, xs, method).astype(dt)  # (Nx, C)
+    wy = weights_1d(grid.ys_mm, ys, method).astype(dt)  # (Ny, R)
+    e, r, _, f2 = hr.shape
+    a = np.matmul(wx, hr)  # (E, R, Nx, 2F)
+    b = np.matmul(wy, a.reshape(e, r, -1))  # (E, Ny, Nx*2F)
+    return b.reshape(e, ys.size, xs.size, f2).view(h.dtype)

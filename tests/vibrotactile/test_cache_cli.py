@@ -118,3 +118,26 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
     assert hand["kind"] == "hand_flow" and hand["ok"]
     with pytest.raises(UserError, match="needs --direction"):
         run(cli.configure_flow, cli.run_flow, [str(mp), "--hand", "300,200"], ctx)
+
+
+def test_prepare_builds_only_what_is_asked(tmp_path, ss_map):
+    from plugins.vibrotactile.lazy import prepare
+    from plugins.vibrotactile.perception import Perception
+
+    seen = []
+    out = prepare(
+        ss_map,
+        Perception(),
+        pairs=[(51, 52), ((250.0, 200.0), 52)],
+        regions=[((300.0, 200.0), "up")],
+        cache_dir=tmp_path,
+        screen_stride=3,
+        progress=lambda f, msg: seen.append(f),
+    )
+    assert set(out["pairs"]) == {(51, 52), ((250.0, 200.0), 52)}
+    assert out["regions"][((300.0, 200.0), "up")]["ok"]
+    assert seen[-1] == 1.0
+    kinds = sorted(p.name.split("-")[0] for p in tmp_path.glob("*.npz"))
+    assert kinds == ["handflow", "pair", "pair", "tables"]
+    again = prepare(ss_map, Perception(), pairs=[(51, 52)], cache_dir=tmp_path)  # from the cache
+    assert again["pairs"][(51, 52)] == out["pairs"][(51, 52)]

@@ -37,8 +37,9 @@ def test_half_the_subgrid_rule_matches_a_direct_count(ss_map, levels):
     pts = np.array([(x, y) for y in ys for x in xs])
     amp = np.abs(interpolate(ss_map, pts)[e, :, keep[k]])
     level = q[e, 0, 0, k]
-    assert (amp >= level).sum() >= math.ceil(225 / 2)  # "at least half" at this level
-    assert (amp > level * 1.0001).sum() < math.ceil(225 / 2)  # and not above it
+    # "at least half" at this level and not above it (square levels are float32)
+    assert (amp >= level * (1 - 1e-5)).sum() >= math.ceil(225 / 2)
+    assert (amp > level * (1 + 1e-5)).sum() < math.ceil(225 / 2)
 
 
 @pytest.mark.parametrize("direction", DIRECTIONS)

@@ -1,0 +1,291 @@
+"""``haptable bench vibration``: accuracy next to speed for the vibrotactile pipeline.
+
+Reference: the analytic simply supported plate (exact FRF anywhere), its map on the
+7 x 12 grid at 0.5 Hz bins to 625 Hz.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from console.bench import machine_info, summarize_s
+
+BANDS = ((5, 150), (150, 300), (300, 450), (450, 625))
+METHODS = ("bilinear", "spline", "spline5")
+
+
+def _time(fn, reps: int) -> list[float]:
+    out = []
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return out
+
+
+def bench_interpolation(plate, m, n_points: int, reps: int) -> dict:
+    from plugins.vibrotactile.interp import interpolate
+
+    rng = np.random.default_rng(0)
+    lo, hi = m.points_mm.min(axis=0), m.points_mm.max(axis=0)
+    xy = rng.uniform(lo, hi, size=(n_points, 2))
+    ref = plate.frf_um_per_v(xy, m.freq_hz)
+    f = m.freq_hz
+    res = {}
+    for meth in METHODS:
+        h = interpolate(m, xy, meth)
+        errs = {}
+        for b0, b1 in BANDS:
+            s = (f >= b0) & (f < b1)
+            per_pt = np.linalg.norm(h[..., s] - ref[..., s], axis=(0, 2)) / np.linalg.norm(
+                ref[..., s], axis=(0, 2)
+            )
+            errs[f"{b0}-{b1}_hz"] = {
+                "rel_l2": float(
+                    np.linalg.norm(h[..., s] - ref[..., s]) / np.linalg.norm(ref[..., s])
+                ),
+                "p95_point": float(np.percentile(per_pt, 95)),
+            }
+        one = xy[:1]
+        t = summarize_s(_time(lambda one=one, meth=meth: interpolate(m, one, meth), reps))
+        res[meth] = {"error": errs, "query_all_bins_one_point": t}
+    return res
+
+
+def bench_tables(m, reps: int) -> dict:
+    from plugins.vibrotactile.tables import build_tables, query_indices, query_points
+
+    build = _time(lambda: build_tables(m), reps)
+    t = build_tables(m)
+    rng = np.random.default_rng(1)
+    pairs = rng.integers(0, m.points.size, size=(20000, 2))
+    t0 = time.perf_counter()
+    for a, p in pairs:
+        query_indices(t, int(a), int(p))
+    per_query = (time.perf_counter() - t0) / len(pairs)
+    arb = _time(lambda: query_points(t, (250.0, 200.0), (330.0, 230.0)), max(5, reps * 4))
+    return {
+        "build_84x84x5": summarize_s(build),
+        "bins": int(((m.freq_hz <= 650) & ~m.masked).sum()),
+        "query_grid_pair_us": per_query * 1e6,
+        "query_arbitrary_points": summarize_s(arb),
+    }, t
+
+
+def _table_chunk(args):
+    m, per, centers, kw = args
+    from plugins.vibrotactile.hand import hand_flow_table
+
+    t0 = time.process_time()
+    out = hand_flow_table(m, per, centers=centers, **kw)
+    out["cpu_s"] = np.array([time.process_time() - t0])
+    return out
+
+
+def hand_flow_table_parallel(m, per, centers, workers: int = 2, **kw) -> dict:
+    """``hand_flow_table`` split over ``workers`` processes (by rows of centres)."""
+    if workers <= 1:
+        return _table_chunk((m, per, centers, kw))
+    chunks = np.array_split(centers, workers)
+    with ProcessPoolExecutor(workers) as ex:
+        parts = list(ex.map(_table_chunk, [(m, per, c, kw) for c in chunks]))
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+
+
+def bench_hand(m, per, quick: bool) -> dict:
+    from plugins.vibrotactile.hand import DIRECTIONS, hand_flow, region_centers
+
+    centers = region_centers(m, 120.0, 10.0)
+    rng = np.random.default_rng(2)
+    sample = centers[rng.choice(len(centers), 4 if quick else 12, replace=False)]
+    exact_t, screen_t, same, loss = [], [], 0, []
+    for c in sample:
+        for d in DIRECTIONS[:2] if quick else DIRECTIONS:
+            t0 = time.perf_counter()
+            ex = hand_flow(m, c, d, per)
+            t1 = time.perf_counter()
+            sc = hand_flow(m, c, d, per, screen_stride=3)
+            t2 = time.perf_counter()
+            exact_t.append(t1 - t0)
+            screen_t.append(t2 - t1)
+            if ex["ok"] and sc["ok"]:
+                pairs = list(zip(ex["parts"], sc["parts"], strict=True))
+                same += all(
+                    (a["actuator"], a["frequency_hz"]) == (b["actuator"], b["frequency_hz"])
+                    for a, b in pairs
+                )
+                loss.extend(a["margin_db"] - b["margin_db"] for a, b in pairs)
+    n_cmp = len(exact_t)
+    todo = centers if not quick else centers[:: max(1, len(centers) // 60)]
+    workers = min(2, os.cpu_count() or 1)
+    t0 = time.perf_counter()
+    table = hand_flow_table_parallel(m, per, todo, workers=workers)
+    whole = time.perf_counter() - t0
+    est = whole * len(centers) / len(todo)
+    cpu = float(table["cpu_s"].sum()) * len(centers) / len(todo)
+    return {
+        "region_exact_one_direction": summarize_s(exact_t),
+        "region_screened_one_direction": summarize_s(screen_t),
+        "screened_same_choice_fraction": same / max(1, n_cmp),
+        "screened_margin_loss_db_median": float(np.median(loss)) if loss else 0.0,
+        "screened_margin_loss_db_max": float(np.max(loss)) if loss else 0.0,
+        "whole_table_regions": int(len(centers)),
+        "whole_table_regions_timed": int(len(todo)),
+        "whole_table_s": float(est),
+        "whole_table_measured_s": float(whole),
+        "whole_table_cpu_s": cpu,
+        "load_average_1min": os.getloadavg()[0],
+        "whole_table_workers": workers,
+        "whole_table_ok_fraction_by_direction": dict(
+            zip(DIRECTIONS, table["ok"].mean(axis=0).round(3).tolist(), strict=True)
+        ),
+    }, table
+
+
+def run_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
+    from plugins.vibrotactile.perception import Perception
+
+    plate = SSPlate()
+    m = analytic_map(plate)
+    per = Perception()
+    if ctx is not None and hasattr(ctx, "profile"):
+        per = Perception.from_section(ctx.profile.section("perception"))
+    interp = bench_interpolation(plate, m, 60 if quick else 300, 50 if quick else 300)
+    tables, t = bench_tables(m, 3 if quick else 10)
+    hand, htable = bench_hand(m, per, quick)
+    out = {
+        "reference": "analytic SSSS glass plate 743.46 x 447.29 x 3.18 mm, zeta 1 %, 7 x 12 grid, 0.5 Hz bins",
+        "interpolation": interp,
+        "tables": tables,
+        "flow_under_hand": hand,
+        "targets": {"table_build_ms": 1000, "query_us": 50, "whole_table_flow_s": 60},
+        "machine": machine_info(),
+        "quick": quick,
+        "load_average_1min": os.getloadavg()[0],
+    }
+    if report_dir:
+        out["report"] = str(write_report(Path(report_dir), out, t, htable))
+    return out
+
+
+def write_report(d: Path, res: dict, tables, htable) -> Path:
+    """Markdown + PNG plots."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d.mkdir(parents=True, exist_ok=True)
+    interp = res["interpolation"]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    centers = [(a + b) / 2 for a, b in BANDS]
+    for meth, r in interp.items():
+        errs = [r["error"][f"{a}-{b}_hz"]["rel_l2"] * 100 for a, b in BANDS]
+        ax[0].plot(centers, errs, "o-", label=meth)
+        ax[1].scatter([r["query_all_bins_one_point"]["p50_ms"] * 1e3], [max(errs)], label=meth)
+    ax[0].set(
+        xlabel="band centre (Hz)",
+        ylabel="relative L2 error (%)",
+        title="FRF interpolation error vs exact",
+    )
+    ax[1].set(
+        xlabel="time per point query, all bins (us)",
+        ylabel="worst-band error (%)",
+        title="error vs time",
+    )
+    for a in ax:
+        a.legend()
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(d / "interpolation.png", dpi=100)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    im = ax[0].imshow(tables.max_diff_um_per_v, cmap="viridis")
+    fig.colorbar(im, ax=ax[0])
+    ax[0].set(title="(a) max difference um/V", xlabel="passive", ylabel="active")
+    im = ax[1].imshow(tables.freq_hz, cmap="plasma")
+    fig.colorbar(im, ax=ax[1])
+    ax[1].set(title="(b) frequency Hz", xlabel="passive")
+    im = ax[2].imshow(
+        np.where(tables.actuator < 0, np.nan, tables.actuator), cmap="tab10", vmin=0, vmax=9
+    )
+    ax[2].set(title="(c) actuator 0..4 = " + " ".join(tables.excitations), xlabel="passive")
+    fig.tight_layout()
+    fig.savefig(d / "tables.png", dpi=100)
+    plt.close(fig)
+
+    h = res["flow_under_hand"]
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    c = htable["centers_mm"]
+    ok = htable["ok"].sum(axis=1)
+    sc = ax.scatter(c[:, 0], c[:, 1], c=ok, cmap="RdYlGn", vmin=0, vmax=4, s=12)
+    fig.colorbar(sc, ax=ax, label="directions with a valid flow")
+    ax.set(
+        xlabel="hand centre x (mm)",
+        ylabel="y (mm)",
+        title="flow under a hand (1 cm steps)",
+        aspect="equal",
+    )
+    fig.tight_layout()
+    fig.savefig(d / "hand_flow.png", dpi=100)
+    plt.close(fig)
+
+    tb = res["tables"]
+    lines = [
+        "# Vibrotactile benchmark",
+        "",
+        f"Reference: {res['reference']}. Machine: {res['machine']['cpu']}, {res['machine']['cores']} cores."
+        + (" (quick run)" if res["quick"] else ""),
+        "",
+        "## FRF interpolation vs the exact plate (off-grid points)",
+        "",
+        "| method | " + " | ".join(f"{a}-{b} Hz" for a, b in BANDS) + " | query p50 (us) |",
+        "|---|" + "---|" * (len(BANDS) + 1),
+    ]
+    for meth, r in interp.items():
+        errs = " | ".join(f"{r['error'][f'{a}-{b}_hz']['rel_l2'] * 100:.1f} %" for a, b in BANDS)
+        lines.append(f"| {meth} | {errs} | {r['query_all_bins_one_point']['p50_ms'] * 1e3:.0f} |")
+    lines += [
+        "",
+        "![interpolation](interpolation.png)",
+        "",
+        "## Lookup tables (paper Fig. 8)",
+        "",
+        f"- build, 84 x 84 pairs x 5 excitations x {tb['bins']} bins: p50 {tb['build_84x84x5']['p50_ms']:.0f} ms"
+        f" (target < 1000 ms)",
+        f"- query, grid pair: {tb['query_grid_pair_us']:.2f} us (target < 50 us)",
+        f"- query, arbitrary points (spline interpolation + search): p50 {tb['query_arbitrary_points']['p50_ms']:.2f} ms",
+        "",
+        "![tables](tables.png)",
+        "",
+        "## Flow under a hand",
+        "",
+        f"- one region, one direction, exhaustive: p50 {h['region_exact_one_direction']['p50_ms']:.0f} ms",
+        f"- one region, screened (every 3rd subgrid point, then exact re-scoring of the top candidates):"
+        f" p50 {h['region_screened_one_direction']['p50_ms']:.0f} ms; same choice as exhaustive in"
+        f" {h['screened_same_choice_fraction'] * 100:.0f} % of cases, margin lost median"
+        f" {h['screened_margin_loss_db_median']:.2f} dB, max {h['screened_margin_loss_db_max']:.2f} dB",
+        f"- whole table at 1 cm steps ({h['whole_table_regions']} regions x 4 directions,"
+        f" {h['whole_table_workers']} processes): {h['whole_table_s']:.1f} s"
+        + (
+            f" (extrapolated from {h['whole_table_regions_timed']} regions)"
+            if h["whole_table_regions_timed"] < h["whole_table_regions"]
+            else ""
+        )
+        + f" wall, {h['whole_table_cpu_s']:.1f} s CPU summed over processes (target < 60 s on 2 cores;"
+        f" 1-minute load average during the run {h['load_average_1min']:.1f})",
+        f"- share of regions with a valid flow, per direction: {h['whole_table_ok_fraction_by_direction']}",
+        "",
+        "![hand flow](hand_flow.png)",
+        "",
+    ]
+    p = d / "vibration.md"
+    p.write_text("\n".join(lines))
+    return p

@@ -1,0 +1,106 @@
+"""Only what is needed: tables, pair answers and flow-under-hand maps computed on demand
+and cached on disk, keyed by a hash of their inputs (map content, parameters).
+
+``prepare`` is what a scene's ``needs`` turn into: ``{"tables": [(a, b), ...],
+"flow_regions": [((x, y), direction), ...]}``; ``progress(fraction, message)`` is called
+for work that may take more than a second.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+
+from console.vibration_map import VibrationMap
+from plugins.vibrotactile.cache import cached
+from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.tables import Tables, build_tables, query_points
+
+CacheDir = str | os.PathLike | None
+
+
+def tables_cached(m: VibrationMap, band_hz: float, cache_dir: CacheDir, progress=None) -> Tables:
+    res = cached(
+        cache_dir,
+        "tables",
+        {"map": m.content_hash(), "band_hz": band_hz},
+        lambda: _arrays(build_tables(m, band_hz, progress)),
+    )
+    return Tables(res["max_diff_um_per_v"], res["freq_hz"], res["actuator"], band_hz, m)
+
+
+def _arrays(t: Tables) -> dict:
+    return {"max_diff_um_per_v": t.max_diff_um_per_v, "freq_hz": t.freq_hz, "actuator": t.actuator}
+
+
+def pair_cached(t: Tables, a_mm, b_mm, method: str, cache_dir: CacheDir) -> dict:
+    """Table answer for arbitrary points (x, y mm), cached."""
+    key = {
+        "map": t.vmap.content_hash(),
+        "band_hz": t.band_hz,
+        "a": list(map(float, a_mm)),
+        "b": list(map(float, b_mm)),
+        "method": method,
+    }
+    return cached(
+        cache_dir,
+        "pair",
+        key,
+        lambda: {"answer_json": query_points(t, tuple(a_mm), tuple(b_mm), method=method)},
+    )["answer_json"]
+
+
+def hand_flow_cached(
+    m: VibrationMap, center_mm, direction: str, per: Perception, cache_dir: CacheDir, **kw
+) -> dict:
+    """``hand.hand_flow`` for one region and direction, cached."""
+    from plugins.vibrotactile.hand import hand_flow
+
+    key = {
+        "map": m.content_hash(),
+        "center": [float(c) for c in center_mm],
+        "direction": direction,
+        "perception": repr(per),
+        **kw,
+    }
+    return cached(
+        cache_dir,
+        "handflow",
+        key,
+        lambda: {"result_json": hand_flow(m, center_mm, direction, per, **kw)},
+    )["result_json"]
+
+
+def prepare(
+    m: VibrationMap,
+    per: Perception,
+    *,
+    pairs: Iterable = (),
+    regions: Iterable = (),
+    band_hz: float = 650.0,
+    method: str = "spline",
+    cache_dir: CacheDir = None,
+    progress: Callable[[float, str], None] | None = None,
+    **hand_kw,
+) -> dict:
+    """Build what a scene asked for and nothing else: pair answers and hand-flow maps."""
+    pairs, regions = list(pairs), list(regions)
+    total = max(1, len(pairs) + len(regions) + 1)
+    t = tables_cached(m, band_hz, cache_dir)
+    out: dict = {"pairs": {}, "regions": {}}
+    for i, (a, b) in enumerate(pairs):
+        xa = m.points_mm[m.point_index(a)] if isinstance(a, int) else a
+        xb = m.points_mm[m.point_index(b)] if isinstance(b, int) else b
+        out["pairs"][
+            (a if isinstance(a, int) else tuple(a), b if isinstance(b, int) else tuple(b))
+        ] = pair_cached(t, xa, xb, method, cache_dir)
+        if progress:
+            progress((i + 2) / total, f"pair {i + 1}/{len(pairs)}")
+    for j, (c, d) in enumerate(regions):
+        out["regions"][(tuple(c), d)] = hand_flow_cached(
+            m, c, d, per, cache_dir, band_hz=band_hz, method=method, **hand_kw
+        )
+        if progress:
+            progress((len(pairs) + j + 2) / total, f"flow region {j + 1}/{len(regions)}")
+    out["tables"] = t
+    return out
