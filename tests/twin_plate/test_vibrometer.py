@@ -113,3 +113,20 @@ def test_point_on_a_nodal_line_is_measured_without_blowing_up(sim):
     assert np.all(np.isfinite(r["frf"][..., r["valid"]]))
     assert r["coherence"][0, 0, k] < r["coherence"][0, 1, k]
     assert np.mean(z_scores(r, sim, s) ** 2) < 1.3
+
+
+def test_grid_measurement_saves_as_a_vibration_map(tmp_path):
+    from console.profile import load_profile
+    from console.vibration_map import load_map, make_map, save_map
+    from plugins.twin.plate.vibrometer import measure_grid, settings_from_profile
+
+    profile = load_profile("sim")
+    s = settings_from_profile(profile, sweep_s=2.0, record_s=3.0)
+    assert s.amplifier_gain == profile.get("amplifiers.piezo_gain")
+    out = measure_grid(profile, s)
+    m = make_map(**{k: v for k, v in out.items() if k != "meta"})
+    back = load_map(save_map(tmp_path / "twin.npz", m))
+    assert back.frf_um_per_v.shape == (5, 84, back.freq_hz.size)
+    assert back.masked[back.freq_hz < 5.0].all() and not back.masked[back.freq_hz > 6].any()
+    assert np.all(back.frf_um_per_v[:, :, back.masked] == 0)
+    np.testing.assert_allclose(back.points_mm[50], [41.73 + 2 * 60, 43.645 + 4 * 60])

@@ -110,6 +110,46 @@ def haptable_profile_sections(register) -> None:
         },
         help="Piezo patches: pin-force coupling constants.",
     )
+    register(
+        "vibrometer",
+        {
+            "sweep_start_hz": Field("float", 0.0, min=0.0, help="linear sweep start"),
+            "sweep_stop_hz": Field(
+                "float", dflt.BAND_MAX_HZ, min=1.0, help="linear sweep stop (paper: 625 Hz)"
+            ),
+            "sweep_s": Field("float", dflt.SWEEP_DURATION_S, min=0.1, help="sweep duration"),
+            "record_s": Field(
+                "float",
+                dflt.RECORD_S,
+                min=0.1,
+                help="analyser record per sweep (>= sweep_s; frequency step 1/record_s)",
+            ),
+            "sample_rate_hz": Field(
+                "float", dflt.SAMPLE_RATE_HZ, min=100.0, help="analyser sample rate"
+            ),
+            "generator_vpp": Field(
+                "float",
+                dflt.SWEEP_GENERATOR_VPP,
+                min=0.0,
+                help="generator sweep amplitude, peak to peak (x piezo_gain at the patch)",
+            ),
+            "sweeps": Field("int", dflt.SWEEPS, min=1, max=100, help="sweeps averaged (H1)"),
+            "noise_um_per_s_per_sqrt_hz": Field(
+                "float",
+                dflt.NOISE_UM_PER_S_PER_SQRT_HZ,
+                min=0.0,
+                help="LDV velocity noise density (assumed)",
+            ),
+            "mask_below_hz": Field(
+                "float",
+                dflt.MASK_BELOW_HZ,
+                min=0.0,
+                help="bins below this are masked (velocity -> displacement blows up at DC)",
+            ),
+            "seed": Field("int", 0, min=0, help="noise seed (reproducible measurements)"),
+        },
+        help="Simulated laser-vibrometer measurement of the plate twin.",
+    )
 
 
 @hookimpl

@@ -141,7 +141,8 @@ def measure(
 
     Returns plain arrays + metadata for the vibration-map writer:
     ``freqs_hz`` (F,), ``frf`` (E, P, F) complex displacement in um per volt at the piezo
-    terminals (NaN where invalid), ``valid`` (F,) bool (False: masked, never use),
+    terminals (NaN where invalid), ``valid`` (F,) bool (False: masked, never use) and
+    ``masked`` = ~valid,
     ``coherence`` (E, P, F), ``x_mm``/``y_mm`` (P,), ``excitations``, ``meta`` (dict).
     """
     s = settings or SweepSettings()
@@ -170,6 +171,7 @@ def measure(
         "freqs_hz": freqs,
         "frf": h_d,
         "valid": valid,
+        "masked": ~valid,
         "coherence": coh,
         "x_mm": np.asarray(x_mm, float).ravel(),
         "y_mm": np.asarray(y_mm, float).ravel(),
@@ -203,3 +205,73 @@ def noise_std_um_per_v(gen: np.ndarray, freqs_hz: np.ndarray, s: SweepSettings) 
     with np.errstate(divide="ignore", invalid="ignore"):
         std_v = np.sqrt(n * sigma**2 / (s.sweeps * np.abs(x) ** 2))
         return std_v / (2 * math.pi * freqs_hz) / s.amplifier_gain * 1e6
+
+
+def settings_from_profile(profile, **overrides) -> SweepSettings:
+    """Sweep settings from [vibrometer] and the piezo gain from [amplifiers]."""
+    v = profile.section("vibrometer")
+    kw = {
+        "f_start_hz": v.get("sweep_start_hz", 0.0),
+        "f_stop_hz": v.get("sweep_stop_hz", dflt.BAND_MAX_HZ),
+        "sweep_s": v.get("sweep_s", dflt.SWEEP_DURATION_S),
+        "record_s": v.get("record_s", dflt.RECORD_S),
+        "sample_rate_hz": v.get("sample_rate_hz", dflt.SAMPLE_RATE_HZ),
+        "generator_vpp": v.get("generator_vpp", dflt.SWEEP_GENERATOR_VPP),
+        "amplifier_gain": profile.get("amplifiers.piezo_gain", dflt.AMPLIFIER_GAIN),
+        "sweeps": v.get("sweeps", dflt.SWEEPS),
+        "noise_um_per_s_per_sqrt_hz": v.get(
+            "noise_um_per_s_per_sqrt_hz", dflt.NOISE_UM_PER_S_PER_SQRT_HZ
+        ),
+        "mask_below_hz": v.get("mask_below_hz", dflt.MASK_BELOW_HZ),
+        "seed": v.get("seed", 0),
+    }
+    kw.update(overrides)
+    return SweepSettings(
+        **{k: (int(x) if k in ("sweeps", "seed") else float(x)) for k, x in kw.items()}
+    )
+
+
+def measure_grid(profile=None, settings: SweepSettings | None = None) -> dict:
+    """Measure the profile's 84-point grid on the profile's twin (all five excitations).
+
+    Returns the arguments of ``console.vibration_map.make_map`` as plain values:
+    ``frf_um_per_v`` (5, P, F) with masked bins set to 0, ``freq_hz``, ``points``
+    (1..P), ``points_mm`` (P, 2), ``excitations``, ``masked``, ``source``, ``gain``,
+    ``note``; plus ``meta`` (the measurement metadata). Save it with
+    ``make_map(**{k: v for k, v in out.items() if k != "meta"})``.
+    """
+    import json
+
+    from .model import build_twin, default_params, grid_points_mm, params_from_profile
+
+    twin = build_twin(params_from_profile(profile) if profile is not None else default_params())
+    if settings is None:
+        settings = settings_from_profile(profile) if profile is not None else SweepSettings()
+    x, y = grid_points_mm(profile)
+    r = measure(twin, x, y, settings)
+    frf = np.where(r["valid"], r["frf"], 0.0)
+    meta = r["meta"]
+    return {
+        "frf_um_per_v": frf,
+        "freq_hz": r["freqs_hz"],
+        "points": np.arange(1, x.size + 1),
+        "points_mm": np.column_stack([x, y]),
+        "excitations": r["excitations"],
+        "masked": r["masked"],
+        "source": "twin:plate vibrometer (H1, linear sweep)",
+        "gain": settings.amplifier_gain,
+        "note": json.dumps(
+            {
+                k: meta[k]
+                for k in (
+                    "estimator",
+                    "settings",
+                    "twin_key",
+                    "damping_ratio",
+                    "modes_kept",
+                    "ringdown_left",
+                )
+            }
+        ),
+        "meta": meta,
+    }
