@@ -149,7 +149,7 @@ def read_png(
     return img
 
 
-def write_png(path: Path, img: np.ndarray) -> None:
+def write_png(path: str | Path, img: np.ndarray) -> None:
     """Write an (H, W) uint8 image as PNG. Camera frames are noisy, so the fastest
     settings compress best per millisecond: Huffman-only coding after the SUB filter
     (about 5 ms and 145 kB for a 640 x 480 frame, against 15 ms and 160 kB by default)."""
@@ -158,6 +158,7 @@ def write_png(path: Path, img: np.ndarray) -> None:
     img = np.asarray(img)
     if img.ndim != 2 or img.dtype != np.uint8:
         raise ValueError(f"{path}: need an (H, W) uint8 image, got {img.dtype} {img.shape}")
+    path = Path(path)
     params = [
         cv2.IMWRITE_PNG_COMPRESSION,
         1,

@@ -191,6 +191,16 @@ def _probe(profile: Any = None):
 
 
 @hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def run(ctx, quick: bool) -> dict:
+        from .bench import run as bench
+
+        return bench(ctx, quick)
+
+    register("twin-camera", run, help="camera twin: frame render time, PNG write, synth rate")
+
+
+@hookimpl
 def haptable_register_cameras(register) -> None:
     register(
         "twin",
