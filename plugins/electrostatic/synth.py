@@ -108,7 +108,7 @@ class Envelope:
                 continue
             step = 1.0 if self.state == "rise" else -1.0
             left = (e - self.k) if step > 0 else self.k
-            m = min(int(math.ceil(left - 1e-9)), n - i)
+            m = max(min(int(math.ceil(left - 1e-9)), n - i), 0)
             ks = self.k + step * np.arange(1, m + 1)
             ks = np.clip(ks, 0.0, e)
             out[i : i + m] = 0.5 - 0.5 * np.cos(np.pi * ks / e)
@@ -207,7 +207,8 @@ class KnobStream:
         self._phase = 0.0
         self._detent_phase = 0.0
         self._vd_phase = 0.0
-        self._freq_hz, self._amp_v = self._targets()
+        self._freq_hz = float(s["cf_freq_hz"])
+        self._freq_hz, _ = self._targets()
         self._amp_v = 0.0  # the master ramp and the glide start from silence
         self._polarity = 1.0
         self._next_id = 0
@@ -254,7 +255,7 @@ class KnobStream:
         """(frequency Hz, amplitude V peak) the friction sine should have now."""
         s, c = self.s, self.condition
         if c.friction == "none" or not self._touching:
-            return (self._freq_hz if hasattr(self, "_freq_hz") else s["cf_freq_hz"]), 0.0
+            return self._freq_hz, 0.0
         if c.friction == "constant":
             return s["cf_freq_hz"], s["carrier_vpp"] / 2
         if c.friction == "velocity":

@@ -157,3 +157,11 @@ def test_envelope_retrigger_is_continuous():
     y = np.concatenate([a, b])
     assert np.max(np.abs(np.diff(y))) <= np.pi / 20 + 1e-12
     assert y[-1] == 0.0 and not e.active
+
+
+def test_stop_before_the_first_block_ends_cleanly():
+    s = KnobStream("HD+CF", FS)
+    s.request_stop()
+    b = s.next_block(B)
+    assert b is not None and not np.any(b[1])
+    assert s.next_block(B) is None
