@@ -10,6 +10,8 @@ console -> projector
   ``{"type": "state", "seq": int, "scene": str, "state": {...}}`` - the FULL scene
   state (idempotent: the projector just draws the newest one); re-sent after a reconnect.
   ``{"type": "heartbeat", "t_s": float}``  ``{"type": "quit"}``
+  ``{"type": "snapshot", "path": str}`` - save the next frame as PNG (answered by
+  ``{"type": "snapshot_done", "path"}``)
 projector -> console
   ``{"type": "hello", "role": "projector", "pid", "size_px", "headless", "scene"}``
   ``{"type": "ack", "seq", "t_recv_s"}`` when a state arrives,
@@ -194,7 +196,8 @@ class ProjectorLink:
         self._state: dict | None = None
         self._seq = 0
         self._dirty = False
-        self._quit = False
+        self._outbox: list[dict] = []  # one-off commands (quit, snapshot), sent once
+        self.snapshots_done: list[str] = []
         self._stop = threading.Event()
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
@@ -237,9 +240,26 @@ class ProjectorLink:
 
     def send_quit(self) -> None:
         """Ask the projector process to exit (the supervisor does this on stop)."""
+        self._send_once({"type": "quit"})
+
+    def _send_once(self, msg: dict) -> None:
         with self._cond:
-            self._quit = True
+            self._outbox.append(msg)
         self._wake()
+
+    def snapshot(self, path: str | Path, timeout_s: float = 10.0) -> bool:
+        """Ask the projector to save its next frame (what it shows) as PNG at ``path``."""
+        path = str(Path(path).resolve())
+        self._send_once({"type": "snapshot", "path": path})
+        deadline = time.monotonic() + timeout_s
+        with self._cond:
+            while path not in self.snapshots_done:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+            self.snapshots_done.remove(path)
+            return True
 
     def wait_drawn(self, seq: int | None = None, timeout_s: float = 5.0) -> bool:
         """Wait until the projector has drawn state ``seq`` (default: the newest)."""
@@ -334,9 +354,9 @@ class ProjectorLink:
                     self._sent_t[self._state["seq"]] = now
                     out += encode({**self._state, "t_send_s": now})
                     self._dirty = False
-                if self._quit:
-                    out += encode({"type": "quit"})
-                    self._quit = False
+                for msg in self._outbox:
+                    out += encode(msg)
+                self._outbox.clear()
             if now - last_tx >= self.heartbeat_s:
                 out += encode({"type": "heartbeat", "t_s": now})
                 last_tx = now
@@ -420,6 +440,10 @@ class ProjectorLink:
             if sent is not None and "t_recv_s" in msg:
                 self.latency_s.append(float(msg["t_recv_s"]) - sent)
             self.acked_seq = max(self.acked_seq, seq)
+        elif t == "snapshot_done":
+            with self._cond:
+                self.snapshots_done.append(str(msg.get("path")))
+                self._cond.notify_all()
         elif t == "drawn":
             seq = int(msg.get("seq", 0))
             sent = self._sent_t.pop(seq, None)
@@ -678,6 +702,7 @@ class ProjectorService:
         peer_timeout_s: float = PEER_TIMEOUT_S,
         backoff_max_s: float = 5.0,
         log_path: Path | str | None = None,
+        env: dict[str, str] | None = None,
     ) -> None:
         self.socket_path = Path(socket_path)
         self.scenes = dict(scenes)
@@ -688,7 +713,12 @@ class ProjectorService:
         )
         self.supervisor = (
             ProjectorSupervisor(
-                command, self.socket_path, self.link, backoff_max_s=backoff_max_s, log_path=log_path
+                command,
+                self.socket_path,
+                self.link,
+                backoff_max_s=backoff_max_s,
+                log_path=log_path,
+                env=env,
             )
             if command
             else None
@@ -769,6 +799,10 @@ class ProjectorService:
     def wait_drawn(self, timeout_s: float = 5.0) -> bool:
         """Wait until the projector shows the newest state."""
         return self.link.wait_drawn(None, timeout_s)
+
+    def snapshot(self, path: str | Path, timeout_s: float = 10.0) -> bool:
+        """Save what the projector shows now as a PNG (for diagnosis and tests)."""
+        return self.link.snapshot(path, timeout_s)
 
     def status(self) -> dict:
         st = {"scene": self.scene_name, "unprepared_needs": self.unprepared, **self.link.status()}

@@ -107,6 +107,24 @@ def open_window(screen: int):
     return window, moderngl.create_context()
 
 
+def read_screen(renderer: Renderer):
+    """The window's back buffer as (H, W, 3) uint8, top row first (the frame just drawn)."""
+    import numpy as np
+
+    w, h = renderer.size_px
+    raw = renderer.ctx.screen.read(viewport=(0, 0, w, h), components=3, alignment=1)
+    return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1].copy()
+
+
+def save_frame(path: str, rgb) -> None:
+    from plugins.projector.renderer import write_png
+
+    try:
+        write_png(path, rgb)
+    except UserError as e:
+        log.warning("projector: snapshot: %s", e)
+
+
 def run(opts: ProjectorOptions) -> int:
     """Serve the link and draw until SIGTERM/SIGINT or a ``quit`` message."""
     stop = threading.Event()
@@ -153,11 +171,19 @@ def run(opts: ProjectorOptions) -> int:
                 renderer.ctx.screen.use()
                 renderer.set_state(state)
                 renderer.draw()
+                shots = server.take_snapshot_requests()
+                for path in shots:  # the back buffer, before the swap
+                    save_frame(path, read_screen(renderer))
                 window.flip()  # blocks to the display rate (vsync)
             else:
                 off.render(state)
                 off.finish()
+                shots = server.take_snapshot_requests()
+                for path in shots:
+                    save_frame(path, off.read_rgb())
             server.frame_done(version, time.monotonic())
+            for path in shots:
+                server.snapshot_done(path)
             if server.connected:
                 alone_since = now
             elif (

@@ -90,6 +90,8 @@ class LinkServer:
         self._drawn_t = 0.0
         self.connected = False
         self.consoles = 0
+        self._snapshot_requests: list[str] = []
+        self._snapshots_done: list[str] = []
 
     # ---- render loop side
     def snapshot(self) -> tuple[int, int, str | None, dict | None]:
@@ -160,6 +162,9 @@ class LinkServer:
                 with self._lock:
                     drawn, drawn_t, frame_t = self._drawn_seq, self._drawn_t, self._last_frame_t
                     scene, fps, frames = self._scene, self.fps, self.frames
+                    done, self._snapshots_done = self._snapshots_done, []
+                for path in done:
+                    out += encode({"type": "snapshot_done", "path": path})
                 if drawn > sent_drawn:
                     out += encode(
                         {"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t, "scene": scene}
@@ -259,3 +264,17 @@ class LinkServer:
             out += encode({"type": "ack", "seq": seq, "t_recv_s": t_recv})
         elif t == "quit":
             self.quit_requested.set()
+        elif t == "snapshot" and isinstance(msg.get("path"), str):
+            with self._lock:
+                self._snapshot_requests.append(msg["path"])
+
+    def take_snapshot_requests(self) -> list[str]:
+        """Paths the console asked the next frame to be saved to (render loop side)."""
+        with self._lock:
+            out, self._snapshot_requests = self._snapshot_requests, []
+            return out
+
+    def snapshot_done(self, path: str) -> None:
+        with self._lock:
+            self._snapshots_done.append(path)
+        self._wake()

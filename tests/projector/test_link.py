@@ -288,3 +288,22 @@ def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path,
             svc.start_scene("no-such-scene")
     finally:
         svc.close()
+
+
+def test_snapshot_saves_what_the_projector_shows(sock_path, tmp_path, reaper):
+    import cv2
+
+    svc = service(sock_path, tmp_path)
+    try:
+        svc.start()
+        reaper.append(svc.supervisor.pid)
+        svc.start_scene("knob")
+        assert svc.wait_drawn(20)
+        out = tmp_path / "shown.png"
+        assert svc.snapshot(out, 20)
+        img = cv2.imread(str(out))
+        assert img.shape == (200, 320, 3)
+        red = (img[..., 2] > 180) & (img[..., 1] < 90) & (img[..., 0] < 90)  # BGR
+        assert red.sum() > 0  # the knob's target city
+    finally:
+        svc.close()
