@@ -47,7 +47,7 @@ def test_frames_are_640x480_uint8_with_the_documented_frame_counts(all_samples):
     for g, (frames, truth) in all_samples.items():
         assert frames.dtype == np.uint8
         assert frames.shape[1:] == (480, 640)
-        assert len(frames) == (3 if g in STATIC else 10)
+        assert len(frames) == (3 if g in STATIC else 8)
         assert len(truth["frames"]) == len(frames)
         assert truth["gesture"] == g and truth["kind"] == ("static" if g in STATIC else "dynamic")
 
@@ -336,6 +336,15 @@ def test_camera_streams_frames_with_status():
     assert {"fps", "dropped", "nominal_fps", "frames"} <= st.keys() and st["frames"] == 5
     cam.close()
     assert cam.read() is None
+
+
+def test_camera_sudden_lights_change():
+    cam = TwinCamera(script=IdleScript(), realtime=False)
+    before = cam.read().image.mean()
+    cam.lights_changed = True
+    after = cam.read()
+    assert after.image.mean() - before > 10 and cam.truth["illumination_step"]
+    assert abs(cam.background().mean() - after.image.mean()) < 2
 
 
 def test_camera_paced_read_counts_dropped_frames():

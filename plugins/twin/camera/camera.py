@@ -12,6 +12,7 @@ Touches land with a realistic error: the contact pad sits a little behind where 
 person aims (``bias_mm`` back along the finger) plus a random scatter (``error_mm``
 standard deviation per axis). ``camera.truth`` holds the ground truth of the last frame
 (contacts in px and mm, hand centre and angle, gesture label, touch target).
+Setting ``lights_changed = True`` makes the room lights jump (gain and offset step).
 """
 
 from __future__ import annotations
@@ -247,6 +248,7 @@ class TwinCamera:
         self._times: collections.deque[float] = collections.deque(maxlen=61)
         self._closed = False
         self.truth: dict[str, Any] | None = None
+        self.lights_changed = False  # a sudden ambient change (gain and offset step)
 
     # ------------------------------------------------------------------ scripting
     def set_script(self, script: Script) -> None:
@@ -335,10 +337,17 @@ class TwinCamera:
             t_s = k / self.fps
             hands, label, extra = self.script.hands(k, t_s, self._rng)
             img, truth = render_frame(
-                hands, self.rig, t_s, self._rng, label=label, noise=self.noise
+                hands,
+                self.rig,
+                t_s,
+                self._rng,
+                label=label,
+                noise=self.noise,
+                step=self.lights_changed,
             )
         truth.update(extra)
         truth["seq"] = k
+        truth["illumination_step"] = self.lights_changed
         self.truth = truth
         self._frames += 1
         self._times.append(time.monotonic())
@@ -346,7 +355,10 @@ class TwinCamera:
 
     def background(self) -> np.ndarray:
         """The empty table now (for a background capture without lifting the hands)."""
-        return render_frame([], self.rig, self._k / self.fps, self._rng, noise=self.noise)[0]
+        t_s = self._k / self.fps
+        return render_frame(
+            [], self.rig, t_s, self._rng, noise=self.noise, step=self.lights_changed
+        )[0]
 
     def close(self) -> None:
         self._closed = True

@@ -33,7 +33,7 @@ HARD_CASES: tuple[str, ...] = (
     "illumination_step",
 )
 STATIC_FRAMES = 3
-DYNAMIC_FRAMES = 10
+DYNAMIC_FRAMES = 8
 STEP_GAIN, STEP_OFFSET = 1.4, 25.0
 
 #: A camera that sees only the middle of the glass (for the ``border_cut`` case).
