@@ -136,3 +136,18 @@ def test_vibrotactile_detents_start_within_one_block():
     for c in r.crossings:
         k = int(np.ceil(c.t_s * FS))
         assert on[k : k + B].any()
+
+
+def test_zero_crossing_frequency_estimate_against_a_chirp_and_hilbert():
+    from scipy.signal import hilbert
+
+    t = np.arange(int(1.0 * FS)) / FS
+    f_t = 60.0 + 120.0 * t  # linear chirp 60 -> 180 Hz
+    x = np.sin(2 * np.pi * (60.0 * t + 60.0 * t**2))
+    tz, f = instantaneous_freq_hz(x, FS)
+    assert np.max(np.abs(f - np.interp(tz, t, f_t))) < 0.2
+    # second method: the phase slope of the analytic signal
+    ph = np.unwrap(np.angle(hilbert(x)))
+    f_h = np.gradient(ph, t) / (2 * np.pi)
+    mid = slice(2000, -2000)
+    assert np.median(np.abs(f_h[mid] - f_t[mid])) < 0.2
