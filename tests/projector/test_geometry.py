@@ -113,3 +113,20 @@ def test_render_size_scales_the_calibration():
     assert np.allclose(
         cal.to_px([[GLASS_MM[0], GLASS_MM[1]]], size_px=(1920, 1080)), [[1920, 1080]]
     )
+
+
+def test_running_projector_picks_up_the_operators_new_calibration(tmp_path):
+    import os
+
+    from plugins.projector.app import CalibrationWatcher
+
+    path = tmp_path / "cal.json"
+    w = CalibrationWatcher(path, (1280, 800), GLASS_MM)
+    assert np.allclose(w.cal.to_px([[GLASS_MM[0], 0]]), [[1280, 0]])
+    assert w.poll(10.0) is None  # nothing changed
+    save_calibration(w.cal.with_point((GLASS_MM[0], 0.0), (1200.0, 30.0)), path)
+    new = w.poll(20.0)
+    assert new is not None and np.allclose(new.to_px([[GLASS_MM[0], 0]]), [[1200, 30]])
+    path.write_text("{broken")  # a half-edited file keeps the last good calibration
+    os.utime(path, (1, 1))
+    assert w.poll(30.0) is None and np.allclose(w.cal.to_px([[GLASS_MM[0], 0]]), [[1200, 30]])

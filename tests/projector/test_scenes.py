@@ -132,3 +132,31 @@ def test_plugin_registers_scenes_section_command_and_bench():
     assert "projector" in plugins.benchmarks
     fields = plugins.sections["projector"][0]
     assert fields["width_px"].default == 1280 and fields["socket_path"].default == ""
+
+
+def test_contacts_overlay_takes_the_pipeline_value_types():
+    from console.types import Contact, Hand
+
+    c = BUILTIN_SCENES["contacts"][0](None)
+    hand = Hand(
+        contour_px=np.zeros((4, 2)),
+        center_px=(10.0, 10.0),
+        radius_px=5.0,
+        angle_deg=0.0,
+        descriptors=np.zeros(8),
+        finger_count=2,
+        center_mm=(300.0, 200.0),
+    )
+    c.update(
+        {
+            "type": "contacts",
+            "contacts": [Contact(7, (1.0, 2.0), (120.0, 80.0)), Contact(8, (3.0, 4.0))],
+            "hands": [hand],
+        }
+    )
+    s = json.loads(json.dumps(c.state()))
+    assert s["contacts"][0] == {"id": 7, "pos_mm": [120.0, 80.0]}
+    assert s["contacts"][1]["pos_mm"] is None  # not calibrated yet: not drawn
+    assert s["hands"][0]["center_mm"] == [300.0, 200.0] and s["hands"][0]["label"] == "2 fingers"
+    prims = primitives(s)
+    assert sum(p["p"] == "ring" for p in prims) == 1
