@@ -114,3 +114,14 @@ def test_limits_include_what_the_card_and_amplifier_can_reach(profile):
     assert lim["screen_max_vpp"] == min(profile.get("limits.screen_max_vpp"), 2 * full * gain)
     assert lim["piezo_max_v"] <= full * profile.get("amplifiers.piezo_gain")
     assert limits(None)["screen_max_vpp"] == 200.0
+
+
+def test_audition_plays_through_the_outputs(capsys):
+    # real time on the twin (about 4 s): the path an operator uses
+    assert main(["knob", "--audition", "VD+VF", "--sectors", "8"]) == 0
+    out = capsys.readouterr().out
+    assert "played VD+VF, 8 sectors: 8 sector crossings" in out
+    import re
+
+    piezo, screen = map(float, re.search(r"piezo ([\d.]+) V, screen ([\d.]+) V", out).groups())
+    assert 30.0 < piezo <= 60.0 and screen == pytest.approx(50.0, abs=0.2)
