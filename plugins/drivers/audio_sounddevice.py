@@ -129,6 +129,7 @@ class SounddeviceOutput:
         self.block_size = int(block_size)
         self.latency_s = float(latency_s)
         self._sd = sd
+        self.close_timeout_s = 2.0
         self._lock = threading.Lock()
         self._stream: Any = None
         self._source: BlockSource | None = None
@@ -187,7 +188,12 @@ class SounddeviceOutput:
         self._state = "running"
 
     def stop(self) -> None:
-        """Silence and close the stream. Safe to call twice, from any thread."""
+        """Silence and close the stream. Safe to call twice, from any thread.
+
+        Returns within ``close_timeout_s`` even when PortAudio blocks closing a stream
+        whose device is gone (it does with a dead JACK server); the stream is then
+        abandoned and the state says so.
+        """
         global _open_streams
         self._silent = True
         with self._lock:
@@ -195,14 +201,27 @@ class SounddeviceOutput:
         if stream is None:
             return
         self._stopping = True
-        try:
-            stream.abort(ignore_errors=True)  # drop queued blocks: silent now
-            stream.close(ignore_errors=True)
-        except Exception as exc:  # a vanished device may refuse even this
-            self._error = self._error or f"closing: {exc}"
-        finally:
-            with _open_lock:
-                _open_streams -= 1
+        errors: list[str] = []
+
+        def close() -> None:
+            try:
+                stream.abort(ignore_errors=True)  # drop queued blocks: silent now
+                stream.close(ignore_errors=True)
+            except Exception as exc:  # a vanished device may refuse even this
+                errors.append(f"closing: {exc}")
+
+        closer = threading.Thread(target=close, name="sounddevice-close", daemon=True)
+        closer.start()
+        closer.join(self.close_timeout_s)
+        if closer.is_alive():  # leave _open_streams counted: never rescan under it
+            hung = "closing the stream hung; restart haptable before using this device again"
+            self._lose(f"audio device {self._label!r} is gone")
+            self._error = f"{self._error}; {hung}"
+            return
+        with _open_lock:
+            _open_streams -= 1
+        if errors:
+            self._error = self._error or errors[0]
         if self._state in ("running", "fault"):
             self._state = "stopped" if self._state == "running" else "fault"
 

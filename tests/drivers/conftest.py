@@ -172,18 +172,12 @@ def _server_up(name: str) -> bool:
     return done.returncode == 0 and "system:playback_1" in done.stdout
 
 
-@pytest.fixture(scope="session")
-def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer]:
-    """A ``jackd`` dummy server at 48 kHz / 256 frames for the session (see module doc)."""
+def start_jackd(name: str, log_path: Path) -> JackServer:
+    """Start ``jackd -n NAME --no-realtime -d dummy`` and wait until it answers."""
     jackd = shutil.which("jackd")
     if jackd is None:
         pytest.skip("jackd not found: apt-get install jackd2")
-    sd = _portaudio()
-    name = f"haptable-test-{os.getpid()}"
-    saved = {k: os.environ.get(k) for k in ("JACK_DEFAULT_SERVER", "JACK_NO_START_SERVER")}
-    os.environ["JACK_DEFAULT_SERVER"] = name  # PortAudio's libjack client reads these
-    os.environ["JACK_NO_START_SERVER"] = "1"
-    log_path = tmp_path_factory.mktemp("jack") / "jackd.log"
+    _jack_tool("jack_lsp")
     with open(log_path, "wb") as log:
         proc = subprocess.Popen(
             [jackd, "-n", name, "--no-realtime", "-d", "dummy"]
@@ -194,12 +188,51 @@ def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer
             start_new_session=True,
         )
     server = JackServer(name, proc, log_path)
+    deadline = time.monotonic() + 15.0
+    while not _server_up(name):
+        if proc.poll() is not None or time.monotonic() > deadline:
+            stop_jackd(server)
+            raise AssertionError(f"jackd did not come up; its log:\n{server.log()}")
+        time.sleep(0.2)
+    return server
+
+
+def stop_jackd(server: JackServer) -> None:
+    proc = server.process
+    if proc.poll() is None:
+        proc.terminate()
     try:
-        deadline = time.monotonic() + 15.0
-        while not _server_up(name):
-            if proc.poll() is not None or time.monotonic() > deadline:
-                raise AssertionError(f"jackd did not come up; its log:\n{server.log()}")
-            time.sleep(0.2)
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(timeout=5)
+
+
+@pytest.fixture
+def jackd_factory(tmp_path: Path) -> Iterator[Any]:
+    """``jackd_factory(name) -> JackServer``: a private server for one test (stopped after)."""
+    started: list[JackServer] = []
+
+    def start(name: str) -> JackServer:
+        server = start_jackd(name, tmp_path / f"{name}.log")
+        started.append(server)
+        return server
+
+    yield start
+    for server in started:
+        stop_jackd(server)
+
+
+@pytest.fixture(scope="session")
+def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer]:
+    """A ``jackd`` dummy server at 48 kHz / 256 frames for the session (see module doc)."""
+    sd = _portaudio()
+    name = f"haptable-test-{os.getpid()}"
+    server = start_jackd(name, tmp_path_factory.mktemp("jack") / "jackd.log")
+    saved = {k: os.environ.get(k) for k in ("JACK_DEFAULT_SERVER", "JACK_NO_START_SERVER")}
+    os.environ["JACK_DEFAULT_SERVER"] = name  # PortAudio's libjack client reads these
+    os.environ["JACK_NO_START_SERVER"] = "1"
+    try:
         if not _jack_output_present(sd):
             pytest.skip(
                 "jackd runs but this PortAudio has no JACK host API: use Debian's libportaudio2"
@@ -207,12 +240,7 @@ def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer
         yield server
     finally:
         sd._terminate()  # close PortAudio's JACK client before its server goes away
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=5)
+        stop_jackd(server)
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from types import SimpleNamespace
 from typing import Any
 
@@ -41,6 +42,8 @@ class FakeStream:
             self.kw["finished_callback"]()
 
     def close(self, ignore_errors: bool = True) -> None:
+        if self.sd.close_hangs:
+            self.sd.release_close.wait(10)
         self.closed = True
 
     def pump(self, n_blocks: int = 1, underflow: bool = False) -> np.ndarray:
@@ -68,6 +71,8 @@ class FakeSd:
         self.default = SimpleNamespace(device=[-1, 1])
         self.streams: list[FakeStream] = []
         self.fail_start = False
+        self.close_hangs = False
+        self.release_close = threading.Event()
         self.rescans = 0
         self.plugged_on_rescan: list[dict] = []
 
@@ -273,6 +278,29 @@ def test_vanished_device_is_reported_and_silenced():
     assert np.all(stream.pump(1) == 0)
     out.stop()
     assert out.status()["state"] == "lost"
+
+
+def test_stop_returns_even_when_portaudio_hangs_closing_a_dead_device():
+    """PortAudio blocks forever closing a stream whose JACK server died: stop() must not."""
+    sd = FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.close_timeout_s = 0.05
+    src = RampSource()
+    out.start(src)
+    stream = sd.streams[0]
+    stream.vanish()
+    sd.close_hangs = True
+    out.stop()  # returns after close_timeout_s
+    st = out.status()
+    assert st["state"] == "lost" and "closing the stream hung" in st["error"]
+    assert asd._open_streams == 1  # PortAudio is not rescanned under a hung stream
+    sd.plugged_on_rescan = [DEVICES[3]]
+    with pytest.raises(DeviceError):
+        asd.locate(sd, "no such device")
+    assert sd.rescans == 0
+    out.stop()  # still fine
+    sd.release_close.set()
+    asd._open_streams = 0  # (the hung stream of this fake is gone now)
 
 
 def test_device_that_cannot_start_gives_a_clear_error():

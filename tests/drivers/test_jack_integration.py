@@ -137,3 +137,61 @@ def test_wrong_device_name_lists_the_jack_device(jack_server):
     out = SounddeviceOutput("no such card", jack_server.sample_rate_hz, jack_server.block_size)
     with pytest.raises(DeviceError, match=r"'system \(JACK Audio Connection Kit\)'"):
         out.start(KnownSource(1, 256))
+
+
+VANISH_SCRIPT = r"""
+import os, signal, sys, time
+from plugins.drivers.audio_sounddevice import SounddeviceOutput
+
+class Source:
+    idle = False
+    def __init__(self):
+        self.alarms = []
+    def fill(self, out):
+        out.fill(0.1)
+    def estop(self, reason, *, wait=True):
+        self.alarms.append(wait)
+
+def until(pred, what):
+    deadline = time.monotonic() + 15
+    while not pred():
+        if time.monotonic() > deadline:
+            print("TIMEOUT", what, flush=True)
+            os._exit(3)
+        time.sleep(0.01)
+
+src = Source()
+out = SounddeviceOutput("system", 48000, 256)
+out.close_timeout_s = 1.0
+out.start(src)
+until(lambda: out.status()["blocks"] > 20, "blocks")
+os.kill(int(os.environ["JACKD_PID"]), signal.SIGTERM)
+until(lambda: out.status()["state"] == "lost", "lost")
+print("STATE", out.status()["state"], flush=True)
+print("ALARMS", src.alarms, flush=True)
+out.stop()
+print("STOPPED", out.status()["state"], flush=True)
+# PortAudio's JACK backend asserts in Pa_Terminate once its server died (pa_jack.c):
+os._exit(0)
+"""
+
+
+def test_jack_server_dying_mid_stream_is_lost_and_stop_returns(jackd_factory, tmp_path):
+    """The device vanishing under a running stream (here: its JACK server killed)."""
+    import os
+    import subprocess
+    import sys
+
+    _ = pytest.importorskip("sounddevice", exc_type=OSError)
+    name = f"haptable-vanish-{os.getpid()}"
+    server = jackd_factory(name)
+    env = dict(os.environ, JACK_DEFAULT_SERVER=name, JACK_NO_START_SERVER="1")
+    env["JACKD_PID"] = str(server.process.pid)
+    done = subprocess.run(
+        [sys.executable, "-c", VANISH_SCRIPT], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    assert "STATE lost" in lines
+    assert "ALARMS [False]" in lines  # the gate is told once, without blocking the callback
+    assert "STOPPED lost" in lines  # stop() came back although PortAudio hangs closing
