@@ -82,6 +82,7 @@ def make_subject(name: str, seed: int = 0, side: str | None = None) -> Subject:
             [0.32, 0.0],
         ]
     ) * [width, palm] + rng.normal(0, 1.5, (10, 2))
+    outline = _chaikin(outline)
     if side is None:
         side = "left" if rng.random() < 0.2 else "right"
     return Subject(
@@ -139,9 +140,18 @@ class Piece:
     poly_mm: np.ndarray
     h_mm: float
     refl: float = 1.0
+    holes: tuple[np.ndarray, ...] = ()  # polygons cut out of this piece
 
 
 _ARC = np.linspace(-np.pi / 2, np.pi / 2, 7)
+
+
+def _chaikin(poly: np.ndarray, n: int = 2) -> np.ndarray:
+    """Corner cutting of a closed polygon (rounds the palm outline)."""
+    for _ in range(n):
+        nxt = np.roll(poly, -1, axis=0)
+        poly = np.stack([0.75 * poly + 0.25 * nxt, 0.25 * poly + 0.75 * nxt], 1).reshape(-1, 2)
+    return poly
 
 
 def _capsule(p0: np.ndarray, p1: np.ndarray, r0: float, r1: float) -> np.ndarray:
@@ -294,7 +304,7 @@ def hand_pieces(subject: Subject, pose: HandPose) -> HandGeometry:
     elev = np.tan(np.radians(pose.forearm_elev_deg))
     for i in range(n_arm):
         v0, v1 = -i * seg + 12.0, -(i + 1) * seg + 12.0
-        h = h_w + 2.0 + elev * (-(v0 + v1) / 2)
+        h = h_w + 6.0 + elev * (-(v0 + v1) / 2)
         r0 = subject.width_mm * (0.36 + 0.02 * i)
         poly = _capsule(to_table([[0, v0]])[0], to_table([[0, v1]])[0], r0, r0 + 1.5)
         pieces.append(Piece(poly, max(h, 0.0), 0.85))

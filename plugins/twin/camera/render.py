@@ -118,70 +118,83 @@ def _band_of(h_mm: float) -> int:
     return -1
 
 
-def _blur_roi(img: np.ndarray, sigma_px: float, roi: tuple[int, int, int, int]) -> None:
-    """Gaussian blur of ``img[roi]`` in place (down-sampled for wide blurs)."""
-    x0, y0, x1, y1 = roi
-    sub = img[y0:y1, x0:x1]
-    if sigma_px < 0.6 or sub.size == 0:
+LOW_RES = 4  # bands blurrier than SHARP_SIGMA_PX are drawn and blurred at 1/4 resolution
+SHARP_SIGMA_PX = 4.0
+
+
+def _band_roi(polys: np.ndarray, pad: float, shape: tuple[int, int]) -> tuple[int, ...] | None:
+    h, w = shape
+    x0 = int(max(np.floor(polys[:, 0].min() - pad), 0))
+    y0 = int(max(np.floor(polys[:, 1].min() - pad), 0))
+    x1 = int(min(np.ceil(polys[:, 0].max() + pad) + 1, w))
+    y1 = int(min(np.ceil(polys[:, 1].max() + pad) + 1, h))
+    return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
+
+
+def _composite(out, mask, val, items, sigma_px, scale) -> None:
+    """Paint one band's pieces (``items``: [outline, *holes] px, height, reflectance) at ``1/scale``
+    resolution, blur, and composite over ``out`` (all three arrays at that resolution)."""
+    polys = [[(c + 0.5) / scale - 0.5 for c in cs] for cs, _, _ in items]
+    sigma = sigma_px / scale
+    roi = _band_roi(np.vstack([cs[0] for cs in polys]), 3 * sigma + 2, out.shape)
+    if roi is None:
         return
-    if sigma_px > 6 and min(sub.shape) >= 16:
-        f = 4 if sigma_px > 12 else 2
-        small = cv2.resize(
-            sub,
-            (max(sub.shape[1] // f, 1), max(sub.shape[0] // f, 1)),
-            interpolation=cv2.INTER_AREA,
-        )
-        small = cv2.GaussianBlur(small, (0, 0), sigma_px / f)
-        img[y0:y1, x0:x1] = cv2.resize(
-            small, (sub.shape[1], sub.shape[0]), interpolation=cv2.INTER_LINEAR
-        )
-    else:
-        img[y0:y1, x0:x1] = cv2.GaussianBlur(sub, (0, 0), sigma_px)
+    x0, y0, x1, y1 = roi
+    m = mask[y0:y1, x0:x1]
+    v = val[y0:y1, x0:x1]
+    m[:] = 0
+    v[:] = 0
+    off = np.array([x0, y0])
+    for cs, (_, hp, refl) in zip(polys, items, strict=True):
+        pts = [np.round((c - off) * 16).astype(np.int32) for c in cs]  # outline, then holes
+        if len(pts) > 1:  # a hole shows what lies above it: clear it first
+            cv2.fillPoly(m, pts[1:], 0.0, lineType=cv2.LINE_AA, shift=4)
+        cv2.fillPoly(m, pts, 1.0, lineType=cv2.LINE_AA, shift=4)
+        cv2.fillPoly(v, pts, contrast(hp) * refl, lineType=cv2.LINE_8, shift=4)
+    v *= m  # antialiased edges
+    if sigma >= 0.6:
+        cv2.GaussianBlur(m, (0, 0), sigma, dst=m)
+        cv2.GaussianBlur(v, (0, 0), sigma, dst=v)
+    o = out[y0:y1, x0:x1]
+    o *= 1 - m
+    o += v
 
 
 def hand_layer(pieces: list[Piece], mapping: TableMapping) -> np.ndarray:
     """Grey levels the hands add at illumination 1 (float32 image)."""
     w, h = mapping.image_px
     out = np.zeros((h, w), np.float32)
-    ppm = mapping.px_per_mm()
-    bands: dict[int, list[tuple[np.ndarray, float, float]]] = {}
     visible = [(p, _band_of(p.h_mm)) for p in pieces]
     visible = [(p, b) for p, b in visible if b >= 0]
     if not visible:
         return out
-    sizes = [len(p.poly_mm) for p, _ in visible]
-    allpx = mapping.mm_to_px(np.vstack([p.poly_mm for p, _ in visible]))
-    for (p, b), poly in zip(visible, np.split(allpx, np.cumsum(sizes)[:-1]), strict=True):
-        bands.setdefault(b, []).append((poly, p.h_mm, p.refl))
-    mask = np.zeros((h, w), np.float32)
-    val = np.zeros((h, w), np.float32)
+    ppm = mapping.px_per_mm()
+    contours = [c for p, _ in visible for c in (p.poly_mm, *p.holes)]
+    sizes = [len(c) for c in contours]
+    allpx = iter(np.split(mapping.mm_to_px(np.vstack(contours)), np.cumsum(sizes)[:-1]))
+    bands: dict[int, list[tuple[list[np.ndarray], float, float]]] = {}
+    for p, b in visible:
+        polys = [next(allpx) for _ in range(1 + len(p.holes))]
+        bands.setdefault(b, []).append((polys, p.h_mm, p.refl))
+    lo_shape = (-(-h // LOW_RES), -(-w // LOW_RES))
+    lo = None
+    mask = np.empty((h, w), np.float32)
+    val = np.empty((h, w), np.float32)
     for b in sorted(bands, reverse=True):  # highest band first, lower ones composite over
         items = sorted(bands[b], key=lambda it: -it[1])  # lower pieces paint last
-        h_mid = 0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])
-        sigma = blur_mm(h_mid) * ppm
-        pad = int(3 * sigma + 3)
-        allp = np.vstack([it[0] for it in items])
-        x0 = int(max(np.floor(allp[:, 0].min()) - pad, 0))
-        y0 = int(max(np.floor(allp[:, 1].min()) - pad, 0))
-        x1 = int(min(np.ceil(allp[:, 0].max()) + pad + 1, w))
-        y1 = int(min(np.ceil(allp[:, 1].max()) + pad + 1, h))
-        if x1 <= x0 or y1 <= y0:
+        sigma = blur_mm(0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])) * ppm
+        if sigma > SHARP_SIGMA_PX:
+            if lo is None:
+                lo = np.zeros(lo_shape, np.float32)
+                lo_mask, lo_val = np.empty_like(lo), np.empty_like(lo)
+            _composite(lo, lo_mask, lo_val, items, sigma, LOW_RES)
             continue
-        m = mask[y0:y1, x0:x1]
-        v = val[y0:y1, x0:x1]
-        m[:] = 0
-        v[:] = 0
-        off = np.array([x0, y0])
-        for poly, hp, refl in items:
-            pts = np.round((poly - off) * 16).astype(np.int32)
-            cv2.fillPoly(m, [pts], 1.0, lineType=cv2.LINE_AA, shift=4)
-            cv2.fillPoly(v, [pts], contrast(hp) * refl, lineType=cv2.LINE_8, shift=4)
-        v *= m  # antialiased edges
-        _blur_roi(mask, sigma, (x0, y0, x1, y1))
-        _blur_roi(val, sigma, (x0, y0, x1, y1))
-        o = out[y0:y1, x0:x1]
-        o *= 1 - m
-        o += v
+        if lo is not None:  # the blurry bands are done: bring them to full resolution
+            out[:] = cv2.resize(lo, (w, h), interpolation=cv2.INTER_LINEAR)
+            lo = None
+        _composite(out, mask, val, items, sigma, 1)
+    if lo is not None:
+        out[:] = cv2.resize(lo, (w, h), interpolation=cv2.INTER_LINEAR)
     return out
 
 
