@@ -30,9 +30,6 @@ def test_plan_plays_paced_and_equal_through_portaudio(jack_server, plugins, tmp_
     try:
         capture.attach()
         wait(lambda: len(capture.blocks) > 4, 10, "the loopback capture to run")
-        idle_underruns = out.status()["audio"]["underruns"]
-        time.sleep(1.0)
-        idle_underruns = out.status()["audio"]["underruns"] - idle_underruns
         t0 = time.monotonic()
         report = out.play(plan)
         wall_s = time.monotonic() - t0
@@ -58,4 +55,6 @@ def test_plan_plays_paced_and_equal_through_portaudio(jack_server, plugins, tmp_
             if i - k >= 0 and i - k + want.size <= got.size
         ), seg.label
     assert all(r.level_v == (0.0, 0.0) for r in log)
-    print("underruns idle 1 s:", idle_underruns, "total:", status["audio"]["underruns"])
+    # underruns are not asserted: the non-realtime dummy server drops callbacks even when
+    # the gate is idle on a loaded machine; `haptable bench` reports them.
+    assert status["audio"]["driver"] == "sounddevice"
