@@ -11,7 +11,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from console.errors import UserError
-from plugins.projector.geometry import Calibration, load_calibration
+from plugins.projector.geometry import (
+    Calibration,
+    glass_corners_mm,
+    load_calibration,
+    save_calibration,
+)
 from plugins.projector.renderer import Offscreen, Renderer
 from plugins.projector.server import LinkServer
 
@@ -68,6 +73,70 @@ class CalibrationWatcher:
             log.warning("projector: keeping the previous calibration: %s", e)
             return None
         return self.cal
+
+
+class CornerAdjust:
+    """The operator adjusts the glass corners from the projector's keyboard.
+
+    ``C`` starts (the alignment view replaces the scene), ``1``..``4`` pick a corner,
+    arrows move it one pixel (ten with Shift), ``Enter`` saves the calibration file,
+    ``Esc`` leaves without saving.
+    """
+
+    NUDGE = {"LEFT": (-1, 0), "RIGHT": (1, 0), "UP": (0, -1), "DOWN": (0, 1)}
+
+    def __init__(self, cal: Calibration, path: Path | None) -> None:
+        self.cal = self.saved = cal
+        self.path = path
+        self.active = False
+        self.corner = 1
+        self.note = ""
+
+    def corner_px(self) -> tuple[float, float]:
+        u, v = self.cal.to_px([glass_corners_mm(self.cal.table_mm)[self.corner - 1]])[0]
+        return float(u), float(v)
+
+    def key(self, name: str, shift: bool = False) -> bool:
+        """Handle a key (pyglet symbol name); True if the picture changes."""
+        name = name.lstrip("_").upper()
+        if not self.active:
+            if name == "C":
+                self.active, self.corner, self.saved, self.note = True, 1, self.cal, ""
+                return True
+            return False
+        if name in ("1", "2", "3", "4"):
+            self.corner = int(name)
+        elif name in self.NUDGE:
+            du, dv = self.NUDGE[name]
+            step = 10.0 if shift else 1.0
+            u, v = self.corner_px()
+            mm = tuple(glass_corners_mm(self.cal.table_mm)[self.corner - 1])
+            try:
+                self.cal = self.cal.with_point(mm, (u + du * step, v + dv * step))
+                self.note = ""
+            except UserError:
+                self.note = "that would fold the glass"
+        elif name in ("RETURN", "ENTER"):
+            if self.path is None:
+                self.note = "no calibration file (start with --calibration or a profile)"
+                return True
+            save_calibration(self.cal, self.path)
+            self.saved, self.active = self.cal, False
+        elif name == "ESCAPE":
+            self.cal, self.active = self.saved, False
+        else:
+            return False
+        return True
+
+    def overlay(self) -> dict:
+        u, v = self.corner_px()
+        msg = f"corner {self.corner} at ({u:.0f}, {v:.0f}) px: arrows move, 1-4 pick, Enter saves, Esc cancels"
+        return {
+            "kind": "alignment",
+            "table_mm": list(self.cal.table_mm),
+            "selected": self.corner,
+            "message": self.note or msg,
+        }
 
 
 def open_window(screen: int):
@@ -140,6 +209,20 @@ def run(opts: ProjectorOptions) -> int:
         window, ctx = open_window(opts.screen)
         size = tuple(window.get_framebuffer_size())
         renderer = Renderer(ctx, size, watcher.cal)
+        adjust = CornerAdjust(watcher.cal, opts.calibration_path)
+
+        def on_key_press(symbol, modifiers):
+            import pyglet
+
+            if adjust.key(
+                pyglet.window.key.symbol_string(symbol),
+                bool(modifiers & pyglet.window.key.MOD_SHIFT),
+            ):
+                renderer.set_calibration(adjust.cal)
+                renderer._key = None
+            return True  # Esc must not close the projector: the console owns it
+
+        window.push_handlers(on_key_press=on_key_press)
     server = LinkServer(
         opts.socket_path,
         heartbeat_s=opts.heartbeat_s,
@@ -163,7 +246,11 @@ def run(opts: ProjectorOptions) -> int:
             if (cal := watcher.poll(now)) is not None:
                 renderer.set_calibration(cal)
                 renderer._key = None  # text sizes depend on the scale: re-tessellate
+                if window is not None and not adjust.active:
+                    adjust.cal = adjust.saved = cal
             version, _, _, state = server.snapshot()
+            if window is not None and adjust.active:
+                state = adjust.overlay()
             if window is not None:
                 window.dispatch_events()
                 if window.has_exit:

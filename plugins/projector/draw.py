@@ -550,6 +550,9 @@ def draw_alignment(s: dict) -> list[dict]:
                 "anchor": "c",
             }
         )
+    if s.get("message"):
+        msg = {"p": "text", "xy": [w / 2, h / 2], "text": s["message"], "size_mm": 13}
+        out.append({**msg, "color": "yellow", "anchor": "c"})
     return out
 
 

@@ -130,3 +130,34 @@ def test_running_projector_picks_up_the_operators_new_calibration(tmp_path):
     path.write_text("{broken")  # a half-edited file keeps the last good calibration
     os.utime(path, (1, 1))
     assert w.poll(30.0) is None and np.allclose(w.cal.to_px([[GLASS_MM[0], 0]]), [[1200, 30]])
+
+
+def test_operator_nudges_a_corner_from_the_keyboard_and_saves(tmp_path):
+    from plugins.projector.app import CornerAdjust
+
+    path = tmp_path / "cal.json"
+    adj = CornerAdjust(default_calibration((1280, 800)), path)
+    assert not adj.key("LEFT")  # keys do nothing until C starts the adjustment
+    assert adj.key("C") and adj.overlay()["kind"] == "alignment"
+    adj.key("_2")
+    adj.key("LEFT", shift=True)
+    adj.key("DOWN")
+    assert adj.corner_px() == pytest.approx((1270.0, 1.0))
+    assert "corner 2 at (1270, 1)" in adj.overlay()["message"]
+    adj.key("ESCAPE")  # cancel: back to the saved calibration, nothing written
+    assert not adj.active and not path.exists()
+    adj.key("C")
+    adj.key("3")
+    for _ in range(5):
+        adj.key("UP", shift=True)
+    adj.key("RETURN")
+    assert not adj.active
+    back = load_calibration(path, (1, 1))
+    assert np.allclose(back.to_px([[GLASS_MM[0], GLASS_MM[1]]]), [[1280, 750]])
+    # a nudge that would fold the glass is refused with a note
+    adj.key("C")
+    adj.key("3")
+    for _ in range(200):
+        adj.key("LEFT", shift=True)
+    assert "fold" in adj.overlay()["message"]
+    assert adj.corner_px()[0] > 0
