@@ -154,17 +154,24 @@ def _chaikin(poly: np.ndarray, n: int = 2) -> np.ndarray:
     return poly
 
 
-def _capsule(p0: np.ndarray, p1: np.ndarray, r0: float, r1: float) -> np.ndarray:
-    """Outline (14, 2) of a tapered capsule from ``p0`` (radius r0) to ``p1`` (r1)."""
-    a = float(np.arctan2(p1[1] - p0[1], p1[0] - p0[0]))
-    out = np.empty((14, 2))
+def _capsules(p0: np.ndarray, p1: np.ndarray, r0: np.ndarray, r1: np.ndarray) -> np.ndarray:
+    """Outlines (K, 14, 2) of tapered capsules from ``p0`` (radius r0) to ``p1`` (r1)."""
+    p0, p1 = np.atleast_2d(p0), np.atleast_2d(p1)
+    r0, r1 = np.atleast_1d(r0)[:, None], np.atleast_1d(r1)[:, None]
+    a = np.arctan2(p1[:, 1] - p0[:, 1], p1[:, 0] - p0[:, 0])[:, None]
     t1 = _ARC + a
     t0 = t1 + np.pi
-    out[:7, 0] = p1[0] + r1 * np.cos(t1)
-    out[:7, 1] = p1[1] + r1 * np.sin(t1)
-    out[7:, 0] = p0[0] + r0 * np.cos(t0)
-    out[7:, 1] = p0[1] + r0 * np.sin(t0)
+    out = np.empty((len(p0), 14, 2))
+    out[:, :7, 0] = p1[:, :1] + r1 * np.cos(t1)
+    out[:, :7, 1] = p1[:, 1:] + r1 * np.sin(t1)
+    out[:, 7:, 0] = p0[:, :1] + r0 * np.cos(t0)
+    out[:, 7:, 1] = p0[:, 1:] + r0 * np.sin(t0)
     return out
+
+
+def _capsule(p0: np.ndarray, p1: np.ndarray, r0: float, r1: float) -> np.ndarray:
+    """Outline (14, 2) of one tapered capsule."""
+    return _capsules(p0, p1, r0, r1)[0]
 
 
 def _chains(z0: float, lens: np.ndarray, flex_rad: np.ndarray, n_sub: int) -> np.ndarray:
@@ -336,19 +343,21 @@ def hand_pieces(subject: Subject, pose: HandPose) -> HandGeometry:
         uv = base_uv + sz[:, :1] * d_uv
         xy = to_table(uv)
         low = sz[:, 1] - radii
-        touching = []
-        for i in range(len(xy) - 1):
-            h = float(min(low[i], low[i + 1]))
-            if h <= (PAD_MM if fp.contact else REST_MM):
-                rs = pose.tip_radius_scale * 0.62
-                pieces.append(
-                    Piece(_capsule(xy[i], xy[i + 1], radii[i] * rs, radii[i + 1] * rs), 0.0, 1.0)
-                )
-                touching.append(i)
-                h = max(h, 0.0) + 3.0  # the rest of the finger's width curves away
-                if pose.tip_radius_scale < 1.0:
-                    h = 60.0  # fingertip-only: the finger above stays high and faint
-            pieces.append(Piece(_capsule(xy[i], xy[i + 1], radii[i], radii[i + 1]), max(h, 0.0)))
+        seg_h = np.minimum(low[:-1], low[1:])
+        touch = seg_h <= (PAD_MM if fp.contact else REST_MM)
+        touching = [int(i) for i in np.flatnonzero(touch)]
+        outlines = _capsules(xy[:-1], xy[1:], radii[:-1], radii[1:])
+        if touching:
+            rs = pose.tip_radius_scale * 0.62
+            pads = _capsules(
+                xy[:-1][touch], xy[1:][touch], radii[:-1][touch] * rs, radii[1:][touch] * rs
+            )
+            pieces += [Piece(pad, 0.0, 1.0) for pad in pads]
+            # the rest of the finger's width curves away (fingertip-only: stays high)
+            seg_h = np.where(
+                touch, 60.0 if pose.tip_radius_scale < 1.0 else np.maximum(seg_h, 0.0) + 3.0, seg_h
+            )
+        pieces += [Piece(o, float(max(h, 0.0))) for o, h in zip(outlines, seg_h, strict=True)]
         tip = xy[-1]
         tips[name] = (float(tip[0]), float(tip[1]), float(max(low.min(), 0.0)))
         if fp.contact and touching:
