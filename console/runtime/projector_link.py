@@ -515,6 +515,7 @@ class ProjectorSupervisor:
         self.restarts = 0
         self.last_exit: int | None = None
         self.last_reason = ""
+        self.last_error = ""
         self._started_t = 0.0
         self._connects_at_start = 0
         self._next_start_t = 0.0
@@ -569,6 +570,20 @@ class ProjectorSupervisor:
         self._connects_at_start = self.link.handshakes if self.link is not None else 0
         log.info("projector: started pid %d", self.pid)
 
+    def _log_tail(self) -> str:
+        """The last error line the projector wrote to its log (shown in the status)."""
+        if self.log_path is None:
+            return ""
+        try:
+            with open(self.log_path, "rb") as f:
+                f.seek(0, os.SEEK_END)
+                f.seek(max(0, f.tell() - 4096))
+                lines = f.read().decode("utf-8", "replace").splitlines()
+        except OSError:
+            return ""
+        errors = [ln for ln in lines if "error" in ln.lower()]
+        return (errors or [""])[-1].strip()[:300]
+
     def _is_alive(self) -> bool:
         if self.proc is not None:
             code = self.proc.poll()
@@ -603,6 +618,7 @@ class ProjectorSupervisor:
                         with contextlib.suppress(subprocess.TimeoutExpired):
                             self.proc.wait(timeout=2.0)
                 if not self._is_alive():
+                    self.last_error = self._log_tail()
                     if not reason:
                         reason = (
                             f"exited ({self.last_exit})" if self.proc is not None else "vanished"
@@ -623,6 +639,8 @@ class ProjectorSupervisor:
             "restarts": self.restarts,
             "last_exit": self.last_exit,
             "last_reason": self.last_reason,
+            "last_error": self.last_error,
+            "log": str(self.log_path) if self.log_path else None,
             "uptime_s": time.monotonic() - self._started_t if self.pid else 0.0,
         }
 

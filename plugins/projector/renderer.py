@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,16 @@ import numpy as np
 from plugins.projector.draw import Layer, build_layer, primitives
 from plugins.projector.geometry import Calibration
 from plugins.projector.text import text_bitmap
+
+log = logging.getLogger("haptable.projector")
+
+
+def error_primitives(message: str) -> list[dict]:
+    """What the projector shows instead of a state it cannot draw."""
+    return [
+        {"p": "text", "xy": [20.0, 30.0], "text": message[:160], "size_mm": 12.0, "color": "red"}
+    ]
+
 
 _HOMOG = """
 uniform mat3 H;        // table mm -> pixels (y down)
@@ -101,7 +112,14 @@ class Renderer:
         if key == self._key:
             return False
         self._key = key
-        self.layer = build_layer(primitives(state))
+        try:
+            self.layer = build_layer(primitives(state))
+        except Exception as e:  # noqa: BLE001 - a bad state must not take the projector down
+            kind = (state or {}).get("kind", "?") if isinstance(state, dict) else "?"
+            log.warning("projector: cannot draw scene kind %r: %s: %s", kind, type(e).__name__, e)
+            self.layer = build_layer(
+                error_primitives(f"cannot draw scene {kind!r}: {type(e).__name__}: {e}")
+            )
         self._upload(self.layer)
         return True
 

@@ -307,3 +307,23 @@ def test_snapshot_saves_what_the_projector_shows(sock_path, tmp_path, reaper):
         assert red.sum() > 0  # the knob's target city
     finally:
         svc.close()
+
+
+def test_a_projector_that_cannot_start_is_retried_and_its_error_reported(sock_path, tmp_path):
+    # a window on a display that does not exist: the process exits 2, again and again
+    svc = ProjectorService(
+        socket_path=sock_path,
+        command=projector_command(sock_path, extra=["--screen", "0"]),
+        scenes=SCENES,
+        backoff_max_s=0.3,
+        log_path=tmp_path / "projector.log",
+        env={**os.environ, "DISPLAY": ":4242"},
+    )
+    try:
+        svc.start()
+        wait_until(lambda: svc.status()["restarts"] >= 2, 60, "two restarts")
+        st = svc.status()
+        assert not st["connected"] and st["last_exit"] == 2
+        assert "cannot open a window" in st["last_error"]
+    finally:
+        svc.close()

@@ -207,3 +207,10 @@ def test_screenshot_of_an_unknown_scene_is_one_line_error(tmp_path, capsys):
     assert main(["--scene", "nope", "--screenshot", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err
     assert "nope" in err and "knob" in err and "Traceback" not in err
+
+
+def test_a_state_that_cannot_be_drawn_shows_an_error_instead_of_crashing(render):
+    img, _ = render({"kind": "knob", "items": ["a"]}, SIZE)  # no centre: a broken third-party state
+    assert is_red(img).sum() > 50  # the error line, in red
+    img, _ = render({"kind": "whatever-plugin-kind"}, SIZE)
+    assert is_red(img).sum() > 50  # unknown kinds say so too
