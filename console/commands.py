@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import wave
@@ -69,7 +70,7 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
             out.append(DeviceStatus(section, name, "ok", "no probe: assumed present"))
             continue
         try:
-            out.append(reg.probe(profile))
+            out.append(dataclasses.replace(reg.probe(profile), kind=section, name=name))
         except Exception as exc:
             out.append(
                 DeviceStatus(

@@ -1,0 +1,66 @@
+"""The core commands as a user runs them."""
+
+from __future__ import annotations
+
+import json
+
+from console.cli import main
+from console.runtime.control import ControlServer, send_command
+
+
+def test_doctor_json_reports_each_device(capsys):
+    assert main(["doctor", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    kinds = {d["kind"]: d for d in data["devices"]}
+    assert set(kinds) == {"audio", "relays", "camera"}
+    assert all(d["state"] == "simulated" for d in kinds.values()) and data["ok"]
+
+
+def test_doctor_on_lab_profile_says_what_is_missing_and_the_fix(capsys):
+    code = main(["--profile", "haptable-lab", "doctor", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    relays = next(d for d in data["devices"] if d["kind"] == "relays")
+    if relays["state"] in ("missing", "error"):
+        assert code == 1 and relays["fix"]
+
+
+def test_play_named_stimulus_reports_relay_switches(capsys):
+    assert main(["play", "relay-walk", "--fast"]) == 0
+    out = capsys.readouterr().out
+    assert "played relay-walk" in out
+    switches = [ln for ln in out.splitlines() if ln.strip().startswith("relay ")]
+    assert len(switches) == 14  # PA, PB, PC, PD one by one, then PALL, each closed and opened
+    assert all("(outputs 0.0 V / 0.0 V)" in ln for ln in switches)
+
+
+def test_play_unknown_stimulus_one_line(capsys):
+    assert main(["play", "sine-PE"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "sine-PE" in err and "sine-PA" in err
+
+
+def test_play_writes_wav(tmp_path, capsys):
+    import wave
+
+    path = tmp_path / "s.wav"
+    assert main(["play", "screen-180hz", "--dry-run", "--out", str(path)]) == 0
+    with wave.open(str(path)) as w:
+        assert w.getnchannels() == 2 and w.getframerate() == 48000 and w.getnframes() == 48000
+
+
+def test_estop_reaches_a_running_console(profile, capsys):
+    calls = []
+    server = ControlServer(profile, lambda line: calls.append(line) or "ok: silenced")
+    try:
+        assert send_command(profile, "ping") == "pong"
+        assert main(["estop", "--json"]) == 0
+        data = json.loads(capsys.readouterr().out)
+    finally:
+        server.close()
+    assert calls == ["estop"]
+    assert data["console"] == "ok: silenced" and data["relays"] == "all open"
+
+
+def test_estop_without_console(capsys):
+    assert main(["estop"]) == 0
+    assert "no console running" in capsys.readouterr().out
