@@ -198,6 +198,7 @@ class ProjectorLink:
         self._dirty = False
         self._outbox: list[dict] = []  # one-off commands (quit, snapshot), sent once
         self.snapshots_done: list[str] = []
+        self.closing = False  # set while the console stops the projector on purpose
         self._stop = threading.Event()
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
@@ -415,7 +416,7 @@ class ProjectorLink:
             sock.close()
         self.last_drop = why
         self._set_connected(False)
-        log.warning("projector link: %s", why)
+        (log.info if self.closing else log.warning)("projector link: %s", why)
         return None
 
     def _handle(self, msg: dict) -> None:
@@ -829,6 +830,8 @@ class ProjectorService:
         return st
 
     def close(self, stop_projector: bool = True) -> None:
+        """Stop the projector (default) or leave it running for the next console."""
+        self.link.closing = True
         if stop_projector and self.supervisor is not None:
             self.supervisor.stop()
         elif self.supervisor is not None:

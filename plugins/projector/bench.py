@@ -79,6 +79,7 @@ def frame_times(profile: Any, n_frames: int) -> dict:
             off.render(s)  # new state: tessellate + upload + draw
             off.finish()
             change.append(time.perf_counter() - t)
+        off.render(b)
         layer = off.renderer.layer
         results[name] = {
             "frame": summarize_s(steady),

@@ -17,9 +17,11 @@ scene state may add its own ``"shapes"`` list; an unknown kind draws only those.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -112,6 +114,16 @@ def tessellate_one(p: dict) -> list[tuple[np.ndarray, tuple]]:
     return out
 
 
+@lru_cache(maxsize=4096)
+def _tessellate_cached(key: str) -> tuple[tuple[np.ndarray, tuple], ...]:
+    """``tessellate_one`` keyed by the primitive's JSON: a changing scene re-uses the
+    triangles of every primitive that did not change."""
+    out = tuple(tessellate_one(json.loads(key)))
+    for tri, _ in out:
+        tri.flags.writeable = False
+    return out
+
+
 def build_layer(prims: list[dict]) -> Layer:
     """Tessellate primitives in order (later ones on top); text goes above everything."""
     tris: list[np.ndarray] = []
@@ -130,7 +142,7 @@ def build_layer(prims: list[dict]) -> Layer:
                     )
                 )
             continue
-        for tri, rgba in tessellate_one(p):
+        for tri, rgba in _tessellate_cached(json.dumps(p, sort_keys=True, separators=(",", ":"))):
             if len(tri):
                 tris.append(tri)
                 cols.append(np.broadcast_to(np.array(rgba, np.float32), (len(tri), 4)))

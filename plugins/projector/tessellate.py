@@ -7,6 +7,7 @@ Curves use enough segments that the chord error stays under ``tol_mm``.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -38,9 +39,16 @@ def rect_outline(x: float, y: float, w: float, h: float, width_mm: float) -> np.
     )
 
 
-def _arc_pts(c, r: float, a0: float, a1: float, n: int) -> np.ndarray:
+@lru_cache(maxsize=512)
+def _unit_arc(a0: float, a1: float, n: int) -> np.ndarray:
     t = np.linspace(a0, a1, n + 1)
-    return np.c_[c[0] + r * np.cos(t), c[1] + r * np.sin(t)]
+    out = np.stack([np.cos(t), np.sin(t)], axis=1)
+    out.flags.writeable = False
+    return out
+
+
+def _arc_pts(c, r: float, a0: float, a1: float, n: int) -> np.ndarray:
+    return _unit_arc(float(a0), float(a1), int(n)) * r + np.asarray(c, dtype=float)
 
 
 def disc(c, r_mm: float) -> np.ndarray:
@@ -73,15 +81,17 @@ def polyline(pts, width_mm: float, closed: bool = False) -> np.ndarray:
     p = np.asarray(pts, dtype=float).reshape(-1, 2)
     if closed and len(p) > 2:
         p = np.vstack([p, p[:1]])
-    parts = []
     h = width_mm / 2
-    for a, b in zip(p[:-1], p[1:], strict=True):
-        d = b - a
-        n = np.hypot(*d)
-        if n == 0:
-            continue
-        o = np.array([-d[1], d[0]]) / n * h
-        parts.append(np.array([a + o, b + o, b - o, a + o, b - o, a - o]))
+    a, b = p[:-1], p[1:]
+    d = b - a
+    n = np.hypot(d[:, 0], d[:, 1])
+    keep = n > 0
+    a, b, d, n = a[keep], b[keep], d[keep], n[keep]
+    parts = []
+    if len(a):
+        o = np.stack([-d[:, 1], d[:, 0]], axis=1) / n[:, None] * h
+        quads = np.stack([a + o, b + o, b - o, a + o, b - o, a - o], axis=1)
+        parts.append(quads.reshape(-1, 2))
     if width_mm > 1.0:  # round joins keep thick strokes closed at corners
         for v in p if not closed else p[:-1]:
             parts.append(disc(v, h))
