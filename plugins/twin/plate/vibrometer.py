@@ -13,8 +13,11 @@ done per mode with zero-padded FFTs (exact linear convolution as long as the pad
 outlasts the impulse response: we pad by 12 decay times 1 / (zeta omega_min), so the
 wrapped tail is below e^-12) and the analyser then sees the first ``record_s`` seconds,
 exactly like a real record (including the leakage of any ring-down that outlasts it).
-This equals a time-stepped modal state-space simulation to round-off and is ~100x
-faster. Every sweep starts from rest; sweeps differ only by their noise.
+For the band-limited sampled input this is exact; against a time-stepped modal state
+space driven by the continuous sweep (scipy.signal.lsim at 16x the sample rate) it agrees
+to ~1e-3 of the peak velocity (tests/twin_plate), and it is much faster. The sweep ends
+with a short raised-cosine fade so no step (a broadband click) is played. Every sweep
+starts from rest; sweeps differ only by their noise.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ class SweepSettings:
     noise_um_per_s_per_sqrt_hz: float = dflt.NOISE_UM_PER_S_PER_SQRT_HZ
     mask_below_hz: float = dflt.MASK_BELOW_HZ
     seed: int = 0
+    fade_s: float = 0.01  # raised-cosine fade at the sweep's end (no step, no broadband click)
 
     def check(self) -> None:
         if not 0 <= self.f_start_hz < self.f_stop_hz < self.sample_rate_hz / 2:
@@ -63,6 +67,9 @@ def linear_sweep(s: SweepSettings) -> np.ndarray:
     rate = (s.f_stop_hz - s.f_start_hz) / s.sweep_s
     x = (s.generator_vpp / 2) * np.sin(2 * math.pi * (s.f_start_hz * t + 0.5 * rate * t**2))
     x[t >= s.sweep_s] = 0.0
+    if s.fade_s > 0:
+        tail = (t > s.sweep_s - s.fade_s) & (t < s.sweep_s)
+        x[tail] *= 0.5 * (1 + np.cos(math.pi * (t[tail] - (s.sweep_s - s.fade_s)) / s.fade_s))
     return x
 
 
