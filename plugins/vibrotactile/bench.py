@@ -148,11 +148,11 @@ def bench_hand(m, per, quick: bool) -> dict:
 
 
 def run_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
-    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map, default_freq_hz
     from plugins.vibrotactile.perception import Perception
 
     plate = SSPlate()
-    m = analytic_map(plate)
+    m = analytic_map(plate, default_freq_hz(625.0, 0.1))  # the twin vibrometer's 0.1 Hz lines
     per = Perception()
     if ctx is not None and hasattr(ctx, "profile"):
         per = Perception.from_section(ctx.profile.section("perception"))
@@ -160,7 +160,7 @@ def run_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
     tables, t = bench_tables(m, 3 if quick else 10)
     hand, htable = bench_hand(m, per, quick)
     out = {
-        "reference": "analytic SSSS glass plate 743.46 x 447.29 x 3.18 mm, zeta 1 %, 7 x 12 grid, 0.5 Hz bins",
+        "reference": "analytic SSSS glass plate 743.46 x 447.29 x 3.18 mm, zeta 1 %, 7 x 12 grid, 0.1 Hz bins to 625 Hz",
         "interpolation": interp,
         "tables": tables,
         "flow_under_hand": hand,

@@ -328,6 +328,11 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--hand-mm", type=float, default=None, help="hand area side (default: profile, 120 mm)"
     )
+    p.add_argument(
+        "--exhaustive",
+        action="store_true",
+        help="hand: score every bin on the full subgrid (slower; default: staged search)",
+    )
     p.add_argument("--out", help="write the plan as a .wav (sound-card units) + .json summary")
     p.add_argument("--play", action="store_true", help="play through the safety gate")
     p.add_argument("--cache-dir", default=None, help="cache folder ('none' to disable)")
@@ -375,6 +380,7 @@ def hand_plan(args, ctx, lim):
         subgrid=vt["hand_subgrid"],
         band_hz=vt["band_hz"],
         method=st.interpolation,
+        screen_stride=1 if args.exhaustive else 3,
     )
     res = hand_flow_cached(vm, (cx, cy), args.direction, per, cache_dir_of(args, ctx), **kw)
     if not res["ok"]:
