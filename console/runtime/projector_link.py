@@ -746,6 +746,7 @@ class ProjectorService:
         self.scene_name: str | None = None
         self.prepared: dict = {}
         self.unprepared: list[str] = []
+        self._lock = threading.RLock()  # the UI and the frame loop may both send events
 
     @classmethod
     def from_profile(
@@ -794,21 +795,24 @@ class ProjectorService:
         prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers)
         for ev in events:
             scene.update(ev)
-        self.scene, self.scene_name = scene, name
-        self.prepared, self.unprepared = prepared, missing
-        return self._push()
+        with self._lock:
+            self.scene, self.scene_name = scene, name
+            self.prepared, self.unprepared = prepared, missing
+            return self._push()
 
     def update(self, event: dict) -> dict:
         """Pass an event to the active scene and show its new state."""
-        if self.scene is None:
-            raise UserError("no active scene: start one first (start_scene)")
-        self.scene.update(event)
-        return self._push()
+        with self._lock:
+            if self.scene is None:
+                raise UserError("no active scene: start one first (start_scene)")
+            self.scene.update(event)
+            return self._push()
 
     def stop_scene(self) -> None:
         """Show black."""
-        self.scene, self.scene_name, self.prepared, self.unprepared = None, None, {}, []
-        self.link.send_state("black", {"kind": "black"})
+        with self._lock:
+            self.scene, self.scene_name, self.prepared, self.unprepared = None, None, {}, []
+            self.link.send_state("black", {"kind": "black"})
 
     def _push(self) -> dict:
         state = self.scene.state()
