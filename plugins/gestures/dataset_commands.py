@@ -43,6 +43,12 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="only the dataset's background.png, none per sample",
     )
+    parser.add_argument(
+        "--left-handed",
+        type=int,
+        default=1,
+        help="how many subjects (the last ones) use their left hand (1)",
+    )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -70,6 +76,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         dynamic_frames=args.dynamic_frames or DYNAMIC_FRAMES,
         lens_distortion=args.lens_distortion,
         per_sample_background=not args.no_sample_background,
+        left_handed=args.left_handed,
         force=args.force,
         progress=progress,
     )

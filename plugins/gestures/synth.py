@@ -9,6 +9,9 @@ Each sample gets its own ``background.png`` (the empty table half a second befor
 the slow ambient drift matches; ``per_sample_background=False`` leaves only the dataset's
 ``background.png``) and a ``truth.json`` (contacts, hand centre, angle).
 
+Subjects are ``s1 .. sN``; the last ``left_handed`` of them (default 1, as in the
+paper's five-subject study) use their left hand, the others their right.
+
 ``record(camera, out, gesture, subject)`` records from any ``console.types.Camera``
 into the same format (the twin acts the gesture out when asked).
 """
@@ -57,23 +60,31 @@ def _session_t0(subject: int, gesture: int, rep: int) -> float:
     return 3600.0 * subject + 300.0 * gesture + 6.0 * rep + 1.0
 
 
-def _render_job(job: tuple) -> tuple[int, int]:
+def _render_job(job: dict) -> tuple[int, int]:
     """Render and write the samples of one (subject, gesture): returns (samples, frames)."""
-    out, seed, si, gi, reps, static_frames, dynamic_frames, rig_kw, per_sample_bg = job
     from plugins.twin.camera import Rig, TableMapping, render_background, render_sample
 
-    rig = Rig(mapping=TableMapping(**rig_kw.pop("mapping")), **rig_kw)
+    out, seed, si, gi = job["out"], job["seed"], job["subject"], job["gesture"]
+    rig = Rig(mapping=TableMapping(k1=job["k1"], k2=job["k2"]), seed=seed)
     subject = subject_names(si + 1)[si]
     gesture = GESTURES[gi]
-    n = static_frames if gesture in STATIC else dynamic_frames
+    n = job["static_frames"] if gesture in STATIC else job["dynamic_frames"]
     frames_total = 0
-    for rep in range(reps):
+    for rep in range(job["reps"]):
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
         t0 = _session_t0(si, gi, rep)
         frames, truth = render_sample(
-            gesture, subject, rep, rng, n_frames=n, rig=rig, t0_s=t0, subject_seed=seed
+            gesture,
+            subject,
+            rep,
+            rng,
+            n_frames=n,
+            rig=rig,
+            t0_s=t0,
+            subject_seed=seed,
+            side=job["side"],
         )
-        bg = render_background(rig, t0 - BACKGROUND_LEAD_S, rng) if per_sample_bg else None
+        bg = render_background(rig, t0 - BACKGROUND_LEAD_S, rng) if job["per_sample_bg"] else None
         extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
         write_sample(
             out,
@@ -88,7 +99,7 @@ def _render_job(job: tuple) -> tuple[int, int]:
             extra=extra,
         )
         frames_total += len(frames)
-    return reps, frames_total
+    return job["reps"], frames_total
 
 
 def synth(
@@ -103,6 +114,7 @@ def synth(
     dynamic_frames: int = DYNAMIC_FRAMES,
     lens_distortion: bool = False,
     per_sample_background: bool = True,
+    left_handed: int = 1,
     force: bool = False,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict[str, Any]:
@@ -113,6 +125,8 @@ def synth(
         raise UserError(f"gestures {bad}: unknown; use {', '.join(GESTURES)}")
     if subjects < 1 or reps < 1:
         raise UserError(f"--subjects {subjects} --reps {reps}: both must be at least 1")
+    if not 0 <= left_handed <= subjects:
+        raise UserError(f"--left-handed {left_handed}: must be from 0 to --subjects {subjects}")
     if static_frames < 1 or dynamic_frames < 4:
         raise UserError("frames: static samples need >= 1 frame, dynamic >= 4")
     if out.exists() and not out.is_dir():
@@ -124,21 +138,23 @@ def synth(
 
     mapping = TableMapping(k1=-0.18, k2=0.03) if lens_distortion else TableMapping()
     rig = Rig(mapping=mapping, seed=seed)
-    rig_kw = {"seed": seed, "mapping": {"k1": mapping.k1, "k2": mapping.k2}}
     t_start = time.perf_counter()
     write_background(out, render_background(rig, 0.0, np.random.default_rng(seed)))
+    sides = ["right"] * (subjects - left_handed) + ["left"] * left_handed
     jobs = [
-        (
-            str(out),
-            seed,
-            si,
-            GESTURES.index(g),
-            reps,
-            static_frames,
-            dynamic_frames,
-            json.loads(json.dumps(rig_kw)),
-            per_sample_background,
-        )
+        {
+            "out": str(out),
+            "seed": seed,
+            "subject": si,
+            "gesture": GESTURES.index(g),
+            "reps": reps,
+            "static_frames": static_frames,
+            "dynamic_frames": dynamic_frames,
+            "k1": mapping.k1,
+            "k2": mapping.k2,
+            "per_sample_bg": per_sample_background,
+            "side": sides[si],
+        }
         for si in range(subjects)
         for g in gestures
     ]
@@ -170,6 +186,7 @@ def synth(
         "dynamic_frames": dynamic_frames,
         "lens_distortion": lens_distortion,
         "per_sample_background": per_sample_background,
+        "hands": dict(zip(subject_names(subjects), sides, strict=True)),
         "mapping": mapping.to_dict(),
         "workers": workers,
         "seconds": round(seconds, 2),

@@ -186,6 +186,8 @@ def test_synth_small_set_is_complete_labelled_and_deterministic(tmp_path):
     samples = load_dataset(tmp_path / "a", check_images=True)
     assert len(samples) == 20
     assert {s.gesture for s in samples} == set(GESTURES)
+    assert {s.hand for s in samples if s.subject == "s1"} == {"right"}
+    assert {s.hand for s in samples if s.subject == "s2"} == {"left"}  # the last is left-handed
     for s in samples:
         assert s.n_frames == (3 if s.kind == "static" else 8)
         assert s.background_path == s.path / "background.png"
@@ -213,6 +215,8 @@ def test_synth_refuses_a_non_empty_folder_and_bad_counts(tmp_path):
         synth(tmp_path / "n", subjects=0, reps=1)
     with pytest.raises(UserError, match="unknown"):
         synth(tmp_path / "g", subjects=1, reps=1, gestures=("wave",))
+    with pytest.raises(UserError, match="--left-handed 3"):
+        synth(tmp_path / "h", subjects=2, reps=1, left_handed=3)
 
 
 def test_record_from_the_twin_camera(tmp_path):
