@@ -106,3 +106,12 @@ def test_the_installed_command(tmp_path):
         ["haptable", "plate", "modes", "--count", "0"], capture_output=True, text=True, timeout=120
     )
     assert bad.returncode == 2 and "--count 0" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_per_edge_seal_scale_changes_the_modes(capsys):
+    uniform = run_modes(capsys, FakeProfile())
+    # no seal along the long edges y = 0 and y = height: a much softer plate
+    loose = run_modes(capsys, FakeProfile(plate={"seal_edge_scale": [1.0, 1.0, 0.0, 0.0]}))
+    assert loose[0]["frequency_hz"] < 0.8 * uniform[0]["frequency_hz"]
+    same = run_modes(capsys, FakeProfile(plate={"seal_edge_scale": [1.0, 1.0, 1.0, 1.0]}))
+    assert same == uniform

@@ -56,6 +56,13 @@ def haptable_profile_sections(register) -> None:
                 min=0.0,
                 help="rubber seal stiffness per metre of edge against edge rotation (N m/rad per m)",
             ),
+            "seal_edge_scale": Field(
+                "floats",
+                [1.0, 1.0, 1.0, 1.0],
+                length=4,
+                min=0.0,
+                help="seal stiffness factor per edge x=0, x=width, y=0, y=height (0: no seal)",
+            ),
             "band_max_hz": Field(
                 "float",
                 dflt.BAND_MAX_HZ,

@@ -15,7 +15,7 @@ import numpy as np
 from . import defaults as dflt
 from .frf import displacement_frf, modal_receptance, static_residual
 from .piezo import PiezoPatch, modal_forces, patch_loads, pin_force_moment
-from .ritz import Modes, Plate, Springs, solve_modes
+from .ritz import EDGES, Modes, Plate, Springs, solve_modes
 
 EXCITATIONS: tuple[str, ...] = ("PA", "PB", "PC", "PD", "PALL")
 
@@ -25,7 +25,9 @@ class TwinParams:
     """Every input of the twin, in SI units except the patch geometry (mm)."""
 
     plate: Plate
-    edges: str | Springs  # "ssss"/"cccc"/"ffff"... or uniform seal springs (k_t, k_r)
+    # "ssss"/"cccc"/"ffff"..., uniform seal springs (k_t, k_r), or per edge
+    # ((edge, (k_t, k_r)), ...) for edges x0 x1 y0 y1
+    edges: str | Springs | tuple[tuple[str, Springs], ...]
     patches: tuple[PiezoPatch, ...]
     moment_n_per_v: float  # pin-force moment per unit length per volt
     damping_ratio: float = dflt.DAMPING_RATIO
@@ -216,10 +218,13 @@ def params_from_profile(
         for n in EXCITATIONS[:4]
     )
     if edges is None:
-        edges = (
-            float(p.get("seal_translational_n_per_m2", dflt.SEAL_KT_N_PER_M2)),
-            float(p.get("seal_rotational_n_per_rad", dflt.SEAL_KR_N_PER_RAD)),
-        )
+        kt = float(p.get("seal_translational_n_per_m2", dflt.SEAL_KT_N_PER_M2))
+        kr = float(p.get("seal_rotational_n_per_rad", dflt.SEAL_KR_N_PER_RAD))
+        scale = [float(v) for v in p.get("seal_edge_scale", [1.0, 1.0, 1.0, 1.0])]
+        if all(v == 1.0 for v in scale):
+            edges = (kt, kr)
+        else:  # per edge x0 x1 y0 y1 (x = 0, x = width, y = 0, y = height)
+            edges = tuple((e, (kt * v, kr * v)) for e, v in zip(EDGES, scale, strict=True))
     return TwinParams(
         plate=plate,
         edges=edges,

@@ -70,13 +70,15 @@ def edge_springs(spec: str | Springs | dict[str, Springs]) -> dict[str, Springs]
     """Normalise an edge specification to ``{edge: (k_t, k_r)}``.
 
     ``spec`` is a 4-letter string of f/s/c in the order x0 x1 y0 y1 (e.g. ``"ssss"``),
-    one ``(k_t, k_r)`` pair for all edges, or a dict per edge.
+    one ``(k_t, k_r)`` pair for all edges, or per edge a dict (or tuple of pairs).
     """
     if isinstance(spec, str):
         s = spec.lower()
         if len(s) != 4 or any(c not in _NAMED for c in s):
             raise ValueError(f"edge string {spec!r}: use 4 letters of f/s/c (x0 x1 y0 y1)")
         return {e: _NAMED[c] for e, c in zip(EDGES, s, strict=True)}
+    if isinstance(spec, tuple) and spec and isinstance(spec[0], tuple):
+        spec = dict(spec)  # ((edge, (k_t, k_r)), ...): the hashable per-edge form
     if isinstance(spec, dict):
         missing = [e for e in EDGES if e not in spec]
         if missing:
