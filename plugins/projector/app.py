@@ -157,21 +157,29 @@ def open_window(screen: int):
         )
     import moderngl
 
-    config = pyglet.gl.Config(
-        major_version=3, minor_version=3, forward_compatible=True, double_buffer=True
-    )
-    try:
-        window = pyglet.window.Window(
-            fullscreen=True,
-            screen=screens[screen],
-            vsync=True,
-            config=config,
-            caption="HapTable projector",
-        )
-    except Exception as e:  # noqa: BLE001
+    base = {
+        "major_version": 3,
+        "minor_version": 3,
+        "forward_compatible": True,
+        "double_buffer": True,
+    }
+    window, last = None, None
+    for extra in ({"sample_buffers": 1, "samples": 4}, {}):  # 4x MSAA if the driver has it
+        try:
+            window = pyglet.window.Window(
+                fullscreen=True,
+                screen=screens[screen],
+                vsync=True,
+                config=pyglet.gl.Config(**base, **extra),
+                caption="HapTable projector",
+            )
+            break
+        except Exception as e:  # noqa: BLE001
+            last = e
+    if window is None:
         raise UserError(
-            f"projector: no OpenGL 3.3 window on screen {screen} ({e}); update the GL driver"
-        ) from None
+            f"projector: no OpenGL 3.3 window on screen {screen} ({last}); update the GL driver"
+        )
     window.set_mouse_visible(False)
     return window, moderngl.create_context()
 

@@ -50,6 +50,21 @@ def alive(pid: int) -> bool:
         return f.read().rsplit(")", 1)[1].split()[0] != "Z"
 
 
+def inet_sockets(pid: int) -> set[str]:
+    """Socket inodes of ``pid`` that are TCP/UDP (IPv4 or IPv6) sockets."""
+    inodes = set()
+    for fd in os.listdir(f"/proc/{pid}/fd"):
+        with contextlib.suppress(OSError):
+            target = os.readlink(f"/proc/{pid}/fd/{fd}")
+            if target.startswith("socket:["):
+                inodes.add(target[8:-1])
+    inet = set()
+    for table in ("tcp", "tcp6", "udp", "udp6"):
+        with contextlib.suppress(OSError), open(f"/proc/net/{table}") as f:
+            inet |= {line.split()[9] for line in list(f)[1:]}
+    return inodes & inet
+
+
 @pytest.fixture
 def sock_path(tmp_path):
     return tmp_path / "p.sock"
@@ -284,6 +299,7 @@ def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path,
         assert st["shown_scene"] == "black" and st["scene"] is None
         assert st["connected"] and st["pid"] == st["projector_pid"]
         assert st["unprepared_needs"] == []
+        assert inet_sockets(st["pid"]) == set()  # the link is a Unix socket only
         with pytest.raises(UserError, match="available"):
             svc.start_scene("no-such-scene")
     finally:
