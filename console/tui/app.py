@@ -32,6 +32,7 @@ silent for the guard gap, and is refused during an e-stop.
 class HapTableApp(App):
     TITLE = "HapTable"
     CSS = """
+    TabbedContent { height: 1fr; }
     #devices, #plugins { height: auto; }
     .relay { height: 3; }
     .relay Label { padding: 1 1; width: 22; }
@@ -135,14 +136,16 @@ class HapTableApp(App):
     # ------------------------------------------------------------------ live state
     def refresh_state(self) -> None:
         out = self.outputs
-        bar = self.query_one(SafetyBar)
+        bars = self.screen.query(SafetyBar)  # every screen shows one; none while tearing down
         if out is None:
-            bar.show(None, self.outputs_error)
+            for bar in bars:
+                bar.show(None, self.outputs_error)
             return
         status = out.status()
-        bar.show(status)
+        for bar in bars:
+            bar.show(status)
         closed = set(status["gate"]["relays_closed"])
-        for sw in self.query(Switch):
+        for sw in self.screen.query(Switch):
             ch = int(sw.id.split("-")[1])
             if sw.value != (ch in closed):
                 with sw.prevent(Switch.Changed):
@@ -151,7 +154,8 @@ class HapTableApp(App):
         if log is not None:
             lines = [f"sample {r.clock}: relay {r.channel} {'closed' if r.closed else 'opened'} at "
                      f"{r.level_v[0]:.1f} V / {r.level_v[1]:.1f} V" for r in log[-8:]]
-            self.query_one("#relaylog", Static).update("switch log:\n" + "\n".join(lines))
+            for w in self.screen.query("#relaylog"):
+                w.update("switch log:\n" + "\n".join(lines))
 
     def on_switch_changed(self, event: Switch.Changed) -> None:
         ch = int(event.switch.id.split("-")[1])

@@ -19,10 +19,10 @@ def describe(status: dict) -> tuple[str, str]:
 
 
 class SafetyBar(Static):
-    """Docked at the bottom of every screen."""
+    """One line above the footer of every screen."""
 
     DEFAULT_CSS = """
-    SafetyBar { dock: bottom; height: 1; background: $panel; color: $text; }
+    SafetyBar { height: 1; background: $panel; color: $text; }
     SafetyBar.live { background: $warning; color: $background; text-style: bold; }
     SafetyBar.estop { background: $error; color: $text; text-style: bold; }
     SafetyBar.nooutputs { background: $error-darken-2; }
