@@ -313,7 +313,7 @@ def draw_flow_hand(s: dict) -> list[dict]:
         out.append(
             {
                 "p": "text",
-                "xy": [cx, y0 - 14],
+                "xy": [cx, cy + size / 2 + 45.0],
                 "text": s["message"],
                 "size_mm": 12,
                 "color": "grey",
