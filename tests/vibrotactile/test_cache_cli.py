@@ -141,3 +141,20 @@ def test_prepare_builds_only_what_is_asked(tmp_path, ss_map):
     assert kinds == ["handflow", "pair", "pair", "tables"]
     again = prepare(ss_map, Perception(), pairs=[(51, 52)], cache_dir=tmp_path)  # from the cache
     assert again["pairs"][(51, 52)] == out["pairs"][(51, 52)]
+
+
+def test_plugin_registers_commands_sections_and_benchmark(plugins):
+    assert {"frf", "tables", "flow", "point"} <= set(plugins.commands)
+    assert "vibration" in plugins.benchmarks
+    assert {"perception", "vibrotactile"} <= set(plugins.sections)
+
+
+def test_profile_perception_section_is_validated(plugins, tmp_path):
+    from console.errors import ProfileError
+    from console.profile import validate
+
+    p = tmp_path / "bad.toml"
+    with pytest.raises(ProfileError):
+        validate({"perception": {"jnd_db": -1.0}}, p, plugins)
+    data = validate({"perception": {"jnd_db": 2.0}}, p, plugins)
+    assert data["perception"]["jnd_db"] == 2.0 and len(data["perception"]["freq_hz"]) == 9
