@@ -757,26 +757,28 @@ class ProjectorService:
         headless: bool = False,
         providers: dict[str, Callable[[Any], Any]] | None = None,
         log_path: Path | str | None = None,
+        extra_args: Iterable[str] = (),
     ) -> ProjectorService:
-        """Settings from the profile's [projector] section, scenes from the plugins."""
+        """Settings from the profile's [projector] section, scenes from the plugins.
+
+        The projector's output goes to ``projector.log`` beside the socket unless
+        ``log_path`` says otherwise."""
         sock = socket_path_for(profile)
-        get = (
-            (lambda k, d: profile.get(f"projector.{k}", d))
-            if profile is not None
-            else (lambda k, d: d)
-        )
+
+        def get(key: str, default: Any) -> Any:
+            return profile.get(f"projector.{key}", default) if profile is not None else default
+
+        path = getattr(profile, "path", None)
         return cls(
             socket_path=sock,
-            command=projector_command(
-                sock, profile_path=getattr(profile, "path", None), headless=headless
-            ),
+            command=projector_command(sock, profile_path=path, headless=headless, extra=extra_args),
             scenes={name: reg.factory for name, reg in plugins.of("scene").items()},
             profile=profile,
             providers=providers,
             heartbeat_s=get("heartbeat_s", HEARTBEAT_S),
             peer_timeout_s=get("peer_timeout_s", PEER_TIMEOUT_S),
             backoff_max_s=get("restart_backoff_max_s", 5.0),
-            log_path=log_path,
+            log_path=log_path or sock.parent / "projector.log",
         )
 
     def start(self) -> None:

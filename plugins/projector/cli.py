@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -83,6 +84,22 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--exit-without-console-s", type=float, default=0.0, help=argparse.SUPPRESS)
     parser.add_argument(
         "--list-scenes", action="store_true", help="list the scenes and what they need"
+    )
+    d = parser.add_argument_group("drive the projector as the console does")
+    d.add_argument(
+        "--show",
+        metavar="SCENE",
+        default=None,
+        help="start (or adopt) the projector and show SCENE (with --event)",
+    )
+    d.add_argument(
+        "--seconds", type=float, default=None, help="with --show: how long (default: until Ctrl-C)"
+    )
+    d.add_argument(
+        "--snapshot", metavar="PNG", default=None, help="with --show: save what the projector shows"
+    )
+    d.add_argument(
+        "--keep", action="store_true", help="with --show: leave the projector running at the end"
     )
     g = parser.add_argument_group("calibration (table mm -> projector pixels)")
     g.add_argument(
@@ -218,6 +235,65 @@ def screenshot(args: Any, ctx: Any) -> int:
     return 0
 
 
+def show(args: Any, ctx: Any) -> int:
+    """Be a console: start or adopt the projector, show a scene, wait, then stop it."""
+    import time
+
+    from console.runtime.projector_link import (
+        ProjectorService,
+        projector_command,
+        socket_path_for,
+    )
+
+    prof = _profile(ctx)
+    extra: list[str] = []
+    if args.size:
+        extra += ["--size", f"{args.size[0]}x{args.size[1]}"]
+    if args.screen is not None:
+        extra += ["--screen", str(args.screen)]
+    if args.calibration:
+        extra += ["--calibration", str(Path(args.calibration).resolve())]
+    sock = Path(args.socket).resolve() if args.socket else socket_path_for(prof)
+    svc = ProjectorService(
+        socket_path=sock,
+        command=projector_command(
+            sock, profile_path=getattr(prof, "path", None), headless=args.headless, extra=extra
+        ),
+        scenes=scene_factories(ctx),
+        profile=prof,
+        heartbeat_s=float(_opt(args, ctx, "heartbeat_s", "heartbeat_s")),
+        peer_timeout_s=float(_opt(args, ctx, "peer_timeout_s", "peer_timeout_s")),
+        log_path=sock.parent / "projector.log",
+    )
+    try:
+        svc.start()
+        if not svc.link.wait_connected(30):
+            st = svc.status()
+            why = st.get("last_error") or st.get("last_reason") or "no answer"
+            raise UserError(f"projector: did not come up ({why}); see {st.get('log')}")
+        svc.start_scene(args.show, args.event)
+        if not svc.wait_drawn(20):
+            raise UserError(
+                "projector: connected but did not draw the scene within 20 s; see its log"
+            )
+        st = svc.status()
+        how = "adopted" if st.get("adopted") else "started"
+        print(f"showing {args.show} on projector pid {st['pid']} ({how})", flush=True)
+        if args.snapshot:
+            if not svc.snapshot(args.snapshot, 20):
+                raise UserError(f"projector: no snapshot written to {args.snapshot}")
+            print(f"wrote {args.snapshot}", flush=True)
+        deadline = None if args.seconds is None else time.monotonic() + args.seconds
+        with contextlib.suppress(KeyboardInterrupt):
+            while deadline is None or time.monotonic() < deadline:
+                time.sleep(0.1)
+        svc.stop_scene()
+        svc.wait_drawn(5)
+    finally:
+        svc.close(stop_projector=not args.keep)
+    return 0
+
+
 def run(args: Any, ctx: Any) -> int:
     if args.list_scenes:
         for name, f in sorted(scene_factories(ctx).items()):
@@ -232,6 +308,8 @@ def run(args: Any, ctx: Any) -> int:
         return calibrate(args, ctx)
     if args.screenshot:
         return screenshot(args, ctx)
+    if args.show:
+        return show(args, ctx)
     from plugins.projector.app import ProjectorOptions
     from plugins.projector.app import run as run_projector
 

@@ -343,3 +343,22 @@ def test_a_projector_that_cannot_start_is_retried_and_its_error_reported(sock_pa
         assert "cannot open a window" in st["last_error"]
     finally:
         svc.close()
+
+
+def test_show_command_starts_a_projector_shows_the_scene_and_stops_it(tmp_path, capsys):
+    import cv2
+
+    from plugins.projector.cli import main
+
+    sock, png = tmp_path / "p.sock", tmp_path / "shown.png"
+    argv = ["--show", "grid", "--event", '{"type": "audition", "point": 51}', "--headless"]
+    argv += ["--size", "320x200", "--socket", str(sock), "--seconds", "0", "--snapshot", str(png)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "showing grid on projector pid" in out and "(started)" in out
+    pid = int(out.split("pid ")[1].split()[0])
+    img = cv2.imread(str(png))
+    yellow = (img[..., 2] > 200) & (img[..., 1] > 190) & (img[..., 0] < 120)
+    assert yellow.sum() > 20  # the auditioned point
+    wait_until(lambda: not alive(pid), 10, "the projector to stop")
+    assert not sock.exists()
