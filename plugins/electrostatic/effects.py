@@ -60,9 +60,8 @@ def stimulus_report(
     try:
         th = threshold_check(vpp, freq_hz, es, waveform)
     except ValueError as exc:
-        raise UserError(
-            f"[electrostatic] threshold table: {exc}; give equal-length lists"
-        ) from None
+        key = "threshold_square_vpp" if waveform == "square" else "threshold_vpp"
+        raise UserError(f"[electrostatic] threshold_freq_hz / {key}: {exc}") from None
     return {"vpp": vpp, "waveform": waveform, **out, **th}
 
 

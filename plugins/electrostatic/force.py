@@ -165,8 +165,14 @@ def threshold_vpp(
     """
     fx = np.asarray(freqs_hz, dtype=float)
     ty = np.asarray(thresholds_vpp, dtype=float)
-    if fx.size == 0 or fx.size != ty.size or np.any(np.diff(fx) <= 0) or np.any(ty <= 0):
-        raise ValueError("threshold table: frequencies must increase and thresholds be > 0")
+    if fx.size == 0 or fx.size != ty.size:
+        raise ValueError(
+            f"{ty.size} thresholds for {fx.size} frequencies; give one threshold per frequency"
+        )
+    if np.any(np.diff(fx) <= 0):
+        raise ValueError("frequencies must increase strictly")
+    if np.any(ty <= 0):
+        raise ValueError("thresholds must be > 0")
     f = np.clip(np.asarray(freq_hz, dtype=float), fx[0], fx[-1])
     db = np.interp(np.log(f), np.log(fx), 20 * np.log10(ty))
     return 10 ** (db / 20)

@@ -125,3 +125,16 @@ def test_audition_plays_through_the_outputs(capsys):
 
     piezo, screen = map(float, re.search(r"piezo ([\d.]+) V, screen ([\d.]+) V", out).groups())
     assert 30.0 < piezo <= 60.0 and screen == pytest.approx(50.0, abs=0.2)
+
+
+def test_a_bad_threshold_table_in_the_profile_is_named(tmp_path, capsys):
+    from console.profile import PROJECT_PROFILES
+
+    prof = tmp_path / "lab.toml"
+    prof.write_text(
+        (PROJECT_PROFILES / "sim.toml").read_text()
+        + "\n[electrostatic]\nthreshold_freq_hz = [50.0, 100.0]\nthreshold_vpp = [30.0]\n"
+    )
+    assert main(["-p", str(prof), "knob", "--forces"]) == 2
+    err = capsys.readouterr().err
+    assert "threshold_vpp" in err and "1 thresholds for 2 frequencies" in err
