@@ -1,0 +1,170 @@
+"""Latency monitor: per-stage ring buffers of durations, frame rate and drop counters.
+
+The frame loop stamps each frame as it passes a stage (``Frame.stamp(stage, t_s)`` on the
+``time.monotonic()`` clock). ``LatencyMonitor.record(frame)`` turns the stamps into
+per-stage durations (each stamp minus the one before it) and an end-to-end time (first
+stamp to last; ``end_to_end`` only for frames that reached the last stage). ``snapshot()`` is what the console shows: p50/p99/max per stage in
+milliseconds, fps, frames seen and dropped.
+
+Stage names are whatever the loop stamps; the loop uses ``arrival`` (the frame was taken
+from the camera), then ``vision``, ``classify``, ``scene``, ``effect``, ``scheduled``
+(the first output sample of the frame's effect was handed to the output scheduler).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterable
+
+import numpy as np
+
+from console.types import Frame
+
+#: The stage a frame's processing is measured from (the camera thread stamps it).
+ARRIVAL = "arrival"
+#: Arrival to the end stage's stamp (default the last stage; the loop uses ``scheduled``),
+#: for frames that reached it: from frame arrival to the first output sample scheduled.
+END_TO_END = "end_to_end"
+#: Arrival to the last stamp of every frame (the processing time a frame cost).
+PROCESSING = "processing"
+
+
+class Ring:
+    """A fixed-size ring of float samples (seconds): O(1) append, no allocation."""
+
+    def __init__(self, size: int) -> None:
+        if size < 1:
+            raise ValueError(f"ring size {size}: must be at least 1")
+        self._buf = np.zeros(int(size))
+        self._n = 0  # samples ever added
+
+    def add(self, x_s: float) -> None:
+        self._buf[self._n % self._buf.size] = x_s
+        self._n += 1
+
+    def values(self) -> np.ndarray:
+        """The samples held (oldest first is not guaranteed; order does not matter)."""
+        return self._buf[: min(self._n, self._buf.size)].copy()
+
+    @property
+    def count(self) -> int:
+        return self._n
+
+
+def stage_durations_s(stamps_s: dict[str, float], order: Iterable[str]) -> dict[str, float]:
+    """Duration of each stamped stage: its stamp minus the previous stamped stage's.
+
+    Stages in ``order`` that the frame did not pass are skipped (a frame without a hand
+    has no ``effect`` stamp), so durations always add up to the end-to-end time.
+    """
+    out: dict[str, float] = {}
+    prev: float | None = None
+    for name in order:
+        t = stamps_s.get(name)
+        if t is None:
+            continue
+        if prev is not None:
+            out[name] = t - prev
+        prev = t
+    return out
+
+
+def percentiles_ms(samples_s: np.ndarray) -> dict[str, float]:
+    """n, p50, p99 and max in milliseconds (NaN when empty)."""
+    a = np.asarray(samples_s, dtype=float) * 1e3
+    if a.size == 0:
+        nan = float("nan")
+        return {"n": 0, "p50_ms": nan, "p99_ms": nan, "max_ms": nan}
+    p50, p99 = np.percentile(a, [50, 99])
+    return {"n": int(a.size), "p50_ms": float(p50), "p99_ms": float(p99), "max_ms": float(a.max())}
+
+
+class LatencyMonitor:
+    """Per-stage p50/p99 over the last ``size`` frames, fps and drops. Thread-safe."""
+
+    def __init__(self, stages: Iterable[str], size: int = 1200, end_stage: str | None = None):
+        self.order = (ARRIVAL, *[s for s in stages if s != ARRIVAL])
+        self.end_stage = end_stage or self.order[-1]
+        if self.end_stage not in self.order:
+            raise ValueError(f"end stage {self.end_stage!r} is not one of {self.order}")
+        self.size = int(size)
+        self._lock = threading.Lock()
+        self._rings: dict[str, Ring] = {
+            s: Ring(size) for s in (*self.order[1:], END_TO_END, PROCESSING)
+        }
+        self._capture = Ring(size)  # camera capture -> arrival (driver latency)
+        self._arrivals = Ring(121)  # arrival times for the frame rate
+        self._last_arrival: float | None = None
+        self.frames = 0
+        self.dropped_queue = 0  # frames the loop discarded (processing too slow)
+        self.dropped_camera = 0  # frames the camera reports lost
+        self.errors = 0  # frames whose processing raised
+
+    def arrived(self, frame: Frame) -> None:
+        """A frame was taken from the camera (called by the camera thread)."""
+        t = frame.stamps_s.get(ARRIVAL)
+        if t is None:
+            return
+        with self._lock:
+            self._arrivals.add(t)
+            self._last_arrival = t
+            if frame.t_capture_s and t >= frame.t_capture_s:
+                self._capture.add(t - frame.t_capture_s)
+
+    def record(self, frame: Frame) -> dict[str, float]:
+        """Add one processed frame's stage durations; returns them (seconds)."""
+        d = stage_durations_s(frame.stamps_s, self.order)
+        stamped = [frame.stamps_s[s] for s in self.order if s in frame.stamps_s]
+        with self._lock:
+            self.frames += 1
+            for name, x in d.items():
+                self._rings[name].add(x)
+            if len(stamped) >= 2 and ARRIVAL in frame.stamps_s:
+                self._rings[PROCESSING].add(stamped[-1] - stamped[0])
+                if self.end_stage in frame.stamps_s:
+                    self._rings[END_TO_END].add(
+                        frame.stamps_s[self.end_stage] - frame.stamps_s[ARRIVAL]
+                    )
+        return d
+
+    def dropped(self, n: int = 1, *, camera: bool = False) -> None:
+        with self._lock:
+            if camera:
+                self.dropped_camera += n
+            else:
+                self.dropped_queue += n
+
+    def failed(self) -> None:
+        with self._lock:
+            self.errors += 1
+
+    def fps(self) -> float:
+        """Frames arriving per second over the last (up to) 120 frames."""
+        with self._lock:
+            t = np.sort(self._arrivals.values())
+        if t.size < 2 or t[-1] <= t[0]:
+            return 0.0
+        return float((t.size - 1) / (t[-1] - t[0]))
+
+    def snapshot(self) -> dict:
+        """Everything the console shows, as plain JSON values."""
+        with self._lock:
+            rings = {k: r.values() for k, r in self._rings.items()}
+            capture = self._capture.values()
+            counts = {
+                "frames": self.frames,
+                "dropped_queue": self.dropped_queue,
+                "dropped_camera": self.dropped_camera,
+                "errors": self.errors,
+            }
+        stages = {name: percentiles_ms(rings[name]) for name in self.order[1:]}
+        return {
+            "fps": round(self.fps(), 2),
+            **counts,
+            "stages": stages,
+            "end_stage": self.end_stage,
+            "end_to_end": percentiles_ms(rings[END_TO_END]),
+            "processing": percentiles_ms(rings[PROCESSING]),
+            "capture_to_arrival": percentiles_ms(capture),
+            "window_frames": self.size,
+        }

@@ -1,0 +1,99 @@
+"""The paper's two demos end to end, and the interaction-loop benchmarks.
+
+``haptable demo flow|knob``: camera -> vision -> gestures -> scene -> effect -> outputs,
+on the twin (a scripted hand) or the real table. Benchmarks: ``haptable bench loop``
+(per-stage and end-to-end latency) and ``haptable bench soak`` (long run: drops, RSS,
+underruns). Profile sections: ``[runtime]`` (frame loop, watchdog) and ``[demos]``.
+
+Public API (for the console): ``start_demo(name, profile, plugins, outputs, **params)
+-> DemoRun`` with ``stop()`` and ``snapshot()``; ``DEMOS``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from console.hookspecs import hookimpl
+from console.schema import Field
+
+DEMOS = ("flow", "knob")
+
+RUNTIME_FIELDS = {
+    "watchdog_ms": Field(
+        "float",
+        250.0,
+        min=20,
+        max=10000,
+        help="silence the outputs (e-stop) when the frame loop is stuck this long "
+        "(a frame in one stage, or no frame from the camera)",
+    ),
+    "queue_frames": Field(
+        "int", 2, min=1, max=64, help="frames waiting for processing; the oldest is dropped"
+    ),
+    "latency_window_frames": Field(
+        "int", 1200, min=10, max=1000000, help="frames the latency monitor's p50/p99 cover"
+    ),
+}
+
+DEMOS_FIELDS = {
+    "flow_map": Field(
+        "path",
+        "",
+        must_exist=False,
+        help="vibration map the flow demo uses (beside the profile); empty on the twin: "
+        "measured once on the plate twin and cached",
+    ),
+    "flow_direction": Field(
+        "str", "right", choices=("left", "right", "up", "down"), help="flow direction"
+    ),
+    "still_mm": Field("float", 12.0, min=1, max=200, help="a resting hand moves less than this"),
+    "still_ms": Field("float", 300.0, min=0, max=10000, help="... for this long to trigger"),
+    "knob_condition": Field(
+        "str", "HD+CF", help="knob feedback condition (V, HD, HD+CF, HD+VF, variants)"
+    ),
+}
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    register("runtime", RUNTIME_FIELDS, help="the interaction loop: queue, watchdog, monitor")
+    register("demos", DEMOS_FIELDS, help="the flow and knob demos")
+
+
+def start_demo(name: str, profile: Any, plugins: Any, outputs: Any, **params: Any):
+    """Start a demo; see ``plugins.demos.run.start_demo``."""
+    from .run import start_demo as _start
+
+    return _start(name, profile, plugins, outputs, **params)
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    from . import cli
+
+    register(
+        "demo",
+        cli.configure,
+        cli.run,
+        help="run the flow or knob demo end to end (twin: a scripted hand)",
+    )
+
+
+@hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def loop(ctx, quick: bool) -> dict:
+        from .bench import run_loop
+
+        return run_loop(ctx, quick)
+
+    def soak(ctx, quick: bool, minutes: float | None = None) -> dict:
+        from .bench import run_soak
+
+        return run_soak(ctx, quick, minutes=minutes)
+
+    register(
+        "loop",
+        loop,
+        help="frame arrival -> first output sample scheduled: per-stage and end-to-end p50/p99",
+    )
+    register("soak", soak, help="knob demo for --minutes at 60 fps: dropped frames, RSS, underruns")

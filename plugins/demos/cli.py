@@ -1,0 +1,85 @@
+"""``haptable demo flow|knob``: run a demo end to end and show the loop's latency."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from console.errors import UserError
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "demo", choices=("flow", "knob", "soak"), help="which demo (soak: the benchmark)"
+    )
+    p.add_argument("--condition", default=None, help="knob condition (default: [demos])")
+    p.add_argument("--sectors", type=int, default=None, help="knob sectors (default: [knob])")
+    p.add_argument(
+        "--direction", choices=("left", "right", "up", "down"), default=None, help="flow direction"
+    )
+    p.add_argument("--seconds", type=float, default=10.0, help="run this long (0: until Ctrl-C)")
+    p.add_argument("--minutes", type=float, default=None, help="soak: run this long")
+    p.add_argument("--no-script", action="store_true", help="twin: no scripted hand")
+    p.add_argument("--tuio", action="store_true", help="also stream TUIO 1.1 ([tuio] host/port)")
+    p.add_argument("--json", action="store_true", help="print the final snapshot as JSON")
+
+
+def _line(snap: dict) -> str:
+    lat = snap["latency"]
+    e2e = lat["end_to_end"]
+    extra = ""
+    if "knob" in snap:
+        k = snap["knob"]
+        extra = f"item {k['item']:>3}  angle {k['angle_deg']:7.1f} deg  crossings {k['crossings']}"
+    elif "flow" in snap:
+        extra = f"flows {snap['flow']['flows']} ({snap['flow']['direction']})"
+    return (
+        f"{snap['uptime_s']:6.1f} s  {lat['fps']:5.1f} fps  frame->output p50 "
+        f"{e2e['p50_ms']:.1f} p99 {e2e['p99_ms']:.1f} ms  dropped {lat['dropped_queue']}"
+        f"+{lat['dropped_camera']}  {extra}"
+    )
+
+
+def run(args, ctx) -> int:
+    if args.demo == "soak":
+        from .bench import run_soak
+
+        out = run_soak(ctx, False, minutes=args.minutes if args.minutes is not None else 10.0)
+        print(json.dumps(out, indent=2, default=float) if args.json else out)
+        return 0
+    from .run import start_demo
+
+    with ctx.outputs(fast=False) as out:
+        run_ = start_demo(
+            args.demo,
+            ctx.profile,
+            ctx.pm,
+            out,
+            script=not args.no_script,
+            condition=args.condition,
+            sectors=args.sectors,
+            direction=args.direction,
+            tuio=True if args.tuio else None,
+        )
+        t0 = time.monotonic()
+        try:
+            while not args.seconds or time.monotonic() - t0 < args.seconds:
+                time.sleep(1.0)
+                snap = run_.snapshot()
+                if not args.json:
+                    print(_line(snap), file=sys.stderr, flush=True)
+                if snap["watchdog"]["tripped"]:
+                    raise UserError(snap["watchdog"]["reason"])
+        except KeyboardInterrupt:
+            pass
+        finally:
+            run_.stop()
+        snap = run_.snapshot()
+        snap["outputs"] = {"audio": out.status()["audio"], "gate": out.status()["gate"]}
+    if args.json:
+        print(json.dumps(snap, indent=2, default=str))
+    else:
+        print(_line(snap))
+    return 0

@@ -1,0 +1,253 @@
+"""Start and stop a demo: camera, vision, gestures, the demo's stages, watchdog, TUIO.
+
+``start_demo("flow"|"knob", profile, plugins, outputs, **params) -> DemoRun`` is what the
+console and ``haptable demo`` call; ``DemoRun.stop()`` ends it (outputs ramp down or
+finish their plan; the camera is closed if the run opened it); ``DemoRun.snapshot()``
+is the latency monitor and the demo's state as JSON values.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+from console.runtime.latency import LatencyMonitor
+from console.runtime.loop import FrameLoop
+from console.runtime.stages import (
+    GestureStage,
+    StillHand,
+    VisionStage,
+    learn_background,
+    open_camera,
+    open_classifier,
+)
+from console.runtime.watchdog import Watchdog
+
+log = logging.getLogger("haptable.demos")
+
+DEMOS = ("flow", "knob")
+
+
+def script_twin(camera: Any, demo: str, profile: Any, *, hold_frames: int | None = None) -> bool:
+    """On the camera twin: a scripted hand performing the demo, looping. False if the
+    camera is not scriptable (real hardware: the operator's hand does it)."""
+    if not callable(getattr(camera, "set_script", None)):
+        return False
+    from plugins.twin.camera import SequenceScript
+
+    fps = float(profile.get("camera.fps") or 60.0)
+    table = (float(profile.get("table.width_mm")), float(profile.get("table.height_mm")))
+    subject = profile.get("twin_camera.subject") or "s1"
+    seed = int(profile.get("twin_camera.seed") or 0)
+    if demo == "flow":
+        items = [("open_hand", subject, None, hold_frames or int(4 * fps))]
+        gap = int(1.0 * fps)
+    else:
+        items = [("rotate", subject, None, hold_frames or int(1.5 * fps))]
+        gap = int(0.5 * fps)
+    camera.set_script(
+        SequenceScript(items, table_mm=table, fps=fps, gap_frames=gap, loop=True, seed=seed)
+    )
+    return True
+
+
+@dataclass
+class DemoRun:
+    """A running demo. ``stop()`` is safe to call twice."""
+
+    name: str
+    demo: Any
+    loop: FrameLoop
+    watchdog: Watchdog
+    camera: Any
+    owns_camera: bool
+    outputs: Any
+    sinks: list = field(default_factory=list)
+    t_start_s: float = field(default_factory=time.monotonic)
+    stopped: bool = False
+
+    @property
+    def monitor(self) -> LatencyMonitor:
+        return self.loop.monitor
+
+    def stop(self) -> None:
+        if self.stopped:
+            return
+        self.stopped = True
+        self.watchdog.stop()
+        self.loop.stop()
+        try:
+            self.demo.stop()
+        finally:
+            for s in self.sinks:
+                close = getattr(s, "close", None)
+                if close:
+                    try:
+                        close()
+                    except Exception:
+                        log.exception("sink close failed")
+            if self.owns_camera:
+                self.camera.close()
+
+    def snapshot(self) -> dict:
+        """Latency monitor, watchdog, demo state and camera status (JSON values)."""
+        try:
+            cam = self.camera.status()
+        except Exception as exc:
+            cam = {"error": repr(exc)}
+        out = {
+            "demo": self.name,
+            "running": not self.stopped and self.loop.running,
+            "uptime_s": round(time.monotonic() - self.t_start_s, 3),
+            "latency": self.monitor.snapshot(),
+            "watchdog": {
+                "limit_ms": self.watchdog.limit_s * 1e3,
+                "tripped": self.watchdog.tripped,
+                "reason": self.watchdog.reason,
+            },
+            "camera": cam,
+            "last_error": self.loop.last_error,
+        }
+        out.update(demo_state(self.demo))
+        return out
+
+    def __enter__(self) -> DemoRun:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+
+def demo_state(demo: Any) -> dict:
+    if demo.name == "knob":
+        s = demo.session
+        return {
+            "knob": {
+                "condition": demo.condition,
+                "item": int(s.knob.item),
+                "angle_deg": float(s.tracker.angle_deg),
+                "touching": bool(s.tracker.touching),
+                "crossings": len(demo.crossings),
+            }
+        }
+    evs = [{k: v for k, v in e.items() if k != "report"} for e in demo.events[-10:]]
+    return {"flow": {"direction": demo.current_direction(), "flows": len(demo.events), "last": evs}}
+
+
+def flow_map_path(profile: Any, cache_dir: Path | None) -> Path:
+    from .adapters import twin_map_path
+
+    raw = profile.get("demos.flow_map") or ""
+    if raw:
+        p = Path(profile.resolve(raw)) if hasattr(profile, "resolve") else Path(raw)
+        if not p.is_file():
+            raise UserError(
+                f"[demos] flow_map = {raw!r}: file not found ({p}); give a vibration map "
+                "(haptable frf import ...) or leave it empty on the twin"
+            )
+        return p
+    if profile.get("camera.driver") != "twin":
+        raise UserError(
+            "[demos] flow_map is empty: give the table's vibration map (haptable frf import ...)"
+        )
+    return twin_map_path(profile, cache_dir)
+
+
+def start_demo(
+    name: str,
+    profile: Any,
+    plugins: Any,
+    outputs: Any,
+    *,
+    camera: Any = None,
+    script: bool = True,
+    condition: str | None = None,
+    sectors: int | None = None,
+    direction: str | None = None,
+    flow_plans: Any = None,
+    prepare: bool = True,
+    cache_dir: Path | None = None,
+    sinks: list | None = None,
+    tuio: bool | None = None,
+) -> DemoRun:
+    """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
+
+    ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
+    TUIO too (default: ``[tuio] enabled``).
+    """
+    if name not in DEMOS:
+        raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
+    dm = profile.section("demos")
+    rt = profile.section("runtime")
+    owns = camera is None
+    if owns:
+        camera = open_camera(profile, plugins)
+    try:
+        if script:
+            script_twin(camera, name, profile)
+        clf = open_classifier(profile, plugins)
+        learn_background(camera, clf)
+        still = StillHand(
+            still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
+        )
+        if name == "knob":
+            from .knob import KnobDemo
+
+            demo = KnobDemo(
+                profile,
+                plugins,
+                outputs,
+                condition=condition or dm.get("knob_condition", "HD+CF"),
+                sectors=sectors or None,
+            )
+        else:
+            from .adapters import flow_effect
+            from .flow import FlowDemo
+
+            plans = flow_plans or flow_effect(
+                plugins, profile, flow_map_path(profile, cache_dir), cache_dir
+            )
+            demo = FlowDemo(
+                profile,
+                plugins,
+                outputs,
+                plans,
+                direction=direction or dm.get("flow_direction", "right"),
+                prepare=prepare,
+            )
+        stages = [
+            ("vision", VisionStage(clf)),
+            ("classify", GestureStage(clf, still)),
+            *demo.stage_fns(),
+        ]
+        mon = LatencyMonitor(
+            [n for n, _ in stages],
+            size=int(rt.get("latency_window_frames", 1200)),
+            end_stage="scheduled",
+        )
+        all_sinks = list(sinks or [])
+        if tuio or (tuio is None and profile.get("tuio.enabled")):
+            from plugins.tuio import make_sender
+
+            all_sinks.append(make_sender(profile, force=True))
+        loop = FrameLoop(
+            camera,
+            stages,
+            monitor=mon,
+            queue_size=int(rt.get("queue_frames", 2)),
+            sinks=all_sinks,
+            name=name,
+        )
+        wd = Watchdog(loop, outputs.estop, float(rt.get("watchdog_ms", 250)) / 1e3)
+        demo.start()
+        loop.start()
+        wd.start()
+    except BaseException:
+        if owns:
+            camera.close()
+        raise
+    return DemoRun(name, demo, loop, wd, camera, owns, outputs, all_sinks)

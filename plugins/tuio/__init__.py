@@ -1,0 +1,97 @@
+"""TUIO 1.1 output: the table's contacts and hands for existing tabletop applications.
+
+Off by default. Profile section ``[tuio]``: ``enabled``, ``host``, ``port`` (default
+127.0.0.1:3333, the TUIO convention). Contacts are ``/tuio/2Dcur``, hands
+``/tuio/2Dblb``, recognised gestures ``/haptable/gesture`` (see ``sender.py`` for the
+message layout). ``haptable tuio`` runs the camera and vision alone and streams TUIO;
+the demos (``haptable demo``) stream it too when ``[tuio] enabled = true``.
+
+Public API: ``make_sender(profile, host=None, port=None)`` -> a frame sink, or
+``None`` when disabled; ``GESTURE_ADDRESS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+from console.hookspecs import hookimpl
+from console.schema import Field
+
+GESTURE_ADDRESS = "/haptable/gesture"
+
+FIELDS = {
+    "enabled": Field("bool", False, help="send TUIO 1.1 (contacts, hands, gestures) over UDP"),
+    "host": Field("str", "127.0.0.1", help="where the TUIO client listens"),
+    "port": Field("int", 3333, min=1, max=65535, help="its UDP port (TUIO default 3333)"),
+    "source": Field("str", "haptable", help="source name in the TUIO 1.1 source message"),
+}
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    register("tuio", FIELDS, help="TUIO 1.1 output over OSC/UDP for tabletop applications")
+
+
+def make_sender(profile: Any, *, host: str | None = None, port: int | None = None, force=False):
+    """A TUIO frame sink for the profile, or ``None`` when ``[tuio] enabled`` is false
+    (``force`` sends anyway, e.g. ``haptable tuio``)."""
+    if not (force or profile.get("tuio.enabled")):
+        return None
+    from .sender import TuioSender
+
+    return TuioSender(
+        host or profile.get("tuio.host") or "127.0.0.1",
+        int(port or profile.get("tuio.port") or 3333),
+        table_mm=(float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))),
+        image_px=(
+            int(profile.get("camera.width_px", 640)),
+            int(profile.get("camera.height_px", 480)),
+        ),
+        source=profile.get("tuio.source") or "haptable",
+    )
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--host", default=None, help="TUIO client host (default: profile)")
+    p.add_argument("--port", type=int, default=None, help="TUIO client port (default: profile)")
+    p.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: Ctrl-C)")
+    p.add_argument("--json", action="store_true", help="print a summary as JSON at the end")
+
+
+def run(args, ctx) -> int:
+    from console.errors import UserError
+    from console.runtime.stages import open_camera, vision_loop
+
+    sender = make_sender(ctx.profile, host=args.host, port=args.port, force=True)
+    camera = open_camera(ctx.profile, ctx.pm)
+    loop = vision_loop(ctx.profile, ctx.pm, camera, sinks=[sender]).start()
+    print(
+        f"TUIO 1.1 to {sender.host}:{sender.port} (/tuio/2Dcur, /tuio/2Dblb, {GESTURE_ADDRESS}); "
+        "Ctrl-C stops",
+        flush=True,
+    )
+    t0 = time.monotonic()
+    try:
+        while not args.seconds or time.monotonic() - t0 < args.seconds:
+            time.sleep(0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        loop.stop()
+        sender.close()
+        camera.close()
+    if loop.monitor.frames == 0 and args.seconds:
+        raise UserError("tuio: no camera frame arrived; check [camera] with `haptable doctor`")
+    out = {"bundles_sent": sender.sent, "frames": loop.monitor.frames, "fseq": sender.fseq}
+    print(json.dumps(out, indent=2) if args.json else out)
+    return 0
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    register(
+        "tuio", configure, run, help="stream the table's contacts, hands, gestures as TUIO 1.1"
+    )
