@@ -133,7 +133,7 @@ def test_a_bad_threshold_table_in_the_profile_is_named(tmp_path, capsys):
     prof = tmp_path / "lab.toml"
     prof.write_text(
         (PROJECT_PROFILES / "sim.toml").read_text()
-        + "\n[electrostatic]\nthreshold_freq_hz = [50.0, 100.0, 200.0]\nthreshold_vpp = [30.0, 40.0]\n"
+        + "\n[electrostatic]\nthreshold_freq_hz = [50.0, 100.0, 200.0]\nthreshold_vpp = [30.0, 40.0]\nthreshold_square_vpp = [30.0, 40.0, 50.0]\n"
     )
     assert main(["-p", str(prof), "knob", "--forces"]) == 2
     err = capsys.readouterr().err
