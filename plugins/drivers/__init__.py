@@ -71,3 +71,14 @@ def haptable_register_cameras(register: Any) -> None:
         description="V4L2/OpenCV camera (PS3 Eye), 8-bit grayscale, reconnects after unplug",
         probe=camera_opencv.probe,
     )
+
+
+@hookimpl
+def haptable_register_benchmarks(register: Any) -> None:
+    from plugins.drivers import bench_audio
+
+    register(
+        "audio-output",
+        bench_audio.run,
+        help="callback period, gate fill time, underruns and latency of [audio] driver (silent)",
+    )

@@ -13,15 +13,19 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import time
+from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from console.bench import summarize_s
 from console.types import BlockSource, DeviceStatus
 from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
+TIMING_WINDOW = 2000  # callbacks kept for the period / fill-time statistics
 
 _open_streams = 0  # streams this process holds open; PortAudio is only rescanned when 0
 _open_lock = threading.Lock()
@@ -141,6 +145,9 @@ class SounddeviceOutput:
         self._underruns = 0
         self._blocks = 0
         self._callback_errors = 0
+        self._t_last_s: float | None = None
+        self._periods_s: deque[float] = deque(maxlen=TIMING_WINDOW)  # between callbacks
+        self._fills_s: deque[float] = deque(maxlen=TIMING_WINDOW)  # inside source.fill
 
     # ------------------------------------------------------------------ lifecycle
     def start(self, source: BlockSource) -> None:
@@ -151,6 +158,9 @@ class SounddeviceOutput:
         sd = self._sd or load_sounddevice()
         index, self._label = locate(sd, self.device)
         self._source = source
+        self._t_last_s = None
+        self._periods_s.clear()
+        self._fills_s.clear()
         self._silent = False
         self._stopping = False
         self._error = ""
@@ -227,6 +237,10 @@ class SounddeviceOutput:
 
     # ------------------------------------------------------------------ callbacks
     def _callback(self, outdata: np.ndarray, frames: int, time_info: Any, status: Any) -> None:
+        t0_s = time.perf_counter()
+        if self._t_last_s is not None:
+            self._periods_s.append(t0_s - self._t_last_s)
+        self._t_last_s = t0_s
         if getattr(status, "output_underflow", False):
             self._underruns += 1
         self._blocks += 1
@@ -235,6 +249,7 @@ class SounddeviceOutput:
             return
         try:
             self._source.fill(outdata)
+            self._fills_s.append(time.perf_counter() - t0_s)
             if not np.all(np.isfinite(outdata)) or float(np.max(np.abs(outdata))) > 1.0:
                 raise ValueError("source produced samples outside [-1, 1] or not finite")
         except Exception as exc:  # never let the audio thread die with signal on the wire
@@ -269,7 +284,8 @@ class SounddeviceOutput:
 
     # ------------------------------------------------------------------ status
     def status(self) -> dict[str, Any]:
-        """State, measured output latency and underrun count."""
+        """State, output latency, underruns, and the callback period and fill time
+        (p50/p99/max in ms over the last ``TIMING_WINDOW`` callbacks)."""
         stream = self._stream
         latency_s = float("nan")
         if stream is not None:
@@ -289,6 +305,8 @@ class SounddeviceOutput:
             "underruns": self._underruns,
             "blocks": self._blocks,
             "callback_errors": self._callback_errors,
+            "period_ms": summarize_s(list(self._periods_s)),
+            "fill_ms": summarize_s(list(self._fills_s)),
             "error": self._error,
         }
 

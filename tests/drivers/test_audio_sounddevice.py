@@ -176,6 +176,7 @@ def test_stream_settings_and_callback_pulls_from_the_source():
     assert st["state"] == "running" and st["blocks"] == 3
     assert st["latency_s"] == pytest.approx(0.0107)
     assert st["device"] == "system (JACK Audio Connection Kit)"
+    assert st["period_ms"]["n"] == 2 and st["fill_ms"]["n"] == 3  # timing kept per callback
     out.stop()
 
 
