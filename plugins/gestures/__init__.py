@@ -1,1 +1,258 @@
-"""Gestures plugin: rear-DI vision pipeline, static/dynamic classifiers, touch calibration."""
+"""Gestures plugin: rear-DI vision pipeline, static/dynamic gesture classifiers, datasets,
+evaluation and touch calibration (paper section 3, Fig. 4).
+
+Commands: ``haptable gestures eval|train|classify`` (and ``synth|record`` for datasets).
+Classifier: ``svm`` (``[gestures] classifier``). Benchmark: ``haptable bench gestures``.
+Profile sections: ``[gestures]`` and ``[vision]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from console.hookspecs import hookimpl
+from console.schema import Field
+
+VISION_FIELDS = {
+    "body_threshold": Field(
+        "float", 14.0, min=1, max=255, help="grey levels above background that count as hand/arm"
+    ),
+    "contact_threshold": Field(
+        "float", 30.0, min=1, max=255, help="grey levels of the high-pass image for a contact"
+    ),
+    "highpass_sigma_px": Field(
+        "float", 6.0, min=0.5, max=100, help="blur of the high-pass filter (image minus blur)"
+    ),
+    "min_hand_area_px": Field("int", 600, min=1, help="smaller foreground blobs are not hands"),
+    "min_contact_area_px": Field("int", 3, min=1, help="smaller bright blobs are noise"),
+    "max_contact_area_px": Field("int", 2500, min=1, help="larger bright blobs are not fingertips"),
+    "wrist_cut": Field(
+        "float", 1.15, min=0.3, max=5, help="silhouette cut this many palm radii towards the wrist"
+    ),
+    "n_harmonics": Field("int", 12, min=2, max=16, help="Fourier descriptor harmonics"),
+    "background_alpha": Field(
+        "float", 0.02, min=0, max=1, help="running-average weight of a new frame in the background"
+    ),
+    "calibration": Field(
+        "path",
+        "touch_calibration.json",
+        must_exist=False,
+        help="touch calibration (camera px -> table mm), beside the profile",
+    ),
+}
+
+GESTURES_FIELDS = {
+    "classifier": Field("str", "svm", help="registered gesture classifier to use"),
+    "model": Field(
+        "path",
+        "gestures.skops",
+        must_exist=False,
+        help="trained model (`haptable gestures train DIR --out MODEL`), beside the profile",
+    ),
+    "frames": Field(
+        "int", 4, min=2, max=6, help="frames a dynamic gesture is decided from (paper: 4)"
+    ),
+}
+
+
+@hookimpl
+def haptable_profile_sections(register):
+    register(
+        "vision",
+        VISION_FIELDS,
+        help="rear-DI vision pipeline: thresholds, filters, descriptors, touch calibration",
+    )
+    register("gestures", GESTURES_FIELDS, help="gesture classifier and its trained model")
+
+
+def vision_params(profile) -> object:
+    """``VisionParams`` from the profile's ``[vision]`` and ``[camera]`` sections."""
+    from .vision import VisionParams
+
+    v = profile.section("vision") if profile is not None else {}
+    cam = profile.section("camera") if profile is not None else {}
+    keys = set(VisionParams.__dataclass_fields__)
+    kw = {k: v[k] for k in v if k in keys}
+    if "width_px" in cam:
+        kw["width_px"] = int(cam["width_px"])
+    if "height_px" in cam:
+        kw["height_px"] = int(cam["height_px"])
+    return VisionParams(**kw)
+
+
+@hookimpl
+def haptable_register_classifiers(register):
+    def factory(profile):
+        from .classifier import SvmClassifier
+
+        return SvmClassifier.from_profile(profile)
+
+    register(
+        "svm",
+        factory,
+        description="Fourier-descriptor + contact-trajectory SVMs (static: 1 pose, dynamic: 4 frames)",
+    )
+
+
+# ---------------------------------------------------------------------- CLI
+def _dataset_commands() -> dict:
+    try:
+        from .dataset_commands import COMMANDS
+    except ImportError:
+        return {}
+    return COMMANDS
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--harmonics", type=int, default=None, help="Fourier harmonics (default: profile, 12)"
+    )
+    p.add_argument(
+        "--frames", type=int, default=None, help="frames for dynamic gestures (default 4)"
+    )
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-cache", action="store_true", help="recompute the features")
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="gestures_cmd", metavar="ACTION", required=True)
+    e = sub.add_parser("eval", help="cross-validate the classifiers on a dataset")
+    e.add_argument("dataset", type=Path)
+    e.add_argument("--cv", choices=("2fold", "loso"), default="2fold")
+    e.add_argument("--json", action="store_true")
+    _common(e)
+    t = sub.add_parser("train", help="train the classifiers on a dataset and save the model")
+    t.add_argument("dataset", type=Path)
+    t.add_argument("--out", type=Path, required=True, help="model file (.skops)")
+    t.add_argument("--json", action="store_true")
+    _common(t)
+    c = sub.add_parser("classify", help="classify one sample folder with a trained model")
+    c.add_argument("model", type=Path)
+    c.add_argument("sample", type=Path)
+    c.add_argument("--json", action="store_true")
+    for name, (conf, _run, help_) in _dataset_commands().items():
+        conf(sub.add_parser(name, help=help_, description=help_))
+
+
+def _progress(args):
+    if getattr(args, "json", False) or not sys.stderr.isatty():
+        return None
+
+    def show(i, n):
+        print(f"\rfeatures {i}/{n}", end="" if i < n else "\n", file=sys.stderr, flush=True)
+
+    return show
+
+
+def run(args, ctx) -> int:
+    cmd = args.gestures_cmd
+    extra = _dataset_commands()
+    if cmd in extra:
+        return int(extra[cmd][1](args, ctx) or 0)
+    from . import evaluate as ev
+
+    profile = _profile(ctx)
+    n_h = (
+        args.harmonics
+        if getattr(args, "harmonics", None)
+        else _get(profile, "vision.n_harmonics", 12)
+    )
+    n_f = args.frames if getattr(args, "frames", None) else _get(profile, "gestures.frames", 4)
+    if cmd == "eval":
+        fs = ev.extract(
+            args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
+        )
+        rep = ev.cross_validate(fs, args.cv, n_harmonics=n_h, n_frames=n_f, seed=args.seed)
+        _print(rep, args.json)
+        return 0
+    if cmd == "train":
+        fs = ev.extract(
+            args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
+        )
+        model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, seed=args.seed)
+        path = model.save(args.out)
+        out = {
+            "model": str(path),
+            "samples": int(len(fs.labels)),
+            "motion_threshold": model.motion_threshold,
+            "n_harmonics": n_h,
+            "n_frames": n_f,
+        }
+        _print(out, args.json)
+        return 0
+    if cmd == "classify":
+        from .classifier import classify_sample
+        from .model import GestureModel
+
+        model = GestureModel.load(args.model)
+        out = classify_sample(model, args.sample, _params(profile))
+        _print(out, args.json)
+        return 0
+    return 2
+
+
+def _profile(ctx):
+    try:
+        return ctx.profile
+    except Exception:  # a command on a dataset must not need a valid profile
+        return None
+
+
+def _get(profile, key, default):
+    if profile is None:
+        return default
+    try:
+        v = profile.get(key)
+    except Exception:
+        return default
+    return default if v is None else v
+
+
+def _params(profile):
+    from dataclasses import replace
+
+    from .evaluate import N_HARMONICS_MAX
+
+    return replace(vision_params(profile), n_harmonics=N_HARMONICS_MAX)
+
+
+def _print(d: dict, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(d, indent=2))
+        return
+    for k, v in d.items():
+        if isinstance(v, dict):
+            print(f"{k}:")
+            for kk, vv in v.items():
+                print(f"  {kk}: {vv:.3f}" if isinstance(vv, float) else f"  {kk}: {vv}")
+        elif isinstance(v, float):
+            print(f"{k}: {v:.4g}")
+        else:
+            print(f"{k}: {v}")
+
+
+@hookimpl
+def haptable_register_commands(register):
+    register(
+        "gestures",
+        configure,
+        run,
+        help="gesture datasets, training, evaluation (2-fold / leave-one-subject-out), classify",
+    )
+
+
+@hookimpl
+def haptable_register_benchmarks(register):
+    def run_bench(ctx, quick: bool) -> dict:
+        from .bench import run_benchmark
+
+        return run_benchmark(ctx, quick)
+
+    register(
+        "gestures",
+        run_bench,
+        help="frame latency; accuracy vs Fourier harmonics, frames used, image noise",
+    )

@@ -32,6 +32,9 @@ from console.types import Contact, Hand
 
 from .descriptors import fourier_descriptors
 
+GRID_SECTORS = 8
+GRID_RINGS = (0.0, 1.3, 2.3, 4.0)  # palm radii
+
 
 @dataclass(frozen=True)
 class VisionParams:
@@ -69,6 +72,10 @@ class FrameResult:
     gain: float = 1.0  # frame / background brightness ratio
     illumination_changed: bool = False
     masks: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+    #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
+    #: brightness-weighted centroid), grid (brightness in the canonical frame,
+    #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii)
+    extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
 
 
 # --------------------------------------------------------------------------- input
@@ -267,19 +274,33 @@ def circle_samples(
     return a, on, out
 
 
-def brightness_axis(mask: np.ndarray, diff: np.ndarray, min_shift_px: float = 1.0) -> float | None:
-    """Direction (rad) from the brightness-weighted centroid of a hand to its plain
-    centroid: towards the dimmer forearm. None if the two nearly coincide."""
-    m0 = cv2.moments(mask, binaryImage=True)
-    if m0["m00"] <= 0:
-        return None
+def bright_centroid(mask: np.ndarray, diff: np.ndarray) -> tuple[float, float] | None:
+    """Centroid of a hand weighted by brightness squared: where it presses on the glass
+    (steadier than the palm centre, which may jump along a forearm)."""
     w = cv2.multiply(diff, diff, dtype=cv2.CV_32F)
     w[mask == 0] = 0
     m1 = cv2.moments(w)
     if m1["m00"] <= 0:
         return None
-    dx = m0["m10"] / m0["m00"] - m1["m10"] / m1["m00"]
-    dy = m0["m01"] / m0["m00"] - m1["m01"] / m1["m00"]
+    return m1["m10"] / m1["m00"], m1["m01"] / m1["m00"]
+
+
+def brightness_axis(
+    mask: np.ndarray,
+    diff: np.ndarray,
+    min_shift_px: float = 1.0,
+    bright: tuple[float, float] | None = None,
+) -> float | None:
+    """Direction (rad) from the brightness-weighted centroid of a hand to its plain
+    centroid: towards the dimmer forearm. None if the two nearly coincide."""
+    m0 = cv2.moments(mask, binaryImage=True)
+    if m0["m00"] <= 0:
+        return None
+    b = bright if bright is not None else bright_centroid(mask, diff)
+    if b is None:
+        return None
+    dx = m0["m10"] / m0["m00"] - b[0]
+    dy = m0["m01"] / m0["m00"] - b[1]
     if math.hypot(dx, dy) < min_shift_px:
         return None
     return math.atan2(dy, dx)
@@ -443,6 +464,43 @@ def count_fingers(silhouette: np.ndarray, palm_radius: float, params: VisionPara
     return min(count, 5)
 
 
+def to_canonical(
+    pts_px: np.ndarray, center: tuple[float, float], angle_deg: float, scale: float = 1.0
+) -> np.ndarray:
+    """Image points -> the canonical hand frame (palm centre at 0, wrist towards +y),
+    divided by ``scale`` (e.g. the palm radius)."""
+    t = math.radians(angle_deg)
+    d = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2) - np.asarray(center)
+    c, s_ = math.cos(t), math.sin(t)
+    return np.column_stack([d[:, 0] * c + d[:, 1] * s_, -d[:, 0] * s_ + d[:, 1] * c]) / scale
+
+
+def brightness_grid(
+    roi_mask: np.ndarray,
+    roi_diff: np.ndarray,
+    center: tuple[float, float],
+    palm_radius: float,
+    angle_deg: float,
+) -> np.ndarray:
+    """Share of the hand's brightness in each cell of a polar grid in the canonical frame
+    (``GRID_SECTORS`` sectors x rings ``GRID_RINGS`` palm radii): where the hand touches
+    or nearly touches the glass, independent of position, rotation, size and gain."""
+    ys, xs = np.nonzero(roi_mask[::2, ::2])
+    n_cells = GRID_SECTORS * (len(GRID_RINGS) - 1)
+    if len(xs) == 0 or palm_radius <= 0:
+        return np.zeros(n_cells)
+    w = roi_diff[ys * 2, xs * 2].astype(np.float64)
+    q = to_canonical(np.column_stack([xs * 2, ys * 2]), center, angle_deg, palm_radius)
+    r = np.hypot(q[:, 0], q[:, 1])
+    sector = ((np.arctan2(q[:, 1], q[:, 0]) + math.pi) / (2 * math.pi) * GRID_SECTORS).astype(int)
+    sector = np.clip(sector, 0, GRID_SECTORS - 1)
+    ring = np.searchsorted(GRID_RINGS, r, side="right") - 1
+    ok = (ring >= 0) & (ring < len(GRID_RINGS) - 1)
+    cells = np.bincount(ring[ok] * GRID_SECTORS + sector[ok], weights=w[ok], minlength=n_cells)
+    total = cells.sum()
+    return cells / total if total > 0 else cells
+
+
 # --------------------------------------------------------------------------- one frame
 def analyse_hand(
     contour: np.ndarray,
@@ -451,8 +509,9 @@ def analyse_hand(
     diff: np.ndarray | None = None,
     contacts: list[Contact] | None = None,
     to_mm=None,
-) -> Hand | None:
-    """Everything about one hand component (contour from ``cv2.findContours``)."""
+) -> tuple[Hand, dict] | None:
+    """Everything about one hand component (contour from ``cv2.findContours``): the
+    ``Hand`` and its extras (see ``FrameResult.extras``)."""
     x0, y0, w, h = cv2.boundingRect(contour)
     pad = 2
     H, W = full_mask.shape
@@ -466,8 +525,11 @@ def analyse_hand(
     center = (pcx + xa, pcy + ya)
     pts = contour.reshape(-1, 2).astype(np.float64)
     hint = None
+    bright = None
     if diff is not None:
-        hint = brightness_axis(roi, diff[ya:yb, xa:xb], 0.1 * pr)
+        bright = bright_centroid(roi, diff[ya:yb, xa:xb])
+        hint = brightness_axis(roi, diff[ya:yb, xa:xb], 0.1 * pr, bright)
+    bright_px = center if bright is None else (bright[0] + xa, bright[1] + ya)
     arc = wrist_arc(roi, (pcx, pcy), pr, params, pts - (xa, ya), (xa, ya), (H, W), hint)
     angle = canonical_angle_deg(arc.mid_rad)
     roi_center = (pcx, pcy)
@@ -496,6 +558,23 @@ def analyse_hand(
     if to_mm is not None:
         cm = np.asarray(to_mm(np.array([[ex, ey]])))[0]
         center_mm = (float(cm[0]), float(cm[1]))
+    grid = (
+        brightness_grid(roi, diff[ya:yb, xa:xb], (pcx, pcy), pr, angle)
+        if diff is not None
+        else np.zeros(GRID_SECTORS * (len(GRID_RINGS) - 1))
+    )
+    canon = (
+        to_canonical(np.array([c.pos_px for c in mine]), center, angle, pr)
+        if mine
+        else np.zeros((0, 2))
+    )
+    extras = {
+        "palm_radius_px": pr,
+        "palm_px": center,
+        "bright_px": bright_px,
+        "grid": grid,
+        "contacts_canon": canon,
+    }
     return Hand(
         contour_px=pts,
         center_px=(float(ex), float(ey)),
@@ -505,7 +584,7 @@ def analyse_hand(
         finger_count=fingers,
         contacts=mine,
         center_mm=center_mm,
-    )
+    ), extras
 
 
 def process_frame(
@@ -543,13 +622,20 @@ def process_frame(
         p.max_contact_size_px,
     )
     contours, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    hands = []
+    found = []
     for c in contours:
         if cv2.contourArea(c) < p.min_hand_area_px:
             continue
-        hand = analyse_hand(c, body, p, diff, contacts, to_mm)
-        if hand is not None:
-            hands.append(hand)
-    hands.sort(key=lambda hd: -cv2.contourArea(hd.contour_px.astype(np.float32)))
+        got = analyse_hand(c, body, p, diff, contacts, to_mm)
+        if got is not None:
+            found.append(got)
+    found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     masks = {"diff": diff, "body": body, "highpass": hp} if keep_masks else {}
-    return FrameResult(tuple(hands), tuple(contacts), float(gain), bool(changed), masks)
+    return FrameResult(
+        tuple(h for h, _ in found),
+        tuple(contacts),
+        float(gain),
+        bool(changed),
+        masks,
+        tuple(e for _, e in found),
+    )

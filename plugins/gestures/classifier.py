@@ -1,0 +1,135 @@
+"""Classifying live frames and single samples with a trained ``GestureModel``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from console.errors import UserError
+from console.types import Frame, Gesture
+
+from .evaluate import N_HARMONICS_MAX, record_features, sample_records
+from .features import dynamic_indices, static_indices
+from .model import GESTURES, GestureModel
+from .sketch import DYNAMIC
+from .vision import Background, FrameResult, VisionParams, process_frame
+
+
+def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, float, float]:
+    """(gesture, kind, confidence, motion score) from frame records (features built
+    with ``N_HARMONICS_MAX`` harmonics)."""
+    k = model.n_frames
+    xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX, model.static_frames)
+    xs = xs[static_indices(model.n_harmonics, N_HARMONICS_MAX)][None, :]
+    xd = xd[k][dynamic_indices(model.n_harmonics, N_HARMONICS_MAX)][None, :]
+    xk = xk[None, :]
+    name = str(model.predict(xs, xd, xk)[0])
+    conf = float(model.confidence(xs, xd, xk)[0])
+    return name, ("dynamic" if name in DYNAMIC else "static"), conf, float(sc[k])
+
+
+def classify_sample(model: GestureModel, folder: str | Path, params: VisionParams) -> dict:
+    """Classify one sample folder of the dataset format; the CLI's ``classify`` output."""
+    from .dataset import read_sample
+
+    s = read_sample(folder)
+    size = (params.width_px, params.height_px)
+    n = max(model.n_frames, model.static_frames)
+    frames = s.frames(limit=n, size_px=size)
+    bg = s.background(size_px=size)
+    if bg is None:
+        raise UserError(
+            f"{folder}: no background.png (in the sample or the dataset folder); "
+            "add an image of the empty table"
+        )
+    params = replace(params, n_harmonics=N_HARMONICS_MAX)
+    times: list[float] = []
+    t0 = time.perf_counter()
+    recs = sample_records(frames, bg, params, times)
+    name, kind, conf, score = decide(model, recs)
+    total = time.perf_counter() - t0
+    return {
+        "sample": str(folder),
+        "gesture": name,
+        "kind": kind,
+        "confidence": conf,
+        "motion_score": score,
+        "motion_threshold": model.motion_threshold,
+        "frames_used": len(frames),
+        "frame_ms_max": 1e3 * max(times) if times else None,
+        "decision_ms": 1e3 * total,
+        "label": s.gesture,
+        "correct": name == s.gesture,
+    }
+
+
+class SvmClassifier:
+    """The ``svm`` classifier plugin: ``classify(frames) -> Gesture | None``.
+
+    Needs a trained model (``[gestures] model``) and a background (``set_background``,
+    or the first frame given while no hand is seen). Frames beyond the model's window
+    are ignored: a dynamic gesture is decided from its first ``n_frames`` frames.
+    """
+
+    names: tuple[str, ...] = GESTURES
+
+    def __init__(
+        self,
+        model: GestureModel | None,
+        params: VisionParams | None = None,
+        to_mm=None,
+        background: np.ndarray | None = None,
+        alpha: float = 0.02,
+    ) -> None:
+        self.model = model
+        self.params = replace(params or VisionParams(), n_harmonics=N_HARMONICS_MAX)
+        self.to_mm = to_mm
+        self.background = Background(background, alpha)
+
+    @classmethod
+    def from_profile(cls, profile) -> SvmClassifier:
+        from . import vision_params
+
+        model = None
+        path = profile.resolve(profile.get("gestures.model"))
+        if Path(path).is_file():
+            model = GestureModel.load(path)
+        to_mm = None
+        cal = profile.resolve(profile.get("vision.calibration"))
+        if Path(cal).is_file():
+            from .calibration import Calibration
+
+            to_mm = Calibration.load(cal).px_to_mm
+        return cls(
+            model, vision_params(profile), to_mm, alpha=profile.get("vision.background_alpha")
+        )
+
+    def set_background(self, image: np.ndarray) -> None:
+        self.background = Background(image, self.background.alpha)
+
+    def process(self, frame: Frame) -> FrameResult:
+        """One frame through the pipeline (the background learns where no hand is)."""
+        if self.background.image is None:
+            self.background.update(frame.image)
+        bg = self.background.image
+        res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
+        self.background.update(frame.image, res.masks.get("body"))
+        frame.stamp("vision", time.monotonic())
+        return res
+
+    def classify(self, frames: list[Frame]) -> Gesture | None:
+        if self.model is None or not frames:
+            return None
+        n = max(self.model.n_frames, self.model.static_frames)
+        results = [self.process(f) for f in frames[:n]]
+        from .features import frame_record
+
+        recs = [frame_record(r) for r in results]
+        if all(r is None for r in recs):
+            return None
+        name, kind, conf, _ = decide(self.model, recs)
+        hand = next((r.hands[0] for r in reversed(results) if r.hands), None)
+        return Gesture(name, kind, conf, frames[min(n, len(frames)) - 1].t_capture_s, hand)

@@ -1,0 +1,354 @@
+"""Features of a dataset (cached) and the cross-validated evaluation of the classifiers.
+
+``extract`` runs the vision pipeline on every sample (the first frames only) and keeps
+the static features, the dynamic features for several window lengths, the motion
+scores and the per-frame pipeline time. ``cross_validate`` trains inside each outer
+fold (hyper-parameters searched inside the training part only) and tests on the rest:
+``2fold`` (stratified, as in the paper) or ``loso`` (leave one subject out).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from console.bench import summarize_s
+from console.errors import UserError
+
+from . import features as F
+from .model import GESTURES, GestureModel
+from .sketch import DYNAMIC, STATIC
+from .vision import VisionParams, process_frame
+
+N_HARMONICS_MAX = 16
+FRAMES_LIST = (2, 3, 4, 5, 6)
+STATIC_FRAMES = 3
+FEATURES_VERSION = 4  # bump when features change: old caches are ignored
+
+
+@dataclass
+class FeatureSet:
+    """Per-sample features of a dataset."""
+
+    names: list[str]
+    labels: np.ndarray
+    subjects: np.ndarray
+    static: np.ndarray
+    kind: np.ndarray  # motion features over the first KIND_FRAMES frames
+    dynamic: dict[int, np.ndarray]
+    score: dict[int, np.ndarray]
+    frame_s: np.ndarray  # pipeline wall time of every frame processed
+    meta: dict = field(default_factory=dict)
+    frame_cpu_s: np.ndarray = field(default_factory=lambda: np.zeros(0))  # thread CPU time
+
+    def subset(self, idx: np.ndarray) -> FeatureSet:
+        return FeatureSet(
+            [self.names[i] for i in idx],
+            self.labels[idx],
+            self.subjects[idx],
+            self.static[idx],
+            self.kind[idx],
+            {k: v[idx] for k, v in self.dynamic.items()},
+            {k: v[idx] for k, v in self.score.items()},
+            self.frame_s,
+            self.meta,
+            self.frame_cpu_s,
+        )
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "haptable" / "gestures"
+
+
+def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:
+    h = hashlib.sha256()
+    h.update(json.dumps([FEATURES_VERSION, repr(params), list(frames), N_HARMONICS_MAX]).encode())
+    for s in samples:
+        h.update(s.name.encode())
+        h.update(s.gesture.encode())
+        h.update(s.subject.encode())
+        for p in (*s.frame_paths[: max(frames)], s.background_path):
+            if p is not None:
+                st = p.stat()
+                h.update(f"{p.name}:{st.st_size}:{st.st_mtime_ns}".encode())
+    return h.hexdigest()[:24]
+
+
+def sample_records(
+    frames: np.ndarray,
+    background: np.ndarray,
+    params: VisionParams,
+    times: list | None = None,
+    cpu: list | None = None,
+) -> list[dict | None]:
+    """Frame records of a sample's frames; the pipeline's wall time (and thread CPU
+    time) of each frame is appended to ``times`` (and ``cpu``)."""
+    out = []
+    for img in frames:
+        c0 = time.thread_time()
+        t0 = time.perf_counter()
+        res = process_frame(img, background, params)
+        t1 = time.perf_counter()
+        if times is not None:
+            times.append(t1 - t0)
+        if cpu is not None:
+            cpu.append(time.thread_time() - c0)
+        out.append(F.frame_record(res))
+    return out
+
+
+def record_features(
+    recs: list[dict | None], frames_list: Sequence[int], n_harmonics: int, static_frames: int
+) -> tuple[np.ndarray, np.ndarray, dict[int, np.ndarray], dict[int, float]]:
+    """(static, kind, dynamic per window length, motion score per window length; the
+    kind features and the score use the first ``KIND_FRAMES`` frames whatever the
+    window, so static and dynamic samples are judged on equally long windows)."""
+    xs = F.static_features(recs, n_harmonics, static_frames)
+    xk = F.motion_features(recs[: F.KIND_FRAMES])
+    xd = {k: F.dynamic_features(recs, n_harmonics, k) for k in frames_list}
+    score = F.motion_score(recs[: F.KIND_FRAMES])
+    sc = {k: score for k in frames_list}
+    return xs, xk, xd, sc
+
+
+def _fallback_background(samples, size_px) -> np.ndarray:
+    """No background.png anywhere: the per-pixel median of the samples' first frames
+    (hands are in different places, so the median is close to the empty table)."""
+    step = max(1, len(samples) // 60)
+    firsts = [s.frames(limit=1, size_px=size_px)[0] for s in samples[::step]]
+    return np.median(np.stack(firsts), axis=0).astype(np.uint8)
+
+
+def extract(
+    root: str | Path,
+    params: VisionParams | None = None,
+    *,
+    frames_list: Sequence[int] = FRAMES_LIST,
+    use_cache: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> FeatureSet:
+    """Features of every sample of the dataset at ``root`` (cached by content)."""
+    from .dataset import load_dataset
+
+    params = params or VisionParams(n_harmonics=N_HARMONICS_MAX)
+    if params.n_harmonics != N_HARMONICS_MAX:
+        from dataclasses import replace
+
+        params = replace(params, n_harmonics=N_HARMONICS_MAX)
+    samples = load_dataset(root)
+    size = (params.width_px, params.height_px)
+    key = _key(samples, params, frames_list)
+    cfile = cache_dir() / f"{key}.npz"
+    if use_cache and cfile.is_file():
+        try:
+            return _load_cache(cfile)
+        except (OSError, ValueError, KeyError):
+            pass
+    import cv2
+
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(1)  # the per-frame time is for one core
+    try:
+        fs = _extract(samples, params, frames_list, size, progress)
+    finally:
+        cv2.setNumThreads(threads)
+    fs.meta["root"] = str(root)
+    if use_cache:
+        with contextlib.suppress(OSError):
+            _save_cache(cfile, fs)
+    return fs
+
+
+def _extract(samples, params, frames_list, size, progress) -> FeatureSet:
+    fallback = None
+    names, labels, subjects, xs_all, xk_all, times, cpu = [], [], [], [], [], [], []
+    xd_all: dict[int, list] = {k: [] for k in frames_list}
+    sc_all: dict[int, list] = {k: [] for k in frames_list}
+    for i, s in enumerate(samples):
+        frames = s.frames(limit=max(frames_list), size_px=size)
+        bg = s.background(size_px=size)
+        if bg is None:
+            if fallback is None:
+                fallback = _fallback_background(samples, size)
+            bg = fallback
+        recs = sample_records(frames, bg, params, times, cpu)
+        xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX, STATIC_FRAMES)
+        xk_all.append(xk)
+        names.append(s.name)
+        labels.append(s.gesture)
+        subjects.append(s.subject)
+        xs_all.append(xs)
+        for k in frames_list:
+            xd_all[k].append(xd[k])
+            sc_all[k].append(sc[k])
+        if progress:
+            progress(i + 1, len(samples))
+    return FeatureSet(
+        names,
+        np.array(labels),
+        np.array(subjects),
+        np.array(xs_all),
+        np.array(xk_all),
+        {k: np.array(v) for k, v in xd_all.items()},
+        {k: np.array(v) for k, v in sc_all.items()},
+        np.array(times),
+        {"n_harmonics_max": N_HARMONICS_MAX},
+        np.array(cpu),
+    )
+
+
+def _save_cache(path: Path, fs: FeatureSet) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {
+        "names": np.array(fs.names),
+        "labels": fs.labels,
+        "subjects": fs.subjects,
+        "static": fs.static,
+        "kind": fs.kind,
+        "frame_s": fs.frame_s,
+        "frame_cpu_s": fs.frame_cpu_s,
+        "meta": np.array(json.dumps(fs.meta)),
+    }
+    for k in fs.dynamic:
+        arrays[f"dyn_{k}"] = fs.dynamic[k]
+        arrays[f"score_{k}"] = fs.score[k]
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(path)
+
+
+def _load_cache(path: Path) -> FeatureSet:
+    with np.load(path, allow_pickle=False) as z:
+        ks = sorted(int(n[4:]) for n in z.files if n.startswith("dyn_"))
+        return FeatureSet(
+            [str(n) for n in z["names"]],
+            z["labels"].astype(str),
+            z["subjects"].astype(str),
+            z["static"],
+            z["kind"],
+            {k: z[f"dyn_{k}"] for k in ks},
+            {k: z[f"score_{k}"] for k in ks},
+            z["frame_s"],
+            json.loads(str(z["meta"])),
+            z["frame_cpu_s"],
+        )
+
+
+def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
+    """(static X, dynamic X, kind X, motion score) with ``n_harmonics`` and ``n_frames``."""
+    if n_frames not in fs.dynamic:
+        raise UserError(
+            f"--frames {n_frames}: features exist for {sorted(fs.dynamic)} frames; pick one of them"
+        )
+    nmax = int(fs.meta.get("n_harmonics_max", N_HARMONICS_MAX))
+    if not 2 <= n_harmonics <= nmax:
+        raise UserError(f"--harmonics {n_harmonics}: use 2 to {nmax}")
+    xs = fs.static[:, F.static_indices(n_harmonics, nmax)]
+    xd = fs.dynamic[n_frames][:, F.dynamic_indices(n_harmonics, nmax)]
+    return xs, xd, fs.kind, fs.score[n_frames]
+
+
+def splits(fs: FeatureSet, cv: str, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
+    from sklearn.model_selection import LeaveOneGroupOut, StratifiedKFold
+
+    idx = np.arange(len(fs.labels))
+    if cv == "2fold":
+        _, counts = np.unique(fs.labels, return_counts=True)
+        if counts.min() < 2:
+            raise UserError("--cv 2fold: every gesture needs at least 2 samples")
+        return list(StratifiedKFold(2, shuffle=True, random_state=seed).split(idx, fs.labels))
+    if cv == "loso":
+        if len(np.unique(fs.subjects)) < 2:
+            raise UserError("--cv loso: the dataset has one subject; use --cv 2fold")
+        return list(LeaveOneGroupOut().split(idx, fs.labels, fs.subjects))
+    raise UserError(f"--cv {cv!r}: use 2fold or loso")
+
+
+def cross_validate(
+    fs: FeatureSet,
+    cv: str = "2fold",
+    *,
+    n_harmonics: int = 12,
+    n_frames: int = 4,
+    seed: int = 0,
+) -> dict:
+    """Outer cross-validation of the whole classifier; the report the CLI prints."""
+    xs, xd, sc = columns(fs, n_harmonics, n_frames)
+    pred = np.empty(len(fs.labels), dtype=object)
+    thresholds = []
+    for tr, te in splits(fs, cv, seed):
+        m = GestureModel.fit(
+            xs[tr],
+            xd[tr],
+            sc[tr],
+            fs.labels[tr],
+            n_harmonics=n_harmonics,
+            n_frames=n_frames,
+            seed=seed,
+        )
+        thresholds.append(m.motion_threshold)
+        pred[te] = m.predict(xs[te], xd[te], sc[te])
+    return report(fs.labels, pred.astype(str), fs, cv, n_harmonics, n_frames, thresholds)
+
+
+def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
+    labels = np.asarray(labels).astype(str)
+    is_st = np.isin(labels, STATIC)
+    is_dy = np.isin(labels, DYNAMIC)
+    present = [g for g in GESTURES if g in set(labels)] + sorted(set(labels) - set(GESTURES))
+    recall = {g: float(np.mean(pred[labels == g] == g)) for g in present}
+    conf = {
+        g: {
+            p: int(np.sum((labels == g) & (pred == p)))
+            for p in present
+            if np.any((labels == g) & (pred == p))
+        }
+        for g in present
+    }
+    kind_ok = np.isin(pred, DYNAMIC) == is_dy
+    t = summarize_s(fs.frame_s)
+    c = summarize_s(fs.frame_cpu_s)
+    return {
+        "cv": cv,
+        "n_samples": int(len(labels)),
+        "subjects": sorted(set(fs.subjects.tolist())),
+        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
+        "dynamic_accuracy": float(np.mean(pred[is_dy] == labels[is_dy])) if is_dy.any() else None,
+        "kind_accuracy": float(np.mean(kind_ok)),
+        "per_class_recall": recall,
+        "confusion": conf,
+        "frame_ms_p50": t["p50_ms"],
+        "frame_ms_p99": t["p99_ms"],
+        "frame_cpu_ms_p50": c["p50_ms"],
+        "frame_cpu_ms_p99": c["p99_ms"],
+        "frames_timed": t["n"],
+        "n_harmonics": n_harmonics,
+        "n_frames": n_frames,
+        "motion_threshold": float(np.median(thresholds)) if thresholds else None,
+    }
+
+
+def train(
+    fs: FeatureSet, *, n_harmonics: int = 12, n_frames: int = 4, seed: int = 0
+) -> GestureModel:
+    xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
+    return GestureModel.fit(
+        xs,
+        xd,
+        xk,
+        sc,
+        fs.labels,
+        n_harmonics=n_harmonics,
+        n_frames=n_frames,
+        seed=seed,
+        meta={"trained_on": fs.meta.get("root"), "n_samples": len(fs.labels)},
+    )

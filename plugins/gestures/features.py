@@ -1,0 +1,244 @@
+"""Gesture features from the vision pipeline's per-frame results.
+
+Static (one pose): the canonical silhouette's Fourier descriptors, the brightness grid in
+the canonical frame (which parts touch), the finger count and the contacts' layout in
+palm radii. Dynamic (the first ``n`` frames): the first frame's static features plus
+the motion of the hand (translation in its own frame, rotation, size change) and of the
+contact trajectories (similarity fit of first to last: translation, rotation, scale
+change; the most and least moving contact, which tells a pivot). Static vs dynamic: the
+motion features over a short window (``KIND_FRAMES``), the same length for every
+sample; ``motion_score`` summarises them (largest displacement in palm radii).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .vision import GRID_RINGS, GRID_SECTORS, FrameResult
+
+KIND_FRAMES = 3  # window for static vs dynamic (a static sample has at least this many)
+N_GRID = GRID_SECTORS * (len(GRID_RINGS) - 1)
+N_CONTACT = 6
+TRACK_GATE = 1.5  # palm radii a contact may move between frames and stay the same
+MOTION_TURN_DEG = 20.0  # a turn of this many degrees counts as one palm radius of motion
+
+
+def desc_size(n_harmonics: int) -> int:
+    return 3 * (2 * n_harmonics - 1)
+
+
+def desc_indices(n: int, n_max: int) -> np.ndarray:
+    """Indices, in a descriptor vector of ``n_max`` harmonics, of the one with ``n``."""
+    ks = np.concatenate([np.arange(-n_max, 0), np.arange(2, n_max + 1)])
+    keep = np.flatnonzero(np.abs(ks) <= n)
+    m = len(ks)
+    return np.concatenate([keep, keep + m, keep + 2 * m])
+
+
+def static_size(n_harmonics: int) -> int:
+    return desc_size(n_harmonics) + N_GRID + 2 + N_CONTACT
+
+
+def static_indices(n: int, n_max: int) -> np.ndarray:
+    """Columns of a static feature vector (built with ``n_max``) that ``n`` harmonics keep."""
+    d = desc_indices(n, n_max)
+    rest = np.arange(desc_size(n_max), static_size(n_max))
+    return np.concatenate([d, rest])
+
+
+def frame_record(res: FrameResult) -> dict | None:
+    """The main (largest) hand of a frame, compactly; None if there is no hand."""
+    if not res.hands:
+        return None
+    h, ex = res.hands[0], res.extras[0]
+    return {
+        "palm_px": np.asarray(ex["palm_px"], dtype=float),
+        "palm_radius_px": float(ex["palm_radius_px"]),
+        "bright_px": np.asarray(ex["bright_px"], dtype=float),
+        "angle_deg": float(h.angle_deg),
+        "descriptors": np.asarray(h.descriptors, dtype=float),
+        "grid": np.asarray(ex["grid"], dtype=float),
+        "fingers": int(h.finger_count),
+        "contacts_px": np.array([c.pos_px for c in h.contacts], dtype=float).reshape(-1, 2),
+        "contacts_canon": np.asarray(ex["contacts_canon"], dtype=float).reshape(-1, 2),
+    }
+
+
+def contact_layout(canon: np.ndarray) -> np.ndarray:
+    """Contacts in the canonical frame (palm radii): count, mean distance from the palm,
+    largest pairwise distance, mean |x|, mean y, angular spread (rad)."""
+    k = len(canon)
+    if k == 0:
+        return np.zeros(N_CONTACT)
+    r = np.hypot(canon[:, 0], canon[:, 1])
+    pair = 0.0
+    if k > 1:
+        d = canon[:, None, :] - canon[None, :, :]
+        pair = float(np.sqrt((d**2).sum(-1)).max())
+    ang = np.sort(np.arctan2(canon[:, 1], canon[:, 0]))
+    spread = 0.0
+    if k > 1:
+        gaps = np.diff(np.concatenate([ang, [ang[0] + 2 * math.pi]]))
+        spread = float(2 * math.pi - gaps.max())
+    return np.array(
+        [
+            min(k, 8),
+            r.mean(),
+            pair,
+            np.abs(canon[:, 0]).mean(),
+            canon[:, 1].mean(),
+            spread,
+        ]
+    )
+
+
+def record_static(rec: dict | None, n_harmonics: int) -> np.ndarray:
+    """Static feature vector of one frame record (zeros and a flag if no hand)."""
+    size = static_size(n_harmonics)
+    if rec is None:
+        v = np.zeros(size)
+        v[desc_size(n_harmonics) + N_GRID + 1] = -1.0  # finger count -1: no hand
+        return v
+    return np.concatenate(
+        [
+            rec["descriptors"],
+            rec["grid"],
+            [rec["fingers"], 1.0],
+            contact_layout(rec["contacts_canon"]),
+        ]
+    )
+
+
+def static_features(records: Sequence[dict | None], n_harmonics: int, n_frames: int = 3):
+    """Mean static features over the first ``n_frames`` frames that show a hand."""
+    recs = [r for r in records[:n_frames] if r is not None]
+    if not recs:
+        return record_static(None, n_harmonics)
+    return np.mean([record_static(r, n_harmonics) for r in recs], axis=0)
+
+
+def _match(a: np.ndarray, b: np.ndarray, gate: float) -> list[tuple[int, int]]:
+    """Pairs (i, j) of points of ``a`` and ``b`` matched by minimum total distance."""
+    if len(a) == 0 or len(b) == 0:
+        return []
+    from scipy.optimize import linear_sum_assignment
+
+    d = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
+    ri, ci = linear_sum_assignment(d)
+    return [(int(i), int(j)) for i, j in zip(ri, ci, strict=True) if d[i, j] <= gate]
+
+
+def contact_tracks(records: Sequence[dict | None], gate_px: float) -> list[np.ndarray]:
+    """Contacts followed through every frame: list of (n_frames, 2) pixel tracks."""
+    if not records or any(r is None for r in records):
+        return []
+    tracks = {i: [p] for i, p in enumerate(records[0]["contacts_px"])}
+    alive = {i: i for i in tracks}  # track id -> index in the current frame
+    for rec in records[1:]:
+        cur = rec["contacts_px"]
+        ids = list(alive)
+        last = np.array([tracks[t][-1] for t in ids]).reshape(-1, 2)
+        pairs = _match(last, cur, gate_px)
+        nxt = {}
+        for i, j in pairs:
+            tracks[ids[i]].append(cur[j])
+            nxt[ids[i]] = j
+        alive = nxt
+    n = len(records)
+    return [np.array(t) for t in tracks.values() if len(t) == n]
+
+
+def similarity(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Least-squares b ~ s R a + t for 2-D point sets: (t, rotation rad, log scale)."""
+    ca, cb = a.mean(0), b.mean(0)
+    t = cb - ca
+    if len(a) < 2:
+        return t, 0.0, 0.0
+    za = (a - ca) @ np.array([1, 1j])
+    zb = (b - cb) @ np.array([1, 1j])
+    den = float(np.sum(np.abs(za) ** 2))
+    if den < 1e-9:
+        return t, 0.0, 0.0
+    s = complex(np.sum(np.conj(za) * zb)) / den
+    if abs(s) < 1e-9:
+        return t, 0.0, 0.0
+    return t, math.atan2(s.imag, s.real), math.log(abs(s))
+
+
+def _wrap_deg(d: float) -> float:
+    return (d + 180.0) % 360.0 - 180.0
+
+
+N_MOTION = 22
+
+
+def motion_features(records: Sequence[dict | None]) -> np.ndarray:
+    """How the hand and its contacts moved over the records (palm radii, degrees)."""
+    recs = [r for r in records if r is not None]
+    v = np.zeros(N_MOTION)
+    if len(recs) < 2:
+        return v
+    r0, r1 = recs[0], recs[-1]
+    rp = max(r0["palm_radius_px"], 1.0)
+    t = math.radians(r0["angle_deg"])
+    rot = np.array([[math.cos(t), math.sin(t)], [-math.sin(t), math.cos(t)]])
+    d_hand = rot @ (r1["palm_px"] - r0["palm_px"]) / rp
+    turn = _wrap_deg(r1["angle_deg"] - r0["angle_deg"])
+    steps = [
+        np.linalg.norm(b["palm_px"] - a["palm_px"]) / rp
+        for a, b in zip(recs, recs[1:], strict=False)
+    ]
+    v[0:2] = np.abs(d_hand)
+    v[2] = np.linalg.norm(d_hand)
+    v[3] = abs(turn) / MOTION_TURN_DEG
+    v[4] = math.log(max(r1["palm_radius_px"], 1.0) / rp)
+    v[5] = float(np.abs(r1["grid"] - r0["grid"]).sum())
+    v[6] = float(np.mean(steps))
+    n0, n1 = len(r0["contacts_px"]), len(r1["contacts_px"])
+    v[7], v[8] = min(n0, 8), min(n1, 8)
+    tracks = contact_tracks(recs, TRACK_GATE * rp)
+    v[9] = len(tracks)
+    if tracks:
+        a = np.array([tr[0] for tr in tracks])
+        b = np.array([tr[-1] for tr in tracks])
+        tr_t, tr_rot, tr_scale = similarity(a, b)
+        tt = rot @ tr_t / rp
+        disp = np.array([np.linalg.norm(tr[-1] - tr[0]) for tr in tracks]) / rp
+        path = np.array([np.linalg.norm(np.diff(tr, axis=0), axis=1).sum() for tr in tracks]) / rp
+        v[10:12] = np.abs(tt)
+        v[12] = np.linalg.norm(tt)
+        v[13] = abs(math.degrees(tr_rot)) / MOTION_TURN_DEG
+        v[14] = tr_scale
+        v[15] = disp.max()
+        v[16] = disp.min()
+        v[17] = disp.min() / disp.max() if disp.max() > 1e-6 else 1.0
+        v[18] = path.max()
+    d_bright = rot @ (r1["bright_px"] - r0["bright_px"]) / rp
+    v[19:21] = np.abs(d_bright)
+    v[21] = float(max(np.linalg.norm(r["bright_px"] - r0["bright_px"]) for r in recs[1:]) / rp)
+    return v
+
+
+def motion_score(records: Sequence[dict | None]) -> float:
+    """How much the hand moved over the records: the larger of the displacement of its
+    brightness-weighted centroid and of its contacts (palm radii)."""
+    m = motion_features(records)
+    return float(max(m[21], m[15]))
+
+
+def dynamic_features(
+    records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4
+) -> np.ndarray:
+    """First-frame static features plus the motion over the first ``n_frames`` frames."""
+    recs = list(records[:n_frames])
+    first = next((r for r in recs if r is not None), None)
+    return np.concatenate([record_static(first, n_harmonics), motion_features(recs)])
+
+
+def dynamic_indices(n: int, n_max: int) -> np.ndarray:
+    """Columns of a dynamic feature vector (built with ``n_max``) that ``n`` harmonics keep."""
+    s = static_indices(n, n_max)
+    return np.concatenate([s, static_size(n_max) + np.arange(N_MOTION)])

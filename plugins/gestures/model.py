@@ -1,0 +1,253 @@
+"""Gesture classifiers: static vs dynamic from the motion over a short window (an SVM on
+the motion features; the single best motion-score threshold is kept for reference),
+then one SVM for static poses and one for dynamic gestures (scikit-learn Pipelines:
+StandardScaler + SVC, RBF).
+
+Hyper-parameters are searched with ``GridSearchCV`` on the training data only (inside
+each outer fold when evaluating: nested cross-validation). Models are saved with
+skops (never pickle) and loaded against an explicit allow-list of types.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from console.errors import UserError
+
+from .sketch import DYNAMIC, STATIC
+
+GESTURES = STATIC + DYNAMIC
+SVC_GRID = {"svc__C": [1.0, 10.0, 100.0], "svc__gamma": ["scale", 0.003, 0.03]}
+MODEL_FORMAT = "haptable-gestures/1"
+
+#: Types a saved model may contain; anything else refuses to load.
+TRUSTED_TYPES = (
+    "sklearn.pipeline.Pipeline",
+    "sklearn.preprocessing._data.StandardScaler",
+    "sklearn.svm._classes.SVC",
+    "numpy.ndarray",
+    "numpy.dtype",
+    "numpy.float64",
+    "numpy.int64",
+    "numpy.int32",
+    "numpy.str_",
+    "builtins.str",
+    "builtins.float",
+    "builtins.int",
+    "builtins.tuple",
+    "builtins.list",
+    "builtins.dict",
+    "builtins.bool",
+    "builtins.NoneType",
+)
+
+
+def file_types(path: Path) -> set[str]:
+    """Every type (``module.Class``) a skops file would build, read from its schema
+    without building anything (skops itself trusts scikit-learn types by default; this
+    allow-list is stricter)."""
+    with zipfile.ZipFile(path) as z:
+        schema = json.loads(z.read("schema.json"))
+    out: set[str] = set()
+    stack = [schema]
+    while stack:
+        n = stack.pop()
+        if isinstance(n, dict):
+            if "__class__" in n:
+                out.add(f"{n.get('__module__')}.{n['__class__']}")
+            stack.extend(n.values())
+        elif isinstance(n, list):
+            stack.extend(n)
+    return out
+
+
+def make_pipeline(seed: int = 0):
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    return Pipeline(
+        [
+            ("scale", StandardScaler()),
+            ("svc", SVC(kernel="rbf", random_state=seed)),
+        ]
+    )
+
+
+def fit_svm(x: np.ndarray, y: np.ndarray, *, inner_folds: int = 3, seed: int = 0):
+    """The SVM pipeline with C and gamma chosen by stratified ``inner_folds``-fold CV on
+    (x, y) only; returns the refitted best pipeline. One class: a constant predictor."""
+    from sklearn.model_selection import GridSearchCV, StratifiedKFold
+
+    classes, counts = np.unique(y, return_counts=True)
+    if len(classes) < 2:
+        return _Constant(str(classes[0])) if len(classes) else None
+    folds = int(min(inner_folds, counts.min()))
+    if folds < 2:
+        pipe = make_pipeline(seed)
+        return pipe.fit(x, y)
+    grid = GridSearchCV(
+        make_pipeline(seed),
+        SVC_GRID,
+        cv=StratifiedKFold(folds, shuffle=True, random_state=seed),
+        n_jobs=1,
+    )
+    grid.fit(x, y)
+    return grid.best_estimator_
+
+
+@dataclass
+class _Constant:
+    label: str
+
+    def predict(self, x):
+        return np.array([self.label] * len(x))
+
+
+def fit_threshold(score: np.ndarray, dynamic: np.ndarray) -> float:
+    """The motion threshold with the fewest errors (static: score <= threshold)."""
+    s = np.sort(np.unique(score))
+    if len(s) == 0:
+        return 0.1
+    cands = np.concatenate([[s[0] - 1e-6], (s[:-1] + s[1:]) / 2, [s[-1] + 1e-6]])
+    errs = [np.sum((score > c) != dynamic) for c in cands]
+    best = np.flatnonzero(np.array(errs) == min(errs))
+    return float(cands[best[len(best) // 2]])
+
+
+@dataclass
+class GestureModel:
+    """Fitted classifiers and the settings their features were built with."""
+
+    static_svm: object
+    dynamic_svm: object
+    kind_svm: object
+    motion_threshold: float
+    n_harmonics: int = 12
+    n_frames: int = 4
+    static_frames: int = 3
+    meta: dict = field(default_factory=dict)
+
+    @classmethod
+    def fit(
+        cls,
+        xs: np.ndarray,
+        xd: np.ndarray,
+        xk: np.ndarray,
+        score: np.ndarray,
+        labels: np.ndarray,
+        *,
+        n_harmonics: int,
+        n_frames: int,
+        static_frames: int = 3,
+        seed: int = 0,
+        meta: dict | None = None,
+    ) -> GestureModel:
+        """Fit on static features ``xs``, dynamic ``xd``, motion (kind) features ``xk``
+        and the motion ``score``."""
+        labels = np.asarray(labels).astype(str)
+        is_dyn = np.isin(labels, DYNAMIC)
+        thr = fit_threshold(score, is_dyn)
+        kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), seed=seed)
+        st = fit_svm(xs[~is_dyn], labels[~is_dyn], seed=seed) if np.any(~is_dyn) else None
+        dy = fit_svm(xd[is_dyn], labels[is_dyn], seed=seed) if np.any(is_dyn) else None
+        return cls(st, dy, kind, thr, n_harmonics, n_frames, static_frames, dict(meta or {}))
+
+    def kind(self, xk: np.ndarray) -> np.ndarray:
+        """True where the motion says dynamic."""
+        if self.kind_svm is None:
+            return np.zeros(len(xk), dtype=bool)
+        return np.asarray(self.kind_svm.predict(xk)) == "dynamic"
+
+    def predict(self, xs: np.ndarray, xd: np.ndarray, xk: np.ndarray) -> np.ndarray:
+        dyn = self.kind(xk)
+        out = np.empty(len(dyn), dtype=object)
+        if np.any(~dyn):
+            out[~dyn] = self._pred(self.static_svm, xs[~dyn], STATIC[0])
+        if np.any(dyn):
+            out[dyn] = self._pred(self.dynamic_svm, xd[dyn], DYNAMIC[0])
+        return out.astype(str)
+
+    @staticmethod
+    def _pred(svm, x, default):
+        if svm is None:
+            return np.array([default] * len(x))
+        return svm.predict(x)
+
+    def confidence(self, xs, xd, xk) -> np.ndarray:
+        """A 0..1 margin-based confidence per sample (1 - exp(-margin))."""
+        dyn = self.kind(xk)
+        out = np.zeros(len(dyn))
+        for mask, svm, x in ((~dyn, self.static_svm, xs), (dyn, self.dynamic_svm, xd)):
+            if np.any(mask) and hasattr(svm, "decision_function"):
+                d = np.atleast_2d(svm.decision_function(x[mask]))
+                top = np.sort(d, axis=1)
+                margin = top[:, -1] - (top[:, -2] if top.shape[1] > 1 else 0)
+                out[mask] = 1 - np.exp(-np.abs(margin))
+        return out
+
+    # ------------------------------------------------------------------ persistence
+    def save(self, path: str | Path) -> Path:
+        import skops.io as sio
+
+        for svm in (self.static_svm, self.dynamic_svm, self.kind_svm):
+            if isinstance(svm, _Constant):
+                raise UserError("gesture model: a class set of one cannot be saved; train on more")
+        obj = {
+            "format": MODEL_FORMAT,
+            "static_svm": self.static_svm,
+            "dynamic_svm": self.dynamic_svm,
+            "kind_svm": self.kind_svm,
+            "settings": json.dumps(
+                {
+                    "motion_threshold": self.motion_threshold,
+                    "n_harmonics": self.n_harmonics,
+                    "n_frames": self.n_frames,
+                    "static_frames": self.static_frames,
+                    "meta": self.meta,
+                }
+            ),
+        }
+        p = Path(path)
+        sio.dump(obj, p)
+        return p
+
+    @classmethod
+    def load(cls, path: str | Path) -> GestureModel:
+        import skops.io as sio
+
+        p = Path(path)
+        if not p.is_file():
+            raise UserError(f"{p}: no gesture model there; make one with `haptable gestures train`")
+        try:
+            found = file_types(p)
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
+            raise UserError(f"{p}: not a skops gesture model ({e}); train it again") from None
+        bad = sorted(found - set(TRUSTED_TYPES))
+        if bad:
+            raise UserError(
+                f"{p}: contains types outside the allow-list ({', '.join(bad)}); "
+                "refusing to load it; train the model again"
+            )
+        try:
+            obj = sio.load(p, trusted=sorted(found))
+        except Exception as e:
+            raise UserError(f"{p}: cannot load the gesture model ({e}); train it again") from None
+        if not isinstance(obj, dict) or obj.get("format") != MODEL_FORMAT:
+            raise UserError(f"{p}: not a {MODEL_FORMAT} model; train it again")
+        s = json.loads(obj["settings"])
+        return cls(
+            obj["static_svm"],
+            obj["dynamic_svm"],
+            obj.get("kind_svm"),
+            float(s["motion_threshold"]),
+            int(s["n_harmonics"]),
+            int(s["n_frames"]),
+            int(s["static_frames"]),
+            dict(s.get("meta", {})),
+        )
