@@ -61,9 +61,9 @@ def haptable_register_commands(register: Any) -> None:
 
 @hookimpl
 def haptable_register_benchmarks(register: Any) -> None:
-    def run(ctx: Any, quick: bool) -> dict:
+    def run(ctx: Any, quick: bool, report_dir: str | None = None) -> dict:
         from .bench import run as bench_run
 
-        return bench_run(ctx, quick)
+        return bench_run(ctx, quick, report_dir=report_dir)
 
     register("knob", run, help="crossing-to-detent latency and synthesizer CPU per audio block")

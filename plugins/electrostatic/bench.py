@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,9 @@ def _pct(a: np.ndarray) -> dict[str, float]:
         "p99": float(np.percentile(a, 99)),
         "max": float(a.max()),
     }
+
+
+_LAST: dict[str, np.ndarray] = {}  # raw arrays of the last run, for the report's plots
 
 
 def simulated_latency(
@@ -56,6 +60,7 @@ def simulated_latency(
     lat_a = np.asarray(lat, dtype=float)
     missed = int(np.isnan(lat_a).sum())
     lat_a = lat_a[~np.isnan(lat_a)]
+    _LAST["latency_samples"] = lat_a
     return {
         "events": n_events,
         "missed": missed,
@@ -168,13 +173,81 @@ def pipeline_per_frame(n_frames: int) -> dict[str, Any]:
     return {"wall": summarize_s(wall), "cpu": summarize_s(cpu)}
 
 
-def run(ctx: Any, quick: bool) -> dict[str, Any]:
+def write_report(folder: Path, result: dict[str, Any]) -> Path:
+    """Markdown summary plus a figure: latency histogram and an HD+VF excerpt."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .simulate import canned_rotation, instantaneous_freq_hz, run_pipeline
+
+    folder.mkdir(parents=True, exist_ok=True)
+    fs, block = result["sample_rate_hz"], result["block"]
+    r = run_pipeline(canned_rotation(), "HD+VF", sample_rate_hz=fs, block=block, sectors=16)
+    t = np.arange(r.screen_v.size) / fs
+    tz, f = instantaneous_freq_hz(r.screen_v, fs)
+    fig, ax = plt.subplots(3, 1, figsize=(9, 8), constrained_layout=True)
+    lat = _LAST.get("latency_samples", np.zeros(0))
+    ax[0].hist(lat, bins=32, range=(0, block))
+    ax[0].set(
+        xlabel="crossing to first detent sample (samples)",
+        ylabel="crossings",
+        title=f"simulated callback loop, {block}-sample blocks at {fs} Hz",
+    )
+    ax[1].plot(t, r.screen_v, lw=0.5)
+    for c in r.crossings:
+        ax[1].axvline(c.t_s, color="r", lw=0.5, alpha=0.5)
+    ax[1].set(xlabel="s", ylabel="screen V", title="HD+VF, canned rotation (red: crossings)")
+    ts = [st.t_s for st in r.states]
+    ax[2].plot(tz, f, ".", ms=2, label="zero-crossing frequency")
+    v = np.abs([st.velocity_deg_s for st in r.states])
+    ax[2].plot(ts, 60 + 120 * np.clip(v / 180.0, 0, 1), label="commanded from velocity")
+    ax[2].set(xlabel="s", ylabel="Hz", ylim=(0, 300))
+    ax[2].legend()
+    png = folder / "knob.png"
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    sim = result["crossing_to_detent_simulated"]
+    thr = result["crossing_to_detent_threaded"]
+    cpu = result["synth_cpu_per_block"]
+    rows = "\n".join(
+        f"| {k} | {v['cpu']['p50_ms'] * 1e3:.1f} | {v['cpu']['p99_ms'] * 1e3:.1f} | {v['wall']['p99_ms'] * 1e3:.1f} |"
+        for k, v in cpu["per_condition"].items()
+    )
+    md = folder / "knob.md"
+    md.write_text(
+        f"""# Knob benchmark
+
+Machine: {", ".join(f"{k} {v}" for k, v in result["machine"].items())} (1-min load {result["load_average_1min"]:.1f})
+
+## Crossing to detent ({block}-sample blocks, {fs} Hz; one block = {block / fs * 1e3:.3f} ms)
+
+| loop | n | p50 | p99 | max | within one block |
+|---|---|---|---|---|---|
+| simulated clock (samples) | {sim["samples"]["n"]} | {sim["samples"]["p50"]:.1f} | {sim["samples"]["p99"]:.1f} | {sim["samples"]["max"]:.1f} | {sim["within_one_block"]} |
+| real threads (ms) | {thr["wall_ms"]["n"]} | {thr["wall_ms"]["p50_ms"]:.3f} | {thr["wall_ms"]["p99_ms"]:.3f} | {thr["wall_ms"]["max_ms"]:.3f} | {thr["within_one_block_frac"]:.1%} |
+
+## Synthesizer time per block (us)
+
+| condition | CPU p50 | CPU p99 | wall p99 |
+|---|---|---|---|
+{rows}
+
+![knob](knob.png)
+""",
+        encoding="utf-8",
+    )
+    return md
+
+
+def run(ctx: Any, quick: bool, report_dir: str | None = None) -> dict[str, Any]:
     fs, block = 48000, 64
     prof = getattr(ctx, "profile", None)
     if prof is not None and hasattr(prof, "get"):
         fs = int(prof.get("audio.sample_rate_hz") or fs)
         block = int(prof.get("audio.block_size") or block)
-    return {
+    out = {
         "sample_rate_hz": fs,
         "block": block,
         "crossing_to_detent_simulated": simulated_latency(300 if quick else 3000, fs, block),
@@ -187,3 +260,6 @@ def run(ctx: Any, quick: bool) -> dict[str, Any]:
         "threads, wall time from post() to the callback that renders the detent (includes "
         "OS scheduling, so machine load shows up in p99/max); cpu = thread CPU time",
     }
+    if report_dir:
+        out["report"] = str(write_report(Path(report_dir), out))
+    return out

@@ -138,3 +138,10 @@ def test_a_bad_threshold_table_in_the_profile_is_named(tmp_path, capsys):
     assert main(["-p", str(prof), "knob", "--forces"]) == 2
     err = capsys.readouterr().err
     assert "threshold_vpp" in err and "2 thresholds for 3 frequencies" in err
+
+
+def test_bench_report_is_written(tmp_path, capsys):
+    assert main(["bench", "knob", "--quick", "--report", str(tmp_path / "rep")]) == 0
+    md = (tmp_path / "rep" / "knob.md").read_text()
+    assert "Crossing to detent" in md and "HD+VF" in md
+    assert (tmp_path / "rep" / "knob.png").stat().st_size > 10000
