@@ -1,0 +1,146 @@
+"""The watchdog silences the outputs (gate e-stop with a clear reason) on a stall."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from console.runtime.loop import FrameLoop
+from console.runtime.watchdog import Watchdog, stall_reason
+from console.types import Frame
+
+
+class Stuck:
+    def __init__(self, stuck_s: float, where: str = "stage 'vision'") -> None:
+        self.stuck_s, self.where = stuck_s, where
+
+    def stall(self, now_s=None):
+        return self.stuck_s, self.where
+
+
+def test_trips_once_past_the_limit_with_a_reason_naming_where():
+    calls: list[str] = []
+    target = Stuck(0.1)
+    wd = Watchdog(target, calls.append, limit_s=0.25)
+    assert not wd.check(0.0)
+    target.stuck_s = 0.4
+    assert wd.check(0.0)
+    assert not wd.check(0.0)  # latched: one e-stop, not one per check
+    assert len(calls) == 1
+    assert "stage 'vision'" in calls[0] and "400 ms" in calls[0] and "watchdog_ms" in calls[0]
+    wd.reset()
+    assert wd.check(0.0) and len(calls) == 2
+
+
+def test_limit_must_be_positive():
+    with pytest.raises(ValueError):
+        Watchdog(Stuck(0), print, 0.0)
+
+
+def test_a_failing_action_does_not_kill_the_watchdog():
+    def boom(reason):
+        raise RuntimeError("x")
+
+    wd = Watchdog(Stuck(1.0), boom, 0.1)
+    assert wd.check(0.0) and wd.tripped
+
+
+def test_reason_for_a_dead_thread():
+    assert "forever" in stall_reason(float("inf"), "a loop thread died", 0.25)
+
+
+class OneFrameCamera:
+    def __init__(self) -> None:
+        self.sent = False
+
+    def read(self, timeout_s=0.1):
+        if self.sent:
+            threading.Event().wait(timeout_s)
+            return None
+        self.sent = True
+        return Frame(np.zeros((4, 4), np.uint8), 0, 0.0)
+
+    def close(self):
+        pass
+
+    def status(self):
+        return {}
+
+
+def test_loop_reports_where_it_is_stuck():
+    release = threading.Event()
+    entered = threading.Event()
+
+    def hang(f, work):
+        entered.set()
+        release.wait(5)
+
+    loop = FrameLoop(OneFrameCamera(), [("vision", lambda f, w: None), ("effect", hang)]).start()
+    try:
+        assert entered.wait(5)
+        stuck, where = loop.stall()
+        assert where == "stage 'effect'" and stuck >= 0
+    finally:
+        release.set()
+        loop.stop()
+    stuck, where = loop.stall()
+    assert where == "camera (no frame arriving)"
+
+
+class Ramp:
+    """A live stream: a 200 Hz sine on the screen channel, ramped in, never ending."""
+
+    patches = frozenset()
+    screen = True
+
+    def __init__(self) -> None:
+        self.k = 0
+        self.stop = False
+
+    def next_block(self, n):
+        if self.stop:
+            return None
+        k = np.arange(self.k, self.k + n)
+        self.k += n
+        env = np.minimum(k / 4800.0, 1.0)
+        return np.zeros(n), 40.0 * env * np.sin(2 * np.pi * 200 * k / 48000)
+
+    def request_stop(self):
+        self.stop = True
+
+
+def test_a_stalled_loop_silences_a_playing_stream(profile, plugins):
+    from console.runtime.outputs import open_outputs
+
+    release = threading.Event()
+    entered = threading.Event()
+
+    def hang(f, work):
+        entered.set()
+        release.wait(10)
+
+    with open_outputs(profile, plugins, fast=False) as out:
+        src = Ramp()
+        report = out.stream(src, name="carrier")
+        loop = FrameLoop(OneFrameCamera(), [("effect", hang)]).start()
+        wd = Watchdog(loop, out.estop, limit_s=0.15).start()
+        try:
+            assert entered.wait(5)
+            assert report.done.wait(10)  # the e-stop ended the stream
+        finally:
+            release.set()
+            wd.stop()
+            loop.stop()
+        st = out.status()["gate"]
+        assert st["estopped"]
+        assert "watchdog" in st["estop_reason"] and "'effect'" in st["estop_reason"]
+        rec = out.recording()
+        assert np.abs(rec[:, 1]).max() > 10.0  # the carrier did play
+        # after the e-stop, every sample is silent and the screen relay is open
+        blocks_after = out.status()["audio"]["blocks"]
+        threading.Event().wait(0.05)
+        rec2 = out.recording()
+        assert np.all(rec2[-(out.status()["audio"]["blocks"] - blocks_after) * 64 - 64 :] == 0.0)
+        assert 5 not in out.gate.relay_state()
