@@ -273,7 +273,8 @@ def probe(profile: Any, api: Any = None) -> DeviceStatus:
         register_hub(api, url)
     except DeviceError as exc:
         fix = str(exc).rsplit("; ", 1)[-1]
-        return DeviceStatus("relay_board", name, "missing", str(exc), fix)
+        busy = fix == SHARE_FIX  # the board may well be there, held by another process
+        return DeviceStatus("relay_board", name, "error" if busy else "missing", str(exc), fix)
     try:
         modules = list_modules(api)
         serial = choose_module(modules, profile.get("relays.serial"))

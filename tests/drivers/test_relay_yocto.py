@@ -229,13 +229,23 @@ def test_probe_with_the_fake(stub_profile):
     assert gone.state == "missing" and "MAXICPL1-ZZZZZ" in gone.fix
 
 
+def test_probe_when_another_process_holds_the_usb(stub_profile):
+    fake = FakeApi(hub_error="Another process (pid 4242) is already using yAPI (ypkt_lin:150)")
+    st = relay_yocto.probe(stub_profile(), api=fake.ns)
+    assert st.state == "error" and "pid 4242" in st.why
+    assert st.fix == relay_yocto.SHARE_FIX and "VirtualHub" in st.fix
+
+
 def test_probe_with_the_real_library_and_nothing_attached(stub_profile):
     """The installed yoctopuce + libusb, no module: "missing", no exception, USB released."""
     pytest.importorskip("yoctopuce")
     st = relay_yocto.probe(stub_profile())
     assert st.kind == "relay_board" and st.name == "yoctopuce"
-    assert st.state == "missing", st
-    assert "Yocto-MaxiCoupler" in st.why and st.fix
+    if st.state == "error":  # another process on this machine holds the USB access now
+        assert st.fix == relay_yocto.SHARE_FIX, st
+    else:
+        assert st.state == "missing", st
+        assert "Yocto-MaxiCoupler" in st.why and st.fix
 
 
 def test_probe_of_an_unreachable_virtualhub_is_missing(stub_profile):
