@@ -50,3 +50,29 @@ def test_geometry_helpers_and_bad_hysteresis():
     assert k.boundary_distance(22.5 + 2.0) == pytest.approx(2.0)
     with pytest.raises(ValueError):
         Knob(32, hysteresis_deg=6.0)
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    sectors=st.sampled_from([8, 16, 32]),
+    angles=st.lists(st.floats(-1000, 1000, allow_nan=False), min_size=1, max_size=60),
+)
+def test_selection_is_the_sector_under_the_angle_and_crossings_add_up(sectors, angles):
+    h = 1.0
+    k = Knob(sectors, hysteresis_deg=h)
+    w = 360.0 / sectors
+    for a in angles:
+        before = k.item
+        cr = k.update(0.0, a)
+        assert k.item - before == sum(c.direction for c in cr)
+        assert all(abs(c.to_item - c.from_item) == 1 for c in cr)
+        # away from a boundary the selection is exactly the sector under the angle
+        r = a % w
+        if h < r < w - h:
+            assert k.item == int(a // w)
+        else:  # within the hysteresis band: one of the two neighbours
+            assert abs(k.item - round(a / w)) <= 1
