@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from plugins.electrostatic.knob import Knob
 
@@ -50,10 +52,6 @@ def test_geometry_helpers_and_bad_hysteresis():
     assert k.boundary_distance(22.5 + 2.0) == pytest.approx(2.0)
     with pytest.raises(ValueError):
         Knob(32, hysteresis_deg=6.0)
-
-
-from hypothesis import given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
 
 
 @settings(max_examples=200, deadline=None)
