@@ -99,3 +99,23 @@ def test_table_of_regions(ss_map):
     one = hand_flow(ss_map, C, "down", PER, screen_stride=3)
     j = DIRECTIONS.index("down")
     assert t["frequency_hz"][0, j, 0] == one["parts"][0]["frequency_hz"]
+
+
+@pytest.mark.parametrize("center", [(200.0, 150.0), (500.0, 260.0)])
+def test_closed_loop_exact_plate_under_the_hand(ss_plate, ss_map, center):
+    """Decisions made on interpolated FRFs hold on the exact plate: in each part the
+    start (then end) side has an active square and its mirror side none."""
+    offs = (np.arange(45) + 0.5) * 120 / 45 - 60
+    pts = np.array([(center[0] + x, center[1] + y) for y in offs for x in offs])
+    for d in DIRECTIONS:
+        r = hand_flow(ss_map, center, d, PER, screen_stride=3)
+        assert r["ok"]
+        s, e = side_masks(d)
+        for part, (a, b) in zip(r["parts"], ((s, e), (e, s)), strict=True):
+            h = np.abs(
+                ss_plate.frf_um_per_v(pts, [part["frequency_hz"]], (part["actuator"],))[0, :, 0]
+            )
+            sq = h.reshape(3, 15, 3, 15).transpose(0, 2, 1, 3).reshape(3, 3, 225)
+            q = -np.sort(-sq, axis=-1)[..., 112]  # 113th largest: at least half of 225
+            active = q * part["amplitude_v"] >= part["x_um"]
+            assert active[a].any() and not active[b].any()
