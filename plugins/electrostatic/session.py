@@ -40,6 +40,7 @@ class KnobSession:
         )
         self.stream = KnobStream(condition, sample_rate_hz, s, limits, sectors=sectors)
         self.fs, self.block, self.record = int(sample_rate_hz), int(block), record
+        self.start_item = int(start_item)
         self.states: list[RotationState] = []
         self.crossings: list[Crossing] = []
         self.crossing_ids: list[int] = []
@@ -61,6 +62,18 @@ class KnobSession:
         self.crossing_ids += ids
         self.items.append(self.knob.item)
         return cr
+
+    def scene_event(self) -> dict[str, Any]:
+        """The knob state for a projected scene (JSON): ``angle_deg`` from the start
+        item's lower boundary (so ``floor(angle / width)`` counts items from the start),
+        ``item_offset`` = the selection with hysteresis (what the detents follow)."""
+        return {
+            "type": "knob",
+            "angle_deg": self.tracker.angle_deg - self.start_item * self.knob.width_deg,
+            "item_offset": self.knob.item - self.start_item,
+            "velocity_deg_s": self.tracker.velocity_deg_s,
+            "touching": self.tracker.touching,
+        }
 
     def render_block(self) -> bool:
         b = self.stream.next_block(self.block)

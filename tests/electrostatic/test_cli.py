@@ -137,3 +137,15 @@ def test_bench_knob_quick_with_report(tmp_path, capsys):
     md = (tmp_path / "rep" / "knob.md").read_text()
     assert "Crossing to detent" in md and "HD+VF" in md
     assert (tmp_path / "rep" / "knob.png").stat().st_size > 10000
+
+
+def test_scene_event_matches_the_projector_convention(profile, plugins):
+    from plugins.electrostatic.simulate import canned_rotation
+
+    ses = plugins.get("effect", "knob").factory(profile).session("HD", sectors=8)
+    for t, cs in canned_rotation():
+        ses.feed(t, cs)
+    ev = ses.scene_event()
+    json.dumps(ev)
+    assert ev["type"] == "knob" and ev["item_offset"] == 4
+    assert int(ev["angle_deg"] // 45.0) == ev["item_offset"]  # mid-sector: both agree
