@@ -119,65 +119,95 @@ def run_loop(ctx: Any, quick: bool) -> dict:
 
 
 def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
-    """The knob demo for ``minutes`` (default 10; quick: 0.5; ``HAPTABLE_SOAK_MINUTES``)."""
+    """The knob demo for ``minutes`` (default 10; quick: 0.5; ``HAPTABLE_SOAK_MINUTES``).
+
+    A watchdog trip (the loop stalled: e-stop) is counted with its reason; the gate is
+    reset and the demo restarted, so the soak always covers the whole time."""
     from .run import start_demo
 
     if minutes is None:
         minutes = float(os.environ.get("HAPTABLE_SOAK_MINUTES", 0.5 if quick else 10.0))
     prof, pm = ctx.profile, ctx.pm
     res: dict = {"machine": machine_info(), "minutes": minutes, "load_avg_start": load_avg()}
-    samples = []
+    samples: list[dict] = []
+    trips: list[dict] = []
+    tot = {"frames": 0, "dropped_queue": 0, "dropped_camera": 0, "errors": 0, "crossings": 0}
+    warm_rss = None
+    last_snap: dict = {}
     with ctx.outputs(fast=False) as out:
         rss0 = rss_mb()
-        with start_demo("knob", prof, pm, out) as run_:
-            t0 = time.monotonic()
-            next_t = t0
-            while time.monotonic() - t0 < minutes * 60:
-                time.sleep(0.5)
-                if time.monotonic() >= next_t:
-                    lat = run_.monitor.snapshot()
-                    samples.append(
-                        {
-                            "t_s": round(time.monotonic() - t0, 1),
-                            "rss_mb": round(rss_mb(), 1),
-                            "fps": lat["fps"],
-                            "frames": lat["frames"],
-                            "dropped_queue": lat["dropped_queue"],
-                            "dropped_camera": lat["dropped_camera"],
-                            "p99_processing_ms": round(lat["processing"]["p99_ms"], 2),
-                            "underruns": out.status()["audio"].get("underruns"),
-                            "load_avg": load_avg()[:1],
-                        }
-                    )
-                    next_t += 30.0
-                if run_.watchdog.tripped:
-                    break
-            run_.stop()
-            snap = run_.snapshot()
-            crossings = len(run_.demo.crossings)
+        t0 = time.monotonic()
+        next_t = t0
+
+        def add(snap: dict, demo: Any) -> None:
+            lat = snap["latency"]
+            for k in ("frames", "dropped_queue", "dropped_camera", "errors"):
+                tot[k] += lat[k]
+            tot["crossings"] += len(demo.crossings)
+
+        while time.monotonic() - t0 < minutes * 60:
+            run_ = start_demo("knob", prof, pm, out)
+            try:
+                while time.monotonic() - t0 < minutes * 60 and not run_.watchdog.tripped:
+                    time.sleep(0.5)
+                    now = time.monotonic()
+                    if now >= next_t:
+                        lat = run_.monitor.snapshot()
+                        rss = rss_mb()
+                        if warm_rss is None and now - t0 >= 150.0:
+                            warm_rss = rss
+                        samples.append(
+                            {
+                                "t_s": round(now - t0, 1),
+                                "rss_mb": round(rss, 1),
+                                "fps": lat["fps"],
+                                "frames": tot["frames"] + lat["frames"],
+                                "dropped_queue": tot["dropped_queue"] + lat["dropped_queue"],
+                                "dropped_camera": tot["dropped_camera"] + lat["dropped_camera"],
+                                "p99_processing_ms": round(lat["processing"]["p99_ms"], 2),
+                                "underruns": out.status()["audio"].get("underruns"),
+                                "watchdog_trips": len(trips),
+                                "load_avg_1min": load_avg()[:1],
+                            }
+                        )
+                        next_t += 30.0
+            finally:
+                run_.stop()
+            last_snap = run_.snapshot()
+            add(last_snap, run_.demo)
+            if run_.watchdog.tripped:
+                trips.append(
+                    {"t_s": round(time.monotonic() - t0, 1), "reason": run_.watchdog.reason}
+                )
+                out.reset()
+        ran_s = time.monotonic() - t0
         rss1 = rss_mb()
         res.update(
             {
-                "ran_s": round(snap["uptime_s"], 1),
-                "frames": snap["latency"]["frames"],
-                "fps": snap["latency"]["fps"],
-                "dropped_for_processing": snap["latency"]["dropped_queue"],
-                "dropped_by_camera_late": snap["latency"]["dropped_camera"],
-                "errors": snap["latency"]["errors"],
+                "ran_s": round(ran_s, 1),
+                "frames": tot["frames"],
+                "fps_mean": round(tot["frames"] / ran_s, 2) if ran_s else 0.0,
+                "dropped_for_processing": tot["dropped_queue"],
+                "dropped_by_camera_late": tot["dropped_camera"],
+                "errors": tot["errors"],
                 "rss_start_mb": round(rss0, 1),
+                "rss_after_150s_mb": None if warm_rss is None else round(warm_rss, 1),
                 "rss_end_mb": round(rss1, 1),
                 "audio": _audio(out),
-                "watchdog": snap["watchdog"],
-                "gate_estopped": out.status()["gate"].get("estopped"),
-                "knob_crossings": crossings,
+                "watchdog_trips": len(trips),
+                "trips": trips[:20],
+                "gate_estopped_at_end": out.status()["gate"].get("estopped"),
+                "knob_crossings": tot["crossings"],
                 "latency_last_window": {
-                    "end_to_end": snap["latency"]["end_to_end"],
-                    "processing": snap["latency"]["processing"],
-                    "stages": snap["latency"]["stages"],
+                    k: last_snap.get("latency", {}).get(k)
+                    for k in ("end_to_end", "processing", "stages")
                 },
                 "samples": samples,
-                "note": "the twin records the last 120 s of audio, so RSS grows for the first "
-                "2 minutes by design; compare samples after that",
+                "note": "dropped_for_processing: frames the loop's queue discarded because "
+                "processing fell behind; dropped_by_camera_late: frames the twin camera "
+                "skipped because its own thread (rendering) was late. The twin keeps the last "
+                "120 s of audio, so RSS grows for the first 2 minutes by design: compare "
+                "rss_after_150s_mb with rss_end_mb",
             }
         )
     res["load_avg_end"] = load_avg()
