@@ -287,3 +287,37 @@ def test_probe_without_permission(stub_profile, tmp_path):
     node.chmod(0)
     st = camera_opencv.probe(stub_profile(camera__device=str(node)))
     assert st.state == "missing" and "video" in st.fix
+
+
+def test_real_videocapture_on_a_file_gives_gray_frames_and_reopens_at_its_end(tmp_path, wait):
+    """The real cv2.VideoCapture (FFMPEG on a file instead of V4L2): types, sizes, and
+    end-of-file read failures treated like an unplug (release, reopen, frames again)."""
+    cv2 = pytest.importorskip("cv2")
+    path = tmp_path / "clip.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 60, (64, 48))
+    if not writer.isOpened():
+        pytest.skip("this OpenCV cannot write MJPG .avi")
+    levels = [20 * (i + 1) for i in range(10)]
+    for level in levels:
+        writer.write(np.full((48, 64, 3), level, np.uint8))
+    writer.release()
+
+    cam = OpenCVCamera(
+        str(path),
+        fps=60,
+        open_capture=lambda d: cv2.VideoCapture(d, cv2.CAP_ANY),
+        fail_limit=2,
+        backoff_s=(0.05, 0.1),
+    )
+    try:
+        wait(lambda: cam.status()["reconnects"] >= 1, 20, "end of file and a reopen")
+        wait(lambda: cam.status()["frames"] > len(levels), 20, "frames after the reopen")
+        frame = cam.read(5)
+        st = cam.status()
+    finally:
+        cam.close()
+    assert frame is not None
+    assert frame.image.dtype == np.uint8 and frame.image.shape == (48, 64)
+    assert min(abs(float(frame.image.mean()) - lv) for lv in levels) < 4  # MJPG is lossy
+    assert st["size_px"] == (64, 48)  # the file cannot be resized: the real size is reported
+    assert st["bad_frames"] == 0
