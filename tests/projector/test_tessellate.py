@@ -7,6 +7,8 @@ import math
 import cv2
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from plugins.projector import tessellate as T
 from plugins.projector.layout import hand_outline_mm
@@ -102,3 +104,20 @@ def test_rect_outline_is_the_frame_area():
     assert T.triangles_area(T.rect_outline(0, 0, w, h, t)) == pytest.approx(
         (w + t) * (h + t) - (w - t) * (h - t)
     )
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    radii=st.lists(st.floats(0.5, 100.0), min_size=3, max_size=40),
+    jitter=st.lists(st.floats(0.05, 0.95), min_size=40, max_size=40),
+    clockwise=st.booleans(),
+)
+def test_ear_clipping_on_random_star_shaped_polygons(radii, jitter, clockwise):
+    n = len(radii)
+    a = (np.arange(n) + np.array(jitter[:n])) * 2 * np.pi / n  # increasing angles: a simple polygon
+    p = np.c_[np.array(radii) * np.cos(a), np.array(radii) * np.sin(a)]
+    if clockwise:
+        p = p[::-1]
+    assume(abs(T.signed_area(p)) > 1e-3)
+    tri = T.polygon(p)
+    assert T.triangles_area(tri) == pytest.approx(abs(T.signed_area(p)), rel=1e-6, abs=1e-6)
