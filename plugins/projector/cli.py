@@ -296,13 +296,14 @@ def show(args: Any, ctx: Any) -> int:
 
 def run(args: Any, ctx: Any) -> int:
     if args.list_scenes:
-        for name, f in sorted(scene_factories(ctx).items()):
-            scene = f(_profile(ctx))
-            needs = getattr(scene, "needs", {})
-            short = {k: (f"{len(v)} items" if isinstance(v, list) else v) for k, v in needs.items()}
-            print(
-                f"{name:18s} {(type(scene).__doc__ or '').strip().splitlines()[0]}  needs: {short or 'nothing'}"
+        regs = ctx.pm.of("scene")
+        for name in sorted(regs):
+            scene = regs[name].factory(_profile(ctx))
+            needs = getattr(scene, "needs", {}) or {}
+            short = ", ".join(
+                f"{k} ({len(v)})" if isinstance(v, list) else k for k, v in needs.items() if v
             )
+            print(f"{name:18s} {regs[name].description}  [needs: {short or 'nothing'}]")
         return 0
     if args.show_calibration or args.set_corner or args.add_point or args.reset_calibration:
         return calibrate(args, ctx)
@@ -390,6 +391,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:
+        return 0
 
 
 class _builtin_only:
