@@ -148,6 +148,7 @@ class SounddeviceOutput:
         self._t_last_s: float | None = None
         self._periods_s: deque[float] = deque(maxlen=TIMING_WINDOW)  # between callbacks
         self._fills_s: deque[float] = deque(maxlen=TIMING_WINDOW)  # inside source.fill
+        self._dac_leads_s: deque[float] = deque(maxlen=TIMING_WINDOW)  # callback -> DAC
 
     # ------------------------------------------------------------------ lifecycle
     def start(self, source: BlockSource) -> None:
@@ -161,6 +162,7 @@ class SounddeviceOutput:
         self._t_last_s = None
         self._periods_s.clear()
         self._fills_s.clear()
+        self._dac_leads_s.clear()
         self._silent = False
         self._stopping = False
         self._error = ""
@@ -241,6 +243,10 @@ class SounddeviceOutput:
         if self._t_last_s is not None:
             self._periods_s.append(t0_s - self._t_last_s)
         self._t_last_s = t0_s
+        dac_s = getattr(time_info, "outputBufferDacTime", 0.0)
+        now_s = getattr(time_info, "currentTime", 0.0)
+        if dac_s > 0 and now_s > 0:  # when this block reaches the DAC (0 if unknown)
+            self._dac_leads_s.append(dac_s - now_s)
         if getattr(status, "output_underflow", False):
             self._underruns += 1
         self._blocks += 1
@@ -284,8 +290,10 @@ class SounddeviceOutput:
 
     # ------------------------------------------------------------------ status
     def status(self) -> dict[str, Any]:
-        """State, output latency, underruns, and the callback period and fill time
-        (p50/p99/max in ms over the last ``TIMING_WINDOW`` callbacks)."""
+        """State, output latency, underruns, and per-callback timing (p50/p99/max in ms
+        over the last ``TIMING_WINDOW`` callbacks): the period between callbacks, the time
+        spent in the source's ``fill``, and how far ahead of the DAC each block was
+        written (``dac_lead_ms``, when the host API reports it)."""
         stream = self._stream
         latency_s = float("nan")
         if stream is not None:
@@ -307,6 +315,7 @@ class SounddeviceOutput:
             "callback_errors": self._callback_errors,
             "period_ms": summarize_s(list(self._periods_s)),
             "fill_ms": summarize_s(list(self._fills_s)),
+            "dac_lead_ms": summarize_s(list(self._dac_leads_s)),
             "error": self._error,
         }
 

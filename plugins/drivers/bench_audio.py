@@ -39,5 +39,6 @@ def run(ctx: Any, quick: bool, duration_s: float | None = None) -> dict[str, Any
         "latency_s": audio.get("latency_s"),
         "period_ms": audio.get("period_ms"),
         "fill_ms": audio.get("fill_ms"),
+        "dac_lead_ms": audio.get("dac_lead_ms"),
         "machine": machine_info(),
     }

@@ -6,7 +6,9 @@ After consecutive read failures (an unplug) the capture is released and reopened
 exponential backoff (state ``reconnecting``). ``status()`` reports the measured frame
 rate and dropped frames: those the camera skipped (gaps in arrival times longer than
 1.5 frame periods) and those the reader never took. Frame ``seq`` counts camera frame
-slots, so a consumer sees every drop as a gap. ``cv2`` is imported lazily.
+slots, so a consumer sees every drop as a gap. ``t_capture_s`` is the V4L2 buffer
+timestamp (CLOCK_MONOTONIC, the clock of ``time.monotonic``) when the driver gives a
+plausible one, else the time the read returned. ``cv2`` is imported lazily.
 """
 
 from __future__ import annotations
@@ -107,18 +109,23 @@ def _props() -> SimpleProps:
         cv2.CAP_PROP_EXPOSURE,
         cv2.CAP_PROP_GAIN,
         getattr(cv2, "CAP_PROP_READ_TIMEOUT_MSEC", None),
+        cv2.CAP_PROP_POS_MSEC,
     )
 
 
 class SimpleProps:
     """The VideoCapture property ids the driver sets (cv2's constants, or a test's)."""
 
-    def __init__(self, width, height, fps, auto_exposure, exposure, gain, read_timeout_ms):
+    def __init__(
+        self, width, height, fps, auto_exposure, exposure, gain, read_timeout_ms, pos_msec=None
+    ):
         self.width, self.height, self.fps = width, height, fps
         self.auto_exposure, self.exposure, self.gain = auto_exposure, exposure, gain
         self.read_timeout_ms = read_timeout_ms
+        self.pos_msec = pos_msec
 
 
+DEVICE_STAMP_MAX_AGE_S = 1.0  # a buffer timestamp older than this is not on our clock
 V4L2_EXPOSURE_MANUAL = 1.0
 V4L2_EXPOSURE_AUTO = 3.0
 
@@ -159,6 +166,7 @@ class OpenCVCamera:
         self._dropped_reader = 0
         self._reconnects = 0
         self._bad_frames = 0
+        self._device_stamps = 0
         self._state = "starting"
         self._error = ""
         self._size_px: tuple[int, int] = (0, 0)
@@ -225,6 +233,20 @@ class OpenCVCamera:
                 return
             delay = min(delay * 2, self._backoff_s[1])
 
+    def _capture_time(self, cap: Any, now_s: float) -> float:
+        """The driver's buffer timestamp when it is on our clock (V4L2: CLOCK_MONOTONIC,
+        as ``time.monotonic``), else the time ``read`` returned."""
+        if self._props.pos_msec is None:
+            return now_s
+        try:
+            t_dev_s = float(cap.get(self._props.pos_msec)) / 1e3
+        except Exception:
+            return now_s
+        if 0.0 <= now_s - t_dev_s <= DEVICE_STAMP_MAX_AGE_S:
+            self._device_stamps += 1
+            return t_dev_s
+        return now_s
+
     def _run(self) -> None:
         fails = 0
         while not self._stop.is_set():
@@ -245,7 +267,7 @@ class OpenCVCamera:
                     self._reconnect()
                 continue
             fails = 0
-            t_s = self._clock()
+            t_s = self._capture_time(cap, self._clock())
             try:
                 gray = to_gray8(image)
             except ValueError as exc:
@@ -296,6 +318,7 @@ class OpenCVCamera:
             "dropped_camera": self._timing.skipped,
             "dropped_reader": self._dropped_reader,
             "bad_frames": self._bad_frames,
+            "device_timestamps": self._device_stamps,  # frames stamped by the driver's clock
             "reconnects": self._reconnects,
             "error": self._error,
         }

@@ -50,9 +50,12 @@ class FakeStream:
         """Run the callback like PortAudio would; returns what it wrote."""
         frames = self.kw["blocksize"]
         outs = []
-        for _ in range(n_blocks):
+        for k in range(n_blocks):
             out = np.full((frames, 2), 7.0, np.float32)  # garbage, must be overwritten
-            self.kw["callback"](out, frames, None, SimpleNamespace(output_underflow=underflow))
+            now = 50.0 + k * frames / self.kw["samplerate"]
+            when = SimpleNamespace(currentTime=now, outputBufferDacTime=now + 0.008)
+            status = SimpleNamespace(output_underflow=underflow)
+            self.kw["callback"](out, frames, when, status)
             outs.append(out)
         return np.concatenate(outs)
 
@@ -177,6 +180,7 @@ def test_stream_settings_and_callback_pulls_from_the_source():
     assert st["latency_s"] == pytest.approx(0.0107)
     assert st["device"] == "system (JACK Audio Connection Kit)"
     assert st["period_ms"]["n"] == 2 and st["fill_ms"]["n"] == 3  # timing kept per callback
+    assert st["dac_lead_ms"]["p50_ms"] == pytest.approx(8.0)
     out.stop()
 
 

@@ -12,7 +12,7 @@ from plugins.drivers import camera_opencv
 from plugins.drivers.camera_opencv import FrameTiming, OpenCVCamera, SimpleProps, to_gray8
 from plugins.drivers.errors import DeviceError
 
-PROPS = SimpleProps("W", "H", "FPS", "AUTO_EXP", "EXP", "GAIN", "READ_TIMEOUT")
+PROPS = SimpleProps("W", "H", "FPS", "AUTO_EXP", "EXP", "GAIN", "READ_TIMEOUT", "POS_MSEC")
 
 
 class World:
@@ -27,6 +27,11 @@ class World:
         self.captures: list[FakeCapture] = []
         self.n = 0
         self.stop = None  # the camera's stop event: a blocked read returns when it is set
+        self.stamp_lag_s: float | None = None  # buffer timestamp this long before the read
+
+    @property
+    def stamp_ms(self) -> float:
+        return 0.0 if self.stamp_lag_s is None else (self.t_s - self.stamp_lag_s) * 1e3
 
     def clock(self) -> float:
         return self.t_s
@@ -59,6 +64,8 @@ class FakeCapture:
         return True
 
     def get(self, prop) -> float:
+        if prop == "POS_MSEC":  # the driver's buffer timestamp, ms on the monotonic clock
+            return self.world.stamp_ms
         return {"W": self.world.size[1], "H": self.world.size[0]}.get(prop, self.props.get(prop, 0))
 
     def read(self):
@@ -184,6 +191,19 @@ def test_frames_are_grayscale_handed_out_once(world, camera, wait):
     assert cam.read(timeout_s=0.01) is None  # not handed out twice
     world.frame()
     assert cam.read(timeout_s=5).seq == 1
+
+
+def test_capture_time_is_the_driver_timestamp_when_plausible(world, camera, wait):
+    world.stamp_lag_s = 0.004  # the frame left the sensor 4 ms before read() returned
+    cam = camera()
+    world.frame()
+    f = cam.read(5)
+    assert f.t_capture_s == pytest.approx(100 + 1 / 60 - 0.004)
+    world.stamp_lag_s = 3600.0  # a timestamp on some other clock is not used
+    world.frame()
+    g = cam.read(5)
+    assert g.t_capture_s == pytest.approx(100 + 2 / 60)
+    assert cam.status()["device_timestamps"] == 1
 
 
 def test_frames_the_reader_missed_and_frames_the_camera_skipped(world, camera, wait):
