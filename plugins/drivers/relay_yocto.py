@@ -265,7 +265,11 @@ def probe(profile: Any, api: Any = None) -> DeviceStatus:
         api = api or load_yocto()
         if url != "usb":  # an unreachable host would block RegisterHub for its timeout
             errmsg = api.YRefParam()
-            if api.YAPI.TestHub(url, 1500, errmsg) != api.YAPI.SUCCESS:
+            try:
+                res = api.YAPI.TestHub(url, 1500, errmsg)
+            except (ImportError, OSError) as exc:  # the native library cannot load
+                raise DeviceError(f"yoctopuce: {exc}; {_hub_fix(url, str(exc))}") from None
+            if res != api.YAPI.SUCCESS:
                 msg = str(errmsg.value)
                 raise DeviceError(
                     f"[relays] url = {url!r}: no hub answers ({msg}); {_hub_fix(url, msg)}"

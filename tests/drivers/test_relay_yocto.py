@@ -229,6 +229,24 @@ def test_probe_with_the_fake(stub_profile):
     assert gone.state == "missing" and "MAXICPL1-ZZZZZ" in gone.fix
 
 
+def test_native_library_that_cannot_load_says_install_libusb(stub_profile):
+    fake = FakeApi()
+
+    def no_libusb(*args):
+        raise ImportError(
+            "Unable to import YAPI shared library (libyapi-amd64.so): "
+            "libusb-1.0.so.0: cannot open shared object file"
+        )
+
+    fake.ns.YAPI.RegisterHub = no_libusb
+    fake.ns.YAPI.TestHub = no_libusb
+    for url in ("usb", "127.0.0.1"):
+        st = relay_yocto.probe(stub_profile(relays__url=url), api=fake.ns)
+        assert st.state == "missing" and st.fix == relay_yocto.LIBUSB_FIX, st
+    with pytest.raises(DeviceError, match="apt-get install libusb-1.0-0"):
+        YoctoRelayBoard(api=fake.ns)
+
+
 def test_probe_when_another_process_holds_the_usb(stub_profile):
     fake = FakeApi(hub_error="Another process (pid 4242) is already using yAPI (ypkt_lin:150)")
     st = relay_yocto.probe(stub_profile(), api=fake.ns)
@@ -236,6 +254,7 @@ def test_probe_when_another_process_holds_the_usb(stub_profile):
     assert st.fix == relay_yocto.SHARE_FIX and "VirtualHub" in st.fix
 
 
+@pytest.mark.hardware
 def test_probe_with_the_real_library_and_nothing_attached(stub_profile):
     """The installed yoctopuce + libusb, no module: "missing", no exception, USB released."""
     pytest.importorskip("yoctopuce")
@@ -243,11 +262,14 @@ def test_probe_with_the_real_library_and_nothing_attached(stub_profile):
     assert st.kind == "relay_board" and st.name == "yoctopuce"
     if st.state == "error":  # another process on this machine holds the USB access now
         assert st.fix == relay_yocto.SHARE_FIX, st
+    elif st.fix == relay_yocto.LIBUSB_FIX:  # no libusb-1.0-0 on this machine
+        assert "libusb" in st.why or "shared library" in st.why, st
     else:
         assert st.state == "missing", st
         assert "Yocto-MaxiCoupler" in st.why and st.fix
 
 
+@pytest.mark.hardware
 def test_probe_of_an_unreachable_virtualhub_is_missing(stub_profile):
     pytest.importorskip("yoctopuce")
     st = relay_yocto.probe(stub_profile(relays__url="127.0.0.1:1"))
