@@ -319,3 +319,14 @@ def test_probe_without_a_board_is_missing_with_the_fix(stub_profile):
     assert st.state == "missing" and "plug in" in st.fix
     denied = relay_hid.probe(stub_profile(), backend=FakeBackend(SimBoard(permission=False)))
     assert denied.state == "missing" and "udev" in denied.fix
+
+
+def test_no_libusb_backend_says_install_libusb(stub_profile, monkeypatch):
+    def no_backend(**kw):
+        raise usb.core.NoBackendError("No backend available")
+
+    monkeypatch.setattr(usb.core, "find", no_backend)
+    with pytest.raises(DeviceError, match="apt-get install libusb-1.0-0"):
+        HidRelayBoard()
+    st = relay_hid.probe(stub_profile())
+    assert st.state == "missing" and st.fix == relay_hid.LIBUSB_FIX
