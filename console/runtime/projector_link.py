@@ -384,7 +384,11 @@ class ProjectorLink:
                         continue
                     self.last_rx_s = time.monotonic()
                     for msg in rx.feed(data):
-                        self._handle(msg)
+                        try:
+                            self._handle(msg)
+                        except (TypeError, ValueError, AttributeError) as e:
+                            rx.bad_lines += 1  # a malformed message must not stop the link
+                            log.warning("projector link: ignored a bad message (%s)", e)
             except BlockingIOError:
                 pass
             except OSError as e:

@@ -89,6 +89,7 @@ class LinkServer:
         self._drawn_seq = 0
         self._drawn_t = 0.0
         self.connected = False
+        self.last_drop = ""
         self.consoles = 0
         self._snapshot_requests: list[str] = []
         self._snapshots_done: list[str] = []
@@ -140,6 +141,7 @@ class LinkServer:
             self._scene, self._state = None, None
             self._version += 1
         self.connected = False
+        self.last_drop = why
         log.warning("projector: console gone (%s): showing black", why)
 
     def _run(self) -> None:
@@ -237,7 +239,11 @@ class LinkServer:
                         continue
                     last_rx = time.monotonic()
                     for msg in rx.feed(data):
-                        self._handle(msg, out, last_rx)
+                        try:
+                            self._handle(msg, out, last_rx)
+                        except (TypeError, ValueError, AttributeError) as e:
+                            rx.bad_lines += 1  # a malformed message must not stop the link
+                            log.warning("projector: ignored a bad message (%s)", e)
             except BlockingIOError:
                 pass
             except OSError as e:

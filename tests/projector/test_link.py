@@ -123,7 +123,7 @@ def _fake_console(path):
 
 
 def test_projector_end_draws_newest_state_and_goes_black_when_the_console_leaves(sock_path):
-    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=0.5, initial={"kind": "alignment"})
+    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=3.0, initial={"kind": "alignment"})
     srv.start()
     try:
         assert srv.snapshot()[3] == {"kind": "alignment"}  # shown until a console comes
@@ -144,13 +144,20 @@ def test_projector_end_draws_newest_state_and_goes_black_when_the_console_leaves
             seen.append(json.loads(f.readline()))
         acks = [m["seq"] for m in seen if m["type"] == "ack"]
         assert acks == [1, 2] and seen[-1]["seq"] == 2  # each state acked; the newest drawn
-        s.close()  # the console dies: EOF
-        wait_until(lambda: srv.snapshot()[3] is None, 5, "black after EOF")
+        # malformed messages are skipped; the link stays up
+        s.sendall(b'{"type": "state", "seq": "x", "state": {}}\n{"type": "state", "seq": 3}\n[]\n')
+        s.sendall(encode({"type": "state", "seq": 4, "scene": "grid", "state": {"kind": "grid"}}))
+        wait_until(lambda: srv.snapshot()[1] == 4, 5, "state 4 after bad lines")
+        f.close()
+        s.close()  # the console dies: EOF, noticed at once (well before the 3 s timeout)
+        wait_until(lambda: srv.snapshot()[3] is None, 10, "black after EOF")
+        assert srv.last_drop == "console closed the link"  # noticed by EOF, not by the timeout
         # a console that goes silent (hung) is dropped after the timeout: black again
         s, f = _fake_console(sock_path)
         s.sendall(encode({"type": "state", "seq": 1, "scene": "grid", "state": {"kind": "grid"}}))
         wait_until(lambda: srv.snapshot()[3] == {"kind": "grid"}, 5, "grid state")
-        wait_until(lambda: srv.snapshot()[3] is None, 5, "black after silence")
+        wait_until(lambda: srv.snapshot()[3] is None, 10, "black after silence")
+        assert srv.last_drop.startswith("no word from the console")
         s.close()
     finally:
         srv.close()
@@ -362,3 +369,38 @@ def test_show_command_starts_a_projector_shows_the_scene_and_stops_it(tmp_path, 
     assert yellow.sum() > 20  # the auditioned point
     wait_until(lambda: not alive(pid), 10, "the projector to stop")
     assert not sock.exists()
+
+
+def test_console_link_survives_malformed_messages_and_reconnects(sock_path):
+    from console.runtime.projector_link import ProjectorLink
+
+    lst = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    lst.bind(str(sock_path))
+    lst.listen(1)
+    lst.settimeout(10)
+    link = ProjectorLink(sock_path, heartbeat_s=0.05, peer_timeout_s=5.0)
+    link.start()
+    try:
+        seq = link.send_state("knob", {"kind": "knob"})
+        for round_ in range(2):  # the second round: after the fake projector dropped us
+            conn, _ = lst.accept()
+            f = conn.makefile("rb")
+            conn.sendall(encode({"type": "hello", "pid": os.getpid(), "scene": None}))
+            conn.sendall(b'{"type": "ack", "seq": "x"}\n{"type": "drawn", "seq": [1]}\n')
+            msgs = [json.loads(f.readline()) for _ in range(2)]
+            state = next(m for m in msgs if m["type"] == "state")  # re-sent on every connect
+            assert state["seq"] == seq and state["state"] == {"kind": "knob"}
+            assert link.wait_connected(5)
+            if round_ == 0:
+                f.close()  # the file keeps the socket open too
+                conn.close()
+                wait_until(lambda: not link.connected, 5, "the drop")
+        conn.sendall(
+            encode({"type": "drawn", "seq": seq, "t_drawn_s": time.monotonic(), "scene": "knob"})
+        )
+        assert link.wait_drawn(seq, 5)
+        assert link.status()["shown_scene"] == "knob" and link.status()["connects"] == 2
+        conn.close()
+    finally:
+        link.close()
+        lst.close()
