@@ -126,8 +126,9 @@ class SimpleProps:
 
 
 DEVICE_STAMP_MAX_AGE_S = 1.0  # a buffer timestamp older than this is not on our clock
-V4L2_EXPOSURE_MANUAL = 1.0
-V4L2_EXPOSURE_AUTO = 3.0
+V4L2_EXPOSURE_MANUAL = 1.0  # V4L2_CID_EXPOSURE_AUTO menu values
+V4L2_EXPOSURE_AUTO = 3.0  # aperture priority: what UVC cameras call automatic
+V4L2_EXPOSURE_AUTO_GSPCA = 0.0  # fully automatic: what gspca drivers (PS3 Eye) offer
 
 
 class OpenCVCamera:
@@ -167,6 +168,7 @@ class OpenCVCamera:
         self._reconnects = 0
         self._bad_frames = 0
         self._device_stamps = 0
+        self._rejected: list[str] = []
         self._state = "starting"
         self._error = ""
         self._size_px: tuple[int, int] = (0, 0)
@@ -195,18 +197,27 @@ class OpenCVCamera:
                 cap.release()
             return None
         p = self._props
-        cap.set(p.width, self.width_px)
-        cap.set(p.height, self.height_px)
-        cap.set(p.fps, self.fps)
+        rejected: list[str] = []
+
+        def put(name: str, prop: Any, value: float) -> bool:
+            ok = bool(cap.set(prop, value))
+            if not ok:
+                rejected.append(name)
+            return ok
+
+        put("width_px", p.width, self.width_px)
+        put("height_px", p.height, self.height_px)
+        put("fps", p.fps, self.fps)
         if self.exposure >= 0:
-            cap.set(p.auto_exposure, V4L2_EXPOSURE_MANUAL)
-            cap.set(p.exposure, self.exposure)
-        else:
-            cap.set(p.auto_exposure, V4L2_EXPOSURE_AUTO)
+            put("auto_exposure", p.auto_exposure, V4L2_EXPOSURE_MANUAL)
+            put("exposure", p.exposure, self.exposure)
+        elif not cap.set(p.auto_exposure, V4L2_EXPOSURE_AUTO):  # UVC: aperture priority
+            put("auto_exposure", p.auto_exposure, V4L2_EXPOSURE_AUTO_GSPCA)  # PS3 Eye: auto
         if self.gain >= 0:
-            cap.set(p.gain, self.gain)
+            put("gain", p.gain, self.gain)
         if p.read_timeout_ms is not None:
-            cap.set(p.read_timeout_ms, 1000)
+            cap.set(p.read_timeout_ms, 1000)  # not every backend has it: never reported
+        self._rejected = rejected
         self._size_px = (int(cap.get(p.width)), int(cap.get(p.height)))
         self._error = ""
         return cap
@@ -318,7 +329,10 @@ class OpenCVCamera:
             "dropped_camera": self._timing.skipped,
             "dropped_reader": self._dropped_reader,
             "bad_frames": self._bad_frames,
-            "device_timestamps": self._device_stamps,  # frames stamped by the driver's clock
+            "device_timestamps": self._device_stamps,
+            "settings_rejected": list(
+                self._rejected
+            ),  # [camera] keys the driver refused  # frames stamped by the driver's clock
             "reconnects": self._reconnects,
             "error": self._error,
         }

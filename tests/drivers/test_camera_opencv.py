@@ -28,6 +28,7 @@ class World:
         self.n = 0
         self.stop = None  # the camera's stop event: a blocked read returns when it is set
         self.stamp_lag_s: float | None = None  # buffer timestamp this long before the read
+        self.refuse: set[tuple[str, float]] = set()  # (property, value) the driver refuses
 
     @property
     def stamp_ms(self) -> float:
@@ -60,6 +61,8 @@ class FakeCapture:
         return self.opened
 
     def set(self, prop, value) -> bool:
+        if (prop, value) in self.world.refuse:
+            return False
         self.props[prop] = value
         return True
 
@@ -177,6 +180,14 @@ def test_settings_from_the_profile_are_applied(world, camera, stub_profile, monk
     cap2 = world.captures[-1]
     assert cap2.props["AUTO_EXP"] == 3.0 and "EXP" not in cap2.props and cap2.props["GAIN"] == 30
     assert cam2.status()["state"] == "running"
+
+
+def test_ps3_eye_automatic_exposure_and_refused_settings_are_reported(world, camera):
+    world.refuse = {("AUTO_EXP", 3.0), ("FPS", 75.0)}  # gspca ov534: auto is menu value 0
+    cam = camera(fps=75.0)
+    cap = world.captures[-1]
+    assert cap.props["AUTO_EXP"] == 0.0
+    assert cam.status()["settings_rejected"] == ["fps"]  # the operator sees what did not apply
 
 
 def test_frames_are_grayscale_handed_out_once(world, camera, wait):
@@ -340,4 +351,5 @@ def test_real_videocapture_on_a_file_gives_gray_frames_and_reopens_at_its_end(tm
     assert frame.image.dtype == np.uint8 and frame.image.shape == (48, 64)
     assert min(abs(float(frame.image.mean()) - lv) for lv in levels) < 4  # MJPG is lossy
     assert st["size_px"] == (64, 48)  # the file cannot be resized: the real size is reported
+    assert "width_px" in st["settings_rejected"]
     assert st["bad_frames"] == 0
