@@ -151,7 +151,8 @@ def test_projector_end_draws_newest_state_and_goes_black_when_the_console_leaves
         f.close()
         s.close()  # the console dies: EOF, noticed at once (well before the 3 s timeout)
         wait_until(lambda: srv.snapshot()[3] is None, 10, "black after EOF")
-        assert srv.last_drop == "console closed the link"  # noticed by EOF, not by the timeout
+        # noticed from the socket (EOF or reset), not by waiting for the timeout
+        assert not srv.last_drop.startswith("no word"), srv.last_drop
         # a console that goes silent (hung) is dropped after the timeout: black again
         s, f = _fake_console(sock_path)
         s.sendall(encode({"type": "state", "seq": 1, "scene": "grid", "state": {"kind": "grid"}}))
