@@ -35,6 +35,7 @@ class Take:
     jitter: tuple[float, ...] = field(default=(0.0,) * 8)  # per-take pose variation
     tremor: bool = True
     seed: int = 0
+    ease_s: float = 0.0  # time constant of the start from rest (0: full speed at once)
 
 
 def _curled(s: Subject, j: float, lift_extra: float = 0.0) -> FingerPose:
@@ -65,16 +66,16 @@ def static_pose(gesture: str, s: Subject, j: tuple[float, ...]) -> tuple:
     if gesture == "two_finger":
         return (hp + 5, hp), (
             thumb_up,
-            _point(j[2], -4 * sp + 2 * j[5]),
-            _point(j[3], 4 * sp + 2 * j[6]),
+            _point(j[2], -4 * sp + 4 * j[5]),
+            _point(j[3], 4 * sp + 4 * j[6]),
             _curled(s, j[4], 3),
             _curled(s, j[4], 3),
         )
     if gesture == "l_shape":
         hl = 10 + 3 * j[0]
         return (hl + 4, hl), (
-            _flat(-38 * sp + 4 * j[1]),
-            _flat(-2 + 2 * j[2]),
+            _flat(-38 * sp + 9 * j[1]),
+            _flat(-2 + 4 * j[2]),
             _curled(s, j[3]),
             _curled(s, j[3]),
             _curled(s, j[4]),
@@ -89,11 +90,11 @@ def static_pose(gesture: str, s: Subject, j: tuple[float, ...]) -> tuple:
         )
     if gesture == "open_hand":
         return (0.0, 0.0), (
-            _flat(-25 * sp + 4 * j[1]),
-            _flat(-12 * sp + 2 * j[2]),
-            _flat(j[5]),
-            _flat(9 * sp + 2 * j[3]),
-            _flat(20 * sp + 3 * j[4]),
+            _flat(-25 * sp + 6 * j[1]),
+            _flat(-12 * sp + 4 * j[2]),
+            _flat(2 * j[5]),
+            _flat(9 * sp + 4 * j[3]),
+            _flat(20 * sp + 5 * j[4]),
         )
     raise ValueError(f"not a static gesture: {gesture!r}")
 
@@ -128,9 +129,19 @@ def _unit(deg: float) -> np.ndarray:
     return np.array([np.cos(a), np.sin(a)])
 
 
+def eased_s(t_s: float, ease_s: float) -> float:
+    """Time at full speed equivalent to ``t_s`` of a motion starting from rest with
+    velocity ``1 - exp(-t / ease_s)`` (integrated)."""
+    if ease_s <= 0:
+        return t_s
+    return t_s - ease_s * (1.0 - float(np.exp(-t_s / ease_s)))
+
+
 def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) -> HandPose:
-    """The hand pose ``t_s`` seconds into a take (tremor from ``rng`` when given)."""
+    """The hand pose ``t_s`` seconds into a take (tremor from ``rng`` when given).
+    Dynamic gestures start from rest and reach their speed within ``take.ease_s``."""
     s, j, g = take.subject, take.jitter, take.gesture
+    tm = eased_s(t_s, take.ease_s)  # motion time
     base = HandPose(take.wrist_mm, take.angle_deg, take.side)
     if g in STATIC:
         palm, fingers = static_pose(g, s, j)
@@ -138,7 +149,7 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
     elif g == "drag":
         palm, fingers = static_pose("one_finger", s, j)
         d = np.radians(take.angle_deg + take.direction)
-        dist = take.rate * t_s
+        dist = take.rate * tm
         curv = s.curvature + 0.002 * j[6]
         # arc of curvature ``curv`` starting along ``d``
         if abs(curv) < 1e-6:
@@ -148,7 +159,7 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
             off = r * np.array(
                 [np.sin(d + dist * curv) - np.sin(d), np.cos(d) - np.cos(d + dist * curv)]
             )
-        pose = replace(base, palm_h_mm=palm, fingers=fingers).moved(tuple(off), 8 * j[7] * t_s)
+        pose = replace(base, palm_h_mm=palm, fingers=fingers).moved(tuple(off), 8 * j[7] * tm)
     elif g == "rotate":
         hp = s.palm_lift_mm - 5
         c = _curled(s, j[3], 2)
@@ -156,16 +167,16 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         fingers = (thumb, _point(j[2], -6), c, c, c)
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=fingers)
         pivot = np.array(_tip(s, pose, "thumb"))
-        w = take.direction * take.rate * t_s
+        w = take.direction * take.rate * tm
         pose = _rotate_about(pose, pivot, w)
     elif g == "zoom":
         p0 = 0.15 + 0.1 * j[0] if take.variant == "in" else 0.85 + 0.1 * j[0]
-        p = float(np.clip(p0 + take.direction * take.rate * t_s, 0, 1))
+        p = float(np.clip(p0 + take.direction * take.rate * tm, 0, 1))
         hp = 0.7 * s.palm_lift_mm
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_pinch_fingers(s, p, j))
     elif g == "spread_pile":
         p0 = 0.1 + 0.08 * j[0] if take.variant == "spread" else 0.9 + 0.08 * j[0]
-        p = float(np.clip(p0 + take.direction * take.rate * t_s, 0, 1))
+        p = float(np.clip(p0 + take.direction * take.rate * tm, 0, 1))
         hp = 0.6 * s.palm_lift_mm
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_five_fingers(s, p, j))
         # the fingertips move, the hand keeps its middle tip roughly in place
@@ -173,9 +184,9 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         palm, fingers = static_pose("closed_hand", s, j)
         pose = replace(base, palm_h_mm=palm, fingers=fingers)
         d = np.radians(take.angle_deg + take.direction)
-        dist = take.rate * t_s
+        dist = take.rate * tm
         off = dist * np.array([np.cos(d), np.sin(d)])
-        pose = pose.moved(tuple(off), 25 * j[7] * t_s)
+        pose = pose.moved(tuple(off), 25 * j[7] * tm)
     else:
         raise ValueError(f"unknown gesture {g!r}")
     if take.tremor and rng is not None:
@@ -204,7 +215,7 @@ RATES = {
     "drag": (150.0, 380.0),
     "rotate": (120.0, 300.0),
     "zoom": (1.6, 3.2),
-    "spread_pile": (1.6, 3.2),
+    "spread_pile": (2.0, 4.0),
     "wipe": (300.0, 650.0),
 }
 
@@ -260,6 +271,7 @@ def plan_take(
         if gesture in ("drag", "wipe"):  # start behind so the path stays centred
             wrist -= 0.5 * travel * _unit(angle + direction)
         wrist_mm = (float(wrist[0]), float(wrist[1]))
+    ease = float(subject.ease_s * rng.uniform(0.7, 1.3)) if gesture in DYNAMIC else 0.0
     return Take(
         gesture,
         subject,
@@ -272,4 +284,5 @@ def plan_take(
         jitter,
         tremor,
         int(rng.integers(0, 2**31)),
+        ease,
     )

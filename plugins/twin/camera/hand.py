@@ -44,6 +44,7 @@ class Subject:
     speed: float  # gesture speed factor
     tremor_mm: float  # frame-to-frame jitter
     curvature: float  # typical path bend (1/mm)
+    ease_s: float = 0.03  # how gently this person starts a motion (time constant)
 
     @property
     def palm_len_mm(self) -> float:
@@ -101,6 +102,7 @@ def make_subject(name: str, seed: int = 0, side: str | None = None) -> Subject:
         speed=float(rng.uniform(0.75, 1.3)),
         tremor_mm=float(rng.uniform(0.15, 0.5)),
         curvature=float(rng.uniform(-0.004, 0.004)),
+        ease_s=float(rng.uniform(0.015, 0.05)),
     )
 
 
