@@ -20,7 +20,7 @@ from typing import Any
 from console.hookspecs import hookimpl
 from console.schema import Field
 
-from .geometry import DEFAULT_CORNERS_PX
+from .constants import DEFAULT_CORNERS_PX
 
 _LAZY = {
     "render_sample": "sample",

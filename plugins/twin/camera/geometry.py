@@ -1,7 +1,7 @@
 """Camera <-> table mapping of the twin: a homography plus optional radial lens distortion.
 
 The IR camera looks at the glass from below, so the image is mirrored: table x (long
-edge, millimetres from the glass corner) runs right-to-left in the image. The mapping
+edge, millimetres from the glass corner) runs right-to-left and table y bottom-to-top. The mapping
 is explicit: the pixel positions of the four glass corners (undistorted) define the
 homography; ``k1``/``k2`` (Brown radial model about the image centre, focal ``focal_px``)
 bend it the way a wide PS3 Eye lens does. ``mm_to_px`` is what the camera sees;
@@ -14,13 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-TABLE_MM = (743.46, 447.29)  # 3M SCT-3250 active glass, paper section 2
-IMAGE_PX = (640, 480)
+from .constants import DEFAULT_CORNERS_PX, IMAGE_PX, TABLE_MM
 
-#: Undistorted pixel positions of the glass corners (0,0), (W,0), (W,H), (0,H):
-#: about 0.82 px/mm, with a little keystone. Seen from below, so mirrored: table x runs
-#: right-to-left and table y bottom-to-top in the image (x left, y up is a reflection).
-DEFAULT_CORNERS_PX = ((627.0, 429.0), (13.0, 421.0), (21.0, 52.0), (617.0, 57.0))
+__all__ = ["DEFAULT_CORNERS_PX", "IMAGE_PX", "TABLE_MM", "TableMapping", "homography_4pt"]
 
 
 def homography_4pt(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
