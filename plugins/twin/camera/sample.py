@@ -1,5 +1,15 @@
 """Rendered samples with ground truth: ``render_sample(gesture, subject, rep, rng)``.
 
+Ground truth of a sample: ``subject gesture hand fps rep kind ("static"|"dynamic")
+variant ("in"/"out", "spread"/"pile", "cw"/"ccw" or "") rate hard t0_s mapping frames``;
+each of ``frames`` holds ``t_s gesture illumination_step contacts_px contacts_mm`` and
+``hands``: per hand ``subject side wrist_mm center_mm center_px angle_deg`` (fingers'
+direction in the table frame, from +x towards +y) ``angle_px_deg`` (the same in the
+displayed image, counter-clockwise from +x) ``palm_contact`` and ``contacts``: per
+contact ``finger kind ("tip" | "knuckle": a curled finger resting on the glass) pos_mm
+pos_px in_image``. A flat hand (closed/open hand, wipe) touches with the whole palm and
+fingers: its ``tip`` contacts are the centres of the distal phalanges.
+
 Hard cases the vision pipeline must survive are options (``hard=``):
 
 - ``"empty"``: no hand at all (the table alone, the gesture label kept).
