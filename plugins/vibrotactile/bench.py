@@ -6,6 +6,7 @@ Reference: the analytic simply supported plate (exact FRF anywhere), its map on 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -81,8 +82,15 @@ def _table_chunk(args):
     m, per, centers, kw = args
     from plugins.vibrotactile.hand import hand_flow_table
 
+    try:  # one BLAS thread per process: the processes are the parallelism
+        from threadpoolctl import threadpool_limits
+
+        limit = threadpool_limits(1)
+    except ImportError:  # threadpoolctl comes with scikit-learn; without it run as is
+        limit = contextlib.nullcontext()
     t0 = time.process_time()
-    out = hand_flow_table(m, per, centers=centers, **kw)
+    with limit:
+        out = hand_flow_table(m, per, centers=centers, **kw)
     out["cpu_s"] = np.array([time.process_time() - t0])
     return out
 
