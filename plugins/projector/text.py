@@ -42,7 +42,10 @@ def _hershey(text: str, px: int) -> np.ndarray:
 
     scale = px / 30.0
     th = max(1, px // 14)
-    (w, h), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, th)
+    (w, _), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, th)
+    (_, h), base = cv2.getTextSize(
+        "Hg", cv2.FONT_HERSHEY_SIMPLEX, scale, th
+    )  # same line height for all
     img = np.zeros((h + base + 2 * th, w + 2 * th), np.uint8)
     cv2.putText(img, text, (th, h + th), cv2.FONT_HERSHEY_SIMPLEX, scale, 255, th, cv2.LINE_AA)
     return img

@@ -214,3 +214,11 @@ def test_a_state_that_cannot_be_drawn_shows_an_error_instead_of_crashing(render)
     assert is_red(img).sum() > 50  # the error line, in red
     img, _ = render({"kind": "whatever-plugin-kind"}, SIZE)
     assert is_red(img).sum() > 50  # unknown kinds say so too
+
+
+def test_text_fallback_without_pillow_keeps_one_line_height():
+    from plugins.projector.text import _hershey, text_bitmap
+
+    a, b = _hershey("Valencia", 40), _hershey("Lyon gyp", 40)
+    assert a.shape[0] == b.shape[0] and a.max() == 255 and b.shape[1] > 20
+    assert text_bitmap("Antwerp", 30).shape[0] == text_bitmap("Bologna", 30).shape[0]
