@@ -32,7 +32,14 @@ What the console calls (see ``ProjectorService``)::
     svc.update({"type": "rotate", "delta_deg": 45})   # events go to the active scene
     svc.stop_scene()                   # black
     svc.status()                       # connected, heartbeat age, fps, restarts, pid ...
-    svc.close()                        # stop the projector
+    svc.snapshot("shown.png")          # what the projector shows now, as PNG
+    svc.close()                        # stop the projector (stop_projector=False: leave it
+                                       # running, black, for the next console to adopt)
+
+``providers`` maps a need kind (``tables``, ``flow_regions``, ``knob``, ``contacts``)
+to a function preparing it; ``start_scene`` calls only those its scene declares and
+lists the rest in ``status()["unprepared_needs"]``. Call from any thread (scene events
+are serialised); nothing here blocks on the projector except the ``wait_*`` calls.
 """
 
 from __future__ import annotations
