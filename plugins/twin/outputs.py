@@ -21,7 +21,11 @@ from console.types import BlockSource
 
 @dataclass
 class _Bus:
-    """The wire between the twin amplifiers' output and the twin relays."""
+    """The wire between the twin amplifiers' output and the twin relays.
+
+    The twin audio output that started last drives it (one live set of outputs per
+    profile, as on the real table); its clock counts the samples that output played.
+    """
 
     level_v: tuple[float, float] = (0.0, 0.0)
     clock: int = 0
@@ -65,6 +69,8 @@ class TwinAudioOutput:
         if self._thread is not None:
             return
         self._source = source
+        self._bus.clock = 0  # this output drives the wire from now on
+        self._bus.level_v = (0.0, 0.0)
         self._stop.clear()
         self._thread = threading.Thread(target=self._run, name="haptable-twin-audio", daemon=True)
         self._thread.start()

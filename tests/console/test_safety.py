@@ -271,3 +271,17 @@ def test_estop_runs_on_signals_exceptions_and_exit(tmp_path, how):
     after = text.split("playing", 1)[1]
     assert "estop" in after or "shutdown" in after, text
     assert "relay 1 False" in after, "the patch relay was opened on the way out"
+
+
+def test_switch_log_lines_up_with_recording_after_other_outputs(profile, plugins):
+    """Twin relay clocks count the samples of the outputs they belong to, not earlier ones."""
+    from console.runtime.outputs import open_outputs
+    from console.stimuli import make_stimulus
+
+    with open_outputs(profile, plugins, fast=True) as first:
+        first.play(make_stimulus("sine-PB", FS))
+    with open_outputs(profile, plugins, fast=True) as out:
+        report = out.play(make_stimulus("sine-PA", FS))
+        closing = [r for r in out.relay_log() if r.closed]
+        assert closing and closing[0].clock <= report.segment_start[0]
+        assert_recording_safe(out)
