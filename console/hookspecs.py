@@ -88,6 +88,17 @@ def haptable_register_relay_boards(register: Register) -> None:
 
 
 @hookspec
+def haptable_register_vibrometers(register: Register) -> None:
+    """Register vibration-map measurement devices (a laser vibrometer, or the twin's).
+
+    The factory returns an object with ``measure(progress=None) -> dict`` whose items are
+    the arguments of ``console.vibration_map.make_map`` plus ``meta`` (provenance);
+    ``progress(done, total)`` is called as points are measured. Selected by
+    ``[vibrometer] driver``.
+    """
+
+
+@hookspec
 def haptable_register_scenes(register: Register) -> None:
     """Register projected scenes.
 

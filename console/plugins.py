@@ -44,6 +44,7 @@ KINDS: dict[str, str] = {
     "audio_output": "haptable_register_audio_outputs",
     "relay_board": "haptable_register_relay_boards",
     "scene": "haptable_register_scenes",
+    "vibrometer": "haptable_register_vibrometers",
     "panel": "haptable_register_panels",
 }
 
