@@ -417,3 +417,28 @@ def test_every_dynamic_gesture_keeps_its_contacts_on_the_glass(all_samples):
         for ft in t["frames"]:
             for p in ft["contacts_mm"]:
                 assert 0 <= p[0] <= 743.46 and 0 <= p[1] <= 447.29, g
+
+
+def test_two_index_fingers_touch_two_targets():
+    cam = TwinCamera(realtime=False, touch_error_mm=0.0, touch_bias_mm=0.0)
+    cam.set_targets([(200.0, 200.0), (500.0, 220.0)])
+    for _ in range(25):
+        cam.read()
+    hands = {h["side"]: h for h in cam.truth["hands"]}
+    assert set(hands) == {"left", "right"}
+    assert hands["left"]["contacts"][0]["pos_mm"] == pytest.approx([200.0, 200.0], abs=1.0)
+    assert hands["right"]["contacts"][0]["pos_mm"] == pytest.approx([500.0, 220.0], abs=1.0)
+    with pytest.raises(ValueError, match="hand sides"):
+        cam.set_targets([(1.0, 1.0)], sides=["left", "right"])
+
+
+def test_place_holds_a_static_hand_where_asked():
+    cam = TwinCamera(realtime=False)
+    cam.place("open_hand", (370.0, 220.0), angle_deg=270.0, side="left")
+    seen = []
+    for _ in range(5):
+        cam.read()
+        seen.append(cam.truth["hands"][0]["center_mm"])
+    assert cam.truth["gesture"] == "open_hand" and cam.truth["hands"][0]["side"] == "left"
+    assert np.abs(np.array(seen) - [370.0, 220.0]).max() < 2.0
+    assert cam.truth["hands"][0]["palm_contact"]

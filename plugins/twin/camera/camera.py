@@ -6,7 +6,8 @@ Scripts say which hands are where at frame ``k``:
 - ``SequenceScript``: gestures one after another with idle gaps (loops).
 - ``TouchScript``: a finger touches given table points in turn (touch calibration);
   ``TwinCamera.set_target(pos_mm)`` switches to touching one projected target on
-  demand, like an operator reacting to the projector.
+  demand, like an operator reacting to the projector; ``set_targets([...])`` touches
+  several at once (one hand each), ``place(gesture, center_mm)`` holds a static hand.
 
 Touches land with a realistic error: the contact pad sits a little behind where the
 person aims (``bias_mm`` back along the finger) plus a random scatter (``error_mm``
@@ -20,7 +21,7 @@ from __future__ import annotations
 import collections
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -288,25 +289,73 @@ class TwinCamera:
     ) -> None:
         """Show a projected target: the operator's finger touches it after a reaction
         time and stays until the next target (``None``: hands off the table)."""
+        self.set_targets([] if pos_mm is None else [pos_mm], subject, [side], reaction_frames)
+
+    def set_targets(
+        self,
+        points_mm: list[tuple[float, float]],
+        subject: str = "s1",
+        sides: list[str] | None = None,
+        reaction_frames: int = 12,
+    ) -> None:
+        """Touch several targets at once, one hand each (e.g. the two index fingers of
+        the paper's flow experiment). Default sides: the left-most point gets the left
+        hand when there are two. ``[]``: hands off the table."""
+        pts = [tuple(map(float, p)) for p in points_mm]
+        if sides is None:
+            sides = ["right"] * len(pts)
+            if len(pts) == 2:
+                order = sorted(range(2), key=lambda i: pts[i][0])
+                sides[order[0]] = "left"
+        if len(sides) != len(pts):
+            raise ValueError(f"{len(pts)} targets but {len(sides)} hand sides")
         with self._lock:
-            if pos_mm is None:
+            if not pts:
                 self.script = IdleScript()
                 return
-            ts = TouchScript(
-                [pos_mm],
-                table_mm=self.rig.mapping.table_mm,
-                subject=subject,
-                side=side,
-                dwell_frames=10**9,
-                approach_frames=6,
-                gap_frames=0,
-                error_mm=self.touch_error_mm,
-                bias_mm=self.touch_bias_mm,
-                subject_seed=self.subject_seed,
-                seed=int(self._rng.integers(2**31)),
-                loop=False,
-            )
-            self.script = _Delayed(ts, self._k + reaction_frames)
+            scripts: list[Script] = [
+                TouchScript(
+                    [p],
+                    table_mm=self.rig.mapping.table_mm,
+                    subject=subject,
+                    side=sd,
+                    dwell_frames=10**9,
+                    approach_frames=6,
+                    gap_frames=0,
+                    error_mm=self.touch_error_mm,
+                    bias_mm=self.touch_bias_mm,
+                    subject_seed=self.subject_seed,
+                    seed=int(self._rng.integers(2**31)),
+                    loop=False,
+                )
+                for p, sd in zip(pts, sides, strict=True)
+            ]
+            script = scripts[0] if len(scripts) == 1 else Together(scripts)
+            self.script = _Delayed(script, self._k + reaction_frames)
+
+    def place(
+        self,
+        gesture: str,
+        center_mm: tuple[float, float],
+        angle_deg: float = 90.0,
+        subject: str = "s1",
+        side: str = "right",
+    ) -> None:
+        """Hold a static gesture with the palm centre at ``center_mm`` (fingers pointing
+        ``angle_deg`` in the table frame), e.g. a hand resting on a flow region."""
+        if gesture not in GESTURES:
+            raise ValueError(f"unknown gesture {gesture!r}; use one of {', '.join(GESTURES)}")
+        subj = make_subject(subject, self.subject_seed)
+        table = self.rig.mapping.table_mm
+        rng = np.random.default_rng(int(self._rng.integers(2**31)))
+        take = plan_take(
+            gesture, subj, rng, table, side=side, wrist_mm=(0.0, 0.0), angle_deg=angle_deg
+        )
+        centre = hand_pieces(subj, take_pose(take, 0.0)).center_mm
+        d = np.asarray(center_mm, dtype=float) - centre
+        take = replace(take, wrist_mm=(float(d[0]), float(d[1])))
+        with self._lock:
+            self.script = HoldScript([take])
 
     # ------------------------------------------------------------------ Camera protocol
     def read(self, timeout_s: float = 0.1) -> Frame | None:
@@ -384,6 +433,44 @@ class TwinCamera:
         }
 
 
+class Together:
+    """Several scripts at once (e.g. one hand per script): hands and truth merged; the
+    first script's extra truth is kept, the others' are listed under ``"others"``."""
+
+    name = "together"
+
+    def __init__(self, scripts: list[Script]) -> None:
+        self.scripts = scripts
+
+    def hands(self, k, t_s, rng):
+        hands: Hands = []
+        labels, extras = [], []
+        for sc in self.scripts:
+            h, label, extra = sc.hands(k, t_s, rng)
+            hands += h
+            labels.append(label)
+            extras.append(extra)
+        label = next((lb for lb in labels if lb != "idle"), "idle")
+        extra = dict(extras[0]) if extras else {}
+        if len(extras) > 1:
+            extra["others"] = extras[1:]
+        return hands, label, extra
+
+
+class HoldScript:
+    """Hands held in place (static gestures), with tremor."""
+
+    name = "hold"
+
+    def __init__(self, takes: list) -> None:
+        self.takes = takes
+
+    def hands(self, k, t_s, rng):
+        hands = [(tk.subject, take_pose(tk, 0.0, rng)) for tk in self.takes]
+        label = self.takes[0].gesture if self.takes else "idle"
+        return hands, label, {}
+
+
 class _Delayed:
     """Run ``inner`` from frame ``start`` on (empty table before)."""
 
@@ -418,4 +505,12 @@ def demo_script(
     )
 
 
-__all__ = ["IdleScript", "SequenceScript", "TouchScript", "TwinCamera", "demo_script"]
+__all__ = [
+    "HoldScript",
+    "IdleScript",
+    "SequenceScript",
+    "Together",
+    "TouchScript",
+    "TwinCamera",
+    "demo_script",
+]
