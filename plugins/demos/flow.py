@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.errors import SafetyRefusal, UserError
 from console.types import Frame
 
 log = logging.getLogger("haptable.demos.flow")
@@ -135,7 +135,11 @@ class FlowDemo:
             return self._report is not None and not self._report.done.is_set()
 
     def _play(self, plan, center, direction, rest, frame: Frame, late_s: float) -> None:
-        report = self.outputs.play(plan, wait=False)
+        try:
+            report = self.outputs.play(plan, wait=False)
+        except SafetyRefusal as exc:  # e-stop active, or the gate refused the plan
+            self.events.append({"kind": "refused", "reason": str(exc), "seq": frame.seq})
+            return
         with self._lock:
             self._report = report
         ev = {

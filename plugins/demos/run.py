@@ -173,11 +173,12 @@ def start_demo(
     cache_dir: Path | None = None,
     sinks: list | None = None,
     tuio: bool | None = None,
+    watchdog_ms: float | None = None,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
     ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
-    TUIO too (default: ``[tuio] enabled``).
+    TUIO too (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
     """
     if name not in DEMOS:
         raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
@@ -242,7 +243,8 @@ def start_demo(
             sinks=all_sinks,
             name=name,
         )
-        wd = Watchdog(loop, outputs.estop, float(rt.get("watchdog_ms", 250)) / 1e3)
+        limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
+        wd = Watchdog(loop, outputs.estop, limit_ms / 1e3)
         demo.start()
         loop.start()
         wd.start()
