@@ -121,7 +121,6 @@ def test_knob_vf_frequency_rises_with_the_rotation_speed(profile, plugins, outpu
         run.stop()
     trace = np.array(run.demo.session.stream.trace)  # (first sample, target Hz, target V)
     f = trace[:, 1]
-    k = run.profile if False else None  # noqa: F841
     assert f.min() >= 60.0 - 1e-6 and f.max() <= 180.0 + 1e-6
     assert f.max() - f.min() > 20.0  # the rotation moved the frequency
 
