@@ -289,7 +289,8 @@ class TwinCamera:
     ) -> None:
         """Show a projected target: the operator's finger touches it after a reaction
         time and stays until the next target (``None``: hands off the table)."""
-        self.set_targets([] if pos_mm is None else [pos_mm], subject, [side], reaction_frames)
+        pts = [] if pos_mm is None else [pos_mm]
+        self.set_targets(pts, subject, [side] * len(pts), reaction_frames)
 
     def set_targets(
         self,
