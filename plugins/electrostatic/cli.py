@@ -7,6 +7,7 @@ import json
 import math
 import threading
 import time
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +58,9 @@ def configure(p: argparse.ArgumentParser) -> None:
         help="sim: the twin's finger; live: camera contacts",
     )
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--max-time", type=float, default=30.0, help="live: seconds before a trial times out"
+    )
     p.add_argument(
         "--audition", metavar="CONDITION", help="play a canned rotation with this condition"
     )
@@ -212,15 +216,78 @@ def _audition(args: argparse.Namespace, ctx: Any) -> int:
     return 0
 
 
+def _run_live(
+    args: argparse.Namespace, ctx: Any, trials: list, k: dict[str, Any], log: Path, say: Any
+) -> list:
+    """Trials with the profile's camera: vision -> contacts -> the trial's knob session."""
+    from console.runtime.stages import open_camera, vision_loop
+
+    from .task import append_jsonl, run_live_trial
+
+    prof = _profile(ctx)
+    a = audio(prof)
+    lock = threading.Lock()
+    holder: dict[str, Any] = {"ses": None, "frames": 0}
+
+    def attach(ses: Any) -> None:
+        with lock:
+            holder["ses"] = ses
+
+    def knob_stage(frame: Any, work: dict) -> None:
+        hand = work.get("hand")
+        contacts = hand.contacts if hand is not None and hand.contacts else work.get("contacts", ())
+        pts = [c for c in contacts if c.pos_mm is not None] or list(contacts)
+        with lock:
+            holder["frames"] += 1
+            if holder["ses"] is not None:
+                holder["ses"].feed(frame.t_capture_s, pts)
+
+    session = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
+    results = []
+    camera = open_camera(prof, ctx.pm)
+    try:
+        with ctx.outputs() as out:
+            loop = vision_loop(prof, ctx.pm, camera, extra_stages=[("knob", knob_stage)]).start()
+            try:
+                for tr in trials:
+                    if not args.json:
+                        print(
+                            f"trial {tr.index + 1}/{len(trials)}: {tr.condition}, {tr.sectors} sectors: "
+                            f"turn from item {tr.start_item} to item {tr.target_item} "
+                            f"({tr.distance_deg:g} deg) and hold",
+                            flush=True,
+                        )
+                    res = run_live_trial(
+                        tr,
+                        settings=k,
+                        outputs=out,
+                        attach=attach,
+                        limits=limits(prof),
+                        sample_rate_hz=a["sample_rate_hz"],
+                        block=a["block_size"],
+                        max_time_s=args.max_time,
+                    )
+                    results.append(res)
+                    append_jsonl(log, {**asdict(res), "session": session, "t_utc": time.time()})
+                    say(res)
+            except KeyboardInterrupt:
+                print(f"stopped: {len(results)} finished trials are in {log}")
+            finally:
+                loop.stop()
+    finally:
+        camera.close()
+    if holder["frames"] == 0:
+        raise UserError(
+            "knob --input live: no camera frame arrived; check [camera] with `haptable doctor`"
+        )
+    return results
+
+
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.forces:
         return _forces(args, ctx)
     if args.audition:
         return _audition(args, ctx)
-    if args.input == "live":
-        raise UserError(
-            "--input live: live camera contacts are not wired to the knob task yet; use --input sim"
-        )
     prof = _profile(ctx)
     k = knob_settings(prof)
     if args.design == "paper":
@@ -255,9 +322,12 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             f"{r.distance_deg:3g} deg: {ct}, {r.overshoots} overshoot(s){rec}"
         )
 
-    results = run_task(
-        trials, settings=k, limits=limits(prof), log_path=log, seed=args.seed, on_trial=say
-    )
+    if args.input == "live":
+        results = _run_live(args, ctx, trials, k, log, say)
+    else:
+        results = run_task(
+            trials, settings=k, limits=limits(prof), log_path=log, seed=args.seed, on_trial=say
+        )
     summary = summarize(results)
     if args.json:
         print(json.dumps({"log": str(log), "summary": summary}, indent=2))

@@ -45,6 +45,8 @@ class KnobSession:
         self.crossings: list[Crossing] = []
         self.crossing_ids: list[int] = []
         self.items: list[int] = []
+        #: (t_s, item) at the start and after every crossing (append-only, any thread reads)
+        self.item_log: list[tuple[float, int]] = []
         self._piezo: list[np.ndarray] = []
         self._screen: list[np.ndarray] = []
 
@@ -60,6 +62,8 @@ class KnobSession:
             self.states.append(st)
         self.crossings += cr
         self.crossing_ids += ids
+        if cr:
+            self.item_log.append((float(t_s), self.knob.item))
         self.items.append(self.knob.item)
         return cr
 

@@ -16,6 +16,7 @@ before each correction, and camera-rate contact noise, lifts and id swaps.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 import math
@@ -260,6 +261,76 @@ def run_trial(
         detents=len(ses.stream.detent_log),
         max_detent_latency_samples=float(lat.max()) if lat.size else None,
         finger="sim",
+    )
+
+
+def run_live_trial(
+    trial: Trial,
+    *,
+    settings: Mapping[str, Any],
+    outputs: Any,
+    attach: Callable[[KnobSession | None], None],
+    limits: Mapping[str, float] | None = None,
+    sample_rate_hz: int = 48000,
+    block: int = 64,
+    max_time_s: float = 30.0,
+    clock: Callable[[], float] = time.monotonic,
+    poll_s: float = 0.01,
+) -> TrialResult:
+    """One trial with live contacts: ``attach(session)`` hands the session to whatever
+    feeds it camera frames (``session.feed(t_capture_s, contacts)``, same clock as
+    ``clock``); its stream plays through ``outputs`` for the length of the trial."""
+    ses = KnobSession(
+        trial.condition,
+        sectors=trial.sectors,
+        settings=settings,
+        limits=limits,
+        sample_rate_hz=sample_rate_hz,
+        block=block,
+        start_item=trial.start_item,
+        n_items=trial.n_items,
+        record=False,
+    )
+    dwell = float(settings["dwell_s"])
+    t0 = clock()
+    ses.item_log.append((t0, ses.knob.item))
+    report = outputs.stream(ses.stream, name=f"knob trial {trial.index + 1}")
+    attach(ses)
+    timed_out = True
+    t_end = t0
+    try:
+        while True:
+            now = clock()
+            log = list(ses.item_log)
+            if log[-1][1] == trial.target_item and now - log[-1][0] >= dwell:
+                timed_out, t_end = False, now
+                break
+            if now - t0 > max_time_s or getattr(report, "error", ""):
+                t_end = now
+                break
+            time.sleep(poll_s)
+    finally:
+        attach(None)
+        ses.stream.request_stop()
+        with contextlib.suppress(TimeoutError):
+            report.wait(2.0)
+    m = trial_metrics(list(ses.item_log), trial.target_item, t0)
+    return TrialResult(
+        trial=trial.index,
+        condition=trial.condition,
+        sectors=trial.sectors,
+        distance_deg=trial.distance_deg,
+        start_item=trial.start_item,
+        target_item=trial.target_item,
+        completion_time_s=None if timed_out else m["completion_time_s"],
+        overshoots=m["overshoots"],
+        recovery_time_s=None if timed_out else m["recovery_time_s"],
+        confirm_time_s=None if timed_out else t_end - t0,
+        timed_out=timed_out,
+        crossings=len(ses.crossings),
+        detents=len(ses.stream.detent_log),
+        max_detent_latency_samples=None,
+        finger="live",
     )
 
 

@@ -32,7 +32,6 @@ def test_bad_arguments_are_one_line_errors(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "HD+VF" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert main(["knob", "--sectors", "200", "--log", str(tmp_path / "x.jsonl")]) == 2
-    assert main(["knob", "--input", "live"]) == 2
     assert main(["knob", "--audition", "nope"]) == 2
 
 

@@ -107,3 +107,58 @@ def test_a_clumsy_finger_times_out_cleanly():
     finger = SimFinger(scatter_frac=3.0, scatter_min_deg=40.0)
     r = run_trial(tr, settings=knob_settings(), finger=finger, max_time_s=2.0, render=False)
     assert r.timed_out and r.completion_time_s is None
+
+
+def test_live_trial_completes_when_fed_contacts_in_real_time(outputs):
+    import threading
+    import time
+
+    from plugins.electrostatic.simulate import min_jerk, rotation_frames
+    from plugins.electrostatic.task import run_live_trial
+
+    tr = make_trials(["HD+CF"], [8], [135.0], 1)[0]  # 3 items forward
+    box = {}
+    done = threading.Event()
+
+    def attach(ses):
+        box["ses"] = ses
+
+    def feeder():
+        t = np.arange(0, 3.0, 1 / 60)
+        ang = min_jerk(t, 0.1, 0.8, 0.0, 135.0)
+        frames = rotation_frames(ang, t, noise_mm=0.2, rng=np.random.default_rng(0))
+        while "ses" not in box:
+            time.sleep(0.001)
+        t0 = time.monotonic()
+        for tf, cs in frames:
+            time.sleep(max(t0 + tf - time.monotonic(), 0))
+            ses = box.get("ses")
+            if ses is None or done.is_set():
+                return
+            ses.feed(t0 + tf, cs)
+
+    th = threading.Thread(target=feeder)
+    th.start()
+    try:
+        r = run_live_trial(
+            tr, settings=knob_settings(), outputs=outputs, attach=attach, max_time_s=5.0
+        )
+    finally:
+        done.set()
+        th.join()
+    assert not r.timed_out and r.finger == "live"
+    assert 0.5 < r.completion_time_s < 1.2  # enters the target item at ~84 % of the move
+    assert r.confirm_time_s >= r.completion_time_s + knob_settings()["dwell_s"] - 0.05
+    assert r.crossings == 3 and r.detents == 3
+    assert box["ses"] is None  # detached when the trial ended
+
+
+def test_live_task_on_the_twin_camera_runs_and_logs(tmp_path, capsys):
+    from console.cli import main
+
+    log = tmp_path / "live.jsonl"
+    rc = main(["knob", "--input", "live", "--trials", "1", "--max-time", "1.0", "--log", str(log)])
+    assert rc == 0
+    rows = read_jsonl(log)
+    assert len(rows) == 1 and rows[0]["finger"] == "live"
+    assert "turn from item" in capsys.readouterr().out
