@@ -49,6 +49,12 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         default=1,
         help="how many subjects (the last ones) use their left hand (1)",
     )
+    parser.add_argument(
+        "--exposure-ms",
+        type=float,
+        default=0.0,
+        help="motion blur: shutter time in ms (0 = sharp; a 60 fps camera allows up to 16.7)",
+    )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -77,6 +83,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         lens_distortion=args.lens_distortion,
         per_sample_background=not args.no_sample_background,
         left_handed=args.left_handed,
+        exposure_ms=args.exposure_ms,
         force=args.force,
         progress=progress,
     )

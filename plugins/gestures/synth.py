@@ -9,6 +9,7 @@ Each sample gets its own ``background.png`` (the empty table half a second befor
 the slow ambient drift matches; ``per_sample_background=False`` leaves only the dataset's
 ``background.png``) and a ``truth.json`` (contacts, hand centre, angle).
 
+``exposure_ms`` > 0 smears moving hands over the shutter time (motion blur).
 Subjects are ``s1 .. sN``; the last ``left_handed`` of them (default 1, as in the
 paper's five-subject study) use their left hand, the others their right.
 
@@ -65,7 +66,11 @@ def _render_job(job: dict) -> tuple[int, int]:
     from plugins.twin.camera import Rig, TableMapping, render_background, render_sample
 
     out, seed, si, gi = job["out"], job["seed"], job["subject"], job["gesture"]
-    rig = Rig(mapping=TableMapping(k1=job["k1"], k2=job["k2"]), seed=seed)
+    rig = Rig(
+        mapping=TableMapping(k1=job["k1"], k2=job["k2"]),
+        seed=seed,
+        exposure_s=job["exposure_s"],
+    )
     subject = subject_names(si + 1)[si]
     gesture = GESTURES[gi]
     n = job["static_frames"] if gesture in STATIC else job["dynamic_frames"]
@@ -115,6 +120,7 @@ def synth(
     lens_distortion: bool = False,
     per_sample_background: bool = True,
     left_handed: int = 1,
+    exposure_ms: float = 0.0,
     force: bool = False,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict[str, Any]:
@@ -125,6 +131,8 @@ def synth(
         raise UserError(f"gestures {bad}: unknown; use {', '.join(GESTURES)}")
     if subjects < 1 or reps < 1:
         raise UserError(f"--subjects {subjects} --reps {reps}: both must be at least 1")
+    if not 0 <= exposure_ms <= 1000:
+        raise UserError(f"--exposure-ms {exposure_ms}: must be from 0 to 1000")
     if not 0 <= left_handed <= subjects:
         raise UserError(f"--left-handed {left_handed}: must be from 0 to --subjects {subjects}")
     if static_frames < 1 or dynamic_frames < 4:
@@ -154,6 +162,7 @@ def synth(
             "k2": mapping.k2,
             "per_sample_bg": per_sample_background,
             "side": sides[si],
+            "exposure_s": exposure_ms / 1000.0,
         }
         for si in range(subjects)
         for g in gestures
@@ -187,6 +196,7 @@ def synth(
         "lens_distortion": lens_distortion,
         "per_sample_background": per_sample_background,
         "hands": dict(zip(subject_names(subjects), sides, strict=True)),
+        "exposure_ms": exposure_ms,
         "mapping": mapping.to_dict(),
         "workers": workers,
         "seconds": round(seconds, 2),

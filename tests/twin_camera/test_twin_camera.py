@@ -442,3 +442,18 @@ def test_place_holds_a_static_hand_where_asked():
     assert cam.truth["gesture"] == "open_hand" and cam.truth["hands"][0]["side"] == "left"
     assert np.abs(np.array(seen) - [370.0, 220.0]).max() < 2.0
     assert cam.truth["hands"][0]["palm_contact"]
+
+
+def test_motion_blur_smears_moving_hands_only():
+    quiet_blur = replace(QUIET, exposure_s=0.012)
+    sharp, ts = _render("wipe", seed=2, rig=QUIET, t0_s=0.0)
+    blurred, tb = _render("wipe", seed=2, rig=quiet_blur, t0_s=0.0)
+    assert ts == {**tb, "mapping": ts["mapping"]}  # same truth (mid-exposure)
+
+    def edge(img):
+        return float(np.percentile(np.abs(np.diff(img.astype(float), axis=1)), 99.9))
+
+    assert edge(blurred[-1]) < 0.8 * edge(sharp[-1])
+    still_a, _ = _render("open_hand", seed=2, rig=QUIET, t0_s=0.0)
+    still_b, _ = _render("open_hand", seed=2, rig=quiet_blur, t0_s=0.0)
+    assert np.array_equal(still_a, still_b)

@@ -59,6 +59,7 @@ class Rig:
     drift_offset: float = 3.0  # slow ambient offset drift amplitude (grey levels)
     drift_period_s: float = 40.0
     frame_level: float = 8.0  # the table frame seen outside the glass
+    exposure_s: float = 0.0  # motion blur: shutter time over which moving hands smear
 
 
 @functools.lru_cache(maxsize=8)

@@ -113,10 +113,16 @@ def render_frame(
     label: str = "",
     step: bool = False,
     noise: bool = True,
+    blur_hands: tuple[list[tuple[Subject, HandPose]], ...] = (),
 ) -> tuple[np.ndarray, dict[str, Any]]:
-    """One uint8 frame of posed hands and its ground truth."""
+    """One uint8 frame of posed hands and its ground truth (of ``hands``). Motion blur:
+    ``blur_hands`` are the same hands at other instants of the exposure, averaged in."""
     pieces, truth = frame_truth(hands, rig.mapping, label, t_s)
     layer = hand_layer(pieces, rig.mapping)
+    if blur_hands:
+        for other in blur_hands:
+            layer += hand_layer(frame_truth(other, rig.mapping, label, t_s)[0], rig.mapping)
+        layer /= 1 + len(blur_hands)
     g, o = (STEP_GAIN, STEP_OFFSET) if step else (1.0, 0.0)
     img = compose(layer, rig, t_s, rng, step_gain=g, step_offset=o, noise=noise)
     return img, truth
@@ -209,7 +215,17 @@ def render_sample(
         if "fingertip_only" in hard:
             hands = [(s, _fingertip_only(p)) for s, p in hands]
         step = "illumination_step" in hard and k >= n // 2
-        frames[k], tr = render_frame(hands, rig, t0 + t, rng, label=gesture, step=step)
+        blur: tuple = ()
+        if rig.exposure_s > 0 and gesture in DYNAMIC and hands:  # the shutter is open
+            e = rig.exposure_s  # from t - e/2 to t + e/2: the truth is at mid-exposure
+            blur = tuple(
+                [(subj, take_pose(tk, max(t + dt, 0.0))) for tk in takes] for dt in (-e / 2, e / 2)
+            )
+            if "fingertip_only" in hard:
+                blur = tuple([(s, _fingertip_only(p)) for s, p in b] for b in blur)
+        frames[k], tr = render_frame(
+            hands, rig, t0 + t, rng, label=gesture, step=step, blur_hands=blur
+        )
         tr["illumination_step"] = step
         truths.append(tr)
     truth = {
