@@ -46,6 +46,14 @@ DEMOS_FIELDS = {
     "flow_direction": Field(
         "str", "right", choices=("left", "right", "up", "down"), help="flow direction"
     ),
+    "flow_grid_mm": Field(
+        "float",
+        10.0,
+        min=0,
+        max=100,
+        help="a hand away from the scene's regions gets the flow of the nearest point of "
+        "this grid (0: its exact position)",
+    ),
     "still_mm": Field("float", 12.0, min=1, max=200, help="a resting hand moves less than this"),
     "still_ms": Field("float", 300.0, min=0, max=10000, help="... for this long to trigger"),
     "knob_condition": Field(

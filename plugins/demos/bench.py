@@ -98,7 +98,7 @@ def run_loop(ctx: Any, quick: bool) -> dict:
         res["audio"] = _audio(out)
     with ctx.outputs(fast=False) as out:
         with start_demo("flow", prof, pm, out, prepare=False) as run_:
-            _run_for(run_, max(seconds, 12.0))
+            _run_for(run_, max(seconds * 1.5, 16.0))
             run_.stop()
             snap = run_.snapshot()
             evs = run_.demo.events

@@ -38,11 +38,13 @@ class FlowDemo:
         *,
         direction: str = "right",
         snap_mm: float = 40.0,
+        grid_mm: float = 10.0,
         prepare: bool = True,
     ) -> None:
         self.profile, self.outputs, self.plans = profile, outputs, plans
         self.direction = direction
         self.snap_mm = float(snap_mm)
+        self.grid_mm = float(grid_mm)
         self.scene = None
         reg = plugins.of("scene").get("flow_hand")
         if reg is not None:
@@ -85,13 +87,18 @@ class FlowDemo:
         return self.direction
 
     def target(self, rest_mm) -> tuple[float, float]:
-        """A resting hand near a scene region takes the region's (prepared) position."""
+        """A resting hand near a scene region takes the region's (prepared) position;
+        elsewhere the nearest point of a ``grid_mm`` grid (the whole-table flow maps'
+        step), so a hand placed again at the same spot reuses its plan."""
         if self.regions:
             d = [np.hypot(rest_mm[0] - x, rest_mm[1] - y) for x, y in self.regions]
             i = int(np.argmin(d))
             if d[i] <= self.snap_mm:
                 return self.regions[i]
-        return (float(rest_mm[0]), float(rest_mm[1]))
+        g = self.grid_mm
+        if g <= 0:
+            return (float(rest_mm[0]), float(rest_mm[1]))
+        return (float(round(rest_mm[0] / g) * g), float(round(rest_mm[1] / g) * g))
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
         if self.scene is None:

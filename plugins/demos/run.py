@@ -218,6 +218,7 @@ def start_demo(
                 outputs,
                 plans,
                 direction=direction or dm.get("flow_direction", "right"),
+                grid_mm=float(dm.get("flow_grid_mm", 10.0)),
                 prepare=prepare,
             )
         stages = [

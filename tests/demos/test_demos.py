@@ -229,3 +229,18 @@ def test_unknown_demo_and_missing_map_are_one_line_errors(profile, plugins, outp
 
     with pytest.raises(UserError, match="flow_map"):
         flow_map_path(NoTwin(profile), None)
+
+
+def test_flow_targets_snap_to_scene_regions_or_the_grid(profile, plugins):
+    from plugins.demos.flow import FlowDemo
+
+    demo = FlowDemo(profile, plugins, None, plans=None, grid_mm=10.0, prepare=False)
+    assert demo.regions, "the flow_hand scene declares its regions"
+    rx, ry = demo.regions[0]
+    assert demo.target((rx + 20.0, ry - 15.0)) == (rx, ry)  # near a region: its position
+    far = (5.0, 5.0)
+    assert min(np.hypot(far[0] - x, far[1] - y) for x, y in demo.regions) > 40
+    assert demo.target((4.0, 6.4)) == (0.0, 10.0)
+    assert demo.target((14.9, 5.1)) == (10.0, 10.0)
+    demo.grid_mm = 0.0
+    assert demo.target((4.0, 6.4)) == (4.0, 6.4)

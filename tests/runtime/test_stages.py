@@ -103,3 +103,47 @@ def test_no_fallback_mapping_off_the_twin(profile):
 
     assert fallback_to_mm(P()) is None
     assert fallback_to_mm(profile) is not None
+
+
+class FakeModelClassifier:
+    """A classifier with a trained model: names a gesture from a window of frames."""
+
+    class model:  # noqa: N801
+        n_frames = 3
+
+    def __init__(self) -> None:
+        self.calls: list[int] = []
+
+    def classify(self, frames):
+        from console.types import Gesture
+
+        self.calls.append(len(frames))
+        return Gesture("l_shape", "static", 0.8, frames[-1].t_capture_s, None)
+
+
+def _hand(center_mm, n_contacts=0):
+    from console.types import Contact, Hand
+
+    cs = tuple(Contact(i, (0.0, 0.0), (0.0, 0.0)) for i in range(n_contacts))
+    return Hand(np.zeros((3, 2)), (0.0, 0.0), 10.0, 0.0, np.zeros(3), n_contacts, cs, center_mm)
+
+
+def test_gesture_stage_names_a_placement_once_and_reports_rest_and_grip():
+    from console.runtime.stages import GestureStage
+    from console.types import Frame
+
+    clf = FakeModelClassifier()
+    st = GestureStage(clf, StillHand(still_mm=5, still_s=0.1))
+    names = []
+    for k in range(20):
+        f = Frame(np.zeros((2, 2), np.uint8), k, k / 60)
+        work = {"hand": _hand((200.0, 100.0), 2 if k >= 12 else 0)}
+        st(f, work)
+        names.append((work["gesture"].name if work["gesture"] else None, work.get("rest_mm")))
+    assert clf.calls == [3]  # once per placement, from the model's window
+    assert names[2][0] == "l_shape"
+    rest = [i for i, (_, r) in enumerate(names) if r is not None]
+    assert rest == [6] and names[6][0] == "static_hand"
+    assert all(n == "two_finger" for n, _ in names[12:])
+    st(Frame(np.zeros((2, 2), np.uint8), 20, 1.0), {"hand": None})
+    assert st.window.maxlen and len(st.window) == 0
