@@ -276,6 +276,10 @@ def _run_live(
                 loop.stop()
     finally:
         camera.close()
+    if results and all(r.timed_out for r in results) and prof.get("camera.driver") == "twin":
+        print(
+            "note: the twin camera's scripted hand does not turn the knob; --input sim runs the simulated finger"
+        )
     if holder["frames"] == 0:
         raise UserError(
             "knob --input live: no camera frame arrived; check [camera] with `haptable doctor`"
@@ -335,7 +339,9 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         print(f"logged {len(results)} trials to {log}")
         for key, v in summary.items():
             print(
-                f"  {key:22s} n={v['n']:2d} time {v['completion_time_s']:.2f} s, "
+                f"  {key:22s} n={v['n']:2d} time "
+                + ("-" if math.isnan(v["completion_time_s"]) else f"{v['completion_time_s']:.2f} s")
+                + ", "
                 f"overshoots {v['overshoots']:.2f}, recovery "
                 + ("-" if math.isnan(v["recovery_time_s"]) else f"{v['recovery_time_s']:.2f} s")
             )
