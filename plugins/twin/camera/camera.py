@@ -31,7 +31,7 @@ from console.types import Frame
 from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose
 from .hand import FingerPose, HandPose, Subject, hand_pieces, make_subject
 from .render import Rig
-from .sample import DYNAMIC_FRAMES, render_frame
+from .sample import render_frame
 
 Hands = list[tuple[Subject, HandPose]]
 
@@ -99,7 +99,7 @@ class SequenceScript:
         """Append a gesture (starting after a gap, no earlier than frame ``at``)."""
         if gesture not in GESTURES:
             raise ValueError(f"unknown gesture {gesture!r}; use one of {', '.join(GESTURES)}")
-        n = n_frames or (2 * DYNAMIC_FRAMES if gesture in DYNAMIC else 45)
+        n = n_frames or (30 if gesture in DYNAMIC else 45)  # half a second, 0.75 s
         start = max(self._end, at or 0) + self.gap
         subj = make_subject(subject, self._subject_seed)
         item = _Item(gesture, subj, side, n, start)
