@@ -90,7 +90,8 @@ class LinkServer:
         self._drawn_t = 0.0
         self.connected = False
         self.last_drop = ""
-        self.consoles = 0
+        self.consoles = 0  # connections that became the console
+        self.accepted = 0  # all connections (probes included)
         self._snapshot_requests: list[str] = []
         self._snapshots_done: list[str] = []
 
@@ -144,8 +145,17 @@ class LinkServer:
         self.last_drop = why
         log.warning("projector: console gone (%s): showing black", why)
 
+    def _hello(self) -> bytes:
+        with self._lock:
+            scene = self._scene
+        msg = {"type": "hello", "role": "projector", "pid": os.getpid(), "protocol": PROTOCOL}
+        return encode({**msg, "scene": scene, **self.info})
+
     def _run(self) -> None:
         client: socket.socket | None = None
+        # Connections that have not spoken yet: a probe (is a projector running?) must not
+        # displace the console, so a connection becomes the console with its first message.
+        pending: dict[socket.socket, float] = {}
         rx = LineBuffer()
         out = bytearray()
         last_rx = last_tx = 0.0
@@ -184,7 +194,9 @@ class LinkServer:
                         }
                     )
                     last_tx = now
-            socks = [self._listener, self._wake_r] + ([client] if client is not None else [])
+            socks = [self._listener, self._wake_r, *pending] + (
+                [client] if client is not None else []
+            )
             try:
                 r, w, _ = select.select(
                     socks,
@@ -205,27 +217,38 @@ class LinkServer:
                 except OSError:
                     new = None
                 if new is not None:
-                    if client is not None:
-                        client.close()  # the newer console wins (the old one may be hung)
-                    new.setblocking(False)
-                    client, rx, out = new, LineBuffer(), bytearray()
-                    last_rx = time.monotonic()
-                    with self._lock:  # sequence numbers are per console connection
-                        self._seq = self._drawn_seq = sent_drawn = 0
-                        scene = self._scene
-                    self.connected = True
-                    self.consoles += 1
-                    out += encode(
-                        {
-                            "type": "hello",
-                            "role": "projector",
-                            "pid": os.getpid(),
-                            "protocol": PROTOCOL,
-                            "scene": scene,
-                            **self.info,
-                        }
-                    )
+                    self.accepted += 1
+                    new.settimeout(1.0)
+                    try:
+                        new.sendall(self._hello())
+                        new.setblocking(False)
+                        pending[new] = time.monotonic()
+                    except OSError:
+                        new.close()
+            for p in [p for p in pending if p in r]:
+                try:
+                    data = p.recv(1 << 16)
+                except BlockingIOError:
                     continue
+                except OSError:
+                    data = b""
+                del pending[p]
+                if not data:
+                    p.close()
+                    continue
+                if client is not None:
+                    client.close()  # the newer console wins (the old one may be hung)
+                client, rx, out = p, LineBuffer(), bytearray()
+                last_rx = time.monotonic()
+                with self._lock:  # sequence numbers are per console connection
+                    self._seq = self._drawn_seq = sent_drawn = 0
+                self.connected = True
+                self.consoles += 1
+                for msg in rx.feed(data):
+                    self._handle_safely(msg, out, last_rx, rx)
+            for p in [p for p, t in pending.items() if time.monotonic() - t > 10.0]:
+                del pending[p]  # silent for 10 s: not a console
+                p.close()
             if client is None:
                 continue
             try:
@@ -239,11 +262,7 @@ class LinkServer:
                         continue
                     last_rx = time.monotonic()
                     for msg in rx.feed(data):
-                        try:
-                            self._handle(msg, out, last_rx)
-                        except (TypeError, ValueError, AttributeError) as e:
-                            rx.bad_lines += 1  # a malformed message must not stop the link
-                            log.warning("projector: ignored a bad message (%s)", e)
+                        self._handle_safely(msg, out, last_rx, rx)
             except BlockingIOError:
                 pass
             except OSError as e:
@@ -253,6 +272,15 @@ class LinkServer:
                 drop(f"no word from the console for {self.peer_timeout_s:g} s")
         if client is not None:
             client.close()
+        for p in pending:
+            p.close()
+
+    def _handle_safely(self, msg: dict, out: bytearray, t_recv: float, rx: LineBuffer) -> None:
+        try:
+            self._handle(msg, out, t_recv)
+        except (TypeError, ValueError, AttributeError) as e:
+            rx.bad_lines += 1  # a malformed message must not stop the link
+            log.warning("projector: ignored a bad message (%s)", e)
 
     def _handle(self, msg: dict, out: bytearray, t_recv: float) -> None:
         t = msg.get("type")

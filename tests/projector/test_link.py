@@ -388,8 +388,10 @@ def test_console_link_survives_malformed_messages_and_reconnects(sock_path):
             f = conn.makefile("rb")
             conn.sendall(encode({"type": "hello", "pid": os.getpid(), "scene": None}))
             conn.sendall(b'{"type": "ack", "seq": "x"}\n{"type": "drawn", "seq": [1]}\n')
-            msgs = [json.loads(f.readline()) for _ in range(2)]
-            state = next(m for m in msgs if m["type"] == "state")  # re-sent on every connect
+            msgs = [json.loads(f.readline())]
+            while msgs[-1]["type"] != "state" and len(msgs) < 50:
+                msgs.append(json.loads(f.readline()))
+            state = msgs[-1]  # the full state is (re-)sent on every connect
             assert state["seq"] == seq and state["state"] == {"kind": "knob"}
             assert link.wait_connected(5)
             if round_ == 0:
@@ -405,3 +407,22 @@ def test_console_link_survives_malformed_messages_and_reconnects(sock_path):
     finally:
         link.close()
         lst.close()
+
+
+def test_a_probe_does_not_displace_the_console(sock_path):
+    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=5.0)
+    srv.start()
+    try:
+        s, f = _fake_console(sock_path)
+        s.sendall(encode({"type": "state", "seq": 1, "scene": "knob", "state": {"kind": "knob"}}))
+        wait_until(lambda: srv.snapshot()[3] == {"kind": "knob"}, 5, "knob")
+        assert probe(sock_path) == os.getpid()  # "is a projector running?" from elsewhere
+        s.sendall(encode({"type": "heartbeat"}))
+        wait_until(
+            lambda: srv.snapshot()[3] is not None and srv.consoles == 1, 5, "still the console"
+        )
+        assert srv.connected and srv.last_drop == ""
+        f.close()
+        s.close()
+    finally:
+        srv.close()
