@@ -417,10 +417,9 @@ def test_a_probe_does_not_displace_the_console(sock_path):
         s.sendall(encode({"type": "state", "seq": 1, "scene": "knob", "state": {"kind": "knob"}}))
         wait_until(lambda: srv.snapshot()[3] == {"kind": "knob"}, 5, "knob")
         assert probe(sock_path) == os.getpid()  # "is a projector running?" from elsewhere
+        wait_until(lambda: srv.accepted == 2, 5, "the probe accepted")
         s.sendall(encode({"type": "heartbeat"}))
-        wait_until(
-            lambda: srv.snapshot()[3] is not None and srv.consoles == 1, 5, "still the console"
-        )
+        assert srv.consoles == 1 and srv.snapshot()[3] == {"kind": "knob"}
         assert srv.connected and srv.last_drop == ""
         f.close()
         s.close()
