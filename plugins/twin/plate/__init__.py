@@ -1,7 +1,9 @@
 """Plate twin plugin: glass modes, piezo coupling, FRFs and a simulated vibrometer.
 
-Profile sections declared here: [glass], [plate], [piezo]. The geometry comes from the
-core's [table], [grid] and [patches.*].
+Profile sections declared here: [glass], [plate], [piezo], [vibrometer]. The geometry
+comes from the core's [table], [grid] and [patches.*]. Registers the ``twin`` vibrometer
+(``[vibrometer] driver``), the ``plate`` command and the ``plate`` and ``closed-loop``
+benchmarks; ``closed_loop`` plays recorded outputs into the twin.
 """
 
 from __future__ import annotations
@@ -120,6 +122,12 @@ def haptable_profile_sections(register) -> None:
     register(
         "vibrometer",
         {
+            "driver": Field(
+                "str",
+                "twin",
+                help="vibrometer plugin that measures the map (twin: the simulated LDV on "
+                "the plate twin; a lab registers its real one)",
+            ),
             "sweep_start_hz": Field("float", 0.0, min=0.0, help="linear sweep start"),
             "sweep_stop_hz": Field(
                 "float", dflt.BAND_MAX_HZ, min=1.0, help="linear sweep stop (paper: 625 Hz)"
@@ -160,6 +168,31 @@ def haptable_profile_sections(register) -> None:
 
 
 @hookimpl
+def haptable_register_vibrometers(register) -> None:
+    from console.types import DeviceStatus
+
+    def factory(profile):
+        from .vibrometer import TwinVibrometer
+
+        return TwinVibrometer(profile)
+
+    def probe(profile) -> DeviceStatus:
+        return DeviceStatus(
+            "vibrometer",
+            "twin",
+            "simulated",
+            "plate twin: simulated laser vibrometer (linear sweep, H1 over 3 sweeps)",
+        )
+
+    register(
+        "twin",
+        factory,
+        description="simulated laser vibrometer on the plate twin",
+        probe=probe,
+    )
+
+
+@hookimpl
 def haptable_register_commands(register) -> None:
     from . import cli
 
@@ -174,3 +207,14 @@ def haptable_register_benchmarks(register) -> None:
         return run_bench(getattr(ctx, "profile", None), quick)
 
     register("plate", run, help="modal solve vs basis size, FRF truncation, vibrometer time")
+
+    def run_loop(ctx, quick: bool) -> dict:
+        from .loop_bench import run_bench as run_loop_bench
+
+        return run_loop_bench(ctx, quick)
+
+    register(
+        "closed-loop",
+        run_loop,
+        help="flows played through the gate into the plate twin: predicted vs achieved margins",
+    )

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -74,9 +75,18 @@ def linear_sweep(s: SweepSettings) -> np.ndarray:
 
 
 def velocity_response(
-    twin: Twin, x_mm: np.ndarray, y_mm: np.ndarray, volts: np.ndarray, fs_hz: float
+    twin: Twin,
+    x_mm: np.ndarray,
+    y_mm: np.ndarray,
+    volts: np.ndarray,
+    fs_hz: float,
+    excitations: tuple[str, ...] = EXCITATIONS,
+    progress: Callable[[int], None] | None = None,
 ) -> np.ndarray:
-    """Noise-free velocity (E, P, N) in m/s for the piezo voltage ``volts`` (N,) from rest."""
+    """Noise-free velocity (E, P, N) in m/s for the piezo voltage ``volts`` (N,) from rest.
+
+    One excitation at a time (``progress(done)`` after each), as a vibrometer session runs.
+    """
     modes = twin.modes
     if modes.n_rigid:
         raise ValueError("vibrometer: the plate has rigid-body modes; support its edges")
@@ -90,12 +100,19 @@ def velocity_response(
     g = modal_receptance(modes.omega_rad_s, f, zeta) * (jw * u)[None, :]  # (R, F) per N
     x_m, y_m = np.asarray(x_mm, float).ravel() / 1e3, np.asarray(y_mm, float).ravel() / 1e3
     phi = modes.shapes(x_m, y_m)  # (P, R)
-    qdot = sfft.irfft(g[None, :, :] * twin.q.T[:, :, None], npad, axis=-1)[..., :n]  # (E,R,N)
-    v = np.einsum("pr,ern->epn", phi, qdot, optimize=True)
+    idx = [EXCITATIONS.index(e) for e in excitations]
+    res = udot = None
     if twin.residual_coeffs is not None:
-        res = _eval_coeffs(twin, twin.residual_coeffs, x_m, y_m)  # (E, P) m/V static
+        res = _eval_coeffs(twin, twin.residual_coeffs[idx], x_m, y_m)  # (E, P) m/V static
         udot = sfft.irfft(jw * u, npad)[:n]
-        v += res[:, :, None] * udot[None, None, :]
+    v = np.empty((len(idx), phi.shape[0], n))
+    for i, e in enumerate(idx):
+        qdot = sfft.irfft(g * twin.q[:, e][:, None], npad, axis=-1)[..., :n]  # (R, N)
+        v[i] = phi @ qdot
+        if res is not None:
+            v[i] += res[i][:, None] * udot[None, :]
+        if progress:
+            progress(i + 1)
     return v
 
 
@@ -104,6 +121,7 @@ def h1_displacement(
     vel: np.ndarray,
     s: SweepSettings,
     rng: np.random.Generator,
+    progress: Callable[[int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """H1 over ``s.sweeps`` noisy records -> (freqs_hz, H_d um/V (…, F), valid, coherence).
 
@@ -121,12 +139,14 @@ def h1_displacement(
     s_vx = np.zeros(vel.shape[:-1] + (freqs.size,), complex)
     s_vv = np.zeros(vel.shape[:-1] + (freqs.size,))
     s_xx = np.zeros(freqs.size)
-    for _ in range(s.sweeps):
+    for i in range(s.sweeps):
         meas = vel + sigma * rng.standard_normal(vel.shape)
         y = sfft.rfft(meas, axis=-1)[..., keep]
         s_vx += y * np.conj(x)
         s_vv += np.abs(y) ** 2
         s_xx += np.abs(x) ** 2
+        if progress:
+            progress(i + 1)
     valid = (freqs >= s.mask_below_hz) & (s_xx > 1e-3 * np.median(s_xx[freqs <= s.f_stop_hz]))
     with np.errstate(divide="ignore", invalid="ignore"):
         h_v = s_vx / s_xx  # m/s per generator volt
@@ -143,8 +163,12 @@ def measure(
     y_mm: np.ndarray,
     settings: SweepSettings | None = None,
     excitations: tuple[str, ...] = EXCITATIONS,
+    progress: Callable[[int, int], None] | None = None,
 ) -> dict:
     """Simulated LDV measurement at points (x_mm, y_mm) for each excitation.
+
+    ``progress(done, total)`` is called as each excitation's responses and then each
+    sweep's spectra complete (total = excitations + sweeps).
 
     Returns plain arrays + metadata for the vibration-map writer:
     ``freqs_hz`` (F,), ``frf`` (E, P, F) complex displacement in um per volt at the piezo
@@ -156,10 +180,20 @@ def measure(
     s.check()
     t0 = time.perf_counter()
     gen = linear_sweep(s)
-    idx = [EXCITATIONS.index(e) for e in excitations]
-    vel = velocity_response(twin, x_mm, y_mm, gen * s.amplifier_gain, s.sample_rate_hz)[idx]
+    total = len(excitations) + s.sweeps
+    vel = velocity_response(
+        twin,
+        x_mm,
+        y_mm,
+        gen * s.amplifier_gain,
+        s.sample_rate_hz,
+        tuple(excitations),
+        (lambda k: progress(k, total)) if progress else None,
+    )
     rng = np.random.default_rng(s.seed)
-    freqs, h_d, valid, coh = h1_displacement(gen, vel, s, rng)
+    freqs, h_d, valid, coh = h1_displacement(
+        gen, vel, s, rng, (lambda k: progress(len(excitations) + k, total)) if progress else None
+    )
     meta = {
         "source": "plate twin, simulated laser vibrometer (H1, linear sweep)",
         "units": "um/V",
@@ -238,7 +272,11 @@ def settings_from_profile(profile, **overrides) -> SweepSettings:
     )
 
 
-def measure_grid(profile=None, settings: SweepSettings | None = None) -> dict:
+def measure_grid(
+    profile=None,
+    settings: SweepSettings | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict:
     """Measure the profile's 84-point grid on the profile's twin (all five excitations).
 
     Returns the arguments of ``console.vibration_map.make_map`` as plain values:
@@ -255,7 +293,7 @@ def measure_grid(profile=None, settings: SweepSettings | None = None) -> dict:
     if settings is None:
         settings = settings_from_profile(profile) if profile is not None else SweepSettings()
     x, y = grid_points_mm(profile)
-    r = measure(twin, x, y, settings)
+    r = measure(twin, x, y, settings, progress=progress)
     frf = np.where(r["valid"], r["frf"], 0.0)
     meta = r["meta"]
     return {
@@ -282,3 +320,15 @@ def measure_grid(profile=None, settings: SweepSettings | None = None) -> dict:
         ),
         "meta": meta,
     }
+
+
+class TwinVibrometer:
+    """The ``twin`` vibrometer device: measures the profile's grid on the plate twin."""
+
+    def __init__(self, profile, settings: SweepSettings | None = None):
+        self.profile = profile
+        self.settings = settings
+
+    def measure(self, progress: Callable[[int, int], None] | None = None) -> dict:
+        """``console.vibration_map.make_map`` arguments plus ``meta`` (see measure_grid)."""
+        return measure_grid(self.profile, self.settings, progress=progress)
