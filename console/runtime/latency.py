@@ -7,7 +7,8 @@ stamp to last; ``end_to_end`` only for frames that reached the last stage). ``sn
 milliseconds, fps, frames seen and dropped.
 
 Stage names are whatever the loop stamps; the loop uses ``arrival`` (the frame was taken
-from the camera), then ``vision``, ``classify``, ``scene``, ``effect``, ``scheduled``
+from the camera), ``dequeued`` (processing began: its duration is the queue wait), then
+``vision``, ``classify``, ``scene``, ``effect``, ``scheduled``
 (the first output sample of the frame's effect was handed to the output scheduler).
 """
 
@@ -22,6 +23,8 @@ from console.types import Frame
 
 #: The stage a frame's processing is measured from (the camera thread stamps it).
 ARRIVAL = "arrival"
+#: The processing thread took the frame from the queue (its duration: the queue wait).
+DEQUEUED = "dequeued"
 #: Arrival to the end stage's stamp (default the last stage; the loop uses ``scheduled``),
 #: for frames that reached it: from frame arrival to the first output sample scheduled.
 END_TO_END = "end_to_end"
@@ -83,7 +86,7 @@ class LatencyMonitor:
     """Per-stage p50/p99 over the last ``size`` frames, fps and drops. Thread-safe."""
 
     def __init__(self, stages: Iterable[str], size: int = 1200, end_stage: str | None = None):
-        self.order = (ARRIVAL, *[s for s in stages if s != ARRIVAL])
+        self.order = (ARRIVAL, DEQUEUED, *[s for s in stages if s not in (ARRIVAL, DEQUEUED)])
         self.end_stage = end_stage or self.order[-1]
         if self.end_stage not in self.order:
             raise ValueError(f"end stage {self.end_stage!r} is not one of {self.order}")
@@ -137,6 +140,11 @@ class LatencyMonitor:
     def failed(self) -> None:
         with self._lock:
             self.errors += 1
+
+    def values_s(self, name: str) -> np.ndarray:
+        """The durations (s) held for a stage, ``end_to_end`` or ``processing``."""
+        with self._lock:
+            return self._rings[name].values()
 
     def fps(self) -> float:
         """Frames arriving per second over the last (up to) 120 frames."""

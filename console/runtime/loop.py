@@ -28,7 +28,7 @@ from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-from console.runtime.latency import ARRIVAL, LatencyMonitor
+from console.runtime.latency import ARRIVAL, DEQUEUED, LatencyMonitor
 from console.types import Camera, Frame
 
 log = logging.getLogger("haptable.loop")
@@ -88,8 +88,10 @@ class FrameLoop:
         name: str = "loop",
     ) -> None:
         names = [n for n, _ in stages]
-        if len(set(names)) != len(names) or ARRIVAL in names:
-            raise ValueError(f"stage names must be unique and not {ARRIVAL!r}: {names}")
+        if len(set(names)) != len(names) or {ARRIVAL, DEQUEUED} & set(names):
+            raise ValueError(
+                f"stage names must be unique and not {ARRIVAL!r} or {DEQUEUED!r}: {names}"
+            )
         self.camera = camera
         self.stages = list(stages)
         self.sinks = list(sinks)
@@ -199,6 +201,7 @@ class FrameLoop:
         work: dict = {}
         with self._lock:
             self._busy_since = time.monotonic()
+        frame.stamp(DEQUEUED, self._busy_since)
         try:
             for name, fn in self.stages:
                 with self._lock:

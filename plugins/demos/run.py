@@ -115,6 +115,12 @@ class DemoRun:
         out.update(demo_state(self.demo))
         return out
 
+    def scene_state(self) -> dict | None:
+        """The demo's projected scene (``flow_hand`` / ``knob``) as the JSON the projector
+        draws (send it over the projector link), or ``None`` without a scene plugin."""
+        scene = getattr(self.demo, "scene", None)
+        return scene.state() if scene is not None else None
+
     def __enter__(self) -> DemoRun:
         return self
 

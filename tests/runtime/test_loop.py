@@ -89,14 +89,16 @@ def test_percentiles_match_numpy_and_empty_is_nan():
 
 def test_monitor_end_to_end_counts_only_frames_that_reached_the_end_stage():
     m = LatencyMonitor(["vision", "scheduled", "scene"], end_stage="scheduled")
-    m.record(frame(0, arrival=0.0, vision=0.002, scheduled=0.003, scene=0.0031))
-    m.record(frame(1, arrival=1.0, vision=1.004))  # no hand: stopped after vision
+    m.record(frame(0, arrival=0.0, dequeued=0.0005, vision=0.002, scheduled=0.003, scene=0.0031))
+    m.record(frame(1, arrival=1.0, dequeued=1.001, vision=1.004))  # no hand: ends at vision
     s = m.snapshot()
     assert s["frames"] == 2
     assert s["end_to_end"]["n"] == 1
     assert s["end_to_end"]["p50_ms"] == pytest.approx(3.0)
     assert s["processing"]["n"] == 2
     assert s["stages"]["vision"]["n"] == 2
+    assert s["stages"]["dequeued"]["p50_ms"] == pytest.approx(0.75)  # the queue wait
+    assert s["stages"]["vision"]["max_ms"] == pytest.approx(3.0)
     assert s["stages"]["scheduled"]["p50_ms"] == pytest.approx(1.0)
 
 
@@ -119,7 +121,7 @@ def test_loop_stamps_every_stage_in_order_and_stops_a_frame_on_false():
         loop.process(f)
     assert [f.seq for f in seen] == [0, 2, 4, 6, 8]
     for f in seen:
-        assert list(f.stamps_s) == [ARRIVAL, "vision", "effect", "scheduled"]
+        assert list(f.stamps_s) == [ARRIVAL, "dequeued", "vision", "effect", "scheduled"]
         ts = list(f.stamps_s.values())
         assert ts == sorted(ts)
     snap = loop.monitor.snapshot()
