@@ -457,3 +457,20 @@ def test_motion_blur_smears_moving_hands_only():
     still_a, _ = _render("open_hand", seed=2, rig=QUIET, t0_s=0.0)
     still_b, _ = _render("open_hand", seed=2, rig=quiet_blur, t0_s=0.0)
     assert np.array_equal(still_a, still_b)
+
+
+def test_long_takes_sweep_back_and_forth_on_the_table():
+    table = (743.46, 447.29)
+    for g in ("rotate", "drag", "wipe", "zoom", "spread_pile"):
+        for seed in range(3):
+            take = plan_take(
+                g, make_subject("s2"), np.random.default_rng(seed), table, duration_s=10.0
+            )
+            poses = [take_pose(take, k / 60.0) for k in range(0, 600, 7)]
+            turn = np.array([p.angle_deg - take.angle_deg for p in poses])
+            assert np.abs(turn).max() < (101.0 if g == "rotate" else 20.0), g
+            for p in poses:
+                geo = hand_pieces(make_subject("s2"), p)
+                for c in geo.contacts:
+                    assert -30 < c["pos_mm"][0] < table[0] + 30, g
+                    assert -30 < c["pos_mm"][1] < table[1] + 30, g

@@ -137,6 +137,22 @@ def eased_s(t_s: float, ease_s: float) -> float:
     return t_s - ease_s * (1.0 - float(np.exp(-t_s / ease_s)))
 
 
+#: How far a long take goes before it turns back (drag/wipe mm, rotate deg): a held
+#: gesture sweeps back and forth instead of leaving the table or spinning round.
+SWEEP = {"drag": 150.0, "wipe": 130.0, "rotate": 100.0}
+
+
+def _sweep(x: float, span: float) -> float:
+    """Triangle wave: 0 -> span -> 0 -> ... as ``x`` grows (identity on [0, span])."""
+    x = x % (2 * span)
+    return x if x <= span else 2 * span - x
+
+
+def _reflect01(x: float) -> float:
+    """Fold ``x`` back into [0, 1] (a pose fraction that keeps going turns back)."""
+    return _sweep(x, 1.0)
+
+
 def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) -> HandPose:
     """The hand pose ``t_s`` seconds into a take (tremor from ``rng`` when given).
     Dynamic gestures start from rest and reach their speed within ``take.ease_s``."""
@@ -149,7 +165,7 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
     elif g == "drag":
         palm, fingers = static_pose("one_finger", s, j)
         d = np.radians(take.angle_deg + take.direction)
-        dist = take.rate * tm
+        dist = _sweep(take.rate * tm, SWEEP["drag"])
         curv = s.curvature + 0.002 * j[6]
         # arc of curvature ``curv`` starting along ``d``
         if abs(curv) < 1e-6:
@@ -159,7 +175,9 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
             off = r * np.array(
                 [np.sin(d + dist * curv) - np.sin(d), np.cos(d) - np.cos(d + dist * curv)]
             )
-        pose = replace(base, palm_h_mm=palm, fingers=fingers).moved(tuple(off), 8 * j[7] * tm)
+        pose = replace(base, palm_h_mm=palm, fingers=fingers).moved(
+            tuple(off), 8 * j[7] * dist / max(take.rate, 1.0)
+        )
     elif g == "rotate":
         hp = s.palm_lift_mm - 5
         c = _curled(s, j[3], 2)
@@ -167,16 +185,16 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         fingers = (thumb, _point(j[2], -6), c, c, c)
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=fingers)
         pivot = np.array(_tip(s, pose, "thumb"))
-        w = take.direction * take.rate * tm
+        w = take.direction * _sweep(take.rate * tm, SWEEP["rotate"])
         pose = _rotate_about(pose, pivot, w)
     elif g == "zoom":
         p0 = 0.15 + 0.1 * j[0] if take.variant == "in" else 0.85 + 0.1 * j[0]
-        p = float(np.clip(p0 + take.direction * take.rate * tm, 0, 1))
+        p = _reflect01(p0 + take.direction * take.rate * tm)
         hp = 0.7 * s.palm_lift_mm
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_pinch_fingers(s, p, j))
     elif g == "spread_pile":
         p0 = 0.1 + 0.08 * j[0] if take.variant == "spread" else 0.9 + 0.08 * j[0]
-        p = float(np.clip(p0 + take.direction * take.rate * tm, 0, 1))
+        p = _reflect01(p0 + take.direction * take.rate * tm)
         hp = 0.6 * s.palm_lift_mm
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_five_fingers(s, p, j))
         # the fingertips move, the hand keeps its middle tip roughly in place
@@ -184,9 +202,9 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         palm, fingers = static_pose("closed_hand", s, j)
         pose = replace(base, palm_h_mm=palm, fingers=fingers)
         d = np.radians(take.angle_deg + take.direction)
-        dist = take.rate * tm
+        dist = _sweep(take.rate * tm, SWEEP["wipe"])
         off = dist * np.array([np.cos(d), np.sin(d)])
-        pose = pose.moved(tuple(off), 25 * j[7] * tm)
+        pose = pose.moved(tuple(off), 25 * j[7] * dist / max(take.rate, 1.0))
     else:
         raise ValueError(f"unknown gesture {g!r}")
     if take.tremor and rng is not None:
@@ -263,7 +281,7 @@ def plan_take(
         direction = float(rng.choice([-90.0, 90.0]) + rng.normal(0, 12))
     if wrist_mm is None:
         reach = subject.length_mm * 0.55
-        travel = rate * duration_s if gesture in ("drag", "wipe") else 20.0
+        travel = min(rate * duration_s, SWEEP[gesture]) if gesture in ("drag", "wipe") else 20.0
         margin = reach + travel + 25.0
         mx, my = min(margin, w / 2 - 1), min(margin, h / 2 - 1)
         center = np.array([rng.uniform(mx, w - mx), rng.uniform(my, h - my)])
