@@ -55,6 +55,14 @@ GESTURES_FIELDS = {
     "frames": Field(
         "int", 4, min=2, max=6, help="frames a dynamic gesture is decided from (paper: 4)"
     ),
+    "harmonics": Field(
+        "int",
+        2,
+        min=0,
+        max=16,
+        help="Fourier harmonics the classifiers use (0: none; more fit subjects seen in "
+        "training better and unseen ones worse, see `haptable bench gestures`)",
+    ),
 }
 
 
@@ -108,7 +116,10 @@ def _dataset_commands() -> dict:
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "--harmonics", type=int, default=None, help="Fourier harmonics (default: profile, 12)"
+        "--harmonics",
+        type=int,
+        default=None,
+        help="Fourier harmonics for the classifiers (default: [gestures] harmonics, 2)",
     )
     p.add_argument(
         "--frames", type=int, default=None, help="frames for dynamic gestures (default 4)"
@@ -155,11 +166,9 @@ def run(args, ctx) -> int:
     from . import evaluate as ev
 
     profile = _profile(ctx)
-    n_h = (
-        args.harmonics
-        if getattr(args, "harmonics", None)
-        else _get(profile, "vision.n_harmonics", 12)
-    )
+    n_h = getattr(args, "harmonics", None)
+    if n_h is None:
+        n_h = _get(profile, "gestures.harmonics", 2)
     n_f = args.frames if getattr(args, "frames", None) else _get(profile, "gestures.frames", 4)
     if cmd == "eval":
         fs = ev.extract(

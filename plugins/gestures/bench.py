@@ -27,7 +27,7 @@ from .vision import (
     subtract,
 )
 
-HARMONICS = (2, 4, 6, 8, 12, 16)
+HARMONICS = (0, 2, 4, 6, 8, 12, 16)
 NOISE = (0.0, 3.0, 6.0, 12.0)
 
 
@@ -125,7 +125,7 @@ def run_benchmark(ctx, quick: bool) -> dict:
             by_frames = []
             fps = float(np.median([s.fps for s in samples]))
             for k in sorted(fs.dynamic):
-                r = ev.cross_validate(fs, "2fold", n_harmonics=12, n_frames=k)
+                r = ev.cross_validate(fs, "2fold", n_harmonics=2, n_frames=k)
                 by_frames.append(
                     {
                         "frames": k,
@@ -139,8 +139,8 @@ def run_benchmark(ctx, quick: bool) -> dict:
             sub = samples if not quick else samples[:: max(1, len(samples) // 150)]
             for sigma in NOISE:
                 by_noise.append({"noise_sigma": sigma, **_noisy_accuracy(sub, params, sigma)})
-            loso = ev.cross_validate(fs, "loso", n_harmonics=12, n_frames=4)
-            two = ev.cross_validate(fs, "2fold", n_harmonics=12, n_frames=4)
+            loso = ev.cross_validate(fs, "loso", n_harmonics=2, n_frames=4)
+            two = ev.cross_validate(fs, "2fold", n_harmonics=2, n_frames=4)
     finally:
         cv2.setNumThreads(threads)
     return {
@@ -186,7 +186,7 @@ def _noisy_accuracy(samples, params: VisionParams, sigma: float, seed: int = 0) 
         np.zeros(0),
         {"n_harmonics_max": ev.N_HARMONICS_MAX},
     )
-    r = ev.cross_validate(fs, "2fold", n_harmonics=12, n_frames=4)
+    r = ev.cross_validate(fs, "2fold", n_harmonics=2, n_frames=4)
     return {
         "static_accuracy": r["static_accuracy"],
         "dynamic_accuracy": r["dynamic_accuracy"],

@@ -250,8 +250,8 @@ def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
             f"--frames {n_frames}: features exist for {sorted(fs.dynamic)} frames; pick one of them"
         )
     nmax = int(fs.meta.get("n_harmonics_max", N_HARMONICS_MAX))
-    if not 2 <= n_harmonics <= nmax:
-        raise UserError(f"--harmonics {n_harmonics}: use 2 to {nmax}")
+    if not (n_harmonics == 0 or 2 <= n_harmonics <= nmax):
+        raise UserError(f"--harmonics {n_harmonics}: use 0 (no descriptors) or 2 to {nmax}")
     xs = fs.static[:, F.static_indices(n_harmonics, nmax)]
     xd = fs.dynamic[n_frames][:, F.dynamic_indices(n_harmonics, nmax)]
     return xs, xd, fs.kind, fs.score[n_frames]
@@ -277,18 +277,19 @@ def cross_validate(
     fs: FeatureSet,
     cv: str = "2fold",
     *,
-    n_harmonics: int = 12,
+    n_harmonics: int = 2,
     n_frames: int = 4,
     seed: int = 0,
 ) -> dict:
     """Outer cross-validation of the whole classifier; the report the CLI prints."""
-    xs, xd, sc = columns(fs, n_harmonics, n_frames)
+    xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
     pred = np.empty(len(fs.labels), dtype=object)
     thresholds = []
     for tr, te in splits(fs, cv, seed):
         m = GestureModel.fit(
             xs[tr],
             xd[tr],
+            xk[tr],
             sc[tr],
             fs.labels[tr],
             n_harmonics=n_harmonics,
@@ -296,7 +297,7 @@ def cross_validate(
             seed=seed,
         )
         thresholds.append(m.motion_threshold)
-        pred[te] = m.predict(xs[te], xd[te], sc[te])
+        pred[te] = m.predict(xs[te], xd[te], xk[te])
     return report(fs.labels, pred.astype(str), fs, cv, n_harmonics, n_frames, thresholds)
 
 
@@ -338,7 +339,7 @@ def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
 
 
 def train(
-    fs: FeatureSet, *, n_harmonics: int = 12, n_frames: int = 4, seed: int = 0
+    fs: FeatureSet, *, n_harmonics: int = 2, n_frames: int = 4, seed: int = 0
 ) -> GestureModel:
     xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
     return GestureModel.fit(

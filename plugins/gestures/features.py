@@ -31,7 +31,10 @@ def desc_size(n_harmonics: int) -> int:
 
 
 def desc_indices(n: int, n_max: int) -> np.ndarray:
-    """Indices, in a descriptor vector of ``n_max`` harmonics, of the one with ``n``."""
+    """Indices, in a descriptor vector of ``n_max`` harmonics, of the one with ``n``
+    (``n = 0``: none)."""
+    if n < 2:
+        return np.zeros(0, dtype=int)
     ks = np.concatenate([np.arange(-n_max, 0), np.arange(2, n_max + 1)])
     keep = np.flatnonzero(np.abs(ks) <= n)
     m = len(ks)
@@ -239,6 +242,13 @@ def dynamic_features(
 
 
 def dynamic_indices(n: int, n_max: int) -> np.ndarray:
-    """Columns of a dynamic feature vector (built with ``n_max``) that ``n`` harmonics keep."""
-    s = static_indices(n, n_max)
-    return np.concatenate([s, static_size(n_max) + np.arange(N_MOTION)])
+    """Columns of a dynamic feature vector (built with ``n_max``) the dynamic classifier
+    uses: ``n`` harmonics of the first frame's descriptors, its contact layout (the
+    number of fingers in contact among them) and the motion features. The brightness
+    grid and the silhouette finger count are left out: across subjects they hurt more
+    than they help (``haptable bench gestures``)."""
+    d = desc_indices(n, n_max)
+    base = desc_size(n_max) + N_GRID + 2
+    contacts = base + np.arange(N_CONTACT)
+    motion = static_size(n_max) + np.arange(N_MOTION)
+    return np.concatenate([d, contacts, motion])

@@ -128,7 +128,7 @@ class GestureModel:
     dynamic_svm: object
     kind_svm: object
     motion_threshold: float
-    n_harmonics: int = 12
+    n_harmonics: int = 2
     n_frames: int = 4
     static_frames: int = 3
     meta: dict = field(default_factory=dict)
