@@ -141,7 +141,11 @@ def run_bench(ctx: Any, quick: bool) -> dict:
         profile = ctx.profile if ctx is not None else None
     except Exception:  # noqa: BLE001 - the bench measures with defaults when no profile loads
         profile = None
+    import os
+
+    load_before = os.getloadavg()[0]
     return {
+        "load_avg_1min": load_before,  # other work on the machine skews llvmpipe timings
         "size_px": list(SIZE),
         "frame_time_headless": frame_times(profile, 30 if quick else 200),
         "link_latency": link_latency(50 if quick else 400),
