@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.types import EXCITATIONS, PATCHES
+from console.types import EXCITATIONS
 from console.vibration_map import VibrationMap, grid_points_mm, make_map
 
 
@@ -125,4 +125,4 @@ def analytic_map(
     )
 
 
-__all__ = ["SSPlate", "analytic_map", "default_freq_hz", "PATCHES"]
+__all__ = ["SSPlate", "analytic_map", "default_freq_hz"]
