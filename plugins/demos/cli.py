@@ -42,6 +42,10 @@ def _line(snap: dict) -> str:
     )
 
 
+def _progress(done: int, total: int, what: str) -> None:
+    print(f"preparing {done + 1}/{total}: {what}", file=sys.stderr, flush=True)
+
+
 def run(args, ctx) -> int:
     if args.demo == "soak":
         from .bench import run_soak
@@ -62,6 +66,7 @@ def run(args, ctx) -> int:
             sectors=args.sectors,
             direction=args.direction,
             tuio=True if args.tuio else None,
+            progress=None if args.json else _progress,
         )
         t0 = time.monotonic()
         try:

@@ -60,11 +60,14 @@ class FlowDemo:
         self._running = False
 
     # ------------------------------------------------------------------ lifecycle
-    def start(self) -> None:
+    def start(self, progress=None) -> None:
         """Prepare the plans the scene needs (its regions, the demo's direction; other
-        directions are computed when first asked for)."""
+        directions are computed when first asked for). ``progress(done, total, what)``
+        is called per region (the first time costs seconds per region; then cached)."""
         if self.prepare_regions:
-            for c in self.regions:
+            for i, c in enumerate(self.regions):
+                if progress is not None:
+                    progress(i, len(self.regions), f"flow {self.direction} at {c[0]:g},{c[1]:g} mm")
                 try:
                     self.plans.plan(c, self.direction, exhaustive=True)
                 except UserError as exc:

@@ -41,7 +41,7 @@ class KnobDemo:
         self.events: list[dict] = []
         self.frames_touching = 0
 
-    def start(self) -> None:
+    def start(self, progress=None) -> None:
         self.report = self.outputs.stream(self.session.stream, name=f"knob {self.condition}")
 
     def stop(self, timeout_s: float = 2.0) -> None:

@@ -180,16 +180,24 @@ def start_demo(
     sinks: list | None = None,
     tuio: bool | None = None,
     watchdog_ms: float | None = None,
+    progress: Any = None,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
     ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
     TUIO too (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
+    ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
+    scene region the first time, cached on disk after); call this from a worker thread.
     """
     if name not in DEMOS:
         raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
     dm = profile.section("demos")
     rt = profile.section("runtime")
+    if cache_dir is None:
+        from .adapters import default_cache_dir
+
+        vt_cache = profile.get("vibrotactile.cache_dir") or ""
+        cache_dir = Path(vt_cache).expanduser() if vt_cache else default_cache_dir()
     owns = camera is None
     if owns:
         camera = open_camera(profile, plugins)
@@ -252,7 +260,7 @@ def start_demo(
         )
         limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
         wd = Watchdog(loop, outputs.estop, limit_ms / 1e3)
-        demo.start()
+        demo.start(progress)
         loop.start()
         wd.start()
     except BaseException:
