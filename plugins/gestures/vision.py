@@ -154,8 +154,7 @@ def subtract(frame: np.ndarray, background: np.ndarray, gain: float = 1.0) -> np
     """``frame - gain * background`` clipped at 0, as uint8."""
     if gain == 1.0 and background.dtype == np.uint8:
         return cv2.subtract(frame, background)
-    b = np.clip(background.astype(np.float32) * gain + 0.5, 0, 255).astype(np.uint8)
-    return cv2.subtract(frame, b)
+    return cv2.subtract(frame, cv2.convertScaleAbs(background, alpha=gain))
 
 
 def highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
@@ -195,26 +194,27 @@ def find_contacts(
     ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
     """
     _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
-    ys, xs = np.nonzero(m)
-    if len(xs) == 0:
-        return []
     md = cv2.dilate(m, _DISK5)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(md, connectivity=8)
-    lab = labels[ys, xs]
-    w = hp[ys, xs].astype(np.float64)
-    area = np.bincount(lab, minlength=n)
-    sw = np.bincount(lab, weights=w, minlength=n)
-    sx = np.bincount(lab, weights=w * xs, minlength=n)
-    sy = np.bincount(lab, weights=w * ys, minlength=n)
+    groups, _ = cv2.findContours(md, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     out: list[Contact] = []
-    for i in range(1, n):
-        if area[i] < min_area_px or area[i] > max_area_px or sw[i] <= 0:
+    for g in groups:
+        x0, y0, w, h = cv2.boundingRect(g)
+        if max(w, h) - 4 > max_size_px:  # the dilation adds 2 px each side
             continue
-        if max(stats[i, cv2.CC_STAT_WIDTH], stats[i, cv2.CC_STAT_HEIGHT]) > max_size_px:
+        sel = np.zeros((h, w), np.uint8)
+        cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
+        sub = m[y0 : y0 + h, x0 : x0 + w] & sel
+        area = int(cv2.countNonZero(sub))
+        if area < min_area_px or area > max_area_px:
             continue
-        out.append(
-            Contact(id=len(out), pos_px=(sx[i] / sw[i], sy[i] / sw[i]), area_px=float(area[i]))
-        )
+        wts = hp[y0 : y0 + h, x0 : x0 + w].astype(np.float32) * (sub > 0)
+        mo = cv2.moments(wts)
+        if mo["m00"] <= 0:
+            continue
+        pos = (x0 + mo["m10"] / mo["m00"], y0 + mo["m01"] / mo["m00"])
+        out.append(Contact(id=len(out), pos_px=pos, area_px=float(area)))
+    out.sort(key=lambda c: (c.pos_px[1], c.pos_px[0]))
+    out = [Contact(i, c.pos_px, c.pos_mm, c.area_px) for i, c in enumerate(out)]
     if to_mm is not None and out:
         mm = np.asarray(to_mm(np.array([c.pos_px for c in out])))
         out = [
@@ -485,12 +485,12 @@ def brightness_grid(
     """Share of the hand's brightness in each cell of a polar grid in the canonical frame
     (``GRID_SECTORS`` sectors x rings ``GRID_RINGS`` palm radii): where the hand touches
     or nearly touches the glass, independent of position, rotation, size and gain."""
-    ys, xs = np.nonzero(roi_mask[::2, ::2])
+    ys, xs = np.nonzero(roi_mask[::3, ::3])
     n_cells = GRID_SECTORS * (len(GRID_RINGS) - 1)
     if len(xs) == 0 or palm_radius <= 0:
         return np.zeros(n_cells)
-    w = roi_diff[ys * 2, xs * 2].astype(np.float64)
-    q = to_canonical(np.column_stack([xs * 2, ys * 2]), center, angle_deg, palm_radius)
+    w = roi_diff[ys * 3, xs * 3].astype(np.float64)
+    q = to_canonical(np.column_stack([xs * 3, ys * 3]), center, angle_deg, palm_radius)
     r = np.hypot(q[:, 0], q[:, 1])
     sector = ((np.arctan2(q[:, 1], q[:, 0]) + math.pi) / (2 * math.pi) * GRID_SECTORS).astype(int)
     sector = np.clip(sector, 0, GRID_SECTORS - 1)
