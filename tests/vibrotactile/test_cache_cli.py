@@ -40,6 +40,7 @@ def run(configure, runner, argv, ctx):
     return runner(p.parse_args(argv), ctx)
 
 
+@pytest.mark.slow
 def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
     monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
     mp = save_map(tmp_path / "map.npz", ss_map)

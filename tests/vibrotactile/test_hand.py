@@ -75,6 +75,7 @@ def test_side_masks_are_mirror_images():
         side_masks("diagonal")
 
 
+@pytest.mark.slow
 def test_screen_then_exact_is_close_to_exhaustive(ss_map):
     """The screened sweep re-scores its candidates exactly: never better than the
     exhaustive search, and close to it (the bench reports how often it is identical)."""
