@@ -462,11 +462,11 @@ def test_motion_blur_smears_moving_hands_only():
 def test_long_takes_sweep_back_and_forth_on_the_table():
     table = (743.46, 447.29)
     for g in ("rotate", "drag", "wipe", "zoom", "spread_pile"):
-        for seed in range(3):
+        for seed in range(2):
             take = plan_take(
                 g, make_subject("s2"), np.random.default_rng(seed), table, duration_s=10.0
             )
-            poses = [take_pose(take, k / 60.0) for k in range(0, 600, 7)]
+            poses = [take_pose(take, k / 60.0) for k in range(0, 600, 23)]
             turn = np.array([p.angle_deg - take.angle_deg for p in poses])
             assert np.abs(turn).max() < (101.0 if g == "rotate" else 20.0), g
             for p in poses:
