@@ -37,6 +37,7 @@ class KnobSession:
             s["filter_beta"],
             s["max_hold_frames"],
             start_angle_deg=self.knob.center_deg(start_item),
+            max_pivot_hold_frames=s["max_pivot_hold_frames"],
         )
         self.stream = KnobStream(condition, sample_rate_hz, s, limits, sectors=sectors)
         self.fs, self.block, self.record = int(sample_rate_hz), int(block), record

@@ -131,9 +131,10 @@ KNOB_DEFAULTS: dict[str, Any] = {
     "vd_excitation": "PALL",
     "ramp_ms": 10.0,
     "glide_ms": 5.0,
-    "filter_alpha": 0.5,
-    "filter_beta": 0.15,
+    "filter_alpha": 0.7,
+    "filter_beta": 0.25,
     "max_hold_frames": 3,
+    "max_pivot_hold_frames": 30,
     "dwell_s": 0.4,
 }
 
@@ -297,6 +298,13 @@ KNOB_FIELDS: dict[str, Field] = {
         min=0,
         max=30,
         help="frames a lifted finger is held/predicted before the grip is released",
+    ),
+    "max_pivot_hold_frames": Field(
+        "int",
+        KNOB_DEFAULTS["max_pivot_hold_frames"],
+        min=0,
+        max=600,
+        help="frames the pivot (thumb) may be unseen while the arc finger still measures",
     ),
     "dwell_s": Field(
         "float",

@@ -43,7 +43,7 @@ def rotation_through_vision():
     return out
 
 
-def test_tracker_follows_the_rendered_hand_past_180_degrees(rotation_through_vision):
+def test_tracker_follows_the_rendered_hand(rotation_through_vision):
     tr = RotationTracker()
     est, true = [], []
     ref = None
@@ -55,10 +55,10 @@ def test_tracker_follows_the_rendered_hand_past_180_degrees(rotation_through_vis
             est.append(s.angle_deg)
             true.append(ref)
     est, true = np.array(est), np.array(true)
-    assert len(est) > 140
+    assert len(est) > 140  # vision loses the thumb at times: the pivot is held
     rel = (est - est[0]) - (true - true[0])
-    assert np.abs(true[-1] - true[0]) > 360.0  # really goes round
-    assert np.max(np.abs(rel)) < 4.0  # measured ~1.3 deg (vision noise + filter)
+    assert np.ptp(true) > 90.0  # the hand really turns (the script sets how: both ways, or round)
+    assert np.max(np.abs(rel)) < 3.0  # ~2 deg: filter overshoot where the hand reverses at once
     knob_est, knob_true = Knob(16), Knob(16)
     n_est = sum(len(knob_est.update(0, a)) for a in est - est[0] + 11.25)
     n_true = sum(len(knob_true.update(0, a)) for a in true - true[0] + 11.25)
