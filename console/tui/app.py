@@ -1,102 +1,150 @@
 """The HapTable console: a thin Textual shell over the runtime.
 
-Screens post messages; workers do blocking work; the e-stop key works on every screen.
+Panes post work to thread workers; blocking work never runs on the UI thread; the e-stop
+key works on every screen and the safety bar shows the live output state on every one.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import threading
 
 from textual import work
-from textual.app import App, ComposeResult
+from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
-from textual.containers import Horizontal, VerticalScroll
-from textual.widgets import DataTable, Footer, Header, Label, Static, Switch, TabbedContent, TabPane
+from textual.containers import VerticalScroll
+from textual.screen import ModalScreen
+from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
 from console.tui.safety_bar import SafetyBar
+from console.tui.util import short_path
 
 HELP = """\
-HapTable console
+[b]HapTable console[/b]
 
-ctrl+e   E-STOP: silence both outputs now and open every relay (any screen)
-ctrl+r   reset the e-stop (outputs stay silent until something plays)
-?        this help
-ctrl+p   command palette
-q        quit (outputs are silenced and relays opened on the way out)
+[b]ctrl+e[/b]   E-STOP: silence both outputs now and open every relay (any screen)
+[b]ctrl+r[/b]   reset the e-stop (outputs stay silent until something plays)
+[b]f1..f7[/b]   Devices, Camera, Vibration, Relays, Electrostatic, Scenes, Latency
+[b]?[/b]        this help          [b]ctrl+p[/b]   command palette
+[b]q[/b]        quit (outputs silenced, relays opened on the way out; ctrl+q anywhere)
 
-Relays switch only in silence: a toggle waits until both channels have been
-silent for the guard gap, and is refused during an e-stop.
+Relays switch only in silence: a toggle waits until both channels have been silent for
+the guard gap, and is refused during an e-stop. Long work (measurement, tables,
+calibration) shows a progress bar and is cancelled with x.
+
+[b]This screen[/b]
+{pane}
 """
+
+#: tab id -> (title, key, pane class path)
+TABS = {
+    "devices": ("Devices", "f1", "console.tui.panes.devices:DevicesPane"),
+    "camera": ("Camera", "f2", "console.tui.panes.camera:CameraPane"),
+    "vibration": ("Vibration", "f3", "console.tui.panes.vibration:VibrationPane"),
+    "relays": ("Relays", "f4", "console.tui.panes.relays:RelaysPane"),
+    "electrostatic": ("Electrostatic", "f5", "console.tui.panes.electrostatic:ElectrostaticPane"),
+    "scenes": ("Scenes", "f6", "console.tui.panes.scenes:ScenesPane"),
+    "latency": ("Latency", "f7", "console.tui.panes.latency:LatencyPane"),
+}
+
+
+def _pane_class(path: str):
+    import importlib
+
+    mod, name = path.split(":")
+    return getattr(importlib.import_module(mod), name)
+
+
+class HelpScreen(ModalScreen):
+    BINDINGS = [("escape,q,question_mark", "dismiss", "close")]
+    DEFAULT_CSS = """
+    HelpScreen { align: center middle; }
+    HelpScreen > VerticalScroll { width: 90; max-width: 100%; height: auto; max-height: 90%;
+        border: thick $accent; background: $panel; padding: 0 1; }
+    """
+
+    def __init__(self, text: str) -> None:
+        super().__init__()
+        self.text = text
+
+    def compose(self) -> ComposeResult:
+        with VerticalScroll():
+            yield Static(self.text)
 
 
 class HapTableApp(App):
     TITLE = "HapTable"
-    CSS = """
-    TabbedContent { height: 1fr; }
-    #devices, #plugins { height: auto; }
-    .relay { height: 3; }
-    .relay Label { padding: 1 1; width: 22; }
-    #relaylog { height: auto; color: $text-muted; }
-    """
+    CSS_PATH = "console.tcss"
     BINDINGS = [
-        Binding("ctrl+e", "estop", "E-STOP", priority=True, show=True),
-        Binding("ctrl+r", "reset_estop", "Reset e-stop", priority=True),
-        Binding("question_mark", "help", "Help"),
-        Binding("q", "quit", "Quit"),
+        Binding("ctrl+e", "estop", "E-STOP", priority=True),
+        Binding("ctrl+r", "reset_estop", "reset", priority=True, show=False),
+        Binding("question_mark", "help", "help"),
+        Binding("q", "quit", "quit", show=False),
+        *[
+            Binding(key, f"show_tab('{tab}')", title, show=False, priority=True)
+            for tab, (title, key, _) in TABS.items()
+        ],
     ]
 
-    def __init__(self, ctx, *, fast: bool | None = None):
+    def __init__(self, ctx, *, fast: bool | None = None, initial: str = "devices"):
         super().__init__()
         self.ctx = ctx
         self.fast = fast
+        self.initial = initial
         self.outputs = None
         self.outputs_error = ""
+        self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
+        self.camera_service = None
         self._control = None
         self._lock = threading.Lock()
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
-        prof = self.ctx.profile
-        yield Header(show_clock=True)
-        with TabbedContent(initial="devices-tab"):
-            with TabPane("Devices", id="devices-tab"):
-                yield Static(id="profile-line")
-                yield DataTable(id="devices", cursor_type="row")
-                yield DataTable(id="plugins", cursor_type="row")
-            with TabPane("Relays", id="relays-tab"), VerticalScroll():
-                for ch in range(1, int(prof.get("relays.channels")) + 1):
-                    with Horizontal(classes="relay"):
-                        yield Label(self._relay_label(ch))
-                        yield Switch(value=False, id=f"relay-{ch}")
-                yield Static(id="relaylog")
+        yield Header()
+        with TabbedContent(initial=self.initial, id="tabs"):
+            for tab, (title, key, path) in TABS.items():
+                with TabPane(f"{title} {key}", id=tab):
+                    yield _pane_class(path)(id=f"{tab}-pane")
         yield SafetyBar(id="safety")
         yield Footer()
 
-    def _relay_label(self, ch: int) -> str:
-        prof = self.ctx.profile
-        names = [n for n, p in prof.items("patches").items() if p["relay_channel"] == ch]
-        if prof.get("screen.relay_channel") == ch:
-            names.append("screen")
-        return f"relay {ch}  {' '.join(names) or '-'}"
-
     def on_mount(self) -> None:
         prof = self.ctx.profile
-        self.sub_title = f"{prof.get('profile.title') or prof.name} - {prof.path}"
-        self.query_one("#profile-line", Static).update(
-            f"profile {prof.name}: {prof.get('profile.description')}")
-        dev = self.query_one("#devices", DataTable)
-        dev.add_columns("device", "driver", "state", "why", "fix")
-        plug = self.query_one("#plugins", DataTable)
-        plug.add_columns("kind", "name", "plugin", "description")
-        for kind, regs in sorted(self.ctx.pm.registrations.items()):
-            for name, reg in sorted(regs.items()):
-                plug.add_row(kind, name, reg.plugin, reg.description)
+        self.sub_title = f"{prof.get('profile.title') or prof.name} - {short_path(prof.path)}"
         self.query_one(SafetyBar).show(None)
         self.open_outputs()
-        self.run_doctor()
         self.set_interval(0.1, self.refresh_state)
+        self.call_after_refresh(self._focus_pane, self.initial)
 
-    # ------------------------------------------------------------------ workers
+    def pane(self, tab: str):
+        return self.query_one(f"#{tab}-pane")
+
+    def _focus_pane(self, tab: str, tries: int = 10) -> None:
+        """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
+        tabs = self.query("#tabs")
+        if not tabs or tabs.first(TabbedContent).active != tab:
+            return
+        target = getattr(self.pane(tab), "focus_target", None)
+        if target is None:
+            return
+        target.focus()
+        if self.focused is not target and tries > 0:
+            self.set_timer(0.05, lambda: self._focus_pane(tab, tries - 1))
+
+    def action_show_tab(self, tab: str) -> None:
+        self.query_one("#tabs", TabbedContent).active = tab
+        self.call_after_refresh(self._focus_pane, tab)
+
+    def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
+        tab = event.pane.id
+        for name in TABS:
+            p = self.pane(name)
+            if hasattr(p, "set_visible"):
+                p.set_visible(name == tab)
+        self.call_after_refresh(self._focus_pane, tab)
+
+    # ------------------------------------------------------------------ outputs
     @work(thread=True, exclusive=True, group="outputs")
     def open_outputs(self) -> None:
         from console.runtime.control import ControlServer
@@ -120,23 +168,53 @@ class HapTableApp(App):
             return "ok: outputs silenced, relays open"
         return f"error: unknown command {line!r}"
 
-    @work(thread=True, exclusive=True, group="doctor")
-    def run_doctor(self) -> None:
-        from console.commands import diagnose
+    def play_plan(self, plan, *, wait: bool = True) -> bool:
+        """Play ``plan`` through the safety gate (call from a worker thread). Refusals and
+        errors become notifications; returns True when it played (or was queued)."""
+        from console.errors import SafetyRefusal, UserError
 
-        rows = diagnose(self.ctx.profile, self.ctx.pm)
-        self.call_from_thread(self._show_doctor, rows)
+        out = self.outputs
+        if out is None:
+            self.call_from_thread(
+                self.notify,
+                f"outputs not open: {self.outputs_error or 'starting'}",
+                severity="error",
+            )
+            return False
+        try:
+            report = out.play(plan, wait=False)
+            with self._lock:
+                self.played.append(plan)
+            if wait:
+                report.wait(3 * plan.duration_s + 10)
+                if report.error:
+                    raise SafetyRefusal(f"{report.name}: {report.error}")
+        except (SafetyRefusal, UserError) as exc:
+            self.call_from_thread(
+                self.notify, str(exc), title="refused", severity="error", timeout=8
+            )
+            return False
+        return True
 
-    def _show_doctor(self, rows) -> None:
-        table = self.query_one("#devices", DataTable)
-        table.clear()
-        for s in rows:
-            table.add_row(s.kind, s.name, s.state, s.why, s.fix)
+    def play_stream(self, source, name: str):
+        """Start a live stream through the gate; returns its report (or None)."""
+        out = self.outputs
+        if out is None:
+            self.notify("outputs not open", severity="error")
+            return None
+        return out.stream(source, name)
+
+    def release_camera(self) -> None:
+        """Stop the camera loop when neither the Camera nor the Latency screen shows."""
+        if self.camera_service is None:
+            return
+        if not any(getattr(self.pane(t), "visible_now", False) for t in ("camera", "latency")):
+            self.camera_service.stop()
 
     # ------------------------------------------------------------------ live state
     def refresh_state(self) -> None:
         out = self.outputs
-        bars = self.screen.query(SafetyBar)  # every screen shows one; none while tearing down
+        bars = self.screen.query(SafetyBar)  # none while a modal is up or tearing down
         if out is None:
             for bar in bars:
                 bar.show(None, self.outputs_error)
@@ -144,35 +222,13 @@ class HapTableApp(App):
         status = out.status()
         for bar in bars:
             bar.show(status)
-        closed = set(status["gate"]["relays_closed"])
-        for sw in self.screen.query(Switch):
-            ch = int(sw.id.split("-")[1])
-            if sw.value != (ch in closed):
-                with sw.prevent(Switch.Changed):
-                    sw.value = ch in closed
-        log = out.relay_log()
-        if log is not None:
-            lines = [f"sample {r.clock}: relay {r.channel} {'closed' if r.closed else 'opened'} at "
-                     f"{r.level_v[0]:.1f} V / {r.level_v[1]:.1f} V" for r in log[-8:]]
-            for w in self.screen.query("#relaylog"):
-                w.update("switch log:\n" + "\n".join(lines))
-
-    def on_switch_changed(self, event: Switch.Changed) -> None:
-        ch = int(event.switch.id.split("-")[1])
-        self.toggle_relay(ch, event.value)
-
-    @work(thread=True, group="relays")
-    def toggle_relay(self, ch: int, closed: bool) -> None:
-        out = self.outputs
-        if out is None:
-            self.call_from_thread(self.notify, "outputs are not open", severity="error")
+        tabs = self.query("#tabs")
+        if not tabs:
             return
-        want = set(out.gate.relay_state())
-        want = want | {ch} if closed else want - {ch}
-        try:
-            out.set_relays(want)
-        except Exception as exc:
-            self.call_from_thread(self.notify, f"relay {ch}: {exc}", severity="error", timeout=6)
+        active = tabs.first(TabbedContent).active
+        pane = self.pane(active)
+        if hasattr(pane, "show_state"):
+            pane.show_state(status, out.relay_log())
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:
@@ -183,6 +239,10 @@ class HapTableApp(App):
             from console.safety import estop_all
 
             estop_all(reason)
+        for tab in TABS:
+            p = self.pane(tab)
+            if hasattr(p, "on_estop"):
+                p.on_estop()
 
     def action_estop(self) -> None:
         self.estop("operator e-stop (console)")
@@ -194,13 +254,65 @@ class HapTableApp(App):
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     def action_help(self) -> None:
-        self.notify(HELP, title="help", timeout=12)
+        tabs = self.query("#tabs")
+        pane_help = ""
+        if tabs:
+            pane = self.pane(tabs.first(TabbedContent).active)
+            pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
+        self.push_screen(HelpScreen(HELP.format(pane=pane_help)))
 
+    def get_system_commands(self, screen):
+        yield from super().get_system_commands(screen)
+        for tab, (title, key, _) in TABS.items():
+            yield SystemCommand(
+                f"Open {title}",
+                f"show the {title} screen ({key})",
+                lambda t=tab: self.action_show_tab(t),
+            )
+        yield SystemCommand("E-STOP", "silence the outputs and open every relay", self.action_estop)
+        yield SystemCommand("Reset e-stop", "clear the e-stop", self.action_reset_estop)
+        yield SystemCommand(
+            "Measure vibration map",
+            "simulated vibrometer on the twin",
+            lambda: (self.action_show_tab("vibration"), self.pane("vibration").action_measure()),
+        )
+        for name, reg in sorted(self.ctx.pm.of("panel").items()):
+            yield SystemCommand(
+                f"Panel: {name}",
+                reg.description or "plugin panel",
+                lambda r=reg: self.push_screen(r.factory(self)),
+            )
+
+    # ------------------------------------------------------------------ exit
     def on_unmount(self) -> None:
+        for tab in TABS:
+            try:
+                p = self.pane(tab)
+            except Exception:
+                continue
+            if hasattr(p, "shutdown"):
+                with contextlib.suppress(Exception):
+                    p.shutdown()
         if self._control is not None:
             self._control.close()
         if self.outputs is not None:
+            path = os.environ.get("HAPTABLE_TWIN_LOG")
+            if path:
+                from console.tui.twin_log import write_twin_log
+
+                try:
+                    write_twin_log(path, self.outputs, list(self.played))
+                except Exception as exc:  # never block the shutdown
+                    self.log.error(f"twin log: {exc}")
             self.outputs.close()
+
+
+def _bindings_help(pane) -> str:
+    lines = []
+    for b in getattr(pane, "BINDINGS", []):
+        key, action, desc = (b.key, b.action, b.description) if isinstance(b, Binding) else b
+        lines.append(f"  {key:<8} {desc}")
+    return "\n".join(lines)
 
 
 def run_app(ctx, *, fast: bool | None = None) -> int:

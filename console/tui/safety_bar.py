@@ -10,12 +10,17 @@ def describe(status: dict) -> tuple[str, str]:
     gate = status["gate"]
     relays = ",".join(str(c) for c in gate["relays_closed"]) or "none"
     if gate["estopped"]:
-        return (f" E-STOP: {gate['estop_reason']}  [ctrl+r: reset]  relays closed: {relays}",
-                "estop")
+        return (
+            f" E-STOP: {gate['estop_reason']}  [ctrl+r: reset]  relays closed: {relays}",
+            "estop",
+        )
     piezo, screen = gate["level_v"]
     state = "PLAYING" if status["busy"] else "idle"
-    return (f" ctrl+e E-STOP | outputs {state} | piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
-            f" | relays closed: {relays}", "live" if status["busy"] else "idle")
+    return (
+        f" ctrl+e E-STOP | outputs {state} | piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
+        f" | relays closed: {relays}",
+        "live" if status["busy"] else "idle",
+    )
 
 
 class SafetyBar(Static):

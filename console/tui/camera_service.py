@@ -1,0 +1,110 @@
+"""The console's camera: the profile's camera and classifier in a frame loop (the
+runtime's ``FrameLoop`` with the ``vision`` and ``classify`` stages), keeping the newest
+frame and result for the Camera view and a latency monitor for the Latency screen.
+
+Started when the Camera or Latency screen opens, stopped when neither is shown.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+TUNABLE = ("body_threshold", "contact_threshold", "highpass_sigma_px")
+
+
+class CameraService:
+    def __init__(self, profile, plugins) -> None:
+        self.profile = profile
+        self.plugins = plugins
+        self.camera = None
+        self.classifier = None
+        self.loop = None
+        self.error = ""
+        self._lock = threading.Lock()
+        self.latest: tuple[Any, dict] | None = None
+        self.recent: deque[np.ndarray] = deque(maxlen=15)
+        self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
+
+    @property
+    def running(self) -> bool:
+        return self.loop is not None and self.loop.running
+
+    def start(self) -> None:
+        """Open the camera and classifier and start the loop (blocking: call in a worker)."""
+        from console.runtime.latency import LatencyMonitor
+        from console.runtime.loop import FrameLoop
+        from console.runtime.stages import (
+            base_stages,
+            learn_background,
+            open_camera,
+            open_classifier,
+        )
+
+        if self.running:
+            return
+        if self.camera is None:
+            self.camera = open_camera(self.profile, self.plugins)
+            self.classifier = open_classifier(self.profile, self.plugins)
+            learn_background(self.camera, self.classifier)
+        stages = base_stages(self.classifier)
+        window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
+        mon = LatencyMonitor([n for n, _ in stages], size=window)
+        self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
+        self.loop.start()
+
+    def _sink(self, frame, work: dict) -> None:
+        with self._lock:
+            self.latest = (frame, work)
+            self.recent.append(frame.image)
+        for hook in list(self.frame_hooks):
+            hook(frame, work)
+
+    def snapshot(self) -> tuple[Any, dict] | None:
+        with self._lock:
+            return self.latest
+
+    def stop(self) -> None:
+        if self.loop is not None:
+            self.loop.stop()
+            self.loop = None
+
+    def close(self) -> None:
+        self.stop()
+        if self.camera is not None:
+            self.camera.close()
+            self.camera = None
+
+    # ------------------------------------------------------------------ tuning
+    def capture_background(self) -> int:
+        """Background = per-pixel median of the recent frames (show the empty table)."""
+        with self._lock:
+            frames = list(self.recent)
+        if not frames or self.classifier is None:
+            return 0
+        self.classifier.set_background(np.median(np.stack(frames), axis=0).astype(np.float32))
+        return len(frames)
+
+    def params(self) -> dict[str, float]:
+        p = getattr(self.classifier, "params", None)
+        return {k: float(getattr(p, k)) for k in TUNABLE} if p is not None else {}
+
+    def set_param(self, key: str, value: float) -> None:
+        """Change a vision threshold; the next frame uses it."""
+        if key not in TUNABLE or self.classifier is None:
+            return
+        self.classifier.params = replace(self.classifier.params, **{key: value})
+
+    def status(self) -> dict:
+        cam = {}
+        if self.camera is not None:
+            try:
+                cam = self.camera.status()
+            except Exception as exc:
+                cam = {"error": str(exc)}
+        mon = self.loop.monitor.snapshot() if self.loop is not None else None
+        return {"camera": cam, "latency": mon, "error": self.error}

@@ -1,0 +1,334 @@
+"""Camera: the live IR view (half-block image, ~10 Hz) with the detected hand, contacts
+and gesture drawn over it; background capture; threshold and high-pass tuning with
+immediate effect; the touch-calibration wizard (projector targets, reprojection error,
+save)."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal
+from textual.widgets import Static
+
+from console.errors import UserError
+
+STEPS = {"body_threshold": 2.0, "contact_threshold": 2.0, "highpass_sigma_px": 0.5}
+VIEWS = ("camera", "diff", "highpass", "body")
+
+
+def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:
+    """(2*rows, cols, 3) RGB overlay: hand outlines green, contacts red, target yellow."""
+    h, w = shape_px
+    ov = np.zeros((2 * rows, cols, 3), np.uint8)
+    sx, sy = cols / w, 2 * rows / h
+
+    def put(pts, rgb, grow: int = 0) -> None:
+        p = np.asarray(pts, float).reshape(-1, 2)
+        if p.size == 0:
+            return
+        c = np.clip((p[:, 0] * sx).astype(int), 0, cols - 1)
+        r = np.clip((p[:, 1] * sy).astype(int), 0, 2 * rows - 1)
+        for dr in range(-grow, grow + 1):
+            for dc in range(-grow, grow + 1):
+                ov[np.clip(r + dr, 0, 2 * rows - 1), np.clip(c + dc, 0, cols - 1)] = rgb
+
+    for hand in work.get("hands", ()) or ():
+        put(hand.contour_px, (60, 220, 60))
+    put([c.pos_px for c in work.get("contacts", ()) or ()], (255, 60, 60), grow=1)
+    if target_px is not None:
+        put([target_px], (255, 230, 0), grow=1)
+    return ov
+
+
+class CameraPane(Horizontal):
+    BINDINGS = [
+        Binding("b", "background", "background"),
+        Binding("t", "tune('body_threshold', -1)", "body -", show=False),
+        Binding("T", "tune('body_threshold', 1)", "body t/T"),
+        Binding("c", "tune('contact_threshold', -1)", "contact -", show=False),
+        Binding("C", "tune('contact_threshold', 1)", "contact c/C"),
+        Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
+        Binding("H", "tune('highpass_sigma_px', 1)", "high-pass h/H"),
+        Binding("v", "view", "view"),
+        Binding("k", "calibrate", "calibrate"),
+        Binding("n", "skip_target", "skip target", show=False),
+        Binding("S", "save_calibration", "save cal.", show=False),
+        Binding("x", "cancel", "cancel", show=False),
+    ]
+    can_focus = True
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.view = "camera"
+        self.visible_now = False
+        self.calibration = None  # CalibrationSession while the wizard runs
+        self.cal_result = None
+        self.cal_message = ""
+        self._cal_lock = threading.Lock()
+        self._timer = None
+
+    def compose(self) -> ComposeResult:
+        yield Static("camera stopped", id="camera-view")
+        yield Static("", id="camera-info")
+
+    @property
+    def focus_target(self):
+        return self
+
+    @property
+    def service(self):
+        app = self.app
+        if app.camera_service is None:
+            from console.tui.camera_service import CameraService
+
+            app.camera_service = CameraService(app.ctx.profile, app.ctx.pm)
+        return app.camera_service
+
+    # ------------------------------------------------------------------ lifecycle
+    def set_visible(self, visible: bool) -> None:
+        self.visible_now = visible
+        if visible:
+            self._start()
+            if self._timer is None:
+                self._timer = self.set_interval(0.1, self.redraw)
+        else:
+            if self._timer is not None:
+                self._timer.stop()
+                self._timer = None
+            self.app.call_later(self.app.release_camera)
+
+    @work(thread=True, exclusive=True, group="camera")
+    def _start(self) -> None:
+        try:
+            self.service.start()
+        except UserError as exc:
+            self.service.error = str(exc)
+
+    def shutdown(self) -> None:
+        if self.app.camera_service is not None:
+            self.app.camera_service.close()
+
+    # ------------------------------------------------------------------ drawing
+    def view_size(self) -> tuple[int, int]:
+        w, h = self.size.width, self.size.height
+        rows = max(4, h - 1)
+        cols = max(16, min(w - 34, int(rows * 2 * 4 / 3)))
+        rows = min(rows, int(cols * 3 / 8) + 1)
+        return cols, rows
+
+    def redraw(self) -> None:
+        from console.tui.plots import HalfBlockImage, downsample
+
+        svc = self.service
+        info = self.query_one("#camera-info", Static)
+        if svc.error:
+            self.query_one("#camera-view", Static).update(f"[red]camera: {svc.error}[/]")
+            return
+        snap = svc.snapshot()
+        if snap is None:
+            self.query_one("#camera-view", Static).update("waiting for the first frame ...")
+            return
+        frame, work = snap
+        res = work.get("result")
+        img = frame.image
+        if self.view != "camera" and res is not None:
+            img = res.masks.get(self.view, img)
+        cols, rows = self.view_size()
+        grey = downsample(img, cols, rows)
+        if self.view != "camera":
+            grey = np.clip(grey * (255.0 / max(grey.max(), 1.0)), 0, 255)
+        target = self._target_px()
+        ov = overlay_pixels(img.shape, cols, rows, work, target)
+        self.query_one("#camera-view", Static).update(HalfBlockImage(grey, ov))
+        info.update(self.info_text(svc, work))
+
+    def info_text(self, svc, work: dict) -> str:
+        st = svc.status()
+        cam, lat = st["camera"], st["latency"] or {}
+        g = work.get("gesture")
+        hands = work.get("hands", ()) or ()
+        lines = [
+            f"[b]{cam.get('driver', '?')}[/b] {cam.get('fps', 0):.0f} fps, "
+            f"{cam.get('dropped', 0)} dropped",
+            f"loop {lat.get('fps', 0):.0f} fps, dropped {lat.get('dropped_queue', 0)}",
+            f"view: {self.view} (v)",
+            f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
+            f"gesture: {g.name if g else '-'}",
+        ]
+        for h in hands[:1]:
+            pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
+            lines.append(f"hand at {pos}, {h.finger_count} fingers")
+        lines.append("")
+        for k, v in svc.params().items():
+            lines.append(f"{k} {v:g}")
+        lines.append("b: capture background")
+        if self.calibration is not None or self.cal_result is not None:
+            lines += ["", "[b]touch calibration[/b]", self.cal_message]
+        else:
+            lines.append("k: touch calibration")
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------------ tuning
+    def action_tune(self, key: str, sign: int) -> None:
+        svc = self.service
+        cur = svc.params().get(key)
+        if cur is None:
+            return
+        svc.set_param(key, max(STEPS[key], cur + sign * STEPS[key]))
+        self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
+
+    def action_view(self) -> None:
+        self.view = VIEWS[(VIEWS.index(self.view) + 1) % len(VIEWS)]
+
+    def action_background(self) -> None:
+        n = self.service.capture_background()
+        self.app.notify(f"background captured from {n} frames" if n else "no frames yet", timeout=3)
+
+    # ------------------------------------------------------------------ calibration
+    def _target_px(self):
+        cal = self.calibration
+        if cal is None:
+            return None
+        nt = cal.next_target()
+        if nt is None or self.service.classifier is None:
+            return None
+        fb = _mm_to_px(self.service, nt[1])
+        return fb
+
+    def action_calibrate(self) -> None:
+        from plugins.gestures.calibration import CalibrationSession, target_grid
+
+        prof = self.app.ctx.profile
+        table = (float(prof.get("table.width_mm")), float(prof.get("table.height_mm")))
+        targets = target_grid(
+            table,
+            columns=int(prof.get("projector.touch_cal_columns", 4) or 4),
+            rows=int(prof.get("projector.touch_cal_rows", 3) or 3),
+            margin_mm=float(prof.get("projector.touch_cal_margin_mm", 60.0) or 60.0),
+        )
+        with self._cal_lock:
+            self.calibration = CalibrationSession(targets)
+            self.cal_result = None
+        self.cal_message = f"touch target 1 of {len(targets)}"
+        svc = self.service
+        if self._cal_hook not in svc.frame_hooks:
+            svc.frame_hooks.append(self._cal_hook)
+        self._projector("start", [list(map(float, t)) for t in targets])
+        self._aim_twin()
+
+    def _aim_twin(self) -> None:
+        """On the camera twin, the simulated operator touches the shown target."""
+        cam = self.service.camera
+        cal = self.calibration
+        if cam is None or cal is None or not hasattr(cam, "set_target"):
+            return
+        nt = cal.next_target()
+        cam.set_target(None if nt is None else nt[1])
+
+    def _cal_hook(self, frame, work: dict) -> None:
+        with self._cal_lock:
+            cal = self.calibration
+            if cal is None:
+                return
+            ev = cal.feed(work.get("contacts", ()) or ())
+        if ev in ("recorded", "lifted", "done"):
+            self.app.call_from_thread(self._cal_event, ev)
+
+    def _cal_event(self, ev: str) -> None:
+        cal = self.calibration
+        if cal is None:
+            return
+        done, total = cal.progress()
+        if ev == "recorded":
+            self.cal_message = f"recorded {done}/{total}: lift the finger"
+            self._projector("touch")
+            cam = self.service.camera
+            if hasattr(cam, "set_target"):
+                cam.set_target(None)
+        elif ev == "lifted":
+            self.cal_message = f"touch target {cal.index + 1} of {total}"
+            self._aim_twin()
+        elif ev == "done":
+            self._finish()
+
+    def action_skip_target(self) -> None:
+        if self.calibration is not None:
+            with self._cal_lock:
+                self.calibration.skip()
+            self._projector("touch")
+            if self.calibration.state == "done":
+                self._finish()
+            else:
+                self._aim_twin()
+
+    def _finish(self) -> None:
+        cal = self.calibration
+        with self._cal_lock:
+            self.calibration = None
+        svc = self.service
+        if self._cal_hook in svc.frame_hooks:
+            svc.frame_hooks.remove(self._cal_hook)
+        if svc.camera is not None and hasattr(svc.camera, "set_target"):
+            svc.camera.set_target(None)
+        try:
+            self.cal_result = cal.finish()
+        except UserError as exc:
+            self.cal_message = f"[red]{exc}[/]"
+            return
+        r = self.cal_result.report()
+        self.cal_message = (
+            f"{r['pairs']} targets: reprojection error {r['rms_mm']:.2f} mm rms, "
+            f"{r['max_mm']:.2f} mm max (leave-one-out {r['loo_rms_mm']:.2f} mm); "
+            f"outliers {r['outliers'] or 'none'}. S: save"
+        )
+        self._projector("stop")
+
+    def action_cancel(self) -> None:
+        if self.calibration is not None:
+            with self._cal_lock:
+                self.calibration = None
+            self.cal_message = "calibration cancelled"
+            if self.service.camera is not None and hasattr(self.service.camera, "set_target"):
+                self.service.camera.set_target(None)
+            self._projector("stop")
+
+    def action_save_calibration(self) -> None:
+        if self.cal_result is None:
+            self.app.notify("no calibration to save: run it first (k)", severity="warning")
+            return
+        prof = self.app.ctx.profile
+        path = prof.resolve(prof.get("vision.calibration") or "touch_calibration.json")
+        self.cal_result.save(path)
+        self.cal_message += f"\nsaved to {path}"
+        self.app.notify(f"touch calibration saved to {path}")
+
+    @work(thread=True, group="cal-projector")
+    def _projector(self, what: str, targets=None) -> None:
+        scenes = self.app.pane("scenes")
+        svc = getattr(scenes, "service", None)
+        if svc is None:  # no projector running: the console alone drives the wizard
+            return
+        try:
+            if what == "start":
+                svc.start_scene("touch_calibration", [{"type": "targets", "targets_mm": targets}])
+            elif what == "touch":
+                svc.update({"type": "touch"})
+            else:
+                svc.stop_scene()
+        except Exception as exc:
+            self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
+
+
+def _mm_to_px(svc, pos_mm):
+    """Where a table point appears in the camera (the twin knows its own mapping)."""
+    cam = svc.camera
+    mapping = getattr(getattr(cam, "rig", None), "mapping", None)
+    fn = getattr(mapping, "mm_to_px", None)
+    if fn is None:
+        return None
+    p = np.asarray(fn(np.asarray([pos_mm], float)), float).reshape(-1, 2)
+    return tuple(p[0])

@@ -1,0 +1,183 @@
+"""Electrostatic: audition the knob conditions and friction presets; amplitude and
+frequency controls kept inside the limits, with the expected force of the setting.
+
+Everything goes through the ``electrostatic`` and ``knob`` effect registrations."""
+
+from __future__ import annotations
+
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import OptionList, Static
+from textual.widgets.option_list import Option
+
+from console.errors import UserError
+
+#: name -> (vpp, freq_hz, waveform, what it is)
+PRESETS = {
+    "knob carrier": (100.0, 180.0, "sine", "the paper's knob friction: 100 Vpp, 180 Hz"),
+    "slow-turn friction": (100.0, 60.0, "sine", "velocity friction at rest (60 Hz)"),
+    "most sensitive": (60.0, 80.0, "sine", "near the threshold minimum (~80 Hz)"),
+    "square 40 Hz": (80.0, 40.0, "square", "square waves are felt lower below ~60 Hz"),
+}
+FREQ_RANGE_HZ = (10.0, 1000.0)
+
+
+def clamp_setting(vpp: float, freq_hz: float, max_vpp: float) -> tuple[float, float]:
+    """Keep a setting inside the limits: 0 <= vpp <= max_vpp, freq within FREQ_RANGE_HZ."""
+    return (
+        float(min(max(vpp, 0.0), max_vpp)),
+        float(min(max(freq_hz, FREQ_RANGE_HZ[0]), FREQ_RANGE_HZ[1])),
+    )
+
+
+def force_text(meta: dict) -> str:
+    """The expected force of a stimulus (effect meta) in words."""
+    felt = (
+        "[red]below the detection threshold[/]"
+        if meta.get("below")
+        else f"[green]{meta.get('margin_db', 0):+.1f} dB above threshold[/]"
+    )
+    return (
+        f"expected attraction {meta['force_mean_n'] * 1e3:.1f} mN mean, "
+        f"{meta['force_peak_n'] * 1e3:.1f} mN peak; friction change "
+        f"{meta['friction_change_mean_n'] * 1e3:.1f} mN on {meta['friction_base_n']:.2f} N; "
+        f"threshold {meta['threshold_vpp']:.0f} Vpp: {felt}"
+    )
+
+
+class ElectrostaticPane(Vertical):
+    BINDINGS = [
+        Binding("plus,equals_sign", "vpp(10)", "+10 Vpp"),
+        Binding("minus", "vpp(-10)", "-10 Vpp"),
+        Binding("right_square_bracket", "freq(10)", "+10 Hz"),
+        Binding("left_square_bracket", "freq(-10)", "-10 Hz"),
+        Binding("t", "waveform", "sine/square"),
+        Binding("p", "play_custom", "play setting"),
+    ]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.vpp, self.freq_hz, self.waveform = 100.0, 180.0, "sine"
+        self.max_vpp = 200.0
+        self.conditions: tuple[str, ...] = ()
+
+    def compose(self) -> ComposeResult:
+        regs = self.app.ctx.pm.of("effect")
+        if "electrostatic" not in regs and "knob" not in regs:
+            yield Static(
+                "no electrostatic effects: the electrostatic plugin is not installed or is "
+                "blocked (HAPTABLE_BLOCK_PLUGINS)"
+            )
+            return
+        with Horizontal(id="es-top"):
+            yield OptionList(id="es-list")
+            yield Static(id="es-setting")
+        yield Static(
+            "enter: audition the highlighted item   + -: amplitude   [ ]: frequency   "
+            "t: waveform   p: play the setting",
+            classes="hint",
+        )
+
+    @property
+    def focus_target(self):
+        lst = self.query("#es-list")
+        return lst.first() if lst else None
+
+    def on_mount(self) -> None:
+        from console.safety import Limits
+
+        if not self.query("#es-list"):
+            return
+        lo, hi = Limits.from_profile(self.app.ctx.profile).screen_range()
+        self.max_vpp = hi - lo
+        lst = self.query_one("#es-list", OptionList)
+        if "knob" in self.app.ctx.pm.of("effect"):
+            from plugins.electrostatic.synth import CONDITIONS  # the knob's condition names
+
+            self.conditions = tuple(CONDITIONS)
+            for c in CONDITIONS:
+                lst.add_option(Option(f"knob {c}", id=f"cond:{c}"))
+        if "electrostatic" in self.app.ctx.pm.of("effect"):
+            for name, (vpp, f, wf, _) in PRESETS.items():
+                lst.add_option(Option(f"{name}: {vpp:g} Vpp {f:g} Hz {wf}", id=f"preset:{name}"))
+        self._update_setting()
+
+    # ------------------------------------------------------------------ setting
+    def action_vpp(self, step: float) -> None:
+        self.vpp, self.freq_hz = clamp_setting(self.vpp + step, self.freq_hz, self.max_vpp)
+        self._update_setting()
+
+    def action_freq(self, step: float) -> None:
+        self.vpp, self.freq_hz = clamp_setting(self.vpp, self.freq_hz + step, self.max_vpp)
+        self._update_setting()
+
+    def action_waveform(self) -> None:
+        self.waveform = "square" if self.waveform == "sine" else "sine"
+        self._update_setting()
+
+    @work(thread=True, exclusive=True, group="es-report")
+    def _update_setting(self) -> None:
+        try:
+            plan = self._render_setting(0.1)
+            text = force_text(plan.meta)
+        except UserError as exc:
+            text = f"[red]{exc}[/]"
+        self.app.call_from_thread(self._show_setting, text)
+
+    def _show_setting(self, text: str) -> None:
+        self.query_one("#es-setting", Static).update(
+            f"[b]setting[/b] {self.vpp:g} Vpp (max {self.max_vpp:g}), {self.freq_hz:g} Hz, "
+            f"{self.waveform}\n{text}"
+        )
+
+    def _render_setting(self, duration_s: float):
+        eff = self.app.ctx.pm.get("effect", "electrostatic").factory(self.app.ctx.profile)
+        return eff.render(
+            vpp=self.vpp, freq_hz=self.freq_hz, duration_s=duration_s, waveform=self.waveform
+        )
+
+    # ------------------------------------------------------------------ audition
+    def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
+        event.stop()
+        kind, name = event.option.id.split(":", 1)
+        if kind == "preset":
+            vpp, f, wf, _ = PRESETS[name]
+            self.vpp, self.freq_hz = clamp_setting(vpp, f, self.max_vpp)
+            self.waveform = wf
+            self._update_setting()
+            self.action_play_custom()
+        else:
+            self._play_condition(name)
+
+    def action_play_custom(self) -> None:
+        self._play_setting()
+
+    @work(thread=True, group="es-play")
+    def _play_setting(self) -> None:
+        try:
+            plan = self._render_setting(1.0)
+        except UserError as exc:
+            self.app.call_from_thread(self.app.notify, str(exc), severity="error")
+            return
+        self.app.call_from_thread(
+            self.app.notify, f"playing {plan.segments[0].label} on the screen", timeout=3
+        )
+        self.app.play_plan(plan)
+
+    @work(thread=True, group="es-play")
+    def _play_condition(self, condition: str) -> None:
+        try:
+            eff = self.app.ctx.pm.get("effect", "knob").factory(self.app.ctx.profile)
+            plan = eff.render(condition=condition)
+        except UserError as exc:
+            self.app.call_from_thread(self.app.notify, str(exc), severity="error")
+            return
+        self.app.call_from_thread(
+            self.app.notify,
+            f"knob {condition}: a canned rotation, {plan.duration_s:.1f} s, "
+            f"{plan.meta.get('crossings', 0)} detents",
+            timeout=4,
+        )
+        self.app.play_plan(plan)

@@ -1,0 +1,148 @@
+"""Latency: per-stage p50/p99 with sparklines, audio output latency and underruns,
+camera fps and drops. Reads the frame loop's ``LatencyMonitor`` (console.runtime)."""
+
+from __future__ import annotations
+
+from collections import defaultdict, deque
+
+from textual import work
+from textual.app import ComposeResult
+from textual.containers import Vertical
+from textual.widgets import DataTable, Static
+
+from console.errors import UserError
+from console.tui.plots import sparkline
+
+#: the stages the issue names, in order, and where their numbers come from
+STAGE_LABELS = {
+    "capture_to_arrival": "capture",
+    "vision": "vision",
+    "classify": "classify",
+    "scene": "scene",
+    "effect": "effect",
+    "scheduled": "output",
+    "end_to_end": "end to end",
+}
+
+
+def stage_rows(snap: dict) -> list[tuple[str, dict]]:
+    """(label, {p50, p99, ...}) for each stage present in a monitor snapshot, in order."""
+    stages = dict(snap.get("stages", {}))
+    stages["capture_to_arrival"] = snap.get("capture_to_arrival", {})
+    stages["end_to_end"] = snap.get("end_to_end", {})
+    rows = []
+    for key, label in STAGE_LABELS.items():
+        if key in stages:
+            rows.append((label, stages[key] or {}))
+    for key, val in snap.get("stages", {}).items():
+        if key not in STAGE_LABELS:
+            rows.append((key, val or {}))
+    return rows
+
+
+def _ms(v) -> str:
+    return "-" if v is None or v != v else f"{v:.2f}"
+
+
+class LatencyPane(Vertical):
+    can_focus = True
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.visible_now = False
+        self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=40))
+        self._tick = 0
+
+    def compose(self) -> ComposeResult:
+        try:
+            import console.runtime.latency  # noqa: F401
+            import console.runtime.loop  # noqa: F401
+
+            self.available = True
+        except ImportError:
+            self.available = False
+        if not self.available:
+            yield Static(
+                "the frame loop and latency monitor (console/runtime/loop.py, latency.py) are "
+                "not installed in this version: no latency to show"
+            )
+            return
+        yield Static("", id="lat-head")
+        yield DataTable(id="lat-table", cursor_type="none", show_cursor=False)
+        yield Static("", id="lat-audio")
+        yield Static(
+            "numbers come from the camera frame loop while this screen (or Camera) is open; "
+            "stages a scene adds (scene, effect, output) appear when a demo runs",
+            classes="hint",
+        )
+
+    @property
+    def focus_target(self):
+        return self
+
+    def on_mount(self) -> None:
+        if self.available:
+            self.query_one("#lat-table", DataTable).add_columns(
+                "stage", "p50 ms", "p99 ms", "max ms", "last 40 p50"
+            )
+
+    def set_visible(self, visible: bool) -> None:
+        self.visible_now = visible
+        if visible and self.available:
+            self._start()
+        elif not visible:
+            self.app.call_later(self.app.release_camera)
+
+    @work(thread=True, exclusive=True, group="camera")
+    def _start(self) -> None:
+        cam = self.app.pane("camera")
+        try:
+            cam.service.start()
+        except UserError as exc:
+            cam.service.error = str(exc)
+
+    def show_state(self, status: dict, log) -> None:
+        self._tick += 1
+        if not self.available or self._tick % 5:
+            return
+        a = status.get("audio", {})
+        lat = a.get("latency_s")
+        self.query_one("#lat-audio", Static).update(
+            f"[b]audio[/b] {a.get('driver', '?')}: output latency "
+            f"{'-' if lat is None else f'{lat * 1e3:.1f} ms'}, underruns {a.get('underruns', 0)}, "
+            f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz"
+        )
+        svc = self.app.camera_service
+        if svc is None:
+            self.query_one("#lat-head", Static).update("camera not started")
+            return
+        st = svc.status()
+        if st["error"]:
+            self.query_one("#lat-head", Static).update(f"[red]camera: {st['error']}[/]")
+            return
+        cam, snap = st["camera"], st["latency"]
+        self.query_one("#lat-head", Static).update(
+            f"[b]camera[/b] {cam.get('driver', '?')}: {cam.get('fps', 0):.1f} fps, "
+            f"{cam.get('dropped', 0)} frames dropped by the camera"
+            + (
+                f"; loop {snap['fps']:.1f} fps, {snap['frames']} frames, "
+                f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
+                if snap
+                else ""
+            )
+        )
+        if not snap:
+            return
+        table = self.query_one("#lat-table", DataTable)
+        table.clear()
+        for label, d in stage_rows(snap):
+            p50 = d.get("p50_ms")
+            if p50 is not None and p50 == p50:
+                self.history[label].append(p50)
+            table.add_row(
+                label,
+                _ms(p50),
+                _ms(d.get("p99_ms")),
+                _ms(d.get("max_ms")),
+                sparkline(self.history[label], 40),
+            )

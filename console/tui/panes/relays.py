@@ -1,0 +1,131 @@
+"""Relays: a toggle per channel with its interlock state, and the switch log."""
+
+from __future__ import annotations
+
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, VerticalScroll
+from textual.widgets import DataTable, Label, Static, Switch
+
+
+def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int, str]) -> str:
+    """Why channel ``ch`` can or cannot switch now (what the operator reads)."""
+    gate = status["gate"]
+    if gate["estopped"]:
+        return "[red]refused: e-stop active (ctrl+r resets)[/]"
+    if ch in pending:
+        want = "close" if pending[ch] else "open"
+        if status["busy"]:
+            return (
+                f"[yellow]waits to {want}: a stimulus is playing; switches in the next silence[/]"
+            )
+        return f"[yellow]waits to {want}: outputs must be silent for the guard gap first[/]"
+    if ch in refused:
+        return f"[red]refused: {refused[ch]}[/]"
+    return "[green]ready[/] (switches only in silence)"
+
+
+def log_rows(log) -> list[tuple[str, ...]]:
+    """The newest switches first: sample clock, channel, state, output level then."""
+    return [
+        (
+            str(r.clock),
+            str(r.channel),
+            "closed" if r.closed else "opened",
+            f"{r.level_v[0]:+.1f} V / {r.level_v[1]:+.1f} V",
+        )
+        for r in reversed(log)
+    ]
+
+
+class RelaysPane(VerticalScroll):
+    BINDINGS = [Binding(str(k), f"toggle({k})", f"relay {k}", show=k == 1) for k in range(1, 9)]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.pending: dict[int, bool] = {}
+        self.refused: dict[int, str] = {}
+        self._log_len = -1
+
+    def compose(self) -> ComposeResult:
+        prof = self.app.ctx.profile
+        yield Static(
+            "keys 1-8 toggle a relay. Relays switch only while both outputs are silent "
+            "(guard gap); a toggle waits behind a playing stimulus and is refused during an "
+            "e-stop.",
+            classes="hint",
+        )
+        for ch in range(1, int(prof.get("relays.channels")) + 1):
+            with Horizontal(classes="relay"):
+                yield Label(self._relay_label(ch), classes="relay-name")
+                yield Switch(value=False, id=f"relay-{ch}")
+                yield Static("", id=f"interlock-{ch}", classes="interlock")
+        yield Static("switch log (newest first)", classes="heading")
+        yield DataTable(id="relaylog", cursor_type="row", show_cursor=False)
+
+    @property
+    def focus_target(self):
+        return self.query_one("#relay-1", Switch)
+
+    def on_mount(self) -> None:
+        self.query_one("#relaylog", DataTable).add_columns("sample", "relay", "", "outputs then")
+
+    def _relay_label(self, ch: int) -> str:
+        prof = self.app.ctx.profile
+        names = [n for n, p in prof.items("patches").items() if p["relay_channel"] == ch]
+        if prof.get("screen.relay_channel") == ch:
+            names.append("screen")
+        return f"relay {ch}  {' '.join(names) or '-'}"
+
+    def show_state(self, status: dict, log) -> None:
+        closed = set(status["gate"]["relays_closed"])
+        for sw in self.query(Switch):
+            ch = int(sw.id.split("-")[1])
+            if ch not in self.pending and sw.value != (ch in closed):
+                with sw.prevent(Switch.Changed):
+                    sw.value = ch in closed
+            self.query_one(f"#interlock-{ch}", Static).update(
+                interlock(ch, status, self.pending, self.refused)
+            )
+        if log is not None and len(log) != self._log_len:
+            self._log_len = len(log)
+            table = self.query_one("#relaylog", DataTable)
+            table.clear()
+            for row in log_rows(log)[:50]:
+                table.add_row(*row)
+
+    def on_switch_changed(self, event: Switch.Changed) -> None:
+        event.stop()
+        self.request(int(event.switch.id.split("-")[1]), event.value)
+
+    def action_toggle(self, ch: int) -> None:
+        out = self.app.outputs
+        if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
+            return
+        closed = ch in out.gate.relay_state()
+        self.request(ch, not closed)
+
+    def request(self, ch: int, closed: bool) -> None:
+        self.pending[ch] = closed
+        self.refused.pop(ch, None)
+        self._switch(ch, closed)
+
+    @work(thread=True, group="relays")
+    def _switch(self, ch: int, closed: bool) -> None:
+        out = self.app.outputs
+        try:
+            if out is None:
+                raise RuntimeError("outputs are not open")
+            want = set(out.gate.relay_state())
+            want = want | {ch} if closed else want - {ch}
+            out.set_relays(want)
+            self.app.call_from_thread(self._done, ch, "")
+        except Exception as exc:
+            self.app.call_from_thread(self._done, ch, str(exc))
+
+    def _done(self, ch: int, error: str) -> None:
+        self.pending.pop(ch, None)
+        if error:
+            self.refused[ch] = error
+            self.app.notify(f"relay {ch}: {error}", severity="error", timeout=6)

@@ -1,0 +1,400 @@
+"""Vibration: the 7 x 12 grid, audition a point, flows between two points (either way)
+and under a hand (four directions), the FRF of the selected point with the frequency
+that plays marked, the lookup-table entry, UFF import and a simulated measurement."""
+
+from __future__ import annotations
+
+import shlex
+
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, VerticalScroll
+from textual.coordinate import Coordinate
+from textual.widgets import DataTable, Input, Label, ProgressBar, Static
+from textual.worker import get_current_worker
+
+from console.errors import UserError
+
+HELP = (
+    "grid: arrows move, enter auditions the point (the last two auditioned are the pair)\n"
+    "f: flow first -> second   r: flow second -> first   w a s d: flow under a hand at the\n"
+    "cursor, up left down right   m: measure on the twin   x: cancel the running work\n"
+    "command line: 51 (audition)  51 52 (flow)  hand 51 right  measure  "
+    "import PA=a.uff PB=b.uff ...  load map.npz"
+)
+KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
+
+
+class VibrationPane(VerticalScroll):
+    BINDINGS = [
+        Binding("f", "flow(False)", "flow 1->2"),
+        Binding("r", "flow(True)", "flow 2->1"),
+        Binding("w", "hand('up')", "hand up", show=False),
+        Binding("a", "hand('left')", "hand left", show=False),
+        Binding("s", "hand('down')", "hand down", show=False),
+        Binding("d", "hand('right')", "hand w/a/s/d"),
+        Binding("m", "measure", "measure"),
+        Binding("x", "cancel", "cancel"),
+        Binding("colon", "command", "command", show=False),
+    ]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.session = None
+        self.selected: list[int] = []
+        self.rows = 7
+        self.cols = 12
+
+    # ------------------------------------------------------------------ layout
+    def compose(self) -> ComposeResult:
+        prof = self.app.ctx.profile
+        self.rows, self.cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
+        yield Input(
+            placeholder="51 | 51 52 | hand 51 right | measure | import PA=a.uff ... | load F.npz",
+            id="vib-cmd",
+            compact=True,
+        )
+        with Horizontal(id="vib-top"):
+            yield DataTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
+            yield Static(id="vib-info")
+        yield Static(id="frf-plot")
+        with Horizontal(id="vib-work"):
+            yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
+            yield Label("", id="vib-status")
+
+    @property
+    def focus_target(self):
+        return self.query_one("#grid", DataTable)
+
+    def on_mount(self) -> None:
+        grid = self.query_one("#grid", DataTable)
+        for c in range(self.cols):
+            grid.add_column(f"{c + 1:>4}", key=str(c), width=4)
+        for r in range(self.rows):
+            grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1}")
+        self.query_one("#vib-info", Static).update(HELP)
+        self.status("looking for a vibration map ...")
+        self.load_cached()
+
+    def _row_cells(self, r: int) -> list[str]:
+        cells = []
+        for c in range(self.cols):
+            n = r * self.cols + c + 1
+            txt = f"{n:>4}"
+            if self.selected and n == self.selected[-1]:
+                txt = f" [b reverse]{n:>3}[/]"
+            elif len(self.selected) > 1 and n == self.selected[-2]:
+                txt = f" [b u]{n:>3}[/]"
+            elif self.session is not None and not self.session.has(n):
+                txt = f"[dim]{n:>4}[/]"
+            cells.append(txt)
+        return cells
+
+    def _redraw_grid(self) -> None:
+        grid = self.query_one("#grid", DataTable)
+        for r in range(self.rows):
+            for c, txt in enumerate(self._row_cells(r)):
+                grid.update_cell(str(r), str(c), txt)
+
+    def status(self, text: str, progress: float | None = None) -> None:
+        self.query_one("#vib-status", Label).update(text)
+        bar = self.query_one("#vib-progress", ProgressBar)
+        bar.display = progress is not None
+        if progress is not None:
+            bar.update(total=1.0, progress=progress)
+
+    def cursor_point(self) -> int:
+        c = self.query_one("#grid", DataTable).cursor_coordinate
+        return c.row * self.cols + c.column + 1
+
+    def move_cursor(self, n: int) -> None:
+        self.query_one("#grid", DataTable).cursor_coordinate = Coordinate(
+            (n - 1) // self.cols, (n - 1) % self.cols
+        )
+
+    # ------------------------------------------------------------------ map
+    @work(thread=True, exclusive=True, group="vib-load")
+    def load_cached(self) -> None:
+        from console.tui import vibration_session as vs
+
+        path = vs.twin_map_path(self.app.ctx.profile)
+        if not path.is_file():
+            self.app.call_from_thread(
+                self.status,
+                "no vibration map: press m to measure the twin's grid (about 10 s), or "
+                "type import PA=a.uff ... / load map.npz",
+            )
+            return
+        self._open(vs.load_map(path), f"map: {path.name} (measured on the twin)")
+
+    def _open(self, vmap, label: str) -> None:
+        from console.tui import vibration_session as vs
+
+        worker = get_current_worker()
+
+        def progress(frac: float, msg: str) -> None:
+            if worker.is_cancelled:
+                raise vs.Cancelled()
+            self.app.call_from_thread(self.status, f"lookup tables: {msg}", frac)
+
+        session = vs.VibrationSession(self.app.ctx.profile, vmap, progress)
+        self.app.call_from_thread(self._ready, session, label)
+
+    def _ready(self, session, label: str) -> None:
+        self.session = session
+        m = session.vmap
+        self.status(
+            f"{label}: {len(m.excitations)} excitations, {m.points.size} points, "
+            f"{m.freq_hz.size} bins; ready"
+        )
+        self._redraw_grid()
+        self._show_selection()
+
+    def action_measure(self) -> None:
+        self.status("measuring ...", 0.0)
+        self._measure()
+
+    @work(thread=True, exclusive=True, group="vib-long")
+    def _measure(self) -> None:
+        from console.tui import vibration_session as vs
+
+        worker = get_current_worker()
+        ctx = self.app.ctx
+
+        def progress(frac: float, msg: str) -> None:
+            self.app.call_from_thread(self.status, f"measuring: {msg}", frac)
+
+        try:
+            vmap = vs.measure_map(ctx.profile, ctx.pm, progress, lambda: worker.is_cancelled)
+            path = vs.save_map(vs.twin_map_path(ctx.profile), vmap)
+            self._open(vmap, f"map: {path.name} (measured now)")
+        except vs.Cancelled:
+            self.app.call_from_thread(self.status, "measurement cancelled; the map is unchanged")
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
+
+    def action_cancel(self) -> None:
+        n = 0
+        for w in self.app.workers:
+            if w.group in ("vib-long", "vib-load") and w.is_running:
+                w.cancel()
+                n += 1
+        if n:
+            self.status("cancelling ...")
+
+    @work(thread=True, exclusive=True, group="vib-long")
+    def _import(self, specs: list[str]) -> None:
+        from console.tui import vibration_session as vs
+
+        try:
+            self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
+            self._open(vs.import_uff_files(self.app.ctx.profile, specs), "map: UFF import")
+        except vs.Cancelled:
+            self.app.call_from_thread(self.status, "import cancelled")
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
+
+    @work(thread=True, exclusive=True, group="vib-long")
+    def _load(self, path: str) -> None:
+        from console.tui import vibration_session as vs
+
+        try:
+            self._open(vs.load_map(path), f"map: {path}")
+        except vs.Cancelled:
+            self.app.call_from_thread(self.status, "cancelled")
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
+
+    def _error(self, msg: str) -> None:
+        self.status(f"[red]{msg}[/]")
+        self.app.notify(msg, severity="error", timeout=8)
+
+    # ------------------------------------------------------------------ actions
+    def _need_session(self) -> bool:
+        if self.session is None:
+            self.app.notify(
+                "no vibration map yet: press m to measure, or import one", severity="warning"
+            )
+            return False
+        return True
+
+    def on_data_table_cell_selected(self, event: DataTable.CellSelected) -> None:
+        event.stop()
+        self.audition(event.coordinate.row * self.cols + event.coordinate.column + 1)
+
+    def select(self, n: int) -> None:
+        if self.selected and self.selected[-1] == n:
+            return
+        self.selected = [*self.selected[-1:], n]
+        self.move_cursor(n)
+        self._redraw_grid()
+        self._show_selection()
+
+    def audition(self, n: int) -> None:
+        if not self._need_session():
+            return
+        if not self.session.has(n):
+            self.app.notify(f"point {n} is not in the vibration map", severity="error")
+            return
+        self.select(n)
+        self._play(lambda s: s.point_plan(n))
+
+    def action_flow(self, reverse: bool) -> None:
+        if not self._need_session():
+            return
+        if len(self.selected) < 2:
+            self.app.notify(
+                "audition two points first (enter on each), then f or r", severity="warning"
+            )
+            return
+        a, b = self.selected[-2], self.selected[-1]
+        if reverse:
+            a, b = b, a
+        self.flow(a, b)
+
+    def flow(self, a: int, b: int) -> None:
+        if not self._need_session():
+            return
+        self._play(lambda s: s.flow_plan(a, b))
+
+    def action_hand(self, direction: str, n: int | None = None) -> None:
+        if not self._need_session():
+            return
+        n = n or self.cursor_point()
+        i = self.session.vmap.point_index(n)
+        x, y = (float(v) for v in self.session.vmap.points_mm[i])
+        self.status(f"flow {direction} under a hand at point {n} ({x:.0f}, {y:.0f} mm) ...")
+        self._play(lambda s: s.hand_plan((x, y), direction))
+
+    @work(thread=True, group="vib-plan")
+    def _play(self, make) -> None:
+        try:
+            plan = make(self.session)
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
+            return
+        self.app.call_from_thread(self._playing, plan)
+        self.app.play_plan(plan)
+
+    def _playing(self, plan) -> None:
+        self.status(f"playing {plan.name}: {describe_plan(plan)}")
+
+    def action_command(self) -> None:
+        self.query_one("#vib-cmd", Input).focus()
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        text = event.value.strip()
+        event.input.value = ""
+        try:
+            self.run_command(text)
+        except UserError as exc:
+            self._error(str(exc))
+        self.focus_target.focus()
+
+    def run_command(self, text: str) -> None:
+        """``51`` | ``51 52`` | ``hand 51 right`` | ``measure`` | ``import ...`` | ``load F``."""
+        words = shlex.split(text)
+        if not words:
+            return
+        head = words[0].lower()
+        if head == "measure":
+            self.action_measure()
+        elif head == "import":
+            if len(words) < 2:
+                raise UserError("import: give EXC=FILE per excitation, e.g. import PA=pa.uff")
+            self._import(words[1:])
+        elif head == "load":
+            if len(words) != 2:
+                raise UserError("load: give one vibration map file (.npz)")
+            self._load(words[1])
+        elif head == "cancel":
+            self.action_cancel()
+        elif head == "hand":
+            if len(words) != 3 or words[2] not in KEY_DIRECTIONS.values():
+                raise UserError("hand: write hand POINT left|right|up|down, e.g. hand 51 right")
+            self.action_hand(words[2], _point(words[1]))
+        elif len(words) == 1:
+            self.audition(_point(words[0]))
+        elif len(words) == 2:
+            a, b = _point(words[0]), _point(words[1])
+            self.selected = [a, b]
+            self.move_cursor(b)
+            self._redraw_grid()
+            self._show_selection()
+            self.flow(a, b)
+        else:
+            raise UserError(f"{text!r}: not a command; {HELP.splitlines()[-1]}")
+
+    # ------------------------------------------------------------------ info + plot
+    def _show_selection(self) -> None:
+        if self.session is None or not self.selected:
+            return
+        self._info()
+
+    @work(thread=True, exclusive=True, group="vib-info")
+    def _info(self) -> None:
+        s, sel = self.session, list(self.selected)
+        n = sel[-1]
+        lines = []
+        i = s.vmap.point_index(n)
+        x, y = s.vmap.points_mm[i]
+        try:
+            plan = s.point_plan(n)
+            mark = plan.meta["frequency_hz"]
+            lines.append(
+                f"[b]point {n}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
+                f"{plan.meta['actuator']}, {plan.meta['amplitude_v']:.1f} V "
+                f"({plan.meta['um_per_v']:.3g} um/V)"
+            )
+        except UserError as exc:
+            mark = None
+            lines.append(f"point {n}: {exc}")
+        if len(sel) > 1:
+            a = sel[-2]
+            lines.append("[b]lookup table[/b] (active / passive: difference, frequency, actuator)")
+            for act, pas in ((a, n), (n, a)):
+                e = s.lookup(act, pas)
+                if e["actuator"] is None:
+                    lines.append(f"  {act} / {pas}: {e.get('note', 'no entry')}")
+                else:
+                    lines.append(
+                        f"  {act} / {pas}: {e['max_difference_um_per_v']:.4g} um/V at "
+                        f"{e['frequency_hz']:g} Hz with {e['actuator']}"
+                    )
+        freq, mags = s.frf(n)
+        self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark)
+
+    def _show_info(self, text: str, freq, mags, mark) -> None:
+        from console.tui.plots import frf_plot
+
+        s = self.session
+        self.query_one("#vib-info", Static).update(text)
+        width = max(20, min(self.size.width - 10, 110))
+        self.query_one("#frf-plot", Static).update(
+            frf_plot(
+                freq,
+                mags,
+                s.vmap.excitations,
+                width=width,
+                height=8,
+                mark_hz=mark,
+                band_hz=s.vt["band_hz"],
+                masked=s.vmap.masked,
+            )
+        )
+
+
+def _point(word: str) -> int:
+    try:
+        return int(word)
+    except ValueError:
+        raise UserError(f"{word!r}: give a grid point number, e.g. 51") from None
+
+
+def describe_plan(plan) -> str:
+    parts = []
+    for seg in plan.segments:
+        parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
+    return f"{plan.duration_s:.1f} s, " + ", ".join(parts)

@@ -1,0 +1,121 @@
+"""What the twin outputs recorded during a console session, written on exit for outside
+inspection (``HAPTABLE_TWIN_LOG=path.json haptable``).
+
+``path.json`` holds the bursts found in the twin recording (non-silent stretches: start
+sample, length, peak volts and dominant frequency per channel), the relay switch log and
+the plans the console played (name, segments with their patches, label, peak and meta).
+``path.npz`` beside it holds the raw recording (``recording_v``, (n, 2) volts) and each
+played segment's waveforms (``plan{i}_seg{j}_piezo_v`` / ``_screen_v``) so a test can
+check sample by sample that what was auditioned is what the amplifiers received.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ENV = "HAPTABLE_TWIN_LOG"
+
+
+def bursts(rec_v: np.ndarray, sample_rate_hz: int, min_gap: int = 16) -> list[dict[str, Any]]:
+    """Non-silent stretches of a (n, 2) recording, split where both channels are exactly
+    zero for at least ``min_gap`` samples."""
+    rec = np.asarray(rec_v, float).reshape(-1, 2)
+    on = np.any(rec != 0.0, axis=1)
+    idx = np.flatnonzero(on)
+    out: list[dict[str, Any]] = []
+    if idx.size == 0:
+        return out
+    breaks = np.flatnonzero(np.diff(idx) > min_gap)
+    starts = np.concatenate([[idx[0]], idx[breaks + 1]])
+    ends = np.concatenate([idx[breaks], [idx[-1]]]) + 1
+    for a, b in zip(starts, ends, strict=True):
+        seg = rec[a:b]
+        item: dict[str, Any] = {"start": int(a), "n_samples": int(b - a)}
+        for ch, name in enumerate(("piezo", "screen")):
+            x = seg[:, ch]
+            item[f"{name}_peak_v"] = float(np.abs(x).max())
+            item[f"{name}_freq_hz"] = dominant_hz(x, sample_rate_hz)
+        out.append(item)
+    return out
+
+
+def dominant_hz(x: np.ndarray, sample_rate_hz: int) -> float | None:
+    """Frequency of the largest spectral peak (parabolic interpolation), None if silent."""
+    x = np.asarray(x, float)
+    if x.size < 8 or not np.any(x):
+        return None
+    n = 1 << int(np.ceil(np.log2(4 * x.size)))
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n))
+    k = int(np.argmax(spec[1:])) + 1
+    if 1 <= k < spec.size - 1:
+        a, b, c = spec[k - 1], spec[k], spec[k + 1]
+        den = a - 2 * b + c
+        k = k + (0.5 * (a - c) / den if den else 0.0)
+    return float(k * sample_rate_hz / n)
+
+
+def _plan_entry(plan, i: int, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    segs = []
+    for j, s in enumerate(plan.segments):
+        arrays[f"plan{i}_seg{j}_piezo_v"] = np.asarray(s.piezo_v, float)
+        arrays[f"plan{i}_seg{j}_screen_v"] = np.asarray(s.screen_v, float)
+        segs.append(
+            {
+                "label": s.label,
+                "patches": sorted(s.patches),
+                "screen": bool(s.screen),
+                "n_samples": s.n_samples,
+                "piezo_peak_v": float(np.abs(s.piezo_v).max()) if s.n_samples else 0.0,
+                "screen_peak_v": float(np.abs(s.screen_v).max()) if s.n_samples else 0.0,
+            }
+        )
+    return {"name": plan.name, "segments": segs, "meta": plan.meta}
+
+
+def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | None:
+    """Write the JSON summary (and the .npz of samples) for ``outputs``; ``played`` lists
+    the ``OutputPlan``s the console sent. Returns the JSON path (None on real hardware)."""
+    rec = outputs.recording()
+    log = outputs.relay_log()
+    if rec is None and log is None:
+        return None
+    fs = int(outputs.limits.sample_rate_hz)
+    arrays: dict[str, np.ndarray] = {}
+    data = {
+        "sample_rate_hz": fs,
+        "recorded_samples": 0 if rec is None else int(len(rec)),
+        "bursts": [] if rec is None else bursts(rec, fs),
+        "relay_log": [
+            {
+                "clock": int(r.clock),
+                "channel": int(r.channel),
+                "closed": bool(r.closed),
+                "level_v": [float(v) for v in r.level_v],
+            }
+            for r in (log or [])
+        ],
+        "played": [_plan_entry(p, i, arrays) for i, p in enumerate(played)],
+        "estop_reason": outputs.gate.estop_reason,
+    }
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(json.dumps(data, indent=2, default=_jsonable))
+    if rec is not None:
+        arrays["recording_v"] = np.asarray(rec, float)
+    np.savez_compressed(p.with_suffix(".npz"), **arrays)
+    return p
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, (set, frozenset, tuple)):
+        return list(o)
+    return str(o)
