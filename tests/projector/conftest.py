@@ -6,6 +6,16 @@ import pytest
 
 
 @pytest.fixture(scope="session")
+def requires_egl():
+    """Skip (saying why) where a headless projector process cannot render."""
+    from plugins.projector.renderer import egl_available
+
+    ok, why = egl_available()
+    if not ok:
+        pytest.skip(f"headless rendering unavailable: {why}")
+
+
+@pytest.fixture(scope="session")
 def egl_ctx():
     from plugins.projector.renderer import egl_available, egl_context
 

@@ -182,6 +182,7 @@ def test_second_projector_on_a_live_socket_is_refused_and_a_stale_one_replaced(s
 
 
 # --------------------------------------------------------------------------- processes
+@pytest.mark.usefixtures("requires_egl")
 def test_projector_killed_with_sigkill_is_restarted_and_shows_the_scene_again(
     sock_path, tmp_path, reaper
 ):
@@ -210,6 +211,7 @@ def test_projector_killed_with_sigkill_is_restarted_and_shows_the_scene_again(
     assert not alive(reaper[-1])
 
 
+@pytest.mark.usefixtures("requires_egl")
 def test_hung_projector_is_detected_by_heartbeat_and_replaced(sock_path, tmp_path, reaper):
     svc = service(sock_path, tmp_path)
     try:
@@ -248,6 +250,7 @@ time.sleep(600)
 """
 
 
+@pytest.mark.usefixtures("requires_egl")
 def test_console_killed_with_sigkill_leaves_the_projector_black_and_a_new_console_adopts_it(
     sock_path, tmp_path, reaper
 ):
@@ -293,6 +296,7 @@ def test_console_killed_with_sigkill_leaves_the_projector_black_and_a_new_consol
     assert not sock_path.exists()
 
 
+@pytest.mark.usefixtures("requires_egl")
 def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path, reaper):
     svc = service(sock_path, tmp_path)
     try:
@@ -314,6 +318,7 @@ def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path,
         svc.close()
 
 
+@pytest.mark.usefixtures("requires_egl")
 def test_snapshot_saves_what_the_projector_shows(sock_path, tmp_path, reaper):
     import cv2
 
@@ -353,6 +358,7 @@ def test_a_projector_that_cannot_start_is_retried_and_its_error_reported(sock_pa
         svc.close()
 
 
+@pytest.mark.usefixtures("requires_egl")
 def test_show_command_starts_a_projector_shows_the_scene_and_stops_it(tmp_path, capsys):
     import cv2
 

@@ -44,6 +44,7 @@ def display():
     xvfb.wait()
 
 
+@pytest.mark.usefixtures("requires_egl")  # no Mesa GL at all: nothing to test
 def test_window_projector_draws_the_knob_full_screen(display, tmp_path):
     sock = tmp_path / "p.sock"
     svc = ProjectorService(
