@@ -6,8 +6,9 @@ Steps for one frame (paper section 3, Fig. 4):
 
 1. ``check_frame``: 2-D uint8 of the expected size, else a ``UserError``.
 2. ``subtract``: frame minus the background, after matching the global brightness
-   (a sudden illumination change is a gain on the whole frame: the median ratio of
-   frame to background estimates it; the hands cover a minority of the pixels).
+   (a sudden illumination change is a gain and an offset on the whole frame: a robust
+   line fit of frame against background over a pixel grid estimates them; the hands
+   cover a minority of the pixels and are left out as the brighter residuals).
 3. ``body_mask``: smoothed difference above ``body_threshold``: hands and forearms,
    including the dim, blurred parts above the glass.
 4. ``highpass`` (difference minus its blur) above ``contact_threshold``: the sharp bright
@@ -57,6 +58,7 @@ class VisionParams:
     n_harmonics: int = 12
     rotation_invariant: bool = True
     illumination_tolerance: float = 0.15  # |gain - 1| above this flags an illumination change
+    offset_tolerance: float = 8.0  # |offset| grey levels above this flags one too
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -69,7 +71,8 @@ class FrameResult:
 
     hands: tuple[Hand, ...]
     contacts: tuple[Contact, ...]  # all contact blobs, hands or not
-    gain: float = 1.0  # frame / background brightness ratio
+    gain: float = 1.0  # frame ~ gain * background + offset
+    offset: float = 0.0
     illumination_changed: bool = False
     masks: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
@@ -150,11 +153,43 @@ def brightness_gain(frame: np.ndarray, background: np.ndarray, step: int = 8) ->
     return float(np.median(f[ok] / b[ok]))
 
 
-def subtract(frame: np.ndarray, background: np.ndarray, gain: float = 1.0) -> np.ndarray:
-    """``frame - gain * background`` clipped at 0, as uint8."""
-    if gain == 1.0 and background.dtype == np.uint8:
+def illumination(frame: np.ndarray, background: np.ndarray, step: int = 12) -> tuple[float, float]:
+    """``(gain, offset)`` with ``frame ~ gain * background + offset`` over the empty parts
+    of the table: a least-squares line on a pixel grid, refitted twice on the pixels
+    whose residual is not far above the median (hands, brighter than predicted, drop
+    out)."""
+    f = frame[::step, ::step].ravel().astype(np.float32)
+    b = background[::step, ::step].ravel().astype(np.float32)
+    keep = np.ones(len(f), dtype=bool)
+    gain, offset = 1.0, 0.0
+    for _ in range(3):
+        fk, bk = f[keep], b[keep]
+        n = len(fk)
+        if n < 10:
+            break
+        mb, mf = float(bk.mean()), float(fk.mean())
+        var = float(np.dot(bk - mb, bk - mb)) / n
+        if var < 4.0:  # too little contrast in the background for a line: an offset
+            gain, offset = 1.0, float(np.median(fk - bk))
+        else:
+            gain = float(np.dot(bk - mb, fk - mf)) / n / var
+            offset = mf - gain * mb
+        res = f - (gain * b + offset)
+        med = float(np.median(res))
+        mad = float(np.median(np.abs(res - med)))
+        keep = res <= med + 2.0 * mad + 1.0
+    if not (0.2 < gain < 5.0):
+        return brightness_gain(frame, background, step), 0.0
+    return gain, offset
+
+
+def subtract(
+    frame: np.ndarray, background: np.ndarray, gain: float = 1.0, offset: float = 0.0
+) -> np.ndarray:
+    """``frame - (gain * background + offset)`` clipped at 0, as uint8."""
+    if gain == 1.0 and offset == 0.0 and background.dtype == np.uint8:
         return cv2.subtract(frame, background)
-    return cv2.subtract(frame, cv2.convertScaleAbs(background, alpha=gain))
+    return cv2.subtract(frame, cv2.convertScaleAbs(background, alpha=gain, beta=offset))
 
 
 def highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
@@ -604,13 +639,13 @@ def process_frame(
             f"background: size {bg.shape[1]} x {bg.shape[0]} px does not match the frame "
             f"({img.shape[1]} x {img.shape[0]}); capture the background again"
         )
-    gain = brightness_gain(img, bg)
-    changed = abs(gain - 1.0) > p.illumination_tolerance
-    if abs(gain - 1.0) < 0.02:
-        gain = 1.0
-    if bg.dtype != np.uint8 and gain == 1.0:
+    gain, offset = illumination(img, bg)
+    changed = abs(gain - 1.0) > p.illumination_tolerance or abs(offset) > p.offset_tolerance
+    if abs(gain - 1.0) < 0.02 and abs(offset) < 1.5:
+        gain, offset = 1.0, 0.0
+    if bg.dtype != np.uint8 and gain == 1.0 and offset == 0.0:
         bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
-    diff = subtract(img, bg, gain)
+    diff = subtract(img, bg, gain, offset)
     body = body_mask(diff, p.body_threshold, p.smooth_px)
     hp = highpass(diff, p.highpass_sigma_px)
     contacts = find_contacts(
@@ -632,10 +667,11 @@ def process_frame(
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     masks = {"diff": diff, "body": body, "highpass": hp} if keep_masks else {}
     return FrameResult(
-        tuple(h for h, _ in found),
-        tuple(contacts),
-        float(gain),
-        bool(changed),
-        masks,
-        tuple(e for _, e in found),
+        hands=tuple(h for h, _ in found),
+        contacts=tuple(contacts),
+        gain=float(gain),
+        offset=float(offset),
+        illumination_changed=bool(changed),
+        masks=masks,
+        extras=tuple(e for _, e in found),
     )

@@ -102,6 +102,12 @@ def test_sudden_illumination_change_is_flagged_and_tolerated():
     assert len(r1.contacts) == len(r0.contacts)
     # without compensation the whole table would be foreground: check it is not
     assert r1.hands[0].radius_px < 200
+    # a gain and an offset together (LEDs and ambient light both change)
+    both = np.clip(f.astype(np.float32) * 1.3 + 20, 0, 255).astype(np.uint8)
+    r2 = process_frame(both, BG, P)
+    assert r2.illumination_changed
+    assert r2.gain == pytest.approx(1.3, abs=0.05) and r2.offset == pytest.approx(20, abs=3)
+    assert len(r2.hands) == 1 and len(r2.contacts) == len(r0.contacts)
 
 
 def test_background_capture_and_slow_update():
