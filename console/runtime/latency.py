@@ -30,6 +30,9 @@ DEQUEUED = "dequeued"
 END_TO_END = "end_to_end"
 #: Arrival to the last stamp of every frame (the processing time a frame cost).
 PROCESSING = "processing"
+#: CPU time the processing thread spent on a frame (``time.thread_time``): the work
+#: itself, without waiting for a CPU on a busy machine.
+CPU = "cpu"
 
 
 class Ring:
@@ -93,7 +96,7 @@ class LatencyMonitor:
         self.size = int(size)
         self._lock = threading.Lock()
         self._rings: dict[str, Ring] = {
-            s: Ring(size) for s in (*self.order[1:], END_TO_END, PROCESSING)
+            s: Ring(size) for s in (*self.order[1:], END_TO_END, PROCESSING, CPU)
         }
         self._capture = Ring(size)  # camera capture -> arrival (driver latency)
         self._arrivals = Ring(121)  # arrival times for the frame rate
@@ -114,12 +117,15 @@ class LatencyMonitor:
             if frame.t_capture_s and t >= frame.t_capture_s:
                 self._capture.add(t - frame.t_capture_s)
 
-    def record(self, frame: Frame) -> dict[str, float]:
-        """Add one processed frame's stage durations; returns them (seconds)."""
+    def record(self, frame: Frame, cpu_s: float | None = None) -> dict[str, float]:
+        """Add one processed frame's stage durations (and the CPU time it cost, when
+        known); returns the durations (seconds)."""
         d = stage_durations_s(frame.stamps_s, self.order)
         stamped = [frame.stamps_s[s] for s in self.order if s in frame.stamps_s]
         with self._lock:
             self.frames += 1
+            if cpu_s is not None:
+                self._rings[CPU].add(cpu_s)
             for name, x in d.items():
                 self._rings[name].add(x)
             if len(stamped) >= 2 and ARRIVAL in frame.stamps_s:
@@ -173,6 +179,7 @@ class LatencyMonitor:
             "end_stage": self.end_stage,
             "end_to_end": percentiles_ms(rings[END_TO_END]),
             "processing": percentiles_ms(rings[PROCESSING]),
+            "cpu_per_frame": percentiles_ms(rings[CPU]),
             "capture_to_arrival": percentiles_ms(capture),
             "window_frames": self.size,
         }

@@ -202,6 +202,7 @@ class FrameLoop:
         with self._lock:
             self._busy_since = time.monotonic()
         frame.stamp(DEQUEUED, self._busy_since)
+        cpu0 = time.thread_time()
         try:
             for name, fn in self.stages:
                 with self._lock:
@@ -210,7 +211,7 @@ class FrameLoop:
                     break
                 if name not in frame.stamps_s:
                     frame.stamp(name, time.monotonic())
-            self.monitor.record(frame)
+            self.monitor.record(frame, time.thread_time() - cpu0)
             for sink in self.sinks:
                 with self._lock:
                     self._stage = "sink"

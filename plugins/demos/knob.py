@@ -67,7 +67,9 @@ class KnobDemo:
         if len(pts) >= 2:
             self.frames_touching += 1
         for c in crossed:
-            self.crossings.append({"t_s": c.t_s, "seq": frame.seq, "item": self.session.knob.item})
+            self.crossings.append(
+                {"t_s": c.t_s, "seq": frame.seq, "item": c.to_item, "direction": c.direction}
+            )
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         # feed() posted to the stream; its next block (<= one audio block away) plays it
