@@ -16,12 +16,15 @@ from .synth import KnobStream, parse_condition
 
 
 def raised_cosine_ramps(n: int, ramp_n: int) -> np.ndarray:
+    """Gain 0 -> 1 -> 0 with raised-cosine ends of ``ramp_n`` samples; exactly 0 at both ends."""
     g = np.ones(n)
     r = min(ramp_n, n // 2)
     if r > 0:
-        up = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, r + 1) / (r + 1))
+        up = 0.5 - 0.5 * np.cos(np.pi * np.arange(r) / r)
         g[:r] = up
         g[n - r :] = up[::-1]
+    elif n:
+        g[0] = g[-1] = 0.0
     return g
 
 
@@ -112,7 +115,14 @@ class ElectrostaticEffect:
                 f"{lim['screen_max_vpp']:g}; lower it"
             )
         fs = audio(self.profile)["sample_rate_hz"]
-        ramp_ms = max(knob_settings(self.profile)["ramp_ms"], lim["ramp_min_ms"])
+        if not 0 < freq_hz < fs / 4:
+            raise UserError(
+                f"electrostatic freq_hz = {freq_hz:g}: must be between 0 and {fs / 4:g} Hz"
+            )
+        if not 0 < duration_s <= 60:
+            raise UserError(f"electrostatic duration_s = {duration_s:g}: must be in (0, 60] s")
+        # a raised cosine stays under the gate's linear ramp when it is pi/2 times longer
+        ramp_ms = max(knob_settings(self.profile)["ramp_ms"], np.pi / 2 * lim["ramp_min_ms"])
         v = friction_stimulus(
             vpp, freq_hz, duration_s, waveform=waveform, sample_rate_hz=fs, ramp_ms=ramp_ms
         )

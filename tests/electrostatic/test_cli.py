@@ -148,3 +148,16 @@ def test_scene_event_matches_the_projector_convention(profile, plugins):
     json.dumps(ev)
     assert ev["type"] == "knob" and ev["item_offset"] == 4
     assert int(ev["angle_deg"] // 45.0) == ev["item_offset"]  # mid-sector: both agree
+
+
+@pytest.mark.parametrize("waveform", ["sine", "square"])
+@pytest.mark.parametrize("freq_hz", [33.0, 80.0, 180.0, 247.3, 1000.0])
+@pytest.mark.parametrize("duration_s", [0.05, 0.3117, 1.0])
+def test_electrostatic_plans_pass_the_gate_check(profile, plugins, waveform, freq_hz, duration_s):
+    from console.safety import Limits, check_plan
+
+    eff = plugins.get("effect", "electrostatic").factory(profile)
+    plan = eff.render(vpp=200.0, freq_hz=freq_hz, duration_s=duration_s, waveform=waveform)
+    check_plan(plan, Limits.from_profile(profile))
+    v = plan.segments[0].screen_v
+    assert v[0] == 0.0 and v[-1] == 0.0 and np.abs(v).max() == pytest.approx(100.0, rel=0.01)
