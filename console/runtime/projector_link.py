@@ -194,11 +194,16 @@ class ProjectorLink:
         heartbeat_s: float = HEARTBEAT_S,
         peer_timeout_s: float = PEER_TIMEOUT_S,
         on_hung: Callable[[int | None], None] | None = None,
+        require_tick: bool = False,
     ) -> None:
         self.socket_path = Path(socket_path)
         self.heartbeat_s = float(heartbeat_s)
         self.peer_timeout_s = float(peer_timeout_s)
         self.on_hung = on_hung
+        # With require_tick the console's own loop must call tick(): heartbeats stop when
+        # it hangs (not just when this I/O thread does), and the projector turns black.
+        self.require_tick = require_tick
+        self._last_tick = time.monotonic()
         self._cond = threading.Condition()
         self._state: dict | None = None
         self._seq = 0
@@ -245,6 +250,10 @@ class ProjectorLink:
             seq = self._seq
         self._wake()
         return seq
+
+    def tick(self) -> None:
+        """The console's main loop is alive (needed only with ``require_tick``)."""
+        self._last_tick = time.monotonic()
 
     def send_quit(self) -> None:
         """Ask the projector process to exit (the supervisor does this on stop)."""
@@ -335,6 +344,12 @@ class ProjectorLink:
         out = bytearray()
         last_tx = 0.0
         while not self._stop.is_set():
+            ticking = (
+                not self.require_tick or time.monotonic() - self._last_tick < self.peer_timeout_s
+            )
+            if sock is None and not ticking:  # the console is stuck: stay away (black)
+                self._idle(self.heartbeat_s)
+                continue
             if sock is None:
                 s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
                 try:
@@ -365,7 +380,7 @@ class ProjectorLink:
                 for msg in self._outbox:
                     out += encode(msg)
                 self._outbox.clear()
-            if now - last_tx >= self.heartbeat_s:
+            if now - last_tx >= self.heartbeat_s and ticking:
                 out += encode({"type": "heartbeat", "t_s": now})
                 last_tx = now
             wait = max(0.0, min(self.heartbeat_s - (now - last_tx), self.heartbeat_s))

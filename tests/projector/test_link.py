@@ -13,6 +13,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -430,4 +431,40 @@ def test_a_probe_does_not_displace_the_console(sock_path):
         f.close()
         s.close()
     finally:
+        srv.close()
+
+
+def test_a_console_whose_loop_stops_ticking_turns_the_projector_black(sock_path):
+    from console.runtime.projector_link import ProjectorLink
+
+    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=1.0)
+    srv.start()
+    stop = threading.Event()
+
+    def render_loop():  # frames advance, so the projector end keeps its heartbeat
+        while not stop.wait(0.02):
+            srv.frame_done(srv.snapshot()[0], time.monotonic())
+
+    threading.Thread(target=render_loop, daemon=True).start()
+    link = ProjectorLink(sock_path, heartbeat_s=0.05, peer_timeout_s=1.0, require_tick=True)
+    link.start()
+    try:
+        link.tick()
+        link.send_state("knob", {"kind": "knob"})
+        wait_until(lambda: srv.snapshot()[3] == {"kind": "knob"}, 10, "knob")
+        for _ in range(30):  # the console loop runs: the projector keeps the scene
+            link.tick()
+            time.sleep(0.05)
+        assert srv.snapshot()[3] == {"kind": "knob"}
+        # the console's loop hangs (its I/O thread lives on): the projector goes black
+        wait_until(lambda: srv.snapshot()[3] is None, 10, "black")
+        assert srv.last_drop.startswith("no word from the console")
+        time.sleep(1.5)  # and it stays black: the stuck console does not reconnect
+        assert srv.snapshot()[3] is None and srv.consoles == 1
+        # the loop recovers (ticks again): reconnect and show the scene again
+        wait_until(lambda: link.tick() or srv.snapshot()[3] == {"kind": "knob"}, 10, "knob again")
+        assert link.hangs == 0  # the projector never looked hung meanwhile
+    finally:
+        stop.set()
+        link.close()
         srv.close()
