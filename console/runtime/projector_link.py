@@ -748,13 +748,17 @@ class ProjectorService:
         backoff_max_s: float = 5.0,
         log_path: Path | str | None = None,
         env: dict[str, str] | None = None,
+        require_tick: bool = False,
     ) -> None:
         self.socket_path = Path(socket_path)
         self.scenes = dict(scenes)
         self.profile = profile
         self.providers = dict(providers or {})
         self.link = ProjectorLink(
-            self.socket_path, heartbeat_s=heartbeat_s, peer_timeout_s=peer_timeout_s
+            self.socket_path,
+            heartbeat_s=heartbeat_s,
+            peer_timeout_s=peer_timeout_s,
+            require_tick=require_tick,
         )
         self.supervisor = (
             ProjectorSupervisor(
@@ -846,6 +850,11 @@ class ProjectorService:
         state = self.scene.state()
         self.link.send_state(self.scene_name, state)
         return state
+
+    def tick(self) -> None:
+        """Call from the console's main loop (e.g. a Textual interval) when built with
+        ``require_tick=True``: if the loop stops, the projector turns black."""
+        self.link.tick()
 
     def wait_drawn(self, timeout_s: float = 5.0) -> bool:
         """Wait until the projector shows the newest state."""
