@@ -215,6 +215,30 @@ def point_shapes_um(twin: Twin, points_mm: np.ndarray) -> np.ndarray:
     return np.hstack([phi, res]) * 1e6
 
 
+def _shapes(twin: Twin, points) -> np.ndarray:
+    """Points (P, 2) mm, or a lattice given as the pair ``(xs_mm, ys_mm)`` of 1-D arrays."""
+    if isinstance(points, tuple) and len(points) == 2 and np.ndim(points[0]) == 1:
+        return lattice_shapes_um(twin, points[0], points[1])
+    return point_shapes_um(twin, points)
+
+
+def lattice_shapes_um(twin: Twin, xs_mm: np.ndarray, ys_mm: np.ndarray) -> np.ndarray:
+    """``point_shapes_um`` on the lattice ys x xs (rows y, row-major), separably: (Ny*Nx, R+4)."""
+    s = twin.modes.system
+    xs_m, ys_m = np.asarray(xs_mm, float) / 1e3, np.asarray(ys_mm, float) / 1e3
+    xi, eta = 2 * xs_m / s.plate.a_m - 1, 2 * ys_m / s.plate.b_m - 1
+    if np.any(np.abs(xi) > 1 + 1e-9) or np.any(np.abs(eta) > 1 + 1e-9):
+        raise ValueError("point outside the plate")
+    vx, vy = s.bx.values(xi), s.by.values(eta)  # (Nx, mx), (Ny, my)
+    coeffs = twin.modes.coeffs
+    if twin.residual_coeffs is not None:
+        coeffs = np.concatenate([coeffs, twin.residual_coeffs[:4]])
+    else:
+        coeffs = np.concatenate([coeffs, np.zeros((4, *coeffs.shape[1:]))])
+    f = np.einsum("xi,kij,yj->yxk", vx, coeffs, vy, optimize=True)
+    return f.reshape(-1, coeffs.shape[0]) * 1e6
+
+
 def displacement_at(
     profile_or_twin,
     piezo_v: np.ndarray,
@@ -262,18 +286,43 @@ def window_rms_um(
     out = np.empty(shapes_um.shape[0])
     for i in range(0, shapes_um.shape[0], chunk):
         sh = shapes_um[i : i + chunk]
-        out[i : i + chunk] = np.sqrt(np.maximum(np.einsum("pi,ij,pj->p", sh, cov, sh), 0.0))
+        out[i : i + chunk] = np.sqrt(np.maximum(((sh @ cov) * sh).sum(axis=1), 0.0))
     return out
+
+
+def window_tone_um(
+    shapes_um: np.ndarray,
+    coords: np.ndarray,
+    window: tuple[int, int],
+    freq_hz: float,
+    fs_hz: float,
+) -> np.ndarray:
+    """Amplitude (P,) of the ``freq_hz`` sine in each point's displacement over ``window``
+    (least-squares fit of a cos + b sin: a lock-in that rejects other components, such
+    as the previous part's ring-down at another frequency)."""
+    s, e = window
+    t = np.arange(s, e) / fs_hz
+    basis = np.column_stack([np.cos(2 * np.pi * freq_hz * t), np.sin(2 * np.pi * freq_hz * t)])
+    proj = np.linalg.solve(basis.T @ basis, basis.T @ coords[:, s:e].T)  # (2, R + 4)
+    ab = shapes_um @ proj.T  # (P, 2)
+    return np.hypot(ab[:, 0], ab[:, 1])
 
 
 @dataclass(frozen=True)
 class PartEnvelope:
-    """One part at each point: steady amplitude (sqrt 2 x RMS over the flat stretch, the
-    sine amplitude a finger feels), the RMS itself, and the peak |x| over the whole part
-    plus its ring-down until the next part starts (ramps and transients included)."""
+    """One part at each point.
+
+    ``amplitude_um``: sqrt 2 x RMS over the flat stretch (everything that moves: the
+    part's tone plus whatever still rings from before); ``tone_um``: the amplitude of the
+    part's own frequency there (what the tables predict; NaN if no frequency given);
+    ``onset_um``: sqrt 2 x RMS from the part's first sample to the flat stretch (ramp-up
+    and settling: where the previous part's ring-down overlaps this one); ``peak_um``:
+    max |x| from the part's start to the next part's start (only for the first
+    ``peak_points`` points, NaN beyond)."""
 
     amplitude_um: np.ndarray  # (P,)
-    rms_um: np.ndarray  # (P,)
+    tone_um: np.ndarray  # (P,)
+    onset_um: np.ndarray  # (P,)
     peak_um: np.ndarray  # (P,)
     window: tuple[int, int]
     span: tuple[int, int]
@@ -289,28 +338,45 @@ def part_envelopes(
     *,
     ramp_s: float,
     settle_s: float = 0.2,
+    freqs_hz: Sequence[float] | None = None,
     peak_points: int = 64,
 ) -> list[PartEnvelope]:
-    """Envelope per part at every point (any number: RMS goes through the covariance).
+    """Envelopes per part at every point (any number: RMS goes through the covariance).
 
-    ``parts`` are (start, stop) samples of each part; the peak is taken over
-    [start, next part's start) (the end of the signal for the last part), and is only
-    computed for the first ``peak_points`` points (NaN beyond: use the RMS for squares).
+    ``points_mm``: (P, 2) mm, or a lattice ``(xs_mm, ys_mm)`` (points ys x xs, rows y).
+    ``parts`` are (start, stop) samples of each part, ``freqs_hz`` each part's drive
+    frequency (for ``tone_um``).
     """
+    from threadpoolctl import threadpool_limits
+
     twin = twin_of(profile_or_twin)
+    # thin (R x n) products: one BLAS thread is fastest, and far faster on a busy machine
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _part_envelopes(
+            twin, piezo_v, patches, points_mm, fs_hz, parts, ramp_s, settle_s, freqs_hz, peak_points
+        )
+
+
+def _part_envelopes(
+    twin, piezo_v, patches, points_mm, fs_hz, parts, ramp_s, settle_s, freqs_hz, peak_points
+) -> list[PartEnvelope]:
     coords = modal_coordinates(twin, piezo_v, patches, fs_hz)
-    shapes = point_shapes_um(twin, points_mm)
+    shapes = _shapes(twin, points_mm)
     n = coords.shape[1]
     out = []
     for i, (s, e) in enumerate(parts):
         win = steady_window(s, e, fs_hz, ramp_s, settle_s)
         rms = window_rms_um(shapes, coords, win)
+        onset = math.sqrt(2) * window_rms_um(shapes, coords, (s, win[0]))
+        tone = np.full(shapes.shape[0], np.nan)
+        if freqs_hz is not None:
+            tone = window_tone_um(shapes, coords, win, float(freqs_hz[i]), fs_hz)
         peak = np.full(shapes.shape[0], np.nan)
         end = parts[i + 1][0] if i + 1 < len(parts) else n
         k = min(peak_points, shapes.shape[0])
         if k:
             peak[:k] = np.abs(shapes[:k] @ coords[:, s:end]).max(axis=1)
-        out.append(PartEnvelope(math.sqrt(2) * rms, rms, peak, win, (int(s), int(e))))
+        out.append(PartEnvelope(math.sqrt(2) * rms, tone, onset, peak, win, (int(s), int(e))))
     return out
 
 
@@ -343,6 +409,7 @@ __all__ = [
     "drive_from_recording",
     "foh_filters",
     "hand_subgrid_mm",
+    "lattice_shapes_um",
     "modal_coordinates",
     "part_envelopes",
     "point_shapes_um",
@@ -352,4 +419,5 @@ __all__ = [
     "weights_from_relay_log",
     "weights_from_spans",
     "window_rms_um",
+    "window_tone_um",
 ]

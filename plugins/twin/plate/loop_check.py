@@ -1,0 +1,413 @@
+"""Closed-loop check: flows rendered from a measured map, played through the safety gate,
+and the plate twin's true response to what was played, against what the tables predicted.
+
+Used by ``tests/closed_loop`` and the ``closed-loop`` benchmark. The stimuli come from the
+vibrotactile plugin's public functions (imported lazily: this is a consumer of its plans,
+exactly as a user's scene would be); the outputs are the profile's (twin audio + relays),
+so every sample went through ``console.safety``.
+
+Per flow part the table predicts, at drive amplitude V and the part's frequency/actuator,
+active = V |H_active|, passive = V |H_passive| and margin = V x (table difference). The
+twin gives the steady amplitude (sqrt 2 x RMS over the flat stretch after the ramp and
+``settle_s``) at the same points from the RECORDING and the relay log. Under a hand the
+same is done for the 3 x 3 squares (level = the value at least half of a square's 15 x 15
+subgrid points reach) against the 3-JND line X(f) of the palm.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .closed_loop import (
+    drive_from_recording,
+    hand_subgrid_mm,
+    part_envelopes,
+    square_levels_um,
+    twin_of,
+)
+
+#: Pairs (grid numbers, active -> passive) checked by default: the paper's 51/52 example
+#: both ways, diagonal neighbours as in Fig. 10's pairs 1-1, 3-3, 4-4, and a long pair.
+DEFAULT_PAIRS: tuple[tuple[int, int], ...] = (
+    (51, 52),
+    (52, 51),
+    (27, 40),
+    (40, 27),
+    (62, 75),
+    (19, 32),
+    (14, 71),
+)
+#: Hand regions (centre mm): four spots across the table (the paper's R1..R4 are only
+#: drawn, not given in numbers), each with the four directions.
+DEFAULT_REGIONS: tuple[tuple[float, float], ...] = (
+    (180.0, 280.0),
+    (300.0, 160.0),
+    (460.0, 290.0),
+    (580.0, 150.0),
+)
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    part_s: float = 1.5
+    ramp_ms: float = 100.0
+    settle_s: float = 0.2  # after the ramp before the steady stretch (lowest mode's tau)
+    pre_s: float = 0.05  # recording kept before the first part (plate at rest)
+
+
+def measured_map(profile, plugins=None, progress=None):
+    """The profile's vibration map measured by its ``[vibrometer] driver`` (twin default)."""
+    from console.vibration_map import make_map
+
+    name = str(profile.get("vibrometer.driver", "twin"))
+    if plugins is None:
+        from .vibrometer import TwinVibrometer
+
+        dev = TwinVibrometer(profile)
+    else:
+        dev = plugins.get("vibrometer", name).factory(profile)
+    out = dev.measure(progress=progress)
+    return make_map(**{k: v for k, v in out.items() if k != "meta"})
+
+
+def relay_channels_of(profile) -> dict[str, int]:
+    return {n: int(p["relay_channel"]) for n, p in profile.items("patches").items()}
+
+
+def stimulus_settings(profile, ls: LoopSettings):
+    from plugins.vibrotactile.stimuli import StimulusSettings
+
+    vt = profile.section("vibrotactile")
+    return StimulusSettings(
+        sample_rate_hz=int(profile.get("audio.sample_rate_hz")),
+        part_s=ls.part_s,
+        ramp_ms=max(ls.ramp_ms, float(profile.get("limits.ramp_min_ms"))),
+        sensation_level_db=float(vt.get("sensation_level_db", 20.0)),
+        drive_max_v=float(vt.get("drive_max_v", 95.0)),
+        interpolation=str(vt.get("interpolation", "spline")),
+    )
+
+
+def perception_of(profile):
+    from plugins.vibrotactile.perception import Perception
+
+    return Perception.from_section(profile.section("perception"))
+
+
+def piezo_limits(profile) -> dict:
+    from console.safety import Limits
+
+    lo, hi = Limits.from_profile(profile).piezo_range()
+    return {"piezo_min_v": lo, "piezo_max_v": hi}
+
+
+def _play_and_envelope(
+    outputs, profile, twin, plan, points_mm, ls: LoopSettings, peak_points, freqs_hz
+):
+    """Play ``plan`` through the gate, then the twin's envelopes per part at the points."""
+    report = outputs.play(plan)
+    fs = plan.sample_rate_hz
+    start = max(0, report.segment_start[0] - int(ls.pre_s * fs))
+    stop = report.segment_end[-1] + int(0.5 * fs)
+    v, w = drive_from_recording(
+        outputs.recording(), outputs.relay_log(), relay_channels_of(profile), start, stop
+    )
+    parts = [
+        (s - start, e - start)
+        for s, e in zip(report.segment_start, report.segment_end, strict=True)
+    ]
+    return part_envelopes(
+        twin,
+        v,
+        w,
+        points_mm,
+        fs,
+        parts,
+        ramp_s=ls.ramp_ms / 1e3,
+        settle_s=ls.settle_s,
+        freqs_hz=freqs_hz,
+        peak_points=peak_points,
+    )
+
+
+def flow_pairs_check(
+    outputs, profile, tables, pairs=DEFAULT_PAIRS, ls: LoopSettings | None = None
+) -> list[dict]:
+    """One row per (pair, part): predicted vs achieved active/passive amplitude and margin.
+
+    Achieved = the part's tone amplitude on the twin (``tone_um``); the rows also carry
+    the broadband level (``all_*``: the previous part's ring-down included) and the
+    passive point's level while the part ramps up (``onset_passive_um``)."""
+    with _one_blas_thread():
+        return _flow_pairs_check(outputs, profile, tables, pairs, ls)
+
+
+def _one_blas_thread():
+    """Thin matrix products throughout: one BLAS thread is fastest (and on a loaded
+    2-core machine, multi-threaded BLAS is 10x slower)."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
+    from plugins.vibrotactile.stimuli import flow_plan
+
+    ls = ls or LoopSettings()
+    twin = twin_of(profile)
+    st, per = stimulus_settings(profile, ls), perception_of(profile)
+    m = tables.vmap
+    rows = []
+    for a_no, b_no in pairs:
+        a, b = m.point_index(a_no), m.point_index(b_no)
+        plan = flow_plan(tables, a, b, per, st, **piezo_limits(profile))
+        pts = m.points_mm[[a, b]]
+        freqs = [p["frequency_hz"] for p in plan.meta["parts"]]
+        env = _play_and_envelope(outputs, profile, twin, plan, pts, ls, 2, freqs)
+        for i, (p, e) in enumerate(zip(plan.meta["parts"], env, strict=True)):
+            act, pas = (0, 1) if i == 0 else (1, 0)
+            v = p["amplitude_v"]
+            pred_a, pred_p = v * p["active_um_per_v"], v * p["passive_um_per_v"]
+            ach_a, ach_p = float(e.tone_um[act]), float(e.tone_um[pas])
+            rows.append(
+                {
+                    "pair": f"{a_no}->{b_no}",
+                    "part": i + 1,
+                    "active": (a_no, b_no)[act],
+                    "passive": (a_no, b_no)[pas],
+                    "actuator": p["actuator"],
+                    "frequency_hz": p["frequency_hz"],
+                    "amplitude_v": v,
+                    "table_um_per_v": p["max_difference_um_per_v"],
+                    "pred_active_um": pred_a,
+                    "pred_passive_um": pred_p,
+                    "pred_margin_um": v * p["max_difference_um_per_v"],
+                    "ach_active_um": ach_a,
+                    "ach_passive_um": ach_p,
+                    "ach_margin_um": ach_a - ach_p,
+                    "all_active_um": float(e.amplitude_um[act]),
+                    "all_passive_um": float(e.amplitude_um[pas]),
+                    "onset_passive_um": float(e.onset_um[pas]),
+                    "peak_active_um": float(e.peak_um[act]),
+                    "peak_passive_um": float(e.peak_um[pas]),
+                    "margin_error_rel_active": abs(
+                        (ach_a - ach_p) - v * p["max_difference_um_per_v"]
+                    )
+                    / max(pred_a, 1e-12),
+                }
+            )
+    return rows
+
+
+def hand_regions_check(
+    outputs,
+    profile,
+    vmap,
+    regions=DEFAULT_REGIONS,
+    directions=("left", "right", "up", "down"),
+    ls: LoopSettings | None = None,
+    screen_stride: int = 3,
+) -> list[dict]:
+    """One row per (region, direction, part): square levels predicted from the map vs
+    achieved on the twin, against the 3-JND line; a flow the map cannot make is a row
+    with ``ok`` False and its reason. ``screen_stride`` as in ``haptable flow --hand``
+    (3: staged search; 1: exhaustive)."""
+    with _one_blas_thread():
+        return _hand_regions_check(outputs, profile, vmap, regions, directions, ls, screen_stride)
+
+
+def _hand_regions_check(outputs, profile, vmap, regions, directions, ls, screen_stride):
+    from console.types import OutputPlan, patches_of
+    from plugins.vibrotactile.hand import hand_flow, side_masks, square_levels
+    from plugins.vibrotactile.stimuli import drive_cap_v, tone_segment
+
+    ls = ls or LoopSettings()
+    twin = twin_of(profile)
+    st, per = stimulus_settings(profile, ls), perception_of(profile)
+    vt = profile.section("vibrotactile")
+    hand_mm, squares, subgrid = (
+        float(vt.get("hand_mm", 120.0)),
+        int(vt.get("hand_squares", 3)),
+        int(vt.get("hand_subgrid", 15)),
+    )
+    kw = dict(
+        hand_mm=hand_mm,
+        squares=squares,
+        subgrid=subgrid,
+        band_hz=float(vt.get("band_hz", 650.0)),
+        method=st.interpolation,
+    )
+    cap = drive_cap_v(st, **piezo_limits(profile))
+    rows = []
+    for c in regions:
+        pts = hand_subgrid_mm(c, hand_mm, squares, subgrid)  # lattice (xs, ys)
+        for d in directions:
+            res = hand_flow(vmap, c, d, per, cap_v=cap, screen_stride=screen_stride, **kw)
+            base = {"region": f"{c[0]:g},{c[1]:g}", "direction": d}
+            if not res["ok"]:
+                rows.append({**base, "part": 0, "ok": False, "reason": res.get("reason", "")})
+                continue
+            segs = tuple(
+                tone_segment(
+                    p["frequency_hz"],
+                    p["amplitude_v"],
+                    st.part_s,
+                    st.ramp_ms / 1e3,
+                    st.sample_rate_hz,
+                    patches_of(p["actuator"]),
+                    label=f"part {i + 1} {p['actuator']}",
+                )
+                for i, p in enumerate(res["parts"])
+            )
+            plan = OutputPlan(st.sample_rate_hz, segs, name=f"hand flow {d} at {base['region']}")
+            freqs = [p["frequency_hz"] for p in res["parts"]]
+            env = _play_and_envelope(outputs, profile, twin, plan, pts, ls, 0, freqs)
+            start, end = side_masks(d, squares)
+            for i, (p, e) in enumerate(zip(res["parts"], env, strict=True)):
+                side_a, side_b = (start, end) if i == 0 else (end, start)
+                v, x = p["amplitude_v"], p["x_um"]
+                k = int(np.argmin(np.abs(vmap.freq_hz - p["frequency_hz"])))
+                q, _ = square_levels(vmap, c, bins=np.array([k]), **kw)
+                pred = q[p["e"], :, :, 0] * v
+                ach = square_levels_um(e.tone_um, squares, subgrid)
+                ach_all = square_levels_um(e.amplitude_um, squares, subgrid)
+                onset = square_levels_um(e.onset_um, squares, subgrid)
+                rows.append(
+                    {
+                        **base,
+                        "part": i + 1,
+                        "ok": True,
+                        "actuator": p["actuator"],
+                        "frequency_hz": p["frequency_hz"],
+                        "amplitude_v": v,
+                        "x_um": x,
+                        "pred_active_um": float(pred[side_a].max()),
+                        "pred_passive_um": float(pred[side_b].max()),
+                        "pred_margin_db": p["margin_db"],
+                        "ach_active_um": float(ach[side_a].max()),
+                        "ach_passive_um": float(ach[side_b].max()),
+                        "ach_margin_db": float(
+                            20 * math.log10(ach[side_a].max() / max(ach[side_b].max(), 1e-30))
+                        ),
+                        "pred_active_squares": (pred >= x).astype(int).tolist(),
+                        "ach_active_squares": (ach >= x).astype(int).tolist(),
+                        "all_passive_um": float(ach_all[side_b].max()),
+                        "onset_passive_um": float(onset[side_b].max()),
+                        "ach_passive_side_felt": bool(ach[side_b].max() >= x),
+                        "all_passive_side_felt": bool(ach_all[side_b].max() >= x),
+                        "onset_passive_side_felt": bool(onset[side_b].max() >= x),
+                        "ach_active_side_felt": bool(ach[side_a].max() >= x),
+                        "level_error_db": float(
+                            np.max(np.abs(20 * np.log10(np.maximum(ach, 1e-30) / pred)))
+                        ),
+                    }
+                )
+    return rows
+
+
+def verdict(row: dict) -> str:
+    """What a user would notice for one hand-flow part (first problem found).
+
+    ``BOTH SIDES``: the passive side reaches the 3-JND line at the part's own frequency
+    (the map's interpolation was wrong there); ``BOTH SIDES (ring-down)``: in the flat
+    stretch the passive side reaches it through what still rings from the previous
+    part; ``overlap at onset``: while this part ramps up the passive side (the previous
+    part's active side) still vibrates above the line; ``active side not felt``.
+    """
+    if not row["ok"]:
+        return "no flow"
+    if not row["ach_active_side_felt"]:
+        return "active side not felt"
+    if row["ach_passive_side_felt"]:
+        return "BOTH SIDES"
+    if row["all_passive_side_felt"]:
+        return "BOTH SIDES (ring-down)"
+    if row["onset_passive_side_felt"]:
+        return "overlap at onset"
+    return "ok"
+
+
+def format_pairs(rows: list[dict]) -> str:
+    head = (
+        f"{'pair':>7} {'pt':>2} {'act':>4} {'f_Hz':>6} {'V':>6} "
+        f"{'pred A/P um':>15} {'ach A/P um':>15} {'pred dA':>7} {'ach dA':>7} {'err%':>5} "
+        f"{'all P um':>8} {'onset P':>7}"
+    )
+    out = [head]
+    for r in rows:
+        out.append(
+            f"{r['pair']:>7} {r['part']:>2} {r['actuator']:>4} {r['frequency_hz']:6.1f} "
+            f"{r['amplitude_v']:6.2f} "
+            f"{r['pred_active_um']:7.3f}/{r['pred_passive_um']:<7.3f} "
+            f"{r['ach_active_um']:7.3f}/{r['ach_passive_um']:<7.3f} "
+            f"{r['pred_margin_um']:7.3f} {r['ach_margin_um']:7.3f} "
+            f"{100 * r['margin_error_rel_active']:5.1f} "
+            f"{r['all_passive_um']:8.3f} {r['onset_passive_um']:7.3f}"
+        )
+    return "\n".join(out)
+
+
+def format_regions(rows: list[dict]) -> str:
+    head = (
+        f"{'region':>7} {'dir':>5} {'pt':>2} {'act':>4} {'f_Hz':>6} {'V':>6} {'X um':>5} "
+        f"{'pred A/B um':>11} {'ach A/B um':>11} {'pred dB':>7} {'ach dB':>6} "
+        f"{'all B':>5} {'onsetB':>6} verdict"
+    )
+    out = [head]
+    for r in rows:
+        if not r["ok"]:
+            out.append(f"{r['region']:>7} {r['direction']:>5}  - no flow: {r['reason']}")
+            continue
+        out.append(
+            f"{r['region']:>7} {r['direction']:>5} {r['part']:>2} {r['actuator']:>4} "
+            f"{r['frequency_hz']:6.1f} {r['amplitude_v']:6.2f} {r['x_um']:5.3f} "
+            f"{r['pred_active_um']:5.3f}/{r['pred_passive_um']:<5.3f} "
+            f"{r['ach_active_um']:5.3f}/{r['ach_passive_um']:<5.3f} "
+            f"{r['pred_margin_db']:7.1f} {r['ach_margin_db']:6.1f} "
+            f"{r['all_passive_um']:5.3f} {r['onset_passive_um']:6.3f} {verdict(r)}"
+        )
+    return "\n".join(out)
+
+
+def run_bench(ctx, quick: bool) -> dict:
+    """``haptable bench closed-loop``: the pairs and regions tables, with timings."""
+    from console.bench import machine_info
+    from console.runtime.outputs import open_outputs
+    from plugins.vibrotactile.tables import build_tables
+
+    profile, pm = ctx.profile, ctx.pm
+    t0 = time.perf_counter()
+    with _one_blas_thread():
+        vmap = measured_map(profile, pm)
+    t_map = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    tables = build_tables(vmap, float(profile.get("vibrotactile.band_hz", 650.0)))
+    t_tab = time.perf_counter() - t0
+    ls = LoopSettings(part_s=0.75 if quick else 1.5)
+    regions = DEFAULT_REGIONS[:2] if quick else DEFAULT_REGIONS
+    with open_outputs(profile, pm, fast=True) as out:
+        t0 = time.perf_counter()
+        pairs = flow_pairs_check(out, profile, tables, DEFAULT_PAIRS, ls)
+        t_pairs = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        hands = hand_regions_check(out, profile, vmap, regions, ls=ls)
+        t_hands = time.perf_counter() - t0
+    return {
+        "machine": machine_info(),
+        "map_measure_s": t_map,
+        "tables_build_s": t_tab,
+        "pairs_s": t_pairs,
+        "regions_s": t_hands,
+        "part_s": ls.part_s,
+        "pairs": pairs,
+        "regions": hands,
+        "pairs_table": format_pairs(pairs).splitlines(),
+        "regions_table": format_regions(hands).splitlines(),
+        "verdicts": {
+            f"{r['region']} {r['direction']} {r.get('part', 0)}": verdict(r) for r in hands
+        },
+    }
