@@ -151,8 +151,8 @@ def test_scene_event_matches_the_projector_convention(profile, plugins):
 
 
 @pytest.mark.parametrize("waveform", ["sine", "square"])
-@pytest.mark.parametrize("freq_hz", [33.0, 80.0, 180.0, 247.3, 1000.0])
-@pytest.mark.parametrize("duration_s", [0.05, 0.3117, 1.0])
+@pytest.mark.parametrize("freq_hz", [33.0, 247.3, 1000.0])
+@pytest.mark.parametrize("duration_s", [0.05, 0.3117])
 def test_electrostatic_plans_pass_the_gate_check(profile, plugins, waveform, freq_hz, duration_s):
     from console.safety import Limits, check_plan
 
