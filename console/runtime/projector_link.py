@@ -788,6 +788,7 @@ class ProjectorService:
         providers: dict[str, Callable[[Any], Any]] | None = None,
         log_path: Path | str | None = None,
         extra_args: Iterable[str] = (),
+        require_tick: bool = False,
     ) -> ProjectorService:
         """Settings from the profile's [projector] section, scenes from the plugins.
 
@@ -809,6 +810,7 @@ class ProjectorService:
             peer_timeout_s=get("peer_timeout_s", PEER_TIMEOUT_S),
             backoff_max_s=get("restart_backoff_max_s", 5.0),
             log_path=log_path or sock.parent / "projector.log",
+            require_tick=require_tick,
         )
 
     def start(self) -> None:
