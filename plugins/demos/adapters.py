@@ -7,7 +7,8 @@ place, through the owning plugin's module-level functions:
 
 - the flow under a hand as an ``OutputPlan`` (vibrotactile has no effect registration:
   wanted ``effect "hand_flow"`` with ``render(center_mm=, direction=, vmap=) -> OutputPlan``);
-- a vibration map of the twin (wanted ``haptable frf measure``, issue 3).
+- a vibration map of the twin: the registered vibrometer when there is one, else the
+  plate twin's ``measure_grid``.
 
 When those registrations appear, ``flow_effect`` uses the registered effect instead.
 """
@@ -29,8 +30,9 @@ def default_cache_dir() -> Path:
     return Path.home() / ".cache" / "haptable" / "demos"
 
 
-def twin_map_path(profile: Any, cache_dir: Path | None = None) -> Path:
-    """The twin's measured map for this profile's plate, measured once and cached."""
+def twin_map_path(profile: Any, cache_dir: Path | None = None, plugins: Any = None) -> Path:
+    """The twin's measured map for this profile's plate, measured once and cached
+    (through the registered vibrometer ``[vibrometer] driver``, when one is)."""
     from console.vibration_map import make_map, save_map
 
     keys = ("table", "grid", "patches", "glass", "plate", "piezo", "vibrometer", "amplifiers")
@@ -39,14 +41,19 @@ def twin_map_path(profile: Any, cache_dir: Path | None = None) -> Path:
     path = (cache_dir or default_cache_dir()) / f"twin-map-{key}.npz"
     if path.is_file():
         return path
-    try:
-        from plugins.twin.plate.vibrometer import measure_grid
-    except ImportError:
-        raise UserError(
-            "[demos] flow_map is empty and the plate twin is not installed; "
-            "set [demos] flow_map to a vibration map (haptable frf import ...)"
-        ) from None
-    out = measure_grid(profile)
+    regs = plugins.of("vibrometer") if plugins is not None else {}
+    name = profile.get("vibrometer.driver") or "twin"
+    if name in regs:
+        out = regs[name].factory(profile).measure()
+    else:
+        try:
+            from plugins.twin.plate.vibrometer import measure_grid
+        except ImportError:
+            raise UserError(
+                "[demos] flow_map is empty and no vibrometer is registered; "
+                "set [demos] flow_map to a vibration map (haptable frf import ...)"
+            ) from None
+        out = measure_grid(profile)
     path.parent.mkdir(parents=True, exist_ok=True)
     save_map(path, make_map(**{k: v for k, v in out.items() if k != "meta"}))
     return path

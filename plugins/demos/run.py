@@ -144,7 +144,7 @@ def demo_state(demo: Any) -> dict:
     return {"flow": {"direction": demo.current_direction(), "flows": len(demo.events), "last": evs}}
 
 
-def flow_map_path(profile: Any, cache_dir: Path | None) -> Path:
+def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> Path:
     from .adapters import twin_map_path
 
     raw = profile.get("demos.flow_map") or ""
@@ -160,7 +160,7 @@ def flow_map_path(profile: Any, cache_dir: Path | None) -> Path:
         raise UserError(
             "[demos] flow_map is empty: give the table's vibration map (haptable frf import ...)"
         )
-    return twin_map_path(profile, cache_dir)
+    return twin_map_path(profile, cache_dir, plugins)
 
 
 def start_demo(
@@ -224,7 +224,7 @@ def start_demo(
             from .flow import FlowDemo
 
             plans = flow_plans or flow_effect(
-                plugins, profile, flow_map_path(profile, cache_dir), cache_dir
+                plugins, profile, flow_map_path(profile, cache_dir, plugins), cache_dir
             )
             demo = FlowDemo(
                 profile,
