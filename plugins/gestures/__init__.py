@@ -144,6 +144,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
     c.add_argument("model", type=Path)
     c.add_argument("sample", type=Path)
     c.add_argument("--json", action="store_true")
+    k = sub.add_parser(
+        "calibrate",
+        help="touch calibration: touch the shown targets; saves camera px -> table mm",
+    )
+    k.add_argument("--columns", type=int, default=5, help="targets across the table (5)")
+    k.add_argument("--rows", type=int, default=4, help="targets along the short edge (4)")
+    k.add_argument("--margin-mm", type=float, default=40.0, help="targets' distance from the edge")
+    k.add_argument("--out", type=Path, default=None, help="file (default: [vision] calibration)")
+    k.add_argument("--camera", default=None, help="camera driver (default: the profile's)")
+    k.add_argument("--json", action="store_true")
     for name, (conf, _run, help_) in _dataset_commands().items():
         conf(sub.add_parser(name, help=help_, description=help_))
 
@@ -192,6 +202,8 @@ def run(args, ctx) -> int:
         }
         _print(out, args.json)
         return 0
+    if cmd == "calibrate":
+        return _calibrate(args, ctx, profile)
     if cmd == "classify":
         from .classifier import classify_sample
         from .model import GestureModel
@@ -201,6 +213,44 @@ def run(args, ctx) -> int:
         _print(out, args.json)
         return 0
     return 2
+
+
+def _calibrate(args, ctx, profile) -> int:
+    from console.errors import UserError
+
+    from .calibration import run_touch_calibration, target_grid
+    from .dataset_commands import open_camera
+    from .synth import capture_background
+
+    if profile is None:
+        raise UserError("gestures calibrate: needs a valid profile (--profile NAME)")
+    table = (profile.get("table.width_mm"), profile.get("table.height_mm"))
+    targets = target_grid(table, args.columns, args.rows, args.margin_mm)
+    out = args.out or profile.resolve(profile.get("vision.calibration"))
+    camera = open_camera(ctx, args.camera)
+    quiet = args.json
+
+    def progress(i, n, pos):
+        if not quiet:
+            print(f"target {i + 1}/{n}: touch ({pos[0]:.0f}, {pos[1]:.0f}) mm", file=sys.stderr)
+
+    try:
+        if hasattr(camera, "background"):
+            bg = camera.background()
+        else:
+            if not quiet:
+                print("clear the table: capturing the background ...", file=sys.stderr)
+            bg = capture_background(camera)
+        cal, session = run_touch_calibration(
+            camera, targets, bg, vision_params(profile), progress=progress
+        )
+    finally:
+        camera.close()
+    cal.save(out)
+    rep = {"saved": str(out), "targets": len(targets), **cal.report()}
+    rep["touched"] = session.progress()[0]
+    _print(rep, args.json)
+    return 0
 
 
 def _profile(ctx):

@@ -393,3 +393,55 @@ class CalibrationSession:
             )
         px = np.array([self.touches_px[i] for i in done])
         return calibrate(px, self.targets_mm[done], **kw)
+
+
+def run_touch_calibration(
+    camera,
+    targets_mm: np.ndarray,
+    background: np.ndarray,
+    params=None,
+    *,
+    show_target=None,
+    max_frames_per_target: int = 600,
+    hold_frames: int = 10,
+    progress=None,
+    **fit_kw,
+) -> tuple[Calibration, CalibrationSession]:
+    """Drive a ``CalibrationSession`` from a camera: show each target (``show_target(i,
+    pos_mm)``, or the camera's own ``set_target`` if it has one, like the twin), feed the
+    contacts the vision pipeline finds, and fit. A target not touched within
+    ``max_frames_per_target`` frames is skipped."""
+    from .vision import VisionParams, process_frame
+
+    params = params or VisionParams()
+    session = CalibrationSession(targets_mm, hold_frames=hold_frames)
+    if show_target is None and hasattr(camera, "set_target"):
+
+        def show_target(i, pos):
+            camera.set_target(pos)
+
+    shown = -1
+    frames_here = 0
+    try:
+        while (t := session.next_target()) is not None:
+            i, pos = t
+            if i != shown:
+                if show_target is not None:
+                    show_target(i, pos)
+                if progress is not None:
+                    progress(i, len(session.targets_mm), pos)
+                shown, frames_here = i, 0
+            frame = camera.read(0.5)
+            if frame is None:
+                continue
+            res = process_frame(frame.image, background, params)
+            event = session.feed(res.contacts)
+            frames_here += 1
+            if event == "recorded" and show_target is not None:
+                show_target(i, None)  # target off: the finger lifts
+            if session.state == "touch" and frames_here > max_frames_per_target:
+                session.skip()
+    finally:
+        if show_target is not None:
+            show_target(-1, None)
+    return session.finish(**fit_kw), session
