@@ -339,6 +339,7 @@ def test_snapshot_saves_what_the_projector_shows(sock_path, tmp_path, reaper):
         svc.close()
 
 
+@pytest.mark.slow
 def test_a_projector_that_cannot_start_is_retried_and_its_error_reported(sock_path, tmp_path):
     # a window on a display that does not exist: the process exits 2, again and again
     svc = ProjectorService(
