@@ -110,16 +110,20 @@ def drive_from_recording(
     relay_channels: dict[str, int],
     start: int = 0,
     stop: int | None = None,
+    clock0: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(piezo volts (n,), weights (n, 4)) for a slice of the outputs' recording.
+    """(piezo volts (n,), weights (n, 4)) for clocks ``start .. stop`` of the outputs.
 
-    ``recording_v`` is ``Outputs.recording()`` ((n, 2) volts, column 0 the piezo channel);
-    its sample i is the outputs' clock i (the relay log's clock).
+    ``recording_v`` is ``Outputs.recording()`` ((n, 2) volts, column 0 the piezo channel)
+    whose first sample was played at clock ``clock0`` (0 unless the recording wrapped);
+    the relay log's clocks are on the same clock.
     """
     rec = np.asarray(recording_v, float)
     v = rec[:, 0] if rec.ndim == 2 else rec
-    stop = v.size if stop is None else min(int(stop), v.size)
-    v = v[start:stop]
+    end = clock0 + v.size if stop is None else min(int(stop), clock0 + v.size)
+    if start < clock0:
+        raise ValueError(f"recording starts at clock {clock0}, after the asked start {start}")
+    v = v[start - clock0 : end - clock0]
     return v, weights_from_relay_log(relay_log, relay_channels, v.size, start)
 
 

@@ -105,6 +105,26 @@ def piezo_limits(profile) -> dict:
     return {"piezo_min_v": lo, "piezo_max_v": hi}
 
 
+def recording_with_offset(outputs, tries: int = 200) -> tuple[np.ndarray, int]:
+    """The outputs' recording and the clock of its first sample.
+
+    The twin keeps the last ``record_s`` seconds; the clock of its first sample is
+    (blocks played x block size) - its length, read when the outputs are idle and the
+    block count is stable around the read.
+    """
+    for _ in range(tries):
+        time.sleep(0.002)
+        st = outputs.status()
+        if st["busy"]:
+            continue
+        b1 = st["audio"].get("blocks")
+        rec = outputs.recording()
+        b2 = outputs.status()["audio"].get("blocks")
+        if b1 is not None and b1 == b2:
+            return rec, int(b1) * int(st["audio"]["block_size"]) - rec.shape[0]
+    raise RuntimeError("outputs never went idle: cannot align the recording with its clock")
+
+
 def _play_and_envelope(
     outputs, profile, twin, plan, points_mm, ls: LoopSettings, peak_points, freqs_hz
 ):
@@ -113,8 +133,9 @@ def _play_and_envelope(
     fs = plan.sample_rate_hz
     start = max(0, report.segment_start[0] - int(ls.pre_s * fs))
     stop = report.segment_end[-1] + int(0.5 * fs)
+    rec, clock0 = recording_with_offset(outputs)
     v, w = drive_from_recording(
-        outputs.recording(), outputs.relay_log(), relay_channels_of(profile), start, stop
+        rec, outputs.relay_log(), relay_channels_of(profile), start, stop, clock0
     )
     parts = [
         (s - start, e - start)

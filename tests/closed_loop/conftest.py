@@ -1,0 +1,77 @@
+"""Session fixtures: the sim profile's twin map measured once through the registered
+vibrometer, its lookup tables, and the closed-loop rows (flows played through the
+safety gate on the twin outputs, then into the plate twin).
+
+The map is the full default sweep (0-625 Hz, 0.1 Hz lines, 84 points, 5 excitations,
+3 sweeps): ~5 s on an idle 2-core machine. Parts are 1.5 s (the paper's Fig. 9).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+#: What the tests play (a subset of the benchmark's): the paper's 51/52 both ways, a
+#: diagonal pair (Fig. 10 style) both ways, and a long pair driven by PB.
+PAIRS = ((51, 52), (52, 51), (27, 40), (40, 27), (14, 71))
+#: Hand regions (centre mm) and the directions played there: "left"/"down" are the same
+#: two parts in the other order, so one per axis is played.
+REGIONS = ((180.0, 280.0), (580.0, 150.0))
+DIRECTIONS = ("right", "up")
+
+
+@pytest.fixture(scope="session")
+def loop_plugins():
+    from console.plugins import load_plugins
+
+    return load_plugins()
+
+
+@pytest.fixture(scope="session")
+def loop_profile(loop_plugins):
+    from console.profile import load_profile
+
+    return load_profile("sim", loop_plugins)
+
+
+@pytest.fixture(scope="session")
+def measured_map(loop_profile, loop_plugins):
+    from plugins.twin.plate.loop_check import _one_blas_thread, measured_map
+
+    with _one_blas_thread():
+        return measured_map(loop_profile, loop_plugins)
+
+
+@pytest.fixture(scope="session")
+def loop_tables(measured_map, loop_profile):
+    from plugins.vibrotactile.tables import build_tables
+
+    return build_tables(measured_map, float(loop_profile.get("vibrotactile.band_hz")))
+
+
+@pytest.fixture(scope="session")
+def loop_outputs(loop_profile, loop_plugins):
+    from console.runtime.outputs import open_outputs
+
+    out = open_outputs(loop_profile, loop_plugins, fast=True)
+    yield out
+    out.close()
+
+
+@pytest.fixture(scope="session")
+def pair_rows(loop_outputs, loop_profile, loop_tables):
+    from plugins.twin.plate.loop_check import flow_pairs_check, format_pairs
+
+    rows = flow_pairs_check(loop_outputs, loop_profile, loop_tables, PAIRS)
+    print("\nclosed loop, flows between points (um; tone amplitude at the part's frequency):")
+    print(format_pairs(rows))
+    return rows
+
+
+@pytest.fixture(scope="session")
+def region_rows(loop_outputs, loop_profile, measured_map):
+    from plugins.twin.plate.loop_check import format_regions, hand_regions_check
+
+    rows = hand_regions_check(loop_outputs, loop_profile, measured_map, REGIONS, DIRECTIONS)
+    print("\nclosed loop, flows under a hand (square levels, um; X = 3 JND above threshold):")
+    print(format_regions(rows))
+    return rows

@@ -1,0 +1,89 @@
+"""Closed loop: flows rendered from the twin's MEASURED map and tables, played through
+the safety gate on the twin outputs, and the plate twin's true time response to the
+RECORDING (relays from the relay log), against what the tables predicted.
+
+Tolerance for flows between points: the achieved margin (active - passive tone amplitude
+over the part's flat stretch) is within 5 % of the predicted active amplitude of the
+predicted margin (V x table difference). What eats into it: the map's measurement noise
+and, for a part on a resonance, the build-up time 1/(zeta omega) (0.3 s at the first
+mode, 53 Hz) that the 1.5 s part does not fully outlast (~-10 % at 53 Hz, both points).
+
+What fails, asserted as documented behaviour (the paper's R4 had "both sides at once"):
+when part 1 drives the first mode (53 Hz, decay time 0.3 s at 1 % damping), the plate is
+still ringing when part 2 starts (the relay gap is milliseconds): the passive point
+moves more than the active point's tone at the start of part 2 and, averaged over its
+flat stretch, still more than the active point (52 -> 51).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+TOL_REL_ACTIVE = 0.05
+DECAY_OVERLAP_S = 0.2  # previous part's decay time above which it rings into the next
+
+
+def decay_time_s(f_hz: float, zeta: float = 0.01) -> float:
+    return 1.0 / (2 * math.pi * zeta * f_hz)
+
+
+def test_each_part_active_beats_passive_by_the_tables_margin(pair_rows):
+    bad = [
+        r
+        for r in pair_rows
+        if r["ach_margin_um"] <= 0
+        or abs(r["ach_margin_um"] - r["pred_margin_um"]) > TOL_REL_ACTIVE * r["pred_active_um"]
+    ]
+    assert not bad, "parts off the tables' margin: " + "; ".join(
+        f"{r['pair']} part {r['part']}: predicted {r['pred_margin_um']:.3f} um, "
+        f"achieved {r['ach_margin_um']:.3f} um"
+        for r in bad
+    )
+
+
+def test_the_paper_pair_and_its_reverse_use_the_same_two_table_entries(pair_rows):
+    by = {(r["pair"], r["part"]): r for r in pair_rows}
+    for k in ("actuator", "frequency_hz", "amplitude_v"):
+        assert by[("51->52", 1)][k] == by[("52->51", 2)][k]
+        assert by[("51->52", 2)][k] == by[("52->51", 1)][k]
+
+
+def test_ring_down_of_a_first_mode_part_overlaps_the_next_part_as_documented(pair_rows):
+    """REPORTED FAILURE: part 1 on the 53 Hz mode keeps the passive point moving in part 2."""
+    rows = {(r["pair"], r["part"]): r for r in pair_rows}
+    overlap, expected = set(), set()
+    for (pair, part), r in rows.items():
+        if part != 2:
+            continue
+        prev = rows[(pair, 1)]
+        if decay_time_s(prev["frequency_hz"]) >= DECAY_OVERLAP_S:
+            expected.add(pair)
+        if r["onset_passive_um"] > 1.5 * r["all_passive_um"]:
+            overlap.add(pair)
+    print(f"\nflows whose part 2 starts with the passive point still ringing: {sorted(overlap)}")
+    assert overlap == expected
+    assert "52->51" in overlap  # 53 Hz PALL, then 163 Hz PALL
+    r = rows[("52->51", 2)]
+    assert r["onset_passive_um"] > r["ach_active_um"]  # passive moves more at the start
+    assert r["all_passive_um"] > r["ach_active_um"]  # ... and over the flat stretch
+    assert r["ach_passive_um"] == pytest.approx(r["pred_passive_um"], rel=0.05)  # tone is fine
+
+
+def test_under_a_hand_the_active_side_is_felt_and_its_mirror_is_not(region_rows):
+    rows = [r for r in region_rows if r["ok"]]
+    assert rows, "no flow under a hand could be rendered"
+    bad = [
+        r
+        for r in rows
+        if not r["ach_active_side_felt"]
+        or r["ach_passive_side_felt"]
+        or r["ach_margin_db"] < r["pred_margin_db"] - 3.5
+    ]
+    assert not bad, "hand flows off their prediction: " + "; ".join(
+        f"{r['region']} {r['direction']} part {r['part']}: active {r['ach_active_um']:.3f} / "
+        f"passive {r['ach_passive_um']:.3f} um vs X {r['x_um']:.3f} um, margin "
+        f"{r['ach_margin_db']:.1f} dB (predicted {r['pred_margin_db']:.1f})"
+        for r in bad
+    )
