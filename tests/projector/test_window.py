@@ -17,9 +17,12 @@ import pytest
 from console.runtime.projector_link import ProjectorService, projector_command
 from plugins.projector.scenes import BUILTIN_SCENES
 
-pytestmark = pytest.mark.skipif(
-    shutil.which("Xvfb") is None, reason="Xvfb not installed (apt install xvfb)"
-)
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        shutil.which("Xvfb") is None, reason="Xvfb not installed (apt install xvfb)"
+    ),
+]
 
 
 @pytest.fixture
