@@ -161,6 +161,56 @@ class HandFlowPlans:
         return plan
 
 
+class TwoPointPlans:
+    """Flow between two points (paper Fig. 9): from ``a_mm`` to ``b_mm``, each part at
+    its table frequency and actuator, equal sensation level; cached per point pair."""
+
+    def __init__(self, hand_plans: HandFlowPlans) -> None:
+        self.h = hand_plans
+        self._tables = None
+        self._plans: dict[tuple, OutputPlan] = {}
+
+    def tables(self):
+        from plugins.vibrotactile.lazy import tables_cached
+
+        if self._tables is None:
+            band = float(self.h.profile.get("vibrotactile.band_hz") or 650.0)
+            self._tables = tables_cached(self.h.vmap, band, self.h.cache_dir)
+        return self._tables
+
+    def plan(self, a_mm, b_mm) -> OutputPlan:
+        from console.safety import Limits
+        from plugins.vibrotactile.stimuli import flow_plan
+
+        k = (round(a_mm[0], 1), round(a_mm[1], 1), round(b_mm[0], 1), round(b_mm[1], 1))
+        if k in self._plans:
+            return self._plans[k]
+        lo, hi = Limits.from_profile(self.h.profile).piezo_range()
+        plan = flow_plan(
+            self.tables(),
+            k[:2],
+            k[2:],
+            self.h.perception,
+            self.h.settings,
+            piezo_min_v=lo,
+            piezo_max_v=hi,
+            name=f"flow {k[0]:g},{k[1]:g} -> {k[2]:g},{k[3]:g}",
+        )
+        parts = [
+            {
+                "frequency_hz": float(p["frequency_hz"]),
+                "actuator": str(p["actuator"]),
+                "amplitude_v": float(p["amplitude_v"]),
+            }
+            for p in plan.meta["parts"]
+        ]
+        meta = {**plan.meta, "kind": "two_point", "from_mm": list(k[:2]), "to_mm": list(k[2:])}
+        meta["parts"] = parts
+        out = OutputPlan(plan.sample_rate_hz, plan.segments, plan.name, plan.gap_s, meta)
+        self._plans[k] = out
+        return out
+
+
 def flow_effect(plugins: Any, profile: Any, vmap_path: str | Path, cache_dir: Path | None):
     """The flow-under-a-hand renderer: a registered ``hand_flow`` effect when a plugin
     provides one, else ``HandFlowPlans`` over the vibrotactile functions."""

@@ -25,6 +25,60 @@ from console.types import Frame
 log = logging.getLogger("haptable.demos.flow")
 
 
+#: Direction -> unit vector in table mm (the vibrotactile convention: up = +y).
+UNIT = {"right": (1.0, 0.0), "left": (-1.0, 0.0), "up": (0.0, 1.0), "down": (0.0, -1.0)}
+
+
+def order_pair(a, b, direction: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(from, to): the flow runs from the finger behind to the finger ahead along
+    ``direction``."""
+    u = np.array(UNIT[direction])
+    pa, pb = np.asarray(a, float), np.asarray(b, float)
+    first, second = (pa, pb) if pa @ u <= pb @ u else (pb, pa)
+    return (float(first[0]), float(first[1])), (float(second[0]), float(second[1]))
+
+
+class StillPair:
+    """Two fingertips resting apart (at least ``min_sep_mm``): their positions once per
+    placement, when both stayed within ``still_mm`` for ``still_s``."""
+
+    def __init__(
+        self,
+        still_mm: float = 12.0,
+        still_s: float = 0.3,
+        lift_s: float = 0.2,
+        min_sep_mm: float = 50.0,
+    ) -> None:
+        self.still_mm, self.still_s, self.lift_s = still_mm, still_s, lift_s
+        self.min_sep_mm = min_sep_mm
+        self._t0: float | None = None
+        self._ref: np.ndarray | None = None
+        self._absent_since: float | None = None
+        self._fired = False
+
+    def update(self, t_s: float, pts) -> tuple | None:
+        p = [np.asarray(q, float) for q in pts]
+        if len(p) != 2 or np.hypot(*(p[0] - p[1])) < self.min_sep_mm:
+            if self._absent_since is None:
+                self._absent_since = t_s
+            if t_s - self._absent_since >= self.lift_s:
+                self._t0, self._ref, self._fired = None, None, False
+            return None
+        self._absent_since = None
+        cur = np.array(sorted(tuple(q) for q in p))  # stable order: by x, then y
+        if self._ref is None or np.hypot(*(cur - self._ref).T).max() > self.still_mm:
+            if self._fired and self._ref is not None:
+                moved = np.hypot(*(cur - self._ref).T).max()
+                if moved <= 4 * self.still_mm:
+                    return None
+            self._t0, self._ref, self._fired = t_s, cur, False
+            return None
+        if self._fired or t_s - self._t0 < self.still_s:
+            return None
+        self._fired = True
+        return (tuple(map(float, self._ref[0])), tuple(map(float, self._ref[1])))
+
+
 class FlowDemo:
     name = "flow"
     stages = ("scene", "effect", "scheduled")
@@ -40,6 +94,9 @@ class FlowDemo:
         snap_mm: float = 40.0,
         grid_mm: float = 10.0,
         prepare: bool = True,
+        pair_plans: Any = None,
+        still_mm: float = 12.0,
+        still_s: float = 0.3,
     ) -> None:
         self.profile, self.outputs, self.plans = profile, outputs, plans
         self.direction = direction
@@ -53,6 +110,8 @@ class FlowDemo:
         if self.scene is not None:
             self.regions = [(float(x), float(y)) for x, y, _ in self.scene.needs["flow_regions"]]
         self.prepare_regions = prepare
+        self.pair_plans = pair_plans  # flows between two resting fingers (None: off)
+        self.pair = StillPair(still_mm, still_s)
         self.events: list[dict] = []
         self._lock = threading.Lock()
         self._report = None  # the plan playing now
@@ -98,10 +157,7 @@ class FlowDemo:
             i = int(np.argmin(d))
             if d[i] <= self.snap_mm:
                 return self.regions[i]
-        g = self.grid_mm
-        if g <= 0:
-            return (float(rest_mm[0]), float(rest_mm[1]))
-        return (float(round(rest_mm[0] / g) * g), float(round(rest_mm[1] / g) * g))
+        return self.snap(rest_mm)
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
         if self.scene is None:
@@ -110,11 +166,42 @@ class FlowDemo:
             if c.pos_mm is not None:
                 self.scene.update({"type": "touch", "pos_mm": list(c.pos_mm)})
 
+    def snap(self, p) -> tuple[float, float]:
+        g = self.grid_mm
+        if g <= 0:
+            return (float(p[0]), float(p[1]))
+        return (float(round(p[0] / g) * g), float(round(p[1] / g) * g))
+
+    def two_fingers(self, frame: Frame, work: dict) -> bool:
+        """Two fingertips resting apart (two index fingers): the flow between them."""
+        pts = [c.pos_mm for c in work.get("contacts", ()) if c.pos_mm is not None]
+        hands = work.get("hands", ())
+        if len(hands) > 1 or len(pts) == 2:
+            got = self.pair.update(frame.t_capture_s, pts)
+        else:
+            got = self.pair.update(frame.t_capture_s, [])
+        if got is None or self.pair_plans is None or not self._running or self.busy():
+            return False
+        direction = self.current_direction()
+        a, b = order_pair(*got, direction)
+        a, b = self.snap(a), self.snap(b)
+        work["request"] = {"from_mm": a, "to_mm": b, "direction": direction}
+        try:
+            work["plan"] = self.pair_plans.plan(a, b)
+        except UserError as exc:
+            self.events.append({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
+            return False
+        return True
+
     def effect_stage(self, frame: Frame, work: dict) -> bool:
+        if self.two_fingers(frame, work):
+            return True
         g = work.get("gesture")
         rest = work.get("rest_mm")
         if g is None or g.name != "static_hand" or rest is None or not self._running:
             return False
+        if len(work.get("hands", ())) > 1:
+            return False  # two hands: the two-finger flow decides
         if self.busy():
             return False
         center, direction = self.target(rest), self.current_direction()
@@ -128,6 +215,9 @@ class FlowDemo:
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         req, plan = work["request"], work["plan"]
+        if "from_mm" in req:
+            self._play(plan, None, req["direction"], None, frame, late_s=0.0, pair=req)
+            return
         self._play(plan, req["center_mm"], req["direction"], req["rest_mm"], frame, late_s=0.0)
 
     def stage_fns(self) -> list:
@@ -144,7 +234,7 @@ class FlowDemo:
                 return True
             return self._report is not None and not self._report.done.is_set()
 
-    def _play(self, plan, center, direction, rest, frame: Frame, late_s: float) -> None:
+    def _play(self, plan, center, direction, rest, frame: Frame, late_s: float, pair=None) -> None:
         try:
             report = self.outputs.play(plan, wait=False)
         except SafetyRefusal as exc:  # e-stop active, or the gate refused the plan
@@ -153,17 +243,21 @@ class FlowDemo:
         with self._lock:
             self._report = report
         ev = {
-            "kind": "flow",
+            "kind": "flow" if pair is None else "two_point",
             "t_arrival_s": frame.stamps_s.get("arrival"),
             "t_scheduled_s": time.monotonic(),
             "late_s": late_s,
             "seq": frame.seq,
-            "rest_mm": [float(rest[0]), float(rest[1])],
-            "center_mm": [float(center[0]), float(center[1])],
             "direction": direction,
             "parts": plan.meta.get("parts", []),
             "report": report,
         }
+        if pair is None:
+            ev["rest_mm"] = [float(rest[0]), float(rest[1])]
+            ev["center_mm"] = [float(center[0]), float(center[1])]
+        else:
+            ev["from_mm"] = list(pair["from_mm"])
+            ev["to_mm"] = list(pair["to_mm"])
         self.events.append(ev)
         if self.scene is not None:
             self.scene.update({"type": "playing", "on": True})

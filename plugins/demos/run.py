@@ -220,12 +220,13 @@ def start_demo(
                 sectors=sectors or None,
             )
         else:
-            from .adapters import flow_effect
+            from .adapters import HandFlowPlans, TwoPointPlans, flow_effect
             from .flow import FlowDemo
 
             plans = flow_plans or flow_effect(
                 plugins, profile, flow_map_path(profile, cache_dir, plugins), cache_dir
             )
+            pairs = TwoPointPlans(plans) if isinstance(plans, HandFlowPlans) else None
             demo = FlowDemo(
                 profile,
                 plugins,
@@ -233,6 +234,9 @@ def start_demo(
                 plans,
                 direction=direction or dm.get("flow_direction", "right"),
                 grid_mm=float(dm.get("flow_grid_mm", 10.0)),
+                pair_plans=pairs,
+                still_mm=float(dm.get("still_mm", 12.0)),
+                still_s=float(dm.get("still_ms", 300)) / 1e3,
                 prepare=prepare,
             )
         stages = [

@@ -293,3 +293,69 @@ def test_twin_map_is_measured_once_through_the_registered_vibrometer(profile, tm
     p2 = twin_map_path(P(), tmp_path, pm)
     assert p1 == p2 and calls == [1]  # cached: measured once
     assert np.array_equal(load_map(p1).frf_um_per_v, m.frf_um_per_v)
+
+
+class BothHands:
+    """Two scripted hands at once (two people's index fingers)."""
+
+    name = "both"
+
+    def __init__(self, a, b) -> None:
+        self.a, self.b = a, b
+
+    def hands(self, k, t_s, rng):
+        h1, _, _ = self.a.hands(k, t_s, rng)
+        h2, _, _ = self.b.hands(k, t_s, rng)
+        return h1 + h2, "two_point", {}
+
+
+def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugins, tmp_path):
+    from console.runtime.outputs import open_outputs
+    from plugins.demos import start_demo
+    from plugins.demos.adapters import HandFlowPlans, TwoPointPlans
+    from plugins.twin.camera import SequenceScript
+
+    prof = flow_profile
+    a = SequenceScript([("one_finger", "s1", "right", 900)], table_mm=TABLE, gap_frames=0, seed=3)
+    b = SequenceScript([("one_finger", "s2", "left", 900)], table_mm=TABLE, gap_frames=0, seed=4)
+    with open_outputs(prof, plugins, fast=False) as out:
+        run = start_demo(
+            "flow", prof, plugins, out, script=False, direction="right", prepare=False,
+            cache_dir=tmp_path / "cache", watchdog_ms=5000,
+        )  # fmt: skip
+        run.camera.set_script(BothHands(a, b))
+        try:
+            assert wait_until(lambda: run.demo.events, 60.0)
+            ev = run.demo.events[0]
+            truth = run.camera.truth
+            assert ev["kind"] == "two_point", ev
+            ev["report"].wait(20.0)
+        finally:
+            run.stop()
+        rec = out.recording()
+    assert len(run.demo.events) == 1  # once per placement
+    tips = sorted(truth["contacts_mm"])  # right: from the left finger to the right one
+    assert np.hypot(*(np.array(ev["from_mm"]) - tips[0])) < 10.0
+    assert np.hypot(*(np.array(ev["to_mm"]) - tips[1])) < 10.0
+    ref = TwoPointPlans(HandFlowPlans(prof, prof.get("demos.flow_map"), tmp_path / "r")).plan(
+        ev["from_mm"], ev["to_mm"]
+    )
+    assert ev["parts"] == ref.meta["parts"]
+    rep = ev["report"]
+    for i, p in enumerate(ev["parts"]):
+        seg = rec[rep.segment_start[i] : rep.segment_end[i], 0]
+        assert dominant_hz(seg) == pytest.approx(p["frequency_hz"], abs=0.5)
+        assert np.abs(seg).max() == pytest.approx(p["amplitude_v"], rel=0.02)
+
+
+def test_pair_order_follows_the_direction():
+    from plugins.demos.flow import StillPair, order_pair
+
+    assert order_pair((300, 100), (100, 120), "right") == ((100.0, 120.0), (300.0, 100.0))
+    assert order_pair((300, 100), (100, 120), "left") == ((300.0, 100.0), (100.0, 120.0))
+    assert order_pair((300, 100), (100, 120), "up") == ((300.0, 100.0), (100.0, 120.0))
+    sp = StillPair(still_mm=5, still_s=0.2, lift_s=0.1, min_sep_mm=50)
+    close = [sp.update(k / 60, [(100, 100), (130, 100)]) for k in range(30)]
+    assert not any(close)  # one hand's two fingers, 30 mm apart: not a pair
+    fired = [sp.update(1 + k / 60, [(100, 100), (300, 100)]) for k in range(60)]
+    assert sum(f is not None for f in fired) == 1
