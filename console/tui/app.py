@@ -105,7 +105,8 @@ class HapTableApp(App):
         with TabbedContent(initial=self.initial, id="tabs"):
             for tab, (title, key, path) in TABS.items():
                 with TabPane(f"{title} {key}", id=tab):
-                    yield _pane_class(path)(id=f"{tab}-pane")
+                    if tab == self.initial:  # the others are built when first opened
+                        yield _pane_class(path)(id=f"{tab}-pane")
         yield SafetyBar(id="safety")
         yield Footer()
 
@@ -113,12 +114,32 @@ class HapTableApp(App):
         prof = self.ctx.profile
         self.sub_title = f"{prof.get('profile.title') or prof.name} - {short_path(prof.path)}"
         self.query_one(SafetyBar).show(None)
-        self.open_outputs()
+        # after the first paint: the outputs' imports and threads must not delay it
+        self.call_after_refresh(self.open_outputs)
         self.set_interval(0.1, self.refresh_state)
+        self.call_after_refresh(self._set_visible, self.initial)
         self.call_after_refresh(self._focus_pane, self.initial)
 
     def pane(self, tab: str):
-        return self.query_one(f"#{tab}-pane")
+        """The pane of ``tab`` (None until its tab was first opened)."""
+        found = self.query(f"#{tab}-pane")
+        return found.first() if found else None
+
+    def ensure_pane(self, tab: str):
+        """Build the pane of ``tab`` on first use."""
+        p = self.pane(tab)
+        if p is None:
+            p = _pane_class(TABS[tab][2])(id=f"{tab}-pane")
+            self.query_one(f"TabPane#{tab}", TabPane).mount(p)
+        return p
+
+    def get_camera_service(self):
+        """The console's camera loop (shared by the Camera and Latency screens)."""
+        if self.camera_service is None:
+            from console.tui.camera_service import CameraService
+
+            self.camera_service = CameraService(self.ctx.profile, self.ctx.pm)
+        return self.camera_service
 
     def _focus_pane(self, tab: str, tries: int = 10) -> None:
         """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
@@ -133,16 +154,21 @@ class HapTableApp(App):
             self.set_timer(0.05, lambda: self._focus_pane(tab, tries - 1))
 
     def action_show_tab(self, tab: str) -> None:
+        self.ensure_pane(tab)
         self.query_one("#tabs", TabbedContent).active = tab
         self.call_after_refresh(self._focus_pane, tab)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
         tab = event.pane.id
+        self.ensure_pane(tab)
+        self.call_after_refresh(self._set_visible, tab)
+        self.call_after_refresh(self._focus_pane, tab)
+
+    def _set_visible(self, tab: str) -> None:
         for name in TABS:
             p = self.pane(name)
             if hasattr(p, "set_visible"):
                 p.set_visible(name == tab)
-        self.call_after_refresh(self._focus_pane, tab)
 
     # ------------------------------------------------------------------ outputs
     @work(thread=True, exclusive=True, group="outputs")
@@ -227,7 +253,7 @@ class HapTableApp(App):
             return
         active = tabs.first(TabbedContent).active
         pane = self.pane(active)
-        if hasattr(pane, "show_state"):
+        if pane is not None and hasattr(pane, "show_state"):
             pane.show_state(status, out.relay_log())
 
     # ------------------------------------------------------------------ actions
@@ -258,7 +284,8 @@ class HapTableApp(App):
         pane_help = ""
         if tabs:
             pane = self.pane(tabs.first(TabbedContent).active)
-            pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
+            if pane is not None:
+                pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
         self.push_screen(HelpScreen(HELP.format(pane=pane_help)))
 
     def get_system_commands(self, screen):
@@ -274,7 +301,10 @@ class HapTableApp(App):
         yield SystemCommand(
             "Measure vibration map",
             "simulated vibrometer on the twin",
-            lambda: (self.action_show_tab("vibration"), self.pane("vibration").action_measure()),
+            lambda: (
+                self.action_show_tab("vibration"),
+                self.ensure_pane("vibration").action_measure(),
+            ),
         )
         for name, reg in sorted(self.ctx.pm.of("panel").items()):
             yield SystemCommand(
@@ -290,9 +320,12 @@ class HapTableApp(App):
                 p = self.pane(tab)
             except Exception:
                 continue
-            if hasattr(p, "shutdown"):
+            if p is not None and hasattr(p, "shutdown"):
                 with contextlib.suppress(Exception):
                     p.shutdown()
+        if self.camera_service is not None:
+            with contextlib.suppress(Exception):
+                self.camera_service.close()
         if self._control is not None:
             self._control.close()
         if self.outputs is not None:

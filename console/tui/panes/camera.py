@@ -81,12 +81,7 @@ class CameraPane(Horizontal):
 
     @property
     def service(self):
-        app = self.app
-        if app.camera_service is None:
-            from console.tui.camera_service import CameraService
-
-            app.camera_service = CameraService(app.ctx.profile, app.ctx.pm)
-        return app.camera_service
+        return self.app.get_camera_service()
 
     # ------------------------------------------------------------------ lifecycle
     def set_visible(self, visible: bool) -> None:
@@ -107,10 +102,6 @@ class CameraPane(Horizontal):
             self.service.start()
         except UserError as exc:
             self.service.error = str(exc)
-
-    def shutdown(self) -> None:
-        if self.app.camera_service is not None:
-            self.app.camera_service.close()
 
     # ------------------------------------------------------------------ drawing
     def view_size(self) -> tuple[int, int]:

@@ -37,7 +37,7 @@ class DevicesPane(VerticalScroll):
         for kind, regs in sorted(ctx.pm.registrations.items()):
             for name, reg in sorted(regs.items()):
                 plug.add_row(kind, name, reg.plugin, reg.description)
-        self.action_doctor()
+        self.call_after_refresh(self.action_doctor)
 
     @work(thread=True, exclusive=True, group="doctor")
     def action_doctor(self) -> None:

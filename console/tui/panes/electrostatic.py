@@ -102,6 +102,8 @@ class ElectrostaticPane(Vertical):
         if "electrostatic" in self.app.ctx.pm.of("effect"):
             for name, (vpp, f, wf, _) in PRESETS.items():
                 lst.add_option(Option(f"{name}: {vpp:g} Vpp {f:g} Hz {wf}", id=f"preset:{name}"))
+        if lst.option_count:
+            lst.highlighted = 0
         self._update_setting()
 
     # ------------------------------------------------------------------ setting

@@ -95,11 +95,11 @@ class LatencyPane(Vertical):
 
     @work(thread=True, exclusive=True, group="camera")
     def _start(self) -> None:
-        cam = self.app.pane("camera")
+        svc = self.app.get_camera_service()
         try:
-            cam.service.start()
+            svc.start()
         except UserError as exc:
-            cam.service.error = str(exc)
+            svc.error = str(exc)
 
     def show_state(self, status: dict, log) -> None:
         self._tick += 1

@@ -1,0 +1,227 @@
+"""Each screen's main action, driven through the keyboard as an operator would, on the
+twin; what played is checked in the twin's recording and relay log."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+from textual.widgets import Input, Switch
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+from console.tui.safety_bar import SafetyBar
+
+from .conftest import segment_in, wait_for
+
+
+def _app(plugins, initial="devices", fast=True):
+    return HapTableApp(Context("sim", plugins), fast=fast, initial=initial)
+
+
+async def _ready(app, pilot):
+    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+
+
+async def _load_map(app, pilot, map_file):
+    pane = app.pane("vibration")
+    await pilot.press("colon")
+    assert isinstance(app.focused, Input)
+    app.focused.value = f"load {map_file}"
+    await pilot.press("enter")
+    await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
+    return pane
+
+
+def _played_in_recording(out, plan) -> float:
+    """Worst |recorded - planned| volts over the plan's segments (piezo channel)."""
+    rec = out.recording()
+    nz = np.flatnonzero(np.any(rec != 0, axis=1))
+    starts = np.concatenate([[nz[0]], nz[1:][np.diff(nz) > 16]])
+    worst = 0.0
+    for seg in plan.segments:
+        errs = [segment_in(rec[:, 0], seg.piezo_v, int(s)) for s in starts]
+        worst = max(worst, min(errs))
+    return worst
+
+
+def test_relay_toggle_and_estop(plugins):
+    async def scenario():
+        app = _app(plugins, "relays", fast=False)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            bar = app.query_one(SafetyBar)
+            await wait_for(pilot, lambda: "E-STOP" in str(bar.render()))
+            await pilot.press("1")
+            await wait_for(pilot, lambda: app.outputs.gate.relay_state() == frozenset({1}))
+            await wait_for(pilot, lambda: "relays closed: 1" in str(bar.render()))
+            assert app.query_one("#relay-1", Switch).value
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.outputs.gate.estopped)
+            assert app.outputs.gate.relay_state() == frozenset()
+            await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP:"))
+            assert bar.has_class("estop")
+            # a toggle during the e-stop is refused, and the screen says why
+            await pilot.press("2")
+            await wait_for(pilot, lambda: "e-stop" in str(app.query_one("#interlock-2").render()))
+            assert app.outputs.gate.relay_state() == frozenset()
+            log = app.outputs.relay_log()
+            assert [(r.channel, r.closed) for r in log] == [(1, True), (1, False)]
+            assert all(r.level_v == (0.0, 0.0) for r in log)
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.outputs.gate.estopped)
+
+    asyncio.run(scenario())
+
+
+def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
+    async def scenario():
+        app = _app(plugins, "vibration")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            # enter on the grid cell of point 51 (row 5, column 3)
+            pane.move_cursor(51)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: len(app.played) == 1, what="point played")
+            point = app.played[0]
+            assert point.name == "point 51"
+            await wait_for(pilot, lambda: "point 51" in str(app.query_one("#vib-info").render()))
+            freq = point.meta["frequency_hz"]
+            plot = str(app.query_one("#frf-plot").render())
+            assert f"{freq:g} Hz" in plot and "PALL" in plot
+            # second point, then the flow both ways
+            pane.move_cursor(52)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: len(app.played) == 2)
+            await wait_for(
+                pilot, lambda: "lookup table" in str(app.query_one("#vib-info").render())
+            )
+            info = str(app.query_one("#vib-info").render())
+            assert "51 / 52:" in info and "52 / 51:" in info
+            await pilot.press("f")
+            await wait_for(pilot, lambda: len(app.played) == 3)
+            await pilot.press("r")
+            await wait_for(pilot, lambda: len(app.played) == 4)
+            assert [p.name for p in app.played[2:]] == ["flow 51->52", "flow 52->51"]
+            entry = pane.session.lookup(51, 52)
+            part1 = app.played[2].meta["parts"][0]
+            assert part1["frequency_hz"] == entry["frequency_hz"]
+            assert part1["actuator"] == entry["actuator"]
+            # flow under a hand at the cursor, to the right
+            await pilot.press("d")
+            await wait_for(pilot, lambda: len(app.played) == 5, 30, "hand flow")
+            hand = app.played[4]
+            assert hand.meta["direction"] == "right" and len(hand.segments) == 2
+            await wait_for(pilot, lambda: not app.outputs.scheduler.busy, 30)
+            for plan in app.played:
+                assert _played_in_recording(app.outputs, plan) < 1e-3
+
+    asyncio.run(scenario())
+
+
+def test_vibration_command_line_and_bad_input(plugins, map_file):
+    async def scenario():
+        app = _app(plugins, "vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            await pilot.press("colon", "9", "9", "enter")
+            await pilot.pause(0.3)
+            assert app.played == []  # point 99 does not exist: nothing plays
+            await pilot.press("colon", *"51 52", "enter")
+            await wait_for(pilot, lambda: len(app.played) == 1)
+            assert app.played[0].name == "flow 51->52"
+            assert pane.selected == [51, 52]
+            await pilot.press("colon", *"import PA", "enter")
+            await wait_for(pilot, lambda: "EXC=FILE" in str(app.query_one("#vib-status").render()))
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.slow
+def test_vibration_measurement_progress_and_cancel(plugins):
+    async def scenario():
+        app = _app(plugins, "vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = app.pane("vibration")
+            await pilot.press("m")
+            bar = app.query_one("#vib-progress")
+            await wait_for(pilot, lambda: bar.display, what="progress bar shown")
+            await pilot.press("x")
+            await wait_for(
+                pilot,
+                lambda: "cancelled" in str(app.query_one("#vib-status").render()),
+                60,
+                "cancelled",
+            )
+            assert pane.session is None
+            await pilot.press("m")
+            await wait_for(pilot, lambda: pane.session is not None, 120, "measured")
+            assert pane.session.vmap.points.size == 84
+            assert "measured now" in str(app.query_one("#vib-status").render())
+
+    asyncio.run(scenario())
+
+
+def test_electrostatic_setting_and_preset(plugins):
+    async def scenario():
+        app = _app(plugins, "electrostatic")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = app.pane("electrostatic")
+            for _ in range(15):  # +150 Vpp from 100: held at the 200 Vpp limit
+                await pilot.press("plus")
+            assert pane.vpp == 200.0
+            await wait_for(
+                pilot, lambda: "expected attraction" in str(app.query_one("#es-setting").render())
+            )
+            await pilot.press("p")
+            await wait_for(pilot, lambda: len(app.played) == 1)
+            plan = app.played[0]
+            assert plan.segments[0].screen and abs(np.ptp(plan.segments[0].screen_v) - 200) < 1
+            await wait_for(pilot, lambda: not app.outputs.scheduler.busy, 10)
+            rec = app.outputs.recording()
+            assert abs(np.ptp(rec[:, 1]) - 200.0) < 1.0 and not np.any(rec[:, 0])
+            # the first list entry is a knob condition: enter auditions it
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: len(app.played) == 2, 30)
+            assert app.played[1].name.startswith("knob ")
+
+    asyncio.run(scenario())
+
+
+def test_scenes_lists_registrations(plugins):
+    async def scenario():
+        app = _app(plugins, "scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            table = app.query_one("#scenes")
+            names = {str(table.get_row_at(i)[0]) for i in range(table.row_count)}
+            assert names == set(plugins.of("scene"))
+            assert "not started" in str(app.query_one("#projector-status").render())
+
+    asyncio.run(scenario())
+
+
+def test_help_and_tab_keys(plugins):
+    async def scenario():
+        app = _app(plugins)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            await pilot.press("f4")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays")
+            await wait_for(pilot, lambda: app.focused is not None and app.focused.id == "relay-1")
+            await pilot.press("question_mark")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "HelpScreen")
+            text = str(app.screen.query_one("Static").render())
+            assert "ctrl+e" in text and "relay 1" in text
+            # the e-stop works on top of the help too
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.outputs.gate.estopped)
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: type(app.screen).__name__ != "HelpScreen")
+
+    asyncio.run(scenario())
