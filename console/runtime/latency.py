@@ -98,6 +98,7 @@ class LatencyMonitor:
         self._rings: dict[str, Ring] = {
             s: Ring(size) for s in (*self.order[1:], END_TO_END, PROCESSING, CPU)
         }
+        self._cpu_rings: dict[str, Ring] = {}  # CPU time per stage
         self._capture = Ring(size)  # camera capture -> arrival (driver latency)
         self._arrivals = Ring(121)  # arrival times for the frame rate
         self._last_arrival: float | None = None
@@ -117,15 +118,25 @@ class LatencyMonitor:
             if frame.t_capture_s and t >= frame.t_capture_s:
                 self._capture.add(t - frame.t_capture_s)
 
-    def record(self, frame: Frame, cpu_s: float | None = None) -> dict[str, float]:
-        """Add one processed frame's stage durations (and the CPU time it cost, when
-        known); returns the durations (seconds)."""
+    def record(
+        self,
+        frame: Frame,
+        cpu_s: float | None = None,
+        stage_cpu_s: dict[str, float] | None = None,
+    ) -> dict[str, float]:
+        """Add one processed frame's stage durations (and the CPU time it and each stage
+        cost, when known); returns the durations (seconds)."""
         d = stage_durations_s(frame.stamps_s, self.order)
         stamped = [frame.stamps_s[s] for s in self.order if s in frame.stamps_s]
         with self._lock:
             self.frames += 1
             if cpu_s is not None:
                 self._rings[CPU].add(cpu_s)
+            for name, x in (stage_cpu_s or {}).items():
+                ring = self._cpu_rings.get(name)
+                if ring is None:
+                    ring = self._cpu_rings[name] = Ring(self.size)
+                ring.add(x)
             for name, x in d.items():
                 self._rings[name].add(x)
             if len(stamped) >= 2 and ARRIVAL in frame.stamps_s:
@@ -164,6 +175,7 @@ class LatencyMonitor:
         """Everything the console shows, as plain JSON values."""
         with self._lock:
             rings = {k: r.values() for k, r in self._rings.items()}
+            cpu_rings = {k: r.values() for k, r in self._cpu_rings.items()}
             capture = self._capture.values()
             counts = {
                 "frames": self.frames,
@@ -180,6 +192,7 @@ class LatencyMonitor:
             "end_to_end": percentiles_ms(rings[END_TO_END]),
             "processing": percentiles_ms(rings[PROCESSING]),
             "cpu_per_frame": percentiles_ms(rings[CPU]),
+            "cpu_stages": {k: percentiles_ms(v) for k, v in cpu_rings.items()},
             "capture_to_arrival": percentiles_ms(capture),
             "window_frames": self.size,
         }

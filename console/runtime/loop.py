@@ -203,15 +203,19 @@ class FrameLoop:
             self._busy_since = time.monotonic()
         frame.stamp(DEQUEUED, self._busy_since)
         cpu0 = time.thread_time()
+        cpu: dict[str, float] = {}
         try:
             for name, fn in self.stages:
                 with self._lock:
                     self._stage = name
-                if fn(frame, work) is False:
+                c0 = time.thread_time()
+                more = fn(frame, work)
+                cpu[name] = time.thread_time() - c0
+                if more is False:
                     break
                 if name not in frame.stamps_s:
                     frame.stamp(name, time.monotonic())
-            self.monitor.record(frame, time.thread_time() - cpu0)
+            self.monitor.record(frame, time.thread_time() - cpu0, cpu)
             for sink in self.sinks:
                 with self._lock:
                     self._stage = "sink"

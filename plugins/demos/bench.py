@@ -70,6 +70,7 @@ def _latency_summary(snap: dict) -> dict:
         "end_to_end": lat["end_to_end"],
         "processing": lat["processing"],
         "cpu_per_frame": lat["cpu_per_frame"],
+        "cpu_stages": lat["cpu_stages"],
         "capture_to_arrival": lat["capture_to_arrival"],
         "watchdog": snap["watchdog"],
     }

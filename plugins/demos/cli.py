@@ -37,7 +37,8 @@ def _line(snap: dict) -> str:
         extra = f"flows {snap['flow']['flows']} ({snap['flow']['direction']})"
     return (
         f"{snap['uptime_s']:6.1f} s  {lat['fps']:5.1f} fps  frame->output p50 "
-        f"{e2e['p50_ms']:.1f} p99 {e2e['p99_ms']:.1f} ms  dropped {lat['dropped_queue']}"
+        f"{e2e['p50_ms']:.1f} p99 {e2e['p99_ms']:.1f} ms  cpu/frame p99 "
+        f"{lat['cpu_per_frame']['p99_ms']:.1f} ms  dropped {lat['dropped_queue']}"
         f"+{lat['dropped_camera']}  {extra}"
     )
 

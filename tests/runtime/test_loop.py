@@ -127,6 +127,7 @@ def test_loop_stamps_every_stage_in_order_and_stops_a_frame_on_false():
     snap = loop.monitor.snapshot()
     assert snap["frames"] == 10 and snap["end_to_end"]["n"] == 5
     assert snap["cpu_per_frame"]["n"] == 10 and snap["cpu_per_frame"]["max_ms"] >= 0.0
+    assert snap["cpu_stages"]["vision"]["n"] == 10 and snap["cpu_stages"]["scheduled"]["n"] == 5
 
 
 def test_a_slow_stage_drops_the_oldest_frames_and_processes_the_newest():
