@@ -9,7 +9,8 @@ Per camera frame two bundles are sent, one per profile, each ``source``, ``alive
   height, area, velocity, rotation velocity (rad/s), motion and rotation acceleration.
 
 Coordinates are normalised 0..1 over the glass: ``x = x_mm / width_mm``,
-``y = y_mm / height_mm`` (the glass corner (0, 0) of the table frame is TUIO's (0, 0));
+``y = y_mm / height_mm`` (the glass corner (0, 0) of the table frame is TUIO's (0, 0);
+clipped to 0..1);
 without a camera -> table mapping, the camera image is used (px / image size).
 Session ids persist while an object is followed from frame to frame (nearest neighbour
 within ``match`` of the normalised plane) and are never reused.
@@ -95,9 +96,12 @@ class Tracker:
 
 
 def _norm(pos_mm, pos_px, table_mm, image_px) -> np.ndarray:
+    """Normalised 0..1 position (clipped: a blob at the glass edge stays on it)."""
     if pos_mm is not None:
-        return np.array([pos_mm[0] / table_mm[0], pos_mm[1] / table_mm[1]], float)
-    return np.array([pos_px[0] / image_px[0], pos_px[1] / image_px[1]], float)
+        p = np.array([pos_mm[0] / table_mm[0], pos_mm[1] / table_mm[1]], float)
+    else:
+        p = np.array([pos_px[0] / image_px[0], pos_px[1] / image_px[1]], float)
+    return np.clip(p, 0.0, 1.0)
 
 
 class TuioSender:

@@ -163,6 +163,13 @@ def test_velocity_of_a_moving_contact(server):
     assert sets[0][6] == pytest.approx(0.0, abs=1e-6)  # constant speed: no acceleration
 
 
+def test_positions_off_the_glass_are_clipped_to_the_unit_square():
+    from plugins.tuio.sender import _norm
+
+    assert list(_norm((-5.0, 500.0), None, TABLE, (640, 480))) == [0.0, 1.0]
+    assert list(_norm(None, (320.0, 120.0), TABLE, (640, 480))) == [0.5, 0.25]
+
+
 def test_off_by_default_and_configured_from_the_profile(profile):
     from plugins.tuio import make_sender
 
