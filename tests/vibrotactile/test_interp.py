@@ -14,7 +14,7 @@ def rel_err(h, ref, sel):
     return np.linalg.norm(h[..., sel] - ref[..., sel]) / np.linalg.norm(ref[..., sel])
 
 
-@pytest.mark.parametrize("method", ["bilinear", "spline"])
+@pytest.mark.parametrize("method", ["bilinear", "keys", "spline"])
 def test_exact_at_grid_points(ss_map, method):
     h = interpolate(ss_map, ss_map.points_mm[[0, 11, 50, 83]], method)
     np.testing.assert_allclose(h, ss_map.frf_um_per_v[:, [0, 11, 50, 83]], atol=1e-12)
