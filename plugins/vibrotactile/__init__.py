@@ -59,7 +59,7 @@ def _sections() -> dict:
                 "interpolation": Field(
                     "str",
                     "spline",
-                    choices=("spline", "bilinear"),
+                    choices=("spline", "keys", "bilinear"),
                     help="FRF interpolation off the grid",
                 ),
                 "part_s": Field("float", 1.5, min=0.05, max=30, help="duration of each flow part"),
