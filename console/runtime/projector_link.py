@@ -316,6 +316,8 @@ class ProjectorLink:
             "connects": self.handshakes,
             "hangs": self.hangs,
             "last_drop": self.last_drop,
+            "headless": self.peer.get("headless"),
+            "size_px": self.peer.get("size_px"),
         }
 
     def close(self) -> None:
@@ -852,6 +854,10 @@ class ProjectorService:
         state = self.scene.state()
         self.link.send_state(self.scene_name, state)
         return state
+
+    def wait_connected(self, timeout_s: float = 10.0) -> bool:
+        """Wait until the projector has answered (started or adopted, then connected)."""
+        return self.link.wait_connected(timeout_s)
 
     def tick(self) -> None:
         """Call from the console's main loop (e.g. a Textual interval) when built with

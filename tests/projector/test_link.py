@@ -303,7 +303,7 @@ def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path,
     try:
         svc.start()
         reaper.append(svc.supervisor.pid)
-        assert svc.link.wait_connected(20)
+        assert svc.wait_connected(20)
         svc.start_scene("contacts")
         assert svc.wait_drawn(20)
         svc.stop_scene()
@@ -311,6 +311,7 @@ def test_stop_scene_shows_black_and_status_reports_the_link(sock_path, tmp_path,
         st = svc.status()
         assert st["shown_scene"] == "black" and st["scene"] is None
         assert st["connected"] and st["pid"] == st["projector_pid"]
+        assert st["headless"] is True and st["size_px"] == [320, 200]
         assert st["unprepared_needs"] == []
         assert inet_sockets(st["pid"]) == set()  # the link is a Unix socket only
         with pytest.raises(UserError, match="available"):
