@@ -394,10 +394,41 @@ def format_regions(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def summarize(pairs: list[dict], regions: list[dict]) -> dict:
+    """Headline numbers: pair margin errors, hand-flow verdict counts and margin errors."""
+    out: dict = {}
+    if pairs:
+        err = [100 * r["margin_error_rel_active"] for r in pairs]
+        out["pairs_margin_error_pct_of_active"] = {"median": float(np.median(err)), "max": max(err)}
+        out["pairs_ringdown_overlap"] = [
+            f"{r['pair']} part {r['part']}"
+            for r in pairs
+            if r["part"] == 2 and r["onset_passive_um"] > 1.5 * r["all_passive_um"]
+        ]
+    ok = [r for r in regions if r["ok"]]
+    counts: dict[str, int] = {}
+    for r in regions:
+        counts[verdict(r)] = counts.get(verdict(r), 0) + 1
+    out["region_parts"] = len(regions)
+    out["region_verdicts"] = counts
+    if ok:
+        d = [r["ach_margin_db"] - r["pred_margin_db"] for r in ok]
+        out["region_margin_error_db"] = {
+            "median": float(np.median(d)),
+            "worst": float(min(d)),
+            "best": float(max(d)),
+        }
+        out["region_worst_square_level_error_db"] = float(max(r["level_error_db"] for r in ok))
+    return out
+
+
 def run_bench(ctx, quick: bool) -> dict:
-    """``haptable bench closed-loop``: the pairs and regions tables, with timings."""
+    """``haptable bench closed-loop``: predicted vs achieved for the default pairs (all
+    parts) and regions (four directions); without ``--quick`` also every hand region at
+    60 mm steps (directions right and up: left/down replay the same parts reversed)."""
     from console.bench import machine_info
     from console.runtime.outputs import open_outputs
+    from plugins.vibrotactile.hand import region_centers
     from plugins.vibrotactile.tables import build_tables
 
     profile, pm = ctx.profile, ctx.pm
@@ -408,8 +439,9 @@ def run_bench(ctx, quick: bool) -> dict:
     t0 = time.perf_counter()
     tables = build_tables(vmap, float(profile.get("vibrotactile.band_hz", 650.0)))
     t_tab = time.perf_counter() - t0
-    ls = LoopSettings(part_s=0.75 if quick else 1.5)
+    ls = LoopSettings()
     regions = DEFAULT_REGIONS[:2] if quick else DEFAULT_REGIONS
+    res: dict = {"machine": machine_info(), "part_s": ls.part_s}
     with open_outputs(profile, pm, fast=True) as out:
         t0 = time.perf_counter()
         pairs = flow_pairs_check(out, profile, tables, DEFAULT_PAIRS, ls)
@@ -417,18 +449,34 @@ def run_bench(ctx, quick: bool) -> dict:
         t0 = time.perf_counter()
         hands = hand_regions_check(out, profile, vmap, regions, ls=ls)
         t_hands = time.perf_counter() - t0
-    return {
-        "machine": machine_info(),
-        "map_measure_s": t_map,
-        "tables_build_s": t_tab,
-        "pairs_s": t_pairs,
-        "regions_s": t_hands,
-        "part_s": ls.part_s,
-        "pairs": pairs,
-        "regions": hands,
-        "pairs_table": format_pairs(pairs).splitlines(),
-        "regions_table": format_regions(hands).splitlines(),
-        "verdicts": {
-            f"{r['region']} {r['direction']} {r.get('part', 0)}": verdict(r) for r in hands
-        },
-    }
+        if not quick:
+            hand_mm = float(profile.get("vibrotactile.hand_mm", 120.0))
+            centers = [tuple(map(float, c)) for c in region_centers(vmap, hand_mm, 60.0)]
+            t0 = time.perf_counter()
+            scan = hand_regions_check(out, profile, vmap, centers, ("right", "up"), ls=ls)
+            res["scan"] = {
+                "regions": len(centers),
+                "step_mm": 60.0,
+                "directions": ["right", "up"],
+                "s": time.perf_counter() - t0,
+                **summarize([], scan),
+                "problems": [
+                    f"{r['region']} {r['direction']} part {r['part']}: {verdict(r)}"
+                    for r in scan
+                    if verdict(r) != "ok"
+                ],
+            }
+    res.update(
+        {
+            "map_measure_s": t_map,
+            "tables_build_s": t_tab,
+            "pairs_s": t_pairs,
+            "regions_s": t_hands,
+            "summary": summarize(pairs, hands),
+            "pairs_table": format_pairs(pairs).splitlines(),
+            "regions_table": format_regions(hands).splitlines(),
+            "pairs": pairs,
+            "regions": hands,
+        }
+    )
+    return res
