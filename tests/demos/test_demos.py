@@ -359,3 +359,38 @@ def test_pair_order_follows_the_direction():
     assert not any(close)  # one hand's two fingers, 30 mm apart: not a pair
     fired = [sp.update(1 + k / 60, [(100, 100), (300, 100)]) for k in range(60)]
     assert sum(f is not None for f in fired) == 1
+
+
+def test_a_registered_hand_flow_effect_is_used_when_a_plugin_provides_one(profile, tmp_path):
+    import plugins.demos
+    import plugins.tuio
+    from console.hookspecs import hookimpl
+    from console.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.types import OutputPlan
+    from plugins.demos.adapters import flow_effect
+
+    asked = []
+
+    class Effect:
+        def __init__(self, profile):
+            pass
+
+        def render(self, **request):
+            asked.append(request)
+            return OutputPlan(48000, (), name="registered")
+
+    class FakePlugin:
+        @hookimpl
+        def haptable_register_effects(self, register):
+            register("hand_flow", Effect)
+
+    mine = {"demos": plugins.demos, "tuio": plugins.tuio, "fakeflow": FakePlugin()}
+    pm = load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
+    eff = flow_effect(pm, profile, tmp_path / "map.npz", None)
+    assert eff.cached((100.0, 200.0), "up") is None
+    plan = eff.plan((100.04, 200.0), "up")
+    assert plan.name == "registered"
+    assert eff.cached((100.0, 200.0), "up") is plan
+    assert asked == [
+        {"center_mm": (100.0, 200.0), "direction": "up", "vmap": str(tmp_path / "map.npz")}
+    ]
