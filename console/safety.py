@@ -235,6 +235,9 @@ class SafetyGate:
 
     @property
     def idle(self) -> bool:
+        """Nothing to play; but silence must keep flowing while an e-stop opens relays."""
+        if not self._safe.is_set():
+            return False
         src = self._source
         return self._estopped or src is None or src.idle
 
