@@ -55,7 +55,9 @@ def test_tracker_follows_the_rendered_hand(rotation_through_vision):
             est.append(s.angle_deg)
             true.append(ref)
     est, true = np.array(est), np.array(true)
-    assert len(est) > 140  # vision loses the thumb at times: the pivot is held
+    # vision loses the thumb at times (the pivot is held); the twin's ambient drift follows
+    # wall time, so how often varies from run to run: ask for most frames, not a count
+    assert len(est) >= 0.8 * len(rotation_through_vision)
     rel = (est - est[0]) - (true - true[0])
     assert np.ptp(true) > 90.0  # the hand really turns (the script sets how: both ways, or round)
     assert np.max(np.abs(rel)) < 3.0  # ~2 deg: filter overshoot where the hand reverses at once
