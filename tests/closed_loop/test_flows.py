@@ -127,3 +127,51 @@ def test_ring_down_makes_both_sides_vibrate_at_the_switch_as_documented(region_r
         assert p1["ach_active_um"] > 2 * p2["x_um"]
         assert not p2["ach_passive_side_felt"]  # in the flat stretch the mirror is quiet
     assert ("281.73,223.645", "right", 2) in overlap
+
+
+def test_the_recording_route_equals_the_plan_route(loop_outputs, loop_profile, loop_tables):
+    """What the gate played (recording + relay log) drives the twin like the plan itself:
+    same samples in each part, the plan's patches connected, same tone amplitudes."""
+    import numpy as np
+
+    from plugins.twin.plate import closed_loop as cl
+    from plugins.twin.plate.loop_check import (
+        LoopSettings,
+        perception_of,
+        piezo_limits,
+        recording_with_offset,
+        relay_channels_of,
+        stimulus_settings,
+    )
+    from plugins.vibrotactile.stimuli import flow_plan
+
+    m = loop_tables.vmap
+    a, b = m.point_index(62), m.point_index(75)
+    st = stimulus_settings(loop_profile, LoopSettings(part_s=0.6))
+    plan = flow_plan(
+        loop_tables, a, b, perception_of(loop_profile), st, **piezo_limits(loop_profile)
+    )
+    report = loop_outputs.play(plan)
+    rec, clock0 = recording_with_offset(loop_outputs)
+    start, stop = report.segment_start[0], report.segment_end[-1]
+    v, w = cl.drive_from_recording(
+        rec, loop_outputs.relay_log(), relay_channels_of(loop_profile), start, stop, clock0
+    )
+    parts_rec = [
+        (s - start, e - start)
+        for s, e in zip(report.segment_start, report.segment_end, strict=True)
+    ]
+    v_plan, w_plan, spans = cl.drive_from_plan(plan)
+    for (s, e), (ps, _, _), seg in zip(parts_rec, spans, plan.segments, strict=True):
+        assert np.allclose(v[s:e], seg.piezo_v, atol=1e-4 * np.abs(seg.piezo_v).max())
+        connected = {cl.PATCHES[i] for i in np.flatnonzero(w[s:e].min(axis=0))}
+        assert connected == set(seg.patches) == {cl.PATCHES[i] for i in np.flatnonzero(w_plan[ps])}
+    pts = m.points_mm[[a, b]]
+    freqs = [p["frequency_hz"] for p in plan.meta["parts"]]
+    kw = dict(ramp_s=st.ramp_ms / 1e3, settle_s=0.15, freqs_hz=freqs)
+    env_rec = cl.part_envelopes(loop_profile, v, w, pts, st.sample_rate_hz, parts_rec, **kw)
+    env_plan = cl.part_envelopes(
+        loop_profile, v_plan, w_plan, pts, st.sample_rate_hz, [s[:2] for s in spans], **kw
+    )
+    for er, ep in zip(env_rec, env_plan, strict=True):
+        assert np.allclose(er.tone_um, ep.tone_um, rtol=2e-3)
