@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import difflib
 import importlib
-import importlib.util
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -34,6 +33,8 @@ BUILTIN_PLUGINS: dict[str, str] = {
     "electrostatic": "plugins.electrostatic",
     "projector": "plugins.projector",
     "drivers": "plugins.drivers",
+    "demos": "plugins.demos",
+    "tuio": "plugins.tuio",
 }
 
 #: Registration kinds and the hook that fills each.
@@ -204,9 +205,8 @@ def load_plugins(
 
     pm.register(core_plugin, name="core")
     for name, module in (BUILTIN_PLUGINS if builtins is None else builtins).items():
-        if is_blocked(name, blocked) or importlib.util.find_spec(module) is None:
-            continue
-        pm.register(importlib.import_module(module), name=name)
+        if not is_blocked(name, blocked):
+            pm.register(importlib.import_module(module), name=name)
 
     if entrypoints is None:
         entrypoints = os.environ.get("HAPTABLE_LOAD_ENTRYPOINTS", "1") != "0"
