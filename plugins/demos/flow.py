@@ -95,6 +95,7 @@ class FlowDemo:
         grid_mm: float = 10.0,
         prepare: bool = True,
         pair_plans: Any = None,
+        projector: Any = None,
         still_mm: float = 12.0,
         still_s: float = 0.3,
     ) -> None:
@@ -102,10 +103,10 @@ class FlowDemo:
         self.direction = direction
         self.snap_mm = float(snap_mm)
         self.grid_mm = float(grid_mm)
-        self.scene = None
-        reg = plugins.of("scene").get("flow_hand")
-        if reg is not None:
-            self.scene = reg.factory(profile)
+        from .scene import SceneLink
+
+        self.link = SceneLink(plugins, profile, "flow_hand", projector)
+        self.scene = self.link.scene
         self.regions: list[tuple[float, float]] = []
         if self.scene is not None:
             self.regions = [(float(x), float(y)) for x, y, _ in self.scene.needs["flow_regions"]]
@@ -160,11 +161,14 @@ class FlowDemo:
         return self.snap(rest_mm)
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
+        """Touches on the arrow buttons select the direction; the flow's end is shown."""
         if self.scene is None:
             return
         for c in work.get("contacts", ()):
-            if c.pos_mm is not None:
-                self.scene.update({"type": "touch", "pos_mm": list(c.pos_mm)})
+            if c.pos_mm is not None and self.scene.hit(c.pos_mm):
+                self.link.emit({"type": "touch", "pos_mm": [float(v) for v in c.pos_mm]})
+        if self.scene.playing and not self.busy():
+            self.link.emit({"type": "playing", "on": False})
 
     def snap(self, p) -> tuple[float, float]:
         g = self.grid_mm
@@ -260,7 +264,7 @@ class FlowDemo:
             ev["to_mm"] = list(pair["to_mm"])
         self.events.append(ev)
         if self.scene is not None:
-            self.scene.update({"type": "playing", "on": True})
+            self.link.emit({"type": "playing", "on": True})
 
     def _compute_later(self, center, direction, rest, frame: Frame) -> None:
         t0 = time.monotonic()

@@ -27,6 +27,7 @@ class KnobDemo:
         *,
         condition: str = "HD+CF",
         sectors: int | None = None,
+        projector: Any = None,
     ) -> None:
         reg = plugins.of("effect").get("knob")
         if reg is None:
@@ -34,14 +35,22 @@ class KnobDemo:
         effect = reg.factory(profile)
         self.session = effect.session(condition, sectors)
         self.condition, self.outputs = condition, outputs
-        sreg = plugins.of("scene").get("knob")
-        self.scene = sreg.factory(profile) if sreg is not None else None
+        from .scene import SceneLink
+
+        self.link = SceneLink(plugins, profile, "knob", projector)
+        self.scene = self.link.scene
+        k = self.session.knob
+        self.sectors = int(k.sectors)
+        # the scene counts sectors from its trial's start item at angle 0
+        self._zero_deg = float(k.center_deg(k.item)) - k.width_deg / 2
         self.report = None
         self.crossings: list[dict] = []
         self.events: list[dict] = []
         self.frames_touching = 0
 
     def start(self, progress=None) -> None:
+        if self.scene is not None:
+            self.link.emit({"type": "trial", "sectors": int(self.sectors), "distance_deg": 270.0})
         self.report = self.outputs.stream(self.session.stream, name=f"knob {self.condition}")
 
     def stop(self, timeout_s: float = 2.0) -> None:
@@ -76,8 +85,10 @@ class KnobDemo:
         work["scheduled_s"] = time.monotonic()
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
-        if self.scene is not None and work.get("knob", {}).get("angle_deg") is not None:
-            self.scene.update({"type": "knob", "angle_deg": float(work["knob"]["angle_deg"])})
+        a = work.get("knob", {}).get("angle_deg")
+        if self.scene is not None and a is not None:
+            ev = {"type": "knob", "angle_deg": float(a) - self._zero_deg}
+            self.link.emit(ev, min_interval_s=1 / 30)
 
     def stage_fns(self) -> list:
         return [

@@ -117,9 +117,14 @@ class DemoRun:
 
     def scene_state(self) -> dict | None:
         """The demo's projected scene (``flow_hand`` / ``knob``) as the JSON the projector
-        draws (send it over the projector link), or ``None`` without a scene plugin."""
+        draws, or ``None`` without a scene plugin."""
         scene = getattr(self.demo, "scene", None)
         return scene.state() if scene is not None else None
+
+    @property
+    def scene_name(self) -> str:
+        """The scene to start on the projector for this demo."""
+        return self.demo.link.name
 
     def __enter__(self) -> DemoRun:
         return self
@@ -181,11 +186,14 @@ def start_demo(
     tuio: bool | None = None,
     watchdog_ms: float | None = None,
     progress: Any = None,
+    projector: Any = None,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
     ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
     TUIO too (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
+    ``projector``: the console's projector service (``update(event)``, after its
+    ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
     scene region the first time, cached on disk after); call this from a worker thread.
     """
@@ -218,6 +226,7 @@ def start_demo(
                 outputs,
                 condition=condition or dm.get("knob_condition", "HD+CF"),
                 sectors=sectors or None,
+                projector=projector,
             )
         else:
             from .adapters import HandFlowPlans, TwoPointPlans, flow_effect
@@ -235,6 +244,7 @@ def start_demo(
                 direction=direction or dm.get("flow_direction", "right"),
                 grid_mm=float(dm.get("flow_grid_mm", 10.0)),
                 pair_plans=pairs,
+                projector=projector,
                 still_mm=float(dm.get("still_mm", 12.0)),
                 still_s=float(dm.get("still_ms", 300)) / 1e3,
                 prepare=prepare,

@@ -394,3 +394,36 @@ def test_a_registered_hand_flow_effect_is_used_when_a_plugin_provides_one(profil
     assert asked == [
         {"center_mm": (100.0, 200.0), "direction": "up", "vmap": str(tmp_path / "map.npz")}
     ]
+
+
+def test_scene_events_reach_the_projector_and_its_knob_follows_the_knob(
+    profile, plugins, outputs_rt
+):
+    from plugins.demos import start_demo
+
+    class Projector:
+        def __init__(self) -> None:
+            self.events: list[dict] = []
+
+        def update(self, event):
+            self.events.append(event)
+            return {}
+
+    proj = Projector()
+    run = start_demo(
+        "knob", profile, plugins, outputs_rt, condition="HD", watchdog_ms=5000, projector=proj
+    )
+    try:
+        assert wait_until(lambda: len(run.demo.crossings) >= 3, 30.0)
+    finally:
+        run.stop()
+    assert run.scene_name == "knob"
+    kinds = [e["type"] for e in proj.events]
+    assert kinds[0] == "trial" and proj.events[0]["sectors"] == run.demo.sectors
+    assert "knob" in kinds
+    state = run.scene_state()
+    # the projected menu highlights the knob's item: its offset from the trial's start
+    # item is the knob's offset from its own start (0), within the knob's hysteresis
+    offset = state["current"] - run.demo.scene.start
+    if 0 < state["current"] < len(state["items"]) - 1:  # not clamped at the menu's ends
+        assert abs(offset - run.demo.session.knob.item) <= 1
