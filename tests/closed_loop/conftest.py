@@ -14,7 +14,8 @@ import pytest
 #: diagonal pair (Fig. 10 style) both ways, and a long pair driven by PB.
 PAIRS = ((51, 52), (52, 51), (27, 40), (40, 27), (14, 71))
 #: Hand regions (centre mm) and the directions played there: "left"/"down" are the same
-#: two parts in the other order, so one per axis is played. (580, 150) is a clean case;
+#: two parts in the other order (same tones; only the ring-down overlap differs), so one
+#: per axis is played here; the benchmark plays all four. (580, 150) is a clean case;
 #: the other two are where a scan of the whole table (haptable bench closed-loop) found
 #: failures: ring-down overlap at the switch (281.73, 223.645) and, at the right edge,
 #: an active side that ends below the 3-JND line plus the overlap (641.73, 163.645).

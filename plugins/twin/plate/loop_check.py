@@ -194,6 +194,7 @@ def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
             v = p["amplitude_v"]
             pred_a, pred_p = v * p["active_um_per_v"], v * p["passive_um_per_v"]
             ach_a, ach_p = float(e.tone_um[act]), float(e.tone_um[pas])
+            thr_db = float(per.threshold_db(p["frequency_hz"], "fingertip"))
             rows.append(
                 {
                     "pair": f"{a_no}->{b_no}",
@@ -210,6 +211,9 @@ def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
                     "ach_active_um": ach_a,
                     "ach_passive_um": ach_p,
                     "ach_margin_um": ach_a - ach_p,
+                    "ach_contrast_db": 20 * math.log10(ach_a / max(ach_p, 1e-30)),
+                    "ach_active_sl_db": 20 * math.log10(max(ach_a, 1e-30)) - thr_db,
+                    "ach_passive_sl_db": 20 * math.log10(max(ach_p, 1e-30)) - thr_db,
                     "all_active_um": float(e.amplitude_um[act]),
                     "all_passive_um": float(e.amplitude_um[pas]),
                     "onset_passive_um": float(e.onset_um[pas]),
@@ -356,7 +360,7 @@ def format_pairs(rows: list[dict]) -> str:
     head = (
         f"{'pair':>7} {'pt':>2} {'act':>4} {'f_Hz':>6} {'V':>6} "
         f"{'pred A/P um':>15} {'ach A/P um':>15} {'pred dA':>7} {'ach dA':>7} {'err%':>5} "
-        f"{'all P um':>8} {'onset P':>7}"
+        f"{'all P um':>8} {'onset P':>7} {'dB A/P':>6} {'SL P dB':>7}"
     )
     out = [head]
     for r in rows:
@@ -367,7 +371,8 @@ def format_pairs(rows: list[dict]) -> str:
             f"{r['ach_active_um']:7.3f}/{r['ach_passive_um']:<7.3f} "
             f"{r['pred_margin_um']:7.3f} {r['ach_margin_um']:7.3f} "
             f"{100 * r['margin_error_rel_active']:5.1f} "
-            f"{r['all_passive_um']:8.3f} {r['onset_passive_um']:7.3f}"
+            f"{r['all_passive_um']:8.3f} {r['onset_passive_um']:7.3f} "
+            f"{r['ach_contrast_db']:6.1f} {r['ach_passive_sl_db']:7.1f}"
         )
     return "\n".join(out)
 
@@ -400,6 +405,12 @@ def summarize(pairs: list[dict], regions: list[dict]) -> dict:
     if pairs:
         err = [100 * r["margin_error_rel_active"] for r in pairs]
         out["pairs_margin_error_pct_of_active"] = {"median": float(np.median(err)), "max": max(err)}
+        out["pairs_low_contrast"] = [
+            f"{r['pair']} part {r['part']} ({r['frequency_hz']:g} Hz, "
+            f"{r['ach_contrast_db']:.1f} dB, passive {r['ach_passive_sl_db']:.0f} dB SL)"
+            for r in pairs
+            if r["ach_contrast_db"] < 3.0
+        ]
         out["pairs_ringdown_overlap"] = [
             f"{r['pair']} part {r['part']}"
             for r in pairs
@@ -425,7 +436,8 @@ def summarize(pairs: list[dict], regions: list[dict]) -> dict:
 def run_bench(ctx, quick: bool) -> dict:
     """``haptable bench closed-loop``: predicted vs achieved for the default pairs (all
     parts) and regions (four directions); without ``--quick`` also every hand region at
-    60 mm steps (directions right and up: left/down replay the same parts reversed)."""
+    60 mm steps, four directions (left/down play the parts of right/up in the other
+    order: same tones, different ring-down overlap)."""
     from console.bench import machine_info
     from console.runtime.outputs import open_outputs
     from plugins.vibrotactile.hand import region_centers
@@ -453,11 +465,11 @@ def run_bench(ctx, quick: bool) -> dict:
             hand_mm = float(profile.get("vibrotactile.hand_mm", 120.0))
             centers = [tuple(map(float, c)) for c in region_centers(vmap, hand_mm, 60.0)]
             t0 = time.perf_counter()
-            scan = hand_regions_check(out, profile, vmap, centers, ("right", "up"), ls=ls)
+            scan = hand_regions_check(out, profile, vmap, centers, ls=ls)
             res["scan"] = {
                 "regions": len(centers),
                 "step_mm": 60.0,
-                "directions": ["right", "up"],
+                "directions": ["left", "right", "up", "down"],
                 "s": time.perf_counter() - t0,
                 **summarize([], scan),
                 "problems": [
