@@ -12,7 +12,16 @@ from plugins.gestures.dataset import write_background, write_sample
 
 
 @pytest.fixture(scope="module")
-def dataset(tmp_path_factory):
+def cache(tmp_path_factory):
+    """One feature cache for the module (train reuses what eval extracted)."""
+    d = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("XDG_CACHE_HOME", str(d))
+        yield d
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory, cache):
     root = tmp_path_factory.mktemp("gestures") / "set"
     bg = sketch.background()
     write_background(root, bg)
@@ -20,7 +29,7 @@ def dataset(tmp_path_factory):
     for subject in ("s1", "s2"):
         size = 0.95 if subject == "s1" else 1.08
         for g in sketch.STATIC + sketch.DYNAMIC:
-            for rep in range(5):
+            for rep in range(4):
                 left = bool(rep % 2)
                 poses = sketch.gesture_poses(
                     g,
@@ -50,26 +59,24 @@ def run_json(capsys, *argv):
     return code, (json.loads(out.out) if code == 0 else out.err)
 
 
-def test_eval_two_fold_and_loso(dataset, capsys, monkeypatch, tmp_path):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+def test_eval_two_fold_and_loso(dataset, cache, capsys):
     code, rep = run_json(capsys, "gestures", "eval", str(dataset), "--cv", "2fold", "--json")
     assert code == 0
     for key in ("static_accuracy", "dynamic_accuracy", "per_class_recall", "confusion"):
         assert key in rep
     assert rep["frame_ms_p50"] > 0 and rep["frame_ms_p99"] >= rep["frame_ms_p50"]
-    assert rep["n_samples"] == 100
+    assert rep["n_samples"] == 80
     assert rep["static_accuracy"] >= 0.8 and rep["dynamic_accuracy"] >= 0.8
-    assert sum(sum(v.values()) for v in rep["confusion"].values()) == 100
-    assert any((tmp_path / "haptable" / "gestures").glob("*.npz"))  # features cached
+    assert sum(sum(v.values()) for v in rep["confusion"].values()) == 80
+    assert any((cache / "haptable" / "gestures").glob("*.npz"))  # features cached
     code, loso = run_json(capsys, "gestures", "eval", str(dataset), "--cv", "loso", "--json")
     assert code == 0 and loso["cv"] == "loso" and loso["subjects"] == ["s1", "s2"]
 
 
-def test_train_then_classify_one_sample(dataset, capsys, monkeypatch, tmp_path):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
     model = tmp_path / "m.skops"
     code, out = run_json(capsys, "gestures", "train", str(dataset), "--out", str(model), "--json")
-    assert code == 0 and model.is_file() and out["samples"] == 100
+    assert code == 0 and model.is_file() and out["samples"] == 80
     code, res = run_json(
         capsys, "gestures", "classify", str(model), str(dataset / "drag" / "s1_000"), "--json"
     )
