@@ -104,4 +104,9 @@ def haptable_register_benchmarks(register) -> None:
         loop,
         help="frame arrival -> first output sample scheduled: per-stage and end-to-end p50/p99",
     )
-    register("soak", soak, help="knob demo for --minutes at 60 fps: dropped frames, RSS, underruns")
+    register(
+        "soak",
+        soak,
+        help="knob demo for 10 minutes at 60 fps: dropped frames, RSS, underruns, watchdog "
+        "trips (other lengths: haptable demo soak --minutes N, or HAPTABLE_SOAK_MINUTES)",
+    )
