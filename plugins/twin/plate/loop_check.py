@@ -112,6 +112,13 @@ def recording_with_offset(outputs, tries: int = 200) -> tuple[np.ndarray, int]:
     (blocks played x block size) - its length, read when the outputs are idle and the
     block count is stable around the read.
     """
+    if outputs.recording() is None:
+        from console.errors import UserError
+
+        raise UserError(
+            "closed loop: these outputs record nothing (real hardware); use a profile whose "
+            "[audio] driver is the twin"
+        )
     for _ in range(tries):
         time.sleep(0.002)
         st = outputs.status()
