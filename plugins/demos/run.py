@@ -187,11 +187,14 @@ def start_demo(
     watchdog_ms: float | None = None,
     progress: Any = None,
     projector: Any = None,
+    classifier: Any = None,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
     ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
     TUIO too (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
+    ``camera``/``classifier``: reuse the console's (its tuned thresholds and learned
+    background; stop the console's own frame loop first); the run closes neither.
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
@@ -212,8 +215,10 @@ def start_demo(
     try:
         if script:
             script_twin(camera, name, profile)
-        clf = open_classifier(profile, plugins)
-        learn_background(camera, clf)
+        clf = classifier
+        if clf is None:
+            clf = open_classifier(profile, plugins)
+            learn_background(camera, clf)
         still = StillHand(
             still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
         )
