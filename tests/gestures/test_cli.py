@@ -87,6 +87,20 @@ def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
     )
     assert code == 0 and res["kind"] == "static"
 
+    # the same model as the live classifier plugin, frame by frame
+    from console.types import Frame
+    from plugins.gestures.classifier import SvmClassifier
+    from plugins.gestures.dataset import read_sample
+    from plugins.gestures.model import GestureModel
+
+    s = read_sample(dataset / "drag" / "s1_000")
+    clf = SvmClassifier(GestureModel.load(model), background=s.background())
+    frames = [Frame(img, i, i / 60) for i, img in enumerate(s.frames())]
+    g = clf.classify(frames)
+    assert g.name == "drag" and g.kind == "dynamic" and 0 <= g.confidence <= 1
+    assert g.hand is not None and "vision" in frames[0].stamps_s
+    assert SvmClassifier(None).classify(frames) is None
+
 
 def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path):
     import shutil
