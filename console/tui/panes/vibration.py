@@ -17,11 +17,11 @@ from textual.worker import get_current_worker
 from console.errors import UserError
 
 HELP = (
-    "grid: arrows move, enter auditions the point (the last two auditioned are the pair)\n"
-    "f: flow first -> second   r: flow second -> first   w a s d: flow under a hand at the\n"
-    "cursor, up left down right   m: measure on the twin   x: cancel the running work\n"
-    "command line: 51 (audition)  51 52 (flow)  hand 51 right  measure  "
-    "import PA=a.uff PB=b.uff ...  load map.npz"
+    "enter: audition the point\n"
+    "f / r: flow between the last two, either way\n"
+    "w a s d: flow under a hand at the cursor\n"
+    "m: measure   x: cancel   : command line\n"
+    "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz)"
 )
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
@@ -55,13 +55,13 @@ class VibrationPane(VerticalScroll):
             id="vib-cmd",
             compact=True,
         )
+        with Horizontal(id="vib-work"):
+            yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
+            yield Label("", id="vib-status")
         with Horizontal(id="vib-top"):
             yield DataTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
             yield Static(id="vib-info")
         yield Static(id="frf-plot")
-        with Horizontal(id="vib-work"):
-            yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
-            yield Label("", id="vib-status")
 
     @property
     def focus_target(self):
