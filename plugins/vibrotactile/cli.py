@@ -257,7 +257,10 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     q.add_argument("--active", required=True, help="grid number 1..84 (row by row) or x,y in mm")
     q.add_argument("--passive", required=True, help="grid number 1..84 or x,y in mm")
     q.add_argument(
-        "--method", choices=("spline", "keys", "bilinear"), default=None, help="off-grid interpolation"
+        "--method",
+        choices=("spline", "keys", "bilinear"),
+        default=None,
+        help="off-grid interpolation",
     )
     q.add_argument("--extrapolate", action="store_true", help="allow points outside the grid")
     q.add_argument("--cache-dir", default=None)
