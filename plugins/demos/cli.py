@@ -26,6 +26,10 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the final snapshot as JSON")
 
 
+def _ms(x: float) -> str:
+    return "-" if x != x else f"{x:.1f}"
+
+
 def _line(snap: dict) -> str:
     lat = snap["latency"]
     e2e = lat["end_to_end"]
@@ -37,8 +41,8 @@ def _line(snap: dict) -> str:
         extra = f"flows {snap['flow']['flows']} ({snap['flow']['direction']})"
     return (
         f"{snap['uptime_s']:6.1f} s  {lat['fps']:5.1f} fps  frame->output p50 "
-        f"{e2e['p50_ms']:.1f} p99 {e2e['p99_ms']:.1f} ms  cpu/frame p99 "
-        f"{lat['cpu_per_frame']['p99_ms']:.1f} ms  dropped {lat['dropped_queue']}"
+        f"{_ms(e2e['p50_ms'])} p99 {_ms(e2e['p99_ms'])} ms  cpu/frame p99 "
+        f"{_ms(lat['cpu_per_frame']['p99_ms'])} ms  dropped {lat['dropped_queue']}"
         f"+{lat['dropped_camera']}  {extra}"
     )
 
