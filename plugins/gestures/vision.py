@@ -73,6 +73,7 @@ class FrameResult:
     contacts: tuple[Contact, ...]  # all contact blobs, hands or not
     gain: float = 1.0  # frame ~ gain * background + offset
     offset: float = 0.0
+    noise: float = 0.0  # robust std of the difference image (grey levels)
     illumination_changed: bool = False
     masks: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
@@ -153,15 +154,18 @@ def brightness_gain(frame: np.ndarray, background: np.ndarray, step: int = 8) ->
     return float(np.median(f[ok] / b[ok]))
 
 
-def illumination(frame: np.ndarray, background: np.ndarray, step: int = 12) -> tuple[float, float]:
-    """``(gain, offset)`` with ``frame ~ gain * background + offset`` over the empty parts
-    of the table: a least-squares line on a pixel grid, refitted twice on the pixels
-    whose residual is not far above the median (hands, brighter than predicted, drop
-    out)."""
+def illumination(
+    frame: np.ndarray, background: np.ndarray, step: int = 12
+) -> tuple[float, float, float]:
+    """``(gain, offset, noise)`` with ``frame ~ gain * background + offset`` over the
+    empty parts of the table: a least-squares line on a pixel grid, refitted twice on the
+    pixels whose residual is not far above the median (hands, brighter than predicted,
+    drop out). ``noise`` is the residuals' robust standard deviation (1.4826 MAD), the
+    noise of the difference image."""
     f = frame[::step, ::step].ravel().astype(np.float32)
     b = background[::step, ::step].ravel().astype(np.float32)
     keep = np.ones(len(f), dtype=bool)
-    gain, offset = 1.0, 0.0
+    gain, offset, mad = 1.0, 0.0, 0.0
     for _ in range(3):
         fk, bk = f[keep], b[keep]
         n = len(fk)
@@ -178,9 +182,10 @@ def illumination(frame: np.ndarray, background: np.ndarray, step: int = 12) -> t
         med = float(np.median(res))
         mad = float(np.median(np.abs(res - med)))
         keep = res <= med + 2.0 * mad + 1.0
+    noise = 1.4826 * mad
     if not (0.2 < gain < 5.0):
-        return brightness_gain(frame, background, step), 0.0
-    return gain, offset
+        return brightness_gain(frame, background, step), 0.0, noise
+    return gain, offset, noise
 
 
 def subtract(
@@ -639,18 +644,21 @@ def process_frame(
             f"background: size {bg.shape[1]} x {bg.shape[0]} px does not match the frame "
             f"({img.shape[1]} x {img.shape[0]}); capture the background again"
         )
-    gain, offset = illumination(img, bg)
+    gain, offset, noise = illumination(img, bg)
     changed = abs(gain - 1.0) > p.illumination_tolerance or abs(offset) > p.offset_tolerance
     if abs(gain - 1.0) < 0.02 and abs(offset) < 1.5:
         gain, offset = 1.0, 0.0
     if bg.dtype != np.uint8 and gain == 1.0 and offset == 0.0:
         bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
     diff = subtract(img, bg, gain, offset)
-    body = body_mask(diff, p.body_threshold, p.smooth_px)
-    hp = highpass(diff, p.highpass_sigma_px)
+    # thresholds rise with the noise (each at least its profile value)
+    body_thr = max(p.body_threshold, 4.0 * noise / max(p.smooth_px, 1) + 2.0)
+    contact_thr = max(p.contact_threshold, 4.0 * noise / 3.0 + 2.0)
+    body = body_mask(diff, body_thr, p.smooth_px)
+    hp = highpass(cv2.blur(diff, (3, 3)), p.highpass_sigma_px)
     contacts = find_contacts(
         hp,
-        p.contact_threshold,
+        contact_thr,
         p.min_contact_area_px,
         p.max_contact_area_px,
         to_mm,
@@ -671,6 +679,7 @@ def process_frame(
         contacts=tuple(contacts),
         gain=float(gain),
         offset=float(offset),
+        noise=float(noise),
         illumination_changed=bool(changed),
         masks=masks,
         extras=tuple(e for _, e in found),

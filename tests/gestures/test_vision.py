@@ -150,3 +150,10 @@ def test_contacts_in_table_mm_through_a_mapping():
     (c,) = r.contacts
     assert c.pos_mm == pytest.approx((c.pos_px[0] * 1.2 + 5, c.pos_px[1] * 1.2 + 5))
     assert r.hands[0].center_mm is not None
+
+
+def test_heavy_sensor_noise_raises_thresholds_not_false_contacts():
+    noisy = frame(pose("two_finger"), noise=12.0, seed=3)
+    r = process_frame(noisy, BG, P)
+    assert r.noise == pytest.approx(12.0, rel=0.35)
+    assert len(r.hands) == 1 and len(r.contacts) == 2
