@@ -349,6 +349,13 @@ def _bindings_help(pane) -> str:
 
 
 def run_app(ctx, *, fast: bool | None = None) -> int:
+    from console.tui.logs import capture_logs, release_logs
+
     _ = ctx.profile  # a bad profile fails here, as one line, before the screen opens
-    HapTableApp(ctx, fast=fast).run()
+    app = HapTableApp(ctx, fast=fast)
+    removed = capture_logs(app)
+    try:
+        app.run()
+    finally:
+        release_logs(removed)
     return 0

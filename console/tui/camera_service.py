@@ -26,6 +26,7 @@ class CameraService:
         self.loop = None
         self.error = ""
         self._lock = threading.Lock()
+        self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
         self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
@@ -45,17 +46,21 @@ class CameraService:
             open_classifier,
         )
 
-        if self.running:
-            return
-        if self.camera is None:
-            self.camera = open_camera(self.profile, self.plugins)
-            self.classifier = open_classifier(self.profile, self.plugins)
-            learn_background(self.camera, self.classifier)
-        stages = base_stages(self.classifier)
-        window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
-        mon = LatencyMonitor([n for n, _ in stages], size=window)
-        self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
-        self.loop.start()
+        with self._start_lock:
+            if self.running:
+                return
+            if self.camera is None:
+                camera = open_camera(self.profile, self.plugins)
+                self.classifier = open_classifier(self.profile, self.plugins)
+                learn_background(camera, self.classifier)
+                self.camera = camera
+            stages = base_stages(self.classifier)
+            window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
+            mon = LatencyMonitor([n for n, _ in stages], size=window)
+            self.loop = FrameLoop(
+                self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink]
+            )
+            self.loop.start()
 
     def _sink(self, frame, work: dict) -> None:
         with self._lock:
@@ -69,15 +74,17 @@ class CameraService:
             return self.latest
 
     def stop(self) -> None:
-        if self.loop is not None:
-            self.loop.stop()
-            self.loop = None
+        with self._start_lock:
+            if self.loop is not None:
+                self.loop.stop()
+                self.loop = None
 
     def close(self) -> None:
         self.stop()
-        if self.camera is not None:
-            self.camera.close()
-            self.camera = None
+        with self._start_lock:
+            if self.camera is not None:
+                self.camera.close()
+                self.camera = None
 
     # ------------------------------------------------------------------ tuning
     def capture_background(self) -> int:

@@ -142,6 +142,11 @@ class HalfBlockImage:
             rgb[on] = overlay[on]
         self.rgb = rgb
 
+    def __rich_measure__(self, console, options):
+        from rich.measure import Measurement
+
+        return Measurement(self.rgb.shape[1], self.rgb.shape[1])
+
     def __rich_console__(self, console, options):
         rgb = self.rgb
         for r in range(0, rgb.shape[0] - 1, 2):

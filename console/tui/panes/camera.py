@@ -143,7 +143,7 @@ class CameraPane(Horizontal):
         g = work.get("gesture")
         hands = work.get("hands", ()) or ()
         lines = [
-            f"[b]{cam.get('driver', '?')}[/b] {cam.get('fps', 0):.0f} fps, "
+            f"[b]{cam.get('driver', '?')}[/b]: {cam.get('fps', 0):.0f} fps, "
             f"{cam.get('dropped', 0)} dropped",
             f"loop {lat.get('fps', 0):.0f} fps, dropped {lat.get('dropped_queue', 0)}",
             f"view: {self.view} (v)",
