@@ -19,13 +19,19 @@ def cli(monkeypatch):
     return main
 
 
-def test_demo_knob_runs_and_reports_the_loop(cli, capsys):
-    assert cli(["demo", "knob", "--seconds", "2", "--json"]) == 0
+def test_demo_knob_runs_and_reports_the_loop(cli, capsys, tmp_path):
+    from console.profile import PROJECT_PROFILES
+
+    prof = tmp_path / "calm.toml"  # a busy test machine must not trip the watchdog
+    prof.write_text(
+        (PROJECT_PROFILES / "sim.toml").read_text() + "\n[runtime]\nwatchdog_ms = 3000\n"
+    )
+    assert cli(["--profile", str(prof), "demo", "knob", "--seconds", "2", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["demo"] == "knob" and not out["running"]
     assert out["latency"]["frames"] > 0
     assert {"vision", "classify", "effect", "scheduled"} <= set(out["latency"]["stages"])
-    assert out["watchdog"]["limit_ms"] == 250.0  # the [runtime] default
+    assert out["watchdog"]["limit_ms"] == 3000.0  # from the profile's [runtime]
     assert out["outputs"]["audio"]["block_size"] == 64
 
 
