@@ -182,6 +182,10 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     e.add_argument(
         "--gain", type=float, default=1.0, help="reference volts per piezo volt (1: piezo volts)"
     )
+    m = sub.add_parser(
+        "measure", help="measure a vibration map with the profile's vibrometer (twin: simulated)"
+    )
+    m.add_argument("--out", required=True, help="vibration map (.npz) to write")
     s = sub.add_parser("info", help="summarise a vibration map")
     s.add_argument("map")
     s.add_argument("--json", action="store_true")
@@ -212,6 +216,8 @@ def run_frf(args, ctx) -> int:
             + (f"; note: {m.provenance['note']}" if m.provenance.get("note") else "")
         )
         return 0
+    if args.frf_cmd == "measure":
+        return measure_map(args, ctx)
     from console.vibration_map import load_map
 
     if args.frf_cmd == "export":
@@ -233,6 +239,26 @@ def run_frf(args, ctx) -> int:
     }
     print(
         json.dumps(info, indent=2) if args.json else "\n".join(f"{k}: {v}" for k, v in info.items())
+    )
+    return 0
+
+
+def measure_map(args, ctx) -> int:
+    """Measure the grid with the vibrometer the profile names and save the map."""
+    from console.vibration_map import make_map, save_map
+
+    name = ctx.profile.get("vibrometer.driver", "twin")
+    device = ctx.pm.get("vibrometer", name).factory(ctx.profile)
+    bar = progress_printer()
+    out = device.measure(progress=lambda done, total: bar(done / max(total, 1), "measuring"))
+    meta = out.pop("meta", {})
+    m = make_map(**out)
+    save_map(args.out, m)
+    print(
+        f"wrote {args.out}: {len(m.excitations)} excitations x {m.points.size} points x "
+        f"{m.freq_hz.size} bins ({m.freq_hz[0]:g}-{m.freq_hz[-1]:g} Hz) from vibrometer "
+        f"{name!r}"
+        + (f" ({meta.get('method')})" if isinstance(meta, dict) and meta.get("method") else "")
     )
     return 0
 
