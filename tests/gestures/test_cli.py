@@ -113,3 +113,17 @@ def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path):
     assert "zoom/s2_003" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     code, err = run_json(capsys, "gestures", "classify", str(tmp_path / "none.skops"), str(bad))
     assert code == 2 and "gestures train" in err
+
+
+@pytest.mark.slow
+def test_dataset_without_any_background_still_evaluates(dataset, capsys, tmp_path):
+    """Someone else's recordings may have no background.png: the median of the samples'
+    first frames stands in for the empty table."""
+    import shutil
+
+    other = tmp_path / "nobg"
+    shutil.copytree(dataset, other)
+    (other / "background.png").unlink()
+    code, rep = run_json(capsys, "gestures", "eval", str(other), "--json")
+    assert code == 0
+    assert rep["static_accuracy"] >= 0.7 and rep["dynamic_accuracy"] >= 0.7
