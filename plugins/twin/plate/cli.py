@@ -9,7 +9,7 @@ EDGE_CHOICES = ("ssss", "cccc", "ffff", "profile")
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    sub = parser.add_subparsers(dest="plate_command", metavar="{modes,measure}")
+    sub = parser.add_subparsers(dest="plate_command", metavar="{modes}")
     sub.required = True
     p = sub.add_parser("modes", help="natural frequencies of the glass plate")
     p.add_argument(
@@ -26,12 +26,6 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--count", type=int, default=10, help="number of elastic modes (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON")
-    m = sub.add_parser(
-        "measure",
-        help="measure the vibration map with the profile's [vibrometer] driver (twin: simulated)",
-    )
-    m.add_argument("--out", required=True, help="vibration map file to write (.npz)")
-    m.add_argument("--json", action="store_true", help="print a JSON summary")
 
 
 def plate_modes(profile, edges: str, aspect: float | None, count: int) -> list[dict]:
@@ -57,60 +51,7 @@ def plate_modes(profile, edges: str, aspect: float | None, count: int) -> list[d
     ]
 
 
-def measure_map(ctx, out: str, progress=None) -> dict:
-    """Measure with the selected vibrometer plugin and save the map; a summary dict."""
-    from console.errors import UserError
-    from console.vibration_map import make_map, save_map
-
-    name = str(ctx.profile.get("vibrometer.driver", "twin"))
-    try:
-        reg = ctx.pm.get("vibrometer", name)
-    except UserError:
-        raise
-    except Exception as exc:
-        raise UserError(
-            f"{ctx.profile.path}: [vibrometer] driver = {name!r}: {exc}; "
-            'use "twin" or install the vibrometer\'s plugin'
-        ) from None
-    res = reg.factory(ctx.profile).measure(progress=progress)
-    m = make_map(**{k: v for k, v in res.items() if k != "meta"}, where=f"vibrometer {name}")
-    path = save_map(out, m)
-    return {
-        "out": str(path),
-        "driver": name,
-        "points": int(m.points.size),
-        "excitations": list(m.excitations),
-        "freq_hz": [float(m.freq_hz[0]), float(m.freq_hz[-1])],
-        "lines": int(m.freq_hz.size),
-        "masked_below_hz": float(m.freq_hz[m.masked].max()) if m.masked.any() else None,
-    }
-
-
-def _progress_printer():
-    import sys
-    import time
-
-    t0 = time.monotonic()
-
-    def cb(done: int, total: int) -> None:
-        if sys.stderr.isatty() and (time.monotonic() - t0 > 1.0 or done == total):
-            print(f"\rmeasuring {done}/{total}", end="\n" if done == total else "", file=sys.stderr)
-
-    return cb
-
-
 def run(args: argparse.Namespace, ctx) -> int:
-    if args.plate_command == "measure":
-        summary = measure_map(ctx, args.out, progress=_progress_printer())
-        if args.json:
-            print(json.dumps(summary))
-        else:
-            print(
-                f"wrote {summary['out']}: {summary['points']} points x "
-                f"{len(summary['excitations'])} excitations x {summary['lines']} lines "
-                f"({summary['driver']} vibrometer)"
-            )
-        return 0
     if args.plate_command != "modes":  # pragma: no cover - argparse enforces the choice
         return 2
     modes = plate_modes(ctx.profile, args.edges, args.aspect, args.count)
