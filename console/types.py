@@ -17,6 +17,18 @@ PATCHES: tuple[str, ...] = ("PA", "PB", "PC", "PD")
 EXCITATIONS: tuple[str, ...] = (*PATCHES, "PALL")
 
 
+#: Flow directions as unit vectors in table millimetres. The projected image shows the
+#: glass with y growing downwards (grid point 1, at the smallest x and y, is top left, as
+#: in the paper's Fig. 5b), so "up" on the projection is toward -y: an arrow and the flow
+#: it triggers point the same way.
+DIRECTIONS_MM: dict[str, tuple[float, float]] = {
+    "right": (1.0, 0.0),
+    "left": (-1.0, 0.0),
+    "up": (0.0, -1.0),
+    "down": (0.0, 1.0),
+}
+
+
 def patches_of(excitation: str) -> frozenset[str]:
     """The patches whose relays close for an excitation name (``PALL`` -> all four)."""
     if excitation == "PALL":

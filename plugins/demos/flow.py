@@ -20,13 +20,13 @@ from typing import Any
 import numpy as np
 
 from console.errors import SafetyRefusal, UserError
-from console.types import Frame
+from console.types import DIRECTIONS_MM, Frame
 
 log = logging.getLogger("haptable.demos.flow")
 
 
 #: Direction -> unit vector in table mm (the vibrotactile convention: up = +y).
-UNIT = {"right": (1.0, 0.0), "left": (-1.0, 0.0), "up": (0.0, 1.0), "down": (0.0, -1.0)}
+UNIT = DIRECTIONS_MM  # the projector's arrows use the same convention
 
 
 def order_pair(a, b, direction: str) -> tuple[tuple[float, float], tuple[float, float]]:

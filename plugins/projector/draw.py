@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from console.types import DIRECTIONS_MM
 from plugins.projector import tessellate as T
 
 PALETTE: dict[str, tuple[float, float, float, float]] = {
@@ -236,12 +237,7 @@ def draw_flow_two_point(s: dict) -> list[dict]:
 
 
 #: Unit arrow vectors in table mm (y grows away from the reference edge: "down" as projected).
-DIRECTIONS: dict[str, tuple[float, float]] = {
-    "up": (0.0, -1.0),
-    "down": (0.0, 1.0),
-    "left": (-1.0, 0.0),
-    "right": (1.0, 0.0),
-}
+DIRECTIONS = DIRECTIONS_MM  # one convention for arrows and flows (console.types)
 
 
 def arrow_button(c, size_mm: float, direction: str, selected: bool) -> list[dict]:

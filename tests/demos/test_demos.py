@@ -353,7 +353,7 @@ def test_pair_order_follows_the_direction():
 
     assert order_pair((300, 100), (100, 120), "right") == ((100.0, 120.0), (300.0, 100.0))
     assert order_pair((300, 100), (100, 120), "left") == ((300.0, 100.0), (100.0, 120.0))
-    assert order_pair((300, 100), (100, 120), "up") == ((300.0, 100.0), (100.0, 120.0))
+    assert order_pair((300, 100), (100, 120), "up") == ((100.0, 120.0), (300.0, 100.0))
     sp = StillPair(still_mm=5, still_s=0.2, lift_s=0.1, min_sep_mm=50)
     close = [sp.update(k / 60, [(100, 100), (130, 100)]) for k in range(30)]
     assert not any(close)  # one hand's two fingers, 30 mm apart: not a pair
