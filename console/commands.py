@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import inspect
 import json
 import sys
 import wave
@@ -13,7 +14,12 @@ import numpy as np
 from console.errors import UserError
 from console.types import DeviceStatus
 
-DEVICE_KINDS = (("audio", "audio_output"), ("relays", "relay_board"), ("camera", "camera"))
+DEVICE_KINDS = (
+    ("audio", "audio_output"),
+    ("relays", "relay_board"),
+    ("camera", "camera"),
+    ("vibrometer", "vibrometer"),
+)
 
 
 # ---------------------------------------------------------------------- plugins
@@ -105,10 +111,10 @@ def run_doctor(args, ctx) -> int:
     else:
         print(f"profile: {ctx.profile.path}")
         for s in statuses:
-            line = f"  {s.kind:<7} {s.name:<12} {s.state:<9} {s.why}"
+            line = f"  {s.kind:<10} {s.name:<12} {s.state:<9} {s.why}"
             print(line.rstrip())
             if s.fix:
-                print(f"  {'':<7} {'':<12} fix: {s.fix}")
+                print(f"  {'':<10} {'':<12} fix: {s.fix}")
     return 1 if bad else 0
 
 
@@ -212,6 +218,7 @@ def configure_bench(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
     p.add_argument("--report", help="write a Markdown report (and plots) into this folder")
+    p.add_argument("--minutes", type=float, help="duration, for benchmarks that run for a time")
 
 
 def run_bench(args, ctx) -> int:
@@ -223,7 +230,14 @@ def run_bench(args, ctx) -> int:
     if args.name not in benches:
         raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
     run = benches[args.name].run
-    kwargs = {"report_dir": args.report} if args.report else {}
+    kwargs = {"report_dir": args.report, "minutes": args.minutes}
+    accepted = inspect.signature(run).parameters
+    takes_any = any(p.kind is p.VAR_KEYWORD for p in accepted.values())
+    for key, value in list(kwargs.items()):
+        if value is None:
+            del kwargs[key]
+        elif key not in accepted and not takes_any:
+            raise UserError(f"benchmark {args.name!r} does not take --{key.replace('_dir', '')}")
     result = run(ctx, args.quick, **kwargs)
     if args.json:
         print(json.dumps(result, indent=2, default=float))

@@ -170,6 +170,7 @@ def check_drivers(profile: Profile, plugins: Plugins) -> None:
         ("camera", "camera"),
         ("audio", "audio_output"),
         ("relays", "relay_board"),
+        ("vibrometer", "vibrometer"),
     ):
         name = profile.get(f"{section}.driver")
         if name is None:

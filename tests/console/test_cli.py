@@ -12,7 +12,7 @@ def test_doctor_json_reports_each_device(capsys):
     assert main(["doctor", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     kinds = {d["kind"]: d for d in data["devices"]}
-    assert set(kinds) == {"audio", "relays", "camera"}
+    assert set(kinds) == {"audio", "relays", "camera", "vibrometer"}
     assert all(d["state"] == "simulated" for d in kinds.values()) and data["ok"]
 
 
