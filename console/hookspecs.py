@@ -109,6 +109,16 @@ def haptable_register_scenes(register: Register) -> None:
 
 
 @hookspec
+def haptable_register_demos(register: Register) -> None:
+    """Register interactive demos the console can start (the paper's flow and knob).
+
+    The factory takes ``(profile, plugins, outputs, **params)`` instead of a profile and
+    returns a running demo with ``stop()``, ``snapshot() -> dict`` (camera, latency,
+    watchdog and demo state, polled by the console) and ``scene_name``.
+    """
+
+
+@hookspec
 def haptable_register_panels(register: Register) -> None:
     """Register console panels (extra Textual screens).
 

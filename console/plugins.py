@@ -46,6 +46,7 @@ KINDS: dict[str, str] = {
     "relay_board": "haptable_register_relay_boards",
     "scene": "haptable_register_scenes",
     "vibrometer": "haptable_register_vibrometers",
+    "demo": "haptable_register_demos",
     "panel": "haptable_register_panels",
 }
 
