@@ -12,12 +12,16 @@ Steps for one frame (paper section 3, Fig. 4):
 3. ``body_mask``: smoothed difference above ``body_threshold``: hands and forearms,
    including the dim, blurred parts above the glass.
 4. ``highpass`` (difference minus its blur) above ``contact_threshold``: the sharp bright
-   parts touching the glass -> contact blobs.
-5. per body component: palm centre (maximum of the distance transform), the wrist arc
-   (where the forearm crosses a circle about the palm, or the image border), the angle
-   that turns the wrist to the reference edge (image bottom), the hand rotated about the
-   centre, the wrist and forearm cut off, the smallest enclosing circle, Fourier
-   descriptors of the canonical silhouette and the number of extended fingers.
+   parts touching the glass -> contact blobs. Both thresholds rise with the noise
+   measured in step 2.
+5. per body component: palm centre (maximum of the distance transform), the forearm
+   direction (the thick part reaching farthest, or leaving the image; its sign checked
+   against the brightness axis, as the forearm is higher above the glass and dimmer),
+   the wrist arc where it crosses a circle about the palm, the angle that turns the
+   wrist to the reference edge (image bottom), the hand rotated about the centre, the
+   wrist and forearm cut off, the smallest enclosing circle, Fourier descriptors of the
+   canonical silhouette, the number of extended fingers, and a brightness grid in the
+   canonical frame (which parts press on the glass).
 """
 
 from __future__ import annotations
