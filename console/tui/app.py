@@ -82,7 +82,13 @@ class HapTableApp(App):
         Binding("question_mark", "help", "help"),
         Binding("q", "quit", "quit", show=False),
         *[
-            Binding(key, f"show_tab('{tab}')", title, show=False, priority=True)
+            Binding(
+                key,
+                f"show_tab('{tab}')",
+                "screens f1-f7" if key == "f1" else title,
+                show=key == "f1",
+                priority=True,
+            )
             for tab, (title, key, _) in TABS.items()
         ],
     ]
@@ -104,7 +110,7 @@ class HapTableApp(App):
         yield Header()
         with TabbedContent(initial=self.initial, id="tabs"):
             for tab, (title, key, path) in TABS.items():
-                with TabPane(f"{title} {key}", id=tab):
+                with TabPane(title, id=tab):
                     if tab == self.initial:  # the others are built when first opened
                         yield _pane_class(path)(id=f"{tab}-pane")
         yield SafetyBar(id="safety")

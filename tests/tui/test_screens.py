@@ -198,7 +198,7 @@ def test_scenes_lists_registrations(plugins):
         app = _app(plugins, "scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             await _ready(app, pilot)
-            table = app.query_one("#scenes")
+            table = app.query_one("#scene-table")
             names = {str(table.get_row_at(i)[0]) for i in range(table.row_count)}
             assert names == set(plugins.of("scene"))
             assert "not started" in str(app.query_one("#projector-status").render())

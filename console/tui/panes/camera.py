@@ -45,6 +45,13 @@ def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -
 
 
 class CameraPane(Horizontal):
+    HELP_TEXT = (
+        "b        capture the background (show the empty table)\n"
+        "t / T    body threshold down / up      c / C  contact threshold down / up\n"
+        "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
+        "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
+        "Overlay: hand outline green, contacts red, calibration target yellow."
+    )
     BINDINGS = [
         Binding("b", "background", "background"),
         Binding("t", "tune('body_threshold', -1)", "body -", show=False),

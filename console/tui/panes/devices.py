@@ -15,13 +15,13 @@ class DevicesPane(VerticalScroll):
 
     def compose(self) -> ComposeResult:
         yield Static(id="profile-line")
-        yield DataTable(id="devices", cursor_type="row")
+        yield DataTable(id="device-table", cursor_type="row")
         yield Static("plugins and what they provide", classes="heading")
-        yield DataTable(id="plugins", cursor_type="row")
+        yield DataTable(id="plugin-table", cursor_type="row")
 
     @property
     def focus_target(self):
-        return self.query_one("#devices", DataTable)
+        return self.query_one("#device-table", DataTable)
 
     def on_mount(self) -> None:
         ctx = self.app.ctx
@@ -30,9 +30,9 @@ class DevicesPane(VerticalScroll):
             f"profile [b]{prof.name}[/b] ({short_path(prof.path)}): "
             f"{prof.get('profile.description') or ''}"
         )
-        dev = self.query_one("#devices", DataTable)
+        dev = self.query_one("#device-table", DataTable)
         dev.add_columns("device", "driver", "state", "why", "fix")
-        plug = self.query_one("#plugins", DataTable)
+        plug = self.query_one("#plugin-table", DataTable)
         plug.add_columns("kind", "name", "plugin", "description")
         for kind, regs in sorted(ctx.pm.registrations.items()):
             for name, reg in sorted(regs.items()):
@@ -47,7 +47,7 @@ class DevicesPane(VerticalScroll):
         self.app.call_from_thread(self._show, rows)
 
     def _show(self, rows) -> None:
-        table = self.query_one("#devices", DataTable)
+        table = self.query_one("#device-table", DataTable)
         table.clear()
         for s in rows:
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(

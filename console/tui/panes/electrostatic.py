@@ -48,6 +48,11 @@ def force_text(meta: dict) -> str:
 
 
 class ElectrostaticPane(Vertical):
+    HELP_TEXT = (
+        "enter    audition the highlighted knob condition or friction preset\n"
+        "+ / -    amplitude (Vpp, held inside [limits] screen_max_vpp)\n"
+        "[ / ]    frequency (10-1000 Hz)   t  sine/square   p  play the setting (1 s)"
+    )
     BINDINGS = [
         Binding("plus,equals_sign", "vpp(10)", "+10 Vpp"),
         Binding("minus", "vpp(-10)", "-10 Vpp"),

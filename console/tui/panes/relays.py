@@ -40,6 +40,11 @@ def log_rows(log) -> list[tuple[str, ...]]:
 
 
 class RelaysPane(VerticalScroll):
+    HELP_TEXT = (
+        "1-8      toggle that relay (or the switch with enter/space)\n"
+        "A toggle waits while a stimulus plays and switches in the next silence; during\n"
+        "an e-stop it is refused. The log lists every switch with the output level then."
+    )
     BINDINGS = [Binding(str(k), f"toggle({k})", f"relay {k}", show=k == 1) for k in range(1, 9)]
 
     def __init__(self, **kw) -> None:

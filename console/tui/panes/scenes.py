@@ -34,6 +34,10 @@ def status_text(st: dict | None) -> str:
 
 
 class ScenesPane(Vertical):
+    HELP_TEXT = (
+        "enter    start the highlighted scene on the projector (starts the projector)\n"
+        "s        show black   k  stop the projector process"
+    )
     BINDINGS = [
         Binding("enter", "start_scene", "start on projector", show=False),
         Binding("s", "stop_scene", "stop (black)"),
@@ -46,7 +50,7 @@ class ScenesPane(Vertical):
         self._tick = 0
 
     def compose(self) -> ComposeResult:
-        yield DataTable(id="scenes", cursor_type="row")
+        yield DataTable(id="scene-table", cursor_type="row")
         yield Static(status_text(None), id="projector-status")
         yield Static(
             "enter: start the highlighted scene on the projector   s: show black   "
@@ -56,10 +60,10 @@ class ScenesPane(Vertical):
 
     @property
     def focus_target(self):
-        return self.query_one("#scenes", DataTable)
+        return self.query_one("#scene-table", DataTable)
 
     def on_mount(self) -> None:
-        t = self.query_one("#scenes", DataTable)
+        t = self.query_one("#scene-table", DataTable)
         t.add_columns("scene", "plugin", "description")
         regs = self.app.ctx.pm.of("scene")
         for name, reg in sorted(regs.items()):
@@ -74,7 +78,7 @@ class ScenesPane(Vertical):
         self._start(event.row_key.value)
 
     def action_start_scene(self) -> None:
-        t = self.query_one("#scenes", DataTable)
+        t = self.query_one("#scene-table", DataTable)
         if t.row_count:
             self._start(t.coordinate_to_cell_key(t.cursor_coordinate).row_key.value)
 

@@ -5,6 +5,7 @@ that plays marked, the lookup-table entry, UFF import and a simulated measuremen
 from __future__ import annotations
 
 import shlex
+from pathlib import Path
 
 from textual import work
 from textual.app import ComposeResult
@@ -27,6 +28,7 @@ KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
 
 class VibrationPane(VerticalScroll):
+    HELP_TEXT = HELP
     BINDINGS = [
         Binding("f", "flow(False)", "flow 1->2"),
         Binding("r", "flow(True)", "flow 2->1"),
@@ -72,7 +74,7 @@ class VibrationPane(VerticalScroll):
         for c in range(self.cols):
             grid.add_column(f"{c + 1:>4}", key=str(c), width=4)
         for r in range(self.rows):
-            grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1}")
+            grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1:>2}")
         self.query_one("#vib-info", Static).update(HELP)
         self.status("looking for a vibration map ...")
         self.load_cached()
@@ -200,7 +202,7 @@ class VibrationPane(VerticalScroll):
         from console.tui import vibration_session as vs
 
         try:
-            self._open(vs.load_map(path), f"map: {path}")
+            self._open(vs.load_map(path), f"map: {Path(path).name}")
         except vs.Cancelled:
             self.app.call_from_thread(self.status, "cancelled")
         except UserError as exc:

@@ -1,0 +1,105 @@
+"""What the console looks like at 80 x 24 (the smallest supported terminal): snapshots
+of each screen with a stable set of plugins (so another plugin's new registration does
+not change them). Update with ``pytest tests/tui/test_snapshots.py --snapshot-update``
+after checking the new SVGs by eye."""
+
+from __future__ import annotations
+
+import pytest
+
+from console.cli import Context
+from console.plugins import load_plugins
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+
+SIZE = (80, 24)
+
+
+def _app(initial: str, *extra: str) -> HapTableApp:
+    builtins = {
+        "twin": "plugins.twin",
+        "twin.camera": "plugins.twin.camera",
+        "twin.plate": "plugins.twin.plate",
+        **{n: f"plugins.{n}" for n in extra},
+    }
+    return HapTableApp(Context("sim", load_plugins(builtins=builtins)), fast=True, initial=initial)
+
+
+async def _settle(app, pilot) -> None:
+    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+    await pilot.pause(0.3)
+    await pilot.wait_for_scheduled_animations()
+
+
+def test_devices(snap_compare):
+    app = _app("devices")
+
+    async def run_before(pilot):
+        await _settle(app, pilot)
+        await wait_for(pilot, lambda: app.query_one("#device-table").row_count >= 3)
+        await pilot.pause(0.5)
+
+    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+
+
+def test_relays_after_a_toggle(snap_compare):
+    app = _app("relays")
+
+    async def run_before(pilot):
+        await _settle(app, pilot)
+        await pilot.press("3")
+        await wait_for(pilot, lambda: app.outputs.gate.relay_state() == frozenset({3}))
+        await wait_for(pilot, lambda: app.query_one("#relaylog").row_count == 1)
+        await pilot.pause(0.5)
+        await pilot.wait_for_scheduled_animations()
+
+    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+
+
+@pytest.mark.parametrize("size", [SIZE, (100, 30)], ids=["80x24", "100x30"])
+def test_vibration_with_a_pair_selected(snap_compare, map_file, size):
+    app = _app("vibration", "vibrotactile")
+
+    async def run_before(pilot):
+        await _settle(app, pilot)
+        pane = app.pane("vibration")
+        await pilot.press("colon")
+        app.focused.value = f"load {map_file}"
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: pane.session is not None, 30)
+        pane.selected = [51, 52]
+        pane.move_cursor(52)
+        pane._redraw_grid()
+        pane._show_selection()
+        await wait_for(pilot, lambda: "lookup table" in str(app.query_one("#vib-info").render()))
+        await pilot.pause(0.3)
+        await pilot.wait_for_scheduled_animations()
+
+    assert snap_compare(app, terminal_size=size, run_before=run_before)
+
+
+def test_electrostatic(snap_compare):
+    app = _app("electrostatic", "electrostatic")
+
+    async def run_before(pilot):
+        await _settle(app, pilot)
+        await wait_for(
+            pilot, lambda: "expected attraction" in str(app.query_one("#es-setting").render())
+        )
+        await pilot.pause(0.2)
+
+    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+
+
+def test_help(snap_compare):
+    app = _app("relays")
+
+    async def run_before(pilot):
+        await _settle(app, pilot)
+        await pilot.press("question_mark")
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "HelpScreen")
+        await pilot.pause(0.3)
+        await pilot.wait_for_scheduled_animations()
+
+    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
