@@ -23,15 +23,15 @@ from console.tui.util import short_path
 HELP = """\
 [b]HapTable console[/b]
 
-[b]ctrl+e[/b]   E-STOP: silence both outputs now and open every relay (any screen)
-[b]ctrl+r[/b]   reset the e-stop (outputs stay silent until something plays)
-[b]f1..f7[/b]   Devices, Camera, Vibration, Relays, Electrostatic, Scenes, Latency
-[b]?[/b]        this help          [b]ctrl+p[/b]   command palette
-[b]q[/b]        quit (outputs silenced, relays opened on the way out; ctrl+q anywhere)
+[b]ctrl+e[/b]  E-STOP: silence both outputs and open every relay (any screen)
+[b]ctrl+r[/b]  reset the e-stop (outputs stay silent until something plays)
+[b]f1-f7[/b]   Devices Camera Vibration Relays Electrostatic Scenes Latency
+[b]?[/b]       this help    [b]ctrl+p[/b]  command palette    [b]q[/b] / [b]ctrl+q[/b]  quit
 
-Relays switch only in silence: a toggle waits until both channels have been silent for
-the guard gap, and is refused during an e-stop. Long work (measurement, tables,
-calibration) shows a progress bar and is cancelled with x.
+Relays switch only in silence: a toggle waits until both channels have been silent \
+for the guard gap, and is refused during an e-stop. Quitting silences the outputs and \
+opens the relays. Long work (measurement, tables, calibration) shows a progress bar; \
+x cancels it.
 
 [b]This screen[/b]
 {pane}
@@ -109,7 +109,7 @@ class HapTableApp(App):
     def compose(self) -> ComposeResult:
         yield Header()
         with TabbedContent(initial=self.initial, id="tabs"):
-            for tab, (title, key, path) in TABS.items():
+            for tab, (title, _key, path) in TABS.items():
                 with TabPane(title, id=tab):
                     if tab == self.initial:  # the others are built when first opened
                         yield _pane_class(path)(id=f"{tab}-pane")
