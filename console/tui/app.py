@@ -102,6 +102,7 @@ class HapTableApp(App):
         self.outputs_error = ""
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self.camera_service = None
+        self.projector_service = None
         self._control = None
         self._lock = threading.Lock()
 
@@ -321,17 +322,12 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ exit
     def on_unmount(self) -> None:
-        for tab in TABS:
-            try:
-                p = self.pane(tab)
-            except Exception:
-                continue
-            if p is not None and hasattr(p, "shutdown"):
-                with contextlib.suppress(Exception):
-                    p.shutdown()
         if self.camera_service is not None:
             with contextlib.suppress(Exception):
                 self.camera_service.close()
+        if self.projector_service is not None:
+            with contextlib.suppress(Exception):
+                self.projector_service.close()
         if self._control is not None:
             self._control.close()
         if self.outputs is not None:

@@ -225,3 +225,54 @@ def test_help_and_tab_keys(plugins):
             await wait_for(pilot, lambda: type(app.screen).__name__ != "HelpScreen")
 
     asyncio.run(scenario())
+
+
+@pytest.mark.slow
+@pytest.mark.hardware
+def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+
+    async def scenario():
+        app = _app(plugins, "scenes")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await _ready(app, pilot)
+            table = app.query_one("#scene-table")
+            names = [str(table.get_row_at(i)[0]) for i in range(table.row_count)]
+            table.move_cursor(row=names.index("grid"))
+            await pilot.press("enter")
+            await wait_for(
+                pilot,
+                lambda: (
+                    app.projector_service is not None
+                    and app.projector_service.status().get("shown_scene") == "grid"
+                ),
+                60,
+                "grid shown",
+            )
+            status = app.query_one("#projector-status")
+            await wait_for(pilot, lambda: "scene: grid" in str(status.render()), 5)
+            assert "connected" in str(status.render())
+            await pilot.press("s")
+            await wait_for(pilot, lambda: app.projector_service.status()["scene"] is None, 10)
+            svc = app.projector_service
+        # leaving the console stops the projector process
+        assert svc.supervisor.pid is None and svc.supervisor.proc is None
+
+    asyncio.run(scenario())
+
+
+def test_command_palette_opens_a_screen(plugins):
+    async def scenario():
+        app = _app(plugins)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            await pilot.press("ctrl+p")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "CommandPalette")
+            await pilot.press(*"Open Relays")
+            await pilot.pause(0.5)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays")
+            assert app.pane("relays") is not None
+
+    asyncio.run(scenario())

@@ -306,8 +306,7 @@ class CameraPane(Horizontal):
 
     @work(thread=True, group="cal-projector")
     def _projector(self, what: str, targets=None) -> None:
-        scenes = self.app.pane("scenes")
-        svc = getattr(scenes, "service", None)
+        svc = self.app.projector_service
         if svc is None:  # no projector running: the console alone drives the wizard
             return
         try:

@@ -46,8 +46,12 @@ class ScenesPane(Vertical):
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
-        self.service = None
         self._tick = 0
+
+    @property
+    def service(self):
+        """The running projector service (kept by the app: it outlives this screen)."""
+        return self.app.projector_service
 
     def compose(self) -> ComposeResult:
         yield DataTable(id="scene-table", cursor_type="row")
@@ -84,7 +88,7 @@ class ScenesPane(Vertical):
 
     def ensure_service(self):
         """The projector service, started on first use (call from a worker)."""
-        if self.service is None:
+        if self.app.projector_service is None:
             from console.runtime.projector_link import ProjectorService
 
             headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
@@ -92,16 +96,14 @@ class ScenesPane(Vertical):
                 self.app.ctx.profile, self.app.ctx.pm, headless=headless
             )
             svc.start()
-            self.service = svc
-        return self.service
+            self.app.projector_service = svc
+        return self.app.projector_service
 
     @work(thread=True, exclusive=True, group="projector")
     def _start(self, name: str) -> None:
         try:
             svc = self.ensure_service()
-            svc.wait_connected = getattr(svc.link, "wait_connected", None)
-            if svc.wait_connected is not None:
-                svc.wait_connected(10.0)
+            svc.link.wait_connected(10.0)
             svc.start_scene(name)
             msg = f"scene {name} started on the projector"
         except (UserError, OSError) as exc:
@@ -115,7 +117,7 @@ class ScenesPane(Vertical):
 
     @work(thread=True, exclusive=True, group="projector")
     def action_close_projector(self) -> None:
-        svc, self.service = self.service, None
+        svc, self.app.projector_service = self.app.projector_service, None
         if svc is not None:
             svc.close()
 
@@ -130,7 +132,3 @@ class ScenesPane(Vertical):
             except Exception as exc:
                 st = {"last_error": str(exc)}
         self.query_one("#projector-status", Static).update(status_text(st))
-
-    def shutdown(self) -> None:
-        if self.service is not None:
-            self.service.close()
