@@ -12,7 +12,7 @@ from console.errors import UserError
 from console.types import Frame, Gesture
 
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
-from .features import dynamic_indices, static_indices
+from .features import select_dynamic, select_static
 from .model import GESTURES, GestureModel
 from .sketch import DYNAMIC
 from .vision import Background, FrameResult, VisionParams, process_frame
@@ -23,8 +23,8 @@ def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, floa
     with ``N_HARMONICS_MAX`` harmonics)."""
     k = model.n_frames
     xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX, model.static_frames)
-    xs = xs[static_indices(model.n_harmonics, N_HARMONICS_MAX)][None, :]
-    xd = xd[k][dynamic_indices(model.n_harmonics, N_HARMONICS_MAX)][None, :]
+    xs = select_static(xs, model.n_harmonics, N_HARMONICS_MAX)
+    xd = select_dynamic(xd[k], model.n_harmonics, N_HARMONICS_MAX)
     xk = xk[None, :]
     name = str(model.predict(xs, xd, xk)[0])
     conf = float(model.confidence(xs, xd, xk)[0])

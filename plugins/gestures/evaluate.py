@@ -252,8 +252,8 @@ def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
     nmax = int(fs.meta.get("n_harmonics_max", N_HARMONICS_MAX))
     if not (n_harmonics == 0 or 2 <= n_harmonics <= nmax):
         raise UserError(f"--harmonics {n_harmonics}: use 0 (no descriptors) or 2 to {nmax}")
-    xs = fs.static[:, F.static_indices(n_harmonics, nmax)]
-    xd = fs.dynamic[n_frames][:, F.dynamic_indices(n_harmonics, nmax)]
+    xs = F.select_static(fs.static, n_harmonics, nmax)
+    xd = F.select_dynamic(fs.dynamic[n_frames], n_harmonics, nmax)
     return xs, xd, fs.kind, fs.score[n_frames]
 
 

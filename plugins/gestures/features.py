@@ -30,26 +30,19 @@ def desc_size(n_harmonics: int) -> int:
     return 3 * (2 * n_harmonics - 1)
 
 
-def desc_indices(n: int, n_max: int) -> np.ndarray:
+def desc_indices(n: int, n_max: int, parts: tuple[int, ...] = (0, 1, 2)) -> np.ndarray:
     """Indices, in a descriptor vector of ``n_max`` harmonics, of the one with ``n``
-    (``n = 0``: none)."""
+    (``n = 0``: none); ``parts``: 0 real, 1 imaginary, 2 magnitude blocks."""
     if n < 2:
         return np.zeros(0, dtype=int)
     ks = np.concatenate([np.arange(-n_max, 0), np.arange(2, n_max + 1)])
     keep = np.flatnonzero(np.abs(ks) <= n)
     m = len(ks)
-    return np.concatenate([keep, keep + m, keep + 2 * m])
+    return np.concatenate([keep + p * m for p in parts])
 
 
 def static_size(n_harmonics: int) -> int:
     return desc_size(n_harmonics) + N_GRID + 2 + N_CONTACT
-
-
-def static_indices(n: int, n_max: int) -> np.ndarray:
-    """Columns of a static feature vector (built with ``n_max``) that ``n`` harmonics keep."""
-    d = desc_indices(n, n_max)
-    rest = np.arange(desc_size(n_max), static_size(n_max))
-    return np.concatenate([d, rest])
 
 
 def frame_record(res: FrameResult) -> dict | None:
@@ -241,14 +234,55 @@ def dynamic_features(
     return np.concatenate([record_static(first, n_harmonics), motion_features(recs)])
 
 
-def dynamic_indices(n: int, n_max: int) -> np.ndarray:
-    """Columns of a dynamic feature vector (built with ``n_max``) the dynamic classifier
-    uses: ``n`` harmonics of the first frame's descriptors, its contact layout (the
-    number of fingers in contact among them) and the motion features. The brightness
-    grid and the silhouette finger count are left out: across subjects they hurt more
-    than they help (``haptable bench gestures``)."""
-    d = desc_indices(n, n_max)
+def _mirror_sectors() -> np.ndarray:
+    """Sector permutation of the brightness grid under x -> -x in the canonical frame
+    (a left hand is the mirror image of a right one)."""
+    width = 2 * math.pi / GRID_SECTORS
+    centre = -math.pi + width * (np.arange(GRID_SECTORS) + 0.5)
+    mirrored = (math.pi - centre + math.pi) % (2 * math.pi) - math.pi
+    return np.clip(((mirrored + math.pi) / width).astype(int), 0, GRID_SECTORS - 1)
+
+
+_MIRROR = _mirror_sectors()
+_PAIRS = np.array([i for i in range(GRID_SECTORS) if i <= _MIRROR[i]])
+
+
+def mirror_invariant_grid(grid: np.ndarray) -> np.ndarray:
+    """(n, N_GRID) grids -> per ring and mirror pair of sectors: mean and half absolute
+    difference (the same for a hand and its mirror image)."""
+    g = grid.reshape(len(grid), -1, GRID_SECTORS)
+    m = g[:, :, _MIRROR]
+    sym = 0.5 * (g + m)[:, :, _PAIRS]
+    asym = 0.5 * np.abs(g - m)[:, :, _PAIRS]
+    return np.concatenate([sym.reshape(len(grid), -1), asym.reshape(len(grid), -1)], axis=1)
+
+
+def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
+    """What the static classifier sees, from (n, static_size(n_max)) feature rows:
+    magnitudes of ``n`` Fourier harmonics (invariant to mirroring as well), the
+    mirror-invariant brightness grid, the finger count, the hand flag and the contact
+    layout. Left and right hands look alike to it."""
+    x = np.atleast_2d(x)
+    d = desc_size(n_max)
+    grid = x[:, d : d + N_GRID]
+    return np.concatenate(
+        [x[:, desc_indices(n, n_max, (2,))], mirror_invariant_grid(grid), x[:, d + N_GRID :]],
+        axis=1,
+    )
+
+
+def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
+    """What the dynamic classifier sees, from (n, static_size(n_max) + N_MOTION) rows:
+    Fourier magnitudes of the first frame, its contact layout (how many fingers touch and
+    where) and the motion features. The brightness grid and the silhouette finger count
+    are left out: across subjects they hurt more than they help."""
+    x = np.atleast_2d(x)
     base = desc_size(n_max) + N_GRID + 2
-    contacts = base + np.arange(N_CONTACT)
-    motion = static_size(n_max) + np.arange(N_MOTION)
-    return np.concatenate([d, contacts, motion])
+    cols = np.concatenate(
+        [
+            desc_indices(n, n_max, (2,)),
+            base + np.arange(N_CONTACT),
+            static_size(n_max) + np.arange(N_MOTION),
+        ]
+    )
+    return x[:, cols]

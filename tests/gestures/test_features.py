@@ -81,3 +81,17 @@ def test_feature_vectors_are_finite_and_sized_with_no_hand():
     assert np.all(np.isfinite(dynamic_features(recs, 12, 4)))
     empty = static_features([None, None], 12)
     assert np.all(np.isfinite(empty)) and empty.shape == (static_size(12),)
+
+
+def test_static_features_do_not_tell_left_from_right_hands():
+    from plugins.gestures.features import mirror_invariant_grid, select_static
+
+    def feats(name, left):
+        recs = records(name, 2, left=left, theta_deg=-60.0)
+        return select_static(static_features(recs, 16), 2, 16)[0]
+
+    right, left, other = feats("l_shape", False), feats("l_shape", True), feats("open_hand", False)
+    assert np.linalg.norm(right - left) < 0.35 * np.linalg.norm(right - other)
+    g = np.random.default_rng(0).random((1, 24))
+    mirrored = g.reshape(3, 8)[:, [3, 2, 1, 0, 7, 6, 5, 4]].reshape(1, 24)
+    np.testing.assert_allclose(mirror_invariant_grid(g), mirror_invariant_grid(mirrored))
