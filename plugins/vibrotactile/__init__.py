@@ -1,8 +1,10 @@
 """Localized vibrotactile feedback: vibration map I/O, interpolation, excitation lookup
 tables, flow stimuli (between two points, under a hand) and the ``vibration`` benchmark.
 
-Commands: ``haptable frf import|export|info``, ``haptable tables build|query``,
-``haptable flow``, ``haptable point``. Profile sections: ``[vibrotactile]`` and
+Effects (``haptable_register_effects``): ``flow`` (between two points), ``hand_flow``
+(under a hand) and ``point`` (a pulse); see ``plugins.vibrotactile.effects`` for the
+request vocabulary. Commands: ``haptable frf import|export|info``, ``haptable tables
+build|query``, ``haptable flow``, ``haptable point``. Profile sections: ``[vibrotactile]`` and
 ``[perception]`` (the human threshold curve, as data).
 """
 
@@ -74,6 +76,31 @@ def _sections() -> dict:
                     max=5000,
                     help="extra silence between the parts (beyond the relay guard)",
                 ),
+                "min_contrast_db": Field(
+                    "float",
+                    0.0,
+                    min=0,
+                    max=60,
+                    help="tables: a pair's entry must have at least this active/passive "
+                    "contrast (ranked by difference among those); 0: the paper's rule "
+                    "(largest absolute difference, Fig. 8)",
+                ),
+                "ringdown_gap_k": Field(
+                    "float",
+                    0.0,
+                    min=0,
+                    max=20,
+                    help="silence between flow parts >= k decay times 1/(2 pi zeta f) of "
+                    "part 1's mode (k >= SL/8.7 puts its ring below threshold); 0: off",
+                ),
+                "ringdown_zeta": Field(
+                    "float",
+                    0.0,
+                    min=0,
+                    max=0.5,
+                    help="modal damping for the ring-down gap; 0: from the map's "
+                    "half-power bandwidth (1 % where it is not resolved)",
+                ),
                 "sensation_level_db": Field(
                     "float", 20.0, min=0, max=60, help="target level above the fingertip threshold"
                 ),
@@ -106,6 +133,35 @@ def _sections() -> dict:
 def haptable_profile_sections(register) -> None:
     for name, (fields, help_) in _sections().items():
         register(name, fields, help=help_)
+
+
+def _effect(cls_name: str):
+    def factory(profile):
+        from plugins.vibrotactile import effects
+
+        return getattr(effects, cls_name)(profile)
+
+    factory.__doc__ = f"``plugins.vibrotactile.effects.{cls_name}(profile)``"
+    return factory
+
+
+@hookimpl
+def haptable_register_effects(register) -> None:
+    register(
+        "flow",
+        _effect("FlowEffect"),
+        description="two-point flow (paper Fig. 9): render(from_point=, to_point=, vmap=|tables=)",
+    )
+    register(
+        "hand_flow",
+        _effect("HandFlowEffect"),
+        description="flow under a hand: render(center_mm=, direction=, vmap=, hand_mm=)",
+    )
+    register(
+        "point",
+        _effect("PointEffect"),
+        description="localized pulse at one point: render(point=, vmap=|tables=)",
+    )
 
 
 @hookimpl

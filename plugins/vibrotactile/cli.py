@@ -37,19 +37,10 @@ def _vt(ctx) -> dict:
 
 
 def settings_of(ctx):
-    from plugins.vibrotactile.stimuli import StimulusSettings
+    """Stimulus settings from the profile (the registered effects read the same)."""
+    from plugins.vibrotactile.effects import setup_from_profile
 
-    vt = _vt(ctx)
-    return StimulusSettings(
-        sample_rate_hz=int(ctx.profile.get("audio.sample_rate_hz")),
-        part_s=vt["part_s"],
-        ramp_ms=max(vt["ramp_ms"], ctx.profile.get("limits.ramp_min_ms")),
-        gap_s=vt["gap_ms"] / 1e3,
-        pulse_s=vt["pulse_s"],
-        sensation_level_db=vt["sensation_level_db"],
-        drive_max_v=vt["drive_max_v"],
-        interpolation=vt["interpolation"],
-    )
+    return setup_from_profile(ctx.profile).settings
 
 
 def piezo_limits(ctx) -> dict:
@@ -105,8 +96,14 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
     if is_tables_file(path):
         return load_tables(path)
     vm = load_map(path, require_all=not getattr(args, "allow_missing", False))
+    c = getattr(args, "min_contrast_db", None)
+    c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else float(c)
     return tables_cached(
-        vm, band_hz or _vt(ctx)["band_hz"], cache_dir_of(args, ctx), progress_printer()
+        vm,
+        band_hz or _vt(ctx)["band_hz"],
+        cache_dir_of(args, ctx),
+        progress_printer(),
+        min_contrast_db=c,
     )
 
 
@@ -278,6 +275,14 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     b.add_argument(
         "--zeta", type=float, default=0.01, help="damping assumed by the resolution check"
     )
+    b.add_argument(
+        "--min-contrast-db",
+        type=float,
+        default=None,
+        help="contrast-aware ranking: an entry needs active/passive >= this many dB (largest "
+        "difference among those; best contrast where none reaches it). Default: profile "
+        "[vibrotactile] min_contrast_db, 0 = the paper's rule (largest absolute difference)",
+    )
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
     q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
     q.add_argument("--active", required=True, help="grid number 1..84 (row by row) or x,y in mm")
@@ -301,7 +306,13 @@ def run_tables(args, ctx) -> int:
 
         m = load_map(args.map, require_all=not args.allow_missing)
         t0 = time.perf_counter()
-        t = build_tables(m, args.band_hz or _vt(ctx)["band_hz"], progress_printer())
+        c = args.min_contrast_db
+        c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else c
+        if c < 0:
+            raise UserError(f"--min-contrast-db {c:g}: give 0 (the paper's rule) or more dB")
+        t = build_tables(
+            m, args.band_hz or _vt(ctx)["band_hz"], progress_printer(), min_contrast_db=c
+        )
         dt = time.perf_counter() - t0
         save_tables(args.out, t)
         from plugins.vibrotactile.tables import coarse_peaks
@@ -316,9 +327,10 @@ def run_tables(args, ctx) -> int:
                 f"{worst['half_power_bw_hz']:.2f} Hz): measure with finer lines",
                 file=sys.stderr,
             )
+        rule = f", contrast >= {c:g} dB" if c > 0 else ""
         print(
             f"wrote {args.out}: {m.points.size} x {m.points.size} pairs x {len(m.excitations)} "
-            f"excitations up to {t.band_hz:g} Hz in {dt * 1e3:.0f} ms"
+            f"excitations up to {t.band_hz:g} Hz{rule} in {dt * 1e3:.0f} ms"
         )
         return 0
     t = tables_for(args.tables, ctx, args)
@@ -362,10 +374,35 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="hand: score every bin on the full subgrid (slower; default: staged search)",
     )
+    p.add_argument(
+        "--min-contrast-db",
+        type=float,
+        default=None,
+        help="from a map: tables with this contrast floor (default: profile; 0 = paper)",
+    )
+    p.add_argument(
+        "--ringdown-k",
+        type=float,
+        default=None,
+        help="silence between the parts >= k decay times of part 1's mode (default: "
+        "profile [vibrotactile] ringdown_gap_k; 0 = relay gap only)",
+    )
     p.add_argument("--out", help="write the plan as a .wav (sound-card units) + .json summary")
     p.add_argument("--play", action="store_true", help="play through the safety gate")
     p.add_argument("--cache-dir", default=None, help="cache folder ('none' to disable)")
     p.add_argument("--json", action="store_true")
+
+
+def with_ringdown(st, args):
+    """Settings with ``--ringdown-k`` applied."""
+    from dataclasses import replace
+
+    k = getattr(args, "ringdown_k", None)
+    if k is None:
+        return st
+    if k < 0:
+        raise UserError(f"--ringdown-k {k:g}: give 0 (off) or a positive number of decay times")
+    return replace(st, ringdown_gap_k=float(k))
 
 
 def run_flow(args, ctx) -> int:
@@ -384,62 +421,48 @@ def run_flow(args, ctx) -> int:
     t = tables_for(args.source, ctx, args)
     a, b = parse_point(args.from_, t.vmap), parse_point(args.to, t.vmap)
     plan = flow_plan(
-        t, a, b, perception_of(ctx), settings_of(ctx), name=f"flow {args.from_}->{args.to}", **lim
+        t,
+        a,
+        b,
+        perception_of(ctx),
+        with_ringdown(settings_of(ctx), args),
+        name=f"flow {args.from_}->{args.to}",
+        **lim,
     )
     return emit_plan(plan, args, ctx, plan_summary(plan))
 
 
 def hand_plan(args, ctx, lim):
-    from console.types import OutputPlan, patches_of
-    from plugins.vibrotactile.lazy import hand_flow_cached
-    from plugins.vibrotactile.stimuli import drive_cap_v, tone_segment
+    """The flow under a hand through the ``hand_flow`` effect (same plan as a scene's)."""
+    from dataclasses import replace
+
+    from plugins.vibrotactile.effects import HandFlowEffect, setup_from_profile
     from plugins.vibrotactile.tables import load_map_or_tables
 
     vm = load_map_or_tables(args.source, require_all=False)
-    vt = _vt(ctx)
     try:
         cx, cy = (float(v) for v in args.hand.split(","))
     except ValueError:
         raise UserError(f"--hand {args.hand!r}: give the hand centre as x,y in mm") from None
-    st, per = settings_of(ctx), perception_of(ctx)
-    kw = dict(
-        cap_v=drive_cap_v(st, **lim),
-        hand_mm=args.hand_mm or vt["hand_mm"],
-        squares=vt["hand_squares"],
-        subgrid=vt["hand_subgrid"],
-        band_hz=vt["band_hz"],
-        method=st.interpolation,
-        screen_stride=1 if args.exhaustive else 3,
+    setup = replace(
+        setup_from_profile(ctx.profile),
+        cache_dir=cache_dir_of(args, ctx),
+        piezo_min_v=lim["piezo_min_v"],
+        piezo_max_v=lim["piezo_max_v"],
     )
-    res = hand_flow_cached(vm, (cx, cy), args.direction, per, cache_dir_of(args, ctx), **kw)
-    if not res["ok"]:
-        raise UserError(
-            f"no flow {args.direction} under a hand at {cx:g},{cy:g} mm: {res['reason']}; try another spot"
-        )
-    segs = tuple(
-        tone_segment(
-            p["frequency_hz"],
-            p["amplitude_v"],
-            st.part_s,
-            st.ramp_ms / 1e3,
-            st.sample_rate_hz,
-            patches_of(p["actuator"]),
-            label=f"part {i + 1} {p['actuator']}",
-        )
-        for i, p in enumerate(res["parts"])
-    )
-    plan = OutputPlan(
-        st.sample_rate_hz,
-        segs,
-        name=f"hand flow {args.direction} at {cx:g},{cy:g}",
-        gap_s=st.gap_s,
-        meta={"kind": "hand_flow", **res},
+    k = getattr(args, "ringdown_k", None)
+    with_ringdown(setup.settings, args)  # validates --ringdown-k
+    plan = HandFlowEffect(ctx.profile, setup).render(
+        (cx, cy),
+        args.direction,
+        vmap=vm,
+        hand_mm=args.hand_mm,
+        exhaustive=args.exhaustive,
+        ringdown_gap_k=k,
     )
     summary = plan_summary(plan)
     for p in summary.get("parts", []):
-        for k in ("e", "k", "qa", "qb", "x_um"):
-            p.pop(k, None)
-    summary.pop("candidates", None)
+        p.pop("x_um", None)
     return plan, summary
 
 

@@ -19,14 +19,31 @@ from plugins.vibrotactile.tables import Tables, build_tables, query_points
 CacheDir = str | os.PathLike | None
 
 
-def tables_cached(m: VibrationMap, band_hz: float, cache_dir: CacheDir, progress=None) -> Tables:
+def tables_cached(
+    m: VibrationMap,
+    band_hz: float,
+    cache_dir: CacheDir,
+    progress=None,
+    *,
+    min_contrast_db: float = 0.0,
+) -> Tables:
+    key = {"map": m.content_hash(), "band_hz": band_hz}
+    if min_contrast_db > 0:  # the paper's tables keep their old key
+        key["min_contrast_db"] = float(min_contrast_db)
     res = cached(
         cache_dir,
         "tables",
-        {"map": m.content_hash(), "band_hz": band_hz},
-        lambda: _arrays(build_tables(m, band_hz, progress)),
+        key,
+        lambda: _arrays(build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db)),
     )
-    return Tables(res["max_diff_um_per_v"], res["freq_hz"], res["actuator"], band_hz, m)
+    return Tables(
+        res["max_diff_um_per_v"],
+        res["freq_hz"],
+        res["actuator"],
+        band_hz,
+        m,
+        float(min_contrast_db),
+    )
 
 
 def _arrays(t: Tables) -> dict:
@@ -38,6 +55,7 @@ def pair_cached(t: Tables, a_mm, b_mm, method: str, cache_dir: CacheDir) -> dict
     key = {
         "map": t.vmap.content_hash(),
         "band_hz": t.band_hz,
+        **({"min_contrast_db": t.min_contrast_db} if t.min_contrast_db > 0 else {}),
         "a": list(map(float, a_mm)),
         "b": list(map(float, b_mm)),
         "method": method,

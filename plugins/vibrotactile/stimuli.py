@@ -7,6 +7,10 @@ switch in the silent gap between the two segments. Amplitudes are equalised in
 sensation level at each part's active point: ``V = 10^((T(f) + SL)/20) / |H(f)|`` with T
 the fingertip threshold (dB re 1 um), SL the common level (target, lowered until both
 parts fit the drive limit).
+
+The silence between the parts is ``gap_s`` (plus the relay guard the gate adds); with
+``ringdown_gap_k`` > 0 it is at least ``k`` decay times of part 1's mode
+(``plugins.vibrotactile.ringdown``), so part 1 no longer rings into part 2.
 """
 
 from __future__ import annotations
@@ -33,6 +37,8 @@ class StimulusSettings:
     sensation_level_db: float = 20.0
     drive_max_v: float = 95.0  # amplitude cap; also capped by the piezo limits
     interpolation: str = "spline"
+    ringdown_gap_k: float = 0.0  # 0: no ring-down gap (the paper's flow)
+    ringdown_zeta: float = 0.0  # 0: damping from the map's half-power bandwidth
 
 
 def tone_segment(
@@ -84,7 +90,32 @@ def _choice(t: Tables, a: Point, b: Point, method: str) -> dict:
     ]
     ans["active_um_per_v"] = float(abs(h_a[e, k]))
     ans["passive_um_per_v"] = float(abs(h_b[e, k]))
+    ans["contrast_db"] = float(
+        20 * np.log10(max(ans["active_um_per_v"], 1e-30) / max(ans["passive_um_per_v"], 1e-30))
+    )
     return ans
+
+
+def gap_after_part_1(m, part1: dict, settings: StimulusSettings, band_hz: float) -> dict:
+    """The silence between the parts: ``settings.gap_s``, or with ``ringdown_gap_k`` > 0
+    at least ``k`` decay times of part 1's mode (``ringdown`` says which and why)."""
+    out = {"gap_s": float(settings.gap_s)}
+    if settings.ringdown_gap_k > 0:
+        from plugins.vibrotactile.ringdown import ringdown_gap_s
+
+        rd = ringdown_gap_s(
+            m,
+            part1["actuator"],
+            part1["frequency_hz"],
+            settings.ringdown_gap_k,
+            zeta=settings.ringdown_zeta,
+            band_hz=band_hz,
+        )
+        out = {
+            "gap_s": max(out["gap_s"], rd["gap_s"]),
+            "ringdown": {**rd, "k": settings.ringdown_gap_k},
+        }
+    return out
 
 
 def drive_cap_v(settings: StimulusSettings, piezo_min_v: float, piezo_max_v: float) -> float:
@@ -138,12 +169,24 @@ def flow_plan(
         notes.append(
             f"sensation level only {sl:.1f} dB (drive limit {cap:g} V): may be hard to feel"
         )
+    if t.min_contrast_db > 0:
+        short = [p for p in parts if p["contrast_db"] < t.min_contrast_db]
+        notes += [
+            f"part {parts.index(p) + 1}: contrast {p['contrast_db']:.1f} dB is below the "
+            f"{t.min_contrast_db:g} dB floor (no candidate reaches it)"
+            for p in short
+        ]
+    gap = gap_after_part_1(t.vmap, parts[0], settings, t.band_hz)
+    meta = {"kind": "flow", "sensation_level_db": float(sl), "parts": parts, "notes": notes}
+    meta["min_contrast_db"] = float(t.min_contrast_db)
+    if "ringdown" in gap:
+        meta["ringdown"] = gap["ringdown"]
     return OutputPlan(
         sample_rate_hz=settings.sample_rate_hz,
         segments=tuple(segs),
         name=name or "flow",
-        gap_s=settings.gap_s,
-        meta={"kind": "flow", "sensation_level_db": float(sl), "parts": parts, "notes": notes},
+        gap_s=gap["gap_s"],
+        meta=meta,
     )
 
 

@@ -2,6 +2,13 @@
 maximum over frequency and excitation of ``|H_active| - |H_passive|`` (um/V), the
 frequency where it occurs and the actuator (excitation) that produces it.
 
+The paper's rule (the default, ``min_contrast_db = 0``) ranks by ABSOLUTE difference:
+at the first mode everything moves a lot, so an entry can win with a contrast
+``20 log10(|H_active| / |H_passive|)`` of ~2 dB, and both points are felt. With a
+contrast floor ``min_contrast_db = C > 0`` only candidates with contrast >= C may win
+(still ranked by difference); a pair with no such candidate gets its best-contrast
+candidate instead (the flow's ``contrast_db`` says how far it falls short).
+
 Only usable bins count: ``freq_hz <= band_hz`` and not masked (near-DC bins can never win).
 Active = passive has no flow: difference 0, frequency NaN, actuator -1 (``query`` says so).
 """
@@ -30,6 +37,7 @@ class Tables:
     actuator: np.ndarray  # (P, P) int8 index into excitations, -1 on the diagonal
     band_hz: float
     vmap: VibrationMap  # the map they were built from (for arbitrary points and stimuli)
+    min_contrast_db: float = 0.0  # 0: the paper's rule (largest absolute difference)
 
     @property
     def excitations(self) -> tuple[str, ...]:
@@ -48,36 +56,53 @@ def usable_bins(m: VibrationMap, band_hz: float) -> np.ndarray:
 
 
 def pair_max(
-    amp_active: np.ndarray, amp_passive: np.ndarray
+    amp_active: np.ndarray, amp_passive: np.ndarray, min_contrast_db: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Max over (E, F) of ``amp_active[:, a] - amp_passive[:, p]`` for every pair.
 
     ``amp_*`` are (E, Na, F) / (E, Np, F) magnitudes; returns (Na, Np) value, flat index of
-    the winner in (E, F) order as excitation ``// F`` and bin ``% F``.
+    the winner in (E, F) order as excitation ``// F`` and bin ``% F``. With
+    ``min_contrast_db`` > 0 only candidates with ``active >= passive x 10^(C/20)`` may win;
+    a pair without one gets the candidate of largest ratio ``active / passive``.
     """
     e, na, f = amp_active.shape
     xa = np.ascontiguousarray(amp_active.transpose(1, 0, 2).reshape(na, e * f))
     xp = np.ascontiguousarray(amp_passive.transpose(1, 0, 2).reshape(-1, e * f))
     best = np.empty((na, xp.shape[0]), amp_active.dtype)
     arg = np.empty((na, xp.shape[0]), np.int64)
+    ratio = float(10 ** (min_contrast_db / 20))
     chunk = max(1, int(4e6 // max(1, xp.size)))
     for i in range(0, na, chunk):
         d = xa[i : i + chunk, None, :] - xp[None, :, :]
-        a = d.argmax(axis=-1)
+        if min_contrast_db > 0:
+            ok = xa[i : i + chunk, None, :] >= ratio * xp[None, :, :]
+            a = np.where(ok, d, -np.inf).argmax(axis=-1)
+            none = ~np.take_along_axis(ok, a[..., None], axis=-1)[..., 0]
+            if none.any():
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    r = xa[i : i + chunk, None, :] / xp[None, :, :]
+                a = np.where(none, np.nan_to_num(r, nan=0.0).argmax(axis=-1), a)
+        else:
+            a = d.argmax(axis=-1)
         arg[i : i + chunk] = a
         best[i : i + chunk] = np.take_along_axis(d, a[..., None], axis=-1)[..., 0]
     return best, arg // f, arg % f
 
 
 def build_tables(
-    m: VibrationMap, band_hz: float = 650.0, progress: Progress | None = None
+    m: VibrationMap,
+    band_hz: float = 650.0,
+    progress: Progress | None = None,
+    *,
+    min_contrast_db: float = 0.0,
 ) -> Tables:
-    """All P x P ordered pairs, vectorised (float32 magnitudes)."""
+    """All P x P ordered pairs, vectorised (float32 magnitudes); ``min_contrast_db`` > 0:
+    the contrast-aware ranking (module docstring)."""
     keep = usable_bins(m, band_hz)
     amp = np.abs(m.frf_um_per_v[:, :, keep]).astype(np.float32)
     if progress:
         progress(0.0, "building lookup tables")
-    best, exc, k = pair_max(amp, amp)
+    best, exc, k = pair_max(amp, amp, min_contrast_db)
     freq = m.freq_hz[keep][k]
     diag = np.arange(m.points.size)
     best = best.astype(float)
@@ -87,7 +112,7 @@ def build_tables(
     act[diag, diag] = -1
     if progress:
         progress(1.0, "lookup tables built")
-    return Tables(best, freq, act, float(band_hz), m)
+    return Tables(best, freq, act, float(band_hz), m, float(min_contrast_db))
 
 
 def query_indices(t: Tables, active: int, passive: int) -> dict:
@@ -122,7 +147,7 @@ def query_points(
     keep = usable_bins(t.vmap, t.band_hz)
     h = interpolate(t.vmap, np.array([active_mm, passive_mm]), method, extrapolate=extrapolate)
     amp = np.abs(h[:, :, keep])
-    best, exc, k = pair_max(amp[:, :1], amp[:, 1:])
+    best, exc, k = pair_max(amp[:, :1], amp[:, 1:], t.min_contrast_db)
     return {
         "max_difference_um_per_v": float(best[0, 0]),
         "frequency_hz": float(t.vmap.freq_hz[keep][k[0, 0]]),
@@ -146,6 +171,7 @@ def save_tables(path: str | os.PathLike, t: Tables) -> Path:
             freq_hz=t.freq_hz,
             actuator=t.actuator,
             band_hz=np.array(t.band_hz),
+            min_contrast_db=np.array(t.min_contrast_db),
             map_hash=np.array(t.vmap.content_hash()),
             **mapped,
         )
@@ -181,7 +207,12 @@ def load_tables(path: str | os.PathLike) -> Tables:
         gain=float(meta["provenance"].get("gain", 1.0)),
     )
     return Tables(
-        data["max_diff_um_per_v"], data["freq_hz"], data["actuator"], float(data["band_hz"]), vm
+        data["max_diff_um_per_v"],
+        data["freq_hz"],
+        data["actuator"],
+        float(data["band_hz"]),
+        vm,
+        float(data.get("min_contrast_db", 0.0)),
     )
 
 
