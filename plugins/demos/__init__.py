@@ -5,8 +5,14 @@ on the twin (a scripted hand) or the real table. Benchmarks: ``haptable bench lo
 (per-stage and end-to-end latency) and ``haptable bench soak`` (long run: drops, RSS,
 underruns). Profile sections: ``[runtime]`` (frame loop, watchdog) and ``[demos]``.
 
-Public API (for the console): ``start_demo(name, profile, plugins, outputs, **params)
--> DemoRun`` with ``stop()`` and ``snapshot()``; ``DEMOS``.
+The demos are registered through ``haptable_register_demos`` as ``flow`` and ``knob``:
+``factory(profile, plugins, outputs, **params) -> DemoRun`` (``stop()``,
+``snapshot()``, ``scene_name``; params as ``plugins.demos.run.start_demo``).
+``start_demo(name, ...)`` is the same call by name (kept for compatibility).
+
+Other plugins are reached only through registrations: effects ``hand_flow``, ``flow``
+and ``knob``, the ``[vibrometer]`` driver (the twin's map), the camera and classifier
+drivers and the ``flow_hand``/``knob`` scenes.
 """
 
 from __future__ import annotations
@@ -73,6 +79,30 @@ def start_demo(name: str, profile: Any, plugins: Any, outputs: Any, **params: An
     from .run import start_demo as _start
 
     return _start(name, profile, plugins, outputs, **params)
+
+
+def _demo_factory(name: str):
+    def factory(profile: Any, plugins: Any, outputs: Any, **params: Any):
+        from .run import start_demo as _start
+
+        return _start(name, profile, plugins, outputs, **params)
+
+    factory.__doc__ = f"Start the {name} demo (``plugins.demos.run.start_demo``)."
+    return factory
+
+
+@hookimpl
+def haptable_register_demos(register) -> None:
+    register(
+        "flow",
+        _demo_factory("flow"),
+        description="flow under a resting hand, or between two resting index fingers",
+    )
+    register(
+        "knob",
+        _demo_factory("knob"),
+        description="two-finger rotation of a virtual knob with haptic feedback",
+    )
 
 
 @hookimpl

@@ -58,11 +58,9 @@ def run(args, ctx) -> int:
         out = run_soak(ctx, False, minutes=args.minutes if args.minutes is not None else 10.0)
         print(json.dumps(out, indent=2, default=float) if args.json else out)
         return 0
-    from .run import start_demo
-
+    start = ctx.pm.get("demo", args.demo).factory  # the registered demo (this plugin's)
     with ctx.outputs(fast=False) as out:
-        run_ = start_demo(
-            args.demo,
+        run_ = start(
             ctx.profile,
             ctx.pm,
             out,

@@ -22,10 +22,12 @@ import numpy as np
 from console.errors import SafetyRefusal, UserError
 from console.types import DIRECTIONS_MM, Frame
 
+from .adapters import summary_parts
+
 log = logging.getLogger("haptable.demos.flow")
 
 
-#: Direction -> unit vector in table mm (the vibrotactile convention: up = +y).
+#: Direction -> unit vector in table mm (console.types: up = -y, as the projected arrows).
 UNIT = DIRECTIONS_MM  # the projector's arrows use the same convention
 
 
@@ -253,7 +255,7 @@ class FlowDemo:
             "late_s": late_s,
             "seq": frame.seq,
             "direction": direction,
-            "parts": plan.meta.get("parts", []),
+            "parts": summary_parts(plan),
             "report": report,
         }
         if pair is None:

@@ -234,13 +234,15 @@ def start_demo(
                 projector=projector,
             )
         else:
-            from .adapters import HandFlowPlans, TwoPointPlans, flow_effect
+            from .adapters import flow_renderers
             from .flow import FlowDemo
 
-            plans = flow_plans or flow_effect(
-                plugins, profile, flow_map_path(profile, cache_dir, plugins), cache_dir
-            )
-            pairs = TwoPointPlans(plans) if isinstance(plans, HandFlowPlans) else None
+            pairs = None
+            plans = flow_plans
+            if plans is None:
+                plans, pairs = flow_renderers(
+                    plugins, profile, flow_map_path(profile, cache_dir, plugins)
+                )
             demo = FlowDemo(
                 profile,
                 plugins,

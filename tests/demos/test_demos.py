@@ -110,10 +110,10 @@ def test_knob_rotation_drives_the_knob_with_the_condition_on_the_screen(
 
 
 def test_knob_vf_frequency_rises_with_the_rotation_speed(profile, plugins, outputs_rt):
-    from plugins.demos import start_demo
-
     out = outputs_rt
-    run = start_demo("knob", profile, plugins, out, condition="HD+VF", watchdog_ms=5000)
+    assert {"flow", "knob"} <= set(plugins.of("demo"))  # registered like any plugin's demo
+    start = plugins.get("demo", "knob").factory
+    run = start(profile, plugins, out, condition="HD+VF", watchdog_ms=5000)
     try:
         assert wait_until(lambda: len(run.demo.crossings) >= 3, 30.0)
     finally:
@@ -143,7 +143,6 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
 ):
     from console.runtime.outputs import open_outputs
     from plugins.demos import start_demo
-    from plugins.demos.adapters import HandFlowPlans
     from plugins.twin.camera import SequenceScript
 
     prof = flow_profile
@@ -173,9 +172,11 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
     # the hand the camera saw is the hand the twin posed
     hand_mm = np.array(truth["hands"][0]["center_mm"])
     assert np.hypot(*(np.array(ev["rest_mm"]) - hand_mm)) < 80.0
-    # the plan is the flow the vibrotactile tables give for that position and direction
-    ref = HandFlowPlans(prof, prof.get("demos.flow_map"), tmp_path / "ref").plan(
-        ev["center_mm"], "up"
+    # the plan is the flow the registered hand_flow effect gives there (same search)
+    ref = (
+        plugins.get("effect", "hand_flow")
+        .factory(prof)
+        .render(center_mm=ev["center_mm"], direction="up", vmap=prof.get("demos.flow_map"))
     )
     parts = ev["parts"]
     assert [(p["frequency_hz"], p["actuator"]) for p in parts] == [
@@ -312,7 +313,7 @@ class BothHands:
 def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugins, tmp_path):
     from console.runtime.outputs import open_outputs
     from plugins.demos import start_demo
-    from plugins.demos.adapters import HandFlowPlans, TwoPointPlans
+    from plugins.demos.adapters import summary_parts
     from plugins.twin.camera import SequenceScript
 
     prof = flow_profile
@@ -337,10 +338,12 @@ def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugi
     tips = sorted(truth["contacts_mm"])  # right: from the left finger to the right one
     assert np.hypot(*(np.array(ev["from_mm"]) - tips[0])) < 10.0
     assert np.hypot(*(np.array(ev["to_mm"]) - tips[1])) < 10.0
-    ref = TwoPointPlans(HandFlowPlans(prof, prof.get("demos.flow_map"), tmp_path / "r")).plan(
-        ev["from_mm"], ev["to_mm"]
+    ref = (
+        plugins.get("effect", "flow")
+        .factory(prof)
+        .render(from_point=ev["from_mm"], to_point=ev["to_mm"], vmap=prof.get("demos.flow_map"))
     )
-    assert ev["parts"] == ref.meta["parts"]
+    assert ev["parts"] == summary_parts(ref)
     rep = ev["report"]
     for i, p in enumerate(ev["parts"]):
         seg = rec[rep.segment_start[i] : rep.segment_end[i], 0]
@@ -361,7 +364,9 @@ def test_pair_order_follows_the_direction():
     assert sum(f is not None for f in fired) == 1
 
 
-def test_a_registered_hand_flow_effect_is_used_when_a_plugin_provides_one(profile, tmp_path):
+def test_the_demo_renders_flows_with_whichever_plugin_registers_hand_flow(
+    profile, tmp_path, monkeypatch
+):
     import plugins.demos
     import plugins.tuio
     from console.hookspecs import hookimpl
@@ -385,7 +390,9 @@ def test_a_registered_hand_flow_effect_is_used_when_a_plugin_provides_one(profil
             register("hand_flow", Effect)
 
     mine = {"demos": plugins.demos, "tuio": plugins.tuio, "fakeflow": FakePlugin()}
+    monkeypatch.setenv("HAPTABLE_BLOCK_PLUGINS", "vibrotactile")  # the fake replaces it
     pm = load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
+    assert pm.get("effect", "hand_flow").plugin == "fakeflow"
     eff = flow_effect(pm, profile, tmp_path / "map.npz", None)
     assert eff.cached((100.0, 200.0), "up") is None
     plan = eff.plan((100.04, 200.0), "up")
