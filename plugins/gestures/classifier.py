@@ -112,6 +112,9 @@ class SvmClassifier:
 
     def process(self, frame: Frame) -> FrameResult:
         """One frame through the pipeline (the background learns where no hand is)."""
+        from .vision import check_frame
+
+        check_frame(frame.image, self.params.shape)
         if self.background.image is None:
             self.background.update(frame.image)
         bg = self.background.image
