@@ -46,10 +46,17 @@ def measured_map(loop_profile, loop_plugins):
 
 
 @pytest.fixture(scope="session")
-def loop_tables(measured_map, loop_profile):
-    from plugins.vibrotactile.tables import build_tables
+def loop_effects(loop_profile, loop_plugins):
+    """The registered flow and hand_flow effects with the check's 1.5 s parts."""
+    from plugins.twin.plate.loop_check import effects_of
 
-    return build_tables(measured_map, float(loop_profile.get("vibrotactile.band_hz")))
+    return effects_of(loop_profile, loop_plugins)
+
+
+@pytest.fixture(scope="session")
+def loop_tables(measured_map, loop_effects):
+    """The paper's tables (largest absolute difference, Fig. 8) of the measured map."""
+    return loop_effects[0].tables(vmap=measured_map, min_contrast_db=0.0)
 
 
 @pytest.fixture(scope="session")
@@ -62,20 +69,30 @@ def loop_outputs(loop_profile, loop_plugins):
 
 
 @pytest.fixture(scope="session")
-def pair_rows(loop_outputs, loop_profile, loop_tables):
+def pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
     from plugins.twin.plate.loop_check import flow_pairs_check, format_pairs
 
-    rows = flow_pairs_check(loop_outputs, loop_profile, loop_tables, PAIRS)
+    rows = flow_pairs_check(
+        loop_outputs, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=0
+    )
     print("\nclosed loop, flows between points (um; tone amplitude at the part's frequency):")
     print(format_pairs(rows))
     return rows
 
 
 @pytest.fixture(scope="session")
-def region_rows(loop_outputs, loop_profile, measured_map):
+def region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     from plugins.twin.plate.loop_check import format_regions, hand_regions_check
 
-    rows = hand_regions_check(loop_outputs, loop_profile, measured_map, REGIONS, DIRECTIONS)
+    rows = hand_regions_check(
+        loop_outputs,
+        loop_profile,
+        measured_map,
+        REGIONS,
+        DIRECTIONS,
+        plugins=loop_plugins,
+        ringdown_gap_k=0,
+    )
     print("\nclosed loop, flows under a hand (square levels, um; X = 3 JND above threshold):")
     print(format_regions(rows))
     return rows

@@ -148,7 +148,9 @@ def test_ring_down_makes_both_sides_vibrate_at_the_switch_as_documented(region_r
     assert ("281.73,223.645", "right", 2) in overlap
 
 
-def test_the_recording_route_equals_the_plan_route(loop_outputs, loop_profile, loop_tables):
+def test_the_recording_route_equals_the_plan_route(
+    loop_outputs, loop_profile, loop_tables, loop_plugins
+):
     """What the gate played (recording + relay log) drives the twin like the plan itself:
     same samples in each part, the plan's patches connected, same tone amplitudes."""
     import numpy as np
@@ -156,20 +158,17 @@ def test_the_recording_route_equals_the_plan_route(loop_outputs, loop_profile, l
     from plugins.twin.plate import closed_loop as cl
     from plugins.twin.plate.loop_check import (
         LoopSettings,
-        perception_of,
-        piezo_limits,
+        effects_of,
         recording_with_offset,
         relay_channels_of,
-        stimulus_settings,
     )
-    from plugins.vibrotactile.stimuli import flow_plan
 
     m = loop_tables.vmap
     a, b = m.point_index(62), m.point_index(75)
-    st = stimulus_settings(loop_profile, LoopSettings(part_s=0.6))
-    plan = flow_plan(
-        loop_tables, a, b, perception_of(loop_profile), st, **piezo_limits(loop_profile)
-    )
+    flow, _ = effects_of(loop_profile, loop_plugins, LoopSettings(part_s=0.6))
+    st = flow.setup.settings
+    plan = flow.render(from_point=62, to_point=75, tables=loop_tables, ringdown_gap_k=0)
+    assert len(plan.segments[0].piezo_v) == int(round(0.6 * st.sample_rate_hz))
     report = loop_outputs.play(plan)
     rec, clock0 = recording_with_offset(loop_outputs)
     start, stop = report.segment_start[0], report.segment_end[-1]

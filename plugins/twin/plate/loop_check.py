@@ -2,9 +2,12 @@
 and the plate twin's true response to what was played, against what the tables predicted.
 
 Used by ``tests/closed_loop`` and the ``closed-loop`` benchmark. The stimuli come from the
-vibrotactile plugin's public functions (imported lazily: this is a consumer of its plans,
-exactly as a user's scene would be); the outputs are the profile's (twin audio + relays),
-so every sample went through ``console.safety``.
+registered effects ``flow`` and ``hand_flow`` (``plugins.get("effect", name)``: this is a
+consumer of their plans, exactly as a scene is); the outputs are the profile's (twin
+audio + relays), so every sample went through ``console.safety``. The effects' options
+are checked here too: ``min_contrast_db`` (contrast-aware tables) and
+``ringdown_gap_k`` (silence of k decay times after part 1); ``compare_options`` plays
+the same pairs and regions with the paper's rule and with the options.
 
 Per flow part the table predicts, at drive amplitude V and the part's frequency/actuator,
 active = V |H_active|, passive = V |H_passive| and margin = V x (table difference). The
@@ -78,31 +81,27 @@ def relay_channels_of(profile) -> dict[str, int]:
     return {n: int(p["relay_channel"]) for n, p in profile.items("patches").items()}
 
 
-def stimulus_settings(profile, ls: LoopSettings):
-    from plugins.vibrotactile.stimuli import StimulusSettings
+def loop_profile(profile, ls: LoopSettings):
+    """The profile with the flow parts' length and ramp of ``ls`` (``[vibrotactile]
+    part_s`` / ``ramp_ms``); everything else as the profile says."""
+    from dataclasses import replace
 
-    vt = profile.section("vibrotactile")
-    return StimulusSettings(
-        sample_rate_hz=int(profile.get("audio.sample_rate_hz")),
-        part_s=ls.part_s,
-        ramp_ms=max(ls.ramp_ms, float(profile.get("limits.ramp_min_ms"))),
-        sensation_level_db=float(vt.get("sensation_level_db", 20.0)),
-        drive_max_v=float(vt.get("drive_max_v", 95.0)),
-        interpolation=str(vt.get("interpolation", "spline")),
+    vt = {**profile.section("vibrotactile"), "part_s": ls.part_s, "ramp_ms": ls.ramp_ms}
+    return replace(profile, data={**profile.data, "vibrotactile": vt})
+
+
+def effects_of(profile, plugins=None, ls: LoopSettings | None = None) -> tuple:
+    """The registered ``flow`` and ``hand_flow`` effects for ``profile`` with ``ls``'s
+    part length (``plugins`` default: the installed plugins)."""
+    if plugins is None:
+        from console.plugins import load_plugins
+
+        plugins = load_plugins()
+    prof = loop_profile(profile, ls or LoopSettings())
+    return (
+        plugins.get("effect", "flow").factory(prof),
+        plugins.get("effect", "hand_flow").factory(prof),
     )
-
-
-def perception_of(profile):
-    from plugins.vibrotactile.perception import Perception
-
-    return Perception.from_section(profile.section("perception"))
-
-
-def piezo_limits(profile) -> dict:
-    from console.safety import Limits
-
-    lo, hi = Limits.from_profile(profile).piezo_range()
-    return {"piezo_min_v": lo, "piezo_max_v": hi}
 
 
 def recording_with_offset(outputs, tries: int = 200) -> tuple[np.ndarray, int]:
@@ -163,15 +162,28 @@ def _play_and_envelope(
 
 
 def flow_pairs_check(
-    outputs, profile, tables, pairs=DEFAULT_PAIRS, ls: LoopSettings | None = None
+    outputs,
+    profile,
+    tables,
+    pairs=DEFAULT_PAIRS,
+    ls: LoopSettings | None = None,
+    *,
+    plugins=None,
+    min_contrast_db: float | None = None,
+    ringdown_gap_k: float | None = None,
 ) -> list[dict]:
     """One row per (pair, part): predicted vs achieved active/passive amplitude and margin.
 
-    Achieved = the part's tone amplitude on the twin (``tone_um``); the rows also carry
-    the broadband level (``all_*``: the previous part's ring-down included) and the
-    passive point's level while the part ramps up (``onset_passive_um``)."""
+    ``tables``: lookup tables (used as they are) or a vibration map (tables built by the
+    ``flow`` effect with ``min_contrast_db``, default the profile's). ``ringdown_gap_k``:
+    the effect's ring-down gap (default the profile's). Achieved = the part's tone
+    amplitude on the twin (``tone_um``); the rows also carry the broadband level
+    (``all_*``: the previous part's ring-down included) and the passive point's level
+    while the part ramps up (``onset_passive_um``)."""
     with _one_blas_thread():
-        return _flow_pairs_check(outputs, profile, tables, pairs, ls)
+        return _flow_pairs_check(
+            outputs, profile, tables, pairs, ls, plugins, min_contrast_db, ringdown_gap_k
+        )
 
 
 def _one_blas_thread():
@@ -182,18 +194,29 @@ def _one_blas_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
-    from plugins.vibrotactile.stimuli import flow_plan
+def _source(tables, min_contrast_db) -> dict:
+    """Render request keys for a tables-or-map argument."""
+    vmap = getattr(tables, "vmap", None)
+    if vmap is None:  # a map
+        return {"vmap": tables, "min_contrast_db": min_contrast_db}
+    if min_contrast_db is not None and min_contrast_db != tables.min_contrast_db:
+        return {"vmap": vmap, "min_contrast_db": min_contrast_db}
+    return {"tables": tables}
 
+
+def _flow_pairs_check(
+    outputs, profile, tables, pairs, ls, plugins, min_contrast_db, ringdown_gap_k
+) -> list[dict]:
     ls = ls or LoopSettings()
     twin = twin_of(profile)
-    st, per = stimulus_settings(profile, ls), perception_of(profile)
-    m = tables.vmap
+    flow, _ = effects_of(profile, plugins, ls)
+    src = _source(tables, min_contrast_db)
     rows = []
     for a_no, b_no in pairs:
-        a, b = m.point_index(a_no), m.point_index(b_no)
-        plan = flow_plan(tables, a, b, per, st, **piezo_limits(profile))
-        pts = m.points_mm[[a, b]]
+        plan = flow.render(
+            from_point=int(a_no), to_point=int(b_no), ringdown_gap_k=ringdown_gap_k, **src
+        )
+        pts = np.array([plan.meta["from_mm"], plan.meta["to_mm"]])
         freqs = [p["frequency_hz"] for p in plan.meta["parts"]]
         env = _play_and_envelope(outputs, profile, twin, plan, pts, ls, 2, freqs)
         for i, (p, e) in enumerate(zip(plan.meta["parts"], env, strict=True)):
@@ -201,7 +224,7 @@ def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
             v = p["amplitude_v"]
             pred_a, pred_p = v * p["active_um_per_v"], v * p["passive_um_per_v"]
             ach_a, ach_p = float(e.tone_um[act]), float(e.tone_um[pas])
-            thr_db = float(per.threshold_db(p["frequency_hz"], "fingertip"))
+            thr_db = float(p["threshold_db"])  # fingertip threshold at the part's frequency
             rows.append(
                 {
                     "pair": f"{a_no}->{b_no}",
@@ -211,10 +234,13 @@ def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
                     "actuator": p["actuator"],
                     "frequency_hz": p["frequency_hz"],
                     "amplitude_v": v,
+                    "gap_s": float(plan.gap_s),
+                    "min_contrast_db": float(plan.meta.get("min_contrast_db", 0.0)),
                     "table_um_per_v": p["max_difference_um_per_v"],
                     "pred_active_um": pred_a,
                     "pred_passive_um": pred_p,
                     "pred_margin_um": v * p["max_difference_um_per_v"],
+                    "pred_contrast_db": float(p["contrast_db"]),
                     "ach_active_um": ach_a,
                     "ach_passive_um": ach_p,
                     "ach_margin_um": ach_a - ach_p,
@@ -224,6 +250,8 @@ def _flow_pairs_check(outputs, profile, tables, pairs, ls) -> list[dict]:
                     "all_active_um": float(e.amplitude_um[act]),
                     "all_passive_um": float(e.amplitude_um[pas]),
                     "onset_passive_um": float(e.onset_um[pas]),
+                    "onset_passive_sl_db": 20 * math.log10(max(float(e.onset_um[pas]), 1e-30))
+                    - thr_db,
                     "peak_active_um": float(e.peak_um[act]),
                     "peak_passive_um": float(e.peak_um[pas]),
                     "margin_error_rel_active": abs(
@@ -243,68 +271,62 @@ def hand_regions_check(
     directions=("left", "right", "up", "down"),
     ls: LoopSettings | None = None,
     screen_stride: int = 3,
+    *,
+    plugins=None,
+    ringdown_gap_k: float | None = None,
 ) -> list[dict]:
     """One row per (region, direction, part): square levels predicted from the map vs
     achieved on the twin, against the 3-JND line; a flow the map cannot make is a row
     with ``ok`` False and its reason. ``screen_stride`` as in ``haptable flow --hand``
-    (3: staged search; 1: exhaustive)."""
+    (3: staged search; 1: exhaustive). ``ringdown_gap_k``: the effect's ring-down gap
+    (default the profile's). Regions are rendered at their centre rounded to 0.1 mm."""
     with _one_blas_thread():
-        return _hand_regions_check(outputs, profile, vmap, regions, directions, ls, screen_stride)
+        return _hand_regions_check(
+            outputs, profile, vmap, regions, directions, ls, screen_stride, plugins, ringdown_gap_k
+        )
 
 
-def _hand_regions_check(outputs, profile, vmap, regions, directions, ls, screen_stride):
-    from console.types import OutputPlan, patches_of
-    from plugins.vibrotactile.hand import hand_flow, side_masks, square_levels
-    from plugins.vibrotactile.stimuli import drive_cap_v, tone_segment
+def _hand_regions_check(
+    outputs, profile, vmap, regions, directions, ls, screen_stride, plugins, ringdown_gap_k
+):
+    from console.errors import UserError
 
     ls = ls or LoopSettings()
     twin = twin_of(profile)
-    st, per = stimulus_settings(profile, ls), perception_of(profile)
+    _, hand = effects_of(profile, plugins, ls)
     vt = profile.section("vibrotactile")
     hand_mm, squares, subgrid = (
         float(vt.get("hand_mm", 120.0)),
         int(vt.get("hand_squares", 3)),
         int(vt.get("hand_subgrid", 15)),
     )
-    kw = dict(
-        hand_mm=hand_mm,
-        squares=squares,
-        subgrid=subgrid,
-        band_hz=float(vt.get("band_hz", 650.0)),
-        method=st.interpolation,
-    )
-    cap = drive_cap_v(st, **piezo_limits(profile))
     rows = []
     for c in regions:
-        pts = hand_subgrid_mm(c, hand_mm, squares, subgrid)  # lattice (xs, ys)
         for d in directions:
-            res = hand_flow(vmap, c, d, per, cap_v=cap, screen_stride=screen_stride, **kw)
             base = {"region": f"{c[0]:g},{c[1]:g}", "direction": d}
-            if not res["ok"]:
-                rows.append({**base, "part": 0, "ok": False, "reason": res.get("reason", "")})
-                continue
-            segs = tuple(
-                tone_segment(
-                    p["frequency_hz"],
-                    p["amplitude_v"],
-                    st.part_s,
-                    st.ramp_ms / 1e3,
-                    st.sample_rate_hz,
-                    patches_of(p["actuator"]),
-                    label=f"part {i + 1} {p['actuator']}",
+            try:
+                plan = hand.render(
+                    center_mm=c,
+                    direction=d,
+                    vmap=vmap,
+                    exhaustive=screen_stride == 1,
+                    screen_stride=screen_stride,
+                    ringdown_gap_k=ringdown_gap_k,
                 )
-                for i, p in enumerate(res["parts"])
-            )
-            plan = OutputPlan(st.sample_rate_hz, segs, name=f"hand flow {d} at {base['region']}")
-            freqs = [p["frequency_hz"] for p in res["parts"]]
+            except UserError as exc:
+                rows.append({**base, "part": 0, "ok": False, "reason": str(exc)})
+                continue
+            center = tuple(plan.meta["center_mm"])
+            pts = hand_subgrid_mm(center, hand_mm, squares, subgrid)  # lattice (xs, ys)
+            parts = plan.meta["parts"]
+            freqs = [p["frequency_hz"] for p in parts]
             env = _play_and_envelope(outputs, profile, twin, plan, pts, ls, 0, freqs)
-            start, end = side_masks(d, squares)
-            for i, (p, e) in enumerate(zip(res["parts"], env, strict=True)):
+            start, end = hand.sides(d)
+            for i, (p, e) in enumerate(zip(parts, env, strict=True)):
                 side_a, side_b = (start, end) if i == 0 else (end, start)
                 v, x = p["amplitude_v"], p["x_um"]
-                k = int(np.argmin(np.abs(vmap.freq_hz - p["frequency_hz"])))
-                q, _ = square_levels(vmap, c, bins=np.array([k]), **kw)
-                pred = q[p["e"], :, :, 0] * v
+                q = hand.square_levels_um_per_v(center, p["actuator"], p["frequency_hz"], vmap=vmap)
+                pred = q * v
                 ach = square_levels_um(e.tone_um, squares, subgrid)
                 ach_all = square_levels_um(e.amplitude_um, squares, subgrid)
                 onset = square_levels_um(e.onset_um, squares, subgrid)
@@ -316,6 +338,7 @@ def _hand_regions_check(outputs, profile, vmap, regions, directions, ls, screen_
                         "actuator": p["actuator"],
                         "frequency_hz": p["frequency_hz"],
                         "amplitude_v": v,
+                        "gap_s": float(plan.gap_s),
                         "x_um": x,
                         "pred_active_um": float(pred[side_a].max()),
                         "pred_passive_um": float(pred[side_b].max()),
@@ -447,32 +470,30 @@ def run_bench(ctx, quick: bool) -> dict:
     order: same tones, different ring-down overlap)."""
     from console.bench import machine_info
     from console.runtime.outputs import open_outputs
-    from plugins.vibrotactile.hand import region_centers
-    from plugins.vibrotactile.tables import build_tables
 
     profile, pm = ctx.profile, ctx.pm
     t0 = time.perf_counter()
     with _one_blas_thread():
         vmap = measured_map(profile, pm)
     t_map = time.perf_counter() - t0
+    flow, hand = effects_of(profile, pm)
     t0 = time.perf_counter()
-    tables = build_tables(vmap, float(profile.get("vibrotactile.band_hz", 650.0)))
+    tables = flow.tables(vmap=vmap, min_contrast_db=0.0)  # the paper's rule (Fig. 8)
     t_tab = time.perf_counter() - t0
     ls = LoopSettings()
     regions = DEFAULT_REGIONS[:2] if quick else DEFAULT_REGIONS
     res: dict = {"machine": machine_info(), "part_s": ls.part_s}
     with open_outputs(profile, pm, fast=True) as out:
         t0 = time.perf_counter()
-        pairs = flow_pairs_check(out, profile, tables, DEFAULT_PAIRS, ls)
+        pairs = flow_pairs_check(out, profile, tables, DEFAULT_PAIRS, ls, plugins=pm)
         t_pairs = time.perf_counter() - t0
         t0 = time.perf_counter()
-        hands = hand_regions_check(out, profile, vmap, regions, ls=ls)
+        hands = hand_regions_check(out, profile, vmap, regions, ls=ls, plugins=pm)
         t_hands = time.perf_counter() - t0
         if not quick:
-            hand_mm = float(profile.get("vibrotactile.hand_mm", 120.0))
-            centers = [tuple(map(float, c)) for c in region_centers(vmap, hand_mm, 60.0)]
+            centers = hand.region_centers(60.0, vmap=vmap)
             t0 = time.perf_counter()
-            scan = hand_regions_check(out, profile, vmap, centers, ls=ls)
+            scan = hand_regions_check(out, profile, vmap, centers, ls=ls, plugins=pm)
             res["scan"] = {
                 "regions": len(centers),
                 "step_mm": 60.0,
