@@ -12,7 +12,7 @@ from console.errors import UserError
 from console.types import Frame, Gesture
 
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
-from .features import select_dynamic, select_static
+from .features import select_dynamic, select_kind, select_static
 from .model import GESTURES, GestureModel
 from .sketch import DYNAMIC
 from .vision import Background, FrameResult, VisionParams, process_frame
@@ -25,7 +25,7 @@ def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, floa
     xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX, model.static_frames)
     xs = select_static(xs, model.n_harmonics, N_HARMONICS_MAX)
     xd = select_dynamic(xd[k], model.n_harmonics, N_HARMONICS_MAX)
-    xk = xk[None, :]
+    xk = select_kind(xk)
     name = str(model.predict(xs, xd, xk)[0])
     conf = float(model.confidence(xs, xd, xk)[0])
     return name, ("dynamic" if name in DYNAMIC else "static"), conf, float(sc[k])

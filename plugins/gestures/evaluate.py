@@ -254,7 +254,7 @@ def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
         raise UserError(f"--harmonics {n_harmonics}: use 0 (no descriptors) or 2 to {nmax}")
     xs = F.select_static(fs.static, n_harmonics, nmax)
     xd = F.select_dynamic(fs.dynamic[n_frames], n_harmonics, nmax)
-    return xs, xd, fs.kind, fs.score[n_frames]
+    return xs, xd, F.select_kind(fs.kind), fs.score[n_frames]
 
 
 def splits(fs: FeatureSet, cv: str, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:

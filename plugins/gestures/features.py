@@ -286,3 +286,16 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
         ]
     )
     return x[:, cols]
+
+
+#: motion features the static/dynamic decision leaves out: the wrist angle, the palm
+#: centre and radius, and the brightness grid jitter even for a still hand (measured:
+#: fewer kind errors across subjects without them)
+KIND_DROP = (3, 4, 5, 6)
+
+
+def select_kind(x: np.ndarray) -> np.ndarray:
+    """What the static/dynamic classifier sees, from (n, N_MOTION) motion rows."""
+    x = np.atleast_2d(x)
+    keep = [i for i in range(x.shape[1]) if i not in KIND_DROP]
+    return x[:, keep]
