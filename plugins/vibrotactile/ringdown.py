@@ -7,9 +7,9 @@ low-frequency part 1 still rings when part 2 starts. The ring-down-aware gap is
 ``k x tau`` of part 1's mode: after ``k`` decay times the ring is ``8.7 k`` dB down
 (part 1 at ``SL`` dB above threshold falls below it for ``k >= SL / 8.7``).
 
-``zeta`` comes from the map's half-power bandwidth at the peak nearest the frequency
-(``2 zeta f_n = f_2 - f_1`` where the spatial RMS of ``|H|`` is ``peak / sqrt 2``),
-or from a given value when the bandwidth is not resolved.
+``zeta`` comes from the map's half-power bandwidth (``2 zeta f_n = f_2 - f_1`` where
+the spatial RMS of ``|H|`` is ``peak / sqrt 2``) of the mode contributing most at the
+part's frequency, or from a given value when no peak is resolved.
 """
 
 from __future__ import annotations
@@ -21,48 +21,59 @@ import numpy as np
 from console.vibration_map import VibrationMap
 
 
+def resonances(r: np.ndarray, f: np.ndarray) -> list[tuple[float, float, float]]:
+    """Resolved resonance peaks of a magnitude curve ``r(f)``: ``(f_n, zeta_n, height)``.
+
+    A peak counts when ``r`` falls below ``peak / sqrt 2`` on both sides before rising
+    above the peak (so measurement ripple is no peak) and the half-power band spans at
+    least 3 bins; ``zeta_n = (f_2 - f_1) / (2 f_n)``, crossings interpolated linearly.
+    """
+    out = []
+    if r.size < 3:
+        return out
+    cand = np.flatnonzero((r[1:-1] > r[:-2]) & (r[1:-1] >= r[2:])) + 1
+    df = float(np.median(np.diff(f)))
+    for k in cand:
+        half = r[k] / math.sqrt(2)
+        cross = []
+        for step in (-1, 1):
+            j = k
+            while 0 <= j + step < r.size and half <= r[j + step] <= r[k]:
+                j += step
+            if not 0 <= j + step < r.size or r[j + step] > r[k]:
+                break  # ran off the curve or into a higher peak: not resolved
+            t = (r[j] - half) / max(r[j] - r[j + step], 1e-300)
+            cross.append(float(f[j] + t * (f[j + step] - f[j])))
+        if len(cross) == 2 and cross[1] - cross[0] >= 3 * df:
+            fn = float(f[k])
+            out.append((fn, (cross[1] - cross[0]) / (2 * fn), float(r[k])))
+    return out
+
+
 def half_power_zeta(
     m: VibrationMap, excitation: str, freq_hz: float, *, band_hz: float = 650.0
 ) -> tuple[float, float] | None:
-    """``(f_n, zeta)`` of the resonance nearest ``freq_hz`` in the spatial RMS of the
-    excitation's ``|H|``, from its half-power bandwidth; ``None`` when no peak is found
-    or its bandwidth spans fewer than 3 bins (not resolved: too coarse to trust)."""
+    """``(f_n, zeta)`` of the mode that rings after a tone at ``freq_hz``: among the
+    resolved peaks (``resonances``) of the spatial RMS of the excitation's ``|H|``, the
+    one contributing most at ``freq_hz`` (single-mode magnitude
+    ``height / sqrt(1 + ((f - f_n) / (zeta f_n))^2)``). ``None`` when the resolved peaks
+    explain less than half the response at ``freq_hz`` (the lines are too coarse for the
+    damping of the mode that rings there)."""
     from plugins.vibrotactile.tables import usable_bins
 
     keep = usable_bins(m, max(band_hz, float(freq_hz)))
     f = m.freq_hz[keep]
     e = m.excitation_index(excitation)
     r = np.sqrt(np.mean(np.abs(m.frf_um_per_v[e][:, keep]) ** 2, axis=0))
-    if r.size < 3:
+    peaks = resonances(r, f)
+    if not peaks:
         return None
-    peaks = np.flatnonzero((r[1:-1] > r[:-2]) & (r[1:-1] >= r[2:])) + 1
-    if peaks.size == 0:
-        return None
-    k = int(peaks[np.argmin(np.abs(f[peaks] - freq_hz))])
-    half = r[k] / math.sqrt(2)
-    sides = []
-    for step in (-1, 1):
-        j = k
-        while 0 <= j + step < r.size and r[j + step] >= half:
-            j += step
-            if r[j] > r[k]:  # climbed into a stronger neighbouring mode
-                j = -1
-                break
-        if j < 0 or not 0 <= j + step < r.size:
-            sides.append(None)
-            continue
-        # linear interpolation of the crossing between bins j and j + step
-        t = (r[j] - half) / max(r[j] - r[j + step], 1e-300)
-        sides.append(float(f[j] + t * (f[j + step] - f[j])))
-    lo, hi = sides
-    if lo is None and hi is None:
-        return None
-    fn = float(f[k])
-    bw = (hi - lo) if lo is not None and hi is not None else 2 * abs((hi or lo) - fn)
-    df = float(np.median(np.diff(f)))
-    if bw < 3 * df:
-        return None
-    return fn, bw / (2 * fn)
+    share = [h / math.sqrt(1 + ((freq_hz - fn) / (z * fn)) ** 2) for fn, z, h in peaks]
+    best = int(np.argmax(share))
+    if share[best] < 0.5 * float(np.interp(freq_hz, f, r)):
+        return None  # the response there comes from modes the lines do not resolve
+    fn, z, _ = peaks[best]
+    return fn, z
 
 
 def decay_time_s(freq_hz: float, zeta: float) -> float:
