@@ -96,3 +96,51 @@ def region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     print("\nclosed loop, flows under a hand (square levels, um; X = 3 JND above threshold):")
     print(format_regions(rows))
     return rows
+
+
+@pytest.fixture(scope="session")
+def option_pair_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
+    """The same pairs with a 10 dB contrast floor and a 3-decay-time ring-down gap."""
+    from plugins.twin.plate.loop_check import flow_pairs_check, format_pairs
+
+    rows = flow_pairs_check(
+        loop_outputs,
+        loop_profile,
+        measured_map,
+        PAIRS,
+        plugins=loop_plugins,
+        min_contrast_db=10.0,
+        ringdown_gap_k=3.0,
+    )
+    print("\nclosed loop, the same flows with min_contrast_db 10 and ringdown_gap_k 3:")
+    print(format_pairs(rows))
+    return rows
+
+
+@pytest.fixture(scope="session")
+def gap_pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
+    """The paper's tables with only the ring-down gap (3 decay times)."""
+    from plugins.twin.plate.loop_check import flow_pairs_check
+
+    return flow_pairs_check(
+        loop_outputs, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=3.0
+    )
+
+
+@pytest.fixture(scope="session")
+def gap_region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
+    """The hand regions played with the ring-down gap (3 decay times)."""
+    from plugins.twin.plate.loop_check import format_regions, hand_regions_check
+
+    rows = hand_regions_check(
+        loop_outputs,
+        loop_profile,
+        measured_map,
+        REGIONS,
+        DIRECTIONS,
+        plugins=loop_plugins,
+        ringdown_gap_k=3.0,
+    )
+    print("\nclosed loop, flows under a hand with ringdown_gap_k 3:")
+    print(format_regions(rows))
+    return rows

@@ -15,6 +15,8 @@ moves more than the active point's tone at the start of part 2 and, averaged ove
 flat stretch, still more than the active point (52 -> 51). And a table entry on that
 mode meets the tables' criterion (largest ABSOLUTE difference) with a contrast of only
 ~2 dB while both points are ~20 dB above the fingertip threshold: both are felt.
+Both are the paper's defaults; ``test_options.py`` shows the documented options
+(``min_contrast_db``, ``ringdown_gap_k``) removing them.
 """
 
 from __future__ import annotations

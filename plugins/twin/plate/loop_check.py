@@ -388,7 +388,7 @@ def verdict(row: dict) -> str:
 
 def format_pairs(rows: list[dict]) -> str:
     head = (
-        f"{'pair':>7} {'pt':>2} {'act':>4} {'f_Hz':>6} {'V':>6} "
+        f"{'pair':>7} {'pt':>2} {'act':>4} {'f_Hz':>6} {'V':>6} {'gap s':>5} "
         f"{'pred A/P um':>15} {'ach A/P um':>15} {'pred dA':>7} {'ach dA':>7} {'err%':>5} "
         f"{'all P um':>8} {'onset P':>7} {'dB A/P':>6} {'SL P dB':>7}"
     )
@@ -396,7 +396,7 @@ def format_pairs(rows: list[dict]) -> str:
     for r in rows:
         out.append(
             f"{r['pair']:>7} {r['part']:>2} {r['actuator']:>4} {r['frequency_hz']:6.1f} "
-            f"{r['amplitude_v']:6.2f} "
+            f"{r['amplitude_v']:6.2f} {r.get('gap_s', 0.0):5.3f} "
             f"{r['pred_active_um']:7.3f}/{r['pred_passive_um']:<7.3f} "
             f"{r['ach_active_um']:7.3f}/{r['ach_passive_um']:<7.3f} "
             f"{r['pred_margin_um']:7.3f} {r['ach_margin_um']:7.3f} "
@@ -463,6 +463,88 @@ def summarize(pairs: list[dict], regions: list[dict]) -> dict:
     return out
 
 
+#: The options ``compare_options`` turns on (suggested values, not the defaults): a
+#: 10 dB contrast floor keeps the passive point 10 dB below the active one (first-mode
+#: entries at ~2 dB never win); 3 decay times of silence put part 1's ring 26 dB down.
+OPTION_CONTRAST_DB = 10.0
+OPTION_RINGDOWN_K = 3.0
+#: Hand regions for the comparison: where the whole-table scan (60 mm steps) found part 1
+#: ringing into part 2 above the 3-JND line, and the right edge (low headroom).
+OPTION_REGIONS: tuple[tuple[float, float], ...] = ((281.73, 223.645), (641.73, 163.645))
+
+
+def pair_problems(rows: list[dict]) -> dict:
+    """The two reported pair failures, counted: parts with < 3 dB achieved contrast, and
+    parts 2 that start with the passive point still ringing from part 1 (onset level >
+    1.5 x its flat-stretch level)."""
+    low = [r for r in rows if r["ach_contrast_db"] < 3.0]
+    ring = [r for r in rows if r["part"] == 2 and r["onset_passive_um"] > 1.5 * r["all_passive_um"]]
+    return {
+        "low_contrast": [f"{r['pair']} part {r['part']}" for r in low],
+        "ringdown_overlap": [f"{r['pair']} part {r['part']}" for r in ring],
+        "min_contrast_db": float(min(r["ach_contrast_db"] for r in rows)),
+        "max_passive_sl_db": float(max(r["ach_passive_sl_db"] for r in rows)),
+        "max_onset_passive_sl_db": float(max(r["onset_passive_sl_db"] for r in rows)),
+        "max_gap_s": float(max(r["gap_s"] for r in rows)),
+    }
+
+
+def compare_options(
+    outputs,
+    profile,
+    vmap,
+    pairs=DEFAULT_PAIRS,
+    regions=DEFAULT_REGIONS,
+    directions=("left", "right", "up", "down"),
+    *,
+    plugins=None,
+    min_contrast_db: float = OPTION_CONTRAST_DB,
+    ringdown_gap_k: float = OPTION_RINGDOWN_K,
+    ls: LoopSettings | None = None,
+) -> dict:
+    """The same flows with the paper's rule (``min_contrast_db`` 0, no ring-down gap)
+    and with the options, played through the gate into the twin: per setting the pair
+    rows and problems, the region verdict counts (hand flows only take the gap)."""
+    settings = {
+        "paper": (0.0, 0.0),
+        "ringdown_gap": (0.0, ringdown_gap_k),
+        "contrast_floor": (min_contrast_db, 0.0),
+        "both": (min_contrast_db, ringdown_gap_k),
+    }
+    out: dict = {"min_contrast_db": min_contrast_db, "ringdown_gap_k": ringdown_gap_k}
+    for name, (c, k) in settings.items():
+        rows = flow_pairs_check(
+            outputs, profile, vmap, pairs, ls, plugins=plugins, min_contrast_db=c, ringdown_gap_k=k
+        )
+        out[name] = {"pairs": rows, "pair_problems": pair_problems(rows)}
+    if regions:
+        for name, k in (("paper", 0.0), ("ringdown_gap", ringdown_gap_k)):
+            rows = hand_regions_check(
+                outputs, profile, vmap, regions, directions, ls, plugins=plugins, ringdown_gap_k=k
+            )
+            out[name]["regions"] = rows
+            out[name]["region_verdicts"] = summarize([], rows)["region_verdicts"]
+    return out
+
+
+def format_options(res: dict) -> str:
+    """A before/after table: one line per setting."""
+    head = (
+        f"{'setting':>15} {'low-contrast parts':>20} {'ring overlaps':>14} {'min dB A/P':>10} "
+        f"{'max P SL':>8} {'max onset P SL':>14} {'max gap s':>9}  hand verdicts"
+    )
+    out = [head]
+    for name in ("paper", "ringdown_gap", "contrast_floor", "both"):
+        pp = res[name]["pair_problems"]
+        out.append(
+            f"{name:>15} {len(pp['low_contrast']):>20} {len(pp['ringdown_overlap']):>14} "
+            f"{pp['min_contrast_db']:10.1f} {pp['max_passive_sl_db']:8.1f} "
+            f"{pp['max_onset_passive_sl_db']:14.1f} {pp['max_gap_s']:9.3f}  "
+            f"{res[name].get('region_verdicts', '')}"
+        )
+    return "\n".join(out)
+
+
 def run_bench(ctx, quick: bool) -> dict:
     """``haptable bench closed-loop``: predicted vs achieved for the default pairs (all
     parts) and regions (four directions); without ``--quick`` also every hand region at
@@ -506,6 +588,30 @@ def run_bench(ctx, quick: bool) -> dict:
                     if verdict(r) != "ok"
                 ],
             }
+        t0 = time.perf_counter()
+        opts = compare_options(
+            out,
+            profile,
+            vmap,
+            DEFAULT_PAIRS,
+            OPTION_REGIONS[:1] if quick else OPTION_REGIONS,
+            ("right", "left") if quick else ("left", "right", "up", "down"),
+            plugins=pm,
+        )
+        res["options"] = {
+            "s": time.perf_counter() - t0,
+            "min_contrast_db": opts["min_contrast_db"],
+            "ringdown_gap_k": opts["ringdown_gap_k"],
+            "table": format_options(opts).splitlines(),
+            **{
+                name: {
+                    "pair_problems": opts[name]["pair_problems"],
+                    "region_verdicts": opts[name].get("region_verdicts"),
+                    "pairs_table": format_pairs(opts[name]["pairs"]).splitlines(),
+                }
+                for name in ("paper", "ringdown_gap", "contrast_floor", "both")
+            },
+        }
     res.update(
         {
             "map_measure_s": t_map,
