@@ -286,6 +286,31 @@ class FlowEffect(_MapUser):
             self._plans[key] = plan
         return plan
 
+    def query(
+        self,
+        active: Any,
+        passive: Any,
+        *,
+        vmap: Any = None,
+        tables: Any = None,
+        min_contrast_db: float | None = None,
+    ) -> dict:
+        """The lookup-table entry of a pair (grid numbers or (x, y) mm): the
+        ``max_difference_um_per_v``, its ``frequency_hz`` and ``actuator`` (``None`` for
+        the same point twice), under the tables' ranking (``min_contrast_db``)."""
+        from plugins.vibrotactile.tables import query_indices, query_points
+
+        t = self.tables(vmap, tables, min_contrast_db=min_contrast_db)
+        a, b = _point(t.vmap, active), _point(t.vmap, passive)
+        if isinstance(a, int) and isinstance(b, int):
+            ans = query_indices(t, a, b)
+        else:
+            xy = [t.vmap.points_mm[p] if isinstance(p, int) else p for p in (a, b)]
+            ans = query_points(
+                t, tuple(xy[0]), tuple(xy[1]), method=self.setup.settings.interpolation
+            )
+        return {**ans, "min_contrast_db": float(t.min_contrast_db)}
+
     def prepare(
         self,
         pairs: Iterable = (),

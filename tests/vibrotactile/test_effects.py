@@ -162,3 +162,55 @@ def test_tables_build_min_contrast_cli(ctx, ss_map, tmp_path, capsys):
     bad = p.parse_args(["build", str(mp), "--out", str(out), "--min-contrast-db", "-1"])
     with pytest.raises(UserError, match="min-contrast-db"):
         cli.run_tables(bad, ctx)
+
+
+def test_query_and_prepare_give_what_render_uses(ctx, ss_map, tmp_path):
+    flow = ctx.pm.get("effect", "flow").factory(ctx.profile)
+    ans = flow.query(52, 51, vmap=ss_map)
+    plan = flow.render(52, 51, vmap=ss_map)
+    p1 = plan.meta["parts"][0]
+    assert (ans["frequency_hz"], ans["actuator"]) == (p1["frequency_hz"], p1["actuator"])
+    assert flow.query(51, 51, vmap=ss_map)["actuator"] is None
+    assert flow.query(52, 51, vmap=ss_map, min_contrast_db=10)["frequency_hz"] > 60.0
+    seen = []
+    plans = flow.prepare(
+        [(51, 52), ((250.0, 200.0), 52)], vmap=ss_map, progress=lambda *a: seen.append(a)
+    )
+    assert plans[0] is flow.cached(51, 52, vmap=ss_map) and plans[1] is not None
+    assert seen[-1][:2] == (2, 2)
+
+    hand = ctx.pm.get("effect", "hand_flow").factory(ctx.profile)
+    got = hand.prepare([((300.0, 200.0), "up")], vmap=ss_map, exhaustive=False)
+    assert got[0] is hand.cached((300.0, 200.0), "up", vmap=ss_map)
+    assert hand.region_centers(120.0, vmap=ss_map)  # centres where a hand fits the grid
+
+
+def test_flow_command_options_contrast_and_ringdown(ctx, ss_map, tmp_path, capsys):
+    import argparse
+    import json
+
+    from console.vibration_map import save_map
+    from plugins.vibrotactile import cli
+
+    mp = tmp_path / "map.npz"
+    save_map(mp, ss_map)
+
+    def flow(*extra):
+        p = argparse.ArgumentParser()
+        cli.configure_flow(p)
+        args = p.parse_args([str(mp), "--from", "52", "--to", "51", "--json", *extra])
+        assert cli.run_flow(args, ctx) == 0
+        return json.loads(capsys.readouterr().out)
+
+    paper = flow("--cache-dir", "none")
+    assert "ringdown" not in paper and paper["parts"][0]["frequency_hz"] < 60
+    opt = flow("--cache-dir", "none", "--min-contrast-db", "10", "--ringdown-k", "3")
+    assert all(p["contrast_db"] >= 10 for p in opt["parts"])
+    rd = opt["ringdown"]
+    assert rd["k"] == 3 and rd["gap_s"] == pytest.approx(3 * rd["tau_s"])
+    p = argparse.ArgumentParser()
+    cli.configure_flow(p)
+    argv = [str(mp), "--hand", "300,200", "--direction", "up", "--ringdown-k", "3", "--json"]
+    assert cli.run_flow(p.parse_args([*argv, "--cache-dir", "none"]), ctx) == 0
+    hand = json.loads(capsys.readouterr().out)
+    assert hand["kind"] == "hand_flow" and hand["ringdown"]["k"] == 3
