@@ -143,11 +143,6 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             "fps": Field("float", 60.0, min=1, max=1000),
             "exposure": Field("float", -1.0, help="driver exposure; -1 = automatic"),
             "gain": Field("float", -1.0, help="driver gain; -1 = automatic"),
-            "calibration_file": Field(
-                "path",
-                "",
-                help="touch calibration (pixels -> mm), relative to the profile; empty: none yet",
-            ),
         },
         False,
         "the infrared camera under the glass",

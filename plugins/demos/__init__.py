@@ -45,7 +45,6 @@ DEMOS_FIELDS = {
     "flow_map": Field(
         "path",
         "",
-        must_exist=False,
         help="vibration map the flow demo uses (beside the profile); empty on the twin: "
         "measured once on the plate twin and cached",
     ),

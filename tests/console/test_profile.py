@@ -50,8 +50,8 @@ def bad(tmp_path: Path, text: str) -> Path:
         ),
         (("[relays]", "[relay]"), ["[relay]", "[relays]"]),
         (
-            ("fps = 60.0", 'fps = 60.0\ncalibration_file = "nope.json"'),
-            ["calibration_file", "nope.json", "not found"],
+            ("fps = 60.0", 'fps = 60.0\n\n[demos]\nflow_map = "nope.npz"'),
+            ["flow_map", "nope.npz", "not found"],
         ),
         (("relay_channel = 2", "relay_channel = 1"), ["relay_channel = 1", "already used"]),
         (("piezo_max_v = 250.0", "piezo_max_v = 400.0"), ["relay rating"]),
