@@ -127,9 +127,14 @@ class HapTableApp(App):
         self.call_after_refresh(self._set_visible, self.initial)
         self.call_after_refresh(self._focus_pane, self.initial)
 
+    @property
+    def base(self):
+        """The main screen (the tabs live there, whatever modal is on top)."""
+        return self.screen_stack[0]
+
     def pane(self, tab: str):
         """The pane of ``tab`` (None until its tab was first opened)."""
-        found = self.query(f"#{tab}-pane")
+        found = self.base.query(f"#{tab}-pane")
         return found.first() if found else None
 
     def ensure_pane(self, tab: str):
@@ -137,7 +142,7 @@ class HapTableApp(App):
         p = self.pane(tab)
         if p is None:
             p = _pane_class(TABS[tab][2])(id=f"{tab}-pane")
-            self.query_one(f"TabPane#{tab}", TabPane).mount(p)
+            self.base.query_one(f"TabPane#{tab}", TabPane).mount(p)
         return p
 
     def get_camera_service(self):
@@ -150,7 +155,7 @@ class HapTableApp(App):
 
     def _focus_pane(self, tab: str, tries: int = 10) -> None:
         """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
-        tabs = self.query("#tabs")
+        tabs = self.base.query("#tabs")
         if not tabs or tabs.first(TabbedContent).active != tab:
             return
         target = getattr(self.pane(tab), "focus_target", None)
@@ -162,7 +167,7 @@ class HapTableApp(App):
 
     def action_show_tab(self, tab: str) -> None:
         self.ensure_pane(tab)
-        self.query_one("#tabs", TabbedContent).active = tab
+        self.base.query_one("#tabs", TabbedContent).active = tab
         self.call_after_refresh(self._focus_pane, tab)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
@@ -255,7 +260,7 @@ class HapTableApp(App):
         status = out.status()
         for bar in bars:
             bar.show(status)
-        tabs = self.query("#tabs")
+        tabs = self.base.query("#tabs")
         if not tabs:
             return
         active = tabs.first(TabbedContent).active
@@ -287,7 +292,7 @@ class HapTableApp(App):
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     def action_help(self) -> None:
-        tabs = self.query("#tabs")
+        tabs = self.base.query("#tabs")
         pane_help = ""
         if tabs:
             pane = self.pane(tabs.first(TabbedContent).active)

@@ -55,7 +55,7 @@ def frf_plot(
         db = 20 * np.log10(np.maximum(m, 1e-12))
     db[:, ~keep] = -np.inf
     top = float(np.nanmax(db[np.isfinite(db)])) if np.isfinite(db).any() else 0.0
-    top = np.ceil(top / 10) * 10
+    top = float(np.ceil(top / 10) * 10) + 0.0  # never "-0"
     bottom = max(floor_db, top - 60.0)
     grid = [[(" ", "") for _ in range(width)] for _ in range(height)]
     for s in range(m.shape[0]):

@@ -2,8 +2,24 @@
 
 from __future__ import annotations
 
+import asyncio
+
 import numpy as np
 import pytest
+
+
+@pytest.fixture(autouse=True)
+def _quick_key_presses(monkeypatch):
+    """Pilot waits after each key until the process's CPU time stops advancing, for at
+    most 1 s twice. The console's output, camera and worker threads keep the process
+    busy, so every key would cost ~2 s; a short fixed pause is enough, because the pilot
+    still waits until every widget has processed its pending messages."""
+    import textual.app
+
+    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
+        await asyncio.sleep(0.02)
+
+    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
 
 
 @pytest.fixture(scope="session")

@@ -105,8 +105,9 @@ class LatencyPane(Vertical):
         self._tick += 1
         if not self.available or self._tick % 5:
             return
-        if not self.query_one("#lat-table", DataTable).columns:
-            return  # not mounted yet
+        tables = self.query("#lat-table")
+        if not tables or not tables.first(DataTable).columns:
+            return  # not composed/mounted yet
         a = status.get("audio", {})
         lat = a.get("latency_s")
         self.query_one("#lat-audio", Static).update(

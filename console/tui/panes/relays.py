@@ -84,8 +84,9 @@ class RelaysPane(VerticalScroll):
         return f"relay {ch}  {' '.join(names) or '-'}"
 
     def show_state(self, status: dict, log) -> None:
-        if not self.query_one("#relaylog", DataTable).columns:
-            return  # not mounted yet (the app's timer may run first)
+        tables = self.query("#relaylog")
+        if not tables or not tables.first(DataTable).columns:
+            return  # not composed/mounted yet (the app's timer may run first)
         closed = set(status["gate"]["relays_closed"])
         for sw in self.query(Switch):
             ch = int(sw.id.split("-")[1])
