@@ -130,7 +130,7 @@ class HapTableApp(App):
     @property
     def base(self):
         """The main screen (the tabs live there, whatever modal is on top)."""
-        return self.screen_stack[0]
+        return self.screen_stack[0] if self.screen_stack else self.screen
 
     def pane(self, tab: str):
         """The pane of ``tab`` (None until its tab was first opened)."""
@@ -155,6 +155,8 @@ class HapTableApp(App):
 
     def _focus_pane(self, tab: str, tries: int = 10) -> None:
         """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
+        if not self.screen_stack or not self.is_running:
+            return
         tabs = self.base.query("#tabs")
         if not tabs or tabs.first(TabbedContent).active != tab:
             return

@@ -87,8 +87,11 @@ def test_touch_calibration_wizard_on_the_twin(plugins):
             await wait_for(pilot, lambda: pane.cal_result is not None, 90, "calibration done")
             r = pane.cal_result.report()
             assert r["pairs"] == 12
-            # the twin's touches scatter ~1.5 mm and land ~2 mm behind the target
-            assert 0.5 < r["rms_mm"] < 6.0
+            # the twin's touches scatter ~1.5 mm and land ~2 mm behind the target: the
+            # leave-one-out error shows it (a residual correction may fit the touched
+            # points themselves exactly)
+            assert 0.5 < r["loo_rms_mm"] < 8.0
+            assert r["rms_mm"] <= r["loo_rms_mm"]
             assert "reprojection error" in pane.cal_message
             await pilot.press("S")
             path = app.ctx.profile.resolve(app.ctx.profile.get("vision.calibration"))
