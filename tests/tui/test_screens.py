@@ -12,6 +12,7 @@ from textual.widgets import Input, Switch
 from console.cli import Context
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar
+from console.types import patches_of
 
 from .conftest import segment_in, wait_for
 
@@ -229,7 +230,7 @@ def test_help_and_tab_keys(plugins):
 
 @pytest.mark.slow
 @pytest.mark.hardware
-def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch):
+def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch, map_file):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
 
@@ -253,6 +254,17 @@ def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch):
             status = app.query_one("#projector-status")
             await wait_for(pilot, lambda: "scene: grid" in str(status.render()), 5)
             assert "connected" in str(status.render())
+            # auditioning a point lights it on the projected grid
+            await pilot.press("f3")
+            await wait_for(pilot, lambda: app.pane("vibration") is not None)
+            vib = app.pane("vibration")
+            vib.run_command(f"load {map_file}")
+            await wait_for(pilot, lambda: vib.session is not None, 30)
+            vib.run_command("51")
+            await wait_for(pilot, lambda: app.projector_service.scene.state()["active"] == 51, 10)
+            lit = app.projector_service.scene.state()["excitation_patches"]
+            assert set(lit) == set(patches_of(app.played[0].meta["actuator"]))
+            await pilot.press("f6")
             await pilot.press("s")
             await wait_for(pilot, lambda: app.projector_service.status()["scene"] is None, 10)
             svc = app.projector_service

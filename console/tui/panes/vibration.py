@@ -281,6 +281,26 @@ class VibrationPane(VerticalScroll):
 
     def _playing(self, plan) -> None:
         self.status(f"playing {plan.name}: {describe_plan(plan)}")
+        self._show_on_projector(plan)
+
+    @work(thread=True, group="vib-projector")
+    def _show_on_projector(self, plan) -> None:
+        """With the projector showing the ``grid`` scene, light the auditioned point."""
+        svc = self.app.projector_service
+        if svc is None or svc.scene_name != "grid" or not self.selected:
+            return
+        meta = plan.meta
+        parts = meta.get("parts") or [meta]
+        event = {
+            "type": "audition",
+            "point": self.selected[-1] if meta.get("kind") == "point" else self.selected[-2],
+            "passive": self.selected[-1] if meta.get("kind") == "flow" else None,
+            "excitation": parts[0].get("actuator"),
+        }
+        try:
+            svc.update(event)
+        except Exception as exc:  # the projector is optional: say so, keep playing
+            self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
 
     def action_command(self) -> None:
         self.query_one("#vib-cmd", Input).focus()
