@@ -213,7 +213,7 @@ def test_help_and_tab_keys(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             await _ready(app, pilot)
             await pilot.press("f4")
-            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays", 30, "f4")
             await wait_for(pilot, lambda: app.focused is not None and app.focused.id == "relay-1")
             await pilot.press("question_mark")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "HelpScreen")
