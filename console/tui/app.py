@@ -103,6 +103,7 @@ class HapTableApp(App):
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self.camera_service = None
         self.projector_service = None
+        self._mounting = None
         self._control = None
         self._lock = threading.Lock()
 
@@ -138,11 +139,11 @@ class HapTableApp(App):
         return found.first() if found else None
 
     def ensure_pane(self, tab: str):
-        """Build the pane of ``tab`` on first use."""
+        """Build the pane of ``tab`` on first use (mounting completes later)."""
         p = self.pane(tab)
         if p is None:
             p = _pane_class(TABS[tab][2])(id=f"{tab}-pane")
-            self.base.query_one(f"TabPane#{tab}", TabPane).mount(p)
+            self._mounting = self.base.query_one(f"TabPane#{tab}", TabPane).mount(p)
         return p
 
     def get_camera_service(self):
@@ -153,7 +154,7 @@ class HapTableApp(App):
             self.camera_service = CameraService(self.ctx.profile, self.ctx.pm)
         return self.camera_service
 
-    def _focus_pane(self, tab: str, tries: int = 10) -> None:
+    def _focus_pane(self, tab: str, tries: int = 100) -> None:
         """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
         if not self.screen_stack or not self.is_running:
             return
@@ -167,8 +168,10 @@ class HapTableApp(App):
         if self.focused is not target and tries > 0:
             self.set_timer(0.05, lambda: self._focus_pane(tab, tries - 1))
 
-    def action_show_tab(self, tab: str) -> None:
-        self.ensure_pane(tab)
+    async def action_show_tab(self, tab: str) -> None:
+        if self.pane(tab) is None:
+            self.ensure_pane(tab)
+            await self._mounting  # switch once the pane exists (no race with its mount)
         self.base.query_one("#tabs", TabbedContent).active = tab
         self.call_after_refresh(self._focus_pane, tab)
 
