@@ -163,6 +163,16 @@ def haptable_register_commands(register):
     commands.register_core(register)
 
 
+@hookimpl
+def haptable_register_benchmarks(register):
+    def console_startup(ctx, quick: bool) -> dict:
+        from console.tui.bench import run
+
+        return run(ctx, quick)
+
+    register("console", console_startup, help="console start-up to first paint (target < 1 s)")
+
+
 def _fail(profile: Profile, msg: str) -> None:
     raise ProfileError(f"{profile.path}: {msg}")
 
