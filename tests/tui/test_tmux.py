@@ -106,6 +106,8 @@ def test_console_in_a_terminal(tmp_path, map_file):
         term.keys("51 52", literal=True)
         term.keys("Enter")
         term.wait("playing flow 51->52")
+        # the bar may still show the idle state from before: see the flow play, then end
+        term.wait("outputs PLAYING", 20)
         term.wait("outputs idle", 20)
         term.open_tab("F4", "relay 1  PA")
         time.sleep(0.3)
