@@ -19,6 +19,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from console.bench import summarize_s
 from console.types import Frame
 
 #: The stage a frame's processing is measured from (the camera thread stamps it).
@@ -75,14 +76,8 @@ def stage_durations_s(stamps_s: dict[str, float], order: Iterable[str]) -> dict[
     return out
 
 
-def percentiles_ms(samples_s: np.ndarray) -> dict[str, float]:
-    """n, p50, p99 and max in milliseconds (NaN when empty)."""
-    a = np.asarray(samples_s, dtype=float) * 1e3
-    if a.size == 0:
-        nan = float("nan")
-        return {"n": 0, "p50_ms": nan, "p99_ms": nan, "max_ms": nan}
-    p50, p99 = np.percentile(a, [50, 99])
-    return {"n": int(a.size), "p50_ms": float(p50), "p99_ms": float(p99), "max_ms": float(a.max())}
+#: n, p50, p99 and max in milliseconds (NaN when empty): the benchmarks' summary.
+percentiles_ms = summarize_s
 
 
 class LatencyMonitor:
