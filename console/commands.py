@@ -154,7 +154,7 @@ def play_and_report(
         print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")
         return 0
     with ctx.outputs(fast=fast) as outputs:
-        report = outputs.play(plan)
+        outputs.play(plan)
         print(f"played {plan.name}: {plan.duration_s:.2f} s in {len(plan.segments)} segment(s)")
         log = outputs.relay_log()
         if log is not None:
@@ -164,7 +164,6 @@ def play_and_report(
                     f"  relay {r.channel} {state} at sample {r.clock} "
                     f"(outputs {r.level_v[0]:.1f} V / {r.level_v[1]:.1f} V)"
                 )
-        del report
     return 0
 
 
