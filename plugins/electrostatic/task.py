@@ -94,6 +94,8 @@ class TrialResult:
     detents: int
     max_detent_latency_samples: float | None
     finger: str
+    #: why the outputs stopped the trial (e-stop, fault); "" when they did not
+    error: str = ""
 
 
 def trial_metrics(
@@ -315,6 +317,7 @@ def run_live_trial(
         with contextlib.suppress(TimeoutError):
             report.wait(2.0)
     m = trial_metrics(list(ses.item_log), trial.target_item, t0)
+    error = getattr(report, "error", "") or ""
     return TrialResult(
         trial=trial.index,
         condition=trial.condition,
@@ -331,6 +334,7 @@ def run_live_trial(
         detents=len(ses.stream.detent_log),
         max_detent_latency_samples=None,
         finger="live",
+        error=error,
     )
 
 

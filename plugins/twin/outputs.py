@@ -118,6 +118,8 @@ class TwinAudioOutput:
                 elif delay < -period:  # a whole block late: the device would have starved
                     self.underruns += 1
                     t_next = time.monotonic()
+            else:
+                time.sleep(0)  # let feeders (camera, knob) run: a fast-forward loop starves them
 
     # twin extras
     def recording_card(self) -> np.ndarray:

@@ -109,10 +109,11 @@ def test_a_clumsy_finger_times_out_cleanly():
     assert r.timed_out and r.completion_time_s is None
 
 
-def test_live_trial_completes_when_fed_contacts_in_real_time(outputs):
+def test_live_trial_completes_when_fed_contacts_in_real_time(profile, plugins):
     import threading
     import time
 
+    from console.runtime.outputs import open_outputs
     from plugins.electrostatic.simulate import min_jerk, rotation_frames
     from plugins.electrostatic.task import run_live_trial
 
@@ -139,6 +140,7 @@ def test_live_trial_completes_when_fed_contacts_in_real_time(outputs):
 
     th = threading.Thread(target=feeder)
     th.start()
+    outputs = open_outputs(profile, plugins)  # paced: a live trial runs in real time
     try:
         r = run_live_trial(
             tr, settings=knob_settings(), outputs=outputs, attach=attach, max_time_s=5.0
@@ -146,7 +148,8 @@ def test_live_trial_completes_when_fed_contacts_in_real_time(outputs):
     finally:
         done.set()
         th.join()
-    assert not r.timed_out and r.finger == "live"
+        outputs.close()
+    assert not r.timed_out and not r.error and r.finger == "live", r
     assert 0.5 < r.completion_time_s < 1.2  # enters the target item at ~84 % of the move
     assert r.confirm_time_s >= r.completion_time_s + knob_settings()["dwell_s"] - 0.05
     assert r.crossings == 3 and r.detents == 3
