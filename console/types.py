@@ -212,3 +212,52 @@ class DeviceStatus:
     state: Literal["ok", "missing", "error", "simulated"]
     why: str = ""
     fix: str = ""
+
+
+# --------------------------------------------------------------------------- simulation
+@dataclass(frozen=True)
+class GestureStep:
+    """One gesture a scripted hand performs: ``gesture`` (a name the camera knows, e.g.
+    ``open_hand``, ``rotate``), whose hand (``subject`` name, seeded by the camera),
+    which hand (``side`` = ``"left"``/``"right"``, ``None``: the subject's dominant one)
+    and for how many camera frames (``frames``; ``None``: the camera's default)."""
+
+    gesture: str
+    subject: str = "s1"
+    side: str | None = None
+    frames: int | None = None
+
+
+@dataclass(frozen=True)
+class GestureScript:
+    """What a simulated camera shows: ``steps`` in turn, ``gap_frames`` of empty table
+    before each, looping if ``loop``; ``seed`` seeds the performance's variations.
+
+    A camera that can act scripts out (the camera twin) has ``set_script(script)``;
+    check with ``callable(getattr(camera, "set_script", None))``: a real camera has no
+    such method (the operator's hand does it).
+    """
+
+    steps: tuple[GestureStep, ...]
+    gap_frames: int = 30
+    loop: bool = True
+    seed: int = 0
+
+
+class SimulatedCamera(Camera, Protocol):
+    """A camera that renders on request (the camera twin), as registered cameras may.
+
+    ``set_script(GestureScript)`` shows a scripted hand on the live stream from the next
+    frame on; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
+    side=None, subject_seed=None) -> (frames (n, H, W) uint8, truth dict)`` renders one
+    performance offline (dataset synthesis); ``render_background(t_s, rng)`` the empty
+    table at session time ``t_s``; ``mapping`` the table mm <-> px mapping (``to_dict()``).
+    """
+
+    def set_script(self, script: GestureScript) -> None: ...
+
+    def render_sample(
+        self, gesture: str, subject: str, rep: int, rng: np.random.Generator, **kw: Any
+    ) -> tuple[np.ndarray, dict[str, Any]]: ...
+
+    def render_background(self, t_s: float, rng: np.random.Generator) -> np.ndarray: ...

@@ -61,16 +61,25 @@ def _session_t0(subject: int, gesture: int, rep: int) -> float:
     return 3600.0 * subject + 300.0 * gesture + 6.0 * rep + 1.0
 
 
+def _twin_camera(seed: int, lens_distortion: bool, exposure_ms: float) -> tuple[Any, dict]:
+    """The registered ``twin`` camera's factory and the settings it renders with
+    (``console.types.SimulatedCamera``); both pickle, so worker processes build it too."""
+    from console.plugins import load_plugins
+
+    factory = load_plugins(entrypoints=False).get("camera", "twin").factory
+    return factory, {
+        "twin_camera.seed": seed,
+        "twin_camera.script": "idle",
+        "twin_camera.realtime": False,
+        "twin_camera.lens_distortion": lens_distortion,
+        "twin_camera.exposure_ms": exposure_ms,
+    }
+
+
 def _render_job(job: dict) -> tuple[int, int]:
     """Render and write the samples of one (subject, gesture): returns (samples, frames)."""
-    from plugins.twin.camera import Rig, TableMapping, render_background, render_sample
-
     out, seed, si, gi = job["out"], job["seed"], job["subject"], job["gesture"]
-    rig = Rig(
-        mapping=TableMapping(k1=job["k1"], k2=job["k2"]),
-        seed=seed,
-        exposure_s=job["exposure_s"],
-    )
+    camera = job["camera"](job["camera_profile"])  # the registered twin camera's factory
     subject = subject_names(si + 1)[si]
     gesture = GESTURES[gi]
     n = job["static_frames"] if gesture in STATIC else job["dynamic_frames"]
@@ -78,18 +87,10 @@ def _render_job(job: dict) -> tuple[int, int]:
     for rep in range(job["reps"]):
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
         t0 = _session_t0(si, gi, rep)
-        frames, truth = render_sample(
-            gesture,
-            subject,
-            rep,
-            rng,
-            n_frames=n,
-            rig=rig,
-            t0_s=t0,
-            subject_seed=seed,
-            side=job["side"],
+        frames, truth = camera.render_sample(
+            gesture, subject, rep, rng, n_frames=n, t0_s=t0, subject_seed=seed, side=job["side"]
         )
-        bg = render_background(rig, t0 - BACKGROUND_LEAD_S, rng) if job["per_sample_bg"] else None
+        bg = camera.render_background(t0 - BACKGROUND_LEAD_S, rng) if job["per_sample_bg"] else None
         extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
         write_sample(
             out,
@@ -142,12 +143,11 @@ def synth(
     if out.is_dir() and any(out.iterdir()) and not force:
         raise UserError(f"{out}: folder is not empty; choose a new --out (or --force to add to it)")
     out.mkdir(parents=True, exist_ok=True)
-    from plugins.twin.camera import Rig, TableMapping, render_background
-
-    mapping = TableMapping(k1=-0.18, k2=0.03) if lens_distortion else TableMapping()
-    rig = Rig(mapping=mapping, seed=seed)
+    camera_factory, camera_profile = _twin_camera(seed, lens_distortion, exposure_ms)
+    camera = camera_factory(camera_profile)
+    mapping = camera.mapping
     t_start = time.perf_counter()
-    write_background(out, render_background(rig, 0.0, np.random.default_rng(seed)))
+    write_background(out, camera.render_background(0.0, np.random.default_rng(seed)))
     sides = ["right"] * (subjects - left_handed) + ["left"] * left_handed
     jobs = [
         {
@@ -158,11 +158,10 @@ def synth(
             "reps": reps,
             "static_frames": static_frames,
             "dynamic_frames": dynamic_frames,
-            "k1": mapping.k1,
-            "k2": mapping.k2,
+            "camera": camera_factory,
+            "camera_profile": camera_profile,
             "per_sample_bg": per_sample_background,
             "side": sides[si],
-            "exposure_s": exposure_ms / 1000.0,
         }
         for si in range(subjects)
         for g in gestures

@@ -77,6 +77,9 @@ FIELDS = {
     "lens_distortion": Field("bool", False, help="bend the image with k1, k2"),
     "k1": Field("float", -0.18, min=-1, max=1, help="radial distortion (barrel < 0)"),
     "k2": Field("float", 0.03, min=-1, max=1, help="radial distortion, 4th order"),
+    "exposure_ms": Field(
+        "float", 0.0, min=0, max=1000, help="shutter time: moving hands smear over it (0: none)"
+    ),
     "focal_px": Field("float", 540.0, min=50, max=5000, help="focal length for distortion"),
     "noise_sigma": Field("float", 1.8, min=0, max=50, help="sensor read noise (grey levels)"),
     "drift_gain": Field("float", 0.03, min=0, max=0.5, help="slow ambient gain drift"),
@@ -140,6 +143,7 @@ def make_camera(profile: Any = None):
         seed=seed,
         noise_sigma=float(tw("noise_sigma")),
         drift_gain=float(tw("drift_gain")),
+        exposure_s=float(tw("exposure_ms")) / 1000.0,
     )
     hand = tw("hand")
     side = None if hand == "auto" else hand

@@ -26,12 +26,13 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from console.types import Frame
+from console.types import Frame, GestureScript
 
+from .geometry import TableMapping
 from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose
 from .hand import FingerPose, HandPose, Subject, hand_pieces, make_subject
 from .render import Rig
-from .sample import render_frame
+from .sample import render_background, render_frame, render_sample
 
 Hands = list[tuple[Subject, HandPose]]
 
@@ -252,9 +253,61 @@ class TwinCamera:
         self.lights_changed = False  # a sudden ambient change (gain and offset step)
 
     # ------------------------------------------------------------------ scripting
-    def set_script(self, script: Script) -> None:
+    def set_script(self, script: Script | GestureScript) -> None:
+        """Show ``script`` from the next frame on: a ``console.types.GestureScript``
+        (how other plugins script the twin) or one of this module's scripts."""
+        if isinstance(script, GestureScript):
+            script = self.sequence(script)
         with self._lock:
             self.script = script
+
+    def sequence(self, script: GestureScript) -> SequenceScript:
+        """A ``GestureScript`` as a ``SequenceScript`` on this camera's table and fps."""
+        return SequenceScript(
+            [(s.gesture, s.subject, s.side, s.frames) for s in script.steps],
+            table_mm=self.rig.mapping.table_mm,
+            fps=self.fps,
+            gap_frames=script.gap_frames,
+            loop=script.loop,
+            subject_seed=self.subject_seed,
+            seed=script.seed,
+        )
+
+    @property
+    def mapping(self) -> TableMapping:
+        """The explicit table mm <-> camera px mapping of this camera."""
+        return self.rig.mapping
+
+    def render_sample(
+        self,
+        gesture: str,
+        subject: str,
+        rep: int,
+        rng: np.random.Generator,
+        *,
+        n_frames: int | None = None,
+        t0_s: float | None = None,
+        side: str | None = None,
+        subject_seed: int | None = None,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """One performance rendered offline (not on the stream): frames and truth
+        (``sample.render_sample`` on this camera's rig and fps)."""
+        return render_sample(
+            gesture,
+            subject,
+            rep,
+            rng,
+            n_frames=n_frames,
+            fps=self.fps,
+            rig=self.rig,
+            side=side,
+            t0_s=t0_s,
+            subject_seed=self.subject_seed if subject_seed is None else subject_seed,
+        )
+
+    def render_background(self, t_s: float, rng: np.random.Generator) -> np.ndarray:
+        """The empty table at session time ``t_s`` (offline, with this rig's drift)."""
+        return render_background(self.rig, t_s, rng)
 
     def perform(
         self,
