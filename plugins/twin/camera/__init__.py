@@ -201,7 +201,7 @@ def haptable_register_benchmarks(register) -> None:
 
         return bench(ctx, quick)
 
-    register("twin-camera", run, help="camera twin: frame render time, PNG write, synth rate")
+    register("twin-camera", run, help="camera twin: frame and sample render time")
 
 
 @hookimpl
