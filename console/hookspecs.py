@@ -63,6 +63,19 @@ def haptable_register_effects(register: Register) -> None:
     The factory returns an object with ``render(**request) -> OutputPlan`` (a finite
     stimulus) and optionally ``stream(**request) -> StreamSource`` (a live one). Plans
     are in volts at the actuator; the safety gate refuses any plan out of limits.
+
+    Optional members the console uses when an effect has them (it says which plugin
+    to enable when none does):
+
+    - ``tables(vmap=, progress=None)``: the excitation lookup tables of a vibration map;
+      ``progress(fraction, message)`` is called between build steps and may raise to
+      cancel the build. ``query(active, passive, vmap=) -> dict`` gives a pair's entry
+      (``max_difference_um_per_v``, ``frequency_hz``, ``actuator``).
+    - ``import_map(files: dict[str, path]) -> VibrationMap``: a map from measurement
+      files, one per excitation (e.g. UFF 58 ``{"PA": "pa.uff"}``).
+    - ``conditions: tuple[str, ...]``: the named conditions ``render(condition=)`` takes.
+    - ``presets: dict[str, dict]``: named settings (``render`` keywords such as ``vpp``,
+      ``freq_hz``, ``waveform``, plus ``help``) an operator may audition.
     """
 
 
@@ -93,7 +106,8 @@ def haptable_register_vibrometers(register: Register) -> None:
 
     The factory returns an object with ``measure(progress=None) -> dict`` whose items are
     the arguments of ``console.vibration_map.make_map`` plus ``meta`` (provenance);
-    ``progress(done, total)`` is called as points are measured. Selected by
+    ``progress(done, total)`` is called as the measurement advances; an exception raised
+    by ``progress`` (an operator's cancel) stops it and propagates. Selected by
     ``[vibrometer] driver``.
     """
 
