@@ -2,7 +2,8 @@
 evaluation and touch calibration (paper section 3, Fig. 4).
 
 Commands: ``haptable gestures eval|train|classify`` (and ``synth|record`` for datasets).
-Classifier: ``svm`` (``[gestures] classifier``). Benchmark: ``haptable bench gestures``.
+Classifier: ``svm`` (``[gestures] classifier``; it offers the touch calibration too).
+Console panel: ``gestures`` (datasets, training). Benchmark: ``haptable bench gestures``.
 Profile sections: ``[gestures]`` and ``[vision]``.
 """
 
@@ -105,6 +106,20 @@ def haptable_register_classifiers(register):
     )
 
 
+@hookimpl
+def haptable_register_panels(register):
+    def factory(app):
+        from .panel import GesturesPanel
+
+        return GesturesPanel(app.ctx)
+
+    register(
+        "gestures",
+        factory,
+        description="gesture datasets: synthesize a twin set, train + evaluate the classifier",
+    )
+
+
 # ---------------------------------------------------------------------- CLI
 def _dataset_commands() -> dict:
     try:
@@ -162,8 +177,8 @@ def _progress(args):
     if getattr(args, "json", False) or not sys.stderr.isatty():
         return None
 
-    def show(i, n):
-        print(f"\rfeatures {i}/{n}", end="" if i < n else "\n", file=sys.stderr, flush=True)
+    def show(frac: float, msg: str) -> None:
+        print(f"\r{msg}", end="" if frac < 1 else "\n", file=sys.stderr, flush=True)
 
     return show
 

@@ -60,6 +60,7 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
 
 
 def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
+    from .jobs import synth_atomic
     from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, synth
 
     gestures = GESTURES
@@ -67,11 +68,14 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         gestures = tuple(g.strip() for g in args.gestures.split(",") if g.strip())
     quiet = args.json or not sys.stderr.isatty()
 
-    def progress(done: int, total: int) -> None:
+    def progress(frac: float, msg: str) -> None:
         if not quiet:
-            print(f"\r{done}/{total} samples", end="", file=sys.stderr, flush=True)
+            print(f"\r{msg:<40}", end="", file=sys.stderr, flush=True)
 
-    info = synth(
+    # a fresh folder is written beside --out and renamed when complete (an interrupted
+    # run leaves nothing); --force adds to an existing folder in place
+    make = synth if args.force else synth_atomic
+    info = make(
         args.out,
         subjects=args.subjects,
         reps=args.reps,
@@ -84,8 +88,8 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         per_sample_background=not args.no_sample_background,
         left_handed=args.left_handed,
         exposure_ms=args.exposure_ms,
-        force=args.force,
         progress=progress,
+        **({"force": True} if args.force else {}),
     )
     if not quiet:
         print(file=sys.stderr)

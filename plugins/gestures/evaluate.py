@@ -14,7 +14,7 @@ import hashlib
 import json
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +25,7 @@ from console.errors import UserError
 
 from . import features as F
 from .model import GESTURES, GestureModel
+from .progress import CancelCheck, Progress, step
 from .sketch import DYNAMIC, STATIC
 from .vision import VisionParams, process_frame
 
@@ -134,9 +135,11 @@ def extract(
     *,
     frames_list: Sequence[int] = FRAMES_LIST,
     use_cache: bool = True,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Progress | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> FeatureSet:
-    """Features of every sample of the dataset at ``root`` (cached by content)."""
+    """Features of every sample of the dataset at ``root`` (cached by content).
+    ``progress(frac, msg)`` after each sample; ``cancelled()`` stops it (``Cancelled``)."""
     from .dataset import load_dataset
 
     params = params or VisionParams(n_harmonics=N_HARMONICS_MAX)
@@ -158,7 +161,7 @@ def extract(
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)  # the per-frame time is for one core
     try:
-        fs = _extract(samples, params, frames_list, size, progress)
+        fs = _extract(samples, params, frames_list, size, progress, cancelled)
     finally:
         cv2.setNumThreads(threads)
     fs.meta["root"] = str(root)
@@ -168,12 +171,13 @@ def extract(
     return fs
 
 
-def _extract(samples, params, frames_list, size, progress) -> FeatureSet:
+def _extract(samples, params, frames_list, size, progress, cancelled) -> FeatureSet:
     fallback = None
     names, labels, subjects, xs_all, xk_all, times, cpu = [], [], [], [], [], [], []
     xd_all: dict[int, list] = {k: [] for k in frames_list}
     sc_all: dict[int, list] = {k: [] for k in frames_list}
     for i, s in enumerate(samples):
+        step(None, cancelled, 0, "features")
         frames = s.frames(limit=max(frames_list), size_px=size)
         bg = s.background(size_px=size)
         if bg is None:
@@ -190,8 +194,7 @@ def _extract(samples, params, frames_list, size, progress) -> FeatureSet:
         for k in frames_list:
             xd_all[k].append(xd[k])
             sc_all[k].append(sc[k])
-        if progress:
-            progress(i + 1, len(samples))
+        step(progress, None, (i + 1) / len(samples), f"features {i + 1}/{len(samples)} samples")
     return FeatureSet(
         names,
         np.array(labels),
@@ -280,12 +283,19 @@ def cross_validate(
     n_harmonics: int = 2,
     n_frames: int = 4,
     seed: int = 0,
+    progress: Progress | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> dict:
-    """Outer cross-validation of the whole classifier; the report the CLI prints."""
+    """Outer cross-validation of the whole classifier; the report the CLI prints (with
+    ``folds``: the test size and accuracies of each outer fold). ``progress(frac, msg)``
+    after each fold; ``cancelled()`` stops it between folds (``Cancelled``)."""
     xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
     pred = np.empty(len(fs.labels), dtype=object)
     thresholds = []
-    for tr, te in splits(fs, cv, seed):
+    folds = []
+    parts = splits(fs, cv, seed)
+    for k, (tr, te) in enumerate(parts):
+        step(progress, cancelled, k / len(parts), f"fold {k + 1}/{len(parts)}: training")
         m = GestureModel.fit(
             xs[tr],
             xd[tr],
@@ -298,7 +308,29 @@ def cross_validate(
         )
         thresholds.append(m.motion_threshold)
         pred[te] = m.predict(xs[te], xd[te], xk[te])
-    return report(fs.labels, pred.astype(str), fs, cv, n_harmonics, n_frames, thresholds)
+        folds.append(fold_report(fs, te, pred[te].astype(str), cv))
+        acc = folds[-1]["accuracy"]
+        step(progress, None, (k + 1) / len(parts), f"fold {k + 1}/{len(parts)}: {acc:.1%}")
+    rep = report(fs.labels, pred.astype(str), fs, cv, n_harmonics, n_frames, thresholds)
+    rep["folds"] = folds
+    return rep
+
+
+def fold_report(fs: FeatureSet, test: np.ndarray, pred: np.ndarray, cv: str) -> dict:
+    """One outer fold: what was tested (a subject under ``loso``) and its accuracies."""
+    labels = fs.labels[test].astype(str)
+    is_st = np.isin(labels, STATIC)
+    out = {
+        "n_test": int(len(test)),
+        "accuracy": float(np.mean(pred == labels)),
+        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
+        "dynamic_accuracy": (
+            float(np.mean(pred[~is_st] == labels[~is_st])) if (~is_st).any() else None
+        ),
+    }
+    if cv == "loso":
+        out["subject"] = str(fs.subjects[test][0])
+    return out
 
 
 def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
@@ -339,9 +371,18 @@ def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
 
 
 def train(
-    fs: FeatureSet, *, n_harmonics: int = 2, n_frames: int = 4, seed: int = 0
+    fs: FeatureSet,
+    *,
+    n_harmonics: int = 2,
+    n_frames: int = 4,
+    seed: int = 0,
+    meta: dict | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> GestureModel:
+    """The classifiers fitted on the whole feature set (``meta`` is added to the model's
+    metadata); ``cancelled()`` is checked before fitting."""
     xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
+    step(None, cancelled, 0, "training")
     return GestureModel.fit(
         xs,
         xd,
@@ -351,5 +392,5 @@ def train(
         n_harmonics=n_harmonics,
         n_frames=n_frames,
         seed=seed,
-        meta={"trained_on": fs.meta.get("root"), "n_samples": len(fs.labels)},
+        meta={"trained_on": fs.meta.get("root"), "n_samples": len(fs.labels), **(meta or {})},
     )

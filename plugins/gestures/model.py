@@ -11,6 +11,7 @@ skops (never pickle) and loaded against an explicit allow-list of types.
 from __future__ import annotations
 
 import json
+import os
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -214,7 +215,12 @@ class GestureModel:
             ),
         }
         p = Path(path)
-        sio.dump(obj, p)
+        tmp = p.with_name(f".{p.name}.partial")
+        try:  # write then rename: a reader never sees half a model
+            sio.dump(obj, tmp)
+            os.replace(tmp, p)
+        finally:
+            tmp.unlink(missing_ok=True)
         return p
 
     @classmethod

@@ -42,6 +42,7 @@ from .dataset import (
     write_png,
     write_sample,
 )
+from .progress import CancelCheck, Progress, step
 
 STATIC_FRAMES = 3
 DYNAMIC_FRAMES = 8
@@ -76,8 +77,9 @@ def _twin_camera(seed: int, lens_distortion: bool, exposure_ms: float) -> tuple[
     }
 
 
-def _render_job(job: dict) -> tuple[int, int]:
-    """Render and write the samples of one (subject, gesture): returns (samples, frames)."""
+def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[int, int]:
+    """Render and write the samples of one (subject, gesture): returns (samples, frames).
+    ``on_rep()`` is called before each repetition (it may raise to stop)."""
     out, seed, si, gi = job["out"], job["seed"], job["subject"], job["gesture"]
     camera = job["camera"](job["camera_profile"])  # the registered twin camera's factory
     subject = subject_names(si + 1)[si]
@@ -85,6 +87,8 @@ def _render_job(job: dict) -> tuple[int, int]:
     n = job["static_frames"] if gesture in STATIC else job["dynamic_frames"]
     frames_total = 0
     for rep in range(job["reps"]):
+        if on_rep is not None:
+            on_rep()
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
         t0 = _session_t0(si, gi, rep)
         frames, truth = camera.render_sample(
@@ -123,9 +127,13 @@ def synth(
     left_handed: int = 1,
     exposure_ms: float = 0.0,
     force: bool = False,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Progress | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> dict[str, Any]:
-    """Write a synthetic dataset; returns counts and the wall time."""
+    """Write a synthetic dataset; returns counts and the wall time. ``progress(frac,
+    msg)`` as samples are written (per sample with one worker, per subject and gesture
+    with several); ``cancelled()`` stops it with ``Cancelled`` (``synth_atomic`` then
+    leaves no partial dataset)."""
     out = Path(out)
     bad = [g for g in gestures if g not in GESTURES]
     if bad:
@@ -170,17 +178,29 @@ def synth(
     done = n_frames = 0
     total = len(jobs) * reps
     if workers == 1:
-        results = map(_render_job, jobs)
-        for s, f in results:
+        for job in jobs:
+            who = f"{subject_names(job['subject'] + 1)[-1]} {GESTURES[job['gesture']]}"
+            k = 0
+
+            def on_rep(who=who, base=done) -> None:
+                nonlocal k
+                step(progress, cancelled, (base + k) / total, f"{base + k}/{total} samples ({who})")
+                k += 1
+
+            s, f = _render_job(job, on_rep)
             done, n_frames = done + s, n_frames + f
-            if progress:
-                progress(done, total)
     else:
         with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as ex:
-            for s, f in ex.map(_render_job, jobs):
-                done, n_frames = done + s, n_frames + f
-                if progress:
-                    progress(done, total)
+            futures = [ex.submit(_render_job, job) for job in jobs]
+            try:
+                for fut in futures:
+                    s, f = fut.result()
+                    done, n_frames = done + s, n_frames + f
+                    step(progress, cancelled, done / total, f"{done}/{total} samples")
+            except BaseException:
+                ex.shutdown(wait=True, cancel_futures=True)
+                raise
+    step(progress, None, 1.0, f"{done}/{total} samples")
     seconds = time.perf_counter() - t_start
     info = {
         "out": str(out),

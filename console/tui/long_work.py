@@ -1,0 +1,151 @@
+"""One long job at a time in a thread worker, with a progress bar, a one-line status and
+cancellation (the console's rule: long work never blocks the screen and ``x`` stops it).
+
+A job is a plain function ``job(progress, cancelled) -> result``: it calls
+``progress(frac, msg)`` (0..1) as it goes and polls ``cancelled()``, raising any
+exception to stop when that returns True. ``LongWork.start`` runs it; the status line
+shows the progress, then ``summary(result)``, "NAME cancelled" or the error as one red
+line (a ``UserError`` as written, anything else as ``NAME failed: ...``). When it ends,
+``LongWork.Finished`` is posted to the parents with the outcome.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+from typing import Any
+
+from textual.app import ComposeResult
+from textual.containers import Horizontal
+from textual.message import Message
+from textual.widgets import Label, ProgressBar
+from textual.worker import get_current_worker
+
+from console.errors import UserError
+
+Progress = Callable[[float, str], None]
+Job = Callable[[Progress, Callable[[], bool]], Any]
+
+
+class LongWork(Horizontal):
+    DEFAULT_CSS = """
+    LongWork { height: 1; }
+    LongWork > ProgressBar { width: 34; }
+    LongWork > Label { width: 1fr; }
+    LongWork > Label.error { color: $error; }
+    """
+
+    class Finished(Message):
+        """A job ended: ``outcome`` is ``done``, ``cancelled`` or ``failed``."""
+
+        def __init__(self, work: LongWork, name: str, outcome: str, result: Any) -> None:
+            super().__init__()
+            self.work = work
+            self.name = name
+            self.outcome = outcome
+            self.result = result
+
+    def __init__(self, idle_text: str = "", **kw) -> None:
+        super().__init__(**kw)
+        self.idle_text = idle_text
+        self.name_running: str | None = None
+        self.outcome: str | None = None  # of the last job
+        self.result: Any = None
+        self.text = idle_text
+        self._worker = None
+
+    def compose(self) -> ComposeResult:
+        bar = ProgressBar(total=1.0, show_eta=False)
+        bar.display = False
+        yield bar
+        yield Label(self.idle_text, markup=False)
+
+    @property
+    def busy(self) -> bool:
+        return self.name_running is not None
+
+    @property
+    def progress(self) -> float | None:
+        """The bar's fraction while it shows, else None."""
+        bar = self.query_one(ProgressBar)
+        return float(bar.progress) if bar.display else None
+
+    def show(self, text: str, frac: float | None = None, *, error: bool = False) -> None:
+        """Status line (and the bar at ``frac``; hidden with None)."""
+        self.text = text
+        label = self.query_one(Label)
+        label.update(text)
+        label.set_class(error, "error")
+        bar = self.query_one(ProgressBar)
+        bar.display = frac is not None
+        if frac is not None:
+            bar.update(total=1.0, progress=frac)
+
+    def error(self, text: str) -> None:
+        """A one-line error on the status line and as a notification."""
+        self.show(text, error=True)
+        self.app.notify(text, severity="error", timeout=8)
+
+    def start(self, name: str, job: Job, summary: Callable[[Any], str] | None = None) -> bool:
+        """Run ``job`` in a thread worker; False (and a notice) when one already runs."""
+        if self.busy:
+            self.app.notify(f"{self.name_running} is running: x cancels it", severity="warning")
+            return False
+        self.name_running = name
+        self.outcome = self.result = None
+        self.show(f"{name} ...", 0.0)
+        self._worker = self.run_worker(
+            lambda: self._run(name, job, summary),
+            name=name,
+            group=f"long-work-{id(self)}",
+            thread=True,
+            exit_on_error=False,
+        )
+        return True
+
+    def cancel(self) -> bool:
+        """Ask the running job to stop (it stops at its next check)."""
+        if not self.busy or self._worker is None:
+            return False
+        self._worker.cancel()
+        self.show(f"cancelling {self.name_running} ...", self.progress)
+        return True
+
+    # ------------------------------------------------------------------ worker thread
+    def _run(self, name: str, job: Job, summary) -> None:
+        worker = get_current_worker()
+
+        def cancelled() -> bool:
+            return worker.is_cancelled
+
+        def progress(frac: float, msg: str) -> None:
+            if not worker.is_cancelled:
+                self._call(self.show, f"{name}: {msg}", max(0.0, min(1.0, frac)))
+
+        try:
+            result = job(progress, cancelled)
+        except Exception as exc:  # noqa: BLE001 - every failure becomes one status line
+            if worker.is_cancelled:
+                self._call(self._end, name, "cancelled", None, f"{name} cancelled")
+            elif isinstance(exc, UserError):
+                self._call(self._end, name, "failed", exc, str(exc))
+            else:
+                self._call(self._end, name, "failed", exc, f"{name} failed: {exc}")
+            return
+        text = summary(result) if summary is not None else f"{name} done"
+        self._call(self._end, name, "done", result, text)
+
+    def _call(self, fn, *args) -> None:
+        with contextlib.suppress(RuntimeError):  # the app is closing
+            self.app.call_from_thread(fn, *args)
+
+    def _end(self, name: str, outcome: str, result: Any, text: str) -> None:
+        self.name_running = None
+        self.outcome, self.result = outcome, result
+        if not self.is_attached:
+            return
+        if outcome == "failed":
+            self.error(text.splitlines()[0] if text else f"{name} failed")
+        else:
+            self.show(text, 1.0 if outcome == "done" else None)
+        self.post_message(self.Finished(self, name, outcome, result))

@@ -1,0 +1,308 @@
+"""The console's Gestures panel (registered as the ``gestures`` panel): the dataset and
+model files (where, how big, subjects and repetitions, the model's cross-validated
+accuracy from its metadata); synthesize a twin dataset and train + evaluate the
+classifier, each in a thread worker with a progress bar, cancelled with ``x``.
+
+Nothing half-written stays behind a cancel: the dataset is written beside its folder
+and renamed into place, the model is written to a temporary file and renamed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+from typing import Any
+
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, VerticalScroll
+from textual.screen import Screen
+from textual.widgets import Button, Footer, Input, Label, Static
+
+from console.errors import UserError
+from console.tui.long_work import LongWork
+from console.tui.safety_bar import SafetyBar
+from console.tui.util import short_path
+
+HELP = (
+    "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder\n"
+    "t: train + evaluate (cross-validation, then the model on every sample)\n"
+    "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
+    "tab: edit the fields (enter returns here)"
+)
+
+
+def data_dir() -> Path:
+    """Where the panel keeps twin datasets by default."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "haptable" / "gestures"
+
+
+def _mb(n: int | None) -> str:
+    return "?" if n is None else f"{n / 1e6:.1f} MB"
+
+
+def _pct(x: float | None) -> str:
+    return "-" if x is None else f"{100 * x:.1f} %"
+
+
+def count(text: str, what: str, lo: int = 1, hi: int = 1000) -> int:
+    """A whole number from a field, or a one-line ``UserError`` naming the field."""
+    try:
+        n = int(text.strip())
+    except ValueError:
+        n = None
+    if n is None or not lo <= n <= hi:
+        raise UserError(f"{what} {text.strip()!r}: give a whole number from {lo} to {hi}")
+    return n
+
+
+def describe(info: dict[str, Any]) -> str:
+    """The files block of the panel from ``jobs.describe_files``."""
+    d, m = info.get("dataset", {}), info.get("model", {})
+    lines = [f"[b]dataset[/b] {short_path(d.get('path', '?'))}"]
+    if not d.get("exists"):
+        lines.append("  none yet: s synthesizes one from the camera twin")
+    elif "error" in d:
+        lines.append(f"  [red]{d['error']}[/]")
+    else:
+        subj = d["subjects"]
+        lines.append(
+            f"  {d['samples']} samples, {_mb(d.get('bytes'))}: {len(subj)} subject(s) "
+            f"({', '.join(subj[:6])}{' ...' if len(subj) > 6 else ''}), "
+            f"{d['gestures']} gestures, {d['reps']} reps"
+        )
+    lines.append(f"[b]model[/b] {short_path(m.get('path', '?'))}")
+    if not m.get("exists"):
+        lines.append("  none yet: t trains and evaluates one")
+    elif "error" in m:
+        lines.append(f"  [red]{m['error']}[/]")
+    else:
+        ev = m.get("evaluation") or {}
+        lines.append(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples")
+        if ev:
+            lines.append(
+                f"  {ev.get('cv')}: static {_pct(ev.get('static_accuracy'))}, "
+                f"dynamic {_pct(ev.get('dynamic_accuracy'))}; folds "
+                + ", ".join(_pct(f["accuracy"]) for f in ev.get("folds", []))
+            )
+        else:
+            lines.append("  no evaluation in its metadata (trained by the CLI)")
+    return "\n".join(lines)
+
+
+def fold_lines(res: dict[str, Any]) -> str:
+    """The result block after training: accuracy per fold and overall."""
+    lines = [
+        f"[b]{res['cv']}[/b] on {res['n_samples']} samples: static "
+        f"{_pct(res['static_accuracy'])}, dynamic {_pct(res['dynamic_accuracy'])}"
+    ]
+    for i, f in enumerate(res["folds"], 1):
+        who = f" (subject {f['subject']})" if "subject" in f else ""
+        lines.append(
+            f"  fold {i}{who}: {_pct(f['accuracy'])} of {f['n_test']} "
+            f"(static {_pct(f['static_accuracy'])}, dynamic {_pct(f['dynamic_accuracy'])})"
+        )
+    lines.append(f"model saved to {short_path(res['model'])} ({_mb(res['bytes'])})")
+    return "\n".join(lines)
+
+
+class GesturesPanel(Screen):
+    """Datasets and training of the gesture classifier."""
+
+    HELP_TEXT = HELP
+    DEFAULT_CSS = """
+    GesturesPanel > VerticalScroll { height: 1fr; padding: 0 1; }
+    GesturesPanel .gp-row { height: 1; }
+    GesturesPanel .gp-row > Label { width: 10; }
+    GesturesPanel .gp-row > Input { width: 1fr; }
+    GesturesPanel .gp-row > Input.gp-num { width: 8; }
+    GesturesPanel #gp-buttons { height: 1; }
+    GesturesPanel #gp-buttons > Button { min-width: 10; height: 1; border: none; margin-right: 1; }
+    GesturesPanel #gp-files { margin-top: 1; }
+    GesturesPanel #gp-result { margin-top: 1; }
+    """
+    BINDINGS = [
+        Binding("s", "synth", "synthesize"),
+        Binding("t", "train", "train+eval"),
+        Binding("x", "cancel", "cancel"),
+        Binding("r", "refresh", "refresh"),
+        Binding("escape", "back", "back"),
+        Binding("question_mark", "help", "help", show=False),
+    ]
+
+    def __init__(self, ctx) -> None:
+        super().__init__()
+        self.ctx = ctx
+        prof = ctx.profile
+        self.harmonics = int(prof.get("gestures.harmonics", 2))
+        self.frames = int(prof.get("gestures.frames", 4))
+        self.default_model = prof.resolve(prof.get("gestures.model") or "gestures.skops")
+        self.files: dict[str, Any] = {}
+
+    def compose(self) -> ComposeResult:
+        with VerticalScroll():
+            yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
+            with Horizontal(classes="gp-row"):
+                yield Label("dataset")
+                yield Input(str(data_dir() / "twin"), id="gp-dataset", compact=True)
+            with Horizontal(classes="gp-row"):
+                yield Label("subjects")
+                yield Input("5", id="gp-subjects", classes="gp-num", compact=True)
+                yield Label(" reps")
+                yield Input("40", id="gp-reps", classes="gp-num", compact=True)
+                yield Label(" cv")
+                yield Input("2fold", id="gp-cv", classes="gp-num", compact=True)
+            with Horizontal(classes="gp-row"):
+                yield Label("model")
+                yield Input(str(self.default_model), id="gp-model", compact=True)
+            with Horizontal(id="gp-buttons"):
+                yield Button("synthesize (s)", id="gp-synth", compact=True)
+                yield Button("train+eval (t)", id="gp-train", compact=True)
+                yield Button("cancel (x)", id="gp-cancel", compact=True)
+            yield LongWork("s: synthesize   t: train + evaluate   x: cancel", id="gp-work")
+            yield Static("", id="gp-files")
+            yield Static("", id="gp-result")
+        yield SafetyBar(id="safety")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.query_one(SafetyBar).show(None)
+        self.query_one("#gp-synth", Button).focus()
+        self.action_refresh()
+
+    @property
+    def work(self) -> LongWork:
+        return self.query_one("#gp-work", LongWork)
+
+    def field(self, name: str) -> str:
+        return self.query_one(f"#gp-{name}", Input).value
+
+    def paths(self) -> tuple[Path, Path]:
+        ds, model = self.field("dataset").strip(), self.field("model").strip()
+        if not ds:
+            raise UserError("dataset: give a folder, e.g. ~/gestures/twin")
+        if not model:
+            raise UserError("model: give a file, e.g. gestures.skops")
+        return Path(ds).expanduser(), Path(model).expanduser()
+
+    # ------------------------------------------------------------------ actions
+    def action_refresh(self) -> None:
+        try:
+            ds, model = self.paths()
+        except UserError as exc:
+            self.work.error(str(exc))
+            return
+        self.query_one("#gp-files", Static).update("reading the files ...")
+        self.run_worker(lambda: self._describe(ds, model), thread=True, group="gp-files")
+
+    def _describe(self, ds: Path, model: Path) -> None:
+        from .jobs import describe_files
+
+        info = describe_files(ds, model)
+        with contextlib.suppress(RuntimeError):  # the console is closing
+            self.app.call_from_thread(self._show_files, info)
+
+    def _show_files(self, info: dict) -> None:
+        self.files = info
+        if self.is_attached:
+            self.query_one("#gp-files", Static).update(describe(info))
+
+    def action_synth(self) -> None:
+        from .jobs import synth_atomic
+
+        try:
+            ds, _ = self.paths()
+            subjects = count(self.field("subjects"), "subjects", 1, 50)
+            reps = count(self.field("reps"), "reps", 1, 500)
+        except UserError as exc:
+            self.work.error(str(exc))
+            return
+
+        def job(progress, cancelled):
+            return synth_atomic(
+                ds, subjects, reps, replace=True, workers=1, progress=progress, cancelled=cancelled
+            )
+
+        def summary(info) -> str:
+            return (
+                f"synthesized {info['samples']} samples ({len(info['subjects'])} subject(s) x "
+                f"{len(info['gestures'])} gestures x {info['reps']} reps, {_mb(info['bytes'])}) "
+                f"in {info['seconds']:.1f} s"
+            )
+
+        self.work.start(f"synthesizing {subjects} x 10 x {reps}", job, summary)
+
+    def action_train(self) -> None:
+        from . import _params
+        from .jobs import train_and_evaluate
+
+        try:
+            ds, model = self.paths()
+            cv = self.field("cv").strip().lower()
+            if cv not in ("2fold", "loso"):
+                raise UserError(f"cv {cv!r}: use 2fold (as in the paper) or loso")
+        except UserError as exc:
+            self.work.error(str(exc))
+            return
+        params = _params(self.ctx.profile)
+
+        def job(progress, cancelled):
+            return train_and_evaluate(
+                ds,
+                model,
+                cv=cv,
+                params=params,
+                n_harmonics=self.harmonics,
+                n_frames=self.frames,
+                progress=progress,
+                cancelled=cancelled,
+            )
+
+        def summary(res) -> str:
+            return (
+                f"trained: {res['cv']} static {_pct(res['static_accuracy'])}, dynamic "
+                f"{_pct(res['dynamic_accuracy'])}; saved {Path(res['model']).name}"
+            )
+
+        self.query_one("#gp-result", Static).update("")
+        self.work.start("training", job, summary)
+
+    def action_cancel(self) -> None:
+        if not self.work.cancel():
+            self.app.notify("nothing to cancel", timeout=2)
+
+    def action_back(self) -> None:
+        if isinstance(self.focused, Input):
+            self.query_one("#gp-synth", Button).focus()
+            return
+        self.work.cancel()
+        self.app.pop_screen()
+
+    def action_help(self) -> None:
+        self.app.notify(HELP, title="Gestures", timeout=10)
+
+    # ------------------------------------------------------------------ events
+    def on_button_pressed(self, event: Button.Pressed) -> None:
+        event.stop()
+        {"gp-synth": self.action_synth, "gp-train": self.action_train}.get(
+            event.button.id or "", self.action_cancel
+        )()
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        self.query_one("#gp-synth", Button).focus()
+        if event.input.id in ("gp-dataset", "gp-model"):
+            self.action_refresh()
+
+    def on_long_work_finished(self, event: LongWork.Finished) -> None:
+        if event.outcome == "done" and isinstance(event.result, dict) and "folds" in event.result:
+            self.query_one("#gp-result", Static).update(fold_lines(event.result))
+        elif event.outcome == "cancelled" and event.name == "training":
+            self.query_one("#gp-result", Static).update("training cancelled: no model was written")
+        elif event.outcome == "cancelled":
+            self.query_one("#gp-result", Static).update(
+                "synthesis cancelled: the dataset folder is unchanged"
+            )
+        self.action_refresh()
