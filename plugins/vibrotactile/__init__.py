@@ -3,9 +3,12 @@ tables, flow stimuli (between two points, under a hand) and the ``vibration`` be
 
 Effects (``haptable_register_effects``): ``flow`` (between two points), ``hand_flow``
 (under a hand) and ``point`` (a pulse); see ``plugins.vibrotactile.effects`` for the
-request vocabulary. Commands: ``haptable frf import|export|info``, ``haptable tables
-build|query``, ``haptable flow``, ``haptable point``. Profile sections: ``[vibrotactile]`` and
-``[perception]`` (the human threshold curve, as data).
+request vocabulary. The ``flow`` effect also gives the lookup tables (``tables(vmap=,
+progress=)``, built step by step with progress and cancel; ``query(active, passive,
+vmap=)``), ``prepare``/``cached`` and UFF import (``import_map({"PA": path, ...})``):
+``plugins.vibrotactile.registered``. Commands: ``haptable frf import|export|info``,
+``haptable tables build|query``, ``haptable flow``, ``haptable point``. Profile sections:
+``[vibrotactile]`` and ``[perception]`` (the human threshold curve, as data).
 """
 
 from __future__ import annotations
@@ -135,21 +138,24 @@ def haptable_profile_sections(register) -> None:
         register(name, fields, help=help_)
 
 
-def _effect(cls_name: str):
+def _effect(cls_name: str, module: str = "effects"):
     def factory(profile):
-        from plugins.vibrotactile import effects
+        import importlib
 
-        return getattr(effects, cls_name)(profile)
+        return getattr(importlib.import_module(f"plugins.vibrotactile.{module}"), cls_name)(profile)
 
-    factory.__doc__ = f"``plugins.vibrotactile.effects.{cls_name}(profile)``"
+    factory.__doc__ = f"``plugins.vibrotactile.{module}.{cls_name}(profile)``"
     return factory
 
 
 @hookimpl
 def haptable_register_effects(register) -> None:
+    # flow also offers: tables(vmap=, progress=) (stepwise, cancellable: raise in
+    # progress), query(active, passive, vmap=), prepare(pairs, vmap=, progress=),
+    # cached(...), import_map({"PA": "pa.uff", ...}) -> VibrationMap (UFF 58)
     register(
         "flow",
-        _effect("FlowEffect"),
+        _effect("RegisteredFlowEffect", "registered"),
         description="two-point flow (paper Fig. 9): render(from_point=, to_point=, vmap=|tables=)",
     )
     register(

@@ -21,8 +21,8 @@ HELP = (
     "enter: audition the point\n"
     "f / r: flow between the last two, either way\n"
     "w a s d: flow under a hand at the cursor\n"
-    "m: measure   x: cancel   : command line\n"
-    "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz)"
+    "m: measure   b: build the lookup tables   x: cancel   : command line\n"
+    "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz | tables)"
 )
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
@@ -37,6 +37,7 @@ class VibrationPane(VerticalScroll):
         Binding("s", "hand('down')", "hand down", show=False),
         Binding("d", "hand('right')", "hand w/a/s/d"),
         Binding("m", "measure", "measure"),
+        Binding("b", "build_tables", "build tables", show=False),
         Binding("x", "cancel", "cancel"),
         Binding("colon", "command", "command", show=False),
     ]
@@ -44,6 +45,7 @@ class VibrationPane(VerticalScroll):
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.session = None
+        self.summary = ""
         self.selected: list[int] = []
         self.rows = 7
         self.cols = 12
@@ -128,9 +130,27 @@ class VibrationPane(VerticalScroll):
                 "type import PA=a.uff ... / load map.npz",
             )
             return
-        self._open(vs.load_map(path), f"map: {path.name} (measured on the twin)")
+        try:
+            self._open(vs.load_map(path), f"map: {path.name} (measured on the twin)")
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
 
     def _open(self, vmap, label: str) -> None:
+        """In a worker: make ``vmap`` the screen's map, then build its lookup tables."""
+        from console.tui import vibration_session as vs
+
+        ctx = self.app.ctx
+        session = vs.VibrationSession(ctx.profile, ctx.pm, vmap)
+        m = session.vmap
+        summary = (
+            f"{label}: {len(m.excitations)} excitations, {m.points.size} points, "
+            f"{m.freq_hz.size} bins"
+        )
+        self.app.call_from_thread(self._ready, session, summary)
+        self._build_tables(session, summary)
+
+    def _build_tables(self, session, summary: str) -> None:
+        """In a worker: the lookup tables with progress; cancel (x) stops the build."""
         from console.tui import vibration_session as vs
 
         worker = get_current_worker()
@@ -138,20 +158,36 @@ class VibrationPane(VerticalScroll):
         def progress(frac: float, msg: str) -> None:
             if worker.is_cancelled:
                 raise vs.Cancelled()
-            self.app.call_from_thread(self.status, f"lookup tables: {msg}", frac)
+            self.app.call_from_thread(self.status, f"{summary}; lookup tables: {msg}", frac)
 
-        session = vs.VibrationSession(self.app.ctx.profile, vmap, progress)
-        self.app.call_from_thread(self._ready, session, label)
+        try:
+            progress(0.0, "starting")
+            session.build_tables(progress)
+            text = f"{summary}; ready"
+        except vs.Cancelled:
+            text = (
+                f"{summary}; lookup-table build cancelled (b builds them; a flow builds "
+                "what it needs)"
+            )
+        except UserError as exc:
+            text = f"{summary}; ready without lookup tables: {exc}"
+        if self.session is session:
+            self.app.call_from_thread(self.status, text)
 
-    def _ready(self, session, label: str) -> None:
-        self.session = session
-        m = session.vmap
-        self.status(
-            f"{label}: {len(m.excitations)} excitations, {m.points.size} points, "
-            f"{m.freq_hz.size} bins; ready"
-        )
+    def _ready(self, session, summary: str) -> None:
+        self.session, self.summary = session, summary
+        self.status(summary)
         self._redraw_grid()
         self._show_selection()
+
+    def action_build_tables(self) -> None:
+        if not self._need_session():
+            return
+        self._tables_worker(self.session, self.summary)
+
+    @work(thread=True, exclusive=True, group="vib-tables")
+    def _tables_worker(self, session, summary: str) -> None:
+        self._build_tables(session, summary)
 
     def action_measure(self) -> None:
         self.status("measuring ...", 0.0)
@@ -179,7 +215,7 @@ class VibrationPane(VerticalScroll):
     def action_cancel(self) -> None:
         n = 0
         for w in self.app.workers:
-            if w.group in ("vib-long", "vib-load") and w.is_running:
+            if w.group in ("vib-long", "vib-load", "vib-tables") and w.is_running:
                 w.cancel()
                 n += 1
         if n:
@@ -191,7 +227,8 @@ class VibrationPane(VerticalScroll):
 
         try:
             self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
-            self._open(vs.import_uff_files(self.app.ctx.profile, specs), "map: UFF import")
+            ctx = self.app.ctx
+            self._open(vs.import_uff_files(ctx.profile, ctx.pm, specs), "map: UFF import")
         except vs.Cancelled:
             self.app.call_from_thread(self.status, "import cancelled")
         except UserError as exc:
@@ -333,6 +370,8 @@ class VibrationPane(VerticalScroll):
             self._load(words[1])
         elif head == "cancel":
             self.action_cancel()
+        elif head == "tables":
+            self.action_build_tables()
         elif head == "hand":
             if len(words) != 3 or words[2] not in KEY_DIRECTIONS.values():
                 raise UserError("hand: write hand POINT left|right|up|down, e.g. hand 51 right")
@@ -377,7 +416,11 @@ class VibrationPane(VerticalScroll):
             a = sel[-2]
             lines.append("[b]lookup table[/b] (active / passive: difference, frequency, actuator)")
             for act, pas in ((a, n), (n, a)):
-                e = s.lookup(act, pas)
+                try:
+                    e = s.lookup(act, pas)
+                except UserError as exc:
+                    lines.append(f"  {exc}")
+                    break
                 if e["actuator"] is None:
                     lines.append(f"  {act} / {pas}: {e.get('note', 'no entry')}")
                 else:
@@ -402,7 +445,7 @@ class VibrationPane(VerticalScroll):
                 width=width,
                 height=8,
                 mark_hz=mark,
-                band_hz=s.vt["band_hz"],
+                band_hz=s.band_hz,
                 masked=s.vmap.masked,
             )
         )

@@ -1,0 +1,144 @@
+"""The ``flow`` effect as registered: ``effects.FlowEffect`` plus what an operator's
+tool needs from it without reaching into this plugin's modules.
+
+- ``tables(vmap=, progress=)`` builds the lookup tables step by step (a slice of active
+  points at a time), calling ``progress(fraction, message)`` between steps; an exception
+  raised by ``progress`` (the console's cancel) stops the build and nothing is cached.
+  The result is cached on disk under the same key as ``lazy.tables_cached``, so every
+  other user of the tables finds it.
+- ``import_map(files)``: a ``VibrationMap`` from one UFF 58 file per excitation, with the
+  profile's amplifier gain, ``[vibrotactile] mask_below_hz`` and grid.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from console.vibration_map import VibrationMap
+from plugins.vibrotactile.effects import FlowEffect
+from plugins.vibrotactile.tables import Tables, pair_max, usable_bins
+
+Progress = Callable[[float, str], None]  # (fraction 0..1, message)
+
+#: steps of a table build (each a slice of active points; progress and cancel between)
+TABLE_STEPS = 12
+
+
+def build_tables_stepwise(
+    m: VibrationMap,
+    band_hz: float,
+    progress: Progress | None = None,
+    *,
+    min_contrast_db: float = 0.0,
+    steps: int = TABLE_STEPS,
+) -> Tables:
+    """``tables.build_tables`` in ``steps`` slices of active points, ``progress`` before
+    each: the same tables (the pair maximum of a row does not depend on the others)."""
+    keep = usable_bins(m, band_hz)
+    amp = np.abs(m.frf_um_per_v[:, :, keep]).astype(np.float32)
+    p = m.points.size
+    best = np.empty((p, p), np.float32)
+    exc = np.empty((p, p), np.int64)
+    k = np.empty((p, p), np.int64)
+    bounds = np.linspace(0, p, min(max(int(steps), 1), p) + 1).round().astype(int)
+    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):
+        if progress:
+            progress(i / (bounds.size - 1), f"pairs of points {a + 1}-{b} of {p}")
+        best[a:b], exc[a:b], k[a:b] = pair_max(amp[:, a:b], amp, min_contrast_db)
+    freq = m.freq_hz[keep][k]
+    diag = np.arange(p)
+    best = best.astype(float)
+    best[diag, diag] = 0.0
+    freq[diag, diag] = np.nan
+    act = exc.astype(np.int8)
+    act[diag, diag] = -1
+    if progress:
+        progress(1.0, "lookup tables built")
+    return Tables(best, freq, act, float(band_hz), m, float(min_contrast_db))
+
+
+def tables_stepwise_cached(
+    m: VibrationMap,
+    band_hz: float,
+    cache_dir: str | os.PathLike | None,
+    progress: Progress | None = None,
+    *,
+    min_contrast_db: float = 0.0,
+) -> Tables:
+    """``lazy.tables_cached`` (same cache key and file) built by ``build_tables_stepwise``."""
+    from plugins.vibrotactile.cache import cached
+
+    key = {"map": m.content_hash(), "band_hz": band_hz}
+    if min_contrast_db > 0:  # the paper's tables keep their old key (as lazy.tables_cached)
+        key["min_contrast_db"] = float(min_contrast_db)
+
+    def build() -> dict:
+        t = build_tables_stepwise(m, band_hz, progress, min_contrast_db=min_contrast_db)
+        return {
+            "max_diff_um_per_v": t.max_diff_um_per_v,
+            "freq_hz": t.freq_hz,
+            "actuator": t.actuator,
+        }
+
+    res = cached(cache_dir, "tables", key, build)
+    return Tables(
+        res["max_diff_um_per_v"],
+        res["freq_hz"],
+        res["actuator"],
+        band_hz,
+        m,
+        float(min_contrast_db),
+    )
+
+
+class RegisteredFlowEffect(FlowEffect):
+    """Effect ``flow`` (see ``effects.FlowEffect``) with a stepwise, cancellable table
+    build and UFF import (module docstring)."""
+
+    def tables(
+        self,
+        vmap: Any = None,
+        tables: Any = None,
+        *,
+        min_contrast_db: float | None = None,
+        progress: Progress | None = None,
+    ) -> Tables:
+        """Lookup tables of a map (``FlowEffect.tables``); with ``progress`` they are built
+        in steps with ``progress(fraction, message)`` between them (raise in it to stop)."""
+        if progress is None or tables is not None:
+            return super().tables(vmap, tables, min_contrast_db=min_contrast_db)
+        m = self.vibration_map(vmap)
+        c = self.setup.min_contrast_db if min_contrast_db is None else float(min_contrast_db)
+        key = ("map", id(m), c)  # FlowEffect.tables' memo key: render/query find these
+        with self._lock:
+            hit = self._tables.get(key)
+            if hit is None or hit.vmap is not m:
+                hit = tables_stepwise_cached(
+                    m, self.setup.band_hz, self.setup.cache_dir, progress, min_contrast_db=c
+                )
+                self._tables[key] = hit
+            return hit
+
+    def import_map(self, files: dict[str, str | os.PathLike]) -> VibrationMap:
+        """A vibration map from UFF 58 files, one per excitation (``{"PA": path, ...}``;
+        missing excitations are allowed): gain ``[amplifiers] piezo_gain``, bins below
+        ``[vibrotactile] mask_below_hz`` masked, the profile's grid for files without
+        point coordinates. Bad files are a ``UserError`` naming the file."""
+        from console.vibration_map import grid_points_mm
+        from plugins.vibrotactile.uff_io import import_uff
+
+        p = self.profile
+        g = p.section("grid")
+        grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
+        return import_uff(
+            {str(e).strip().upper(): str(Path(f).expanduser()) for e, f in files.items()},
+            gain=float(p.get("amplifiers.piezo_gain")),
+            mask_below_hz=float(p.get("vibrotactile.mask_below_hz", 5.0)),
+            grid_mm=grid,
+            require_all=False,
+        )
