@@ -133,6 +133,19 @@ def haptable_register_demos(register: Register) -> None:
 
 
 @hookspec
+def haptable_register_frame_sinks(register: Register) -> None:
+    """Register frame sinks: outputs the frame loop feeds after its stages (e.g. TUIO).
+
+    The factory is ``factory(profile, *, force=False)`` and returns a sink, or ``None``
+    when the profile leaves the sink off (``force`` opens it anyway, e.g.
+    ``haptable demo --tuio``). A sink is called ``sink(frame, work)`` for every
+    processed frame (``work``: the stages' results, ``contacts``, ``hands``,
+    ``gesture`` ...), untimed, and its ``close()`` (if any) is called when the run ends.
+    The demo runner opens every registered sink that the profile enables.
+    """
+
+
+@hookspec
 def haptable_register_panels(register: Register) -> None:
     """Register console panels (extra Textual screens).
 

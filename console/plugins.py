@@ -48,6 +48,7 @@ KINDS: dict[str, str] = {
     "vibrometer": "haptable_register_vibrometers",
     "demo": "haptable_register_demos",
     "panel": "haptable_register_panels",
+    "frame_sink": "haptable_register_frame_sinks",
 }
 
 

@@ -26,6 +26,7 @@ from console.runtime.stages import (
     open_classifier,
 )
 from console.runtime.watchdog import Watchdog
+from console.types import GestureScript, GestureStep
 
 log = logging.getLogger("haptable.demos")
 
@@ -33,26 +34,45 @@ DEMOS = ("flow", "knob")
 
 
 def script_twin(camera: Any, demo: str, profile: Any, *, hold_frames: int | None = None) -> bool:
-    """On the camera twin: a scripted hand performing the demo, looping. False if the
-    camera is not scriptable (real hardware: the operator's hand does it)."""
+    """On a simulated camera (the twin): a scripted hand performing the demo, looping.
+    False if the camera is not scriptable (real hardware: the operator's hand does it)."""
     if not callable(getattr(camera, "set_script", None)):
         return False
-    from plugins.twin.camera import SequenceScript
-
     fps = float(profile.get("camera.fps") or 60.0)
-    table = (float(profile.get("table.width_mm")), float(profile.get("table.height_mm")))
     subject = profile.get("twin_camera.subject") or "s1"
     seed = int(profile.get("twin_camera.seed") or 0)
     if demo == "flow":
-        items = [("open_hand", subject, None, hold_frames or int(4 * fps))]
+        step = GestureStep("open_hand", subject, None, hold_frames or int(4 * fps))
         gap = int(1.0 * fps)
     else:
-        items = [("rotate", subject, None, hold_frames or int(1.5 * fps))]
+        step = GestureStep("rotate", subject, None, hold_frames or int(1.5 * fps))
         gap = int(0.5 * fps)
-    camera.set_script(
-        SequenceScript(items, table_mm=table, fps=fps, gap_frames=gap, loop=True, seed=seed)
-    )
+    camera.set_script(GestureScript((step,), gap_frames=gap, loop=True, seed=seed))
     return True
+
+
+def open_frame_sinks(profile: Any, plugins: Any, *, force: dict[str, bool] | None = None):
+    """Every registered frame sink the profile enables (``haptable_register_frame_sinks``).
+
+    ``force`` maps sink names to True (open even if the profile leaves it off) or False
+    (leave it closed even if enabled)."""
+    force = force or {}
+    regs = plugins.of("frame_sink")
+    missing = sorted(n for n, on in force.items() if on and n not in regs)
+    if missing:
+        known = ", ".join(sorted(regs)) or "none"
+        raise UserError(
+            f"frame sink {missing[0]!r}: no plugin registers it (registered: {known}); "
+            "install or unblock the plugin that provides it"
+        )
+    sinks = []
+    for name, reg in sorted(regs.items()):
+        if force.get(name) is False:
+            continue
+        sink = reg.factory(profile, force=bool(force.get(name)))
+        if sink is not None:
+            sinks.append(sink)
+    return sinks
 
 
 @dataclass
@@ -191,8 +211,9 @@ def start_demo(
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
-    ``script``: on the twin camera, a scripted hand performs the demo. ``tuio``: stream
-    TUIO too (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
+    ``script``: on the twin camera, a scripted hand performs the demo. Registered frame
+    sinks the profile enables are fed too; ``tuio`` forces the ``tuio`` sink on (True) or
+    off (False) (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
     ``camera``/``classifier``: reuse the console's (its tuned thresholds and learned
     background; stop the console's own frame loop first); the run closes neither.
     ``projector``: the console's projector service (``update(event)``, after its
@@ -267,10 +288,9 @@ def start_demo(
             end_stage="scheduled",
         )
         all_sinks = list(sinks or [])
-        if tuio or (tuio is None and profile.get("tuio.enabled")):
-            from plugins.tuio import make_sender
-
-            all_sinks.append(make_sender(profile, force=True))
+        all_sinks += open_frame_sinks(
+            profile, plugins, force=None if tuio is None else {"tuio": tuio}
+        )
         loop = FrameLoop(
             camera,
             stages,

@@ -4,9 +4,10 @@ Off by default. Profile section ``[tuio]``: ``enabled``, ``host``, ``port`` (def
 127.0.0.1:3333, the TUIO convention). Contacts are ``/tuio/2Dcur``, hands
 ``/tuio/2Dblb``, recognised gestures ``/haptable/gesture`` (see ``sender.py`` for the
 message layout). ``haptable tuio`` runs the camera and vision alone and streams TUIO;
-the demos (``haptable demo``) stream it too when ``[tuio] enabled = true``.
+the demos (``haptable demo``) stream it too when ``[tuio] enabled = true``: the sender
+is registered as the frame sink ``tuio`` (``haptable_register_frame_sinks``).
 
-Public API: ``make_sender(profile, host=None, port=None)`` -> a frame sink, or
+``make_sender(profile, host=None, port=None, force=False)`` -> a frame sink, or
 ``None`` when disabled; ``GESTURE_ADDRESS``.
 """
 
@@ -51,6 +52,15 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
             int(profile.get("camera.height_px", 480)),
         ),
         source=profile.get("tuio.source") or "haptable",
+    )
+
+
+@hookimpl
+def haptable_register_frame_sinks(register) -> None:
+    register(
+        "tuio",
+        make_sender,
+        description="TUIO 1.1 over OSC/UDP: contacts, hands, gestures ([tuio] enabled)",
     )
 
 
