@@ -1,7 +1,8 @@
 """Electrostatic friction and the haptic knob (paper 4.2, 5.3-5.5).
 
-Registers: effects ``electrostatic`` (one friction stimulus with its expected force) and
-``knob`` (the four conditions and variants, finite or live); profile sections
+Registers: effects ``electrostatic`` (one friction stimulus with its expected force; its
+``presets`` are the named friction settings) and ``knob`` (the four conditions and
+variants, finite or live; its ``conditions`` names them); profile sections
 [electrostatic] and [knob]; the ``haptable knob`` command; the ``knob`` benchmark.
 Modules: force (Eqs. 1-2, thresholds), rotation (two-finger tracker), knob (sectors),
 synth (live stream), session/simulate (pipeline and twin), task (the experiment).
@@ -26,17 +27,54 @@ def haptable_profile_sections(register: Any) -> None:
     register("knob", KNOB_FIELDS, help="haptic knob: sectors, feedback signals, tracker, task")
 
 
+#: Friction presets an operator auditions on the ``electrostatic`` effect (its
+#: ``presets``): ``render`` keywords plus ``help``.
+FRICTION_PRESETS: dict[str, dict[str, Any]] = {
+    "knob carrier": {
+        "vpp": 100.0,
+        "freq_hz": 180.0,
+        "waveform": "sine",
+        "help": "the paper's knob friction: 100 Vpp, 180 Hz",
+    },
+    "slow-turn friction": {
+        "vpp": 100.0,
+        "freq_hz": 60.0,
+        "waveform": "sine",
+        "help": "velocity friction at rest (60 Hz)",
+    },
+    "most sensitive": {
+        "vpp": 60.0,
+        "freq_hz": 80.0,
+        "waveform": "sine",
+        "help": "near the threshold minimum (~80 Hz)",
+    },
+    "square 40 Hz": {
+        "vpp": 80.0,
+        "freq_hz": 40.0,
+        "waveform": "square",
+        "help": "square waves are felt lower below ~60 Hz",
+    },
+}
+
+
 @hookimpl
 def haptable_register_effects(register: Any) -> None:
     def electrostatic(profile: Any) -> Any:
+        """``ElectrostaticEffect`` with ``presets`` (``FRICTION_PRESETS``)."""
         from .effects import ElectrostaticEffect
 
-        return ElectrostaticEffect(profile)
+        eff = ElectrostaticEffect(profile)
+        eff.presets = {k: dict(v) for k, v in FRICTION_PRESETS.items()}
+        return eff
 
     def knob(profile: Any) -> Any:
+        """``KnobEffect`` with ``conditions``: the names ``render(condition=)`` takes."""
         from .effects import KnobEffect
+        from .synth import CONDITIONS
 
-        return KnobEffect(profile)
+        eff = KnobEffect(profile)
+        eff.conditions = tuple(CONDITIONS)
+        return eff
 
     register(
         "electrostatic",

@@ -1,7 +1,8 @@
 """Electrostatic: audition the knob conditions and friction presets; amplitude and
 frequency controls kept inside the limits, with the expected force of the setting.
 
-Everything goes through the ``electrostatic`` and ``knob`` effect registrations."""
+Everything goes through the ``electrostatic`` and ``knob`` effect registrations: the
+knob effect's ``conditions`` and the electrostatic effect's ``presets`` fill the list."""
 
 from __future__ import annotations
 
@@ -14,13 +15,6 @@ from textual.widgets.option_list import Option
 
 from console.errors import UserError
 
-#: name -> (vpp, freq_hz, waveform, what it is)
-PRESETS = {
-    "knob carrier": (100.0, 180.0, "sine", "the paper's knob friction: 100 Vpp, 180 Hz"),
-    "slow-turn friction": (100.0, 60.0, "sine", "velocity friction at rest (60 Hz)"),
-    "most sensitive": (60.0, 80.0, "sine", "near the threshold minimum (~80 Hz)"),
-    "square 40 Hz": (80.0, 40.0, "square", "square waves are felt lower below ~60 Hz"),
-}
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
 
@@ -67,6 +61,8 @@ class ElectrostaticPane(Vertical):
         self.vpp, self.freq_hz, self.waveform = 100.0, 180.0, "sine"
         self.max_vpp = 200.0
         self.conditions: tuple[str, ...] = ()
+        self.presets: dict[str, dict] = {}
+        self.notes: list[str] = []
 
     def compose(self) -> ComposeResult:
         regs = self.app.ctx.pm.of("effect")
@@ -98,18 +94,37 @@ class ElectrostaticPane(Vertical):
         lo, hi = Limits.from_profile(self.app.ctx.profile).screen_range()
         self.max_vpp = hi - lo
         lst = self.query_one("#es-list", OptionList)
-        if "knob" in self.app.ctx.pm.of("effect"):
-            from plugins.electrostatic.synth import CONDITIONS  # the knob's condition names
-
-            self.conditions = tuple(CONDITIONS)
-            for c in CONDITIONS:
+        ctx = self.app.ctx
+        regs = ctx.pm.of("effect")
+        notes = []
+        if "knob" in regs:
+            self.conditions = tuple(getattr(regs["knob"].factory(ctx.profile), "conditions", ()))
+            for c in self.conditions:
                 lst.add_option(Option(f"knob {c}", id=f"cond:{c}"))
-        if "electrostatic" in self.app.ctx.pm.of("effect"):
-            for name, (vpp, f, wf, _) in PRESETS.items():
-                lst.add_option(Option(f"{name}: {vpp:g} Vpp {f:g} Hz {wf}", id=f"preset:{name}"))
+        if not self.conditions:
+            notes.append("no effect plugin offers knob conditions: install/enable electrostatic")
+        if "electrostatic" in regs:
+            presets = getattr(regs["electrostatic"].factory(ctx.profile), "presets", None) or {}
+            self.presets = {str(k): dict(v) for k, v in presets.items()}
+            for name, p in self.presets.items():
+                lst.add_option(
+                    Option(
+                        f"{name}: {p['vpp']:g} Vpp {p['freq_hz']:g} Hz {p.get('waveform', 'sine')}",
+                        id=f"preset:{name}",
+                    )
+                )
+        if not self.presets:
+            notes.append("no effect plugin offers friction presets: install/enable electrostatic")
         if lst.option_count:
             lst.highlighted = 0
-        self._update_setting()
+        self.notes = notes
+        if "electrostatic" in regs:
+            self._update_setting()
+        else:
+            self._show_setting(
+                "[yellow]no effect plugin offers an electrostatic stimulus: install/enable "
+                "electrostatic[/]"
+            )
 
     # ------------------------------------------------------------------ setting
     def action_vpp(self, step: float) -> None:
@@ -134,9 +149,10 @@ class ElectrostaticPane(Vertical):
         self.app.call_from_thread(self._show_setting, text)
 
     def _show_setting(self, text: str) -> None:
+        notes = "".join(f"\n[yellow]{n}[/]" for n in self.notes)
         self.query_one("#es-setting", Static).update(
             f"[b]setting[/b] {self.vpp:g} Vpp (max {self.max_vpp:g}), {self.freq_hz:g} Hz, "
-            f"{self.waveform}\n{text}"
+            f"{self.waveform}\n{text}{notes}"
         )
 
     def _render_setting(self, duration_s: float):
@@ -150,9 +166,9 @@ class ElectrostaticPane(Vertical):
         event.stop()
         kind, name = event.option.id.split(":", 1)
         if kind == "preset":
-            vpp, f, wf, _ = PRESETS[name]
-            self.vpp, self.freq_hz = clamp_setting(vpp, f, self.max_vpp)
-            self.waveform = wf
+            p = self.presets[name]
+            self.vpp, self.freq_hz = clamp_setting(p["vpp"], p["freq_hz"], self.max_vpp)
+            self.waveform = p.get("waveform", "sine")
             self._update_setting()
             self.action_play_custom()
         else:
