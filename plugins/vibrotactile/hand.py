@@ -208,23 +208,53 @@ def staged_levels(
     q, bins = square_levels(
         m, center_mm, stride=screen_stride, bins=keep[::step], cache_bins=True, **kw
     )
-    cand = {
-        b
-        for d in directions
-        for b in choose(q, bins, m, d, perception, cap_v, top=top)["candidates"]
-    }
+
+    def candidates(q: np.ndarray, bins: np.ndarray, n: int) -> set:
+        """The ``n`` best bins per part, over every direction asked for."""
+        return {
+            b
+            for d in directions
+            for b in choose(q, bins, m, d, perception, cap_v, top=n)["candidates"]
+        }
+
+    cand = candidates(q, bins, top)
     if step > 1:
         pos = np.searchsorted(keep, sorted(cand))
         near = np.unique(
             np.clip(pos[:, None] + np.arange(-step + 1, step)[None, :], 0, keep.size - 1)
         )
         q, bins = square_levels(m, center_mm, stride=screen_stride, bins=keep[near], **kw)
-        cand = {
-            b
-            for d in directions
-            for b in choose(q, bins, m, d, perception, cap_v, top=final_top)["candidates"]
-        }
+        cand = candidates(q, bins, final_top)
     return square_levels(m, center_mm, bins=np.array(sorted(cand)), **kw)
+
+
+def search_levels(
+    m: VibrationMap,
+    center_mm,
+    directions,
+    perception: Perception,
+    cap_v: float,
+    *,
+    screen_stride: int,
+    screen_df_hz: float,
+    top: int,
+    **kw,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Square levels to ``choose`` from: exhaustive (``square_levels``) when
+    ``screen_stride`` is 1, else ``staged_levels`` for ``directions``."""
+    if screen_stride > 1:
+        return staged_levels(
+            m,
+            center_mm,
+            directions,
+            perception,
+            cap_v,
+            screen_stride=screen_stride,
+            screen_df_hz=screen_df_hz,
+            top=top,
+            **kw,
+        )
+    return square_levels(m, center_mm, **kw)
 
 
 def hand_flow(
@@ -248,20 +278,8 @@ def hand_flow(
     point); > 1: ``staged_levels`` (what the whole-table sweep uses; the benchmark
     reports how often it matches the exhaustive choice)."""
     kw = dict(hand_mm=hand_mm, squares=squares, subgrid=subgrid, band_hz=band_hz, method=method)
-    if screen_stride > 1:
-        q, keep = staged_levels(
-            m,
-            center_mm,
-            (direction,),
-            perception,
-            cap_v,
-            screen_stride=screen_stride,
-            screen_df_hz=screen_df_hz,
-            top=top,
-            **kw,
-        )
-    else:
-        q, keep = square_levels(m, center_mm, **kw)
+    search = dict(screen_stride=screen_stride, screen_df_hz=screen_df_hz, top=top)
+    q, keep = search_levels(m, center_mm, (direction,), perception, cap_v, **search, **kw)
     out = choose(q, keep, m, direction, perception, cap_v)
     out["center_mm"] = [float(c) for c in center_mm]
     out["hand_mm"] = hand_mm
@@ -311,21 +329,9 @@ def hand_flow_table(
     margin = np.full((n, 4, 2), np.nan)
     active = np.zeros((n, 4, 2, squares, squares), bool)
     kw = dict(hand_mm=hand_mm, squares=squares, subgrid=subgrid, band_hz=band_hz, method=method)
+    search = dict(screen_stride=screen_stride, screen_df_hz=screen_df_hz, top=top)
     for i, cen in enumerate(c):
-        if screen_stride > 1:
-            q, keep = staged_levels(
-                m,
-                cen,
-                DIRECTIONS,
-                perception,
-                cap_v,
-                screen_stride=screen_stride,
-                screen_df_hz=screen_df_hz,
-                top=top,
-                **kw,
-            )
-        else:
-            q, keep = square_levels(m, cen, **kw)
+        q, keep = search_levels(m, cen, DIRECTIONS, perception, cap_v, **search, **kw)
         for j, d in enumerate(DIRECTIONS):
             r = choose(q, keep, m, d, perception, cap_v)
             ok[i, j] = r["ok"]
