@@ -53,6 +53,15 @@ def haptable_register_classifiers(register: Register) -> None:
     The factory returns an object with ``classify(frames: list[Frame]) -> Gesture | None``
     and ``names: tuple[str, ...]`` (the gestures it knows). Selected by
     ``[gestures] classifier`` in the profile.
+
+    Optionally ``touch_calibration(profile) -> session`` for the console's touch-
+    calibration wizard (camera px -> table mm; the console says so when it is absent).
+    The session has ``targets_mm`` (N x 2), ``next_target() -> (index, (x, y) mm) | None``,
+    ``feed(contacts) -> event`` for each frame's contacts (``"recorded"``, ``"lifted"``,
+    ``"done"``, or a waiting state), ``skip()``, ``index``, ``state`` (``"done"`` at the
+    end), ``progress() -> (touched, total)`` and ``finish() -> result``, whose
+    ``report()`` has ``pairs``, ``rms_mm``, ``max_mm``, ``loo_rms_mm``, ``outliers`` and
+    ``save(path)`` writes the file ``[vision] calibration`` names.
     """
 
 

@@ -107,6 +107,21 @@ class SvmClassifier:
             model, vision_params(profile), to_mm, alpha=profile.get("vision.background_alpha")
         )
 
+    def touch_calibration(self, profile):
+        """A touch-calibration session for the console's wizard (the classifier contract's
+        optional ``touch_calibration``): targets from ``[projector] touch_cal_columns``,
+        ``touch_cal_rows``, ``touch_cal_margin_mm`` over the profile's table."""
+        from .calibration import CalibrationSession, target_grid
+
+        table = (float(profile.get("table.width_mm")), float(profile.get("table.height_mm")))
+        targets = target_grid(
+            table,
+            columns=int(profile.get("projector.touch_cal_columns", 4) or 4),
+            rows=int(profile.get("projector.touch_cal_rows", 3) or 3),
+            margin_mm=float(profile.get("projector.touch_cal_margin_mm", 60.0) or 60.0),
+        )
+        return CalibrationSession(targets)
+
     def set_background(self, image: np.ndarray) -> None:
         self.background = Background(image, self.background.alpha)
 

@@ -164,12 +164,12 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
         if m.is_file():
             info["bytes"] = m.stat().st_size
             try:
-                from .model import GestureModel
+                from .model import read_settings
 
-                gm = GestureModel.load(m)
-                info["n_samples"] = gm.meta.get("n_samples")
-                info["evaluation"] = gm.meta.get("evaluation")
-                info["trained_on"] = gm.meta.get("trained_on")
+                meta = read_settings(m).get("meta", {})
+                info["n_samples"] = meta.get("n_samples")
+                info["evaluation"] = meta.get("evaluation")
+                info["trained_on"] = meta.get("trained_on")
             except UserError as exc:
                 info["error"] = str(exc)
         out["model"] = info

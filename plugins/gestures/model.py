@@ -67,6 +67,21 @@ def file_types(path: Path) -> set[str]:
     return out
 
 
+def read_settings(path: str | Path) -> dict:
+    """A saved model's settings and metadata (``meta``), read from its skops schema
+    without building (or importing) anything; a one-line ``UserError`` if unreadable."""
+    p = Path(path)
+    try:
+        with zipfile.ZipFile(p) as z:
+            schema = json.loads(z.read("schema.json"))
+        content = schema["content"]
+        if json.loads(content["format"]["content"]) != MODEL_FORMAT:
+            raise ValueError(f"not a {MODEL_FORMAT} model")
+        return json.loads(json.loads(content["settings"]["content"]))
+    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
+        raise UserError(f"{p}: not a readable gesture model ({e}); train it again") from None
+
+
 def make_pipeline(seed: int = 0):
     from sklearn.pipeline import Pipeline
     from sklearn.preprocessing import StandardScaler

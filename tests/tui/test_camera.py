@@ -120,3 +120,47 @@ def test_latency_screen_shows_stage_percentiles(plugins):
             assert "output latency" in audio and "underruns 0" in audio
 
     asyncio.run(scenario())
+
+
+def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
+    """k asks the classifier for its touch-calibration session (the pane imports no
+    plugin); a classifier without one gets a plain sentence, not a crash."""
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await _first_frame(app, pilot)
+            pane = app.pane("camera")
+            info = app.query_one("#camera-info")
+            await pilot.press("k")
+            assert pane.calibration is not None
+            assert len(pane.calibration.targets_mm) == 12  # [projector] 4 x 3 targets
+            await wait_for(pilot, lambda: "touch target 1 of 12" in str(info.render()), 10)
+            await pilot.press("x")
+            assert pane.calibration is None
+            await wait_for(pilot, lambda: "calibration cancelled" in str(info.render()), 10)
+
+            svc = app.camera_service
+            real = svc.classifier
+            svc.classifier = type("NoCalibration", (), {"params": real.params})()
+            await pilot.press("k")
+            assert pane.calibration is None
+            await wait_for(pilot, lambda: "offers none" in str(info.render()), 10)
+            assert "[gestures] classifier" in str(info.render())
+            svc.classifier = real
+
+    asyncio.run(scenario())
+
+
+def test_g_opens_the_gestures_panel_from_the_camera_screen(plugins):
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.pane("camera") is not None, what="camera pane")
+            await wait_for(pilot, lambda: app.focused is app.pane("camera"), what="focus")
+            await pilot.press("g")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: type(app.screen).__name__ != "GesturesPanel")
+
+    asyncio.run(scenario())

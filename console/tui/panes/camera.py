@@ -1,7 +1,8 @@
 """Camera: the live IR view (half-block image, ~10 Hz) with the detected hand, contacts
 and gesture drawn over it; background capture; threshold and high-pass tuning with
 immediate effect; the touch-calibration wizard (projector targets, reprojection error,
-save)."""
+save), offered by the classifier (its optional ``touch_calibration``, see
+``console.hookspecs``); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
 
@@ -50,6 +51,7 @@ class CameraPane(Horizontal):
         "t / T    body threshold down / up      c / C  contact threshold down / up\n"
         "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
+        "g        gestures panel: datasets, training and evaluation\n"
         "Overlay: hand outline green, contacts red, calibration target yellow."
     )
     BINDINGS = [
@@ -65,6 +67,7 @@ class CameraPane(Horizontal):
         Binding("n", "skip_target", "skip target", show=False),
         Binding("S", "save_calibration", "save cal.", show=False),
         Binding("x", "cancel", "cancel", show=False),
+        Binding("g", "gestures_panel", "gestures"),
     ]
     can_focus = True
 
@@ -72,7 +75,7 @@ class CameraPane(Horizontal):
         super().__init__(**kw)
         self.view = "camera"
         self.visible_now = False
-        self.calibration = None  # CalibrationSession while the wizard runs
+        self.calibration = None  # the classifier's calibration session while the wizard runs
         self.cal_result = None
         self.cal_message = ""
         self._cal_lock = threading.Lock()
@@ -164,7 +167,7 @@ class CameraPane(Horizontal):
         for k, v in svc.params().items():
             lines.append(f"{k} {v:g}")
         lines.append("b: capture background")
-        if self.calibration is not None or self.cal_result is not None:
+        if self.calibration is not None or self.cal_result is not None or self.cal_message:
             lines += ["", "[b]touch calibration[/b]", self.cal_message]
         else:
             lines.append("k: touch calibration")
@@ -197,19 +200,43 @@ class CameraPane(Horizontal):
         fb = _mm_to_px(self.service, nt[1])
         return fb
 
-    def action_calibrate(self) -> None:
-        from plugins.gestures.calibration import CalibrationSession, target_grid
-
+    def new_calibration(self):
+        """The classifier's touch-calibration session, or None with the reason shown."""
         prof = self.app.ctx.profile
-        table = (float(prof.get("table.width_mm")), float(prof.get("table.height_mm")))
-        targets = target_grid(
-            table,
-            columns=int(prof.get("projector.touch_cal_columns", 4) or 4),
-            rows=int(prof.get("projector.touch_cal_rows", 3) or 3),
-            margin_mm=float(prof.get("projector.touch_cal_margin_mm", 60.0) or 60.0),
-        )
+        clf = self.service.classifier
+        if clf is None:
+            why = "the camera is not running yet; wait for the first frame, then press k"
+            if self.service.error:
+                why = f"no camera ({self.service.error})"
+            self._cal_unavailable(f"touch calibration: {why}")
+            return None
+        make = getattr(clf, "touch_calibration", None)
+        if make is None:
+            name = prof.get("gestures.classifier") or "?"
+            self._cal_unavailable(
+                f"touch calibration: the classifier {name!r} offers none; choose one that "
+                "does in [gestures] classifier (e.g. svm)"
+            )
+            return None
+        try:
+            return make(prof)
+        except UserError as exc:
+            self._cal_unavailable(str(exc))
+            return None
+
+    def _cal_unavailable(self, msg: str) -> None:
+        from textual.markup import escape
+
+        self.cal_message = escape(msg)
+        self.app.notify(msg, severity="warning", timeout=8)
+
+    def action_calibrate(self) -> None:
+        session = self.new_calibration()
+        if session is None:
+            return
+        targets = session.targets_mm
         with self._cal_lock:
-            self.calibration = CalibrationSession(targets)
+            self.calibration = session
             self.cal_result = None
         self.cal_message = f"touch target 1 of {len(targets)}"
         svc = self.service
@@ -293,6 +320,15 @@ class CameraPane(Horizontal):
             if self.service.camera is not None and hasattr(self.service.camera, "set_target"):
                 self.service.camera.set_target(None)
             self._projector("stop")
+
+    def action_gestures_panel(self) -> None:
+        reg = self.app.ctx.pm.of("panel").get("gestures")
+        if reg is None:
+            self.app.notify(
+                "no gestures panel: the gestures plugin is not loaded", severity="warning"
+            )
+            return
+        self.app.push_screen(reg.factory(self.app))
 
     def action_save_calibration(self) -> None:
         if self.cal_result is None:

@@ -1,0 +1,88 @@
+"""The Gestures panel, driven as an operator would: opened from the command palette,
+a tiny twin dataset synthesized with a progress bar and a summary, training cancelled
+(no model file appears), training run to the end (accuracy per fold), bad input."""
+
+from __future__ import annotations
+
+import asyncio
+
+from textual.widgets import Input
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+
+
+def _set(panel, name: str, value: str) -> None:
+    panel.query_one(f"#gp-{name}", Input).value = value
+
+
+def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
+    ds, model = tmp_path / "set", tmp_path / "gestures.skops"
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            await pilot.press("ctrl+p")
+            await pilot.press(*"Panel: gestures")
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
+            panel = app.screen
+            work = panel.work
+            _set(panel, "dataset", str(ds))
+            _set(panel, "model", str(model))
+            _set(panel, "subjects", "1")
+
+            # bad input: one red line naming the field, nothing started or written
+            _set(panel, "reps", "0")
+            await pilot.press("s")
+            assert "reps '0'" in work.text and "\n" not in work.text
+            assert work.query_one("Label").has_class("error")
+            assert not work.busy and not ds.exists()
+
+            # a tiny dataset: the bar shows while it runs, a summary when done
+            _set(panel, "reps", "2")
+            await pilot.press("s")
+            assert work.busy and work.progress is not None
+            seen = set()
+
+            def done() -> bool:
+                if work.progress is not None:
+                    seen.add(round(work.progress, 2))
+                return work.outcome is not None
+
+            await wait_for(pilot, done, 60, "synthesis done")
+            assert work.outcome == "done", work.text
+            assert "synthesized 20 samples (1 subject(s) x 10 gestures x 2 reps" in work.text
+            assert len(seen) >= 3  # the bar moved through the work
+            files = panel.query_one("#gp-files")
+            await wait_for(pilot, lambda: "20 samples" in str(files.render()), 10, "files")
+            assert "2 reps" in str(files.render())
+            assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
+
+            # training cancelled: says so, no model file, no temporary left behind
+            await pilot.press("t", "x")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "training stopped")
+            assert work.outcome == "cancelled" and "training cancelled" in work.text
+            res = panel.query_one("#gp-result")
+            await wait_for(pilot, lambda: "no model was written" in str(res.render()), 10)
+            assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
+
+            # training to the end: accuracy per fold, the model in the files block
+            await pilot.press("t")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "training done")
+            assert work.outcome == "done", work.text
+            res = panel.query_one("#gp-result")
+            await wait_for(pilot, lambda: "fold 2" in str(res.render()), 10, "result")
+            result = str(res.render())
+            assert "fold 1" in result and "fold 2" in result and "2fold" in result
+            assert model.is_file()
+            await wait_for(pilot, lambda: "folds" in str(files.render()), 10, "model files")
+            assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures.skops", "set"]
+
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: type(app.screen).__name__ != "GesturesPanel")
+
+    asyncio.run(scenario())
