@@ -179,6 +179,18 @@ def _target(c, r: float, col: str, label: str = "") -> list[dict]:
     return out
 
 
+def _caption(s: dict, key: str, *, above_mm: float, size_mm: float) -> list[dict]:
+    """``s[key]`` as grey text centred ``above_mm`` above the glass's far edge (none if
+    empty)."""
+    if not s.get(key):
+        return []
+    w, h = s.get("table_mm", [743.46, 447.29])
+    xy = [w / 2, h - above_mm]
+    return [
+        {"p": "text", "xy": xy, "text": s[key], "size_mm": size_mm, "color": "grey", "anchor": "c"}
+    ]
+
+
 def draw_touch_calibration(s: dict) -> list[dict]:
     out: list[dict] = []
     cur = s.get("current")
@@ -190,19 +202,7 @@ def draw_touch_calibration(s: dict) -> list[dict]:
             out.append({"p": "disc", "c": c, "r": 4.0, "fill": "green"})
         else:
             out += _target(c, 6.0, "dim")
-    if s.get("message"):
-        w, h = s.get("table_mm", [743.46, 447.29])
-        out.append(
-            {
-                "p": "text",
-                "xy": [w / 2, h - 20],
-                "text": s["message"],
-                "size_mm": 14,
-                "color": "grey",
-                "anchor": "c",
-            }
-        )
-    return out
+    return out + _caption(s, "message", above_mm=20, size_mm=14)
 
 
 def draw_flow_two_point(s: dict) -> list[dict]:
@@ -221,19 +221,7 @@ def draw_flow_two_point(s: dict) -> list[dict]:
                 {"p": "ring", "c": a, "r": 26.0, "width_mm": 3.0, "stroke": "yellow"},
                 {"p": "ring", "c": b, "r": 26.0, "width_mm": 3.0, "stroke": "yellow"},
             ]
-    if s.get("message"):
-        w, h = s.get("table_mm", [743.46, 447.29])
-        out.append(
-            {
-                "p": "text",
-                "xy": [w / 2, h - 20],
-                "text": s["message"],
-                "size_mm": 14,
-                "color": "grey",
-                "anchor": "c",
-            }
-        )
-    return out
+    return out + _caption(s, "message", above_mm=20, size_mm=14)
 
 
 #: Unit arrow vectors in table mm (y grows away from the reference edge: "down" as projected).
@@ -516,19 +504,7 @@ def draw_grid(s: dict) -> list[dict]:
                 "color": "yellow",
             }
         )
-    if s.get("caption"):
-        w, h = s.get("table_mm", [743.46, 447.29])
-        out.append(
-            {
-                "p": "text",
-                "xy": [w / 2, h - 12],
-                "text": s["caption"],
-                "size_mm": 11,
-                "color": "grey",
-                "anchor": "c",
-            }
-        )
-    return out
+    return out + _caption(s, "caption", above_mm=12, size_mm=11)
 
 
 def draw_alignment(s: dict) -> list[dict]:
