@@ -145,6 +145,50 @@ class SimFinger:
         return self.fitts_a_s + self.fitts_b_s * math.log2(abs(dist_deg) / width_deg + 1.0)
 
 
+def _session(
+    trial: Trial,
+    settings: Mapping[str, Any],
+    limits: Mapping[str, float] | None,
+    sample_rate_hz: int,
+    block: int,
+) -> KnobSession:
+    """The knob session of one trial (sim or live): its condition, sectors and items."""
+    return KnobSession(
+        trial.condition,
+        sectors=trial.sectors,
+        settings=settings,
+        limits=limits,
+        sample_rate_hz=sample_rate_hz,
+        block=block,
+        start_item=trial.start_item,
+        n_items=trial.n_items,
+        record=False,
+    )
+
+
+def _result(
+    trial: Trial, ses: KnobSession, m: dict, confirm_s: float, timed_out: bool, **kw: Any
+) -> TrialResult:
+    """A trial's result from its metrics ``m`` (``trial_metrics``); the times are
+    ``None`` when it timed out. ``kw``: the finger-specific fields."""
+    return TrialResult(
+        trial=trial.index,
+        condition=trial.condition,
+        sectors=trial.sectors,
+        distance_deg=trial.distance_deg,
+        start_item=trial.start_item,
+        target_item=trial.target_item,
+        completion_time_s=None if timed_out else m["completion_time_s"],
+        overshoots=m["overshoots"],
+        recovery_time_s=None if timed_out else m["recovery_time_s"],
+        confirm_time_s=None if timed_out else confirm_s,
+        timed_out=timed_out,
+        crossings=len(ses.crossings),
+        detents=len(ses.stream.detent_log),
+        **kw,
+    )
+
+
 def run_trial(
     trial: Trial,
     *,
@@ -160,17 +204,7 @@ def run_trial(
     """Run one trial with the simulated finger closing the loop through the knob."""
     finger = finger or SimFinger()
     rng = rng or np.random.default_rng(trial.index)
-    ses = KnobSession(
-        trial.condition,
-        sectors=trial.sectors,
-        settings=settings,
-        limits=limits,
-        sample_rate_hz=sample_rate_hz,
-        block=block,
-        start_item=trial.start_item,
-        n_items=trial.n_items,
-        record=False,
-    )
+    ses = _session(trial, settings, limits, sample_rate_hz, block)
     knob = ses.knob
     w = knob.width_deg
     dwell = float(settings["dwell_s"])
@@ -247,20 +281,12 @@ def run_trial(
         ses.finish()
     m = trial_metrics(item_times, trial.target_item)
     lat = ses.latency_samples() if render else np.zeros(0)
-    return TrialResult(
-        trial=trial.index,
-        condition=trial.condition,
-        sectors=trial.sectors,
-        distance_deg=trial.distance_deg,
-        start_item=trial.start_item,
-        target_item=trial.target_item,
-        completion_time_s=None if timed_out else m["completion_time_s"],
-        overshoots=m["overshoots"],
-        recovery_time_s=None if timed_out else m["recovery_time_s"],
-        confirm_time_s=None if timed_out else t,
-        timed_out=timed_out,
-        crossings=len(ses.crossings),
-        detents=len(ses.stream.detent_log),
+    return _result(
+        trial,
+        ses,
+        m,
+        t,
+        timed_out,
         max_detent_latency_samples=float(lat.max()) if lat.size else None,
         finger="sim",
     )
@@ -282,17 +308,7 @@ def run_live_trial(
     """One trial with live contacts: ``attach(session)`` hands the session to whatever
     feeds it camera frames (``session.feed(t_capture_s, contacts)``, same clock as
     ``clock``); its stream plays through ``outputs`` for the length of the trial."""
-    ses = KnobSession(
-        trial.condition,
-        sectors=trial.sectors,
-        settings=settings,
-        limits=limits,
-        sample_rate_hz=sample_rate_hz,
-        block=block,
-        start_item=trial.start_item,
-        n_items=trial.n_items,
-        record=False,
-    )
+    ses = _session(trial, settings, limits, sample_rate_hz, block)
     dwell = float(settings["dwell_s"])
     t0 = clock()
     ses.item_log.append((t0, ses.knob.item))
@@ -318,20 +334,12 @@ def run_live_trial(
             report.wait(2.0)
     m = trial_metrics(list(ses.item_log), trial.target_item, t0)
     error = getattr(report, "error", "") or ""
-    return TrialResult(
-        trial=trial.index,
-        condition=trial.condition,
-        sectors=trial.sectors,
-        distance_deg=trial.distance_deg,
-        start_item=trial.start_item,
-        target_item=trial.target_item,
-        completion_time_s=None if timed_out else m["completion_time_s"],
-        overshoots=m["overshoots"],
-        recovery_time_s=None if timed_out else m["recovery_time_s"],
-        confirm_time_s=None if timed_out else t_end - t0,
-        timed_out=timed_out,
-        crossings=len(ses.crossings),
-        detents=len(ses.stream.detent_log),
+    return _result(
+        trial,
+        ses,
+        m,
+        t_end - t0,
+        timed_out,
         max_detent_latency_samples=None,
         finger="live",
         error=error,
