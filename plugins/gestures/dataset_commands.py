@@ -12,6 +12,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from console.errors import UserError
+
 from .dataset import GESTURES
 
 
@@ -74,6 +76,9 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
 
     # a fresh folder is written beside --out and renamed when complete (an interrupted
     # run leaves nothing); --force adds to an existing folder in place
+    out = Path(args.out)
+    if not args.force and out.is_dir() and any(out.iterdir()):
+        raise UserError(f"{out}: folder is not empty; choose a new --out (or --force to add to it)")
     make = synth if args.force else synth_atomic
     info = make(
         args.out,
