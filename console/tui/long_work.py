@@ -5,7 +5,8 @@ A job is a plain function ``job(progress, cancelled) -> result``: it calls
 ``progress(frac, msg)`` (0..1) as it goes and polls ``cancelled()``, raising any
 exception to stop when that returns True. ``LongWork.start`` runs it; the status line
 shows the progress, then ``summary(result)``, "NAME cancelled" or the error as one red
-line (a ``UserError`` as written, anything else as ``NAME failed: ...``). When it ends,
+line (a ``UserError`` as written, anything else as ``NAME failed: ...``); the bar shows
+only while a job runs. When it ends,
 ``LongWork.Finished`` is posted to the parents with the outcome.
 """
 
@@ -30,7 +31,7 @@ Job = Callable[[Progress, Callable[[], bool]], Any]
 class LongWork(Horizontal):
     DEFAULT_CSS = """
     LongWork { height: 1; }
-    LongWork > ProgressBar { width: 34; }
+    LongWork > ProgressBar { width: auto; margin-right: 1; }
     LongWork > Label { width: 1fr; }
     LongWork > Label.error { color: $error; }
     """
@@ -147,5 +148,5 @@ class LongWork(Horizontal):
         if outcome == "failed":
             self.error(text.splitlines()[0] if text else f"{name} failed")
         else:
-            self.show(text, 1.0 if outcome == "done" else None)
+            self.show(text)
         self.post_message(self.Finished(self, name, outcome, result))

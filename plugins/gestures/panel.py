@@ -227,11 +227,12 @@ class GesturesPanel(Screen):
 
         def summary(info) -> str:
             return (
-                f"synthesized {info['samples']} samples ({len(info['subjects'])} subject(s) x "
-                f"{len(info['gestures'])} gestures x {info['reps']} reps, {_mb(info['bytes'])}) "
-                f"in {info['seconds']:.1f} s"
+                f"synthesized {info['samples']} samples ({len(info['subjects'])} x "
+                f"{len(info['gestures'])} x {info['reps']}), {_mb(info['bytes'])}, "
+                f"{info['seconds']:.1f} s"
             )
 
+        self.query_one("#gp-result", Static).update("")
         self.work.start(f"synthesizing {subjects} x 10 x {reps}", job, summary)
 
     def action_train(self) -> None:
@@ -292,9 +293,11 @@ class GesturesPanel(Screen):
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         event.stop()
-        self.query_one("#gp-synth", Button).focus()
+        self.query_one("#gp-synth", Button).focus()  # leaving the field refreshes the files
+
+    def on_input_blurred(self, event: Input.Blurred) -> None:
         if event.input.id in ("gp-dataset", "gp-model"):
-            self.action_refresh()
+            self.action_refresh()  # the files block follows the fields
 
     def on_long_work_finished(self, event: LongWork.Finished) -> None:
         if event.outcome == "done" and isinstance(event.result, dict) and "folds" in event.result:
