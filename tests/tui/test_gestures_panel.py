@@ -126,3 +126,31 @@ def test_long_work_failure_is_one_line_and_a_second_job_waits():
             assert work.progress is None and not work.busy
 
     asyncio.run(scenario())
+
+
+def test_gestures_panel_at_80x24(snap_compare):
+    """The panel at the smallest supported terminal, after a bad repetition count (stable
+    plugins and relative paths, so the picture does not depend on the machine)."""
+    from console.plugins import load_plugins
+
+    names = ("twin", "twin.camera", "twin.plate", "gestures")
+    plugins = load_plugins(builtins={n: f"plugins.{n}" for n in names})
+    app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+
+    async def run_before(pilot):
+        await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+        app.push_screen(plugins.of("panel")["gestures"].factory(app))
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
+        panel = app.screen
+        await wait_for(pilot, lambda: bool(panel.query("#gp-files")), what="panel composed")
+        _set(panel, "dataset", "no-such-set")
+        _set(panel, "model", "no-such-model.skops")
+        _set(panel, "reps", "0")
+        panel.action_refresh()
+        files = panel.query_one("#gp-files")
+        await wait_for(pilot, lambda: "no-such-model" in str(files.render()), 10, "files")
+        await pilot.press("s")
+        await pilot.pause(0.3)
+        await pilot.wait_for_scheduled_animations()
+
+    assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)
