@@ -136,7 +136,7 @@ class GesturesPanel(Screen):
         super().__init__()
         self.ctx = ctx
         prof = ctx.profile
-        self.harmonics = int(prof.get("gestures.harmonics", 2))
+        self.harmonics = int(prof.get("gestures.harmonics", 2))  # 0 (no descriptors) is valid
         self.frames = int(prof.get("gestures.frames", 4))
         self.default_model = prof.resolve(prof.get("gestures.model") or "gestures.skops")
         self.files: dict[str, Any] = {}
@@ -248,9 +248,10 @@ class GesturesPanel(Screen):
             self.work.error(str(exc))
             return
         params = _params(self.ctx.profile)
+        live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
-            return train_and_evaluate(
+            res = train_and_evaluate(
                 ds,
                 model,
                 cv=cv,
@@ -260,6 +261,11 @@ class GesturesPanel(Screen):
                 progress=progress,
                 cancelled=cancelled,
             )
+            if live:  # the profile's model: the running classifier switches to it
+                from .model import GestureModel
+
+                res["loaded"] = GestureModel.load(res["model"])
+            return res
 
         def summary(res) -> str:
             return (
@@ -269,6 +275,16 @@ class GesturesPanel(Screen):
 
         self.query_one("#gp-result", Static).update("")
         self.work.start("training", job, summary)
+
+    def use_model(self, model) -> str:
+        """Hand a model trained to the profile's ``[gestures] model`` to the console's
+        running classifier (this plugin's own ``svm``); says what happened."""
+        svc = getattr(self.app, "camera_service", None)
+        clf = getattr(svc, "classifier", None)
+        if clf is None or not hasattr(clf, "model"):
+            return "the console's classifier loads it when the camera starts"
+        clf.model = model
+        return "the Camera screen's classifier uses it now"
 
     def action_cancel(self) -> None:
         if not self.work.cancel():
@@ -301,7 +317,10 @@ class GesturesPanel(Screen):
 
     def on_long_work_finished(self, event: LongWork.Finished) -> None:
         if event.outcome == "done" and isinstance(event.result, dict) and "folds" in event.result:
-            self.query_one("#gp-result", Static).update(fold_lines(event.result))
+            text = fold_lines(event.result)
+            if "loaded" in event.result:
+                text += "\n" + self.use_model(event.result["loaded"])
+            self.query_one("#gp-result", Static).update(text)
         elif event.outcome == "cancelled" and event.name == "training":
             self.query_one("#gp-result", Static).update("training cancelled: no model was written")
         elif event.outcome == "cancelled":

@@ -152,15 +152,45 @@ def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
     asyncio.run(scenario())
 
 
-def test_g_opens_the_gestures_panel_from_the_camera_screen(plugins):
+def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, tmp_path):
+    """From the Camera screen, g opens the Gestures panel; a model trained there to the
+    profile's [gestures] model file goes straight to the camera's classifier."""
+    from textual.widgets import Input
+
     async def scenario():
         app = _app(plugins, "camera")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.pane("camera") is not None, what="camera pane")
+            await _first_frame(app, pilot)
+            assert app.camera_service.classifier.model is None  # the sim profile has none
             await wait_for(pilot, lambda: app.focused is app.pane("camera"), what="focus")
             await pilot.press("g")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
+            panel = app.screen
+            await wait_for(pilot, lambda: bool(panel.query("#gp-files")), what="panel")
+            panel.default_model = tmp_path / "profile-model.skops"  # as if the profile named it
+            for name, value in (
+                ("dataset", str(tmp_path / "set")),
+                ("model", str(panel.default_model)),
+                ("subjects", "1"),
+                ("reps", "2"),
+            ):
+                panel.query_one(f"#gp-{name}", Input).value = value
+            work = panel.work
+            await pilot.press("s")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "synthesized")
+            await pilot.press("t")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "trained")
+            assert work.outcome == "done", work.text
+            res = panel.query_one("#gp-result")
+            await wait_for(pilot, lambda: "uses it now" in str(res.render()), 10)
+            clf = app.camera_service.classifier
+            assert clf.model is not None and clf.model.meta["evaluation"]["cv"] == "2fold"
             await pilot.press("escape")
             await wait_for(pilot, lambda: type(app.screen).__name__ != "GesturesPanel")
+            # the camera screen now names a gesture for what the twin's hand does
+            info = app.query_one("#camera-info")
+            await wait_for(
+                pilot, lambda: "gesture: -" not in str(info.render()), 30, "a gesture named"
+            )
 
     asyncio.run(scenario())
