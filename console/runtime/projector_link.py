@@ -38,7 +38,9 @@ What the console calls (see ``ProjectorService``)::
 
 ``providers`` maps a need kind (``tables``, ``flow_regions``, ``knob``, ``contacts``)
 to a function preparing it; ``start_scene`` calls only those its scene declares and
-lists the rest in ``status()["unprepared_needs"]``. Call from any thread (scene events
+lists the rest in ``status()["unprepared_needs"]`` (why: ``status()["unprepared_why"]``;
+``prepare_again()`` retries them). ``effect_providers`` gives the providers the
+registered effects back (``tables`` from the ``flow`` effect). Call from any thread (scene events
 are serialised); nothing here blocks on the projector except the ``wait_*`` calls.
 """
 
@@ -702,19 +704,72 @@ class ProjectorSupervisor:
 
 # --------------------------------------------------------------------------- service
 def prepare_needs(
-    needs: dict, providers: dict[str, Callable[[Any], Any]]
+    needs: dict,
+    providers: dict[str, Callable[[Any], Any]],
+    reasons: dict[str, str] | None = None,
 ) -> tuple[dict, list[str]]:
     """Prepare only what a scene declares: call ``providers[kind](value)`` for each
-    declared need. Returns (prepared, kinds with no provider)."""
+    declared need. Returns (prepared, kinds not prepared). A provider that cannot
+    prepare raises ``UserError``; its message goes to ``reasons[kind]`` (with
+    ``reasons`` given, else it propagates), as does "no provider" for a kind without one."""
     prepared, missing = {}, []
     for kind, value in (needs or {}).items():
         if not value:
             continue
         if kind in providers:
-            prepared[kind] = providers[kind](value)
+            try:
+                prepared[kind] = providers[kind](value)
+            except UserError as exc:
+                if reasons is None:
+                    raise
+                missing.append(kind)
+                reasons[kind] = str(exc)
         else:
             missing.append(kind)
+            if reasons is not None:
+                reasons[kind] = "no provider in this console"
     return prepared, missing
+
+
+def effect_providers(
+    profile: Any, plugins: Any, current_map: Callable[[], Any]
+) -> dict[str, Callable[[Any], Any]]:
+    """Need providers backed by the registered effects (no plugin imported).
+
+    ``tables`` (a list of grid points, or of (a, b) pairs): the registered ``flow``
+    effect's lookup tables of ``current_map()`` (the console's vibration map: a
+    ``VibrationMap`` or a map file; it raises ``UserError`` when there is none), checked
+    to cover the declared points. Returns ``{"tables": Tables, "points": [...]}``."""
+    effects: dict[str, Any] = {}
+
+    def flow() -> Any:
+        if "flow" not in effects:
+            regs = plugins.of("effect")
+            eff = regs["flow"].factory(profile) if "flow" in regs else None
+            if not callable(getattr(eff, "tables", None)):
+                raise UserError(
+                    "no effect plugin offers a lookup table: install/enable vibrotactile"
+                )
+            effects["flow"] = eff
+        return effects["flow"]
+
+    def tables(points: Any) -> dict:
+        eff = flow()
+        vmap = current_map()
+        t = eff.tables(vmap=vmap)
+        flat = sorted(
+            {int(q) for p in points for q in (p if isinstance(p, (list, tuple)) else (p,))}
+        )
+        have = {int(n) for n in t.vmap.points}
+        lack = [n for n in flat if n not in have]
+        if lack:
+            raise UserError(
+                f"tables: the vibration map has no point {lack[0]} (of {len(lack)} missing); "
+                "measure or import the whole grid"
+            )
+        return {"tables": t, "points": flat}
+
+    return {"tables": tables}
 
 
 def projector_command(
@@ -778,6 +833,7 @@ class ProjectorService:
         self.scene_name: str | None = None
         self.prepared: dict = {}
         self.unprepared: list[str] = []
+        self.unprepared_why: dict[str, str] = {}
         self._lock = threading.RLock()  # the UI and the frame loop may both send events
 
     @classmethod
@@ -828,13 +884,30 @@ class ProjectorService:
                 f"no scene named {name!r}; available: {', '.join(sorted(self.scenes)) or 'none'}"
             )
         scene = self.scenes[name](self.profile)
-        prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers)
+        why: dict[str, str] = {}
+        prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers, why)
         for ev in events:
             scene.update(ev)
         with self._lock:
             self.scene, self.scene_name = scene, name
-            self.prepared, self.unprepared = prepared, missing
+            self.prepared, self.unprepared, self.unprepared_why = prepared, missing, why
             return self._push()
+
+    def prepare_again(self) -> list[str]:
+        """Retry the active scene's unprepared needs (e.g. once a vibration map is
+        loaded); returns the kinds still not prepared."""
+        with self._lock:
+            scene, todo = self.scene, list(self.unprepared)
+        if scene is None or not todo:
+            return todo
+        needs = getattr(scene, "needs", {}) or {}
+        why: dict[str, str] = {}
+        prepared, missing = prepare_needs({k: needs.get(k) for k in todo}, self.providers, why)
+        with self._lock:
+            if self.scene is scene:
+                self.prepared.update(prepared)
+                self.unprepared, self.unprepared_why = missing, why
+            return list(self.unprepared)
 
     def update(self, event: dict) -> dict:
         """Pass an event to the active scene and show its new state."""
@@ -848,6 +921,7 @@ class ProjectorService:
         """Show black."""
         with self._lock:
             self.scene, self.scene_name, self.prepared, self.unprepared = None, None, {}, []
+            self.unprepared_why = {}
             self.link.send_state("black", {"kind": "black"})
 
     def _push(self) -> dict:
@@ -873,7 +947,12 @@ class ProjectorService:
         return self.link.snapshot(path, timeout_s)
 
     def status(self) -> dict:
-        st = {"scene": self.scene_name, "unprepared_needs": self.unprepared, **self.link.status()}
+        st = {
+            "scene": self.scene_name,
+            "unprepared_needs": self.unprepared,
+            "unprepared_why": dict(self.unprepared_why),
+            **self.link.status(),
+        }
         if self.supervisor is not None:
             st.update(self.supervisor.status())
         return st

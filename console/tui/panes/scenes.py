@@ -27,7 +27,9 @@ def status_text(st: dict | None) -> str:
     if st.get("headless"):
         parts.append("headless (no display)")
     if st.get("unprepared_needs"):
-        parts.append(f"[yellow]not prepared: {', '.join(st['unprepared_needs'])}[/]")
+        why = st.get("unprepared_why") or {}
+        items = [f"{k} ({why[k]})" if why.get(k) else k for k in st["unprepared_needs"]]
+        parts.append(f"[yellow]not prepared: {'; '.join(items)}[/]")
     if st.get("last_error"):
         parts.append(f"[red]{st['last_error']}[/]")
     return "  ".join(parts)
@@ -89,15 +91,36 @@ class ScenesPane(Vertical):
     def ensure_service(self):
         """The projector service, started on first use (call from a worker)."""
         if self.app.projector_service is None:
-            from console.runtime.projector_link import ProjectorService
+            from console.runtime.projector_link import ProjectorService, effect_providers
 
+            ctx = self.app.ctx
             headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
             svc = ProjectorService.from_profile(
-                self.app.ctx.profile, self.app.ctx.pm, headless=headless
+                ctx.profile,
+                ctx.pm,
+                headless=headless,
+                providers=effect_providers(ctx.profile, ctx.pm, self.current_map),
             )
             svc.start()
             self.app.projector_service = svc
         return self.app.projector_service
+
+    def current_map(self):
+        """The console's vibration map for a scene's ``tables`` (call from a worker): the
+        Vibration screen's, else this profile's measured map, else a ``UserError``."""
+        from console.tui import vibration_session as vs
+
+        vib = self.app.call_from_thread(self.app.pane, "vibration")
+        session = getattr(vib, "session", None)
+        if session is not None:
+            return session.vmap
+        path = vs.twin_map_path(self.app.ctx.profile)
+        if path.is_file():
+            return path
+        raise UserError(
+            "no vibration map yet: measure (m) or load one on the Vibration screen, "
+            "then start the scene again"
+        )
 
     @work(thread=True, exclusive=True, group="projector")
     def _start(self, name: str) -> None:
@@ -131,4 +154,6 @@ class ScenesPane(Vertical):
                 st = self.service.status()
             except Exception as exc:
                 st = {"last_error": str(exc)}
-        self.query_one("#projector-status", Static).update(status_text(st))
+        found = self.query("#projector-status")
+        if found:  # gone while the console shuts down
+            found.first(Static).update(status_text(st))

@@ -46,6 +46,7 @@ class VibrationPane(VerticalScroll):
         super().__init__(**kw)
         self.session = None
         self.summary = ""
+        self.status_text = ""
         self.selected: list[int] = []
         self.rows = 7
         self.cols = 12
@@ -102,6 +103,7 @@ class VibrationPane(VerticalScroll):
                 grid.update_cell(str(r), str(c), txt)
 
     def status(self, text: str, progress: float | None = None) -> None:
+        self.status_text = text
         self.query_one("#vib-status", Label).update(text)
         bar = self.query_one("#vib-progress", ProgressBar)
         bar.display = progress is not None
@@ -136,7 +138,8 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
 
     def _open(self, vmap, label: str) -> None:
-        """In a worker: make ``vmap`` the screen's map, then build its lookup tables."""
+        """In a worker: make ``vmap`` the screen's map; its lookup tables are built in
+        their own worker (group ``vib-tables``: a new map or x cancels it)."""
         from console.tui import vibration_session as vs
 
         ctx = self.app.ctx
@@ -147,23 +150,24 @@ class VibrationPane(VerticalScroll):
             f"{m.freq_hz.size} bins"
         )
         self.app.call_from_thread(self._ready, session, summary)
-        self._build_tables(session, summary)
 
     def _build_tables(self, session, summary: str) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
         from console.tui import vibration_session as vs
 
         worker = get_current_worker()
+        show = self.app.call_from_thread
 
         def progress(frac: float, msg: str) -> None:
             if worker.is_cancelled:
                 raise vs.Cancelled()
-            self.app.call_from_thread(self.status, f"{summary}; lookup tables: {msg}", frac)
+            show(self._tables_status, session, summary, f"{summary}; lookup tables: {msg}", frac)
 
         try:
-            progress(0.0, "starting")
+            show(self._tables_status, session, summary, f"{summary}; lookup tables ...", 0.0, True)
             session.build_tables(progress)
             text = f"{summary}; ready"
+            self._prepare_projector()
         except vs.Cancelled:
             text = (
                 f"{summary}; lookup-table build cancelled (b builds them; a flow builds "
@@ -171,14 +175,30 @@ class VibrationPane(VerticalScroll):
             )
         except UserError as exc:
             text = f"{summary}; ready without lookup tables: {exc}"
-        if self.session is session:
-            self.app.call_from_thread(self.status, text)
+        show(self._tables_status, session, summary, text)
+
+    def _tables_status(
+        self, session, summary: str, text: str, frac: float | None = None, claim: bool = False
+    ) -> None:
+        """Show the table build's state unless another map or message took the line."""
+        if self.session is session and (claim or self.status_text.startswith(summary)):
+            self.status(text, frac)
+
+    def _prepare_projector(self) -> None:
+        """In a worker: a projected scene waiting for lookup tables gets them now."""
+        svc = self.app.projector_service
+        if svc is not None and "tables" in svc.unprepared:
+            try:
+                svc.prepare_again()
+            except Exception as exc:  # the projector is optional: say so, keep going
+                self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
 
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
         self.status(summary)
         self._redraw_grid()
         self._show_selection()
+        self._tables_worker(session, summary)
 
     def action_build_tables(self) -> None:
         if not self._need_session():
@@ -213,12 +233,12 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
 
     def action_cancel(self) -> None:
-        n = 0
+        long_work = 0
         for w in self.app.workers:
             if w.group in ("vib-long", "vib-load", "vib-tables") and w.is_running:
                 w.cancel()
-                n += 1
-        if n:
+                long_work += w.group != "vib-tables"  # a table build says so itself
+        if long_work:
             self.status("cancelling ...")
 
     @work(thread=True, exclusive=True, group="vib-long")

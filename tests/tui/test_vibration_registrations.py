@@ -1,0 +1,86 @@
+"""The Vibration screen works through registrations: the lookup-table build is a worker
+with progress that x cancels and b restarts; without the vibrotactile plugin the screen
+says which plugin to enable instead of playing anything."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+from console.cli import Context
+from console.plugins import BUILTIN_PLUGINS, load_plugins
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+from .test_screens import _app, _load_map, _ready
+
+
+def _status(app) -> str:
+    return str(app.query_one("#vib-status").render())
+
+
+def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch):
+    from plugins.vibrotactile import registered
+
+    real = registered.build_tables_stepwise
+    fractions: list[float] = []
+
+    def slow_build(m, band_hz, progress=None, **kw):
+        def slow(frac: float, msg: str) -> None:
+            fractions.append(frac)
+            time.sleep(0.25)  # a large map: each step takes a while
+            progress(frac, msg)
+
+        return real(m, band_hz, slow, **kw)
+
+    monkeypatch.setattr(registered, "build_tables_stepwise", slow_build)
+
+    async def scenario():
+        app = _app(plugins, "vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            bar = app.query_one("#vib-progress")
+            await wait_for(pilot, lambda: "lookup tables: pairs" in _status(app), 10, "progress")
+            assert bar.display
+            await pilot.press("x")
+            await wait_for(pilot, lambda: "build cancelled" in _status(app), 20, "cancelled")
+            assert not bar.display and not pane.session.tables_ready
+            assert fractions and max(fractions) < 1.0  # stopped part way
+            # the map stays usable: a point plays without tables
+            await pilot.press("colon", "5", "1", "enter")
+            await wait_for(pilot, lambda: len(app.played) == 1)
+            # b builds them again, to the end
+            fractions.clear()
+            await pilot.press("b")
+            await wait_for(pilot, lambda: _status(app).endswith("; ready"), 30, "rebuilt")
+            assert pane.session.tables_ready and fractions[-1] == 1.0
+            await pilot.press("colon", *"51 52", "enter")
+            await wait_for(pilot, lambda: len(app.played) == 2)
+            assert app.played[1].name == "flow 51->52"
+
+    asyncio.run(scenario())
+
+
+def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
+    pm = load_plugins(builtins={k: v for k, v in BUILTIN_PLUGINS.items() if k != "vibrotactile"})
+
+    async def scenario():
+        app = HapTableApp(Context("sim", pm), fast=True, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            await _load_map(app, pilot, map_file)  # maps are the console's: they load
+            await wait_for(pilot, lambda: "without lookup tables" in _status(app), 10)
+            assert "install/enable vibrotactile" in _status(app)
+            await pilot.press("colon", "5", "1", "enter")
+            await wait_for(
+                pilot, lambda: "localized point stimulus" in _status(app), 10, "point refused"
+            )
+            assert "install/enable vibrotactile" in _status(app)
+            await pilot.press("colon")
+            app.focused.value = "import PA=a.uff"
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: "imports UFF" in _status(app), 20, "import refused")
+            assert app.played == []
+
+    asyncio.run(scenario())
