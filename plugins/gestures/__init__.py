@@ -302,10 +302,18 @@ def _print(d: dict, as_json: bool) -> None:
             print(f"{k}:")
             for kk, vv in v.items():
                 print(f"  {kk}: {vv:.3f}" if isinstance(vv, float) else f"  {kk}: {vv}")
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            print(f"{k}:")
+            for i, x in enumerate(v, 1):
+                print(f"  {i}: " + ", ".join(_short(kk, vv) for kk, vv in x.items()))
         elif isinstance(v, float):
             print(f"{k}: {v:.4g}")
         else:
             print(f"{k}: {v}")
+
+
+def _short(k: str, v) -> str:
+    return f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
 
 
 @hookimpl
