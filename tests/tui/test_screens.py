@@ -283,11 +283,15 @@ def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch, 
             vib = app.pane("vibration")
             vib.run_command(f"load {map_file}")
             await wait_for(pilot, lambda: vib.session is not None, 30)
+            # the grid's tables come from the registered flow effect once a map is loaded
+            await wait_for(pilot, lambda: app.projector_service.unprepared == [], 30)
             vib.run_command("51")
             await wait_for(pilot, lambda: app.projector_service.scene.state()["active"] == 51, 10)
+            await wait_for(pilot, lambda: len(app.played) == 1, 10, "point played")
             lit = app.projector_service.scene.state()["excitation_patches"]
             assert set(lit) == set(patches_of(app.played[0].meta["actuator"]))
             await pilot.press("f6")
+            await wait_for(pilot, lambda: "not prepared" not in str(status.render()), 10)
             await pilot.press("s")
             await wait_for(pilot, lambda: app.projector_service.status()["scene"] is None, 10)
             svc = app.projector_service

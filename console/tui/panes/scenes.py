@@ -117,10 +117,7 @@ class ScenesPane(Vertical):
         path = vs.twin_map_path(self.app.ctx.profile)
         if path.is_file():
             return path
-        raise UserError(
-            "no vibration map yet: measure (m) or load one on the Vibration screen, "
-            "then start the scene again"
-        )
+        raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")
 
     @work(thread=True, exclusive=True, group="projector")
     def _start(self, name: str) -> None:

@@ -104,6 +104,8 @@ class VibrationPane(VerticalScroll):
 
     def status(self, text: str, progress: float | None = None) -> None:
         self.status_text = text
+        if not self.query("#vib-status"):  # a worker finishing while the console closes
+            return
         self.query_one("#vib-status", Label).update(text)
         bar = self.query_one("#vib-progress", ProgressBar)
         bar.display = progress is not None
@@ -455,6 +457,8 @@ class VibrationPane(VerticalScroll):
         from console.tui.plots import frf_plot
 
         s = self.session
+        if not self.query("#vib-info"):  # a worker finishing while the console closes
+            return
         self.query_one("#vib-info", Static).update(text)
         width = max(20, min(self.size.width - 10, 110))
         self.query_one("#frf-plot", Static).update(
