@@ -4,6 +4,10 @@ Profile sections declared here: [glass], [plate], [piezo], [vibrometer]. The geo
 comes from the core's [table], [grid] and [patches.*]. Registers the ``twin`` vibrometer
 (``[vibrometer] driver``), the ``plate`` command and the ``plate`` and ``closed-loop``
 benchmarks; ``closed_loop`` plays recorded outputs into the twin.
+
+The ``twin`` vibrometer's ``measure(progress=)`` calls ``progress(done, total)`` after each
+excitation's responses and each averaged sweep; an exception raised in ``progress`` (an
+operator's cancel) stops the measurement and propagates.
 """
 
 from __future__ import annotations
