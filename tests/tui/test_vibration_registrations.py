@@ -7,6 +7,8 @@ from __future__ import annotations
 import asyncio
 import time
 
+import numpy as np
+
 from console.cli import Context
 from console.plugins import BUILTIN_PLUGINS, load_plugins
 from console.tui.app import HapTableApp
@@ -82,5 +84,45 @@ def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
             await pilot.press("enter")
             await wait_for(pilot, lambda: "imports UFF" in _status(app), 20, "import refused")
             assert app.played == []
+
+    asyncio.run(scenario())
+
+
+def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
+    from console.profile import load_profile
+    from console.vibration_map import load_map, make_map
+    from plugins.vibrotactile.uff_io import export_uff
+
+    full = load_map(map_file)
+    row = make_map(
+        full.frf_um_per_v[:, 48:60],  # grid row 5: points 49..60
+        full.freq_hz,
+        full.points[48:60],
+        full.points_mm[48:60],
+        full.excitations,
+        full.masked,
+    )
+    gain = float(load_profile("sim", plugins).get("amplifiers.piezo_gain"))
+    paths = export_uff(row, tmp_path / "uff", gain=gain)
+    specs = [f"{p.stem}={p}" for p in paths]
+
+    async def scenario():
+        app = _app(plugins, "vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = app.pane("vibration")
+            await pilot.press("colon")
+            app.focused.value = "import " + " ".join(specs)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: pane.session is not None, 30, "imported")
+            await wait_for(pilot, lambda: _status(app).endswith("; ready"), 30, "tables")
+            assert _status(app).startswith("map: UFF import: 5 excitations, 12 points")
+            m = pane.session.vmap
+            assert m.points.tolist() == list(range(49, 61))
+            np.testing.assert_allclose(m.frf_um_per_v, row.frf_um_per_v, rtol=1e-9, atol=1e-12)
+            await pilot.press("colon", *"51 52", "enter")
+            await wait_for(pilot, lambda: len(app.played) == 1)
+            entry = pane.session.lookup(51, 52)
+            assert app.played[0].meta["parts"][0]["frequency_hz"] == entry["frequency_hz"]
 
     asyncio.run(scenario())
