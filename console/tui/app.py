@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+import time
 
 from textual import work
 from textual.app import App, ComposeResult, SystemCommand
@@ -47,6 +48,10 @@ TABS = {
     "scenes": ("Scenes", "f6", "console.tui.panes.scenes:ScenesPane"),
     "latency": ("Latency", "f7", "console.tui.panes.latency:LatencyPane"),
 }
+
+
+#: how long a screen switch keeps trying to focus the new screen's main widget
+FOCUS_WAIT_S = 5.0
 
 
 def _pane_class(path: str):
@@ -104,6 +109,7 @@ class HapTableApp(App):
         self.camera_service = None
         self.projector_service = None
         self._mounting = None
+        self._focus_wanted: tuple[str, float] | None = None
         self._control = None
         self._lock = threading.Lock()
 
@@ -154,19 +160,39 @@ class HapTableApp(App):
             self.camera_service = CameraService(self.ctx.profile, self.ctx.pm)
         return self.camera_service
 
-    def _focus_pane(self, tab: str, tries: int = 100) -> None:
-        """Focus the pane's main widget once its tab shows (retry while it is hidden)."""
-        if not self.screen_stack or not self.is_running:
+    def _focus_pane(self, tab: str) -> None:
+        """Ask for the pane's main widget to take the focus once its tab shows.
+
+        The request is applied on every refresh tick until it holds (a pane mounted on
+        first use has no widgets for a few frames) and expires after a few seconds; it
+        never takes the focus from a widget inside the pane.
+        """
+        self._focus_wanted = (tab, time.monotonic() + FOCUS_WAIT_S)
+        self._apply_focus()
+
+    def _apply_focus(self) -> None:
+        want = self._focus_wanted
+        if want is None or not self.screen_stack or not self.is_running:
+            return
+        tab, deadline = want
+        if time.monotonic() > deadline:
+            self._focus_wanted = None
             return
         tabs = self.base.query("#tabs")
-        if not tabs or tabs.first(TabbedContent).active != tab:
+        pane = self.pane(tab)
+        if not tabs or tabs.first(TabbedContent).active != tab or pane is None:
+            return  # the switch is still on its way
+        try:
+            target = pane.focus_target
+        except Exception:  # not composed yet
             return
-        target = getattr(self.pane(tab), "focus_target", None)
-        if target is None:
+        focused = self.base.focused
+        if focused is not None and pane in focused.ancestors_with_self:
+            self._focus_wanted = None  # done (or the operator chose a widget there)
             return
-        target.focus()
-        if self.focused is not target and tries > 0:
-            self.set_timer(0.05, lambda: self._focus_pane(tab, tries - 1))
+        if self.screen is self.base:  # a modal on top keeps its focus
+            target.focus()
+        self.set_timer(0.03, self._apply_focus)
 
     async def action_show_tab(self, tab: str) -> None:
         if self.pane(tab) is None:
@@ -176,12 +202,16 @@ class HapTableApp(App):
         self.call_after_refresh(self._focus_pane, tab)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
+        if not self.screen_stack:  # a late activation while the console shuts down
+            return
         tab = event.pane.id
         self.ensure_pane(tab)
         self.call_after_refresh(self._set_visible, tab)
         self.call_after_refresh(self._focus_pane, tab)
 
     def _set_visible(self, tab: str) -> None:
+        if not self.screen_stack:
+            return
         for name in TABS:
             p = self.pane(name)
             if hasattr(p, "set_visible"):

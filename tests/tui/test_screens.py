@@ -232,11 +232,6 @@ def test_help_on_question_mark_and_estop_over_it(plugins):
     asyncio.run(scenario())
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="open: after other console instances ran in the same process, the relays "
-    "screen opened by F4 sometimes never takes the focus (seen only in pilot runs)",
-)
 def test_function_keys_open_and_focus_a_screen(plugins):
     async def scenario():
         app = _app(plugins)
@@ -244,9 +239,18 @@ def test_function_keys_open_and_focus_a_screen(plugins):
             await _ready(app, pilot)
             await pilot.press("f4")
             await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays", 10)
-            await wait_for(
-                pilot, lambda: app.focused is not None and app.focused.id == "relay-1", 10
-            )
+            try:
+                await wait_for(
+                    pilot, lambda: app.focused is not None and app.focused.id == "relay-1", 10
+                )
+            except AssertionError:
+                sw = app.query_one("#relay-1")
+                raise AssertionError(
+                    f"focused={app.focused!r} sw.disabled={sw.disabled} focusable={sw.focusable}"
+                    f" display={sw.display} visible={sw.visible} region={sw.region}"
+                    f" screen={app.screen!r} stack={app.screen_stack} pane={app.pane('relays')!r}"
+                    f" mounting={app._mounting!r}"
+                ) from None
 
     asyncio.run(scenario())
 
