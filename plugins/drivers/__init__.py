@@ -6,6 +6,7 @@ factory or probe that needs it, so importing this plugin costs nothing on the tw
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 from console.hookspecs import hookimpl
@@ -31,46 +32,53 @@ def haptable_profile_sections(register: Any) -> None:
     )
 
 
+#: Registration kind -> (name, driver module, description). Each driver module has
+#: ``from_profile(profile)`` (the factory) and ``probe(profile)`` (for ``haptable doctor``).
+DRIVERS: dict[str, tuple[tuple[str, str, str], ...]] = {
+    "audio_output": (
+        (
+            "sounddevice",
+            "audio_sounddevice",
+            "sound card through PortAudio (sounddevice), 2 channels float32",
+        ),
+    ),
+    "relay_board": (
+        (
+            "yoctopuce",
+            "relay_yocto",
+            "Yocto-MaxiCoupler, 8 relays, through the official yoctopuce library",
+        ),
+        ("hid", "relay_hid", "generic 0x16c0:0x05df USB HID relay board through pyusb"),
+    ),
+    "camera": (
+        (
+            "opencv",
+            "camera_opencv",
+            "V4L2/OpenCV camera (PS3 Eye), 8-bit grayscale, reconnects after unplug",
+        ),
+    ),
+}
+
+
+def _register(register: Any, kind: str) -> None:
+    for name, module, description in DRIVERS[kind]:
+        driver = importlib.import_module(f"{__name__}.{module}")
+        register(name, driver.from_profile, description=description, probe=driver.probe)
+
+
 @hookimpl
 def haptable_register_audio_outputs(register: Any) -> None:
-    from plugins.drivers import audio_sounddevice
-
-    register(
-        "sounddevice",
-        audio_sounddevice.from_profile,
-        description="sound card through PortAudio (sounddevice), 2 channels float32",
-        probe=audio_sounddevice.probe,
-    )
+    _register(register, "audio_output")
 
 
 @hookimpl
 def haptable_register_relay_boards(register: Any) -> None:
-    from plugins.drivers import relay_hid, relay_yocto
-
-    register(
-        "yoctopuce",
-        relay_yocto.from_profile,
-        description="Yocto-MaxiCoupler, 8 relays, through the official yoctopuce library",
-        probe=relay_yocto.probe,
-    )
-    register(
-        "hid",
-        relay_hid.from_profile,
-        description="generic 0x16c0:0x05df USB HID relay board through pyusb",
-        probe=relay_hid.probe,
-    )
+    _register(register, "relay_board")
 
 
 @hookimpl
 def haptable_register_cameras(register: Any) -> None:
-    from plugins.drivers import camera_opencv
-
-    register(
-        "opencv",
-        camera_opencv.from_profile,
-        description="V4L2/OpenCV camera (PS3 Eye), 8-bit grayscale, reconnects after unplug",
-        probe=camera_opencv.probe,
-    )
+    _register(register, "camera")
 
 
 @hookimpl

@@ -17,7 +17,7 @@ import threading
 from typing import Any
 
 from console.types import DeviceStatus
-from plugins.drivers.errors import DeviceError
+from plugins.drivers.errors import DeviceError, check_channel
 
 VENDOR_ID = 0x16C0
 PRODUCT_ID = 0x05DF
@@ -222,11 +222,7 @@ class HidRelayBoard:
         After a readback mismatch (state ``error``) closing is refused but opening is
         still attempted, so an e-stop can always try to open everything.
         """
-        if not isinstance(channel, int) or not 1 <= channel <= self.channels:
-            raise DeviceError(
-                f"relay channel {channel!r} does not exist: board {self.serial!r} has "
-                f"channels 1..{self.channels}"
-            )
+        check_channel(channel, self.channels, f"board {self.serial!r}")
         opening = not closed
         before = self._mask()
         code = CMD_ON if closed else CMD_OFF

@@ -16,7 +16,7 @@ from types import SimpleNamespace
 from typing import Any
 
 from console.types import DeviceStatus
-from plugins.drivers.errors import DeviceError
+from plugins.drivers.errors import DeviceError, check_channel
 
 CHANNELS = 8
 PRODUCT = "Yocto-MaxiCoupler"
@@ -196,11 +196,7 @@ class YoctoRelayBoard:
         After a readback mismatch (state ``error``) closing is refused but opening is
         still attempted, so an e-stop can always try to open everything.
         """
-        if not isinstance(channel, int) or not 1 <= channel <= self.channels:
-            raise DeviceError(
-                f"relay channel {channel!r} does not exist: Yocto-MaxiCoupler has channels "
-                f"1..{self.channels}"
-            )
+        check_channel(channel, self.channels, "Yocto-MaxiCoupler")
         # after a readback mismatch only opening is still attempted (e-stop must try)
         if self._state != "running" and not (self._state == "error" and not closed):
             raise DeviceError(
