@@ -93,11 +93,13 @@ def measure_map(profile, plugins, progress: Progress, cancelled: Callable[[], bo
             "install/enable twin.plate); import a UFF measurement instead"
         )
     want = _get(profile, "vibrometer.driver")
-    name = want if want in regs else (next(iter(regs)) if len(regs) == 1 else None)
-    if name is None:
+    name = want if want else (next(iter(regs)) if len(regs) == 1 else None)
+    if name not in regs:  # never measure with another device than the profile names
+        known = ", ".join(sorted(regs))
         raise UserError(
-            f"[vibrometer] driver = {want!r}: no such vibrometer; available: "
-            f"{', '.join(sorted(regs))}"
+            f"[vibrometer] driver = {want!r}: no such vibrometer; available: {known}"
+            if want
+            else f"[vibrometer] driver: not set; set it to one of {known}"
         )
 
     def cb(done: int, total: int) -> None:

@@ -126,3 +126,50 @@ def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
             assert app.played[0].meta["parts"][0]["frequency_hz"] == entry["frequency_hz"]
 
     asyncio.run(scenario())
+
+
+def test_measurement_uses_the_vibrometer_the_profile_names():
+    from types import SimpleNamespace
+
+    import pytest
+
+    from console.errors import UserError
+    from console.tui import vibration_session as vs
+
+    def measured(name: str, progress) -> dict:
+        used.append(name)
+        progress(1, 1)
+        return {
+            "frf_um_per_v": np.ones((5, 1, 3)),
+            "freq_hz": np.array([10.0, 20.0, 30.0]),
+            "points": np.array([1]),
+            "points_mm": np.zeros((1, 2)),
+            "excitations": ("PA", "PB", "PC", "PD", "PALL"),
+            "meta": {"source": name},
+        }
+
+    def reg(name):
+        def factory(profile):
+            return SimpleNamespace(measure=lambda progress=None: measured(name, progress))
+
+        return SimpleNamespace(factory=factory)
+
+    def plugins(*names):
+        return SimpleNamespace(of=lambda kind: {n: reg(n) for n in names})
+
+    def profile(driver):
+        return SimpleNamespace(get=lambda key, default=None: driver)
+
+    used: list[str] = []
+    run = [lambda f, m: None, lambda: False]
+    with pytest.raises(UserError, match="driver = 'ldv': no such vibrometer; available: twin"):
+        vs.measure_map(profile("ldv"), plugins("twin"), *run)  # never the twin instead
+    with pytest.raises(UserError, match="not set; set it to one of a, b"):
+        vs.measure_map(profile(None), plugins("a", "b"), *run)
+    with pytest.raises(UserError, match="install/enable twin.plate"):
+        vs.measure_map(profile("twin"), plugins(), *run)
+    m = vs.measure_map(profile(None), plugins("twin"), *run)  # the only one
+    assert used == ["twin"] and m.points.tolist() == [1]
+    with pytest.raises(vs.Cancelled):  # cancel reaches the device through its progress
+        vs.measure_map(profile("b"), plugins("a", "b"), run[0], iter([False, True]).__next__)
+    assert used == ["twin", "b"]
