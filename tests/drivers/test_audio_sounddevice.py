@@ -162,6 +162,15 @@ def test_device_plugged_in_after_start_is_found_by_a_rescan():
 
 
 # ---------------------------------------------------------------- streaming
+def started(src, sd=None):
+    """An output on the fake PortAudio ``system`` device, started on ``src``: (output,
+    its stream, src)."""
+    sd = sd or FakeSd()
+    out = SounddeviceOutput("system", sd=sd)
+    out.start(src)
+    return out, sd.streams[0], src
+
+
 def test_stream_settings_and_callback_pulls_from_the_source():
     sd = FakeSd()
     out = SounddeviceOutput("system", 48000, 128, sd=sd)
@@ -185,10 +194,7 @@ def test_stream_settings_and_callback_pulls_from_the_source():
 
 
 def test_underruns_are_counted():
-    sd = FakeSd()
-    out = SounddeviceOutput("system", sd=sd)
-    out.start(RampSource())
-    stream = sd.streams[0]
+    out, stream, _ = started(RampSource())
     stream.pump(5)
     stream.pump(2, underflow=True)
     stream.pump(1)
@@ -204,11 +210,7 @@ def test_exception_in_source_gives_silence_for_the_rest_of_the_stream():
                 out[:] = 0.3  # half-written garbage, then it dies
                 raise RuntimeError("effect crashed")
 
-    sd = FakeSd()
-    out = SounddeviceOutput("system", sd=sd)
-    src = Bad()
-    out.start(src)
-    stream = sd.streams[0]
+    out, stream, src = started(Bad())
     first = stream.pump(1)
     assert np.any(first != 0)
     rest = stream.pump(10)  # the callback itself never raises
@@ -240,11 +242,7 @@ def test_out_of_range_or_non_finite_block_is_silenced(bad):
 
 
 def test_stop_is_idempotent_and_silences_before_closing():
-    sd = FakeSd()
-    out = SounddeviceOutput("system", sd=sd)
-    src = RampSource()
-    out.start(src)
-    stream = sd.streams[0]
+    out, stream, src = started(RampSource())
     out.stop()
     assert stream.closed and not stream.active
     assert np.all(stream.pump(2) == 0)  # a late callback after stop writes zeros
@@ -253,7 +251,7 @@ def test_stop_is_idempotent_and_silences_before_closing():
     st = out.status()
     assert st["state"] == "stopped" and st["error"] == ""
     assert src.alarms == []  # an ordinary stop is no alarm
-    SounddeviceOutput("system", sd=sd).stop()  # never started: fine too
+    SounddeviceOutput("system", sd=FakeSd()).stop()  # never started: fine too
 
 
 def test_restart_after_stop_opens_a_new_stream():
@@ -269,11 +267,7 @@ def test_restart_after_stop_opens_a_new_stream():
 
 
 def test_vanished_device_is_reported_and_silenced():
-    sd = FakeSd()
-    out = SounddeviceOutput("system", sd=sd)
-    src = RampSource()
-    out.start(src)
-    stream = sd.streams[0]
+    out, stream, src = started(RampSource())
     stream.pump(2)
     stream.vanish()
     st = out.status()
