@@ -38,10 +38,11 @@ What the console calls (see ``ProjectorService``)::
 
 ``providers`` maps a need kind (``tables``, ``flow_regions``, ``knob``, ``contacts``)
 to a function preparing it; ``start_scene`` calls only those its scene declares and
-lists the rest in ``status()["unprepared_needs"]`` (why: ``status()["unprepared_why"]``;
-``prepare_again()`` retries them). ``effect_providers`` gives the providers the
-registered effects back (``tables`` from the ``flow`` effect). Call from any thread (scene events
-are serialised); nothing here blocks on the projector except the ``wait_*`` calls.
+lists the rest in ``status()["unprepared_needs"]`` (why, where a provider said:
+``status()["unprepared_why"]``; ``prepare_again()`` retries them). ``effect_providers``
+gives the providers the registered effects back (``tables`` from the ``flow`` effect).
+Call from any thread (scene events are serialised); nothing here blocks on the projector
+except the ``wait_*`` calls.
 """
 
 from __future__ import annotations
@@ -709,9 +710,9 @@ def prepare_needs(
     reasons: dict[str, str] | None = None,
 ) -> tuple[dict, list[str]]:
     """Prepare only what a scene declares: call ``providers[kind](value)`` for each
-    declared need. Returns (prepared, kinds not prepared). A provider that cannot
-    prepare raises ``UserError``; its message goes to ``reasons[kind]`` (with
-    ``reasons`` given, else it propagates), as does "no provider" for a kind without one."""
+    declared need. Returns (prepared, kinds not prepared: no provider, or the provider
+    could not). A provider that cannot prepare raises ``UserError``; with ``reasons``
+    given its message goes to ``reasons[kind]``, else it propagates."""
     prepared, missing = {}, []
     for kind, value in (needs or {}).items():
         if not value:
@@ -726,8 +727,6 @@ def prepare_needs(
                 reasons[kind] = str(exc)
         else:
             missing.append(kind)
-            if reasons is not None:
-                reasons[kind] = "no provider in this console"
     return prepared, missing
 
 
