@@ -42,7 +42,10 @@ def haptable_register_cameras(register: Register) -> None:
 
     The factory returns a ``console.types.Camera``: ``read(timeout_s) -> Frame | None``
     (640 x 480 uint8 by default), ``close()``, ``status() -> dict`` with at least
-    ``fps`` and ``dropped``. Selected by ``[camera] driver`` in the profile.
+    ``fps`` and ``dropped``. Selected by ``[camera] driver`` in the profile. A simulated
+    camera (the twin) is also a ``console.types.SimulatedCamera``: it acts out a
+    ``GestureScript`` (``set_script``) and renders gesture samples offline, which is how
+    other plugins script or render it without importing it.
     """
 
 

@@ -1,7 +1,12 @@
 """Camera twin plugin: a rear-DI infrared camera of hands on the table (paper Sec. 2-3).
 
 Registers the camera driver ``twin`` (``[camera] driver = "twin"``) and the profile
-section ``[twin_camera]``. Public API (imported lazily, numpy/cv2 only when used):
+section ``[twin_camera]``. Other plugins reach it only through that registration: the
+camera it builds is a ``console.types.SimulatedCamera`` (``set_script(GestureScript)``
+for a scripted hand on the stream, as the demos do; ``render_sample`` and
+``render_background`` offline, as ``gestures synth`` does, with ``mapping``).
+
+Within this plugin (imported lazily, numpy/cv2 only when used):
 
 - ``render_sample(gesture, subject, rep, rng, ...) -> (frames, truth)``: one gesture
   performance as uint8 frames with per-frame ground truth (see ``sample.py``).
