@@ -41,13 +41,11 @@ class SinkPlugin:
         register("recorder", factory, description="keeps frame numbers")
 
 
-def load(*extra_plugins, **named):
-    import plugins.demos
-    import plugins.tuio
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
+def load(**extra):
+    """The built-in plugins (demos and tuio among them) and ``extra`` ones by name."""
+    from console.plugins import load_plugins
 
-    mine = {"demos": plugins.demos, "tuio": plugins.tuio, **named}
-    return load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
+    return load_plugins(extra=extra)
 
 
 def test_sinks_follow_the_profile_and_the_force_switch(profile):
