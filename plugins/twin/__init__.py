@@ -7,7 +7,33 @@ separate plugins of the twin.
 from __future__ import annotations
 
 from console.hookspecs import hookimpl
+from console.schema import Field
 from console.types import DeviceStatus
+
+AUDIO_FIELDS = {
+    "buffer_periods": Field(
+        "int",
+        3,
+        min=2,
+        max=16,
+        help="paced twin: device buffer in audio blocks (a real card's driver fills 2-4 "
+        "periods ahead); adds this many blocks of output latency, underrun only when empty",
+    ),
+    "record_s": Field(
+        "float",
+        120.0,
+        min=0.01,
+        max=3600,
+        help="seconds of played audio the twin keeps for its recording (a bounded ring)",
+    ),
+}
+
+
+@hookimpl
+def haptable_profile_sections(register) -> None:
+    register(
+        "twin_audio", AUDIO_FIELDS, help="the twin's sound card (used when [audio] driver = 'twin')"
+    )
 
 
 def _simulated(kind: str):

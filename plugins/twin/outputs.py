@@ -1,16 +1,28 @@
 """Twin audio output and relay board: the table's outputs simulated and recorded.
 
-The audio output pulls blocks from the safety gate paced in real time (or as fast as
-possible for tests) and records exactly what it was given. The relay board has the
-MaxiCoupler's channels and logs every switch with the output level at that moment
-(read from the twin audio output it is wired to, as the real contacts would see it).
+The audio output pulls blocks from the safety gate and records exactly what it was
+given. Paced (real time), it behaves like a sound card with a device buffer of
+``[twin_audio] buffer_periods`` blocks: its thread fills the buffer ahead while the
+simulated DAC plays it at the sample rate, and an underrun is counted only when the DAC
+finds the buffer empty (the thread was more than ``buffer_periods - 1`` blocks late, as
+on ALSA/PortAudio). The buffer adds ``buffer_periods`` blocks of output latency, reported
+in ``status()["latency_s"]`` (the safety gate adds it to its guard and settle gaps). An
+e-stop drops the queued blocks (like the sounddevice driver's ``abort``): the output is
+silent from the sample playing when the gate's e-stop event fires. Fast-forward (not
+paced) it has no buffer: a block counts as played when handed over.
+
+The relay board has the MaxiCoupler's channels and logs every switch with the output
+level at that moment (the sample the twin DAC is playing then, as the real contacts would
+see it) and the clock of that sample (an index into the recording).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,17 +30,28 @@ import numpy as np
 
 from console.types import BlockSource
 
+#: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
+DEFAULT_BUFFER_PERIODS = 3
+#: Seconds of audio the twin keeps for ``recording_v`` (a bounded ring).
+DEFAULT_RECORD_S = 120.0
+
 
 @dataclass
 class _Bus:
     """The wire between the twin amplifiers' output and the twin relays.
 
     The twin audio output that started last drives it (one live set of outputs per
-    profile, as on the real table); its clock counts the samples that output played.
+    profile, as on the real table): ``probe()`` gives the clock of the sample at the
+    amplifiers now (samples played since that output started) and its level in volts.
     """
 
     level_v: tuple[float, float] = (0.0, 0.0)
     clock: int = 0
+    probe: Callable[[], tuple[int, tuple[float, float]]] | None = None
+
+    def now(self) -> tuple[int, tuple[float, float]]:
+        probe = self.probe
+        return probe() if probe is not None else (self.clock, self.level_v)
 
 
 _BUSES: dict[str, _Bus] = {}
@@ -38,13 +61,32 @@ def bus_for(profile) -> _Bus:
     return _BUSES.setdefault(str(profile.path), _Bus())
 
 
+def _key(profile, dotted: str, default):
+    try:
+        v = profile.get(dotted)
+    except Exception:  # a bare profile stub without the section
+        v = None
+    return default if v is None else v
+
+
 class TwinAudioOutput:
     """Two channels (left piezo, right screen) into the simulated amplifiers."""
 
-    def __init__(self, profile, *, record_s: float = 120.0):
+    def __init__(
+        self,
+        profile,
+        *,
+        record_s: float | None = None,
+        buffer_periods: int | None = None,
+    ):
         self.sample_rate_hz = int(profile.get("audio.sample_rate_hz"))
         self.block_size = int(profile.get("audio.block_size"))
         self.paced = bool(profile.get("audio.paced"))
+        if buffer_periods is None:
+            buffer_periods = _key(profile, "twin_audio.buffer_periods", DEFAULT_BUFFER_PERIODS)
+        self.buffer_periods = max(2, int(buffer_periods))  # 1: no slack at all
+        if record_s is None:
+            record_s = float(_key(profile, "twin_audio.record_s", DEFAULT_RECORD_S))
         full = float(profile.get("audio.full_scale_v"))
         self._to_v = np.array(
             [
@@ -54,23 +96,37 @@ class TwinAudioOutput:
             dtype=np.float32,
         )
         self._bus = bus_for(profile)
-        self._blocks: deque[np.ndarray] = deque(
-            maxlen=max(1, int(record_s * self.sample_rate_hz / self.block_size))
-        )
+        bs = self.block_size
+        self._cap = bs * max(1, math.ceil(record_s * self.sample_rate_hz / bs))
+        self._rec = np.zeros((self._cap, 2), dtype=np.float32)  # ring, indexed by clock
+        self._lock = threading.Lock()
+        self._written = 0  # samples handed over by the gate (= the recording's clock)
+        self._kept_from = 0  # oldest clock still in the ring
+        self._t0: float | None = None  # DAC clock: sample _s0 played at _t0 (None: priming)
+        self._s0 = 0
+        self._cut_pending = False
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.underruns = 0
+        self.underrun_s = 0.0  # silence the DAC played while the buffer was empty
         self.blocks = 0
         self.callback_s: deque[float] = deque(maxlen=4096)
         self._source: BlockSource | None = None
+        self._out = np.zeros((self.block_size, 2), dtype=np.float32)
 
     # AudioOutput protocol
     def start(self, source: BlockSource) -> None:
         if self._thread is not None:
             return
         self._source = source
+        with self._lock:
+            self._t0, self._s0 = None, self._written
         self._bus.clock = 0  # this output drives the wire from now on
         self._bus.level_v = (0.0, 0.0)
+        self._bus.probe = self._probe
+        listeners = getattr(source, "listeners", None)
+        if isinstance(listeners, list):
+            listeners.append(self._on_gate_event)
         self._stop.clear()
         self._thread = threading.Thread(target=self._run, name="haptable-twin-audio", daemon=True)
         self._thread.start()
@@ -80,6 +136,18 @@ class TwinAudioOutput:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
         self._thread = None
+        with self._lock:  # the DAC plays out what was queued
+            self._t0 = None
+            self._s0 = self._written
+        listeners = getattr(self._source, "listeners", None)
+        if isinstance(listeners, list) and self._on_gate_event in listeners:
+            listeners.remove(self._on_gate_event)
+
+    @property
+    def latency_s(self) -> float:
+        """Handing a sample over -> it has been played (at most): the device buffer."""
+        periods = self.buffer_periods if self.paced else 1
+        return periods * self.block_size / self.sample_rate_hz
 
     def status(self) -> dict[str, Any]:
         return {
@@ -88,51 +156,135 @@ class TwinAudioOutput:
             "paced": self.paced,
             "sample_rate_hz": self.sample_rate_hz,
             "block_size": self.block_size,
-            "latency_s": self.block_size / self.sample_rate_hz,
+            "buffer_periods": self.buffer_periods if self.paced else 1,
+            "latency_s": self.latency_s,
             "underruns": self.underruns,
+            "underrun_s": round(self.underrun_s, 4),
             "blocks": self.blocks,
         }
 
+    # the simulated DAC ---------------------------------------------------------------
+    def _played(self, now: float) -> int:
+        """Clock of the sample the DAC plays at ``now`` (caller holds the lock)."""
+        if not self.paced:
+            return self._written
+        if self._t0 is None:
+            return self._s0
+        return min(self._written, self._s0 + int((now - self._t0) * self.sample_rate_hz + 1e-6))
+
+    def _probe(self) -> tuple[int, tuple[float, float]]:
+        with self._lock:
+            p = self._played(time.monotonic())
+            if p <= self._kept_from or p == 0:
+                lvl = (0.0, 0.0)
+            else:
+                x = self._rec[(p - 1) % self._cap] * self._to_v
+                lvl = (float(x[0]), float(x[1]))
+        return p, lvl
+
+    def _on_gate_event(self, ev: Any) -> None:
+        """E-stop: drop the queued blocks (silent from the sample playing now)."""
+        if getattr(ev, "kind", "") not in ("estop", "shutdown"):
+            return
+        t = getattr(ev, "t_s", None) or time.monotonic()  # the moment of the e-stop
+        with self._lock:
+            self._silence(self._played(t), self._written)
+            self._cut_pending = True  # a block being filled right now is dropped too
+
+    def _silence(self, a: int, b: int) -> None:
+        """Zero clocks ``a..b`` of the ring (caller holds the lock)."""
+        a = max(a, self._kept_from, b - self._cap)
+        if b <= a:
+            return
+        i, j = a % self._cap, b % self._cap
+        if i < j:
+            self._rec[i:j] = 0.0
+        else:
+            self._rec[i:] = 0.0
+            self._rec[:j] = 0.0
+
+    def _store(self, out: np.ndarray) -> None:
+        """Queue a filled block (caller holds the lock)."""
+        n = out.shape[0]
+        i = self._written % self._cap
+        self._rec[i : i + n] = 0.0 if self._cut_pending else out
+        self._cut_pending = False
+        self._written += n
+        self._kept_from = max(self._kept_from, self._written - self._cap)
+        self.blocks += 1
+
+    def _fill(self, src: BlockSource, out: np.ndarray) -> None:
+        t0 = time.perf_counter()
+        src.fill(out)
+        self.callback_s.append(time.perf_counter() - t0)
+
     def _run(self) -> None:
-        out = np.zeros((self.block_size, 2), dtype=np.float32)
-        period = self.block_size / self.sample_rate_hz
-        t_next = time.monotonic()
         src = self._source
         while not self._stop.is_set():
-            if not self.paced and src.idle:
-                time.sleep(0.0002)  # fast-forward: the clock only runs while there is work
+            if not self.paced:
+                if src.idle:
+                    time.sleep(0.0002)  # fast-forward: the clock only runs while there is work
+                    continue
+                self.step(time.monotonic())
+                time.sleep(0)  # let feeders (camera, knob) run: a fast-forward loop starves them
                 continue
-            t0 = time.perf_counter()
-            src.fill(out)
-            self.callback_s.append(time.perf_counter() - t0)
-            self._blocks.append(out.copy())
-            self.blocks += 1
+            wait_s = self.step(time.monotonic())
+            if wait_s > 0:
+                time.sleep(wait_s)
+
+    def step(self, now: float) -> float:
+        """The driver thread's work at time ``now``: fill one block if the device buffer
+        has room (returns 0), else the seconds until the DAC frees a block. Counts an
+        underrun when the DAC found the buffer empty (the thread came too late)."""
+        bs, fs = self.block_size, self.sample_rate_hz
+        src, out = self._source, self._out
+        if not self.paced:
+            self._fill(src, out)
+            with self._lock:
+                self._store(out)
             last = out[-1] * self._to_v
             self._bus.level_v = (float(last[0]), float(last[1]))
-            self._bus.clock += self.block_size
-            if self.paced:
-                t_next += period
-                delay = t_next - time.monotonic()
-                if delay > 0:
-                    time.sleep(delay)
-                elif delay < -period:  # a whole block late: the device would have starved
+            self._bus.clock = self._written
+            return 0.0
+        with self._lock:
+            if self._t0 is not None:
+                due = self._s0 + (now - self._t0) * fs
+                if due > self._written:  # the DAC ran out of samples: it played silence
                     self.underruns += 1
-                    t_next = time.monotonic()
-            else:
-                time.sleep(0)  # let feeders (camera, knob) run: a fast-forward loop starves them
+                    self.underrun_s += (due - self._written) / fs
+                    self._t0, self._s0 = None, self._written  # re-prime, then restart
+            played = self._played(now)
+            room = (played // bs) * bs + self.buffer_periods * bs - self._written
+        if room >= bs:
+            self._fill(src, out)
+            with self._lock:
+                self._store(out)
+                if self._t0 is None and self._written - self._s0 >= self.buffer_periods * bs:
+                    self._t0 = now  # primed: the DAC starts
+            return 0.0
+        # full: until the DAC finishes the block it is playing
+        return max(1e-6, self._t0 + ((played // bs + 1) * bs - self._s0) / fs - now)
 
     # twin extras
     def recording_card(self) -> np.ndarray:
-        """Everything played, (n, 2) in sound-card units."""
-        blocks = list(self._blocks)
-        return np.concatenate(blocks) if blocks else np.zeros((0, 2), np.float32)
+        """Everything played (the last ``record_s``), (n, 2) in sound-card units; row k is
+        clock ``k`` unless the ring wrapped (then the oldest kept sample comes first)."""
+        with self._lock:
+            a, b = self._kept_from, self._written
+            if b <= a:
+                return np.zeros((0, 2), np.float32)
+            i, j = a % self._cap, b % self._cap
+            if i < j:
+                return self._rec[i:j].copy()
+            return np.concatenate([self._rec[i:], self._rec[:j]])
 
     def recording_v(self) -> np.ndarray:
         """Everything played, (n, 2) in volts at the piezo patches / screen."""
         return self.recording_card().astype(np.float64) * self._to_v
 
     def clear_recording(self) -> None:
-        self._blocks.clear()
+        with self._lock:
+            self._kept_from = self._written
 
 
 @dataclass(frozen=True)
@@ -162,9 +314,8 @@ class TwinRelayBoard:
             raise OSError(f"twin relay {channel} did not respond")
         if self._state[channel - 1] != closed:
             self._state[channel - 1] = closed
-            self.log.append(
-                SwitchRecord(time.monotonic(), self._bus.clock, channel, closed, self._bus.level_v)
-            )
+            clock, level_v = self._bus.now()
+            self.log.append(SwitchRecord(time.monotonic(), clock, channel, closed, level_v))
 
     def states(self) -> tuple[bool, ...]:
         return tuple(self._state)

@@ -1,0 +1,166 @@
+"""The twin sound card: a device buffer of ``[twin_audio] buffer_periods`` blocks, underruns
+only when the simulated DAC finds it empty, e-stop drops the queued blocks, recordings stay
+sample-exact and relay switches see the level actually at the amplifiers.
+
+The DAC model is driven with a fake clock (``TwinAudioOutput.step(now)``), so these tests
+assert what happened, never how long it took.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from console.safety import GateEvent
+from console.signals import tone
+from console.types import OutputPlan, Segment
+from plugins.twin.outputs import TwinAudioOutput
+
+FS, BS = 48000, 64
+PERIOD_S = BS / FS
+
+
+class Counter:
+    """A gate stand-in: block k holds the sample numbers k*BS .. (k+1)*BS - 1 (scaled)."""
+
+    def __init__(self) -> None:
+        self.n = 0
+        self.idle = False
+        self.listeners: list = []
+
+    def fill(self, out: np.ndarray) -> None:
+        k = np.arange(self.n, self.n + out.shape[0], dtype=np.float64)
+        out[:, 0] = (k % 1000 + 1) / 1000.0  # never zero
+        out[:, 1] = -out[:, 0]
+        self.n += out.shape[0]
+
+
+def twin(profile, periods: int = 3) -> tuple[TwinAudioOutput, Counter]:
+    out = TwinAudioOutput(profile, buffer_periods=periods, record_s=1.0)
+    out.paced = True
+    src = Counter()
+    out._source = src  # step() is driven by hand: no thread
+    return out, src
+
+
+def run_until(out: TwinAudioOutput, t_end: float, t: float = 0.0, *, late_s: float = 0.0):
+    """Wake the driver whenever it asks (``late_s`` after); returns the clock at the end."""
+    while t < t_end:
+        wait = out.step(t)
+        t += wait + (late_s if wait > 0 else 0.0)
+    return t
+
+
+def expected(n: int) -> np.ndarray:
+    k = np.arange(n, dtype=np.float64)
+    x = ((k % 1000 + 1) / 1000.0).astype(np.float32)
+    return np.column_stack([x, -x])
+
+
+@pytest.mark.parametrize("periods", [2, 3, 4])
+def test_buffer_primes_then_plays_in_real_time_without_underruns(profile, periods):
+    out, _ = twin(profile, periods)
+    assert out.step(0.0) == 0.0  # priming fills the whole buffer at once
+    t = run_until(out, 0.5)
+    assert out.underruns == 0
+    played = out._played(t)
+    # the DAC played half a second, the driver never further ahead than the buffer
+    assert abs(played - FS // 2) <= periods * BS
+    assert 0 <= out._written - played <= periods * BS
+    np.testing.assert_array_equal(out.recording_card(), expected(out._written))
+    assert out.status()["latency_s"] == pytest.approx(periods * PERIOD_S)
+
+
+def test_late_driver_underruns_only_when_the_buffer_runs_dry(profile):
+    """Buffer of 3 periods: the driver may be up to 2 periods late (ALSA/PortAudio)."""
+    out, _ = twin(profile, 3)
+    run_until(out, 0.5, late_s=1.9 * PERIOD_S)
+    assert out.underruns == 0, "late by less than the buffered blocks: no underrun"
+    out2, _ = twin(profile, 3)
+    run_until(out2, 0.5, late_s=2.5 * PERIOD_S)
+    assert out2.underruns > 0, "late by more than the buffered blocks: the DAC starved"
+    assert out2.status()["underrun_s"] > 0
+    # the recording holds what the gate handed over, gapless (the silence is not in it)
+    np.testing.assert_array_equal(out2.recording_card(), expected(out2._written))
+
+
+def test_one_long_stall_counts_one_underrun_and_the_gap(profile):
+    out, _ = twin(profile, 3)
+    t = run_until(out, 0.2)
+    t += 0.050  # the driver thread stalled 50 ms
+    run_until(out, t + 0.2, t)
+    assert out.underruns == 1
+    # the DAC had up to 3 blocks queued when the stall began
+    assert 0.050 - 3 * PERIOD_S <= out.underrun_s <= 0.050
+
+
+def test_estop_drops_the_queued_blocks(profile):
+    out, src = twin(profile, 4)
+    t = run_until(out, 0.1)
+    out.step(t)  # the buffer is full again
+    played, written = out._played(t), out._written
+    assert written - played > BS, "blocks are queued"
+    out._on_gate_event(GateEvent(t, written, "estop", "operator e-stop"))
+    src.n = 10**6  # whatever the next fill holds (a block under way at the e-stop) is dropped
+    out.step(t + PERIOD_S)
+    rec = out.recording_card()
+    np.testing.assert_array_equal(rec[:played], expected(played), "the past is untouched")
+    assert not np.any(rec[played:]), "silent from the sample playing at the e-stop"
+    assert out._bus.now()[1] == (0.0, 0.0)
+
+
+def test_other_gate_events_keep_the_buffer(profile):
+    out, _ = twin(profile, 3)
+    t = run_until(out, 0.05)
+    out._on_gate_event(GateEvent(t, 0, "switch", "relays closed: [1]"))
+    np.testing.assert_array_equal(out.recording_card(), expected(out._written))
+
+
+def test_paced_plan_is_sample_exact_and_switches_only_in_played_silence(profile, plugins):
+    from console.runtime.outputs import open_outputs
+
+    sig = tone(250, 10, 0.3, FS)
+    plan = OutputPlan(
+        FS,
+        (
+            Segment(sig, np.zeros_like(sig), frozenset({"PA"})),
+            Segment(0.5 * sig, np.zeros_like(sig), frozenset({"PB"})),
+        ),
+        gap_s=0.01,
+    )
+    with open_outputs(profile, plugins, fast=False) as out:
+        periods = out.status()["audio"]["buffer_periods"]
+        assert out.gate.latency_samples == periods * out.status()["audio"]["block_size"]
+        report = out.play(plan, timeout_s=30)
+        rec = out.recording()
+        for k, seg in enumerate(plan.segments):
+            a = report.segment_start[k]
+            np.testing.assert_allclose(rec[a : a + seg.n_samples, 0], seg.piezo_v, atol=1e-3)
+        lim = out.limits
+        switches = out.relay_log()
+        assert len(switches) >= 4
+        for sw in switches:
+            assert sw.level_v == (0.0, 0.0), sw
+            near = rec[max(0, sw.clock - lim.guard_samples) : sw.clock + lim.settle_samples]
+            assert not np.any(near), f"signal at the amplifiers near switch {sw}"
+
+
+def test_paced_estop_cuts_within_the_buffer(profile, plugins):
+    from console.runtime.outputs import open_outputs
+
+    sig = tone(250, 10, 3.0, FS)
+    plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
+    with open_outputs(profile, plugins, fast=False) as out:
+        bs = out.status()["audio"]["block_size"]
+        periods = out.status()["audio"]["buffer_periods"]
+        report = out.play(plan, wait=False)
+        while not report.segment_start or out.gate.clock < report.segment_start[0] + FS // 5:
+            report.done.wait(0.01)
+        out.estop("test e-stop")
+        stop = [e for e in out.gate.events if e.kind == "estop"][0].clock
+        rec = out.recording()
+        assert not np.any(rec[stop:]), "nothing handed over after the e-stop plays"
+        quiet = np.flatnonzero(np.any(rec[:stop] != 0, axis=1))
+        last_signal = int(quiet[-1]) + 1 if quiet.size else 0
+        assert last_signal >= stop - periods * bs - bs, "only the queued blocks were dropped"
+        assert out.relay_log()[-1].level_v == (0.0, 0.0)
