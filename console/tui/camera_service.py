@@ -2,7 +2,10 @@
 runtime's ``FrameLoop`` with the ``vision`` and ``classify`` stages), keeping the newest
 frame and result for the Camera view and a latency monitor for the Latency screen.
 
-Started when the Camera or Latency screen opens, stopped when neither is shown.
+Started when the Camera or Latency screen opens, stopped when neither is shown. A demo
+started from the console borrows the camera and classifier (``lend``/``give_back``): the
+service's own loop stays stopped meanwhile and the demo's loop feeds ``sink`` (the Camera
+view stays live).
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ class CameraService:
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
         self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
+        self.borrower: str | None = None  # the demo running on this camera, if any
 
     @property
     def running(self) -> bool:
@@ -47,13 +51,9 @@ class CameraService:
         )
 
         with self._start_lock:
-            if self.running:
+            if self.running or self.borrower is not None:
                 return
-            if self.camera is None:
-                camera = open_camera(self.profile, self.plugins)
-                self.classifier = open_classifier(self.profile, self.plugins)
-                learn_background(camera, self.classifier)
-                self.camera = camera
+            self._open(open_camera, open_classifier, learn_background)
             stages = base_stages(self.classifier)
             window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
             mon = LatencyMonitor([n for n, _ in stages], size=window)
@@ -61,6 +61,40 @@ class CameraService:
                 self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink]
             )
             self.loop.start()
+
+    def _open(self, open_camera, open_classifier, learn_background) -> None:
+        if self.camera is None:
+            camera = open_camera(self.profile, self.plugins)
+            self.classifier = open_classifier(self.profile, self.plugins)
+            learn_background(camera, self.classifier)
+            self.camera = camera
+
+    def lend(self, borrower: str) -> tuple[Any, Any]:
+        """Stop this service's loop and hand (camera, classifier) to ``borrower`` (a demo),
+        opening them if needed (blocking: call in a worker). Until ``give_back`` the
+        service's own loop does not start; ``sink`` is the frame sink to give the
+        borrower's loop so the Camera view keeps showing frames."""
+        from console.runtime.stages import learn_background, open_camera, open_classifier
+
+        with self._start_lock:
+            if self.borrower is not None:
+                raise RuntimeError(f"the camera is already lent to {self.borrower}")
+            if self.loop is not None:
+                self.loop.stop()
+                self.loop = None
+            self._open(open_camera, open_classifier, learn_background)
+            self.borrower = borrower
+            return self.camera, self.classifier
+
+    def give_back(self) -> None:
+        """The borrower's loop has stopped: the service may run its own loop again."""
+        with self._start_lock:
+            self.borrower = None
+
+    @property
+    def sink(self):
+        """``sink(frame, work)``: keeps the newest frame and calls the frame hooks."""
+        return self._sink
 
     def _sink(self, frame, work: dict) -> None:
         with self._lock:

@@ -50,6 +50,7 @@ class LatencyPane(Vertical):
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.visible_now = False
+        self.source = ""  # "camera" or "demo NAME": whose loop the numbers are
         self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=40))
         self._tick = 0
 
@@ -71,8 +72,9 @@ class LatencyPane(Vertical):
         yield DataTable(id="lat-table", cursor_type="none", show_cursor=False)
         yield Static("", id="lat-audio")
         yield Static(
-            "numbers come from the camera frame loop while this screen (or Camera) is open; "
-            "stages a scene adds (scene, effect, output) appear when a demo runs",
+            "numbers come from the camera frame loop while this screen (or Camera) is open, "
+            "or from the demo's loop while a demo runs (Scenes screen, F6): it adds the "
+            "scene, effect and output stages",
             classes="hint",
         )
 
@@ -101,6 +103,12 @@ class LatencyPane(Vertical):
         except UserError as exc:
             svc.error = str(exc)
 
+    def demo_run(self):
+        """The demo started from the Scenes screen, while it runs (else None)."""
+        scenes = self.app.pane("scenes")
+        run = getattr(scenes, "demo_run", None)
+        return None if run is None or getattr(run, "stopped", False) else run
+
     def show_state(self, status: dict, log) -> None:
         self._tick += 1
         if not self.available or self._tick % 5:
@@ -115,16 +123,31 @@ class LatencyPane(Vertical):
             f"{'-' if lat is None else f'{lat * 1e3:.1f} ms'}, underruns {a.get('underruns', 0)}, "
             f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz"
         )
-        svc = self.app.camera_service
-        if svc is None:
-            self.query_one("#lat-head", Static).update("camera not started")
-            return
-        st = svc.status()
-        if st["error"]:
+        run = self.demo_run()
+        if run is not None:
+            try:
+                st = run.snapshot()
+            except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
+                st = {"camera": {}, "latency": None, "error": f"demo snapshot: {exc}"}
+            self.source = f"demo {st.get('demo', '?')}"
+            what = (
+                f"[b]showing: the {self.source} loop[/b] (camera -> vision -> classify -> "
+                "scene -> effect -> output)"
+            )
+        else:
+            svc = self.app.camera_service
+            self.source = "camera"
+            if svc is None:
+                self.query_one("#lat-head", Static).update("camera not started")
+                return
+            st = svc.status()
+            what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
+        if st.get("error"):
             self.query_one("#lat-head", Static).update(f"[red]camera: {st['error']}[/]")
             return
-        cam, snap = st["camera"], st["latency"]
+        cam, snap = st.get("camera") or {}, st.get("latency")
         self.query_one("#lat-head", Static).update(
+            f"{what}\n"
             f"[b]camera[/b] {cam.get('driver', '?')}: {cam.get('fps', 0):.1f} fps, "
             f"{cam.get('dropped', 0)} frames dropped by the camera"
             + (

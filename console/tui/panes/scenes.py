@@ -1,10 +1,18 @@
 """Scenes: the scenes plugins register; start and stop them on the projector; its status.
+Demos: the interactive demos plugins register (``haptable_register_demos``: the paper's
+flow and knob), started on the console's outputs, camera and projector.
 
-The projector is its own process, driven through ``console.runtime.projector_link``."""
+The projector is its own process, driven through ``console.runtime.projector_link``.
+A demo borrows the console's camera and classifier (``CameraService.lend``), runs its
+own frame loop (camera -> vision -> gestures -> scene -> effect -> outputs) and is
+polled for its latency and state; ``s`` or the e-stop stops it, so does quitting."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import threading
+from typing import Any
 
 from textual import work
 from textual.app import ComposeResult
@@ -13,6 +21,18 @@ from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
 from console.errors import UserError
+from console.tui.long_work import LongWork
+
+#: the loop stages a demo snapshot reports, as the Latency screen labels them
+DEMO_STAGES = (
+    ("capture_to_arrival", "capture"),
+    ("vision", "vision"),
+    ("classify", "classify"),
+    ("scene", "scene"),
+    ("effect", "effect"),
+    ("scheduled", "output"),
+    ("end_to_end", "end to end"),
+)
 
 
 def status_text(st: dict | None) -> str:
@@ -35,20 +55,167 @@ def status_text(st: dict | None) -> str:
     return "  ".join(parts)
 
 
+def _ms(v) -> str:
+    if v is None or v != v:
+        return "-"
+    return f"{v:.1f}" if v < 10 else f"{v:.0f}"
+
+
+def demo_text(snap: dict, hand: dict | None = None) -> str:
+    """What the operator sees of a running demo, from ``DemoRun.snapshot()`` and what
+    the camera last saw (``HandWatch.state``)."""
+    name = snap.get("demo", "?")
+    wd = snap.get("watchdog", {})
+    if wd.get("tripped"):
+        dog = f"[red]watchdog tripped: {wd.get('reason') or 'loop stalled'}[/]"
+    else:
+        dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
+    cam = snap.get("camera", {})
+    lat = snap.get("latency") or {}
+    state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
+    lines = [
+        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.1f} s   {dog}   camera "
+        f"{cam.get('driver', '?')} {cam.get('fps', 0):.1f} fps, dropped: "
+        f"{cam.get('dropped', 0)} by the camera, {lat.get('dropped_queue', 0)} in the queue"
+    ]
+    stages = dict(lat.get("stages", {}))
+    stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}
+    stages["end_to_end"] = lat.get("end_to_end") or {}
+    parts = [
+        f"{label} {_ms(stages[key].get('p50_ms'))}/{_ms(stages[key].get('p99_ms'))}"
+        for key, label in DEMO_STAGES
+        if key in stages
+    ]
+    lines.append("latency p50/p99 ms: " + "  ".join(parts))
+    if hand is not None:
+        if not hand.get("hands"):
+            seen = "no hand on the table"
+        else:
+            rest = hand.get("rest_mm")
+            seen = (
+                f"hand resting at {rest[0]:.0f},{rest[1]:.0f} mm"
+                if rest is not None
+                else "hand seen (moving)"
+            )
+            seen += f", {hand.get('contacts', 0)} contacts"
+            if hand.get("gesture"):
+                seen += f", gesture {hand['gesture']}"
+        lines.append(seen)
+    if "flow" in snap:
+        f = snap["flow"]
+        text = f"flow {f.get('direction')}: {f.get('flows', 0)} played"
+        last = [e for e in f.get("last", []) if e.get("parts")]
+        if last:
+            e = last[-1]
+            at = e.get("center_mm") or e.get("from_mm")
+            where = f" at {at[0]:.0f},{at[1]:.0f} mm" if at else ""
+            pts = " + ".join(
+                f"{p['actuator']} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", [])
+            )
+            text += f"; last{where}: {pts}"
+        lines.append(text)
+    if "knob" in snap:
+        k = snap["knob"]
+        lines.append(
+            f"knob {k.get('condition')}: item {k.get('item')}, angle "
+            f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
+            f", {k.get('crossings', 0)} crossings"
+        )
+    if snap.get("last_error"):
+        lines.append(f"[red]{snap['last_error']}[/]")
+    return "\n".join(lines)
+
+
+class HandWatch:
+    """Frame hook: what the camera last saw (hands, contacts, gesture, a resting hand)."""
+
+    def __init__(self) -> None:
+        self.state: dict[str, Any] = {"hands": 0, "contacts": 0, "gesture": None, "rest_mm": None}
+
+    def __call__(self, frame, work: dict) -> None:
+        hands = work.get("hands") or ()
+        rest = work.get("rest_mm")
+        if rest is None and hands:
+            rest = self.state["rest_mm"]  # still resting where it was placed
+        g = work.get("gesture")
+        self.state = {
+            "hands": len(hands),
+            "contacts": len(work.get("contacts") or ()),
+            "gesture": getattr(g, "name", None) if g is not None else self.state["gesture"],
+            "rest_mm": None if rest is None else (float(rest[0]), float(rest[1])),
+        }
+
+
+class ProjectorForward:
+    """The demo's scene events, forwarded to the console's projector service once the
+    demo's scene is shown there (events before that are applied when it starts)."""
+
+    def __init__(self, service) -> None:
+        self.service = service
+        self.ready = False
+        self.pending: list[dict] = []
+        self._lock = threading.Lock()
+
+    def update(self, event: dict) -> dict:
+        with self._lock:
+            if not self.ready:
+                self.pending = [*self.pending[-199:], event]
+                return {}
+        return self.service.update(event)
+
+    def start(self, scene: str) -> None:
+        with self._lock:
+            first, self.pending = self.pending, []
+        self.service.start_scene(scene, first)
+        with self._lock:
+            for ev in self.pending:
+                self.service.update(ev)
+            self.pending, self.ready = [], True
+
+
+class DemoCancelled(Exception):
+    pass
+
+
 class ScenesPane(Vertical):
+    DEFAULT_CSS = """
+    ScenesPane #scene-table { max-height: 8; }
+    ScenesPane #demo-table { height: auto; max-height: 5; margin-top: 1; }
+    ScenesPane #demo-status { height: auto; }
+    """
     HELP_TEXT = (
+        "Scenes table:\n"
         "enter    start the highlighted scene on the projector (starts the projector)\n"
-        "s        show black   k  stop the projector process"
+        "s        show black (or stop the running demo)   k  stop the projector process\n"
+        "Demos table (tab or d moves there):\n"
+        "enter    start the highlighted demo on the outputs (enter again stops it)\n"
+        "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
+        "A demo uses the console's camera (the Camera view stays live) and, when the\n"
+        "projector runs, shows its scene there. The Latency screen shows its loop."
     )
     BINDINGS = [
         Binding("enter", "start_scene", "start on projector", show=False),
-        Binding("s", "stop_scene", "stop (black)"),
+        Binding("s", "stop", "stop"),
         Binding("k", "close_projector", "stop projector"),
+        Binding("d", "focus_demos", "demos"),
+        Binding("x", "cancel_demo", "cancel", show=False),
     ]
+
+    #: extra ``factory(...)`` arguments per demo name (e.g. ``{"flow": {"prepare": False}}``)
+    demo_params: dict[str, dict] = {}
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self._tick = 0
+        self.demo_run = None  # the running DemoRun
+        self.demo_name: str | None = None  # running or being prepared
+        self.demo_state = "idle"
+        self.hand = HandWatch()
+        self._lent = None  # (camera service, camera, its script before the demo)
+        self._forward: ProjectorForward | None = None
+        self._stop_lock = threading.Lock()
+        self._quitting = False
+        self.last_snapshot: dict | None = None
 
     @property
     def service(self):
@@ -61,6 +228,14 @@ class ScenesPane(Vertical):
         yield Static(
             "enter: start the highlighted scene on the projector   s: show black   "
             "k: stop the projector process",
+            classes="hint",
+        )
+        yield DataTable(id="demo-table", cursor_type="row")
+        yield LongWork("", id="demo-work")
+        yield Static("", id="demo-status")
+        yield Static(
+            "demos (d): enter starts the highlighted demo, s stops it, x cancels its "
+            "preparation; the Latency screen shows its loop",
             classes="hint",
         )
 
@@ -78,10 +253,25 @@ class ScenesPane(Vertical):
             self.query_one("#projector-status", Static).update(
                 "no scenes: no plugin registers one (install the projector plugin)"
             )
+        d = self.query_one("#demo-table", DataTable)
+        d.add_column("demo", key="demo")
+        d.add_column("state", key="state", width=12)
+        d.add_column("description", key="description")
+        demos = self.app.ctx.pm.of("demo")
+        for name, reg in sorted(demos.items()):
+            d.add_row(name, "idle", reg.description, key=name)
+        if not demos:
+            self.query_one("#demo-status", Static).update(
+                "no demos: no plugin registers one (install the demos plugin)"
+            )
+        self.set_interval(0.25, self.poll_demo)
 
     def on_data_table_row_selected(self, event: DataTable.RowSelected) -> None:
         event.stop()
-        self._start(event.row_key.value)
+        if event.data_table.id == "demo-table":
+            self.toggle_demo(event.row_key.value)
+        else:
+            self._start(event.row_key.value)
 
     def action_start_scene(self) -> None:
         t = self.query_one("#scene-table", DataTable)
@@ -130,10 +320,214 @@ class ScenesPane(Vertical):
             msg = f"scene {name}: {exc}"
         self.app.call_from_thread(self.app.notify, msg, timeout=4)
 
+    def action_stop(self) -> None:
+        """``s``: stop the running demo, else show black on the projector."""
+        if self.demo_name is not None:
+            self.stop_demo()
+        else:
+            self.action_stop_scene()
+
     @work(thread=True, exclusive=True, group="projector")
     def action_stop_scene(self) -> None:
         if self.service is not None:
             self.service.stop_scene()
+
+    # ------------------------------------------------------------------ demos
+    def action_focus_demos(self) -> None:
+        self.query_one("#demo-table", DataTable).focus()
+
+    def toggle_demo(self, name: str) -> None:
+        """Enter on a demo: start it, or stop it when it is the one running."""
+        if self.demo_name is None:
+            self.start_demo(name)
+        elif self.demo_name == name:
+            self.stop_demo()
+        else:
+            self.app.notify(f"demo {self.demo_name} is running: s stops it", severity="warning")
+
+    def _set_state(self, text: str) -> None:
+        self.demo_state = text
+        if self.demo_name is None:
+            return
+        t = self.query("#demo-table")
+        if t and self.demo_name in t.first(DataTable).rows:
+            t.first(DataTable).update_cell(self.demo_name, "state", text)
+
+    def start_demo(self, name: str) -> bool:
+        """Start demo ``name`` on the console's outputs (preparation in a worker)."""
+        app = self.app
+        reg = app.ctx.pm.of("demo").get(name)
+        lw = self.query_one("#demo-work", LongWork)
+        if reg is None or lw.busy or self.demo_name is not None:
+            return False
+        out = app.outputs
+        if out is None:
+            lw.error(f"demo {name}: outputs not open ({app.outputs_error or 'starting'})")
+            return False
+        if out.gate.estopped:
+            lw.error(f"demo {name}: the e-stop is active; ctrl+r resets it")
+            return False
+        self.demo_name = name
+        self._set_state("starting")
+        self.hand = HandWatch()
+        svc = app.get_camera_service()
+        projector = app.projector_service
+        params = dict(self.demo_params.get(name, {}))
+        ctx = app.ctx
+
+        def job(progress, cancelled):
+            def prep(done: int, total: int, what: str) -> None:
+                if cancelled():
+                    raise DemoCancelled(name)
+                progress(0.1 + 0.9 * done / max(total, 1), f"preparing {what} ({done + 1}/{total})")
+
+            progress(0.0, "opening the camera")
+            camera, clf = svc.lend(f"demo {name}")
+            self._lent = (svc, camera, getattr(camera, "script", None))
+            svc.frame_hooks.append(self.hand)
+            fwd = ProjectorForward(projector) if projector is not None else None
+            progress(0.1, "starting")
+            try:
+                if cancelled():
+                    raise DemoCancelled(name)
+                run = reg.factory(
+                    ctx.profile,
+                    ctx.pm,
+                    out,
+                    camera=camera,
+                    classifier=clf,
+                    script=True,
+                    projector=fwd,
+                    progress=prep,
+                    sinks=[svc.sink],
+                    **params,
+                )
+            except BaseException:
+                self._give_back()
+                raise
+            self.demo_run, self._forward = run, fwd
+            if cancelled():
+                self._stop_run(run)
+                raise DemoCancelled(name)
+            if fwd is not None:
+                try:
+                    fwd.start(run.scene_name)
+                except (UserError, OSError) as exc:
+                    self.app.call_from_thread(
+                        self.app.notify, f"projector: {exc}", severity="warning"
+                    )
+            return run
+
+        lw.start(f"demo {name}", job, lambda run: f"demo {name} running: s stops it")
+        return True
+
+    def on_long_work_finished(self, event: LongWork.Finished) -> None:
+        event.stop()
+        if event.outcome == "done":
+            self._set_state("running")
+            return
+        name, self.demo_name = self.demo_name, None
+        self.demo_run = None
+        t = self.query("#demo-table")
+        if name and t:
+            t.first(DataTable).update_cell(name, "state", event.outcome)
+        self.demo_state = event.outcome
+
+    def action_cancel_demo(self) -> None:
+        lw = self.query_one("#demo-work", LongWork)
+        lw.cancel()
+
+    def stop_demo(self, reason: str = "stopped") -> None:
+        """Stop the running demo (or cancel its preparation)."""
+        lw = self.query_one("#demo-work", LongWork)
+        if lw.busy:
+            lw.cancel()
+            return
+        run = self.demo_run
+        if run is None:
+            return
+        self._set_state("stopping")
+        self._stop_worker(run, reason)
+
+    @work(thread=True, group="demo-stop", exit_on_error=False)
+    def _stop_worker(self, run, reason: str) -> None:
+        try:
+            self._stop_run(run)
+        except Exception as exc:  # noqa: BLE001 - one line, the console stays up
+            reason = f"stop failed: {exc}"
+        with contextlib.suppress(RuntimeError):  # the app is closing
+            self.app.call_from_thread(self._stopped, reason)
+
+    def _stopped(self, reason: str) -> None:
+        self._set_state(reason)
+        if self.last_snapshot is not None:  # the run's last numbers stay, marked as such
+            snap = {**self.last_snapshot, "running": False}
+            text = demo_text(snap, None)
+            self.query_one("#demo-status", Static).update(f"last run ({reason}):\n{text}")
+        self.demo_name, self.demo_run = None, None
+        self.query_one("#demo-work", LongWork).show(f"demo {reason}")
+        for tab in ("camera", "latency"):  # their views take the camera back
+            pane = self.app.pane(tab)
+            if getattr(pane, "visible_now", False) and hasattr(pane, "_start"):
+                pane._start()
+
+    def _stop_run(self, run) -> None:
+        """Stop ``run``, show black if it showed its scene, give the camera back (blocking)."""
+        with self._stop_lock:
+            try:
+                run.stop()
+            finally:
+                fwd, self._forward = self._forward, None
+                if fwd is not None and fwd.ready:
+                    with contextlib.suppress(Exception):
+                        if fwd.service.status().get("scene") == run.scene_name:
+                            fwd.service.stop_scene()
+                self._give_back()
+
+    def _give_back(self) -> None:
+        lent, self._lent = self._lent, None
+        if lent is None:
+            return
+        svc, camera, script = lent
+        with contextlib.suppress(ValueError):
+            svc.frame_hooks.remove(self.hand)
+        if script is not None and callable(getattr(camera, "set_script", None)):
+            with contextlib.suppress(Exception):
+                camera.set_script(script)  # the twin shows what it showed before
+        svc.give_back()
+
+    def on_estop(self) -> None:
+        """The app's e-stop (outputs already silenced): stop the demo too."""
+        if self.demo_name is not None:
+            self.stop_demo("e-stopped")
+
+    def on_unmount(self) -> None:
+        """Quitting: stop the demo before the app closes the outputs and the camera."""
+        self._quitting = True
+        lw = self.query("#demo-work")
+        if lw and lw.first(LongWork).busy:
+            lw.first(LongWork).cancel()
+        run = self.demo_run
+        if run is not None:
+            self._stop_run(run)
+
+    def poll_demo(self) -> None:
+        """~4 Hz: the running demo's snapshot."""
+        run = self.demo_run
+        if run is None or self._quitting:
+            return
+        try:
+            snap = run.snapshot()
+        except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
+            snap = {"demo": self.demo_name, "last_error": f"snapshot failed: {exc}"}
+        self.last_snapshot = snap
+        self.query_one("#demo-status", Static).update(demo_text(snap, self.hand.state))
+        if self.demo_state == "running":
+            t = self.query_one("#demo-table", DataTable)
+            if self.demo_name in t.rows:
+                up = snap.get("uptime_s", 0.0)
+                state = f"running {up:.0f} s" if snap.get("running") else "loop stopped"
+                t.update_cell(self.demo_name, "state", state)
 
     @work(thread=True, exclusive=True, group="projector")
     def action_close_projector(self) -> None:
