@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+import time
 from typing import Any
 
 from textual import work
@@ -171,6 +172,20 @@ class ProjectorForward:
             for ev in self.pending:
                 self.service.update(ev)
             self.pending, self.ready = [], True
+
+
+def wait_silent(outputs, timeout_s: float = 10.0) -> bool:
+    """Wait (bounded) until ``outputs`` play nothing: a demo's stop lets the plan that is
+    playing end by its own ramps (at most one plan)."""
+    if outputs is None:
+        return True
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        st = outputs.status()
+        if not st.get("busy") and st["gate"]["level_v"] == (0.0, 0.0):
+            return True
+        time.sleep(0.05)
+    return False
 
 
 class DemoCancelled(Exception):
@@ -476,6 +491,7 @@ class ScenesPane(Vertical):
         with self._stop_lock:
             try:
                 run.stop()
+                wait_silent(getattr(run, "outputs", None))
             finally:
                 fwd, self._forward = self._forward, None
                 if fwd is not None and fwd.ready:

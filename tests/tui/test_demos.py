@@ -1,0 +1,174 @@
+"""The demos started from the Scenes screen on the twin, as an operator does: the scripted
+hand performs, the flow it reports is what the twin's amplifier and relays got; stopping,
+the e-stop and quitting leave the outputs silent and the relays open."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+from console.types import patches_of
+
+from .conftest import wait_for
+
+FS = 48000
+
+
+def dominant_hz(x: np.ndarray, fs: int = FS) -> float:
+    """Spectral peak (Hann window, 4x zero padding, parabolic refinement)."""
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n=4 * x.size))
+    k = int(np.argmax(spec[1:])) + 1
+    a, b, c = np.log(spec[k - 1 : k + 2] + 1e-300)
+    return (k + 0.5 * (a - c) / (a - 2 * b + c)) * fs / (4 * x.size)
+
+
+def played_bursts(rec: np.ndarray, log) -> list[tuple[frozenset, float]]:
+    """(relay channels closed, dominant Hz) of each burst on the piezo channel, in order:
+    the recording cut where the relays switched, then at silent gaps."""
+    bounds = sorted({0, rec.shape[0], *(min(r.clock, rec.shape[0]) for r in log)})
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        closed = set()
+        for r in log:
+            if r.clock <= a:
+                (closed.add if r.closed else closed.discard)(r.channel)
+        nz = np.flatnonzero(rec[a:b, 0])
+        if nz.size == 0:
+            continue
+        cuts = np.flatnonzero(np.diff(nz) > 480) + 1  # 10 ms of silence: a new burst
+        for run in np.split(nz, cuts):
+            if run.size > 480:
+                seg = rec[a + run[0] : a + run[-1] + 1, 0]
+                out.append((frozenset(closed), dominant_hz(seg)))
+    return out
+
+
+@pytest.fixture
+def flow_ctx(tmp_path, plugins, map_file):
+    """The sim profile with a vibration map for the flow demo (no twin measurement)."""
+    from console.profile import PROJECT_PROFILES
+
+    text = (PROJECT_PROFILES / "sim.toml").read_text()
+    path = tmp_path / "flow.toml"
+    path.write_text(text + f'\n[demos]\nflow_map = "{map_file}"\n')
+    return Context(str(path), plugins)
+
+
+async def _start(app, pilot, name: str):
+    """Open the demos table, highlight ``name``, press enter; wait until it runs."""
+    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+    await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes pane")
+    pane = app.pane("scenes")
+    await pilot.press("d")
+    table = app.query_one("#demo-table")
+    await wait_for(pilot, lambda: app.focused is table, what="demo table focused")
+    names = [str(table.get_row_at(i)[0]) for i in range(table.row_count)]
+    assert set(names) == set(app.ctx.pm.of("demo"))
+    table.move_cursor(row=names.index(name))
+    await pilot.press("enter")
+    await wait_for(pilot, lambda: pane.demo_state == "running", 60, f"{name} running")
+    return pane
+
+
+def _silent_and_open(out) -> None:
+    st = out.status()["gate"]
+    assert st["level_v"] == (0.0, 0.0)
+    assert st["relays_closed"] == []
+    log = out.relay_log()
+    assert log and not log[-1].closed
+
+
+def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
+    async def scenario():
+        app = HapTableApp(flow_ctx, fast=False, initial="scenes")
+        async with app.run_test(size=(100, 30)) as pilot:
+            pane = app.pane("scenes")
+            pane.demo_params = {"flow": {"prepare": False}}  # plans on first use (fast)
+            pane = await _start(app, pilot, "flow")
+            out = app.outputs
+            run = pane.demo_run
+            assert app.camera_service.borrower == "demo flow"  # the console's camera
+
+            def flow_done() -> bool:
+                snap = run.snapshot()["flow"]
+                if not any(e.get("parts") for e in snap["last"]):
+                    return False
+                want = sum(len(e["parts"]) for e in snap["last"] if e.get("parts"))
+                return len(played_bursts(out.recording(), out.relay_log())) >= want
+
+            await wait_for(pilot, flow_done, 45, "a flow played")
+            snap = run.snapshot()
+            status = str(app.query_one("#demo-status").render())
+            assert "flow right" in status and "latency p50/p99" in status
+            assert "end to end" in status
+            # the Latency screen shows the demo's loop, with the demo's stages
+            await pilot.press("f7")
+            lat = app.pane("latency")
+            await wait_for(pilot, lambda: lat.source == "demo flow", 10, "latency of the demo")
+            head = str(app.query_one("#lat-head").render())
+            assert "demo flow" in head
+            rows = app.query_one("#lat-table")
+            labels = {str(rows.get_row_at(i)[0]) for i in range(rows.row_count)}
+            assert {"capture", "vision", "classify", "scene", "effect", "output"} <= labels
+            await pilot.press("f6")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
+            assert run.stopped and not run.loop.running
+            assert app.camera_service.borrower is None  # given back
+            await pilot.pause(0.3)
+            _silent_and_open(out)
+            rec, log = out.recording(), out.relay_log()
+        # what the demo reported is what the amplifier and the relays got
+        chans = {n: int(v["relay_channel"]) for n, v in flow_ctx.profile.items("patches").items()}
+        parts = [p for e in snap["flow"]["last"] for p in e.get("parts", [])]
+        assert parts
+        bursts = played_bursts(rec, log)
+        assert len(bursts) >= len(parts)
+        for p, (closed, hz) in zip(parts, bursts, strict=False):
+            assert closed == {chans[q] for q in patches_of(p["actuator"])}
+            assert hz == pytest.approx(p["frequency_hz"], abs=1.0)
+        assert all(r.level_v == (0.0, 0.0) for r in log)  # relays switched in silence
+
+    asyncio.run(scenario())
+
+
+def test_estop_stops_a_running_demo(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _start(app, pilot, "knob")
+            run = pane.demo_run
+            out = app.outputs
+            screen = int(app.ctx.profile.get("screen.relay_channel"))
+            await wait_for(
+                pilot, lambda: screen in out.status()["gate"]["relays_closed"], 20, "knob playing"
+            )
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
+            assert run.stopped and not run.loop.running
+            assert pane.demo_state == "e-stopped"
+            assert app.camera_service.borrower is None
+            assert out.gate.estopped
+            _silent_and_open(out)
+            assert np.any(out.recording()[:, 1])  # the knob had played on the screen
+
+    asyncio.run(scenario())
+
+
+def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _start(app, pilot, "knob")
+            run = pane.demo_run
+            out = app.outputs
+            await wait_for(pilot, lambda: np.any(out.recording()[:, 1]), 20, "knob playing")
+            await pilot.press("q")
+        assert run.stopped and not run.loop.running
+        _silent_and_open(out)
+
+    asyncio.run(scenario())
