@@ -39,6 +39,12 @@ RUNTIME_FIELDS = {
     "latency_window_frames": Field(
         "int", 1200, min=10, max=1000000, help="frames the latency monitor's p50/p99 cover"
     ),
+    "twin_camera_process": Field(
+        "bool",
+        True,
+        help="demos on the twin camera: render its frames in a separate process, as a "
+        "camera device delivers them (false: in the console's process, sharing its CPU time)",
+    ),
 }
 
 DEMOS_FIELDS = {

@@ -9,6 +9,7 @@ reasons, RSS at start and end, audio underruns, watchdog trips.
 from __future__ import annotations
 
 import os
+import sys
 import time
 from typing import Any
 
@@ -29,6 +30,17 @@ def rss_mb() -> float:
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def rss_after_trim_mb() -> float | None:
+    """RSS after glibc's ``malloc_trim(0)`` returned free heap pages (None elsewhere)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        return None
+    return round(rss_mb(), 2)
 
 
 def load_avg() -> list[float]:
@@ -165,7 +177,7 @@ def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any)
             res = _latency_summary(run_.snapshot())
             res["would_trip_watchdog"] = _over_limit(run_, limit)
             if demo == "knob":
-                res["crossings"] = len(run_.demo.crossings)
+                res["crossings"] = run_.demo.crossings_total
             else:
                 flows = [e for e in run_.demo.events if e.get("kind") == "flow"]
                 res["flows"] = len(flows)
@@ -209,60 +221,92 @@ def run_loop(ctx: Any, quick: bool) -> dict:
     return res
 
 
+#: The soak's RSS baseline is taken after this warm-up (imports, first frames, caches).
+SOAK_WARMUP_S = 10.0
+#: Seconds of audio the twin keeps during a soak (its recording is a bounded ring; a short
+#: one is filled during the warm-up, so the RSS after it shows only real growth).
+SOAK_RECORD_S = 5.0
+
+
+def soak_profile(profile: Any) -> Any:
+    """The profile with the twin's recording shortened to ``SOAK_RECORD_S``."""
+    import dataclasses
+
+    data = dict(profile.data)
+    data["twin_audio"] = {**dict(data.get("twin_audio") or {}), "record_s": SOAK_RECORD_S}
+    return dataclasses.replace(profile, data=data)
+
+
+def rss_slope_mb_per_min(samples: list[dict], from_s: float) -> float | None:
+    """Least-squares slope of RSS over time (MB/min) for the samples from ``from_s``."""
+    import numpy as np
+
+    pts = [(x["t_s"], x["rss_mb"]) for x in samples if x["t_s"] >= from_s]
+    if len(pts) < 2:
+        return None
+    t, r = np.array(pts).T
+    return float(np.polyfit(t / 60.0, r, 1)[0])
+
+
 def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     """The knob demo for ``minutes`` (default 10; quick: 0.5; ``HAPTABLE_SOAK_MINUTES``).
 
     A watchdog trip (the loop stalled: e-stop) is counted with its reason; the gate is
-    reset and the demo restarted, so the soak always covers the whole time."""
+    reset and the demo restarted, so the soak always covers the whole time. RSS is taken
+    after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between."""
+    from console.runtime.outputs import open_outputs
+
     from .run import start_demo
 
     if minutes is None:
         minutes = float(os.environ.get("HAPTABLE_SOAK_MINUTES", 0.5 if quick else 10.0))
-    prof, pm = ctx.profile, ctx.pm
+    prof, pm = soak_profile(ctx.profile), ctx.pm
     res: dict = {"machine": machine_info(), "minutes": minutes, "load_avg_start": load_avg()}
     samples: list[dict] = []
     trips: list[dict] = []
     tot = {"frames": 0, "dropped_queue": 0, "dropped_camera": 0, "errors": 0, "crossings": 0}
     warm_rss = None
     last_snap: dict = {}
-    with ctx.outputs(fast=False) as out:
+    with open_outputs(prof, pm, fast=False) as out:
         rss0 = rss_mb()
         t0 = time.monotonic()
-        next_t = t0
+        next_t = t0 + SOAK_WARMUP_S
 
         def add(snap: dict, demo: Any) -> None:
             lat = snap["latency"]
             for k in ("frames", "dropped_queue", "dropped_camera", "errors"):
                 tot[k] += lat[k]
-            tot["crossings"] += len(demo.crossings)
+            tot["crossings"] += demo.crossings_total
 
         while time.monotonic() - t0 < minutes * 60:
             run_ = start_demo("knob", prof, pm, out)
             try:
                 while time.monotonic() - t0 < minutes * 60 and not run_.watchdog.tripped:
-                    time.sleep(0.5)
+                    time.sleep(0.25)
                     now = time.monotonic()
                     if now >= next_t:
                         lat = run_.monitor.snapshot()
                         rss = rss_mb()
-                        if warm_rss is None and now - t0 >= 150.0:
+                        if warm_rss is None:
                             warm_rss = rss
+                        a = out.status()["audio"]
                         samples.append(
                             {
                                 "t_s": round(now - t0, 1),
-                                "rss_mb": round(rss, 1),
+                                "rss_mb": round(rss, 2),
                                 "fps": lat["fps"],
                                 "frames": tot["frames"] + lat["frames"],
                                 "dropped_queue": tot["dropped_queue"] + lat["dropped_queue"],
                                 "dropped_camera": tot["dropped_camera"] + lat["dropped_camera"],
                                 "p99_processing_ms": round(lat["processing"]["p99_ms"], 2),
                                 "p99_cpu_per_frame_ms": round(lat["cpu_per_frame"]["p99_ms"], 2),
-                                "underruns": out.status()["audio"].get("underruns"),
+                                "underruns": a.get("underruns"),
+                                "blocks": a.get("blocks"),
                                 "watchdog_trips": len(trips),
                                 "load_avg_1min": load_avg()[:1],
                             }
                         )
-                        next_t += 30.0
+                        next_t += 10.0
             finally:
                 run_.stop()
             last_snap = run_.snapshot()
@@ -274,6 +318,10 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 out.reset()
         ran_s = time.monotonic() - t0
         rss1 = rss_mb()
+        rss1_trim = rss_after_trim_mb()
+        audio = _audio(out)
+        audio["buffer_periods"] = out.status()["audio"].get("buffer_periods")
+        audio["latency_ms"] = 1e3 * (out.status()["audio"].get("latency_s") or 0.0)
         res.update(
             {
                 "ran_s": round(ran_s, 1),
@@ -282,24 +330,32 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "dropped_for_processing": tot["dropped_queue"],
                 "dropped_by_camera_late": tot["dropped_camera"],
                 "errors": tot["errors"],
-                "rss_start_mb": round(rss0, 1),
-                "rss_after_150s_mb": None if warm_rss is None else round(warm_rss, 1),
-                "rss_end_mb": round(rss1, 1),
-                "audio": _audio(out),
+                "rss_at_open_mb": round(rss0, 1),
+                "warmup_s": SOAK_WARMUP_S,
+                "rss_start_mb": None if warm_rss is None else round(warm_rss, 2),
+                "rss_end_mb": round(rss1, 2),
+                "rss_slope_mb_per_min": rss_slope_mb_per_min(samples, SOAK_WARMUP_S),
+                "rss_end_after_malloc_trim_mb": rss1_trim,
+                "switch_interval_ms": round(sys.getswitchinterval() * 1e3, 3),
+                "audio": audio,
+                "twin_record_s": SOAK_RECORD_S,
                 "watchdog_trips": len(trips),
                 "trips": trips[:20],
                 "gate_estopped_at_end": out.status()["gate"].get("estopped"),
                 "knob_crossings": tot["crossings"],
                 "latency_last_window": {
                     k: last_snap.get("latency", {}).get(k)
-                    for k in ("end_to_end", "processing", "cpu_per_frame", "stages")
+                    for k in ("end_to_end", "processing", "cpu_per_frame", "stages", "cpu_stages")
                 },
                 "samples": samples,
                 "note": "dropped_for_processing: frames the loop's queue discarded because "
                 "processing fell behind; dropped_by_camera_late: frames the twin camera "
-                "skipped because its own thread (rendering) was late. The twin keeps the last "
-                "120 s of audio, so RSS grows for the first 2 minutes by design: compare "
-                "rss_after_150s_mb with rss_end_mb",
+                "skipped because its own thread (rendering) was late. rss_start_mb is taken "
+                f"after {SOAK_WARMUP_S:g} s of warm-up (the twin keeps {SOAK_RECORD_S:g} s of "
+                "audio during a soak, filled by then); the slope is fitted from there on. "
+                "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
+                "empty. rss_end_after_malloc_trim_mb: RSS once glibc returned its free heap "
+                "(growth it gives back is allocator retention, not a leak)",
             }
         )
     res["load_avg_end"] = load_avg()

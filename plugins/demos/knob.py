@@ -10,6 +10,7 @@ crossings were posted to the stream: its next audio block plays them).
 from __future__ import annotations
 
 import time
+from collections import deque
 from typing import Any
 
 from console.errors import UserError
@@ -44,7 +45,9 @@ class KnobDemo:
         # the scene counts sectors from its trial's start item at angle 0
         self._zero_deg = float(k.center_deg(k.item)) - k.width_deg / 2
         self.report = None
-        self.crossings: list[dict] = []
+        #: the last crossings (bounded: a demo runs for as long as the operator likes)
+        self.crossings: deque[dict] = deque(maxlen=4096)
+        self.crossings_total = 0
         self.events: list[dict] = []
         self.frames_touching = 0
 
@@ -75,6 +78,7 @@ class KnobDemo:
         }
         if len(pts) >= 2:
             self.frames_touching += 1
+        self.crossings_total += len(crossed)
         for c in crossed:
             self.crossings.append(
                 {"t_s": c.t_s, "seq": frame.seq, "item": c.to_item, "direction": c.direction}

@@ -162,11 +162,21 @@ def demo_state(demo: Any) -> dict:
                 "item": int(s.knob.item),
                 "angle_deg": float(s.tracker.angle_deg),
                 "touching": bool(s.tracker.touching),
-                "crossings": len(demo.crossings),
+                "crossings": demo.crossings_total,
             }
         }
     evs = [{k: v for k, v in e.items() if k != "report"} for e in demo.events[-10:]]
     return {"flow": {"direction": demo.current_direction(), "flows": len(demo.events), "last": evs}}
+
+
+def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
+    """The profile's camera; the twin scripted for ``demo`` in its own process
+    (``[runtime] twin_camera_process``)."""
+    if profile.get("camera.driver") == "twin" and profile.get("runtime.twin_camera_process"):
+        from .camproc import ProcessCamera
+
+        return ProcessCamera(profile, demo)
+    return open_camera(profile, plugins)
 
 
 def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> Path:
@@ -232,7 +242,7 @@ def start_demo(
         cache_dir = Path(vt_cache).expanduser() if vt_cache else default_cache_dir()
     owns = camera is None
     if owns:
-        camera = open_camera(profile, plugins)
+        camera = _open_camera(profile, plugins, name) if script else open_camera(profile, plugins)
     try:
         if script:
             script_twin(camera, name, profile)

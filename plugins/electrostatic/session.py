@@ -2,10 +2,16 @@
 
 The live loop and the twin use the same object: ``feed(t_s, contacts)`` per camera
 frame, ``render_until(t_s)`` pulls audio blocks (offline) up to a time.
+
+``record=True`` (offline runs) keeps everything: every state, item, crossing and the
+rendered audio. A live session (``record=False``) runs for as long as the operator
+likes, so it keeps only the last ``LIVE_LOG`` frames' items and crossings (bounded
+memory); ``crossings_total`` counts them all.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -14,6 +20,13 @@ import numpy as np
 from .knob import Crossing, Knob
 from .rotation import RotationState, RotationTracker
 from .synth import KnobStream
+
+#: Entries a live session keeps per log (items per frame; crossings; item changes).
+LIVE_LOG = 4096
+
+
+def _log(record: bool) -> list | deque:
+    return [] if record else deque(maxlen=LIVE_LOG)
 
 
 class KnobSession:
@@ -43,11 +56,13 @@ class KnobSession:
         self.fs, self.block, self.record = int(sample_rate_hz), int(block), record
         self.start_item = int(start_item)
         self.states: list[RotationState] = []
-        self.crossings: list[Crossing] = []
-        self.crossing_ids: list[int] = []
-        self.items: list[int] = []
-        #: (t_s, item) at the start and after every crossing (append-only, any thread reads)
-        self.item_log: list[tuple[float, int]] = []
+        self.crossings: list[Crossing] | deque[Crossing] = _log(record)
+        self.crossing_ids: list[int] | deque[int] = _log(record)
+        self.crossings_total = 0
+        self.items: list[int] | deque[int] = _log(record)
+        #: (t_s, item) at the start and after every crossing (append-only, any thread reads;
+        #: live: the last ``LIVE_LOG``)
+        self.item_log: list[tuple[float, int]] | deque[tuple[float, int]] = _log(record)
         self._piezo: list[np.ndarray] = []
         self._screen: list[np.ndarray] = []
 
@@ -63,6 +78,7 @@ class KnobSession:
             self.states.append(st)
         self.crossings += cr
         self.crossing_ids += ids
+        self.crossings_total += len(cr)
         if cr:
             self.item_log.append((float(t_s), self.knob.item))
         self.items.append(self.knob.item)

@@ -19,6 +19,8 @@ see it) and the clock of that sample (an index into the recording).
 from __future__ import annotations
 
 import math
+import os
+import sys
 import threading
 import time
 from collections import deque
@@ -69,6 +71,17 @@ def _key(profile, dotted: str, default):
     return default if v is None else v
 
 
+def realtime_priority() -> bool:
+    """Give the calling thread real-time (FIFO) scheduling, as PortAudio and JACK do for
+    their audio threads when the system allows it; False where it is not permitted."""
+    try:
+        prio = os.sched_get_priority_min(os.SCHED_FIFO) + 10
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(prio))  # 0: this thread
+        return True
+    except (AttributeError, OSError):
+        return False
+
+
 class TwinAudioOutput:
     """Two channels (left piezo, right screen) into the simulated amplifiers."""
 
@@ -107,6 +120,7 @@ class TwinAudioOutput:
         self._cut_pending = False
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
+        self.realtime_priority = False
         self.underruns = 0
         self.underrun_s = 0.0  # silence the DAC played while the buffer was empty
         self.blocks = 0
@@ -158,6 +172,7 @@ class TwinAudioOutput:
             "block_size": self.block_size,
             "buffer_periods": self.buffer_periods if self.paced else 1,
             "latency_s": self.latency_s,
+            "realtime_priority": self.realtime_priority,
             "underruns": self.underruns,
             "underrun_s": round(self.underrun_s, 4),
             "blocks": self.blocks,
@@ -220,6 +235,13 @@ class TwinAudioOutput:
 
     def _run(self) -> None:
         src = self._source
+        if self.paced:
+            self.realtime_priority = realtime_priority()
+            # the driver thread needs the GIL within its slack ((buffer_periods - 1) blocks):
+            # Python hands it over only every switch interval (5 ms by default)
+            slack_s = (self.buffer_periods - 1) * self.block_size / self.sample_rate_hz
+            if sys.getswitchinterval() > slack_s / 2:
+                sys.setswitchinterval(slack_s / 2)
         while not self._stop.is_set():
             if not self.paced:
                 if src.idle:
