@@ -100,7 +100,12 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
                 want = sum(len(e["parts"]) for e in snap["last"] if e.get("parts"))
                 return len(played_bursts(out.recording(), out.relay_log())) >= want
 
-            await wait_for(pilot, flow_done, 45, "a flow played")
+            try:
+                await wait_for(pilot, flow_done, 45, "a flow played")
+            except AssertionError as exc:
+                bursts = played_bursts(out.recording(), out.relay_log())
+                snap = {k: v for k, v in run.snapshot().items() if k != "latency"}
+                raise AssertionError(f"{exc}: {snap} bursts={bursts}") from None
             snap = run.snapshot()
             status = str(app.query_one("#demo-status").render())
             assert "flow right" in status and "latency p50/p99" in status
@@ -144,9 +149,12 @@ def test_estop_stops_a_running_demo(plugins):
             run = pane.demo_run
             out = app.outputs
             screen = int(app.ctx.profile.get("screen.relay_channel"))
-            await wait_for(
-                pilot, lambda: screen in out.status()["gate"]["relays_closed"], 20, "knob playing"
-            )
+
+            def playing() -> bool:
+                closed = out.status()["gate"]["relays_closed"]
+                return screen in closed and bool(np.any(out.recording()[:, 1]))
+
+            await wait_for(pilot, playing, 20, "knob playing on the screen electrode")
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
             assert run.stopped and not run.loop.running
@@ -154,7 +162,6 @@ def test_estop_stops_a_running_demo(plugins):
             assert app.camera_service.borrower is None
             assert out.gate.estopped
             _silent_and_open(out)
-            assert np.any(out.recording()[:, 1])  # the knob had played on the screen
 
     asyncio.run(scenario())
 
@@ -170,5 +177,29 @@ def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
             await pilot.press("q")
         assert run.stopped and not run.loop.running
         _silent_and_open(out)
+
+    asyncio.run(scenario())
+
+
+def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
+    from console.tui.long_work import LongWork
+
+    async def scenario():
+        app = HapTableApp(flow_ctx, fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            pane = app.pane("scenes")
+            await pilot.press("d")
+            await pilot.press("enter")  # flow: the first row
+            lw = app.query_one("#demo-work", LongWork)
+            await wait_for(pilot, lambda: "preparing" in lw.text, 30, "preparation shown")
+            assert lw.progress is not None  # the bar shows
+            await pilot.press("x")
+            await wait_for(pilot, lambda: lw.outcome == "cancelled", 60, "cancelled")
+            assert pane.demo_run is None and pane.demo_name is None
+            assert app.camera_service.borrower is None  # the camera is the console's again
+            assert not app.outputs.relay_log()  # nothing played
+            table = app.query_one("#demo-table")
+            assert str(table.get_cell("flow", "state")) == "cancelled"
 
     asyncio.run(scenario())

@@ -114,6 +114,8 @@ def demo_text(snap: dict, hand: dict | None = None) -> str:
                 f"{p['actuator']} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", [])
             )
             text += f"; last{where}: {pts}"
+            if e.get("late_s"):  # its plan was computed first (not prepared)
+                text += f" (planned in {e['late_s'] * 1e3:.0f} ms)"
         lines.append(text)
     if "knob" in snap:
         k = snap["knob"]
@@ -205,6 +207,8 @@ class ScenesPane(Vertical):
         "Demos table (tab or d moves there):\n"
         "enter    start the highlighted demo on the outputs (enter again stops it)\n"
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
+        "space    on the twin: your finger touches the table (again: lifts it); arrows\n"
+        "         move it 20 mm (the flow plays under a resting hand)\n"
         "A demo uses the console's camera (the Camera view stays live) and, when the\n"
         "projector runs, shows its scene there. The Latency screen shows its loop."
     )
@@ -214,7 +218,16 @@ class ScenesPane(Vertical):
         Binding("k", "close_projector", "stop projector"),
         Binding("d", "focus_demos", "demos"),
         Binding("x", "cancel_demo", "cancel", show=False),
+        # the operator's hand on the twin while a demo runs (table mm; y grows downwards)
+        Binding("space", "place_hand", "place/lift hand", priority=True),
+        Binding("up", "move_hand(0, -1)", "hand up", show=False, priority=True),
+        Binding("down", "move_hand(0, 1)", "hand down", show=False, priority=True),
+        Binding("left", "move_hand(-1, 0)", "hand left", show=False, priority=True),
+        Binding("right", "move_hand(1, 0)", "hand right", show=False, priority=True),
     ]
+
+    #: how far one arrow key moves the operator's hand on the twin
+    HAND_STEP_MM = 20.0
 
     #: extra ``factory(...)`` arguments per demo name (e.g. ``{"flow": {"prepare": False}}``)
     demo_params: dict[str, dict] = {}
@@ -231,6 +244,8 @@ class ScenesPane(Vertical):
         self._stop_lock = threading.Lock()
         self._quitting = False
         self.last_snapshot: dict | None = None
+        self.hand_mm: tuple[float, float] | None = None  # the operator's hand on the twin
+        self.hand_placed = False  # the operator drives the twin (not the script)
 
     @property
     def service(self):
@@ -385,6 +400,7 @@ class ScenesPane(Vertical):
         self.demo_name = name
         self._set_state("starting")
         self.hand = HandWatch()
+        self.hand_placed, self.hand_mm = False, None
         svc = app.get_camera_service()
         projector = app.projector_service
         params = dict(self.demo_params.get(name, {}))
@@ -512,6 +528,58 @@ class ScenesPane(Vertical):
                 camera.set_script(script)  # the twin shows what it showed before
         svc.give_back()
 
+    # ------------------------------------------------------------------ the twin's hand
+    def _twin(self):
+        """The running demo's camera when the operator can touch the twin with it (it has
+        ``set_target(pos_mm | None)``, as the Camera screen's calibration uses)."""
+        lent = self._lent
+        if lent is None or self.demo_run is None:
+            return None
+        cam = lent[1]
+        return cam if callable(getattr(cam, "set_target", None)) else None
+
+    def check_action(self, action: str, parameters) -> bool | None:
+        if action in ("place_hand", "move_hand"):
+            if self._twin() is None:
+                return False  # the key does what it does elsewhere (e.g. the table cursor)
+            return action == "place_hand" or self.hand_placed
+        return True
+
+    def _table_mm(self, cam) -> tuple[float, float]:
+        mapping = getattr(cam, "mapping", None)
+        return tuple(getattr(mapping, "table_mm", (700.0, 440.0)))
+
+    def action_place_hand(self) -> None:
+        """Space: the operator's hand touches the twin (where it was, else mid-table);
+        again: lifts it (the demo's scripted hand comes back when the demo stops)."""
+        cam = self._twin()
+        if cam is None:
+            return
+        if self.hand_placed:
+            self.hand_placed = False
+            cam.set_target(None)
+            self.app.notify("hand lifted (space places it again)", timeout=2)
+            return
+        if self.hand_mm is None:
+            w, h = self._table_mm(cam)
+            rest = self.hand.state.get("rest_mm")
+            self.hand_mm = rest if rest is not None else (w / 2, h / 2)
+        self.hand_placed = True
+        cam.set_target(self.hand_mm)
+        x, y = self.hand_mm
+        self.app.notify(f"hand placed at {x:.0f},{y:.0f} mm (arrows move it)", timeout=2)
+
+    def action_move_hand(self, dx: int, dy: int) -> None:
+        cam = self._twin()
+        if cam is None or not self.hand_placed or self.hand_mm is None:
+            return
+        w, h = self._table_mm(cam)
+        m = 20.0
+        x = min(max(self.hand_mm[0] + dx * self.HAND_STEP_MM, m), w - m)
+        y = min(max(self.hand_mm[1] + dy * self.HAND_STEP_MM, m), h - m)
+        self.hand_mm = (x, y)
+        cam.set_target(self.hand_mm)
+
     def on_estop(self) -> None:
         """The app's e-stop (outputs already silenced): stop the demo too."""
         if self.demo_name is not None:
@@ -537,7 +605,14 @@ class ScenesPane(Vertical):
         except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
             snap = {"demo": self.demo_name, "last_error": f"snapshot failed: {exc}"}
         self.last_snapshot = snap
-        self.query_one("#demo-status", Static).update(demo_text(snap, self.hand.state))
+        text = demo_text(snap, self.hand.state)
+        if self._twin() is not None:
+            if self.hand_placed and self.hand_mm is not None:
+                x, y = self.hand_mm
+                text += f"\nyour finger on the twin at {x:.0f},{y:.0f} mm: arrows move, space lifts"
+            else:
+                text += "\nthe twin's scripted hand performs; space: touch the table yourself"
+        self.query_one("#demo-status", Static).update(text)
         if self.demo_state == "running":
             t = self.query_one("#demo-table", DataTable)
             if self.demo_name in t.rows:
