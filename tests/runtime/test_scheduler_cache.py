@@ -1,0 +1,31 @@
+"""The scheduler checks a plan once, however often a demo replays it; a new plan is checked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from console.errors import SafetyRefusal
+from console.signals import tone
+from console.types import OutputPlan, Segment
+
+FS = 48000
+
+
+def test_replayed_plan_is_checked_once_and_new_plans_still_refused(outputs, monkeypatch):
+    import console.runtime.scheduler as sched
+
+    calls = []
+    real = sched.check_plan
+    monkeypatch.setattr(sched, "check_plan", lambda p, lim: (calls.append(p), real(p, lim)))
+    sig = tone(250, 10, 0.05, FS, 0.01)
+    plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
+    for _ in range(3):
+        outputs.play(plan)
+    assert len(calls) == 1
+    bad = OutputPlan(FS, (Segment(100 * sig, np.zeros_like(sig), frozenset({"PA"})),))
+    with pytest.raises(SafetyRefusal):
+        outputs.play(bad)
+    with pytest.raises(SafetyRefusal):
+        outputs.play(bad)  # a refused plan is never remembered as checked
+    assert len(calls) == 3
