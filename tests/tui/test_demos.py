@@ -87,7 +87,8 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
         app = HapTableApp(flow_ctx, fast=False, initial="scenes")
         async with app.run_test(size=(100, 30)) as pilot:
             pane = app.pane("scenes")
-            pane.demo_params = {"flow": {"prepare": False}}  # plans on first use (fast)
+            # plans on first use (fast); a loaded test machine must not trip the watchdog
+            pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
             out = app.outputs
             run = pane.demo_run
@@ -112,8 +113,16 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             assert "end to end" in status
             # the Latency screen shows the demo's loop, with the demo's stages
             await pilot.press("f7")
+            await wait_for(pilot, lambda: app.pane("latency") is not None, 10, "latency pane")
             lat = app.pane("latency")
-            await wait_for(pilot, lambda: lat.source == "demo flow", 10, "latency of the demo")
+            try:
+                await wait_for(pilot, lambda: lat.source == "demo flow", 20, "demo latency")
+            except AssertionError as exc:
+                head = app.query("#lat-head")
+                raise AssertionError(
+                    f"{exc}: tab={app.query_one('#tabs').active} source={lat.source!r} "
+                    f"head={head and str(head.first().render())!r} stopped={run.stopped}"
+                ) from None
             head = str(app.query_one("#lat-head").render())
             assert "demo flow" in head
             rows = app.query_one("#lat-table")
