@@ -51,6 +51,7 @@ class LatencyPane(Vertical):
         super().__init__(**kw)
         self.visible_now = False
         self.source = ""  # "camera" or "demo NAME": whose loop the numbers are
+        self._history_source = ""
         self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=40))
         self._tick = 0
 
@@ -142,6 +143,9 @@ class LatencyPane(Vertical):
                 return
             st = svc.status()
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
+        if self.source != self._history_source:  # sparklines: one loop
+            self.history.clear()
+            self._history_source = self.source
         if st.get("error"):
             self.query_one("#lat-head", Static).update(f"[red]camera: {st['error']}[/]")
             return

@@ -75,9 +75,9 @@ def demo_text(snap: dict, hand: dict | None = None) -> str:
     lat = snap.get("latency") or {}
     state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
     lines = [
-        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.1f} s   {dog}   camera "
-        f"{cam.get('driver', '?')} {cam.get('fps', 0):.1f} fps, dropped: "
-        f"{cam.get('dropped', 0)} by the camera, {lat.get('dropped_queue', 0)} in the queue"
+        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.0f} s  {dog}  camera "
+        f"{cam.get('fps', 0):.0f} fps, dropped {cam.get('dropped', 0)} (camera) + "
+        f"{lat.get('dropped_queue', 0)} (queue)"
     ]
     stages = dict(lat.get("stages", {}))
     stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}
@@ -196,8 +196,7 @@ class DemoCancelled(Exception):
 
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
-    ScenesPane #scene-table { max-height: 8; }
-    ScenesPane #demo-table { height: auto; max-height: 5; margin-top: 1; }
+    ScenesPane #demo-table { height: auto; max-height: 5; }
     ScenesPane #demo-status { height: auto; }
     """
     HELP_TEXT = (
@@ -256,16 +255,14 @@ class ScenesPane(Vertical):
         yield DataTable(id="scene-table", cursor_type="row")
         yield Static(status_text(None), id="projector-status")
         yield Static(
-            "enter: start the highlighted scene on the projector   s: show black   "
-            "k: stop the projector process",
+            "enter: start the scene on the projector  s: black  k: stop the projector",
             classes="hint",
         )
         yield DataTable(id="demo-table", cursor_type="row")
         yield LongWork("", id="demo-work")
         yield Static("", id="demo-status")
         yield Static(
-            "demos (d): enter starts the highlighted demo, s stops it, x cancels its "
-            "preparation; the Latency screen shows its loop",
+            "demos (d): enter start/stop  s stop  x cancel  F7: its latency  ? more",
             classes="hint",
         )
 
@@ -275,6 +272,8 @@ class ScenesPane(Vertical):
 
     def on_mount(self) -> None:
         t = self.query_one("#scene-table", DataTable)
+        # the scenes take what the demos leave (it scrolls): usable at 80 x 24
+        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 4, 12
         t.add_columns("scene", "plugin", "description")
         regs = self.app.ctx.pm.of("scene")
         for name, reg in sorted(regs.items()):
@@ -611,7 +610,7 @@ class ScenesPane(Vertical):
                 x, y = self.hand_mm
                 text += f"\nyour finger on the twin at {x:.0f},{y:.0f} mm: arrows move, space lifts"
             else:
-                text += "\nthe twin's scripted hand performs; space: touch the table yourself"
+                text += "\ntwin: the scripted hand performs; space: touch it yourself"
         self.query_one("#demo-status", Static).update(text)
         if self.demo_state == "running":
             t = self.query_one("#demo-table", DataTable)
