@@ -339,6 +339,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "switch_interval_ms": round(sys.getswitchinterval() * 1e3, 3),
                 "audio": audio,
                 "twin_record_s": SOAK_RECORD_S,
+                "twin_camera_process": bool(prof.get("runtime.twin_camera_process")),
                 "watchdog_trips": len(trips),
                 "trips": trips[:20],
                 "gate_estopped_at_end": out.status()["gate"].get("estopped"),
@@ -350,7 +351,8 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "samples": samples,
                 "note": "dropped_for_processing: frames the loop's queue discarded because "
                 "processing fell behind; dropped_by_camera_late: frames the twin camera "
-                "skipped because its own thread (rendering) was late. rss_start_mb is taken "
+                "skipped because its rendering was late, or (twin camera in its own process) "
+                "that the loop's camera thread read too late to take. rss_start_mb is taken "
                 f"after {SOAK_WARMUP_S:g} s of warm-up (the twin keeps {SOAK_RECORD_S:g} s of "
                 "audio during a soak, filled by then); the slope is fitted from there on. "
                 "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
