@@ -8,6 +8,7 @@ path emits silence; the gate itself refuses any switch that is not in silence.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import queue
 import threading
@@ -84,9 +85,10 @@ class Scheduler(Source):
         self._switch_result: queue.Queue = queue.Queue()
         self._stream_k = 0
         self._stream_last = (0.0, 0.0)
-        # plans that passed check_plan against these limits, by identity (a demo replays
-        # its cached plans: the check of a 3 s plan costs ~0.5 ms on the frame that plays it)
-        self._checked: weakref.WeakValueDictionary[int, OutputPlan] = weakref.WeakValueDictionary()
+        # plans that passed check_plan against these limits, by identity, with the private
+        # read-only copy of their samples that was checked (a demo replays its cached
+        # plans: the check of a 3 s plan costs ~0.5 ms on the frame that plays it)
+        self._checked: dict[int, tuple[weakref.ref, tuple[tuple[np.ndarray, np.ndarray], ...]]] = {}
         self._worker = threading.Thread(
             target=self._relay_worker, name="haptable-relays", daemon=True
         )
@@ -103,13 +105,12 @@ class Scheduler(Source):
     def play(self, plan: OutputPlan) -> PlayReport:
         """Check and queue a plan. Raises ``SafetyRefusal`` (nothing queued) if refused.
 
-        A plan object played again is not re-checked (plans are frozen; the gate still
-        checks every block's range as it plays)."""
+        A plan object played again is not re-checked: what plays is the private read-only
+        copy of its samples taken when it passed the check, so changing the caller's
+        arrays afterwards cannot slip past the gate (which also checks every block)."""
         if self.gate.estopped:
             raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
-        if self._checked.get(id(plan)) is not plan:
-            check_plan(plan, self.limits)
-            self._checked[id(plan)] = plan
+        samples = self._checked_samples(plan)
         steps: deque[_Step] = deque()
         gap = round(plan.gap_s * plan.sample_rate_hz)
         for i, seg in enumerate(plan.segments):
@@ -117,8 +118,8 @@ class Scheduler(Source):
             steps.append(
                 _Step(
                     "play",
-                    piezo=np.asarray(seg.piezo_v, float),
-                    screen=np.asarray(seg.screen_v, float),
+                    piezo=samples[i][0],
+                    screen=samples[i][1],
                     n=seg.n_samples,
                     segment=i,
                 )
@@ -129,6 +130,26 @@ class Scheduler(Source):
         report = PlayReport(plan.name or "plan")
         self._enqueue(_Job(steps, report))
         return report
+
+    def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """The plan's samples as checked (copied read-only; checked once per plan object)."""
+        hit = self._checked.get(id(plan))
+        if hit is not None and hit[0]() is plan:
+            return hit[1]
+        samples = tuple((_frozen(seg.piezo_v), _frozen(seg.screen_v)) for seg in plan.segments)
+        check_plan(
+            dataclasses.replace(
+                plan,
+                segments=tuple(
+                    dataclasses.replace(seg, piezo_v=p, screen_v=s)
+                    for seg, (p, s) in zip(plan.segments, samples, strict=True)
+                ),
+            ),
+            self.limits,
+        )
+        key = id(plan)
+        self._checked[key] = (weakref.ref(plan, lambda _r: self._checked.pop(key, None)), samples)
+        return samples
 
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
         """Queue a live stream; it plays until it returns ``None`` (after its ramp-down)."""
@@ -332,3 +353,10 @@ class Scheduler(Source):
 
     def close(self) -> None:
         self._switch_q.put(None)
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """A private read-only float copy of ``a``."""
+    out = np.array(a, dtype=float, copy=True)
+    out.flags.writeable = False
+    return out

@@ -29,3 +29,14 @@ def test_replayed_plan_is_checked_once_and_new_plans_still_refused(outputs, monk
     with pytest.raises(SafetyRefusal):
         outputs.play(bad)  # a refused plan is never remembered as checked
     assert len(calls) == 3
+
+
+def test_a_checked_plan_changed_afterwards_plays_as_checked(outputs):
+    sig = tone(250, 10, 0.05, FS, 0.01)
+    piezo = sig.copy()
+    plan = OutputPlan(FS, (Segment(piezo, np.zeros_like(sig), frozenset({"PA"})),))
+    outputs.play(plan).wait(10)
+    piezo *= 100  # over the limits: a second check would refuse it
+    outputs.play(plan).wait(10)
+    rec = outputs.recording()[:, 0]
+    assert np.max(np.abs(rec)) == pytest.approx(np.max(np.abs(sig)), rel=1e-6)
