@@ -26,9 +26,10 @@ def dominant_hz(x: np.ndarray, fs: int = FS) -> float:
     return (k + 0.5 * (a - c) / (a - 2 * b + c)) * fs / (4 * x.size)
 
 
-def played_bursts(rec: np.ndarray, log) -> list[tuple[frozenset, float]]:
+def played_bursts(rec: np.ndarray, log, part_n: int) -> list[tuple[frozenset, float]]:
     """(relay channels closed, dominant Hz) of each burst on the piezo channel, in order:
-    the recording cut where the relays switched, then at silent gaps."""
+    the recording cut where the relays switched, then at silent gaps, then into parts of
+    ``part_n`` samples (two parts on the same patches follow each other without a gap)."""
     bounds = sorted({0, rec.shape[0], *(min(r.clock, rec.shape[0]) for r in log)})
     out = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
@@ -41,10 +42,19 @@ def played_bursts(rec: np.ndarray, log) -> list[tuple[frozenset, float]]:
             continue
         cuts = np.flatnonzero(np.diff(nz) > 480) + 1  # 10 ms of silence: a new burst
         for run in np.split(nz, cuts):
-            if run.size > 480:
-                seg = rec[a + run[0] : a + run[-1] + 1, 0]
+            if run.size <= 480:
+                continue
+            n = max(1, round((run[-1] + 1 - run[0]) / part_n))
+            for k in range(n):
+                k0 = a + run[0] + k * (run[-1] + 1 - run[0]) // n
+                seg = rec[k0 : k0 + (run[-1] + 1 - run[0]) // n, 0]
                 out.append((frozenset(closed), dominant_hz(seg)))
     return out
+
+
+def part_n(app) -> int:
+    """Samples in one part of a flow."""
+    return int(round(app.ctx.profile.get("vibrotactile.part_s") * FS))
 
 
 @pytest.fixture
@@ -99,12 +109,12 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
                 if not any(e.get("parts") for e in snap["last"]):
                     return False
                 want = sum(len(e["parts"]) for e in snap["last"] if e.get("parts"))
-                return len(played_bursts(out.recording(), out.relay_log())) >= want
+                return len(played_bursts(out.recording(), out.relay_log(), part_n(app))) >= want
 
             try:
                 await wait_for(pilot, flow_done, 45, "a flow played")
             except AssertionError as exc:
-                bursts = played_bursts(out.recording(), out.relay_log())
+                bursts = played_bursts(out.recording(), out.relay_log(), part_n(app))
                 snap = {k: v for k, v in run.snapshot().items() if k != "latency"}
                 raise AssertionError(f"{exc}: {snap} bursts={bursts}") from None
             snap = run.snapshot()
@@ -140,7 +150,7 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
         chans = {n: int(v["relay_channel"]) for n, v in flow_ctx.profile.items("patches").items()}
         parts = [p for e in snap["flow"]["last"] for p in e.get("parts", [])]
         assert parts
-        bursts = played_bursts(rec, log)
+        bursts = played_bursts(rec, log, part_n(app))
         assert len(bursts) >= len(parts)
         for p, (closed, hz) in zip(parts, bursts, strict=False):
             assert closed == {chans[q] for q in patches_of(p["actuator"])}
@@ -210,5 +220,59 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
             assert not app.outputs.relay_log()  # nothing played
             table = app.query_one("#demo-table")
             assert str(table.get_cell("flow", "state")) == "cancelled"
+
+    asyncio.run(scenario())
+
+
+def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx):
+    async def scenario():
+        app = HapTableApp(flow_ctx, fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("scenes")
+            pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
+            pane = await _start(app, pilot, "flow")
+            run, out = pane.demo_run, app.outputs
+
+            def new_flow_near(n_before: int, where) -> bool:
+                """A flow after the first ``n_before`` events, under a hand resting near
+                ``where`` (the hand's centre is some cm from its fingertip)."""
+                f = run.snapshot()["flow"]
+                new = [e for e in f["last"][-(f["flows"] - n_before) :] if e.get("parts")]
+                return f["flows"] > n_before and any(
+                    np.hypot(*(np.array(e["rest_mm"]) - where)) < 80 for e in new
+                )
+
+            # the operator's finger replaces the scripted hand; a placement while a flow
+            # still plays is skipped (one flow at a time), so move on until one plays
+            await pilot.press("space")
+            assert pane.hand_placed and pane.hand_mm is not None
+            placed = False
+            for step in range(6):
+                n0, where = run.snapshot()["flow"]["flows"], np.array(pane.hand_mm)
+                try:
+                    await wait_for(pilot, lambda n=n0, w=where: new_flow_near(n, w), 8, "flow")
+                    placed = True
+                    break
+                except AssertionError:
+                    await pilot.press("down" if step % 2 == 0 else "left")
+            assert placed, run.snapshot()["flow"]
+            await wait_for(pilot, lambda: not out.status()["busy"], 20, "flow played")
+            n1 = run.snapshot()["flow"]["flows"]
+            await pilot.press("down", "down", "down")  # 60 mm further: a new placement
+            moved = np.array(pane.hand_mm)
+            assert np.hypot(*(moved - where)) == pytest.approx(60.0)
+            await wait_for(pilot, lambda: new_flow_near(n1, moved), 20, "flow where it moved")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
+            snap = run.snapshot()
+            _silent_and_open(out)
+            rec, log = out.recording(), out.relay_log()
+        chans = {n: int(v["relay_channel"]) for n, v in flow_ctx.profile.items("patches").items()}
+        parts = [p for e in snap["flow"]["last"] for p in e.get("parts", [])]
+        bursts = played_bursts(rec, log, part_n(app))
+        assert len(bursts) >= len(parts)
+        for p, (closed, hz) in zip(parts, bursts, strict=False):
+            assert closed == {chans[q] for q in patches_of(p["actuator"])}
+            assert hz == pytest.approx(p["frequency_hz"], abs=1.0)
 
     asyncio.run(scenario())
