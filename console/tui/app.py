@@ -178,21 +178,27 @@ class HapTableApp(App):
         if time.monotonic() > deadline:
             self._focus_wanted = None
             return
+        target = self._focus_target(tab)  # None while the switch or the mount is on its way
+        if target is not None:
+            pane = self.pane(tab)
+            focused = self.base.focused
+            if focused is not None and pane in focused.ancestors_with_self:
+                self._focus_wanted = None  # done (or the operator chose a widget there)
+                return
+            if self.screen is self.base:  # a modal on top keeps its focus
+                target.focus()
+        self.set_timer(0.03, self._apply_focus)
+
+    def _focus_target(self, tab: str):
+        """The main widget of ``tab``'s pane once that tab shows and the pane is composed."""
         tabs = self.base.query("#tabs")
         pane = self.pane(tab)
         if not tabs or tabs.first(TabbedContent).active != tab or pane is None:
-            return  # the switch is still on its way
+            return None
         try:
-            target = pane.focus_target
+            return pane.focus_target
         except Exception:  # not composed yet
-            return
-        focused = self.base.focused
-        if focused is not None and pane in focused.ancestors_with_self:
-            self._focus_wanted = None  # done (or the operator chose a widget there)
-            return
-        if self.screen is self.base:  # a modal on top keeps its focus
-            target.focus()
-        self.set_timer(0.03, self._apply_focus)
+            return None
 
     async def action_show_tab(self, tab: str) -> None:
         if self.pane(tab) is None:
