@@ -109,6 +109,10 @@ def summary_parts(plan: OutputPlan) -> list[dict]:
     ]
 
 
+def _pair_key(a_mm, b_mm) -> tuple[float, float, float, float]:
+    return (round(a_mm[0], 1), round(a_mm[1], 1), round(b_mm[0], 1), round(b_mm[1], 1))
+
+
 class TwoPointFlows:
     """Flow between two points (paper Fig. 9) from the registered ``flow`` effect: from
     ``a_mm`` to ``b_mm``, each part at its table frequency and actuator; cached per pair
@@ -119,8 +123,11 @@ class TwoPointFlows:
         self.vmap = str(vmap_path)
         self._plans: dict[tuple, OutputPlan] = {}
 
+    def cached(self, a_mm, b_mm) -> OutputPlan | None:
+        return self._plans.get(_pair_key(a_mm, b_mm))
+
     def plan(self, a_mm, b_mm) -> OutputPlan:
-        k = (round(a_mm[0], 1), round(a_mm[1], 1), round(b_mm[0], 1), round(b_mm[1], 1))
+        k = _pair_key(a_mm, b_mm)
         if k in self._plans:
             return self._plans[k]
         plan = self.effect.render(

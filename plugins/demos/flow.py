@@ -191,12 +191,13 @@ class FlowDemo:
         direction = self.current_direction()
         a, b = order_pair(*got, direction)
         a, b = self.snap(a), self.snap(b)
-        work["request"] = {"from_mm": a, "to_mm": b, "direction": direction}
-        try:
-            work["plan"] = self.pair_plans.plan(a, b)
-        except UserError as exc:
-            self.events.append({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
+        req = {"from_mm": a, "to_mm": b, "direction": direction}
+        work["request"] = req
+        plan = self.pair_plans.cached(a, b)
+        if plan is None:  # computed off the frame loop (it can take a few 100 ms)
+            self._compute_later(lambda: self.pair_plans.plan(a, b), req, frame)
             return False
+        work["plan"] = plan
         return True
 
     def effect_stage(self, frame: Frame, work: dict) -> bool:
@@ -214,17 +215,19 @@ class FlowDemo:
         work["request"] = {"center_mm": center, "direction": direction, "rest_mm": rest}
         plan = self.plans.cached(center, direction)
         if plan is None:
-            self._compute_later(center, direction, rest, frame)
+            self._compute_later(lambda: self.plans.plan(center, direction), work["request"], frame)
             return False
         work["plan"] = plan
         return True
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
-        req, plan = work["request"], work["plan"]
+        self._play_request(work["plan"], work["request"], frame, late_s=0.0)
+
+    def _play_request(self, plan, req: dict, frame: Frame, late_s: float) -> None:
         if "from_mm" in req:
-            self._play(plan, None, req["direction"], None, frame, late_s=0.0, pair=req)
+            self._play(plan, None, req["direction"], None, frame, late_s=late_s, pair=req)
             return
-        self._play(plan, req["center_mm"], req["direction"], req["rest_mm"], frame, late_s=0.0)
+        self._play(plan, req["center_mm"], req["direction"], req["rest_mm"], frame, late_s=late_s)
 
     def stage_fns(self) -> list:
         return [
@@ -268,12 +271,13 @@ class FlowDemo:
         if self.scene is not None:
             self.link.emit({"type": "playing", "on": True})
 
-    def _compute_later(self, center, direction, rest, frame: Frame) -> None:
+    def _compute_later(self, make_plan, req: dict, frame: Frame) -> None:
+        """Compute a plan on a worker thread, then play it (``late_s`` = the wait)."""
         t0 = time.monotonic()
 
         def run() -> None:
             try:
-                plan = self.plans.plan(center, direction)
+                plan = make_plan()
             except UserError as exc:
                 self.events.append({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
                 return
@@ -282,7 +286,7 @@ class FlowDemo:
                 self.events.append({"kind": "error", "reason": repr(exc), "seq": frame.seq})
                 return
             if self._running:
-                self._play(plan, center, direction, rest, frame, late_s=time.monotonic() - t0)
+                self._play_request(plan, req, frame, late_s=time.monotonic() - t0)
 
         th = threading.Thread(target=run, name="haptable-flow-plan", daemon=True)
         with self._lock:
