@@ -53,6 +53,9 @@ class KnobSession:
             max_pivot_hold_frames=s["max_pivot_hold_frames"],
         )
         self.stream = KnobStream(condition, sample_rate_hz, s, limits, sectors=sectors)
+        if not record:  # live: the stream's per-block trace and detent log stay short too
+            self.stream.trace = deque(maxlen=LIVE_LOG)
+            self.stream.detent_log = deque(maxlen=LIVE_LOG)
         self.fs, self.block, self.record = int(sample_rate_hz), int(block), record
         self.start_item = int(start_item)
         self.states: list[RotationState] = []
