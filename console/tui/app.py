@@ -61,6 +61,14 @@ def _pane_class(path: str):
     return getattr(importlib.import_module(mod), name)
 
 
+class ScreenTabs(TabbedContent):
+    """The console's screens. Only the operator switches screens (keys, clicks, palette):
+    a widget taking the focus in a hidden screen must not switch back to it."""
+
+    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        event.stop()
+
+
 class HelpScreen(ModalScreen):
     BINDINGS = [("escape,q,question_mark", "dismiss", "close")]
     DEFAULT_CSS = """
@@ -116,7 +124,7 @@ class HapTableApp(App):
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         yield Header()
-        with TabbedContent(initial=self.initial, id="tabs"):
+        with ScreenTabs(initial=self.initial, id="tabs"):
             for tab, (title, _key, path) in TABS.items():
                 with TabPane(title, id=tab):
                     if tab == self.initial:  # the others are built when first opened
@@ -189,6 +197,23 @@ class HapTableApp(App):
                 target.focus()
         self.set_timer(0.03, self._apply_focus)
 
+    def _keep_focus_visible(self) -> None:
+        """Focus never rests in a hidden screen: Textual hands the focus of a widget being
+        hidden to a sibling, which can be in the same hidden pane (keys would go nowhere)."""
+        if not self.screen_stack or self.screen is not self.base:
+            return
+        tabs = self.base.query("#tabs")
+        focused = self.base.focused
+        if not tabs or focused is None:
+            return
+        active = tabs.first(TabbedContent).active
+        for tab in TABS:
+            if tab != active and self.pane(tab) in focused.ancestors_with_self:
+                target = self._focus_target(active)
+                if target is not None:
+                    target.focus()
+                return
+
     def _focus_target(self, tab: str):
         """The main widget of ``tab``'s pane once that tab shows and the pane is composed."""
         tabs = self.base.query("#tabs")
@@ -201,9 +226,12 @@ class HapTableApp(App):
             return None
 
     async def action_show_tab(self, tab: str) -> None:
-        if self.pane(tab) is None:
-            self.ensure_pane(tab)
-            await self._mounting  # switch once the pane exists (no race with its mount)
+        # the pane is built on first use; it finishes mounting after the switch (the focus
+        # request waits for it): awaiting its mount here could hold the switch back
+        self.ensure_pane(tab)
+        # Drop the focus first: Textual hands the focus of a widget being hidden to a
+        # sibling in the same (hidden) pane, and focus in a pane makes it the active tab.
+        self.base.set_focus(None)
         self.base.query_one("#tabs", TabbedContent).active = tab
         self.call_after_refresh(self._focus_pane, tab)
 
@@ -292,6 +320,7 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ live state
     def refresh_state(self) -> None:
+        self._keep_focus_visible()
         out = self.outputs
         bars = self.screen.query(SafetyBar)  # none while a modal is up or tearing down
         if out is None:
