@@ -206,8 +206,8 @@ class GesturesPanel(Screen):
 
     def _show_files(self, info: dict) -> None:
         self.files = info
-        if self.is_attached:
-            self.query_one("#gp-files", Static).update(describe(info))
+        for w in self.query("#gp-files").results(Static):  # none while the panel closes
+            w.update(describe(info))
 
     def action_synth(self) -> None:
         from .jobs import synth_atomic

@@ -215,7 +215,10 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
             assert lw.progress is not None  # the bar shows
             await pilot.press("x")
             await wait_for(pilot, lambda: lw.outcome == "cancelled", 60, "cancelled")
-            assert pane.demo_run is None and pane.demo_name is None
+            # the pane tidies up when the worker's end reaches it (a message later)
+            await wait_for(
+                pilot, lambda: pane.demo_run is None and pane.demo_name is None, 10, "tidied"
+            )
             assert app.camera_service.borrower is None  # the camera is the console's again
             assert not app.outputs.relay_log()  # nothing played
             table = app.query_one("#demo-table")
