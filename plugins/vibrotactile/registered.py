@@ -17,11 +17,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from console.vibration_map import VibrationMap
 from plugins.vibrotactile.effects import FlowEffect
-from plugins.vibrotactile.tables import Tables, pair_max, usable_bins
+from plugins.vibrotactile.tables import Tables, build_tables
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 
@@ -39,27 +37,7 @@ def build_tables_stepwise(
 ) -> Tables:
     """``tables.build_tables`` in ``steps`` slices of active points, ``progress`` before
     each: the same tables (the pair maximum of a row does not depend on the others)."""
-    keep = usable_bins(m, band_hz)
-    amp = np.abs(m.frf_um_per_v[:, :, keep]).astype(np.float32)
-    p = m.points.size
-    best = np.empty((p, p), np.float32)
-    exc = np.empty((p, p), np.int64)
-    k = np.empty((p, p), np.int64)
-    bounds = np.linspace(0, p, min(max(int(steps), 1), p) + 1).round().astype(int)
-    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):
-        if progress:
-            progress(i / (bounds.size - 1), f"pairs of points {a + 1}-{b} of {p}")
-        best[a:b], exc[a:b], k[a:b] = pair_max(amp[:, a:b], amp, min_contrast_db)
-    freq = m.freq_hz[keep][k]
-    diag = np.arange(p)
-    best = best.astype(float)
-    best[diag, diag] = 0.0
-    freq[diag, diag] = np.nan
-    act = exc.astype(np.int8)
-    act[diag, diag] = -1
-    if progress:
-        progress(1.0, "lookup tables built")
-    return Tables(best, freq, act, float(band_hz), m, float(min_contrast_db))
+    return build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db, steps=steps)
 
 
 def tables_stepwise_cached(

@@ -95,16 +95,30 @@ def build_tables(
     progress: Progress | None = None,
     *,
     min_contrast_db: float = 0.0,
+    steps: int = 1,
 ) -> Tables:
     """All P x P ordered pairs, vectorised (float32 magnitudes); ``min_contrast_db`` > 0:
-    the contrast-aware ranking (module docstring)."""
+    the contrast-aware ranking (module docstring). ``steps`` > 1 builds in that many
+    slices of active points with ``progress`` before each (a raising ``progress``
+    cancels); the tables are the same (a row's pair maximum does not depend on others)."""
     keep = usable_bins(m, band_hz)
     amp = np.abs(m.frf_um_per_v[:, :, keep]).astype(np.float32)
-    if progress:
-        progress(0.0, "building lookup tables")
-    best, exc, k = pair_max(amp, amp, min_contrast_db)
+    p = m.points.size
+    best = np.empty((p, p), np.float32)
+    exc = np.empty((p, p), np.int64)
+    k = np.empty((p, p), np.int64)
+    bounds = np.linspace(0, p, min(max(int(steps), 1), p) + 1).round().astype(int)
+    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):
+        if progress:
+            msg = (
+                "building lookup tables"
+                if bounds.size == 2
+                else f"pairs of points {a + 1}-{b} of {p}"
+            )
+            progress(i / (bounds.size - 1), msg)
+        best[a:b], exc[a:b], k[a:b] = pair_max(amp[:, a:b], amp, min_contrast_db)
     freq = m.freq_hz[keep][k]
-    diag = np.arange(m.points.size)
+    diag = np.arange(p)
     best = best.astype(float)
     best[diag, diag] = 0.0
     freq[diag, diag] = np.nan
