@@ -13,6 +13,7 @@ only while a job runs. When it ends,
 from __future__ import annotations
 
 import contextlib
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -53,7 +54,7 @@ class LongWork(Horizontal):
         self.outcome: str | None = None  # of the last job
         self.result: Any = None
         self.text = idle_text
-        self._worker = None
+        self._stop = threading.Event()
 
     def compose(self) -> ComposeResult:
         bar = ProgressBar(total=1.0, show_eta=False)
@@ -94,9 +95,10 @@ class LongWork(Horizontal):
             return False
         self.name_running = name
         self.outcome = self.result = None
+        self._stop = stop = threading.Event()
         self.show(f"{name} ...", 0.0)
-        self._worker = self.run_worker(
-            lambda: self._run(name, job, summary),
+        self.run_worker(
+            lambda: self._run(name, job, summary, stop),
             name=name,
             group=f"long-work-{id(self)}",
             thread=True,
@@ -105,28 +107,31 @@ class LongWork(Horizontal):
         return True
 
     def cancel(self) -> bool:
-        """Ask the running job to stop (it stops at its next check)."""
-        if not self.busy or self._worker is None:
+        """Ask the running job to stop (it stops at its next check).
+
+        A flag rather than ``Worker.cancel``: cancelling a worker whose thread has not
+        started yet would drop the job without a word, leaving the work busy for ever."""
+        if not self.busy:
             return False
-        self._worker.cancel()
+        self._stop.set()
         self.show(f"cancelling {self.name_running} ...", self.progress)
         return True
 
     # ------------------------------------------------------------------ worker thread
-    def _run(self, name: str, job: Job, summary) -> None:
+    def _run(self, name: str, job: Job, summary, stop: threading.Event) -> None:
         worker = get_current_worker()
 
-        def cancelled() -> bool:
-            return worker.is_cancelled
+        def cancelled() -> bool:  # x, or the console closing
+            return stop.is_set() or worker.is_cancelled
 
         def progress(frac: float, msg: str) -> None:
-            if not worker.is_cancelled:
+            if not cancelled():
                 self._call(self.show, f"{name}: {msg}", max(0.0, min(1.0, frac)))
 
         try:
             result = job(progress, cancelled)
         except Exception as exc:  # noqa: BLE001 - every failure becomes one status line
-            if worker.is_cancelled:
+            if cancelled():
                 self._call(self._end, name, "cancelled", None, f"{name} cancelled")
             elif isinstance(exc, UserError):
                 self._call(self._end, name, "failed", exc, str(exc))

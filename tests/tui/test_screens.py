@@ -155,10 +155,9 @@ def test_vibration_measurement_progress_and_cancel(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             await _ready(app, pilot)
             pane = app.pane("vibration")
-            await pilot.press("m")
-            bar = app.query_one("#vib-progress")
-            await wait_for(pilot, lambda: bar.display, what="progress bar shown")
-            await pilot.press("x")
+            # x at once, before the measurement's thread has started, still cancels it
+            pane.action_measure()
+            pane.action_cancel()
             await wait_for(
                 pilot,
                 lambda: "cancelled" in str(app.query_one("#vib-status").render()),
@@ -167,6 +166,9 @@ def test_vibration_measurement_progress_and_cancel(plugins):
             )
             assert pane.session is None
             await pilot.press("m")
+            bar = app.query_one("#vib-progress")
+            await wait_for(pilot, lambda: "vibrometer: step" in pane.status_text, 60, "steps")
+            assert bar.display
             await wait_for(pilot, lambda: pane.session is not None, 120, "measured")
             assert pane.session.vmap.points.size == 84
             assert "measured now" in str(app.query_one("#vib-status").render())

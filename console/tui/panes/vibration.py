@@ -5,6 +5,7 @@ that plays marked, the lookup-table entry, UFF import and a simulated measuremen
 from __future__ import annotations
 
 import shlex
+import threading
 from pathlib import Path
 
 from textual import work
@@ -50,6 +51,7 @@ class VibrationPane(VerticalScroll):
         self.selected: list[int] = []
         self.rows = 7
         self.cols = 12
+        self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -112,6 +114,17 @@ class VibrationPane(VerticalScroll):
         if progress is not None:
             bar.update(total=1.0, progress=progress)
 
+    def _new_stop(self, group: str) -> threading.Event:
+        """A fresh stop flag for the next worker of ``group`` (the previous one's is set).
+
+        Workers poll this flag, not ``Worker.cancel``: cancelling a worker whose thread
+        has not started yet drops it without a word, and the status would never say so."""
+        old = self._stops.get(group)
+        if old is not None:
+            old.set()
+        self._stops[group] = stop = threading.Event()
+        return stop
+
     def cursor_point(self) -> int:
         c = self.query_one("#grid", DataTable).cursor_coordinate
         return c.row * self.cols + c.column + 1
@@ -153,15 +166,15 @@ class VibrationPane(VerticalScroll):
         )
         self.app.call_from_thread(self._ready, session, summary)
 
-    def _build_tables(self, session, summary: str) -> None:
+    def _build_tables(self, session, summary: str, stop: threading.Event) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
         from console.tui import vibration_session as vs
 
-        worker = get_current_worker()
+        cancelled = _cancelled(stop)
         show = self.app.call_from_thread
 
         def progress(frac: float, msg: str) -> None:
-            if worker.is_cancelled:
+            if cancelled():
                 raise vs.Cancelled()
             show(self._tables_status, session, summary, f"{summary}; lookup tables: {msg}", frac)
 
@@ -200,33 +213,33 @@ class VibrationPane(VerticalScroll):
         self.status(summary)
         self._redraw_grid()
         self._show_selection()
-        self._tables_worker(session, summary)
+        self._tables_worker(session, summary, self._new_stop("vib-tables"))
 
     def action_build_tables(self) -> None:
         if not self._need_session():
             return
-        self._tables_worker(self.session, self.summary)
+        self._tables_worker(self.session, self.summary, self._new_stop("vib-tables"))
 
     @work(thread=True, exclusive=True, group="vib-tables")
-    def _tables_worker(self, session, summary: str) -> None:
-        self._build_tables(session, summary)
+    def _tables_worker(self, session, summary: str, stop: threading.Event) -> None:
+        self._build_tables(session, summary, stop)
 
     def action_measure(self) -> None:
         self.status("measuring ...", 0.0)
-        self._measure()
+        self._measure(self._new_stop("vib-long"))
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _measure(self) -> None:
+    def _measure(self, stop: threading.Event) -> None:
         from console.tui import vibration_session as vs
 
-        worker = get_current_worker()
+        cancelled = _cancelled(stop)
         ctx = self.app.ctx
 
         def progress(frac: float, msg: str) -> None:
             self.app.call_from_thread(self.status, f"measuring: {msg}", frac)
 
         try:
-            vmap = vs.measure_map(ctx.profile, ctx.pm, progress, lambda: worker.is_cancelled)
+            vmap = vs.measure_map(ctx.profile, ctx.pm, progress, cancelled)
             path = vs.save_map(vs.twin_map_path(ctx.profile), vmap)
             self._open(vmap, f"map: {path.name} (measured now)")
         except vs.Cancelled:
@@ -237,33 +250,40 @@ class VibrationPane(VerticalScroll):
     def action_cancel(self) -> None:
         long_work = 0
         for w in self.app.workers:
-            if w.group in ("vib-long", "vib-load", "vib-tables") and w.is_running:
-                w.cancel()
+            stop = self._stops.get(w.group or "")
+            if stop is not None and w.is_running and not stop.is_set():
+                stop.set()
                 long_work += w.group != "vib-tables"  # a table build says so itself
         if long_work:
             self.status("cancelling ...")
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _import(self, specs: list[str]) -> None:
+    def _import(self, specs: list[str], stop: threading.Event) -> None:
         from console.tui import vibration_session as vs
 
         try:
             self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
             ctx = self.app.ctx
-            self._open(vs.import_uff_files(ctx.profile, ctx.pm, specs), "map: UFF import")
+            vmap = vs.import_uff_files(ctx.profile, ctx.pm, specs)
+            if _cancelled(stop)():  # the files are read in one go: x keeps the old map
+                raise vs.Cancelled()
+            self._open(vmap, "map: UFF import")
         except vs.Cancelled:
-            self.app.call_from_thread(self.status, "import cancelled")
+            self.app.call_from_thread(self.status, "import cancelled; the map is unchanged")
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _load(self, path: str) -> None:
+    def _load(self, path: str, stop: threading.Event) -> None:
         from console.tui import vibration_session as vs
 
         try:
-            self._open(vs.load_map(path), f"map: {Path(path).name}")
+            vmap = vs.load_map(path)
+            if _cancelled(stop)():
+                raise vs.Cancelled()
+            self._open(vmap, f"map: {Path(path).name}")
         except vs.Cancelled:
-            self.app.call_from_thread(self.status, "cancelled")
+            self.app.call_from_thread(self.status, "loading cancelled; the map is unchanged")
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))
 
@@ -385,11 +405,11 @@ class VibrationPane(VerticalScroll):
         elif head == "import":
             if len(words) < 2:
                 raise UserError("import: give EXC=FILE per excitation, e.g. import PA=pa.uff")
-            self._import(words[1:])
+            self._import(words[1:], self._new_stop("vib-long"))
         elif head == "load":
             if len(words) != 2:
                 raise UserError("load: give one vibration map file (.npz)")
-            self._load(words[1])
+            self._load(words[1], self._new_stop("vib-long"))
         elif head == "cancel":
             self.action_cancel()
         elif head == "tables":
@@ -487,3 +507,9 @@ def describe_plan(plan) -> str:
     for seg in plan.segments:
         parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
     return f"{plan.duration_s:.1f} s, " + ", ".join(parts)
+
+
+def _cancelled(stop: threading.Event):
+    """In a worker: True once x set ``stop`` or the console is closing."""
+    worker = get_current_worker()
+    return lambda: stop.is_set() or worker.is_cancelled

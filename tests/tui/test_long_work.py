@@ -1,0 +1,45 @@
+"""Long work: x right after a start stops the job and frees the widget."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+
+from textual.app import App
+
+from console.tui.long_work import LongWork
+
+from .conftest import wait_for
+
+
+def test_cancel_before_the_job_thread_starts_still_ends_the_job():
+    """Cancel in the same breath as start (before the worker thread runs): the job sees
+    the cancel at its first check, the line says "cancelled" and a new job can start."""
+    ran = threading.Event()
+
+    def job(progress, cancelled):
+        ran.set()
+        for _ in range(200):
+            if cancelled():
+                raise RuntimeError("stopped")
+            progress(0.1, "working")
+            threading.Event().wait(0.01)
+        return 1
+
+    class Host(App):
+        def compose(self):
+            yield LongWork(id="w")
+
+    async def scenario():
+        app = Host()
+        async with app.run_test(size=(80, 5)) as pilot:
+            work = app.query_one(LongWork)
+            assert work.start("copying", job)
+            assert work.cancel()  # no await in between: the thread has not run yet
+            await wait_for(pilot, lambda: work.outcome == "cancelled", 10, "cancelled")
+            assert ran.is_set() and not work.busy
+            assert work.text == "copying cancelled" and work.progress is None
+            assert work.start("again", lambda progress, cancelled: 2)
+            await wait_for(pilot, lambda: work.outcome == "done", 10, "second job")
+
+    asyncio.run(scenario())
