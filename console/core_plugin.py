@@ -83,6 +83,13 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 help="sound-card output volts (peak) at sample value 1.0",
             ),
             "paced": Field("bool", True, help="twin: play in real time (false: fast-forward)"),
+            "lock_memory": Field(
+                "bool",
+                True,
+                help="lock the console's memory in RAM while outputs play in real time "
+                "(mlockall, as JACK does: a paged-out page stalls the audio thread); needs "
+                "root, CAP_IPC_LOCK or memlock unlimited, else skipped with a notice",
+            ),
         },
         False,
         "the two-channel sound card: left = piezo amplifier, right = screen amplifier",

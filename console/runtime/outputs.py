@@ -74,6 +74,13 @@ class Outputs:
         self.gate.latency_samples = max(
             int(audio.block_size), int(round(lat * self.limits.sample_rate_hz))
         )
+        self.memory_locked, self.memory_note = False, "real-time memory lock not asked for"
+        if profile.get("audio.lock_memory") and getattr(audio, "paced", True):
+            from .memory_lock import lock_memory
+
+            self.memory_locked, self.memory_note = lock_memory()
+            if not self.memory_locked:
+                log.warning("%s", self.memory_note)
         self._closed = False
 
     # ------------------------------------------------------------------ playing
@@ -126,6 +133,8 @@ class Outputs:
             "audio": self._audio.status(),
             "relays": self._board.status(),
             "busy": self.scheduler.busy,
+            "memory_locked": self.memory_locked,
+            "memory_note": self.memory_note,
         }
 
     def close(self) -> None:
@@ -144,6 +153,10 @@ class Outputs:
                     self._board.close()
                 except Exception:
                     log.exception("relay board close failed")
+                if self.memory_locked:
+                    from .memory_lock import unlock_memory
+
+                    unlock_memory()
 
     def __enter__(self) -> Outputs:
         return self
