@@ -34,6 +34,15 @@ VISION_FIELDS = {
         "float", 1.15, min=0.3, max=5, help="silhouette cut this many palm radii towards the wrist"
     ),
     "n_harmonics": Field("int", 12, min=2, max=16, help="Fourier descriptor harmonics"),
+    "opencv_threads": Field(
+        "int",
+        1,
+        min=0,
+        max=64,
+        help="OpenCV threads for the per-frame vision (1: a 640 x 480 frame loses more to "
+        "the thread pool's hand-offs than it gains, and the other core stays free for the "
+        "audio; 0: OpenCV's default)",
+    ),
     "background_alpha": Field(
         "float", 0.02, min=0, max=1, help="running-average weight of a new frame in the background"
     ),

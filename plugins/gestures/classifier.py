@@ -103,6 +103,11 @@ class SvmClassifier:
             from .calibration import Calibration
 
             to_mm = Calibration.load(cal).px_to_mm
+        threads = int(profile.get("vision.opencv_threads"))
+        if threads > 0:  # process-wide: the frame loop's vision is what OpenCV runs most
+            import cv2
+
+            cv2.setNumThreads(threads)
         return cls(
             model, vision_params(profile), to_mm, alpha=profile.get("vision.background_alpha")
         )
@@ -132,7 +137,7 @@ class SvmClassifier:
         check_frame(frame.image, self.params.shape)
         if self.background.image is None:
             self.background.update(frame.image)
-        bg = self.background.image
+        bg = self.background.u8
         res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
         self.background.update(frame.image, res.masks.get("body"))
         frame.stamp("vision", time.monotonic())

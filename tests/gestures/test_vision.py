@@ -110,6 +110,15 @@ def test_sudden_illumination_change_is_flagged_and_tolerated():
     assert len(r2.hands) == 1 and len(r2.contacts) == len(r0.contacts)
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 10, 2133, 2134])
+def test_fast_median_is_numpys_median(n):
+    from plugins.gestures.vision import _median
+
+    rng = np.random.default_rng(n)
+    for a in (rng.normal(0, 5, n).astype(np.float32), np.round(rng.normal(0, 5, n))):
+        assert _median(a) == pytest.approx(float(np.median(a)), abs=1e-6)
+
+
 def test_background_capture_and_slow_update():
     rng = np.random.default_rng(1)
     frames = [np.clip(BG + rng.normal(0, 3, BG.shape), 0, 255).astype(np.uint8) for _ in range(9)]
@@ -122,6 +131,9 @@ def test_background_capture_and_slow_update():
     bg.update(f, r.masks["body"])
     under = r.masks["body"] > 0
     assert np.array_equal(bg.image[under], before[under])  # the hand is not learned
+    assert not np.array_equal(bg.image[~under], before[~under])  # the table is
+    # the 8-bit copy each frame is compared with follows the float average
+    assert np.abs(bg.u8.astype(np.float32) - bg.image).max() <= 0.5 + 1e-4
     with pytest.raises(UserError, match="empty table"):
         Background().capture([])
 
