@@ -254,6 +254,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     A watchdog trip (the loop stalled: e-stop) is counted with its reason; the gate is
     reset and the demo restarted, so the soak always covers the whole time. RSS is taken
     after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between."""
+    from console.runtime.jitter import finish_probe, start_probe
     from console.runtime.outputs import open_outputs
 
     from .run import start_demo
@@ -269,6 +270,10 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     last_snap: dict = {}
     with open_outputs(prof, pm, fast=False) as out:
         rss0 = rss_mb()
+        a = out.status()["audio"]
+        period_s = a["block_size"] / a["sample_rate_hz"]
+        slack_s = (int(a.get("buffer_periods") or 2) - 1) * period_s
+        probe = start_probe(minutes * 60, period_s, slack_s)
         t0 = time.monotonic()
         next_t = t0 + SOAK_WARMUP_S
 
@@ -317,6 +322,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 )
                 out.reset()
         ran_s = time.monotonic() - t0
+        jitter = finish_probe(probe)
         rss1 = rss_mb()
         rss1_trim = rss_after_trim_mb()
         audio = _audio(out)
@@ -337,7 +343,9 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "rss_slope_mb_per_min": rss_slope_mb_per_min(samples, SOAK_WARMUP_S),
                 "rss_end_after_malloc_trim_mb": rss1_trim,
                 "switch_interval_ms": round(sys.getswitchinterval() * 1e3, 3),
+                "memory_locked": out.status()["memory_locked"],
                 "audio": audio,
+                "machine_jitter": jitter,
                 "twin_record_s": SOAK_RECORD_S,
                 "twin_camera_process": bool(prof.get("runtime.twin_camera_process")),
                 "watchdog_trips": len(trips),
@@ -357,7 +365,10 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "audio during a soak, filled by then); the slope is fitted from there on. "
                 "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
                 "empty. rss_end_after_malloc_trim_mb: RSS once glibc returned its free heap "
-                "(growth it gives back is allocator retention, not a leak)",
+                "(growth it gives back is allocator retention, not a leak). machine_jitter: "
+                "a real-time thread in a separate small process woken every audio block "
+                "during the soak (console.runtime.jitter); late_over_slack counts the wakes "
+                "that would have emptied the device buffer: the machine's share of underruns",
             }
         )
     res["load_avg_end"] = load_avg()
