@@ -87,7 +87,28 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
                     f"report this to the {reg.plugin} plugin",
                 )
             )
+    out.append(realtime_status(profile))
     return out
+
+
+def realtime_status(profile) -> DeviceStatus:
+    """Whether the audio thread can keep its memory in RAM (``[audio] lock_memory``)."""
+    from console.runtime.memory_lock import HOW_TO_ALLOW, _may_lock
+
+    if not profile.get("audio.lock_memory"):
+        return DeviceStatus("realtime", "memory", "ok", "lock_memory = false: not asked for")
+    ok, why = _may_lock()
+    if ok:
+        return DeviceStatus("realtime", "memory", "ok", f"can be locked in RAM ({why})")
+    twin = profile.get("audio.driver") == "twin"
+    return DeviceStatus(
+        "realtime",
+        "memory",
+        "ok" if twin else "missing",
+        f"cannot be locked ({why}): a paged-out page can stall the audio thread"
+        + (" (the twin only counts the underruns)" if twin else ""),
+        HOW_TO_ALLOW,
+    )
 
 
 def configure_doctor(p: argparse.ArgumentParser) -> None:

@@ -12,8 +12,21 @@ def test_doctor_json_reports_each_device(capsys):
     assert main(["doctor", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     kinds = {d["kind"]: d for d in data["devices"]}
+    rt = kinds.pop("realtime")
     assert set(kinds) == {"audio", "relays", "camera", "vibrometer"}
     assert all(d["state"] == "simulated" for d in kinds.values()) and data["ok"]
+    assert rt["state"] == "ok"  # the twin plays without a memory lock (it says so)
+
+
+def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins):
+    from console import commands
+    from console.profile import load_profile
+    from console.runtime import memory_lock
+
+    monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
+    prof = load_profile("haptable-lab", plugins)
+    st = commands.realtime_status(prof)
+    assert st.state == "missing" and "8192 kB" in st.why and "memlock unlimited" in st.fix
 
 
 def test_doctor_on_lab_profile_says_what_is_missing_and_the_fix(capsys):
