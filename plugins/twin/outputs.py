@@ -126,6 +126,8 @@ class TwinAudioOutput:
         self.realtime_priority = False
         self.underruns = 0
         self.underrun_s = 0.0  # silence the DAC played while the buffer was empty
+        self.underruns_audible = 0  # ... of them, cutting into output (the last block not silent)
+        self._last_block_sounded = False
         self.blocks = 0
         self.callback_s: deque[float] = deque(maxlen=4096)
         self._source: BlockSource | None = None
@@ -178,6 +180,7 @@ class TwinAudioOutput:
             "realtime_priority": self.realtime_priority,
             "underruns": self.underruns,
             "underrun_s": round(self.underrun_s, 4),
+            "underruns_audible": self.underruns_audible,
             "blocks": self.blocks,
         }
 
@@ -226,6 +229,7 @@ class TwinAudioOutput:
         n = out.shape[0]
         i = self._written % self._cap
         self._rec[i : i + n] = 0.0 if self._cut_pending else out
+        self._last_block_sounded = not self._cut_pending and bool(out.any())
         self._cut_pending = False
         self._written += n
         self._kept_from = max(self._kept_from, self._written - self._cap)
@@ -277,6 +281,7 @@ class TwinAudioOutput:
                 if due > self._written:  # the DAC ran out of samples: it played silence
                     self.underruns += 1
                     self.underrun_s += (due - self._written) / fs
+                    self.underruns_audible += self._last_block_sounded
                     self._t0, self._s0 = None, self._written  # re-prime, then restart
             played = self._played(now)
             room = (played // bs) * bs + self.buffer_periods * bs - self._written

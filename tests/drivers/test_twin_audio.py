@@ -94,6 +94,18 @@ def test_one_long_stall_counts_one_underrun_and_the_gap(profile):
     assert 0.050 - 3 * PERIOD_S <= out.underrun_s <= 0.050
 
 
+def test_a_stall_in_silence_is_an_underrun_nobody_hears(profile):
+    out, src = twin(profile, 3)
+    t = run_until(out, 0.2)
+    t = run_until(out, t + 0.2, t + 0.050)  # stalled while a tone played
+    assert (out.underruns, out.underruns_audible) == (1, 1)
+    src.fill = lambda block: block.fill(0.0)  # the gate has nothing to play
+    t = run_until(out, t + 0.2, t)
+    run_until(out, t + 0.2, t + 0.050)  # stalled in silence
+    assert (out.underruns, out.underruns_audible) == (2, 1)
+    assert out.status()["underruns_audible"] == 1
+
+
 def test_estop_drops_the_queued_blocks(profile):
     out, src = twin(profile, 4)
     t = run_until(out, 0.1)

@@ -121,7 +121,13 @@ class LatencyPane(Vertical):
         lat = a.get("latency_s")
         self.query_one("#lat-audio", Static).update(
             f"[b]audio[/b] {a.get('driver', '?')}: output latency "
-            f"{'-' if lat is None else f'{lat * 1e3:.1f} ms'}, underruns {a.get('underruns', 0)}, "
+            f"{'-' if lat is None else f'{lat * 1e3:.1f} ms'}, underruns {a.get('underruns', 0)}"
+            + (
+                f" ({a['underruns_audible']} cutting into sound)"
+                if a.get("underruns_audible") is not None
+                else ""
+            )
+            + ", "
             f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz"
         )
         run = self.demo_run()
