@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections import deque
 from typing import Any
 
 import numpy as np
@@ -115,7 +116,9 @@ class FlowDemo:
         self.prepare_regions = prepare
         self.pair_plans = pair_plans  # flows between two resting fingers (None: off)
         self.pair = StillPair(still_mm, still_s)
-        self.events: list[dict] = []
+        #: the last flows, refusals and errors (bounded: a demo runs as long as it is used)
+        self.events: deque[dict] = deque(maxlen=512)
+        self.events_total = 0
         self._lock = threading.Lock()
         self._report = None  # the plan playing now
         self._pending: threading.Thread | None = None
@@ -229,6 +232,10 @@ class FlowDemo:
             return
         self._play(plan, req["center_mm"], req["direction"], req["rest_mm"], frame, late_s=late_s)
 
+    def _log_event(self, ev: dict) -> None:
+        self.events.append(ev)
+        self.events_total += 1
+
     def stage_fns(self) -> list:
         return [
             ("scene", self.scene_stage),
@@ -247,7 +254,7 @@ class FlowDemo:
         try:
             report = self.outputs.play(plan, wait=False)
         except SafetyRefusal as exc:  # e-stop active, or the gate refused the plan
-            self.events.append({"kind": "refused", "reason": str(exc), "seq": frame.seq})
+            self._log_event({"kind": "refused", "reason": str(exc), "seq": frame.seq})
             return
         with self._lock:
             self._report = report
@@ -267,7 +274,7 @@ class FlowDemo:
         else:
             ev["from_mm"] = list(pair["from_mm"])
             ev["to_mm"] = list(pair["to_mm"])
-        self.events.append(ev)
+        self._log_event(ev)
         if self.scene is not None:
             self.link.emit({"type": "playing", "on": True})
 
@@ -279,11 +286,11 @@ class FlowDemo:
             try:
                 plan = make_plan()
             except UserError as exc:
-                self.events.append({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
+                self._log_event({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
                 return
             except Exception as exc:  # never let the worker die silently
                 log.exception("flow plan failed")
-                self.events.append({"kind": "error", "reason": repr(exc), "seq": frame.seq})
+                self._log_event({"kind": "error", "reason": repr(exc), "seq": frame.seq})
                 return
             if self._running:
                 self._play_request(plan, req, frame, late_s=time.monotonic() - t0)

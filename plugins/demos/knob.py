@@ -46,7 +46,7 @@ class KnobDemo:
         self._zero_deg = float(k.center_deg(k.item)) - k.width_deg / 2
         self.report = None
         #: the last crossings (bounded: a demo runs for as long as the operator likes)
-        self.crossings: deque[dict] = deque(maxlen=4096)
+        self.crossings: deque[dict] = deque(maxlen=512)
         self.crossings_total = 0
         self.events: list[dict] = []
         self.frames_touching = 0

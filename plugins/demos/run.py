@@ -165,8 +165,10 @@ def demo_state(demo: Any) -> dict:
                 "crossings": demo.crossings_total,
             }
         }
-    evs = [{k: v for k, v in e.items() if k != "report"} for e in demo.events[-10:]]
-    return {"flow": {"direction": demo.current_direction(), "flows": len(demo.events), "last": evs}}
+    evs = [{k: v for k, v in e.items() if k != "report"} for e in list(demo.events)[-10:]]
+    return {
+        "flow": {"direction": demo.current_direction(), "flows": demo.events_total, "last": evs}
+    }
 
 
 def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:

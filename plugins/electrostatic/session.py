@@ -21,8 +21,10 @@ from .knob import Crossing, Knob
 from .rotation import RotationState, RotationTracker
 from .synth import KnobStream
 
-#: Entries a live session keeps per log (items per frame; crossings; item changes).
-LIVE_LOG = 4096
+#: Entries a live session keeps per log (items per frame; crossings; item changes; the
+#: stream's per-block trace and detents): ~70 s of steady turning, 8 s of frames. A
+#: live trial needs a few dozen; 4096 kept ~4 MB and took a 10-minute soak to fill.
+LIVE_LOG = 512
 
 
 def _log(record: bool) -> list | deque:
