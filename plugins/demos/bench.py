@@ -57,6 +57,7 @@ def _audio(out) -> dict:
         "sample_rate_hz": a.get("sample_rate_hz"),
         "block_ms": 1e3 * a.get("block_size", 0) / max(a.get("sample_rate_hz", 1), 1),
         "underruns": a.get("underruns"),
+        "underruns_audible": a.get("underruns_audible"),
         "blocks": a.get("blocks"),
         "paced": a.get("paced"),
     }
@@ -364,7 +365,8 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 f"after {SOAK_WARMUP_S:g} s of warm-up (the twin keeps {SOAK_RECORD_S:g} s of "
                 "audio during a soak, filled by then); the slope is fitted from there on. "
                 "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
-                "empty. rss_end_after_malloc_trim_mb: RSS once glibc returned its free heap "
+                "empty; underruns_audible: of those, the ones that cut into sound (the block "
+                "played before the gap was not silent). rss_end_after_malloc_trim_mb: RSS once glibc returned its free heap "
                 "(growth it gives back is allocator retention, not a leak). machine_jitter: "
                 "a real-time thread in a separate small process woken every audio block "
                 "during the soak (console.runtime.jitter); late_over_slack counts the wakes "
