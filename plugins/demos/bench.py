@@ -366,8 +366,8 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "audio during a soak, filled by then); the slope is fitted from there on. "
                 "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
                 "empty; underruns_audible: of those, the ones that cut into sound (the block "
-                "played before the gap was not silent). rss_end_after_malloc_trim_mb: RSS once glibc returned its free heap "
-                "(growth it gives back is allocator retention, not a leak). machine_jitter: "
+                "played before the gap was not silent). rss_end_after_malloc_trim_mb: RSS "
+                "once glibc returned its free heap (growth it gives back is allocator retention, not a leak). machine_jitter: "
                 "a real-time thread in a separate small process woken every audio block "
                 "during the soak (console.runtime.jitter); late_over_slack counts the wakes "
                 "that would have emptied the device buffer: the machine's share of underruns",
