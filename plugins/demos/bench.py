@@ -222,8 +222,11 @@ def run_loop(ctx: Any, quick: bool) -> dict:
     return res
 
 
-#: The soak's RSS baseline is taken after this warm-up (imports, first frames, caches).
-SOAK_WARMUP_S = 10.0
+#: The soak's RSS baseline is taken after this warm-up: imports, first frames, caches, and
+#: the live logs (512 entries each: knob crossings fill theirs in about 70 s of turning).
+SOAK_WARMUP_S = 90.0
+#: RSS and counters are sampled every 10 s from here on (the warm-up is shown too).
+SOAK_SAMPLES_FROM_S = 10.0
 #: Seconds of audio the twin keeps during a soak (its recording is a bounded ring; a short
 #: one is filled during the warm-up, so the RSS after it shows only real growth).
 SOAK_RECORD_S = 5.0
@@ -263,6 +266,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     if minutes is None:
         minutes = float(os.environ.get("HAPTABLE_SOAK_MINUTES", 0.5 if quick else 10.0))
     prof, pm = soak_profile(ctx.profile), ctx.pm
+    warmup_s = min(SOAK_WARMUP_S, minutes * 60 / 3)  # a short soak: its first third
     res: dict = {"machine": machine_info(), "minutes": minutes, "load_avg_start": load_avg()}
     samples: list[dict] = []
     trips: list[dict] = []
@@ -276,7 +280,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
         slack_s = (int(a.get("buffer_periods") or 2) - 1) * period_s
         probe = start_probe(minutes * 60, period_s, slack_s)
         t0 = time.monotonic()
-        next_t = t0 + SOAK_WARMUP_S
+        next_t = t0 + SOAK_SAMPLES_FROM_S
 
         def add(snap: dict, demo: Any) -> None:
             lat = snap["latency"]
@@ -293,7 +297,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                     if now >= next_t:
                         lat = run_.monitor.snapshot()
                         rss = rss_mb()
-                        if warm_rss is None:
+                        if warm_rss is None and now - t0 >= warmup_s:
                             warm_rss = rss
                         a = out.status()["audio"]
                         samples.append(
@@ -338,10 +342,10 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "dropped_by_camera_late": tot["dropped_camera"],
                 "errors": tot["errors"],
                 "rss_at_open_mb": round(rss0, 1),
-                "warmup_s": SOAK_WARMUP_S,
+                "warmup_s": warmup_s,
                 "rss_start_mb": None if warm_rss is None else round(warm_rss, 2),
                 "rss_end_mb": round(rss1, 2),
-                "rss_slope_mb_per_min": rss_slope_mb_per_min(samples, SOAK_WARMUP_S),
+                "rss_slope_mb_per_min": rss_slope_mb_per_min(samples, warmup_s),
                 "rss_end_after_malloc_trim_mb": rss1_trim,
                 "switch_interval_ms": round(sys.getswitchinterval() * 1e3, 3),
                 "memory_locked": out.status()["memory_locked"],
@@ -362,8 +366,10 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 "processing fell behind; dropped_by_camera_late: frames the twin camera "
                 "skipped because its rendering was late, or (twin camera in its own process) "
                 "that the loop's camera thread read too late to take. rss_start_mb is taken "
-                f"after {SOAK_WARMUP_S:g} s of warm-up (the twin keeps {SOAK_RECORD_S:g} s of "
-                "audio during a soak, filled by then); the slope is fitted from there on. "
+                f"after {warmup_s:g} s of warm-up (the twin keeps {SOAK_RECORD_S:g} s of "
+                "audio during a soak and the live logs 512 entries, filled by then); the "
+                "slope is fitted from there on; samples start at "
+                f"{SOAK_SAMPLES_FROM_S:g} s. "
                 "underruns: the twin DAC found its device buffer (buffer_periods blocks) "
                 "empty; underruns_audible: of those, the ones that cut into sound (the block "
                 "played before the gap was not silent). rss_end_after_malloc_trim_mb: RSS "
