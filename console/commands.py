@@ -87,7 +87,6 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
                     f"report this to the {reg.plugin} plugin",
                 )
             )
-    out.append(realtime_status(profile))
     return out
 
 
@@ -116,7 +115,7 @@ def configure_doctor(p: argparse.ArgumentParser) -> None:
 
 
 def run_doctor(args, ctx) -> int:
-    statuses = diagnose(ctx.profile, ctx.pm)
+    statuses = [*diagnose(ctx.profile, ctx.pm), realtime_status(ctx.profile)]
     bad = [s for s in statuses if s.state in ("missing", "error")]
     if args.json:
         print(
