@@ -265,6 +265,8 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
             moved = np.array(pane.hand_mm)
             assert np.hypot(*(moved - where)) == pytest.approx(60.0)
             await wait_for(pilot, lambda: new_flow_near(n1, moved), 20, "flow where it moved")
+            # let it play out: a stop cuts a flow under way, and its cut burst is not counted
+            await wait_for(pilot, lambda: not out.status()["busy"], 20, "second flow played")
             await pilot.press("s")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
             snap = run.snapshot()
