@@ -83,6 +83,16 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 help="sound-card output volts (peak) at sample value 1.0",
             ),
             "paced": Field("bool", True, help="twin: play in real time (false: fast-forward)"),
+            "switch_interval_ms": Field(
+                "float",
+                0.25,
+                min=0.05,
+                max=5,
+                help="while paced outputs are open, Python hands the GIL to a waiting thread "
+                "within this time (Python's default is 5 ms): the audio thread and the frame "
+                "loop wait up to this long each time they take it back from a busy thread "
+                "(the console drawing, a flow being planned)",
+            ),
             "lock_memory": Field(
                 "bool",
                 True,

@@ -8,6 +8,7 @@ Nothing outside this module holds a driver.
 from __future__ import annotations
 
 import logging
+import sys
 from typing import Any
 
 import numpy as np
@@ -74,6 +75,10 @@ class Outputs:
         self.gate.latency_samples = max(
             int(audio.block_size), int(round(lat * self.limits.sample_rate_hz))
         )
+        if getattr(audio, "paced", True):  # the audio thread must get the GIL in time
+            want_s = float(profile.get("audio.switch_interval_ms")) * 1e-3
+            if sys.getswitchinterval() > want_s:
+                sys.setswitchinterval(want_s)
         self.memory_locked, self.memory_note = False, "real-time memory lock not asked for"
         if profile.get("audio.lock_memory") and getattr(audio, "paced", True):
             from .memory_lock import lock_memory
