@@ -140,7 +140,11 @@ def haptable_register_demos(register: Register) -> None:
 
     The factory takes ``(profile, plugins, outputs, **params)`` instead of a profile and
     returns a running demo with ``stop()``, ``snapshot() -> dict`` (camera, latency,
-    watchdog and demo state, polled by the console) and ``scene_name``.
+    watchdog and demo state, polled by the console) and ``scene_name``. The console passes
+    ``camera=``, ``classifier=`` (its own, lent), ``script=True``, ``projector=``,
+    ``progress=``, ``sinks=`` and ``camera_apart=True`` (a simulated camera may be replaced
+    by one rendering in its own process; the demo's ``camera`` attribute is the one used,
+    with ``set_target(pos_mm | None)`` when the operator can touch it).
     """
 
 

@@ -54,7 +54,12 @@ def _child() -> None:
         out.write(MSG.pack(-1, bg.shape[0], float(bg.shape[1]), 0))
         out.flush()
         k = 0
-        while not select.select([sys.stdin], [], [], 0)[0]:  # stdin closed: stop
+        while True:
+            if select.select([sys.stdin], [], [], 0)[0]:
+                line = sys.stdin.buffer.readline()
+                if not line:  # stdin closed: stop
+                    break
+                _command(cam, line)
             f = cam.read(0.1)
             if f is None:
                 continue
@@ -72,12 +77,46 @@ def _child() -> None:
         shm.close()
 
 
+def _command(cam: Any, line: bytes) -> None:
+    """One command from the parent (a JSON line): ``{"set_target": [x_mm, y_mm] | null}``
+    puts the operator's hand on the twin (or gives it back to the script)."""
+    import json
+
+    cmd = json.loads(line)
+    if "set_target" in cmd and callable(getattr(cam, "set_target", None)):
+        t = cmd["set_target"]
+        cam.set_target(None if t is None else (float(t[0]), float(t[1])))
+
+
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (it cleans the shared memory up if the
+    console dies) with the real stderr: it hands ``sys.stderr.fileno()`` to its helper,
+    and inside the console Textual's stderr capture answers -1 ("bad value(s) in
+    fds_to_keep": the demo failed to start from the console)."""
+    if getattr(sys.stderr, "fileno", None) is None or _fileno(sys.stderr) >= 0:
+        resource_tracker.ensure_running()
+        return
+    captured, sys.stderr = sys.stderr, sys.__stderr__
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        sys.stderr = captured
+
+
+def _fileno(stream: Any) -> int:
+    try:
+        return int(stream.fileno())
+    except (OSError, ValueError, AttributeError):
+        return -1
+
+
 class ProcessCamera:
     """Camera protocol over a twin camera rendering in a child process."""
 
     def __init__(self, profile: Any, demo: str = "", *, start_timeout_s: float = 60.0):
         w = int(profile.get("camera.width_px") or 640)
         h = int(profile.get("camera.height_px") or 480)
+        _start_resource_tracker()
         self._shm = shared_memory.SharedMemory(create=True, size=(SLOTS + 1) * w * h)
         blob = pickle.dumps(profile)
         self._proc = subprocess.Popen(
@@ -136,6 +175,20 @@ class ProcessCamera:
 
     def background(self) -> np.ndarray:
         return self._bg.copy()
+
+    def set_target(self, pos_mm: tuple[float, float] | None) -> None:
+        """The operator's hand on the twin at ``pos_mm`` (table mm), or back to the script
+        (``None``), as the in-process twin camera's ``set_target``."""
+        import json
+
+        if self._closed:
+            return
+        t = None if pos_mm is None else [float(pos_mm[0]), float(pos_mm[1])]
+        try:
+            self._proc.stdin.write(json.dumps({"set_target": t}).encode() + b"\n")
+            self._proc.stdin.flush()
+        except (BrokenPipeError, OSError):
+            pass  # the child ended: status() says so
 
     def close(self) -> None:
         if self._closed:

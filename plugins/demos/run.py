@@ -171,10 +171,17 @@ def demo_state(demo: Any) -> dict:
     }
 
 
+def _twin_apart(profile: Any) -> bool:
+    """The profile's camera is the twin and renders in its own process."""
+    return profile.get("camera.driver") == "twin" and bool(
+        profile.get("runtime.twin_camera_process")
+    )
+
+
 def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
     """The profile's camera; the twin scripted for ``demo`` in its own process
     (``[runtime] twin_camera_process``)."""
-    if profile.get("camera.driver") == "twin" and profile.get("runtime.twin_camera_process"):
+    if _twin_apart(profile):
         from .camproc import ProcessCamera
 
         return ProcessCamera(profile, demo)
@@ -220,6 +227,7 @@ def start_demo(
     progress: Any = None,
     projector: Any = None,
     classifier: Any = None,
+    camera_apart: bool = False,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
@@ -228,6 +236,9 @@ def start_demo(
     off (False) (default: ``[tuio] enabled``). ``watchdog_ms`` overrides ``[runtime]``.
     ``camera``/``classifier``: reuse the console's (its tuned thresholds and learned
     background; stop the console's own frame loop first); the run closes neither.
+    ``camera_apart``: a scripted twin ``camera`` is replaced by the twin rendering in its
+    own process when ``[runtime] twin_camera_process`` says so (the console lends its
+    in-process twin; rendering it beside the loop and the audio costs them the GIL).
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
@@ -242,6 +253,8 @@ def start_demo(
 
         vt_cache = profile.get("vibrotactile.cache_dir") or ""
         cache_dir = Path(vt_cache).expanduser() if vt_cache else default_cache_dir()
+    if camera_apart and script and camera is not None and _twin_apart(profile):
+        camera = None  # the run opens the twin in its own process (and closes it)
     owns = camera is None
     if owns:
         camera = _open_camera(profile, plugins, name) if script else open_camera(profile, plugins)

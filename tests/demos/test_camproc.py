@@ -30,3 +30,34 @@ def test_process_camera_delivers_the_scripted_hand_and_cleans_up(profile):
         cam.close()
     assert not cam.status()["alive"], "the camera process ended"
     assert cam.read(0.1) is None
+
+
+def _hand_centroid_px(cam, bg) -> np.ndarray:
+    """Where the newest frames differ from the empty table (pixels)."""
+    import time
+
+    time.sleep(0.4)  # the command reaches the child, its next frames show it
+    frames = [f for f in (cam.read(2.0) for _ in range(12)) if f is not None]
+    moved = np.abs(frames[-1].image.astype(int) - bg) > 30
+    ys, xs = np.nonzero(moved)
+    assert xs.size > 200, "a hand is on the table"
+    return np.array([xs.mean(), ys.mean()])
+
+
+def test_the_operators_hand_reaches_the_twin_in_its_own_process(profile):
+    """``set_target`` crosses to the child: the hand shows where the operator put it."""
+    from plugins.demos.camproc import ProcessCamera
+
+    cam = ProcessCamera(profile, "flow")
+    try:
+        bg = cam.background().astype(int)
+        cam.set_target((200.0, 150.0))
+        a = _hand_centroid_px(cam, bg)
+        cam.set_target((600.0, 300.0))
+        b = _hand_centroid_px(cam, bg)
+        # 400 mm along the table is over 250 px in the 640 px image
+        assert np.hypot(*(b - a)) > 250
+        assert cam.status()["alive"]
+    finally:
+        cam.close()
+    cam.set_target(None)  # closed: nothing to tell, no error

@@ -80,7 +80,12 @@ async def _start(app, pilot, name: str):
     assert set(names) == set(app.ctx.pm.of("demo"))
     table.move_cursor(row=names.index(name))
     await pilot.press("enter")
-    await wait_for(pilot, lambda: pane.demo_state == "running", 60, f"{name} running")
+    try:
+        await wait_for(pilot, lambda: pane.demo_state == "running", 60, f"{name} running")
+    except AssertionError:
+        raise AssertionError(
+            f"{name} not running: state {pane.demo_state!r}, {app.query_one('#demo-work').text!r}"
+        ) from None
     return pane
 
 
@@ -235,6 +240,8 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
             pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
             run, out = pane.demo_run, app.outputs
+            # the console lent its twin; the demo renders the twin in its own process
+            assert run.camera.status().get("process")
 
             def new_flow_near(n_before: int, where) -> bool:
                 """A flow after the first ``n_before`` events, under a hand resting near

@@ -430,6 +430,7 @@ class ScenesPane(Vertical):
                     projector=fwd,
                     progress=prep,
                     sinks=[svc.sink],
+                    camera_apart=True,
                     **params,
                 )
             except BaseException:
@@ -534,7 +535,7 @@ class ScenesPane(Vertical):
         lent = self._lent
         if lent is None or self.demo_run is None:
             return None
-        cam = lent[1]
+        cam = getattr(self.demo_run, "camera", None) or lent[1]  # the twin apart, or lent
         return cam if callable(getattr(cam, "set_target", None)) else None
 
     def check_action(self, action: str, parameters) -> bool | None:
@@ -545,8 +546,8 @@ class ScenesPane(Vertical):
         return True
 
     def _table_mm(self, cam) -> tuple[float, float]:
-        mapping = getattr(cam, "mapping", None)
-        return tuple(getattr(mapping, "table_mm", (700.0, 440.0)))
+        prof = self.app.ctx.profile
+        return (float(prof.get("table.width_mm")), float(prof.get("table.height_mm")))
 
     def action_place_hand(self) -> None:
         """Space: the operator's hand touches the twin (where it was, else mid-table);
