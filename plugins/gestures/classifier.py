@@ -107,7 +107,8 @@ class SvmClassifier:
         if threads > 0:  # process-wide: the frame loop's vision is what OpenCV runs most
             import cv2
 
-            cv2.setNumThreads(threads)
+            if cv2.getNumThreads() != threads:  # once: resizing the pool under a running
+                cv2.setNumThreads(threads)  # parallel loop in another thread is not safe
         return cls(
             model, vision_params(profile), to_mm, alpha=profile.get("vision.background_alpha")
         )
