@@ -41,6 +41,17 @@ async def wait_for(pilot, cond, timeout_s: float = 10.0, what: str = "condition"
     raise AssertionError(f"{what} not reached in {timeout_s:g} s")
 
 
+async def command(app, pilot, text: str) -> None:
+    """Type ``text`` on the screen's command line (``:`` opens it) and press enter; waits
+    for the line to take the focus first (under load a key can beat the focus change)."""
+    from textual.widgets import Input
+
+    await pilot.press("colon")
+    await wait_for(pilot, lambda: isinstance(app.focused, Input), 10, "command line focused")
+    app.focused.value = text
+    await pilot.press("enter")
+
+
 def segment_in(rec: np.ndarray, seg: np.ndarray, start_hint: int) -> float:
     """Largest |difference| between ``seg`` and the recording aligned on its first
     non-zero sample at ``start_hint`` (the first non-zero sample of a burst)."""

@@ -14,7 +14,7 @@ from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar
 from console.types import patches_of
 
-from .conftest import segment_in, wait_for
+from .conftest import command, segment_in, wait_for
 
 
 def _app(plugins, initial="devices", fast=True):
@@ -135,14 +135,14 @@ def test_vibration_command_line_and_bad_input(plugins, map_file):
         async with app.run_test(size=(80, 24)) as pilot:
             await _ready(app, pilot)
             pane = await _load_map(app, pilot, map_file)
-            await pilot.press("colon", "9", "9", "enter")
+            await command(app, pilot, "99")
             await pilot.pause(0.3)
             assert app.played == []  # point 99 does not exist: nothing plays
-            await pilot.press("colon", *"51 52", "enter")
+            await command(app, pilot, "51 52")
             await wait_for(pilot, lambda: len(app.played) == 1)
             assert app.played[0].name == "flow 51->52"
             assert pane.selected == [51, 52]
-            await pilot.press("colon", *"import PA", "enter")
+            await command(app, pilot, "import PA")
             await wait_for(pilot, lambda: "EXC=FILE" in str(app.query_one("#vib-status").render()))
 
     asyncio.run(scenario())

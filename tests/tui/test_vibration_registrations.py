@@ -13,7 +13,7 @@ from console.cli import Context
 from console.plugins import BUILTIN_PLUGINS, load_plugins
 from console.tui.app import HapTableApp
 
-from .conftest import wait_for
+from .conftest import command, wait_for
 from .test_screens import _app, _load_map, _ready
 
 
@@ -50,14 +50,14 @@ def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monk
             assert not bar.display and not pane.session.tables_ready
             assert fractions and max(fractions) < 1.0  # stopped part way
             # the map stays usable: a point plays without tables
-            await pilot.press("colon", "5", "1", "enter")
+            await command(app, pilot, "51")
             await wait_for(pilot, lambda: len(app.played) == 1)
             # b builds them again, to the end
             fractions.clear()
             await pilot.press("b")
             await wait_for(pilot, lambda: _status(app).endswith("; ready"), 30, "rebuilt")
             assert pane.session.tables_ready and fractions[-1] == 1.0
-            await pilot.press("colon", *"51 52", "enter")
+            await command(app, pilot, "51 52")
             await wait_for(pilot, lambda: len(app.played) == 2)
             assert app.played[1].name == "flow 51->52"
 
@@ -74,7 +74,7 @@ def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
             await _load_map(app, pilot, map_file)  # maps are the console's: they load
             await wait_for(pilot, lambda: "without lookup tables" in _status(app), 10)
             assert "install/enable vibrotactile" in _status(app)
-            await pilot.press("colon", "5", "1", "enter")
+            await command(app, pilot, "51")
             await wait_for(
                 pilot, lambda: "localized point stimulus" in _status(app), 10, "point refused"
             )
@@ -120,7 +120,7 @@ def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
             m = pane.session.vmap
             assert m.points.tolist() == list(range(49, 61))
             np.testing.assert_allclose(m.frf_um_per_v, row.frf_um_per_v, rtol=1e-9, atol=1e-12)
-            await pilot.press("colon", *"51 52", "enter")
+            await command(app, pilot, "51 52")
             await wait_for(pilot, lambda: len(app.played) == 1)
             entry = pane.session.lookup(51, 52)
             assert app.played[0].meta["parts"][0]["frequency_hz"] == entry["frequency_hz"]
