@@ -6,12 +6,10 @@ from __future__ import annotations
 
 import asyncio
 
-from textual.app import App
 from textual.widgets import Input
 
 from console.cli import Context
 from console.tui.app import HapTableApp
-from console.tui.long_work import LongWork
 
 from .conftest import wait_for
 
@@ -92,38 +90,6 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
 
             await pilot.press("escape")
             await wait_for(pilot, lambda: type(app.screen).__name__ != "GesturesPanel")
-
-    asyncio.run(scenario())
-
-
-def test_long_work_failure_is_one_line_and_a_second_job_waits():
-    """A job's unexpected error is one red line naming the job; a second start while one
-    runs is refused with a notice (one long job at a time per widget)."""
-    import threading
-
-    release = threading.Event()
-
-    def slow(progress, cancelled):
-        progress(0.5, "half way")
-        release.wait(10)
-        raise ValueError("disk full\nsecond line")
-
-    class Host(App):
-        def compose(self):
-            yield LongWork(id="w")
-
-    async def scenario():
-        app = Host()
-        async with app.run_test(size=(80, 5)) as pilot:
-            work = app.query_one(LongWork)
-            assert work.start("copying", slow)
-            await wait_for(pilot, lambda: work.text == "copying: half way", 10)
-            assert work.progress == 0.5
-            assert not work.start("another", slow)  # busy: refused
-            release.set()
-            await wait_for(pilot, lambda: work.outcome == "failed", 10)
-            assert work.text == "copying failed: disk full"
-            assert work.progress is None and not work.busy
 
     asyncio.run(scenario())
 

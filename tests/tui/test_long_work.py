@@ -1,4 +1,5 @@
-"""Long work: x right after a start stops the job and frees the widget."""
+"""Long work (the console's one-job-at-a-time worker): failures as one line, one job at a
+time, and x right after a start stops the job and frees the widget."""
 
 from __future__ import annotations
 
@@ -10,6 +11,11 @@ from textual.app import App
 from console.tui.long_work import LongWork
 
 from .conftest import wait_for
+
+
+class Host(App):
+    def compose(self):
+        yield LongWork(id="w")
 
 
 def test_cancel_before_the_job_thread_starts_still_ends_the_job():
@@ -26,10 +32,6 @@ def test_cancel_before_the_job_thread_starts_still_ends_the_job():
             threading.Event().wait(0.01)
         return 1
 
-    class Host(App):
-        def compose(self):
-            yield LongWork(id="w")
-
     async def scenario():
         app = Host()
         async with app.run_test(size=(80, 5)) as pilot:
@@ -41,5 +43,33 @@ def test_cancel_before_the_job_thread_starts_still_ends_the_job():
             assert work.text == "copying cancelled" and work.progress is None
             assert work.start("again", lambda progress, cancelled: 2)
             await wait_for(pilot, lambda: work.outcome == "done", 10, "second job")
+
+    asyncio.run(scenario())
+
+
+def test_long_work_failure_is_one_line_and_a_second_job_waits():
+    """A job's unexpected error is one red line naming the job; a second start while one
+    runs is refused with a notice (one long job at a time per widget)."""
+    import threading
+
+    release = threading.Event()
+
+    def slow(progress, cancelled):
+        progress(0.5, "half way")
+        release.wait(10)
+        raise ValueError("disk full\nsecond line")
+
+    async def scenario():
+        app = Host()
+        async with app.run_test(size=(80, 5)) as pilot:
+            work = app.query_one(LongWork)
+            assert work.start("copying", slow)
+            await wait_for(pilot, lambda: work.text == "copying: half way", 10)
+            assert work.progress == 0.5
+            assert not work.start("another", slow)  # busy: refused
+            release.set()
+            await wait_for(pilot, lambda: work.outcome == "failed", 10)
+            assert work.text == "copying failed: disk full"
+            assert work.progress is None and not work.busy
 
     asyncio.run(scenario())
