@@ -75,12 +75,13 @@ class Outputs:
         self.gate.latency_samples = max(
             int(audio.block_size), int(round(lat * self.limits.sample_rate_hz))
         )
-        if getattr(audio, "paced", True):  # the audio thread must get the GIL in time
+        paced = getattr(audio, "paced", True)
+        if paced:  # the audio thread must get the GIL in time
             want_s = float(profile.get("audio.switch_interval_ms")) * 1e-3
             if sys.getswitchinterval() > want_s:
                 sys.setswitchinterval(want_s)
         self.memory_locked, self.memory_note = False, "real-time memory lock not asked for"
-        if profile.get("audio.lock_memory") and getattr(audio, "paced", True):
+        if profile.get("audio.lock_memory") and paced:
             from .memory_lock import lock_memory
 
             self.memory_locked, self.memory_note = lock_memory()

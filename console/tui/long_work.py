@@ -29,6 +29,15 @@ Progress = Callable[[float, str], None]
 Job = Callable[[Progress, Callable[[], bool]], Any]
 
 
+def stop_check(stop: threading.Event) -> Callable[[], bool]:
+    """In a worker thread: True once ``stop`` is set (x) or the console closes the worker.
+
+    A flag rather than ``Worker.cancel`` alone: cancelling a worker whose thread has not
+    started yet drops the job without a word."""
+    worker = get_current_worker()
+    return lambda: stop.is_set() or worker.is_cancelled
+
+
 class LongWork(Horizontal):
     DEFAULT_CSS = """
     LongWork { height: 1; }
@@ -119,10 +128,7 @@ class LongWork(Horizontal):
 
     # ------------------------------------------------------------------ worker thread
     def _run(self, name: str, job: Job, summary, stop: threading.Event) -> None:
-        worker = get_current_worker()
-
-        def cancelled() -> bool:  # x, or the console closing
-            return stop.is_set() or worker.is_cancelled
+        cancelled = stop_check(stop)
 
         def progress(frac: float, msg: str) -> None:
             if not cancelled():

@@ -11,6 +11,7 @@ copies the newest announced frame out; it waits on the pipe without holding the 
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import select
@@ -80,8 +81,6 @@ def _child() -> None:
 def _command(cam: Any, line: bytes) -> None:
     """One command from the parent (a JSON line): ``{"set_target": [x_mm, y_mm] | null}``
     puts the operator's hand on the twin (or gives it back to the script)."""
-    import json
-
     cmd = json.loads(line)
     if "set_target" in cmd and callable(getattr(cam, "set_target", None)):
         t = cmd["set_target"]
@@ -93,7 +92,7 @@ def _start_resource_tracker() -> None:
     console dies) with the real stderr: it hands ``sys.stderr.fileno()`` to its helper,
     and inside the console Textual's stderr capture answers -1 ("bad value(s) in
     fds_to_keep": the demo failed to start from the console)."""
-    if getattr(sys.stderr, "fileno", None) is None or _fileno(sys.stderr) >= 0:
+    if _fileno(sys.stderr) >= 0:
         resource_tracker.ensure_running()
         return
     captured, sys.stderr = sys.stderr, sys.__stderr__
@@ -179,8 +178,6 @@ class ProcessCamera:
     def set_target(self, pos_mm: tuple[float, float] | None) -> None:
         """The operator's hand on the twin at ``pos_mm`` (table mm), or back to the script
         (``None``), as the in-process twin camera's ``set_target``."""
-        import json
-
         if self._closed:
             return
         t = None if pos_mm is None else [float(pos_mm[0]), float(pos_mm[1])]

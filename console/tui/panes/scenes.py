@@ -545,7 +545,7 @@ class ScenesPane(Vertical):
             return action == "place_hand" or self.hand_placed
         return True
 
-    def _table_mm(self, cam) -> tuple[float, float]:
+    def _table_mm(self) -> tuple[float, float]:
         prof = self.app.ctx.profile
         return (float(prof.get("table.width_mm")), float(prof.get("table.height_mm")))
 
@@ -561,7 +561,7 @@ class ScenesPane(Vertical):
             self.app.notify("hand lifted (space places it again)", timeout=2)
             return
         if self.hand_mm is None:
-            w, h = self._table_mm(cam)
+            w, h = self._table_mm()
             rest = self.hand.state.get("rest_mm")
             self.hand_mm = rest if rest is not None else (w / 2, h / 2)
         self.hand_placed = True
@@ -573,7 +573,7 @@ class ScenesPane(Vertical):
         cam = self._twin()
         if cam is None or not self.hand_placed or self.hand_mm is None:
             return
-        w, h = self._table_mm(cam)
+        w, h = self._table_mm()
         m = 20.0
         x = min(max(self.hand_mm[0] + dx * self.HAND_STEP_MM, m), w - m)
         y = min(max(self.hand_mm[1] + dy * self.HAND_STEP_MM, m), h - m)

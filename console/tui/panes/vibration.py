@@ -14,9 +14,9 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
-from textual.worker import get_current_worker
 
 from console.errors import UserError
+from console.tui.long_work import stop_check
 
 HELP = (
     "enter: audition the point\n"
@@ -170,7 +170,7 @@ class VibrationPane(VerticalScroll):
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
         from console.tui import vibration_session as vs
 
-        cancelled = _cancelled(stop)
+        cancelled = stop_check(stop)
         show = self.app.call_from_thread
 
         def progress(frac: float, msg: str) -> None:
@@ -232,7 +232,7 @@ class VibrationPane(VerticalScroll):
     def _measure(self, stop: threading.Event) -> None:
         from console.tui import vibration_session as vs
 
-        cancelled = _cancelled(stop)
+        cancelled = stop_check(stop)
         ctx = self.app.ctx
 
         def progress(frac: float, msg: str) -> None:
@@ -265,7 +265,7 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
             ctx = self.app.ctx
             vmap = vs.import_uff_files(ctx.profile, ctx.pm, specs)
-            if _cancelled(stop)():  # the files are read in one go: x keeps the old map
+            if stop_check(stop)():  # the files are read in one go: x keeps the old map
                 raise vs.Cancelled()
             self._open(vmap, "map: UFF import")
         except vs.Cancelled:
@@ -279,7 +279,7 @@ class VibrationPane(VerticalScroll):
 
         try:
             vmap = vs.load_map(path)
-            if _cancelled(stop)():
+            if stop_check(stop)():
                 raise vs.Cancelled()
             self._open(vmap, f"map: {Path(path).name}")
         except vs.Cancelled:
@@ -507,9 +507,3 @@ def describe_plan(plan) -> str:
     for seg in plan.segments:
         parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
     return f"{plan.duration_s:.1f} s, " + ", ".join(parts)
-
-
-def _cancelled(stop: threading.Event):
-    """In a worker: True once x set ``stop`` or the console is closing."""
-    worker = get_current_worker()
-    return lambda: stop.is_set() or worker.is_cancelled
