@@ -27,6 +27,7 @@ Steps for one frame (paper section 3, Fig. 4):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 import cv2
@@ -79,11 +80,33 @@ class FrameResult:
     offset: float = 0.0
     noise: float = 0.0  # robust std of the difference image (grey levels)
     illumination_changed: bool = False
-    masks: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+    #: "diff", "body", "highpass" (computed on first access) with ``keep_masks``
+    masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
     #: brightness-weighted centroid), grid (brightness in the canonical frame,
     #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii)
     extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
+
+
+class Masks(Mapping):
+    """A frame's intermediate images: given ones, and ones made on first access from a
+    function of no arguments (the full-frame high-pass, which the pipeline itself needs
+    only near the contacts)."""
+
+    def __init__(self, images: dict[str, np.ndarray], makers: dict[str, Callable]) -> None:
+        self._images = dict(images)
+        self._makers = dict(makers)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key not in self._images:
+            self._images[key] = self._makers[key]()  # KeyError if neither
+        return self._images[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([*self._images, *(k for k in self._makers if k not in self._images)])
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
 
 
 # --------------------------------------------------------------------------- input
@@ -233,6 +256,53 @@ def highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
     return cv2.subtract(diff, blur)
 
 
+def _gauss_radius_px(sigma_px: float) -> int:
+    """Half the kernel size ``cv2.GaussianBlur`` picks for an 8-bit image and ``sigma_px``."""
+    return (int(round(sigma_px * 6 + 1)) | 1) // 2
+
+
+def contact_window(
+    diff: np.ndarray, threshold: float, params: VisionParams | None = None
+) -> tuple[int, int, int, int] | None:
+    """``(x0, y0, x1, y1)``: the only part of the frame where ``find_contacts`` can find
+    anything in the high-pass of ``cv2.blur(diff, (3, 3))`` at ``threshold``, or None.
+
+    A high-pass pixel is at most its 3x3 mean, which exceeds ``threshold`` only next to
+    a ``diff`` pixel that does: the box around those, grown by 1 px (the mean) and 2 px
+    (the 5 px dilation that groups a contact)."""
+    _, m = cv2.threshold(diff, threshold, 255, cv2.THRESH_BINARY)
+    x, y, w, h = cv2.boundingRect(m)
+    if w == 0:
+        return None
+    g = 3
+    H, W = diff.shape
+    return max(x - g, 0), max(y - g, 0), min(x + w + g, W), min(y + h + g, H)
+
+
+def highpass_window(
+    diff: np.ndarray, sigma_px: float, window: tuple[int, int, int, int]
+) -> np.ndarray:
+    """``highpass(cv2.blur(diff, (3, 3)), sigma_px)`` inside ``window`` (x0, y0, x1, y1)
+    only, equal to the full-frame result there: computed on a crop wider by the reach of
+    the blurs (and aligned to the 4 px blocks of the quarter-resolution blur)."""
+    H, W = diff.shape
+    x0, y0, x1, y1 = window
+    if sigma_px >= 4:
+        a, m = 4, 4 * (_gauss_radius_px(sigma_px / 4) + 2)
+        if W % 4 or H % 4:  # the full frame's quarter image is not made of whole blocks
+            a, m = 1, max(W, H)
+    else:
+        a, m = 1, _gauss_radius_px(sigma_px) + 1
+    cx0, cy0 = max((x0 - m) // a * a, 0), max((y0 - m) // a * a, 0)
+    cx1, cy1 = min(-(-(x1 + m) // a) * a, W), min(-(-(y1 + m) // a) * a, H)
+    dx0, dy0 = max(cx0 - 1, 0), max(cy0 - 1, 0)  # the 3x3 mean reaches 1 px further
+    dx1, dy1 = min(cx1 + 1, W), min(cy1 + 1, H)
+    b3 = cv2.blur(diff[dy0:dy1, dx0:dx1], (3, 3))
+    b3 = np.ascontiguousarray(b3[cy0 - dy0 : cy1 - dy0, cx0 - dx0 : cx1 - dx0])
+    hp = highpass(b3, sigma_px)
+    return hp[y0 - cy0 : y1 - cy0, x0 - cx0 : x1 - cx0]
+
+
 def body_mask(diff: np.ndarray, threshold: float, smooth_px: int = 5) -> np.ndarray:
     """Hands and forearms: the smoothed difference above ``threshold`` (uint8 0/255)."""
     if smooth_px > 1:
@@ -249,12 +319,15 @@ def find_contacts(
     max_area_px: int = 2500,
     to_mm=None,
     max_size_px: int = 45,
+    origin_px: tuple[int, int] = (0, 0),
 ) -> list[Contact]:
     """Bright blobs of the high-pass image: intensity-weighted centroid and area.
 
     Pixels above ``threshold`` are grouped after a 5 px dilation, so the broken rim
     that a flat palm leaves in the high-pass image becomes one large blob, rejected by
     ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
+    ``hp`` may be a crop of the frame's high-pass at ``origin_px`` (x, y): positions
+    are in the frame's pixels.
     """
     _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
     md = cv2.dilate(m, _DISK5)
@@ -274,7 +347,8 @@ def find_contacts(
         mo = cv2.moments(wts)
         if mo["m00"] <= 0:
             continue
-        pos = (x0 + mo["m10"] / mo["m00"], y0 + mo["m01"] / mo["m00"])
+        gx, gy = x0 + origin_px[0], y0 + origin_px[1]
+        pos = (gx + mo["m10"] / mo["m00"], gy + mo["m01"] / mo["m00"])
         out.append(Contact(id=len(out), pos_px=pos, area_px=float(area)))
     out.sort(key=lambda c: (c.pos_px[1], c.pos_px[0]))
     out = [Contact(i, c.pos_px, c.pos_mm, c.area_px) for i, c in enumerate(out)]
@@ -678,15 +752,19 @@ def process_frame(
     body_thr = max(p.body_threshold, 4.0 * noise / max(p.smooth_px, 1) + 2.0)
     contact_thr = max(p.contact_threshold, 4.0 * noise / 3.0 + 2.0)
     body = body_mask(diff, body_thr, p.smooth_px)
-    hp = highpass(cv2.blur(diff, (3, 3)), p.highpass_sigma_px)
-    contacts = find_contacts(
-        hp,
-        contact_thr,
-        p.min_contact_area_px,
-        p.max_contact_area_px,
-        to_mm,
-        p.max_contact_size_px,
-    )
+    # contacts: the high-pass only where it can exceed the threshold
+    win = contact_window(diff, contact_thr)
+    contacts = []
+    if win is not None:
+        contacts = find_contacts(
+            highpass_window(diff, p.highpass_sigma_px, win),
+            contact_thr,
+            p.min_contact_area_px,
+            p.max_contact_area_px,
+            to_mm,
+            p.max_contact_size_px,
+            origin_px=win[:2],
+        )
     contours, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     found = []
     for c in contours:
@@ -696,7 +774,13 @@ def process_frame(
         if got is not None:
             found.append(got)
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
-    masks = {"diff": diff, "body": body, "highpass": hp} if keep_masks else {}
+    masks: Mapping[str, np.ndarray] = {}
+    if keep_masks:  # the whole high-pass image only if someone looks at it
+        sigma = p.highpass_sigma_px
+        masks = Masks(
+            {"diff": diff, "body": body},
+            {"highpass": lambda: highpass(cv2.blur(diff, (3, 3)), sigma)},
+        )
     return FrameResult(
         hands=tuple(h for h, _ in found),
         contacts=tuple(contacts),

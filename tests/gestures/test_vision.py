@@ -169,3 +169,60 @@ def test_heavy_sensor_noise_raises_thresholds_not_false_contacts():
     r = process_frame(noisy, BG, P)
     assert r.noise == pytest.approx(12.0, rel=0.35)
     assert len(r.hands) == 1 and len(r.contacts) == 2
+
+
+@pytest.mark.parametrize("sigma", [6.0, 2.5, 9.0])
+@pytest.mark.parametrize(
+    "where",
+    [
+        ((320, 220), -90.0),  # mid-table
+        ((615, 240), 180.0),  # cut by the right border
+        ((25, 15), -45.0),  # in the top-left corner
+        ((320, 470), 90.0),  # fingers at the bottom edge
+    ],
+)
+def test_contacts_found_in_the_window_equal_the_full_frame_ones(sigma, where):
+    from plugins.gestures.vision import (
+        contact_window,
+        find_contacts,
+        highpass,
+        highpass_window,
+    )
+
+    pos, theta = where
+    diff = cv2_subtract(frame(pose("two_finger", pos, theta), pose("one_finger", (120, 300))))
+    full = highpass(cv2_blur3(diff), sigma)
+    win = contact_window(diff, 30.0)
+    x0, y0, x1, y1 = win
+    assert np.array_equal(highpass_window(diff, sigma, win), full[y0:y1, x0:x1])
+    # nothing above the threshold outside the window
+    outside = full > 30
+    outside[y0:y1, x0:x1] = False
+    assert not outside.any()
+    got = find_contacts(highpass_window(diff, sigma, win), 30.0, origin_px=(x0, y0))
+    want = find_contacts(full, 30.0)
+    assert len(want) >= 1 and got == want
+
+
+def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
+    from plugins.gestures.vision import contact_window, highpass
+
+    assert contact_window(cv2_subtract(frame()), 30.0) is None
+    f = frame(pose("one_finger"))
+    r = process_frame(f, BG, P, keep_masks=True)
+    assert sorted(r.masks) == ["body", "diff", "highpass"]
+    want = highpass(cv2_blur3(cv2_subtract(f)), P.highpass_sigma_px)
+    assert np.array_equal(r.masks["highpass"], want)
+    assert np.array_equal(r.masks.get("highpass"), want)
+
+
+def cv2_subtract(img):
+    import cv2
+
+    return cv2.subtract(img, BG)
+
+
+def cv2_blur3(img):
+    import cv2
+
+    return cv2.blur(img, (3, 3))
