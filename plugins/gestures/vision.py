@@ -26,6 +26,7 @@ Steps for one frame (paper section 3, Fig. 4):
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -208,26 +209,29 @@ def illumination(
     pixels whose residual is not far above the median (hands, brighter than predicted,
     drop out). ``noise`` is the residuals' robust standard deviation (1.4826 MAD), the
     noise of the difference image."""
-    f = frame[::step, ::step].ravel().astype(np.float32)
-    b = background[::step, ::step].ravel().astype(np.float32)
-    keep = np.ones(len(f), dtype=bool)
+    f = frame[::step, ::step].astype(np.float32).ravel()
+    b = background[::step, ::step].astype(np.float32).ravel()
+    fk, bk = f, b  # the first fit uses every pixel
     gain, offset, mad = 1.0, 0.0, 0.0
-    for _ in range(3):
-        fk, bk = f[keep], b[keep]
+    for it in range(3):
         n = len(fk)
         if n < 10:
             break
-        mb, mf = float(bk.mean()), float(fk.mean())
-        var = float(np.dot(bk - mb, bk - mb)) / n
+        # means as ndarray.mean takes them (float32 sum / n), with less overhead
+        mb, mf = float(np.add.reduce(bk) / n), float(np.add.reduce(fk) / n)
+        db = bk - mb
+        var = float(np.dot(db, db)) / n
         if var < 4.0:  # too little contrast in the background for a line: an offset
             gain, offset = 1.0, _median(fk - bk)
         else:
-            gain = float(np.dot(bk - mb, fk - mf)) / n / var
+            gain = float(np.dot(db, fk - mf)) / n / var
             offset = mf - gain * mb
         res = f - (gain * b + offset)
         med = _median(res)
         mad = _median(np.abs(res - med))
-        keep = res <= med + 2.0 * mad + 1.0
+        if it < 2:
+            keep = res <= med + 2.0 * mad + 1.0
+            fk, bk = f[keep], b[keep]
     noise = 1.4826 * mad
     if not (0.2 < gain < 5.0):
         return brightness_gain(frame, background, step), 0.0, noise
@@ -373,18 +377,25 @@ def palm(mask: np.ndarray) -> tuple[tuple[float, float], float]:
 
 
 def _runs(on: np.ndarray) -> list[tuple[int, int]]:
-    """Circular runs of True in ``on``: (start index, length)."""
+    """Circular runs of True in ``on``: (start index, length), in index order."""
     n = len(on)
-    if not np.any(on):
-        return []
-    if np.all(on):
-        return [(0, n)]
-    start = int(np.argmin(on))  # rotate so index 0 is off
-    r = np.roll(on, -start)
-    d = np.diff(np.concatenate([[0], r.astype(np.int8), [0]]))
-    s = np.flatnonzero(d == 1)
-    e = np.flatnonzero(d == -1)
-    return [((int(a) + start) % n, int(b - a)) for a, b in zip(s, e, strict=True)]
+    prev = np.concatenate((on[-1:], on[:-1]))  # on shifted round by one
+    starts = np.flatnonzero(on > prev).tolist()  # on, and off before
+    if not starts:
+        return [(0, n)] if on[0] else []
+    ends = np.flatnonzero(on < prev).tolist()  # off, and on before: one past a run
+    if ends[0] < starts[0]:  # the first run wraps round from the end
+        ends = ends[1:] + ends[:1]
+    return [(s, (e - s) % n) for s, e in zip(starts, ends, strict=True)]
+
+
+@functools.cache
+def _circle(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angles of ``n`` points equally spaced on a circle, their cosines and sines."""
+    a = np.arange(n) * (2 * math.pi / n)
+    for v in (a, c := np.cos(a), s := np.sin(a)):
+        v.flags.writeable = False
+    return a, c, s
 
 
 def circle_samples(
@@ -398,14 +409,14 @@ def circle_samples(
     """Angles (rad, image axes: x right, y down), on-mask and outside-image flags of ``n``
     points on a circle. ``mask`` may be a crop of the image at ``offset`` (x, y) of an
     image of ``image_shape`` (default: the mask is the whole image)."""
-    a = np.arange(n) * (2 * math.pi / n)
-    x = np.rint(center[0] + radius * np.cos(a)).astype(int)
-    y = np.rint(center[1] + radius * np.sin(a)).astype(int)
+    a, cos_a, sin_a = _circle(n)
+    x = np.rint(center[0] + radius * cos_a).astype(np.intp)
+    y = np.rint(center[1] + radius * sin_a).astype(np.intp)
     h, w = mask.shape
     ih, iw = image_shape or (h, w)
-    gx, gy = x + offset[0], y + offset[1]
-    out = (gx < 0) | (gx >= iw) | (gy < 0) | (gy >= ih)
-    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+    # negative coordinates wrap round to huge unsigned ones: one test per axis
+    out = ~((x + offset[0]).view(np.uintp) < iw) | ~((y + offset[1]).view(np.uintp) < ih)
+    inside = (x.view(np.uintp) < w) & (y.view(np.uintp) < h)
     on = np.zeros(n, dtype=bool)
     on[inside] = mask[y[inside], x[inside]] > 0
     return a, on, out
@@ -503,9 +514,21 @@ def wrist_arc(
         d2 = dx * dx + dy * dy
         i = int(np.argmax(d2))
         ih, iw = image_shape or (h, w)
-        gx, gy = px + offset[0], py + offset[1]
-        edge = (gx < k + 1) | (gy < k + 1) | (gx > iw - k - 2) | (gy > ih - k - 2)
-        if np.any(edge):  # the thick part leaves the image: the forearm goes that way
+        sh, sw = opened.shape
+        edge = None
+        # pixel centres span offset + (0.5 k - 0.5) .. offset + (size - 0.5) k - 0.5:
+        # look for pixels at the image edge only if that span reaches it
+        lo_x, lo_y = offset[0] + 0.5 * k - 0.5, offset[1] + 0.5 * k - 0.5
+        if (
+            min(lo_x, lo_y) < k + 1
+            or lo_x + (sw - 1) * k > iw - k - 2
+            or lo_y + (sh - 1) * k > ih - k - 2
+        ):
+            gx, gy = px + offset[0], py + offset[1]
+            edge = (gx < k + 1) | (gy < k + 1) | (gx > iw - k - 2) | (gy > ih - k - 2)
+            if not edge.any():
+                edge = None
+        if edge is not None:  # the thick part leaves the image: the forearm goes that way
             direction = math.atan2(float(dy[edge].mean()), float(dx[edge].mean()))
             found = "border"
         elif d2[i] > r * r:
@@ -607,9 +630,14 @@ def to_canonical(
     """Image points -> the canonical hand frame (palm centre at 0, wrist towards +y),
     divided by ``scale`` (e.g. the palm radius)."""
     t = math.radians(angle_deg)
-    d = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2) - np.asarray(center)
+    p = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2)
+    dx, dy = p[:, 0] - center[0], p[:, 1] - center[1]
     c, s_ = math.cos(t), math.sin(t)
-    return np.column_stack([d[:, 0] * c + d[:, 1] * s_, -d[:, 0] * s_ + d[:, 1] * c]) / scale
+    out = np.empty((len(p), 2))
+    out[:, 0] = dx * c + dy * s_
+    out[:, 1] = -dx * s_ + dy * c
+    out /= scale
+    return out
 
 
 def brightness_grid(
