@@ -140,11 +140,13 @@ def haptable_register_demos(register: Register) -> None:
 
     The factory takes ``(profile, plugins, outputs, **params)`` instead of a profile and
     returns a running demo with ``stop()``, ``snapshot() -> dict`` (camera, latency,
-    watchdog and demo state, polled by the console) and ``scene_name``. The console passes
-    ``camera=``, ``classifier=`` (its own, lent), ``script=True``, ``projector=``,
-    ``progress=``, ``sinks=`` and ``camera_apart=True`` (a simulated camera may be replaced
-    by one rendering in its own process; the demo's ``camera`` attribute is the one used,
-    with ``set_target(pos_mm | None)`` when the operator can touch it).
+    watchdog and demo state as JSON values) and ``scene_name``. The console runs it in its
+    own process (``console.runtime.demo_host``, with the outputs handed over) and passes
+    ``script=True``, ``camera_apart=True`` (a simulated camera may render in a process of
+    its own), ``sinks=`` (frame sinks ``sink(frame, work)``), ``projector=`` (``update(event)``
+    for the scene's events), ``progress(done, total, what)`` (raising stops the
+    preparation) and ``vision=`` (the Camera screen's tuned thresholds); the demo's
+    ``camera`` attribute has ``set_target(pos_mm | None)`` when the operator can touch it.
     """
 
 

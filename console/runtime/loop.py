@@ -86,6 +86,7 @@ class FrameLoop:
         queue_size: int = 2,
         sinks: Iterable[Sink] = (),
         name: str = "loop",
+        realtime: bool = False,
     ) -> None:
         names = [n for n, _ in stages]
         if len(set(names)) != len(names) or {ARRIVAL, DEQUEUED} & set(names):
@@ -108,6 +109,8 @@ class FrameLoop:
         self._camera_dropped_seen = 0
         self.last_error: str = ""
         self.frames_in = 0
+        self.realtime = realtime  # ask for FIFO scheduling of both threads
+        self.realtime_granted: bool | None = None  # what the system gave (None: not asked)
 
     # ------------------------------------------------------------------ control
     def start(self) -> FrameLoop:
@@ -156,7 +159,14 @@ class FrameLoop:
         return 0.0, "not started"
 
     # ------------------------------------------------------------------ threads
+    def _want_realtime(self) -> None:
+        if self.realtime:
+            from console.runtime.realtime import FRAMES_PRIORITY, realtime_priority
+
+            self.realtime_granted = realtime_priority(FRAMES_PRIORITY)
+
     def _camera_run(self) -> None:
+        self._want_realtime()
         cam = self.camera
         while not self._stop.is_set():
             try:
@@ -189,6 +199,7 @@ class FrameLoop:
             self._camera_dropped_seen = n
 
     def _process_run(self) -> None:
+        self._want_realtime()
         while not self._stop.is_set():
             frame = self.queue.get(0.05)
             if frame is None:

@@ -253,7 +253,9 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ outputs
     @work(thread=True, exclusive=True, group="outputs")
-    def open_outputs(self) -> None:
+    def open_outputs(self, estop_reason: str | None = None) -> None:
+        """Open the profile's outputs (again after a demo: ``estop_reason`` keeps an
+        e-stop that happened meanwhile until the operator resets it)."""
         from console.runtime.control import ControlServer
         from console.runtime.outputs import open_outputs
 
@@ -262,12 +264,37 @@ class HapTableApp(App):
         except Exception as exc:  # shown in the bar; the console stays usable
             self.outputs_error = str(exc)
             return
+        if estop_reason:
+            out.estop(estop_reason)
         with self._lock:
             self.outputs = out
+            self.outputs_error = ""
+        if self._control is not None:
+            return
         try:
             self._control = ControlServer(self.ctx.profile, self._control_command)
         except OSError as exc:
             self.outputs_error = str(exc)
+
+    def hand_over_outputs(self, borrower: str) -> None:
+        """Close the console's outputs for ``borrower`` (a demo process opens them: a
+        sound card or relay board opens once). Refused while they play or are e-stopped.
+        Blocking: call from a worker; ``open_outputs`` takes them back."""
+        from console.errors import UserError
+
+        with self._lock:
+            out = self.outputs
+            if out is None:
+                raise UserError(
+                    f"{borrower}: outputs not open ({self.outputs_error or 'starting'})"
+                )
+            if out.gate.estopped:
+                raise UserError(f"{borrower}: the e-stop is active; ctrl+r resets it")
+            if out.status()["busy"]:
+                raise UserError(f"{borrower}: the outputs are playing; wait or stop them (s)")
+            self.outputs = None
+            self.outputs_error = f"in use by {borrower} (its own process)"
+        out.close()
 
     def _control_command(self, line: str) -> str:
         if line == "estop":
@@ -323,11 +350,16 @@ class HapTableApp(App):
         self._keep_focus_visible()
         out = self.outputs
         bars = self.screen.query(SafetyBar)  # none while a modal is up or tearing down
-        if out is None:
+        status, log = None, None
+        if out is not None:
+            status, log = out.status(), out.relay_log()
+        else:  # a demo process holds them: what it last said
+            scenes = self.pane("scenes")
+            status = scenes.demo_outputs_status() if scenes is not None else None
+        if status is None:
             for bar in bars:
                 bar.show(None, self.outputs_error)
             return
-        status = out.status()
         for bar in bars:
             bar.show(status)
         tabs = self.base.query("#tabs")
@@ -336,7 +368,7 @@ class HapTableApp(App):
         active = tabs.first(TabbedContent).active
         pane = self.pane(active)
         if pane is not None and hasattr(pane, "show_state"):
-            pane.show_state(status, out.relay_log())
+            pane.show_state(status, log)
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:
@@ -350,7 +382,7 @@ class HapTableApp(App):
         for tab in TABS:
             p = self.pane(tab)
             if hasattr(p, "on_estop"):
-                p.on_estop()
+                p.on_estop(reason)
 
     def action_estop(self) -> None:
         self.estop("operator e-stop (console)")
@@ -408,7 +440,7 @@ class HapTableApp(App):
         if self.outputs is not None:
             path = os.environ.get("HAPTABLE_TWIN_LOG")
             if path:
-                from console.tui.twin_log import write_twin_log
+                from console.runtime.twin_log import write_twin_log
 
                 try:
                     write_twin_log(path, self.outputs, list(self.played))

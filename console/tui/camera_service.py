@@ -3,9 +3,8 @@ runtime's ``FrameLoop`` with the ``vision`` and ``classify`` stages), keeping th
 frame and result for the Camera view and a latency monitor for the Latency screen.
 
 Started when the Camera or Latency screen opens, stopped when neither is shown. A demo
-started from the console borrows the camera and classifier (``lend``/``give_back``): the
-service's own loop stays stopped meanwhile and the demo's loop feeds ``sink`` (the Camera
-view stays live).
+started from the console runs in its own process and opens the camera there: the service
+closes it meanwhile (``release``/``give_back``).
 """
 
 from __future__ import annotations
@@ -65,36 +64,31 @@ class CameraService:
     def _open(self, open_camera, open_classifier, learn_background) -> None:
         if self.camera is None:
             camera = open_camera(self.profile, self.plugins)
-            self.classifier = open_classifier(self.profile, self.plugins)
+            if self.classifier is None:  # kept across a demo: its tuned thresholds
+                self.classifier = open_classifier(self.profile, self.plugins)
             learn_background(camera, self.classifier)
             self.camera = camera
 
-    def lend(self, borrower: str) -> tuple[Any, Any]:
-        """Stop this service's loop and hand (camera, classifier) to ``borrower`` (a demo),
-        opening them if needed (blocking: call in a worker). Until ``give_back`` the
-        service's own loop does not start; ``sink`` is the frame sink to give the
-        borrower's loop so the Camera view keeps showing frames."""
-        from console.runtime.stages import learn_background, open_camera, open_classifier
-
+    def release(self, borrower: str) -> None:
+        """Stop this service's loop and close the camera for ``borrower`` (a demo process
+        opens it: a camera device opens once). Until ``give_back`` the service does not
+        start again. Blocking: call in a worker."""
         with self._start_lock:
             if self.borrower is not None:
-                raise RuntimeError(f"the camera is already lent to {self.borrower}")
+                raise RuntimeError(f"the camera is already in use by {self.borrower}")
             if self.loop is not None:
                 self.loop.stop()
                 self.loop = None
-            self._open(open_camera, open_classifier, learn_background)
+            if self.camera is not None:
+                self.camera.close()
+                self.camera = None
+            self.latest = None
             self.borrower = borrower
-            return self.camera, self.classifier
 
     def give_back(self) -> None:
-        """The borrower's loop has stopped: the service may run its own loop again."""
+        """The borrower has closed the camera: the service may open it again."""
         with self._start_lock:
             self.borrower = None
-
-    @property
-    def sink(self):
-        """``sink(frame, work)``: keeps the newest frame and calls the frame hooks."""
-        return self._sink
 
     def _sink(self, frame, work: dict) -> None:
         with self._lock:
@@ -148,4 +142,4 @@ class CameraService:
             except Exception as exc:
                 cam = {"error": str(exc)}
         mon = self.loop.monitor.snapshot() if self.loop is not None else None
-        return {"camera": cam, "latency": mon, "error": self.error}
+        return {"camera": cam, "latency": mon, "error": self.error, "borrower": self.borrower}

@@ -39,6 +39,12 @@ RUNTIME_FIELDS = {
     "latency_window_frames": Field(
         "int", 1200, min=10, max=1000000, help="frames the latency monitor's p50/p99 cover"
     ),
+    "realtime_loop": Field(
+        "bool",
+        True,
+        help="a demo's frame loop threads ask for real-time (FIFO) scheduling one step "
+        "below the audio thread, where the system allows it (rtprio limit or CAP_SYS_NICE)",
+    ),
     "twin_camera_process": Field(
         "bool",
         True,

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -130,6 +130,7 @@ class DemoRun:
                 "reason": self.watchdog.reason,
             },
             "camera": cam,
+            "realtime_loop": self.loop.realtime_granted,
             "last_error": self.loop.last_error,
         }
         out.update(demo_state(self.demo))
@@ -228,6 +229,7 @@ def start_demo(
     projector: Any = None,
     classifier: Any = None,
     camera_apart: bool = False,
+    vision: dict | None = None,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
@@ -241,6 +243,7 @@ def start_demo(
     in-process twin; rendering it beside the loop and the audio costs them the GIL).
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
+    ``vision``: classifier parameters to override (the console's tuned thresholds).
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
     scene region the first time, cached on disk after); call this from a worker thread.
     """
@@ -265,6 +268,8 @@ def start_demo(
         if clf is None:
             clf = open_classifier(profile, plugins)
             learn_background(camera, clf)
+        if vision and hasattr(clf, "params"):
+            clf.params = replace(clf.params, **vision)
         still = StillHand(
             still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
         )
@@ -323,6 +328,7 @@ def start_demo(
             queue_size=int(rt.get("queue_frames", 2)),
             sinks=all_sinks,
             name=name,
+            realtime=bool(rt.get("realtime_loop", True)),
         )
         limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
         wd = Watchdog(loop, outputs.estop, limit_ms / 1e3)

@@ -19,7 +19,6 @@ see it) and the clock of that sample (an index into the recording).
 from __future__ import annotations
 
 import math
-import os
 import sys
 import threading
 import time
@@ -30,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from console.runtime.realtime import realtime_priority
 from console.types import BlockSource
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
@@ -69,17 +69,6 @@ def _key(profile, dotted: str, default):
     except Exception:  # a bare profile stub without the section
         v = None
     return default if v is None else v
-
-
-def realtime_priority() -> bool:
-    """Give the calling thread real-time (FIFO) scheduling, as PortAudio and JACK do for
-    their audio threads when the system allows it; False where it is not permitted."""
-    try:
-        prio = os.sched_get_priority_min(os.SCHED_FIFO) + 10
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(prio))  # 0: this thread
-        return True
-    except (AttributeError, OSError):
-        return False
 
 
 class TwinAudioOutput:

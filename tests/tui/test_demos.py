@@ -1,10 +1,15 @@
-"""The demos started from the Scenes screen on the twin, as an operator does: the scripted
-hand performs, the flow it reports is what the twin's amplifier and relays got; stopping,
-the e-stop and quitting leave the outputs silent and the relays open."""
+"""The demos started from the Scenes screen on the twin, as an operator does: the demo runs
+in its own process with the console's outputs handed over; the scripted hand performs,
+the flow it reports is what the twin's amplifier and relays got (the process's twin log);
+stopping, the e-stop and quitting leave the outputs silent and the relays open, the
+process gone and the console's outputs back."""
 
 from __future__ import annotations
 
 import asyncio
+import json
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -89,12 +94,32 @@ async def _start(app, pilot, name: str):
     return pane
 
 
-def _silent_and_open(out) -> None:
-    st = out.status()["gate"]
-    assert st["level_v"] == (0.0, 0.0)
-    assert st["relays_closed"] == []
-    log = out.relay_log()
+def twin_record(run) -> tuple[np.ndarray, list]:
+    """What the demo process's twin outputs received: (recording (n, 2) V, relay log)."""
+    path = Path(run.final["twin_log"])
+    log = [SimpleNamespace(**r) for r in json.loads(path.read_text())["relay_log"]]
+    with np.load(path.with_suffix(".npz")) as z:
+        return z["recording_v"], log
+
+
+def outputs_of(run) -> dict:
+    """The demo's outputs (gate, audio, busy) as its process last reported them."""
+    return run.snapshot().get("outputs") or {"gate": {}, "busy": True}
+
+
+def _silent_and_open(run) -> None:
+    """The process ended with its outputs silent and every relay open."""
+    assert run.proc.poll() is not None, "the demo process still runs"
+    gate = run.final["final"]["outputs"]["gate"]
+    assert gate["level_v"] == [0.0, 0.0]
+    assert gate["relays_closed"] == []
+    _, log = twin_record(run)
     assert log and not log[-1].closed
+
+
+async def _outputs_back(app, pilot):
+    await wait_for(pilot, lambda: app.outputs is not None, 20, "the console's outputs back")
+    return app.outputs
 
 
 def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
@@ -105,23 +130,23 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             # plans on first use (fast); a loaded test machine must not trip the watchdog
             pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
-            out = app.outputs
             run = pane.demo_run
-            assert app.camera_service.borrower == "demo flow"  # the console's camera
+            assert app.outputs is None  # handed over to the demo's process
+            assert app.camera_service.borrower == "demo flow"  # and the camera
 
             def flow_done() -> bool:
-                snap = run.snapshot()["flow"]
-                if not any(e.get("parts") for e in snap["last"]):
-                    return False
-                want = sum(len(e["parts"]) for e in snap["last"] if e.get("parts"))
-                return len(played_bursts(out.recording(), out.relay_log(), part_n(app))) >= want
+                snap = run.snapshot()
+                last = snap.get("flow", {}).get("last", [])
+                return any(e.get("parts") for e in last) and not snap["outputs"]["busy"]
 
             try:
                 await wait_for(pilot, flow_done, 45, "a flow played")
             except AssertionError as exc:
-                bursts = played_bursts(out.recording(), out.relay_log(), part_n(app))
                 snap = {k: v for k, v in run.snapshot().items() if k != "latency"}
-                raise AssertionError(f"{exc}: {snap} bursts={bursts}") from None
+                raise AssertionError(f"{exc}: {snap}") from None
+            # the safety bar shows the demo's outputs while the process holds them
+            bar = str(app.query_one("#safety").render())
+            assert "ctrl+e E-STOP | outputs" in bar and "not open" not in bar
             snap = run.snapshot()
             status = str(app.query_one("#demo-status").render())
             assert "flow right" in status and "latency p50/p99" in status
@@ -146,11 +171,13 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             await pilot.press("f6")
             await pilot.press("s")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
-            assert run.stopped and not run.loop.running
+            assert run.stopped and not run.running
             assert app.camera_service.borrower is None  # given back
-            await pilot.pause(0.3)
-            _silent_and_open(out)
-            rec, log = out.recording(), out.relay_log()
+            out = await _outputs_back(app, pilot)
+            assert not out.gate.estopped
+            _silent_and_open(run)
+            rec, log = twin_record(run)
+            assert run.final["twin_log"] in str(app.query_one("#demo-status").render())
         # what the demo reported is what the amplifier and the relays got
         chans = {n: int(v["relay_channel"]) for n, v in flow_ctx.profile.items("patches").items()}
         parts = [p for e in snap["flow"]["last"] for p in e.get("parts", [])]
@@ -160,7 +187,7 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
         for p, (closed, hz) in zip(parts, bursts, strict=False):
             assert closed == {chans[q] for q in patches_of(p["actuator"])}
             assert hz == pytest.approx(p["frequency_hz"], abs=1.0)
-        assert all(r.level_v == (0.0, 0.0) for r in log)  # relays switched in silence
+        assert all(r.level_v == [0.0, 0.0] for r in log)  # relays switched in silence
 
     asyncio.run(scenario())
 
@@ -171,21 +198,27 @@ def test_estop_stops_a_running_demo(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
             run = pane.demo_run
-            out = app.outputs
             screen = int(app.ctx.profile.get("screen.relay_channel"))
 
             def playing() -> bool:
-                closed = out.status()["gate"]["relays_closed"]
-                return screen in closed and bool(np.any(out.recording()[:, 1]))
+                st = outputs_of(run)
+                gate = st["gate"]
+                return screen in gate.get("relays_closed", ()) and gate["level_v"][1] != 0
 
             await wait_for(pilot, playing, 20, "knob playing on the screen electrode")
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
-            assert run.stopped and not run.loop.running
+            assert run.stopped and not run.running
             assert pane.demo_state == "e-stopped"
             assert app.camera_service.borrower is None
-            assert out.gate.estopped
-            _silent_and_open(out)
+            assert run.final["final"]["outputs"]["gate"]["estopped"]  # the process's gate
+            _silent_and_open(run)
+            rec, _ = twin_record(run)
+            assert np.any(rec[:, 1])  # it did play on the screen electrode
+            # the console's outputs come back e-stopped, until the operator resets them
+            out = await _outputs_back(app, pilot)
+            assert out.gate.estopped and "operator e-stop" in out.gate.estop_reason
+            assert "E-STOP" in str(app.query_one("#safety").render())
 
     asyncio.run(scenario())
 
@@ -196,11 +229,11 @@ def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
             run = pane.demo_run
-            out = app.outputs
-            await wait_for(pilot, lambda: np.any(out.recording()[:, 1]), 20, "knob playing")
+            await wait_for(pilot, lambda: outputs_of(run)["busy"], 20, "knob playing")
             await pilot.press("q")
-        assert run.stopped and not run.loop.running
-        _silent_and_open(out)
+        assert run.stopped and not run.running
+        _silent_and_open(run)
+        assert app.outputs is None  # not reopened while quitting
 
     asyncio.run(scenario())
 
@@ -218,6 +251,8 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
             lw = app.query_one("#demo-work", LongWork)
             await wait_for(pilot, lambda: "preparing" in lw.text, 30, "preparation shown")
             assert lw.progress is not None  # the bar shows
+            run = pane.demo_run  # its process prepares the flow's plans
+            assert run is not None and app.outputs is None
             await pilot.press("x")
             await wait_for(pilot, lambda: lw.outcome == "cancelled", 60, "cancelled")
             # the pane tidies up when the worker's end reaches it (a message later)
@@ -225,7 +260,9 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
                 pilot, lambda: pane.demo_run is None and pane.demo_name is None, 10, "tidied"
             )
             assert app.camera_service.borrower is None  # the camera is the console's again
-            assert not app.outputs.relay_log()  # nothing played
+            assert run.proc.wait(10) is not None and run.exit_reason == "cancelled"
+            out = await _outputs_back(app, pilot)
+            assert not out.gate.estopped
             table = app.query_one("#demo-table")
             assert str(table.get_cell("flow", "state")) == "cancelled"
 
@@ -239,9 +276,9 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
             pane = app.pane("scenes")
             pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
-            run, out = pane.demo_run, app.outputs
-            # the console lent its twin; the demo renders the twin in its own process
-            assert run.camera.status().get("process")
+            run = pane.demo_run
+            # the demo's process renders the twin camera in a process of its own
+            assert run.snapshot()["camera"].get("process")
 
             def new_flow_near(n_before: int, where) -> bool:
                 """A flow after the first ``n_before`` events, under a hand resting near
@@ -266,19 +303,19 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
                 except AssertionError:
                     await pilot.press("down" if step % 2 == 0 else "left")
             assert placed, run.snapshot()["flow"]
-            await wait_for(pilot, lambda: not out.status()["busy"], 20, "flow played")
+            await wait_for(pilot, lambda: not outputs_of(run)["busy"], 20, "flow played")
             n1 = run.snapshot()["flow"]["flows"]
             await pilot.press("down", "down", "down")  # 60 mm further: a new placement
             moved = np.array(pane.hand_mm)
             assert np.hypot(*(moved - where)) == pytest.approx(60.0)
             await wait_for(pilot, lambda: new_flow_near(n1, moved), 20, "flow where it moved")
             # let it play out: a stop cuts a flow under way, and its cut burst is not counted
-            await wait_for(pilot, lambda: not out.status()["busy"], 20, "second flow played")
+            await wait_for(pilot, lambda: not outputs_of(run)["busy"], 20, "second flow played")
             await pilot.press("s")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
             snap = run.snapshot()
-            _silent_and_open(out)
-            rec, log = out.recording(), out.relay_log()
+            _silent_and_open(run)
+            rec, log = twin_record(run)
         chans = {n: int(v["relay_channel"]) for n, v in flow_ctx.profile.items("patches").items()}
         parts = [p for e in snap["flow"]["last"] for p in e.get("parts", [])]
         bursts = played_bursts(rec, log, part_n(app))
@@ -286,5 +323,26 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
         for p, (closed, hz) in zip(parts, bursts, strict=False):
             assert closed == {chans[q] for q in patches_of(p["actuator"])}
             assert hz == pytest.approx(p["frequency_hz"], abs=1.0)
+
+    asyncio.run(scenario())
+
+
+def test_a_demo_process_that_dies_is_shown_and_the_outputs_come_back_estopped(plugins):
+    import os
+    import signal
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _start(app, pilot, "knob")
+            run = pane.demo_run
+            os.kill(run.proc.pid, signal.SIGKILL)
+            await wait_for(pilot, lambda: pane.demo_name is None, 20, "the console noticed")
+            assert "exited (code -9)" in pane.demo_state
+            assert app.camera_service.borrower is None
+            # back e-stopped: the process did not close its outputs itself
+            out = await _outputs_back(app, pilot)
+            assert out.gate.estopped and "exited (code -9)" in out.gate.estop_reason
+            assert out.status()["gate"]["relays_closed"] == []
 
     asyncio.run(scenario())

@@ -129,6 +129,12 @@ class CameraPane(Horizontal):
         if svc.error:
             self.query_one("#camera-view", Static).update(f"[red]camera: {svc.error}[/]")
             return
+        if svc.borrower is not None:
+            self.query_one("#camera-view", Static).update(
+                f"the camera is in use by {svc.borrower}, which runs in its own process:\n"
+                "the Scenes screen (F6) shows what it sees, the Latency screen (F7) its loop"
+            )
+            return
         snap = svc.snapshot()
         if snap is None:
             self.query_one("#camera-view", Static).update("waiting for the first frame ...")

@@ -3,17 +3,19 @@ Demos: the interactive demos plugins register (``haptable_register_demos``: the 
 flow and knob), started on the console's outputs, camera and projector.
 
 The projector is its own process, driven through ``console.runtime.projector_link``.
-A demo borrows the console's camera and classifier (``CameraService.lend``), runs its
-own frame loop (camera -> vision -> gestures -> scene -> effect -> outputs) and is
-polled for its latency and state; ``s`` or the e-stop stops it, so does quitting."""
+A demo runs in its own process (``console.runtime.demo_process``): its frame loop (camera
+-> vision -> gestures -> scene -> effect -> outputs) never waits for the console's
+drawing. The console hands it the outputs and the camera (each opens once), forwards its
+scene events to the projector, shows what it reports and takes both back when it ends;
+``s`` or the e-stop stops it, so does quitting."""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import tempfile
 import threading
-import time
-from typing import Any
+from pathlib import Path
 
 from textual import work
 from textual.app import ComposeResult
@@ -56,6 +58,13 @@ def status_text(st: dict | None) -> str:
     return "  ".join(parts)
 
 
+def twin_log_path(name: str) -> Path:
+    """Where a demo process writes what the twin's outputs received (``.json`` bursts and
+    relay switches, ``.npz`` samples: ``console.runtime.twin_log``); the next run of the
+    same demo overwrites it."""
+    return Path(tempfile.gettempdir()) / f"haptable-demo-{os.getpid()}-{name}.json"
+
+
 def _ms(v) -> str:
     if v is None or v != v:
         return "-"
@@ -63,8 +72,8 @@ def _ms(v) -> str:
 
 
 def demo_text(snap: dict, hand: dict | None = None) -> str:
-    """What the operator sees of a running demo, from ``DemoRun.snapshot()`` and what
-    the camera last saw (``HandWatch.state``)."""
+    """What the operator sees of a running demo, from its snapshot and what its camera
+    last saw (``hand``: ``console.runtime.demo_host.HandWatch.state``)."""
     name = snap.get("demo", "?")
     wd = snap.get("watchdog", {})
     if wd.get("tripped"):
@@ -129,26 +138,6 @@ def demo_text(snap: dict, hand: dict | None = None) -> str:
     return "\n".join(lines)
 
 
-class HandWatch:
-    """Frame hook: what the camera last saw (hands, contacts, gesture, a resting hand)."""
-
-    def __init__(self) -> None:
-        self.state: dict[str, Any] = {"hands": 0, "contacts": 0, "gesture": None, "rest_mm": None}
-
-    def __call__(self, frame, work: dict) -> None:
-        hands = work.get("hands") or ()
-        rest = work.get("rest_mm")
-        if rest is None and hands:
-            rest = self.state["rest_mm"]  # still resting where it was placed
-        g = work.get("gesture")
-        self.state = {
-            "hands": len(hands),
-            "contacts": len(work.get("contacts") or ()),
-            "gesture": getattr(g, "name", None) if g is not None else self.state["gesture"],
-            "rest_mm": None if rest is None else (float(rest[0]), float(rest[1])),
-        }
-
-
 class ProjectorForward:
     """The demo's scene events, forwarded to the console's projector service once the
     demo's scene is shown there (events before that are applied when it starts)."""
@@ -176,24 +165,6 @@ class ProjectorForward:
             self.pending, self.ready = [], True
 
 
-def wait_silent(outputs, timeout_s: float = 10.0) -> bool:
-    """Wait (bounded) until ``outputs`` play nothing: a demo's stop lets the plan that is
-    playing end by its own ramps (at most one plan)."""
-    if outputs is None:
-        return True
-    t_end = time.monotonic() + timeout_s
-    while time.monotonic() < t_end:
-        st = outputs.status()
-        if not st.get("busy") and st["gate"]["level_v"] == (0.0, 0.0):
-            return True
-        time.sleep(0.05)
-    return False
-
-
-class DemoCancelled(Exception):
-    pass
-
-
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
     ScenesPane #demo-table { height: auto; max-height: 5; }
@@ -208,8 +179,9 @@ class ScenesPane(Vertical):
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
         "space    on the twin: your finger touches the table (again: lifts it); arrows\n"
         "         move it 20 mm (the flow plays under a resting hand)\n"
-        "A demo uses the console's camera (the Camera view stays live) and, when the\n"
-        "projector runs, shows its scene there. The Latency screen shows its loop."
+        "A demo runs in its own process with the console's outputs and camera (handed\n"
+        "over until it ends) and, when the projector runs, shows its scene there.\n"
+        "The Latency screen shows its loop."
     )
     BINDINGS = [
         Binding("enter", "start_scene", "start on projector", show=False),
@@ -234,15 +206,14 @@ class ScenesPane(Vertical):
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self._tick = 0
-        self.demo_run = None  # the running DemoRun
+        self.demo_run = None  # the running DemoProcess
         self.demo_name: str | None = None  # running or being prepared
         self.demo_state = "idle"
-        self.hand = HandWatch()
-        self._lent = None  # (camera service, camera, its script before the demo)
         self._forward: ProjectorForward | None = None
         self._stop_lock = threading.Lock()
         self._quitting = False
         self.last_snapshot: dict | None = None
+        self._last_final: dict | None = None  # the last run's "stopped" message
         self.hand_mm: tuple[float, float] | None = None  # the operator's hand on the twin
         self.hand_placed = False  # the operator drives the twin (not the script)
 
@@ -383,7 +354,7 @@ class ScenesPane(Vertical):
             t.first(DataTable).update_cell(self.demo_name, "state", text)
 
     def start_demo(self, name: str) -> bool:
-        """Start demo ``name`` on the console's outputs (preparation in a worker)."""
+        """Start demo ``name`` in its own process (hand-over and start in a worker)."""
         app = self.app
         reg = app.ctx.pm.of("demo").get(name)
         lw = self.query_one("#demo-work", LongWork)
@@ -398,48 +369,41 @@ class ScenesPane(Vertical):
             return False
         self.demo_name = name
         self._set_state("starting")
-        self.hand = HandWatch()
         self.hand_placed, self.hand_mm = False, None
         svc = app.get_camera_service()
         projector = app.projector_service
         params = dict(self.demo_params.get(name, {}))
+        vision = svc.params()
+        if vision:
+            params.setdefault("vision", vision)  # the Camera screen's tuned thresholds
         ctx = app.ctx
 
         def job(progress, cancelled):
-            def prep(done: int, total: int, what: str) -> None:
-                if cancelled():
-                    raise DemoCancelled(name)
-                progress(0.1 + 0.9 * done / max(total, 1), f"preparing {what} ({done + 1}/{total})")
+            from console.runtime.demo_process import DemoCancelled, DemoProcess
 
-            progress(0.0, "opening the camera")
-            camera, clf = svc.lend(f"demo {name}")
-            self._lent = (svc, camera, getattr(camera, "script", None))
-            svc.frame_hooks.append(self.hand)
-            fwd = ProjectorForward(projector) if projector is not None else None
-            progress(0.1, "starting")
+            progress(0.0, "handing over the outputs and the camera")
+            app.hand_over_outputs(f"demo {name}")
+            run = None
             try:
+                svc.release(f"demo {name}")
                 if cancelled():
                     raise DemoCancelled(name)
-                run = reg.factory(
+                fwd = ProjectorForward(projector) if projector is not None else None
+                run = DemoProcess(
                     ctx.profile,
-                    ctx.pm,
-                    out,
-                    camera=camera,
-                    classifier=clf,
-                    script=True,
-                    projector=fwd,
-                    progress=prep,
-                    sinks=[svc.sink],
-                    camera_apart=True,
-                    **params,
+                    name,
+                    params=params,
+                    on_scene=fwd.update if fwd is not None else None,
+                    twin_log=twin_log_path(name),
                 )
+                self.demo_run, self._forward = run, fwd
+                run.wait_started(progress, cancelled)
             except BaseException:
-                self._give_back()
+                if run is not None:
+                    run.stop("cancelled")
+                self.demo_run = None
+                self._take_back(run)
                 raise
-            self.demo_run, self._forward = run, fwd
-            if cancelled():
-                self._stop_run(run)
-                raise DemoCancelled(name)
             if fwd is not None:
                 try:
                     fwd.start(run.scene_name)
@@ -486,6 +450,8 @@ class ScenesPane(Vertical):
             self._stop_run(run)
         except Exception as exc:  # noqa: BLE001 - one line, the console stays up
             reason = f"stop failed: {exc}"
+        if run.exit_reason and run.exit_reason not in ("stopped", reason):
+            reason = run.exit_reason  # it ended by itself (an error, its watchdog ...)
         with contextlib.suppress(RuntimeError):  # the app is closing
             self.app.call_from_thread(self._stopped, reason)
 
@@ -494,6 +460,9 @@ class ScenesPane(Vertical):
         if self.last_snapshot is not None:  # the run's last numbers stay, marked as such
             snap = {**self.last_snapshot, "running": False}
             text = demo_text(snap, None)
+            log = (getattr(self, "_last_final", None) or {}).get("twin_log")
+            if log:
+                text += f"\nwhat the twin's outputs received: {log}"
             self.query_one("#demo-status", Static).update(f"last run ({reason}):\n{text}")
         self.demo_name, self.demo_run = None, None
         self.query_one("#demo-work", LongWork).show(f"demo {reason}")
@@ -503,40 +472,48 @@ class ScenesPane(Vertical):
                 pane._start()
 
     def _stop_run(self, run) -> None:
-        """Stop ``run``, show black if it showed its scene, give the camera back (blocking)."""
+        """Stop ``run`` (the process lets the playing plan end, closes its outputs and
+        exits), show black if it showed its scene, take outputs and camera back."""
         with self._stop_lock:
             try:
                 run.stop()
-                wait_silent(getattr(run, "outputs", None))
+                self.last_snapshot = run.snapshot()
+                self._last_final = run.final
             finally:
                 fwd, self._forward = self._forward, None
                 if fwd is not None and fwd.ready:
                     with contextlib.suppress(Exception):
                         if fwd.service.status().get("scene") == run.scene_name:
                             fwd.service.stop_scene()
-                self._give_back()
+                self._take_back(run)
 
-    def _give_back(self) -> None:
-        lent, self._lent = self._lent, None
-        if lent is None:
+    def _take_back(self, run) -> None:
+        """The demo process has ended: the console's camera and outputs again (an e-stop
+        it had stays until the operator resets it). Not while the console quits."""
+        svc = self.app.camera_service
+        if svc is not None:
+            svc.give_back()
+        if self._quitting or self.app.outputs is not None:
             return
-        svc, camera, script = lent
-        with contextlib.suppress(ValueError):
-            svc.frame_hooks.remove(self.hand)
-        if script is not None and callable(getattr(camera, "set_script", None)):
-            with contextlib.suppress(Exception):
-                camera.set_script(script)  # the twin shows what it showed before
-        svc.give_back()
+        reason = getattr(run, "estop_reason", None)
+        if reason is None and getattr(run, "crashed", False):
+            reason = f"demo {run.name}: {run.exit_reason}"
+        with contextlib.suppress(RuntimeError):  # the app is closing
+            self.app.call_from_thread(self.app.open_outputs, reason)
+
+    def demo_outputs_status(self) -> dict | None:
+        """The running demo's outputs (for the safety bar while the demo holds them)."""
+        run = self.demo_run
+        return run.outputs_status() if run is not None else None
 
     # ------------------------------------------------------------------ the twin's hand
     def _twin(self):
-        """The running demo's camera when the operator can touch the twin with it (it has
-        ``set_target(pos_mm | None)``, as the Camera screen's calibration uses)."""
-        lent = self._lent
-        if lent is None or self.demo_run is None:
+        """The running demo's camera when the operator can touch the twin with it (it
+        takes ``set_target(pos_mm | None)``, as the Camera screen's calibration uses)."""
+        run = self.demo_run
+        if run is None or self.demo_state != "running":
             return None
-        cam = getattr(self.demo_run, "camera", None) or lent[1]  # the twin apart, or lent
-        return cam if callable(getattr(cam, "set_target", None)) else None
+        return run.camera
 
     def check_action(self, action: str, parameters) -> bool | None:
         if action in ("place_hand", "move_hand"):
@@ -562,7 +539,8 @@ class ScenesPane(Vertical):
             return
         if self.hand_mm is None:
             w, h = self._table_mm()
-            rest = self.hand.state.get("rest_mm")
+            hand = (self.last_snapshot or {}).get("hand") or {}
+            rest = hand.get("rest_mm")
             self.hand_mm = rest if rest is not None else (w / 2, h / 2)
         self.hand_placed = True
         cam.set_target(self.hand_mm)
@@ -580,8 +558,11 @@ class ScenesPane(Vertical):
         self.hand_mm = (x, y)
         cam.set_target(self.hand_mm)
 
-    def on_estop(self) -> None:
-        """The app's e-stop (outputs already silenced): stop the demo too."""
+    def on_estop(self, reason: str = "e-stop") -> None:
+        """The app's e-stop: the demo process silences its outputs now, then stops."""
+        run = self.demo_run
+        if run is not None:
+            run.estop(reason)
         if self.demo_name is not None:
             self.stop_demo("e-stopped")
 
@@ -605,7 +586,9 @@ class ScenesPane(Vertical):
         except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
             snap = {"demo": self.demo_name, "last_error": f"snapshot failed: {exc}"}
         self.last_snapshot = snap
-        text = demo_text(snap, self.hand.state)
+        if run.stopped and self.demo_state == "running":  # it ended by itself
+            self.stop_demo(run.exit_reason or "ended")
+        text = demo_text(snap, snap.get("hand"))
         if self._twin() is not None:
             if self.hand_placed and self.hand_mm is not None:
                 x, y = self.hand_mm

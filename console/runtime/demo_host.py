@@ -1,0 +1,283 @@
+"""A demo in its own process: the frame loop, the outputs and nothing else.
+
+The console's interpreter draws the screens; a frame loop beside it shares its GIL and
+misses the loop's latency target (and the audio its blocks) whenever the console paints.
+So the console runs a demo here, as it runs the projector: ``python -m
+console.runtime.demo_host`` opens the profile's outputs, starts the registered demo
+(``haptable_register_demos``) and talks over its standard streams, one JSON object a line.
+
+In (stdin, after the pickled start request): ``{"cmd": "stop"}``, ``{"cmd": "estop",
+"reason": ...}``, ``{"cmd": "target", "pos_mm": [x, y] | null}`` (the operator's finger
+on the twin). End of input (the console is gone) is an e-stop.
+
+Out (the protocol's own descriptor; stray prints go to stderr): ``{"step": what}``,
+``{"progress": [done, total, what]}`` (the demo's preparation), ``{"started": {...}}``, ``{"status": snapshot}`` five times a second (the
+demo's snapshot plus ``outputs`` (gate, audio, busy) and ``hand`` (what the camera saw)),
+``{"scene": event}`` (for the projector), ``{"error": line}``, ``{"stopped": {...}}``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+#: status lines per second
+STATUS_HZ = 5.0
+
+
+class HandWatch:
+    """Frame sink: what the camera last saw (hands, contacts, gesture, a resting hand)."""
+
+    def __init__(self) -> None:
+        self.state: dict[str, Any] = {"hands": 0, "contacts": 0, "gesture": None, "rest_mm": None}
+
+    def __call__(self, frame, work: dict) -> None:
+        hands = work.get("hands") or ()
+        rest = work.get("rest_mm")
+        if rest is None and hands:
+            rest = self.state["rest_mm"]  # still resting where it was placed
+        g = work.get("gesture")
+        self.state = {
+            "hands": len(hands),
+            "contacts": len(work.get("contacts") or ()),
+            "gesture": getattr(g, "name", None) if g is not None else self.state["gesture"],
+            "rest_mm": None if rest is None else (float(rest[0]), float(rest[1])),
+        }
+
+
+def wait_silent(outputs, timeout_s: float = 10.0) -> bool:
+    """Wait (bounded) until ``outputs`` play nothing: a demo's stop lets the plan that is
+    playing end by its own ramps (at most one plan)."""
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        st = outputs.status()
+        if not st.get("busy") and st["gate"]["level_v"] == (0.0, 0.0):
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def _jsonable(o: Any) -> Any:
+    if hasattr(o, "tolist"):
+        return o.tolist()
+    if isinstance(o, (set, frozenset, tuple)):
+        return list(o)
+    return str(o)
+
+
+class _Protocol:
+    """The out stream: one JSON object a line, from any thread."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+        self._lock = threading.Lock()
+
+    def send(self, kind: str, value: Any) -> None:
+        line = json.dumps({kind: value}, default=_jsonable)
+        with self._lock:
+            try:
+                self._stream.write(line + "\n")
+                self._stream.flush()
+            except (BrokenPipeError, ValueError, OSError):
+                pass  # the console is gone: the end of stdin stops us
+
+
+class _Cancelled(Exception):
+    pass
+
+
+class Host:
+    """One demo run on this process's outputs, driven by the command stream."""
+
+    def __init__(self, request: dict, proto: _Protocol) -> None:
+        self.request = request
+        self.proto = proto
+        self.outputs = None
+        self.run = None
+        self.stop_asked = threading.Event()
+        self.estop_reason: str | None = None
+
+    # ---------------------------------------------------------------- commands
+    def read_commands(self, stream) -> None:
+        for raw in stream:
+            try:
+                msg = json.loads(raw.decode("utf-8", "replace"))
+            except ValueError:
+                continue
+            self.command(msg)
+        self.estop("the console closed the demo's command stream")
+
+    def command(self, msg: dict) -> None:
+        cmd = msg.get("cmd")
+        if cmd == "stop":
+            self.stop_asked.set()
+        elif cmd == "estop":
+            self.estop(str(msg.get("reason") or "e-stop"))
+        elif cmd == "target":
+            cam = getattr(self.run, "camera", None)
+            if callable(getattr(cam, "set_target", None)):
+                pos = msg.get("pos_mm")
+                cam.set_target(None if pos is None else (float(pos[0]), float(pos[1])))
+
+    def estop(self, reason: str) -> None:
+        if self.estop_reason is None:
+            self.estop_reason = reason
+        if self.outputs is not None:
+            self.outputs.estop(reason)
+        self.stop_asked.set()
+
+    # ---------------------------------------------------------------- the run
+    def progress(self, done: int, total: int, what: str) -> None:
+        if self.stop_asked.is_set():
+            raise _Cancelled()
+        self.proto.send("progress", [done, total, what])
+
+    def status(self) -> dict:
+        snap = self.run.snapshot()
+        st = self.outputs.status()
+        snap["outputs"] = {k: st[k] for k in ("gate", "audio", "busy")}
+        snap["hand"] = self.hand.state
+        return snap
+
+    def serve(self) -> int:
+        from console.plugins import load_plugins
+        from console.runtime.outputs import open_outputs
+
+        req = self.request
+        profile, name = req["profile"], req["demo"]
+        pm = load_plugins()
+        reg = pm.of("demo").get(name)
+        if reg is None:
+            self.proto.send("error", f"demo {name!r}: no plugin registers it in this process")
+            return 2
+        self.proto.send("step", "opening the outputs")
+        self.outputs = open_outputs(profile, pm, fast=False)
+        if self.estop_reason is not None:
+            self.outputs.estop(self.estop_reason)
+        self.hand = HandWatch()
+        try:
+            if self.stop_asked.is_set():
+                raise _Cancelled()
+            self.proto.send("step", "opening the camera")
+            self.run = reg.factory(
+                profile,
+                pm,
+                self.outputs,
+                script=True,
+                camera_apart=True,
+                sinks=[self.hand],
+                projector=_SceneOut(self.proto),
+                progress=self.progress,
+                **req.get("params", {}),
+            )
+            cam = self.run.camera
+            self.proto.send(
+                "started",
+                {
+                    "scene_name": self.run.scene_name,
+                    "touchable": callable(getattr(cam, "set_target", None)),
+                    "pid": os.getpid(),
+                },
+            )
+            period = 1.0 / STATUS_HZ
+            self.proto.send("status", self.status())
+            while not self.stop_asked.wait(period):
+                self.proto.send("status", self.status())
+            return self.finish()
+        except _Cancelled:
+            self.proto.send("stopped", {"reason": "cancelled", "estop": self.estop_reason})
+            return 0
+        finally:
+            if self.run is not None:
+                self.run.stop()
+            self.outputs.close()
+
+    def finish(self) -> int:
+        """Stop the run, let the playing plan end, write the twin's log, say so."""
+        self.run.stop()
+        if self.estop_reason is None:
+            wait_silent(self.outputs)
+        final = self.status()
+        final["running"] = False
+        logs = self.write_logs()
+        self.proto.send(
+            "stopped", {"reason": "stopped", "estop": self.estop_reason, "final": final, **logs}
+        )
+        return 0
+
+    def write_logs(self) -> dict:
+        """The twin's recording and relay log (``console.runtime.twin_log``) where the
+        console asked, and beside ``$HAPTABLE_TWIN_LOG`` when that is set."""
+        from console.runtime.twin_log import write_twin_log
+
+        out: dict[str, str] = {}
+        paths = []
+        if self.request.get("twin_log"):
+            paths.append(Path(self.request["twin_log"]))
+        env = os.environ.get("HAPTABLE_TWIN_LOG")
+        if env:
+            p = Path(env)
+            paths.append(p.with_name(f"{p.stem}.demo-{self.request['demo']}{p.suffix or '.json'}"))
+        for p in paths:
+            try:
+                got = write_twin_log(p, self.outputs, [])
+            except OSError as exc:
+                print(f"twin log {p}: {exc}", file=sys.stderr)
+                continue
+            if got is not None:
+                out.setdefault("twin_log", str(got))
+        return out
+
+
+class _SceneOut:
+    """The demo's projector: its scene events go to the console, which shows them."""
+
+    def __init__(self, proto: _Protocol) -> None:
+        self.proto = proto
+
+    def update(self, event: dict) -> dict:
+        self.proto.send("scene", event)
+        return {}
+
+
+def main() -> int:
+    proto = _Protocol(os.fdopen(os.dup(1), "w", buffering=1))
+    os.dup2(2, 1)  # a stray print must not break the protocol
+    sys.stdout = sys.stderr
+    raw = sys.stdin.buffer
+    request = pickle.loads(raw.read(int(raw.readline())))
+    host = Host(request, proto)
+    commands = threading.Thread(
+        target=host.read_commands,
+        args=(raw,),  # the same buffer: commands may already sit behind the request
+        name="haptable-demo-commands",
+        daemon=True,
+    )
+    commands.start()
+    from console.errors import UserError
+
+    try:
+        return host.serve()
+    except UserError as exc:
+        proto.send("error", str(exc))
+        return 2
+    except Exception as exc:  # one line for the console; the traceback to our stderr
+        import traceback
+
+        traceback.print_exc()
+        proto.send("error", f"demo {request.get('demo')}: {type(exc).__name__}: {exc}")
+        return 1
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stderr.flush()
+    # the command thread sits in a read of stdin: leave without finalising the
+    # interpreter (which would abort on that thread's lock); the outputs are closed
+    os._exit(code)

@@ -1,0 +1,23 @@
+"""Real-time (FIFO) scheduling for the threads that must not wait for the rest of the
+machine: the audio driver's thread (as PortAudio and JACK do) and a demo's frame loop,
+a step below it. Where the system does not allow it (no ``rtprio`` limit, no
+CAP_SYS_NICE) the thread keeps normal scheduling; callers report which one they got."""
+
+from __future__ import annotations
+
+import os
+
+#: FIFO priorities above the minimum: audio first, then the frame loop
+AUDIO_PRIORITY = 10
+FRAMES_PRIORITY = 5
+
+
+def realtime_priority(above_min: int = AUDIO_PRIORITY) -> bool:
+    """Give the calling thread FIFO scheduling at ``min + above_min``; False where it is
+    not permitted (or not on Linux)."""
+    try:
+        prio = os.sched_get_priority_min(os.SCHED_FIFO) + above_min
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(prio))  # 0: this thread
+        return True
+    except (AttributeError, OSError):
+        return False

@@ -1,0 +1,101 @@
+"""A demo in its own process (``console.runtime.demo_process`` / ``demo_host``): it runs and
+reports, it stops with its outputs silent and open, and whatever ends it (the console
+vanishing, a kill, a bad request) ends it safely with one line saying why."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from console.errors import UserError
+from console.runtime.demo_process import DemoCancelled, DemoProcess
+
+
+def _relay_log(run) -> list[dict]:
+    return json.loads(Path(run.final["twin_log"]).read_text())["relay_log"]
+
+
+def _wait(cond, timeout_s: float, what: str) -> None:
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        if cond():
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+
+
+def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
+    steps: list[str] = []
+    run = DemoProcess(profile, "knob", twin_log=tmp_path / "knob.json")
+    try:
+        run.wait_started(lambda f, text: steps.append(text))
+        assert steps and steps[-1].startswith("opening the") and run.running
+        assert run.scene_name == "knob" and run.camera is run  # the twin can be touched
+        screen = int(profile.get("screen.relay_channel"))
+
+        def turning() -> bool:
+            s = run.snapshot()
+            return s["knob"]["crossings"] >= 3 and s["latency"]["frames"] >= 60
+
+        _wait(turning, 30, "the scripted hand turning the knob")
+        snap = run.snapshot()
+        assert snap["demo"] == "knob" and snap["running"]
+        assert snap["hand"]["hands"] >= 1  # what its camera saw
+        assert snap["latency"]["end_to_end"]["n"] > 0
+        assert snap["outputs"]["gate"]["estopped"] is False
+    finally:
+        run.stop()
+    assert run.proc.returncode == 0 and run.exit_reason == "stopped"
+    final = run.final["final"]
+    assert final["running"] is False
+    assert final["outputs"]["gate"]["level_v"] == [0.0, 0.0]
+    assert final["outputs"]["gate"]["relays_closed"] == []
+    log = _relay_log(run)
+    assert any(r["channel"] == screen and r["closed"] for r in log)  # the knob played
+    assert not log[-1]["closed"]
+    with np.load(tmp_path / "knob.npz") as z:
+        assert np.any(z["recording_v"][:, 1])  # friction on the screen electrode
+
+
+def test_the_console_vanishing_estops_the_demo(profile, tmp_path):
+    run = DemoProcess(profile, "knob", twin_log=tmp_path / "knob.json")
+    run.wait_started()
+    run.proc.stdin.close()  # what the console's death looks like from the demo's side
+    assert run.wait_ended(20)
+    assert run.proc.returncode == 0
+    assert "console closed" in run.estop_reason
+    assert run.final["final"]["outputs"]["gate"]["estopped"]
+    assert not _relay_log(run)[-1]["closed"]
+
+
+def test_a_killed_demo_process_is_noticed(profile):
+    run = DemoProcess(profile, "knob")
+    run.wait_started()
+    os.kill(run.proc.pid, signal.SIGKILL)
+    assert run.wait_ended(10)
+    assert run.stopped and not run.running
+    assert "exited (code -9)" in run.exit_reason
+    assert run.snapshot()["running"] is False
+    run.stop()  # still safe
+
+
+def test_a_bad_request_is_one_line(profile):
+    run = DemoProcess(profile, "knob", params={"condition": "XX"})
+    with pytest.raises(UserError) as err:
+        run.wait_started()
+    assert "XX" in str(err.value) and "\n" not in str(err.value)
+    assert run.wait_ended(10) and run.proc.returncode == 2
+
+
+def test_cancelling_while_it_starts(profile):
+    run = DemoProcess(profile, "knob")
+    with pytest.raises(DemoCancelled):
+        run.wait_started(cancelled=lambda: True)
+    assert run.proc.poll() is not None
+    assert run.exit_reason == "cancelled"
