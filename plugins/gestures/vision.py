@@ -265,22 +265,64 @@ def _gauss_radius_px(sigma_px: float) -> int:
     return (int(round(sigma_px * 6 + 1)) | 1) // 2
 
 
+def above_box(
+    image: np.ndarray, threshold: float, within: tuple[int, int, int, int] | None = None
+) -> tuple[int, int, int, int] | None:
+    """``(x0, y0, x1, y1)``: the bounding box of the pixels above ``threshold`` (the test
+    ``cv2.threshold`` makes), looked for in the box ``within`` only if given; None if
+    there are none."""
+    ox, oy = 0, 0
+    if within is not None:
+        ox, oy, x1, y1 = within
+        image = image[oy:y1, ox:x1]
+    _, m = cv2.threshold(image, threshold, 255, cv2.THRESH_BINARY)
+    x, y, w, h = cv2.boundingRect(m)
+    if w == 0:
+        return None
+    return x + ox, y + oy, x + ox + w, y + oy + h
+
+
+def _grow(box: tuple[int, int, int, int], by_px: int, shape: tuple[int, int]):
+    x0, y0, x1, y1 = box
+    return (
+        max(x0 - by_px, 0),
+        max(y0 - by_px, 0),
+        min(x1 + by_px, shape[1]),
+        min(y1 + by_px, shape[0]),
+    )
+
+
 def contact_window(
-    diff: np.ndarray, threshold: float, params: VisionParams | None = None
+    diff: np.ndarray, threshold: float, within: tuple[int, int, int, int] | None = None
 ) -> tuple[int, int, int, int] | None:
     """``(x0, y0, x1, y1)``: the only part of the frame where ``find_contacts`` can find
-    anything in the high-pass of ``cv2.blur(diff, (3, 3))`` at ``threshold``, or None.
+    anything in the high-pass of ``cv2.blur(diff, (3, 3))`` at ``threshold``, or None
+    (``within``: a box known to hold every ``diff`` pixel above ``threshold``).
 
     A high-pass pixel is at most its 3x3 mean, which exceeds ``threshold`` only next to
     a ``diff`` pixel that does: the box around those, grown by 1 px (the mean) and 2 px
     (the 5 px dilation that groups a contact)."""
-    _, m = cv2.threshold(diff, threshold, 255, cv2.THRESH_BINARY)
-    x, y, w, h = cv2.boundingRect(m)
-    if w == 0:
-        return None
-    g = 3
-    H, W = diff.shape
-    return max(x - g, 0), max(y - g, 0), min(x + w + g, W), min(y + h + g, H)
+    box = above_box(diff, threshold, within)
+    return None if box is None else _grow(box, 3, diff.shape)
+
+
+def body_window(
+    diff: np.ndarray, threshold: float, smooth_px: int = 5
+) -> tuple[np.ndarray, tuple[int, int, int, int] | None]:
+    """``body_mask(diff, threshold, smooth_px)`` made only where it can be non-zero: the
+    mean over ``smooth_px`` exceeds ``threshold`` only within ``smooth_px // 2`` of a
+    ``diff`` pixel that does. The full-size mask, and the box that holds all of it
+    (None: the mask is empty)."""
+    body = np.zeros_like(diff)
+    box = above_box(diff, threshold)
+    if box is None:
+        return body, None
+    reach = smooth_px // 2 if smooth_px > 1 else 0
+    x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
+    cx0, cy0, cx1, cy1 = _grow(win, reach, diff.shape)  # the mean's input
+    m = body_mask(diff[cy0:cy1, cx0:cx1], threshold, smooth_px)
+    body[y0:y1, x0:x1] = m[y0 - cy0 : y1 - cy0, x0 - cx0 : x1 - cx0]
+    return body, win
 
 
 def highpass_window(
@@ -779,9 +821,13 @@ def process_frame(
     # thresholds rise with the noise (each at least its profile value)
     body_thr = max(p.body_threshold, 4.0 * noise / max(p.smooth_px, 1) + 2.0)
     contact_thr = max(p.contact_threshold, 4.0 * noise / 3.0 + 2.0)
-    body = body_mask(diff, body_thr, p.smooth_px)
-    # contacts: the high-pass only where it can exceed the threshold
-    win = contact_window(diff, contact_thr)
+    # hands and contacts: only around the pixels above the thresholds (the rest of the
+    # frame cannot reach them through the smoothing); the same results as the whole frame
+    body, body_win = body_window(diff, body_thr, p.smooth_px)
+    if contact_thr < body_thr:
+        win = contact_window(diff, contact_thr)
+    else:  # contact pixels are above the body threshold too: in the body's window
+        win = None if body_win is None else contact_window(diff, contact_thr, body_win)
     contacts = []
     if win is not None:
         contacts = find_contacts(
@@ -793,7 +839,12 @@ def process_frame(
             p.max_contact_size_px,
             origin_px=win[:2],
         )
-    contours, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contours = ()
+    if body_win is not None:
+        x0, y0, x1, y1 = body_win
+        contours, _ = cv2.findContours(
+            body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
+        )
     found = []
     for c in contours:
         if cv2.contourArea(c) < p.min_hand_area_px:

@@ -226,3 +226,28 @@ def cv2_blur3(img):
     import cv2
 
     return cv2.blur(img, (3, 3))
+
+
+@pytest.mark.parametrize("smooth", [1, 4, 5, 7])
+@pytest.mark.parametrize("where", [((320, 220), -90.0), ((615, 240), 180.0), ((30, 470), 45.0)])
+def test_body_found_in_its_window_equals_the_full_frame_mask(smooth, where):
+    from plugins.gestures.vision import body_mask, body_window
+
+    diff = cv2_subtract(frame(pose("open_hand", *where), pose("one_finger", (200, 100))))
+    body, win = body_window(diff, 14.0, smooth)
+    assert np.array_equal(body, body_mask(diff, 14.0, smooth))
+    x0, y0, x1, y1 = win
+    assert body.any() and not body.sum() - body[y0:y1, x0:x1].sum()
+    empty, none = body_window(cv2_subtract(frame()), 14.0, smooth)
+    assert none is None and not empty.any()
+
+
+def test_contacts_when_the_contact_threshold_is_below_the_body_one():
+    # a tuned profile may set them the other way round: contacts outside the body count
+    from plugins.gestures.vision import find_contacts, highpass
+
+    p = VisionParams(body_threshold=60.0, contact_threshold=25.0)
+    f = frame(pose("two_finger"))
+    r = process_frame(f, BG, p)
+    want = find_contacts(highpass(cv2_blur3(cv2_subtract(f)), 6.0), 25.0)
+    assert len(want) >= 2 and r.contacts == tuple(want)
