@@ -189,6 +189,18 @@ def haptable_register_benchmarks(register):
 
     register("console", console_startup, help="console start-up to first paint (target < 1 s)")
 
+    def console_demo(ctx, quick: bool) -> dict:
+        from console.tui.demo_bench import run
+
+        return run(ctx, quick)
+
+    register(
+        "console-demo",
+        console_demo,
+        help="demos started from the console: the knob's loop latency per screen, the "
+        "operator's finger moved on the flow demo (key -> flow scheduled), output log check",
+    )
+
 
 def _fail(profile: Profile, msg: str) -> None:
     raise ProfileError(f"{profile.path}: {msg}")
