@@ -13,18 +13,23 @@ harmonics is positive.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 
 def clean_contour(points: np.ndarray) -> np.ndarray:
-    """(N, 2) float points with consecutive duplicates (and the closing repeat) removed."""
+    """(N, 2) float points with consecutive duplicates (and the closing repeat) removed
+    (``points`` itself, or a view of it, when there are none: do not write to it)."""
     p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(p) == 0:
         return p
+    moved = p[1:] != p[:-1]
     keep = np.ones(len(p), dtype=bool)
-    keep[1:] = np.any(np.diff(p, axis=0) != 0, axis=1)
-    p = p[keep]
-    if len(p) > 1 and np.all(p[0] == p[-1]):
+    keep[1:] = moved[:, 0] | moved[:, 1]
+    if not keep.all():
+        p = p[keep]
+    if len(p) > 1 and p[0, 0] == p[-1, 0] and p[0, 1] == p[-1, 1]:
         p = p[:-1]
     return p
 
@@ -40,16 +45,19 @@ def resample_contour(points: np.ndarray, n: int) -> np.ndarray:
         raise ValueError("empty contour")
     if len(p) == 1:
         return np.repeat(p, n, axis=0)
-    closed = np.vstack([p, p[:1]])
-    seg = np.hypot(*np.diff(closed, axis=0).T)
-    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    closed = np.concatenate((p, p[:1]))
+    d = closed[1:] - closed[:-1]
+    cum = np.empty(len(closed))
+    cum[0] = 0.0
+    np.cumsum(np.hypot(d[:, 0], d[:, 1]), out=cum[1:])
     total = cum[-1]
     if total <= 0:
         return np.repeat(p[:1], n, axis=0)
     t = np.arange(n) * (total / n)
-    x = np.interp(t, cum, closed[:, 0])
-    y = np.interp(t, cum, closed[:, 1])
-    return np.column_stack([x, y])
+    out = np.empty((n, 2))
+    out[:, 0] = np.interp(t, cum, closed[:, 0])
+    out[:, 1] = np.interp(t, cum, closed[:, 1])
+    return out
 
 
 def signed_area(points: np.ndarray) -> float:
@@ -67,6 +75,15 @@ def fourier_coefficients(points: np.ndarray, n_samples: int = 128) -> np.ndarray
         p = p[::-1]
     z = p[:, 0] + 1j * p[:, 1]
     return np.fft.fft(z) / n_samples
+
+
+@functools.cache
+def _harmonics(n_harmonics: int) -> tuple[np.ndarray, np.ndarray]:
+    """The kept harmonics ``-n..-1, 2..n`` and which of them are even."""
+    ks = np.concatenate([np.arange(-n_harmonics, 0), np.arange(2, n_harmonics + 1)])
+    even = ks % 2 == 0
+    ks.flags.writeable = even.flags.writeable = False
+    return ks, even
 
 
 def fourier_descriptors(
@@ -88,7 +105,7 @@ def fourier_descriptors(
         raise ValueError("n_harmonics must be at least 2")
     n_samples = max(n_samples, 2 * n_harmonics + 2)
     z = fourier_coefficients(points, n_samples)
-    ks = np.concatenate([np.arange(-n_harmonics, 0), np.arange(2, n_harmonics + 1)])
+    ks, even = _harmonics(n_harmonics)
     z1 = z[1]
     scale = abs(z1)
     size = 3 * len(ks)
@@ -103,7 +120,6 @@ def fourier_descriptors(
         shift = 0.5 * (p1 - pm1)  # 2 pi s
         c = z[ks] * np.exp(-1j * (rot + ks * shift)) / scale
         # remaining ambiguity: a joint half turn flips the sign of the even harmonics
-        even = ks % 2 == 0
         stat = np.sum(c[even].real * np.abs(c[even]))
         if stat < 0:
             c[even] = -c[even]

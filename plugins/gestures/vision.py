@@ -440,6 +440,15 @@ def _circle(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, c, s
 
 
+@functools.cache
+def _wrist_sector(n: int) -> np.ndarray:
+    """Which of ``_circle(n)``'s angles are within 60 degrees of straight down (+y)."""
+    a = _circle(n)[0]
+    down = np.abs(((a - math.pi / 2) + math.pi) % (2 * math.pi) - math.pi) < math.radians(60)
+    down.flags.writeable = False
+    return down
+
+
 def circle_samples(
     mask: np.ndarray,
     center: tuple[float, float],
@@ -629,10 +638,12 @@ def canonical_silhouette(
     m = cv2.getRotationMatrix2D((float(center[0]), float(center[1])), angle_deg, 1.0)
     m[0, 2] += half - center[0]
     m[1, 2] += half - center[1]
-    rot = cv2.warpAffine(mask, m, (size, size), flags=cv2.INTER_NEAREST)
     cut = int(round(half + params.wrist_cut * palm_radius))
-    if cut < size:
-        rot[max(cut, 0) :, :] = 0
+    if cut <= 0:
+        return None
+    # only the rows above the cut are made (each output pixel depends on its own
+    # position alone, so they are the top rows of the whole rotated square)
+    rot = cv2.warpAffine(mask, m, (size, min(cut, size)), flags=cv2.INTER_NEAREST)
     contours, _ = cv2.findContours(rot, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
         return None
@@ -648,13 +659,13 @@ def count_fingers(silhouette: np.ndarray, palm_radius: float, params: VisionPara
         return 0
     r = params.finger_radius * palm_radius
     half = int(math.ceil(np.abs(silhouette).max())) + 2
-    size = 2 * half + 1
-    m = np.zeros((size, size), np.uint8)
-    cv2.fillPoly(m, [np.rint(silhouette + half).astype(np.int32)], 255)
-    a, on, out = circle_samples(m, (half, half), r, 180)
-    # wrist sector: straight down (+y) +- 60 degrees
-    down = np.abs(((a - math.pi / 2) + math.pi) % (2 * math.pi) - math.pi) < math.radians(60)
-    on &= ~down
+    poly = np.rint(silhouette + half).astype(np.int32)
+    # the filled silhouette in a square of side 2 half + 1 about the palm centre, made
+    # only as far right and down as the polygon reaches (beyond it all is off)
+    m = np.zeros((int(poly[:, 1].max()) + 1, int(poly[:, 0].max()) + 1), np.uint8)
+    cv2.fillPoly(m, [poly], 255)
+    _, on, _ = circle_samples(m, (half, half), r, 180)
+    on &= ~_wrist_sector(180)
     count = 0
     dang = 2 * math.pi / 180
     width = params.finger_width * palm_radius
@@ -671,15 +682,20 @@ def to_canonical(
 ) -> np.ndarray:
     """Image points -> the canonical hand frame (palm centre at 0, wrist towards +y),
     divided by ``scale`` (e.g. the palm radius)."""
-    t = math.radians(angle_deg)
     p = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2)
-    dx, dy = p[:, 0] - center[0], p[:, 1] - center[1]
-    c, s_ = math.cos(t), math.sin(t)
     out = np.empty((len(p), 2))
-    out[:, 0] = dx * c + dy * s_
-    out[:, 1] = -dx * s_ + dy * c
-    out /= scale
+    out[:, 0], out[:, 1] = _canonical_xy(p[:, 0], p[:, 1], center, angle_deg, scale)
     return out
+
+
+def _canonical_xy(
+    x: np.ndarray, y: np.ndarray, center: tuple[float, float], angle_deg: float, scale: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``to_canonical`` on coordinate arrays: (u, v) arrays."""
+    t = math.radians(angle_deg)
+    dx, dy = x - center[0], y - center[1]
+    c, s_ = math.cos(t), math.sin(t)
+    return (dx * c + dy * s_) / scale, (-dx * s_ + dy * c) / scale
 
 
 def brightness_grid(
@@ -696,11 +712,11 @@ def brightness_grid(
     n_cells = GRID_SECTORS * (len(GRID_RINGS) - 1)
     if len(xs) == 0 or palm_radius <= 0:
         return np.zeros(n_cells)
-    w = roi_diff[ys * 3, xs * 3].astype(np.float64)
-    q = to_canonical(np.column_stack([xs * 3, ys * 3]), center, angle_deg, palm_radius)
-    r = np.hypot(q[:, 0], q[:, 1])
-    sector = ((np.arctan2(q[:, 1], q[:, 0]) + math.pi) / (2 * math.pi) * GRID_SECTORS).astype(int)
-    sector = np.clip(sector, 0, GRID_SECTORS - 1)
+    w = roi_diff[::3, ::3][ys, xs].astype(np.float64)
+    u, v = _canonical_xy(xs * 3, ys * 3, center, angle_deg, palm_radius)
+    r = np.hypot(u, v)
+    sector = ((np.arctan2(v, u) + math.pi) / (2 * math.pi) * GRID_SECTORS).astype(int)
+    sector = np.minimum(np.maximum(sector, 0, out=sector), GRID_SECTORS - 1, out=sector)
     ring = np.searchsorted(GRID_RINGS, r, side="right") - 1
     ok = (ring >= 0) & (ring < len(GRID_RINGS) - 1)
     cells = np.bincount(ring[ok] * GRID_SECTORS + sector[ok], weights=w[ok], minlength=n_cells)
