@@ -71,6 +71,12 @@ DEMOS_FIELDS = {
         help="a hand away from the scene's regions gets the flow of the nearest point of "
         "this grid (0: its exact position)",
     ),
+    "plan_process": Field(
+        "bool",
+        True,
+        help="flows not prepared at the start (a hand away from the scene's regions) are "
+        "planned in a separate process (false: on a thread sharing the loop's interpreter)",
+    ),
     "still_mm": Field("float", 12.0, min=1, max=200, help="a resting hand moves less than this"),
     "still_ms": Field("float", 300.0, min=0, max=10000, help="... for this long to trigger"),
     "knob_condition": Field(

@@ -77,9 +77,10 @@ class HandFlows:
     otherwise its default (fast) search.
     """
 
-    def __init__(self, effect: Any, vmap_path: str | Path) -> None:
+    def __init__(self, effect: Any, vmap_path: str | Path, planner: Any = None) -> None:
         self.effect = effect
         self.vmap = str(vmap_path)
+        self.planner = planner
         self._plans: dict[tuple, OutputPlan] = {}
 
     def cached(self, center_mm, direction: str) -> OutputPlan | None:
@@ -91,9 +92,13 @@ class HandFlows:
         k = _key(center_mm, direction)
         if k not in self._plans:
             req = {"center_mm": k[:2], "direction": direction, "vmap": self.vmap}
-            if exhaustive:
+            if exhaustive:  # preparing, before the loop runs: here
                 req["exhaustive"] = True
-            self._plans[k] = self.effect.render(**req)
+                self._plans[k] = self.effect.render(**req)
+            elif self.planner is not None:
+                self._plans[k] = self.planner.render("hand_flow", **req)
+            else:
+                self._plans[k] = self.effect.render(**req)
         return self._plans[k]
 
 
@@ -118,9 +123,10 @@ class TwoPointFlows:
     ``a_mm`` to ``b_mm``, each part at its table frequency and actuator; cached per pair
     (0.1 mm)."""
 
-    def __init__(self, effect: Any, vmap_path: str | Path) -> None:
+    def __init__(self, effect: Any, vmap_path: str | Path, planner: Any = None) -> None:
         self.effect = effect
         self.vmap = str(vmap_path)
+        self.planner = planner
         self._plans: dict[tuple, OutputPlan] = {}
 
     def cached(self, a_mm, b_mm) -> OutputPlan | None:
@@ -130,12 +136,16 @@ class TwoPointFlows:
         k = _pair_key(a_mm, b_mm)
         if k in self._plans:
             return self._plans[k]
-        plan = self.effect.render(
-            from_point=k[:2],
-            to_point=k[2:],
-            vmap=self.vmap,
-            name=f"flow {k[0]:g},{k[1]:g} -> {k[2]:g},{k[3]:g}",
-        )
+        req = {
+            "from_point": k[:2],
+            "to_point": k[2:],
+            "vmap": self.vmap,
+            "name": f"flow {k[0]:g},{k[1]:g} -> {k[2]:g},{k[3]:g}",
+        }
+        if self.planner is not None:
+            plan = self.planner.render("flow", **req)
+        else:
+            plan = self.effect.render(**req)
         meta = {
             **plan.meta,
             "kind": "two_point",
@@ -148,13 +158,17 @@ class TwoPointFlows:
         return out
 
 
-def flow_renderers(plugins: Any, profile: Any, vmap_path: str | Path) -> tuple[Any, Any]:
+def flow_renderers(
+    plugins: Any, profile: Any, vmap_path: str | Path, planner: Any = None
+) -> tuple[Any, Any]:
     """(hand flows, two-point flows) over the registered ``hand_flow`` and ``flow``
-    effects; two-point flows are ``None`` when no ``flow`` effect is registered."""
-    hand = HandFlows(_effect(plugins, "hand_flow", profile), vmap_path)
+    effects; two-point flows are ``None`` when no ``flow`` effect is registered.
+    ``planner`` (``plugins.demos.planner.PlanProcess``) computes the plans not prepared
+    at the start in its own process."""
+    hand = HandFlows(_effect(plugins, "hand_flow", profile), vmap_path, planner)
     pairs = None
     if plugins.of("effect").get("flow") is not None:
-        pairs = TwoPointFlows(_effect(plugins, "flow", profile), vmap_path)
+        pairs = TwoPointFlows(_effect(plugins, "flow", profile), vmap_path, planner)
     return hand, pairs
 
 

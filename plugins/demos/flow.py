@@ -101,6 +101,7 @@ class FlowDemo:
         projector: Any = None,
         still_mm: float = 12.0,
         still_s: float = 0.3,
+        planner: Any = None,
     ) -> None:
         self.profile, self.outputs, self.plans = profile, outputs, plans
         self.direction = direction
@@ -123,6 +124,7 @@ class FlowDemo:
         self._report = None  # the plan playing now
         self._pending: threading.Thread | None = None
         self._running = False
+        self.planner = planner  # computes plans in its own process (closed on stop)
 
     # ------------------------------------------------------------------ lifecycle
     def start(self, progress=None) -> None:
@@ -142,6 +144,8 @@ class FlowDemo:
     def stop(self) -> None:
         """No new flows; a flow already playing ends by its own ramps (max one plan)."""
         self._running = False
+        if self.planner is not None:
+            self.planner.close()  # a plan under way is abandoned
         t = self._pending
         if t is not None:
             t.join(5.0)
@@ -286,7 +290,8 @@ class FlowDemo:
             try:
                 plan = make_plan()
             except UserError as exc:
-                self._log_event({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
+                if self._running:  # else: stopped while it was computed
+                    self._log_event({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
                 return
             except Exception as exc:  # never let the worker die silently
                 log.exception("flow plan failed")

@@ -288,11 +288,15 @@ def start_demo(
             from .adapters import flow_renderers
             from .flow import FlowDemo
 
-            pairs = None
+            pairs, planner = None, None
             plans = flow_plans
             if plans is None:
+                if dm.get("plan_process", True):
+                    from .planner import PlanProcess
+
+                    planner = PlanProcess(profile)
                 plans, pairs = flow_renderers(
-                    plugins, profile, flow_map_path(profile, cache_dir, plugins)
+                    plugins, profile, flow_map_path(profile, cache_dir, plugins), planner
                 )
             demo = FlowDemo(
                 profile,
@@ -306,6 +310,7 @@ def start_demo(
                 still_mm=float(dm.get("still_mm", 12.0)),
                 still_s=float(dm.get("still_ms", 300)) / 1e3,
                 prepare=prepare,
+                planner=planner,
             )
         stages = [
             ("vision", VisionStage(clf)),

@@ -1,0 +1,76 @@
+"""Flow plans computed in a process of their own.
+
+A plan that was not prepared (a hand resting away from the scene's regions) costs up to
+a second or two of search. On a thread of the demo's process that search shares the
+interpreter with the frame loop and the audio thread: frames wait and audio blocks come
+late. ``PlanProcess`` runs the same registered effects (``hand_flow``, ``flow``) in a
+spawned worker process; the demo's plan thread waits for the answer without holding the
+interpreter. The plans are the effects' own: the same request gives the same samples.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import threading
+from typing import Any
+
+from console.types import OutputPlan
+
+
+def _serve(profile: Any, conn) -> None:
+    """The worker: the registered flow effects, one request at a time, until closed."""
+    from console.plugins import load_plugins
+
+    pm = load_plugins()
+    effects = {}
+    for name in ("hand_flow", "flow"):
+        reg = pm.of("effect").get(name)
+        if reg is not None:
+            effects[name] = reg.factory(profile)
+    while True:
+        try:
+            effect, req = conn.recv()
+        except (EOFError, OSError):
+            return
+        try:
+            if effect not in effects:
+                from console.errors import UserError
+
+                raise UserError(f"the flow demo needs the {effect!r} effect; it is not registered")
+            conn.send((True, effects[effect].render(**req)))
+        except Exception as exc:  # the caller raises it
+            conn.send((False, exc))
+
+
+class PlanProcess:
+    """``render(effect, **request)``: the registered effect's plan, computed in the worker
+    process (blocking; call it from a thread that may wait). ``close()`` ends it, a plan
+    under way included."""
+
+    def __init__(self, profile: Any) -> None:
+        ctx = multiprocessing.get_context("spawn")  # never fork a threaded process
+        self._conn, child = ctx.Pipe()
+        self._proc = ctx.Process(
+            target=_serve, args=(profile, child), name="haptable-flow-planner", daemon=True
+        )
+        self._proc.start()
+        child.close()
+        self._lock = threading.Lock()
+
+    def render(self, effect: str, **req: Any) -> OutputPlan:
+        from console.errors import UserError
+
+        with self._lock:
+            try:
+                self._conn.send((effect, req))
+                ok, value = self._conn.recv()
+            except (EOFError, OSError):
+                raise UserError("flow planner: its process ended (the demo stopped)") from None
+        if not ok:
+            raise value
+        return value
+
+    def close(self) -> None:
+        self._proc.terminate()
+        self._conn.close()
+        self._proc.join(2.0)
