@@ -277,11 +277,15 @@ def above_box(
     if within is not None:
         ox, oy, x1, y1 = within
         image = image[oy:y1, ox:x1]
-    _, m = cv2.threshold(image, threshold, 255, cv2.THRESH_BINARY)
-    x, y, w, h = cv2.boundingRect(m)
-    if w == 0:
+    # columns holding such a pixel, then the rows in that band (no mask image written)
+    # cv2.threshold compares with floor(threshold) on 8-bit images, as do integers here
+    cols = np.flatnonzero(image.max(axis=0) > threshold)
+    if len(cols) == 0:
         return None
-    return x + ox, y + oy, x + ox + w, y + oy + h
+    x0, x1 = int(cols[0]), int(cols[-1]) + 1
+    rows = np.flatnonzero(image[:, x0:x1].max(axis=1) > threshold)
+    y0, y1 = int(rows[0]), int(rows[-1]) + 1
+    return x0 + ox, y0 + oy, x1 + ox, y1 + oy
 
 
 def _grow(box: tuple[int, int, int, int], by_px: int, shape: tuple[int, int]):
@@ -391,8 +395,8 @@ def find_contacts(
         area = int(cv2.countNonZero(sub))
         if area < min_area_px or area > max_area_px:
             continue
-        wts = hp[y0 : y0 + h, x0 : x0 + w].astype(np.float32) * (sub > 0)
-        mo = cv2.moments(wts)
+        hps = hp[y0 : y0 + h, x0 : x0 + w]
+        mo = cv2.moments(cv2.bitwise_and(hps, hps, mask=sub))  # integer sums: exact
         if mo["m00"] <= 0:
             continue
         gx, gy = x0 + origin_px[0], y0 + origin_px[1]
@@ -434,6 +438,14 @@ def _runs(on: np.ndarray) -> list[tuple[int, int]]:
 
 
 @functools.cache
+def _disk(radius_px: int) -> np.ndarray:
+    """Elliptic structuring element of ``2 radius + 1`` px (read-only)."""
+    d = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius_px + 1, 2 * radius_px + 1))
+    d.flags.writeable = False
+    return d
+
+
+@functools.cache
 def _circle(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Angles of ``n`` points equally spaced on a circle, their cosines and sines."""
     a = np.arange(n) * (2 * math.pi / n)
@@ -468,8 +480,11 @@ def circle_samples(
     h, w = mask.shape
     ih, iw = image_shape or (h, w)
     # negative coordinates wrap round to huge unsigned ones: one test per axis
-    out = ~((x + offset[0]).view(np.uintp) < iw) | ~((y + offset[1]).view(np.uintp) < ih)
     inside = (x.view(np.uintp) < w) & (y.view(np.uintp) < h)
+    if offset == (0, 0) and (ih, iw) == (h, w):
+        out = ~inside
+    else:
+        out = ((x + offset[0]).view(np.uintp) >= iw) | ((y + offset[1]).view(np.uintp) >= ih)
     on = np.zeros(n, dtype=bool)
     on[inside] = mask[y[inside], x[inside]] > 0
     return a, on, out
@@ -478,9 +493,8 @@ def circle_samples(
 def bright_centroid(mask: np.ndarray, diff: np.ndarray) -> tuple[float, float] | None:
     """Centroid of a hand weighted by brightness squared: where it presses on the glass
     (steadier than the palm centre, which may jump along a forearm)."""
-    w = cv2.multiply(diff, diff, dtype=cv2.CV_32F)
-    w[mask == 0] = 0
-    m1 = cv2.moments(w)
+    d = cv2.bitwise_and(diff, diff, mask=mask)  # 0 off the hand
+    m1 = cv2.moments(cv2.multiply(d, d, dtype=cv2.CV_32F))
     if m1["m00"] <= 0:
         return None
     return m1["m10"] / m1["m00"], m1["m01"] / m1["m00"]
@@ -555,8 +569,7 @@ def wrist_arc(
     small = cv2.resize(mask, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
     _, small = cv2.threshold(small, 127, 255, cv2.THRESH_BINARY)
     rad = max(int(round(params.finger_width * palm_radius / k)), 1)
-    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-    opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disk)
+    opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, _disk(rad))
     ys, xs = np.nonzero(opened)
     direction: float | None = None
     found = "fallback"
