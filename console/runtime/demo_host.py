@@ -27,6 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from console.runtime.realtime import SUPPORT_PRIORITY, realtime_priority
+
 #: status lines per second
 STATUS_HZ = 5.0
 
@@ -105,6 +107,7 @@ class Host:
 
     # ---------------------------------------------------------------- commands
     def read_commands(self, stream) -> None:
+        realtime_priority(SUPPORT_PRIORITY)  # an e-stop must not wait behind other programs
         for raw in stream:
             try:
                 msg = json.loads(raw.decode("utf-8", "replace"))
@@ -186,6 +189,7 @@ class Host:
                 },
             )
             period = 1.0 / STATUS_HZ
+            realtime_priority(SUPPORT_PRIORITY)  # prepared; now see console.runtime.realtime
             self.proto.send("status", self.status())
             while not self.stop_asked.wait(period):
                 self.proto.send("status", self.status())

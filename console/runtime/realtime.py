@@ -7,17 +7,22 @@ from __future__ import annotations
 
 import os
 
-#: FIFO priorities above the minimum: audio first, then the frame loop
+#: FIFO priorities above the minimum: audio first, then the frame loop, then the threads
+#: that serve them (relay switching, the watchdog, a demo's status): a thread of normal
+#: priority holding the interpreter while another program runs would make the real-time
+#: ones wait for it (the interpreter lock knows no priorities)
 AUDIO_PRIORITY = 10
 FRAMES_PRIORITY = 5
+SUPPORT_PRIORITY = 1
 
 
 def realtime_priority(above_min: int = AUDIO_PRIORITY) -> bool:
     """Give the calling thread FIFO scheduling at ``min + above_min``; False where it is
-    not permitted (or not on Linux)."""
+    not permitted (or not on Linux). Processes it starts get normal scheduling."""
     try:
         prio = os.sched_get_priority_min(os.SCHED_FIFO) + above_min
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(prio))  # 0: this thread
+        policy = os.SCHED_FIFO | getattr(os, "SCHED_RESET_ON_FORK", 0)
+        os.sched_setscheduler(0, policy, os.sched_param(prio))  # 0: this thread
         return True
     except (AttributeError, OSError):
         return False

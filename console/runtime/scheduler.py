@@ -339,6 +339,9 @@ class Scheduler(Source):
         job.report.done.set()
 
     def _relay_worker(self) -> None:
+        from console.runtime.realtime import SUPPORT_PRIORITY, realtime_priority
+
+        realtime_priority(SUPPORT_PRIORITY)  # part of the output path, as the audio thread
         while True:
             target = self._switch_q.get()
             if target is None:

@@ -41,6 +41,7 @@ class Watchdog:
         on_stall: Callable[[str], None],
         limit_s: float,
         period_s: float | None = None,
+        realtime: bool = False,
     ) -> None:
         if not limit_s > 0:
             raise ValueError(f"watchdog limit {limit_s} s: must be positive")
@@ -49,6 +50,7 @@ class Watchdog:
         self.limit_s = float(limit_s)
         self.period_s = float(period_s) if period_s else min(self.limit_s / 4, 0.05)
         self.reason = ""
+        self.realtime = realtime  # FIFO scheduling (a demo's loop is real-time too)
         self._tripped = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -89,5 +91,9 @@ class Watchdog:
             self._thread.join(1.0)
 
     def _run(self) -> None:
+        if self.realtime:
+            from console.runtime.realtime import SUPPORT_PRIORITY, realtime_priority
+
+            realtime_priority(SUPPORT_PRIORITY)
         while not self._stop.wait(self.period_s):
             self.check(time.monotonic())

@@ -336,7 +336,7 @@ def start_demo(
             realtime=bool(rt.get("realtime_loop", True)),
         )
         limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
-        wd = Watchdog(loop, outputs.estop, limit_ms / 1e3)
+        wd = Watchdog(loop, outputs.estop, limit_ms / 1e3, realtime=loop.realtime)
         demo.start(progress)
         loop.start()
         wd.start()
