@@ -600,9 +600,10 @@ def wrist_arc(
         elif d2[i] > r * r:
             # mean direction of the thick pixels beyond the circle near the farthest one
             far = math.atan2(dy[i], dx[i])
-            ang = np.arctan2(dy, dx)
-            near = (d2 > r * r) & (np.cos(ang - far) > math.cos(math.radians(35)))
-            direction = math.atan2(float(np.sin(ang[near]).sum()), float(np.cos(ang[near]).sum()))
+            beyond = d2 > r * r
+            ang = np.arctan2(dy[beyond], dx[beyond])
+            ang = ang[np.cos(ang - far) > math.cos(math.radians(35))]
+            direction = math.atan2(float(np.sin(ang).sum()), float(np.cos(ang).sum()))
             found = "forearm"
     if hint_rad is not None:
         if direction is None:
