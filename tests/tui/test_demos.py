@@ -305,9 +305,9 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
             assert placed, run.snapshot()["flow"]
             await wait_for(pilot, lambda: not outputs_of(run)["busy"], 20, "flow played")
             n1 = run.snapshot()["flow"]["flows"]
-            await pilot.press("down", "down", "down")  # 60 mm further: a new placement
+            await pilot.press("down")  # lifted and put down 20 mm further: a new placement
             moved = np.array(pane.hand_mm)
-            assert np.hypot(*(moved - where)) == pytest.approx(60.0)
+            assert np.hypot(*(moved - where)) == pytest.approx(20.0)
             await wait_for(pilot, lambda: new_flow_near(n1, moved), 20, "flow where it moved")
             # let it play out: a stop cuts a flow under way, and its cut burst is not counted
             await wait_for(pilot, lambda: not outputs_of(run)["busy"], 20, "second flow played")

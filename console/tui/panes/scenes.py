@@ -178,7 +178,7 @@ class ScenesPane(Vertical):
         "enter    start the highlighted demo on the outputs (enter again stops it)\n"
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
         "space    on the twin: your finger touches the table (again: lifts it); arrows\n"
-        "         move it 20 mm (the flow plays under a resting hand)\n"
+        "         lift it and touch 20 mm further (a flow plays under a resting hand)\n"
         "A demo runs in its own process with the console's outputs and camera (handed\n"
         "over until it ends) and, when the projector runs, shows its scene there.\n"
         "The Latency screen shows its loop."
@@ -216,6 +216,7 @@ class ScenesPane(Vertical):
         self._last_final: dict | None = None  # the last run's "stopped" message
         self.hand_mm: tuple[float, float] | None = None  # the operator's hand on the twin
         self.hand_placed = False  # the operator drives the twin (not the script)
+        self._touch_timer = None  # the finger's landing after a lift
 
     @property
     def service(self):
@@ -534,6 +535,8 @@ class ScenesPane(Vertical):
             return
         if self.hand_placed:
             self.hand_placed = False
+            if self._touch_timer is not None:
+                self._touch_timer.stop()  # a landing under way is called off
             cam.set_target(None)
             self.app.notify("hand lifted (space places it again)", timeout=2)
             return
@@ -543,7 +546,7 @@ class ScenesPane(Vertical):
             rest = hand.get("rest_mm")
             self.hand_mm = rest if rest is not None else (w / 2, h / 2)
         self.hand_placed = True
-        cam.set_target(self.hand_mm)
+        self._touch(cam, self.hand_mm)
         x, y = self.hand_mm
         self.app.notify(f"hand placed at {x:.0f},{y:.0f} mm (arrows move it)", timeout=2)
 
@@ -556,7 +559,19 @@ class ScenesPane(Vertical):
         x = min(max(self.hand_mm[0] + dx * self.HAND_STEP_MM, m), w - m)
         y = min(max(self.hand_mm[1] + dy * self.HAND_STEP_MM, m), h - m)
         self.hand_mm = (x, y)
-        cam.set_target(self.hand_mm)
+        self._touch(cam, self.hand_mm)
+
+    #: how long the finger is off the table between two placements (the demo's resting
+    #: hand re-arms after a lift of [StillHand] lift_s = 0.2 s)
+    LIFT_S = 0.35
+
+    def _touch(self, cam, pos_mm) -> None:
+        """Lift the finger, then put it down at ``pos_mm``: a new placement, as an
+        operator taps elsewhere (sliding 20 mm would not count as one)."""
+        cam.set_target(None)
+        if self._touch_timer is not None:
+            self._touch_timer.stop()
+        self._touch_timer = self.set_timer(self.LIFT_S, lambda: cam.set_target(pos_mm))
 
     def on_estop(self, reason: str = "e-stop") -> None:
         """The app's e-stop: the demo process silences its outputs now, then stops."""
