@@ -125,6 +125,9 @@ def demo_text(snap: dict, hand: dict | None = None) -> str:
             text += f"; last{where}: {pts}"
             if e.get("late_s"):  # its plan was computed first (not prepared)
                 text += f" (planned in {e['late_s'] * 1e3:.0f} ms)"
+        newest = (f.get("last") or [None])[-1]
+        if newest is not None and not newest.get("parts"):  # a refusal or no flow there
+            text += f"\n[yellow]{newest.get('kind')}: {newest.get('reason', '')}[/]"
         lines.append(text)
     if "knob" in snap:
         k = snap["knob"]
