@@ -5,7 +5,9 @@ CAP_SYS_NICE) the thread keeps normal scheduling; callers report which one they 
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 
 #: FIFO priorities above the minimum: audio first, then the frame loop, then the threads
 #: that serve them (relay switching, the watchdog, a demo's status): a thread of normal
@@ -26,3 +28,22 @@ def realtime_priority(above_min: int = AUDIO_PRIORITY) -> bool:
         return True
     except (AttributeError, OSError):
         return False
+
+
+@contextlib.contextmanager
+def support_priority() -> Iterator[bool]:
+    """The calling thread at ``SUPPORT_PRIORITY`` for the block (as a demo's process
+    serves its real-time threads: benchmarks that run a demo in their own process), its
+    scheduling restored after. Yields whether it was granted."""
+    try:
+        before = (os.sched_getscheduler(0), os.sched_getparam(0))
+    except (AttributeError, OSError):
+        yield False
+        return
+    got = realtime_priority(SUPPORT_PRIORITY)
+    try:
+        yield got
+    finally:
+        if got:
+            with contextlib.suppress(OSError):
+                os.sched_setscheduler(0, *before)

@@ -193,6 +193,15 @@ def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any)
 
 
 def run_loop(ctx: Any, quick: bool) -> dict:
+    from console.runtime.realtime import support_priority
+
+    with support_priority() as rt:  # as the console's demo process serves its loop
+        res = _run_loop(ctx, quick)
+    res["support_threads_realtime"] = rt
+    return res
+
+
+def _run_loop(ctx: Any, quick: bool) -> dict:
     seconds = 8.0 if quick else 30.0
     prof = ctx.profile
     res: dict = {
@@ -257,7 +266,17 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
 
     A watchdog trip (the loop stalled: e-stop) is counted with its reason; the gate is
     reset and the demo restarted, so the soak always covers the whole time. RSS is taken
-    after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between."""
+    after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between.
+    The polling thread runs as the console's demo process runs its status thread."""
+    from console.runtime.realtime import support_priority
+
+    with support_priority() as rt:
+        res = _run_soak(ctx, quick, minutes)
+    res["support_threads_realtime"] = rt
+    return res
+
+
+def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     from console.runtime.jitter import finish_probe, start_probe
     from console.runtime.outputs import open_outputs
 
