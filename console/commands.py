@@ -110,12 +110,33 @@ def realtime_status(profile) -> DeviceStatus:
     )
 
 
+def scheduling_status(profile) -> DeviceStatus:
+    """Whether the audio thread and a demo's frame loop can run with real-time priority."""
+    from console.runtime.realtime import HOW_TO_ALLOW, may_use_realtime
+
+    if may_use_realtime():
+        return DeviceStatus("realtime", "scheduling", "ok", "real-time (FIFO) priority allowed")
+    twin = profile.get("audio.driver") == "twin"
+    return DeviceStatus(
+        "realtime",
+        "scheduling",
+        "ok" if twin else "missing",
+        "real-time priority not allowed: other programs can delay the audio and the "
+        "frame loop" + (" (the twin only counts the underruns)" if twin else ""),
+        HOW_TO_ALLOW,
+    )
+
+
 def configure_doctor(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
 
 
 def run_doctor(args, ctx) -> int:
-    statuses = [*diagnose(ctx.profile, ctx.pm), realtime_status(ctx.profile)]
+    statuses = [
+        *diagnose(ctx.profile, ctx.pm),
+        realtime_status(ctx.profile),
+        scheduling_status(ctx.profile),
+    ]
     bad = [s for s in statuses if s.state in ("missing", "error")]
     if args.json:
         print(

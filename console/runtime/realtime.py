@@ -13,6 +13,11 @@ from collections.abc import Iterator
 #: that serve them (relay switching, the watchdog, a demo's status): a thread of normal
 #: priority holding the interpreter while another program runs would make the real-time
 #: ones wait for it (the interpreter lock knows no priorities)
+HOW_TO_ALLOW = (
+    "allow it with a real-time priority limit for the console's user "
+    "(/etc/security/limits.d/audio.conf: '@audio - rtprio 95', user in group audio)"
+)
+
 AUDIO_PRIORITY = 10
 FRAMES_PRIORITY = 5
 SUPPORT_PRIORITY = 1
@@ -47,3 +52,14 @@ def support_priority() -> Iterator[bool]:
         if got:
             with contextlib.suppress(OSError):
                 os.sched_setscheduler(0, *before)
+
+
+def may_use_realtime() -> bool:
+    """Whether a thread of this process gets FIFO scheduling (tried on a throwaway one)."""
+    import threading
+
+    got: list[bool] = []
+    t = threading.Thread(target=lambda: got.append(realtime_priority(SUPPORT_PRIORITY)))
+    t.start()
+    t.join()
+    return bool(got and got[0])

@@ -11,11 +11,12 @@ from console.runtime.control import ControlServer, send_command
 def test_doctor_json_reports_each_device(capsys):
     assert main(["doctor", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    kinds = {d["kind"]: d for d in data["devices"]}
-    rt = kinds.pop("realtime")
+    rt = {d["name"]: d for d in data["devices"] if d["kind"] == "realtime"}
+    kinds = {d["kind"]: d for d in data["devices"] if d["kind"] != "realtime"}
     assert set(kinds) == {"audio", "relays", "camera", "vibrometer"}
     assert all(d["state"] == "simulated" for d in kinds.values()) and data["ok"]
-    assert rt["state"] == "ok"  # the twin plays without a memory lock (it says so)
+    assert set(rt) == {"memory", "scheduling"}
+    assert all(d["state"] == "ok" for d in rt.values())  # the twin plays without (it says so)
 
 
 def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins):
@@ -27,6 +28,18 @@ def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins)
     prof = load_profile("haptable-lab", plugins)
     st = commands.realtime_status(prof)
     assert st.state == "missing" and "8192 kB" in st.why and "memlock unlimited" in st.fix
+
+
+def test_doctor_names_the_realtime_fix_for_a_sound_card(monkeypatch, plugins):
+    from console import commands
+    from console.profile import load_profile
+    from console.runtime import realtime
+
+    monkeypatch.setattr(realtime, "realtime_priority", lambda above_min=10: False)
+    prof = load_profile("haptable-lab", plugins)
+    st = commands.scheduling_status(prof)
+    assert st.state == "missing" and "rtprio 95" in st.fix
+    assert commands.scheduling_status(load_profile("sim", plugins)).state == "ok"
 
 
 def test_doctor_on_lab_profile_says_what_is_missing_and_the_fix(capsys):
