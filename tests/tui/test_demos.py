@@ -346,3 +346,23 @@ def test_a_demo_process_that_dies_is_shown_and_the_outputs_come_back_estopped(pl
             assert out.status()["gate"]["relays_closed"] == []
 
     asyncio.run(scenario())
+
+
+def test_haptable_estop_from_a_shell_reaches_the_demo_process(plugins):
+    from console.runtime.control import send_command
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _start(app, pilot, "knob")
+            run = pane.demo_run
+            reply = await asyncio.to_thread(send_command, app.ctx.profile, "estop")
+            assert reply and reply.startswith("ok")
+            await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
+            assert run.final["final"]["outputs"]["gate"]["estopped"]
+            assert "another process" in run.estop_reason
+            _silent_and_open(run)
+            out = await _outputs_back(app, pilot)
+            assert out.gate.estopped
+
+    asyncio.run(scenario())
