@@ -262,6 +262,11 @@ def highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
     return cv2.subtract(diff, blur)
 
 
+def frame_highpass(diff: np.ndarray, sigma_px: float) -> np.ndarray:
+    """The whole frame's high-pass image as the pipeline defines it (3x3 mean first)."""
+    return highpass(cv2.blur(diff, (3, 3)), sigma_px)
+
+
 def _gauss_radius_px(sigma_px: float) -> int:
     """Half the kernel size ``cv2.GaussianBlur`` picks for an 8-bit image and ``sigma_px``."""
     return (int(round(sigma_px * 6 + 1)) | 1) // 2
@@ -334,7 +339,7 @@ def body_window(
 def highpass_window(
     diff: np.ndarray, sigma_px: float, window: tuple[int, int, int, int]
 ) -> np.ndarray:
-    """``highpass(cv2.blur(diff, (3, 3)), sigma_px)`` inside ``window`` (x0, y0, x1, y1)
+    """``frame_highpass(diff, sigma_px)`` inside ``window`` (x0, y0, x1, y1)
     only, equal to the full-frame result there: computed on a crop wider by the reach of
     the blurs (and aligned to the 4 px blocks of the quarter-resolution blur)."""
     H, W = diff.shape
@@ -890,7 +895,7 @@ def process_frame(
         sigma = p.highpass_sigma_px
         masks = Masks(
             {"diff": diff, "body": body},
-            {"highpass": lambda: highpass(cv2.blur(diff, (3, 3)), sigma)},
+            {"highpass": functools.partial(frame_highpass, diff, sigma)},
         )
     return FrameResult(
         hands=tuple(h for h, _ in found),

@@ -1,6 +1,7 @@
 """Vision pipeline on plain cv2-drawn frames, including the hard cases."""
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -214,6 +215,8 @@ def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
     want = highpass(cv2_blur3(cv2_subtract(f)), P.highpass_sigma_px)
     assert np.array_equal(r.masks["highpass"], want)
     assert np.array_equal(r.masks.get("highpass"), want)
+    again = pickle.loads(pickle.dumps(process_frame(f, BG, P, keep_masks=True).masks))
+    assert np.array_equal(again["highpass"], want)  # a result can cross a process
 
 
 def cv2_subtract(img):
