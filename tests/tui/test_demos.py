@@ -366,3 +366,27 @@ def test_haptable_estop_from_a_shell_reaches_the_demo_process(plugins):
             assert out.gate.estopped
 
     asyncio.run(scenario())
+
+
+def test_a_demo_is_refused_while_the_console_plays_and_nothing_is_handed_over(plugins):
+    from console.signals import tone
+    from console.tui.long_work import LongWork
+    from console.types import OutputPlan, Segment
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            out = await _outputs_back(app, pilot)
+            sig = tone(200, 20, 3.0, FS, 0.01)
+            plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
+            out.play(plan, wait=False)  # an audition under way
+            await wait_for(pilot, lambda: out.status()["busy"], 5, "playing")
+            pane = app.pane("scenes")
+            assert pane.start_demo("knob")
+            lw = app.query_one("#demo-work", LongWork)
+            await wait_for(pilot, lambda: lw.outcome is not None, 10, "refused")
+            assert "outputs are playing" in lw.text and "\n" not in lw.text.strip()
+            assert app.outputs is out and app.camera_service.borrower is None
+            assert pane.demo_name is None
+
+    asyncio.run(scenario())
