@@ -166,7 +166,8 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
             await pilot.press("g")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
             panel = app.screen
-            await wait_for(pilot, lambda: bool(panel.query("#gp-files")), what="panel")
+            fields = ("#gp-files", "#gp-dataset", "#gp-model", "#gp-subjects", "#gp-reps")
+            await wait_for(pilot, lambda: all(panel.query(f) for f in fields), what="panel")
             panel.default_model = tmp_path / "profile-model.skops"  # as if the profile named it
             for name, value in (
                 ("dataset", str(tmp_path / "set")),
