@@ -3,6 +3,7 @@
 import math
 import pickle
 
+import cv2
 import numpy as np
 import pytest
 
@@ -16,6 +17,14 @@ P = VisionParams()
 
 def frame(*hands, noise=2.0, seed=0):
     return sketch.draw(list(hands), BG, noise=noise, rng=np.random.default_rng(seed))
+
+
+def cv2_subtract(img):
+    return cv2.subtract(img, BG)
+
+
+def cv2_blur3(img):
+    return cv2.blur(img, (3, 3))
 
 
 def pose(name="open_hand", pos=(320, 240), theta=-90.0, **kw):
@@ -217,18 +226,6 @@ def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
     assert np.array_equal(r.masks.get("highpass"), want)
     again = pickle.loads(pickle.dumps(process_frame(f, BG, P, keep_masks=True).masks))
     assert np.array_equal(again["highpass"], want)  # a result can cross a process
-
-
-def cv2_subtract(img):
-    import cv2
-
-    return cv2.subtract(img, BG)
-
-
-def cv2_blur3(img):
-    import cv2
-
-    return cv2.blur(img, (3, 3))
 
 
 @pytest.mark.parametrize("smooth", [1, 4, 5, 7])
