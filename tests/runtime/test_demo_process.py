@@ -32,7 +32,8 @@ def _wait(cond, timeout_s: float, what: str) -> None:
 
 def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
     steps: list[str] = []
-    run = DemoProcess(profile, "knob", twin_log=tmp_path / "knob.json")
+    scene: list[dict] = []  # what the console forwards to the projector
+    run = DemoProcess(profile, "knob", on_scene=scene.append, twin_log=tmp_path / "knob.json")
     try:
         run.wait_started(lambda f, text: steps.append(text))
         assert steps and steps[-1].startswith("opening the") and run.running
@@ -49,6 +50,7 @@ def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
         assert snap["hand"]["hands"] >= 1  # what its camera saw
         assert snap["latency"]["end_to_end"]["n"] > 0
         assert snap["outputs"]["gate"]["estopped"] is False
+        assert any(e["type"] == "knob" and "angle_deg" in e for e in scene)
     finally:
         run.stop()
     assert run.proc.returncode == 0 and run.exit_reason == "stopped"
