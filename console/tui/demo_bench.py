@@ -73,20 +73,31 @@ def _window(snap: dict) -> dict:
     }
 
 
-def _log_matches(final: dict, snap: dict) -> dict:
-    """The flow parts the demo reported against the bursts in its output log: a burst at
-    each part's frequency (within 1 Hz)."""
-    from console.runtime.twin_log import bursts
+def _log_matches(final: dict, snap: dict, part_s: float) -> dict:
+    """The flow parts the demo reported against its output log: the piezo recording cut
+    into bursts at silences, a burst of k parts' length (parts on the same patch follow
+    each other without a gap) into k pieces; a part matches a piece at its frequency
+    (within 1 Hz)."""
+    from console.runtime.twin_log import bursts, dominant_hz
 
     path = final.get("twin_log")
     if not path:
         return {"checked": 0, "note": "no twin log (real outputs)"}
     data = json.loads(Path(path).read_text())
+    fs = int(data["sample_rate_hz"])
     with np.load(Path(path).with_suffix(".npz")) as z:
-        rec = z["recording_v"]
-    found = bursts(rec, int(data["sample_rate_hz"]))
+        piezo = z["recording_v"][:, 0]
+    part_n = max(1, round(part_s * fs))
+    hz = []
+    for b in bursts(np.stack([piezo, np.zeros_like(piezo)], axis=1), fs):
+        k = max(1, round(b["n_samples"] / part_n))
+        step = b["n_samples"] // k
+        for j in range(k):
+            a = b["start"] + j * step
+            f = dominant_hz(piezo[a : a + step], fs)
+            if f is not None:
+                hz.append(f)
     parts = [p for e in snap.get("flow", {}).get("last", []) for p in e.get("parts", [])]
-    hz = [b["piezo_freq_hz"] for b in found if b.get("piezo_freq_hz")]
     freq_ok = sum(any(abs(h - p["frequency_hz"]) <= 1.0 for h in hz) for p in parts)
     return {"parts_reported": len(parts), "parts_with_a_burst_at_their_hz": freq_ok}
 
@@ -140,7 +151,7 @@ async def _flow(app, pilot, moves: int) -> dict:
         "key_to_flow_scheduled": summarize_s(delays) if delays else None,
         "still_ms": app.ctx.profile.get("demos.still_ms"),
         "loop": window,
-        "output_log": _log_matches(final, snap),
+        "output_log": _log_matches(final, snap, float(app.ctx.profile.get("vibrotactile.part_s"))),
     }
 
 
