@@ -12,7 +12,7 @@ import threading
 import time
 
 from textual import work
-from textual.app import App, ComposeResult, SystemCommand
+from textual.app import App, ComposeResult, ScreenStackError, SystemCommand
 from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
@@ -349,7 +349,11 @@ class HapTableApp(App):
     def refresh_state(self) -> None:
         self._keep_focus_visible()
         out = self.outputs
-        bars = self.screen.query(SafetyBar)  # none while a modal is up or tearing down
+        try:
+            screen = self.screen
+        except ScreenStackError:  # the app is closing: its timer may tick once more
+            return
+        bars = screen.query(SafetyBar)  # none while a modal is up or tearing down
         status, log = None, None
         if out is not None:
             status, log = out.status(), out.relay_log()
