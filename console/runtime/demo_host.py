@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import os
 import pickle
+import shutil
 import sys
 import threading
 import time
@@ -102,6 +103,7 @@ class Host:
         self.proto = proto
         self.outputs = None
         self.run = None
+        self.hand = HandWatch()  # the frame sink: what the demo's camera saw
         self.stop_asked = threading.Event()
         self.estop_reason: str | None = None
 
@@ -163,7 +165,6 @@ class Host:
         self.outputs = open_outputs(profile, pm, fast=False)
         if self.estop_reason is not None:
             self.outputs.estop(self.estop_reason)
-        self.hand = HandWatch()
         try:
             if self.stop_asked.is_set():
                 raise _Cancelled()
@@ -207,8 +208,7 @@ class Host:
         self.run.stop()
         if self.estop_reason is None:
             wait_silent(self.outputs)
-        final = self.status()
-        final["running"] = False
+        final = self.status()  # the stopped run says running: false
         logs = self.write_logs()
         self.proto.send(
             "stopped", {"reason": "stopped", "estop": self.estop_reason, "final": final, **logs}
@@ -220,7 +220,6 @@ class Host:
         console asked, and beside ``$HAPTABLE_TWIN_LOG`` when that is set."""
         from console.runtime.twin_log import write_twin_log
 
-        out: dict[str, str] = {}
         paths = []
         if self.request.get("twin_log"):
             paths.append(Path(self.request["twin_log"]))
@@ -228,15 +227,20 @@ class Host:
         if env:
             p = Path(env)
             paths.append(p.with_name(f"{p.stem}.demo-{self.request['demo']}{p.suffix or '.json'}"))
-        for p in paths:
-            try:
-                got = write_twin_log(p, self.outputs, [])
-            except OSError as exc:
-                print(f"twin log {p}: {exc}", file=sys.stderr)
-                continue
-            if got is not None:
-                out.setdefault("twin_log", str(got))
-        return out
+        if not paths:
+            return {}
+        try:  # written once (its bursts are found once), copied to the other place
+            got = write_twin_log(paths[0], self.outputs, [])
+            if got is None:
+                return {}
+            for p in paths[1:]:
+                p.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(got, p)
+                shutil.copyfile(got.with_suffix(".npz"), p.with_suffix(".npz"))
+        except OSError as exc:
+            print(f"twin log: {exc}", file=sys.stderr)
+            return {}
+        return {"twin_log": str(got)}
 
 
 class _SceneOut:

@@ -187,7 +187,8 @@ class DemoProcess:
             self.stopped = True
             if self.exit_reason is None:
                 self.exit_reason = reason
-        self.proc.stdin.close() if not self.proc.stdin.closed else None
+        with contextlib.suppress(OSError):
+            self.proc.stdin.close()  # safe when already closed
         with contextlib.suppress(OSError):
             self._log.close()
 

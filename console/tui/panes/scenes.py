@@ -464,7 +464,7 @@ class ScenesPane(Vertical):
         if self.last_snapshot is not None:  # the run's last numbers stay, marked as such
             snap = {**self.last_snapshot, "running": False}
             text = demo_text(snap, None)
-            log = (getattr(self, "_last_final", None) or {}).get("twin_log")
+            log = (self._last_final or {}).get("twin_log")
             if log:
                 text += f"\nwhat the twin's outputs received: {log}"
             self.query_one("#demo-status", Static).update(f"last run ({reason}):\n{text}")
