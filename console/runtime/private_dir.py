@@ -1,0 +1,83 @@
+"""The per-user runtime directory and files that never follow a symlink.
+
+Sockets, the process registry and run logs live in ``$XDG_RUNTIME_DIR/haptable`` (a
+systemd user's private tmpfs) or, without it, ``/tmp/haptable-<uid>``. The directory is
+created 0700; an existing one must be a real directory (not a symlink) owned by this
+user with no group or other permissions, else every command that needs it refuses in one
+line with the fix. Files written in it, or in any shared directory, are opened with
+``O_NOFOLLOW`` and created 0600, so a planted symlink can never redirect a write.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+from console.errors import UserError
+
+
+def runtime_dir() -> Path:
+    """The checked private directory (created 0700 on first use)."""
+    base = os.environ.get("XDG_RUNTIME_DIR")
+    d = Path(base) / "haptable" if base else Path(f"/tmp/haptable-{os.getuid()}")
+    return ensure_private_dir(d)
+
+
+def ensure_private_dir(d: Path) -> Path:
+    """Create ``d`` 0700, or verify an existing one is ours and private. Raises ``UserError``."""
+    try:
+        os.mkdir(d, 0o700)
+    except FileExistsError:
+        pass
+    except FileNotFoundError:
+        raise UserError(
+            f"{d}: its parent directory does not exist; set XDG_RUNTIME_DIR to a directory "
+            f"of yours"
+        ) from None
+    except OSError as exc:
+        raise UserError(f"{d}: cannot create the runtime directory: {exc.strerror}") from None
+    try:
+        st = os.lstat(d)
+    except OSError as exc:
+        raise UserError(f"{d}: cannot read the runtime directory: {exc.strerror}") from None
+    if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
+        raise UserError(
+            f"{d}: the runtime directory is not a plain directory (a symlink or file); "
+            f"remove it (another user may have planted it) and start again"
+        )
+    if st.st_uid != os.getuid():
+        raise UserError(
+            f"{d}: the runtime directory belongs to uid {st.st_uid}, not to you "
+            f"({os.getuid()}); remove it or set XDG_RUNTIME_DIR to a directory of yours"
+        )
+    if st.st_mode & 0o077:
+        raise UserError(
+            f"{d}: the runtime directory has mode {stat.S_IMODE(st.st_mode):03o}; "
+            f"run `chmod 700 {d}`"
+        )
+    return d
+
+
+def open_private(path: Path | str, *, append: bool = False) -> int:
+    """Open ``path`` for writing without following a symlink; created 0600. A file
+    descriptor; raises ``UserError`` when ``path`` is a symlink or cannot be opened."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+    flags |= os.O_APPEND if append else os.O_TRUNC
+    try:
+        return os.open(path, flags, 0o600)
+    except OSError as exc:
+        if os.path.islink(path):
+            raise UserError(
+                f"{path}: is a symlink; refusing to write through it (remove it)"
+            ) from None
+        raise UserError(f"{path}: cannot write: {exc.strerror}") from None
+
+
+def write_private(path: Path | str, data: bytes | str) -> Path:
+    """Write ``data`` to ``path`` (never through a symlink, created 0600)."""
+    raw = data.encode() if isinstance(data, str) else data
+    fd = open_private(path)
+    with os.fdopen(fd, "wb") as f:
+        f.write(raw)
+    return Path(path)
