@@ -56,6 +56,14 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 "floats", [61.0, 35.0], length=2, min=1, max=500, help="extent along x, y"
             ),
             "relay_channel": Field("int", min=1, max=64, help="relay channel feeding this patch"),
+            "capacitance_nf": Field(
+                "float",
+                90.0,
+                min=1,
+                max=100000,
+                help="the patch's capacitance (PI-876.A12: about 90 nF); with the amplifier's "
+                "peak current it sets the slew limit dV/dt = I / C",
+            ),
         },
         True,
         "piezo patches PA..PD (PI-876.A12 DuraAct by default)",
@@ -64,7 +72,15 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
         {
             "relay_channel": Field(
                 "int", 5, min=1, max=64, help="relay channel of the screen electrode"
-            )
+            ),
+            "capacitance_nf": Field(
+                "float",
+                200.0,
+                min=1,
+                max=100000,
+                help="the screen electrode's capacitance with its cable (measure it with an "
+                "LCR meter); sets the screen channel's slew limit with the amplifier current",
+            ),
         },
         False,
         "the screen's conductive layer (electrovibration)",
@@ -108,6 +124,17 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
         {
             "piezo_gain": Field("float", 50.0, min=1, max=1000, help="volts out per volt in"),
             "screen_gain": Field("float", 50.0, min=1, max=1000),
+            "piezo_peak_current_ma": Field(
+                "float",
+                200.0,
+                min=1,
+                max=100000,
+                help="the piezo amplifier's peak output current: with the loads' capacitance "
+                "it bounds how fast the output may change (the slew limit)",
+            ),
+            "screen_peak_current_ma": Field(
+                "float", 200.0, min=1, max=100000, help="the screen amplifier's peak current"
+            ),
         },
         False,
         "high-voltage amplifiers (PI E413.D2, gain 50)",
@@ -125,6 +152,21 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 "float", 5.0, min=0, max=1000, help="silence required before and after any switch"
             ),
             "rating_vpp": Field("float", 350.0, min=1, max=5000, help="contact rating"),
+            "current_rating_ma": Field(
+                "float",
+                100.0,
+                min=1,
+                max=100000,
+                help="current one relay channel may carry (Yocto-MaxiCoupler: 100 mA); "
+                "part of the slew limit",
+            ),
+            "min_switch_interval_ms": Field(
+                "float",
+                20.0,
+                min=1,
+                max=60000,
+                help="a relay channel switches at most once in this time (relay life)",
+            ),
         },
         False,
         "USB relays that route the piezo amplifier to patches and the screen amplifier",
@@ -145,7 +187,20 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             ),
             "max_plan_s": Field("float", 60.0, min=0.01, max=3600),
             "estop_timeout_ms": Field(
-                "float", 50.0, min=1, max=5000, help="longest wait for silence before relays open"
+                "float",
+                50.0,
+                min=1,
+                max=5000,
+                help="an e-stop opens the relays once silence reached the driver; this long "
+                "without the driver pulling samples, it opens them anyway",
+            ),
+            "source_stall_ms": Field(
+                "float",
+                100.0,
+                min=5,
+                max=5000,
+                help="a stream or attached source that gives no block in this time is a "
+                "fault: the gate ramps down and e-stops",
             ),
         },
         False,

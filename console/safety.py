@@ -1,14 +1,24 @@
 """The safety gate: the only path from effects to the amplifiers and relays.
 
-- Plans are checked before they play: over a limit, NaN/inf, or not starting and ending at
-  zero through a ramp -> refused with a message, never clipped.
-- Every audio block is checked again on its way to the driver (last line of defence):
-  a bad block trips the e-stop and the driver gets silence.
-- Relays switch only while both channels have been silent for the guard gap (plus the
-  device latency); the gate holds the outputs silent while a switch is under way and for
-  the settle time after it, whatever a plugin asks.
-- E-stop silences the outputs from the next audio block, then opens every relay. It is
-  idempotent, and also runs on an unhandled exception, on SIGINT/SIGTERM and at exit.
+- Plans are checked before they play: over a limit, NaN/inf, a step faster than the slew
+  limit anywhere, or not starting and ending at zero through a ramp -> refused with a
+  message, never clipped. What plays is the private read-only copy that was checked.
+- Every audio block, whatever produced it (a plan, a stream, an attached source), is
+  checked again on its way to the driver: finite numbers, limits, the slew limit against
+  the last sample handed out, screen signal only with the screen relay closed. A bad
+  block trips the e-stop and the driver gets a ramp to zero at the slew limit.
+- The slew limit comes from the physics: the amplifier's peak current and the relay's
+  current rating into the capacitance of the loads the relays connect (dV/dt = I / C).
+- Plugin code never runs on the audio thread unguarded: an attached source is called on a
+  thread of its own and the driver never waits for it longer than ``[limits]
+  source_stall_ms`` (an e-stop ends the wait at once).
+- Relays switch only while the samples handed to the driver have been zero for the guard
+  gap (plus the device latency), at most once per ``[relays] min_switch_interval_ms`` per
+  channel; the gate holds the outputs silent while a switch is under way and for the
+  settle time after it, whatever a plugin asks.
+- E-stop ramps the outputs to zero from the next audio block, then opens every relay once
+  that silence has been handed to the driver. It is idempotent, and also runs on an
+  unhandled exception, on SIGINT/SIGTERM and at exit.
 """
 
 from __future__ import annotations
@@ -23,7 +33,7 @@ import time
 import weakref
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -54,6 +64,15 @@ class Limits:
     guard_samples: int
     settle_samples: int  # switch time + guard after a switch
     estop_timeout_s: float
+    # slew: dV/dt = I / C, per amplifier and per relay channel
+    piezo_current_a: float = 0.2
+    screen_current_a: float = 0.2
+    relay_current_a: float = 0.1
+    patch_capacitance_f: dict[str, float] = field(default_factory=dict)
+    patch_relay: dict[str, int] = field(default_factory=dict)
+    screen_capacitance_f: float = 200e-9
+    min_switch_interval_samples: int = 0
+    source_stall_s: float = 0.1
 
     @classmethod
     def from_profile(cls, profile: Profile) -> Limits:
@@ -61,6 +80,7 @@ class Limits:
         full = float(profile.get("audio.full_scale_v"))
         guard = profile.get("relays.guard_ms") * 1e-3
         switch = profile.get("relays.switch_time_ms") * 1e-3
+        patches = profile.items("patches")
         return cls(
             sample_rate_hz=fs,
             piezo_min_v=float(profile.get("limits.piezo_min_v")),
@@ -74,7 +94,36 @@ class Limits:
             guard_samples=round(guard * fs),
             settle_samples=round((guard + switch) * fs),
             estop_timeout_s=profile.get("limits.estop_timeout_ms") * 1e-3,
+            piezo_current_a=float(profile.get("amplifiers.piezo_peak_current_ma")) * 1e-3,
+            screen_current_a=float(profile.get("amplifiers.screen_peak_current_ma")) * 1e-3,
+            relay_current_a=float(profile.get("relays.current_rating_ma")) * 1e-3,
+            patch_capacitance_f={n: float(p["capacitance_nf"]) * 1e-9 for n, p in patches.items()},
+            patch_relay={n: int(p["relay_channel"]) for n, p in patches.items()},
+            screen_capacitance_f=float(profile.get("screen.capacitance_nf")) * 1e-9,
+            min_switch_interval_samples=round(
+                profile.get("relays.min_switch_interval_ms") * 1e-3 * fs
+            ),
+            source_stall_s=float(profile.get("limits.source_stall_ms")) * 1e-3,
         )
+
+    def slew_v_per_s(self, channel: str, patches: frozenset[str] = frozenset()) -> float:
+        """Fastest change the channel may make: the amplifier's peak current into every
+        load it drives, and each relay channel's current rating into the loads behind it."""
+        if channel == "screen":
+            c = self.screen_capacitance_f
+            return min(self.screen_current_a, self.relay_current_a) / c
+        caps = self.patch_capacitance_f or {p: 90e-9 for p in PATCHES}
+        chosen = [p for p in patches if p in caps] or [max(caps, key=caps.__getitem__)]
+        per_relay: dict[int | str, float] = {}
+        for p in chosen:
+            ch = self.patch_relay.get(p, p)
+            per_relay[ch] = per_relay.get(ch, 0.0) + caps[p]
+        total = sum(caps[p] for p in chosen)
+        return min(self.piezo_current_a / total, self.relay_current_a / max(per_relay.values()))
+
+    def max_step_v(self, channel: str, patches: frozenset[str] = frozenset()) -> float:
+        """The slew limit as the largest change from one sample to the next, in volts."""
+        return self.slew_v_per_s(channel, patches) / self.sample_rate_hz
 
     def piezo_range(self) -> tuple[float, float]:
         return max(self.piezo_min_v, -self.piezo_card_v), min(self.piezo_max_v, self.piezo_card_v)
@@ -97,6 +146,24 @@ def _range_problem(x: np.ndarray, lo: float, hi: float, rating_vpp: float) -> st
     if mx - mn > rating_vpp + 1e-9:
         return f"{mx - mn:.1f} Vpp exceeds the relay rating {rating_vpp:g} Vpp"
     return None
+
+
+def _slew_problem(x: np.ndarray, prev: float, max_step: float, *, end: bool) -> str | None:
+    """A change from one sample to the next (from ``prev``; to 0 after the end when
+    ``end``) larger than ``max_step`` volts."""
+    if x.size == 0:
+        return None
+    d = np.abs(np.diff(x, prepend=prev, append=0.0 if end else x[-1]))
+    tol = max_step * 1e-9 + 1e-9
+    over = np.flatnonzero(d > max_step + tol)
+    if not over.size:
+        return None
+    k = int(over[0])
+    return (
+        f"steps {float(d[k]):.2f} V in one sample at sample {k}, over its slew limit of "
+        f"{max_step:.2f} V per sample (amplifier/relay current into the load capacitance); "
+        f"smooth the edge"
+    )
 
 
 def _ramp_problem(x: np.ndarray, ramp: int) -> str | None:
@@ -124,6 +191,11 @@ def _ramp_problem(x: np.ndarray, ramp: int) -> str | None:
 def check_plan(plan: OutputPlan, limits: Limits) -> None:
     """Refuse a plan the outputs must not play. Raises ``SafetyRefusal``."""
     name = plan.name or "plan"
+    n_total = sum(int(np.size(getattr(seg, "piezo_v", ()))) for seg in plan.segments)
+    if n_total > limits.max_plan_samples:
+        raise SafetyRefusal(
+            f"{name}: {n_total / limits.sample_rate_hz:.1f} s is longer than [limits] max_plan_s"
+        )
     if plan.sample_rate_hz != limits.sample_rate_hz:
         raise SafetyRefusal(
             f"{name}: sample rate {plan.sample_rate_hz} Hz, but the output runs at "
@@ -146,15 +218,20 @@ def check_plan(plan: OutputPlan, limits: Limits) -> None:
         if arrays["piezo_v"].size != arrays["screen_v"].size:
             raise SafetyRefusal(f"{label}: piezo and screen channels differ in length")
         total += arrays["piezo_v"].size
+        patches = frozenset(seg.patches)
         for ch, (lo, hi) in (
             ("piezo_v", limits.piezo_range()),
             ("screen_v", limits.screen_range()),
         ):
             x = arrays[ch]
+            chan = ch.split("_")[0]
             if (p := _range_problem(x, lo, hi, limits.rating_vpp)) is not None:
-                raise SafetyRefusal(f"{label}: {ch.split('_')[0]} channel {p}")
+                raise SafetyRefusal(f"{label}: {chan} channel {p}")
             if (p := _ramp_problem(x, limits.ramp_samples)) is not None:
-                raise SafetyRefusal(f"{label}: {ch.split('_')[0]} channel {p}")
+                raise SafetyRefusal(f"{label}: {chan} channel {p}")
+            step = limits.max_step_v(chan, patches)
+            if (p := _slew_problem(x, 0.0, step, end=True)) is not None:
+                raise SafetyRefusal(f"{label}: {chan} channel {p}")
         if np.any(arrays["piezo_v"]) and not seg.patches:
             raise SafetyRefusal(f"{label}: piezo signal with no patch selected")
         if np.any(arrays["screen_v"]) and not seg.screen:
@@ -179,6 +256,82 @@ class Source:
         """Drop everything queued (called by the e-stop)."""
 
 
+class SourceStalled(Exception):
+    """A source did not answer within its time (or is still inside an earlier call)."""
+
+
+class SourceInterrupted(Exception):
+    """An e-stop ended the wait for a source."""
+
+
+class SourceCaller:
+    """Runs plugin code (``fn(n)``) on a thread of its own so that it never holds the audio
+    thread: the caller waits at most ``timeout_s``, or until ``interrupt()`` (the e-stop).
+    A call that is still running makes every later call fail at once (the source stalled);
+    its late result is dropped."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._cv = threading.Condition()
+        self._req: tuple[int, Callable[[int], Any], int] | None = None
+        self._done: tuple[int, bool, Any] | None = None
+        self._busy = False
+        self._gen = 0
+        self._interrupts = 0
+        self._thread: threading.Thread | None = None
+
+    def call(self, fn: Callable[[int], Any], n: int, timeout_s: float) -> Any:
+        with self._cv:
+            if self._busy:
+                raise SourceStalled(f"{self.name} is still inside an earlier call")
+            self._gen += 1
+            gen, seen = self._gen, self._interrupts
+            self._req, self._done, self._busy = (gen, fn, n), None, True
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
+                self._thread.start()
+            self._cv.notify_all()
+            deadline = time.monotonic() + timeout_s
+            while self._done is None or self._done[0] != gen:
+                if self._interrupts != seen:
+                    raise SourceInterrupted(f"{self.name}: interrupted by the e-stop")
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise SourceStalled(
+                        f"{self.name} gave no block within {timeout_s * 1e3:.0f} ms "
+                        f"([limits] source_stall_ms)"
+                    )
+                self._cv.wait(left)
+            _, ok, value = self._done
+        if not ok:
+            raise value
+        return value
+
+    def interrupt(self) -> None:
+        with self._cv:
+            self._interrupts += 1
+            self._cv.notify_all()
+
+    def _run(self) -> None:
+        from console.runtime.realtime import AUDIO_PRIORITY, realtime_priority
+
+        realtime_priority(AUDIO_PRIORITY)  # it stands in for the audio thread
+        while True:
+            with self._cv:
+                while self._req is None:
+                    self._cv.wait()
+                gen, fn, n = self._req
+                self._req = None
+            try:
+                res: tuple[bool, Any] = (True, fn(n))
+            except BaseException as exc:  # handed to the caller, never lost
+                res = (False, exc)
+            with self._cv:
+                self._done = (gen, *res)
+                self._busy = False
+                self._cv.notify_all()
+
+
 @dataclass(frozen=True)
 class GateEvent:
     t_s: float
@@ -190,11 +343,25 @@ class GateEvent:
 _LIVE_GATES: weakref.WeakSet[SafetyGate] = weakref.WeakSet()
 
 
+def _as_volts(x: Any, n: int, name: str) -> tuple[np.ndarray | None, str | None]:
+    """A block channel as a float array of ``n`` samples, or why it is not one."""
+    try:
+        a = np.asarray(x)
+    except Exception as exc:
+        return None, f"{name} block is not an array ({type(exc).__name__})"
+    if a.dtype.kind not in "fiu":
+        return None, f"{name} block has dtype {a.dtype}, not numbers"
+    if a.shape != (n,):
+        return None, f"output block has shape {a.shape} on the {name} channel, expected ({n},)"
+    return a.astype(np.float64, copy=False), None
+
+
 class SafetyGate:
     """Owns the relay board, checks every block, and holds the e-stop.
 
-    ``fill(out)`` is what the audio driver calls. The scheduler is attached with
-    ``attach(source)``. Only the gate ever calls ``board.set``.
+    ``fill(out)`` is what the audio driver calls. The scheduler attaches itself; any other
+    source (``attach(source)``) is called on a guarded thread and checked the same way.
+    Only the gate ever calls ``board.set``.
     """
 
     def __init__(
@@ -203,20 +370,24 @@ class SafetyGate:
         board: RelayBoard | None,
         *,
         relay_channels: dict[str, int] | None = None,
+        screen_channel: int | None = None,
         latency_samples: int = 0,
     ) -> None:
         self.limits = limits
         self._board = board
         self.relay_channels = dict(relay_channels or {})
+        self.screen_channel = screen_channel
         self.latency_samples = latency_samples
         self._lock = threading.RLock()
         self._source: Source | None = None
+        self._caller: SourceCaller | None = None  # set for sources other than the scheduler
         self._estopped = False
         self.estop_reason = ""
         self._switching = False
         self.clock = 0  # samples handed to the driver
         self._last_nonzero = -(10**12)
         self._quiet_until = 0  # no signal before this clock (post-switch settle)
+        self._last_switch: dict[int, int] = {}  # channel -> clock of its last switch
         self.level_v = (0.0, 0.0)  # last sample handed out, volts at the actuators
         self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
         self.events: deque[GateEvent] = deque(maxlen=1000)
@@ -235,15 +406,30 @@ class SafetyGate:
 
     @property
     def idle(self) -> bool:
-        """Nothing to play; but silence must keep flowing while an e-stop opens relays."""
-        if not self._safe.is_set():
+        """Nothing to play; but samples must keep flowing while an e-stop ramps down and
+        opens relays (a fast-forward driver only pulls while this is False)."""
+        if not self._safe.is_set() or self.level_v != (0.0, 0.0):
             return False
         src = self._source
-        return self._estopped or src is None or src.idle
+        if self._estopped or src is None:
+            return True
+        try:
+            return bool(src.idle)
+        except Exception:
+            return False
 
     def attach(self, source: Source) -> None:
+        """Play from ``source``: every block it gives passes the same checks as a plan's,
+        and it runs on a guarded thread (a stall never holds the audio thread)."""
         with self._lock:
             self._source = source
+            self._caller = SourceCaller("haptable-source")
+
+    def attach_scheduler(self, scheduler: Source) -> None:
+        """The output scheduler: core code that guards the plugin code it calls itself."""
+        with self._lock:
+            self._source = scheduler
+            self._caller = None
 
     def quiet_samples(self) -> int:
         """How long both channels have been silent, in samples handed to the driver."""
@@ -258,6 +444,14 @@ class SafetyGate:
     def relay_state(self) -> frozenset[int]:
         return frozenset(i + 1 for i, closed in enumerate(self.relays) if closed)
 
+    def closed_patches(self) -> frozenset[str]:
+        relays = self.relays
+        return frozenset(
+            p
+            for p, c in self.relay_channels.items()
+            if p in PATCHES and 1 <= c <= len(relays) and relays[c - 1]
+        )
+
     def _event(self, kind: str, message: str) -> None:
         ev = GateEvent(time.monotonic(), self.clock, kind, message)
         self.events.append(ev)
@@ -270,45 +464,94 @@ class SafetyGate:
 
     # ------------------------------------------------------------------ audio path
     def fill(self, out: np.ndarray) -> None:
-        """Fill ``out`` (frames, 2) float32 in sound-card units. Called by the driver."""
+        """Fill ``out`` (frames, 2) float32 in sound-card units. Called by the driver; never
+        raises and never waits on plugin code longer than ``source_stall_s``."""
+        self._audio_thread = threading.current_thread()
+        try:
+            self._fill(out)
+        except Exception as exc:  # the audio thread must survive anything
+            self._hand_ramp_down(out)
+            self._fault(f"output path failed: {exc!r}")
+
+    def _fill(self, out: np.ndarray) -> None:
         n = out.shape[0]
         with self._lock:
-            src = self._source
+            src, caller = self._source, self._caller
             hold = self._estopped or self._switching
             clock = self.clock
-        self._audio_thread = threading.current_thread()
-        block = None
-        if not hold and src is not None:
-            try:
-                block = src.next_block(n)
-            except Exception as exc:
-                self._fault(f"output source failed: {exc!r}")
-                block = None
+        if hold or src is None:
+            self._hand_ramp_down(out)
+            return
+        try:
+            block = (
+                src.next_block(n)
+                if caller is None
+                else caller.call(src.next_block, n, self.limits.source_stall_s)
+            )
+        except SourceInterrupted:
+            block = None
+        except Exception as exc:
+            self._hand_ramp_down(out)
+            self._fault(f"output source failed: {exc}")
+            return
         if block is None:
-            out[:] = 0.0
-            self._advance(n, nonzero=False, last=(0.0, 0.0))
+            self._hand_ramp_down(out)
             return
-        piezo, screen = block
-        problem = self._block_problem(piezo, screen, n, clock)
+        problem = None
+        try:
+            raw_p, raw_s = block
+        except Exception:
+            raw_p = raw_s = None
+            problem = "output source gave no (piezo, screen) pair"
+        piezo = screen = None
+        if problem is None:
+            piezo, problem = _as_volts(raw_p, n, "piezo")
+        if problem is None:
+            screen, problem = _as_volts(raw_s, n, "screen")
+        if problem is None:
+            problem = self._block_problem(piezo, screen, clock)
         if problem:
-            out[:] = 0.0
+            self._hand_ramp_down(out)
             self._fault(problem)
-            self._advance(n, nonzero=False, last=(0.0, 0.0))
             return
-        out[:, 0] = piezo * self._piezo_scale
-        out[:, 1] = screen * self._screen_scale
-        nz = bool(np.any(piezo) or np.any(screen))
         with self._lock:
             if self._estopped or self._switching:  # e-stop or switch arrived meanwhile
-                out[:] = 0.0
-                nz = False
-        self._advance(n, nonzero=nz, last=(float(piezo[-1]), float(screen[-1])))
+                piezo = screen = None
+        if piezo is None:
+            self._hand_ramp_down(out)
+            return
+        self._hand(out, piezo, screen)
 
-    def _block_problem(
-        self, piezo: np.ndarray, screen: np.ndarray, n: int, clock: int
-    ) -> str | None:
-        if piezo.shape != (n,) or screen.shape != (n,):
-            return f"output block has shape {piezo.shape}/{screen.shape}, expected ({n},)"
+    def _hand(self, out: np.ndarray, piezo: np.ndarray, screen: np.ndarray) -> None:
+        out[:, 0] = piezo * self._piezo_scale
+        out[:, 1] = screen * self._screen_scale
+        nz = bool(piezo.any() or screen.any())
+        with self._lock:
+            self.clock += out.shape[0]
+            if nz:
+                self._last_nonzero = self.clock
+            self.level_v = (float(piezo[-1]), float(screen[-1]))
+
+    def _hand_ramp_down(self, out: np.ndarray) -> None:
+        """Hand the driver a ramp from the last level to zero at the slew limit (zeros
+        once there): the only way the gate ever goes silent."""
+        n = out.shape[0]
+        lp, ls = self.level_v
+        if lp == 0.0 and ls == 0.0:
+            out[:] = 0.0
+            with self._lock:
+                self.clock += n
+            return
+        k = np.arange(1, n + 1)
+        chans = []
+        for level, step in (
+            (lp, self.limits.max_step_v("piezo", self.closed_patches())),
+            (ls, self.limits.max_step_v("screen")),
+        ):
+            chans.append(np.sign(level) * np.maximum(abs(level) - step * k, 0.0))
+        self._hand(out, chans[0], chans[1])
+
+    def _block_problem(self, piezo: np.ndarray, screen: np.ndarray, clock: int) -> str | None:
         lim = self.limits
         for name, x, (lo, hi) in (
             ("piezo", piezo, lim.piezo_range()),
@@ -316,34 +559,44 @@ class SafetyGate:
         ):
             if (p := _range_problem(x, lo, hi, math.inf)) is not None:
                 return f"{name} channel {p} of a block"
-        if clock < self._quiet_until and (np.any(piezo) or np.any(screen)):
+        p_on, s_on = bool(piezo.any()), bool(screen.any())
+        if clock < self._quiet_until and (p_on or s_on):
             return "signal during the relay settle time"
-        relays = self.relays
-        if np.any(piezo) and not any(
-            relays[c - 1]
-            for p, c in self.relay_channels.items()
-            if p in PATCHES and c <= len(relays)
-        ):
+        patches = self.closed_patches()
+        if p_on and not patches:
             return "piezo signal while no patch relay is closed"
+        relays = self.relays
+        sc = self.screen_channel
+        if s_on and sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1]):
+            return "screen signal while the screen relay is open"
+        lp, ls = self.level_v
+        for name, x, prev, step in (
+            ("piezo", piezo, lp, lim.max_step_v("piezo", patches)),
+            ("screen", screen, ls, lim.max_step_v("screen")),
+        ):
+            if (p := _slew_problem(x, prev, step, end=False)) is not None:
+                return f"{name} channel {p} (a block)"
         return None
-
-    def _advance(self, n: int, *, nonzero: bool, last: tuple[float, float]) -> None:
-        with self._lock:
-            self.clock += n
-            if nonzero:
-                self._last_nonzero = self.clock
-            self.level_v = last
 
     def _fault(self, message: str) -> None:
         self._event("fault", message)
         self.estop(f"fault: {message}", wait=threading.current_thread() is not self._audio_thread)
 
     # ------------------------------------------------------------------ relays
+    def switch_wait_samples(self, closed: frozenset[int]) -> int:
+        """Samples until every channel that would change may switch again (relay life)."""
+        gap = self.limits.min_switch_interval_samples
+        with self._lock:
+            changing = [i + 1 for i, c in enumerate(self.relays) if c != (i + 1 in closed)]
+            last = [self._last_switch.get(ch) for ch in changing]
+            return max([0] + [t + gap - self.clock for t in last if t is not None])
+
     def switch_relays(self, closed: frozenset[int]) -> None:
         """Set the relay board to exactly ``closed`` (1-based channels), in silence.
 
-        Raises ``SafetyRefusal`` when the outputs have not been silent for the guard
-        gap, when the e-stop is active (only opening is allowed then), or the driver fails.
+        Raises ``SafetyRefusal`` when the samples handed to the driver have not been zero
+        for the guard gap, when a channel switched less than ``min_switch_interval_ms``
+        ago, when the e-stop is active (only opening is allowed then), or the driver fails.
         """
         board = self._board
         if board is None:
@@ -368,12 +621,23 @@ class SafetyGate:
                     f"relay switch refused: outputs silent for {quiet} samples, "
                     f"need {need} (guard gap + device latency)"
                 )
+            wait = self.switch_wait_samples(closed)
+            if wait > 0:
+                fs = self.limits.sample_rate_hz
+                raise SafetyRefusal(
+                    f"relay switch refused: a channel switched "
+                    f"{(self.limits.min_switch_interval_samples - wait) / fs * 1e3:.1f} ms ago; "
+                    f"the rate limit allows one switch per "
+                    f"{self.limits.min_switch_interval_samples / fs * 1e3:g} ms "
+                    f"([relays] min_switch_interval_ms)"
+                )
             self._switching = True
         try:
             target = tuple(i + 1 in closed for i in range(n))
             for i, (now, want) in enumerate(zip(self.relays, target, strict=True)):
                 if now != want:
                     board.set(i + 1, want)
+                    self._last_switch[i + 1] = self.clock
             self.relays = tuple(board.states())
             self._event("switch", f"relays closed: {sorted(closed) or 'none'}")
         except Exception as exc:
@@ -392,6 +656,7 @@ class SafetyGate:
         for ch in range(1, board.channels + 1):
             try:
                 board.set(ch, False)
+                self._last_switch[ch] = self.clock
             except Exception as exc:  # keep opening the others
                 self._event("fault", f"relay {ch} failed to open: {exc!r}")
         try:
@@ -401,7 +666,8 @@ class SafetyGate:
 
     # ------------------------------------------------------------------ e-stop
     def estop(self, reason: str = "e-stop", *, quiet: bool = False, wait: bool = True) -> None:
-        """Silence from the next block, drop the queue, then open every relay. Idempotent.
+        """Ramp to zero from the next block, drop the queue, then open every relay once
+        the silence has been handed to the driver. Idempotent.
 
         ``quiet`` logs it as an ordinary shutdown (closing the outputs), not an alarm.
         ``wait=False`` (used from the audio thread) opens the relays on another thread.
@@ -411,8 +677,10 @@ class SafetyGate:
             self._estopped = True
             if first:
                 self.estop_reason = reason
-            src = self._source
+            src, caller = self._source, self._caller
             self._safe.clear()
+        if caller is not None:
+            caller.interrupt()
         if src is not None:
             try:
                 src.abort(reason)
@@ -428,11 +696,32 @@ class SafetyGate:
             ).start()
 
     def _open_when_silent(self) -> None:
-        """Wait (bounded) for the silence to reach the relays, then open them all."""
-        deadline = time.monotonic() + self.limits.estop_timeout_s
+        """Wait for the driver to have been handed silence for the guard gap, then open
+        every relay. A driver that stopped pulling (no clock for ``estop_timeout_ms``) is
+        not playing anything: the relays open then too, and the event says so."""
         need = self.limits.guard_samples + self.latency_samples
-        while self.quiet_samples() < need and time.monotonic() < deadline:
+        timeout = self.limits.estop_timeout_s
+        last_clock, last_move = self.clock, time.monotonic()
+        give_up = last_move + max(20 * timeout, 1.0)
+        note = ""
+        while True:
+            with self._lock:
+                silent = self.clock - self._last_nonzero >= need and self.level_v == (0.0, 0.0)
+                clock = self.clock
+            now = time.monotonic()
+            if silent:
+                break
+            if clock != last_clock:
+                last_clock, last_move = clock, now
+            elif now - last_move > timeout:
+                note = "the audio driver stopped pulling samples"
+                break
+            if now > give_up:
+                note = "no silence reached the driver in time"
+                break
             time.sleep(0.0005)
+        if note:
+            self._event("fault", f"relays opened without observed silence: {note}")
         with self._lock:
             self._switching = True
         try:

@@ -109,6 +109,9 @@ class Segment:
     screen: bool = False
     label: str = ""
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "patches", frozenset(self.patches))
+
     @property
     def n_samples(self) -> int:
         return int(len(self.piezo_v))
@@ -123,6 +126,10 @@ class OutputPlan:
     name: str = ""
     gap_s: float = 0.0  # extra silence between segments beyond the relay guard gap
     meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        # a plan is a value: a changed plan is a new plan (the gate plays what it checked)
+        object.__setattr__(self, "segments", tuple(self.segments))
 
     @property
     def duration_s(self) -> float:

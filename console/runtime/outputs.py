@@ -56,7 +56,11 @@ class Outputs:
         relay_channels = {n: p["relay_channel"] for n, p in profile.items("patches").items()}
         screen_channel = int(profile.get("screen.relay_channel"))
         self.gate = SafetyGate(
-            self.limits, board, relay_channels=relay_channels, latency_samples=int(audio.block_size)
+            self.limits,
+            board,
+            relay_channels=relay_channels,
+            screen_channel=screen_channel,
+            latency_samples=int(audio.block_size),
         )
         self.scheduler = Scheduler(
             self.gate, relay_channels=relay_channels, screen_channel=screen_channel
@@ -104,18 +108,23 @@ class Outputs:
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
         return self.scheduler.stream(source, name)
 
-    def set_relays(self, closed: frozenset[int] | set[int], *, wait: bool = True) -> PlayReport:
+    def set_relays(
+        self, closed: frozenset[int] | set[int], *, wait: bool = True, timeout_s: float = 5.0
+    ) -> PlayReport:
+        """The operator's relay setting: refused during an e-stop; with ``wait``, a command
+        not done within ``timeout_s`` is dropped (never runs later) and refused."""
         report = self.scheduler.set_relays(frozenset(closed))
         if wait:
-            report.wait(5.0)
+            try:
+                report.wait(timeout_s)
+            except TimeoutError:
+                why = f"relay command timed out after {timeout_s:g} s and was dropped"
+                if self.scheduler.cancel(report, why):
+                    raise SafetyRefusal(why) from None
+                report.wait(timeout_s)  # it was switching at that moment: let it finish
             if report.error:
                 raise SafetyRefusal(report.error)
         return report
-
-    def toggle_relay(self, channel: int, *, wait: bool = True) -> PlayReport:
-        closed = set(self.gate.relay_state())
-        closed ^= {channel}
-        return self.set_relays(closed, wait=wait)
 
     # ------------------------------------------------------------------ safety
     def estop(self, reason: str = "operator e-stop") -> None:

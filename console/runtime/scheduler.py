@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import queue
 import threading
 import weakref
@@ -19,7 +20,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from console.errors import SafetyRefusal
-from console.safety import Limits, SafetyGate, Source, check_plan
+from console.safety import (
+    Limits,
+    SafetyGate,
+    Source,
+    SourceCaller,
+    SourceInterrupted,
+    check_plan,
+)
 from console.types import OutputPlan, StreamSource
 
 log = logging.getLogger("haptable.scheduler")
@@ -52,12 +60,14 @@ class _Step:
     stream: StreamSource | None = None
     phase: str = ""  # relays: "", "switching", "settling"
     segment: int = -1
+    restore: bool = False  # relays: go to the operator's own setting (read when it runs)
 
 
 @dataclass
 class _Job:
     steps: deque[_Step]
     report: PlayReport
+    previous: frozenset[int] | None = None  # an operator relay command: the setting before
 
 
 def stream_start_problem(x: np.ndarray, k0: int, ramp: int, vmax: float) -> str | None:
@@ -85,15 +95,23 @@ class Scheduler(Source):
         self._switch_result: queue.Queue = queue.Queue()
         self._stream_k = 0
         self._stream_last = (0.0, 0.0)
+        #: the operator's own relay setting (console toggles); a stimulus routes the relays
+        #: its own way while it plays and this setting comes back after it
+        self.operator_relays: frozenset[int] = frozenset()
+        self._caller = SourceCaller("haptable-stream")
         # plans that passed check_plan against these limits, by identity, with the private
         # read-only copy of their samples that was checked (a demo replays its cached
         # plans: the check of a 3 s plan costs ~0.5 ms on the frame that plays it)
-        self._checked: dict[int, tuple[weakref.ref, tuple[tuple[np.ndarray, np.ndarray], ...]]] = {}
+        self._checked: dict[int, tuple[weakref.ref, tuple, tuple[int, ...]]] = {}
         self._worker = threading.Thread(
             target=self._relay_worker, name="haptable-relays", daemon=True
         )
         self._worker.start()
-        gate.attach(self)
+        gate.attach_scheduler(self)
+
+    def attach_to_gate(self) -> None:
+        """Make the gate play from this scheduler again (after another source was attached)."""
+        self.gate.attach_scheduler(self)
 
     # ------------------------------------------------------------------ API
     def relays_for(self, patches: frozenset[str], screen: bool) -> frozenset[int]:
@@ -126,7 +144,7 @@ class Scheduler(Source):
             )
             if gap and i < len(plan.segments) - 1:
                 steps.append(_Step("silence", n=gap))
-        steps.append(_Step("relays", relays=frozenset()))
+        steps.append(_Step("relays", restore=True))
         report = PlayReport(plan.name or "plan")
         self._enqueue(_Job(steps, report))
         return report
@@ -134,7 +152,8 @@ class Scheduler(Source):
     def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         """The plan's samples as checked (copied read-only; checked once per plan object)."""
         hit = self._checked.get(id(plan))
-        if hit is not None and hit[0]() is plan:
+        seg_ids = tuple(map(id, plan.segments))
+        if hit is not None and hit[0]() is plan and hit[2] == seg_ids:
             return hit[1]
         samples = tuple((_frozen(seg.piezo_v), _frozen(seg.screen_v)) for seg in plan.segments)
         check_plan(
@@ -148,7 +167,8 @@ class Scheduler(Source):
             self.limits,
         )
         key = id(plan)
-        self._checked[key] = (weakref.ref(plan, lambda _r: self._checked.pop(key, None)), samples)
+        ref = weakref.ref(plan, lambda _r: self._checked.pop(key, None))
+        self._checked[key] = (ref, samples, seg_ids)
         return samples
 
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
@@ -161,7 +181,7 @@ class Scheduler(Source):
                     "relays", relays=self.relays_for(frozenset(source.patches), bool(source.screen))
                 ),
                 _Step("stream", stream=source, segment=0),
-                _Step("relays", relays=frozenset()),
+                _Step("relays", restore=True),
             ]
         )
         report = PlayReport(name)
@@ -169,29 +189,62 @@ class Scheduler(Source):
         return report
 
     def set_relays(self, closed: frozenset[int], name: str = "relays") -> PlayReport:
-        """Switch relays by hand (console toggles): queued, done in silence."""
+        """The operator's relay setting (console toggles). Refused during an e-stop; while
+        a stimulus plays it takes effect when the stimulus ends (its routing is only
+        temporary); otherwise it switches in the next silence."""
+        if self.gate.estopped:
+            raise SafetyRefusal(
+                f"e-stop active ({self.gate.estop_reason}): relays stay open; reset first"
+            )
+        n = len(self.gate.relays)
+        bad = sorted(c for c in closed if not 1 <= c <= n)
+        if bad:
+            raise SafetyRefusal(f"relay channel {bad[0]} does not exist (board has {n})")
         report = PlayReport(name)
-        self._enqueue(_Job(deque([_Step("relays", relays=frozenset(closed))]), report))
+        job = _Job(deque([_Step("relays", restore=True)]), report)
+        with self._lock:
+            job.previous = self.operator_relays
+            self.operator_relays = frozenset(closed)
+            self._jobs.append(job)
         return report
+
+    def cancel(self, report: PlayReport, why: str) -> bool:
+        """Drop a queued relay command that has not switched yet (a timed-out or refused
+        command never runs later); its operator setting is undone. True if dropped."""
+        with self._lock:
+            for job in list(self._jobs):
+                if job.report is report:
+                    self._jobs.remove(job)
+                    break
+            else:
+                return False
+            if job.previous is not None:
+                self.operator_relays = job.previous
+        report.error = report.error or why
+        report.done.set()
+        return True
 
     def _enqueue(self, job: _Job) -> None:
         with self._lock:
             self._jobs.append(job)
 
     def abort(self, reason: str) -> None:
+        """E-stop: drop every job and pending relay command; the operator setting becomes
+        all open (the e-stop opens every relay)."""
+        self._caller.interrupt()
         with self._lock:
             jobs = list(self._jobs)
             if self._job is not None:
                 jobs.insert(0, self._job)
             self._jobs.clear()
             self._job = None
+            self.operator_relays = frozenset()
+        streams = [st.stream for job in jobs for st in job.steps if st.stream is not None]
+        if streams:  # plugin code: never on the e-stop's own thread (it may hang)
+            threading.Thread(
+                target=_stop_streams, args=(streams,), name="haptable-stream-stop", daemon=True
+            ).start()
         for job in jobs:
-            for st in job.steps:
-                if st.stream is not None:
-                    try:
-                        st.stream.request_stop()
-                    except Exception:
-                        log.exception("stream stop failed")
             job.report.error = job.report.error or f"stopped: {reason}"
             job.report.done.set()
 
@@ -233,7 +286,7 @@ class Scheduler(Source):
                 continue
             st = job.steps[0]
             if st.kind == "play":
-                if st.pos == 0:
+                if st.pos == 0 and st.segment >= 0:
                     job.report.segment_start.append(self.gate.clock + pos)
                 k = min(n - pos, st.n - st.pos)
                 piezo[pos : pos + k] = st.piezo[st.pos : st.pos + k]
@@ -242,7 +295,8 @@ class Scheduler(Source):
                 pos += k
                 any_signal = True
                 if st.pos >= st.n:
-                    job.report.segment_end.append(self.gate.clock + pos)
+                    if st.segment >= 0:
+                        job.report.segment_end.append(self.gate.clock + pos)
                     job.steps.popleft()
             elif st.kind == "silence":
                 k = min(n - pos, st.n - st.pos)
@@ -266,27 +320,32 @@ class Scheduler(Source):
         return (piezo, screen) if any_signal else None
 
     def _pull_stream(self, job, st, piezo, screen, pos, n) -> int | None:
-        """Copy stream samples; return the position where the stream ended, or None."""
+        """Copy stream samples; return the position where the stream ended, or None.
+
+        The stream's own code runs on a guarded thread: a stall longer than ``[limits]
+        source_stall_ms`` raises (the gate e-stops), an e-stop ends the wait at once. A
+        stream that stops mid-signal is ramped down at the slew limit, across blocks."""
         src = st.stream
         if st.pos == 0:
             job.report.segment_start.append(self.gate.clock + pos)
             self._stream_k = 0
+            self._stream_last = (0.0, 0.0)
         while pos < n:
-            blk = src.next_block(n - pos)
+            try:
+                blk = self._caller.call(src.next_block, n - pos, self.limits.source_stall_s)
+            except SourceInterrupted:
+                return n  # the e-stop has it: the gate ramps down
             if blk is None:
-                last = self._stream_last
-                if last != (0.0, 0.0):  # a stream that stops mid-signal: ramp it down
-                    ramp = np.linspace(1.0, 0.0, self.limits.ramp_samples)[1:]
-                    k = min(ramp.size, n - pos)
-                    piezo[pos : pos + k] = last[0] * ramp[:k]
-                    screen[pos : pos + k] = last[1] * ramp[:k]
-                    pos += k
-                    self._stream_last = (0.0, 0.0)
                 job.report.segment_end.append(self.gate.clock + pos)
+                tail = self._ramp_down(frozenset(src.patches))
+                if tail is not None:
+                    job.steps.insert(
+                        1, _Step("play", piezo=tail[0], screen=tail[1], n=tail[0].size)
+                    )
                 return pos
             p, s = (np.asarray(a, float) for a in blk)
             k = p.size
-            if k == 0 or k > n - pos or s.size != k:
+            if k == 0 or k > n - pos or s.size != k or p.ndim != 1 or s.ndim != 1:
                 raise ValueError(f"stream returned {k} samples, asked for at most {n - pos}")
             for x, lim in (
                 (p, max(map(abs, self.limits.piezo_range()))),
@@ -302,16 +361,37 @@ class Scheduler(Source):
             self._stream_last = (float(p[-1]), float(s[-1]))
         return None
 
+    def _ramp_down(self, patches: frozenset[str]) -> tuple[np.ndarray, np.ndarray] | None:
+        """From the stream's last sample to zero: linear, over the start ramp's length or
+        longer where the slew limit needs it; ``None`` when it ended at zero."""
+        lp, ls = self._stream_last
+        self._stream_last = (0.0, 0.0)
+        if lp == 0.0 and ls == 0.0:
+            return None
+        lim = self.limits
+        need = max(
+            lim.ramp_samples,
+            math.ceil(abs(lp) / lim.max_step_v("piezo", patches)),
+            math.ceil(abs(ls) / lim.max_step_v("screen")),
+        )
+        r = np.linspace(1.0, 0.0, need + 1)[1:]
+        return lp * r, ls * r
+
     def _relay_step(self, job: _Job, st: _Step) -> bool:
         """Advance a relay step; True when done (the block may continue)."""
         gate = self.gate
         if st.phase == "":
+            if st.restore:
+                with self._lock:
+                    st.relays = self.operator_relays
             if gate.relay_state() == st.relays:
                 job.steps.popleft()
+                if job.previous is not None:  # an operator command: it is now in force
+                    job.previous = None
                 return True
             need = self.limits.guard_samples + gate.latency_samples
-            if gate.quiet_samples() < need:
-                return False  # emit silence until the guard gap has passed
+            if gate.quiet_samples() < need or gate.switch_wait_samples(st.relays) > 0:
+                return False  # emit silence until the guard gap (and the rate limit) passed
             st.phase = "switching"
             self._switch_q.put(st.relays)
             return False
@@ -322,6 +402,9 @@ class Scheduler(Source):
                 return False
             if not ok:
                 job.report.error = msg
+                if job.previous is not None:
+                    with self._lock:
+                        self.operator_relays = job.previous
                 self._finish(job)
                 return False
             st.phase = "settling"
@@ -356,6 +439,14 @@ class Scheduler(Source):
 
     def close(self) -> None:
         self._switch_q.put(None)
+
+
+def _stop_streams(streams: list[StreamSource]) -> None:
+    for stream in streams:
+        try:
+            stream.request_stop()
+        except Exception:
+            log.exception("stream stop failed")
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.safety import Limits
 from console.types import OutputPlan, Segment
 
 from .force import Material, expected_force, threshold_check
@@ -126,6 +127,16 @@ class ElectrostaticEffect:
         v = friction_stimulus(
             vpp, freq_hz, duration_s, waveform=waveform, sample_rate_hz=fs, ramp_ms=ramp_ms
         )
+        if self.profile is not None:
+            slew_v_per_s = Limits.from_profile(self.profile).slew_v_per_s("screen")
+            fastest = float(np.abs(np.diff(v)).max(initial=0.0)) * fs
+            if fastest > slew_v_per_s:
+                raise UserError(
+                    f"electrostatic {waveform} {vpp:g} Vpp at {freq_hz:g} Hz changes at "
+                    f"{fastest / 1e3:.0f} V/ms, faster than the screen's slew limit of "
+                    f"{slew_v_per_s / 1e3:.0f} V/ms ([amplifiers] screen_peak_current_ma / "
+                    f"[screen] capacitance_nf); lower vpp or freq_hz"
+                )
         seg = Segment(
             np.zeros_like(v), v, frozenset(), True, f"{waveform} {vpp:g} Vpp {freq_hz:g} Hz"
         )

@@ -9,6 +9,7 @@ import pytest
 from scipy.io import wavfile
 
 from console.cli import main
+from console.errors import UserError
 from plugins.electrostatic.effects import KnobEffect
 from plugins.electrostatic.task import read_jsonl
 
@@ -157,7 +158,12 @@ def test_electrostatic_plans_pass_the_gate_check(profile, plugins, waveform, fre
     from console.safety import Limits, check_plan
 
     eff = plugins.get("effect", "electrostatic").factory(profile)
+    lim = Limits.from_profile(profile)
+    if freq_hz * np.pi * 200.0 > lim.slew_v_per_s("screen"):  # 200 Vpp at 1 kHz: too fast
+        with pytest.raises(UserError, match="slew limit"):
+            eff.render(vpp=200.0, freq_hz=freq_hz, duration_s=duration_s, waveform=waveform)
+        return
     plan = eff.render(vpp=200.0, freq_hz=freq_hz, duration_s=duration_s, waveform=waveform)
-    check_plan(plan, Limits.from_profile(profile))
+    check_plan(plan, lim)
     v = plan.segments[0].screen_v
     assert v[0] == 0.0 and v[-1] == 0.0 and np.abs(v).max() == pytest.approx(100.0, rel=0.01)

@@ -1,0 +1,271 @@
+"""What used to get past the safety gate (issue: "no way past the gate"), each reproduced
+on the twin and checked on what the twin's amplifiers and relays received."""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from console.errors import SafetyRefusal
+from console.safety import Source
+from console.signals import tone
+from console.types import OutputPlan, Segment
+
+FS = 48000
+
+
+def max_steps(outputs) -> np.ndarray:
+    """Largest sample-to-sample change the twin amplifiers received, per channel."""
+    rec = outputs.recording()
+    if rec.shape[0] < 2:
+        return np.zeros(2)
+    d = np.abs(np.diff(np.vstack([np.zeros((1, 2)), rec]), axis=0))
+    return d.max(axis=0)
+
+
+def assert_within_slew(outputs, patches=("PA",)) -> None:
+    lim = outputs.limits
+    piezo, screen = max_steps(outputs)
+    assert piezo <= lim.max_step_v("piezo", frozenset(patches)) * 1.001 + 1e-9, piezo
+    assert screen <= lim.max_step_v("screen") * 1.001 + 1e-9, screen
+
+
+def wait_until(cond, timeout_s=10.0):
+    t = time.monotonic() + timeout_s
+    while not cond():
+        assert time.monotonic() < t, "timed out"
+        time.sleep(0.002)
+
+
+# ---------------------------------------------------------------- 1. steps inside a segment
+def test_step_inside_a_segment_is_refused(outputs):
+    x = np.zeros(4800)
+    x[1000:3000] = 100.0
+    plan = OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="step")
+    with pytest.raises(SafetyRefusal, match="slew"):
+        outputs.play(plan)
+    assert not np.any(outputs.recording())
+
+
+def test_sine_jumping_mid_segment_is_refused(outputs):
+    x = tone(250, 1.0, 0.2, FS, 0.01)
+    x[4000:6000] *= 100.0
+    plan = OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="jump")
+    with pytest.raises(SafetyRefusal, match="slew"):
+        outputs.play(plan)
+
+
+def test_paper_waveforms_stay_within_the_slew_limit(outputs):
+    lim = outputs.limits
+    full = lim.piezo_card_v  # the sound card's full scale at the patches
+    x = tone(625, full, 0.1, FS, 0.01)
+    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
+    pall = tone(625, 0.95 * min(full, 100.0), 0.1, FS, 0.01)
+    outputs.play(
+        OutputPlan(FS, (Segment(pall, np.zeros_like(pall), frozenset({"PA", "PB", "PC", "PD"})),))
+    )
+    assert not outputs.gate.estopped
+
+
+class StepStream:
+    """A live stream: a ramped 1 V sine that steps to 99 V after ``step_at`` samples."""
+
+    patches = frozenset({"PA"})
+    screen = False
+
+    def __init__(self, step_at=4860, end_level=None, n_total=9600):  # 4860: a crest
+        self.k, self.step_at, self.end_level, self.n_total = 0, step_at, end_level, n_total
+
+    def next_block(self, n):
+        if self.k >= self.n_total:
+            return None
+        k = self.k + np.arange(n)
+        if self.end_level is not None:  # rises slowly to end_level and stops there
+            x = np.minimum(k * 0.01, self.end_level)
+        else:
+            x = np.sin(2 * np.pi * 200 * k / FS) * np.minimum(1.0, k / 480)
+            x = np.where(k >= self.step_at, x * 99.0, x)
+        self.k += n
+        return x, np.zeros(n)
+
+    def request_stop(self):
+        self.n_total = self.k
+
+
+def test_stream_stepping_mid_way_is_ramped_down_and_estops(outputs):
+    report = outputs.stream(StepStream())
+    report.wait(10)
+    assert outputs.gate.estopped and "slew" in outputs.gate.estop_reason
+    assert outputs.gate.wait_safe(5)
+    assert_within_slew(outputs)
+    assert np.abs(outputs.recording()[:, 0]).max() < 5.0, "the 99 V step never reached the amp"
+
+
+def test_stream_ending_high_ramps_down_across_blocks(outputs):
+    report = outputs.stream(StepStream(end_level=80.0, n_total=12000))
+    report.wait(10)
+    rec = outputs.recording()
+    assert np.abs(rec[:, 0]).max() >= 79.0
+    assert rec[-1, 0] == 0.0
+    assert_within_slew(outputs)
+    assert not outputs.gate.estopped
+
+
+# ---------------------------------------------------------------- 2. immutable plans
+def test_a_checked_plan_changed_after_play_never_plays_its_old_samples(outputs):
+    loud = tone(250, 100.0, 0.05, FS, 0.01)
+    plan = OutputPlan(FS, [Segment(loud, np.zeros_like(loud), frozenset({"PA"}))], name="p")
+    outputs.play(plan)
+    n1 = outputs.recording().shape[0]
+    short = np.zeros(480)
+    with contextlib.suppress(TypeError):  # segments are a tuple: a changed plan is a new plan
+        plan.segments[0] = Segment(short, short, frozenset({"PB"}))
+    outputs.play(plan)
+    rec = outputs.recording()[n1:]
+    pb = [s for s in outputs.relay_log() if s.channel == 2 and s.closed]
+    assert not (pb and np.any(rec)), "the first play's 100 V samples went out on PB"
+
+
+def test_segment_arrays_changed_after_check_do_not_play(outputs):
+    x = tone(250, 10.0, 0.05, FS, 0.01)
+    seg = Segment(x, np.zeros_like(x), frozenset({"PA"}))
+    plan = OutputPlan(FS, (seg,), name="p")
+    outputs.play(plan)
+    with contextlib.suppress(ValueError):  # read-only
+        seg.piezo_v[1000:1500] = 200.0
+    outputs.play(plan)
+    assert np.abs(outputs.recording()[:, 0]).max() <= 10.0 + 1e-4  # float32 recording
+
+
+# ---------------------------------------------------------------- 3. attached sources
+class DCSource(Source):
+    def __init__(self, level=50.0, dtype=float):
+        self.level, self.dtype = level, dtype
+
+    def next_block(self, n):
+        return np.full(n, self.level).astype(self.dtype), np.zeros(n)
+
+    @property
+    def idle(self):
+        return False
+
+    def abort(self, reason):
+        pass
+
+
+def test_attached_source_stepping_to_dc_is_stopped(outputs):
+    outputs.set_relays({1})
+    outputs.gate.attach(DCSource(50.0))
+    wait_until(lambda: outputs.gate.estopped)
+    assert outputs.gate.wait_safe(5)
+    assert np.abs(outputs.recording()[:, 0]).max() < 1.0, "0 -> 50 V DC never reached the amp"
+
+
+def test_object_dtype_block_estops_without_killing_the_audio_thread(outputs):
+    outputs.set_relays({1})
+    outputs.gate.attach(DCSource(0.0, dtype=object))
+    wait_until(lambda: outputs.gate.estopped)
+    assert outputs.gate.wait_safe(5)
+    c0 = outputs.gate.clock
+    outputs.reset()
+    outputs.scheduler.attach_to_gate()
+    x = tone(250, 10.0, 0.05, FS, 0.01)
+    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
+    assert outputs.gate.clock > c0, "the audio thread still runs"
+
+
+# ---------------------------------------------------------------- 4. a stalled stream
+class StallingStream:
+    patches = frozenset({"PA"})
+    screen = False
+
+    def __init__(self, stall_after=2400, stall_s=0.5):
+        self.k, self.stall_after, self.stall_s = 0, stall_after, stall_s
+        self.stalling = threading.Event()
+
+    def next_block(self, n):
+        if self.k >= self.stall_after:
+            self.stalling.set()
+            time.sleep(self.stall_s)
+        k = self.k + np.arange(n)
+        self.k += n
+        return 10 * np.sin(2 * np.pi * 200 * k / FS) * np.minimum(1.0, k / 480), np.zeros(n)
+
+    def request_stop(self):
+        pass
+
+
+def test_estop_with_a_stalled_stream_opens_relays_only_after_silence(outputs):
+    stream_obj = StallingStream()
+    outputs.stream(stream_obj)
+    assert stream_obj.stalling.wait(10)
+    t0 = time.monotonic()
+    outputs.estop()
+    assert time.monotonic() - t0 < 0.4, "the e-stop did not wait for the stalled stream"
+    assert outputs.gate.relay_state() == frozenset()
+    rec = outputs.recording()
+    guard = outputs.limits.guard_samples
+    for sw in outputs.relay_log():
+        if not sw.closed:
+            assert sw.level_v == (0.0, 0.0), sw
+            assert not np.any(rec[max(0, sw.clock - guard) : sw.clock]), "signal before opening"
+
+
+# ---------------------------------------------------------------- 5. relay commands
+def test_relay_command_refused_during_estop_never_runs_later(outputs):
+    outputs.estop()
+    with pytest.raises(SafetyRefusal, match="e-stop"):
+        outputs.set_relays({1, 5})
+    outputs.reset()
+    x = tone(250, 10.0, 0.02, FS, 0.005)
+    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
+    time.sleep(0.05)
+    assert outputs.gate.relay_state() == frozenset()
+    assert not any(s.closed and s.channel == 5 for s in outputs.relay_log())
+
+
+def test_timed_out_relay_command_is_dropped(outputs):
+    x = tone(250, 10.0, 1.0, FS, 0.01)
+    report = outputs.play(
+        OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)), wait=False
+    )
+    with pytest.raises(SafetyRefusal, match="timed out"):
+        outputs.set_relays({3}, timeout_s=0.01)
+    report.wait(10)
+    time.sleep(0.05)
+    assert 3 not in outputs.gate.relay_state()
+    assert not any(s.channel == 3 for s in outputs.relay_log())
+
+
+def test_operator_relays_are_restored_after_a_stimulus(outputs):
+    outputs.set_relays({3})
+    x = tone(250, 10.0, 0.3, FS, 0.01)
+    report = outputs.play(
+        OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)), wait=False
+    )
+    wait_until(lambda: report.segment_start)
+    toggle = outputs.set_relays({3, 6}, wait=False)  # pressed while the stimulus plays
+    report.wait(10)
+    toggle.wait(10)
+    assert outputs.gate.relay_state() == frozenset({3, 6}), "operator's setting restored"
+    assert outputs.gate.relay_state() != frozenset({1}), "the stimulus's routing is gone"
+
+
+def test_relay_switching_is_rate_limited(outputs):
+    gate = outputs.gate
+    ok = refused = 0
+    t_end = time.monotonic() + 0.5
+    while time.monotonic() < t_end:
+        try:
+            gate.switch_relays(frozenset() if gate.relay_state() else frozenset({7}))
+            ok += 1
+        except SafetyRefusal as exc:
+            refused += "rate" in str(exc) or "switched" in str(exc)
+    lim = outputs.limits
+    assert refused > 0
+    # the gate's own clock bounds it: at most one switch per interval of samples played
+    assert ok <= gate.clock / max(lim.min_switch_interval_samples, 1) + 2
