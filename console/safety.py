@@ -338,6 +338,9 @@ class GateEvent:
     clock: int
     kind: str  # "estop", "refused", "switch", "fault", "reset"
     message: str
+    #: an e-stop a driver may answer by dropping its queued blocks at once (an operator's);
+    #: a fault's e-stop is not cut: the gate's ramp to zero at the slew limit plays out
+    cut: bool = True
 
 
 _LIVE_GATES: weakref.WeakSet[SafetyGate] = weakref.WeakSet()
@@ -452,8 +455,8 @@ class SafetyGate:
             if p in PATCHES and 1 <= c <= len(relays) and relays[c - 1]
         )
 
-    def _event(self, kind: str, message: str) -> None:
-        ev = GateEvent(time.monotonic(), self.clock, kind, message)
+    def _event(self, kind: str, message: str, *, cut: bool = True) -> None:
+        ev = GateEvent(time.monotonic(), self.clock, kind, message, cut)
         self.events.append(ev)
         log.warning("%s: %s", kind, message) if kind in ("estop", "fault") else log.info(message)
         for fn in list(self.listeners):
@@ -580,7 +583,11 @@ class SafetyGate:
 
     def _fault(self, message: str) -> None:
         self._event("fault", message)
-        self.estop(f"fault: {message}", wait=threading.current_thread() is not self._audio_thread)
+        self.estop(
+            f"fault: {message}",
+            wait=threading.current_thread() is not self._audio_thread,
+            cut=False,
+        )
 
     # ------------------------------------------------------------------ relays
     def switch_wait_samples(self, closed: frozenset[int]) -> int:
@@ -665,12 +672,16 @@ class SafetyGate:
             self._event("fault", f"relay board state unreadable: {exc!r}")
 
     # ------------------------------------------------------------------ e-stop
-    def estop(self, reason: str = "e-stop", *, quiet: bool = False, wait: bool = True) -> None:
+    def estop(
+        self, reason: str = "e-stop", *, quiet: bool = False, wait: bool = True, cut: bool = True
+    ) -> None:
         """Ramp to zero from the next block, drop the queue, then open every relay once
         the silence has been handed to the driver. Idempotent.
 
         ``quiet`` logs it as an ordinary shutdown (closing the outputs), not an alarm.
         ``wait=False`` (used from the audio thread) opens the relays on another thread.
+        ``cut=False`` (a fault) lets the ramp down reach the amplifiers instead of inviting
+        the driver to drop its queue.
         """
         with self._lock:
             first = not self._estopped
@@ -687,7 +698,7 @@ class SafetyGate:
             except Exception:
                 log.exception("source abort failed")
         if first:
-            self._event("shutdown" if quiet else "estop", reason)
+            self._event("shutdown" if quiet else "estop", reason, cut=cut)
         if wait:
             self._open_when_silent()
         else:

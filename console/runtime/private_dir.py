@@ -32,8 +32,7 @@ def ensure_private_dir(d: Path) -> Path:
         pass
     except FileNotFoundError:
         raise UserError(
-            f"{d}: its parent directory does not exist; set XDG_RUNTIME_DIR to a directory "
-            f"of yours"
+            f"{d}: its parent directory does not exist; set XDG_RUNTIME_DIR to a directory of yours"
         ) from None
     except OSError as exc:
         raise UserError(f"{d}: cannot create the runtime directory: {exc.strerror}") from None

@@ -203,6 +203,10 @@ class Scheduler(Source):
         report = PlayReport(name)
         job = _Job(deque([_Step("relays", restore=True)]), report)
         with self._lock:
+            if self.gate.estopped:
+                raise SafetyRefusal(
+                    f"e-stop active ({self.gate.estop_reason}): relays stay open; reset first"
+                )
             job.previous = self.operator_relays
             self.operator_relays = frozenset(closed)
             self._jobs.append(job)
@@ -225,13 +229,16 @@ class Scheduler(Source):
         return True
 
     def _enqueue(self, job: _Job) -> None:
-        with self._lock:
+        with self._lock:  # the e-stop flag is set before abort() takes this lock: no race
+            if self.gate.estopped:
+                raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
             self._jobs.append(job)
 
     def abort(self, reason: str) -> None:
         """E-stop: drop every job and pending relay command; the operator setting becomes
         all open (the e-stop opens every relay)."""
         self._caller.interrupt()
+        self._caller = SourceCaller("haptable-stream")  # a stalled call keeps the old one
         with self._lock:
             jobs = list(self._jobs)
             if self._job is not None:
@@ -343,7 +350,10 @@ class Scheduler(Source):
                         1, _Step("play", piezo=tail[0], screen=tail[1], n=tail[0].size)
                     )
                 return pos
-            p, s = (np.asarray(a, float) for a in blk)
+            p, s = (np.asarray(a) for a in blk)
+            if p.dtype.kind not in "fiu" or s.dtype.kind not in "fiu":
+                raise ValueError(f"stream block has dtype {p.dtype}/{s.dtype}, not numbers")
+            p, s = p.astype(float, copy=False), s.astype(float, copy=False)
             k = p.size
             if k == 0 or k > n - pos or s.size != k or p.ndim != 1 or s.ndim != 1:
                 raise ValueError(f"stream returned {k} samples, asked for at most {n - pos}")

@@ -194,8 +194,8 @@ class TwinAudioOutput:
 
     def _on_gate_event(self, ev: Any) -> None:
         """E-stop: drop the queued blocks (silent from the sample playing now)."""
-        if getattr(ev, "kind", "") not in ("estop", "shutdown"):
-            return
+        if getattr(ev, "kind", "") not in ("estop", "shutdown") or not getattr(ev, "cut", True):
+            return  # a fault's e-stop: the gate's ramp to zero plays out
         t = getattr(ev, "t_s", None) or time.monotonic()  # the moment of the e-stop
         with self._lock:
             self._silence(self._played(t), self._written)

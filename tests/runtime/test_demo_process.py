@@ -42,7 +42,8 @@ def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
 
         def turning() -> bool:
             s = run.snapshot()
-            return s["knob"]["crossings"] >= 3 and s["latency"]["frames"] >= 60
+            seen = s["hand"]["hands"] >= 1  # the scripted hand rests between turns
+            return s["knob"]["crossings"] >= 3 and s["latency"]["frames"] >= 60 and seen
 
         _wait(turning, 30, "the scripted hand turning the knob")
         snap = run.snapshot()

@@ -79,6 +79,10 @@ def test_relay_toggle_and_estop(plugins):
             assert all(r.level_v == (0.0, 0.0) for r in log)
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: not app.outputs.gate.estopped)
+            # the refused toggle is gone: it never runs after the reset
+            await asyncio.sleep(0.3)
+            assert app.outputs.gate.relay_state() == frozenset()
+            assert not any(r.channel == 2 for r in app.outputs.relay_log())
 
     asyncio.run(scenario())
 

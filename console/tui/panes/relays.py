@@ -18,7 +18,8 @@ def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int
         want = "close" if pending[ch] else "open"
         if status["busy"]:
             return (
-                f"[yellow]waits to {want}: a stimulus is playing; switches in the next silence[/]"
+                f"[yellow]waits to {want}: a stimulus routes the relays now; yours come back "
+                f"when it ends[/]"
             )
         return f"[yellow]waits to {want}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
@@ -42,8 +43,9 @@ def log_rows(log) -> list[tuple[str, ...]]:
 class RelaysPane(VerticalScroll):
     HELP_TEXT = (
         "1-8      toggle that relay (or the switch with enter/space)\n"
-        "A toggle waits while a stimulus plays and switches in the next silence; during\n"
-        "an e-stop it is refused. The log lists every switch with the output level then."
+        "A toggle sets your own relay setting: while a stimulus plays it routes the relays\n"
+        "its way and yours come back when it ends; during an e-stop a toggle is refused and\n"
+        "never runs later. The log lists every switch with the output level then."
     )
     BINDINGS = [Binding(str(k), f"toggle({k})", f"relay {k}", show=k == 1) for k in range(1, 9)]
 
@@ -111,7 +113,7 @@ class RelaysPane(VerticalScroll):
         out = self.app.outputs
         if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
             return
-        closed = ch in out.gate.relay_state()
+        closed = ch in out.scheduler.operator_relays  # the operator's own setting
         self.request(ch, not closed)
 
     def request(self, ch: int, closed: bool) -> None:
@@ -125,7 +127,7 @@ class RelaysPane(VerticalScroll):
         try:
             if out is None:
                 raise RuntimeError("outputs are not open")
-            want = set(out.gate.relay_state())
+            want = set(out.scheduler.operator_relays)  # not a stimulus's temporary routing
             want = want | {ch} if closed else want - {ch}
             out.set_relays(want)
             self.app.call_from_thread(self._done, ch, "")

@@ -1,0 +1,265 @@
+"""Property tests of the safety gate with injected faults: whatever plans, streams, attached
+sources, relay commands and e-stops arrive, the twin's amplifiers and relays only ever see
+samples inside the limits and the slew limit, switches in silence, and silence within one
+block (plus the ramp down) of an e-stop."""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from console.errors import SafetyRefusal
+from console.safety import Source
+from console.signals import ramp_envelope
+from console.types import OutputPlan, Segment
+
+FS = 48000
+BLOCK = 64
+PROPS = settings(
+    max_examples=25,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
+
+
+def fresh(outputs) -> tuple[int, int, float]:
+    """Start an example from a clean, attached, reset gate; where its records begin."""
+    g = outputs.gate
+    if g.estopped:
+        g.wait_safe(5)
+        outputs.reset()
+    outputs.scheduler.attach_to_gate()
+    t = time.monotonic() + 5
+    while outputs.scheduler.busy and time.monotonic() < t:
+        time.sleep(0.002)
+    return outputs.recording().shape[0], len(outputs.relay_log()), time.monotonic()
+
+
+def check_received(outputs, start: tuple[int, int, float], route: frozenset[str]) -> None:
+    """What the twin received since ``start`` (``fresh``): limits, slew, silent switches,
+    silence after an e-stop."""
+    rec0, log0, t0 = start
+    events = [e for e in outputs.gate.events if e.t_s >= t0]
+    lim = outputs.limits
+    rec = outputs.recording()
+    prev = rec[rec0 - 1] if rec0 > 0 else np.zeros(2)
+    part = rec[rec0:]
+    assert np.all(np.isfinite(part))
+    lo, hi = lim.piezo_range()
+    assert part[:, 0].min(initial=0) >= lo - 1e-4 and part[:, 0].max(initial=0) <= hi + 1e-4
+    assert np.abs(part[:, 1]).max(initial=0) <= lim.screen_range()[1] + 1e-4
+    steps = np.abs(np.diff(np.vstack([prev[None, :], part]), axis=0))
+    if steps.size:
+        # the twin drops its queued blocks at an e-stop (as a sound card's abort does): the
+        # cut is the driver's, so look at what the gate handed over up to each e-stop
+        cuts = [e.clock for e in events if e.kind in ("estop", "shutdown") and e.cut]
+        ok = np.ones(steps.shape[0], bool)
+        for c in cuts:
+            i = c - rec0
+            ok[max(i - BLOCK, 0) : max(i + BLOCK, 0)] = False
+        tol = 1.0005
+        worst = int(np.argmax(np.where(ok, steps[:, 0], 0)))
+        assert steps[ok, 0].max(initial=0) <= lim.max_step_v("piezo", route) * tol + 1e-4, (
+            f"step at {rec0 + worst}: {part[max(worst - 3, 0) : worst + 3, 0]}, "
+            f"events {[(e.kind, e.clock) for e in events]}"
+        )
+        assert steps[ok, 1].max(initial=0) <= lim.max_step_v("screen") * tol + 1e-4
+    guard = lim.guard_samples
+    for sw in outputs.relay_log()[log0:]:
+        assert sw.level_v == (0.0, 0.0), sw
+        assert not np.any(rec[max(rec0, sw.clock - guard) : sw.clock]), f"signal before {sw}"
+    for i, ev in enumerate(events):
+        if ev.kind == "estop":
+            ramp = int(np.ceil(hi / lim.max_step_v("piezo", route)))
+            resets = [e.clock for e in events[i:] if e.kind == "reset"]
+            after = rec[ev.clock + BLOCK + ramp + 1 : resets[0] if resets else None]
+            assert not np.any(after), f"not silent within a block of the e-stop {ev}"
+
+
+# ------------------------------------------------------------------------- generators
+FAULTS = st.sampled_from(["none", "nan", "step", "raise", "object", "stall", "wrong_len"])
+
+
+def signal(n: int, amp: float, f: float) -> np.ndarray:
+    t = np.arange(n) / FS
+    return amp * np.sin(2 * np.pi * f * t) * ramp_envelope(n, 480)
+
+
+class FaultyStream:
+    def __init__(self, route, amp, f, fault, at, n_total):
+        self.patches, self.screen = route, False
+        self.amp, self.f, self.fault, self.at, self.n_total, self.k = amp, f, fault, at, n_total, 0
+
+    def next_block(self, n):
+        if self.k >= self.n_total:
+            return None
+        k = self.k + np.arange(n)
+        x = self.amp * np.sin(2 * np.pi * self.f * k / FS) * np.minimum(1.0, k / 480)
+        if self.k >= self.at:
+            if self.fault == "nan":
+                x[0] = np.nan
+            elif self.fault == "step":
+                x = x + 60.0
+            elif self.fault == "raise":
+                raise RuntimeError("effect crashed")
+            elif self.fault == "object":
+                x = x.astype(object)
+            elif self.fault == "stall":
+                time.sleep(0.25)
+            elif self.fault == "wrong_len":
+                x = x[:-1]
+        self.k += n
+        return x, np.zeros(len(x))
+
+    def request_stop(self):
+        self.n_total = self.k
+
+
+class FaultySource(Source, FaultyStream):
+    @property
+    def idle(self):
+        return False
+
+    def abort(self, reason):
+        pass
+
+    def next_block(self, n):
+        out = FaultyStream.next_block(self, n)
+        return out if out is not None else (np.zeros(n), np.zeros(n))
+
+
+def estop_later(outputs, delay_s: float | None) -> threading.Thread | None:
+    if delay_s is None:
+        return None
+    th = threading.Thread(target=lambda: (time.sleep(delay_s), outputs.estop("property")))
+    th.start()
+    return th
+
+
+# ------------------------------------------------------------------------- properties
+@PROPS
+@given(
+    route=st.sampled_from(sorted(ROUTES)),
+    amp=st.floats(0.5, 95),
+    f=st.floats(20, 700),
+    fault=FAULTS,
+    at=st.integers(0, 3000),
+    step_at=st.integers(0, 4000),
+    step_v=st.floats(0, 200),
+    estop_s=st.none() | st.floats(0, 0.02),
+)
+def test_plans_with_faults(outputs, route, amp, f, fault, at, step_at, step_v, estop_s):
+    start = fresh(outputs)
+    n = 4800
+    x = signal(n, amp, f)
+    if fault == "nan":
+        x[at % n] = np.nan
+    elif fault == "step":
+        x[step_at:] += step_v
+        x[-1] = 0.0
+    elif fault == "object":
+        x = x.astype(object)
+    plan = OutputPlan(FS, (Segment(x, np.zeros(n), ROUTES[route]),), name="prop")
+    th = estop_later(outputs, estop_s)
+    with contextlib.suppress(SafetyRefusal):
+        outputs.play(plan, timeout_s=10)
+    if th:
+        th.join()
+    outputs.gate.wait_safe(5)
+    check_received(outputs, start, ROUTES[route])
+
+
+@PROPS
+@given(
+    route=st.sampled_from(sorted(ROUTES)),
+    amp=st.floats(0.5, 95),
+    f=st.floats(20, 700),
+    fault=FAULTS,
+    at=st.integers(0, 6000),
+    estop_s=st.none() | st.floats(0, 0.02),
+    attach=st.booleans(),
+)
+def test_streams_and_attached_sources_with_faults(
+    outputs, route, amp, f, fault, at, estop_s, attach
+):
+    start = fresh(outputs)
+    if attach:
+        outputs.set_relays({outputs.gate.relay_channels[p] for p in ROUTES[route]})
+        src = FaultySource(ROUTES[route], amp, f, fault, at, 9600)
+        outputs.gate.attach(src)
+        th = estop_later(outputs, estop_s if estop_s is not None else 0.05)
+        t_end = time.monotonic() + 5
+        while not outputs.gate.estopped and time.monotonic() < t_end:
+            time.sleep(0.002)
+    else:
+        th = estop_later(outputs, estop_s)
+        with contextlib.suppress(SafetyRefusal):
+            outputs.stream(FaultyStream(ROUTES[route], amp, f, fault, at, 9600)).wait(10)
+    if th:
+        th.join()
+    outputs.gate.wait_safe(5)
+    check_received(outputs, start, ROUTES[route])
+
+
+@PROPS
+@given(
+    cmds=st.lists(
+        st.tuples(
+            st.sampled_from(["set", "play", "estop", "reset", "switch"]),
+            st.frozensets(st.integers(1, 8), max_size=3),
+        ),
+        min_size=1,
+        max_size=12,
+    )
+)
+def test_relay_command_sequences(outputs, cmds):
+    start = fresh(outputs)
+    x = signal(2400, 20.0, 250.0)
+    plan = OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="p")
+    refused_in_estop: set[int] = set()
+    for kind, chans in cmds:
+        try:
+            if kind == "set":
+                if outputs.gate.estopped:
+                    refused_in_estop |= chans
+                outputs.set_relays(chans, wait=False)
+            elif kind == "play":
+                outputs.play(plan, wait=False)
+            elif kind == "estop":
+                outputs.estop("property")
+            elif kind == "reset":
+                outputs.gate.wait_safe(5)
+                outputs.reset()
+            else:
+                outputs.gate.switch_relays(chans)
+        except SafetyRefusal:
+            continue
+    t = time.monotonic() + 10
+    while outputs.scheduler.busy and time.monotonic() < t:
+        time.sleep(0.002)
+    outputs.gate.wait_safe(5)
+    check_received(outputs, start, frozenset({"PA"}))
+    if outputs.gate.estopped:
+        assert outputs.gate.relay_state() == frozenset()
+    else:
+        assert outputs.gate.relay_state() == outputs.scheduler.operator_relays
+
+
+@pytest.mark.parametrize("fault", ["stall", "raise", "object", "nan"])
+def test_the_audio_thread_survives_every_fault(outputs, fault):
+    fresh(outputs)
+    outputs.stream(FaultyStream(ROUTES["PA"], 10.0, 200.0, fault, 960, 9600)).wait(10)
+    assert outputs.gate.estopped
+    outputs.gate.wait_safe(5)
+    c0 = outputs.gate.clock
+    outputs.reset()
+    x = signal(2400, 10.0, 250.0)
+    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
+    assert outputs.gate.clock > c0
