@@ -249,6 +249,19 @@ def haptable_register_benchmarks(register):
 
         return run(ctx, quick)
 
+    def safety(ctx, quick: bool) -> dict:
+        from console.safety_bench import run
+
+        return run(ctx, quick)
+
+    register(
+        "safety",
+        safety,
+        help="the gate under random faulty plans, streams, sources and relay commands "
+        "(cases per second, problems found) and e-stop latency to the last non-zero sample "
+        "for the console, a demo host and a CLI demo",
+    )
+
     register(
         "console-demo",
         console_demo,

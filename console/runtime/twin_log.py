@@ -101,6 +101,11 @@ def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | Non
         ],
         "played": [_plan_entry(p, i, arrays) for i, p in enumerate(played)],
         "estop_reason": outputs.gate.estop_reason,
+        "latency_samples": int(outputs.gate.latency_samples),
+        "gate_events": [
+            {"kind": e.kind, "clock": int(e.clock), "message": e.message, "cut": e.cut}
+            for e in list(outputs.gate.events)
+        ],
     }
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
