@@ -26,6 +26,7 @@ from __future__ import annotations
 import atexit
 import logging
 import math
+import queue
 import signal
 import sys
 import threading
@@ -268,68 +269,65 @@ class SourceCaller:
     """Runs plugin code (``fn(n)``) on a thread of its own so that it never holds the audio
     thread: the caller waits at most ``timeout_s``, or until ``interrupt()`` (the e-stop).
     A call that is still running makes every later call fail at once (the source stalled);
-    its late result is dropped."""
+    its late result is dropped. The hand-over is two C-level queues (no Python locks)."""
 
     def __init__(self, name: str) -> None:
         self.name = name
-        self._cv = threading.Condition()
-        self._req: tuple[int, Callable[[int], Any], int] | None = None
-        self._done: tuple[int, bool, Any] | None = None
+        self._req: queue.SimpleQueue = queue.SimpleQueue()
+        self._res: queue.SimpleQueue = queue.SimpleQueue()
         self._busy = False
         self._gen = 0
         self._interrupts = 0
         self._thread: threading.Thread | None = None
 
     def call(self, fn: Callable[[int], Any], n: int, timeout_s: float) -> Any:
-        with self._cv:
-            if self._busy:
-                raise SourceStalled(f"{self.name} is still inside an earlier call")
-            self._gen += 1
-            gen, seen = self._gen, self._interrupts
-            self._req, self._done, self._busy = (gen, fn, n), None, True
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
-                self._thread.start()
-            self._cv.notify_all()
-            deadline = time.monotonic() + timeout_s
-            while self._done is None or self._done[0] != gen:
-                if self._interrupts != seen:
+        if self._busy:
+            raise SourceStalled(f"{self.name} is still inside an earlier call")
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
+            self._thread.start()
+        self._gen += 1
+        gen, seen = self._gen, self._interrupts
+        self._busy = True
+        self._req.put((gen, fn, n))
+        deadline = time.monotonic() + timeout_s
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise SourceStalled(
+                    f"{self.name} gave no block within {timeout_s * 1e3:.0f} ms "
+                    f"([limits] source_stall_ms)"
+                )
+            try:
+                item = self._res.get(timeout=left)
+            except queue.Empty:
+                continue
+            if item[0] == "interrupt":
+                if item[1] > seen:
                     raise SourceInterrupted(f"{self.name}: interrupted by the e-stop")
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise SourceStalled(
-                        f"{self.name} gave no block within {timeout_s * 1e3:.0f} ms "
-                        f"([limits] source_stall_ms)"
-                    )
-                self._cv.wait(left)
-            _, ok, value = self._done
-        if not ok:
-            raise value
-        return value
+                continue
+            if item[0] != gen:
+                continue  # the late answer to an abandoned call
+            if not item[1]:
+                raise item[2]
+            return item[2]
 
     def interrupt(self) -> None:
-        with self._cv:
-            self._interrupts += 1
-            self._cv.notify_all()
+        self._interrupts += 1
+        self._res.put(("interrupt", self._interrupts))
 
     def _run(self) -> None:
         from console.runtime.realtime import AUDIO_PRIORITY, realtime_priority
 
         realtime_priority(AUDIO_PRIORITY)  # it stands in for the audio thread
         while True:
-            with self._cv:
-                while self._req is None:
-                    self._cv.wait()
-                gen, fn, n = self._req
-                self._req = None
+            gen, fn, n = self._req.get()
             try:
                 res: tuple[bool, Any] = (True, fn(n))
             except BaseException as exc:  # handed to the caller, never lost
                 res = (False, exc)
-            with self._cv:
-                self._done = (gen, *res)
-                self._busy = False
-                self._cv.notify_all()
+            self._busy = False
+            self._res.put((gen, *res))
 
 
 @dataclass(frozen=True)
