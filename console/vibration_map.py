@@ -50,6 +50,14 @@ FORMAT = "haptable-vibration-map"
 VERSION = 1
 UNITS = {"frf": "um/V", "freq": "Hz", "position": "mm"}
 KEYS = ("frf_um_per_v", "freq_hz", "points", "points_mm", "excitations", "masked", "meta_json")
+#: |FRF| bound: 1e4 um/V is 1 cm of displacement per volt at the piezo; the glass (a few
+#: mm thick) breaks long before, and measured plates peak at ~0.01-10 um/V. A larger value
+#: is a unit mistake (m vs um, a missing gain) or a conversion blow-up.
+MAX_FRF_UM_PER_V = 1e4
+#: no vibrometer, amplifier or sound card in the chain reaches 1 MHz
+MAX_FREQ_HZ = 1e6
+#: positions are mm from the glass corner of a ~1 m table: 10 m means a wrong unit
+MAX_POSITION_MM = 1e4
 
 
 @dataclass(frozen=True)
@@ -135,9 +143,16 @@ def make_map(
 
 
 def validate_map(
-    m: VibrationMap, *, where: str = "vibration map", require_all: bool = True
+    m: VibrationMap,
+    *,
+    where: str = "vibration map",
+    require_all: bool = True,
+    grid_points: int | None = None,
 ) -> None:
-    """Raise a one-line ``UserError`` for anything a consumer could trip on."""
+    """Raise a one-line ``UserError`` for anything a consumer could trip on.
+
+    ``grid_points`` (rows x columns of the profile's grid): point numbers must lie in
+    1..grid_points; without it only 1..2^31-1 is checked."""
     frf, f = m.frf_um_per_v, m.freq_hz
     if f.ndim != 1 or f.size < 2:
         raise UserError(f"{where}: freq_hz must be a 1-D array of at least 2 bins; re-export it")
@@ -146,6 +161,11 @@ def validate_map(
     if f[0] < 0:
         raise UserError(
             f"{where}: freq_hz has a negative frequency ({f[0]:g} Hz); frequencies must be >= 0"
+        )
+    if f[-1] > MAX_FREQ_HZ:
+        raise UserError(
+            f"{where}: freq_hz reaches {f[-1]:g} Hz, above {MAX_FREQ_HZ:g} Hz (no vibrometer "
+            f"or amplifier reaches it); check the frequency unit (Hz)"
         )
     if np.any(np.diff(f) <= 0):
         i = int(np.flatnonzero(np.diff(f) <= 0)[0])
@@ -156,6 +176,10 @@ def validate_map(
     E, P = len(m.excitations), m.points.shape[0] if m.points.ndim == 1 else -1
     if m.points.ndim != 1:
         raise UserError(f"{where}: points must be a 1-D array of grid numbers")
+    if E == 0:
+        raise UserError(f"{where}: excitations is empty; a map holds at least one of PA..PALL")
+    if P == 0:
+        raise UserError(f"{where}: points is empty; a map holds at least one grid point")
     if frf.shape != (E, P, f.size):
         raise UserError(
             f"{where}: frf_um_per_v has shape {frf.shape}, expected (excitations, points, "
@@ -167,6 +191,22 @@ def validate_map(
         raise UserError(f"{where}: masked has shape {m.masked.shape}, expected ({f.size},)")
     if not np.all(np.isfinite(m.points_mm)):
         raise UserError(f"{where}: points_mm holds NaN or inf; fix the point coordinates")
+    far = np.abs(m.points_mm) > MAX_POSITION_MM
+    if far.any():
+        i = int(np.flatnonzero(far.any(axis=1))[0])
+        x, y = m.points_mm[i]
+        raise UserError(
+            f"{where}: points_mm of point {int(m.points[i])} is ({x:g}, {y:g}) mm, beyond "
+            f"{MAX_POSITION_MM:g} mm from the corner (the table is ~1 m); check the unit (mm)"
+        )
+    top = grid_points if grid_points is not None else 2**31 - 1
+    out = (m.points < 1) | (m.points > top)
+    if out.any():
+        raise UserError(
+            f"{where}: points holds grid number {int(m.points[out][0])}, outside 1..{top}"
+            + (" (the profile's [grid] rows x columns)" if grid_points is not None else "")
+            + "; number the points row by row from 1"
+        )
     if len(set(m.points.tolist())) != P:
         raise UserError(f"{where}: points has duplicate grid numbers; each point must appear once")
     bad = ~np.isfinite(frf)
@@ -176,9 +216,19 @@ def validate_map(
             f"{where}: FRF is NaN/inf for {m.excitations[e]} point {int(m.points[p])} at "
             f"{f[k]:g} Hz; mask that bin or re-measure"
         )
+    mag = np.abs(frf)
+    if mag.max() > MAX_FRF_UM_PER_V:
+        e, p, k = np.unravel_index(int(mag.argmax()), mag.shape)
+        raise UserError(
+            f"{where}: frf_um_per_v is {mag[e, p, k]:.3g} um/V for {m.excitations[e]} point "
+            f"{int(m.points[p])} at {f[k]:g} Hz, above {MAX_FRF_UM_PER_V:g} um/V (1 cm per "
+            f"volt: glass cannot move so far); check the unit (um/V at the piezo) and gain"
+        )
     unknown = [e for e in m.excitations if e not in EXCITATIONS]
     if unknown:
-        raise UserError(f"{where}: unknown excitation {unknown[0]!r}; use {' '.join(EXCITATIONS)}")
+        raise UserError(
+            f"{where}: unknown excitation {unknown[0]!r} in excitations; use {' '.join(EXCITATIONS)}"
+        )
     if len(set(m.excitations)) != E:
         raise UserError(f"{where}: an excitation appears twice in {list(m.excitations)}")
     if require_all:
@@ -212,57 +262,162 @@ def save_map(path: str | os.PathLike, m: VibrationMap) -> Path:
     return p
 
 
-def load_map(path: str | os.PathLike, *, require_all: bool = True) -> VibrationMap:
-    """Read and validate a map written by ``save_map``."""
-    p = Path(path)
-    where = str(p)
-    if not p.exists():
+FIX = "re-create it with `haptable frf measure` or `haptable frf import`"
+
+
+def load_map(
+    path: str | os.PathLike, *, require_all: bool = True, grid_points: int | None = None
+) -> VibrationMap:
+    """Read and validate a map written by ``save_map`` (bounded: ``console.npz_safe``)."""
+    from console.npz_safe import read_npz
+
+    data = read_npz(path, what="vibration map", fix=FIX)
+    if "max_diff_um_per_v" in data:
         raise UserError(
-            f"{where}: no such vibration map; run `haptable frf measure` or `haptable frf import`"
+            f"{path}: a lookup-tables file, not a vibration map; pass the map it was built from"
         )
-    try:
-        with np.load(p, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
+    if "map_frf_um_per_v" in data:
         raise UserError(
-            f"{where}: not a vibration map (.npz) ({exc}); pass the file `frf import` wrote"
-        ) from None
-    missing = [k for k in KEYS if k not in data]
-    if missing:
-        raise UserError(
-            f"{where}: not a vibration map, key {missing[0]!r} is missing; re-create it"
+            f"{path}: a lookup-tables file without key 'max_diff_um_per_v' (damaged); "
+            "rebuild it with `haptable tables build MAP --out FILE`"
         )
-    try:
-        meta = json.loads(str(data["meta_json"]))
-    except json.JSONDecodeError:
-        raise UserError(f"{where}: meta_json is not valid JSON; re-create the map") from None
-    if meta.get("format") != FORMAT:
-        raise UserError(f"{where}: format is {meta.get('format')!r}, expected {FORMAT!r}")
-    if int(meta.get("version", 0)) > VERSION:
-        raise UserError(
-            f"{where}: map version {meta.get('version')} is newer than this console ({VERSION}); upgrade"
-        )
-    units = meta.get("units", {})
-    for key, want in UNITS.items():
-        if units.get(key) != want:
+    return map_from_arrays(data, where=str(path), require_all=require_all, grid_points=grid_points)
+
+
+def _numeric(where: str, key: str, a: np.ndarray, kinds: str, what: str) -> np.ndarray:
+    if a.dtype.kind not in kinds:
+        raise UserError(f"{where}: {key} has dtype {a.dtype}, expected {what}; {FIX}")
+    return a
+
+
+def _grid_numbers(where: str, key: str, a: np.ndarray) -> np.ndarray:
+    """Integer grid numbers; floats only when they hold whole numbers."""
+    if a.dtype.kind in "iu":
+        if a.size and (a.max() > 2**62 or a.min() < -(2**62)):
+            raise UserError(f"{where}: {key} holds {a.max()}, not a grid number; {FIX}")
+        return a.astype(np.int64)
+    if a.dtype.kind == "f":
+        bad = ~np.isfinite(a) | (a != np.round(a)) | (np.abs(a) > 2**31)
+        if bad.any():
             raise UserError(
-                f"{where}: units.{key} is {units.get(key)!r}, expected {want!r}; convert the map "
-                f"(the FRF must be displacement in um per volt at the piezo)"
+                f"{where}: {key} holds {a[bad][0]:g}, not a whole grid number; number the "
+                "points 1, 2, ... row by row"
             )
-    if not np.iscomplexobj(data["frf_um_per_v"]):
+        return a.astype(np.int64)
+    raise UserError(f"{where}: {key} has dtype {a.dtype}, expected integer grid numbers; {FIX}")
+
+
+def _meta(where: str, raw: np.ndarray, key: str) -> dict[str, Any]:
+    """The checked ``meta_json`` object: format, version, units (and provenance)."""
+    from console.npz_safe import read_json_text
+
+    meta = read_json_text(raw, where=where, key=key, fix=FIX)
+    if not isinstance(meta, dict):
+        raise UserError(f"{where}: {key} must be a JSON object, not {type(meta).__name__}; {FIX}")
+    for k in ("format", "version", "units"):
+        if k not in meta:
+            raise UserError(f"{where}: {key} has no {k!r}; {FIX}")
+    if meta["format"] != FORMAT:
         raise UserError(
-            f"{where}: frf_um_per_v must be complex (magnitudes lose the phase needed to interpolate)"
+            f"{where}: {key} format is {str(meta['format'])[:40]!r}, expected {FORMAT!r}; "
+            "pass a vibration map"
         )
+    v = meta["version"]
+    if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+        raise UserError(
+            f"{where}: {key} version is {str(v)[:40]!r}, expected a whole number 1..{VERSION}; {FIX}"
+        )
+    if v > VERSION:
+        raise UserError(
+            f"{where}: {key} version {v} is newer than this console's ({VERSION}); upgrade "
+            "HapTable to read it"
+        )
+    units = meta["units"]
+    if not isinstance(units, dict):
+        raise UserError(f"{where}: {key} units must be an object like {UNITS}; {FIX}")
+    for k, want in UNITS.items():
+        if units.get(k) != want:
+            raise UserError(
+                f"{where}: {key} units.{k} is {str(units.get(k))[:40]!r}, expected {want!r}; "
+                "convert the map (the FRF must be displacement in um per volt at the piezo)"
+            )
+    prov = meta.get("provenance", {})
+    if not isinstance(prov, dict):
+        raise UserError(f"{where}: {key} provenance must be an object; {FIX}")
+    gain = prov.get("gain", 1.0)
+    if not isinstance(gain, (int, float)) or isinstance(gain, bool) or not 0 < gain < 1e6:
+        raise UserError(
+            f"{where}: {key} provenance.gain is {str(gain)[:40]!r}, expected a number > 0 "
+            "(the amplifier gain applied); fix or re-create the map"
+        )
+    return meta
+
+
+def map_from_arrays(
+    data: dict[str, np.ndarray],
+    *,
+    where: str,
+    prefix: str = "",
+    require_all: bool = True,
+    grid_points: int | None = None,
+) -> VibrationMap:
+    """A validated map from the arrays of a ``.npz`` (keys ``prefix + KEYS``: tables
+    files hold their map under ``map_``). Dtypes are checked before any conversion."""
+    missing = [prefix + k for k in KEYS if prefix + k not in data]
+    if missing:
+        raise UserError(f"{where}: key {missing[0]!r} is missing; {FIX}")
+    if not prefix:
+        extra = sorted(set(data) - set(KEYS))
+        if extra:
+            raise UserError(
+                f"{where}: unknown key {extra[0]!r} (a version-{VERSION} map holds exactly "
+                f"{', '.join(KEYS)}); remove it or re-create the map"
+            )
+    d = {k: data[prefix + k] for k in KEYS}
+    meta = _meta(where, d["meta_json"], prefix + "meta_json")
+    n = prefix  # keys named as stored
+    frf = d["frf_um_per_v"]
+    if frf.dtype.kind != "c":
+        raise UserError(
+            f"{where}: {n}frf_um_per_v has dtype {frf.dtype}, must be complex (magnitudes lose "
+            "the phase needed to interpolate); re-export with phase"
+        )
+    freq = _numeric(where, n + "freq_hz", d["freq_hz"], "iuf", "real numbers (Hz)")
+    mm = _numeric(where, n + "points_mm", d["points_mm"], "iuf", "real numbers (mm)")
+    points = _grid_numbers(where, n + "points", d["points"])
+    exc = d["excitations"]
+    if exc.dtype.kind not in "US" or exc.ndim > 1:
+        raise UserError(
+            f"{where}: {n}excitations must be a 1-D array of names (PA PB PC PD PALL), not "
+            f"{exc.dtype} of shape {exc.shape}; {FIX}"
+        )
+    masked = d["masked"]
+    if masked.dtype.kind in "iu" and np.isin(masked, (0, 1)).all():
+        masked = masked.astype(bool)
+    if masked.dtype.kind != "b":
+        raise UserError(f"{where}: {n}masked has dtype {masked.dtype}, expected bool; {FIX}")
+    names = tuple(
+        e.decode("ascii", "replace") if isinstance(e, bytes) else str(e) for e in np.atleast_1d(exc)
+    )
     m = VibrationMap(
-        frf_um_per_v=data["frf_um_per_v"].astype(np.complex128),
-        freq_hz=data["freq_hz"].astype(np.float64),
-        points=data["points"].astype(np.int64),
-        points_mm=data["points_mm"].astype(np.float64),
-        excitations=tuple(str(e) for e in np.atleast_1d(data["excitations"])),
-        masked=data["masked"].astype(bool),
+        frf_um_per_v=frf.astype(np.complex128),
+        freq_hz=freq.astype(np.float64),
+        points=points,
+        points_mm=mm.astype(np.float64),
+        excitations=names,
+        masked=masked,
         provenance=dict(meta.get("provenance", {})),
     )
-    validate_map(m, where=where, require_all=require_all)
+    try:
+        validate_map(m, where=where, require_all=require_all, grid_points=grid_points)
+    except UserError as exc:
+        if not prefix:
+            raise
+        # name the stored key (map_freq_hz) in a tables file
+        msg = str(exc)
+        for k in KEYS:
+            msg = msg.replace(f": {k} ", f": {prefix}{k} ", 1)
+        raise UserError(msg) from None
     return m
 
 

@@ -199,7 +199,14 @@ def save_map(path: Path, vmap) -> Path:
     return _save(path, vmap)
 
 
-def load_map(path: Path):
+def load_map(path: Path, profile=None):
+    """A vibration map file (any subset of excitations), its point numbers checked
+    against ``profile``'s grid when given; bad files are a one-line ``UserError``."""
     from console.vibration_map import load_map as _load
 
-    return _load(path, require_all=False)
+    g = _section(profile, "grid") if profile is not None else {}
+    try:
+        grid = int(g["rows"]) * int(g["columns"])
+    except (KeyError, TypeError, ValueError):
+        grid = None
+    return _load(Path(path).expanduser(), require_all=False, grid_points=grid)

@@ -16,6 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from console.errors import UserError
+from console.npz_safe import read_json_text, read_npz
+
 CODE_VERSION = 1
 
 
@@ -32,6 +35,10 @@ def key_hash(key: dict) -> str:
     return hashlib.sha256(blob).hexdigest()[:24]
 
 
+def _json(v, path: Path, key: str):
+    return read_json_text(v, where=str(path), key=key, fix="", max_chars=2**28)
+
+
 def cached(
     cache_dir: str | os.PathLike | None, kind: str, key: dict, compute: Callable[[], dict]
 ) -> dict:
@@ -40,11 +47,10 @@ def cached(
     path = Path(cache_dir) / f"{kind}-{key_hash(key)}.npz"
     if path.exists():
         try:
-            with np.load(path, allow_pickle=False) as z:
-                out = {k: z[k] for k in z.files}
-            return {k: (json.loads(str(v)) if k.endswith("_json") else v) for k, v in out.items()}
-        except (OSError, ValueError):
-            path.unlink(missing_ok=True)  # a torn write: recompute
+            out = read_npz(path, what="cache entry", fix="it is recomputed")
+            return {k: (_json(v, path, k) if k.endswith("_json") else v) for k, v in out.items()}
+        except UserError:
+            path.unlink(missing_ok=True)  # a torn write or a damaged file: recompute
     result = compute()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(f".{os.getpid()}.tmp")

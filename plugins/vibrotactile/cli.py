@@ -66,24 +66,40 @@ def cache_dir_of(args, ctx) -> Path | None:
     return Path(raw).expanduser() if raw else default_cache_dir()
 
 
+def grid_points(ctx) -> int | None:
+    """rows x columns of the profile's grid (point numbers run 1..this)."""
+    g = ctx.profile.section("grid")
+    return int(g["rows"]) * int(g["columns"])
+
+
+def sample_rate(ctx) -> float:
+    return float(ctx.profile.get("audio.sample_rate_hz"))
+
+
+def finite(name: str, value: float | None, lo: float, hi: float, fix: str) -> float | None:
+    """A number argument within [lo, hi] (``None`` passes): else one line naming it."""
+    if value is not None and not lo <= value <= hi:  # NaN fails too
+        raise UserError(f"{name} {value:g}: {fix}")
+    return value
+
+
 def parse_point(text: str, vmap):
-    """``51`` (grid number) -> map index; ``x,y`` (mm) -> (x, y)."""
+    """``51`` (grid number) -> map index; ``x,y`` (mm) -> (x, y), finite."""
     t = text.strip()
+    hint = f"give a grid number 1..{int(vmap.points.max())} or x,y in mm (e.g. 300,200)"
     if "," in t:
         try:
             x, y = (float(v) for v in t.split(","))
         except ValueError:
-            raise UserError(
-                f"point {text!r}: give a grid number 1..84 or x,y in mm (e.g. 300,200)"
-            ) from None
+            raise UserError(f"point {text!r}: {hint}") from None
+        if not (np.isfinite(x) and np.isfinite(y)):
+            raise UserError(f"point {text!r}: x and y must be finite numbers in mm; {hint}")
         return (x, y)
     try:
-        n = int(t)
+        num = int(t)
     except ValueError:
-        raise UserError(
-            f"point {text!r}: give a grid number 1..84 or x,y in mm (e.g. 300,200)"
-        ) from None
-    return vmap.point_index(n)
+        raise UserError(f"point {text!r}: {hint}") from None
+    return vmap.point_index(num)
 
 
 def tables_for(path: str, ctx, args, band_hz: float | None = None):
@@ -94,8 +110,12 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
     from plugins.vibrotactile.vibration_io import is_tables_file
 
     if is_tables_file(path):
-        return load_tables(path)
-    vm = load_map(path, require_all=not getattr(args, "allow_missing", False))
+        return load_tables(path, sample_rate_hz=sample_rate(ctx), grid_points=grid_points(ctx))
+    vm = load_map(
+        path,
+        require_all=not getattr(args, "allow_missing", False),
+        grid_points=grid_points(ctx),
+    )
     c = getattr(args, "min_contrast_db", None)
     c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else float(c)
     return tables_cached(
@@ -203,6 +223,8 @@ def run_frf(args, ctx) -> int:
         grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
         gain = args.gain if args.gain is not None else ctx.profile.get("amplifiers.piezo_gain")
         mask = args.mask_below_hz if args.mask_below_hz is not None else _vt(ctx)["mask_below_hz"]
+        finite("--gain", gain, 1e-6, 1e6, "the amplifier gain must be > 0 (PI E413.D2: 50)")
+        finite("--mask-below-hz", mask, 0, 1e5, "give 0 or more Hz (default: profile, 5)")
         m = import_uff(
             files, gain=gain, mask_below_hz=mask, grid_mm=grid, require_all=not args.allow_missing
         )
@@ -220,11 +242,11 @@ def run_frf(args, ctx) -> int:
     if args.frf_cmd == "export":
         from plugins.vibrotactile.uff_io import export_uff
 
-        m = load_map(args.map, require_all=False)
+        m = load_map(args.map, require_all=False, grid_points=grid_points(ctx))
         for path in export_uff(m, args.out, binary=args.binary, gain=args.gain):
             print(f"wrote {path}")
         return 0
-    m = load_map(args.map, require_all=False)
+    m = load_map(args.map, require_all=False, grid_points=grid_points(ctx))
     info = {
         "excitations": list(m.excitations),
         "points": int(m.points.size),
@@ -304,12 +326,13 @@ def run_tables(args, ctx) -> int:
     if args.tables_cmd == "build":
         from console.vibration_map import load_map
 
-        m = load_map(args.map, require_all=not args.allow_missing)
-        t0 = time.perf_counter()
+        nyq = sample_rate(ctx) / 2
+        finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
         c = args.min_contrast_db
         c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else c
-        if c < 0:
-            raise UserError(f"--min-contrast-db {c:g}: give 0 (the paper's rule) or more dB")
+        finite("--min-contrast-db", c, 0, 200, "give 0 (the paper's rule) or more dB")
+        m = load_map(args.map, require_all=not args.allow_missing, grid_points=grid_points(ctx))
+        t0 = time.perf_counter()
         t = build_tables(
             m, args.band_hz or _vt(ctx)["band_hz"], progress_printer(), min_contrast_db=c
         )
@@ -400,8 +423,7 @@ def with_ringdown(st, args):
     k = getattr(args, "ringdown_k", None)
     if k is None:
         return st
-    if k < 0:
-        raise UserError(f"--ringdown-k {k:g}: give 0 (off) or a positive number of decay times")
+    finite("--ringdown-k", k, 0, 1e3, "give 0 (off) or a positive number of decay times")
     return replace(st, ringdown_gap_k=float(k))
 
 
@@ -439,11 +461,19 @@ def hand_plan(args, ctx, lim):
     from plugins.vibrotactile.effects import HandFlowEffect, setup_from_profile
     from plugins.vibrotactile.tables import load_map_or_tables
 
-    vm = load_map_or_tables(args.source, require_all=False)
+    vm = load_map_or_tables(
+        args.source,
+        require_all=False,
+        sample_rate_hz=sample_rate(ctx),
+        grid_points=grid_points(ctx),
+    )
     try:
         cx, cy = (float(v) for v in args.hand.split(","))
     except ValueError:
         raise UserError(f"--hand {args.hand!r}: give the hand centre as x,y in mm") from None
+    if not (np.isfinite(cx) and np.isfinite(cy)):
+        raise UserError(f"--hand {args.hand!r}: x and y must be finite numbers in mm")
+    finite("--hand-mm", args.hand_mm, 1, 1e4, "give the hand's square side in mm (e.g. 120)")
     setup = replace(
         setup_from_profile(ctx.profile),
         cache_dir=cache_dir_of(args, ctx),

@@ -132,8 +132,18 @@ class _MapUser:
 
                 if len(self._maps) >= 4:
                     self._maps.pop(next(iter(self._maps)))
-                self._maps[key] = load_map_or_tables(p, require_all=False)
+                self._maps[key] = load_map_or_tables(p, require_all=False, **self._file_checks())
             return self._maps[key]
+
+    def _file_checks(self) -> dict:
+        """What a map or tables file is checked against: the profile's grid size (point
+        numbers) and sample rate (Nyquist)."""
+        try:
+            g = self.profile.section("grid")
+            grid = int(g["rows"]) * int(g["columns"])
+        except (UserError, KeyError, TypeError, ValueError):
+            grid = None
+        return {"sample_rate_hz": self.setup.settings.sample_rate_hz, "grid_points": grid}
 
     def tables(
         self,
@@ -150,16 +160,27 @@ class _MapUser:
         (or this ``min_contrast_db``: 0 is the paper's rule)."""
         from plugins.vibrotactile.tables import Tables, load_tables
 
-        if isinstance(tables, Tables):
-            return tables
         if tables is not None:
-            p = Path(tables)
-            st = p.stat() if p.is_file() else None
-            key = ("file", str(p), st.st_mtime_ns if st else 0)
-            with self._lock:
-                if key not in self._tables:
-                    self._tables[key] = load_tables(p)
-                return self._tables[key]
+            if isinstance(tables, Tables):
+                t = tables
+            else:
+                p = Path(tables)
+                st = p.stat() if p.is_file() else None
+                key = ("file", str(p), st.st_mtime_ns if st else 0)
+                with self._lock:
+                    if key not in self._tables:
+                        self._tables[key] = load_tables(p, **self._file_checks())
+                    t = self._tables[key]
+            if vmap is not None:  # both given: the tables must come from that map
+                from plugins.vibrotactile.tables import check_tables_map
+
+                check_tables_map(
+                    t,
+                    self.vibration_map(vmap),
+                    tables_where=str(tables) if not isinstance(tables, Tables) else "tables",
+                    map_where=str(vmap) if not isinstance(vmap, VibrationMap) else "the map",
+                )
+            return t
         m = self.vibration_map(vmap)
         c = self.setup.min_contrast_db if min_contrast_db is None else float(min_contrast_db)
         key = ("map", id(m), c)
@@ -175,10 +196,14 @@ class _MapUser:
             return hit
 
     def _source_key(self, vmap: Any, tables: Any) -> tuple:
-        src = tables if tables is not None else vmap
-        if isinstance(src, (str, os.PathLike)):
-            return ("path", str(src))
-        return ("obj", id(src))
+        """Both sources name a plan: tables given with another map are checked again."""
+
+        def one(src: Any) -> tuple:
+            if isinstance(src, (str, os.PathLike)):
+                return ("path", str(src))
+            return ("obj", id(src))
+
+        return one(tables) if vmap is None else (*one(tables), *one(vmap))
 
     def _settings(self, ringdown_gap_k: float | None):
         st = self.setup.settings

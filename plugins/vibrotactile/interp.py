@@ -74,8 +74,9 @@ def _check_inside(v: np.ndarray, knots: np.ndarray, axis: str, extrapolate: bool
     bad = (v < lo) | (v > hi)
     if bad.any():
         val = float(v[bad][0])
+        shown = f"{val:.1f}" if abs(val) < 1e6 else f"{val:.3g}"
         raise UserError(
-            f"point {axis}={val:.1f} mm is outside the measured grid ({axis} {knots[0]:.1f}.."
+            f"point {axis}={shown} mm is outside the measured grid ({axis} {knots[0]:.1f}.."
             f"{knots[-1]:.1f} mm); pick a point inside or allow extrapolation (--extrapolate)"
         )
 

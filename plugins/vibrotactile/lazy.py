@@ -11,10 +11,11 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable
 
+from console.errors import UserError
 from console.vibration_map import VibrationMap
 from plugins.vibrotactile.cache import cached
 from plugins.vibrotactile.perception import Perception
-from plugins.vibrotactile.tables import Tables, build_tables, query_points
+from plugins.vibrotactile.tables import Tables, build_tables, query_points, validate_tables
 
 CacheDir = str | os.PathLike | None
 
@@ -30,12 +31,20 @@ def tables_cached(
     key = {"map": m.content_hash(), "band_hz": band_hz}
     if min_contrast_db > 0:  # the paper's tables keep their old key
         key["min_contrast_db"] = float(min_contrast_db)
-    res = cached(
-        cache_dir,
-        "tables",
-        key,
-        lambda: _arrays(build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db)),
-    )
+
+    def build() -> dict:
+        return _arrays(build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db))
+
+    res = cached(cache_dir, "tables", key, build)
+    try:
+        t = _tables(res, m, band_hz, min_contrast_db)
+        validate_tables(t, where="tables cache")
+    except (UserError, KeyError):  # a damaged cache entry: build without the cache
+        t = _tables(cached(None, "tables", key, build), m, band_hz, min_contrast_db)
+    return t
+
+
+def _tables(res: dict, m: VibrationMap, band_hz: float, min_contrast_db: float) -> Tables:
     return Tables(
         res["max_diff_um_per_v"],
         res["freq_hz"],

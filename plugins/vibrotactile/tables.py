@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from console.errors import UserError
-from console.vibration_map import VibrationMap, load_map, make_map, save_map
+from console.vibration_map import VibrationMap, save_map
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 
@@ -192,53 +192,191 @@ def save_tables(path: str | os.PathLike, t: Tables) -> Path:
     return p
 
 
-def load_tables(path: str | os.PathLike) -> Tables:
+TABLE_KEYS = ("max_diff_um_per_v", "freq_hz", "actuator", "band_hz", "map_hash")
+OPTIONAL_KEYS = ("min_contrast_db",)
+TABLES_FIX = "rebuild it with `haptable tables build MAP --out FILE`"
+
+
+def load_tables(
+    path: str | os.PathLike,
+    *,
+    sample_rate_hz: float | None = None,
+    grid_points: int | None = None,
+    data: dict[str, np.ndarray] | None = None,
+) -> Tables:
+    """Read and validate a tables file: its map (``map_*``), the stored ``map_hash``
+    against that map, and every entry (``validate_tables``). ``sample_rate_hz``: the
+    profile's, for the Nyquist check; ``data``: the arrays when already read."""
+    from console.npz_safe import read_npz
+    from console.vibration_map import KEYS, map_from_arrays
+
     p = Path(path)
-    if not p.exists():
-        raise UserError(f"{p}: no such tables file; run `haptable tables build MAP --out {p}`")
-    try:
-        with np.load(p, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
+    where = str(p)
+    if data is None:
+        data = read_npz(p, what="tables file", fix=TABLES_FIX)
+    if "max_diff_um_per_v" not in data and "frf_um_per_v" in data:
+        raise UserError(f"{p}: a vibration map, not a tables file; build tables from it first")
+    known = {*TABLE_KEYS, *OPTIONAL_KEYS, *(f"map_{k}" for k in KEYS)}
+    missing = [k for k in (*TABLE_KEYS, *(f"map_{k}" for k in KEYS)) if k not in data]
+    if missing:
+        raise UserError(f"{p}: key {missing[0]!r} is missing; {TABLES_FIX}")
+    extra = sorted(set(data) - known)
+    if extra:
+        raise UserError(f"{p}: unknown key {extra[0]!r} in a tables file; {TABLES_FIX}")
+    vm = map_from_arrays(
+        data, where=where, prefix="map_", require_all=False, grid_points=grid_points
+    )
+    band = _scalar(where, "band_hz", data["band_hz"])
+    if not 0 < band <= 1e6:
+        raise UserError(f"{p}: band_hz is {band:g}, expected 0 < band_hz <= 1e6 Hz; {TABLES_FIX}")
+    c = _scalar(where, "min_contrast_db", data.get("min_contrast_db", np.array(0.0)))
+    if not 0 <= c <= 200:
+        raise UserError(f"{p}: min_contrast_db is {c:g}, expected 0..200 dB; {TABLES_FIX}")
+    h = data["map_hash"]
+    if h.shape != () or h.dtype.kind != "U":
+        raise UserError(f"{p}: map_hash must be one text string (SHA-256); {TABLES_FIX}")
+    if str(h) != vm.content_hash():
         raise UserError(
-            f"{p}: not a tables file ({exc}); rebuild it with `haptable tables build`"
-        ) from None
-    if "max_diff_um_per_v" not in data or "map_frf_um_per_v" not in data:
-        raise UserError(f"{p}: not a tables file (a vibration map? build tables from it first)")
-    import json
-
-    meta = json.loads(str(data["map_meta_json"]))
-    vm = make_map(
-        data["map_frf_um_per_v"],
-        data["map_freq_hz"],
-        data["map_points"],
-        data["map_points_mm"],
-        tuple(str(e) for e in data["map_excitations"]),
-        data["map_masked"],
-        require_all=False,
-        where=str(p),
-        **{k: meta["provenance"].get(k, "") for k in ("source", "note", "date")},
-        gain=float(meta["provenance"].get("gain", 1.0)),
-    )
-    return Tables(
-        data["max_diff_um_per_v"],
-        data["freq_hz"],
-        data["actuator"],
-        float(data["band_hz"]),
+            f"{p}: map_hash does not match the map stored in the file (edited or damaged "
+            f"after it was built); {TABLES_FIX}"
+        )
+    t = Tables(
+        _real(where, "max_diff_um_per_v", data["max_diff_um_per_v"]),
+        _real(where, "freq_hz", data["freq_hz"]),
+        _actuator(where, data["actuator"]),
+        band,
         vm,
-        float(data.get("min_contrast_db", 0.0)),
+        c,
     )
+    validate_tables(t, where=where, sample_rate_hz=sample_rate_hz)
+    return t
 
 
-def load_map_or_tables(path: str | os.PathLike, *, require_all: bool = True) -> VibrationMap:
+def _scalar(where: str, key: str, a: np.ndarray) -> float:
+    if a.shape != () or a.dtype.kind not in "iuf" or not np.isfinite(a):
+        raise UserError(
+            f"{where}: {key} must be one finite number, not {a.dtype} of shape {a.shape} "
+            f"({str(a)[:30]}); {TABLES_FIX}"
+        )
+    return float(a)
+
+
+def _real(where: str, key: str, a: np.ndarray) -> np.ndarray:
+    if a.dtype.kind not in "iuf":
+        raise UserError(f"{where}: {key} has dtype {a.dtype}, expected real numbers; {TABLES_FIX}")
+    return a.astype(np.float64)
+
+
+def _actuator(where: str, a: np.ndarray) -> np.ndarray:
+    if a.dtype.kind not in "iu":
+        raise UserError(
+            f"{where}: actuator has dtype {a.dtype}, expected integer excitation indices; "
+            f"{TABLES_FIX}"
+        )
+    if a.size and (a.min() < -128 or a.max() > 127):
+        bad = a[(a < -128) | (a > 127)][0]
+        raise UserError(f"{where}: actuator holds {bad}, not an excitation index; {TABLES_FIX}")
+    return a.astype(np.int8)
+
+
+def validate_tables(t: Tables, *, where: str, sample_rate_hz: float | None = None) -> None:
+    """Every entry checked against the tables' map: shapes (P, P), differences finite and
+    within the map's largest magnitude, each frequency a usable bin of the map (inside
+    the band, unmasked) and below Nyquist, each actuator one of the map's excitations."""
+    m = t.vmap
+    p, e = m.points.size, len(m.excitations)
+    pts = m.points
+
+    def pair(ij) -> str:
+        return f"active {int(pts[ij[0]])} / passive {int(pts[ij[1]])}"
+
+    for key, a in (
+        ("max_diff_um_per_v", t.max_diff_um_per_v),
+        ("freq_hz", t.freq_hz),
+        ("actuator", t.actuator),
+    ):
+        if a.shape != (p, p):
+            raise UserError(
+                f"{where}: {key} has shape {a.shape}, expected ({p}, {p}) for the {p} points "
+                f"of its map; {TABLES_FIX}"
+            )
+    nyq = None if sample_rate_hz is None else float(sample_rate_hz) / 2
+    if nyq is not None and t.band_hz > nyq:
+        raise UserError(
+            f"{where}: band_hz {t.band_hz:g} Hz is above the Nyquist frequency {nyq:g} Hz "
+            f"of the profile's sample rate; rebuild with a lower --band-hz"
+        )
+    off = ~np.eye(p, dtype=bool)
+    d = t.max_diff_um_per_v
+    bad = ~np.isfinite(d) & off
+    if bad.any():
+        ij = np.argwhere(bad)[0]
+        raise UserError(f"{where}: max_diff_um_per_v is NaN/inf for {pair(ij)}; {TABLES_FIX}")
+    top = float(np.abs(m.frf_um_per_v).max())
+    lim = top * (1 + 1e-5) + 1e-12
+    bad = (np.abs(np.where(off, d, 0.0)) > lim) | (~off & (d != 0))
+    if bad.any():
+        ij = np.argwhere(bad)[0]
+        raise UserError(
+            f"{where}: max_diff_um_per_v is {d[tuple(ij)]:.4g} um/V for {pair(ij)}, beyond the "
+            f"map's largest |H| ({top:.4g} um/V): the tables do not come from this map; "
+            f"{TABLES_FIX}"
+        )
+    f = t.freq_hz
+    usable = m.freq_hz[(m.freq_hz <= t.band_hz) & ~m.masked]
+    bad = off & ~np.isin(f, usable)
+    if bad.any():
+        ij = tuple(np.argwhere(bad)[0])
+        v = f[ij]
+        if not np.isfinite(v):
+            why = "NaN/inf"
+        elif nyq is not None and v >= nyq:
+            why = f"{v:g} Hz, at or above the Nyquist frequency {nyq:g} Hz"
+        elif v > t.band_hz or v < m.freq_hz[0] or v > m.freq_hz[-1]:
+            why = f"{v:g} Hz, outside the map's band ({m.freq_hz[0]:g}..{t.band_hz:g} Hz)"
+        elif np.isin(v, m.freq_hz):
+            why = f"{v:g} Hz, a masked bin of the map"
+        else:
+            why = f"{v:g} Hz, not a frequency bin of the map"
+        raise UserError(f"{where}: freq_hz for {pair(ij)} is {why}; {TABLES_FIX}")
+    a = t.actuator
+    bad = (off & ((a < 0) | (a >= e))) | (~off & (a != -1))
+    if bad.any():
+        ij = tuple(np.argwhere(bad)[0])
+        raise UserError(
+            f"{where}: actuator for {pair(ij)} is {int(a[ij])}, not an excitation of the map "
+            f"(0..{e - 1}: {' '.join(m.excitations)}; -1 only for a point with itself); "
+            f"{TABLES_FIX}"
+        )
+
+
+def check_tables_map(t: Tables, m: VibrationMap, *, tables_where: str, map_where: str) -> None:
+    """Tables used with a map must have been built from that map (same content hash)."""
+    if t.vmap.content_hash() != m.content_hash():
+        raise UserError(
+            f"{tables_where}: map_hash {t.vmap.content_hash()[:12]}... is not the hash of "
+            f"{map_where} ({m.content_hash()[:12]}...): the tables were built from another "
+            f"map; rebuild them from this one (`haptable tables build`)"
+        )
+
+
+def load_map_or_tables(
+    path: str | os.PathLike,
+    *,
+    require_all: bool = True,
+    sample_rate_hz: float | None = None,
+    grid_points: int | None = None,
+) -> VibrationMap:
     """The vibration map held in a map or a tables file."""
-    p = Path(path)
-    if p.exists():
-        with np.load(p, allow_pickle=False) as z:
-            is_tables = "max_diff_um_per_v" in z.files
-        if is_tables:
-            return load_tables(p).vmap
-    return load_map(p, require_all=require_all)
+    from console.npz_safe import read_npz
+    from console.vibration_map import FIX, map_from_arrays
+
+    data = read_npz(path, what="vibration map or tables file", fix=FIX)
+    if "max_diff_um_per_v" in data:
+        return load_tables(
+            path, sample_rate_hz=sample_rate_hz, grid_points=grid_points, data=data
+        ).vmap
+    return map_from_arrays(data, where=str(path), require_all=require_all, grid_points=grid_points)
 
 
 def coarse_peaks(m: VibrationMap, zeta: float = 0.01, band_hz: float = 650.0) -> list[dict]:

@@ -5,19 +5,22 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
-
 from console.errors import UserError
 
 
 def is_tables_file(path: str | os.PathLike) -> bool:
+    """True for a lookup-tables file, False for a vibration map (its archive checked,
+    no array read); anything else is a one-line ``UserError``."""
+    from console.npz_safe import npz_keys
+
     p = Path(path)
     if not p.exists():
         raise UserError(
             f"{p}: no such file; build tables with `haptable tables build MAP --out {p}`"
         )
-    try:
-        with np.load(p, allow_pickle=False) as z:
-            return "max_diff_um_per_v" in z.files
-    except (OSError, ValueError):
-        raise UserError(f"{p}: not a tables or vibration-map file (.npz)") from None
+    keys = npz_keys(
+        p,
+        what="tables or vibration-map file",
+        fix="pass a map (`haptable frf measure|import`) or tables (`haptable tables build`)",
+    )
+    return "max_diff_um_per_v" in keys

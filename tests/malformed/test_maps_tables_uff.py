@@ -181,15 +181,17 @@ def _frf(g, fn):
 def _bomb(d, g):
     """A real deflate bomb: 40 MB of zeros in ~40 kB (the limit is lowered to 8 MB)."""
     p = d / "bomb.npz"
-    with zipfile.ZipFile(p, "w", zipfile.ZIP_DEFLATED) as z:
-        with z.open("frf_um_per_v.npy", "w", force_zip64=True) as fh:
-            n = 40 * 2**20 // 16
-            np.lib.format.write_array_header_1_0(
-                fh, {"descr": "<c16", "fortran_order": False, "shape": (n,)}
-            )
-            zeros = bytes(2**20)
-            for _ in range(40):
-                fh.write(zeros)
+    n = 40 * 2**20 // 16
+    with (
+        zipfile.ZipFile(p, "w", zipfile.ZIP_DEFLATED) as z,
+        z.open("frf_um_per_v.npy", "w", force_zip64=True) as fh,
+    ):
+        np.lib.format.write_array_header_1_0(
+            fh, {"descr": "<c16", "fortran_order": False, "shape": (n,)}
+        )
+        zeros = bytes(2**20)
+        for _ in range(40):
+            fh.write(zeros)
     return p
 
 
@@ -299,9 +301,7 @@ MAP_CASES = [
         "frf_um_per_v",
         "1e+07",
     ),
-    _mapkey(
-        "points_mm-1e300", "points_mm", points_mm=np.r_[[[1e300, 0.0]], np.zeros((83, 2)) + 5]
-    ),
+    _mapkey("points_mm-1e300", "points_mm", points_mm=np.r_[[[1e300, 0.0]], np.zeros((83, 2)) + 5]),
     _mapkey("freq-1e300", "freq_hz", "1e+300", freq_hz=np.r_[F_HZ[:-1], 1e300]),
     _mapkey("points-duplicate", "points", "duplicate", points=np.r_[1, np.arange(1, 84)]),
     _mapkey("points-zero", "points", "0", points=np.arange(0, 84)),
@@ -312,7 +312,9 @@ MAP_CASES = [
     _mapkey("freq-unsorted", "freq_hz", freq_hz=F_HZ[[1, 0, *range(2, 27)]]),
     _mapkey("freq-duplicate", "freq_hz", freq_hz=np.r_[0.0, F_HZ[1:-1], F_HZ[-2]]),
     _mapkey("freq-one-bin", "freq_hz", freq_hz=np.array([25.0])),
-    _mapkey("excitation-unknown", "excitations", "PX", excitations=np.array([*EXCITATIONS[:4], "PX"])),
+    _mapkey(
+        "excitation-unknown", "excitations", "PX", excitations=np.array([*EXCITATIONS[:4], "PX"])
+    ),
     _mapkey(
         "no-points",
         "points",
@@ -492,10 +494,14 @@ def _trunc_b(nbytes):
     return build
 
 
-def _nan_uff(d):
-    data = np.full(11, 5e-5, complex)
-    data[4] = np.nan
-    return uff58(d / "a.uff", data=data)
+def _nan_uff(token):
+    """pyuff writes NaN as 0: put the token in the text as an exporter would."""
+
+    def build(d):
+        p = uff58(d / "a.uff")
+        return uff_text_edit(p, "  4.00000e+01   5.00000000000e-05", f"  4.00000e+01   {token:>17}")
+
+    return build
 
 
 UFF_CASES = [
@@ -509,7 +515,8 @@ UFF_CASES = [
     _uff("truncated-header", _trunc(0.05), "UFF"),
     _uff("58b-truncated", _trunc_b(40), "UFF"),
     _uff("58b-truncated-more", _trunc_b(300), "UFF"),
-    _uff("nan", _nan_uff, "NaN"),
+    _uff("nan", _nan_uff("nan"), "NaN"),
+    _uff("inf", _nan_uff("-inf"), "inf"),
     _uff("huge-frf", lambda d: uff58(d / "a.uff", data=np.full(11, 1e290, complex)), "node 1"),
     _uff(
         "wrong-length",
@@ -524,17 +531,17 @@ UFF_CASES = [
     _uff(
         "node-not-a-number",
         lambda d: uff_text_edit(uff58(d / "a.uff"), "pt         1   3", "pt         x   3"),
-        "UFF",
+        "node 0",
     ),
     _uff("unknown-node-500", lambda d: uff58(d / "a.uff", nodes=(1, 500)), "500"),
     _uff("node-0", lambda d: uff58(d / "a.uff", nodes=(0, 1)), "node 0"),
     _uff("node-duplicate", lambda d: uff58(d / "a.uff", nodes=(1, 1)), "node 1"),
-    _uff("real-ordinate", lambda d: uff58(d / "a.uff", data=np.ones(11), ord_data_type=4), "complex"),
+    _uff(
+        "real-ordinate", lambda d: uff58(d / "a.uff", data=np.ones(11), ord_data_type=4), "complex"
+    ),
     _uff("ordinate-kind-3", lambda d: uff58(d / "a.uff", kind=3), "ordinate"),
     _uff("not-frf", lambda d: uff58(d / "a.uff", func_type=1), "func_type"),
-    _uff(
-        "negative-freq", lambda d: uff58(d / "a.uff", f=np.arange(-20.0, 81.0, 10.0)), "negative"
-    ),
+    _uff("negative-freq", lambda d: uff58(d / "a.uff", f=np.arange(-20.0, 81.0, 10.0)), "negative"),
     _uff("gain-nan", lambda d: uff58(d / "a.uff"), "--gain", "nan", extra=("--gain", "nan")),
     _uff("gain-zero", lambda d: uff58(d / "a.uff"), "--gain", extra=("--gain", "0")),
     _uff(
@@ -574,7 +581,12 @@ ARG_CASES = [
     _args("active-outside", ["--active", "5000,3", "--passive", "52"], "5000"),
     _args("active-3-coords", ["--active", "1,2,3", "--passive", "52"], "1,2,3"),
     _args("flow-to-nan", ["--from", "51", "--to", "nan,100"], "nan", cmd="flow"),
-    _args("flow-ringdown-nan", ["--from", "51", "--to", "52", "--ringdown-k", "nan"], "nan", cmd="flow"),
+    _args(
+        "flow-ringdown-nan",
+        ["--from", "51", "--to", "52", "--ringdown-k", "nan"],
+        "nan",
+        cmd="flow",
+    ),
     _args("point-1e300", ["1e300"], "1e300", cmd="point"),
     _args("point-nan", ["nan,5"], "nan", cmd="point"),
     _args("build-band-nan", ["--band-hz", "nan"], "--band-hz", cmd="build"),
@@ -649,3 +661,22 @@ def test_console_vibration_screen_loads_refuse_with_one_line(good, tmp_path):
     bomb = lying_size(good["map"], tmp_path / "lie.npz", 0xFFFF0000)
     with pytest.raises(UserError, match="uncompressed"):
         vs.load_map(bomb)
+
+
+def test_damaged_tables_cache_entry_is_rebuilt_not_used(good, tmp_path):
+    """A cache entry that is a valid archive with wrong content (another size of table,
+    an empty file) is rebuilt, never used nor a crash."""
+    from console.vibration_map import load_map
+    from plugins.vibrotactile.lazy import tables_cached
+    from plugins.vibrotactile.tables import build_tables
+
+    m = load_map(good["map"])
+    ref = build_tables(m, 650.0)
+    tables_cached(m, 650.0, tmp_path)
+    (entry,) = tmp_path.glob("tables-*.npz")
+    write_npz(entry, {"max_diff_um_per_v": np.zeros((3, 3)), "freq_hz": np.zeros((3, 3))})
+    t = tables_cached(m, 650.0, tmp_path)
+    assert np.array_equal(t.actuator, ref.actuator)
+    entry.write_bytes(b"")
+    t = tables_cached(m, 650.0, tmp_path)
+    assert np.array_equal(t.freq_hz, ref.freq_hz, equal_nan=True)

@@ -148,7 +148,10 @@ class VibrationPane(VerticalScroll):
             )
             return
         try:
-            self._open(vs.load_map(path), f"map: {path.name} (measured on the twin)")
+            self._open(
+                vs.load_map(path, self.app.ctx.profile),
+                f"map: {path.name} (measured on the twin)",
+            )
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))
 
@@ -278,7 +281,7 @@ class VibrationPane(VerticalScroll):
         from console.tui import vibration_session as vs
 
         try:
-            vmap = vs.load_map(path)
+            vmap = vs.load_map(path, self.app.ctx.profile)
             if stop_check(stop)():
                 raise vs.Cancelled()
             self._open(vmap, f"map: {Path(path).name}")
