@@ -63,7 +63,9 @@ def _regular_file(p: Path, what: str, fix: str) -> int:
     return st.st_size
 
 
-def _check_infos(p: Path, z: zipfile.ZipFile, what: str, fix: str) -> list[zipfile.ZipInfo]:
+def _check_infos(
+    p: Path, z: zipfile.ZipFile, what: str, fix: str, limit: int
+) -> list[zipfile.ZipInfo]:
     infos = z.infolist()
     if not infos:
         raise UserError(f"{p}: an empty .npz archive, not a {what}; {fix}")
@@ -92,15 +94,15 @@ def _check_infos(p: Path, z: zipfile.ZipFile, what: str, fix: str) -> list[zipfi
                 f"corrupt header); {fix}"
             )
         total += info.file_size
-    if total > MAX_TOTAL_BYTES:
+    if total > limit:
         raise UserError(
             f"{p}: the archive declares {_mb(total)} uncompressed, above the "
-            f"{_mb(MAX_TOTAL_BYTES)} limit of a {what}; {fix}"
+            f"{_mb(limit)} limit of a {what}; {fix}"
         )
     return infos
 
 
-def _header(p: Path, key: str, fh, size: int, fix: str) -> tuple[tuple, np.dtype]:
+def _header(p: Path, key: str, fh, size: int, fix: str, limit: int) -> tuple[tuple, np.dtype]:
     """Shape and dtype from a member's .npy header, checked against its size."""
     try:
         version = npformat.read_magic(fh)
@@ -122,10 +124,10 @@ def _header(p: Path, key: str, fh, size: int, fix: str) -> tuple[tuple, np.dtype
     for n in shape:
         count *= int(n)
     need = count * dtype.itemsize
-    if need > MAX_TOTAL_BYTES:
+    if need > limit:
         raise UserError(
             f"{p}: key {key!r} declares shape {shape} {dtype} ({_mb(need)}), above the "
-            f"{_mb(MAX_TOTAL_BYTES)} limit; {fix}"
+            f"{_mb(limit)} limit; {fix}"
         )
     if size - offset != need:
         raise UserError(
@@ -135,12 +137,16 @@ def _header(p: Path, key: str, fh, size: int, fix: str) -> tuple[tuple, np.dtype
     return shape, dtype
 
 
-def read_npz(path: str | os.PathLike, *, what: str, fix: str) -> dict[str, np.ndarray]:
+def read_npz(
+    path: str | os.PathLike, *, what: str, fix: str, max_bytes: int | None = None
+) -> dict[str, np.ndarray]:
     """All arrays of a ``.npz`` archive, each size-checked before it is read.
 
-    ``what`` names the file kind in messages ("vibration map"); ``fix`` ends each one.
+    ``what`` names the file kind in messages ("vibration map"); ``fix`` ends each one;
+    ``max_bytes``: the total uncompressed bound (default ``MAX_TOTAL_BYTES``).
     """
     p = Path(path)
+    limit = MAX_TOTAL_BYTES if max_bytes is None else int(max_bytes)
     _regular_file(p, what, fix)
     try:
         z = zipfile.ZipFile(p)
@@ -152,11 +158,11 @@ def read_npz(path: str | os.PathLike, *, what: str, fix: str) -> dict[str, np.nd
         raise UserError(f"{p}: cannot read the archive ({exc}); {fix}") from None
     out: dict[str, np.ndarray] = {}
     with z:
-        for info in _check_infos(p, z, what, fix):
+        for info in _check_infos(p, z, what, fix, limit):
             key = info.filename[:-4]
             try:
                 with z.open(info) as fh:
-                    _header(p, key, fh, info.file_size, fix)
+                    _header(p, key, fh, info.file_size, fix, limit)
                 with z.open(info) as fh:
                     out[key] = npformat.read_array(fh, allow_pickle=False)
             except UserError:
@@ -226,14 +232,17 @@ def read_json_text(
     return obj
 
 
-def npz_keys(path: str | os.PathLike, *, what: str, fix: str) -> list[str]:
+def npz_keys(
+    path: str | os.PathLike, *, what: str, fix: str, max_bytes: int | None = None
+) -> list[str]:
     """The keys of a ``.npz`` archive (its directory checked as ``read_npz`` does, no
     array read): to tell one kind of file from another before loading it."""
     p = Path(path)
     _regular_file(p, what, fix)
     try:
         with zipfile.ZipFile(p) as z:
-            return [i.filename[:-4] for i in _check_infos(p, z, what, fix)]
+            limit = MAX_TOTAL_BYTES if max_bytes is None else int(max_bytes)
+            return [i.filename[:-4] for i in _check_infos(p, z, what, fix, limit)]
     except zipfile.BadZipFile:
         raise UserError(
             f"{p}: not a zip archive (truncated, or not a .npz at all), so not a {what}; {fix}"

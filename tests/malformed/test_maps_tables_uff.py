@@ -680,3 +680,15 @@ def test_damaged_tables_cache_entry_is_rebuilt_not_used(good, tmp_path):
     entry.write_bytes(b"")
     t = tables_cached(m, 650.0, tmp_path)
     assert np.array_equal(t.freq_hz, ref.freq_hz, equal_nan=True)
+
+
+def test_read_npz_checks_size_before_reading(tmp_path):
+    """The shared reader: the bound is a parameter; within it the arrays come back."""
+    from console.errors import UserError
+    from console.npz_safe import read_npz
+
+    p = write_npz(tmp_path / "a.npz", {"x": np.zeros(1000), "s": np.array("text")})
+    got = read_npz(p, what="test file", fix="fix it")
+    assert np.array_equal(got["x"], np.zeros(1000)) and str(got["s"]) == "text"
+    with pytest.raises(UserError, match=r"a\.npz: the archive declares .* above the 4,000"):
+        read_npz(p, what="test file", fix="fix it", max_bytes=4000)
