@@ -113,8 +113,12 @@ def _header(p: Path, key: str, fh, size: int, fix: str, limit: int) -> tuple[tup
         else:
             raise ValueError(f".npy format version {version} is not supported")
         offset = fh.tell()
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+    except ValueError as exc:
         raise UserError(f"{p}: key {key!r} has no valid .npy header ({exc}); {fix}") from None
+    except (OSError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise UserError(
+            f"{p}: key {key!r} cannot be read ({exc}): the file is damaged; {fix}"
+        ) from None
     if dtype.hasobject or dtype.kind not in KINDS or dtype.fields is not None:
         why = "pickled Python objects (refused)" if dtype.hasobject else f"dtype {dtype}"
         raise UserError(

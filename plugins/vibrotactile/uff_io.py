@@ -64,6 +64,8 @@ def _read_sets(path: Path) -> list[dict]:
     sets = [sets] if isinstance(sets, dict) else list(sets)
     raw = path.read_bytes()  # pyuff silently drops a dataset cut short at the end
     delimiters = sum(1 for line in raw.split(b"\n") if line.strip() == b"-1")
+    if delimiters == 0:
+        raise UserError(f"{path}: not a UFF file (no '-1' dataset delimiter line); {fix}")
     if not raw.rstrip().endswith(b"-1") or (raw.isascii() and delimiters % 2):
         raise UserError(
             f"{path}: the last dataset (#{delimiters // 2 + 1}) has no closing -1 line: the "
