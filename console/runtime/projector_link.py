@@ -49,12 +49,12 @@ from __future__ import annotations
 
 import collections
 import contextlib
-import json
 import logging
 import os
-import select
+import selectors
 import signal
 import socket
+import stat
 import struct
 import subprocess
 import sys
@@ -65,77 +65,62 @@ from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
+from console.runtime.link_protocol import (
+    MAX_LINE_BYTES,
+    TO_CONSOLE,
+    LineBuffer,
+    ProtocolError,
+    decode,
+    encode,
+)
+from console.runtime.private_dir import ensure_private_dir, open_private, runtime_dir
 
 log = logging.getLogger("haptable.projector")
 
 PROTOCOL = 1
-MAX_LINE_BYTES = 16 * 1024 * 1024
 HEARTBEAT_S = 0.25
 PEER_TIMEOUT_S = 2.0
 #: Longest path a Unix socket address takes (sun_path is 108 bytes with the NUL).
 MAX_SOCKET_PATH = 107
+#: Largest snapshot PNG the console takes from the projector's folder.
+MAX_SNAPSHOT_BYTES = 256 << 20
 
 
-# --------------------------------------------------------------------------- protocol
-def encode(msg: dict) -> bytes:
-    """One message as a line of JSON (UTF-8, no embedded newlines)."""
-    return json.dumps(msg, separators=(",", ":"), allow_nan=False).encode() + b"\n"
-
-
-class LineBuffer:
-    """Splits a byte stream into JSON messages; bad lines are counted and skipped."""
-
-    def __init__(self, max_line_bytes: int = MAX_LINE_BYTES) -> None:
-        self.buf = bytearray()
-        self.max = max_line_bytes
-        self.bad_lines = 0
-
-    def feed(self, data: bytes) -> list[dict]:
-        self.buf += data
-        out = []
-        while True:
-            i = self.buf.find(b"\n")
-            if i < 0:
-                if len(self.buf) > self.max:  # a runaway line: drop it, keep the link
-                    self.buf.clear()
-                    self.bad_lines += 1
-                return out
-            line = bytes(self.buf[:i])
-            del self.buf[: i + 1]
-            if not line.strip():
-                continue
-            try:
-                msg = json.loads(line)
-            except (ValueError, UnicodeDecodeError):
-                self.bad_lines += 1
-                continue
-            if isinstance(msg, dict):
-                out.append(msg)
-            else:
-                self.bad_lines += 1
-
-
+# --------------------------------------------------------------------------- socket
 def default_socket_path() -> Path:
-    """``$XDG_RUNTIME_DIR/haptable/projector.sock``, else ``/tmp/haptable-<uid>/...``."""
-    base = os.environ.get("XDG_RUNTIME_DIR")
-    d = Path(base) / "haptable" if base else Path(f"/tmp/haptable-{os.getuid()}")
-    return d / "projector.sock"
+    """``projector.sock`` in the private runtime directory (``$XDG_RUNTIME_DIR/haptable``
+    or ``/tmp/haptable-<uid>``, created 0700 and checked)."""
+    return runtime_dir() / "projector.sock"
 
 
 def prepare_socket_dir(path: Path) -> Path:
-    """Check the path fits a Unix socket address and make its folder private (0700)."""
+    """Check the path fits a Unix socket address and its folder is private: ours, not a
+    symlink, no group or other access (created 0700 when missing). ``UserError`` otherwise."""
     path = Path(path)
     if len(os.fsencode(str(path))) > MAX_SOCKET_PATH:
         raise UserError(
             f"projector socket {path}: longer than {MAX_SOCKET_PATH} bytes; "
             "set [projector] socket_path to a shorter path"
         )
+    folder = path.parent
     try:
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        folder.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
     except OSError as e:
         raise UserError(
-            f"projector socket {path}: cannot create its folder ({e}); choose another socket_path"
+            f"projector socket {path}: cannot create its folder ({e.strerror}); "
+            "choose another socket_path"
         ) from None
+    with contextlib.suppress(OSError):
+        st = os.stat(folder)
+        if st.st_mode & (stat.S_ISVTX | 0o002):
+            raise UserError(
+                f"projector socket {path}: {folder} is a shared folder; put the socket in a "
+                "private folder of yours, or leave [projector] socket_path empty"
+            )
+    try:
+        ensure_private_dir(folder)
+    except UserError as e:
+        raise UserError(f"projector socket {path}: {e}") from None
     return path
 
 
@@ -156,17 +141,28 @@ def calibration_path_for(profile: Any) -> Path | None:
     return Path(profile.path).with_name(f"{Path(profile.path).stem}.projector.json")
 
 
-def peer_pid(sock: socket.socket) -> int | None:
-    """The pid of the process at the other end of a Unix socket (Linux SO_PEERCRED)."""
+def _peer_cred(sock: socket.socket) -> tuple[int, int, int] | None:
+    """(pid, uid, gid) of the process at the other end of a Unix socket (Linux SO_PEERCRED)."""
     so_peercred = getattr(socket, "SO_PEERCRED", None)
     if so_peercred is None:
         return None
     try:
         raw = sock.getsockopt(socket.SOL_SOCKET, so_peercred, struct.calcsize("3i"))
-        pid, _, _ = struct.unpack("3i", raw)
-        return pid or None
+        return struct.unpack("3i", raw)
     except OSError:
         return None
+
+
+def peer_pid(sock: socket.socket) -> int | None:
+    """The pid of the process at the other end of a Unix socket."""
+    cred = _peer_cred(sock)
+    return (cred[0] or None) if cred else None
+
+
+def peer_uid(sock: socket.socket) -> int | None:
+    """The uid of the process at the other end of a Unix socket (None: unknown here)."""
+    cred = _peer_cred(sock)
+    return cred[1] if cred else None
 
 
 def probe(socket_path: Path, timeout_s: float = 0.5) -> int | None:
@@ -182,12 +178,34 @@ def probe(socket_path: Path, timeout_s: float = 0.5) -> int | None:
         s.close()
 
 
+def fetch_snapshot(written: Path, dest: Path) -> None:
+    """Move the PNG the projector wrote in its snapshot folder to ``dest`` (the user's path).
+    The source is read without following a symlink and must be a regular file."""
+    try:
+        fd = os.open(written, os.O_RDONLY | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0))
+    except OSError as e:
+        raise UserError(f"projector snapshot {written}: cannot read it ({e.strerror})") from None
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(f.fileno())
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_SNAPSHOT_BYTES:
+            raise UserError(f"projector snapshot {written}: not a PNG file the projector wrote")
+        data = f.read(MAX_SNAPSHOT_BYTES + 1)
+    try:
+        dest.write_bytes(data)
+    except OSError as e:
+        raise UserError(f"{dest}: cannot write the snapshot ({e.strerror})") from None
+    with contextlib.suppress(OSError):
+        os.unlink(written)
+
+
 # --------------------------------------------------------------------------- link
 class ProjectorLink:
     """The console's connection to the projector: one I/O thread, reconnects by itself.
 
     ``send_state`` never blocks: it records the newest full state and wakes the thread,
-    which sends it (and re-sends it after every reconnect).
+    which sends it (and re-sends it after every reconnect). A projector of another uid is
+    refused; any protocol error from the projector drops the connection (and reconnects);
+    an unexpected error in the thread does the same, so the thread never dies.
     """
 
     def __init__(
@@ -198,11 +216,13 @@ class ProjectorLink:
         peer_timeout_s: float = PEER_TIMEOUT_S,
         on_hung: Callable[[int | None], None] | None = None,
         require_tick: bool = False,
+        peer_uid: int | None = None,
     ) -> None:
         self.socket_path = Path(socket_path)
         self.heartbeat_s = float(heartbeat_s)
         self.peer_timeout_s = float(peer_timeout_s)
         self.on_hung = on_hung
+        self.peer_uid = os.getuid() if peer_uid is None else peer_uid
         # With require_tick the console's own loop must call tick(): heartbeats stop when
         # it hangs (not just when this I/O thread does), and the projector turns black.
         self.require_tick = require_tick
@@ -212,13 +232,22 @@ class ProjectorLink:
         self._seq = 0
         self._dirty = False
         self._outbox: list[dict] = []  # one-off commands (quit, snapshot), sent once
-        self.snapshots_done: list[str] = []
+        self._snapshots_asked = 0
+        self._snapshot_replies: dict[str, dict | None] = {}  # request -> reply (None: waiting)
         self.closing = False  # set while the console stops the projector on purpose
         self._stop = threading.Event()
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
+        self._sel = selectors.DefaultSelector()
+        self._sel.register(self._wake_r, selectors.EVENT_READ, "wake")
         self._thread: threading.Thread | None = None
         self._sent_t: dict[int, float] = {}
+        # the I/O thread's connection
+        self._sock: socket.socket | None = None
+        self._rx = LineBuffer()
+        self._out = bytearray()
+        self._last_tx = 0.0
+        self._backoff = 0.02
         # status
         self.connected = False
         self.peer_pid: int | None = None
@@ -233,6 +262,7 @@ class ProjectorLink:
         self.connects = 0  # socket connections made
         self.handshakes = 0  # of which the projector answered
         self.hangs = 0
+        self.protocol_errors = 0
         self.last_drop = ""
         self.latency_s: collections.deque[float] = collections.deque(maxlen=4096)
         self.drawn_latency_s: collections.deque[float] = collections.deque(maxlen=4096)
@@ -244,8 +274,20 @@ class ProjectorLink:
             self._thread.start()
 
     def send_state(self, scene: str, state: dict) -> int:
-        """Make ``state`` the one the projector shows; returns its sequence number."""
-        json.dumps(state, allow_nan=False)  # fail here, in the caller, if not JSON
+        """Make ``state`` the one the projector shows; returns its sequence number.
+
+        Refused here, in the caller, when it is not JSON (``ValueError``), or too large or
+        too deeply nested for the link (``UserError``)."""
+        line = encode({"type": "state", "seq": self._seq + 1, "scene": scene, "state": state})
+        if len(line) > MAX_LINE_BYTES - 64:
+            raise UserError(
+                f"scene {scene!r}: its state is {len(line)} bytes; the projector link carries "
+                f"at most {MAX_LINE_BYTES} bytes per message (send less geometry)"
+            )
+        try:
+            decode(line[:-1], {"state": {}})
+        except ProtocolError as e:
+            raise UserError(f"scene {scene!r}: the projector would refuse its state: {e}") from None
         with self._cond:
             self._seq += 1
             self._state = {"type": "state", "seq": self._seq, "scene": scene, "state": state}
@@ -268,18 +310,31 @@ class ProjectorLink:
         self._wake()
 
     def snapshot(self, path: str | Path, timeout_s: float = 10.0) -> bool:
-        """Ask the projector to save its next frame (what it shows) as PNG at ``path``."""
-        path = str(Path(path).resolve())
-        self._send_once({"type": "snapshot", "path": path})
+        """Save the projector's next frame (what it shows) as PNG at ``path``: False if no
+        answer within ``timeout_s``, ``UserError`` if the projector refused.
+
+        The projector writes only in its snapshot folder; the file is then moved here."""
+        dest = Path(path).resolve()
+        with self._cond:
+            self._snapshots_asked += 1
+            name = f"console-{os.getpid()}-{self._snapshots_asked}.png"
+            self._snapshot_replies[name] = None
+        self._send_once({"type": "snapshot", "path": name})
         deadline = time.monotonic() + timeout_s
         with self._cond:
-            while path not in self.snapshots_done:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return False
-                self._cond.wait(left)
-            self.snapshots_done.remove(path)
-            return True
+            try:
+                while self._snapshot_replies[name] is None:
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        return False
+                    self._cond.wait(left)
+                reply = self._snapshot_replies[name]
+            finally:
+                self._snapshot_replies.pop(name, None)
+        if reply["type"] == "error":
+            raise UserError(f"projector snapshot: {reply.get('message', 'refused')}")
+        fetch_snapshot(Path(reply.get("file", "")), dest)
+        return True
 
     def wait_drawn(self, seq: int | None = None, timeout_s: float = 5.0) -> bool:
         """Wait until the projector has drawn state ``seq`` (default: the newest)."""
@@ -318,6 +373,7 @@ class ProjectorLink:
             "drawn_seq": self.drawn_seq,
             "connects": self.handshakes,
             "hangs": self.hangs,
+            "protocol_errors": self.protocol_errors,
             "last_drop": self.last_drop,
             "headless": self.peer.get("headless"),
             "size_px": self.peer.get("size_px"),
@@ -329,6 +385,10 @@ class ProjectorLink:
         if self._thread is not None:
             self._thread.join(timeout=3.0)
             self._thread = None
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+        self._sel.close()
         for s in (self._wake_r, self._wake_w):
             s.close()
 
@@ -343,115 +403,141 @@ class ProjectorLink:
             self._cond.notify_all()
 
     def _run(self) -> None:
-        backoff = 0.02
-        sock: socket.socket | None = None
-        rx = LineBuffer()
-        out = bytearray()
-        last_tx = 0.0
         while not self._stop.is_set():
-            ticking = (
-                not self.require_tick or time.monotonic() - self._last_tick < self.peer_timeout_s
-            )
-            if sock is None and not ticking:  # the console is stuck: stay away (black)
-                self._idle(self.heartbeat_s)
-                continue
-            if sock is None:
-                s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-                try:
-                    s.settimeout(1.0)
-                    s.connect(str(self.socket_path))
-                    s.setblocking(False)
-                except OSError:
-                    s.close()
-                    self._idle(backoff)
-                    backoff = min(backoff * 2, 0.5)
-                    continue
-                sock, rx, out = s, LineBuffer(), bytearray()
-                backoff = 0.02
-                self.peer_pid = peer_pid(s)
-                self.connects += 1
-                self.last_rx_s = time.monotonic()
-                out += encode(
-                    {"type": "hello", "role": "console", "pid": os.getpid(), "protocol": PROTOCOL}
-                )
-                with self._cond:
-                    self._dirty = self._state is not None  # re-send the full state
-            now = time.monotonic()
-            with self._cond:
-                if self._dirty and self._state is not None:
-                    self._sent_t[self._state["seq"]] = now
-                    out += encode({**self._state, "t_send_s": now})
-                    self._dirty = False
-                for msg in self._outbox:
-                    out += encode(msg)
-                self._outbox.clear()
-            if now - last_tx >= self.heartbeat_s and ticking:
-                out += encode({"type": "heartbeat", "t_s": now})
-                last_tx = now
-            wait = max(0.0, min(self.heartbeat_s - (now - last_tx), self.heartbeat_s))
             try:
-                r, w, _ = select.select([sock, self._wake_r], [sock] if out else [], [], wait)
-            except (OSError, ValueError):
-                sock = self._drop(sock, "select failed")
-                continue
-            if self._wake_r in r:
-                try:
+                self._step()
+            except Exception as e:  # noqa: BLE001 - the link thread must never die
+                self._drop(f"link error: {type(e).__name__}: {e}")
+                self._idle(0.1)
+        self._drop("closed") if self._sock is not None else self._set_connected(False)
+
+    def _connect(self) -> bool:
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        try:
+            s.settimeout(1.0)
+            s.connect(str(self.socket_path))
+            s.setblocking(False)
+        except OSError:
+            s.close()
+            return False
+        uid = peer_uid(s)
+        if uid is not None and uid != self.peer_uid:
+            s.close()
+            self._note(
+                f"refused the projector socket {self.socket_path}: served by uid {uid}, "
+                f"not {self.peer_uid}"
+            )
+            return False
+        self._sock, self._rx, self._out = s, LineBuffer(), bytearray()
+        self._sel.register(s, selectors.EVENT_READ, "sock")
+        self.peer_pid = peer_pid(s)
+        self.connects += 1
+        self.last_rx_s = time.monotonic()
+        self._out += encode(
+            {"type": "hello", "role": "console", "pid": os.getpid(), "protocol": PROTOCOL}
+        )
+        with self._cond:
+            self._dirty = self._state is not None  # re-send the full state
+        return True
+
+    def _step(self) -> None:
+        ticking = not self.require_tick or time.monotonic() - self._last_tick < self.peer_timeout_s
+        if self._sock is None and not ticking:  # the console is stuck: stay away (black)
+            self._idle(self.heartbeat_s)
+            return
+        if self._sock is None:
+            if not self._connect():
+                self._idle(self._backoff)
+                self._backoff = min(self._backoff * 2, 0.5)
+                return
+            self._backoff = 0.02
+        sock = self._sock
+        now = time.monotonic()
+        with self._cond:
+            if self._dirty and self._state is not None:
+                self._sent_t[self._state["seq"]] = now
+                self._out += encode({**self._state, "t_send_s": now})
+                self._dirty = False
+            for msg in self._outbox:
+                self._out += encode(msg)
+            self._outbox.clear()
+        if now - self._last_tx >= self.heartbeat_s and ticking:
+            self._out += encode({"type": "heartbeat", "t_s": now})
+            self._last_tx = now
+        wait = max(0.0, min(self.heartbeat_s - (now - self._last_tx), self.heartbeat_s))
+        self._sel.modify(
+            sock, selectors.EVENT_READ | (selectors.EVENT_WRITE if self._out else 0), "sock"
+        )
+        readable = writable = False
+        for key, mask in self._sel.select(wait):
+            if key.data == "wake":
+                with contextlib.suppress(BlockingIOError, OSError):
                     while self._wake_r.recv(4096):
                         pass
-                except (BlockingIOError, OSError):
-                    pass
-            try:
-                if sock in w and out:
-                    n = sock.send(out)
-                    del out[:n]
-                if sock in r:
-                    data = sock.recv(1 << 16)
-                    if not data:
-                        sock = self._drop(sock, "projector closed the link")
-                        continue
-                    self.last_rx_s = time.monotonic()
-                    for msg in rx.feed(data):
-                        try:
-                            self._handle(msg)
-                        except (TypeError, ValueError, AttributeError) as e:
-                            rx.bad_lines += 1  # a malformed message must not stop the link
-                            log.warning("projector link: ignored a bad message (%s)", e)
-            except BlockingIOError:
-                pass
-            except OSError as e:
-                sock = self._drop(sock, f"link error: {e}")
-                continue
-            if (
-                len(out) > MAX_LINE_BYTES
-                or time.monotonic() - (self.last_rx_s or 0) > self.peer_timeout_s
-            ):
-                self.hangs += 1
-                pid = self.peer_pid
-                sock = self._drop(sock, f"no word from the projector for {self.peer_timeout_s:g} s")
-                if self.on_hung is not None:
-                    self.on_hung(pid)
-        if sock is not None:
-            sock.close()
-        self._set_connected(False)
+            else:
+                readable = bool(mask & selectors.EVENT_READ)
+                writable = bool(mask & selectors.EVENT_WRITE)
+        try:
+            if writable and self._out:
+                n = sock.send(self._out)
+                del self._out[:n]
+            if readable:
+                data = sock.recv(1 << 16)
+                if not data:
+                    self._drop("projector closed the link")
+                    return
+                self.last_rx_s = time.monotonic()
+                for line in self._rx.feed(data):
+                    self._handle(decode(line, TO_CONSOLE))
+        except BlockingIOError:
+            pass
+        except ProtocolError as e:
+            self.protocol_errors += 1
+            self._drop(f"protocol error from the projector: {e}")
+            return
+        except OSError as e:
+            self._drop(f"link error: {e}")
+            return
+        if (
+            len(self._out) > MAX_LINE_BYTES
+            or time.monotonic() - (self.last_rx_s or 0) > self.peer_timeout_s
+        ):
+            self.hangs += 1
+            pid = self.peer_pid
+            self._drop(f"no word from the projector for {self.peer_timeout_s:g} s")
+            if self.on_hung is not None:
+                self.on_hung(pid)
 
     def _idle(self, seconds: float) -> None:
+        """Wait ``seconds`` or until woken (only the wake socket is watched then)."""
+        if self._sock is not None:
+            self._stop.wait(seconds)
+            return
         try:
-            r, _, _ = select.select([self._wake_r], [], [], seconds)
-            if r:
-                self._wake_r.recv(4096)
-        except OSError:
-            time.sleep(seconds)
+            if self._sel.select(seconds):
+                with contextlib.suppress(BlockingIOError, OSError):
+                    while self._wake_r.recv(4096):
+                        pass
+        except (OSError, ValueError):
+            self._stop.wait(seconds)
 
-    def _drop(self, sock: socket.socket | None, why: str) -> None:
-        if sock is not None:
-            sock.close()
+    def _note(self, why: str) -> None:
+        """Log ``why`` (once while it stays the same) and keep it as the last drop."""
+        if why != self.last_drop:
+            (log.info if self.closing else log.warning)("projector link: %s", why)
         self.last_drop = why
+
+    def _drop(self, why: str) -> None:
+        self._note(why)
         self._set_connected(False)
-        (log.info if self.closing else log.warning)("projector link: %s", why)
-        return None
+        sock, self._sock = self._sock, None
+        if sock is not None:
+            with contextlib.suppress(KeyError, ValueError):
+                self._sel.unregister(sock)
+            sock.close()
 
     def _handle(self, msg: dict) -> None:
-        t = msg.get("type")
+        t = msg["type"]
         now = time.monotonic()
         if t == "heartbeat":
             self.last_heartbeat_s = now
@@ -467,17 +553,22 @@ class ProjectorLink:
             self._set_connected(True)
             log.info("projector link: connected (pid %s)", self.peer_pid)
         elif t == "ack":
-            seq = int(msg.get("seq", 0))
+            seq = msg["seq"]
             sent = self._sent_t.get(seq)
             if sent is not None and "t_recv_s" in msg:
                 self.latency_s.append(float(msg["t_recv_s"]) - sent)
             self.acked_seq = max(self.acked_seq, seq)
-        elif t == "snapshot_done":
+        elif t in ("snapshot_done", "error"):
+            path = msg.get("path")
             with self._cond:
-                self.snapshots_done.append(str(msg.get("path")))
-                self._cond.notify_all()
+                if path in self._snapshot_replies:  # only answers to what we asked
+                    self._snapshot_replies[path] = msg
+                    self._cond.notify_all()
+                    return
+            if t == "error":
+                log.warning("projector link: the projector says: %s", msg.get("message", "")[:300])
         elif t == "drawn":
-            seq = int(msg.get("seq", 0))
+            seq = msg["seq"]
             sent = self._sent_t.pop(seq, None)
             if sent is not None and "t_drawn_s" in msg:
                 self.drawn_latency_s.append(float(msg["t_drawn_s"]) - sent)
@@ -579,7 +670,11 @@ class ProjectorSupervisor:
         self._hung.set()
 
     def _spawn(self) -> None:
-        out = open(self.log_path, "ab") if self.log_path else subprocess.DEVNULL  # noqa: SIM115
+        out = (
+            os.fdopen(open_private(self.log_path, append=True), "ab")
+            if self.log_path
+            else subprocess.DEVNULL
+        )
         try:
             self.proc = subprocess.Popen(
                 self.command,

@@ -37,6 +37,7 @@ class ProjectorOptions:
     peer_timeout_s: float = 2.0
     initial_state: dict | None = None
     exit_without_console_s: float = 0.0  # 0: wait for a console forever
+    snapshot_dir: Path | None = None  # where ``snapshot`` requests may write (None: default)
 
 
 class CalibrationWatcher:
@@ -193,13 +194,18 @@ def read_screen(renderer: Renderer):
     return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1].copy()
 
 
-def save_frame(path: str, rgb) -> None:
-    from plugins.projector.renderer import write_png
+def save_frames(server: LinkServer, shots: list[tuple[str, Path]], rgb) -> None:
+    """Write the frame for each snapshot request (paths checked by the server) and answer."""
+    from plugins.projector.snapshots import write_snapshot
 
-    try:
-        write_png(path, rgb)
-    except UserError as e:
-        log.warning("projector: snapshot: %s", e)
+    for request, path in shots:
+        try:
+            write_snapshot(path, rgb)
+        except UserError as e:
+            log.warning("projector: snapshot: %s", e)
+            server.snapshot_failed(request, str(e))
+        else:
+            server.snapshot_done(request, path)
 
 
 def run(opts: ProjectorOptions) -> int:
@@ -237,6 +243,7 @@ def run(opts: ProjectorOptions) -> int:
         peer_timeout_s=opts.peer_timeout_s,
         initial=opts.initial_state,
         info={"size_px": list(size), "headless": opts.headless},
+        snapshot_dir=opts.snapshot_dir,
     )
     server.start()
     log.info(
@@ -267,18 +274,16 @@ def run(opts: ProjectorOptions) -> int:
                 renderer.set_state(state)
                 renderer.draw()
                 shots = server.take_snapshot_requests()
-                for path in shots:  # the back buffer, before the swap
-                    save_frame(path, read_screen(renderer))
+                if shots:  # the back buffer, before the swap
+                    save_frames(server, shots, read_screen(renderer))
                 window.flip()  # blocks to the display rate (vsync)
             else:
                 off.render(state)
                 off.finish()
                 shots = server.take_snapshot_requests()
-                for path in shots:
-                    save_frame(path, off.read_rgb())
+                if shots:
+                    save_frames(server, shots, off.read_rgb())
             server.frame_done(version, time.monotonic())
-            for path in shots:
-                server.snapshot_done(path)
             if server.connected:
                 alone_since = now
             elif (

@@ -79,6 +79,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--calibration", default=None, help="calibration JSON (default: beside the profile)"
     )
+    parser.add_argument(
+        "--snapshot-dir",
+        default=None,
+        help="the only folder the link's snapshot requests may write to "
+        "(default: [projector] snapshot_dir, else 'snapshots' in the runtime folder)",
+    )
     parser.add_argument("--heartbeat-s", type=float, default=None, help=argparse.SUPPRESS)
     parser.add_argument("--peer-timeout-s", type=float, default=None, help=argparse.SUPPRESS)
     parser.add_argument("--exit-without-console-s", type=float, default=0.0, help=argparse.SUPPRESS)
@@ -168,6 +174,15 @@ def _calibration_path(args: Any, ctx: Any) -> Path | None:
     if args.calibration:
         return Path(args.calibration)
     return calibration_path_for(_profile(ctx))
+
+
+def _snapshot_dir(args: Any, ctx: Any) -> Path | None:
+    """``--snapshot-dir``, else ``[projector] snapshot_dir`` (relative to the profile)."""
+    if args.snapshot_dir:
+        return Path(args.snapshot_dir).expanduser().resolve()
+    prof = _profile(ctx)
+    p = prof.get("projector.snapshot_dir", "") if prof is not None else ""
+    return prof.resolve(p) if p else None
 
 
 def calibrate(args: Any, ctx: Any) -> int:
@@ -334,6 +349,7 @@ def run(args: Any, ctx: Any) -> int:
         peer_timeout_s=float(_opt(args, ctx, "peer_timeout_s", "peer_timeout_s")),
         initial_state=build_state(ctx, args.scene, args.event) if args.scene else None,
         exit_without_console_s=args.exit_without_console_s,
+        snapshot_dir=_snapshot_dir(args, ctx),
     )
     return run_projector(opts)
 

@@ -1,8 +1,16 @@
 """The projector end of the link: serve the Unix socket, keep the newest scene state.
 
-One I/O thread. The render loop reads ``snapshot()`` each frame and reports
-``frame_done()``; heartbeats go out only while frames advance, so a stuck renderer looks
-hung to the console. The protocol is described in ``console.runtime.projector_link``.
+One I/O thread (``selectors``: epoll on Linux, so any file descriptor number works). The
+render loop reads ``snapshot()`` each frame and reports ``frame_done()``; heartbeats go out
+only while frames advance, so a stuck renderer looks hung to the console. The protocol is
+described in ``console.runtime.projector_link`` and checked by
+``console.runtime.link_protocol``.
+
+Hostile or broken clients: a peer of another uid is closed at once; at most
+``MAX_CONNECTIONS`` connections are open (a newcomer displaces the oldest one that has not
+spoken yet, so idle connections can neither exhaust anything nor lock a console out); any
+protocol error closes that connection and shows black; an unexpected error in the thread
+shows black too, and the thread keeps serving.
 """
 
 from __future__ import annotations
@@ -11,28 +19,42 @@ import collections
 import contextlib
 import logging
 import os
-import select
+import selectors
 import socket
 import threading
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from console.errors import UserError
+from console.runtime.link_protocol import (
+    TO_PROJECTOR,
+    LineBuffer,
+    ProtocolError,
+    decode,
+    encode,
+)
 from console.runtime.projector_link import (
     HEARTBEAT_S,
     PEER_TIMEOUT_S,
     PROTOCOL,
-    LineBuffer,
-    encode,
+    peer_uid,
     prepare_socket_dir,
     probe,
 )
+from plugins.projector.snapshots import snapshot_dir, snapshot_target
 
 log = logging.getLogger("haptable.projector")
 
+MAX_CONNECTIONS = 8
+#: A connection that has not spoken for this long is no console (probes close at once).
+PENDING_TIMEOUT_S = 10.0
+#: A console that leaves this much unread is not reading: dropped.
+MAX_UNSENT_BYTES = 1 << 20
+
 
 def bind_socket(path: Path) -> socket.socket:
-    """Listen on ``path``; a stale socket file is replaced, a live projector is an error."""
+    """Listen on ``path`` (0600); a stale socket file is replaced, a live projector is an error."""
     path = prepare_socket_dir(Path(path))
     if path.exists() or path.is_symlink():
         pid = probe(path)
@@ -47,11 +69,28 @@ def bind_socket(path: Path) -> socket.socket:
     old = os.umask(0o177)  # socket file rw for this user only
     try:
         s.bind(str(path))
+        os.chmod(path, 0o600)
+    except OSError as e:
+        s.close()
+        raise UserError(f"projector socket {path}: cannot listen ({e.strerror})") from None
     finally:
         os.umask(old)
-    s.listen(4)
+    s.listen(MAX_CONNECTIONS)
     s.setblocking(False)
     return s
+
+
+@dataclass(eq=False)
+class Conn:
+    """One accepted connection: a console once it has spoken."""
+
+    sock: socket.socket
+    opened: float
+    rx: LineBuffer = field(default_factory=LineBuffer)
+    out: bytearray = field(default_factory=bytearray)
+    console: bool = False
+    last_rx: float = 0.0
+    events: int = selectors.EVENT_READ
 
 
 class LinkServer:
@@ -65,11 +104,18 @@ class LinkServer:
         peer_timeout_s: float = PEER_TIMEOUT_S,
         initial: dict | None = None,
         info: dict | None = None,
+        snapshot_dir: Path | str | None = None,
+        peer_uid: int | None = None,
+        max_connections: int = MAX_CONNECTIONS,
     ) -> None:
         self.socket_path = Path(socket_path)
         self.heartbeat_s = heartbeat_s
         self.peer_timeout_s = peer_timeout_s
         self.info = dict(info or {})
+        self.peer_uid = os.getuid() if peer_uid is None else peer_uid
+        self.max_connections = max(2, int(max_connections))
+        self._snapshot_config = snapshot_dir
+        self._snapshot_base: Path | None = None
         self._lock = threading.Lock()
         self._scene: str | None = initial.get("kind") if initial else None
         self._state: dict | None = initial
@@ -92,8 +138,17 @@ class LinkServer:
         self.last_drop = ""
         self.consoles = 0  # connections that became the console
         self.accepted = 0  # all connections (probes included)
-        self._snapshot_requests: list[str] = []
-        self._snapshots_done: list[str] = []
+        self.refused_peers = 0  # of another uid
+        self.protocol_errors = 0
+        self._snapshot_requests: list[tuple[str, Path]] = []
+        self._snapshot_replies: list[dict] = []
+        # the I/O thread's own state
+        self._sel = selectors.DefaultSelector()
+        self._conns: dict[socket.socket, Conn] = {}
+        self._console: Conn | None = None
+        self._sent_drawn = 0
+        self._last_tx = 0.0
+        self._listen_paused_until = 0.0
 
     # ---- render loop side
     def snapshot(self) -> tuple[int, int, str | None, dict | None]:
@@ -117,8 +172,25 @@ class LinkServer:
                 self._drawn_seq, self._drawn_t = self._seq, t_s
                 self._wake()
 
+    def take_snapshot_requests(self) -> list[tuple[str, Path]]:
+        """(request, checked file) pairs the next frame is to be saved to (render loop side)."""
+        with self._lock:
+            out, self._snapshot_requests = self._snapshot_requests, []
+            return out
+
+    def snapshot_done(self, request: str, written: Path) -> None:
+        self._reply({"type": "snapshot_done", "path": request, "file": str(written)})
+
+    def snapshot_failed(self, request: str, why: str) -> None:
+        self._reply({"type": "error", "path": request, "message": why})
+
+    def open_connections(self) -> int:
+        return len(self._conns)
+
     # ---- thread
     def start(self) -> None:
+        self._sel.register(self._listener, selectors.EVENT_READ, "listen")
+        self._sel.register(self._wake_r, selectors.EVENT_READ, "wake")
         self._thread = threading.Thread(target=self._run, name="projector-server", daemon=True)
         self._thread.start()
 
@@ -132,10 +204,16 @@ class LinkServer:
             self.socket_path.unlink()
         self._wake_r.close()
         self._wake_w.close()
+        self._sel.close()
 
     def _wake(self) -> None:
         with contextlib.suppress(OSError):
             self._wake_w.send(b"\0")
+
+    def _reply(self, msg: dict) -> None:
+        with self._lock:
+            self._snapshot_replies.append(msg)
+        self._wake()
 
     def _go_black(self, why: str) -> None:
         with self._lock:
@@ -152,163 +230,204 @@ class LinkServer:
         return encode({**msg, "scene": scene, **self.info})
 
     def _run(self) -> None:
-        client: socket.socket | None = None
-        # Connections that have not spoken yet: a probe (is a projector running?) must not
-        # displace the console, so a connection becomes the console with its first message.
-        pending: dict[socket.socket, float] = {}
-        rx = LineBuffer()
-        out = bytearray()
-        last_rx = last_tx = 0.0
-        sent_drawn = 0
-
-        def drop(why: str) -> None:
-            nonlocal client
-            if client is not None:
-                client.close()
-                client = None
-                self._go_black(why)
-
         while not self._stop.is_set():
-            now = time.monotonic()
-            if client is not None:
-                with self._lock:
-                    drawn, drawn_t, frame_t = self._drawn_seq, self._drawn_t, self._last_frame_t
-                    scene, fps, frames = self._scene, self.fps, self.frames
-                    done, self._snapshots_done = self._snapshots_done, []
-                for path in done:
-                    out += encode({"type": "snapshot_done", "path": path})
-                if drawn > sent_drawn:
-                    out += encode(
-                        {"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t, "scene": scene}
-                    )
-                    sent_drawn = drawn
-                # heartbeats only while the render loop is alive
-                if now - last_tx >= self.heartbeat_s and now - frame_t < self.peer_timeout_s:
-                    out += encode(
-                        {
-                            "type": "heartbeat",
-                            "t_s": now,
-                            "fps": round(fps, 2),
-                            "frames": frames,
-                            "scene": scene,
-                        }
-                    )
-                    last_tx = now
-            socks = [self._listener, self._wake_r, *pending] + (
-                [client] if client is not None else []
-            )
             try:
-                r, w, _ = select.select(
-                    socks,
-                    [client] if (client is not None and out) else [],
-                    [],
-                    self.heartbeat_s / 2,
-                )
-            except (OSError, ValueError):
-                drop("select failed")
-                continue
-            if self._wake_r in r:
+                self._step()
+            except Exception as e:  # noqa: BLE001 - the link thread must never die
+                self._recover(f"{type(e).__name__}: {e}")
+                self._stop.wait(0.05)
+        for conn in list(self._conns.values()):
+            conn.sock.close()
+        self._conns.clear()
+
+    def _recover(self, why: str) -> None:
+        """After an unexpected error: drop the console, show black, keep serving."""
+        log.error("projector: link error (%s): dropping the console", why)
+        try:
+            if self._console is not None:
+                self._close(self._console, f"link error: {why}")
+            else:
+                self._go_black(f"link error: {why}")
+        except Exception:  # noqa: BLE001 - at least black
+            with self._lock:
+                self._scene, self._state = None, None
+                self._version += 1
+
+    def _step(self) -> None:
+        now = time.monotonic()
+        if self._listen_paused_until and now >= self._listen_paused_until:
+            self._listen_paused_until = 0.0
+            self._sel.register(self._listener, selectors.EVENT_READ, "listen")
+        if self._console is not None:
+            self._queue_for_console(self._console, now)
+        for conn in list(self._conns.values()):
+            want = selectors.EVENT_READ | (selectors.EVENT_WRITE if conn.out else 0)
+            if want != conn.events:
+                self._sel.modify(conn.sock, want, conn)
+                conn.events = want
+        for key, mask in self._sel.select(self.heartbeat_s / 2):
+            tag = key.data
+            if tag == "wake":
                 with contextlib.suppress(BlockingIOError, OSError):
                     while self._wake_r.recv(4096):
                         pass
-            if self._listener in r:
-                try:
-                    new, _ = self._listener.accept()
-                except OSError:
-                    new = None
-                if new is not None:
-                    self.accepted += 1
-                    new.settimeout(1.0)
-                    try:
-                        new.sendall(self._hello())
-                        new.setblocking(False)
-                        pending[new] = time.monotonic()
-                    except OSError:
-                        new.close()
-            for p in [p for p in pending if p in r]:
-                try:
-                    data = p.recv(1 << 16)
-                except BlockingIOError:
-                    continue
-                except OSError:
-                    data = b""
-                del pending[p]
-                if not data:
-                    p.close()
-                    continue
-                if client is not None:
-                    client.close()  # the newer console wins (the old one may be hung)
-                client, rx, out = p, LineBuffer(), bytearray()
-                last_rx = time.monotonic()
-                with self._lock:  # sequence numbers are per console connection
-                    self._seq = self._drawn_seq = sent_drawn = 0
-                self.connected = True
-                self.consoles += 1
-                for msg in rx.feed(data):
-                    self._handle_safely(msg, out, last_rx, rx)
-            for p in [p for p, t in pending.items() if time.monotonic() - t > 10.0]:
-                del pending[p]  # silent for 10 s: not a console
-                p.close()
-            if client is None:
-                continue
-            try:
-                if client in w and out:
-                    n = client.send(out)
-                    del out[:n]
-                if client in r:
-                    data = client.recv(1 << 16)
-                    if not data:
-                        drop("console closed the link")
-                        continue
-                    last_rx = time.monotonic()
-                    for msg in rx.feed(data):
-                        self._handle_safely(msg, out, last_rx, rx)
-            except BlockingIOError:
-                pass
-            except OSError as e:
-                drop(f"link error: {e}")
-                continue
-            if time.monotonic() - last_rx > self.peer_timeout_s:
-                drop(f"no word from the console for {self.peer_timeout_s:g} s")
-        if client is not None:
-            client.close()
-        for p in pending:
-            p.close()
+            elif tag == "listen":
+                self._accept()
+            elif tag.sock in self._conns:
+                if mask & selectors.EVENT_WRITE:
+                    self._send(tag)
+                if mask & selectors.EVENT_READ and tag.sock in self._conns:
+                    self._receive(tag)
+        now = time.monotonic()
+        for conn in list(self._conns.values()):
+            if conn.console and now - conn.last_rx > self.peer_timeout_s:
+                self._close(conn, f"no word from the console for {self.peer_timeout_s:g} s")
+            elif not conn.console and now - conn.opened > PENDING_TIMEOUT_S:
+                self._close(conn, "")  # silent: not a console
 
-    def _handle_safely(self, msg: dict, out: bytearray, t_recv: float, rx: LineBuffer) -> None:
+    def _queue_for_console(self, conn: Conn, now: float) -> None:
+        with self._lock:
+            drawn, drawn_t, frame_t = self._drawn_seq, self._drawn_t, self._last_frame_t
+            scene, fps, frames = self._scene, self.fps, self.frames
+            replies, self._snapshot_replies = self._snapshot_replies, []
+        for msg in replies:
+            conn.out += encode(msg)
+        if drawn > self._sent_drawn:
+            conn.out += encode(
+                {"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t, "scene": scene}
+            )
+            self._sent_drawn = drawn
+        # heartbeats only while the render loop is alive
+        if now - self._last_tx >= self.heartbeat_s and now - frame_t < self.peer_timeout_s:
+            beat = {"type": "heartbeat", "t_s": now, "fps": round(fps, 2), "frames": frames}
+            conn.out += encode({**beat, "scene": scene})
+            self._last_tx = now
+        if len(conn.out) > MAX_UNSENT_BYTES:
+            self._close(conn, "the console does not read its messages")
+
+    def _accept(self) -> None:
+        for _ in range(64):  # a burst at a time; the rest on the next turn
+            try:
+                sock, _ = self._listener.accept()
+            except BlockingIOError:
+                return
+            except OSError as e:  # out of file descriptors: listen again a little later
+                log.warning("projector: cannot accept a connection (%s): pausing 0.2 s", e)
+                self._sel.unregister(self._listener)
+                self._listen_paused_until = time.monotonic() + 0.2
+                return
+            self.accepted += 1
+            uid = peer_uid(sock)
+            if uid is not None and uid != self.peer_uid:
+                sock.close()
+                self.refused_peers += 1
+                log.warning(
+                    "projector: refused a connection from uid %d (not %d)", uid, self.peer_uid
+                )
+                continue
+            sock.setblocking(False)
+            if len(self._conns) >= self.max_connections:
+                idle = [c for c in self._conns.values() if not c.console]
+                if not idle:
+                    sock.close()
+                    continue
+                self._close(min(idle, key=lambda c: c.opened), "")
+            conn = Conn(sock, time.monotonic(), out=bytearray(self._hello()))
+            conn.events = selectors.EVENT_READ | selectors.EVENT_WRITE
+            self._sel.register(sock, conn.events, conn)
+            self._conns[sock] = conn
+
+    def _close(self, conn: Conn, why: str) -> None:
+        with contextlib.suppress(KeyError, ValueError):
+            self._sel.unregister(conn.sock)
+        self._conns.pop(conn.sock, None)
+        if conn is self._console:
+            self._console = None
+            self._go_black(why)
+        conn.sock.close()
+
+    def _send(self, conn: Conn) -> None:
         try:
-            self._handle(msg, out, t_recv)
-        except (TypeError, ValueError, AttributeError) as e:
-            rx.bad_lines += 1  # a malformed message must not stop the link
-            log.warning("projector: ignored a bad message (%s)", e)
+            n = conn.sock.send(conn.out)
+        except BlockingIOError:
+            return
+        except OSError as e:
+            self._close(conn, f"link error: {e}")
+            return
+        del conn.out[:n]
+
+    def _receive(self, conn: Conn) -> None:
+        try:
+            data = conn.sock.recv(1 << 16)
+        except BlockingIOError:
+            return
+        except OSError as e:
+            self._close(conn, f"link error: {e}")
+            return
+        if not data:
+            self._close(conn, "console closed the link")
+            return
+        now = time.monotonic()
+        if not conn.console:
+            self._promote(conn)
+        conn.last_rx = now
+        try:
+            for line in conn.rx.feed(data):
+                self._handle(decode(line, TO_PROJECTOR), conn.out, now)
+        except ProtocolError as e:
+            self._protocol_error(conn, str(e))
+
+    def _promote(self, conn: Conn) -> None:
+        """A connection's first message makes it the console (the newer one wins: the old
+        one may be hung)."""
+        if self._console is not None:
+            old, self._console = self._console, None
+            self._close(old, "")
+        conn.console = True
+        self._console = conn
+        with self._lock:  # sequence numbers are per console connection
+            self._seq = self._drawn_seq = 0
+            self._snapshot_replies.clear()
+        self._sent_drawn = 0
+        self.connected = True
+        self.consoles += 1
+
+    def _protocol_error(self, conn: Conn, why: str) -> None:
+        """Tell the peer why (best effort), drop it, show black."""
+        self.protocol_errors += 1
+        with contextlib.suppress(OSError):
+            conn.sock.send(encode({"type": "error", "message": f"protocol error: {why}"}))
+        self._close(conn, f"protocol error: {why}")  # it spoke: it was the console
 
     def _handle(self, msg: dict, out: bytearray, t_recv: float) -> None:
-        t = msg.get("type")
+        t = msg["type"]
         if t == "state":
-            state = msg.get("state")
-            if not isinstance(state, dict):
-                return
-            seq = int(msg.get("seq", 0))
+            state, seq = msg["state"], msg["seq"]
+            scene = msg.get("scene") or state.get("kind")
+            if scene is not None and not isinstance(scene, str):
+                raise ProtocolError("state.kind is not a string")
             with self._lock:
-                self._scene = msg.get("scene") or state.get("kind")
+                self._scene = scene
                 self._state = state
                 self._seq = seq
                 self._version += 1
                 self._state_version = self._version
             out += encode({"type": "ack", "seq": seq, "t_recv_s": t_recv})
+        elif t == "hello":
+            if msg.get("protocol", PROTOCOL) != PROTOCOL:
+                raise ProtocolError(
+                    f"protocol {msg['protocol']} (this projector speaks {PROTOCOL})"
+                )
         elif t == "quit":
             self.quit_requested.set()
-        elif t == "snapshot" and isinstance(msg.get("path"), str):
+        elif t == "snapshot":
+            try:
+                if self._snapshot_base is None:
+                    self._snapshot_base = snapshot_dir(self._snapshot_config)
+                target = snapshot_target(self._snapshot_base, msg["path"])
+            except UserError as e:
+                log.warning("projector: refused a snapshot: %s", e)
+                out += encode({"type": "error", "path": msg["path"], "message": str(e)})
+                return
             with self._lock:
-                self._snapshot_requests.append(msg["path"])
-
-    def take_snapshot_requests(self) -> list[str]:
-        """Paths the console asked the next frame to be saved to (render loop side)."""
-        with self._lock:
-            out, self._snapshot_requests = self._snapshot_requests, []
-            return out
-
-    def snapshot_done(self, path: str) -> None:
-        with self._lock:
-            self._snapshots_done.append(path)
-        self._wake()
+                self._snapshot_requests.append((msg["path"], target))

@@ -15,6 +15,11 @@ FIELDS: dict[str, Field] = {
         "path", "", must_exist=False,
         help="projector calibration JSON; empty = <profile name>.projector.json beside the profile",
     ),
+    "snapshot_dir": Field(
+        "path", "", must_exist=False,
+        help="the only folder a snapshot request over the link may write to; empty = "
+        "'snapshots' in the private runtime folder",
+    ),
     "heartbeat_s": Field("float", 0.25, min=0.01, max=10, help="heartbeat interval both ways"),
     "peer_timeout_s": Field("float", 2.0, min=0.05, max=60, help="silence after which the peer is hung"),
     "restart_backoff_max_s": Field("float", 5.0, min=0.1, max=300, help="longest wait between restarts"),

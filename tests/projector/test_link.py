@@ -19,6 +19,7 @@ import time
 import pytest
 
 from console.errors import UserError
+from console.runtime.link_protocol import ProtocolError
 from console.runtime.projector_link import (
     LineBuffer,
     ProjectorService,
@@ -94,19 +95,13 @@ def service(sock_path, tmp_path) -> ProjectorService:
 
 
 # --------------------------------------------------------------------------- protocol
-def test_line_buffer_joins_split_messages_and_skips_bad_lines():
+def test_line_buffer_joins_split_lines_and_refuses_a_runaway_line():
     rx = LineBuffer(max_line_bytes=100)
-    data = (
-        encode({"type": "state", "seq": 1})
-        + b"not json\n"
-        + b"[1,2]\n"
-        + encode({"type": "heartbeat"})
-    )
-    msgs = rx.feed(data[:7]) + rx.feed(data[7:])
-    assert [m["type"] for m in msgs] == ["state", "heartbeat"]
-    assert rx.bad_lines == 2
-    assert rx.feed(b"x" * 200) == [] and rx.bad_lines == 3  # a runaway line is dropped
-    assert rx.feed(encode({"type": "ok"})) == [{"type": "ok"}]
+    data = encode({"type": "state", "seq": 1}) + b"\n  \n" + encode({"type": "heartbeat"})
+    lines = rx.feed(data[:7]) + rx.feed(data[7:])
+    assert [json.loads(x)["type"] for x in lines] == ["state", "heartbeat"]
+    with pytest.raises(ProtocolError, match="longer than 100"):
+        rx.feed(b"x" * 200)  # a runaway line: the connection is dropped
 
 
 def test_state_must_be_json_in_the_caller(sock_path):
@@ -145,10 +140,15 @@ def test_projector_end_draws_newest_state_and_goes_black_when_the_console_leaves
             seen.append(json.loads(f.readline()))
         acks = [m["seq"] for m in seen if m["type"] == "ack"]
         assert acks == [1, 2] and seen[-1]["seq"] == 2  # each state acked; the newest drawn
-        # malformed messages are skipped; the link stays up
-        s.sendall(b'{"type": "state", "seq": "x", "state": {}}\n{"type": "state", "seq": 3}\n[]\n')
+        # a malformed message: the connection is dropped and the projector shows black
+        s.sendall(b'{"type": "state", "seq": "x", "state": {}}\n')
+        wait_until(lambda: srv.snapshot()[3] is None, 5, "black after a bad message")
+        assert srv.last_drop.startswith("protocol error") and f.read().endswith(b"\n")
+        f.close()
+        s.close()
+        s, f = _fake_console(sock_path)  # the next console is served
         s.sendall(encode({"type": "state", "seq": 4, "scene": "grid", "state": {"kind": "grid"}}))
-        wait_until(lambda: srv.snapshot()[1] == 4, 5, "state 4 after bad lines")
+        wait_until(lambda: srv.snapshot()[1] == 4, 5, "state 4 from the next console")
         f.close()
         s.close()  # the console dies: EOF, noticed at once (well before the 3 s timeout)
         wait_until(lambda: srv.snapshot()[3] is None, 10, "black after EOF")
@@ -381,7 +381,7 @@ def test_show_command_starts_a_projector_shows_the_scene_and_stops_it(tmp_path, 
     assert not sock.exists()
 
 
-def test_console_link_survives_malformed_messages_and_reconnects(sock_path):
+def test_console_link_drops_a_malformed_projector_and_reconnects(sock_path):
     from console.runtime.projector_link import ProjectorLink
 
     lst = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -396,17 +396,18 @@ def test_console_link_survives_malformed_messages_and_reconnects(sock_path):
             conn, _ = lst.accept()
             f = conn.makefile("rb")
             conn.sendall(encode({"type": "hello", "pid": os.getpid(), "scene": None}))
-            conn.sendall(b'{"type": "ack", "seq": "x"}\n{"type": "drawn", "seq": [1]}\n')
             msgs = [json.loads(f.readline())]
             while msgs[-1]["type"] != "state" and len(msgs) < 50:
                 msgs.append(json.loads(f.readline()))
             state = msgs[-1]  # the full state is (re-)sent on every connect
             assert state["seq"] == seq and state["state"] == {"kind": "knob"}
             assert link.wait_connected(5)
-            if round_ == 0:
+            if round_ == 0:  # a malformed message: the console drops this projector
+                conn.sendall(b'{"type": "ack", "seq": "x"}\n')
+                wait_until(lambda: not link.connected, 5, "the drop")
+                assert link.last_drop.startswith("protocol error")
                 f.close()  # the file keeps the socket open too
                 conn.close()
-                wait_until(lambda: not link.connected, 5, "the drop")
         conn.sendall(
             encode({"type": "drawn", "seq": seq, "t_drawn_s": time.monotonic(), "scene": "knob"})
         )
