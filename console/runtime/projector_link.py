@@ -10,13 +10,21 @@ console -> projector
   ``{"type": "state", "seq": int, "scene": str, "state": {...}}`` - the FULL scene
   state (idempotent: the projector just draws the newest one); re-sent after a reconnect.
   ``{"type": "heartbeat", "t_s": float}``  ``{"type": "quit"}``
-  ``{"type": "snapshot", "path": str}`` - save the next frame as PNG (answered by
-  ``{"type": "snapshot_done", "path"}``)
+  ``{"type": "snapshot", "path": str}`` - save the next frame as PNG in the projector's
+  snapshot folder (``path``: a file name in it, or an absolute path inside it); answered
+  by ``{"type": "snapshot_done", "path", "file"}`` (``file``: what was written) or
+  ``{"type": "error", "path", "message"}`` (refused: outside the folder, a symlink)
 projector -> console
   ``{"type": "hello", "role": "projector", "pid", "size_px", "headless", "scene"}``
   ``{"type": "ack", "seq", "t_recv_s"}`` when a state arrives,
   ``{"type": "drawn", "seq", "t_drawn_s"}`` when the first frame showing it is finished,
   ``{"type": "heartbeat", "fps", "frames", "scene", "t_s"}`` (only while frames advance).
+
+Both ends check every line (``console.runtime.link_protocol``: at most 1 MiB, nesting at
+most 32 deep, finite numbers, known types with typed fields) and drop a connection that
+sends anything else; the projector then shows black (and says why in an ``error`` line).
+The socket lives in the private runtime directory (0700, owner checked) and is 0600;
+each end also refuses a peer of another uid (SO_PEERCRED).
 
 Either side that hears nothing for ``peer_timeout_s`` treats the peer as hung: the
 projector drops the connection and shows black; the console drops it and the supervisor

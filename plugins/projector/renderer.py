@@ -21,6 +21,26 @@ from plugins.projector.text import text_bitmap
 log = logging.getLogger("haptable.projector")
 
 
+#: What one state may ask the renderer for (the real scenes stay far below: ~170 shapes,
+#: a few thousand text pixels): beyond it the state is not drawn (an error line shows).
+MAX_PRIMITIVES = 10_000
+MAX_TEXT_PIXELS = 16_000_000
+
+
+def check_budget(prims: list[dict], px_per_mm: float) -> None:
+    """``ValueError`` when ``prims`` would take too long to tessellate or too much memory
+    for their text bitmaps (a state is untrusted input from the link)."""
+    if len(prims) > MAX_PRIMITIVES:
+        raise ValueError(f"{len(prims)} shapes (at most {MAX_PRIMITIVES})")
+    area = 0.0
+    for p in prims:
+        if p["p"] == "text":
+            px = min(max(float(p.get("size_mm", 12.0)) * px_per_mm * 1.25, 6.0), 256.0)
+            area += len(str(p.get("text", ""))) * px * px * 0.7  # glyphs ~0.7 px wide per px
+    if area > MAX_TEXT_PIXELS:
+        raise ValueError(f"text of ~{area / 1e6:.0f} Mpx (at most {MAX_TEXT_PIXELS / 1e6:.0f})")
+
+
 def error_primitives(message: str) -> list[dict]:
     """What the projector shows instead of a state it cannot draw."""
     return [
@@ -113,7 +133,9 @@ class Renderer:
             return False
         self._key = key
         try:
-            self.layer = build_layer(primitives(state))
+            prims = primitives(state)
+            check_budget(prims, self._px_per_mm)
+            self.layer = build_layer(prims)
         except Exception as e:  # noqa: BLE001 - a bad state must not take the projector down
             kind = (state or {}).get("kind", "?") if isinstance(state, dict) else "?"
             log.warning("projector: cannot draw scene kind %r: %s: %s", kind, type(e).__name__, e)

@@ -507,3 +507,23 @@ def test_the_link_thread_runs_while_hostile_clients_come_and_go(sock_path):
         s.close()
     finally:
         srv.close()
+
+
+# --------------------------------------------------------------------------- states as input
+@pytest.mark.parametrize(
+    "shapes",
+    [
+        [{"p": "text", "xy": [10, 10], "text": "x" * 3000, "size_mm": 1000}],  # ~0.5 GB bitmap
+        [{"p": "disc", "c": [10.0 + i % 700, 10.0 + i // 700], "r": 3} for i in range(60_000)],
+    ],
+    ids=["text bomb", "60000 shapes"],
+)
+def test_a_state_too_big_to_draw_shows_an_error_at_once(render, shapes):
+    """A state within the line bound that would hang the renderer or exhaust its memory."""
+    t0 = time.monotonic()
+    img, _ = render({"kind": "black", "shapes": shapes}, size=(320, 200))
+    took = time.monotonic() - t0
+    assert took < 1.5, f"the renderer was stuck {took:.1f} s"
+    red = (img[..., 0] > 180) & (img[..., 1] < 90) & (img[..., 2] < 90)  # RGB
+    white = (img.min(axis=2) > 200).sum()
+    assert red.sum() > 0 and white < 0.05 * img.shape[0] * img.shape[1]
