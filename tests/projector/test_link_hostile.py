@@ -527,3 +527,50 @@ def test_a_state_too_big_to_draw_shows_an_error_at_once(render, shapes):
     red = (img[..., 0] > 180) & (img[..., 1] < 90) & (img[..., 2] < 90)  # RGB
     white = (img.min(axis=2) > 200).sum()
     assert red.sum() > 0 and white < 0.05 * img.shape[0] * img.shape[1]
+
+
+def _connect_as(uid: int, path: Path) -> str:
+    """Connect to ``path`` from a child process running as ``uid``: what it got."""
+    pid = os.fork()
+    if pid == 0:  # the child: only system calls, then _exit
+        code = 9
+        try:
+            os.setgid(uid)
+            os.setuid(uid)
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            s.settimeout(5.0)
+            try:
+                s.connect(str(path))
+            except PermissionError:
+                code = 0
+            else:
+                with contextlib.suppress(OSError):
+                    s.sendall(encode(state(1)))
+                try:
+                    code = 2 if s.recv(1 << 16) else 1
+                except OSError:
+                    code = 1
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    code = os.waitstatus_to_exitcode(status)
+    return {0: "permission denied", 1: "closed", 2: "served"}.get(code, f"exit {code}")
+
+
+@pytest.mark.skipif(os.getuid() != 0, reason="needs root to act as another user")
+def test_another_user_cannot_reach_the_projector():
+    import shutil
+    import tempfile
+
+    d = Path(tempfile.mkdtemp(prefix="hpt-uid-", dir="/tmp"))  # /tmp: others may pass
+    srv = LinkServer(d / "p.sock", heartbeat_s=0.05, peer_timeout_s=5.0)
+    srv.start()
+    try:
+        assert _connect_as(65534, d / "p.sock") == "permission denied"  # 0700 / 0600
+        os.chmod(d, 0o755)  # opened up by hand afterwards: the uid check still holds
+        os.chmod(d / "p.sock", 0o666)
+        assert _connect_as(65534, d / "p.sock") == "closed"
+        assert srv.refused_peers == 1 and srv.consoles == 0 and srv.snapshot()[3] is None
+    finally:
+        srv.close()
+        shutil.rmtree(d, ignore_errors=True)
