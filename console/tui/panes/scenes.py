@@ -55,6 +55,10 @@ def status_text(st: dict | None) -> str:
         parts.append(f"[yellow]not prepared: {'; '.join(items)}[/]")
     if st.get("last_error"):
         parts.append(f"[red]{st['last_error']}[/]")
+    elif not st.get("connected") and st.get("last_drop"):
+        from rich.markup import escape
+
+        parts.append(f"[yellow]{escape(st['last_drop'])}[/]")
     return "  ".join(parts)
 
 
