@@ -577,3 +577,104 @@ def test_another_user_cannot_reach_the_projector():
     finally:
         srv.close()
         shutil.rmtree(d, ignore_errors=True)
+
+
+# --------------------------------------------------------------------------- generated lines
+def _json_values():
+    from hypothesis import strategies as st
+
+    leaf = (
+        st.none()
+        | st.booleans()
+        | st.integers(min_value=-(2**70), max_value=2**70)
+        | st.floats(allow_nan=True, allow_infinity=True)
+        | st.text(max_size=20)
+    )
+    return st.recursive(
+        leaf,
+        lambda kids: (
+            st.lists(kids, max_size=4) | st.dictionaries(st.text(max_size=8), kids, max_size=4)
+        ),
+        max_leaves=40,
+    )
+
+
+def _lines():
+    from hypothesis import strategies as st
+
+    from console.runtime.link_protocol import TO_PROJECTOR
+
+    kinds = st.sampled_from([*TO_PROJECTOR, "x", ""])
+    fields = st.sampled_from(["seq", "scene", "state", "path", "t_s", "protocol", "type"])
+    msg = st.builds(
+        lambda k, extra: {"type": k, **extra},
+        kinds,
+        st.dictionaries(fields, _json_values(), max_size=4),
+    )
+    as_json = msg.map(lambda m: json.dumps(m).encode())  # NaN/Infinity written as such
+    nested = st.integers(1, 5000).map(lambda n: b"[" * n + b"]" * n)
+    return (
+        as_json
+        | st.binary(max_size=200)
+        | nested
+        | _json_values().map(lambda v: json.dumps(v).encode())
+    )
+
+
+def test_generated_lines_are_accepted_checked_or_refused_never_anything_else():
+    from hypothesis import given, settings
+
+    from console.runtime.link_protocol import TO_PROJECTOR, ProtocolError, decode
+
+    seen = {"ok": 0, "refused": 0}
+
+    @settings(max_examples=3000, deadline=None, database=None)
+    @given(_lines())
+    def check(line):
+        line = line.replace(b"\n", b" ")
+        try:
+            msg = decode(line, TO_PROJECTOR)
+        except ProtocolError:
+            seen["refused"] += 1
+            return
+        seen["ok"] += 1
+        assert msg["type"] in TO_PROJECTOR
+        json.dumps(msg, allow_nan=False)  # finite, plain JSON: safe to use
+
+    check()
+    print(f"generated lines: {seen['ok']} accepted, {seen['refused']} refused")
+    assert seen["ok"] > 50 and seen["refused"] > 50
+
+
+def test_generated_hostile_lines_never_stop_the_link_thread(sock_path):
+    """A hundred generated lines, each on its own connection after a good state."""
+    from hypothesis import given, settings
+
+    srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=5.0)
+    srv.start()
+    outcomes = {"black": 0, "kept": 0}
+    try:
+
+        @settings(max_examples=100, deadline=None, database=None)
+        @given(_lines())
+        def check(line):
+            s, _ = connect(sock_path)
+            s.sendall(encode(state(1)))
+            read_until(s, lambda m: m["type"] == "ack")
+            with contextlib.suppress(OSError):
+                s.sendall(line.replace(b"\n", b" ") + b"\n" + encode(state(2)))
+            try:
+                read_until(s, lambda m: m["type"] == "ack" and m["seq"] == 2, limit=50)
+                outcomes["kept"] += 1  # an acceptable message: the scene goes on
+                assert srv.snapshot()[3] == KNOB
+            except (ConnectionError, OSError, json.JSONDecodeError):
+                outcomes["black"] += 1  # refused: dropped and black
+                wait_until(lambda: srv.snapshot()[3] is None, 5, "black")
+            s.close()
+            assert srv._thread.is_alive()
+
+        check()
+    finally:
+        srv.close()
+    print(f"generated hostile lines: {outcomes}")
+    assert outcomes["black"] > 10
