@@ -81,7 +81,7 @@ from console.runtime.link_protocol import (
     decode,
     encode,
 )
-from console.runtime.private_dir import ensure_private_dir, open_private, runtime_dir
+from console.runtime.private_dir import open_private, runtime_dir
 
 log = logging.getLogger("haptable.projector")
 
@@ -102,8 +102,10 @@ def default_socket_path() -> Path:
 
 
 def prepare_socket_dir(path: Path) -> Path:
-    """Check the path fits a Unix socket address and its folder is private: ours, not a
-    symlink, no group or other access (created 0700 when missing). ``UserError`` otherwise."""
+    """Check the path fits a Unix socket address and no other user can replace the socket:
+    its folder must be a real folder of this user that nobody else may write to (created
+    0700 when missing; the default one, the runtime directory, is 0700 and checked by
+    ``runtime_dir()``). ``UserError`` with the fix otherwise."""
     path = Path(path)
     if len(os.fsencode(str(path))) > MAX_SOCKET_PATH:
         raise UserError(
@@ -111,24 +113,31 @@ def prepare_socket_dir(path: Path) -> Path:
             "set [projector] socket_path to a shorter path"
         )
     folder = path.parent
+    fix = "or leave [projector] socket_path empty for the private runtime folder"
     try:
-        folder.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        st = os.lstat(folder)
     except OSError as e:
         raise UserError(
             f"projector socket {path}: cannot create its folder ({e.strerror}); "
-            "choose another socket_path"
+            f"choose another socket_path, {fix}"
         ) from None
-    with contextlib.suppress(OSError):
-        st = os.stat(folder)
-        if st.st_mode & (stat.S_ISVTX | 0o002):
-            raise UserError(
-                f"projector socket {path}: {folder} is a shared folder; put the socket in a "
-                "private folder of yours, or leave [projector] socket_path empty"
-            )
-    try:
-        ensure_private_dir(folder)
-    except UserError as e:
-        raise UserError(f"projector socket {path}: {e}") from None
+    if not stat.S_ISDIR(st.st_mode):
+        raise UserError(
+            f"projector socket {path}: {folder} is not a plain folder (a symlink?); "
+            f"choose another socket_path, {fix}"
+        )
+    if st.st_uid != os.getuid():
+        raise UserError(
+            f"projector socket {path}: {folder} belongs to uid {st.st_uid}, not to you "
+            f"({os.getuid()}); choose a folder of yours, {fix}"
+        )
+    if st.st_mode & 0o022:
+        raise UserError(
+            f"projector socket {path}: {folder} is a shared folder (mode "
+            f"{stat.S_IMODE(st.st_mode):o}: others may replace the socket); run "
+            f"`chmod go-w {folder}` or choose a private folder, {fix}"
+        )
     return path
 
 

@@ -678,3 +678,25 @@ def test_generated_hostile_lines_never_stop_the_link_thread(sock_path):
         srv.close()
     print(f"generated hostile lines: {outcomes}")
     assert outcomes["black"] > 10
+
+
+def test_a_configured_socket_folder_must_be_ours_and_not_writable_by_others(tmp_path):
+    from console.runtime.projector_link import prepare_socket_dir
+
+    home = tmp_path / "home"  # like a home folder: readable by others, writable by us only
+    home.mkdir()
+    os.chmod(home, 0o755)
+    assert prepare_socket_dir(home / "p.sock") == home / "p.sock"
+    made = tmp_path / "new" / "dir"
+    prepare_socket_dir(made / "p.sock")
+    assert stat.S_IMODE(made.stat().st_mode) == 0o700
+    group = tmp_path / "group"
+    group.mkdir()
+    os.chmod(group, 0o775)
+    with pytest.raises(UserError, match="chmod go-w"):
+        prepare_socket_dir(group / "p.sock")
+    (tmp_path / "link").symlink_to(home, target_is_directory=True)
+    with pytest.raises(UserError, match="not a plain folder"):
+        prepare_socket_dir(tmp_path / "link" / "p.sock")
+    with pytest.raises(UserError, match="shared folder"):
+        prepare_socket_dir(Path("/tmp/p.sock"))
