@@ -241,8 +241,8 @@ class LinkServer:
         self._conns.clear()
 
     def _recover(self, why: str) -> None:
-        """After an unexpected error: drop the console, show black, keep serving."""
-        log.error("projector: link error (%s): dropping the console", why)
+        """After an unexpected error: drop the console, show black (one log line), keep
+        serving."""
         try:
             if self._console is not None:
                 self._close(self._console, f"link error: {why}")
