@@ -426,7 +426,12 @@ class ProjectorLink:
             except Exception as e:  # noqa: BLE001 - the link thread must never die
                 self._drop(f"link error: {type(e).__name__}: {e}")
                 self._idle(0.1)
-        self._drop("closed") if self._sock is not None else self._set_connected(False)
+        if self._sock is not None:
+            with contextlib.suppress(KeyError, ValueError):
+                self._sel.unregister(self._sock)
+            self._sock.close()
+            self._sock = None
+        self._set_connected(False)
 
     def _connect(self) -> bool:
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
