@@ -241,11 +241,14 @@ class LinkServer:
         self._conns.clear()
 
     def _recover(self, why: str) -> None:
-        """After an unexpected error: drop the console, show black (one log line), keep
-        serving."""
+        """After an unexpected error: drop every connection (whichever caused it), show
+        black (one log line), keep serving."""
         try:
-            if self._console is not None:
-                self._close(self._console, f"link error: {why}")
+            console = self._console
+            for conn in [c for c in self._conns.values() if c is not console]:
+                self._close(conn, "")
+            if console is not None:
+                self._close(console, f"link error: {why}")
             else:
                 self._go_black(f"link error: {why}")
         except Exception:  # noqa: BLE001 - at least black
