@@ -10,7 +10,7 @@ import sys
 from collections.abc import Iterator
 from functools import cached_property
 
-from console.errors import UserError
+from console.errors import EStopped, UserError
 
 
 class Context:
@@ -19,6 +19,12 @@ class Context:
     def __init__(self, profile_arg: str | None, plugins):
         self.profile_arg = profile_arg
         self.pm = plugins
+        self._remote_stops: list = []
+
+    @property
+    def estopped_by(self) -> str | None:
+        """Why another process e-stopped outputs this command opened (None: it did not)."""
+        return next((s.reason for s in self._remote_stops if s.reason), None)
 
     @cached_property
     def profile(self):
@@ -28,14 +34,35 @@ class Context:
 
     @contextlib.contextmanager
     def outputs(self, fast: bool | None = None) -> Iterator:
-        """The profile's outputs behind the safety gate; silent and open on leaving."""
+        """The profile's outputs behind the safety gate; silent and open on leaving.
+
+        An e-stop from another process (`haptable estop`) ends the command: whatever it
+        was doing is interrupted and ``EStopped`` leaves (exit status 4). With
+        ``$HAPTABLE_TWIN_LOG`` set, the twin's log is written there on leaving."""
         from console.runtime.outputs import open_outputs
+        from console.runtime.outputs_registry import RemoteStop
+        from console.runtime.twin_log import write_env_twin_log
 
         out = open_outputs(self.profile, self.pm, fast=fast)
+        stop = None
         try:
-            yield out
+            stop = RemoteStop(out.registration)  # from here its interrupt may come
+            self._remote_stops.append(stop)
+            try:
+                yield out
+            finally:
+                stop.disarm()
+        except GeneratorExit:
+            raise
+        except BaseException:
+            if stop is not None and stop.reason:
+                raise EStopped(stop.reason) from None
+            raise
         finally:
             out.close()
+            write_env_twin_log(out)
+        if stop.reason:
+            raise EStopped(stop.reason)
 
 
 def build_parser(plugins) -> argparse.ArgumentParser:
@@ -58,6 +85,7 @@ def build_parser(plugins) -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
+    ctx = None
     try:
         from console.plugins import load_plugins
 
@@ -71,16 +99,27 @@ def main(argv: list[str] | None = None) -> int:
         ctx = Context(getattr(args, "profile_sub", None) or args.profile, plugins)
         if command == "console" and args.command is None:
             args = parser.parse_args([*argv, "console"])
-        return int(plugins.commands[command].run(args, ctx) or 0)
+        code = int(plugins.commands[command].run(args, ctx) or 0)
+        if ctx.estopped_by:  # it finished anyway: still say it was stopped
+            raise EStopped(ctx.estopped_by)
+        return code
+    except EStopped as exc:
+        return _estopped(str(exc))
     except UserError as exc:
+        if ctx is not None and ctx.estopped_by:  # what the e-stop made fail
+            return _estopped(ctx.estopped_by)
         print(f"haptable: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if ctx is not None and ctx.estopped_by:
+            return _estopped(ctx.estopped_by)
         print("haptable: interrupted (outputs silenced)", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
     except Exception as exc:
+        if ctx is not None and ctx.estopped_by:
+            return _estopped(ctx.estopped_by)
         if debug:
             raise
         print(
@@ -93,6 +132,11 @@ def main(argv: list[str] | None = None) -> int:
         from console.safety import estop_all
 
         estop_all("command finished")
+
+
+def _estopped(reason: str) -> int:
+    print(f"haptable: e-stopped by {reason}; outputs silent, relays open", file=sys.stderr)
+    return EStopped.EXIT_CODE
 
 
 if __name__ == "__main__":

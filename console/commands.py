@@ -222,33 +222,79 @@ def run_play(args, ctx) -> int:
 # ---------------------------------------------------------------------- estop
 def configure_estop(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=2.0,
+        help="seconds each process has to confirm its silence (default 2)",
+    )
 
 
-def run_estop(args, ctx) -> int:
-    """E-stop a running console (over its control socket) and open the profile's relays."""
-    from console.runtime.control import send_command
+def _open_relays_here(ctx) -> str:
+    """Open the profile's relay board from this process (when no other holds it)."""
     from console.safety import Limits, SafetyGate
 
-    console_reply = send_command(ctx.profile, "estop")
-    relays = "not opened"
     try:
         reg = ctx.pm.get("relay_board", ctx.profile.get("relays.driver"))
         board = reg.factory(ctx.profile)
         gate = SafetyGate(Limits.from_profile(ctx.profile), board)
         gate.estop("haptable estop")
         board.close()
-        relays = "all open"
-    except Exception as exc:  # the console may hold the board (one process at a time)
-        relays = (
-            f"not reachable here ({exc}); the console opened them"
-            if console_reply
-            else f"not reachable: {exc}"
-        )
-    result = {"console": console_reply or "no console running", "relays": relays}
+        return "all open"
+    except Exception as exc:  # a process holding the board opened them (one at a time)
+        return f"not reachable here: {exc}"
+
+
+def run_estop(args, ctx) -> int:
+    """E-stop every process holding outputs (all at once, each with a deadline), tell the
+    profile's console, and open the profile's relays. Exit 1 when anything is unconfirmed."""
+    import threading
+
+    from console.runtime.control import send_command
+    from console.runtime.outputs_registry import estop_everywhere
+
+    if not 0 < args.timeout <= 60:
+        raise UserError(f"--timeout {args.timeout:g}: give seconds from 0.01 to 60")
+    refused = ""
+    console: dict[str, str | None] = {}
+
+    def tell_console() -> None:
+        try:
+            console["reply"] = send_command(ctx.profile, "estop", timeout_s=args.timeout)
+        except UserError as exc:  # a broken profile: the processes matter first
+            console["reply"] = f"not reached: {exc}"
+
+    th = threading.Thread(target=tell_console, daemon=True)
+    th.start()
+    try:
+        reached = estop_everywhere(timeout_s=args.timeout)
+    except UserError as exc:  # the runtime directory is refused: say so, still open relays
+        reached, refused = [], str(exc)
+    th.join(args.timeout + 0.5)
+    relays = _open_relays_here(ctx)
+    live = [r for r in reached if not r.stale]
+    unconfirmed = [r for r in live if not r.confirmed]
+    result = {
+        "processes": [dataclasses.asdict(r) for r in reached],
+        "confirmed": bool(live) and not unconfirmed,
+        "console": console.get("reply") or "no console running",
+        "relays": relays,
+    }
+    if refused:
+        result["error"] = refused
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"e-stop: console: {result['console']}; relays: {result['relays']}")
+        for r in reached:
+            print(f"e-stop: {r.line()}")
+        if not live:
+            print("e-stop: no process holds outputs")
+        print(f"e-stop: console: {result['console']}; relays: {relays}")
+    if refused:
+        print(f"haptable: error: {refused}", file=sys.stderr)
+        return 2
+    if unconfirmed or (not live and relays != "all open"):
+        return 1
     return 0
 
 

@@ -11,3 +11,10 @@ class ProfileError(UserError):
 
 class SafetyRefusal(UserError):
     """The safety gate refused a plan or a relay switch; the message says why."""
+
+
+class EStopped(Exception):
+    """Another process (`haptable estop`) e-stopped this command's outputs; it stopped."""
+
+    #: the exit status of a command stopped this way
+    EXIT_CODE = 4

@@ -1,77 +1,97 @@
-"""The console's control socket: lets `haptable estop` (another process) stop a console.
+"""The console's command channel, and "one console at a time" per user and profile.
 
-A Unix-domain socket per profile under $XDG_RUNTIME_DIR (or the temp dir); one line in,
-one line out. No network listener.
+A console holds an exclusive lock on ``console-<profile>-<key>.lock`` in the private
+runtime directory (``console.runtime.private_dir``) while it runs: the lock ends with the
+process, so the socket of a console that died is never taken for another console. Beside
+it, ``console-<profile>-<key>.sock`` (0600, ``console.runtime.line_server``: bounded lines,
+a deadline per connection, peers of this uid only) answers ``ping`` and ``estop`` (which
+also stops what the console's screens run). The outputs themselves are reached by
+`haptable estop` through ``console.runtime.outputs_registry``, like any process's.
 """
 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
 import os
-import socket
-import tempfile
-import threading
 from collections.abc import Callable
 from pathlib import Path
 
+from console.errors import UserError
+from console.runtime.line_server import LineServer, PeerRefused, request
+from console.runtime.private_dir import open_private, runtime_dir
+
 
 def socket_path(profile) -> Path:
-    base = Path(os.environ.get("XDG_RUNTIME_DIR") or tempfile.gettempdir()) / "haptable"
     key = hashlib.sha1(str(profile.path).encode()).hexdigest()[:10]
-    return base / f"console-{profile.name}-{key}.sock"
+    return runtime_dir() / f"console-{profile.name}-{key}.sock"
 
 
 def send_command(profile, command: str, timeout_s: float = 1.0) -> str | None:
-    """Send one line to a running console; its reply, or None if none is running."""
-    path = socket_path(profile)
-    if not path.exists():
-        return None
+    """Send one line to a running console; its reply, or None if none answers (none runs,
+    it does not answer in time, or the socket is not this user's)."""
     try:
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
-            s.settimeout(timeout_s)
-            s.connect(str(path))
-            s.sendall(command.encode() + b"\n")
-            return s.makefile().readline().strip() or None
-    except OSError:
+        return request(socket_path(profile), command, timeout_s=timeout_s)[0] or None
+    except (OSError, UserError):
         return None
+
+
+def _holder(lock_path: Path) -> str:
+    with contextlib.suppress(OSError, ValueError):
+        fd = os.open(lock_path, os.O_RDONLY | os.O_NOFOLLOW)
+        with os.fdopen(fd) as f:
+            return f" (pid {int(f.read(32).strip())})"
+    return ""
 
 
 class ControlServer:
-    """Serves commands (``estop``, ``status``) to other processes."""
+    """Serves ``ping`` and the console's commands to other processes; refuses (``UserError``)
+    when another console of this user already runs the profile."""
 
     def __init__(self, profile, handler: Callable[[str], str]):
         self.path = socket_path(profile)
+        self.lock_path = self.path.with_suffix(".lock")
         self.handler = handler
-        self.path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        if self.path.exists():
-            if send_command(profile, "ping") is not None:
-                raise OSError(f"another console already runs this profile ({self.path})")
-            self.path.unlink()
-        self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self._sock.bind(str(self.path))
-        self._sock.listen(4)
-        self._thread = threading.Thread(target=self._serve, name="haptable-control", daemon=True)
-        self._thread.start()
+        self._lock_fd = open_private(self.lock_path, append=True)
+        try:
+            fcntl.flock(self._lock_fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(self._lock_fd)
+            raise UserError(
+                f"another console already runs profile {profile.name!r}"
+                f"{_holder(self.lock_path)}; use it, or quit it first"
+            ) from None
+        try:
+            os.ftruncate(self._lock_fd, 0)
+            os.write(self._lock_fd, f"{os.getpid()}\n".encode())
+            self._remove_stale()
+            self._server = LineServer(self.path, self._command, name="haptable-control")
+        except BaseException:
+            os.close(self._lock_fd)
+            raise
 
-    def _serve(self) -> None:
-        while True:
-            try:
-                conn, _ = self._sock.accept()
-            except OSError:
-                return
-            with conn:
-                try:
-                    line = conn.makefile().readline().strip()
-                    reply = "pong" if line == "ping" else self.handler(line)
-                    conn.sendall(reply.encode() + b"\n")
-                except Exception as exc:
-                    with contextlib.suppress(OSError):
-                        conn.sendall(f"error: {exc}\n".encode())
+    def _remove_stale(self) -> None:
+        """With the lock held, a socket file here is a dead console's: remove it (after
+        making sure nothing of ours answers on it)."""
+        try:
+            reply = request(self.path, "ping", timeout_s=0.2)[0]
+        except (FileNotFoundError, ConnectionRefusedError, PeerRefused, TimeoutError, OSError):
+            reply = None
+        if reply == "pong":  # cannot happen while we hold the lock; never take it over
+            raise UserError(f"another console answers on {self.path}; quit it first")
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(self.path)
+
+    def _command(self, line: str, peer_pid: int) -> str:
+        return "pong" if line == "ping" else self.handler(line)
 
     def close(self) -> None:
+        """Stop serving, remove the socket, release the lock. Safe to call twice."""
+        if self._lock_fd < 0:
+            return
         try:
-            self._sock.close()
+            self._server.close()
         finally:
-            if self.path.exists():
-                self.path.unlink()
+            os.close(self._lock_fd)
+            self._lock_fd = -1

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import pickle
-import shutil
 import sys
 import threading
 import time
@@ -163,6 +162,7 @@ class Host:
             return 2
         self.proto.send("step", "opening the outputs")
         self.outputs = open_outputs(profile, pm, fast=False)
+        self.outputs.registration.listeners.append(self.estop)  # `haptable estop` ends the run
         if self.estop_reason is not None:
             self.outputs.estop(self.estop_reason)
         try:
@@ -218,7 +218,8 @@ class Host:
     def write_logs(self) -> dict:
         """The twin's recording and relay log (``console.runtime.twin_log``) where the
         console asked, and beside ``$HAPTABLE_TWIN_LOG`` when that is set."""
-        from console.runtime.twin_log import write_twin_log
+        from console.errors import UserError
+        from console.runtime.twin_log import copy_twin_log, write_twin_log
 
         paths = []
         if self.request.get("twin_log"):
@@ -234,10 +235,8 @@ class Host:
             if got is None:
                 return {}
             for p in paths[1:]:
-                p.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(got, p)
-                shutil.copyfile(got.with_suffix(".npz"), p.with_suffix(".npz"))
-        except OSError as exc:
+                copy_twin_log(got, p)
+        except (OSError, UserError) as exc:
             print(f"twin log: {exc}", file=sys.stderr)
             return {}
         return {"twin_log": str(got)}

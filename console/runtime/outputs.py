@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from console.errors import SafetyRefusal, UserError
+from console.runtime.outputs_registry import register_outputs
 from console.runtime.scheduler import PlayReport, Scheduler
 from console.safety import Limits, SafetyGate, install_emergency_hooks
 from console.types import OutputPlan, StreamSource
@@ -92,6 +93,7 @@ class Outputs:
             if not self.memory_locked:
                 log.warning("%s", self.memory_note)
         self._closed = False
+        self.registration = register_outputs(self)  # `haptable estop` reaches this process
 
     # ------------------------------------------------------------------ playing
     def play(
@@ -164,6 +166,8 @@ class Outputs:
                 self._audio.stop()
             finally:
                 self.scheduler.close()
+                if getattr(self, "registration", None) is not None:
+                    self.registration.close()
                 try:
                     self._board.close()
                 except Exception:

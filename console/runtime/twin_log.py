@@ -1,22 +1,27 @@
-"""What the twin outputs recorded during a console session, written on exit for outside
-inspection (``HAPTABLE_TWIN_LOG=path.json haptable``).
+"""What the twin outputs recorded during a console session or a command, written on exit
+for outside inspection (``HAPTABLE_TWIN_LOG=path.json haptable [command]``).
 
 ``path.json`` holds the bursts found in the twin recording (non-silent stretches: start
 sample, length, peak volts and dominant frequency per channel), the relay switch log and
 the plans the console played (name, segments with their patches, label, peak and meta).
 ``path.npz`` beside it holds the raw recording (``recording_v``, (n, 2) volts) and each
 played segment's waveforms (``plan{i}_seg{j}_piezo_v`` / ``_screen_v``) so a test can
-check sample by sample that what was auditioned is what the amplifiers received.
+check sample by sample that what was auditioned is what the amplifiers received. The
+gate's events (e-stops, switches, with their sample clock) are listed too. Both files are
+written without following a symlink (``console.runtime.private_dir``).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from console.runtime.private_dir import open_private, write_private
 
 ENV = "HAPTABLE_TWIN_LOG"
 
@@ -109,11 +114,32 @@ def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | Non
     }
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_text(json.dumps(data, indent=2, default=_jsonable))
+    write_private(p, json.dumps(data, indent=2, default=_jsonable))
     if rec is not None:
         arrays["recording_v"] = np.asarray(rec, float)
-    np.savez_compressed(p.with_suffix(".npz"), **arrays)
+    with os.fdopen(open_private(p.with_suffix(".npz")), "wb") as f:
+        np.savez_compressed(f, **arrays)
     return p
+
+
+def copy_twin_log(src: Path, dst: Path) -> None:
+    """Copy a written log (``.json`` and ``.npz``) to ``dst``, never through a symlink."""
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    write_private(dst, src.read_bytes())
+    write_private(dst.with_suffix(".npz"), src.with_suffix(".npz").read_bytes())
+
+
+def write_env_twin_log(outputs) -> Path | None:
+    """Write the log to ``$HAPTABLE_TWIN_LOG`` when it is set (a command's closed outputs);
+    a failure is one line on stderr, never an exception (the outputs are closed already)."""
+    path = os.environ.get(ENV)
+    if not path:
+        return None
+    try:
+        return write_twin_log(path, outputs, [])
+    except Exception as exc:
+        print(f"haptable: twin log {path}: {exc}", file=sys.stderr)
+        return None
 
 
 def _jsonable(o: Any) -> Any:

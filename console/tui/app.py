@@ -256,9 +256,16 @@ class HapTableApp(App):
     def open_outputs(self, estop_reason: str | None = None) -> None:
         """Open the profile's outputs (again after a demo: ``estop_reason`` keeps an
         e-stop that happened meanwhile until the operator resets it)."""
+        from console.errors import UserError
         from console.runtime.control import ControlServer
         from console.runtime.outputs import open_outputs
 
+        if self._control is None:  # one console at a time: a second opens no outputs
+            try:
+                self._control = ControlServer(self.ctx.profile, self._control_command)
+            except (OSError, UserError) as exc:
+                self.outputs_error = str(exc)
+                return
         try:
             out = open_outputs(self.ctx.profile, self.ctx.pm, fast=self.fast)
         except Exception as exc:  # shown in the bar; the console stays usable
@@ -269,12 +276,6 @@ class HapTableApp(App):
         with self._lock:
             self.outputs = out
             self.outputs_error = ""
-        if self._control is not None:
-            return
-        try:
-            self._control = ControlServer(self.ctx.profile, self._control_command)
-        except OSError as exc:
-            self.outputs_error = str(exc)
 
     def hand_over_outputs(self, borrower: str) -> None:
         """Close the console's outputs for ``borrower`` (a demo process opens them: a

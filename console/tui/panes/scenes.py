@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import threading
 from pathlib import Path
 
@@ -64,9 +63,11 @@ def status_text(st: dict | None) -> str:
 
 def twin_log_path(name: str) -> Path:
     """Where a demo process writes what the twin's outputs received (``.json`` bursts and
-    relay switches, ``.npz`` samples: ``console.runtime.twin_log``); the next run of the
-    same demo overwrites it."""
-    return Path(tempfile.gettempdir()) / f"haptable-demo-{os.getpid()}-{name}.json"
+    relay switches, ``.npz`` samples: ``console.runtime.twin_log``): the private runtime
+    directory; the next run of the same demo overwrites it."""
+    from console.runtime.private_dir import runtime_dir
+
+    return runtime_dir() / f"demo-{os.getpid()}-{name}.json"
 
 
 def _ms(v) -> str:
