@@ -20,6 +20,7 @@ class Context:
         self.profile_arg = profile_arg
         self.pm = plugins
         self._remote_stops: list = []
+        self.estop_first: tuple[list, str] | None = None  # `haptable estop`'s early reach
 
     @property
     def estopped_by(self) -> str | None:
@@ -82,11 +83,38 @@ def build_parser(plugins) -> argparse.ArgumentParser:
     return parser
 
 
+def estop_first(argv: list[str]) -> tuple[list, str] | None:
+    """For `haptable estop`: reach every process holding outputs before the plugins load
+    (an e-stop must not wait for imports). None for any other command, or arguments the
+    full parser must judge."""
+    if "-h" in argv or "--help" in argv:
+        return None
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--profile", "-p")
+    pre.add_argument("--verbose", "-v", action="store_true")
+    pre.add_argument("command", nargs="?")
+    pre.add_argument("--timeout", type=float, default=2.0)
+    pre.add_argument("--json", action="store_true")
+    try:
+        known, rest = pre.parse_known_args(argv)
+    except (SystemExit, ValueError):
+        return None
+    if known.command != "estop" or rest or not 0.01 <= known.timeout <= 60:
+        return None
+    try:
+        from console.runtime.outputs_registry import estop_or_refusal
+
+        return estop_or_refusal(known.timeout)
+    except Exception:  # the command's own run tries again and reports
+        return None
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
     ctx = None
     try:
+        early = estop_first(argv)
         from console.plugins import load_plugins
 
         plugins = load_plugins()
@@ -97,6 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         command = args.command or "console"
         ctx = Context(getattr(args, "profile_sub", None) or args.profile, plugins)
+        ctx.estop_first = early
         if command == "console" and args.command is None:
             args = parser.parse_args([*argv, "console"])
         code = int(plugins.commands[command].run(args, ctx) or 0)

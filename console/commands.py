@@ -251,11 +251,10 @@ def run_estop(args, ctx) -> int:
     import threading
 
     from console.runtime.control import send_command
-    from console.runtime.outputs_registry import estop_everywhere
+    from console.runtime.outputs_registry import estop_or_refusal
 
-    if not 0 < args.timeout <= 60:
+    if not 0.01 <= args.timeout <= 60:
         raise UserError(f"--timeout {args.timeout:g}: give seconds from 0.01 to 60")
-    refused = ""
     console: dict[str, str | None] = {}
 
     def tell_console() -> None:
@@ -266,10 +265,9 @@ def run_estop(args, ctx) -> int:
 
     th = threading.Thread(target=tell_console, daemon=True)
     th.start()
-    try:
-        reached = estop_everywhere(timeout_s=args.timeout)
-    except UserError as exc:  # the runtime directory is refused: say so, still open relays
-        reached, refused = [], str(exc)
+    # the processes first: `haptable estop` did it before loading the plugins (cli.main)
+    early = getattr(ctx, "estop_first", None)
+    reached, refused = early if early is not None else estop_or_refusal(args.timeout)
     th.join(args.timeout + 0.5)
     relays = _open_relays_here(ctx)
     live = [r for r in reached if not r.stale]

@@ -239,6 +239,17 @@ def estop_everywhere(timeout_s: float = 2.0) -> list[Reached]:
     return sorted(out, key=lambda r: r.pid)
 
 
+def estop_or_refusal(timeout_s: float) -> tuple[list[Reached], str]:
+    """``estop_everywhere``, or no results and the one-line reason the runtime directory
+    was refused (the caller still opens what it can)."""
+    from console.errors import UserError
+
+    try:
+        return estop_everywhere(timeout_s), ""
+    except UserError as exc:
+        return [], str(exc)
+
+
 # ---------------------------------------------------------------------- a CLI command
 class RemoteStop:
     """Ends a CLI command whose outputs another process e-stopped: ``KeyboardInterrupt``
