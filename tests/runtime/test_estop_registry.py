@@ -488,15 +488,14 @@ def test_a_planted_symlink_at_a_twin_log_is_refused_not_followed(outputs, tmp_pa
     assert victim.read_text() == "keep"
 
 
-def test_a_cli_twin_log_through_a_symlink_is_one_line_and_the_target_kept(tmp_path, capsys):
+def test_a_cli_twin_log_through_a_symlink_is_one_line_and_the_target_kept(
+    tmp_path, capsys, monkeypatch
+):
     victim = tmp_path / "victim"
     victim.write_text("keep")
     (tmp_path / "twin.json").symlink_to(victim)
-    os.environ["HAPTABLE_TWIN_LOG"] = str(tmp_path / "twin.json")
-    try:
-        assert main(["play", "sine-PA", "--fast"]) == 0
-    finally:
-        del os.environ["HAPTABLE_TWIN_LOG"]
+    monkeypatch.setenv("HAPTABLE_TWIN_LOG", str(tmp_path / "twin.json"))
+    assert main(["play", "sine-PA", "--fast"]) == 0
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "is a symlink; refusing" in err, err
     assert victim.read_text() == "keep"
