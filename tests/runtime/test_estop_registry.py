@@ -104,8 +104,8 @@ def _registered(pid: int) -> bool:
 def _silent_after_estop(log_json: Path) -> tuple[int, float]:
     """(e-stop clock, peak before it) from a twin log; asserts nothing plays after it."""
     data = json.loads(log_json.read_text())
-    stops = [e for e in data["events"] if e["kind"] == "estop"]
-    assert stops and stops[0]["message"].startswith("haptable estop (pid "), data["events"]
+    stops = [e for e in data["gate_events"] if e["kind"] == "estop"]
+    assert stops and stops[0]["message"].startswith("haptable estop (pid "), data["gate_events"]
     clock = stops[0]["clock"]
     rec = np.load(log_json.with_suffix(".npz"))["recording_v"]
     assert rec.shape[0] > clock, "the twin recorded past the e-stop"
