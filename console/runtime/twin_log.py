@@ -138,7 +138,7 @@ def write_env_twin_log(outputs) -> Path | None:
     try:
         return write_twin_log(path, outputs, [])
     except Exception as exc:
-        print(f"haptable: twin log {path}: {exc}", file=sys.stderr)
+        print(f"haptable: twin log: {exc}", file=sys.stderr)
         return None
 
 
