@@ -164,7 +164,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _estopped(reason: str) -> int:
-    print(f"haptable: e-stopped by {reason}; outputs silent, relays open", file=sys.stderr)
+    print(
+        f"haptable: e-stopped by {reason}; the command stopped, its outputs closed", file=sys.stderr
+    )
     return EStopped.EXIT_CODE
 
 
