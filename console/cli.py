@@ -109,6 +109,13 @@ def estop_first(argv: list[str]) -> tuple[list, str] | None:
         return None
 
 
+def one_line(message: str) -> str:
+    """An error message as one line: line breaks and other control characters (from
+    a file's keys or values quoted in it) are escaped, a runaway message is cut."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+    return text if len(text) <= 2000 else text[:2000] + " ..."
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
@@ -137,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as exc:
         if ctx is not None and ctx.estopped_by:  # what the e-stop made fail
             return _estopped(ctx.estopped_by)
-        print(f"haptable: error: {exc}", file=sys.stderr)
+        print(f"haptable: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if ctx is not None and ctx.estopped_by:

@@ -146,10 +146,20 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             "url": Field("str", "usb", help="yoctopuce hub: 'usb' or a VirtualHub URL"),
             "channels": Field("int", 8, min=1, max=64),
             "switch_time_ms": Field(
-                "float", 2.0, min=0, max=1000, help="time for a contact to settle after a command"
+                "float",
+                2.0,
+                min=0.1,
+                max=1000,
+                help="time for a contact to settle after a command (no relay settles in under "
+                "0.1 ms: solid-state PhotoMOS 0.1-3 ms, reed ~0.5 ms, mechanical 5-15 ms)",
             ),
             "guard_ms": Field(
-                "float", 5.0, min=0, max=1000, help="silence required before and after any switch"
+                "float",
+                5.0,
+                min=1.0,
+                max=1000,
+                help="silence required before and after any switch; at least switch_time_ms "
+                "and one audio block (the gate sees the driver's samples a block at a time)",
             ),
             "rating_vpp": Field("float", 350.0, min=1, max=5000, help="contact rating"),
             "current_rating_ma": Field(
@@ -297,8 +307,12 @@ def check_consistency(profile: Profile) -> None:
                 f"used by [{used[p['relay_channel']]}]; give each output its own channel",
             )
     missing = [n for n in PATCHES if n not in patches]
-    if patches and missing:
-        _fail(profile, f"[patches] missing {', '.join(missing)}: PALL needs all four patches")
+    if missing:
+        _fail(
+            profile,
+            f"[patches] missing {', '.join(f'[patches.{n}]' for n in missing)}: every "
+            "excitation needs its patch; add each with center_mm and relay_channel",
+        )
     sc = profile.get("screen.relay_channel")
     if sc in used:
         _fail(profile, f"[screen] relay_channel = {sc}: already used by [{used[sc]}]")
@@ -309,6 +323,7 @@ def check_consistency(profile: Profile) -> None:
                 f"[{who}] relay_channel = {ch}: the board has {channels} channels "
                 f"([relays] channels)",
             )
+    _check_guard(profile)
     rating = profile.get("relays.rating_vpp")
     lo, hi = profile.get("limits.piezo_min_v"), profile.get("limits.piezo_max_v")
     if hi - lo > rating:
@@ -332,4 +347,24 @@ def check_consistency(profile: Profile) -> None:
             profile,
             f"[grid] the grid reaches ({gx1:g}, {gy1:g}) mm, beyond the {w} x {h} "
             f"mm glass; fix origin_mm, pitch_mm, rows or columns",
+        )
+
+
+def _check_guard(profile: Profile) -> None:
+    """The relay guard covers the contact's settling time and one audio block."""
+    guard, switch = profile.get("relays.guard_ms"), profile.get("relays.switch_time_ms")
+    if guard < switch:
+        _fail(
+            profile,
+            f"[relays] guard_ms = {guard:g} is shorter than switch_time_ms = {switch:g}: "
+            "the contact would still move in signal; make guard_ms at least switch_time_ms",
+        )
+    fs, block = profile.get("audio.sample_rate_hz"), profile.get("audio.block_size")
+    block_ms = 1e3 * block / fs
+    if guard < block_ms:
+        _fail(
+            profile,
+            f"[relays] guard_ms = {guard:g} is shorter than one audio block ([audio] "
+            f"block_size = {block} at {fs} Hz = {block_ms:.3g} ms): the gate cannot see that "
+            "much silence; raise guard_ms or lower block_size",
         )

@@ -22,6 +22,8 @@ if TYPE_CHECKING:
     from console.plugins import Plugins
 
 DEFAULT_PROFILE = "sim"
+#: A profile is a page of settings; anything larger is refused before it is read.
+MAX_PROFILE_BYTES = 1024 * 1024
 PROJECT_PROFILES = Path(__file__).resolve().parent.parent / "profiles"
 
 
@@ -93,17 +95,25 @@ def _where(path: Path) -> str:
 
 def _fmt(value: Any) -> str:
     if isinstance(value, str):
-        return f'"{value}"'
+        return '"' + _printable(value) + '"'
     if isinstance(value, bool):
         return "true" if value else "false"
-    return repr(value)
+    text = repr(value)
+    return text if len(text) <= 80 else text[:60] + f"... ({len(text)} characters)"
+
+
+def _printable(name: str) -> str:
+    """A key, section or string value as it can be shown on one line (control and
+    invisible characters escaped, as Python writes them)."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in name)
 
 
 def _validate_table(
     where: str, label: str, table: Any, fields: dict[str, Field], base: Path
 ) -> dict[str, Any]:
+    label = _printable(label)
     if not isinstance(table, dict):
-        raise ProfileError(f"{where}: [{label}] must be a table, got {_fmt(table)}")
+        raise ProfileError(f"{where}: [{_printable(label)}] must be a table, got {_fmt(table)}")
     out: dict[str, Any] = {}
     for key, value in table.items():
         if key not in fields:
@@ -146,7 +156,7 @@ def validate(raw: dict[str, Any], path: Path, plugins: Plugins) -> dict[str, Any
         if name not in sections:
             guess = difflib.get_close_matches(name, list(sections), n=1)
             hint = f"did you mean [{guess[0]}]?" if guess else "no loaded plugin declares it"
-            raise ProfileError(f"{where}: unknown section [{name}] ({hint})")
+            raise ProfileError(f"{where}: unknown section [{_printable(name)}] ({hint})")
         fields, per_item, _help, _owner = sections[name]
         if per_item:
             if not isinstance(table, dict):
@@ -185,6 +195,44 @@ def check_drivers(profile: Profile, plugins: Plugins) -> None:
             )
 
 
+def parse_toml(path: Path) -> dict[str, Any]:
+    """The profile file's TOML, refused with one line when too large, not UTF-8, not
+    TOML or nested too deeply."""
+    where = _where(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_PROFILE_BYTES:
+            raise ProfileError(
+                f"{where}: {size / 1e6:.1f} MB is too large for a profile (at most "
+                f"{MAX_PROFILE_BYTES / 1e6:.1f} MB); give the profile's .toml, not another file"
+            )
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ProfileError(f"{where}: cannot read: {exc.strerror or exc}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise ProfileError(
+            f"{where}: not UTF-8 text (byte {data[exc.start]:#04x} on line {line}); "
+            "save the profile as UTF-8"
+        ) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProfileError(f"{where}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ProfileError(
+            f"{where}: arrays or tables nested too deeply to read; a profile needs at most "
+            "two levels ([section] and [section.item])"
+        ) from None
+    except ValueError as exc:  # e.g. an integer beyond Python's digit limit
+        raise ProfileError(
+            f"{where}: a value TOML allows but no setting can hold "
+            f"({str(exc).split(';')[0]}); write it as a short number"
+        ) from None
+
+
 def load_profile(
     name_or_path: str | os.PathLike | None = None, plugins: Plugins | None = None
 ) -> Profile:
@@ -194,12 +242,7 @@ def load_profile(
 
         plugins = load_plugins()
     path = find_profile(name_or_path)
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ProfileError(f"{_where(path)}: not valid TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProfileError(f"{_where(path)}: cannot read: {exc}") from None
+    raw = parse_toml(path)
     profile = Profile(name=path.stem, path=path, data=validate(raw, path, plugins))
     check_drivers(profile, plugins)
     from console.core_plugin import check_consistency

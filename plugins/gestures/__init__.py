@@ -278,10 +278,9 @@ def _calibrate(args, ctx, profile) -> int:
 
 
 def _profile(ctx):
-    try:
-        return ctx.profile
-    except Exception:  # a command on a dataset must not need a valid profile
-        return None
+    """The profile, or None for a caller without one; a profile given but broken is
+    refused (its line names the file), never silently replaced by defaults."""
+    return getattr(ctx, "profile", None)
 
 
 def _get(profile, key, default):

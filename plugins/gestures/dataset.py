@@ -23,6 +23,8 @@ from __future__ import annotations
 import json
 import math
 import re
+import stat
+import struct
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +48,11 @@ REQUIRED_KEYS = {
     "fps": "frames per second, e.g. 60",
 }
 JSON_EXAMPLE = '{"subject": "s1", "gesture": "<gesture>", "hand": "right", "fps": 60}'
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+MAX_FRAME_PX = 8192 * 8192  # the largest camera frame a profile allows ([camera])
+MAX_PNG_BYTES = 256 * 1024 * 1024
+MAX_JSON_BYTES = 16 * 1024 * 1024
+MAX_FPS = 10000.0
 
 
 def kind_of(gesture: str) -> str:
@@ -102,12 +109,7 @@ class Sample:
         p = self.path / "truth.json"
         if not p.is_file():
             return None
-        try:
-            return json.loads(p.read_text())
-        except (OSError, ValueError) as exc:
-            raise UserError(
-                f"{self._where(p)}: not valid JSON ({exc}); delete or rewrite it"
-            ) from None
+        return read_json(p, self._where(p), "delete or rewrite it")
 
     def _where(self, p: Path) -> str:
         return _show(p)
@@ -124,11 +126,21 @@ def read_png(
     import cv2
 
     where = where or str(path)
-    try:
-        data = np.fromfile(path, dtype=np.uint8)
-    except OSError as exc:
-        raise UserError(f"{where}: cannot read ({exc.strerror}); check the file") from None
-    img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    data = _read_bytes(Path(path), where, MAX_PNG_BYTES, "frame")
+    if not data.size:
+        raise UserError(f"{where}: empty file (0 bytes); record or export the frame again")
+    width, height = png_size(data[:33].tobytes(), where)
+    if size_px is not None and (width, height) != tuple(size_px):
+        raise UserError(
+            f"{where}: {width} x {height} px; expected {size_px[0]} x {size_px[1]} px "
+            "(the camera's frame size)"
+        )
+    if width * height > MAX_FRAME_PX:
+        raise UserError(
+            f"{where}: {width} x {height} px is larger than any camera frame (at most "
+            f"{MAX_FRAME_PX} pixels); not decoding it"
+        )
+    img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
     if img is None:
         raise UserError(f"{where}: not a readable PNG image; re-export it as 8-bit greyscale PNG")
     if img.ndim != 2:
@@ -147,6 +159,50 @@ def read_png(
             f"{size_px[0]} x {size_px[1]} px (the camera's frame size)"
         )
     return img
+
+
+def png_size(head: bytes, where: str) -> tuple[int, int]:
+    """(width, height) from a PNG's signature and IHDR chunk, without decoding it."""
+    if not head.startswith(PNG_SIGNATURE):
+        raise UserError(
+            f"{where}: not a PNG file (it starts with {head[:8]!r}); save frames as 8-bit "
+            "greyscale PNG"
+        )
+    if len(head) < 24 or head[12:16] != b"IHDR":
+        raise UserError(f"{where}: a PNG without its header (IHDR); export the frame again")
+    width, height = struct.unpack(">II", head[16:24])
+    return width, height
+
+
+def _read_bytes(path: Path, where: str, max_bytes: int, what: str) -> np.ndarray:
+    """A regular file's bytes, refused (one line) when it is not a regular file or
+    is larger than ``max_bytes``."""
+    try:
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
+            raise UserError(f"{where}: not a regular file; the {what} must be a file")
+        if st.st_size > max_bytes:
+            raise UserError(
+                f"{where}: {st.st_size / 1e6:.0f} MB is too large for a {what} "
+                f"(at most {max_bytes / 1e6:.0f} MB)"
+            )
+        return np.fromfile(path, dtype=np.uint8)
+    except OSError as exc:
+        raise UserError(f"{where}: cannot read ({exc.strerror or exc}); check the file") from None
+
+
+def read_json(path: Path, where: str, fix: str) -> Any:
+    """A small JSON file, or a one-line UserError (too large, not UTF-8, malformed,
+    nested too deeply) ending with ``fix``."""
+    data = _read_bytes(path, where, MAX_JSON_BYTES, "JSON file").tobytes()
+    try:
+        return json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise UserError(f"{where}: not UTF-8 text; {fix}") from None
+    except json.JSONDecodeError as exc:
+        raise UserError(f"{where}: malformed JSON (line {exc.lineno}: {exc.msg}); {fix}") from None
+    except RecursionError:
+        raise UserError(f"{where}: JSON nested too deeply to read; {fix}") from None
 
 
 def write_png(path: str | Path, img: np.ndarray) -> None:
@@ -177,17 +233,7 @@ def _read_meta(folder: Path, where: str) -> dict[str, Any]:
     p = folder / "sample.json"
     if not p.is_file():
         raise UserError(f"{where}: no sample.json; add one like {JSON_EXAMPLE}")
-    try:
-        meta = json.loads(p.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise UserError(
-            f"{where}/sample.json: not UTF-8 text; rewrite it as JSON like {JSON_EXAMPLE}"
-        ) from None
-    except json.JSONDecodeError as exc:
-        raise UserError(
-            f"{where}/sample.json: malformed JSON (line {exc.lineno}: {exc.msg}); "
-            f"it should look like {JSON_EXAMPLE}"
-        ) from None
+    meta = read_json(p, f"{where}/sample.json", f"it should look like {JSON_EXAMPLE}")
     if not isinstance(meta, dict):
         raise UserError(
             f"{where}/sample.json: holds a {type(meta).__name__}, not an object; "
@@ -217,9 +263,10 @@ def read_sample(folder: str | Path, root: str | Path | None = None) -> Sample:
             f"{where}/sample.json: gesture {gesture!r} but the sample is in the "
             f"{folder.parent.name!r} folder; move it or fix the label"
         )
-    if not isinstance(subject, str) or not subject.strip():
+    if not isinstance(subject, str) or not subject.strip() or not subject.isprintable():
         raise UserError(
-            f"{where}/sample.json: subject {subject!r} must be a non-empty string like 's1'"
+            f"{where}/sample.json: subject {subject!r} must be a non-empty one-line string "
+            "like 's1'"
         )
     if hand not in HANDS:
         raise UserError(f"{where}/sample.json: hand {hand!r} must be 'left' or 'right'")
@@ -227,9 +274,12 @@ def read_sample(folder: str | Path, root: str | Path | None = None) -> Sample:
         isinstance(fps, bool)
         or not isinstance(fps, (int, float))
         or not math.isfinite(fps)
-        or fps <= 0
+        or not 0 < fps <= MAX_FPS
     ):
-        raise UserError(f"{where}/sample.json: fps {fps!r} must be a positive number, e.g. 60")
+        raise UserError(
+            f"{where}/sample.json: fps {fps!r} must be a number above 0 and at most "
+            f"{MAX_FPS:g}, e.g. 60"
+        )
     numbered = []
     for p in folder.iterdir():
         m = FRAME_RE.match(p.name)

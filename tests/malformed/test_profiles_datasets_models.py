@@ -862,4 +862,4 @@ def test_extreme_frames_through_the_live_classifier(name, fx):
     g = clf.classify(frames)
     assert g is None or g.name in GESTURES
     res = clf.process(Frame(frame.copy(), 9, 9 / 60))
-    assert isinstance(res.hands, list)
+    assert isinstance(res.hands, tuple)
