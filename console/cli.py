@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import math
 import os
 import sys
 from collections.abc import Iterator
@@ -107,6 +108,14 @@ def estop_first(argv: list[str]) -> tuple[list, str] | None:
         return estop_or_refusal(known.timeout)
     except Exception:  # the command's own run tries again and reports
         return None
+
+
+def seconds_option(value: float | None, flag: str) -> float | None:
+    """A duration option (``--seconds``, ``--minutes``, ...) checked: finite and not
+    negative (``None``: not given); else a one-line ``UserError``."""
+    if value is not None and not (math.isfinite(value) and value >= 0):
+        raise UserError(f"{flag} {value!r}: give a finite time, 0 or more")
+    return value
 
 
 def one_line(message: str) -> str:

@@ -215,7 +215,11 @@ def run_play(args, ctx) -> int:
         for name, (desc, _) in STIMULI.items():
             print(f"  {name:<14} {desc}")
         return 0 if args.list else 2
-    plan = make_stimulus(args.name, int(ctx.profile.get("audio.sample_rate_hz")))
+    plan = make_stimulus(
+        args.name,
+        int(ctx.profile.get("audio.sample_rate_hz")),
+        float(ctx.profile.get("limits.max_plan_s")),
+    )
     return play_and_report(ctx, plan, fast=args.fast, out=args.out, dry_run=args.dry_run)
 
 

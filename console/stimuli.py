@@ -7,7 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from console.errors import UserError
-from console.signals import linear_chirp, tone
+from console.signals import MAX_PLAN_S, check_duration, linear_chirp, tone
 from console.types import PATCHES, OutputPlan, Segment, patches_of
 
 
@@ -55,11 +55,24 @@ STIMULI: dict[str, tuple[str, Callable[[int], OutputPlan]]] = {
 }
 
 
-def make_stimulus(name: str, fs: int) -> OutputPlan:
+#: Each stimulus's length in seconds, checked against ``[limits] max_plan_s`` before
+#: its arrays are built.
+DURATION_S: dict[str, float] = {
+    **{f"sine-{e}": 1.0 for e in (*PATCHES, "PALL")},
+    "screen-180hz": 1.0,
+    "sweep": 3.0,
+    "relay-walk": 0.3 * (len(PATCHES) + 1),
+}
+
+
+def make_stimulus(name: str, fs: int, max_s: float = MAX_PLAN_S) -> OutputPlan:
+    """The named stimulus at ``fs``, refused before it is built when longer than
+    ``max_s`` (the profile's ``[limits] max_plan_s``)."""
     if name not in STIMULI:
         import difflib
 
         guess = difflib.get_close_matches(name, list(STIMULI), n=1)
         hint = f"did you mean {guess[0]!r}? " if guess else ""
         raise UserError(f"no test stimulus {name!r}; {hint}available: {', '.join(STIMULI)}")
+    check_duration(DURATION_S[name], max_s, f"play {name}")
     return STIMULI[name][1](fs)

@@ -52,6 +52,10 @@ def _progress(done: int, total: int, what: str) -> None:
 
 
 def run(args, ctx) -> int:
+    from console.cli import seconds_option
+
+    seconds_option(args.seconds, "--seconds")
+    seconds_option(args.minutes, "--minutes")
     if args.demo == "soak":
         from .bench import run_soak
 

@@ -288,6 +288,9 @@ def _run_live(
 
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
+    from console.cli import seconds_option
+
+    seconds_option(args.max_time, "--max-time")
     if args.forces:
         return _forces(args, ctx)
     if args.audition:

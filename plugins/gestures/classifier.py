@@ -49,7 +49,11 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
     times: list[float] = []
     t0 = time.perf_counter()
     recs = sample_records(frames, bg, params, times)
-    name, kind, conf, score = decide(model, recs)
+    seen = sum(r is not None for r in recs)
+    if seen:
+        name, kind, conf, score = decide(model, recs)
+    else:  # a blinded, covered or empty camera: no hand, nothing to classify
+        name, kind, conf, score = "none", "none", 0.0, 0.0
     total = time.perf_counter() - t0
     return {
         "sample": str(folder),
@@ -59,6 +63,7 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
         "motion_score": score,
         "motion_threshold": model.motion_threshold,
         "frames_used": len(frames),
+        "hands_seen": seen,
         "frame_ms_max": 1e3 * max(times) if times else None,
         "decision_ms": 1e3 * total,
         "label": s.gesture,

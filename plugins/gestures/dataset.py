@@ -165,8 +165,8 @@ def png_size(head: bytes, where: str) -> tuple[int, int]:
     """(width, height) from a PNG's signature and IHDR chunk, without decoding it."""
     if not head.startswith(PNG_SIGNATURE):
         raise UserError(
-            f"{where}: not a PNG file (it starts with {head[:8]!r}); save frames as 8-bit "
-            "greyscale PNG"
+            f"{where}: not a readable PNG image (it starts with {head[:8]!r}); save frames "
+            "as 8-bit greyscale PNG"
         )
     if len(head) < 24 or head[12:16] != b"IHDR":
         raise UserError(f"{where}: a PNG without its header (IHDR); export the frame again")
@@ -265,7 +265,7 @@ def read_sample(folder: str | Path, root: str | Path | None = None) -> Sample:
         )
     if not isinstance(subject, str) or not subject.strip() or not subject.isprintable():
         raise UserError(
-            f"{where}/sample.json: subject {subject!r} must be a non-empty one-line string "
+            f"{where}/sample.json: subject {subject!r} must be a non-empty string on one line "
             "like 's1'"
         )
     if hand not in HANDS:
@@ -277,8 +277,7 @@ def read_sample(folder: str | Path, root: str | Path | None = None) -> Sample:
         or not 0 < fps <= MAX_FPS
     ):
         raise UserError(
-            f"{where}/sample.json: fps {fps!r} must be a number above 0 and at most "
-            f"{MAX_FPS:g}, e.g. 60"
+            f"{where}/sample.json: fps {fps!r} must be a positive number up to {MAX_FPS:g}, e.g. 60"
         )
     numbered = []
     for p in folder.iterdir():

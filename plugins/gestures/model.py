@@ -48,12 +48,46 @@ TRUSTED_TYPES = (
 )
 
 
+#: Size limits checked from the zip's directory before anything is read (a model is a
+#: few hundred kB; a zip bomb declares gigabytes).
+MAX_MODEL_BYTES = 64 * 1024 * 1024
+MAX_SCHEMA_BYTES = 16 * 1024 * 1024
+MAX_UNPACKED_BYTES = 256 * 1024 * 1024
+
+
+def read_schema(path: Path) -> dict:
+    """A skops file's ``schema.json``, after checking the file's and its members'
+    declared sizes; ``ValueError`` (with what is wrong) if it cannot be used."""
+    size = path.stat().st_size
+    if size > MAX_MODEL_BYTES:
+        raise ValueError(f"{size / 1e6:.0f} MB, more than a model's {MAX_MODEL_BYTES / 1e6:.0f} MB")
+    with zipfile.ZipFile(path) as z:
+        infos = {i.filename: i for i in z.infolist()}
+        if "schema.json" not in infos:
+            raise ValueError("no schema.json inside")
+        unpacked = sum(i.file_size for i in infos.values())
+        if infos["schema.json"].file_size > MAX_SCHEMA_BYTES or unpacked > MAX_UNPACKED_BYTES:
+            raise ValueError(
+                f"it unpacks to {unpacked / 1e6:.0f} MB (schema.json "
+                f"{infos['schema.json'].file_size / 1e6:.0f} MB), far more than a model's few MB"
+            )
+        raw = z.read("schema.json")
+    try:
+        schema = json.loads(raw)
+    except RecursionError:
+        raise ValueError("schema.json nested too deeply") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"schema.json is not JSON: {e}") from None
+    if not isinstance(schema, dict):
+        raise ValueError("schema.json is not an object")
+    return schema
+
+
 def file_types(path: Path) -> set[str]:
     """Every type (``module.Class``) a skops file would build, read from its schema
     without building anything (skops itself trusts scikit-learn types by default; this
     allow-list is stricter)."""
-    with zipfile.ZipFile(path) as z:
-        schema = json.loads(z.read("schema.json"))
+    schema = read_schema(path)
     out: set[str] = set()
     stack = [schema]
     while stack:
@@ -72,9 +106,7 @@ def read_settings(path: str | Path) -> dict:
     without building (or importing) anything; a one-line ``UserError`` if unreadable."""
     p = Path(path)
     try:
-        with zipfile.ZipFile(p) as z:
-            schema = json.loads(z.read("schema.json"))
-        content = schema["content"]
+        content = read_schema(p)["content"]
         if json.loads(content["format"]["content"]) != MODEL_FORMAT:
             raise ValueError(f"not a {MODEL_FORMAT} model")
         return json.loads(json.loads(content["settings"]["content"]))
@@ -239,7 +271,10 @@ class GestureModel:
         return p
 
     @classmethod
-    def load(cls, path: str | Path) -> GestureModel:
+    def load(cls, path: str | Path, *, check_features: bool = True) -> GestureModel:
+        """Load a saved model: types against the allow-list, settings, every
+        classifier's arrays, and (``check_features``) their widths against the features
+        the vision pipeline makes; a one-line ``UserError`` for anything wrong."""
         import skops.io as sio
 
         p = Path(path)
@@ -249,6 +284,8 @@ class GestureModel:
             found = file_types(p)
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
             raise UserError(f"{p}: not a skops gesture model ({e}); train it again") from None
+        except RecursionError:
+            raise UserError(f"{p}: skops schema nested too deeply; train it again") from None
         bad = sorted(found - set(TRUSTED_TYPES))
         if bad:
             raise UserError(
@@ -261,14 +298,23 @@ class GestureModel:
             raise UserError(f"{p}: cannot load the gesture model ({e}); train it again") from None
         if not isinstance(obj, dict) or obj.get("format") != MODEL_FORMAT:
             raise UserError(f"{p}: not a {MODEL_FORMAT} model; train it again")
-        s = json.loads(obj["settings"])
-        return cls(
-            obj["static_svm"],
-            obj["dynamic_svm"],
-            obj.get("kind_svm"),
-            float(s["motion_threshold"]),
-            int(s["n_harmonics"]),
-            int(s["n_frames"]),
-            int(s["static_frames"]),
-            dict(s.get("meta", {})),
+        from .model_checks import check_classifiers, check_settings
+
+        s = check_settings(obj.get("settings"), p)
+        svms = {k: obj.get(k) for k in ("static_svm", "dynamic_svm", "kind_svm")}
+        check_classifiers(svms, p)
+        model = cls(
+            svms["static_svm"],
+            svms["dynamic_svm"],
+            svms["kind_svm"],
+            s["motion_threshold"],
+            s["n_harmonics"],
+            s["n_frames"],
+            s["static_frames"],
+            s["meta"],
         )
+        if check_features:
+            from .model_checks import check_widths
+
+            check_widths(model, p)
+        return model

@@ -54,6 +54,9 @@ class VisionParams:
     highpass_sigma_px: float = 6.0
     smooth_px: int = 5
     min_hand_area_px: int = 600
+    # a blob over this fraction of the frame is no hand (a hand is ~5 % of the table's
+    # view) but a blinded, covered or saturated camera
+    max_hand_fraction: float = 0.5
     min_contact_area_px: int = 3
     max_contact_area_px: int = 2500
     max_contact_size_px: int = 45
@@ -424,7 +427,11 @@ _DISK5 = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 # --------------------------------------------------------------------------- geometry
 def palm(mask: np.ndarray) -> tuple[tuple[float, float], float]:
     """Palm centre and radius: the maximum of the distance transform inside ``mask``."""
-    d = cv2.distanceTransform(mask, cv2.DIST_L2, 3)
+    if cv2.countNonZero(mask) == mask.size:  # no edge inside: the image's border is it
+        mask = cv2.copyMakeBorder(mask, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
+        d = cv2.distanceTransform(mask, cv2.DIST_L2, 3)[1:-1, 1:-1]
+    else:
+        d = cv2.distanceTransform(mask, cv2.DIST_L2, 3)
     _, r, _, loc = cv2.minMaxLoc(d)
     return (float(loc[0]), float(loc[1])), float(r)
 
@@ -883,8 +890,9 @@ def process_frame(
             body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
         )
     found = []
+    max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
     for c in contours:
-        if cv2.contourArea(c) < p.min_hand_area_px:
+        if not p.min_hand_area_px <= cv2.contourArea(c) <= max_area:
             continue
         got = analyse_hand(c, body, p, diff, contacts, to_mm)
         if got is not None:

@@ -72,8 +72,11 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 
 def run(args, ctx) -> int:
+    from console.cli import seconds_option
     from console.errors import UserError
     from console.runtime.stages import open_camera, vision_loop
+
+    seconds_option(args.seconds, "--seconds")
 
     sender = make_sender(ctx.profile, host=args.host, port=args.port, force=True)
     camera = open_camera(ctx.profile, ctx.pm)

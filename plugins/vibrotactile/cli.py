@@ -48,7 +48,11 @@ def piezo_limits(ctx) -> dict:
     from console.safety import Limits
 
     lo, hi = Limits.from_profile(ctx.profile).piezo_range()
-    return {"piezo_min_v": lo, "piezo_max_v": hi}
+    return {
+        "piezo_min_v": lo,
+        "piezo_max_v": hi,
+        "max_plan_s": float(ctx.profile.get("limits.max_plan_s")),
+    }
 
 
 def perception_of(ctx):

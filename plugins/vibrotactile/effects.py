@@ -48,6 +48,7 @@ class Setup:
     min_contrast_db: float
     cache_dir: Path | None
     hand: dict = field(default_factory=dict)  # hand_mm, squares, subgrid
+    max_plan_s: float = 3600.0  # [limits] max_plan_s: longer plans are refused unbuilt
 
     @property
     def cap_v(self) -> float:
@@ -57,7 +58,11 @@ class Setup:
 
     @property
     def limits(self) -> dict:
-        return {"piezo_min_v": self.piezo_min_v, "piezo_max_v": self.piezo_max_v}
+        return {
+            "piezo_min_v": self.piezo_min_v,
+            "piezo_max_v": self.piezo_max_v,
+            "max_plan_s": self.max_plan_s,
+        }
 
 
 def setup_from_profile(profile: Any) -> Setup:
@@ -96,6 +101,7 @@ def setup_from_profile(profile: Any) -> Setup:
             "squares": int(vt["hand_squares"]),
             "subgrid": int(vt["hand_subgrid"]),
         },
+        max_plan_s=float(profile.get("limits.max_plan_s")),
     )
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from console.errors import UserError
+from console.signals import MAX_PLAN_S, check_duration, plan_samples
 from console.types import OutputPlan, Segment, patches_of
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import Tables, query_indices, usable_bins
@@ -51,7 +52,7 @@ def tone_segment(
     label: str = "",
 ) -> Segment:
     """Sine at ``freq_hz`` with linear ramps: exactly 0 V at the first and last sample."""
-    n = int(round(duration_s * sample_rate_hz))
+    n = plan_samples(duration_s, sample_rate_hz, what=label or "tone")
     nr = max(1, int(round(ramp_s * sample_rate_hz)))
     if n < 2 * nr + 1:
         raise UserError(
@@ -132,9 +133,11 @@ def flow_plan(
     *,
     piezo_min_v: float = -100.0,
     piezo_max_v: float = 250.0,
+    max_plan_s: float = MAX_PLAN_S,
     name: str = "",
 ) -> OutputPlan:
-    """Two-part flow from ``a`` to ``b`` (paper Fig. 9), equal sensation level in both parts."""
+    """Two-part flow from ``a`` to ``b`` (paper Fig. 9), equal sensation level in both
+    parts; refused before its arrays are built when longer than ``max_plan_s``."""
     parts = [_choice(t, a, b, settings.interpolation), _choice(t, b, a, settings.interpolation)]
     cap = drive_cap_v(settings, piezo_min_v, piezo_max_v)
     for p in parts:
@@ -146,6 +149,13 @@ def flow_plan(
         p["threshold_db"] = float(perception.threshold_db(p["frequency_hz"], "fingertip"))
         p["max_sl_db"] = float(20 * np.log10(p["active_um_per_v"] * cap) - p["threshold_db"])
     sl = min(settings.sensation_level_db, *(p["max_sl_db"] for p in parts))
+    gap = gap_after_part_1(t.vmap, parts[0], settings, t.band_hz)
+    why = ""
+    if "ringdown" in gap:
+        why = f" (ring-down gap of ringdown_gap_k = {settings.ringdown_gap_k:g} decay times)"
+    check_duration(
+        2 * settings.part_s + gap["gap_s"], max_plan_s, f"{name or 'flow'}: parts and gap{why}"
+    )
     segs = []
     for i, p in enumerate(parts):
         amp = 10 ** ((p["threshold_db"] + sl) / 20) / p["active_um_per_v"]
@@ -176,7 +186,6 @@ def flow_plan(
             f"{t.min_contrast_db:g} dB floor (no candidate reaches it)"
             for p in short
         ]
-    gap = gap_after_part_1(t.vmap, parts[0], settings, t.band_hz)
     meta = {"kind": "flow", "sensation_level_db": float(sl), "parts": parts, "notes": notes}
     meta["min_contrast_db"] = float(t.min_contrast_db)
     if "ringdown" in gap:
@@ -198,6 +207,7 @@ def point_plan(
     *,
     piezo_min_v: float = -100.0,
     piezo_max_v: float = 250.0,
+    max_plan_s: float = MAX_PLAN_S,
     name: str = "",
 ) -> OutputPlan:
     """A localized pulse at one point: the excitation and frequency where its
@@ -220,6 +230,7 @@ def point_plan(
     thr = float(perception.threshold_db(f, "fingertip"))
     sl = min(settings.sensation_level_db, 20 * np.log10(g * cap) - thr)
     v = float(min(10 ** ((thr + sl) / 20) / g, cap))
+    check_duration(settings.pulse_s, max_plan_s, f"{name or 'point'}: pulse")
     seg = tone_segment(
         f,
         v,

@@ -35,7 +35,7 @@ def test_fit_predict_save_load_round_trip(tmp_path):
     pred = m.predict(xs, xd, xk)
     assert np.mean(pred == y) > 0.95
     p = m.save(tmp_path / "m.skops")
-    back = GestureModel.load(p)
+    back = GestureModel.load(p, check_features=False)  # toy features, not the pipeline's
     assert back.n_harmonics == 8 and back.n_frames == 4
     assert back.motion_threshold == pytest.approx(m.motion_threshold)
     np.testing.assert_array_equal(back.predict(xs, xd, xk), pred)

@@ -298,10 +298,11 @@ def test_cli_synth_and_record(tmp_path, plugins, capsys):
     assert run(args, None) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["samples"] == 2
-    from console.profile import load_profile
+    from console.profile import PROJECT_PROFILES, load_profile
 
     toml = tmp_path / "fast.toml"
-    toml.write_text("[twin_camera]\nrealtime = false\n")
+    sim = (PROJECT_PROFILES / "sim.toml").read_text()  # a profile needs its patches
+    toml.write_text(sim + "\n[twin_camera]\nrealtime = false\n")
     ctx = SimpleNamespace(profile=load_profile(toml, plugins), pm=plugins)
     args, run = _parse(
         "record",

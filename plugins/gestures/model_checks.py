@@ -1,0 +1,174 @@
+"""Checks of a loaded gesture model: its settings, each classifier's arrays against each
+other, and their widths against the features the vision pipeline makes.
+
+skops rebuilds objects from arrays it does not check; a model whose arrays disagree
+(a scaler mean of the wrong length, support vectors of another width, NaN in them) would
+fail deep inside scikit-learn or, worse, classify silently wrong. Every problem is a
+one-line ``UserError`` naming the file, the classifier and the array.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from console.errors import UserError
+
+from .sketch import DYNAMIC, STATIC
+
+#: classes each classifier may answer
+CLASSES = {"static_svm": STATIC, "dynamic_svm": DYNAMIC, "kind_svm": ("static", "dynamic")}
+RETRAIN = "train it again with `haptable gestures train`"
+
+
+def _int_in(s: dict, key: str, allowed: tuple[int, ...], p: Path) -> int:
+    v = s.get(key)
+    if isinstance(v, bool) or not isinstance(v, int) or v not in allowed:
+        raise UserError(
+            f"{p}: settings {key} = {v!r}: expected one of {', '.join(map(str, allowed))}; "
+            f"{RETRAIN}"
+        )
+    return v
+
+
+def check_settings(raw: Any, p: Path) -> dict[str, Any]:
+    """The model's settings (a JSON string in the file), checked and normalised."""
+    from .evaluate import FRAMES_LIST, N_HARMONICS_MAX
+
+    if not isinstance(raw, str):
+        raise UserError(f"{p}: no settings (a JSON text) in the model; {RETRAIN}")
+    try:
+        s = json.loads(raw)
+    except (ValueError, RecursionError) as e:
+        raise UserError(f"{p}: settings are not readable JSON ({e}); {RETRAIN}") from None
+    if not isinstance(s, dict):
+        raise UserError(f"{p}: settings are not a JSON object; {RETRAIN}")
+    thr = s.get("motion_threshold")
+    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not math.isfinite(thr):
+        raise UserError(f"{p}: settings motion_threshold = {thr!r}: expected a number; {RETRAIN}")
+    meta = s.get("meta", {})
+    if not isinstance(meta, dict):
+        raise UserError(f"{p}: settings meta = {meta!r}: expected an object; {RETRAIN}")
+    return {
+        "motion_threshold": float(thr),
+        "n_harmonics": _int_in(s, "n_harmonics", (0, *range(2, N_HARMONICS_MAX + 1)), p),
+        "n_frames": _int_in(s, "n_frames", tuple(FRAMES_LIST), p),
+        "static_frames": _int_in(s, "static_frames", tuple(range(1, max(FRAMES_LIST) + 1)), p),
+        "meta": meta,
+    }
+
+
+def _array(est: Any, attr: str, shape: tuple, where: str, p: Path, *, numeric=True) -> np.ndarray:
+    """``est.attr`` as an array of ``shape`` (``None`` entries: any), finite if numeric."""
+    a = getattr(est, attr, None)
+    if not isinstance(a, np.ndarray):
+        raise UserError(f"{p}: {where} has no array {attr}; {RETRAIN}")
+    ok = a.ndim == len(shape) and all(
+        w is None or w == n for w, n in zip(shape, a.shape, strict=False)
+    )
+    if not ok:
+        want = " x ".join("any" if w is None else str(w) for w in shape)
+        raise UserError(
+            f"{p}: {where} {attr} has shape {a.shape}, expected ({want}): the model's "
+            f"arrays do not fit together; {RETRAIN}"
+        )
+    if numeric:
+        if not np.issubdtype(a.dtype, np.number):
+            raise UserError(f"{p}: {where} {attr} holds {a.dtype}, not numbers; {RETRAIN}")
+        if not np.all(np.isfinite(a)):
+            raise UserError(f"{p}: {where} {attr} holds values that are not finite; {RETRAIN}")
+    return a
+
+
+def check_pipeline(name: str, pipe: Any, p: Path) -> int:
+    """One classifier (StandardScaler + RBF SVC) checked; returns its input width."""
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    steps = getattr(pipe, "steps", None) if isinstance(pipe, Pipeline) else None
+    kinds = [(n, type(e)) for n, e in steps or []]
+    if kinds != [("scale", StandardScaler), ("svc", SVC)]:
+        raise UserError(
+            f"{p}: {name} is {type(pipe).__name__}, not the StandardScaler + SVC pipeline "
+            f"`haptable gestures train` makes; {RETRAIN}"
+        )
+    scale, svc = pipe.named_steps["scale"], pipe.named_steps["svc"]
+    nf = getattr(scale, "n_features_in_", None)
+    if isinstance(nf, bool) or not isinstance(nf, (int, np.integer)) or nf < 1:
+        raise UserError(f"{p}: {name} scaler has no input width (n_features_in_); {RETRAIN}")
+    nf = int(nf)
+    for attr in ("mean_", "scale_"):
+        _array(scale, attr, (nf,), f"{name} scaler", p)
+    where = f"{name} svc"
+    classes = _array(svc, "classes_", (None,), where, p, numeric=False)
+    unknown = sorted(set(map(str, classes)) - set(CLASSES[name]))
+    if unknown or len(classes) < 2:
+        raise UserError(
+            f"{p}: {name} answers {', '.join(map(repr, unknown)) or 'fewer than two classes'}"
+            f"; it may answer {', '.join(CLASSES[name])}; {RETRAIN}"
+        )
+    k = len(classes)
+    sv = _array(svc, "support_vectors_", (None, nf), where, p)
+    n_sv = sv.shape[0]
+    n_support = _array(svc, "_n_support", (k,), where, p)
+    if n_sv < 1 or int(n_support.sum()) != n_sv or np.any(n_support < 0):
+        raise UserError(
+            f"{p}: {where} _n_support {n_support.tolist()} does not add up to the "
+            f"{n_sv} support vectors; {RETRAIN}"
+        )
+    for attr in ("dual_coef_", "_dual_coef_"):
+        _array(svc, attr, (k - 1, n_sv), where, p)
+    for attr in ("intercept_", "_intercept_"):
+        _array(svc, attr, (k * (k - 1) // 2,), where, p)
+    gamma = getattr(svc, "_gamma", None)
+    if not isinstance(gamma, (float, np.floating)) or not (math.isfinite(gamma) and gamma > 0):
+        raise UserError(f"{p}: {where} gamma {gamma!r} is not a positive number; {RETRAIN}")
+    try:  # the last word: the classifier answers a row of its own width
+        pipe.predict(np.zeros((1, nf)))
+        pipe.decision_function(np.zeros((1, nf)))
+    except Exception as e:  # noqa: BLE001 - whatever scikit-learn raises, one line
+        raise UserError(
+            f"{p}: {name} cannot classify ({type(e).__name__}: {e}); {RETRAIN}"
+        ) from None
+    return nf
+
+
+def check_classifiers(svms: dict[str, Any], p: Path) -> dict[str, int]:
+    """Every classifier present checked; at least one of static and dynamic."""
+    if svms.get("static_svm") is None and svms.get("dynamic_svm") is None:
+        raise UserError(f"{p}: neither static_svm nor dynamic_svm in the model; {RETRAIN}")
+    return {n: check_pipeline(n, m, p) for n, m in svms.items() if m is not None}
+
+
+def feature_widths(n_harmonics: int, n_frames: int, static_frames: int) -> dict[str, int]:
+    """Feature widths the vision pipeline makes for each classifier with these settings."""
+    from .evaluate import N_HARMONICS_MAX, record_features
+    from .features import select_dynamic, select_kind, select_static
+
+    recs = [None] * max(n_frames, static_frames)
+    xs, xk, xd, _ = record_features(recs, (n_frames,), N_HARMONICS_MAX, static_frames)
+    return {
+        "static_svm": select_static(xs, n_harmonics, N_HARMONICS_MAX).shape[1],
+        "dynamic_svm": select_dynamic(xd[n_frames], n_harmonics, N_HARMONICS_MAX).shape[1],
+        "kind_svm": select_kind(xk).shape[1],
+    }
+
+
+def check_widths(model: Any, p: Path) -> None:
+    """Each classifier takes as many features as the pipeline makes for the model's
+    settings (a model trained on another feature set is refused, not run)."""
+    want = feature_widths(model.n_harmonics, model.n_frames, model.static_frames)
+    for name, w in want.items():
+        svm = getattr(model, name)
+        nf = getattr(svm, "n_features_in_", None) if svm is not None else None
+        if nf is not None and int(nf) != w:
+            raise UserError(
+                f"{p}: {name} takes {int(nf)} features but the vision pipeline makes {w} "
+                f"(n_harmonics = {model.n_harmonics}, n_frames = {model.n_frames}): it was "
+                f"trained on another feature set; {RETRAIN}"
+            )
