@@ -317,8 +317,10 @@ def run_bench(args, ctx) -> int:
         return 0
     if args.name not in benches:
         raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
+    from console.cli import seconds_option
+
     run = benches[args.name].run
-    kwargs = {"report_dir": args.report, "minutes": args.minutes}
+    kwargs = {"report_dir": args.report, "minutes": seconds_option(args.minutes, "--minutes")}
     accepted = inspect.signature(run).parameters
     takes_any = any(p.kind is p.VAR_KEYWORD for p in accepted.values())
     for key, value in list(kwargs.items()):

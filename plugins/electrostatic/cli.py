@@ -21,6 +21,9 @@ from .simulate import canned_rotation, run_pipeline
 from .synth import CONDITIONS, parse_condition
 from .task import DISTANCES_DEG, PAPER_CONDITIONS, SECTOR_SETS, make_trials, run_task, summarize
 
+MAX_TRIALS = 10000
+MAX_DISTANCE_DEG = 3600.0  # ten turns of the knob
+
 
 def configure(p: argparse.ArgumentParser) -> None:
     p.description = (
@@ -291,6 +294,13 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     from console.cli import seconds_option
 
     seconds_option(args.max_time, "--max-time")
+    if args.trials is not None and args.trials > MAX_TRIALS:
+        raise UserError(f"--trials {args.trials}: at most {MAX_TRIALS} (the paper's design is 216)")
+    for d in args.distance or ():
+        if not (math.isfinite(d) and 0 < d <= MAX_DISTANCE_DEG):
+            raise UserError(
+                f"--distance {d!r}: give degrees above 0 and at most {MAX_DISTANCE_DEG:g}"
+            )
     if args.forces:
         return _forces(args, ctx)
     if args.audition:

@@ -736,6 +736,9 @@ def seconds_case(name: str, argv: list[str], *parts: str):
 seconds_case("demo-seconds-nan", ["demo", "flow", "--seconds", "nan"], "--seconds", "nan")
 seconds_case("demo-seconds-negative", ["demo", "flow", "--seconds", "-5"], "--seconds", "-5")
 seconds_case("demo-minutes-inf", ["demo", "soak", "--minutes", "inf"], "--minutes", "inf")
+seconds_case("bench-minutes-nan", ["bench", "soak", "--minutes", "nan"], "--minutes", "nan")
+seconds_case("knob-trials-huge", ["knob", "--trials", "1000000000"], "--trials", "1000000000")
+seconds_case("knob-distance-nan", ["knob", "--distance", "nan"], "--distance", "nan")
 seconds_case("tuio-seconds-nan", ["tuio", "--seconds", "nan"], "--seconds", "nan")
 seconds_case("knob-max-time-nan", ["knob", "--input", "live", "--max-time", "nan"], "--max-time")
 
