@@ -128,13 +128,6 @@ profile_case(
     edit=("switch_time_ms = 2.0\nguard_ms = 5.0", "switch_time_ms = 3.0\nguard_ms = 1.5"),
 )
 profile_case(
-    "guard-shorter-than-a-block",
-    "",
-    "guard_ms",
-    "block_size",
-    edit=("block_size = 64", "block_size = 4096"),
-)
-profile_case(
     "screen-on-patch-channel",
     "",
     "relay_channel = 1",
