@@ -112,24 +112,42 @@ class Calibration:
     @classmethod
     def from_json(cls, d: dict, where: str = "calibration") -> Calibration:
         try:
+            if not isinstance(d, dict):
+                raise ValueError(f"a JSON {type(d).__name__}, not an object")
             if d.get("format") != "haptable-touch-calibration/1":
                 raise ValueError(f"format {d.get('format')!r}")
             h = np.asarray(d["homography"], dtype=np.float64)
             if h.shape != (3, 3) or not np.all(np.isfinite(h)):
                 raise ValueError("homography is not a finite 3x3 matrix")
+            centers = np.asarray(d["centers_px"], dtype=np.float64).reshape(-1, 2)
+            resid = np.asarray(d["residuals_mm"], dtype=np.float64).reshape(-1, 2)
+            inliers = np.asarray(d["inliers"], dtype=bool).reshape(-1)
+            if not len(resid) == len(inliers) == len(centers):
+                raise ValueError(
+                    f"{len(centers)} centers_px, {len(resid)} residuals_mm and "
+                    f"{len(inliers)} inliers: one of each per target"
+                )
+            if not (np.all(np.isfinite(centers)) and np.all(np.isfinite(resid))):
+                raise ValueError("centers_px or residuals_mm hold values that are not finite")
+            smoothing = None if d["smoothing"] is None else float(d["smoothing"])
+            if smoothing is not None and not (math.isfinite(smoothing) and smoothing >= 0):
+                raise ValueError(f"smoothing {smoothing!r} is not a number >= 0")
+            image_px = tuple(int(v) for v in d.get("image_px", (640, 480)))
+            if len(image_px) != 2 or min(image_px) < 1:
+                raise ValueError(f"image_px {list(image_px)} is not a width and a height")
             return cls(
                 homography=h,
-                centers_px=np.asarray(d["centers_px"], dtype=np.float64).reshape(-1, 2),
-                residuals_mm=np.asarray(d["residuals_mm"], dtype=np.float64).reshape(-1, 2),
-                smoothing=None if d["smoothing"] is None else float(d["smoothing"]),
-                inliers=np.asarray(d["inliers"], dtype=bool),
+                centers_px=centers,
+                residuals_mm=resid,
+                smoothing=smoothing,
+                inliers=inliers,
                 rms_mm=float(d["rms_mm"]),
                 max_mm=float(d["max_mm"]),
                 loo_rms_mm=float(d["loo_rms_mm"]),
                 loo_rms_homography_mm=float(d["loo_rms_homography_mm"]),
-                image_px=tuple(int(v) for v in d.get("image_px", (640, 480))),
+                image_px=image_px,
             )
-        except (KeyError, TypeError, ValueError) as e:
+        except (KeyError, TypeError, ValueError, OverflowError, np.linalg.LinAlgError) as e:
             raise UserError(
                 f"{where}: not a touch calibration ({e}); run the touch calibration again"
             ) from None
@@ -141,13 +159,12 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
+        from .dataset import read_json
+
         p = Path(path)
-        try:
-            d = json.loads(p.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise UserError(f"{p}: no touch calibration there; run the touch calibration") from None
-        except json.JSONDecodeError as e:
-            raise UserError(f"{p}: not valid JSON ({e.msg}, line {e.lineno})") from None
+        if not p.exists():
+            raise UserError(f"{p}: no touch calibration there; run the touch calibration")
+        d = read_json(p, str(p), "run the touch calibration again")
         return cls.from_json(d, str(p))
 
 

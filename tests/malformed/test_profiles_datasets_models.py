@@ -473,6 +473,96 @@ def _(root):
     (root / "zoom" / "s1_000" / "frame_000.png").write_bytes(bomb_png(30000, 30000))
 
 
+# ---------------------------------------------------------------------------- touch calibration
+GOOD_CAL = {
+    "format": "haptable-touch-calibration/1",
+    "homography": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+    "centers_px": [[100, 100], [500, 100], [100, 400], [500, 400]],
+    "residuals_mm": [[0, 0]] * 4,
+    "smoothing": None,
+    "inliers": [True] * 4,
+    "rms_mm": 0.5,
+    "max_mm": 1.0,
+    "loo_rms_mm": 1.0,
+    "loo_rms_homography_mm": 1.0,
+    "image_px": [640, 480],
+}
+
+
+def calibration_case(name: str, *parts: str):
+    """The profile's ``[vision] calibration`` file, read when the frame loop starts
+    (``haptable tuio``): ``make(path)`` writes it."""
+
+    def deco(make):
+        @case("dataset", f"calibration-{name}")
+        def build(tmp: Path, fx):
+            prof = tmp / "cal.toml"
+            prof.write_text(SIM + '\n[vision]\ncalibration = "cal.json"\n')
+            make(tmp / "cal.json")
+            return ["--profile", prof, "tuio", "--seconds", "0.2"], ["cal.json", *parts]
+
+        return make
+
+    return deco
+
+
+def cal_with(**kw) -> str:
+    return json.dumps({**GOOD_CAL, **kw})
+
+
+@calibration_case("a-list", "list")
+def _(p):
+    p.write_text("[1, 2]")
+
+
+@calibration_case("deep", "nest")
+def _(p):
+    p.write_text("[" * 100000 + "]" * 100000)
+
+
+@calibration_case("not-utf8", "UTF-8")
+def _(p):
+    p.write_bytes(b'{"format": "\xff"}')
+
+
+@calibration_case("too-large", "MB")
+def _(p):
+    with open(p, "wb") as f:
+        f.truncate(40 * 1024 * 1024)
+
+
+@calibration_case("no-homography", "homography")
+def _(p):
+    d = dict(GOOD_CAL)
+    del d["homography"]
+    p.write_text(json.dumps(d))
+
+
+@calibration_case("homography-2x2", "homography")
+def _(p):
+    p.write_text(cal_with(homography=[[1, 0], [0, 1]]))
+
+
+@calibration_case("residuals-mismatch", "residuals_mm")
+def _(p):
+    p.write_text(cal_with(residuals_mm=[[0, 0]] * 3))
+
+
+@calibration_case("centers-nan", "centers_px")
+def _(p):
+    p.write_text(cal_with(centers_px=[[float("nan"), 1]] * 4))
+
+
+@calibration_case("smoothing-negative", "smoothing")
+def _(p):
+    p.write_text(cal_with(smoothing=-1.0))
+
+
+@calibration_case("image-px-zero", "image_px")
+def _(p):
+    p.write_text(cal_with(image_px=[0, 480]))
+
+
 # ---------------------------------------------------------------------------- models
 def model_case(name: str, *parts: str):
     def deco(make):
