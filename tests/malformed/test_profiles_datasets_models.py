@@ -826,6 +826,13 @@ seconds_case("tuio-seconds-nan", ["tuio", "--seconds", "nan"], "--seconds", "nan
 seconds_case("knob-max-time-nan", ["knob", "--input", "live", "--max-time", "nan"], "--max-time")
 
 
+@case("plan", "play-longer-than-max-plan")
+def _play_long(tmp: Path, fx):
+    p = tmp / "short.toml"
+    p.write_text(SIM.replace("ramp_min_ms = 5.0", "ramp_min_ms = 5.0\nmax_plan_s = 1.0"))
+    return ["--profile", p, "play", "sweep", "--dry-run"], ["play sweep", "3 s", "max_plan_s = 1"]
+
+
 # ---------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
 def fx(tmp_path_factory, vmap_file):
@@ -959,3 +966,39 @@ def test_palm_of_a_mask_without_edges_is_bounded_by_the_image():
 
     (cx, cy), r = palm(np.full((60, 100), 255, np.uint8))
     assert 25 <= r <= 31 and 20 <= cx <= 80 and 25 <= cy <= 35
+
+
+@pytest.mark.parametrize("dur_s", [float("nan"), float("inf"), -1.0, 1e12])
+def test_signal_lengths_are_refused_before_any_array(dur_s):
+    """A tone or sweep of a NaN, infinite, negative or huge duration is one line, and
+    nothing is allocated for it (1e12 s would be 4.8e16 samples)."""
+    import tracemalloc
+
+    from console.errors import UserError
+    from console.signals import linear_chirp, tone
+
+    tracemalloc.start()
+    try:
+        for make in (
+            lambda: tone(250.0, 1.0, dur_s, 48000),
+            lambda: linear_chirp(10.0, 625.0, 1.0, dur_s, 48000),
+        ):
+            with pytest.raises(UserError, match="duration|max_plan_s"):
+                make()
+        assert tracemalloc.get_traced_memory()[1] < 1_000_000
+    finally:
+        tracemalloc.stop()
+
+
+def test_a_stimulus_is_refused_unbuilt_when_longer_than_max_plan(monkeypatch):
+    from console import stimuli
+    from console.errors import UserError
+
+    def never(fs):
+        raise AssertionError("the sweep was built")
+
+    monkeypatch.setitem(stimuli.STIMULI, "sweep", (stimuli.STIMULI["sweep"][0], never))
+    with pytest.raises(
+        UserError, match=r"play sweep: 3 s is longer than \[limits\] max_plan_s = 1 s"
+    ):
+        stimuli.make_stimulus("sweep", 48000, 1.0)
