@@ -72,6 +72,9 @@ def read_schema(path: Path) -> dict:
                 f"{infos['schema.json'].file_size / 1e6:.0f} MB), far more than a model's few MB"
             )
         raw = z.read("schema.json")
+        for name, info in infos.items():
+            if name.endswith(".npy"):
+                _check_npy_header(z, info)
     try:
         schema = json.loads(raw)
     except RecursionError:
@@ -81,6 +84,30 @@ def read_schema(path: Path) -> dict:
     if not isinstance(schema, dict):
         raise ValueError("schema.json is not an object")
     return schema
+
+
+def _check_npy_header(z: zipfile.ZipFile, info: zipfile.ZipInfo) -> None:
+    """An array member's ``.npy`` header: a plain dtype (never objects) whose shape
+    fits the member's size, read before skops builds (and allocates) the array."""
+    from numpy.lib import format as npformat
+
+    with z.open(info) as fh:
+        try:
+            version = npformat.read_magic(fh)
+            read = {(1, 0): npformat.read_array_header_1_0, (2, 0): npformat.read_array_header_2_0}
+            if version not in read:
+                raise ValueError(f"npy version {version}")
+            shape, _fortran, dtype = read[version](fh)
+        except ValueError as e:
+            raise ValueError(f"array {info.filename}: bad header ({e})") from None
+    if dtype.hasobject or dtype.kind not in "biufcUS":
+        raise ValueError(f"array {info.filename}: dtype {dtype} is not plain numbers or text")
+    need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if need > info.file_size:
+        raise ValueError(
+            f"array {info.filename} declares shape {shape} ({need / 1e6:.3g} MB) in "
+            f"{info.file_size} bytes"
+        )
 
 
 def file_types(path: Path) -> set[str]:

@@ -665,6 +665,25 @@ def _(p, fx):
     rewrite_zip(fx.model, p, edit)
 
 
+@model_case("array-header-huge", "declares shape")
+def _(p, fx):
+    """An array member whose .npy header declares 10^10 floats in a few bytes."""
+    from numpy.lib import format as npformat
+
+    def edit(n, b):
+        if not n.endswith(".npy") or b"(6, 35)" not in b and b"'shape': (" not in b:
+            return b
+        import io
+
+        out = io.BytesIO()
+        npformat.write_array_header_1_0(
+            out, {"descr": "<f8", "fortran_order": False, "shape": (10**10,)}
+        )
+        return out.getvalue() + b"\0" * 64
+
+    rewrite_zip(fx.model, p, edit)
+
+
 @model_case("untrusted-type", "allow-list")
 def _(p, fx):
     from sklearn.linear_model import LogisticRegression
