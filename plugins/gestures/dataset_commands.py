@@ -16,6 +16,35 @@ from console.errors import UserError
 
 from .dataset import GESTURES
 
+#: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
+#: at 60 fps; the paper's set is 5 subjects x 40 repetitions)
+MAX_FRAMES = 600
+MAX_SUBJECTS = 1000
+MAX_REPS = 100000
+
+
+def check_count(value: int | None, flag: str, lo: int, hi: int) -> None:
+    """A count option within [lo, hi] (``None``: not given), else one line."""
+    if value is not None and not lo <= value <= hi:
+        raise UserError(f"{flag} {value}: give {lo} to {hi}")
+
+
+def check_folder_name(value: str | None, flag: str) -> None:
+    """A name that becomes one folder inside the dataset: no path, nothing invisible."""
+    if value is None:
+        return
+    if (
+        not value.strip()
+        or value in (".", "..")
+        or "/" in value
+        or "\\" in value
+        or not value.isprintable()
+    ):
+        raise UserError(
+            f"{flag} {value!r}: give a plain name like s1 (it names a folder inside the "
+            "dataset: no slashes, not '.' or '..')"
+        )
+
 
 def configure_synth(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--subjects", type=int, default=5, help="number of subjects (5)")
@@ -64,6 +93,11 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
 def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
     from .jobs import synth_atomic
     from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, synth
+
+    check_count(args.subjects, "--subjects", 1, MAX_SUBJECTS)
+    check_count(args.reps, "--reps", 1, MAX_REPS)
+    check_count(args.static_frames, "--static-frames", 1, MAX_FRAMES)
+    check_count(args.dynamic_frames, "--dynamic-frames", 1, MAX_FRAMES)
 
     gestures = GESTURES
     if args.gestures:
@@ -137,6 +171,10 @@ def open_camera(ctx: Any, driver: str | None = None) -> Any:
 
 def run_record(args: argparse.Namespace, ctx: Any) -> int:
     from .synth import capture_background, record
+
+    check_count(args.frames, "--frames", 1, MAX_FRAMES)
+    check_folder_name(args.subject, "--subject")
+    check_folder_name(args.name, "--name")
 
     camera = open_camera(ctx, args.camera)
     try:

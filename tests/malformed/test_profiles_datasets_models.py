@@ -473,6 +473,31 @@ def _(root):
     (root / "zoom" / "s1_000" / "frame_000.png").write_bytes(bomb_png(30000, 30000))
 
 
+def record_case(name: str, extra: list[str], *parts: str):
+    """``haptable gestures record`` options that name or size what is written."""
+
+    @case("dataset", f"record-{name}")
+    def build(tmp: Path, fx):
+        base = ["gestures", "record", "--gesture", "drag", "--out", tmp / "rec"]
+        return [*base, *extra], list(parts)
+
+
+record_case("frames-huge", ["--subject", "s1", "--frames", "100000000"], "--frames", "100000000")
+record_case("subject-path", ["--subject", "../../outside"], "--subject", "../../outside")
+record_case("name-path", ["--subject", "s1", "--name", "../x"], "--name", "'../x'")
+record_case("subject-newline", ["--subject", "s1\nrm"], "--subject", "\\n")
+
+
+def synth_case(name: str, extra: list[str], *parts: str):
+    @case("dataset", f"synth-{name}")
+    def build(tmp: Path, fx):
+        return ["gestures", "synth", "--out", tmp / "syn", *extra], list(parts)
+
+
+synth_case("reps-huge", ["--reps", "1000000000"], "--reps", "1000000000")
+synth_case("subjects-zero", ["--subjects", "0"], "--subjects", "0")
+
+
 # ---------------------------------------------------------------------------- touch calibration
 GOOD_CAL = {
     "format": "haptable-touch-calibration/1",
