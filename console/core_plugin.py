@@ -316,7 +316,11 @@ def check_consistency(profile: Profile) -> None:
         )
     sc = profile.get("screen.relay_channel")
     if sc in used:
-        _fail(profile, f"[screen] relay_channel = {sc}: already used by [{used[sc]}]")
+        _fail(
+            profile,
+            f"[screen] relay_channel = {sc}: already used by [{used[sc]}]; give each output "
+            "its own channel",
+        )
     for ch, who in [*used.items(), (sc, "screen")]:
         if ch > channels:
             _fail(

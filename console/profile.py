@@ -113,7 +113,10 @@ def _validate_table(
 ) -> dict[str, Any]:
     label = _printable(label)
     if not isinstance(table, dict):
-        raise ProfileError(f"{where}: [{_printable(label)}] must be a table, got {_fmt(table)}")
+        raise ProfileError(
+            f"{where}: [{label}] must be a table, got {_fmt(table)}; write it as [{label}] "
+            "with its keys on the lines below"
+        )
     out: dict[str, Any] = {}
     for key, value in table.items():
         if key not in fields:

@@ -147,7 +147,12 @@ class Calibration:
                 loo_rms_homography_mm=float(d["loo_rms_homography_mm"]),
                 image_px=image_px,
             )
-        except (KeyError, TypeError, ValueError, OverflowError, np.linalg.LinAlgError) as e:
+        except KeyError as e:
+            raise UserError(
+                f"{where}: not a touch calibration (missing key {e}); run the touch "
+                "calibration again"
+            ) from None
+        except (TypeError, ValueError, OverflowError, np.linalg.LinAlgError) as e:
             raise UserError(
                 f"{where}: not a touch calibration ({e}); run the touch calibration again"
             ) from None

@@ -39,13 +39,13 @@ def case(kind: str, name: str):
     return deco
 
 
-def tally(name: str, code: int, clear: bool) -> None:
+def tally(name: str, code: int, clear: bool, line: str = "") -> None:
     """With $HAPTABLE_MALFORMED_TALLY set, append each case's outcome there (for the
     before/after counts in the issue's closing note)."""
     if path := os.environ.get("HAPTABLE_MALFORMED_TALLY"):
         what = {0: "accepted", 3: "internal"}.get(code, "line" if clear else f"exit{code}-unclear")
         with open(path, "a") as f:
-            f.write(f"{name}\t{what}\n")
+            f.write(f"{name}\t{what}\t{line[:400]!r}\n")
 
 
 def run_cli(capsys, argv: list[str]) -> tuple[int, str, str]:
@@ -935,7 +935,7 @@ def test_malformed_input_one_clear_line(name, fx, tmp_path, capsys, monkeypatch)
     argv, parts = build(tmp_path, fx)
     code, out, err = run_cli(capsys, argv)
     lines = err.strip().splitlines()
-    tally(name, code, len(lines) == 1 and all(p in lines[0] for p in parts))
+    tally(name, code, len(lines) == 1 and all(p in lines[0] for p in parts), err.strip())
     assert code == 2, f"exit {code}: {err.strip()[:300]!r} out={out[:200]!r}"
     assert len(lines) == 1, err[:600]
     assert lines[0].startswith("haptable: error: "), lines[0][:300]
