@@ -380,6 +380,9 @@ class SafetyGate:
         self.screen_channel = screen_channel
         self.latency_samples = latency_samples
         self._lock = threading.RLock()
+        # held across a relay switch: an e-stop opening the relays waits for a switch in
+        # flight to finish, so a late command can never close a relay after the e-stop
+        self._switch_lock = threading.RLock()
         self._source: Source | None = None
         self._caller: SourceCaller | None = None  # set for sources other than the scheduler
         self._estopped = False
@@ -612,6 +615,10 @@ class SafetyGate:
         bad = [c for c in closed if not 1 <= c <= n]
         if bad:
             raise SafetyRefusal(f"relay channel {bad[0]} does not exist (board has {n})")
+        with self._switch_lock:
+            self._switch_held(board, closed, n)
+
+    def _switch_held(self, board: RelayBoard, closed: frozenset[int], n: int) -> None:
         with self._lock:
             if self._estopped and closed:
                 raise SafetyRefusal(
@@ -731,15 +738,16 @@ class SafetyGate:
             time.sleep(0.0005)
         if note:
             self._event("fault", f"relays opened without observed silence: {note}")
-        with self._lock:
-            self._switching = True
-        try:
-            self._open_all_relays()
-        finally:
+        with self._switch_lock:
             with self._lock:
-                self._switching = False
-                self._quiet_until = self.clock + self.limits.settle_samples
-            self._safe.set()
+                self._switching = True
+            try:
+                self._open_all_relays()
+            finally:
+                with self._lock:
+                    self._switching = False
+                    self._quiet_until = self.clock + self.limits.settle_samples
+                self._safe.set()
 
     def wait_safe(self, timeout_s: float = 5.0) -> bool:
         """Block until an e-stop has opened the relays; True if it did in time."""

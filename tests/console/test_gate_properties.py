@@ -221,7 +221,7 @@ def test_relay_command_sequences(outputs, cmds):
     check_received(outputs, start, frozenset({"PA"}))
     if outputs.gate.estopped:
         assert outputs.gate.relay_state() == frozenset()
-    else:
+    elif not any(kind == "switch" for kind, _ in cmds):  # a direct gate switch is neither
         assert outputs.gate.relay_state() == outputs.scheduler.operator_relays
 
 
