@@ -192,7 +192,11 @@ def _ramp_problem(x: np.ndarray, ramp: int) -> str | None:
 def check_plan(plan: OutputPlan, limits: Limits) -> None:
     """Refuse a plan the outputs must not play. Raises ``SafetyRefusal``."""
     name = plan.name or "plan"
+    gap_s = plan.gap_s
+    if not isinstance(gap_s, (int, float)) or not math.isfinite(gap_s) or gap_s < 0:
+        raise SafetyRefusal(f"{name}: gap_s = {gap_s!r}: must be a finite number of seconds >= 0")
     n_total = sum(int(np.size(getattr(seg, "piezo_v", ()))) for seg in plan.segments)
+    n_total += round(gap_s * limits.sample_rate_hz) * max(len(plan.segments) - 1, 0)
     if n_total > limits.max_plan_samples:
         raise SafetyRefusal(
             f"{name}: {n_total / limits.sample_rate_hz:.1f} s is longer than [limits] max_plan_s"

@@ -269,3 +269,13 @@ def test_relay_switching_is_rate_limited(outputs):
     assert refused > 0
     # the gate's own clock bounds it: at most one switch per interval of samples played
     assert ok <= gate.clock / max(lim.min_switch_interval_samples, 1) + 2
+
+
+@pytest.mark.parametrize("gap_s", [float("nan"), float("inf"), -1.0, 1e9])
+def test_a_plan_gap_is_checked_and_counted(outputs, gap_s):
+    x = tone(250, 10.0, 0.05, FS, 0.01)
+    seg = Segment(x, np.zeros_like(x), frozenset({"PA"}))
+    plan = OutputPlan(FS, (seg, seg), name="gappy", gap_s=gap_s)
+    with pytest.raises(SafetyRefusal, match="gap_s|max_plan_s"):
+        outputs.play(plan)
+    assert not np.any(outputs.recording())
