@@ -162,21 +162,39 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as exc:
+        if ctx is not None and ctx.estopped_by:
+            return _estopped(ctx.estopped_by)
+        if debug or not exc.filename:
+            if debug:
+                raise
+            return _internal(exc)
+        # a file or folder given to the command that cannot be read or written
+        print(
+            f"haptable: error: {one_line(str(exc.filename))}: {exc.strerror or exc}; "
+            f"check the path and its permissions",
+            file=sys.stderr,
+        )
+        return 2
     except Exception as exc:
         if ctx is not None and ctx.estopped_by:
             return _estopped(ctx.estopped_by)
         if debug:
             raise
-        print(
-            f"haptable: internal error: {type(exc).__name__}: {exc} "
-            f"(outputs silenced; HAPTABLE_DEBUG=1 shows the traceback; please report it)",
-            file=sys.stderr,
-        )
-        return 3
+        return _internal(exc)
     finally:
         from console.safety import estop_all
 
         estop_all("command finished")
+
+
+def _internal(exc: BaseException) -> int:
+    print(
+        f"haptable: internal error: {type(exc).__name__}: {exc} "
+        f"(outputs silenced; HAPTABLE_DEBUG=1 shows the traceback; please report it)",
+        file=sys.stderr,
+    )
+    return 3
 
 
 def _estopped(reason: str) -> int:

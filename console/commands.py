@@ -173,7 +173,7 @@ def write_plan_wav(plan, path: str, piezo_card_v: float, screen_card_v: float) -
     left = np.concatenate([s.piezo_v for s in plan.segments]) / piezo_card_v
     right = np.concatenate([s.screen_v for s in plan.segments]) / screen_card_v
     pcm = (np.clip(np.stack([left, right], 1), -1, 1) * 32767).astype("<i2")
-    with wave.open(path, "wb") as w:
+    with open(path, "wb") as f, wave.open(f, "wb") as w:  # the path fails here, cleanly
         w.setnchannels(2)
         w.setsampwidth(2)
         w.setframerate(plan.sample_rate_hz)

@@ -90,3 +90,12 @@ def test_estop_reaches_a_running_console(profile, capsys):
 def test_estop_without_console(capsys):
     assert main(["estop"]) == 0
     assert "no console running" in capsys.readouterr().out
+
+
+def test_an_output_path_that_cannot_be_written_is_one_line(capsys):
+    """A file the command must write into a place that cannot hold it: one line, exit 2."""
+    from console.cli import main
+
+    assert main(["play", "sine-PA", "--dry-run", "--out", "/dev/null/x.wav"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "/dev/null/x.wav" in err[0] and "internal error" not in err[0]
