@@ -22,6 +22,7 @@ import numpy as np
 
 from console.bench import summarize_s
 from console.errors import UserError
+from console.npz_safe import read_npz
 
 from . import features as F
 from .model import GESTURES, GestureModel
@@ -154,8 +155,8 @@ def extract(
     if use_cache and cfile.is_file():
         try:
             return _load_cache(cfile)
-        except (OSError, ValueError, KeyError):
-            pass
+        except (OSError, ValueError, KeyError, UserError):
+            pass  # a damaged cache entry: computed again and rewritten
     import cv2
 
     threads = cv2.getNumThreads()
@@ -230,20 +231,20 @@ def _save_cache(path: Path, fs: FeatureSet) -> None:
 
 
 def _load_cache(path: Path) -> FeatureSet:
-    with np.load(path, allow_pickle=False) as z:
-        ks = sorted(int(n[4:]) for n in z.files if n.startswith("dyn_"))
-        return FeatureSet(
-            [str(n) for n in z["names"]],
-            z["labels"].astype(str),
-            z["subjects"].astype(str),
-            z["static"],
-            z["kind"],
-            {k: z[f"dyn_{k}"] for k in ks},
-            {k: z[f"score_{k}"] for k in ks},
-            z["frame_s"],
-            json.loads(str(z["meta"])),
-            z["frame_cpu_s"],
-        )
+    z = read_npz(path, what="gesture feature cache", fix="it is rebuilt")
+    ks = sorted(int(n[4:]) for n in z if n.startswith("dyn_"))
+    return FeatureSet(
+        [str(n) for n in z["names"]],
+        z["labels"].astype(str),
+        z["subjects"].astype(str),
+        z["static"],
+        z["kind"],
+        {k: z[f"dyn_{k}"] for k in ks},
+        {k: z[f"score_{k}"] for k in ks},
+        z["frame_s"],
+        json.loads(str(z["meta"])),
+        z["frame_cpu_s"],
+    )
 
 
 def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
