@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -122,6 +123,12 @@ def test_out_of_tree_distribution_shows_up(tmp_path):
             str(pkg),
         ],
         check=True,
+        # build with this environment's setuptools (>= 70.1 builds wheels by itself); the
+        # bare interpreter's may be older and lack bdist_wheel
+        env={
+            **os.environ,
+            "PYTHONPATH": os.pathsep.join(p for p in sys.path if "site-packages" in p),
+        },
     )
     out = subprocess.run(
         [str(py), "-m", "console.cli", "plugins", "--json"],
