@@ -36,10 +36,10 @@ FAULTS = ("none", "nan", "step", "raise", "object", "stall", "wrong_len")
 ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
 
 
-class _FaultyStream:
+class FaultyStream:
     """A ramped sine that misbehaves (``fault``) from sample ``at`` on."""
 
-    def __init__(self, route, amp, f, fault, at, n_total, fs):
+    def __init__(self, route, amp, f, fault, at, n_total, fs=48000):
         self.patches, self.screen = route, False
         self.amp, self.f, self.fault, self.at = amp, f, fault, at
         self.n_total, self.fs, self.k = n_total, fs, 0
@@ -69,7 +69,7 @@ class _FaultyStream:
         self.n_total = self.k
 
 
-class _FaultySource(Source, _FaultyStream):
+class FaultySource(Source, FaultyStream):
     @property
     def idle(self):
         return False
@@ -78,11 +78,12 @@ class _FaultySource(Source, _FaultyStream):
         pass
 
     def next_block(self, n):
-        out = _FaultyStream.next_block(self, n)
+        out = FaultyStream.next_block(self, n)
         return out if out is not None else (np.zeros(n), np.zeros(n))
 
 
-def _fresh(out) -> Window:
+def fresh_window(out) -> Window:
+    """A clean, attached, reset gate; where the next case's records begin."""
     if out.gate.estopped:
         out.gate.wait_safe(5)
         out.reset()
@@ -126,14 +127,14 @@ def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
         th = _estop_later(out, estop_s)
         try:
             at = int(rng.integers(0, 6000))
-            out.stream(_FaultyStream(route, amp, f, fault, at, 9600, fs)).wait(10)
+            out.stream(FaultyStream(route, amp, f, fault, at, 9600, fs)).wait(10)
         except SafetyRefusal:
             pass
     elif kind == "attach":
         with contextlib.suppress(SafetyRefusal):
             out.set_relays({out.gate.relay_channels[p] for p in route})
         at = int(rng.integers(0, 6000))
-        out.gate.attach(_FaultySource(route, amp, f, fault, at, 9600, fs))
+        out.gate.attach(FaultySource(route, amp, f, fault, at, 9600, fs))
         th = _estop_later(out, estop_s if estop_s is not None else 0.03)
         t_end = time.monotonic() + 5
         while not out.gate.estopped and time.monotonic() < t_end:
@@ -179,7 +180,7 @@ def fuzz_cases(ctx, seconds: float, seed: int = 0) -> dict[str, Any]:
     with open_outputs(ctx.profile, ctx.pm, fast=True) as out:
         t0 = time.perf_counter()
         while time.perf_counter() - t0 < seconds:
-            start = _fresh(out)
+            start = fresh_window(out)
             kind, route = _one_case(out, rng)
             per_kind[kind] = per_kind.get(kind, 0) + 1
             found = received_problems(

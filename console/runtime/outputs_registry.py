@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from console.runtime.line_server import LineServer, PeerRefused, request
-from console.runtime.private_dir import ensure_private_dir, runtime_dir, write_private
+from console.runtime.private_dir import ensure_private_dir, pid_alive, runtime_dir, write_private
 
 #: how long the server waits for the relays to open after its e-stop
 ESTOP_WAIT_S = 1.0
@@ -160,16 +160,6 @@ class Reached:
         return f"{who}: " + ("confirmed " if self.confirmed else "NOT confirmed: ") + self.why
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def _reach(sock: Path, timeout_s: float) -> Reached:
     meta_path = sock.with_suffix(".json")
     try:
@@ -191,7 +181,7 @@ def _reach(sock: Path, timeout_s: float) -> Reached:
                 p.unlink()
         return result(True, "", stale=True)
 
-    if pid > 0 and not _pid_alive(pid):
+    if pid > 0 and not pid_alive(pid):
         return remove()
     try:
         reply, server_pid = request(sock, "estop", timeout_s=timeout_s)

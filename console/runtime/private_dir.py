@@ -26,36 +26,60 @@ def runtime_dir() -> Path:
 
 def ensure_private_dir(d: Path) -> Path:
     """Create ``d`` 0700, or verify an existing one is ours and private. Raises ``UserError``."""
+    return ensure_own_dir(d, forbidden_mode=0o077, what="the runtime directory")
+
+
+def ensure_own_dir(
+    d: Path,
+    *,
+    forbidden_mode: int,
+    what: str,
+    fix: str = "set XDG_RUNTIME_DIR to a directory of yours",
+) -> Path:
+    """Create ``d`` (0700, parents too) or check an existing one: a real directory (not a
+    symlink) owned by this user, none of ``forbidden_mode``'s bits set (0o077: private;
+    0o022: nobody else may write, as a socket's folder needs). ``UserError`` naming ``d``,
+    ``what`` it is for and the fix otherwise."""
     try:
-        os.mkdir(d, 0o700)
-    except FileExistsError:
-        pass
-    except FileNotFoundError:
-        raise UserError(
-            f"{d}: its parent directory does not exist; set XDG_RUNTIME_DIR to a directory of yours"
-        ) from None
-    except OSError as exc:
-        raise UserError(f"{d}: cannot create the runtime directory: {exc.strerror}") from None
-    try:
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+        st = os.lstat(d)
+    except FileExistsError:  # a file or a dangling symlink in the way
         st = os.lstat(d)
     except OSError as exc:
-        raise UserError(f"{d}: cannot read the runtime directory: {exc.strerror}") from None
+        raise UserError(f"{d}: cannot create {what}: {exc.strerror}; {fix}") from None
     if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
         raise UserError(
-            f"{d}: the runtime directory is not a plain directory (a symlink or file); "
-            f"remove it (another user may have planted it) and start again"
+            f"{d}: {what} is not a plain directory (a symlink or file; not a plain folder); "
+            f"remove it (another user may have planted it) or {fix}"
         )
     if st.st_uid != os.getuid():
         raise UserError(
-            f"{d}: the runtime directory belongs to uid {st.st_uid}, not to you "
-            f"({os.getuid()}); remove it or set XDG_RUNTIME_DIR to a directory of yours"
+            f"{d}: {what} belongs to uid {st.st_uid}, not to you ({os.getuid()}); "
+            f"remove it or {fix}"
         )
-    if st.st_mode & 0o077:
+    if st.st_mode & forbidden_mode:
+        mode = stat.S_IMODE(st.st_mode)
+        cmd = "chmod 700" if forbidden_mode == 0o077 else "chmod go-w"
         raise UserError(
-            f"{d}: the runtime directory has mode {stat.S_IMODE(st.st_mode):03o}; "
-            f"run `chmod 700 {d}`"
+            f"{d}: {what} has mode {mode:03o} (a shared folder: others may replace what is "
+            f"in it); run `{cmd} {d}` or {fix}"
         )
     return d
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie does not; another user's does)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
 
 
 def open_private(path: Path | str, *, append: bool = False) -> int:

@@ -81,7 +81,7 @@ from console.runtime.link_protocol import (
     decode,
     encode,
 )
-from console.runtime.private_dir import open_private, runtime_dir
+from console.runtime.private_dir import ensure_own_dir, open_private, pid_alive, runtime_dir
 
 log = logging.getLogger("haptable.projector")
 
@@ -112,32 +112,13 @@ def prepare_socket_dir(path: Path) -> Path:
             f"projector socket {path}: longer than {MAX_SOCKET_PATH} bytes; "
             "set [projector] socket_path to a shorter path"
         )
-    folder = path.parent
-    fix = "or leave [projector] socket_path empty for the private runtime folder"
-    try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        st = os.lstat(folder)
-    except OSError as e:
-        raise UserError(
-            f"projector socket {path}: cannot create its folder ({e.strerror}); "
-            f"choose another socket_path, {fix}"
-        ) from None
-    if not stat.S_ISDIR(st.st_mode):
-        raise UserError(
-            f"projector socket {path}: {folder} is not a plain folder (a symlink?); "
-            f"choose another socket_path, {fix}"
-        )
-    if st.st_uid != os.getuid():
-        raise UserError(
-            f"projector socket {path}: {folder} belongs to uid {st.st_uid}, not to you "
-            f"({os.getuid()}); choose a folder of yours, {fix}"
-        )
-    if st.st_mode & 0o022:
-        raise UserError(
-            f"projector socket {path}: {folder} is a shared folder (mode "
-            f"{stat.S_IMODE(st.st_mode):o}: others may replace the socket); run "
-            f"`chmod go-w {folder}` or choose a private folder, {fix}"
-        )
+    ensure_own_dir(
+        path.parent,
+        forbidden_mode=0o022,
+        what=f"the folder of the projector socket {path.name}",
+        fix="choose another [projector] socket_path, or leave it empty for the private "
+        "runtime folder",
+    )
     return path
 
 
@@ -604,20 +585,6 @@ class ProjectorLink:
 
 
 # --------------------------------------------------------------------------- supervisor
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:  # a zombie is dead for our purposes
-        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return True
-
-
 def kill_projector(pid: int, sig: int = signal.SIGKILL) -> None:
     """Signal the projector: its whole process group when it leads one (we started it so)."""
     try:
@@ -740,7 +707,7 @@ class ProjectorSupervisor:
                 self.last_exit = code
                 return False
             return True
-        return self.pid is not None and _alive(self.pid)
+        return self.pid is not None and pid_alive(self.pid)
 
     def _watch(self) -> None:
         while not self._stop.wait(0.05):
@@ -807,7 +774,7 @@ class ProjectorSupervisor:
             deadline = time.monotonic() + timeout_s
             sent_term = False
             while time.monotonic() < deadline:
-                if (proc.poll() is not None) if proc else not _alive(pid):
+                if (proc.poll() is not None) if proc else not pid_alive(pid):
                     break
                 if not sent_term and time.monotonic() > deadline - timeout_s / 2:
                     kill_projector(pid, signal.SIGTERM)

@@ -15,8 +15,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from console.errors import SafetyRefusal
-from console.safety import Source
 from console.safety_audit import Window, received_problems
+from console.safety_bench import FaultySource, FaultyStream, fresh_window
 from console.signals import ramp_envelope
 from console.types import OutputPlan, Segment
 
@@ -30,17 +30,7 @@ PROPS = settings(
 ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
 
 
-def fresh(outputs) -> Window:
-    """Start an example from a clean, attached, reset gate; where its records begin."""
-    g = outputs.gate
-    if g.estopped:
-        g.wait_safe(5)
-        outputs.reset()
-    outputs.scheduler.attach_to_gate()
-    t = time.monotonic() + 5
-    while outputs.scheduler.busy and time.monotonic() < t:
-        time.sleep(0.002)
-    return Window(outputs.recording().shape[0], len(outputs.relay_log()), time.monotonic())
+fresh = fresh_window
 
 
 def check_received(outputs, start: Window, route: frozenset[str]) -> None:
@@ -63,49 +53,6 @@ FAULTS = st.sampled_from(["none", "nan", "step", "raise", "object", "stall", "wr
 def signal(n: int, amp: float, f: float) -> np.ndarray:
     t = np.arange(n) / FS
     return amp * np.sin(2 * np.pi * f * t) * ramp_envelope(n, 480)
-
-
-class FaultyStream:
-    def __init__(self, route, amp, f, fault, at, n_total):
-        self.patches, self.screen = route, False
-        self.amp, self.f, self.fault, self.at, self.n_total, self.k = amp, f, fault, at, n_total, 0
-
-    def next_block(self, n):
-        if self.k >= self.n_total:
-            return None
-        k = self.k + np.arange(n)
-        x = self.amp * np.sin(2 * np.pi * self.f * k / FS) * np.minimum(1.0, k / 480)
-        if self.k >= self.at:
-            if self.fault == "nan":
-                x[0] = np.nan
-            elif self.fault == "step":
-                x = x + 60.0
-            elif self.fault == "raise":
-                raise RuntimeError("effect crashed")
-            elif self.fault == "object":
-                x = x.astype(object)
-            elif self.fault == "stall":
-                time.sleep(0.25)
-            elif self.fault == "wrong_len":
-                x = x[:-1]
-        self.k += n
-        return x, np.zeros(len(x))
-
-    def request_stop(self):
-        self.n_total = self.k
-
-
-class FaultySource(Source, FaultyStream):
-    @property
-    def idle(self):
-        return False
-
-    def abort(self, reason):
-        pass
-
-    def next_block(self, n):
-        out = FaultyStream.next_block(self, n)
-        return out if out is not None else (np.zeros(n), np.zeros(n))
 
 
 def estop_later(outputs, delay_s: float | None) -> threading.Thread | None:

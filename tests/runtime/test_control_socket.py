@@ -14,21 +14,7 @@ from console.errors import UserError
 from console.runtime.control import ControlServer, send_command, socket_path
 from console.runtime.private_dir import runtime_dir
 
-
-def connect(path, timeout_s: float = 2.0) -> socket.socket:
-    """A client connection; a backlog nobody accepts from is a failure, not a hang."""
-    t_end = time.monotonic() + timeout_s
-    while True:
-        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        s.settimeout(timeout_s)
-        try:
-            s.connect(str(path))
-            return s
-        except BlockingIOError:  # the backlog is full right now
-            s.close()
-            if time.monotonic() > t_end:
-                raise TimeoutError(f"{path}: nobody accepts connections") from None
-            time.sleep(0.005)
+from .conftest import connect
 
 
 def _server(profile, calls=None):

@@ -27,6 +27,8 @@ from console.cli import main
 from console.errors import UserError
 from console.runtime.private_dir import ensure_private_dir, runtime_dir
 
+from .conftest import connect
+
 ROOT = Path(__file__).resolve().parents[2]
 #: the exit status of a command stopped by `haptable estop` (README, Commands)
 EXIT_ESTOPPED = 4
@@ -255,20 +257,6 @@ def _cap() -> dict:
 
 
 # ---------------------------------------------------------------------- (c) clients
-def connect(path: Path, timeout_s: float = 2.0) -> socket.socket:
-    """A client connection; a backlog nobody accepts from is a failure, not a hang."""
-    t_end = time.monotonic() + timeout_s
-    while True:
-        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        s.settimeout(timeout_s)
-        try:
-            s.connect(str(path))
-            return s
-        except BlockingIOError:  # the backlog is full right now
-            s.close()
-            if time.monotonic() > t_end:
-                raise TimeoutError(f"{path}: nobody accepts connections") from None
-            time.sleep(0.005)
 
 
 def _idle_clients(path: Path, n: int) -> list[socket.socket]:

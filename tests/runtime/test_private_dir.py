@@ -21,7 +21,7 @@ def test_shared_mode_refused_with_fix(tmp_path):
     d = tmp_path / "shared"
     d.mkdir(mode=0o777)
     os.chmod(d, 0o777)
-    with pytest.raises(UserError, match=r"mode 777; run `chmod 700"):
+    with pytest.raises(UserError, match=r"mode 777 .*run `chmod 700"):
         ensure_private_dir(d)
 
 
