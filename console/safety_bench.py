@@ -7,7 +7,8 @@
 - ``estop``: e-stop latency, the request to the last non-zero sample at the driver (the
   twin's DAC, paced in real time), for the gate in the console's own process, for a demo
   in its own process (the console's Scenes screen) and for a CLI demo stopped by
-  ``haptable estop`` from another process.
+  ``haptable estop`` from another process (there also the whole command's time, Python's
+  start-up included, and the demo's own request -> confirmed silent).
 """
 
 from __future__ import annotations
@@ -280,6 +281,8 @@ def estop_demo_host(ctx, trials: int) -> dict[str, Any]:
 def estop_cli_demo(ctx, trials: int) -> dict[str, Any]:
     """``haptable demo knob`` from a shell, stopped by ``haptable estop`` from another one."""
     lat: list[float] = []
+    command_s: list[float] = []  # `haptable estop` started -> exited (Python start-up included)
+    server_s: list[float] = []  # the demo's own e-stop request -> confirmed silent
     failed: list[str] = []
     profile = str(ctx.profile.path)
     with tempfile.TemporaryDirectory() as d:
@@ -296,9 +299,15 @@ def estop_cli_demo(ctx, trials: int) -> dict[str, Any]:
             )
             try:
                 time.sleep(4.0)  # started and turning
+                t0 = time.perf_counter()
                 stop = subprocess.run(
-                    [*cmd, "estop"], env=env, capture_output=True, text=True, timeout=30
+                    [*cmd, "estop", "--json"], env=env, capture_output=True, text=True, timeout=30
                 )
+                command_s.append(time.perf_counter() - t0)
+                with contextlib.suppress(ValueError, KeyError):
+                    for proc in json.loads(stop.stdout)["processes"]:
+                        if proc.get("pid") == demo.pid and proc.get("server_ms") is not None:
+                            server_s.append(proc["server_ms"] * 1e-3)
                 demo.wait(30)
             finally:
                 if demo.poll() is None:
@@ -310,7 +319,13 @@ def estop_cli_demo(ctx, trials: int) -> dict[str, Any]:
                 failed.append(f"trial {i}: no twin log with an e-stop ({demo.returncode})")
             else:
                 lat.append(got)
-    return {**summarize_s(lat), "trials": trials, "failed": failed[:5]}
+    return {
+        **summarize_s(lat),
+        "trials": trials,
+        "estop_command_ms": summarize_s(command_s),
+        "process_confirm_ms": summarize_s(server_s),
+        "failed": failed[:5],
+    }
 
 
 def run(ctx, quick: bool) -> dict[str, Any]:
