@@ -59,6 +59,7 @@ class _Step:
     pos: int = 0
     stream: StreamSource | None = None
     phase: str = ""  # relays: "", "switching", "settling"
+    token: int = 0  # relays: the switch request this step waits for
     segment: int = -1
     restore: bool = False  # relays: go to the operator's own setting (read when it runs)
 
@@ -93,6 +94,11 @@ class Scheduler(Source):
         self._job: _Job | None = None
         self._switch_q: queue.Queue = queue.Queue()
         self._switch_result: queue.Queue = queue.Queue()
+        # every switch request carries a token and the e-stop epoch it was made in: the
+        # worker never runs a request from before an e-stop, a step never takes another's
+        # answer
+        self._epoch = 0
+        self._tokens = 0
         self._stream_k = 0
         self._stream_last = (0.0, 0.0)
         #: the operator's own relay setting (console toggles); a stimulus routes the relays
@@ -240,6 +246,7 @@ class Scheduler(Source):
         self._caller.interrupt()
         self._caller = SourceCaller("haptable-stream")  # a stalled call keeps the old one
         with self._lock:
+            self._epoch += 1  # switch requests queued before now are dropped
             jobs = list(self._jobs)
             if self._job is not None:
                 jobs.insert(0, self._job)
@@ -403,13 +410,19 @@ class Scheduler(Source):
             if gate.quiet_samples() < need or gate.switch_wait_samples(st.relays) > 0:
                 return False  # emit silence until the guard gap (and the rate limit) passed
             st.phase = "switching"
-            self._switch_q.put(st.relays)
+            with self._lock:
+                self._tokens += 1
+                st.token = self._tokens
+                self._switch_q.put((self._epoch, st.token, st.relays))
             return False
         if st.phase == "switching":
-            try:
-                ok, msg = self._switch_result.get_nowait()
-            except queue.Empty:
-                return False
+            while True:
+                try:
+                    token, ok, msg = self._switch_result.get_nowait()
+                except queue.Empty:
+                    return False
+                if token == st.token:
+                    break  # (an answer to a request of an aborted job is dropped)
             if not ok:
                 job.report.error = msg
                 if job.previous is not None:
@@ -436,16 +449,20 @@ class Scheduler(Source):
 
         realtime_priority(SUPPORT_PRIORITY)  # part of the output path, as the audio thread
         while True:
-            target = self._switch_q.get()
-            if target is None:
+            item = self._switch_q.get()
+            if item is None:
                 return
+            epoch, token, target = item
+            if epoch != self._epoch:  # made before an e-stop: dropped, never run later
+                self._switch_result.put((token, False, "dropped by the e-stop"))
+                continue
             try:
                 self.gate.switch_relays(target)
-                self._switch_result.put((True, ""))
+                self._switch_result.put((token, True, ""))
             except SafetyRefusal as exc:
-                self._switch_result.put((False, str(exc)))
+                self._switch_result.put((token, False, str(exc)))
             except Exception as exc:  # never let the worker die silently
-                self._switch_result.put((False, f"relay switch failed: {exc!r}"))
+                self._switch_result.put((token, False, f"relay switch failed: {exc!r}"))
 
     def close(self) -> None:
         self._switch_q.put(None)

@@ -279,3 +279,31 @@ def test_a_plan_gap_is_checked_and_counted(outputs, gap_s):
     with pytest.raises(SafetyRefusal, match="gap_s|max_plan_s"):
         outputs.play(plan)
     assert not np.any(outputs.recording())
+
+
+def test_a_switch_answer_from_before_an_estop_is_not_taken_by_the_next_stimulus(outputs):
+    board = outputs._board
+    release = threading.Event()
+    orig = board.set
+
+    def slow_set(ch, closed):
+        if ch == 1 and closed:
+            release.wait(5)  # the relay board takes its time (USB)
+        elif closed:
+            time.sleep(0.05)
+        orig(ch, closed)
+
+    board.set = slow_set
+    outputs.set_relays({1}, wait=False)  # the worker is now inside the switch
+    time.sleep(0.05)
+    t = threading.Thread(target=outputs.estop)
+    t.start()
+    time.sleep(0.05)
+    release.set()
+    t.join(5)
+    assert outputs.gate.relay_state() == frozenset(), "the e-stop waited and opened it"
+    outputs.reset()
+    x = tone(250, 10.0, 0.05, FS, 0.01)
+    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PB"})),)))
+    assert not outputs.gate.estopped, outputs.gate.estop_reason
+    assert any(s.channel == 2 and s.closed for s in outputs.relay_log())
