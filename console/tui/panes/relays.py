@@ -58,9 +58,9 @@ class RelaysPane(VerticalScroll):
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
         yield Static(
-            "keys 1-8 toggle a relay. Relays switch only while both outputs are silent "
-            "(guard gap); a toggle waits behind a playing stimulus and is refused during an "
-            "e-stop.",
+            "keys 1-8 toggle your relay setting. Relays switch only while both outputs are "
+            "silent (guard gap); a playing stimulus routes them its way and yours come back "
+            "when it ends; during an e-stop a toggle is refused and never runs later.",
             classes="hint",
         )
         for ch in range(1, int(prof.get("relays.channels")) + 1):
