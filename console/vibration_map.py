@@ -10,7 +10,9 @@ key                dtype, shape                meaning
 ``frf_um_per_v``   complex128 (E, P, F)        displacement FRF, micrometres per volt
                                                at the piezo terminals (peak/peak-ampl.)
 ``freq_hz``        float64 (F,)                frequency bins, >= 0, strictly increasing
-``points``         int64 (P,)                  grid numbers 1..rows*columns, row by row
+``points``         int64 (P,)                  point ids >= 1: the measurement's node
+                                               numbers (any order; the profile's grid
+                                               numbers, row by row, for the twin)
 ``points_mm``      float64 (P, 2)              x, y in mm from the glass corner
                                                (x along the long edge)
 ``excitations``    str (E,)                    names from PA PB PC PD PALL (PALL: the
@@ -26,7 +28,9 @@ key                dtype, shape                meaning
 "units": {"frf": "um/V", "freq": "Hz", "position": "mm"}, "provenance": {"source":
 ..., "date": ISO 8601, "gain": amplifier gain applied (generator volts -> piezo volts),
 "note": ...}}``. Every value is finite (masked bins hold 0). A map normally holds all
-five excitations; ``validate_map(..., require_all=False)`` accepts a subset.
+five excitations; ``validate_map(..., require_all=False)`` accepts a subset. Which
+points are neighbours, and the grid a screen draws, come from ``points_mm``
+(``grid_cells``), never from the numbering.
 
 Errors are ``UserError`` with one line naming the file, the key and the fix.
 """
@@ -66,7 +70,7 @@ class VibrationMap:
 
     frf_um_per_v: np.ndarray  # (E, P, F) complex
     freq_hz: np.ndarray  # (F,)
-    points: np.ndarray  # (P,) int, grid numbers
+    points: np.ndarray  # (P,) int, point ids (node numbers)
     points_mm: np.ndarray  # (P, 2)
     excitations: tuple[str, ...]
     masked: np.ndarray  # (F,) bool
@@ -82,7 +86,7 @@ class VibrationMap:
         return self.excitations.index(name)
 
     def point_index(self, number: int) -> int:
-        """Index of grid point ``number`` (1-based grid numbering)."""
+        """Index of the point with id ``number`` (the measurement's node number)."""
         hits = np.flatnonzero(self.points == int(number))
         if hits.size == 0:
             raise UserError(
@@ -205,7 +209,7 @@ def validate_map(
         raise UserError(
             f"{where}: points holds grid number {int(m.points[out][0])}, outside 1..{top}"
             + (" (the profile's [grid] rows x columns)" if grid_points is not None else "")
-            + "; number the points row by row from 1"
+            + "; point ids (node numbers) are whole numbers >= 1"
         )
     if len(set(m.points.tolist())) != P:
         raise UserError(f"{where}: points has duplicate grid numbers; each point must appear once")
@@ -430,3 +434,19 @@ def grid_points_mm(
     return np.column_stack(
         [origin_mm[0] + (n % columns) * pitch_mm, origin_mm[1] + (n // columns) * pitch_mm]
     ).astype(float)
+
+
+def grid_cells(points_mm: np.ndarray, tol_mm: float = 1e-3) -> tuple[int, int, np.ndarray]:
+    """The screen grid the points form, from their coordinates (never their numbering):
+    ``(rows, columns, cells)`` with ``cells[i] = (row, column)`` of point ``i``; rows grow
+    with y, columns with x. Coordinates within ``tol_mm`` share a row/column."""
+    xy = np.asarray(points_mm, float)
+
+    def levels(v: np.ndarray) -> np.ndarray:
+        order = np.argsort(v, kind="stable")
+        lev = np.zeros(v.size, np.int64)
+        lev[order] = np.concatenate([[0], np.cumsum(np.diff(v[order]) > tol_mm)])
+        return lev
+
+    col, row = levels(xy[:, 0]), levels(xy[:, 1])
+    return int(row.max()) + 1, int(col.max()) + 1, np.column_stack([row, col])

@@ -200,13 +200,9 @@ def save_map(path: Path, vmap) -> Path:
 
 
 def load_map(path: Path, profile=None):
-    """A vibration map file (any subset of excitations), its point numbers checked
-    against ``profile``'s grid when given; bad files are a one-line ``UserError``."""
+    """A vibration map file (any subset of excitations); its point ids are the
+    measurement's node numbers (any positive number); bad files are a one-line
+    ``UserError``. ``profile`` is accepted for the callers' symmetry."""
     from console.vibration_map import load_map as _load
 
-    g = _section(profile, "grid") if profile is not None else {}
-    try:
-        grid = int(g["rows"]) * int(g["columns"])
-    except (KeyError, TypeError, ValueError):
-        grid = None
-    return _load(Path(path).expanduser(), require_all=False, grid_points=grid)
+    return _load(Path(path).expanduser(), require_all=False)

@@ -70,12 +70,6 @@ def cache_dir_of(args, ctx) -> Path | None:
     return Path(raw).expanduser() if raw else default_cache_dir()
 
 
-def grid_points(ctx) -> int | None:
-    """rows x columns of the profile's grid (point numbers run 1..this)."""
-    g = ctx.profile.section("grid")
-    return int(g["rows"]) * int(g["columns"])
-
-
 def sample_rate(ctx) -> float:
     return float(ctx.profile.get("audio.sample_rate_hz"))
 
@@ -88,9 +82,9 @@ def finite(name: str, value: float | None, lo: float, hi: float, fix: str) -> fl
 
 
 def parse_point(text: str, vmap):
-    """``51`` (grid number) -> map index; ``x,y`` (mm) -> (x, y), finite."""
+    """``51`` (point id: the map's node number) -> map index; ``x,y`` (mm) -> (x, y), finite."""
     t = text.strip()
-    hint = f"give a grid number 1..{int(vmap.points.max())} or x,y in mm (e.g. 300,200)"
+    hint = "give a point id of the map (its node number) or x,y in mm (e.g. 300,200)"
     if "," in t:
         try:
             x, y = (float(v) for v in t.split(","))
@@ -114,11 +108,10 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
     from plugins.vibrotactile.vibration_io import is_tables_file
 
     if is_tables_file(path):
-        return load_tables(path, sample_rate_hz=sample_rate(ctx), grid_points=grid_points(ctx))
+        return load_tables(path, sample_rate_hz=sample_rate(ctx))
     vm = load_map(
         path,
         require_all=not getattr(args, "allow_missing", False),
-        grid_points=grid_points(ctx),
     )
     c = getattr(args, "min_contrast_db", None)
     c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else float(c)
@@ -179,19 +172,51 @@ def plan_summary(plan) -> dict:
 # ---------------------------------------------------------------------- frf
 def configure_frf(p: argparse.ArgumentParser) -> None:
     sub = p.add_subparsers(dest="frf_cmd", metavar="ACTION", required=True)
-    i = sub.add_parser("import", help="UFF 58/58b files, one per excitation -> vibration map")
+    i = sub.add_parser(
+        "import",
+        help="UFF 58/58b -> vibration map: EXC=FILE per excitation, or one FILE for all",
+    )
     i.add_argument(
-        "files", nargs="+", metavar="EXC=FILE", help="PA=pa.uff PB=pb.uff ... PALL=all.uff"
+        "files",
+        nargs="+",
+        metavar="EXC=FILE|FILE",
+        help="PA=pa.uff PB=pb.uff ... PALL=all.uff, or one file holding every excitation "
+        "(told apart by reference node: --ref-node)",
     )
     i.add_argument("--out", required=True, help="vibration map (.npz) to write")
+    i.add_argument(
+        "--ref-node",
+        nargs="+",
+        metavar="EXC=NODE",
+        default=None,
+        help="one file for all: the reference node of each excitation (default PA=1 PB=2 "
+        "PC=3 PD=4 PALL=5)",
+    )
     i.add_argument(
         "--gain",
         type=float,
         default=None,
-        help="amplifier gain: the UFF reference is generator volts (default: profile amplifiers.piezo_gain)",
+        help="amplifier gain: the UFF reference is generator volts (default: the gain a "
+        "HapTable export stored, else profile amplifiers.piezo_gain)",
     )
     i.add_argument(
-        "--mask-below-hz", type=float, default=None, help="mask bins below (default: profile)"
+        "--mask-below-hz",
+        type=float,
+        default=None,
+        help="mask bins below (default: a HapTable export's mask, else profile)",
+    )
+    i.add_argument(
+        "--reference",
+        choices=("voltage", "force"),
+        default="voltage",
+        help="what the FRF is per: generator voltage (default) or a measured force (m/N: "
+        "needs --sensitivity-n-per-v)",
+    )
+    i.add_argument(
+        "--sensitivity-n-per-v",
+        type=float,
+        default=None,
+        help="with --reference force: newtons of that force per generator volt",
     )
     i.add_argument(
         "--allow-missing", action="store_true", help="accept fewer than five excitations"
@@ -201,7 +226,11 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     e.add_argument("--out", required=True, help="folder for PA.uff ... PALL.uff")
     e.add_argument("--binary", action="store_true", help="write binary 58b")
     e.add_argument(
-        "--gain", type=float, default=1.0, help="reference volts per piezo volt (1: piezo volts)"
+        "--gain",
+        type=float,
+        default=1.0,
+        help="amplifier gain: write per generator volt = map x gain (1: per piezo volt); "
+        "stored in the files, so import reads it back",
     )
     m = sub.add_parser(
         "measure", help="measure a vibration map with the profile's vibrometer (twin: simulated)"
@@ -217,21 +246,54 @@ def run_frf(args, ctx) -> int:
         from console.vibration_map import grid_points_mm, save_map
         from plugins.vibrotactile.uff_io import import_uff
 
-        files = {}
-        for item in args.files:
-            if "=" not in item:
-                raise UserError(f"{item!r}: write EXC=FILE, e.g. PA=pa.uff")
-            exc, path = item.split("=", 1)
-            files[exc.strip().upper()] = path
+        plain = [f for f in args.files if "=" not in f]
+        if plain and (len(args.files) > 1):
+            raise UserError(
+                f"{plain[0]!r}: give EXC=FILE per excitation (PA=pa.uff ...) or one FILE for "
+                "all excitations (with --ref-node), not both"
+            )
+        if plain:
+            files = plain[0]
+        else:
+            if args.ref_node:
+                raise UserError("--ref-node: only for one FILE holding every excitation")
+            files = {}
+            for item in args.files:
+                exc, path = item.split("=", 1)
+                files[exc.strip().upper()] = path
+        ref_nodes = None
+        if args.ref_node:
+            ref_nodes = {}
+            for item in args.ref_node:
+                exc, _, num = item.partition("=")
+                try:
+                    ref_nodes[exc.strip().upper()] = int(num)
+                except ValueError:
+                    raise UserError(f"--ref-node {item!r}: write EXC=NODE, e.g. PA=1") from None
         g = ctx.profile.section("grid")
         grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
-        gain = args.gain if args.gain is not None else ctx.profile.get("amplifiers.piezo_gain")
-        mask = args.mask_below_hz if args.mask_below_hz is not None else _vt(ctx)["mask_below_hz"]
-        finite("--gain", gain, 1e-6, 1e6, "the amplifier gain must be > 0 (PI E413.D2: 50)")
-        finite("--mask-below-hz", mask, 0, 1e5, "give 0 or more Hz (default: profile, 5)")
-        m = import_uff(
-            files, gain=gain, mask_below_hz=mask, grid_mm=grid, require_all=not args.allow_missing
+        finite("--gain", args.gain, 1e-6, 1e6, "the amplifier gain must be > 0 (PI E413.D2: 50)")
+        finite("--mask-below-hz", args.mask_below_hz, 0, 1e5, "give 0 or more Hz (default 5)")
+        finite(
+            "--sensitivity-n-per-v",
+            args.sensitivity_n_per_v,
+            1e-9,
+            1e9,
+            "give the newtons per generator volt (> 0)",
         )
+        m = import_uff(
+            files,
+            gain=args.gain,
+            mask_below_hz=args.mask_below_hz,
+            grid_mm=grid,
+            require_all=not args.allow_missing,
+            ref_nodes=ref_nodes,
+            reference=args.reference,
+            sensitivity_n_per_v=args.sensitivity_n_per_v,
+            default_gain=ctx.profile.get("amplifiers.piezo_gain"),
+            default_mask_below_hz=_vt(ctx)["mask_below_hz"],
+        )
+        gain = m.provenance["gain"]
         save_map(args.out, m)
         print(
             f"wrote {args.out}: {len(m.excitations)} excitations x {m.points.size} points x "
@@ -246,11 +308,11 @@ def run_frf(args, ctx) -> int:
     if args.frf_cmd == "export":
         from plugins.vibrotactile.uff_io import export_uff
 
-        m = load_map(args.map, require_all=False, grid_points=grid_points(ctx))
+        m = load_map(args.map, require_all=False)
         for path in export_uff(m, args.out, binary=args.binary, gain=args.gain):
             print(f"wrote {path}")
         return 0
-    m = load_map(args.map, require_all=False, grid_points=grid_points(ctx))
+    m = load_map(args.map, require_all=False)
     info = {
         "excitations": list(m.excitations),
         "points": int(m.points.size),
@@ -311,8 +373,8 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     )
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
     q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
-    q.add_argument("--active", required=True, help="grid number 1..84 (row by row) or x,y in mm")
-    q.add_argument("--passive", required=True, help="grid number 1..84 or x,y in mm")
+    q.add_argument("--active", required=True, help="point id (the map's node number) or x,y in mm")
+    q.add_argument("--passive", required=True, help="point id (node number) or x,y in mm")
     q.add_argument(
         "--method",
         choices=("spline", "keys", "bilinear"),
@@ -335,7 +397,7 @@ def run_tables(args, ctx) -> int:
         c = args.min_contrast_db
         c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else c
         finite("--min-contrast-db", c, 0, 200, "give 0 (the paper's rule) or more dB")
-        m = load_map(args.map, require_all=not args.allow_missing, grid_points=grid_points(ctx))
+        m = load_map(args.map, require_all=not args.allow_missing)
         t0 = time.perf_counter()
         t = build_tables(
             m, args.band_hz or _vt(ctx)["band_hz"], progress_printer(), min_contrast_db=c
@@ -387,8 +449,8 @@ def run_tables(args, ctx) -> int:
 # ---------------------------------------------------------------------- flow / point
 def configure_flow(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", metavar="TABLES|MAP", help="tables file, or a vibration map")
-    p.add_argument("--from", dest="from_", help="start point: grid number 1..84 or x,y mm")
-    p.add_argument("--to", help="end point: grid number 1..84 or x,y mm")
+    p.add_argument("--from", dest="from_", help="start point: point id (node number) or x,y mm")
+    p.add_argument("--to", help="end point: point id (node number) or x,y mm")
     p.add_argument("--hand", help="hand centre x,y in mm (flow under a hand)")
     p.add_argument(
         "--direction", choices=("left", "right", "up", "down"), help="flow direction under the hand"
@@ -441,9 +503,7 @@ def run_flow(args, ctx) -> int:
         plan, summary = hand_plan(args, ctx, lim)
         return emit_plan(plan, args, ctx, summary)
     if not (args.from_ and args.to):
-        raise UserError(
-            "give --from P --to Q (grid numbers or x,y mm), or --hand X,Y --direction D"
-        )
+        raise UserError("give --from P --to Q (point ids or x,y mm), or --hand X,Y --direction D")
     t = tables_for(args.source, ctx, args)
     a, b = parse_point(args.from_, t.vmap), parse_point(args.to, t.vmap)
     plan = flow_plan(
@@ -469,7 +529,6 @@ def hand_plan(args, ctx, lim):
         args.source,
         require_all=False,
         sample_rate_hz=sample_rate(ctx),
-        grid_points=grid_points(ctx),
     )
     try:
         cx, cy = (float(v) for v in args.hand.split(","))
@@ -502,7 +561,7 @@ def hand_plan(args, ctx, lim):
 
 def configure_point(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", metavar="TABLES|MAP")
-    p.add_argument("point", help="grid number 1..84 or x,y in mm")
+    p.add_argument("point", help="point id (node number) or x,y in mm")
     p.add_argument("--out", help="write the plan as a .wav + .json summary")
     p.add_argument("--play", action="store_true")
     p.add_argument("--cache-dir", default=None)

@@ -11,7 +11,7 @@ The request vocabulary, shared by the three effects:
 - the map: ``vmap`` = a vibration-map file, a tables file or a ``VibrationMap``;
   ``tables`` = a ``Tables`` (its map and ranking are used) or a tables file. One of
   them is required.
-- a point: a grid number (``int``, 1..rows x columns, row by row) or ``(x, y)`` in mm.
+- a point: a point id of the map (``int``, the measurement's node number) or ``(x, y)`` in mm.
 - ``name``: the plan's name (default: a description of the request).
 
 Consumers (scenes, demos, benchmarks) reach these only through
@@ -142,14 +142,9 @@ class _MapUser:
             return self._maps[key]
 
     def _file_checks(self) -> dict:
-        """What a map or tables file is checked against: the profile's grid size (point
-        numbers) and sample rate (Nyquist)."""
-        try:
-            g = self.profile.section("grid")
-            grid = int(g["rows"]) * int(g["columns"])
-        except (UserError, KeyError, TypeError, ValueError):
-            grid = None
-        return {"sample_rate_hz": self.setup.settings.sample_rate_hz, "grid_points": grid}
+        """What a map or tables file is checked against: the sample rate (Nyquist). Point
+        ids are the measurement's node numbers, not checked against the profile's grid."""
+        return {"sample_rate_hz": self.setup.settings.sample_rate_hz}
 
     def tables(
         self,

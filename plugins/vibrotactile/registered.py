@@ -104,8 +104,9 @@ class RegisteredFlowEffect(FlowEffect):
 
     def import_map(self, files: dict[str, str | os.PathLike]) -> VibrationMap:
         """A vibration map from UFF 58 files, one per excitation (``{"PA": path, ...}``;
-        missing excitations are allowed): gain ``[amplifiers] piezo_gain``, bins below
-        ``[vibrotactile] mask_below_hz`` masked, the profile's grid for files without
+        missing excitations are allowed): gain and mask stored by this project's export,
+        else gain ``[amplifiers] piezo_gain`` and bins below ``[vibrotactile] mask_below_hz``
+        masked, the profile's grid for files without
         point coordinates. Bad files are a ``UserError`` naming the file."""
         from console.vibration_map import grid_points_mm
         from plugins.vibrotactile.uff_io import import_uff
@@ -115,8 +116,8 @@ class RegisteredFlowEffect(FlowEffect):
         grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
         return import_uff(
             {str(e).strip().upper(): str(Path(f).expanduser()) for e, f in files.items()},
-            gain=float(p.get("amplifiers.piezo_gain")),
-            mask_below_hz=float(p.get("vibrotactile.mask_below_hz", 5.0)),
+            default_gain=float(p.get("amplifiers.piezo_gain")),
+            default_mask_below_hz=float(p.get("vibrotactile.mask_below_hz", 5.0)),
             grid_mm=grid,
             require_all=False,
         )

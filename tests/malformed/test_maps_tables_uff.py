@@ -117,7 +117,8 @@ def uff58(path: Path, nodes=(1, 2, 3), *, binary=False, data=None, f=None, kind=
             abscissa_inc=0.0,
             abscissa_spec_data_type=18,
             ordinate_spec_data_type=kind,
-            orddenom_spec_data_type=13,
+            orddenom_spec_data_type=1,  # the generator voltage ("general", unit V)
+            orddenom_axis_units_lab="V",
             data=d,
             x=f,
             id1="vibrometer",
@@ -305,7 +306,8 @@ MAP_CASES = [
     _mapkey("freq-1e300", "freq_hz", "1e+300", freq_hz=np.r_[F_HZ[:-1], 1e300]),
     _mapkey("points-duplicate", "points", "duplicate", points=np.r_[1, np.arange(1, 84)]),
     _mapkey("points-zero", "points", "0", points=np.arange(0, 84)),
-    _mapkey("points-85", "points", "85", points=np.arange(2, 86)),
+    # point ids are the measurement's node numbers (2..85 is a valid map); 0 is none
+    _mapkey("points-0", "points", "0", points=np.arange(0, 84)),
     _mapkey("points-negative", "points", "-3", points=np.r_[-3, np.arange(2, 85)]),
     _mapkey("points-int-overflow", "points", points=np.r_[2**40, np.arange(2, 85)]),
     _mapkey("freq-negative", "freq_hz", "negative", freq_hz=F_HZ - 10),

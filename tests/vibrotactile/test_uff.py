@@ -27,6 +27,7 @@ def write_vibrometer_uff(
     coords_m=None,
     nodes=None,
     coord_set=15,
+    denom=1,
 ):
     """What a vibrometer exports: FRF per *generator* volt in SI units (velocity by default)."""
     w = 2 * np.pi * freq_hz
@@ -75,7 +76,8 @@ def write_vibrometer_uff(
                 abscissa_inc=float(freq_hz[1] - freq_hz[0]),
                 abscissa_spec_data_type=18,
                 ordinate_spec_data_type=kind,
-                orddenom_spec_data_type=13,
+                orddenom_spec_data_type=denom,
+                orddenom_axis_units_lab="V",
                 data=d,
                 x=freq_hz,
                 id1="vibrometer",
@@ -233,7 +235,7 @@ def test_missing_excitation_and_bad_node(tmp_path, exact, grid_mm):
     assert m.excitations == ("PA", "PB", "PC", "PD")
     write_vibrometer_uff(files["PA"], exact[0, :3], F_HZ, nodes=np.array([1, 2, 99]))
     files = {e: files[e] for e in ("PA",)}
-    with pytest.raises(UserError, match="node 99 is not a grid number"):
+    with pytest.raises(UserError, match="node 99 is not a grid number .* no coordinates"):
         import_uff(files, gain=GAIN, grid_mm=grid_mm, require_all=False)
 
 

@@ -1,4 +1,5 @@
-"""Vibration: the 7 x 12 grid, audition a point, flows between two points (either way)
+"""Vibration: the map's grid (laid out from the points' coordinates, labelled with their
+ids: the measurement's node numbers), audition a point, flows between two points (either way)
 and under a hand (four directions), the FRF of the selected point with the frequency
 that plays marked, the lookup-table entry, UFF import and a simulated measurement."""
 
@@ -51,12 +52,15 @@ class VibrationPane(VerticalScroll):
         self.selected: list[int] = []
         self.rows = 7
         self.cols = 12
+        self.id_at: dict[tuple[int, int], int] = {}  # (row, column) -> point id
+        self.cell_of: dict[int, tuple[int, int]] = {}  # point id -> (row, column)
         self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
-        self.rows, self.cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
+        rows, cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
+        self._set_layout(rows, cols, {(n // cols, n % cols): n + 1 for n in range(rows * cols)})
         yield Input(
             placeholder="51 | 51 52 | hand 51 right | measure | import PA=a.uff ... | load F.npz",
             id="vib-cmd",
@@ -74,12 +78,33 @@ class VibrationPane(VerticalScroll):
     def focus_target(self):
         return self.query_one("#grid", DataTable)
 
-    def on_mount(self) -> None:
+    def _set_layout(self, rows: int, cols: int, id_at: dict[tuple[int, int], int]) -> None:
+        self.rows, self.cols, self.id_at = rows, cols, id_at
+        self.cell_of = {n: rc for rc, n in id_at.items()}
+
+    def _layout_from_map(self, vmap) -> None:
+        """The grid the map's points form by their coordinates, labelled with their ids."""
+        from console.vibration_map import grid_cells
+
+        rows, cols, cells = grid_cells(vmap.points_mm)
+        self._set_layout(
+            rows,
+            cols,
+            {(int(r), int(c)): int(n) for (r, c), n in zip(cells, vmap.points, strict=True)},
+        )
+        grid = self.query_one("#grid", DataTable)
+        grid.clear(columns=True)
+        self._fill_grid()
+
+    def _fill_grid(self) -> None:
         grid = self.query_one("#grid", DataTable)
         for c in range(self.cols):
             grid.add_column(f"{c + 1:>4}", key=str(c), width=4)
         for r in range(self.rows):
             grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1:>2}")
+
+    def on_mount(self) -> None:
+        self._fill_grid()
         self.query_one("#vib-info", Static).update(HELP)
         self.status("looking for a vibration map ...")
         self.load_cached()
@@ -87,7 +112,10 @@ class VibrationPane(VerticalScroll):
     def _row_cells(self, r: int) -> list[str]:
         cells = []
         for c in range(self.cols):
-            n = r * self.cols + c + 1
+            n = self.id_at.get((r, c))
+            if n is None:  # no point measured at this place
+                cells.append("    ")
+                continue
             txt = f"{n:>4}"
             if self.selected and n == self.selected[-1]:
                 txt = f" [b reverse]{n:>3}[/]"
@@ -127,12 +155,14 @@ class VibrationPane(VerticalScroll):
 
     def cursor_point(self) -> int:
         c = self.query_one("#grid", DataTable).cursor_coordinate
-        return c.row * self.cols + c.column + 1
+        n = self.id_at.get((c.row, c.column))
+        if n is None:
+            raise UserError(f"no point at row {c.row + 1}, column {c.column + 1}")
+        return n
 
     def move_cursor(self, n: int) -> None:
-        self.query_one("#grid", DataTable).cursor_coordinate = Coordinate(
-            (n - 1) // self.cols, (n - 1) % self.cols
-        )
+        if n in self.cell_of:
+            self.query_one("#grid", DataTable).cursor_coordinate = Coordinate(*self.cell_of[n])
 
     # ------------------------------------------------------------------ map
     @work(thread=True, exclusive=True, group="vib-load")
@@ -214,7 +244,7 @@ class VibrationPane(VerticalScroll):
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
         self.status(summary)
-        self._redraw_grid()
+        self._layout_from_map(session.vmap)
         self._show_selection()
         self._tables_worker(session, summary, self._new_stop("vib-tables"))
 
@@ -305,7 +335,9 @@ class VibrationPane(VerticalScroll):
 
     def on_data_table_cell_selected(self, event: DataTable.CellSelected) -> None:
         event.stop()
-        self.audition(event.coordinate.row * self.cols + event.coordinate.column + 1)
+        n = self.id_at.get((event.coordinate.row, event.coordinate.column))
+        if n is not None:
+            self.audition(n)
 
     def select(self, n: int) -> None:
         if self.selected and self.selected[-1] == n:
@@ -345,7 +377,11 @@ class VibrationPane(VerticalScroll):
     def action_hand(self, direction: str, n: int | None = None) -> None:
         if not self._need_session():
             return
-        n = n or self.cursor_point()
+        try:
+            n = n or self.cursor_point()
+        except UserError as exc:
+            self.app.notify(str(exc), severity="error")
+            return
         i = self.session.vmap.point_index(n)
         x, y = (float(v) for v in self.session.vmap.points_mm[i])
         self.status(f"flow {direction} under a hand at point {n} ({x:.0f}, {y:.0f} mm) ...")
@@ -502,7 +538,7 @@ def _point(word: str) -> int:
     try:
         return int(word)
     except ValueError:
-        raise UserError(f"{word!r}: give a grid point number, e.g. 51") from None
+        raise UserError(f"{word!r}: give a point id (the map's node number), e.g. 51") from None
 
 
 def describe_plan(plan) -> str:
