@@ -221,10 +221,17 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     i.add_argument(
         "--allow-missing", action="store_true", help="accept fewer than five excitations"
     )
-    e = sub.add_parser("export", help="vibration map -> one UFF 58 file per excitation")
+    e = sub.add_parser(
+        "export", help="vibration map -> UFF 58, one file per excitation (or --one-file)"
+    )
     e.add_argument("map")
     e.add_argument("--out", required=True, help="folder for PA.uff ... PALL.uff")
     e.add_argument("--binary", action="store_true", help="write binary 58b")
+    e.add_argument(
+        "--one-file",
+        action="store_true",
+        help="write DIR/all.uff holding every excitation (ref_node PA=1 .. PALL=5)",
+    )
     e.add_argument(
         "--gain",
         type=float,
@@ -309,7 +316,9 @@ def run_frf(args, ctx) -> int:
         from plugins.vibrotactile.uff_io import export_uff
 
         m = load_map(args.map, require_all=False)
-        for path in export_uff(m, args.out, binary=args.binary, gain=args.gain):
+        for path in export_uff(
+            m, args.out, binary=args.binary, gain=args.gain, one_file=args.one_file
+        ):
             print(f"wrote {path}")
         return 0
     m = load_map(args.map, require_all=False)

@@ -550,11 +550,17 @@ def _check_magnitudes(frf, f, nodes, order, parts, gain: float) -> None:
 
 
 def export_uff(
-    m: VibrationMap, out_dir: str | os.PathLike, *, binary: bool = False, gain: float = 1.0
+    m: VibrationMap,
+    out_dir: str | os.PathLike,
+    *,
+    binary: bool = False,
+    gain: float = 1.0,
+    one_file: bool = False,
 ) -> list[Path]:
     """Write ``out_dir/<EXC>.uff`` per excitation: displacement in m per generator volt
     (the map times ``gain``, the amplifier gain; 1: per piezo volt), with the gain (id2)
-    and the masked bins (id3) stored so that ``import_uff`` gives the map back."""
+    and the masked bins (id3) stored so that ``import_uff`` gives the map back.
+    ``one_file``: ``out_dir/all.uff`` holds every excitation (ref_node PA=1 .. PALL=5)."""
     import pyuff
 
     if not 0 < gain < 1e6:
@@ -564,28 +570,33 @@ def export_uff(
     f = m.freq_hz
     uniform = bool(np.allclose(np.diff(f), f[1] - f[0], rtol=0, atol=1e-12 * max(1.0, f[-1])))
     mask = _mask_text(m.masked)
-    paths = []
+    paths: list[Path] = []
+    every: list[dict] = []
     for ei, e in enumerate(m.excitations):
-        sets = [
-            pyuff.prepare_164(
-                units_code=1,
-                units_description="SI",
-                temp_mode=2,
-                length=1.0,
-                force=1.0,
-                temp=1.0,
-                temp_offset=273.15,
-            ),
-            pyuff.prepare_15(
-                node_nums=[int(n) for n in m.points],
-                def_cs=[0] * m.points.size,
-                disp_cs=[0] * m.points.size,
-                color=[1] * m.points.size,
-                x=(m.points_mm[:, 0] / 1000).tolist(),
-                y=(m.points_mm[:, 1] / 1000).tolist(),
-                z=[0.0] * m.points.size,
-            ),
-        ]
+        sets = (
+            []
+            if one_file and every
+            else [
+                pyuff.prepare_164(
+                    units_code=1,
+                    units_description="SI",
+                    temp_mode=2,
+                    length=1.0,
+                    force=1.0,
+                    temp=1.0,
+                    temp_offset=273.15,
+                ),
+                pyuff.prepare_15(
+                    node_nums=[int(n) for n in m.points],
+                    def_cs=[0] * m.points.size,
+                    disp_cs=[0] * m.points.size,
+                    color=[1] * m.points.size,
+                    x=(m.points_mm[:, 0] / 1000).tolist(),
+                    y=(m.points_mm[:, 1] / 1000).tolist(),
+                    z=[0.0] * m.points.size,
+                ),
+            ]
+        )
         for pi, node in enumerate(m.points):
             s58 = pyuff.prepare_58(
                 binary=int(binary),
@@ -620,7 +631,14 @@ def export_uff(
                 orddenom_axis_lab="Voltage",
             )
             sets.append(s58)
+        if one_file:
+            every += sets
+            continue
         path = d / f"{e}.uff"
         pyuff.UFF(str(path)).write_sets(sets, mode="overwrite")
+        paths.append(path)
+    if one_file:
+        path = d / "all.uff"
+        pyuff.UFF(str(path)).write_sets(every, mode="overwrite")
         paths.append(path)
     return paths

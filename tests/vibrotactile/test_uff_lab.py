@@ -364,3 +364,19 @@ def test_help_does_not_limit_point_numbers(capsys):
             main(cmd)
         text = capsys.readouterr().out
         assert "1..84" not in text and "point id" in text, cmd
+
+
+def test_one_file_export_round_trip_with_no_flags(tmp_path, ss_map):
+    """export --one-file: every excitation in all.uff (ref_node PA=1 ..), import FILE."""
+    sub = small_map(ss_map, 12)
+    save_map(tmp_path / "m.npz", sub)
+    argv = ["frf", "export", str(tmp_path / "m.npz"), "--out", str(tmp_path / "u")]
+    assert main([*argv, "--gain", "12.5", "--one-file", "--binary"]) == 0
+    sets = pyuff.UFF(str(tmp_path / "u" / "all.uff")).read_sets()
+    assert sorted({s["ref_node"] for s in sets if s["type"] == 58}) == [1, 2, 3, 4, 5]
+    out = tmp_path / "back.npz"
+    assert main(["frf", "import", str(tmp_path / "u" / "all.uff"), "--out", str(out)]) == 0
+    back = load_map(out)
+    np.testing.assert_allclose(back.frf_um_per_v, sub.frf_um_per_v, rtol=1e-14, atol=0)
+    assert back.excitations == sub.excitations and np.array_equal(back.masked, sub.masked)
+    assert back.provenance["gain"] == 12.5
