@@ -72,6 +72,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from console.errors import UserError
 from console.runtime.link_protocol import (
     MAX_LINE_BYTES,
@@ -819,10 +821,12 @@ def effect_providers(
 ) -> dict[str, Callable[[Any], Any]]:
     """Need providers backed by the registered effects (no plugin imported).
 
-    ``tables`` (a list of grid points, or of (a, b) pairs): the registered ``flow``
-    effect's lookup tables of ``current_map()`` (the console's vibration map: a
-    ``VibrationMap`` or a map file; it raises ``UserError`` when there is none), checked
-    to cover the declared points. Returns ``{"tables": Tables, "points": [...]}``."""
+    ``tables`` (a list of grid points, or of (a, b) pairs, or ``"map"``: all of them):
+    the registered ``flow`` effect's lookup tables of ``current_map()`` (the console's
+    vibration map: a ``VibrationMap`` or a map file; it raises ``UserError`` when there
+    is none), checked to cover the declared points. Returns ``{"tables": Tables,
+    "points": [...]}`` (and ``"points_mm"`` for ``"map"``: the scene is told them as a
+    ``points`` event, so it draws the map's own ids where they are)."""
     effects: dict[str, Any] = {}
 
     def flow() -> Any:
@@ -840,10 +844,16 @@ def effect_providers(
         eff = flow()
         vmap = current_map()
         t = eff.tables(vmap=vmap)
+        have = {int(n) for n in t.vmap.points}
+        if points == "map":  # every point of the map, as the map numbers them
+            return {
+                "tables": t,
+                "points": [int(n) for n in t.vmap.points],
+                "points_mm": np.asarray(t.vmap.points_mm, float).tolist(),
+            }
         flat = sorted(
             {int(q) for p in points for q in (p if isinstance(p, (list, tuple)) else (p,))}
         )
-        have = {int(n) for n in t.vmap.points}
         lack = [n for n in flat if n not in have]
         if lack:
             raise UserError(
@@ -853,6 +863,13 @@ def effect_providers(
         return {"tables": t, "points": flat}
 
     return {"tables": tables}
+
+
+def _tell_points(scene: Any, prepared: dict) -> None:
+    """A scene that asked for the whole map's tables learns the map's point ids and mm."""
+    got = prepared.get("tables")
+    if isinstance(got, dict) and "points_mm" in got:
+        scene.update({"type": "points", "ids": got["points"], "points_mm": got["points_mm"]})
 
 
 def projector_command(
@@ -969,6 +986,7 @@ class ProjectorService:
         scene = self.scenes[name](self.profile)
         why: dict[str, str] = {}
         prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers, why)
+        _tell_points(scene, prepared)
         for ev in events:
             scene.update(ev)
         with self._lock:
@@ -988,6 +1006,7 @@ class ProjectorService:
         prepared, missing = prepare_needs({k: needs.get(k) for k in todo}, self.providers, why)
         with self._lock:
             if self.scene is scene:
+                _tell_points(scene, prepared)
                 self.prepared.update(prepared)
                 self.unprepared, self.unprepared_why = missing, why
             return list(self.unprepared)

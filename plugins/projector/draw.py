@@ -474,6 +474,7 @@ def draw_grid(s: dict) -> list[dict]:
             }
         )
     pts = s.get("points_mm", [])
+    ids = s.get("point_ids") or list(range(1, len(pts) + 1))
     act, pas = s.get("active"), s.get("passive")
     for n, c in enumerate(pts, start=1):
         if n == act:
@@ -484,7 +485,7 @@ def draw_grid(s: dict) -> list[dict]:
                 {
                     "p": "text",
                     "xy": [c[0] + 4, c[1] + 7],
-                    "text": str(n),
+                    "text": str(ids[n - 1] if n - 1 < len(ids) else n),
                     "size_mm": 6.5,
                     "color": "dim",
                 }
@@ -499,7 +500,7 @@ def draw_grid(s: dict) -> list[dict]:
             {
                 "p": "text",
                 "xy": [c[0] + 24, c[1] - 16],
-                "text": str(act),
+                "text": str(ids[act - 1] if act - 1 < len(ids) else act),
                 "size_mm": 12,
                 "color": "yellow",
             }

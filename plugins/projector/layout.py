@@ -57,6 +57,18 @@ def grid_points_mm(profile: Any) -> np.ndarray:
     return np.c_[ox + (n % cols) * pitch, oy + (n // cols) * pitch]
 
 
+def map_points(ids: Any, points_mm: Any) -> tuple[list[int], np.ndarray]:
+    """A vibration map's point ids and their (x, y) mm, checked: one UserError line."""
+    try:
+        idl = [int(n) for n in ids]
+        pts = np.asarray(points_mm, dtype=float).reshape(len(idl), 2)
+    except (TypeError, ValueError):
+        raise UserError("grid: points must be point ids with one (x, y) in mm each") from None
+    if not 0 < len(idl) <= 10000 or len(set(idl)) != len(idl) or not np.all(np.isfinite(pts)):
+        raise UserError("grid: points must be 1..10000 distinct ids with finite (x, y) mm")
+    return idl, pts
+
+
 def patches_mm(profile: Any) -> list[dict]:
     if profile is None:
         return []

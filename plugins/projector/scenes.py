@@ -343,32 +343,42 @@ class ContactsOverlay(Scene):
 
 
 class GridAudition(Scene):
-    """The 7 x 12 measurement grid with the point being auditioned lit."""
+    """The measurement grid with the point being auditioned lit. Until the vibration map's
+    own points arrive (a ``points`` event: its point ids and their mm, as the map numbers
+    them) it shows the profile's grid numbered row by row."""
 
     kind = "grid"
 
     def __init__(self, profile: Any = None) -> None:
         super().__init__(profile)
         self.points = layout.grid_points_mm(profile)
+        self.ids = list(range(1, len(self.points) + 1))
         self.patches = layout.patches_mm(profile)
-        self.active: int | None = None
+        self.active: int | None = None  # point ids
         self.passive: int | None = None
         self.excitation: str | None = None
 
     @property
     def needs(self) -> dict:  # type: ignore[override]
-        return {"tables": list(range(1, len(self.points) + 1))}
+        return {"tables": "map"}  # every point of the map the console has loaded
 
     def update(self, event: dict) -> None:
         super().update(event)
-        if event.get("type") == "audition":
-            n = event.get("point")
-            if n is not None and not 1 <= int(n) <= len(self.points):
-                raise UserError(f"grid: point {n} is not on the grid; use 1..{len(self.points)}")
-            self.active = None if n is None else int(n)
-            p = event.get("passive")
-            self.passive = None if p is None else int(p)
+        t = event.get("type")
+        if t == "points":
+            self.ids, self.points = layout.map_points(event.get("ids"), event.get("points_mm"))
+            self.active = self.passive = None
+        elif t == "audition":
+            self.active = self._known(event.get("point"))
+            self.passive = self._known(event.get("passive"))
             self.excitation = event.get("excitation")
+
+    def _known(self, n: Any) -> int | None:
+        if n is None:
+            return None
+        if n not in self.ids:
+            raise UserError(f"grid: point {n} is not on the map's grid; use one of its point ids")
+        return int(n)
 
     def state(self) -> dict:
         from console.types import patches_of
@@ -377,11 +387,13 @@ class GridAudition(Scene):
         cap = f"point {self.active}" if self.active else ""
         if self.active and self.excitation:
             cap += f" · {self.excitation}"
+        index = {n: i + 1 for i, n in enumerate(self.ids)}
         return {
             **super().state(),
             "points_mm": self.points.tolist(),
-            "active": self.active,
-            "passive": self.passive,
+            "point_ids": list(self.ids),
+            "active": index.get(self.active),  # 1-based positions in points_mm
+            "passive": index.get(self.passive),
             "patches": self.patches,
             "excitation_patches": lit,
             "caption": cap,

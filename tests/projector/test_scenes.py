@@ -109,8 +109,29 @@ def test_grid_audition_checks_the_point():
     g.update({"type": "audition", "point": 51, "passive": 52, "excitation": "PALL"})
     s = g.state()
     assert s["active"] == 51 and s["excitation_patches"] == ["PA", "PB", "PC", "PD"]
-    with pytest.raises(UserError, match="1..84"):
+    with pytest.raises(UserError, match="not on the map's grid"):
         g.update({"type": "audition", "point": 85})
+
+
+def test_grid_follows_the_maps_own_ids_and_places():
+    """A map numbered column by column (ids 1001..1084): the projected labels are its ids,
+    and the auditioned id is lit where that point is on the glass."""
+    g = GridAudition(None)
+    rows, cols, pitch, ox, oy = 7, 12, 60.0, 41.73, 43.645
+    ids, pts = [], []
+    for c in range(cols):  # column-major numbering
+        for r in range(rows):
+            ids.append(1001 + c * rows + r)
+            pts.append([ox + c * pitch, oy + r * pitch])
+    g.update({"type": "points", "ids": ids, "points_mm": pts})
+    g.update({"type": "audition", "point": 1009, "passive": 1002, "excitation": "PA"})
+    s = g.state()
+    assert s["points_mm"][s["active"] - 1] == [ox + 1 * pitch, oy + 1 * pitch]
+    assert s["points_mm"][s["passive"] - 1] == [ox, oy + 1 * pitch]
+    texts = {sh["text"] for sh in primitives(s) if sh.get("p") == "text"}
+    assert {"1001", "1084", "1009"} <= texts and "1" not in texts
+    with pytest.raises(UserError, match="points"):
+        g.update({"type": "points", "ids": [1, 1], "points_mm": [[0, 0], [1, 1]]})
 
 
 def test_runtime_prepares_only_what_a_scene_declares():
