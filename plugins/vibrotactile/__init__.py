@@ -18,7 +18,13 @@ from console.schema import Field
 
 
 def _sections() -> dict:
-    from plugins.vibrotactile.perception import DEFAULT_FREQ_HZ, DEFAULT_THRESHOLD_DB, SOURCES
+    from plugins.vibrotactile.perception import (
+        DEFAULT_FREQ_HZ,
+        DEFAULT_THRESHOLD_DB,
+        DEFAULT_WEBER_FRACTION,
+        DEFAULT_WEBER_FREQ_HZ,
+        SOURCES,
+    )
 
     return {
         "perception": (
@@ -44,6 +50,23 @@ def _sections() -> dict:
                 ),
                 "jnd_db": Field(
                     "float", 1.5, min=0.1, max=10, help="intensity just-noticeable difference"
+                ),
+                "weber_freq_hz": Field(
+                    "floats",
+                    list(DEFAULT_WEBER_FREQ_HZ),
+                    min=0.1,
+                    max=20000,
+                    min_length=1,
+                    help="frequencies of the Weber fraction curve (ascending)",
+                ),
+                "weber_fraction": Field(
+                    "floats",
+                    list(DEFAULT_WEBER_FRACTION),
+                    min=0.01,
+                    max=10,
+                    min_length=1,
+                    help="amplitude Weber fraction per frequency: one JND is 20 log10(1 + w) "
+                    "dB (perceptual tables count felt differences in these JNDs)",
                 ),
                 "sources": Field("str", SOURCES, help="where the curve comes from"),
             },
@@ -87,6 +110,24 @@ def _sections() -> dict:
                     help="tables: a pair's entry must have at least this active/passive "
                     "contrast (ranked by difference among those); 0: the paper's rule "
                     "(largest absolute difference, Fig. 8)",
+                ),
+                "table_rule": Field(
+                    "str",
+                    "perceptual",
+                    choices=("perceptual", "paper"),
+                    help="lookup-table rule: perceptual (largest felt active-minus-passive "
+                    "difference in JND at the flow's level) or paper (largest displacement "
+                    "difference, Fig. 8)",
+                ),
+                "play_band_hz": Field(
+                    "floats",
+                    [0.0, 625.0],
+                    min=0,
+                    max=20000,
+                    min_length=2,
+                    help="band the amplifier and patches are known to play (perceptual "
+                    "tables): the paper measured its map with a 0-625 Hz sweep through the "
+                    "E413.D2 amplifier (section 4)",
                 ),
                 "ringdown_gap_k": Field(
                     "float",

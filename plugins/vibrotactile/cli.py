@@ -108,20 +108,48 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
     from plugins.vibrotactile.vibration_io import is_tables_file
 
     if is_tables_file(path):
-        return load_tables(path, sample_rate_hz=sample_rate(ctx))
+        t = load_tables(path, sample_rate_hz=sample_rate(ctx))
+        want = getattr(args, "rule", None)
+        if want is not None and want != t.rule:
+            raise UserError(
+                f"{path}: tables built with the {t.rule} rule, not {want}; rebuild them with "
+                f"`haptable tables build MAP --out FILE --rule {want}` or give the map"
+            )
+        return t
     vm = load_map(
         path,
         require_all=not getattr(args, "allow_missing", False),
     )
-    c = getattr(args, "min_contrast_db", None)
-    c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else float(c)
+    c, per = table_rule_of(ctx, args)
     return tables_cached(
         vm,
         band_hz or _vt(ctx)["band_hz"],
         cache_dir_of(args, ctx),
         progress_printer(),
         min_contrast_db=c,
+        perceptual=per,
     )
+
+
+def table_rule_of(ctx, args):
+    """(min_contrast_db, PerceptualRule or None) from ``--rule``/``--min-contrast-db`` and
+    the profile's ``[vibrotactile] table_rule`` and ``min_contrast_db``."""
+    from plugins.vibrotactile.perceptual import rule_from_profile
+
+    c = getattr(args, "min_contrast_db", None)
+    rule = getattr(args, "rule", None)
+    if rule is None:  # as the effects' Setup.rule_of: a contrast floor is the paper's rule
+        floor = c is not None or float(_vt(ctx).get("min_contrast_db", 0.0)) > 0
+        rule = "paper" if floor else str(_vt(ctx).get("table_rule", "perceptual"))
+    if rule == "paper":
+        c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else float(c)
+        return c, None
+    if c:
+        raise UserError(
+            f"--min-contrast-db {c:g} applies to --rule paper only; the perceptual rule "
+            "weighs contrast itself"
+        )
+    return 0.0, rule_from_profile(ctx.profile, sample_rate(ctx))
 
 
 def emit_plan(plan, args, ctx, summary: dict) -> int:
@@ -358,6 +386,19 @@ def measure_map(args, ctx) -> int:
 
 
 # ---------------------------------------------------------------------- tables
+def add_rule_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--rule",
+        choices=("perceptual", "paper"),
+        default=None,
+        help="table rule. perceptual: the entry the finger tells apart best (felt "
+        "active-minus-passive difference in JND above the [perception] threshold, at the "
+        "drive the amplifier can deliver, inside [vibrotactile] play_band_hz); paper: "
+        "largest displacement difference (Fig. 8). Default: profile [vibrotactile] "
+        "table_rule (perceptual); a tables file keeps the rule it was built with",
+    )
+
+
 def configure_tables(p: argparse.ArgumentParser) -> None:
     sub = p.add_subparsers(dest="tables_cmd", metavar="ACTION", required=True)
     b = sub.add_parser("build", help="vibration map -> lookup tables (paper Fig. 8)")
@@ -380,6 +421,7 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
         "difference among those; best contrast where none reaches it). Default: profile "
         "[vibrotactile] min_contrast_db, 0 = the paper's rule (largest absolute difference)",
     )
+    add_rule_option(b)
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
     q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
     q.add_argument("--active", required=True, help="point id (the map's node number) or x,y in mm")
@@ -391,6 +433,7 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
         help="off-grid interpolation",
     )
     q.add_argument("--extrapolate", action="store_true", help="allow points outside the grid")
+    add_rule_option(q)
     q.add_argument("--cache-dir", default=None)
     q.add_argument("--json", action="store_true")
 
@@ -403,13 +446,16 @@ def run_tables(args, ctx) -> int:
 
         nyq = sample_rate(ctx) / 2
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
-        c = args.min_contrast_db
-        c = float(_vt(ctx).get("min_contrast_db", 0.0)) if c is None else c
+        c, per = table_rule_of(ctx, args)
         finite("--min-contrast-db", c, 0, 200, "give 0 (the paper's rule) or more dB")
         m = load_map(args.map, require_all=not args.allow_missing)
         t0 = time.perf_counter()
         t = build_tables(
-            m, args.band_hz or _vt(ctx)["band_hz"], progress_printer(), min_contrast_db=c
+            m,
+            args.band_hz or _vt(ctx)["band_hz"],
+            progress_printer(),
+            min_contrast_db=c,
+            perceptual=per,
         )
         dt = time.perf_counter() - t0
         save_tables(args.out, t)
@@ -425,7 +471,7 @@ def run_tables(args, ctx) -> int:
                 f"{worst['half_power_bw_hz']:.2f} Hz): measure with finer lines",
                 file=sys.stderr,
             )
-        rule = f", contrast >= {c:g} dB" if c > 0 else ""
+        rule = f", rule {t.rule}" + (f", contrast >= {c:g} dB" if c > 0 else "")
         print(
             f"wrote {args.out}: {m.points.size} x {m.points.size} pairs x {len(m.excitations)} "
             f"excitations up to {t.band_hz:g} Hz{rule} in {dt * 1e3:.0f} ms"
@@ -444,13 +490,21 @@ def run_tables(args, ctx) -> int:
             method=args.method or _vt(ctx)["interpolation"],
             extrapolate=args.extrapolate,
         )
+    ans["rule"] = t.rule
     if args.json:
         print(json.dumps(ans))
     elif ans["actuator"] is None:
         print(ans["note"])
     else:
+        felt = ""
+        if "felt_jnd" in ans:
+            felt = (
+                f", felt difference {ans['felt_db']:.1f} dB = {ans['felt_jnd']:.1f} JND "
+                f"(contrast {ans['contrast_db']:.1f} dB)"
+            )
         print(
-            f"{ans['max_difference_um_per_v']:.4g} um/V at {ans['frequency_hz']:g} Hz with {ans['actuator']}"
+            f"{ans['max_difference_um_per_v']:.4g} um/V at {ans['frequency_hz']:g} Hz with "
+            f"{ans['actuator']} (rule {t.rule}{felt})"
         )
     return 0
 
@@ -476,8 +530,10 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
         "--min-contrast-db",
         type=float,
         default=None,
-        help="from a map: tables with this contrast floor (default: profile; 0 = paper)",
+        help="from a map: the paper's tables with this contrast floor (default: profile; "
+        "0 = the paper's rule without floor)",
     )
+    add_rule_option(p)
     p.add_argument(
         "--ringdown-k",
         type=float,

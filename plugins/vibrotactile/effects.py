@@ -49,6 +49,31 @@ class Setup:
     cache_dir: Path | None
     hand: dict = field(default_factory=dict)  # hand_mm, squares, subgrid
     max_plan_s: float = 3600.0  # [limits] max_plan_s: longer plans are refused unbuilt
+    table_rule: str = "paper"  # [vibrotactile] table_rule: perceptual or paper
+    perceptual: Any = None  # perceptual.PerceptualRule of the profile
+
+    def rule_of(self, min_contrast_db: float | None, rule: str | None) -> tuple[float, Any]:
+        """(min_contrast_db, PerceptualRule or None) of a request. An explicit
+        ``min_contrast_db`` (0 included) without ``rule`` selects the paper's rule, as
+        before there were two; nothing given: the profile's ``min_contrast_db`` (> 0:
+        the paper's rule with that floor) else its ``table_rule``."""
+        if rule is None:
+            if min_contrast_db is not None:
+                return float(min_contrast_db), None
+            if self.min_contrast_db > 0:
+                return self.min_contrast_db, None
+            rule = self.table_rule
+        if rule == "paper":
+            c = self.min_contrast_db if min_contrast_db is None else float(min_contrast_db)
+            return c, None
+        if rule != "perceptual":
+            raise UserError(f"table rule {rule!r}: give 'perceptual' or 'paper'")
+        if min_contrast_db:
+            raise UserError(
+                f"min_contrast_db {min_contrast_db:g} applies to the paper's rule only; the "
+                "perceptual rule weighs contrast itself"
+            )
+        return 0.0, self.perceptual
 
     @property
     def cap_v(self) -> float:
@@ -70,6 +95,7 @@ def setup_from_profile(profile: Any) -> Setup:
     from console.safety import Limits
     from plugins.vibrotactile.cache import default_cache_dir
     from plugins.vibrotactile.perception import Perception
+    from plugins.vibrotactile.perceptual import rule_from_profile
     from plugins.vibrotactile.stimuli import StimulusSettings
 
     vt = profile.section("vibrotactile")
@@ -102,6 +128,8 @@ def setup_from_profile(profile: Any) -> Setup:
             "subgrid": int(vt["hand_subgrid"]),
         },
         max_plan_s=float(profile.get("limits.max_plan_s")),
+        table_rule=str(vt.get("table_rule", "perceptual")),
+        perceptual=rule_from_profile(profile),
     )
 
 
@@ -153,12 +181,14 @@ class _MapUser:
         *,
         min_contrast_db: float | None = None,
         progress: Callable[[float, str], None] | None = None,
+        rule: str | None = None,
+        steps: int = 1,
     ):
         """Lookup tables (paper Fig. 8) of a map, built once and cached on disk.
 
         ``tables`` given: used as is (a ``Tables`` or a tables file). Else built from
-        ``vmap`` with the profile's ``[vibrotactile] band_hz`` and ``min_contrast_db``
-        (or this ``min_contrast_db``: 0 is the paper's rule)."""
+        ``vmap`` with the profile's ``[vibrotactile] band_hz`` under ``rule``
+        (``perceptual`` or ``paper``; ``Setup.rule_of`` says which when not given)."""
         from plugins.vibrotactile.tables import Tables, load_tables
 
         if tables is not None:
@@ -183,15 +213,21 @@ class _MapUser:
                 )
             return t
         m = self.vibration_map(vmap)
-        c = self.setup.min_contrast_db if min_contrast_db is None else float(min_contrast_db)
-        key = ("map", id(m), c)
+        c, per = self.setup.rule_of(min_contrast_db, rule)
+        key = ("map", id(m), c, per)
         with self._lock:
             hit = self._tables.get(key)
             if hit is None or hit.vmap is not m:
                 from plugins.vibrotactile.lazy import tables_cached
 
                 hit = tables_cached(
-                    m, self.setup.band_hz, self.setup.cache_dir, progress, min_contrast_db=c
+                    m,
+                    self.setup.band_hz,
+                    self.setup.cache_dir,
+                    progress,
+                    min_contrast_db=c,
+                    perceptual=per,
+                    steps=steps,
                 )
                 self._tables[key] = hit
             return hit
@@ -238,18 +274,20 @@ class FlowEffect(_MapUser):
     (x, y) mm (``active``/``passive`` are accepted as synonyms: part 1's active point is
     ``from_point``). ``min_contrast_db``: the tables' ranking (default ``[vibrotactile]
     min_contrast_db``; 0 = the paper's largest absolute difference; ignored with
-    ``tables=``, which carry their own). ``ringdown_gap_k``: the silence between the
+    ``tables=``, which carry their own); ``rule``: ``perceptual`` or ``paper`` (default
+    ``[vibrotactile] table_rule``). ``ringdown_gap_k``: the silence between the
     parts is at least ``k`` decay times of part 1's mode (default ``[vibrotactile]
     ringdown_gap_k``; 0 = relay gap only). The plan's ``meta`` has ``parts`` (table
     answer, ``active_um_per_v``, ``passive_um_per_v``, ``contrast_db``, ``amplitude_v``
     per part), ``sensation_level_db``, ``notes``, ``from``/``to`` and ``ringdown``.
     """
 
-    def _key(self, a, b, vmap, tables, min_contrast_db, ringdown_gap_k) -> tuple:
+    def _key(self, a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule=None) -> tuple:
         norm = [
             tuple(map(float, p)) if not isinstance(p, (int, np.integer)) else int(p) for p in (a, b)
         ]
-        return ("flow", *norm, self._source_key(vmap, tables), min_contrast_db, ringdown_gap_k)
+        src = self._source_key(vmap, tables)
+        return ("flow", *norm, src, min_contrast_db, ringdown_gap_k, rule)
 
     def cached(
         self,
@@ -262,12 +300,13 @@ class FlowEffect(_MapUser):
         tables: Any = None,
         min_contrast_db: float | None = None,
         ringdown_gap_k: float | None = None,
+        rule: str | None = None,
         **_: Any,
     ) -> OutputPlan | None:
         """The plan if this effect already rendered it (no work, never raises)."""
         a, b = (from_point, to_point) if from_point is not None else (active, passive)
         try:
-            k = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k)
+            k = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule)
         except (TypeError, ValueError):
             return None
         return self._plans.get(k)
@@ -284,17 +323,18 @@ class FlowEffect(_MapUser):
         name: str = "",
         min_contrast_db: float | None = None,
         ringdown_gap_k: float | None = None,
+        rule: str | None = None,
     ) -> OutputPlan:
         from plugins.vibrotactile.stimuli import flow_plan
 
         a, b = (from_point, to_point) if from_point is not None else (active, passive)
         if a is None or b is None:
             raise UserError("flow: give from_point= and to_point= (grid numbers or (x, y) mm)")
-        key = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k)
+        key = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule)
         hit = self._plans.get(key)
         if hit is not None:
             return hit
-        t = self.tables(vmap, tables, min_contrast_db=min_contrast_db)
+        t = self.tables(vmap, tables, min_contrast_db=min_contrast_db, rule=rule)
         pa, pb = _point(t.vmap, a), _point(t.vmap, b)
         plan = flow_plan(
             t,
@@ -320,13 +360,14 @@ class FlowEffect(_MapUser):
         vmap: Any = None,
         tables: Any = None,
         min_contrast_db: float | None = None,
+        rule: str | None = None,
     ) -> dict:
         """The lookup-table entry of a pair (grid numbers or (x, y) mm): the
         ``max_difference_um_per_v``, its ``frequency_hz`` and ``actuator`` (``None`` for
         the same point twice), under the tables' ranking (``min_contrast_db``)."""
         from plugins.vibrotactile.tables import query_indices, query_points
 
-        t = self.tables(vmap, tables, min_contrast_db=min_contrast_db)
+        t = self.tables(vmap, tables, min_contrast_db=min_contrast_db, rule=rule)
         a, b = _point(t.vmap, active), _point(t.vmap, passive)
         if isinstance(a, int) and isinstance(b, int):
             ans = query_indices(t, a, b)
@@ -351,7 +392,9 @@ class FlowEffect(_MapUser):
         a flow for are skipped (``None`` in the list)."""
         pairs = list(pairs)
         out: list = []
-        self.tables(vmap, tables, min_contrast_db=request.get("min_contrast_db"))
+        self.tables(
+            vmap, tables, min_contrast_db=request.get("min_contrast_db"), rule=request.get("rule")
+        )
         for i, (a, b) in enumerate(pairs):
             if progress is not None:
                 progress(i, len(pairs), f"flow {_label(a)}->{_label(b)}")

@@ -15,6 +15,7 @@ from console.errors import UserError
 from console.vibration_map import VibrationMap
 from plugins.vibrotactile.cache import cached
 from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables, query_points, validate_tables
 
 CacheDir = str | os.PathLike | None
@@ -27,24 +28,44 @@ def tables_cached(
     progress=None,
     *,
     min_contrast_db: float = 0.0,
+    perceptual: PerceptualRule | None = None,
+    steps: int = 1,
 ) -> Tables:
-    key = {"map": m.content_hash(), "band_hz": band_hz}
+    """``build_tables`` cached under a key of the map and the rule's parameters."""
+    key: dict = {"map": m.content_hash(), "band_hz": band_hz}
     if min_contrast_db > 0:  # the paper's tables keep their old key
         key["min_contrast_db"] = float(min_contrast_db)
+    if perceptual is not None:
+        key["rule"] = perceptual.to_json()
 
     def build() -> dict:
-        return _arrays(build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db))
+        return _arrays(
+            build_tables(
+                m,
+                band_hz,
+                progress,
+                min_contrast_db=min_contrast_db,
+                perceptual=perceptual,
+                steps=steps,
+            )
+        )
 
     res = cached(cache_dir, "tables", key, build)
     try:
-        t = _tables(res, m, band_hz, min_contrast_db)
+        t = _tables(res, m, band_hz, min_contrast_db, perceptual)
         validate_tables(t, where="tables cache")
     except (UserError, KeyError):  # a damaged cache entry: build without the cache
-        t = _tables(cached(None, "tables", key, build), m, band_hz, min_contrast_db)
+        t = _tables(cached(None, "tables", key, build), m, band_hz, min_contrast_db, perceptual)
     return t
 
 
-def _tables(res: dict, m: VibrationMap, band_hz: float, min_contrast_db: float) -> Tables:
+def _tables(
+    res: dict,
+    m: VibrationMap,
+    band_hz: float,
+    min_contrast_db: float,
+    perceptual: PerceptualRule | None = None,
+) -> Tables:
     return Tables(
         res["max_diff_um_per_v"],
         res["freq_hz"],
@@ -52,6 +73,7 @@ def _tables(res: dict, m: VibrationMap, band_hz: float, min_contrast_db: float) 
         band_hz,
         m,
         float(min_contrast_db),
+        perceptual,
     )
 
 
@@ -65,6 +87,7 @@ def pair_cached(t: Tables, a_mm, b_mm, method: str, cache_dir: CacheDir) -> dict
         "map": t.vmap.content_hash(),
         "band_hz": t.band_hz,
         **({"min_contrast_db": t.min_contrast_db} if t.min_contrast_db > 0 else {}),
+        **({"rule": t.perceptual.to_json()} if t.perceptual is not None else {}),
         "a": list(map(float, a_mm)),
         "b": list(map(float, b_mm)),
         "method": method,
@@ -108,12 +131,14 @@ def prepare(
     method: str = "spline",
     cache_dir: CacheDir = None,
     progress: Callable[[float, str], None] | None = None,
+    perceptual: PerceptualRule | None = None,
     **hand_kw,
 ) -> dict:
-    """Build what a scene asked for and nothing else: pair answers and hand-flow maps."""
+    """Build what a scene asked for and nothing else: pair answers and hand-flow maps
+    (pairs under the perceptual rule when ``perceptual`` is given, else the paper's)."""
     pairs, regions = list(pairs), list(regions)
     total = max(1, len(pairs) + len(regions) + 1)
-    t = tables_cached(m, band_hz, cache_dir)
+    t = tables_cached(m, band_hz, cache_dir, perceptual=perceptual)
     out: dict = {"pairs": {}, "regions": {}}
     for i, (a, b) in enumerate(pairs):
         xa = m.points_mm[m.point_index(a)] if isinstance(a, int) else a

@@ -19,6 +19,7 @@ from typing import Any
 
 from console.vibration_map import VibrationMap
 from plugins.vibrotactile.effects import FlowEffect
+from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
@@ -33,11 +34,14 @@ def build_tables_stepwise(
     progress: Progress | None = None,
     *,
     min_contrast_db: float = 0.0,
+    perceptual: PerceptualRule | None = None,
     steps: int = TABLE_STEPS,
 ) -> Tables:
     """``tables.build_tables`` in ``steps`` slices of active points, ``progress`` before
     each: the same tables (the pair maximum of a row does not depend on the others)."""
-    return build_tables(m, band_hz, progress, min_contrast_db=min_contrast_db, steps=steps)
+    return build_tables(
+        m, band_hz, progress, min_contrast_db=min_contrast_db, steps=steps, perceptual=perceptual
+    )
 
 
 def tables_stepwise_cached(
@@ -47,30 +51,19 @@ def tables_stepwise_cached(
     progress: Progress | None = None,
     *,
     min_contrast_db: float = 0.0,
+    perceptual: PerceptualRule | None = None,
 ) -> Tables:
-    """``lazy.tables_cached`` (same cache key and file) built by ``build_tables_stepwise``."""
-    from plugins.vibrotactile.cache import cached
+    """``lazy.tables_cached`` (same cache key and file) built in ``TABLE_STEPS`` steps."""
+    from plugins.vibrotactile.lazy import tables_cached
 
-    key = {"map": m.content_hash(), "band_hz": band_hz}
-    if min_contrast_db > 0:  # the paper's tables keep their old key (as lazy.tables_cached)
-        key["min_contrast_db"] = float(min_contrast_db)
-
-    def build() -> dict:
-        t = build_tables_stepwise(m, band_hz, progress, min_contrast_db=min_contrast_db)
-        return {
-            "max_diff_um_per_v": t.max_diff_um_per_v,
-            "freq_hz": t.freq_hz,
-            "actuator": t.actuator,
-        }
-
-    res = cached(cache_dir, "tables", key, build)
-    return Tables(
-        res["max_diff_um_per_v"],
-        res["freq_hz"],
-        res["actuator"],
-        band_hz,
+    return tables_cached(
         m,
-        float(min_contrast_db),
+        band_hz,
+        cache_dir,
+        progress,
+        min_contrast_db=min_contrast_db,
+        perceptual=perceptual,
+        steps=TABLE_STEPS,
     )
 
 
@@ -85,22 +78,19 @@ class RegisteredFlowEffect(FlowEffect):
         *,
         min_contrast_db: float | None = None,
         progress: Progress | None = None,
+        rule: str | None = None,
+        steps: int = 1,
     ) -> Tables:
         """Lookup tables of a map (``FlowEffect.tables``); with ``progress`` they are built
         in steps with ``progress(fraction, message)`` between them (raise in it to stop)."""
-        if progress is None or tables is not None:
-            return super().tables(vmap, tables, min_contrast_db=min_contrast_db)
-        m = self.vibration_map(vmap)
-        c = self.setup.min_contrast_db if min_contrast_db is None else float(min_contrast_db)
-        key = ("map", id(m), c)  # FlowEffect.tables' memo key: render/query find these
-        with self._lock:
-            hit = self._tables.get(key)
-            if hit is None or hit.vmap is not m:
-                hit = tables_stepwise_cached(
-                    m, self.setup.band_hz, self.setup.cache_dir, progress, min_contrast_db=c
-                )
-                self._tables[key] = hit
-            return hit
+        return super().tables(
+            vmap,
+            tables,
+            min_contrast_db=min_contrast_db,
+            progress=progress,
+            rule=rule,
+            steps=TABLE_STEPS if progress is not None else 1,
+        )
 
     def import_map(self, files: dict[str, str | os.PathLike]) -> VibrationMap:
         """A vibration map from UFF 58 files, one per excitation (``{"PA": path, ...}``;

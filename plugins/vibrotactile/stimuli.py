@@ -188,6 +188,7 @@ def flow_plan(
         ]
     meta = {"kind": "flow", "sensation_level_db": float(sl), "parts": parts, "notes": notes}
     meta["min_contrast_db"] = float(t.min_contrast_db)
+    meta["rule"] = t.rule
     if "ringdown" in gap:
         meta["ringdown"] = gap["ringdown"]
     return OutputPlan(

@@ -9,6 +9,12 @@ contrast floor ``min_contrast_db = C > 0`` only candidates with contrast >= C ma
 (still ranked by difference); a pair with no such candidate gets its best-contrast
 candidate instead (the flow's ``contrast_db`` says how far it falls short).
 
+Two rules choose the entry (``Tables.rule``, stored in the tables file's ``rule`` key;
+files without it are the paper's): ``paper`` as above, and ``perceptual``
+(``plugins.vibrotactile.perceptual``: the candidate whose flow part the finger tells
+apart best, in JND above the ``[perception]`` threshold at the drive the amplifier can
+deliver), the default for new tables.
+
 Only usable bins count: ``freq_hz <= band_hz`` and not masked (near-DC bins can never win).
 Active = passive has no flow: difference 0, frequency NaN, actuator -1 (``query`` says so).
 """
@@ -24,6 +30,7 @@ import numpy as np
 
 from console.errors import UserError
 from console.vibration_map import VibrationMap, save_map
+from plugins.vibrotactile.perceptual import PerceptualRule
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 
@@ -38,6 +45,11 @@ class Tables:
     band_hz: float
     vmap: VibrationMap  # the map they were built from (for arbitrary points and stimuli)
     min_contrast_db: float = 0.0  # 0: the paper's rule (largest absolute difference)
+    perceptual: PerceptualRule | None = None  # None: the paper's rule
+
+    @property
+    def rule(self) -> str:
+        return "paper" if self.perceptual is None else "perceptual"
 
     @property
     def excitations(self) -> tuple[str, ...]:
@@ -96,12 +108,14 @@ def build_tables(
     *,
     min_contrast_db: float = 0.0,
     steps: int = 1,
+    perceptual: PerceptualRule | None = None,
 ) -> Tables:
     """All P x P ordered pairs, vectorised (float32 magnitudes); ``min_contrast_db`` > 0:
-    the contrast-aware ranking (module docstring). ``steps`` > 1 builds in that many
+    the contrast-aware ranking (module docstring); ``perceptual``: the perceptual rule
+    (``min_contrast_db`` must then be 0). ``steps`` > 1 builds in that many
     slices of active points with ``progress`` before each (a raising ``progress``
     cancels); the tables are the same (a row's pair maximum does not depend on others)."""
-    keep = usable_bins(m, band_hz)
+    keep = rule_bins(m, band_hz, perceptual, min_contrast_db)
     amp = np.abs(m.frf_um_per_v[:, :, keep]).astype(np.float32)
     p = m.points.size
     best = np.empty((p, p), np.float32)
@@ -116,7 +130,12 @@ def build_tables(
                 else f"pairs of points {a + 1}-{b} of {p}"
             )
             progress(i / (bounds.size - 1), msg)
-        best[a:b], exc[a:b], k[a:b] = pair_max(amp[:, a:b], amp, min_contrast_db)
+        if perceptual is None:
+            best[a:b], exc[a:b], k[a:b] = pair_max(amp[:, a:b], amp, min_contrast_db)
+        else:
+            best[a:b], exc[a:b], k[a:b], _ = pair_best(
+                perceptual, m.freq_hz[keep], amp[:, a:b], amp
+            )
     freq = m.freq_hz[keep][k]
     diag = np.arange(p)
     best = best.astype(float)
@@ -126,7 +145,41 @@ def build_tables(
     act[diag, diag] = -1
     if progress:
         progress(1.0, "lookup tables built")
-    return Tables(best, freq, act, float(band_hz), m, float(min_contrast_db))
+    return Tables(best, freq, act, float(band_hz), m, float(min_contrast_db), perceptual)
+
+
+def rule_bins(
+    m: VibrationMap,
+    band_hz: float,
+    perceptual: PerceptualRule | None,
+    min_contrast_db: float = 0.0,
+) -> np.ndarray:
+    """The candidate bins of a rule: ``usable_bins``, and for the perceptual rule only
+    those in its play band and below its Nyquist frequency."""
+    keep = usable_bins(m, band_hz)
+    if perceptual is None:
+        return keep
+    if min_contrast_db > 0:
+        raise UserError(
+            f"min_contrast_db {min_contrast_db:g} applies to the paper's rule only; the "
+            "perceptual rule weighs contrast itself: give --rule paper or min_contrast_db 0"
+        )
+    keep = keep[perceptual.candidate_bins(m.freq_hz[keep])]
+    if keep.size == 0:
+        lo, hi = perceptual.play_band_hz
+        raise UserError(
+            f"vibration map: no usable bin inside play_band_hz [{lo:g}, {hi:g}] Hz below "
+            f"{min(band_hz, perceptual.nyquist_hz):g} Hz; widen [vibrotactile] play_band_hz "
+            "or use --rule paper"
+        )
+    return keep
+
+
+def pair_best(rule, freq_hz, amp_active, amp_passive):
+    """``perceptual.pair_best`` (imported here so both rules sit side by side)."""
+    from plugins.vibrotactile.perceptual import pair_best as best
+
+    return best(rule, freq_hz, amp_active, amp_passive)
 
 
 def query_indices(t: Tables, active: int, passive: int) -> dict:
@@ -138,11 +191,30 @@ def query_indices(t: Tables, active: int, passive: int) -> dict:
             "actuator": None,
             "note": "active and passive are the same point: no flow between them",
         }
-    return {
+    ans = {
         "max_difference_um_per_v": float(t.max_diff_um_per_v[active, passive]),
         "frequency_hz": float(t.freq_hz[active, passive]),
         "actuator": t.excitations[int(t.actuator[active, passive])],
     }
+    return _with_felt(t, ans, t.vmap.frf_um_per_v[:, [active, passive]])
+
+
+def _with_felt(t: Tables, ans: dict, h: np.ndarray) -> dict:
+    """The answer plus its rule and, for perceptual tables, the felt difference (dB, JND)
+    and contrast of the chosen entry; ``h`` (E, 2, F) FRFs of the active, passive point."""
+    ans["rule"] = t.rule
+    if t.perceptual is None:
+        return ans
+    from plugins.vibrotactile.perceptual import felt_db
+
+    e = t.excitations.index(ans["actuator"])
+    k = int(np.argmin(np.abs(t.vmap.freq_hz - ans["frequency_hz"])))
+    f = float(t.vmap.freq_hz[k])
+    d, c = felt_db(t.perceptual, f, abs(h[e, 0, k]), abs(h[e, 1, k]))
+    ans["felt_db"] = float(d)
+    ans["felt_jnd"] = float(d / t.perceptual.perception.jnd_db_at(f))
+    ans["contrast_db"] = float(c)
+    return ans
 
 
 def query_points(
@@ -158,15 +230,19 @@ def query_points(
 
     if np.allclose(active_mm, passive_mm):
         return query_indices(t, 0, 0)
-    keep = usable_bins(t.vmap, t.band_hz)
+    keep = rule_bins(t.vmap, t.band_hz, t.perceptual, t.min_contrast_db)
     h = interpolate(t.vmap, np.array([active_mm, passive_mm]), method, extrapolate=extrapolate)
     amp = np.abs(h[:, :, keep])
-    best, exc, k = pair_max(amp[:, :1], amp[:, 1:], t.min_contrast_db)
-    return {
+    if t.perceptual is None:
+        best, exc, k = pair_max(amp[:, :1], amp[:, 1:], t.min_contrast_db)
+    else:
+        best, exc, k, _ = pair_best(t.perceptual, t.vmap.freq_hz[keep], amp[:, :1], amp[:, 1:])
+    ans = {
         "max_difference_um_per_v": float(best[0, 0]),
         "frequency_hz": float(t.vmap.freq_hz[keep][k[0, 0]]),
         "actuator": t.excitations[int(exc[0, 0])],
     }
+    return _with_felt(t, ans, h)
 
 
 def save_tables(path: str | os.PathLike, t: Tables) -> Path:
@@ -186,6 +262,8 @@ def save_tables(path: str | os.PathLike, t: Tables) -> Path:
             actuator=t.actuator,
             band_hz=np.array(t.band_hz),
             min_contrast_db=np.array(t.min_contrast_db),
+            rule=np.array(t.rule),
+            rule_json=np.array("" if t.perceptual is None else t.perceptual.to_json()),
             map_hash=np.array(t.vmap.content_hash()),
             **mapped,
         )
@@ -193,7 +271,7 @@ def save_tables(path: str | os.PathLike, t: Tables) -> Path:
 
 
 TABLE_KEYS = ("max_diff_um_per_v", "freq_hz", "actuator", "band_hz", "map_hash")
-OPTIONAL_KEYS = ("min_contrast_db",)
+OPTIONAL_KEYS = ("min_contrast_db", "rule", "rule_json")
 TABLES_FIX = "rebuild it with `haptable tables build MAP --out FILE`"
 
 
@@ -232,6 +310,7 @@ def load_tables(
     c = _scalar(where, "min_contrast_db", data.get("min_contrast_db", np.array(0.0)))
     if not 0 <= c <= 200:
         raise UserError(f"{p}: min_contrast_db is {c:g}, expected 0..200 dB; {TABLES_FIX}")
+    perceptual = _rule(where, data, c)
     h = data["map_hash"]
     if h.shape != () or h.dtype.kind != "U":
         raise UserError(f"{p}: map_hash must be one text string (SHA-256); {TABLES_FIX}")
@@ -247,9 +326,38 @@ def load_tables(
         band,
         vm,
         c,
+        perceptual,
     )
     validate_tables(t, where=where, sample_rate_hz=sample_rate_hz)
     return t
+
+
+def _text(where: str, key: str, a: np.ndarray) -> str:
+    if a.shape != () or a.dtype.kind != "U":
+        raise UserError(f"{where}: {key} must be one text string; {TABLES_FIX}")
+    return str(a)
+
+
+def _rule(where: str, data: dict, min_contrast_db: float) -> PerceptualRule | None:
+    """The stored rule: no ``rule`` key (files written before the perceptual rule) or
+    ``paper`` -> None; ``perceptual`` -> its parameters from ``rule_json``."""
+    rule = _text(where, "rule", data["rule"]) if "rule" in data else "paper"
+    text = _text(where, "rule_json", data["rule_json"]) if "rule_json" in data else ""
+    if rule == "paper":
+        if text:
+            raise UserError(f"{where}: rule 'paper' with a rule_json; {TABLES_FIX}")
+        return None
+    if rule != "perceptual":
+        raise UserError(
+            f"{where}: rule {rule[:30]!r}, expected 'paper' or 'perceptual'; {TABLES_FIX}"
+        )
+    if min_contrast_db > 0:
+        raise UserError(
+            f"{where}: rule 'perceptual' with min_contrast_db {min_contrast_db:g}; {TABLES_FIX}"
+        )
+    if not text:
+        raise UserError(f"{where}: rule 'perceptual' without its rule_json; {TABLES_FIX}")
+    return PerceptualRule.from_json(text, where=where)
 
 
 def _scalar(where: str, key: str, a: np.ndarray) -> float:
@@ -324,6 +432,8 @@ def validate_tables(t: Tables, *, where: str, sample_rate_hz: float | None = Non
         )
     f = t.freq_hz
     usable = m.freq_hz[(m.freq_hz <= t.band_hz) & ~m.masked]
+    if t.perceptual is not None:
+        usable = usable[t.perceptual.candidate_bins(usable)]
     bad = off & ~np.isin(f, usable)
     if bad.any():
         ij = tuple(np.argwhere(bad)[0])
@@ -334,6 +444,9 @@ def validate_tables(t: Tables, *, where: str, sample_rate_hz: float | None = Non
             why = f"{v:g} Hz, at or above the Nyquist frequency {nyq:g} Hz"
         elif v > t.band_hz or v < m.freq_hz[0] or v > m.freq_hz[-1]:
             why = f"{v:g} Hz, outside the map's band ({m.freq_hz[0]:g}..{t.band_hz:g} Hz)"
+        elif t.perceptual is not None and not t.perceptual.candidate_bins(v):
+            lo, hi = t.perceptual.play_band_hz
+            why = f"{v:g} Hz, outside the rule's play band {lo:g}..{hi:g} Hz or its Nyquist"
         elif np.isin(v, m.freq_hz):
             why = f"{v:g} Hz, a masked bin of the map"
         else:

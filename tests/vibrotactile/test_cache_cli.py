@@ -54,7 +54,16 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
         ctx,
     )
     ans = json.loads(capsys.readouterr().out)
-    assert set(ans) == {"max_difference_um_per_v", "frequency_hz", "actuator"}
+    assert set(ans) == {
+        "max_difference_um_per_v",
+        "frequency_hz",
+        "actuator",
+        "rule",
+        "felt_db",
+        "felt_jnd",
+        "contrast_db",
+    }
+    assert ans["rule"] == "perceptual"  # the default for new tables
     # the same answer from the map itself (tables built lazily and cached)
     run(
         cli.configure_tables,

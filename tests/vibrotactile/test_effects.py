@@ -126,8 +126,8 @@ def test_half_power_damping_matches_the_plate_and_sets_the_gap(ctx, ss_plate):
     assert rd["zeta_from"].startswith("default")
 
     flow = ctx.pm.get("effect", "flow").factory(ctx.profile)
-    paper = flow.render(52, 51, vmap=fine)
-    gapped = flow.render(52, 51, vmap=fine, ringdown_gap_k=3)
+    paper = flow.render(52, 51, vmap=fine, rule="paper")
+    gapped = flow.render(52, 51, vmap=fine, ringdown_gap_k=3, rule="paper")
     assert paper.gap_s == 0.0 and "ringdown" not in paper.meta
     rd = gapped.meta["ringdown"]
     f1 = gapped.meta["parts"][0]["frequency_hz"]
@@ -202,8 +202,11 @@ def test_flow_command_options_contrast_and_ringdown(ctx, ss_map, tmp_path, capsy
         assert cli.run_flow(args, ctx) == 0
         return json.loads(capsys.readouterr().out)
 
-    paper = flow("--cache-dir", "none")
+    paper = flow("--cache-dir", "none", "--rule", "paper")
     assert "ringdown" not in paper and paper["parts"][0]["frequency_hz"] < 60
+    assert paper["rule"] == "paper"
+    felt = flow("--cache-dir", "none")  # the default: perceptual tables
+    assert felt["rule"] == "perceptual" and felt["parts"][0]["frequency_hz"] > 60
     opt = flow("--cache-dir", "none", "--min-contrast-db", "10", "--ringdown-k", "3")
     assert all(p["contrast_db"] >= 10 for p in opt["parts"])
     rd = opt["ringdown"]
