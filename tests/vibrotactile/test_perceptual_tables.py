@@ -191,12 +191,8 @@ def test_tables_file_keeps_the_rule_and_old_files_load_as_paper(tmp_path):
 
 
 # ------------------------------------------------------------------ the twin, accelerance
-#: Noise of the accelerance measurement: complex Gaussian at 1 % (-40 dB) of the map's
-#: median accelerance above 50 Hz, per excitation. An assumption of a swept-sine LDV
-#: measurement with few averages (not a measured value): enough to make the converted
-#: displacement blow up below ~20 Hz as lab files do (issue #14: 51 -> 52 at 5 Hz).
-NOISE_REL = 1e-2
-MASK_BELOW_HZ = 5.0  # [vibrotactile] mask_below_hz default
+# The twin's map as a lab measures it (accelerance with 1 % noise, converted back by
+# -A / omega^2, bins below 5 Hz masked): plugins.twin.plate.rule_check.accelerance_map.
 
 
 @pytest.fixture(scope="module")
@@ -211,23 +207,9 @@ def twin_map():
         return measured_map(prof, pm), prof
 
 
-def accelerance_map(m, rel=NOISE_REL, seed=1):
-    """``m`` measured as accelerance (m/s^2 per V) with noise, converted back to
-    displacement by ``-A / omega^2`` as ``uff_io`` does, bins below 5 Hz masked."""
-    w = 2 * np.pi * m.freq_hz
-    acc = -(w**2) * m.frf_um_per_v * 1e-6
-    level = np.median(np.abs(acc[:, :, m.freq_hz > 50]), axis=(1, 2))[:, None, None]
-    rng = np.random.default_rng(seed)
-    noise = rel * level * (rng.standard_normal(acc.shape) + 1j * rng.standard_normal(acc.shape))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        disp = np.where(w > 0, -(acc + noise / np.sqrt(2)) / np.where(w > 0, w, 1) ** 2, 0) * 1e6
-    return make_map(
-        disp, m.freq_hz, m.points, m.points_mm, m.excitations, m.freq_hz < MASK_BELOW_HZ
-    )
-
-
 @pytest.mark.slow
 def test_accelerance_map_paper_picks_low_bin_perceptual_a_tactile_one(twin_map):
+    from plugins.twin.plate.rule_check import accelerance_map
     from plugins.vibrotactile.perceptual import rule_from_profile
 
     m, prof = twin_map

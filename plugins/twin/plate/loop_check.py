@@ -547,8 +547,10 @@ def format_options(res: dict) -> str:
 
 def run_bench(ctx, quick: bool) -> dict:
     """``haptable bench closed-loop``: predicted vs achieved for the default pairs (all
-    parts) and regions (four directions); without ``--quick`` also every hand region at
-    60 mm steps, four directions (left/down play the parts of right/up in the other
+    parts) and regions (four directions); both table rules compared (``rules``:
+    ``rule_check.compare_rules``, all pairs and the pairs under the default regions in
+    steady state, the default pairs played, and the accelerance-derived map); without
+    ``--quick`` also every hand region at 60 mm steps, four directions (left/down play the parts of right/up in the other
     order: same tones, different ring-down overlap)."""
     from console.bench import machine_info
     from console.runtime.outputs import open_outputs
@@ -560,7 +562,7 @@ def run_bench(ctx, quick: bool) -> dict:
     t_map = time.perf_counter() - t0
     flow, hand = effects_of(profile, pm)
     t0 = time.perf_counter()
-    tables = flow.tables(vmap=vmap, min_contrast_db=0.0)  # the paper's rule (Fig. 8)
+    tables = flow.tables(vmap=vmap, rule="paper")  # the paper's rule (Fig. 8)
     t_tab = time.perf_counter() - t0
     ls = LoopSettings()
     regions = DEFAULT_REGIONS[:2] if quick else DEFAULT_REGIONS
@@ -611,6 +613,22 @@ def run_bench(ctx, quick: bool) -> dict:
                 }
                 for name in ("paper", "ringdown_gap", "contrast_floor", "both")
             },
+        }
+        from .rule_check import compare_rules, format_rules, without_rows
+
+        t0 = time.perf_counter()
+        rules = compare_rules(
+            out,
+            profile,
+            vmap,
+            plugins=pm,
+            played_pairs=DEFAULT_PAIRS[:3] if quick else DEFAULT_PAIRS,
+            regions=DEFAULT_REGIONS,
+        )
+        res["rules"] = {
+            "s": time.perf_counter() - t0,
+            "table": format_rules(rules).splitlines(),
+            **without_rows(rules),
         }
     res.update(
         {
