@@ -63,7 +63,9 @@ def tables_stepwise_cached(
         progress,
         min_contrast_db=min_contrast_db,
         perceptual=perceptual,
-        steps=TABLE_STEPS,
+        builder=lambda: build_tables_stepwise(
+            m, band_hz, progress, min_contrast_db=min_contrast_db, perceptual=perceptual
+        ),
     )
 
 
@@ -83,14 +85,24 @@ class RegisteredFlowEffect(FlowEffect):
     ) -> Tables:
         """Lookup tables of a map (``FlowEffect.tables``); with ``progress`` they are built
         in steps with ``progress(fraction, message)`` between them (raise in it to stop)."""
-        return super().tables(
-            vmap,
-            tables,
-            min_contrast_db=min_contrast_db,
-            progress=progress,
-            rule=rule,
-            steps=TABLE_STEPS if progress is not None else 1,
-        )
+        if progress is None or tables is not None:
+            return super().tables(vmap, tables, min_contrast_db=min_contrast_db, rule=rule)
+        m = self.vibration_map(vmap)
+        c, per = self.setup.rule_of(min_contrast_db, rule)
+        key = ("map", id(m), c, per)  # FlowEffect.tables' memo key: render/query find these
+        with self._lock:
+            hit = self._tables.get(key)
+            if hit is None or hit.vmap is not m:
+                hit = tables_stepwise_cached(
+                    m,
+                    self.setup.band_hz,
+                    self.setup.cache_dir,
+                    progress,
+                    min_contrast_db=c,
+                    perceptual=per,
+                )
+                self._tables[key] = hit
+            return hit
 
     def import_map(self, files: dict[str, str | os.PathLike]) -> VibrationMap:
         """A vibration map from UFF 58 files, one per excitation (``{"PA": path, ...}``;
