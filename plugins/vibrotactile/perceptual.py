@@ -20,8 +20,9 @@ scored by what the flow (``stimuli.flow_plan``) would make the finger feel:
 
 So a candidate wins by being felt (threshold), by leaving the passive point unfelt or
 weak (contrast) and by being discriminable (JND), never by sheer um/V. Ties (several
-candidates at the target level with the passive point below threshold, same JND) go to
-the largest contrast ``C`` (margin against map error). Only bins inside the tables' band,
+candidates at the target level with the passive point below threshold, same JND; scores
+equal to 1e-5 relative, the build is float32 like the paper's) go to the largest
+contrast ``C`` (margin against map error). Only bins inside the tables' band,
 the ``play_band_hz`` the amplifier and patches are known to play, below Nyquist and
 unmasked are candidates. The chosen entry still stores ``|H_a| - |H_p|`` (um/V).
 """
@@ -146,16 +147,18 @@ def pair_best(
     """
     e, na, f = amp_active.shape
     off, jnd = rule.levels(freq_hz)
-    off = np.tile(off, e).astype(np.float64)  # (E*F,) in (E, F) order
-    jnd = np.tile(jnd, e).astype(np.float64)
+    # float32 like the paper's build: levels in dB to ~1e-5 dB, far below one JND
+    off = np.tile(off, e).astype(np.float32)  # (E*F,) in (E, F) order
+    inv_jnd = (1 / np.tile(jnd, e)).astype(np.float32)
 
     def db(x: np.ndarray) -> np.ndarray:
         n = x.shape[1]
-        return 20 * np.log10(np.maximum(x.transpose(1, 0, 2).reshape(n, e * f), 1e-30))
+        y = np.maximum(x.transpose(1, 0, 2).reshape(n, e * f), 1e-30).astype(np.float32)
+        return 20 * np.log10(y)
 
-    la = db(amp_active.astype(np.float64)) + off  # (Na, E*F) active SL at full drive
-    lp = db(amp_passive.astype(np.float64)) + off
-    s = np.minimum(rule.target_sl_db, la)
+    la = db(amp_active) + off  # (Na, E*F) active SL at full drive
+    lp = db(amp_passive) + off
+    s = np.minimum(np.float32(rule.target_sl_db), la)
     xa = amp_active.transpose(1, 0, 2).reshape(na, e * f)
     xp = amp_passive.transpose(1, 0, 2).reshape(-1, e * f)
     np_ = xp.shape[0]
@@ -165,9 +168,10 @@ def pair_best(
     chunk = max(1, int(2e6 // max(1, np_ * e * f)))
     for i in range(0, na, chunk):
         c = la[i : i + chunk, None, :] - lp[None, :, :]  # contrast dB
-        sc = np.minimum(s[i : i + chunk, None, :], c) / jnd
+        sc = np.minimum(s[i : i + chunk, None, :], c)
+        sc *= inv_jnd
         top = sc.max(axis=-1, keepdims=True)
-        tie = sc >= top - 1e-9 * np.maximum(1.0, np.abs(top))
+        tie = sc >= top - 1e-5 * np.maximum(1.0, np.abs(top))
         a = np.where(tie, c, -np.inf).argmax(axis=-1)
         arg[i : i + chunk] = a
         score[i : i + chunk] = top[..., 0]

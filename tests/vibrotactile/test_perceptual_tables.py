@@ -247,5 +247,6 @@ def test_perceptual_entries_at_least_as_perceptible_on_the_twin_map(twin_map):
         return d / rule.perception.jnd_db_at(m.freq_hz[k])
 
     fp, fq = felt_jnd(paper), felt_jnd(per)
-    assert np.all(fq >= fp - 1e-6)  # the rule maximises what the paper's entry also offers
+    # the rule maximises what the paper's entry also offers (float32 build: 1e-3 JND)
+    assert np.all(fq >= fp - 1e-3)
     assert np.median(fq) > np.median(fp) + 1.0  # and by more than a JND typically
