@@ -219,7 +219,7 @@ def format_rules(res: dict) -> str:
         f"{'rule':>10} {'set':>16} {'pairs':>6} {'C med dB':>8} {'C p10':>6} {'C<3dB %':>7} "
         f"{'A SL':>5} {'P SL':>5} {'P felt %':>8} {'felt JND':>8} {'f med Hz':>8} {'<20Hz %':>7}"
     )
-    lines = [head]
+    lines = [head, "(C: achieved active/passive contrast; for 'played' rows p10 is the minimum)"]
     for rule in ("paper", "perceptual"):
         for name in ("all_pairs", "under_hand", "accelerance"):
             s = res[rule].get(name)
