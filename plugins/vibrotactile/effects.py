@@ -73,6 +73,8 @@ class Setup:
                 f"min_contrast_db {min_contrast_db:g} applies to the paper's rule only; the "
                 "perceptual rule weighs contrast itself"
             )
+        if self.perceptual is None:
+            raise UserError("perceptual tables need the profile's rule (setup_from_profile)")
         return 0.0, self.perceptual
 
     @property
