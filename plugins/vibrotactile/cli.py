@@ -428,9 +428,9 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     q.add_argument("--passive", required=True, help="point id (node number) or x,y in mm")
     q.add_argument(
         "--method",
-        choices=("spline", "keys", "bilinear"),
+        choices=("spline", "keys", "bilinear", "modal"),
         default=None,
-        help="off-grid interpolation",
+        help="off-grid interpolation (modal: fitted modes, a fit of a few seconds per map)",
     )
     q.add_argument("--extrapolate", action="store_true", help="allow points outside the grid")
     add_rule_option(q)
