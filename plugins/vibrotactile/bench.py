@@ -73,6 +73,128 @@ def bench_interpolation(plate, m, n_points: int, reps: int) -> dict:
     return res
 
 
+TWIN_METHODS = ("bilinear", "keys", "spline", "modal")
+TWIN_BANDS = ((5, 150), (150, 300), (300, 625), (5, 625))
+NOISE_REL, NOISE_FLOOR = 0.02, 1e-3  # see add_ldv_noise
+
+
+def add_ldv_noise(m, rel: float = NOISE_REL, floor: float = NOISE_FLOOR, seed: int = 1):
+    """The map with complex Gaussian noise of ``rel`` x |H| per bin plus ``floor`` x the
+    map's RMS per excitation: an LDV's H1 over 3 averages at coherence 0.999 has a random
+    error of ~1.3 %; speckle and drop-outs on glass add to it, hence 2 %."""
+    from console.vibration_map import make_map
+
+    rng = np.random.default_rng(seed)
+    h = m.frf_um_per_v
+    std = rel * np.abs(h) + floor * np.sqrt(np.mean(np.abs(h) ** 2, axis=(1, 2), keepdims=True))
+    n = (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)) * std / np.sqrt(2)
+    return make_map(h + n, m.freq_hz, m.points, m.points_mm, m.excitations, m.masked)
+
+
+def _lattice_profile(profile, factor: int, noise: float | None):
+    """The profile with a grid ``factor`` times denser (same origin and extent) and,
+    if given, the vibrometer's noise density replaced."""
+    import copy
+    import dataclasses
+
+    data = copy.deepcopy(profile.data)
+    g = data.setdefault("grid", {})
+    g["rows"] = (int(profile.get("grid.rows", 7)) - 1) * factor + 1
+    g["columns"] = (int(profile.get("grid.columns", 12)) - 1) * factor + 1
+    g["pitch_mm"] = float(profile.get("grid.pitch_mm", 60.0)) / factor
+    if noise is not None:
+        data.setdefault("vibrometer", {})["noise_um_per_s_per_sqrt_hz"] = noise
+    return dataclasses.replace(profile, data=data)
+
+
+def twin_maps(ctx):
+    """(grid map, off-grid points (N, 2), their exact FRFs (E, N, F), twin-LDV noisy map):
+    the profile's twin vibrometer (through its registration) on a lattice twice as dense
+    as the grid, noise-free: its even rows and columns are the map, the rest (midpoints
+    in x, in y and cell centres) the reference."""
+    from console.vibration_map import make_map
+
+    dev = ctx.pm.get("vibrometer", "twin")
+    r = dev.factory(_lattice_profile(ctx.profile, 2, 0.0)).measure()
+    rows = int(ctx.profile.get("grid.rows", 7))
+    cols = int(ctx.profile.get("grid.columns", 12))
+    idx = np.arange((rows - 1) * 2 + 1)[:, None] * ((cols - 1) * 2 + 1) + np.arange(
+        (cols - 1) * 2 + 1
+    )
+    on = np.zeros(idx.shape, bool)
+    on[::2, ::2] = True
+    grid_i, off_i = idx[on], idx[~on]
+
+    def sub(frf, where):
+        return make_map(
+            frf[:, where],
+            r["freq_hz"],
+            np.arange(1, where.size + 1),
+            r["points_mm"][where],
+            r["excitations"],
+            r["masked"],
+            source="twin lattice subset",
+        )
+
+    m = sub(r["frf_um_per_v"], grid_i)
+    ldv = dev.factory(ctx.profile).measure()  # the twin LDV's own noise on the real grid
+    m_ldv = make_map(**{k: v for k, v in ldv.items() if k != "meta"})
+    return m, r["points_mm"][off_i], r["frf_um_per_v"][:, off_i], m_ldv
+
+
+def bench_twin_interpolation(ctx, quick: bool) -> dict:
+    """Error vs time of the four methods on the twin, clean and with LDV noise."""
+    from plugins.vibrotactile import modal_fit
+    from plugins.vibrotactile.interp import interpolate
+
+    m, xy, ref, m_ldv = twin_maps(ctx)
+    f = m.freq_hz
+    ref_rms = np.sqrt(np.mean(np.abs(m.frf_um_per_v) ** 2))
+    maps = {
+        "clean": m,
+        f"noise_{NOISE_REL * 100:g}pct_rel": add_ldv_noise(m),
+    }
+    if not quick:
+        maps["twin_ldv_noise"] = m_ldv
+    out = {
+        "reference": "plate twin, noise-free simulated LDV on a 30 mm lattice: the 60 mm grid "
+        f"is the map, the other {xy.shape[0]} points (midpoints, cell centres) the reference",
+        "noise": f"{NOISE_REL * 100:g} % of |H| per bin + {NOISE_FLOOR * 100:g} % of the map RMS "
+        "(complex Gaussian); twin_ldv_noise: the twin vibrometer's own velocity noise",
+        "rms_um_per_v": float(ref_rms),
+    }
+    for name, mp in maps.items():
+        rows = {}
+        for meth in TWIN_METHODS:
+            fit_s = fit_cpu = None
+            if meth == "modal":
+                t0, c0 = time.perf_counter(), time.process_time()
+                modal_fit.modal_model(mp)
+                fit_s, fit_cpu = time.perf_counter() - t0, time.process_time() - c0
+            h = interpolate(mp, xy, meth)
+            errs = {}
+            for b0, b1 in TWIN_BANDS:
+                s = (f >= b0) & (f < b1) & ~mp.masked
+                errs[f"{b0}-{b1}_hz"] = float(
+                    np.linalg.norm(h[..., s] - ref[..., s]) / np.linalg.norm(ref[..., s])
+                )
+            one = xy[:1]
+            q = _summ(
+                lambda one=one, meth=meth, mp=mp: interpolate(mp, one, meth), 5 if quick else 30
+            )
+            rows[meth] = {
+                "rel_l2": errs,
+                "fit_s": fit_s,
+                "fit_cpu_s": fit_cpu,
+                "query_all_bins_one_point": q,
+            }
+            if meth == "modal":
+                mdl = modal_fit.modal_model(mp)
+                rows[meth]["poles"] = int(mdl.poles.size)
+        out[name] = rows
+    return out
+
+
 def bench_tables(m, reps: int) -> dict:
     from plugins.vibrotactile.tables import build_tables, query_indices, query_points
 
@@ -191,11 +313,15 @@ def run_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
     if ctx is not None and hasattr(ctx, "profile"):
         per = Perception.from_section(ctx.profile.section("perception"))
     interp = bench_interpolation(plate, m, 60 if quick else 300, 50 if quick else 300)
+    twin_interp = None
+    if ctx is not None and hasattr(ctx, "pm") and hasattr(ctx, "profile"):
+        twin_interp = bench_twin_interpolation(ctx, quick)
     tables, t = bench_tables(m, 3 if quick else 10)
     hand, htable = bench_hand(m, per, quick)
     out = {
         "reference": "analytic SSSS glass plate 743.46 x 447.29 x 3.18 mm, zeta 1 %, 7 x 12 grid, 0.1 Hz bins to 625 Hz",
         "interpolation": interp,
+        "interpolation_twin": twin_interp,
         "tables": tables,
         "flow_under_hand": hand,
         "targets": {"table_build_ms": 1000, "query_us": 50, "whole_table_flow_s": 60},
@@ -293,6 +419,30 @@ def write_report(d: Path, res: dict, tables, htable) -> Path:
         lines.append(
             f"| {meth} | {errs} | {q['p50_ms'] * 1e3:.0f} wall / {q['cpu_p50_ms'] * 1e3:.0f} CPU |"
         )
+    tw = res.get("interpolation_twin")
+    if tw:
+        lines += [
+            "",
+            "## FRF interpolation on the plate twin, clean and noisy",
+            "",
+            f"{tw['reference']}. Noise: {tw['noise']}. Relative L2 error; modal fit time once"
+            " per map, query: one point, all excitations and bins.",
+            "",
+            "| map | method | "
+            + " | ".join(f"{a}-{b} Hz" for a, b in TWIN_BANDS)
+            + " | fit (s) | query p50 (ms) |",
+            "|---|---|" + "---|" * (len(TWIN_BANDS) + 2),
+        ]
+        for name, rows in tw.items():
+            if not isinstance(rows, dict):
+                continue
+            for meth, r in rows.items():
+                errs = " | ".join(
+                    f"{r['rel_l2'][f'{a}-{b}_hz'] * 100:.2f} %" for a, b in TWIN_BANDS
+                )
+                fit = "-" if r["fit_s"] is None else f"{r['fit_s']:.1f}"
+                q = r["query_all_bins_one_point"]["p50_ms"]
+                lines.append(f"| {name} | {meth} | {errs} | {fit} | {q:.2f} |")
     lines += [
         "",
         "![interpolation](interpolation.png)",

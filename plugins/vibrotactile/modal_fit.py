@@ -343,6 +343,7 @@ def modal_interpolate(model: ModalModel, xy_mm: np.ndarray, freq_hz: np.ndarray)
 
 
 _MODELS: dict[str, ModalModel] = {}
+_BY_ARRAY: dict[int, tuple[np.ndarray, ModalModel]] = {}  # same FRF array object: no hashing
 
 
 def model_key(m: VibrationMap) -> str:
@@ -353,12 +354,19 @@ def model_key(m: VibrationMap) -> str:
 
 
 def modal_model(m: VibrationMap) -> ModalModel:
-    """The map's fitted model, fitted once per map content (explicit cache)."""
+    """The map's fitted model, fitted once per map content (explicit caches: by the FRF
+    array object, then by a hash of the map's arrays)."""
+    hit = _BY_ARRAY.get(id(m.frf_um_per_v))
+    if hit is not None and hit[0] is m.frf_um_per_v:
+        return hit[1]
     key = model_key(m)
-    hit = _MODELS.get(key)
-    if hit is None:
-        hit = fit_modal(m)
+    model = _MODELS.get(key)
+    if model is None:
+        model = fit_modal(m)
         if len(_MODELS) >= 4:
             _MODELS.pop(next(iter(_MODELS)))
-        _MODELS[key] = hit
-    return hit
+        _MODELS[key] = model
+    if len(_BY_ARRAY) >= 4:
+        _BY_ARRAY.pop(next(iter(_BY_ARRAY)))
+    _BY_ARRAY[id(m.frf_um_per_v)] = (m.frf_um_per_v, model)
+    return model
