@@ -196,7 +196,8 @@ def test_tables_query_modal_cli(exact_map, twin, tmp_path, capsys):
 
     path = save_map(tmp_path / "twin.npz", exact_map)
     a, p = (251.73, 223.645), (311.73, 253.645)  # a midpoint and a cell centre
-    args = ["tables", "query", str(path), "--active", "%g,%g" % a, "--passive", "%g,%g" % p]
+    args = ["tables", "query", str(path), "--active", f"{a[0]:g},{a[1]:g}"]
+    args += ["--passive", f"{p[0]:g},{p[1]:g}"]
     args += ["--method", "modal", "--json", "--cache-dir", str(tmp_path / "cache")]
     assert main(args) == 0
     ans = json.loads(capsys.readouterr().out)
