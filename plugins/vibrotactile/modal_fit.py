@@ -114,12 +114,13 @@ def stable_poles(all_poles: list[np.ndarray], band_hz, last: int = 10) -> np.nda
 
 
 def fit_poles(
-    freq_hz: np.ndarray, frf: np.ndarray, band_hz, order: int = ORDER, n_prf: int = N_PRF
+    freq_hz: np.ndarray, frf: np.ndarray, band_hz, order: int = ORDER, n_prf: int | None = None
 ) -> np.ndarray:
     """Global poles (R,) complex rad/s from FRFs (N, F) by LSCF (sdypy-EMA) on the
     principal response functions, with the stabilisation check of ``stable_poles``."""
     ema = _sdypy()
     sel = freq_hz <= band_hz[1]
+    n_prf = n_prf or N_PRF
     h = np.where((freq_hz[sel] >= band_hz[0])[None, :], frf[:, sel], 0.0)
     _, s, vh = np.linalg.svd(h, full_matrices=False)
     prf = s[:n_prf, None] * vh[:n_prf]
