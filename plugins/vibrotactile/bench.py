@@ -193,6 +193,7 @@ def bench_twin_interpolation(ctx, quick: bool) -> dict:
             if meth == "modal":
                 mdl = modal_fit.modal_model(mp)
                 rows[meth]["poles"] = int(mdl.poles.size)
+                rows[meth]["grid_fit_rel_l2"] = mdl.grid_fit_error
         out[name] = rows
     return out
 

@@ -58,6 +58,7 @@ class ModalModel:
     grid: Grid
     center_mm: tuple[float, float]
     band_hz: tuple[float, float]
+    grid_fit_error: float = float("nan")  # relative L2 of the fit vs the map in the band
 
     @property
     def freq_hz(self) -> np.ndarray:
@@ -319,7 +320,11 @@ def fit_modal(
     shapes = tuple(fit_field(a[:, :, r], grid, u, v, 2, 0.05) for r in range(poles.size))
     k = res.shape[2]
     resid = fit_field(res.transpose(0, 2, 1).reshape(e * k, p), grid, u, v, 8, 0.02)
-    return ModalModel(poles, shapes, resid, a, res, grid, center, band)
+    sel = (m.freq_hz >= band[0]) & (m.freq_hz <= band[1]) & ~m.masked
+    fitted = synthesize(poles, a, res, m.freq_hz[sel], band[1])
+    data = m.frf_um_per_v[..., sel]
+    err = float(np.linalg.norm(fitted - data) / max(np.linalg.norm(data), 1e-300))
+    return ModalModel(poles, shapes, resid, a, res, grid, center, band, err)
 
 
 def spline_weights(grid: Grid, xy: np.ndarray) -> np.ndarray:
