@@ -430,7 +430,7 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
         "--method",
         choices=("spline", "keys", "bilinear", "modal"),
         default=None,
-        help="off-grid interpolation (modal: fitted modes, a fit of a few seconds per map)",
+        help="off-grid interpolation (modal: fitted modes, a fit of ~10 s per map, cached)",
     )
     q.add_argument("--extrapolate", action="store_true", help="allow points outside the grid")
     add_rule_option(q)

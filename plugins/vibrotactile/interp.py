@@ -16,7 +16,7 @@ mean of two magnitudes). The weights are tensor products of 1-D weights in x and
   whose residue fields are interpolated in a plate-mode basis (standing waves + edge
   terms, spline for the remainder): a better spatial basis than the spline's cubics, so
   it wins where k h is large (300-625 Hz) and on noisy maps; it costs a fit per map
-  (seconds, cached) and works on points only (not ``interpolate_lattice``).
+  (8-16 s CPU on 2 cores, cached) and works on points only (not ``interpolate_lattice``).
 
 Points outside the grid rectangle raise ``UserError`` unless ``extrapolate=True``
 (bilinear: nearest edge value held constant; spline: the end polynomial pieces, so
