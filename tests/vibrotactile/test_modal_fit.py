@@ -193,7 +193,7 @@ def test_lattice_refuses_modal(exact_map):
 
 
 def test_tables_query_modal_cli(exact_map, twin, tmp_path, capsys):
-    """`tables query --method modal` at two off-grid points: the entry is the best
+    """`tables query --method modal --rule paper` at two off-grid points: the entry is the best
     difference of the twin's exact FRFs there (same frequency, same actuator)."""
     import json
 
@@ -204,7 +204,15 @@ def test_tables_query_modal_cli(exact_map, twin, tmp_path, capsys):
     a, p = (251.73, 223.645), (311.73, 253.645)  # a midpoint and a cell centre
     args = ["tables", "query", str(path), "--active", f"{a[0]:g},{a[1]:g}"]
     args += ["--passive", f"{p[0]:g},{p[1]:g}"]
-    args += ["--method", "modal", "--json", "--cache-dir", str(tmp_path / "cache")]
+    args += [
+        "--method",
+        "modal",
+        "--rule",
+        "paper",
+        "--json",
+        "--cache-dir",
+        str(tmp_path / "cache"),
+    ]
     assert main(args) == 0
     ans = json.loads(capsys.readouterr().out)
     keep = (F_HZ >= 5) & (F_HZ <= 650)
