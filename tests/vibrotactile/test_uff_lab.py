@@ -176,8 +176,9 @@ def test_export_headers_read_back_with_pyuff(tmp_path, ss_map):
             assert "gain=50.0" in s["id2"]
 
 
-def test_export_is_read_by_sdypy_if_installed(tmp_path, ss_map):
-    uff = pytest.importorskip("sdypy.io.uff", reason="sdypy is not installed")
+def test_export_is_read_by_sdypys_reader(tmp_path, ss_map):
+    """SDyPy's reader (sdypy-io: ``sdypy.io.uff``, the field's toolbox) reads the export."""
+    uff = pytest.importorskip("sdypy.io", reason="sdypy-io is not installed").uff
     paths = export_uff(small_map(ss_map, 3), tmp_path, gain=50.0)
     sets = uff.UFF(str(paths[0])).read_sets()
     assert [s["type"] for s in sets] == [164, 15, 58, 58, 58]
