@@ -7,7 +7,7 @@ import asyncio
 
 import numpy as np
 import pytest
-from textual.widgets import Input, Switch
+from textual.widgets import Switch
 
 from console.cli import Context
 from console.tui.app import HapTableApp
@@ -34,10 +34,7 @@ async def _ready(app, pilot):
 
 async def _load_map(app, pilot, map_file):
     pane = app.pane("vibration")
-    await pilot.press("colon")
-    assert isinstance(app.focused, Input)
-    app.focused.value = f"load {map_file}"
-    await pilot.press("enter")
+    await command(app, pilot, f"load {map_file}")  # typed once the line has the focus
     await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
     return pane
 

@@ -9,7 +9,7 @@ from console.cli import Context
 from console.plugins import load_plugins
 from console.tui.app import HapTableApp
 
-from .conftest import wait_for
+from .conftest import command, wait_for
 
 SIZE = (80, 24)
 
@@ -61,9 +61,7 @@ def test_vibration_with_a_pair_selected(snap_compare, map_file):
     async def run_before(pilot):
         await _settle(app, pilot)
         pane = app.pane("vibration")
-        await pilot.press("colon")
-        app.focused.value = f"load {map_file}"
-        await pilot.press("enter")
+        await command(app, pilot, f"load {map_file}")
         await wait_for(pilot, lambda: pane.session is not None, 30)
         pane.selected = [51, 52]
         pane.move_cursor(52)
