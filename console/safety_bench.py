@@ -98,76 +98,106 @@ def fresh_window(out) -> Window:
 def _estop_later(out, delay_s: float | None) -> threading.Thread | None:
     if delay_s is None:
         return None
-    th = threading.Thread(target=lambda: (time.sleep(delay_s), out.estop("bench")), daemon=True)
+    th = threading.Thread(target=lambda: (time.sleep(delay_s), out.estop("case")), daemon=True)
     th.start()
     return th
 
 
-def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
+def _finish(out, th: threading.Thread | None) -> None:
+    """Let a case end: its e-stop thread joined, the queue empty, the relays safe."""
+    if th is not None:
+        th.join()
+    t_end = time.monotonic() + 10
+    while out.scheduler.busy and time.monotonic() < t_end:
+        time.sleep(0.001)
+    out.gate.wait_safe(5)
+
+
+def plan_case(out, route, amp, f, fault, nan_at, step_at, step_v, estop_s) -> None:
+    """A ramped sine plan, broken by ``fault`` (a NaN at ``nan_at``, a ``step_v`` step from
+    ``step_at``, object dtype), e-stopped ``estop_s`` after it is asked for."""
+    fs, n = out.limits.sample_rate_hz, 4800
+    x = amp * np.sin(2 * np.pi * f * np.arange(n) / fs) * ramp_envelope(n, 480)
+    if fault == "nan":
+        x[nan_at % n] = np.nan
+    elif fault == "step":
+        x[step_at:] += step_v
+        x[-1] = 0.0
+    elif fault == "object":
+        x = x.astype(object)
+    th = _estop_later(out, estop_s)
+    with contextlib.suppress(SafetyRefusal):
+        out.play(OutputPlan(fs, (Segment(x, np.zeros(n), route),), name="case"), timeout_s=10)
+    _finish(out, th)
+
+
+def source_case(out, route, amp, f, fault, at, estop_s, attach) -> None:
+    """A live stream (or, with ``attach``, a source attached to the gate directly) that
+    misbehaves from sample ``at``; an attached one is always e-stopped in the end."""
     fs = out.limits.sample_rate_hz
-    route_name = str(rng.choice(sorted(ROUTES)))
-    route = ROUTES[route_name]
-    fault = str(rng.choice(FAULTS))
-    amp, f = float(rng.uniform(0.5, 95)), float(rng.uniform(20, 700))
-    estop_s = float(rng.uniform(0, 0.02)) if rng.random() < 0.4 else None
-    kind = str(rng.choice(["plan", "stream", "attach", "relays"]))
-    if kind == "plan":
-        n = 4800
-        x = amp * np.sin(2 * np.pi * f * np.arange(n) / fs) * ramp_envelope(n, 480)
-        if fault == "nan":
-            x[int(rng.integers(n))] = np.nan
-        elif fault == "step":
-            x[int(rng.integers(n)) :] += float(rng.uniform(0, 200))
-            x[-1] = 0.0
-        elif fault == "object":
-            x = x.astype(object)
-        th = _estop_later(out, estop_s)
-        with contextlib.suppress(SafetyRefusal):
-            out.play(OutputPlan(fs, (Segment(x, np.zeros(n), route),), name="case"), timeout_s=10)
-    elif kind == "stream":
-        th = _estop_later(out, estop_s)
-        try:
-            at = int(rng.integers(0, 6000))
-            out.stream(FaultyStream(route, amp, f, fault, at, 9600, fs)).wait(10)
-        except SafetyRefusal:
-            pass
-    elif kind == "attach":
-        with contextlib.suppress(SafetyRefusal):
+    if attach:
+        with contextlib.suppress(SafetyRefusal):  # a refused command is an outcome too
             out.set_relays({out.gate.relay_channels[p] for p in route})
-        at = int(rng.integers(0, 6000))
         out.gate.attach(FaultySource(route, amp, f, fault, at, 9600, fs))
         th = _estop_later(out, estop_s if estop_s is not None else 0.03)
         t_end = time.monotonic() + 5
         while not out.gate.estopped and time.monotonic() < t_end:
             time.sleep(0.001)
     else:
+        th = _estop_later(out, estop_s)
+        with contextlib.suppress(SafetyRefusal):
+            out.stream(FaultyStream(route, amp, f, fault, at, 9600, fs)).wait(10)
+    _finish(out, th)
+
+
+def relay_case(out, cmds: list[tuple[str, frozenset[int]]]) -> None:
+    """Relay commands, plays, e-stops, resets and direct gate switches in the given order
+    (on PA); refusals are outcomes."""
+    fs = out.limits.sample_rate_hz
+    x = tone(250, 20.0, 0.05, fs, 0.01)
+    plan = OutputPlan(fs, (Segment(x, np.zeros_like(x), ROUTES["PA"]),), name="p")
+    for op, chans in cmds:
+        try:
+            if op == "set":
+                out.set_relays(chans, wait=False)
+            elif op == "play":
+                out.play(plan, wait=False)
+            elif op == "estop":
+                out.estop("case")
+            elif op == "reset":
+                out.gate.wait_safe(5)
+                out.reset()
+            else:
+                out.gate.switch_relays(frozenset(chans))
+        except SafetyRefusal:
+            continue
+    _finish(out, None)
+
+
+def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
+    """A random case of one of the three kinds; its kind and the routing it played on."""
+    route = ROUTES[str(rng.choice(sorted(ROUTES)))]
+    fault = str(rng.choice(FAULTS))
+    amp, f = float(rng.uniform(0.5, 95)), float(rng.uniform(20, 700))
+    estop_s = float(rng.uniform(0, 0.02)) if rng.random() < 0.4 else None
+    at = int(rng.integers(0, 6000))
+    kind = str(rng.choice(["plan", "stream", "attach", "relays"]))
+    if kind == "plan":
+        step_v = float(rng.uniform(0, 200))
+        plan_case(out, route, amp, f, fault, at, int(rng.integers(4800)), step_v, estop_s)
+    elif kind in ("stream", "attach"):
+        source_case(out, route, amp, f, fault, at, estop_s, kind == "attach")
+    else:
+        ops = ["set", "play", "estop", "reset", "switch"]
+        cmds = [
+            (
+                str(rng.choice(ops)),
+                frozenset(int(c) for c in rng.choice(np.arange(1, 9), int(rng.integers(0, 4)))),
+            )
+            for _ in range(int(rng.integers(1, 12)))
+        ]
+        relay_case(out, cmds)
         route = ROUTES["PA"]
-        th = None
-        x = tone(250, 20.0, 0.05, fs, 0.01)
-        plan = OutputPlan(fs, (Segment(x, np.zeros_like(x), route),), name="p")
-        for _ in range(int(rng.integers(1, 12))):
-            op = str(rng.choice(["set", "play", "estop", "reset", "switch"]))
-            chans = {int(c) for c in rng.choice(np.arange(1, 9), int(rng.integers(0, 4)))}
-            try:
-                if op == "set":
-                    out.set_relays(chans, wait=False)
-                elif op == "play":
-                    out.play(plan, wait=False)
-                elif op == "estop":
-                    out.estop("bench")
-                elif op == "reset":
-                    out.gate.wait_safe(5)
-                    out.reset()
-                else:
-                    out.gate.switch_relays(frozenset(chans))
-            except SafetyRefusal:
-                continue
-        t_end = time.monotonic() + 10
-        while out.scheduler.busy and time.monotonic() < t_end:
-            time.sleep(0.001)
-    if th is not None:
-        th.join()
-    out.gate.wait_safe(5)
     return kind, route
 
 

@@ -5,18 +5,20 @@ block (plus the ramp down) of an e-stop."""
 
 from __future__ import annotations
 
-import contextlib
-import threading
-import time
-
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from console.errors import SafetyRefusal
 from console.safety_audit import Window, received_problems
-from console.safety_bench import FaultySource, FaultyStream, fresh_window
+from console.safety_bench import (
+    ROUTES,
+    FaultyStream,
+    fresh_window,
+    plan_case,
+    relay_case,
+    source_case,
+)
 from console.signals import ramp_envelope
 from console.types import OutputPlan, Segment
 
@@ -27,7 +29,6 @@ PROPS = settings(
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
-ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
 
 
 fresh = fresh_window
@@ -46,7 +47,7 @@ def check_received(outputs, start: Window, route: frozenset[str]) -> None:
     assert not problems, problems
 
 
-# ------------------------------------------------------------------------- generators
+# ------------------------------------------------------------------------- properties
 FAULTS = st.sampled_from(["none", "nan", "step", "raise", "object", "stall", "wrong_len"])
 
 
@@ -55,15 +56,6 @@ def signal(n: int, amp: float, f: float) -> np.ndarray:
     return amp * np.sin(2 * np.pi * f * t) * ramp_envelope(n, 480)
 
 
-def estop_later(outputs, delay_s: float | None) -> threading.Thread | None:
-    if delay_s is None:
-        return None
-    th = threading.Thread(target=lambda: (time.sleep(delay_s), outputs.estop("property")))
-    th.start()
-    return th
-
-
-# ------------------------------------------------------------------------- properties
 @PROPS
 @given(
     route=st.sampled_from(sorted(ROUTES)),
@@ -77,22 +69,7 @@ def estop_later(outputs, delay_s: float | None) -> threading.Thread | None:
 )
 def test_plans_with_faults(outputs, route, amp, f, fault, at, step_at, step_v, estop_s):
     start = fresh(outputs)
-    n = 4800
-    x = signal(n, amp, f)
-    if fault == "nan":
-        x[at % n] = np.nan
-    elif fault == "step":
-        x[step_at:] += step_v
-        x[-1] = 0.0
-    elif fault == "object":
-        x = x.astype(object)
-    plan = OutputPlan(FS, (Segment(x, np.zeros(n), ROUTES[route]),), name="prop")
-    th = estop_later(outputs, estop_s)
-    with contextlib.suppress(SafetyRefusal):
-        outputs.play(plan, timeout_s=10)
-    if th:
-        th.join()
-    outputs.gate.wait_safe(5)
+    plan_case(outputs, ROUTES[route], amp, f, fault, at, step_at, step_v, estop_s)
     check_received(outputs, start, ROUTES[route])
 
 
@@ -110,22 +87,7 @@ def test_streams_and_attached_sources_with_faults(
     outputs, route, amp, f, fault, at, estop_s, attach
 ):
     start = fresh(outputs)
-    if attach:
-        with contextlib.suppress(SafetyRefusal):  # a refused command is an outcome too
-            outputs.set_relays({outputs.gate.relay_channels[p] for p in ROUTES[route]})
-        src = FaultySource(ROUTES[route], amp, f, fault, at, 9600)
-        outputs.gate.attach(src)
-        th = estop_later(outputs, estop_s if estop_s is not None else 0.05)
-        t_end = time.monotonic() + 5
-        while not outputs.gate.estopped and time.monotonic() < t_end:
-            time.sleep(0.002)
-    else:
-        th = estop_later(outputs, estop_s)
-        with contextlib.suppress(SafetyRefusal):
-            outputs.stream(FaultyStream(ROUTES[route], amp, f, fault, at, 9600)).wait(10)
-    if th:
-        th.join()
-    outputs.gate.wait_safe(5)
+    source_case(outputs, ROUTES[route], amp, f, fault, at, estop_s, attach)
     check_received(outputs, start, ROUTES[route])
 
 
@@ -142,30 +104,7 @@ def test_streams_and_attached_sources_with_faults(
 )
 def test_relay_command_sequences(outputs, cmds):
     start = fresh(outputs)
-    x = signal(2400, 20.0, 250.0)
-    plan = OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="p")
-    refused_in_estop: set[int] = set()
-    for kind, chans in cmds:
-        try:
-            if kind == "set":
-                if outputs.gate.estopped:
-                    refused_in_estop |= chans
-                outputs.set_relays(chans, wait=False)
-            elif kind == "play":
-                outputs.play(plan, wait=False)
-            elif kind == "estop":
-                outputs.estop("property")
-            elif kind == "reset":
-                outputs.gate.wait_safe(5)
-                outputs.reset()
-            else:
-                outputs.gate.switch_relays(chans)
-        except SafetyRefusal:
-            continue
-    t = time.monotonic() + 10
-    while outputs.scheduler.busy and time.monotonic() < t:
-        time.sleep(0.002)
-    outputs.gate.wait_safe(5)
+    relay_case(outputs, cmds)
     check_received(outputs, start, frozenset({"PA"}))
     if outputs.gate.estopped:
         assert outputs.gate.relay_state() == frozenset()
