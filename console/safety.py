@@ -396,6 +396,7 @@ class SafetyGate:
         self._last_nonzero = -(10**12)
         self._quiet_until = 0  # no signal before this clock (post-switch settle)
         self._last_switch: dict[int, int] = {}  # channel -> clock of its last switch
+        self._steps_for: tuple | None = None  # _max_steps() for one relay state
         self.level_v = (0.0, 0.0)  # last sample handed out, volts at the actuators
         self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
         self.events: deque[GateEvent] = deque(maxlen=1000)
@@ -451,6 +452,18 @@ class SafetyGate:
 
     def relay_state(self) -> frozenset[int]:
         return frozenset(i + 1 for i, closed in enumerate(self.relays) if closed)
+
+    def _max_steps(self) -> tuple[frozenset[str], float, float]:
+        """The closed patches and each channel's slew step for the relays as they are:
+        worked out once per relay state, not in every audio block."""
+        relays = self.relays
+        hit = self._steps_for
+        if hit is None or hit[0] != relays:
+            patches = self.closed_patches()
+            lim = self.limits
+            hit = (relays, patches, lim.max_step_v("piezo", patches), lim.max_step_v("screen"))
+            self._steps_for = hit
+        return hit[1], hit[2], hit[3]
 
     def closed_patches(self) -> frozenset[str]:
         relays = self.relays
@@ -551,13 +564,12 @@ class SafetyGate:
                 self.clock += n
             return
         k = np.arange(1, n + 1)
-        chans = []
-        for level, step in (
-            (lp, self.limits.max_step_v("piezo", self.closed_patches())),
-            (ls, self.limits.max_step_v("screen")),
-        ):
-            chans.append(np.sign(level) * np.maximum(abs(level) - step * k, 0.0))
-        self._hand(out, chans[0], chans[1])
+        _, piezo_step, screen_step = self._max_steps()
+        piezo, screen = (
+            np.sign(level) * np.maximum(abs(level) - step * k, 0.0)
+            for level, step in ((lp, piezo_step), (ls, screen_step))
+        )
+        self._hand(out, piezo, screen)
 
     def _block_problem(self, piezo: np.ndarray, screen: np.ndarray, clock: int) -> str | None:
         lim = self.limits
@@ -570,7 +582,7 @@ class SafetyGate:
         p_on, s_on = bool(piezo.any()), bool(screen.any())
         if clock < self._quiet_until and (p_on or s_on):
             return "signal during the relay settle time"
-        patches = self.closed_patches()
+        patches, piezo_step, screen_step = self._max_steps()
         if p_on and not patches:
             return "piezo signal while no patch relay is closed"
         relays = self.relays
@@ -579,8 +591,8 @@ class SafetyGate:
             return "screen signal while the screen relay is open"
         lp, ls = self.level_v
         for name, x, prev, step in (
-            ("piezo", piezo, lp, lim.max_step_v("piezo", patches)),
-            ("screen", screen, ls, lim.max_step_v("screen")),
+            ("piezo", piezo, lp, piezo_step),
+            ("screen", screen, ls, screen_step),
         ):
             if (p := _slew_problem(x, prev, step, end=False)) is not None:
                 return f"{name} channel {p} (a block)"
