@@ -5,7 +5,8 @@
   random moments) played on the fast-forward twin; each case's recording and relay log
   checked by ``console.safety_audit``. Cases per second and the problems found (0 expected).
 - ``estop``: e-stop latency, the request to the last non-zero sample at the driver (the
-  twin's DAC, paced in real time), for the gate in the console's own process, for a demo
+  twin's DAC, paced in real time; the sample at the DAC when the request came is taken as
+  the gate's clock less the device latency, which errs late by up to one block), for the gate in the console's own process, for a demo
   in its own process (the console's Scenes screen) and for a CLI demo stopped by
   ``haptable estop`` from another process (there also the whole command's time, Python's
   start-up included, and the demo's own request -> confirmed silent).
@@ -249,7 +250,6 @@ def estop_in_process(ctx, trials: int, seed: int = 1) -> dict[str, Any]:
     lat: list[float] = []
     with open_outputs(ctx.profile, ctx.pm, fast=False) as out:
         fs = out.limits.sample_rate_hz
-        bus = out._audio._bus  # the twin DAC: the sample at the amplifiers now
         x = tone(250, 50.0, 2.0, fs, 0.01)
         plan = OutputPlan(fs, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="tone")
         for _ in range(trials):
@@ -262,7 +262,9 @@ def estop_in_process(ctx, trials: int, seed: int = 1) -> dict[str, Any]:
             while not report.segment_start and time.monotonic() < t_end:
                 time.sleep(0.001)
             time.sleep(float(rng.uniform(0.05, 0.2)))
-            at_dac, _ = bus.now()
+            # the sample at the amplifiers now: handed out, less the device buffer (as
+            # for the other rows, from the gate alone)
+            at_dac = out.gate.clock - out.gate.latency_samples
             out.estop("bench")
             out.gate.wait_safe(5)
             last = _last_nonzero(out.recording())
