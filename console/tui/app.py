@@ -7,8 +7,6 @@ key works on every screen and the safety bar shows the live output state on ever
 from __future__ import annotations
 
 import contextlib
-import os
-import threading
 import time
 
 from textual import work
@@ -18,7 +16,10 @@ from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
+from console.session import ConsoleSession
+from console.session.events import Failed, SessionEvent
 from console.tui.safety_bar import SafetyBar
+from console.tui.session_messages import SessionMessage
 from console.tui.util import short_path
 
 HELP = """\
@@ -111,15 +112,12 @@ class HapTableApp(App):
         self.ctx = ctx
         self.fast = fast
         self.initial = initial
-        self.outputs = None
-        self.outputs_error = ""
-        self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
+        self.session = ConsoleSession(ctx, fast=fast)
+        self.session.subscribe(self._session_event)
         self.camera_service = None
         self.projector_service = None
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
-        self._control = None
-        self._lock = threading.Lock()
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -251,85 +249,48 @@ class HapTableApp(App):
             if hasattr(p, "set_visible"):
                 p.set_visible(name == tab)
 
-    # ------------------------------------------------------------------ outputs
+    # ------------------------------------------------------------------ the session
+    @property
+    def outputs(self):
+        return self.session.outputs
+
+    @property
+    def outputs_error(self) -> str:
+        return self.session.outputs_error
+
+    @property
+    def played(self) -> list:
+        return self.session.played
+
     @work(thread=True, exclusive=True, group="outputs")
     def open_outputs(self, estop_reason: str | None = None) -> None:
         """Open the profile's outputs (again after a demo: ``estop_reason`` keeps an
         e-stop that happened meanwhile until the operator resets it)."""
-        from console.errors import UserError
-        from console.runtime.control import ControlServer
-        from console.runtime.outputs import open_outputs
-
-        if self._control is None:  # one console at a time: a second opens no outputs
-            try:
-                self._control = ControlServer(self.ctx.profile, self._control_command)
-            except (OSError, UserError) as exc:
-                self.outputs_error = str(exc)
-                return
-        try:
-            out = open_outputs(self.ctx.profile, self.ctx.pm, fast=self.fast)
-        except Exception as exc:  # shown in the bar; the console stays usable
-            self.outputs_error = str(exc)
-            return
-        if estop_reason:
-            out.estop(estop_reason)
-        with self._lock:
-            self.outputs = out
-            self.outputs_error = ""
+        self.session.open_outputs(estop_reason)
 
     def hand_over_outputs(self, borrower: str) -> None:
-        """Close the console's outputs for ``borrower`` (a demo process opens them: a
-        sound card or relay board opens once). Refused while they play or are e-stopped.
-        Blocking: call from a worker; ``open_outputs`` takes them back."""
-        from console.errors import UserError
-
-        with self._lock:
-            out = self.outputs
-            if out is None:
-                raise UserError(
-                    f"{borrower}: outputs not open ({self.outputs_error or 'starting'})"
-                )
-            if out.gate.estopped:
-                raise UserError(f"{borrower}: the e-stop is active; ctrl+r resets it")
-            if out.status()["busy"]:
-                raise UserError(f"{borrower}: the outputs are playing; wait or stop them (s)")
-            self.outputs = None
-            self.outputs_error = f"in use by {borrower} (its own process)"
-        out.close()
-
-    def _control_command(self, line: str) -> str:
-        if line == "estop":
-            self.estop("e-stop from another process")
-            return "ok: outputs silenced, relays open"
-        return f"error: unknown command {line!r}"
+        """Close the console's outputs for ``borrower`` (see ``ConsoleSession``)."""
+        self.session.hand_over_outputs(borrower)
 
     def play_plan(self, plan, *, wait: bool = True) -> bool:
-        """Play ``plan`` through the safety gate (call from a worker thread). Refusals and
-        errors become notifications; returns True when it played (or was queued)."""
-        from console.errors import SafetyRefusal, UserError
+        """Play ``plan`` through the safety gate (call from a worker thread); refusals
+        come back as session messages the app shows."""
+        return self.session.play_plan(plan, wait=wait)
 
-        out = self.outputs
-        if out is None:
-            self.call_from_thread(
-                self.notify,
-                f"outputs not open: {self.outputs_error or 'starting'}",
-                severity="error",
-            )
-            return False
-        try:
-            report = out.play(plan, wait=False)
-            with self._lock:
-                self.played.append(plan)
-            if wait:
-                report.wait(3 * plan.duration_s + 10)
-                if report.error:
-                    raise SafetyRefusal(f"{report.name}: {report.error}")
-        except (SafetyRefusal, UserError) as exc:
-            self.call_from_thread(
-                self.notify, str(exc), title="refused", severity="error", timeout=8
-            )
-            return False
-        return True
+    def _session_event(self, event: SessionEvent) -> None:
+        self.post_message(SessionMessage(event))  # thread-safe
+
+    def on_session_message(self, message: SessionMessage) -> None:
+        ev = message.event
+        if isinstance(ev, Failed):
+            title = "refused" if ev.name == "refused" else ev.topic
+            self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
+        if not self.screen_stack:
+            return
+        for tab in TABS:
+            pane = self.pane(tab)
+            if pane is not None:
+                pane.post_message(SessionMessage(ev))
 
     def play_stream(self, source, name: str):
         """Start a live stream through the gate; returns its report (or None)."""
@@ -377,13 +338,7 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:
-        out = self.outputs
-        if out is not None:
-            out.estop(reason)
-        else:
-            from console.safety import estop_all
-
-            estop_all(reason)
+        self.session.estop(reason)
         for tab in TABS:
             p = self.pane(tab)
             if hasattr(p, "on_estop"):
@@ -394,8 +349,7 @@ class HapTableApp(App):
         self.notify("E-STOP: outputs silenced, relays open", severity="error")
 
     def action_reset_estop(self) -> None:
-        if self.outputs is not None and self.outputs.gate.estopped:
-            self.outputs.reset()
+        if self.session.reset_estop():
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     def action_help(self) -> None:
@@ -440,18 +394,7 @@ class HapTableApp(App):
         if self.projector_service is not None:
             with contextlib.suppress(Exception):
                 self.projector_service.close()
-        if self._control is not None:
-            self._control.close()
-        if self.outputs is not None:
-            path = os.environ.get("HAPTABLE_TWIN_LOG")
-            if path:
-                from console.runtime.twin_log import write_twin_log
-
-                try:
-                    write_twin_log(path, self.outputs, list(self.played))
-                except Exception as exc:  # never block the shutdown
-                    self.log.error(f"twin log: {exc}")
-            self.outputs.close()
+        self.session.close()
 
 
 def _bindings_help(pane) -> str:
