@@ -95,3 +95,18 @@ def test_a_projector_that_gives_no_command_is_named(tmp_path):
     plugins, profile = _with_projectors({"empty": reg})
     with pytest.raises(UserError, match=r"projector 'empty' \(plugin third\): gave no command"):
         projector_launch(profile, plugins, tmp_path / "p.sock")
+
+
+def test_a_profile_naming_an_unknown_projector_is_refused_when_loaded(plugins, tmp_path):
+    from console.profile import ProfileError
+
+    sim = (Path(__file__).parents[2] / "profiles" / "sim.toml").read_text()
+    path = tmp_path / "bad.toml"
+    path.write_text(
+        sim + '\n[projector]\ndriver = "modrengl"\n'
+        if "[projector]" not in sim
+        else sim.replace("[projector]", '[projector]\ndriver = "modrengl"', 1)
+    )
+    with pytest.raises(ProfileError, match=r"bad.toml.*\[projector\] driver.*'moderngl'") as e:
+        load_profile(str(path), plugins)
+    assert "\n" not in str(e.value)
