@@ -329,5 +329,5 @@ class ProjectorService:
         if stop_projector and self.supervisor is not None:
             self.supervisor.stop()
         elif self.supervisor is not None:
-            self.supervisor._stop.set()
+            self.supervisor.detach()
         self.link.close()

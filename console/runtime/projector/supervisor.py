@@ -218,6 +218,10 @@ class ProjectorSupervisor:
             "uptime_s": time.monotonic() - self._started_t if self.pid else 0.0,
         }
 
+    def detach(self) -> None:
+        """Stop watching and leave the projector running (black) for the next console."""
+        self._stop.set()
+
     def stop(self, timeout_s: float = 3.0) -> None:
         """Stop watching and end the projector (quit, then SIGTERM, then SIGKILL)."""
         self._stop.set()
