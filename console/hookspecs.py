@@ -7,7 +7,7 @@ hooks and the same manager as third-party ones (installed through the ``haptable
 entry-point group).
 
 ``register`` for the device and content kinds (cameras, classifiers, effects, audio
-outputs, relay boards, scenes, panels) is::
+outputs, relay boards, scenes, projectors, panels) is::
 
     register(name: str, factory: Callable[[Profile], object], *,
              description: str = "", probe: Callable[[Profile], DeviceStatus] | None = None)
@@ -131,6 +131,21 @@ def haptable_register_scenes(register: Register) -> None:
     The factory returns a scene with ``needs`` (what the runtime must prepare: e.g.
     ``{"tables": [...points], "flow_regions": [...], "knob": True, "contacts": True}``),
     ``update(event: dict) -> None`` and ``state() -> dict`` (JSON the projector draws).
+    """
+
+
+@hookspec
+def haptable_register_projectors(register: Register) -> None:
+    """Register projector processes: how the console starts the one that draws scenes.
+
+    The factory is ``factory(profile, *, socket_path: Path, headless: bool = False,
+    extra: list[str] = []) -> console.runtime.projector.supervisor.ProjectorLaunch``:
+    ``argv``, the command line of a process that serves the projector link on
+    ``socket_path`` (``console.runtime.projector.protocol``, the protocol both ends share)
+    and, with ``headless``, renders offscreen; ``extra`` are further arguments for it;
+    ``env``, variables added to its environment. The console's supervisor runs that
+    command in its own session and restarts it when it dies or hangs. Selected by
+    ``[projector] driver`` (default: the only one registered).
     """
 
 

@@ -45,6 +45,7 @@ KINDS: dict[str, str] = {
     "audio_output": "haptable_register_audio_outputs",
     "relay_board": "haptable_register_relay_boards",
     "scene": "haptable_register_scenes",
+    "projector": "haptable_register_projectors",
     "vibrometer": "haptable_register_vibrometers",
     "demo": "haptable_register_demos",
     "panel": "haptable_register_panels",

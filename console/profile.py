@@ -184,6 +184,7 @@ def check_drivers(profile: Profile, plugins: Plugins) -> None:
         ("audio", "audio_output"),
         ("relays", "relay_board"),
         ("vibrometer", "vibrometer"),
+        ("projector", "projector"),
     ):
         name = profile.get(f"{section}.driver")
         if name is None:

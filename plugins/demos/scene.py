@@ -2,7 +2,7 @@
 direction) and, when the console runs a projector, the same events forwarded to it.
 
 ``projector`` is anything with ``update(event) -> dict`` (the console's
-``console.runtime.projector_link.ProjectorService`` after ``start_scene``). A projector
+``console.runtime.projector.service.ProjectorService`` after ``start_scene``). A projector
 failure never stops the haptics: it is logged and counted.
 """
 

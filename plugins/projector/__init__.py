@@ -1,5 +1,6 @@
 """Projected scenes: a separate projector process (pyglet + moderngl, or EGL headless)
-driven from the console over a Unix-socket link (``console.runtime.projector_link``).
+driven from the console over a Unix-socket link (``console.runtime.projector``; this
+plugin serves it in ``server`` and registers how it is started in ``launch``).
 
 Scenes are registered here (``haptable_register_scenes``), drawn in table millimetres
 (``draw``) through the projector calibration (``geometry``), and rendered by
@@ -17,6 +18,13 @@ def haptable_register_scenes(register) -> None:
 
     for name, (cls, description) in BUILTIN_SCENES.items():
         register(name, cls, description=description)
+
+
+@hookimpl
+def haptable_register_projectors(register) -> None:
+    from plugins.projector.launch import DESCRIPTION, NAME, launch
+
+    register(NAME, launch, description=DESCRIPTION)
 
 
 @hookimpl

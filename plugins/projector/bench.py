@@ -94,7 +94,8 @@ def frame_times(profile: Any, n_frames: int) -> dict:
 
 
 def link_latency(n_messages: int) -> dict:
-    from console.runtime.projector_link import ProjectorService, projector_command
+    from console.runtime.projector.service import ProjectorService
+    from plugins.projector.launch import projector_command
 
     with tempfile.TemporaryDirectory(prefix="hpt-bench-") as d:
         sock = Path(d) / "p.sock"

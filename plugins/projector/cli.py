@@ -10,13 +10,9 @@ from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
-from console.runtime.projector_link import (
-    calibration_path_for,
-    default_socket_path,
-    socket_path_for,
-)
+from console.runtime.projector.protocol import default_socket_path, socket_path_for
 from plugins.projector import layout
-from plugins.projector.settings import DEFAULTS
+from plugins.projector.settings import DEFAULTS, calibration_path_for
 
 EPILOG = """examples:
   haptable projector                      full screen on screen 0, waits for the console
@@ -254,11 +250,8 @@ def show(args: Any, ctx: Any) -> int:
     """Be a console: start or adopt the projector, show a scene, wait, then stop it."""
     import time
 
-    from console.runtime.projector_link import (
-        ProjectorService,
-        projector_command,
-        socket_path_for,
-    )
+    from console.runtime.projector.service import ProjectorService
+    from plugins.projector.launch import projector_command
 
     prof = _profile(ctx)
     extra: list[str] = []

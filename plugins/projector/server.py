@@ -2,9 +2,9 @@
 
 One I/O thread (``selectors``: epoll on Linux, so any file descriptor number works). The
 render loop reads ``snapshot()`` each frame and reports ``frame_done()``; heartbeats go out
-only while frames advance, so a stuck renderer looks hung to the console. The protocol is
-described in ``console.runtime.projector_link`` and checked by
-``console.runtime.link_protocol``.
+only while frames advance, so a stuck renderer looks hung to the console. The protocol
+(framing, checks, messages, peer credentials, socket path rules) is the console's own,
+``console.runtime.projector.protocol``: both ends are built from that one module.
 
 Hostile or broken clients: a peer of another uid is closed at once; at most
 ``MAX_CONNECTIONS`` connections are open (a newcomer displaces the oldest one that has not
@@ -27,18 +27,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from console.errors import UserError
-from console.runtime.link_protocol import (
-    TO_PROJECTOR,
-    LineBuffer,
-    ProtocolError,
-    decode,
-    encode,
-)
-from console.runtime.projector_link import (
+from console.runtime.projector import protocol as proto
+from console.runtime.projector.protocol import (
     HEARTBEAT_S,
     PEER_TIMEOUT_S,
-    PROTOCOL,
-    peer_uid,
+    TO_PROJECTOR,
+    MessageReader,
+    ProtocolError,
+    encode,
     prepare_socket_dir,
     probe,
 )
@@ -86,7 +82,7 @@ class Conn:
 
     sock: socket.socket
     opened: float
-    rx: LineBuffer = field(default_factory=LineBuffer)
+    rx: MessageReader = field(default_factory=lambda: MessageReader(TO_PROJECTOR))
     out: bytearray = field(default_factory=bytearray)
     console: bool = False
     last_rx: float = 0.0
@@ -179,10 +175,10 @@ class LinkServer:
             return out
 
     def snapshot_done(self, request: str, written: Path) -> None:
-        self._reply({"type": "snapshot_done", "path": request, "file": str(written)})
+        self._reply(proto.snapshot_done(request, written))
 
     def snapshot_failed(self, request: str, why: str) -> None:
-        self._reply({"type": "error", "path": request, "message": why})
+        self._reply(proto.error(why, request))
 
     def open_connections(self) -> int:
         return len(self._conns)
@@ -226,8 +222,7 @@ class LinkServer:
     def _hello(self) -> bytes:
         with self._lock:
             scene = self._scene
-        msg = {"type": "hello", "role": "projector", "pid": os.getpid(), "protocol": PROTOCOL}
-        return encode({**msg, "scene": scene, **self.info})
+        return encode(proto.projector_hello(scene, self.info))
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -296,14 +291,11 @@ class LinkServer:
         for msg in replies:
             conn.out += encode(msg)
         if drawn > self._sent_drawn:
-            conn.out += encode(
-                {"type": "drawn", "seq": drawn, "t_drawn_s": drawn_t, "scene": scene}
-            )
+            conn.out += encode(proto.drawn(drawn, drawn_t, scene))
             self._sent_drawn = drawn
         # heartbeats only while the render loop is alive
         if now - self._last_tx >= self.heartbeat_s and now - frame_t < self.peer_timeout_s:
-            beat = {"type": "heartbeat", "t_s": now, "fps": round(fps, 2), "frames": frames}
-            conn.out += encode({**beat, "scene": scene})
+            conn.out += encode(proto.projector_heartbeat(now, fps, frames, scene))
             self._last_tx = now
         if len(conn.out) > MAX_UNSENT_BYTES:
             self._close(conn, "the console does not read its messages")
@@ -320,8 +312,8 @@ class LinkServer:
                 self._listen_paused_until = time.monotonic() + 0.2
                 return
             self.accepted += 1
-            uid = peer_uid(sock)
-            if uid is not None and uid != self.peer_uid:
+            uid = proto.foreign_uid(sock, self.peer_uid)
+            if uid is not None:
                 sock.close()
                 self.refused_peers += 1
                 log.warning(
@@ -375,8 +367,8 @@ class LinkServer:
             self._promote(conn)
         conn.last_rx = now
         try:
-            for line in conn.rx.feed(data):
-                self._handle(decode(line, TO_PROJECTOR), conn.out, now)
+            for msg in conn.rx.feed(data):
+                self._handle(msg, conn.out, now)
         except ProtocolError as e:
             self._protocol_error(conn, str(e))
 
@@ -399,29 +391,21 @@ class LinkServer:
         """Tell the peer why (best effort), drop it, show black."""
         self.protocol_errors += 1
         with contextlib.suppress(OSError):
-            conn.sock.send(encode({"type": "error", "message": f"protocol error: {why}"}))
+            conn.sock.send(encode(proto.error(f"protocol error: {why}")))
         self._close(conn, f"protocol error: {why}")  # it spoke: it was the console
 
     def _handle(self, msg: dict, out: bytearray, t_recv: float) -> None:
         t = msg["type"]
         if t == "state":
-            state, seq = msg["state"], msg["seq"]
-            scene = msg.get("scene") or state.get("kind")
-            if scene is not None and not isinstance(scene, str):
-                raise ProtocolError("state.kind is not a string")
+            state, seq, scene = msg["state"], msg["seq"], proto.state_scene(msg)
             with self._lock:
                 self._scene = scene
                 self._state = state
                 self._seq = seq
                 self._version += 1
                 self._state_version = self._version
-            out += encode({"type": "ack", "seq": seq, "t_recv_s": t_recv})
-        elif t == "hello":
-            if msg.get("protocol", PROTOCOL) != PROTOCOL:
-                raise ProtocolError(
-                    f"protocol {msg['protocol']} (this projector speaks {PROTOCOL})"
-                )
-        elif t == "quit":
+            out += encode(proto.ack(seq, t_recv))
+        elif t == "quit":  # a hello (its protocol version checked on reading) needs no answer
             self.quit_requested.set()
         elif t == "snapshot":
             try:
@@ -430,7 +414,7 @@ class LinkServer:
                 target = snapshot_target(self._snapshot_base, msg["path"])
             except UserError as e:
                 log.warning("projector: refused a snapshot: %s", e)
-                out += encode({"type": "error", "path": msg["path"], "message": str(e)})
+                out += encode(proto.error(str(e), msg["path"]))
                 return
             with self._lock:
                 self._snapshot_requests.append((msg["path"], target))

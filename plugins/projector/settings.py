@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
 from console.schema import Field
 from plugins.projector.layout import DEFAULT_CITIES, DEFAULT_FLOW_PAIRS, DEFAULT_HAND_REGIONS
 
 FIELDS: dict[str, Field] = {
+    "driver": Field("str", "moderngl", help="the registered projector the console starts"),
     "screen": Field("int", 0, min=0, max=16, help="screen index for the full-screen window"),
     "width_px": Field("int", 1280, min=16, max=16384, help="projector frame width (Asus B1M: 1280)"),
     "height_px": Field("int", 800, min=16, max=16384, help="projector frame height (Asus B1M: 800)"),
@@ -36,3 +40,14 @@ FIELDS: dict[str, Field] = {
 }  # fmt: skip
 
 DEFAULTS = {k: f.default for k, f in FIELDS.items()}
+
+
+def calibration_path_for(profile: Any) -> Path | None:
+    """The projector calibration JSON: ``[projector] calibration_path`` (relative to the
+    profile) or ``<profile name>.projector.json`` beside the profile."""
+    if profile is None:
+        return None
+    p = profile.get("projector.calibration_path", "")
+    if p:
+        return profile.resolve(p)
+    return Path(profile.path).with_name(f"{Path(profile.path).stem}.projector.json")

@@ -19,14 +19,9 @@ import time
 import pytest
 
 from console.errors import UserError
-from console.runtime.link_protocol import ProtocolError
-from console.runtime.projector_link import (
-    LineBuffer,
-    ProjectorService,
-    encode,
-    probe,
-    projector_command,
-)
+from console.runtime.projector.protocol import LineBuffer, ProtocolError, encode, probe
+from console.runtime.projector.service import ProjectorService
+from plugins.projector.launch import projector_command
 from plugins.projector.scenes import BUILTIN_SCENES
 from plugins.projector.server import LinkServer
 
@@ -237,7 +232,8 @@ def test_hung_projector_is_detected_by_heartbeat_and_replaced(sock_path, tmp_pat
 
 CONSOLE = """
 import sys, time
-from console.runtime.projector_link import ProjectorService, projector_command
+from console.runtime.projector.service import ProjectorService
+from plugins.projector.launch import projector_command
 from plugins.projector.scenes import BUILTIN_SCENES
 sock, log = sys.argv[1], sys.argv[2]
 svc = ProjectorService(socket_path=sock, command=projector_command(sock, headless=True, extra={fast!r}),
@@ -382,7 +378,7 @@ def test_show_command_starts_a_projector_shows_the_scene_and_stops_it(tmp_path, 
 
 
 def test_console_link_drops_a_malformed_projector_and_reconnects(sock_path):
-    from console.runtime.projector_link import ProjectorLink
+    from console.runtime.projector.client import ProjectorLink
 
     lst = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     lst.bind(str(sock_path))
@@ -438,7 +434,7 @@ def test_a_probe_does_not_displace_the_console(sock_path):
 
 
 def test_a_console_whose_loop_stops_ticking_turns_the_projector_black(sock_path):
-    from console.runtime.projector_link import ProjectorLink
+    from console.runtime.projector.client import ProjectorLink
 
     srv = LinkServer(sock_path, heartbeat_s=0.05, peer_timeout_s=1.0)
     srv.start()

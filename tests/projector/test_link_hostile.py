@@ -23,9 +23,9 @@ from pathlib import Path
 import pytest
 
 from console.errors import UserError
-from console.runtime.projector_link import (
+from console.runtime.projector.client import ProjectorLink
+from console.runtime.projector.protocol import (
     MAX_LINE_BYTES,
-    ProjectorLink,
     default_socket_path,
     encode,
     probe,
@@ -602,7 +602,7 @@ def _json_values():
 def _lines():
     from hypothesis import strategies as st
 
-    from console.runtime.link_protocol import TO_PROJECTOR
+    from console.runtime.projector.protocol import TO_PROJECTOR
 
     kinds = st.sampled_from([*TO_PROJECTOR, "x", ""])
     fields = st.sampled_from(["seq", "scene", "state", "path", "t_s", "protocol", "type"])
@@ -624,7 +624,7 @@ def _lines():
 def test_generated_lines_are_accepted_checked_or_refused_never_anything_else():
     from hypothesis import given, settings
 
-    from console.runtime.link_protocol import TO_PROJECTOR, ProtocolError, decode
+    from console.runtime.projector.protocol import TO_PROJECTOR, ProtocolError, decode
 
     seen = {"ok": 0, "refused": 0}
 
@@ -681,7 +681,7 @@ def test_generated_hostile_lines_never_stop_the_link_thread(sock_path):
 
 
 def test_a_configured_socket_folder_must_be_ours_and_not_writable_by_others(tmp_path):
-    from console.runtime.projector_link import prepare_socket_dir
+    from console.runtime.projector.protocol import prepare_socket_dir
 
     home = tmp_path / "home"  # like a home folder: readable by others, writable by us only
     home.mkdir()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from console.errors import UserError
-from console.runtime.projector_link import prepare_needs
+from console.runtime.projector.service import prepare_needs
 from plugins.projector.draw import DRAWERS, primitives
 from plugins.projector.layout import grid_points_mm, parse_pairs, parse_regions
 from plugins.projector.scenes import BUILTIN_SCENES, FlowHand, FlowTwoPoint, GridAudition, Knob

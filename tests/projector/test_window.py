@@ -14,7 +14,8 @@ import subprocess
 import cv2
 import pytest
 
-from console.runtime.projector_link import ProjectorService, projector_command
+from console.runtime.projector.service import ProjectorService
+from plugins.projector.launch import projector_command
 from plugins.projector.scenes import BUILTIN_SCENES
 
 pytestmark = [

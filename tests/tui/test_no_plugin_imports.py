@@ -2,7 +2,7 @@
 (``console/hookspecs.py``) and ``console`` types. An AST scan of every module under
 ``console/`` for imports of ``plugins`` (static, or a module name given to
 ``importlib.import_module`` / ``__import__``) and for ``plugins.*`` module-name strings,
-allowing only the built-in plugin list and the projector's subprocess command."""
+allowing only the built-in plugin list (the projector plugin registers its own command)."""
 
 from __future__ import annotations
 
@@ -19,8 +19,6 @@ ROOT = Path(console.__file__).resolve().parent
 ALLOWED_STRINGS = {
     # the built-in plugins registered by name, exactly like entry-point plugins
     *(("plugins.py", m) for m in BUILTIN_PLUGINS.values()),
-    # the projector runs as its own process: ``python -m plugins.projector``
-    ("runtime/projector_link.py", "plugins.projector"),
 }
 MODULE_NAME = re.compile(r"plugins\.([A-Za-z_]\w*(\.[A-Za-z_]\w*)*\.?)?")  # not bare "plugins"
 

@@ -11,7 +11,8 @@ import pytest
 from textual.widgets import Input
 
 from console.errors import UserError
-from console.runtime.projector_link import ProjectorLink, ProjectorService, effect_providers
+from console.runtime.projector.client import ProjectorLink
+from console.runtime.projector.service import ProjectorService, effect_providers
 from console.tui.panes.scenes import status_text
 
 from .conftest import wait_for

@@ -2,7 +2,7 @@
 Demos: the interactive demos plugins register (``haptable_register_demos``: the paper's
 flow and knob), started on the console's outputs, camera and projector.
 
-The projector is its own process, driven through ``console.runtime.projector_link``.
+The projector is its own process, driven through ``console.runtime.projector``.
 A demo runs in its own process (``console.runtime.demo_process``): its frame loop (camera
 -> vision -> gestures -> scene -> effect -> outputs) never waits for the console's
 drawing. The console hands it the outputs and the camera (each opens once), forwards its
@@ -290,7 +290,7 @@ class ScenesPane(Vertical):
     def ensure_service(self):
         """The projector service, started on first use (call from a worker)."""
         if self.app.projector_service is None:
-            from console.runtime.projector_link import ProjectorService, effect_providers
+            from console.runtime.projector.service import ProjectorService, effect_providers
 
             ctx = self.app.ctx
             headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
