@@ -1,4 +1,5 @@
-"""Hermetic tests: no installed third-party plugins, private runtime dir, sim profile."""
+"""Hermetic tests: no installed third-party plugins, private runtime dir, sim profile, and
+every directory ``console.paths`` names under one tmp root per session (per xdist worker)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,31 @@ os.environ["HAPTABLE_LOAD_ENTRYPOINTS"] = "0"
 os.environ.pop("HAPTABLE_BLOCK_PLUGINS", None)
 os.environ.pop("HAPTABLE_PROFILE", None)
 os.environ.pop("HAPTABLE_PROFILES", None)
+
+
+#: ``console.paths``' variables, each pinned below the session's tmp root.
+PINNED_DIRS = (
+    "HAPTABLE_CONFIG_DIR",
+    "HAPTABLE_STATE_DIR",
+    "HAPTABLE_CACHE_DIR",
+    "HAPTABLE_DATA_DIR",
+    "XDG_CONFIG_HOME",
+    "XDG_STATE_HOME",
+    "XDG_CACHE_HOME",
+    "XDG_DATA_HOME",
+)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def pinned_root(tmp_path_factory):
+    """The session's root for config, state, cache and data: no test writes to ~/.cache.
+    Set once per session (per worker) so caches are shared between its tests; a test or
+    module that needs its own cache sets ``HAPTABLE_CACHE_DIR`` itself."""
+    root = tmp_path_factory.mktemp("pinned")
+    with pytest.MonkeyPatch.context() as mp:
+        for var in PINNED_DIRS:
+            mp.setenv(var, str(root / var.lower()))
+        yield root
 
 
 @pytest.fixture(autouse=True)

@@ -16,7 +16,7 @@ def cache(tmp_path_factory):
     """One feature cache for the module (train reuses what eval extracted)."""
     d = tmp_path_factory.mktemp("cache")
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("XDG_CACHE_HOME", str(d))
+        mp.setenv("HAPTABLE_CACHE_DIR", str(d))
         yield d
 
 

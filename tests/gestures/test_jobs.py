@@ -48,7 +48,7 @@ def sketched(tmp_path_factory):
 def _module_cache(tmp_path_factory):
     """One feature cache for the module: the sketched set's features are extracted once."""
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))
+        mp.setenv("HAPTABLE_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
         yield
 
 
