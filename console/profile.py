@@ -4,7 +4,7 @@ A profile is found by path, or by name in ``$HAPTABLE_PROFILES``,
 ``profiles`` in the config directory (``console.paths``: ``~/.config/haptable/profiles``)
 and the project's ``profiles/`` folder. Sections are
 declared by plugins (``haptable_profile_sections``); the core declares its own in
-``console.core_plugin``.
+``console.core_sections``.
 """
 
 from __future__ import annotations
@@ -250,7 +250,7 @@ def load_profile(
     raw = parse_toml(path)
     profile = Profile(name=path.stem, path=path, data=validate(raw, path, plugins))
     check_drivers(profile, plugins)
-    from console.core_plugin import check_consistency
+    from console.core_sections import check_consistency
 
     check_consistency(profile)
     return profile

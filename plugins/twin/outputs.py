@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from console.runtime.realtime import realtime_priority
+from console.realtime import realtime_priority
 from console.types import BlockSource
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
