@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.types import DIRECTIONS
 
-DIRECTIONS = ("left", "right", "up", "down")
 Progress = Callable[[float, str], None]
 
 #: effect name -> what it offers the screen (for "no plugin offers ..." messages)

@@ -22,9 +22,7 @@ from typing import Any
 
 from console import paths
 from console.errors import UserError
-from console.types import OutputPlan
-
-DIRECTIONS = ("left", "right", "up", "down")
+from console.types import DIRECTIONS, OutputPlan
 
 
 def default_cache_dir() -> Path:

@@ -301,10 +301,6 @@ class TwinAudioOutput:
         """Everything played, (n, 2) in volts at the piezo patches / screen."""
         return self.recording_card().astype(np.float64) * self._to_v
 
-    def clear_recording(self) -> None:
-        with self._lock:
-            self._kept_from = self._written
-
 
 @dataclass(frozen=True)
 class SwitchRecord:

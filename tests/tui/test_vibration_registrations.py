@@ -24,7 +24,7 @@ def _status(app) -> str:
 def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch):
     from plugins.vibrotactile import registered
 
-    real = registered.build_tables_stepwise
+    real = registered.build_tables
     fractions: list[float] = []
 
     def slow_build(m, band_hz, progress=None, **kw):
@@ -35,7 +35,7 @@ def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monk
 
         return real(m, band_hz, slow, **kw)
 
-    monkeypatch.setattr(registered, "build_tables_stepwise", slow_build)
+    monkeypatch.setattr(registered, "build_tables", slow_build)
 
     async def scenario():
         app = _app(plugins, "vibration")
