@@ -13,6 +13,20 @@ os.environ.pop("HAPTABLE_PROFILE", None)
 os.environ.pop("HAPTABLE_PROFILES", None)
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config):
+    """pytest-xdist by default: ``-n auto --dist loadgroup`` (tests marked
+    ``xdist_group`` share one worker) unless ``-n`` is given (``-n0``: one process) or
+    xdist is off (``-p no:xdist``). Here rather than in pyproject's addopts, which would
+    make ``-p no:xdist`` an error."""
+    if hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("xdist"):
+        return
+    if config.option.numprocesses is None and not config.option.collectonly:
+        config.option.numprocesses = "auto"
+        if config.option.dist == "no":
+            config.option.dist = "loadgroup"
+
+
 #: ``console.paths``' variables, each pinned below the session's tmp root.
 PINNED_DIRS = (
     "HAPTABLE_CONFIG_DIR",

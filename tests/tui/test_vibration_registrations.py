@@ -21,8 +21,11 @@ def _status(app) -> str:
     return str(app.query_one("#vib-status").render())
 
 
-def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch):
+def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch, tmp_path):
     from plugins.vibrotactile import registered
+
+    # a cold cache of its own: the session's may hold these tables from another test
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
 
     real = registered.build_tables
     fractions: list[float] = []
