@@ -1,9 +1,12 @@
 """Hermetic tests: no installed third-party plugins, private runtime dir, sim profile, and
-every directory ``console.paths`` names under one tmp root per session (per xdist worker)."""
+every directory ``console.paths`` names under one tmp root per session (per xdist worker),
+a fresh set of them for each test."""
 
 from __future__ import annotations
 
 import os
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -40,16 +43,28 @@ PINNED_DIRS = (
 )
 
 
+def _pin(mp: pytest.MonkeyPatch, base: Path) -> None:
+    for var in PINNED_DIRS:
+        mp.setenv(var, str(base / var.lower()))
+
+
 @pytest.fixture(scope="session", autouse=True)
 def pinned_root(tmp_path_factory):
     """The session's root for config, state, cache and data: no test writes to ~/.cache.
-    Set once per session (per worker) so caches are shared between its tests; a test or
-    module that needs its own cache sets ``HAPTABLE_CACHE_DIR`` itself."""
+    Session and module fixtures use ``session/`` below it."""
     root = tmp_path_factory.mktemp("pinned")
     with pytest.MonkeyPatch.context() as mp:
-        for var in PINNED_DIRS:
-            mp.setenv(var, str(root / var.lower()))
+        _pin(mp, root / "session")
         yield root
+
+
+@pytest.fixture(autouse=True)
+def _pinned_dirs(pinned_root, monkeypatch):
+    """Each test its own directories below the root: what one test cached (a measured map
+    the Vibration screen loads at start, lookup tables) never changes what another sees,
+    whichever worker ran what before. A module that shares a cache between its tests sets
+    ``HAPTABLE_CACHE_DIR`` in an autouse fixture of its own."""
+    _pin(monkeypatch, Path(tempfile.mkdtemp(prefix="test-", dir=pinned_root)))
 
 
 @pytest.fixture(autouse=True)

@@ -20,6 +20,11 @@ def cache(tmp_path_factory):
         yield d
 
 
+@pytest.fixture(autouse=True)
+def _module_cache(cache, monkeypatch):
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(cache))
+
+
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory, cache):
     root = tmp_path_factory.mktemp("gestures") / "set"
