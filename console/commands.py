@@ -12,14 +12,7 @@ import wave
 import numpy as np
 
 from console.errors import UserError
-from console.types import DeviceStatus
-
-DEVICE_KINDS = (
-    ("audio", "audio_output"),
-    ("relays", "relay_board"),
-    ("camera", "camera"),
-    ("vibrometer", "vibrometer"),
-)
+from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 
 
 # ---------------------------------------------------------------------- plugins
@@ -55,78 +48,6 @@ def run_plugins(args, ctx) -> int:
 
 
 # ---------------------------------------------------------------------- doctor
-def diagnose(profile, plugins) -> list[DeviceStatus]:
-    """One status per device the profile uses: ok / simulated / missing / error, with a fix."""
-    out = []
-    for section, kind in DEVICE_KINDS:
-        name = profile.get(f"{section}.driver")
-        reg = plugins.of(kind).get(name)
-        if reg is None:
-            out.append(
-                DeviceStatus(
-                    section,
-                    name,
-                    "error",
-                    "driver not registered",
-                    "install the plugin that provides it, or fix the profile",
-                )
-            )
-            continue
-        if reg.probe is None:
-            out.append(DeviceStatus(section, name, "ok", "no probe: assumed present"))
-            continue
-        try:
-            out.append(dataclasses.replace(reg.probe(profile), kind=section, name=name))
-        except Exception as exc:
-            out.append(
-                DeviceStatus(
-                    section,
-                    name,
-                    "error",
-                    f"probe failed: {exc}",
-                    f"report this to the {reg.plugin} plugin",
-                )
-            )
-    return out
-
-
-def realtime_status(profile) -> DeviceStatus:
-    """Whether the audio thread can keep its memory in RAM (``[audio] lock_memory``)."""
-    from console.runtime.memory_lock import HOW_TO_ALLOW, _may_lock
-
-    if not profile.get("audio.lock_memory"):
-        return DeviceStatus("realtime", "memory", "ok", "lock_memory = false: not asked for")
-    ok, why = _may_lock()
-    if ok:
-        return DeviceStatus("realtime", "memory", "ok", f"can be locked in RAM ({why})")
-    twin = profile.get("audio.driver") == "twin"
-    return DeviceStatus(
-        "realtime",
-        "memory",
-        "ok" if twin else "missing",
-        f"cannot be locked ({why}): a paged-out page can stall the audio thread"
-        + (" (the twin only counts the underruns)" if twin else ""),
-        HOW_TO_ALLOW,
-    )
-
-
-def scheduling_status(profile) -> DeviceStatus:
-    """Whether the audio thread and a demo's frame loop can run with real-time priority."""
-    from console.runtime.realtime import HOW_TO_ALLOW, may_use_realtime
-
-    if may_use_realtime():
-        return DeviceStatus("realtime", "scheduling", "ok", "real-time (FIFO) priority allowed")
-    twin = profile.get("audio.driver") == "twin"
-    return DeviceStatus(
-        "realtime",
-        "scheduling",
-        "ok" if twin else "missing",
-        "real-time priority not allowed: other programs can delay the audio and the "
-        "frame loop" + (" (the twin only counts the underruns)" if twin else ""),
-        HOW_TO_ALLOW,
-    )
-
-
 def configure_doctor(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
 
@@ -317,7 +238,7 @@ def run_bench(args, ctx) -> int:
         return 0
     if args.name not in benches:
         raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
-    from console.cli import seconds_option
+    from console.options import seconds_option
 
     run = benches[args.name].run
     kwargs = {"report_dir": args.report, "minutes": seconds_option(args.minutes, "--minutes")}

@@ -190,12 +190,16 @@ def _collect(plugins: Plugins) -> None:
 
 def load_plugins(
     *,
+    core: Any = None,
     builtins: dict[str, str] | None = None,
     entrypoints: bool | None = None,
     extra: dict[str, Any] | None = None,
 ) -> Plugins:
     """Build the manager: core hooks, built-in plugins, then entry-point plugins.
 
+    ``core`` is the plugin registered as ``core``: by default ``console.core_sections``
+    (the core's profile sections); the CLI passes ``console.core_commands``, which adds the
+    core commands and benchmarks and sits above this layer, so it is given, not imported.
     ``extra`` registers plugin objects by name (tests use it to add a plugin).
     """
     pm = pluggy.PluginManager(hookspecs.PROJECT)
@@ -204,9 +208,9 @@ def load_plugins(
     for name in blocked:
         pm.set_blocked(name)
 
-    from console import core_plugin
-
-    pm.register(core_plugin, name="core")
+    if core is None:
+        from console import core_sections as core
+    pm.register(core, name="core")
     for name, module in (BUILTIN_PLUGINS if builtins is None else builtins).items():
         if not is_blocked(name, blocked):
             pm.register(importlib.import_module(module), name=name)

@@ -1,9 +1,10 @@
 """TOML profiles -> validated settings, with one-line errors naming file, key and value.
 
 A profile is found by path, or by name in ``$HAPTABLE_PROFILES``,
-``~/.config/haptable/profiles`` and the project's ``profiles/`` folder. Sections are
+``profiles`` in the config directory (``console.paths``: ``~/.config/haptable/profiles``)
+and the project's ``profiles/`` folder. Sections are
 declared by plugins (``haptable_profile_sections``); the core declares its own in
-``console.core_plugin``.
+``console.core_sections``.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from console import paths
 from console.errors import ProfileError
 from console.schema import Field, check
 
@@ -31,7 +33,7 @@ def search_dirs() -> list[Path]:
     dirs = []
     if env := os.environ.get("HAPTABLE_PROFILES"):
         dirs += [Path(p) for p in env.split(os.pathsep) if p]
-    dirs.append(Path.home() / ".config" / "haptable" / "profiles")
+    dirs.append(paths.config_dir("profiles"))
     dirs.append(PROJECT_PROFILES)
     return dirs
 
@@ -249,7 +251,7 @@ def load_profile(
     raw = parse_toml(path)
     profile = Profile(name=path.stem, path=path, data=validate(raw, path, plugins))
     check_drivers(profile, plugins)
-    from console.core_plugin import check_consistency
+    from console.core_sections import check_consistency
 
     check_consistency(profile)
     return profile

@@ -321,7 +321,7 @@ class SourceCaller:
         self._res.put(("interrupt", self._interrupts))
 
     def _run(self) -> None:
-        from console.runtime.realtime import AUDIO_PRIORITY, realtime_priority
+        from console.realtime import AUDIO_PRIORITY, realtime_priority
 
         realtime_priority(AUDIO_PRIORITY)  # it stands in for the audio thread
         while True:

@@ -22,11 +22,13 @@ EXCITATIONS: tuple[str, ...] = (*PATCHES, "PALL")
 #: in the paper's Fig. 5b), so "up" on the projection is toward -y: an arrow and the flow
 #: it triggers point the same way.
 DIRECTIONS_MM: dict[str, tuple[float, float]] = {
-    "right": (1.0, 0.0),
     "left": (-1.0, 0.0),
+    "right": (1.0, 0.0),
     "up": (0.0, -1.0),
     "down": (0.0, 1.0),
 }
+#: The flow directions in the order hand-flow maps and their caches index them.
+DIRECTIONS: tuple[str, ...] = tuple(DIRECTIONS_MM)
 
 
 def patches_of(excitation: str) -> frozenset[str]:
@@ -134,13 +136,6 @@ class OutputPlan:
     @property
     def duration_s(self) -> float:
         return sum(s.n_samples for s in self.segments) / self.sample_rate_hz
-
-
-@dataclass(frozen=True)
-class RelayState:
-    """Which relay channels (1-based) are closed."""
-
-    closed: frozenset[int] = frozenset()
 
 
 @runtime_checkable

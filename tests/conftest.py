@@ -1,8 +1,12 @@
-"""Hermetic tests: no installed third-party plugins, private runtime dir, sim profile."""
+"""Hermetic tests: no installed third-party plugins, private runtime dir, sim profile, and
+every directory ``console.paths`` names under one tmp root per session (per xdist worker),
+a fresh set of them for each test."""
 
 from __future__ import annotations
 
 import os
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -10,6 +14,57 @@ os.environ["HAPTABLE_LOAD_ENTRYPOINTS"] = "0"
 os.environ.pop("HAPTABLE_BLOCK_PLUGINS", None)
 os.environ.pop("HAPTABLE_PROFILE", None)
 os.environ.pop("HAPTABLE_PROFILES", None)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config):
+    """pytest-xdist by default: ``-n auto --dist loadgroup`` (tests marked
+    ``xdist_group`` share one worker) unless ``-n`` is given (``-n0``: one process) or
+    xdist is off (``-p no:xdist``). Here rather than in pyproject's addopts, which would
+    make ``-p no:xdist`` an error."""
+    if hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("xdist"):
+        return
+    if config.option.numprocesses is None and not config.option.collectonly:
+        config.option.numprocesses = "auto"
+        if config.option.dist == "no":
+            config.option.dist = "loadgroup"
+
+
+#: ``console.paths``' variables, each pinned below the session's tmp root.
+PINNED_DIRS = (
+    "HAPTABLE_CONFIG_DIR",
+    "HAPTABLE_STATE_DIR",
+    "HAPTABLE_CACHE_DIR",
+    "HAPTABLE_DATA_DIR",
+    "XDG_CONFIG_HOME",
+    "XDG_STATE_HOME",
+    "XDG_CACHE_HOME",
+    "XDG_DATA_HOME",
+)
+
+
+def _pin(mp: pytest.MonkeyPatch, base: Path) -> None:
+    for var in PINNED_DIRS:
+        mp.setenv(var, str(base / var.lower()))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def pinned_root(tmp_path_factory):
+    """The session's root for config, state, cache and data: no test writes to ~/.cache.
+    Session and module fixtures use ``session/`` below it."""
+    root = tmp_path_factory.mktemp("pinned")
+    with pytest.MonkeyPatch.context() as mp:
+        _pin(mp, root / "session")
+        yield root
+
+
+@pytest.fixture(autouse=True)
+def _pinned_dirs(pinned_root, monkeypatch):
+    """Each test its own directories below the root: what one test cached (a measured map
+    the Vibration screen loads at start, lookup tables) never changes what another sees,
+    whichever worker ran what before. A module that shares a cache between its tests sets
+    ``HAPTABLE_CACHE_DIR`` in an autouse fixture of its own."""
+    _pin(monkeypatch, Path(tempfile.mkdtemp(prefix="test-", dir=pinned_root)))
 
 
 @pytest.fixture(autouse=True)

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from console.runtime.realtime import SUPPORT_PRIORITY, realtime_priority
+from console.realtime import SUPPORT_PRIORITY, realtime_priority
 
 #: status lines per second
 STATUS_HZ = 5.0
@@ -190,7 +190,7 @@ class Host:
                 },
             )
             period = 1.0 / STATUS_HZ
-            realtime_priority(SUPPORT_PRIORITY)  # prepared; now see console.runtime.realtime
+            realtime_priority(SUPPORT_PRIORITY)  # prepared; now see console.realtime
             self.proto.send("status", self.status())
             while not self.stop_asked.wait(period):
                 self.proto.send("status", self.status())

@@ -161,7 +161,7 @@ class FrameLoop:
     # ------------------------------------------------------------------ threads
     def _want_realtime(self) -> None:
         if self.realtime:
-            from console.runtime.realtime import FRAMES_PRIORITY, realtime_priority
+            from console.realtime import FRAMES_PRIORITY, realtime_priority
 
             self.realtime_granted = realtime_priority(FRAMES_PRIORITY)
 

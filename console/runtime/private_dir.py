@@ -14,14 +14,13 @@ import os
 import stat
 from pathlib import Path
 
+from console import paths
 from console.errors import UserError
 
 
 def runtime_dir() -> Path:
     """The checked private directory (created 0700 on first use)."""
-    base = os.environ.get("XDG_RUNTIME_DIR")
-    d = Path(base) / "haptable" if base else Path(f"/tmp/haptable-{os.getuid()}")
-    return ensure_private_dir(d)
+    return ensure_private_dir(paths.runtime_dir())
 
 
 def ensure_private_dir(d: Path) -> Path:

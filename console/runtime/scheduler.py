@@ -445,7 +445,7 @@ class Scheduler(Source):
         job.report.done.set()
 
     def _relay_worker(self) -> None:
-        from console.runtime.realtime import SUPPORT_PRIORITY, realtime_priority
+        from console.realtime import SUPPORT_PRIORITY, realtime_priority
 
         realtime_priority(SUPPORT_PRIORITY)  # part of the output path, as the audio thread
         while True:

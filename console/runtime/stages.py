@@ -10,13 +10,13 @@ results in ``work``: ``result`` (the vision result: ``hands``, ``contacts``), ``
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from console.errors import UserError
-from console.types import Contact, Frame, Gesture, Hand
+from console.types import Frame, Gesture, Hand
 
 
 def corners_homography(
@@ -66,13 +66,6 @@ def open_classifier(profile: Any, plugins: Any):
     if getattr(clf, "to_mm", "absent") is None:
         clf.to_mm = fallback_to_mm(profile)
     return clf
-
-
-def with_mm(c: Contact, to_mm) -> Contact:
-    if c.pos_mm is not None or to_mm is None:
-        return c
-    x, y = to_mm(np.array([c.pos_px]))[0]
-    return replace(c, pos_mm=(float(x), float(y)))
 
 
 class VisionStage:

@@ -4,16 +4,16 @@ errors, as notifications (a stray write to stderr would tear the screen)."""
 from __future__ import annotations
 
 import logging
-import os
 import threading
 import time
 from pathlib import Path
 
+from console import paths
+
 
 def log_path() -> Path:
-    """``$XDG_STATE_HOME/haptable/console.log`` (``~/.local/state/haptable/console.log``)."""
-    base = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
-    return Path(base) / "haptable" / "console.log"
+    """``console.log`` in the state directory (``~/.local/state/haptable/console.log``)."""
+    return paths.state_dir("console.log")
 
 
 class NotifyHandler(logging.Handler):

@@ -14,8 +14,8 @@ from pathlib import Path
 
 
 async def _shoot(args) -> Path:
-    from console.cli import Context
     from console.plugins import load_plugins
+    from console.runtime.context import Context
     from console.tui.app import HapTableApp
 
     app = HapTableApp(Context(args.profile, load_plugins()), fast=True, initial=args.tab)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -26,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.types import DIRECTIONS
 
-DIRECTIONS = ("left", "right", "up", "down")
 Progress = Callable[[float, str], None]
 
 #: effect name -> what it offers the screen (for "no plugin offers ..." messages)
@@ -45,10 +44,9 @@ class Cancelled(Exception):
 def cache_dir() -> Path:
     """The console's own cache: ``$HAPTABLE_CACHE_DIR`` or ``$XDG_CACHE_HOME/haptable``
     (``~/.cache/haptable``), sub-folder ``console``."""
-    env = os.environ.get("HAPTABLE_CACHE_DIR")
-    if env:
-        return Path(env) / "console"
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "haptable" / "console"
+    from console import paths
+
+    return paths.cache_dir("console")
 
 
 def twin_map_path(profile) -> Path:

@@ -20,14 +20,14 @@ import json
 from pathlib import Path
 from typing import Any
 
+from console import paths
 from console.errors import UserError
-from console.types import OutputPlan
-
-DIRECTIONS = ("left", "right", "up", "down")
+from console.types import DIRECTIONS, OutputPlan
 
 
 def default_cache_dir() -> Path:
-    return Path.home() / ".cache" / "haptable" / "demos"
+    """``demos`` in HapTable's cache directory (``console.paths``)."""
+    return paths.cache_dir("demos")
 
 
 def twin_map_path(profile: Any, cache_dir: Path | None = None, plugins: Any = None) -> Path:

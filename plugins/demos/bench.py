@@ -193,7 +193,7 @@ def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any)
 
 
 def run_loop(ctx: Any, quick: bool) -> dict:
-    from console.runtime.realtime import support_priority
+    from console.realtime import support_priority
 
     with support_priority() as rt:  # as the console's demo process serves its loop
         res = _run_loop(ctx, quick)
@@ -268,7 +268,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     reset and the demo restarted, so the soak always covers the whole time. RSS is taken
     after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between.
     The polling thread runs as the console's demo process runs its status thread."""
-    from console.runtime.realtime import support_priority
+    from console.realtime import support_priority
 
     with support_priority() as rt:
         res = _run_soak(ctx, quick, minutes)

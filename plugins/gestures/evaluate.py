@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from console import paths
 from console.bench import summarize_s
 from console.errors import UserError
 from console.npz_safe import read_npz
@@ -67,8 +67,8 @@ class FeatureSet:
 
 
 def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "haptable" / "gestures"
+    """``gestures`` in HapTable's cache directory (``console.paths``)."""
+    return paths.cache_dir("gestures")
 
 
 def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:

@@ -10,7 +10,6 @@ and renamed into place, the model is written to a temporary file and renamed.
 from __future__ import annotations
 
 import contextlib
-import os
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Button, Footer, Input, Label, Static
 
+from console import paths
 from console.errors import UserError
 from console.tui.long_work import LongWork
 from console.tui.safety_bar import SafetyBar
@@ -35,8 +35,7 @@ HELP = (
 
 def data_dir() -> Path:
     """Where the panel keeps twin datasets by default."""
-    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
-    return Path(base) / "haptable" / "gestures"
+    return paths.data_dir("gestures")
 
 
 def _mb(n: int | None) -> str:

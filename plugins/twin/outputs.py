@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from console.runtime.realtime import realtime_priority
+from console.realtime import realtime_priority
 from console.types import BlockSource
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
@@ -300,10 +300,6 @@ class TwinAudioOutput:
     def recording_v(self) -> np.ndarray:
         """Everything played, (n, 2) in volts at the piezo patches / screen."""
         return self.recording_card().astype(np.float64) * self._to_v
-
-    def clear_recording(self) -> None:
-        with self._lock:
-            self._kept_from = self._written
 
 
 @dataclass(frozen=True)

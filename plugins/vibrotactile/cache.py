@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from console import paths
 from console.errors import UserError
 from console.npz_safe import read_json_text, read_npz
 
@@ -23,11 +24,8 @@ CODE_VERSION = 1
 
 
 def default_cache_dir() -> Path:
-    """``$HAPTABLE_CACHE_DIR`` or ``$XDG_CACHE_HOME/haptable`` (``~/.cache/haptable``)."""
-    env = os.environ.get("HAPTABLE_CACHE_DIR")
-    if env:
-        return Path(env)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "haptable"
+    """HapTable's cache directory (``console.paths.cache_dir``)."""
+    return paths.cache_dir()
 
 
 def key_hash(key: dict) -> str:

@@ -27,12 +27,11 @@ from collections.abc import Callable
 import numpy as np
 
 from console.errors import UserError
+from console.types import DIRECTIONS
 from console.vibration_map import VibrationMap
 from plugins.vibrotactile.interp import interpolate_lattice
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
-
-DIRECTIONS = ("left", "right", "up", "down")
 
 
 def side_masks(direction: str, squares: int = 3) -> tuple[np.ndarray, np.ndarray]:

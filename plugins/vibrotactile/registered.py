@@ -28,22 +28,6 @@ Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 TABLE_STEPS = 12
 
 
-def build_tables_stepwise(
-    m: VibrationMap,
-    band_hz: float,
-    progress: Progress | None = None,
-    *,
-    min_contrast_db: float = 0.0,
-    perceptual: PerceptualRule | None = None,
-    steps: int = TABLE_STEPS,
-) -> Tables:
-    """``tables.build_tables`` in ``steps`` slices of active points, ``progress`` before
-    each: the same tables (the pair maximum of a row does not depend on the others)."""
-    return build_tables(
-        m, band_hz, progress, min_contrast_db=min_contrast_db, steps=steps, perceptual=perceptual
-    )
-
-
 def tables_stepwise_cached(
     m: VibrationMap,
     band_hz: float,
@@ -63,8 +47,13 @@ def tables_stepwise_cached(
         progress,
         min_contrast_db=min_contrast_db,
         perceptual=perceptual,
-        builder=lambda: build_tables_stepwise(
-            m, band_hz, progress, min_contrast_db=min_contrast_db, perceptual=perceptual
+        builder=lambda: build_tables(
+            m,
+            band_hz,
+            progress,
+            min_contrast_db=min_contrast_db,
+            steps=TABLE_STEPS,
+            perceptual=perceptual,
         ),
     )
 

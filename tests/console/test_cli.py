@@ -20,26 +20,25 @@ def test_doctor_json_reports_each_device(capsys):
 
 
 def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins):
-    from console import commands
     from console.profile import load_profile
-    from console.runtime import memory_lock
+    from console.runtime import doctor, memory_lock
 
     monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
     prof = load_profile("haptable-lab", plugins)
-    st = commands.realtime_status(prof)
+    st = doctor.realtime_status(prof)
     assert st.state == "missing" and "8192 kB" in st.why and "memlock unlimited" in st.fix
 
 
 def test_doctor_names_the_realtime_fix_for_a_sound_card(monkeypatch, plugins):
-    from console import commands
+    from console import realtime
     from console.profile import load_profile
-    from console.runtime import realtime
+    from console.runtime import doctor
 
     monkeypatch.setattr(realtime, "realtime_priority", lambda above_min=10: False)
     prof = load_profile("haptable-lab", plugins)
-    st = commands.scheduling_status(prof)
+    st = doctor.scheduling_status(prof)
     assert st.state == "missing" and "rtprio 95" in st.fix
-    assert commands.scheduling_status(load_profile("sim", plugins)).state == "ok"
+    assert doctor.scheduling_status(load_profile("sim", plugins)).state == "ok"
 
 
 def test_doctor_on_lab_profile_says_what_is_missing_and_the_fix(capsys):

@@ -10,8 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from console.safety_audit import Window, received_problems
-from console.safety_bench import (
+from console.benchmarks.safety import (
     ROUTES,
     FaultyStream,
     fresh_window,
@@ -19,6 +18,7 @@ from console.safety_bench import (
     relay_case,
     source_case,
 )
+from console.safety_audit import Window, received_problems
 from console.signals import ramp_envelope
 from console.types import OutputPlan, Segment
 

@@ -10,7 +10,8 @@ import pytest
 
 from plugins.drivers.audio_sounddevice import SounddeviceOutput, from_profile
 
-pytestmark = pytest.mark.hardware
+#: one JACK dummy server (a session fixture) serves them all: on one xdist worker
+pytestmark = [pytest.mark.hardware, pytest.mark.xdist_group("jack")]
 
 
 class KnownSource:

@@ -11,7 +11,8 @@ from console.profile import PROJECT_PROFILES, load_profile
 from console.runtime.outputs import open_outputs
 from console.stimuli import make_stimulus
 
-pytestmark = pytest.mark.hardware
+#: one JACK dummy server (a session fixture) serves them all: on one xdist worker
+pytestmark = [pytest.mark.hardware, pytest.mark.xdist_group("jack")]
 
 
 def test_plan_plays_paced_and_equal_through_portaudio(jack_server, plugins, tmp_path, wait):

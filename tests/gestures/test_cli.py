@@ -16,8 +16,13 @@ def cache(tmp_path_factory):
     """One feature cache for the module (train reuses what eval extracted)."""
     d = tmp_path_factory.mktemp("cache")
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("XDG_CACHE_HOME", str(d))
+        mp.setenv("HAPTABLE_CACHE_DIR", str(d))
         yield d
+
+
+@pytest.fixture(autouse=True)
+def _module_cache(cache, monkeypatch):
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(cache))
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +73,7 @@ def test_eval_two_fold_and_loso(dataset, cache, capsys):
     assert rep["n_samples"] == 80
     assert rep["static_accuracy"] >= 0.8 and rep["dynamic_accuracy"] >= 0.8
     assert sum(sum(v.values()) for v in rep["confusion"].values()) == 80
-    assert any((cache / "haptable" / "gestures").glob("*.npz"))  # features cached
+    assert any((cache / "gestures").glob("*.npz"))  # features cached
     code, loso = run_json(capsys, "gestures", "eval", str(dataset), "--cv", "loso", "--json")
     assert code == 0 and loso["cv"] == "loso" and loso["subjects"] == ["s1", "s2"]
 

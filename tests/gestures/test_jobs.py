@@ -44,12 +44,15 @@ def sketched(tmp_path_factory):
     return root
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _module_cache(tmp_path_factory):
+@pytest.fixture(scope="module")
+def module_cache(tmp_path_factory):
     """One feature cache for the module: the sketched set's features are extracted once."""
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))
-        yield
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture(autouse=True)
+def _module_cache(module_cache, monkeypatch):
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(module_cache))
 
 
 def test_synth_reports_progress_and_a_cancel_keeps_the_previous_set(tmp_path):

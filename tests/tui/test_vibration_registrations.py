@@ -21,10 +21,13 @@ def _status(app) -> str:
     return str(app.query_one("#vib-status").render())
 
 
-def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch):
+def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monkeypatch, tmp_path):
     from plugins.vibrotactile import registered
 
-    real = registered.build_tables_stepwise
+    # a cold cache of its own: the session's may hold these tables from another test
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
+
+    real = registered.build_tables
     fractions: list[float] = []
 
     def slow_build(m, band_hz, progress=None, **kw):
@@ -35,7 +38,7 @@ def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monk
 
         return real(m, band_hz, slow, **kw)
 
-    monkeypatch.setattr(registered, "build_tables_stepwise", slow_build)
+    monkeypatch.setattr(registered, "build_tables", slow_build)
 
     async def scenario():
         app = _app(plugins, "vibration")

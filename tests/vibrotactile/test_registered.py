@@ -8,7 +8,7 @@ import pytest
 
 from console.errors import UserError
 from plugins.vibrotactile import lazy
-from plugins.vibrotactile.registered import build_tables_stepwise, tables_stepwise_cached
+from plugins.vibrotactile.registered import TABLE_STEPS, tables_stepwise_cached
 from plugins.vibrotactile.tables import build_tables
 
 
@@ -19,8 +19,8 @@ class Stop(Exception):
 @pytest.mark.parametrize("contrast_db", [0.0, 10.0])
 def test_stepwise_tables_equal_the_one_shot_build(ss_map, contrast_db):
     seen: list[float] = []
-    got = build_tables_stepwise(
-        ss_map, 650.0, lambda f, m: seen.append(f), min_contrast_db=contrast_db
+    got = build_tables(
+        ss_map, 650.0, lambda f, m: seen.append(f), min_contrast_db=contrast_db, steps=TABLE_STEPS
     )
     want = build_tables(ss_map, 650.0, min_contrast_db=contrast_db)
     assert np.array_equal(got.max_diff_um_per_v, want.max_diff_um_per_v)

@@ -41,7 +41,7 @@ class DevicesPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="doctor")
     def action_doctor(self) -> None:
-        from console.commands import diagnose
+        from console.runtime.doctor import diagnose
 
         rows = diagnose(self.app.ctx.profile, self.app.ctx.pm)
         self.app.call_from_thread(self._show, rows)

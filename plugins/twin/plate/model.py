@@ -256,10 +256,6 @@ def grid_points_mm(profile=None) -> tuple[np.ndarray, np.ndarray]:
     return origin[0] + (n % cols) * pitch, origin[1] + (n // cols) * pitch
 
 
-def mode_count(twin: Twin, f_max_hz: float) -> int:
-    return int(np.sum(twin.freq_hz <= f_max_hz))
-
-
 __all__ = [
     "EXCITATIONS",
     "Twin",

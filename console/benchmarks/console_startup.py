@@ -4,7 +4,7 @@ Phases (from process start): ``main`` the interpreter is up, ``plugins`` the plu
 manager is loaded (every built-in plugin imported), ``profile`` the profile is validated,
 ``textual`` the console's modules are imported; then the first paint.
 
-``run(ctx, quick)`` starts ``python -m console.tui.bench --child PROFILE`` several times;
+``run(ctx, quick)`` starts ``python -m console.benchmarks.console_startup --child PROFILE`` several times;
 each child builds the console exactly as ``haptable`` does (plugins, profile, app) and,
 headless, reports the ``time.monotonic()`` of its first refresh after mount (the first
 paint) and exits. The parent measured the process start on the same clock.
@@ -21,8 +21,8 @@ import time
 
 def _child(profile: str | None) -> None:
     times: dict[str, float] = {"main": time.monotonic()}
-    from console.cli import Context
     from console.plugins import load_plugins
+    from console.runtime.context import Context
 
     plugins = load_plugins()
     times["plugins"] = time.monotonic()
@@ -48,7 +48,7 @@ def startup_once(profile: str | None = None) -> dict[str, float]:
     env = dict(os.environ)
     t0 = time.monotonic()
     out = subprocess.run(
-        [sys.executable, "-m", "console.tui.bench", "--child", profile or ""],
+        [sys.executable, "-m", "console.benchmarks.console_startup", "--child", profile or ""],
         capture_output=True,
         text=True,
         env=env,

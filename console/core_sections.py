@@ -1,6 +1,7 @@
-"""The core's own plugin: the profile sections every table has, and the core commands.
+"""The core's profile sections (every table has them) and the checks across their keys.
 
-Registered on the same manager as every other plugin (name ``core``).
+This is the ``core`` plugin the plugin manager registers by default; the CLI registers
+``console.core_commands`` in its place, which adds the core commands and benchmarks.
 """
 
 from __future__ import annotations
@@ -237,48 +238,6 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
 def haptable_profile_sections(register):
     for name, (fields, per_item, help_) in SECTIONS.items():
         register(name, fields, per_item=per_item, help=help_)
-
-
-@hookimpl
-def haptable_register_commands(register):
-    from console import commands
-
-    commands.register_core(register)
-
-
-@hookimpl
-def haptable_register_benchmarks(register):
-    def console_startup(ctx, quick: bool) -> dict:
-        from console.tui.bench import run
-
-        return run(ctx, quick)
-
-    register("console", console_startup, help="console start-up to first paint (target < 1 s)")
-
-    def console_demo(ctx, quick: bool) -> dict:
-        from console.tui.demo_bench import run
-
-        return run(ctx, quick)
-
-    def safety(ctx, quick: bool) -> dict:
-        from console.safety_bench import run
-
-        return run(ctx, quick)
-
-    register(
-        "safety",
-        safety,
-        help="the gate under random faulty plans, streams, sources and relay commands "
-        "(cases per second, problems found) and e-stop latency to the last non-zero sample "
-        "for the console, a demo host and a CLI demo",
-    )
-
-    register(
-        "console-demo",
-        console_demo,
-        help="demos started from the console: the knob's loop latency per screen, the "
-        "operator's finger moved on the flow demo (key -> flow scheduled), output log check",
-    )
 
 
 def _fail(profile: Profile, msg: str) -> None:

@@ -1,0 +1,59 @@
+"""The ``core`` plugin as the CLI registers it: the core's profile sections, the core
+commands and the console's own benchmarks.
+
+It sits at the top layer (it names the commands and the benchmarks), so the plugin manager
+never imports it: ``console.cli`` passes it to ``load_plugins(core=...)``.
+"""
+
+from __future__ import annotations
+
+from console.core_sections import haptable_profile_sections
+from console.hookspecs import hookimpl
+
+__all__ = [
+    "haptable_profile_sections",
+    "haptable_register_benchmarks",
+    "haptable_register_commands",
+]
+
+
+@hookimpl
+def haptable_register_commands(register):
+    from console import commands
+
+    commands.register_core(register)
+
+
+@hookimpl
+def haptable_register_benchmarks(register):
+    def console_startup(ctx, quick: bool) -> dict:
+        from console.benchmarks.console_startup import run
+
+        return run(ctx, quick)
+
+    register("console", console_startup, help="console start-up to first paint (target < 1 s)")
+
+    def console_demo(ctx, quick: bool) -> dict:
+        from console.benchmarks.console_demo import run
+
+        return run(ctx, quick)
+
+    def safety(ctx, quick: bool) -> dict:
+        from console.benchmarks.safety import run
+
+        return run(ctx, quick)
+
+    register(
+        "safety",
+        safety,
+        help="the gate under random faulty plans, streams, sources and relay commands "
+        "(cases per second, problems found) and e-stop latency to the last non-zero sample "
+        "for the console, a demo host and a CLI demo",
+    )
+
+    register(
+        "console-demo",
+        console_demo,
+        help="demos started from the console: the knob's loop latency per screen, the "
+        "operator's finger moved on the flow demo (key -> flow scheduled), output log check",
+    )

@@ -1,0 +1,68 @@
+"""Every directory HapTable writes, by one rule each.
+
+=============  ========================  =================================  ======================
+function       override                  XDG base                           default
+=============  ========================  =================================  ======================
+config_dir     ``$HAPTABLE_CONFIG_DIR``  ``$XDG_CONFIG_HOME/haptable``      ``~/.config/haptable``
+state_dir      ``$HAPTABLE_STATE_DIR``   ``$XDG_STATE_HOME/haptable``       ``~/.local/state/haptable``
+cache_dir      ``$HAPTABLE_CACHE_DIR``   ``$XDG_CACHE_HOME/haptable``       ``~/.cache/haptable``
+data_dir       ``$HAPTABLE_DATA_DIR``    ``$XDG_DATA_HOME/haptable``        ``~/.local/share/haptable``
+runtime_dir    --                        ``$XDG_RUNTIME_DIR/haptable``      ``/tmp/haptable-<uid>``
+=============  ========================  =================================  ======================
+
+An override names the directory itself (no ``haptable`` appended). An empty or relative XDG
+variable is ignored, as the XDG base-directory spec says. These functions only compute paths;
+they create nothing. The runtime directory holds sockets and the process registry, so its
+users take it from ``console.runtime.private_dir.runtime_dir``, which creates it 0700 and
+refuses one that is not private.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+APP = "haptable"
+
+
+def _xdg(var: str, *default: str) -> Path:
+    raw = os.environ.get(var, "")
+    return Path(raw) if raw and os.path.isabs(raw) else Path.home().joinpath(*default)
+
+
+def _dir(override: str, xdg_var: str, default: tuple[str, ...], parts: tuple[str, ...]) -> Path:
+    env = os.environ.get(override, "")
+    base = Path(env).expanduser() if env else _xdg(xdg_var, *default) / APP
+    return base.joinpath(*parts)
+
+
+def config_dir(*parts: str) -> Path:
+    """Settings the operator writes (profiles): ``$HAPTABLE_CONFIG_DIR`` or
+    ``$XDG_CONFIG_HOME/haptable``, then ``parts`` below it."""
+    return _dir("HAPTABLE_CONFIG_DIR", "XDG_CONFIG_HOME", (".config",), parts)
+
+
+def state_dir(*parts: str) -> Path:
+    """What the console keeps between runs (its log): ``$HAPTABLE_STATE_DIR`` or
+    ``$XDG_STATE_HOME/haptable``, then ``parts`` below it."""
+    return _dir("HAPTABLE_STATE_DIR", "XDG_STATE_HOME", (".local", "state"), parts)
+
+
+def cache_dir(*parts: str) -> Path:
+    """What can be computed again (tables, measured maps, features): ``$HAPTABLE_CACHE_DIR``
+    or ``$XDG_CACHE_HOME/haptable``, then ``parts`` below it."""
+    return _dir("HAPTABLE_CACHE_DIR", "XDG_CACHE_HOME", (".cache",), parts)
+
+
+def data_dir(*parts: str) -> Path:
+    """What the operator records and keeps (datasets): ``$HAPTABLE_DATA_DIR`` or
+    ``$XDG_DATA_HOME/haptable``, then ``parts`` below it."""
+    return _dir("HAPTABLE_DATA_DIR", "XDG_DATA_HOME", (".local", "share"), parts)
+
+
+def runtime_dir() -> Path:
+    """Where sockets, the process registry and run logs go: ``$XDG_RUNTIME_DIR/haptable``
+    or, without it, ``/tmp/haptable-<uid>``. Unchecked and not created: use
+    ``console.runtime.private_dir.runtime_dir()``, which is."""
+    base = os.environ.get("XDG_RUNTIME_DIR")
+    return Path(base) / APP if base else Path(f"/tmp/{APP}-{os.getuid()}")
