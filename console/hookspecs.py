@@ -183,7 +183,11 @@ def haptable_register_panels(register: Register) -> None:
     """Register console panels (extra Textual screens).
 
     The factory takes the running app instead of a profile and returns a Textual
-    ``Screen``; the console lists it in its command palette.
+    ``Screen``; the console lists it in its command palette. With
+    ``tab=console.plugins.PanelTab(title, key="f8", order=80)`` it is one of the
+    console's tabs instead: the factory returns the tab's widget (built when the tab is
+    first opened), ``key`` opens it, ``order`` places it (the built-in screens are
+    Devices 10 ... Latency 70, keys f1-f7).
     """
 
 

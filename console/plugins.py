@@ -37,6 +37,9 @@ BUILTIN_PLUGINS: dict[str, str] = {
     "tuio": "plugins.tuio",
 }
 
+#: The console's own screens, registered beside the core plugin as ``core.panels``.
+CORE_PANELS = "console.tui.core_panels"
+
 #: Registration kinds and the hook that fills each.
 KINDS: dict[str, str] = {
     "camera": "haptable_register_cameras",
@@ -54,8 +57,19 @@ KINDS: dict[str, str] = {
 
 
 @dataclass(frozen=True)
+class PanelTab:
+    """How a panel shows as one of the console's tabs: its ``title``, the ``key`` that
+    opens it (``"f6"``; empty: none) and its ``order`` among the tabs (lower first)."""
+
+    title: str
+    key: str = ""
+    order: int = 100
+
+
+@dataclass(frozen=True)
 class Registration:
-    """Something a plugin provides: a factory and how to describe and probe it."""
+    """Something a plugin provides: a factory and how to describe and probe it (a panel:
+    ``tab``, how it shows as a tab; None: in the command palette only)."""
 
     kind: str
     name: str
@@ -63,6 +77,7 @@ class Registration:
     factory: Callable[..., Any]
     description: str = ""
     probe: Callable[..., Any] | None = None
+    tab: PanelTab | None = None
 
 
 @dataclass(frozen=True)
@@ -149,8 +164,11 @@ def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> Callable
         *,
         description: str = "",
         probe: Callable[..., Any] | None = None,
+        tab: PanelTab | None = None,
     ) -> None:
-        regs[name] = Registration(kind, name, owner, factory, description, probe)
+        if tab is not None and kind != "panel":
+            raise UserError(f"plugin {owner!r}: {kind} {name!r}: only a panel shows as a tab")
+        regs[name] = Registration(kind, name, owner, factory, description, probe, tab)
 
     return register
 
@@ -211,6 +229,9 @@ def load_plugins(
     if core is None:
         from console import core_sections as core
     pm.register(core, name="core")
+    # the console's own screens: a tui module, registered by name as the built-in plugins
+    # are (this layer imports neither)
+    pm.register(importlib.import_module(CORE_PANELS), name="core.panels")
     for name, module in (BUILTIN_PLUGINS if builtins is None else builtins).items():
         if not is_blocked(name, blocked):
             pm.register(importlib.import_module(module), name=name)

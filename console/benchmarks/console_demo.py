@@ -35,7 +35,7 @@ async def _wait(pilot, cond, timeout_s: float, what: str) -> None:
 async def _start(app, pilot, name: str) -> tuple[object, float]:
     """Highlight ``name`` in the demos table and press enter, as the operator does;
     (the demo's process, seconds from the key to running)."""
-    await _wait(pilot, lambda: app.outputs is not None, 30, "outputs open")
+    await _wait(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
     await pilot.press("f6")
     await _wait(pilot, lambda: app.pane("scenes") is not None, 10, "scenes screen")
     pane = app.pane("scenes")
@@ -46,7 +46,7 @@ async def _start(app, pilot, name: str) -> tuple[object, float]:
     t0 = time.monotonic()
     await pilot.press("enter")
     await _wait(pilot, lambda: pane.demo_state == "running", 120, f"{name} running")
-    return pane.demo_run, time.monotonic() - t0
+    return app.session.demos.run, time.monotonic() - t0
 
 
 async def _stop(app, pilot, run) -> dict:
@@ -54,7 +54,7 @@ async def _stop(app, pilot, run) -> dict:
     await pilot.press("f6")
     await pilot.press("s")
     await _wait(pilot, lambda: pane.demo_name is None, 30, "demo stopped")
-    await _wait(pilot, lambda: app.outputs is not None, 30, "outputs back")
+    await _wait(pilot, lambda: app.session.outputs is not None, 30, "outputs back")
     return run.final or {}
 
 
@@ -123,8 +123,7 @@ async def _scenario(ctx, seconds: float, flow_moves: int) -> dict:
 
 
 async def _flow(app, pilot, moves: int) -> dict:
-    pane = app.pane("scenes")
-    pane.demo_params = {"flow": {"prepare": False}}
+    app.session.demos.params = {"flow": {"prepare": False}}
     run, t_start = await _start(app, pilot, "flow")
     await pilot.press("space")  # the operator's finger replaces the scripted hand
     delays, missed = [], 0

@@ -33,7 +33,15 @@ class ConsoleSession:
         self._control: Any = None
         self._lock = threading.Lock()
         self._subscribers: list[Subscriber] = []
-        self.closed = False
+        self.closed = False  # no outputs open again (quitting)
+        self._closing = False
+        self._camera: Any = None
+        self.vibration: Any = None  # the vibration session (its map), once one is loaded
+        from console.session.demos import DemoControl
+        from console.session.scenes import SceneControl
+
+        self.demos = DemoControl(self)
+        self.scenes = SceneControl(self)
 
     @property
     def profile(self) -> Any:
@@ -42,6 +50,26 @@ class ConsoleSession:
     @property
     def plugins(self) -> Any:
         return self.ctx.pm
+
+    @property
+    def camera(self) -> Any:
+        """The console's camera loop (built on first use; a demo borrows the camera)."""
+        with self._lock:
+            if self._camera is None:
+                from console.tui.camera_service import CameraService  # moves to session/
+
+                self._camera = CameraService(self.profile, self.plugins)
+            return self._camera
+
+    @property
+    def camera_started(self) -> Any:
+        """The camera loop if something built it, else None (never builds one)."""
+        return self._camera
+
+    @property
+    def projector(self) -> Any:
+        """The projector service while it runs (``scenes.ensure()`` starts it), else None."""
+        return self.scenes.service
 
     # ------------------------------------------------------------------ observers
     def subscribe(self, fn: Subscriber) -> None:
@@ -137,7 +165,8 @@ class ConsoleSession:
 
     def estop(self, reason: str) -> None:
         """Silence every output now: the console's own, or every process holding outputs
-        (a demo process) when the console has handed its outputs over."""
+        (a demo process) when the console has handed its outputs over; a running demo
+        then stops (on a thread: the e-stop itself never waits)."""
         out = self.outputs
         if out is not None:
             out.estop(reason)
@@ -145,6 +174,11 @@ class ConsoleSession:
             from console.safety import estop_all
 
             estop_all(reason)
+        if self.demos.run is not None:
+            self.demos.estop(reason)
+            threading.Thread(
+                target=self.demos.stop, args=("e-stopped",), name="haptable-demo-estop", daemon=True
+            ).start()
         self.emit(Stopped("estop", reason=reason))
 
     def reset_estop(self) -> bool:
@@ -160,25 +194,50 @@ class ConsoleSession:
         out = self.outputs
         if out is not None:
             return out.status(), out.relay_log()
-        return None, None
+        return self.demos.outputs_status(), None
 
     # ------------------------------------------------------------------ exit
-    def close(self) -> None:
-        """Stop everything the session runs and close the outputs (blocking: the app calls
-        it from a worker at quit). Idempotent."""
+    def silence(self) -> None:
+        """Quitting, first of all: close the console's outputs now (they ramp to silence
+        and open the relays; the twin log is written). Idempotent."""
         with self._lock:
-            if self.closed:
-                return
+            out, self.outputs = self.outputs, None
             self.closed = True
+        if out is None:
+            return
+        path = os.environ.get("HAPTABLE_TWIN_LOG")
+        if path:
+            from console.runtime.twin_log import write_twin_log
+
+            with contextlib.suppress(Exception):  # never block the shutdown
+                write_twin_log(path, out, list(self.played))
+        out.close()
+
+    def close(self) -> None:
+        """Silence the outputs, then stop everything the session runs: the demo (its
+        process closes the outputs it holds), the projector, the camera loop, the control
+        server (blocking: the app calls it off the UI thread at quit). Idempotent."""
+        self.silence()
+        with self._lock:
+            if self._closing:
+                return
+            self._closing = True
+        for step in (self.demos.close, self.scenes.close_projector, self._close_camera):
+            with contextlib.suppress(Exception):
+                step()
         if self._control is not None:
             with contextlib.suppress(Exception):
                 self._control.close()
-        out = self.outputs
-        if out is not None:
-            path = os.environ.get("HAPTABLE_TWIN_LOG")
-            if path:
-                from console.runtime.twin_log import write_twin_log
 
-                with contextlib.suppress(Exception):  # never block the shutdown
-                    write_twin_log(path, out, list(self.played))
-            out.close()
+    def abandon(self, reason: str) -> None:
+        """``close`` did not finish in time (a demo or the projector hangs): silence every
+        process still holding outputs now. Never blocks."""
+        self.demos.estop(reason)
+        from console.safety import estop_all
+
+        with contextlib.suppress(Exception):
+            estop_all(reason)
+
+    def _close_camera(self) -> None:
+        if self._camera is not None:
+            self._camera.close()

@@ -7,6 +7,7 @@ key works on every screen and the safety bar shows the live output state on ever
 from __future__ import annotations
 
 import contextlib
+import threading
 import time
 
 from textual import work
@@ -17,7 +18,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
 from console.session import ConsoleSession
-from console.session.events import Failed, SessionEvent
+from console.session.events import Failed, SessionEvent, Stopped
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
 from console.tui.util import short_path
@@ -27,7 +28,7 @@ HELP = """\
 
 [b]ctrl+e[/b]  E-STOP: silence both outputs and open every relay (any screen)
 [b]ctrl+r[/b]  reset the e-stop (outputs stay silent until something plays)
-[b]f1-f7[/b]   Devices Camera Vibration Relays Electrostatic Scenes Latency
+{tabs}
 [b]?[/b]       this help    [b]ctrl+p[/b]  command palette    [b]q[/b] / [b]ctrl+q[/b]  quit
 
 Relays switch only in silence: a toggle waits until both channels have been silent \
@@ -39,27 +40,24 @@ x cancels it.
 {pane}
 """
 
-#: tab id -> (title, key, pane class path)
-TABS = {
-    "devices": ("Devices", "f1", "console.tui.panes.devices:DevicesPane"),
-    "camera": ("Camera", "f2", "console.tui.panes.camera:CameraPane"),
-    "vibration": ("Vibration", "f3", "console.tui.panes.vibration:VibrationPane"),
-    "relays": ("Relays", "f4", "console.tui.panes.relays:RelaysPane"),
-    "electrostatic": ("Electrostatic", "f5", "console.tui.panes.electrostatic:ElectrostaticPane"),
-    "scenes": ("Scenes", "f6", "console.tui.panes.scenes:ScenesPane"),
-    "latency": ("Latency", "f7", "console.tui.panes.latency:LatencyPane"),
-}
-
-
 #: how long a screen switch keeps trying to focus the new screen's main widget
 FOCUS_WAIT_S = 5.0
 
 
-def _pane_class(path: str):
-    import importlib
+def panel_tabs(plugins) -> dict[str, tuple[str, str, object]]:
+    """The panels registered with a tab (``haptable_register_panels``, ``tab=PanelTab``),
+    in tab order: name -> (title, key, registration)."""
+    regs = [r for r in plugins.of("panel").values() if r.tab is not None]
+    regs.sort(key=lambda r: (r.tab.order, r.name))
+    return {r.name: (r.tab.title, r.tab.key, r) for r in regs}
 
-    mod, name = path.split(":")
-    return getattr(importlib.import_module(mod), name)
+
+def _keys_help(tabs: dict) -> str:
+    keyed = [(key, title) for title, key, _ in tabs.values() if key]
+    if not keyed:
+        return ""
+    keys = keyed[0][0] if len(keyed) == 1 else f"{keyed[0][0]}-{keyed[-1][0]}"
+    return f"[b]{keys:<6}[/b]  {' '.join(title for _, title in keyed)}"
 
 
 class ScreenTabs(TabbedContent):
@@ -95,17 +93,11 @@ class HapTableApp(App):
         Binding("ctrl+r", "reset_estop", "reset", priority=True, show=False),
         Binding("question_mark", "help", "help"),
         Binding("q", "quit", "quit", show=False),
-        *[
-            Binding(
-                key,
-                f"show_tab('{tab}')",
-                "screens f1-f7" if key == "f1" else title,
-                show=key == "f1",
-                priority=True,
-            )
-            for tab, (title, key, _) in TABS.items()
-        ],
     ]
+
+    #: how long quitting waits for the session to close (a demo to stop, the projector,
+    #: the camera) before it e-stops what is left and exits anyway
+    QUIT_WAIT_S = 15.0
 
     def __init__(self, ctx, *, fast: bool | None = None, initial: str = "devices"):
         super().__init__()
@@ -114,19 +106,39 @@ class HapTableApp(App):
         self.initial = initial
         self.session = ConsoleSession(ctx, fast=fast)
         self.session.subscribe(self._session_event)
-        self.camera_service = None
-        self.projector_service = None
+        self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
+        self._bind_tabs()
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
+
+    def _bind_tabs(self) -> None:
+        """A key per tab (the first one shown in the footer for them all)."""
+        keys = [key for _title, key, _reg in self.tabs.values() if key]
+        span = keys[0] if len(keys) == 1 else f"{keys[0]}-{keys[-1]}" if keys else ""
+        for tab, (title, key, _reg) in self.tabs.items():
+            if key:
+                first = key == keys[0]
+                self._bindings.bind(
+                    key,
+                    f"show_tab('{tab}')",
+                    f"screens {span}" if first else title,
+                    show=first,
+                    priority=True,
+                )
+
+    def _build_pane(self, tab: str):
+        pane = self.tabs[tab][2].factory(self)
+        pane.id = f"{tab}-pane"
+        return pane
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         yield Header()
         with ScreenTabs(initial=self.initial, id="tabs"):
-            for tab, (title, _key, path) in TABS.items():
+            for tab, (title, _key, _reg) in self.tabs.items():
                 with TabPane(title, id=tab):
                     if tab == self.initial:  # the others are built when first opened
-                        yield _pane_class(path)(id=f"{tab}-pane")
+                        yield self._build_pane(tab)
         yield SafetyBar(id="safety")
         yield Footer()
 
@@ -135,8 +147,9 @@ class HapTableApp(App):
         self.sub_title = f"{prof.get('profile.title') or prof.name} - {short_path(prof.path)}"
         self.query_one(SafetyBar).show(None)
         # after the first paint: the outputs' imports and threads must not delay it
-        self.call_after_refresh(self.open_outputs)
+        self.call_after_refresh(self._open_outputs)
         self.set_interval(0.1, self.refresh_state)
+        self.set_interval(0.25, self.session.demos.poll)  # a running demo's Snapshot
         self.call_after_refresh(self._set_visible, self.initial)
         self.call_after_refresh(self._focus_pane, self.initial)
 
@@ -154,17 +167,9 @@ class HapTableApp(App):
         """Build the pane of ``tab`` on first use (mounting completes later)."""
         p = self.pane(tab)
         if p is None:
-            p = _pane_class(TABS[tab][2])(id=f"{tab}-pane")
+            p = self._build_pane(tab)
             self._mounting = self.base.query_one(f"TabPane#{tab}", TabPane).mount(p)
         return p
-
-    def get_camera_service(self):
-        """The console's camera loop (shared by the Camera and Latency screens)."""
-        if self.camera_service is None:
-            from console.tui.camera_service import CameraService
-
-            self.camera_service = CameraService(self.ctx.profile, self.ctx.pm)
-        return self.camera_service
 
     def _focus_pane(self, tab: str) -> None:
         """Ask for the pane's main widget to take the focus once its tab shows.
@@ -205,7 +210,7 @@ class HapTableApp(App):
         if not tabs or focused is None:
             return
         active = tabs.first(TabbedContent).active
-        for tab in TABS:
+        for tab in self.tabs:
             if tab != active and self.pane(tab) in focused.ancestors_with_self:
                 target = self._focus_target(active)
                 if target is not None:
@@ -244,38 +249,15 @@ class HapTableApp(App):
     def _set_visible(self, tab: str) -> None:
         if not self.screen_stack:
             return
-        for name in TABS:
+        for name in self.tabs:
             p = self.pane(name)
             if hasattr(p, "set_visible"):
                 p.set_visible(name == tab)
 
     # ------------------------------------------------------------------ the session
-    @property
-    def outputs(self):
-        return self.session.outputs
-
-    @property
-    def outputs_error(self) -> str:
-        return self.session.outputs_error
-
-    @property
-    def played(self) -> list:
-        return self.session.played
-
     @work(thread=True, exclusive=True, group="outputs")
-    def open_outputs(self, estop_reason: str | None = None) -> None:
-        """Open the profile's outputs (again after a demo: ``estop_reason`` keeps an
-        e-stop that happened meanwhile until the operator resets it)."""
-        self.session.open_outputs(estop_reason)
-
-    def hand_over_outputs(self, borrower: str) -> None:
-        """Close the console's outputs for ``borrower`` (see ``ConsoleSession``)."""
-        self.session.hand_over_outputs(borrower)
-
-    def play_plan(self, plan, *, wait: bool = True) -> bool:
-        """Play ``plan`` through the safety gate (call from a worker thread); refusals
-        come back as session messages the app shows."""
-        return self.session.play_plan(plan, wait=wait)
+    def _open_outputs(self) -> None:
+        self.session.open_outputs()
 
     def _session_event(self, event: SessionEvent) -> None:
         self.post_message(SessionMessage(event))  # thread-safe
@@ -287,44 +269,36 @@ class HapTableApp(App):
             self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
         if not self.screen_stack:
             return
-        for tab in TABS:
+        for tab in self.tabs:
             pane = self.pane(tab)
             if pane is not None:
                 pane.post_message(SessionMessage(ev))
-
-    def play_stream(self, source, name: str):
-        """Start a live stream through the gate; returns its report (or None)."""
-        out = self.outputs
-        if out is None:
-            self.notify("outputs not open", severity="error")
-            return None
-        return out.stream(source, name)
+        if isinstance(ev, Stopped) and ev.topic == "demo":  # the camera is back: the
+            tabs = self.base.query("#tabs")  # screen showing it starts its loop again
+            if tabs:
+                self._set_visible(tabs.first(TabbedContent).active)
 
     def release_camera(self) -> None:
         """Stop the camera loop when neither the Camera nor the Latency screen shows."""
-        if self.camera_service is None:
+        svc = self.session.camera_started
+        if svc is None:
             return
         if not any(getattr(self.pane(t), "visible_now", False) for t in ("camera", "latency")):
-            self.camera_service.stop()
+            svc.stop()
 
     # ------------------------------------------------------------------ live state
     def refresh_state(self) -> None:
         self._keep_focus_visible()
-        out = self.outputs
         try:
             screen = self.screen
         except ScreenStackError:  # the app is closing: its timer may tick once more
             return
         bars = screen.query(SafetyBar)  # none while a modal is up or tearing down
-        status, log = None, None
-        if out is not None:
-            status, log = out.status(), out.relay_log()
-        else:  # a demo process holds them: what it last said
-            scenes = self.pane("scenes")
-            status = scenes.demo_outputs_status() if scenes is not None else None
+        # the console's outputs, else what the demo process holding them last said
+        status, log = self.session.output_status()
         if status is None:
             for bar in bars:
-                bar.show(None, self.outputs_error)
+                bar.show(None, self.session.outputs_error)
             return
         for bar in bars:
             bar.show(status)
@@ -338,11 +312,8 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:
+        """Silence everything now (screens observe the ``estop`` event)."""
         self.session.estop(reason)
-        for tab in TABS:
-            p = self.pane(tab)
-            if hasattr(p, "on_estop"):
-                p.on_estop(reason)
 
     def action_estop(self) -> None:
         self.estop("operator e-stop (console)")
@@ -359,14 +330,14 @@ class HapTableApp(App):
             pane = self.pane(tabs.first(TabbedContent).active)
             if pane is not None:
                 pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
-        self.push_screen(HelpScreen(HELP.format(pane=pane_help)))
+        self.push_screen(HelpScreen(HELP.format(tabs=_keys_help(self.tabs), pane=pane_help)))
 
     def get_system_commands(self, screen):
         yield from super().get_system_commands(screen)
-        for tab, (title, key, _) in TABS.items():
+        for tab, (title, key, _) in self.tabs.items():
             yield SystemCommand(
                 f"Open {title}",
-                f"show the {title} screen ({key})",
+                f"show the {title} screen ({key})" if key else f"show the {title} screen",
                 lambda t=tab: self.action_show_tab(t),
             )
         yield SystemCommand("E-STOP", "silence the outputs and open every relay", self.action_estop)
@@ -380,6 +351,8 @@ class HapTableApp(App):
             ),
         )
         for name, reg in sorted(self.ctx.pm.of("panel").items()):
+            if reg.tab is not None:  # a tab: opened above
+                continue
             yield SystemCommand(
                 f"Panel: {name}",
                 reg.description or "plugin panel",
@@ -388,13 +361,15 @@ class HapTableApp(App):
 
     # ------------------------------------------------------------------ exit
     def on_unmount(self) -> None:
-        if self.camera_service is not None:
+        """Quitting: the session closes off the UI thread (outputs silenced first, then a
+        running demo, the projector, the camera); after ``QUIT_WAIT_S`` the console
+        e-stops whatever still runs and exits anyway."""
+        closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
+        closer.start()
+        closer.join(self.QUIT_WAIT_S)
+        if closer.is_alive():
             with contextlib.suppress(Exception):
-                self.camera_service.close()
-        if self.projector_service is not None:
-            with contextlib.suppress(Exception):
-                self.projector_service.close()
-        self.session.close()
+                self.session.abandon("the console quit while its session was still closing")
 
 
 def _bindings_help(pane) -> str:

@@ -22,7 +22,7 @@ async def _shoot(args) -> Path:
     w, h = (int(v) for v in args.size.lower().split("x"))
     async with app.run_test(size=(w, h)) as pilot:
         for _ in range(200):
-            if app.outputs is not None:
+            if app.session.outputs is not None:
                 break
             await pilot.pause(0.05)
         if args.map and args.tab == "vibration":

@@ -5,6 +5,8 @@ on the twin (a scripted hand) or the real table. Benchmarks: ``haptable bench lo
 (per-stage and end-to-end latency) and ``haptable bench soak`` (long run: drops, RSS,
 underruns). Profile sections: ``[runtime]`` (frame loop, watchdog) and ``[demos]``.
 
+Console panel: the Scenes screen (``scenes``, tab F6; ``panel.py``).
+
 The demos are registered through ``haptable_register_demos`` as ``flow`` and ``knob``:
 ``factory(profile, plugins, outputs, **params) -> DemoRun`` (``stop()``,
 ``snapshot()``, ``scene_name``; params as ``plugins.demos.run.start_demo``).
@@ -119,6 +121,24 @@ def haptable_register_demos(register) -> None:
         "knob",
         _demo_factory("knob"),
         description="two-finger rotation of a virtual knob with haptic feedback",
+    )
+
+
+def _scenes_panel(app: Any) -> Any:
+    from .panel import ScenesPane
+
+    return ScenesPane()
+
+
+@hookimpl
+def haptable_register_panels(register) -> None:
+    from console.plugins import PanelTab
+
+    register(
+        "scenes",
+        _scenes_panel,
+        description="scenes on the projector; the flow and knob demos on the outputs",
+        tab=PanelTab("Scenes", "f6", 60),
     )
 
 

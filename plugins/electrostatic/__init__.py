@@ -3,7 +3,8 @@
 Registers: effects ``electrostatic`` (one friction stimulus with its expected force; its
 ``presets`` are the named friction settings) and ``knob`` (the four conditions and
 variants, finite or live; its ``conditions`` names them); profile sections
-[electrostatic] and [knob]; the ``haptable knob`` command; the ``knob`` benchmark.
+[electrostatic] and [knob]; the ``haptable knob`` command; the ``knob`` benchmark; the
+Electrostatic screen (panel ``electrostatic``, tab F5).
 Modules: force (Eqs. 1-2, thresholds), rotation (two-finger tracker), knob (sectors),
 synth (live stream), session/simulate (pipeline and twin), task (the experiment).
 """
@@ -85,6 +86,24 @@ def haptable_register_effects(register: Any) -> None:
         "knob",
         knob,
         description="haptic knob conditions V, HD, HD+CF, HD+VF and variants (live stream)",
+    )
+
+
+def _electrostatic_panel(app: Any) -> Any:
+    from console.tui.panes.electrostatic import ElectrostaticPane
+
+    return ElectrostaticPane()
+
+
+@hookimpl
+def haptable_register_panels(register: Any) -> None:
+    from console.plugins import PanelTab
+
+    register(
+        "electrostatic",
+        _electrostatic_panel,
+        description="friction settings and knob conditions on the screen",
+        tab=PanelTab("Electrostatic", "f5", 50),
     )
 
 

@@ -278,7 +278,7 @@ class GesturesPanel(Screen):
     def use_model(self, model) -> str:
         """Hand a model trained to the profile's ``[gestures] model`` to the console's
         running classifier (this plugin's own ``svm``); says what happened."""
-        svc = getattr(self.app, "camera_service", None)
+        svc = self.app.session.camera_started
         clf = getattr(svc, "classifier", None)
         if clf is None or not hasattr(clf, "model"):
             return "the console's classifier loads it when the camera starts"

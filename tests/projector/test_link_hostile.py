@@ -410,7 +410,7 @@ def test_a_peer_of_another_uid_is_dropped_on_both_ends(sock_path):
         time.sleep(1.0)
         assert not link.connected and srv.snapshot()[3] is None
         assert "uid" in link.last_drop
-        from console.tui.panes.scenes import status_text
+        from plugins.demos.panel import status_text
 
         assert f"served by uid {os.getuid()}" in status_text(link.status())  # the operator sees why
     finally:

@@ -456,7 +456,7 @@ def test_haptable_estop_ends_a_demo_process_of_the_console(profile, tmp_path):
 
 # ---------------------------------------------------------------------- files (item 8)
 def test_the_consoles_demo_log_goes_to_the_private_directory():
-    from console.tui.panes.scenes import twin_log_path
+    from console.session.demos import twin_log_path
 
     p = twin_log_path("knob")
     assert p.parent == runtime_dir() and not str(p).startswith("/tmp/haptable-demo")

@@ -25,7 +25,10 @@ def _app(plugins, initial):
 async def _first_frame(app, pilot):
     await wait_for(
         pilot,
-        lambda: app.camera_service is not None and app.camera_service.snapshot() is not None,
+        lambda: (
+            app.session.camera_started is not None
+            and app.session.camera_started.snapshot() is not None
+        ),
         30,
         "first camera frame",
     )
@@ -52,7 +55,7 @@ def test_camera_view_tuning_and_background(plugins):
         app = _app(plugins, "camera")
         async with app.run_test(size=(100, 30)) as pilot:
             await _first_frame(app, pilot)
-            svc = app.camera_service
+            svc = app.session.camera_started
             view = app.query_one("#camera-view")
             await wait_for(pilot, lambda: type(view.render()).__name__ != "Content", 10)
             # the twin's demo script shows a hand: the view reports it
@@ -140,7 +143,7 @@ def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
             assert pane.calibration is None
             await wait_for(pilot, lambda: "calibration cancelled" in str(info.render()), 10)
 
-            svc = app.camera_service
+            svc = app.session.camera_started
             real = svc.classifier
             svc.classifier = type("NoCalibration", (), {"params": real.params})()
             await pilot.press("k")
@@ -161,7 +164,7 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
         app = _app(plugins, "camera")
         async with app.run_test(size=(80, 24)) as pilot:
             await _first_frame(app, pilot)
-            assert app.camera_service.classifier.model is None  # the sim profile has none
+            assert app.session.camera_started.classifier.model is None  # the sim profile has none
             await wait_for(pilot, lambda: app.focused is app.pane("camera"), what="focus")
             await pilot.press("g")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
@@ -184,7 +187,7 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
             assert work.outcome == "done", work.text
             res = panel.query_one("#gp-result")
             await wait_for(pilot, lambda: "uses it now" in str(res.render()), 10)
-            clf = app.camera_service.classifier
+            clf = app.session.camera_started.classifier
             assert clf.model is not None and clf.model.meta["evaluation"]["cv"] == "2fold"
             await pilot.press("escape")
             await wait_for(pilot, lambda: type(app.screen).__name__ != "GesturesPanel")

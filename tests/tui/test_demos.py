@@ -75,7 +75,7 @@ def flow_ctx(tmp_path, plugins, map_file):
 
 async def _start(app, pilot, name: str):
     """Open the demos table, highlight ``name``, press enter; wait until it runs."""
-    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
     await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes pane")
     pane = app.pane("scenes")
     await pilot.press("d")
@@ -118,8 +118,8 @@ def _silent_and_open(run) -> None:
 
 
 async def _outputs_back(app, pilot):
-    await wait_for(pilot, lambda: app.outputs is not None, 20, "the console's outputs back")
-    return app.outputs
+    await wait_for(pilot, lambda: app.session.outputs is not None, 20, "the console's outputs back")
+    return app.session.outputs
 
 
 def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
@@ -128,11 +128,11 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
         async with app.run_test(size=(100, 30)) as pilot:
             pane = app.pane("scenes")
             # plans on first use (fast); a loaded test machine must not trip the watchdog
-            pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
+            app.session.demos.params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
-            run = pane.demo_run
-            assert app.outputs is None  # handed over to the demo's process
-            assert app.camera_service.borrower == "demo flow"  # and the camera
+            run = app.session.demos.run
+            assert app.session.outputs is None  # handed over to the demo's process
+            assert app.session.camera_started.borrower == "demo flow"  # and the camera
 
             def flow_done() -> bool:
                 snap = run.snapshot()
@@ -172,7 +172,7 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             await pilot.press("s")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
             assert run.stopped and not run.running
-            assert app.camera_service.borrower is None  # given back
+            assert app.session.camera_started.borrower is None  # given back
             out = await _outputs_back(app, pilot)
             assert not out.gate.estopped
             _silent_and_open(run)
@@ -197,7 +197,7 @@ def test_estop_stops_a_running_demo(plugins):
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
-            run = pane.demo_run
+            run = app.session.demos.run
             screen = int(app.ctx.profile.get("screen.relay_channel"))
 
             def playing() -> bool:
@@ -210,7 +210,7 @@ def test_estop_stops_a_running_demo(plugins):
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
             assert run.stopped and not run.running
             assert pane.demo_state == "e-stopped"
-            assert app.camera_service.borrower is None
+            assert app.session.camera_started.borrower is None
             assert run.final["final"]["outputs"]["gate"]["estopped"]  # the process's gate
             _silent_and_open(run)
             rec, _ = twin_record(run)
@@ -228,12 +228,12 @@ def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
-            run = pane.demo_run
+            run = app.session.demos.run
             await wait_for(pilot, lambda: outputs_of(run)["busy"], 20, "knob playing")
             await pilot.press("q")
         assert run.stopped and not run.running
         _silent_and_open(run)
-        assert app.outputs is None  # not reopened while quitting
+        assert app.session.outputs is None  # not reopened while quitting
 
     asyncio.run(scenario())
 
@@ -244,22 +244,25 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
     async def scenario():
         app = HapTableApp(flow_ctx, fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
             pane = app.pane("scenes")
             await pilot.press("d")
             await pilot.press("enter")  # flow: the first row
             lw = app.query_one("#demo-work", LongWork)
             await wait_for(pilot, lambda: "preparing" in lw.text, 30, "preparation shown")
             assert lw.progress is not None  # the bar shows
-            run = pane.demo_run  # its process prepares the flow's plans
-            assert run is not None and app.outputs is None
+            run = app.session.demos.run  # its process prepares the flow's plans
+            assert run is not None and app.session.outputs is None
             await pilot.press("x")
             await wait_for(pilot, lambda: lw.outcome == "cancelled", 60, "cancelled")
             # the pane tidies up when the worker's end reaches it (a message later)
             await wait_for(
-                pilot, lambda: pane.demo_run is None and pane.demo_name is None, 10, "tidied"
+                pilot,
+                lambda: app.session.demos.run is None and pane.demo_name is None,
+                10,
+                "tidied",
             )
-            assert app.camera_service.borrower is None  # the camera is the console's again
+            assert app.session.camera_started.borrower is None  # the camera is the console's again
             assert run.proc.wait(10) is not None and run.exit_reason == "cancelled"
             out = await _outputs_back(app, pilot)
             assert not out.gate.estopped
@@ -274,9 +277,9 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
         app = HapTableApp(flow_ctx, fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = app.pane("scenes")
-            pane.demo_params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
+            app.session.demos.params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
-            run = pane.demo_run
+            run = app.session.demos.run
             # the demo's process renders the twin camera in a process of its own
             assert run.snapshot()["camera"].get("process")
 
@@ -335,11 +338,11 @@ def test_a_demo_process_that_dies_is_shown_and_the_outputs_come_back_estopped(pl
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
-            run = pane.demo_run
+            run = app.session.demos.run
             os.kill(run.proc.pid, signal.SIGKILL)
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "the console noticed")
             assert "exited (code -9)" in pane.demo_state
-            assert app.camera_service.borrower is None
+            assert app.session.camera_started.borrower is None
             # back e-stopped: the process did not close its outputs itself
             out = await _outputs_back(app, pilot)
             assert out.gate.estopped and "exited (code -9)" in out.gate.estop_reason
@@ -355,7 +358,7 @@ def test_haptable_estop_from_a_shell_reaches_the_demo_process(plugins):
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _start(app, pilot, "knob")
-            run = pane.demo_run
+            run = app.session.demos.run
             reply = await asyncio.to_thread(send_command, app.ctx.profile, "estop")
             assert reply and reply.startswith("ok")
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "demo stopped")
@@ -386,7 +389,7 @@ def test_a_demo_is_refused_while_the_console_plays_and_nothing_is_handed_over(pl
             lw = app.query_one("#demo-work", LongWork)
             await wait_for(pilot, lambda: lw.outcome is not None, 10, "refused")
             assert "outputs are playing" in lw.text and "\n" not in lw.text.strip()
-            assert app.outputs is out and app.camera_service.borrower is None
+            assert app.session.outputs is out and app.session.camera_started.borrower is None
             assert pane.demo_name is None
 
     asyncio.run(scenario())

@@ -24,7 +24,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
             await pilot.press("ctrl+p")
             await pilot.press(*"Panel: gestures")
             await pilot.press("enter")
@@ -84,7 +84,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
 
             # the e-stop works here too, and the panel's safety bar shows it
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.outputs.gate.estopped, what="e-stop")
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stop")
             bar = panel.query_one("#safety")
             await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP"), what="bar")
 
@@ -104,7 +104,7 @@ def test_gestures_panel_at_80x24(snap_compare):
     app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
 
     async def run_before(pilot):
-        await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+        await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
         app.push_screen(plugins.of("panel")["gestures"].factory(app))
         await wait_for(pilot, lambda: type(app.screen).__name__ == "GesturesPanel")
         panel = app.screen

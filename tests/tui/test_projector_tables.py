@@ -13,7 +13,7 @@ from textual.widgets import Input
 from console.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.service import ProjectorService, effect_providers
-from console.tui.panes.scenes import status_text
+from plugins.demos.panel import status_text
 
 from .conftest import wait_for
 from .test_screens import _app, _ready
@@ -107,12 +107,12 @@ def test_grid_scene_from_the_console_is_prepared_once_a_map_is_loaded(
             await wait_for(
                 pilot,
                 lambda: (
-                    app.projector_service is not None and app.projector_service.scene_name == "grid"
+                    app.session.projector is not None and app.session.projector.scene_name == "grid"
                 ),
                 30,
                 "grid started",
             )
-            svc = app.projector_service
+            svc = app.session.projector
             assert svc.unprepared == ["tables"]
             assert "no vibration map yet" in status_text(svc.status())
             # load a map on the Vibration screen: its tables reach the projected scene

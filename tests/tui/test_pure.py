@@ -136,7 +136,7 @@ def test_latency_rows_follow_the_pipeline_order():
 
 
 def test_demo_text_shows_the_last_flow_and_a_newer_refusal():
-    from console.tui.panes.scenes import demo_text
+    from plugins.demos.panel import demo_text
 
     flow = {
         "kind": "flow",

@@ -23,7 +23,7 @@ def _app(plugins, initial="devices", fast=True):
 
 async def _ready(app, pilot):
     """Outputs open and the first screen focused (as a person waits to see it)."""
-    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
 
     def focused() -> bool:
         pane = app.pane(app.initial)
@@ -59,27 +59,27 @@ def test_relay_toggle_and_estop(plugins):
             bar = app.query_one(SafetyBar)
             await wait_for(pilot, lambda: "E-STOP" in str(bar.render()))
             await pilot.press("1")
-            await wait_for(pilot, lambda: app.outputs.gate.relay_state() == frozenset({1}))
+            await wait_for(pilot, lambda: app.session.outputs.gate.relay_state() == frozenset({1}))
             await wait_for(pilot, lambda: "relays closed: 1" in str(bar.render()))
             await wait_for(pilot, lambda: app.query_one("#relay-1", Switch).value)
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.outputs.gate.estopped)
-            assert app.outputs.gate.relay_state() == frozenset()
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
+            assert app.session.outputs.gate.relay_state() == frozenset()
             await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP:"))
             assert bar.has_class("estop")
             # a toggle during the e-stop is refused, and the screen says why
             await pilot.press("2")
             await wait_for(pilot, lambda: "e-stop" in str(app.query_one("#interlock-2").render()))
-            assert app.outputs.gate.relay_state() == frozenset()
-            log = app.outputs.relay_log()
+            assert app.session.outputs.gate.relay_state() == frozenset()
+            log = app.session.outputs.relay_log()
             assert [(r.channel, r.closed) for r in log] == [(1, True), (1, False)]
             assert all(r.level_v == (0.0, 0.0) for r in log)
             await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: not app.outputs.gate.estopped)
+            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped)
             # the refused toggle is gone: it never runs after the reset
             await asyncio.sleep(0.3)
-            assert app.outputs.gate.relay_state() == frozenset()
-            assert not any(r.channel == 2 for r in app.outputs.relay_log())
+            assert app.session.outputs.gate.relay_state() == frozenset()
+            assert not any(r.channel == 2 for r in app.session.outputs.relay_log())
 
     asyncio.run(scenario())
 
@@ -93,8 +93,8 @@ def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
             # enter on the grid cell of point 51 (row 5, column 3)
             pane.move_cursor(51)
             await pilot.press("enter")
-            await wait_for(pilot, lambda: len(app.played) == 1, what="point played")
-            point = app.played[0]
+            await wait_for(pilot, lambda: len(app.session.played) == 1, what="point played")
+            point = app.session.played[0]
             assert point.name == "point 51"
             await wait_for(pilot, lambda: "point 51" in str(app.query_one("#vib-info").render()))
             freq = point.meta["frequency_hz"]
@@ -103,29 +103,29 @@ def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
             # second point, then the flow both ways
             pane.move_cursor(52)
             await pilot.press("enter")
-            await wait_for(pilot, lambda: len(app.played) == 2)
+            await wait_for(pilot, lambda: len(app.session.played) == 2)
             await wait_for(
                 pilot, lambda: "lookup table" in str(app.query_one("#vib-info").render())
             )
             info = str(app.query_one("#vib-info").render())
             assert "51 / 52:" in info and "52 / 51:" in info
             await pilot.press("f")
-            await wait_for(pilot, lambda: len(app.played) == 3)
+            await wait_for(pilot, lambda: len(app.session.played) == 3)
             await pilot.press("r")
-            await wait_for(pilot, lambda: len(app.played) == 4)
-            assert [p.name for p in app.played[2:]] == ["flow 51->52", "flow 52->51"]
+            await wait_for(pilot, lambda: len(app.session.played) == 4)
+            assert [p.name for p in app.session.played[2:]] == ["flow 51->52", "flow 52->51"]
             entry = pane.session.lookup(51, 52)
-            part1 = app.played[2].meta["parts"][0]
+            part1 = app.session.played[2].meta["parts"][0]
             assert part1["frequency_hz"] == entry["frequency_hz"]
             assert part1["actuator"] == entry["actuator"]
             # flow under a hand at the cursor, to the right
             await pilot.press("d")
-            await wait_for(pilot, lambda: len(app.played) == 5, 30, "hand flow")
-            hand = app.played[4]
+            await wait_for(pilot, lambda: len(app.session.played) == 5, 30, "hand flow")
+            hand = app.session.played[4]
             assert hand.meta["direction"] == "right" and len(hand.segments) == 2
-            await wait_for(pilot, lambda: not app.outputs.scheduler.busy, 30)
-            for plan in app.played:
-                assert _played_in_recording(app.outputs, plan) < 1e-3
+            await wait_for(pilot, lambda: not app.session.outputs.scheduler.busy, 30)
+            for plan in app.session.played:
+                assert _played_in_recording(app.session.outputs, plan) < 1e-3
 
     asyncio.run(scenario())
 
@@ -138,10 +138,10 @@ def test_vibration_command_line_and_bad_input(plugins, map_file):
             pane = await _load_map(app, pilot, map_file)
             await command(app, pilot, "99")
             await pilot.pause(0.3)
-            assert app.played == []  # point 99 does not exist: nothing plays
+            assert app.session.played == []  # point 99 does not exist: nothing plays
             await command(app, pilot, "51 52")
-            await wait_for(pilot, lambda: len(app.played) == 1)
-            assert app.played[0].name == "flow 51->52"
+            await wait_for(pilot, lambda: len(app.session.played) == 1)
+            assert app.session.played[0].name == "flow 51->52"
             assert pane.selected == [51, 52]
             await command(app, pilot, "import PA")
             await wait_for(pilot, lambda: "EXC=FILE" in str(app.query_one("#vib-status").render()))
@@ -190,16 +190,16 @@ def test_electrostatic_setting_and_preset(plugins):
                 pilot, lambda: "expected attraction" in str(app.query_one("#es-setting").render())
             )
             await pilot.press("p")
-            await wait_for(pilot, lambda: len(app.played) == 1)
-            plan = app.played[0]
+            await wait_for(pilot, lambda: len(app.session.played) == 1)
+            plan = app.session.played[0]
             assert plan.segments[0].screen and abs(np.ptp(plan.segments[0].screen_v) - 200) < 1
-            await wait_for(pilot, lambda: not app.outputs.scheduler.busy, 10)
-            rec = app.outputs.recording()
+            await wait_for(pilot, lambda: not app.session.outputs.scheduler.busy, 10)
+            rec = app.session.outputs.recording()
             assert abs(np.ptp(rec[:, 1]) - 200.0) < 1.0 and not np.any(rec[:, 0])
             # the first list entry is a knob condition: enter auditions it
             await pilot.press("enter")
-            await wait_for(pilot, lambda: len(app.played) == 2, 30)
-            assert app.played[1].name.startswith("knob ")
+            await wait_for(pilot, lambda: len(app.session.played) == 2, 30)
+            assert app.session.played[1].name.startswith("knob ")
 
     asyncio.run(scenario())
 
@@ -224,11 +224,12 @@ def test_help_on_question_mark_and_estop_over_it(plugins):
             await _ready(app, pilot)
             await pilot.press("question_mark")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "HelpScreen")
+            await wait_for(pilot, lambda: app.screen.query("Static"), 5, "help composed")
             text = str(app.screen.query_one("Static").render())
             assert "ctrl+e" in text and "toggle that relay" in text  # this screen's keys
             # the e-stop works on top of the help too
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.outputs.gate.estopped)
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
             await pilot.press("escape")
             await wait_for(pilot, lambda: type(app.screen).__name__ != "HelpScreen")
 
@@ -275,8 +276,8 @@ def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch, 
             await wait_for(
                 pilot,
                 lambda: (
-                    app.projector_service is not None
-                    and app.projector_service.status().get("shown_scene") == "grid"
+                    app.session.projector is not None
+                    and app.session.projector.status().get("shown_scene") == "grid"
                 ),
                 60,
                 "grid shown",
@@ -291,17 +292,17 @@ def test_scene_starts_and_stops_on_the_headless_projector(plugins, monkeypatch, 
             vib.run_command(f"load {map_file}")
             await wait_for(pilot, lambda: vib.session is not None, 30)
             # the grid's tables come from the registered flow effect once a map is loaded
-            await wait_for(pilot, lambda: app.projector_service.unprepared == [], 30)
+            await wait_for(pilot, lambda: app.session.projector.unprepared == [], 30)
             vib.run_command("51")
-            await wait_for(pilot, lambda: app.projector_service.scene.state()["active"] == 51, 10)
-            await wait_for(pilot, lambda: len(app.played) == 1, 10, "point played")
-            lit = app.projector_service.scene.state()["excitation_patches"]
-            assert set(lit) == set(patches_of(app.played[0].meta["actuator"]))
+            await wait_for(pilot, lambda: app.session.projector.scene.state()["active"] == 51, 10)
+            await wait_for(pilot, lambda: len(app.session.played) == 1, 10, "point played")
+            lit = app.session.projector.scene.state()["excitation_patches"]
+            assert set(lit) == set(patches_of(app.session.played[0].meta["actuator"]))
             await pilot.press("f6")
             await wait_for(pilot, lambda: "not prepared" not in str(status.render()), 10)
             await pilot.press("s")
-            await wait_for(pilot, lambda: app.projector_service.status()["scene"] is None, 10)
-            svc = app.projector_service
+            await wait_for(pilot, lambda: app.session.projector.status()["scene"] is None, 10)
+            svc = app.session.projector
         # leaving the console stops the projector process
         assert svc.supervisor.pid is None and svc.supervisor.proc is None
 

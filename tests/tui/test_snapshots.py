@@ -25,7 +25,7 @@ def _app(initial: str, *extra: str) -> HapTableApp:
 
 
 async def _settle(app, pilot) -> None:
-    await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
     await pilot.pause(0.3)
     await pilot.wait_for_scheduled_animations()
 
@@ -47,7 +47,7 @@ def test_relays_after_a_toggle(snap_compare):
     async def run_before(pilot):
         await _settle(app, pilot)
         await pilot.press("3")
-        await wait_for(pilot, lambda: app.outputs.gate.relay_state() == frozenset({3}))
+        await wait_for(pilot, lambda: app.session.outputs.gate.relay_state() == frozenset({3}))
         await wait_for(pilot, lambda: app.query_one("#relaylog").row_count == 1)
         await pilot.pause(0.5)
         await pilot.wait_for_scheduled_animations()

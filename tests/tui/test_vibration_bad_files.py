@@ -40,7 +40,7 @@ def test_bad_map_and_uff_files_leave_the_console_and_its_map(plugins, map_file, 
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=(100, 30)) as pilot:
             pane = app.pane("vibration")
-            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
             await command(app, pilot, f"load {map_file}")
             await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
             first = pane.session

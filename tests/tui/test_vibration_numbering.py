@@ -26,7 +26,7 @@ def test_grid_from_coordinates_with_the_files_numbers(plugins, map_file, tmp_pat
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=(100, 30)) as pilot:
             pane = app.pane("vibration")
-            await wait_for(pilot, lambda: app.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
             await command(app, pilot, f"load {cm}")
             await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
             await wait_for(pilot, lambda: pane.id_at.get((0, 0)) == 1001, 10, "grid laid out")

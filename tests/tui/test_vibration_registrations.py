@@ -54,15 +54,15 @@ def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monk
             assert fractions and max(fractions) < 1.0  # stopped part way
             # the map stays usable: a point plays without tables
             await command(app, pilot, "51")
-            await wait_for(pilot, lambda: len(app.played) == 1)
+            await wait_for(pilot, lambda: len(app.session.played) == 1)
             # b builds them again, to the end
             fractions.clear()
             await pilot.press("b")
             await wait_for(pilot, lambda: _status(app).endswith("; ready"), 30, "rebuilt")
             assert pane.session.tables_ready and fractions[-1] == 1.0
             await command(app, pilot, "51 52")
-            await wait_for(pilot, lambda: len(app.played) == 2)
-            assert app.played[1].name == "flow 51->52"
+            await wait_for(pilot, lambda: len(app.session.played) == 2)
+            assert app.session.played[1].name == "flow 51->52"
 
     asyncio.run(scenario())
 
@@ -94,7 +94,7 @@ def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
                 20,
                 "import refused",
             )
-            assert app.played == []
+            assert app.session.played == []
 
     asyncio.run(scenario())
 
@@ -130,9 +130,9 @@ def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
             assert m.points.tolist() == list(range(49, 61))
             np.testing.assert_allclose(m.frf_um_per_v, row.frf_um_per_v, rtol=1e-9, atol=1e-12)
             await command(app, pilot, "51 52")
-            await wait_for(pilot, lambda: len(app.played) == 1)
+            await wait_for(pilot, lambda: len(app.session.played) == 1)
             entry = pane.session.lookup(51, 52)
-            assert app.played[0].meta["parts"][0]["frequency_hz"] == entry["frequency_hz"]
+            assert app.session.played[0].meta["parts"][0]["frequency_hz"] == entry["frequency_hz"]
 
     asyncio.run(scenario())
 

@@ -91,7 +91,7 @@ class CameraPane(Horizontal):
 
     @property
     def service(self):
-        return self.app.get_camera_service()
+        return self.app.session.camera
 
     # ------------------------------------------------------------------ lifecycle
     def set_visible(self, visible: bool) -> None:
@@ -348,7 +348,7 @@ class CameraPane(Horizontal):
 
     @work(thread=True, group="cal-projector")
     def _projector(self, what: str, targets=None) -> None:
-        svc = self.app.projector_service
+        svc = self.app.session.projector
         if svc is None:  # no projector running: the console alone drives the wizard
             return
         try:

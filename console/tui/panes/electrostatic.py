@@ -187,7 +187,7 @@ class ElectrostaticPane(Vertical):
         self.app.call_from_thread(
             self.app.notify, f"playing {plan.segments[0].label} on the screen", timeout=3
         )
-        self.app.play_plan(plan)
+        self.app.session.play_plan(plan)
 
     @work(thread=True, group="es-play")
     def _play_condition(self, condition: str) -> None:
@@ -203,4 +203,4 @@ class ElectrostaticPane(Vertical):
             f"{plan.meta.get('crossings', 0)} detents",
             timeout=4,
         )
-        self.app.play_plan(plan)
+        self.app.session.play_plan(plan)

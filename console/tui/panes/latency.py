@@ -98,17 +98,15 @@ class LatencyPane(Vertical):
 
     @work(thread=True, exclusive=True, group="camera")
     def _start(self) -> None:
-        svc = self.app.get_camera_service()
+        svc = self.app.session.camera
         try:
             svc.start()
         except UserError as exc:
             svc.error = str(exc)
 
     def demo_run(self):
-        """The demo started from the Scenes screen, while it runs (else None)."""
-        scenes = self.app.pane("scenes")
-        run = getattr(scenes, "demo_run", None)
-        return None if run is None or getattr(run, "stopped", False) else run
+        """The session's running demo (else None)."""
+        return self.app.session.demos.running
 
     def show_state(self, status: dict, log) -> None:
         self._tick += 1
@@ -142,7 +140,7 @@ class LatencyPane(Vertical):
                 "scene -> effect -> output)"
             )
         else:
-            svc = self.app.camera_service
+            svc = self.app.session.camera_started
             self.source = "camera"
             if svc is None:
                 self.query_one("#lat-head", Static).update("camera not started")

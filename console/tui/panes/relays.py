@@ -110,7 +110,7 @@ class RelaysPane(VerticalScroll):
         self.request(int(event.switch.id.split("-")[1]), event.value)
 
     def action_toggle(self, ch: int) -> None:
-        out = self.app.outputs
+        out = self.app.session.outputs
         if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
             return
         closed = ch in out.scheduler.operator_relays  # the operator's own setting
@@ -123,7 +123,7 @@ class RelaysPane(VerticalScroll):
 
     @work(thread=True, group="relays")
     def _switch(self, ch: int, closed: bool) -> None:
-        out = self.app.outputs
+        out = self.app.session.outputs
         try:
             if out is None:
                 raise RuntimeError("outputs are not open")

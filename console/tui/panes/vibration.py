@@ -234,7 +234,7 @@ class VibrationPane(VerticalScroll):
 
     def _prepare_projector(self) -> None:
         """In a worker: a projected scene waiting for lookup tables gets them now."""
-        svc = self.app.projector_service
+        svc = self.app.session.projector
         if svc is not None and "tables" in svc.unprepared:
             try:
                 svc.prepare_again()
@@ -243,6 +243,7 @@ class VibrationPane(VerticalScroll):
 
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
+        self.app.session.vibration = session  # its map prepares the projector's tables
         self.status(summary)
         self._layout_from_map(session.vmap)
         self._show_selection()
@@ -395,7 +396,7 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
             return
         self.app.call_from_thread(self._playing, plan)
-        self.app.play_plan(plan)
+        self.app.session.play_plan(plan)
 
     def _playing(self, plan) -> None:
         self.status(f"playing {plan.name}: {describe_plan(plan)}")
@@ -404,7 +405,7 @@ class VibrationPane(VerticalScroll):
     @work(thread=True, group="vib-projector")
     def _show_on_projector(self, plan) -> None:
         """With the projector showing the ``grid`` scene, light the auditioned point."""
-        svc = self.app.projector_service
+        svc = self.app.session.projector
         if svc is None or svc.scene_name != "grid" or not self.selected:
             return
         meta = plan.meta

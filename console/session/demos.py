@@ -1,0 +1,277 @@
+"""The demo lifecycle: a registered demo run in its own process on the console's outputs,
+camera and projector.
+
+``DemoControl.start(name)`` hands the outputs and the camera over (each opens once),
+starts the ``DemoProcess``, waits for it to run (``progress``/``cancelled`` follow its
+preparation) and forwards its scene events to the projector; ``stop()`` stops it, shows
+black if it showed its scene and takes outputs and camera back. It reports events with
+topic ``demo``: ``Progress`` while it prepares, ``Started`` when it runs, ``Snapshot``
+(``poll()``), ``Stopped`` (``reason``: stopped, cancelled, e-stopped, an error ...) and
+``Failed``. Blocking calls run on the caller's thread: screens call them from workers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+from console.session.events import Progress, Snapshot, Started, Stopped
+
+
+def twin_log_path(name: str) -> Path:
+    """Where a demo process writes what the twin's outputs received (``.json`` bursts and
+    relay switches, ``.npz`` samples: ``console.runtime.twin_log``): the private runtime
+    directory; the next run of the same demo overwrites it."""
+    from console.runtime.private_dir import runtime_dir
+
+    return runtime_dir() / f"demo-{os.getpid()}-{name}.json"
+
+
+class ProjectorForward:
+    """The demo's scene events, forwarded to the console's projector service once the
+    demo's scene is shown there (events before that are applied when it starts)."""
+
+    def __init__(self, service: Any) -> None:
+        self.service = service
+        self.ready = False
+        self.pending: list[dict] = []
+        self._lock = threading.Lock()
+
+    def update(self, event: dict) -> dict:
+        with self._lock:
+            if not self.ready:
+                self.pending = [*self.pending[-199:], event]
+                return {}
+        return self.service.update(event)
+
+    def start(self, scene: str) -> None:
+        with self._lock:
+            first, self.pending = self.pending, []
+        self.service.start_scene(scene, first)
+        with self._lock:
+            for ev in self.pending:
+                self.service.update(ev)
+            self.pending, self.ready = [], True
+
+
+class DemoControl:
+    """The one demo ``session`` runs at a time: ``name`` (running or being prepared),
+    ``state`` (idle, starting, running, stopping, or how the last run ended) and ``run``
+    (the ``DemoProcess`` while it lives)."""
+
+    #: extra ``factory(...)`` arguments per demo name (e.g. ``{"flow": {"prepare": False}}``)
+    params: dict[str, dict]
+
+    def __init__(self, session: Any) -> None:
+        self.session = session
+        self.params = {}
+        self.run: Any = None
+        self.name: str | None = None
+        self.state = "idle"
+        self.last_snapshot: dict | None = None
+        self.last_final: dict | None = None  # the last run's "stopped" message
+        self._forward: ProjectorForward | None = None
+        self._lock = threading.Lock()
+        self._stop_lock = threading.Lock()
+        self._stopping: Any = None  # the run a stop is under way for
+
+    # ------------------------------------------------------------------ start
+    def check_start(self, name: str) -> None:
+        """Refuse a start now (one line): an unknown demo, one already running, outputs
+        not open or e-stopped."""
+        s = self.session
+        if name not in s.plugins.of("demo"):
+            raise UserError(f"no demo named {name!r}")
+        if self.name is not None:
+            raise UserError(f"demo {self.name} is running: s stops it")
+        out = s.outputs
+        if out is None:
+            raise UserError(f"demo {name}: outputs not open ({s.outputs_error or 'starting'})")
+        if out.gate.estopped:
+            raise UserError(f"demo {name}: the e-stop is active; ctrl+r resets it")
+
+    def start(
+        self,
+        name: str,
+        progress: Callable[[float, str], None] | None = None,
+        cancelled: Callable[[], bool] | None = None,
+    ) -> Any:
+        """Start demo ``name`` and wait until it runs (blocking); returns its process.
+        A refusal or failure raises (``UserError``, ``DemoCancelled``) after outputs and
+        camera were taken back, and is reported as ``Stopped``."""
+        from console.runtime.demo_process import DemoCancelled, DemoProcess
+
+        s = self.session
+        with self._lock:
+            self.check_start(name)
+            self.name, self.state = name, "starting"
+            self.last_snapshot = None
+        s.emit(Started("demo", name, detail="starting"))
+
+        def step(frac: float, text: str) -> None:
+            s.emit(Progress("demo", name, fraction=frac, text=text))
+            if progress is not None:
+                progress(frac, text)
+
+        cancelled = cancelled or (lambda: False)
+        params = dict(self.params.get(name, {}))
+        run = None
+        try:
+            step(0.0, "handing over the outputs and the camera")
+            camera = s.camera
+            vision = camera.params()
+            if vision:
+                params.setdefault("vision", vision)  # the Camera screen's tuned thresholds
+            s.hand_over_outputs(f"demo {name}")
+            try:
+                camera.release(f"demo {name}")
+                if cancelled():
+                    raise DemoCancelled(name)
+                projector = s.scenes.service
+                fwd = ProjectorForward(projector) if projector is not None else None
+                run = DemoProcess(
+                    s.profile,
+                    name,
+                    params=params,
+                    on_scene=fwd.update if fwd is not None else None,
+                    twin_log=twin_log_path(name),
+                )
+                self.run, self._forward = run, fwd
+                run.wait_started(step, cancelled)
+            except BaseException:
+                if run is not None:
+                    run.stop("cancelled")
+                self.run = None
+                self._take_back(run)
+                raise
+        except BaseException as exc:
+            cancel = cancelled() or isinstance(exc, DemoCancelled)
+            self._ended(name, "cancelled" if cancel else "failed")  # the caller says why
+            raise
+        if fwd is not None:
+            try:
+                fwd.start(run.scene_name)
+            except (UserError, OSError) as exc:
+                s.fail("projector", f"projector: {exc}", severity="warning")
+        self.state = "running"
+        s.emit(Started("demo", name, detail="running"))
+        return run
+
+    # ------------------------------------------------------------------ stop
+    def stop(self, reason: str = "stopped") -> str:
+        """Stop the running demo (blocking): the process lets the playing plan end,
+        closes its outputs and exits; black on the projector if it showed its scene;
+        outputs and camera taken back. Returns how it ended (``Stopped`` says so too)."""
+        with self._lock:
+            run, name = self.run, self.name
+            if run is None or name is None or self._stopping is run:
+                return self.state  # nothing runs, or its stop is under way
+            self._stopping, self.state = run, "stopping"
+        try:
+            self._stop_run(run)
+        except Exception as exc:  # noqa: BLE001 - one line, the console stays up
+            reason = f"stop failed: {exc}"
+        if run.exit_reason and run.exit_reason not in ("stopped", reason):
+            reason = run.exit_reason  # it ended by itself (an error, its watchdog ...)
+        self._ended(name, reason)
+        return reason
+
+    def estop(self, reason: str) -> None:
+        """The e-stop: the demo process silences its outputs now (``stop`` then ends it)."""
+        run = self.run
+        if run is not None:
+            run.estop(reason)
+
+    def _stop_run(self, run: Any) -> None:
+        with self._stop_lock:
+            try:
+                run.stop()
+                self.last_snapshot = run.snapshot()
+                self.last_final = run.final
+            finally:
+                fwd, self._forward = self._forward, None
+                if fwd is not None and fwd.ready:
+                    with contextlib.suppress(Exception):
+                        if fwd.service.status().get("scene") == run.scene_name:
+                            fwd.service.stop_scene()
+                self._take_back(run)
+
+    def _take_back(self, run: Any) -> None:
+        """The demo process has ended: the console's camera and outputs again (an e-stop
+        it had stays until the operator resets it). Not once the session closes."""
+        s = self.session
+        s.camera.give_back()
+        if s.closed or s.outputs is not None:
+            return
+        reason = getattr(run, "estop_reason", None)
+        if reason is None and getattr(run, "crashed", False):
+            reason = f"demo {run.name}: {run.exit_reason}"
+        s.open_outputs(reason)
+
+    def _ended(self, name: str, reason: str) -> None:
+        with self._lock:
+            self.run, self.name, self.state = None, None, reason
+        self.session.emit(Stopped("demo", name, reason=reason))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def running(self) -> Any:
+        """The running demo process (None while none runs or it is still preparing)."""
+        run = self.run
+        if run is None or self.state not in ("running", "stopping") or run.stopped:
+            return None
+        return run
+
+    def poll(self) -> dict | None:
+        """The running demo's newest snapshot, reported as ``Snapshot`` (None: none
+        runs). Never blocks: a demo that ended by itself is stopped on a thread
+        (``Stopped`` says why)."""
+        run, name = self.run, self.name
+        if run is None or name is None:
+            return None
+        try:
+            snap = run.snapshot()
+        except Exception as exc:  # noqa: BLE001 - shown, never raised
+            snap = {"demo": name, "last_error": f"snapshot failed: {exc}"}
+        self.last_snapshot = snap
+        self.session.emit(Snapshot("demo", name, data=snap))
+        if run.stopped and self.state == "running":  # it ended by itself: tidy up
+            self.state = "stopping"
+            threading.Thread(
+                target=self.stop,
+                args=(run.exit_reason or "ended",),
+                name="haptable-demo-ended",
+                daemon=True,
+            ).start()
+        return snap
+
+    def outputs_status(self) -> dict | None:
+        """The running demo's outputs (for the safety bar while the demo holds them)."""
+        run = self.run
+        return run.outputs_status() if run is not None else None
+
+    def set_target(self, pos_mm: tuple[float, float] | None) -> bool:
+        """The operator's finger on the twin the running demo watches (None lifts it);
+        False when the demo's camera cannot be touched."""
+        cam = self.touchable()
+        if cam is None:
+            return False
+        cam.set_target(pos_mm)
+        return True
+
+    def touchable(self) -> Any:
+        """The running demo's camera when the operator can touch the twin with it."""
+        run = self.run
+        if run is None or self.state != "running":
+            return None
+        return run.camera
+
+    def close(self) -> None:
+        """Quitting: stop the demo (blocking) before the session closes the outputs."""
+        if self.run is not None:
+            self.stop("stopped")
