@@ -227,7 +227,7 @@ def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
-            pane = await _start(app, pilot, "knob")
+            await _start(app, pilot, "knob")
             run = app.session.demos.run
             await wait_for(pilot, lambda: outputs_of(run)["busy"], 20, "knob playing")
             await pilot.press("q")
