@@ -22,10 +22,22 @@ Subscriber = Callable[[SessionEvent], None]
 
 class ConsoleSession:
     """What one operator's console runs: ``ctx`` gives the profile (``ctx.profile``) and the
-    plugins (``ctx.pm``); ``fast`` runs the twin's outputs unpaced (tests)."""
+    plugins (``ctx.pm``); ``fast`` runs the twin's outputs unpaced (tests).
+    ``camera_factory(profile, plugins)`` builds the camera loop and ``map_path(profile)``
+    says where the profile's measured vibration map is kept (the console passes its own
+    until both live in this package)."""
 
-    def __init__(self, ctx: Any, *, fast: bool | None = None) -> None:
+    def __init__(
+        self,
+        ctx: Any,
+        *,
+        fast: bool | None = None,
+        camera_factory: Callable[[Any, Any], Any] | None = None,
+        map_path: Callable[[Any], Any] | None = None,
+    ) -> None:
         self.ctx = ctx
+        self.camera_factory = camera_factory
+        self.map_path = map_path
         self.fast = fast
         self.outputs: Any = None
         self.outputs_error = ""
@@ -56,9 +68,9 @@ class ConsoleSession:
         """The console's camera loop (built on first use; a demo borrows the camera)."""
         with self._lock:
             if self._camera is None:
-                from console.tui.camera_service import CameraService  # moves to session/
-
-                self._camera = CameraService(self.profile, self.plugins)
+                if self.camera_factory is None:
+                    raise UserError("this console has no camera loop")
+                self._camera = self.camera_factory(self.profile, self.plugins)
             return self._camera
 
     @property

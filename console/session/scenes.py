@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
-from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
@@ -53,8 +52,9 @@ class SceneControl:
         vib = self.session.vibration
         if vib is not None and getattr(vib, "vmap", None) is not None:
             return vib.vmap
-        path = measured_map_path(self.session.profile)
-        if path.is_file():
+        map_path = self.session.map_path
+        path = map_path(self.session.profile) if map_path is not None else None
+        if path is not None and path.is_file():
             return path
         raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")
 
@@ -96,10 +96,3 @@ class SceneControl:
             with contextlib.suppress(Exception):
                 svc.close()
             self.session.emit(Stopped("projector", reason="closed"))
-
-
-def measured_map_path(profile: Any) -> Path:
-    """Where this profile's measured vibration map is kept."""
-    from console.tui.vibration_session import twin_map_path  # moves to console/session
-
-    return twin_map_path(profile)

@@ -60,6 +60,18 @@ def _keys_help(tabs: dict) -> str:
     return f"[b]{keys:<6}[/b]  {' '.join(title for _, title in keyed)}"
 
 
+def _camera_service(profile, plugins):
+    from console.tui.camera_service import CameraService  # numpy, the vision stages
+
+    return CameraService(profile, plugins)
+
+
+def _measured_map_path(profile):
+    from console.tui.vibration_session import twin_map_path
+
+    return twin_map_path(profile)
+
+
 class ScreenTabs(TabbedContent):
     """The console's screens. Only the operator switches screens (keys, clicks, palette):
     a widget taking the focus in a hidden screen must not switch back to it."""
@@ -104,7 +116,9 @@ class HapTableApp(App):
         self.ctx = ctx
         self.fast = fast
         self.initial = initial
-        self.session = ConsoleSession(ctx, fast=fast)
+        self.session = ConsoleSession(
+            ctx, fast=fast, camera_factory=_camera_service, map_path=_measured_map_path
+        )
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
         self._bind_tabs()
