@@ -37,23 +37,22 @@ async def _start(app, pilot, name: str) -> tuple[object, float]:
     (the demo's process, seconds from the key to running)."""
     await _wait(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
     await pilot.press("f6")
-    await _wait(pilot, lambda: app.pane("scenes") is not None, 10, "scenes screen")
-    pane = app.pane("scenes")
+    await _wait(pilot, lambda: app.query("#demo-table"), 10, "scenes screen")
     await pilot.press("d")
     table = app.query_one("#demo-table")
     names = [str(table.get_row_at(i)[0]) for i in range(table.row_count)]
     table.move_cursor(row=names.index(name))
     t0 = time.monotonic()
     await pilot.press("enter")
-    await _wait(pilot, lambda: pane.demo_state == "running", 120, f"{name} running")
+    demos = app.session.demos
+    await _wait(pilot, lambda: demos.state == "running", 120, f"{name} running")
     return app.session.demos.run, time.monotonic() - t0
 
 
 async def _stop(app, pilot, run) -> dict:
-    pane = app.pane("scenes")
     await pilot.press("f6")
     await pilot.press("s")
-    await _wait(pilot, lambda: pane.demo_name is None, 30, "demo stopped")
+    await _wait(pilot, lambda: app.session.demos.name is None, 30, "demo stopped")
     await _wait(pilot, lambda: app.session.outputs is not None, 30, "outputs back")
     return run.final or {}
 
