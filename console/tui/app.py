@@ -57,7 +57,8 @@ def _keys_help(tabs: dict) -> str:
     if not keyed:
         return ""
     keys = keyed[0][0] if len(keyed) == 1 else f"{keyed[0][0]}-{keyed[-1][0]}"
-    return f"[b]{keys:<6}[/b]  {' '.join(title for _, title in keyed)}"
+    pad = " " * max(2, 8 - len(keys))  # the key column, as the lines around it
+    return f"[b]{keys}[/b]{pad}{' '.join(title for _, title in keyed)}"
 
 
 def _camera_service(profile, plugins):

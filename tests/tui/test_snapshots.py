@@ -19,6 +19,9 @@ def _app(initial: str, *extra: str) -> HapTableApp:
         "twin": "plugins.twin",
         "twin.camera": "plugins.twin.camera",
         "twin.plate": "plugins.twin.plate",
+        # the plugins whose screens are tabs (F5 Electrostatic, F6 Scenes)
+        "electrostatic": "plugins.electrostatic",
+        "demos": "plugins.demos",
         **{n: f"plugins.{n}" for n in extra},
     }
     return HapTableApp(Context("sim", load_plugins(builtins=builtins)), fast=True, initial=initial)
