@@ -353,7 +353,7 @@ class ScenesPane(Vertical):
             self.query_one("#demo-status", Static).update(f"last run ({reason}):\n{text}")
         self.demo_name = None
         lw = self.query_one("#demo-work", LongWork)
-        if not lw.busy:
+        if not lw.busy and reason not in ("failed", "cancelled"):  # those: its own line
             lw.show(f"demo {reason}")
 
     def _show_snapshot(self, snap: dict) -> None:

@@ -390,6 +390,9 @@ def test_a_demo_is_refused_while_the_console_plays_and_nothing_is_handed_over(pl
             await wait_for(pilot, lambda: lw.outcome is not None, 10, "refused")
             assert "outputs are playing" in lw.text and "\n" not in lw.text.strip()
             assert app.session.outputs is out and app.session.camera_started.borrower is None
-            assert pane.demo_name is None
+            # the session's Stopped reaches the screen a message later
+            await wait_for(pilot, lambda: pane.demo_name is None, 5, "the screen saw it end")
+            assert pane.demo_state == "failed"
+            assert "outputs are playing" in lw.text  # the refusal's line stays
 
     asyncio.run(scenario())
