@@ -211,10 +211,12 @@ class ConsoleSession:
     # ------------------------------------------------------------------ exit
     def silence(self) -> None:
         """Quitting, first of all: close the console's outputs now (they ramp to silence
-        and open the relays; the twin log is written). Idempotent."""
+        and open the relays; the twin log is written); none open again. Idempotent."""
         with self._lock:
-            out, self.outputs = self.outputs, None
+            if self.closed:
+                return
             self.closed = True
+            out = self.outputs  # kept (closed): what they played stays readable
         if out is None:
             return
         path = os.environ.get("HAPTABLE_TWIN_LOG")
