@@ -1,0 +1,54 @@
+"""The session's demo lifecycle and scene control without the Textual app: refusals as
+one line, events to every subscriber, an e-stop reported to observers."""
+
+from __future__ import annotations
+
+import pytest
+
+from console.errors import UserError
+from console.runtime.context import Context
+from console.session import ConsoleSession, Started, Stopped
+
+
+@pytest.fixture
+def session(plugins):
+    s = ConsoleSession(Context("sim", plugins), fast=True)
+    yield s
+    s.close()
+
+
+def test_a_demo_start_is_refused_in_one_line_without_outputs_or_by_name(session):
+    seen = []
+    session.subscribe(seen.append)
+    with pytest.raises(UserError, match="no demo named 'nope'"):
+        session.demos.start("nope")
+    with pytest.raises(UserError, match=r"demo knob: outputs not open \(starting\)"):
+        session.demos.start("knob")
+    assert seen == [] and session.demos.name is None and session.demos.state == "idle"
+
+
+def test_a_refused_hand_over_ends_the_start_and_reports_it(session):
+    seen = []
+    session.subscribe(seen.append)
+    assert session.open_outputs()
+    session.outputs.estop("test")
+    with pytest.raises(UserError, match="e-stop is active"):
+        session.demos.start("knob")
+    session.outputs.reset()
+    session.hand_over_outputs("someone else")  # a borrower holds them: no outputs
+    with pytest.raises(UserError, match="outputs not open"):
+        session.demos.start("knob")
+    assert [type(e).__name__ for e in seen] == ["Started", "Stopped"]  # outputs: opened, lent
+
+
+def test_estop_and_scene_failures_reach_every_subscriber(session, monkeypatch):
+    a, b = [], []
+    session.subscribe(a.append)
+    session.subscribe(b.append)
+    session.estop("test e-stop")
+    assert a == b == [Stopped("estop", reason="test e-stop")]
+    assert session.projector is None  # nothing started the projector
+    monkeypatch.setattr(session.scenes, "ensure", lambda: (_ for _ in ()).throw(OSError("no")))
+    assert not session.scenes.start("grid")
+    assert a[-1].topic == "projector" and "scene grid: no" in a[-1].message
+    assert not any(isinstance(e, Started) for e in a)
