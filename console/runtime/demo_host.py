@@ -282,9 +282,20 @@ def main() -> int:
         return 1
 
 
+def _exit_code(exc: BaseException) -> int:
+    """The status for a ``SystemExit``/``KeyboardInterrupt`` ending the host (the signal
+    hook of ``console.safety`` raises them after e-stopping the gate)."""
+    if isinstance(exc, SystemExit):
+        return exc.code if isinstance(exc.code, int) else 1
+    return 130
+
+
 if __name__ == "__main__":
-    code = main()
+    try:
+        code = main()
+    except (SystemExit, KeyboardInterrupt) as exc:  # SIGTERM/SIGINT: the gate is e-stopped
+        code = _exit_code(exc)
     sys.stderr.flush()
     # the command thread sits in a read of stdin: leave without finalising the
-    # interpreter (which would abort on that thread's lock); the outputs are closed
+    # interpreter (which would abort on that thread's lock), whatever ended main
     os._exit(code)

@@ -49,6 +49,7 @@ class DemoProcess:
         self.estop_reason: str | None = None
         self.final: dict | None = None  # the stopped message
         self.error: str | None = None
+        self._stop_reason: str | None = None  # why the console asked it to end
         self._status: dict | None = None
         self._progress: tuple[float, str] | None = None
         self._started = threading.Event()
@@ -85,6 +86,8 @@ class DemoProcess:
                 self._on(kind, value)
         code = self.proc.wait()
         with self._lock:
+            if self.exit_reason is None and self._stop_reason is not None and not self.error:
+                self.exit_reason = self._stop_reason  # it ended because it was told to
             if self.exit_reason is None:
                 self.exit_reason = self.error or f"the demo process exited (code {code})" + (
                     f": {self.stderr_tail()}" if self.stderr_tail() else ""
@@ -177,6 +180,9 @@ class DemoProcess:
         """Stop the demo: the playing plan ends by its ramps, the process closes its
         outputs and exits (killed after ``timeout_s``; its outputs' e-stop hook silences
         them on the signal)."""
+        with self._lock:
+            if self._stop_reason is None:
+                self._stop_reason = reason
         self._send({"cmd": "stop"})
         if not self._ended.wait(timeout_s):
             self.proc.terminate()  # SIGTERM: the host's emergency hook e-stops its gate

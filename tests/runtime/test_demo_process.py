@@ -102,3 +102,15 @@ def test_cancelling_while_it_starts(profile):
         run.wait_started(cancelled=lambda: True)
     assert run.proc.poll() is not None
     assert run.exit_reason == "cancelled"
+
+
+def test_a_demo_that_does_not_stop_in_time_is_terminated_cleanly(profile, monkeypatch):
+    """``stop()`` terminates a host that ignores the stop request (its preparation is slow
+    on a loaded machine): the host leaves through its own exit path (no interpreter abort,
+    which the command thread's read of stdin would cause) and the run says why it ended."""
+    run = DemoProcess(profile, "knob")
+    run.wait_started()
+    monkeypatch.setattr(run, "_send", lambda msg: True)  # the host never hears "stop"
+    run.stop("cancelled", timeout_s=0.5)
+    assert run.proc.returncode == 128 + signal.SIGTERM  # not -6 (SIGABRT)
+    assert run.exit_reason == "cancelled"
