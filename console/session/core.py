@@ -48,6 +48,7 @@ class ConsoleSession:
         self.closed = False  # no outputs open again (quitting)
         self._closing = False
         self._camera: Any = None
+        self._calibration: Any = None
         self.vibration: Any = None  # the vibration session (its map), once one is loaded
         from console.session.demos import DemoControl
         from console.session.scenes import SceneControl
@@ -68,10 +69,23 @@ class ConsoleSession:
         """The console's camera loop (built on first use; a demo borrows the camera)."""
         with self._lock:
             if self._camera is None:
-                if self.camera_factory is None:
-                    raise UserError("this console has no camera loop")
-                self._camera = self.camera_factory(self.profile, self.plugins)
+                if self.camera_factory is not None:
+                    self._camera = self.camera_factory(self.profile, self.plugins)
+                else:
+                    from console.session.camera import CameraService
+
+                    self._camera = CameraService(self.profile, self.plugins)
             return self._camera
+
+    @property
+    def calibration(self) -> Any:
+        """The touch-calibration wizard (``console.session.calibration``) on the camera."""
+        with self._lock:
+            if self._calibration is None:
+                from console.session.calibration import TouchCalibration
+
+                self._calibration = TouchCalibration(self, projector=lambda: self.projector)
+            return self._calibration
 
     @property
     def camera_started(self) -> Any:

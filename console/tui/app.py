@@ -61,12 +61,6 @@ def _keys_help(tabs: dict) -> str:
     return f"[b]{keys}[/b]{pad}{' '.join(title for _, title in keyed)}"
 
 
-def _camera_service(profile, plugins):
-    from console.tui.camera_service import CameraService  # numpy, the vision stages
-
-    return CameraService(profile, plugins)
-
-
 def _measured_map_path(profile):
     from console.tui.vibration_session import twin_map_path
 
@@ -117,9 +111,7 @@ class HapTableApp(App):
         self.ctx = ctx
         self.fast = fast
         self.initial = initial
-        self.session = ConsoleSession(
-            ctx, fast=fast, camera_factory=_camera_service, map_path=_measured_map_path
-        )
+        self.session = ConsoleSession(ctx, fast=fast, map_path=_measured_map_path)
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
         self._bind_tabs()
@@ -292,14 +284,6 @@ class HapTableApp(App):
             tabs = self.base.query("#tabs")  # screen showing it starts its loop again
             if tabs:
                 self._set_visible(tabs.first(TabbedContent).active)
-
-    def release_camera(self) -> None:
-        """Stop the camera loop when neither the Camera nor the Latency screen shows."""
-        svc = self.session.camera_started
-        if svc is None:
-            return
-        if not any(getattr(self.pane(t), "visible_now", False) for t in ("camera", "latency")):
-            svc.stop()
 
     # ------------------------------------------------------------------ live state
     def refresh_state(self) -> None:

@@ -90,7 +90,7 @@ def haptable_register_effects(register: Any) -> None:
 
 
 def _electrostatic_panel(app: Any) -> Any:
-    from console.tui.panes.electrostatic import ElectrostaticPane
+    from .panel import ElectrostaticPane
 
     return ElectrostaticPane()
 

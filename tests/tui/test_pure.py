@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from console.runtime.twin_log import bursts, dominant_hz
-from console.tui.panes.electrostatic import FREQ_RANGE_HZ, clamp_setting, force_text
+from plugins.electrostatic.panel import FREQ_RANGE_HZ, clamp_setting, force_text
 from console.tui.panes.latency import stage_rows
 from console.tui.panes.relays import interlock
 from console.tui.plots import HalfBlockImage, downsample, frf_plot, sparkline

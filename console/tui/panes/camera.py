@@ -1,12 +1,9 @@
 """Camera: the live IR view (half-block image, ~10 Hz) with the detected hand, contacts
 and gesture drawn over it; background capture; threshold and high-pass tuning with
-immediate effect; the touch-calibration wizard (projector targets, reprojection error,
-save), offered by the classifier (its optional ``touch_calibration``, see
-``console.hookspecs``); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
+immediate effect; the touch-calibration wizard (``console.session.calibration``: this
+screen shows it and forwards its keys); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
-
-import threading
 
 import numpy as np
 from textual import work
@@ -75,10 +72,6 @@ class CameraPane(Horizontal):
         super().__init__(**kw)
         self.view = "camera"
         self.visible_now = False
-        self.calibration = None  # the classifier's calibration session while the wizard runs
-        self.cal_result = None
-        self.cal_message = ""
-        self._cal_lock = threading.Lock()
         self._timer = None
 
     def compose(self) -> ComposeResult:
@@ -97,21 +90,18 @@ class CameraPane(Horizontal):
     def set_visible(self, visible: bool) -> None:
         self.visible_now = visible
         if visible:
-            self._start()
+            self._watch(True)
             if self._timer is None:
                 self._timer = self.set_interval(0.1, self.redraw)
         else:
             if self._timer is not None:
                 self._timer.stop()
                 self._timer = None
-            self.app.call_later(self.app.release_camera)
+            self.app.call_later(self.service.watch, self, False)
 
     @work(thread=True, exclusive=True, group="camera")
-    def _start(self) -> None:
-        try:
-            self.service.start()
-        except UserError as exc:
-            self.service.error = str(exc)
+    def _watch(self, on: bool) -> None:
+        self.service.watch(self, on)
 
     # ------------------------------------------------------------------ drawing
     def view_size(self) -> tuple[int, int]:
@@ -196,136 +186,37 @@ class CameraPane(Horizontal):
         self.app.notify(f"background captured from {n} frames" if n else "no frames yet", timeout=3)
 
     # ------------------------------------------------------------------ calibration
-    def _target_px(self):
-        cal = self.calibration
-        if cal is None:
-            return None
-        nt = cal.next_target()
-        if nt is None or self.service.classifier is None:
-            return None
-        fb = _mm_to_px(self.service, nt[1])
-        return fb
+    @property
+    def wizard(self):
+        """The session's touch-calibration wizard (the pane only shows it)."""
+        return self.app.session.calibration
 
-    def new_calibration(self):
-        """The classifier's touch-calibration session, or None with the reason shown."""
-        prof = self.app.ctx.profile
-        clf = self.service.classifier
-        if clf is None:
-            why = "the camera is not running yet; wait for the first frame, then press k"
-            if self.service.error:
-                why = f"no camera ({self.service.error})"
-            self._cal_unavailable(f"touch calibration: {why}")
-            return None
-        make = getattr(clf, "touch_calibration", None)
-        if make is None:
-            name = prof.get("gestures.classifier") or "?"
-            self._cal_unavailable(
-                f"touch calibration: the classifier {name!r} offers none; choose one that "
-                "does in [gestures] classifier (e.g. svm)"
-            )
-            return None
-        try:
-            return make(prof)
-        except UserError as exc:
-            self._cal_unavailable(str(exc))
-            return None
+    @property
+    def calibration(self):
+        return self.wizard.active
 
-    def _cal_unavailable(self, msg: str) -> None:
+    @property
+    def cal_result(self):
+        return self.wizard.result
+
+    @property
+    def cal_message(self) -> str:
         from textual.markup import escape
 
-        self.cal_message = escape(msg)
-        self.app.notify(msg, severity="warning", timeout=8)
+        w = self.wizard
+        return f"[red]{escape(w.message)}[/]" if w.failed else escape(w.message)
+
+    def _target_px(self):
+        return self.wizard.target_px()
 
     def action_calibrate(self) -> None:
-        session = self.new_calibration()
-        if session is None:
-            return
-        targets = session.targets_mm
-        with self._cal_lock:
-            self.calibration = session
-            self.cal_result = None
-        self.cal_message = f"touch target 1 of {len(targets)}"
-        svc = self.service
-        if self._cal_hook not in svc.frame_hooks:
-            svc.frame_hooks.append(self._cal_hook)
-        self._projector("start", [list(map(float, t)) for t in targets])
-        self._aim_twin()
-
-    def _aim_twin(self) -> None:
-        """On the camera twin, the simulated operator touches the shown target."""
-        cam = self.service.camera
-        cal = self.calibration
-        if cam is None or cal is None or not hasattr(cam, "set_target"):
-            return
-        nt = cal.next_target()
-        cam.set_target(None if nt is None else nt[1])
-
-    def _cal_hook(self, frame, work: dict) -> None:
-        with self._cal_lock:
-            cal = self.calibration
-            if cal is None:
-                return
-            ev = cal.feed(work.get("contacts", ()) or ())
-        if ev in ("recorded", "lifted", "done"):
-            self.app.call_from_thread(self._cal_event, ev)
-
-    def _cal_event(self, ev: str) -> None:
-        cal = self.calibration
-        if cal is None:
-            return
-        done, total = cal.progress()
-        if ev == "recorded":
-            self.cal_message = f"recorded {done}/{total}: lift the finger"
-            self._projector("touch")
-            cam = self.service.camera
-            if hasattr(cam, "set_target"):
-                cam.set_target(None)
-        elif ev == "lifted":
-            self.cal_message = f"touch target {cal.index + 1} of {total}"
-            self._aim_twin()
-        elif ev == "done":
-            self._finish()
+        self.wizard.start()
 
     def action_skip_target(self) -> None:
-        if self.calibration is not None:
-            with self._cal_lock:
-                self.calibration.skip()
-            self._projector("touch")
-            if self.calibration.state == "done":
-                self._finish()
-            else:
-                self._aim_twin()
-
-    def _finish(self) -> None:
-        cal = self.calibration
-        with self._cal_lock:
-            self.calibration = None
-        svc = self.service
-        if self._cal_hook in svc.frame_hooks:
-            svc.frame_hooks.remove(self._cal_hook)
-        if svc.camera is not None and hasattr(svc.camera, "set_target"):
-            svc.camera.set_target(None)
-        try:
-            self.cal_result = cal.finish()
-        except UserError as exc:
-            self.cal_message = f"[red]{exc}[/]"
-            return
-        r = self.cal_result.report()
-        self.cal_message = (
-            f"{r['pairs']} targets: reprojection error {r['rms_mm']:.2f} mm rms, "
-            f"{r['max_mm']:.2f} mm max (leave-one-out {r['loo_rms_mm']:.2f} mm); "
-            f"outliers {r['outliers'] or 'none'}. S: save"
-        )
-        self._projector("stop")
+        self.wizard.skip()
 
     def action_cancel(self) -> None:
-        if self.calibration is not None:
-            with self._cal_lock:
-                self.calibration = None
-            self.cal_message = "calibration cancelled"
-            if self.service.camera is not None and hasattr(self.service.camera, "set_target"):
-                self.service.camera.set_target(None)
-            self._projector("stop")
+        self.wizard.cancel()
 
     def action_gestures_panel(self) -> None:
         reg = self.app.ctx.pm.of("panel").get("gestures")
@@ -337,37 +228,9 @@ class CameraPane(Horizontal):
         self.app.push_screen(reg.factory(self.app))
 
     def action_save_calibration(self) -> None:
-        if self.cal_result is None:
-            self.app.notify("no calibration to save: run it first (k)", severity="warning")
-            return
-        prof = self.app.ctx.profile
-        path = prof.resolve(prof.get("vision.calibration") or "touch_calibration.json")
-        self.cal_result.save(path)
-        self.cal_message += f"\nsaved to {path}"
-        self.app.notify(f"touch calibration saved to {path}")
-
-    @work(thread=True, group="cal-projector")
-    def _projector(self, what: str, targets=None) -> None:
-        svc = self.app.session.projector
-        if svc is None:  # no projector running: the console alone drives the wizard
-            return
         try:
-            if what == "start":
-                svc.start_scene("touch_calibration", [{"type": "targets", "targets_mm": targets}])
-            elif what == "touch":
-                svc.update({"type": "touch"})
-            else:
-                svc.stop_scene()
-        except Exception as exc:
-            self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
-
-
-def _mm_to_px(svc, pos_mm):
-    """Where a table point appears in the camera (the twin knows its own mapping)."""
-    cam = svc.camera
-    mapping = getattr(getattr(cam, "rig", None), "mapping", None)
-    fn = getattr(mapping, "mm_to_px", None)
-    if fn is None:
-        return None
-    p = np.asarray(fn(np.asarray([pos_mm], float)), float).reshape(-1, 2)
-    return tuple(p[0])
+            path = self.wizard.save()
+        except UserError as exc:
+            self.app.notify(str(exc), severity="warning")
+            return
+        self.app.notify(f"touch calibration saved to {path}")

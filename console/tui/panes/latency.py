@@ -10,7 +10,6 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
-from console.errors import UserError
 from console.tui.plots import sparkline
 
 #: the stages the issue names, in order, and where their numbers come from
@@ -92,17 +91,13 @@ class LatencyPane(Vertical):
     def set_visible(self, visible: bool) -> None:
         self.visible_now = visible
         if visible and self.available:
-            self._start()
+            self._watch()
         elif not visible:
-            self.app.call_later(self.app.release_camera)
+            self.app.call_later(self.app.session.camera.watch, self, False)
 
     @work(thread=True, exclusive=True, group="camera")
-    def _start(self) -> None:
-        svc = self.app.session.camera
-        try:
-            svc.start()
-        except UserError as exc:
-            svc.error = str(exc)
+    def _watch(self) -> None:
+        self.app.session.camera.watch(self, True)
 
     def demo_run(self):
         """The session's running demo (else None)."""

@@ -1,5 +1,6 @@
-"""Electrostatic: audition the knob conditions and friction presets; amplitude and
-frequency controls kept inside the limits, with the expected force of the setting.
+"""The electrostatic plugin's screen (F5, Electrostatic): audition the knob conditions and
+friction presets; amplitude and frequency controls kept inside the limits, with the
+expected force of the setting.
 
 Everything goes through the ``electrostatic`` and ``knob`` effect registrations: the
 knob effect's ``conditions`` and the electrostatic effect's ``presets`` fill the list."""

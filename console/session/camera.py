@@ -2,9 +2,10 @@
 runtime's ``FrameLoop`` with the ``vision`` and ``classify`` stages), keeping the newest
 frame and result for the Camera view and a latency monitor for the Latency screen.
 
-Started when the Camera or Latency screen opens, stopped when neither is shown. A demo
-started from the console runs in its own process and opens the camera there: the service
-closes it meanwhile (``release``/``give_back``).
+Screens that show it say so with ``watch(viewer, True)`` (the Camera and Latency screens
+when shown) and ``watch(viewer, False)`` when hidden: the loop runs while someone watches
+and stops when nobody does. A demo started from the console runs in its own process and
+opens the camera there: the service closes it meanwhile (``release``/``give_back``).
 """
 
 from __future__ import annotations
@@ -33,13 +34,47 @@ class CameraService:
         self.recent: deque[np.ndarray] = deque(maxlen=15)
         self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
         self.borrower: str | None = None  # the demo running on this camera, if any
+        self._viewers: set[int] = set()  # id() of whoever watches (see ``watch``)
 
     @property
     def running(self) -> bool:
         return self.loop is not None and self.loop.running
 
+    def watch(self, viewer: object, on: bool) -> None:
+        """``viewer`` shows the camera (``on``) or no longer does. The loop starts with the
+        first viewer and stops when the last one leaves. Blocking (opening the camera, or
+        joining its loop): call in a worker. A failure to open is kept in ``error``."""
+        from console.errors import UserError
+
+        with self._lock:
+            if on:
+                self._viewers.add(id(viewer))
+            else:
+                self._viewers.discard(id(viewer))
+            watched = bool(self._viewers)
+        if not watched:
+            self.stop()
+            return
+        if on:
+            try:
+                with self._start_lock:
+                    if not self.watched:  # the last viewer left meanwhile
+                        return
+                    self._start_locked()
+            except UserError as exc:
+                self.error = str(exc)
+
+    @property
+    def watched(self) -> bool:
+        with self._lock:
+            return bool(self._viewers)
+
     def start(self) -> None:
         """Open the camera and classifier and start the loop (blocking: call in a worker)."""
+        with self._start_lock:
+            self._start_locked()
+
+    def _start_locked(self) -> None:
         from console.runtime.latency import LatencyMonitor
         from console.runtime.loop import FrameLoop
         from console.runtime.stages import (
@@ -49,17 +84,14 @@ class CameraService:
             open_classifier,
         )
 
-        with self._start_lock:
-            if self.running or self.borrower is not None:
-                return
-            self._open(open_camera, open_classifier, learn_background)
-            stages = base_stages(self.classifier)
-            window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
-            mon = LatencyMonitor([n for n, _ in stages], size=window)
-            self.loop = FrameLoop(
-                self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink]
-            )
-            self.loop.start()
+        if self.running or self.borrower is not None:
+            return
+        self._open(open_camera, open_classifier, learn_background)
+        stages = base_stages(self.classifier)
+        window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
+        mon = LatencyMonitor([n for n, _ in stages], size=window)
+        self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
+        self.loop.start()
 
     def _open(self, open_camera, open_classifier, learn_background) -> None:
         if self.camera is None:
