@@ -62,7 +62,7 @@ def _keys_help(tabs: dict) -> str:
 
 
 def _measured_map_path(profile):
-    from console.tui.vibration_session import twin_map_path
+    from console.session.vibration import twin_map_path
 
     return twin_map_path(profile)
 

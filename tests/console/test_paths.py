@@ -49,7 +49,7 @@ def test_every_directory_the_project_writes_is_under_the_tests_tmp_roots(pinned_
     """conftest pins them: a test that caches a table cannot touch the user's ~/.cache."""
     from console.profile import search_dirs
     from console.tui.logs import log_path
-    from console.tui.vibration_session import cache_dir as console_cache
+    from console.session.vibration import cache_dir as console_cache
     from plugins.demos.adapters import default_cache_dir as demos_cache
     from plugins.gestures.evaluate import cache_dir as gestures_cache
     from plugins.gestures.panel import data_dir as gestures_data

@@ -649,7 +649,7 @@ def test_console_vibration_screen_loads_refuse_with_one_line(good, tmp_path):
     from console.errors import UserError
     from console.plugins import load_plugins
     from console.profile import load_profile
-    from console.tui import vibration_session as vs
+    from console.session import vibration as vs
 
     pm = load_plugins()
     prof = load_profile("sim", pm)

@@ -143,7 +143,7 @@ def test_measurement_uses_the_vibrometer_the_profile_names():
     import pytest
 
     from console.errors import UserError
-    from console.tui import vibration_session as vs
+    from console.session import vibration as vs
 
     def measured(name: str, progress) -> dict:
         used.append(name)

@@ -167,7 +167,7 @@ class VibrationPane(VerticalScroll):
     # ------------------------------------------------------------------ map
     @work(thread=True, exclusive=True, group="vib-load")
     def load_cached(self) -> None:
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         path = vs.twin_map_path(self.app.ctx.profile)
         if not path.is_file():
@@ -188,7 +188,7 @@ class VibrationPane(VerticalScroll):
     def _open(self, vmap, label: str) -> None:
         """In a worker: make ``vmap`` the screen's map; its lookup tables are built in
         their own worker (group ``vib-tables``: a new map or x cancels it)."""
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         ctx = self.app.ctx
         session = vs.VibrationSession(ctx.profile, ctx.pm, vmap)
@@ -201,7 +201,7 @@ class VibrationPane(VerticalScroll):
 
     def _build_tables(self, session, summary: str, stop: threading.Event) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         cancelled = stop_check(stop)
         show = self.app.call_from_thread
@@ -264,7 +264,7 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _measure(self, stop: threading.Event) -> None:
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         cancelled = stop_check(stop)
         ctx = self.app.ctx
@@ -293,7 +293,7 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _import(self, specs: list[str], stop: threading.Event) -> None:
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         try:
             self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
@@ -309,7 +309,7 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _load(self, path: str, stop: threading.Event) -> None:
-        from console.tui import vibration_session as vs
+        from console.session import vibration as vs
 
         try:
             vmap = vs.load_map(path, self.app.ctx.profile)
