@@ -49,7 +49,7 @@ class ConsoleSession:
         self._closing = False
         self._camera: Any = None
         self._calibration: Any = None
-        self.vibration: Any = None  # the vibration session (its map), once one is loaded
+        self._vibration: Any = None
         from console.session.demos import DemoControl
         from console.session.scenes import SceneControl
 
@@ -96,6 +96,16 @@ class ConsoleSession:
     def projector(self) -> Any:
         """The projector service while it runs (``scenes.ensure()`` starts it), else None."""
         return self.scenes.service
+
+    @property
+    def vibration(self) -> Any:
+        """The console's vibration map and its effects (``console.session.vibration``)."""
+        with self._lock:
+            if self._vibration is None:
+                from console.session.vibration import VibrationService
+
+                self._vibration = VibrationService(self)
+            return self._vibration
 
     # ------------------------------------------------------------------ observers
     def subscribe(self, fn: Subscriber) -> None:

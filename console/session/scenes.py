@@ -49,14 +49,7 @@ class SceneControl:
     def current_map(self) -> Any:
         """The console's vibration map for a scene's ``tables``: the vibration session's,
         else this profile's measured map, else a ``UserError``."""
-        vib = self.session.vibration
-        if vib is not None and getattr(vib, "vmap", None) is not None:
-            return vib.vmap
-        map_path = self.session.map_path
-        path = map_path(self.session.profile) if map_path is not None else None
-        if path is not None and path.is_file():
-            return path
-        raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")
+        return self.session.vibration.current_map()
 
     def start(self, name: str) -> bool:
         """Show scene ``name`` on the projector (starting it). Blocking; a failure is

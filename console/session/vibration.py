@@ -1,4 +1,9 @@
-"""The Vibration screen's access to vibration maps and stimuli, through registrations only.
+"""The console's vibration map and the stimuli played with it, through registrations only.
+
+``VibrationService`` (``session.vibration``) holds the console's current map: measured
+(the one measured-map provider, ``console.runtime.measured_map``), imported from UFF or
+loaded from a file; the Vibration screen shows it, the Scenes screen and the projector
+service read it there. ``VibrationSession`` is one map with the effects that play it.
 
 The console computes no haptics and imports no plugin: it asks the registered plugins
 (``console/hookspecs.py`` lists the members used here):
@@ -16,8 +21,7 @@ Where no plugin offers what is asked, a ``UserError`` says which plugin to enabl
 
 from __future__ import annotations
 
-import hashlib
-import json
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -25,7 +29,17 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.runtime.measured_map import (
+    Cancelled,
+    measure_map,
+    measured_map_file,
+    measured_map_path,
+)
+from console.session.events import Progress as ProgressEvent
+from console.session.events import Started, Stopped
 from console.types import DIRECTIONS
+
+__all__ = ["Cancelled", "VibrationService", "VibrationSession", "measure_map"]
 
 Progress = Callable[[float, str], None]
 
@@ -35,32 +49,6 @@ OFFERS = {
     "flow": "a lookup table or two-point flow",
     "hand_flow": "a flow under a hand",
 }
-
-
-class Cancelled(Exception):
-    """Raised inside long work when the operator cancels it."""
-
-
-def cache_dir() -> Path:
-    """The console's own cache: ``$HAPTABLE_CACHE_DIR`` or ``$XDG_CACHE_HOME/haptable``
-    (``~/.cache/haptable``), sub-folder ``console``."""
-    from console import paths
-
-    return paths.cache_dir("console")
-
-
-def twin_map_path(profile) -> Path:
-    """Where this profile's measured map is kept (keyed by what shapes the plate)."""
-    keys = ("table", "grid", "patches", "glass", "plate", "piezo", "vibrometer", "amplifiers")
-    blob = json.dumps({k: _section(profile, k) for k in keys}, sort_keys=True, default=str)
-    return cache_dir() / f"measured-map-{hashlib.sha256(blob.encode()).hexdigest()[:16]}.npz"
-
-
-def _section(profile, name: str) -> dict:
-    try:
-        return profile.section(name)
-    except (UserError, KeyError):  # a section no loaded plugin declares
-        return {}
 
 
 def _get(profile, key: str, default: Any = None) -> Any:
@@ -77,39 +65,6 @@ def effect(plugins, profile, name: str) -> Any:
         what = OFFERS.get(name, f"the {name!r} effect")
         raise UserError(f"no effect plugin offers {what}: install/enable vibrotactile")
     return regs[name].factory(profile)
-
-
-def measure_map(profile, plugins, progress: Progress, cancelled: Callable[[], bool]):
-    """Measure the grid (all five excitations) with the registered vibrometer and return
-    the ``VibrationMap``; ``Cancelled`` when ``cancelled()`` turns true."""
-    from console.vibration_map import make_map
-
-    regs = plugins.of("vibrometer")
-    if not regs:
-        raise UserError(
-            "no vibrometer: no plugin registers one (the plate twin registers 'twin': "
-            "install/enable twin.plate); import a UFF measurement instead"
-        )
-    want = _get(profile, "vibrometer.driver")
-    name = want if want else (next(iter(regs)) if len(regs) == 1 else None)
-    if name not in regs:  # never measure with another device than the profile names
-        known = ", ".join(sorted(regs))
-        raise UserError(
-            f"[vibrometer] driver = {want!r}: no such vibrometer; available: {known}"
-            if want
-            else f"[vibrometer] driver: not set; set it to one of {known}"
-        )
-
-    def cb(done: int, total: int) -> None:
-        if cancelled():
-            raise Cancelled()
-        progress(done / max(total, 1), f"{name} vibrometer: step {done}/{total}")
-
-    if cancelled():
-        raise Cancelled()
-    progress(0.0, f"{name} vibrometer: starting")
-    out = regs[name].factory(profile).measure(progress=cb)
-    return make_map(**{k: v for k, v in out.items() if k != "meta"})
 
 
 def import_uff_files(profile, plugins, specs: list[str]):
@@ -139,6 +94,7 @@ class VibrationSession:
         self.band_hz = _get(profile, "vibrotactile.band_hz")
         self._effects: dict[str, Any] = {}
         self.tables_ready = False
+        self.summary = ""  # what the console says of this map (set by VibrationService)
 
     def effect(self, name: str) -> Any:
         if name not in self._effects:
@@ -204,3 +160,129 @@ def load_map(path: Path, profile=None):
     from console.vibration_map import load_map as _load
 
     return _load(Path(path).expanduser(), require_all=False)
+
+
+TOPIC = "vibration"
+
+
+class VibrationService:
+    """The console's current vibration map (``current``: a ``VibrationSession``, or None)
+    and the long work that changes it. Blocking calls run on the caller's thread (screens
+    call them from workers); each reports to the console session's observers with topic
+    ``vibration``: ``Progress`` (name ``measure`` or ``tables``), ``Started`` (name
+    ``map``: a map is current, ``detail`` says which) and ``Stopped`` (``cancelled``)."""
+
+    def __init__(self, session: Any) -> None:
+        self.session = session
+        self.current: VibrationSession | None = None
+        self.summary = ""
+        self._lock = threading.Lock()
+
+    @property
+    def profile(self) -> Any:
+        return self.session.profile
+
+    @property
+    def plugins(self) -> Any:
+        return self.session.plugins
+
+    # ------------------------------------------------------------------ the map
+    def cached_map_path(self) -> Path:
+        """Where the measured map of this profile's plate is kept (may not exist)."""
+        return measured_map_path(self.profile)
+
+    def measure(
+        self, progress: Progress | None = None, cancelled: Callable[[], bool] | None = None
+    ) -> VibrationSession:
+        """Measure the grid again with the profile's vibrometer, keep it as the measured
+        map (the demos use it too) and make it current."""
+        try:
+            path = measured_map_file(
+                self.profile,
+                self.plugins,
+                self._reporting("measure", progress),
+                cancelled,
+                remeasure=True,
+            )
+        except Cancelled:
+            self.session.emit(Stopped(TOPIC, name="measure", reason="cancelled"))
+            raise
+        return self.open(load_map(path), f"map: {path.name} (measured now)")
+
+    def load_cached(self) -> VibrationSession | None:
+        """The measured map when one is kept (made current), else None."""
+        path = self.cached_map_path()
+        if not path.is_file():
+            return None
+        return self.open(load_map(path), f"map: {path.name} (measured on the twin)")
+
+    def load(self, path: str | Path, cancelled: Callable[[], bool] | None = None):
+        """A map file made current (``Cancelled`` when cancelled meanwhile)."""
+        vmap = load_map(Path(path))
+        if cancelled is not None and cancelled():
+            raise Cancelled()
+        return self.open(vmap, f"map: {Path(path).name}")
+
+    def import_uff(self, specs: list[str], cancelled: Callable[[], bool] | None = None):
+        """UFF measurements (``["PA=a.uff", ...]``) made current."""
+        vmap = import_uff_files(self.profile, self.plugins, specs)
+        if cancelled is not None and cancelled():  # read in one go: the old map stays
+            raise Cancelled()
+        return self.open(vmap, "map: UFF import")
+
+    def open(self, vmap: Any, label: str) -> VibrationSession:
+        """Make ``vmap`` the console's current map."""
+        vs = VibrationSession(self.profile, self.plugins, vmap)
+        summary = (
+            f"{label}: {len(vmap.excitations)} excitations, {vmap.points.size} points, "
+            f"{vmap.freq_hz.size} bins"
+        )
+        vs.summary = summary
+        with self._lock:
+            self.current, self.summary = vs, summary
+        self.session.emit(Started(TOPIC, name="map", detail=summary))
+        return vs
+
+    def current_map(self) -> Any:
+        """The console's map for a scene's lookup tables: the current one, else the
+        profile's measured map file when kept, else a ``UserError``."""
+        cur = self.current
+        if cur is not None:
+            return cur.vmap
+        path = self.cached_map_path()
+        if path.is_file():
+            return path
+        raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")
+
+    # ------------------------------------------------------------------ tables
+    def build_tables(
+        self,
+        vs: VibrationSession | None = None,
+        progress: Progress | None = None,
+        cancelled: Callable[[], bool] | None = None,
+    ) -> None:
+        """Build the lookup tables of ``vs`` (default: the current map), with progress;
+        ``Cancelled`` when ``cancelled()`` turns true."""
+        vs = vs or self.current
+        if vs is None:
+            raise UserError("no vibration map yet: press m to measure, or import one")
+        report = self._reporting("tables", progress)
+
+        def step(frac: float, msg: str) -> None:
+            if cancelled is not None and cancelled():
+                raise Cancelled()
+            report(frac, msg)
+
+        try:
+            vs.build_tables(step)
+        except Cancelled:
+            self.session.emit(Stopped(TOPIC, name="tables", reason="cancelled"))
+            raise
+
+    def _reporting(self, name: str, progress: Progress | None) -> Progress:
+        def report(frac: float, msg: str) -> None:
+            if progress is not None:
+                progress(frac, msg)
+            self.session.emit(ProgressEvent(TOPIC, name=name, fraction=frac, text=msg))
+
+        return report

@@ -62,9 +62,9 @@ def _keys_help(tabs: dict) -> str:
 
 
 def _measured_map_path(profile):
-    from console.session.vibration import twin_map_path
+    from console.runtime.measured_map import measured_map_path
 
-    return twin_map_path(profile)
+    return measured_map_path(profile)
 
 
 class ScreenTabs(TabbedContent):

@@ -5,9 +5,9 @@
   preparing a scene's regions);
 - the flow between two points: the registered effect ``flow``
   (``render(from_point=, to_point=, vmap=) -> OutputPlan``);
-- the vibration map on the twin: the registered vibrometer ``[vibrometer] driver``
-  (``measure() -> dict`` of ``console.vibration_map.make_map`` arguments), measured
-  once per plate configuration and cached as a file.
+- the vibration map on the twin: the console's measured map
+  (``console.runtime.measured_map``: measured once per plate configuration with the
+  registered vibrometer, cached as a file the console's Vibration screen shares).
 
 Each renderer keeps the plans it made (per position, 0.1 mm) so a hand placed again at
 the same spot reuses its plan; ``cached(...)`` answers without computing.
@@ -15,44 +15,11 @@ the same spot reuses its plan; ``cached(...)`` answers without computing.
 
 from __future__ import annotations
 
-import hashlib
-import json
 from pathlib import Path
 from typing import Any
 
-from console import paths
 from console.errors import UserError
 from console.types import DIRECTIONS, OutputPlan
-
-
-def default_cache_dir() -> Path:
-    """``demos`` in HapTable's cache directory (``console.paths``)."""
-    return paths.cache_dir("demos")
-
-
-def twin_map_path(profile: Any, cache_dir: Path | None = None, plugins: Any = None) -> Path:
-    """The twin's measured map for this profile's plate, measured once through the
-    registered vibrometer (``[vibrometer] driver``, default ``twin``) and cached."""
-    from console.vibration_map import make_map, save_map
-
-    keys = ("table", "grid", "patches", "glass", "plate", "piezo", "vibrometer", "amplifiers")
-    blob = json.dumps({k: profile.section(k) for k in keys}, sort_keys=True, default=str)
-    key = hashlib.sha256(blob.encode()).hexdigest()[:16]
-    path = (cache_dir or default_cache_dir()) / f"twin-map-{key}.npz"
-    if path.is_file():
-        return path
-    regs = plugins.of("vibrometer") if plugins is not None else {}
-    name = profile.get("vibrometer.driver") or "twin"
-    if name not in regs:
-        known = ", ".join(sorted(regs)) or "none"
-        raise UserError(
-            f"[demos] flow_map is empty and no vibrometer {name!r} is registered (have: "
-            f"{known}); set [demos] flow_map to a vibration map (haptable frf import ...)"
-        )
-    out = regs[name].factory(profile).measure()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    save_map(path, make_map(**{k: v for k, v in out.items() if k != "meta"}))
-    return path
 
 
 def _effect(plugins: Any, name: str, profile: Any) -> Any:

@@ -190,7 +190,9 @@ def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
 
 
 def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> Path:
-    from .adapters import twin_map_path
+    """The flow's vibration map: ``[demos] flow_map``, else (on the twin) the console's
+    measured map of this plate, measured once (``cache_dir``: keep it there instead)."""
+    from console.runtime.measured_map import measured_map_file
 
     raw = profile.get("demos.flow_map") or ""
     if raw:
@@ -205,7 +207,13 @@ def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> 
         raise UserError(
             "[demos] flow_map is empty: give the table's vibration map (haptable frf import ...)"
         )
-    return twin_map_path(profile, cache_dir, plugins)
+    try:
+        return measured_map_file(profile, plugins, cache=cache_dir)
+    except UserError as exc:
+        raise UserError(
+            f"[demos] flow_map is empty and the twin's map cannot be measured ({exc}); set "
+            "[demos] flow_map to a vibration map (haptable frf import ...)"
+        ) from None
 
 
 def start_demo(
@@ -251,11 +259,6 @@ def start_demo(
         raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
     dm = profile.section("demos")
     rt = profile.section("runtime")
-    if cache_dir is None:
-        from .adapters import default_cache_dir
-
-        vt_cache = profile.get("vibrotactile.cache_dir") or ""
-        cache_dir = Path(vt_cache).expanduser() if vt_cache else default_cache_dir()
     if camera_apart and script and camera is not None and _twin_apart(profile):
         camera = None  # the run opens the twin in its own process (and closes it)
     owns = camera is None

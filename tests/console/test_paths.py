@@ -48,9 +48,8 @@ def test_runtime_dir_rule_is_the_checked_one(tmp_path, monkeypatch):
 def test_every_directory_the_project_writes_is_under_the_tests_tmp_roots(pinned_root):
     """conftest pins them: a test that caches a table cannot touch the user's ~/.cache."""
     from console.profile import search_dirs
+    from console.runtime.measured_map import cache_dir as console_cache
     from console.tui.logs import log_path
-    from console.session.vibration import cache_dir as console_cache
-    from plugins.demos.adapters import default_cache_dir as demos_cache
     from plugins.gestures.evaluate import cache_dir as gestures_cache
     from plugins.gestures.panel import data_dir as gestures_data
     from plugins.vibrotactile.cache import default_cache_dir as vt_cache
@@ -61,8 +60,7 @@ def test_every_directory_the_project_writes_is_under_the_tests_tmp_roots(pinned_
         paths.cache_dir(),
         paths.data_dir(),
         log_path(),
-        console_cache(),
-        demos_cache(),
+        console_cache(),  # the measured maps (the console's and the demos')
         gestures_cache(),
         gestures_data(),
         vt_cache(),

@@ -247,12 +247,13 @@ def test_flow_targets_snap_to_scene_regions_or_the_grid(profile, plugins):
 
 
 def test_twin_map_is_measured_once_through_the_registered_vibrometer(profile, tmp_path):
+    """The demos' flow map on the twin is the console's measured map (one provider)."""
     import plugins.demos
     import plugins.tuio
     from console.hookspecs import hookimpl
     from console.plugins import BUILTIN_PLUGINS, load_plugins
     from console.vibration_map import load_map
-    from plugins.demos.adapters import twin_map_path
+    from plugins.demos.run import flow_map_path
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     m = analytic_map(SSPlate())
@@ -290,8 +291,8 @@ def test_twin_map_is_measured_once_through_the_registered_vibrometer(profile, tm
         def section(self, name):
             return profile.section(name)
 
-    p1 = twin_map_path(P(), tmp_path, pm)
-    p2 = twin_map_path(P(), tmp_path, pm)
+    p1 = flow_map_path(P(), tmp_path, pm)
+    p2 = flow_map_path(P(), tmp_path, pm)
     assert p1 == p2 and calls == [1]  # cached: measured once
     assert np.array_equal(load_map(p1).frf_um_per_v, m.frf_um_per_v)
 

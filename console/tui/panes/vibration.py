@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import shlex
 import threading
-from pathlib import Path
 
 from textual import work
 from textual.app import ComposeResult
@@ -165,58 +164,47 @@ class VibrationPane(VerticalScroll):
             self.query_one("#grid", DataTable).cursor_coordinate = Coordinate(*self.cell_of[n])
 
     # ------------------------------------------------------------------ map
+    @property
+    def service(self):
+        """The session's vibration map and its long work (``console.session.vibration``)."""
+        return self.app.session.vibration
+
     @work(thread=True, exclusive=True, group="vib-load")
     def load_cached(self) -> None:
-        from console.session import vibration as vs
-
-        path = vs.twin_map_path(self.app.ctx.profile)
-        if not path.is_file():
+        try:
+            session = self.service.load_cached()
+        except UserError as exc:
+            self.app.call_from_thread(self._error, str(exc))
+            return
+        if session is None:
             self.app.call_from_thread(
                 self.status,
                 "no vibration map: press m to measure the twin's grid (about 10 s), or "
                 "type import PA=a.uff ... / load map.npz",
             )
             return
-        try:
-            self._open(
-                vs.load_map(path, self.app.ctx.profile),
-                f"map: {path.name} (measured on the twin)",
-            )
-        except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+        self._show_map(session)
 
-    def _open(self, vmap, label: str) -> None:
-        """In a worker: make ``vmap`` the screen's map; its lookup tables are built in
-        their own worker (group ``vib-tables``: a new map or x cancels it)."""
-        from console.session import vibration as vs
-
-        ctx = self.app.ctx
-        session = vs.VibrationSession(ctx.profile, ctx.pm, vmap)
-        m = session.vmap
-        summary = (
-            f"{label}: {len(m.excitations)} excitations, {m.points.size} points, "
-            f"{m.freq_hz.size} bins"
-        )
-        self.app.call_from_thread(self._ready, session, summary)
+    def _show_map(self, session) -> None:
+        """In a worker: show the session's new current map; its lookup tables are built
+        in their own worker (group ``vib-tables``: a new map or x cancels it)."""
+        self.app.call_from_thread(self._ready, session, session.summary)
 
     def _build_tables(self, session, summary: str, stop: threading.Event) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
-        from console.session import vibration as vs
+        from console.session.vibration import Cancelled
 
-        cancelled = stop_check(stop)
         show = self.app.call_from_thread
 
         def progress(frac: float, msg: str) -> None:
-            if cancelled():
-                raise vs.Cancelled()
             show(self._tables_status, session, summary, f"{summary}; lookup tables: {msg}", frac)
 
         try:
             show(self._tables_status, session, summary, f"{summary}; lookup tables ...", 0.0, True)
-            session.build_tables(progress)
+            self.service.build_tables(session, progress, stop_check(stop))
             text = f"{summary}; ready"
             self._prepare_projector()
-        except vs.Cancelled:
+        except Cancelled:
             text = (
                 f"{summary}; lookup-table build cancelled (b builds them; a flow builds "
                 "what it needs)"
@@ -243,7 +231,6 @@ class VibrationPane(VerticalScroll):
 
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
-        self.app.session.vibration = session  # its map prepares the projector's tables
         self.status(summary)
         self._layout_from_map(session.vmap)
         self._show_selection()
@@ -264,19 +251,14 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _measure(self, stop: threading.Event) -> None:
-        from console.session import vibration as vs
-
-        cancelled = stop_check(stop)
-        ctx = self.app.ctx
+        from console.session.vibration import Cancelled
 
         def progress(frac: float, msg: str) -> None:
             self.app.call_from_thread(self.status, f"measuring: {msg}", frac)
 
         try:
-            vmap = vs.measure_map(ctx.profile, ctx.pm, progress, cancelled)
-            path = vs.save_map(vs.twin_map_path(ctx.profile), vmap)
-            self._open(vmap, f"map: {path.name} (measured now)")
-        except vs.Cancelled:
+            self._show_map(self.service.measure(progress, stop_check(stop)))
+        except Cancelled:
             self.app.call_from_thread(self.status, "measurement cancelled; the map is unchanged")
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))
@@ -293,30 +275,23 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _import(self, specs: list[str], stop: threading.Event) -> None:
-        from console.session import vibration as vs
+        from console.session.vibration import Cancelled
 
         try:
             self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
-            ctx = self.app.ctx
-            vmap = vs.import_uff_files(ctx.profile, ctx.pm, specs)
-            if stop_check(stop)():  # the files are read in one go: x keeps the old map
-                raise vs.Cancelled()
-            self._open(vmap, "map: UFF import")
-        except vs.Cancelled:
+            self._show_map(self.service.import_uff(specs, stop_check(stop)))
+        except Cancelled:
             self.app.call_from_thread(self.status, "import cancelled; the map is unchanged")
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _load(self, path: str, stop: threading.Event) -> None:
-        from console.session import vibration as vs
+        from console.session.vibration import Cancelled
 
         try:
-            vmap = vs.load_map(path, self.app.ctx.profile)
-            if stop_check(stop)():
-                raise vs.Cancelled()
-            self._open(vmap, f"map: {Path(path).name}")
-        except vs.Cancelled:
+            self._show_map(self.service.load(path, stop_check(stop)))
+        except Cancelled:
             self.app.call_from_thread(self.status, "loading cancelled; the map is unchanged")
         except UserError as exc:
             self.app.call_from_thread(self._error, str(exc))

@@ -1,0 +1,72 @@
+"""The session's camera runs while a screen watches it and stops when none does; a demo
+borrowing it keeps it closed until given back."""
+
+from __future__ import annotations
+
+import time
+from types import SimpleNamespace
+
+
+def _wait(cond, timeout_s: float = 30.0) -> bool:
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return cond()
+
+
+def test_camera_runs_while_watched(profile, plugins):
+    from console.session import ConsoleSession
+
+    session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    assert session.camera_service is None  # created on first use
+    cam = session.camera
+    assert session.camera is cam and not cam.running
+    camera_screen, latency_screen = object(), object()
+    try:
+        cam.watch(camera_screen, True)
+        assert cam.running and cam.watched
+        assert _wait(lambda: cam.snapshot() is not None), "a first frame"
+        cam.watch(latency_screen, True)
+        cam.watch(camera_screen, False)
+        assert cam.running  # the latency screen still watches
+        cam.watch(camera_screen, False)  # twice: still one viewer left
+        assert cam.running
+        cam.watch(latency_screen, False)
+        assert not cam.running and not cam.watched  # nobody watches: stopped
+
+        cam.watch(camera_screen, True)
+        assert cam.running
+        cam.release("demo flow")  # a demo process opens the camera itself
+        assert not cam.running and cam.camera is None
+        cam.watch(latency_screen, True)
+        assert not cam.running  # not while it is lent
+        cam.give_back()
+        cam.watch(latency_screen, True)
+        assert cam.running
+    finally:
+        session.close()
+    assert not cam.running and cam.camera is None  # the session closes it
+
+
+def test_a_viewer_leaving_before_the_start_keeps_it_closed(profile, plugins):
+    """The start runs in a worker: when the screen is hidden before that worker gets to
+    open the camera, the loop is not started for nobody."""
+    import threading
+
+    from console.session import ConsoleSession
+
+    session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    cam = session.camera
+    viewer = object()
+    with cam._start_lock:  # another start (or stop) holds the camera meanwhile
+        worker = threading.Thread(target=cam.watch, args=(viewer, True))
+        worker.start()
+        assert _wait(lambda: cam.watched, 5)  # counted, waiting to start
+        with cam._lock:  # the screen is hidden: its viewer leaves
+            cam._viewers.discard(id(viewer))
+    worker.join(30)
+    assert not worker.is_alive()
+    assert not cam.running and cam.camera is None
+    session.close()
