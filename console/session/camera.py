@@ -12,18 +12,26 @@ from __future__ import annotations
 
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
+from console.session.events import SessionEvent, Started, Stopped
+
 TUNABLE = ("body_threshold", "contact_threshold", "highpass_sigma_px")
 
 
 class CameraService:
-    def __init__(self, profile, plugins) -> None:
+    """``emit(event)`` reports the loop's start and stop (topic ``camera``)."""
+
+    def __init__(
+        self, profile, plugins, emit: Callable[[SessionEvent], None] | None = None
+    ) -> None:
         self.profile = profile
         self.plugins = plugins
+        self.emit = emit or (lambda event: None)
         self.camera = None
         self.classifier = None
         self.loop = None
@@ -53,7 +61,7 @@ class CameraService:
                 self._viewers.discard(id(viewer))
             watched = bool(self._viewers)
         if not watched:
-            self.stop()
+            self.stop("nobody watches")
             return
         if on:
             try:
@@ -92,6 +100,7 @@ class CameraService:
         mon = LatencyMonitor([n for n, _ in stages], size=window)
         self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
         self.loop.start()
+        self.emit(Started("camera"))
 
     def _open(self, open_camera, open_classifier, learn_background) -> None:
         if self.camera is None:
@@ -116,6 +125,7 @@ class CameraService:
                 self.camera = None
             self.latest = None
             self.borrower = borrower
+        self.emit(Stopped("camera", reason=f"in use by {borrower}"))
 
     def give_back(self) -> None:
         """The borrower has closed the camera: the service may open it again."""
@@ -133,14 +143,16 @@ class CameraService:
         with self._lock:
             return self.latest
 
-    def stop(self) -> None:
+    def stop(self, reason: str = "stopped") -> None:
         with self._start_lock:
-            if self.loop is not None:
-                self.loop.stop()
-                self.loop = None
+            loop, self.loop = self.loop, None
+            if loop is not None:
+                loop.stop()
+        if loop is not None:
+            self.emit(Stopped("camera", reason=reason))
 
     def close(self) -> None:
-        self.stop()
+        self.stop("closed")
         with self._start_lock:
             if self.camera is not None:
                 self.camera.close()

@@ -74,7 +74,7 @@ class ConsoleSession:
                 else:
                     from console.session.camera import CameraService
 
-                    self._camera = CameraService(self.profile, self.plugins)
+                    self._camera = CameraService(self.profile, self.plugins, self.emit)
             return self._camera
 
     @property

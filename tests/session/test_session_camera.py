@@ -18,8 +18,11 @@ def _wait(cond, timeout_s: float = 30.0) -> bool:
 
 def test_camera_runs_while_watched(profile, plugins):
     from console.session import ConsoleSession
+    from console.session.events import Started, Stopped
 
     session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    events: list = []
+    session.subscribe(lambda e: events.append(e) if e.topic == "camera" else None)
     assert session.camera_service is None  # created on first use
     cam = session.camera
     assert session.camera is cam and not cam.running
@@ -35,11 +38,14 @@ def test_camera_runs_while_watched(profile, plugins):
         assert cam.running
         cam.watch(latency_screen, False)
         assert not cam.running and not cam.watched  # nobody watches: stopped
+        assert [type(e) for e in events] == [Started, Stopped]
+        assert events[-1].reason == "nobody watches"
 
         cam.watch(camera_screen, True)
         assert cam.running
         cam.release("demo flow")  # a demo process opens the camera itself
         assert not cam.running and cam.camera is None
+        assert events[-1] == Stopped("camera", reason="in use by demo flow")
         cam.watch(latency_screen, True)
         assert not cam.running  # not while it is lent
         cam.give_back()
