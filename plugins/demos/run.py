@@ -252,6 +252,8 @@ def start_demo(
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
     ``vision``: classifier parameters to override (the console's tuned thresholds).
+    ``cache_dir``: where the twin's measured map is kept (default: the console's cache,
+    shared with its Vibration screen: ``console.runtime.measured_map``).
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
     scene region the first time, cached on disk after); call this from a worker thread.
     """
