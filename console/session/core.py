@@ -23,9 +23,8 @@ Subscriber = Callable[[SessionEvent], None]
 class ConsoleSession:
     """What one operator's console runs: ``ctx`` gives the profile (``ctx.profile``) and the
     plugins (``ctx.pm``); ``fast`` runs the twin's outputs unpaced (tests).
-    ``camera_factory(profile, plugins)`` builds the camera loop and ``map_path(profile)``
-    says where the profile's measured vibration map is kept (the console passes its own
-    until both live in this package)."""
+    ``camera_factory(profile, plugins)`` builds another camera loop than the console's
+    ``console.session.camera.CameraService`` (tests)."""
 
     def __init__(
         self,
@@ -33,11 +32,9 @@ class ConsoleSession:
         *,
         fast: bool | None = None,
         camera_factory: Callable[[Any, Any], Any] | None = None,
-        map_path: Callable[[Any], Any] | None = None,
     ) -> None:
         self.ctx = ctx
         self.camera_factory = camera_factory
-        self.map_path = map_path
         self.fast = fast
         self.outputs: Any = None
         self.outputs_error = ""

@@ -61,12 +61,6 @@ def _keys_help(tabs: dict) -> str:
     return f"[b]{keys}[/b]{pad}{' '.join(title for _, title in keyed)}"
 
 
-def _measured_map_path(profile):
-    from console.runtime.measured_map import measured_map_path
-
-    return measured_map_path(profile)
-
-
 class ScreenTabs(TabbedContent):
     """The console's screens. Only the operator switches screens (keys, clicks, palette):
     a widget taking the focus in a hidden screen must not switch back to it."""
@@ -111,7 +105,7 @@ class HapTableApp(App):
         self.ctx = ctx
         self.fast = fast
         self.initial = initial
-        self.session = ConsoleSession(ctx, fast=fast, map_path=_measured_map_path)
+        self.session = ConsoleSession(ctx, fast=fast)
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
         self._bind_tabs()

@@ -43,10 +43,10 @@ class Classifier:
 def _session(profile, classifier):
     from console.session import ConsoleSession
 
-    session = ConsoleSession(SimpleNamespace(profile=profile, pm=None))
     cam = FakeCamera()
-    session.camera_service = SimpleNamespace(
-        classifier=classifier, camera=cam, error="", frame_hooks=[]
+    service = SimpleNamespace(classifier=classifier, camera=cam, error="", frame_hooks=[])
+    session = ConsoleSession(
+        SimpleNamespace(profile=profile, pm=None), camera_factory=lambda p, pl: service
     )
     events: list = []
     session.subscribe(events.append)
@@ -57,7 +57,7 @@ def _frames(session, cam, n: int) -> None:
     """``n`` frames: the finger on the aimed target (if any), else no contact."""
     for _ in range(n):
         contacts = () if cam.target is None else (Contact(1, _px(cam.target)),)
-        for hook in list(session.camera_service.frame_hooks):
+        for hook in list(session.camera.frame_hooks):
             hook(None, {"contacts": contacts})
 
 
@@ -89,7 +89,7 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
     r = wizard.result.report()
     assert r["pairs"] == 6 and r["rms_mm"] < 1e-6  # an exact affine view
     assert "reprojection error" in wizard.message
-    assert session.camera_service.frame_hooks == []  # unhooked
+    assert session.camera.frame_hooks == []  # unhooked
     assert cam.target is None
 
     kinds = [type(e) for e in events if e.topic == "calibration"]
@@ -130,11 +130,11 @@ def test_skip_cancel_and_a_classifier_without_calibration(profile):
     assert "at least 4" in wizard.message
     assert any(isinstance(e, Failed) and e.topic == "calibration" for e in events)
 
-    session.camera_service.classifier = SimpleNamespace(params=None)
+    session.camera.classifier = SimpleNamespace(params=None)
     assert not wizard.start()
     assert "offers none" in wizard.message and "[gestures] classifier" in wizard.message
     assert isinstance(events[-1], Failed) and events[-1].severity == "warning"
-    session.camera_service.classifier = None
+    session.camera.classifier = None
     assert not wizard.start() and "not running yet" in wizard.message
 
 

@@ -23,7 +23,7 @@ def test_camera_runs_while_watched(profile, plugins):
     session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
     events: list = []
     session.subscribe(lambda e: events.append(e) if e.topic == "camera" else None)
-    assert session.camera_service is None  # created on first use
+    assert session.camera_started is None  # created on first use
     cam = session.camera
     assert session.camera is cam and not cam.running
     camera_screen, latency_screen = object(), object()
