@@ -7,10 +7,14 @@ hooks and the same manager as third-party ones (installed through the ``haptable
 entry-point group).
 
 ``register`` for the device and content kinds (cameras, classifiers, effects, audio
-outputs, relay boards, scenes, projectors, panels) is::
+outputs, relay boards, scenes, projectors, panels) is a ``RegisterFactory``::
 
     register(name: str, factory: Callable[[Profile], object], *,
              description: str = "", probe: Callable[[Profile], DeviceStatus] | None = None)
+
+What a factory builds is typed in ``console.contracts`` (each hook below names its
+Protocol); the plugin manager refuses a thing that lacks a member of its contract, with
+one line naming the plugin, the kind and the member.
 
 ``name`` is what a profile's ``driver = "..."`` (or a scene list, or the console) uses to
 pick it. ``factory(profile)`` builds the thing only when it is needed, so a driver's
@@ -25,87 +29,139 @@ safety gate (``console.safety``); a plugin receives no handle to a driver.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import pluggy
+
+from console.types import DeviceStatus
 
 PROJECT = "haptable"
 hookspec = pluggy.HookspecMarker(PROJECT)
 hookimpl = pluggy.HookimplMarker(PROJECT)
 
-Register = Callable[..., None]
+
+class RegisterFactory(Protocol):
+    """``register`` of the device and content kinds: one call per thing provided."""
+
+    def __call__(
+        self,
+        name: str,
+        factory: Callable[..., Any],
+        *,
+        description: str = "",
+        probe: Callable[[Any], DeviceStatus] | None = None,
+        tab: Any = None,  # panels only: a console.plugins.PanelTab
+    ) -> None: ...
+
+
+class RegisterCommand(Protocol):
+    """``register`` of ``haptable_register_commands``."""
+
+    def __call__(
+        self,
+        name: str,
+        configure: Callable[[Any], None],
+        run: Callable[[Any, Any], int],
+        *,
+        help: str = "",  # noqa: A002
+    ) -> None: ...
+
+
+class RegisterBenchmark(Protocol):
+    """``register`` of ``haptable_register_benchmarks``."""
+
+    def __call__(
+        self,
+        name: str,
+        run: Callable[[Any, bool], dict],
+        *,
+        help: str = "",  # noqa: A002
+    ) -> None: ...
+
+
+class RegisterSection(Protocol):
+    """``register`` of ``haptable_profile_sections``."""
+
+    def __call__(
+        self,
+        section: str,
+        fields: dict[str, Any],
+        *,
+        per_item: bool = False,
+        help: str = "",  # noqa: A002
+    ) -> None: ...
+
+
+#: Kept for plugins written against the untyped callback.
+Register = RegisterFactory
 
 
 @hookspec
-def haptable_register_cameras(register: Register) -> None:
+def haptable_register_cameras(register: RegisterFactory) -> None:
     """Register camera drivers.
 
-    The factory returns a ``console.types.Camera``: ``read(timeout_s) -> Frame | None``
+    The factory returns a ``contracts.Camera``: ``read(timeout_s) -> Frame | None``
     (640 x 480 uint8 by default), ``close()``, ``status() -> dict`` with at least
     ``fps`` and ``dropped``. Selected by ``[camera] driver`` in the profile. A simulated
-    camera (the twin) is also a ``console.types.SimulatedCamera``: it acts out a
+    camera (the twin) is also a ``contracts.SimulatedCamera``: it acts out a
     ``GestureScript`` (``set_script``) and renders gesture samples offline, which is how
-    other plugins script or render it without importing it.
+    other plugins script or render it without importing it; and a
+    ``contracts.TouchableCamera`` (``set_target(pos_mm)``, ``mm_to_px(pos_mm)``): the
+    operator's finger on the twin.
     """
 
 
 @hookspec
-def haptable_register_classifiers(register: Register) -> None:
+def haptable_register_classifiers(register: RegisterFactory) -> None:
     """Register gesture classifiers.
 
-    The factory returns an object with ``classify(frames: list[Frame]) -> Gesture | None``
-    and ``names: tuple[str, ...]`` (the gestures it knows). Selected by
-    ``[gestures] classifier`` in the profile.
+    The factory returns a ``contracts.Classifier``: ``classify(frames) -> Gesture |
+    None``, ``names`` (the gestures it knows), ``n_frames``, the per-frame vision
+    ``process(frame) -> contracts.VisionResult`` with its ``views``, ``to_mm``,
+    ``set_background(image)`` and its tunables (``tunables()``, ``tunable_ranges()``,
+    ``set_tunable(name, value)``). Selected by ``[gestures] classifier`` in the profile.
 
-    Optionally ``touch_calibration(profile) -> session`` for the console's touch-
-    calibration wizard (camera px -> table mm; the console says so when it is absent).
-    The session has ``targets_mm`` (N x 2), ``next_target() -> (index, (x, y) mm) | None``,
-    ``feed(contacts) -> event`` for each frame's contacts (``"recorded"``, ``"lifted"``,
-    ``"done"``, or a waiting state), ``skip()``, ``index``, ``state`` (``"done"`` at the
-    end), ``progress() -> (touched, total)`` and ``finish() -> result``, whose
-    ``report()`` has ``pairs``, ``rms_mm``, ``max_mm``, ``loo_rms_mm``, ``outliers`` and
-    ``save(path)`` writes the file ``[vision] calibration`` names.
+    Optionally a ``contracts.TouchCalibrating``: ``touch_calibration(profile) ->
+    contracts.TouchCalibrationSession`` for the console's touch-calibration wizard
+    (camera px -> table mm; the console says so when no classifier offers it).
     """
 
 
 @hookspec
-def haptable_register_effects(register: Register) -> None:
+def haptable_register_effects(register: RegisterFactory) -> None:
     """Register effect renderers (vibrotactile, electrostatic ...).
 
-    The factory returns an object with ``render(**request) -> OutputPlan`` (a finite
-    stimulus) and optionally ``stream(**request) -> StreamSource`` (a live one). Plans
-    are in volts at the actuator; the safety gate refuses any plan out of limits.
+    The factory returns a ``contracts.Effect``: ``render(**request) -> OutputPlan`` (a
+    finite stimulus). Plans are in volts at the actuator; the safety gate refuses any
+    plan out of limits.
 
-    Optional members the console uses when an effect has them (it says which plugin
-    to enable when none does):
-
-    - ``tables(vmap=, progress=None)``: the excitation lookup tables of a vibration map;
-      ``progress(fraction, message)`` is called between build steps and may raise to
-      cancel the build. ``query(active, passive, vmap=) -> dict`` gives a pair's entry
-      (``max_difference_um_per_v``, ``frequency_hz``, ``actuator``).
-    - ``import_map(files: dict[str, path]) -> VibrationMap``: a map from measurement
-      files, one per excitation (e.g. UFF 58 ``{"PA": "pa.uff"}``).
-    - ``conditions: tuple[str, ...]``: the named conditions ``render(condition=)`` takes.
-    - ``presets: dict[str, dict]``: named settings (``render`` keywords such as ``vpp``,
-      ``freq_hz``, ``waveform``, plus ``help``) an operator may audition.
+    Optional capabilities the console asks for (``plugins.provider("effect", Protocol,
+    profile)``; it says which plugin to enable when none offers one), all in
+    ``console.contracts``: ``StreamingEffect`` (``stream(**request) -> StreamSource``),
+    ``TableEffect`` (``tables``, ``query``), ``MapImporter`` (``import_map``),
+    ``PointEffect`` (``render_point``), ``FlowEffect`` (``render_flow``),
+    ``HandFlowEffect`` (``render_hand_flow``), ``Conditions`` (``conditions``) and
+    ``Presets`` (``presets``).
     """
 
 
 @hookspec
-def haptable_register_audio_outputs(register: Register) -> None:
+def haptable_register_audio_outputs(register: RegisterFactory) -> None:
     """Register audio output drivers (left channel: piezo amplifier, right: screen).
 
-    The factory returns a ``console.types.AudioOutput``: ``start(source)`` pulls blocks
+    The factory returns a ``contracts.AudioOutput`` (the twin's also a
+    ``contracts.SimulatedAudio``): ``start(source)`` pulls blocks
     from ``source.fill(out)`` (the safety gate) until ``stop()``; ``status()`` reports
     ``latency_s`` and ``underruns``. Selected by ``[audio] driver``.
     """
 
 
 @hookspec
-def haptable_register_relay_boards(register: Register) -> None:
+def haptable_register_relay_boards(register: RegisterFactory) -> None:
     """Register relay board drivers.
 
-    The factory returns a ``console.types.RelayBoard``: ``channels``, ``set(channel,
+    The factory returns a ``contracts.RelayBoard`` (the twin's also a
+    ``contracts.SimulatedRelays``): ``channels``, ``set(channel,
     closed)``, ``states()``, ``close()``, ``status()``. Only the safety gate calls
     ``set``, and only while both output channels are silent. Selected by
     ``[relays] driver``.
@@ -113,10 +169,10 @@ def haptable_register_relay_boards(register: Register) -> None:
 
 
 @hookspec
-def haptable_register_vibrometers(register: Register) -> None:
+def haptable_register_vibrometers(register: RegisterFactory) -> None:
     """Register vibration-map measurement devices (a laser vibrometer, or the twin's).
 
-    The factory returns an object with ``measure(progress=None) -> dict`` whose items are
+    The factory returns a ``contracts.Vibrometer``: ``measure(progress=None) -> dict`` whose items are
     the arguments of ``console.vibration_map.make_map`` plus ``meta`` (provenance);
     ``progress(done, total)`` is called as the measurement advances; an exception raised
     by ``progress`` (an operator's cancel) stops it and propagates. Selected by
@@ -125,21 +181,22 @@ def haptable_register_vibrometers(register: Register) -> None:
 
 
 @hookspec
-def haptable_register_scenes(register: Register) -> None:
+def haptable_register_scenes(register: RegisterFactory) -> None:
     """Register projected scenes.
 
-    The factory returns a scene with ``needs`` (what the runtime must prepare: e.g.
+    The factory returns a ``contracts.Scene`` with ``needs`` (what the runtime must prepare: e.g.
     ``{"tables": [...points], "flow_regions": [...], "knob": True, "contacts": True}``),
     ``update(event: dict) -> None`` and ``state() -> dict`` (JSON the projector draws).
     """
 
 
 @hookspec
-def haptable_register_projectors(register: Register) -> None:
+def haptable_register_projectors(register: RegisterFactory) -> None:
     """Register projector processes: how the console starts the one that draws scenes.
 
-    The factory is ``factory(profile, *, socket_path: Path, headless: bool = False,
-    extra: list[str] = []) -> console.runtime.projector.supervisor.ProjectorLaunch``:
+    The factory is a ``contracts.ProjectorFactory``: ``factory(profile, *, socket_path:
+    Path, headless: bool = False, extra: list[str] = []) ->
+    console.runtime.projector.supervisor.ProjectorLaunch``:
     ``argv``, the command line of a process that serves the projector link on
     ``socket_path`` (``console.runtime.projector.protocol``, the protocol both ends share)
     and, with ``headless``, renders offscreen; ``extra`` are further arguments for it;
@@ -150,49 +207,53 @@ def haptable_register_projectors(register: Register) -> None:
 
 
 @hookspec
-def haptable_register_demos(register: Register) -> None:
+def haptable_register_demos(register: RegisterFactory) -> None:
     """Register interactive demos the console can start (the paper's flow and knob).
 
-    The factory takes ``(profile, plugins, outputs, **params)`` instead of a profile and
-    returns a running demo with ``stop()``, ``snapshot() -> dict`` (camera, latency,
-    watchdog and demo state as JSON values) and ``scene_name``. The console runs it in its
+    The factory is a ``contracts.DemoFactory``: it takes ``(profile, plugins, outputs,
+    **params)`` instead of a profile and returns a running ``contracts.Demo`` with
+    ``stop()``, ``snapshot() -> dict`` (camera, latency, watchdog and demo state as JSON
+    values), ``scene_name`` and ``status_lines(snapshot)`` (what the operator reads of a
+    snapshot; the factory formats one too, without a running demo). The console runs it in its
     own process (``console.runtime.demo_host``, with the outputs handed over) and passes
     ``script=True``, ``camera_apart=True`` (a simulated camera may render in a process of
     its own), ``sinks=`` (frame sinks ``sink(frame, work)``), ``projector=`` (``update(event)``
     for the scene's events), ``progress(done, total, what)`` (raising stops the
     preparation) and ``vision=`` (the Camera screen's tuned thresholds); the demo's
-    ``camera`` attribute has ``set_target(pos_mm | None)`` when the operator can touch it.
+    ``camera`` is a ``contracts.TouchableCamera`` when the operator can touch it.
     """
 
 
 @hookspec
-def haptable_register_frame_sinks(register: Register) -> None:
+def haptable_register_frame_sinks(register: RegisterFactory) -> None:
     """Register frame sinks: outputs the frame loop feeds after its stages (e.g. TUIO).
 
-    The factory is ``factory(profile, *, force=False)`` and returns a sink, or ``None``
-    when the profile leaves the sink off (``force`` opens it anyway, e.g.
-    ``haptable demo --tuio``). A sink is called ``sink(frame, work)`` for every
-    processed frame (``work``: the stages' results, ``contacts``, ``hands``,
-    ``gesture`` ...), untimed, and its ``close()`` (if any) is called when the run ends.
+    The factory is a ``contracts.FrameSinkFactory``: ``factory(profile, *, force=False)``
+    returns a ``contracts.FrameSink``, or ``None`` when the profile leaves the sink off
+    (``force`` opens it anyway, e.g. ``haptable demo --tuio``). A sink is called
+    ``sink(frame, work)`` for every processed frame (``work``: the stages' results,
+    ``contacts``, ``hands``, ``gesture`` ...), untimed, and its ``close()`` is called
+    when the run ends.
     The demo runner opens every registered sink that the profile enables.
     """
 
 
 @hookspec
-def haptable_register_panels(register: Register) -> None:
+def haptable_register_panels(register: RegisterFactory) -> None:
     """Register console panels (extra Textual screens).
 
-    The factory takes the running app instead of a profile and returns a Textual
-    ``Screen``; the console lists it in its command palette. With
-    ``tab=console.plugins.PanelTab(title, key="f8", order=80)`` it is one of the
-    console's tabs instead: the factory returns the tab's widget (built when the tab is
-    first opened), ``key`` opens it, ``order`` places it (the built-in screens are
-    Devices 10 ... Latency 70, keys f1-f7).
+    The factory is a ``contracts.PanelFactory``: it takes the running app instead of a
+    profile and returns a Textual ``Screen`` (a ``contracts.Panel``); the console lists
+    it in its command palette. With ``tab=console.plugins.PanelTab(title, key="f8",
+    order=80)`` it is one of the console's tabs instead: the factory returns the tab's
+    widget (a ``contracts.Panel`` too, built when the tab is first opened), ``key`` opens
+    it, ``order`` places it (the built-in screens are Devices 10 ... Latency 70, keys
+    f1-f7).
     """
 
 
 @hookspec
-def haptable_register_commands(register: Register) -> None:
+def haptable_register_commands(register: RegisterCommand) -> None:
     """Register ``haptable`` sub-commands.
 
     ``register(name, configure, run, *, help="")``: ``configure(parser)`` adds the
@@ -202,7 +263,7 @@ def haptable_register_commands(register: Register) -> None:
 
 
 @hookspec
-def haptable_register_benchmarks(register: Register) -> None:
+def haptable_register_benchmarks(register: RegisterBenchmark) -> None:
     """Register ``haptable bench NAME`` benchmarks.
 
     ``register(name, run, *, help="")``: ``run(ctx, quick: bool) -> dict`` returns the
@@ -220,7 +281,7 @@ def documented_hooks() -> dict[str, Any]:
 
 
 @hookspec
-def haptable_profile_sections(register: Register) -> None:
+def haptable_profile_sections(register: RegisterSection) -> None:
     """Declare the profile sections a plugin reads, so profiles are validated.
 
     ``register(section: str, fields: dict[str, console.schema.Field], *,

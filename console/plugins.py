@@ -4,6 +4,13 @@ Built-ins are registered with ``pm.register`` exactly like third-party plugins f
 the ``haptable`` entry-point group. ``HAPTABLE_BLOCK_PLUGINS=name,name`` blocks plugins
 by name (a name also blocks its dotted children: ``twin`` blocks ``twin.plate``).
 ``HAPTABLE_LOAD_ENTRYPOINTS=0`` keeps installed third-party plugins out (tests do this).
+
+What a registration builds is checked against its kind's Protocol
+(``console.contracts.KIND_CONTRACTS``): a factory whose own contract is known (a demo's,
+a frame sink's, a panel's, or a class) when it is registered, the built thing when it is
+built (``Plugins.build``). console/ asks for capabilities, not names:
+``plugins.provider("effect", contracts.PointEffect, profile)`` is the first registered
+effect offering ``render_point`` (built once per profile).
 """
 
 from __future__ import annotations
@@ -11,6 +18,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import os
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -18,7 +26,7 @@ from typing import Any
 
 import pluggy
 
-from console import hookspecs
+from console import contracts, hookspecs
 from console.errors import UserError
 
 ENTRY_POINT_GROUP = "haptable"
@@ -106,6 +114,8 @@ class Plugins:
     commands: dict[str, Command] = field(default_factory=dict)
     benchmarks: dict[str, Benchmark] = field(default_factory=dict)
     sections: dict[str, tuple[dict, bool, str, str]] = field(default_factory=dict)
+    _built: dict[tuple[str, str, int], tuple[Any, Any]] = field(default_factory=dict, repr=False)
+    _build_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def of(self, kind: str) -> dict[str, Registration]:
         """Registrations of one kind (``camera``, ``audio_output`` ...) by name."""
@@ -120,6 +130,55 @@ class Plugins:
 
     def plugin_names(self) -> list[str]:
         return sorted(n for n, p in self.pm.list_name_plugin() if n and p is not None)
+
+    # ------------------------------------------------------------ capabilities
+    def build(self, kind: str, name: str, profile: Any) -> Any:
+        """Build registration ``name`` of ``kind`` for ``profile`` (fresh each call) and
+        check it against its kind's contract: a ``UserError`` names the plugin, the kind
+        and the missing member."""
+        reg = self.get(kind, name)
+        obj = reg.factory(profile)
+        proto = contracts.KIND_CONTRACTS.get(kind)
+        if proto is not None and kind not in contracts.FACTORY_CONTRACTS:
+            refuse(reg, obj, proto)
+        return obj
+
+    def built(self, kind: str, name: str, profile: Any) -> Any:
+        """``build``, once per (kind, name, profile): effects are built once."""
+        key = (kind, name, id(profile))
+        with self._build_lock:
+            hit = self._built.get(key)
+            if hit is not None and hit[0] is profile:
+                return hit[1]
+        obj = self.build(kind, name, profile)
+        with self._build_lock:
+            hit = self._built.setdefault(key, (profile, obj))  # a racing build: keep one
+            return hit[1] if hit[0] is profile else obj
+
+    def providers(self, kind: str, proto: type, profile: Any) -> list[tuple[str, Any]]:
+        """Every registration of ``kind`` whose built object satisfies the capability
+        ``proto`` (a ``console.contracts`` Protocol), as ``(name, object)`` in
+        registration order; objects are built once per profile."""
+        return [
+            (name, obj)
+            for name in self.of(kind)
+            if contracts.satisfies(obj := self.built(kind, name, profile), proto)
+        ]
+
+    def provider(self, kind: str, proto: type, profile: Any, *, plugin_hint: str = "") -> Any:
+        """The first registration of ``kind`` offering ``proto``, built for ``profile``
+        (once). None does: a ``UserError`` naming the capability and its members, and
+        ``plugin_hint`` (the plugin to enable) when the caller knows one."""
+        found = self.providers(kind, proto, profile)
+        if found:
+            return found[0][1]
+        what = ", ".join(m for m in contracts.members(proto) if m != "__call__")
+        have = ", ".join(self.of(kind)) or "none"
+        enable = f"install/enable {plugin_hint}" if plugin_hint else "install/enable a plugin"
+        raise UserError(
+            f"no {kind.replace('_', ' ')} offers {proto.__name__} ({what}): {enable} that "
+            f"does (registered: {have})"
+        )
 
 
 def blocked_names() -> set[str]:
@@ -157,7 +216,35 @@ def _check_hooks(pm: pluggy.PluginManager) -> None:
         raise UserError(f"plugin {exc.plugin!r}: {exc}") from None
 
 
-def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> Callable[..., None]:
+def refuse(reg: Registration, obj: Any, proto: type) -> None:
+    """One line naming the plugin, the kind and what ``obj`` lacks of ``proto``."""
+    bad = contracts.problems(obj, proto)
+    if bad:
+        kind = reg.kind.replace("_", " ")
+        raise UserError(
+            f"plugin {reg.plugin!r} registers {kind} {reg.name!r} that does not satisfy "
+            f"console.contracts.{proto.__name__}: {'; '.join(bad)}"
+        )
+
+
+def check_registration(reg: Registration) -> None:
+    """What can be checked before anything is built: the factory's own contract (a
+    demo's, a frame sink's, a panel's) or, for a class, its methods."""
+    if not callable(reg.factory):
+        raise UserError(
+            f"plugin {reg.plugin!r} registers {reg.kind.replace('_', ' ')} {reg.name!r} "
+            f"with a factory that is not callable: {reg.factory!r}"
+        )
+    factory_proto = contracts.FACTORY_CONTRACTS.get(reg.kind)
+    if factory_proto is not None:
+        refuse(reg, reg.factory, factory_proto)
+    elif isinstance(reg.factory, type) and reg.kind in contracts.KIND_CONTRACTS:
+        lacking = contracts.missing(reg.factory, contracts.KIND_CONTRACTS[reg.kind])
+        if lacking:
+            refuse(reg, reg.factory, contracts.KIND_CONTRACTS[reg.kind])
+
+
+def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> hookspecs.RegisterFactory:
     def register(
         name: str,
         factory: Callable[..., Any],
@@ -168,7 +255,9 @@ def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> Callable
     ) -> None:
         if tab is not None and kind != "panel":
             raise UserError(f"plugin {owner!r}: {kind} {name!r}: only a panel shows as a tab")
-        regs[name] = Registration(kind, name, owner, factory, description, probe, tab)
+        reg = Registration(kind, name, owner, factory, description, probe, tab)
+        check_registration(reg)
+        regs[name] = reg
 
     return register
 

@@ -39,8 +39,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from console.contracts import RelayBoard
 from console.errors import SafetyRefusal
-from console.types import PATCHES, OutputPlan, RelayBoard
+from console.types import PATCHES, OutputPlan
 
 if TYPE_CHECKING:
     from console.profile import Profile

@@ -8,7 +8,7 @@ long edge, y along the short edge), ``_px`` camera pixels, ``_s`` seconds on the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol, runtime_checkable
+from typing import Any, Literal
 
 import numpy as np
 
@@ -138,73 +138,19 @@ class OutputPlan:
         return sum(s.n_samples for s in self.segments) / self.sample_rate_hz
 
 
-@runtime_checkable
-class StreamSource(Protocol):
-    """A live output (e.g. the knob): produces the next block in volts at the actuator.
+@dataclass(frozen=True)
+class TunableRange:
+    """Where a tunable may go (``min_value`` .. ``max_value``) and one operator step."""
 
-    ``next_block`` returns ``(piezo_v, screen_v)`` arrays of length ``n`` or ``None``
-    when the stream has finished (after ramping down to zero).
-    """
+    min_value: float
+    max_value: float
+    step: float
 
-    patches: frozenset[str]
-    screen: bool
-
-    def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None: ...
-
-    def request_stop(self) -> None: ...
+    def clamp(self, value: float) -> float:
+        return min(self.max_value, max(self.min_value, float(value)))
 
 
-# --------------------------------------------------------------------------- drivers
-class BlockSource(Protocol):
-    """What an audio output pulls from: the safety gate. Fills ``out`` (frames, 2),
-    float32 sound-card units in [-1, 1]; column 0 = left (piezo), 1 = right (screen)."""
-
-    def fill(self, out: np.ndarray) -> None: ...
-
-    @property
-    def idle(self) -> bool: ...
-
-    def estop(self, reason: str) -> None:
-        """Drivers call this when the device fails (vanished, stream error)."""
-
-
-class AudioOutput(Protocol):
-    """An audio device plugin. It never generates samples itself."""
-
-    sample_rate_hz: int
-    block_size: int
-
-    def start(self, source: BlockSource) -> None: ...
-
-    def stop(self) -> None: ...
-
-    def status(self) -> dict[str, Any]: ...
-
-
-class RelayBoard(Protocol):
-    """A relay board plugin; channels are 1-based. Only the safety gate calls ``set``."""
-
-    channels: int
-
-    def set(self, channel: int, closed: bool) -> None: ...
-
-    def states(self) -> tuple[bool, ...]: ...
-
-    def close(self) -> None: ...
-
-    def status(self) -> dict[str, Any]: ...
-
-
-class Camera(Protocol):
-    """A camera plugin: ``read`` returns the next frame or ``None`` if none is ready."""
-
-    def read(self, timeout_s: float = 0.1) -> Frame | None: ...
-
-    def close(self) -> None: ...
-
-    def status(self) -> dict[str, Any]: ...
-
-
+# --------------------------------------------------------------------------- devices
 @dataclass(frozen=True)
 class DeviceStatus:
     """One line of ``haptable doctor``."""
@@ -235,31 +181,11 @@ class GestureScript:
     """What a simulated camera shows: ``steps`` in turn, ``gap_frames`` of empty table
     before each, looping if ``loop``; ``seed`` seeds the performance's variations.
 
-    A camera that can act scripts out (the camera twin) has ``set_script(script)``;
-    check with ``callable(getattr(camera, "set_script", None))``: a real camera has no
-    such method (the operator's hand does it).
+    A camera that can act scripts out is a ``console.contracts.SimulatedCamera``
+    (the camera twin); a real camera is not (the operator's hand does it).
     """
 
     steps: tuple[GestureStep, ...]
     gap_frames: int = 30
     loop: bool = True
     seed: int = 0
-
-
-class SimulatedCamera(Camera, Protocol):
-    """A camera that renders on request (the camera twin), as registered cameras may.
-
-    ``set_script(GestureScript)`` shows a scripted hand on the live stream from the next
-    frame on; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
-    side=None, subject_seed=None) -> (frames (n, H, W) uint8, truth dict)`` renders one
-    performance offline (dataset synthesis); ``render_background(t_s, rng)`` the empty
-    table at session time ``t_s``; ``mapping`` the table mm <-> px mapping (``to_dict()``).
-    """
-
-    def set_script(self, script: GestureScript) -> None: ...
-
-    def render_sample(
-        self, gesture: str, subject: str, rep: int, rng: np.random.Generator, **kw: Any
-    ) -> tuple[np.ndarray, dict[str, Any]]: ...
-
-    def render_background(self, t_s: float, rng: np.random.Generator) -> np.ndarray: ...

@@ -28,8 +28,9 @@ from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
+from console.contracts import Camera
 from console.runtime.latency import ARRIVAL, DEQUEUED, LatencyMonitor
-from console.types import Camera, Frame
+from console.types import Frame
 
 log = logging.getLogger("haptable.loop")
 

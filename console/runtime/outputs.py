@@ -13,11 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from console.contracts import StreamSource
 from console.errors import SafetyRefusal, UserError
 from console.runtime.outputs_registry import register_outputs
 from console.runtime.scheduler import PlayReport, Scheduler
 from console.safety import Limits, SafetyGate, install_emergency_hooks
-from console.types import OutputPlan, StreamSource
+from console.types import OutputPlan
 
 log = logging.getLogger("haptable.outputs")
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from console.contracts import StreamSource
 from console.errors import SafetyRefusal
 from console.safety import (
     Limits,
@@ -28,7 +29,7 @@ from console.safety import (
     SourceInterrupted,
     check_plan,
 )
-from console.types import OutputPlan, StreamSource
+from console.types import OutputPlan
 
 log = logging.getLogger("haptable.scheduler")
 

@@ -9,7 +9,10 @@ Console panel: the Scenes screen (``scenes``, tab F6; ``panel.py``).
 
 The demos are registered through ``haptable_register_demos`` as ``flow`` and ``knob``:
 ``factory(profile, plugins, outputs, **params) -> DemoRun`` (``stop()``,
-``snapshot()``, ``scene_name``; params as ``plugins.demos.run.start_demo``).
+``snapshot()``, ``scene_name``, ``status_lines(snapshot)``; params as
+``plugins.demos.run.start_demo``); the factory formats snapshots too
+(``factory.status_lines``: the console holds only the snapshots of a demo run in
+another process).
 ``start_demo(name, ...)`` is the same call by name (kept for compatibility).
 
 Other plugins are reached only through registrations: effects ``hand_flow``, ``flow``
@@ -100,14 +103,28 @@ def start_demo(name: str, profile: Any, plugins: Any, outputs: Any, **params: An
     return _start(name, profile, plugins, outputs, **params)
 
 
-def _demo_factory(name: str):
-    def factory(profile: Any, plugins: Any, outputs: Any, **params: Any):
-        from .run import start_demo as _start
+class DemoFactory:
+    """A registered demo (``console.contracts.DemoFactory``): called ``(profile, plugins,
+    outputs, **params)`` it starts the demo (``plugins.demos.run.start_demo``);
+    ``status_lines(snapshot)`` formats a snapshot of it (``plugins.demos.status``)."""
 
-        return _start(name, profile, plugins, outputs, **params)
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.__doc__ = f"Start the {name} demo (``plugins.demos.run.start_demo``)."
 
-    factory.__doc__ = f"Start the {name} demo (``plugins.demos.run.start_demo``)."
-    return factory
+    def __call__(self, profile: Any, plugins: Any, outputs: Any, **params: Any) -> Any:
+        from .run import start_demo
+
+        return start_demo(self.name, profile, plugins, outputs, **params)
+
+    def status_lines(self, snapshot: dict[str, Any]) -> list[str]:
+        from .status import status_lines
+
+        return status_lines(snapshot)
+
+
+def _demo_factory(name: str) -> DemoFactory:
+    return DemoFactory(name)
 
 
 @hookimpl

@@ -187,6 +187,11 @@ class ProcessCamera:
         except (BrokenPipeError, OSError):
             pass  # the child ended: status() says so
 
+    def mm_to_px(self, pos_mm: tuple[float, float]) -> tuple[float, float] | None:
+        """``None``: the table mapping lives with the twin in the child process; this
+        camera's frames are drawn in the demo's own status, never with targets."""
+        return None
+
     def close(self) -> None:
         if self._closed:
             return

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -135,6 +135,12 @@ class DemoRun:
         }
         out.update(demo_state(self.demo))
         return out
+
+    def status_lines(self, snapshot: dict) -> list[str]:
+        """``snapshot`` as the operator reads it (``plugins.demos.status``)."""
+        from .status import status_lines
+
+        return status_lines(snapshot)
 
     def scene_state(self) -> dict | None:
         """The demo's projected scene (``flow_hand`` / ``knob``) as the JSON the projector
@@ -273,8 +279,8 @@ def start_demo(
         if clf is None:
             clf = open_classifier(profile, plugins)
             learn_background(camera, clf)
-        if vision and hasattr(clf, "params"):
-            clf.params = replace(clf.params, **vision)
+        for key, value in (vision or {}).items():  # the console's tuned thresholds
+            clf.set_tunable(key, value)
         still = StillHand(
             still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
         )

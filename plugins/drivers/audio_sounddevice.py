@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 
 from console.bench import summarize_s
-from console.types import BlockSource, DeviceStatus
+from console.contracts import BlockSource
+from console.types import DeviceStatus
 from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from console.errors import UserError
-from console.types import Frame, Gesture
+from console.types import Frame, Gesture, TunableRange
 
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
 from .features import select_dynamic, select_kind, select_static
@@ -71,8 +71,18 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
     }
 
 
+#: The vision thresholds an operator tunes (``VisionParams`` fields) and their ranges:
+#: the profile's bounds above, one step at the bottom (a zero threshold sees noise).
+TUNABLES: dict[str, TunableRange] = {
+    "body_threshold": TunableRange(2.0, 255.0, 2.0),
+    "contact_threshold": TunableRange(2.0, 255.0, 2.0),
+    "highpass_sigma_px": TunableRange(0.5, 100.0, 0.5),
+}
+
+
 class SvmClassifier:
-    """The ``svm`` classifier plugin: ``classify(frames) -> Gesture | None``.
+    """The ``svm`` classifier plugin (a ``console.contracts.Classifier`` and
+    ``TouchCalibrating``): ``classify(frames) -> Gesture | None``.
 
     Needs a trained model (``[gestures] model``) and a background (``set_background``,
     or the first frame given while no hand is seen). Frames beyond the model's window
@@ -80,6 +90,7 @@ class SvmClassifier:
     """
 
     names: tuple[str, ...] = GESTURES
+    views: tuple[str, ...] = ("diff", "highpass", "body")
 
     def __init__(
         self,
@@ -133,11 +144,34 @@ class SvmClassifier:
         )
         return CalibrationSession(targets)
 
+    @property
+    def n_frames(self) -> int:
+        """Frames ``classify`` decides from (0: no trained model)."""
+        return int(self.model.n_frames) if self.model is not None else 0
+
+    def tunables(self) -> dict[str, float]:
+        """The vision thresholds an operator tunes, by name."""
+        return {k: float(getattr(self.params, k)) for k in TUNABLES}
+
+    def tunable_ranges(self) -> dict[str, TunableRange]:
+        return dict(TUNABLES)
+
+    def set_tunable(self, name: str, value: float) -> None:
+        """Change one threshold; the next frame uses it."""
+        rng = TUNABLES.get(name)
+        if rng is None:
+            raise ValueError(f"{name!r} is not tunable: use one of {', '.join(TUNABLES)}")
+        v = float(value)
+        if not rng.min_value <= v <= rng.max_value:
+            raise ValueError(f"{name} = {v:g} is outside {rng.min_value:g}..{rng.max_value:g}")
+        self.params = replace(self.params, **{name: v})
+
     def set_background(self, image: np.ndarray) -> None:
         self.background = Background(image, self.background.alpha)
 
     def process(self, frame: Frame) -> FrameResult:
-        """One frame through the pipeline (the background learns where no hand is)."""
+        """One frame through the pipeline (the background learns where no hand is); the
+        result is a ``console.contracts.VisionResult`` (``view(name)`` of ``views``)."""
         from .vision import check_frame
 
         check_frame(frame.image, self.params.shape)

@@ -13,7 +13,7 @@ the slow ambient drift matches; ``per_sample_background=False`` leaves only the 
 Subjects are ``s1 .. sN``; the last ``left_handed`` of them (default 1, as in the
 paper's five-subject study) use their left hand, the others their right.
 
-``record(camera, out, gesture, subject)`` records from any ``console.types.Camera``
+``record(camera, out, gesture, subject)`` records from any ``console.contracts.Camera``
 into the same format (the twin acts the gesture out when asked).
 """
 
@@ -64,7 +64,7 @@ def _session_t0(subject: int, gesture: int, rep: int) -> float:
 
 def _twin_camera(seed: int, lens_distortion: bool, exposure_ms: float) -> tuple[Any, dict]:
     """The registered ``twin`` camera's factory and the settings it renders with
-    (``console.types.SimulatedCamera``); both pickle, so worker processes build it too."""
+    (``console.contracts.SimulatedCamera``); both pickle, so worker processes build it too."""
     from console.plugins import load_plugins
 
     factory = load_plugins(entrypoints=False).get("camera", "twin").factory

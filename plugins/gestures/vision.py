@@ -91,6 +91,11 @@ class FrameResult:
     #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii)
     extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
 
+    def view(self, name: str) -> np.ndarray | None:
+        """The intermediate image ``name`` (``diff``, ``body``, ``highpass``), or ``None``
+        when this result kept none (``console.contracts.VisionResult``)."""
+        return self.masks.get(name)
+
 
 class Masks(Mapping):
     """A frame's intermediate images: given ones, and ones made on first access from a

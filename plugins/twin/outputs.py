@@ -29,8 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from console.contracts import BlockSource
 from console.realtime import realtime_priority
-from console.types import BlockSource
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
 DEFAULT_BUFFER_PERIODS = 3

@@ -354,6 +354,11 @@ class FlowEffect(_MapUser):
             self._plans[key] = plan
         return plan
 
+    def render_flow(self, a: int, b: int, vmap: Any) -> OutputPlan:
+        """The flow from grid point ``a`` to ``b`` of ``vmap``
+        (``console.contracts.FlowEffect``)."""
+        return self.render(int(a), int(b), vmap=vmap)
+
     def query(
         self,
         active: Any,
@@ -532,6 +537,11 @@ class HandFlowEffect(_MapUser):
             self._plans[key] = plan
         return plan
 
+    def render_hand_flow(self, center_mm: Any, direction: str, vmap: Any) -> OutputPlan:
+        """The flow under a hand at ``center_mm`` toward ``direction`` on ``vmap``, the
+        staged search (``console.contracts.HandFlowEffect``)."""
+        return self.render(center_mm=center_mm, direction=direction, vmap=vmap, screen_stride=3)
+
     def prepare(
         self,
         regions: Iterable = (),
@@ -602,6 +612,11 @@ class PointEffect(_MapUser):
         except (TypeError, ValueError, IndexError):
             return None
         return self._plans.get(k)
+
+    def render_point(self, point: Any, vmap: Any) -> OutputPlan:
+        """The pulse at ``point`` (a grid number or (x, y) mm) of ``vmap``
+        (``console.contracts.PointEffect``)."""
+        return self.render(point=point, vmap=vmap)
 
     def render(
         self, point: Any = None, *, vmap: Any = None, tables: Any = None, name: str = ""

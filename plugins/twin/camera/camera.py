@@ -1,4 +1,4 @@
-"""The streaming camera twin: a ``console.types.Camera`` driven by a script.
+"""The streaming camera twin: a ``console.contracts.Camera`` driven by a script.
 
 Scripts say which hands are where at frame ``k``:
 
@@ -344,6 +344,13 @@ class TwinCamera:
         time and stays until the next target (``None``: hands off the table)."""
         pts = [] if pos_mm is None else [pos_mm]
         self.set_targets(pts, subject, [side] * len(pts), reaction_frames)
+
+    def mm_to_px(self, pos_mm: tuple[float, float]) -> tuple[float, float] | None:
+        """Where the table point ``pos_mm`` shows in this camera's image (pixels; the
+        lens included), as ``console.contracts.TouchableCamera`` asks."""
+        p = np.asarray(self.rig.mapping.mm_to_px(np.asarray([pos_mm], float)), float)
+        x, y = p.reshape(-1, 2)[0]
+        return (float(x), float(y))
 
     def set_targets(
         self,

@@ -1,0 +1,648 @@
+"""What crosses a plugin boundary, typed: the Protocols registered objects satisfy.
+
+``console/hookspecs.py`` says which hooks a plugin implements and what it registers;
+this module says what the registered things *are*. Every registered factory builds an
+object satisfying the Protocol of its kind (``KIND_CONTRACTS``); some objects also offer
+an optional capability (a narrower Protocol). console/ asks for a capability
+(``plugins.provider("effect", PointEffect, profile)``) instead of an effect's name, a
+snapshot's keys or another plugin's internals, and the plugin manager refuses an object
+that lacks a member of its kind's contract with one line naming the plugin, the kind and
+the member (``check``).
+
+Capabilities at a glance (kind: the contract, then the optional capabilities)::
+
+    camera        Camera; TouchableCamera (the operator's finger on a twin),
+                  RendersBackground, SimulatedCamera (acts out GestureScripts)
+    classifier    Classifier (gestures, per-frame vision, tunables, background);
+                  TouchCalibrating (the touch-calibration wizard's session)
+    effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
+                  FlowEffect, HandFlowEffect, Conditions, Presets
+    audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v)
+    relay_board   RelayBoard; SimulatedRelays (the twin: switch log)
+    vibrometer    Vibrometer
+    scene         Scene (its events: e.g. PointsEvent)
+    projector     ProjectorFactory -> ProjectorLauncher
+    demo          DemoFactory -> Demo (with its own status_lines)
+    frame_sink    FrameSinkFactory -> FrameSink
+    panel         PanelFactory -> Panel
+
+Values that cross (frames, gestures, plans ...) are the dataclasses of
+``console.types``; only behaviour is typed here.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Literal, Protocol, TypedDict, runtime_checkable
+
+import numpy as np
+
+from console.types import (
+    Contact,
+    DeviceStatus,
+    Frame,
+    Gesture,
+    GestureScript,
+    Hand,
+    OutputPlan,
+    TunableRange,
+)
+
+PosMm = tuple[float, float]
+
+
+# --------------------------------------------------------------------------- outputs
+@runtime_checkable
+class StreamSource(Protocol):
+    """A live output (e.g. the knob): produces the next block in volts at the actuator.
+
+    ``next_block`` returns ``(piezo_v, screen_v)`` arrays of length ``n`` or ``None``
+    when the stream has finished (after ramping down to zero).
+    """
+
+    patches: frozenset[str]
+    screen: bool
+
+    def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None: ...
+
+    def request_stop(self) -> None: ...
+
+
+@runtime_checkable
+class BlockSource(Protocol):
+    """What an audio output pulls from: the safety gate. Fills ``out`` (frames, 2),
+    float32 sound-card units in [-1, 1]; column 0 = left (piezo), 1 = right (screen)."""
+
+    def fill(self, out: np.ndarray) -> None: ...
+
+    @property
+    def idle(self) -> bool: ...
+
+    def estop(self, reason: str) -> None:
+        """Drivers call this when the device fails (vanished, stream error)."""
+
+
+@runtime_checkable
+class AudioOutput(Protocol):
+    """An audio device (left channel: piezo amplifier, right: screen). It never generates
+    samples itself: ``start(source)`` pulls blocks from ``source.fill`` (the safety gate)
+    until ``stop()``; ``status()`` reports ``latency_s`` and ``underruns``."""
+
+    sample_rate_hz: int
+    block_size: int
+
+    def start(self, source: BlockSource) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class SimulatedAudio(AudioOutput, Protocol):
+    """A simulated sound card (the twin): ``paced`` (True: blocks at the card's rate;
+    False: as fast as the gate fills them, for tests and offline runs) and what it
+    played, in volts at the actuator (``recording_v() -> (n, 2)``)."""
+
+    paced: bool
+
+    def recording_v(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class RelayBoard(Protocol):
+    """A relay board; channels are 1-based. Only the safety gate calls ``set``, and only
+    while both output channels are silent."""
+
+    channels: int
+
+    def set(self, channel: int, closed: bool) -> None: ...
+
+    def states(self) -> tuple[bool, ...]: ...
+
+    def close(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class SimulatedRelays(RelayBoard, Protocol):
+    """A simulated relay board (the twin) keeps ``log``: every switch, in order
+    (records with ``t_s``, ``channel``, ``closed`` and the output level then)."""
+
+    log: list[Any]
+
+
+# --------------------------------------------------------------------------- camera
+@runtime_checkable
+class Camera(Protocol):
+    """A camera: ``read`` returns the next frame (640 x 480 uint8 by default) or ``None``
+    if none is ready; ``status()`` has at least ``fps`` and ``dropped``."""
+
+    def read(self, timeout_s: float = 0.1) -> Frame | None: ...
+
+    def close(self) -> None: ...
+
+    def status(self) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class TouchableCamera(Camera, Protocol):
+    """A camera the operator can touch (a twin): ``set_target(pos_mm)`` puts a fingertip
+    on the table at ``pos_mm`` (``None`` lifts it); ``mm_to_px(pos_mm)`` is where a table
+    point shows in the image (``None`` outside it), for drawing targets on the view."""
+
+    def set_target(self, pos_mm: PosMm | None) -> None: ...
+
+    def mm_to_px(self, pos_mm: PosMm) -> tuple[float, float] | None: ...
+
+
+@runtime_checkable
+class RendersBackground(Camera, Protocol):
+    """A camera that can show its empty table (``background() -> (H, W)`` image) even
+    with hands on it, so the vision learns the background at once."""
+
+    def background(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class SimulatedCamera(RendersBackground, Protocol):
+    """A camera that renders on request (the camera twin).
+
+    ``set_script(GestureScript)`` shows a scripted hand on the live stream from the next
+    frame on; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
+    side=None, subject_seed=None) -> (frames (n, H, W) uint8, truth dict)`` renders one
+    performance offline (dataset synthesis); ``render_background(t_s, rng)`` the empty
+    table at session time ``t_s``; ``mapping`` the table mm <-> px mapping (``to_dict()``).
+    A real camera is none of this: the operator's hand does it.
+    """
+
+    @property
+    def mapping(self) -> Any: ...
+
+    def set_script(self, script: GestureScript) -> None: ...
+
+    def render_sample(
+        self, gesture: str, subject: str, rep: int, rng: np.random.Generator, **kw: Any
+    ) -> tuple[np.ndarray, dict[str, Any]]: ...
+
+    def render_background(self, t_s: float, rng: np.random.Generator) -> np.ndarray: ...
+
+
+# --------------------------------------------------------------------------- vision
+@runtime_checkable
+class VisionResult(Protocol):
+    """What a classifier's vision found in one frame: ``hands``, ``contacts`` (all contact
+    blobs, on a hand or not) and its intermediate images by name (``view(name)``, one of
+    the classifier's ``views``; ``None`` when it has no such image)."""
+
+    hands: tuple[Hand, ...]
+    contacts: tuple[Contact, ...]
+
+    def view(self, name: str) -> np.ndarray | None: ...
+
+
+@runtime_checkable
+class Classifier(Protocol):
+    """A gesture classifier with its per-frame vision.
+
+    - ``names``: the gestures it knows; ``classify(frames) -> Gesture | None`` decides
+      from the first ``n_frames`` frames (``n_frames == 0``: no trained model, it names
+      nothing).
+    - ``process(frame) -> VisionResult``: one frame through the vision (stamps
+      ``vision`` on the frame); ``views``: the names its results' ``view`` knows.
+    - ``to_mm``: camera px -> table mm, ``(n, 2) -> (n, 2)``, or ``None`` (positions stay
+      in pixels; the console may set a fallback).
+    - ``set_background(image)``: the empty table, learnt at once.
+    - tunables (the Camera screen's thresholds): ``tunables() -> {name: value}``,
+      ``tunable_ranges() -> {name: TunableRange}``, ``set_tunable(name, value)`` (the
+      next frame uses it; a name it has not or a value out of range is a ``ValueError``).
+    """
+
+    names: tuple[str, ...]
+    views: tuple[str, ...]
+    to_mm: Callable[[np.ndarray], np.ndarray] | None
+
+    @property
+    def n_frames(self) -> int: ...
+
+    def classify(self, frames: list[Frame]) -> Gesture | None: ...
+
+    def process(self, frame: Frame) -> VisionResult: ...
+
+    def set_background(self, image: np.ndarray) -> None: ...
+
+    def tunables(self) -> dict[str, float]: ...
+
+    def tunable_ranges(self) -> dict[str, TunableRange]: ...
+
+    def set_tunable(self, name: str, value: float) -> None: ...
+
+
+@runtime_checkable
+class CalibrationResult(Protocol):
+    """A finished touch calibration: ``report()`` has ``pairs``, ``rms_mm``, ``max_mm``,
+    ``loo_rms_mm``, ``outliers``; ``save(path)`` writes the file ``[vision] calibration``
+    names."""
+
+    def report(self) -> dict[str, Any]: ...
+
+    def save(self, path: Any) -> Any: ...
+
+
+@runtime_checkable
+class TouchCalibrationSession(Protocol):
+    """The wizard's session (camera px -> table mm): ``targets_mm`` (N x 2);
+    ``next_target() -> (index, (x, y) mm) | None``; ``feed(contacts) -> event`` for each
+    frame's contacts (``"recorded"``, ``"lifted"``, ``"done"``, or a waiting state);
+    ``skip()``; ``index``; ``state`` (``"done"`` at the end); ``progress() -> (touched,
+    total)``; ``finish() -> CalibrationResult``."""
+
+    targets_mm: np.ndarray
+    index: int
+    state: str
+
+    def next_target(self) -> tuple[int, PosMm] | None: ...
+
+    def feed(self, contacts: Sequence[Contact]) -> str: ...
+
+    def skip(self) -> None: ...
+
+    def progress(self) -> tuple[int, int]: ...
+
+    def finish(self) -> CalibrationResult: ...
+
+
+@runtime_checkable
+class TouchCalibrating(Protocol):
+    """A classifier offering the touch-calibration wizard (the console says so when none
+    does): ``touch_calibration(profile) -> TouchCalibrationSession``."""
+
+    def touch_calibration(self, profile: Any) -> TouchCalibrationSession: ...
+
+
+# --------------------------------------------------------------------------- effects
+@runtime_checkable
+class Effect(Protocol):
+    """An effect renderer: ``render(**request) -> OutputPlan``, a finite stimulus in volts
+    at the actuator (the safety gate refuses any plan out of limits). The keywords are
+    the effect's own (its registration's description names them)."""
+
+    def render(self, **request: Any) -> OutputPlan: ...
+
+
+@runtime_checkable
+class StreamingEffect(Effect, Protocol):
+    """An effect that also plays live: ``stream(**request) -> StreamSource``."""
+
+    def stream(self, **request: Any) -> StreamSource: ...
+
+
+@runtime_checkable
+class TableEffect(Effect, Protocol):
+    """The excitation lookup tables of a vibration map (paper Fig. 8).
+
+    ``tables(vmap=, progress=None)`` builds (or loads) them; ``progress(fraction,
+    message)`` is called between build steps and may raise to cancel the build.
+    ``query(active, passive, vmap=) -> dict`` gives a pair's entry
+    (``max_difference_um_per_v``, ``frequency_hz``, ``actuator``)."""
+
+    def tables(
+        self, vmap: Any = None, *, progress: Callable[[float, str], None] | None = None
+    ) -> Any: ...
+
+    def query(self, active: int, passive: int, *, vmap: Any = None) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class MapImporter(Protocol):
+    """``import_map(files) -> VibrationMap``: a map from measurement files, one per
+    excitation (e.g. UFF 58 ``{"PA": "pa.uff"}``)."""
+
+    def import_map(self, files: Mapping[str, Any]) -> Any: ...
+
+
+@runtime_checkable
+class PointEffect(Effect, Protocol):
+    """A localized pulse at one grid point (or ``(x, y)`` mm) of the map ``vmap``."""
+
+    def render_point(self, point: Any, vmap: Any) -> OutputPlan: ...
+
+
+@runtime_checkable
+class FlowEffect(Effect, Protocol):
+    """A flow from grid point ``a`` to grid point ``b`` of the map ``vmap`` (Fig. 9)."""
+
+    def render_flow(self, a: int, b: int, vmap: Any) -> OutputPlan: ...
+
+
+@runtime_checkable
+class HandFlowEffect(Effect, Protocol):
+    """A flow under a hand centred at ``center_mm`` in ``direction`` (a key of
+    ``console.types.DIRECTIONS_MM``) on the map ``vmap``."""
+
+    def render_hand_flow(self, center_mm: PosMm, direction: str, vmap: Any) -> OutputPlan: ...
+
+
+@runtime_checkable
+class Conditions(Effect, Protocol):
+    """The named conditions ``render(condition=)`` (and ``stream``) take, in order."""
+
+    conditions: tuple[str, ...]
+
+
+@runtime_checkable
+class Presets(Effect, Protocol):
+    """Named settings an operator may audition: ``render`` keywords (``vpp``,
+    ``freq_hz``, ``waveform`` ...) plus ``help``."""
+
+    presets: dict[str, dict[str, Any]]
+
+
+# --------------------------------------------------------------------------- scenes
+class PointsEvent(TypedDict):
+    """The event telling a grid scene the map's own points: ``{"type": "points", "ids":
+    [n, ...], "points_mm": [[x, y], ...]}`` (the ids the map numbers, where they are)."""
+
+    type: Literal["points"]
+    ids: list[int]
+    points_mm: list[list[float]]
+
+
+def points_event(ids: Sequence[int], points_mm: Any) -> PointsEvent:
+    """A ``PointsEvent`` from ids and an (n, 2) array of millimetres."""
+    pts = np.asarray(points_mm, dtype=float).reshape(-1, 2)
+    return {"type": "points", "ids": [int(i) for i in ids], "points_mm": pts.tolist()}
+
+
+@runtime_checkable
+class Scene(Protocol):
+    """A projected scene: ``needs`` (what the runtime must prepare: e.g. ``{"tables":
+    [...points] | "map", "flow_regions": [...], "knob": True, "contacts": True}``),
+    ``update(event: dict)`` (``set`` events overwrite fields; a ``PointsEvent``; the
+    scene's own events) and ``state() -> dict`` (the JSON the projector draws)."""
+
+    @property
+    def needs(self) -> dict[str, Any]: ...
+
+    def update(self, event: dict[str, Any]) -> None: ...
+
+    def state(self) -> dict[str, Any]: ...
+
+
+# --------------------------------------------------------------------------- projector
+@runtime_checkable
+class ProjectorLauncher(Protocol):
+    """How to start a projector process (``console.runtime.projector.supervisor.
+    ProjectorLaunch``): ``argv``, a command line serving the projector link, and its
+    ``environment()`` (``None``: the console's own)."""
+
+    argv: Sequence[str]
+
+    def environment(self) -> dict[str, str] | None: ...
+
+
+@runtime_checkable
+class ProjectorFactory(Protocol):
+    """``factory(profile, *, socket_path, headless=False, extra=()) ->
+    ProjectorLauncher``: the projector serving ``socket_path``."""
+
+    def __call__(
+        self, profile: Any, *, socket_path: Any, headless: bool = False, extra: Any = ()
+    ) -> ProjectorLauncher: ...
+
+
+# --------------------------------------------------------------------------- demos
+@runtime_checkable
+class Demo(Protocol):
+    """A running demo: ``stop()`` (safe twice), ``snapshot() -> dict`` (camera, latency,
+    watchdog and demo state as JSON values), ``scene_name`` (the scene to project),
+    ``camera`` (a ``TouchableCamera`` when the operator can touch it) and
+    ``status_lines(snapshot) -> list[str]``: what the operator reads of a snapshot
+    (Textual markup), so the console never decodes a demo's keys."""
+
+    @property
+    def scene_name(self) -> str: ...
+
+    @property
+    def camera(self) -> Any: ...
+
+    def stop(self) -> None: ...
+
+    def snapshot(self) -> dict[str, Any]: ...
+
+    def status_lines(self, snapshot: dict[str, Any]) -> list[str]: ...
+
+
+@runtime_checkable
+class DemoFactory(Protocol):
+    """How a demo is registered: called ``(profile, plugins, outputs, **params)`` it
+    starts one (``Demo``); ``status_lines(snapshot)`` formats a snapshot without a running
+    demo (the console's process holds only the snapshots of a demo run elsewhere).
+    A snapshot's ``hand`` (what the camera saw: ``hands``, ``contacts``, ``gesture``,
+    ``rest_mm``), when present, is shown too."""
+
+    def __call__(self, profile: Any, plugins: Any, outputs: Any, **params: Any) -> Demo: ...
+
+    def status_lines(self, snapshot: dict[str, Any]) -> list[str]: ...
+
+
+# --------------------------------------------------------------------------- others
+@runtime_checkable
+class Vibrometer(Protocol):
+    """A vibration-map measurement device: ``measure(progress=None) -> dict`` whose items
+    are the arguments of ``console.vibration_map.make_map`` plus ``meta``;
+    ``progress(done, total)`` may raise (an operator's cancel) to stop it."""
+
+    def measure(self, progress: Callable[[int, int], None] | None = None) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class FrameSink(Protocol):
+    """Fed ``sink(frame, work)`` after the frame loop's stages (``work``: ``contacts``,
+    ``hands``, ``gesture`` ...), untimed; ``close()`` when the run ends."""
+
+    def __call__(self, frame: Frame, work: dict[str, Any]) -> None: ...
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class FrameSinkFactory(Protocol):
+    """``factory(profile, *, force=False) -> FrameSink | None`` (``None``: the profile
+    leaves it off; ``force`` opens it anyway)."""
+
+    def __call__(self, profile: Any, *, force: bool = False) -> FrameSink | None: ...
+
+
+@runtime_checkable
+class Panel(Protocol):
+    """A console panel: a Textual ``Screen`` (anything with ``compose``)."""
+
+    def compose(self) -> Any: ...
+
+
+@runtime_checkable
+class PanelFactory(Protocol):
+    """``factory(app) -> Panel``: built with the running app, not a profile."""
+
+    def __call__(self, app: Any) -> Panel: ...
+
+
+@runtime_checkable
+class Prober(Protocol):
+    """A registration's ``probe(profile) -> DeviceStatus`` (``haptable doctor``)."""
+
+    def __call__(self, profile: Any) -> DeviceStatus: ...
+
+
+#: The contract of what each kind's factory builds (``plugins.Plugins.build`` checks it).
+KIND_CONTRACTS: dict[str, type] = {
+    "camera": Camera,
+    "classifier": Classifier,
+    "effect": Effect,
+    "audio_output": AudioOutput,
+    "relay_board": RelayBoard,
+    "vibrometer": Vibrometer,
+    "scene": Scene,
+    "projector": ProjectorLauncher,
+    "demo": Demo,
+    "frame_sink": FrameSink,
+    "panel": Panel,
+}
+
+#: The contract of the factory itself, for kinds whose factory is not ``f(profile)``.
+FACTORY_CONTRACTS: dict[str, type] = {
+    "projector": ProjectorFactory,
+    "demo": DemoFactory,
+    "frame_sink": FrameSinkFactory,
+    "panel": PanelFactory,
+}
+
+
+# --------------------------------------------------------------------------- checking
+def members(proto: type) -> tuple[str, ...]:
+    """The members a Protocol asks for (its own and its Protocol bases'), sorted."""
+    names: set[str] = set()
+    for base in proto.__mro__:
+        if base in (object, Protocol) or not getattr(base, "_is_protocol", False):
+            continue
+        names.update(getattr(base, "__annotations__", {}))
+        for name, value in vars(base).items():
+            if name == "__call__" or (
+                not name.startswith("_") and (callable(value) or isinstance(value, property))
+            ):
+                names.add(name)
+    return tuple(sorted(names))
+
+
+def missing(obj: Any, proto: type) -> list[str]:
+    """The members of ``proto`` that ``obj`` lacks (a class is checked for its methods
+    and class attributes only: instance attributes appear when it is built)."""
+    out = []
+    for name in members(proto):
+        if name == "__call__":
+            if not callable(obj):
+                out.append("__call__")
+            continue
+        if inspect.isclass(obj) and _is_data(proto, name):
+            continue
+        try:
+            getattr(obj, name)
+        except AttributeError:
+            out.append(name)
+        except Exception:  # a property that fails before the object is set up is there
+            pass
+    return out
+
+
+def _is_data(proto: type, name: str) -> bool:
+    for base in proto.__mro__:
+        if name in vars(base):
+            return isinstance(vars(base)[name], property)
+        if name in getattr(base, "__annotations__", {}):
+            return True
+    return False
+
+
+def _proto_method(proto: type, name: str) -> Any:
+    for base in proto.__mro__:
+        v = vars(base).get(name)
+        if v is not None and callable(v) and not isinstance(v, property):
+            return v
+    return None
+
+
+def signature_problems(obj: Any, proto: type) -> list[str]:
+    """Methods of ``obj`` that cannot be called as ``proto`` calls them: a parameter the
+    Protocol passes that the method does not take, or one the method requires that the
+    Protocol does not pass. ``**kw`` in the Protocol means "the object's own keywords"."""
+    out = []
+    for name in members(proto):
+        want = _proto_method(proto, name)
+        if want is None:
+            continue
+        have = obj if name == "__call__" else getattr(obj, name, None)
+        if have is None or not callable(have):
+            continue
+        try:
+            got = inspect.signature(have)
+            exp = inspect.signature(want)
+        except (TypeError, ValueError):
+            continue
+        exp_params = list(exp.parameters.values())[1:]  # self
+        if inspect.isclass(obj) and name != "__call__":
+            got_params = list(got.parameters.values())[1:]
+        else:
+            got_params = list(got.parameters.values())
+        why = _mismatch(exp_params, got_params)
+        if why:
+            out.append(f"{name}{got} {why}")
+    return out
+
+
+def _mismatch(exp: list[inspect.Parameter], got: list[inspect.Parameter]) -> str:
+    P = inspect.Parameter
+    positional = [p for p in got if p.kind in (P.POSITIONAL_ONLY, P.POSITIONAL_OR_KEYWORD)]
+    var_pos = any(p.kind is P.VAR_POSITIONAL for p in got)
+    var_kw = any(p.kind is P.VAR_KEYWORD for p in got)
+    by_name = {p.name: p for p in got if p.kind in (P.POSITIONAL_OR_KEYWORD, P.KEYWORD_ONLY)}
+    passed: set[str] = set()
+    n_pos = 0
+    for p in exp:
+        if p.kind in (P.POSITIONAL_ONLY, P.POSITIONAL_OR_KEYWORD):
+            if n_pos < len(positional):
+                passed.add(positional[n_pos].name)
+            elif not var_pos:
+                return f"does not take {p.name!r} (argument {n_pos + 1})"
+            n_pos += 1
+        elif p.kind is P.KEYWORD_ONLY:
+            if p.name in by_name:
+                passed.add(p.name)
+            elif not var_kw:
+                return f"does not take the keyword {p.name!r}"
+    exp_var_kw = any(p.kind is P.VAR_KEYWORD for p in exp)
+    for p in got:
+        required = p.default is P.empty and p.kind in (
+            P.POSITIONAL_ONLY,
+            P.POSITIONAL_OR_KEYWORD,
+            P.KEYWORD_ONLY,
+        )
+        if required and p.name not in passed and not exp_var_kw:
+            return f"requires {p.name!r}, which the contract does not pass"
+    return ""
+
+
+def problems(obj: Any, proto: type) -> list[str]:
+    """Everything that keeps ``obj`` from satisfying ``proto``: missing members first,
+    then methods with the wrong signature."""
+    lacking = missing(obj, proto)
+    if lacking:
+        return [f"no {m}" for m in lacking]
+    return signature_problems(obj, proto)
+
+
+def satisfies(obj: Any, proto: type) -> bool:
+    """``obj`` has every member of ``proto``, each method callable as the contract says."""
+    return not problems(obj, proto)

@@ -1,0 +1,103 @@
+"""What the operator reads of a demo: its snapshot as status lines (Textual markup).
+
+The console shows these lines and never decodes the snapshot's keys itself
+(``console.contracts.Demo.status_lines``); the demo process and the console's process
+format the same snapshot the same way.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+#: The latency stages shown, as (monitor key, label), in the order a frame passes them.
+DEMO_STAGES = (
+    ("capture_to_arrival", "capture"),
+    ("vision", "vision"),
+    ("classify", "classify"),
+    ("scene", "scene"),
+    ("effect", "effect"),
+    ("scheduled", "output"),
+    ("end_to_end", "end to end"),
+)
+
+
+def _ms(v: Any) -> str:
+    if v is None or v != v:
+        return "-"
+    return f"{v:.1f}" if v < 10 else f"{v:.0f}"
+
+
+def status_lines(snap: dict[str, Any]) -> list[str]:
+    """A demo snapshot (``DemoRun.snapshot()``, with ``hand``: what its camera last saw,
+    when the host adds it) as lines: state, watchdog and camera; latency per stage; the
+    hand; the flow's last stimulus (or a newer refusal) or the knob's state; an error."""
+    name = snap.get("demo", "?")
+    wd = snap.get("watchdog", {})
+    if wd.get("tripped"):
+        dog = f"[red]watchdog tripped: {wd.get('reason') or 'loop stalled'}[/]"
+    else:
+        dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
+    cam = snap.get("camera", {})
+    lat = snap.get("latency") or {}
+    state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
+    lines = [
+        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.0f} s  {dog}  camera "
+        f"{cam.get('fps', 0):.0f} fps, dropped {cam.get('dropped', 0)} (camera) + "
+        f"{lat.get('dropped_queue', 0)} (queue)"
+    ]
+    stages = dict(lat.get("stages", {}))
+    stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}
+    stages["end_to_end"] = lat.get("end_to_end") or {}
+    parts = [
+        f"{label} {_ms(stages[key].get('p50_ms'))}/{_ms(stages[key].get('p99_ms'))}"
+        for key, label in DEMO_STAGES
+        if key in stages
+    ]
+    lines.append("latency p50/p99 ms: " + "  ".join(parts))
+    hand = snap.get("hand")
+    if hand is not None:
+        lines.append(_hand_line(hand))
+    if "flow" in snap:
+        lines.append(_flow_text(snap["flow"]))
+    if "knob" in snap:
+        k = snap["knob"]
+        lines.append(
+            f"knob {k.get('condition')}: item {k.get('item')}, angle "
+            f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
+            f", {k.get('crossings', 0)} crossings"
+        )
+    if snap.get("last_error"):
+        lines.append(f"[red]{snap['last_error']}[/]")
+    return lines
+
+
+def _hand_line(hand: dict[str, Any]) -> str:
+    if not hand.get("hands"):
+        return "no hand on the table"
+    rest = hand.get("rest_mm")
+    seen = (
+        f"hand resting at {rest[0]:.0f},{rest[1]:.0f} mm"
+        if rest is not None
+        else "hand seen (moving)"
+    )
+    seen += f", {hand.get('contacts', 0)} contacts"
+    if hand.get("gesture"):
+        seen += f", gesture {hand['gesture']}"
+    return seen
+
+
+def _flow_text(f: dict[str, Any]) -> str:
+    text = f"flow {f.get('direction')}: {f.get('flows', 0)} played"
+    last = [e for e in f.get("last", []) if e.get("parts")]
+    if last:
+        e = last[-1]
+        at = e.get("center_mm") or e.get("from_mm")
+        where = f" at {at[0]:.0f},{at[1]:.0f} mm" if at else ""
+        pts = " + ".join(f"{p['actuator']} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", []))
+        text += f"; last{where}: {pts}"
+        if e.get("late_s"):  # its plan was computed first (not prepared)
+            text += f" (planned in {e['late_s'] * 1e3:.0f} ms)"
+    newest = (f.get("last") or [None])[-1]
+    if newest is not None and not newest.get("parts"):  # a refusal or no flow there
+        text += f"\n[yellow]{newest.get('kind')}: {newest.get('reason', '')}[/]"
+    return text
