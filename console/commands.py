@@ -55,8 +55,8 @@ def configure_doctor(p: argparse.ArgumentParser) -> None:
 def run_doctor(args, ctx) -> int:
     statuses = [
         *diagnose(ctx.profile, ctx.pm),
-        realtime_status(ctx.profile),
-        scheduling_status(ctx.profile),
+        realtime_status(ctx.profile, ctx.pm),
+        scheduling_status(ctx.profile, ctx.pm),
     ]
     bad = [s for s in statuses if s.state in ("missing", "error")]
     if args.json:
@@ -191,7 +191,7 @@ def run_estop(args, ctx) -> int:
     th = threading.Thread(target=tell_console, daemon=True)
     th.start()
     # the processes first: `haptable estop` did it before loading the plugins (cli.main)
-    early = getattr(ctx, "estop_first", None)
+    early = ctx.estop_first
     reached, refused = early if early is not None else estop_or_refusal(args.timeout)
     th.join(args.timeout + 0.5)
     relays = _open_relays_here(ctx)

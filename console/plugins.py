@@ -48,6 +48,14 @@ BUILTIN_PLUGINS: dict[str, str] = {
 #: The console's own screens, registered beside the core plugin as ``core.panels``.
 CORE_PANELS = "console.tui.core_panels"
 
+#: The profile section whose ``driver`` picks each device kind.
+DRIVER_SECTIONS: dict[str, str] = {
+    "camera": "camera",
+    "audio_output": "audio",
+    "relay_board": "relays",
+    "vibrometer": "vibrometer",
+}
+
 #: Registration kinds and the hook that fills each.
 KINDS: dict[str, str] = {
     "camera": "haptable_register_cameras",
@@ -130,6 +138,17 @@ class Plugins:
 
     def plugin_names(self) -> list[str]:
         return sorted(n for n, p in self.pm.list_name_plugin() if n and p is not None)
+
+    def simulated(self, kind: str, profile: Any) -> bool:
+        """Whether the profile's driver of ``kind`` is a simulation (the twin): its
+        registration's probe says ``"simulated"``, without opening it."""
+        reg = self.of(kind).get(profile.get(f"{DRIVER_SECTIONS[kind]}.driver"))
+        if reg is None or reg.probe is None:
+            return False
+        try:
+            return reg.probe(profile).state == "simulated"
+        except Exception:  # a probe that fails says nothing is simulated
+            return False
 
     # ------------------------------------------------------------ capabilities
     def build(self, kind: str, name: str, profile: Any) -> Any:

@@ -27,6 +27,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from console.contracts import TouchableCamera
 from console.realtime import SUPPORT_PRIORITY, realtime_priority
 
 #: status lines per second
@@ -48,7 +51,7 @@ class HandWatch:
         self.state = {
             "hands": len(hands),
             "contacts": len(work.get("contacts") or ()),
-            "gesture": getattr(g, "name", None) if g is not None else self.state["gesture"],
+            "gesture": g.name if g is not None else self.state["gesture"],
             "rest_mm": None if rest is None else (float(rest[0]), float(rest[1])),
         }
 
@@ -66,7 +69,7 @@ def wait_silent(outputs, timeout_s: float = 10.0) -> bool:
 
 
 def _jsonable(o: Any) -> Any:
-    if hasattr(o, "tolist"):
+    if isinstance(o, np.ndarray | np.generic):
         return o.tolist()
     if isinstance(o, (set, frozenset, tuple)):
         return list(o)
@@ -124,8 +127,8 @@ class Host:
         elif cmd == "estop":
             self.estop(str(msg.get("reason") or "e-stop"))
         elif cmd == "target":
-            cam = getattr(self.run, "camera", None)
-            if callable(getattr(cam, "set_target", None)):
+            cam = self.run.camera if self.run is not None else None
+            if isinstance(cam, TouchableCamera):
                 pos = msg.get("pos_mm")
                 cam.set_target(None if pos is None else (float(pos[0]), float(pos[1])))
 
@@ -185,7 +188,7 @@ class Host:
                 "started",
                 {
                     "scene_name": self.run.scene_name,
-                    "touchable": callable(getattr(cam, "set_target", None)),
+                    "touchable": isinstance(cam, TouchableCamera),
                     "pid": os.getpid(),
                 },
             )

@@ -50,7 +50,7 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
     return out
 
 
-def realtime_status(profile) -> DeviceStatus:
+def realtime_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread can keep its memory in RAM (``[audio] lock_memory``)."""
     from console.runtime.memory_lock import HOW_TO_ALLOW, _may_lock
 
@@ -59,7 +59,7 @@ def realtime_status(profile) -> DeviceStatus:
     ok, why = _may_lock()
     if ok:
         return DeviceStatus("realtime", "memory", "ok", f"can be locked in RAM ({why})")
-    twin = profile.get("audio.driver") == "twin"
+    twin = plugins.simulated("audio_output", profile)
     return DeviceStatus(
         "realtime",
         "memory",
@@ -70,13 +70,13 @@ def realtime_status(profile) -> DeviceStatus:
     )
 
 
-def scheduling_status(profile) -> DeviceStatus:
+def scheduling_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread and a demo's frame loop can run with real-time priority."""
     from console.realtime import HOW_TO_ALLOW, may_use_realtime
 
     if may_use_realtime():
         return DeviceStatus("realtime", "scheduling", "ok", "real-time (FIFO) priority allowed")
-    twin = profile.get("audio.driver") == "twin"
+    twin = plugins.simulated("audio_output", profile)
     return DeviceStatus(
         "realtime",
         "scheduling",

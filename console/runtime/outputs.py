@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import StreamSource
+from console.contracts import SimulatedAudio, SimulatedRelays, StreamSource
 from console.errors import SafetyRefusal, UserError
 from console.runtime.outputs_registry import register_outputs
 from console.runtime.scheduler import PlayReport, Scheduler
@@ -26,13 +26,15 @@ log = logging.getLogger("haptable.outputs")
 class Outputs:
     """Play plans and streams, switch relays, e-stop. Always through the gate."""
 
+    registration = None  # until the outputs are registered (``haptable estop``)
+
     def __init__(self, profile, plugins, *, fast: bool | None = None):
         self.profile = profile
         self.limits = Limits.from_profile(profile)
         audio_reg = plugins.get("audio_output", profile.get("audio.driver"))
         relay_reg = plugins.get("relay_board", profile.get("relays.driver"))
         try:
-            board = relay_reg.factory(profile)
+            board = plugins.build("relay_board", relay_reg.name, profile)
         except UserError:
             raise
         except Exception as exc:
@@ -41,7 +43,7 @@ class Outputs:
                 f"run `haptable doctor` for the fix"
             ) from None
         try:
-            audio = audio_reg.factory(profile)
+            audio = plugins.build("audio_output", audio_reg.name, profile)
         except UserError:
             board.close()
             raise
@@ -51,7 +53,8 @@ class Outputs:
                 f"audio output {audio_reg.name!r} failed to open: {exc}; "
                 f"run `haptable doctor` for the fix"
             ) from None
-        if fast is not None and hasattr(audio, "paced"):
+        simulated = isinstance(audio, SimulatedAudio)
+        if fast is not None and simulated:
             audio.paced = not fast
         self._audio = audio
         self._board = board
@@ -81,7 +84,7 @@ class Outputs:
         self.gate.latency_samples = max(
             int(audio.block_size), int(round(lat * self.limits.sample_rate_hz))
         )
-        paced = getattr(audio, "paced", True)
+        paced = audio.paced if simulated else True
         if paced:  # the audio thread must get the GIL in time
             want_s = float(profile.get("audio.switch_interval_ms")) * 1e-3
             if sys.getswitchinterval() > want_s:
@@ -139,11 +142,12 @@ class Outputs:
     # ------------------------------------------------------------------ twin recordings
     def recording(self) -> np.ndarray | None:
         """What the twin amplifiers received, (n, 2) volts; ``None`` on real hardware."""
-        fn = getattr(self._audio, "recording_v", None)
-        return fn() if fn else None
+        audio = self._audio
+        return audio.recording_v() if isinstance(audio, SimulatedAudio) else None
 
     def relay_log(self) -> list | None:
-        return getattr(self._board, "log", None)
+        """Every relay switch of the twin's board, in order; ``None`` on real hardware."""
+        return self._board.log if isinstance(self._board, SimulatedRelays) else None
 
     def status(self) -> dict[str, Any]:
         return {
@@ -167,7 +171,7 @@ class Outputs:
                 self._audio.stop()
             finally:
                 self.scheduler.close()
-                if getattr(self, "registration", None) is not None:
+                if self.registration is not None:
                     self.registration.close()
                 try:
                     self._board.close()

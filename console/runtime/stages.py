@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from console.contracts import Classifier, RendersBackground
 from console.errors import UserError
 from console.types import Frame, Gesture, Hand
 
@@ -42,11 +43,16 @@ def corners_homography(
     return to_mm
 
 
-def fallback_to_mm(profile: Any):
-    """Without a touch calibration: the twin camera's glass corners from the profile
-    (``[twin_camera] corners_px``), else ``None`` (positions stay in pixels)."""
+def fallback_to_mm(profile: Any, plugins: Any = None):
+    """Without a touch calibration: a simulated camera's glass corners from the profile
+    (``[twin_camera] corners_px``), else ``None`` (positions stay in pixels). Whether the
+    camera is simulated is its registration's to say (``plugins.simulated``)."""
     corners = profile.get("twin_camera.corners_px")
-    if profile.get("camera.driver") != "twin" or not corners:
+    if plugins is None:
+        from console.plugins import load_plugins
+
+        plugins = load_plugins()
+    if not corners or not plugins.simulated("camera", profile):
         return None
     w, h = float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))
     sx = float(profile.get("camera.width_px", 640)) / 640.0
@@ -54,17 +60,13 @@ def fallback_to_mm(profile: Any):
     return corners_homography(list(corners), (w, h), (sx, sy))
 
 
-def open_classifier(profile: Any, plugins: Any):
-    """The profile's classifier; it must offer ``process(frame)`` (the vision pipeline)."""
-    reg = plugins.get("classifier", profile.get("gestures.classifier") or "svm")
-    clf = reg.factory(profile)
-    if not callable(getattr(clf, "process", None)):
-        raise UserError(
-            f"[gestures] classifier = {reg.name!r} has no per-frame vision (process(frame)); "
-            "the demos need one: use 'svm'"
-        )
-    if getattr(clf, "to_mm", "absent") is None:
-        clf.to_mm = fallback_to_mm(profile)
+def open_classifier(profile: Any, plugins: Any) -> Classifier:
+    """The profile's classifier, checked against ``console.contracts.Classifier`` (its
+    per-frame vision included); positions in mm through ``fallback_to_mm`` when it has
+    no calibration of its own."""
+    clf = plugins.build("classifier", profile.get("gestures.classifier") or "svm", profile)
+    if clf.to_mm is None:
+        clf.to_mm = fallback_to_mm(profile, plugins)
     return clf
 
 
@@ -161,9 +163,8 @@ class GestureStage:
             self._named = False
         else:
             self.window.append(frame)
-            model = getattr(self.clf, "model", None)
-            n = getattr(model, "n_frames", 0) if model is not None else 0
-            if model is not None and not self._named and len(self.window) >= max(n, 1):
+            n = self.clf.n_frames  # 0: no trained model
+            if n > 0 and not self._named and len(self.window) >= n:
                 self._named = True
                 named = self.clf.classify(list(self.window))
                 if named is not None:
@@ -177,7 +178,7 @@ def open_camera(profile: Any, plugins: Any) -> Any:
     """The profile's camera (``[camera] driver``), opened through its registration."""
     reg = plugins.get("camera", profile.get("camera.driver"))
     try:
-        return reg.factory(profile)
+        return plugins.build("camera", reg.name, profile)
     except UserError:
         raise
     except Exception as exc:
@@ -188,9 +189,8 @@ def open_camera(profile: Any, plugins: Any) -> Any:
 
 def learn_background(camera: Any, classifier: Any) -> None:
     """Give the classifier the empty table (the twin can render it with hands on it)."""
-    bg = getattr(camera, "background", None)
-    if callable(bg) and callable(getattr(classifier, "set_background", None)):
-        classifier.set_background(bg())
+    if isinstance(camera, RendersBackground):
+        classifier.set_background(camera.background())
 
 
 def base_stages(classifier: Any, gestures: GestureStage | None = None) -> list:

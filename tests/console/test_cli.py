@@ -25,7 +25,7 @@ def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins)
 
     monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
     prof = load_profile("haptable-lab", plugins)
-    st = doctor.realtime_status(prof)
+    st = doctor.realtime_status(prof, plugins)
     assert st.state == "missing" and "8192 kB" in st.why and "memlock unlimited" in st.fix
 
 
@@ -36,9 +36,9 @@ def test_doctor_names_the_realtime_fix_for_a_sound_card(monkeypatch, plugins):
 
     monkeypatch.setattr(realtime, "realtime_priority", lambda above_min=10: False)
     prof = load_profile("haptable-lab", plugins)
-    st = doctor.scheduling_status(prof)
+    st = doctor.scheduling_status(prof, plugins)
     assert st.state == "missing" and "rtprio 95" in st.fix
-    assert doctor.scheduling_status(load_profile("sim", plugins)).state == "ok"
+    assert doctor.scheduling_status(load_profile("sim", plugins), plugins).state == "ok"
 
 
 def test_doctor_on_lab_profile_says_what_is_missing_and_the_fix(capsys):

@@ -108,8 +108,7 @@ def test_no_fallback_mapping_off_the_twin(profile):
 class FakeModelClassifier:
     """A classifier with a trained model: names a gesture from a window of frames."""
 
-    class model:  # noqa: N801
-        n_frames = 3
+    n_frames = 3  # the trained model's window
 
     def __init__(self) -> None:
         self.calls: list[int] = []
