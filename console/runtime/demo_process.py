@@ -2,7 +2,8 @@
 
 ``DemoProcess(profile, name, ...)`` spawns the host; ``wait_started`` follows its
 preparation; ``snapshot()`` is the newest status it sent (the demo's latency, watchdog,
-state, plus its outputs and what its camera saw); ``stop``/``estop``/``set_target`` send
+state, plus its outputs and what its camera saw), ``status_lines(snapshot)`` what the
+operator reads of one (the demo plugin formats it); ``stop``/``estop``/``set_target`` send
 commands. The process owns the profile's outputs while it runs: the console hands its own
 over first (a sound card or relay board opens once) and takes them back after.
 """
@@ -39,8 +40,10 @@ class DemoProcess:
         params: dict | None = None,
         on_scene: Callable[[dict], Any] | None = None,
         twin_log: str | os.PathLike | None = None,
+        plugins: Any = None,
     ) -> None:
         self.name = name
+        self._plugins = plugins  # whose demo registration formats the snapshots
         self.on_scene = on_scene
         self.scene_name: str | None = None
         self.touchable = False
@@ -234,6 +237,16 @@ class DemoProcess:
                 if self.error:
                     snap["last_error"] = self.error
         return snap
+
+    def status_lines(self, snapshot: dict) -> list[str]:
+        """``snapshot`` as the operator reads it: the demo registration's own
+        ``status_lines`` (``console.contracts.DemoFactory``), here in the console's
+        process (the run's last snapshot stays readable after the process ended)."""
+        if self._plugins is None:
+            from console.plugins import load_plugins
+
+            self._plugins = load_plugins()
+        return list(self._plugins.get("demo", self.name).factory.status_lines(snapshot))
 
     def outputs_status(self) -> dict | None:
         """The demo's outputs (gate, audio, busy) as its last status said."""

@@ -57,6 +57,9 @@ def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
     assert run.proc.returncode == 0 and run.exit_reason == "stopped"
     final = run.final["final"]
     assert final["running"] is False
+    lines = run.status_lines(run.snapshot())  # the demo plugin's words, here
+    assert lines[0].startswith("[b]knob[/b] [yellow]loop stopped")
+    assert any(line.startswith("knob HD+CF: item") for line in lines)
     assert final["outputs"]["gate"]["level_v"] == [0.0, 0.0]
     assert final["outputs"]["gate"]["relays_closed"] == []
     log = _relay_log(run)
