@@ -19,8 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from console.contracts import TouchableCamera, TouchCalibrating
 from console.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
@@ -74,15 +73,14 @@ class TouchCalibration:
             if svc.error:
                 why = f"no camera ({svc.error})"
             return self._unavailable(f"touch calibration: {why}")
-        make = getattr(clf, "touch_calibration", None)
-        if make is None:
+        if not isinstance(clf, TouchCalibrating):
             name = prof.get("gestures.classifier") or "?"
             return self._unavailable(
                 f"touch calibration: the classifier {name!r} offers none; choose one that "
                 "does in [gestures] classifier (e.g. svm)"
             )
         try:
-            return make(prof)
+            return clf.touch_calibration(prof)
         except UserError as exc:
             return self._unavailable(str(exc))
 
@@ -222,7 +220,7 @@ class TouchCalibration:
 
     def _set_twin_target(self, pos_mm: Any) -> None:
         cam = self.camera.camera
-        if cam is not None and hasattr(cam, "set_target"):
+        if isinstance(cam, TouchableCamera):
             cam.set_target(pos_mm)
 
     def _project(self, what: str, targets: list | None = None) -> None:
@@ -260,10 +258,5 @@ class TouchCalibration:
 
 
 def _mm_to_px(cam: Any, pos_mm: Any) -> tuple[float, float] | None:
-    """Where a table point appears in the camera (the twin knows its own mapping)."""
-    mapping = getattr(getattr(cam, "rig", None), "mapping", None)
-    fn = getattr(mapping, "mm_to_px", None)
-    if fn is None:
-        return None
-    p = np.asarray(fn(np.asarray([pos_mm], float)), float).reshape(-1, 2)
-    return tuple(p[0])
+    """Where a table point appears in the camera (a twin knows its own mapping)."""
+    return cam.mm_to_px(pos_mm) if isinstance(cam, TouchableCamera) else None

@@ -13,14 +13,12 @@ from __future__ import annotations
 import threading
 from collections import deque
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from console.session.events import SessionEvent, Started, Stopped
-
-TUNABLE = ("body_threshold", "contact_threshold", "highpass_sigma_px")
+from console.types import TunableRange
 
 
 class CameraService:
@@ -169,14 +167,22 @@ class CameraService:
         return len(frames)
 
     def params(self) -> dict[str, float]:
-        p = getattr(self.classifier, "params", None)
-        return {k: float(getattr(p, k)) for k in TUNABLE} if p is not None else {}
+        """The classifier's tunables (``console.contracts.Classifier``), by name."""
+        return self.classifier.tunables() if self.classifier is not None else {}
+
+    def param_ranges(self) -> dict[str, TunableRange]:
+        return self.classifier.tunable_ranges() if self.classifier is not None else {}
 
     def set_param(self, key: str, value: float) -> None:
-        """Change a vision threshold; the next frame uses it."""
-        if key not in TUNABLE or self.classifier is None:
+        """Change a vision threshold (kept in its range); the next frame uses it."""
+        rng = self.param_ranges().get(key)
+        if rng is None or self.classifier is None:
             return
-        self.classifier.params = replace(self.classifier.params, **{key: value})
+        self.classifier.set_tunable(key, rng.clamp(value))
+
+    def views(self) -> tuple[str, ...]:
+        """The classifier's intermediate images a result shows (``VisionResult.view``)."""
+        return tuple(self.classifier.views) if self.classifier is not None else ()
 
     def status(self) -> dict:
         cam = {}

@@ -145,7 +145,8 @@ def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
 
             svc = app.session.camera_started
             real = svc.classifier
-            svc.classifier = type("NoCalibration", (), {"params": real.params})()
+            plain = {k: getattr(real, k) for k in ("tunables", "tunable_ranges", "views")}
+            svc.classifier = type("NoCalibration", (), plain)()  # no touch_calibration
             await pilot.press("k")
             assert pane.calibration is None
             await wait_for(pilot, lambda: "offers none" in str(info.render()), 10)

@@ -14,9 +14,6 @@ from textual.widgets import Static
 
 from console.errors import UserError
 
-STEPS = {"body_threshold": 2.0, "contact_threshold": 2.0, "highpass_sigma_px": 0.5}
-VIEWS = ("camera", "diff", "highpass", "body")
-
 
 def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:
     """(2*rows, cols, 3) RGB overlay: hand outlines green, contacts red, target yellow."""
@@ -133,7 +130,8 @@ class CameraPane(Horizontal):
         res = work.get("result")
         img = frame.image
         if self.view != "camera" and res is not None:
-            img = res.masks.get(self.view, img)
+            shown = res.view(self.view)
+            img = img if shown is None else shown
         cols, rows = self.view_size()
         grey = downsample(img, cols, rows)
         if self.view != "camera":
@@ -172,14 +170,17 @@ class CameraPane(Horizontal):
     # ------------------------------------------------------------------ tuning
     def action_tune(self, key: str, sign: int) -> None:
         svc = self.service
-        cur = svc.params().get(key)
-        if cur is None:
+        cur, rng = svc.params().get(key), svc.param_ranges().get(key)
+        if cur is None or rng is None:
             return
-        svc.set_param(key, max(STEPS[key], cur + sign * STEPS[key]))
+        svc.set_param(key, cur + sign * rng.step)
         self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
 
     def action_view(self) -> None:
-        self.view = VIEWS[(VIEWS.index(self.view) + 1) % len(VIEWS)]
+        views = ("camera", *self.service.views())
+        self.view = (
+            views[(views.index(self.view) + 1) % len(views)] if self.view in views else "camera"
+        )
 
     def action_background(self) -> None:
         n = self.service.capture_background()
