@@ -301,7 +301,7 @@ class StreamingEffect(Effect, Protocol):
 
 @runtime_checkable
 class TableEffect(Effect, Protocol):
-    """The excitation lookup tables of a vibration map (paper Fig. 8).
+    """Lookup tables of a vibration map: the best excitation per pair (paper Fig. 8).
 
     ``tables(vmap=, progress=None)`` builds (or loads) them; ``progress(fraction,
     message)`` is called between build steps and may raise to cancel the build.
@@ -317,44 +317,47 @@ class TableEffect(Effect, Protocol):
 
 @runtime_checkable
 class MapImporter(Protocol):
-    """``import_map(files) -> VibrationMap``: a map from measurement files, one per
-    excitation (e.g. UFF 58 ``{"PA": "pa.uff"}``)."""
+    """Vibration maps from measurement files (imports UFF 58): ``import_map(files) ->
+    VibrationMap``, one file per excitation (e.g. ``{"PA": "pa.uff"}``)."""
 
     def import_map(self, files: Mapping[str, Any]) -> Any: ...
 
 
 @runtime_checkable
 class PointEffect(Effect, Protocol):
-    """A localized pulse at one grid point (or ``(x, y)`` mm) of the map ``vmap``."""
+    """A localized point stimulus: a pulse at one grid point (or ``(x, y)`` mm) of the
+    map ``vmap``."""
 
     def render_point(self, point: Any, vmap: Any) -> OutputPlan: ...
 
 
 @runtime_checkable
 class FlowEffect(Effect, Protocol):
-    """A flow from grid point ``a`` to grid point ``b`` of the map ``vmap`` (Fig. 9)."""
+    """A two-point flow: from grid point ``a`` to grid point ``b`` of the map ``vmap``
+    (Fig. 9)."""
 
     def render_flow(self, a: int, b: int, vmap: Any) -> OutputPlan: ...
 
 
 @runtime_checkable
 class HandFlowEffect(Effect, Protocol):
-    """A flow under a hand centred at ``center_mm`` in ``direction`` (a key of
-    ``console.types.DIRECTIONS_MM``) on the map ``vmap``."""
+    """A flow under a hand: centred at ``center_mm``, toward ``direction`` (a key of
+    ``console.types.DIRECTIONS_MM``), on the map ``vmap``."""
 
     def render_hand_flow(self, center_mm: PosMm, direction: str, vmap: Any) -> OutputPlan: ...
 
 
 @runtime_checkable
 class Conditions(Effect, Protocol):
-    """The named conditions ``render(condition=)`` (and ``stream``) take, in order."""
+    """Named conditions: the ``conditions`` that ``render(condition=)`` (and ``stream``)
+    take, in order."""
 
     conditions: tuple[str, ...]
 
 
 @runtime_checkable
 class Presets(Effect, Protocol):
-    """Named settings an operator may audition: ``render`` keywords (``vpp``,
+    """Named presets: settings an operator may audition, ``render`` keywords (``vpp``,
     ``freq_hz``, ``waveform`` ...) plus ``help``."""
 
     presets: dict[str, dict[str, Any]]
@@ -632,6 +635,13 @@ def _mismatch(exp: list[inspect.Parameter], got: list[inspect.Parameter]) -> str
         if required and p.name not in passed and not exp_var_kw:
             return f"requires {p.name!r}, which the contract does not pass"
     return ""
+
+
+def summary(proto: type) -> str:
+    """What a capability is, in a few words (its docstring up to the first colon)."""
+    head = (proto.__doc__ or proto.__name__).strip().split(":")[0].split(".")[0]
+    head = " ".join(head.split())
+    return head[:1].lower() + head[1:]
 
 
 def problems(obj: Any, proto: type) -> list[str]:

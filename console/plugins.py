@@ -184,20 +184,29 @@ class Plugins:
             if contracts.satisfies(obj := self.built(kind, name, profile), proto)
         ]
 
-    def provider(self, kind: str, proto: type, profile: Any, *, plugin_hint: str = "") -> Any:
-        """The first registration of ``kind`` offering ``proto``, built for ``profile``
-        (once). None does: a ``UserError`` naming the capability and its members, and
-        ``plugin_hint`` (the plugin to enable) when the caller knows one."""
+    def provider_name(self, kind: str, proto: type, profile: Any, *, plugin_hint: str = "") -> str:
+        """The name of the first registration of ``kind`` offering ``proto``. None does:
+        a ``UserError`` naming the capability and its members, and ``plugin_hint`` (the
+        plugin to enable) when the caller knows one."""
         found = self.providers(kind, proto, profile)
         if found:
-            return found[0][1]
+            return found[0][0]
         what = ", ".join(m for m in contracts.members(proto) if m != "__call__")
         have = ", ".join(self.of(kind)) or "none"
         enable = f"install/enable {plugin_hint}" if plugin_hint else "install/enable a plugin"
         raise UserError(
-            f"no {kind.replace('_', ' ')} offers {proto.__name__} ({what}): {enable} that "
-            f"does (registered: {have})"
+            f"no {kind.replace('_', ' ')} plugin offers {contracts.summary(proto)} "
+            f"({proto.__name__}: {what}): {enable} (registered: {have})"
         )
+
+    def provider(
+        self, kind: str, proto: type, profile: Any, *, plugin_hint: str = "", fresh: bool = False
+    ) -> Any:
+        """The first registration of ``kind`` offering ``proto`` (``provider_name``),
+        built for ``profile`` once; ``fresh``: a new object of it, for a caller whose
+        state must not be shared."""
+        name = self.provider_name(kind, proto, profile, plugin_hint=plugin_hint)
+        return self.build(kind, name, profile) if fresh else self.built(kind, name, profile)
 
 
 def blocked_names() -> set[str]:

@@ -6,13 +6,12 @@ loaded from a file; the Vibration screen shows it, the Scenes screen and the pro
 service read it there. ``VibrationSession`` is one map with the effects that play it.
 
 The console computes no haptics and imports no plugin: it asks the registered plugins
-(``console/hookspecs.py`` lists the members used here):
+for capabilities (``console/contracts.py``):
 
-- stimuli: the ``effect`` registrations ``point``, ``flow`` and ``hand_flow``
-  (``render``);
-- the lookup tables: the ``flow`` effect's ``tables(vmap=, progress=)`` (built step by
+- stimuli: the effects offering ``PointEffect``, ``FlowEffect`` and ``HandFlowEffect``;
+- the lookup tables: a ``TableEffect``'s ``tables(vmap=, progress=)`` (built step by
   step, cancellable) and ``query(active, passive, vmap=)``;
-- UFF import: the first effect offering ``import_map(files)`` (vibrotactile's ``flow``);
+- UFF import: the first effect offering ``MapImporter.import_map(files)``;
 - a measurement: the ``vibrometer`` registration named by ``[vibrometer] driver`` (or
   the only one; the plate twin registers ``twin``), with progress and cancel.
 
@@ -28,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from console import contracts
 from console.errors import UserError
 from console.runtime.measured_map import (
     Cancelled,
@@ -43,13 +43,6 @@ __all__ = ["Cancelled", "VibrationService", "VibrationSession", "measure_map"]
 
 Progress = Callable[[float, str], None]
 
-#: effect name -> what it offers the screen (for "no plugin offers ..." messages)
-OFFERS = {
-    "point": "a localized point stimulus",
-    "flow": "a lookup table or two-point flow",
-    "hand_flow": "a flow under a hand",
-}
-
 
 def _get(profile, key: str, default: Any = None) -> Any:
     try:
@@ -58,13 +51,10 @@ def _get(profile, key: str, default: Any = None) -> Any:
         return default
 
 
-def effect(plugins, profile, name: str) -> Any:
-    """The ``name`` effect built for ``profile``, or a ``UserError`` naming the plugin."""
-    regs = plugins.of("effect")
-    if name not in regs:
-        what = OFFERS.get(name, f"the {name!r} effect")
-        raise UserError(f"no effect plugin offers {what}: install/enable vibrotactile")
-    return regs[name].factory(profile)
+def effect(plugins, profile, capability: type) -> Any:
+    """A new effect offering ``capability`` (a ``console.contracts`` Protocol) built for
+    ``profile``, or a ``UserError`` naming the capability and the plugin to enable."""
+    return plugins.provider("effect", capability, profile, plugin_hint="vibrotactile", fresh=True)
 
 
 def import_uff_files(profile, plugins, specs: list[str]):
@@ -75,13 +65,7 @@ def import_uff_files(profile, plugins, specs: list[str]):
             raise UserError(f"{item!r}: write EXC=FILE, e.g. PA=pa.uff")
         exc, path = item.split("=", 1)
         files[exc.strip().upper()] = str(Path(path).expanduser())
-    regs = plugins.of("effect")
-    for name in ("flow", *sorted(regs)):
-        if name in regs:
-            eff = regs[name].factory(profile)
-            if callable(getattr(eff, "import_map", None)):
-                return eff.import_map(files)
-    raise UserError("no effect plugin imports UFF measurements: install/enable vibrotactile")
+    return effect(plugins, profile, contracts.MapImporter).import_map(files)
 
 
 class VibrationSession:
@@ -92,22 +76,22 @@ class VibrationSession:
         self.plugins = plugins
         self.vmap = vmap
         self.band_hz = _get(profile, "vibrotactile.band_hz")
-        self._effects: dict[str, Any] = {}
+        self._effects: dict[str, Any] = {}  # by registration: one object, its caches
         self.tables_ready = False
         self.summary = ""  # what the console says of this map (set by VibrationService)
 
-    def effect(self, name: str) -> Any:
+    def effect(self, capability: type) -> Any:
+        """This session's effect offering ``capability``: each registration built once
+        per session (its tables and plans are cached by the map object)."""
+        name = self.plugins.provider_name(
+            "effect", capability, self.profile, plugin_hint="vibrotactile"
+        )
         if name not in self._effects:
-            self._effects[name] = effect(self.plugins, self.profile, name)
+            self._effects[name] = self.plugins.build("effect", name, self.profile)
         return self._effects[name]
 
     def _tables_effect(self) -> Any:
-        eff = self.effect("flow")
-        if not callable(getattr(eff, "tables", None)) or not callable(getattr(eff, "query", None)):
-            raise UserError(
-                f"no effect plugin offers {OFFERS['flow']}: install/enable vibrotactile"
-            )
-        return eff
+        return self.effect(contracts.TableEffect)
 
     @property
     def points(self) -> list[int]:
@@ -131,19 +115,19 @@ class VibrationSession:
         return self._tables_effect().query(int(active), int(passive), vmap=self.vmap)
 
     def point_plan(self, n: int):
-        return self.effect("point").render(point=int(n), vmap=self.vmap)
+        return self.effect(contracts.PointEffect).render_point(int(n), self.vmap)
 
     def flow_plan(self, a: int, b: int):
         if a == b:
             raise UserError(f"flow {a} -> {b}: pick two different points")
-        return self.effect("flow").render(int(a), int(b), vmap=self.vmap)
+        return self.effect(contracts.FlowEffect).render_flow(int(a), int(b), self.vmap)
 
     def hand_plan(self, center_mm: tuple[float, float], direction: str):
         if direction not in DIRECTIONS:
             raise UserError(f"direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
         cx, cy = (round(float(c), 1) for c in center_mm)
-        return self.effect("hand_flow").render(
-            center_mm=(cx, cy), direction=direction, vmap=self.vmap, screen_stride=3
+        return self.effect(contracts.HandFlowEffect).render_hand_flow(
+            (cx, cy), direction, self.vmap
         )
 
 
