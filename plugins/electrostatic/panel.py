@@ -2,10 +2,13 @@
 friction presets; amplitude and frequency controls kept inside the limits, with the
 expected force of the setting.
 
-Everything goes through the ``electrostatic`` and ``knob`` effect registrations: the
-knob effect's ``conditions`` and the electrostatic effect's ``presets`` fill the list."""
+Everything goes through effect capabilities (``console.contracts``): the ``Conditions``
+effect's conditions and the ``Presets`` effect's presets fill the list; the setting is
+rendered by the ``Presets`` effect."""
 
 from __future__ import annotations
+
+from typing import Any
 
 from textual import work
 from textual.app import ComposeResult
@@ -14,6 +17,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import OptionList, Static
 from textual.widgets.option_list import Option
 
+from console.contracts import Conditions, Presets
 from console.errors import UserError
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
@@ -65,9 +69,18 @@ class ElectrostaticPane(Vertical):
         self.presets: dict[str, dict] = {}
         self.notes: list[str] = []
 
+    def _offering(self, capability: type) -> Any:
+        """The effect offering ``capability`` (``Conditions``, ``Presets``), or None."""
+        ctx = self.app.ctx
+        found = ctx.pm.providers("effect", capability, ctx.profile)
+        return found[0][1] if found else None
+
+    def _effect(self, capability: type) -> Any:
+        ctx = self.app.ctx
+        return ctx.pm.provider("effect", capability, ctx.profile, plugin_hint="electrostatic")
+
     def compose(self) -> ComposeResult:
-        regs = self.app.ctx.pm.of("effect")
-        if "electrostatic" not in regs and "knob" not in regs:
+        if self._offering(Presets) is None and self._offering(Conditions) is None:
             yield Static(
                 "no electrostatic effects: the electrostatic plugin is not installed or is "
                 "blocked (HAPTABLE_BLOCK_PLUGINS)"
@@ -95,17 +108,16 @@ class ElectrostaticPane(Vertical):
         lo, hi = Limits.from_profile(self.app.ctx.profile).screen_range()
         self.max_vpp = hi - lo
         lst = self.query_one("#es-list", OptionList)
-        ctx = self.app.ctx
-        regs = ctx.pm.of("effect")
         notes = []
-        if "knob" in regs:
-            self.conditions = tuple(getattr(regs["knob"].factory(ctx.profile), "conditions", ()))
+        knob, screen = self._offering(Conditions), self._offering(Presets)
+        if knob is not None:
+            self.conditions = tuple(knob.conditions)
             for c in self.conditions:
                 lst.add_option(Option(f"knob {c}", id=f"cond:{c}"))
         if not self.conditions:
             notes.append("no effect plugin offers knob conditions: install/enable electrostatic")
-        if "electrostatic" in regs:
-            presets = getattr(regs["electrostatic"].factory(ctx.profile), "presets", None) or {}
+        if screen is not None:
+            presets = screen.presets or {}
             self.presets = {str(k): dict(v) for k, v in presets.items()}
             for name, p in self.presets.items():
                 lst.add_option(
@@ -119,7 +131,7 @@ class ElectrostaticPane(Vertical):
         if lst.option_count:
             lst.highlighted = 0
         self.notes = notes
-        if "electrostatic" in regs:
+        if screen is not None:
             self._update_setting()
         else:
             self._show_setting(
@@ -157,8 +169,7 @@ class ElectrostaticPane(Vertical):
         )
 
     def _render_setting(self, duration_s: float):
-        eff = self.app.ctx.pm.get("effect", "electrostatic").factory(self.app.ctx.profile)
-        return eff.render(
+        return self._effect(Presets).render(
             vpp=self.vpp, freq_hz=self.freq_hz, duration_s=duration_s, waveform=self.waveform
         )
 
@@ -193,8 +204,7 @@ class ElectrostaticPane(Vertical):
     @work(thread=True, group="es-play")
     def _play_condition(self, condition: str) -> None:
         try:
-            eff = self.app.ctx.pm.get("effect", "knob").factory(self.app.ctx.profile)
-            plan = eff.render(condition=condition)
+            plan = self._effect(Conditions).render(condition=condition)
         except UserError as exc:
             self.app.call_from_thread(self.app.notify, str(exc), severity="error")
             return
