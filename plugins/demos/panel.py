@@ -25,16 +25,7 @@ from console.session.events import Progress, Snapshot, Started, Stopped
 from console.tui.long_work import LongWork
 from console.tui.session_messages import SessionMessage
 
-#: the loop stages a demo snapshot reports, as the Latency screen labels them
-DEMO_STAGES = (
-    ("capture_to_arrival", "capture"),
-    ("vision", "vision"),
-    ("classify", "classify"),
-    ("scene", "scene"),
-    ("effect", "effect"),
-    ("scheduled", "output"),
-    ("end_to_end", "end to end"),
-)
+from .status import status_lines
 
 
 def status_text(st: dict | None) -> str:
@@ -59,82 +50,6 @@ def status_text(st: dict | None) -> str:
 
         parts.append(f"[yellow]{escape(st['last_drop'])}[/]")
     return "  ".join(parts)
-
-
-def _ms(v) -> str:
-    if v is None or v != v:
-        return "-"
-    return f"{v:.1f}" if v < 10 else f"{v:.0f}"
-
-
-def demo_text(snap: dict, hand: dict | None = None) -> str:
-    """What the operator sees of a running demo, from its snapshot and what its camera
-    last saw (``hand``: ``console.runtime.demo_host.HandWatch.state``)."""
-    name = snap.get("demo", "?")
-    wd = snap.get("watchdog", {})
-    if wd.get("tripped"):
-        dog = f"[red]watchdog tripped: {wd.get('reason') or 'loop stalled'}[/]"
-    else:
-        dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
-    cam = snap.get("camera", {})
-    lat = snap.get("latency") or {}
-    state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
-    lines = [
-        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.0f} s  {dog}  camera "
-        f"{cam.get('fps', 0):.0f} fps, dropped {cam.get('dropped', 0)} (camera) + "
-        f"{lat.get('dropped_queue', 0)} (queue)"
-    ]
-    stages = dict(lat.get("stages", {}))
-    stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}
-    stages["end_to_end"] = lat.get("end_to_end") or {}
-    parts = [
-        f"{label} {_ms(stages[key].get('p50_ms'))}/{_ms(stages[key].get('p99_ms'))}"
-        for key, label in DEMO_STAGES
-        if key in stages
-    ]
-    lines.append("latency p50/p99 ms: " + "  ".join(parts))
-    if hand is not None:
-        if not hand.get("hands"):
-            seen = "no hand on the table"
-        else:
-            rest = hand.get("rest_mm")
-            seen = (
-                f"hand resting at {rest[0]:.0f},{rest[1]:.0f} mm"
-                if rest is not None
-                else "hand seen (moving)"
-            )
-            seen += f", {hand.get('contacts', 0)} contacts"
-            if hand.get("gesture"):
-                seen += f", gesture {hand['gesture']}"
-        lines.append(seen)
-    if "flow" in snap:
-        f = snap["flow"]
-        text = f"flow {f.get('direction')}: {f.get('flows', 0)} played"
-        last = [e for e in f.get("last", []) if e.get("parts")]
-        if last:
-            e = last[-1]
-            at = e.get("center_mm") or e.get("from_mm")
-            where = f" at {at[0]:.0f},{at[1]:.0f} mm" if at else ""
-            pts = " + ".join(
-                f"{p['actuator']} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", [])
-            )
-            text += f"; last{where}: {pts}"
-            if e.get("late_s"):  # its plan was computed first (not prepared)
-                text += f" (planned in {e['late_s'] * 1e3:.0f} ms)"
-        newest = (f.get("last") or [None])[-1]
-        if newest is not None and not newest.get("parts"):  # a refusal or no flow there
-            text += f"\n[yellow]{newest.get('kind')}: {newest.get('reason', '')}[/]"
-        lines.append(text)
-    if "knob" in snap:
-        k = snap["knob"]
-        lines.append(
-            f"knob {k.get('condition')}: item {k.get('item')}, angle "
-            f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
-            f", {k.get('crossings', 0)} crossings"
-        )
-    if snap.get("last_error"):
-        lines.append(f"[red]{snap['last_error']}[/]")
-    return "\n".join(lines)
 
 
 class ScenesPane(Vertical):
@@ -345,8 +260,8 @@ class ScenesPane(Vertical):
         self._set_state(reason)
         demos = self.demos
         if demos.last_snapshot is not None:
-            snap = {**demos.last_snapshot, "running": False}  # the run's last numbers stay
-            text = demo_text(snap, None)
+            snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
+            text = "\n".join(status_lines(snap))
             log = (demos.last_final or {}).get("twin_log")
             if log:
                 text += f"\nwhat the twin's outputs received: {log}"
@@ -357,7 +272,7 @@ class ScenesPane(Vertical):
             lw.show(f"demo {reason}")
 
     def _show_snapshot(self, snap: dict) -> None:
-        text = demo_text(snap, snap.get("hand"))
+        text = "\n".join(status_lines(snap))
         if self._twin() is not None:
             if self.hand_placed and self.hand_mm is not None:
                 x, y = self.hand_mm

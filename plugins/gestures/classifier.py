@@ -71,11 +71,11 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
     }
 
 
-#: The vision thresholds an operator tunes (``VisionParams`` fields) and their ranges:
-#: the profile's bounds above, one step at the bottom (a zero threshold sees noise).
+#: The vision thresholds an operator tunes (``VisionParams`` fields): the ``[vision]``
+#: profile bounds and one operator step.
 TUNABLES: dict[str, TunableRange] = {
-    "body_threshold": TunableRange(2.0, 255.0, 2.0),
-    "contact_threshold": TunableRange(2.0, 255.0, 2.0),
+    "body_threshold": TunableRange(1.0, 255.0, 2.0),
+    "contact_threshold": TunableRange(1.0, 255.0, 2.0),
     "highpass_sigma_px": TunableRange(0.5, 100.0, 0.5),
 }
 

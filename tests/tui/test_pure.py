@@ -133,27 +133,3 @@ def test_latency_rows_follow_the_pipeline_order():
         "end to end",
         "extra",
     ]
-
-
-def test_demo_text_shows_the_last_flow_and_a_newer_refusal():
-    from plugins.demos.panel import demo_text
-
-    flow = {
-        "kind": "flow",
-        "center_mm": [300.0, 200.0],
-        "parts": [
-            {"actuator": "PA", "frequency_hz": 163.0},
-            {"actuator": "PB", "frequency_hz": 94.0},
-        ],
-        "late_s": 0.42,
-    }
-    snap = {
-        "demo": "flow",
-        "running": True,
-        "flow": {"direction": "up", "flows": 1, "last": [flow]},
-    }
-    text = demo_text(snap)
-    assert "flow up: 1 played; last at 300,200 mm: PA 163 Hz + PB 94 Hz (planned in 420 ms)" in text
-    refused = {"kind": "no_flow", "reason": "no region at 5,5 mm"}
-    snap["flow"]["last"] = [flow, refused]
-    assert "no_flow: no region at 5,5 mm" in demo_text(snap)
