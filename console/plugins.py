@@ -225,10 +225,9 @@ def _plugin_name(pm: pluggy.PluginManager, impl: Any) -> str:
 def _check_hooks(pm: pluggy.PluginManager) -> None:
     """Fail at start-up, naming the plugin, when a hook implementation matches no spec."""
     known = [n for n in dir(hookspecs) if n.startswith("haptable_")]
-    for name in dir(pm.hook):
+    for name, caller in sorted(vars(pm.hook).items()):  # the relay's hook callers
         if not name.startswith("haptable_"):
             continue
-        caller = getattr(pm.hook, name)
         if caller.spec is None:
             impls = caller.get_hookimpls()
             who = ", ".join(sorted({_plugin_name(pm, i) for i in impls}))
@@ -294,7 +293,7 @@ def _collect(plugins: Plugins) -> None:
     pm = plugins.pm
     for kind, hook_name in KINDS.items():
         regs: dict[str, Registration] = {}
-        for impl in reversed(getattr(pm.hook, hook_name).get_hookimpls()):
+        for impl in reversed(vars(pm.hook)[hook_name].get_hookimpls()):
             impl.function(register=_registrar(regs, kind, _plugin_name(pm, impl)))
         plugins.registrations[kind] = regs
 
