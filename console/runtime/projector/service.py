@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from console.contracts import TableEffect, points_event
 from console.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.protocol import HEARTBEAT_S, PEER_TIMEOUT_S, socket_path_for
@@ -71,23 +72,19 @@ def effect_providers(
     """Need providers backed by the registered effects (no plugin imported).
 
     ``tables`` (a list of grid points, or of (a, b) pairs, or ``"map"``: all of them):
-    the registered ``flow`` effect's lookup tables of ``current_map()`` (the console's
+    the lookup tables (a ``console.contracts.TableEffect``) of ``current_map()`` (the console's
     vibration map: a ``VibrationMap`` or a map file; it raises ``UserError`` when there
     is none), checked to cover the declared points. Returns ``{"tables": Tables,
     "points": [...]}`` (and ``"points_mm"`` for ``"map"``: the scene is told them as a
     ``points`` event, so it draws the map's own ids where they are)."""
     effects: dict[str, Any] = {}
 
-    def flow() -> Any:
-        if "flow" not in effects:
-            regs = plugins.of("effect")
-            eff = regs["flow"].factory(profile) if "flow" in regs else None
-            if not callable(getattr(eff, "tables", None)):
-                raise UserError(
-                    "no effect plugin offers a lookup table: install/enable vibrotactile"
-                )
-            effects["flow"] = eff
-        return effects["flow"]
+    def flow() -> Any:  # the effect offering lookup tables, built once for this service
+        if "tables" not in effects:
+            effects["tables"] = plugins.provider(
+                "effect", TableEffect, profile, plugin_hint="vibrotactile", fresh=True
+            )
+        return effects["tables"]
 
     def tables(points: Any) -> dict:
         eff = flow()
@@ -118,7 +115,7 @@ def _tell_points(scene: Any, prepared: dict) -> None:
     """A scene that asked for the whole map's tables learns the map's point ids and mm."""
     got = prepared.get("tables")
     if isinstance(got, dict) and "points_mm" in got:
-        scene.update({"type": "points", "ids": got["points"], "points_mm": got["points_mm"]})
+        scene.update(points_event(got["points"], got["points_mm"]))
 
 
 def projector_launch(
@@ -247,9 +244,9 @@ class ProjectorService:
             raise UserError(
                 f"no scene named {name!r}; available: {', '.join(sorted(self.scenes)) or 'none'}"
             )
-        scene = self.scenes[name](self.profile)
+        scene = self.scenes[name](self.profile)  # a console.contracts.Scene
         why: dict[str, str] = {}
-        prepared, missing = prepare_needs(getattr(scene, "needs", {}) or {}, self.providers, why)
+        prepared, missing = prepare_needs(scene.needs or {}, self.providers, why)
         _tell_points(scene, prepared)
         for ev in events:
             scene.update(ev)
@@ -265,7 +262,7 @@ class ProjectorService:
             scene, todo = self.scene, list(self.unprepared)
         if scene is None or not todo:
             return todo
-        needs = getattr(scene, "needs", {}) or {}
+        needs = scene.needs or {}
         why: dict[str, str] = {}
         prepared, missing = prepare_needs({k: needs.get(k) for k in todo}, self.providers, why)
         with self._lock:
