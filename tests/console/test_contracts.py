@@ -308,3 +308,60 @@ def test_the_demo_formats_its_own_snapshot(plugins):
     assert any(line.startswith("flow up: 1 played") for line in lines)
     del snap["hand"]
     assert not any("hand" in line for line in factory.status_lines(snap))
+
+
+# ------------------------------------------------------------------ probes
+PROBE_LIMIT = 15
+
+
+def _stdlib_modules(tree) -> set[str]:
+    """Names a module binds to stdlib modules (``import os``, ``import socket as so``)."""
+    import ast
+    import sys
+
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] in sys.stdlib_module_names:
+                    out.add(alias.asname or alias.name.split(".")[0])
+    return out
+
+
+def probes() -> list[str]:
+    """``getattr``/``hasattr`` calls in console/ on anything but a stdlib module the file
+    imports (``getattr(os, "O_CLOEXEC", 0)`` asks the platform, not a plugin). The
+    contract checker itself (console/contracts.py) reads members by name: that is its
+    job."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    out = []
+    for path in sorted((root / "console").rglob("*.py")):
+        if path.name == "contracts.py" and path.parent.name == "console":
+            continue
+        tree = ast.parse(path.read_text(), str(path))
+        modules = _stdlib_modules(tree)
+        for node in ast.walk(tree):
+            if not (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Name)
+                and node.func.id in ("getattr", "hasattr")
+                and node.args
+            ):
+                continue
+            first = node.args[0]
+            if isinstance(first, ast.Name) and first.id in modules:
+                continue
+            where = f"{path.relative_to(root)}:{node.lineno}"
+            out.append(f"{where}: {ast.unparse(node)}")
+    return sorted(out)
+
+
+def test_few_probes():
+    found = probes()
+    assert len(found) < PROBE_LIMIT, (
+        f"{len(found)} getattr/hasattr probes in console/ (ask for a capability of "
+        "console/contracts.py instead):\n" + "\n".join(found)
+    )
