@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from console.contracts import SimulatedCamera
 from console.errors import UserError
 from console.runtime.latency import LatencyMonitor
 from console.runtime.loop import FrameLoop
@@ -36,7 +37,7 @@ DEMOS = ("flow", "knob")
 def script_twin(camera: Any, demo: str, profile: Any, *, hold_frames: int | None = None) -> bool:
     """On a simulated camera (the twin): a scripted hand performing the demo, looping.
     False if the camera is not scriptable (real hardware: the operator's hand does it)."""
-    if not callable(getattr(camera, "set_script", None)):
+    if not isinstance(camera, SimulatedCamera):
         return False
     fps = float(profile.get("camera.fps") or 60.0)
     subject = profile.get("twin_camera.subject") or "s1"
@@ -178,17 +179,18 @@ def demo_state(demo: Any) -> dict:
     }
 
 
-def _twin_apart(profile: Any) -> bool:
-    """The profile's camera is the twin and renders in its own process."""
-    return profile.get("camera.driver") == "twin" and bool(
-        profile.get("runtime.twin_camera_process")
+def _twin_apart(profile: Any, plugins: Any) -> bool:
+    """The profile's camera is simulated (its registration says so) and renders in its
+    own process (``[runtime] twin_camera_process``)."""
+    return bool(profile.get("runtime.twin_camera_process")) and plugins.simulated(
+        "camera", profile
     )
 
 
 def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
     """The profile's camera; the twin scripted for ``demo`` in its own process
     (``[runtime] twin_camera_process``)."""
-    if _twin_apart(profile):
+    if _twin_apart(profile, plugins):
         from .camproc import ProcessCamera
 
         return ProcessCamera(profile, demo)
@@ -267,7 +269,7 @@ def start_demo(
         raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
     dm = profile.section("demos")
     rt = profile.section("runtime")
-    if camera_apart and script and camera is not None and _twin_apart(profile):
+    if camera_apart and script and camera is not None and _twin_apart(profile, plugins):
         camera = None  # the run opens the twin in its own process (and closes it)
     owns = camera is None
     if owns:
