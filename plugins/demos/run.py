@@ -182,9 +182,7 @@ def demo_state(demo: Any) -> dict:
 def _twin_apart(profile: Any, plugins: Any) -> bool:
     """The profile's camera is simulated (its registration says so) and renders in its
     own process (``[runtime] twin_camera_process``)."""
-    return bool(profile.get("runtime.twin_camera_process")) and plugins.simulated(
-        "camera", profile
-    )
+    return bool(profile.get("runtime.twin_camera_process")) and plugins.simulated("camera", profile)
 
 
 def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
