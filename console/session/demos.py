@@ -140,6 +140,7 @@ class DemoControl:
                     params=params,
                     on_scene=fwd.update if fwd is not None else None,
                     twin_log=twin_log_path(name),
+                    plugins=s.plugins,
                 )
                 self.run, self._forward = run, fwd
                 run.wait_started(step, cancelled)
@@ -208,8 +209,8 @@ class DemoControl:
         s.camera.give_back()
         if s.closed or s.outputs is not None:
             return
-        reason = getattr(run, "estop_reason", None)
-        if reason is None and getattr(run, "crashed", False):
+        reason = run.estop_reason if run is not None else None  # None: it never started
+        if reason is None and run is not None and run.crashed:
             reason = f"demo {run.name}: {run.exit_reason}"
         s.open_outputs(reason)
 

@@ -36,7 +36,7 @@ class DevicesPane(VerticalScroll):
         plug.add_columns("kind", "name", "plugin", "description")
         for kind, regs in sorted(ctx.pm.registrations.items()):
             for name, reg in sorted(regs.items()):
-                if getattr(reg, "tab", None) is not None:
+                if reg.tab is not None:
                     continue  # a screen of the console: its tab shows it
                 plug.add_row(kind, name, reg.plugin, reg.description)
         self.call_after_refresh(self.action_doctor)
