@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from console.runtime.twin_log import bursts, dominant_hz
-from plugins.electrostatic.panel import FREQ_RANGE_HZ, clamp_setting, force_text
 from console.tui.panes.latency import stage_rows
 from console.tui.panes.relays import interlock
 from console.tui.plots import HalfBlockImage, downsample, frf_plot, sparkline
+from plugins.electrostatic.panel import FREQ_RANGE_HZ, clamp_setting, force_text
 
 
 def _status(estopped=False, busy=False):
