@@ -19,7 +19,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console.contracts import TouchableCamera, TouchCalibrating
+import numpy as np
+
 from console.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
@@ -73,14 +74,15 @@ class TouchCalibration:
             if svc.error:
                 why = f"no camera ({svc.error})"
             return self._unavailable(f"touch calibration: {why}")
-        if not isinstance(clf, TouchCalibrating):
+        make = getattr(clf, "touch_calibration", None)
+        if make is None:
             name = prof.get("gestures.classifier") or "?"
             return self._unavailable(
                 f"touch calibration: the classifier {name!r} offers none; choose one that "
                 "does in [gestures] classifier (e.g. svm)"
             )
         try:
-            return clf.touch_calibration(prof)
+            return make(prof)
         except UserError as exc:
             return self._unavailable(str(exc))
 
@@ -220,7 +222,7 @@ class TouchCalibration:
 
     def _set_twin_target(self, pos_mm: Any) -> None:
         cam = self.camera.camera
-        if isinstance(cam, TouchableCamera):
+        if cam is not None and hasattr(cam, "set_target"):
             cam.set_target(pos_mm)
 
     def _project(self, what: str, targets: list | None = None) -> None:
@@ -258,5 +260,10 @@ class TouchCalibration:
 
 
 def _mm_to_px(cam: Any, pos_mm: Any) -> tuple[float, float] | None:
-    """Where a table point appears in the camera (a twin knows its own mapping)."""
-    return cam.mm_to_px(pos_mm) if isinstance(cam, TouchableCamera) else None
+    """Where a table point appears in the camera (the twin knows its own mapping)."""
+    mapping = getattr(getattr(cam, "rig", None), "mapping", None)
+    fn = getattr(mapping, "mm_to_px", None)
+    if fn is None:
+        return None
+    p = np.asarray(fn(np.asarray([pos_mm], float)), float).reshape(-1, 2)
+    return tuple(p[0])

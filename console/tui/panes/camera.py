@@ -14,6 +14,9 @@ from textual.widgets import Static
 
 from console.errors import UserError
 
+#: the views the camera screen cycles through after the camera image (``VisionResult.view``)
+VISION_VIEWS = ("diff", "highpass", "body")
+
 
 def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:
     """(2*rows, cols, 3) RGB overlay: hand outlines green, contacts red, target yellow."""
@@ -177,10 +180,8 @@ class CameraPane(Horizontal):
         self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
 
     def action_view(self) -> None:
-        views = ("camera", *self.service.views())
-        self.view = (
-            views[(views.index(self.view) + 1) % len(views)] if self.view in views else "camera"
-        )
+        views = ("camera", *VISION_VIEWS)
+        self.view = views[(views.index(self.view) + 1) % len(views)]
 
     def action_background(self) -> None:
         n = self.service.capture_background()
