@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from console.contracts import TouchCalibrating
 from console.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
@@ -74,15 +75,14 @@ class TouchCalibration:
             if svc.error:
                 why = f"no camera ({svc.error})"
             return self._unavailable(f"touch calibration: {why}")
-        make = getattr(clf, "touch_calibration", None)
-        if make is None:
+        if not isinstance(clf, TouchCalibrating):
             name = prof.get("gestures.classifier") or "?"
             return self._unavailable(
                 f"touch calibration: the classifier {name!r} offers none; choose one that "
                 "does in [gestures] classifier (e.g. svm)"
             )
         try:
-            return make(prof)
+            return clf.touch_calibration(prof)
         except UserError as exc:
             return self._unavailable(str(exc))
 
