@@ -90,6 +90,9 @@ def test_console_in_a_terminal(tmp_path, map_file):
     try:
         term.wait("outputs idle", 60)
         term.open_tab("F3", "no vibration map")
+        # the footer lists the screen's own keys once the focus is in it (as a person
+        # waits for the screen to answer before typing its ':' command)
+        term.wait("m measure", 30)
         term.keys(":")
         time.sleep(0.3)
         term.keys(f"load {map_file}", literal=True)
