@@ -3,7 +3,8 @@
 sibling modules: ``background`` (background model, illumination, subtraction),
 ``segmentation`` (high-pass, body mask and the windows they are made in), ``contacts``
 (contact blobs) and ``hand_shape`` (palm, wrist, canonical pose, fingers, brightness grid).
-Pure functions of arrays (numpy + OpenCV 5) plus one small stateful background model.
+Pure functions of arrays (numpy + OpenCV 5); the one stateful part, the background
+model, is in ``background``.
 
 Steps for one frame (paper section 3, Fig. 4):
 
