@@ -17,17 +17,11 @@ import numpy as np
 from console.bench import machine_info, summarize_s
 
 from . import evaluate as ev
+from .background import illumination, subtract
+from .contacts import find_contacts
 from .features import KIND_FRAMES
-from .vision import (
-    VisionParams,
-    body_window,
-    contact_window,
-    find_contacts,
-    highpass_window,
-    illumination,
-    process_frame,
-    subtract,
-)
+from .segmentation import body_window, contact_window, highpass_window
+from .vision import VisionParams, process_frame
 
 HARMONICS = (0, 2, 4, 6, 8, 12, 16)
 NOISE = (0.0, 3.0, 6.0, 12.0)

@@ -11,11 +11,12 @@ import numpy as np
 from console.errors import UserError
 from console.types import Frame, Gesture, TunableRange
 
+from .background import Background
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
 from .features import select_dynamic, select_kind, select_static
 from .model import GESTURES, GestureModel
 from .sketch import DYNAMIC
-from .vision import Background, FrameResult, VisionParams, process_frame
+from .vision import FrameResult, VisionParams, process_frame
 
 
 def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, float, float]:

@@ -17,7 +17,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .vision import GRID_RINGS, GRID_SECTORS, FrameResult
+from .hand_shape import GRID_RINGS, GRID_SECTORS
+from .vision import FrameResult
 
 KIND_FRAMES = 3  # window for static vs dynamic (a static sample has at least this many)
 N_GRID = GRID_SECTORS * (len(GRID_RINGS) - 1)

@@ -9,7 +9,8 @@ import pytest
 
 from console.errors import UserError
 from plugins.gestures import sketch
-from plugins.gestures.vision import Background, VisionParams, check_frame, process_frame
+from plugins.gestures.background import Background
+from plugins.gestures.vision import VisionParams, check_frame, process_frame
 
 BG = sketch.background()
 P = VisionParams()
@@ -122,7 +123,7 @@ def test_sudden_illumination_change_is_flagged_and_tolerated():
 
 @pytest.mark.parametrize("n", [1, 2, 3, 10, 2133, 2134])
 def test_fast_median_is_numpys_median(n):
-    from plugins.gestures.vision import _median
+    from plugins.gestures.background import _median
 
     rng = np.random.default_rng(n)
     for a in (rng.normal(0, 5, n).astype(np.float32), np.round(rng.normal(0, 5, n))):
@@ -192,12 +193,8 @@ def test_heavy_sensor_noise_raises_thresholds_not_false_contacts():
     ],
 )
 def test_contacts_found_in_the_window_equal_the_full_frame_ones(sigma, where):
-    from plugins.gestures.vision import (
-        contact_window,
-        find_contacts,
-        highpass,
-        highpass_window,
-    )
+    from plugins.gestures.contacts import find_contacts
+    from plugins.gestures.segmentation import contact_window, highpass, highpass_window
 
     pos, theta = where
     diff = cv2_subtract(frame(pose("two_finger", pos, theta), pose("one_finger", (120, 300))))
@@ -215,7 +212,7 @@ def test_contacts_found_in_the_window_equal_the_full_frame_ones(sigma, where):
 
 
 def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
-    from plugins.gestures.vision import contact_window, highpass
+    from plugins.gestures.segmentation import contact_window, highpass
 
     assert contact_window(cv2_subtract(frame()), 30.0) is None
     f = frame(pose("one_finger"))
@@ -231,7 +228,7 @@ def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
 @pytest.mark.parametrize("smooth", [1, 4, 5, 7])
 @pytest.mark.parametrize("where", [((320, 220), -90.0), ((615, 240), 180.0), ((30, 470), 45.0)])
 def test_body_found_in_its_window_equals_the_full_frame_mask(smooth, where):
-    from plugins.gestures.vision import body_mask, body_window
+    from plugins.gestures.segmentation import body_mask, body_window
 
     diff = cv2_subtract(frame(pose("open_hand", *where), pose("one_finger", (200, 100))))
     body, win = body_window(diff, 14.0, smooth)
@@ -244,7 +241,8 @@ def test_body_found_in_its_window_equals_the_full_frame_mask(smooth, where):
 
 def test_contacts_when_the_contact_threshold_is_below_the_body_one():
     # a tuned profile may set them the other way round: contacts outside the body count
-    from plugins.gestures.vision import find_contacts, highpass
+    from plugins.gestures.contacts import find_contacts
+    from plugins.gestures.segmentation import highpass
 
     p = VisionParams(body_threshold=60.0, contact_threshold=25.0)
     f = frame(pose("two_finger"))

@@ -1006,7 +1006,7 @@ def test_palm_of_a_mask_without_edges_is_bounded_by_the_image():
     """A mask with no background pixel (a saturated frame) has its palm radius bounded
     by the image (the distance transform alone gives ~1e38 and the wrist search then
     fails building a structuring element of that size)."""
-    from plugins.gestures.vision import palm
+    from plugins.gestures.hand_shape import palm
 
     (cx, cy), r = palm(np.full((60, 100), 255, np.uint8))
     assert 25 <= r <= 31 and 20 <= cx <= 80 and 25 <= cy <= 35

@@ -1,0 +1,60 @@
+"""Contact points: the bright blobs of the high-pass image (fingertips on the glass)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from console.types import Contact
+
+
+def find_contacts(
+    hp: np.ndarray,
+    threshold: float,
+    min_area_px: int = 3,
+    max_area_px: int = 2500,
+    to_mm=None,
+    max_size_px: int = 45,
+    origin_px: tuple[int, int] = (0, 0),
+) -> list[Contact]:
+    """Bright blobs of the high-pass image: intensity-weighted centroid and area.
+
+    Pixels above ``threshold`` are grouped after a 5 px dilation, so the broken rim
+    that a flat palm leaves in the high-pass image becomes one large blob, rejected by
+    ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
+    ``hp`` may be a crop of the frame's high-pass at ``origin_px`` (x, y): positions
+    are in the frame's pixels.
+    """
+    _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
+    md = cv2.dilate(m, _DISK5)
+    groups, _ = cv2.findContours(md, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    out: list[Contact] = []
+    for g in groups:
+        x0, y0, w, h = cv2.boundingRect(g)
+        if max(w, h) - 4 > max_size_px:  # the dilation adds 2 px each side
+            continue
+        sel = np.zeros((h, w), np.uint8)
+        cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
+        sub = m[y0 : y0 + h, x0 : x0 + w] & sel
+        area = int(cv2.countNonZero(sub))
+        if area < min_area_px or area > max_area_px:
+            continue
+        hps = hp[y0 : y0 + h, x0 : x0 + w]
+        mo = cv2.moments(cv2.bitwise_and(hps, hps, mask=sub))  # integer sums: exact
+        if mo["m00"] <= 0:
+            continue
+        gx, gy = x0 + origin_px[0], y0 + origin_px[1]
+        pos = (gx + mo["m10"] / mo["m00"], gy + mo["m01"] / mo["m00"])
+        out.append(Contact(id=len(out), pos_px=pos, area_px=float(area)))
+    out.sort(key=lambda c: (c.pos_px[1], c.pos_px[0]))
+    out = [Contact(i, c.pos_px, c.pos_mm, c.area_px) for i, c in enumerate(out)]
+    if to_mm is not None and out:
+        mm = np.asarray(to_mm(np.array([c.pos_px for c in out])))
+        out = [
+            Contact(c.id, c.pos_px, (float(q[0]), float(q[1])), c.area_px)
+            for c, q in zip(out, mm, strict=True)
+        ]
+    return out
+
+
+_DISK5 = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
