@@ -19,9 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from console.contracts import TouchCalibrating
+from console.contracts import TouchableCamera, TouchCalibrating
 from console.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
@@ -222,7 +220,7 @@ class TouchCalibration:
 
     def _set_twin_target(self, pos_mm: Any) -> None:
         cam = self.camera.camera
-        if cam is not None and hasattr(cam, "set_target"):
+        if isinstance(cam, TouchableCamera):
             cam.set_target(pos_mm)
 
     def _project(self, what: str, targets: list | None = None) -> None:
@@ -260,10 +258,8 @@ class TouchCalibration:
 
 
 def _mm_to_px(cam: Any, pos_mm: Any) -> tuple[float, float] | None:
-    """Where a table point appears in the camera (the twin knows its own mapping)."""
-    mapping = getattr(getattr(cam, "rig", None), "mapping", None)
-    fn = getattr(mapping, "mm_to_px", None)
-    if fn is None:
+    """Where a table point appears in the camera (a touchable camera, the twin, knows)."""
+    if not isinstance(cam, TouchableCamera):
         return None
-    p = np.asarray(fn(np.asarray([pos_mm], float)), float).reshape(-1, 2)
-    return tuple(p[0])
+    px = cam.mm_to_px((float(pos_mm[0]), float(pos_mm[1])))
+    return None if px is None else (float(px[0]), float(px[1]))

@@ -8,7 +8,6 @@ import json
 import threading
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 from console.types import Contact
@@ -20,15 +19,29 @@ def _px(pos_mm) -> tuple[float, float]:
 
 
 class FakeCamera:
-    """A camera the operator's finger is aimed at (like the twin's ``set_target``)."""
+    """A camera the operator's finger is aimed at (a ``TouchableCamera``, like the twin);
+    it knows where a table point shows once it is given a ``px_of`` mapping."""
 
     def __init__(self) -> None:
         self.target = None
         self.aimed: list = []
+        self.px_of = None
+
+    def read(self, timeout_s: float = 0.1):
+        return None
+
+    def close(self) -> None:
+        pass
+
+    def status(self) -> dict:
+        return {"fps": 0.0, "dropped": 0}
 
     def set_target(self, pos_mm) -> None:
         self.target = pos_mm
         self.aimed.append(pos_mm)
+
+    def mm_to_px(self, pos_mm):
+        return None if self.px_of is None else self.px_of(pos_mm)
 
 
 class Classifier:
@@ -144,7 +157,5 @@ def test_target_in_the_camera_image_when_the_camera_knows_its_mapping(profile):
     assert wizard.target_px() is None  # not running
     wizard.start()
     assert wizard.target_px() is None  # this camera knows no mapping
-    cam.rig = SimpleNamespace(
-        mapping=SimpleNamespace(mm_to_px=lambda p: np.array([_px(q) for q in p]))
-    )
+    cam.px_of = _px
     assert wizard.target_px() == pytest.approx(_px(wizard.target_mm()))
