@@ -8,14 +8,13 @@ from __future__ import annotations
 import asyncio
 
 import pytest
-from textual.widgets import Input
 
 from console.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.service import ProjectorService, effect_providers
 from plugins.demos.panel import status_text
 
-from .conftest import wait_for
+from .conftest import command, wait_for
 from .test_screens import _app, _ready
 
 
@@ -120,10 +119,7 @@ def test_grid_scene_from_the_console_is_prepared_once_a_map_is_loaded(
             await wait_for(pilot, lambda: app.pane("vibration") is not None)
             vib = app.pane("vibration")
             await wait_for(pilot, lambda: app.focused is vib.focus_target, 10, "grid focused")
-            await pilot.press("colon")
-            assert isinstance(app.focused, Input)
-            app.focused.value = f"load {map_file}"
-            await pilot.press("enter")
+            await command(app, pilot, f"load {map_file}")
             await wait_for(pilot, lambda: svc.unprepared == [], 30, "tables prepared")
             assert svc.prepared["tables"]["tables"].vmap.points.size == 84
             assert "not prepared" not in status_text(svc.status())

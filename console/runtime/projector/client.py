@@ -350,8 +350,8 @@ class ProjectorLink:
         except BlockingIOError:
             pass
         except ProtocolError as e:
-            self.protocol_errors += 1
             self._drop(f"protocol error from the projector: {e}")
+            self.protocol_errors += 1  # counted once the drop says why (status readers)
             return
         except OSError as e:
             self._drop(f"link error: {e}")
