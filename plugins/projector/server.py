@@ -45,8 +45,19 @@ log = logging.getLogger("haptable.projector")
 MAX_CONNECTIONS = 8
 #: A connection that has not spoken for this long is no console (probes close at once).
 PENDING_TIMEOUT_S = 10.0
+#: how often a projector with no console checks that its socket still leads to it
+SOCKET_CHECK_S = 1.0
 #: A console that leaves this much unread is not reading: dropped.
 MAX_UNSENT_BYTES = 1 << 20
+
+
+def _file_id(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of ``path`` itself (None: it does not exist)."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino)
 
 
 def bind_socket(path: Path) -> socket.socket:
@@ -121,6 +132,9 @@ class LinkServer:
         self._stop = threading.Event()
         self.quit_requested = threading.Event()
         self._listener = bind_socket(self.socket_path)
+        self._socket_id = _file_id(self.socket_path)  # what a console connects to
+        self._socket_checked_s = time.monotonic()
+        self.orphaned = ""  # why it quit by itself (its socket is gone: nobody can reach it)
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
         self._thread: threading.Thread | None = None
@@ -196,8 +210,9 @@ class LinkServer:
         if self._thread is not None:
             self._thread.join(timeout=2.0)
         self._listener.close()
-        with contextlib.suppress(OSError):
-            self.socket_path.unlink()
+        if _file_id(self.socket_path) == self._socket_id:  # never another projector's socket
+            with contextlib.suppress(OSError):
+                self.socket_path.unlink()
         self._wake_r.close()
         self._wake_w.close()
         self._sel.close()
@@ -277,11 +292,24 @@ class LinkServer:
                 if mask & selectors.EVENT_READ and tag.sock in self._conns:
                     self._receive(tag)
         now = time.monotonic()
+        if self._console is None and now - self._socket_checked_s >= SOCKET_CHECK_S:
+            self._socket_checked_s = now
+            self._quit_if_unreachable()
         for conn in list(self._conns.values()):
             if conn.console and now - conn.last_rx > self.peer_timeout_s:
                 self._close(conn, f"no word from the console for {self.peer_timeout_s:g} s")
             elif not conn.console and now - conn.opened > PENDING_TIMEOUT_S:
                 self._close(conn, "")  # silent: not a console
+
+    def _quit_if_unreachable(self) -> None:
+        """With no console connected, a projector whose socket file was removed or taken
+        over by another can never be reached again (nobody adopts it): it quits instead
+        of drawing black forever."""
+        if _file_id(self.socket_path) == self._socket_id:
+            return
+        self.orphaned = f"socket {self.socket_path} is gone: no console can reach this projector"
+        log.warning("projector: %s; quitting", self.orphaned)
+        self.quit_requested.set()
 
     def _queue_for_console(self, conn: Conn, now: float) -> None:
         with self._lock:

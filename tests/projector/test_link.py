@@ -23,7 +23,7 @@ from console.runtime.projector.protocol import LineBuffer, ProtocolError, encode
 from console.runtime.projector.service import ProjectorService
 from plugins.projector.launch import projector_command
 from plugins.projector.scenes import BUILTIN_SCENES
-from plugins.projector.server import LinkServer
+from plugins.projector.server import SOCKET_CHECK_S, LinkServer
 
 SCENES = {n: cls for n, (cls, _) in BUILTIN_SCENES.items()}
 FAST = ["--size", "320x200", "--fps", "30", "--heartbeat-s", "0.1", "--peer-timeout-s", "1.0"]
@@ -467,3 +467,27 @@ def test_a_console_whose_loop_stops_ticking_turns_the_projector_black(sock_path)
         stop.set()
         link.close()
         srv.close()
+
+
+def test_a_projector_whose_socket_is_gone_quits_instead_of_running_forever(sock_path):
+    """Nobody can adopt a projector once its socket file is removed (its console's runtime
+    directory deleted) or taken over by another: with no console connected it quits, and
+    it never removes the socket that replaced its own."""
+    srv = LinkServer(sock_path, heartbeat_s=0.05)
+    srv.start()
+    other = None
+    try:
+        time.sleep(2 * SOCKET_CHECK_S)
+        assert not srv.quit_requested.is_set()  # reachable: it stays for a console to adopt
+        sock_path.unlink()
+        assert srv.quit_requested.wait(5 * SOCKET_CHECK_S)
+        assert "no console can reach" in srv.orphaned
+        other = LinkServer(sock_path, heartbeat_s=0.05)  # a new projector at the same path
+        other_id = sock_path.stat().st_ino
+    finally:
+        srv.close()
+    try:
+        assert sock_path.exists() and sock_path.stat().st_ino == other_id
+    finally:
+        other.close()
+    assert not sock_path.exists()
