@@ -416,11 +416,12 @@ class LinkServer:
         self.consoles += 1
 
     def _protocol_error(self, conn: Conn, why: str) -> None:
-        """Tell the peer why (best effort), drop it, show black."""
-        self.protocol_errors += 1
+        """Tell the peer why (best effort), drop it, show black; counted once it is black
+        (a status reader never sees the count before the black)."""
         with contextlib.suppress(OSError):
             conn.sock.send(encode(proto.error(f"protocol error: {why}")))
         self._close(conn, f"protocol error: {why}")  # it spoke: it was the console
+        self.protocol_errors += 1
 
     def _handle(self, msg: dict, out: bytearray, t_recv: float) -> None:
         t = msg["type"]

@@ -360,9 +360,9 @@ class ProjectorLink:
             len(self._out) > MAX_LINE_BYTES
             or time.monotonic() - (self.last_rx_s or 0) > self.peer_timeout_s
         ):
-            self.hangs += 1
             pid = self.peer_pid
             self._drop(f"no word from the projector for {self.peer_timeout_s:g} s")
+            self.hangs += 1  # counted once the drop says why
             if self.on_hung is not None:
                 self.on_hung(pid)
 
