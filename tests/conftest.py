@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -96,3 +97,60 @@ def outputs(profile, plugins):
     out = open_outputs(profile, plugins, fast=True)
     yield out
     out.close()
+
+
+@pytest.fixture
+def fake_vibrometer(profile):
+    """Plugins (demos, tuio) with a counting vibrometer ``fake`` measuring an analytic plate,
+    and the sim profile naming it: ``pm``, ``profile``, ``calls``, ``map``."""
+    import plugins.demos
+    import plugins.tuio
+    from console.hookspecs import hookimpl
+    from console.plugins import BUILTIN_PLUGINS, load_plugins
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
+
+    m = analytic_map(SSPlate())
+    calls: list[int] = []
+
+    class Vib:
+        def __init__(self, profile):
+            pass
+
+        def measure(self, progress=None):
+            calls.append(1)
+            if progress is not None:
+                progress(1, 1)
+            return {
+                "frf_um_per_v": m.frf_um_per_v,
+                "freq_hz": m.freq_hz,
+                "points": m.points,
+                "points_mm": m.points_mm,
+                "excitations": m.excitations,
+                "masked": m.masked,
+                "source": "fake vibrometer",
+                "meta": {},
+            }
+
+    class FakePlugin:
+        @hookimpl
+        def haptable_register_vibrometers(self, register):
+            register("fake", Vib)
+
+    mine = {"demos": plugins.demos, "tuio": plugins.tuio, "fakevib": FakePlugin()}
+    pm = load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
+
+    class P:
+        """The sim profile naming the fake vibrometer (``plate`` overridable)."""
+
+        plate: dict = {}
+
+        def get(self, key, default=None):
+            return "fake" if key == "vibrometer.driver" else profile.get(key, default)
+
+        def section(self, name):
+            return self.plate if name == "plate" and self.plate else profile.section(name)
+
+        def resolve(self, p):
+            return profile.resolve(p)
+
+    return SimpleNamespace(pm=pm, profile=P(), calls=calls, map=m)

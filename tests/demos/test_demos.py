@@ -246,55 +246,16 @@ def test_flow_targets_snap_to_scene_regions_or_the_grid(profile, plugins):
     assert demo.target((4.0, 6.4)) == (4.0, 6.4)
 
 
-def test_twin_map_is_measured_once_through_the_registered_vibrometer(profile, tmp_path):
+def test_twin_map_is_measured_once_through_the_registered_vibrometer(fake_vibrometer, tmp_path):
     """The demos' flow map on the twin is the console's measured map (one provider)."""
-    import plugins.demos
-    import plugins.tuio
-    from console.hookspecs import hookimpl
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
     from console.vibration_map import load_map
     from plugins.demos.run import flow_map_path
-    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
-    m = analytic_map(SSPlate())
-    calls = []
-
-    class Vib:
-        def __init__(self, profile):
-            pass
-
-        def measure(self, progress=None):
-            calls.append(1)
-            return {
-                "frf_um_per_v": m.frf_um_per_v,
-                "freq_hz": m.freq_hz,
-                "points": m.points,
-                "points_mm": m.points_mm,
-                "excitations": m.excitations,
-                "masked": m.masked,
-                "source": "fake vibrometer",
-                "meta": {},
-            }
-
-    class FakePlugin:
-        @hookimpl
-        def haptable_register_vibrometers(self, register):
-            register("fake", Vib)
-
-    mine = {"demos": plugins.demos, "tuio": plugins.tuio, "fakevib": FakePlugin()}
-    pm = load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
-
-    class P:
-        def get(self, key, default=None):
-            return "fake" if key == "vibrometer.driver" else profile.get(key, default)
-
-        def section(self, name):
-            return profile.section(name)
-
-    p1 = flow_map_path(P(), tmp_path, pm)
-    p2 = flow_map_path(P(), tmp_path, pm)
-    assert p1 == p2 and calls == [1]  # cached: measured once
-    assert np.array_equal(load_map(p1).frf_um_per_v, m.frf_um_per_v)
+    fv = fake_vibrometer
+    p1 = flow_map_path(fv.profile, tmp_path, fv.pm)
+    p2 = flow_map_path(fv.profile, tmp_path, fv.pm)
+    assert p1 == p2 and fv.calls == [1]  # cached: measured once
+    assert np.array_equal(load_map(p1).frf_um_per_v, fv.map.frf_um_per_v)
 
 
 class BothHands:
