@@ -66,3 +66,23 @@ def runtime_dir() -> Path:
     ``console.runtime.private_dir.runtime_dir()``, which is."""
     base = os.environ.get("XDG_RUNTIME_DIR")
     return Path(base) / APP if base else Path(f"/tmp/{APP}-{os.getuid()}")
+
+
+def _profile_part(name: str) -> str:
+    """A profile's name as one safe path component (``sim``, ``haptable-lab``)."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in str(name)).strip(".")
+    # "profiles" is the folder of profile files beside these
+    return {"": "default", "profiles": "profiles_"}.get(safe, safe)
+
+
+def profile_config_dir(profile_name: str, *parts: str) -> Path:
+    """Settings the operator edits for one profile (its signal library, camera settings,
+    tuned thresholds): ``config_dir(<profile name>, ...)``, never the repository's
+    ``profiles/``."""
+    return config_dir(_profile_part(profile_name), *parts)
+
+
+def profile_state_dir(profile_name: str, *parts: str) -> Path:
+    """What the console produces for one profile and keeps (calibrations, trained models):
+    ``state_dir(<profile name>, ...)``."""
+    return state_dir(_profile_part(profile_name), *parts)

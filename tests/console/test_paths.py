@@ -72,3 +72,15 @@ def test_every_directory_the_project_writes_is_under_the_tests_tmp_roots(pinned_
     for p in written:
         assert not p.is_relative_to(real_home / ".cache"), p
     assert paths.runtime_dir().is_relative_to(Path(os.environ["XDG_RUNTIME_DIR"]))
+
+
+def test_per_profile_dirs_are_one_component_below_config_and_state(tmp_path, monkeypatch):
+    monkeypatch.setenv("HAPTABLE_CONFIG_DIR", str(tmp_path / "cfg"))
+    monkeypatch.setenv("HAPTABLE_STATE_DIR", str(tmp_path / "st"))
+    assert (
+        paths.profile_config_dir("sim", "signals.toml") == tmp_path / "cfg" / "sim" / "signals.toml"
+    )
+    assert paths.profile_state_dir("haptable-lab") == tmp_path / "st" / "haptable-lab"
+    # a name never climbs out or lands in the folder of profile files
+    assert paths.profile_config_dir("../x/y").parent == tmp_path / "cfg"
+    assert paths.profile_config_dir("profiles") != paths.config_dir("profiles")
