@@ -7,6 +7,7 @@ long edge, y along the short edge), ``_px`` camera pixels, ``_s`` seconds on the
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -97,12 +98,16 @@ class Gesture:
 # --------------------------------------------------------------------------- outputs
 @dataclass(frozen=True)
 class Segment:
-    """A stretch of output: both channels in volts at the actuator, same length.
+    """A stretch of output in volts at the actuators, every channel the same length.
 
-    ``patches`` are the piezo patches whose relays are closed while it plays (the
-    piezo channel reaches only those); ``screen`` says whether the screen relay is
-    closed. Relays change only in the silent gap between segments (the safety gate
-    enforces it).
+    ``piezo_v`` is the paper's piezo bus: it reaches every patch in ``patches`` (their
+    relays are closed while it plays). ``patch_v`` gives patches drives of their own
+    (``{"PA": (n,), "PC": (n,)}``); its patches join ``patches``, and a patch in
+    ``patches`` without an entry plays ``piezo_v``. A profile whose ``[audio] channels``
+    drive each patch on its own plays every drive on its patch's channel; a bus profile
+    plays a segment only when all its drives are equal (``bus_drive()``). ``screen`` says
+    whether the screen relay is closed. Relays change only in the silent gap between
+    segments (the safety gate enforces it).
     """
 
     piezo_v: np.ndarray  # (n,) float, volts at the patch terminals
@@ -110,13 +115,53 @@ class Segment:
     patches: frozenset[str] = frozenset()
     screen: bool = False
     label: str = ""
+    patch_v: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "patches", frozenset(self.patches))
+        drives = dict(self.patch_v or {})
+        object.__setattr__(self, "patch_v", drives)
+        object.__setattr__(self, "patches", frozenset(self.patches) | frozenset(drives))
+
+    @classmethod
+    def per_patch(
+        cls,
+        patch_v: Mapping[str, np.ndarray],
+        screen_v: np.ndarray | None = None,
+        *,
+        screen: bool = False,
+        label: str = "",
+    ) -> Segment:
+        """A segment with a drive per patch (the bus silent), e.g. from the per-patch
+        amplitude/phase solver. Every drive and ``screen_v`` must have the same length."""
+        if not patch_v:
+            raise ValueError("a per-patch segment needs at least one patch drive")
+        n = len(next(iter(patch_v.values())))
+        sv = np.zeros(n) if screen_v is None else screen_v
+        return cls(np.zeros(n), sv, frozenset(), screen, label, dict(patch_v))
 
     @property
     def n_samples(self) -> int:
         return int(len(self.piezo_v))
+
+    @property
+    def independent(self) -> bool:
+        """True when some patch has a drive of its own (``patch_v``)."""
+        return bool(self.patch_v)
+
+    def drives(self) -> dict[str, np.ndarray]:
+        """Each connected patch's drive in volts, by patch name (sorted)."""
+        return {p: self.patch_v.get(p, self.piezo_v) for p in sorted(self.patches)}
+
+    def bus_drive(self) -> np.ndarray | None:
+        """The one drive every connected patch plays (what a bus profile's piezo channel
+        plays), or ``None`` when the patches' drives differ."""
+        if not self.patch_v:
+            return self.piezo_v
+        drives = list(self.drives().values())
+        first = np.asarray(drives[0])
+        if all(np.array_equal(first, np.asarray(d)) for d in drives[1:]):
+            return first
+        return None
 
 
 @dataclass(frozen=True)

@@ -162,12 +162,12 @@ class Scheduler(Source):
         seg_ids = tuple(map(id, plan.segments))
         if hit is not None and hit[0]() is plan and hit[2] == seg_ids:
             return hit[1]
-        samples = tuple((_frozen(seg.piezo_v), _frozen(seg.screen_v)) for seg in plan.segments)
+        samples = tuple((_frozen(_bus_drive(seg)), _frozen(seg.screen_v)) for seg in plan.segments)
         check_plan(
             dataclasses.replace(
                 plan,
                 segments=tuple(
-                    dataclasses.replace(seg, piezo_v=p, screen_v=s)
+                    dataclasses.replace(seg, piezo_v=p, screen_v=s, patch_v={})
                     for seg, (p, s) in zip(plan.segments, samples, strict=True)
                 ),
             ),
@@ -475,6 +475,17 @@ def _stop_streams(streams: list[StreamSource]) -> None:
             stream.request_stop()
         except Exception:
             log.exception("stream stop failed")
+
+
+def _bus_drive(seg) -> np.ndarray:
+    """The drive the piezo bus plays for a segment; refused when its patches differ."""
+    bus = seg.bus_drive()
+    if bus is None:
+        raise SafetyRefusal(
+            f"segment {seg.label or ''}: its patches {sorted(seg.patches)} have different "
+            f"drives: it needs a profile whose [audio] channels drive each patch on its own"
+        )
+    return bus
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

@@ -186,9 +186,15 @@ def check_plan(plan: OutputPlan, limits: Limits) -> None:
         unknown = set(seg.patches) - set(PATCHES)
         if unknown:
             raise SafetyRefusal(f"{label}: unknown patches {sorted(unknown)}; use {PATCHES}")
+        bus = seg.bus_drive()
+        if bus is None:
+            raise SafetyRefusal(
+                f"{label}: its patches {sorted(seg.patches)} have different drives: it needs "
+                f"a profile whose [audio] channels drive each patch on its own"
+            )
         arrays = {}
-        for ch in ("piezo_v", "screen_v"):
-            a = np.asarray(getattr(seg, ch))
+        for ch, raw in (("piezo_v", bus), ("screen_v", seg.screen_v)):
+            a = np.asarray(raw)
             if a.ndim != 1 or not np.issubdtype(a.dtype, np.number):
                 raise SafetyRefusal(f"{label}: {ch} must be a 1-D array of volts")
             arrays[ch] = a.astype(float, copy=False)
