@@ -51,6 +51,18 @@ def haptable_register_benchmarks(register):
         "for the console, a demo host and a CLI demo",
     )
 
+    def gate_fill(ctx, quick: bool) -> dict:
+        from console.benchmarks.gate_fill import run
+
+        return run(ctx, quick)
+
+    register(
+        "gate-fill",
+        gate_fill,
+        help="the safety gate's work per audio block (the callback's fill): p50/p99 while "
+        "idle, playing and ramping down after an e-stop",
+    )
+
     register(
         "console-demo",
         console_demo,
