@@ -19,6 +19,7 @@ import numpy as np
 from console.contracts import RelayBoard
 from console.errors import SafetyRefusal
 from console.safety.limits import Limits, range_problem, slew_problem
+from console.safety.scope import ScopeTap
 from console.safety.sources import Source, SourceCaller, SourceInterrupted
 from console.types import PATCHES
 
@@ -101,6 +102,12 @@ class SafetyGate:
         self.listeners: list[Callable[[GateEvent], None]] = []
         self._piezo_scale = 1.0 / limits.piezo_card_v
         self._screen_scale = 1.0 / limits.screen_card_v
+        #: the last seconds handed to the driver, per sound-card channel (``scope.read``)
+        self.scope = ScopeTap(
+            limits.sample_rate_hz,
+            ("piezo", "screen"),
+            (limits.piezo_card_v, limits.screen_card_v),
+        )
         LIVE_GATES.add(self)
 
     # ------------------------------------------------------------------ state
@@ -183,11 +190,16 @@ class SafetyGate:
         """Fill ``out`` (frames, 2) float32 in sound-card units. Called by the driver; never
         raises and never waits on plugin code longer than ``source_stall_s``."""
         self._audio_thread = threading.current_thread()
+        clock = self.clock  # of the block's first sample (only this thread moves it)
         try:
             self._fill(out)
         except Exception as exc:  # the audio thread must survive anything
             self._hand_ramp_down(out)
             self._fault(f"output path failed: {exc!r}")
+        try:
+            self.scope.write(out, clock)  # what the driver got, as it got it
+        except Exception:  # the scope is an observer: never the output's problem
+            log.exception("scope tap failed")
 
     def _fill(self, out: np.ndarray) -> None:
         n = out.shape[0]

@@ -9,6 +9,7 @@ thread: screens call them from workers.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import threading
 from collections.abc import Callable
@@ -195,6 +196,29 @@ class ConsoleSession:
             self.fail("outputs", str(exc), name="refused")
             return False
         return True
+
+    def scope(self, seconds: float | None = 0.1) -> Any:
+        """The last ``seconds`` (all kept: None) of what the gate handed the driver, per
+        channel in volts at the actuators (``console.safety.scope.ScopeTrace``, with the
+        gate's e-stops and relay switches inside it as marks); None while the console
+        holds no outputs (a demo process has them, or they never opened)."""
+        out = self.outputs
+        if out is None:
+            return None
+        gate = out.gate
+        trace = gate.scope.read(seconds)
+        end = trace.clock + trace.n
+        marks = tuple(
+            (ev.clock, ev.kind, ev.message)
+            for ev in list(gate.events)
+            if trace.clock <= ev.clock < end and ev.kind in ("estop", "fault", "switch")
+        )
+        return dataclasses.replace(trace, marks=marks)
+
+    def last_played(self) -> Any:
+        """The last plan accepted for playing (an ``OutputPlan``), else None."""
+        with self._lock:
+            return self.played[-1] if self.played else None
 
     def estop(self, reason: str) -> None:
         """Silence every output now: the console's own, or every process holding outputs
