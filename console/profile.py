@@ -5,6 +5,12 @@ A profile is found by path, or by name in ``$HAPTABLE_PROFILES``,
 and the project's ``profiles/`` folder. Sections are
 declared by plugins (``haptable_profile_sections``); the core declares its own in
 ``console.core_sections``.
+
+What the operator saves from the console (the sound card, the relay board, later the
+camera's settings) goes to the profile's override file,
+``console.paths.profile_config_dir(<name>, "overrides.toml")``, never to the profile
+itself: it is merged over the profile at load and validated exactly like it
+(``save_overrides`` writes it atomically, keeping every other key).
 """
 
 from __future__ import annotations
@@ -24,6 +30,8 @@ if TYPE_CHECKING:
     from console.plugins import Plugins
 
 DEFAULT_PROFILE = "sim"
+#: the file of the operator's saved settings in each profile's config directory
+OVERRIDES_FILE = "overrides.toml"
 #: A profile is a page of settings; anything larger is refused before it is read.
 MAX_PROFILE_BYTES = 1024 * 1024
 PROJECT_PROFILES = Path(__file__).resolve().parent.parent / "profiles"
@@ -66,6 +74,8 @@ class Profile:
     name: str
     path: Path
     data: dict[str, Any] = field(repr=False)
+    #: the override file merged over the profile at load (None: there was none)
+    overrides: Path | None = None
 
     def get(self, dotted: str, default: Any = None) -> Any:
         node: Any = self.data
@@ -111,7 +121,12 @@ def _printable(name: str) -> str:
 
 
 def _validate_table(
-    where: str, label: str, table: Any, fields: dict[str, Field], base: Path
+    where: str,
+    label: str,
+    table: Any,
+    fields: dict[str, Field],
+    base: Path,
+    partial: bool = False,
 ) -> dict[str, Any]:
     label = _printable(label)
     if not isinstance(table, dict):
@@ -142,7 +157,7 @@ def _validate_table(
                 )
         out[key] = norm
     for key, f in fields.items():
-        if key in out:
+        if key in out or partial:
             continue
         if f.required:
             raise ProfileError(
@@ -152,9 +167,19 @@ def _validate_table(
     return out
 
 
-def validate(raw: dict[str, Any], path: Path, plugins: Plugins) -> dict[str, Any]:
-    """Check every section and key against the plugins' declared schemas."""
+def validate(
+    raw: dict[str, Any],
+    path: Path,
+    plugins: Plugins,
+    *,
+    partial: bool = False,
+    base: Path | None = None,
+) -> dict[str, Any]:
+    """Check every section and key against the plugins' declared schemas. ``partial``
+    (an override file) checks what is there and fills in nothing; relative paths are
+    relative to ``base`` (the profile's folder; default: ``path``'s)."""
     where = _where(path)
+    folder = base if base is not None else path.parent
     sections = plugins.sections
     data: dict[str, Any] = {}
     for name, table in raw.items():
@@ -167,14 +192,16 @@ def validate(raw: dict[str, Any], path: Path, plugins: Plugins) -> dict[str, Any
             if not isinstance(table, dict):
                 raise ProfileError(f"{where}: [{name}] must hold named tables like [{name}.X]")
             data[name] = {
-                item: _validate_table(where, f"{name}.{item}", sub, fields, path.parent)
+                item: _validate_table(where, f"{name}.{item}", sub, fields, folder, partial)
                 for item, sub in table.items()
             }
         else:
-            data[name] = _validate_table(where, name, table, fields, path.parent)
+            data[name] = _validate_table(where, name, table, fields, folder, partial)
+    if partial:
+        return data
     for name, (fields, per_item, _help, _owner) in sections.items():
         if name not in data:
-            data[name] = {} if per_item else _validate_table(where, name, {}, fields, path.parent)
+            data[name] = {} if per_item else _validate_table(where, name, {}, fields, folder)
     return data
 
 
@@ -242,16 +269,120 @@ def parse_toml(path: Path) -> dict[str, Any]:
 def load_profile(
     name_or_path: str | os.PathLike | None = None, plugins: Plugins | None = None
 ) -> Profile:
-    """Find, parse and validate a profile. Raises ``ProfileError`` with one line."""
+    """Find, parse and validate a profile, with its override file (``overrides_path``)
+    merged over it. Raises ``ProfileError`` with one line."""
     if plugins is None:
         from console.plugins import load_plugins
 
         plugins = load_plugins()
     path = find_profile(name_or_path)
-    raw = parse_toml(path)
-    profile = Profile(name=path.stem, path=path, data=validate(raw, path, plugins))
+    over_path = overrides_path(path.stem)
+    return _build(path, parse_toml(path), read_overrides(over_path, path, plugins), plugins)
+
+
+def _build(path: Path, raw: dict[str, Any], over: dict[str, Any], plugins: Plugins) -> Profile:
+    """The profile of file ``path`` (its TOML ``raw``) with the checked overrides ``over``
+    merged over it, validated; a check across keys that fails only because of the
+    overrides names the override file too."""
+    over_path = overrides_path(path.stem)
+    profile = Profile(
+        name=path.stem,
+        path=path,
+        data=validate(_merge(raw, over) if over else raw, path, plugins),
+        overrides=over_path if over else None,
+    )
     check_drivers(profile, plugins)
     from console.core_sections import check_consistency
 
-    check_consistency(profile)
+    try:
+        check_consistency(profile)
+    except ProfileError as exc:
+        if not over:
+            raise
+        raise ProfileError(
+            f"{exc} (with the overrides saved in {_where(over_path)}: change that key there "
+            "or remove it)"
+        ) from None
     return profile
+
+
+# --------------------------------------------------------------------------- overrides
+def overrides_path(profile_name: str) -> Path:
+    """Where the operator's saved settings for profile ``profile_name`` live."""
+    return paths.profile_config_dir(profile_name, OVERRIDES_FILE)
+
+
+def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``over`` merged into ``base`` table by table (``over``'s values win)."""
+    out = dict(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def read_overrides(path: Path, profile_path: Path, plugins: Plugins) -> dict[str, Any]:
+    """The override file's raw tables ({} when there is none), each key checked like the
+    profile's (a bad one: one line naming this file, the key and the fix)."""
+    if not path.is_file():
+        return {}
+    raw = parse_toml(path)
+    data = validate(raw, path, plugins, partial=True, base=profile_path.parent)
+    check_drivers(Profile(name=profile_path.stem, path=path, data=data), plugins)
+    return raw
+
+
+def save_overrides(
+    profile: Profile, settings: dict[str, Any], plugins: Plugins | None = None
+) -> Path:
+    """Save ``settings`` (``{"audio.device": "...", ...}``) to ``profile``'s override
+    file, keeping every other key (and comment) in it, checked like the profile before
+    anything is written; written atomically. Returns the file's path."""
+    import tomlkit
+
+    if plugins is None:
+        from console.plugins import load_plugins
+
+        plugins = load_plugins()
+    path = overrides_path(profile.name)
+    if path.is_file():
+        parse_toml(path)  # a broken file is refused with its line, never overwritten
+        doc = tomlkit.parse(path.read_text(encoding="utf-8"))
+    else:
+        doc = tomlkit.document()
+    for dotted, value in settings.items():
+        *tables, key = dotted.split(".")
+        if not tables:
+            raise ProfileError(f"{dotted!r}: a setting is named section.key")
+        node: Any = doc
+        for t in tables:
+            if t not in node:
+                node[t] = tomlkit.table()
+            node = node[t]
+        node[key] = value
+    text = tomlkit.dumps(doc)
+    try:
+        new_raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:  # a value TOML cannot hold
+        raise ProfileError(f"{_where(path)}: cannot save {settings}: {exc}") from None
+    data = validate(new_raw, path, plugins, partial=True, base=profile.path.parent)
+    check_drivers(Profile(name=profile.name, path=path, data=data), plugins)
+    _build(profile.path, parse_toml(profile.path), new_raw, plugins)  # the next load works
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise ProfileError(
+            f"{_where(path)}: cannot save the profile's settings: {exc.strerror or exc}; "
+            "check the config directory is writable ($HAPTABLE_CONFIG_DIR)"
+        ) from None
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
