@@ -10,7 +10,8 @@ entry-point group).
 outputs, relay boards, scenes, projectors, panels) is a ``RegisterFactory``::
 
     register(name: str, factory: Callable[[Profile], object], *,
-             description: str = "", probe: Callable[[Profile], DeviceStatus] | None = None)
+             description: str = "", probe: Callable[[Profile], DeviceStatus] | None = None,
+             devices: Callable[[Profile], list[OutputDevice]] | None = None)
 
 What a factory builds is typed in ``console.contracts`` (each hook below names its
 Protocol); the plugin manager refuses a thing that lacks a member of its contract, with
@@ -20,7 +21,9 @@ one line naming the plugin, the kind and the member.
 pick it. ``factory(profile)`` builds the thing only when it is needed, so a driver's
 hardware library is imported inside the factory, never at module import. ``probe``
 lets ``haptable doctor`` say whether the device is there and what fixes it, without
-opening it.
+opening it. ``devices`` (audio outputs only) lists what the driver could open, for the
+console's Devices screen (``console.types.OutputDevice``: the name ``[audio] device``
+takes, host API, channels, default latencies).
 
 Every sample and relay switch produced by anything registered here goes through the
 safety gate (``console.safety``); a plugin receives no handle to a driver.
@@ -51,6 +54,7 @@ class RegisterFactory(Protocol):
         description: str = "",
         probe: Callable[[Any], DeviceStatus] | None = None,
         tab: Any = None,  # panels only: a console.plugins.PanelTab
+        devices: Callable[[Any], list[Any]] | None = None,  # audio outputs: OutputDevice
     ) -> None: ...
 
 

@@ -94,6 +94,8 @@ class Registration:
     description: str = ""
     probe: Callable[..., Any] | None = None
     tab: PanelTab | None = None
+    #: audio outputs: ``devices(profile) -> list[OutputDevice]``, what it can open
+    devices: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -279,10 +281,15 @@ def _registrar(regs: dict[str, Registration], kind: str, owner: str) -> hookspec
         description: str = "",
         probe: Callable[..., Any] | None = None,
         tab: PanelTab | None = None,
+        devices: Callable[..., Any] | None = None,
     ) -> None:
         if tab is not None and kind != "panel":
             raise UserError(f"plugin {owner!r}: {kind} {name!r}: only a panel shows as a tab")
-        reg = Registration(kind, name, owner, factory, description, probe, tab)
+        if devices is not None and kind != "audio_output":
+            raise UserError(
+                f"plugin {owner!r}: {kind} {name!r}: only an audio output lists devices"
+            )
+        reg = Registration(kind, name, owner, factory, description, probe, tab, devices)
         check_registration(reg)
         regs[name] = reg
 

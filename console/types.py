@@ -207,6 +207,22 @@ class DeviceStatus:
     fix: str = ""
 
 
+@dataclass(frozen=True)
+class OutputDevice:
+    """A device an audio output driver can open, as the Devices screen lists it; ``name``
+    is what ``[audio] device`` takes to pick it. ``note`` says why it cannot be used
+    (too few output channels), empty when it can."""
+
+    driver: str
+    name: str
+    host_api: str = ""
+    output_channels: int = 0
+    low_latency_s: float = float("nan")  # the device's default low / high output latency
+    high_latency_s: float = float("nan")
+    default: bool = False  # the system's default output
+    note: str = ""
+
+
 # --------------------------------------------------------------------------- simulation
 @dataclass(frozen=True)
 class GestureStep:

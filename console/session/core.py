@@ -39,6 +39,9 @@ class ConsoleSession:
         self.fast = fast
         self.outputs: Any = None
         self.outputs_error = ""
+        #: the profile the console's outputs open with: the console's own, or that
+        #: profile reloaded after the operator saved another device (``reopen_outputs``)
+        self.outputs_profile: Any = None
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self._control: Any = None
         self._lock = threading.Lock()
@@ -136,7 +139,7 @@ class ConsoleSession:
                 self.emit(Stopped("outputs", reason=self.outputs_error))
                 return False
         try:
-            out = open_outputs(self.profile, self.plugins, fast=self.fast)
+            out = open_outputs(self.outputs_profile or self.profile, self.plugins, fast=self.fast)
         except Exception as exc:  # noqa: BLE001 - shown in the bar; the console stays usable
             self.outputs_error = str(exc)
             self.emit(Stopped("outputs", reason=self.outputs_error))
@@ -170,6 +173,28 @@ class ConsoleSession:
             self.outputs_error = f"in use by {borrower} (its own process)"
         out.close()
         self.emit(Stopped("outputs", reason=self.outputs_error))
+
+    def reopen_outputs(self, profile: Any) -> bool:
+        """Close the console's outputs and open ``profile``'s (the console's profile
+        reloaded after another sound card or relay board was saved to it). Refused with
+        one line (``UserError``) while they play, are e-stopped or a demo holds them.
+        Blocking; True when the new outputs opened (else ``outputs_error`` says why)."""
+        with self._lock:
+            out = self.outputs
+            if out is None and self.demos.run is not None:
+                raise UserError("a demo holds the outputs; stop it first (Scenes, s)")
+            if out is not None:
+                if out.gate.estopped:
+                    raise UserError("the e-stop is active; ctrl+r resets it first")
+                if out.status()["busy"]:
+                    raise UserError("the outputs are playing; wait or stop them first")
+            self.outputs = None
+            self.outputs_profile = profile
+            self.outputs_error = "reopening with the chosen devices"
+        if out is not None:
+            out.close()
+            self.emit(Stopped("outputs", reason=self.outputs_error))
+        return self.open_outputs()
 
     def _control_command(self, line: str) -> str:
         if line == "estop":

@@ -63,7 +63,8 @@ DRIVERS: dict[str, tuple[tuple[str, str, str], ...]] = {
 def _register(register: Any, kind: str) -> None:
     for name, module, description in DRIVERS[kind]:
         driver = importlib.import_module(f"{__name__}.{module}")
-        register(name, driver.from_profile, description=description, probe=driver.probe)
+        extra = {"devices": driver.list_devices} if kind == "audio_output" else {}
+        register(name, driver.from_profile, description=description, probe=driver.probe, **extra)
 
 
 @hookimpl

@@ -22,10 +22,11 @@ import numpy as np
 
 from console.bench import summarize_s
 from console.contracts import BlockSource
-from console.types import DeviceStatus
+from console.types import DeviceStatus, OutputDevice
 from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
+CHANNELS = 2  # left: piezo amplifier, right: screen amplifier
 TIMING_WINDOW = 2000  # callbacks kept for the period / fill-time statistics
 
 _open_streams = 0  # streams this process holds open; PortAudio is only rescanned when 0
@@ -172,7 +173,7 @@ class SounddeviceOutput:
                 samplerate=self.sample_rate_hz,
                 blocksize=self.block_size,
                 device=index,
-                channels=2,
+                channels=CHANNELS,
                 dtype="float32",
                 latency=self.latency_s if self.latency_s > 0 else "low",
                 callback=self._callback,
@@ -319,6 +320,37 @@ class SounddeviceOutput:
             "dac_lead_ms": summarize_s(list(self._dac_leads_s)),
             "error": self._error,
         }
+
+
+def list_devices(profile: Any, sd: Any = None) -> list[OutputDevice]:
+    """Every PortAudio device with an output (rescanned first while no stream of this
+    process is open): the name ``[audio] device`` takes ("name (host API)"), channels,
+    default latencies; a device with too few channels says so in ``note``. Raises
+    ``DeviceError`` (with the fix) without PortAudio."""
+    sd = sd or load_sounddevice()
+    _rescan(sd)
+    devices = list(sd.query_devices())
+    hostapis = list(sd.query_hostapis())
+    default = sd.default.device[1]
+    found = []
+    for i, d in enumerate(devices):
+        ch = int(d.get("max_output_channels", 0))
+        if ch < 1:
+            continue
+        api = hostapis[d["hostapi"]]["name"] if d["hostapi"] < len(hostapis) else "?"
+        found.append(
+            OutputDevice(
+                "sounddevice",
+                _label(d, hostapis),
+                api,
+                ch,
+                float(d.get("default_low_output_latency", float("nan"))),
+                float(d.get("default_high_output_latency", float("nan"))),
+                default=default is not None and i == int(default),
+                note="" if ch >= CHANNELS else f"{ch} output channel: needs {CHANNELS}",
+            )
+        )
+    return found
 
 
 def from_profile(profile: Any) -> SounddeviceOutput:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from console.hookspecs import hookimpl
 from console.schema import Field
-from console.types import DeviceStatus
+from console.types import DeviceStatus, OutputDevice
 
 AUDIO_FIELDS = {
     "buffer_periods": Field(
@@ -47,11 +47,26 @@ def haptable_register_audio_outputs(register):
 
         return TwinAudioOutput(profile)
 
+    def devices(profile):
+        fs, block = profile.get("audio.sample_rate_hz"), profile.get("audio.block_size")
+        periods = profile.get("twin_audio.buffer_periods")
+        return [
+            OutputDevice(
+                "twin",
+                "digital twin amplifiers",
+                "simulated",
+                2,
+                block / fs,  # fast-forward: one block
+                periods * block / fs,  # paced: the simulated device buffer
+            )
+        ]
+
     register(
         "twin",
         factory,
         description="simulated amplifiers; records what was played",
         probe=_simulated("audio"),
+        devices=devices,
     )
 
 

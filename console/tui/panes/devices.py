@@ -1,21 +1,64 @@
-"""Devices: the profile, each device with its doctor status and fix, and every plugin."""
+"""Devices: the profile, each device with its doctor status and fix, the sound card and
+relay board to use (picked here, saved to the profile's override file, the outputs
+reopened with them), a named test signal through the gate, and every plugin."""
 
 from __future__ import annotations
 
-from textual import work
-from textual.app import ComposeResult
-from textual.containers import VerticalScroll
-from textual.widgets import DataTable, Static
+import math
 
+from rich.markup import escape
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import VerticalScroll
+from textual.widgets import DataTable, Select, Static
+
+from console.stimuli import STIMULI
 from console.tui.util import short_path
 
 
+def _ms(seconds: float) -> str:
+    return "-" if seconds is None or not math.isfinite(seconds) else f"{seconds * 1e3:.1f}"
+
+
 class DevicesPane(VerticalScroll):
-    BINDINGS = [("d", "doctor", "Re-check devices")]
+    HELP_TEXT = (
+        "enter    on a sound card or relay board row: use it (saved to the profile's\n"
+        "         override file; the outputs reopen with it)\n"
+        "t        play the chosen test signal through the gate on the outputs now open\n"
+        "l        list the sound cards and relay boards again\n"
+        "d        re-check the profile's devices (doctor)"
+    )
+    BINDINGS = [
+        Binding("d", "doctor", "Re-check devices"),
+        Binding("l", "list_devices", "List again"),
+        Binding("t", "test_output", "Test signal"),
+    ]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.audio_rows: dict[str, tuple[str, str]] = {}  # row key -> (driver, device)
+        self.relay_rows: dict[str, str] = {}  # row key -> driver
+        self.result = ""  # the last pick or test, as shown
 
     def compose(self) -> ComposeResult:
-        yield Static(id="profile-line")
+        yield Static(id="profile-line", markup=False)
         yield DataTable(id="device-table", cursor_type="row")
+        yield Static(
+            "sound card (enter uses it; saved to the profile's overrides)", classes="heading"
+        )
+        yield DataTable(id="audio-table", cursor_type="row")
+        yield Static("relay board (enter uses it)", classes="heading")
+        yield DataTable(id="relay-table", cursor_type="row")
+        yield Static("test signal (t plays it through the gate)", classes="heading")
+        yield Select(
+            [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
+            value="sine-PA",
+            allow_blank=False,
+            id="stimulus",
+        )
+        yield Static("", id="devices-result", markup=False)
         yield Static("plugins and what they provide", classes="heading")
         yield DataTable(id="plugin-table", cursor_type="row")
 
@@ -25,27 +68,49 @@ class DevicesPane(VerticalScroll):
 
     def on_mount(self) -> None:
         ctx = self.app.ctx
-        prof = ctx.profile
-        self.query_one("#profile-line", Static).update(
-            f"profile [b]{prof.name}[/b] ({short_path(prof.path)}): "
-            f"{prof.get('profile.description') or ''}"
-        )
+        self._show_profile_line()
         dev = self.query_one("#device-table", DataTable)
         dev.add_columns("device", "driver", "state", "why", "fix")
+        self.query_one("#audio-table", DataTable).add_columns(
+            "", "driver", "device", "host API", "out ch", "low ms", "high ms", "note"
+        )
+        self.query_one("#relay-table", DataTable).add_columns(
+            "", "driver", "probe", "what it finds", "description"
+        )
         plug = self.query_one("#plugin-table", DataTable)
         plug.add_columns("kind", "name", "plugin", "description")
         for kind, regs in sorted(ctx.pm.registrations.items()):
             for name, reg in sorted(regs.items()):
                 if reg.tab is not None:
                     continue  # a screen of the console: its tab shows it
-                plug.add_row(kind, name, reg.plugin, reg.description)
+                plug.add_row(Text(kind), Text(name), Text(reg.plugin), Text(reg.description))
         self.call_after_refresh(self.action_doctor)
+        self.call_after_refresh(self.action_list_devices)
 
+    # ------------------------------------------------------------------ what is in use
+    def _profile(self):
+        """The profile the outputs open with (after a pick: reloaded with it)."""
+        session = self.app.session
+        return session.outputs_profile or self.app.ctx.profile
+
+    def _show_profile_line(self) -> None:
+        prof = self._profile()
+        saved = f"; saved settings: {short_path(prof.overrides)}" if prof.overrides else ""
+        self.query_one("#profile-line", Static).update(
+            f"profile {prof.name} ({short_path(prof.path)}): "
+            f"{prof.get('profile.description') or ''}{saved}"
+        )
+
+    def _in_use(self) -> tuple[str, str, str]:
+        prof = self._profile()
+        return prof.get("audio.driver"), prof.get("audio.device") or "", prof.get("relays.driver")
+
+    # ------------------------------------------------------------------ doctor
     @work(thread=True, exclusive=True, group="doctor")
     def action_doctor(self) -> None:
         from console.runtime.doctor import diagnose
 
-        rows = diagnose(self.app.ctx.profile, self.app.ctx.pm)
+        rows = diagnose(self._profile(), self.app.ctx.pm)
         self.app.call_from_thread(self._show, rows)
 
     def _show(self, rows) -> None:
@@ -53,6 +118,143 @@ class DevicesPane(VerticalScroll):
         table.clear()
         for s in rows:
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
-                s.state, f"[red]{s.state}[/]"
+                s.state, f"[red]{escape(s.state)}[/]"
             )
-            table.add_row(s.kind, s.name, state, s.why, s.fix)
+            table.add_row(
+                Text(s.kind), Text(s.name), Text.from_markup(state), Text(s.why), Text(s.fix)
+            )
+
+    # ------------------------------------------------------------------ listing
+    @work(thread=True, exclusive=True, group="devices")
+    def action_list_devices(self) -> None:
+        from console.runtime.devices import output_devices, relay_boards
+
+        prof, pm = self._profile(), self.app.ctx.pm
+        audio = output_devices(prof, pm)
+        relays = relay_boards(prof, pm)
+        self.app.call_from_thread(self._show_devices, audio, relays)
+
+    def _show_devices(self, audio, relays) -> None:
+        drv, device, relay_drv = self._in_use()
+        table = self.query_one("#audio-table", DataTable)
+        table.clear()
+        self.audio_rows.clear()
+        for d in audio:
+            if not d.devices:
+                key = f"{d.driver}\x00"
+                self.audio_rows[key] = (d.driver, "")
+                mark = "●" if d.driver == drv else ""
+                table.add_row(mark, Text(d.driver), "", "", "", "", "", Text(d.problem), key=key)
+            for dev in d.devices:
+                key = f"{dev.driver}\x00{dev.name}"
+                self.audio_rows[key] = (dev.driver, dev.name)
+                used = dev.driver == drv and (drv == "twin" or dev.name == device)
+                table.add_row(
+                    "●" if used else ("default" if dev.default else ""),
+                    Text(dev.driver),
+                    Text(dev.name),
+                    Text(dev.host_api),
+                    str(dev.output_channels),
+                    _ms(dev.low_latency_s),
+                    _ms(dev.high_latency_s),
+                    Text(dev.note),
+                    key=key,
+                )
+        rtable = self.query_one("#relay-table", DataTable)
+        rtable.clear()
+        self.relay_rows.clear()
+        for name, description, status in relays:
+            key = f"relay\x00{name}"
+            self.relay_rows[key] = name
+            rtable.add_row(
+                "●" if name == relay_drv else "",
+                Text(name),
+                Text(status.state),
+                Text(status.why),
+                Text(description),
+                key=key,
+            )
+
+    # ------------------------------------------------------------------ picking
+    @on(DataTable.RowSelected, "#audio-table")
+    def _pick_audio(self, event: DataTable.RowSelected) -> None:
+        choice = self.audio_rows.get(str(event.row_key.value))
+        if choice is None:
+            return
+        driver, device = choice
+        label = device or driver
+        self._apply({"audio.driver": driver, "audio.device": device}, f"sound card {label!r}")
+
+    @on(DataTable.RowSelected, "#relay-table")
+    def _pick_relays(self, event: DataTable.RowSelected) -> None:
+        driver = self.relay_rows.get(str(event.row_key.value))
+        if driver is not None:
+            self._apply({"relays.driver": driver}, f"relay board {driver!r}")
+
+    @work(thread=True, exclusive=True, group="pick")
+    def _apply(self, settings: dict, what: str) -> None:
+        """Save ``settings`` to the profile's override file, reload the profile and
+        reopen the outputs with it (refused while they play or are e-stopped)."""
+        from console.errors import UserError
+        from console.profile import load_profile, save_overrides
+
+        session, pm = self.app.session, self.app.ctx.pm
+        self._say(f"{what}: saving ...")
+        try:
+            path = save_overrides(self._profile(), settings, pm)
+            new = load_profile(self._profile().path, pm)
+            opened = session.reopen_outputs(new)
+        except UserError as exc:  # ProfileError too: one line naming the file and key
+            self._say(f"{what}: not used: {exc}")
+            return
+        if opened:
+            self._say(f"{what} in use; saved to {short_path(path)}")
+        else:
+            self._say(
+                f"{what} saved to {short_path(path)} but the outputs did not open: "
+                f"{session.outputs_error}"
+            )
+        self.app.call_from_thread(self._after_pick)
+
+    def _after_pick(self) -> None:
+        self._show_profile_line()
+        self.action_list_devices()
+        self.action_doctor()
+
+    # ------------------------------------------------------------------ testing
+    @work(thread=True, exclusive=True, group="test-output")
+    def action_test_output(self) -> None:
+        from console.errors import UserError
+        from console.stimuli import make_stimulus
+
+        name = self.app.call_from_thread(lambda: self.query_one("#stimulus", Select).value)
+        session = self.app.session
+        prof = self._profile()
+        try:
+            plan = make_stimulus(
+                str(name),
+                int(prof.get("audio.sample_rate_hz")),
+                float(prof.get("limits.max_plan_s")),
+            )
+        except UserError as exc:
+            self._say(f"test signal: {exc}")
+            return
+        where = prof.get("audio.device") or prof.get("audio.driver")
+        self._say(f"{name}: playing on {where!r} ...")
+        if not session.play_plan(plan):
+            self._say(f"{name}: not played (the message says why)")
+            return
+        trace = session.scope(plan.duration_s + 0.5)
+        peaks = (
+            ""
+            if trace is None
+            else ", ".join(f"{ch} {v:.1f} V peak" for ch, v in trace.peak_v().items())
+        )
+        self._say(f"{name} played on {where!r} through the gate: {peaks}")
+
+    def _say(self, text: str) -> None:
+        def show() -> None:
+            self.result = text
+            self.query_one("#devices-result", Static).update(text)
+
+        self.app.call_from_thread(show)

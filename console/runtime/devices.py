@@ -1,0 +1,53 @@
+"""What the Devices screen lists: every audio output driver's devices and every relay
+board driver's probe, each call guarded (a driver that fails says why in one line)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from console.types import DeviceStatus, OutputDevice
+
+
+@dataclass(frozen=True)
+class DriverDevices:
+    """One audio output driver: the devices it can open, or why it lists none."""
+
+    driver: str
+    description: str
+    devices: tuple[OutputDevice, ...] = field(default=())
+    problem: str = ""
+
+
+def output_devices(profile: Any, plugins: Any) -> list[DriverDevices]:
+    """Every registered audio output driver's devices (a driver without a ``devices``
+    listing shows as one row naming it: ``[audio] device`` is then free text)."""
+    found = []
+    for name, reg in sorted(plugins.of("audio_output").items()):
+        if reg.devices is None:
+            found.append(DriverDevices(name, reg.description, problem="lists no devices"))
+            continue
+        try:
+            devs = tuple(reg.devices(profile))
+        except Exception as exc:  # noqa: BLE001 - a missing library is a row, not a crash
+            found.append(DriverDevices(name, reg.description, problem=str(exc)))
+            continue
+        found.append(
+            DriverDevices(name, reg.description, devs, "" if devs else "no output device found")
+        )
+    return found
+
+
+def relay_boards(profile: Any, plugins: Any) -> list[tuple[str, str, DeviceStatus]]:
+    """(driver, description, what its probe finds) for every registered relay board."""
+    rows = []
+    for name, reg in sorted(plugins.of("relay_board").items()):
+        if reg.probe is None:
+            status = DeviceStatus("relay_board", name, "missing", "no probe registered")
+        else:
+            try:
+                status = reg.probe(profile)
+            except Exception as exc:  # noqa: BLE001 - shown in its row
+                status = DeviceStatus("relay_board", name, "error", f"probe failed: {exc}")
+        rows.append((name, reg.description, status))
+    return rows

@@ -1,0 +1,147 @@
+"""The Devices screen: pick a sound card and a relay board (saved to the profile's override
+file, the outputs reopened with them), play a named test signal through the gate."""
+
+from __future__ import annotations
+
+import asyncio
+from types import SimpleNamespace
+
+import numpy as np
+from textual.widgets import DataTable, Static
+
+from console.cli import main
+from console.hookspecs import hookimpl
+from console.plugins import load_plugins
+from console.profile import load_profile, overrides_path
+from console.runtime.context import Context
+from console.tui.app import HapTableApp
+from console.types import DeviceStatus, OutputDevice
+
+from .conftest import wait_for
+
+CARDS = (
+    OutputDevice("bench-card", "Bench Card A (ALSA)", "ALSA", 2, 0.005, 0.02, default=True),
+    OutputDevice("bench-card", "Bench Card B (JACK)", "JACK", 8, 0.003, 0.01),
+    OutputDevice("bench-card", "Bench mic (ALSA)", "ALSA", 1, 0.005, 0.02, note="1 output"),
+)
+
+
+def _bench_card_plugin():
+    """An audio output listing three cards; what it opens is the twin's amplifiers (so
+    the test hears what the gate passed)."""
+
+    @hookimpl
+    def haptable_register_audio_outputs(register):
+        def factory(profile):
+            from plugins.twin.outputs import TwinAudioOutput
+
+            return TwinAudioOutput(profile)
+
+        register(
+            "bench-card",
+            factory,
+            description="a test sound card",
+            probe=lambda p: DeviceStatus("audio", "bench-card", "simulated", "test card"),
+            devices=lambda profile: list(CARDS),
+        )
+
+    return SimpleNamespace(haptable_register_audio_outputs=haptable_register_audio_outputs)
+
+
+def _row_of(table: DataTable, text: str) -> int | None:
+    for i in range(table.row_count):
+        if any(text in str(c) for c in table.get_row_at(i)):
+            return i
+    return None
+
+
+async def _select(pilot, app, table_id: str, text: str) -> DataTable:
+    table = app.query_one(table_id, DataTable)
+    await wait_for(pilot, lambda: _row_of(table, text) is not None, 20, f"{text} listed")
+    table.focus()
+    table.move_cursor(row=_row_of(table, text))
+    await pilot.press("enter")
+    return table
+
+
+def _result(app) -> str:
+    return str(app.query_one("#devices-result", Static).content)
+
+
+def test_pick_a_sound_card_and_a_relay_board_the_next_load_has_them():
+    plugins = load_plugins(extra={"bench_card": _bench_card_plugin()})
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            table = await _select(pilot, app, "#audio-table", "Bench Card B (JACK)")
+            await wait_for(pilot, lambda: "in use" in _result(app), 20, "card in use")
+            assert "Bench Card B (JACK)" in _result(app)
+            assert str(overrides_path("sim").name) in _result(app)
+            session = app.session
+            assert session.outputs is not None
+            assert session.outputs_profile.get("audio.device") == "Bench Card B (JACK)"
+            # the table marks the card in use, and lists host API, channels, latencies
+            await wait_for(
+                pilot,
+                lambda: str(table.get_row_at(_row_of(table, "Card B"))[0]) == "●",
+                10,
+                "card B marked",
+            )
+            row = [str(c) for c in table.get_row_at(_row_of(table, "Card B"))]
+            assert row[3:7] == ["JACK", "8", "3.0", "10.0"]
+            assert "twin" in [str(c) for c in table.get_column_at(1)]  # the twin listed too
+            mic = [str(c) for c in table.get_row_at(_row_of(table, "Bench mic"))]
+            assert mic[-1] == "1 output"
+            # the relay board: every registered driver with what its probe finds
+            await _select(pilot, app, "#relay-table", "twin")
+            await wait_for(pilot, lambda: "relay board 'twin' in use" in _result(app), 20)
+            relays = app.query_one("#relay-table", DataTable)
+            drivers = [str(c) for c in relays.get_column_at(1)]
+            assert {"twin", "yoctopuce", "hid"} <= set(drivers)
+            # a named test signal, through the session and the gate, on the new card
+            await pilot.press("t")
+            await wait_for(pilot, lambda: "played" in _result(app), 30, "test played")
+            assert "piezo 20.0 V peak" in _result(app) and "screen 0.0 V peak" in _result(app)
+            rec = session.outputs.recording()  # what the card's amplifiers received
+            assert abs(np.max(np.abs(rec[:, 0])) - 20.0) < 1e-3
+
+    asyncio.run(scenario())
+    again = load_profile("sim", plugins)
+    assert again.get("audio.driver") == "bench-card"
+    assert again.get("audio.device") == "Bench Card B (JACK)"
+    assert again.get("relays.driver") == "twin"
+    assert again.overrides == overrides_path("sim")
+
+
+def test_a_broken_override_file_gets_one_line(capsys):
+    path = overrides_path("sim")
+    path.parent.mkdir(parents=True)
+    path.write_text('[audio]\nblock_size = "large"\n')
+    assert main(["--profile", "sim", "doctor"]) != 0
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert str(path) in err and "block_size" in err and "expected" in err
+    assert "Traceback" not in err
+
+
+def test_a_pick_refused_by_a_broken_override_file_says_so_and_keeps_the_outputs():
+    plugins = load_plugins(extra={"bench_card": _bench_card_plugin()})
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            before = app.session.outputs
+            path = overrides_path("sim")
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text('[audio]\nsample_rate_hz = "fast"\n')  # broken by hand meanwhile
+            await _select(pilot, app, "#audio-table", "Bench Card A (ALSA)")
+            await wait_for(pilot, lambda: "not used" in _result(app), 20, "refusal shown")
+            msg = _result(app)
+            assert str(path) in msg and "sample_rate_hz" in msg and "\n" not in msg
+            assert app.session.outputs is before  # still the ones that were open
+            assert path.read_text() == '[audio]\nsample_rate_hz = "fast"\n'  # untouched
+
+    asyncio.run(scenario())
