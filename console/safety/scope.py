@@ -45,6 +45,19 @@ class ScopeTrace:
         peaks = np.max(np.abs(self.volts), axis=0)
         return {name: float(p) for name, p in zip(self.channels, peaks, strict=True)}
 
+    def span(self, start: int, end: int) -> ScopeTrace:
+        """The part from gate clock ``start`` to ``end`` (clipped to what is kept)."""
+        a = min(max(start - self.clock, 0), self.n)
+        b = min(max(end - self.clock, a), self.n)
+        c0, c1 = self.clock + a, self.clock + b
+        marks = tuple(m for m in self.marks if c0 <= m[0] < c1)
+        return ScopeTrace(self.volts[a:b], self.sample_rate_hz, c0, self.channels, marks)
+
+    def last(self, seconds: float) -> ScopeTrace:
+        """The newest ``seconds`` of the trace."""
+        end = self.clock + self.n
+        return self.span(end - int(round(seconds * self.sample_rate_hz)), end)
+
     def silent_after(self, clock: int) -> tuple[float, float] | None:
         """From gate clock ``clock`` (an e-stop): (largest |volts| then, ms until every
         channel is zero), or None when the trace does not reach silence after it."""

@@ -43,6 +43,7 @@ class ConsoleSession:
         #: profile reloaded after the operator saved another device (``reopen_outputs``)
         self.outputs_profile: Any = None
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
+        self._last_play: tuple[Any, Any] | None = None  # (plan, its PlayReport)
         self._control: Any = None
         self._lock = threading.Lock()
         self._subscribers: list[Subscriber] = []
@@ -213,6 +214,7 @@ class ConsoleSession:
             report = out.play(plan, wait=False)
             with self._lock:
                 self.played.append(plan)
+                self._last_play = (plan, report)
             if wait:
                 report.wait(3 * plan.duration_s + 10)
                 if report.error:
@@ -240,10 +242,11 @@ class ConsoleSession:
         )
         return dataclasses.replace(trace, marks=marks)
 
-    def last_played(self) -> Any:
-        """The last plan accepted for playing (an ``OutputPlan``), else None."""
+    def last_played(self) -> tuple[Any, Any] | None:
+        """(plan, report) of the last plan accepted for playing, else None: the report
+        (``PlayReport``) has the gate clock of each segment's first and last sample."""
         with self._lock:
-            return self.played[-1] if self.played else None
+            return self._last_play
 
     def estop(self, reason: str) -> None:
         """Silence every output now: the console's own, or every process holding outputs

@@ -43,6 +43,12 @@ def _latency(app: Any) -> Any:
     return LatencyPane()
 
 
+def _scope(app: Any) -> Any:
+    from console.tui.panes.scope import ScopePane
+
+    return ScopePane()
+
+
 @hookimpl
 def haptable_register_panels(register: Any) -> None:
     register(
@@ -74,4 +80,10 @@ def haptable_register_panels(register: Any) -> None:
         _latency,
         description="per-stage latency of the frame loop or the running demo",
         tab=PanelTab("Latency", "f7", 70),
+    )
+    register(
+        "scope",
+        _scope,
+        description="the last output per channel as the safety gate passed it, in volts",
+        tab=PanelTab("Scope", "f9", 90),
     )

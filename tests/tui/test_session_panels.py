@@ -29,6 +29,7 @@ BUILT_IN = [
     ("electrostatic", "Electrostatic", "f5"),
     ("scenes", "Scenes", "f6"),
     ("latency", "Latency", "f7"),
+    ("scope", "Scope", "f9"),
 ]
 
 
@@ -89,7 +90,8 @@ def test_blocking_a_plugin_drops_its_tab(monkeypatch):
 
 def test_a_plugin_panel_with_a_tab_shows_as_one_with_its_key():
     plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f8", 80))})
-    assert list(panel_tabs(plugins))[-1] == "probe"  # after Latency (70)
+    names = list(panel_tabs(plugins))
+    assert names.index("latency") < names.index("probe") < names.index("scope")  # 70, 80, 90
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")

@@ -1,0 +1,169 @@
+"""Scope: what the safety gate handed the driver, per channel, in volts at the actuators
+(what the amplifiers got), refreshed live; ``space`` freezes it, ``p`` shows the last
+played plan whole, ``+``/``-`` change the time window. E-stops in view are marked with
+the level they ramped down from and how long the ramp took."""
+
+from __future__ import annotations
+
+import numpy as np
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Vertical
+from textual.widgets import Static
+
+from console.tui.charts import Chart, Series
+
+#: the time windows ``+``/``-`` step through, in ms
+WINDOWS_MS = (5, 10, 20, 50, 100, 200, 500, 1000, 2000, 4000)
+#: around the last plan (``p``): this much before and after it, in ms
+PLAN_MARGIN_MS = 20.0
+
+
+def plan_line(last) -> str:
+    """The last played plan in words: name, length, where it played, and whether done."""
+    if last is None:
+        return "no plan played yet"
+    plan, report = last
+    where = sorted({p for seg in plan.segments for p in seg.patches})
+    if any(seg.screen for seg in plan.segments):
+        where.append("screen")
+    state = "playing" if not report.done.is_set() else (report.error or "done")
+    return (
+        f"last plan {plan.name or 'plan'}: {plan.duration_s:.2f} s on "
+        f"{', '.join(where) or 'nothing'} ({state})"
+    )
+
+
+def marks_lines(trace) -> list[str]:
+    """One line per e-stop or fault in ``trace``: when, from what level, how long the
+    ramp to silence took (as the trace shows it)."""
+    lines = []
+    for clock, kind, message in trace.marks:
+        if kind not in ("estop", "fault"):
+            continue
+        at_ms = (clock - trace.clock) * 1e3 / trace.sample_rate_hz
+        ramp = trace.silent_after(clock)
+        how = (
+            f"ramp {ramp[0]:.1f} V -> 0 V in {ramp[1]:.2f} ms"
+            if ramp is not None
+            else "ramp not finished in view"
+        )
+        lines.append(f"{kind} at {at_ms:.1f} ms: {how} ({message})")
+    return lines
+
+
+class ScopePane(Vertical):
+    HELP_TEXT = (
+        "space    freeze / run (frozen: the last 4 s are kept to look at)\n"
+        "p        the last played plan, whole (frozen)\n"
+        "+ / -    shorter / longer time window\n"
+        "What the safety gate handed the driver, per channel, in volts at the actuators."
+    )
+    BINDINGS = [
+        Binding("space", "freeze", "Freeze/run"),
+        Binding("p", "last_plan", "Last plan"),
+        Binding("plus,equals_sign", "zoom(-1)", "Shorter", show=False),
+        Binding("minus", "zoom(1)", "Longer", show=False),
+    ]
+    can_focus = True
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.window_ms = 50
+        self.frozen = None  # the whole ring (ScopeTrace) while frozen
+        self.plan_view = False  # frozen on the last plan's span
+        self.shown = None  # the ScopeTrace drawn now
+        self._tick = 0
+
+    def compose(self) -> ComposeResult:
+        yield Static("", id="scope-head", markup=False)
+        yield Chart(
+            x_label="time",
+            x_unit="ms",
+            y_label="output",
+            y_unit="V",
+            id="scope-chart",
+        )
+        yield Static("", id="scope-info", markup=False)
+
+    @property
+    def focus_target(self):
+        return self
+
+    def on_mount(self) -> None:
+        self._redraw()
+
+    # ------------------------------------------------------------------ keys
+    def action_freeze(self) -> None:
+        if self.frozen is not None:
+            self.frozen, self.plan_view = None, False
+        else:
+            self.frozen = self.app.session.scope(None)
+        self._redraw()
+
+    def action_last_plan(self) -> None:
+        self.frozen = self.app.session.scope(None)
+        self.plan_view = self.frozen is not None
+        self._redraw()
+
+    def action_zoom(self, step: int) -> None:
+        i = min(range(len(WINDOWS_MS)), key=lambda k: abs(WINDOWS_MS[k] - self.window_ms))
+        self.window_ms = WINDOWS_MS[min(max(i + step, 0), len(WINDOWS_MS) - 1)]
+        self.plan_view = False
+        self._redraw()
+
+    # ------------------------------------------------------------------ drawing
+    def show_state(self, status: dict, log) -> None:
+        """The app's 10 Hz tick while this screen shows: live, redraw every other."""
+        self._tick += 1
+        if self.frozen is None and self._tick % 2 == 0:
+            self._redraw()
+
+    def _view(self):
+        """What to draw: the live window, the frozen window or the last plan's span."""
+        session = self.app.session
+        last = session.last_played()
+        if self.frozen is None:
+            trace = session.scope(self.window_ms / 1e3)
+            return trace, "live"
+        trace = self.frozen
+        if self.plan_view and last is not None:
+            _plan, report = last
+            if report.segment_start:
+                fs = trace.sample_rate_hz
+                margin = int(PLAN_MARGIN_MS * fs / 1e3)
+                end = report.segment_end[-1] if report.segment_end else trace.clock + trace.n
+                kept = "" if report.segment_start[0] >= trace.clock else " (its start is gone)"
+                return (
+                    trace.span(report.segment_start[0] - margin, end + margin),
+                    f"frozen on the last plan{kept}",
+                )
+        return trace.last(self.window_ms / 1e3), "frozen"
+
+    def _redraw(self) -> None:
+        session = self.app.session
+        chart = self.query_one("#scope-chart", Chart)
+        head = self.query_one("#scope-head", Static)
+        info = self.query_one("#scope-info", Static)
+        trace, mode = self._view()
+        plan = plan_line(session.last_played())
+        if trace is None:
+            why = session.outputs_error or "not open yet"
+            head.update(f"outputs not here: {why}; {plan}")
+            chart.clear("no outputs in this console: nothing to show")
+            info.update("")
+            self.shown = None
+            return
+        self.shown = trace
+        span_ms = trace.n * 1e3 / trace.sample_rate_hz
+        head.update(
+            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; space "
+            f"freezes, p last plan, +/- zoom) | {plan}"
+        )
+        t_ms = np.arange(trace.n) * (1e3 / trace.sample_rate_hz)
+        chart.set_series(
+            [Series(ch, t_ms, trace.volts[:, c]) for c, ch in enumerate(trace.channels)],
+            title="what the gate handed the driver, volts at the actuators",
+        )
+        peaks = ", ".join(f"{ch} {v:.1f} V" for ch, v in trace.peak_v().items())
+        info.update("\n".join([f"peak: {peaks}", *marks_lines(trace)]))

@@ -1,0 +1,97 @@
+"""The Scope screen: what the gate handed the driver, per channel, in volts."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import time
+
+from textual.widgets import Static
+
+from console.cli import Context
+from console.stimuli import make_stimulus
+from console.tui.app import HapTableApp
+from console.tui.charts import Chart
+
+from .conftest import wait_for
+
+FS = 48000
+
+
+def _text(app, id_: str) -> str:
+    return str(app.query_one(id_, Static).content)
+
+
+def test_a_played_stimulus_shows_its_peak_per_channel(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="scope")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            pane = app.pane("scope")
+            await wait_for(pilot, lambda: "LIVE" in _text(app, "#scope-head"), 10, "live")
+            plan = make_stimulus("sine-PB", FS)
+            assert app.session.play_plan(plan, wait=False)  # as a screen does
+            report = app.session.last_played()[1]
+            await wait_for(pilot, report.done.is_set, 20, "played")
+            await pilot.press("p")  # the last plan, whole
+            await wait_for(
+                pilot, lambda: "last plan sine-PB: 1.00 s on PB (done)" in _text(app, "#scope-head")
+            )
+            assert "FROZEN ON THE LAST PLAN" in _text(app, "#scope-head")
+            assert "peak: piezo 20.0 V, screen 0.0 V" in _text(app, "#scope-info")
+            shown = pane.shown
+            assert shown.n >= FS  # the whole second, and the margins
+            chart = app.query_one("#scope-chart", Chart)
+            summary = chart.summary()
+            assert "x: time (ms); y: output (V)" in summary
+            assert re.search(r"piezo: x 0\.\.10[0-9]{2}\.?\d*, y -20\.?0*\.\.20", summary), summary
+            assert "screen: x" in summary
+            # frozen: nothing changes while more plays
+            await pilot.press("space")  # run again
+            assert "LIVE" in _text(app, "#scope-head")
+            await pilot.press("space")  # freeze the live window
+            assert pane.frozen is not None and "FROZEN" in _text(app, "#scope-head")
+            before = pane.shown
+            app.session.play_plan(make_stimulus("screen-180hz", FS), wait=True)
+            await pilot.pause(0.5)
+            assert pane.shown is before
+            await pilot.press("space")
+            await wait_for(pilot, lambda: pane.frozen is None and pane.shown is not before)
+
+    asyncio.run(scenario())
+
+
+def test_an_estop_ramp_is_visible(plugins):
+    """Paced in real time: the e-stop lands in the middle of a tone; the Scope shows the
+    level it ramped down from and a ramp as long as the slew limit allows."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="scope")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            out = app.session.outputs
+            plan = make_stimulus("sine-PA", FS)
+            assert app.session.play_plan(plan, wait=False)
+            report = app.session.last_played()[1]
+            t_end = time.monotonic() + 10
+            while time.monotonic() < t_end and not report.segment_start:
+                await pilot.pause(0.02)
+            await pilot.pause(0.3)  # well inside the tone
+            await pilot.press("ctrl+e")
+            assert out.gate.wait_safe(5)
+            await pilot.pause(0.1)
+            await pilot.press("p")
+            await wait_for(
+                pilot, lambda: "estop at" in _text(app, "#scope-info"), 10, "e-stop shown"
+            )
+            info = _text(app, "#scope-info")
+            m = re.search(r"estop at ([\d.]+) ms: ramp ([\d.]+) V -> 0 V in ([\d.]+) ms", info)
+            assert m, info
+            level_v, ramp_ms = float(m.group(2)), float(m.group(3))
+            assert 0.5 < level_v <= 20.0
+            slew = out.limits.slew_v_per_s("piezo", frozenset({"PA"}))
+            assert abs(ramp_ms - level_v / slew * 1e3) <= 1e3 / FS + 0.01
+            assert "operator e-stop" in info
+            await pilot.press("ctrl+r")
+
+    asyncio.run(scenario())
