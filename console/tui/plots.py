@@ -1,8 +1,8 @@
 """Text plots for the console: pure functions of arrays returning Rich renderables.
 
-- ``frf_plot``: |H| (dB re 1 um/V) of several excitations against frequency, one
-  character per column, with one frequency marked.
-- ``sparkline``: values as ``▁▂▃▄▅▆▇█``.
+- ``frf_series``: |H| (um/V) of several excitations against frequency as series of a
+  ``console.tui.charts.Chart`` (dB axis), with one frequency marked.
+- ``sparkline``: values as ``▁▂▃▄▅▆▇█``, as many as the width allows.
 - ``HalfBlockImage``: a grey image as half-block characters (two pixels per cell),
   with coloured overlay pixels.
 """
@@ -15,79 +15,50 @@ import numpy as np
 from rich.color import Color
 from rich.segment import Segment
 from rich.style import Style
-from rich.text import Text
 
-SERIES_COLOURS = ("cyan", "magenta", "green", "yellow", "bright_white")
+from console.tui.charts import Series
+
 BARS = "▁▂▃▄▅▆▇█"
 
 
-def frf_plot(
+def frf_series(
     freq_hz: np.ndarray,
     mags: np.ndarray,
     names: Sequence[str],
     *,
-    width: int = 60,
-    height: int = 10,
     mark_hz: float | None = None,
     band_hz: float | None = None,
     masked: np.ndarray | None = None,
-    floor_db: float = -60.0,
-) -> Text:
-    """|H| of ``mags`` (S, F) in um/V on a dB axis; columns hold the max over their bins.
-
-    Masked bins never draw. ``mark_hz`` draws a vertical marker and its value per series.
-    """
+) -> list[Series]:
+    """|H| of ``mags`` (S, F) in um/V against frequency, one chart series per excitation
+    (for ``charts.Chart`` with a dB axis). Masked bins and bins above ``band_hz`` are left
+    out (NaN, never drawn). With ``mark_hz`` each label carries its value at that
+    frequency and a vertical line series ``plays at ... Hz`` marks it."""
     f = np.asarray(freq_hz, float)
-    m = np.abs(np.asarray(mags))
+    m = np.abs(np.asarray(mags, float))
     keep = np.ones(f.shape, bool) if masked is None else ~np.asarray(masked, bool)
     if band_hz is not None:
         keep &= f <= band_hz
-    width, height = max(10, int(width)), max(3, int(height))
-    text = Text()
     if not keep.any() or m.size == 0:
-        return Text("no usable bins to plot")
-    fmax = float(f[keep].max())
-    fmin = float(f[keep].min())
-    col = np.clip(
-        ((f - fmin) / max(fmax - fmin, 1e-12) * (width - 1)).round().astype(int), 0, width - 1
-    )
-    with np.errstate(divide="ignore"):
-        db = 20 * np.log10(np.maximum(m, 1e-12))
-    db[:, ~keep] = -np.inf
-    top = float(np.nanmax(db[np.isfinite(db)])) if np.isfinite(db).any() else 0.0
-    top = float(np.ceil(top / 10) * 10) + 0.0  # never "-0"
-    bottom = max(floor_db, top - 60.0)
-    grid = [[(" ", "") for _ in range(width)] for _ in range(height)]
-    for s in range(m.shape[0]):
-        colmax = np.full(width, -np.inf)
-        np.maximum.at(colmax, col[keep], db[s, keep])
-        for c in range(width):
-            if not np.isfinite(colmax[c]) or colmax[c] < bottom:
-                continue
-            r = int(round((top - colmax[c]) / (top - bottom) * (height - 1)))
-            grid[min(max(r, 0), height - 1)][c] = ("•", SERIES_COLOURS[s % len(SERIES_COLOURS)])
-    mark_col = None
-    if mark_hz is not None and fmin <= mark_hz <= fmax:
-        mark_col = int(round((mark_hz - fmin) / max(fmax - fmin, 1e-12) * (width - 1)))
-    for r in range(height):
-        label = f"{top - r * (top - bottom) / (height - 1):5.0f} " if r % 3 == 0 else "      "
-        text.append(label, style="dim")
-        for c, (ch, style) in enumerate(grid[r]):
-            if c == mark_col and ch == " ":
-                text.append("│", style="bold red")
-            else:
-                text.append(ch, style=style)
-        text.append("\n")
-    axis = f"      {fmin:<8.0f}{'Hz  dB re 1 um/V':^{max(width - 16, 1)}}{fmax:>8.0f}"
-    text.append(axis + "\n", style="dim")
-    for s, name in enumerate(names):
-        text.append(f" {name}", style=SERIES_COLOURS[s % len(SERIES_COLOURS)])
-        if mark_hz is not None:
-            k = int(np.argmin(np.abs(f - mark_hz)))
-            text.append(f" {m[s, k]:.3g}", style="dim")
+        return []
+    k = None
     if mark_hz is not None:
-        text.append(f"   │ {mark_hz:g} Hz", style="bold red")
-    return text
+        k = int(np.flatnonzero(keep)[np.argmin(np.abs(f[keep] - mark_hz))])
+    series = []
+    for s, name in enumerate(names):
+        label = name if k is None else f"{name} {m[s, k]:.3g}"
+        series.append(Series(label, f, np.where(keep, m[s], np.nan)))
+    if mark_hz is not None:
+        top = float(m[:, keep].max())
+        if top > 0:  # a line over the 60 dB the axis shows below the highest peak
+            series.append(
+                Series(
+                    f"plays at {mark_hz:g} Hz",
+                    np.array([mark_hz, mark_hz]),
+                    np.array([top * 1e-3, top]),
+                )
+            )
+    return series
 
 
 def sparkline(values: Sequence[float], width: int = 20) -> str:

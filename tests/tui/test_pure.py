@@ -7,7 +7,7 @@ import numpy as np
 from console.runtime.twin_log import bursts, dominant_hz
 from console.tui.panes.latency import stage_rows
 from console.tui.panes.relays import interlock
-from console.tui.plots import HalfBlockImage, downsample, frf_plot, sparkline
+from console.tui.plots import HalfBlockImage, downsample, frf_series, sparkline
 from plugins.electrostatic.panel import FREQ_RANGE_HZ, clamp_setting, force_text
 
 
@@ -15,30 +15,37 @@ def _status(estopped=False, busy=False):
     return {"gate": {"estopped": estopped, "relays_closed": []}, "busy": busy}
 
 
-def test_frf_plot_marks_the_chosen_frequency_and_reports_each_excitation():
+def test_frf_series_mark_the_chosen_frequency_with_each_excitations_value():
     f = np.linspace(0, 600, 601)
     mags = np.vstack([1 / (1 + ((f - f0) / 5) ** 2) for f0 in (100, 200, 300)])
-    text = frf_plot(f, mags, ("PA", "PB", "PALL"), width=61, height=8, mark_hz=200.0).plain
-    lines = text.splitlines()
-    plot = lines[:8]
-    # the marker sits in the column of 200 Hz (after the 6-character axis labels)
-    col = 6 + 20
-    assert all(ln[col] in "│•" for ln in plot)
-    # each peak is drawn in the top row at its own column
-    assert plot[0][6 + 10] == "•" and plot[0][6 + 30] == "•"
-    legend = lines[-1]
-    assert "PA" in legend and "PALL" in legend and "200 Hz" in legend
-    # the value at the marked frequency is printed for the excitation peaking there
-    assert "PB 1" in legend
+    series = frf_series(f, mags, ("PA", "PB", "PALL"), mark_hz=200.0)
+    assert [s.label for s in series] == ["PA 0.00249", "PB 1", "PALL 0.00249", "plays at 200 Hz"]
+    np.testing.assert_array_equal(series[1].y, mags[1])  # um/V as measured: the chart does dB
+    mark = series[-1]
+    assert list(mark.x) == [200.0, 200.0] and mark.y[1] == 1.0 and mark.y[0] == 1e-3
 
 
-def test_frf_plot_never_draws_masked_bins():
+def test_frf_series_never_draw_masked_bins_or_bins_above_the_band():
+    from console.tui.charts import Chart
+
     f = np.linspace(0, 100, 101)
     mags = np.ones((1, 101))
     mags[0, :10] = 1e3  # huge near DC, but masked
     masked = f < 10
-    text = frf_plot(f, mags, ("PA",), width=40, height=6, masked=masked).plain
-    assert text.splitlines()[0].strip().startswith("0")  # the axis tops at 0 dB, not 60
+    (pa,) = frf_series(f, mags, ("PA",), masked=masked, band_hz=90.0)
+    assert np.isnan(pa.y[:10]).all() and np.isnan(pa.y[91:]).all()
+    chart = Chart(x_unit="Hz", y_label="|H|", y_unit="um/V", db_y=True)
+    chart.series = (pa,)
+    ((label, x, y),) = chart.drawn(columns=200)
+    assert label == "PA" and x.min() == 10 and x.max() == 90 and np.all(y == 0.0)  # 0 dB
+    assert "|H| (dB re 1 um/V)" in chart.summary()
+    assert frf_series(f, mags, ("PA",), masked=np.ones(101, bool)) == []
+
+
+def test_sparkline_uses_the_width_it_is_given():
+    values = np.arange(100.0)
+    assert len(sparkline(values, 73)) == 73 and sparkline(values, 73)[-1] == "█"
+    assert len(sparkline(values[:5], 73)) == 5  # fewer values: fewer bars
 
 
 def test_sparkline_scales_to_its_max():

@@ -98,8 +98,9 @@ def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
             assert point.name == "point 51"
             await wait_for(pilot, lambda: "point 51" in str(app.query_one("#vib-info").render()))
             freq = point.meta["frequency_hz"]
-            plot = str(app.query_one("#frf-plot").render())
-            assert f"{freq:g} Hz" in plot and "PALL" in plot
+            plot = app.query_one("#frf-plot").summary()
+            assert f"plays at {freq:g} Hz" in plot and "PALL" in plot and "point 51" in plot
+            assert "frequency (Hz)" in plot and "|H| (dB re 1 um/V)" in plot
             # second point, then the flow both ways
             pane.move_cursor(52)
             await pilot.press("enter")

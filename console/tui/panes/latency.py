@@ -39,6 +39,17 @@ def stage_rows(snap: dict) -> list[tuple[str, dict]]:
     return rows
 
 
+#: p50 values kept per stage for its sparkline (it shows as many as fit)
+HISTORY = 500
+
+
+def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
+    """Characters left for the sparkline column: the table's width less the other
+    columns and every column's padding (at least 8)."""
+    used = sum(other_widths) + 2 * padding * (len(other_widths) + 1)
+    return max(8, table_width - used - 1)  # one for the scrollbar's gutter
+
+
 def _ms(v) -> str:
     return "-" if v is None or v != v else f"{v:.2f}"
 
@@ -51,7 +62,7 @@ class LatencyPane(Vertical):
         self.visible_now = False
         self.source = ""  # "camera" or "demo NAME": whose loop the numbers are
         self._history_source = ""
-        self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=40))
+        self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=HISTORY))
         self._tick = 0
 
     def compose(self) -> ComposeResult:
@@ -85,7 +96,7 @@ class LatencyPane(Vertical):
     def on_mount(self) -> None:
         if self.available:
             self.query_one("#lat-table", DataTable).add_columns(
-                "stage", "p50 ms", "p99 ms", "max ms", "last 40 p50"
+                "stage", "p50 ms", "p99 ms", "max ms", "p50 history"
             )
 
     def set_visible(self, visible: bool) -> None:
@@ -164,14 +175,17 @@ class LatencyPane(Vertical):
             return
         table = self.query_one("#lat-table", DataTable)
         table.clear()
+        cells = []
         for label, d in stage_rows(snap):
             p50 = d.get("p50_ms")
             if p50 is not None and p50 == p50:
                 self.history[label].append(p50)
-            table.add_row(
-                label,
-                _ms(p50),
-                _ms(d.get("p99_ms")),
-                _ms(d.get("max_ms")),
-                sparkline(self.history[label], 40),
-            )
+            cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms"))))
+        heads = ("stage", "p50 ms", "p99 ms", "max ms")
+        width = spark_width(
+            table.size.width or self.size.width,
+            [max(len(r[i]) for r in [heads, *cells]) for i in range(len(heads))],
+            table.cell_padding,
+        )
+        for row in cells:
+            table.add_row(*row, sparkline(self.history[row[0]], width))

@@ -16,6 +16,7 @@ from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 
 from console.errors import UserError
+from console.tui.charts import Chart
 from console.tui.long_work import stop_check
 
 HELP = (
@@ -71,7 +72,16 @@ class VibrationPane(VerticalScroll):
         with Horizontal(id="vib-top"):
             yield DataTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
             yield Static(id="vib-info")
-        yield Static(id="frf-plot")
+        yield Chart(
+            title="FRF of the selected point",
+            x_label="frequency",
+            x_unit="Hz",
+            y_label="|H|",
+            y_unit="um/V",
+            db_y=True,
+            db_ref=1.0,
+            id="frf-plot",
+        )
 
     @property
     def focus_target(self):
@@ -486,28 +496,23 @@ class VibrationPane(VerticalScroll):
                         f"{e['frequency_hz']:g} Hz with {e['actuator']}"
                     )
         freq, mags = s.frf(n)
-        self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark)
+        self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark, n)
 
-    def _show_info(self, text: str, freq, mags, mark) -> None:
-        from console.tui.plots import frf_plot
+    def _show_info(self, text: str, freq, mags, mark, point: int) -> None:
+        from console.tui.plots import frf_series
 
         s = self.session
         if not self.query("#vib-info"):  # a worker finishing while the console closes
             return
         self.query_one("#vib-info", Static).update(text)
-        width = max(20, min(self.size.width - 10, 110))
-        self.query_one("#frf-plot", Static).update(
-            frf_plot(
-                freq,
-                mags,
-                s.vmap.excitations,
-                width=width,
-                height=8,
-                mark_hz=mark,
-                band_hz=s.band_hz,
-                masked=s.vmap.masked,
-            )
+        series = frf_series(
+            freq, mags, s.vmap.excitations, mark_hz=mark, band_hz=s.band_hz, masked=s.vmap.masked
         )
+        chart = self.query_one("#frf-plot", Chart)
+        if not series:
+            chart.clear(f"point {point}: no usable bins to plot")
+            return
+        chart.set_series(series, title=f"FRF of point {point} (values at the marked frequency)")
 
 
 def _point(word: str) -> int:
