@@ -138,10 +138,29 @@ def test_a_pick_refused_by_a_broken_override_file_says_so_and_keeps_the_outputs(
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text('[audio]\nsample_rate_hz = "fast"\n')  # broken by hand meanwhile
             await _select(pilot, app, "#audio-table", "Bench Card A (ALSA)")
-            await wait_for(pilot, lambda: "not used" in _result(app), 20, "refusal shown")
+            await wait_for(pilot, lambda: "not saved" in _result(app), 20, "refusal shown")
             msg = _result(app)
             assert str(path) in msg and "sample_rate_hz" in msg and "\n" not in msg
             assert app.session.outputs is before  # still the ones that were open
             assert path.read_text() == '[audio]\nsample_rate_hz = "fast"\n'  # untouched
+
+    asyncio.run(scenario())
+
+
+def test_a_pick_during_an_estop_is_saved_but_the_estopped_outputs_stay():
+    plugins = load_plugins(extra={"bench_card": _bench_card_plugin()})
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            before = app.session.outputs
+            await pilot.press("ctrl+e")
+            assert before.gate.wait_safe(5)
+            await _select(pilot, app, "#audio-table", "Bench Card A (ALSA)")
+            await wait_for(pilot, lambda: "stay as they are" in _result(app), 20, "refusal")
+            assert "e-stop is active" in _result(app)
+            assert app.session.outputs is before and before.gate.estopped  # never reopened
+            assert load_profile("sim", plugins).get("audio.device") == "Bench Card A (ALSA)"
 
     asyncio.run(scenario())

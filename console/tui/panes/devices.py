@@ -203,9 +203,16 @@ class DevicesPane(VerticalScroll):
         try:
             path = save_overrides(self._profile(), settings, pm)
             new = load_profile(self._profile().path, pm)
-            opened = session.reopen_outputs(new)
         except UserError as exc:  # ProfileError too: one line naming the file and key
-            self._say(f"{what}: not used: {exc}")
+            self._say(f"{what}: not saved: {exc}")
+            return
+        try:
+            opened = session.reopen_outputs(new)
+        except UserError as exc:  # playing, e-stopped or lent to a demo
+            self._say(
+                f"{what} saved to {short_path(path)}; the outputs stay as they are: {exc} "
+                "(pick it again then, or restart the console)"
+            )
             return
         if opened:
             self._say(f"{what} in use; saved to {short_path(path)}")
