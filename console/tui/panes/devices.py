@@ -144,7 +144,9 @@ class DevicesPane(VerticalScroll):
                 key = f"{d.driver}\x00"
                 self.audio_rows[key] = (d.driver, "")
                 mark = "●" if d.driver == drv else ""
-                table.add_row(mark, Text(d.driver), "", "", "", "", "", Text(d.problem), key=key)
+                table.add_row(
+                    mark, Text(d.driver), Text(f"none: {d.problem}"), "", "", "", "", "", key=key
+                )
             for dev in d.devices:
                 key = f"{dev.driver}\x00{dev.name}"
                 self.audio_rows[key] = (dev.driver, dev.name)
