@@ -248,6 +248,22 @@ class ConsoleSession:
         with self._lock:
             return self._last_play
 
+    def audition(
+        self, signal: Any, target: Any, *, name: str = "audition", wait: bool = True
+    ) -> bool:
+        """Play a designed signal (an expression or a ``console.signal_design`` node) on
+        ``target`` (a ``Target``: patches or the screen) through the gate, checked against
+        the limits first (``console.session.audition``). A refusal is a ``Failed`` event
+        (topic ``signals``); returns True when it played (or queued)."""
+        from console.session.audition import audition_plan
+
+        try:
+            plan = audition_plan(self.profile, signal, target, name)
+        except UserError as exc:
+            self.fail("signals", str(exc), name=name)
+            return False
+        return self.play_plan(plan, wait=wait)
+
     def estop(self, reason: str) -> None:
         """Silence every output now: the console's own, or every process holding outputs
         (a demo process) when the console has handed its outputs over; a running demo

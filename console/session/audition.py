@@ -1,0 +1,85 @@
+"""A designed signal as a plan for the gate: rendered at the profile's sample rate, on a
+target (patches or the screen), checked against the limits before it plays.
+
+The checks a designer hits first get their own words (the peak against the piezo range or
+the screen's Vpp; the start and end ramps the gate asks for, with the ``ramp(...)`` that
+fixes them); then the gate's own ``check_plan`` runs on the very plan that will play. A
+signal is never changed to pass: the operator adds the ramp to the expression.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from console.errors import SafetyRefusal
+from console.safety import RAMP_TOLERANCE, Limits, check_plan
+from console.signal_design import Node, Target, render, signal_plan
+from console.signal_expr import parse
+from console.types import OutputPlan
+
+
+def ramp_hint(limits: Limits) -> str:
+    ms = math.ceil(limits.ramp_samples / limits.sample_rate_hz * 1e3)
+    return f"multiply it by ramp({ms} ms) (the profile's [limits] ramp_min_ms)"
+
+
+def ramp_problem(x: np.ndarray, ramp: int) -> str | None:
+    """Where ``x`` leaves the gate's linear start/end envelope of ``ramp`` samples."""
+    peak = float(np.max(np.abs(x))) if x.size else 0.0
+    if peak == 0.0:
+        return None
+    tol = 1e-6 * peak + 1e-9
+    if abs(x[0]) > tol:
+        return f"starts at {x[0]:.3g} V, not 0"
+    if abs(x[-1]) > tol:
+        return f"ends at {x[-1]:.3g} V, not 0"
+    n = min(ramp, x.size)
+    env = peak * (np.arange(n) / ramp) * RAMP_TOLERANCE + tol
+    if np.any(np.abs(x[:n]) > env):
+        return "rises faster than the gate's start ramp"
+    if np.any(np.abs(x[::-1][:n]) > env):
+        return "falls faster than the gate's end ramp"
+    return None
+
+
+def level_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
+    if target.screen:
+        lo, hi = limits.screen_range()
+        peak = float(np.max(np.abs(x)))
+        if peak > hi + 1e-9:
+            return (
+                f"peak {peak:.1f} V ({2 * peak:.0f} Vpp) is beyond the screen's {2 * hi:g} Vpp; "
+                "lower the amplitude"
+            )
+        return None
+    lo, hi = limits.piezo_range()
+    mn, mx = float(np.min(x)), float(np.max(x))
+    if mn < lo - 1e-9 or mx > hi + 1e-9:
+        worst = mx if mx > hi + 1e-9 else mn
+        return (
+            f"peak {worst:.1f} V is beyond the piezo range {lo:g}..{hi:g} V at the patch; "
+            "lower the amplitude"
+        )
+    return None
+
+
+def audition_plan(
+    profile: Any, signal: str | Node, target: Target, name: str = "audition"
+) -> OutputPlan:
+    """``signal`` (an expression or a parsed node) as the plan that plays on ``target``;
+    refused with one line (``SafetyRefusal``) before anything plays."""
+    limits = Limits.from_profile(profile)
+    node = parse(signal) if isinstance(signal, str) else signal
+    fs = limits.sample_rate_hz
+    x = render(node, fs, max_s=float(profile.get("limits.max_plan_s")), what=name)
+    where = target.label
+    if (p := level_problem(x, target, limits)) is not None:
+        raise SafetyRefusal(f"{name} on {where}: {p}")
+    if (p := ramp_problem(x, limits.ramp_samples)) is not None:
+        raise SafetyRefusal(f"{name} on {where}: {p}; {ramp_hint(limits)}")
+    plan = signal_plan(x, target, fs, name)
+    check_plan(plan, limits)
+    return plan

@@ -1,0 +1,69 @@
+"""Auditioning a designed signal through the session: it reaches the twin's amplifiers on
+the chosen patches or the screen, and is refused before playing when out of limits."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from console.signal_design import parse_target, render
+from console.signal_expr import parse
+
+EXPR = "sine(250 Hz, 30 V, 0.2 s) * ramp(10 ms)"
+
+
+@pytest.fixture
+def session(profile, plugins):
+    from console.session import ConsoleSession
+
+    s = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    assert s.open_outputs(), s.outputs_error
+    failures: list = []
+    s.subscribe(lambda e: failures.append(e) if type(e).__name__ == "Failed" else None)
+    s.failures = failures
+    yield s
+    s.close()
+
+
+def test_audition_on_patches_and_screen_reaches_the_amplifiers(session):
+    fs = int(session.profile.get("audio.sample_rate_hz"))
+    want = render(parse(EXPR), fs)
+    assert session.audition(EXPR, parse_target("PA,PC"), name="designed")
+    rec = session.outputs.recording()
+    piezo = rec[:, 0]
+    k = int(np.flatnonzero(piezo)[0])
+    start = k - int(np.flatnonzero(want)[0])
+    np.testing.assert_allclose(piezo[start : start + want.size], want, atol=1e-9)
+    assert not rec[:, 1].any()  # the screen stayed silent
+    closed = {r.channel for r in session.outputs.relay_log() if r.closed}
+    relays = {int(session.profile.get(f"patches.{p}.relay_channel")) for p in ("PA", "PC")}
+    assert relays <= closed
+    n_before = rec.shape[0]
+    assert session.audition(EXPR, parse_target("screen"), name="designed")
+    screen = session.outputs.recording()[n_before:, 1]
+    assert np.max(np.abs(screen)) == pytest.approx(30.0, rel=1e-3)
+    assert session.played[-1].segments[0].screen
+    assert not session.failures
+
+
+@pytest.mark.parametrize(
+    ("expr", "target", "says"),
+    [
+        ("sine(250 Hz, 30 V, 0.2 s)", "PA", "ends at"),
+        ("sine(250 Hz, 30 V, 0.2 s) * ramp(1 ms)", "PA", "rises faster than the gate's start ramp; multiply it by ramp(5 ms)"),
+        ("sine(250 Hz, 300 V, 0.2 s) * ramp(10 ms)", "PB", "beyond the piezo range"),
+        ("sine(250 Hz, 300 Vpp, 0.2 s) * ramp(10 ms)", "screen", "beyond the screen's 200 Vpp"),
+        ("square(250 Hz, 40 V, 0.2 s) * ramp(10 ms)", "PA", "slew limit"),
+        ("sine(250 Hz, 30 V, 7200 s) * ramp(10 ms)", "PA", "max_plan_s"),
+    ],
+)  # fmt: skip
+def test_audition_refuses_before_playing(session, expr, target, says):
+    n0 = len(session.played)
+    assert not session.audition(expr, parse_target(target), name="designed")
+    assert len(session.played) == n0  # nothing went to the outputs
+    (fail,) = session.failures
+    assert fail.topic == "signals" and says in fail.message and "\n" not in fail.message
+    rec = session.outputs.recording()
+    assert rec is None or not rec.any()
