@@ -19,9 +19,15 @@ __all__ = [
 
 @hookimpl
 def haptable_register_commands(register):
-    from console import commands
+    from console import commands, signal_commands
 
     commands.register_core(register)
+    register(
+        "signals",
+        signal_commands.configure,
+        signal_commands.run,
+        help="the signal library: list, show, play on patches or the screen, add, rm",
+    )
 
 
 @hookimpl

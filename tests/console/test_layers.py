@@ -43,6 +43,7 @@ LAYER_OF: dict[str, str] = {
     "console.cli": "cli",
     "console.commands": "cli",
     "console.core_commands": "cli",
+    "console.signal_commands": "cli",
     "console.benchmarks": "cli",  # the top, beside the CLI that registers them
 }
 
