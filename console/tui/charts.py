@@ -118,12 +118,12 @@ class Chart(PlotextPlot):
     def y_axis_label(self) -> str:
         if self.db_y:
             ref = f"{self.db_ref:g} {self.y_unit}".strip()
-            return f"{self.y_label} (dB re {ref})"
+            return f"{self.y_label} (dB re {ref})" if self.y_label else f"dB re {ref}"
         return _axis(self.y_label, self.y_unit)
 
     @property
     def x_axis_label(self) -> str:
-        return _axis(self.x_label, self.x_unit) + (" [log]" if self.log_x else "")
+        return _axis(self.x_label, self.x_unit)
 
     def drawn(self, columns: int | None = None) -> list[tuple[str, np.ndarray, np.ndarray]]:
         """(label, x, y) as drawn: log-x drops x <= 0, dB-y converts, long series reduced
@@ -147,7 +147,8 @@ class Chart(PlotextPlot):
         lines = [self.title] if self.title else []
         if not self.series:
             return "\n".join([*lines, self.empty_text])
-        lines.append(f"x: {self.x_axis_label}; y: {self.y_axis_label}")
+        log = " (log axis)" if self.log_x else ""
+        lines.append(f"x: {self.x_axis_label}{log}; y: {self.y_axis_label}")
         for label, x, y in self.drawn(columns=1 << 20):
             if x.size:
                 lines.append(

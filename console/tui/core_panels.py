@@ -49,6 +49,12 @@ def _scope(app: Any) -> Any:
     return ScopePane()
 
 
+def _signals(app: Any) -> Any:
+    from console.tui.panes.signals import SignalsPane
+
+    return SignalsPane()
+
+
 @hookimpl
 def haptable_register_panels(register: Any) -> None:
     register(
@@ -80,6 +86,12 @@ def haptable_register_panels(register: Any) -> None:
         _latency,
         description="per-stage latency of the frame loop or the running demo",
         tab=PanelTab("Latency", "f7", 70),
+    )
+    register(
+        "signals",
+        _signals,
+        description="signal designer and library: waveform, spectrum, audition on any patch",
+        tab=PanelTab("Signals", "f8", 80),
     )
     register(
         "scope",

@@ -68,7 +68,8 @@ async def _log_x_db_y():
         chart.set_series([Series("spectrum", f, mag)])
         await pilot.pause()
         text = _shown(chart)
-        assert "frequency (Hz) [log]" in text and "dB re 1 V" in text
+        assert "frequency (Hz)" in text and "dB re 1 V" in text
+        assert "x: frequency (Hz) (log axis); y: |X| (dB re 1 V)" in chart.summary()
         ((label, x, y),) = chart.drawn()
         assert x.tolist() == [10.0, 100.0, 1000.0]  # 0 Hz has no place on a log axis
         assert y.tolist() == [0.0, -20.0, -120.0]  # a zero sits on the floor, never -inf

@@ -29,6 +29,7 @@ BUILT_IN = [
     ("electrostatic", "Electrostatic", "f5"),
     ("scenes", "Scenes", "f6"),
     ("latency", "Latency", "f7"),
+    ("signals", "Signals", "f8"),
     ("scope", "Scope", "f9"),
 ]
 
@@ -89,17 +90,16 @@ def test_blocking_a_plugin_drops_its_tab(monkeypatch):
 
 
 def test_a_plugin_panel_with_a_tab_shows_as_one_with_its_key():
-    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f8", 80))})
-    names = list(panel_tabs(plugins))
-    assert names.index("latency") < names.index("probe") < names.index("scope")  # 70, 80, 90
+    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f10", 100))})
+    assert list(panel_tabs(plugins))[-1] == "probe"  # after Signals (80) and Scope (90)
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(100, 30)) as pilot:
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             assert app.query_one("TabPane#probe", TabPane)
-            await pilot.press("f8")
-            await wait_for(pilot, lambda: app.query_one("#tabs").active == "probe", 10, "f8")
+            await pilot.press("f10")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "probe", 10, "f10")
             await wait_for(pilot, lambda: isinstance(app.pane("probe"), ProbePane), 10)
             # a tab is opened by its key, not listed again as a palette panel
             titles = [c.title for c in app.get_system_commands(app.screen)]

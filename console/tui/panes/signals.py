@@ -1,0 +1,277 @@
+"""Signals: design a signal as a one-line expression, see its waveform and spectrum, save
+it to the profile's library, audition it on patches or the screen through the gate."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Input, Label, OptionList, Static
+from textual.widgets.option_list import Option
+
+from console.errors import UserError
+from console.session.events import Failed, Stopped
+from console.signal_design import Summary, Target, parse_target, render, spectrum, summarize
+from console.signal_expr import parse
+from console.signal_library import (
+    BUILTIN,
+    Entry,
+    add_signal,
+    library_path,
+    load_library,
+    remove_signal,
+)
+from console.tui.charts import Chart, Series
+
+DEFAULT_EXPR = BUILTIN["tone-250"].expr
+#: the spectrum shows this many dB below its peak
+SPECTRUM_RANGE_DB = 80.0
+
+
+@dataclass(frozen=True)
+class Preview:
+    expr: str
+    target: Target
+    fs: int
+    volts: np.ndarray
+    summary: Summary
+
+
+class SignalsPane(Vertical):
+    HELP_TEXT = (
+        "Type a signal on the top line, a name and where it plays (PA, PA,PC, PALL, screen).\n"
+        "enter    show its waveform and spectrum (before anything plays)\n"
+        "ctrl+o   play it through the safety gate (ctrl+e e-stops as everywhere)\n"
+        "ctrl+s   save it under its name in the profile's library (twice replaces)\n"
+        "library  enter loads a signal, delete removes a saved one (built-ins, dimmed, are\n"
+        "         read-only)\n"
+        "Syntax: sine|square|saw|triangle(250 Hz, 20 V, 1 s), chirp|logchirp(10 Hz, 600 Hz,\n"
+        "10 V, 2 s), noise(5 V, 1 s, seed=1), silence(0.2 s); envelopes adsr(10 ms, 50 ms,\n"
+        "0.7, 100 ms), ramp(10 ms), linramp(0, 1), expramp(1 %, 100 %); a + b, a * b,\n"
+        "seq(a, b), a * 3 (repeat), a * 50 % or a * -6 dB (gain). Volts at the actuator; the\n"
+        "gate needs a ramp at both ends: multiply by ramp(5 ms) or an envelope."
+    )
+    DEFAULT_CSS = """
+    SignalsPane { height: 1fr; }
+    #sig-row { height: 1; }
+    #sig-row .hint { width: 1fr; }
+    #sig-name { width: 18; }
+    #sig-target { width: 14; }
+    #sig-status { height: 1; }
+    #sig-status.error { color: $error; }
+    #sig-main { height: 1fr; }
+    #sig-library { width: 20; height: 1fr; border: none; padding: 0; }
+    """
+    BINDINGS = [
+        Binding("ctrl+o", "play", "play"),
+        Binding("ctrl+s", "save", "save"),
+    ]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.preview: Preview | None = None
+        self._replace: str | None = None  # a name ctrl+s was pressed on once already
+        self._playing = ""
+        self._gen = 0
+        self.entries: dict[str, Entry] = {}
+
+    def compose(self) -> ComposeResult:
+        yield Input(
+            DEFAULT_EXPR,
+            placeholder="sine(250 Hz, 20 V, 1 s) * ramp(10 ms)",
+            id="sig-expr",
+            compact=True,
+        )
+        with Horizontal(id="sig-row"):
+            yield Label("name ")
+            yield Input("", placeholder="(to save)", id="sig-name", compact=True)
+            yield Label(" on ")
+            yield Input("PA", placeholder="PA,PC|screen", id="sig-target", compact=True)
+            yield Static(" enter plots, ctrl+o plays, ctrl+s saves, ? help", classes="hint")
+        yield Static("", id="sig-status")
+        with Horizontal(id="sig-main"):
+            yield OptionList(id="sig-library")
+            yield Chart(
+                title="waveform", x_label="time", x_unit="s", y_label="", y_unit="V", id="sig-wave"
+            )
+            yield Chart(
+                title="spectrum",
+                x_label="f",
+                x_unit="Hz",
+                y_label="",
+                y_unit="V",
+                log_x=True,
+                db_y=True,
+                id="sig-spectrum",
+            )
+
+    @property
+    def focus_target(self):
+        return self.query_one("#sig-expr", Input)
+
+    def on_mount(self) -> None:
+        self.reload_library()
+        self.show_preview()
+
+    # ------------------------------------------------------------------ helpers
+    def status(self, text: str, error: bool = False) -> None:
+        line = " ".join(str(text).split())
+        w = self.query_one("#sig-status", Static)
+        w.update(line)
+        w.set_class(error, "error")
+
+    @property
+    def library_file(self):
+        return library_path(self.app.ctx.profile.name)
+
+    def reload_library(self, select: str | None = None) -> None:
+        try:
+            self.entries = load_library(self.library_file)
+        except UserError as exc:
+            self.entries = dict(BUILTIN)
+            self.status(str(exc), error=True)
+        ol = self.query_one("#sig-library", OptionList)
+        ol.clear_options()
+        ol.add_options(  # built-ins dimmed (read-only); Text: names are never markup
+            Option(Text(e.name, style="dim" if e.builtin else ""), id=e.name)
+            for e in self.entries.values()
+        )
+        if select in self.entries:
+            ol.highlighted = list(self.entries).index(select)
+
+    def _fields(self) -> tuple[str, str, str]:
+        return (
+            self.query_one("#sig-expr", Input).value.strip(),
+            self.query_one("#sig-name", Input).value.strip(),
+            self.query_one("#sig-target", Input).value.strip(),
+        )
+
+    # ------------------------------------------------------------------ preview
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        self.show_preview()
+
+    def on_input_changed(self, event: Input.Changed) -> None:
+        if event.input.id == "sig-name":
+            self._replace = None
+
+    def show_preview(self, then_play: bool = False) -> None:
+        """Parse and render the fields' signal (off the UI thread), then plot it; with
+        ``then_play`` it plays once the plots show."""
+        self._gen += 1  # a slower earlier preview never overwrites this one
+        self._compute_preview(self._gen, *self._fields(), then_play)
+
+    @work(thread=True, exclusive=True, group="sig-preview")
+    def _compute_preview(
+        self, gen: int, expr: str, name: str, target_text: str, then_play: bool
+    ) -> None:
+        prof = self.app.ctx.profile
+        try:
+            target = parse_target(target_text)
+            fs = int(prof.get("audio.sample_rate_hz"))
+            x = render(parse(expr), fs, max_s=float(prof.get("limits.max_plan_s")))
+        except UserError as exc:
+            self.app.call_from_thread(self._refused, gen, str(exc))
+            return
+        p = Preview(expr, target, fs, x, summarize(x, fs))
+        self.app.call_from_thread(self._show, gen, p, name if then_play else None)
+
+    def _refused(self, gen: int, message: str) -> None:
+        if gen != self._gen:
+            return
+        self.preview = None
+        self.status(message, error=True)
+        for cid in ("#sig-wave", "#sig-spectrum"):
+            self.query_one(cid, Chart).clear("no signal: see the line above")
+
+    def _show(self, gen: int, p: Preview, play_name: str | None) -> None:
+        if gen != self._gen:
+            return
+        self.preview = p
+        t = np.arange(p.volts.size) / p.fs
+        channel = "screen" if p.target.screen else p.target.label
+        wave = self.query_one("#sig-wave", Chart)
+        wave.y_label = "screen" if p.target.screen else "piezo"
+        wave.set_series([Series(channel, t, p.volts)], title=f"waveform on {channel}")
+        f, mag = spectrum(p.volts, p.fs)
+        spec = self.query_one("#sig-spectrum", Chart)
+        top = 20 * np.log10(max(float(mag.max(initial=0.0)), 1e-9))
+        spec.db_floor = top - SPECTRUM_RANGE_DB
+        keep = f >= 1.0  # a log axis: from 1 Hz
+        spec.set_series([Series("|X|", f[keep], mag[keep])])
+        self.status(p.summary.line())
+        if play_name is not None:
+            self._audition(p, play_name or "designed")
+
+    # ------------------------------------------------------------------ play, save, load
+    def action_play(self) -> None:
+        self.show_preview(then_play=True)
+
+    def _audition(self, p: Preview, name: str) -> None:
+        self._playing = name
+        self.status(f"playing {name} on {p.target.label}: {p.summary.line()}")
+        self._play(p, name)
+
+    @work(thread=True, group="sig-play")
+    def _play(self, p: Preview, name: str) -> None:
+        ok = self.app.session.audition(p.expr, p.target, name=name)
+        if ok:
+            self.app.call_from_thread(self._played, name, p)
+
+    def _played(self, name: str, p: Preview) -> None:
+        if self._playing == name:
+            self._playing = ""
+            self.status(f"played {name} on {p.target.label} ({p.summary.duration_s:.2f} s)")
+
+    def on_session_message(self, message) -> None:
+        ev = message.event
+        if isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and self._playing:
+            self._playing = ""
+            self.status(ev.message, error=True)
+        elif isinstance(ev, Stopped) and ev.topic == "estop" and self._playing:
+            self._playing = ""
+            self.status(f"e-stopped: {ev.reason} (ctrl+r resets)", error=True)
+
+    def action_save(self) -> None:
+        expr, name, _target = self._fields()
+        lib = self.entries
+        replace = self._replace == name
+        if name in lib and not lib[name].builtin and lib[name].expr != expr and not replace:
+            self._replace = name
+            self.status(f"{name} is already saved: ctrl+s again replaces it", error=True)
+            return
+        try:
+            add_signal(self.library_file, name, expr, replace=True)
+        except UserError as exc:
+            self.status(str(exc), error=True)
+            return
+        self._replace = None
+        self.reload_library(select=name)
+        self.status(f"saved {name} in {self.library_file}")
+
+    def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
+        e = self.entries.get(event.option.id or "")
+        if e is None:
+            return
+        self.query_one("#sig-expr", Input).value = e.expr
+        self.query_one("#sig-name", Input).value = e.name
+        self._replace = None
+        self.show_preview()
+
+    def on_key(self, event) -> None:
+        ol = self.query_one("#sig-library", OptionList)
+        if event.key == "delete" and self.app.focused is ol and ol.highlighted is not None:
+            event.stop()
+            name = ol.get_option_at_index(ol.highlighted).id or ""
+            try:
+                remove_signal(self.library_file, name)
+            except UserError as exc:
+                self.status(str(exc), error=True)
+                return
+            self.reload_library()
+            self.status(f"removed {name} from the library")
