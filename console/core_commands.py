@@ -69,6 +69,18 @@ def haptable_register_benchmarks(register):
         "idle, playing and ramping down after an e-stop",
     )
 
+    def signals(ctx, quick: bool) -> dict:
+        from console.benchmarks.signals import run
+
+        return run(ctx, quick)
+
+    register(
+        "signals",
+        signals,
+        help="signal designer: parse, render and gate-check time per expression, and the "
+        "renderers' error against analytic references (frequency, chirp, ADSR levels)",
+    )
+
     register(
         "console-demo",
         console_demo,

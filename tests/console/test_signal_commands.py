@@ -70,3 +70,13 @@ def test_errors_are_one_line(capsys, argv, says):
     assert main(["signals", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert says in err and err.startswith("haptable: error:") and "\n" not in err
+
+
+def test_signals_benchmark_reports_timing_and_accuracy(capsys):
+    assert main(["bench", "signals", "--quick", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data["timing"]["tone 1 s"]) == {"parse", "render", "gate_check"}
+    assert data["timing"]["60 s tone"]["render"]["n"] == 5
+    acc = data["accuracy"]
+    assert acc["sine_freq_err_hz"] < 0.1 and acc["chirp_inst_freq_rel_err"] < 0.01
+    assert acc["sine_vs_tone_max_abs_v"] < 1e-9 and acc["adsr_level_err"] < 1e-9
