@@ -115,7 +115,14 @@ def test_refusals_and_loading_from_the_library(plugins):
             expr.value = "sine(250 Hz, 20 V, 0.5 s)"  # no ramp
             await pilot.press("ctrl+o")
             await wait_for(pilot, lambda: "ramp(5 ms)" in _status(app), 10, "ramp refusal")
-            assert "ends at" in _status(app) and not app.session.played
+            assert "ends at" in _status(app) and "ctrl+t adds it" in _status(app)
+            assert "[limits] ramp_min_ms" in _status(app)  # brackets show literally
+            assert not app.session.played
+            await pilot.press("ctrl+t")  # the operator adds the ramp, visibly
+            assert expr.value == "(sine(250 Hz, 20 V, 0.5 s)) * ramp(5 ms)"
+            await pilot.press("ctrl+o")
+            await wait_for(pilot, lambda: "played" in _status(app), 20, "played with its ramp")
+            assert len(app.session.played) == 1
             lib = app.query_one("#sig-library", OptionList)
             lib.focus()
             await pilot.press("home", "down", "down", "enter")  # the third entry: sweep

@@ -48,6 +48,7 @@ class SignalsPane(Vertical):
         "enter    show its waveform and spectrum (before anything plays)\n"
         "ctrl+o   play it through the safety gate (ctrl+e e-stops as everywhere)\n"
         "ctrl+s   save it under its name in the profile's library (twice replaces)\n"
+        "ctrl+t   multiply it by the gate's minimum ramp (you see it in the expression)\n"
         "library  enter loads a signal, delete removes a saved one (built-ins, dimmed, are\n"
         "         read-only)\n"
         "Syntax: sine|square|saw|triangle(250 Hz, 20 V, 1 s), chirp|logchirp(10 Hz, 600 Hz,\n"
@@ -70,6 +71,7 @@ class SignalsPane(Vertical):
     BINDINGS = [
         Binding("ctrl+o", "play", "play"),
         Binding("ctrl+s", "save", "save"),
+        Binding("ctrl+t", "add_ramp", "add ramp"),
     ]
 
     def __init__(self, **kw) -> None:
@@ -122,7 +124,7 @@ class SignalsPane(Vertical):
     def status(self, text: str, error: bool = False) -> None:
         line = " ".join(str(text).split())
         w = self.query_one("#sig-status", Static)
-        w.update(line)
+        w.update(Text(line))  # literal: "[limits]" in a message is no markup
         w.set_class(error, "error")
 
     @property
@@ -232,10 +234,21 @@ class SignalsPane(Vertical):
         ev = message.event
         if isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and self._playing:
             self._playing = ""
-            self.status(ev.message, error=True)
+            hint = " (ctrl+t adds it)" if "ramp_min_ms" in ev.message else ""
+            self.status(ev.message + hint, error=True)
         elif isinstance(ev, Stopped) and ev.topic == "estop" and self._playing:
             self._playing = ""
             self.status(f"e-stopped: {ev.reason} (ctrl+r resets)", error=True)
+
+    def action_add_ramp(self) -> None:
+        """The designer adds the gate's minimum ramp to the expression, in plain sight."""
+        ms = float(self.app.ctx.profile.get("limits.ramp_min_ms"))
+        box = self.query_one("#sig-expr", Input)
+        expr = box.value.strip()
+        if not expr:
+            return
+        box.value = f"({expr}) * ramp({ms:g} ms)"
+        self.show_preview()
 
     def action_save(self) -> None:
         expr, name, _target = self._fields()
