@@ -193,3 +193,16 @@ def test_targets_and_plans():
     assert seg.screen and not seg.patches and not seg.piezo_v.any()
     seg = signal_plan(y, parse_target("PA,PC"), FS, "x").segments[0]
     assert seg.patches == {"PA", "PC"} and not seg.screen and not seg.screen_v.any()
+
+
+def test_nan_and_inf_never_reach_a_plan():
+    from console.signal_design import Level, Mix, Wave
+
+    for bad in ("nan", "inf", "sine(250 Hz, nan V, 1 s)", "sine(250 Hz, 1e999 V, 1 s)"):
+        with pytest.raises(UserError) as err:
+            volts(bad)
+        assert "\n" not in str(err.value)
+    # a tree built in code (not parsed) is still checked after rendering
+    node = Mix("*", (Wave("sine", 10.0, float("nan"), 1.0), Level(1.0, 1.0)))
+    with pytest.raises(UserError, match="not a number at 0 s"):
+        render(node, FS)
