@@ -18,7 +18,7 @@ import numpy as np
 from scipy import signal as sps
 
 from console.errors import UserError
-from console.signals import MAX_PLAN_S, check_duration, ramp_envelope
+from console.signals import MAX_PLAN_S, plan_samples, ramp_envelope
 from console.types import EXCITATIONS, PATCHES, OutputPlan, Segment, patches_of
 
 
@@ -307,7 +307,7 @@ def render(node: Node, fs: int, *, max_s: float = MAX_PLAN_S, what: str = "signa
             f"{what}: {node.text or 'it'} is a ratio (an envelope or a modulator in %), not "
             "volts; multiply it by a signal in volts, e.g. sine(250 Hz, 20 V, 1 s)"
         )
-    check_duration(d, max_s, what)
+    plan_samples(d, fs, max_s=max_s, what=what)  # refused here, before any allocation
     n = node.n_samples(fs) or 0
     if n < 2:
         raise UserError(f"{what}: {d:g} s is shorter than two samples; give it a length")
