@@ -123,7 +123,7 @@ def test_a_plugin_panel_without_a_tab_stays_in_the_palette():
 
 
 def test_session_events_reach_screens_that_did_not_start_the_work():
-    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f8", 80))})
+    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f9", 90))})
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="probe")
