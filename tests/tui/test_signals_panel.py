@@ -13,7 +13,7 @@ from textual.widgets import Input, OptionList, Static
 from console.cli import Context
 from console.signal_design import render
 from console.signal_expr import parse
-from console.signal_library import library_path
+from console.signal_library import add_signal, library_path
 from console.tui.app import HapTableApp
 from console.tui.charts import Chart
 
@@ -130,6 +130,13 @@ def test_refusals_and_loading_from_the_library(plugins):
             assert app.query_one("#sig-name", Input).value == "sweep"
             await pilot.press("delete")
             await wait_for(pilot, lambda: "read-only" in _status(app), 5, "built-in kept")
+
+            # saved from the command line while the console runs: there when shown again
+            add_signal(library_path("sim"), "from-cli", "silence(1 s)")
+            await pilot.press("f1")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "devices", 5, "f1")
+            await pilot.press("f8")
+            await wait_for(pilot, lambda: "from-cli" in [o.id for o in lib.options], 5, "reload")
 
     asyncio.run(scenario())
 

@@ -120,6 +120,11 @@ class SignalsPane(Vertical):
         self.reload_library()
         self.show_preview()
 
+    def set_visible(self, visible: bool) -> None:
+        """Shown again: the library may have changed (``haptable signals add``)."""
+        if visible and self.is_mounted and self.query("#sig-library"):
+            self.reload_library()
+
     # ------------------------------------------------------------------ helpers
     def status(self, text: str, error: bool = False) -> None:
         line = " ".join(str(text).split())
@@ -132,12 +137,15 @@ class SignalsPane(Vertical):
         return library_path(self.app.ctx.profile.name)
 
     def reload_library(self, select: str | None = None) -> None:
+        """The library list again (keeps the highlighted entry unless ``select``)."""
+        ol = self.query_one("#sig-library", OptionList)
+        if select is None and ol.highlighted is not None and ol.option_count:
+            select = ol.get_option_at_index(ol.highlighted).id
         try:
             self.entries = load_library(self.library_file)
         except UserError as exc:
             self.entries = dict(BUILTIN)
             self.status(str(exc), error=True)
-        ol = self.query_one("#sig-library", OptionList)
         ol.clear_options()
         ol.add_options(  # built-ins dimmed (read-only); Text: names are never markup
             Option(Text(e.name, style="dim" if e.builtin else ""), id=e.name)
