@@ -231,6 +231,37 @@ class Gain(Node):
         return self.factor * self.part.render(fs, n)
 
 
+@dataclass(frozen=True)
+class Lowpass(Node):
+    """``part`` through a zero-phase Butterworth low-pass (order 4, run forward and
+    backward: ``|H(f)|^2 = 1 / (1 + (f / cutoff)^8)``, no delay): smooths the edges of
+    square and saw waves to within the slew limit."""
+
+    part: Node
+    cutoff_hz: float
+    text: str = ""
+    ORDER = 4
+
+    @property
+    def volts(self) -> bool:  # type: ignore[override]
+        return self.part.volts
+
+    def duration_s(self) -> float | None:
+        return self.part.duration_s()
+
+    def n_samples(self, fs: int) -> int | None:
+        return self.part.n_samples(fs)
+
+    def render(self, fs: int, n: int) -> np.ndarray:
+        _below_nyquist(self.text or "lowpass", self.cutoff_hz, fs)
+        y = self.part.render(fs, n)
+        if y.size < 2:
+            return y
+        sos = sps.butter(self.ORDER, self.cutoff_hz, fs=fs, output="sos")
+        pad = min(3 * (2 * len(sos) + 1), y.size - 1)
+        return sps.sosfiltfilt(sos, y, padlen=pad)
+
+
 def _fit(part: Node, fs: int, n: int) -> np.ndarray:
     """``part`` over ``n`` samples: an envelope stretches, a shorter signal is followed
     by silence."""

@@ -8,6 +8,7 @@
 - Envelopes (ratios; without a length they stretch to what they multiply):
   ``adsr(A, D, SUSTAIN, R[, DUR])``, ``ramp(T)`` (linear in and out, what the gate asks),
   ``linramp(FROM, TO[, DUR])``, ``expramp(FROM, TO[, DUR])``.
+- Filtering: ``lowpass(a, 4 kHz)`` (zero-phase Butterworth: smooths square/saw edges).
 - Combining: ``a + b``, ``a - b`` (sum), ``a * b`` (product: an envelope shapes a signal),
   ``seq(a, b, ...)``, ``repeat(a, N)`` or ``a * N`` (N a whole number: N times over),
   ``a * 50 %`` or ``a * -6 dB`` (a gain), ``-a``.
@@ -31,6 +32,7 @@ from console.signal_design import (
     Chirp,
     Gain,
     Level,
+    Lowpass,
     Mix,
     Node,
     Noise,
@@ -86,6 +88,7 @@ _SPEC: dict[str, tuple[tuple[str, str, object], ...]] = {
     "linramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
     "expramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
     "repeat": (("signal", "node", None), ("count", "int", None)),
+    "lowpass": (("signal", "node", None), ("cutoff", "Hz", None)),
 }  # fmt: skip
 FUNCTIONS = (*_SPEC, "seq")
 
@@ -370,4 +373,8 @@ def _build(name: str, a: dict, part: str) -> Node:
         return Level(a["start"], a["end"], exp, a["duration"], part)
     if name == "repeat":
         return _repeat(a["signal"], a["count"], part)
+    if name == "lowpass":
+        _need(a["cutoff"] > 0, part, "cutoff must be above 0 Hz")
+        _need(a["signal"].duration_s() is not None, part, "filter a signal, not an envelope")
+        return Lowpass(a["signal"], a["cutoff"], part)
     raise AssertionError(name)  # pragma: no cover

@@ -3,7 +3,8 @@ target (patches or the screen), checked against the limits before it plays.
 
 The checks a designer hits first get their own words (the peak against the piezo range or
 the screen's Vpp; the start and end ramps the gate asks for, with the ``ramp(...)`` that
-fixes them); then the gate's own ``check_plan`` runs on the very plan that will play. A
+fixes them; a step over the slew limit, with a ``lowpass(...)`` cutoff that smooths it);
+then the gate's own ``check_plan`` runs on the very plan that will play. A
 signal is never changed to pass: the operator adds the ramp to the expression.
 """
 
@@ -45,6 +46,32 @@ def ramp_problem(x: np.ndarray, ramp: int) -> str | None:
     return None
 
 
+def _nice_hz(f: float) -> str:
+    """``f`` rounded down to 1, 2 or 5 times a power of ten, with its unit."""
+    e = 10.0 ** math.floor(math.log10(max(f, 1.0)))
+    nice = max(m * e for m in (1, 2, 5) if m * e <= max(f, 1.0))
+    return f"{nice / 1e3:g} kHz" if nice >= 1e3 else f"{nice:g} Hz"
+
+
+def slew_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
+    """The largest sample-to-sample step (from and back to 0 at the ends) when it is over
+    the slew limit of the target's load, with a low-pass cutoff that brings a sine of the
+    signal's peak within it (with a margin of two)."""
+    chan = "screen" if target.screen else "piezo"
+    step = limits.max_step_v(chan, target.patches)
+    d = np.abs(np.diff(x, prepend=0.0, append=0.0))
+    k = int(np.argmax(d))
+    if d[k] <= step * (1 + 1e-9) + 1e-9:
+        return None
+    peak = float(np.max(np.abs(x)))
+    cutoff = step * limits.sample_rate_hz / (2 * math.pi * peak) / 2
+    return (
+        f"steps {d[k]:.1f} V in one sample at {k / limits.sample_rate_hz:.4g} s, over the "
+        f"slew limit of {step:.1f} V per sample into {target.label}; smooth its edges, "
+        f"e.g. lowpass(..., {_nice_hz(cutoff)})"
+    )
+
+
 def level_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
     if target.screen:
         lo, hi = limits.screen_range()
@@ -80,6 +107,8 @@ def audition_plan(
         raise SafetyRefusal(f"{name} on {where}: {p}")
     if (p := ramp_problem(x, limits.ramp_samples)) is not None:
         raise SafetyRefusal(f"{name} on {where}: {p}; {ramp_hint(limits)}")
+    if (p := slew_problem(x, target, limits)) is not None:
+        raise SafetyRefusal(f"{name} on {where}: {p}")
     plan = signal_plan(x, target, fs, name)
     check_plan(plan, limits)
     return plan

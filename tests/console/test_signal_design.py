@@ -206,3 +206,17 @@ def test_nan_and_inf_never_reach_a_plan():
     node = Mix("*", (Wave("sine", 10.0, float("nan"), 1.0), Level(1.0, 1.0)))
     with pytest.raises(UserError, match="not a number at 0 s"):
         render(node, FS)
+
+
+def test_lowpass_matches_the_butterworth_magnitude_and_has_no_delay():
+    # filtfilt of an order-4 Butterworth: |H(f)|^2 = 1 / (1 + (f / fc)^8), zero phase
+    for f in (250.0, 500.0, 1000.0, 2000.0):
+        y = volts(f"lowpass(sine({f} Hz, 10 V, 1 s), 1 kHz)")
+        mid = slice(FS // 4, 3 * FS // 4)  # away from the ends
+        ref = 10 * np.sin(2 * np.pi * f * np.arange(FS) / FS) / (1 + (f / 1000.0) ** 8)
+        np.testing.assert_allclose(y[mid], ref[mid], atol=0.02)
+    with pytest.raises(UserError, match="not an envelope"):
+        parse("lowpass(ramp(5 ms), 1 kHz)")
+    with pytest.raises(UserError, match="below 24000 Hz"):
+        volts("lowpass(silence(1 s), 30 kHz)")
+    assert volts("lowpass(sine(100 Hz, 1 V, 1 ms), 1 kHz)").size == 48

@@ -55,7 +55,7 @@ def test_audition_on_patches_and_screen_reaches_the_amplifiers(session):
         ("sine(250 Hz, 30 V, 0.2 s) * ramp(1 ms)", "PA", "rises faster than the gate's start ramp; multiply it by ramp(5 ms)"),
         ("sine(250 Hz, 300 V, 0.2 s) * ramp(10 ms)", "PB", "beyond the piezo range"),
         ("sine(250 Hz, 300 Vpp, 0.2 s) * ramp(10 ms)", "screen", "beyond the screen's 200 Vpp"),
-        ("square(250 Hz, 40 V, 0.2 s) * ramp(10 ms)", "PA", "slew limit"),
+        ("square(250 Hz, 40 V, 0.2 s) * ramp(10 ms)", "PA", "slew limit of 23.1 V per sample into PA; smooth its edges, e.g. lowpass(..., 2 kHz)"),
         ("sine(250 Hz, 30 V, 7200 s) * ramp(10 ms)", "PA", "max_plan_s"),
     ],
 )  # fmt: skip
@@ -67,3 +67,12 @@ def test_audition_refuses_before_playing(session, expr, target, says):
     assert fail.topic == "signals" and says in fail.message and "\n" not in fail.message
     rec = session.outputs.recording()
     assert rec is None or not rec.any()
+
+
+def test_the_suggested_lowpass_makes_a_square_wave_playable(session):
+    square = "square(100 Hz, 40 V, 0.3 s)"
+    assert not session.audition(f"{square} * ramp(5 ms)", parse_target("PA,PC"))
+    (fail,) = session.failures
+    cutoff = fail.message.split("lowpass(..., ")[1].rstrip(")")
+    assert session.audition(f"lowpass({square}, {cutoff}) * ramp(5 ms)", parse_target("PA,PC"))
+    assert np.max(np.abs(session.outputs.recording()[:, 0])) > 40  # the square's overshoot

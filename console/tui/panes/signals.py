@@ -54,8 +54,9 @@ class SignalsPane(Vertical):
         "Syntax: sine|square|saw|triangle(250 Hz, 20 V, 1 s), chirp|logchirp(10 Hz, 600 Hz,\n"
         "10 V, 2 s), noise(5 V, 1 s, seed=1), silence(0.2 s); envelopes adsr(10 ms, 50 ms,\n"
         "0.7, 100 ms), ramp(10 ms), linramp(0, 1), expramp(1 %, 100 %); a + b, a * b,\n"
-        "seq(a, b), a * 3 (repeat), a * 50 % or a * -6 dB (gain). Volts at the actuator; the\n"
-        "gate needs a ramp at both ends: multiply by ramp(5 ms) or an envelope."
+        "seq(a, b), a * 3 (repeat), a * 50 % or a * -6 dB (gain), lowpass(a, 2 kHz) (smooth\n"
+        "edges). Volts at the actuator; the gate needs a ramp at both ends (ctrl+t) and\n"
+        "steps within the slew limit (lowpass)."
     )
     DEFAULT_CSS = """
     SignalsPane { height: 1fr; }
