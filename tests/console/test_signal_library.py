@@ -91,3 +91,20 @@ def test_bad_names_and_descriptions(tmp_path):
     with pytest.raises(UserError, match="needs a unit"):
         add_signal(path, "ok", "silence(1)")
     assert not path.exists()
+
+
+def test_a_failed_write_leaves_the_library_as_it_was(tmp_path, monkeypatch):
+    import console.signal_library as sl
+
+    path = tmp_path / "signals.toml"
+    add_signal(path, "keep", "silence(1 s)")
+    before = path.read_bytes()
+
+    def broken_replace(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(sl.os, "replace", broken_replace)
+    with pytest.raises(UserError, match="cannot write: No space left on device"):
+        add_signal(path, "new", "silence(2 s)")
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["signals.toml", "signals.toml.lock"]
