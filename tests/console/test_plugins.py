@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import base64
+import hashlib
 import json
 import os
 import subprocess
 import sys
 import textwrap
 import venv
+import zipfile
+from pathlib import Path
 
 import pytest
 
+import console
 from console import hookspecs
 from console.cli import main
 from console.errors import UserError
@@ -80,62 +85,64 @@ def test_unknown_hook_without_docs_would_be_caught():
     assert not doc  # the check above would reject exactly this
 
 
+def _toycam_wheel(folder: Path) -> Path:
+    """A wheel of ``haptable-toycam`` (a ``haptable`` entry point) written as the wheel
+    format says (PEP 427): installing it needs pip only, no build backend, so the test does
+    not depend on the setuptools (or its lack of ``bdist_wheel``) of any interpreter."""
+    info = "haptable_toycam-0.1.dist-info"
+    files = {
+        "haptable_toycam/__init__.py": textwrap.dedent("""
+            from console.hookspecs import hookimpl
+
+            @hookimpl
+            def haptable_register_cameras(register):
+                register("toycam", lambda profile: None, description="out-of-tree camera")
+        """),
+        f"{info}/METADATA": "Metadata-Version: 2.1\nName: haptable-toycam\nVersion: 0.1\n",
+        f"{info}/WHEEL": "Wheel-Version: 1.0\nGenerator: hand\nRoot-Is-Purelib: true\n"
+        "Tag: py3-none-any\n",
+        f"{info}/entry_points.txt": "[haptable]\ntoycam = haptable_toycam\n",
+    }
+    record = []
+    for name, text in files.items():
+        digest = hashlib.sha256(text.encode()).digest()
+        b64 = base64.urlsafe_b64encode(digest).rstrip(b"=").decode()
+        record.append(f"{name},sha256={b64},{len(text.encode())}")
+    files[f"{info}/RECORD"] = "\n".join([*record, f"{info}/RECORD,,"]) + "\n"
+    wheel = folder / "haptable_toycam-0.1-py3-none-any.whl"
+    with zipfile.ZipFile(wheel, "w") as z:
+        for name, text in files.items():
+            z.writestr(name, text)
+    return wheel
+
+
 @pytest.mark.slow
 def test_out_of_tree_distribution_shows_up(tmp_path):
-    """A tiny distribution with a `haptable` entry point, installed into a fresh venv."""
-    pkg = tmp_path / "src"
-    (pkg / "haptable_toycam").mkdir(parents=True)
-    (pkg / "pyproject.toml").write_text(
-        textwrap.dedent("""
-        [build-system]
-        requires = ["setuptools"]
-        build-backend = "setuptools.build_meta"
-        [project]
-        name = "haptable-toycam"
-        version = "0.1"
-        [project.entry-points.haptable]
-        toycam = "haptable_toycam"
-    """)
-    )
-    (pkg / "haptable_toycam" / "__init__.py").write_text(
-        textwrap.dedent("""
-        from console.hookspecs import hookimpl
-
-        @hookimpl
-        def haptable_register_cameras(register):
-            register("toycam", lambda profile: None, description="out-of-tree camera")
-    """)
-    )
+    """A tiny distribution with a `haptable` entry point, installed by pip into a fresh
+    venv that sees nothing of the base interpreter's packages."""
     env_dir = tmp_path / "venv"
-    venv.EnvBuilder(system_site_packages=True, with_pip=False).create(env_dir)
+    venv.EnvBuilder(system_site_packages=False, with_pip=False).create(env_dir)
     py = env_dir / "bin" / "python"
     subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "--python",
-            str(py),
-            "install",
-            "-q",
-            "--no-deps",
-            "--no-build-isolation",
-            str(pkg),
-        ],
+        [sys.executable, "-m", "pip", "--python", str(py), "install", "-q", "--no-deps"]
+        + ["--no-index", "--disable-pip-version-check", str(_toycam_wheel(tmp_path))],
         check=True,
-        # build with this environment's setuptools (>= 70.1 builds wheels by itself); the
-        # bare interpreter's may be older and lack bdist_wheel
-        env={
-            **os.environ,
-            "PYTHONPATH": os.pathsep.join(p for p in sys.path if "site-packages" in p),
-        },
     )
+    # the console and its dependencies from this checkout and this environment
+    here = Path(console.__file__).resolve().parent.parent
+    deps = [p for p in sys.path if p.endswith(("site-packages", "dist-packages"))]
     out = subprocess.run(
         [str(py), "-m", "console.cli", "plugins", "--json"],
         capture_output=True,
         text=True,
         check=True,
-        env={"PATH": "/usr/bin:/bin", "HAPTABLE_LOAD_ENTRYPOINTS": "1", "HOME": str(tmp_path)},
+        cwd=tmp_path,
+        env={
+            "PATH": "/usr/bin:/bin",
+            "HAPTABLE_LOAD_ENTRYPOINTS": "1",
+            "HOME": str(tmp_path),
+            "PYTHONPATH": os.pathsep.join([str(here), *deps]),
+        },
     )
     data = json.loads(out.stdout)
     assert "toycam" in data["plugins"]
