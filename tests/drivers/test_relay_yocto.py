@@ -269,8 +269,32 @@ def test_probe_with_the_real_library_and_nothing_attached(stub_profile):
         assert "Yocto-MaxiCoupler" in st.why and st.fix
 
 
+def native_yoctopuce_or_skip(yapi=None) -> None:
+    """Skip, saying why, when the yoctopuce wheel is not installed or its native library
+    cannot load (it needs libusb-1.0-0 even to reach a VirtualHub over the network)."""
+    if yapi is None:
+        yapi = pytest.importorskip("yoctopuce.yocto_api").YAPI
+    try:
+        yapi.GetAPIVersion()  # loads the native library; opens no USB device
+    except (ImportError, OSError) as exc:
+        pytest.skip(f"yoctopuce's native library cannot load ({exc}); {relay_yocto.LIBUSB_FIX}")
+
+
+def test_no_native_library_skips_saying_why():
+    class NoLibusb:
+        @staticmethod
+        def GetAPIVersion():  # noqa: N802 (the library's name)
+            raise ImportError(
+                "Unable to import YAPI shared library (libyapi-amd64.so): "
+                "libusb-1.0.so.0: cannot open shared object file"
+            )
+
+    with pytest.raises(pytest.skip.Exception, match="apt-get install libusb-1.0-0"):
+        native_yoctopuce_or_skip(NoLibusb)
+
+
 @pytest.mark.hardware
 def test_probe_of_an_unreachable_virtualhub_is_missing(stub_profile):
-    pytest.importorskip("yoctopuce")
+    native_yoctopuce_or_skip()
     st = relay_yocto.probe(stub_profile(relays__url="127.0.0.1:1"))
     assert st.state == "missing" and "VirtualHub" in st.fix
