@@ -6,6 +6,7 @@ import argparse
 import dataclasses
 import inspect
 import json
+import shutil
 import sys
 import wave
 
@@ -223,7 +224,7 @@ def run_estop(args, ctx) -> int:
 
 # ---------------------------------------------------------------------- bench
 def configure_bench(p: argparse.ArgumentParser) -> None:
-    p.add_argument("name", nargs="?", help="benchmark to run (omit to list them)")
+    p.add_argument("name", nargs="?", help="benchmark to run (`list` or none: list them)")
     p.add_argument("--json", action="store_true")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
     p.add_argument("--report", help="write a Markdown report (and plots) into this folder")
@@ -232,9 +233,8 @@ def configure_bench(p: argparse.ArgumentParser) -> None:
 
 def run_bench(args, ctx) -> int:
     benches = ctx.pm.benchmarks
-    if not args.name:
-        for name, b in sorted(benches.items()):
-            print(f"  {name:<12} {b.help}")
+    if not args.name or args.name == "list":
+        _list_benchmarks(benches, args.json)
         return 0
     if args.name not in benches:
         raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
@@ -255,6 +255,20 @@ def run_bench(args, ctx) -> int:
     else:
         _print_nested(result)
     return 0
+
+
+def _list_benchmarks(benches: dict, as_json: bool) -> None:
+    """One line per benchmark: its name and what it measures, cut to the terminal's width
+    (``--json``: the whole descriptions)."""
+    if as_json:
+        rows = [{"name": n, "help": b.help} for n, b in sorted(benches.items())]
+        print(json.dumps(rows, indent=2))
+        return
+    width = shutil.get_terminal_size((100, 24)).columns
+    pad = max((len(n) for n in benches), default=0)
+    for name, b in sorted(benches.items()):
+        line = f"{name:<{pad}}  {' '.join(str(b.help).split())}"
+        print(line if len(line) <= width else line[: width - 3].rstrip() + "...")
 
 
 def _print_nested(d, indent: int = 0) -> None:

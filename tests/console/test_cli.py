@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 from console.cli import main
 from console.runtime.control import ControlServer, send_command
@@ -98,3 +99,23 @@ def test_an_output_path_that_cannot_be_written_is_one_line(capsys):
     assert main(["play", "sine-PA", "--dry-run", "--out", "/dev/null/x.wav"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "/dev/null/x.wav" in err[0] and "internal error" not in err[0]
+
+
+def test_bench_list_names_every_benchmark_on_one_line(capsys, monkeypatch):
+    from console import core_commands
+    from console.plugins import load_plugins
+
+    monkeypatch.setenv("COLUMNS", "80")
+    assert main(["bench", "list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = sorted(load_plugins(core=core_commands).benchmarks)
+    assert {"safety", "vibration", "console"} <= set(names)
+    assert [line.split()[0] for line in lines] == names
+    assert all(len(line) <= 80 for line in lines)
+    col = {re.match(r"\S+\s+", line).end() for line in lines}  # descriptions in one column
+    assert len(col) == 1
+    assert main(["bench"]) == 0  # no name: the same list
+    assert capsys.readouterr().out.splitlines() == lines
+    assert main(["bench", "list", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["name"] for r in rows] == names and all(r["help"] for r in rows)

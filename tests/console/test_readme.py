@@ -68,3 +68,13 @@ def test_ci_runs_the_readme_test_command():
     assert "test-command" in ci and "README.md" in ci
     assert "pytest" in block("test-command")
     assert "haptable" in block("console-command")
+
+
+def test_readme_installs_the_system_packages_ci_installs_in_one_line():
+    lines = block("system-packages").strip().splitlines()
+    assert len(lines) == 1 and "apt-get install" in lines[0]
+    readme_pkgs = {w for w in lines[0].split() if not w.startswith("-")}
+    readme_pkgs -= {"sudo", "apt-get", "install"}
+    ci = (ROOT / ".ci" / "run").read_text()
+    ci_pkgs = set(re.search(r"^pkgs=\((.*?)\)", ci, re.M).group(1).split())
+    assert readme_pkgs == ci_pkgs
