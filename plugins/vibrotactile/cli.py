@@ -176,8 +176,9 @@ def emit_plan(plan, args, ctx, summary: dict) -> int:
     if args.json:
         print(json.dumps(summary, indent=2, default=float))
     else:
-        for k, v in summary.items():
-            print(f"{k}: {v}")
+        from plugins.vibrotactile.summary_text import summary_lines
+
+        print("\n".join(summary_lines(summary)))
     return 0
 
 
