@@ -187,11 +187,13 @@ class TouchCalibration:
         calibration`` file, which the classifier reads); ``UserError`` when none is."""
         if self.result is None:
             raise UserError("no calibration to save: run it first (k)")
+        from console.profile_files import profile_file
+
         prof = self.session.profile
         dest = (
             Path(path)
             if path
-            else prof.resolve(prof.get("vision.calibration") or "touch_calibration.json")
+            else profile_file(prof, "vision.calibration", "touch_calibration.json")
         )
         self.result.save(dest)
         with self._lock:

@@ -48,9 +48,10 @@ VISION_FIELDS = {
     ),
     "calibration": Field(
         "path",
-        "touch_calibration.json",
+        "",
         must_exist=False,
-        help="touch calibration (camera px -> table mm), beside the profile",
+        help="touch calibration (camera px -> table mm); empty: touch_calibration.json in "
+        "the profile's state directory (~/.local/state/haptable/<profile>)",
     ),
 }
 
@@ -58,9 +59,10 @@ GESTURES_FIELDS = {
     "classifier": Field("str", "svm", help="registered gesture classifier to use"),
     "model": Field(
         "path",
-        "gestures.skops",
+        "",
         must_exist=False,
-        help="trained model (`haptable gestures train DIR --out MODEL`), beside the profile",
+        help="trained model (`haptable gestures train DIR --out MODEL`); empty: "
+        "gestures.skops in the profile's state directory (~/.local/state/haptable/<profile>)",
     ),
     "frames": Field(
         "int", 4, min=2, max=6, help="frames a dynamic gesture is decided from (paper: 4)"
@@ -84,6 +86,21 @@ def haptable_profile_sections(register):
         help="rear-DI vision pipeline: thresholds, filters, descriptors, touch calibration",
     )
     register("gestures", GESTURES_FIELDS, help="gesture classifier and its trained model")
+
+
+def calibration_file(profile) -> Path:
+    """The touch calibration's file: ``[vision] calibration``, else the profile's state
+    directory (``console.profile_files``)."""
+    from console.profile_files import profile_file
+
+    return profile_file(profile, "vision.calibration", "touch_calibration.json")
+
+
+def model_file(profile) -> Path:
+    """The trained model's file: ``[gestures] model``, else the profile's state directory."""
+    from console.profile_files import profile_file
+
+    return profile_file(profile, "gestures.model", "gestures.skops")
 
 
 def vision_params(profile) -> object:
@@ -161,7 +178,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     _common(e)
     t = sub.add_parser("train", help="train the classifiers on a dataset and save the model")
     t.add_argument("dataset", type=Path)
-    t.add_argument("--out", type=Path, required=True, help="model file (.skops)")
+    t.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="model file (.skops; default: [gestures] model, which the classifier reads)",
+    )
     t.add_argument("--json", action="store_true")
     _common(t)
     c = sub.add_parser("classify", help="classify one sample folder with a trained model")
@@ -216,7 +238,13 @@ def run(args, ctx) -> int:
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
         model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, seed=args.seed)
-        path = model.save(args.out)
+        if args.out is None and profile is None:
+            from console.errors import UserError
+
+            raise UserError("gestures train: give --out MODEL or a valid profile (--profile)")
+        out_path = args.out or model_file(profile)
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        path = model.save(out_path)
         out = {
             "model": str(path),
             "samples": int(len(fs.labels)),
@@ -250,7 +278,7 @@ def _calibrate(args, ctx, profile) -> int:
         raise UserError("gestures calibrate: needs a valid profile (--profile NAME)")
     table = (profile.get("table.width_mm"), profile.get("table.height_mm"))
     targets = target_grid(table, args.columns, args.rows, args.margin_mm)
-    out = args.out or profile.resolve(profile.get("vision.calibration"))
+    out = args.out or calibration_file(profile)
     camera = open_camera(ctx, args.camera)
     quiet = args.json
 

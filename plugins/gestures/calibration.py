@@ -17,6 +17,7 @@ Errors reported: in-sample RMS and max over the inliers, and the leave-one-out R
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Sequence
@@ -158,8 +159,21 @@ class Calibration:
             ) from None
 
     def save(self, path: str | Path) -> Path:
+        """Write the calibration (its folder made first; written then renamed, so a reader
+        never sees half a file); ``UserError`` naming the file when it cannot be."""
         p = Path(path)
-        p.write_text(json.dumps(self.to_json(), indent=1), encoding="utf-8")
+        tmp = p.with_name(f".{p.name}.partial")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            tmp.write_text(json.dumps(self.to_json(), indent=1), encoding="utf-8")
+            tmp.replace(p)
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                tmp.unlink(missing_ok=True)
+            raise UserError(
+                f"{p}: cannot write the touch calibration ({exc.strerror or exc}); give a "
+                "writable file ([vision] calibration) or leave it empty for the state directory"
+            ) from None
         return p
 
     @classmethod

@@ -108,14 +108,14 @@ class SvmClassifier:
 
     @classmethod
     def from_profile(cls, profile) -> SvmClassifier:
-        from . import vision_params
+        from . import calibration_file, model_file, vision_params
 
         model = None
-        path = profile.resolve(profile.get("gestures.model"))
+        path = model_file(profile)
         if Path(path).is_file():
             model = GestureModel.load(path)
         to_mm = None
-        cal = profile.resolve(profile.get("vision.calibration"))
+        cal = calibration_file(profile)
         if Path(cal).is_file():
             from .calibration import Calibration
 

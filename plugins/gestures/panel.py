@@ -137,7 +137,9 @@ class GesturesPanel(Screen):
         prof = ctx.profile
         self.harmonics = int(prof.get("gestures.harmonics", 2))  # 0 (no descriptors) is valid
         self.frames = int(prof.get("gestures.frames", 4))
-        self.default_model = prof.resolve(prof.get("gestures.model") or "gestures.skops")
+        from . import model_file
+
+        self.default_model = model_file(prof)
         self.files: dict[str, Any] = {}
 
     def compose(self) -> ComposeResult:

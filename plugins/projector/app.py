@@ -121,7 +121,11 @@ class CornerAdjust:
             if self.path is None:
                 self.note = "no calibration file (start with --calibration or a profile)"
                 return True
-            save_calibration(self.cal, self.path)
+            try:
+                save_calibration(self.cal, self.path)
+            except UserError as e:
+                self.note = str(e)
+                return True
             self.saved, self.active = self.cal, False
         elif name == "ESCAPE":
             self.cal, self.active = self.saved, False

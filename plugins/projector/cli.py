@@ -73,7 +73,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--fps", type=float, default=None, help="headless frame rate")
     parser.add_argument(
-        "--calibration", default=None, help="calibration JSON (default: beside the profile)"
+        "--calibration",
+        default=None,
+        help="calibration JSON (default: [projector] calibration_path, else the profile's state directory)",
     )
     parser.add_argument(
         "--snapshot-dir",

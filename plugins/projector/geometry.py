@@ -2,12 +2,14 @@
 
 The calibration is a set of point pairs (table mm, projector px) that the operator
 adjusts, usually the four glass corners; the homography is fitted from them with the
-normalised DLT (Hartley). It is stored as JSON beside the profile. Pixel y points down,
-(0, 0) is the top-left pixel corner of the projector frame.
+normalised DLT (Hartley). It is stored as JSON in the profile's state directory
+(``settings.calibration_path_for``). Pixel y points down, (0, 0) is the top-left pixel
+corner of the projector frame.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -233,5 +235,15 @@ def save_calibration(cal: Calibration, path: Path) -> None:
     """Write ``cal`` as JSON (atomically, so a crash never leaves half a file)."""
     path = Path(path)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(cal.to_json(), indent=2) + "\n", encoding="utf-8")
-    tmp.replace(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(json.dumps(cal.to_json(), indent=2) + "\n", encoding="utf-8")
+        tmp.replace(path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        raise UserError(
+            f"{path}: cannot write the projector calibration ({exc.strerror or exc}); give a "
+            "writable file ([projector] calibration_path) or leave it empty for the state "
+            "directory"
+        ) from None

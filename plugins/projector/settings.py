@@ -17,7 +17,7 @@ FIELDS: dict[str, Field] = {
     "socket_path": Field("str", "", help="Unix socket of the link; empty = per-user runtime folder"),
     "calibration_path": Field(
         "path", "", must_exist=False,
-        help="projector calibration JSON; empty = <profile name>.projector.json beside the profile",
+        help="projector calibration JSON; empty = projector.json in the profile's state directory",
     ),
     "snapshot_dir": Field(
         "path", "", must_exist=False,
@@ -44,10 +44,12 @@ DEFAULTS = {k: f.default for k, f in FIELDS.items()}
 
 def calibration_path_for(profile: Any) -> Path | None:
     """The projector calibration JSON: ``[projector] calibration_path`` (relative to the
-    profile) or ``<profile name>.projector.json`` beside the profile."""
+    profile) or ``projector.json`` in the profile's state directory (an old
+    ``<profile name>.projector.json`` beside the profile is copied there:
+    ``console.profile_files``)."""
     if profile is None:
         return None
-    p = profile.get("projector.calibration_path", "")
-    if p:
-        return profile.resolve(p)
-    return Path(profile.path).with_name(f"{Path(profile.path).stem}.projector.json")
+    from console.profile_files import profile_file
+
+    legacy = f"{Path(profile.path).stem}.projector.json"
+    return profile_file(profile, "projector.calibration_path", "projector.json", legacy)

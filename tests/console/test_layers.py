@@ -35,6 +35,7 @@ LAYER_OF: dict[str, str] = {
     "console.plugins": "profile",
     "console.core_sections": "profile",
     "console.signal_library": "profile",
+    "console.profile_files": "profile",  # the files kept per profile (state directory)
     "console.safety": "safety",
     "console.safety_audit": "safety",
     "console.runtime": "runtime",

@@ -132,3 +132,24 @@ def test_dataset_without_any_background_still_evaluates(dataset, capsys, tmp_pat
     code, rep = run_json(capsys, "gestures", "eval", str(other), "--json")
     assert code == 0
     assert rep["static_accuracy"] >= 0.7 and rep["dynamic_accuracy"] >= 0.7
+
+
+def test_train_without_out_saves_the_profiles_model_where_the_classifier_reads_it(
+    dataset, capsys, tmp_path, plugins
+):
+    """No --out: the model goes to the profile's state directory, not beside the profile."""
+    import shutil
+
+    from console import paths
+    from console.profile import PROJECT_PROFILES, load_profile
+    from plugins.gestures.classifier import SvmClassifier
+
+    shutil.copy(PROJECT_PROFILES / "sim.toml", tmp_path / "bench.toml")
+    code, out = run_json(
+        capsys, "-p", str(tmp_path / "bench.toml"), "gestures", "train", str(dataset), "--json"
+    )
+    assert code == 0
+    assert out["model"] == str(paths.profile_state_dir("bench", "gestures.skops"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bench.toml"]
+    clf = SvmClassifier.from_profile(load_profile(tmp_path / "bench.toml", plugins))
+    assert clf.model is not None and clf.model.n_frames == out["n_frames"]

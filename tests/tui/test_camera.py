@@ -10,7 +10,9 @@ import json
 import numpy as np
 import pytest
 
+from console import paths
 from console.cli import Context
+from console.profile import PROJECT_PROFILES
 from console.tui.app import HapTableApp
 from console.tui.panes.camera import overlay_pixels
 from console.types import Contact, Hand
@@ -97,10 +99,11 @@ def test_touch_calibration_wizard_on_the_twin(plugins):
             assert r["rms_mm"] <= r["loo_rms_mm"]
             assert "reprojection error" in pane.cal_message
             await pilot.press("S")
-            path = app.ctx.profile.resolve(app.ctx.profile.get("vision.calibration"))
+            # in the profile's state directory, never in the repository's profiles/
+            path = paths.profile_state_dir("sim", "touch_calibration.json")
             saved = json.loads(path.read_text())
             assert saved["format"].startswith("haptable-touch-calibration")
-            path.unlink()
+            assert not (PROJECT_PROFILES / "touch_calibration.json").exists()
 
     asyncio.run(scenario())
 
