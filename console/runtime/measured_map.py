@@ -2,9 +2,10 @@
 
 ``measured_map(profile, plugins)`` measures the grid (all five excitations) with the
 registered vibrometer the profile names (``[vibrometer] driver``, or the only one; the
-plate twin registers ``twin``) and keeps the map in the console's cache, keyed by a hash
-of what shapes the plate and of the vibrometer: a second call, from the console or from a
-demo process, loads it instead of measuring again. ``measured_map_file`` gives the
+plate twin registers ``twin``) and keeps the map in HapTable's one cache, keyed by a hash
+of what shapes the plate and of the vibrometer: a second call, from the console, a demo
+process or a command (``haptable frf measure``, ``tables``/``flow``/``point measured``),
+loads it instead of measuring again. ``measured_map_file`` gives the
 cached file (for what reads maps from files). ``progress(fraction, text)`` reports the
 measurement; ``cancelled()`` turning true stops it with ``Cancelled``.
 """
@@ -32,21 +33,21 @@ class Cancelled(Exception):
 
 
 def cache_dir() -> Path:
-    """Where measured maps are kept: ``console`` in HapTable's cache directory
-    (``console.paths``)."""
+    """Where measured maps are kept: ``console`` in HapTable's one cache directory
+    (``console.paths.cache_dir``, ``$HAPTABLE_CACHE_DIR``); nothing else keeps them."""
     from console import paths
 
     return paths.cache_dir("console")
 
 
-def measured_map_path(profile: Any, cache: Path | None = None) -> Path:
+def measured_map_path(profile: Any) -> Path:
     """Where this profile's measured map is kept (it may not exist yet)."""
     inputs = {k: _section(profile, k) for k in KEY_SECTIONS}
     inputs["driver"] = _get(profile, "vibrometer.driver")
     inputs["format"] = FORMAT
     blob = json.dumps(inputs, sort_keys=True, default=str)
     key = hashlib.sha256(blob.encode()).hexdigest()[:16]
-    return (cache or cache_dir()) / f"measured-map-{key}.npz"
+    return cache_dir() / f"measured-map-{key}.npz"
 
 
 def measured_map_file(
@@ -56,13 +57,12 @@ def measured_map_file(
     cancelled: Callable[[], bool] | None = None,
     *,
     remeasure: bool = False,
-    cache: Path | None = None,
 ) -> Path:
     """The cached map file of this profile's plate, measured first when there is none
     (or when ``remeasure``: the operator measures again)."""
     from console.vibration_map import save_map
 
-    path = measured_map_path(profile, cache)
+    path = measured_map_path(profile)
     if path.is_file() and not remeasure:
         return path
     vmap = measure_map(profile, plugins, progress or _quiet, cancelled or _never)
@@ -77,14 +77,11 @@ def measured_map(
     cancelled: Callable[[], bool] | None = None,
     *,
     remeasure: bool = False,
-    cache: Path | None = None,
 ) -> Any:
     """This profile's measured ``VibrationMap`` (from the cache, else measured now)."""
     from console.vibration_map import load_map
 
-    path = measured_map_file(
-        profile, plugins, progress, cancelled, remeasure=remeasure, cache=cache
-    )
+    path = measured_map_file(profile, plugins, progress, cancelled, remeasure=remeasure)
     return load_map(path)
 
 

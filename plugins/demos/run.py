@@ -195,9 +195,10 @@ def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
     return open_camera(profile, plugins)
 
 
-def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> Path:
-    """The flow's vibration map: ``[demos] flow_map``, else (on the twin) the console's
-    measured map of this plate, measured once (``cache_dir``: keep it there instead)."""
+def flow_map_path(profile: Any, plugins: Any = None) -> Path:
+    """The flow's vibration map: ``[demos] flow_map``, else (on the twin) the profile's
+    measured map in HapTable's one cache, the file the console's Vibration screen and
+    ``haptable tables measured`` use (measured once)."""
     from console.runtime.measured_map import measured_map_file
 
     raw = profile.get("demos.flow_map") or ""
@@ -214,7 +215,7 @@ def flow_map_path(profile: Any, cache_dir: Path | None, plugins: Any = None) -> 
             "[demos] flow_map is empty: give the table's vibration map (haptable frf import ...)"
         )
     try:
-        return measured_map_file(profile, plugins, cache=cache_dir)
+        return measured_map_file(profile, plugins)
     except UserError as exc:
         raise UserError(
             f"[demos] flow_map is empty and the twin's map cannot be measured ({exc}); set "
@@ -235,7 +236,6 @@ def start_demo(
     direction: str | None = None,
     flow_plans: Any = None,
     prepare: bool = True,
-    cache_dir: Path | None = None,
     sinks: list | None = None,
     tuio: bool | None = None,
     watchdog_ms: float | None = None,
@@ -258,8 +258,8 @@ def start_demo(
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
     ``vision``: classifier parameters to override (the console's tuned thresholds).
-    ``cache_dir``: where the twin's measured map is kept (default: the console's cache,
-    shared with its Vibration screen: ``console.runtime.measured_map``).
+    On the twin, the flow's map is the measured map in HapTable's one cache, shared with
+    the console's Vibration screen (``console.runtime.measured_map``).
     ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
     scene region the first time, cached on disk after); call this from a worker thread.
     """
@@ -307,7 +307,7 @@ def start_demo(
 
                     planner = PlanProcess(profile)
                 plans, pairs = flow_renderers(
-                    plugins, profile, flow_map_path(profile, cache_dir, plugins), planner
+                    plugins, profile, flow_map_path(profile, plugins), planner
                 )
             demo = FlowDemo(
                 profile,

@@ -165,7 +165,11 @@ def _sections() -> dict:
                     "int", 15, min=1, max=60, help="subgrid points per square side"
                 ),
                 "cache_dir": Field(
-                    "str", "", help="cache for tables/flow maps; empty: ~/.cache/haptable"
+                    "str",
+                    "",
+                    choices=("", "none"),
+                    help="tables and flow plans on disk: empty = HapTable's one cache "
+                    "(~/.cache/haptable, $HAPTABLE_CACHE_DIR), 'none' = computed every time",
                 ),
             },
             "vibration map use: tables, interpolation, flow stimuli",

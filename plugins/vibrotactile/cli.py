@@ -70,6 +70,25 @@ def cache_dir_of(args, ctx) -> Path | None:
     return Path(raw).expanduser() if raw else default_cache_dir()
 
 
+#: the map argument naming the profile's measured map (HapTable's one cache)
+MEASURED = "measured"
+MAP_HELP = (
+    "a vibration map (.npz), or 'measured': the profile's measured map, the file the "
+    "console's Vibration screen and the flow demo use (measured first when there is none)"
+)
+
+
+def map_source(source: str, ctx) -> str:
+    """``source``, or for ``measured`` (when no file has that name) the profile's measured
+    map in HapTable's cache (``console.runtime.measured_map``), measured with the profile's
+    vibrometer first when the cache has none."""
+    if source != MEASURED or Path(source).exists():
+        return source
+    from console.runtime.measured_map import measured_map_file
+
+    return str(measured_map_file(ctx.profile, ctx.pm, progress_printer()))
+
+
 def sample_rate(ctx) -> float:
     return float(ctx.profile.get("audio.sample_rate_hz"))
 
@@ -107,6 +126,7 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
     from plugins.vibrotactile.tables import load_tables
     from plugins.vibrotactile.vibration_io import is_tables_file
 
+    path = map_source(path, ctx)
     if is_tables_file(path):
         t = load_tables(path, sample_rate_hz=sample_rate(ctx))
         want = getattr(args, "rule", None)
@@ -253,7 +273,7 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     e = sub.add_parser(
         "export", help="vibration map -> UFF 58, one file per excitation (or --one-file)"
     )
-    e.add_argument("map")
+    e.add_argument("map", help=MAP_HELP)
     e.add_argument("--out", required=True, help="folder for PA.uff ... PALL.uff")
     e.add_argument("--binary", action="store_true", help="write binary 58b")
     e.add_argument(
@@ -269,11 +289,13 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
         "stored in the files, so import reads it back",
     )
     m = sub.add_parser(
-        "measure", help="measure a vibration map with the profile's vibrometer (twin: simulated)"
+        "measure",
+        help="measure the profile's vibration map with its vibrometer (twin: simulated) into "
+        "HapTable's cache, where the console and the demos read it ('measured' as a MAP)",
     )
-    m.add_argument("--out", required=True, help="vibration map (.npz) to write")
+    m.add_argument("--out", default=None, help="also write the map (.npz) here")
     s = sub.add_parser("info", help="summarise a vibration map")
-    s.add_argument("map")
+    s.add_argument("map", help=MAP_HELP)
     s.add_argument("--json", action="store_true")
 
 
@@ -344,13 +366,13 @@ def run_frf(args, ctx) -> int:
     if args.frf_cmd == "export":
         from plugins.vibrotactile.uff_io import export_uff
 
-        m = load_map(args.map, require_all=False)
+        m = load_map(map_source(args.map, ctx), require_all=False)
         for path in export_uff(
             m, args.out, binary=args.binary, gain=args.gain, one_file=args.one_file
         ):
             print(f"wrote {path}")
         return 0
-    m = load_map(args.map, require_all=False)
+    m = load_map(map_source(args.map, ctx), require_all=False)
     info = {
         "excitations": list(m.excitations),
         "points": int(m.points.size),
@@ -367,21 +389,27 @@ def run_frf(args, ctx) -> int:
 
 
 def measure_map(args, ctx) -> int:
-    """Measure the grid with the vibrometer the profile names and save the map."""
-    from console.vibration_map import make_map, save_map
+    """Measure the grid with the vibrometer the profile names into HapTable's cache (the
+    file the console and the demos read: ``console.runtime.measured_map``), and copy it
+    to ``--out`` when given."""
+    from console.runtime.measured_map import measured_map_file
+    from console.vibration_map import load_map, save_map
 
-    name = ctx.profile.get("vibrometer.driver", "twin")
-    device = ctx.pm.get("vibrometer", name).factory(ctx.profile)
-    bar = progress_printer()
-    out = device.measure(progress=lambda done, total: bar(done / max(total, 1), "measuring"))
-    meta = out.pop("meta", {})
-    m = make_map(**out)
-    save_map(args.out, m)
+    cached = measured_map_file(ctx.profile, ctx.pm, progress_printer(), remeasure=True)
+    m = load_map(cached)
+    wrote = [str(cached)]
+    if args.out:
+        out = Path(args.out)
+        if out.suffix.lower() != ".npz":
+            raise UserError(f"--out {out}: give a .npz path for the vibration map")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save_map(out, m)
+        wrote.insert(0, str(out))
+    name = ctx.profile.get("vibrometer.driver") or "the only vibrometer"
     print(
-        f"wrote {args.out}: {len(m.excitations)} excitations x {m.points.size} points x "
-        f"{m.freq_hz.size} bins ({m.freq_hz[0]:g}-{m.freq_hz[-1]:g} Hz) from vibrometer "
-        f"{name!r}"
-        + (f" ({meta.get('method')})" if isinstance(meta, dict) and meta.get("method") else "")
+        f"wrote {' and '.join(wrote)}: {len(m.excitations)} excitations x {m.points.size} "
+        f"points x {m.freq_hz.size} bins ({m.freq_hz[0]:g}-{m.freq_hz[-1]:g} Hz) from "
+        f"vibrometer {name!r}"
     )
     return 0
 
@@ -403,7 +431,7 @@ def add_rule_option(p: argparse.ArgumentParser) -> None:
 def configure_tables(p: argparse.ArgumentParser) -> None:
     sub = p.add_subparsers(dest="tables_cmd", metavar="ACTION", required=True)
     b = sub.add_parser("build", help="vibration map -> lookup tables (paper Fig. 8)")
-    b.add_argument("map")
+    b.add_argument("map", help=MAP_HELP)
     b.add_argument("--out", required=True)
     b.add_argument(
         "--band-hz", type=float, default=None, help="usable band (default: profile, 650 Hz)"
@@ -424,7 +452,11 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     )
     add_rule_option(b)
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
-    q.add_argument("tables", help="tables file (or a vibration map: tables built and cached)")
+    q.add_argument(
+        "tables",
+        help="tables file, or a vibration map (tables built and cached); 'measured': the "
+        "profile's measured map",
+    )
     q.add_argument("--active", required=True, help="point id (the map's node number) or x,y in mm")
     q.add_argument("--passive", required=True, help="point id (node number) or x,y in mm")
     q.add_argument(
@@ -449,7 +481,7 @@ def run_tables(args, ctx) -> int:
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
         c, per = table_rule_of(ctx, args)
         finite("--min-contrast-db", c, 0, 200, "give 0 (the paper's rule) or more dB")
-        m = load_map(args.map, require_all=not args.allow_missing)
+        m = load_map(map_source(args.map, ctx), require_all=not args.allow_missing)
         t0 = time.perf_counter()
         t = build_tables(
             m,
@@ -512,7 +544,11 @@ def run_tables(args, ctx) -> int:
 
 # ---------------------------------------------------------------------- flow / point
 def configure_flow(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", metavar="TABLES|MAP", help="tables file, or a vibration map")
+    p.add_argument(
+        "source",
+        metavar="TABLES|MAP",
+        help="tables file, or a vibration map; 'measured': the profile's measured map",
+    )
     p.add_argument("--from", dest="from_", help="start point: point id (node number) or x,y mm")
     p.add_argument("--to", help="end point: point id (node number) or x,y mm")
     p.add_argument("--hand", help="hand centre x,y in mm (flow under a hand)")
@@ -592,7 +628,7 @@ def hand_plan(args, ctx, lim):
     from plugins.vibrotactile.tables import load_map_or_tables
 
     vm = load_map_or_tables(
-        args.source,
+        map_source(args.source, ctx),
         require_all=False,
         sample_rate_hz=sample_rate(ctx),
     )
@@ -626,7 +662,11 @@ def hand_plan(args, ctx, lim):
 
 
 def configure_point(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", metavar="TABLES|MAP")
+    p.add_argument(
+        "source",
+        metavar="TABLES|MAP",
+        help="tables file, or a vibration map; 'measured': the profile's measured map",
+    )
     p.add_argument("point", help="point id (node number) or x,y in mm")
     p.add_argument("--out", help="write the plan as a .wav + .json summary")
     p.add_argument("--play", action="store_true")

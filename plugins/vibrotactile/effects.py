@@ -114,8 +114,7 @@ def setup_from_profile(profile: Any) -> Setup:
         ringdown_zeta=float(vt.get("ringdown_zeta", 0.0)),
     )
     lo, hi = Limits.from_profile(profile).piezo_range()
-    raw = str(vt.get("cache_dir", "") or "")
-    cache = None if raw == "none" else (Path(raw).expanduser() if raw else default_cache_dir())
+    cache = None if str(vt.get("cache_dir", "") or "") == "none" else default_cache_dir()
     return Setup(
         settings=st,
         perception=Perception.from_section(profile.section("perception")),

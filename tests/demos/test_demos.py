@@ -149,7 +149,7 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
     with open_outputs(prof, plugins, fast=False) as out:
         run = start_demo(
             "flow", prof, plugins, out, script=False, direction="up", prepare=False,
-            cache_dir=tmp_path / "cache", watchdog_ms=5000,
+            watchdog_ms=5000,
         )  # fmt: skip
         run.camera.set_script(
             SequenceScript([("open_hand", "s1", None, 600)], table_mm=TABLE, gap_frames=10, seed=4)
@@ -228,7 +228,7 @@ def test_unknown_demo_and_missing_map_are_one_line_errors(profile, plugins, outp
     from plugins.demos.run import flow_map_path
 
     with pytest.raises(UserError, match="flow_map"):
-        flow_map_path(NoTwin(profile), None)
+        flow_map_path(NoTwin(profile))
 
 
 def test_flow_targets_snap_to_scene_regions_or_the_grid(profile, plugins):
@@ -252,8 +252,8 @@ def test_twin_map_is_measured_once_through_the_registered_vibrometer(fake_vibrom
     from plugins.demos.run import flow_map_path
 
     fv = fake_vibrometer
-    p1 = flow_map_path(fv.profile, tmp_path, fv.pm)
-    p2 = flow_map_path(fv.profile, tmp_path, fv.pm)
+    p1 = flow_map_path(fv.profile, fv.pm)
+    p2 = flow_map_path(fv.profile, fv.pm)
     assert p1 == p2 and fv.calls == [1]  # cached: measured once
     assert np.array_equal(load_map(p1).frf_um_per_v, fv.map.frf_um_per_v)
 
@@ -284,7 +284,7 @@ def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugi
     with open_outputs(prof, plugins, fast=False) as out:
         run = start_demo(
             "flow", prof, plugins, out, script=False, direction="right", prepare=False,
-            cache_dir=tmp_path / "cache", watchdog_ms=5000,
+            watchdog_ms=5000,
         )  # fmt: skip
         run.camera.set_script(BothHands(a, b))
         try:

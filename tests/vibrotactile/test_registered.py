@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from console import paths
 from console.errors import UserError
 from plugins.vibrotactile import lazy
 from plugins.vibrotactile.registered import TABLE_STEPS, tables_stepwise_cached
@@ -54,7 +55,7 @@ def test_cancelled_build_caches_nothing_and_the_next_build_is_found_by_lazy(
 
 
 def _flow(ctx, tmp_path):
-    ctx.profile.data["vibrotactile"]["cache_dir"] = str(tmp_path / "cache")
+    """The registered flow effect, caching in HapTable's cache (this test's own: conftest)."""
     return ctx.pm.get("effect", "flow").factory(ctx.profile)
 
 
@@ -105,3 +106,19 @@ def test_flow_effect_imports_uff(ctx, ss_map, tmp_path):
     np.testing.assert_allclose(back.frf_um_per_v, sub.frf_um_per_v[:2], rtol=1e-10, atol=1e-14)
     with pytest.raises(UserError, match="PX"):
         flow.import_map({"PX": paths[0]})
+
+
+def test_tables_cache_only_in_haptables_cache_or_nowhere(ctx, plugins, tmp_path):
+    """`[vibrotactile] cache_dir` is empty (the one cache) or "none"; a folder of its own
+    is refused with the line that says so."""
+    from console.errors import ProfileError
+    from console.profile import load_profile
+    from plugins.vibrotactile.effects import setup_from_profile
+
+    assert setup_from_profile(ctx.profile).cache_dir == paths.cache_dir()
+    ctx.profile.data["vibrotactile"]["cache_dir"] = "none"
+    assert setup_from_profile(ctx.profile).cache_dir is None
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[vibrotactile]\ncache_dir = "/srv/tables"\n')
+    with pytest.raises(ProfileError, match=r"\[vibrotactile\] cache_dir.*none.*HAPTABLE_CACHE_DIR"):
+        load_profile(bad, plugins)
