@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from console import paths
+from console.errors import UserError
 
 log = logging.getLogger("haptable.files")
 
@@ -38,9 +39,8 @@ def profile_file(profile: Any, key: str, name: str, legacy: str | None = None) -
     if raw:
         return profile.resolve(raw)
     home = paths.profile_state_dir(profile.name, name)
-    path = getattr(profile, "path", None)
-    old = Path(path).parent / (legacy or name) if path else None
-    if old is not None and old.is_file() and old.resolve() != home.resolve():
+    old = Path(profile.path).parent / (legacy or name)
+    if old.is_file() and old.resolve() != home.resolve():
         _adopt(old, home, key)
     return home
 
@@ -69,9 +69,7 @@ def _tell(old: Path, home: Path, msg: str) -> None:
     log.warning(msg, old, home)
 
 
-def _unwritable(home: Path, exc: OSError):
-    from console.errors import UserError
-
+def _unwritable(home: Path, exc: OSError) -> UserError:
     return UserError(
         f"{home}: cannot write ({exc.strerror or exc}); make the state directory writable "
         "or set $HAPTABLE_STATE_DIR"
