@@ -382,9 +382,12 @@ def run_frf(args, ctx) -> int:
         "peak_um_per_v": float(np.abs(m.frf_um_per_v).max()),
         "provenance": m.provenance,
     }
-    print(
-        json.dumps(info, indent=2) if args.json else "\n".join(f"{k}: {v}" for k, v in info.items())
-    )
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        from plugins.vibrotactile.summary_text import summary_lines
+
+        print("\n".join(summary_lines(info)))
     return 0
 
 

@@ -86,3 +86,13 @@ def test_flow_and_point_print_readable_values(tmp_path, ctx, ss_map, capsys, mon
         else:
             assert re.search(rf"^frequency +{data['frequency_hz']:.4g} Hz$", text, re.M)
             assert re.search(rf"^actuator +{data['actuator']}$", text, re.M)
+
+
+def test_frf_info_prints_readable_values(tmp_path, ctx, ss_map, capsys):
+    mp = str(save_map(tmp_path / "map.npz", ss_map))
+    assert run(cli.configure_frf, cli.run_frf, ["info", mp], ctx) == 0
+    text = capsys.readouterr().out
+    assert re.search(rf"^points +{ss_map.points.size}$", text, re.M)
+    assert re.search(r"^excitations +PA PB PC PD PALL$", text, re.M)
+    assert re.search(r"^peak +[0-9.e-]+ um/V$", text, re.M)
+    assert "'" not in text and "[" not in text
