@@ -14,7 +14,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
     camera        Camera; TouchableCamera (the operator's finger on a twin),
                   RendersBackground, SimulatedCamera (acts out GestureScripts)
     classifier    Classifier (gestures, per-frame vision, tunables, background);
-                  TouchCalibrating (the touch-calibration wizard's session)
+                  TouchCalibrating (the touch-calibration wizard's session);
+                  TunablesInProfile (the profile keys its tunables are kept under)
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
                   FlowEffect, HandFlowEffect, Conditions, Presets
     audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v)
@@ -280,6 +281,14 @@ class TouchCalibrating(Protocol):
     does): ``touch_calibration(profile) -> TouchCalibrationSession``."""
 
     def touch_calibration(self, profile: Any) -> TouchCalibrationSession: ...
+
+
+@runtime_checkable
+class TunablesInProfile(Protocol):
+    """A classifier whose tunables are profile settings, so the console can keep the
+    operator's tuning for the next start: ``tunable_keys() -> {tunable: "section.key"}``."""
+
+    def tunable_keys(self) -> dict[str, str]: ...
 
 
 # --------------------------------------------------------------------------- effects

@@ -13,6 +13,7 @@ from __future__ import annotations
 import threading
 from collections import deque
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -179,6 +180,27 @@ class CameraService:
         if rng is None or self.classifier is None:
             return
         self.classifier.set_tunable(key, rng.clamp(value))
+
+    def save_tuning(self) -> Path:
+        """Keep the tuned thresholds for the next start: written to the profile's override
+        file in the user's config directory (``console.profile.save_overrides``) under the
+        keys the classifier names (``TunablesInProfile``); returns the file."""
+        from console.contracts import TunablesInProfile
+        from console.errors import UserError
+        from console.profile import save_overrides
+
+        clf = self.classifier
+        if clf is None:
+            raise UserError("no thresholds to save yet: wait for the camera's first frame")
+        if not isinstance(clf, TunablesInProfile):
+            name = self.profile.get("gestures.classifier") or "?"
+            raise UserError(
+                f"the classifier {name!r} names no profile keys for its thresholds: they "
+                "last until the console closes"
+            )
+        keys = clf.tunable_keys()
+        values = {keys[k]: v for k, v in clf.tunables().items() if k in keys}
+        return save_overrides(self.profile, values, self.plugins)
 
     def views(self) -> tuple[str, ...]:
         """The classifier's intermediate images a result shows (``VisionResult.view``)."""

@@ -157,6 +157,10 @@ class SvmClassifier:
     def tunable_ranges(self) -> dict[str, TunableRange]:
         return dict(TUNABLES)
 
+    def tunable_keys(self) -> dict[str, str]:
+        """The profile keys the thresholds are read from (``[vision]``)."""
+        return {k: f"vision.{k}" for k in TUNABLES}
+
     def set_tunable(self, name: str, value: float) -> None:
         """Change one threshold; the next frame uses it."""
         rng = TUNABLES.get(name)

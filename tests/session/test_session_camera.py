@@ -76,3 +76,38 @@ def test_a_viewer_leaving_before_the_start_keeps_it_closed(profile, plugins):
     assert not worker.is_alive()
     assert not cam.running and cam.camera is None
     session.close()
+
+
+def test_tuned_thresholds_are_kept_for_the_next_start(profile, plugins):
+    """The Camera screen's W: the classifier's tunables go to the profile's overrides file
+    (the user's config directory, never the repository's profiles/), and the next load of
+    the profile starts the classifier with them."""
+    import pytest
+
+    from console import paths
+    from console.errors import UserError
+    from console.profile import PROJECT_PROFILES, load_profile
+    from console.runtime.stages import open_classifier
+    from console.session import ConsoleSession
+
+    sim = (PROJECT_PROFILES / "sim.toml").read_bytes()
+    session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    cam = session.camera
+    try:
+        with pytest.raises(UserError, match="first frame"):
+            cam.save_tuning()
+        cam.classifier = open_classifier(profile, plugins)
+        before = cam.params()
+        cam.set_param("body_threshold", before["body_threshold"] + 4)
+        cam.set_param("highpass_sigma_px", 2.5)
+        tuned = cam.params()
+        assert tuned != before
+        path = cam.save_tuning()
+    finally:
+        session.close()
+    assert path == paths.profile_config_dir("sim", "overrides.toml")
+    again = load_profile("sim", plugins)
+    assert again.get("vision.body_threshold") == before["body_threshold"] + 4
+    assert again.get("vision.highpass_sigma_px") == 2.5
+    assert open_classifier(again, plugins).tunables() == tuned
+    assert (PROJECT_PROFILES / "sim.toml").read_bytes() == sim

@@ -202,3 +202,30 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
             )
 
     asyncio.run(scenario())
+
+
+def test_w_keeps_the_tuned_thresholds_for_the_profile(plugins):
+    """T raises the body threshold, W writes it to the profile's overrides file and says
+    where; the next load of the profile has it."""
+    from console.profile import load_profile
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await _first_frame(app, pilot)
+            svc = app.session.camera_started
+            before = svc.params()["body_threshold"]
+            await pilot.press("T")
+            await wait_for(pilot, lambda: svc.params()["body_threshold"] == before + 2)
+            await pilot.press("W")
+            where = paths.profile_config_dir("sim", "overrides.toml")
+            await wait_for(
+                pilot,
+                lambda: any(str(where) in str(n.message) for n in app._notifications),
+                10,
+                "the notification naming the file",
+            )
+            return before
+
+    before = asyncio.run(scenario())
+    assert load_profile("sim", plugins).get("vision.body_threshold") == before + 2

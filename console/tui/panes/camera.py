@@ -47,6 +47,7 @@ class CameraPane(Horizontal):
         "b        capture the background (show the empty table)\n"
         "t / T    body threshold down / up      c / C  contact threshold down / up\n"
         "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
+        "W        keep the thresholds for this profile (its overrides file)\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
         "g        gestures panel: datasets, training and evaluation\n"
         "Overlay: hand outline green, contacts red, calibration target yellow."
@@ -60,6 +61,7 @@ class CameraPane(Horizontal):
         Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
         Binding("H", "tune('highpass_sigma_px', 1)", "high-pass h/H"),
         Binding("v", "view", "view"),
+        Binding("W", "save_tuning", "keep thresholds", show=False),
         Binding("k", "calibrate", "calibrate"),
         Binding("n", "skip_target", "skip target", show=False),
         Binding("S", "save_calibration", "save cal.", show=False),
@@ -163,7 +165,7 @@ class CameraPane(Horizontal):
         lines.append("")
         for k, v in svc.params().items():
             lines.append(f"{k} {v:g}")
-        lines.append("b: capture background")
+        lines += ["b: capture background", "W: keep the thresholds"]
         if self.calibration is not None or self.cal_result is not None or self.cal_message:
             lines += ["", "[b]touch calibration[/b]", self.cal_message]
         else:
@@ -178,6 +180,15 @@ class CameraPane(Horizontal):
             return
         svc.set_param(key, cur + sign * rng.step)
         self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
+
+    @work(thread=True, exclusive=True, group="camera-tuning")
+    def action_save_tuning(self) -> None:
+        try:
+            path = self.service.save_tuning()
+        except UserError as exc:
+            self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
+            return
+        self.app.call_from_thread(self.app.notify, f"thresholds kept in {path}", timeout=4)
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)
