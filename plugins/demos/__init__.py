@@ -62,8 +62,8 @@ DEMOS_FIELDS = {
     "flow_map": Field(
         "path",
         "",
-        help="vibration map the flow demo uses (beside the profile); empty on the twin: "
-        "measured once on the plate twin and cached",
+        help="vibration map the flow demo uses (relative to the profile's folder); empty on "
+        "the twin: the profile's measured map, measured once into HapTable's cache",
     ),
     "flow_direction": Field(
         "str", "right", choices=("left", "right", "up", "down"), help="flow direction"
