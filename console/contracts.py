@@ -72,8 +72,9 @@ class StreamSource(Protocol):
 
 @runtime_checkable
 class BlockSource(Protocol):
-    """What an audio output pulls from: the safety gate. Fills ``out`` (frames, 2),
-    float32 sound-card units in [-1, 1]; column 0 = left (piezo), 1 = right (screen)."""
+    """What an audio output pulls from: the safety gate. Fills ``out`` (frames, channels),
+    float32 sound-card units in [-1, 1], one column per ``[audio] channels`` name (by
+    default two: column 0 = left (piezo), 1 = right (screen))."""
 
     def fill(self, out: np.ndarray) -> None: ...
 
@@ -104,7 +105,7 @@ class AudioOutput(Protocol):
 class SimulatedAudio(AudioOutput, Protocol):
     """A simulated sound card (the twin): ``paced`` (True: blocks at the card's rate;
     False: as fast as the gate fills them, for tests and offline runs) and what it
-    played, in volts at the actuator (``recording_v() -> (n, 2)``)."""
+    played, in volts at the actuator (``recording_v() -> (n, channels)``)."""
 
     paced: bool
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from console.channels import BUS_CHANNELS, layout_problem
 from console.errors import ProfileError
 from console.hookspecs import hookimpl
 from console.schema import Field
@@ -56,7 +57,14 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             "size_mm": Field(
                 "floats", [61.0, 35.0], length=2, min=1, max=500, help="extent along x, y"
             ),
-            "relay_channel": Field("int", min=1, max=64, help="relay channel feeding this patch"),
+            "relay_channel": Field(
+                "int",
+                0,
+                min=0,
+                max=64,
+                help="relay channel feeding this patch; 0: no relay, only where [audio] "
+                "channels gives the patch a channel of its own (then always connected)",
+            ),
             "capacitance_nf": Field(
                 "float",
                 90.0,
@@ -89,6 +97,14 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
     "audio": (
         {
             "driver": Field("str", "twin", help="audio output driver (see `haptable plugins`)"),
+            "channels": Field(
+                "strs",
+                list(BUS_CHANNELS),
+                min_length=2,
+                help="what each sound-card channel drives, in order: 'piezo' (the bus "
+                "through the patch relays) and 'screen', or one channel per patch "
+                "(PA, PB, PC, PD) and 'screen'",
+            ),
             "device": Field("str", "", help="device name (substring) for real drivers"),
             "sample_rate_hz": Field("int", 48000, min=8000, max=192000),
             "block_size": Field("int", 64, min=16, max=8192, help="frames per callback"),
@@ -119,7 +135,8 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             ),
         },
         False,
-        "the two-channel sound card: left = piezo amplifier, right = screen amplifier",
+        "the sound card: by default two channels (left = piezo amplifier, right = screen "
+        "amplifier); [audio] channels names more",
     ),
     "amplifiers": (
         {
@@ -250,6 +267,9 @@ def check_consistency(profile: Profile) -> None:
     used: dict[int, str] = {}
     patches = profile.items("patches")
     w, h = profile.get("table.width_mm"), profile.get("table.height_mm")
+    audio = list(profile.get("audio.channels") or BUS_CHANNELS)
+    if (problem := layout_problem(audio)) is not None:
+        _fail(profile, f"[audio] channels = {audio}: {problem}")
     for name, p in patches.items():
         if name not in PATCHES:
             _fail(profile, f"[patches.{name}] unknown patch; use {', '.join(PATCHES)}")
@@ -259,6 +279,15 @@ def check_consistency(profile: Profile) -> None:
                 profile,
                 f"[patches.{name}] center_mm = {p['center_mm']}: outside the {w} x {h} mm glass",
             )
+        if not p.get("relay_channel"):
+            if name not in audio:
+                _fail(
+                    profile,
+                    f"[patches.{name}] has no relay_channel: on the piezo bus every patch "
+                    f"needs its relay; set relay_channel, or give {name} a channel of its "
+                    f"own in [audio] channels",
+                )
+            continue
         used.setdefault(p["relay_channel"], f"patches.{name}")
         if used[p["relay_channel"]] != f"patches.{name}":
             _fail(

@@ -58,7 +58,11 @@ class Outputs:
             audio.paced = not fast
         self._audio = audio
         self._board = board
-        relay_channels = {n: p["relay_channel"] for n, p in profile.items("patches").items()}
+        relay_channels = {
+            n: int(p["relay_channel"])
+            for n, p in profile.items("patches").items()
+            if p.get("relay_channel")  # 0: no relay (a patch on a channel of its own)
+        }
         screen_channel = int(profile.get("screen.relay_channel"))
         self.gate = SafetyGate(
             self.limits,

@@ -29,7 +29,7 @@ from console.safety import (
     SourceInterrupted,
     check_plan,
 )
-from console.types import OutputPlan
+from console.types import OutputPlan, Segment
 
 log = logging.getLogger("haptable.scheduler")
 
@@ -54,8 +54,7 @@ class PlayReport:
 class _Step:
     kind: str  # "relays", "play", "silence", "stream"
     relays: frozenset[int] = frozenset()
-    piezo: np.ndarray | None = None
-    screen: np.ndarray | None = None
+    cols: tuple[np.ndarray, ...] = ()  # play: one array per output channel
     n: int = 0
     pos: int = 0
     stream: StreamSource | None = None
@@ -100,8 +99,9 @@ class Scheduler(Source):
         # answer
         self._epoch = 0
         self._tokens = 0
+        self.layout = self.limits.layout
         self._stream_k = 0
-        self._stream_last = (0.0, 0.0)
+        self._stream_last: tuple[float, ...] = (0.0,) * self.layout.n
         #: the operator's own relay setting (console toggles); a stimulus routes the relays
         #: its own way while it plays and this setting comes back after it
         self.operator_relays: frozenset[int] = frozenset()
@@ -122,7 +122,9 @@ class Scheduler(Source):
 
     # ------------------------------------------------------------------ API
     def relays_for(self, patches: frozenset[str], screen: bool) -> frozenset[int]:
-        chans = {self.relay_channels[p] for p in patches}
+        """The relays to close: the patches' (a patch without a relay is always
+        connected) and the screen's."""
+        chans = {self.relay_channels[p] for p in patches if self.relay_channels.get(p)}
         if screen:
             chans.add(self.screen_channel)
         return frozenset(chans)
@@ -140,15 +142,7 @@ class Scheduler(Source):
         gap = round(plan.gap_s * plan.sample_rate_hz)
         for i, seg in enumerate(plan.segments):
             steps.append(_Step("relays", relays=self.relays_for(seg.patches, seg.screen)))
-            steps.append(
-                _Step(
-                    "play",
-                    piezo=samples[i][0],
-                    screen=samples[i][1],
-                    n=seg.n_samples,
-                    segment=i,
-                )
-            )
+            steps.append(_Step("play", cols=samples[i], n=seg.n_samples, segment=i))
             if gap and i < len(plan.segments) - 1:
                 steps.append(_Step("silence", n=gap))
         steps.append(_Step("relays", restore=True))
@@ -156,23 +150,16 @@ class Scheduler(Source):
         self._enqueue(_Job(steps, report))
         return report
 
-    def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        """The plan's samples as checked (copied read-only; checked once per plan object)."""
+    def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, ...], ...]:
+        """Each segment's samples per output channel as checked (copied read-only;
+        checked once per plan object)."""
         hit = self._checked.get(id(plan))
         seg_ids = tuple(map(id, plan.segments))
         if hit is not None and hit[0]() is plan and hit[2] == seg_ids:
             return hit[1]
-        samples = tuple((_frozen(_bus_drive(seg)), _frozen(seg.screen_v)) for seg in plan.segments)
-        check_plan(
-            dataclasses.replace(
-                plan,
-                segments=tuple(
-                    dataclasses.replace(seg, piezo_v=p, screen_v=s, patch_v={})
-                    for seg, (p, s) in zip(plan.segments, samples, strict=True)
-                ),
-            ),
-            self.limits,
-        )
+        frozen = tuple(_frozen_segment(seg) for seg in plan.segments)
+        check_plan(dataclasses.replace(plan, segments=frozen), self.limits)
+        samples = tuple(tuple(self.layout.columns(seg)) for seg in frozen)
         key = id(plan)
         ref = weakref.ref(plan, lambda _r: self._checked.pop(key, None))
         self._checked[key] = (ref, samples, seg_ids)
@@ -182,6 +169,13 @@ class Scheduler(Source):
         """Queue a live stream; it plays until it returns ``None`` (after its ramp-down)."""
         if self.gate.estopped:
             raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
+        if self.layout.independent:
+            missing = sorted(set(source.patches) - set(self.layout.patch_index))
+            if missing:
+                raise SafetyRefusal(
+                    f"{name}: streams to {', '.join(missing)}, but [audio] channels = "
+                    f"{list(self.layout.names)} has no channel for it"
+                )
         steps = deque(
             [
                 _Step(
@@ -284,9 +278,10 @@ class Scheduler(Source):
             return self._job is not None or bool(self._jobs)
 
     # ------------------------------------------------------------------ audio thread
-    def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
-        piezo = np.zeros(n)
-        screen = np.zeros(n)
+    def next_block(self, n: int) -> tuple[np.ndarray, ...] | None:
+        """The next ``n`` samples of every output channel (the bus: ``(piezo, screen)``),
+        or ``None`` when there is nothing to play."""
+        cols = tuple(np.zeros(n) for _ in range(self.layout.n))
         pos = 0
         any_signal = False
         while pos < n:
@@ -304,8 +299,8 @@ class Scheduler(Source):
                 if st.pos == 0 and st.segment >= 0:
                     job.report.segment_start.append(self.gate.clock + pos)
                 k = min(n - pos, st.n - st.pos)
-                piezo[pos : pos + k] = st.piezo[st.pos : st.pos + k]
-                screen[pos : pos + k] = st.screen[st.pos : st.pos + k]
+                for dst, src in zip(cols, st.cols, strict=True):
+                    dst[pos : pos + k] = src[st.pos : st.pos + k]
                 st.pos += k
                 pos += k
                 any_signal = True
@@ -320,7 +315,7 @@ class Scheduler(Source):
                 if st.pos >= st.n:
                     job.steps.popleft()
             elif st.kind == "stream":
-                done = self._pull_stream(job, st, piezo, screen, pos, n)
+                done = self._pull_stream(job, st, cols, pos, n)
                 any_signal = True
                 if done is None:
                     pos = n
@@ -332,9 +327,9 @@ class Scheduler(Source):
                     break
                 if not self._relay_step(job, st):
                     break
-        return (piezo, screen) if any_signal else None
+        return cols if any_signal else None
 
-    def _pull_stream(self, job, st, piezo, screen, pos, n) -> int | None:
+    def _pull_stream(self, job, st, cols, pos, n) -> int | None:
         """Copy stream samples; return the position where the stream ended, or None.
 
         The stream's own code runs on a guarded thread: a stall longer than ``[limits]
@@ -344,7 +339,7 @@ class Scheduler(Source):
         if st.pos == 0:
             job.report.segment_start.append(self.gate.clock + pos)
             self._stream_k = 0
-            self._stream_last = (0.0, 0.0)
+            self._stream_last = (0.0,) * self.layout.n
         while pos < n:
             try:
                 blk = self._caller.call(src.next_block, n - pos, self.limits.source_stall_s)
@@ -354,9 +349,7 @@ class Scheduler(Source):
                 job.report.segment_end.append(self.gate.clock + pos)
                 tail = self._ramp_down(frozenset(src.patches))
                 if tail is not None:
-                    job.steps.insert(
-                        1, _Step("play", piezo=tail[0], screen=tail[1], n=tail[0].size)
-                    )
+                    job.steps.insert(1, _Step("play", cols=tail, n=tail[0].size))
                 return pos
             p, s = (np.asarray(a) for a in blk)
             if p.dtype.kind not in "fiu" or s.dtype.kind not in "fiu":
@@ -371,29 +364,29 @@ class Scheduler(Source):
             ):
                 if prob := stream_start_problem(x, self._stream_k, self.limits.ramp_samples, lim):
                     raise ValueError(prob)
-            piezo[pos : pos + k] = p
-            screen[pos : pos + k] = s
+            for dst, x in zip(cols, self.layout.from_bus(p, s, src.patches), strict=True):
+                dst[pos : pos + k] = x
             self._stream_k += k
             st.pos += k
             pos += k
-            self._stream_last = (float(p[-1]), float(s[-1]))
+            self._stream_last = tuple(float(dst[pos - 1]) for dst in cols)
         return None
 
-    def _ramp_down(self, patches: frozenset[str]) -> tuple[np.ndarray, np.ndarray] | None:
-        """From the stream's last sample to zero: linear, over the start ramp's length or
-        longer where the slew limit needs it; ``None`` when it ended at zero."""
-        lp, ls = self._stream_last
-        self._stream_last = (0.0, 0.0)
-        if lp == 0.0 and ls == 0.0:
+    def _ramp_down(self, patches: frozenset[str]) -> tuple[np.ndarray, ...] | None:
+        """From the stream's last sample to zero on every channel: linear, over the start
+        ramp's length or longer where the slew limit needs it; ``None`` when it ended at
+        zero."""
+        last = np.array(self._stream_last)
+        self._stream_last = (0.0,) * self.layout.n
+        if not last.any():
             return None
         lim = self.limits
+        steps = lim.column_steps_v(patches)
         need = max(
-            lim.ramp_samples,
-            math.ceil(abs(lp) / lim.max_step_v("piezo", patches)),
-            math.ceil(abs(ls) / lim.max_step_v("screen")),
+            lim.ramp_samples, *(math.ceil(abs(v) / st) for v, st in zip(last, steps, strict=True))
         )
         r = np.linspace(1.0, 0.0, need + 1)[1:]
-        return lp * r, ls * r
+        return tuple(v * r for v in last)
 
     def _relay_step(self, job: _Job, st: _Step) -> bool:
         """Advance a relay step; True when done (the block may continue)."""
@@ -477,15 +470,14 @@ def _stop_streams(streams: list[StreamSource]) -> None:
             log.exception("stream stop failed")
 
 
-def _bus_drive(seg) -> np.ndarray:
-    """The drive the piezo bus plays for a segment; refused when its patches differ."""
-    bus = seg.bus_drive()
-    if bus is None:
-        raise SafetyRefusal(
-            f"segment {seg.label or ''}: its patches {sorted(seg.patches)} have different "
-            f"drives: it needs a profile whose [audio] channels drive each patch on its own"
-        )
-    return bus
+def _frozen_segment(seg: Segment) -> Segment:
+    """The segment with private read-only copies of all its samples."""
+    return dataclasses.replace(
+        seg,
+        piezo_v=_frozen(seg.piezo_v),
+        screen_v=_frozen(seg.screen_v),
+        patch_v={p: _frozen(v) for p, v in seg.patch_v.items()},
+    )
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

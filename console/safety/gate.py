@@ -93,21 +93,25 @@ class SafetyGate:
         self._quiet_until = 0  # no signal before this clock (post-switch settle)
         self._last_switch: dict[int, int] = {}  # channel -> clock of its last switch
         self._steps_for: tuple | None = None  # _max_steps() for one relay state
-        self.level_v = (0.0, 0.0)  # last sample handed out, volts at the actuators
+        self.layout = limits.layout  # what each sound-card channel drives
+        names = self.layout.names
+        #: the order the block checks look at the channels: piezo ones first
+        self._check_order = sorted(range(len(names)), key=lambda k: names[k] == "screen")
+        #: last sample handed out per channel, volts at the actuators
+        self.level_v: tuple[float, ...] = (0.0,) * len(names)
         self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
         self.events: deque[GateEvent] = deque(maxlen=1000)
         self._safe = threading.Event()
         self._safe.set()
         self._audio_thread: threading.Thread | None = None
         self.listeners: list[Callable[[GateEvent], None]] = []
-        self._piezo_scale = 1.0 / limits.piezo_card_v
-        self._screen_scale = 1.0 / limits.screen_card_v
-        #: the last seconds handed to the driver, per sound-card channel (``scope.read``)
-        self.scope = ScopeTap(
-            limits.sample_rate_hz,
-            ("piezo", "screen"),
-            (limits.piezo_card_v, limits.screen_card_v),
+        card_v = tuple(
+            limits.screen_card_v if kind == "screen" else limits.piezo_card_v
+            for kind in self.layout.kinds()
         )
+        self._scale = 1.0 / np.array(card_v)
+        #: the last seconds handed to the driver, per sound-card channel (``scope.read``)
+        self.scope = ScopeTap(limits.sample_rate_hz, self.layout.names, card_v)
         LIVE_GATES.add(self)
 
     # ------------------------------------------------------------------ state
@@ -119,7 +123,7 @@ class SafetyGate:
     def idle(self) -> bool:
         """Nothing to play; but samples must keep flowing while an e-stop ramps down and
         opens relays (a fast-forward driver only pulls while this is False)."""
-        if not self._safe.is_set() or self.level_v != (0.0, 0.0):
+        if not self._safe.is_set() or any(self.level_v):
             return False
         src = self._source
         if self._estopped or src is None:
@@ -155,25 +159,29 @@ class SafetyGate:
     def relay_state(self) -> frozenset[int]:
         return frozenset(i + 1 for i, closed in enumerate(self.relays) if closed)
 
-    def _max_steps(self) -> tuple[frozenset[str], float, float]:
-        """The closed patches and each channel's slew step for the relays as they are:
-        worked out once per relay state, not in every audio block."""
+    def _max_steps(self) -> tuple[frozenset[str], np.ndarray]:
+        """The connected patches and each channel's slew step for the relays as they
+        are: worked out once per relay state, not in every audio block."""
         relays = self.relays
         hit = self._steps_for
         if hit is None or hit[0] != relays:
             patches = self.closed_patches()
-            lim = self.limits
-            hit = (relays, patches, lim.max_step_v("piezo", patches), lim.max_step_v("screen"))
+            hit = (relays, patches, self.limits.column_steps_v(patches))
             self._steps_for = hit
-        return hit[1], hit[2], hit[3]
+        return hit[1], hit[2]
 
     def closed_patches(self) -> frozenset[str]:
+        """The patches an amplifier reaches now: relay closed, or (a patch with a channel
+        of its own and no relay) always."""
         relays = self.relays
-        return frozenset(
+        closed = {
             p
             for p, c in self.relay_channels.items()
             if p in PATCHES and 1 <= c <= len(relays) and relays[c - 1]
-        )
+        }
+        if self.layout.independent:
+            closed.update(p for p in self.layout.patch_index if p not in self.relay_channels)
+        return frozenset(closed)
 
     def _event(self, kind: str, message: str, *, cut: bool = True) -> None:
         ev = GateEvent(time.monotonic(), self.clock, kind, message, cut)
@@ -187,9 +195,17 @@ class SafetyGate:
 
     # ------------------------------------------------------------------ audio path
     def fill(self, out: np.ndarray) -> None:
-        """Fill ``out`` (frames, 2) float32 in sound-card units. Called by the driver; never
-        raises and never waits on plugin code longer than ``source_stall_s``."""
+        """Fill ``out`` (frames, channels) float32 in sound-card units, one column per
+        ``[audio] channels`` name. Called by the driver; never raises and never waits on
+        plugin code longer than ``source_stall_s``."""
         self._audio_thread = threading.current_thread()
+        if out.ndim != 2 or out.shape[1] != self.layout.n:
+            out[...] = 0.0
+            self._fault(
+                f"the audio output gave a block of shape {out.shape}, but [audio] channels "
+                f"names {self.layout.n} channels; open the device with that many"
+            )
+            return
         clock = self.clock  # of the block's first sample (only this thread moves it)
         try:
             self._fill(out)
@@ -225,84 +241,103 @@ class SafetyGate:
         if block is None:
             self._hand_ramp_down(out)
             return
-        problem = None
-        try:
-            raw_p, raw_s = block
-        except Exception:
-            raw_p = raw_s = None
-            problem = "output source gave no (piezo, screen) pair"
-        piezo = screen = None
+        cols, problem = self._columns(block, n)
         if problem is None:
-            piezo, problem = _as_volts(raw_p, n, "piezo")
-        if problem is None:
-            screen, problem = _as_volts(raw_s, n, "screen")
-        if problem is None:
-            problem = self._block_problem(piezo, screen, clock)
+            problem = self._block_problem(cols, clock)
         if problem:
             self._hand_ramp_down(out)
             self._fault(problem)
             return
         with self._lock:
             if self._estopped or self._switching:  # e-stop or switch arrived meanwhile
-                piezo = screen = None
-        if piezo is None:
+                cols = None
+        if cols is None:
             self._hand_ramp_down(out)
             return
-        self._hand(out, piezo, screen)
+        self._hand(out, cols)
 
-    def _hand(self, out: np.ndarray, piezo: np.ndarray, screen: np.ndarray) -> None:
-        out[:, 0] = piezo * self._piezo_scale
-        out[:, 1] = screen * self._screen_scale
-        nz = bool(piezo.any() or screen.any())
+    def _columns(self, block: Any, n: int) -> tuple[list[np.ndarray] | None, str | None]:
+        """A source's block as one float array of ``n`` samples per channel, or why not:
+        a block is a sequence of one array per channel (the bus: ``(piezo, screen)``)."""
+        names = self.layout.names
+        try:
+            raw = tuple(block)
+        except Exception:
+            raw = ()
+        if len(raw) != len(names):
+            if len(names) == 2:
+                return None, "output source gave no (piezo, screen) pair"
+            return None, (
+                f"output source gave {len(raw)} channels, expected {len(names)} "
+                f"([audio] channels = {list(names)})"
+            )
+        cols = []
+        for name, x in zip(names, raw, strict=True):
+            a, problem = _as_volts(x, n, name)
+            if problem is not None:
+                return None, problem
+            cols.append(a)
+        return cols, None
+
+    def _hand(self, out: np.ndarray, cols: list[np.ndarray]) -> None:
+        nz = False
+        for k, x in enumerate(cols):
+            out[:, k] = x * self._scale[k]
+            nz = nz or bool(x.any())
         with self._lock:
             self.clock += out.shape[0]
             if nz:
                 self._last_nonzero = self.clock
-            self.level_v = (float(piezo[-1]), float(screen[-1]))
+            self.level_v = tuple(float(x[-1]) for x in cols)
 
     def _hand_ramp_down(self, out: np.ndarray) -> None:
         """Hand the driver a ramp from the last level to zero at the slew limit (zeros
-        once there): the only way the gate ever goes silent."""
+        once there), every channel at once: the only way the gate ever goes silent."""
         n = out.shape[0]
-        lp, ls = self.level_v
-        if lp == 0.0 and ls == 0.0:
+        levels = self.level_v
+        if not any(levels) or len(levels) != out.shape[1]:
             out[:] = 0.0
             with self._lock:
                 self.clock += n
             return
         k = np.arange(1, n + 1)
-        _, piezo_step, screen_step = self._max_steps()
-        piezo, screen = (
+        _, steps = self._max_steps()
+        cols = [
             np.sign(level) * np.maximum(abs(level) - step * k, 0.0)
-            for level, step in ((lp, piezo_step), (ls, screen_step))
-        )
-        self._hand(out, piezo, screen)
+            for level, step in zip(levels, steps, strict=True)
+        ]
+        self._hand(out, cols)
 
-    def _block_problem(self, piezo: np.ndarray, screen: np.ndarray, clock: int) -> str | None:
+    def _block_problem(self, cols: list[np.ndarray], clock: int) -> str | None:
         lim = self.limits
-        for name, x, (lo, hi) in (
-            ("piezo", piezo, lim.piezo_range()),
-            ("screen", screen, lim.screen_range()),
-        ):
-            if (p := range_problem(x, lo, hi, math.inf)) is not None:
-                return f"{name} channel {p} of a block"
-        p_on, s_on = bool(piezo.any()), bool(screen.any())
-        if clock < self._quiet_until and (p_on or s_on):
+        names = self.layout.names
+        ranges = lim.column_ranges()
+        for k in self._check_order:
+            if (p := range_problem(cols[k], *ranges[k], math.inf)) is not None:
+                return f"{names[k]} channel {p} of a block"
+        on = [bool(x.any()) for x in cols]
+        if clock < self._quiet_until and any(on):
             return "signal during the relay settle time"
-        patches, piezo_step, screen_step = self._max_steps()
-        if p_on and not patches:
-            return "piezo signal while no patch relay is closed"
+        patches, steps = self._max_steps()
+        for k in self._check_order:
+            name = names[k]
+            if not on[k] or name == "screen":
+                continue
+            if name == "piezo" and not patches:
+                return "piezo signal while no patch relay is closed"
+            if name != "piezo" and name not in patches:
+                return f"{name} signal while its patch relay is open"
         relays = self.relays
         sc = self.screen_channel
-        if s_on and sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1]):
-            return "screen signal while the screen relay is open"
-        lp, ls = self.level_v
-        for name, x, prev, step in (
-            ("piezo", piezo, lp, piezo_step),
-            ("screen", screen, ls, screen_step),
+        if (
+            on[self.layout.screen_index]
+            and sc is not None
+            and not (1 <= sc <= len(relays) and relays[sc - 1])
         ):
-            if (p := slew_problem(x, prev, step, end=False)) is not None:
-                return f"{name} channel {p} (a block)"
+            return "screen signal while the screen relay is open"
+        for k in self._check_order:
+            if (p := slew_problem(cols[k], self.level_v[k], steps[k], end=False)) is not None:
+                return f"{names[k]} channel {p} (a block)"
         return None
 
     def _fault(self, message: str) -> None:
@@ -351,7 +386,7 @@ class SafetyGate:
                 raise SafetyRefusal("relay switch refused: another switch is under way")
             need = self.limits.guard_samples + self.latency_samples
             quiet = self.clock - self._last_nonzero
-            if quiet < need or self.level_v != (0.0, 0.0):
+            if quiet < need or any(self.level_v):
                 raise SafetyRefusal(
                     f"relay switch refused: outputs silent for {quiet} samples, "
                     f"need {need} (guard gap + device latency)"
@@ -445,7 +480,7 @@ class SafetyGate:
         note = ""
         while True:
             with self._lock:
-                silent = self.clock - self._last_nonzero >= need and self.level_v == (0.0, 0.0)
+                silent = self.clock - self._last_nonzero >= need and not any(self.level_v)
                 clock = self.clock
             now = time.monotonic()
             if silent:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from console.channels import BUS_CHANNELS, ChannelLayout
 from console.errors import SafetyRefusal
 from console.types import PATCHES, OutputPlan
 
@@ -46,6 +47,8 @@ class Limits:
     screen_capacitance_f: float = 200e-9
     min_switch_interval_samples: int = 0
     source_stall_s: float = 0.1
+    #: what each sound-card channel drives (``[audio] channels``)
+    channels: tuple[str, ...] = BUS_CHANNELS
 
     @classmethod
     def from_profile(cls, profile: Profile) -> Limits:
@@ -71,13 +74,42 @@ class Limits:
             screen_current_a=float(profile.get("amplifiers.screen_peak_current_ma")) * 1e-3,
             relay_current_a=float(profile.get("relays.current_rating_ma")) * 1e-3,
             patch_capacitance_f={n: float(p["capacitance_nf"]) * 1e-9 for n, p in patches.items()},
-            patch_relay={n: int(p["relay_channel"]) for n, p in patches.items()},
+            patch_relay={
+                n: int(p["relay_channel"]) for n, p in patches.items() if p.get("relay_channel")
+            },
             screen_capacitance_f=float(profile.get("screen.capacitance_nf")) * 1e-9,
             min_switch_interval_samples=round(
                 profile.get("relays.min_switch_interval_ms") * 1e-3 * fs
             ),
             source_stall_s=float(profile.get("limits.source_stall_ms")) * 1e-3,
+            channels=ChannelLayout.from_profile(profile).names,
         )
+
+    @property
+    def layout(self) -> ChannelLayout:
+        return ChannelLayout(self.channels)
+
+    def column_steps_v(self, connected: frozenset[str]) -> np.ndarray:
+        """The slew limit of every channel as the largest change per sample, in volts:
+        the bus's for the ``connected`` patches, a patch channel's for its patch alone,
+        the screen's."""
+        steps = []
+        for name in self.channels:
+            if name == "screen":
+                steps.append(self.max_step_v("screen"))
+            elif name == "piezo":
+                steps.append(self.max_step_v("piezo", connected))
+            else:
+                steps.append(self.max_step_v("piezo", frozenset({name})))
+        return np.array(steps)
+
+    def column_ranges(self) -> list[tuple[float, float]]:
+        """Allowed volts per channel: piezo limits on the bus and patch channels, the
+        screen's on the screen channel."""
+        return [
+            self.screen_range() if name == "screen" else self.piezo_range()
+            for name in self.channels
+        ]
 
     def slew_v_per_s(self, channel: str, patches: frozenset[str] = frozenset()) -> float:
         """Fastest change the channel may make: the amplifier's peak current into every
@@ -181,45 +213,57 @@ def check_plan(plan: OutputPlan, limits: Limits) -> None:
     if not plan.segments:
         raise SafetyRefusal(f"{name}: no segments to play")
     total = 0
+    layout = limits.layout
     for i, seg in enumerate(plan.segments, 1):
         label = f"{name}: segment {i}" + (f" ({seg.label})" if seg.label else "")
-        unknown = set(seg.patches) - set(PATCHES)
-        if unknown:
-            raise SafetyRefusal(f"{label}: unknown patches {sorted(unknown)}; use {PATCHES}")
-        bus = seg.bus_drive()
-        if bus is None:
-            raise SafetyRefusal(
-                f"{label}: its patches {sorted(seg.patches)} have different drives: it needs "
-                f"a profile whose [audio] channels drive each patch on its own"
-            )
-        arrays = {}
-        for ch, raw in (("piezo_v", bus), ("screen_v", seg.screen_v)):
-            a = np.asarray(raw)
-            if a.ndim != 1 or not np.issubdtype(a.dtype, np.number):
-                raise SafetyRefusal(f"{label}: {ch} must be a 1-D array of volts")
-            arrays[ch] = a.astype(float, copy=False)
-        if arrays["piezo_v"].size != arrays["screen_v"].size:
-            raise SafetyRefusal(f"{label}: piezo and screen channels differ in length")
-        total += arrays["piezo_v"].size
-        patches = frozenset(seg.patches)
-        for ch, (lo, hi) in (
-            ("piezo_v", limits.piezo_range()),
-            ("screen_v", limits.screen_range()),
-        ):
-            x = arrays[ch]
-            chan = ch.split("_")[0]
-            if (p := range_problem(x, lo, hi, limits.rating_vpp)) is not None:
-                raise SafetyRefusal(f"{label}: {chan} channel {p}")
-            if (p := _ramp_problem(x, limits.ramp_samples)) is not None:
-                raise SafetyRefusal(f"{label}: {chan} channel {p}")
-            step = limits.max_step_v(chan, patches)
-            if (p := slew_problem(x, 0.0, step, end=True)) is not None:
-                raise SafetyRefusal(f"{label}: {chan} channel {p}")
-        if np.any(arrays["piezo_v"]) and not seg.patches:
-            raise SafetyRefusal(f"{label}: piezo signal with no patch selected")
-        if np.any(arrays["screen_v"]) and not seg.screen:
-            raise SafetyRefusal(f"{label}: screen signal with the screen relay open")
+        total += _check_segment(seg, label, layout, limits)
     if total > limits.max_plan_samples:
         raise SafetyRefusal(
             f"{name}: {total / limits.sample_rate_hz:.1f} s is longer than [limits] max_plan_s"
         )
+
+
+def _check_segment(seg, label: str, layout: ChannelLayout, limits: Limits) -> int:
+    """Refuse a segment the outputs must not play; its length in samples."""
+    unknown = set(seg.patches) - set(PATCHES)
+    if unknown:
+        raise SafetyRefusal(f"{label}: unknown patches {sorted(unknown)}; use {PATCHES}")
+    given = {"piezo_v": seg.piezo_v, "screen_v": seg.screen_v}
+    given.update({f"patch_v[{p!r}]": v for p, v in seg.patch_v.items()})
+    for what, v in given.items():
+        a = np.asarray(v)
+        if a.ndim != 1 or not np.issubdtype(a.dtype, np.number):
+            raise SafetyRefusal(f"{label}: {what} must be a 1-D array of volts")
+        if a.size != np.size(seg.piezo_v):
+            raise SafetyRefusal(f"{label}: piezo and screen channels differ in length")
+    try:
+        raw = layout.columns(seg)
+    except ValueError as exc:
+        raise SafetyRefusal(f"{label}: {exc}") from None
+    arrays = [np.asarray(a).astype(float, copy=False) for a in raw]
+    n = arrays[layout.screen_index].size
+    patches = frozenset(seg.patches)
+    steps = limits.column_steps_v(patches)
+    # the screen last, as the two-channel check always did
+    order = sorted(range(layout.n), key=lambda k: layout.names[k] == "screen")
+    ranges = limits.column_ranges()
+    for k in order:
+        x, chan = arrays[k], layout.names[k]
+        lo, hi = ranges[k]
+        if (p := range_problem(x, lo, hi, limits.rating_vpp)) is not None:
+            raise SafetyRefusal(f"{label}: {chan} channel {p}")
+        if (p := _ramp_problem(x, limits.ramp_samples)) is not None:
+            raise SafetyRefusal(f"{label}: {chan} channel {p}")
+        if (p := slew_problem(x, 0.0, float(steps[k]), end=True)) is not None:
+            raise SafetyRefusal(f"{label}: {chan} channel {p}")
+    piezo_on = any(np.any(arrays[k]) for k, c in enumerate(layout.names) if c != "screen")
+    if (piezo_on or np.any(seg.piezo_v)) and not seg.patches:
+        raise SafetyRefusal(f"{label}: piezo signal with no patch selected")
+    if np.any(seg.piezo_v) and not seg.patches - set(seg.patch_v):
+        raise SafetyRefusal(
+            f"{label}: piezo_v reaches no patch (each of {sorted(seg.patches)} has its own "
+            f"drive in patch_v); put it in patch_v or add its patches"
+        )
+    if np.any(arrays[layout.screen_index]) and not seg.screen:
+        raise SafetyRefusal(f"{label}: screen signal with the screen relay open")
+    return n

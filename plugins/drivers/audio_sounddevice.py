@@ -1,6 +1,7 @@
 """Sound-card output through PortAudio (the ``sounddevice`` package).
 
-Two float32 channels (left: piezo amplifier, right: screen amplifier). The PortAudio
+Float32 channels as ``[audio] channels`` names them (by default two: left piezo
+amplifier, right screen amplifier; e.g. five for a patch each and the screen). The PortAudio
 callback pulls every block from the source (the safety gate) and never raises: an
 exception or a bad sample from the source silences the output for the rest of the
 stream (state ``fault``). A device that disappears ends the stream (state ``lost``).
@@ -21,12 +22,12 @@ from typing import Any
 import numpy as np
 
 from console.bench import summarize_s
+from console.channels import ChannelLayout
 from console.contracts import BlockSource
 from console.types import DeviceStatus, OutputDevice
 from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
-CHANNELS = 2  # left: piezo amplifier, right: screen amplifier
 TIMING_WINDOW = 2000  # callbacks kept for the period / fill-time statistics
 
 _open_streams = 0  # streams this process holds open; PortAudio is only rescanned when 0
@@ -47,31 +48,42 @@ def _label(dev: dict, hostapis: Sequence[dict]) -> str:
     return f"{dev['name']} ({api})"
 
 
-def output_devices(devices: Sequence[dict], hostapis: Sequence[dict]) -> list[tuple[int, str]]:
-    """``(index, "name (host API)")`` of every device with at least two output channels."""
+def output_devices(
+    devices: Sequence[dict], hostapis: Sequence[dict], channels: int = 2
+) -> list[tuple[int, str]]:
+    """``(index, "name (host API)")`` of every device with at least ``channels`` outputs."""
     return [
         (i, _label(d, hostapis))
         for i, d in enumerate(devices)
-        if int(d.get("max_output_channels", 0)) >= 2
+        if int(d.get("max_output_channels", 0)) >= channels
     ]
 
 
+def _kind(channels: int) -> str:
+    return "stereo output" if channels == 2 else f"output with {channels} channels"
+
+
 def find_output_device(
-    devices: Sequence[dict], hostapis: Sequence[dict], name: str, default_index: int = -1
+    devices: Sequence[dict],
+    hostapis: Sequence[dict],
+    name: str,
+    default_index: int = -1,
+    channels: int = 2,
 ) -> int:
-    """Index of the stereo output whose name matches ``name``.
+    """Index of the output with at least ``channels`` channels whose name matches ``name``.
 
     An exact name (case-insensitive) wins; else a unique substring of "name (host API)".
     An empty name means the system default output. Raises DeviceError listing the
-    available outputs when nothing or several things match.
+    available outputs when nothing or several things match; a device that matches but
+    has too few channels is named with its count.
     """
-    outputs = output_devices(devices, hostapis)
+    outputs = output_devices(devices, hostapis, channels)
     listing = ", ".join(repr(label) for _, label in outputs) or "none"
     if not name:
         if any(i == default_index for i, _ in outputs):
             return default_index
         raise DeviceError(
-            f"[audio] device = '': there is no default stereo output; "
+            f"[audio] device = '': there is no default {_kind(channels)}; "
             f"available outputs: {listing}; set [audio] device to one of them"
         )
     wanted = name.casefold()
@@ -82,8 +94,20 @@ def find_output_device(
     if len(matches) == 1:
         return matches[0][0]
     if not matches:
+        small = [
+            (label, int(devices[i].get("max_output_channels", 0)))
+            for i, label in output_devices(devices, hostapis, 1)
+            if wanted in label.casefold() or str(devices[i]["name"]).casefold() == wanted
+        ]
+        if small and channels > 2:
+            label, have = small[0]
+            raise DeviceError(
+                f"[audio] device = {name!r}: {label!r} has {have} output channels, but "
+                f"[audio] channels names {channels}; use a {channels}-channel interface "
+                f"or fewer channels"
+            )
         raise DeviceError(
-            f"[audio] device = {name!r}: no stereo output device matches; "
+            f"[audio] device = {name!r}: no {_kind(channels)} device matches; "
             f"available outputs: {listing}; plug in the sound card or set "
             f"[audio] device to one of them"
         )
@@ -102,14 +126,17 @@ def _rescan(sd: Any) -> None:
             sd._initialize()
 
 
-def locate(sd: Any, name: str) -> tuple[int, str]:
-    """``(index, label)`` of the device named ``name``, rescanning once if not found."""
+def locate(sd: Any, name: str, channels: int = 2) -> tuple[int, str]:
+    """``(index, label)`` of the device named ``name`` with at least ``channels`` outputs,
+    rescanning once if not found."""
 
     def attempt() -> tuple[int, str]:
         devices = list(sd.query_devices())
         hostapis = list(sd.query_hostapis())
         default = sd.default.device[1]
-        idx = find_output_device(devices, hostapis, name, -1 if default is None else int(default))
+        idx = find_output_device(
+            devices, hostapis, name, -1 if default is None else int(default), channels
+        )
         return idx, _label(devices[idx], hostapis)
 
     try:
@@ -129,8 +156,10 @@ class SounddeviceOutput:
         block_size: int = 256,
         latency_s: float = 0.0,
         sd: Any = None,
+        channels: int = 2,
     ) -> None:
         self.device = device
+        self.channels = int(channels)
         self.sample_rate_hz = int(sample_rate_hz)
         self.block_size = int(block_size)
         self.latency_s = float(latency_s)
@@ -159,7 +188,7 @@ class SounddeviceOutput:
             raise DeviceError(f"audio output {self._label!r} is already started; stop() it first")
         global _open_streams
         sd = self._sd or load_sounddevice()
-        index, self._label = locate(sd, self.device)
+        index, self._label = locate(sd, self.device, self.channels)
         self._source = source
         self._t_last_s = None
         self._periods_s.clear()
@@ -173,7 +202,7 @@ class SounddeviceOutput:
                 samplerate=self.sample_rate_hz,
                 blocksize=self.block_size,
                 device=index,
-                channels=CHANNELS,
+                channels=self.channels,
                 dtype="float32",
                 latency=self.latency_s if self.latency_s > 0 else "low",
                 callback=self._callback,
@@ -183,7 +212,7 @@ class SounddeviceOutput:
             self._silent = True
             raise DeviceError(
                 f"audio device {self._label!r}: cannot open at {self.sample_rate_hz} Hz, "
-                f"block {self.block_size}, 2 channels float32 ({exc}); check "
+                f"block {self.block_size}, {self.channels} channels float32 ({exc}); check "
                 f"[audio] sample_rate_hz / block_size match what the device supports"
             ) from None
         with _open_lock:
@@ -308,6 +337,7 @@ class SounddeviceOutput:
         return {
             "driver": "sounddevice",
             "device": self._label or self.device,
+            "channels": self.channels,
             "state": self._state,
             "sample_rate_hz": self.sample_rate_hz,
             "block_size": self.block_size,
@@ -332,6 +362,7 @@ def list_devices(profile: Any, sd: Any = None) -> list[OutputDevice]:
     devices = list(sd.query_devices())
     hostapis = list(sd.query_hostapis())
     default = sd.default.device[1]
+    need = ChannelLayout.from_profile(profile).n
     found = []
     for i, d in enumerate(devices):
         ch = int(d.get("max_output_channels", 0))
@@ -347,7 +378,7 @@ def list_devices(profile: Any, sd: Any = None) -> list[OutputDevice]:
                 float(d.get("default_low_output_latency", float("nan"))),
                 float(d.get("default_high_output_latency", float("nan"))),
                 default=default is not None and i == int(default),
-                note="" if ch >= CHANNELS else f"{ch} output channel: needs {CHANNELS}",
+                note="" if ch >= need else f"{ch} output channel{'s' * (ch != 1)}: needs {need}",
             )
         )
     return found
@@ -360,6 +391,7 @@ def from_profile(profile: Any) -> SounddeviceOutput:
         sample_rate_hz=profile.get("audio.sample_rate_hz"),
         block_size=profile.get("audio.block_size"),
         latency_s=profile.get("sounddevice.latency_s"),
+        channels=ChannelLayout.from_profile(profile).n,
     )
 
 
@@ -370,8 +402,9 @@ def probe(profile: Any, sd: Any = None) -> DeviceStatus:
         sd = sd or load_sounddevice()
     except DeviceError as exc:
         return DeviceStatus("audio_output", "sounddevice", "missing", str(exc), PORTAUDIO_FIX)
+    channels = ChannelLayout.from_profile(profile).n
     try:
-        _, label = locate(sd, name)
+        _, label = locate(sd, name, channels)
     except DeviceError as exc:
         return DeviceStatus(
             "audio_output",
@@ -380,4 +413,6 @@ def probe(profile: Any, sd: Any = None) -> DeviceStatus:
             str(exc),
             "plug in the sound card, or set [audio] device to one of the listed outputs",
         )
-    return DeviceStatus("audio_output", "sounddevice", "ok", f"output {label!r}")
+    return DeviceStatus(
+        "audio_output", "sounddevice", "ok", f"output {label!r} ({channels} channels)"
+    )

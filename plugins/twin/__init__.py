@@ -6,6 +6,7 @@ separate plugins of the twin.
 
 from __future__ import annotations
 
+from console.channels import ChannelLayout
 from console.hookspecs import hookimpl
 from console.schema import Field
 from console.types import DeviceStatus, OutputDevice
@@ -40,6 +41,14 @@ def _simulated(kind: str):
     return lambda profile: DeviceStatus(kind, "twin", "simulated", "digital twin")
 
 
+def _twin_audio_probe(profile) -> DeviceStatus:
+    """The twin opens as many channels as ``[audio] channels`` names: say which."""
+    names = ChannelLayout.from_profile(profile).names
+    return DeviceStatus(
+        "audio", "twin", "simulated", f"digital twin, {len(names)} channels: {', '.join(names)}"
+    )
+
+
 @hookimpl
 def haptable_register_audio_outputs(register):
     def factory(profile):
@@ -55,7 +64,7 @@ def haptable_register_audio_outputs(register):
                 "twin",
                 "digital twin amplifiers",
                 "simulated",
-                2,
+                ChannelLayout.from_profile(profile).n,  # as many as [audio] channels names
                 block / fs,  # fast-forward: one block
                 periods * block / fs,  # paced: the simulated device buffer
             )
@@ -65,7 +74,7 @@ def haptable_register_audio_outputs(register):
         "twin",
         factory,
         description="simulated amplifiers; records what was played",
-        probe=_simulated("audio"),
+        probe=_twin_audio_probe,
         devices=devices,
     )
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from console.channels import ChannelLayout
 from console.contracts import BlockSource
 from console.realtime import realtime_priority
 
@@ -47,11 +48,11 @@ class _Bus:
     amplifiers now (samples played since that output started) and its level in volts.
     """
 
-    level_v: tuple[float, float] = (0.0, 0.0)
+    level_v: tuple[float, ...] = (0.0, 0.0)
     clock: int = 0
-    probe: Callable[[], tuple[int, tuple[float, float]]] | None = None
+    probe: Callable[[], tuple[int, tuple[float, ...]]] | None = None
 
-    def now(self) -> tuple[int, tuple[float, float]]:
+    def now(self) -> tuple[int, tuple[float, ...]]:
         probe = self.probe
         return probe() if probe is not None else (self.clock, self.level_v)
 
@@ -72,7 +73,8 @@ def _key(profile, dotted: str, default):
 
 
 class TwinAudioOutput:
-    """Two channels (left piezo, right screen) into the simulated amplifiers."""
+    """The profile's ``[audio] channels`` (by default two: left piezo, right screen) into
+    the simulated amplifiers, one amplifier per channel."""
 
     def __init__(
         self,
@@ -90,17 +92,18 @@ class TwinAudioOutput:
         if record_s is None:
             record_s = float(_key(profile, "twin_audio.record_s", DEFAULT_RECORD_S))
         full = float(profile.get("audio.full_scale_v"))
-        self._to_v = np.array(
-            [
-                full * profile.get("amplifiers.piezo_gain"),
-                full * profile.get("amplifiers.screen_gain"),
-            ],
-            dtype=np.float32,
-        )
+        gain = {
+            "piezo": full * profile.get("amplifiers.piezo_gain"),
+            "screen": full * profile.get("amplifiers.screen_gain"),
+        }
+        self.channels = ChannelLayout.from_profile(profile).names
+        kinds = ChannelLayout(self.channels).kinds()
+        self._to_v = np.array([gain[k] for k in kinds], dtype=np.float32)
+        n_ch = len(self.channels)
         self._bus = bus_for(profile)
         bs = self.block_size
         self._cap = bs * max(1, math.ceil(record_s * self.sample_rate_hz / bs))
-        self._rec = np.empty((self._cap, 2), dtype=np.float32)  # ring, indexed by clock
+        self._rec = np.empty((self._cap, n_ch), dtype=np.float32)  # ring, indexed by clock
         # written here, not first in the audio thread: touching fresh pages there (each
         # new 2 MB huge page zeroed on demand) stalled it 5-7 ms every ~5 s: underruns
         self._rec.fill(0.0)
@@ -120,7 +123,7 @@ class TwinAudioOutput:
         self.blocks = 0
         self.callback_s: deque[float] = deque(maxlen=4096)
         self._source: BlockSource | None = None
-        self._out = np.zeros((self.block_size, 2), dtype=np.float32)
+        self._out = np.zeros((self.block_size, n_ch), dtype=np.float32)
 
     # AudioOutput protocol
     def start(self, source: BlockSource) -> None:
@@ -130,7 +133,7 @@ class TwinAudioOutput:
         with self._lock:
             self._t0, self._s0 = None, self._written
         self._bus.clock = 0  # this output drives the wire from now on
-        self._bus.level_v = (0.0, 0.0)
+        self._bus.level_v = (0.0,) * len(self.channels)
         self._bus.probe = self._probe
         listeners = getattr(source, "listeners", None)
         if isinstance(listeners, list):
@@ -182,14 +185,14 @@ class TwinAudioOutput:
             return self._s0
         return min(self._written, self._s0 + int((now - self._t0) * self.sample_rate_hz + 1e-6))
 
-    def _probe(self) -> tuple[int, tuple[float, float]]:
+    def _probe(self) -> tuple[int, tuple[float, ...]]:
         with self._lock:
             p = self._played(time.monotonic())
             if p <= self._kept_from or p == 0:
-                lvl = (0.0, 0.0)
+                lvl = (0.0,) * len(self.channels)
             else:
                 x = self._rec[(p - 1) % self._cap] * self._to_v
-                lvl = (float(x[0]), float(x[1]))
+                lvl = tuple(float(v) for v in x)
         return p, lvl
 
     def _on_gate_event(self, ev: Any) -> None:
@@ -261,7 +264,7 @@ class TwinAudioOutput:
             with self._lock:
                 self._store(out)
             last = out[-1] * self._to_v
-            self._bus.level_v = (float(last[0]), float(last[1]))
+            self._bus.level_v = tuple(float(v) for v in last)
             self._bus.clock = self._written
             return 0.0
         with self._lock:
@@ -286,19 +289,20 @@ class TwinAudioOutput:
 
     # twin extras
     def recording_card(self) -> np.ndarray:
-        """Everything played (the last ``record_s``), (n, 2) in sound-card units; row k is
+        """Everything played (the last ``record_s``), (n, channels) in sound-card units
+        (a column per ``[audio] channels`` name); row k is
         clock ``k`` unless the ring wrapped (then the oldest kept sample comes first)."""
         with self._lock:
             a, b = self._kept_from, self._written
             if b <= a:
-                return np.zeros((0, 2), np.float32)
+                return np.zeros((0, len(self.channels)), np.float32)
             i, j = a % self._cap, b % self._cap
             if i < j:
                 return self._rec[i:j].copy()
             return np.concatenate([self._rec[i:], self._rec[:j]])
 
     def recording_v(self) -> np.ndarray:
-        """Everything played, (n, 2) in volts at the piezo patches / screen."""
+        """Everything played, (n, channels) in volts at the piezo patches / screen."""
         return self.recording_card().astype(np.float64) * self._to_v
 
 
@@ -308,7 +312,7 @@ class SwitchRecord:
     clock: int
     channel: int
     closed: bool
-    level_v: tuple[float, float]
+    level_v: tuple[float, ...]  # every output channel's volts at the switch
 
 
 class TwinRelayBoard:

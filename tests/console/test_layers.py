@@ -17,6 +17,7 @@ LAYERS = ("types", "profile", "safety", "runtime", "session", "tui", "cli")
 LAYER_OF: dict[str, str] = {
     "console": "types",
     "console.types": "types",
+    "console.channels": "types",
     "console.errors": "types",
     "console.schema": "types",
     "console.hookspecs": "types",

@@ -80,7 +80,7 @@ class RelaysPane(VerticalScroll):
 
     def _relay_label(self, ch: int) -> str:
         prof = self.app.ctx.profile
-        names = [n for n, p in prof.items("patches").items() if p["relay_channel"] == ch]
+        names = [n for n, p in prof.items("patches").items() if p.get("relay_channel") == ch]
         if prof.get("screen.relay_channel") == ch:
             names.append("screen")
         return f"relay {ch}  {' '.join(names) or '-'}"

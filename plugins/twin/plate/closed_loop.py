@@ -1,9 +1,15 @@
 """Closed loop on the twin: what the plate does, over time, with what the outputs played.
 
-The piezo channel (volts at the patch terminals) reaches only the patches whose relays
-are closed, so the generalized force on mode r at sample k is
+On the paper's bus the piezo channel (volts at the patch terminals) reaches only the
+patches whose relays are closed; with a channel per patch (``[audio] channels`` =
+``["PA", "PB", "PC", "PD", "screen"]``) each patch p has volts V_p of its own. So the
+generalized force on mode r at sample k is
 
-    f_r[k] = V[k] * sum_p Q[r, p] * w_p[k]          (w_p = 1 while patch p is connected)
+    f_r[k] = sum_p Q[r, p] * V_p[k] * w_p[k]        (w_p = 1 while patch p is connected)
+
+with V_p = V for every patch on the bus. The drive is the (n, 4) array V_p w_p: the
+twin plate takes one input per patch, and its response is linear in them
+(superposition, checked in tests/closed_loop against the FRF).
 
 with Q the pin-force modal forces per volt of PA..PD (PALL = all four in parallel, the
 sum). Each mode is the damped oscillator  q'' + 2 zeta w_r q' + w_r^2 q = f_r, started
@@ -14,7 +20,7 @@ that disconnects a patch), not a steady-state shortcut. The modes the twin left 
 act quasi-statically: their static residual per patch times V[k] w_p[k] is added.
 
 Displacement at points = shapes (P, R + 4) @ coordinates (R + 4, n): the first R rows of
-the coordinates are the modal displacements, the last four V * w_p (for the residual).
+the coordinates are the modal displacements, the last four V_p * w_p (for the residual).
 The RMS over a window for MANY points (the 3 x 3 squares of a hand, 2025 subgrid points)
 comes from the window's covariance of the coordinates, exactly, without forming the
 (points x samples) array: rms_p^2 = s_p^T C s_p.
@@ -35,6 +41,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from console.channels import BUS_CHANNELS
 
 from .model import EXCITATIONS, Twin, TwinParams, _eval_coeffs
 
@@ -116,38 +124,80 @@ def drive_from_recording(
     start: int = 0,
     stop: int | None = None,
     clock0: int = 0,
+    channels: Sequence[str] = BUS_CHANNELS,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(piezo volts (n,), weights (n, 4)) for clocks ``start .. stop`` of the outputs.
+    """(drive, weights (n, 4)) for clocks ``start .. stop`` of the outputs.
 
-    ``recording_v`` is ``Outputs.recording()`` ((n, 2) volts, column 0 the piezo channel)
-    whose first sample was played at clock ``clock0`` (0 unless the recording wrapped);
-    the relay log's clocks are on the same clock.
+    ``recording_v`` is ``Outputs.recording()`` ((n, channels) volts, a column per
+    ``[audio] channels`` name in ``channels``) whose first sample was played at clock
+    ``clock0`` (0 unless the recording wrapped); the relay log's clocks are on the same
+    clock. On the bus the drive is the piezo channel's volts (n,); with a channel per
+    patch it is each patch's volts (n, 4) (PA..PD; 0 for a patch without a channel), and
+    a patch without a relay is connected throughout.
     """
     rec = np.asarray(recording_v, float)
-    v = rec[:, 0] if rec.ndim == 2 else rec
-    end = clock0 + v.size if stop is None else min(int(stop), clock0 + v.size)
+    names = tuple(channels)
+    if rec.ndim == 2 and rec.shape[1] != len(names):
+        raise ValueError(
+            f"recording has {rec.shape[1]} channels, but channels = {list(names)} names "
+            f"{len(names)}"
+        )
+    if rec.ndim == 1:
+        rec = rec[:, None]
+        names = ("piezo",)
+    end = clock0 + rec.shape[0] if stop is None else min(int(stop), clock0 + rec.shape[0])
     if start < clock0:
         raise ValueError(f"recording starts at clock {clock0}, after the asked start {start}")
-    v = v[start - clock0 : end - clock0]
-    return v, weights_from_relay_log(relay_log, relay_channels, v.size, start)
+    rec = rec[start - clock0 : end - clock0]
+    w = weights_from_relay_log(relay_log, relay_channels, rec.shape[0], start)
+    if "piezo" in names:
+        return rec[:, names.index("piezo")], w
+    v = np.zeros((rec.shape[0], 4))
+    for i, p in enumerate(PATCHES):
+        if p in names:
+            v[:, i] = rec[:, names.index(p)]
+            if not relay_channels.get(p):
+                w[:, i] = 1.0  # no relay: always connected
+    return v, w
 
 
 def drive_from_plan(plan, guard_s: float = 0.0) -> tuple[np.ndarray, np.ndarray, list[Span]]:
-    """(piezo volts, weights, spans) of a plan played directly: segments separated by
-    ``plan.gap_s + guard_s`` of silence (patches disconnected in the gaps)."""
+    """(drive, weights, spans) of a plan played directly: segments separated by
+    ``plan.gap_s + guard_s`` of silence (patches disconnected in the gaps).
+
+    The drive is the bus volts (n,) when every segment plays the bus, else each patch's
+    volts (n, 4) (PA..PD; ``Segment.drives()``, so bus segments fit in too)."""
     fs = plan.sample_rate_hz
     gap = int(round((plan.gap_s + guard_s) * fs))
+    per_patch = any(seg.patch_v for seg in plan.segments)
     parts, spans, pos = [], [], 0
     for i, seg in enumerate(plan.segments):
         if i and gap:
-            parts.append(np.zeros(gap))
+            parts.append(np.zeros((gap, 4)) if per_patch else np.zeros(gap))
             pos += gap
-        v = np.asarray(seg.piezo_v, float)
+        if per_patch:
+            v = np.zeros((seg.n_samples, 4))
+            for p, x in seg.drives().items():
+                v[:, PATCHES.index(p)] = x
+        else:
+            v = np.asarray(seg.piezo_v, float)
         parts.append(v)
-        spans.append((pos, pos + v.size, frozenset(seg.patches)))
-        pos += v.size
-    v = np.concatenate(parts) if parts else np.zeros(0)
-    return v, weights_from_spans(spans, v.size), spans
+        spans.append((pos, pos + v.shape[0], frozenset(seg.patches)))
+        pos += v.shape[0]
+    empty = np.zeros((0, 4)) if per_patch else np.zeros(0)
+    v = np.concatenate(parts) if parts else empty
+    return v, weights_from_spans(spans, v.shape[0]), spans
+
+
+def patch_volts(drive: np.ndarray, weights) -> np.ndarray:
+    """(n, 4) volts reaching PA..PD: a bus drive (n,) on every connected patch, or a
+    per-patch drive (n, 4) where its patch is connected. An (n, 2) recording of the bus
+    layout counts by its piezo column (0)."""
+    v = np.asarray(drive, float)
+    if v.ndim == 2 and v.shape[1] != 4:
+        v = v[:, 0]
+    w = _weights(weights, v.shape[0])
+    return v * w if v.ndim == 2 else v[:, None] * w
 
 
 def _weights(patches, n: int) -> np.ndarray:
@@ -191,21 +241,20 @@ _FILTERS: dict[tuple, list] = {}
 def modal_coordinates(
     twin: Twin, piezo_v: np.ndarray, weights: np.ndarray, fs_hz: float
 ) -> np.ndarray:
-    """(R + 4, n): modal displacements q_r(t) from rest, then V(t) w_p(t) for PA..PD."""
+    """(R + 4, n): modal displacements q_r(t) from rest, then V_p(t) w_p(t) for PA..PD.
+
+    ``piezo_v``: the bus volts (n,), or each patch's volts (n, 4) (see ``patch_volts``)."""
     from scipy.signal import lfilter
 
-    v = np.asarray(piezo_v, float)
-    if v.ndim == 2:
-        v = v[:, 0]
-    w = _weights(weights, v.size)
-    drive = v[:, None] * w  # (n, 4) volts reaching each patch
+    drive = patch_volts(piezo_v, weights)  # (n, 4) volts reaching each patch
+    n = drive.shape[0]
     force = twin.q[:, :4] @ drive.T  # (R, n)
     key = (twin.key, float(fs_hz))
     if key not in _FILTERS:
         if len(_FILTERS) > 8:
             _FILTERS.clear()
         _FILTERS[key] = foh_filters(twin.modes.omega_rad_s, twin.params.damping_ratio, fs_hz)
-    coords = np.empty((force.shape[0] + 4, v.size))
+    coords = np.empty((force.shape[0] + 4, n))
     for r, (b, a) in enumerate(_FILTERS[key]):
         coords[r] = lfilter(b, a, force[r]) if np.any(force[r]) else 0.0
     coords[-4:] = drive.T
@@ -257,7 +306,8 @@ def displacement_at(
 ) -> np.ndarray:
     """Plate displacement (n_points, n_samples) in um at ``points_mm`` (P, 2), from rest.
 
-    ``piezo_v``: (n,) volts at the patch terminals, or the outputs' (n, 2) recording.
+    ``piezo_v``: (n,) bus volts at the patch terminals, each patch's volts (n, 4), or the
+    bus layout's (n, 2) recording.
     ``patches``: (n, 4) connection weights of PA..PD, a per-sample sequence of patch
     sets, or spans ``(start, stop, patches)`` (e.g. from ``drive_from_plan``).
     """
@@ -420,6 +470,7 @@ __all__ = [
     "hand_subgrid_mm",
     "lattice_shapes_um",
     "modal_coordinates",
+    "patch_volts",
     "part_envelopes",
     "point_shapes_um",
     "square_levels_um",

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from console.channels import ChannelLayout
+
 from .closed_loop import (
     drive_from_recording,
     hand_subgrid_mm,
@@ -78,7 +80,11 @@ def measured_map(profile, plugins=None, progress=None):
 
 
 def relay_channels_of(profile) -> dict[str, int]:
-    return {n: int(p["relay_channel"]) for n, p in profile.items("patches").items()}
+    return {
+        n: int(p["relay_channel"])
+        for n, p in profile.items("patches").items()
+        if p.get("relay_channel")
+    }
 
 
 def loop_profile(profile, ls: LoopSettings):
@@ -141,7 +147,13 @@ def _play_and_envelope(
     stop = report.segment_end[-1] + int(0.5 * fs)
     rec, clock0 = recording_with_offset(outputs)
     v, w = drive_from_recording(
-        rec, outputs.relay_log(), relay_channels_of(profile), start, stop, clock0
+        rec,
+        outputs.relay_log(),
+        relay_channels_of(profile),
+        start,
+        stop,
+        clock0,
+        ChannelLayout.from_profile(profile).names,
     )
     parts = [
         (s - start, e - start)
