@@ -34,20 +34,27 @@ def received_problems(
     route: frozenset[str],
     block: int,
 ) -> list[str]:
-    """Every broken promise in ``rec`` ((n, 2) volts) and ``relay_log`` since ``start``."""
+    """Every broken promise in ``rec`` ((n, channels) volts, a column per ``[audio]
+    channels`` name) and ``relay_log`` since ``start``; ``route`` is the patches the bus
+    reached (for its slew limit)."""
     out: list[str] = []
     rec0, log0 = start.rec0, start.log0
+    names = limits.channels
     evs = [e for e in events if e.t_s >= start.t0_s]
-    prev = rec[rec0 - 1] if rec0 > 0 else np.zeros(2)
+    prev = rec[rec0 - 1] if rec0 > 0 else np.zeros(len(names))
     part = rec[rec0:]
     if not np.all(np.isfinite(part)):
         out.append("non-finite sample")
         return out
-    lo, hi = limits.piezo_range()
-    if part.size and (part[:, 0].min() < lo - 1e-4 or part[:, 0].max() > hi + 1e-4):
-        out.append(f"piezo sample outside {lo:g}..{hi:g} V")
-    if part.size and np.abs(part[:, 1]).max() > limits.screen_range()[1] + 1e-4:
-        out.append("screen sample outside its limit")
+    for k, (name, (lo, hi)) in enumerate(zip(names, limits.column_ranges(), strict=True)):
+        if not part.size:
+            break
+        if part[:, k].min() < lo - 1e-4 or part[:, k].max() > hi + 1e-4:
+            if name == "screen":
+                out.append("screen sample outside its limit")
+            else:
+                out.append(f"{name} sample outside {lo:g}..{hi:g} V")
+    steps_v = limits.column_steps_v(route)
     if part.shape[0]:
         steps = np.abs(np.diff(np.vstack([prev[None, :], part]), axis=0))
         ok = np.ones(steps.shape[0], bool)
@@ -56,21 +63,23 @@ def received_problems(
                 i = e.clock - rec0
                 ok[max(i - block, 0) : max(i + block, 0)] = False
         tol = 1.0005
-        for ch, name, step in (
-            (0, "piezo", limits.max_step_v("piezo", route)),
-            (1, "screen", limits.max_step_v("screen")),
-        ):
+        for ch, (name, step) in enumerate(zip(names, steps_v, strict=True)):
             worst = float(steps[ok, ch].max(initial=0.0))
             if worst > step * tol + 1e-4:
                 k = rec0 + int(np.argmax(np.where(ok, steps[:, ch], 0.0)))
                 out.append(f"{name} steps {worst:.2f} V at sample {k} (limit {step:.2f})")
     guard = limits.guard_samples
     for sw in relay_log[log0:]:
-        if tuple(sw.level_v) != (0.0, 0.0):
+        if any(sw.level_v):
             out.append(f"relay {sw.channel} switched at {sw.level_v} V")
         elif np.any(rec[max(rec0, sw.clock - guard) : sw.clock]):
             out.append(f"signal within the guard gap before relay {sw.channel} switched")
-    ramp = int(np.ceil(hi / limits.max_step_v("piezo", route)))
+    hi = limits.piezo_range()[1]
+    ramp = max(
+        int(np.ceil(hi / step))
+        for name, step in zip(names, steps_v, strict=True)
+        if name != "screen"
+    )
     for i, e in enumerate(evs):
         if e.kind == "estop":
             resets = [r.clock for r in evs[i:] if r.kind == "reset"]

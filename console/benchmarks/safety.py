@@ -138,7 +138,8 @@ def source_case(out, route, amp, f, fault, at, estop_s, attach) -> None:
     fs = out.limits.sample_rate_hz
     if attach:
         with contextlib.suppress(SafetyRefusal):  # a refused command is an outcome too
-            out.set_relays({out.gate.relay_channels[p] for p in route})
+            # a patch without a relay (a channel of its own) is always connected
+            out.set_relays({c for p in route if (c := out.gate.relay_channels.get(p))})
         out.gate.attach(FaultySource(route, amp, f, fault, at, 9600, fs))
         th = _estop_later(out, estop_s if estop_s is not None else 0.03)
         t_end = time.monotonic() + 5
