@@ -125,7 +125,7 @@ def play_and_report(
                 state = "closed" if r.closed else "opened"
                 print(
                     f"  relay {r.channel} {state} at sample {r.clock} "
-                    f"(outputs {r.level_v[0]:.1f} V / {r.level_v[1]:.1f} V)"
+                    f"(outputs {' / '.join(f'{v:.1f} V' for v in r.level_v)})"
                 )
     return 0
 

@@ -62,7 +62,7 @@ def wait_silent(outputs, timeout_s: float = 10.0) -> bool:
     t_end = time.monotonic() + timeout_s
     while time.monotonic() < t_end:
         st = outputs.status()
-        if not st.get("busy") and st["gate"]["level_v"] == (0.0, 0.0):
+        if not st.get("busy") and not any(st["gate"]["level_v"]):
             return True
         time.sleep(0.05)
     return False

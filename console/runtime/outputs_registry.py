@@ -108,8 +108,8 @@ class Registration:
         problems = []
         if not opened:
             problems.append(f"relays not opened within {ESTOP_WAIT_S:g} s")
-        if level != (0.0, 0.0):
-            problems.append(f"outputs still at {level[0]:.2f} V / {level[1]:.2f} V")
+        if any(level):
+            problems.append(f"outputs still at {' / '.join(f'{v:.2f} V' for v in level)}")
         if st["relays_closed"]:
             problems.append(f"relays {', '.join(map(str, st['relays_closed']))} still closed")
         for fn in list(self.listeners):

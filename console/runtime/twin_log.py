@@ -4,9 +4,11 @@ for outside inspection (``HAPTABLE_TWIN_LOG=path.json haptable [command]``).
 ``path.json`` holds the bursts found in the twin recording (non-silent stretches: start
 sample, length, peak volts and dominant frequency per channel), the relay switch log and
 the plans the console played (name, segments with their patches, label, peak and meta).
-``path.npz`` beside it holds the raw recording (``recording_v``, (n, 2) volts) and each
-played segment's waveforms (``plan{i}_seg{j}_piezo_v`` / ``_screen_v``) so a test can
-check sample by sample that what was auditioned is what the amplifiers received. The
+``path.npz`` beside it holds the raw recording (``recording_v``, (n, channels) volts, a
+column per ``[audio] channels`` name) and each played segment's waveforms
+(``plan{i}_seg{j}_piezo_v`` / ``_screen_v``, and ``_PA_v`` ... for a patch with a drive of
+its own) so a test can check sample by sample that what was auditioned is what the
+amplifiers received. The
 gate's events (e-stops, switches, with their sample clock) are listed too. Both files are
 written without following a symlink (``console.runtime.private_dir``).
 """
@@ -26,10 +28,15 @@ from console.runtime.private_dir import open_private, write_private
 ENV = "HAPTABLE_TWIN_LOG"
 
 
-def bursts(rec_v: np.ndarray, sample_rate_hz: int, min_gap: int = 16) -> list[dict[str, Any]]:
-    """Non-silent stretches of a (n, 2) recording, split where both channels are exactly
-    zero for at least ``min_gap`` samples."""
-    rec = np.asarray(rec_v, float).reshape(-1, 2)
+def bursts(
+    rec_v: np.ndarray,
+    sample_rate_hz: int,
+    min_gap: int = 16,
+    channels: tuple[str, ...] = ("piezo", "screen"),
+) -> list[dict[str, Any]]:
+    """Non-silent stretches of a (n, channels) recording, split where every channel is
+    exactly zero for at least ``min_gap`` samples; peak and frequency per channel name."""
+    rec = np.asarray(rec_v, float).reshape(-1, len(channels))
     on = np.any(rec != 0.0, axis=1)
     idx = np.flatnonzero(on)
     out: list[dict[str, Any]] = []
@@ -41,7 +48,7 @@ def bursts(rec_v: np.ndarray, sample_rate_hz: int, min_gap: int = 16) -> list[di
     for a, b in zip(starts, ends, strict=True):
         seg = rec[a:b]
         item: dict[str, Any] = {"start": int(a), "n_samples": int(b - a)}
-        for ch, name in enumerate(("piezo", "screen")):
+        for ch, name in enumerate(channels):
             x = seg[:, ch]
             item[f"{name}_peak_v"] = float(np.abs(x).max())
             item[f"{name}_freq_hz"] = dominant_hz(x, sample_rate_hz)
@@ -69,11 +76,14 @@ def _plan_entry(plan, i: int, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     for j, s in enumerate(plan.segments):
         arrays[f"plan{i}_seg{j}_piezo_v"] = np.asarray(s.piezo_v, float)
         arrays[f"plan{i}_seg{j}_screen_v"] = np.asarray(s.screen_v, float)
+        for patch, v in s.patch_v.items():  # a drive of its own
+            arrays[f"plan{i}_seg{j}_{patch}_v"] = np.asarray(v, float)
         segs.append(
             {
                 "label": s.label,
                 "patches": sorted(s.patches),
                 "screen": bool(s.screen),
+                "own_drives": sorted(s.patch_v),
                 "n_samples": s.n_samples,
                 "piezo_peak_v": float(np.abs(s.piezo_v).max()) if s.n_samples else 0.0,
                 "screen_peak_v": float(np.abs(s.screen_v).max()) if s.n_samples else 0.0,
@@ -94,7 +104,8 @@ def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | Non
     data = {
         "sample_rate_hz": fs,
         "recorded_samples": 0 if rec is None else int(len(rec)),
-        "bursts": [] if rec is None else bursts(rec, fs),
+        "channels": list(outputs.limits.channels),
+        "bursts": [] if rec is None else bursts(rec, fs, channels=outputs.limits.channels),
         "relay_log": [
             {
                 "clock": int(r.clock),

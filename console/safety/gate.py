@@ -526,6 +526,7 @@ class SafetyGate:
             "estop_reason": self.estop_reason,
             "clock": self.clock,
             "level_v": self.level_v,
+            "channels": list(self.layout.names),
             "relays_closed": sorted(self.relay_state()),
             "quiet_samples": self.quiet_samples(),
         }

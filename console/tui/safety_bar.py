@@ -14,11 +14,16 @@ def describe(status: dict) -> tuple[str, str]:
             f" E-STOP: {gate['estop_reason']}  [ctrl+r: reset]  relays closed: {relays}",
             "estop",
         )
-    piezo, screen = gate["level_v"]
+    levels = gate["level_v"]
+    names = gate.get("channels") or ["piezo", "screen"]
+    if len(levels) == 2:
+        piezo, screen = levels
+        shown = f"piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
+    else:  # a channel per patch
+        shown = "  ".join(f"{n} {v:+6.1f} V" for n, v in zip(names, levels, strict=False))
     state = "PLAYING" if status["busy"] else "idle"
     return (
-        f" ctrl+e E-STOP | outputs {state} | piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
-        f" | relays closed: {relays}",
+        f" ctrl+e E-STOP | outputs {state} | {shown} | relays closed: {relays}",
         "live" if status["busy"] else "idle",
     )
 

@@ -210,11 +210,16 @@ def _audition(args: argparse.Namespace, ctx: Any) -> int:
             ses.stream.request_stop()
             th.join(timeout=1.0)
         rec = out.recording()
+        screen_col = list(out.limits.channels).index("screen")
     if report.error:
         raise UserError(f"knob {cond}: {report.error}")
     what = ""
     if rec is not None and len(rec):
-        what = f"; the twin recorded peaks piezo {np.abs(rec[:, 0]).max():.1f} V, screen {np.abs(rec[:, 1]).max():.1f} V"
+        piezo = np.delete(rec, screen_col, axis=1)
+        what = (
+            f"; the twin recorded peaks piezo {np.abs(piezo).max():.1f} V, "
+            f"screen {np.abs(rec[:, screen_col]).max():.1f} V"
+        )
     print(f"played {cond}, {n} sectors: {len(ses.crossings)} sector crossings{what}")
     return 0
 

@@ -34,7 +34,7 @@ def log_rows(log) -> list[tuple[str, ...]]:
             str(r.clock),
             str(r.channel),
             "closed" if r.closed else "opened",
-            f"{r.level_v[0]:+.1f} V / {r.level_v[1]:+.1f} V",
+            " / ".join(f"{v:+.1f} V" for v in r.level_v),
         )
         for r in reversed(log)
     ]
