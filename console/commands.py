@@ -85,18 +85,24 @@ def run_doctor(args, ctx) -> int:
 def configure_play(p: argparse.ArgumentParser) -> None:
     p.add_argument("name", nargs="?", help="test stimulus (see --list)")
     p.add_argument("--list", action="store_true", help="list the test stimuli")
-    p.add_argument("--out", help="also write the plan as a 2-channel WAV (volts / full scale)")
+    p.add_argument(
+        "--out",
+        help="also write the plan as a WAV, a channel per [audio] channels name "
+        "(volts / full scale)",
+    )
     p.add_argument("--dry-run", action="store_true", help="check the plan, do not play it")
     p.add_argument("--fast", action="store_true", help="twin: fast-forward instead of real time")
 
 
-def write_plan_wav(plan, path: str, piezo_card_v: float, screen_card_v: float) -> None:
-    """Write a plan as the sound card would play it (gaps not included), 16-bit stereo."""
-    left = np.concatenate([s.piezo_v for s in plan.segments]) / piezo_card_v
-    right = np.concatenate([s.screen_v for s in plan.segments]) / screen_card_v
-    pcm = (np.clip(np.stack([left, right], 1), -1, 1) * 32767).astype("<i2")
+def write_plan_wav(plan, path: str, limits) -> None:
+    """Write a checked plan as the sound card would play it (gaps not included), 16-bit,
+    a channel per ``[audio] channels`` name (the bus: stereo, piezo left)."""
+    layout = limits.layout
+    cols = np.concatenate([np.stack(layout.columns(s), 1) for s in plan.segments])
+    full = [limits.screen_card_v if k == "screen" else limits.piezo_card_v for k in layout.kinds()]
+    pcm = (np.clip(cols / np.array(full), -1, 1) * 32767).astype("<i2")
     with open(path, "wb") as f, wave.open(f, "wb") as w:  # the path fails here, cleanly
-        w.setnchannels(2)
+        w.setnchannels(layout.n)
         w.setsampwidth(2)
         w.setframerate(plan.sample_rate_hz)
         w.writeframes(pcm.tobytes())
@@ -111,7 +117,7 @@ def play_and_report(
     limits = Limits.from_profile(ctx.profile)
     check_plan(plan, limits)
     if out:
-        write_plan_wav(plan, out, limits.piezo_card_v, limits.screen_card_v)
+        write_plan_wav(plan, out, limits)
         print(f"wrote {out}")
     if dry_run:
         print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")

@@ -4,6 +4,7 @@ gate's per-channel checks and e-stop ramp, and the twin's five-channel outputs."
 from __future__ import annotations
 
 import dataclasses
+import os
 import threading
 from pathlib import Path
 
@@ -361,3 +362,36 @@ def test_estop_on_sim_4ch_silences_every_channel_and_the_audit_agrees(outputs4):
         int(outputs4.gate.latency_samples),
     )
     assert not problems, problems
+
+
+# ------------------------------------------------------------------------- commands
+def test_play_writes_a_wav_with_a_channel_per_output(tmp_path):
+    import wave
+
+    from console.cli import main
+
+    path = tmp_path / "pc.wav"
+    assert main(["--profile", "sim-4ch", "play", "sine-PC", "--dry-run", "--out", str(path)]) == 0
+    with wave.open(str(path)) as w:
+        assert w.getnchannels() == 5
+        x = np.frombuffer(w.readframes(w.getnframes()), "<i2").reshape(-1, 5)
+    assert np.abs(x[:, 2]).max() > 6000 and not x[:, [0, 1, 3, 4]].any()
+
+
+def test_haptable_estop_reaches_five_channel_outputs_mid_plan(plugins):
+    from console.runtime.outputs_registry import estop_everywhere
+
+    prof = load_profile("sim-4ch", plugins)
+    with open_outputs(prof, plugins, fast=False) as out:
+        n = FS
+        seg = Segment.per_patch({p: sine(n, 30, 200 + 20 * i) for i, p in enumerate(PATCHES)})
+        report = out.play(OutputPlan(FS, (seg,), name="all4"), wait=False)
+        while not report.segment_start:
+            report.done.wait(0.005)
+        report.done.wait(0.05)
+        reached = [r for r in estop_everywhere(timeout_s=2.0) if r.pid == os.getpid()]
+        assert reached and reached[0].confirmed, reached
+        assert out.gate.level_v == (0.0,) * 5 and out.gate.estopped
+        rec = out.recording()
+        assert all(np.abs(rec[:, k]).max() > 10 for k in range(4))  # they were all playing
+        assert not rec[-out.gate.latency_samples :].any()
