@@ -107,7 +107,8 @@ def find_output_device(
                 f"or fewer channels"
             )
         raise DeviceError(
-            f"[audio] device = {name!r}: no {_kind(channels)} device matches; "
+            f"[audio] device = {name!r}: no {_kind(channels).replace('output', 'output device')} "
+            f"matches; "
             f"available outputs: {listing}; plug in the sound card or set "
             f"[audio] device to one of them"
         )
