@@ -58,7 +58,9 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
     limits = Limits.from_profile(profile)
     block = int(profile.get("audio.block_size"))
     fs = int(profile.get("audio.sample_rate_hz"))
-    relay_channels = {n: p["relay_channel"] for n, p in profile.items("patches").items()}
+    relay_channels = {  # 0: a patch on a channel of its own without a relay
+        n: p["relay_channel"] for n, p in profile.items("patches").items() if p["relay_channel"]
+    }
     screen_channel = int(profile.get("screen.relay_channel"))
     board = _MemoryBoard(int(profile.get("relays.channels")))
     gate = SafetyGate(
@@ -69,7 +71,7 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
         latency_samples=block,
     )
     sched = Scheduler(gate, relay_channels=relay_channels, screen_channel=screen_channel)
-    out = np.zeros((block, 2), np.float32)
+    out = np.zeros((block, limits.layout.n), np.float32)  # a column per [audio] channels name
     times: dict[str, list[float]] = {"idle": [], "playing": [], "estop_ramp": []}
     rounds = rounds if rounds is not None else (2 if quick else 8)
     plan = make_stimulus("sine-PALL", fs)
@@ -87,17 +89,17 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
             # the relay switch runs on the scheduler's thread; keep the clock going
             deadline = time.monotonic() + 30
             while not report.done.is_set() and time.monotonic() < deadline:
-                tick("playing" if gate.level_v != (0.0, 0.0) else "idle")
+                tick("playing" if any(gate.level_v) else "idle")
             if report.error:
                 raise RuntimeError(f"bench plan refused: {report.error}")
             if r % 2 == 0:  # every other round: an e-stop in the middle of a plan
                 report = sched.play(plan)
-                while gate.level_v == (0.0, 0.0) and time.monotonic() < deadline:
+                while not any(gate.level_v) and time.monotonic() < deadline:
                     tick("idle")
                 for _ in range(block and fs // (4 * block)):
                     tick("playing")
                 gate.estop("bench", wait=False)
-                while gate.level_v != (0.0, 0.0):
+                while any(gate.level_v):
                     tick("estop_ramp")
                 for _ in range(200):
                     tick("idle")
@@ -110,6 +112,7 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
         "profile": profile.name,
         "block_size": block,
         "sample_rate_hz": fs,
+        "channels": list(limits.channels),
         "block_period_us": 1e6 * block / fs,
         "fill": {phase: _stats_us(v) for phase, v in times.items()},
         "machine": machine_info(),

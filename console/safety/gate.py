@@ -97,6 +97,8 @@ class SafetyGate:
         names = self.layout.names
         #: the order the block checks look at the channels: piezo ones first
         self._check_order = sorted(range(len(names)), key=lambda k: names[k] == "screen")
+        ranges = np.array(limits.column_ranges())
+        self._ranges = (ranges[:, 0], ranges[:, 1])
         #: last sample handed out per channel, volts at the actuators
         self.level_v: tuple[float, ...] = (0.0,) * len(names)
         self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
@@ -309,6 +311,43 @@ class SafetyGate:
         self._hand(out, cols)
 
     def _block_problem(self, cols: list[np.ndarray], clock: int) -> str | None:
+        """Why the block must not play (the first rule it breaks), or ``None``. Every
+        channel at once first (one pass over the block); only a block that fails is
+        looked at channel by channel, for the message."""
+        if self._block_ok(cols, clock):
+            return None
+        return self._block_first_problem(cols, clock)
+
+    def _block_ok(self, cols: list[np.ndarray], clock: int) -> bool:
+        """True when the block keeps every rule: finite, inside each channel's range, no
+        signal while settling or on a channel whose load is disconnected, each step within
+        its channel's slew limit (tolerances as in ``range_problem`` / ``slew_problem``)."""
+        x = np.stack(cols)  # (channels, n)
+        if x.shape[1] == 0:
+            return True
+        if not np.isfinite(x).all():
+            return False
+        lo, hi = self._ranges
+        if (x.min(axis=1) < lo - 1e-9).any() or (x.max(axis=1) > hi + 1e-9).any():
+            return False
+        on = x.any(axis=1)
+        if on.any():
+            if clock < self._quiet_until:
+                return False
+            patches, _ = self._max_steps()
+            for k in np.flatnonzero(on):
+                name = self.layout.names[k]
+                if name == "screen":
+                    sc, relays = self.screen_channel, self.relays
+                    if sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1]):
+                        return False
+                elif (name == "piezo" and not patches) or (name != "piezo" and name not in patches):
+                    return False
+        _, steps = self._max_steps()
+        d = np.abs(np.diff(x, axis=1, prepend=np.asarray(self.level_v)[:, None]))
+        return bool((d.max(axis=1) <= steps * (1 + 1e-9) + 1e-9).all())
+
+    def _block_first_problem(self, cols: list[np.ndarray], clock: int) -> str | None:
         lim = self.limits
         names = self.layout.names
         ranges = lim.column_ranges()

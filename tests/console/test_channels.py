@@ -395,3 +395,39 @@ def test_haptable_estop_reaches_five_channel_outputs_mid_plan(plugins):
         rec = out.recording()
         assert all(np.abs(rec[:, k]).max() > 10 for k in range(4))  # they were all playing
         assert not rec[-out.gate.latency_samples :].any()
+
+
+@pytest.mark.parametrize("layout", [("piezo", "screen"), FOUR])
+def test_the_gates_one_pass_check_agrees_with_the_per_channel_one(layout):
+    """The block check every block takes (all channels at once) against the per-channel
+    check that words the refusal: the same verdict on random blocks near every limit."""
+    rng = np.random.default_rng(7)
+    lim = limits4(channels=layout, piezo_current_a=0.05, relay_current_a=0.05)
+    relays = {"PA": 1, "PB": 2} if layout == FOUR else {p: i for i, p in enumerate(PATCHES, 1)}
+    gate = SafetyGate(lim, Board(), relay_channels=relays, screen_channel=5)
+    n, agree, refused = 64, 0, 0
+    for trial in range(600):
+        closed = frozenset(int(c) for c in np.flatnonzero(rng.random(5) < 0.8) + 1)
+        gate.relays = tuple(i + 1 in closed for i in range(8))
+        gate.level_v = tuple(rng.uniform(-20, 20, len(layout)) * rng.integers(0, 2))
+        steps = lim.column_steps_v(gate.closed_patches())
+        cols = []
+        for k in range(len(layout)):
+            walk = gate.level_v[k] + np.cumsum(rng.uniform(-1, 1, n) * steps[k] * 1.001)
+            if rng.random() < 0.5:
+                walk = np.zeros(n)
+            cols.append(walk)
+        k = int(rng.integers(len(layout)))
+        fault = rng.integers(6)
+        if fault == 1:
+            cols[k][rng.integers(n)] = np.nan
+        elif fault == 2:
+            cols[k] = cols[k] + rng.choice([-1, 1]) * 110.0
+        clock = int(rng.integers(0, 8 * lim.settle_samples))
+        gate._quiet_until = lim.settle_samples
+        ok = gate._block_ok(cols, clock)
+        problem = gate._block_first_problem(cols, clock)
+        assert ok == (problem is None), (trial, problem)
+        agree += 1
+        refused += problem is not None
+    assert agree == 600 and 60 < refused < 540  # both verdicts were exercised
