@@ -59,7 +59,9 @@ class StreamSource(Protocol):
     """A live output (e.g. the knob): produces the next block in volts at the actuator.
 
     ``next_block`` returns ``(piezo_v, screen_v)`` arrays of length ``n`` or ``None``
-    when the stream has finished (after ramping down to zero).
+    when the stream has finished (after ramping down to zero). ``piezo_v`` plays on the
+    piezo bus, or, where ``[audio] channels`` gives each patch its own channel, on each of
+    ``patches``' channels.
     """
 
     patches: frozenset[str]

@@ -145,7 +145,8 @@ class Outputs:
 
     # ------------------------------------------------------------------ twin recordings
     def recording(self) -> np.ndarray | None:
-        """What the twin amplifiers received, (n, 2) volts; ``None`` on real hardware."""
+        """What the twin amplifiers received, (n, channels) volts (a column per ``[audio]
+        channels`` name); ``None`` on real hardware."""
         audio = self._audio
         return audio.recording_v() if isinstance(audio, SimulatedAudio) else None
 
