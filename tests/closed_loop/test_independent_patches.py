@@ -95,3 +95,44 @@ def test_steady_state_matches_each_patchs_frf_with_its_phase(played):
         phasor = ab[i] - 1j * ab[i + 1]  # amp sin(wt) = Re(-amp j e^{jwt})
         h = twin.frf_um_per_v(PTS[:, 0], PTS[:, 1], [f_hz], (patch,))[0, :, 0]
         assert np.abs(phasor - h * (-1j * amp)).max() < 2e-3 * np.abs(h * amp).max(), patch
+
+
+def test_drive_from_a_recording_with_some_patch_relays():
+    from types import SimpleNamespace as R
+
+    names = ("PB", "PA", "screen")  # PC and PD have no channel; PA has a relay, PB none
+    rec = np.zeros((1000, 3))
+    rec[:, 0] = np.arange(1000)  # PB
+    rec[:, 1] = -np.arange(1000)  # PA
+    log = [R(clock=100, channel=1, closed=True), R(clock=600, channel=1, closed=False)]
+    v, w = cl.drive_from_recording(rec[50:], log, {"PA": 1}, 80, 900, 50, names)
+    assert v.shape == (820, 4)
+    assert v[0, 1] == 80 and v[0, 0] == -80 and not v[:, 2:].any()
+    assert np.all(w[:, 1] == 1.0)  # PB: no relay, always connected
+    assert not w[:20, 0].any() and w[20:520, 0].all() and not w[520:, 0].any()  # PA's relay
+    assert not w[:, 2:].any()
+    with pytest.raises(ValueError, match="recording has 3 channels"):
+        cl.drive_from_recording(rec, log, {"PA": 1}, channels=("piezo", "screen"))
+
+
+def test_drive_from_a_plan_mixing_bus_and_per_patch_segments():
+    n = 2400
+    a, b = ramped(200.0, 10.0, n, 240), ramped(300.0, 20.0, n, 240)
+    plan = OutputPlan(
+        FS,
+        (
+            Segment(a, np.zeros(n), frozenset({"PB", "PD"})),
+            Segment.per_patch({"PA": b, "PC": -b}),
+        ),
+        gap_s=0.01,
+    )
+    v, w, spans = cl.drive_from_plan(plan)
+    gap = int(0.01 * FS)
+    assert v.shape == (2 * n + gap, 4) and w.shape == v.shape
+    assert np.array_equal(v[:n, 1], a) and np.array_equal(v[:n, 3], a) and not v[:n, [0, 2]].any()
+    assert not v[n : n + gap].any() and not w[n : n + gap].any()
+    assert np.array_equal(v[n + gap :, 0], b) and np.array_equal(v[n + gap :, 2], -b)
+    assert spans[1] == (n + gap, 2 * n + gap, frozenset({"PA", "PC"}))
+    # the same bus plan without per-patch segments keeps the bus drive (n,)
+    bus, _, _ = cl.drive_from_plan(OutputPlan(FS, plan.segments[:1]))
+    assert bus.shape == (n,)
