@@ -148,6 +148,14 @@ def _sections() -> dict:
                 "sensation_level_db": Field(
                     "float", 20.0, min=0, max=60, help="target level above the fingertip threshold"
                 ),
+                "map_error_rel": Field(
+                    "float",
+                    0.05,
+                    min=1e-4,
+                    max=1,
+                    help="independent patches: the map's error (std / the bin's RMS |H|) "
+                    "the per-patch solution must survive (regularises the cancellation)",
+                ),
                 "drive_max_v": Field(
                     "float",
                     95.0,

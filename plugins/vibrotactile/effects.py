@@ -51,6 +51,7 @@ class Setup:
     max_plan_s: float = 3600.0  # [limits] max_plan_s: longer plans are refused unbuilt
     table_rule: str = "paper"  # [vibrotactile] table_rule: perceptual or paper
     perceptual: Any = None  # perceptual.PerceptualRule of the profile
+    map_error_rel: float = 0.05  # [vibrotactile] map_error_rel (independent patches)
 
     def rule_of(self, min_contrast_db: float | None, rule: str | None) -> tuple[float, Any]:
         """(min_contrast_db, PerceptualRule or None) of a request. An explicit
@@ -131,6 +132,7 @@ def setup_from_profile(profile: Any) -> Setup:
         max_plan_s=float(profile.get("limits.max_plan_s")),
         table_rule=str(vt.get("table_rule", "perceptual")),
         perceptual=rule_from_profile(profile),
+        map_error_rel=float(vt.get("map_error_rel", 0.05)),
     )
 
 
@@ -358,6 +360,26 @@ class FlowEffect(_MapUser):
         (``console.contracts.FlowEffect``)."""
         return self.render(int(a), int(b), vmap=vmap)
 
+    def patch_drives(
+        self, pairs: Iterable, *, vmap: Any = None, tables: Any = None, method: str = "independent"
+    ) -> list[dict | None]:
+        """Per (active, passive) pair of map indices: the part's ``frequency_hz`` and
+        ``weights`` (4,) complex drive of PA..PD (1 V peak on the strongest patch),
+        predicted ``contrast_db`` and ``amplitude_v``, by ``method``: ``paper`` (the
+        paper's tables), ``independent`` or ``time_reversal``
+        (``plugins.vibrotactile.independent``); ``None`` where there is no flow."""
+        from plugins.vibrotactile import independent as ind
+
+        s = self.setup
+        kw = {"cap_v": s.cap_v, "target_sl_db": s.settings.sensation_level_db}
+        if method == "paper":
+            t = self.tables(vmap, tables, rule="paper")
+            return ind.paper_pair_drives(t, list(pairs), s.perception, **kw)
+        return ind.solve_pairs(
+            self.vibration_map(vmap, tables), pairs, s.perception, band_hz=s.band_hz,
+            method=method, map_error_rel=s.map_error_rel, **kw,
+        )  # fmt: skip
+
     def query(
         self,
         active: Any,
@@ -565,6 +587,27 @@ class HandFlowEffect(_MapUser):
         if progress is not None:
             progress(len(regions), len(regions), "flows ready")
         return out
+
+    def patch_drives(
+        self, center_mm: Any, direction: str, *, vmap: Any = None, method: str = "independent"
+    ) -> list[dict]:
+        """The two parts of the flow under a hand as per-patch drives: ``frequency_hz``,
+        ``weights`` (4,) complex (1 V peak on the strongest patch), ``amplitude_v``,
+        ``x_um`` (3-JND line); ``paper``: the staged search's answer on its actuator."""
+        from plugins.vibrotactile import independent as ind
+
+        if method == "paper":
+            plan = self.render(center_mm=center_mm, direction=direction, vmap=vmap)
+            return [
+                {**p, "weights": ind.actuator_weights(p["actuator"])} for p in plan.meta["parts"]
+            ]
+        s = self.setup
+        return ind.solve_region(
+            self.vibration_map(vmap), center_mm, direction, s.perception, cap_v=s.cap_v,
+            hand_mm=s.hand["hand_mm"], squares=s.hand["squares"], subgrid=s.hand["subgrid"],
+            band_hz=s.band_hz, method=method, map_error_rel=s.map_error_rel,
+            interpolation=s.settings.interpolation,
+        )  # fmt: skip
 
     # ------------------------------------------------------ for checks and scenes
     def sides(self, direction: str) -> tuple[np.ndarray, np.ndarray]:

@@ -319,6 +319,7 @@ def solve_region(
     interpolation: str = "spline",
     stride: int = 3,
     candidates: int = 6,
+    objective: str = "max_min",
 ) -> list[dict]:
     """The two parts of a flow under a hand (part 1: start side active, end side
     passive; part 2 the reverse), each: ``frequency_hz``, ``bin``, ``weights`` (4,),
@@ -357,7 +358,8 @@ def solve_region(
         lv = square_levels_of(np.abs(np.einsum("kpi,ki->kp", h, x)), squares, n)
         la, lb = lv[:, side_a], lv[:, side_b]
         with np.errstate(divide="ignore"):
-            mm = 20 * np.log10(la.min(axis=1) / np.maximum(lb.max(axis=1), 1e-300))
+            top = la.min(axis=1) if objective == "max_min" else la.max(axis=1)
+            mm = 20 * np.log10(top / np.maximum(lb.max(axis=1), 1e-300))
             sl = 20 * np.log10(np.maximum(la.min(axis=1), 1e-300) * cap_v / x_um)
         req = _required_sl(sl[None], 0.0, -np.inf)[0]
         score = np.where(sl >= req - 1e-9, mm, -np.inf)
@@ -367,7 +369,7 @@ def solve_region(
             if not np.isfinite(score[k]):
                 break
             xk, ck = x[k], score[k]
-            if method == "independent":
+            if method == "independent" and objective == "max_min":
                 xr, cr = max_min_weights(h[k], side_a, side_b, squares, n, float(eps[k]))
                 lr = square_levels_of(np.abs(h[k] @ xr), squares, n)
                 if cr > ck and lr[side_a].min() * cap_v >= x_um[k] * 10 ** (req / 20) - 1e-12:
@@ -391,12 +393,53 @@ def solve_region(
                 ),
                 "x_um": float(x_um[k]),
                 "amplitude_v": amp,
+                "objective": objective,
             }
         )
     return parts
 
 
+# --------------------------------------------------------------------------- uniform drives
+def actuator_weights(actuator: str) -> np.ndarray:
+    """(4,) drive of the paper's excitation: one patch at 1, or PALL all four at 1."""
+    if actuator == "PALL":
+        return np.ones(4, complex)
+    if actuator not in PATCHES:
+        raise UserError(f"actuator {actuator!r}: use {', '.join(PATCHES)} or PALL")
+    x = np.zeros(4, complex)
+    x[PATCHES.index(actuator)] = 1.0
+    return x
+
+
+def paper_pair_drives(
+    t, pairs: Iterable[tuple[int, int]], perception: Perception, *, cap_v: float,
+    target_sl_db: float = 20.0,
+) -> list[dict | None]:  # fmt: skip
+    """The tables' answer per pair of map indices in the form of ``solve_pairs`` (weights
+    of the table's actuator at 1 V); ``None`` where the tables have no flow."""
+    m = t.vmap
+    keep = usable_bins(m, t.band_hz)
+    h = patch_frf(m)
+    out: list[dict | None] = []
+    for a, b in pairs:
+        if not t.max_diff_um_per_v[a, b] > 0:
+            out.append(None)
+            continue
+        act = m.excitations[int(t.actuator[a, b])]
+        f = float(t.freq_hz[a, b])
+        k = int(keep[np.argmin(np.abs(m.freq_hz[keep] - f))])
+        x = actuator_weights(act)
+        ga, gb = abs(h[:, a, k] @ x), abs(h[:, b, k] @ x)
+        ans = _answer("paper", f, k, x, ga, gb, ga**2 / max(gb**2, 1e-300), perception, cap_v,
+                      target_sl_db, "fingertip")  # fmt: skip
+        ans["actuator"] = act
+        out.append(ans)
+    return out
+
+
 __all__ = [
+    "actuator_weights",
+    "paper_pair_drives",
     "region_lattice",
     "solve_region",
     "METHODS",

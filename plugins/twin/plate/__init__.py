@@ -222,3 +222,15 @@ def haptable_register_benchmarks(register) -> None:
         run_loop,
         help="flows played through the gate into the plate twin: predicted vs achieved margins",
     )
+
+    def run_localisation(ctx, quick: bool) -> dict:
+        from .localisation import run_bench as run_localisation_bench
+
+        return run_localisation_bench(ctx, quick)
+
+    register(
+        "localisation",
+        run_localisation,
+        help="paper tables vs independent patches vs time reversal, played into the plate "
+        "twin: achieved contrast over grid pairs and under hands, drive volts, map error",
+    )
