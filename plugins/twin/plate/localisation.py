@@ -11,9 +11,9 @@ strongest patch: the same peak voltage for every method).
 How a drive is played: a part is the sine ``Im(x_p e^{i w t})`` on each patch under the
 effects' linear ramps, from rest. The plate is linear, so one time simulation per
 frequency of the complex drive ``u(t) = env(t) e^{i w t}`` through every mode
-(``closed_loop.patch_coordinates``: exact first-order-hold discretisation, lfilter) gives
+(exact first-order-hold discretisation, lfilter) gives
 every real per-patch drive at that frequency: the response to ``Im(x_p u)`` is
-``Im(Q x . Y)``. What the twin then does at a point is measured as the flows' checks do:
+``Im(Q x . Y)`` (the same first-order-hold modal filters as ``closed_loop``). What the twin then does at a point is measured as the flows' checks do:
 the amplitude of the part's own frequency over the flat stretch after the ramp and
 ``settle_s`` (a lock-in, ``closed_loop.window_tone_um``). ``tests/closed_loop`` checks
 this against the explicit (n, 4) drive and against the same flows played through the
@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .closed_loop import (
+    foh_filters,
     hand_subgrid_mm,
     lattice_shapes_um,
-    mode_filters,
     point_shapes_um,
     square_levels_um,
     steady_window,
@@ -75,6 +75,18 @@ def part_envelope(n: int, ramp_n: int) -> np.ndarray:
     env[:ramp_n] = np.arange(ramp_n) / ramp_n
     env[-ramp_n:] = np.arange(ramp_n)[::-1] / ramp_n
     return env
+
+
+_FILTERS: dict[tuple, list] = {}
+
+
+def mode_filters(twin: Twin, fs_hz: float) -> list:
+    """The twin's per-mode ``closed_loop.foh_filters`` at ``fs_hz`` (kept per twin, rate)."""
+    key = (twin.key, float(fs_hz))
+    if key not in _FILTERS:
+        _FILTERS.clear()
+        _FILTERS[key] = foh_filters(twin.modes.omega_rad_s, twin.params.damping_ratio, fs_hz)
+    return _FILTERS[key]
 
 
 def tone_lockin(twin: Twin, freq_hz: float, fs_hz: float, ls: LoopSettings) -> ToneLockin:
