@@ -148,6 +148,15 @@ def _sections() -> dict:
                 "sensation_level_db": Field(
                     "float", 20.0, min=0, max=60, help="target level above the fingertip threshold"
                 ),
+                "method": Field(
+                    "str",
+                    "auto",
+                    choices=("auto", "paper", "independent", "time_reversal"),
+                    help="flow and point rendering: paper (one actuator or all four per "
+                    "part, the tables), independent (an amplitude and phase per patch), "
+                    "time_reversal; auto: independent when [audio] channels give each "
+                    "patch its own channel, else paper",
+                ),
                 "map_error_rel": Field(
                     "float",
                     0.05,

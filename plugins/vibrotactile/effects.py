@@ -52,6 +52,7 @@ class Setup:
     table_rule: str = "paper"  # [vibrotactile] table_rule: perceptual or paper
     perceptual: Any = None  # perceptual.PerceptualRule of the profile
     map_error_rel: float = 0.05  # [vibrotactile] map_error_rel (independent patches)
+    method: str = "paper"  # [vibrotactile] method, "auto" resolved for the profile
 
     def rule_of(self, min_contrast_db: float | None, rule: str | None) -> tuple[float, Any]:
         """(min_contrast_db, PerceptualRule or None) of a request. An explicit
@@ -133,7 +134,17 @@ def setup_from_profile(profile: Any) -> Setup:
         table_rule=str(vt.get("table_rule", "perceptual")),
         perceptual=rule_from_profile(profile),
         map_error_rel=float(vt.get("map_error_rel", 0.05)),
+        method=_default_method(profile, str(vt.get("method", "auto"))),
     )
+
+
+def _default_method(profile: Any, method: str) -> str:
+    """``auto``: independent patches when each has its own channel, else the paper's."""
+    from plugins.vibrotactile.independent_plans import per_patch_channels
+
+    if method != "auto":
+        return method
+    return "independent" if per_patch_channels(profile) else "paper"
 
 
 class _MapUser:
@@ -245,6 +256,17 @@ class _MapUser:
 
         return one(tables) if vmap is None else (*one(tables), *one(vmap))
 
+    def method_of(self, method: str | None, what: str) -> str:
+        """The request's rendering method (default ``[vibrotactile] method``); a method
+        with per-patch drives on a bus profile is refused in one line."""
+        from plugins.vibrotactile.independent_plans import refuse_on_bus
+
+        m = self.setup.method if method is None else str(method)
+        if m not in ("paper", "independent", "time_reversal"):
+            raise UserError(f"{what} method {m!r}: use paper, independent or time_reversal")
+        refuse_on_bus(self.profile, what, m)
+        return m
+
     def _settings(self, ringdown_gap_k: float | None):
         st = self.setup.settings
         if ringdown_gap_k is not None:
@@ -304,6 +326,7 @@ class FlowEffect(_MapUser):
         min_contrast_db: float | None = None,
         ringdown_gap_k: float | None = None,
         rule: str | None = None,
+        method: str | None = None,
         **_: Any,
     ) -> OutputPlan | None:
         """The plan if this effect already rendered it (no work, never raises)."""
@@ -312,7 +335,8 @@ class FlowEffect(_MapUser):
             k = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule)
         except (TypeError, ValueError):
             return None
-        return self._plans.get(k)
+        how = self.setup.method if method is None else method
+        return self._plans.get(k if how == "paper" else (*k, how))
 
     def render(
         self,
@@ -327,16 +351,21 @@ class FlowEffect(_MapUser):
         min_contrast_db: float | None = None,
         ringdown_gap_k: float | None = None,
         rule: str | None = None,
+        method: str | None = None,
     ) -> OutputPlan:
         from plugins.vibrotactile.stimuli import flow_plan
 
         a, b = (from_point, to_point) if from_point is not None else (active, passive)
         if a is None or b is None:
             raise UserError("flow: give from_point= and to_point= (grid numbers or (x, y) mm)")
+        how = self.method_of(method, "flow")
         key = self._key(a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule)
+        key = key if how == "paper" else (*key, how)
         hit = self._plans.get(key)
         if hit is not None:
             return hit
+        if how != "paper":
+            return self._render_patches(a, b, vmap, tables, name, how, key)
         t = self.tables(vmap, tables, min_contrast_db=min_contrast_db, rule=rule)
         pa, pb = _point(t.vmap, a), _point(t.vmap, b)
         plan = flow_plan(
@@ -349,6 +378,27 @@ class FlowEffect(_MapUser):
             **self.setup.limits,
         )
         xy = [t.vmap.points_mm[p] if isinstance(p, int) else p for p in (pa, pb)]
+        plan.meta["from_mm"] = [float(v) for v in xy[0]]
+        plan.meta["to_mm"] = [float(v) for v in xy[1]]
+        with self._lock:
+            self._plans[key] = plan
+        return plan
+
+    def _render_patches(self, a, b, vmap, tables, name, how, key) -> OutputPlan:
+        """The flow with a drive per patch (``independent_plans.flow_plan``)."""
+        from plugins.vibrotactile import independent_plans
+
+        m = self.vibration_map(vmap, tables)
+        pa, pb = _point(m, a), _point(m, b)
+        if pa == pb or (not isinstance(pa, int) and np.allclose(pa, pb)):
+            raise UserError("flow: the two points are the same; a flow needs two points")
+        s = self.setup
+        plan = independent_plans.flow_plan(
+            m, pa, pb, s.perception, s.settings, method=how, cap_v=s.cap_v, band_hz=s.band_hz,
+            map_error_rel=s.map_error_rel, max_plan_s=s.max_plan_s,
+            name=name or f"flow {_label(a)}->{_label(b)} ({how})",
+        )  # fmt: skip
+        xy = [m.points_mm[p] if isinstance(p, int) else p for p in (pa, pb)]
         plan.meta["from_mm"] = [float(v) for v in xy[0]]
         plan.meta["to_mm"] = [float(v) for v in xy[1]]
         with self._lock:
@@ -648,12 +698,15 @@ class PointEffect(_MapUser):
     ``um_per_v``, ``sensation_level_db`` and ``median_grid_um_per_v``.
     """
 
-    def cached(self, point: Any = None, *, vmap: Any = None, tables: Any = None, **_: Any):
+    def cached(
+        self, point: Any = None, *, vmap: Any = None, tables: Any = None, method=None, **_: Any
+    ):
         try:
             k = ("point", _label(point), self._source_key(vmap, tables))
         except (TypeError, ValueError, IndexError):
             return None
-        return self._plans.get(k)
+        how = self.setup.method if method is None else method
+        return self._plans.get(k if how == "paper" else (*k, how))
 
     def render_point(self, point: Any, vmap: Any) -> OutputPlan:
         """The pulse at ``point`` (a grid number or (x, y) mm) of ``vmap``
@@ -661,15 +714,35 @@ class PointEffect(_MapUser):
         return self.render(point=point, vmap=vmap)
 
     def render(
-        self, point: Any = None, *, vmap: Any = None, tables: Any = None, name: str = ""
+        self,
+        point: Any = None,
+        *,
+        vmap: Any = None,
+        tables: Any = None,
+        name: str = "",
+        method: str | None = None,
     ) -> OutputPlan:
         from plugins.vibrotactile.stimuli import point_plan
 
         if point is None:
             raise UserError("point: give point= (a grid number or (x, y) mm)")
+        how = self.method_of(method, "point")
         key = ("point", _label(point), self._source_key(vmap, tables))
+        key = key if how == "paper" else (*key, how)
         if key in self._plans:
             return self._plans[key]
+        if how != "paper":
+            from plugins.vibrotactile import independent_plans
+
+            m, s = self.vibration_map(vmap, tables), self.setup
+            plan = independent_plans.point_plan(
+                m, _point(m, point), s.perception, s.settings, cap_v=s.cap_v,
+                band_hz=s.band_hz, map_error_rel=s.map_error_rel, max_plan_s=s.max_plan_s,
+                method=how, name=name or f"point {_label(point)} ({how})",
+            )  # fmt: skip
+            with self._lock:
+                self._plans[key] = plan
+            return plan
         if tables is None:  # a pulse needs the map only, not the pair tables
             from plugins.vibrotactile.tables import Tables
 

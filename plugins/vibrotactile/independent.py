@@ -175,18 +175,20 @@ def solve_pairs(
     band_hz: float = 650.0,
     method: str = "independent",
     map_error_rel: float = DEFAULT_MAP_ERROR_REL,
+    eps: np.ndarray | None = None,
 ) -> list[dict]:
     """One answer per (active, passive) pair of map INDICES: ``frequency_hz``, ``bin``,
     ``weights`` (4,) complex (1 V peak on the strongest patch), ``active_um_per_v``,
     ``passive_um_per_v`` (at those weights, per volt of drive), ``contrast_db`` (the
     map's) and ``expected_contrast_db`` (with the map error ``eps``), ``amplitude_v``
-    (drive for the target level, at most ``cap_v``) and ``sensation_level_db``."""
+    (drive for the target level, at most ``cap_v``) and ``sensation_level_db``.
+    ``eps`` (F,): the error variance per map bin (default from ``map_error_rel``)."""
     if method not in METHODS:
         raise UserError(f"method {method!r}: use {', '.join(METHODS)}")
     pairs = [(int(a), int(b)) for a, b in pairs]
     keep = usable_bins(m, band_hz)
     h = patch_frf(m, keep)  # (4, P, K)
-    eps = error_variance(h, map_error_rel)
+    eps = error_variance(h, map_error_rel) if eps is None else eps[keep]
     f = m.freq_hz[keep]
     hp = np.ascontiguousarray(h.transpose(1, 2, 0))  # (P, K, 4)
     by_active: dict[int, list[int]] = {}
