@@ -594,6 +594,8 @@ class HandFlowEffect(_MapUser):
                 for p in res["parts"]
             ],
             "level_above_3jnd_db": res.get("level_above_3jnd_db"),
+            "method": "paper",
+            "predicted_contrast_db": float(min(p["margin_db"] for p in res["parts"])),
         }
         if "ringdown" in gap:
             meta["ringdown"] = gap["ringdown"]

@@ -187,6 +187,8 @@ def flow_plan(
             for p in short
         ]
     meta = {"kind": "flow", "sensation_level_db": float(sl), "parts": parts, "notes": notes}
+    meta["method"] = "paper"
+    meta["predicted_contrast_db"] = float(min(p["contrast_db"] for p in parts))
     meta["min_contrast_db"] = float(t.min_contrast_db)
     meta["rule"] = t.rule
     if "ringdown" in gap:

@@ -45,7 +45,7 @@ def test_four_channels_flow_is_per_patch(four_effects, ss_map):
     flow = four_effects["flow"]
     plan = flow.render(10, 40, vmap=ss_map)  # auto: independent on four channels
     paper = flow.render(10, 40, vmap=ss_map, method="paper")
-    assert plan.meta["method"] == "independent" and "method" not in paper.meta
+    assert plan.meta["method"] == "independent" and paper.meta["method"] == "paper"
     assert flow.cached(10, 40, vmap=ss_map) is plan
     assert flow.cached(10, 40, vmap=ss_map, method="paper") is paper
     cap = flow.setup.cap_v

@@ -471,9 +471,10 @@ class VibrationPane(VerticalScroll):
         try:
             plan = s.point_plan(n)
             mark = plan.meta["frequency_hz"]
+            who = plan.meta.get("actuator") or f"{plan.meta.get('method')} patches"
             lines.append(
                 f"[b]point {n}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
-                f"{plan.meta['actuator']}, {plan.meta['amplitude_v']:.1f} V "
+                f"{who}, {plan.meta['amplitude_v']:.1f} V "
                 f"({plan.meta['um_per_v']:.3g} um/V)"
             )
         except UserError as exc:
@@ -495,6 +496,10 @@ class VibrationPane(VerticalScroll):
                         f"  {act} / {pas}: {e['max_difference_um_per_v']:.4g} um/V at "
                         f"{e['frequency_hz']:g} Hz with {e['actuator']}"
                     )
+            try:
+                lines.append(f"[b]flow {a} -> {n}[/b]: {rendering(s.flow_plan(a, n))}")
+            except UserError as exc:
+                lines.append(f"flow {a} -> {n}: {exc}")
         freq, mags = s.frf(n)
         self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark, n)
 
@@ -522,8 +527,20 @@ def _point(word: str) -> int:
         raise UserError(f"{word!r}: give a point id (the map's node number), e.g. 51") from None
 
 
+def rendering(plan) -> str:
+    """How a flow was rendered, from its plan's ``meta`` (``contracts.FlowEffect``)."""
+    method = plan.meta.get("method")
+    if method is None:
+        return "method not given by the effect"
+    c = plan.meta.get("predicted_contrast_db")
+    patches = " (a drive per patch)" if any(s.patch_v for s in plan.segments) else ""
+    tail = "" if c is None else f", predicted contrast {c:.1f} dB"
+    return f"method {method}{patches}{tail}"
+
+
 def describe_plan(plan) -> str:
     parts = []
     for seg in plan.segments:
         parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
-    return f"{plan.duration_s:.1f} s, " + ", ".join(parts)
+    head = f"{plan.duration_s:.1f} s, " + ", ".join(parts)
+    return head + (f"; {rendering(plan)}" if plan.meta.get("kind") == "flow" else "")
