@@ -513,11 +513,14 @@ class HandFlowEffect(_MapUser):
         exhaustive: bool = False,
         screen_stride: int | None = None,
         ringdown_gap_k: float | None = None,
+        method: str | None = None,
         **_: Any,
     ) -> OutputPlan | None:
         """The plan if already rendered for this place (either search), else ``None``."""
+        how = self.setup.method if method is None else method
         for ex in (exhaustive, not exhaustive):
             k = self._key(center_mm, direction, vmap, hand_mm, ex, screen_stride, ringdown_gap_k)
+            k = k if how == "paper" else (*k, how)
             if k in self._plans:
                 return self._plans[k]
         return None
@@ -542,6 +545,7 @@ class HandFlowEffect(_MapUser):
         screen_stride: int | None = None,
         name: str = "",
         ringdown_gap_k: float | None = None,
+        method: str | None = None,
     ) -> OutputPlan:
         from plugins.vibrotactile.hand import DIRECTIONS
         from plugins.vibrotactile.lazy import hand_flow_cached
@@ -551,12 +555,16 @@ class HandFlowEffect(_MapUser):
             raise UserError(f"flow direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
         if center_mm is None:
             raise UserError("hand_flow: give center_mm=(x, y) in mm")
+        how = self.method_of(method, "hand flow")
         key = self._key(
             center_mm, direction, vmap, hand_mm, exhaustive, screen_stride, ringdown_gap_k
         )
+        key = key if how == "paper" else (*key, how)
         hit = self._plans.get(key)
         if hit is not None:
             return hit
+        if how != "paper":
+            return self._render_patches(key, direction, vmap, hand_mm, name, how)
         m = self.vibration_map(vmap)
         cx, cy = key[1]
         stride = 1 if exhaustive else int(screen_stride or 3)
@@ -610,6 +618,40 @@ class HandFlowEffect(_MapUser):
             self._plans[key] = plan
         return plan
 
+    def _render_patches(self, key, direction, vmap, hand_mm, name, how) -> OutputPlan:
+        """The flow under a hand with a drive per patch (``independent.solve_region``)."""
+        from plugins.vibrotactile.independent_plans import describe_part, per_patch_segment
+
+        (cx, cy), st = key[1], self.setup.settings
+        parts = self.patch_drives((cx, cy), direction, vmap=vmap, method=how, hand_mm=hand_mm)
+        segs = tuple(
+            per_patch_segment(
+                p["frequency_hz"], p["amplitude_v"], p["weights"], st.part_s, st.ramp_ms / 1e3,
+                st.sample_rate_hz, label=f"part {i + 1} {how}",
+            )
+            for i, p in enumerate(parts)
+        )  # fmt: skip
+        meta = {
+            "kind": "hand_flow",
+            "ok": True,
+            "center_mm": [cx, cy],
+            "direction": direction,
+            "hand_mm": float(hand_mm or self.setup.hand["hand_mm"]),
+            "method": how,
+            "parts": [describe_part(p, p["amplitude_v"]) for p in parts],
+            "predicted_contrast_db": float(min(p["contrast_db"] for p in parts)),
+        }
+        plan = OutputPlan(
+            st.sample_rate_hz,
+            segs,
+            name=name or f"hand flow {direction} at {cx:g},{cy:g} ({how})",
+            gap_s=st.gap_s,
+            meta=meta,
+        )
+        with self._lock:
+            self._plans[key] = plan
+        return plan
+
     def render_hand_flow(self, center_mm: Any, direction: str, vmap: Any) -> OutputPlan:
         """The flow under a hand at ``center_mm`` toward ``direction`` on ``vmap``, the
         staged search (``console.contracts.HandFlowEffect``)."""
@@ -641,7 +683,13 @@ class HandFlowEffect(_MapUser):
         return out
 
     def patch_drives(
-        self, center_mm: Any, direction: str, *, vmap: Any = None, method: str = "independent"
+        self,
+        center_mm: Any,
+        direction: str,
+        *,
+        vmap: Any = None,
+        method: str = "independent",
+        hand_mm: float | None = None,
     ) -> list[dict]:
         """The two parts of the flow under a hand as per-patch drives: ``frequency_hz``,
         ``weights`` (4,) complex (1 V peak on the strongest patch), ``amplitude_v``,
@@ -649,14 +697,17 @@ class HandFlowEffect(_MapUser):
         from plugins.vibrotactile import independent as ind
 
         if method == "paper":
-            plan = self.render(center_mm=center_mm, direction=direction, vmap=vmap)
+            plan = self.render(
+                center_mm=center_mm, direction=direction, vmap=vmap, hand_mm=hand_mm, method="paper"
+            )
             return [
                 {**p, "weights": ind.actuator_weights(p["actuator"])} for p in plan.meta["parts"]
             ]
         s = self.setup
         return ind.solve_region(
             self.vibration_map(vmap), center_mm, direction, s.perception, cap_v=s.cap_v,
-            hand_mm=s.hand["hand_mm"], squares=s.hand["squares"], subgrid=s.hand["subgrid"],
+            hand_mm=float(hand_mm or s.hand["hand_mm"]), squares=s.hand["squares"],
+            subgrid=s.hand["subgrid"],
             band_hz=s.band_hz, method=method, map_error_rel=s.map_error_rel,
             interpolation=s.settings.interpolation,
         )  # fmt: skip

@@ -78,10 +78,12 @@ def per_patch_segment(
     return Segment.per_patch(drives, label=label)
 
 
-def _describe(ans: dict, amp: float) -> dict:
+def describe_part(ans: dict, amp: float) -> dict:
     """JSON-able part: the per-patch volts and phases instead of the complex weights."""
     w = np.asarray(ans["weights"], complex)
     out = {k: v for k, v in ans.items() if k != "weights"}
+    if isinstance(out.get("levels_um_per_v"), np.ndarray):
+        out["levels_um_per_v"] = out["levels_um_per_v"].tolist()
     out["amplitude_v"] = float(amp)
     out["patch_v"] = {p: float(amp * abs(x)) for p, x in zip(PATCHES, w, strict=True)}
     out["patch_phase_deg"] = {
@@ -152,7 +154,7 @@ def flow_plan(
                 settings.sample_rate_hz, label=f"part {i + 1} {method}",
             )
         )  # fmt: skip
-        meta_parts.append(_describe(p, amp))
+        meta_parts.append(describe_part(p, amp))
     notes = []
     if sl < 3 * perception.jnd_db:
         notes.append(
@@ -246,6 +248,6 @@ def point_plan(
         min(settings.ramp_ms / 1e3, settings.pulse_s / 4), settings.sample_rate_hz,
         label=f"point {method}",
     )  # fmt: skip
-    meta = {"kind": "point", "method": method, **_describe(ans, ans["amplitude_v"])}
+    meta = {"kind": "point", "method": method, **describe_part(ans, ans["amplitude_v"])}
     meta["predicted_contrast_db"] = meta["contrast_db"]
     return OutputPlan(settings.sample_rate_hz, (seg,), name=name or "point", meta=meta)

@@ -91,3 +91,22 @@ def test_four_channels_point_focus(four_effects, ss_map):
     tr = point.render(point=30, vmap=ss_map, method="time_reversal").meta
     assert m["contrast_db"] >= tr["contrast_db"] - 1e-6 or m["frequency_hz"] != tr["frequency_hz"]
     assert m["um_per_v"] > m["median_grid_um_per_v"]
+
+
+def test_four_channels_hand_flow(ctx, ss_map):
+    prof = with_channels(ctx.profile, FOUR, cache_dir="none")
+    hand = ctx.pm.get("effect", "hand_flow").factory(prof)
+    plan = hand.render(center_mm=(300.0, 200.0), direction="right", vmap=ss_map)
+    assert plan.meta["method"] == "independent" and len(plan.segments) == 2
+    assert all(s.independent for s in plan.segments)
+    assert hand.cached((300.0, 200.0), "right", vmap=ss_map) is plan
+    assert plan.meta["predicted_contrast_db"] == min(p["contrast_db"] for p in plan.meta["parts"])
+    for seg, part in zip(plan.segments, plan.meta["parts"], strict=True):
+        peak = max(np.abs(v).max() for v in seg.drives().values())
+        assert peak == pytest.approx(part["amplitude_v"], rel=1e-3)
+        assert peak <= hand.setup.cap_v + 1e-9
+    paper = hand.render(center_mm=(300.0, 200.0), direction="right", vmap=ss_map, method="paper")
+    assert paper.meta["method"] == "paper" and not any(s.independent for s in paper.segments)
+    bus = ctx.pm.get("effect", "hand_flow").factory(with_channels(ctx.profile, ["piezo", "screen"]))
+    with pytest.raises(UserError, match=r"\[audio\] channels"):
+        bus.render(center_mm=(300.0, 200.0), direction="right", vmap=ss_map, method="independent")
