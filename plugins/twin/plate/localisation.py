@@ -402,7 +402,9 @@ def _sensitivity(player, flow, shapes, vmap, pairs, quick: bool, cap: float) -> 
 
 def _gate_check(profile, pm, flow, vmap, player, shapes, ls) -> dict:
     """The paper's flows of the first default pairs played through the safety gate
-    (``flow_pairs_check``) against the same parts played here: contrast difference."""
+    (``flow_pairs_check``), and the independent flows of the same pairs played through
+    the gate with a channel per patch (``independent``), against the same parts played
+    here: contrast difference."""
     from console.runtime.outputs import open_outputs
 
     from .loop_check import flow_pairs_check
@@ -416,12 +418,68 @@ def _gate_check(profile, pm, flow, vmap, player, shapes, ls) -> dict:
     diff = [
         abs(g["ach_contrast_db"] - m["ach_contrast_db"]) for g, m in zip(gate, mine, strict=True)
     ]
+    rows = independent_through_gate(per_patch_profile(profile), pm, vmap, pairs_no, ls, player)
     return {
         "parts": len(gate),
         "max_contrast_difference_db": float(max(diff)),
         "gate_contrast_db": [float(g["ach_contrast_db"]) for g in gate],
         "here_contrast_db": [float(m["ach_contrast_db"]) for m in mine],
+        "independent": {
+            "channels": ["PA", "PB", "PC", "PD", "screen"],
+            "max_contrast_difference_db": float(
+                max(abs(r["gate_contrast_db"] - r["here_contrast_db"]) for r in rows)
+            ),
+            "rows": rows,
+        },
     }
+
+
+def per_patch_profile(profile):
+    """The profile with a channel per patch (``[audio] channels`` = PA..PD, screen)."""
+    from dataclasses import replace
+
+    audio = {**profile.section("audio"), "channels": ["PA", "PB", "PC", "PD", "screen"]}
+    return replace(profile, data={**profile.data, "audio": audio})
+
+
+def independent_through_gate(profile4, pm, vmap, pairs_no, ls, player) -> list[dict]:
+    """Independent flows between grid numbers played through the safety gate on a
+    per-patch profile, recorded, then into the plate twin; per part the achieved
+    contrast there and here (the same answer played by ``play_pairs``)."""
+    from console.runtime.outputs import open_outputs
+
+    from .loop_check import _play_and_envelope
+
+    flow4, _ = effects_of(profile4, pm, ls)
+    shapes = point_shapes_um(player.twin, vmap.points_mm)
+    rows = []
+    with open_outputs(profile4, pm, fast=True) as out:
+        for a_no, b_no in pairs_no:
+            plan = flow4.render(int(a_no), int(b_no), vmap=vmap, method="independent")
+            pts = np.array([plan.meta["from_mm"], plan.meta["to_mm"]])
+            freqs = [p["frequency_hz"] for p in plan.meta["parts"]]
+            env = _play_and_envelope(out, profile4, player.twin, plan, pts, ls, 2, freqs)
+            a, b = vmap.point_index(a_no), vmap.point_index(b_no)
+            pair = [(a, b), (b, a)]
+            here = play_pairs(
+                player, shapes, pair, flow4.patch_drives(pair, vmap=vmap, method="independent")
+            )
+            for i, (e, h) in enumerate(zip(env, here, strict=True)):
+                act, pas = (0, 1) if i == 0 else (1, 0)
+                amp = plan.meta["parts"][i]["amplitude_v"]
+                rows.append(
+                    {
+                        "pair": f"{a_no}->{b_no}",
+                        "part": i + 1,
+                        "frequency_hz": float(freqs[i]),
+                        "gate_contrast_db": 20
+                        * math.log10(float(e.tone_um[act]) / max(float(e.tone_um[pas]), 1e-300)),
+                        "here_contrast_db": float(h["ach_contrast_db"]),
+                        "gate_active_um_per_v": float(e.tone_um[act]) / amp,
+                        "here_active_um_per_v": h["ach_active_um"] / h["amplitude_v"],
+                    }
+                )
+    return rows
 
 
 def format_table(res: dict) -> list[str]:
