@@ -304,7 +304,10 @@ class FlowEffect(_MapUser):
     parts is at least ``k`` decay times of part 1's mode (default ``[vibrotactile]
     ringdown_gap_k``; 0 = relay gap only). The plan's ``meta`` has ``parts`` (table
     answer, ``active_um_per_v``, ``passive_um_per_v``, ``contrast_db``, ``amplitude_v``
-    per part), ``sensation_level_db``, ``notes``, ``from``/``to`` and ``ringdown``.
+    per part), ``sensation_level_db``, ``notes``, ``from``/``to``, ``ringdown``,
+    ``method`` and ``predicted_contrast_db``. ``method``: ``paper`` (the tables),
+    ``independent`` or ``time_reversal`` (a drive per patch, ``independent_plans``;
+    refused on a bus profile); default ``[vibrotactile] method``.
     """
 
     def _key(self, a, b, vmap, tables, min_contrast_db, ringdown_gap_k, rule=None) -> tuple:
@@ -496,7 +499,8 @@ class HandFlowEffect(_MapUser):
     ``center_mm``, ``direction``, ``parts`` (``actuator``, ``frequency_hz``,
     ``amplitude_v``, ``margin_db``, ``x_um`` the 3-JND line, ``active`` squares),
     ``level_above_3jnd_db`` and ``ringdown`` when a ring-down gap applies.
-    A place with no flow is a ``UserError`` saying why.
+    A place with no flow is a ``UserError`` saying why. ``method`` as for ``flow``
+    (``independent``: the max-min solve over the hand's squares).
     """
 
     def _key(self, center_mm, direction, vmap, hand_mm, exhaustive, stride, k) -> tuple:
@@ -748,7 +752,8 @@ class PointEffect(_MapUser):
     ``render(point=, vmap= | tables=, name="") -> OutputPlan``: the excitation and
     frequency where the point's displacement per volt is largest, at the target
     sensation level; ``meta`` has ``frequency_hz``, ``actuator``, ``amplitude_v``,
-    ``um_per_v``, ``sensation_level_db`` and ``median_grid_um_per_v``.
+    ``um_per_v``, ``sensation_level_db`` and ``median_grid_um_per_v``. ``method`` as for
+    ``flow`` (``independent``: the drive focusing on the point against the whole grid).
     """
 
     def cached(
