@@ -624,34 +624,11 @@ class HandFlowEffect(_MapUser):
 
     def _render_patches(self, key, direction, vmap, hand_mm, name, how) -> OutputPlan:
         """The flow under a hand with a drive per patch (``independent.solve_region``)."""
-        from plugins.vibrotactile.independent_plans import describe_part, per_patch_segment
+        from plugins.vibrotactile.independent_plans import hand_flow_plan
 
-        (cx, cy), st = key[1], self.setup.settings
-        parts = self.patch_drives((cx, cy), direction, vmap=vmap, method=how, hand_mm=hand_mm)
-        segs = tuple(
-            per_patch_segment(
-                p["frequency_hz"], p["amplitude_v"], p["weights"], st.part_s, st.ramp_ms / 1e3,
-                st.sample_rate_hz, label=f"part {i + 1} {how}",
-            )
-            for i, p in enumerate(parts)
-        )  # fmt: skip
-        meta = {
-            "kind": "hand_flow",
-            "ok": True,
-            "center_mm": [cx, cy],
-            "direction": direction,
-            "hand_mm": float(hand_mm or self.setup.hand["hand_mm"]),
-            "method": how,
-            "parts": [describe_part(p, p["amplitude_v"]) for p in parts],
-            "predicted_contrast_db": float(min(p["contrast_db"] for p in parts)),
-        }
-        plan = OutputPlan(
-            st.sample_rate_hz,
-            segs,
-            name=name or f"hand flow {direction} at {cx:g},{cy:g} ({how})",
-            gap_s=st.gap_s,
-            meta=meta,
-        )
+        (cx, cy), hm = key[1], float(hand_mm or self.setup.hand["hand_mm"])
+        parts = self.patch_drives((cx, cy), direction, vmap=vmap, method=how, hand_mm=hm)
+        plan = hand_flow_plan(parts, (cx, cy), direction, hm, self.setup.settings, how, name)
         with self._lock:
             self._plans[key] = plan
         return plan

@@ -174,6 +174,41 @@ def flow_plan(
     )
 
 
+def hand_flow_plan(
+    parts: list[dict], center_mm, direction: str, hand_mm: float, settings, method: str,
+    name: str = "",
+) -> OutputPlan:  # fmt: skip
+    """The two parts of ``independent.solve_region`` as a plan (``meta`` as the paper's
+    hand flow: ``center_mm``, ``direction``, ``parts``; plus ``method`` and
+    ``predicted_contrast_db``, the weaker part's margin on the map)."""
+    st = settings
+    segs = tuple(
+        per_patch_segment(
+            p["frequency_hz"], p["amplitude_v"], p["weights"], st.part_s, st.ramp_ms / 1e3,
+            st.sample_rate_hz, label=f"part {i + 1} {method}",
+        )
+        for i, p in enumerate(parts)
+    )  # fmt: skip
+    cx, cy = (float(c) for c in center_mm)
+    meta = {
+        "kind": "hand_flow",
+        "ok": True,
+        "center_mm": [cx, cy],
+        "direction": direction,
+        "hand_mm": float(hand_mm),
+        "method": method,
+        "parts": [describe_part(p, p["amplitude_v"]) for p in parts],
+        "predicted_contrast_db": float(min(p["contrast_db"] for p in parts)),
+    }
+    return OutputPlan(
+        st.sample_rate_hz,
+        segs,
+        name=name or f"hand flow {direction} at {cx:g},{cy:g} ({method})",
+        gap_s=st.gap_s,
+        meta=meta,
+    )
+
+
 def solve_focus(
     m: VibrationMap,
     h_a: np.ndarray,
