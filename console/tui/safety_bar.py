@@ -1,29 +1,67 @@
-"""The always-visible bar: e-stop key, live output state, closed relays."""
+"""The always-visible bar: e-stop key, live output state, closed relays.
+
+The bar is one line at any width: the closed relays and the e-stop / reset key always
+show; what does not fit (the e-stop's reason, words around the voltages) is shortened
+first. Notifications sit above it (``console.tcss``: the toast rack keeps clear of the
+bar and the footer). Its text is shown literally (``markup=False``): a reason or a
+driver's error naming ``[audio] device`` keeps its brackets.
+"""
 
 from __future__ import annotations
 
 from textual.widgets import Static
 
 
-def describe(status: dict) -> tuple[str, str]:
-    """(text, css class) for the gate/scheduler status of an ``Outputs``."""
+def _fit(variants: list[str], width: int | None) -> str:
+    """The first (longest) variant that fits ``width`` columns, else the last one cut."""
+    if not width:
+        return variants[0]
+    for text in variants:
+        if len(text) <= width:
+            return text
+    return variants[-1][:width]
+
+
+def describe(status: dict, width: int | None = None) -> tuple[str, str]:
+    """(text, css class) for the gate/scheduler status of an ``Outputs``, fitted to
+    ``width`` columns (None: the full text)."""
     gate = status["gate"]
     relays = ",".join(str(c) for c in gate["relays_closed"]) or "none"
     if gate["estopped"]:
+        reason = gate["estop_reason"]
         return (
-            f" E-STOP: {gate['estop_reason']}  [ctrl+r: reset]  relays closed: {relays}",
+            _fit(
+                [
+                    f" E-STOP: {reason}  [ctrl+r: reset]  relays closed: {relays}",
+                    # the key and the relays first: the reason is cut when it must be
+                    f" E-STOP: ctrl+r resets | relays closed: {relays} | {reason}",
+                ],
+                width,
+            ),
             "estop",
         )
     levels = gate["level_v"]
     names = gate.get("channels") or ["piezo", "screen"]
+    pairs = list(zip(names, levels, strict=False))
     if len(levels) == 2:
-        piezo, screen = levels
-        shown = f"piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
+        (_, piezo), (_, screen) = pairs
+        full = f"piezo {piezo:+7.1f} V  screen {screen:+7.1f} V"
     else:  # a channel per patch
-        shown = "  ".join(f"{n} {v:+6.1f} V" for n, v in zip(names, levels, strict=False))
+        full = "  ".join(f"{n} {v:+6.1f} V" for n, v in pairs)
+    mid = " ".join(f"{n} {v:+.1f} V" for n, v in pairs)
+    short = " ".join(f"{n} {v:+.0f}" for n, v in pairs) + " V"
     state = "PLAYING" if status["busy"] else "idle"
     return (
-        f" ctrl+e E-STOP | outputs {state} | {shown} | relays closed: {relays}",
+        _fit(
+            [
+                f" ctrl+e E-STOP | outputs {state} | {full} | relays closed: {relays}",
+                f" ctrl+e E-STOP | {state} | {mid} | relays closed: {relays}",
+                f" ^e E-STOP | {state} | {short} | closed: {relays}",
+                # the levels last: what does not fit is cut from them
+                f" ^e E-STOP | {state} | closed: {relays} | {short}",
+            ],
+            width,
+        ),
         "live" if status["busy"] else "idle",
     )
 
@@ -38,11 +76,24 @@ class SafetyBar(Static):
     SafetyBar.nooutputs { background: $error-darken-2; }
     """
 
+    def __init__(self, *args, **kw) -> None:
+        kw.setdefault("markup", False)
+        super().__init__(*args, **kw)
+        self._shown: tuple[dict | None, str] | None = None
+
+    def _width(self) -> int | None:
+        return self.size.width or self.app.size.width or None
+
     def show(self, status: dict | None, error: str = "") -> None:
+        self._shown = (status, error)
         if status is None:
             self.update(f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}")
             self.set_classes("nooutputs")
             return
-        text, cls = describe(status)
+        text, cls = describe(status, self._width())
         self.update(text)
         self.set_classes(cls)
+
+    def on_resize(self) -> None:
+        if self._shown is not None:
+            self.show(*self._shown)

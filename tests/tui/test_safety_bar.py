@@ -1,0 +1,70 @@
+"""The safety bar stays readable: notifications never cover it, and at 80 x 24 it still
+shows the closed relays and the e-stop / reset key (an operator's first look after an
+e-stop or an audition)."""
+
+from __future__ import annotations
+
+import asyncio
+
+from textual.widgets._toast import Toast
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+from console.tui.safety_bar import SafetyBar, describe
+
+from .conftest import wait_for
+
+
+def _status(*, estopped=False, reason="", relays=(), level=(0.0, 0.0), busy=False):
+    gate = {
+        "estopped": estopped,
+        "estop_reason": reason,
+        "relays_closed": list(relays),
+        "level_v": level,
+    }
+    return {"gate": gate, "busy": busy}
+
+
+def test_the_bar_keeps_relays_and_keys_at_any_width():
+    for width in (200, 120, 80, 60):
+        text, cls = describe(_status(relays=(1, 2, 3, 4, 5), level=(-123.4, 300.0)), width)
+        assert len(text) <= width and cls == "idle"
+        assert "E-STOP" in text and "1,2,3,4,5" in text
+        long_reason = "e-stop from another process: the demo's watchdog tripped in stage vision"
+        text, cls = describe(_status(estopped=True, reason=long_reason, relays=(5,)), width)
+        assert len(text) <= width and cls == "estop"
+        assert "ctrl+r" in text and "relays closed: 5" in text
+        five = _status(relays=(1, 2, 3, 4), level=(-123.4, 0.0, 56.7, 0.0, 300.0))
+        five["gate"]["channels"] = ["PA", "PB", "PC", "PD", "screen"]
+        text, _ = describe(five, width)
+        assert len(text) <= width and "E-STOP" in text and "1,2,3,4" in text
+        if width >= 80:  # every channel by name
+            assert all(n in text for n in ("PA", "PB", "PC", "PD", "screen")), text
+    wide, _ = describe(_status(estopped=True, reason="operator", relays=()), 200)
+    assert "operator" in wide and "relays closed: none" in wide
+
+
+def test_notifications_never_cover_the_bar_at_80x24(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=(80, 24), notifications=True) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            bar = app.query_one(SafetyBar)
+            await pilot.press("1")  # close relay 1, then e-stop: it opens again
+            await wait_for(pilot, lambda: "relays closed: 1" in str(bar.render()))
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
+            await wait_for(pilot, lambda: bool(app.screen.query(Toast)), what="a toast")
+            await wait_for(pilot, lambda: "ctrl+r" in str(bar.render()))
+            text = str(bar.render())
+            assert "relays closed: none" in text and len(text) <= 80
+            await pilot.pause(0.3)  # the toasts are laid out
+            for toast in app.screen.query(Toast):
+                assert not toast.region.overlaps(bar.region), (toast.region, bar.region)
+            # what the operator sees on the bar's row is the bar
+            row = bar.region.y
+            for x in (1, 40, 79):
+                widget, _ = app.screen.get_widget_at(x, row)
+                assert widget is bar, (x, widget)
+
+    asyncio.run(scenario())
