@@ -6,10 +6,19 @@ part needs libusb-1.0-0; in USB mode only one process at a time may use Yoctopuc
 devices, so a second process (the console while `haptable doctor` runs) must go
 through a VirtualHub: ``[relays] url = "127.0.0.1"``.
 ``yoctopuce`` is imported only when a board is opened or probed.
+
+The API is started once per process (``use_hub``): the library's own start is not
+thread-safe (two threads starting it at once get "Api already started (yapi:...)", which
+read as another process holding the USB), and the console probes the board (Devices
+screen) while it opens it (outputs). Boards and probes share one registration per hub.
+The API is freed when the last open board closes (a demo's process or VirtualHub can
+then have the USB) and at exit; a probe alone never frees it, so the board the console
+opens next uses the same start.
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import threading
 from types import SimpleNamespace
@@ -31,8 +40,10 @@ SHARE_FIX = (
     '[relays] url = "127.0.0.1" in every process'
 )
 
-_users = 0  # boards open in this process (FreeAPI only when none is)
-_users_lock = threading.Lock()
+_users = 0  # boards open and probes running in this process
+_users_lock = threading.Lock()  # held while the API starts, registers a hub or is freed
+_registered: set[tuple[int, str]] = set()  # (id of the API's YAPI, url) registered now
+_started: dict[int, Any] = {}  # the APIs started now, by id of their YAPI (freed at exit)
 
 
 def load_yocto() -> SimpleNamespace:
@@ -72,8 +83,55 @@ def register_hub(api: Any, url: str) -> None:
         )
 
 
+def use_hub(api: Any, url: str) -> None:
+    """Register ``url`` with the process's API unless it is already, and count a user
+    (``release_hub`` ends the use). A DeviceError names the fix when the hub cannot be
+    reached."""
+    global _users
+    key = (id(api.YAPI), url)
+    with _users_lock:
+        if key not in _registered:
+            try:
+                register_hub(api, url)
+            except DeviceError:
+                if _users == 0:  # a half-started API: let another process have the USB
+                    _free(api)
+                raise
+            _registered.add(key)
+            _started[id(api.YAPI)] = api
+        _users += 1
+
+
+def release_hub(api: Any, *, board: bool) -> None:
+    """One user of the API is done. When the last one is a board, the API is freed: the
+    USB is then free for another process (a demo's, VirtualHub)."""
+    global _users
+    with _users_lock:
+        _users -= 1
+        if _users == 0 and board:
+            _free(api)
+
+
+def _free(api: Any) -> None:
+    _registered.clear()
+    _started.pop(id(api.YAPI), None)
+    with contextlib.suppress(Exception):
+        api.YAPI.FreeAPI()
+
+
+def _free_at_exit() -> None:
+    with _users_lock:
+        for api in list(_started.values()):
+            _free(api)
+
+
+atexit.register(_free_at_exit)
+
+
 def list_modules(api: Any) -> list[tuple[str, str]]:
-    """``(serial, product name)`` of every module online on the registered hubs."""
+    """``(serial, product name)`` of every module online on the registered hubs (the
+    list updated first: the API may have been started before a module was plugged in)."""
+    api.YAPI.UpdateDeviceList(api.YRefParam())
     found = []
     module = api.YModule.FirstModule()
     while module is not None:
@@ -116,7 +174,6 @@ class YoctoRelayBoard:
     def __init__(
         self, url: str = "usb", serial: str = "", channels: int = CHANNELS, api: Any = None
     ):
-        global _users
         if not 1 <= channels <= CHANNELS:
             raise DeviceError(
                 f"[relays] channels = {channels}: the Yocto-MaxiCoupler has {CHANNELS} relays; "
@@ -130,9 +187,7 @@ class YoctoRelayBoard:
         self._error = ""
         self._switches = 0
         self._commanded = [False] * self.channels
-        register_hub(self._api, url)
-        with _users_lock:
-            _users += 1
+        use_hub(self._api, url)
         self._released = False
         try:
             self.serial = choose_module(list_modules(self._api), serial)
@@ -151,16 +206,10 @@ class YoctoRelayBoard:
             raise
 
     def _release(self) -> None:
-        global _users
         if self._released:
             return
         self._released = True
-        with _users_lock:
-            _users -= 1
-            last = _users == 0
-        if last:
-            with contextlib.suppress(Exception):  # let another process have the USB
-                self._api.YAPI.FreeAPI()
+        release_hub(self._api, board=True)  # the last board frees the API (USB for others)
 
     def _switch(self, channel: int, closed: bool, what: str) -> None:
         relay = self._relays[channel - 1]
@@ -270,7 +319,7 @@ def probe(profile: Any, api: Any = None) -> DeviceStatus:
                 raise DeviceError(
                     f"[relays] url = {url!r}: no hub answers ({msg}); {_hub_fix(url, msg)}"
                 )
-        register_hub(api, url)
+        use_hub(api, url)  # the board's registration when it is open (never a second one)
     except DeviceError as exc:
         fix = str(exc).rsplit("; ", 1)[-1]
         busy = fix == SHARE_FIX  # the board may well be there, held by another process
@@ -285,7 +334,4 @@ def probe(profile: Any, api: Any = None) -> DeviceStatus:
         fix = f"plug in the Yocto-MaxiCoupler{' ' + serial if serial else ''} (USB or hub {url!r})"
         return DeviceStatus("relay_board", name, "missing", str(exc), fix)
     finally:
-        with _users_lock:
-            if _users == 0:
-                with contextlib.suppress(Exception):
-                    api.YAPI.FreeAPI()
+        release_hub(api, board=False)  # the board opened next uses the same start

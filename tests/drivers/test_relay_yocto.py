@@ -60,6 +60,10 @@ class FakeApi:
             def FreeAPI():  # noqa: N802
                 api.freed += 1
 
+            @staticmethod
+            def UpdateDeviceList(errmsg):  # noqa: N802
+                return 0
+
         class Module:
             def __init__(self, i: int) -> None:
                 self.i = i
@@ -298,3 +302,64 @@ def test_probe_of_an_unreachable_virtualhub_is_missing(stub_profile):
     native_yoctopuce_or_skip()
     st = relay_yocto.probe(stub_profile(relays__url="127.0.0.1:1"))
     assert st.state == "missing" and "VirtualHub" in st.fix
+
+
+class StrictApi(FakeApi):
+    """The real library's rules: its start is not thread-safe (a second start meanwhile
+    fails with "Api already started"), and a hub is registered once while it runs."""
+
+    def __init__(self, *modules: SimModule) -> None:
+        import threading
+        import time
+
+        super().__init__(*modules)
+        api, started = self, {"now": False, "starting": threading.Lock()}
+
+        def register(url, errmsg):  # noqa: N802
+            if not started["now"]:
+                if not started["starting"].acquire(blocking=False):
+                    errmsg.value = "Api already started (yapi:2868)"
+                    return -8
+                try:
+                    time.sleep(0.05)  # the native start takes a while
+                    started["now"] = True
+                finally:
+                    started["starting"].release()
+            api.registered.append(url)
+            return 0
+
+        def free():  # noqa: N802
+            started["now"] = False
+            api.freed += 1
+
+        self.ns.YAPI.RegisterHub = staticmethod(register)
+        self.ns.YAPI.FreeAPI = staticmethod(free)
+
+
+def test_the_api_starts_once_while_the_console_probes_and_opens_the_board(stub_profile):
+    """The Devices screen probes the board while the outputs open it: one start and one
+    registration of the hub, whatever the order (two starts at once blamed the console's
+    own pid); closing the board frees the API for other processes."""
+    import threading
+
+    fake = StrictApi(SimModule("MAXICPL1-1A2B3"))
+    got: dict = {}
+
+    def probe() -> None:
+        got["probe"] = relay_yocto.probe(stub_profile(), api=fake.ns)
+
+    def open_board() -> None:
+        got["board"] = YoctoRelayBoard(api=fake.ns)
+
+    threads = [threading.Thread(target=f) for f in (probe, open_board)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(10)
+    assert got["probe"].state == "ok", got["probe"]
+    board = got["board"]
+    assert fake.registered == ["usb"] and fake.freed == 0
+    again = relay_yocto.probe(stub_profile(), api=fake.ns)  # the board is open: no second
+    assert again.state == "ok" and fake.registered == ["usb"] and fake.freed == 0
+    board.close()
+    assert fake.freed == 1 and relay_yocto._users == 0  # the USB for other processes
