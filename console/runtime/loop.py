@@ -118,6 +118,9 @@ class FrameLoop:
         if self._threads:
             raise RuntimeError(f"{self.name}: already started")
         self._stop.clear()
+        # the camera's drops from now on: frames it lost before this loop read are not
+        # this pipeline's (a camera kept open while its screen was hidden)
+        self._camera_dropped_seen = self._camera_dropped()
         self._threads = [
             threading.Thread(
                 target=self._camera_run, name=f"haptable-{self.name}-camera", daemon=True
@@ -188,13 +191,16 @@ class FrameLoop:
                 self.monitor.dropped(1)
             self._poll_camera_drops()
 
+    def _camera_dropped(self) -> int:
+        try:
+            return int(self.camera.status().get("dropped", 0) or 0)
+        except Exception:
+            return 0
+
     def _poll_camera_drops(self) -> None:
         if self.frames_in % 30:
             return
-        try:
-            n = int(self.camera.status().get("dropped", 0) or 0)
-        except Exception:
-            return
+        n = self._camera_dropped()
         if n > self._camera_dropped_seen:
             self.monitor.dropped(n - self._camera_dropped_seen, camera=True)
             self._camera_dropped_seen = n

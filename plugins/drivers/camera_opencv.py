@@ -5,7 +5,9 @@ grayscale and keeps the newest; ``read(timeout_s)`` hands out each frame at most
 After consecutive read failures (an unplug) the capture is released and reopened with
 exponential backoff (state ``reconnecting``). ``status()`` reports the measured frame
 rate and dropped frames: those the camera skipped (gaps in arrival times longer than
-1.5 frame periods) and those the reader never took. Frame ``seq`` counts camera frame
+1.5 frame periods) and those the reader missed while it was reading (it read within
+``READER_AWAY_S``, or waits in ``read``). Frames that came while nobody read (a screen
+not shown, a stopped loop) are not drops: ``unread`` counts them apart. Frame ``seq`` counts camera frame
 slots, so a consumer sees every drop as a gap. ``t_capture_s`` is the V4L2 buffer
 timestamp (CLOCK_MONOTONIC, the clock of ``time.monotonic``) when the driver gives a
 plausible one, else the time the read returned. ``cv2`` is imported lazily.
@@ -126,6 +128,8 @@ class SimpleProps:
 
 
 DEVICE_STAMP_MAX_AGE_S = 1.0  # a buffer timestamp older than this is not on our clock
+#: a reader that has not called ``read`` for this long is away: frames meanwhile are unread
+READER_AWAY_S = 0.5
 V4L2_EXPOSURE_MANUAL = 1.0  # V4L2_CID_EXPOSURE_AUTO menu values
 V4L2_EXPOSURE_AUTO = 3.0  # aperture priority: what UVC cameras call automatic
 V4L2_EXPOSURE_AUTO_GSPCA = 0.0  # fully automatic: what gspca drivers (PS3 Eye) offer
@@ -165,6 +169,9 @@ class OpenCVCamera:
         self._seq = -1
         self._frames = 0
         self._dropped_reader = 0
+        self._unread = 0  # frames replaced while nobody was reading
+        self._reading = 0  # read() calls waiting now
+        self._last_read_s = clock()  # the opener reads next: a reader from the start
         self._reconnects = 0
         self._bad_frames = 0
         self._device_stamps = 0
@@ -278,7 +285,8 @@ class OpenCVCamera:
                     self._reconnect()
                 continue
             fails = 0
-            t_s = self._capture_time(cap, self._clock())
+            now = self._clock()
+            t_s = self._capture_time(cap, now)
             try:
                 gray = to_gray8(image)
             except ValueError as exc:
@@ -289,8 +297,12 @@ class OpenCVCamera:
             with self._cond:
                 self._seq += 1 + missed
                 self._frames += 1
-                if not self._taken:
-                    self._dropped_reader += 1
+                if not self._taken:  # replaced unread: a drop only if someone reads
+                    reading = self._reading or now - self._last_read_s <= READER_AWAY_S
+                    if reading:
+                        self._dropped_reader += 1
+                    else:
+                        self._unread += 1
                 self._latest = Frame(gray, self._seq, t_s, self.source)
                 self._taken = False
                 self._cond.notify_all()
@@ -299,12 +311,19 @@ class OpenCVCamera:
     def read(self, timeout_s: float = 0.1) -> Frame | None:
         """The newest frame not yet returned, waiting up to ``timeout_s``; else None."""
         with self._cond:
-            if self._taken:
-                self._cond.wait_for(lambda: not self._taken or self._stop.is_set(), timeout_s)
-            if self._taken or self._latest is None:
-                return None
-            self._taken = True
-            return self._latest
+            self._reading += 1
+            try:
+                if self._taken:
+                    self._cond.wait_for(
+                        lambda: not self._taken or self._stop.is_set(), timeout_s
+                    )
+                if self._taken or self._latest is None:
+                    return None
+                self._taken = True
+                return self._latest
+            finally:
+                self._reading -= 1
+                self._last_read_s = self._clock()
 
     def close(self) -> None:
         """Stop the grab thread and release the camera. Safe to call twice."""
@@ -328,6 +347,7 @@ class OpenCVCamera:
             "dropped": self._timing.skipped + self._dropped_reader,
             "dropped_camera": self._timing.skipped,
             "dropped_reader": self._dropped_reader,
+            "unread": self._unread,
             "bad_frames": self._bad_frames,
             "device_timestamps": self._device_stamps,
             "settings_rejected": list(

@@ -353,3 +353,23 @@ def test_real_videocapture_on_a_file_gives_gray_frames_and_reopens_at_its_end(tm
     assert st["size_px"] == (64, 48)  # the file cannot be resized: the real size is reported
     assert "width_px" in st["settings_rejected"]
     assert st["bad_frames"] == 0
+
+
+def test_frames_that_came_while_nobody_read_are_not_drops(world, camera, wait):
+    """A camera kept open while its screen is hidden: the frames meanwhile are unread,
+    not dropped; frames a reader misses while it reads still are."""
+    cam = camera()
+    assert cam.read(0.01) is None  # the reader is there ...
+    world.t_s += 5.0  # ... then away for five seconds (the Camera screen hidden)
+    for _ in range(4):
+        world.frame()
+    frames_seen(cam, 4, wait)
+    assert cam.read(0.01).seq == 3  # back: the newest
+    st = cam.status()
+    assert (st["dropped"], st["dropped_reader"], st["unread"]) == (0, 0, 3)
+    for _ in range(3):  # reading again: what it misses now is dropped
+        world.frame()
+    frames_seen(cam, 7, wait)
+    cam.read(0.01)
+    st = cam.status()
+    assert (st["dropped"], st["dropped_reader"], st["unread"]) == (2, 2, 3)

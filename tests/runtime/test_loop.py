@@ -179,3 +179,38 @@ def test_stage_names_must_be_unique():
         FrameLoop(ListCamera(0), [("a", print), ("a", print)])
     with pytest.raises(ValueError):
         FrameLoop(ListCamera(0), [(ARRIVAL, print)])
+
+
+def test_camera_drops_count_from_the_loop_start():
+    """A camera kept open before the loop (its screen hidden) reports what it lost then:
+    the loop counts only what the camera drops while the loop reads it."""
+    import time
+
+    class Kept(ListCamera):
+        def __init__(self) -> None:
+            super().__init__(60)
+            self.dropped = 500  # before this loop
+            self.go = threading.Event()  # the second 30 frames wait for it
+
+        def read(self, timeout_s: float = 0.1):
+            if self.k >= 30 and not self.go.wait(timeout_s):
+                return None
+            return super().read(timeout_s)
+
+        def status(self) -> dict:
+            return {"dropped": self.dropped}
+
+    cam = Kept()
+    loop = FrameLoop(cam, [("vision", lambda f, w: None)]).start()
+    try:
+        deadline = time.monotonic() + 5
+        while loop.frames_in < 30 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert loop.monitor.snapshot()["dropped_camera"] == 0
+        cam.dropped += 2  # now the camera loses two while the loop reads
+        cam.go.set()
+        while loop.monitor.snapshot()["dropped_camera"] == 0 and time.monotonic() < deadline:
+            time.sleep(0.01)  # polled every 30 frames
+        assert loop.monitor.snapshot()["dropped_camera"] == 2
+    finally:
+        loop.stop()

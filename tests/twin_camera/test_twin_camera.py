@@ -474,3 +474,17 @@ def test_long_takes_sweep_back_and_forth_on_the_table():
                 for c in geo.contacts:
                     assert -30 < c["pos_mm"][0] < table[0] + 30, g
                     assert -30 < c["pos_mm"][1] < table[1] + 30, g
+
+
+def test_frames_that_passed_while_nobody_read_are_not_dropped():
+    """The twin kept open while nobody reads (its screen hidden): on the next read the
+    frames meanwhile are unread, not dropped, and the next frame is on time."""
+    cam = TwinCamera(script=IdleScript(), fps=60.0, realtime=True)
+    assert cam.read(0.5) is not None
+    time.sleep(0.8)  # nobody reads (longer than READER_AWAY_S)
+    t0 = time.monotonic()
+    f = cam.read(0.5)
+    assert f is not None and time.monotonic() - t0 < 0.1
+    st = cam.status()
+    assert st["dropped"] == 0 and 40 <= st["unread"] <= 60, st
+    assert f.seq == st["unread"] + 1

@@ -216,9 +216,15 @@ class TouchScript:
         return [(self.subject, pose)], "touch" if touching else "hover", extra
 
 
+#: a reader that has not called ``read`` for this long is away: the frames meanwhile are
+#: ``unread``, not dropped (a paced reader that is late drops them)
+READER_AWAY_S = 0.5
+
+
 class TwinCamera:
     """The IR camera twin: ``read()`` paced at ``fps`` (or as fast as asked when
-    ``realtime=False``), ``status()`` with measured fps and dropped frames."""
+    ``realtime=False``), ``status()`` with measured fps and dropped frames (those a
+    reader missed while reading; frames that passed while nobody read are ``unread``)."""
 
     def __init__(
         self,
@@ -245,7 +251,9 @@ class TwinCamera:
         self._lock = threading.Lock()
         self._k = 0  # next frame index
         self._t0: float | None = None
-        self._dropped = 0
+        self._dropped = 0  # frames a reader missed while reading (it was late)
+        self._unread = 0  # frames that passed while nobody read (not drops)
+        self._last_read: float | None = None  # when read() was last called
         self._frames = 0
         self._times: collections.deque[float] = collections.deque(maxlen=61)
         self._closed = False
@@ -423,8 +431,16 @@ class TwinCamera:
         if self._closed:
             return None
         now = time.monotonic()
+        away = self._last_read is not None and now - self._last_read > READER_AWAY_S
+        self._last_read = now
         if self.realtime:
             if self._t0 is None:
+                self._t0 = now - self._k / self.fps
+            elif away:  # nobody read meanwhile (a stopped loop): unread, not dropped
+                late = int((now - (self._t0 + self._k / self.fps)) * self.fps)
+                if late > 0:
+                    self._unread += late
+                    self._k += late
                 self._t0 = now - self._k / self.fps
             due = self._t0 + self._k / self.fps
             wait = due - now
@@ -485,6 +501,7 @@ class TwinCamera:
             "fps": round(self.measured_fps(), 2),
             "nominal_fps": self.fps,
             "dropped": self._dropped,
+            "unread": self._unread,
             "frames": self._frames,
             "realtime": self.realtime,
             "script": getattr(self.script, "name", type(self.script).__name__),
