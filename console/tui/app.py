@@ -21,6 +21,7 @@ from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
+from console.tui.text import escape
 from console.tui.util import short_path
 
 HELP = """\
@@ -58,7 +59,8 @@ def _keys_help(tabs: dict) -> str:
         return ""
     keys = keyed[0][0] if len(keyed) == 1 else f"{keyed[0][0]}-{keyed[-1][0]}"
     pad = " " * max(2, 8 - len(keys))  # the key column, as the lines around it
-    return f"[b]{keys}[/b]{pad}{' '.join(title for _, title in keyed)}"
+    titles = " ".join(title for _, title in keyed)
+    return f"[b]{escape(keys)}[/b]" + pad + escape(titles)
 
 
 class ScreenTabs(TabbedContent):
@@ -302,6 +304,12 @@ class HapTableApp(App):
         pane = self.pane(active)
         if pane is not None and hasattr(pane, "show_state"):
             pane.show_state(status, log)
+
+    def notify(self, message: str, *, markup: bool = False, **kw) -> None:
+        """A notification shown as written: its messages carry profile keys
+        (``[audio] device``), file names and plugins' errors (``console/tui/text.py``).
+        ``markup=True`` for a message that is a template with its values escaped."""
+        super().notify(message, markup=markup, **kw)
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:

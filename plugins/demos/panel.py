@@ -24,8 +24,9 @@ from console.errors import UserError
 from console.session.events import Progress, Snapshot, Started, Stopped
 from console.tui.long_work import LongWork
 from console.tui.session_messages import SessionMessage
+from console.tui.text import LiteralTable, escape
 
-from .status import status_lines
+from .status import status_lines, unprepared_text
 
 
 def status_text(st: dict | None) -> str:
@@ -33,21 +34,20 @@ def status_text(st: dict | None) -> str:
     if st is None:
         return "projector: not started (enter on a scene starts it)"
     conn = "[green]connected[/]" if st.get("connected") else "[yellow]not connected[/]"
-    parts = [f"projector: {conn}", f"scene: {st.get('scene') or 'black'}"]
+    parts = [f"projector: {conn}", f"scene: {escape(st.get('scene') or 'black')}"]
     for key, label in (("pid", "pid"), ("fps", "fps"), ("restarts", "restarts")):
         if st.get(key) is not None:
-            parts.append(f"{label} {st[key]}")
+            parts.append(f"{label} {escape(st[key])}")
     if st.get("headless"):
         parts.append("headless (no display)")
     if st.get("unprepared_needs"):
-        why = st.get("unprepared_why") or {}
-        items = [f"{k} ({why[k]})" if why.get(k) else k for k in st["unprepared_needs"]]
-        parts.append(f"[yellow]not prepared: {'; '.join(items)}[/]")
+        text = unprepared_text(
+            st.get("scene"), list(st["unprepared_needs"]), st.get("unprepared_why") or {}
+        )
+        parts.append("[yellow]" + text + "[/]")  # markup: its values are escaped
     if st.get("last_error"):
-        parts.append(f"[red]{st['last_error']}[/]")
+        parts.append(f"[red]{escape(st['last_error'])}[/]")
     elif not st.get("connected") and st.get("last_drop"):
-        from rich.markup import escape
-
         parts.append(f"[yellow]{escape(st['last_drop'])}[/]")
     return "  ".join(parts)
 
@@ -101,13 +101,13 @@ class ScenesPane(Vertical):
         return self.app.session.demos
 
     def compose(self) -> ComposeResult:
-        yield DataTable(id="scene-table", cursor_type="row")
+        yield LiteralTable(id="scene-table", cursor_type="row")
         yield Static(status_text(None), id="projector-status")
         yield Static(
             "enter: start the scene on the projector  s: black  k: stop the projector",
             classes="hint",
         )
-        yield DataTable(id="demo-table", cursor_type="row")
+        yield LiteralTable(id="demo-table", cursor_type="row")
         yield LongWork("", id="demo-work")
         yield Static("", id="demo-status")
         yield Static(

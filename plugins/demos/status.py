@@ -9,6 +9,39 @@ from __future__ import annotations
 
 from typing import Any
 
+from textual.markup import escape as _escape
+
+#: the scene each demo drives on the projector (``SceneLink`` in flow.py and knob.py)
+DEMO_SCENES = {"flow": "flow_hand", "knob": "knob"}
+
+
+def escape(value: Any) -> str:
+    """``value`` for a markup line, its square brackets shown as written (the demo's
+    process formats too: ``console.tui.text.escape`` without the console's widgets)."""
+    return _escape(str(value))
+
+
+def unprepared_text(scene: str | None, needs: list[str], why: dict[str, str]) -> str:
+    """Why a projected scene's needs are not prepared, and the fix (Textual markup).
+
+    A need with a reason (a provider that could not prepare it: ``tables`` without a
+    vibration map) says it. A need nothing in the console prepares is live input the
+    scene waits for (the knob's angle, the contacts): started from the Scenes table
+    alone the scene shows its picture without it; the demo that drives the scene sends
+    it."""
+    live = [k for k in needs if not why.get(k)]
+    parts = [f"{escape(k)} ({escape(why[k])})" for k in needs if why.get(k)]
+    if live:
+        names = " and ".join(escape(k) for k in live)
+        demos = [d for d, s in DEMO_SCENES.items() if s == scene]
+        if demos:
+            fix = f"start the {escape(demos[0])} demo (d, then enter on it): it drives this scene"
+        else:
+            fix = "a demo or a screen that drives this scene sends it; alone it stays still"
+        parts.append(f"{names}: live input the scene waits for; nothing sends it yet: {fix}")
+    return "not prepared: " + "; ".join(parts)
+
+
 #: The latency stages shown, as (monitor key, label), in the order a frame passes them.
 DEMO_STAGES = (
     ("capture_to_arrival", "capture"),
@@ -34,16 +67,20 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     name = snap.get("demo", "?")
     wd = snap.get("watchdog", {})
     if wd.get("tripped"):
-        dog = f"[red]watchdog tripped: {wd.get('reason') or 'loop stalled'}[/]"
+        dog = f"[red]watchdog tripped: {escape(wd.get('reason') or 'loop stalled')}[/]"
     else:
         dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
     cam = snap.get("camera", {})
     lat = snap.get("latency") or {}
     state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
     lines = [
-        f"[b]{name}[/b] {state} {snap.get('uptime_s', 0):.0f} s  {dog}  camera "
-        f"{cam.get('fps', 0):.0f} fps, dropped {cam.get('dropped', 0)} (camera) + "
-        f"{lat.get('dropped_queue', 0)} (queue)"
+        f"[b]{escape(name)}[/b] "
+        + state
+        + f" {snap.get('uptime_s', 0):.0f} s  "
+        + dog
+        + f"  camera {cam.get('fps', 0):.0f} fps, dropped "
+        f"{escape(lat.get('dropped_camera', 0))} (camera) + "
+        f"{escape(lat.get('dropped_queue', 0))} (queue)"
     ]
     stages = dict(lat.get("stages", {}))
     stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}
@@ -62,12 +99,12 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     if "knob" in snap:
         k = snap["knob"]
         lines.append(
-            f"knob {k.get('condition')}: item {k.get('item')}, angle "
+            f"knob {escape(k.get('condition'))}: item {escape(k.get('item'))}, angle "
             f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
             f", {k.get('crossings', 0)} crossings"
         )
     if snap.get("last_error"):
-        lines.append(f"[red]{snap['last_error']}[/]")
+        lines.append(f"[red]{escape(snap['last_error'])}[/]")
     return lines
 
 
@@ -82,22 +119,24 @@ def _hand_line(hand: dict[str, Any]) -> str:
     )
     seen += f", {hand.get('contacts', 0)} contacts"
     if hand.get("gesture"):
-        seen += f", gesture {hand['gesture']}"
+        seen += f", gesture {escape(hand['gesture'])}"
     return seen
 
 
 def _flow_text(f: dict[str, Any]) -> str:
-    text = f"flow {f.get('direction')}: {f.get('flows', 0)} played"
+    text = escape(f"flow {f.get('direction')}: {f.get('flows', 0)} played")
     last = [e for e in f.get("last", []) if e.get("parts")]
     if last:
         e = last[-1]
         at = e.get("center_mm") or e.get("from_mm")
         where = f" at {at[0]:.0f},{at[1]:.0f} mm" if at else ""
-        pts = " + ".join(f"{p['actuator']} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", []))
+        pts = " + ".join(
+            f"{escape(p['actuator'])} {p['frequency_hz']:.0f} Hz" for p in e.get("parts", [])
+        )
         text += f"; last{where}: {pts}"
         if e.get("late_s"):  # its plan was computed first (not prepared)
             text += f" (planned in {e['late_s'] * 1e3:.0f} ms)"
     newest = (f.get("last") or [None])[-1]
     if newest is not None and not newest.get("parts"):  # a refusal or no flow there
-        text += f"\n[yellow]{newest.get('kind')}: {newest.get('reason', '')}[/]"
+        text += f"\n[yellow]{escape(newest.get('kind'))}: {escape(newest.get('reason', ''))}[/]"
     return text

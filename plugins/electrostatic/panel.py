@@ -19,6 +19,7 @@ from textual.widgets.option_list import Option
 
 from console.contracts import Conditions, Presets
 from console.errors import UserError
+from console.tui.text import escape
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -158,14 +159,14 @@ class ElectrostaticPane(Vertical):
             plan = self._render_setting(0.1)
             text = force_text(plan.meta)
         except UserError as exc:
-            text = f"[red]{exc}[/]"
+            text = f"[red]{escape(exc)}[/]"
         self.app.call_from_thread(self._show_setting, text)
 
     def _show_setting(self, text: str) -> None:
-        notes = "".join(f"\n[yellow]{n}[/]" for n in self.notes)
+        notes = "".join(f"\n[yellow]{escape(n)}[/]" for n in self.notes)
         self.query_one("#es-setting", Static).update(
             f"[b]setting[/b] {self.vpp:g} Vpp (max {self.max_vpp:g}), {self.freq_hz:g} Hz, "
-            f"{self.waveform}\n{text}{notes}"
+            f"{escape(self.waveform)}\n" + text + notes
         )
 
     def _render_setting(self, duration_s: float):

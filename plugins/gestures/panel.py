@@ -23,6 +23,7 @@ from console import paths
 from console.errors import UserError
 from console.tui.long_work import LongWork
 from console.tui.safety_bar import SafetyBar
+from console.tui.text import escape
 from console.tui.util import short_path
 
 HELP = (
@@ -60,31 +61,35 @@ def count(text: str, what: str, lo: int = 1, hi: int = 1000) -> int:
 def describe(info: dict[str, Any]) -> str:
     """The files block of the panel from ``jobs.describe_files``."""
     d, m = info.get("dataset", {}), info.get("model", {})
-    lines = [f"[b]dataset[/b] {short_path(d.get('path', '?'))}"]
+    lines = [f"[b]dataset[/b] {escape(short_path(d.get('path', '?')))}"]
     if not d.get("exists"):
         lines.append("  none yet: s synthesizes one from the camera twin")
     elif "error" in d:
-        lines.append(f"  [red]{d['error']}[/]")
+        lines.append(f"  [red]{escape(d['error'])}[/]")
     else:
         subj = d["subjects"]
         lines.append(
-            f"  {d['samples']} samples, {_mb(d.get('bytes'))}: {len(subj)} subject(s) "
-            f"({', '.join(subj[:6])}{' ...' if len(subj) > 6 else ''}), "
-            f"{d['gestures']} gestures, {d['reps']} reps"
+            escape(
+                f"  {d['samples']} samples, {_mb(d.get('bytes'))}: {len(subj)} subject(s) "
+                f"({', '.join(subj[:6])}{' ...' if len(subj) > 6 else ''}), "
+                f"{d['gestures']} gestures, {d['reps']} reps"
+            )
         )
-    lines.append(f"[b]model[/b] {short_path(m.get('path', '?'))}")
+    lines.append(f"[b]model[/b] {escape(short_path(m.get('path', '?')))}")
     if not m.get("exists"):
         lines.append("  none yet: t trains and evaluates one")
     elif "error" in m:
-        lines.append(f"  [red]{m['error']}[/]")
+        lines.append(f"  [red]{escape(m['error'])}[/]")
     else:
         ev = m.get("evaluation") or {}
-        lines.append(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples")
+        lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
         if ev:
             lines.append(
-                f"  {ev.get('cv')}: static {_pct(ev.get('static_accuracy'))}, "
-                f"dynamic {_pct(ev.get('dynamic_accuracy'))}; folds "
-                + ", ".join(_pct(f["accuracy"]) for f in ev.get("folds", []))
+                escape(
+                    f"  {ev.get('cv')}: static {_pct(ev.get('static_accuracy'))}, "
+                    f"dynamic {_pct(ev.get('dynamic_accuracy'))}; folds "
+                    + ", ".join(_pct(f["accuracy"]) for f in ev.get("folds", []))
+                )
             )
         else:
             lines.append("  no evaluation in its metadata (trained by the CLI)")
@@ -94,16 +99,18 @@ def describe(info: dict[str, Any]) -> str:
 def fold_lines(res: dict[str, Any]) -> str:
     """The result block after training: accuracy per fold and overall."""
     lines = [
-        f"[b]{res['cv']}[/b] on {res['n_samples']} samples: static "
-        f"{_pct(res['static_accuracy'])}, dynamic {_pct(res['dynamic_accuracy'])}"
+        f"[b]{escape(res['cv'])}[/b] on {escape(res['n_samples'])} samples: static "
+        f"{escape(_pct(res['static_accuracy']))}, dynamic {escape(_pct(res['dynamic_accuracy']))}"
     ]
     for i, f in enumerate(res["folds"], 1):
         who = f" (subject {f['subject']})" if "subject" in f else ""
         lines.append(
-            f"  fold {i}{who}: {_pct(f['accuracy'])} of {f['n_test']} "
-            f"(static {_pct(f['static_accuracy'])}, dynamic {_pct(f['dynamic_accuracy'])})"
+            escape(
+                f"  fold {i}{who}: {_pct(f['accuracy'])} of {f['n_test']} "
+                f"(static {_pct(f['static_accuracy'])}, dynamic {_pct(f['dynamic_accuracy'])})"
+            )
         )
-    lines.append(f"model saved to {short_path(res['model'])} ({_mb(res['bytes'])})")
+    lines.append(escape(f"model saved to {short_path(res['model'])} ({_mb(res['bytes'])})"))
     return "\n".join(lines)
 
 

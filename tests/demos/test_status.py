@@ -33,3 +33,36 @@ def test_a_stopped_run_without_a_camera_view():
     assert "[red]watchdog tripped: stuck[/]" in lines[0]
     assert lines[-1] == "knob HD: item 2, angle 30 deg, touching, 0 crossings"
     assert not any("hand" in line for line in lines)  # no camera view given
+
+
+def test_not_prepared_says_what_is_missing_and_the_fix():
+    from textual.content import Content
+
+    from plugins.demos.panel import status_text
+
+    def shown(st):
+        return Content.from_markup(status_text(st)).plain
+
+    knob = shown({"scene": "knob", "unprepared_needs": ["knob", "contacts"]})
+    assert "not prepared: knob and contacts: live input the scene waits for" in knob
+    assert "start the knob demo (d, then enter on it): it drives this scene" in knob
+    alone = shown({"scene": "contacts", "unprepared_needs": ["contacts"]})
+    assert "contacts: live input" in alone and "demo" in alone and "knob" not in alone
+    why = {"tables": "no vibration map yet: load one; [vibrotactile] off"}
+    both = shown({"scene": "flow_hand", "unprepared_needs": ["tables"], "unprepared_why": why})
+    assert "not prepared: tables (no vibration map yet: load one; [vibrotactile] off)" in both
+
+
+def test_status_lines_keep_brackets_and_count_pipeline_drops():
+    from textual.content import Content
+
+    snap = {
+        "demo": "flow",
+        "running": True,
+        "camera": {"fps": 60.0, "dropped": 900},  # frames nobody read before the loop
+        "latency": {"dropped_camera": 2, "dropped_queue": 3, "stages": {}},
+        "last_error": "[audio] device = 'x': gone",
+    }
+    text = Content.from_markup("\n".join(status_lines(snap))).plain
+    assert "dropped 2 (camera) + 3 (queue)" in text and "900" not in text
+    assert "[audio] device = 'x': gone" in text

@@ -13,6 +13,7 @@ from textual.containers import Horizontal
 from textual.widgets import Static
 
 from console.errors import UserError
+from console.tui.text import escape
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
 VISION_VIEWS = ("diff", "highpass", "body")
@@ -119,7 +120,7 @@ class CameraPane(Horizontal):
         svc = self.service
         info = self.query_one("#camera-info", Static)
         if svc.error:
-            self.query_one("#camera-view", Static).update(f"[red]camera: {svc.error}[/]")
+            self.query_one("#camera-view", Static).update(f"[red]camera: {escape(svc.error)}[/]")
             return
         if svc.borrower is not None:
             self.query_one("#camera-view", Static).update(
@@ -152,9 +153,12 @@ class CameraPane(Horizontal):
         g = work.get("gesture")
         hands = work.get("hands", ()) or ()
         lines = [
-            f"[b]{cam.get('driver', '?')}[/b]: {cam.get('fps', 0):.0f} fps, "
-            f"{cam.get('dropped', 0)} dropped",
-            f"loop {lat.get('fps', 0):.0f} fps, dropped {lat.get('dropped_queue', 0)}",
+            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps",
+            # what this loop lost since it started: frames the camera dropped while the
+            # loop read it, and frames the processing was too slow for (never the frames
+            # that passed while nobody watched)
+            f"loop {lat.get('fps', 0):.0f} fps, dropped {escape(lat.get('dropped_camera', 0))}"
+            f" (camera) + {escape(lat.get('dropped_queue', 0))} (queue)",
             f"view: {self.view} (v)",
             f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
             f"gesture: {g.name if g else '-'}",

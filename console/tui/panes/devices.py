@@ -15,6 +15,7 @@ from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
 from console.stimuli import STIMULI
+from console.tui.text import LiteralTable
 from console.tui.util import short_path
 
 
@@ -44,13 +45,13 @@ class DevicesPane(VerticalScroll):
 
     def compose(self) -> ComposeResult:
         yield Static(id="profile-line", markup=False)
-        yield DataTable(id="device-table", cursor_type="row")
+        yield LiteralTable(id="device-table", cursor_type="row")
         yield Static(
             "sound card (enter uses it; saved to the profile's overrides)", classes="heading"
         )
-        yield DataTable(id="audio-table", cursor_type="row")
+        yield LiteralTable(id="audio-table", cursor_type="row")
         yield Static("relay board (enter uses it)", classes="heading")
-        yield DataTable(id="relay-table", cursor_type="row")
+        yield LiteralTable(id="relay-table", cursor_type="row")
         yield Static("test signal (t plays it through the gate)", classes="heading")
         yield Select(
             [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
@@ -60,7 +61,7 @@ class DevicesPane(VerticalScroll):
         )
         yield Static("", id="devices-result", markup=False)
         yield Static("plugins and what they provide", classes="heading")
-        yield DataTable(id="plugin-table", cursor_type="row")
+        yield LiteralTable(id="plugin-table", cursor_type="row")
 
     @property
     def focus_target(self):

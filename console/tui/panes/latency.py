@@ -11,6 +11,7 @@ from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
 from console.tui.plots import sparkline
+from console.tui.text import LiteralTable, escape
 
 #: the stages the issue names, in order, and where their numbers come from
 STAGE_LABELS = {
@@ -80,7 +81,7 @@ class LatencyPane(Vertical):
             )
             return
         yield Static("", id="lat-head")
-        yield DataTable(id="lat-table", cursor_type="none", show_cursor=False)
+        yield LiteralTable(id="lat-table", cursor_type="none", show_cursor=False)
         yield Static("", id="lat-audio")
         yield Static(
             "numbers come from the camera frame loop while this screen (or Camera) is open, "
@@ -124,8 +125,9 @@ class LatencyPane(Vertical):
         a = status.get("audio", {})
         lat = a.get("latency_s")
         self.query_one("#lat-audio", Static).update(
-            f"[b]audio[/b] {a.get('driver', '?')}: output latency "
-            f"{'-' if lat is None else f'{lat * 1e3:.1f} ms'}, underruns {a.get('underruns', 0)}"
+            f"[b]audio[/b] {escape(a.get('driver', '?'))}: output latency "
+            f"{escape('-' if lat is None else f'{lat * 1e3:.1f} ms')}, "
+            f"underruns {escape(a.get('underruns', 0))}"
             + (
                 f" ({a['underruns_audible']} cutting into sound)"
                 if a.get("underruns_audible") is not None
@@ -142,7 +144,7 @@ class LatencyPane(Vertical):
                 st = {"camera": {}, "latency": None, "error": f"demo snapshot: {exc}"}
             self.source = f"demo {st.get('demo', '?')}"
             what = (
-                f"[b]showing: the {self.source} loop[/b] (camera -> vision -> classify -> "
+                f"[b]showing: the {escape(self.source)} loop[/b] (camera -> vision -> classify -> "
                 "scene -> effect -> output)"
             )
         else:
@@ -157,13 +159,13 @@ class LatencyPane(Vertical):
             self.history.clear()
             self._history_source = self.source
         if st.get("error"):
-            self.query_one("#lat-head", Static).update(f"[red]camera: {st['error']}[/]")
+            self.query_one("#lat-head", Static).update(f"[red]camera: {escape(st['error'])}[/]")
             return
         cam, snap = st.get("camera") or {}, st.get("latency")
         self.query_one("#lat-head", Static).update(
-            f"{what}\n"
-            f"[b]camera[/b] {cam.get('driver', '?')}: {cam.get('fps', 0):.1f} fps, "
-            f"{cam.get('dropped', 0)} frames dropped by the camera"
+            what + "\n"
+            f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {cam.get('fps', 0):.1f} fps, "
+            f"{escape(cam.get('dropped', 0))} frames dropped by the camera"
             + (
                 f"; loop {snap['fps']:.1f} fps, {snap['frames']} frames, "
                 f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"

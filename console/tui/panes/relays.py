@@ -8,6 +8,8 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
+from console.tui.text import LiteralTable, escape
+
 
 def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int, str]) -> str:
     """Why channel ``ch`` can or cannot switch now (what the operator reads)."""
@@ -18,12 +20,12 @@ def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int
         want = "close" if pending[ch] else "open"
         if status["busy"]:
             return (
-                f"[yellow]waits to {want}: a stimulus routes the relays now; yours come back "
+                f"[yellow]waits to {escape(want)}: a stimulus routes the relays now; yours come back "
                 f"when it ends[/]"
             )
-        return f"[yellow]waits to {want}: outputs must be silent for the guard gap first[/]"
+        return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
-        return f"[red]refused: {refused[ch]}[/]"
+        return f"[red]refused: {escape(refused[ch])}[/]"
     return "[green]ready[/] (switches only in silence)"
 
 
@@ -65,11 +67,11 @@ class RelaysPane(VerticalScroll):
         )
         for ch in range(1, int(prof.get("relays.channels")) + 1):
             with Horizontal(classes="relay"):
-                yield Label(self._relay_label(ch), classes="relay-name")
+                yield Label(self._relay_label(ch), classes="relay-name", markup=False)
                 yield Switch(value=False, id=f"relay-{ch}")
                 yield Static("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
-        yield DataTable(id="relaylog", cursor_type="row", show_cursor=False)
+        yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)
 
     @property
     def focus_target(self):
