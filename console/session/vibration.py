@@ -191,14 +191,52 @@ class VibrationService:
         except Cancelled:
             self.session.emit(Stopped(TOPIC, name="measure", reason="cancelled"))
             raise
-        return self.open(load_map(path), f"map: {path.name} (measured now)")
+        vmap = load_map(path)
+        return self.open(vmap, f"map: measured now ({self._source(vmap)})")
+
+    def twin_plate_only(self) -> bool:
+        """The profile's vibrometer is a simulation (the plate twin) while its outputs
+        drive real amplifiers: what it measures is the twin's plate, not this table."""
+        try:
+            pl, prof = self.plugins, self.profile
+            return pl.simulated("vibrometer", prof) and not pl.simulated("audio_output", prof)
+        except Exception:  # noqa: BLE001 - a profile without these sections: not the case
+            return False
+
+    def _source(self, vmap: Any) -> str:
+        source = str(vmap.provenance.get("source") or "source not recorded")
+        if self.twin_plate_only():
+            source += "; the TWIN's plate, not this table"
+        return source
 
     def load_cached(self) -> VibrationSession | None:
-        """The measured map when one is kept (made current), else None."""
+        """The measured map when one is kept (made current), else None. On a real table
+        whose only vibrometer is the twin the kept map is the twin's: it is not loaded
+        (``no_map_text`` says so and how to load it anyway)."""
         path = self.cached_map_path()
-        if not path.is_file():
+        if not path.is_file() or self.twin_plate_only():
             return None
-        return self.open(load_map(path), f"map: {path.name} (measured on the twin)")
+        vmap = load_map(path)
+        date = str(vmap.provenance.get("date") or "")[:16].replace("T", " ")
+        when = f" of {date} UTC" if date else ""
+        return self.open(
+            vmap, f"map: the kept measurement{when} ({self._source(vmap)}; m measures again)"
+        )
+
+    def no_map_text(self) -> str:
+        """Why there is no current map, and what to do (the Vibration screen shows it)."""
+        if not self.twin_plate_only():
+            return (
+                "no vibration map: press m to measure the twin's grid (about 10 s), or "
+                "type import PA=a.uff ... / load map.npz"
+            )
+        path = self.cached_map_path()
+        kept = f"; the twin's map is kept: load {path} uses it anyway" if path.is_file() else ""
+        return (
+            "no vibration map of this table: the profile's only vibrometer is the plate twin "
+            "(a simulation): import your measurement (import PA=pa.uff PB=pb.uff ...) or "
+            f"load map.npz; m measures the twin's plate, not this glass{kept}"
+        )
 
     def load(self, path: str | Path, cancelled: Callable[[], bool] | None = None):
         """A map file made current (``Cancelled`` when cancelled meanwhile)."""
@@ -234,6 +272,11 @@ class VibrationService:
         if cur is not None:
             return cur.vmap
         path = self.cached_map_path()
+        if self.twin_plate_only():
+            raise UserError(
+                "no vibration map of this table yet (the kept one was measured on the plate "
+                "twin): import or load one on the Vibration screen"
+            )
         if path.is_file():
             return path
         raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")

@@ -18,6 +18,8 @@ from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 from console.errors import UserError
 from console.tui.charts import Chart
 from console.tui.long_work import stop_check
+from console.tui.session_messages import SessionMessage
+from console.tui.text import LiteralTable, escape, styled
 
 HELP = (
     "enter: audition the point\n"
@@ -39,7 +41,7 @@ class VibrationPane(VerticalScroll):
         Binding("s", "hand('down')", "hand down", show=False),
         Binding("d", "hand('right')", "hand w/a/s/d"),
         Binding("m", "measure", "measure"),
-        Binding("b", "build_tables", "build tables", show=False),
+        Binding("b", "build_tables", "tables"),
         Binding("x", "cancel", "cancel"),
         Binding("colon", "command", "command", show=False),
     ]
@@ -66,11 +68,12 @@ class VibrationPane(VerticalScroll):
             id="vib-cmd",
             compact=True,
         )
+        yield Static("", id="vib-outputs", markup=False)
         with Horizontal(id="vib-work"):
             yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
-            yield Label("", id="vib-status")
+            yield Label("", id="vib-status", markup=False)
         with Horizontal(id="vib-top"):
-            yield DataTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
+            yield LiteralTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
             yield Static(id="vib-info")
         yield Chart(
             title="FRF of the selected point",
@@ -113,25 +116,26 @@ class VibrationPane(VerticalScroll):
             grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1:>2}")
 
     def on_mount(self) -> None:
+        self._show_outputs()
         self._fill_grid()
         self.query_one("#vib-info", Static).update(HELP)
         self.status("looking for a vibration map ...")
         self.load_cached()
 
-    def _row_cells(self, r: int) -> list[str]:
+    def _row_cells(self, r: int) -> list:
         cells = []
         for c in range(self.cols):
             n = self.id_at.get((r, c))
             if n is None:  # no point measured at this place
                 cells.append("    ")
                 continue
-            txt = f"{n:>4}"
+            txt = styled(f"{n:>4}", "")
             if self.selected and n == self.selected[-1]:
-                txt = f" [b reverse]{n:>3}[/]"
+                txt = styled(" ", "") + styled(f"{n:>3}", "bold reverse")
             elif len(self.selected) > 1 and n == self.selected[-2]:
-                txt = f" [b u]{n:>3}[/]"
+                txt = styled(" ", "") + styled(f"{n:>3}", "bold underline")
             elif self.session is not None and not self.session.has(n):
-                txt = f"[dim]{n:>4}[/]"
+                txt = styled(f"{n:>4}", "dim")
             cells.append(txt)
         return cells
 
@@ -141,11 +145,13 @@ class VibrationPane(VerticalScroll):
             for c, txt in enumerate(self._row_cells(r)):
                 grid.update_cell(str(r), str(c), txt)
 
-    def status(self, text: str, progress: float | None = None) -> None:
+    def status(self, text: str, progress: float | None = None, error: bool = False) -> None:
         self.status_text = text
         if not self.query("#vib-status"):  # a worker finishing while the console closes
             return
-        self.query_one("#vib-status", Label).update(text)
+        label = self.query_one("#vib-status", Label)
+        label.update(text)
+        label.set_class(error, "error")
         bar = self.query_one("#vib-progress", ProgressBar)
         bar.display = progress is not None
         if progress is not None:
@@ -173,6 +179,24 @@ class VibrationPane(VerticalScroll):
         if n in self.cell_of:
             self.query_one("#grid", DataTable).cursor_coordinate = Coordinate(*self.cell_of[n])
 
+    def _show_outputs(self) -> None:
+        """A line while the outputs are not open (they failed, or a demo holds them):
+        auditions and flows cannot play, and the screen says so before a key is pressed."""
+        if not self.query("#vib-outputs"):
+            return
+        line = self.query_one("#vib-outputs", Static)
+        s = self.app.session
+        line.display = s.outputs is None and bool(s.outputs_error)
+        if line.display:
+            line.update(
+                f"outputs not open: {s.outputs_error}; nothing plays from this screen until "
+                "they open (the Devices screen says why)"
+            )
+
+    def on_session_message(self, message: SessionMessage) -> None:
+        if message.event.topic == "outputs":
+            self._show_outputs()
+
     # ------------------------------------------------------------------ map
     @property
     def service(self):
@@ -187,11 +211,7 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
             return
         if session is None:
-            self.app.call_from_thread(
-                self.status,
-                "no vibration map: press m to measure the twin's grid (about 10 s), or "
-                "type import PA=a.uff ... / load map.npz",
-            )
+            self.app.call_from_thread(self.status, self.service.no_map_text())
             return
         self._show_map(session)
 
@@ -247,7 +267,17 @@ class VibrationPane(VerticalScroll):
         self._tables_worker(session, summary, self._new_stop("vib-tables"))
 
     def action_build_tables(self) -> None:
+        """``b``: build the current map's lookup tables, or say they are built (a new map
+        builds its own on loading) or being built."""
         if not self._need_session():
+            return
+        if self.session.tables_ready:
+            text = "lookup tables already built for this map: nothing to build"
+            self.status(f"{self.summary}; {text}")
+            self.app.notify(f"{text} (a new map builds its own)", timeout=4)
+            return
+        if any(w.group == "vib-tables" and w.is_running for w in self.app.workers):
+            self.app.notify("the lookup tables are being built: x cancels", timeout=4)
             return
         self._tables_worker(self.session, self.summary, self._new_stop("vib-tables"))
 
@@ -307,7 +337,7 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
 
     def _error(self, msg: str) -> None:
-        self.status(f"[red]{msg}[/]")
+        self.status(msg, error=True)
         self.app.notify(msg, severity="error", timeout=8)
 
     # ------------------------------------------------------------------ actions
@@ -473,13 +503,13 @@ class VibrationPane(VerticalScroll):
             mark = plan.meta["frequency_hz"]
             who = plan.meta.get("actuator") or f"{plan.meta.get('method')} patches"
             lines.append(
-                f"[b]point {n}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
-                f"{who}, {plan.meta['amplitude_v']:.1f} V "
+                f"[b]point {n:d}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
+                f"{escape(who)}, {plan.meta['amplitude_v']:.1f} V "
                 f"({plan.meta['um_per_v']:.3g} um/V)"
             )
         except UserError as exc:
             mark = None
-            lines.append(f"point {n}: {exc}")
+            lines.append(f"point {n:d}: {escape(exc)}")
         if len(sel) > 1:
             a = sel[-2]
             lines.append("[b]lookup table[/b] (active / passive: difference, frequency, actuator)")
@@ -487,19 +517,19 @@ class VibrationPane(VerticalScroll):
                 try:
                     e = s.lookup(act, pas)
                 except UserError as exc:
-                    lines.append(f"  {exc}")
+                    lines.append(f"  {escape(exc)}")
                     break
                 if e["actuator"] is None:
-                    lines.append(f"  {act} / {pas}: {e.get('note', 'no entry')}")
+                    lines.append(f"  {act:d} / {pas:d}: {escape(e.get('note', 'no entry'))}")
                 else:
                     lines.append(
-                        f"  {act} / {pas}: {e['max_difference_um_per_v']:.4g} um/V at "
-                        f"{e['frequency_hz']:g} Hz with {e['actuator']}"
+                        f"  {act:d} / {pas:d}: {e['max_difference_um_per_v']:.4g} um/V at "
+                        f"{e['frequency_hz']:g} Hz with {escape(e['actuator'])}"
                     )
             try:
-                lines.append(f"[b]flow {a} -> {n}[/b]: {rendering(s.flow_plan(a, n))}")
+                lines.append(f"[b]flow {a:d} -> {n:d}[/b]: {escape(rendering(s.flow_plan(a, n)))}")
             except UserError as exc:
-                lines.append(f"flow {a} -> {n}: {exc}")
+                lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
         freq, mags = s.frf(n)
         self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark, n)
 

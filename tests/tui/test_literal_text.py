@@ -1,0 +1,156 @@
+"""Text in square brackets shows as written on every screen (``console/tui/text.py``).
+
+An AST scan of the console's screens and the plugins' panels: tables are
+``LiteralTable`` (a str cell is never markup), and an f-string with markup escapes what
+it interpolates (``escape(...)``, or a number with a format spec). Then, on the screens,
+the brackets of a plugin's description, a device's error, a session failure and a log
+record are all there."""
+
+from __future__ import annotations
+
+import ast
+import asyncio
+import re
+from pathlib import Path
+
+import console
+import plugins
+from console.cli import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+
+CONSOLE = Path(console.__file__).resolve().parent
+PLUGINS = Path(plugins.__file__).resolve().parent
+#: a markup tag in a template: [b], [/b], [/], [red], [b reverse], [dim] ...
+TAG = re.compile(r"\[/?[a-z]*( [a-z]+)*\]")
+NUMERIC_SPEC = re.compile(r".*[bcdeEfFgGnoxX%]$")
+
+
+def screen_files() -> list[tuple[Path, str]]:
+    """The files that put text on the screen: console/tui and each plugin's panel (and
+    the demos' status lines, Textual markup by contract)."""
+    files = [
+        (p, f"console/{p.relative_to(CONSOLE).as_posix()}") for p in CONSOLE.glob("tui/**/*.py")
+    ]
+    for p in [*PLUGINS.glob("*/panel.py"), PLUGINS / "demos" / "status.py"]:
+        files.append((p, f"plugins/{p.relative_to(PLUGINS).as_posix()}"))
+    return sorted(files, key=lambda f: f[1])
+
+
+def _is_escaped(value: ast.FormattedValue) -> bool:
+    v = value.value
+    if isinstance(v, ast.Call):
+        fn = v.func
+        name = (
+            fn.id if isinstance(fn, ast.Name) else fn.attr if isinstance(fn, ast.Attribute) else ""
+        )
+        if name == "escape":
+            return True
+    spec = value.format_spec
+    if isinstance(spec, ast.JoinedStr) and spec.values:
+        last = spec.values[-1]
+        if isinstance(last, ast.Constant) and NUMERIC_SPEC.match(str(last.value)):
+            return True
+    return False
+
+
+def violations(source: str, rel: str) -> list[str]:
+    out = []
+    tree = ast.parse(source)
+    specs = {id(n.format_spec) for n in ast.walk(tree) if isinstance(n, ast.FormattedValue)}
+    for node in ast.walk(tree):
+        where = f"{rel}:{getattr(node, 'lineno', '?')}"
+        if isinstance(node, ast.Call):
+            fn = node.func
+            name = (
+                fn.id
+                if isinstance(fn, ast.Name)
+                else fn.attr
+                if isinstance(fn, ast.Attribute)
+                else ""
+            )
+            if name == "DataTable" and rel != "console/tui/text.py":
+                out.append(f"{where}: DataTable(...): use console.tui.text.LiteralTable")
+        elif isinstance(node, ast.JoinedStr) and id(node) not in specs:
+            template = "".join(
+                str(v.value) if isinstance(v, ast.Constant) else "{}" for v in node.values
+            )
+            if not TAG.search(template):
+                continue
+            for v in node.values:
+                if isinstance(v, ast.FormattedValue) and not _is_escaped(v):
+                    out.append(f"{where}: {ast.unparse(v.value)!r} in markup {template!r}")
+    return out
+
+
+def test_screens_show_dynamic_text_literally():
+    found = []
+    for path, rel in screen_files():
+        found += violations(path.read_text(), rel)
+    assert not found, (
+        "values shown through markup must be escaped (console/tui/text.py):\n" + "\n".join(found)
+    )
+
+
+def test_the_scan_catches_each_form():
+    bad = (
+        "t = DataTable(id='x')\n"
+        "a = f'[red]{msg}[/]'\n"
+        "b = f'[b]{name}[/b]: {x:.1f} V {escape(why)}'\n"
+        "c = f'plain {msg}'\n"  # no markup: the widget decides (markup=False)
+        "d = f'{n:>4} [dim]{n:d}[/]'\n"
+        "e = f'[audio] device = {name!r}'\n"
+    )
+    got = violations(bad, "console/tui/bad.py")
+    assert [g.split(":")[1] for g in got] == ["1", "2", "3", "5", "6"], got
+    assert "'msg'" in got[1] and "'name'" in got[2] and "'n'" in got[3]
+
+
+def screen_text(app) -> str:
+    """What the terminal shows now, as lines of text."""
+    return "\n".join(strip.text for strip in app.screen._compositor.render_strips())
+
+
+def test_brackets_show_on_the_screens(plugins, monkeypatch):
+    import logging
+
+    from textual.widgets._toast import Toast
+
+    from console.runtime import doctor
+    from console.tui.logs import NotifyHandler
+    from console.tui.safety_bar import SafetyBar
+    from console.types import DeviceStatus
+
+    real = doctor.diagnose
+
+    def diagnose(profile, pm):
+        why = "[audio] device = 'x': no stereo output matches"
+        return [*real(profile, pm), DeviceStatus("audio", "cardx", "missing", why, "fix [b]")]
+
+    monkeypatch.setattr(doctor, "diagnose", diagnose)
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(220, 50), notifications=True) as pilot:
+            handler = NotifyHandler(app)
+            logging.getLogger().addHandler(handler)
+            try:
+                await wait_for(pilot, lambda: "cardx" in screen_text(app), 20, "doctor rows")
+                shown = screen_text(app)
+                assert "gestures ([tuio] enabled)" in shown  # a plugin's description
+                assert "[audio] device = 'x'" in shown and "fix [b]" in shown
+                app.session.fail("outputs", "[audio] device = 'y': matches several outputs")
+                logging.getLogger("haptable.test").warning("[relays] serial = 'Z' not online")
+                await wait_for(pilot, lambda: len(app.screen.query(Toast)) >= 2, 5, "toasts")
+                await pilot.pause(0.2)
+                toasts = " ".join(str(t.render()) for t in app.screen.query(Toast))
+                assert "[audio] device = 'y'" in toasts
+                assert "[relays] serial = 'Z'" in toasts
+                bar = app.query_one(SafetyBar)
+                bar.show(None, "[audio] device = '': there is no default stereo output")
+                assert "not open: [audio] device = ''" in str(bar.render())
+            finally:
+                logging.getLogger().removeHandler(handler)
+
+    asyncio.run(scenario())
