@@ -31,6 +31,7 @@ HELP = """\
 [b]ctrl+r[/b]  reset the e-stop (outputs stay silent until something plays)
 {tabs}
 [b]?[/b]       this help    [b]ctrl+p[/b]  command palette    [b]q[/b] / [b]ctrl+q[/b]  quit
+[b]ctrl+l[/b]  the log: the console's messages and what drivers wrote to stderr
 
 Relays switch only in silence: a toggle waits until both channels have been silent \
 for the guard gap, and is refused during an e-stop. Quitting silences the outputs and \
@@ -95,6 +96,7 @@ class HapTableApp(App):
         Binding("ctrl+e", "estop", "E-STOP", priority=True),
         Binding("ctrl+r", "reset_estop", "reset", priority=True, show=False),
         Binding("question_mark", "help", "help"),
+        Binding("ctrl+l", "log", "log", show=False),
         Binding("q", "quit", "quit", show=False),
     ]
 
@@ -333,8 +335,20 @@ class HapTableApp(App):
                 pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
         self.push_screen(HelpScreen(HELP.format(tabs=_keys_help(self.tabs), pane=pane_help)))
 
+    def action_log(self) -> None:
+        """The log view: the console's records and what drivers wrote to stderr."""
+        from console.tui.logs import LogScreen, view_handler
+
+        if isinstance(self.screen, LogScreen):
+            return
+        handler = view_handler()
+        self.push_screen(LogScreen(list(handler.lines) if handler is not None else []))
+
     def get_system_commands(self, screen):
         yield from super().get_system_commands(screen)
+        yield SystemCommand(
+            "Log", "the console's log and driver messages (ctrl+l)", self.action_log
+        )
         for tab, (title, key, _) in self.tabs.items():
             yield SystemCommand(
                 f"Open {title}",
@@ -382,13 +396,16 @@ def _bindings_help(pane) -> str:
 
 
 def run_app(ctx, *, fast: bool | None = None) -> int:
-    from console.tui.logs import capture_logs, release_logs
+    from console.tui.logs import NativeStderr, capture_logs, on_terminal, release_logs
 
     _ = ctx.profile  # a bad profile fails here, as one line, before the screen opens
     app = HapTableApp(ctx, fast=fast)
     removed = capture_logs(app)
+    native = NativeStderr()  # OpenCV, PortAudio, libusb: into the log, not over the screen
     try:
+        app.driver_class = on_terminal(app.driver_class, native.start())
         app.run()
     finally:
+        native.stop()
         release_logs(removed)
     return 0

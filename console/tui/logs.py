@@ -1,14 +1,35 @@
-"""Log records while the console owns the terminal: into a file and, for warnings and
-errors, as notifications (a stray write to stderr would tear the screen)."""
+"""Log records while the console owns the terminal: into a file, into the log view
+(``ctrl+l``: ``LogScreen``) and, for warnings and errors, as notifications (a stray write
+to stderr would tear the screen).
+
+What native code writes to stderr (OpenCV, PortAudio, libusb write to file descriptor 2
+from C, past Python's ``sys.stderr``) goes there too: ``NativeStderr`` points fd 2 at a
+pipe while the console runs and logs each line (logger ``haptable.native``); Textual
+draws on a copy of the terminal's fd 2. Both are restored on exit.
+"""
 
 from __future__ import annotations
 
+import collections
+import contextlib
 import logging
+import os
+import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any, TextIO
+
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.screen import ModalScreen
+from textual.widgets import Log, Static
 
 from console import paths
+
+#: the lines the log view keeps (the file keeps everything)
+LOG_VIEW_LINES = 1000
+NATIVE_LOGGER = "haptable.native"
 
 
 def log_path() -> Path:
@@ -40,9 +61,161 @@ class NotifyHandler(logging.Handler):
             pass
 
 
+class ViewHandler(logging.Handler):
+    """Every record (INFO and above) as a line for the log view: kept in ``lines`` and
+    written to the open ``LogScreen`` (from any thread)."""
+
+    def __init__(self, app) -> None:
+        super().__init__(logging.INFO)
+        self.app = app
+        self.lines: collections.deque[str] = collections.deque(maxlen=LOG_VIEW_LINES)
+        self.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            line = self.format(record)
+        except Exception:
+            return
+        self.lines.append(line)
+        try:
+            if threading.current_thread() is threading.main_thread():
+                self._show(line)
+            else:
+                self.app.call_from_thread(self._show, line)
+        except Exception:
+            pass
+
+    def _show(self, line: str) -> None:
+        screen = self.app.screen if self.app.is_running else None
+        if isinstance(screen, LogScreen):
+            screen.query_one(Log).write_line(line)
+
+
+class LogScreen(ModalScreen):
+    """The console's log: its records and what drivers wrote to stderr (plain text)."""
+
+    BINDINGS = [Binding("escape,q,ctrl+l", "dismiss", "close")]
+    DEFAULT_CSS = """
+    LogScreen { align: center middle; }
+    LogScreen > Log { width: 100%; height: 1fr; border: thick $accent; background: $panel; }
+    LogScreen > Static { width: 100%; height: 1; background: $panel; }
+    """
+
+    def __init__(self, lines: list[str]) -> None:
+        super().__init__()
+        self.lines = lines
+
+    def compose(self) -> ComposeResult:
+        yield Static(f" log (also in {log_path()}): escape closes", markup=False)
+        log = Log(highlight=False, auto_scroll=True)
+        yield log
+
+    def on_mount(self) -> None:
+        log = self.query_one(Log)
+        log.write_lines(self.lines or ["(nothing logged yet)"])
+        log.focus()
+
+
+def view_handler() -> ViewHandler | None:
+    """The log view's handler installed by ``capture_logs`` (None when not installed)."""
+    for h in logging.getLogger().handlers:
+        if isinstance(h, ViewHandler):
+            return h
+    return None
+
+
+class NativeStderr:
+    """File descriptor 2 into the log while the console owns the terminal.
+
+    ``start()`` keeps a copy of the terminal's fd 2 (returned as a file: the screen is
+    drawn there) and points fd 2 at a pipe; a thread logs each line written into it
+    (logger ``haptable.native``: the first one as a warning, so the operator hears of
+    it once, the others as information). ``stop()`` puts the terminal back on fd 2 and
+    logs what was still in the pipe.
+    """
+
+    def __init__(self, logger: str = NATIVE_LOGGER) -> None:
+        self.log = logging.getLogger(logger)
+        self.log.setLevel(logging.INFO)
+        self.lines = 0
+        self._saved: int | None = None
+        self._terminal: TextIO | None = None
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> TextIO:
+        for stream in (sys.stderr, sys.__stderr__):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        self._saved = os.dup(2)
+        read_fd, write_fd = os.pipe()
+        os.dup2(write_fd, 2)
+        os.close(write_fd)
+        self._thread = threading.Thread(
+            target=self._pump, args=(read_fd,), name="haptable-native-stderr", daemon=True
+        )
+        self._thread.start()
+        self._terminal = os.fdopen(os.dup(self._saved), "w", buffering=1, errors="replace")
+        return self._terminal
+
+    def _pump(self, fd: int) -> None:
+        buf = b""
+        with os.fdopen(fd, "rb", buffering=0) as pipe:
+            while True:
+                try:
+                    chunk = pipe.read(4096)
+                except OSError:
+                    break
+                if not chunk:
+                    break
+                buf += chunk
+                *lines, buf = buf.split(b"\n")
+                for line in lines:
+                    self._emit(line)
+        if buf:
+            self._emit(buf)
+
+    def _emit(self, raw: bytes) -> None:
+        text = raw.decode(errors="replace").rstrip()
+        if not text.strip():
+            return
+        self.lines += 1
+        if self.lines == 1:
+            self.log.warning("%s  (driver messages: ctrl+l shows the log)", text)
+        else:
+            self.log.info("%s", text)
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        if self._saved is None:
+            return
+        with contextlib.suppress(Exception):
+            sys.stderr.flush()
+        os.dup2(self._saved, 2)  # the pipe's last writer closes: the pump ends
+        os.close(self._saved)
+        self._saved = None
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        if self._terminal is not None:
+            self._terminal.close()
+            self._terminal = None
+
+
+def on_terminal(driver_class: type, terminal: TextIO) -> type:
+    """``driver_class`` drawing on ``terminal`` (Textual's drivers write to
+    ``sys.__stderr__``, which is the pipe while ``NativeStderr`` runs)."""
+
+    class TerminalDriver(driver_class):  # type: ignore[misc, valid-type]
+        def __init__(self, *args: Any, **kw: Any) -> None:
+            super().__init__(*args, **kw)
+            if hasattr(self, "_file"):
+                self._file = terminal
+
+    TerminalDriver.__name__ = f"{driver_class.__name__}OnTerminal"
+    return TerminalDriver
+
+
 def capture_logs(app) -> list[logging.Handler]:
-    """Take stderr handlers off the root logger; log to a file and to notifications.
-    Returns the removed handlers (``release_logs`` puts them back)."""
+    """Take stderr handlers off the root logger; log to a file, to the log view and to
+    notifications. Returns the removed handlers (``release_logs`` puts them back)."""
     root = logging.getLogger()
     removed = [
         h
@@ -60,15 +233,22 @@ def capture_logs(app) -> list[logging.Handler]:
     except OSError:
         pass
     root.addHandler(NotifyHandler(app))
+    root.addHandler(ViewHandler(app))
+    global _last_resort
+    _last_resort = logging.lastResort
     logging.lastResort = None  # no fallback to stderr while the screen is ours
     return removed
+
+
+_last_resort: logging.Handler | None = logging.lastResort
 
 
 def release_logs(removed: list[logging.Handler]) -> None:
     root = logging.getLogger()
     for h in list(root.handlers):
-        if isinstance(h, (NotifyHandler, logging.FileHandler)):
+        if isinstance(h, (NotifyHandler, ViewHandler, logging.FileHandler)):
             root.removeHandler(h)
             h.close()
     for h in removed:
         root.addHandler(h)
+    logging.lastResort = _last_resort
