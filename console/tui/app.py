@@ -76,6 +76,7 @@ class HelpScreen(ModalScreen):
     BINDINGS = [("escape,q,question_mark", "dismiss", "close")]
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
+    HelpScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
     HelpScreen > VerticalScroll { width: 90; max-width: 100%; height: auto; max-height: 90%;
         border: thick $accent; background: $panel; padding: 0 1; }
     """
@@ -87,6 +88,7 @@ class HelpScreen(ModalScreen):
     def compose(self) -> ComposeResult:
         with VerticalScroll():
             yield Static(self.text)
+        yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
 
 class HapTableApp(App):
@@ -290,7 +292,9 @@ class HapTableApp(App):
             screen = self.screen
         except ScreenStackError:  # the app is closing: its timer may tick once more
             return
-        bars = screen.query(SafetyBar)  # none while a modal is up or tearing down
+        bars = [*screen.query(SafetyBar)]  # a modal shows its own (help, log) ...
+        if screen is not self.base:  # ... above the main screen's, which shows under it
+            bars += self.base.query(SafetyBar)
         # the console's outputs, else what the demo process holding them last said
         status, log = self.session.output_status()
         if status is None:
@@ -403,7 +407,9 @@ def run_app(ctx, *, fast: bool | None = None) -> int:
     removed = capture_logs(app)
     native = NativeStderr()  # OpenCV, PortAudio, libusb: into the log, not over the screen
     try:
-        app.driver_class = on_terminal(app.driver_class, native.start())
+        terminal = native.start()
+        app.driver_class = on_terminal(app.driver_class, terminal)
+        app.error_console.file = terminal  # a crash's traceback reaches the operator
         app.run()
     finally:
         native.stop()

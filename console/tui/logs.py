@@ -26,6 +26,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Log, Static
 
 from console import paths
+from console.tui.safety_bar import SafetyBar
 
 #: the lines the log view keeps (the file keeps everything)
 LOG_VIEW_LINES = 1000
@@ -96,8 +97,9 @@ class LogScreen(ModalScreen):
 
     BINDINGS = [Binding("escape,q,ctrl+l", "dismiss", "close")]
     DEFAULT_CSS = """
-    LogScreen { align: center middle; }
+    LogScreen { align: center top; }
     LogScreen > Log { width: 100%; height: 1fr; border: thick $accent; background: $panel; }
+    LogScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
     LogScreen > Static { width: 100%; height: 1; background: $panel; }
     """
 
@@ -107,8 +109,8 @@ class LogScreen(ModalScreen):
 
     def compose(self) -> ComposeResult:
         yield Static(f" log (also in {log_path()}): escape closes", markup=False)
-        log = Log(highlight=False, auto_scroll=True)
-        yield log
+        yield Log(highlight=False, auto_scroll=True)
+        yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
     def on_mount(self) -> None:
         log = self.query_one(Log)
@@ -130,14 +132,17 @@ class NativeStderr:
     ``start()`` keeps a copy of the terminal's fd 2 (returned as a file: the screen is
     drawn there) and points fd 2 at a pipe; a thread logs each line written into it
     (logger ``haptable.native``: the first one as a warning, so the operator hears of
-    it once, the others as information). ``stop()`` puts the terminal back on fd 2 and
-    logs what was still in the pipe.
+    it once, the others as information). A line holding one of the last lines logged is
+    an echo (a handler writing to fd 2) or a repeat: counted in ``echoes``, not logged
+    again. ``stop()`` puts the terminal back on fd 2 and logs what was still in the pipe.
     """
 
     def __init__(self, logger: str = NATIVE_LOGGER) -> None:
         self.log = logging.getLogger(logger)
         self.log.setLevel(logging.INFO)
         self.lines = 0
+        self.echoes = 0  # lines dropped as echoes of what was just logged
+        self._recent: collections.deque[str] = collections.deque(maxlen=32)
         self._saved: int | None = None
         self._terminal: TextIO | None = None
         self._thread: threading.Thread | None = None
@@ -178,6 +183,12 @@ class NativeStderr:
         text = raw.decode(errors="replace").rstrip()
         if not text.strip():
             return
+        # a handler that writes to fd 2 (a library's own StreamHandler) echoes what was
+        # just logged back into the pipe: logging it again would never end
+        if any(prev in text for prev in self._recent):
+            self.echoes += 1
+            return
+        self._recent.append(text)
         self.lines += 1
         if self.lines == 1:
             self.log.warning("%s  (driver messages: ctrl+l shows the log)", text)

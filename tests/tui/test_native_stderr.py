@@ -78,3 +78,24 @@ def test_the_log_view_shows_records_and_driver_lines_as_written(plugins):
             logging.getLogger().removeHandler(handler)
 
     asyncio.run(scenario())
+
+
+def test_a_handler_writing_to_fd2_does_not_feed_back(capfd):
+    """A library's StreamHandler on stderr writes each native line it is given back into
+    fd 2: the line is logged once, not forever."""
+    import sys
+    import time
+
+    native = NativeStderr()
+    native.start()
+    echo = logging.StreamHandler(sys.__stderr__)  # fd 2: the pipe now
+    echo.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    native.log.addHandler(echo)
+    try:
+        os.write(2, b"libusb: error [udev_hotplug_event] ignoring udev action\n")
+        time.sleep(0.5)
+    finally:
+        native.log.removeHandler(echo)
+        native.stop()
+    assert native.lines == 1 and native.echoes >= 1
+    capfd.readouterr()

@@ -68,3 +68,33 @@ def test_notifications_never_cover_the_bar_at_80x24(plugins):
                 assert widget is bar, (x, widget)
 
     asyncio.run(scenario())
+
+
+def test_the_bar_shows_on_the_help_and_the_log(plugins):
+    """A modal (help, the log view) shows the bar too, kept up to date: an e-stop
+    pressed there shows at once, with the reset key and the relays."""
+    from console.tui.logs import LogScreen
+
+    from .test_literal_text import screen_text
+
+    app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+
+    def last() -> str:
+        return screen_text(app).splitlines()[-2]  # the bar: where the main one is
+
+    async def scenario():
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            for key, modal in (("question_mark", "HelpScreen"), ("ctrl+l", LogScreen.__name__)):
+                await pilot.press(key)
+                await wait_for(pilot, lambda m=modal: type(app.screen).__name__ == m, 5, modal)
+                await pilot.press("ctrl+e")
+                await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
+                await wait_for(pilot, lambda: "E-STOP: operator" in last(), 5, "the bar")
+                assert "relays closed: none" in last() and "ctrl+r" in last()
+                await pilot.press("ctrl+r")
+                await wait_for(pilot, lambda: "| idle |" in last(), 5, "the bar idle")
+                await pilot.press("escape")
+                await wait_for(pilot, lambda: app.screen is app.base, 5, "back")
+
+    asyncio.run(scenario())
