@@ -314,9 +314,7 @@ class OpenCVCamera:
             self._reading += 1
             try:
                 if self._taken:
-                    self._cond.wait_for(
-                        lambda: not self._taken or self._stop.is_set(), timeout_s
-                    )
+                    self._cond.wait_for(lambda: not self._taken or self._stop.is_set(), timeout_s)
                 if self._taken or self._latest is None:
                     return None
                 self._taken = True
