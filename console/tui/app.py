@@ -87,7 +87,7 @@ class HelpScreen(ModalScreen):
 
     def compose(self) -> ComposeResult:
         with VerticalScroll():
-            yield Static(self.text)
+            yield Static(self.text, id="help-text")
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
 

@@ -236,3 +236,21 @@ def test_w_keeps_the_tuned_thresholds_for_the_profile(plugins):
 
     before = asyncio.run(scenario())
     assert load_profile("sim", plugins).get("vision.body_threshold") == before + 2
+
+
+def test_devices_results_arriving_after_the_console_closed_are_dropped(plugins):
+    """The camera test ends on the Devices screen (f1): its device listing (PortAudio, a
+    probe per relay driver) may finish after the console has closed; its result must not
+    raise into a console that is gone (it failed the camera test now and then)."""
+
+    async def scenario():
+        app = _app(plugins, "devices")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await wait_for(pilot, lambda: app.pane("devices") is not None, 10, "devices")
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: pane.query("#audio-table"), 10, "composed")
+            await pane.remove()  # what closing does to it
+            pane._show_devices([], [])  # the worker's late result
+            pane._show([])
+
+    asyncio.run(scenario())

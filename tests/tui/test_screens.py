@@ -225,8 +225,8 @@ def test_help_on_question_mark_and_estop_over_it(plugins):
             await _ready(app, pilot)
             await pilot.press("question_mark")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "HelpScreen")
-            await wait_for(pilot, lambda: app.screen.query("Static"), 5, "help composed")
-            text = str(app.screen.query_one("Static").render())
+            await wait_for(pilot, lambda: app.screen.query("#help-text"), 5, "help composed")
+            text = str(app.screen.query_one("#help-text").render())
             assert "ctrl+e" in text and "toggle that relay" in text  # this screen's keys
             # the e-stop works on top of the help too
             await pilot.press("ctrl+e")

@@ -115,6 +115,8 @@ class DevicesPane(VerticalScroll):
         self.app.call_from_thread(self._show, rows)
 
     def _show(self, rows) -> None:
+        if not self.query("#device-table"):  # a worker finishing while the console closes
+            return
         table = self.query_one("#device-table", DataTable)
         table.clear()
         for s in rows:
@@ -136,6 +138,8 @@ class DevicesPane(VerticalScroll):
         self.app.call_from_thread(self._show_devices, audio, relays)
 
     def _show_devices(self, audio, relays) -> None:
+        if not self.query("#audio-table"):  # a worker finishing while the console closes
+            return
         drv, device, relay_drv = self._in_use()
         table = self.query_one("#audio-table", DataTable)
         table.clear()
