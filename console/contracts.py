@@ -26,6 +26,7 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
     demo          DemoFactory -> Demo (with its own status_lines)
     frame_sink    FrameSinkFactory -> FrameSink
     panel         PanelFactory -> Panel
+    observer      SimulatedObserver (a simulated study participant)
 
 Values that cross (frames, gestures, plans ...) are the dataclasses of
 ``console.types``; only behaviour is typed here.
@@ -465,6 +466,37 @@ class DemoFactory(Protocol):
     def status_lines(self, snapshot: dict[str, Any]) -> list[str]: ...
 
 
+# --------------------------------------------------------------------------- studies
+@runtime_checkable
+class SimulatedObserver(Protocol):
+    """A simulated study participant (``haptable study run --simulate``).
+
+    ``respond(trial, played, *, participant_seed) -> (response, response_time_s)``: the
+    answer to one trial of a plan (the ``plan.json`` trial: ``direction``, ``pair`` or
+    ``region``, ``hand``, ``stimulus``) after the stimulus ``played`` (the ``OutputPlan``
+    the outputs accepted); the same seed and trial give the same answer.
+    ``parameters(participant_seed) -> dict``: the participant's observer parameters (JSON
+    values, stored in ``participant.json``)."""
+
+    def respond(
+        self, trial: Mapping[str, Any], played: OutputPlan, *, participant_seed: int
+    ) -> tuple[str, float]: ...
+
+    def parameters(self, participant_seed: int) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class KnobTrials(Effect, Protocol):
+    """The knob task run by a simulated finger: ``knob_trial(condition=, sectors=,
+    distance_deg=, seed=) -> dict`` with ``start_item``, ``target_item``,
+    ``completion_time_s``, ``overshoots``, ``recovery_time_s`` (None when it timed out),
+    ``timed_out``, ``crossings``, ``detents`` and ``error``."""
+
+    def knob_trial(
+        self, *, condition: str, sectors: int, distance_deg: float, seed: int
+    ) -> dict[str, Any]: ...
+
+
 # --------------------------------------------------------------------------- others
 @runtime_checkable
 class Vibrometer(Protocol):
@@ -527,6 +559,7 @@ KIND_CONTRACTS: dict[str, type] = {
     "demo": Demo,
     "frame_sink": FrameSink,
     "panel": Panel,
+    "observer": SimulatedObserver,
 }
 
 #: The contract of the factory itself, for kinds whose factory is not ``f(profile)``.

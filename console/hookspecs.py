@@ -243,6 +243,17 @@ def haptable_register_frame_sinks(register: RegisterFactory) -> None:
 
 
 @hookspec
+def haptable_register_observers(register: RegisterFactory) -> None:
+    """Register simulated study participants (``haptable study run --simulate``).
+
+    The factory takes the profile and returns a ``contracts.SimulatedObserver``:
+    ``respond(trial, played, *, participant_seed) -> (response, response_time_s)`` for a
+    plan's trial after the ``OutputPlan`` played, and ``parameters(participant_seed)``
+    (stored with the participant). The studies plugin asks for the first one.
+    """
+
+
+@hookspec
 def haptable_register_panels(register: RegisterFactory) -> None:
     """Register console panels (extra Textual screens).
 

@@ -43,6 +43,7 @@ BUILTIN_PLUGINS: dict[str, str] = {
     "drivers": "plugins.drivers",
     "demos": "plugins.demos",
     "tuio": "plugins.tuio",
+    "studies": "plugins.studies",
 }
 
 #: The console's own screens, registered beside the core plugin as ``core.panels``.
@@ -69,6 +70,7 @@ KINDS: dict[str, str] = {
     "demo": "haptable_register_demos",
     "panel": "haptable_register_panels",
     "frame_sink": "haptable_register_frame_sinks",
+    "observer": "haptable_register_observers",
 }
 
 

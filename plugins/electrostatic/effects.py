@@ -178,6 +178,28 @@ class KnobEffect:
             record=False,
         )
 
+    def knob_trial(
+        self, *, condition: str, sectors: int, distance_deg: float, seed: int
+    ) -> dict[str, Any]:
+        """One trial of the paper's knob task (``task.run_trial``) with the simulated
+        finger (``contracts.KnobTrials``): its measures as a dict."""
+        from dataclasses import asdict
+
+        from .task import SimFinger, make_trials, run_trial
+
+        c = parse_condition(condition).name
+        (trial,) = make_trials([c], [int(sectors)], [float(distance_deg)], 1, seed=0)
+        res = run_trial(
+            trial,
+            settings=knob_settings(self.profile),
+            limits=limits(self.profile),
+            finger=SimFinger(),
+            rng=np.random.default_rng(int(seed)),
+            sample_rate_hz=audio(self.profile)["sample_rate_hz"],
+            block=audio(self.profile)["block_size"],
+        )
+        return asdict(res)
+
     def render(
         self, condition: str = "HD+VF", sectors: int | None = None, seed: int = 0
     ) -> OutputPlan:

@@ -1,0 +1,50 @@
+"""The paper's user studies run from the console (section 5): protocols, participants,
+crash-safe trials.
+
+Protocols are data (``studies/exp1.toml``, ``exp2.toml``, ``knob.toml``; ``protocol.py``
+checks them); a participant's plan is seeded and stored before the first trial
+(``plan.py``); every trial event is appended and fsynced (``store.py``; the files and
+their columns: this package's ``README.md``); ``runner.py`` runs a plan with pause, replay
+and abort, and resumes after a crash at the next trial of the stored plan.
+
+``haptable study run exp1|exp2|knob --participant P01 --out DIR`` (``cli.py``) and the
+Studies screen (``panel.py``, tab F10). Stimuli through the contracts only: the
+``FlowEffect`` and ``HandFlowEffect`` effects and the knob's ``KnobTrials``; simulated
+participants through a registered ``SimulatedObserver`` (``console.contracts``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from console.hookspecs import hookimpl
+
+
+@hookimpl
+def haptable_register_commands(register) -> None:
+    from . import cli
+
+    register(
+        "study",
+        cli.configure,
+        cli.run,
+        help="run the paper's user studies (exp1, exp2, knob): participants, resume",
+    )
+
+
+def _studies_panel(app: Any) -> Any:
+    from .panel import StudiesPane
+
+    return StudiesPane()
+
+
+@hookimpl
+def haptable_register_panels(register) -> None:
+    from console.plugins import PanelTab
+
+    register(
+        "studies",
+        _studies_panel,
+        description="user studies: protocol, participant, progress, pause, replay, abort",
+        tab=PanelTab("Studies", "f10", 100),
+    )

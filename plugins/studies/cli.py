@@ -1,0 +1,223 @@
+"""``haptable study run exp1|exp2|knob --participant P01 --out DIR``: run a participant.
+
+A person: the participant's fields from options, or prompted at a terminal; answers typed
+(or from a keypad: 8/2/4/6, 1/2 for experiment 1, 0 replays). ``--simulate``: a simulated
+participant (the registered ``SimulatedObserver``); ``--participants N`` runs P01..PN
+(or from ``--participant``'s number on). A run stopped for any reason (Ctrl-C, kill -9)
+resumes with the same command: the next trial of the stored plan, the trial in flight
+repeated. ``haptable study list`` lists the protocols.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import re
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+
+from . import protocol as protocols
+from .start import PARTICIPANT_KEYS, prepare, stored_participant
+
+MAX_PARTICIPANTS = 500
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    sub = p.add_subparsers(dest="study_cmd", metavar="ACTION", required=True)
+    r = sub.add_parser("run", help="run a protocol for a participant (resumes a stopped run)")
+    r.add_argument("study", help="exp1, exp2, knob, or a protocol .toml file")
+    r.add_argument("--participant", default=None, help="participant id, e.g. P01")
+    r.add_argument("--out", type=Path, required=True, help="the study's folder")
+    r.add_argument("--simulate", action="store_true", help="simulated participant(s)")
+    r.add_argument("--participants", type=int, default=None, help="with --simulate: run N")
+    r.add_argument("--map", type=Path, default=None, help="vibration map (default: measured)")
+    r.add_argument("--seed", type=int, default=None, help="the participant's seed")
+    r.add_argument(
+        "--row", type=int, default=None, help="Latin-square row (default: id's number - 1)"
+    )
+    r.add_argument("--trials", type=int, default=None, help="run at most this many trials now")
+    r.add_argument("--age", type=int, default=None)
+    r.add_argument("--sex", default=None, help="female, male, other, undisclosed")
+    r.add_argument("--handedness", default=None, help="left, right, ambidextrous")
+    r.add_argument("--hand-width-cm", type=float, default=None)
+    r.add_argument("--hand-length-cm", type=float, default=None)
+    r.add_argument("--consent", action="store_true", help="the informed consent is noted")
+    r.add_argument("--json", action="store_true", help="print a JSON summary at the end")
+    r.add_argument("--quiet", action="store_true", help="no line per trial")
+    sub.add_parser("list", help="the protocols in studies/ and their trial counts")
+
+
+def _ids(args: argparse.Namespace) -> list[str]:
+    if args.participants is None:
+        if not args.participant:
+            raise UserError("study run: give --participant P01 (or --simulate --participants N)")
+        return [args.participant]
+    if not args.simulate:
+        raise UserError("--participants N runs simulated participants: add --simulate")
+    if not 1 <= args.participants <= MAX_PARTICIPANTS:
+        raise UserError(f"--participants {args.participants}: give 1..{MAX_PARTICIPANTS}")
+    first, prefix, width = 1, "P", 2
+    if args.participant:
+        m = re.match(r"^(.*?)(\d+)$", args.participant)
+        if not m:
+            raise UserError(
+                f"--participant {args.participant!r}: with --participants it is the first id "
+                "and must end in a number (P01)"
+            )
+        prefix, first, width = m.group(1), int(m.group(2)), len(m.group(2))
+    return [f"{prefix}{first + k:0{width}d}" for k in range(args.participants)]
+
+
+def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
+    d = {
+        "age": args.age,
+        "sex": args.sex,
+        "handedness": args.handedness,
+        "hand_width_cm": args.hand_width_cm,
+        "hand_length_cm": args.hand_length_cm,
+        "consent": True if args.consent else None,
+    }
+    missing = [k for k in PARTICIPANT_KEYS if d[k] is None]
+    if missing and not sys.stdin.isatty():
+        opts = ", ".join("--" + k.replace("_", "-") for k in missing)
+        raise UserError(f"participant {pid}: give {opts} (or run at a terminal to be asked)")
+    for k in missing:
+        if k == "consent":
+            ans = input(f"{pid}: informed consent noted? [y/N] ").strip().lower()
+            d[k] = True if ans in ("y", "yes") else None
+        else:
+            d[k] = input(f"{pid}: {k.replace('_', ' ')}: ").strip()
+    return d
+
+
+def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
+    if args.map is not None:
+        from console.vibration_map import load_map
+
+        return load_map(args.map.expanduser(), require_all=False)
+    from console.runtime.measured_map import measured_map
+
+    def progress(frac: float, text: str) -> None:
+        print(f"\rvibration map: {frac:4.0%} {text}"[:100], end="", file=sys.stderr, flush=True)
+
+    vmap = measured_map(ctx.profile, ctx.pm, progress)
+    print(file=sys.stderr)
+    return vmap
+
+
+def _line(kind: str, info: dict[str, Any]) -> str | None:
+    if kind == "done":
+        r = info["record"]
+        what = " ".join(
+            str(r[k]) for k in ("phase", "pair", "region", "direction", "condition") if r.get(k)
+        )
+        if r.get("completion_time_s") is not None or "overshoots" in r:
+            ct = r.get("completion_time_s")
+            res = (
+                f"{'timeout' if ct is None else f'{ct:.2f} s'}, {r.get('overshoots')} overshoot(s)"
+            )
+        else:
+            res = f"{r['response']} ({'correct' if r['correct'] else 'wrong'}, {r['replays']} replay(s))"
+        return f"  {r['participant']} trial {r['trial'] + 1}: {what}: {res}"
+    if kind in ("aborted", "refused"):
+        return f"  {kind}: {info.get('reason') or info.get('why')}"
+    if kind == "questionnaire":
+        return f"  questionnaire after {info['condition']} ({info['items']} items)"
+    return None
+
+
+def run(args: argparse.Namespace, ctx: Any) -> int:
+    if args.study_cmd == "list":
+        for name in protocols.available():
+            p = protocols.load(name)
+            phases = ", ".join(f"{ph.name} {ph.n_trials}" for ph in p.phases)
+            print(f"  {name:<8} {p.n_trials:4d} trials ({phases}): {p.title}")
+        return 0
+    from .responders import ObserverResponder, TerminalResponder, observer
+    from .runner import Control, run_plan
+    from .stimuli import EffectPlayer, check_places, play_on
+
+    if args.trials is not None and args.trials < 1:
+        raise UserError(f"--trials {args.trials}: give at least 1")
+    proto = protocols.load(args.study)
+    ids = _ids(args)
+    obs = observer(ctx.pm, ctx.profile) if args.simulate else None
+    if proto.stimulus == "knob" and not args.simulate:
+        raise UserError(
+            "knob study with a person: not run from here yet; use --simulate, or run the "
+            "trials with `haptable knob --input live`"
+        )
+    vmap = _vmap(args, ctx) if proto.stimulus != "knob" else None
+    control = Control()
+    old = signal.getsignal(signal.SIGINT)
+
+    def on_int(signum: int, frame: Any) -> None:
+        control.abort("Ctrl-C")
+
+    summaries = []
+    with ctx.outputs(fast=True if args.simulate else None) as outputs:
+        signal.signal(signal.SIGINT, on_int)
+        try:
+            for pid in ids:
+                details = None
+                if not args.simulate and stored_participant(args.out, pid) is None:
+                    details = _details(args, pid)
+                prep = prepare(
+                    args.study,
+                    pid,
+                    args.out,
+                    details=details,
+                    simulate=args.simulate,
+                    observer=obs,
+                    seed=args.seed,
+                    row=args.row,
+                )
+                if vmap is not None:
+                    check_places(prep.plan, vmap)
+                player = EffectPlayer(
+                    ctx.pm, ctx.profile, vmap, play_on(outputs), knob_seed=prep.participant_seed
+                )
+                responder = (
+                    ObserverResponder(obs, prep.participant_seed)
+                    if args.simulate
+                    else TerminalResponder(prep.plan["responses"])
+                )
+
+                def say(kind: str, info: dict[str, Any]) -> None:
+                    line = _line(kind, info)
+                    if line and not args.quiet and not args.json:
+                        print(line, flush=True)
+
+                if not args.json:
+                    print(f"{pid}: {proto.name} -> {prep.files.root}", flush=True)
+                res = run_plan(
+                    prep.files,
+                    prep.plan,
+                    prep.participant,
+                    player=player,
+                    responder=responder,
+                    control=control,
+                    notify=say,
+                    limit=args.trials,
+                )
+                summaries.append({"participant": pid, "dir": str(prep.files.root), **res})
+                if not args.json:
+                    print(
+                        f"{pid}: {res['done']}/{res['total']} trials done"
+                        + (" (finished)" if res["finished"] else "; the same command resumes"),
+                        flush=True,
+                    )
+                if res["aborted"]:
+                    break
+        finally:
+            signal.signal(signal.SIGINT, old)
+    if args.json:
+        print(json.dumps({"study": proto.name, "participants": summaries}, indent=1))
+    with contextlib.suppress(Exception):
+        sys.stdout.flush()
+    return 130 if any(s["aborted"] for s in summaries) else 0

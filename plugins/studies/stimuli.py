@@ -1,0 +1,129 @@
+"""A trial's stimulus, through the registered effects and the outputs' safety gate.
+
+``EffectPlayer`` renders a flow trial with the ``FlowEffect`` (from one grid point to the
+other of the vibration map), a hand-flow trial with the ``HandFlowEffect`` (centred on the
+region, toward the direction) and plays the plan with ``play(plan)`` (the console
+session's ``play_plan``, or the outputs opened by the CLI); rendered plans are kept per
+stimulus (a replay plays the same samples). Knob trials run the ``KnobTrials`` task (the
+simulated finger closing the loop through the knob session). The studies plugin knows
+only the contracts (``console.contracts``), never the plugins that offer them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Callable
+from typing import Any
+
+from console import contracts
+from console.errors import UserError
+from console.types import OutputPlan
+
+
+def check_places(plan: dict[str, Any], vmap: Any) -> None:
+    """Every pair's points are on the map, each left point left of its right point
+    (smaller x); every region centre is on the table the map covers: one line otherwise."""
+    seen: set[tuple[int, int]] = set()
+    for t in plan["trials"]:
+        s = t["stimulus"]
+        if s.get("effect") == "flow" and (s["left"], s["right"]) not in seen:
+            seen.add((s["left"], s["right"]))
+            xl = float(vmap.points_mm[vmap.point_index(s["left"]), 0])
+            xr = float(vmap.points_mm[vmap.point_index(s["right"]), 0])
+            if not xl < xr:
+                raise UserError(
+                    f"{plan.get('protocol_file', 'protocol')}: pair {t['pair']}: left point "
+                    f"{s['left']} (x = {xl:g} mm) is not left of right point {s['right']} "
+                    f"(x = {xr:g} mm); swap left and right"
+                )
+        if s.get("effect") == "hand_flow":
+            x, y = s["center_mm"]
+            lo, hi = vmap.points_mm.min(axis=0), vmap.points_mm.max(axis=0)
+            if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]):
+                raise UserError(
+                    f"{plan.get('protocol_file', 'protocol')}: region {t['region']}: centre "
+                    f"({x:g}, {y:g}) mm is outside the map's grid ({lo[0]:g}..{hi[0]:g}, "
+                    f"{lo[1]:g}..{hi[1]:g}) mm; move it onto the table"
+                )
+
+
+def _key(stim: dict[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(stim, sort_keys=True).encode()).hexdigest()
+
+
+class EffectPlayer:
+    """Flow and hand-flow trials: rendered by the effects, played by ``play(plan)``
+    (which raises, or returns False, when the outputs refuse it)."""
+
+    def __init__(
+        self,
+        plugins: Any,
+        profile: Any,
+        vmap: Any,
+        play: Callable[[OutputPlan], Any],
+        *,
+        knob_seed: int = 0,
+    ) -> None:
+        self.plugins = plugins
+        self.profile = profile
+        self.vmap = vmap
+        self._play = play
+        self._plans: dict[str, OutputPlan] = {}
+        self.knob_seed = knob_seed
+
+    def _effect(self, proto: type) -> Any:
+        return self.plugins.provider("effect", proto, self.profile, plugin_hint="vibrotactile")
+
+    def prepare(self, trial: dict[str, Any]) -> OutputPlan:
+        """The trial's plan (rendered once per stimulus)."""
+        s = trial["stimulus"]
+        k = _key(s)
+        plan = self._plans.get(k)
+        if plan is None:
+            if s.get("effect") == "flow":
+                eff = self._effect(contracts.FlowEffect)
+                plan = eff.render_flow(int(s["from_point"]), int(s["to_point"]), self.vmap)
+            elif s.get("effect") == "hand_flow":
+                eff = self._effect(contracts.HandFlowEffect)
+                cx, cy = s["center_mm"]
+                plan = eff.render_hand_flow((float(cx), float(cy)), s["direction"], self.vmap)
+            else:
+                raise UserError(f"trial {trial['index'] + 1}: no effect plays {s!r}")
+            self._plans[k] = plan
+        return plan
+
+    def play(self, trial: dict[str, Any], attempt: int) -> Any:
+        s = trial["stimulus"]
+        if s.get("task") == "knob":
+            return knob_trial(self.plugins, self.profile, trial, self.knob_seed, attempt)
+        plan = self.prepare(trial)
+        if self._play(plan) is False:
+            raise UserError(f"trial {trial['index'] + 1}: the outputs refused {plan.name!r}")
+        return plan
+
+
+def knob_trial(plugins: Any, profile: Any, trial: dict[str, Any], seed: int, attempt: int) -> Any:
+    """One knob trial with the simulated finger (``contracts.KnobTrials``)."""
+    s = trial["stimulus"]
+    eff = plugins.provider("effect", contracts.KnobTrials, profile, plugin_hint="electrostatic")
+    return eff.knob_trial(
+        condition=s["condition"],
+        sectors=int(s["sectors"]),
+        distance_deg=float(s["distance_deg"]),
+        seed=(int(seed) * 100_003 + int(trial["index"]) * 17 + attempt) % (2**63),
+    )
+
+
+def play_on(outputs: Any) -> Callable[[OutputPlan], bool]:
+    """``play(plan)`` on outputs opened by ``console.runtime.outputs.open_outputs``:
+    through the safety gate, blocking until played; a refusal is a ``UserError``."""
+
+    def play(plan: OutputPlan) -> bool:
+        report = outputs.play(plan, wait=False)
+        report.wait(3 * plan.duration_s + 10)
+        if report.error:
+            raise UserError(f"{plan.name}: {report.error}")
+        return True
+
+    return play

@@ -1,0 +1,273 @@
+"""The files of a run (``--out DIR``): what the runner writes and resumes from.
+
+``DIR/<participant>/participant.json`` (id, age, sex, handedness, hand_width_cm,
+hand_length_cm, consent_noted, consent_time, simulated, observer), ``plan.json`` (written
+atomically before the first trial) and ``trials.jsonl`` (one JSON object per line,
+appended and fsynced per event; the columns are in this package's README.md). A
+``start`` without its ``done`` is a trial in flight at a crash: ``open_run`` marks it
+``interrupted`` and the run repeats it; the run continues at the first trial of the stored
+plan without a ``done``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import re
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+
+SEXES = ("female", "male", "other", "undisclosed")
+HANDEDNESS = ("left", "right", "ambidextrous")
+_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+
+
+@dataclass(frozen=True)
+class Participant:
+    id: str
+    age: int
+    sex: str
+    handedness: str
+    hand_width_cm: float
+    hand_length_cm: float
+    consent_noted: bool
+    consent_time: str = ""
+    simulated: bool = False
+    observer: dict[str, Any] = field(default_factory=dict)
+
+
+def check_id(pid: str) -> str:
+    if not isinstance(pid, str) or not _ID.match(pid):
+        raise UserError(
+            f"participant {pid!r}: use letters, digits, '_', '-' or '.' (e.g. P01), "
+            "at most 64 characters"
+        )
+    return pid
+
+
+def make_participant(
+    pid: str,
+    *,
+    age: Any,
+    sex: Any,
+    handedness: Any,
+    hand_width_cm: Any,
+    hand_length_cm: Any,
+    consent: Any,
+    simulated: bool = False,
+    observer: dict[str, Any] | None = None,
+) -> Participant:
+    """A checked participant; each bad value is one line naming the field and the fix."""
+    check_id(pid)
+
+    def num(name: str, v: Any, lo: float, hi: float) -> float:
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            x = math.nan
+        if not (math.isfinite(x) and lo <= x <= hi):
+            raise UserError(
+                f"participant {pid}: {name} = {v!r}: give a number from {lo:g} to {hi:g}"
+            )
+        return x
+
+    a = num("age", age, 1, 120)
+    if a != int(a):
+        raise UserError(f"participant {pid}: age = {age!r}: give whole years")
+    if sex not in SEXES:
+        raise UserError(f"participant {pid}: sex = {sex!r}: use one of {', '.join(SEXES)}")
+    if handedness not in HANDEDNESS:
+        raise UserError(
+            f"participant {pid}: handedness = {handedness!r}: use one of {', '.join(HANDEDNESS)}"
+        )
+    w = num("hand_width_cm", hand_width_cm, 3, 30)
+    length = num("hand_length_cm", hand_length_cm, 5, 40)
+    if consent is not True:
+        raise UserError(
+            f"participant {pid}: consent not noted; note the participant's informed consent "
+            "(--consent) before the first trial"
+        )
+    return Participant(
+        pid,
+        int(a),
+        sex,
+        handedness,
+        w,
+        length,
+        True,
+        time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        bool(simulated),
+        dict(observer or {}),
+    )
+
+
+# ------------------------------------------------------------------ durable writes
+def _fsync_dir(d: Path) -> None:
+    with contextlib.suppress(OSError):
+        fd = os.open(d, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def write_json_atomic(path: Path, obj: Any) -> None:
+    """Write ``obj`` as JSON so that ``path`` holds the old or the new file, never half."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", encoding="utf-8") as f:
+        json.dump(obj, f, indent=1, sort_keys=True)
+        f.write("\n")
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    _fsync_dir(path.parent)
+
+
+def append_event(path: Path, record: dict[str, Any]) -> None:
+    """Append one JSON line and make it durable (flush + fsync) before returning; a torn
+    last line (a crash mid-write) gets a newline first so it cannot swallow this one."""
+    line = json.dumps(record, sort_keys=True) + "\n"
+    with open(path, "ab+") as f:
+        if f.tell() > 0:
+            f.seek(-1, os.SEEK_END)
+            if f.read(1) != b"\n":
+                line = "\n" + line
+        f.write(line.encode("utf-8"))
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def read_events(path: Path) -> list[dict[str, Any]]:
+    """The events of a ``trials.jsonl``; a torn line (crash mid-write) is skipped."""
+    p = Path(path)
+    if not p.is_file():
+        return []
+    out = []
+    for line in p.read_text(encoding="utf-8").splitlines():
+        with contextlib.suppress(json.JSONDecodeError):
+            rec = json.loads(line)
+            if isinstance(rec, dict):
+                out.append(rec)
+    return out
+
+
+def read_json(path: Path) -> Any:
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise UserError(
+            f"{path}: cannot read it ({exc}); restore it or start a new --out"
+        ) from None
+
+
+# ------------------------------------------------------------------ a participant's run
+@dataclass
+class RunFiles:
+    """One participant's folder: ``participant.json``, ``plan.json``, ``trials.jsonl``."""
+
+    root: Path
+
+    @property
+    def participant_path(self) -> Path:
+        return self.root / "participant.json"
+
+    @property
+    def plan_path(self) -> Path:
+        return self.root / "plan.json"
+
+    @property
+    def trials_path(self) -> Path:
+        return self.root / "trials.jsonl"
+
+    def events(self) -> list[dict[str, Any]]:
+        return read_events(self.trials_path)
+
+    def append(self, record: dict[str, Any]) -> None:
+        append_event(self.trials_path, record)
+
+
+def participant_dir(out: Path, pid: str) -> Path:
+    return Path(out).expanduser() / check_id(pid)
+
+
+def load_participant(files: RunFiles) -> dict[str, Any] | None:
+    return read_json(files.participant_path) if files.participant_path.is_file() else None
+
+
+def save_participant(files: RunFiles, p: Participant) -> None:
+    write_json_atomic(files.participant_path, asdict(p))
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Where a run stands: trials ``done`` (indices), the trial ``in_flight`` at a crash
+    (or None), ``next_trial`` (None: all done) and the questionnaires answered (by the
+    trial they follow)."""
+
+    done: frozenset[int]
+    in_flight: int | None
+    next_trial: int | None
+    questionnaires_done: frozenset[int]
+    total: int
+
+
+def progress(plan: dict[str, Any], events: list[dict[str, Any]]) -> Progress:
+    done: set[int] = set()
+    open_start: int | None = None
+    answered: dict[int, set[tuple[str, int]]] = {}
+    q_after = {q["after_trial"]: q for q in plan.get("questionnaires", [])}
+    for e in events:
+        ev, i = e.get("event"), e.get("trial")
+        if ev == "start":
+            open_start = i
+        elif ev in ("done", "interrupted"):
+            if ev == "done":
+                done.add(int(i))
+            if open_start == i:
+                open_start = None
+        elif ev == "questionnaire":
+            answered.setdefault(int(e.get("after_trial", -1)), set()).add(
+                (e.get("category"), e.get("item"))
+            )
+    n = len(plan["trials"])
+    nxt = next((t["index"] for t in plan["trials"] if t["index"] not in done), None)
+    q_done = frozenset(k for k, q in q_after.items() if len(answered.get(k, ())) >= len(q["items"]))
+    return Progress(frozenset(done), open_start, nxt, q_done, n)
+
+
+def open_run(out: Path, pid: str, plan: dict[str, Any]) -> tuple[RunFiles, dict[str, Any]]:
+    """The participant's folder ready to run: a new plan stored (atomically) before any
+    trial, or the stored one when its protocol and seed agree (a resume; a trial in flight
+    at a crash is marked ``interrupted``). Returns the files and the plan to follow."""
+    files = RunFiles(participant_dir(out, pid))
+    files.root.mkdir(parents=True, exist_ok=True)
+    if files.plan_path.is_file():
+        stored = read_json(files.plan_path)
+        for key in ("experiment", "protocol_sha256"):
+            if stored.get(key) != plan.get(key):
+                raise UserError(
+                    f"{files.plan_path}: {key} = {stored.get(key)!r} but this run has "
+                    f"{plan.get(key)!r}; resume with the same protocol file or use a new --out"
+                )
+        plan = stored
+    else:
+        write_json_atomic(files.plan_path, plan)
+    st = progress(plan, files.events())
+    if st.in_flight is not None:
+        files.append(
+            {
+                "event": "interrupted",
+                "trial": st.in_flight,
+                "participant": pid,
+                "experiment": plan["experiment"],
+                "t": time.time(),
+            }
+        )
+    return files, plan
