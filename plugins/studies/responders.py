@@ -107,11 +107,11 @@ class TerminalResponder:
     def __init__(
         self,
         responses: list[str],
-        read: Callable[[str], str] = input,
+        read: Callable[[str], str] | None = None,
         write: Callable[[str], Any] = lambda s: print(s, file=sys.stderr),
     ) -> None:
         self.responses = responses
-        self.read = read
+        self.read = read or (lambda prompt: input(prompt))
         self.write = write
 
     def answer(self, trial, played, replays_left, control: Control) -> Answer:

@@ -231,9 +231,8 @@ def _run_trial(
         raise
     except Exception as exc:
         files.append({**base, "event": "interrupted", "reason": str(exc), "t": time.time()})
-        if isinstance(exc, UserError):
-            raise
-        raise UserError(f"trial {trial['index'] + 1}: the stimulus failed: {exc}") from exc
+        what = "" if isinstance(exc, UserError) else "failed: "
+        raise UserError(f"trial {trial['index'] + 1}: {what}{exc}") from exc
     rec = {
         **base,
         "event": "done",

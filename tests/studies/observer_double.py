@@ -51,10 +51,6 @@ class ObserverDouble:
         return wrong[int(rng.integers(len(wrong)))], 0.5 + rng.random()
 
 
-class DoublePlugin:
-    @hookimpl
-    def haptable_register_observers(self, register) -> None:
-        register("double", ObserverDouble)
-
-
-plugin = DoublePlugin()
+@hookimpl
+def haptable_register_observers(register) -> None:
+    register("double", ObserverDouble)

@@ -1,0 +1,65 @@
+"""Studies fixtures: the analytic plate's map as a file, plugins with the observer double."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+
+
+@pytest.fixture(scope="session")
+def map_file(tmp_path_factory):
+    from console.vibration_map import save_map
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
+
+    return save_map(tmp_path_factory.mktemp("map") / "plate.npz", analytic_map(SSPlate()))
+
+
+@pytest.fixture
+def double_plugins(monkeypatch):
+    """Plugins with the observer test double registered as ``double``."""
+    monkeypatch.syspath_prepend(str(HERE))
+    from console import plugins as cp
+
+    monkeypatch.setitem(cp.BUILTIN_PLUGINS, "double", "observer_double")
+    sys.modules.pop("observer_double", None)
+    return cp.load_plugins()
+
+
+SMALL_EXP2 = """
+[study]
+name = "exp2"
+stimulus = "hand_flow"
+responses = ["up", "down", "left", "right"]
+seed = 3
+[[regions]]
+name = "Rprelim"
+center_mm = [371.73, 223.65]
+hand = "right"
+[[regions]]
+name = "R4"
+center_mm = [580.0, 320.0]
+hand = "right"
+[[phases]]
+name = "preliminary"
+factors = { region = ["Rprelim"], direction = ["up", "right"] }
+repetitions = 1
+replays = "unlimited"
+[[phases]]
+name = "main"
+factors = { region = ["R4"], direction = ["up", "down", "left", "right"] }
+repetitions = 1
+block_by = "region"
+order = "same_for_all"
+replays = 1
+"""
+
+
+@pytest.fixture
+def small_exp2(tmp_path):
+    p = tmp_path / "exp2-small.toml"
+    p.write_text(SMALL_EXP2)
+    return p
