@@ -146,7 +146,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         raise UserError(f"--trials {args.trials}: give at least 1")
     proto = protocols.load(args.study)
     ids = _ids(args)
-    obs = observer(ctx.pm, ctx.profile) if args.simulate else None
+    obs = observer(ctx.pm, ctx.profile) if args.simulate and proto.stimulus != "knob" else None
     if proto.stimulus == "knob" and not args.simulate:
         raise UserError(
             "knob study with a person: not run from here yet; use --simulate, or run the "

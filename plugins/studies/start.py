@@ -98,7 +98,12 @@ def prepare(
         person = None
     elif simulate:
         pseed = participant_seed(proto, pid) if seed is None else int(seed)
-        person = simulated_participant(pid, pseed, observer.parameters(pseed))
+        params = (
+            observer.parameters(pseed)
+            if observer is not None
+            else {"model": "the knob task's simulated finger (KnobTrials)"}
+        )
+        person = simulated_participant(pid, pseed, params)
     else:
         d = dict(details or {})
         person = make_participant(pid, **{k: d.get(k) for k in PARTICIPANT_KEYS})

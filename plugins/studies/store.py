@@ -66,6 +66,12 @@ def make_participant(
     """A checked participant; each bad value is one line naming the field and the fix."""
     check_id(pid)
 
+    given = {"age": age, "sex": sex, "handedness": handedness}
+    given |= {"hand_width_cm": hand_width_cm, "hand_length_cm": hand_length_cm}
+    for name, v in given.items():
+        if v is None or v == "":
+            raise UserError(f"participant {pid}: {name} is missing; give it before the first trial")
+
     def num(name: str, v: Any, lo: float, hi: float) -> float:
         try:
             x = float(v)

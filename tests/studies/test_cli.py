@@ -144,3 +144,27 @@ def test_kill_9_mid_trial_marks_it_interrupted_and_repeats_it(tmp_path, map_file
     kinds = [(e["event"], e["trial"]) for e in events]
     assert kinds[6:9] == [("start", 3), ("interrupted", 3), ("start", 3)]
     assert [e["trial"] for e in events if e["event"] == "done"] == list(range(6))
+
+
+def test_simulated_knob_runs_the_knob_task_then_the_questionnaire(cli, capsys, tmp_path):
+    out = tmp_path / "knob"
+    args = ["study", "run", "knob", "--simulate", "--participant", "P02", "--out", str(out)]
+    assert cli([*args, "--trials", "54", "--quiet"]) == 0  # the first condition
+    d = out / "P02"
+    plan = json.loads((d / "plan.json").read_text())
+    assert plan["latin_square_row"] == 1
+    first = plan["questionnaires"][0]["condition"]
+    done = _done(d)
+    assert len(done) == 54 and {e["condition"] for e in done} == {first}
+    for e in done:
+        assert e["response"] is None and e["overshoots"] >= 0
+        assert e["sectors"] in (8, 16, 32) and e["distance_deg"] in (135.0, 270.0, 450.0)
+        assert e["correct"] == (not e["timed_out"])
+        if not e["timed_out"]:
+            assert e["completion_time_s"] > 0
+    lines = [json.loads(x) for x in (d / "trials.jsonl").read_text().splitlines()]
+    qs = [e for e in lines if e["event"] == "questionnaire"]
+    assert len(qs) == 14 and {q["condition"] for q in qs} == {first}
+    assert all(1 <= q["score"] <= 7 for q in qs)
+    part = json.loads((d / "participant.json").read_text())
+    assert part["simulated"] and "simulated finger" in part["observer"]["model"]

@@ -31,6 +31,7 @@ BUILT_IN = [
     ("latency", "Latency", "f7"),
     ("signals", "Signals", "f8"),
     ("scope", "Scope", "f9"),
+    ("studies", "Studies", "f10"),
 ]
 
 
@@ -90,16 +91,16 @@ def test_blocking_a_plugin_drops_its_tab(monkeypatch):
 
 
 def test_a_plugin_panel_with_a_tab_shows_as_one_with_its_key():
-    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f10", 100))})
-    assert list(panel_tabs(plugins))[-1] == "probe"  # after Signals (80) and Scope (90)
+    plugins = load_plugins(extra={"probe": _probe_plugin(PanelTab("Probe", "f12", 120))})
+    assert list(panel_tabs(plugins))[-1] == "probe"  # after Signals, Scope and Studies (100)
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(100, 30)) as pilot:
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             assert app.query_one("TabPane#probe", TabPane)
-            await pilot.press("f10")
-            await wait_for(pilot, lambda: app.query_one("#tabs").active == "probe", 10, "f10")
+            await pilot.press("f12")
+            await wait_for(pilot, lambda: app.query_one("#tabs").active == "probe", 10, "f12")
             await wait_for(pilot, lambda: isinstance(app.pane("probe"), ProbePane), 10)
             # a tab is opened by its key, not listed again as a palette panel
             titles = [c.title for c in app.get_system_commands(app.screen)]

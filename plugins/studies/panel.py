@@ -1,0 +1,417 @@
+"""The Studies screen (the studies plugin's tab, F10): pick a protocol and a participant,
+start, pause, replay, abort; the experimenter's view of progress and the current trial.
+
+Presentation only: a worker prepares the participant (``start.prepare``) and runs the plan
+(``runner.run_plan``) with the console session's outputs (``session.play_plan``, through
+the safety gate) and the console's vibration map; the run reports through the session
+(topic ``study``: ``Started``, ``Snapshot`` per step, ``Stopped``, ``Failed``) and this
+screen shows what it is told (``on_session_message``). A person answers with the arrow
+keys (or 1 = left to right, 2 = right to left in experiment 1) or the answer buttons, a
+questionnaire item with 1..7; a simulated participant answers by itself. Stopping a
+run for any reason (abort, e-stop, quitting) leaves the trial in flight ``interrupted``;
+start again with the same participant to resume at the next trial of the stored plan.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rich.markup import escape
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Button, Checkbox, DataTable, Input, ProgressBar, Select, Static
+
+from console.errors import UserError
+from console.session.events import Failed, Snapshot, Started, Stopped
+from console.tui.session_messages import SessionMessage
+
+from . import protocol as protocols
+from .runner import Answer, Control
+
+TOPIC = "study"
+ANSWERS = {
+    "up": "up",
+    "down": "down",
+    "left": "left",
+    "right": "right",
+    "1": "left_to_right",
+    "2": "right_to_left",
+}
+
+
+def default_out() -> Path:
+    from console import paths
+
+    return paths.data_dir("studies")
+
+
+def trial_text(t: dict[str, Any]) -> str:
+    """A trial as the experimenter reads it: phase, place, direction or condition."""
+    place = t.get("region") or (f"pair {t['pair']}" if t.get("pair") else "")
+    what = t.get("direction") or t.get("condition") or ""
+    if t.get("stimulus", {}).get("task") == "knob":
+        s = t["stimulus"]
+        what = f"{s['condition']} {s['sectors']} sectors {s['distance_deg']:g} deg"
+    hand = f" ({t['hand']} hand)" if t.get("hand") else ""
+    return " ".join(x for x in (t.get("phase", ""), place, what) if x) + hand
+
+
+class StudiesPane(Vertical):
+    can_focus = True
+    DEFAULT_CSS = """
+    StudiesPane #study-form { height: auto; }
+    StudiesPane #study-form Input { width: 14; }
+    StudiesPane #study-form Select { width: 16; }
+    StudiesPane #study-person { height: auto; }
+    StudiesPane #study-person Input { width: 12; }
+    StudiesPane #study-buttons { height: auto; }
+    StudiesPane #study-answers { height: auto; }
+    StudiesPane #study-status { height: auto; }
+    StudiesPane #study-trials { height: 1fr; }
+    """
+    HELP_TEXT = (
+        "Pick the protocol, the participant and the folder; a person needs age, sex,\n"
+        "handedness, hand size and the consent noted (a simulated one does not).\n"
+        "s / Start     start (or resume: the same participant continues where it stopped)\n"
+        "p             pause after this trial / resume\n"
+        "r             replay the stimulus (within the phase's replays)\n"
+        "a             abort now (the trial in flight is repeated on resume)\n"
+        "arrows        answer up/down/left/right; 1 / 2: left to right / right to left\n"
+        "1..7          a questionnaire score"
+    )
+    BINDINGS = [
+        Binding("s", "start", "start"),
+        Binding("p", "pause", "pause/resume"),
+        Binding("r", "replay", "replay"),
+        Binding("a", "abort", "abort"),
+        Binding("up", "answer('up')", show=False),
+        Binding("down", "answer('down')", show=False),
+        Binding("left", "answer('left')", show=False),
+        Binding("right", "answer('right')", show=False),
+        *(Binding(str(k), f"digit({k})", show=False) for k in range(1, 10)),
+    ]
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.control: Control | None = None
+        self.responder: Any = None
+        self.running: str | None = None  # the participant being run
+        self.asking: dict[str, Any] | None = None
+        self.last: dict[str, Any] = {}
+
+    def compose(self) -> ComposeResult:
+        names = protocols.available()
+        with Horizontal(id="study-form"):
+            yield Select(
+                [(n, n) for n in names], value=names[0] if names else Select.BLANK, id="protocol"
+            )
+            yield Input("P01", placeholder="participant", id="participant")
+            yield Input(str(default_out()), placeholder="folder", id="out")
+            yield Checkbox("simulated", True, id="simulate")
+        with Horizontal(id="study-person"):
+            yield Input(placeholder="age", id="age")
+            yield Input(placeholder="sex", id="sex")
+            yield Input(placeholder="handedness", id="handedness")
+            yield Input(placeholder="hand width cm", id="hand_width_cm")
+            yield Input(placeholder="hand length cm", id="hand_length_cm")
+            yield Checkbox("consent noted", False, id="consent")
+        with Horizontal(id="study-buttons"):
+            yield Button("Start", id="start", variant="primary")
+            yield Button("Pause", id="pause")
+            yield Button("Replay", id="replay")
+            yield Button("Abort", id="abort", variant="error")
+        with Horizontal(id="study-answers"):
+            for label, value in (
+                ("↑", "up"),
+                ("↓", "down"),
+                ("←", "left"),
+                ("→", "right"),
+                ("L→R", "left_to_right"),
+                ("R→L", "right_to_left"),
+            ):
+                yield Button(label, id=f"ans-{value}", classes="answer")
+        yield ProgressBar(total=1, show_eta=False, id="study-progress")
+        yield Static(
+            "no study running: pick a protocol and a participant, then s", id="study-status"
+        )
+        table = DataTable(id="study-trials", cursor_type="row")
+        table.add_columns("trial", "what", "response", "correct", "replays", "time")
+        yield table
+
+    # ------------------------------------------------------------------ actions
+    def _value(self, wid: str) -> Any:
+        w = self.query_one(f"#{wid}")
+        return w.value
+
+    def on_button_pressed(self, event: Button.Pressed) -> None:
+        bid = event.button.id or ""
+        event.stop()
+        if bid.startswith("ans-"):
+            self._answer(bid[4:])
+        elif bid in ("start", "pause", "replay", "abort"):
+            getattr(self, f"action_{bid}")()
+
+    def action_start(self) -> None:
+        if self.running is not None:
+            self.app.notify(f"{self.running} is running: a aborts it", severity="warning")
+            return
+        study = self._value("protocol")
+        if study is Select.BLANK or not study:
+            self.app.notify("no protocol in studies/", severity="error")
+            return
+        spec = {
+            "study": str(study),
+            "pid": self._value("participant").strip(),
+            "out": Path(self._value("out").strip() or default_out()).expanduser(),
+            "simulate": bool(self._value("simulate")),
+            "details": {
+                "age": self._value("age").strip() or None,
+                "sex": self._value("sex").strip() or None,
+                "handedness": self._value("handedness").strip() or None,
+                "hand_width_cm": self._value("hand_width_cm").strip() or None,
+                "hand_length_cm": self._value("hand_length_cm").strip() or None,
+                "consent": True if self._value("consent") else None,
+            },
+        }
+        from .responders import QueueResponder
+
+        self.control = Control()
+        self.responder = None if spec["simulate"] else QueueResponder()
+        self.running = spec["pid"]
+        self.last = {}
+        self.query_one("#study-trials", DataTable).clear()
+        self._status(f"{escape(spec['pid'])}: preparing {spec['study']} ...")
+        self.focus()
+        self._run(spec, self.control, self.responder)
+
+    def action_pause(self) -> None:
+        c = self.control
+        if c is None or self.running is None:
+            return
+        if c.paused:
+            c.resume()
+            self.app.notify("resumed")
+        else:
+            c.pause()
+            self.app.notify("pausing after this trial (p resumes)")
+        self._show()
+
+    def action_replay(self) -> None:
+        if self.responder is not None and self.asking and "trial" in self.asking:
+            self.responder.put(Answer(replay=True))
+
+    def action_abort(self) -> None:
+        if self.control is not None and self.running is not None:
+            self.control.abort("aborted by the experimenter")
+
+    def action_answer(self, key: str) -> None:
+        self._answer(ANSWERS.get(key, key))
+
+    def action_digit(self, k: int) -> None:
+        if self.asking and "item" in self.asking:
+            if 1 <= k <= int(self.asking.get("scale", 7)) and self.responder is not None:
+                self.responder.put(int(k))
+            return
+        self._answer(ANSWERS.get(str(k), ""))
+
+    def _answer(self, value: str) -> None:
+        if self.responder is None or not self.asking or "trial" not in self.asking:
+            return
+        self.responder.put(Answer(response=value))
+
+    # ------------------------------------------------------------------ the run
+    @work(thread=True, exclusive=True, group="study", exit_on_error=False)
+    def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
+        session = self.app.session
+        pid = spec["pid"]
+
+        def emit(kind: str, info: dict[str, Any]) -> None:
+            session.emit(Snapshot(TOPIC, name=pid, data={"kind": kind, **_plain(info)}))
+            if kind == "waiting" and responder is not None:
+                session.emit(Snapshot(TOPIC, name=pid, data={"kind": "ask", **_plain(info)}))
+
+        try:
+            res = run_study(session, spec, control, responder, emit)
+        except UserError as exc:
+            session.fail(TOPIC, str(exc), name=pid)
+            session.emit(Stopped(TOPIC, name=pid, reason=str(exc)))
+            return
+        why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
+        session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))
+
+    def on_session_message(self, message: SessionMessage) -> None:
+        ev = message.event
+        if ev.topic != TOPIC:
+            return
+        if isinstance(ev, Started):
+            self.running = ev.name
+            self._status(f"{escape(ev.name)}: {escape(ev.detail)}")
+        elif isinstance(ev, Snapshot):
+            self._snapshot(ev.data)
+        elif isinstance(ev, Stopped):
+            self.running = None
+            self.asking = None
+            self.last["stopped"] = ev.reason
+            self._show()
+        elif isinstance(ev, Failed):
+            self.last["error"] = ev.message
+
+    def _snapshot(self, d: dict[str, Any]) -> None:
+        kind = d.get("kind")
+        if kind == "progress":
+            bar = self.query_one("#study-progress", ProgressBar)
+            bar.update(total=max(int(d["total"]), 1), progress=int(d["done"]))
+            self.last["done"], self.last["total"] = int(d["done"]), int(d["total"])
+        elif kind == "start":
+            self.asking = None
+            self.last["trial"] = d["trial"]
+            self.last["state"] = "playing"
+        elif kind == "waiting":
+            left = d.get("replays_left")
+            self.last["state"] = "waiting for the answer (" + (
+                "replays unlimited)" if left is None else f"{left} replay(s) left)"
+            )
+        elif kind == "ask":
+            self.asking = {"trial": d["trial"]}
+        elif kind == "replay":
+            self.asking = None  # answers count once the replay has played
+            self.last["state"] = f"replay {d['replays']}"
+        elif kind == "refused":
+            self.app.notify(d.get("why", "refused"), severity="warning", timeout=3)
+        elif kind == "done":
+            self.asking = None
+            self.last["state"] = "answered"
+            r = d["record"]
+            rt = r.get("response_time_s")
+            if r.get("completion_time_s") is not None or "overshoots" in r:
+                ct = r.get("completion_time_s")
+                resp = f"{'timeout' if ct is None else f'{ct:.2f} s'} {r.get('overshoots')} ovs"
+            else:
+                resp = str(r.get("response"))
+            table = self.query_one("#study-trials", DataTable)
+            table.add_row(
+                str(r["trial"] + 1),
+                trial_text(r),
+                resp,
+                "yes" if r.get("correct") else "no",
+                str(r.get("replays", 0)),
+                "-" if rt is None else f"{rt:.2f} s",
+            )
+            table.move_cursor(row=table.row_count - 1)
+        elif kind == "questionnaire":
+            self.last["state"] = f"questionnaire after {d['condition']}"
+        elif kind == "rate":
+            self.asking = {"item": d["item"], "scale": d["scale"]}
+            self.last["state"] = f"rate 1..{d['scale']}: {d['item']['text']}"
+        elif kind == "paused":
+            self.last["state"] = "paused (p resumes)"
+        elif kind == "aborted":
+            self.last["state"] = f"aborted: {d.get('reason', '')}"
+        elif kind == "finished":
+            self.last["state"] = "finished"
+        self._show()
+
+    def _show(self) -> None:
+        L = self.last
+        who = self.running or "-"
+        head = f"[b]{escape(who)}[/b]: {L.get('done', 0)}/{L.get('total', 0)} trials done"
+        if self.control is not None and self.control.paused and self.running:
+            head += "  [yellow]paused[/]"
+        lines = [head]
+        if L.get("trial") and self.running:
+            t = L["trial"]
+            lines.append(f"trial {t['index'] + 1}: {escape(trial_text(t))}")
+        if L.get("state") and self.running:
+            lines.append(escape(L["state"]))
+        if not self.running and L.get("stopped"):
+            lines.append(f"stopped: {escape(L['stopped'])}")
+            if L.get("error"):
+                lines.append(f"[red]{escape(L['error'])}[/]")
+        self._status("\n".join(lines))
+
+    def _status(self, text: str) -> None:
+        self.query_one("#study-status", Static).update(text)
+
+    def on_unmount(self) -> None:
+        if self.control is not None:
+            self.control.abort("the console closed")
+
+
+def _plain(info: dict[str, Any]) -> dict[str, Any]:
+    """A runner notice as JSON-like values (what a Snapshot carries)."""
+    out = {}
+    for k, v in info.items():
+        if k == "trial" and isinstance(v, dict):
+            out[k] = {kk: vv for kk, vv in v.items() if kk != "stimulus"} | {
+                "stimulus": dict(v.get("stimulus", {}))
+            }
+        elif isinstance(v, str | int | float | bool | dict | list) or v is None:
+            out[k] = v
+    return out
+
+
+class _Asking:
+    """Wraps a ``QueueResponder`` so the screen learns what the participant is asked."""
+
+    def __init__(self, inner: Any, emit: Any) -> None:
+        self.inner = inner
+        self.emit = emit
+
+    def answer(self, trial, played, replays_left, control):
+        return self.inner.answer(trial, played, replays_left, control)
+
+    def rate(self, item, questionnaire, records, control):
+        self.emit("rate", {"item": item, "scale": questionnaire["scale"]})
+        return self.inner.rate(item, questionnaire, records, control)
+
+
+def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
+    """Prepare the participant and run the plan on the console session (blocking)."""
+    from console.session.events import Started
+    from console.vibration_map import VibrationMap, load_map
+
+    from .responders import ObserverResponder, observer
+    from .runner import run_plan
+    from .start import prepare
+    from .stimuli import EffectPlayer, check_places
+
+    pm, profile = session.plugins, session.profile
+    proto = protocols.load(spec["study"])
+    obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
+    if proto.stimulus == "knob" and not spec["simulate"]:
+        raise UserError("knob study with a person: not run from here yet; tick simulated")
+    from .start import stored_participant
+
+    details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
+    prep = prepare(
+        spec["study"],
+        spec["pid"],
+        spec["out"],
+        details=details,
+        simulate=spec["simulate"],
+        observer=obs,
+    )
+    vmap = None
+    if proto.stimulus != "knob":
+        cur = session.vibration.current_map()
+        vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
+        check_places(prep.plan, vmap)
+    player = EffectPlayer(pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed)
+    resp = (
+        ObserverResponder(obs, prep.participant_seed)
+        if spec["simulate"]
+        else _Asking(responder, emit)
+    )
+    session.emit(Started(TOPIC, name=spec["pid"], detail=f"{proto.title} -> {prep.files.root}"))
+    return run_plan(
+        prep.files,
+        prep.plan,
+        prep.participant,
+        player=player,
+        responder=resp,
+        control=control,
+        notify=emit,
+    )

@@ -1,0 +1,149 @@
+"""The Studies screen as an experimenter uses it (Textual's Pilot): experiment 2 for a
+simulated participant, progress moving, abort, and a resume that continues where it
+stopped."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+import pytest
+
+from console.cli import Context
+
+
+@pytest.fixture(autouse=True)
+def _quick_key_presses(monkeypatch):
+    import textual.app
+
+    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
+        await asyncio.sleep(0.02)
+
+    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
+
+
+async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
+    for _ in range(int(timeout_s / 0.05)):
+        if cond():
+            return
+        await pilot.pause(0.05)
+    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+
+
+def _events(path):
+    return [json.loads(x) for x in path.read_text().splitlines() if x.strip()]
+
+
+def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_file, tmp_path):
+    from textual.widgets import DataTable, ProgressBar, Static
+
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            pane = app.pane("studies")
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#out").value = str(tmp_path)
+            assert pane.query_one("#simulate").value is True
+            await pilot.click("#start")
+            bar = pane.query_one("#study-progress", ProgressBar)
+            await wait_for(pilot, lambda: (bar.progress or 0) >= 3, what="three trials done")
+            assert bar.total == 200
+            status = str(pane.query_one("#study-status", Static).render())
+            assert "P01" in status and "/200 trials done" in status and "Rprelim" in status
+            await pilot.click("#abort")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
+            stopped_at = int(bar.progress)
+            assert "aborted" in str(pane.query_one("#study-status", Static).render())
+            events = _events(tmp_path / "P01" / "trials.jsonl")
+            done = [e["trial"] for e in events if e["event"] == "done"]
+            assert done == list(range(len(done))) and len(done) == stopped_at
+            table = pane.query_one("#study-trials", DataTable)
+            assert table.row_count == stopped_at
+            # start again: the stored plan continues at the next trial
+            await pilot.click("#start")
+            await wait_for(pilot, lambda: (bar.progress or 0) >= stopped_at + 2, what="resumed")
+            await pilot.click("#abort")
+            await wait_for(pilot, lambda: pane.running is None, what="stopped again")
+            events = _events(tmp_path / "P01" / "trials.jsonl")
+            starts = [e["trial"] for e in events if e["event"] == "start"]
+            done = [e["trial"] for e in events if e["event"] == "done"]
+            assert done == list(range(len(done))) and len(done) >= stopped_at + 2
+            n_first = len([e for e in starts if e < stopped_at]) + 1  # + the aborted one
+            assert starts[n_first - 1] == stopped_at or starts[n_first] == stopped_at
+            plan = json.loads((tmp_path / "P01" / "plan.json").read_text())
+            for e in events:
+                if e["event"] == "done":
+                    t = plan["trials"][e["trial"]]
+                    assert (e["region"], e["direction"]) == (t["region"], t["direction"])
+
+    asyncio.run(scenario())
+
+
+def test_a_person_answers_with_the_keys_and_replays_once(
+    double_plugins, map_file, tmp_path, small_exp2
+):
+    from textual.widgets import ProgressBar
+
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            pane = app.pane("studies")
+            from plugins.studies import protocol as P
+
+            pane.query_one("#protocol").set_options(
+                [(n, n) for n in (*P.available(), str(small_exp2))]
+            )
+            await pilot.pause(0.2)
+            pane.query_one("#protocol").value = str(small_exp2)
+            await pilot.pause(0.2)
+            pane.query_one("#out").value = str(tmp_path)
+            pane.query_one("#simulate").value = False
+            await pilot.click("#start")  # no details: refused in one line, nothing stored
+            await wait_for(
+                pilot, lambda: pane.running is None and pane.last.get("stopped"), what="refused"
+            )
+            assert (
+                "participant P01: age is missing" in pane.last["stopped"]
+                and not (tmp_path / "P01").exists()
+            )
+            for wid, v in (
+                ("age", "28"),
+                ("sex", "female"),
+                ("handedness", "right"),
+                ("hand_width_cm", "8.4"),
+                ("hand_length_cm", "18.1"),
+            ):
+                pane.query_one(f"#{wid}").value = v
+            pane.query_one("#consent").value = True
+            await pilot.click("#start")
+            bar = pane.query_one("#study-progress", ProgressBar)
+            for k, key in enumerate(["up", "right", "down", "left", "up", "right"]):
+                await wait_for(pilot, lambda: pane.asking is not None, what=f"asked {k}")
+                pane.focus()
+                if k == 2:  # one replay allowed in the main phase, a second is refused
+                    await pilot.press("r")
+                    await wait_for(
+                        pilot, lambda: pane.last.get("state") == "replay 1", what="replay"
+                    )
+                    await wait_for(pilot, lambda: pane.asking is not None, what="asked again")
+                await pilot.press(key)
+                await wait_for(pilot, lambda k=k: (bar.progress or 0) >= k + 1, what=f"answer {k}")
+            await wait_for(pilot, lambda: pane.running is None, what="finished")
+            events = _events(tmp_path / "P01" / "trials.jsonl")
+            done = [e for e in events if e["event"] == "done"]
+            assert [e["response"] for e in done] == ["up", "right", "down", "left", "up", "right"]
+            assert [e["replays"] for e in done][2] == 1
+            assert all(e["response_time_s"] > 0 for e in done)
+            assert "finished" in pane.last["stopped"]
+
+    asyncio.run(scenario())
