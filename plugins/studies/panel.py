@@ -111,6 +111,7 @@ class StudiesPane(Vertical):
             yield Input("P01", placeholder="participant", id="participant")
             yield Input(str(default_out()), placeholder="folder", id="out")
             yield Checkbox("simulated", True, id="simulate")
+            yield Checkbox("projector", False, id="projector")
         with Horizontal(id="study-person"):
             yield Input(placeholder="age", id="age")
             yield Input(placeholder="sex", id="sex")
@@ -167,6 +168,7 @@ class StudiesPane(Vertical):
             "pid": self._value("participant").strip(),
             "out": Path(self._value("out").strip() or default_out()).expanduser(),
             "simulate": bool(self._value("simulate")),
+            "projector": bool(self._value("projector")),
             "details": {
                 "age": self._value("age").strip() or None,
                 "sex": self._value("sex").strip() or None,
@@ -405,13 +407,31 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
         if spec["simulate"]
         else _Asking(responder, emit)
     )
+    projected = None
+    if spec.get("projector") and not spec["simulate"]:
+        if not proto.scene:
+            raise UserError(f"{proto.path}: no [study] scene to answer on; untick 'projector'")
+        from .projected import ProjectedAnswers
+
+        projected = ProjectedAnswers(session, responder, proto.scene)
+        projected.open()
+
+    def notify(kind: str, info: dict[str, Any]) -> None:
+        if projected is not None:
+            projected.notice(kind, info)
+        emit(kind, info)
+
     session.emit(Started(TOPIC, name=spec["pid"], detail=f"{proto.title} -> {prep.files.root}"))
-    return run_plan(
-        prep.files,
-        prep.plan,
-        prep.participant,
-        player=player,
-        responder=resp,
-        control=control,
-        notify=emit,
-    )
+    try:
+        return run_plan(
+            prep.files,
+            prep.plan,
+            prep.participant,
+            player=player,
+            responder=resp,
+            control=control,
+            notify=notify,
+        )
+    finally:
+        if projected is not None:
+            projected.close()

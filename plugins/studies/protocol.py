@@ -1,7 +1,7 @@
 """Study protocols as data: ``studies/<name>.toml`` read and checked with one-line errors.
 
 A protocol has ``[study]`` (name, title, stimulus ``flow`` | ``hand_flow`` | ``knob``,
-responses, seed), the stimulus places (``[[pairs]]`` for ``flow``: ``name``, ``left`` and
+responses, seed, and the projected ``scene`` whose touched buttons answer), the stimulus places (``[[pairs]]`` for ``flow``: ``name``, ``left`` and
 ``right`` grid point ids; ``[[regions]]`` for ``hand_flow``: ``name``, ``center_mm``,
 ``hand``), ``[[phases]]`` and, for the knob, ``[questionnaire]``. A phase crosses its
 ``factors`` (a table of lists), repeats them ``repetitions`` times and orders them:
@@ -46,6 +46,7 @@ STUDY_FIELDS = {
     "stimulus": Field("str", choices=STIMULI, help="how a trial is played"),
     "responses": Field("strs", [], help="the answers a participant may give"),
     "seed": Field("int", 0, min=0, help="seeds the orders shared by every participant"),
+    "scene": Field("str", "", help="the projected scene whose touched buttons answer"),
 }
 PHASE_FIELDS = {
     "name": Field("str", help="the phase's name (familiarisation, main ...)"),
@@ -87,6 +88,7 @@ class Protocol:
     pairs: dict[str, dict[str, int]] = field(default_factory=dict)
     regions: dict[str, dict[str, Any]] = field(default_factory=dict)
     questionnaire: dict[str, Any] | None = None
+    scene: str = ""
     path: str = ""
     sha256: str = ""
 
@@ -205,6 +207,7 @@ def parse(raw: dict[str, Any], where: str = "<protocol>", *, sha256: str = "") -
         pairs=pairs,
         regions=regions,
         questionnaire=questionnaire,
+        scene=study["scene"],
         path=where,
         sha256=sha256,
     )

@@ -188,9 +188,9 @@ def _run_trial(
     base = _base(plan, pid, trial)
     t_start = time.time()
     files.append({**base, "event": "start", "t_start": t_start})
-    say("start", {"trial": trial, "total": len(plan["trials"])})
     replays = 0
     try:
+        say("start", {"trial": trial, "total": len(plan["trials"])})
         played = player.play(trial, 0)
         control.check()
         if trial["stimulus"].get("task") == "knob":

@@ -147,3 +147,65 @@ def test_a_person_answers_with_the_keys_and_replays_once(
             assert "finished" in pane.last["stopped"]
 
     asyncio.run(scenario())
+
+
+def test_a_person_answers_on_the_projected_arrows_the_camera_sees(
+    double_plugins, map_file, tmp_path, small_exp2
+):
+    """Fig. 12b: the hand guide on the trial's region and four projected arrows; the twin
+    camera sees the operator's finger on an arrow and that is the answer."""
+    from console.tui.app import HapTableApp
+    from plugins.studies import protocol as P
+
+    small_exp2.write_text(
+        small_exp2.read_text().replace("seed = 3", 'seed = 3\nscene = "flow_hand"')
+    )
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            pane = app.pane("studies")
+            sel = pane.query_one("#protocol")
+            sel.set_options([(n, n) for n in (*P.available(), str(small_exp2))])
+            await pilot.pause(0.2)
+            sel.value = str(small_exp2)
+            pane.query_one("#out").value = str(tmp_path)
+            pane.query_one("#simulate").value = False
+            pane.query_one("#projector").value = True
+            for wid, v in (
+                ("age", "28"),
+                ("sex", "male"),
+                ("handedness", "left"),
+                ("hand_width_cm", "8.4"),
+                ("hand_length_cm", "18.1"),
+            ):
+                pane.query_one(f"#{wid}").value = v
+            pane.query_one("#consent").value = True
+            await pilot.pause(0.2)
+            await pilot.click("#start")
+            want = ["up", "left", "down", "right", "left", "up"]
+            for k, d in enumerate(want):
+                await wait_for(pilot, lambda: pane.asking is not None, 120, f"asked {k}")
+                svc = app.session.projector
+                state = svc.scene.state()
+                assert state["region"] == pane.last["trial"]["region"]
+                assert state["hand_outline_mm"] and not state["playing"]
+                (button,) = [b for b in state["buttons"] if b["dir"] == d]
+                cam = app.session.camera.camera
+                cam.set_target(tuple(button["c"]))
+                await wait_for(
+                    pilot,
+                    lambda k=k: len(pane.query_one("#study-trials").rows) > k,
+                    60,
+                    f"touch {k}",
+                )
+                cam.set_target(None)
+                await pilot.pause(0.3)
+            await wait_for(pilot, lambda: pane.running is None, 60, "finished")
+            done = [e for e in _events(tmp_path / "P01" / "trials.jsonl") if e["event"] == "done"]
+            assert [e["response"] for e in done] == want
+
+    asyncio.run(scenario())
