@@ -32,14 +32,7 @@ from . import protocol as protocols
 from .runner import Answer, Control
 
 TOPIC = "study"
-ANSWERS = {
-    "up": "up",
-    "down": "down",
-    "left": "left",
-    "right": "right",
-    "1": "left_to_right",
-    "2": "right_to_left",
-}
+ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 
 
 def default_out() -> Path:
@@ -79,7 +72,8 @@ class StudiesPane(Vertical):
         "p             pause after this trial / resume\n"
         "r             replay the stimulus (within the phase's replays)\n"
         "a             abort now (the trial in flight is repeated on resume)\n"
-        "arrows        answer up/down/left/right; 1 / 2: left to right / right to left\n"
+        "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2: left to\n"
+        "              right / right to left (experiment 1)\n"
         "1..7          a questionnaire score"
     )
     BINDINGS = [
@@ -100,6 +94,7 @@ class StudiesPane(Vertical):
         self.responder: Any = None
         self.running: str | None = None  # the participant being run
         self.asking: dict[str, Any] | None = None
+        self.responses: list[str] = []
         self.last: dict[str, Any] = {}
 
     def compose(self) -> ComposeResult:
@@ -184,6 +179,12 @@ class StudiesPane(Vertical):
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
         self.last = {}
+        try:
+            self.responses = list(protocols.load(str(study)).responses)
+        except UserError as exc:
+            self.app.notify(str(exc), severity="error")
+            self.running = None
+            return
         self.query_one("#study-trials", DataTable).clear()
         self._status(f"{escape(spec['pid'])}: preparing {spec['study']} ...")
         self.focus()
@@ -217,7 +218,11 @@ class StudiesPane(Vertical):
             if 1 <= k <= int(self.asking.get("scale", 7)) and self.responder is not None:
                 self.responder.put(int(k))
             return
-        self._answer(ANSWERS.get(str(k), ""))
+        from .responders import parse_key
+
+        a = parse_key(str(k), self.responses)  # a keypad: 8 2 4 6 (exp2), 1 2 (exp1)
+        if a is not None and a.response:
+            self._answer(a.response)
 
     def _answer(self, value: str) -> None:
         if self.responder is None or not self.asking or "trial" not in self.asking:
