@@ -487,13 +487,27 @@ class SimulatedObserver(Protocol):
 
 @runtime_checkable
 class KnobTrials(Effect, Protocol):
-    """The knob task run by a simulated finger: ``knob_trial(condition=, sectors=,
-    distance_deg=, seed=) -> dict`` with ``start_item``, ``target_item``,
-    ``completion_time_s``, ``overshoots``, ``recovery_time_s`` (None when it timed out),
-    ``timed_out``, ``crossings``, ``detents`` and ``error``."""
+    """The knob task, one trial: ``knob_trial(condition=, sectors=, distance_deg=,
+    seed=)`` with a simulated finger, ``knob_live_trial(..., outputs=, attach=,
+    max_time_s=)`` with a person (the knob session streams through ``outputs``;
+    ``attach(session)`` feeds it the camera's contacts, ``session.feed(t_capture_s,
+    contacts)``, and ``attach(None)`` ends that). Both return a dict with ``start_item``,
+    ``target_item``, ``completion_time_s``, ``overshoots``, ``recovery_time_s`` (None
+    when it timed out), ``timed_out``, ``crossings``, ``detents`` and ``error``."""
 
     def knob_trial(
         self, *, condition: str, sectors: int, distance_deg: float, seed: int
+    ) -> dict[str, Any]: ...
+
+    def knob_live_trial(
+        self,
+        *,
+        condition: str,
+        sectors: int,
+        distance_deg: float,
+        outputs: Any,
+        attach: Callable[[Any], None],
+        max_time_s: float = 30.0,
     ) -> dict[str, Any]: ...
 
 

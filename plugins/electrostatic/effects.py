@@ -200,6 +200,39 @@ class KnobEffect:
         )
         return asdict(res)
 
+    def knob_live_trial(
+        self,
+        *,
+        condition: str,
+        sectors: int,
+        distance_deg: float,
+        outputs: Any,
+        attach: Any,
+        max_time_s: float = 30.0,
+    ) -> dict[str, Any]:
+        """One trial of the knob task with a person (``task.run_live_trial``): the trial's
+        knob session streams through ``outputs`` and is handed to ``attach(session)``,
+        which feeds it the camera's contacts (``session.feed(t_capture_s, contacts)``),
+        then ``attach(None)``. Its measures as a dict."""
+        from dataclasses import asdict
+
+        from .task import make_trials, run_live_trial
+
+        c = parse_condition(condition).name
+        (trial,) = make_trials([c], [int(sectors)], [float(distance_deg)], 1, seed=0)
+        a = audio(self.profile)
+        res = run_live_trial(
+            trial,
+            settings=knob_settings(self.profile),
+            outputs=outputs,
+            attach=attach,
+            limits=limits(self.profile),
+            sample_rate_hz=a["sample_rate_hz"],
+            block=a["block_size"],
+            max_time_s=float(max_time_s),
+        )
+        return asdict(res)
+
     def render(
         self, condition: str = "HD+VF", sectors: int | None = None, seed: int = 0
     ) -> OutputPlan:

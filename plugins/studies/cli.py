@@ -149,8 +149,8 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     obs = observer(ctx.pm, ctx.profile) if args.simulate and proto.stimulus != "knob" else None
     if proto.stimulus == "knob" and not args.simulate:
         raise UserError(
-            "knob study with a person: not run from here yet; use --simulate, or run the "
-            "trials with `haptable knob --input live`"
+            "knob study with a person: run it from the console's Studies screen (F10, the "
+            "camera turns the knob), or use --simulate here"
         )
     vmap = _vmap(args, ctx) if proto.stimulus != "knob" else None
     control = Control()

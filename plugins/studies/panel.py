@@ -216,6 +216,7 @@ class StudiesPane(Vertical):
     def action_digit(self, k: int) -> None:
         if self.asking and "item" in self.asking:
             if 1 <= k <= int(self.asking.get("scale", 7)) and self.responder is not None:
+                self.asking = None  # one score per item: the next item asks again
                 self.responder.put(int(k))
             return
         from .responders import parse_key
@@ -227,6 +228,7 @@ class StudiesPane(Vertical):
     def _answer(self, value: str) -> None:
         if self.responder is None or not self.asking or "trial" not in self.asking:
             return
+        self.asking = None  # one answer per stimulus
         self.responder.put(Answer(response=value))
 
     # ------------------------------------------------------------------ the run
@@ -388,8 +390,6 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     pm, profile = session.plugins, session.profile
     proto = protocols.load(spec["study"])
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
-    if proto.stimulus == "knob" and not spec["simulate"]:
-        raise UserError("knob study with a person: not run from here yet; tick simulated")
     from .start import stored_participant
 
     details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
@@ -406,7 +406,22 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
         cur = session.vibration.current_map()
         vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
         check_places(prep.plan, vmap)
-    player = EffectPlayer(pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed)
+    live = None
+    if proto.stimulus == "knob" and not spec["simulate"]:
+        if session.outputs is None:
+            raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
+        from .stimuli import LiveKnob
+
+        live = LiveKnob(pm, profile, session.outputs)
+        session.camera.frame_hooks.append(live.frame)
+        session.camera.watch(live, True)
+        if session.camera.error:
+            session.camera.frame_hooks.remove(live.frame)
+            session.camera.watch(live, False)
+            raise UserError(f"camera: {session.camera.error}")
+    player = EffectPlayer(
+        pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed, live_knob=live
+    )
     resp = (
         ObserverResponder(obs, prep.participant_seed)
         if spec["simulate"]
@@ -440,3 +455,7 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     finally:
         if projected is not None:
             projected.close()
+        if live is not None:
+            if live.frame in session.camera.frame_hooks:
+                session.camera.frame_hooks.remove(live.frame)
+            session.camera.watch(live, False)

@@ -5,7 +5,9 @@ other of the vibration map), a hand-flow trial with the ``HandFlowEffect`` (cent
 region, toward the direction) and plays the plan with ``play(plan)`` (the console
 session's ``play_plan``, or the outputs opened by the CLI); rendered plans are kept per
 stimulus (a replay plays the same samples). Knob trials run the ``KnobTrials`` task (the
-simulated finger closing the loop through the knob session). The studies plugin knows
+simulated finger closing the loop through the knob session), or with a person
+``LiveKnob``: the knob session streams through the outputs while the camera loop's
+contacts drive it, until the selection rests on the target or ``max_time_s``. The studies plugin knows
 only the contracts (``console.contracts``), never the plugins that offer them.
 """
 
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -64,6 +67,7 @@ class EffectPlayer:
         play: Callable[[OutputPlan], Any],
         *,
         knob_seed: int = 0,
+        live_knob: LiveKnob | None = None,
     ) -> None:
         self.plugins = plugins
         self.profile = profile
@@ -71,6 +75,7 @@ class EffectPlayer:
         self._play = play
         self._plans: dict[str, OutputPlan] = {}
         self.knob_seed = knob_seed
+        self.live_knob = live_knob
 
     def _effect(self, proto: type) -> Any:
         return self.plugins.provider("effect", proto, self.profile, plugin_hint="vibrotactile")
@@ -96,6 +101,8 @@ class EffectPlayer:
     def play(self, trial: dict[str, Any], attempt: int) -> Any:
         s = trial["stimulus"]
         if s.get("task") == "knob":
+            if self.live_knob is not None:
+                return self.live_knob.play(trial)
             return knob_trial(self.plugins, self.profile, trial, self.knob_seed, attempt)
         plan = self.prepare(trial)
         if self._play(plan) is False:
@@ -127,3 +134,50 @@ def play_on(outputs: Any) -> Callable[[OutputPlan], bool]:
         return True
 
     return play
+
+
+#: a live knob trial ends after this long without reaching the target (paper task: 30 s)
+LIVE_KNOB_MAX_S = 30.0
+
+
+class LiveKnob:
+    """Knob trials with a person: ``KnobTrials.knob_live_trial`` on ``outputs`` (through
+    the gate), fed the contacts of each camera frame (``frame(frame, work)``, a camera
+    loop's frame hook)."""
+
+    def __init__(self, plugins: Any, profile: Any, outputs: Any) -> None:
+        self.plugins = plugins
+        self.profile = profile
+        self.outputs = outputs
+        self._ses: Any = None
+        self._lock = threading.Lock()
+        self.frames = 0
+
+    def attach(self, ses: Any) -> None:
+        with self._lock:
+            self._ses = ses
+
+    def frame(self, frame: Any, work: dict[str, Any]) -> None:
+        contacts = work.get("contacts", ())
+        pts = [c for c in contacts if c.pos_mm is not None] or list(contacts)
+        with self._lock:
+            self.frames += 1
+            if self._ses is not None:
+                self._ses.feed(frame.t_capture_s, pts)
+
+    def play(self, trial: dict[str, Any]) -> dict[str, Any]:
+        s = trial["stimulus"]
+        eff = self.plugins.provider(
+            "effect", contracts.KnobTrials, self.profile, plugin_hint="electrostatic"
+        )
+        res = eff.knob_live_trial(
+            condition=s["condition"],
+            sectors=int(s["sectors"]),
+            distance_deg=float(s["distance_deg"]),
+            outputs=self.outputs,
+            attach=self.attach,
+            max_time_s=LIVE_KNOB_MAX_S,
+        )
+        if res.get("error"):
+            raise UserError(f"trial {trial['index'] + 1}: the outputs stopped it: {res['error']}")
+        return res

@@ -209,3 +209,68 @@ def test_a_person_answers_on_the_projected_arrows_the_camera_sees(
             assert [e["response"] for e in done] == want
 
     asyncio.run(scenario())
+
+
+def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
+    double_plugins, tmp_path, monkeypatch
+):
+    """Knob trials with a person from the screen: each streams through the outputs while
+    the console's camera loop feeds it (on the twin nobody turns it: it times out), then
+    the participant scores the 14 items with 1..7."""
+    from console.tui.app import HapTableApp
+    from plugins.studies import protocol as P
+    from plugins.studies import stimuli
+
+    monkeypatch.setattr(stimuli, "LIVE_KNOB_MAX_S", 0.5)
+    text = P.find("knob").read_text().replace("repetitions = 6", "repetitions = 2")
+    text = text.replace('["V", "HD", "HD+CF", "HD+VF"]', '["HD+CF"]')
+    text = text.replace("sectors = [8, 16, 32]", "sectors = [8]").replace(
+        "[135, 270, 450]", "[135]"
+    )
+    path = tmp_path / "knob-small.toml"
+    path.write_text(text)
+    hooked = []
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            pane = app.pane("studies")
+            sel = pane.query_one("#protocol")
+            sel.set_options([(n, n) for n in (*P.available(), str(path))])
+            await pilot.pause(0.2)
+            sel.value = str(path)
+            pane.query_one("#out").value = str(tmp_path)
+            pane.query_one("#simulate").value = False
+            for wid, v in (
+                ("age", "40"),
+                ("sex", "other"),
+                ("handedness", "right"),
+                ("hand_width_cm", "9"),
+                ("hand_length_cm", "19"),
+            ):
+                pane.query_one(f"#{wid}").value = v
+            pane.query_one("#consent").value = True
+            await pilot.pause(0.2)
+            await pilot.click("#start")
+            await wait_for(pilot, lambda: app.session.camera.frame_hooks, 60, "camera hooked")
+            hooked.append(len(app.session.camera.frame_hooks))
+            for k in range(14):
+                await wait_for(
+                    pilot, lambda: pane.asking and "item" in pane.asking, 60, f"item {k}"
+                )
+                pane.focus()
+                await pilot.press(str(1 + k % 7))
+            await wait_for(pilot, lambda: pane.running is None, 60, "finished")
+            assert "finished" in pane.last["stopped"]
+            assert not app.session.camera.frame_hooks  # the camera hook went with the run
+
+    asyncio.run(scenario())
+    events = _events(tmp_path / "P01" / "trials.jsonl")
+    done = [e for e in events if e["event"] == "done"]
+    assert len(done) == 2 and all(e["timed_out"] and not e["correct"] for e in done)
+    assert all(e["condition"] == "HD+CF" and e["response"] is None for e in done)
+    qs = [e for e in events if e["event"] == "questionnaire"]
+    assert sorted(q["score"] for q in qs) == sorted(1 + k % 7 for k in range(14))
+    assert hooked == [1]

@@ -296,3 +296,41 @@ def test_places_off_the_map_are_one_line(tmp_path, small_exp2, map_file):
     p.write_text(text)
     with pytest.raises(UserError, match="pair 4: left point 22 .* is not left of right point 33"):
         check_places(make_plan(P.load(p), "P01"), load_map(map_file))
+
+
+def test_a_live_knob_trial_streams_through_the_gate_while_contacts_turn_it(
+    outputs, profile, plugins
+):
+    """A person's knob trial (``LiveKnob``): the camera's contacts (here a two-finger
+    rotation as the camera loop would deliver it) turn the knob to the target; the trial
+    ends there with its measures, and its feedback went through the gate."""
+    import time
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from plugins.electrostatic.simulate import min_jerk, rotation_frames
+    from plugins.studies.stimuli import LiveKnob
+
+    live = LiveKnob(plugins, profile, outputs)
+    trial = {
+        "index": 0,
+        "stimulus": {"task": "knob", "condition": "HD+CF", "sectors": 8, "distance_deg": 135.0},
+    }
+    got = {}
+    t = threading.Thread(target=lambda: got.update(live.play(trial)))
+    t.start()
+    t0 = time.monotonic()
+    while t.is_alive() and time.monotonic() - t0 < 10:
+        s = time.monotonic() - t0
+        angle = float(min_jerk(np.array([s]), 0.3, 1.2, 0.0, 135.0)[0])
+        ((_, contacts),) = rotation_frames(np.array([angle]), np.array([s]))
+        live.frame(SimpleNamespace(t_capture_s=time.monotonic()), {"contacts": contacts})
+        time.sleep(1 / 60)
+    t.join(10)
+    assert not got["timed_out"] and got["error"] == ""
+    assert got["target_item"] - got["start_item"] == 3
+    assert 1.0 < got["completion_time_s"] < 5.0
+    assert got["detents"] >= 3 and live.frames > 60
+    rec = outputs.recording()
+    assert abs(rec[:, 1]).max() > 10.0  # HD+CF: friction and detents on the screen channel
