@@ -469,7 +469,8 @@ class DemoFactory(Protocol):
 # --------------------------------------------------------------------------- studies
 @runtime_checkable
 class SimulatedObserver(Protocol):
-    """A simulated participant answering a study's trials (``study run --simulate``).
+    """A simulated participant answering a study's trials. ``haptable study run
+    --simulate`` asks the first one registered.
 
     ``respond(trial, played, *, participant_seed) -> (response, response_time_s)``: the
     answer to one trial of a plan (the ``plan.json`` trial: ``direction``, ``pair`` or
