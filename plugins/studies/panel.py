@@ -244,9 +244,10 @@ class StudiesPane(Vertical):
 
         try:
             res = run_study(session, spec, control, responder, emit)
-        except UserError as exc:
-            session.fail(TOPIC, str(exc), name=pid)
-            session.emit(Stopped(TOPIC, name=pid, reason=str(exc)))
+        except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
+            why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
+            session.fail(TOPIC, why, name=pid)
+            session.emit(Stopped(TOPIC, name=pid, reason=why))
             return
         why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
         session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))

@@ -253,7 +253,13 @@ def open_run(out: Path, pid: str, plan: dict[str, Any]) -> tuple[RunFiles, dict[
     trial, or the stored one when its protocol and seed agree (a resume; a trial in flight
     at a crash is marked ``interrupted``). Returns the files and the plan to follow."""
     files = RunFiles(participant_dir(out, pid))
-    files.root.mkdir(parents=True, exist_ok=True)
+    try:
+        files.root.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(
+            f"{files.root}: cannot make the participant's folder ({exc.strerror or exc}); "
+            "give a writable --out"
+        ) from None
     if files.plan_path.is_file():
         stored = read_json(files.plan_path)
         for key in ("experiment", "protocol_sha256"):

@@ -189,6 +189,12 @@ def test_pause_holds_between_trials(tmp_path, small_exp2):
     assert progress(plan, files.events()).next_trial is None
 
 
+def test_an_unwritable_folder_is_one_line(tmp_path, small_exp2):
+    (tmp_path / "file").write_text("")
+    with pytest.raises(UserError, match="cannot make the participant's folder .* writable --out"):
+        open_run(tmp_path / "file", "P01", make_plan(P.load(small_exp2), "P01"))
+
+
 def test_a_changed_protocol_does_not_resume_an_old_plan(tmp_path, small_exp2):
     open_run(tmp_path, "P01", make_plan(P.load(small_exp2), "P01"))
     small_exp2.write_text(
