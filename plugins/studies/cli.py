@@ -113,6 +113,11 @@ def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
 def _line(kind: str, info: dict[str, Any]) -> str | None:
     if kind == "done":
         r = info["record"]
+        if not r.get("simulated") and r.get("response") is not None:
+            # a participant may read the terminal: no right answer shown (it is in the file)
+            return (
+                f"  {r['participant']} trial {r['trial'] + 1}: answered ({r['replays']} replay(s))"
+            )
         what = " ".join(
             str(r[k]) for k in ("phase", "pair", "region", "direction", "condition") if r.get(k)
         )

@@ -78,6 +78,9 @@ def test_a_person_needs_their_details_and_consent(
     keys = iter(["0", "8", "x", "6", "8", "2", "4", "6"])
     monkeypatch.setattr("builtins.input", lambda prompt="": next(keys))
     assert cli([*base, *details, "--consent"]) == 0
+    out = capsys.readouterr().out
+    assert "P01 trial 1: answered (1 replay(s))" in out
+    assert "correct" not in out and "wrong" not in out  # the participant may read it
     done = _done(tmp_path / "P01")
     assert len(done) == 6 and done[0]["replays"] == 1 and done[0]["response"] == "up"
     part = json.loads((tmp_path / "P01" / "participant.json").read_text())
