@@ -407,43 +407,43 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
         cur = session.vibration.current_map()
         vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
         check_places(prep.plan, vmap)
-    live = None
-    if proto.stimulus == "knob" and not spec["simulate"]:
-        if session.outputs is None:
-            raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
-        from .stimuli import LiveKnob
-
-        live = LiveKnob(pm, profile, session.outputs)
-        session.camera.frame_hooks.append(live.frame)
-        session.camera.watch(live, True)
-        if session.camera.error:
-            session.camera.frame_hooks.remove(live.frame)
-            session.camera.watch(live, False)
-            raise UserError(f"camera: {session.camera.error}")
-    player = EffectPlayer(
-        pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed, live_knob=live
-    )
     resp = (
         ObserverResponder(obs, prep.participant_seed)
         if spec["simulate"]
         else _Asking(responder, emit)
     )
-    projected = None
-    if spec.get("projector") and not spec["simulate"]:
-        if not proto.scene:
-            raise UserError(f"{proto.path}: no [study] scene to answer on; untick 'projector'")
-        from .projected import ProjectedAnswers
-
-        projected = ProjectedAnswers(session, responder, proto.scene)
-        projected.open()
+    projected: Any = None
+    live: Any = None
 
     def notify(kind: str, info: dict[str, Any]) -> None:
         if projected is not None:
             projected.notice(kind, info)
         emit(kind, info)
 
-    session.emit(Started(TOPIC, name=spec["pid"], detail=f"{proto.title} -> {prep.files.root}"))
     try:
+        if spec.get("projector") and not spec["simulate"]:
+            if not proto.scene:
+                raise UserError(f"{proto.path}: no [study] scene to show; untick 'projector'")
+            from .projected import ProjectedAnswers
+
+            projected = ProjectedAnswers(session, responder, proto.scene)
+            projected.open()
+        if proto.stimulus == "knob" and not spec["simulate"]:
+            if session.outputs is None:
+                raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
+            from .stimuli import LiveKnob
+
+            show = projected.show if projected is not None else None
+            live = LiveKnob(pm, profile, session.outputs, show=show)
+            session.camera.frame_hooks.append(live.frame)
+            session.camera.watch(live, True)
+            if session.camera.error:
+                raise UserError(f"camera: {session.camera.error}")
+        player = EffectPlayer(
+            pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed, live_knob=live
+        )
+        detail = f"{proto.title} -> {prep.files.root}"
+        session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
         return run_plan(
             prep.files,
             prep.plan,

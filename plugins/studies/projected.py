@@ -1,4 +1,5 @@
-"""Answers from the projected arrow buttons: the camera sees the touch (exp2, Fig. 12b).
+"""The protocol's projected scene: answers from the arrow buttons the camera sees
+touched (exp2, Fig. 12b), and the knob and its menu during knob trials (Fig. 16a).
 
 The protocol names the scene (``[study] scene``, ``flow_hand`` for experiment 2: the
 hand-placement guide on the trial's region and four arrow buttons beside it). During a
@@ -7,7 +8,9 @@ guide to each trial's region (``{"type": "region"}``), marks the stimulus playin
 (``{"type": "playing"}``), and passes each new fingertip contact the camera loop sees
 (``contacts`` with ``pos_mm``) to the scene as a ``touch``; when the scene's state then has
 a ``selected`` arrow, that direction is the answer. A finger must lift before it answers
-again (a resting finger answers once).
+again (a resting finger answers once). For the knob (``scene = "knob"``) each trial sets
+the scene's sectors and distance (``{"type": "trial"}``) and the live knob session's state
+is shown as the finger turns it (``show``, ``LiveKnob``).
 """
 
 from __future__ import annotations
@@ -66,8 +69,24 @@ class ProjectedAnswers:
             raise UserError("the projector stopped; start the study again")
         return svc.update(event)
 
+    def show(self, event: dict[str, Any]) -> Any:
+        """Pass an event to the scene (the knob's state while a knob trial runs)."""
+        return self._update(event)
+
     def notice(self, kind: str, info: dict[str, Any]) -> None:
-        """Follow the run (the runner's notices): region, playing, waiting for an answer."""
+        """Follow the run (the runner's notices): region, playing, waiting for an answer;
+        a knob trial's sectors and distance."""
+        if kind == "start" and info["trial"]["stimulus"].get("task") == "knob":
+            s, i = info["trial"]["stimulus"], info["trial"]["index"]
+            self._update(
+                {
+                    "type": "trial",
+                    "sectors": s["sectors"],
+                    "distance_deg": s["distance_deg"],
+                    "seed": i,
+                }
+            )
+            return
         if kind == "start":
             self.armed = False
             region = info["trial"].get("region")

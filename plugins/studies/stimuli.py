@@ -13,6 +13,7 @@ only the contracts (``console.contracts``), never the plugins that offer them.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import threading
@@ -145,10 +146,18 @@ class LiveKnob:
     the gate), fed the contacts of each camera frame (``frame(frame, work)``, a camera
     loop's frame hook)."""
 
-    def __init__(self, plugins: Any, profile: Any, outputs: Any) -> None:
+    def __init__(
+        self,
+        plugins: Any,
+        profile: Any,
+        outputs: Any,
+        show: Callable[[dict[str, Any]], Any] | None = None,
+    ) -> None:
         self.plugins = plugins
         self.profile = profile
         self.outputs = outputs
+        self.show = show  # the projected knob scene's update(event), when one shows
+        self._shown_at = 0.0
         self._ses: Any = None
         self._lock = threading.Lock()
         self.frames = 0
@@ -162,8 +171,13 @@ class LiveKnob:
         pts = [c for c in contacts if c.pos_mm is not None] or list(contacts)
         with self._lock:
             self.frames += 1
-            if self._ses is not None:
-                self._ses.feed(frame.t_capture_s, pts)
+            ses = self._ses
+            if ses is not None:
+                ses.feed(frame.t_capture_s, pts)
+        if ses is not None and self.show is not None and frame.t_capture_s - self._shown_at >= 0.04:
+            self._shown_at = frame.t_capture_s
+            with contextlib.suppress(Exception):  # the projector going away never stops a trial
+                self.show(ses.scene_event())
 
     def play(self, trial: dict[str, Any]) -> dict[str, Any]:
         s = trial["stimulus"]

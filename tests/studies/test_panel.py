@@ -243,6 +243,7 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
             sel.value = str(path)
             pane.query_one("#out").value = str(tmp_path)
             pane.query_one("#simulate").value = False
+            pane.query_one("#projector").value = True  # the knob and its menu (Fig. 16a)
             for wid, v in (
                 ("age", "40"),
                 ("sex", "other"),
@@ -260,6 +261,13 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
                 await wait_for(
                     pilot, lambda: pane.asking and "item" in pane.asking, 60, f"item {k}"
                 )
+                if k == 0:  # the projector shows the last trial's knob: 8 sectors, 135 deg
+                    svc = app.session.projector
+                    st = svc.scene.state()
+                    assert svc.scene_name == "knob" and st["sectors"] == 8
+                    assert st["target"] - svc.scene.start == 3
+                    # the camera feeds the projected buttons' watcher and the live knob
+                    hooked.append(len(app.session.camera.frame_hooks))
                 pane.focus()
                 await pilot.press(str(1 + k % 7))
             await wait_for(pilot, lambda: pane.running is None, 60, "finished")
@@ -273,4 +281,4 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
     assert all(e["condition"] == "HD+CF" and e["response"] is None for e in done)
     qs = [e for e in events if e["event"] == "questionnaire"]
     assert sorted(q["score"] for q in qs) == sorted(1 + k % 7 for k in range(14))
-    assert hooked == [1]
+    assert hooked[-1] == 2
