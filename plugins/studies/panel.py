@@ -386,7 +386,7 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     from .responders import ObserverResponder, observer
     from .runner import run_plan
     from .start import prepare
-    from .stimuli import EffectPlayer, check_places
+    from .stimuli import EffectPlayer, check_places, play_on_session
 
     pm, profile = session.plugins, session.profile
     proto = protocols.load(spec["study"])
@@ -440,7 +440,12 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
             if session.camera.error:
                 raise UserError(f"camera: {session.camera.error}")
         player = EffectPlayer(
-            pm, profile, vmap, session.play_plan, knob_seed=prep.participant_seed, live_knob=live
+            pm,
+            profile,
+            vmap,
+            play_on_session(session),
+            knob_seed=prep.participant_seed,
+            live_knob=live,
         )
         detail = f"{proto.title} -> {prep.files.root}"
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))

@@ -95,7 +95,7 @@ class EffectPlayer:
                 cx, cy = s["center_mm"]
                 plan = eff.render_hand_flow((float(cx), float(cy)), s["direction"], self.vmap)
             else:
-                raise UserError(f"trial {trial['index'] + 1}: no effect plays {s!r}")
+                raise UserError(f"no effect plays {s!r}")
             self._plans[k] = plan
         return plan
 
@@ -107,7 +107,7 @@ class EffectPlayer:
             return knob_trial(self.plugins, self.profile, trial, self.knob_seed, attempt)
         plan = self.prepare(trial)
         if self._play(plan) is False:
-            raise UserError(f"trial {trial['index'] + 1}: the outputs refused {plan.name!r}")
+            raise UserError(f"the outputs refused {plan.name!r}")
         return plan
 
 
@@ -193,5 +193,21 @@ class LiveKnob:
             max_time_s=LIVE_KNOB_MAX_S,
         )
         if res.get("error"):
-            raise UserError(f"trial {trial['index'] + 1}: the outputs stopped it: {res['error']}")
+            raise UserError(f"the outputs stopped it: {res['error']}")
         return res
+
+
+def play_on_session(session: Any) -> Callable[[OutputPlan], bool]:
+    """``play(plan)`` through the console session (``play_plan``: the gate, the session's
+    record of what played); a refusal says why (the e-stop and its reason)."""
+
+    def play(plan: OutputPlan) -> bool:
+        if session.play_plan(plan):
+            return True
+        out = session.outputs
+        st = out.gate.status() if out is not None else {}
+        if st.get("estopped"):
+            raise UserError(f"e-stop ({st.get('estop_reason') or 'no reason given'}): {plan.name}")
+        raise UserError(f"the outputs refused {plan.name!r} (the console's message says why)")
+
+    return play

@@ -282,3 +282,29 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
     qs = [e for e in events if e["event"] == "questionnaire"]
     assert sorted(q["score"] for q in qs) == sorted(1 + k % 7 for k in range(14))
     assert hooked[-1] == 2
+
+
+def test_the_e_stop_stops_a_run_and_its_trial_is_repeated(double_plugins, map_file, tmp_path):
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            pane = app.pane("studies")
+            pane.query_one("#protocol").value = "exp1"
+            pane.query_one("#out").value = str(tmp_path)
+            await pilot.click("#start")
+            await wait_for(pilot, lambda: pane.last.get("done", 0) >= 1, what="a trial done")
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
+            assert "e-stop" in pane.last["stopped"]
+            assert not app.session.outputs.status()["busy"]
+            assert app.session.outputs.gate.estopped
+
+    asyncio.run(scenario())
+    events = _events(tmp_path / "P01" / "trials.jsonl")
+    assert events[-1]["event"] == "interrupted" and "e-stop" in events[-1]["reason"]
+    assert events[-2] == {**events[-2], "event": "start", "trial": events[-1]["trial"]}
