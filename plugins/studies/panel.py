@@ -59,7 +59,9 @@ class StudiesPane(Vertical):
     StudiesPane #study-form Input { width: 14; }
     StudiesPane #study-form Select { width: 16; }
     StudiesPane #study-person { height: auto; }
-    StudiesPane #study-person Input { width: 12; }
+    StudiesPane #study-person Input { width: 11; }
+    StudiesPane #study-buttons Button { min-width: 10; }
+    StudiesPane #study-answers Button { min-width: 7; }
     StudiesPane #study-buttons { height: auto; }
     StudiesPane #study-answers { height: auto; }
     StudiesPane #study-status { height: auto; }
