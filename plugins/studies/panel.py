@@ -41,6 +41,16 @@ def default_out() -> Path:
     return paths.data_dir("studies")
 
 
+def next_id(pid: str) -> str:
+    """The next participant's id (``P01`` -> ``P02``; an id without a number: itself)."""
+    import re
+
+    m = re.match(r"^(.*?)(\d+)$", pid)
+    if not m:
+        return pid
+    return f"{m.group(1)}{int(m.group(2)) + 1:0{len(m.group(2))}d}"
+
+
 def trial_text(t: dict[str, Any]) -> str:
     """A trial as the experimenter reads it: phase, place, direction or condition."""
     place = t.get("region") or (f"pair {t['pair']}" if t.get("pair") else "")
@@ -267,6 +277,10 @@ class StudiesPane(Vertical):
             self.running = None
             self.asking = None
             self.last["stopped"] = ev.reason
+            if ev.reason.startswith("finished"):  # ready for the next participant
+                field = self.query_one("#participant", Input)
+                if field.value.strip() == ev.name:
+                    field.value = next_id(ev.name)
             self._show()
         elif isinstance(ev, Failed):
             self.last["error"] = ev.message

@@ -273,6 +273,7 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
             await wait_for(pilot, lambda: pane.running is None, 60, "finished")
             assert "finished" in pane.last["stopped"]
             assert not app.session.camera.frame_hooks  # the camera hook went with the run
+            assert pane.query_one("#participant").value == "P02"  # ready for the next one
 
     asyncio.run(scenario())
     events = _events(tmp_path / "P01" / "trials.jsonl")
@@ -308,3 +309,15 @@ def test_the_e_stop_stops_a_run_and_its_trial_is_repeated(double_plugins, map_fi
     events = _events(tmp_path / "P01" / "trials.jsonl")
     assert events[-1]["event"] == "interrupted" and "e-stop" in events[-1]["reason"]
     assert events[-2] == {**events[-2], "event": "start", "trial": events[-1]["trial"]}
+
+
+def test_the_next_participant_id():
+    from plugins.studies.panel import next_id
+
+    assert [next_id(p) for p in ("P01", "P09", "S099", "P1", "alice")] == [
+        "P02",
+        "P10",
+        "S100",
+        "P2",
+        "alice",
+    ]
