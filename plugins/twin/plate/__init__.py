@@ -197,6 +197,21 @@ def haptable_register_vibrometers(register) -> None:
 
 
 @hookimpl
+def haptable_register_observers(register) -> None:
+    def factory(profile):
+        from .observer import TwinObserver
+
+        return TwinObserver(profile)
+
+    register(
+        "twin",
+        factory,
+        description="simulated participant: the plate twin's vibration under the finger or "
+        "hand, threshold, JND, lapse (plate/observer.py)",
+    )
+
+
+@hookimpl
 def haptable_register_commands(register) -> None:
     from . import cli
 
