@@ -50,6 +50,9 @@ def configure(p: argparse.ArgumentParser) -> None:
     r.add_argument("--json", action="store_true", help="print a JSON summary at the end")
     r.add_argument("--quiet", action="store_true", help="no line per trial")
     sub.add_parser("list", help="the protocols in studies/ and their trial counts")
+    from .analyze_cli import add_parser
+
+    add_parser(sub)
 
 
 def _ids(args: argparse.Namespace) -> list[str]:
@@ -137,6 +140,10 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
 
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
+    if args.study_cmd == "analyze":
+        from . import analyze_cli
+
+        return analyze_cli.run(args)
     if args.study_cmd == "list":
         for name in protocols.available():
             p = protocols.load(name)

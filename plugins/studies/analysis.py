@@ -1,0 +1,491 @@
+"""``haptable study analyze DIR...``: the runs' files read back and analysed.
+
+Reads each participant's ``participant.json``, ``plan.json`` and the ``done`` and
+``questionnaire`` lines of ``trials.jsonl`` (the last ``done`` per trial; the columns in
+this package's README.md). Experiments 1 and 2 (the ``main`` phase; practice phases are
+reported apart): accuracy per participant, direction, pair or region and cell; a two-way
+repeated-measures ANOVA on the per-participant cell accuracies (pingouin ``rm_anova``,
+Mauchly's test, Greenhouse-Geisser, partial eta squared), Bonferroni post-hoc
+comparisons (pingouin ``pairwise_tests``) and simple main effects (a one-way RM-ANOVA of
+each factor at each level of the other, Bonferroni over the levels). The knob:
+completion time, overshoots and recovery time by condition x sectors x distance and a
+three-way RM-ANOVA of each (``rmanova.py``: pingouin stops at two factors), and a one-way
+RM-ANOVA of each questionnaire category over the conditions.
+
+An ANOVA needs every participant in every cell with the plan's number of trials: missing
+cells or unequal counts give one line saying who and what (``skipped``), never an F.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from console.errors import UserError
+
+from .rmanova import rm_anova
+from .store import read_events, read_json
+
+#: Factors of each experiment's main phase (the plan's trial keys).
+FACTORS = {"exp1": ("pair", "direction"), "exp2": ("region", "direction")}
+KNOB_MEASURES = ("completion_time_s", "overshoots", "recovery_time_s")
+KNOB_FACTORS = ("condition", "sectors", "distance_deg")
+DONE_KEYS = ("participant", "experiment", "phase", "trial")
+
+
+@dataclass
+class Study:
+    """Everything read from the folders: one experiment."""
+
+    experiment: str
+    participants: dict[str, dict[str, Any]]
+    plans: dict[str, dict[str, Any]]
+    trials: Any  # pandas DataFrame of the done records
+    questionnaire: Any  # pandas DataFrame of the questionnaire lines
+    notes: list[str] = field(default_factory=list)
+
+
+def participant_dirs(paths: list[Path]) -> list[Path]:
+    """Each path is a participant's folder (it holds ``plan.json``) or a study's
+    ``--out`` folder (its sub-folders that do)."""
+    out: list[Path] = []
+    for p in paths:
+        p = Path(p).expanduser()
+        if not p.is_dir():
+            raise UserError(f"{p}: no such folder; give the --out folder of `haptable study run`")
+        if (p / "plan.json").is_file():
+            out.append(p)
+            continue
+        subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "plan.json").is_file())
+        if not subs:
+            raise UserError(
+                f"{p}: no participant folder (P01/plan.json ...) in it; give the --out folder "
+                "of `haptable study run`"
+            )
+        out.extend(subs)
+    return list(dict.fromkeys(out))
+
+
+def load(paths: list[Path], *, exclude: tuple[str, ...] = ()) -> Study:
+    """The study in ``paths`` (one experiment; participants in ``exclude`` left out)."""
+    import pandas as pd
+
+    dirs = participant_dirs(paths)
+    done, quest, parts, plans, notes, twice = [], [], {}, {}, [], []
+    exps: dict[str, list[str]] = {}
+    for d in dirs:
+        plan = read_json(d / "plan.json")
+        if not isinstance(plan, dict) or "experiment" not in plan or "trials" not in plan:
+            raise UserError(f"{d / 'plan.json'}: not a study plan (no experiment/trials)")
+        pid = str(plan.get("participant") or d.name)
+        if pid in exclude:
+            notes.append(f"{pid}: left out (--exclude)")
+            continue
+        exps.setdefault(plan["experiment"], []).append(pid)
+        if pid in plans:
+            twice.append(f"{d}: participant {pid} appears twice; give each folder once")
+            continue
+        plans[pid] = plan
+        pj = d / "participant.json"
+        parts[pid] = read_json(pj) if pj.is_file() else {"id": pid}
+        last: dict[int, dict] = {}
+        for n, e in enumerate(read_events(d / "trials.jsonl"), 1):
+            ev = e.get("event")
+            if ev == "done":
+                miss = [k for k in DONE_KEYS if k not in e]
+                if miss:
+                    raise UserError(
+                        f"{d / 'trials.jsonl'}: event {n} ('done') has no {', '.join(miss)}; "
+                        "the file is not from `haptable study run` or was edited"
+                    )
+                last[int(e["trial"])] = e
+            elif ev == "questionnaire":
+                quest.append({k: e.get(k) for k in ("condition", "category", "item", "score")})
+                quest[-1]["participant"] = pid
+                quest[-1]["after_trial"] = e.get("after_trial")
+        done.extend(last.values())
+        total = len(plan["trials"])
+        if len(last) < total:
+            notes.append(f"{pid}: {len(last)}/{total} trials done (run not finished)")
+    if len(exps) > 1:
+        raise UserError(
+            "the folders hold different experiments ("
+            + "; ".join(f"{k}: {', '.join(v)}" for k, v in exps.items())
+            + "); analyse one experiment at a time"
+        )
+    if twice:
+        raise UserError(twice[0])
+    if not exps:
+        raise UserError("no participant left to analyse")
+    exp = next(iter(exps))
+    trials = pd.DataFrame(done)
+    if trials.empty:
+        raise UserError(f"{', '.join(map(str, paths))}: no trial is done yet; run some first")
+    q = pd.DataFrame(quest)
+    if not q.empty:  # the last answer per participant, condition and item
+        q = q.drop_duplicates(["participant", "after_trial", "category", "item"], keep="last")
+    return Study(exp, parts, plans, trials, q, notes)
+
+
+# --------------------------------------------------------------------------- accuracy
+def _summary(df, by: str) -> list[dict[str, Any]]:
+    """Mean, SD and SEM over participants of their accuracy per level of ``by``."""
+    per = df.groupby(["participant", by], sort=False)["correct"].mean().unstack(by)
+    out = []
+    for level in per.columns:
+        col = per[level].dropna() * 100
+        n = int(col.size)
+        sd = float(col.std(ddof=1)) if n > 1 else math.nan
+        out.append(
+            {
+                by: level,
+                "accuracy_pct": float(col.mean()),
+                "sd_pct": _num(sd),
+                "sem_pct": _num(sd / math.sqrt(n) if n > 1 else math.nan),
+                "participants": n,
+                "trials": int(df[df[by] == level].shape[0]),
+            }
+        )
+    return out
+
+
+def _num(x: float) -> float | None:
+    return None if x is None or not math.isfinite(float(x)) else float(x)
+
+
+def accuracy(study: Study) -> dict[str, Any]:
+    """Accuracy tables of experiment 1 or 2 (main phase; practice apart)."""
+    df = study.trials
+    df = df.assign(correct=df["correct"].astype(bool))
+    a, b = FACTORS[study.experiment]
+    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    practice = df[df["phase"] != "main"]
+    per_p = main.groupby("participant")["correct"].agg(["mean", "size"])
+    out: dict[str, Any] = {
+        "participants": [
+            {"participant": p, "accuracy_pct": 100 * float(r["mean"]), "trials": int(r["size"])}
+            for p, r in per_p.iterrows()
+        ],
+        "overall_pct": 100 * float(main["correct"].mean()),
+        f"by_{b}": _summary(main, b),
+        f"by_{a}": _summary(main, a),
+        "cells": [
+            {a: ka, b: kb, **row}
+            for ka, sub in main.groupby(a, sort=False)
+            for row in _summary(sub, b)
+            for kb in [row[b]]
+        ],
+    }
+    if not practice.empty:
+        out["practice"] = {
+            ph: 100 * float(sub["correct"].mean()) for ph, sub in practice.groupby("phase")
+        }
+    if "replays" in main:
+        out["replays_mean"] = float(main["replays"].fillna(0).mean())
+    if "response_time_s" in main:
+        rt = main["response_time_s"].dropna()
+        out["response_time_s_median"] = float(rt.median()) if rt.size else None
+    return out
+
+
+# --------------------------------------------------------------------------- balance
+def design_counts(study: Study, factors: tuple[str, ...], phase: str | None) -> dict[tuple, int]:
+    """Trials per cell the plans ask for (the first participant's plan; the plans of
+    one protocol have the same cells)."""
+    counts: dict[tuple, int] = {}
+    plan = next(iter(study.plans.values()))
+    for t in plan["trials"]:
+        if phase is not None and t.get("phase") != phase:
+            continue
+        key = tuple(_level(t.get(f) if f in t else t["stimulus"].get(f)) for f in factors)
+        counts[key] = counts.get(key, 0) + 1
+    return counts
+
+
+def _level(v: Any) -> Any:
+    return int(v) if isinstance(v, float) and v.is_integer() else v
+
+
+def balance_problem(
+    df, factors: tuple[str, ...], want: dict[tuple, int], *, exact: bool = True
+) -> str | None:
+    """Why the cells are not complete and (``exact``) balanced (None: they are)."""
+    have = df.groupby(["participant", *factors]).size()
+    missing, short = [], []
+    for pid in sorted(set(df["participant"])):
+        for cell, n in want.items():
+            got = int(have.get((pid, *cell), 0))
+            label = "/".join(map(str, cell))
+            if got == 0:
+                missing.append(f"{pid} {label}")
+            elif exact and got != n:
+                short.append(f"{pid} {label} ({got} of {n})")
+    if missing:
+        more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+        return (
+            f"missing cells: {', '.join(missing[:3])}{more}; finish those runs (the same "
+            "`study run` command resumes) or leave the participants out with --exclude"
+        )
+    if short:
+        more = f" and {len(short) - 3} more" if len(short) > 3 else ""
+        return (
+            f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or leave "
+            "the participants out with --exclude"
+        )
+    if df["participant"].nunique() < 2:
+        return "one participant: an ANOVA needs at least two"
+    return None
+
+
+# --------------------------------------------------------------------------- two-way
+def _clean(df) -> list[dict[str, Any]]:
+    out = []
+    for rec in df.to_dict("records"):
+        out.append(
+            {
+                str(k): (
+                    _num(v)
+                    if isinstance(v, (float, np.floating))
+                    else (v.item() if isinstance(v, np.generic) else v)
+                )
+                for k, v in rec.items()
+            }
+        )
+    return out
+
+
+def two_way(df, dv: str, a: str, b: str) -> dict[str, Any]:
+    """Two-way RM-ANOVA of ``dv`` (one value per participant and cell) with sphericity,
+    post-hoc and simple main effects."""
+    import pingouin as pg
+
+    cells = df.groupby(["participant", a, b], sort=False)[dv].mean().reset_index()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        aov = pg.rm_anova(
+            cells, dv=dv, within=[a, b], subject="participant", detailed=True, effsize="np2"
+        )
+    # sphericity per effect from the contrasts (pingouin's interaction epsilon is
+    # approximate when both factors have more than two levels; it has no Mauchly there)
+    la, lb = list(dict.fromkeys(cells[a])), list(dict.fromkeys(cells[b]))
+    pids = list(dict.fromkeys(cells["participant"]))
+    arr = (
+        cells.set_index(["participant", a, b])[dv]
+        .reindex([(p, x, y) for p in pids for x in la for y in lb])
+        .to_numpy()
+        .reshape(len(pids), len(la), len(lb))
+    )
+    sph = {r.source: r for r in rm_anova(arr, [a, b])}
+    table = []
+    for rec in _clean(aov):
+        src = str(rec["Source"])
+        r = sph.get(src)
+        row = {
+            "source": src,
+            "ss": rec.get("SS"),
+            "df1": rec.get("DF") if "DF" in rec else rec.get("ddof1"),
+            "df2": rec.get("ddof2") or (r.df2 if r else None),
+            "f": rec.get("F"),
+            "p": rec.get("p-unc"),
+            "np2": rec.get("np2"),
+        }
+        if r is not None:
+            row.update(
+                {
+                    "df1": r.df1,
+                    "df2": r.df2,
+                    "eps_gg": r.eps_gg,
+                    "p_gg": _num(r.p_gg),
+                    "mauchly_w": _num(r.mauchly_w),
+                    "mauchly_p": _num(r.mauchly_p),
+                    "sphericity": r.sphericity,
+                }
+            )
+            row["p_reported"] = row["p"] if r.sphericity == "assumed" else row["p_gg"]
+        table.append(row)
+    table = [r for r in table if r["source"] in sph]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        post = pg.pairwise_tests(cells, dv=dv, within=[a, b], subject="participant", padjust="bonf")
+    keep = [c for c in ("Contrast", a, "A", "B", "T", "dof", "p-unc", "p-corr") if c in post]
+    return {
+        "dv": dv,
+        "factors": [a, b],
+        "participants": len(pids),
+        "anova": table,
+        "posthoc_bonferroni": _clean(post[keep]),
+        "simple_main_effects": simple_main_effects(cells, dv, a, b)
+        + simple_main_effects(cells, dv, b, a),
+    }
+
+
+def simple_main_effects(cells, dv: str, of: str, at: str) -> list[dict[str, Any]]:
+    """One-way RM-ANOVA of ``of`` at each level of ``at`` (GG-corrected p when Mauchly's
+    test rejects sphericity), p Bonferroni-corrected over the levels of ``at``."""
+    levels = list(dict.fromkeys(cells[at]))
+    out = []
+    for lev in levels:
+        sub = cells[cells[at] == lev]
+        pids = list(dict.fromkeys(sub["participant"]))
+        lo = list(dict.fromkeys(sub[of]))
+        arr = (
+            sub.set_index(["participant", of])[dv]
+            .reindex([(p, x) for p in pids for x in lo])
+            .to_numpy()
+            .reshape(len(pids), len(lo))
+        )
+        (r,) = rm_anova(arr, [of])
+        p = r.p_reported
+        out.append(
+            {
+                "effect": of,
+                "at": f"{at} = {lev}",
+                "f": _num(r.f),
+                "df1": r.df1,
+                "df2": r.df2,
+                "eps_gg": r.eps_gg,
+                "p": _num(p),
+                "p_bonferroni": _num(min(1.0, p * len(levels))),
+                "np2": _num(r.np2),
+            }
+        )
+    return out
+
+
+# --------------------------------------------------------------------------- knob
+def knob(study: Study) -> dict[str, Any]:
+    """Knob measures by condition x sectors x distance, their three-way RM-ANOVA, and
+    the questionnaire's one-way RM-ANOVA per category."""
+    import pingouin as pg
+
+    df = study.trials.copy()
+    for k in ("sectors", "distance_deg"):
+        if k not in df:
+            df[k] = [s.get(k) for s in df["stimulus"]]
+        df[k] = df[k].map(_level)
+    out: dict[str, Any] = {"measures": {}, "questionnaire": {}}
+    want = design_counts(study, KNOB_FACTORS, None)
+    for m in KNOB_MEASURES:
+        if m not in df:
+            out["measures"][m] = {"skipped": f"no {m} column in the trials"}
+            continue
+        d = df[df[m].notna()].assign(**{m: lambda x, m=m: x[m].astype(float)})
+        desc = (
+            d.groupby(list(KNOB_FACTORS))[m]
+            .agg(["mean", "std", "count"])
+            .reset_index()
+            .rename(columns={"std": "sd", "count": "trials"})
+        )
+        res: dict[str, Any] = {"by_cell": _clean(desc)}
+        res["by_condition"] = _clean(d.groupby("condition")[m].agg(["mean", "std"]).reset_index())
+        # recovery time exists only for trials with an overshoot: a mean per cell over
+        # those, every participant needs at least one in every cell
+        exact = m != "recovery_time_s"
+        why = balance_problem(d, KNOB_FACTORS, want, exact=exact)
+        if why and not exact:
+            why = (
+                "recovery time exists only after an overshoot, and "
+                + why.split(";")[0].replace("missing cells", "these cells had none")
+                + "; the three-way ANOVA needs one in every cell of every participant "
+                "(the means above use the trials that had one)"
+            )
+        if why:
+            res["anova"] = {"skipped": f"{m}: {why}"}
+        else:
+            cells = d.groupby(["participant", *KNOB_FACTORS])[m].mean()
+            pids = sorted(set(d["participant"]))
+            levels = [sorted(set(d[f]), key=_order) for f in KNOB_FACTORS]
+            idx = [
+                (p, a, b, c) for p in pids for a in levels[0] for b in levels[1] for c in levels[2]
+            ]
+            arr = cells.reindex(idx).to_numpy().reshape(len(pids), *map(len, levels))
+            res["anova"] = {
+                "participants": len(pids),
+                "rows": [r.as_dict() for r in rm_anova(arr, list(KNOB_FACTORS))],
+            }
+        out["measures"][m] = res
+    q = study.questionnaire
+    if q is None or q.empty:
+        out["questionnaire"] = {"skipped": "no questionnaire answers in the runs"}
+        return out
+    q = q.assign(score=q["score"].astype(float))
+    cat = q.groupby(["participant", "category", "condition"])["score"].mean().reset_index()
+    for c, sub in cat.groupby("category", sort=False):
+        counts = sub.groupby("participant")["condition"].nunique()
+        ncond = sub["condition"].nunique()
+        res = {
+            "by_condition": _clean(
+                sub.groupby("condition")["score"].agg(["mean", "std"]).reset_index()
+            )
+        }
+        lacking = counts[counts < ncond]
+        if len(lacking) or sub["participant"].nunique() < 2:
+            res["anova"] = {
+                "skipped": (
+                    f"{c}: {', '.join(lacking.index)} rated only {int(lacking.min())} of "
+                    f"{ncond} conditions; finish those runs or --exclude them"
+                    if len(lacking)
+                    else f"{c}: one participant: an ANOVA needs at least two"
+                )
+            }
+        else:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                aov = pg.rm_anova(
+                    sub,
+                    dv="score",
+                    within="condition",
+                    subject="participant",
+                    correction=True,
+                    detailed=True,
+                    effsize="np2",
+                )
+                post = pg.pairwise_tests(
+                    sub, dv="score", within="condition", subject="participant", padjust="bonf"
+                )
+            res["anova"] = _clean(aov)
+            top = res["anova"][0]
+            top["p_reported"] = (
+                top.get("p-GG-corr") if top.get("sphericity") is False else top.get("p-unc")
+            )
+            res["posthoc_bonferroni"] = _clean(
+                post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]
+            )
+        out["questionnaire"][str(c)] = res
+    return out
+
+
+def _order(v: Any) -> tuple:
+    return (0, v, "") if isinstance(v, (int, float)) else (1, 0, str(v))
+
+
+# --------------------------------------------------------------------------- all
+def analyze(study: Study) -> dict[str, Any]:
+    """The analysis as JSON values (``--json``)."""
+    res: dict[str, Any] = {
+        "experiment": study.experiment,
+        "participants": sorted(study.participants),
+        "simulated": sorted(p for p, d in study.participants.items() if d.get("simulated")),
+        "notes": list(study.notes),
+    }
+    if study.experiment == "knob":
+        res["knob"] = knob(study)
+        return res
+    if study.experiment not in FACTORS:
+        raise UserError(f"experiment {study.experiment!r}: the analysis knows exp1, exp2 and knob")
+    res["accuracy"] = accuracy(study)
+    a, b = FACTORS[study.experiment]
+    df = study.trials
+    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    main = main.assign(correct=main["correct"].astype(float))
+    why = balance_problem(main, (a, b), design_counts(study, (a, b), "main"))
+    if why:
+        res["anova"] = {"skipped": f"ANOVA {a} x {b}: not run: {why}"}
+    else:
+        res["anova"] = two_way(main.assign(accuracy=main["correct"]), "accuracy", a, b)
+    return res

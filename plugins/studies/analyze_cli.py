@@ -1,0 +1,100 @@
+"""``haptable study analyze DIR... [--json] [--report out.html] [--exclude P03]``.
+
+DIR is a study's ``--out`` folder (every participant in it) or a participant's folder;
+several may be given (one experiment). Prints the accuracy tables and the ANOVA (or, with
+``--json``, everything ``analysis.analyze`` returns); ``--report`` writes the HTML page
+with the figures (``report.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+
+def add_parser(sub: Any) -> None:
+    a = sub.add_parser("analyze", help="accuracy, RM-ANOVA, figures of finished (or partial) runs")
+    a.add_argument("dirs", nargs="+", type=Path, help="--out folders or participant folders")
+    a.add_argument("--json", action="store_true", help="print the analysis as JSON")
+    a.add_argument("--report", type=Path, default=None, help="write an HTML report here")
+    a.add_argument(
+        "--exclude", action="append", default=[], metavar="ID", help="leave a participant out"
+    )
+
+
+def _lines(res: dict[str, Any]) -> list[str]:
+    out = [f"{res['experiment']}: {len(res['participants'])} participant(s)"]
+    out += [f"  note: {n}" for n in res.get("notes", [])]
+    if "accuracy" in res:
+        acc = res["accuracy"]
+        out.append(f"accuracy (main phase): {acc['overall_pct']:.1f} %")
+        for key in [k for k in acc if k.startswith("by_")]:
+            name = key[3:]
+            out.append(f"  per {name}:")
+            for r in acc[key]:
+                sd = "" if r["sd_pct"] is None else f" (SD {r['sd_pct']:.1f})"
+                out.append(f"    {str(r[name]):<15} {r['accuracy_pct']:5.1f} %{sd}")
+        aov = res["anova"]
+        if "skipped" in aov:
+            out.append(aov["skipped"])
+        else:
+            out.append(
+                f"{' x '.join(aov['factors'])} RM-ANOVA ({aov['participants']} participants):"
+            )
+            out.append(
+                f"  {'source':<22} {'df':>9} {'F':>8} {'p':>9} {'np2':>6} {'Mauchly p':>9} "
+                f"{'eps':>5} {'p (GG)':>9}"
+            )
+            for r in aov["anova"]:
+                mp = "-" if r.get("mauchly_p") is None else f"{r['mauchly_p']:.3f}"
+                out.append(
+                    f"  {r['source']:<22} {r['df1']:>3}, {r['df2']:<4} {r['f']:8.2f} "
+                    f"{r['p']:9.2g} {r['np2']:6.3f} {mp:>9} {r['eps_gg']:5.2f} "
+                    f"{r['p_gg']:9.2g}  ({r['sphericity']})"
+                )
+    if "knob" in res:
+        for m, r in res["knob"]["measures"].items():
+            a = r.get("anova", r)
+            if "skipped" in a:
+                out.append(f"{m}: {a['skipped']}")
+                continue
+            out.append(f"{m}: three-way RM-ANOVA ({a['participants']} participants)")
+            for row in a["rows"]:
+                out.append(
+                    f"  {row['source']:<36} F({row['df1']}, {row['df2']}) = {row['f']:.2f}, "
+                    f"p = {row['p_reported']:.2g} ({row['sphericity']}), np2 = {row['np2']:.3f}"
+                )
+        q = res["knob"]["questionnaire"]
+        if "skipped" in q:
+            out.append(q["skipped"])
+        for c, r in q.items() if "skipped" not in q else ():
+            a = r["anova"]
+            if isinstance(a, dict):
+                out.append(f"questionnaire {c}: {a['skipped']}")
+            else:
+                row = a[0]
+                out.append(
+                    f"questionnaire {c}: F({row['DF']}, {a[1]['DF']}) = {row['F']:.2f}, "
+                    f"p = {row['p_reported']:.2g}"
+                    f"{' (GG)' if row.get('sphericity') is False else ''}, np2 = {row['np2']:.3f}"
+                )
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from . import analysis, report
+
+    study = analysis.load(list(args.dirs), exclude=tuple(args.exclude))
+    res = analysis.analyze(study)
+    if args.report is not None:
+        path = report.write(res, args.report)
+        res["report"] = str(path)
+    if args.json:
+        print(json.dumps(res, indent=1, default=str))
+    else:
+        print("\n".join(_lines(res)))
+        if args.report is not None:
+            print(f"report: {res['report']}")
+    return 0

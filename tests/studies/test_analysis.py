@@ -1,0 +1,305 @@
+"""``haptable study analyze``: run folders written from the file contract (synth_runs.py),
+the RM-ANOVA against second implementations (statsmodels' AnovaRM, the textbook sums of
+squares, pingouin; the GG epsilon and Mauchly's W by other formulas), missing and
+unbalanced cells refused in one line, the report and the CLI."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from console.errors import UserError
+from plugins.studies import analysis as an
+from plugins.studies import rmanova as rm
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import synth_runs as sr  # noqa: E402
+
+REGIONS = ("R1", "R2", "R3", "R4")
+
+
+def _weak_r4_right(i, region, direction):
+    return 0.55 if (region == "R4" and direction == "right") else 0.95
+
+
+@pytest.fixture
+def exp2_dir(tmp_path):
+    return sr.write_flow(tmp_path / "exp2", "exp2", REGIONS, _weak_r4_right, 8, 10, seed=3)
+
+
+def _long(cells: np.ndarray, names: list[str]) -> pd.DataFrame:
+    rows = []
+    for idx in itertools.product(*map(range, cells.shape)):
+        rows.append(
+            {
+                "s": f"S{idx[0]}",
+                **{n: f"{n}{i}" for n, i in zip(names, idx[1:], strict=True)},
+                "y": cells[idx],
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _random_cells(shape, seed):
+    rng = np.random.default_rng(seed)
+    y = rng.normal(size=shape) + rng.normal(size=(shape[0],) + (1,) * (len(shape) - 1))
+    y[(slice(None), 0) + (slice(None),) * (len(shape) - 2)] += 0.7  # an effect of factor A
+    # unequal variances across levels: sphericity does not hold exactly
+    y *= np.linspace(1, 2.5, shape[1]).reshape((1, -1) + (1,) * (len(shape) - 2))
+    return y
+
+
+# --------------------------------------------------------------------- the ANOVA itself
+@pytest.mark.parametrize("shape", [(7, 3, 4), (6, 4, 3, 3), (9, 2, 2)])
+def test_rm_anova_matches_statsmodels_anovarm(shape):
+    from statsmodels.stats.anova import AnovaRM
+
+    names = ["A", "B", "D"][: len(shape) - 1]  # patsy reserves "C"
+    y = _random_cells(shape, seed=len(shape) * 10 + shape[1])
+    ref = AnovaRM(_long(y, names), "y", "s", within=names).fit().anova_table
+    ours = {r.source.replace(" * ", ":"): r for r in rm.rm_anova(y, names)}
+    assert set(ours) == set(ref.index)
+    for src, row in ref.iterrows():
+        assert ours[src].f == pytest.approx(row["F Value"], rel=1e-9)
+        assert ours[src].df1 == row["Num DF"] and ours[src].df2 == row["Den DF"]
+        assert ours[src].p == pytest.approx(row["Pr > F"], rel=1e-7, abs=1e-14)
+
+
+def test_rm_anova_sums_of_squares_by_the_textbook():
+    """Two-way, balanced: SS from the grand, marginal and cell means."""
+    y = _random_cells((5, 3, 2), seed=1)
+    n, a, b = y.shape
+    g = y.mean()
+    ma, mb, ms = y.mean(axis=(0, 2)), y.mean(axis=(0, 1)), y.mean(axis=(1, 2))
+    mab = y.mean(axis=0)
+    mas, mbs = y.mean(axis=2), y.mean(axis=1)  # (n, a), (n, b)
+    ss_a = n * b * ((ma - g) ** 2).sum()
+    ss_b = n * a * ((mb - g) ** 2).sum()
+    ss_ab = n * ((mab - ma[:, None] - mb[None, :] + g) ** 2).sum()
+    ss_as = b * ((mas - ma[None, :] - ms[:, None] + g) ** 2).sum()
+    ss_bs = a * ((mbs - mb[None, :] - ms[:, None] + g) ** 2).sum()
+    ss_tot = ((y - g) ** 2).sum()
+    ss_s = a * b * ((ms - g) ** 2).sum()
+    ss_abs = ss_tot - ss_a - ss_b - ss_ab - ss_s - ss_as - ss_bs
+    rows = {r.source: r for r in rm.rm_anova(y, ["A", "B"])}
+    for src, ss, sse in (("A", ss_a, ss_as), ("B", ss_b, ss_bs), ("A * B", ss_ab, ss_abs)):
+        assert rows[src].ss == pytest.approx(ss, rel=1e-10)
+        assert rows[src].ss_error == pytest.approx(sse, rel=1e-10)
+        assert rows[src].np2 == pytest.approx(ss / (ss + sse), rel=1e-10)
+
+
+def _box_epsilon(y: np.ndarray) -> float:
+    """Greenhouse-Geisser epsilon by Box's formula on the k x k covariance of the levels
+    (no contrasts): k^2 (mean diag - mean)^2 / ((k-1)(sum s^2 - 2k sum row-mean^2 + k^2 mean^2))."""
+    s = np.cov(y, rowvar=False)
+    k = s.shape[0]
+    sbar, dbar, rows = s.mean(), np.diag(s).mean(), s.mean(axis=1)
+    return (
+        k**2
+        * (dbar - sbar) ** 2
+        / ((k - 1) * ((s**2).sum() - 2 * k * (rows**2).sum() + k**2 * sbar**2))
+    )
+
+
+def test_gg_epsilon_against_boxs_formula_and_its_bounds():
+    y = _random_cells((10, 4), seed=7)
+    (row,) = rm.rm_anova(y, ["A"])
+    assert row.eps_gg == pytest.approx(_box_epsilon(y), rel=1e-10)
+    assert 1 / 3 - 1e-12 <= row.eps_gg <= 1
+    # compound symmetry (equal variances, equal covariances): epsilon 1, Mauchly W 1
+    rng = np.random.default_rng(0)
+    cs = rng.normal(size=(40, 1)) + rng.normal(size=(40, 4)) * 0.5
+    cs = cs - cs.mean(axis=0)
+    z = cs @ rm.helmert(4).T
+    # rotate the contrast scores so their covariance is exactly isotropic
+    w, v = np.linalg.eigh(np.cov(z, rowvar=False))
+    z_iso = (z - z.mean(0)) @ v @ np.diag(w**-0.5) @ v.T
+    assert rm.gg_epsilon(z_iso) == pytest.approx(1.0, abs=1e-12)
+    assert rm.mauchly(z_iso)[0] == pytest.approx(1.0, abs=1e-10)
+
+
+def test_mauchly_and_epsilon_match_pingouin_for_one_factor():
+    import pingouin as pg
+
+    y = _random_cells((12, 4), seed=11)
+    df = _long(y, ["A"])
+    (row,) = rm.rm_anova(y, ["A"])
+    sph = pg.sphericity(df, dv="y", within="A", subject="s")
+    assert row.mauchly_w == pytest.approx(sph.W, rel=1e-8)
+    assert row.mauchly_chi2 == pytest.approx(sph.chi2, rel=1e-8)
+    # pingouin's second-order term has 3(p + 1) where Anderson has 3p: nearly the same p
+    assert row.mauchly_p == pytest.approx(sph.pval, rel=2e-3)
+    assert row.eps_gg == pytest.approx(pg.epsilon(df, dv="y", within="A", subject="s"), rel=1e-8)
+
+
+def test_pingouin_two_way_agrees_with_the_contrasts():
+    import pingouin as pg
+
+    y = _random_cells((8, 4, 4), seed=5)
+    df = _long(y, ["A", "B"])
+    aov = pg.rm_anova(
+        df, dv="y", within=["A", "B"], subject="s", detailed=True, effsize="np2"
+    ).set_index("Source")
+    for r in rm.rm_anova(y, ["A", "B"]):
+        assert r.f == pytest.approx(aov.loc[r.source, "F"], rel=1e-9)
+        assert r.ss == pytest.approx(aov.loc[r.source, "SS"], rel=1e-9)
+        assert r.np2 == pytest.approx(aov.loc[r.source, "np2"], rel=1e-9)
+    # the main effects' epsilon as pingouin's (its interaction epsilon is approximate)
+    for r in rm.rm_anova(y, ["A", "B"])[:2]:
+        assert r.eps_gg == pytest.approx(aov.loc[r.source, "eps"], rel=1e-8)
+
+
+def test_mauchly_is_untestable_with_too_few_subjects():
+    y = _random_cells((4, 4, 4), seed=2)  # the interaction has 9 df, 3 subjects' worth
+    inter = rm.rm_anova(y, ["A", "B"])[2]
+    assert inter.sphericity == "untestable"
+    assert inter.p_reported == inter.p_gg  # the conservative p
+
+
+# --------------------------------------------------------------------- runs -> analysis
+def test_exp2_accuracy_tables_are_the_files_counted(exp2_dir):
+    res = an.analyze(an.load([exp2_dir]))
+    recs = [
+        json.loads(line)
+        for f in sorted(exp2_dir.glob("*/trials.jsonl"))
+        for line in f.read_text().splitlines()
+    ]
+    main = [r for r in recs if r["phase"] == "main"]
+    acc = res["accuracy"]
+    assert acc["overall_pct"] == pytest.approx(100 * np.mean([r["correct"] for r in main]))
+    p1 = [r["correct"] for r in main if r["participant"] == "P01"]
+    assert acc["participants"][0] == {
+        "participant": "P01",
+        "accuracy_pct": 100 * np.mean(p1),
+        "trials": 160,
+    }
+    cell = next(c for c in acc["cells"] if c["region"] == "R4" and c["direction"] == "right")
+    per = [
+        np.mean(
+            [
+                r["correct"]
+                for r in main
+                if r["participant"] == p and r["region"] == "R4" and r["direction"] == "right"
+            ]
+        )
+        for p in sorted({r["participant"] for r in main})
+    ]
+    assert cell["accuracy_pct"] == pytest.approx(100 * np.mean(per))
+    assert cell["sd_pct"] == pytest.approx(100 * np.std(per, ddof=1))
+    assert "practice" in acc
+
+
+def test_exp2_anova_finds_the_weak_cell(exp2_dir):
+    res = an.analyze(an.load([exp2_dir]))
+    aov = res["anova"]
+    inter = next(r for r in aov["anova"] if r["source"] == "region * direction")
+    assert inter["p_reported"] < 0.01 and inter["np2"] > 0.2
+    sme = {(e["effect"], e["at"]): e for e in aov["simple_main_effects"]}
+    assert sme[("direction", "region = R4")]["p_bonferroni"] < 0.01
+    for r in ("R1", "R2", "R3"):
+        assert sme[("direction", f"region = {r}")]["p_bonferroni"] > 0.01
+    # post-hoc within R4: right differs from the others
+    r4 = [p for p in aov["posthoc_bonferroni"] if p.get("region") == "R4"]
+    assert r4 and all(p["p-corr"] < 0.05 for p in r4 if "right" in (p["A"], p["B"]))
+
+
+def test_the_last_done_of_a_trial_counts(tmp_path):
+    root = sr.write_flow(tmp_path / "e", "exp1", ("1", "2"), lambda *a: 1.0, 3, 2)
+    f = root / "P01" / "trials.jsonl"
+    recs = [json.loads(x) for x in f.read_text().splitlines()]
+    again = {**recs[-1], "correct": False, "response": "x"}
+    f.write_text(
+        f.read_text() + '{"event": "start", "trial": 99}\n{torn\n' + json.dumps(again) + "\n"
+    )
+    res = an.analyze(an.load([root]))
+    p1 = res["accuracy"]["participants"][0]
+    assert p1["trials"] == 8 and p1["accuracy_pct"] == pytest.approx(100 * 7 / 8)
+
+
+def test_missing_cells_are_one_line_and_no_f(tmp_path):
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 4, 3, drop={"P02": 12})
+    res = an.analyze(an.load([root]))
+    assert set(res["anova"]) == {"skipped"}
+    line = res["anova"]["skipped"]
+    assert "missing cells: P02 R4/" in line and "--exclude" in line and "\n" not in line
+    assert any("P02: 40/52 trials done" in n for n in res["notes"])
+    ok = an.analyze(an.load([root], exclude=("P02",)))
+    assert ok["anova"]["participants"] == 3
+
+
+def test_unbalanced_cells_are_one_line(tmp_path):
+    root = sr.write_flow(tmp_path / "e", "exp1", ("1", "2"), lambda *a: 0.8, 4, 3)
+    f = root / "P03" / "trials.jsonl"
+    lines = f.read_text().splitlines()
+    f.write_text("\n".join(lines[:5] + lines[6:]) + "\n")  # one main trial never done
+    res = an.analyze(an.load([root]))
+    assert re.match(
+        r"ANOVA pair x direction: not run: unbalanced cells: P03 1/\w+ \(2 of 3\)",
+        res["anova"]["skipped"],
+    )
+
+
+def test_bad_folders_are_one_line(tmp_path):
+    with pytest.raises(UserError, match="no participant folder"):
+        an.load([tmp_path])
+    with pytest.raises(UserError, match="no such folder"):
+        an.load([tmp_path / "nope"])
+    sr.write_flow(tmp_path / "a", "exp1", ("1",), lambda *a: 1.0, 2, 1)
+    sr.write_flow(tmp_path / "b", "exp2", ("R1",), lambda *a: 1.0, 2, 1)
+    with pytest.raises(UserError, match="different experiments"):
+        an.load([tmp_path / "a", tmp_path / "b"])
+    bad = tmp_path / "a" / "P01" / "trials.jsonl"
+    bad.write_text('{"event": "done", "trial": 0}\n')
+    with pytest.raises(UserError, match=r"trials.jsonl: event 1 \('done'\) has no participant"):
+        an.load([tmp_path / "a"])
+
+
+def test_knob_analysis(tmp_path):
+    root = sr.write_knob(tmp_path / "k", 6)
+    res = an.analyze(an.load([root]))
+    ct = res["knob"]["measures"]["completion_time_s"]
+    rows = {r["source"]: r for r in ct["anova"]["rows"]}
+    assert len(rows) == 7
+    assert rows["sectors"]["p_reported"] < 0.01 and rows["distance_deg"]["p_reported"] < 0.01
+    assert rows["condition"]["p"] > 0.01
+    rec = res["knob"]["measures"]["recovery_time_s"]["anova"]
+    assert "only after an overshoot" in rec.get("skipped", "") or "rows" in rec
+    q = res["knob"]["questionnaire"]
+    assert set(q) == set(sr.CATEGORIES)
+    eff = q["effectiveness"]["anova"][0]
+    assert eff["p_reported"] < 0.001
+    sub = res["knob"]["questionnaire"]["effectiveness"]["by_condition"]
+    assert {r["condition"] for r in sub} == set(sr.CONDITIONS)
+
+
+# --------------------------------------------------------------------- report and CLI
+def _cli(*args):
+    from console.cli import main
+
+    return main(["study", "analyze", *map(str, args)])
+
+
+def test_cli_json_and_report(exp2_dir, tmp_path, capsys):
+    out = tmp_path / "report.html"
+    assert _cli(exp2_dir, "--json", "--report", out) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["experiment"] == "exp2" and res["report"] == str(out)
+    page = out.read_text()
+    assert page.count("data:image/png;base64,") == 2
+    assert "region * direction" in page and "Mauchly" in page
+    assert "Simple main effects" in page
+
+
+def test_cli_text_says_why_no_anova(tmp_path, capsys):
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, drop={"P03": 5})
+    assert _cli(root) == 0
+    text = capsys.readouterr().out
+    assert "not run: missing cells: P03" in text
+    assert not re.search(r"region \* direction\s+\d", text)
