@@ -19,10 +19,13 @@ on side ``A_d`` and second on ``B_d`` the evidence is (dB)
 
     E_d = ((mean s_1[A_d] - mean s_1[B_d]) + (mean s_2[B_d] - mean s_2[A_d])) / 2
 
-and the observer answers ``argmax_d (K E_d / J + N(0, 1))``; ``J`` is one JND in dB,
+and the percept is a direction in the plane: ``z = K (E_right, E_down) / J`` (flows
+between two fingers: ``E_left_to_right`` alone) plus independent noise ``N(0, 1/2)`` on
+each axis; the answer is the candidate whose unit direction has the largest projection
+of it (opposite answers share their axis' noise). ``J`` is one JND in dB,
 ``20 log10(1 + w(f))`` of the ``[perception]`` Weber curve (mean over the parts) times the
-participant's ``jnd_scale``; ``K = 0.477`` makes a one-JND evidence difference 75 %
-correct with two answers (``Phi(sqrt 2 K) = 0.75``). A symmetric stimulus (``E_d`` equal)
+participant's ``jnd_scale``; ``K = 0.477`` makes one JND of evidence 75 % correct
+between two opposite answers (``Phi(sqrt 2 K) = 0.75``). A symmetric stimulus (``E_d`` = 0)
 is answered at chance. With probability ``lapse * k / (k - 1)`` (``k`` answers) the
 observer lapses and answers at random, so a clear stimulus is answered correctly
 ``1 - lapse`` of the time (Wichmann and Hill's lapse rate).
@@ -40,6 +43,7 @@ and trial give the same answer.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 from collections import OrderedDict
@@ -57,6 +61,11 @@ from .closed_loop import PATCHES, hand_subgrid_mm, part_envelopes, square_levels
 #: Candidate answers per stimulus kind, and the sides their parts should be felt on.
 FLOW_ANSWERS = ("left_to_right", "right_to_left")
 HAND_ANSWERS = ("up", "down", "left", "right")
+#: Each answer's unit direction (x right, y down: ``console.types.DIRECTIONS_MM``).
+AXES = {
+    FLOW_ANSWERS: np.array([[1.0], [-1.0]]),
+    HAND_ANSWERS: np.array([[0.0, -1.0], [0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]]),
+}
 #: Evidence in JND -> decision noise units (one JND: 75 % with two answers).
 K_JND = 0.4769
 #: Drift-diffusion boundary separation (decision noise units).
@@ -94,6 +103,7 @@ class ObserverParams:
         }
 
 
+@functools.lru_cache(maxsize=1024)
 def participant(seed: int) -> ObserverParams:
     """The participant drawn from ``seed`` (the documented distributions)."""
     rng = np.random.default_rng([int(seed) % (2**63), 0x0B5E])
@@ -206,14 +216,18 @@ class TwinObserver:
         p = participant(participant_seed)
         answers, evidence, jnd = self.evidence(trial, played, p.threshold_offset_db)
         rng = np.random.default_rng([int(participant_seed) % (2**63), int(trial["index"]), 7])
-        z = K_JND * evidence / (jnd * p.jnd_scale)
+        units = AXES[answers]  # (k, axes) unit direction of each answer
+        z = K_JND * (units.T @ evidence) / 2 / (jnd * p.jnd_scale)  # percept, noise units
         k = len(answers)
         if rng.random() < p.lapse * k / (k - 1):
             choice = int(rng.integers(k))
+            noisy = z
         else:
-            choice = int(np.argmax(z + rng.standard_normal(k)))
-        others = np.delete(z, choice)
-        v = max(abs(float(z[choice] - others.max())) if others.size else 0.0, 1e-6)
+            noisy = z + rng.normal(0.0, math.sqrt(0.5), z.size)
+            choice = int(np.argmax(units @ noisy))
+        score = units @ z
+        others = np.delete(score, choice)
+        v = max(abs(float(score[choice] - others.max())) / math.sqrt(2 * 0.5), 1e-6)
         a = DDM_BOUNDARY
         dt = a / (2 * v) * math.tanh(a * v / 2)
         rt = (p.t_nd_s + dt) * float(rng.lognormal(0.0, RT_SIGMA))
