@@ -48,3 +48,18 @@ def haptable_register_panels(register) -> None:
         description="user studies: protocol, participant, progress, pause, replay, abort",
         tab=PanelTab("Studies", "f10", 100),
     )
+
+
+@hookimpl
+def haptable_register_benchmarks(register) -> None:
+    def run(ctx, quick: bool) -> dict:
+        from .bench import run_bench
+
+        return run_bench(ctx, quick)
+
+    register(
+        "study",
+        run,
+        help="simulated participants: predicted accuracy per region/pair x direction vs "
+        "the paper, trials per second",
+    )

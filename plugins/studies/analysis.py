@@ -484,6 +484,9 @@ def analyze(study: Study) -> dict[str, Any]:
     main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
     main = main.assign(correct=main["correct"].astype(float))
     why = balance_problem(main, (a, b), design_counts(study, (a, b), "main"))
+    single = [f for f in (a, b) if main[f].nunique() < 2]
+    if single and not why:
+        why = f"{single[0]} has one level ({main[single[0]].iloc[0]}); nothing to compare"
     if why:
         res["anova"] = {"skipped": f"ANOVA {a} x {b}: not run: {why}"}
     else:

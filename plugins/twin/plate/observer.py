@@ -35,10 +35,11 @@ decision time of a drift-diffusion with boundary separation ``a = 2`` and drift 
 the chosen candidate's margin in standard deviations (``a^2 / 4`` s at ``v = 0``), times
 a log-normal factor (sigma 0.3).
 
-Participants (seeded by ``participant_seed``, ASSUMPTIONS, no measured spread):
+Participants (seeded by ``participant_seed``; ASSUMPTIONS, no measured spread):
 threshold offset ``o ~ N(0, 4 dB)``; ``jnd_scale ~ LogNormal(0, 0.25)``; ``lapse ~
-Beta(2, 48)`` (mean 4 %); ``t_nd ~ N(0.45, 0.08)`` s clipped to 0.2..0.9. The same seed
-and trial give the same answer.
+Beta(1, 99)`` (mean 1 %: the paper's experiment 1 had every one of its 400 trials right,
+so lapses are rare); ``t_nd ~ N(0.45, 0.08)`` s clipped to 0.2..0.9. The same seed and
+trial give the same answer.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ DDM_BOUNDARY = 2.0
 #: Participant distributions (documented in the module docstring).
 OFFSET_SD_DB = 4.0
 JND_SCALE_SIGMA = 0.25
-LAPSE_BETA = (2.0, 48.0)
+LAPSE_BETA = (1.0, 99.0)
 T_ND_S = (0.45, 0.08)
 RT_SIGMA = 0.3
 SETTLE_S = 0.2
