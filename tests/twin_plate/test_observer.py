@@ -275,3 +275,24 @@ def test_a_flow_whose_two_parts_are_the_same_is_at_chance_on_the_twin(twin_setup
     _, ev, jnd = obs.evidence(trial, same)
     # part 2 starts with part 1's ring-down still there: small, not a direction
     assert abs(ev[0]) < 0.5 * jnd
+
+
+def test_a_hand_flow_on_the_twin_points_the_way_it_was_rendered(twin_setup):
+    """Region R3 of the protocol (placeholder centre): every direction's evidence is
+    largest for that direction, and the squares' levels are what the envelopes give."""
+    pm, prof, vmap = twin_setup
+    obs = pm.provider("observer", contracts.SimulatedObserver, prof)
+    hand = pm.provider("effect", contracts.HandFlowEffect, prof)
+    for d in ("up", "down", "left", "right"):
+        plan = hand.render_hand_flow((560.0, 140.0), d, vmap)
+        trial = {
+            "index": 0,
+            "direction": d,
+            "stimulus": {"effect": "hand_flow", "center_mm": [560.0, 140.0], "direction": d},
+        }
+        answers, ev, jnd = obs.evidence(trial, plan)
+        assert answers[int(np.argmax(ev))] == d
+        assert ev.max() > jnd
+        # opposite answers have opposite evidence (the percept is a direction)
+        opp = {"up": "down", "down": "up", "left": "right", "right": "left"}[d]
+        assert ev[answers.index(opp)] == pytest.approx(-ev.max())
