@@ -407,6 +407,7 @@ def knob(study: Study) -> dict[str, Any]:
             res["anova"] = {
                 "participants": len(pids),
                 "rows": [r.as_dict() for r in rm_anova(arr, list(KNOB_FACTORS))],
+                "posthoc_bonferroni": _main_effect_pairs(cells.reset_index(), m),
             }
         out["measures"][m] = res
     q = study.questionnaire
@@ -457,6 +458,22 @@ def knob(study: Study) -> dict[str, Any]:
                 post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]
             )
         out["questionnaire"][str(c)] = res
+    return out
+
+
+def _main_effect_pairs(cells, dv: str) -> list[dict[str, Any]]:
+    """Bonferroni-corrected paired t-tests between the levels of each knob factor, on
+    each participant's mean over the other factors."""
+    import pingouin as pg
+
+    out = []
+    for f in KNOB_FACTORS:
+        marg = cells.groupby(["participant", f])[dv].mean().reset_index()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            post = pg.pairwise_tests(marg, dv=dv, within=f, subject="participant", padjust="bonf")
+        for rec in _clean(post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]):
+            out.append({"factor": f, **rec})
     return out
 
 

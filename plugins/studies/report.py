@@ -224,6 +224,8 @@ def render(res: dict[str, Any], title: str = "") -> str:
                 parts.append(
                     f"<p>Three-way RM-ANOVA, {a['participants']} participants:</p>"
                     + table(a["rows"], ANOVA_COLS)
+                    + "<p>Post-hoc pairwise t-tests per factor (Bonferroni):</p>"
+                    + table(a.get("posthoc_bonferroni", []))
                 )
         for cap, png in figs:
             parts.append(_fig(cap, png))

@@ -269,6 +269,11 @@ def test_knob_analysis(tmp_path):
     assert len(rows) == 7
     assert rows["sectors"]["p_reported"] < 0.01 and rows["distance_deg"]["p_reported"] < 0.01
     assert rows["condition"]["p"] > 0.01
+    post = {(r["factor"], r["A"], r["B"]): r for r in ct["anova"]["posthoc_bonferroni"]}
+    assert post[("sectors", 8, 32)]["p-corr"] < 0.05
+    assert post[("sectors", 8, 32)]["p-corr"] == pytest.approx(
+        min(1.0, 3 * post[("sectors", 8, 32)]["p-unc"])
+    )
     rec = res["knob"]["measures"]["recovery_time_s"]["anova"]
     assert "only after an overshoot" in rec.get("skipped", "") or "rows" in rec
     q = res["knob"]["questionnaire"]
