@@ -83,10 +83,10 @@ def _check_profile(pm, profile, *, must_build: bool) -> list[str]:
 
 def test_every_sim_registration_satisfies_its_contract(plugins, profile):
     checked = _check_profile(plugins, profile, must_build=True)
-    # every kind has something registered and checked (the simulated observer is the
-    # twin's, not registered yet: the studies tests register a double of it)
-    assert {c.split(":")[0] for c in checked} == set(contracts.KIND_CONTRACTS) - {"observer"}
+    # every kind has something registered and checked
+    assert {c.split(":")[0] for c in checked} == set(contracts.KIND_CONTRACTS)
     assert "camera:twin" in checked and "effect:point" in checked
+    assert "observer:twin" in checked  # the simulated participant of the plate twin
 
 
 def test_the_lab_profile_s_registrations_too(plugins):
