@@ -450,9 +450,26 @@ def knob(study: Study) -> dict[str, Any]:
                     sub, dv="score", within="condition", subject="participant", padjust="bonf"
                 )
             res["anova"] = _clean(aov)
+            # sphericity as for the other effects (pingouin tests it even with fewer
+            # participants than conditions, where Mauchly's test is not defined)
+            conds = list(dict.fromkeys(sub["condition"]))
+            pids = list(dict.fromkeys(sub["participant"]))
+            arr = (
+                sub.set_index(["participant", "condition"])["score"]
+                .reindex([(p, x) for p in pids for x in conds])
+                .to_numpy()
+                .reshape(len(pids), len(conds))
+            )
+            (r,) = rm_anova(arr, ["condition"])
             top = res["anova"][0]
-            top["p_reported"] = (
-                top.get("p-GG-corr") if top.get("sphericity") is False else top.get("p-unc")
+            top.update(
+                {
+                    "sphericity": r.sphericity,
+                    "mauchly_p": _num(r.mauchly_p),
+                    "eps_gg": r.eps_gg,
+                    "p_gg": _num(r.p_gg),
+                    "p_reported": _num(r.p_reported),
+                }
             )
             res["posthoc_bonferroni"] = _clean(
                 post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]

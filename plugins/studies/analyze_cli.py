@@ -58,7 +58,7 @@ def _lines(res: dict[str, Any]) -> list[str]:
         for m, r in res["knob"]["measures"].items():
             a = r.get("anova", r)
             if "skipped" in a:
-                out.append(f"{m}: {a['skipped']}")
+                out.append(a["skipped"])
                 continue
             out.append(f"{m}: three-way RM-ANOVA ({a['participants']} participants)")
             for row in a["rows"]:
@@ -77,8 +77,7 @@ def _lines(res: dict[str, Any]) -> list[str]:
                 row = a[0]
                 out.append(
                     f"questionnaire {c}: F({row['DF']}, {a[1]['DF']}) = {row['F']:.2f}, "
-                    f"p = {row['p_reported']:.2g}"
-                    f"{' (GG)' if row.get('sphericity') is False else ''}, np2 = {row['np2']:.3f}"
+                    f"p = {row['p_reported']:.2g} ({row['sphericity']}), np2 = {row['np2']:.3f}"
                 )
     return out
 

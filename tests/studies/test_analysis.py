@@ -280,6 +280,13 @@ def test_knob_analysis(tmp_path):
     assert set(q) == set(sr.CATEGORIES)
     eff = q["effectiveness"]["anova"][0]
     assert eff["p_reported"] < 0.001
+    # pingouin's one-way F and ours agree; the reported p follows our sphericity verdict
+    cat = res["knob"]["questionnaire"]["effectiveness"]
+    assert eff["sphericity"] in ("assumed", "violated")
+    assert eff["p_reported"] == pytest.approx(
+        eff["p-unc"] if eff["sphericity"] == "assumed" else eff["p_gg"]
+    )
+    assert cat["posthoc_bonferroni"]
     sub = res["knob"]["questionnaire"]["effectiveness"]["by_condition"]
     assert {r["condition"] for r in sub} == set(sr.CONDITIONS)
 
