@@ -17,7 +17,7 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   TouchCalibrating (the touch-calibration wizard's session);
                   TunablesInProfile (the profile keys its tunables are kept under)
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
-                  FlowEffect, HandFlowEffect, Conditions, Presets
+                  FlowEffect, HandFlowEffect, PrecomputedHandFlows, Conditions, Presets
     audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v)
     relay_board   RelayBoard; SimulatedRelays (the twin: switch log)
     vibrometer    Vibrometer
@@ -360,6 +360,33 @@ class HandFlowEffect(Effect, Protocol):
     ``console.types.DIRECTIONS_MM``), on the map ``vmap``."""
 
     def render_hand_flow(self, center_mm: PosMm, direction: str, vmap: Any) -> OutputPlan: ...
+
+
+@runtime_checkable
+class HandFlowAtlas(Protocol):
+    """Every flow under a hand on a grid of centres, chosen ahead: ``nearest(pos_mm)`` the
+    centre serving a hand there (``None``: outside), ``has(center_mm)``,
+    ``plan(center_mm, direction)`` its plan (``UserError``: no flow there), ``nbytes``."""
+
+    nbytes: int
+
+    def nearest(self, pos_mm: PosMm) -> tuple[float, float] | None: ...
+
+    def has(self, center_mm: PosMm) -> bool: ...
+
+    def plan(self, center_mm: PosMm, direction: str) -> OutputPlan: ...
+
+
+@runtime_checkable
+class PrecomputedHandFlows(HandFlowEffect, Protocol):
+    """A flow-under-hand effect that chooses every flow of a map ahead:
+    ``hand_flow_atlas(vmap, step_mm, progress=)`` (``progress(done, total, what)``;
+    raising cancels) -> ``HandFlowAtlas``, the same plans ``render_hand_flow`` gives at
+    its centres."""
+
+    def hand_flow_atlas(
+        self, vmap: Any, step_mm: float, *, progress: Any = None
+    ) -> HandFlowAtlas: ...
 
 
 @runtime_checkable

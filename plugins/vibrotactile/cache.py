@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -21,6 +22,8 @@ from console.errors import UserError
 from console.npz_safe import read_json_text, read_npz
 
 CODE_VERSION = 1
+
+log = logging.getLogger("haptable.vibrotactile.cache")
 
 
 def default_cache_dir() -> Path:
@@ -37,19 +40,14 @@ def _json(v, path: Path, key: str):
     return read_json_text(v, where=str(path), key=key, fix="", max_chars=2**28)
 
 
-def cached(
-    cache_dir: str | os.PathLike | None, kind: str, key: dict, compute: Callable[[], dict]
-) -> dict:
-    if cache_dir is None:
-        return compute()
-    path = Path(cache_dir) / f"{kind}-{key_hash(key)}.npz"
-    if path.exists():
-        try:
-            out = read_npz(path, what="cache entry", fix="it is recomputed")
-            return {k: (_json(v, path, k) if k.endswith("_json") else v) for k, v in out.items()}
-        except UserError:
-            path.unlink(missing_ok=True)  # a torn write or a damaged file: recompute
-    result = compute()
+def read_entry(path: Path) -> dict:
+    """A cache entry's arrays (``*_json`` keys decoded); ``UserError`` if it is damaged."""
+    out = read_npz(path, what="cache entry", fix="it is recomputed")
+    return {k: (_json(v, path, k) if k.endswith("_json") else v) for k, v in out.items()}
+
+
+def write_entry(path: Path, result: dict) -> None:
+    """Store ``result`` atomically (a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(f".{os.getpid()}.tmp")
     with open(tmp, "wb") as fh:
@@ -61,4 +59,20 @@ def cached(
             },
         )
     os.replace(tmp, path)
+
+
+def cached(
+    cache_dir: str | os.PathLike | None, kind: str, key: dict, compute: Callable[[], dict]
+) -> dict:
+    if cache_dir is None:
+        return compute()
+    path = Path(cache_dir) / f"{kind}-{key_hash(key)}.npz"
+    if path.exists():
+        try:
+            return read_entry(path)
+        except UserError as exc:  # a torn write or a damaged file: recompute
+            log.warning("cache entry damaged, recomputing it: %s", exc)
+            path.unlink(missing_ok=True)
+    result = compute()
+    write_entry(path, result)
     return result

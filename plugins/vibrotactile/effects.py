@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
-from console.types import OutputPlan, patches_of
+from console.types import OutputPlan
 from console.vibration_map import VibrationMap
 
 Progress = Callable[[int, int, str], None]  # (done, total, what)
@@ -552,8 +552,8 @@ class HandFlowEffect(_MapUser):
         method: str | None = None,
     ) -> OutputPlan:
         from plugins.vibrotactile.hand import DIRECTIONS
+        from plugins.vibrotactile.instant import no_flow_error, plan_from_search
         from plugins.vibrotactile.lazy import hand_flow_cached
-        from plugins.vibrotactile.stimuli import gap_after_part_1, tone_segment
 
         if direction not in DIRECTIONS:
             raise UserError(f"flow direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
@@ -577,46 +577,10 @@ class HandFlowEffect(_MapUser):
             m, (cx, cy), direction, self.setup.perception, self.setup.cache_dir, **kw
         )
         if not res["ok"]:
-            raise UserError(
-                f"no flow {direction} under a hand at {cx:g},{cy:g} mm: {res['reason']}; "
-                "move the hand"
-            )
+            raise no_flow_error(direction, (cx, cy), res["reason"])
         st = self._settings(ringdown_gap_k)
-        segs = tuple(
-            tone_segment(
-                p["frequency_hz"],
-                p["amplitude_v"],
-                st.part_s,
-                st.ramp_ms / 1e3,
-                st.sample_rate_hz,
-                patches_of(p["actuator"]),
-                label=f"part {i + 1} {p['actuator']}",
-            )
-            for i, p in enumerate(res["parts"])
-        )
-        gap = gap_after_part_1(m, res["parts"][0], st, self.setup.band_hz)
-        meta = {
-            "kind": "hand_flow",
-            "ok": True,
-            "center_mm": [cx, cy],
-            "direction": direction,
-            "hand_mm": float(kw["hand_mm"]),
-            "parts": [
-                {k: v for k, v in p.items() if k not in ("e", "k", "qa", "qb")}
-                for p in res["parts"]
-            ],
-            "level_above_3jnd_db": res.get("level_above_3jnd_db"),
-            "method": "paper",
-            "predicted_contrast_db": float(min(p["margin_db"] for p in res["parts"])),
-        }
-        if "ringdown" in gap:
-            meta["ringdown"] = gap["ringdown"]
-        plan = OutputPlan(
-            st.sample_rate_hz,
-            segs,
-            name=name or f"hand flow {direction} at {cx:g},{cy:g}",
-            gap_s=gap["gap_s"],
-            meta=meta,
+        plan = plan_from_search(
+            m, res, (cx, cy), direction, st, self.setup.band_hz, kw["hand_mm"], name
         )
         with self._lock:
             self._plans[key] = plan
@@ -637,6 +601,38 @@ class HandFlowEffect(_MapUser):
         """The flow under a hand at ``center_mm`` toward ``direction`` on ``vmap``, the
         staged search (``console.contracts.HandFlowEffect``)."""
         return self.render(center_mm=center_mm, direction=direction, vmap=vmap, screen_stride=3)
+
+    def hand_flow_atlas(
+        self,
+        vmap: Any,
+        step_mm: float = 10.0,
+        *,
+        progress: Progress | None = None,
+        workers: int | None = None,
+    ):
+        """Every flow ``render_hand_flow`` gives on a ``step_mm`` grid of hand centres, in
+        all directions, chosen ahead (``plugins.vibrotactile.instant.FlowAtlas``; cached
+        on disk; ``progress`` raising cancels; ``workers`` processes, default up to 2)."""
+        from plugins.vibrotactile.instant import load_or_build
+
+        how = self.method_of(None, "hand flow")
+        if how != "paper":
+            raise UserError(
+                f"flow atlas: this profile's hand flows use the {how!r} method; the atlas "
+                "holds the paper's search only (flows are planned when asked)"
+            )
+        s = self.setup
+        return load_or_build(
+            self.vibration_map(vmap),
+            s.perception,
+            s.cache_dir,
+            step_mm=float(step_mm),
+            cap_v=s.cap_v,
+            settings=s.settings,
+            **self._kw(None),
+            workers=min(2, os.cpu_count() or 1) if workers is None else int(workers),
+            progress=progress,
+        )
 
     def prepare(
         self,

@@ -179,6 +179,62 @@ def choose(
     return out
 
 
+def screen_levels(
+    m: VibrationMap,
+    center_mm,
+    *,
+    screen_stride: int = 3,
+    screen_df_hz: float = 0.5,
+    **kw,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Stage 1 of ``staged_levels`` (it does not depend on the direction): square levels
+    at every bin ~``screen_df_hz`` apart on every ``screen_stride``-th subgrid point.
+    Returns (q, their bins, the usable bins, the bin step)."""
+    keep = usable_bins(m, kw.get("band_hz", 650.0))
+    df = float(np.median(np.diff(m.freq_hz[keep]))) if keep.size > 1 else 1.0
+    step = max(1, int(round(screen_df_hz / df)))
+    q, bins = square_levels(
+        m, center_mm, stride=screen_stride, bins=keep[::step], cache_bins=True, **kw
+    )
+    return q, bins, keep, step
+
+
+def refine_levels(
+    m: VibrationMap,
+    center_mm,
+    screened: tuple,
+    directions,
+    perception: Perception,
+    cap_v: float,
+    *,
+    screen_stride: int = 3,
+    top: int = 8,
+    final_top: int = 3,
+    **kw,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stages 2 and 3 of ``staged_levels`` for ``directions`` from stage 1's ``screened``
+    (``screen_levels``): one screen serves every direction of a place."""
+    q, bins, keep, step = screened
+
+    def candidates(q: np.ndarray, bins: np.ndarray, n: int) -> set:
+        """The ``n`` best bins per part, over every direction asked for."""
+        return {
+            b
+            for d in directions
+            for b in choose(q, bins, m, d, perception, cap_v, top=n)["candidates"]
+        }
+
+    cand = candidates(q, bins, top)
+    if step > 1:
+        pos = np.searchsorted(keep, sorted(cand))
+        near = np.unique(
+            np.clip(pos[:, None] + np.arange(-step + 1, step)[None, :], 0, keep.size - 1)
+        )
+        q, bins = square_levels(m, center_mm, stride=screen_stride, bins=keep[near], **kw)
+        cand = candidates(q, bins, final_top)
+    return square_levels(m, center_mm, bins=np.array(sorted(cand)), **kw)
+
+
 def staged_levels(
     m: VibrationMap,
     center_mm,
@@ -201,30 +257,21 @@ def staged_levels(
        the ``final_top`` best per part and direction;
     3. those bins on the full subgrid (exact levels), returned for ``choose``.
     """
-    keep = usable_bins(m, kw.get("band_hz", 650.0))
-    df = float(np.median(np.diff(m.freq_hz[keep]))) if keep.size > 1 else 1.0
-    step = max(1, int(round(screen_df_hz / df)))
-    q, bins = square_levels(
-        m, center_mm, stride=screen_stride, bins=keep[::step], cache_bins=True, **kw
+    screened = screen_levels(
+        m, center_mm, screen_stride=screen_stride, screen_df_hz=screen_df_hz, **kw
     )
-
-    def candidates(q: np.ndarray, bins: np.ndarray, n: int) -> set:
-        """The ``n`` best bins per part, over every direction asked for."""
-        return {
-            b
-            for d in directions
-            for b in choose(q, bins, m, d, perception, cap_v, top=n)["candidates"]
-        }
-
-    cand = candidates(q, bins, top)
-    if step > 1:
-        pos = np.searchsorted(keep, sorted(cand))
-        near = np.unique(
-            np.clip(pos[:, None] + np.arange(-step + 1, step)[None, :], 0, keep.size - 1)
-        )
-        q, bins = square_levels(m, center_mm, stride=screen_stride, bins=keep[near], **kw)
-        cand = candidates(q, bins, final_top)
-    return square_levels(m, center_mm, bins=np.array(sorted(cand)), **kw)
+    return refine_levels(
+        m,
+        center_mm,
+        screened,
+        directions,
+        perception,
+        cap_v,
+        screen_stride=screen_stride,
+        top=top,
+        final_top=final_top,
+        **kw,
+    )
 
 
 def search_levels(

@@ -27,7 +27,7 @@ CAPABILITIES = {
     ("classifier", "svm"): (contracts.TouchCalibrating,),
     ("effect", "point"): (contracts.PointEffect,),
     ("effect", "flow"): (contracts.FlowEffect, contracts.TableEffect, contracts.MapImporter),
-    ("effect", "hand_flow"): (contracts.HandFlowEffect,),
+    ("effect", "hand_flow"): (contracts.HandFlowEffect, contracts.PrecomputedHandFlows),
     ("effect", "knob"): (contracts.Conditions, contracts.StreamingEffect, contracts.KnobTrials),
     ("effect", "electrostatic"): (contracts.Presets,),
     ("audio_output", "twin"): (contracts.SimulatedAudio,),

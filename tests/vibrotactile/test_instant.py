@@ -1,0 +1,228 @@
+"""Flows chosen ahead (the flow atlas): a resting hand anywhere gets, by lookup, the plan
+the ``hand_flow`` effect computes for the nearest atlas place, sample for sample; the
+cache follows the map; a damaged cache file is rebuilt with a log line, never played."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import logging
+import threading
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from console.errors import UserError
+from console.types import DIRECTIONS, Gesture
+from console.vibration_map import VibrationMap, save_map
+
+STEP_MM = 40.0  # a coarse grid keeps the tests fast (the demo's is 10 mm)
+
+
+def _map(scale: float = 1.0) -> VibrationMap:
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map, default_freq_hz
+
+    m = analytic_map(SSPlate(), default_freq_hz(625.0, 2.0))
+    return dataclasses.replace(m, frf_um_per_v=m.frf_um_per_v * scale) if scale != 1 else m
+
+
+def _profile(profile, cache_dir) -> object:
+    data = dict(profile.data)
+    data["vibrotactile"] = {**dict(data.get("vibrotactile") or {}), "cache_dir": str(cache_dir)}
+    return dataclasses.replace(profile, data=data)
+
+
+@pytest.fixture
+def setup(tmp_path, profile, plugins):
+    path = tmp_path / "map.npz"
+    save_map(path, _map())
+    prof = _profile(profile, tmp_path / "cache")
+    return SimpleNamespace(path=path, profile=prof, pm=plugins, cache=tmp_path / "cache")
+
+
+def _effect(s, cache_dir=None):
+    return s.pm.get("effect", "hand_flow").factory(_profile(s.profile, cache_dir or s.cache))
+
+
+def _same_plan(a, b) -> None:
+    assert a.name == b.name and a.gap_s == b.gap_s and a.sample_rate_hz == b.sample_rate_hz
+    assert a.meta == b.meta
+    assert len(a.segments) == len(b.segments) == 2
+    for sa, sb in zip(a.segments, b.segments, strict=True):
+        assert sa.patches == sb.patches and sa.label == sb.label
+        np.testing.assert_array_equal(sa.piezo_v, sb.piezo_v)
+        np.testing.assert_array_equal(sa.screen_v, sb.screen_v)
+
+
+class Outputs:
+    def __init__(self) -> None:
+        self.played: list = []
+
+    def play(self, plan, wait=False):
+        self.played.append(plan)
+        done = threading.Event()
+        done.set()  # finished at once: the next placement may play
+        return SimpleNamespace(done=done)
+
+
+def test_a_flow_at_a_random_position_plays_the_plan_the_effect_computes(setup, tmp_path):
+    from plugins.demos.adapters import flow_renderers
+    from plugins.demos.flow import FlowDemo
+
+    s = setup
+    hand, _ = flow_renderers(s.pm, s.profile, s.path)
+    out = Outputs()
+    demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
+    demo.regions = []  # the scene's regions have their own prepared plans
+    seen: list = []
+    demo.start(lambda done, total, what: seen.append((done, total)))
+    assert seen[-1][0] == seen[-1][1] > 0  # progress reached the end
+    atlas = hand.atlas
+    assert atlas is not None and atlas.places == seen[-1][1]
+    direct = _effect(s, cache_dir=tmp_path / "other")  # computes afresh
+    rng = np.random.default_rng(7)
+    xs, ys = atlas.xs, atlas.ys
+    played = 0
+    for k in range(10):
+        rest = (rng.uniform(xs[0] - 15, xs[-1] + 15), rng.uniform(ys[0] - 15, ys[-1] + 15))
+        direction = DIRECTIONS[k % 4]
+        demo.direction = direction
+        frame = SimpleNamespace(seq=k, t_capture_s=float(k), stamps_s={"classify": float(k)})
+        g = Gesture("static_hand", "static", 1.0, float(k), None)
+        work = {"gesture": g, "rest_mm": rest, "hands": ()}
+        started = demo.effect_stage(frame, work)
+        center = work["request"]["center_mm"]
+        # the nearest place of the grid (within half a step on each axis)
+        assert abs(center[0] - rest[0]) <= STEP_MM / 2 + 15 + 1e-9
+        assert abs(center[1] - rest[1]) <= STEP_MM / 2 + 15 + 1e-9
+        try:
+            ref = direct.render(center_mm=center, direction=direction, vmap=str(s.path))
+        except UserError as exc:  # no flow there: the demo says the same at once
+            assert not started and demo.events[-1]["kind"] == "no_flow"
+            assert demo.events[-1]["reason"] == str(exc)
+            continue
+        assert started, "played by lookup on the deciding frame, not computed later"
+        demo.scheduled_stage(frame, work)
+        _same_plan(out.played[-1], ref)
+        assert demo.events[-1]["late_s"] == 0.0
+        played += 1
+    assert played >= 5
+    # a hand far off the measured part of the table: no atlas place serves it
+    assert hand.nearest((xs[0] - 3 * STEP_MM, ys[0])) is None
+
+
+def test_the_atlas_equals_the_staged_search_per_place_including_no_flow(setup):
+    from plugins.vibrotactile.hand import hand_flow
+    from plugins.vibrotactile.instant import load_or_build
+
+    s = setup
+    eff = _effect(s)
+    m = eff.vibration_map(str(s.path))
+    st = eff.setup
+    kw = {**st.hand, "band_hz": st.band_hz, "method": st.settings.interpolation}
+    for cap_v in (st.cap_v, 1e-4):  # 1e-4 V: no flow anywhere (the hard case)
+        at = load_or_build(
+            m, st.perception, None, step_mm=STEP_MM, cap_v=cap_v, settings=st.settings,
+            workers=1, **kw,
+        )  # fmt: skip
+        for c in [(at.xs[0], at.ys[0]), (at.xs[-1], at.ys[-1]), (at.xs[2], at.ys[1])]:
+            for d in DIRECTIONS:
+                ref = hand_flow(m, c, d, st.perception, cap_v=cap_v, screen_stride=3, **kw)
+                got = at.result(c, d)
+                assert got["ok"] == ref["ok"]
+                if not ref["ok"]:
+                    assert got["reason"] == ref["reason"]
+                    with pytest.raises(UserError, match="no flow"):
+                        at.plan(c, d)
+                    continue
+                for p, q in zip(got["parts"], ref["parts"], strict=True):
+                    assert p["actuator"] == q["actuator"]
+                    assert p["frequency_hz"] == q["frequency_hz"]
+                    assert p["amplitude_v"] == q["amplitude_v"]
+                    assert p["active"] == q["active"]
+        if cap_v < 1:
+            assert not at.a["ok"].any()
+
+
+def test_a_changed_map_invalidates_the_cache(setup, tmp_path):
+    s = setup
+    eff = _effect(s)
+    a1 = eff.hand_flow_atlas(str(s.path), STEP_MM, workers=1)
+    assert not a1.from_cache
+    assert eff.hand_flow_atlas(str(s.path), STEP_MM, workers=1).from_cache
+    files = set(s.cache.glob("flowatlas-*.npz"))
+    assert len(files) == 1
+    # the same place, another map (the plate twice as responsive): a new atlas
+    other = tmp_path / "map2.npz"
+    save_map(other, _map(scale=2.0))
+    a2 = eff.hand_flow_atlas(str(other), STEP_MM, workers=1)
+    assert not a2.from_cache
+    assert len(set(s.cache.glob("flowatlas-*.npz"))) == 2
+    ok = a1.a["ok"] & a2.a["ok"]
+    v1, v2 = a1.a["amplitude_v"][ok], a2.a["amplitude_v"][ok]
+    assert ok.any() and np.median(v2 / v1) < 0.9  # its own plans: less drive needed
+    # another step is another atlas too
+    assert not eff.hand_flow_atlas(str(s.path), STEP_MM * 1.5, workers=1).from_cache
+
+
+@pytest.mark.parametrize("damage", ["truncated", "amplitude_over_cap"])
+def test_a_corrupt_cache_file_is_rebuilt_with_a_log_line_never_played(setup, caplog, damage):
+    from plugins.vibrotactile.cache import read_entry, write_entry
+
+    s = setup
+    eff = _effect(s)
+    good = eff.hand_flow_atlas(str(s.path), STEP_MM, workers=1)
+    (path,) = s.cache.glob("flowatlas-*.npz")
+    if damage == "truncated":
+        path.write_bytes(path.read_bytes()[:200])
+    else:  # a readable file whose amplitudes the gate would have to refuse
+        arrays = read_entry(path)
+        arrays["amplitude_v"] = arrays["amplitude_v"] * 50.0
+        write_entry(path, arrays)
+    fresh = _effect(s)
+    with caplog.at_level(logging.WARNING, logger="haptable.vibrotactile.instant"):
+        again = fresh.hand_flow_atlas(str(s.path), STEP_MM, workers=1)
+    assert not again.from_cache, "rebuilt, not read"
+    lines = [r.getMessage() for r in caplog.records if "damaged" in r.getMessage()]
+    assert len(lines) == 1 and str(path) in lines[0]
+    np.testing.assert_array_equal(again.a["amplitude_v"], good.a["amplitude_v"])
+    assert read_entry(path)["amplitude_v"].max() <= eff.setup.cap_v * (1 + 1e-9)  # replaced
+    c = (float(again.xs[1]), float(again.ys[1]))
+    ok = [d for d in DIRECTIONS if again.result(c, d)["ok"]]
+    _same_plan(again.plan(c, ok[0]), eff.render(center_mm=c, direction=ok[0], vmap=str(s.path)))
+
+
+def test_cancelling_the_build_stops_its_workers_and_stores_nothing(setup):
+    s = setup
+    eff = _effect(s)
+
+    class Stop(Exception):
+        pass
+
+    def progress(done, total, what):
+        if done > 0:
+            raise Stop()
+
+    with pytest.raises(Stop):
+        eff.hand_flow_atlas(str(s.path), 20.0, progress=progress, workers=2)
+    assert not list(s.cache.glob("flowatlas-*"))
+    import multiprocessing
+
+    assert not [p for p in multiprocessing.active_children() if p.is_alive()]
+
+
+def test_the_atlas_holds_little_memory(setup):
+    s = setup
+    at = _effect(s).hand_flow_atlas(str(s.path), STEP_MM, workers=1)
+    stored = at.nbytes
+    assert stored < 200 * at.places * len(DIRECTIONS)  # bytes per place and direction
+    xs, ys = at.xs, at.ys
+    for i in range(3 * at.max_plans):
+        c = (float(xs[i % xs.size]), float(ys[(i // xs.size) % ys.size]))
+        for d in DIRECTIONS:
+            with contextlib.suppress(UserError):
+                at.plan(c, d)
+    plan_bytes = at.nbytes - stored
+    one = 2 * 2 * 8 * int(round(1.5 * 48000))  # two parts, piezo and screen, float64
+    assert 0 < plan_bytes <= at.max_plans * one * 1.01  # bounded: the oldest are dropped
