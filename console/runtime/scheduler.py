@@ -13,6 +13,7 @@ import logging
 import math
 import queue
 import threading
+import time
 import weakref
 from collections import deque
 from dataclasses import dataclass, field
@@ -41,6 +42,8 @@ class PlayReport:
     name: str
     segment_start: list[int] = field(default_factory=list)
     segment_end: list[int] = field(default_factory=list)
+    #: monotonic time its first sample was handed to the audio driver (None: not yet)
+    t_first_sample_s: float | None = None
     error: str = ""
     done: threading.Event = field(default_factory=threading.Event, repr=False)
 
@@ -298,6 +301,8 @@ class Scheduler(Source):
             if st.kind == "play":
                 if st.pos == 0 and st.segment >= 0:
                     job.report.segment_start.append(self.gate.clock + pos)
+                    if job.report.t_first_sample_s is None:
+                        job.report.t_first_sample_s = time.monotonic()
                 k = min(n - pos, st.n - st.pos)
                 for dst, src in zip(cols, st.cols, strict=True):
                     dst[pos : pos + k] = src[st.pos : st.pos + k]

@@ -82,6 +82,13 @@ DEMOS_FIELDS = {
         help="flows not prepared at the start (a hand away from the scene's regions) are "
         "planned in a separate process (false: on a thread sharing the loop's interpreter)",
     ),
+    "flow_atlas": Field(
+        "bool",
+        True,
+        help="when the flow demo prepares, choose every flow under a hand on the "
+        "flow_grid_mm grid in every direction (minutes the first time, then cached): a "
+        "resting hand's flow starts at once (false: planned when asked, 1-3 s late)",
+    ),
     "still_mm": Field("float", 12.0, min=1, max=200, help="a resting hand moves less than this"),
     "still_ms": Field("float", 300.0, min=0, max=10000, help="... for this long to trigger"),
     "knob_condition": Field(
@@ -183,6 +190,18 @@ def haptable_register_benchmarks(register) -> None:
 
         return run_soak(ctx, quick, minutes=minutes)
 
+    def flow_latency(ctx, quick: bool) -> dict:
+        from .flow_latency import run_flow_latency
+
+        return run_flow_latency(ctx, quick)
+
+    register(
+        "flow-latency",
+        flow_latency,
+        help="flow demo: gesture decision -> the flow's first sample at the driver, p50/p99, "
+        "with every flow chosen ahead (after) and searched when asked (before); the "
+        "precompute's time and memory",
+    )
     register(
         "loop",
         loop,

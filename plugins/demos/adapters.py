@@ -10,7 +10,10 @@
   registered vibrometer, cached as a file the console's Vibration screen shares).
 
 Each renderer keeps the plans it made (per position, 0.1 mm) so a hand placed again at
-the same spot reuses its plan; ``cached(...)`` answers without computing.
+the same spot reuses its plan; ``cached(...)`` answers without computing. Flows under a
+hand can all be chosen ahead (``HandFlows.prepare_atlas``: the effect's
+``hand_flow_atlas``, ``console.contracts.PrecomputedHandFlows``); a hand then gets the
+plan of the nearest atlas place by lookup (``nearest``, ``lookup``).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from console.contracts import PrecomputedHandFlows
 from console.errors import UserError
 from console.types import DIRECTIONS, OutputPlan
 
@@ -49,9 +53,37 @@ class HandFlows:
         self.vmap = str(vmap_path)
         self.planner = planner
         self._plans: dict[tuple, OutputPlan] = {}
+        self.atlas: Any = None  # every flow on a grid, chosen ahead (prepare_atlas)
+
+    def prepare_atlas(self, step_mm: float, progress=None) -> bool:
+        """Choose every flow on a ``step_mm`` grid of hand centres ahead (minutes the first
+        time, then read from the effect's cache); ``progress(done, total, what)``, raising
+        cancels. False when the registered effect offers no atlas."""
+        if not isinstance(self.effect, PrecomputedHandFlows) or step_mm <= 0:
+            return False
+        self.atlas = self.effect.hand_flow_atlas(self.vmap, step_mm, progress=progress)
+        return True
+
+    def nearest(self, pos_mm) -> tuple[float, float] | None:
+        """The atlas place serving a hand resting at ``pos_mm`` (``None``: no atlas, or
+        too far outside the places where a hand fits)."""
+        return None if self.atlas is None else self.atlas.nearest(pos_mm)
+
+    def lookup(self, center_mm, direction: str) -> OutputPlan | None:
+        """The plan without a search: one made before, or the atlas's (``UserError`` when
+        the atlas says there is no flow there); ``None`` when it needs a search."""
+        hit = self._plans.get(_key(center_mm, direction))
+        if hit is not None or self.atlas is None or not self.atlas.has(center_mm):
+            return hit
+        if direction not in DIRECTIONS:
+            raise UserError(f"flow direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
+        return self.atlas.plan(center_mm, direction)
 
     def cached(self, center_mm, direction: str) -> OutputPlan | None:
-        return self._plans.get(_key(center_mm, direction))
+        try:
+            return self.lookup(center_mm, direction)
+        except UserError:
+            return None
 
     def plan(self, center_mm, direction: str, *, exhaustive: bool = False) -> OutputPlan:
         if direction not in DIRECTIONS:

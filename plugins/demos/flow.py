@@ -6,8 +6,11 @@ flow direction is the scene's selected arrow, else the demo's ``direction``) ->
 (the plan handed to the output scheduler, non-blocking).
 
 Plans for the scene's hand regions are prepared at start (exhaustive search, cached on
-disk); a hand elsewhere gets the staged search on a worker thread and its plan plays
-when ready (``events`` record how late).
+disk), and every flow under a hand on the ``grid_mm`` grid is chosen ahead in all four
+directions (the effect's atlas, cached on disk): the frame that decides the gesture plays
+the nearest place's plan by lookup. A hand where neither serves (no atlas, or off the
+table's measured part) gets the staged search on a worker thread and its plan plays when
+ready (``events`` record how late).
 """
 
 from __future__ import annotations
@@ -102,8 +105,10 @@ class FlowDemo:
         still_mm: float = 12.0,
         still_s: float = 0.3,
         planner: Any = None,
+        precompute: bool = True,
     ) -> None:
         self.profile, self.outputs, self.plans = profile, outputs, plans
+        self.precompute = precompute  # choose every flow on the grid ahead (prepare too)
         self.direction = direction
         self.snap_mm = float(snap_mm)
         self.grid_mm = float(grid_mm)
@@ -128,9 +133,13 @@ class FlowDemo:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self, progress=None) -> None:
-        """Prepare the plans the scene needs (its regions, the demo's direction; other
-        directions are computed when first asked for). ``progress(done, total, what)``
-        is called per region (the first time costs seconds per region; then cached)."""
+        """Prepare the plans the scene needs: its regions in the demo's direction
+        (exhaustive) and, with ``precompute``, every flow on the ``grid_mm`` grid in every
+        direction (the first time costs seconds per region and minutes for the grid; then
+        cached). ``progress(done, total, what)``; raising in it cancels."""
+        wants_atlas = self.prepare_regions and self.precompute and self.grid_mm > 0
+        if wants_atlas and not self.plans.prepare_atlas(self.grid_mm, progress):
+            log.info("the hand_flow effect offers no atlas: flows are planned when asked")
         if self.prepare_regions:
             for i, c in enumerate(self.regions):
                 if progress is not None:
@@ -160,13 +169,18 @@ class FlowDemo:
 
     def target(self, rest_mm) -> tuple[float, float]:
         """A resting hand near a scene region takes the region's (prepared) position;
-        elsewhere the nearest point of a ``grid_mm`` grid (the whole-table flow maps'
-        step), so a hand placed again at the same spot reuses its plan."""
+        elsewhere the nearest place of the atlas (every flow chosen ahead), else the
+        nearest point of a ``grid_mm`` grid, so a hand placed again at the same spot
+        reuses its plan."""
         if self.regions:
             d = [np.hypot(rest_mm[0] - x, rest_mm[1] - y) for x, y in self.regions]
             i = int(np.argmin(d))
             if d[i] <= self.snap_mm:
                 return self.regions[i]
+        if self.grid_mm > 0 and self.plans is not None and self.plans.atlas is not None:
+            near = self.plans.nearest(rest_mm)
+            if near is not None:
+                return near
         return self.snap(rest_mm)
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
@@ -220,7 +234,11 @@ class FlowDemo:
             return False
         center, direction = self.target(rest), self.current_direction()
         work["request"] = {"center_mm": center, "direction": direction, "rest_mm": rest}
-        plan = self.plans.cached(center, direction)
+        try:
+            plan = self.plans.lookup(center, direction)
+        except UserError as exc:  # the atlas knows there is no flow here
+            self._log_event({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
+            return False
         if plan is None:
             self._compute_later(lambda: self.plans.plan(center, direction), work["request"], frame)
             return False
@@ -265,6 +283,7 @@ class FlowDemo:
         ev = {
             "kind": "flow" if pair is None else "two_point",
             "t_arrival_s": frame.stamps_s.get("arrival"),
+            "t_decided_s": frame.stamps_s.get("classify"),  # the gesture decision
             "t_scheduled_s": time.monotonic(),
             "late_s": late_s,
             "seq": frame.seq,

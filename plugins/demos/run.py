@@ -322,6 +322,7 @@ def start_demo(
                 still_s=float(dm.get("still_ms", 300)) / 1e3,
                 prepare=prepare,
                 planner=planner,
+                precompute=bool(dm.get("flow_atlas", True)),
             )
         stages = [
             ("vision", VisionStage(clf)),
