@@ -115,6 +115,11 @@ class Outputs:
                 raise SafetyRefusal(f"{report.name}: {report.error}")
         return report
 
+    def precheck(self, plan: OutputPlan) -> None:
+        """Check a plan ahead of playing it (a plan about to be asked for: its check is
+        then not on the path to its first sample); ``SafetyRefusal`` if refused."""
+        self.scheduler.precheck(plan)
+
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
         return self.scheduler.stream(source, name)
 

@@ -153,6 +153,11 @@ class Scheduler(Source):
         self._enqueue(_Job(steps, report))
         return report
 
+    def precheck(self, plan: OutputPlan) -> None:
+        """Check ``plan`` now (``SafetyRefusal`` if refused) so that playing this plan
+        object later skips the check: what plays is still the copy checked here."""
+        self._checked_samples(plan)
+
     def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, ...], ...]:
         """Each segment's samples per output channel as checked (copied read-only;
         checked once per plan object)."""

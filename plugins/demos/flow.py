@@ -19,7 +19,7 @@ import logging
 import threading
 import time
 from collections import deque
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -29,6 +29,13 @@ from console.types import DIRECTIONS_MM, Frame
 from .adapters import summary_parts
 
 log = logging.getLogger("haptable.demos.flow")
+
+
+@runtime_checkable
+class Prechecks(Protocol):
+    """Outputs that check a plan ahead of playing it (``console.runtime.outputs``)."""
+
+    def precheck(self, plan: Any) -> None: ...
 
 
 #: Direction -> unit vector in table mm (console.types: up = -y, as the projected arrows).
@@ -130,6 +137,10 @@ class FlowDemo:
         self._pending: threading.Thread | None = None
         self._running = False
         self.planner = planner  # computes plans in its own process (closed on stop)
+        self._warm_key: tuple | None = None  # the plan made ahead for the hand on the table
+        self._warm_next: tuple | None = None
+        self._warm_ready = threading.Event()
+        self._warm_thread: threading.Thread | None = None
 
     # ------------------------------------------------------------------ lifecycle
     def start(self, progress=None) -> None:
@@ -227,6 +238,7 @@ class FlowDemo:
         g = work.get("gesture")
         rest = work.get("rest_mm")
         if g is None or g.name != "static_hand" or rest is None or not self._running:
+            self._warm(work)
             return False
         if len(work.get("hands", ())) > 1:
             return False  # two hands: the two-finger flow decides
@@ -244,6 +256,45 @@ class FlowDemo:
             return False
         work["plan"] = plan
         return True
+
+    def _warm(self, work: dict) -> None:
+        """A hand on the table not yet at rest: have the plan of the place under it made
+        and checked now, on the warm-up thread, so the frame that decides plays it at
+        once (atlas places only: a search is never started speculatively)."""
+        hand = work.get("hand")
+        pos = hand.center_mm if hand is not None else None
+        if pos is None or self.plans is None or self.plans.atlas is None or not self._running:
+            return
+        key = (self.target(pos), self.current_direction())
+        if key == self._warm_key:
+            return
+        self._warm_key = key
+        with self._lock:
+            self._warm_next = key  # a newer place replaces one not started yet
+            if self._warm_thread is None:
+                self._warm_thread = threading.Thread(
+                    target=self._warm_worker, name="haptable-flow-warm", daemon=True
+                )
+                self._warm_thread.start()
+        self._warm_ready.set()
+
+    def _warm_worker(self) -> None:
+        while self._running:
+            if not self._warm_ready.wait(0.5):
+                continue  # look at _running again
+            with self._lock:
+                key, self._warm_next = self._warm_next, None
+                self._warm_ready.clear()
+            if key is None:
+                continue
+            try:
+                plan = self.plans.lookup(*key)
+                if plan is not None and isinstance(self.outputs, Prechecks):
+                    self.outputs.precheck(plan)
+            except (UserError, SafetyRefusal):
+                pass  # the deciding frame meets it again and says so
+        with self._lock:
+            self._warm_thread = None
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         self._play_request(work["plan"], work["request"], frame, late_s=0.0)

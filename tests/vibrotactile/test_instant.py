@@ -226,3 +226,43 @@ def test_the_atlas_holds_little_memory(setup):
     plan_bytes = at.nbytes - stored
     one = 2 * 2 * 8 * int(round(1.5 * 48000))  # two parts, piezo and screen, float64
     assert 0 < plan_bytes <= at.max_plans * one * 1.01  # bounded: the oldest are dropped
+
+
+def test_the_plan_under_a_settling_hand_is_made_and_checked_before_the_decision(setup):
+    import time
+
+    from plugins.demos.adapters import flow_renderers
+    from plugins.demos.flow import FlowDemo
+
+    s = setup
+
+    class Checking(Outputs):
+        def __init__(self) -> None:
+            super().__init__()
+            self.checked: list = []
+
+        def precheck(self, plan) -> None:
+            self.checked.append(plan)
+
+    hand, _ = flow_renderers(s.pm, s.profile, s.path)
+    out = Checking()
+    demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
+    demo.regions = []
+    demo.start()
+    try:
+        c = (float(hand.atlas.xs[2]), float(hand.atlas.ys[1]))
+        ok = [d for d in DIRECTIONS if hand.atlas.result(c, d)["ok"]]
+        demo.direction = ok[0]
+        settling = SimpleNamespace(center_mm=(c[0] + 3.0, c[1] - 4.0))
+        frame = SimpleNamespace(seq=0, t_capture_s=0.0, stamps_s={})
+        assert not demo.effect_stage(frame, {"hand": settling, "hands": (settling,)})
+        t_end = time.monotonic() + 10
+        while not out.checked and time.monotonic() < t_end:
+            time.sleep(0.01)
+        assert len(out.checked) == 1, "made and checked while the hand settles"
+        g = Gesture("static_hand", "static", 1.0, 1.0, None)
+        work = {"gesture": g, "rest_mm": (c[0] - 2.0, c[1] + 1.0), "hands": ()}
+        assert demo.effect_stage(frame, work)
+        assert work["plan"] is out.checked[0]  # the deciding frame plays that very plan
+    finally:
+        demo.stop()
