@@ -40,3 +40,27 @@ def test_a_checked_plan_changed_afterwards_plays_as_checked(outputs):
     outputs.play(plan).wait(10)
     rec = outputs.recording()[:, 0]
     assert np.max(np.abs(rec)) == pytest.approx(np.max(np.abs(sig)), rel=1e-6)
+
+
+def test_a_prechecked_plan_plays_unchecked_and_a_refused_one_stays_refused(outputs, monkeypatch):
+    import time
+
+    import console.runtime.scheduler as sched
+
+    calls = []
+    real = sched.check_plan
+    monkeypatch.setattr(sched, "check_plan", lambda p, lim: (calls.append(p), real(p, lim)))
+    sig = tone(250, 10, 0.05, FS, 0.01)
+    plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
+    outputs.precheck(plan)
+    assert len(calls) == 1
+    t0 = time.monotonic()
+    rep = outputs.play(plan)
+    assert len(calls) == 1  # checked ahead: not again on the way to the driver
+    assert rep.t_first_sample_s is not None and rep.t_first_sample_s >= t0
+    bad = OutputPlan(FS, (Segment(100 * sig, np.zeros_like(sig), frozenset({"PA"})),))
+    with pytest.raises(SafetyRefusal):
+        outputs.precheck(bad)
+    with pytest.raises(SafetyRefusal):
+        outputs.play(bad)  # a plan refused ahead is checked (and refused) again
+    assert len(calls) == 3
