@@ -217,7 +217,7 @@ def _run(ctx: Any, quick: bool) -> dict:
         "relay_settle_ms": guard + switch,
         "dac_buffer_ms": 3 * bs / fs * 1e3,
     }
-    n_after, n_before = (12, 6) if quick else (60, 20)
+    n_after, n_before = (10, 4) if quick else (60, 20)
     # the atlas of the profile's map is built (or loaded) first, as the demo prepares it
     res["atlas"] = measure_atlas(ctx, quick)
     res["after"] = run_placements(ctx, True, n_after, seed=11)
