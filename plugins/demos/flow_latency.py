@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import os
 import time
 from typing import Any
 
@@ -119,6 +120,19 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
     }
 
 
+@contextlib.contextmanager
+def _env(name: str, value: str):
+    old = os.environ.get(name)
+    os.environ[name] = value
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = old
+
+
 class _Enough(Exception):
     """Stops a timed build after enough places (quick)."""
 
@@ -138,9 +152,11 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
     step = float(ctx.profile.get("demos.flow_grid_mm") or 10.0)
     rss0 = rss_mb()
     res: dict = {"step_mm": step, "directions": 4}
-    with tempfile.TemporaryDirectory(prefix="haptable-atlas-") as tmp:
-        prof = _profile_with(ctx.profile, "vibrotactile", cache_dir=tmp)
-        eff = ctx.pm.get("effect", "hand_flow").factory(prof)
+    with (
+        tempfile.TemporaryDirectory(prefix="haptable-atlas-") as tmp,
+        _env("HAPTABLE_CACHE_DIR", tmp),  # a fresh cache: the build is timed
+    ):
+        eff = ctx.pm.get("effect", "hand_flow").factory(ctx.profile)
         if not isinstance(eff, PrecomputedHandFlows):
             return {"note": "the registered hand_flow effect offers no atlas"}
         marks: list[tuple[float, int, int]] = []

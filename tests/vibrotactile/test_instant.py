@@ -27,22 +27,23 @@ def _map(scale: float = 1.0) -> VibrationMap:
     return dataclasses.replace(m, frf_um_per_v=m.frf_um_per_v * scale) if scale != 1 else m
 
 
-def _profile(profile, cache_dir) -> object:
+def _uncached(profile) -> object:
     data = dict(profile.data)
-    data["vibrotactile"] = {**dict(data.get("vibrotactile") or {}), "cache_dir": str(cache_dir)}
+    data["vibrotactile"] = {**dict(data.get("vibrotactile") or {}), "cache_dir": "none"}
     return dataclasses.replace(profile, data=data)
 
 
 @pytest.fixture
-def setup(tmp_path, profile, plugins):
+def setup(tmp_path, profile, plugins, monkeypatch):
     path = tmp_path / "map.npz"
     save_map(path, _map())
-    prof = _profile(profile, tmp_path / "cache")
-    return SimpleNamespace(path=path, profile=prof, pm=plugins, cache=tmp_path / "cache")
+    monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))  # HapTable's one cache
+    return SimpleNamespace(path=path, profile=profile, pm=plugins, cache=tmp_path / "cache")
 
 
-def _effect(s, cache_dir=None):
-    return s.pm.get("effect", "hand_flow").factory(_profile(s.profile, cache_dir or s.cache))
+def _effect(s, cached: bool = True):
+    prof = s.profile if cached else _uncached(s.profile)
+    return s.pm.get("effect", "hand_flow").factory(prof)
 
 
 def _same_plan(a, b) -> None:
@@ -80,7 +81,7 @@ def test_a_flow_at_a_random_position_plays_the_plan_the_effect_computes(setup, t
     assert seen[-1][0] == seen[-1][1] > 0  # progress reached the end
     atlas = hand.atlas
     assert atlas is not None and atlas.places == seen[-1][1]
-    direct = _effect(s, cache_dir=tmp_path / "other")  # computes afresh
+    direct = _effect(s, cached=False)  # computes afresh
     rng = np.random.default_rng(7)
     xs, ys = atlas.xs, atlas.ys
     played = 0
