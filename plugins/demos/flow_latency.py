@@ -148,7 +148,7 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
 
     from .run import flow_map_path
 
-    vmap = str(flow_map_path(ctx.profile, None, ctx.pm))
+    vmap = str(flow_map_path(ctx.profile, ctx.pm))
     step = float(ctx.profile.get("demos.flow_grid_mm") or 10.0)
     rss0 = rss_mb()
     res: dict = {"step_mm": step, "directions": 4}
