@@ -247,15 +247,26 @@ class FlowDemo:
         center, direction = self.target(rest), self.current_direction()
         work["request"] = {"center_mm": center, "direction": direction, "rest_mm": rest}
         try:
-            plan = self.plans.lookup(center, direction)
+            center, plan = self.ready_plan(center, direction)
         except UserError as exc:  # the atlas knows there is no flow here
             self._log_event({"kind": "no_flow", "reason": str(exc), "seq": frame.seq})
             return False
+        work["request"]["center_mm"] = center
         if plan is None:
             self._compute_later(lambda: self.plans.plan(center, direction), work["request"], frame)
             return False
         work["plan"] = plan
         return True
+
+    def ready_plan(self, center, direction: str) -> tuple[tuple[float, float], Any]:
+        """(place, plan) without a search: the plan made for ``center`` before, else (a
+        scene region in a direction not prepared) its nearest atlas place's; plan
+        ``None`` when only a search can make it. ``UserError``: no flow there."""
+        plan = self.plans.lookup(center, direction)
+        near = self.plans.nearest(center) if plan is None else None
+        if near is not None:
+            return near, self.plans.lookup(near, direction)
+        return center, plan
 
     def _warm(self, work: dict) -> None:
         """A hand on the table not yet at rest: have the plan of the place under it made
@@ -288,7 +299,7 @@ class FlowDemo:
             if key is None:
                 continue
             try:
-                plan = self.plans.lookup(*key)
+                _, plan = self.ready_plan(*key)
                 if plan is not None and isinstance(self.outputs, Prechecks):
                     self.outputs.precheck(plan)
             except (UserError, SafetyRefusal):

@@ -267,3 +267,29 @@ def test_the_plan_under_a_settling_hand_is_made_and_checked_before_the_decision(
         assert work["plan"] is out.checked[0]  # the deciding frame plays that very plan
     finally:
         demo.stop()
+
+
+def test_a_scene_region_in_a_direction_not_prepared_plays_its_atlas_place_at_once(setup):
+    from plugins.demos.adapters import flow_renderers
+    from plugins.demos.flow import FlowDemo
+
+    s = setup
+    hand, _ = flow_renderers(s.pm, s.profile, s.path)
+    out = Outputs()
+    demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
+    region = (float(hand.effect.region_centers(STEP_MM, vmap=str(s.path))[3][0]) + 7.0, 230.0)
+    demo.regions, demo.direction = [region], "right"  # prepared (exhaustive) for "right"
+    demo.start()
+    try:
+        assert hand.lookup(region, "right") is not None and hand.lookup(region, "up") is None
+        place = hand.nearest(region)
+        ok = [d for d in DIRECTIONS if d != "right" and hand.atlas.result(place, d)["ok"]]
+        demo.direction = ok[0]
+        frame = SimpleNamespace(seq=1, t_capture_s=1.0, stamps_s={})
+        g = Gesture("static_hand", "static", 1.0, 1.0, None)
+        work = {"gesture": g, "rest_mm": (region[0] + 5, region[1] - 5), "hands": ()}
+        assert demo.effect_stage(frame, work)  # at once, not searched later
+        assert work["request"]["center_mm"] == place
+        _same_plan(work["plan"], hand.atlas.plan(place, ok[0]))
+    finally:
+        demo.stop()
