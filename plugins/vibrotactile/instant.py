@@ -18,7 +18,7 @@ The atlas is built in worker processes (``workers``; cancel by raising in ``prog
 and cached on disk keyed by a hash of everything it depends on: the map's content, the
 perception model, the drive cap, band, interpolation, hand geometry, search parameters and
 the step. A cache file that cannot be read or fails its checks is logged, deleted and
-rebuilt: it is never played. Memory: ~90 bytes per place and direction plus at most
+rebuilt: it is never played. Memory: ~100 bytes per place and direction plus at most
 ``max_plans`` synthesised plans (``nbytes`` says how much).
 """
 
