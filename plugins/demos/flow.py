@@ -148,9 +148,12 @@ class FlowDemo:
         (exhaustive) and, with ``precompute``, every flow on the ``grid_mm`` grid in every
         direction (the first time costs seconds per region and minutes for the grid; then
         cached). ``progress(done, total, what)``; raising in it cancels."""
-        wants_atlas = self.prepare_regions and self.precompute and self.grid_mm > 0
-        if wants_atlas and not self.plans.prepare_atlas(self.grid_mm, progress):
-            log.info("the hand_flow effect offers no atlas: flows are planned when asked")
+        if self.prepare_regions and self.precompute and self.grid_mm > 0:
+            try:
+                if not self.plans.prepare_atlas(self.grid_mm, progress):
+                    log.info("the hand_flow effect offers no atlas: flows are planned when asked")
+            except UserError as exc:  # e.g. per-patch drives: no atlas of those yet
+                log.warning("%s", exc)
         if self.prepare_regions:
             for i, c in enumerate(self.regions):
                 if progress is not None:

@@ -293,3 +293,23 @@ def test_a_scene_region_in_a_direction_not_prepared_plays_its_atlas_place_at_onc
         _same_plan(work["plan"], hand.atlas.plan(place, ok[0]))
     finally:
         demo.stop()
+
+
+def test_per_patch_profiles_get_no_atlas_and_plan_when_asked(setup, caplog):
+    from console.profile import load_profile
+    from plugins.demos.adapters import flow_renderers
+    from plugins.demos.flow import FlowDemo
+
+    s = setup
+    prof = load_profile("sim-4ch", s.pm)  # a channel per patch: independent drives
+    eff = s.pm.get("effect", "hand_flow").factory(prof)
+    with pytest.raises(UserError, match="independent.*paper's search only"):
+        eff.hand_flow_atlas(str(s.path), STEP_MM)
+    hand, _ = flow_renderers(s.pm, prof, s.path)
+    demo = FlowDemo(prof, s.pm, Outputs(), hand, grid_mm=STEP_MM, prepare=True)
+    demo.regions = []
+    with caplog.at_level(logging.WARNING, logger="haptable.demos.flow"):
+        demo.start()
+    demo.stop()
+    assert hand.atlas is None and "flow atlas" in caplog.text
+    assert not list(s.cache.glob("flowatlas-*"))
