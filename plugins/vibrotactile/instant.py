@@ -10,9 +10,9 @@ flow is then a lookup of the nearest centre plus the synthesis of two tones (the
 
 The resolution: 10 mm by default (``[demos] flow_grid_mm``). A hand at rest is only known
 to within the resting detector's ``still_mm`` (12 mm) and the palm tells two touches
-apart only ~10 mm or more apart (two-point threshold of the palm); the nearest 10 mm
-centre is at most 7 mm away, below both, and the 40 mm squares under the hand change by
-less than a fifth of a square.
+apart ~10 mm or more apart (the palm's two-point threshold, a recalled literature value);
+the nearest 10 mm centre is at most 7 mm away, below both, and the 40 mm squares under
+the hand change by less than a fifth of a square.
 
 The atlas is built in worker processes (``workers``; cancel by raising in ``progress``)
 and cached on disk keyed by a hash of everything it depends on: the map's content, the
