@@ -116,7 +116,11 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "decision_to_output_ms": summarize_s(output),
         "processing": snap["latency"]["processing"],
         "underruns": audio.get("underruns"),
-        "hands_mm": truth,
+        "hands_mm": truth,  # where each placement put the hand (the twin's truth)
+        "flows_rest_mm": [e.get("rest_mm") for e in flows],  # where the camera saw it rest
+        "events_not_flows": [
+            {k: v for k, v in e.items() if k != "report"} for e in events if e["kind"] != "flow"
+        ][:10],
     }
 
 
