@@ -7,9 +7,13 @@ simulated DAC plays it at the sample rate, and an underrun is counted only when 
 finds the buffer empty (the thread was more than ``buffer_periods - 1`` blocks late, as
 on ALSA/PortAudio). The buffer adds ``buffer_periods`` blocks of output latency, reported
 in ``status()["latency_s"]`` (the safety gate adds it to its guard and settle gaps). An
-e-stop drops the queued blocks (like the sounddevice driver's ``abort``): the output is
-silent from the sample playing when the gate's e-stop event fires. Fast-forward (not
-paced) it has no buffer: a block counts as played when handed over.
+operator's e-stop (a ``cut`` event) drops the queued blocks (like the sounddevice driver's
+``abort``): the output is silent from the sample playing when the gate's e-stop event
+fires, and stays silent until the gate's own ramp down is over (the block under way at
+the event and every later one are dropped until the gate hands a block that ends in
+silence). Playing the rest of the gate's ramp after the drop would step the amplifiers
+from 0 V back up to the ramp's level: a step over the slew limit the gate never made.
+Fast-forward (not paced) it has no buffer: a block counts as played when handed over.
 
 The relay board has the MaxiCoupler's channels and logs every switch with the output
 level at that moment (the sample the twin DAC is playing then, as the real contacts would
@@ -112,7 +116,11 @@ class TwinAudioOutput:
         self._kept_from = 0  # oldest clock still in the ring
         self._t0: float | None = None  # DAC clock: sample _s0 played at _t0 (None: priming)
         self._s0 = 0
-        self._cut_pending = False
+        # an operator's e-stop cut the output: blocks are dropped until the gate's ramp
+        # down is over (until it hands a block that ends in silence)
+        self._cutting = False
+        self._filling = False  # the driver is inside the gate's fill (a block under way)
+        self._handed_silent = True  # the last block the gate handed ended at 0 V everywhere
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.realtime_priority = False
@@ -196,13 +204,18 @@ class TwinAudioOutput:
         return p, lvl
 
     def _on_gate_event(self, ev: Any) -> None:
-        """E-stop: drop the queued blocks (silent from the sample playing now)."""
+        """E-stop: drop the queued blocks (silent from the sample playing now), and every
+        block the gate hands until its ramp down is over."""
         if getattr(ev, "kind", "") not in ("estop", "shutdown") or not getattr(ev, "cut", True):
             return  # a fault's e-stop: the gate's ramp to zero plays out
         t = getattr(ev, "t_s", None) or time.monotonic()  # the moment of the e-stop
         with self._lock:
             self._silence(self._played(t), self._written)
-            self._cut_pending = True  # a block being filled right now is dropped too
+            # a block under way now may have been filled before the gate saw its e-stop
+            # (signal), and every later one is the gate's ramp from the level it last
+            # handed: dropped too, unless the gate was silent and nothing is under way.
+            # (A fill that starts after this reads the e-stop: it ramps from that level.)
+            self._cutting = self._cutting or self._filling or not self._handed_silent
 
     def _silence(self, a: int, b: int) -> None:
         """Zero clocks ``a..b`` of the ring (caller holds the lock)."""
@@ -220,14 +233,21 @@ class TwinAudioOutput:
         """Queue a filled block (caller holds the lock)."""
         n = out.shape[0]
         i = self._written % self._cap
-        self._rec[i : i + n] = 0.0 if self._cut_pending else out
-        self._last_block_sounded = not self._cut_pending and bool(out.any())
-        self._cut_pending = False
+        cut = self._cutting
+        self._rec[i : i + n] = 0.0 if cut else out
+        self._last_block_sounded = not cut and bool(out.any())
+        self._handed_silent = not out[-1].any()
+        if self._handed_silent:  # the gate's ramp down is over: nothing left to drop
+            self._cutting = False
+        self._filling = False
         self._written += n
         self._kept_from = max(self._kept_from, self._written - self._cap)
         self.blocks += 1
 
     def _fill(self, src: BlockSource, out: np.ndarray) -> None:
+        # set before the gate is called (an e-stop event that read False came before this
+        # fill, which then reads the gate's e-stop flag and ramps from the level last handed)
+        self._filling = True
         t0 = time.perf_counter()
         src.fill(out)
         self.callback_s.append(time.perf_counter() - t0)
@@ -263,7 +283,7 @@ class TwinAudioOutput:
             self._fill(src, out)
             with self._lock:
                 self._store(out)
-            last = out[-1] * self._to_v
+            last = self._rec[(self._written - 1) % self._cap] * self._to_v  # as stored
             self._bus.level_v = tuple(float(v) for v in last)
             self._bus.clock = self._written
             return 0.0

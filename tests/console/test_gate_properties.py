@@ -5,6 +5,8 @@ block (plus the ramp down) of an e-stop."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -125,6 +127,51 @@ def test_the_audio_thread_survives_every_fault(outputs, fault):
     assert outputs.gate.clock > c0
 
 
+@pytest.mark.parametrize("lands", ["before", "after"])
+def test_an_estop_landing_as_a_loud_block_is_handed_over_stays_silent(outputs, lands):
+    """An operator's e-stop landing just before the gate hands over a loud block it has
+    already checked (its event's clock: the block's first sample), or just after (the
+    block's end, before the driver stores it): the twin drops that block (the driver's cut)
+    and must drop the rest of the gate's ramp down too. Played after the cut, the ramp's
+    first sample (the block's last level less one slew step) stepped the amplifiers up from
+    0 V: the property test above met it under load; here the timing is injected."""
+    from console.benchmarks.safety import FaultySource
+
+    gate = outputs.gate
+    route = ROUTES["PA"]
+    step_v = float(outputs.limits.column_steps_v(route)[0])
+    start = fresh(outputs)
+    outputs.set_relays({gate.relay_channels["PA"]})
+    hand = gate._hand
+    landed: list[int] = []  # the clock of the block the e-stop landed on
+
+    def hand_with_estop(out, cols):
+        if landed or abs(float(cols[0][-1])) <= 2.2 * step_v:  # a ramp down of 3+ samples
+            hand(out, cols)
+            return
+        landed.append(gate.clock)
+        if lands == "before":
+            gate.estop("operator", wait=False)
+        hand(out, cols)
+        if lands == "after":
+            gate.estop("operator", wait=False)
+
+    gate._hand = hand_with_estop
+    try:
+        gate.attach(FaultySource(route, 90.0, 250.0, "none", 10**6, 9600, FS))
+        t_end = time.monotonic() + 10
+        while not gate.estopped and time.monotonic() < t_end:
+            time.sleep(0.001)
+        assert gate.wait_safe(5)
+    finally:
+        gate._hand = hand
+    assert landed, "no loud block was handed: the e-stop never landed"
+    stop = [e for e in gate.events if e.kind == "estop" and e.t_s >= start.t0_s][0]
+    assert stop.clock == landed[0] + (BLOCK if lands == "after" else 0)
+    check_received(outputs, start, route)
+    assert not np.any(outputs.recording()[stop.clock :]), "the amplifiers got signal after the cut"
+
+
 def test_the_audit_sees_what_breaks_a_promise(outputs):
     """The checker itself: a step, a switch under signal and noise after an e-stop."""
     from console.safety import GateEvent
@@ -152,3 +199,14 @@ def test_the_audit_sees_what_breaks_a_promise(outputs):
     assert any(
         "e-stop" in p for p in received_problems(lim, late, [], [ev], start, ROUTES["PA"], BLOCK)
     )
+    # a driver's cut to 0 V at an operator's e-stop is no slew step; a step back up from
+    # that silence (the gate's ramp played after the cut) is one, however near the cut
+    cut = rec.copy()
+    cut[:1000, 0] = np.linspace(0.0, 60.0, 1000)  # a slow rise, cut to 0 V at 1000
+    cut[1064:1067, 0] = [60.0 - 23.0, 60.0 - 46.0, 0.0]
+    at_cut = GateEvent(1.0, 1040, "estop", "operator")
+    step = lim.column_steps_v(ROUTES["PA"])[0]
+    found = received_problems(lim, cut, [], [at_cut], start, ROUTES["PA"], BLOCK)
+    assert found == [f"piezo steps 37.00 V at sample 1064 (limit {step:.2f})"], found
+    cut[1064:1067, 0] = 0.0
+    assert received_problems(lim, cut, [], [at_cut], start, ROUTES["PA"], BLOCK) == []

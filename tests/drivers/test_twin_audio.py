@@ -176,3 +176,54 @@ def test_paced_estop_cuts_within_the_buffer(profile, plugins):
         last_signal = int(quiet[-1]) + 1 if quiet.size else 0
         assert last_signal >= stop - periods * bs - bs, "only the queued blocks were dropped"
         assert out.relay_log()[-1].level_v == (0.0, 0.0)
+
+
+class Ramp:
+    """A gate stand-in handing ``levels`` (one per block, held), then silence."""
+
+    def __init__(self, levels: list[float]) -> None:
+        self.levels = list(levels)
+        self.idle = False
+        self.listeners: list = []
+
+    def fill(self, out: np.ndarray) -> None:
+        out[:] = self.levels.pop(0) if self.levels else 0.0
+
+
+def fast_twin(profile, src) -> TwinAudioOutput:
+    out = TwinAudioOutput(profile, record_s=1.0)
+    out.paced = False
+    out._source = src  # step() is driven by hand: no thread
+    return out
+
+
+def test_estop_drops_the_gate_ramp_down_until_it_ends_in_silence(profile):
+    """After the cut the gate still ramps down from the level it last handed: the device
+    that dropped its queue stays silent through that ramp (its first sample, played after
+    the silence, would step the amplifiers up from 0 V)."""
+    src = Ramp([0.3, 0.3, 0.2, 0.1, 0.0, 0.4])  # block 5: a new signal after the ramp
+    out = fast_twin(profile, src)
+    out.step(0.0)
+    out.step(0.0)
+    out._on_gate_event(GateEvent(0.0, 2 * BS, "estop", "operator e-stop"))
+    for _ in range(4):
+        out.step(0.0)
+    rec = out.recording_card()[:, 0]
+    assert np.all(rec[: 2 * BS] == np.float32(0.3)), "what played before the cut stays"
+    assert not np.any(rec[2 * BS : 5 * BS]), "the ramp after the cut is dropped"
+    assert np.all(rec[5 * BS :] == np.float32(0.4)), "the cut ends with the gate's silence"
+
+
+def test_an_estop_in_silence_drops_nothing_later(profile):
+    """An e-stop while the gate hands silence and no block is under way cuts nothing: the
+    gate only hands silence after it, and what it plays after a reset is not dropped."""
+    src = Ramp([0.3, 0.0])
+    out = fast_twin(profile, src)
+    out.step(0.0)
+    out.step(0.0)
+    out._on_gate_event(GateEvent(0.0, 2 * BS, "estop", "operator e-stop"))
+    src.levels = [0.2, 0.2]  # after a reset, from silence (a ramp in the real gate)
+    out.step(0.0)
+    out.step(0.0)
+    rec = out.recording_card()[:, 0]
+    assert np.all(rec[2 * BS :] == np.float32(0.2)), "a block after the e-stop was dropped"
