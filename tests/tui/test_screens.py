@@ -4,6 +4,7 @@ twin; what played is checked in the twin's recording and relay log."""
 from __future__ import annotations
 
 import asyncio
+import threading
 
 import numpy as np
 import pytest
@@ -67,9 +68,12 @@ def test_relay_toggle_and_estop(plugins):
             assert app.session.outputs.gate.relay_state() == frozenset()
             await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP:"))
             assert bar.has_class("estop")
-            # a toggle during the e-stop is refused, and the screen says why
+            # a toggle during the e-stop is refused, and the screen says why (the label says
+            # "e-stop" for every relay already: wait on the refusal of this key itself)
+            pane = app.pane("relays")
             await pilot.press("2")
-            await wait_for(pilot, lambda: "e-stop" in str(app.query_one("#interlock-2").render()))
+            await wait_for(pilot, lambda: "e-stop" in pane.refused.get(2, "") and not pane.pending)
+            assert "e-stop" in str(app.query_one("#interlock-2").render())
             assert app.session.outputs.gate.relay_state() == frozenset()
             log = app.session.outputs.relay_log()
             assert [(r.channel, r.closed) for r in log] == [(1, True), (1, False)]
@@ -80,6 +84,40 @@ def test_relay_toggle_and_estop(plugins):
             await asyncio.sleep(0.3)
             assert app.session.outputs.gate.relay_state() == frozenset()
             assert not any(r.channel == 2 for r in app.session.outputs.relay_log())
+
+    asyncio.run(scenario())
+
+
+def test_a_toggle_during_the_estop_never_runs_after_a_quick_reset(plugins, monkeypatch):
+    """The key is refused when it is pressed: a relay command started during the e-stop
+    and run after the reset (a slow worker thread: injected here by holding the outputs'
+    relay command until the reset is done) would close a relay nobody asked for then."""
+
+    async def scenario():
+        app = _app(plugins, "relays")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            out = app.session.outputs
+            pane = app.pane("relays")
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: out.gate.estopped and out.gate.wait_safe(0))
+            reset = threading.Event()
+            set_relays = out.set_relays
+
+            def held_until_reset(*a, **kw):
+                reset.wait(10)
+                return set_relays(*a, **kw)
+
+            monkeypatch.setattr(out, "set_relays", held_until_reset)
+            await pilot.press("2")
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not out.gate.estopped)
+            reset.set()
+            await wait_for(pilot, lambda: not pane.pending, what="the toggle answered")
+            await asyncio.sleep(0.3)
+            assert out.gate.relay_state() == frozenset()
+            assert not any(r.channel == 2 for r in out.relay_log())
+            assert "e-stop" in pane.refused[2]
 
     asyncio.run(scenario())
 

@@ -119,8 +119,15 @@ class RelaysPane(VerticalScroll):
         self.request(ch, not closed)
 
     def request(self, ch: int, closed: bool) -> None:
-        self.pending[ch] = closed
         self.refused.pop(ch, None)
+        out = self.app.session.outputs
+        if out is not None and out.gate.estopped:
+            # refused on the key itself: the worker may run only after a quick reset, and
+            # would then switch a relay the operator asked for during the e-stop
+            reason = out.gate.estop_reason
+            self._done(ch, f"e-stop active ({reason}): relays stay open; reset first")
+            return
+        self.pending[ch] = closed
         self._switch(ch, closed)
 
     @work(thread=True, group="relays")
