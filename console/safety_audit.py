@@ -57,13 +57,16 @@ def received_problems(
     steps_v = limits.column_steps_v(route)
     if part.shape[0]:
         steps = np.abs(np.diff(np.vstack([prev[None, :], part]), axis=0))
+        # where a driver's cut lands: the block under way at the e-stop (checked before
+        # it, handed before or after the event took its clock) is dropped or played whole,
+        # so the cut is at most a block either side of the event's clock, both ends included
         near_cut = np.zeros(steps.shape[0], bool)
         for e in evs:
             if e.kind in ("estop", "shutdown") and e.cut:
                 i = e.clock - rec0
-                near_cut[max(i - block, 0) : max(i + block, 0)] = True
-        # a driver's cut drops the output to 0 V: only a step that lands at zero is one (a
-        # step up from the silence after it is the ramp's tail played late, never a cut)
+                near_cut[max(i - block, 0) : max(i + block + 1, 0)] = True
+        # a cut drops the output to 0 V: only a step that lands at zero is one (a step up
+        # from the silence after it is the ramp's tail played late, never a cut)
         ok = ~(near_cut[:, None] & (part == 0.0))
         tol = 1.0005
         for ch, (name, step) in enumerate(zip(names, steps_v, strict=True)):
