@@ -35,8 +35,10 @@ class GateEvent:
     clock: int
     kind: str  # "estop", "refused", "switch", "fault", "reset"
     message: str
-    #: an e-stop a driver may answer by dropping its queued blocks at once (an operator's);
-    #: a fault's e-stop is not cut: the gate's ramp to zero at the slew limit plays out
+    #: an e-stop a driver may answer by dropping its queued blocks at once (an operator's),
+    #: and then every block until the gate hands one ending in silence (the rest of its
+    #: ramp down, played after the drop, would step up from 0 V); a fault's e-stop is not
+    #: cut: the gate's ramp to zero at the slew limit plays out
     cut: bool = True
 
 
