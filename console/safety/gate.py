@@ -108,6 +108,8 @@ class SafetyGate:
         self._safe = threading.Event()
         self._safe.set()
         self._audio_thread: threading.Thread | None = None
+        #: the driver is inside ``fill`` (waiting on the gate: it has not stopped pulling)
+        self._in_fill = False
         self.listeners: list[Callable[[GateEvent], None]] = []
         card_v = tuple(
             limits.screen_card_v if kind == "screen" else limits.piezo_card_v
@@ -211,11 +213,14 @@ class SafetyGate:
             )
             return
         clock = self.clock  # of the block's first sample (only this thread moves it)
+        self._in_fill = True
         try:
             self._fill(out)
         except Exception as exc:  # the audio thread must survive anything
             self._hand_ramp_down(out)
             self._fault(f"output path failed: {exc!r}")
+        finally:
+            self._in_fill = False
         try:
             self.scope.write(out, clock)  # what the driver got, as it got it
         except Exception:  # the scope is an observer: never the output's problem
@@ -513,7 +518,10 @@ class SafetyGate:
     def _open_when_silent(self) -> None:
         """Wait for the driver to have been handed silence for the guard gap, then open
         every relay. A driver that stopped pulling (no clock for ``estop_timeout_ms``) is
-        not playing anything: the relays open then too, and the event says so."""
+        not playing anything: the relays open then too, and the event says so. A driver
+        inside ``fill`` (a block checked before the e-stop, its thread starved or waiting
+        on a source) has not stopped: its block may still be signal, so the wait goes on
+        (at most the give-up time)."""
         need = self.limits.guard_samples + self.latency_samples
         timeout = self.limits.estop_timeout_s
         last_clock, last_move = self.clock, time.monotonic()
@@ -526,7 +534,7 @@ class SafetyGate:
             now = time.monotonic()
             if silent:
                 break
-            if clock != last_clock:
+            if clock != last_clock or self._in_fill:
                 last_clock, last_move = clock, now
             elif now - last_move > timeout:
                 note = "the audio driver stopped pulling samples"

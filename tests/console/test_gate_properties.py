@@ -186,6 +186,41 @@ def test_an_estop_landing_as_a_loud_block_is_handed_over_stays_silent(outputs, l
     assert rec[cut - 1, 0] != 0 and not np.any(rec[cut:]), "silent from the cut on"
 
 
+def test_an_estop_waits_for_a_block_under_way_before_opening_the_relays(outputs):
+    """A driver inside the gate's fill (its thread starved under load, here held inside the
+    source by the test) has not stopped pulling: the block it brings back was checked
+    before the e-stop. The relays must not open on the "stopped pulling" timeout while
+    the amplifiers still hold the signal's level; under load they did (57.5 V at relay 1)."""
+    import threading
+
+    from console.benchmarks.safety import FaultySource
+
+    gate = outputs.gate
+    start = fresh(outputs)
+    outputs.set_relays({gate.relay_channels["PA"]})
+    inside, release = threading.Event(), threading.Event()
+
+    class HeldSource(FaultySource):  # core code on the audio thread, as the scheduler
+        def next_block(self, n):
+            if self.k >= 2048 and not release.is_set():
+                inside.set()
+                release.wait(10)
+            return super().next_block(n)
+
+    gate.attach_scheduler(HeldSource(ROUTES["PA"], 60.0, 250.0, "none", 10**6, 9600, FS))
+    try:
+        assert inside.wait(10)
+        assert any(gate.level_v), "the amplifiers hold the signal's level"
+        gate.estop("operator", wait=False)
+        time.sleep(6 * outputs.limits.estop_timeout_s)  # the driver has not come back
+        assert gate.relay_state() == frozenset({1}), "relays opened under signal"
+    finally:
+        release.set()
+    assert gate.wait_safe(5)
+    assert not [e for e in gate.events if "without observed silence" in e.message]
+    check_received(outputs, start, ROUTES["PA"])
+
+
 def test_the_audit_sees_what_breaks_a_promise(outputs):
     """The checker itself: a step, a switch under signal and noise after an e-stop."""
     from console.safety import GateEvent
