@@ -232,6 +232,9 @@ class SafetyGate:
             src, caller = self._source, self._caller
             hold = self._estopped or self._switching
             clock = self.clock
+            # an e-stop after this look interrupts the call below (estop() sets its flag
+            # under this lock, then interrupts): none falls between the look and the call
+            seen = caller.interrupts if caller is not None else 0
         if hold or src is None:
             self._hand_ramp_down(out)
             return
@@ -239,7 +242,7 @@ class SafetyGate:
             block = (
                 src.next_block(n)
                 if caller is None
-                else caller.call(src.next_block, n, self.limits.source_stall_s)
+                else caller.call(src.next_block, n, self.limits.source_stall_s, since=seen)
             )
         except SourceInterrupted:
             block = None

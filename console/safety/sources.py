@@ -50,14 +50,25 @@ class SourceCaller:
         self._interrupts = 0
         self._thread: threading.Thread | None = None
 
-    def call(self, fn: Callable[[int], Any], n: int, timeout_s: float) -> Any:
+    @property
+    def interrupts(self) -> int:
+        """How many interrupts so far (``call(..., since=)`` counts the ones after)."""
+        return self._interrupts
+
+    def call(
+        self, fn: Callable[[int], Any], n: int, timeout_s: float, *, since: int | None = None
+    ) -> Any:
+        """``fn(n)`` on the guarded thread. An interrupt after ``since`` (``interrupts`` as
+        the caller read it, e.g. with its e-stop flag; default: now) ends the wait."""
         if self._busy:
             raise SourceStalled(f"{self.name} is still inside an earlier call")
         if self._thread is None:
             self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
             self._thread.start()
         self._gen += 1
-        gen, seen = self._gen, self._interrupts
+        gen, seen = self._gen, self._interrupts if since is None else since
+        if self._interrupts > seen:  # an e-stop came between the caller's look and now
+            raise SourceInterrupted(f"{self.name}: interrupted by the e-stop")
         self._busy = True
         self._req.put((gen, fn, n))
         deadline = time.monotonic() + timeout_s

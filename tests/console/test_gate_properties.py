@@ -221,6 +221,43 @@ def test_an_estop_waits_for_a_block_under_way_before_opening_the_relays(outputs)
     check_received(outputs, start, ROUTES["PA"])
 
 
+def test_an_estop_between_the_gates_look_and_its_call_to_a_source_ends_the_wait(outputs):
+    """An e-stop landing after the gate looked at its flag (not e-stopped) and before it
+    called the attached source ends the wait for that source at once: the e-stop does not
+    wait out the source's stall time (a slow source here), nor turn into a stall fault."""
+    from console.benchmarks.safety import FaultySource
+
+    gate = outputs.gate
+    start = fresh(outputs)
+    outputs.set_relays({gate.relay_channels["PA"]})
+
+    class SlowSource(FaultySource):
+        def next_block(self, n):
+            if self.k >= 2048:
+                time.sleep(3 * outputs.limits.source_stall_s)
+            return super().next_block(n)
+
+    gate.attach(SlowSource(ROUTES["PA"], 30.0, 250.0, "none", 10**6, 9600, FS))
+    caller = gate._caller
+    call = caller.call
+    landed = []
+
+    def call_after_an_estop(fn, n, timeout_s, **kw):
+        if fn.__self__.k >= 2048 and not landed:
+            landed.append(gate.clock)
+            gate.estop("operator", wait=False)
+        return call(fn, n, timeout_s, **kw)
+
+    caller.call = call_after_an_estop
+    t_end = time.monotonic() + 10
+    while not landed and time.monotonic() < t_end:
+        time.sleep(0.001)
+    assert landed and gate.wait_safe(5)
+    since = [e for e in gate.events if e.t_s >= start.t0_s]
+    assert [e.kind for e in since if e.kind in ("estop", "fault")] == ["estop"], since
+    check_received(outputs, start, ROUTES["PA"])
+
+
 def test_the_audit_sees_what_breaks_a_promise(outputs):
     """The checker itself: a step, a switch under signal and noise after an e-stop."""
     from console.safety import GateEvent
