@@ -28,7 +28,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -47,18 +47,35 @@ DEFAULT_RECORD_S = 120.0
 class _Bus:
     """The wire between the twin amplifiers' output and the twin relays.
 
-    The twin audio output that started last drives it (one live set of outputs per
-    profile, as on the real table): ``probe()`` gives the clock of the sample at the
+    The live twin audio output that started last drives it (one live set of outputs per
+    profile, as on the real table): its probe gives the clock of the sample at the
     amplifiers now (samples played since that output started) and its level in volts.
+    When it stops, the output that was driving before it (still live) drives again: two
+    outputs of one profile file (a profile changed in memory keeps its path) never leave
+    a stopped output's clock on the other's relay log.
     """
 
     level_v: tuple[float, ...] = (0.0, 0.0)
     clock: int = 0
-    probe: Callable[[], tuple[int, tuple[float, ...]]] | None = None
+    probes: list[Callable[[], tuple[int, tuple[float, ...]]]] = field(default_factory=list)
 
     def now(self) -> tuple[int, tuple[float, ...]]:
-        probe = self.probe
-        return probe() if probe is not None else (self.clock, self.level_v)
+        probes = self.probes
+        return probes[-1]() if probes else (self.clock, self.level_v)
+
+    def drive(self, probe: Callable[[], tuple[int, tuple[float, ...]]]) -> None:
+        """``probe``'s output drives the wire from now on."""
+        self.release(probe)
+        self.clock = 0
+        self.probes.append(probe)
+
+    def release(self, probe: Callable[[], tuple[int, tuple[float, ...]]]) -> None:
+        """``probe``'s output stopped: the one before it drives again (its last clock and
+        level stay on the wire when no output is left)."""
+        if probe in self.probes:
+            if self.probes[-1] == probe:
+                self.clock, self.level_v = probe()
+            self.probes.remove(probe)
 
 
 _BUSES: dict[str, _Bus] = {}
@@ -140,9 +157,8 @@ class TwinAudioOutput:
         self._source = source
         with self._lock:
             self._t0, self._s0 = None, self._written
-        self._bus.clock = 0  # this output drives the wire from now on
         self._bus.level_v = (0.0,) * len(self.channels)
-        self._bus.probe = self._probe
+        self._bus.drive(self._probe)  # this output drives the wire from now on
         listeners = getattr(source, "listeners", None)
         if isinstance(listeners, list):
             listeners.append(self._on_gate_event)
@@ -161,6 +177,7 @@ class TwinAudioOutput:
         listeners = getattr(self._source, "listeners", None)
         if isinstance(listeners, list) and self._on_gate_event in listeners:
             listeners.remove(self._on_gate_event)
+        self._bus.release(self._probe)
 
     @property
     def latency_s(self) -> float:
@@ -283,9 +300,6 @@ class TwinAudioOutput:
             self._fill(src, out)
             with self._lock:
                 self._store(out)
-            last = self._rec[(self._written - 1) % self._cap] * self._to_v  # as stored
-            self._bus.level_v = tuple(float(v) for v in last)
-            self._bus.clock = self._written
             return 0.0
         with self._lock:
             if self._t0 is not None:

@@ -227,3 +227,30 @@ def test_an_estop_in_silence_drops_nothing_later(profile):
     out.step(0.0)
     rec = out.recording_card()[:, 0]
     assert np.all(rec[2 * BS :] == np.float32(0.2)), "a block after the e-stop was dropped"
+
+
+def test_a_stopped_output_leaves_the_relays_to_the_live_one_of_the_same_profile(profile, plugins):
+    """Two outputs of one profile file (a profile changed in memory keeps its path): after
+    the second stops, the first one's relay switches carry the first one's clock again
+    (they carried the stopped output's, so a closed loop read the wrong samples)."""
+    import dataclasses
+
+    from console.runtime.outputs import open_outputs
+
+    first = open_outputs(profile, plugins, fast=True)
+    try:
+        x = tone(250, 5.0, 0.05, FS, 0.01)
+        plan = OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="p")
+        first.play(plan)
+        other = dataclasses.replace(profile, data=dict(profile.data))  # same path
+        second = open_outputs(other, plugins, fast=True)
+        second.play(plan)
+        second.play(plan)
+        second.close()
+        report = first.play(plan)
+        switches = [r for r in first.relay_log() if r.closed]
+        assert switches[-1].clock <= report.segment_start[0]
+        assert switches[-1].clock >= report.segment_start[0] - 2 * FS  # its own clock
+        assert first.status()["audio"]["blocks"] * BS >= report.segment_end[0]
+    finally:
+        first.close()
