@@ -17,7 +17,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from rich.markup import escape
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -27,6 +26,7 @@ from textual.widgets import Button, Checkbox, DataTable, Input, ProgressBar, Sel
 from console.errors import UserError
 from console.session.events import Failed, Snapshot, Started, Stopped
 from console.tui.session_messages import SessionMessage
+from console.tui.text import LiteralTable, escape
 
 from . import protocol as protocols
 from .runner import Answer, Control
@@ -145,7 +145,7 @@ class StudiesPane(Vertical):
         yield Static(
             "no study running: pick a protocol and a participant, then s", id="study-status"
         )
-        table = DataTable(id="study-trials", cursor_type="row")
+        table = LiteralTable(id="study-trials", cursor_type="row")
         table.add_columns("trial", "what", "response", "correct", "replays", "time")
         yield table
 
@@ -343,7 +343,7 @@ class StudiesPane(Vertical):
     def _show(self) -> None:
         L = self.last
         who = self.running or "-"
-        head = f"[b]{escape(who)}[/b]: {L.get('done', 0)}/{L.get('total', 0)} trials done"
+        head = f"[b]{escape(who)}[/b]: {escape(L.get('done', 0))}/{escape(L.get('total', 0))} trials done"
         if self.control is not None and self.control.paused and self.running:
             head += "  [yellow]paused[/]"
         lines = [head]
@@ -439,7 +439,7 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     try:
         if spec.get("projector") and not spec["simulate"]:
             if not proto.scene:
-                raise UserError(f"{proto.path}: no [study] scene to show; untick 'projector'")
+                raise UserError(str(proto.path) + ": no [study] scene to show; untick 'projector'")
             from .projected import ProjectedAnswers
 
             projected = ProjectedAnswers(session, responder, proto.scene)
