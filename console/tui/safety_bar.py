@@ -40,7 +40,8 @@ def describe(status: dict, width: int | None = None) -> tuple[str, str]:
             ),
             "estop",
         )
-    levels = gate["level_v"]
+    # a level that shows as zero is zero: never "-0.0 V" after a ramp down
+    levels = [0.0 if abs(float(v)) < 0.05 else float(v) for v in gate["level_v"]]
     names = gate.get("channels") or ["piezo", "screen"]
     pairs = list(zip(names, levels, strict=False))
     if len(levels) == 2:

@@ -98,3 +98,10 @@ def test_the_bar_shows_on_the_help_and_the_log(plugins):
                 await wait_for(pilot, lambda: app.screen is app.base, 5, "back")
 
     asyncio.run(scenario())
+
+
+def test_a_level_that_shows_as_zero_has_no_sign():
+    """After a ramp down the last sample can be -1e-9 V: the bar says +0.0 V, not -0.0 V."""
+    for width in (None, 80, 40):
+        text, _ = describe(_status(level=(-1e-9, -0.0)), width)
+        assert "-0" not in text, text
