@@ -89,6 +89,9 @@ def downsample(image: np.ndarray, cols: int, rows: int) -> np.ndarray:
 _STYLES: dict[tuple, Style] = {}
 
 
+_LABEL = Style(color="black", bgcolor="bright_white", bold=True)
+
+
 def _style(top: tuple, bottom: tuple) -> Style:
     key = (top, bottom)
     s = _STYLES.get(key)
@@ -103,15 +106,27 @@ class HalfBlockImage:
     """A (2*rows, cols) grey image plus overlay as ``▀`` cells (top pixel fg, bottom bg).
 
     ``overlay`` is an (2*rows, cols, 3) uint8 RGB array; pixels where it is non-zero
-    replace the grey value. Grey is quantised to 32 levels (style cache)."""
+    replace the grey value. Grey is quantised to 32 levels (style cache). ``labels``
+    ``{(row, col): text}`` write text over the cells from (row, col) on (clipped at the
+    right edge), e.g. a blob's id next to it."""
 
-    def __init__(self, grey: np.ndarray, overlay: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        grey: np.ndarray,
+        overlay: np.ndarray | None = None,
+        labels: dict[tuple[int, int], str] | None = None,
+    ) -> None:
         g = (np.clip(grey, 0, 255).astype(np.uint8) // 8) * 8 + 4
         rgb = np.repeat(g[..., None], 3, axis=2)
         if overlay is not None:
             on = overlay.any(axis=2)
             rgb[on] = overlay[on]
         self.rgb = rgb
+        self.text: dict[tuple[int, int], str] = {}  # (cell row, col) -> one character
+        for (row, col), label in (labels or {}).items():
+            for i, ch in enumerate(str(label)):
+                if 0 <= row < rgb.shape[0] // 2 and 0 <= col + i < rgb.shape[1]:
+                    self.text[(row, col + i)] = ch
 
     def __rich_measure__(self, console, options):
         from rich.measure import Measurement
@@ -119,10 +134,14 @@ class HalfBlockImage:
         return Measurement(self.rgb.shape[1], self.rgb.shape[1])
 
     def __rich_console__(self, console, options):
-        rgb = self.rgb
+        rgb, text = self.rgb, self.text
         for r in range(0, rgb.shape[0] - 1, 2):
             top, bot = rgb[r], rgb[r + 1]
             for c in range(rgb.shape[1]):
+                ch = text.get((r // 2, c))
+                if ch is not None:
+                    yield Segment(ch, _LABEL)
+                    continue
                 yield Segment(
                     "▀", _style(tuple(int(v) for v in top[c]), tuple(int(v) for v in bot[c]))
                 )

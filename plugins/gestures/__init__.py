@@ -27,9 +27,18 @@ VISION_FIELDS = {
     "highpass_sigma_px": Field(
         "float", 6.0, min=0.5, max=100, help="blur of the high-pass filter (image minus blur)"
     ),
-    "min_hand_area_px": Field("int", 600, min=1, help="smaller foreground blobs are not hands"),
-    "min_contact_area_px": Field("int", 3, min=1, help="smaller bright blobs are noise"),
-    "max_contact_area_px": Field("int", 2500, min=1, help="larger bright blobs are not fingertips"),
+    "smooth_px": Field(
+        "int", 5, min=1, max=31, help="box blur of the difference image before the body threshold"
+    ),
+    "min_hand_area_px": Field(
+        "int", 600, min=1, max=307200, help="smaller foreground blobs are not hands"
+    ),
+    "min_contact_area_px": Field(
+        "int", 3, min=1, max=307200, help="smaller bright blobs are noise"
+    ),
+    "max_contact_area_px": Field(
+        "int", 2500, min=1, max=307200, help="larger bright blobs are not fingertips"
+    ),
     "wrist_cut": Field(
         "float", 1.15, min=0.3, max=5, help="silhouette cut this many palm radii towards the wrist"
     ),

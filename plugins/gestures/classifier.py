@@ -72,13 +72,22 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
     }
 
 
-#: The vision thresholds an operator tunes (``VisionParams`` fields): the ``[vision]``
-#: profile bounds and one operator step.
+#: The vision settings an operator tunes (``VisionParams`` fields, and the background's
+#: ``background_alpha``): the ``[vision]`` profile bounds and one operator step.
 TUNABLES: dict[str, TunableRange] = {
     "body_threshold": TunableRange(1.0, 255.0, 2.0),
     "contact_threshold": TunableRange(1.0, 255.0, 2.0),
     "highpass_sigma_px": TunableRange(0.5, 100.0, 0.5),
+    "smooth_px": TunableRange(1.0, 31.0, 2.0),
+    "min_hand_area_px": TunableRange(1.0, 307200.0, 100.0),
+    "min_contact_area_px": TunableRange(1.0, 307200.0, 1.0),
+    "max_contact_area_px": TunableRange(1.0, 307200.0, 100.0),
+    "background_alpha": TunableRange(0.0, 1.0, 0.005),
 }
+#: the tunables that are whole numbers (pixel counts)
+INT_TUNABLES = frozenset(
+    {"smooth_px", "min_hand_area_px", "min_contact_area_px", "max_contact_area_px"}
+)
 
 
 class SvmClassifier:
@@ -151,8 +160,15 @@ class SvmClassifier:
         return int(self.model.n_frames) if self.model is not None else 0
 
     def tunables(self) -> dict[str, float]:
-        """The vision thresholds an operator tunes, by name."""
-        return {k: float(getattr(self.params, k)) for k in TUNABLES}
+        """The vision settings an operator tunes, by name (pixel counts as ``int``: the
+        profile keeps them so)."""
+        out: dict[str, float] = {
+            k: (int if k in INT_TUNABLES else float)(getattr(self.params, k))
+            for k in TUNABLES
+            if k != "background_alpha"
+        }
+        out["background_alpha"] = float(self.background.alpha)
+        return out
 
     def tunable_ranges(self) -> dict[str, TunableRange]:
         return dict(TUNABLES)
@@ -162,14 +178,19 @@ class SvmClassifier:
         return {k: f"vision.{k}" for k in TUNABLES}
 
     def set_tunable(self, name: str, value: float) -> None:
-        """Change one threshold; the next frame uses it."""
+        """Change one setting; the next frame uses it (pixel counts are rounded)."""
         rng = TUNABLES.get(name)
         if rng is None:
             raise ValueError(f"{name!r} is not tunable: use one of {', '.join(TUNABLES)}")
         v = float(value)
         if not rng.min_value <= v <= rng.max_value:
             raise ValueError(f"{name} = {v:g} is outside {rng.min_value:g}..{rng.max_value:g}")
-        self.params = replace(self.params, **{name: v})
+        if name == "background_alpha":
+            self.background.alpha = v
+        elif name in INT_TUNABLES:
+            self.params = replace(self.params, **{name: int(round(v))})
+        else:
+            self.params = replace(self.params, **{name: v})
 
     def set_background(self, image: np.ndarray) -> None:
         self.background = Background(image, self.background.alpha)

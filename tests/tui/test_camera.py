@@ -254,3 +254,65 @@ def test_devices_results_arriving_after_the_console_closed_are_dropped(plugins):
             pane._show([])
 
     asyncio.run(scenario())
+
+
+def test_contact_ids_are_written_next_to_the_contacts_on_the_view():
+    """The classifier's contact ids appear as text on the half-block view, right of the
+    contact's cell; the picture stays half blocks elsewhere."""
+    from rich.console import Console
+
+    from console.tui.panes.camera import blob_labels
+    from console.tui.plots import HalfBlockImage
+
+    work = {"contacts": (Contact(7, (320.0, 240.0)), Contact(12, (630.0, 10.0)))}
+    labels = blob_labels((480, 640), cols=64, rows=24, work=work)
+    assert labels == {(12, 34): "7", (0, 63): "12"}
+    con = Console(width=80, record=True, color_system="truecolor")
+    con.print(HalfBlockImage(np.full((48, 64), 90.0), None, labels))
+    lines = con.export_text().splitlines()
+    assert lines[12][34] == "7" and set(lines[12][:34]) == {"▀"}
+    assert lines[0][63] == "1"  # clipped at the right edge, never wrapped
+    assert len(lines[0]) == 64
+
+
+def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
+    """] walks to the smoothing setting, + raises it (the next frame uses it), W keeps
+    every setting; the next console's classifier starts with them."""
+    from console.profile import load_profile
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(110, 40)) as pilot:
+            await _first_frame(app, pilot)
+            svc = app.session.camera_started
+            pane = app.pane("camera")
+            info = app.query_one("#camera-info")
+            while pane.chosen_key() != "smooth_px":
+                await pilot.press("right_square_bracket")
+            before = svc.params()["smooth_px"]
+            await pilot.press("plus")
+            assert svc.classifier.params.smooth_px == before + 2
+            await wait_for(
+                pilot, lambda: f"▸ smooth_px {before + 2}" in str(info.render()), 10, "shown"
+            )
+            while pane.chosen_key() != "background_alpha":
+                await pilot.press("left_square_bracket")
+            alpha = svc.params()["background_alpha"]
+            await pilot.press("minus")
+            assert svc.classifier.background.alpha == pytest.approx(alpha - 0.005)
+            await pilot.press("W")
+            where = paths.profile_config_dir("sim", "overrides.toml")
+            await wait_for(
+                pilot,
+                lambda: any(str(where) in str(n.message) for n in app._notifications),
+                10,
+                "the notification naming the file",
+            )
+            return before + 2, alpha - 0.005
+
+    smooth, alpha = asyncio.run(scenario())
+    prof = load_profile("sim", plugins)
+    assert prof.get("vision.smooth_px") == smooth
+    assert prof.get("vision.background_alpha") == pytest.approx(alpha)
+    clf = plugins.build("classifier", "svm", prof)
+    assert clf.tunables()["smooth_px"] == smooth

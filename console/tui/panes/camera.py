@@ -1,6 +1,8 @@
 """Camera: the live IR view (half-block image, ~10 Hz) with the detected hand, contacts
 and gesture drawn over it; background capture; threshold and high-pass tuning with
-immediate effect; the touch-calibration wizard (``console.session.calibration``: this
+immediate effect (every vision setting the classifier offers: ``[``/``]`` choose one,
+``-``/``+`` change it; ``W`` keeps them all for the profile); contact ids written next to
+each contact on the view; the touch-calibration wizard (``console.session.calibration``: this
 screen shows it and forwards its keys); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
@@ -43,15 +45,30 @@ def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -
     return ov
 
 
+def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, int], str]:
+    """``{(cell row, col): id}``: each contact's id (the classifier's) written just right
+    of the contact on a ``cols`` x ``rows`` half-block view of a ``shape_px`` image."""
+    h, w = shape_px
+    out: dict[tuple[int, int], str] = {}
+    for c in work.get("contacts", ()) or ():
+        x, y = c.pos_px
+        col = min(cols - 1, max(0, int(x * cols / w)))
+        row = min(rows - 1, max(0, int(y * 2 * rows / h) // 2))
+        out[(row, min(col + 2, cols - 1))] = str(c.id)
+    return out
+
+
 class CameraPane(Horizontal):
     HELP_TEXT = (
         "b        capture the background (show the empty table)\n"
         "t / T    body threshold down / up      c / C  contact threshold down / up\n"
         "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
-        "W        keep the thresholds for this profile (its overrides file)\n"
+        "[ / ]    choose a vision setting (thresholds, smoothing, blob sizes, background)\n"
+        "- / +    change the chosen setting by one step\n"
+        "W        keep every vision setting for this profile (its overrides file)\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
         "g        gestures panel: datasets, training and evaluation\n"
-        "Overlay: hand outline green, contacts red, calibration target yellow."
+        "Overlay: hand outline green, contacts red with their ids, calibration target yellow."
     )
     BINDINGS = [
         Binding("b", "background", "background"),
@@ -62,7 +79,11 @@ class CameraPane(Horizontal):
         Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
         Binding("H", "tune('highpass_sigma_px', 1)", "high-pass h/H"),
         Binding("v", "view", "view"),
-        Binding("W", "save_tuning", "keep thresholds", show=False),
+        Binding("left_square_bracket", "choose(-1)", "previous setting", show=False),
+        Binding("right_square_bracket", "choose(1)", "setting [/]"),
+        Binding("minus", "tune_chosen(-1)", "setting -", show=False),
+        Binding("plus", "tune_chosen(1)", "setting -/+"),
+        Binding("W", "save_tuning", "keep settings", show=False),
         Binding("k", "calibrate", "calibrate"),
         Binding("n", "skip_target", "skip target", show=False),
         Binding("S", "save_calibration", "save cal.", show=False),
@@ -74,6 +95,7 @@ class CameraPane(Horizontal):
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.view = "camera"
+        self.chosen = 0  # index into the service's params(): the setting - / + change
         self.visible_now = False
         self._timer = None
 
@@ -144,7 +166,8 @@ class CameraPane(Horizontal):
             grey = np.clip(grey * (255.0 / max(grey.max(), 1.0)), 0, 255)
         target = self._target_px()
         ov = overlay_pixels(img.shape, cols, rows, work, target)
-        self.query_one("#camera-view", Static).update(HalfBlockImage(grey, ov))
+        labels = blob_labels(img.shape, cols, rows, work)
+        self.query_one("#camera-view", Static).update(HalfBlockImage(grey, ov, labels))
         info.update(self.info_text(svc, work))
 
     def info_text(self, svc, work: dict) -> str:
@@ -167,9 +190,10 @@ class CameraPane(Horizontal):
             pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
             lines.append(f"hand at {pos}, {h.finger_count} fingers")
         lines.append("")
+        chosen = self.chosen_key()
         for k, v in svc.params().items():
-            lines.append(f"{k} {v:g}")
-        lines += ["b: capture background", "W: keep the thresholds"]
+            lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
+        lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
         if self.calibration is not None or self.cal_result is not None or self.cal_message:
             lines += ["", "[b]touch calibration[/b]", self.cal_message]
         else:
@@ -185,6 +209,21 @@ class CameraPane(Horizontal):
         svc.set_param(key, cur + sign * rng.step)
         self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
 
+    def chosen_key(self) -> str | None:
+        keys = list(self.service.params())
+        return keys[self.chosen % len(keys)] if keys else None
+
+    def action_choose(self, step: int) -> None:
+        keys = list(self.service.params())
+        if keys:
+            self.chosen = (self.chosen + step) % len(keys)
+            self.app.notify(f"- / + change {keys[self.chosen]}", timeout=2)
+
+    def action_tune_chosen(self, sign: int) -> None:
+        key = self.chosen_key()
+        if key is not None:
+            self.action_tune(key, sign)
+
     @work(thread=True, exclusive=True, group="camera-tuning")
     def action_save_tuning(self) -> None:
         try:
@@ -192,7 +231,7 @@ class CameraPane(Horizontal):
         except UserError as exc:
             self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
             return
-        self.app.call_from_thread(self.app.notify, f"thresholds kept in {path}", timeout=4)
+        self.app.call_from_thread(self.app.notify, f"vision settings kept in {path}", timeout=4)
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)
