@@ -24,7 +24,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
     scene         Scene (its events: e.g. PointsEvent)
     projector     ProjectorFactory -> ProjectorLauncher
     demo          DemoFactory -> Demo (with its own status_lines)
-    frame_sink    FrameSinkFactory -> FrameSink
+    frame_sink    FrameSinkFactory -> FrameSink; SwitchableSink (its switch and target
+                  in the profile: the Camera screen turns it on and off)
     panel         PanelFactory -> Panel
     observer      SimulatedObserver (a simulated study participant)
 
@@ -565,6 +566,15 @@ class FrameSinkFactory(Protocol):
     leaves it off; ``force`` opens it anyway)."""
 
     def __call__(self, profile: Any, *, force: bool = False) -> FrameSink | None: ...
+
+
+@runtime_checkable
+class SwitchableSink(FrameSinkFactory, Protocol):
+    """A frame-sink factory the console switches on and off and points at a host:port
+    (the Camera screen; saved per profile): ``keys`` names its profile keys,
+    ``{"enabled": "<section>.enabled", "host": ..., "port": ...}``."""
+
+    keys: dict[str, str]
 
 
 @runtime_checkable

@@ -42,6 +42,7 @@ class CameraService:
         self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
         self.borrower: str | None = None  # the demo running on this camera, if any
         self._viewers: set[int] = set()  # id() of whoever watches (see ``watch``)
+        self._sinks: dict[str, Any] = {}  # the switchable frame sinks on, by name
 
     @property
     def running(self) -> bool:
@@ -98,6 +99,7 @@ class CameraService:
         window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
         mon = LatencyMonitor([n for n, _ in stages], size=window)
         self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
+        self._open_sinks()
         self.loop.start()
         self.emit(Started("camera"))
 
@@ -152,6 +154,8 @@ class CameraService:
 
     def close(self) -> None:
         self.stop("closed")
+        for name in list(self._sinks):
+            self._close_sink(name)
         with self._start_lock:
             if self.camera is not None:
                 self.camera.close()
@@ -201,6 +205,63 @@ class CameraService:
         keys = clf.tunable_keys()
         values = {keys[k]: v for k, v in clf.tunables().items() if k in keys}
         return save_overrides(self.profile, values, self.plugins)
+
+    # ------------------------------------------------------------------ output switches
+    def switches(self) -> dict[str, Any]:
+        """The frame sinks the console can switch (``contracts.SwitchableSink``, e.g. the
+        TUIO sender), by name."""
+        from console.contracts import SwitchableSink
+
+        return {
+            name: reg.factory
+            for name, reg in self.plugins.of("frame_sink").items()
+            if isinstance(reg.factory, SwitchableSink)
+        }
+
+    def sink_state(self, name: str) -> tuple[bool, str]:
+        """(on, "host:port") of switchable sink ``name``, as this loop has it."""
+        keys = self.switches()[name].keys
+        target = f"{self.profile.get(keys['host'])}:{self.profile.get(keys['port'])}"
+        return name in self._sinks, target
+
+    def set_sink(self, name: str, on: bool, target: str | None = None) -> Path:
+        """Switch sink ``name`` on or off (and point it at ``target`` "host:port"), saved
+        to the profile's overrides file (the next start has it); a running loop feeds it
+        from the next frame. Returns the file. Bad ``target``: a ``UserError``."""
+        from console.errors import UserError
+        from console.profile import load_profile, save_overrides
+
+        factory = self.switches().get(name)
+        if factory is None:
+            raise UserError(f"no switchable output {name!r}: its plugin is not loaded")
+        keys = factory.keys
+        settings: dict[str, Any] = {keys["enabled"]: bool(on)}
+        if target is not None:
+            host, sep, port = target.strip().rpartition(":")
+            if not sep or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+                raise UserError(f"{name} target {target!r}: write host:port, e.g. 127.0.0.1:3333")
+            settings[keys["host"]], settings[keys["port"]] = host, int(port)
+        path = save_overrides(self.profile, settings, self.plugins)
+        self.profile = load_profile(self.profile.path, self.plugins)
+        self._close_sink(name)
+        if self.running:
+            self._open_sinks()
+        return path
+
+    def _open_sinks(self) -> None:
+        """Open the switchable sinks the profile turns on (those not open yet)."""
+        for name, factory in self.switches().items():
+            if name not in self._sinks:
+                sink = factory(self.profile)
+                if sink is not None:
+                    self._sinks[name] = sink
+                    self.frame_hooks.append(sink)
+
+    def _close_sink(self, name: str) -> None:
+        sink = self._sinks.pop(name, None)
+        if sink is not None:
+            self.frame_hooks.remove(sink)
+            sink.close()
 
     def views(self) -> tuple[str, ...]:
         """The classifier's intermediate images a result shows (``VisionResult.view``)."""

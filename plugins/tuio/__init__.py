@@ -55,11 +55,21 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
     )
 
 
+class SenderFactory:
+    """``make_sender`` as a ``console.contracts.SwitchableSink``: the console's Camera
+    screen switches it (``[tuio] enabled``) and sets its target (``host``, ``port``)."""
+
+    keys = {"enabled": "tuio.enabled", "host": "tuio.host", "port": "tuio.port"}
+
+    def __call__(self, profile: Any, *, force: bool = False):
+        return make_sender(profile, force=force)
+
+
 @hookimpl
 def haptable_register_frame_sinks(register) -> None:
     register(
         "tuio",
-        make_sender,
+        SenderFactory(),
         description="TUIO 1.1 over OSC/UDP: contacts, hands, gestures ([tuio] enabled)",
     )
 

@@ -316,3 +316,69 @@ def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
     assert prof.get("vision.background_alpha") == pytest.approx(alpha)
     clf = plugins.build("classifier", "svm", prof)
     assert clf.tunables()["smooth_px"] == smooth
+
+
+def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
+    """U types the TUIO target, u switches it on: the camera loop's bundles reach a UDP
+    socket there; both are kept for the profile and the next console's loop streams
+    again; a bad target is one line and changes nothing."""
+    import socket
+
+    from console.profile import load_profile
+    from console.session.camera import CameraService
+
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rx.bind(("127.0.0.1", 0))
+    rx.settimeout(10)
+    port = rx.getsockname()[1]
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(110, 40)) as pilot:
+            await _first_frame(app, pilot)
+            svc = app.session.camera_started
+            info = app.query_one("#camera-info")
+            assert "tuio: off -> 127.0.0.1:3333" in str(info.render())
+            await pilot.press("U")
+            box = app.query_one("#camera-target")
+            assert box.display and box.has_focus
+            box.value = "nowhere"
+            await pilot.press("enter")
+            await wait_for(
+                pilot,
+                lambda: any("host:port" in str(n.message) for n in app._notifications),
+                10,
+                "the bad target refused",
+            )
+            await pilot.press("U")
+            box.value = f"127.0.0.1:{port}"
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: svc.sink_state("tuio")[1] == f"127.0.0.1:{port}")
+            assert not box.display
+            await pilot.press("u")
+            await wait_for(pilot, lambda: svc.sink_state("tuio")[0], 10, "tuio on")
+            await wait_for(pilot, lambda: f"tuio: on -> 127.0.0.1:{port}" in str(info.render()), 10)
+
+    try:
+        asyncio.run(scenario())
+        data, _ = rx.recvfrom(65536)
+        assert data.startswith(b"#bundle")
+        prof = load_profile("sim", plugins)
+        assert (prof.get("tuio.enabled"), prof.get("tuio.port")) == (True, port)
+        while True:  # drain what the first console sent
+            rx.settimeout(0.5)
+            try:
+                rx.recvfrom(65536)
+            except TimeoutError:
+                break
+        svc = CameraService(prof, plugins)
+        svc.start()
+        try:
+            rx.settimeout(10)
+            assert rx.recvfrom(65536)[0].startswith(b"#bundle")  # restored at the next start
+            svc.set_sink("tuio", False)
+            assert load_profile("sim", plugins).get("tuio.enabled") is False
+        finally:
+            svc.close()
+    finally:
+        rx.close()

@@ -11,8 +11,8 @@ import numpy as np
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal
-from textual.widgets import Static
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Input, Static
 
 from console.errors import UserError
 from console.tui.text import escape
@@ -68,6 +68,8 @@ class CameraPane(Horizontal):
         "W        keep every vision setting for this profile (its overrides file)\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
         "g        gestures panel: datasets, training and evaluation\n"
+        "u        TUIO (or another switchable output) on / off, kept for the profile\n"
+        "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
         "Overlay: hand outline green, contacts red with their ids, calibration target yellow."
     )
     BINDINGS = [
@@ -89,6 +91,8 @@ class CameraPane(Horizontal):
         Binding("S", "save_calibration", "save cal.", show=False),
         Binding("x", "cancel", "cancel", show=False),
         Binding("g", "gestures_panel", "gestures"),
+        Binding("u", "toggle_output", "TUIO u/U"),
+        Binding("U", "edit_target", "output target", show=False),
     ]
     can_focus = True
 
@@ -101,7 +105,11 @@ class CameraPane(Horizontal):
 
     def compose(self) -> ComposeResult:
         yield Static("camera stopped", id="camera-view")
-        yield Static("", id="camera-info")
+        with Vertical(id="camera-side"):
+            yield Static("", id="camera-info")
+            box = Input(placeholder="host:port, Enter", id="camera-target")
+            box.display = False
+            yield box
 
     @property
     def focus_target(self):
@@ -194,6 +202,9 @@ class CameraPane(Horizontal):
         for k, v in svc.params().items():
             lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
         lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
+        for name in svc.switches():
+            on, target = svc.sink_state(name)
+            lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
         if self.calibration is not None or self.cal_result is not None or self.cal_message:
             lines += ["", "[b]touch calibration[/b]", self.cal_message]
         else:
@@ -232,6 +243,59 @@ class CameraPane(Horizontal):
             self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
             return
         self.app.call_from_thread(self.app.notify, f"vision settings kept in {path}", timeout=4)
+
+    def _output(self) -> str | None:
+        names = list(self.service.switches())
+        if not names:
+            self.app.notify(
+                "no switchable output: the tuio plugin is not loaded", severity="warning"
+            )
+        return names[0] if names else None
+
+    def action_toggle_output(self) -> None:
+        name = self._output()
+        if name is not None:
+            self._switch(name, not self.service.sink_state(name)[0], None)
+
+    def action_edit_target(self) -> None:
+        name = self._output()
+        if name is None:
+            return
+        box = self.query_one("#camera-target", Input)
+        box.value = self.service.sink_state(name)[1]
+        box.display = True
+        box.focus()
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        if event.input.id != "camera-target":
+            return
+        event.stop()
+        event.input.display = False
+        self.focus()
+        name = self._output()
+        if name is not None:
+            self._switch(name, self.service.sink_state(name)[0], event.value)
+
+    def on_key(self, event) -> None:
+        box = self.query_one("#camera-target", Input)
+        if event.key == "escape" and box.has_focus:
+            event.stop()
+            box.display = False
+            self.focus()
+
+    @work(thread=True, exclusive=True, group="camera-output")
+    def _switch(self, name: str, on: bool, target: str | None) -> None:
+        try:
+            path = self.service.set_sink(name, on, target)
+        except UserError as exc:
+            self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
+            return
+        on, where = self.service.sink_state(name)
+        self.app.call_from_thread(
+            self.app.notify,
+            f"{name} {'on' if on else 'off'} -> {where} (kept in {path})",
+            timeout=4,
+        )
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)
