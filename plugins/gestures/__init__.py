@@ -39,6 +39,22 @@ VISION_FIELDS = {
     "max_contact_area_px": Field(
         "int", 2500, min=1, max=307200, help="larger bright blobs are not fingertips"
     ),
+    "rotate_deg": Field(
+        "int", 0, min=0, max=270, help="the camera image turned clockwise: 0, 90, 180 or 270"
+    ),
+    "mirror": Field("int", 0, min=0, max=1, help="1: the camera image mirrored left-right"),
+    "roi_left_px": Field(
+        "int", 0, min=0, max=4096, help="region of interest: px ignored at the left (turned image)"
+    ),
+    "roi_top_px": Field(
+        "int", 0, min=0, max=4096, help="region of interest: px ignored at the top"
+    ),
+    "roi_right_px": Field(
+        "int", 0, min=0, max=4096, help="region of interest: px ignored at the right"
+    ),
+    "roi_bottom_px": Field(
+        "int", 0, min=0, max=4096, help="region of interest: px ignored at the bottom"
+    ),
     "wrist_cut": Field(
         "float", 1.15, min=0.3, max=5, help="silhouette cut this many palm radii towards the wrist"
     ),

@@ -15,6 +15,7 @@ from .background import Background
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
 from .features import select_dynamic, select_kind, select_static
 from .model import GESTURES, GestureModel
+from .orientation import Orientation
 from .sketch import DYNAMIC
 from .vision import FrameResult, VisionParams, process_frame
 
@@ -83,11 +84,51 @@ TUNABLES: dict[str, TunableRange] = {
     "min_contact_area_px": TunableRange(1.0, 307200.0, 1.0),
     "max_contact_area_px": TunableRange(1.0, 307200.0, 100.0),
     "background_alpha": TunableRange(0.0, 1.0, 0.005),
+    # how the camera is mounted and the region of interest (``orientation.Orientation``)
+    "rotate_deg": TunableRange(0.0, 270.0, 90.0),
+    "mirror": TunableRange(0.0, 1.0, 1.0),
+    "roi_left_px": TunableRange(0.0, 4096.0, 8.0),
+    "roi_top_px": TunableRange(0.0, 4096.0, 8.0),
+    "roi_right_px": TunableRange(0.0, 4096.0, 8.0),
+    "roi_bottom_px": TunableRange(0.0, 4096.0, 8.0),
 }
-#: the tunables that are whole numbers (pixel counts)
+#: the tunables of the camera's mounting and region of interest (not ``VisionParams``)
+ORIENTATION_TUNABLES = (
+    "rotate_deg",
+    "mirror",
+    "roi_left_px",
+    "roi_top_px",
+    "roi_right_px",
+    "roi_bottom_px",
+)
+#: the tunables that are whole numbers (pixel counts, degrees, switches)
 INT_TUNABLES = frozenset(
     {"smooth_px", "min_hand_area_px", "min_contact_area_px", "max_contact_area_px"}
-)
+) | frozenset(ORIENTATION_TUNABLES)
+
+
+def orientation_of(values: dict) -> Orientation:
+    """An ``Orientation`` from the orientation tunables' values (by name)."""
+    return Orientation(
+        rotate_deg=int(values.get("rotate_deg", 0)),
+        mirror=bool(values.get("mirror", 0)),
+        margins_px=tuple(
+            int(values.get(k, 0))
+            for k in ("roi_left_px", "roi_top_px", "roi_right_px", "roi_bottom_px")
+        ),
+    )
+
+
+def _orientation_values(o: Orientation) -> dict[str, int]:
+    left, top, right, bottom = o.margins_px
+    return {
+        "rotate_deg": o.rotate_deg,
+        "mirror": int(o.mirror),
+        "roi_left_px": left,
+        "roi_top_px": top,
+        "roi_right_px": right,
+        "roi_bottom_px": bottom,
+    }
 
 
 class SvmClassifier:
@@ -109,8 +150,10 @@ class SvmClassifier:
         to_mm=None,
         background: np.ndarray | None = None,
         alpha: float = 0.02,
+        orientation: Orientation | None = None,
     ) -> None:
         self.model = model
+        self.orientation = orientation or Orientation()
         self.params = replace(params or VisionParams(), n_harmonics=N_HARMONICS_MAX)
         self.to_mm = to_mm
         self.background = Background(background, alpha)
@@ -136,7 +179,13 @@ class SvmClassifier:
             if cv2.getNumThreads() != threads:  # once: resizing the pool under a running
                 cv2.setNumThreads(threads)  # parallel loop in another thread is not safe
         return cls(
-            model, vision_params(profile), to_mm, alpha=profile.get("vision.background_alpha")
+            model,
+            vision_params(profile),
+            to_mm,
+            alpha=profile.get("vision.background_alpha"),
+            orientation=orientation_of(
+                {k: profile.get(f"vision.{k}", 0) or 0 for k in ORIENTATION_TUNABLES}
+            ),
         )
 
     def touch_calibration(self, profile):
@@ -165,9 +214,10 @@ class SvmClassifier:
         out: dict[str, float] = {
             k: (int if k in INT_TUNABLES else float)(getattr(self.params, k))
             for k in TUNABLES
-            if k != "background_alpha"
+            if k != "background_alpha" and k not in ORIENTATION_TUNABLES
         }
         out["background_alpha"] = float(self.background.alpha)
+        out.update(_orientation_values(self.orientation))
         return out
 
     def tunable_ranges(self) -> dict[str, TunableRange]:
@@ -187,6 +237,10 @@ class SvmClassifier:
             raise ValueError(f"{name} = {v:g} is outside {rng.min_value:g}..{rng.max_value:g}")
         if name == "background_alpha":
             self.background.alpha = v
+        elif name in ORIENTATION_TUNABLES:
+            if name == "rotate_deg":
+                v = 90.0 * round(v / 90.0)
+            self.orientation = orientation_of({**self.tunables(), name: int(round(v))})
         elif name in INT_TUNABLES:
             self.params = replace(self.params, **{name: int(round(v))})
         else:
@@ -204,8 +258,19 @@ class SvmClassifier:
         if self.background.image is None:
             self.background.update(frame.image)
         bg = self.background.u8
-        res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
-        self.background.update(frame.image, res.masks.get("body"))
+        o = self.orientation
+        if o.identity:
+            res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
+            self.background.update(frame.image, res.masks.get("body"))
+        else:  # positions and views in the turned image, outside the ROI nothing
+            bg = o.apply(bg)
+            img = o.outside_as(o.apply(frame.image), bg)
+            h, w = img.shape
+            params = replace(self.params, width_px=w, height_px=h)
+            res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
+            body = res.masks.get("body")
+            self.background.update(frame.image, None if body is None else o.undo(body))
+            res = replace(res, masks=res.masks.with_image("camera", img))
         frame.stamp("vision", time.monotonic())
         return res
 

@@ -131,6 +131,10 @@ class Masks(Mapping):
     def __iter__(self) -> Iterator[str]:
         return iter([*self._images, *(k for k in self._makers if k not in self._images)])
 
+    def with_image(self, name: str, image: np.ndarray) -> Masks:
+        """These images plus ``name``."""
+        return Masks({**self._images, name: image}, self._makers)
+
     def __len__(self) -> int:
         return sum(1 for _ in self)
 

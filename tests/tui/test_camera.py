@@ -382,3 +382,45 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
             svc.close()
     finally:
         rx.close()
+
+
+def test_the_view_turns_with_the_camera_and_the_roi_is_set_from_the_screen(plugins):
+    """rotate_deg + turns the view upright for a camera mounted a quarter turn off (the
+    view becomes portrait), roi_left_px + narrows what segmentation sees; W keeps both."""
+    from console.profile import load_profile
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(110, 40)) as pilot:
+            await _first_frame(app, pilot)
+            svc = app.session.camera_started
+            pane = app.pane("camera")
+            await wait_for(pilot, lambda: pane.shown is not None, 10, "a picture")
+            rows2, cols = pane.shown.rgb.shape[:2]
+            assert cols > rows2  # 640 x 480: landscape
+            while pane.chosen_key() != "rotate_deg":
+                await pilot.press("right_square_bracket")
+            await pilot.press("plus")
+            assert svc.classifier.orientation.rotate_deg == 90
+
+            def portrait():
+                r2, c = pane.shown.rgb.shape[:2]
+                return r2 > c
+
+            await wait_for(pilot, portrait, 10, "the turned view")
+            while pane.chosen_key() != "roi_left_px":
+                await pilot.press("right_square_bracket")
+            await pilot.press("plus", "plus")
+            assert svc.classifier.orientation.margins_px == (16, 0, 0, 0)
+            await pilot.press("W")
+            await wait_for(
+                pilot,
+                lambda: any("overrides.toml" in str(n.message) for n in app._notifications),
+                10,
+                "kept",
+            )
+
+    asyncio.run(scenario())
+    prof = load_profile("sim", plugins)
+    assert (prof.get("vision.rotate_deg"), prof.get("vision.roi_left_px")) == (90, 16)
+    assert plugins.build("classifier", "svm", prof).orientation.margins_px == (16, 0, 0, 0)

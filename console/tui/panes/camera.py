@@ -100,6 +100,7 @@ class CameraPane(Horizontal):
         super().__init__(**kw)
         self.view = "camera"
         self.chosen = 0  # index into the service's params(): the setting - / + change
+        self.shown = None  # the HalfBlockImage on the view now
         self.visible_now = False
         self._timer = None
 
@@ -137,11 +138,12 @@ class CameraPane(Horizontal):
         self.service.watch(self, on)
 
     # ------------------------------------------------------------------ drawing
-    def view_size(self) -> tuple[int, int]:
+    def view_size(self, aspect: float = 4 / 3) -> tuple[int, int]:
+        """(cols, rows) of the view for an image ``aspect`` (width / height) wide."""
         w, h = self.size.width, self.size.height
         rows = max(4, h - 1)
-        cols = max(16, min(w - 34, int(rows * 2 * 4 / 3)))
-        rows = min(rows, int(cols * 3 / 8) + 1)
+        cols = max(16, min(w - 34, int(rows * 2 * aspect)))
+        rows = min(rows, int(cols / aspect / 2) + 1)
         return cols, rows
 
     def redraw(self) -> None:
@@ -165,17 +167,18 @@ class CameraPane(Horizontal):
         frame, work = snap
         res = work.get("result")
         img = frame.image
-        if self.view != "camera" and res is not None:
+        if res is not None:  # "camera": the image as the vision saw it (turned, ROI)
             shown = res.view(self.view)
             img = img if shown is None else shown
-        cols, rows = self.view_size()
+        cols, rows = self.view_size(img.shape[1] / img.shape[0])
         grey = downsample(img, cols, rows)
         if self.view != "camera":
             grey = np.clip(grey * (255.0 / max(grey.max(), 1.0)), 0, 255)
         target = self._target_px()
         ov = overlay_pixels(img.shape, cols, rows, work, target)
         labels = blob_labels(img.shape, cols, rows, work)
-        self.query_one("#camera-view", Static).update(HalfBlockImage(grey, ov, labels))
+        self.shown = HalfBlockImage(grey, ov, labels)
+        self.query_one("#camera-view", Static).update(self.shown)
         info.update(self.info_text(svc, work))
 
     def info_text(self, svc, work: dict) -> str:
