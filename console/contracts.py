@@ -11,7 +11,7 @@ the member (``check``).
 
 Capabilities at a glance (kind: the contract, then the optional capabilities)::
 
-    camera        Camera; TouchableCamera (the operator's finger on a twin),
+    camera        Camera; AdjustableCamera (exposure, gain); TouchableCamera (the operator's finger on a twin),
                   RendersBackground, SimulatedCamera (acts out GestureScripts)
     classifier    Classifier (gestures, per-frame vision, tunables, background);
                   TouchCalibrating (the touch-calibration wizard's session);
@@ -162,6 +162,22 @@ class TouchableCamera(Camera, Protocol):
     def set_target(self, pos_mm: PosMm | None) -> None: ...
 
     def mm_to_px(self, pos_mm: PosMm) -> tuple[float, float] | None: ...
+
+
+@runtime_checkable
+class AdjustableCamera(Camera, Protocol):
+    """A camera whose driver takes exposure, gain ... while it runs (the Camera screen
+    tunes them): ``controls() -> {name: TunableRange}``, ``control_values()``,
+    ``set_control(name, value)`` (from the next frames), ``control_keys() -> {name:
+    profile key}`` (where they are kept). A camera that is not one has none."""
+
+    def controls(self) -> dict[str, TunableRange]: ...
+
+    def control_values(self) -> dict[str, float]: ...
+
+    def control_keys(self) -> dict[str, str]: ...
+
+    def set_control(self, name: str, value: float) -> None: ...
 
 
 @runtime_checkable

@@ -171,19 +171,40 @@ class CameraService:
         self.classifier.set_background(np.median(np.stack(frames), axis=0).astype(np.float32))
         return len(frames)
 
+    def _adjustable(self):
+        """The camera when its driver takes exposure, gain ... (``AdjustableCamera``)."""
+        from console.contracts import AdjustableCamera
+
+        cam = self.camera
+        return cam if isinstance(cam, AdjustableCamera) else None
+
     def params(self) -> dict[str, float]:
-        """The classifier's tunables (``console.contracts.Classifier``), by name."""
-        return self.classifier.tunables() if self.classifier is not None else {}
+        """The classifier's tunables (``console.contracts.Classifier``) and the camera's
+        controls (``AdjustableCamera``: exposure, gain), by name."""
+        out = self.classifier.tunables() if self.classifier is not None else {}
+        cam = self._adjustable()
+        return {**out, **cam.control_values()} if cam is not None else out
 
     def param_ranges(self) -> dict[str, TunableRange]:
-        return self.classifier.tunable_ranges() if self.classifier is not None else {}
+        out = self.classifier.tunable_ranges() if self.classifier is not None else {}
+        cam = self._adjustable()
+        return {**out, **cam.controls()} if cam is not None else out
+
+    def camera_controls(self) -> bool:
+        """Whether the camera's driver takes exposure and gain from the console."""
+        return self._adjustable() is not None
 
     def set_param(self, key: str, value: float) -> None:
-        """Change a vision threshold (kept in its range); the next frame uses it."""
+        """Change a vision threshold or a camera control (kept in its range); the next
+        frame uses it."""
         rng = self.param_ranges().get(key)
-        if rng is None or self.classifier is None:
+        if rng is None:
             return
-        self.classifier.set_tunable(key, rng.clamp(value))
+        cam = self._adjustable()
+        if cam is not None and key in cam.controls():
+            cam.set_control(key, rng.clamp(value))
+        elif self.classifier is not None:
+            self.classifier.set_tunable(key, rng.clamp(value))
 
     def save_tuning(self) -> Path:
         """Keep the tuned thresholds for the next start: written to the profile's override
@@ -204,6 +225,10 @@ class CameraService:
             )
         keys = clf.tunable_keys()
         values = {keys[k]: v for k, v in clf.tunables().items() if k in keys}
+        cam = self._adjustable()
+        if cam is not None:
+            ckeys = cam.control_keys()
+            values.update({ckeys[k]: v for k, v in cam.control_values().items() if k in ckeys})
         return save_overrides(self.profile, values, self.plugins)
 
     # ------------------------------------------------------------------ output switches

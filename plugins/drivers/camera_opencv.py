@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from console.types import DeviceStatus, Frame
+from console.types import DeviceStatus, Frame, TunableRange
 from plugins.drivers.errors import DeviceError
 
 
@@ -127,6 +127,9 @@ class SimpleProps:
         self.pos_msec = pos_msec
 
 
+#: the controls an operator changes while the camera runs (-1: the driver's automatic)
+CONTROLS = {"exposure": TunableRange(-1.0, 10000.0, 10.0), "gain": TunableRange(-1.0, 255.0, 4.0)}
+
 DEVICE_STAMP_MAX_AGE_S = 1.0  # a buffer timestamp older than this is not on our clock
 #: a reader that has not called ``read`` for this long is away: frames meanwhile are unread
 READER_AWAY_S = 0.5
@@ -164,6 +167,7 @@ class OpenCVCamera:
         self._timing = FrameTiming(self.fps)
         self._cond = threading.Condition()
         self._stop = threading.Event()
+        self._pending = threading.Event()  # exposure or gain changed while running
         self._latest: Frame | None = None
         self._taken = True
         self._seq = -1
@@ -215,6 +219,17 @@ class OpenCVCamera:
         put("width_px", p.width, self.width_px)
         put("height_px", p.height, self.height_px)
         put("fps", p.fps, self.fps)
+        self._put_controls(cap, put)
+        if p.read_timeout_ms is not None:
+            cap.set(p.read_timeout_ms, 1000)  # not every backend has it: never reported
+        self._rejected = rejected
+        self._size_px = (int(cap.get(p.width)), int(cap.get(p.height)))
+        self._error = ""
+        return cap
+
+    def _put_controls(self, cap: Any, put: Callable[[str, Any, float], bool]) -> None:
+        """Exposure and gain to the capture (-1: the driver's automatic)."""
+        p = self._props
         if self.exposure >= 0:
             put("auto_exposure", p.auto_exposure, V4L2_EXPOSURE_MANUAL)
             put("exposure", p.exposure, self.exposure)
@@ -222,12 +237,46 @@ class OpenCVCamera:
             put("auto_exposure", p.auto_exposure, V4L2_EXPOSURE_AUTO_GSPCA)  # PS3 Eye: auto
         if self.gain >= 0:
             put("gain", p.gain, self.gain)
-        if p.read_timeout_ms is not None:
-            cap.set(p.read_timeout_ms, 1000)  # not every backend has it: never reported
+
+    def _apply_pending(self, cap: Any) -> None:
+        """Controls set while running, applied from the grab thread (the one that reads
+        the capture); a refused one is listed in ``settings_rejected``."""
+        if not self._pending.is_set():
+            return
+        self._pending.clear()
+        rejected = [r for r in self._rejected if r not in ("auto_exposure", "exposure", "gain")]
+
+        def put(name: str, prop: Any, value: float) -> bool:
+            ok = bool(cap.set(prop, value))
+            if not ok:
+                rejected.append(name)
+            return ok
+
+        self._put_controls(cap, put)
         self._rejected = rejected
-        self._size_px = (int(cap.get(p.width)), int(cap.get(p.height)))
-        self._error = ""
-        return cap
+
+    # ------------------------------------------------------------------ AdjustableCamera
+    def controls(self) -> dict[str, TunableRange]:
+        """Exposure and gain (driver units; -1: automatic)."""
+        return dict(CONTROLS)
+
+    def control_values(self) -> dict[str, float]:
+        return {"exposure": self.exposure, "gain": self.gain}
+
+    def control_keys(self) -> dict[str, str]:
+        return {"exposure": "camera.exposure", "gain": "camera.gain"}
+
+    def set_control(self, name: str, value: float) -> None:
+        """Exposure or gain from the next frames on (-1 or below: automatic)."""
+        rng = CONTROLS.get(name)
+        if rng is None:
+            raise ValueError(f"{name!r} is no camera control: use one of {', '.join(CONTROLS)}")
+        v = max(-1.0, float(rng.clamp(value)))
+        if name == "exposure":
+            self.exposure = v
+        else:
+            self.gain = v
+        self._pending.set()
 
     def _release(self) -> None:
         cap, self._cap = self._cap, None
@@ -272,6 +321,7 @@ class OpenCVCamera:
             if cap is None:
                 self._reconnect()
                 continue
+            self._apply_pending(cap)
             try:
                 ok, image = cap.read()
             except Exception as exc:

@@ -373,3 +373,36 @@ def test_frames_that_came_while_nobody_read_are_not_drops(world, camera, wait):
     cam.read(0.01)
     st = cam.status()
     assert (st["dropped"], st["dropped_reader"], st["unread"]) == (2, 2, 3)
+
+
+def test_exposure_and_gain_change_while_running_from_the_grab_thread(world, camera, wait):
+    """The console sets exposure and gain on a running camera (``AdjustableCamera``): the
+    grab thread hands them to the capture before its next read; -1 is automatic again;
+    a value the driver refuses is reported, and reported no more once one is taken."""
+    from console.contracts import AdjustableCamera
+
+    cam = camera()
+    cap = world.captures[-1]
+    assert isinstance(cam, AdjustableCamera)
+    assert cam.control_values() == {"exposure": -1.0, "gain": -1.0}
+    assert "GAIN" not in cap.props and cap.props["AUTO_EXP"] == 3.0
+    cam.set_control("gain", 40)
+    cam.set_control("exposure", 120)
+    world.frame()
+    wait(lambda: cap.props.get("GAIN") == 40.0, 10, "the gain applied")
+    wait(lambda: cap.props.get("EXP") == 120.0, 10, "the exposure applied")
+    assert cap.props["AUTO_EXP"] == 1.0  # manual exposure
+    world.refuse = {("GAIN", 44.0)}
+    cam.set_control("gain", 44)
+    cam.set_control("exposure", -30)  # below -1: automatic
+    world.frame()
+    wait(lambda: cam.status()["settings_rejected"] == ["gain"], 10, "the refusal reported")
+    assert cap.props["AUTO_EXP"] == 3.0 and cam.control_values()["exposure"] == -1.0
+    world.refuse = set()
+    cam.set_control("gain", 48)
+    world.frame()
+    wait(lambda: cap.props.get("GAIN") == 48.0, 10, "the next gain applied")
+    wait(lambda: cam.status()["settings_rejected"] == [], 10, "the refusal cleared")
+    with pytest.raises(ValueError, match="no camera control"):
+        cam.set_control("focus", 1)
+    assert cam.control_keys() == {"exposure": "camera.exposure", "gain": "camera.gain"}

@@ -111,3 +111,58 @@ def test_tuned_thresholds_are_kept_for_the_next_start(profile, plugins):
     assert again.get("vision.highpass_sigma_px") == 2.5
     assert open_classifier(again, plugins).tunables() == tuned
     assert (PROJECT_PROFILES / "sim.toml").read_bytes() == sim
+
+
+class _DialCamera:
+    """A camera whose driver takes exposure and gain (an ``AdjustableCamera``)."""
+
+    def __init__(self) -> None:
+        from console.types import TunableRange
+
+        self.values = {"exposure": -1.0, "gain": -1.0}
+        self.ranges = {"exposure": TunableRange(-1, 1000, 10), "gain": TunableRange(-1, 100, 4)}
+
+    def read(self, timeout_s: float = 0.1):
+        return None
+
+    def close(self) -> None:
+        pass
+
+    def status(self) -> dict:
+        return {"driver": "dial"}
+
+    def controls(self):
+        return dict(self.ranges)
+
+    def control_values(self):
+        return dict(self.values)
+
+    def control_keys(self):
+        return {"exposure": "camera.exposure", "gain": "camera.gain"}
+
+    def set_control(self, name: str, value: float) -> None:
+        self.values[name] = float(value)
+
+
+def test_exposure_and_gain_are_tuned_and_kept_where_the_driver_takes_them(profile, plugins):
+    from console.profile import load_profile
+    from console.session.camera import CameraService
+
+    svc = CameraService(profile, plugins)
+    svc.classifier = plugins.build("classifier", "svm", profile)
+    svc.camera = plugins.build("camera", profile.get("camera.driver"), profile)
+    try:
+        assert not svc.camera_controls() and "gain" not in svc.params()  # the twin: none
+    finally:
+        svc.camera.close()
+    svc.camera = _DialCamera()
+    assert svc.camera_controls()
+    svc.set_param("gain", 2000)  # kept in the driver's range
+    svc.set_param("exposure", 250)
+    svc.set_param("body_threshold", 20)  # the classifier's still reach it
+    assert svc.camera.values == {"exposure": 250.0, "gain": 100.0}
+    assert svc.params()["gain"] == 100.0 and svc.params()["body_threshold"] == 20.0
+    svc.save_tuning()
+    again = load_profile(profile.path, plugins)
+    assert (again.get("camera.exposure"), again.get("camera.gain")) == (250.0, 100.0)
+    assert again.get("vision.body_threshold") == 20.0

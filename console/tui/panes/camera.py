@@ -63,7 +63,8 @@ class CameraPane(Horizontal):
         "b        capture the background (show the empty table)\n"
         "t / T    body threshold down / up      c / C  contact threshold down / up\n"
         "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
-        "[ / ]    choose a vision setting (thresholds, smoothing, blob sizes, background)\n"
+        "[ / ]    choose a setting (thresholds, smoothing, blob sizes, background, rotation,\n"
+        "         mirror, region of interest; exposure and gain where the driver takes them)\n"
         "- / +    change the chosen setting by one step\n"
         "W        keep every vision setting for this profile (its overrides file)\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
@@ -204,6 +205,8 @@ class CameraPane(Horizontal):
         chosen = self.chosen_key()
         for k, v in svc.params().items():
             lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
+        if not svc.camera_controls():
+            lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
         lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
         for name in svc.switches():
             on, target = svc.sink_state(name)
