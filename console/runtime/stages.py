@@ -71,18 +71,25 @@ def open_classifier(profile: Any, plugins: Any) -> Classifier:
 
 
 class VisionStage:
-    """Stage ``vision``: the classifier's pipeline on one frame."""
+    """Stage ``vision``: the classifier's pipeline on one frame, then the hands and
+    contacts followed with ids (``console.runtime.tracking``): ``work["tracks"]`` is the
+    frame's ``TrackFrame``; ``contacts`` (and each hand's) carry their track ids."""
 
     def __init__(self, classifier: Any) -> None:
+        from console.runtime.tracking import Tracking
+
         self.clf = classifier
+        self.tracking = Tracking(classifier.to_mm)
 
     def __call__(self, frame: Frame, work: dict) -> None:
         res = self.clf.process(frame)
         work["result"] = res
-        hands: tuple[Hand, ...] = tuple(res.hands)
+        tracks = self.tracking.update(frame.t_capture_s, tuple(res.hands), tuple(res.contacts))
+        hands: tuple[Hand, ...] = tracks.hands
+        work["tracks"] = tracks
         work["hands"] = hands
         work["hand"] = hands[0] if hands else None
-        work["contacts"] = tuple(res.contacts)
+        work["contacts"] = tracks.contacts
 
 
 @dataclass
@@ -151,11 +158,15 @@ class GestureStage:
         pos = hand.center_mm if hand is not None else None
         if hand is not None and pos is None:
             pos = hand.center_px
+        palm = pos
+        tracks = work.get("tracks")  # stillness of the tracked centre: the palm's can jump
+        if hand is not None and tracks is not None and tracks.in_mm and tracks.hand_tracks:
+            pos = tuple(tracks.hand_tracks[0].pos)
         rest = self.still.update(t, pos)
         g = None
         if rest is not None and hand is not None:
             g = Gesture("static_hand", "static", 1.0, t, hand)
-            work["rest_mm"] = rest
+            work["rest_mm"] = rest if pos is palm else palm  # where the palm rests
         elif hand is not None and len(hand.contacts) == 2:
             g = Gesture("two_finger", "static", 1.0, t, hand)
         if hand is None:

@@ -12,11 +12,13 @@ Coordinates are normalised 0..1 over the glass: ``x = x_mm / width_mm``,
 ``y = y_mm / height_mm`` (the glass corner (0, 0) of the table frame is TUIO's (0, 0);
 clipped to 0..1);
 without a camera -> table mapping, the camera image is used (px / image size).
-Session ids persist while an object is followed from frame to frame (nearest neighbour
-within ``match`` of the normalised plane) and are never reused.
+Session ids are the tracks' ids (``console.runtime.tracking``: one id per hand or contact
+for as long as it stays on the table, never reused; the frame loop's ``work["tracks"]``,
+or the sender's own tracking when called with bare lists). A track coasting through a
+missed frame stays ``alive`` without a ``set``. ``source`` is ``name@host`` (this machine).
 
 Recognised gestures go to the custom address ``/haptable/gesture`` (in their own
-bundle, when a gesture starts, not every frame)::
+bundle, once when a gesture starts on a hand, not every frame it lasts)::
 
     /haptable/gesture  s:name  s:kind ("static"|"dynamic")  f:confidence
                        f:x  f:y (hand centre, normalised; -1 -1 if unknown)
@@ -25,74 +27,12 @@ bundle, when a gesture starts, not every frame)::
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+import socket
 from typing import Any
 
 import numpy as np
 
 GESTURE_ADDRESS = "/haptable/gesture"
-
-
-@dataclass
-class _Track:
-    sid: int
-    pos: np.ndarray
-    t_s: float
-    vel: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    speed: float = 0.0
-    angle: float = 0.0
-    rot_vel: float = 0.0
-
-
-class Tracker:
-    """Session ids for points from frame to frame (greedy nearest neighbour)."""
-
-    def __init__(self, match: float = 0.05) -> None:
-        self.match = float(match)
-        self.tracks: dict[int, _Track] = {}
-        self._next = 0
-
-    def update(
-        self, t_s: float, pts: list[np.ndarray], angles: list[float] | None = None
-    ) -> list[tuple[_Track, float, float]]:
-        """Assign ids; returns (track, motion acceleration, rotation acceleration)."""
-        angles = angles or [0.0] * len(pts)
-        free = dict(self.tracks)
-        pairs = sorted(
-            (float(np.hypot(*(p - tr.pos))), i, sid)
-            for i, p in enumerate(pts)
-            for sid, tr in free.items()
-        )
-        assigned: dict[int, int] = {}
-        used: set[int] = set()
-        for d, i, sid in pairs:
-            if d > self.match or i in assigned or sid in used:
-                continue
-            assigned[i] = sid
-            used.add(sid)
-        out = []
-        new_tracks: dict[int, _Track] = {}
-        for i, p in enumerate(pts):
-            a = float(angles[i])
-            if i in assigned:
-                tr = free[assigned[i]]
-                dt = max(t_s - tr.t_s, 1e-6)
-                vel = (p - tr.pos) / dt
-                speed = float(np.hypot(*vel))
-                accel = (speed - tr.speed) / dt
-                da = math.remainder(a - tr.angle, 2 * math.pi)
-                rv = da / dt
-                racc = (rv - tr.rot_vel) / dt
-                tr.pos, tr.t_s, tr.vel, tr.speed, tr.angle, tr.rot_vel = p, t_s, vel, speed, a, rv
-            else:
-                tr = _Track(self._next, p, t_s, angle=a)
-                self._next += 1
-                accel = racc = 0.0
-            new_tracks[tr.sid] = tr
-            out.append((tr, accel, racc))
-        self.tracks = new_tracks
-        return out
 
 
 def _norm(pos_mm, pos_px, table_mm, image_px) -> np.ndarray:
@@ -102,6 +42,17 @@ def _norm(pos_mm, pos_px, table_mm, image_px) -> np.ndarray:
     else:
         p = np.array([pos_px[0] / image_px[0], pos_px[1] / image_px[1]], float)
     return np.clip(p, 0.0, 1.0)
+
+
+def _blob_size(hand, image_px) -> tuple[float, float, float]:
+    """Width, height (bounding box) and area of a hand's outline, normalised to the image."""
+    c = np.asarray(hand.contour_px, float).reshape(-1, 2)
+    if not c.size:
+        return 0.0, 0.0, 0.0
+    ext = (c.max(0) - c.min(0)) / np.asarray(image_px, float)
+    x, y = c[:, 0], c[:, 1]
+    area = 0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1)))
+    return float(ext[0]), float(ext[1]), float(area / (image_px[0] * image_px[1]))
 
 
 class TuioSender:
@@ -119,23 +70,33 @@ class TuioSender:
     ) -> None:
         from pythonosc.udp_client import UDPClient
 
+        from console.runtime.tracking import Announcer, Tracking
+
         self.host, self.port = host, int(port)
         self.table_mm, self.image_px = table_mm, image_px
-        self.source = f"{source}@{host}"
+        self.source = f"{source}@{socket.gethostname()}"
         self.client = client or UDPClient(host, int(port))
-        self.cursors = Tracker()
-        self.blobs = Tracker()
+        self.tracking = Tracking()  # when the frame loop gives no tracks
+        self.announcer = Announcer()
         self.fseq = 0
         self.sent = 0
-        self._last_gesture: tuple | None = None
+
+    def _pos(self, p: np.ndarray, in_mm: bool) -> np.ndarray:
+        return _norm(p if in_mm else None, p, self.table_mm, self.image_px)
+
+    def _scale(self, in_mm: bool) -> np.ndarray:
+        return 1.0 / np.asarray(self.table_mm if in_mm else self.image_px, float)
 
     # ------------------------------------------------------------------ building
-    def bundles(self, t_s: float, contacts, hands, gesture=None) -> list:
-        """The OSC bundles for one frame (built, not sent)."""
+    def bundles(self, t_s: float, contacts, hands, gesture=None, tracks=None) -> list:
+        """The OSC bundles for one frame (built, not sent); ``tracks``: the frame loop's
+        ``TrackFrame`` (else the sender follows ``contacts`` and ``hands`` itself)."""
         from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
         from pythonosc.osc_message_builder import OscMessageBuilder
 
         self.fseq += 1
+        if tracks is None:
+            tracks = self.tracking.update(t_s, tuple(hands), tuple(contacts))
 
         def msg(address: str, *args: tuple[Any, str]):
             b = OscMessageBuilder(address=address)
@@ -143,65 +104,50 @@ class TuioSender:
                 b.add_arg(v, t)
             return b.build()
 
-        def bundle(profile: str, rows: list[tuple]) -> Any:
+        def bundle(profile: str, alive: list[int], rows: list[tuple]) -> Any:
             bb = OscBundleBuilder(IMMEDIATELY)
             bb.add_content(msg(profile, ("source", "s"), (self.source, "s")))
-            bb.add_content(msg(profile, ("alive", "s"), *[(r[0], "i") for r in rows]))
+            bb.add_content(msg(profile, ("alive", "s"), *[(i, "i") for i in alive]))
             for r in rows:
                 bb.add_content(msg(profile, ("set", "s"), (r[0], "i"), *[(v, "f") for v in r[1:]]))
             bb.add_content(msg(profile, ("fseq", "s"), (self.fseq, "i")))
             return bb.build()
 
-        tm, ip = self.table_mm, self.image_px
-        cpts = [_norm(c.pos_mm, c.pos_px, tm, ip) for c in contacts]
+        k = self._scale(tracks.in_mm)
         crow = []
-        for tr, acc, _ in self.cursors.update(t_s, cpts):
-            crow.append((tr.sid, *map(float, tr.pos), *map(float, tr.vel), float(acc)))
-        hpts, hang, hsize = [], [], []
-        for h in hands:
-            hpts.append(_norm(h.center_mm, h.center_px, tm, ip))
-            hang.append(math.radians(float(h.angle_deg)))
-            c = np.asarray(h.contour_px, float).reshape(-1, 2)
-            if c.size:
-                ext = (c.max(0) - c.min(0)) / np.asarray(ip, float)
-                x, y = c[:, 0], c[:, 1]
-                area = 0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1)))
-                hsize.append((float(ext[0]), float(ext[1]), float(area / (ip[0] * ip[1]))))
-            else:
-                hsize.append((0.0, 0.0, 0.0))
+        for tr in tracks.contact_tracks:
+            x, y = self._pos(tr.pos, tracks.in_mm)
+            vx, vy = tr.vel * k
+            crow.append((tr.id, float(x), float(y), float(vx), float(vy), float(tr.accel * k[0])))
         brow = []
-        for (tr, acc, racc), (w, h_, f) in zip(
-            self.blobs.update(t_s, hpts, hang), hsize, strict=True
-        ):
+        for tr, h in zip(tracks.hand_tracks, tracks.hands, strict=True):
+            x, y = self._pos(tr.pos, tracks.in_mm)
+            vx, vy = tr.vel * k
             brow.append(
-                (tr.sid, float(tr.pos[0]), float(tr.pos[1]), float(tr.angle), w, h_, f,
-                 float(tr.vel[0]), float(tr.vel[1]), float(tr.rot_vel), float(acc), float(racc))
+                (tr.id, float(x), float(y), float(tr.angle), *_blob_size(h, self.image_px),
+                 float(vx), float(vy), float(tr.rot_vel), float(tr.accel * k[0]),
+                 float(tr.rot_accel))
             )  # fmt: skip
-        out = [bundle("/tuio/2Dcur", crow), bundle("/tuio/2Dblb", brow)]
-        if gesture is not None:
-            g = self._gesture_bundle(gesture, msg)
-            if g is not None:
-                out.append(g)
-        else:
-            self._last_gesture = None
+        out = [
+            bundle("/tuio/2Dcur", [t.id for t in tracks.live_contacts], crow),
+            bundle("/tuio/2Dblb", [t.id for t in tracks.live_hands], brow),
+        ]
+        sid = tracks.hand_id(gesture.hand) if gesture is not None else -1
+        started = self.announcer.update(gesture, sid)
+        if started is not None:
+            out.append(self._gesture_bundle(started, sid, tracks, msg))
         return out
 
-    def _gesture_bundle(self, gesture, msg) -> Any:
+    def _gesture_bundle(self, gesture, sid: int, tracks, msg) -> Any:
         from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 
-        hand = gesture.hand
         pos = np.array([-1.0, -1.0])
-        sid = -1
-        if hand is not None:
-            pos = _norm(hand.center_mm, hand.center_px, self.table_mm, self.image_px)
-            near = [(float(np.hypot(*(tr.pos - pos))), s) for s, tr in self.blobs.tracks.items()]
-            if near:
-                d, s = min(near)
-                sid = s if d <= self.blobs.match else -1
-        key = (gesture.name, sid)
-        if key == self._last_gesture:
-            return None
-        self._last_gesture = key
+        live = {t.id: t for t in tracks.live_hands}
+        if sid in live:
+            pos = self._pos(live[sid].pos, tracks.in_mm)
+        elif gesture.hand is not None:
+            h = gesture.hand
+            pos = _norm(h.center_mm, h.center_px, self.table_mm, self.image_px)
         bb = OscBundleBuilder(IMMEDIATELY)
         bb.add_content(
             msg(
@@ -218,13 +164,16 @@ class TuioSender:
         return bb.build()
 
     # ------------------------------------------------------------------ sink
-    def send(self, t_s: float, contacts, hands, gesture=None) -> None:
-        for b in self.bundles(t_s, contacts, hands, gesture):
+    def _send_all(self, bundles) -> None:
+        for b in bundles:
             try:
                 self.client.send(b)
                 self.sent += 1
             except OSError:  # nobody listening / network down: TUIO is best effort
                 pass
+
+    def send(self, t_s: float, contacts, hands, gesture=None, tracks=None) -> None:
+        self._send_all(self.bundles(t_s, contacts, hands, gesture, tracks))
 
     def __call__(self, frame, work: dict) -> None:
         self.send(
@@ -232,8 +181,12 @@ class TuioSender:
             work.get("contacts", ()),
             work.get("hands", ()),
             work.get("gesture"),
+            work.get("tracks"),
         )
 
     def close(self) -> None:
         """An empty frame (nothing alive) so clients drop every object."""
-        self.send(0.0, (), ())
+        from console.runtime.tracking import Announcer, TrackFrame, Tracking
+
+        self.tracking, self.announcer = Tracking(), Announcer()
+        self.send(0.0, (), (), None, TrackFrame(0.0, (), (), (), (), (), (), True))

@@ -1,0 +1,263 @@
+"""Identities for hands and contacts from frame to frame: one id per object for as long
+as it stays on the table.
+
+Each frame, the measured positions are assigned to the live tracks' *predicted* positions
+by minimum total distance (Hungarian assignment, ``scipy.optimize.linear_sum_assignment``)
+within a gate; a track that finds no measurement coasts on its prediction for
+``grace_frames`` frames before its id dies (a hand missed by one frame's segmentation keeps
+its id); ids are never reused. Positions are smoothed by an alpha-beta filter (position
+and velocity, Kalman's steady state for a constant-velocity target).
+
+A hand's tracked position is the centroid of its outline (the blob's centre, as TUIO
+2Dblb expects), mapped to table mm when a camera -> table mapping is given: the palm centre
+(the distance transform's maximum) jumps between near-equal maxima of an open hand and is
+kept for the gesture features only.
+
+``Tracking.update(t_s, hands, contacts)`` -> ``TrackFrame``: the hands' and contacts'
+tracks (aligned with the inputs) and every live track, the contacts renamed to their track
+ids. ``Announcer`` says when a gesture starts (once per hand track and name).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from console.types import Contact, Gesture, Hand
+
+ToMm = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass
+class Track:
+    """One followed object: ``id``, smoothed ``pos`` and ``vel`` (units per second),
+    ``angle`` (rad) and ``rot_vel``; ``accel``/``rot_accel`` the last changes of speed
+    and rotation speed per second; ``missed`` frames since last seen."""
+
+    id: int
+    pos: np.ndarray
+    t_s: float
+    vel: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    angle: float = 0.0
+    rot_vel: float = 0.0
+    accel: float = 0.0
+    rot_accel: float = 0.0
+    missed: int = 0
+    frames: int = 1
+
+    @property
+    def speed(self) -> float:
+        return float(np.hypot(*self.vel))
+
+    def predict(self, t_s: float) -> np.ndarray:
+        return self.pos + self.vel * max(t_s - self.t_s, 0.0)
+
+
+class IdTracker:
+    """Tracks with ids for points (Hungarian assignment on predicted positions).
+
+    ``gate``: the farthest a measurement may be from a prediction (the points' units);
+    ``grace_frames``: frames a track coasts unseen before it dies; ``alpha``/``beta``:
+    the position and velocity gains of the alpha-beta filter (1, 1: no smoothing);
+    ``ids``: the id counter (shared between trackers so ids are unique across them).
+    """
+
+    def __init__(
+        self,
+        gate: float,
+        *,
+        grace_frames: int = 6,
+        alpha: float = 0.5,
+        beta: float = 0.1,
+        ids: Callable[[], int] | None = None,
+    ) -> None:
+        if gate <= 0 or grace_frames < 0 or not (0 < alpha <= 1) or not (0 <= beta <= 2):
+            raise ValueError("tracker: gate > 0, grace_frames >= 0, 0 < alpha <= 1, 0 <= beta <= 2")
+        self.gate, self.grace = float(gate), int(grace_frames)
+        self.alpha, self.beta = float(alpha), float(beta)
+        self.tracks: dict[int, Track] = {}
+        if ids is None:
+            counter = iter(range(1 << 62))
+            ids = counter.__next__
+        self._ids = ids
+
+    def update(
+        self, t_s: float, pts: Sequence[Sequence[float]], angles: Sequence[float] | None = None
+    ) -> list[Track]:
+        """Assign ``pts`` to tracks (a new id for a point no track claims); returns the
+        points' tracks in order. Tracks unseen for more than ``grace_frames`` die."""
+        from scipy.optimize import linear_sum_assignment
+
+        pts_a = np.asarray(pts, float).reshape(-1, 2)
+        angs = [0.0] * len(pts_a) if angles is None else [float(a) for a in angles]
+        live = list(self.tracks.values())
+        match: dict[int, Track] = {}
+        if live and len(pts_a):
+            pred = np.array([tr.predict(t_s) for tr in live])
+            d = np.hypot(*(pts_a[:, None, :] - pred[None, :, :]).transpose(2, 0, 1))
+            cost = np.where(d <= self.gate, d, 1e9)  # out of the gate: only if forced
+            rows, cols = linear_sum_assignment(cost)
+            match = {
+                int(i): live[j] for i, j in zip(rows, cols, strict=True) if d[i, j] <= self.gate
+            }
+        out: list[Track] = []
+        for i, p in enumerate(pts_a):
+            tr = match.get(i)
+            if tr is None:
+                tr = Track(self._ids(), p.copy(), t_s, angle=angs[i])
+                self.tracks[tr.id] = tr
+            else:
+                self._correct(tr, t_s, p, angs[i])
+            out.append(tr)
+        seen = {tr.id for tr in out}
+        for tid, tr in list(self.tracks.items()):
+            if tid not in seen:
+                tr.missed += 1
+                if tr.missed > self.grace:
+                    del self.tracks[tid]
+        return out
+
+    def _correct(self, tr: Track, t_s: float, p: np.ndarray, angle: float) -> None:
+        dt = max(t_s - tr.t_s, 1e-6)
+        speed0 = tr.speed
+        pred = tr.pos + tr.vel * dt
+        r = p - pred
+        tr.pos = pred + self.alpha * r
+        tr.vel = tr.vel + (self.beta / dt) * r
+        tr.accel = (tr.speed - speed0) / dt
+        rv = math.remainder(angle - tr.angle, 2 * math.pi) / dt
+        tr.rot_accel = (rv - tr.rot_vel) / dt
+        tr.angle, tr.rot_vel = angle, rv
+        tr.t_s, tr.missed, tr.frames = t_s, 0, tr.frames + 1
+
+
+def outline_centroid(contour_px: np.ndarray) -> tuple[float, float] | None:
+    """Area centroid of a closed outline (shoelace moments); ``None`` if degenerate."""
+    c = np.asarray(contour_px, float).reshape(-1, 2)
+    if len(c) < 3:
+        return None
+    x, y = c[:, 0], c[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = cross.sum() / 2.0
+    if abs(a) < 1e-9:
+        return None
+    return float(((x + xn) * cross).sum() / (6 * a)), float(((y + yn) * cross).sum() / (6 * a))
+
+
+@dataclass(frozen=True)
+class TrackFrame:
+    """One frame's tracking: ``hands``/``contacts`` (the frame's objects, contacts
+    renamed to their track ids), ``hand_tracks``/``contact_tracks`` aligned with them,
+    ``live_hands``/``live_contacts`` every live track (coasting ones included), ``in_mm``
+    (positions in table mm; else camera px)."""
+
+    t_s: float
+    hands: tuple[Hand, ...]
+    contacts: tuple[Contact, ...]
+    hand_tracks: tuple[Track, ...]
+    contact_tracks: tuple[Track, ...]
+    live_hands: tuple[Track, ...]
+    live_contacts: tuple[Track, ...]
+    in_mm: bool
+
+    def hand_id(self, hand: Hand | None) -> int:
+        """The track id of ``hand`` (one of this frame's, else the nearest live hand
+        track to its palm centre), -1 if none."""
+        if hand is None:
+            return -1
+        for h, tr in zip(self.hands, self.hand_tracks, strict=True):
+            if h is hand:
+                return tr.id
+        if not self.live_hands:
+            return -1
+        p = hand.center_mm if self.in_mm and hand.center_mm is not None else hand.center_px
+        d = [(float(np.hypot(*(tr.pos - np.asarray(p, float)))), tr.id) for tr in self.live_hands]
+        return min(d)[1]
+
+
+class Tracking:
+    """Hands and contacts followed with ids (unique across both).
+
+    ``to_mm``: camera px -> table mm (``None``: hands at their ``center_mm`` when they
+    have one, contacts at ``pos_mm``; else px). Gates and grace in mm at 60 fps.
+    """
+
+    def __init__(
+        self,
+        to_mm: ToMm | None = None,
+        *,
+        hand_gate_mm: float = 90.0,
+        contact_gate_mm: float = 20.0,
+        hand_grace_frames: int = 6,
+        contact_grace_frames: int = 3,
+    ) -> None:
+        self.to_mm = to_mm
+        counter = iter(range(1 << 62))
+        self.hands = IdTracker(hand_gate_mm, grace_frames=hand_grace_frames, ids=counter.__next__)
+        self.contacts = IdTracker(
+            contact_gate_mm, grace_frames=contact_grace_frames, alpha=0.7, ids=counter.__next__
+        )
+
+    def _hand_points(self, hands: Sequence[Hand]) -> tuple[np.ndarray, bool]:
+        if not hands:
+            return np.zeros((0, 2)), True
+        if self.to_mm is not None:
+            px = []
+            for h in hands:
+                c = outline_centroid(h.contour_px)
+                px.append(c if c is not None else h.center_px)
+            return np.asarray(self.to_mm(np.asarray(px, float)), float).reshape(-1, 2), True
+        if all(h.center_mm is not None for h in hands):
+            return np.array([h.center_mm for h in hands], float), True
+        return np.array([h.center_px for h in hands], float), False
+
+    def update(self, t_s: float, hands: Sequence[Hand], contacts: Sequence[Contact]) -> TrackFrame:
+        hpts, in_mm = self._hand_points(hands)
+        htr = self.hands.update(t_s, hpts, [math.radians(h.angle_deg) for h in hands])
+        cmm = [c.pos_mm if in_mm and c.pos_mm is not None else c.pos_px for c in contacts]
+        ctr = self.contacts.update(t_s, cmm)
+        renamed = {id(c): replace(c, id=tr.id) for c, tr in zip(contacts, ctr, strict=True)}
+        by_px = {c.pos_px: renamed[id(c)] for c in contacts}  # a hand's contacts are
+        hands_out = [  # the frame's blobs (the same pixel position), renamed alike
+            replace(h, contacts=tuple(by_px.get(c.pos_px, c) for c in h.contacts))
+            if h.contacts
+            else h
+            for h in hands
+        ]
+        return TrackFrame(
+            t_s,
+            tuple(hands_out),
+            tuple(renamed[id(c)] for c in contacts),
+            tuple(htr),
+            tuple(ctr),
+            tuple(self.hands.tracks.values()),
+            tuple(self.contacts.tracks.values()),
+            in_mm,
+        )
+
+
+class Announcer:
+    """A gesture is announced once when it starts: ``update(gesture, hand_id)`` returns
+    it the first frame a (name, hand track) pair is seen and ``None`` while it lasts; it
+    ends after ``grace_frames`` frames without it (a one-frame drop does not restart it)."""
+
+    def __init__(self, grace_frames: int = 6) -> None:
+        self.grace = int(grace_frames)
+        self._active: dict[tuple[str, int], int] = {}  # key -> frames since last seen
+
+    def update(self, gesture: Gesture | None, hand_id: int) -> Gesture | None:
+        key = (gesture.name, hand_id) if gesture is not None else None
+        for k in list(self._active):
+            if k != key:
+                self._active[k] += 1
+                if self._active[k] > self.grace:
+                    del self._active[k]
+        if key is None:
+            return None
+        new = key not in self._active
+        self._active[key] = 0
+        return gesture if new else None

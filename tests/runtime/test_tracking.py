@@ -1,0 +1,108 @@
+"""Identities for hands and contacts (console.runtime.tracking)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from console.runtime.tracking import Announcer, IdTracker, Tracking, outline_centroid
+from console.types import Contact, Gesture, Hand
+
+
+def test_crossing_points_keep_their_ids_where_greedy_matching_swaps_them():
+    # two points moving towards each other: greedy nearest-first pairing takes the one
+    # short pair and forces the other far; the total-distance assignment does not
+    tr = IdTracker(gate=50.0, alpha=1.0, beta=0.0)
+    a, b = tr.update(0.0, [(0.0, 0.0), (30.0, 0.0)])
+    # A moved to 18 (18 away from its track, 12 from B's), B moved to 45 (15 from B's)
+    got = tr.update(1 / 60, [(18.0, 0.0), (45.0, 0.0)])
+    assert [t.id for t in got] == [a.id, b.id]
+
+
+def test_a_missed_frame_keeps_the_id_and_a_long_absence_ends_it():
+    tr = IdTracker(gate=20.0, grace_frames=3)
+    (t0,) = tr.update(0.0, [(100.0, 100.0)])
+    for k in range(1, 4):  # three frames without it: coasting, still live
+        assert tr.update(k / 60, []) == [] and t0.id in tr.tracks
+    (t1,) = tr.update(4 / 60, [(101.0, 100.0)])
+    assert t1.id == t0.id
+    for k in range(5, 9):
+        tr.update(k / 60, [])
+    assert not tr.tracks
+    (t2,) = tr.update(9 / 60, [(101.0, 100.0)])
+    assert t2.id > t0.id  # ids are never reused
+
+
+def test_out_of_the_gate_is_a_new_object():
+    tr = IdTracker(gate=20.0)
+    (a,) = tr.update(0.0, [(0.0, 0.0)])
+    (b,) = tr.update(1 / 60, [(50.0, 0.0)])
+    assert b.id != a.id and set(tr.tracks) == {a.id, b.id}
+
+
+def test_the_filter_follows_a_constant_velocity_exactly_once_settled():
+    # the alpha-beta filter's steady state for a constant-velocity target: no lag
+    tr = IdTracker(gate=100.0, alpha=0.5, beta=0.1)
+    v = np.array([120.0, -30.0])  # units per second
+    for k in range(400):
+        (t,) = tr.update(k / 60, [v * k / 60])
+    assert t.pos == pytest.approx(v * 399 / 60, abs=1e-6)
+    assert t.vel == pytest.approx(v, abs=1e-6)
+
+
+def test_the_filter_reduces_noise_as_the_alpha_beta_theory_says():
+    # Kalata (1984): steady-state position variance ratio of the alpha-beta filter
+    a, b = 0.5, 0.1
+    theory = (2 * a * a + 2 * b - 3 * a * b) / (a * (4 - 2 * a - b))
+    rng = np.random.default_rng(1)
+    tr = IdTracker(gate=1e6, alpha=a, beta=b)
+    out = []
+    for k in range(20000):
+        (t,) = tr.update(k / 60, [rng.normal(0.0, 1.0, 2)])
+        out.append(t.pos.copy())
+    var = np.var(np.array(out[200:]), axis=0).mean()
+    assert var == pytest.approx(theory, rel=0.05)
+
+
+def test_outline_centroid_matches_opencv_moments():
+    rng = np.random.default_rng(2)
+    ang = np.sort(rng.uniform(0, 2 * np.pi, 40))
+    r = rng.uniform(40, 90, 40)
+    pts = np.c_[200 + r * np.cos(ang), 150 + r * np.sin(ang)]
+    m = cv2.moments(pts.astype(np.float32))
+    assert outline_centroid(pts) == pytest.approx((m["m10"] / m["m00"], m["m01"] / m["m00"]))
+    assert outline_centroid(pts[::-1]) == pytest.approx(outline_centroid(pts))  # either turn
+    assert outline_centroid(pts[:2]) is None
+    assert outline_centroid(np.array([[0, 0], [1, 1], [2, 2]])) is None  # no area
+
+
+def _hand(contour, palm_px, contacts=()):
+    return Hand(np.asarray(contour, float), palm_px, 30.0, 0.0, np.zeros(4), 0, contacts)
+
+
+def test_a_hand_is_tracked_at_its_outline_centre_not_its_jumping_palm_centre():
+    square = [[100, 100], [200, 100], [200, 200], [100, 200]]
+    trk = Tracking(to_mm=lambda px: np.asarray(px, float) * 2.0)
+    ids = set()
+    for k in range(20):
+        palm = (150.0, 130.0) if k % 2 else (150.0, 170.0)  # two near-equal maxima
+        c = Contact(0, (120.0, 110.0), (240.0, 220.0))
+        f = trk.update(k / 60, [_hand(square, palm, (c,))], [c])
+        (t,) = f.hand_tracks
+        ids.add(t.id)
+        assert t.pos == pytest.approx((300.0, 300.0))  # mm of the square's centre
+        # the hand's own contact and the frame's are the same blob: the same track id
+        assert f.hands[0].contacts[0].id == f.contacts[0].id == f.contact_tracks[0].id
+        assert f.hand_id(f.hands[0]) == t.id
+    assert len(ids) == 1 and t.id != f.contacts[0].id  # unique across hands and contacts
+
+
+def test_a_gesture_is_announced_when_it_starts():
+    g = Gesture("two_finger", "static", 1.0, 0.0)
+    ann = Announcer(grace_frames=2)
+    seq = [(g, 1), (g, 1), (None, -1), (g, 1), (g, 2), (None, -1)]
+    seq += [(None, -1)] * 3 + [(g, 1), (Gesture("rotate", "dynamic", 1.0, 0.0), 1)]
+    said = [ann.update(gk, hid) is not None for gk, hid in seq]
+    # starts: hand 1, a second hand, hand 1 after a long gap, a new name on hand 1
+    assert said == [True, False, False, False, True, False, False, False, False, True, True]
