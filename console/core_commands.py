@@ -87,3 +87,15 @@ def haptable_register_benchmarks(register):
         help="demos started from the console: the knob's loop latency per screen, the "
         "operator's finger moved on the flow demo (key -> flow scheduled), output log check",
     )
+
+    def tracking(ctx, quick: bool) -> dict:
+        from console.benchmarks.tracking import run
+
+        return run(ctx, quick)
+
+    register(
+        "tracking",
+        tracking,
+        help="hand and contact identities on the twin: tracker time per frame (p50/p99), "
+        "blob sessions of a resting hand per 10 s, centre step against the palm's (mm)",
+    )

@@ -25,6 +25,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from console.types import Contact, Gesture, Hand
 
@@ -89,8 +90,6 @@ class IdTracker:
     ) -> list[Track]:
         """Assign ``pts`` to tracks (a new id for a point no track claims); returns the
         points' tracks in order. Tracks unseen for more than ``grace_frames`` die."""
-        from scipy.optimize import linear_sum_assignment
-
         pts_a = np.asarray(pts, float).reshape(-1, 2)
         angs = [0.0] * len(pts_a) if angles is None else [float(a) for a in angles]
         live = list(self.tracks.values())

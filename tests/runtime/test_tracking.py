@@ -106,3 +106,16 @@ def test_a_gesture_is_announced_when_it_starts():
     said = [ann.update(gk, hid) is not None for gk, hid in seq]
     # starts: hand 1, a second hand, hand 1 after a long gap, a new name on hand 1
     assert said == [True, False, False, False, True, False, False, False, False, True, True]
+
+
+def test_bench_tracking_sees_one_hand_and_two_fingertips(profile, plugins):
+    from types import SimpleNamespace
+
+    from console.benchmarks.tracking import run
+
+    out = run(SimpleNamespace(profile=profile, pm=plugins), quick=True)
+    rest = out["resting_hand"]
+    assert rest["blob_sessions"] == 1 and out["two_fingers"]["contact_sessions"] == 2
+    # the tracked centre is steadier than the palm centre it replaces for tracking
+    assert rest["tracked_centre_step"]["p99_mm"] < rest["palm_centre_step"]["p50_mm"] + 1.0
+    assert out["tracker"]["n"] == out["frames"] > 0
