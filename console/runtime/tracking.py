@@ -21,7 +21,7 @@ ids. ``Announcer`` says when a gesture starts (once per hand track and name).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -240,23 +240,37 @@ class Tracking:
 
 
 class Announcer:
-    """A gesture is announced once when it starts: ``update(gesture, hand_id)`` returns
-    it the first frame a (name, hand track) pair is seen and ``None`` while it lasts; it
-    ends after ``grace_frames`` frames without it (a one-frame drop does not restart it)."""
+    """A gesture is announced once when it starts: ``update(gesture, hand_id, live)``
+    returns it the first time its name is seen on that hand track, ``None`` after (while
+    it lasts, through frames where recognition drops it, and after another gesture of
+    the same hand: once per name per placement of a hand); a hand's memory ends with its
+    track (``live``: the live hand track ids). Without a hand (``hand_id`` -1) a gesture
+    ends after ``grace_frames`` frames without it."""
 
     def __init__(self, grace_frames: int = 6) -> None:
         self.grace = int(grace_frames)
-        self._active: dict[tuple[str, int], int] = {}  # key -> frames since last seen
+        self._said: dict[int, set[str]] = {}  # hand track id -> gestures announced
+        self._loose: dict[str, int] = {}  # handless gesture -> frames since last seen
 
-    def update(self, gesture: Gesture | None, hand_id: int) -> Gesture | None:
-        key = (gesture.name, hand_id) if gesture is not None else None
-        for k in list(self._active):
-            if k != key:
-                self._active[k] += 1
-                if self._active[k] > self.grace:
-                    del self._active[k]
-        if key is None:
+    def update(
+        self, gesture: Gesture | None, hand_id: int, live: Iterable[int] = ()
+    ) -> Gesture | None:
+        live_ids = set(live) | ({hand_id} if hand_id >= 0 else set())
+        self._said = {h: n for h, n in self._said.items() if h in live_ids}
+        name = gesture.name if gesture is not None and hand_id < 0 else None
+        for k in list(self._loose):
+            if k != name:
+                self._loose[k] += 1
+                if self._loose[k] > self.grace:
+                    del self._loose[k]
+        if gesture is None:
             return None
-        new = key not in self._active
-        self._active[key] = 0
+        if hand_id >= 0:
+            said = self._said.setdefault(hand_id, set())
+            if gesture.name in said:
+                return None
+            said.add(gesture.name)
+            return gesture
+        new = gesture.name not in self._loose
+        self._loose[gesture.name] = 0
         return gesture if new else None

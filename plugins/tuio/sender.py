@@ -18,7 +18,7 @@ or the sender's own tracking when called with bare lists). A track coasting thro
 missed frame stays ``alive`` without a ``set``. ``source`` is ``name@host`` (this machine).
 
 Recognised gestures go to the custom address ``/haptable/gesture`` (in their own
-bundle, once when a gesture starts on a hand, not every frame it lasts)::
+bundle, once when a gesture starts on a hand: once per name per placement)::
 
     /haptable/gesture  s:name  s:kind ("static"|"dynamic")  f:confidence
                        f:x  f:y (hand centre, normalised; -1 -1 if unknown)
@@ -133,7 +133,7 @@ class TuioSender:
             bundle("/tuio/2Dblb", [t.id for t in tracks.live_hands], brow),
         ]
         sid = tracks.hand_id(gesture.hand) if gesture is not None else -1
-        started = self.announcer.update(gesture, sid)
+        started = self.announcer.update(gesture, sid, (t.id for t in tracks.live_hands))
         if started is not None:
             out.append(self._gesture_bundle(started, sid, tracks, msg))
         return out

@@ -100,12 +100,18 @@ def test_a_hand_is_tracked_at_its_outline_centre_not_its_jumping_palm_centre():
 
 def test_a_gesture_is_announced_when_it_starts():
     g = Gesture("two_finger", "static", 1.0, 0.0)
+    r = Gesture("rotate", "dynamic", 1.0, 0.0)
     ann = Announcer(grace_frames=2)
-    seq = [(g, 1), (g, 1), (None, -1), (g, 1), (g, 2), (None, -1)]
-    seq += [(None, -1)] * 3 + [(g, 1), (Gesture("rotate", "dynamic", 1.0, 0.0), 1)]
-    said = [ann.update(gk, hid) is not None for gk, hid in seq]
-    # starts: hand 1, a second hand, hand 1 after a long gap, a new name on hand 1
-    assert said == [True, False, False, False, True, False, False, False, False, True, True]
+    seq = [(g, 1, {1}), (g, 1, {1}), (None, -1, {1}), (None, -1, {1}), (None, -1, {1})]
+    seq += [(g, 1, {1}), (g, 2, {1, 2}), (r, 1, {1, 2}), (g, 1, {1, 2})]
+    seq += [(None, -1, {2}), (g, 3, {2, 3})]  # hand 1 left; hand 3 is a new placement
+    seq += [(g, -1, ()), (None, -1, ()), (g, -1, ()), (None, -1, ())]  # no hand: grace
+    seq += [(None, -1, ()), (None, -1, ()), (g, -1, ())]
+    said = [ann.update(gk, hid, live) is not None for gk, hid, live in seq]
+    # dropped by recognition on the same hand, or back after another gesture of that
+    # hand: not again; another hand, another name, a new hand: each a start
+    assert said[:11] == [True, False, False, False, False, False, True, True, False, False, True]
+    assert said[11:] == [True, False, False, False, False, False, True]
 
 
 def test_bench_tracking_sees_one_hand_and_two_fingertips(profile, plugins):

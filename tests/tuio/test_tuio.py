@@ -142,12 +142,15 @@ def test_a_gesture_is_sent_once_while_it_lasts(server):
     tx = TuioSender("127.0.0.1", server.server_address[1], table_mm=TABLE)
     h = hand((300.0, 100.0))
     g = Gesture("two_finger", "static", 1.0, 0.0, h)
-    frames = [g] * 5 + [None] + [g] * 3  # a one-frame drop: the same gesture goes on
-    frames += [None] * 10 + [g]  # gone for longer than the grace: it starts again
-    for k, gk in enumerate(frames):
-        tx.send(k / 60, [], [h], gk)
+    # frames of (hands, gesture): recognition drops it for a frame, then for ten, while
+    # the hand stays: one gesture; the hand lifts (its id ends) and comes back: again
+    frames = [([h], g)] * 5 + [([h], None)] + [([h], g)] * 3 + [([h], None)] * 10
+    frames += [([], None)] * 8 + [([h], g)] * 3
+    for k, (hands, gk) in enumerate(frames):
+        tx.send(k / 60, [], hands, gk)
     assert wait_for(lambda: len(server.dispatcher.bundles) >= 2 * len(frames) + 2)
     time.sleep(0.05)
     assert len(server.gestures) == 2
     assert [a[0] for a in server.gestures] == ["two_finger"] * 2
-    assert [a[-1] for a in server.gestures] == [1, len(frames)]  # fseq of each start
+    assert [a[-1] for a in server.gestures] == [1, len(frames) - 2]  # fseq of each start
+    assert server.gestures[0][5] != server.gestures[1][5]  # on the hand's new id
