@@ -84,6 +84,7 @@ class VisionStage:
     def __call__(self, frame: Frame, work: dict) -> None:
         res = self.clf.process(frame)
         work["result"] = res
+        self.tracking.to_mm = self.clf.to_mm  # a touch calibration may replace it
         tracks = self.tracking.update(frame.t_capture_s, tuple(res.hands), tuple(res.contacts))
         hands: tuple[Hand, ...] = tracks.hands
         work["tracks"] = tracks
