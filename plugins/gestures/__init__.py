@@ -185,10 +185,15 @@ def _common(p: argparse.ArgumentParser) -> None:
         "--harmonics",
         type=int,
         default=None,
-        help="Fourier harmonics for the classifiers (default: [gestures] harmonics, 2)",
+        help="Fourier harmonics for the classifiers (default: chosen by cross-validation "
+        "on the training samples among 2, 4, 6, 8)",
     )
     p.add_argument(
-        "--frames", type=int, default=None, help="frames for dynamic gestures (default 4)"
+        "--frames",
+        type=int,
+        default=None,
+        help="frames a dynamic gesture is decided from (default: chosen by cross-validation "
+        "among 2 .. [gestures] frames)",
     )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-cache", action="store_true", help="recompute the features")
@@ -199,6 +204,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     e = sub.add_parser("eval", help="cross-validate the classifiers on a dataset")
     e.add_argument("dataset", type=Path)
     e.add_argument("--cv", choices=("2fold", "loso"), default="2fold")
+    e.add_argument(
+        "--model",
+        type=Path,
+        default=None,
+        help="evaluate this trained model (.skops) on the whole dataset instead of cross-validating",
+    )
     e.add_argument("--json", action="store_true")
     _common(e)
     t = sub.add_parser("train", help="train the classifiers on a dataset and save the model")
@@ -248,21 +259,32 @@ def run(args, ctx) -> int:
 
     profile = _profile(ctx)
     n_h = getattr(args, "harmonics", None)
-    if n_h is None:
-        n_h = _get(profile, "gestures.harmonics", 2)
-    n_f = args.frames if getattr(args, "frames", None) else _get(profile, "gestures.frames", 4)
+    n_f = getattr(args, "frames", None)
+    top = int(_get(profile, "gestures.frames", 4))
+    if cmd == "eval" and args.model is not None:
+        from .model import GestureModel
+        from .selection import evaluate_model
+
+        model = GestureModel.load(args.model)  # a bad model is refused before extracting
+        fs = ev.extract(
+            args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
+        )
+        _print(evaluate_model(fs, model, str(args.model)), args.json)
+        return 0
     if cmd == "eval":
         fs = ev.extract(
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
-        rep = ev.cross_validate(fs, args.cv, n_harmonics=n_h, n_frames=n_f, seed=args.seed)
+        rep = ev.cross_validate(
+            fs, args.cv, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed
+        )
         _print(rep, args.json)
         return 0
     if cmd == "train":
         fs = ev.extract(
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
-        model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, seed=args.seed)
+        model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed)
         if args.out is None and profile is None:
             from console.errors import UserError
 
@@ -274,8 +296,9 @@ def run(args, ctx) -> int:
             "model": str(path),
             "samples": int(len(fs.labels)),
             "motion_threshold": model.motion_threshold,
-            "n_harmonics": n_h,
-            "n_frames": n_f,
+            "n_harmonics": model.n_harmonics,
+            "n_frames": model.n_frames,
+            "selection": model.meta.get("selection"),
         }
         _print(out, args.json)
         return 0

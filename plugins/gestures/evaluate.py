@@ -27,6 +27,7 @@ from console.npz_safe import read_npz
 from . import features as F
 from .model import GESTURES, GestureModel
 from .progress import CancelCheck, Progress, step
+from .selection import INNER_FOLDS
 from .sketch import DYNAMIC, STATIC
 from .vision import VisionParams, process_frame
 
@@ -281,39 +282,51 @@ def cross_validate(
     fs: FeatureSet,
     cv: str = "2fold",
     *,
-    n_harmonics: int = 2,
-    n_frames: int = 4,
+    n_harmonics: int | None = 2,
+    n_frames: int | None = 4,
+    max_frames: int | None = None,
     seed: int = 0,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
 ) -> dict:
     """Outer cross-validation of the whole classifier; the report the CLI prints (with
-    ``folds``: the test size and accuracies of each outer fold). ``progress(frac, msg)``
-    after each fold; ``cancelled()`` stops it between folds (``Cancelled``)."""
-    xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
+    ``folds``: the test size and accuracies of each outer fold). ``n_harmonics`` or
+    ``n_frames`` None: chosen inside each outer fold's training part (nested CV; the
+    choices are in ``folds``). ``progress(frac, msg)`` after each fold; ``cancelled()``
+    stops it between folds (``Cancelled``)."""
+    from .selection import candidates, select_settings
+
+    hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
+    for h in hs:
+        columns(fs, h, frs[0])  # a bad --harmonics / --frames is refused before any fit
     pred = np.empty(len(fs.labels), dtype=object)
     thresholds = []
     folds = []
+    chosen = []
     parts = splits(fs, cv, seed)
     for k, (tr, te) in enumerate(parts):
         step(progress, cancelled, k / len(parts), f"fold {k + 1}/{len(parts)}: training")
+        sel = select_settings(fs, tr, hs, frs, seed=seed, cancelled=cancelled)
+        h, f = sel["n_harmonics"], sel["n_frames"]
+        xs, xd, xk, sc = columns(fs, h, f)
         m = GestureModel.fit(
-            xs[tr],
-            xd[tr],
-            xk[tr],
-            sc[tr],
-            fs.labels[tr],
-            n_harmonics=n_harmonics,
-            n_frames=n_frames,
-            seed=seed,
+            xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f, seed=seed
         )
         thresholds.append(m.motion_threshold)
         pred[te] = m.predict(xs[te], xd[te], xk[te])
         folds.append(fold_report(fs, te, pred[te].astype(str), cv))
+        folds[-1].update(n_harmonics=h, n_frames=f, selection=sel["scores"])
+        chosen.append((h, f))
         acc = folds[-1]["accuracy"]
         step(progress, None, (k + 1) / len(parts), f"fold {k + 1}/{len(parts)}: {acc:.1%}")
-    rep = report(fs.labels, pred.astype(str), fs, cv, n_harmonics, n_frames, thresholds)
+    h, f = max(set(chosen), key=chosen.count)  # the most frequent choice, for the summary
+    rep = report(fs.labels, pred.astype(str), fs, cv, h, f, thresholds)
     rep["folds"] = folds
+    rep["selection"] = {
+        "searched": {"n_harmonics": list(hs), "n_frames": list(frs)},
+        "chosen_per_fold": [{"n_harmonics": a, "n_frames": b} for a, b in chosen],
+        "inner_folds": None if len(hs) * len(frs) == 1 else INNER_FOLDS,
+    }
     return rep
 
 
@@ -374,24 +387,44 @@ def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
 def train(
     fs: FeatureSet,
     *,
-    n_harmonics: int = 2,
-    n_frames: int = 4,
+    n_harmonics: int | None = 2,
+    n_frames: int | None = 4,
+    max_frames: int | None = None,
     seed: int = 0,
     meta: dict | None = None,
     cancelled: CancelCheck | None = None,
 ) -> GestureModel:
     """The classifiers fitted on the whole feature set (``meta`` is added to the model's
-    metadata); ``cancelled()`` is checked before fitting."""
-    xs, xd, xk, sc = columns(fs, n_harmonics, n_frames)
+    metadata); ``n_harmonics`` / ``n_frames`` None: chosen by cross-validation on the set
+    (what was searched and each candidate's accuracy are kept in ``meta["selection"]``);
+    ``cancelled()`` is checked before fitting."""
+    from .selection import candidates, select_settings
+
+    hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
+    for h in hs:
+        columns(fs, h, frs[0])
+    idx = np.arange(len(fs.labels))
     step(None, cancelled, 0, "training")
+    sel = select_settings(fs, idx, hs, frs, seed=seed, cancelled=cancelled)
+    h, f = sel["n_harmonics"], sel["n_frames"]
+    xs, xd, xk, sc = columns(fs, h, f)
+    selection = {
+        "searched": {"n_harmonics": list(hs), "n_frames": list(frs)},
+        "inner_cv_accuracy": sel["scores"],
+    }
     return GestureModel.fit(
         xs,
         xd,
         xk,
         sc,
         fs.labels,
-        n_harmonics=n_harmonics,
-        n_frames=n_frames,
+        n_harmonics=h,
+        n_frames=f,
         seed=seed,
-        meta={"trained_on": fs.meta.get("root"), "n_samples": len(fs.labels), **(meta or {})},
+        meta={
+            "trained_on": fs.meta.get("root"),
+            "n_samples": len(fs.labels),
+            "selection": selection,
+            **(meta or {}),
+        },
     )

@@ -222,13 +222,16 @@ class GestureModel:
         static_frames: int = 3,
         seed: int = 0,
         meta: dict | None = None,
+        kind_svm: object | None = None,
     ) -> GestureModel:
         """Fit on static features ``xs``, dynamic ``xd``, motion (kind) features ``xk``
-        and the motion ``score``."""
+        and the motion ``score`` (``kind_svm``: one already fitted on the same samples)."""
         labels = np.asarray(labels).astype(str)
         is_dyn = np.isin(labels, DYNAMIC)
         thr = fit_threshold(score, is_dyn)
-        kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), seed=seed)
+        kind = kind_svm
+        if kind is None:
+            kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), seed=seed)
         st = fit_svm(xs[~is_dyn], labels[~is_dyn], seed=seed) if np.any(~is_dyn) else None
         dy = fit_svm(xd[is_dyn], labels[is_dyn], seed=seed) if np.any(is_dyn) else None
         return cls(st, dy, kind, thr, n_harmonics, n_frames, static_frames, dict(meta or {}))

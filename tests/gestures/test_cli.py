@@ -153,3 +153,76 @@ def test_train_without_out_saves_the_profiles_model_where_the_classifier_reads_i
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bench.toml"]
     clf = SvmClassifier.from_profile(load_profile(tmp_path / "bench.toml", plugins))
     assert clf.model is not None and clf.model.n_frames == out["n_frames"]
+
+
+def _subset(src, dst, subject):
+    """A copy of the dataset with one subject's samples (another session's recordings)."""
+    import re
+    import shutil
+
+    def other(_d, names):
+        return [n for n in names if re.fullmatch(r"s\d_\d+", n) and not n.startswith(subject)]
+
+    shutil.copytree(src, dst, ignore=other)
+    return dst
+
+
+def test_a_model_trained_on_one_set_is_evaluated_on_another(dataset, capsys, tmp_path):
+    one = _subset(dataset, tmp_path / "one", "s1")
+    two = _subset(dataset, tmp_path / "two", "s2")
+    model = tmp_path / "m.skops"
+    code, out = run_json(capsys, "gestures", "train", str(one), "--out", str(model), "--json")
+    assert code == 0 and out["samples"] == 40
+    code, rep = run_json(capsys, "gestures", "eval", str(two), "--model", str(model), "--json")
+    assert code == 0
+    code, cv = run_json(capsys, "gestures", "eval", str(two), "--json")
+    assert set(cv) - set(rep) == set()  # the same report as a cross-validation
+    assert rep["cv"] == "model" and rep["model"] == str(model) and rep["subjects"] == ["s2"]
+    assert rep["n_samples"] == 40 and rep["trained_on"] == str(one)
+    assert rep["n_harmonics"] == out["n_harmonics"] and rep["n_frames"] == out["n_frames"]
+    # every prediction is what `classify` says for that sample
+    hits = 0
+    for folder in sorted(p for p in two.glob("*/s2_*")):
+        code, res = run_json(capsys, "gestures", "classify", str(model), str(folder), "--json")
+        hits += bool(res["correct"])
+    total = sum(v.get(g, 0) for g, v in rep["confusion"].items())
+    assert hits == total and rep["static_accuracy"] >= 0.7 and rep["dynamic_accuracy"] >= 0.7
+    code, err = run_json(
+        capsys, "gestures", "eval", str(two), "--model", str(tmp_path / "none.skops")
+    )
+    assert code == 2 and "gestures train" in err and len(err.strip().splitlines()) == 1
+
+
+def test_harmonics_and_frames_are_chosen_on_the_training_samples(dataset, capsys, tmp_path):
+    from plugins.gestures.evaluate import extract
+    from plugins.gestures.model import GestureModel
+    from plugins.gestures.selection import select_settings
+
+    model = tmp_path / "m.skops"
+    code, out = run_json(capsys, "gestures", "train", str(dataset), "--out", str(model), "--json")
+    assert code == 0
+    sel = out["selection"]
+    assert sel["searched"] == {"n_harmonics": [2, 4, 6, 8], "n_frames": [2, 3, 4]}
+    assert out["n_harmonics"] in (2, 4, 6, 8) and out["n_frames"] in (2, 3, 4)
+    best = sel["inner_cv_accuracy"][f"h{out['n_harmonics']}_f{out['n_frames']}"]
+    assert best == max(sel["inner_cv_accuracy"].values()) and len(sel["inner_cv_accuracy"]) == 12
+    saved = GestureModel.load(model)
+    assert saved.meta["selection"] == sel and saved.n_frames == out["n_frames"]
+    # given values are kept, nothing searched
+    code, fixed = run_json(
+        capsys, "gestures", "train", str(dataset), "--out", str(model), "--harmonics", "4",
+        "--frames", "3", "--json",
+    )  # fmt: skip
+    assert (fixed["n_harmonics"], fixed["n_frames"]) == (4, 3)
+    assert fixed["selection"]["inner_cv_accuracy"] is None
+    # nested: each outer fold chooses on its own training part, reported in the eval JSON
+    code, rep = run_json(capsys, "gestures", "eval", str(dataset), "--cv", "loso", "--json")
+    assert [f["subject"] for f in rep["folds"]] == ["s1", "s2"]
+    assert len(rep["selection"]["chosen_per_fold"]) == 2
+    assert all(f["n_frames"] in (2, 3, 4) and len(f["selection"]) == 12 for f in rep["folds"])
+    # the choice sees the training samples only: other samples' labels do not matter
+    fs = extract(dataset)
+    tr = np.flatnonzero(fs.subjects == "s1")
+    a = select_settings(fs, tr, (2, 6), (2, 4))
+    fs.labels[fs.subjects == "s2"] = "tap"
+    assert select_settings(fs, tr, (2, 6), (2, 4)) == a

@@ -1,0 +1,111 @@
+"""Model selection inside training, and a trained model checked on another dataset.
+
+``select_settings`` picks the Fourier harmonics and the frames a dynamic gesture is
+decided from by stratified cross-validation on the training samples only (the SVMs' C
+and gamma are searched inside each fit, ``model.fit_svm``); ``cross_validate`` in
+``evaluate`` calls it inside every outer fold, so the reported accuracy is a nested
+cross-validation. ``evaluate_model`` applies a saved model to a whole dataset.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from console.errors import UserError
+
+from .model import GestureModel
+from .progress import CancelCheck, step
+
+#: Candidates searched when the harmonics / frames are not given.
+HARMONICS_CANDIDATES = (2, 4, 6, 8)
+FRAMES_CANDIDATES = (2, 3, 4)
+INNER_FOLDS = 3
+
+
+def candidates(
+    fs, harmonics: int | None, frames: int | None, max_frames: int | None = None
+) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """The harmonics and frames to search: a given value alone, else the candidates
+    (frames no more than ``max_frames``, the latency budget, and only those extracted)."""
+    nmax = int(fs.meta.get("n_harmonics_max", 16))
+    hs = (
+        (harmonics,)
+        if harmonics is not None
+        else tuple(h for h in HARMONICS_CANDIDATES if h <= nmax)
+    )
+    if frames is not None:
+        fr: tuple[int, ...] = (frames,)
+    else:
+        top = max_frames if max_frames is not None else max(FRAMES_CANDIDATES)
+        fr = tuple(
+            f for f in sorted(set(FRAMES_CANDIDATES) | {top}) if f <= top and f in fs.dynamic
+        )
+        if not fr:
+            raise UserError(f"gestures.frames = {top}: features exist for {sorted(fs.dynamic)}")
+    return hs, fr
+
+
+def select_settings(
+    fs,
+    idx: np.ndarray,
+    harmonics: Sequence[int],
+    frames: Sequence[int],
+    *,
+    seed: int = 0,
+    cancelled: CancelCheck | None = None,
+) -> dict:
+    """The (harmonics, frames) with the best inner-CV accuracy on samples ``idx`` of
+    ``fs`` (ties: fewer frames, then fewer harmonics, i.e. the faster and simpler model),
+    with every candidate's accuracy. One candidate: returned without fitting."""
+    from sklearn.model_selection import StratifiedKFold
+
+    from .evaluate import columns
+
+    grid = [(h, f) for h in harmonics for f in frames]
+    if len(grid) == 1:
+        return {"n_harmonics": grid[0][0], "n_frames": grid[0][1], "scores": None}
+    labels = fs.labels[idx].astype(str)
+    _, counts = np.unique(labels, return_counts=True)
+    folds = int(min(INNER_FOLDS, counts.min()))
+    if folds < 2:
+        raise UserError("model selection: every gesture needs at least 2 training samples")
+    correct = {c: 0 for c in grid}
+    inner = StratifiedKFold(folds, shuffle=True, random_state=seed).split(idx, labels)
+    for tr, te in inner:
+        step(None, cancelled, 0, "model selection")
+        tr, te = idx[tr], idx[te]
+        # the kind SVM and threshold do not depend on harmonics or frames: fit them once
+        base = None
+        for h, f in grid:
+            xs, xd, xk, sc = columns(fs, h, f)
+            m = GestureModel.fit(
+                xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f,
+                seed=seed, kind_svm=base,
+            )  # fmt: skip
+            base = m.kind_svm
+            correct[(h, f)] += int(np.sum(m.predict(xs[te], xd[te], xk[te]) == fs.labels[te]))
+    n = len(idx)
+    best = max(grid, key=lambda c: (correct[c], -c[1], -c[0]))
+    return {
+        "n_harmonics": best[0],
+        "n_frames": best[1],
+        "scores": {f"h{h}_f{f}": correct[(h, f)] / n for h, f in grid},
+    }
+
+
+def evaluate_model(fs, model: GestureModel, path: str) -> dict:
+    """The eval report (same keys as ``cross_validate``) of ``model`` on every sample."""
+    from .evaluate import columns, fold_report, report
+
+    xs, xd, xk, _ = columns(fs, model.n_harmonics, model.n_frames)
+    pred = model.predict(xs, xd, xk).astype(str)
+    rep = report(
+        fs.labels, pred, fs, "model", model.n_harmonics, model.n_frames, [model.motion_threshold]
+    )
+    rep["model"] = str(path)
+    rep["trained_on"] = model.meta.get("trained_on")
+    rep["selection"] = model.meta.get("selection")
+    rep["folds"] = [fold_report(fs, np.arange(len(fs.labels)), pred, "model")]
+    return rep
