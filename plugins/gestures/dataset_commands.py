@@ -86,6 +86,15 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         help="motion blur: shutter time in ms (0 = sharp; a 60 fps camera allows up to 16.7)",
     )
+    parser.add_argument(
+        "--vary",
+        action="store_true",
+        help="vary light (+-40 %%), LED hot spots, noise, hand size and hover height "
+        "per subject and session",
+    )
+    parser.add_argument(
+        "--sessions", type=int, default=2, help="with --vary: sessions per subject (2)"
+    )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -127,6 +136,8 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         per_sample_background=not args.no_sample_background,
         left_handed=args.left_handed,
         exposure_ms=args.exposure_ms,
+        vary=args.vary,
+        sessions=args.sessions,
         progress=progress,
         **({"force": True} if args.force else {}),
     )

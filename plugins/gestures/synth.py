@@ -13,6 +13,13 @@ the slow ambient drift matches; ``per_sample_background=False`` leaves only the 
 Subjects are ``s1 .. sN``; the last ``left_handed`` of them (default 1, as in the
 paper's five-subject study) use their left hand, the others their right.
 
+``vary=True`` draws a recording condition per subject and session (``sessions`` blocks
+of the repetitions; ``CONDITION_RANGES``): IR light level +-40 %, the LED lobes and
+hot-spot layout, sensor read noise (per session), hand size and hover height of lifted
+parts (per subject, times a smaller per-session change). Each sample's ``sample.json``
+holds its ``session`` and ``condition``; the dataset's ``background.png`` is the default
+rig's, every sample has its own under its session's light.
+
 ``record(camera, out, gesture, subject)`` records from any ``console.contracts.Camera``
 into the same format (the twin acts the gesture out when asked).
 """
@@ -48,6 +55,31 @@ STATIC_FRAMES = 3
 DYNAMIC_FRAMES = 8
 BACKGROUND_LEAD_S = 0.5
 
+#: Uniform ranges of the recording conditions ``vary=True`` draws (twin camera keys).
+CONDITION_RANGES = {
+    "illumination": (0.6, 1.4),  # per session: IR LED level, +-40 %
+    "noise_sigma": (1.0, 3.5),  # per session: read noise, grey levels
+    "hand_scale": (0.92, 1.08),  # per subject (on top of the subject's own size)
+    "hover_scale": (0.7, 1.4),  # per subject: heights of lifted fingers and palm
+    "session_scale": (0.97, 1.03),  # per session: hand size and hover times this
+}
+
+
+def condition(seed: int, subject: int, session: int) -> dict[str, float | int]:
+    """The seeded recording condition of ``subject``'s ``session`` (twin camera keys)."""
+    r = CONDITION_RANGES
+    who = np.random.default_rng(np.random.SeedSequence([seed, subject, 7919]))
+    hand, hover = who.uniform(*r["hand_scale"]), who.uniform(*r["hover_scale"])
+    ses = np.random.default_rng(np.random.SeedSequence([seed, subject, session, 104729]))
+    k = ses.uniform(*r["session_scale"], size=2)
+    return {
+        "illumination": round(float(ses.uniform(*r["illumination"])), 4),
+        "noise_sigma": round(float(ses.uniform(*r["noise_sigma"])), 3),
+        "led_seed": int(ses.integers(0, 2**31 - 1)),
+        "hand_scale": round(float(hand * k[0]), 4),
+        "hover_scale": round(float(hover * k[1]), 4),
+    }
+
 
 def subject_names(n: int) -> list[str]:
     return [f"s{i + 1}" for i in range(n)]
@@ -81,7 +113,8 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
     """Render and write the samples of one (subject, gesture): returns (samples, frames).
     ``on_rep()`` is called before each repetition (it may raise to stop)."""
     out, seed, si, gi = job["out"], job["seed"], job["subject"], job["gesture"]
-    camera = job["camera"](job["camera_profile"])  # the registered twin camera's factory
+    sessions = job.get("sessions", 0)  # 0: no variation, the default rig
+    cameras: dict[int, Any] = {}
     subject = subject_names(si + 1)[si]
     gesture = GESTURES[gi]
     n = job["static_frames"] if gesture in STATIC else job["dynamic_frames"]
@@ -90,12 +123,21 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
         if on_rep is not None:
             on_rep()
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
+        session = rep * sessions // job["reps"] if sessions else 0
+        cond = condition(seed, si, session) if sessions else None
+        if session not in cameras:  # the registered twin camera's factory
+            prof = dict(job["camera_profile"])
+            prof.update({f"twin_camera.{k}": v for k, v in (cond or {}).items()})
+            cameras[session] = job["camera"](prof)
+        camera = cameras[session]
         t0 = _session_t0(si, gi, rep)
         frames, truth = camera.render_sample(
             gesture, subject, rep, rng, n_frames=n, t0_s=t0, subject_seed=seed, side=job["side"]
         )
         bg = camera.render_background(t0 - BACKGROUND_LEAD_S, rng) if job["per_sample_bg"] else None
         extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
+        if cond is not None:
+            extra.update(session=f"{subject_names(si + 1)[si]}/{session}", condition=cond)
         write_sample(
             out,
             gesture,
@@ -126,6 +168,8 @@ def synth(
     per_sample_background: bool = True,
     left_handed: int = 1,
     exposure_ms: float = 0.0,
+    vary: bool = False,
+    sessions: int = 2,
     force: bool = False,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
@@ -144,6 +188,8 @@ def synth(
         raise UserError(f"--exposure-ms {exposure_ms}: must be from 0 to 1000")
     if not 0 <= left_handed <= subjects:
         raise UserError(f"--left-handed {left_handed}: must be from 0 to --subjects {subjects}")
+    if vary and not 1 <= sessions <= reps:
+        raise UserError(f"--sessions {sessions}: must be from 1 to --reps {reps}")
     if static_frames < 1 or dynamic_frames < 4:
         raise UserError("frames: static samples need >= 1 frame, dynamic >= 4")
     if out.exists() and not out.is_dir():
@@ -170,6 +216,7 @@ def synth(
             "camera_profile": camera_profile,
             "per_sample_bg": per_sample_background,
             "side": sides[si],
+            "sessions": sessions if vary else 0,
         }
         for si in range(subjects)
         for g in gestures
@@ -216,6 +263,9 @@ def synth(
         "per_sample_background": per_sample_background,
         "hands": dict(zip(subject_names(subjects), sides, strict=True)),
         "exposure_ms": exposure_ms,
+        "vary": vary,
+        "sessions": sessions if vary else None,
+        "condition_ranges": CONDITION_RANGES if vary else None,
         "mapping": mapping.to_dict(),
         "workers": workers,
         "seconds": round(seconds, 2),

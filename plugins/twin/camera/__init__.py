@@ -88,6 +88,16 @@ FIELDS = {
     "focal_px": Field("float", 540.0, min=50, max=5000, help="focal length for distortion"),
     "noise_sigma": Field("float", 1.8, min=0, max=50, help="sensor read noise (grey levels)"),
     "drift_gain": Field("float", 0.03, min=0, max=0.5, help="slow ambient gain drift"),
+    "illumination": Field(
+        "float", 1.0, min=0.2, max=3.0, help="IR LED power (x; scales hands, glow, hot spots)"
+    ),
+    "led_seed": Field(
+        "int", -1, min=-1, help="seed of the LED lobes and hot-spot layout (-1: the seed)"
+    ),
+    "hand_scale": Field("float", 1.0, min=0.5, max=1.5, help="hand size (x the subject's)"),
+    "hover_scale": Field(
+        "float", 1.0, min=0.2, max=3.0, help="height of lifted fingers and palm (x the subject's)"
+    ),
     "gap_s": Field("float", 0.5, min=0, max=60, help="empty table between demo gestures"),
     "touch_error_mm": Field(
         "float", 1.5, min=0, max=20, help="scatter of a touch around where the operator aims"
@@ -143,9 +153,11 @@ def make_camera(profile: Any = None):
         focal_px=float(tw("focal_px")) * sx,
     )
     seed = int(tw("seed"))
+    led_seed = int(tw("led_seed"))
     rig = Rig(
         mapping=mapping,
-        seed=seed,
+        seed=seed if led_seed < 0 else led_seed,
+        illumination=float(tw("illumination")),
         noise_sigma=float(tw("noise_sigma")),
         drift_gain=float(tw("drift_gain")),
         exposure_s=float(tw("exposure_ms")) / 1000.0,
@@ -177,6 +189,8 @@ def make_camera(profile: Any = None):
         seed=seed,
         touch_error_mm=float(tw("touch_error_mm")),
         touch_bias_mm=float(tw("touch_bias_mm")),
+        hand_scale=float(tw("hand_scale")),
+        hover_scale=float(tw("hover_scale")),
     )
 
 

@@ -30,7 +30,7 @@ from console.types import Frame, GestureScript
 
 from .geometry import TableMapping
 from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose
-from .hand import FingerPose, HandPose, Subject, hand_pieces, make_subject
+from .hand import FingerPose, HandPose, Subject, hand_pieces, make_subject, scaled_subject
 from .render import Rig
 from .sample import render_background, render_frame, render_sample
 
@@ -238,8 +238,11 @@ class TwinCamera:
         noise: bool = True,
         touch_error_mm: float = 1.5,
         touch_bias_mm: float = 2.0,
+        hand_scale: float = 1.0,
+        hover_scale: float = 1.0,
     ) -> None:
         self.rig = rig or Rig()
+        self.hand_scale, self.hover_scale = hand_scale, hover_scale
         self.fps = float(fps)
         self.realtime = realtime
         self.script: Script = script or IdleScript()
@@ -299,10 +302,13 @@ class TwinCamera:
         subject_seed: int | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """One performance rendered offline (not on the stream): frames and truth
-        (``sample.render_sample`` on this camera's rig and fps)."""
+        (``sample.render_sample`` on this camera's rig and fps, the subject's hand scaled
+        by ``hand_scale`` and its lifted parts' heights by ``hover_scale``)."""
+        seed = self.subject_seed if subject_seed is None else subject_seed
+        subj = scaled_subject(make_subject(subject, seed), self.hand_scale, self.hover_scale)
         return render_sample(
             gesture,
-            subject,
+            subj,
             rep,
             rng,
             n_frames=n_frames,
@@ -310,7 +316,7 @@ class TwinCamera:
             rig=self.rig,
             side=side,
             t0_s=t0_s,
-            subject_seed=self.subject_seed if subject_seed is None else subject_seed,
+            subject_seed=seed,
         )
 
     def render_background(self, t_s: float, rng: np.random.Generator) -> np.ndarray:

@@ -51,6 +51,24 @@ class Subject:
         return self.length_mm - self.finger_len_mm[2]
 
 
+def scaled_subject(subject: Subject, size: float = 1.0, hover: float = 1.0) -> Subject:
+    """``subject`` with every length times ``size`` and the heights of lifted fingers and
+    palm times ``hover`` (a condition of a recording session)."""
+    if size == 1.0 and hover == 1.0:
+        return subject
+    return replace(
+        subject,
+        length_mm=subject.length_mm * size,
+        width_mm=subject.width_mm * size,
+        finger_len_mm=tuple(v * size for v in subject.finger_len_mm),
+        finger_r_mm=tuple(v * size for v in subject.finger_r_mm),
+        mcp_uv=tuple((u * size, v * size) for u, v in subject.mcp_uv),
+        palm_uv=tuple((u * size, v * size) for u, v in subject.palm_uv),
+        lift_mm=subject.lift_mm * hover,
+        palm_lift_mm=subject.palm_lift_mm * hover,
+    )
+
+
 def subject_seed(name: str, seed: int = 0) -> int:
     return zlib.crc32(f"{name}/{seed}".encode())
 

@@ -60,6 +60,7 @@ class Rig:
     drift_period_s: float = 40.0
     frame_level: float = 8.0  # the table frame seen outside the glass
     exposure_s: float = 0.0  # motion blur: shutter time over which moving hands smear
+    illumination: float = 1.0  # LED power: scales the hands' light, the glow and hot spots
 
 
 @functools.lru_cache(maxsize=8)
@@ -227,7 +228,7 @@ def compose(
     img = layer * illum
     img *= maskf
     img += glow
-    img *= g * step_gain
+    img *= g * step_gain * rig.illumination
     img += o + step_offset
     if noise:
         h, w = img.shape
