@@ -24,6 +24,14 @@ VISION_FIELDS = {
     "contact_threshold": Field(
         "float", 30.0, min=1, max=255, help="grey levels of the high-pass image for a contact"
     ),
+    "contact_level": Field(
+        "float",
+        0.0,
+        min=0,
+        max=255,
+        help="touching skin's brightness body_threshold is set for (twin: 180); > 0: the body "
+        "threshold follows the brightness at the contacts (light-level invariant); 0: fixed",
+    ),
     "highpass_sigma_px": Field(
         "float", 6.0, min=0.5, max=100, help="blur of the high-pass filter (image minus blur)"
     ),

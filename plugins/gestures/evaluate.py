@@ -34,7 +34,7 @@ from .vision import VisionParams, process_frame
 N_HARMONICS_MAX = 16
 FRAMES_LIST = (2, 3, 4, 5, 6)
 STATIC_FRAMES = 3
-FEATURES_VERSION = 6  # bump when features change: old caches are ignored
+FEATURES_VERSION = 7  # bump when features change: old caches are ignored
 
 
 @dataclass

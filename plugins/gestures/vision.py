@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import cv2
@@ -83,6 +83,11 @@ class VisionParams:
     finger_width: float = 0.55  # one finger's width, palm radii
     n_harmonics: int = 12
     rotation_invariant: bool = True
+    #: touching skin's brightness (grey levels above the background) ``body_threshold``
+    #: is set for (180 on the twin at its default light): > 0, the body threshold follows
+    #: the brightness measured near the contacts, so fewer hovering parts change with the
+    #: IR light level; 0 (default): the fixed ``body_threshold``
+    contact_level: float = 0.0
     illumination_tolerance: float = 0.15  # |gain - 1| above this flags an illumination change
     offset_tolerance: float = 8.0  # |offset| grey levels above this flags one too
 
@@ -169,6 +174,19 @@ def check_frame(image: object, shape: tuple[int, int] | None = (480, 640)) -> np
 
 
 # --------------------------------------------------------------------------- one frame
+def contact_brightness(diff: np.ndarray, contacts: Sequence[Contact]) -> float | None:
+    """Touching skin's brightness in this frame: the median over ``contacts`` of the
+    3x3 mean of ``diff`` at each contact (None without contacts). It follows the IR
+    light reaching the hand, whatever the background was captured under."""
+    H, W = diff.shape
+    vals = []
+    for c in contacts:
+        x, y = int(round(c.pos_px[0])), int(round(c.pos_px[1]))
+        if 0 <= x < W and 0 <= y < H:
+            vals.append(float(diff[max(y - 1, 0) : y + 2, max(x - 1, 0) : x + 2].mean()))
+    return float(np.median(vals)) if vals else None
+
+
 def analyse_hand(
     contour: np.ndarray,
     full_mask: np.ndarray,
@@ -278,16 +296,12 @@ def process_frame(
     if bg.dtype != np.uint8 and gain == 1.0 and offset == 0.0:
         bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
     diff = subtract(img, bg, gain, offset)
-    # thresholds rise with the noise (each at least its profile value)
-    body_thr = max(p.body_threshold, 4.0 * noise / max(p.smooth_px, 1) + 2.0)
+    # thresholds rise with the noise (the contact one at least its profile value)
+    noise_body = 4.0 * noise / max(p.smooth_px, 1) + 2.0
     contact_thr = max(p.contact_threshold, 4.0 * noise / 3.0 + 2.0)
-    # hands and contacts: only around the pixels above the thresholds (the rest of the
-    # frame cannot reach them through the smoothing); the same results as the whole frame
-    body, body_win = body_window(diff, body_thr, p.smooth_px)
-    if contact_thr < body_thr:
-        win = contact_window(diff, contact_thr)
-    else:  # contact pixels are above the body threshold too: in the body's window
-        win = None if body_win is None else contact_window(diff, contact_thr, body_win)
+    # contacts first: only around the pixels above the threshold (the rest of the frame
+    # cannot reach them through the smoothing); the same results as the whole frame
+    win = contact_window(diff, contact_thr)
     contacts = []
     if win is not None:
         contacts = find_contacts(
@@ -299,6 +313,13 @@ def process_frame(
             p.max_contact_size_px,
             origin_px=win[:2],
         )
+    # the body threshold scaled by the light the contacts show (relative, not absolute)
+    level = contact_brightness(diff, contacts) if p.contact_level > 0 else None
+    body_thr = p.body_threshold
+    if level is not None:
+        body_thr *= min(max(level / p.contact_level, 0.5), 2.0)
+    body_thr = max(body_thr, noise_body)
+    body, body_win = body_window(diff, body_thr, p.smooth_px)
     contours = ()
     if body_win is not None:
         x0, y0, x1, y1 = body_win
