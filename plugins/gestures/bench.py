@@ -2,7 +2,10 @@
 (2-fold) vs Fourier harmonics, vs frames used for dynamic gestures, vs image noise.
 
 Data: the dataset in ``$HAPTABLE_GESTURES_DATASET`` if set, else a synthetic set from
-the camera twin written to a temporary folder (quick: 5 subjects x 6 reps; full: x 20).
+the camera twin with varied conditions (``synth --vary``, 2 sessions per subject) written
+to a temporary folder (quick: 5 subjects x 6 reps; full: x 20). On a set with conditions,
+leave-one-condition-out and light transfer (train near nominal light, test at x0.8 or
+less and x1.2 or more) with harmonics and frames chosen on the training part.
 """
 
 from __future__ import annotations
@@ -35,8 +38,8 @@ def _dataset(quick: bool, tmp: Path) -> tuple[Path, str]:
 
     reps = 6 if quick else 20
     out = tmp / "set"
-    synth(out, 5, reps, seed=1, workers=1)
-    return out, f"twin synth 5 subjects x 10 gestures x {reps} reps (seed 1)"
+    synth(out, 5, reps, seed=1, workers=1, vary=True, sessions=2)
+    return out, f"twin synth --vary 5 subjects x 2 sessions x 10 gestures x {reps} reps (seed 1)"
 
 
 def frame_latency(samples, params: VisionParams, n_frames: int = 300, repeats: int = 3) -> dict:
@@ -152,6 +155,11 @@ def run_benchmark(ctx, quick: bool) -> dict:
                 by_noise.append({"noise_sigma": sigma, **_noisy_accuracy(sub, params, sigma)})
             loso = ev.cross_validate(fs, "loso", n_harmonics=2, n_frames=4)
             two = ev.cross_validate(fs, "2fold", n_harmonics=2, n_frames=4)
+            from .selection import condition_report
+
+            loso_sel = ev.cross_validate(fs, "loso", n_harmonics=None, n_frames=None)
+            conds = {s.name: s.meta for s in samples}
+            by_condition = condition_report(fs, conds)
     finally:
         cv2.setNumThreads(threads)
     return {
@@ -161,6 +169,11 @@ def run_benchmark(ctx, quick: bool) -> dict:
         "extract_s": extract_s,
         "two_fold": {k: two[k] for k in ("static_accuracy", "dynamic_accuracy", "kind_accuracy")},
         "loso": {k: loso[k] for k in ("static_accuracy", "dynamic_accuracy", "kind_accuracy")},
+        "loso_selected": {
+            **{k: loso_sel[k] for k in ("static_accuracy", "dynamic_accuracy", "kind_accuracy")},
+            "chosen_per_fold": loso_sel["selection"]["chosen_per_fold"],
+        },
+        **by_condition,
         "accuracy_vs_harmonics": by_harm,
         "accuracy_vs_frames": by_frames,
         "accuracy_vs_noise": by_noise,

@@ -109,3 +109,80 @@ def evaluate_model(fs, model: GestureModel, path: str) -> dict:
     rep["selection"] = model.meta.get("selection")
     rep["folds"] = [fold_report(fs, np.arange(len(fs.labels)), pred, "model")]
     return rep
+
+
+def holdout(
+    fs,
+    train_idx: np.ndarray,
+    test_idx: np.ndarray,
+    *,
+    n_harmonics: int | None = None,
+    n_frames: int | None = None,
+    max_frames: int | None = None,
+    seed: int = 0,
+) -> dict:
+    """Train on ``train_idx`` (settings chosen there, as ``train`` does) and test on
+    ``test_idx``: the fold's report with the chosen harmonics and frames."""
+    from .evaluate import columns, fold_report
+
+    hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
+    sel = select_settings(fs, train_idx, hs, frs, seed=seed)
+    h, f = sel["n_harmonics"], sel["n_frames"]
+    xs, xd, xk, sc = columns(fs, h, f)
+    tr, te = train_idx, test_idx
+    m = GestureModel.fit(
+        xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f, seed=seed
+    )
+    pred = m.predict(xs[te], xd[te], xk[te]).astype(str)
+    return {**fold_report(fs, te, pred, "holdout"), "n_harmonics": h, "n_frames": f}
+
+
+def condition_report(
+    fs,
+    conditions: dict[str, dict],
+    *,
+    n_harmonics: int | None = None,
+    n_frames: int | None = None,
+    seed: int = 0,
+) -> dict:
+    """Leave-one-condition-out (each recording session of a ``synth --vary`` set tested
+    by a model trained on the others) and light transfer (trained on sessions lit within
+    +-15 % of nominal, tested on those lit <= x0.8 and >= x1.2). ``conditions``: sample
+    name -> {"session", "condition"} (from ``sample.json``); None where there are none.
+    ``n_harmonics`` / ``n_frames`` None: chosen on each training part."""
+    kw = {"n_harmonics": n_harmonics, "n_frames": n_frames, "seed": seed}
+    names = list(fs.names)
+    if not all(n in conditions and conditions[n].get("condition") for n in names):
+        return {"leave_one_condition_out": None, "light_transfer": None}
+    session = np.array([conditions[n]["session"] for n in names])
+    light = np.array([conditions[n]["condition"]["illumination"] for n in names])
+    folds = []
+    for s in sorted(set(session)):
+        te = np.flatnonzero(session == s)
+        folds.append({"session": str(s), "illumination": float(light[te][0]),
+                      **holdout(fs, np.flatnonzero(session != s), te, **kw)})  # fmt: skip
+    out: dict = {"leave_one_condition_out": _pooled(folds), "light_transfer": {}}
+    out["leave_one_condition_out"]["folds"] = folds
+    mid = np.flatnonzero(np.abs(light - 1.0) <= 0.15)
+    for name, te in (
+        ("dim", np.flatnonzero(light <= 0.8)),
+        ("bright", np.flatnonzero(light >= 1.2)),
+    ):
+        if len(te) == 0 or len(np.unique(fs.labels[mid])) < len(np.unique(fs.labels)):
+            out["light_transfer"][name] = None
+            continue
+        r = holdout(fs, mid, te, **kw)
+        r["train_light"] = [float(light[mid].min()), float(light[mid].max())]
+        r["test_light"] = [float(light[te].min()), float(light[te].max())]
+        out["light_transfer"][name] = r
+    return out
+
+
+def _pooled(folds: list[dict]) -> dict:
+    """Accuracies over all folds' test samples (weighted by their sizes)."""
+
+    def mean(key: str) -> float | None:
+        got = [(f[key], f["n_test"]) for f in folds if f.get(key) is not None]
+        return sum(a * n for a, n in got) / sum(n for _, n in got) if got else None
+
+    return {k: mean(k) for k in ("accuracy", "static_accuracy", "dynamic_accuracy")}
