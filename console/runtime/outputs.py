@@ -120,6 +120,17 @@ class Outputs:
         then not on the path to its first sample); ``SafetyRefusal`` if refused."""
         self.scheduler.precheck(plan)
 
+    def prearm(self, patches: frozenset[str], screen: bool) -> PlayReport | None:
+        """Close the relays of a plan's first segment ahead of it, in silence through the
+        gate (only while nothing plays and the operator's relays are all open), so that
+        the plan plays at the next block; ``None`` when not done. Non-blocking."""
+        return self.scheduler.prearm(frozenset(patches), screen)
+
+    def disarm(self) -> PlayReport | None:
+        """Cancel a pre-arm: the relays open again in silence (a queued plan is left to
+        open them when it ends). Non-blocking."""
+        return self.scheduler.disarm()
+
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
         return self.scheduler.stream(source, name)
 

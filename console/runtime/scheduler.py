@@ -72,6 +72,7 @@ class _Job:
     steps: deque[_Step]
     report: PlayReport
     previous: frozenset[int] | None = None  # an operator relay command: the setting before
+    prearm: bool = False  # relays closed ahead of a plan (or opened again): no samples
 
 
 def stream_start_problem(x: np.ndarray, k0: int, ramp: int, vmax: float) -> str | None:
@@ -172,6 +173,54 @@ class Scheduler(Source):
         ref = weakref.ref(plan, lambda _r: self._checked.pop(key, None))
         self._checked[key] = (ref, samples, seg_ids)
         return samples
+
+    def prearm(self, patches: frozenset[str], screen: bool) -> PlayReport | None:
+        """Close the relays a plan's first segment needs ahead of it, in silence and
+        through the gate like every switch (its guard gap before, its settling after), so
+        that the plan, queued later, plays at the next block. Closing a relay to a silent
+        amplifier puts no voltage on the glass; the e-stop opens it as any other.
+
+        Done only while nothing else is queued and the operator's own relay setting is
+        all open (an operator's setting is never overridden); ``None`` when not done
+        (or already armed so). A newer pre-arm replaces one not started yet."""
+        relays = self.relays_for(frozenset(patches), bool(screen))
+        report = PlayReport("prearm")
+        with self._lock:
+            if self.gate.estopped or self.operator_relays or self._others_queued():
+                return None
+            self._drop_queued_prearms()
+            current = self._job is not None and self._job.prearm
+            if not current and self.gate.relay_state() == relays:
+                return None
+            self._jobs.append(_Job(deque([_Step("relays", relays=relays)]), report, prearm=True))
+        return report
+
+    def disarm(self) -> PlayReport | None:
+        """Cancel a pre-arm: the relays go back to the operator's setting (all open), in
+        silence. A plan already queued behind it is left alone (it opens them when it
+        ends); ``None`` when there was nothing to undo."""
+        report = PlayReport("disarm")
+        with self._lock:
+            self._drop_queued_prearms()
+            if self.gate.estopped or self._others_queued():
+                return None
+            current = self._job is not None and self._job.prearm
+            if not current and self.gate.relay_state() == self.operator_relays:
+                return None
+            self._jobs.append(_Job(deque([_Step("relays", restore=True)]), report, prearm=True))
+        return report
+
+    def _others_queued(self) -> bool:
+        """A plan, stream or operator command is playing or queued (under ``_lock``)."""
+        jobs = list(self._jobs) + ([self._job] if self._job is not None else [])
+        return any(not j.prearm for j in jobs)
+
+    def _drop_queued_prearms(self) -> None:
+        """Pre-arms (and disarms) not started yet are dropped (under ``_lock``)."""
+        for job in [j for j in self._jobs if j.prearm]:
+            self._jobs.remove(job)
+            job.report.error = "replaced"
+            job.report.done.set()
 
     def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
         """Queue a live stream; it plays until it returns ``None`` (after its ramp-down)."""

@@ -38,6 +38,15 @@ class Prechecks(Protocol):
     def precheck(self, plan: Any) -> None: ...
 
 
+@runtime_checkable
+class Prearms(Protocol):
+    """Outputs that close a plan's first relays ahead of it (``console.runtime.outputs``)."""
+
+    def prearm(self, patches: frozenset[str], screen: bool) -> Any: ...
+
+    def disarm(self) -> Any: ...
+
+
 #: Direction -> unit vector in table mm (console.types: up = -y, as the projected arrows).
 UNIT = DIRECTIONS_MM  # the projector's arrows use the same convention
 
@@ -167,6 +176,7 @@ class FlowDemo:
     def stop(self) -> None:
         """No new flows; a flow already playing ends by its own ramps (max one plan)."""
         self._running = False
+        self._disarm()
         if self.planner is not None:
             self.planner.close()  # a plan under way is abandoned
         t = self._pending
@@ -277,6 +287,9 @@ class FlowDemo:
         once (atlas places only: a search is never started speculatively)."""
         hand = work.get("hand")
         pos = hand.center_mm if hand is not None else None
+        if pos is None and self._warm_key is not None:  # the hand left: cancel the pre-arm
+            self._warm_key = None
+            self._disarm()
         if pos is None or self.plans is None or self.plans.atlas is None or not self._running:
             return
         key = (self.target(pos), self.current_direction())
@@ -305,10 +318,27 @@ class FlowDemo:
                 _, plan = self.ready_plan(*key)
                 if plan is not None and isinstance(self.outputs, Prechecks):
                     self.outputs.precheck(plan)
+                    self._prearm(plan)
             except (UserError, SafetyRefusal):
                 pass  # the deciding frame meets it again and says so
         with self._lock:
             self._warm_thread = None
+
+    def _prearm(self, plan) -> None:
+        """Close the relays of the plan's first segment now, in silence (the hand still
+        settles): the plan then plays at the next block after the decision. Skipped by
+        the outputs while anything plays or the operator's relays are set."""
+        if not self._running or self.busy() or not isinstance(self.outputs, Prearms):
+            return
+        with self._lock:
+            if self._warm_next is not None:
+                return  # the hand moved on: its own place is armed next
+        first = plan.segments[0]
+        self.outputs.prearm(frozenset(first.patches), bool(first.screen))
+
+    def _disarm(self) -> None:
+        if isinstance(self.outputs, Prearms) and not self.busy():
+            self.outputs.disarm()
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         self._play_request(work["plan"], work["request"], frame, late_s=0.0)

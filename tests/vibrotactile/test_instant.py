@@ -269,6 +269,55 @@ def test_the_plan_under_a_settling_hand_is_made_and_checked_before_the_decision(
         demo.stop()
 
 
+def test_the_relays_of_the_plan_under_a_settling_hand_are_prearmed_and_disarmed(setup):
+    import time
+
+    from plugins.demos.adapters import flow_renderers
+    from plugins.demos.flow import FlowDemo
+
+    s = setup
+
+    class Arming(Outputs):
+        def __init__(self) -> None:
+            super().__init__()
+            self.calls: list = []
+
+        def precheck(self, plan) -> None:
+            self.calls.append(("precheck", plan))
+
+        def prearm(self, patches, screen):
+            self.calls.append(("prearm", patches, screen))
+
+        def disarm(self):
+            self.calls.append(("disarm",))
+
+    hand, _ = flow_renderers(s.pm, s.profile, s.path)
+    out = Arming()
+    demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
+    demo.regions = []
+    demo.start()
+    try:
+        c = (float(hand.atlas.xs[2]), float(hand.atlas.ys[1]))
+        ok = [d for d in DIRECTIONS if hand.atlas.result(c, d)["ok"]]
+        demo.direction = ok[0]
+        settling = SimpleNamespace(center_mm=(c[0] + 3.0, c[1] - 4.0))
+        frame = SimpleNamespace(seq=0, t_capture_s=0.0, stamps_s={})
+        demo.effect_stage(frame, {"hand": settling, "hands": (settling,)})
+        t_end = time.monotonic() + 10
+        while len(out.calls) < 2 and time.monotonic() < t_end:
+            time.sleep(0.01)
+        (_, plan), arm = out.calls[:2]
+        first = plan.segments[0]
+        assert arm == ("prearm", frozenset(first.patches), bool(first.screen))
+        demo.effect_stage(frame, {"hands": ()})  # the hand left: the pre-arm is cancelled
+        assert out.calls[-1] == ("disarm",)
+        n = len(out.calls)
+        demo.effect_stage(frame, {"hands": ()})
+        assert len(out.calls) == n  # once
+    finally:
+        demo.stop()
+
+
 def test_a_scene_region_in_a_direction_not_prepared_plays_its_atlas_place_at_once(setup):
     from plugins.demos.adapters import flow_renderers
     from plugins.demos.flow import FlowDemo
