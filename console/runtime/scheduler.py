@@ -181,8 +181,8 @@ class Scheduler(Source):
         amplifier puts no voltage on the glass; the e-stop opens it as any other.
 
         Done only while nothing else is queued and the operator's own relay setting is
-        all open (an operator's setting is never overridden); ``None`` when not done
-        (or already armed so). A newer pre-arm replaces one not started yet."""
+        all open (an operator's setting is never overridden); ``None`` when not done.
+        A newer pre-arm replaces one not started yet."""
         relays = self.relays_for(frozenset(patches), bool(screen))
         report = PlayReport("prearm")
         with self._lock:
@@ -191,7 +191,8 @@ class Scheduler(Source):
             self._drop_queued_prearms()
             current = self._job is not None and self._job.prearm
             if not current and self.gate.relay_state() == relays:
-                return None
+                report.done.set()  # armed so already
+                return report
             self._jobs.append(_Job(deque([_Step("relays", relays=relays)]), report, prearm=True))
         return report
 

@@ -8,7 +8,9 @@ flow direction is the scene's selected arrow, else the demo's ``direction``) ->
 Plans for the scene's hand regions are prepared at start (exhaustive search, cached on
 disk), and every flow under a hand on the ``grid_mm`` grid is chosen ahead in all four
 directions (the effect's atlas, cached on disk): the frame that decides the gesture plays
-the nearest place's plan by lookup. A hand where neither serves (no atlas, or off the
+the nearest place's plan by lookup. While the hand settles, that plan is made and checked
+ahead and its first segment's relays are closed (pre-armed, in silence, through the gate):
+it plays at the next audio block after the decision. A hand where neither serves (no atlas, or off the
 table's measured part) gets the staged search on a worker thread and its plan plays when
 ready (``events`` record how late).
 """
@@ -147,6 +149,9 @@ class FlowDemo:
         self._running = False
         self.planner = planner  # computes plans in its own process (closed on stop)
         self._warm_key: tuple | None = None  # the plan made ahead for the hand on the table
+        self._armed: tuple | None = None  # (patches, screen) the last pre-arm asked for
+        self._rearm = False
+        self._settle: deque[np.ndarray] = deque(maxlen=600)  # the settling hand's centres
         self._warm_next: tuple | None = None
         self._warm_ready = threading.Event()
         self._warm_thread: threading.Thread | None = None
@@ -283,19 +288,30 @@ class FlowDemo:
 
     def _warm(self, work: dict) -> None:
         """A hand on the table not yet at rest: have the plan of the place under it made
-        and checked now, on the warm-up thread, so the frame that decides plays it at
-        once (atlas places only: a search is never started speculatively)."""
+        and checked now, on the warm-up thread, and its first relays pre-armed, so the
+        frame that decides plays it at the next block (atlas places only: a search is
+        never started speculatively). The hand leaving cancels the pre-arm."""
         hand = work.get("hand")
         pos = hand.center_mm if hand is not None else None
-        if pos is None and self._warm_key is not None:  # the hand left: cancel the pre-arm
-            self._warm_key = None
-            self._disarm()
+        if pos is None:
+            self._settle.clear()
+            if self._warm_key is not None:  # the hand left: cancel the pre-arm
+                self._warm_key = None
+                self._disarm()
         if pos is None or self.plans is None or self.plans.atlas is None or not self._running:
             return
+        # where the resting detector will say the hand rests: the mean of its positions
+        # since it came within ``still_mm`` (as ``StillHand``), so the plan armed is the
+        # plan the decision picks
+        p = np.asarray(pos, float)
+        if self._settle and np.hypot(*(p - self._settle[0])) > self.pair.still_mm:
+            self._settle.clear()
+        self._settle.append(p)
+        pos = tuple(np.mean(self._settle, axis=0))
         key = (self.target(pos), self.current_direction())
-        if key == self._warm_key:
-            return
-        self._warm_key = key
+        if key == self._warm_key and not (self._rearm and not self.busy()):
+            return  # (a pre-arm skipped while the last flow played is tried again after)
+        self._warm_key, self._rearm = key, False
         with self._lock:
             self._warm_next = key  # a newer place replaces one not started yet
             if self._warm_thread is None:
@@ -328,17 +344,23 @@ class FlowDemo:
         """Close the relays of the plan's first segment now, in silence (the hand still
         settles): the plan then plays at the next block after the decision. Skipped by
         the outputs while anything plays or the operator's relays are set."""
-        if not self._running or self.busy() or not isinstance(self.outputs, Prearms):
+        if not self._running or not isinstance(self.outputs, Prearms):
+            return
+        if self.busy():
+            self._rearm = True  # the flow before still plays: again when it ended
             return
         with self._lock:
             if self._warm_next is not None:
                 return  # the hand moved on: its own place is armed next
         first = plan.segments[0]
-        self.outputs.prearm(frozenset(first.patches), bool(first.screen))
+        want = (frozenset(first.patches), bool(first.screen))
+        if self.outputs.prearm(*want) is not None:
+            self._armed = want
 
     def _disarm(self) -> None:
         if isinstance(self.outputs, Prearms) and not self.busy():
             self.outputs.disarm()
+            self._armed = None
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         self._play_request(work["plan"], work["request"], frame, late_s=0.0)
@@ -368,6 +390,9 @@ class FlowDemo:
             return self._report is not None and not self._report.done.is_set()
 
     def _play(self, plan, center, direction, rest, frame: Frame, late_s: float, pair=None) -> None:
+        first = plan.segments[0]
+        prearmed = self._armed == (frozenset(first.patches), bool(first.screen))
+        self._armed = None  # the plan opens its relays when it ends
         try:
             report = self.outputs.play(plan, wait=False)
         except SafetyRefusal as exc:  # e-stop active, or the gate refused the plan
@@ -384,6 +409,7 @@ class FlowDemo:
             "seq": frame.seq,
             "direction": direction,
             "parts": summary_parts(plan),
+            "prearmed": prearmed,  # its first relays were asked for ahead (while it settled)
             "report": report,
         }
         if pair is None:

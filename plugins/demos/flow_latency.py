@@ -106,10 +106,16 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         for e in flows
         if e.get("t_decided_s") and e["report"].t_first_sample_s is not None
     ]
+    not_armed = [  # why a flow waited: where the hand settled vs where it rested
+        {"rest_mm": e.get("rest_mm"), "center_mm": e.get("center_mm"), "seq": e["seq"]}
+        for e in flows
+        if not e.get("prearmed")
+    ]
     return {
         "placements": n,
         "flows": len(flows),
         "flows_planned_late": sum(e["late_s"] > 0 for e in flows),
+        "flows_prearmed": sum(bool(e.get("prearmed")) for e in flows),
         "no_flow": sum(e.get("kind") == "no_flow" for e in events),
         "errors": sum(e.get("kind") in ("error", "refused") for e in events),
         "decision_to_queued_ms": summarize_s(queued),
@@ -118,6 +124,7 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "underruns": audio.get("underruns"),
         "hands_mm": truth,  # where each placement put the hand (the twin's truth)
         "flows_rest_mm": [e.get("rest_mm") for e in flows],  # where the camera saw it rest
+        "flows_not_prearmed": not_armed[:10],
         "events_not_flows": [
             {k: v for k, v in e.items() if k != "report"} for e in events if e["kind"] != "flow"
         ][:10],
