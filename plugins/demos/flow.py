@@ -49,6 +49,8 @@ class Prearms(Protocol):
     def disarm(self) -> Any: ...
 
 
+#: A resting hand this close past the border of the place pre-armed keeps that place (mm).
+ARMED_SLACK_MM = 2.0
 #: Direction -> unit vector in table mm (console.types: up = -y, as the projected arrows).
 UNIT = DIRECTIONS_MM  # the projector's arrows use the same convention
 
@@ -212,6 +214,19 @@ class FlowDemo:
                 return near
         return self.snap(rest_mm)
 
+    def prefer_armed(self, rest_mm, center) -> tuple[float, float]:
+        """The place made (and pre-armed) while the hand settled when the resting
+        position lies within ``ARMED_SLACK_MM`` of that place's half-step cell (a hand
+        resting on the border between two places: the resting detector knows it to
+        within ``still_mm`` only), else ``center``."""
+        key = self._warm_key
+        if key is None or key[0] == center or key[1] != self.current_direction():
+            return center
+        off = np.abs(np.asarray(rest_mm, float) - np.asarray(key[0], float))
+        if self.grid_mm > 0 and off.max() <= self.grid_mm / 2 + ARMED_SLACK_MM:
+            return key[0]
+        return center
+
     def scene_stage(self, frame: Frame, work: dict) -> None:
         """Touches on the arrow buttons select the direction; the flow's end is shown."""
         if self.scene is None:
@@ -262,7 +277,7 @@ class FlowDemo:
             return False  # two hands: the two-finger flow decides
         if self.busy():
             return False
-        center, direction = self.target(rest), self.current_direction()
+        center, direction = self.prefer_armed(rest, self.target(rest)), self.current_direction()
         work["request"] = {"center_mm": center, "direction": direction, "rest_mm": rest}
         try:
             center, plan = self.ready_plan(center, direction)
@@ -334,13 +349,13 @@ class FlowDemo:
                 _, plan = self.ready_plan(*key)
                 if plan is not None and isinstance(self.outputs, Prechecks):
                     self.outputs.precheck(plan)
-                    self._prearm(plan)
+                    self._prearm(plan, key)
             except (UserError, SafetyRefusal):
                 pass  # the deciding frame meets it again and says so
         with self._lock:
             self._warm_thread = None
 
-    def _prearm(self, plan) -> None:
+    def _prearm(self, plan, key: tuple) -> None:
         """Close the relays of the plan's first segment now, in silence (the hand still
         settles): the plan then plays at the next block after the decision. Skipped by
         the outputs while anything plays or the operator's relays are set."""
@@ -350,8 +365,8 @@ class FlowDemo:
             self._rearm = True  # the flow before still plays: again when it ended
             return
         with self._lock:
-            if self._warm_next is not None:
-                return  # the hand moved on: its own place is armed next
+            if self._warm_next is not None or self._warm_key != key:
+                return  # the hand moved on (its own place is armed next) or left
         first = plan.segments[0]
         want = (frozenset(first.patches), bool(first.screen))
         if self.outputs.prearm(*want) is not None:

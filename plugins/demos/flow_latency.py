@@ -9,9 +9,11 @@ output scheduler, the safety gate and the twin's paced audio output. Per flow:
   scheduler (the lookup, or the search, and the synthesis);
 - ``decision_to_output_ms``: the decision -> the block holding the plan's first sample
   handed to the audio driver (the scheduler stamps it; it then plays after the device
-  buffer, ``dac_buffer_ms``). It includes the relay switch every flow needs first
-  (``[relays] guard_ms`` of silence, the switch, ``guard_ms + switch_time_ms`` of
-  settling, counted in samples by the gate): ``relay_settle_ms`` says how much.
+  buffer, ``dac_buffer_ms``, not included). Every flow first needs its patches' relays
+  closed (``[relays] guard_ms`` of silence, the switch, ``guard_ms + switch_time_ms`` of
+  settling, counted in samples by the gate: ``relay_settle_ms``); with the atlas the
+  demo closes them while the hand settles (pre-armed, in silence, through the gate), so
+  a pre-armed flow (``flows_prearmed``) plays at the next audio block.
 
 Two runs: ``before`` (no atlas: the plan searched when asked, in the planner process, as
 the demo did before) and ``after`` (every flow chosen ahead: lookup). Also the atlas's
@@ -238,9 +240,11 @@ def _run(ctx: Any, quick: bool) -> dict:
         "target": {"decision_to_output_p99_ms": TARGET_P99_MS},
         "means": "decision: the frame's classify stage fired (a hand at rest); output: the "
         "block holding the flow's first sample handed to the audio driver (then "
-        "dac_buffer_ms to the DAC). Each flow first closes its patch's relays: "
-        "guard_ms of silence, then guard_ms + switch_time_ms settling (relay_settle_ms), "
-        "a safety rule no plan lookup can shorten.",
+        "dac_buffer_ms to the DAC, not included). Each flow first closes its patch's "
+        "relays: guard_ms of silence, then guard_ms + switch_time_ms settling "
+        "(relay_settle_ms); the demo closes them while the hand settles (pre-armed, in "
+        "silence), so a pre-armed flow plays at the next block; one not pre-armed waits "
+        "for them.",
         "relay_settle_ms": guard + switch,
         "dac_buffer_ms": 3 * bs / fs * 1e3,
     }

@@ -309,6 +309,12 @@ def test_the_relays_of_the_plan_under_a_settling_hand_are_prearmed_and_disarmed(
         (_, plan), arm = out.calls[:2]
         first = plan.segments[0]
         assert arm == ("prearm", frozenset(first.patches), bool(first.screen))
+        # a hand resting just past the border of the armed place keeps it; further on, not
+        g = Gesture("static_hand", "static", 1.0, 1.0, None)
+        for dx, keeps in ((STEP_MM / 2 + 1.0, True), (STEP_MM / 2 + 6.0, False)):
+            work = {"gesture": g, "rest_mm": (c[0] + dx, c[1]), "hands": ()}
+            demo.effect_stage(frame, work)
+            assert (work["request"]["center_mm"] == c) is keeps, (dx, work["request"])
         demo.effect_stage(frame, {"hands": ()})  # the hand left: the pre-arm is cancelled
         assert out.calls[-1] == ("disarm",)
         n = len(out.calls)
