@@ -17,6 +17,8 @@ class DriverDevices:
     description: str
     devices: tuple[OutputDevice, ...] = field(default=())
     problem: str = ""
+    #: False when the driver has no ``devices`` listing (``[audio] device`` is free text)
+    lists: bool = True
 
 
 def output_devices(profile: Any, plugins: Any) -> list[DriverDevices]:
@@ -25,7 +27,9 @@ def output_devices(profile: Any, plugins: Any) -> list[DriverDevices]:
     found = []
     for name, reg in sorted(plugins.of("audio_output").items()):
         if reg.devices is None:
-            found.append(DriverDevices(name, reg.description, problem="lists no devices"))
+            found.append(
+                DriverDevices(name, reg.description, problem="lists no devices", lists=False)
+            )
             continue
         try:
             devs = tuple(reg.devices(profile))

@@ -42,6 +42,7 @@ class ConsoleSession:
         #: the profile the console's outputs open with: the console's own, or that
         #: profile reloaded after the operator saved another device (``reopen_outputs``)
         self.outputs_profile: Any = None
+        self.reopen_error = ""  # why the last ``reopen_outputs`` failed ("" when it opened)
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self._last_play: tuple[Any, Any] | None = None  # (plan, its PlayReport)
         self._control: Any = None
@@ -179,7 +180,8 @@ class ConsoleSession:
         """Close the console's outputs and open ``profile``'s (the console's profile
         reloaded after another sound card or relay board was saved to it). Refused with
         one line (``UserError``) while they play, are e-stopped or a demo holds them.
-        Blocking; True when the new outputs opened (else ``outputs_error`` says why)."""
+        Blocking; True when the new outputs opened. When they fail to open, the previous
+        profile's outputs open again and ``reopen_error`` says what failed (False)."""
         with self._lock:
             out = self.outputs
             if out is None and self.demos.run is not None:
@@ -189,13 +191,21 @@ class ConsoleSession:
                     raise UserError("the e-stop is active; ctrl+r resets it first")
                 if out.status()["busy"]:
                     raise UserError("the outputs are playing; wait or stop them first")
+            previous = self.outputs_profile
             self.outputs = None
             self.outputs_profile = profile
             self.outputs_error = "reopening with the chosen devices"
+            self.reopen_error = ""
         if out is not None:
             out.close()
             self.emit(Stopped("outputs", reason=self.outputs_error))
-        return self.open_outputs()
+        if self.open_outputs():
+            return True
+        self.reopen_error = self.outputs_error
+        with self._lock:
+            self.outputs_profile = previous  # never left with no outputs: the old ones back
+        self.open_outputs()
+        return False
 
     def _control_command(self, line: str) -> str:
         if line == "estop":

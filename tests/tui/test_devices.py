@@ -165,3 +165,80 @@ def test_a_pick_during_an_estop_is_saved_but_the_estopped_outputs_stay():
             assert load_profile("sim", plugins).get("audio.device") == "Bench Card A (ALSA)"
 
     asyncio.run(scenario())
+
+
+def _failing_card_plugin():
+    """A sound card that lists one device and fails to start it, and a driver that lists
+    its devices and finds none."""
+
+    @hookimpl
+    def haptable_register_audio_outputs(register):
+        def factory(profile):
+            from plugins.twin.outputs import TwinAudioOutput
+
+            class DeadCard(TwinAudioOutput):
+                def start(self, gate):
+                    raise OSError("device unavailable")
+
+            return DeadCard(profile)
+
+        register(
+            "dead-card",
+            factory,
+            description="a card that never starts",
+            probe=lambda p: DeviceStatus("audio", "dead-card", "simulated", "test card"),
+            devices=lambda profile: [OutputDevice("dead-card", "Dead Card", "ALSA", 2, 0, 0)],
+        )
+        register(
+            "empty-card",
+            factory,
+            description="a driver with no device plugged in",
+            probe=lambda p: DeviceStatus("audio", "empty-card", "missing", "none"),
+            devices=lambda profile: [],
+        )
+
+    return SimpleNamespace(haptable_register_audio_outputs=haptable_register_audio_outputs)
+
+
+def test_a_row_with_no_device_cannot_be_picked_and_the_outputs_stay():
+    plugins = load_plugins(extra={"dead_card": _failing_card_plugin()})
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            before = app.session.outputs
+            await _select(pilot, app, "#audio-table", "none: no output device found")
+            await wait_for(pilot, lambda: "no device on this row" in _result(app), 10)
+            assert "empty-card" in _result(app) and "\n" not in _result(app)
+            await pilot.pause(0.3)
+            assert app.session.outputs is before and not before.gate.estopped
+            assert not overrides_path("sim").exists()  # nothing saved
+
+    asyncio.run(scenario())
+
+
+def test_a_pick_that_fails_to_open_brings_back_the_outputs_and_the_overrides():
+    plugins = load_plugins(extra={"dead_card": _failing_card_plugin()})
+    path = overrides_path("sim")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text('# my settings\n[audio]\ndevice = ""\n')
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await _select(pilot, app, "#audio-table", "Dead Card")
+            await wait_for(pilot, lambda: "did not open" in _result(app), 20, "failure")
+            msg = _result(app)
+            assert "device unavailable" in msg and "previous outputs are back" in msg
+            assert "\n" not in msg
+            out = app.session.outputs
+            assert out is not None and not out.gate.estopped
+            assert (app.session.outputs_profile or app.ctx.profile).get("audio.driver") == "twin"
+            await pilot.press("t")  # the twin plays again
+            await wait_for(pilot, lambda: "through the gate" in _result(app), 30, "played")
+
+    asyncio.run(scenario())
+    assert path.read_text() == '# my settings\n[audio]\ndevice = ""\n'
+    assert load_profile("sim", plugins).get("audio.driver") == "twin"

@@ -23,6 +23,14 @@ def _ms(seconds: float) -> str:
     return "-" if seconds is None or not math.isfinite(seconds) else f"{seconds * 1e3:.1f}"
 
 
+def _restore(path, text: str | None) -> None:
+    """Put the override file back as it was before a pick (absent: removed)."""
+    if text is None:
+        path.unlink(missing_ok=True)
+    else:
+        path.write_text(text, encoding="utf-8")
+
+
 class DevicesPane(VerticalScroll):
     HELP_TEXT = (
         "enter    on a sound card or relay board row: use it (saved to the profile's\n"
@@ -40,6 +48,7 @@ class DevicesPane(VerticalScroll):
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.audio_rows: dict[str, tuple[str, str]] = {}  # row key -> (driver, device)
+        self.no_device_rows: dict[str, str] = {}  # row key -> why it cannot be picked
         self.relay_rows: dict[str, str] = {}  # row key -> driver
         self.result = ""  # the last pick or test, as shown
 
@@ -144,10 +153,13 @@ class DevicesPane(VerticalScroll):
         table = self.query_one("#audio-table", DataTable)
         table.clear()
         self.audio_rows.clear()
+        self.no_device_rows.clear()
         for d in audio:
             if not d.devices:
                 key = f"{d.driver}\x00"
                 self.audio_rows[key] = (d.driver, "")
+                if d.lists:  # it lists its devices and found none: nothing to open
+                    self.no_device_rows[key] = f"{d.driver}: {d.problem}"
                 mark = "●" if d.driver == drv else ""
                 table.add_row(
                     mark, Text(d.driver), Text(f"none: {d.problem}"), "", "", "", "", "", key=key
@@ -185,8 +197,16 @@ class DevicesPane(VerticalScroll):
     # ------------------------------------------------------------------ picking
     @on(DataTable.RowSelected, "#audio-table")
     def _pick_audio(self, event: DataTable.RowSelected) -> None:
-        choice = self.audio_rows.get(str(event.row_key.value))
+        key = str(event.row_key.value)
+        choice = self.audio_rows.get(key)
         if choice is None:
+            return
+        if key in self.no_device_rows:
+            self.result = (
+                f"{self.no_device_rows[key]}: no device on this row to use; "
+                "connect one and list again (l)"
+            )
+            self.query_one("#devices-result", Static).update(self.result)
             return
         driver, device = choice
         label = device or driver
@@ -203,10 +223,12 @@ class DevicesPane(VerticalScroll):
         """Save ``settings`` to the profile's override file, reload the profile and
         reopen the outputs with it (refused while they play or are e-stopped)."""
         from console.errors import UserError
-        from console.profile import load_profile, save_overrides
+        from console.profile import load_profile, overrides_path, save_overrides
 
         session, pm = self.app.session, self.app.ctx.pm
         self._say(f"{what}: saving ...")
+        saved = overrides_path(self._profile().name)
+        old_text = saved.read_text(encoding="utf-8") if saved.is_file() else None
         try:
             path = save_overrides(self._profile(), settings, pm)
             new = load_profile(self._profile().path, pm)
@@ -223,10 +245,12 @@ class DevicesPane(VerticalScroll):
             return
         if opened:
             self._say(f"{what} in use; saved to {short_path(path)}")
-        else:
+        else:  # the session reopened the previous outputs: their settings come back too
+            _restore(path, old_text)
+            back = "the previous outputs are back" if session.outputs else "no outputs open"
             self._say(
-                f"{what} saved to {short_path(path)} but the outputs did not open: "
-                f"{session.outputs_error}"
+                f"{what} did not open: {session.reopen_error}; {back} and "
+                f"{short_path(path)} keeps its previous settings"
             )
         self.app.call_from_thread(self._after_pick)
 
