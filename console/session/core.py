@@ -20,6 +20,11 @@ from console.session.events import Failed, SessionEvent, Started, Stopped
 
 Subscriber = Callable[[SessionEvent], None]
 
+#: the last played plan's samples are kept with this much before and after it (seconds)
+PLAN_MARGIN_S = 0.02
+#: after a plan that was stopped (e-stop): this much after it stopped is kept (seconds)
+STOPPED_TAIL_S = 0.1
+
 
 class ConsoleSession:
     """What one operator's console runs: ``ctx`` gives the profile (``ctx.profile``) and the
@@ -45,6 +50,7 @@ class ConsoleSession:
         self.reopen_error = ""  # why the last ``reopen_outputs`` failed ("" when it opened)
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self._last_play: tuple[Any, Any] | None = None  # (plan, its PlayReport)
+        self._last_trace: tuple[Any, Any] | None = None  # (PlayReport, its ScopeTrace)
         self._control: Any = None
         self._lock = threading.Lock()
         self._subscribers: list[Subscriber] = []
@@ -225,6 +231,7 @@ class ConsoleSession:
             with self._lock:
                 self.played.append(plan)
                 self._last_play = (plan, report)
+            threading.Thread(target=self._keep_plan_trace, args=(out, report), daemon=True).start()
             if wait:
                 report.wait(3 * plan.duration_s + 10)
                 if report.error:
@@ -251,6 +258,48 @@ class ConsoleSession:
             if trace.clock <= ev.clock < end and ev.kind in ("estop", "fault", "switch")
         )
         return dataclasses.replace(trace, marks=marks)
+
+    def _keep_plan_trace(self, out: Any, report: Any) -> None:
+        """When ``report``'s plan ends, copy what the gate passed for it (with
+        ``PLAN_MARGIN_S`` around it) out of the scope's ring, which keeps only seconds:
+        bounded by the ring's length (a longer plan keeps its newest part)."""
+        import time
+
+        if not report.done.wait(3600) or not report.segment_start:
+            return
+        fs = out.gate.scope.sample_rate_hz
+        margin = int(round(PLAN_MARGIN_S * fs))
+        if len(report.segment_end) < len(report.segment_start):  # stopped (an e-stop):
+            newest = out.gate.scope.read(0.0)  # keep its ramp to silence too
+            end = newest.clock + newest.n + int(round(STOPPED_TAIL_S * fs))
+        else:
+            end = report.segment_end[-1]
+        deadline = time.monotonic() + 1.0
+        while time.monotonic() < deadline:  # the margin after it reaches the ring
+            newest = out.gate.scope.read(0.0)
+            if newest.clock + newest.n >= end + margin or self.outputs is not out:
+                break
+            time.sleep(0.01)
+        if self.outputs is not out:
+            return
+        whole = self.scope(None)
+        if whole is None:
+            return
+        trace = whole.span(report.segment_start[0] - margin, end + margin)
+        with self._lock:
+            if self._last_play is not None and self._last_play[1] is report:
+                self._last_trace = (report, trace)
+
+    def last_plan_trace(self) -> tuple[Any, Any] | None:
+        """(PlayReport, ScopeTrace) of the last played plan as the gate passed it, read
+        when it ended (kept after the scope's ring moved on); None while it plays or when
+        none was kept."""
+        with self._lock:
+            kept = self._last_trace
+            last = self._last_play
+        if kept is None or last is None or kept[0] is not last[1]:
+            return None
+        return kept
 
     def last_played(self) -> tuple[Any, Any] | None:
         """(plan, report) of the last plan accepted for playing, else None: the report

@@ -95,3 +95,33 @@ def test_an_estop_ramp_is_visible(plugins):
             await pilot.press("ctrl+r")
 
     asyncio.run(scenario())
+
+
+def test_the_last_plan_is_kept_after_the_ring_moved_on_and_a_new_play_unfreezes(plugins):
+    """The scope's ring keeps ~4 s: 5 s more through the gate after a plan, ``p`` still
+    shows that plan whole (kept when it ended); the next plan played unfreezes the view."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="scope")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            pane, out = app.pane("scope"), app.session.outputs
+            assert app.session.play_plan(make_stimulus("sine-PB", FS), wait=True)
+            start = app.session.last_played()[1].segment_start[0]
+            await wait_for(pilot, lambda: app.session.last_plan_trace() is not None, 10)
+            for _ in range(5):  # another part of the console plays on the outputs
+                out.play(make_stimulus("screen-180hz", FS), wait=True)
+            assert app.session.scope(None).clock > start  # the ring lost the plan's start
+            await pilot.press("p")
+            head = _text(app, "#scope-head")
+            assert "FROZEN ON THE LAST PLAN |" in head, head
+            assert "gone" not in head and "last plan sine-PB: 1.00 s on PB (done)" in head
+            assert pane.shown.n >= FS  # the whole second
+            assert "peak: piezo 20.0 V, screen 0.0 V" in _text(app, "#scope-info")
+            assert "space runs live" in head
+            # the next plan played unfreezes the view
+            assert app.session.play_plan(make_stimulus("sine-PA", FS), wait=False)
+            await wait_for(pilot, lambda: "LIVE" in _text(app, "#scope-head"), 10, "live")
+            assert pane.frozen is None and not pane.plan_view
+
+    asyncio.run(scenario())

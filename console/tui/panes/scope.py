@@ -11,12 +11,13 @@ from textual.binding import Binding
 from textual.containers import Vertical
 from textual.widgets import Static
 
+from console.session.core import PLAN_MARGIN_S
 from console.tui.charts import Chart, Series
 
 #: the time windows ``+``/``-`` step through, in ms
 WINDOWS_MS = (5, 10, 20, 50, 100, 200, 500, 1000, 2000, 4000)
 #: around the last plan (``p``): this much before and after it, in ms
-PLAN_MARGIN_MS = 20.0
+PLAN_MARGIN_MS = PLAN_MARGIN_S * 1e3
 
 
 def plan_line(last) -> str:
@@ -55,7 +56,7 @@ def marks_lines(trace) -> list[str]:
 class ScopePane(Vertical):
     HELP_TEXT = (
         "space    freeze / run (frozen: the last 4 s are kept to look at)\n"
-        "p        the last played plan, whole (frozen)\n"
+        "p        the last played plan, whole (frozen until the next plan plays)\n"
         "+ / -    shorter / longer time window\n"
         "What the safety gate handed the driver, per channel, in volts at the actuators."
     )
@@ -72,6 +73,7 @@ class ScopePane(Vertical):
         self.window_ms = 50
         self.frozen = None  # the whole ring (ScopeTrace) while frozen
         self.plan_view = False  # frozen on the last plan's span
+        self.plan_report = None  # the PlayReport of the plan frozen on (``p``)
         self.shown = None  # the ScopeTrace drawn now
         self._tick = 0
 
@@ -96,14 +98,17 @@ class ScopePane(Vertical):
     # ------------------------------------------------------------------ keys
     def action_freeze(self) -> None:
         if self.frozen is not None:
-            self.frozen, self.plan_view = None, False
+            self.frozen, self.plan_view, self.plan_report = None, False, None
         else:
             self.frozen = self.app.session.scope(None)
         self._redraw()
 
     def action_last_plan(self) -> None:
-        self.frozen = self.app.session.scope(None)
+        session = self.app.session
+        self.frozen = session.scope(None)
         self.plan_view = self.frozen is not None
+        last = session.last_played()
+        self.plan_report = None if last is None else last[1]
         self._redraw()
 
     def action_zoom(self, step: int) -> None:
@@ -116,7 +121,15 @@ class ScopePane(Vertical):
     def show_state(self, status: dict, log) -> None:
         """The app's 10 Hz tick while this screen shows: live, redraw every other."""
         self._tick += 1
-        if self.frozen is None and self._tick % 2 == 0:
+        if self.plan_view:
+            last = self.app.session.last_played()
+            if last is not None and last[1] is not self.plan_report:  # another plan played
+                self.frozen, self.plan_view, self.plan_report = None, False, None
+        if self.plan_view:  # the plan's copy is kept when it ends: show it then
+            kept = self.app.session.last_plan_trace()
+            if kept is not None and kept[1] is not self.shown:
+                self._redraw()
+        elif self.frozen is None and self._tick % 2 == 0:
             self._redraw()
 
     def _view(self):
@@ -129,11 +142,21 @@ class ScopePane(Vertical):
         trace = self.frozen
         if self.plan_view and last is not None:
             _plan, report = last
+            kept = session.last_plan_trace()
+            if kept is not None and report.segment_start:  # copied when it ended
+                gone = "" if report.segment_start[0] >= kept[1].clock else " (its start is gone)"
+                return kept[1], f"frozen on the last plan{gone}"
             if report.segment_start:
                 fs = trace.sample_rate_hz
                 margin = int(PLAN_MARGIN_MS * fs / 1e3)
                 end = report.segment_end[-1] if report.segment_end else trace.clock + trace.n
-                kept = "" if report.segment_start[0] >= trace.clock else " (its start is gone)"
+                if end + margin <= trace.clock:
+                    return None, "aged out"
+                kept = (
+                    ""
+                    if report.segment_start[0] >= trace.clock
+                    else " (its start is gone: play it again)"
+                )
                 return (
                     trace.span(report.segment_start[0] - margin, end + margin),
                     f"frozen on the last plan{kept}",
@@ -147,6 +170,15 @@ class ScopePane(Vertical):
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
         plan = plan_line(session.last_played())
+        if trace is None and mode == "aged out":
+            head.update(
+                "FROZEN | the last plan aged out of the scope and was not kept: "
+                f"play it again (space runs live) | {plan}"
+            )
+            chart.clear("the last plan aged out: play it again, space runs live")
+            info.update("")
+            self.shown = None
+            return
         if trace is None:
             why = session.outputs_error or "not open yet"
             head.update(f"outputs not here: {why}; {plan}")
@@ -156,9 +188,10 @@ class ScopePane(Vertical):
             return
         self.shown = trace
         span_ms = trace.n * 1e3 / trace.sample_rate_hz
+        space = "space runs live" if self.frozen is not None else "space freezes"
         head.update(
-            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; space "
-            f"freezes, p last plan, +/- zoom) | {plan}"
+            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; {space}, "
+            f"p last plan, +/- zoom) | {plan}"
         )
         t_ms = np.arange(trace.n) * (1e3 / trace.sample_rate_hz)
         chart.set_series(
