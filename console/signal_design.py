@@ -350,11 +350,12 @@ def render(node: Node, fs: int, *, max_s: float = MAX_PLAN_S, what: str = "signa
 
 
 # ---------------------------------------------------------------------- what it holds
-def spectrum(x: np.ndarray, fs: int) -> tuple[np.ndarray, np.ndarray]:
-    """(frequency in Hz, peak amplitude in V) of ``x`` under a Hann window: a sine of
-    peak A on a bin reads A."""
+def spectrum(x: np.ndarray, fs: int, *, window: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency in Hz, peak amplitude in V) of ``x`` under a Hann window (``window``
+    False: none, the spectrum of the finite signal as it is, so a chirp's start and end
+    keep their level): a sine of peak A on a bin reads A."""
     x = np.asarray(x, float)
-    w = np.hanning(x.size) if x.size > 1 else np.ones(x.size)
+    w = np.hanning(x.size) if x.size > 1 and window else np.ones(x.size)
     mag = np.abs(np.fft.rfft(x * w)) * 2.0 / max(w.sum(), 1e-12)
     return np.fft.rfftfreq(x.size, 1.0 / fs), mag
 

@@ -4,6 +4,8 @@ legend, an optional log-frequency axis and a dB axis, drawn to the size the layo
 ``Chart`` is the widget; the data it draws is a tuple of ``Series`` (plain arrays). Long
 series are reduced to a min/max pair per output column before plotext sees them
 (``envelope``): a 1 s waveform at 48 kHz draws as fast as 200 points and no peak is lost.
+On a log-x axis (a spectrum) the columns are log-spaced and keep their maximum
+(``log_peaks``), so low frequencies get as many columns as high ones.
 ``Chart.summary()`` is the plain-text view of what the chart shows (title, axes with their
 units and ranges, one line per series): tests and screen readers read it.
 """
@@ -46,6 +48,28 @@ def envelope(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np
         for k in sorted({i, j}):
             xs.append(x[a + k])
             ys.append(seg[k])
+    return np.asarray(xs), np.asarray(ys)
+
+
+def log_peaks(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """At most ``columns`` points of (x, y) (x > 0, ascending) on a log-x axis: x cut into
+    ``columns`` log-spaced columns, each kept as its largest y (at its x). A spectrum
+    reduced this way keeps its low frequencies (one column per few bins there, many
+    bins per column at the top) and its peaks; columns with no point are left out."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    columns = max(1, int(columns))
+    if x.size <= columns:
+        return x, y
+    edges = np.geomspace(x[0], x[-1], columns + 1)
+    starts = np.searchsorted(x, edges[:-1], side="left")
+    ends = np.append(starts[1:], x.size)
+    xs, ys = [], []
+    for a, b in zip(starts, ends, strict=True):
+        if b <= a:
+            continue
+        k = a + int(np.argmax(y[a:b]))
+        xs.append(x[k])
+        ys.append(y[k])
     return np.asarray(xs), np.asarray(ys)
 
 
@@ -127,7 +151,8 @@ class Chart(PlotextPlot):
 
     def drawn(self, columns: int | None = None) -> list[tuple[str, np.ndarray, np.ndarray]]:
         """(label, x, y) as drawn: log-x drops x <= 0, dB-y converts, long series reduced
-        to ``columns`` min/max pairs (the widget's width by default)."""
+        to ``columns`` min/max pairs (the widget's width by default; on a log-x axis the
+        largest y of each of ``columns`` log-spaced columns: ``log_peaks``)."""
         cols = columns if columns is not None else max(10, self.size.width or 80)
         out = []
         for s in self.series:
@@ -138,7 +163,11 @@ class Chart(PlotextPlot):
             x, y = x[keep], y[keep]
             if self.db_y:
                 y = to_db(y, self.db_ref, self.db_floor)
-            x, y = envelope(x, y, cols)
+            if self.log_x:  # columns of equal width on the log axis: max per column
+                order = np.argsort(x, kind="stable")
+                x, y = log_peaks(x[order], y[order], cols)
+            else:
+                x, y = envelope(x, y, cols)
             out.append((s.label, x, y))
         return out
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from textual.app import App, ComposeResult
 
-from console.tui.charts import Chart, Series, envelope, to_db
+from console.tui.charts import Chart, Series, envelope, log_peaks, to_db
 
 
 class ChartApp(App):
@@ -84,3 +84,20 @@ def test_envelope_keeps_every_peak_and_to_db_is_20log10():
     assert xs.size <= 200 and np.all(np.diff(xs) > 0)
     assert ys.max() == 3.0 and ys.min() == pytest.approx(-1.0, abs=1e-6)
     assert to_db(np.array([10.0, 0.1]), ref=1.0).tolist() == pytest.approx([20.0, -20.0])
+
+
+def test_log_peaks_is_the_max_of_each_log_spaced_column():
+    """Against a second method: columns by digitizing log10(x) on equal steps."""
+    rng = np.random.default_rng(3)
+    x = np.fft.rfftfreq(48_000, 1 / 48_000)[1:]  # 1 Hz .. 24 kHz, linear bins
+    y = rng.normal(size=x.size)
+    xs, ys = log_peaks(x, y, 60)
+    assert xs.size <= 60 and np.all(np.diff(xs) > 0)
+    lx = np.log10(x)
+    col = np.minimum(((lx - lx[0]) / (lx[-1] - lx[0]) * 60).astype(int), 59)
+    want = [y[col == c].max() for c in range(60) if np.any(col == c)]
+    assert ys.tolist() == pytest.approx(want)
+    assert xs[:5].tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]  # low bins keep a column each
+    assert ys.max() == y.max()  # the peak is never lost
+    few_x, few_y = log_peaks(x[:10], y[:10], 60)  # fewer points than columns: as they are
+    assert few_x.tolist() == x[:10].tolist() and few_y.tolist() == y[:10].tolist()

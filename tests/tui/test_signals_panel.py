@@ -8,6 +8,7 @@ import asyncio
 import tomllib
 
 import numpy as np
+import pytest
 from textual.widgets import Input, OptionList, Static
 
 from console.cli import Context
@@ -156,5 +157,43 @@ def test_estop_stops_an_audition(plugins):
             assert out.gate.estopped
             await wait_for(pilot, lambda: not out.status()["busy"], 10, "silent")
             assert "played" not in _status(app)
+
+    asyncio.run(scenario())
+
+
+def test_a_chirp_draws_a_flat_band_on_the_log_frequency_axis(plugins):
+    """A linear chirp spreads its energy evenly over its band: the spectrum as drawn (at
+    80 columns, log-x) is flat across it, with points all along it, low end included; a
+    sine draws one peak at its frequency, not a ramp up to it."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=(80, 24)) as pilot:
+            expr = app.query_one("#sig-expr", Input)
+            await wait_for(pilot, lambda: app.focused is expr, 10, "expression focused")
+            spec = app.query_one("#sig-spectrum", Chart)
+            expr.value = "chirp(10 Hz, 625 Hz, 20 V, 1 s)"
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: bool(spec.series), 10, "spectrum drawn")
+            ((_label, f, db),) = spec.drawn()
+            assert f.size <= max(10, spec.size.width)
+            band = (f >= 10.0) & (f <= 625.0)
+            assert np.count_nonzero(band) >= 10, f  # the band has columns, not one point
+            # away from the chirp's ends (a Fresnel edge about sqrt(615 Hz/s) wide)
+            inner = (f >= 50.0) & (f <= 575.0)
+            assert np.count_nonzero(inner) >= 6
+            assert np.ptp(db[inner]) < 3.0, (f[inner], db[inner])
+            # the level by stationary phase: A / (T sqrt(rate)) as a sine's peak reads A
+            level = 20 * np.log10(20.0 / (1.0 * np.sqrt(615.0)))
+            assert abs(np.median(db[inner]) - level) < 0.5
+            assert db[f > 1000.0].max() < level - 15  # nothing above the band
+            expr.value = "sine(250 Hz, 20 V, 1 s)"
+            await pilot.press("enter")
+            await wait_for(
+                pilot, lambda: abs(spec.drawn()[0][1][np.argmax(spec.drawn()[0][2])] - 250) < 1
+            )
+            ((_label, f, db),) = spec.drawn()
+            assert db.max() == pytest.approx(20 * np.log10(20.0), abs=0.1)
+            assert db[(f > 2.0) & (f < 150.0)].max() < db.max() - 60  # no ramp up to it
 
     asyncio.run(scenario())

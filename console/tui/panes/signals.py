@@ -209,7 +209,9 @@ class SignalsPane(Vertical):
         wave = self.query_one("#sig-wave", Chart)
         wave.y_label = "screen" if p.target.screen else "piezo"
         wave.set_series([Series(channel, t, p.volts)], title=f"waveform on {channel}")
-        f, mag = spectrum(p.volts, p.fs)
+        # the designed signal is finite and whole: no window, so a chirp's ends keep
+        # their level (a Hann window would draw it as a bump)
+        f, mag = spectrum(p.volts, p.fs, window=False)
         spec = self.query_one("#sig-spectrum", Chart)
         top = 20 * np.log10(max(float(mag.max(initial=0.0)), 1e-9))
         spec.db_floor = top - SPECTRUM_RANGE_DB
