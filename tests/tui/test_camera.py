@@ -343,7 +343,9 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
             await _first_frame(app, pilot)
             svc = app.session.camera_started
             info = app.query_one("#camera-info")
-            assert "tuio: off -> 127.0.0.1:3333" in str(info.render())
+            await wait_for(
+                pilot, lambda: "tuio: off -> 127.0.0.1:3333" in str(info.render()), 10, "tuio off"
+            )
             await pilot.press("U")
             box = app.query_one("#camera-target")
             assert box.display and box.has_focus
