@@ -16,6 +16,7 @@ from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 
 from console.errors import UserError
+from console.session.events import Stopped
 from console.tui.charts import Chart
 from console.tui.long_work import stop_check
 from console.tui.session_messages import SessionMessage
@@ -33,6 +34,8 @@ KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
 class VibrationPane(VerticalScroll):
     HELP_TEXT = HELP
+    # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
+    can_focus = False
     BINDINGS = [
         Binding("f", "flow(False)", "flow 1->2"),
         Binding("r", "flow(True)", "flow 2->1"),
@@ -57,6 +60,7 @@ class VibrationPane(VerticalScroll):
         self.id_at: dict[tuple[int, int], int] = {}  # (row, column) -> point id
         self.cell_of: dict[int, tuple[int, int]] = {}  # point id -> (row, column)
         self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
+        self._now_playing = None  # the plan the status line says is playing
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -194,8 +198,11 @@ class VibrationPane(VerticalScroll):
             )
 
     def on_session_message(self, message: SessionMessage) -> None:
-        if message.event.topic == "outputs":
+        ev = message.event
+        if ev.topic == "outputs":
             self._show_outputs()
+        elif isinstance(ev, Stopped) and ev.topic == "estop" and self._now_playing is not None:
+            self._estopped(self._now_playing, ev.reason)
 
     # ------------------------------------------------------------------ map
     @property
@@ -411,11 +418,37 @@ class VibrationPane(VerticalScroll):
             self.app.call_from_thread(self._error, str(exc))
             return
         self.app.call_from_thread(self._playing, plan)
-        self.app.session.play_plan(plan)
+        played = self.app.session.play_plan(plan)
+        out = self.app.session.outputs
+        estopped = out is not None and out.gate.estopped
+        self.app.call_from_thread(self._played, plan, played, estopped)
 
     def _playing(self, plan) -> None:
+        self._now_playing = plan
         self.status(f"playing {plan.name}: {describe_plan(plan)}")
         self._show_on_projector(plan)
+
+    def _played(self, plan, played: bool, estopped: bool) -> None:
+        """The status line says how the plan it shows as playing ended."""
+        if plan is not self._now_playing:
+            return
+        if estopped:
+            self._estopped(plan, "")
+            return
+        self._now_playing = None
+        if played:
+            self.status(f"played {plan.name}: {describe_plan(plan)}")
+        else:
+            self.status(f"{plan.name} did not play (the notice says why)", error=True)
+
+    def _estopped(self, plan, reason: str) -> None:
+        """An e-stop silenced ``plan``: the line says so until something else plays."""
+        self._now_playing = None
+        why = f" ({reason})" if reason else ""
+        self.status(
+            f"{plan.name} stopped by the e-stop{why}; ctrl+r resets it, then play again",
+            error=True,
+        )
 
     @work(thread=True, group="vib-projector")
     def _show_on_projector(self, plan) -> None:

@@ -1,0 +1,79 @@
+"""The Vibration screen after a map came in: Tab only reaches widgets that show their focus
+(the command line, the grid, the tabs) and the grid still plays on enter; an e-stop during
+an audition leaves a status line that says the e-stop stopped it, also after the reset."""
+
+from __future__ import annotations
+
+import asyncio
+
+from textual.widgets import DataTable, Input
+from textual.widgets._tabbed_content import ContentTabs
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+
+from .conftest import command, wait_for
+
+
+def _status(app) -> str:
+    return str(app.query_one("#vib-status").render())
+
+
+def test_tab_never_focuses_an_invisible_widget(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("vibration")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
+            await pilot.press("m")
+            await wait_for(pilot, lambda: pane.session is not None, 120, "measured")
+            await wait_for(pilot, lambda: "measured now" in _status(app), 30, "status")
+            seen = []
+            for _ in range(6):
+                await pilot.press("tab")
+                seen.append(app.focused)
+            assert pane not in seen
+            assert all(isinstance(w, (Input, DataTable, ContentTabs)) for w in seen), seen
+            assert {type(w) for w in seen} >= {Input, ContentTabs}
+            # back on the grid, enter auditions the point under the cursor
+            for _ in range(3):
+                if app.focused is pane.focus_target:
+                    break
+                await pilot.press("tab")
+            assert app.focused is pane.focus_target
+            pane.move_cursor(51)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: len(app.session.played) == 1, what="point played")
+            assert app.session.played[0].name == "point 51"
+
+    asyncio.run(scenario())
+
+
+def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("vibration")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            await command(app, pilot, f"load {map_file}")
+            await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
+            pane.move_cursor(14)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: "playing point 14" in _status(app), what="playing")
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stopped")
+            await wait_for(
+                pilot, lambda: "stopped by the e-stop" in _status(app), what="status after e-stop"
+            )
+            assert "point 14" in _status(app) and "playing" not in _status(app)
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped, what="reset")
+            await pilot.pause(0.5)
+            assert "point 14 stopped by the e-stop" in _status(app)
+            # the next audition plays and then says it played
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: "played point 14" in _status(app), 30, "played")
+
+    asyncio.run(scenario())
