@@ -21,7 +21,16 @@ from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
-from textual.widgets import Button, Checkbox, DataTable, Input, ProgressBar, Select, Static
+from textual.widgets import (
+    Button,
+    Checkbox,
+    DataTable,
+    Input,
+    Label,
+    ProgressBar,
+    Select,
+    Static,
+)
 
 from console.errors import UserError
 from console.session.events import Failed, Snapshot, Started, Stopped
@@ -65,11 +74,18 @@ def trial_text(t: dict[str, Any]) -> str:
 class StudiesPane(Vertical):
     can_focus = True
     DEFAULT_CSS = """
-    StudiesPane #study-form { height: auto; }
-    StudiesPane #study-form Input { width: 14; }
-    StudiesPane #study-form Select { width: 16; }
-    StudiesPane #study-person { height: auto; }
-    StudiesPane #study-person Input { width: 11; }
+    StudiesPane .study-row { height: 1; }
+    StudiesPane .study-row Label { width: auto; padding: 0 1 0 0; }
+    StudiesPane .study-row Input { margin-right: 2; }
+    StudiesPane .study-row Checkbox { margin-right: 1; }
+    StudiesPane #protocol { width: 14; margin-right: 2; }
+    StudiesPane #participant { margin-right: 1; }
+    StudiesPane #participant { width: 10; }
+    StudiesPane #out { width: 1fr; margin-right: 0; }
+    StudiesPane #age { width: 5; }
+    StudiesPane #sex { width: 10; }
+    StudiesPane #handedness { width: 13; }
+    StudiesPane #hand_width_cm, StudiesPane #hand_length_cm { width: 6; }
     StudiesPane #study-buttons Button { min-width: 10; }
     StudiesPane #study-answers Button { min-width: 7; }
     StudiesPane #study-buttons { height: auto; }
@@ -111,21 +127,38 @@ class StudiesPane(Vertical):
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
-        with Horizontal(id="study-form"):
+        # one labelled field per value, on rows that fit 80 columns (a placeholder alone
+        # is cut short and gone once the field is filled)
+        with Horizontal(id="study-form", classes="study-row"):
+            yield Label("protocol", markup=False)
             yield Select(
-                [(n, n) for n in names], value=names[0] if names else Select.BLANK, id="protocol"
+                [(n, n) for n in names],
+                value=names[0] if names else Select.BLANK,
+                id="protocol",
+                compact=True,
             )
-            yield Input("P01", placeholder="participant", id="participant")
-            yield Input(str(default_out()), placeholder="folder", id="out")
-            yield Checkbox("simulated", True, id="simulate")
-            yield Checkbox("projector", False, id="projector")
-        with Horizontal(id="study-person"):
-            yield Input(placeholder="age", id="age")
-            yield Input(placeholder="sex", id="sex")
-            yield Input(placeholder="handedness", id="handedness")
-            yield Input(placeholder="hand width cm", id="hand_width_cm")
-            yield Input(placeholder="hand length cm", id="hand_length_cm")
-            yield Checkbox("consent noted", False, id="consent")
+            yield Label("participant", markup=False)
+            yield Input("P01", placeholder="id", id="participant", compact=True)
+            yield Checkbox("simulated", True, id="simulate", compact=True)
+            yield Checkbox("projector", False, id="projector", compact=True)
+        with Horizontal(id="study-folder", classes="study-row"):
+            yield Label("folder", markup=False)
+            yield Input(
+                str(default_out()), placeholder="where the results go", id="out", compact=True
+            )
+        with Horizontal(id="study-person", classes="study-row"):
+            yield Label("age", markup=False)
+            yield Input(id="age", compact=True)
+            yield Label("sex", markup=False)
+            yield Input(id="sex", compact=True)
+            yield Label("handedness", markup=False)
+            yield Input(id="handedness", compact=True)
+        with Horizontal(id="study-hand", classes="study-row"):
+            yield Label("hand width cm", markup=False)
+            yield Input(id="hand_width_cm", compact=True)
+            yield Label("hand length cm", markup=False)
+            yield Input(id="hand_length_cm", compact=True)
+            yield Checkbox("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
             yield Button("Start", id="start", variant="primary")
             yield Button("Pause", id="pause")
@@ -148,6 +181,11 @@ class StudiesPane(Vertical):
         table = LiteralTable(id="study-trials", cursor_type="row")
         table.add_columns("trial", "what", "response", "correct", "replays", "time")
         yield table
+
+    @property
+    def focus_target(self) -> Button:
+        """Start, focused when the screen shows: the footer lists the screen's keys."""
+        return self.query_one("#start", Button)
 
     # ------------------------------------------------------------------ actions
     def _value(self, wid: str) -> Any:
@@ -190,7 +228,7 @@ class StudiesPane(Vertical):
         self.control = Control()
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
-        self.last = {}
+        self.last = {"pid": spec["pid"]}
         try:
             self.responses = list(protocols.load(str(study)).responses)
         except UserError as exc:
@@ -269,13 +307,14 @@ class StudiesPane(Vertical):
         if ev.topic != TOPIC:
             return
         if isinstance(ev, Started):
-            self.running = ev.name
+            self.running = self.last["pid"] = ev.name
             self._status(f"{escape(ev.name)}: {escape(ev.detail)}")
         elif isinstance(ev, Snapshot):
             self._snapshot(ev.data)
         elif isinstance(ev, Stopped):
             self.running = None
             self.asking = None
+            self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
             if ev.reason.startswith("finished"):  # ready for the next participant
                 field = self.query_one("#participant", Input)
@@ -342,8 +381,9 @@ class StudiesPane(Vertical):
 
     def _show(self) -> None:
         L = self.last
-        who = self.running or "-"
-        head = f"[b]{escape(who)}[/b]: {escape(L.get('done', 0))}/{escape(L.get('total', 0))} trials done"
+        who = self.running or L.get("pid") or "-"  # the participant also once stopped
+        done = f"{escape(L.get('done', 0))}/{escape(L.get('total', 0))} trials done"
+        head = f"[b]{escape(who)}[/b]: {done}"
         if self.control is not None and self.control.paused and self.running:
             head += "  [yellow]paused[/]"
         lines = [head]
@@ -353,9 +393,13 @@ class StudiesPane(Vertical):
         if L.get("state") and self.running:
             lines.append(escape(L["state"]))
         if not self.running and L.get("stopped"):
-            lines.append(f"stopped: {escape(L['stopped'])}")
-            if L.get("error"):
-                lines.append(f"[red]{escape(L['error'])}[/]")
+            error = L.get("error")
+            if error and error == L["stopped"]:  # a failure: its reason once, in red
+                lines.append(f"[red]stopped: {escape(error)}[/]")
+            else:
+                lines.append(f"stopped: {escape(L['stopped'])}")
+                if error:
+                    lines.append(f"[red]{escape(error)}[/]")
         self._status("\n".join(lines))
 
     def _status(self, text: str) -> None:

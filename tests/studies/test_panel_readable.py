@@ -1,0 +1,111 @@
+"""The Studies screen as a new experimenter first sees it, at 80 x 24 and 120 x 40: the
+screen's keys in the footer at once, every field labelled and shown whole, and a status
+that names the participant after a run stopped and says a refusal once."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from textual.widgets import Button, Static
+
+from console.cli import Context
+
+from .test_panel import wait_for
+
+
+def screen_text(app) -> str:
+    return "\n".join(strip.text for strip in app.screen._compositor.render_strips())
+
+
+async def _studies(app, pilot):
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+    await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+    return app.pane("studies")
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_keys_in_the_footer_and_fields_readable_on_show(double_plugins, size):
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=size) as pilot:
+            pane = await _studies(app, pilot)
+            await wait_for(
+                pilot,
+                lambda: app.focused is not None and pane in app.focused.ancestors_with_self,
+                what="the screen focused",
+            )
+            assert isinstance(app.focused, Button) and app.focused.id == "start"
+            await pilot.pause(0.2)
+            text = screen_text(app)
+            footer = text.splitlines()[-1]
+            for key in ("s start", "p pause", "r replay", "a abort"):
+                assert key in footer, footer
+            for label in (
+                "protocol",
+                "participant",
+                "simulated",
+                "projector",
+                "age",
+                "sex",
+                "handedness",
+                "hand width cm",
+                "hand length cm",
+                "consent noted",
+            ):
+                assert label in text, label
+            assert "folder " in text
+            # a filled field keeps its label and shows its value whole (the folder as a
+            # user's default data folder reads)
+            pane.query_one("#out").value = "/root/.local/share/haptable/studies"
+            pane.query_one("#handedness").value = "ambidextrous"
+            pane.query_one("#hand_length_cm").value = "18.15"
+            await pilot.pause(0.2)
+            text = screen_text(app)
+            assert "folder /root/.local/share/haptable/studies" in text
+            assert "handedness ambidextrous" in text and "hand length cm 18.15" in text
+            # s on the screen as it shows starts a run (a person without details: refused)
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#simulate").value = False
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.last.get("stopped"), what="refused")
+
+    asyncio.run(scenario())
+
+
+def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, map_file, tmp_path):
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _studies(app, pilot)
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            status = pane.query_one("#study-status", Static)
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#out").value = str(tmp_path)
+            pane.query_one("#participant").value = "P07"
+            # a person without details: refused, the reason said once
+            pane.query_one("#simulate").value = False
+            await pilot.click("#start")
+            await wait_for(pilot, lambda: pane.last.get("stopped"), what="refused")
+            await pilot.pause(0.2)
+            shown = str(status.render())
+            assert shown.startswith("P07: ")
+            assert shown.count("age is missing") == 1, shown
+            # a simulated run, aborted: the status still names the participant
+            pane.query_one("#simulate").value = True
+            await pilot.click("#start")
+            bar = pane.query_one("#study-progress")
+            await wait_for(pilot, lambda: (bar.progress or 0) >= 2, what="two trials done")
+            await pilot.click("#abort")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
+            await pilot.pause(0.2)
+            shown = str(status.render())
+            done = int(bar.progress)
+            assert shown.startswith(f"P07: {done}/200 trials done"), shown
+            assert "aborted" in shown and shown.count(f"{done}/200") <= 2
+
+    asyncio.run(scenario())
