@@ -432,7 +432,7 @@ class VibrationPane(VerticalScroll):
         """The status line says how the plan it shows as playing ended."""
         if plan is not self._now_playing:
             return
-        if estopped:
+        if estopped and not played:  # a play that ended before the e-stop says so
             self._estopped(plan, "")
             return
         self._now_playing = None
