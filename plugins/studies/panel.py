@@ -383,7 +383,7 @@ class StudiesPane(Vertical):
         L = self.last
         who = self.running or L.get("pid") or "-"  # the participant also once stopped
         done = f"{escape(L.get('done', 0))}/{escape(L.get('total', 0))} trials done"
-        head = f"[b]{escape(who)}[/b]: {done}"
+        head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above
         if self.control is not None and self.control.paused and self.running:
             head += "  [yellow]paused[/]"
         lines = [head]

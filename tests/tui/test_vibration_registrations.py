@@ -55,6 +55,7 @@ def test_table_build_shows_progress_cancels_and_rebuilds(plugins, map_file, monk
             # the map stays usable: a point plays without tables
             await command(app, pilot, "51")
             await wait_for(pilot, lambda: len(app.session.played) == 1)
+            await wait_for(pilot, lambda: "played point 51" in _status(app), 10, "point played")
             # b builds them again, to the end
             fractions.clear()
             await pilot.press("b")
