@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from console import paths
+from console.atomic import write_text_atomic
 from console.errors import ProfileError
 from console.schema import Field, check
 
@@ -370,19 +371,11 @@ def save_overrides(
     data = validate(new_raw, path, plugins, partial=True, base=profile.path.parent)
     check_drivers(Profile(name=profile.name, path=path, data=data), plugins)
     _build(profile.path, parse_toml(profile.path), new_raw, plugins)  # the next load works
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        write_text_atomic(path, text)
     except OSError as exc:
         raise ProfileError(
             f"{_where(path)}: cannot save the profile's settings: {exc.strerror or exc}; "
             "check the config directory is writable ($HAPTABLE_CONFIG_DIR)"
         ) from None
-    finally:
-        tmp.unlink(missing_ok=True)
     return path

@@ -18,13 +18,12 @@ from __future__ import annotations
 import contextlib
 import difflib
 import json
-import os
 import re
-import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from console.atomic import write_text_atomic
 from console.errors import ProfileError, UserError
 from console.paths import profile_config_dir
 from console.profile import _fmt, _printable, _where, parse_toml
@@ -195,18 +194,7 @@ def _locked(path: Path) -> Iterator[None]:
 
 
 def _write(path: Path, entries: dict[str, Entry]) -> None:
-    text = _toml(entries)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    write_text_atomic(path, _toml(entries))
 
 
 def add_signal(

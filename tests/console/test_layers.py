@@ -23,6 +23,7 @@ LAYER_OF: dict[str, str] = {
     "console.hookspecs": "types",
     "console.contracts": "types",
     "console.paths": "types",
+    "console.atomic": "types",
     "console.npz_safe": "types",
     "console.signals": "types",
     "console.signal_design": "types",

@@ -94,7 +94,7 @@ def test_bad_names_and_descriptions(tmp_path):
 
 
 def test_a_failed_write_leaves_the_library_as_it_was(tmp_path, monkeypatch):
-    import console.signal_library as sl
+    import console.atomic
 
     path = tmp_path / "signals.toml"
     add_signal(path, "keep", "silence(1 s)")
@@ -103,7 +103,7 @@ def test_a_failed_write_leaves_the_library_as_it_was(tmp_path, monkeypatch):
     def broken_replace(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(sl.os, "replace", broken_replace)
+    monkeypatch.setattr(console.atomic.os, "replace", broken_replace)
     with pytest.raises(UserError, match="cannot write: No space left on device"):
         add_signal(path, "new", "silence(2 s)")
     assert path.read_bytes() == before
