@@ -9,8 +9,9 @@ from pathlib import Path
 
 
 def write_text_atomic(path: Path, text: str) -> None:
-    """``text`` to ``path`` through a temporary file in the same folder (fsynced, then
-    renamed over it); the temporary file is gone whatever happens. ``OSError`` as raised."""
+    """``text`` to ``path`` through a temporary file in the same folder (fsynced, renamed
+    over it, the folder fsynced so the rename survives a power cut); the temporary file
+    is gone whatever happens. ``OSError`` as raised."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -23,3 +24,14 @@ def write_text_atomic(path: Path, text: str) -> None:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+    fsync_dir(path.parent)
+
+
+def fsync_dir(folder: Path) -> None:
+    """Make a folder's entries (a new or renamed file) durable; best effort."""
+    with contextlib.suppress(OSError):
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

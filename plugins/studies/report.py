@@ -268,7 +268,7 @@ def write(res: dict[str, Any], path: Path, title: str = "") -> Path:
         from console.errors import UserError
 
         raise UserError(f"--report {path}: folder {path.parent} does not exist; create it first")
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(render(res, title), encoding="utf-8")
-    tmp.replace(path)
+    from console.atomic import write_text_atomic
+
+    write_text_atomic(path, render(res, title))
     return path

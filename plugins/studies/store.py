@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from console.atomic import write_text_atomic
 from console.errors import UserError
 
 SEXES = ("female", "male", "other", "undisclosed")
@@ -114,26 +115,9 @@ def make_participant(
 
 
 # ------------------------------------------------------------------ durable writes
-def _fsync_dir(d: Path) -> None:
-    with contextlib.suppress(OSError):
-        fd = os.open(d, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
 def write_json_atomic(path: Path, obj: Any) -> None:
     """Write ``obj`` as JSON so that ``path`` holds the old or the new file, never half."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(obj, f, indent=1, sort_keys=True)
-        f.write("\n")
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    _fsync_dir(path.parent)
+    write_text_atomic(Path(path), json.dumps(obj, indent=1, sort_keys=True) + "\n")
 
 
 def append_event(path: Path, record: dict[str, Any]) -> None:
