@@ -71,8 +71,11 @@ def participant_dirs(paths: list[Path]) -> list[Path]:
     return list(dict.fromkeys(out))
 
 
-def load(paths: list[Path], *, exclude: tuple[str, ...] = ()) -> Study:
-    """The study in ``paths`` (one experiment; participants in ``exclude`` left out)."""
+def load(
+    paths: list[Path], *, exclude: tuple[str, ...] = (), experiment: str | None = None
+) -> Study:
+    """The study in ``paths`` (one experiment; participants in ``exclude`` left out; with
+    ``experiment``, only the participants of that experiment)."""
     import pandas as pd
 
     dirs = participant_dirs(paths)
@@ -83,6 +86,8 @@ def load(paths: list[Path], *, exclude: tuple[str, ...] = ()) -> Study:
         if not isinstance(plan, dict) or "experiment" not in plan or "trials" not in plan:
             raise UserError(f"{d / 'plan.json'}: not a study plan (no experiment/trials)")
         pid = str(plan.get("participant") or d.name)
+        if experiment is not None and plan["experiment"] != experiment:
+            continue
         if pid in exclude:
             notes.append(f"{pid}: left out (--exclude)")
             continue
@@ -121,7 +126,10 @@ def load(paths: list[Path], *, exclude: tuple[str, ...] = ()) -> Study:
     if twice:
         raise UserError(twice[0])
     if not exps:
-        raise UserError("no participant left to analyse")
+        what = f" of {experiment}" if experiment else ""
+        raise UserError(
+            f"{', '.join(map(str, paths))}: no participant{what} left to analyse; run one first"
+        )
     exp = next(iter(exps))
     trials = pd.DataFrame(done)
     if trials.empty:

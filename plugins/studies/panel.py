@@ -1,11 +1,12 @@
 """The Studies screen (the studies plugin's tab, F10): pick a protocol and a participant,
-start, pause, replay, abort; the experimenter's view of progress and the current trial.
+start, pause, replay, abort; the experimenter's view of progress and the current trial;
+analyse the folder's runs (the report written next to them, the ANOVA table shown).
 
-Presentation only: a worker prepares the participant (``start.prepare``) and runs the plan
-(``runner.run_plan``) with the console session's outputs (``session.play_plan``, through
-the safety gate) and the console's vibration map; the run reports through the session
-(topic ``study``: ``Started``, ``Snapshot`` per step, ``Stopped``, ``Failed``) and this
-screen shows what it is told (``on_session_message``). A person answers with the arrow
+Presentation only: a worker runs ``console_run.run`` (the participant prepared, the plan
+run with the console session's outputs through the safety gate) or
+``console_run.run_analysis``; both report through the session (topic ``study``:
+``Started``, ``Snapshot`` per step, ``Stopped``, ``Failed``) and this screen shows what it
+is told (``on_session_message``). A person answers with the arrow
 keys (or 1 = left to right, 2 = right to left in experiment 1) or the answer buttons, a
 questionnaire item with 1..7; a simulated participant answers by itself. Stopping a
 run for any reason (abort, e-stop, quitting) leaves the trial in flight ``interrupted``;
@@ -38,16 +39,17 @@ from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 
 from . import protocol as protocols
+from .console_run import TOPIC
 from .runner import Answer, Control
 
-TOPIC = "study"
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 
 
-def default_out() -> Path:
+def default_out(study: str = "") -> Path:
+    """A protocol's default results folder: ``<data dir>/studies/<protocol>``."""
     from console import paths
 
-    return paths.data_dir("studies")
+    return paths.data_dir("studies", study) if study else paths.data_dir("studies")
 
 
 def next_id(pid: str) -> str:
@@ -92,6 +94,9 @@ class StudiesPane(Vertical):
     StudiesPane #study-answers { height: auto; }
     StudiesPane #study-status { height: auto; }
     StudiesPane #study-trials { height: 1fr; }
+    StudiesPane #study-analysis { height: 1fr; display: none; }
+    StudiesPane #analysis-head { height: auto; }
+    StudiesPane #study-anova { height: 1fr; }
     """
     HELP_TEXT = (
         "Pick the protocol, the participant and the folder; a person needs age, sex,\n"
@@ -100,6 +105,9 @@ class StudiesPane(Vertical):
         "p             pause after this trial / resume\n"
         "r             replay the stimulus (within the phase's replays)\n"
         "a             abort now (the trial in flight is repeated on resume)\n"
+        "n / Analyse   analyse the folder's runs of this protocol: the report\n"
+        "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
+        "t             show the trials / the analysis"
         "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2: left to\n"
         "              right / right to left (experiment 1)\n"
         "1..7          a questionnaire score"
@@ -109,6 +117,8 @@ class StudiesPane(Vertical):
         Binding("p", "pause", "pause/resume"),
         Binding("r", "replay", "replay"),
         Binding("a", "abort", "abort"),
+        Binding("n", "analyse", "analyse"),
+        Binding("t", "toggle_view", "trials/analysis"),
         Binding("up", "answer('up')", show=False),
         Binding("down", "answer('down')", show=False),
         Binding("left", "answer('left')", show=False),
@@ -143,8 +153,9 @@ class StudiesPane(Vertical):
             yield Checkbox("projector", False, id="projector", compact=True)
         with Horizontal(id="study-folder", classes="study-row"):
             yield Label("folder", markup=False)
+            first = str(names[0]) if names else ""
             yield Input(
-                str(default_out()), placeholder="where the results go", id="out", compact=True
+                str(default_out(first)), placeholder="where the results go", id="out", compact=True
             )
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
@@ -164,6 +175,7 @@ class StudiesPane(Vertical):
             yield Button("Pause", id="pause")
             yield Button("Replay", id="replay")
             yield Button("Abort", id="abort", variant="error")
+            yield Button("Analyse", id="analyse")
         with Horizontal(id="study-answers"):
             for label, value in (
                 ("↑", "up"),
@@ -181,6 +193,9 @@ class StudiesPane(Vertical):
         table = LiteralTable(id="study-trials", cursor_type="row")
         table.add_columns("trial", "what", "response", "correct", "replays", "time")
         yield table
+        with Vertical(id="study-analysis"):
+            yield Static("", id="analysis-head", markup=False)
+            yield LiteralTable(id="study-anova", cursor_type="row")
 
     @property
     def focus_target(self) -> Button:
@@ -197,7 +212,7 @@ class StudiesPane(Vertical):
         event.stop()
         if bid.startswith("ans-"):
             self._answer(bid[4:])
-        elif bid in ("start", "pause", "replay", "abort"):
+        elif bid in ("start", "pause", "replay", "abort", "analyse"):
             getattr(self, f"action_{bid}")()
 
     def action_start(self) -> None:
@@ -236,6 +251,7 @@ class StudiesPane(Vertical):
             self.running = None
             return
         self.query_one("#study-trials", DataTable).clear()
+        self._view("trials")
         self._status(f"{escape(spec['pid'])}: preparing {spec['study']} ...")
         self.focus()
         self._run(spec, self.control, self.responder)
@@ -259,6 +275,39 @@ class StudiesPane(Vertical):
     def action_abort(self) -> None:
         if self.control is not None and self.running is not None:
             self.control.abort("aborted by the experimenter")
+
+    def action_analyse(self) -> None:
+        study = self._value("protocol")
+        if study is Select.BLANK or not study:
+            self.app.notify("no protocol in studies/", severity="error")
+            return
+        try:
+            experiment = protocols.load(str(study)).name
+        except UserError as exc:
+            self.app.notify(str(exc), severity="error")
+            return
+        out = Path(self._value("out").strip() or default_out(str(study))).expanduser()
+        self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out} ...")
+        self._view("analysis")
+        self._analyse(out, experiment)
+
+    def action_toggle_view(self) -> None:
+        box = self.query_one("#study-analysis")
+        self._view("trials" if box.display else "analysis")
+
+    def _view(self, which: str) -> None:
+        """Show the trials table or the analysis in the screen's lower half."""
+        self.query_one("#study-analysis").display = which == "analysis"
+        self.query_one("#study-trials").display = which == "trials"
+
+    def on_select_changed(self, event: Select.Changed) -> None:
+        """A new protocol: its own default folder, unless the folder was typed."""
+        if event.select.id != "protocol" or event.value is Select.BLANK:
+            return
+        field = self.query_one("#out", Input)
+        defaults = {str(default_out())} | {str(default_out(n)) for n in protocols.available()}
+        if field.value.strip() in defaults:
+            field.value = str(default_out(str(event.value)))
 
     def action_answer(self, key: str) -> None:
         self._answer(ANSWERS.get(key, key))
@@ -284,23 +333,15 @@ class StudiesPane(Vertical):
     # ------------------------------------------------------------------ the run
     @work(thread=True, exclusive=True, group="study", exit_on_error=False)
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
-        session = self.app.session
-        pid = spec["pid"]
+        from .console_run import run
 
-        def emit(kind: str, info: dict[str, Any]) -> None:
-            session.emit(Snapshot(TOPIC, name=pid, data={"kind": kind, **_plain(info)}))
-            if kind == "waiting" and responder is not None:
-                session.emit(Snapshot(TOPIC, name=pid, data={"kind": "ask", **_plain(info)}))
+        run(self.app.session, spec, control, responder)
 
-        try:
-            res = run_study(session, spec, control, responder, emit)
-        except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
-            why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
-            session.fail(TOPIC, why, name=pid)
-            session.emit(Stopped(TOPIC, name=pid, reason=why))
-            return
-        why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
-        session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))
+    @work(thread=True, exclusive=True, group="study-analysis", exit_on_error=False)
+    def _analyse(self, out: Path, experiment: str) -> None:
+        from .console_run import run_analysis
+
+        run_analysis(self.app.session, out, experiment)
 
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
@@ -322,10 +363,16 @@ class StudiesPane(Vertical):
                     field.value = next_id(ev.name)
             self._show()
         elif isinstance(ev, Failed):
+            if ev.name == "study analysis":  # not a participant id (a space)
+                self.query_one("#analysis-head", Static).update(ev.message)
+                return
             self.last["error"] = ev.message
 
     def _snapshot(self, d: dict[str, Any]) -> None:
         kind = d.get("kind")
+        if kind == "analysis":
+            self._analysis(d)
+            return
         if kind == "progress":
             bar = self.query_one("#study-progress", ProgressBar)
             bar.update(total=max(int(d["total"]), 1), progress=int(d["done"]))
@@ -379,6 +426,18 @@ class StudiesPane(Vertical):
             self.last["state"] = "finished"
         self._show()
 
+    def _analysis(self, d: dict[str, Any]) -> None:
+        head = [*d["headline"], f"report: {d['report']}"]
+        if not d["rows"]:
+            head.append("no ANOVA table (see the lines above)")
+        self.query_one("#analysis-head", Static).update("\n".join(head))
+        table = self.query_one("#study-anova", DataTable)
+        table.clear(columns=True)
+        table.add_columns(*d["columns"])
+        for row in d["rows"]:
+            table.add_row(*row)
+        self._view("analysis")
+
     def _show(self) -> None:
         L = self.last
         who = self.running or L.get("pid") or "-"  # the participant also once stopped
@@ -408,120 +467,3 @@ class StudiesPane(Vertical):
     def on_unmount(self) -> None:
         if self.control is not None:
             self.control.abort("the console closed")
-
-
-def _plain(info: dict[str, Any]) -> dict[str, Any]:
-    """A runner notice as JSON-like values (what a Snapshot carries)."""
-    out = {}
-    for k, v in info.items():
-        if k == "trial" and isinstance(v, dict):
-            out[k] = {kk: vv for kk, vv in v.items() if kk != "stimulus"} | {
-                "stimulus": dict(v.get("stimulus", {}))
-            }
-        elif isinstance(v, str | int | float | bool | dict | list) or v is None:
-            out[k] = v
-    return out
-
-
-class _Asking:
-    """Wraps a ``QueueResponder`` so the screen learns what the participant is asked."""
-
-    def __init__(self, inner: Any, emit: Any) -> None:
-        self.inner = inner
-        self.emit = emit
-
-    def answer(self, trial, played, replays_left, control):
-        return self.inner.answer(trial, played, replays_left, control)
-
-    def rate(self, item, questionnaire, records, control):
-        self.emit("rate", {"item": item, "scale": questionnaire["scale"]})
-        return self.inner.rate(item, questionnaire, records, control)
-
-
-def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
-    """Prepare the participant and run the plan on the console session (blocking)."""
-    from console.session.events import Started
-    from console.vibration_map import VibrationMap, load_map
-
-    from .responders import ObserverResponder, observer
-    from .runner import run_plan
-    from .start import prepare
-    from .stimuli import EffectPlayer, check_places, play_on_session
-
-    pm, profile = session.plugins, session.profile
-    proto = protocols.load(spec["study"])
-    obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
-    from .start import stored_participant
-
-    details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
-    prep = prepare(
-        spec["study"],
-        spec["pid"],
-        spec["out"],
-        details=details,
-        simulate=spec["simulate"],
-        observer=obs,
-    )
-    vmap = None
-    if proto.stimulus != "knob":
-        cur = session.vibration.current_map()
-        vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
-        check_places(prep.plan, vmap)
-    resp = (
-        ObserverResponder(obs, prep.participant_seed)
-        if spec["simulate"]
-        else _Asking(responder, emit)
-    )
-    projected: Any = None
-    live: Any = None
-
-    def notify(kind: str, info: dict[str, Any]) -> None:
-        if projected is not None:
-            projected.notice(kind, info)
-        emit(kind, info)
-
-    try:
-        if spec.get("projector") and not spec["simulate"]:
-            if not proto.scene:
-                raise UserError(str(proto.path) + ": no [study] scene to show; untick 'projector'")
-            from .projected import ProjectedAnswers
-
-            projected = ProjectedAnswers(session, responder, proto.scene)
-            projected.open()
-        if proto.stimulus == "knob" and not spec["simulate"]:
-            if session.outputs is None:
-                raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
-            from .stimuli import LiveKnob
-
-            show = projected.show if projected is not None else None
-            live = LiveKnob(pm, profile, session.outputs, show=show)
-            session.camera.frame_hooks.append(live.frame)
-            session.camera.watch(live, True)
-            if session.camera.error:
-                raise UserError(f"camera: {session.camera.error}")
-        player = EffectPlayer(
-            pm,
-            profile,
-            vmap,
-            play_on_session(session),
-            knob_seed=prep.participant_seed,
-            live_knob=live,
-        )
-        detail = f"{proto.title} -> {prep.files.root}"
-        session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
-        return run_plan(
-            prep.files,
-            prep.plan,
-            prep.participant,
-            player=player,
-            responder=resp,
-            control=control,
-            notify=notify,
-        )
-    finally:
-        if projected is not None:
-            projected.close()
-        if live is not None:
-            if live.frame in session.camera.frame_hooks:
-                session.camera.frame_hooks.remove(live.frame)
-            session.camera.watch(live, False)

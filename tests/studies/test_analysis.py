@@ -315,3 +315,55 @@ def test_cli_text_says_why_no_anova(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "not run: missing cells: P03" in text
     assert not re.search(r"region \* direction\s+\d", text)
+
+
+# --------------------------------------------------------------------- the screen's summary
+def test_summary_rows_are_the_anova_and_say_the_correction(exp2_dir):
+    from plugins.studies import summary
+
+    res = an.analyze(an.load([exp2_dir]))
+    rows = {r[0]: r for r in summary.anova_rows(res)}
+    assert set(rows) == {"region", "direction", "region * direction"}
+    for src, row in rows.items():
+        r = next(x for x in res["anova"]["anova"] if x["source"] == src)
+        assert row[1] == f"{r['f']:.2f} ({r['df1']:g}, {r['df2']:g})"
+        assert row[3] == r["sphericity"] and row[5] == f"{r['np2']:.3f}"
+        p = r["p_reported"]
+        assert row[2].startswith("< .001" if p < 0.001 else f"{p:.3f}")
+        assert row[2].endswith(" GG") == (r["sphericity"] != "assumed")
+    head = summary.headline(res)
+    assert head[0].startswith("exp2: 8 participant(s) (P01, P02") and "8 simulated" in head[0]
+    assert head[1].startswith(f"accuracy {res['accuracy']['overall_pct']:.1f} % (P01 ")
+
+
+def test_summary_of_missing_cells_is_the_line_and_no_row(tmp_path):
+    from plugins.studies import summary
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, drop={"P02": 5})
+    res = an.analyze(an.load([root]))
+    assert summary.anova_rows(res) == []
+    head = summary.headline(res)
+    assert any(h.startswith("P02: ") and "trials done" in h for h in head)
+    assert any(h.startswith("ANOVA region x direction: not run: missing cells: P02") for h in head)
+
+
+def test_summary_of_the_knob_has_each_measure_and_category(tmp_path):
+    from plugins.studies import summary
+
+    res = an.analyze(an.load([sr.write_knob(tmp_path / "k", 6)]))
+    effects = [r[0] for r in summary.anova_rows(res)]
+    assert "completion_time_s: sectors" in effects and "overshoots: condition" in effects
+    assert "questionnaire effectiveness: condition" in effects
+    assert len([e for e in effects if e.startswith("completion_time_s: ")]) == 7
+
+
+def test_one_experiment_out_of_a_mixed_folder(tmp_path):
+    sr.write_flow(tmp_path / "mixed", "exp2", ("R1", "R2"), lambda *a: 0.9, 3, 2)
+    sr.write_flow(tmp_path / "other", "exp1", ("1",), lambda *a: 1.0, 2, 1)
+    (tmp_path / "other" / "P01").rename(tmp_path / "mixed" / "Q01")
+    with pytest.raises(UserError, match="different experiments"):
+        an.load([tmp_path / "mixed"])
+    assert an.load([tmp_path / "mixed"], experiment="exp2").experiment == "exp2"
+    assert set(an.load([tmp_path / "mixed"], experiment="exp1").participants) == {"P01"}
+    with pytest.raises(UserError, match=r"mixed: no participant of knob left to analyse; run"):
+        an.load([tmp_path / "mixed"], experiment="knob")

@@ -321,3 +321,155 @@ def test_the_next_participant_id():
         "P2",
         "alice",
     ]
+
+
+def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path):
+    """n on the Studies screen: the folder's runs of the chosen protocol (an exp1 run in
+    the same folder is left aside), the report next to them, the ANOVA table shown."""
+    import sys
+    from pathlib import Path
+
+    from textual.widgets import DataTable, Static
+
+    from console.tui.app import HapTableApp
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import synth_runs as sr
+
+    def weak(i, region, direction):
+        return 0.5 if (region == "R4" and direction == "right") else 0.95
+
+    sr.write_flow(tmp_path / "runs", "exp2", ("R1", "R2", "R3", "R4"), weak, 6, 6, seed=2)
+    sr.write_flow(tmp_path / "x", "exp1", ("1",), lambda *a: 1.0, 1, 1)
+    (tmp_path / "x" / "P01").rename(tmp_path / "runs" / "Q01")
+    (tmp_path / "empty").mkdir()
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            pane = app.pane("studies")
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#out").value = str(tmp_path / "runs")
+            table = pane.query_one("#study-anova", DataTable)
+            head = pane.query_one("#analysis-head", Static)
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus on Start")
+            await pilot.press("n")
+            await wait_for(
+                pilot, lambda: table.row_count == 3, what="the ANOVA table", timeout_s=120
+            )
+            assert pane.query_one("#study-analysis").display
+            assert not pane.query_one("#study-trials").display
+            report = tmp_path / "runs" / "exp2-report.html"
+            text = str(head.render())
+            assert text.splitlines()[0].startswith("exp2: 6 participant(s) (P01, ")
+            assert f"report: {report}" in text
+            assert "<h1>HapTable study: exp2</h1>" in report.read_text()
+            rows = [[str(c) for c in table.get_row_at(i)] for i in range(3)]
+            effects = {r[0]: r for r in rows}
+            inter = effects["region * direction"]
+            assert inter[2].endswith(" GG") == (inter[3] != "assumed")
+            assert float(inter[1].split()[0]) > 2  # the weak R4 cell: an interaction
+            await pilot.press("t")
+            assert pane.query_one("#study-trials").display
+            await pilot.press("t")
+            assert pane.query_one("#study-analysis").display
+            # a folder without runs of this protocol: one line, no table
+            pane.query_one("#out").value = str(tmp_path / "empty")
+            await pilot.press("n")
+            await wait_for(pilot, lambda: "no participant folder" in str(head.render()), what="why")
+            assert str(head.render()).startswith(f"analysis: {tmp_path / 'empty'}: no participant")
+            assert len(str(head.render()).splitlines()) == 1
+
+    asyncio.run(scenario())
+
+
+def test_each_protocol_has_its_default_folder(double_plugins):
+    from textual.widgets import Input
+
+    from console import paths
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            pane = app.pane("studies")
+            out = pane.query_one("#out", Input)
+            first = pane.query_one("#protocol").value
+            assert out.value == str(paths.data_dir("studies", first))
+            pane.query_one("#protocol").value = "exp2"
+            await pilot.pause()
+            assert out.value == str(paths.data_dir("studies", "exp2"))
+            out.value = "/data/lab/my-study"  # typed: kept whatever the protocol
+            pane.query_one("#protocol").value = "knob"
+            await pilot.pause()
+            assert out.value == "/data/lab/my-study"
+
+    asyncio.run(scenario())
+
+
+def test_a_console_killed_mid_trial_resumes_from_the_screen(double_plugins, map_file, tmp_path):
+    """The console process killed with SIGKILL while a trial plays; a new console's
+    Studies screen starts the same participant: the trial in flight is marked interrupted
+    and repeated, the stored plan goes on, and the outputs open (no stale lock)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from textual.widgets import ProgressBar
+
+    from console.tui.app import HapTableApp
+
+    here = Path(__file__).resolve().parent
+    out, hang = tmp_path / "runs", tmp_path / "hanging"
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(here.parents[1]),
+        "HAPTABLE_TEST_HANG_AT": "4",
+        "HAPTABLE_TEST_HANG_FILE": str(hang),
+    }
+    child = [sys.executable, str(here / "console_child.py"), str(out), str(map_file)]
+    proc = subprocess.Popen(child, env=env, cwd=here.parents[1])
+    try:
+        for _ in range(1800):
+            if hang.exists() or proc.poll() is not None:
+                break
+            time.sleep(0.1)
+        assert hang.exists(), f"the console never reached trial 5 (exit {proc.poll()})"
+        proc.send_signal(signal.SIGKILL)
+        assert proc.wait(30) == -signal.SIGKILL
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    events = _events(out / "P01" / "trials.jsonl")
+    assert [e["trial"] for e in events if e["event"] == "done"] == [0, 1, 2, 3]
+    assert (events[-1]["event"], events[-1]["trial"]) == ("start", 4)
+    plan_before = (out / "P01" / "plan.json").read_text()
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            pane = app.pane("studies")
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#out").value = str(out)
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus on Start")
+            await pilot.press("s")
+            bar = pane.query_one("#study-progress", ProgressBar)
+            await wait_for(pilot, lambda: (bar.progress or 0) >= 7, what="resumed to trial 7")
+            await pilot.press("a")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
+
+    asyncio.run(scenario())
+    assert (out / "P01" / "plan.json").read_text() == plan_before  # the stored plan
+    events = _events(out / "P01" / "trials.jsonl")
+    kinds = [(e["event"], e["trial"]) for e in events]
+    assert kinds[8:11] == [("start", 4), ("interrupted", 4), ("start", 4)]
+    done = [e["trial"] for e in events if e["event"] == "done"]
+    assert done[:7] == list(range(7)) and done == sorted(set(done))

@@ -1,0 +1,198 @@
+"""A study run and its analysis on the console's session, for the Studies screen: the
+screen starts these in a worker and shows what they report through the session (topic
+``study``: ``Started``, a ``Snapshot`` per step, ``Stopped``, ``Failed``).
+
+``run_study`` prepares the participant (``start.prepare``) and runs the stored plan
+(``runner.run_plan``) with the session's outputs (``session.play_plan``, through the
+safety gate) and its vibration map. ``analyse`` reads a folder's runs of one experiment,
+writes the HTML report next to them and reports the headline and the ANOVA table
+(``summary.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from console.errors import UserError
+
+from . import protocol as protocols
+from .runner import Control
+
+TOPIC = "study"
+
+
+def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) -> None:
+    """Run ``spec`` (the screen's choices) and report it through the session (blocking:
+    the screen's worker thread). Any failure is one line (``Failed``), then ``Stopped``."""
+    from console.session.events import Snapshot, Stopped
+
+    pid = spec["pid"]
+
+    def emit(kind: str, info: dict[str, Any]) -> None:
+        session.emit(Snapshot(TOPIC, name=pid, data={"kind": kind, **_plain(info)}))
+        if kind == "waiting" and responder is not None:
+            session.emit(Snapshot(TOPIC, name=pid, data={"kind": "ask", **_plain(info)}))
+
+    try:
+        res = run_study(session, spec, control, responder, emit)
+    except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
+        why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
+        session.fail(TOPIC, why, name=pid)
+        session.emit(Stopped(TOPIC, name=pid, reason=why))
+        return
+    why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
+    session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))
+
+
+def report_path(out: Path, experiment: str) -> Path:
+    """Where the Studies screen writes a folder's report: ``<out>/<experiment>-report.html``."""
+    return Path(out) / f"{experiment}-report.html"
+
+
+def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
+    """Analyse ``experiment``'s participants in ``out``, write the report, and tell the
+    screen (a ``Snapshot`` of kind ``analysis``: headline, columns, rows, report)."""
+    from console.session.events import Snapshot
+
+    from . import analysis, report, summary
+
+    study = analysis.load([Path(out)], experiment=experiment)
+    res = analysis.analyze(study)
+    path = report.write(res, report_path(out, experiment), title=f"HapTable study: {experiment}")
+    data = {
+        "kind": "analysis",
+        "experiment": experiment,
+        "report": str(path),
+        "headline": summary.headline(res),
+        "columns": list(summary.COLUMNS),
+        "rows": [list(r) for r in summary.anova_rows(res)],
+    }
+    session.emit(Snapshot(TOPIC, name=experiment, data=data))
+    return data
+
+
+def run_analysis(session: Any, out: Path, experiment: str) -> None:
+    """``analyse`` reporting any failure as one line (``Failed``, name ``analysis``)."""
+    try:
+        analyse(session, out, experiment)
+    except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
+        why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
+        session.fail(TOPIC, f"analysis: {why}", name="study analysis")
+
+
+def _plain(info: dict[str, Any]) -> dict[str, Any]:
+    """A runner notice as JSON-like values (what a Snapshot carries)."""
+    out = {}
+    for k, v in info.items():
+        if k == "trial" and isinstance(v, dict):
+            out[k] = {kk: vv for kk, vv in v.items() if kk != "stimulus"} | {
+                "stimulus": dict(v.get("stimulus", {}))
+            }
+        elif isinstance(v, str | int | float | bool | dict | list) or v is None:
+            out[k] = v
+    return out
+
+
+class _Asking:
+    """Wraps a ``QueueResponder`` so the screen learns what the participant is asked."""
+
+    def __init__(self, inner: Any, emit: Any) -> None:
+        self.inner = inner
+        self.emit = emit
+
+    def answer(self, trial, played, replays_left, control):
+        return self.inner.answer(trial, played, replays_left, control)
+
+    def rate(self, item, questionnaire, records, control):
+        self.emit("rate", {"item": item, "scale": questionnaire["scale"]})
+        return self.inner.rate(item, questionnaire, records, control)
+
+
+def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
+    """Prepare the participant and run the plan on the console session (blocking)."""
+    from console.session.events import Started
+    from console.vibration_map import VibrationMap, load_map
+
+    from .responders import ObserverResponder, observer
+    from .runner import run_plan
+    from .start import prepare
+    from .stimuli import EffectPlayer, check_places, play_on_session
+
+    pm, profile = session.plugins, session.profile
+    proto = protocols.load(spec["study"])
+    obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
+    from .start import stored_participant
+
+    details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
+    prep = prepare(
+        spec["study"],
+        spec["pid"],
+        spec["out"],
+        details=details,
+        simulate=spec["simulate"],
+        observer=obs,
+    )
+    vmap = None
+    if proto.stimulus != "knob":
+        cur = session.vibration.current_map()
+        vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
+        check_places(prep.plan, vmap)
+    resp = (
+        ObserverResponder(obs, prep.participant_seed)
+        if spec["simulate"]
+        else _Asking(responder, emit)
+    )
+    projected: Any = None
+    live: Any = None
+
+    def notify(kind: str, info: dict[str, Any]) -> None:
+        if projected is not None:
+            projected.notice(kind, info)
+        emit(kind, info)
+
+    try:
+        if spec.get("projector") and not spec["simulate"]:
+            if not proto.scene:
+                raise UserError(str(proto.path) + ": no [study] scene to show; untick 'projector'")
+            from .projected import ProjectedAnswers
+
+            projected = ProjectedAnswers(session, responder, proto.scene)
+            projected.open()
+        if proto.stimulus == "knob" and not spec["simulate"]:
+            if session.outputs is None:
+                raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
+            from .stimuli import LiveKnob
+
+            show = projected.show if projected is not None else None
+            live = LiveKnob(pm, profile, session.outputs, show=show)
+            session.camera.frame_hooks.append(live.frame)
+            session.camera.watch(live, True)
+            if session.camera.error:
+                raise UserError(f"camera: {session.camera.error}")
+        player = EffectPlayer(
+            pm,
+            profile,
+            vmap,
+            play_on_session(session),
+            knob_seed=prep.participant_seed,
+            live_knob=live,
+        )
+        detail = f"{proto.title} -> {prep.files.root}"
+        session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
+        return run_plan(
+            prep.files,
+            prep.plan,
+            prep.participant,
+            player=player,
+            responder=resp,
+            control=control,
+            notify=notify,
+        )
+    finally:
+        if projected is not None:
+            projected.close()
+        if live is not None:
+            if live.frame in session.camera.frame_hooks:
+                session.camera.frame_hooks.remove(live.frame)
+            session.camera.watch(live, False)

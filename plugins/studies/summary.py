@@ -1,0 +1,103 @@
+"""The analysis in a few lines and one ANOVA table: what the Studies screen shows after
+``analyse`` (``analysis.analyze``'s result; the HTML report has the rest)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+#: The ANOVA table's columns: the effect, F with its degrees of freedom, the p to report
+#: (Greenhouse-Geisser corrected unless sphericity holds), Mauchly's verdict, epsilon,
+#: partial eta squared.
+COLUMNS = ("effect", "F (df)", "p", "sphericity", "eps GG", "np2")
+
+
+def _num(v: Any, fmt: str = ".2f") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return format(v, fmt)
+
+
+def _p(v: Any) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return "< .001" if v < 0.001 else f"{v:.3f}"
+
+
+def _df(v: Any) -> str:
+    return _num(v, "g") if v is not None else "-"
+
+
+def _row(effect: str, r: dict[str, Any], p: Any) -> tuple[str, ...]:
+    corrected = r.get("sphericity") not in (None, "assumed")
+    return (
+        effect,
+        f"{_num(r.get('f'))} ({_df(r.get('df1'))}, {_df(r.get('df2'))})",
+        _p(p) + (" GG" if corrected and p is not None else ""),
+        str(r.get("sphericity") or "-"),
+        _num(r.get("eps_gg")),
+        _num(r.get("np2"), ".3f"),
+    )
+
+
+def anova_rows(res: dict[str, Any]) -> list[tuple[str, ...]]:
+    """The rows of every ANOVA in ``res`` (``COLUMNS``); an ANOVA not run gives none."""
+    rows: list[tuple[str, ...]] = []
+    aov = res.get("anova")
+    if isinstance(aov, dict) and "anova" in aov:
+        for r in aov["anova"]:
+            rows.append(_row(str(r["source"]), r, r.get("p_reported", r.get("p"))))
+    knob = res.get("knob") or {}
+    for measure, m in (knob.get("measures") or {}).items():
+        a = m.get("anova", m)
+        for r in a.get("rows", []):
+            rows.append(_row(f"{measure}: {r['source']}", r, r.get("p_reported")))
+    q = knob.get("questionnaire") or {}
+    for cat, c in q.items() if "skipped" not in q else ():
+        a = c.get("anova") if isinstance(c, dict) else None
+        if isinstance(a, list) and a:
+            top = a[0]
+            r = {
+                "f": top.get("F"),
+                "df1": top.get("DF"),
+                "df2": a[1].get("DF") if len(a) > 1 else None,
+                "np2": top.get("np2"),
+                "eps_gg": top.get("eps_gg"),
+                "sphericity": top.get("sphericity"),
+            }
+            rows.append(_row(f"questionnaire {cat}: condition", r, top.get("p_reported")))
+    return rows
+
+
+def headline(res: dict[str, Any]) -> list[str]:
+    """Who was analysed, the overall accuracy, and every note or ANOVA not run."""
+    who = res["participants"]
+    sim = len(res.get("simulated", []))
+    lines = [
+        f"{res['experiment']}: {len(who)} participant(s) ({', '.join(who)})"
+        + (f", {sim} simulated" if sim else "")
+    ]
+    acc = res.get("accuracy")
+    if acc:
+        part = "; ".join(
+            f"{r['participant']} {r['accuracy_pct']:.1f} %" for r in acc.get("participants", [])
+        )
+        lines.append(f"accuracy {acc['overall_pct']:.1f} %" + (f" ({part})" if part else ""))
+    lines += list(res.get("notes", []))
+    aov = res.get("anova")
+    if isinstance(aov, dict) and "skipped" in aov:
+        lines.append(aov["skipped"])
+    knob = res.get("knob") or {}
+    for m in (knob.get("measures") or {}).values():
+        a = m.get("anova", m)
+        if "skipped" in a:
+            lines.append(a["skipped"])
+    q = knob.get("questionnaire") or {}
+    if "skipped" in q:
+        lines.append(q["skipped"])
+    else:
+        for cat, c in q.items():
+            a = c.get("anova") if isinstance(c, dict) else None
+            if isinstance(a, dict) and "skipped" in a:
+                lines.append(f"questionnaire {cat}: {a['skipped']}")
+    return lines
