@@ -288,13 +288,22 @@ def _print_nested(d, indent: int = 0) -> None:
 
 # ---------------------------------------------------------------------- console
 def configure_console(p: argparse.ArgumentParser) -> None:
-    pass
+    from console.core_sections import IMAGE_MODES
+
+    p.add_argument(
+        "--image",
+        choices=IMAGE_MODES,
+        default=None,
+        help="the Camera screen's IR view: auto (ask the terminal for Sixel or the Kitty "
+        "graphics protocol), halfblock (characters, never ask) or a protocol; default: "
+        "the profile's [console] image, else auto",
+    )
 
 
 def run_console(args, ctx) -> int:
     from console.tui.app import run_app
 
-    return run_app(ctx)
+    return run_app(ctx, image=getattr(args, "image", None))
 
 
 def register_core(register) -> None:

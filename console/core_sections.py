@@ -17,6 +17,9 @@ from console.types import PATCHES
 if TYPE_CHECKING:
     from console.profile import Profile
 
+#: how the Camera screen draws the IR view (``console.tui.irview``)
+IMAGE_MODES = ("auto", "halfblock", "kitty", "sixel")
+
 SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
     "profile": (
         {
@@ -247,6 +250,20 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
         },
         False,
         "the infrared camera under the glass",
+    ),
+    "console": (
+        {
+            "image": Field(
+                "str",
+                "auto",
+                choices=IMAGE_MODES,
+                help="the Camera screen's IR view: 'auto' asks the terminal for Sixel or "
+                "the Kitty graphics protocol at start-up; 'halfblock' draws characters and "
+                "never asks; 'sixel' or 'kitty' where the terminal is misdetected",
+            ),
+        },
+        False,
+        "the operator console (also settable in the profile's overrides file)",
     ),
 }
 

@@ -106,11 +106,16 @@ class HapTableApp(App):
     #: the camera) before it e-stops what is left and exits anyway
     QUIT_WAIT_S = 15.0
 
-    def __init__(self, ctx, *, fast: bool | None = None, initial: str = "devices"):
+    def __init__(
+        self, ctx, *, fast: bool | None = None, initial: str = "devices", image: str = "halfblock"
+    ):
         super().__init__()
         self.ctx = ctx
         self.fast = fast
         self.initial = initial
+        #: how the Camera screen draws the IR view: ``halfblock``, ``sixel`` or ``kitty``
+        #: (``console.tui.irview``; ``run_app`` asks the terminal before it starts)
+        self.image_mode = image
         self.session = ConsoleSession(ctx, fast=fast)
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
@@ -399,11 +404,15 @@ def _bindings_help(pane) -> str:
     return "\n".join(lines)
 
 
-def run_app(ctx, *, fast: bool | None = None) -> int:
+def run_app(ctx, *, fast: bool | None = None, image: str | None = None) -> int:
+    """The console in this terminal. ``image`` (else ``[console] image``) picks the
+    Camera screen's IR view; the terminal is asked here, before Textual reads the keys."""
+    from console.tui.irview import image_mode_for
     from console.tui.logs import NativeStderr, capture_logs, on_terminal, release_logs
 
     _ = ctx.profile  # a bad profile fails here, as one line, before the screen opens
-    app = HapTableApp(ctx, fast=fast)
+    mode = image_mode_for(ctx.profile, image)
+    app = HapTableApp(ctx, fast=fast, image=mode)
     removed = capture_logs(app)
     native = NativeStderr()  # OpenCV, PortAudio, libusb: into the log, not over the screen
     try:
