@@ -5,15 +5,17 @@ refused in one line), and the screen under Pilot in both kinds of view."""
 
 from __future__ import annotations
 
+import asyncio
 import io
 import sys
 
 import numpy as np
 import pytest
 
-from console.cli import main
+from console.cli import Context, main
 from console.errors import ProfileError
 from console.profile import PROJECT_PROFILES, load_profile
+from console.tui.app import HapTableApp
 from console.tui.irview import (
     GREEN,
     YELLOW,
@@ -24,6 +26,8 @@ from console.tui.irview import (
     probe,
 )
 from console.types import Contact, Hand
+
+from .conftest import wait_for
 
 SIM = (PROJECT_PROFILES / "sim.toml").read_text()
 
@@ -158,3 +162,85 @@ def test_a_bad_image_option_is_refused_naming_the_choices(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "--image" in err and "halfblock" in err and "sixel" in err
+
+
+# ---------------------------------------------------------------------- the bytes
+def _contact_frame() -> tuple[np.ndarray, dict]:
+    grey = np.full((480, 640), 80.0)
+    return grey, {"contacts": (Contact(3, (320.0, 240.0)),)}
+
+
+def test_the_kitty_widget_sends_the_image_and_places_it_in_cells(monkeypatch):
+    """textual-image's Kitty widget (Unicode placeholders): the PNG goes to the terminal
+    as graphics-protocol messages, the cells carry the placeholder character."""
+    from PIL import Image
+    from rich.console import Console
+
+    from console.tui.irview import graphics_widget
+
+    sent = io.StringIO()  # where textual-image writes the graphics messages
+    monkeypatch.setattr(sys, "__stdout__", sent)
+    grey, work = _contact_frame()
+    w = graphics_widget("kitty", "k")
+    w.image = Image.fromarray(ir_rgb(grey, work, (320, 240)), "RGB")
+    renderable = w.render()  # unsized: the image's own 320 x 240 px in 10 x 20 px cells
+    cells = io.StringIO()
+    Console(file=cells, width=40, height=14, color_system="truecolor").print(renderable)
+    out = sent.getvalue()
+    assert out.startswith("\x1b_G") and "f=100" in out  # a PNG transmission
+    assert "a=p" in out and "U=1" in out  # a virtual placement over 32 x 12 cells
+    assert cells.getvalue().count(chr(0x10EEEE)) == 32 * 12
+
+
+def test_camera_screen_in_sixel_draws_the_frame_as_sixels_with_the_overlay(plugins):
+    """Forced to sixel (as on a terminal that speaks it): the view is textual-image's
+    Sixel widget; what it writes is a Sixel image (DCS ... ST) and the image it encodes
+    is the frame with the overlay drawn in; the title names the view."""
+    from textual.geometry import Region
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera", image="sixel")
+        async with app.run_test(size=(100, 30)) as pilot:
+            pane = app.pane("camera")
+            title = app.query_one("#camera-title")
+            await wait_for(pilot, lambda: "via sixel" in str(title.render()), 30, "the sixel view")
+            assert str(title.render()).startswith("IR 640x480 via sixel")
+            assert not app.query_one("#camera-view").display  # the half-block view is off
+            widget = app.query_one("#camera-image")
+            drawn: dict = {}
+
+            def sixels() -> bool:
+                """What the widget's child (made again for each new image) writes."""
+                if not widget.children or widget.children[0].size.height == 0:
+                    return False
+                impl = widget.children[0]
+                strips = impl.render_lines(Region(0, 0, impl.size.width, impl.size.height))
+                drawn.update(impl=impl, text="".join(s.text for st in strips for s in st))
+                return "\x1bP" in drawn["text"]
+
+            await wait_for(pilot, sixels, 20, "sixel data")
+            text, impl = drawn["text"], drawn["impl"]
+            start = text.find("\x1bP")
+            assert start >= 0 and text.find("\x1b\\", start) > start
+            assert "#" in text[start:]  # a colour register: the image is drawn, not blank
+            # the image it shows is the scaled frame in whole cells (10 x 20 px here:
+            # no terminal was asked)
+            rgb = pane.shown_rgb
+            assert rgb.shape[1] == impl.size.width * 10 and rgb.shape[0] == impl.size.height * 20
+
+    asyncio.run(scenario())
+
+
+def test_camera_screen_under_pilot_is_half_block_and_says_so(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=(100, 30)) as pilot:
+            title = app.query_one("#camera-title")
+            await wait_for(pilot, lambda: "half-block" in str(title.render()), 30, "the view")
+            assert app.image_mode == "halfblock"
+            assert app.query_one("#camera-view").display
+            assert type(app.pane("camera").shown).__name__ == "HalfBlockImage"
+            assert not app.query("#camera-image")  # no graphics widget, no textual-image
+            assert str(title.render()).startswith("IR 640x480 as half-block ")
+
+    asyncio.run(scenario())

@@ -1,5 +1,6 @@
-"""Camera: the live IR view (half-block image, ~10 Hz) with the detected hand, contacts
-and gesture drawn over it; background capture; threshold and high-pass tuning with
+"""Camera: the live IR view with the detected hand, contacts and gesture drawn over it:
+an image of real pixels where the terminal speaks Sixel or the Kitty graphics protocol
+(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz); its title says which; background capture; threshold and high-pass tuning with
 immediate effect (every vision setting the classifier offers: ``[``/``]`` choose one,
 ``-``/``+`` change it; ``W`` keeps them all for the profile); contact ids written next to
 each contact on the view; the touch-calibration wizard (``console.session.calibration``: this
@@ -71,7 +72,9 @@ class CameraPane(Horizontal):
         "g        gestures panel: datasets, training and evaluation\n"
         "u        TUIO (or another switchable output) on / off, kept for the profile\n"
         "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
-        "Overlay: hand outline green, contacts red with their ids, calibration target yellow."
+        "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
+        "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
+        "(its title says which; [console] image or haptable console --image chooses)."
     )
     BINDINGS = [
         Binding("b", "background", "background"),
@@ -101,12 +104,23 @@ class CameraPane(Horizontal):
         super().__init__(**kw)
         self.view = "camera"
         self.chosen = 0  # index into the service's params(): the setting - / + change
-        self.shown = None  # the HalfBlockImage on the view now
+        self.shown = None  # the HalfBlockImage on the view now (half-block mode)
+        self.shown_rgb = None  # the RGB image on the view now (sixel, kitty)
         self.visible_now = False
         self._timer = None
+        self._image = None  # textual-image's widget, made at the first frame it shows
+        self._image_at = -1e9  # monotonic time of its last update
+        self._image_frame = None  # what it shows: (frame, view, target, area)
+
+    @property
+    def image_mode(self) -> str:
+        """``halfblock``, ``sixel`` or ``kitty``: as the app was started (``run_app``)."""
+        return getattr(self.app, "image_mode", "halfblock")
 
     def compose(self) -> ComposeResult:
-        yield Static("camera stopped", id="camera-view")
+        with Vertical(id="camera-main"):
+            yield Static("", id="camera-title", markup=False)
+            yield Static("camera stopped", id="camera-view")
         with Vertical(id="camera-side"):
             yield Static("", id="camera-info")
             box = Input(placeholder="host:port, Enter", id="camera-target")
@@ -139,31 +153,46 @@ class CameraPane(Horizontal):
         self.service.watch(self, on)
 
     # ------------------------------------------------------------------ drawing
+    #: the side panel's width and the title's row, in cells
+    SIDE_COLS = 34
+    #: the image's shortest interval in graphics modes (each update sends a new image)
+    GRAPHICS_PERIOD_S = 0.2
+
+    def view_area(self) -> tuple[int, int]:
+        """(cols, rows) the view may take beside the side panel, below its title."""
+        return max(16, self.size.width - self.SIDE_COLS), max(4, self.size.height - 2)
+
     def view_size(self, aspect: float = 4 / 3) -> tuple[int, int]:
-        """(cols, rows) of the view for an image ``aspect`` (width / height) wide."""
-        w, h = self.size.width, self.size.height
-        rows = max(4, h - 1)
-        cols = max(16, min(w - 34, int(rows * 2 * aspect)))
+        """(cols, rows) of the half-block view for an image ``aspect`` (width / height) wide."""
+        cols, rows = self.view_area()
+        cols = max(16, min(cols, int(rows * 2 * aspect)))
         rows = min(rows, int(cols / aspect / 2) + 1)
         return cols, rows
 
-    def redraw(self) -> None:
-        from console.tui.plots import HalfBlockImage, downsample
+    def _message(self, text: str) -> None:
+        """``text`` in place of the view (the camera stopped, borrowed, starting)."""
+        if self._image is not None:
+            self._image.display = False
+        view = self.query_one("#camera-view", Static)
+        view.display = True
+        view.update(text)
+        self.query_one("#camera-title", Static).update("")
 
+    def redraw(self) -> None:
         svc = self.service
         info = self.query_one("#camera-info", Static)
         if svc.error:
-            self.query_one("#camera-view", Static).update(f"[red]camera: {escape(svc.error)}[/]")
+            self._message(f"[red]camera: {escape(svc.error)}[/]")
             return
         if svc.borrower is not None:
-            self.query_one("#camera-view", Static).update(
+            self._message(
                 f"the camera is in use by {svc.borrower}, which runs in its own process:\n"
                 "the Scenes screen (F6) shows what it sees, the Latency screen (F7) its loop"
             )
             return
         snap = svc.snapshot()
         if snap is None:
-            self.query_one("#camera-view", Static).update("waiting for the first frame ...")
+            self._message("waiting for the first frame ...")
             return
         frame, work = snap
         res = work.get("result")
@@ -171,6 +200,15 @@ class CameraPane(Horizontal):
         if res is not None:  # "camera": the image as the vision saw it (turned, ROI)
             shown = res.view(self.view)
             img = img if shown is None else shown
+        if self.image_mode in ("sixel", "kitty"):
+            self._draw_graphics(frame, img, work)
+        else:
+            self._draw_halfblock(img, work)
+        info.update(self.info_text(svc, work))
+
+    def _draw_halfblock(self, img: np.ndarray, work: dict) -> None:
+        from console.tui.plots import HalfBlockImage, downsample
+
         cols, rows = self.view_size(img.shape[1] / img.shape[0])
         grey = downsample(img, cols, rows)
         if self.view != "camera":
@@ -179,8 +217,56 @@ class CameraPane(Horizontal):
         ov = overlay_pixels(img.shape, cols, rows, work, target)
         labels = blob_labels(img.shape, cols, rows, work)
         self.shown = HalfBlockImage(grey, ov, labels)
-        self.query_one("#camera-view", Static).update(self.shown)
-        info.update(self.info_text(svc, work))
+        view = self.query_one("#camera-view", Static)
+        view.display = True
+        view.update(self.shown)
+        h, w = img.shape[:2]
+        self.query_one("#camera-title", Static).update(
+            f"IR {w}x{h} as half-block {cols}x{rows} cells"
+        )
+
+    def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
+        """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
+        the overlay drawn into it; a new image at most every ``GRAPHICS_PERIOD_S``."""
+        import time
+
+        from PIL import Image as PILImage
+
+        from console.tui.irview import MODE_NAMES, cell_size_px, fit_px, graphics_widget, ir_rgb
+
+        now = time.monotonic()
+        target = self._target_px()
+        cell = cell_size_px()
+        area = self.view_area()
+        shows = (self.view, None if target is None else tuple(target), area)
+        last = self._image_frame
+        if last is not None and last[0] is frame and last[1] == shows:
+            return  # the same picture
+        if now - self._image_at < self.GRAPHICS_PERIOD_S:
+            return
+        self._image_frame, self._image_at = (frame, shows), now
+        (pw, ph), (cols, rows) = fit_px(img.shape[:2], *area, cell)
+        rgb = ir_rgb(
+            img,
+            work,
+            (pw, ph),
+            target_px=target,
+            stretch=self.view != "camera",
+            canvas_px=(cols * cell[0], rows * cell[1]),
+        )
+        self.shown_rgb = rgb
+        if self._image is None:
+            self._image = graphics_widget(self.image_mode, "camera-image")
+            self.query_one("#camera-main").mount(self._image)
+        self.query_one("#camera-view", Static).display = False
+        self._image.display = True
+        self._image.styles.width = cols
+        self._image.styles.height = rows
+        self._image.image = PILImage.fromarray(rgb, "RGB")
+        h, w = img.shape[:2]
+        self.query_one("#camera-title", Static).update(
+            f"IR {w}x{h} via {MODE_NAMES[self.image_mode]}, {pw}x{ph} px"
+        )
 
     def info_text(self, svc, work: dict) -> str:
         st = svc.status()
