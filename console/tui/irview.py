@@ -40,6 +40,7 @@ __all__ = [
     "graphics_widget",
     "image_mode_for",
     "ir_rgb",
+    "load",
     "probe",
 ]
 
@@ -65,14 +66,10 @@ def probe() -> str | None:
             return None
     except ValueError:  # a closed stream
         return None
-    if os.environ.get("TERM", "dumb") in ("", "dumb"):
+    if os.environ.get("TERM", "dumb") in ("", "dumb") or not load():
         return None
-    try:
-        import textual_image.widget  # noqa: F401  (asks the terminal: protocol, cell size)
-        from textual_image import renderable
-    except Exception as exc:  # a terminal answering garbage, no termios: no graphics
-        log.info("terminal graphics not available: %s: %s", type(exc).__name__, exc)
-        return None
+    from textual_image import renderable
+
     if renderable.Image is renderable.SixelImage:
         return "sixel"
     if renderable.Image is renderable.TGPImage:
@@ -80,10 +77,23 @@ def probe() -> str | None:
     return None
 
 
+def load() -> bool:
+    """Import textual-image (which asks the terminal, if stdout is one, and keeps the
+    answers): False, logged, where it fails (a terminal answering garbage, no termios)."""
+    try:
+        import textual_image.widget  # noqa: F401  (asks the terminal: protocol, cell size)
+    except Exception as exc:
+        log.warning("terminal graphics not available: %s: %s", type(exc).__name__, exc)
+        return False
+    return True
+
+
 def choose_image_mode(setting: str, ask: Callable[[], str | None] = probe) -> str:
     """The IR view's mode for ``setting`` (one of ``IMAGE_MODES``): ``halfblock`` as
     set, never asking the terminal; ``sixel``/``kitty`` as set (``ask`` still runs, for
-    the cell size in pixels); ``auto``: what ``ask`` finds, else ``halfblock``."""
+    the cell size in pixels, and textual-image is loaded now, never once Textual reads
+    the keys; half-block where it cannot load); ``auto``: what ``ask`` finds, else
+    ``halfblock``."""
     if setting not in IMAGE_MODES:
         from console.errors import UserError
 
@@ -94,6 +104,8 @@ def choose_image_mode(setting: str, ask: Callable[[], str | None] = probe) -> st
     if setting == "auto":
         log.info("IR view: %s", found or "half-block (no terminal graphics found)")
         return found or "halfblock"
+    if not load():
+        return "halfblock"
     if found != setting:
         log.info("IR view: %s as set (the terminal reported %s)", setting, found or "none")
     return setting

@@ -124,6 +124,14 @@ def test_a_set_mode_wins_over_what_the_terminal_says():
     assert choose_image_mode("kitty", lambda: "sixel") == "kitty"
 
 
+def test_a_set_protocol_that_cannot_load_falls_back_to_half_block(monkeypatch):
+    """(textual-image failing to import, e.g. stdin not a terminal while stdout is)"""
+    import console.tui.irview as irview
+
+    monkeypatch.setattr(irview, "load", lambda: False)
+    assert choose_image_mode("sixel", lambda: None) == "halfblock"
+
+
 def test_without_a_terminal_nothing_is_asked(monkeypatch):
     out = io.StringIO()  # not a terminal: isatty() is False
     monkeypatch.setattr(sys, "__stdout__", out)

@@ -1,9 +1,10 @@
 """Camera: the live IR view with the detected hand, contacts and gesture drawn over it:
 an image of real pixels where the terminal speaks Sixel or the Kitty graphics protocol
-(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz); its title says which; background capture; threshold and high-pass tuning with
-immediate effect (every vision setting the classifier offers: ``[``/``]`` choose one,
-``-``/``+`` change it; ``W`` keeps them all for the profile); contact ids written next to
-each contact on the view; the touch-calibration wizard (``console.session.calibration``: this
+(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz), its title saying
+which; background capture; threshold and high-pass tuning with immediate effect (every
+vision setting the classifier offers: ``[``/``]`` choose one, ``-``/``+`` change it;
+``W`` keeps them all for the profile); contact ids written next to each contact on the
+view; the touch-calibration wizard (``console.session.calibration``: this
 screen shows it and forwards its keys); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
@@ -153,7 +154,7 @@ class CameraPane(Horizontal):
         self.service.watch(self, on)
 
     # ------------------------------------------------------------------ drawing
-    #: the side panel's width and the title's row, in cells
+    #: the side panel's width in cells (the view takes the rest, below its title)
     SIDE_COLS = 34
     #: the image's shortest interval in graphics modes (each update sends a new image)
     GRAPHICS_PERIOD_S = 0.2
