@@ -26,11 +26,13 @@ VISION_FIELDS = {
     ),
     "contact_level": Field(
         "float",
-        0.0,
+        180.0,
         min=0,
         max=255,
-        help="touching skin's brightness body_threshold is set for (twin: 180); > 0: the body "
-        "threshold follows the brightness at the contacts (light-level invariant); 0: fixed",
+        help="touching skin's brightness (grey levels above the background) the thresholds "
+        "are given for; > 0: each hand's thresholds scale with the light it shows (its "
+        "brightest part over this), so the light level does not change what counts as hand "
+        "or contact; 0: fixed thresholds",
     ),
     "highpass_sigma_px": Field(
         "float", 6.0, min=0.5, max=100, help="blur of the high-pass filter (image minus blur)"

@@ -24,10 +24,10 @@ def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, floa
     """(gesture, kind, confidence, motion score) from frame records (features built
     with ``N_HARMONICS_MAX`` harmonics)."""
     k = model.n_frames
-    xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX, model.static_frames)
-    xs = select_static(xs, model.n_harmonics, N_HARMONICS_MAX)
+    xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX)
+    xs = select_static(xs[k], model.n_harmonics, N_HARMONICS_MAX)
     xd = select_dynamic(xd[k], model.n_harmonics, N_HARMONICS_MAX)
-    xk = select_kind(xk)
+    xk = select_kind(xk[k])
     name = str(model.predict(xs, xd, xk)[0])
     conf = float(model.confidence(xs, xd, xk)[0])
     return name, ("dynamic" if name in DYNAMIC else "static"), conf, float(sc[k])
@@ -39,8 +39,7 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
 
     s = read_sample(folder)
     size = (params.width_px, params.height_px)
-    n = max(model.n_frames, model.static_frames)
-    frames = s.frames(limit=n, size_px=size)
+    frames = s.frames(limit=model.n_frames, size_px=size)
     bg = s.background(size_px=size)
     if bg is None:
         raise UserError(
@@ -78,6 +77,7 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
 TUNABLES: dict[str, TunableRange] = {
     "body_threshold": TunableRange(1.0, 255.0, 2.0),
     "contact_threshold": TunableRange(1.0, 255.0, 2.0),
+    "contact_level": TunableRange(0.0, 255.0, 5.0),
     "highpass_sigma_px": TunableRange(0.5, 100.0, 0.5),
     "smooth_px": TunableRange(1.0, 31.0, 2.0),
     "min_hand_area_px": TunableRange(1.0, 307200.0, 100.0),
@@ -277,7 +277,7 @@ class SvmClassifier:
     def classify(self, frames: list[Frame]) -> Gesture | None:
         if self.model is None or not frames:
             return None
-        n = max(self.model.n_frames, self.model.static_frames)
+        n = self.model.n_frames
         results = [self.process(f) for f in frames[:n]]
         from .features import frame_record
 

@@ -10,7 +10,7 @@ from console.types import Contact
 
 def find_contacts(
     hp: np.ndarray,
-    threshold: float,
+    threshold: float | np.ndarray,
     min_area_px: int = 3,
     max_area_px: int = 2500,
     to_mm=None,
@@ -23,9 +23,12 @@ def find_contacts(
     that a flat palm leaves in the high-pass image becomes one large blob, rejected by
     ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
     ``hp`` may be a crop of the frame's high-pass at ``origin_px`` (x, y): positions
-    are in the frame's pixels.
+    are in the frame's pixels. ``threshold``: one for every pixel, or an image of them.
     """
-    _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
+    if np.ndim(threshold):
+        m = np.where(hp > threshold, 255, 0).astype(np.uint8)
+    else:
+        _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
     md = cv2.dilate(m, _DISK5)
     groups, _ = cv2.findContours(md, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     out: list[Contact] = []

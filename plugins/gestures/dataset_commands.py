@@ -56,13 +56,16 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         "--gestures", default=None, help="comma-separated subset of: " + ", ".join(GESTURES)
     )
     parser.add_argument(
-        "--static-frames", type=int, default=None, help="frames per static sample (3)"
+        "--static-frames",
+        type=int,
+        default=None,
+        help="frames per static sample (6; a gesture is decided from its first 2 to 6)",
     )
     parser.add_argument(
         "--dynamic-frames",
         type=int,
         default=None,
-        help="frames per dynamic sample (8; the classifier reads 4)",
+        help="frames per dynamic sample (8)",
     )
     parser.add_argument(
         "--lens-distortion",
@@ -95,6 +98,13 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sessions", type=int, default=2, help="with --vary: sessions per subject (2)"
     )
+    parser.add_argument(
+        "--light-scale",
+        type=float,
+        default=1.0,
+        help="multiply every sample's IR light (the same performances under another light; "
+        "0.1 to 3, default 1)",
+    )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -105,7 +115,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
 
     check_count(args.subjects, "--subjects", 1, MAX_SUBJECTS)
     check_count(args.reps, "--reps", 1, MAX_REPS)
-    check_count(args.static_frames, "--static-frames", 1, MAX_FRAMES)
+    check_count(args.static_frames, "--static-frames", 2, MAX_FRAMES)
     check_count(args.dynamic_frames, "--dynamic-frames", 1, MAX_FRAMES)
 
     gestures = GESTURES
@@ -138,6 +148,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         exposure_ms=args.exposure_ms,
         vary=args.vary,
         sessions=args.sessions,
+        light_scale=args.light_scale,
         progress=progress,
         **({"force": True} if args.force else {}),
     )

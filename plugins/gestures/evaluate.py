@@ -1,8 +1,8 @@
 """Features of a dataset (cached) and the cross-validated evaluation of the classifiers.
 
-``extract`` runs the vision pipeline on every sample (the first frames only) and keeps
-the static features, the dynamic features for several window lengths, the motion
-scores and the per-frame pipeline time. ``cross_validate`` trains inside each outer
+``extract`` runs the vision pipeline on every sample (the first frames only) and keeps,
+for each decision window (the first k frames, ``FRAMES_LIST``), the static, motion
+(kind) and dynamic features and the motion score, and the per-frame pipeline time. ``cross_validate`` trains inside each outer
 fold (hyper-parameters searched inside the training part only) and tests on the rest:
 ``2fold`` (stratified, as in the paper) or ``loso`` (leave one subject out).
 """
@@ -33,8 +33,7 @@ from .vision import VisionParams, process_frame
 
 N_HARMONICS_MAX = 16
 FRAMES_LIST = (2, 3, 4, 5, 6)
-STATIC_FRAMES = 3
-FEATURES_VERSION = 7  # bump when features change: old caches are ignored
+FEATURES_VERSION = 8  # bump when features change: old caches are ignored
 
 
 @dataclass
@@ -44,8 +43,10 @@ class FeatureSet:
     names: list[str]
     labels: np.ndarray
     subjects: np.ndarray
-    static: np.ndarray
-    kind: np.ndarray  # motion features over the first KIND_FRAMES frames
+    # per decision window k (the first k frames): static features (mean over the
+    # window), motion features (static vs dynamic), dynamic features, motion score
+    static: dict[int, np.ndarray]
+    kind: dict[int, np.ndarray]
     dynamic: dict[int, np.ndarray]
     score: dict[int, np.ndarray]
     frame_s: np.ndarray  # pipeline wall time of every frame processed
@@ -57,8 +58,8 @@ class FeatureSet:
             [self.names[i] for i in idx],
             self.labels[idx],
             self.subjects[idx],
-            self.static[idx],
-            self.kind[idx],
+            {k: v[idx] for k, v in self.static.items()},
+            {k: v[idx] for k, v in self.kind.items()},
             {k: v[idx] for k, v in self.dynamic.items()},
             {k: v[idx] for k, v in self.score.items()},
             self.frame_s,
@@ -110,16 +111,14 @@ def sample_records(
 
 
 def record_features(
-    recs: list[dict | None], frames_list: Sequence[int], n_harmonics: int, static_frames: int
-) -> tuple[np.ndarray, np.ndarray, dict[int, np.ndarray], dict[int, float]]:
-    """(static, kind, dynamic per window length, motion score per window length; the
-    kind features and the score use the first ``KIND_FRAMES`` frames whatever the
-    window, so static and dynamic samples are judged on equally long windows)."""
-    xs = F.static_features(recs, n_harmonics, static_frames)
-    xk = F.motion_features(recs[: F.KIND_FRAMES])
+    recs: list[dict | None], frames_list: Sequence[int], n_harmonics: int
+) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray], dict[int, np.ndarray], dict[int, float]]:
+    """Per decision window k in ``frames_list`` (the first k records): (static, kind,
+    dynamic features, motion score)."""
+    xs = {k: F.static_features(recs, n_harmonics, k) for k in frames_list}
+    xk = {k: F.motion_features(recs[:k]) for k in frames_list}
     xd = {k: F.dynamic_features(recs, n_harmonics, k) for k in frames_list}
-    score = F.motion_score(recs[: F.KIND_FRAMES])
-    sc = {k: score for k in frames_list}
+    sc = {k: F.motion_score(recs[:k]) for k in frames_list}
     return xs, xk, xd, sc
 
 
@@ -140,8 +139,10 @@ def extract(
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
 ) -> FeatureSet:
-    """Features of every sample of the dataset at ``root`` (cached by content).
-    ``progress(frac, msg)`` after each sample; ``cancelled()`` stops it (``Cancelled``)."""
+    """Features of every sample of the dataset at ``root`` (cached by content), for the
+    decision windows of ``frames_list`` no longer than the shortest sample (a window is
+    the same length for every sample). ``progress(frac, msg)`` after each sample;
+    ``cancelled()`` stops it (``Cancelled``)."""
     from .dataset import load_dataset
 
     params = params or VisionParams(n_harmonics=N_HARMONICS_MAX)
@@ -150,6 +151,14 @@ def extract(
 
         params = replace(params, n_harmonics=N_HARMONICS_MAX)
     samples = load_dataset(root)
+    shortest = min(len(s.frame_paths) for s in samples)
+    frames_list = tuple(k for k in frames_list if k <= shortest)
+    if not frames_list:
+        short = min(samples, key=lambda s: len(s.frame_paths))
+        raise UserError(
+            f"{short.name}: {shortest} frame(s); a gesture is decided from at least 2 "
+            "frames: record every sample with 2 or more"
+        )
     size = (params.width_px, params.height_px)
     key = _key(samples, params, frames_list)
     cfile = cache_dir() / f"{key}.npz"
@@ -175,7 +184,9 @@ def extract(
 
 def _extract(samples, params, frames_list, size, progress, cancelled) -> FeatureSet:
     fallback = None
-    names, labels, subjects, xs_all, xk_all, times, cpu = [], [], [], [], [], [], []
+    names, labels, subjects, times, cpu = [], [], [], [], []
+    xs_all: dict[int, list] = {k: [] for k in frames_list}
+    xk_all: dict[int, list] = {k: [] for k in frames_list}
     xd_all: dict[int, list] = {k: [] for k in frames_list}
     sc_all: dict[int, list] = {k: [] for k in frames_list}
     for i, s in enumerate(samples):
@@ -187,13 +198,13 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
                 fallback = _fallback_background(samples, size)
             bg = fallback
         recs = sample_records(frames, bg, params, times, cpu)
-        xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX, STATIC_FRAMES)
-        xk_all.append(xk)
+        xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX)
         names.append(s.name)
         labels.append(s.gesture)
         subjects.append(s.subject)
-        xs_all.append(xs)
         for k in frames_list:
+            xs_all[k].append(xs[k])
+            xk_all[k].append(xk[k])
             xd_all[k].append(xd[k])
             sc_all[k].append(sc[k])
         step(progress, None, (i + 1) / len(samples), f"features {i + 1}/{len(samples)} samples")
@@ -201,8 +212,8 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
         names,
         np.array(labels),
         np.array(subjects),
-        np.array(xs_all),
-        np.array(xk_all),
+        {k: np.array(v) for k, v in xs_all.items()},
+        {k: np.array(v) for k, v in xk_all.items()},
         {k: np.array(v) for k, v in xd_all.items()},
         {k: np.array(v) for k, v in sc_all.items()},
         np.array(times),
@@ -217,13 +228,13 @@ def _save_cache(path: Path, fs: FeatureSet) -> None:
         "names": np.array(fs.names),
         "labels": fs.labels,
         "subjects": fs.subjects,
-        "static": fs.static,
-        "kind": fs.kind,
         "frame_s": fs.frame_s,
         "frame_cpu_s": fs.frame_cpu_s,
         "meta": np.array(json.dumps(fs.meta)),
     }
     for k in fs.dynamic:
+        arrays[f"static_{k}"] = fs.static[k]
+        arrays[f"kind_{k}"] = fs.kind[k]
         arrays[f"dyn_{k}"] = fs.dynamic[k]
         arrays[f"score_{k}"] = fs.score[k]
     tmp = path.with_suffix(".tmp.npz")
@@ -238,8 +249,8 @@ def _load_cache(path: Path) -> FeatureSet:
         [str(n) for n in z["names"]],
         z["labels"].astype(str),
         z["subjects"].astype(str),
-        z["static"],
-        z["kind"],
+        {k: z[f"static_{k}"] for k in ks},
+        {k: z[f"kind_{k}"] for k in ks},
         {k: z[f"dyn_{k}"] for k in ks},
         {k: z[f"score_{k}"] for k in ks},
         z["frame_s"],
@@ -249,17 +260,19 @@ def _load_cache(path: Path) -> FeatureSet:
 
 
 def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
-    """(static X, dynamic X, kind X, motion score) with ``n_harmonics`` and ``n_frames``."""
+    """(static X, dynamic X, kind X, motion score) with ``n_harmonics``, decided from the
+    first ``n_frames`` frames."""
     if n_frames not in fs.dynamic:
         raise UserError(
-            f"--frames {n_frames}: features exist for {sorted(fs.dynamic)} frames; pick one of them"
+            f"--frames {n_frames}: features exist for {sorted(fs.dynamic)} frames (no longer "
+            "than the dataset's shortest sample); pick one of them"
         )
     nmax = int(fs.meta.get("n_harmonics_max", N_HARMONICS_MAX))
     if not (n_harmonics == 0 or 2 <= n_harmonics <= nmax):
         raise UserError(f"--harmonics {n_harmonics}: use 0 (no descriptors) or 2 to {nmax}")
-    xs = F.select_static(fs.static, n_harmonics, nmax)
+    xs = F.select_static(fs.static[n_frames], n_harmonics, nmax)
     xd = F.select_dynamic(fs.dynamic[n_frames], n_harmonics, nmax)
-    return xs, xd, F.select_kind(fs.kind), fs.score[n_frames]
+    return xs, xd, F.select_kind(fs.kind[n_frames]), fs.score[n_frames]
 
 
 def splits(fs: FeatureSet, cv: str, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:

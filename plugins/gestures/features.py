@@ -1,13 +1,16 @@
 """Gesture features from the vision pipeline's per-frame results.
 
-Static (one pose): the canonical silhouette's Fourier descriptors, the brightness grid in
-the canonical frame (which parts touch), the finger count and the contacts' layout in
-palm radii. Dynamic (the first ``n`` frames): the first frame's static features plus
-the motion of the hand (translation in its own frame, rotation, size change) and of the
-contact trajectories (similarity fit of first to last: translation, rotation, scale
-change; the most and least moving contact, which tells a pivot). Static vs dynamic: the
-motion features over a short window (``KIND_FRAMES``), the same length for every
-sample; ``motion_score`` summarises them (largest displacement in palm radii).
+Every decision is made from the first ``n`` frames of a gesture (the model's
+``n_frames``, the same window for each part). Static (one pose): the canonical
+silhouette's Fourier descriptors, the brightness grid in the canonical frame (which parts
+touch), the finger count and the contacts' layout in palm radii, averaged over the
+window. Dynamic: the first frame's static features plus the motion of the hand
+(translation in its own frame, rotation, size change) and of the contact trajectories
+(similarity fit of first to last: translation, rotation, size change; the most and least
+moving contact, which tells a pivot) over the window. Static vs dynamic: the motion
+features over the window; ``motion_score`` summarises them (largest displacement in palm
+radii). The number of contacts is given to the classifiers as a category as well
+(``count_code``): one finger or two is what tells some gestures apart.
 """
 
 from __future__ import annotations
@@ -20,7 +23,6 @@ import numpy as np
 from .hand_shape import GRID_RINGS, GRID_SECTORS
 from .vision import FrameResult
 
-KIND_FRAMES = 3  # window for static vs dynamic (a static sample has at least this many)
 N_GRID = GRID_SECTORS * (len(GRID_RINGS) - 1)
 N_CONTACT = 6
 TRACK_GATE = 1.5  # palm radii a contact may move between frames and stay the same
@@ -109,7 +111,7 @@ def record_static(rec: dict | None, n_harmonics: int) -> np.ndarray:
     )
 
 
-def static_features(records: Sequence[dict | None], n_harmonics: int, n_frames: int = 3):
+def static_features(records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4):
     """Mean static features over the first ``n_frames`` frames that show a hand."""
     recs = [r for r in records[:n_frames] if r is not None]
     if not recs:
@@ -208,7 +210,7 @@ def motion_features(records: Sequence[dict | None]) -> np.ndarray:
         v[10:12] = np.abs(tt)
         v[12] = np.linalg.norm(tt)
         v[13] = abs(math.degrees(tr_rot)) / MOTION_TURN_DEG
-        v[14] = tr_scale
+        v[14] = abs(tr_scale)  # zooming in and out alike
         v[15] = disp.max()
         v[16] = disp.min()
         v[17] = disp.min() / disp.max() if disp.max() > 1e-6 else 1.0
@@ -258,16 +260,34 @@ def mirror_invariant_grid(grid: np.ndarray) -> np.ndarray:
     return np.concatenate([sym.reshape(len(grid), -1), asym.reshape(len(grid), -1)], axis=1)
 
 
+MAX_COUNT_CODE = 5
+
+
+def count_code(counts: np.ndarray) -> np.ndarray:
+    """(n,) contact counts (a mean over frames may lie between two) -> (n, 6) columns,
+    one per count 0 .. ``MAX_COUNT_CODE``: 1 at the count, shared linearly between the two
+    nearest for a fractional one (one-hot for whole counts; 5 and more share the last)."""
+    c = np.clip(np.asarray(counts, dtype=float), 0, MAX_COUNT_CODE)
+    k = np.arange(MAX_COUNT_CODE + 1)
+    return np.maximum(0.0, 1.0 - np.abs(c[:, None] - k[None, :]))
+
+
 def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the static classifier sees, from (n, static_size(n_max)) feature rows:
     magnitudes of ``n`` Fourier harmonics (invariant to mirroring as well), the
-    mirror-invariant brightness grid, the finger count, the hand flag and the contact
-    layout. Left and right hands look alike to it."""
+    mirror-invariant brightness grid, the finger count, the hand flag, the contact
+    layout and the contact count as a category. Left and right hands look alike to it."""
     x = np.atleast_2d(x)
     d = desc_size(n_max)
     grid = x[:, d : d + N_GRID]
+    count = x[:, d + N_GRID + 2]
     return np.concatenate(
-        [x[:, desc_indices(n, n_max, (2,))], mirror_invariant_grid(grid), x[:, d + N_GRID :]],
+        [
+            x[:, desc_indices(n, n_max, (2,))],
+            mirror_invariant_grid(grid),
+            x[:, d + N_GRID :],
+            count_code(count),
+        ],
         axis=1,
     )
 
@@ -275,8 +295,9 @@ def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the dynamic classifier sees, from (n, static_size(n_max) + N_MOTION) rows:
     Fourier magnitudes of the first frame, its contact layout (how many fingers touch and
-    where) and the motion features. The brightness grid and the silhouette finger count
-    are left out: across subjects they hurt more than they help."""
+    where, the count as a category too) and the motion features. The brightness grid
+    and the silhouette finger count are left out: across subjects they hurt more than
+    they help."""
     x = np.atleast_2d(x)
     base = desc_size(n_max) + N_GRID + 2
     cols = np.concatenate(
@@ -286,7 +307,7 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
             static_size(n_max) + np.arange(N_MOTION),
         ]
     )
-    return x[:, cols]
+    return np.concatenate([x[:, cols], count_code(x[:, base])], axis=1)
 
 
 #: motion features the static/dynamic decision leaves out: the wrist angle, the palm

@@ -24,7 +24,9 @@ from .sketch import DYNAMIC, STATIC
 
 GESTURES = STATIC + DYNAMIC
 SVC_GRID = {"svc__C": [1.0, 10.0, 100.0], "svc__gamma": ["scale", 0.003, 0.03]}
-MODEL_FORMAT = "haptable-gestures/1"
+#: the saved model's format; /2: one decision window (``n_frames``) for the static,
+#: kind and dynamic features, the contact count as a category
+MODEL_FORMAT = "haptable-gestures/2"
 
 #: Types a saved model may contain; anything else refuses to load.
 TRUSTED_TYPES = (
@@ -134,11 +136,22 @@ def read_settings(path: str | Path) -> dict:
     p = Path(path)
     try:
         content = read_schema(p)["content"]
-        if json.loads(content["format"]["content"]) != MODEL_FORMAT:
-            raise ValueError(f"not a {MODEL_FORMAT} model")
+        _check_format(json.loads(content["format"]["content"]))
         return json.loads(json.loads(content["settings"]["content"]))
     except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
         raise UserError(f"{p}: not a readable gesture model ({e}); train it again") from None
+
+
+def _check_format(fmt: object) -> None:
+    """``ValueError`` saying what the file is when ``fmt`` is not ``MODEL_FORMAT``."""
+    if fmt == MODEL_FORMAT:
+        return
+    if isinstance(fmt, str) and fmt.startswith("haptable-gestures/"):
+        raise ValueError(
+            f"a {fmt} model from an older HapTable (this one reads {MODEL_FORMAT}: features "
+            "changed)"
+        )
+    raise ValueError(f"not a {MODEL_FORMAT} model")
 
 
 def make_pipeline(seed: int = 0):
@@ -204,8 +217,7 @@ class GestureModel:
     kind_svm: object
     motion_threshold: float
     n_harmonics: int = 2
-    n_frames: int = 4
-    static_frames: int = 3
+    n_frames: int = 4  # every decision is made from the first n_frames frames
     meta: dict = field(default_factory=dict)
 
     @classmethod
@@ -219,7 +231,6 @@ class GestureModel:
         *,
         n_harmonics: int,
         n_frames: int,
-        static_frames: int = 3,
         seed: int = 0,
         meta: dict | None = None,
         kind_svm: object | None = None,
@@ -234,7 +245,7 @@ class GestureModel:
             kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), seed=seed)
         st = fit_svm(xs[~is_dyn], labels[~is_dyn], seed=seed) if np.any(~is_dyn) else None
         dy = fit_svm(xd[is_dyn], labels[is_dyn], seed=seed) if np.any(is_dyn) else None
-        return cls(st, dy, kind, thr, n_harmonics, n_frames, static_frames, dict(meta or {}))
+        return cls(st, dy, kind, thr, n_harmonics, n_frames, dict(meta or {}))
 
     def kind(self, xk: np.ndarray) -> np.ndarray:
         """True where the motion says dynamic."""
@@ -286,7 +297,6 @@ class GestureModel:
                     "motion_threshold": self.motion_threshold,
                     "n_harmonics": self.n_harmonics,
                     "n_frames": self.n_frames,
-                    "static_frames": self.static_frames,
                     "meta": self.meta,
                 }
             ),
@@ -326,8 +336,10 @@ class GestureModel:
             obj = sio.load(p, trusted=sorted(found))
         except Exception as e:
             raise UserError(f"{p}: cannot load the gesture model ({e}); train it again") from None
-        if not isinstance(obj, dict) or obj.get("format") != MODEL_FORMAT:
-            raise UserError(f"{p}: not a {MODEL_FORMAT} model; train it again")
+        try:
+            _check_format(obj.get("format") if isinstance(obj, dict) else None)
+        except ValueError as e:
+            raise UserError(f"{p}: {e}; train it again") from None
         from .model_checks import check_classifiers, check_settings
 
         s = check_settings(obj.get("settings"), p)
@@ -340,7 +352,6 @@ class GestureModel:
             s["motion_threshold"],
             s["n_harmonics"],
             s["n_frames"],
-            s["static_frames"],
             s["meta"],
         )
         if check_features:

@@ -57,7 +57,6 @@ def check_settings(raw: Any, p: Path) -> dict[str, Any]:
         "motion_threshold": float(thr),
         "n_harmonics": _int_in(s, "n_harmonics", (0, *range(2, N_HARMONICS_MAX + 1)), p),
         "n_frames": _int_in(s, "n_frames", tuple(FRAMES_LIST), p),
-        "static_frames": _int_in(s, "static_frames", tuple(range(1, max(FRAMES_LIST) + 1)), p),
         "meta": meta,
     }
 
@@ -145,24 +144,24 @@ def check_classifiers(svms: dict[str, Any], p: Path) -> dict[str, int]:
     return {n: check_pipeline(n, m, p) for n, m in svms.items() if m is not None}
 
 
-def feature_widths(n_harmonics: int, n_frames: int, static_frames: int) -> dict[str, int]:
+def feature_widths(n_harmonics: int, n_frames: int) -> dict[str, int]:
     """Feature widths the vision pipeline makes for each classifier with these settings."""
     from .evaluate import N_HARMONICS_MAX, record_features
     from .features import select_dynamic, select_kind, select_static
 
-    recs = [None] * max(n_frames, static_frames)
-    xs, xk, xd, _ = record_features(recs, (n_frames,), N_HARMONICS_MAX, static_frames)
+    k = n_frames
+    xs, xk, xd, _ = record_features([None] * k, (k,), N_HARMONICS_MAX)
     return {
-        "static_svm": select_static(xs, n_harmonics, N_HARMONICS_MAX).shape[1],
-        "dynamic_svm": select_dynamic(xd[n_frames], n_harmonics, N_HARMONICS_MAX).shape[1],
-        "kind_svm": select_kind(xk).shape[1],
+        "static_svm": select_static(xs[k], n_harmonics, N_HARMONICS_MAX).shape[1],
+        "dynamic_svm": select_dynamic(xd[k], n_harmonics, N_HARMONICS_MAX).shape[1],
+        "kind_svm": select_kind(xk[k]).shape[1],
     }
 
 
 def check_widths(model: Any, p: Path) -> None:
     """Each classifier takes as many features as the pipeline makes for the model's
     settings (a model trained on another feature set is refused, not run)."""
-    want = feature_widths(model.n_harmonics, model.n_frames, model.static_frames)
+    want = feature_widths(model.n_harmonics, model.n_frames)
     for name, w in want.items():
         svm = getattr(model, name)
         nf = getattr(svm, "n_features_in_", None) if svm is not None else None

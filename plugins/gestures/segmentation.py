@@ -5,6 +5,8 @@ the windows of the frame where either can be non-zero, so the pipeline works on 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
@@ -126,3 +128,117 @@ def body_mask(diff: np.ndarray, threshold: float, smooth_px: int = 5) -> np.ndar
         diff = cv2.blur(diff, (smooth_px, smooth_px))
     _, m = cv2.threshold(diff, threshold, 255, cv2.THRESH_BINARY)
     return m
+
+
+#: parts are found on block means of this size; a part is a hand's when its brightest
+#: block rises this many times above the noise floor
+PART_BLOCK_PX = 4
+SEED_FACTOR = 2.5
+
+
+@dataclass(frozen=True)
+class Parts:
+    """The body's connected parts at the lowest threshold, each with the light it shows:
+    ``blocks`` (int32, one label per ``PART_BLOCK_PX`` block of the frame; 0 = no hand's
+    part), ``scale[i]`` the brightness of part i relative to the reference level,
+    ``peak[i]`` its brightest block mean (grey levels above the background), and
+    ``win`` (x0, y0, x1, y1) the frame's box that holds every hand's part."""
+
+    win: tuple[int, int, int, int]
+    blocks: np.ndarray
+    scale: np.ndarray
+    peak: np.ndarray
+
+    def label_at(self, x: int, y: int) -> int:
+        """The part at pixel (x, y) of the frame (0: none)."""
+        b = PART_BLOCK_PX
+        by, bx = y // b, x // b
+        if 0 <= by < self.blocks.shape[0] and 0 <= bx < self.blocks.shape[1]:
+            return int(self.blocks[by, bx])
+        return 0
+
+    def image(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+        """``values[part]`` at every pixel of ``box`` (x0, y0, x1, y1) of the frame, in
+        ``values``' dtype (``values[0]`` where no part is)."""
+        b = PART_BLOCK_PX
+        x0, y0, x1, y1 = box
+        bx0, by0 = x0 // b, y0 // b
+        bx1, by1 = -(-x1 // b), -(-y1 // b)
+        blk = np.full((by1 - by0, bx1 - bx0), values[0], values.dtype)
+        hb, wb = self.blocks.shape
+        sub = self.blocks[by0 : min(by1, hb), bx0 : min(bx1, wb)]
+        blk[: sub.shape[0], : sub.shape[1]] = values[sub]
+        up = cv2.resize(blk, None, fx=b, fy=b, interpolation=cv2.INTER_NEAREST)
+        return up[y0 - by0 * b : y1 - by0 * b, x0 - bx0 * b : x1 - bx0 * b]
+
+
+def relative_body(
+    diff: np.ndarray,
+    threshold: float,
+    reference: float,
+    noise: float,
+    smooth_px: int = 5,
+    scale_range: tuple[float, float] = (0.3, 2.0),
+) -> tuple[np.ndarray, Parts | None]:
+    """Hands and forearms with a threshold that follows each part's own light.
+
+    The parts are found on the difference image's 4 x 4 block means (cheap, and their
+    noise is a quarter of a pixel's): connected regions above the lowest threshold any
+    part can have (``threshold`` x the smallest scale, and at least 4 sigma of the block
+    noise, ``noise`` being a pixel's). A part whose brightest block rises well above the
+    noise (``SEED_FACTOR`` x that floor) is a hand's; its scale is that brightness over
+    ``reference``, kept within ``scale_range``. Each part is then cut at full resolution
+    (``smooth_px`` box mean) at ``threshold`` x its scale. Touching skin is a part's
+    brightest; it rises and falls with the IR light reaching that hand (LED power, hot
+    spots, vignetting), so the parts of a hand above the glass keep their extent under
+    another light.
+
+    The full-size mask (uint8 0/255) and the parts (None: no hand's part)."""
+    body = np.zeros_like(diff)
+    H, W = diff.shape
+    b = PART_BLOCK_PX
+    hb, wb = H // b, W // b
+    small = cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
+    floor = 4.0 * noise / b + 2.0
+    low = max(threshold * scale_range[0], floor)
+    _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_32S)
+    peak = np.zeros(n)
+    for i in range(1, n):
+        x, y, w, h = stats[i, :4]
+        peak[i] = float(small[y : y + h, x : x + w][lab[y : y + h, x : x + w] == i].max())
+    # a hand's part rises above the lowest threshold and well above the noise (specks of
+    # noise and background drift do not)
+    real = peak >= max(low, SEED_FACTOR * floor)
+    real[0] = False
+    if not real.any():
+        return body, None
+    # each block keeps its part's label, grown by one block so a part's edge pixels
+    # (brighter than their block's mean) keep it too
+    blocks = cv2.dilate(np.where(real, np.arange(n), 0).astype(np.float32)[lab], _BLOCK3)
+    blocks = blocks.astype(np.int32)
+    boxes = stats[real, :4]
+    reach = smooth_px // 2 if smooth_px > 1 else 0
+    box = (
+        int(boxes[:, 0].min()) * b,
+        int(boxes[:, 1].min()) * b,
+        int((boxes[:, 0] + boxes[:, 2]).max()) * b,
+        int((boxes[:, 1] + boxes[:, 3]).max()) * b,
+    )
+    x0, y0, x1, y1 = win = _grow(box, b + reach, diff.shape)
+    cx0, cy0, cx1, cy1 = _grow(win, reach, diff.shape)
+    src = diff[cy0:cy1, cx0:cx1]
+    sm = cv2.blur(src, (smooth_px, smooth_px)) if smooth_px > 1 else src
+    sm = sm[y0 - cy0 : y1 - cy0, x0 - cx0 : x1 - cx0]
+    scale = np.ones(n)
+    scale[real] = np.clip(peak[real] / reference, *scale_range)
+    # sm > t for an integer sm is sm > floor(t): one uint8 threshold per part, 255 = never
+    thr = np.where(real, np.floor(np.maximum(threshold * scale, low)), 255)
+    thr[0] = 255
+    parts = Parts(win, blocks, scale, peak)
+    limit = parts.image(np.minimum(thr, 255).astype(np.uint8), win)
+    body[y0:y1, x0:x1] = cv2.compare(sm, limit, cv2.CMP_GT)
+    return body, parts
+
+
+_BLOCK3 = np.ones((3, 3), np.uint8)

@@ -4,7 +4,8 @@
 40 repetitions = 2000 samples) in the dataset format (``dataset.py``). Every sample has
 its own seed derived from (seed, subject, gesture, rep), so the result does not depend
 on the number of worker processes or their order. Static samples get
-``STATIC_FRAMES`` frames, dynamic ones ``DYNAMIC_FRAMES`` (the classifier reads four).
+``STATIC_FRAMES`` frames, dynamic ones ``DYNAMIC_FRAMES`` (a gesture is decided from
+its first 2 to 6, the same number for every sample).
 Each sample gets its own ``background.png`` (the empty table half a second before, so
 the slow ambient drift matches; ``per_sample_background=False`` leaves only the dataset's
 ``background.png``) and a ``truth.json`` (contacts, hand centre, angle).
@@ -14,11 +15,14 @@ Subjects are ``s1 .. sN``; the last ``left_handed`` of them (default 1, as in th
 paper's five-subject study) use their left hand, the others their right.
 
 ``vary=True`` draws a recording condition per subject and session (``sessions`` blocks
-of the repetitions; ``CONDITION_RANGES``): IR light level +-40 %, the LED lobes and
-hot-spot layout, sensor read noise (per session), hand size and hover height of lifted
-parts (per subject, times a smaller per-session change). Each sample's ``sample.json``
-holds its ``session`` and ``condition``; the dataset's ``background.png`` is the default
-rig's, every sample has its own under its session's light.
+of the repetitions; ``CONDITION_RANGES``): IR light level +-40 % (stratified: the
+subject-sessions share the range evenly, each at a random place in its own stratum),
+the LED lobes and hot-spot layout, sensor read noise (per session), hand size and hover
+height of lifted parts (per subject, times a smaller per-session change). Each sample's
+``sample.json`` holds its ``session`` and ``condition``; the dataset's
+``background.png`` is the default rig's, every sample has its own under its session's
+light. ``light_scale`` multiplies every sample's light (the same performances, seen
+under another light: the same seed and a scale of 0.7 or 1.3 make the light-shift sets).
 
 ``record(camera, out, gesture, subject)`` records from any ``console.contracts.Camera``
 into the same format (the twin acts the gesture out when asked).
@@ -51,7 +55,7 @@ from .dataset import (
 )
 from .progress import CancelCheck, Progress, step
 
-STATIC_FRAMES = 3
+STATIC_FRAMES = 6
 DYNAMIC_FRAMES = 8
 BACKGROUND_LEAD_S = 0.5
 
@@ -65,15 +69,25 @@ CONDITION_RANGES = {
 }
 
 
-def condition(seed: int, subject: int, session: int) -> dict[str, float | int]:
-    """The seeded recording condition of ``subject``'s ``session`` (twin camera keys)."""
+def condition(
+    seed: int, subject: int, session: int, subjects: int = 1, sessions: int = 1
+) -> dict[str, float | int]:
+    """The seeded recording condition of ``subject``'s ``session`` (twin camera keys), one
+    of ``subjects`` x ``sessions``: the light level is stratified over them (a seeded
+    order of the strata, a random place in each)."""
     r = CONDITION_RANGES
     who = np.random.default_rng(np.random.SeedSequence([seed, subject, 7919]))
     hand, hover = who.uniform(*r["hand_scale"]), who.uniform(*r["hover_scale"])
     ses = np.random.default_rng(np.random.SeedSequence([seed, subject, session, 104729]))
     k = ses.uniform(*r["session_scale"], size=2)
+    slots = max(subjects * sessions, subject * sessions + session + 1)
+    stratum = np.random.default_rng(np.random.SeedSequence([seed, slots, 15485863])).permutation(
+        slots
+    )[subject * sessions + session]
+    lo, hi = r["illumination"]
+    light = lo + (hi - lo) * (stratum + ses.uniform()) / slots
     return {
-        "illumination": round(float(ses.uniform(*r["illumination"])), 4),
+        "illumination": round(float(light), 4),
         "noise_sigma": round(float(ses.uniform(*r["noise_sigma"])), 3),
         "led_seed": int(ses.integers(0, 2**31 - 1)),
         "hand_scale": round(float(hand * k[0]), 4),
@@ -124,7 +138,10 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
             on_rep()
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
         session = rep * sessions // job["reps"] if sessions else 0
-        cond = condition(seed, si, session) if sessions else None
+        cond = condition(seed, si, session, job["subjects"], sessions) if sessions else None
+        if job["light_scale"] != 1.0:
+            cond = dict(cond or {"illumination": 1.0})
+            cond["illumination"] = round(cond["illumination"] * job["light_scale"], 4)
         if session not in cameras:  # the registered twin camera's factory
             prof = dict(job["camera_profile"])
             prof.update({f"twin_camera.{k}": v for k, v in (cond or {}).items()})
@@ -138,6 +155,8 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
         extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
         if cond is not None:
             extra.update(session=f"{subject_names(si + 1)[si]}/{session}", condition=cond)
+        if job["light_scale"] != 1.0:
+            extra["light_scale"] = job["light_scale"]
         write_sample(
             out,
             gesture,
@@ -170,6 +189,7 @@ def synth(
     exposure_ms: float = 0.0,
     vary: bool = False,
     sessions: int = 2,
+    light_scale: float = 1.0,
     force: bool = False,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
@@ -190,8 +210,10 @@ def synth(
         raise UserError(f"--left-handed {left_handed}: must be from 0 to --subjects {subjects}")
     if vary and not 1 <= sessions <= reps:
         raise UserError(f"--sessions {sessions}: must be from 1 to --reps {reps}")
-    if static_frames < 1 or dynamic_frames < 4:
-        raise UserError("frames: static samples need >= 1 frame, dynamic >= 4")
+    if static_frames < 2 or dynamic_frames < 4:
+        raise UserError("frames: static samples need >= 2 frames, dynamic >= 4")
+    if not 0.1 <= light_scale <= 3.0:
+        raise UserError(f"--light-scale {light_scale}: must be from 0.1 to 3")
     if out.exists() and not out.is_dir():
         raise UserError(f"{out}: exists and is not a folder; choose another --out")
     if out.is_dir() and any(out.iterdir()) and not force:
@@ -217,6 +239,8 @@ def synth(
             "per_sample_bg": per_sample_background,
             "side": sides[si],
             "sessions": sessions if vary else 0,
+            "subjects": subjects,
+            "light_scale": float(light_scale),
         }
         for si in range(subjects)
         for g in gestures
@@ -266,6 +290,7 @@ def synth(
         "vary": vary,
         "sessions": sessions if vary else None,
         "condition_ranges": CONDITION_RANGES if vary else None,
+        "light_scale": light_scale,
         "mapping": mapping.to_dict(),
         "workers": workers,
         "seconds": round(seconds, 2),

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 import cv2
@@ -57,7 +57,17 @@ from .hand_shape import (
     to_canonical,
     wrist_arc,
 )
-from .segmentation import body_window, contact_window, frame_highpass, highpass_window
+from .segmentation import (
+    Parts,
+    contact_window,
+    frame_highpass,
+    highpass_window,
+    relative_body,
+)
+
+#: the range a hand's light may scale the thresholds by (a hand dimmer than 0.3 of the
+#: reference is mostly noise; brighter than 2x, the sensor clips)
+SCALE_RANGE = (0.3, 2.0)
 
 
 @dataclass(frozen=True)
@@ -83,11 +93,12 @@ class VisionParams:
     finger_width: float = 0.55  # one finger's width, palm radii
     n_harmonics: int = 12
     rotation_invariant: bool = True
-    #: touching skin's brightness (grey levels above the background) ``body_threshold``
-    #: is set for (180 on the twin at its default light): > 0, the body threshold follows
-    #: the brightness measured near the contacts, so fewer hovering parts change with the
-    #: IR light level; 0 (default): the fixed ``body_threshold``
-    contact_level: float = 0.0
+    #: touching skin's brightness (grey levels above the background, its brightest 5 px
+    #: mean) the two thresholds are given for (about 183 on the twin at its nominal
+    #: light): > 0 (default), each hand's thresholds scale with the brightness that hand
+    #: shows, so its hovering parts and contacts keep their extent under another light
+    #: (``segmentation.relative_body``); 0: fixed thresholds in grey levels
+    contact_level: float = 180.0
     illumination_tolerance: float = 0.15  # |gain - 1| above this flags an illumination change
     offset_tolerance: float = 8.0  # |offset| grey levels above this flags one too
 
@@ -174,19 +185,6 @@ def check_frame(image: object, shape: tuple[int, int] | None = (480, 640)) -> np
 
 
 # --------------------------------------------------------------------------- one frame
-def contact_brightness(diff: np.ndarray, contacts: Sequence[Contact]) -> float | None:
-    """Touching skin's brightness in this frame: the median over ``contacts`` of the
-    3x3 mean of ``diff`` at each contact (None without contacts). It follows the IR
-    light reaching the hand, whatever the background was captured under."""
-    H, W = diff.shape
-    vals = []
-    for c in contacts:
-        x, y = int(round(c.pos_px[0])), int(round(c.pos_px[1]))
-        if 0 <= x < W and 0 <= y < H:
-            vals.append(float(diff[max(y - 1, 0) : y + 2, max(x - 1, 0) : x + 2].mean()))
-    return float(np.median(vals)) if vals else None
-
-
 def analyse_hand(
     contour: np.ndarray,
     full_mask: np.ndarray,
@@ -195,8 +193,9 @@ def analyse_hand(
     contacts: list[Contact] | None = None,
     to_mm=None,
 ) -> tuple[Hand, dict] | None:
-    """Everything about one hand component (contour from ``cv2.findContours``): the
-    ``Hand`` and its extras (see ``FrameResult.extras``)."""
+    """Everything about one hand (its largest piece's contour from ``cv2.findContours``;
+    ``contacts``: the hand's own): the ``Hand`` and its extras (see
+    ``FrameResult.extras``)."""
     x0, y0, w, h = cv2.boundingRect(contour)
     pad = 2
     H, W = full_mask.shape
@@ -230,15 +229,7 @@ def analyse_hand(
         sil, params.n_harmonics, rotation_invariant=params.rotation_invariant
     )
     fingers = count_fingers(sil, pr, params)
-    mine: tuple[Contact, ...] = ()
-    if contacts:
-        mine = tuple(
-            c
-            for c in contacts
-            if 0 <= int(c.pos_px[1]) < H
-            and 0 <= int(c.pos_px[0]) < W
-            and cv2.pointPolygonTest(contour, (float(c.pos_px[0]), float(c.pos_px[1])), True) >= -3
-        )
+    mine = tuple(contacts or ())
     center_mm = None
     if to_mm is not None:
         cm = np.asarray(to_mm(np.array([[ex, ey]])))[0]
@@ -272,6 +263,41 @@ def analyse_hand(
     ), extras
 
 
+def hands_of(
+    body: np.ndarray,
+    parts: Parts | None,
+    contacts: list[Contact],
+    min_area_px: float,
+    max_area_px: float,
+) -> list[tuple[np.ndarray, list[Contact]]]:
+    """The hands in a body mask: per part (``relative_body``: everything of a hand
+    above the lowest threshold), its largest piece's contour when its area is within
+    the bounds, and the contacts that lie in that part. A hand whose fingertips touch
+    while the fingers above them rise out of the mask falls into pieces; the pieces
+    and their contacts stay one hand."""
+    if parts is None:
+        return []
+    x0, y0, x1, y1 = parts.win
+    contours, _ = cv2.findContours(
+        body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
+    )
+    largest: dict[int, tuple[float, np.ndarray]] = {}
+    for c in contours:
+        part = parts.label_at(*(int(v) for v in c[0, 0]))
+        area = cv2.contourArea(c)
+        if part and area > largest.get(part, (-1.0, None))[0]:
+            largest[part] = (area, c)
+    owner: dict[int, list[Contact]] = {}
+    for c in contacts:
+        part = parts.label_at(int(round(c.pos_px[0])), int(round(c.pos_px[1])))
+        owner.setdefault(part, []).append(c)
+    return [
+        (c, owner.get(part, []))
+        for part, (area, c) in sorted(largest.items())
+        if min_area_px <= area <= max_area_px
+    ]
+
+
 def process_frame(
     image: np.ndarray,
     background: np.ndarray,
@@ -296,42 +322,37 @@ def process_frame(
     if bg.dtype != np.uint8 and gain == 1.0 and offset == 0.0:
         bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
     diff = subtract(img, bg, gain, offset)
-    # thresholds rise with the noise (the contact one at least its profile value)
+    # thresholds: each hand's relative to the light it shows (``relative_body``), never
+    # below what the noise measured in the fit allows
     noise_body = 4.0 * noise / max(p.smooth_px, 1) + 2.0
-    contact_thr = max(p.contact_threshold, 4.0 * noise / 3.0 + 2.0)
-    # contacts first: only around the pixels above the threshold (the rest of the frame
-    # cannot reach them through the smoothing); the same results as the whole frame
-    win = contact_window(diff, contact_thr)
+    noise_contact = 4.0 * noise / 3.0 + 2.0
+    lo_s, hi_s = SCALE_RANGE if p.contact_level > 0 else (1.0, 1.0)
+    body, parts = relative_body(
+        diff, p.body_threshold, p.contact_level or 1.0, noise_body, p.smooth_px, (lo_s, hi_s)
+    )
+    # contacts only around the pixels above the lowest contact threshold (the rest of the
+    # frame cannot reach it through the smoothing), each part at its own threshold
     contacts = []
-    if win is not None:
+    win = None
+    if parts is not None:
+        win = contact_window(diff, max(p.contact_threshold * lo_s, noise_contact), parts.win)
+    if win is not None and parts is not None:
+        per_part = np.maximum(p.contact_threshold * parts.scale, noise_contact)
+        per_part[0] = p.contact_threshold * hi_s  # off the hands' parts
+        thr = parts.image(np.minimum(per_part, 255).astype(np.float32), win)
         contacts = find_contacts(
             highpass_window(diff, p.highpass_sigma_px, win),
-            contact_thr,
+            thr,
             p.min_contact_area_px,
             p.max_contact_area_px,
             to_mm,
             p.max_contact_size_px,
             origin_px=win[:2],
         )
-    # the body threshold scaled by the light the contacts show (relative, not absolute)
-    level = contact_brightness(diff, contacts) if p.contact_level > 0 else None
-    body_thr = p.body_threshold
-    if level is not None:
-        body_thr *= min(max(level / p.contact_level, 0.5), 2.0)
-    body_thr = max(body_thr, noise_body)
-    body, body_win = body_window(diff, body_thr, p.smooth_px)
-    contours = ()
-    if body_win is not None:
-        x0, y0, x1, y1 = body_win
-        contours, _ = cv2.findContours(
-            body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
-        )
     found = []
     max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
-    for c in contours:
-        if not p.min_hand_area_px <= cv2.contourArea(c) <= max_area:
-            continue
-        got = analyse_hand(c, body, p, diff, contacts, to_mm)
+    for main, mine in hands_of(body, parts, contacts, p.min_hand_area_px, max_area):
+        got = analyse_hand(main, body, p, diff, mine, to_mm)
         if got is not None:
             found.append(got)
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))

@@ -38,7 +38,7 @@ def dataset(tmp_path_factory, cache):
                 left = bool(rep % 2)
                 poses = sketch.gesture_poses(
                     g,
-                    3 if g in sketch.STATIC else 5,
+                    4 if g in sketch.STATIC else 5,
                     pos_px=(rng.uniform(220, 420), rng.uniform(180, 280)),
                     theta_deg=rng.uniform(-180, 180),
                     left=left,

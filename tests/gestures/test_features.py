@@ -88,7 +88,7 @@ def test_static_features_do_not_tell_left_from_right_hands():
 
     def feats(name, left):
         recs = records(name, 2, left=left, theta_deg=-60.0)
-        return select_static(static_features(recs, 16), 2, 16)[0]
+        return select_static(static_features(recs, P.n_harmonics), 2, P.n_harmonics)[0]
 
     right, left, other = feats("l_shape", False), feats("l_shape", True), feats("open_hand", False)
     assert np.linalg.norm(right - left) < 0.35 * np.linalg.norm(right - other)

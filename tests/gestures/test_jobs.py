@@ -32,7 +32,7 @@ def sketched(tmp_path_factory):
             for rep in range(2):
                 poses = sketch.gesture_poses(
                     g,
-                    3 if g in sketch.STATIC else 5,
+                    4 if g in sketch.STATIC else 5,
                     pos_px=(rng.uniform(240, 400), rng.uniform(200, 260)),
                     theta_deg=rng.uniform(-60, 60),
                     size=(0.95, 1.05)[si],

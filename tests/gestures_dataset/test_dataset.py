@@ -189,7 +189,7 @@ def test_synth_small_set_is_complete_labelled_and_deterministic(tmp_path):
     assert {s.hand for s in samples if s.subject == "s1"} == {"right"}
     assert {s.hand for s in samples if s.subject == "s2"} == {"left"}  # the last is left-handed
     for s in samples:
-        assert s.n_frames == (3 if s.kind == "static" else 8)
+        assert s.n_frames == (6 if s.kind == "static" else 8)
         assert s.background_path == s.path / "background.png"
         t = s.truth()
         assert t["gesture"] == s.gesture and t["subject"] == s.subject and t["hand"] == s.hand
@@ -229,7 +229,7 @@ def test_record_from_the_twin_camera(tmp_path):
     assert (p1.name, p3.name) == ("s4_000", "s4_001")
     by = {s.path: s for s in load_dataset(tmp_path, check_images=True)}
     assert by[p1].n_frames == 6 and by[p1].hand == "left" and by[p1].gesture == "rotate"
-    assert by[p2].n_frames == 3 and by[p2].meta["source"] == "twin"
+    assert by[p2].n_frames == 6 and by[p2].meta["source"] == "twin"
     assert by[p1].fps == 60.0
 
 

@@ -632,7 +632,6 @@ def dump_model(p: Path, m, **changes) -> None:
                 "motion_threshold": m.motion_threshold,
                 "n_harmonics": m.n_harmonics,
                 "n_frames": m.n_frames,
-                "static_frames": m.static_frames,
                 "meta": m.meta,
             }
         ),
@@ -744,21 +743,21 @@ def _(p, fx):
 @model_case("settings-n-frames-99", "n_frames", "99")
 def _(p, fx):
     _, m = load_parts(fx)
-    s = {"motion_threshold": 0.1, "n_harmonics": 2, "n_frames": 99, "static_frames": 3}
+    s = {"motion_threshold": 0.1, "n_harmonics": 2, "n_frames": 99}
     dump_model(p, m, settings=json.dumps(s))
 
 
 @model_case("settings-harmonics-50", "n_harmonics", "50")
 def _(p, fx):
     _, m = load_parts(fx)
-    s = {"motion_threshold": 0.1, "n_harmonics": 50, "n_frames": 4, "static_frames": 3}
+    s = {"motion_threshold": 0.1, "n_harmonics": 50, "n_frames": 4}
     dump_model(p, m, settings=json.dumps(s))
 
 
 @model_case("settings-threshold-nan", "motion_threshold")
 def _(p, fx):
     _, m = load_parts(fx)
-    s = {"motion_threshold": float("nan"), "n_harmonics": 2, "n_frames": 4, "static_frames": 3}
+    s = {"motion_threshold": float("nan"), "n_harmonics": 2, "n_frames": 4}
     dump_model(p, m, settings=json.dumps(s))
 
 
@@ -889,10 +888,10 @@ def fx(tmp_path_factory, vmap_file):
     from plugins.gestures.model import GestureModel
 
     base = tmp_path_factory.mktemp("gfx")
-    xs, xk, xd, _ = record_features([None] * 4, (4,), N_HARMONICS_MAX, 3)
-    ws = select_static(xs, 2, N_HARMONICS_MAX).shape[1]
+    xs, xk, xd, _ = record_features([None] * 4, (4,), N_HARMONICS_MAX)
+    ws = select_static(xs[4], 2, N_HARMONICS_MAX).shape[1]
     wd = select_dynamic(xd[4], 2, N_HARMONICS_MAX).shape[1]
-    wk = select_kind(xk).shape[1]
+    wk = select_kind(xk[4]).shape[1]
     rng = np.random.default_rng(1)
     labels = np.array([g for g in sketch.STATIC + sketch.DYNAMIC for _ in range(4)])
     n = len(labels)

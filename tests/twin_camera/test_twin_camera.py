@@ -47,7 +47,7 @@ def test_frames_are_640x480_uint8_with_the_documented_frame_counts(all_samples):
     for g, (frames, truth) in all_samples.items():
         assert frames.dtype == np.uint8
         assert frames.shape[1:] == (480, 640)
-        assert len(frames) == (3 if g in STATIC else 8)
+        assert len(frames) == (6 if g in STATIC else 8)
         assert len(truth["frames"]) == len(frames)
         assert truth["gesture"] == g and truth["kind"] == ("static" if g in STATIC else "dynamic")
 

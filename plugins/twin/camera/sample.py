@@ -42,7 +42,7 @@ HARD_CASES: tuple[str, ...] = (
     "rotated_180",
     "illumination_step",
 )
-STATIC_FRAMES = 3
+STATIC_FRAMES = 6
 DYNAMIC_FRAMES = 8
 STEP_GAIN, STEP_OFFSET = 1.4, 25.0
 
