@@ -216,13 +216,17 @@ class SimulatedCamera(RendersBackground, Protocol):
 @runtime_checkable
 class VisionResult(Protocol):
     """What a classifier's vision found in one frame: ``hands``, ``contacts`` (all contact
-    blobs, on a hand or not) and its intermediate images by name (``view(name)``, one of
-    the classifier's ``views``; ``None`` when it has no such image)."""
+    blobs, on a hand or not), its intermediate images by name (``view(name)``, one of
+    the classifier's ``views``; ``None`` when it has no such image) and what it measured
+    that an operator tunes against (``readings() -> {name: value}``, e.g. the touching
+    skin's level or pixels the sensor clips; may be empty)."""
 
     hands: tuple[Hand, ...]
     contacts: tuple[Contact, ...]
 
     def view(self, name: str) -> np.ndarray | None: ...
+
+    def readings(self) -> dict[str, float]: ...
 
 
 @runtime_checkable

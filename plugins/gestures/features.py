@@ -237,27 +237,14 @@ def dynamic_features(
     return np.concatenate([record_static(first, n_harmonics), motion_features(recs)])
 
 
-def _mirror_sectors() -> np.ndarray:
-    """Sector permutation of the brightness grid under x -> -x in the canonical frame
-    (a left hand is the mirror image of a right one)."""
-    width = 2 * math.pi / GRID_SECTORS
-    centre = -math.pi + width * (np.arange(GRID_SECTORS) + 0.5)
-    mirrored = (math.pi - centre + math.pi) % (2 * math.pi) - math.pi
-    return np.clip(((mirrored + math.pi) / width).astype(int), 0, GRID_SECTORS - 1)
-
-
-_MIRROR = _mirror_sectors()
-_PAIRS = np.array([i for i in range(GRID_SECTORS) if i <= _MIRROR[i]])
-
-
-def mirror_invariant_grid(grid: np.ndarray) -> np.ndarray:
-    """(n, N_GRID) grids -> per ring and mirror pair of sectors: mean and half absolute
-    difference (the same for a hand and its mirror image)."""
-    g = grid.reshape(len(grid), -1, GRID_SECTORS)
-    m = g[:, :, _MIRROR]
-    sym = 0.5 * (g + m)[:, :, _PAIRS]
-    asym = 0.5 * np.abs(g - m)[:, :, _PAIRS]
-    return np.concatenate([sym.reshape(len(grid), -1), asym.reshape(len(grid), -1)], axis=1)
+def ring_shares(grid: np.ndarray) -> np.ndarray:
+    """(n, N_GRID) grids -> (n, rings): the share of the hand's brightness at each
+    distance from the palm (the sectors summed). The same for a hand and its mirror
+    image; the sectors themselves tell one person's way of holding a pose from another's
+    more than one pose from another (measured: leave-one-subject-out static accuracy
+    0.978 with the mirror-paired sectors, 0.994 with the rings, twin, 5 x 10 x 20)."""
+    g = np.asarray(grid).reshape(len(grid), -1, GRID_SECTORS)
+    return g.sum(axis=2)
 
 
 MAX_COUNT_CODE = 5
@@ -274,9 +261,10 @@ def count_code(counts: np.ndarray) -> np.ndarray:
 
 def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the static classifier sees, from (n, static_size(n_max)) feature rows:
-    magnitudes of ``n`` Fourier harmonics (invariant to mirroring as well), the
-    mirror-invariant brightness grid, the finger count, the hand flag, the contact
-    layout and the contact count as a category. Left and right hands look alike to it."""
+    magnitudes of ``n`` Fourier harmonics (invariant to mirroring as well), the hand's
+    brightness by distance from the palm (``ring_shares``), the finger count, the hand
+    flag, the contact layout and the contact count as a category. Left and right hands
+    look alike to it."""
     x = np.atleast_2d(x)
     d = desc_size(n_max)
     grid = x[:, d : d + N_GRID]
@@ -284,7 +272,7 @@ def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     return np.concatenate(
         [
             x[:, desc_indices(n, n_max, (2,))],
-            mirror_invariant_grid(grid),
+            ring_shares(grid),
             x[:, d + N_GRID :],
             count_code(count),
         ],

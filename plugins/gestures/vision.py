@@ -117,17 +117,35 @@ class FrameResult:
     offset: float = 0.0
     noise: float = 0.0  # robust std of the difference image (grey levels)
     illumination_changed: bool = False
+    #: pixels of the hands' outlines at the sensor's maximum (255): touching skin clips,
+    #: so the hands' light and thresholds are underestimated; lower exposure or gain
+    clipped_px: int = 0
     #: "diff", "body", "highpass" (computed on first access) with ``keep_masks``
     masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
     #: brightness-weighted centroid), grid (brightness in the canonical frame,
-    #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii)
+    #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii), level (the
+    #: hand's brightest block, grey levels above the background), light (level over
+    #: ``contact_level``, the scale of its thresholds; 1.0 with fixed thresholds)
     extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
 
     def view(self, name: str) -> np.ndarray | None:
         """The intermediate image ``name`` (``diff``, ``body``, ``highpass``), or ``None``
         when this result kept none (``console.contracts.VisionResult``)."""
         return self.masks.get(name)
+
+    def readings(self) -> dict[str, float]:
+        """What an operator tunes against (``console.contracts.VisionResult``): the
+        main hand's touch level and light scale, clipped pixels, the noise and the
+        illumination gain against the background."""
+        out: dict[str, float] = {}
+        if self.extras:
+            out["touch level"] = float(self.extras[0]["level"])
+            out["light x"] = float(self.extras[0]["light"])
+        out["clipped px"] = float(self.clipped_px)
+        out["noise"] = float(self.noise)
+        out["gain"] = float(self.gain)
+        return out
 
 
 class Masks(Mapping):
@@ -269,10 +287,10 @@ def hands_of(
     contacts: list[Contact],
     min_area_px: float,
     max_area_px: float,
-) -> list[tuple[np.ndarray, list[Contact]]]:
+) -> list[tuple[np.ndarray, list[Contact], int]]:
     """The hands in a body mask: per part (``relative_body``: everything of a hand
     above the lowest threshold), its largest piece's contour when its area is within
-    the bounds, and the contacts that lie in that part. A hand whose fingertips touch
+    the bounds, the contacts that lie in that part, and the part's label. A hand whose fingertips touch
     while the fingers above them rise out of the mask falls into pieces; the pieces
     and their contacts stay one hand."""
     if parts is None:
@@ -292,7 +310,7 @@ def hands_of(
         part = parts.label_at(int(round(c.pos_px[0])), int(round(c.pos_px[1])))
         owner.setdefault(part, []).append(c)
     return [
-        (c, owner.get(part, []))
+        (c, owner.get(part, []), part)
         for part, (area, c) in sorted(largest.items())
         if min_area_px <= area <= max_area_px
     ]
@@ -351,10 +369,17 @@ def process_frame(
         )
     found = []
     max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
-    for main, mine in hands_of(body, parts, contacts, p.min_hand_area_px, max_area):
+    for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area):
         got = analyse_hand(main, body, p, diff, mine, to_mm)
         if got is not None:
+            got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))
             found.append(got)
+    clipped = 0
+    if found:  # the sensor's maximum inside the hands' outlines
+        x0, y0, x1, y1 = parts.win
+        hot = cv2.compare(img[y0:y1, x0:x1], 254, cv2.CMP_GT)
+        if cv2.countNonZero(hot):
+            clipped = cv2.countNonZero(cv2.bitwise_and(hot, body[y0:y1, x0:x1]))
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     masks: Mapping[str, np.ndarray] = {}
     if keep_masks:  # the whole high-pass image only if someone looks at it
@@ -370,6 +395,7 @@ def process_frame(
         offset=float(offset),
         noise=float(noise),
         illumination_changed=bool(changed),
+        clipped_px=int(clipped),
         masks=masks,
         extras=tuple(e for _, e in found),
     )

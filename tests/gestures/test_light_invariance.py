@@ -83,3 +83,18 @@ def test_noise_alone_is_no_hand_and_a_faint_hand_still_is():
     img = bg.copy()
     img[150:330, 250:410] = 55  # a hovering hand 25 grey levels above the table, no touch
     assert len(process_frame(img, bg, RELATIVE).hands) == 1
+
+
+def test_clipped_touching_skin_is_counted_for_the_operator():
+    from console.tui.panes.camera import reading_lines
+
+    got = {}
+    for light in (1.0, 1.6):
+        frames, bg = _seen("closed_hand", light, 0, 1)
+        got[light] = process_frame(frames[0], bg, RELATIVE).readings()
+    assert got[1.0]["clipped px"] == 0 and got[1.6]["clipped px"] > 100
+    assert 0.85 < got[1.0]["light x"] < 1.2  # touching skin near the reference level
+    assert 140 < got[1.0]["touch level"] < 220
+    lines = reading_lines(got[1.6])
+    assert any("touching skin clips" in ln and "lower the exposure or gain" in ln for ln in lines)
+    assert not any("clips" in ln for ln in reading_lines(got[1.0]))

@@ -47,6 +47,20 @@ def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -
     return ov
 
 
+def reading_lines(readings: dict[str, float]) -> list[str]:
+    """The vision's readings as lines for the info panel: one line of values, and a
+    warning with the fix when the sensor clips on a hand."""
+    if not readings:
+        return []
+    out = [f"{escape(k)} {v:.3g}" for k, v in readings.items()]
+    clipped = readings.get("clipped px", 0)
+    if clipped > 0:
+        out.append(
+            f"[red]touching skin clips ({clipped:.0f} px at 255): lower the exposure or gain[/]"
+        )
+    return out
+
+
 def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, int], str]:
     """``{(cell row, col): id}``: each contact's id (the classifier's) written just right
     of the contact on a ``cols`` x ``rows`` half-block view of a ``shape_px`` image."""
@@ -288,6 +302,9 @@ class CameraPane(Horizontal):
         for h in hands[:1]:
             pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
             lines.append(f"hand at {pos}, {h.finger_count} fingers")
+        res = work.get("result")
+        if res is not None:
+            lines += reading_lines(res.readings())
         lines.append("")
         chosen = self.chosen_key()
         for k, v in svc.params().items():
