@@ -13,7 +13,7 @@ import contextlib
 import hashlib
 import json
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -301,17 +301,28 @@ def cross_validate(
     seed: int = 0,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
+    transfer: Mapping[str, FeatureSet] | None = None,
 ) -> dict:
     """Outer cross-validation of the whole classifier; the report the CLI prints (with
     ``folds``: the test size and accuracies of each outer fold). ``n_harmonics`` or
     ``n_frames`` None: chosen inside each outer fold's training part (nested CV; the
     choices are in ``folds``). ``progress(frac, msg)`` after each fold; ``cancelled()``
-    stops it between folds (``Cancelled``)."""
+    stops it between folds (``Cancelled``).
+
+    ``transfer``: feature sets of the same samples seen otherwise (the same performances
+    under another light, say); each outer fold's model also classifies its test samples
+    there, and ``transfer[name]`` in the report has that set's accuracies and its
+    per-sample predictions (``predicted``)."""
     from .selection import candidates, select_settings
 
     hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
     for h in hs:
         columns(fs, h, frs[0])  # a bad --harmonics / --frames is refused before any fit
+    transfer = dict(transfer or {})
+    for name, other in transfer.items():
+        if list(other.names) != list(fs.names):
+            raise UserError(f"transfer set {name}: not the same samples in the same order")
+    pred_t = {name: np.empty(len(fs.labels), dtype=object) for name in transfer}
     pred = np.empty(len(fs.labels), dtype=object)
     thresholds = []
     folds = []
@@ -323,12 +334,16 @@ def cross_validate(
         h, f = sel["n_harmonics"], sel["n_frames"]
         xs, xd, xk, sc = columns(fs, h, f)
         m = GestureModel.fit(
-            xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f, seed=seed
-        )
+            xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f,
+            seed=seed, groups=fs.subjects[tr],
+        )  # fmt: skip
         thresholds.append(m.motion_threshold)
         pred[te] = m.predict(xs[te], xd[te], xk[te])
+        for name, other in transfer.items():
+            ts, td, tk, _ = columns(other, h, f)
+            pred_t[name][te] = m.predict(ts[te], td[te], tk[te])
         folds.append(fold_report(fs, te, pred[te].astype(str), cv))
-        folds[-1].update(n_harmonics=h, n_frames=f, selection=sel["scores"])
+        folds[-1].update(n_harmonics=h, n_frames=f, selection=sel["scores"], svm=m.svm_settings())
         chosen.append((h, f))
         acc = folds[-1]["accuracy"]
         step(progress, None, (k + 1) / len(parts), f"fold {k + 1}/{len(parts)}: {acc:.1%}")
@@ -340,6 +355,13 @@ def cross_validate(
         "chosen_per_fold": [{"n_harmonics": a, "n_frames": b} for a, b in chosen],
         "inner_folds": None if len(hs) * len(frs) == 1 else INNER_FOLDS,
     }
+    if transfer:
+        rep["transfer"] = {}
+        for name, other in transfer.items():
+            got = pred_t[name].astype(str)
+            r = report(fs.labels, got, other, cv, h, f, thresholds)
+            keys = ("static_accuracy", "dynamic_accuracy", "kind_accuracy", "n_samples")
+            rep["transfer"][name] = {k: r[k] for k in keys} | {"predicted": got.tolist()}
     return rep
 
 
@@ -425,7 +447,7 @@ def train(
         "searched": {"n_harmonics": list(hs), "n_frames": list(frs)},
         "inner_cv_accuracy": sel["scores"],
     }
-    return GestureModel.fit(
+    model = GestureModel.fit(
         xs,
         xd,
         xk,
@@ -434,6 +456,7 @@ def train(
         n_harmonics=h,
         n_frames=f,
         seed=seed,
+        groups=fs.subjects,
         meta={
             "trained_on": fs.meta.get("root"),
             "n_samples": len(fs.labels),
@@ -441,3 +464,5 @@ def train(
             **(meta or {}),
         },
     )
+    selection["svm"] = model.svm_settings()
+    return model

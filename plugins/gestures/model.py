@@ -167,26 +167,58 @@ def make_pipeline(seed: int = 0):
     )
 
 
-def fit_svm(x: np.ndarray, y: np.ndarray, *, inner_folds: int = 3, seed: int = 0):
-    """The SVM pipeline with C and gamma chosen by stratified ``inner_folds``-fold CV on
-    (x, y) only; returns the refitted best pipeline. One class: a constant predictor."""
-    from sklearn.model_selection import GridSearchCV, StratifiedKFold
+def inner_splitter(y: np.ndarray, groups: np.ndarray | None, folds: int, seed: int = 0):
+    """Folds for choosing settings on training data: by group (subject) when there are
+    at least 2, so a choice is judged on people it was not tuned on (what the outer
+    leave-one-subject-out and a new user ask of it); else stratified by class. None when
+    no split is possible."""
+    from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
-    classes, counts = np.unique(y, return_counts=True)
+    _, counts = np.unique(y, return_counts=True)
+    if groups is not None and len(np.unique(groups)) >= 2:
+        k = int(min(folds, len(np.unique(groups))))
+        return StratifiedGroupKFold(k, shuffle=True, random_state=seed)
+    k = int(min(folds, counts.min()))
+    return _Ungrouped(StratifiedKFold(k, shuffle=True, random_state=seed)) if k >= 2 else None
+
+
+@dataclass
+class _Ungrouped:
+    """A class-stratified splitter that takes (and ignores) the groups argument."""
+
+    inner: object
+
+    def split(self, x, y, groups=None):
+        return self.inner.split(x, y)
+
+
+def fit_svm(
+    x: np.ndarray,
+    y: np.ndarray,
+    *,
+    groups: np.ndarray | None = None,
+    inner_folds: int = 3,
+    seed: int = 0,
+):
+    """The SVM pipeline with C and gamma chosen by ``inner_folds``-fold CV on (x, y) only
+    (``inner_splitter``: by subject when ``groups`` names them); returns the refitted best
+    pipeline. One class: a constant predictor."""
+    from sklearn.model_selection import GridSearchCV
+
+    classes = np.unique(y)
     if len(classes) < 2:
         return _Constant(str(classes[0])) if len(classes) else None
-    folds = int(min(inner_folds, counts.min()))
-    if folds < 2:
+    cv = inner_splitter(y, groups, inner_folds, seed)
+    if cv is None:
         pipe = make_pipeline(seed)
         return pipe.fit(x, y)
-    grid = GridSearchCV(
-        make_pipeline(seed),
-        SVC_GRID,
-        cv=StratifiedKFold(folds, shuffle=True, random_state=seed),
-        n_jobs=1,
-    )
+    grid = GridSearchCV(make_pipeline(seed), SVC_GRID, cv=list(cv.split(x, y, groups)), n_jobs=1)
     grid.fit(x, y)
     return grid.best_estimator_
+
+
+def _part(groups: np.ndarray | None, mask: np.ndarray) -> np.ndarray | None:
+    return None if groups is None else groups[mask]
 
 
 @dataclass
@@ -234,18 +266,42 @@ class GestureModel:
         seed: int = 0,
         meta: dict | None = None,
         kind_svm: object | None = None,
+        groups: np.ndarray | None = None,
     ) -> GestureModel:
         """Fit on static features ``xs``, dynamic ``xd``, motion (kind) features ``xk``
-        and the motion ``score`` (``kind_svm``: one already fitted on the same samples)."""
+        and the motion ``score`` (``kind_svm``: one already fitted on the same samples;
+        ``groups``: each sample's subject, so C and gamma are chosen across people)."""
         labels = np.asarray(labels).astype(str)
         is_dyn = np.isin(labels, DYNAMIC)
         thr = fit_threshold(score, is_dyn)
+        g = None if groups is None else np.asarray(groups)
         kind = kind_svm
         if kind is None:
-            kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), seed=seed)
-        st = fit_svm(xs[~is_dyn], labels[~is_dyn], seed=seed) if np.any(~is_dyn) else None
-        dy = fit_svm(xd[is_dyn], labels[is_dyn], seed=seed) if np.any(is_dyn) else None
+            kind = fit_svm(xk, np.where(is_dyn, "dynamic", "static"), groups=g, seed=seed)
+        st = dy = None
+        if np.any(~is_dyn):
+            st = fit_svm(xs[~is_dyn], labels[~is_dyn], groups=_part(g, ~is_dyn), seed=seed)
+        if np.any(is_dyn):
+            dy = fit_svm(xd[is_dyn], labels[is_dyn], groups=_part(g, is_dyn), seed=seed)
         return cls(st, dy, kind, thr, n_harmonics, n_frames, dict(meta or {}))
+
+    def svm_settings(self) -> dict[str, dict[str, float | str] | None]:
+        """C and gamma each SVM was fitted with (chosen by cross-validation in ``fit_svm``),
+        by classifier (``static``, ``dynamic``, ``kind``)."""
+        from sklearn.pipeline import Pipeline
+
+        out: dict[str, dict[str, float | str] | None] = {}
+        for name, svm in (
+            ("static", self.static_svm),
+            ("dynamic", self.dynamic_svm),
+            ("kind", self.kind_svm),
+        ):
+            out[name] = None
+            if isinstance(svm, Pipeline):
+                svc = svm.named_steps["svc"]
+                gamma = svc.gamma if isinstance(svc.gamma, str) else float(svc.gamma)
+                out[name] = {"C": float(svc.C), "gamma": gamma}
+        return out
 
     def kind(self, xk: np.ndarray) -> np.ndarray:
         """True where the motion says dynamic."""

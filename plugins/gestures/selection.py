@@ -15,7 +15,7 @@ import numpy as np
 
 from console.errors import UserError
 
-from .model import GestureModel
+from .model import GestureModel, inner_splitter
 from .progress import CancelCheck, step
 
 #: Candidates searched when the harmonics / frames are not given.
@@ -58,33 +58,32 @@ def select_settings(
 ) -> dict:
     """The (harmonics, frames) with the best inner-CV accuracy on samples ``idx`` of
     ``fs`` (ties: fewer frames, then fewer harmonics, i.e. the faster and simpler model),
-    with every candidate's accuracy. One candidate: returned without fitting."""
-    from sklearn.model_selection import StratifiedKFold
-
+    with every candidate's accuracy. The inner folds keep each subject on one side
+    (``model.inner_splitter``): settings that only suit the people they were tuned on
+    are not chosen. One candidate: returned without fitting."""
     from .evaluate import columns
 
     grid = [(h, f) for h in harmonics for f in frames]
     if len(grid) == 1:
         return {"n_harmonics": grid[0][0], "n_frames": grid[0][1], "scores": None}
     labels = fs.labels[idx].astype(str)
-    _, counts = np.unique(labels, return_counts=True)
-    folds = int(min(INNER_FOLDS, counts.min()))
-    if folds < 2:
+    groups = fs.subjects[idx]
+    splitter = inner_splitter(labels, groups, INNER_FOLDS, seed)
+    if splitter is None:
         raise UserError("model selection: every gesture needs at least 2 training samples")
     correct = {c: 0 for c in grid}
-    inner = StratifiedKFold(folds, shuffle=True, random_state=seed).split(idx, labels)
-    for tr, te in inner:
+    for tr, te in splitter.split(idx, labels, groups):
         step(None, cancelled, 0, "model selection")
         tr, te = idx[tr], idx[te]
-        # the kind SVM and threshold do not depend on harmonics or frames: fit them once
-        base = None
+        # the kind SVM depends on the frames only: fitted once per window
+        kinds: dict[int, object] = {}
         for h, f in grid:
             xs, xd, xk, sc = columns(fs, h, f)
             m = GestureModel.fit(
                 xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f,
-                seed=seed, kind_svm=base,
+                seed=seed, kind_svm=kinds.get(f), groups=fs.subjects[tr],
             )  # fmt: skip
-            base = m.kind_svm
+            kinds[f] = m.kind_svm
             correct[(h, f)] += int(np.sum(m.predict(xs[te], xd[te], xk[te]) == fs.labels[te]))
     n = len(idx)
     best = max(grid, key=lambda c: (correct[c], -c[1], -c[0]))
@@ -131,8 +130,9 @@ def holdout(
     xs, xd, xk, sc = columns(fs, h, f)
     tr, te = train_idx, test_idx
     m = GestureModel.fit(
-        xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f, seed=seed
-    )
+        xs[tr], xd[tr], xk[tr], sc[tr], fs.labels[tr], n_harmonics=h, n_frames=f, seed=seed,
+        groups=fs.subjects[tr],
+    )  # fmt: skip
     pred = m.predict(xs[te], xd[te], xk[te]).astype(str)
     return {**fold_report(fs, te, pred, "holdout"), "n_harmonics": h, "n_frames": f}
 

@@ -34,3 +34,52 @@ def test_each_session_is_tested_by_a_model_trained_on_the_others(tmp_path):
     # a set without recorded conditions has no such report
     plain = {n: {} for n in fs.names}
     assert condition_report(fs, plain) == {"leave_one_condition_out": None, "light_transfer": None}
+
+
+def _varied_features(tmp_path):
+    root = tmp_path / "varied"
+    gestures = ("one_finger", "two_finger", "drag", "zoom")
+    synth(root, 3, 4, seed=5, workers=1, gestures=gestures, vary=True, sessions=2)
+    return root, extract(root, use_cache=False)
+
+
+def test_each_window_is_judged_with_its_own_kind_classifier(tmp_path):
+    """A candidate's inner accuracy does not depend on which candidates were tried
+    before it (each decision window has its own static-vs-dynamic classifier), and the
+    inner folds keep a subject on one side."""
+    from plugins.gestures.model import inner_splitter
+    from plugins.gestures.selection import select_settings
+
+    _, fs = _varied_features(tmp_path)
+    idx = np.arange(len(fs.labels))
+    a = select_settings(fs, idx, (2,), (2, 4))["scores"]
+    b = select_settings(fs, idx, (2,), (4, 2))["scores"]
+    assert a == b
+    split = inner_splitter(fs.labels, fs.subjects, 3)
+    for tr, te in split.split(idx, fs.labels, fs.subjects):
+        assert not set(fs.subjects[tr]) & set(fs.subjects[te])
+
+
+def test_a_fold_s_model_is_also_tested_under_another_light(tmp_path):
+    """``cross_validate(transfer=...)``: the same performances seen under x0.7 light are
+    classified by each fold's model; the report has their accuracies and predictions."""
+    from plugins.gestures.evaluate import cross_validate
+
+    root, fs = _varied_features(tmp_path)
+    dim_root = tmp_path / "dim"
+    gestures = ("one_finger", "two_finger", "drag", "zoom")
+    synth(dim_root, 3, 4, seed=5, workers=1, gestures=gestures, vary=True, sessions=2,
+          light_scale=0.7)  # fmt: skip
+    dim = extract(dim_root, use_cache=False)
+    dim_meta = {s.name: s.meta for s in load_dataset(dim_root)}
+    base_meta = {s.name: s.meta for s in load_dataset(root)}
+    for n in fs.names:  # the same performance, at 0.7 of its session's light
+        a, b = base_meta[n]["condition"]["illumination"], dim_meta[n]["condition"]["illumination"]
+        assert abs(b - 0.7 * a) < 1e-3
+    r = cross_validate(fs, "loso", n_harmonics=2, n_frames=4, transfer={"x0.7": dim})
+    t = r["transfer"]["x0.7"]
+    assert len(t["predicted"]) == len(fs.labels) and t["n_samples"] == len(fs.labels)
+    acc = np.mean(np.array(t["predicted"]) == fs.labels)
+    st = t["static_accuracy"] * 24 + t["dynamic_accuracy"] * 24
+    assert abs(acc * 48 - st) < 1e-9
+    assert acc >= 0.75
