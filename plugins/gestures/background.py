@@ -1,6 +1,7 @@
 """The background model and the frame's illumination against it: the empty table's image
-(captured as a median, then slowly updated where no hand is), the global gain and offset of a
-frame against it (a sudden illumination change), and the difference image."""
+(captured as a median, then kept current: a whole-frame gain and offset follows the light,
+a slow running average the table's local changes where no hand is), the global gain and
+offset of a frame against it (a sudden illumination change), and the difference image."""
 
 from __future__ import annotations
 
@@ -11,9 +12,14 @@ from console.errors import UserError
 
 
 class Background:
-    """Background image: captured on demand (median of frames), then slowly updated by a
-    running average where no hand is seen. ``image`` is the float average; ``u8`` its
-    rounded 8-bit copy, kept current by ``update`` (what each frame is compared with)."""
+    """Background image: captured on demand (median of frames), then kept current by
+    ``update``: the light's change as the frame's fit measured it (``gain`` x background +
+    ``offset``, over the whole image, under the hands too: ambient drift and sudden steps
+    are followed at once and never learnt as a hand), then a running average with weight
+    ``alpha`` where no hand is (the table's slow local changes). A resting hand is never
+    blended in: its whole extent down to the lowest threshold is left out. ``image`` is
+    the float background; ``u8`` its rounded 8-bit copy (what each frame is compared
+    with)."""
 
     def __init__(self, image: np.ndarray | None = None, alpha: float = 0.02) -> None:
         self.alpha = float(alpha)
@@ -32,11 +38,22 @@ class Background:
             raise UserError("background capture: no frames; show the empty table for a moment")
         self._set(np.median(np.stack(frames).astype(np.float32), axis=0))
 
-    def update(self, frame: np.ndarray, foreground: np.ndarray | None = None) -> None:
-        """Blend ``frame`` in with weight ``alpha``, except under ``foreground`` (mask)."""
+    def update(
+        self,
+        frame: np.ndarray,
+        foreground: np.ndarray | None = None,
+        gain: float = 1.0,
+        offset: float = 0.0,
+    ) -> None:
+        """Follow the light (``frame ~ gain * background + offset``, as the frame's fit
+        found it), then blend ``frame`` in with weight ``alpha`` except under
+        ``foreground`` (mask)."""
         if self.image is None:
             self._set(frame.astype(np.float32))
             return
+        if gain != 1.0 or offset != 0.0:
+            self.image *= np.float32(gain)
+            self.image += np.float32(offset)
         if foreground is None:
             cv2.accumulateWeighted(frame, self.image, self.alpha)
         else:

@@ -261,16 +261,16 @@ class SvmClassifier:
         o = self.orientation
         if o.identity:
             res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
-            self.background.update(frame.image, res.masks.get("body"))
+            hands = res.masks["foreground"]
         else:  # positions and views in the turned image, outside the ROI nothing
             bg = o.apply(bg)
             img = o.outside_as(o.apply(frame.image), bg)
             h, w = img.shape
             params = replace(self.params, width_px=w, height_px=h)
             res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
-            body = res.masks.get("body")
-            self.background.update(frame.image, None if body is None else o.undo(body))
+            hands = o.undo(res.masks["foreground"])
             res = replace(res, masks=res.masks.with_image("camera", img))
+        self.background.update(frame.image, hands, res.gain, res.offset)
         frame.stamp("vision", time.monotonic())
         return res
 

@@ -113,14 +113,15 @@ class FrameResult:
 
     hands: tuple[Hand, ...]
     contacts: tuple[Contact, ...]  # all contact blobs, hands or not
-    gain: float = 1.0  # frame ~ gain * background + offset
+    gain: float = 1.0  # frame ~ gain * background + offset (the fit, however small)
     offset: float = 0.0
     noise: float = 0.0  # robust std of the difference image (grey levels)
     illumination_changed: bool = False
     #: pixels of the hands' outlines at the sensor's maximum (255): touching skin clips,
     #: so the hands' light and thresholds are underestimated; lower exposure or gain
     clipped_px: int = 0
-    #: "diff", "body", "highpass" (computed on first access) with ``keep_masks``
+    #: "diff", "body", "highpass" and "foreground" (the last two computed on first
+    #: access) with ``keep_masks``
     masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
     #: brightness-weighted centroid), grid (brightness in the canonical frame,
@@ -281,6 +282,16 @@ def analyse_hand(
     ), extras
 
 
+def foreground(parts: Parts | None, shape: tuple[int, int]) -> np.ndarray:
+    """Everything of the hands down to the lowest threshold (uint8 0/255, the parts'
+    blocks grown by one): what the background must never learn."""
+    if parts is None:
+        return np.zeros(shape, np.uint8)
+    values = np.full(len(parts.scale), 255, np.uint8)
+    values[0] = 0
+    return parts.image(values, (0, 0, shape[1], shape[0]))
+
+
 def hands_of(
     body: np.ndarray,
     parts: Parts | None,
@@ -333,9 +344,10 @@ def process_frame(
             f"background: size {bg.shape[1]} x {bg.shape[0]} px does not match the frame "
             f"({img.shape[1]} x {img.shape[0]}); capture the background again"
         )
-    gain, offset, noise = illumination(img, bg)
-    changed = abs(gain - 1.0) > p.illumination_tolerance or abs(offset) > p.offset_tolerance
-    if abs(gain - 1.0) < 0.02 and abs(offset) < 1.5:
+    fit_gain, fit_offset, noise = illumination(img, bg)
+    changed = abs(fit_gain - 1.0) > p.illumination_tolerance or abs(fit_offset) > p.offset_tolerance
+    gain, offset = fit_gain, fit_offset
+    if abs(gain - 1.0) < 0.02 and abs(offset) < 1.5:  # within the noise: the fast path
         gain, offset = 1.0, 0.0
     if bg.dtype != np.uint8 and gain == 1.0 and offset == 0.0:
         bg = np.clip(bg + 0.5, 0, 255).astype(np.uint8)
@@ -386,13 +398,16 @@ def process_frame(
         sigma = p.highpass_sigma_px
         masks = Masks(
             {"diff": diff, "body": body},
-            {"highpass": functools.partial(frame_highpass, diff, sigma)},
+            {
+                "highpass": functools.partial(frame_highpass, diff, sigma),
+                "foreground": functools.partial(foreground, parts, img.shape),
+            },
         )
     return FrameResult(
         hands=tuple(h for h, _ in found),
         contacts=tuple(contacts),
-        gain=float(gain),
-        offset=float(offset),
+        gain=float(fit_gain),
+        offset=float(fit_offset),
         noise=float(noise),
         illumination_changed=bool(changed),
         clipped_px=int(clipped),

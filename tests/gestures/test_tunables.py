@@ -67,8 +67,9 @@ def test_blob_size_limits_decide_which_contacts_count(plugins, profile):
 
 
 def test_background_alpha_is_the_weight_of_a_new_frame(plugins, profile):
-    """With no hand in view the background moves towards the frame by ``alpha`` of the
-    difference (an analytic running average)."""
+    """Where the table changes locally and no hand is, the background moves towards the
+    frame by ``alpha`` of the difference (an analytic running average); a change of the
+    whole frame is the light, followed at once."""
     import numpy as np
 
     from console.types import Frame
@@ -76,13 +77,20 @@ def test_background_alpha_is_the_weight_of_a_new_frame(plugins, profile):
     clf = plugins.build("classifier", "svm", profile)
     clf.set_background(np.full((480, 640), 100, np.uint8))
     clf.set_tunable("body_threshold", 255.0)  # nothing counts as hand: every pixel learns
+    local = np.full((480, 640), 100, np.uint8)
+    local[100:140, 200:240] = 110  # a local change the light's fit leaves out
     clf.set_tunable("background_alpha", 0.0)
-    clf.process(Frame(np.full((480, 640), 110, np.uint8), 0, 0.0))
+    clf.process(Frame(local.copy(), 0, 0.0))
     assert float(clf.background.image.mean()) == 100.0
     clf.set_tunable("background_alpha", 0.25)
     assert clf.tunables()["background_alpha"] == 0.25
-    clf.process(Frame(np.full((480, 640), 110, np.uint8), 1, 0.1))
-    assert float(clf.background.image.mean()) == pytest.approx(102.5, abs=1e-4)
+    clf.process(Frame(local.copy(), 1, 0.1))
+    patch = clf.background.image[100:140, 200:240]
+    assert float(patch.mean()) == pytest.approx(102.5, abs=1e-4)
+    assert float(clf.background.image[300:, 400:].mean()) == pytest.approx(100.0, abs=1e-4)
+    clf.set_tunable("background_alpha", 0.0)
+    clf.process(Frame(np.full((480, 640), 120, np.uint8), 2, 0.2))  # the light: +20
+    assert float(clf.background.image[300:, 400:].mean()) == pytest.approx(120.0, abs=0.5)
 
 
 def test_every_tuned_setting_is_restored_at_the_next_start(plugins, profile):

@@ -217,7 +217,7 @@ def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
     assert contact_window(cv2_subtract(frame()), 30.0) is None
     f = frame(pose("one_finger"))
     r = process_frame(f, BG, P, keep_masks=True)
-    assert sorted(r.masks) == ["body", "diff", "highpass"]
+    assert sorted(r.masks) == ["body", "diff", "foreground", "highpass"]
     want = highpass(cv2_blur3(cv2_subtract(f)), P.highpass_sigma_px)
     assert np.array_equal(r.masks["highpass"], want)
     assert np.array_equal(r.masks.get("highpass"), want)
