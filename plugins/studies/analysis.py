@@ -301,19 +301,23 @@ def two_way(df, dv: str, a: str, b: str) -> dict[str, Any]:
             "f": rec.get("F"),
             "p": rec.get("p-unc"),
             "np2": rec.get("np2"),
+            "note": None,
         }
         if r is not None:
             row.update(
                 {
                     "df1": r.df1,
                     "df2": r.df2,
-                    "eps_gg": r.eps_gg,
+                    "eps_gg": _num(r.eps_gg),
                     "p_gg": _num(r.p_gg),
                     "mauchly_w": _num(r.mauchly_w),
                     "mauchly_p": _num(r.mauchly_p),
                     "sphericity": r.sphericity,
                 }
             )
+            if r.undefined:  # pingouin divides by a zero error term: inf or NaN, p 0
+                row.update(f=None, p=None, p_gg=None, np2=_num(r.np2))
+                row["note"] = f"{src}: " + no_f_note(r.undefined, src, None)
             row["p_reported"] = row["p"] if r.sphericity == "assumed" else row["p_gg"]
         table.append(row)
     table = [r for r in table if r["source"] in sph]
@@ -326,10 +330,35 @@ def two_way(df, dv: str, a: str, b: str) -> dict[str, Any]:
         "factors": [a, b],
         "participants": len(pids),
         "anova": table,
-        "posthoc_bonferroni": _clean(post[keep]),
+        "posthoc_bonferroni": posthoc(post[keep], a),
         "simple_main_effects": simple_main_effects(cells, dv, a, b)
         + simple_main_effects(cells, dv, b, a),
     }
+
+
+def posthoc(post, level: str | None = None) -> list[dict[str, Any]]:
+    """pingouin's pairwise tests as JSON values. A comparison with no spread (every
+    participant's difference the same: pingouin's T is +-inf, or NaN when that difference
+    is 0 too) has no t: T, p-unc and p-corr are None (never a p of 0) and ``note`` says
+    why, naming the comparison (``level``: the column of the factor it is within)."""
+    out = []
+    for raw, rec in zip(post.to_dict("records"), _clean(post), strict=True):
+        rec["note"] = None
+        t = raw.get("T")
+        if isinstance(t, (float, np.floating)) and not math.isfinite(float(t)):
+            rec.update({"T": None, "p-unc": None, "p-corr": None})
+            lev = rec.get(level) if level else None
+            where = f"{lev}: " if lev not in (None, "-") else ""
+            a, b = rec.get("A"), rec.get("B")
+            if math.isnan(float(t)):
+                why = (
+                    f"no difference and no spread: every participant scored the same in {a} and {b}"
+                )
+            else:
+                why = f"no spread: every participant's {a} - {b} difference is the same"
+            rec["note"] = f"{where}{a} vs {b}: {why}; t and p undefined"
+        out.append(rec)
+    return out
 
 
 def simple_main_effects(cells, dv: str, of: str, at: str) -> list[dict[str, Any]]:
@@ -356,13 +385,44 @@ def simple_main_effects(cells, dv: str, of: str, at: str) -> list[dict[str, Any]
                 "f": _num(r.f),
                 "df1": r.df1,
                 "df2": r.df2,
-                "eps_gg": r.eps_gg,
+                "eps_gg": _num(r.eps_gg),
                 "p": _num(p),
-                "p_bonferroni": _num(min(1.0, p * len(levels))),
+                "p_bonferroni": _num(min(1.0, p * len(levels)) if math.isfinite(p) else p),
                 "np2": _num(r.np2),
+                "note": no_f_note(r.undefined, of, lev, arr, dv) if r.undefined else None,
             }
         )
     return out
+
+
+def no_f_note(why: str, of: str, where: Any, values: Any = None, dv: str = "") -> str:
+    """Why an effect of ``of`` (at the level ``where`` of the other factor, or over all
+    of it: None) has no F and no p (``rmanova``: ``no variance``, ``no error variance``):
+    one line naming the cell. ``values``: the subjects x levels array, to say the one
+    value every participant had."""
+    cell = f" in {where}" if where is not None else ""
+    if " * " in of:  # an interaction: the differences along one factor at the other's levels
+        a, b = of.split(" * ", 1)
+        if why == "no variance":
+            return (
+                f"no variance: no participant's {b} differences change with {a}; F and p undefined"
+            )
+        return (
+            f"no error variance: every participant's {b} differences change with {a} the same "
+            "way; F and p undefined (an F over zero error is no test)"
+        )
+    if why == "no variance":
+        v = np.asarray(values, float) if values is not None else np.array([0.0, 1.0])
+        if v.size and np.ptp(v) == 0:
+            same = f"{100 * v.flat[0]:.0f} %" if dv == "accuracy" else f"{v.flat[0]:g}"
+            what = f"every participant scored the same{cell} ({same} in every {of})"
+        else:
+            what = f"each participant scored the same in every {of}{cell}"
+        return f"no variance: {what}; F and p undefined"
+    return (
+        f"no error variance: every participant shows the same differences between {of} "
+        f"levels{cell}; F and p undefined (an F over zero error is no test)"
+    )
 
 
 # --------------------------------------------------------------------------- knob
@@ -412,9 +472,13 @@ def knob(study: Study) -> dict[str, Any]:
                 (p, a, b, c) for p in pids for a in levels[0] for b in levels[1] for c in levels[2]
             ]
             arr = cells.reindex(idx).to_numpy().reshape(len(pids), *map(len, levels))
+            rows = []
+            for r in rm_anova(arr, list(KNOB_FACTORS)):
+                why = r.undefined and f"{m}: {r.source}: " + no_f_note(r.undefined, r.source, None)
+                rows.append({**r.as_dict(), "note": why or None})
             res["anova"] = {
                 "participants": len(pids),
-                "rows": [r.as_dict() for r in rm_anova(arr, list(KNOB_FACTORS))],
+                "rows": rows,
                 "posthoc_bonferroni": _main_effect_pairs(cells.reset_index(), m),
             }
         out["measures"][m] = res
@@ -474,12 +538,21 @@ def knob(study: Study) -> dict[str, Any]:
                 {
                     "sphericity": r.sphericity,
                     "mauchly_p": _num(r.mauchly_p),
-                    "eps_gg": r.eps_gg,
+                    "eps_gg": _num(r.eps_gg),
                     "p_gg": _num(r.p_gg),
                     "p_reported": _num(r.p_reported),
+                    "note": None,
                 }
             )
-            res["posthoc_bonferroni"] = _clean(
+            if r.undefined:  # pingouin's F over a zero error term: inf or NaN, p 0
+                for k in ("F", "p-unc", "p-GG-corr"):
+                    if k in top:
+                        top[k] = None
+                top["np2"] = _num(r.np2)
+                top["note"] = f"questionnaire {c}: " + no_f_note(
+                    r.undefined, "condition", None, arr
+                )
+            res["posthoc_bonferroni"] = posthoc(
                 post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]
             )
         out["questionnaire"][str(c)] = res
@@ -497,7 +570,7 @@ def _main_effect_pairs(cells, dv: str) -> list[dict[str, Any]]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             post = pg.pairwise_tests(marg, dv=dv, within=f, subject="participant", padjust="bonf")
-        for rec in _clean(post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]):
+        for rec in posthoc(post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]):
             out.append({"factor": f, **rec})
     return out
 

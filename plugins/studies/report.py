@@ -167,6 +167,7 @@ ANOVA_COLS = [
     "eps_gg",
     "p_gg",
     "p_reported",
+    "note",
 ]
 
 

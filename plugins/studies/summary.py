@@ -69,6 +69,21 @@ def anova_rows(res: dict[str, Any]) -> list[tuple[str, ...]]:
     return rows
 
 
+def undefined_notes(aov: dict[str, Any]) -> list[str]:
+    """Why a row of a two-way ANOVA (its table, simple main effects, post-hoc tests) has
+    no F, t or p: one line each."""
+    notes = [r["note"] for r in aov.get("anova", []) if r.get("note")]
+    notes += [
+        f"simple main effect of {r['effect']} at {r['at']}: {r['note']}"
+        for r in aov.get("simple_main_effects", [])
+        if r.get("note")
+    ]
+    post = [r["note"] for r in aov.get("posthoc_bonferroni", []) if r.get("note")]
+    if len(post) > 3:  # often every pair of a constant cell: the report lists them all
+        post = [*post[:2], f"and {len(post) - 2} more post-hoc comparisons without spread"]
+    return notes + post
+
+
 def headline(res: dict[str, Any]) -> list[str]:
     """Who was analysed, the overall accuracy, and every note or ANOVA not run."""
     who = res["participants"]
@@ -87,11 +102,14 @@ def headline(res: dict[str, Any]) -> list[str]:
     aov = res.get("anova")
     if isinstance(aov, dict) and "skipped" in aov:
         lines.append(aov["skipped"])
+    elif isinstance(aov, dict):
+        lines += undefined_notes(aov)
     knob = res.get("knob") or {}
     for m in (knob.get("measures") or {}).values():
         a = m.get("anova", m)
         if "skipped" in a:
             lines.append(a["skipped"])
+        lines += [r["note"] for r in a.get("rows", []) if r.get("note")]
     q = knob.get("questionnaire") or {}
     if "skipped" in q:
         lines.append(q["skipped"])
@@ -100,4 +118,6 @@ def headline(res: dict[str, Any]) -> list[str]:
             a = c.get("anova") if isinstance(c, dict) else None
             if isinstance(a, dict) and "skipped" in a:
                 lines.append(f"questionnaire {cat}: {a['skipped']}")
+            elif isinstance(a, list) and a and a[0].get("note"):
+                lines.append(a[0]["note"])
     return lines

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import re
 import sys
 from pathlib import Path
@@ -367,3 +368,92 @@ def test_one_experiment_out_of_a_mixed_folder(tmp_path):
     assert set(an.load([tmp_path / "mixed"], experiment="exp1").participants) == {"P01"}
     with pytest.raises(UserError, match=r"mixed: no participant of knob left to analyse; run"):
         an.load([tmp_path / "mixed"], experiment="knob")
+
+
+# --------------------------------------------------------------------- degenerate cells
+def _all_right_in_r4(i, region, direction):
+    """Every participant 100 % in R4, 0 % in R1 (no spread at all in either)."""
+    return {"R4": 1.0, "R1": 0.0}.get(region, 0.6 + 0.05 * i)
+
+
+def test_rm_anova_without_variance_has_no_f_and_no_p():
+    from statsmodels.stats.anova import AnovaRM
+
+    # every subject the same at every level: no variance at all
+    (r,) = rm.rm_anova(np.full((5, 4), 1.0), ["A"])
+    assert r.undefined == "no variance" and r.sphericity == "undefined"
+    assert all(math.isnan(x) for x in (r.f, r.p, r.p_gg, r.np2, r.p_reported))
+    # subjects differ, levels do not: SS and SS_error both zero (to rounding: 0.1 + 0.2)
+    y = np.array([[0.1 + 0.2] * 3, [0.3] * 3, [0.7] * 3])
+    (r,) = rm.rm_anova(y, ["A"])
+    assert r.undefined == "no variance" and math.isnan(r.p)
+    # the same differences in every subject: SS_error zero, the effect is not
+    y = np.array([[0.1, 0.5, 0.2], [0.3, 0.7, 0.4], [0.0, 0.4, 0.1]]) + 0.1
+    (r,) = rm.rm_anova(y, ["A"])
+    assert r.undefined == "no error variance" and math.isnan(r.f) and math.isnan(r.p)
+    assert r.np2 == 1.0
+    assert r.as_dict()["p_reported"] is None and r.as_dict()["f"] is None
+    # a normal case is untouched and still agrees with statsmodels
+    y = _random_cells((6, 3), seed=4)
+    (r,) = rm.rm_anova(y, ["A"])
+    ref = AnovaRM(_long(y, ["A"]), "y", "s", within=["A"]).fit().anova_table.loc["A"]
+    assert not r.undefined and r.f == pytest.approx(ref["F Value"], rel=1e-9)
+    assert r.p == pytest.approx(ref["Pr > F"], rel=1e-7)
+
+
+def test_a_constant_cell_is_no_significant_simple_main_effect(tmp_path):
+    """All participants 100 % in R4: the simple main effect of direction in R4 is
+    undefined (no F, no p, a note naming R4), never F = inf, p = 0; the other regions'
+    simple main effects agree with statsmodels."""
+    from statsmodels.stats.anova import AnovaRM
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _all_right_in_r4, 5, 6, seed=4)
+    res = an.analyze(an.load([root]))
+    sme = {(e["effect"], e["at"]): e for e in res["anova"]["simple_main_effects"]}
+    r4 = sme[("direction", "region = R4")]
+    assert r4["f"] is None and r4["p"] is None and r4["p_bonferroni"] is None
+    assert r4["np2"] is None
+    assert r4["note"].startswith("no variance: every participant scored the same in R4 (100 %")
+    r1 = sme[("direction", "region = R1")]
+    assert r1["p"] is None and "in R1 (0 % in every direction)" in r1["note"]
+    # a normal cell: the same F as statsmodels on the per-participant accuracies
+    recs = [json.loads(x) for f in root.glob("*/trials.jsonl") for x in f.read_text().splitlines()]
+    df = pd.DataFrame([r for r in recs if r["phase"] == "main" and r["region"] == "R2"])
+    cells = df.groupby(["participant", "direction"])["correct"].mean().reset_index()
+    ref = AnovaRM(cells, "correct", "participant", within=["direction"]).fit().anova_table
+    r2 = sme[("direction", "region = R2")]
+    assert r2["note"] is None
+    assert r2["f"] == pytest.approx(ref.loc["direction", "F Value"], rel=1e-9)
+    # what a user reads: the CLI and the screen's lines say why, no p of 0
+    from plugins.studies import summary
+    from plugins.studies.analyze_cli import _lines
+
+    text = "\n".join(_lines(res))
+    assert "simple main effect of direction at region = R4: no variance: every participant" in text
+    assert any("R4 (100 %" in h for h in summary.headline(res))
+
+
+def test_a_comparison_without_spread_has_no_t_and_no_p(tmp_path):
+    """R1 0 % and R4 100 % for everybody: the R1 vs R4 post-hoc test has no t and no p
+    (pingouin's T is inf and its p 0), and says why; the others keep theirs."""
+    from scipy import stats
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _all_right_in_r4, 5, 6, seed=4)
+    res = an.analyze(an.load([root]))
+    post = res["anova"]["posthoc_bonferroni"]
+    main = {(p["A"], p["B"]): p for p in post if p["Contrast"] == "region"}
+    bad = main[("R1", "R4")]
+    assert bad["T"] is None and bad["p-unc"] is None and bad["p-corr"] is None
+    assert bad["note"] == (
+        "R1 vs R4: no spread: every participant's R1 - R4 difference is the same; t and p undefined"
+    )
+    within_r4 = [p for p in post if p.get("region") == "R4"]
+    assert within_r4 and all(p["p-unc"] is None and "no spread" in p["note"] for p in within_r4)
+    assert not any(p["p-unc"] == 0 or p["p-corr"] == 0 for p in post)
+    # a comparison with spread: the paired t-test of the participants' region means
+    ok = main[("R2", "R3")]
+    recs = [json.loads(x) for f in root.glob("*/trials.jsonl") for x in f.read_text().splitlines()]
+    df = pd.DataFrame([r for r in recs if r["phase"] == "main"])
+    m = df.groupby(["participant", "region"])["correct"].mean().unstack()
+    t, p = stats.ttest_rel(m["R2"], m["R3"])
+    assert ok["note"] is None and ok["T"] == pytest.approx(t) and ok["p-unc"] == pytest.approx(p)
