@@ -166,22 +166,34 @@ def _num(x: float) -> float | None:
     return None if x is None or not math.isfinite(float(x)) else float(x)
 
 
+#: what the accuracy of the main phase is before any main-phase trial is done
+NO_MAIN = "no main-phase trials yet"
+
+
 def accuracy(study: Study) -> dict[str, Any]:
-    """Accuracy tables of experiment 1 or 2 (main phase; practice apart)."""
+    """Accuracy tables of experiment 1 or 2: the main phase only (practice phases apart,
+    ``practice``); before any main-phase trial ``overall_pct`` is None and ``main_phase``
+    says so (``NO_MAIN``), and a participant without one has ``accuracy_pct`` None."""
     df = study.trials
     df = df.assign(correct=df["correct"].astype(bool))
     a, b = FACTORS[study.experiment]
-    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    main = df[df["phase"] == "main"]
     practice = df[df["phase"] != "main"]
     per_p = main.groupby("participant")["correct"].agg(["mean", "size"])
+    people = []
+    for p in sorted(study.plans):
+        if p in per_p.index:
+            r = per_p.loc[p]
+            people.append({"participant": p, "accuracy_pct": 100 * float(r["mean"])})
+            people[-1]["trials"] = int(r["size"])
+        else:
+            people.append({"participant": p, "accuracy_pct": None, "trials": 0})
     out: dict[str, Any] = {
-        "participants": [
-            {"participant": p, "accuracy_pct": 100 * float(r["mean"]), "trials": int(r["size"])}
-            for p, r in per_p.iterrows()
-        ],
-        "overall_pct": 100 * float(main["correct"].mean()),
-        f"by_{b}": _summary(main, b),
-        f"by_{a}": _summary(main, a),
+        "participants": people,
+        "overall_pct": 100 * float(main["correct"].mean()) if len(main) else None,
+        "main_phase": f"{len(main)} trials" if len(main) else NO_MAIN,
+        f"by_{b}": _summary(main, b) if len(main) else [],
+        f"by_{a}": _summary(main, a) if len(main) else [],
         "cells": [
             {a: ka, b: kb, **row}
             for ka, sub in main.groupby(a, sort=False)
@@ -220,12 +232,24 @@ def _level(v: Any) -> Any:
 
 
 def balance_problem(
-    df, factors: tuple[str, ...], want: dict[tuple, int], *, exact: bool = True
+    df,
+    factors: tuple[str, ...],
+    want: dict[tuple, int],
+    *,
+    exact: bool = True,
+    participants: list[str] | None = None,
 ) -> str | None:
-    """Why the cells are not complete and (``exact``) balanced (None: they are)."""
-    have = df.groupby(["participant", *factors]).size()
+    """Why the cells are not complete and (``exact``) balanced (None: they are).
+    ``participants``: everyone who should be in every cell (default: those in ``df``;
+    give the study's: a participant without a row in ``df`` is missing every cell)."""
+    have = df.groupby(["participant", *factors]).size() if len(df) else {}
+    pids = sorted(set(df["participant"]) if participants is None else set(participants))
     missing, short = [], []
-    for pid in sorted(set(df["participant"])):
+    for pid in pids:
+        gone = [c for c in want if int(have.get((pid, *c), 0)) == 0]
+        if want and len(gone) == len(want) and len(want) > 1:
+            missing.append(f"{pid} (all {len(want)} cells)")
+            continue
         for cell, n in want.items():
             got = int(have.get((pid, *cell), 0))
             label = "/".join(map(str, cell))
@@ -245,7 +269,7 @@ def balance_problem(
             f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or leave "
             "the participants out with --exclude"
         )
-    if df["participant"].nunique() < 2:
+    if len(pids) < 2:
         return "one participant: an ANOVA needs at least two"
     return None
 
@@ -454,7 +478,7 @@ def knob(study: Study) -> dict[str, Any]:
         # recovery time exists only for trials with an overshoot: a mean per cell over
         # those, every participant needs at least one in every cell
         exact = m != "recovery_time_s"
-        why = balance_problem(d, KNOB_FACTORS, want, exact=exact)
+        why = balance_problem(d, KNOB_FACTORS, want, exact=exact, participants=list(study.plans))
         if why and not exact:
             why = (
                 "recovery time exists only after an overshoot, and "
@@ -596,9 +620,10 @@ def analyze(study: Study) -> dict[str, Any]:
     res["accuracy"] = accuracy(study)
     a, b = FACTORS[study.experiment]
     df = study.trials
-    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    main = df[df["phase"] == "main"]
     main = main.assign(correct=main["correct"].astype(float))
-    why = balance_problem(main, (a, b), design_counts(study, (a, b), "main"))
+    want = design_counts(study, (a, b), "main")
+    why = balance_problem(main, (a, b), want, participants=list(study.plans))
     single = [f for f in (a, b) if main[f].nunique() < 2]
     if single and not why:
         why = f"{single[0]} has one level ({main[single[0]].iloc[0]}); nothing to compare"

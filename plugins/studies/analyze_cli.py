@@ -31,8 +31,13 @@ def _lines(res: dict[str, Any]) -> list[str]:
     out += [f"  note: {n}" for n in res.get("notes", [])]
     if "accuracy" in res:
         acc = res["accuracy"]
-        out.append(f"accuracy (main phase): {acc['overall_pct']:.1f} %")
-        for key in [k for k in acc if k.startswith("by_")]:
+        if acc["overall_pct"] is None:
+            out.append(f"accuracy (main phase): {acc['main_phase']}")
+        else:
+            out.append(f"accuracy (main phase): {acc['overall_pct']:.1f} %")
+        for ph, pct in acc.get("practice", {}).items():
+            out.append(f"  {ph} phase (apart from the accuracy): {pct:.1f} %")
+        for key in [k for k in acc if k.startswith("by_") and acc[k]]:
             name = key[3:]
             out.append(f"  per {name}:")
             for r in acc[key]:

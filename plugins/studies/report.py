@@ -185,9 +185,14 @@ def render(res: dict[str, Any], title: str = "") -> str:
     figs: list[tuple[str, str]] = []
     if "accuracy" in res:
         acc = res["accuracy"]
-        parts.append(f"<h2>Accuracy</h2><p>Overall (main phase): {acc['overall_pct']:.1f} %</p>")
+        overall = acc["overall_pct"]
+        said = acc.get("main_phase") if overall is None else f"{overall:.1f} %"
+        parts.append(f"<h2>Accuracy</h2><p>Overall (main phase): {html.escape(str(said))}</p>")
+        if acc.get("practice"):
+            practice = ", ".join(f"{k} {v:.1f} %" for k, v in acc["practice"].items())
+            parts.append(f"<p>Practice phases (apart): {html.escape(practice)}</p>")
         place = "region" if "by_region" in acc else "pair"
-        figs = accuracy_figures(res)
+        figs = accuracy_figures(res) if overall is not None else []
         for cap, png in figs[:1]:
             parts.append(_fig(cap, png))
         parts.append("<h3>Per participant</h3>" + table(acc["participants"]))

@@ -95,9 +95,19 @@ def headline(res: dict[str, Any]) -> list[str]:
     acc = res.get("accuracy")
     if acc:
         part = "; ".join(
-            f"{r['participant']} {r['accuracy_pct']:.1f} %" for r in acc.get("participants", [])
+            f"{r['participant']} "
+            + ("no main-phase trial" if r["accuracy_pct"] is None else f"{r['accuracy_pct']:.1f} %")
+            for r in acc.get("participants", [])
         )
-        lines.append(f"accuracy {acc['overall_pct']:.1f} %" + (f" ({part})" if part else ""))
+        overall = acc["overall_pct"]
+        if overall is None:
+            practice = "; ".join(f"{ph} {v:.1f} %" for ph, v in acc.get("practice", {}).items())
+            lines.append(
+                f"accuracy: {acc.get('main_phase')}"
+                + (f" (practice: {practice})" if practice else "")
+            )
+        else:
+            lines.append(f"accuracy {overall:.1f} %" + (f" ({part})" if part else ""))
     lines += list(res.get("notes", []))
     aov = res.get("anova")
     if isinstance(aov, dict) and "skipped" in aov:

@@ -457,3 +457,41 @@ def test_a_comparison_without_spread_has_no_t_and_no_p(tmp_path):
     m = df.groupby(["participant", "region"])["correct"].mean().unstack()
     t, p = stats.ttest_rel(m["R2"], m["R3"])
     assert ok["note"] is None and ok["T"] == pytest.approx(t) and ok["p-unc"] == pytest.approx(p)
+
+
+# --------------------------------------------------------------------- runs under way
+def test_accuracy_is_the_main_phase_only_and_says_when_there_is_none(tmp_path, capsys):
+    """P01 in the practice phase only: no accuracy (the practice's is apart), not the
+    practice's number as the accuracy."""
+    from plugins.studies import summary
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, lambda *a: 0.5, 1, 2, drop={"P01": 32})
+    res = an.analyze(an.load([root]))
+    acc = res["accuracy"]
+    assert acc["overall_pct"] is None and acc["main_phase"] == "no main-phase trials yet"
+    assert acc["participants"] == [{"participant": "P01", "accuracy_pct": None, "trials": 0}]
+    assert set(acc["practice"]) == {"practice"}
+    head = summary.headline(res)
+    assert head[1].startswith("accuracy: no main-phase trials yet (practice: practice ")
+    assert _cli(root) == 0
+    assert "accuracy (main phase): no main-phase trials yet" in capsys.readouterr().out
+
+
+def test_a_participant_without_main_trials_is_missing_cells_not_left_out(tmp_path):
+    """P01 finished, P02 still in the practice phase: the accuracy is P01's, and the ANOVA
+    line says P02's cells are missing (not that there is one participant)."""
+    from plugins.studies import summary
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, lambda *a: 0.8, 2, 2, drop={"P02": 32})
+    res = an.analyze(an.load([root]))
+    p1 = [
+        json.loads(x)["correct"]
+        for x in (root / "P01" / "trials.jsonl").read_text().splitlines()
+        if json.loads(x)["phase"] == "main"
+    ]
+    acc = res["accuracy"]
+    assert acc["overall_pct"] == pytest.approx(100 * np.mean(p1))
+    assert acc["participants"][1] == {"participant": "P02", "accuracy_pct": None, "trials": 0}
+    line = res["anova"]["skipped"]
+    assert "missing cells: P02 (all 16 cells)" in line and "one participant" not in line
+    assert any("P02 no main-phase trial" in h for h in summary.headline(res))
