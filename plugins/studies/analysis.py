@@ -140,6 +140,42 @@ def load(
     return Study(exp, parts, plans, trials, q, notes)
 
 
+# --------------------------------------------------------------------------- order
+def level_order(study: Study, factor: str, phase: str = "main") -> list[Any]:
+    """The levels of ``factor`` in the protocol's order: the plan's ``factors`` of
+    ``phase`` (plans written before it was stored: the plan's ``responses`` for the
+    direction, else none: natural order)."""
+    plan = next(iter(study.plans.values()))
+    levels = (plan.get("factors") or {}).get(phase, {}).get(factor)
+    if levels is None and factor == "direction":
+        levels = plan.get("responses")
+    return [_level(v) for v in levels or []]
+
+
+def _natural(v: Any) -> tuple:
+    """``R2`` before ``R10``; numbers by value."""
+    import re
+
+    if isinstance(v, (int, float)):
+        return (0, v, ())
+    parts = re.split(r"(\d+)", str(v))
+    return (1, 0, tuple((0, int(x), "") if x.isdigit() else (1, 0, x) for x in parts))
+
+
+def in_protocol_order(df, study: Study, factors: tuple[str, ...], phase: str = "main"):
+    """``df``'s rows sorted (stably) by ``factors`` in the protocol's level order, so that
+    tables grouped in order of appearance (``groupby(sort=False)``) list the protocol's
+    order, not the first trial's."""
+    if df.empty:
+        return df
+    ranks = {}
+    for f in factors:
+        listed = level_order(study, f, phase)
+        rest = sorted((v for v in set(df[f]) if v not in listed), key=_natural)
+        ranks[f] = {v: i for i, v in enumerate([*listed, *rest])}
+    return df.sort_values(list(factors), key=lambda col: col.map(ranks[col.name]), kind="mergesort")
+
+
 # --------------------------------------------------------------------------- accuracy
 def _summary(df, by: str) -> list[dict[str, Any]]:
     """Mean, SD and SEM over participants of their accuracy per level of ``by``."""
@@ -177,7 +213,7 @@ def accuracy(study: Study) -> dict[str, Any]:
     df = study.trials
     df = df.assign(correct=df["correct"].astype(bool))
     a, b = FACTORS[study.experiment]
-    main = df[df["phase"] == "main"]
+    main = in_protocol_order(df[df["phase"] == "main"], study, (a, b))
     practice = df[df["phase"] != "main"]
     per_p = main.groupby("participant")["correct"].agg(["mean", "size"])
     people = []
@@ -460,6 +496,7 @@ def knob(study: Study) -> dict[str, Any]:
         if k not in df:
             df[k] = [s.get(k) for s in df["stimulus"]]
         df[k] = df[k].map(_level)
+    df = in_protocol_order(df, study, KNOB_FACTORS)
     out: dict[str, Any] = {"measures": {}, "questionnaire": {}}
     want = design_counts(study, KNOB_FACTORS, None)
     for m in KNOB_MEASURES:
@@ -468,13 +505,15 @@ def knob(study: Study) -> dict[str, Any]:
             continue
         d = df[df[m].notna()].assign(**{m: lambda x, m=m: x[m].astype(float)})
         desc = (
-            d.groupby(list(KNOB_FACTORS))[m]
+            d.groupby(list(KNOB_FACTORS), sort=False)[m]
             .agg(["mean", "std", "count"])
             .reset_index()
             .rename(columns={"std": "sd", "count": "trials"})
         )
         res: dict[str, Any] = {"by_cell": _clean(desc)}
-        res["by_condition"] = _clean(d.groupby("condition")[m].agg(["mean", "std"]).reset_index())
+        res["by_condition"] = _clean(
+            d.groupby("condition", sort=False)[m].agg(["mean", "std"]).reset_index()
+        )
         # recovery time exists only for trials with an overshoot: a mean per cell over
         # those, every participant needs at least one in every cell
         exact = m != "recovery_time_s"
@@ -510,14 +549,18 @@ def knob(study: Study) -> dict[str, Any]:
     if q is None or q.empty:
         out["questionnaire"] = {"skipped": "no questionnaire answers in the runs"}
         return out
-    q = q.assign(score=q["score"].astype(float))
-    cat = q.groupby(["participant", "category", "condition"])["score"].mean().reset_index()
+    q = in_protocol_order(q.assign(score=q["score"].astype(float)), study, ("condition",))
+    cat = (
+        q.groupby(["participant", "category", "condition"], sort=False)["score"]
+        .mean()
+        .reset_index()
+    )
     for c, sub in cat.groupby("category", sort=False):
         counts = sub.groupby("participant")["condition"].nunique()
         ncond = sub["condition"].nunique()
         res = {
             "by_condition": _clean(
-                sub.groupby("condition")["score"].agg(["mean", "std"]).reset_index()
+                sub.groupby("condition", sort=False)["score"].agg(["mean", "std"]).reset_index()
             )
         }
         lacking = counts[counts < ncond]
@@ -620,7 +663,7 @@ def analyze(study: Study) -> dict[str, Any]:
     res["accuracy"] = accuracy(study)
     a, b = FACTORS[study.experiment]
     df = study.trials
-    main = df[df["phase"] == "main"]
+    main = in_protocol_order(df[df["phase"] == "main"], study, (a, b))
     main = main.assign(correct=main["correct"].astype(float))
     want = design_counts(study, (a, b), "main")
     why = balance_problem(main, (a, b), want, participants=list(study.plans))

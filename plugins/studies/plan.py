@@ -106,8 +106,9 @@ def make_plan(
     protocol: Protocol, participant_id: str, *, seed: int | None = None, row: int | None = None
 ) -> dict[str, Any]:
     """The participant's plan (the ``plan.json`` contract): ``experiment``,
-    ``protocol_sha256``, ``seed``, ``latin_square_row``, ``trials`` (ordered) and
-    ``questionnaires`` (each after a trial index)."""
+    ``protocol_sha256``, ``seed``, ``latin_square_row``, ``factors`` (each phase's factor
+    levels in the protocol's order), ``trials`` (ordered) and ``questionnaires`` (each
+    after a trial index)."""
     seed = participant_seed(protocol, participant_id) if seed is None else int(seed)
     needs_row = any(p.block_order == "latin_square" for p in protocol.phases)
     if row is None:
@@ -167,6 +168,7 @@ def make_plan(
         "participant": participant_id,
         "seed": seed,
         "latin_square_row": row if needs_row else None,
+        "factors": {ph.name: {f: list(v) for f, v in ph.factors.items()} for ph in protocol.phases},
         "trials": trials,
         "questionnaires": questionnaires,
     }

@@ -495,3 +495,64 @@ def test_a_participant_without_main_trials_is_missing_cells_not_left_out(tmp_pat
     line = res["anova"]["skipped"]
     assert "missing cells: P02 (all 16 cells)" in line and "one participant" not in line
     assert any("P02 no main-phase trial" in h for h in summary.headline(res))
+
+
+# --------------------------------------------------------------------- order and figures
+def _shuffled_with_protocol_levels(root: Path, factors: dict | None, responses=None) -> None:
+    """The trial lines in a random order (the first trial R3 or so, as a run's random
+    order would have it) and the plan's protocol levels as ``make_plan`` stores them."""
+    import random
+
+    for k, d in enumerate(sorted(root.iterdir())):
+        lines = (d / "trials.jsonl").read_text().splitlines()
+        random.Random(k).shuffle(lines)
+        (d / "trials.jsonl").write_text("\n".join(lines) + "\n")
+        plan = json.loads((d / "plan.json").read_text())
+        if factors is not None:
+            plan["factors"] = factors
+        if responses is not None:
+            plan["responses"] = responses
+        (d / "plan.json").write_text(json.dumps(plan))
+
+
+def test_tables_list_the_levels_in_the_protocol_order(tmp_path):
+    from plugins.studies.plan import make_plan
+    from plugins.studies.protocol import load as load_protocol
+
+    plan = make_plan(load_protocol("exp2"), "P01")
+    assert plan["factors"]["main"] == {
+        "region": ["R1", "R2", "R3", "R4"],
+        "direction": ["up", "down", "left", "right"],
+    }
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, seed=1)
+    _shuffled_with_protocol_levels(root, {"main": plan["factors"]["main"]})
+    res = an.analyze(an.load([root]))
+    acc = res["accuracy"]
+    order = ["up", "down", "left", "right"]
+    assert [r["direction"] for r in acc["by_direction"]] == order
+    assert [r["region"] for r in acc["by_region"]] == list(REGIONS)
+    assert [(c["region"], c["direction"]) for c in acc["cells"]] == [
+        (r, d) for r in REGIONS for d in order
+    ]
+    sme = [e["at"] for e in res["anova"]["simple_main_effects"]]
+    assert sme == [f"direction = {d}" for d in order] + [f"region = {r}" for r in REGIONS]
+    # a plan written before the levels were stored: the directions as its responses
+    old = sr.write_flow(tmp_path / "o", "exp2", REGIONS, _weak_r4_right, 3, 2, seed=1)
+    _shuffled_with_protocol_levels(old, None, responses=order)
+    acc = an.analyze(an.load([old]))["accuracy"]
+    assert [r["direction"] for r in acc["by_direction"]] == order
+    assert [r["region"] for r in acc["by_region"]] == list(REGIONS)
+
+
+def test_the_legend_of_the_cells_figure_covers_no_bar(exp2_dir):
+    from plugins.studies import report
+
+    res = an.analyze(an.load([exp2_dir]))
+    fig = report.cells_figure(res["accuracy"], "region")
+    fig.canvas.draw()
+    (ax,) = fig.axes
+    legend = (fig.legends or [ax.get_legend()])[0].get_window_extent()
+    bars = [b.get_window_extent() for b in ax.patches]
+    assert len(bars) == 16 and max(b.y1 for b in bars) > ax.get_window_extent().y1 - 20
+    assert not any(legend.overlaps(b) for b in bars)
+    assert legend.y1 <= ax.get_window_extent().y0  # below the axes, outside the plot
