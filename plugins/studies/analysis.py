@@ -30,6 +30,7 @@ from console.errors import UserError
 
 from .rmanova import rm_anova
 from .store import read_events, read_json
+from .words import CLI, Words
 
 #: Factors of each experiment's main phase (the plan's trial keys).
 FACTORS = {"exp1": ("pair", "direction"), "exp2": ("region", "direction")}
@@ -48,41 +49,47 @@ class Study:
     trials: Any  # pandas DataFrame of the done records
     questionnaire: Any  # pandas DataFrame of the questionnaire lines
     notes: list[str] = field(default_factory=list)
+    #: how the analysis's lines name a fix (the CLI's flags or the screen's fields)
+    words: Words = CLI
 
 
-def participant_dirs(paths: list[Path]) -> list[Path]:
+def participant_dirs(paths: list[Path], words: Words = CLI) -> list[Path]:
     """Each path is a participant's folder (it holds ``plan.json``) or a study's
     ``--out`` folder (its sub-folders that do)."""
     out: list[Path] = []
     for p in paths:
         p = Path(p).expanduser()
+        if p.exists() and not p.is_dir():
+            raise UserError(f"{p}: is a file, not a folder; {words.runs}")
         if not p.is_dir():
-            raise UserError(f"{p}: no such folder; give the --out folder of `haptable study run`")
+            raise UserError(f"{p}: no such folder; {words.runs}")
         if (p / "plan.json").is_file():
             out.append(p)
             continue
         subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "plan.json").is_file())
         if not subs:
-            raise UserError(
-                f"{p}: no participant folder (P01/plan.json ...) in it; give the --out folder "
-                "of `haptable study run`"
-            )
+            raise UserError(f"{p}: no participant folder (P01/plan.json ...) in it; {words.runs}")
         out.extend(subs)
     return list(dict.fromkeys(out))
 
 
 def load(
-    paths: list[Path], *, exclude: tuple[str, ...] = (), experiment: str | None = None
+    paths: list[Path],
+    *,
+    exclude: tuple[str, ...] = (),
+    experiment: str | None = None,
+    words: Words = CLI,
 ) -> Study:
     """The study in ``paths`` (one experiment; participants in ``exclude`` left out; with
-    ``experiment``, only the participants of that experiment)."""
+    ``experiment``, only the participants of that experiment; ``words``: how its lines
+    name a fix)."""
     import pandas as pd
 
-    dirs = participant_dirs(paths)
+    dirs = participant_dirs(paths, words)
     done, quest, parts, plans, notes, twice = [], [], {}, {}, [], []
     exps: dict[str, list[str]] = {}
     for d in dirs:
-        plan = read_json(d / "plan.json")
+        plan = read_json(d / "plan.json", words)
         if not isinstance(plan, dict) or "experiment" not in plan or "trials" not in plan:
             raise UserError(f"{d / 'plan.json'}: not a study plan (no experiment/trials)")
         pid = str(plan.get("participant") or d.name)
@@ -97,7 +104,7 @@ def load(
             continue
         plans[pid] = plan
         pj = d / "participant.json"
-        parts[pid] = read_json(pj) if pj.is_file() else {"id": pid}
+        parts[pid] = read_json(pj, words) if pj.is_file() else {"id": pid}
         last: dict[int, dict] = {}
         for n, e in enumerate(read_events(d / "trials.jsonl"), 1):
             ev = e.get("event")
@@ -137,7 +144,7 @@ def load(
     q = pd.DataFrame(quest)
     if not q.empty:  # the last answer per participant, condition and item
         q = q.drop_duplicates(["participant", "after_trial", "category", "item"], keep="last")
-    return Study(exp, parts, plans, trials, q, notes)
+    return Study(exp, parts, plans, trials, q, notes, words)
 
 
 # --------------------------------------------------------------------------- order
@@ -274,10 +281,12 @@ def balance_problem(
     *,
     exact: bool = True,
     participants: list[str] | None = None,
+    words: Words = CLI,
 ) -> str | None:
     """Why the cells are not complete and (``exact``) balanced (None: they are).
     ``participants``: everyone who should be in every cell (default: those in ``df``;
-    give the study's: a participant without a row in ``df`` is missing every cell)."""
+    give the study's: a participant without a row in ``df`` is missing every cell).
+    ``words``: how the fix is named."""
     have = df.groupby(["participant", *factors]).size() if len(df) else {}
     pids = sorted(set(df["participant"]) if participants is None else set(participants))
     missing, short = [], []
@@ -296,14 +305,13 @@ def balance_problem(
     if missing:
         more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
         return (
-            f"missing cells: {', '.join(missing[:3])}{more}; finish those runs (the same "
-            "`study run` command resumes) or leave the participants out with --exclude"
+            f"missing cells: {', '.join(missing[:3])}{more}; finish those runs "
+            f"({words.resume}) or {words.exclude}"
         )
     if short:
         more = f" and {len(short) - 3} more" if len(short) > 3 else ""
         return (
-            f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or leave "
-            "the participants out with --exclude"
+            f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or {words.exclude}"
         )
     if len(pids) < 2:
         return "one participant: an ANOVA needs at least two"
@@ -517,7 +525,9 @@ def knob(study: Study) -> dict[str, Any]:
         # recovery time exists only for trials with an overshoot: a mean per cell over
         # those, every participant needs at least one in every cell
         exact = m != "recovery_time_s"
-        why = balance_problem(d, KNOB_FACTORS, want, exact=exact, participants=list(study.plans))
+        why = balance_problem(
+            d, KNOB_FACTORS, want, exact=exact, participants=list(study.plans), words=study.words
+        )
         if why and not exact:
             why = (
                 "recovery time exists only after an overshoot, and "
@@ -568,7 +578,7 @@ def knob(study: Study) -> dict[str, Any]:
             res["anova"] = {
                 "skipped": (
                     f"{c}: {', '.join(lacking.index)} rated only {int(lacking.min())} of "
-                    f"{ncond} conditions; finish those runs or --exclude them"
+                    f"{ncond} conditions; finish those runs or {study.words.exclude}"
                     if len(lacking)
                     else f"{c}: one participant: an ANOVA needs at least two"
                 )
@@ -666,7 +676,7 @@ def analyze(study: Study) -> dict[str, Any]:
     main = in_protocol_order(df[df["phase"] == "main"], study, (a, b))
     main = main.assign(correct=main["correct"].astype(float))
     want = design_counts(study, (a, b), "main")
-    why = balance_problem(main, (a, b), want, participants=list(study.plans))
+    why = balance_problem(main, (a, b), want, participants=list(study.plans), words=study.words)
     single = [f for f in (a, b) if main[f].nunique() < 2]
     if single and not why:
         why = f"{single[0]} has one level ({main[single[0]].iloc[0]}); nothing to compare"

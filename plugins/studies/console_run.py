@@ -18,6 +18,7 @@ from console.errors import UserError
 
 from . import protocol as protocols
 from .runner import Control
+from .words import SCREEN
 
 TOPIC = "study"
 
@@ -57,7 +58,7 @@ def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
 
     from . import analysis, report, summary
 
-    study = analysis.load([Path(out)], experiment=experiment)
+    study = analysis.load([Path(out)], experiment=experiment, words=SCREEN)
     res = analysis.analyze(study)
     path = report.write(res, report_path(out, experiment), title=f"HapTable study: {experiment}")
     data = {
@@ -124,14 +125,15 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
     from .start import stored_participant
 
-    details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
+    stored = stored_participant(spec["out"], spec["pid"], SCREEN)
     prep = prepare(
         spec["study"],
         spec["pid"],
         spec["out"],
-        details=details,
+        details=None if stored else spec["details"],
         simulate=spec["simulate"],
         observer=obs,
+        words=SCREEN,
     )
     vmap = None
     if proto.stimulus != "knob":

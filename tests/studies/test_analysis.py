@@ -556,3 +556,31 @@ def test_the_legend_of_the_cells_figure_covers_no_bar(exp2_dir):
     assert len(bars) == 16 and max(b.y1 for b in bars) > ax.get_window_extent().y1 - 20
     assert not any(legend.overlaps(b) for b in bars)
     assert legend.y1 <= ax.get_window_extent().y0  # below the axes, outside the plot
+
+
+def test_a_file_is_not_a_folder_and_the_screen_hears_its_own_words(tmp_path, capsys):
+    from plugins.studies.words import SCREEN
+
+    f = tmp_path / "notes.txt"
+    f.write_text("x")
+    assert _cli(f) == 2
+    err = capsys.readouterr().err
+    assert f"{f}: is a file, not a folder; give the --out folder of `haptable study run`" in err
+    with pytest.raises(UserError) as e:
+        an.load([f], words=SCREEN)
+    assert str(e.value) == (
+        f"{f}: is a file, not a folder; set folder to the study's results folder (the one "
+        "holding P01/ ...)"
+    )
+    with pytest.raises(UserError, match="no such folder; set folder to"):
+        an.load([tmp_path / "nope"], words=SCREEN)
+    # what to do about missing cells, as the screen can do it
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, drop={"P02": 5})
+    line = an.analyze(an.load([root], words=SCREEN))["anova"]["skipped"]
+    assert line.endswith(
+        "finish those runs (s with the same participant resumes) or move their folders out "
+        "of the results folder"
+    )
+    assert "--" not in line and "`" not in line
+    cli_line = an.analyze(an.load([root]))["anova"]["skipped"]
+    assert "(the same `study run` command resumes)" in cli_line and "--exclude" in cli_line

@@ -112,8 +112,10 @@ def test_a_person_answers_with_the_keys_and_replays_once(
             await wait_for(
                 pilot, lambda: pane.running is None and pane.last.get("stopped"), what="refused"
             )
-            assert (
-                "participant P01: age is missing" in pane.last["stopped"]
+            assert (  # every missing field at once, as the screen names them
+                "participant P01: age, sex, handedness, hand width cm and hand length cm "
+                "missing; give them and note the consent (tick 'consent noted')"
+                in pane.last["stopped"]
                 and not (tmp_path / "P01").exists()
             )
             for wid, v in (

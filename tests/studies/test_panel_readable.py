@@ -94,7 +94,7 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
             await pilot.pause(0.2)
             shown = str(status.render())
             assert shown.startswith("P07: ")
-            assert shown.count("age is missing") == 1, shown
+            assert shown.count("hand length cm missing") == 1, shown
             # a simulated run, aborted: the status still names the participant
             pane.query_one("#simulate").value = True
             await pilot.click("#start")
