@@ -180,7 +180,10 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
             knob_seed=prep.participant_seed,
             live_knob=live,
         )
-        detail = f"{proto.title} -> {prep.files.root}"
+        from .store import resume_text
+
+        again = resume_text(prep.plan, prep.files.events())
+        detail = f"{proto.title} -> {prep.files.root}" + (f"; {again}" if again else "")
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
         return run_plan(
             prep.files,

@@ -250,6 +250,18 @@ def progress(plan: dict[str, Any], events: list[dict[str, Any]]) -> Progress:
     return Progress(frozenset(done), open_start, nxt, q_done, n)
 
 
+def resume_text(plan: dict[str, Any], events: list[dict[str, Any]]) -> str | None:
+    """Where a run resumes, for one line ("resuming at trial 5 of 200 (4 done; trial 5 was
+    interrupted and runs again)"); None for a run not started yet or finished."""
+    st = progress(plan, events)
+    if st.next_trial is None or not (st.done or events):
+        return None
+    n = st.next_trial
+    cut = any(e.get("event") == "interrupted" and e.get("trial") == n for e in events)
+    why = f"; trial {n + 1} was interrupted and runs again" if cut else ""
+    return f"resuming at trial {n + 1} of {st.total} ({len(st.done)} done{why})"
+
+
 def open_run(
     out: Path, pid: str, plan: dict[str, Any], words: Words = CLI
 ) -> tuple[RunFiles, dict[str, Any]]:
