@@ -131,3 +131,29 @@ def headline(res: dict[str, Any]) -> list[str]:
             elif isinstance(a, list) and a and a[0].get("note"):
                 lines.append(a[0]["note"])
     return lines
+
+
+def screen_lines(res: dict[str, Any]) -> tuple[str, list[str]]:
+    """What the Studies screen shows around its ANOVA table at 80 x 24: a title line (who,
+    the accuracy) and the notes, those about the ANOVA first (a test not run, an effect
+    without F), then the runs' notes and each participant's accuracy."""
+    who = res["participants"]
+    sim = len(res.get("simulated", []))
+    title = f"{res['experiment']}: {len(who)} participant(s)" + (
+        f", {sim} simulated" if sim else ""
+    )
+    acc = res.get("accuracy")
+    lines = headline(res)
+    if acc:
+        overall = acc["overall_pct"]
+        title += (
+            f"; accuracy: {acc.get('main_phase')}"
+            if overall is None
+            else f"; accuracy {overall:.1f} %"
+        )
+    run_notes = list(res.get("notes", []))
+    notes = [x for x in lines[2 if acc else 1 :] if x not in run_notes] + run_notes
+    if acc:
+        notes.append(lines[1].replace("accuracy", "accuracy (main phase)", 1))
+    notes.append("participants: " + ", ".join(who))
+    return title, notes
