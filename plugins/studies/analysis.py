@@ -412,7 +412,7 @@ def posthoc(post, level: str | None = None) -> list[dict[str, Any]]:
     out = []
     for raw, rec in zip(post.to_dict("records"), _clean(post), strict=True):
         rec["note"] = None
-        t = raw.get("T")
+        t = raw.get("T", math.nan)  # no T column at all: every score the same
         if isinstance(t, (float, np.floating)) and not math.isfinite(float(t)):
             rec.update({"T": None, "p-unc": None, "p-corr": None})
             lev = rec.get(level) if level else None

@@ -86,9 +86,10 @@ def _lines(res: dict[str, Any]) -> list[str]:
             else:
                 row = a[0]
                 out.append(
-                    f"questionnaire {c}: F({row['DF']}, {a[1]['DF']}) = {_f(row['F'], '.2f')}, "
+                    f"questionnaire {c}: F({row['DF']}, {a[1]['DF'] if len(a) > 1 else '-'}) = "
+                    f"{_f(row.get('F'), '.2f')}, "
                     f"p = {_f(row['p_reported'], '.2g')} ({row['sphericity']}), "
-                    f"np2 = {_f(row['np2'], '.3f')}"
+                    f"np2 = {_f(row.get('np2'), '.3f')}"
                 )
                 if row.get("note"):
                     out.append(f"  note: {row['note']}")

@@ -584,3 +584,36 @@ def test_a_file_is_not_a_folder_and_the_screen_hears_its_own_words(tmp_path, cap
     assert "--" not in line and "`" not in line
     cli_line = an.analyze(an.load([root]))["anova"]["skipped"]
     assert "(the same `study run` command resumes)" in cli_line and "--exclude" in cli_line
+
+
+def test_a_questionnaire_category_without_variance_has_no_f(tmp_path, capsys):
+    """Every participant gives 4 in every condition ("ease of use"), or the same scores
+    per condition ("effectiveness"): no F, no p (pingouin's inf, NaN or missing columns
+    are not passed on), a note each; the CLI prints it without failing."""
+    from plugins.studies import summary
+
+    root = sr.write_knob(tmp_path / "k", 4)
+    same = {"V": 2, "HD": 5, "HD+CF": 6, "HD+VF": 6}
+    for d in root.iterdir():
+        f = d / "trials.jsonl"
+        recs = [json.loads(x) for x in f.read_text().splitlines()]
+        for e in recs:
+            if e["event"] == "questionnaire":
+                e["score"] = 4 if e["category"] == "ease of use" else same[e["condition"]]
+        f.write_text("".join(json.dumps(e) + "\n" for e in recs))
+    res = an.analyze(an.load([root]))
+    q = res["knob"]["questionnaire"]
+    ease, eff = q["ease of use"]["anova"][0], q["effectiveness"]["anova"][0]
+    assert ease.get("F") is None and ease["p_reported"] is None and ease["np2"] is None
+    assert ease["note"].endswith(
+        "no variance: every participant scored the same (4 in every condition); F and p undefined"
+    )
+    assert eff["F"] is None and eff["p-unc"] is None and eff["np2"] == 1.0
+    assert "no error variance" in eff["note"]
+    post = {(r["A"], r["B"]): r for r in q["effectiveness"]["posthoc_bonferroni"]}
+    assert post[("HD", "V")]["p-corr"] is None and "no spread" in post[("HD", "V")]["note"]
+    assert "no difference and no spread" in post[("HD+CF", "HD+VF")]["note"]
+    rows = {r[0]: r for r in summary.anova_rows(res)}
+    assert rows["questionnaire ease of use: condition"][1:3] == ("- (3, 9)", "-")
+    assert _cli(root) == 0
+    assert "questionnaire ease of use: F(3, 9) = -, p = - (undefined)" in capsys.readouterr().out
