@@ -158,6 +158,7 @@ class StudiesPane(Vertical):
         #: (folder, experiment) of the analysis shown (analysed again after a run there)
         self.analysed: tuple[Path, str] | None = None
         self.run_out: Path | None = None  # the folder of the run going on
+        self._show_result = True  # the analysis coming in switches to its view
         self.notes: list[str] = []
 
     def compose(self) -> ComposeResult:
@@ -327,10 +328,14 @@ class StudiesPane(Vertical):
         out = Path(self._value("out").strip() or default_out(str(study))).expanduser()
         self._start_analysis(out, experiment)
 
-    def _start_analysis(self, out: Path, experiment: str, why: str = "") -> None:
+    def _start_analysis(self, out: Path, experiment: str, why: str = "", show: bool = True) -> None:
+        """Analyse ``out`` (``show``: switch to the analysis view, as ``n`` does; a refresh
+        after a run leaves the view the experimenter has)."""
         self.analysed = (out, experiment)
+        self._show_result = show
         self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out}{why} ...")
-        self._view("analysis")
+        if show:
+            self._view("analysis")
         self._analyse(out, experiment)
 
     def action_toggle_view(self) -> None:
@@ -431,7 +436,8 @@ class StudiesPane(Vertical):
             self._show()
             out, self.run_out = self.run_out, None
             if self.analysed is not None and out is not None and _same(self.analysed[0], out):
-                self._start_analysis(*self.analysed, why=f" again after {ev.name}'s run")
+                again = f" again after {ev.name}'s run"
+                self._start_analysis(*self.analysed, why=again, show=False)
         elif isinstance(ev, Failed):
             if ev.name == "study analysis":  # not a participant id (a space)
                 self._analysis_failed(ev.message)
@@ -518,7 +524,8 @@ class StudiesPane(Vertical):
         out = self.analysed[0] if self.analysed else None
         where = f"{report.name} in the folder" if out and _same(report.parent, out) else report
         self.query_one("#analysis-report", Static).update(f"report: {where}")
-        self._view("analysis")
+        if self._show_result:
+            self._view("analysis")
 
     def _analysis_failed(self, message: str) -> None:
         """The analysis failed: its line alone, nothing of an earlier analysis under it."""
@@ -527,7 +534,8 @@ class StudiesPane(Vertical):
         self.notes = []
         self._notes(open_=False)
         self.query_one("#analysis-report", Static).update("")
-        self._view("analysis")
+        if self._show_result:
+            self._view("analysis")
 
     def _show(self) -> None:
         L = self.last
