@@ -30,6 +30,7 @@ from console.errors import UserError
 
 from .rmanova import rm_anova
 from .store import read_events, read_json
+from .words import CLI, Words
 
 #: Factors of each experiment's main phase (the plan's trial keys).
 FACTORS = {"exp1": ("pair", "direction"), "exp2": ("region", "direction")}
@@ -48,41 +49,47 @@ class Study:
     trials: Any  # pandas DataFrame of the done records
     questionnaire: Any  # pandas DataFrame of the questionnaire lines
     notes: list[str] = field(default_factory=list)
+    #: how the analysis's lines name a fix (the CLI's flags or the screen's fields)
+    words: Words = CLI
 
 
-def participant_dirs(paths: list[Path]) -> list[Path]:
+def participant_dirs(paths: list[Path], words: Words = CLI) -> list[Path]:
     """Each path is a participant's folder (it holds ``plan.json``) or a study's
     ``--out`` folder (its sub-folders that do)."""
     out: list[Path] = []
     for p in paths:
         p = Path(p).expanduser()
+        if p.exists() and not p.is_dir():
+            raise UserError(f"{p}: is a file, not a folder; {words.runs}")
         if not p.is_dir():
-            raise UserError(f"{p}: no such folder; give the --out folder of `haptable study run`")
+            raise UserError(f"{p}: no such folder; {words.runs}")
         if (p / "plan.json").is_file():
             out.append(p)
             continue
         subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "plan.json").is_file())
         if not subs:
-            raise UserError(
-                f"{p}: no participant folder (P01/plan.json ...) in it; give the --out folder "
-                "of `haptable study run`"
-            )
+            raise UserError(f"{p}: no participant folder (P01/plan.json ...) in it; {words.runs}")
         out.extend(subs)
     return list(dict.fromkeys(out))
 
 
 def load(
-    paths: list[Path], *, exclude: tuple[str, ...] = (), experiment: str | None = None
+    paths: list[Path],
+    *,
+    exclude: tuple[str, ...] = (),
+    experiment: str | None = None,
+    words: Words = CLI,
 ) -> Study:
     """The study in ``paths`` (one experiment; participants in ``exclude`` left out; with
-    ``experiment``, only the participants of that experiment)."""
+    ``experiment``, only the participants of that experiment; ``words``: how its lines
+    name a fix)."""
     import pandas as pd
 
-    dirs = participant_dirs(paths)
+    dirs = participant_dirs(paths, words)
     done, quest, parts, plans, notes, twice = [], [], {}, {}, [], []
     exps: dict[str, list[str]] = {}
     for d in dirs:
-        plan = read_json(d / "plan.json")
+        plan = read_json(d / "plan.json", words)
         if not isinstance(plan, dict) or "experiment" not in plan or "trials" not in plan:
             raise UserError(f"{d / 'plan.json'}: not a study plan (no experiment/trials)")
         pid = str(plan.get("participant") or d.name)
@@ -97,7 +104,7 @@ def load(
             continue
         plans[pid] = plan
         pj = d / "participant.json"
-        parts[pid] = read_json(pj) if pj.is_file() else {"id": pid}
+        parts[pid] = read_json(pj, words) if pj.is_file() else {"id": pid}
         last: dict[int, dict] = {}
         for n, e in enumerate(read_events(d / "trials.jsonl"), 1):
             ev = e.get("event")
@@ -137,7 +144,43 @@ def load(
     q = pd.DataFrame(quest)
     if not q.empty:  # the last answer per participant, condition and item
         q = q.drop_duplicates(["participant", "after_trial", "category", "item"], keep="last")
-    return Study(exp, parts, plans, trials, q, notes)
+    return Study(exp, parts, plans, trials, q, notes, words)
+
+
+# --------------------------------------------------------------------------- order
+def level_order(study: Study, factor: str, phase: str = "main") -> list[Any]:
+    """The levels of ``factor`` in the protocol's order: the plan's ``factors`` of
+    ``phase`` (plans written before it was stored: the plan's ``responses`` for the
+    direction, else none: natural order)."""
+    plan = next(iter(study.plans.values()))
+    levels = (plan.get("factors") or {}).get(phase, {}).get(factor)
+    if levels is None and factor == "direction":
+        levels = plan.get("responses")
+    return [_level(v) for v in levels or []]
+
+
+def _natural(v: Any) -> tuple:
+    """``R2`` before ``R10``; numbers by value."""
+    import re
+
+    if isinstance(v, (int, float)):
+        return (0, v, ())
+    parts = re.split(r"(\d+)", str(v))
+    return (1, 0, tuple((0, int(x), "") if x.isdigit() else (1, 0, x) for x in parts))
+
+
+def in_protocol_order(df, study: Study, factors: tuple[str, ...], phase: str = "main"):
+    """``df``'s rows sorted (stably) by ``factors`` in the protocol's level order, so that
+    tables grouped in order of appearance (``groupby(sort=False)``) list the protocol's
+    order, not the first trial's."""
+    if df.empty:
+        return df
+    ranks = {}
+    for f in factors:
+        listed = level_order(study, f, phase)
+        rest = sorted((v for v in set(df[f]) if v not in listed), key=_natural)
+        ranks[f] = {v: i for i, v in enumerate([*listed, *rest])}
+    return df.sort_values(list(factors), key=lambda col: col.map(ranks[col.name]), kind="mergesort")
 
 
 # --------------------------------------------------------------------------- accuracy
@@ -166,22 +209,34 @@ def _num(x: float) -> float | None:
     return None if x is None or not math.isfinite(float(x)) else float(x)
 
 
+#: what the accuracy of the main phase is before any main-phase trial is done
+NO_MAIN = "no main-phase trials yet"
+
+
 def accuracy(study: Study) -> dict[str, Any]:
-    """Accuracy tables of experiment 1 or 2 (main phase; practice apart)."""
+    """Accuracy tables of experiment 1 or 2: the main phase only (practice phases apart,
+    ``practice``); before any main-phase trial ``overall_pct`` is None and ``main_phase``
+    says so (``NO_MAIN``), and a participant without one has ``accuracy_pct`` None."""
     df = study.trials
     df = df.assign(correct=df["correct"].astype(bool))
     a, b = FACTORS[study.experiment]
-    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    main = in_protocol_order(df[df["phase"] == "main"], study, (a, b))
     practice = df[df["phase"] != "main"]
     per_p = main.groupby("participant")["correct"].agg(["mean", "size"])
+    people = []
+    for p in sorted(study.plans):
+        if p in per_p.index:
+            r = per_p.loc[p]
+            people.append({"participant": p, "accuracy_pct": 100 * float(r["mean"])})
+            people[-1]["trials"] = int(r["size"])
+        else:
+            people.append({"participant": p, "accuracy_pct": None, "trials": 0})
     out: dict[str, Any] = {
-        "participants": [
-            {"participant": p, "accuracy_pct": 100 * float(r["mean"]), "trials": int(r["size"])}
-            for p, r in per_p.iterrows()
-        ],
-        "overall_pct": 100 * float(main["correct"].mean()),
-        f"by_{b}": _summary(main, b),
-        f"by_{a}": _summary(main, a),
+        "participants": people,
+        "overall_pct": 100 * float(main["correct"].mean()) if len(main) else None,
+        "main_phase": f"{len(main)} trials" if len(main) else NO_MAIN,
+        f"by_{b}": _summary(main, b) if len(main) else [],
+        f"by_{a}": _summary(main, a) if len(main) else [],
         "cells": [
             {a: ka, b: kb, **row}
             for ka, sub in main.groupby(a, sort=False)
@@ -220,12 +275,26 @@ def _level(v: Any) -> Any:
 
 
 def balance_problem(
-    df, factors: tuple[str, ...], want: dict[tuple, int], *, exact: bool = True
+    df,
+    factors: tuple[str, ...],
+    want: dict[tuple, int],
+    *,
+    exact: bool = True,
+    participants: list[str] | None = None,
+    words: Words = CLI,
 ) -> str | None:
-    """Why the cells are not complete and (``exact``) balanced (None: they are)."""
-    have = df.groupby(["participant", *factors]).size()
+    """Why the cells are not complete and (``exact``) balanced (None: they are).
+    ``participants``: everyone who should be in every cell (default: those in ``df``;
+    give the study's: a participant without a row in ``df`` is missing every cell).
+    ``words``: how the fix is named."""
+    have = df.groupby(["participant", *factors]).size() if len(df) else {}
+    pids = sorted(set(df["participant"]) if participants is None else set(participants))
     missing, short = [], []
-    for pid in sorted(set(df["participant"])):
+    for pid in pids:
+        gone = [c for c in want if int(have.get((pid, *c), 0)) == 0]
+        if want and len(gone) == len(want) and len(want) > 1:
+            missing.append(f"{pid} (all {len(want)} cells)")
+            continue
         for cell, n in want.items():
             got = int(have.get((pid, *cell), 0))
             label = "/".join(map(str, cell))
@@ -236,16 +305,15 @@ def balance_problem(
     if missing:
         more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
         return (
-            f"missing cells: {', '.join(missing[:3])}{more}; finish those runs (the same "
-            "`study run` command resumes) or leave the participants out with --exclude"
+            f"missing cells: {', '.join(missing[:3])}{more}; finish those runs "
+            f"({words.resume}) or {words.exclude}"
         )
     if short:
         more = f" and {len(short) - 3} more" if len(short) > 3 else ""
         return (
-            f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or leave "
-            "the participants out with --exclude"
+            f"unbalanced cells: {', '.join(short[:3])}{more}; finish those runs or {words.exclude}"
         )
-    if df["participant"].nunique() < 2:
+    if len(pids) < 2:
         return "one participant: an ANOVA needs at least two"
     return None
 
@@ -301,19 +369,23 @@ def two_way(df, dv: str, a: str, b: str) -> dict[str, Any]:
             "f": rec.get("F"),
             "p": rec.get("p-unc"),
             "np2": rec.get("np2"),
+            "note": None,
         }
         if r is not None:
             row.update(
                 {
                     "df1": r.df1,
                     "df2": r.df2,
-                    "eps_gg": r.eps_gg,
+                    "eps_gg": _num(r.eps_gg),
                     "p_gg": _num(r.p_gg),
                     "mauchly_w": _num(r.mauchly_w),
                     "mauchly_p": _num(r.mauchly_p),
                     "sphericity": r.sphericity,
                 }
             )
+            if r.undefined:  # pingouin divides by a zero error term: inf or NaN, p 0
+                row.update(f=None, p=None, p_gg=None, np2=_num(r.np2))
+                row["note"] = f"{src}: " + no_f_note(r.undefined, src, None)
             row["p_reported"] = row["p"] if r.sphericity == "assumed" else row["p_gg"]
         table.append(row)
     table = [r for r in table if r["source"] in sph]
@@ -326,10 +398,35 @@ def two_way(df, dv: str, a: str, b: str) -> dict[str, Any]:
         "factors": [a, b],
         "participants": len(pids),
         "anova": table,
-        "posthoc_bonferroni": _clean(post[keep]),
+        "posthoc_bonferroni": posthoc(post[keep], a),
         "simple_main_effects": simple_main_effects(cells, dv, a, b)
         + simple_main_effects(cells, dv, b, a),
     }
+
+
+def posthoc(post, level: str | None = None) -> list[dict[str, Any]]:
+    """pingouin's pairwise tests as JSON values. A comparison with no spread (every
+    participant's difference the same: pingouin's T is +-inf, or NaN when that difference
+    is 0 too) has no t: T, p-unc and p-corr are None (never a p of 0) and ``note`` says
+    why, naming the comparison (``level``: the column of the factor it is within)."""
+    out = []
+    for raw, rec in zip(post.to_dict("records"), _clean(post), strict=True):
+        rec["note"] = None
+        t = raw.get("T", math.nan)  # no T column at all: every score the same
+        if isinstance(t, (float, np.floating)) and not math.isfinite(float(t)):
+            rec.update({"T": None, "p-unc": None, "p-corr": None})
+            lev = rec.get(level) if level else None
+            where = f"{lev}: " if lev not in (None, "-") else ""
+            a, b = rec.get("A"), rec.get("B")
+            if math.isnan(float(t)):
+                why = (
+                    f"no difference and no spread: every participant scored the same in {a} and {b}"
+                )
+            else:
+                why = f"no spread: every participant's {a} - {b} difference is the same"
+            rec["note"] = f"{where}{a} vs {b}: {why}; t and p undefined"
+        out.append(rec)
+    return out
 
 
 def simple_main_effects(cells, dv: str, of: str, at: str) -> list[dict[str, Any]]:
@@ -356,13 +453,44 @@ def simple_main_effects(cells, dv: str, of: str, at: str) -> list[dict[str, Any]
                 "f": _num(r.f),
                 "df1": r.df1,
                 "df2": r.df2,
-                "eps_gg": r.eps_gg,
+                "eps_gg": _num(r.eps_gg),
                 "p": _num(p),
-                "p_bonferroni": _num(min(1.0, p * len(levels))),
+                "p_bonferroni": _num(min(1.0, p * len(levels)) if math.isfinite(p) else p),
                 "np2": _num(r.np2),
+                "note": no_f_note(r.undefined, of, lev, arr, dv) if r.undefined else None,
             }
         )
     return out
+
+
+def no_f_note(why: str, of: str, where: Any, values: Any = None, dv: str = "") -> str:
+    """Why an effect of ``of`` (at the level ``where`` of the other factor, or over all
+    of it: None) has no F and no p (``rmanova``: ``no variance``, ``no error variance``):
+    one line naming the cell. ``values``: the subjects x levels array, to say the one
+    value every participant had."""
+    cell = f" in {where}" if where is not None else ""
+    if " * " in of:  # an interaction: the differences along one factor at the other's levels
+        a, b = of.split(" * ", 1)
+        if why == "no variance":
+            return (
+                f"no variance: no participant's {b} differences change with {a}; F and p undefined"
+            )
+        return (
+            f"no error variance: every participant's {b} differences change with {a} the same "
+            "way; F and p undefined (an F over zero error is no test)"
+        )
+    if why == "no variance":
+        v = np.asarray(values, float) if values is not None else np.array([0.0, 1.0])
+        if v.size and np.ptp(v) == 0:
+            same = f"{100 * v.flat[0]:.0f} %" if dv == "accuracy" else f"{v.flat[0]:g}"
+            what = f"every participant scored the same{cell} ({same} in every {of})"
+        else:
+            what = f"each participant scored the same in every {of}{cell}"
+        return f"no variance: {what}; F and p undefined"
+    return (
+        f"no error variance: every participant shows the same differences between {of} "
+        f"levels{cell}; F and p undefined (an F over zero error is no test)"
+    )
 
 
 # --------------------------------------------------------------------------- knob
@@ -376,6 +504,7 @@ def knob(study: Study) -> dict[str, Any]:
         if k not in df:
             df[k] = [s.get(k) for s in df["stimulus"]]
         df[k] = df[k].map(_level)
+    df = in_protocol_order(df, study, KNOB_FACTORS)
     out: dict[str, Any] = {"measures": {}, "questionnaire": {}}
     want = design_counts(study, KNOB_FACTORS, None)
     for m in KNOB_MEASURES:
@@ -384,17 +513,21 @@ def knob(study: Study) -> dict[str, Any]:
             continue
         d = df[df[m].notna()].assign(**{m: lambda x, m=m: x[m].astype(float)})
         desc = (
-            d.groupby(list(KNOB_FACTORS))[m]
+            d.groupby(list(KNOB_FACTORS), sort=False)[m]
             .agg(["mean", "std", "count"])
             .reset_index()
             .rename(columns={"std": "sd", "count": "trials"})
         )
         res: dict[str, Any] = {"by_cell": _clean(desc)}
-        res["by_condition"] = _clean(d.groupby("condition")[m].agg(["mean", "std"]).reset_index())
+        res["by_condition"] = _clean(
+            d.groupby("condition", sort=False)[m].agg(["mean", "std"]).reset_index()
+        )
         # recovery time exists only for trials with an overshoot: a mean per cell over
         # those, every participant needs at least one in every cell
         exact = m != "recovery_time_s"
-        why = balance_problem(d, KNOB_FACTORS, want, exact=exact)
+        why = balance_problem(
+            d, KNOB_FACTORS, want, exact=exact, participants=list(study.plans), words=study.words
+        )
         if why and not exact:
             why = (
                 "recovery time exists only after an overshoot, and "
@@ -412,9 +545,13 @@ def knob(study: Study) -> dict[str, Any]:
                 (p, a, b, c) for p in pids for a in levels[0] for b in levels[1] for c in levels[2]
             ]
             arr = cells.reindex(idx).to_numpy().reshape(len(pids), *map(len, levels))
+            rows = []
+            for r in rm_anova(arr, list(KNOB_FACTORS)):
+                why = r.undefined and f"{m}: {r.source}: " + no_f_note(r.undefined, r.source, None)
+                rows.append({**r.as_dict(), "note": why or None})
             res["anova"] = {
                 "participants": len(pids),
-                "rows": [r.as_dict() for r in rm_anova(arr, list(KNOB_FACTORS))],
+                "rows": rows,
                 "posthoc_bonferroni": _main_effect_pairs(cells.reset_index(), m),
             }
         out["measures"][m] = res
@@ -422,14 +559,18 @@ def knob(study: Study) -> dict[str, Any]:
     if q is None or q.empty:
         out["questionnaire"] = {"skipped": "no questionnaire answers in the runs"}
         return out
-    q = q.assign(score=q["score"].astype(float))
-    cat = q.groupby(["participant", "category", "condition"])["score"].mean().reset_index()
+    q = in_protocol_order(q.assign(score=q["score"].astype(float)), study, ("condition",))
+    cat = (
+        q.groupby(["participant", "category", "condition"], sort=False)["score"]
+        .mean()
+        .reset_index()
+    )
     for c, sub in cat.groupby("category", sort=False):
         counts = sub.groupby("participant")["condition"].nunique()
         ncond = sub["condition"].nunique()
         res = {
             "by_condition": _clean(
-                sub.groupby("condition")["score"].agg(["mean", "std"]).reset_index()
+                sub.groupby("condition", sort=False)["score"].agg(["mean", "std"]).reset_index()
             )
         }
         lacking = counts[counts < ncond]
@@ -437,7 +578,7 @@ def knob(study: Study) -> dict[str, Any]:
             res["anova"] = {
                 "skipped": (
                     f"{c}: {', '.join(lacking.index)} rated only {int(lacking.min())} of "
-                    f"{ncond} conditions; finish those runs or --exclude them"
+                    f"{ncond} conditions; finish those runs or {study.words.exclude}"
                     if len(lacking)
                     else f"{c}: one participant: an ANOVA needs at least two"
                 )
@@ -474,12 +615,21 @@ def knob(study: Study) -> dict[str, Any]:
                 {
                     "sphericity": r.sphericity,
                     "mauchly_p": _num(r.mauchly_p),
-                    "eps_gg": r.eps_gg,
+                    "eps_gg": _num(r.eps_gg),
                     "p_gg": _num(r.p_gg),
                     "p_reported": _num(r.p_reported),
+                    "note": None,
                 }
             )
-            res["posthoc_bonferroni"] = _clean(
+            if r.undefined:  # pingouin's F over a zero error term: inf or NaN, p 0
+                for k in ("F", "p-unc", "p-GG-corr"):
+                    if k in top:
+                        top[k] = None
+                top["np2"] = _num(r.np2)
+                top["note"] = f"questionnaire {c}: " + no_f_note(
+                    r.undefined, "condition", None, arr
+                )
+            res["posthoc_bonferroni"] = posthoc(
                 post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]
             )
         out["questionnaire"][str(c)] = res
@@ -497,7 +647,7 @@ def _main_effect_pairs(cells, dv: str) -> list[dict[str, Any]]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             post = pg.pairwise_tests(marg, dv=dv, within=f, subject="participant", padjust="bonf")
-        for rec in _clean(post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]):
+        for rec in posthoc(post[[k for k in ("A", "B", "T", "p-unc", "p-corr") if k in post]]):
             out.append({"factor": f, **rec})
     return out
 
@@ -523,9 +673,10 @@ def analyze(study: Study) -> dict[str, Any]:
     res["accuracy"] = accuracy(study)
     a, b = FACTORS[study.experiment]
     df = study.trials
-    main = df[df["phase"] == "main"] if "main" in set(df["phase"]) else df
+    main = in_protocol_order(df[df["phase"] == "main"], study, (a, b))
     main = main.assign(correct=main["correct"].astype(float))
-    why = balance_problem(main, (a, b), design_counts(study, (a, b), "main"))
+    want = design_counts(study, (a, b), "main")
+    why = balance_problem(main, (a, b), want, participants=list(study.plans), words=study.words)
     single = [f for f in (a, b) if main[f].nunique() < 2]
     if single and not why:
         why = f"{single[0]} has one level ({main[single[0]].iloc[0]}); nothing to compare"

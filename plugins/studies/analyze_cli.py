@@ -25,12 +25,19 @@ def add_parser(sub: Any) -> None:
 
 
 def _lines(res: dict[str, Any]) -> list[str]:
+    from .summary import undefined_notes
+
     out = [f"{res['experiment']}: {len(res['participants'])} participant(s)"]
     out += [f"  note: {n}" for n in res.get("notes", [])]
     if "accuracy" in res:
         acc = res["accuracy"]
-        out.append(f"accuracy (main phase): {acc['overall_pct']:.1f} %")
-        for key in [k for k in acc if k.startswith("by_")]:
+        if acc["overall_pct"] is None:
+            out.append(f"accuracy (main phase): {acc['main_phase']}")
+        else:
+            out.append(f"accuracy (main phase): {acc['overall_pct']:.1f} %")
+        for ph, pct in acc.get("practice", {}).items():
+            out.append(f"  {ph} phase (apart from the accuracy): {pct:.1f} %")
+        for key in [k for k in acc if k.startswith("by_") and acc[k]]:
             name = key[3:]
             out.append(f"  per {name}:")
             for r in acc[key]:
@@ -48,12 +55,13 @@ def _lines(res: dict[str, Any]) -> list[str]:
                 f"{'eps':>5} {'p (GG)':>9}"
             )
             for r in aov["anova"]:
-                mp = "-" if r.get("mauchly_p") is None else f"{r['mauchly_p']:.3f}"
                 out.append(
-                    f"  {r['source']:<22} {r['df1']:>3}, {r['df2']:<4} {r['f']:8.2f} "
-                    f"{r['p']:9.2g} {r['np2']:6.3f} {mp:>9} {r['eps_gg']:5.2f} "
-                    f"{r['p_gg']:9.2g}  ({r['sphericity']})"
+                    f"  {r['source']:<22} {r['df1']:>3}, {r['df2']:<4} {_f(r['f'], '8.2f')} "
+                    f"{_f(r['p'], '9.2g')} {_f(r['np2'], '6.3f')} "
+                    f"{_f(r.get('mauchly_p'), '9.3f')} {_f(r.get('eps_gg'), '5.2f')} "
+                    f"{_f(r.get('p_gg'), '9.2g')}  ({r['sphericity']})"
                 )
+            out += [f"  note: {n}" for n in undefined_notes(aov)]
     if "knob" in res:
         for m, r in res["knob"]["measures"].items():
             a = r.get("anova", r)
@@ -63,9 +71,11 @@ def _lines(res: dict[str, Any]) -> list[str]:
             out.append(f"{m}: three-way RM-ANOVA ({a['participants']} participants)")
             for row in a["rows"]:
                 out.append(
-                    f"  {row['source']:<36} F({row['df1']}, {row['df2']}) = {row['f']:.2f}, "
-                    f"p = {row['p_reported']:.2g} ({row['sphericity']}), np2 = {row['np2']:.3f}"
+                    f"  {row['source']:<36} F({row['df1']}, {row['df2']}) = {_f(row['f'], '.2f')}, "
+                    f"p = {_f(row['p_reported'], '.2g')} ({row['sphericity']}), "
+                    f"np2 = {_f(row['np2'], '.3f')}"
                 )
+            out += [f"  note: {row['note']}" for row in a["rows"] if row.get("note")]
         q = res["knob"]["questionnaire"]
         if "skipped" in q:
             out.append(q["skipped"])
@@ -76,10 +86,22 @@ def _lines(res: dict[str, Any]) -> list[str]:
             else:
                 row = a[0]
                 out.append(
-                    f"questionnaire {c}: F({row['DF']}, {a[1]['DF']}) = {row['F']:.2f}, "
-                    f"p = {row['p_reported']:.2g} ({row['sphericity']}), np2 = {row['np2']:.3f}"
+                    f"questionnaire {c}: F({row['DF']}, {a[1]['DF'] if len(a) > 1 else '-'}) = "
+                    f"{_f(row.get('F'), '.2f')}, "
+                    f"p = {_f(row['p_reported'], '.2g')} ({row['sphericity']}), "
+                    f"np2 = {_f(row.get('np2'), '.3f')}"
                 )
+                if row.get("note"):
+                    out.append(f"  note: {row['note']}")
     return out
+
+
+def _f(v: Any, fmt: str) -> str:
+    """A number as ``fmt``; None (undefined: the notes say why) as "-" of the same width."""
+    if v is None:
+        width = fmt.split(".")[0]
+        return f"{'-':>{width}}" if width else "-"
+    return format(v, fmt)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -23,6 +23,7 @@ from console.errors import UserError
 
 from . import protocol as protocols
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
+from .store import resume_text
 
 MAX_PARTICIPANTS = 500
 
@@ -90,11 +91,17 @@ def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
         opts = ", ".join("--" + k.replace("_", "-") for k in missing)
         raise UserError(f"participant {pid}: give {opts} (or run at a terminal to be asked)")
     for k in missing:
-        if k == "consent":
-            ans = input(f"{pid}: informed consent noted? [y/N] ").strip().lower()
-            d[k] = True if ans in ("y", "yes") else None
-        else:
-            d[k] = input(f"{pid}: {k.replace('_', ' ')}: ").strip()
+        try:
+            if k == "consent":
+                ans = input(f"{pid}: informed consent noted? [y/N] ").strip().lower()
+                d[k] = True if ans in ("y", "yes") else None
+            else:
+                d[k] = input(f"{pid}: {k.replace('_', ' ')}: ").strip()
+        except EOFError:
+            raise UserError(
+                f"participant {pid}: input ended before {k.replace('_', ' ')} was given; give "
+                "it as --" + k.replace("_", "-") + " or answer at a terminal"
+            ) from None
     return d
 
 
@@ -150,7 +157,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             phases = ", ".join(f"{ph.name} {ph.n_trials}" for ph in p.phases)
             print(f"  {name:<8} {p.n_trials:4d} trials ({phases}): {p.title}")
         return 0
-    from .responders import ObserverResponder, TerminalResponder, observer
+    from .responders import INPUT_ENDED, ObserverResponder, TerminalResponder, observer
     from .runner import Control, run_plan
     from .stimuli import EffectPlayer, check_places, play_on
 
@@ -207,6 +214,9 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
 
                 if not args.json:
                     print(f"{pid}: {proto.name} -> {prep.files.root}", flush=True)
+                    again = resume_text(prep.plan, prep.files.events())
+                    if again:
+                        print(f"{pid}: {again}", flush=True)
                 res = run_plan(
                     prep.files,
                     prep.plan,
@@ -232,4 +242,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         print(json.dumps({"study": proto.name, "participants": summaries}, indent=1))
     with contextlib.suppress(Exception):
         sys.stdout.flush()
+    if control.aborted and control.reason == INPUT_ENDED:  # not Ctrl-C: bad input, 2
+        last = summaries[-1] if summaries else {}
+        raise UserError(
+            f"input ended (stdin closed) at {last.get('participant', '?')}'s trial "
+            f"{last.get('done', 0) + 1}: the run stopped there; answer at a terminal, the same "
+            "command resumes"
+        )
     return 130 if any(s["aborted"] for s in summaries) else 0

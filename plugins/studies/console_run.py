@@ -2,9 +2,11 @@
 screen starts these in a worker and shows what they report through the session (topic
 ``study``: ``Started``, a ``Snapshot`` per step, ``Stopped``, ``Failed``).
 
-``run_study`` prepares the participant (``start.prepare``) and runs the stored plan
-(``runner.run_plan``) with the session's outputs (``session.play_plan``, through the
-safety gate) and its vibration map. ``analyse`` reads a folder's runs of one experiment,
+``run_study`` prepares the participant (``start.prepare``, refusals in the screen's
+words: ``words.SCREEN``) and runs the stored plan (``runner.run_plan``) with the
+session's outputs (``session.play_plan``, through the safety gate) and a vibration map
+got as ``haptable study run`` gets it (``study_map``: the current map, the kept measured
+one, or measured now with progress; ``map_hint`` is what the screen says before ``s``). ``analyse`` reads a folder's runs of one experiment,
 writes the HTML report next to them and reports the headline and the ANOVA table
 (``summary.py``).
 """
@@ -18,6 +20,7 @@ from console.errors import UserError
 
 from . import protocol as protocols
 from .runner import Control
+from .words import SCREEN
 
 TOPIC = "study"
 
@@ -57,7 +60,7 @@ def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
 
     from . import analysis, report, summary
 
-    study = analysis.load([Path(out)], experiment=experiment)
+    study = analysis.load([Path(out)], experiment=experiment, words=SCREEN)
     res = analysis.analyze(study)
     path = report.write(res, report_path(out, experiment), title=f"HapTable study: {experiment}")
     data = {
@@ -65,6 +68,8 @@ def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
         "experiment": experiment,
         "report": str(path),
         "headline": summary.headline(res),
+        "title": summary.screen_lines(res)[0],
+        "notes": summary.screen_lines(res)[1],
         "columns": list(summary.COLUMNS),
         "rows": [list(r) for r in summary.anova_rows(res)],
     }
@@ -79,6 +84,58 @@ def run_analysis(session: Any, out: Path, experiment: str) -> None:
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, f"analysis: {why}", name="study analysis")
+
+
+def map_hint(session: Any, study: str) -> str:
+    """What the Studies screen says before ``s`` about the vibration map a flow study
+    plays on ("" when the protocol needs none or one is there)."""
+    try:
+        proto = protocols.load(study)
+    except UserError:
+        return ""
+    vib = session.vibration
+    if proto.stimulus == "knob" or vib.current is not None:
+        return ""
+    if vib.twin_plate_only():
+        return (
+            f"{proto.name} needs a vibration map of this table: import or load one on the "
+            "Vibration screen (F3) first"
+        )
+    if vib.cached_map_path().is_file():
+        return ""  # the kept measured map: loaded at s
+    return f"{proto.name} needs a vibration map: none yet, s measures the twin's grid first (~10 s)"
+
+
+def study_map(session: Any, control: Control, emit: Any) -> Any:
+    """The vibration map a flow study plays on, as ``haptable study run`` gets it: the
+    console's current map, else the kept measured map of the profile, else measured now
+    with the profile's vibrometer (progress as ``map`` notices; ``a`` cancels). On a real
+    table whose only vibrometer is the twin none is measured: one line says what to do."""
+    from console.runtime.measured_map import Cancelled
+    from console.vibration_map import VibrationMap
+
+    vib = session.vibration
+    try:
+        cur = vib.current_map()
+    except UserError:
+        if vib.twin_plate_only():
+            raise
+        emit("map", {"fraction": 0.0, "text": "measuring the vibration map (no map yet)"})
+        try:
+            vs = vib.measure(
+                lambda frac, text: emit("map", {"fraction": float(frac), "text": str(text)}),
+                lambda: control.aborted,
+            )
+        except Cancelled:
+            raise UserError(
+                "the vibration map's measurement was cancelled; s measures it again"
+            ) from None
+        return vs.vmap
+    if isinstance(cur, VibrationMap):
+        return cur
+    emit("map", {"fraction": 1.0, "text": "loading the kept measured map"})
+    vs = vib.load_cached()  # made current: the Vibration screen shows what the study plays on
+    return vs.vmap if vs is not None else vib.load(cur).vmap
 
 
 def _plain(info: dict[str, Any]) -> dict[str, Any]:
@@ -112,7 +169,6 @@ class _Asking:
 def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
     """Prepare the participant and run the plan on the console session (blocking)."""
     from console.session.events import Started
-    from console.vibration_map import VibrationMap, load_map
 
     from .responders import ObserverResponder, observer
     from .runner import run_plan
@@ -124,19 +180,19 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
     from .start import stored_participant
 
-    details = None if stored_participant(spec["out"], spec["pid"]) else spec["details"]
+    stored = stored_participant(spec["out"], spec["pid"], SCREEN)
     prep = prepare(
         spec["study"],
         spec["pid"],
         spec["out"],
-        details=details,
+        details=None if stored else spec["details"],
         simulate=spec["simulate"],
         observer=obs,
+        words=SCREEN,
     )
     vmap = None
     if proto.stimulus != "knob":
-        cur = session.vibration.current_map()
-        vmap = cur if isinstance(cur, VibrationMap) else load_map(cur)
+        vmap = study_map(session, control, emit)
         check_places(prep.plan, vmap)
     resp = (
         ObserverResponder(obs, prep.participant_seed)
@@ -178,7 +234,10 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
             knob_seed=prep.participant_seed,
             live_knob=live,
         )
-        detail = f"{proto.title} -> {prep.files.root}"
+        from .store import resume_text
+
+        again = resume_text(prep.plan, prep.files.events())
+        detail = f"{proto.title} -> {prep.files.root}" + (f"; {again}" if again else "")
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
         return run_plan(
             prep.files,

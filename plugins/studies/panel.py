@@ -11,6 +11,14 @@ keys (or 1 = left to right, 2 = right to left in experiment 1) or the answer but
 questionnaire item with 1..7; a simulated participant answers by itself. Stopping a
 run for any reason (abort, e-stop, quitting) leaves the trial in flight ``interrupted``;
 start again with the same participant to resume at the next trial of the stored plan.
+During an e-stop ``s`` is refused on the key (nothing is written). A flow study needs a
+vibration map: the status says so before ``s`` when there is none, and the run measures
+it first as ``haptable study run`` does (``console_run.study_map``, progress shown).
+
+At 80 x 24 the analysis view shows its title line, the ANOVA table, the notes collapsed
+to one line with their count (``o`` shows them all, in the table's place) and the
+report's path; the buttons are one line each. An analysis shown while a run writes to
+its folder is marked stale, and analysed again when the run stops.
 """
 
 from __future__ import annotations
@@ -21,7 +29,7 @@ from typing import Any
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import (
     Button,
     Checkbox,
@@ -43,6 +51,7 @@ from .console_run import TOPIC
 from .runner import Answer, Control
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
+IDLE = "no study running: pick a protocol and a participant, then s"
 
 
 def default_out(study: str = "") -> Path:
@@ -88,37 +97,49 @@ class StudiesPane(Vertical):
     StudiesPane #sex { width: 10; }
     StudiesPane #handedness { width: 13; }
     StudiesPane #hand_width_cm, StudiesPane #hand_length_cm { width: 6; }
-    StudiesPane #study-buttons Button { min-width: 10; }
-    StudiesPane #study-answers Button { min-width: 7; }
-    StudiesPane #study-buttons { height: auto; }
-    StudiesPane #study-answers { height: auto; }
+    StudiesPane #study-buttons Button { min-width: 9; margin-right: 1; }
+    StudiesPane #study-answers Button { min-width: 5; margin-right: 1; }
+    StudiesPane #study-buttons { height: 1; }
+    StudiesPane #study-answers { height: 1; }
     StudiesPane #study-status { height: auto; }
     StudiesPane #study-trials { height: 1fr; }
     StudiesPane #study-analysis { height: 1fr; display: none; }
     StudiesPane #analysis-head { height: auto; }
     StudiesPane #study-anova { height: 1fr; }
+    StudiesPane #analysis-notes-box { height: 1; overflow-y: hidden; }
+    StudiesPane #analysis-notes-box.-open { height: 1fr; overflow-y: auto; }
+    StudiesPane #analysis-notes { text-wrap: nowrap; text-overflow: ellipsis; }
+    StudiesPane #analysis-notes-box.-open #analysis-notes { text-wrap: wrap; }
+    StudiesPane #analysis-report { height: auto; }
     """
     HELP_TEXT = (
-        "Pick the protocol, the participant and the folder; a person needs age, sex,\n"
-        "handedness, hand size and the consent noted (a simulated one does not).\n"
-        "s / Start     start (or resume: the same participant continues where it stopped)\n"
+        "Pick the protocol, the participant and the folder; a person needs age,\n"
+        "sex, handedness, hand size and the consent noted (a simulated one not).\n"
+        "s / Start     start (or resume: the same participant continues where it\n"
+        "              stopped); refused during an e-stop (ctrl+r resets it)\n"
         "p             pause after this trial / resume\n"
         "r             replay the stimulus (within the phase's replays)\n"
         "a             abort now (the trial in flight is repeated on resume)\n"
         "n / Analyse   analyse the folder's runs of this protocol: the report\n"
         "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
-        "t             show the trials / the analysis"
-        "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2: left to\n"
-        "              right / right to left (experiment 1)\n"
-        "1..7          a questionnaire score"
+        "t             show the trials / the analysis\n"
+        "o             the analysis's notes: all of them / one line\n"
+        "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2:\n"
+        "              left to right / right to left (experiment 1)\n"
+        "1..7          a questionnaire score\n"
+        "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
+        "none loaded or kept, s measures the twin's grid first."
     )
     BINDINGS = [
+        # short labels: at 80 columns the footer keeps ^e E-STOP and ? help beside them
+        # (r replay is on its button and in the help)
         Binding("s", "start", "start"),
-        Binding("p", "pause", "pause/resume"),
-        Binding("r", "replay", "replay"),
+        Binding("p", "pause", "pause"),
+        Binding("r", "replay", "replay", show=False),
         Binding("a", "abort", "abort"),
         Binding("n", "analyse", "analyse"),
-        Binding("t", "toggle_view", "trials/analysis"),
+        Binding("t", "toggle_view", "view"),
+        Binding("o", "toggle_notes", "notes", show=False),
         Binding("up", "answer('up')", show=False),
         Binding("down", "answer('down')", show=False),
         Binding("left", "answer('left')", show=False),
@@ -134,6 +155,11 @@ class StudiesPane(Vertical):
         self.asking: dict[str, Any] | None = None
         self.responses: list[str] = []
         self.last: dict[str, Any] = {}
+        #: (folder, experiment) of the analysis shown (analysed again after a run there)
+        self.analysed: tuple[Path, str] | None = None
+        self.run_out: Path | None = None  # the folder of the run going on
+        self._show_result = True  # the analysis coming in switches to its view
+        self.notes: list[str] = []
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -171,11 +197,11 @@ class StudiesPane(Vertical):
             yield Input(id="hand_length_cm", compact=True)
             yield Checkbox("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
-            yield Button("Start", id="start", variant="primary")
-            yield Button("Pause", id="pause")
-            yield Button("Replay", id="replay")
-            yield Button("Abort", id="abort", variant="error")
-            yield Button("Analyse", id="analyse")
+            yield Button("Start", id="start", variant="primary", compact=True)
+            yield Button("Pause", id="pause", compact=True)
+            yield Button("Replay", id="replay", compact=True)
+            yield Button("Abort", id="abort", variant="error", compact=True)
+            yield Button("Analyse", id="analyse", compact=True)
         with Horizontal(id="study-answers"):
             for label, value in (
                 ("↑", "up"),
@@ -185,17 +211,18 @@ class StudiesPane(Vertical):
                 ("L→R", "left_to_right"),
                 ("R→L", "right_to_left"),
             ):
-                yield Button(label, id=f"ans-{value}", classes="answer")
+                yield Button(label, id=f"ans-{value}", classes="answer", compact=True)
         yield ProgressBar(total=1, show_eta=False, id="study-progress")
-        yield Static(
-            "no study running: pick a protocol and a participant, then s", id="study-status"
-        )
+        yield Static(IDLE, id="study-status")
         table = LiteralTable(id="study-trials", cursor_type="row")
         table.add_columns("trial", "what", "response", "correct", "replays", "time")
         yield table
         with Vertical(id="study-analysis"):
             yield Static("", id="analysis-head", markup=False)
             yield LiteralTable(id="study-anova", cursor_type="row")
+            with VerticalScroll(id="analysis-notes-box"):
+                yield Static("", id="analysis-notes", markup=False)
+            yield Static("", id="analysis-report", markup=False)
 
     @property
     def focus_target(self) -> Button:
@@ -218,6 +245,11 @@ class StudiesPane(Vertical):
     def action_start(self) -> None:
         if self.running is not None:
             self.app.notify(f"{self.running} is running: a aborts it", severity="warning")
+            return
+        out = self.app.session.outputs
+        if out is not None and out.gate.estopped:
+            # refused on the key: a run would only write a start and its interruption
+            self._status("e-stop engaged: ctrl+r resets it first")
             return
         study = self._value("protocol")
         if study is Select.BLANK or not study:
@@ -251,6 +283,13 @@ class StudiesPane(Vertical):
             self.running = None
             return
         self.query_one("#study-trials", DataTable).clear()
+        self.query_one("#study-progress", ProgressBar).update(total=1, progress=0)
+        self.run_out = spec["out"]
+        if self.analysed is not None and _same(self.analysed[0], spec["out"]):
+            self.query_one("#analysis-head", Static).update(
+                f"stale: {spec['pid']}'s run is writing to {spec['out']}; analysed again "
+                "when it stops"
+            )
         self._view("trials")
         self._status(f"{escape(spec['pid'])}: preparing {spec['study']} ...")
         self.focus()
@@ -287,13 +326,42 @@ class StudiesPane(Vertical):
             self.app.notify(str(exc), severity="error")
             return
         out = Path(self._value("out").strip() or default_out(str(study))).expanduser()
-        self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out} ...")
-        self._view("analysis")
+        self._start_analysis(out, experiment)
+
+    def _start_analysis(self, out: Path, experiment: str, why: str = "", show: bool = True) -> None:
+        """Analyse ``out`` (``show``: switch to the analysis view, as ``n`` does; a refresh
+        after a run leaves the view the experimenter has)."""
+        self.analysed = (out, experiment)
+        self._show_result = show
+        self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out}{why} ...")
+        if show:
+            self._view("analysis")
         self._analyse(out, experiment)
 
     def action_toggle_view(self) -> None:
         box = self.query_one("#study-analysis")
         self._view("trials" if box.display else "analysis")
+
+    def action_toggle_notes(self) -> None:
+        """The analysis's notes: all of them in the table's place, or one line."""
+        box = self.query_one("#analysis-notes-box")
+        if self.notes and self.query_one("#study-anova", DataTable).row_count:
+            self._notes(open_=not box.has_class("-open"))  # else: no table to come back to
+
+    def _notes(self, open_: bool) -> None:
+        box = self.query_one("#analysis-notes-box")
+        box.set_class(open_, "-open")
+        has_rows = self.query_one("#study-anova", DataTable).row_count > 0
+        self.query_one("#study-anova").display = has_rows and not open_
+        n = len(self.notes)
+        if not n:
+            text = ""
+        elif open_:
+            more = "; o shows the table" if has_rows else ""
+            text = f"notes ({n}{more}):\n" + "\n".join(f"- {x}" for x in self.notes)
+        else:
+            text = f"{n} note{'s' if n > 1 else ''} (o shows all): {self.notes[0]}"
+        self.query_one("#analysis-notes", Static).update(text)
 
     def _view(self, which: str) -> None:
         """Show the trials table or the analysis in the screen's lower half."""
@@ -308,6 +376,7 @@ class StudiesPane(Vertical):
         defaults = {str(default_out())} | {str(default_out(n)) for n in protocols.available()}
         if field.value.strip() in defaults:
             field.value = str(default_out(str(event.value)))
+        self._idle()
 
     def action_answer(self, key: str) -> None:
         self._answer(ANSWERS.get(key, key))
@@ -345,6 +414,9 @@ class StudiesPane(Vertical):
 
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
+        if ev.topic == "vibration" and isinstance(ev, Started) and self.running is None:
+            self._idle()  # a map now: the hint before s goes
+            return
         if ev.topic != TOPIC:
             return
         if isinstance(ev, Started):
@@ -362,9 +434,13 @@ class StudiesPane(Vertical):
                 if field.value.strip() == ev.name:
                     field.value = next_id(ev.name)
             self._show()
+            out, self.run_out = self.run_out, None
+            if self.analysed is not None and out is not None and _same(self.analysed[0], out):
+                again = f" again after {ev.name}'s run"
+                self._start_analysis(*self.analysed, why=again, show=False)
         elif isinstance(ev, Failed):
             if ev.name == "study analysis":  # not a participant id (a space)
-                self.query_one("#analysis-head", Static).update(ev.message)
+                self._analysis_failed(ev.message)
                 return
             self.last["error"] = ev.message
 
@@ -377,9 +453,14 @@ class StudiesPane(Vertical):
             bar = self.query_one("#study-progress", ProgressBar)
             bar.update(total=max(int(d["total"]), 1), progress=int(d["done"]))
             self.last["done"], self.last["total"] = int(d["done"]), int(d["total"])
+        elif kind == "map":
+            bar = self.query_one("#study-progress", ProgressBar)
+            bar.update(total=100, progress=round(100 * float(d.get("fraction") or 0)))
+            self.last["state"] = f"vibration map: {d.get('text', '')}"
         elif kind == "start":
             self.asking = None
             self.last["trial"] = d["trial"]
+            self.last["next"] = False
             self.last["state"] = "playing"
         elif kind == "waiting":
             left = d.get("replays_left")
@@ -419,6 +500,8 @@ class StudiesPane(Vertical):
             self.asking = {"item": d["item"], "scale": d["scale"]}
             self.last["state"] = f"rate 1..{d['scale']}: {d['item']['text']}"
         elif kind == "paused":
+            if isinstance(d.get("trial"), dict):  # the trial that comes, not the last one
+                self.last["trial"], self.last["next"] = d["trial"], True
             self.last["state"] = "paused (p resumes)"
         elif kind == "aborted":
             self.last["state"] = f"aborted: {d.get('reason', '')}"
@@ -427,28 +510,48 @@ class StudiesPane(Vertical):
         self._show()
 
     def _analysis(self, d: dict[str, Any]) -> None:
-        head = [*d["headline"], f"report: {d['report']}"]
-        if not d["rows"]:
-            head.append("no ANOVA table (see the lines above)")
-        self.query_one("#analysis-head", Static).update("\n".join(head))
+        self.query_one("#analysis-head", Static).update(d["title"])
         table = self.query_one("#study-anova", DataTable)
         table.clear(columns=True)
         table.add_columns(*d["columns"])
         for row in d["rows"]:
             table.add_row(*row)
-        self._view("analysis")
+        self.notes = list(d["notes"])
+        if not d["rows"]:
+            self.notes.insert(0, "no ANOVA table: the notes say why")
+        self._notes(open_=not d["rows"])  # without a table the notes take its place
+        report = Path(d["report"])
+        out = self.analysed[0] if self.analysed else None
+        where = f"{report.name} in the folder" if out and _same(report.parent, out) else report
+        self.query_one("#analysis-report", Static).update(f"report: {where}")
+        if self._show_result:
+            self._view("analysis")
+
+    def _analysis_failed(self, message: str) -> None:
+        """The analysis failed: its line alone, nothing of an earlier analysis under it."""
+        self.query_one("#analysis-head", Static).update(message)
+        self.query_one("#study-anova", DataTable).clear(columns=True)
+        self.notes = []
+        self._notes(open_=False)
+        self.query_one("#analysis-report", Static).update("")
+        if self._show_result:
+            self._view("analysis")
 
     def _show(self) -> None:
         L = self.last
         who = self.running or L.get("pid") or "-"  # the participant also once stopped
-        done = f"{escape(L.get('done', 0))}/{escape(L.get('total', 0))} trials done"
+        if "total" in L:
+            done = f"{escape(L['done'])}/{escape(L['total'])} trials done"
+        else:  # no plan reached yet (a refused start): no count to show
+            done = "not started" if not self.running else "preparing"
         head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above
         if self.control is not None and self.control.paused and self.running:
             head += "  [yellow]paused[/]"
         lines = [head]
         if L.get("trial") and self.running:
             t = L["trial"]
-            lines.append(f"trial {t['index'] + 1}: {escape(trial_text(t))}")
+            which = "next: trial" if L.get("next") else "trial"
+            lines.append(f"{which} {t['index'] + 1}: {escape(trial_text(t))}")
         if L.get("state") and self.running:
             lines.append(escape(L["state"]))
         if not self.running and L.get("stopped"):
@@ -459,11 +562,42 @@ class StudiesPane(Vertical):
                 lines.append(f"stopped: {escape(L['stopped'])}")
                 if error:
                     lines.append(f"[red]{escape(error)}[/]")
-        self._status("\n".join(lines))
+        self._status("\n".join(lines) + ("" if self.running else self._map_hint()))
 
     def _status(self, text: str) -> None:
         self.query_one("#study-status", Static).update(text)
 
+    def on_mount(self) -> None:
+        self._idle()
+
+    def _idle(self) -> None:
+        """No run going on: the last run's status (or what to do), and what the chosen
+        flow study still needs (a vibration map)."""
+        if self.running is not None:
+            return
+        if self.last:
+            self._show()
+        else:
+            self._status(IDLE + self._map_hint())
+
+    def _map_hint(self) -> str:
+        """The status's line about the vibration map the chosen protocol needs, or ""."""
+        study = self._value("protocol")
+        if study is Select.BLANK or not study:
+            return ""
+        from .console_run import map_hint
+
+        hint = map_hint(self.app.session, str(study))
+        return f"\n[yellow]{escape(hint)}[/]" if hint else ""
+
     def on_unmount(self) -> None:
         if self.control is not None:
             self.control.abort("the console closed")
+
+
+def _same(a: Path, b: Path) -> bool:
+    """The same folder (as typed, or resolved)."""
+    try:
+        return Path(a).expanduser().resolve() == Path(b).expanduser().resolve()
+    except OSError:
+        return Path(a) == Path(b)

@@ -43,13 +43,14 @@ def balanced_latin_square(n: int) -> list[list[int]]:
     return rows
 
 
-def participant_number(participant_id: str) -> int:
-    """The number in a participant id (``P07`` -> 7): its trailing digits."""
+def participant_number(participant_id: str, row_hint: str = "or give --row") -> int:
+    """The number in a participant id (``P07`` -> 7): its trailing digits. ``row_hint``:
+    how else the user can pick the row ("" where they cannot)."""
     m = re.search(r"(\d+)$", participant_id)
     if not m or int(m.group(1)) < 1:
         raise UserError(
             f"participant {participant_id!r}: no number at its end to pick the counterbalancing "
-            "row; name participants P01, P02 ... or give --row"
+            f"row; name participants P01, P02 ...{' ' + row_hint if row_hint else ''}"
         )
     return int(m.group(1))
 
@@ -103,15 +104,21 @@ def _stimulus(protocol: Protocol, cell: dict[str, Any]) -> dict[str, Any]:
 
 
 def make_plan(
-    protocol: Protocol, participant_id: str, *, seed: int | None = None, row: int | None = None
+    protocol: Protocol,
+    participant_id: str,
+    *,
+    seed: int | None = None,
+    row: int | None = None,
+    row_hint: str = "or give --row",
 ) -> dict[str, Any]:
     """The participant's plan (the ``plan.json`` contract): ``experiment``,
-    ``protocol_sha256``, ``seed``, ``latin_square_row``, ``trials`` (ordered) and
-    ``questionnaires`` (each after a trial index)."""
+    ``protocol_sha256``, ``seed``, ``latin_square_row``, ``factors`` (each phase's factor
+    levels in the protocol's order), ``trials`` (ordered) and ``questionnaires`` (each
+    after a trial index)."""
     seed = participant_seed(protocol, participant_id) if seed is None else int(seed)
     needs_row = any(p.block_order == "latin_square" for p in protocol.phases)
     if row is None:
-        row = participant_number(participant_id) - 1 if needs_row else 0
+        row = participant_number(participant_id, row_hint) - 1 if needs_row else 0
     trials: list[dict[str, Any]] = []
     questionnaires: list[dict[str, Any]] = []
     for k, phase in enumerate(protocol.phases):
@@ -167,6 +174,7 @@ def make_plan(
         "participant": participant_id,
         "seed": seed,
         "latin_square_row": row if needs_row else None,
+        "factors": {ph.name: {f: list(v) for f, v in ph.factors.items()} for ph in protocol.phases},
         "trials": trials,
         "questionnaires": questionnaires,
     }

@@ -55,10 +55,18 @@ def accuracy_figures(res: dict[str, Any]) -> list[tuple[str, str]]:
     _bars(axs[0], acc["by_direction"], "direction", "(a) per direction")
     _bars(axs[1], acc[f"by_{place}"], place, f"(b) per {place}")
     out = [(f"Correct responses per direction and per {place} (mean, SEM bars)", _png(fig))]
+    out.append((f"Correct responses per {place} and direction", _png(cells_figure(acc, place))))
+    return out
+
+
+def cells_figure(acc: dict[str, Any], place: str):
+    """Accuracy per place and direction: a bar per cell, grouped by place (the protocol's
+    order), the legend below the axes where it covers no bar."""
+    plt = _plt()
     cells = acc["cells"]
     places = list(dict.fromkeys(c[place] for c in cells))
     dirs = list(dict.fromkeys(c["direction"] for c in cells))
-    fig, ax = plt.subplots(figsize=(9, 3.4))
+    fig, ax = plt.subplots(figsize=(9, 3.6), layout="constrained")
     width = 0.8 / max(1, len(dirs))
     for j, d in enumerate(dirs):
         xs = np.arange(len(places)) + (j - (len(dirs) - 1) / 2) * width
@@ -76,9 +84,14 @@ def accuracy_figures(res: dict[str, Any]) -> list[tuple[str, str]]:
     ax.set_xticks(np.arange(len(places)), places)
     ax.set_ylim(0, 105)
     ax.set_ylabel("correct (%)")
-    ax.legend(fontsize=8, ncols=len(dirs))
-    out.append((f"Correct responses per {place} and direction", _png(fig)))
-    return out
+    _legend_below(ax, len(dirs))
+    return fig
+
+
+def _legend_below(ax, n: int) -> None:
+    """The legend in one row below the axes and their tick labels (the figure's
+    constrained layout makes room): bars reach the top, a legend inside covers them."""
+    ax.figure.legend(loc="outside lower center", ncols=max(1, n), fontsize=8, frameon=False)
 
 
 def knob_figures(res: dict[str, Any]) -> list[tuple[str, str]]:
@@ -110,7 +123,7 @@ def knob_figures(res: dict[str, Any]) -> list[tuple[str, str]]:
     cats = [c for c, v in q.items() if isinstance(v, dict) and "by_condition" in v]
     if cats:
         conds = list(dict.fromkeys(r["condition"] for c in cats for r in q[c]["by_condition"]))
-        fig, ax = plt.subplots(figsize=(max(6, 1.4 * len(cats)), 3.4))
+        fig, ax = plt.subplots(figsize=(max(6, 1.4 * len(cats)), 3.6), layout="constrained")
         width = 0.8 / len(conds)
         for j, cond in enumerate(conds):
             xs = np.arange(len(cats)) + (j - (len(conds) - 1) / 2) * width
@@ -122,7 +135,7 @@ def knob_figures(res: dict[str, Any]) -> list[tuple[str, str]]:
         ax.set_xticks(np.arange(len(cats)), cats, rotation=20, ha="right", fontsize=8)
         ax.set_ylim(1, 7)
         ax.set_ylabel("score (1-7)")
-        ax.legend(fontsize=8, ncols=len(conds))
+        _legend_below(ax, len(conds))
         out.append(("Questionnaire: mean score per category and condition (as Fig. 17)", _png(fig)))
     return out
 
@@ -167,6 +180,7 @@ ANOVA_COLS = [
     "eps_gg",
     "p_gg",
     "p_reported",
+    "note",
 ]
 
 
@@ -184,9 +198,14 @@ def render(res: dict[str, Any], title: str = "") -> str:
     figs: list[tuple[str, str]] = []
     if "accuracy" in res:
         acc = res["accuracy"]
-        parts.append(f"<h2>Accuracy</h2><p>Overall (main phase): {acc['overall_pct']:.1f} %</p>")
+        overall = acc["overall_pct"]
+        said = acc.get("main_phase") if overall is None else f"{overall:.1f} %"
+        parts.append(f"<h2>Accuracy</h2><p>Overall (main phase): {html.escape(str(said))}</p>")
+        if acc.get("practice"):
+            practice = ", ".join(f"{k} {v:.1f} %" for k, v in acc["practice"].items())
+            parts.append(f"<p>Practice phases (apart): {html.escape(practice)}</p>")
         place = "region" if "by_region" in acc else "pair"
-        figs = accuracy_figures(res)
+        figs = accuracy_figures(res) if overall is not None else []
         for cap, png in figs[:1]:
             parts.append(_fig(cap, png))
         parts.append("<h3>Per participant</h3>" + table(acc["participants"]))

@@ -44,6 +44,8 @@ KEYS = {
 }
 EXP1_KEYS = {"1": "left_to_right", "2": "right_to_left", "l": "left_to_right", "r": "right_to_left"}
 REPLAY_KEYS = ("0", "p", "replay")
+#: the abort reason when the terminal's input ends (stdin closed, a script ran out)
+INPUT_ENDED = "input ended"
 
 
 def parse_key(key: str, responses: list[str]) -> Answer | None:
@@ -127,7 +129,7 @@ class TerminalResponder:
             try:
                 raw = self.read(f"trial {trial['index'] + 1}: {keys}; 0/p replay ({left} left): ")
             except EOFError:
-                control.abort("input closed")
+                control.abort(INPUT_ENDED)
                 control.check()
             a = parse_key(raw, self.responses)
             if a is None:
@@ -147,7 +149,7 @@ class TerminalResponder:
                     f"{scale} = agree): "
                 )
             except EOFError:
-                control.abort("input closed")
+                control.abort(INPUT_ENDED)
                 control.check()
             if raw.strip().isdigit() and 1 <= int(raw) <= scale:
                 return int(raw)

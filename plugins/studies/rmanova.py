@@ -16,6 +16,13 @@ distribution (Mauchly 1940; Anderson 1958; Greenhouse & Geisser 1959).
 pingouin's two-way ``rm_anova`` gives the same F (tests/studies/test_analysis.py); it
 warns its interaction epsilon may be inaccurate when both factors have more than two
 levels, and it has no three-way design: this module covers both.
+
+A degenerate effect has no F: when ``SS_error`` is zero (to rounding: below ``1e-20``
+of the data's sum of squares) every subject shows the same contrasts, so the F ratio
+divides by zero. With ``SS_effect`` zero too there is no variance at all (``undefined =
+"no variance"``: F, p, epsilon and partial eta squared are NaN, never a p of 0); with
+``SS_effect`` above zero (``"no error variance"``) F and p are NaN as well (an infinite
+F is no test) while partial eta squared is 1, which it is.
 """
 
 from __future__ import annotations
@@ -54,11 +61,17 @@ class EffectRow:
     mauchly_chi2: float
     mauchly_df: int
     mauchly_p: float
+    #: why F and p are undefined (module docstring): "" (they are defined), "no variance"
+    #: or "no error variance"
+    undefined: str = ""
 
     @property
     def sphericity(self) -> str:
-        """``assumed`` (Mauchly p >= 0.05 or one df), ``violated`` (p < 0.05) or
-        ``untestable`` (fewer subjects than the effect's df + 1: no Mauchly test)."""
+        """``assumed`` (Mauchly p >= 0.05 or one df), ``violated`` (p < 0.05),
+        ``untestable`` (fewer subjects than the effect's df + 1: no Mauchly test) or
+        ``undefined`` (no F: ``undefined`` says why)."""
+        if self.undefined:
+            return "undefined"
         if self.df1 < 2:
             return "assumed"
         if not np.isfinite(self.mauchly_p):
@@ -126,6 +139,8 @@ def rm_anova(cells: np.ndarray, factors: list[str]) -> list[EffectRow]:
     if n < 2:
         raise ValueError("need at least two subjects")
     flat = y.reshape(n, -1)
+    # below this a sum of squares is rounding: contrasts of equal values give ~1e-32
+    tiny = 1e-20 * float((flat**2).sum())
     rows = []
     effects = [e for r in range(1, len(factors) + 1) for e in combinations(range(len(factors)), r)]
     for eff in effects:
@@ -139,10 +154,17 @@ def rm_anova(cells: np.ndarray, factors: list[str]) -> list[EffectRow]:
         ss = float(n * m @ m)
         sse = float(((z - m) ** 2).sum())
         df1, df2 = p, p * (n - 1)
-        f = (ss / df1) / (sse / df2) if sse > 0 else math.inf
-        pv = float(stats.f.sf(f, df1, df2)) if math.isfinite(f) else 0.0
-        eps = gg_epsilon(z) if sse > 0 else 1.0
-        pgg = float(stats.f.sf(f, df1 * eps, df2 * eps)) if math.isfinite(f) else 0.0
+        undefined = ""
+        if sse <= tiny:
+            undefined = "no variance" if ss <= tiny else "no error variance"
+            f = pv = eps = pgg = math.nan
+            np2 = math.nan if ss <= tiny else 1.0
+        else:
+            f = (ss / df1) / (sse / df2)
+            pv = float(stats.f.sf(f, df1, df2))
+            eps = gg_epsilon(z)
+            pgg = float(stats.f.sf(f, df1 * eps, df2 * eps))
+            np2 = ss / (ss + sse)
         w, chi2, mdf, mp = mauchly(z)
         rows.append(
             EffectRow(
@@ -153,13 +175,14 @@ def rm_anova(cells: np.ndarray, factors: list[str]) -> list[EffectRow]:
                 sse,
                 f,
                 pv,
-                ss / (ss + sse) if ss + sse > 0 else math.nan,
+                np2,
                 eps,
                 pgg,
                 w,
                 chi2,
                 mdf,
                 mp,
+                undefined,
             )
         )
     return rows

@@ -149,7 +149,9 @@ def run_plan(
             if i not in st.done:
                 if limit is not None and ran >= limit:
                     break
-                control.wait_if_paused(lambda i=i: say("paused", {"next": i}))
+                control.wait_if_paused(
+                    lambda i=i, trial=trial: say("paused", {"next": i, "trial": trial})
+                )
                 _run_trial(files, plan, pid, simulated, trial, player, responder, control, say)
                 ran += 1
                 st = progress(plan, files.events())

@@ -31,6 +31,7 @@ from .store import (
     participant_dir,
     save_participant,
 )
+from .words import CLI, Words
 
 PARTICIPANT_KEYS = ("age", "sex", "handedness", "hand_width_cm", "hand_length_cm", "consent")
 
@@ -63,9 +64,9 @@ def simulated_participant(pid: str, seed: int, observer_parameters: dict[str, An
     )
 
 
-def stored_participant(out: Path, pid: str) -> dict[str, Any] | None:
+def stored_participant(out: Path, pid: str, words: Words = CLI) -> dict[str, Any] | None:
     """The participant already stored under ``out`` (a resume), else None."""
-    return load_participant(RunFiles(participant_dir(out, check_id(pid))))
+    return load_participant(RunFiles(participant_dir(out, check_id(pid))), words)
 
 
 def prepare(
@@ -78,22 +79,25 @@ def prepare(
     observer: Any = None,
     seed: int | None = None,
     row: int | None = None,
+    words: Words = CLI,
 ) -> Prepared:
     """Everything checked and stored before the first trial (see the module docstring).
     ``details``: the participant's fields (``PARTICIPANT_KEYS``) for a new participant;
-    ``observer``: the ``SimulatedObserver`` when ``simulate``."""
+    ``observer``: the ``SimulatedObserver`` when ``simulate``; ``words``: how refusals
+    name the fix (the CLI's flags or the screen's fields)."""
     proto = protocols.load(study)
     check_id(pid)
-    plan = make_plan(proto, pid, seed=seed, row=row)
-    stored = stored_participant(out, pid)
+    plan = make_plan(proto, pid, seed=seed, row=row, row_hint=words.row)
+    stored = stored_participant(out, pid, words)
     if stored is not None:
         if bool(stored.get("simulated")) != bool(simulate):
             from console.errors import UserError
 
-            who = "simulated" if stored.get("simulated") else "a person"
+            sim = bool(stored.get("simulated"))
+            how = words.resume_simulated if sim else words.resume_person
             raise UserError(
-                f"{participant_dir(out, pid)}: participant {pid} is {who}; resume the same way "
-                "(with or without --simulate) or use another --out"
+                f"{participant_dir(out, pid)}: participant {pid} is "
+                f"{'simulated' if sim else 'a person'}; {how}, or use another {words.out}"
             )
         person = None
     elif simulate:
@@ -106,8 +110,8 @@ def prepare(
         person = simulated_participant(pid, pseed, params)
     else:
         d = dict(details or {})
-        person = make_participant(pid, **{k: d.get(k) for k in PARTICIPANT_KEYS})
-    files, plan = open_run(out, pid, plan)
+        person = make_participant(pid, **{k: d.get(k) for k in PARTICIPANT_KEYS}, words=words)
+    files, plan = open_run(out, pid, plan, words)
     if person is not None:
         save_participant(files, person)
         stored = asdict(person)

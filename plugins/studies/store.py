@@ -24,6 +24,8 @@ from typing import Any
 from console.atomic import write_text_atomic
 from console.errors import UserError
 
+from .words import CLI, Words, listing
+
 SEXES = ("female", "male", "other", "undisclosed")
 HANDEDNESS = ("left", "right", "ambidextrous")
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -63,15 +65,27 @@ def make_participant(
     consent: Any,
     simulated: bool = False,
     observer: dict[str, Any] | None = None,
+    words: Words = CLI,
 ) -> Participant:
-    """A checked participant; each bad value is one line naming the field and the fix."""
+    """A checked participant: the missing fields named at once, else each bad value in
+    one line naming the field (as ``words`` calls it) and the fix. ``sex`` and
+    ``handedness`` are taken in any case and by a unique start (``F``: female)."""
     check_id(pid)
 
     given = {"age": age, "sex": sex, "handedness": handedness}
     given |= {"hand_width_cm": hand_width_cm, "hand_length_cm": hand_length_cm}
-    for name, v in given.items():
-        if v is None or v == "":
-            raise UserError(f"participant {pid}: {name} is missing; give it before the first trial")
+    missing = [name for name, v in given.items() if v is None or str(v).strip() == ""]
+    if missing:
+        names = [words.fields.get(k, k) for k in missing]
+        also = f" and note the consent ({words.consent})" if consent is not True else ""
+        raise UserError(
+            f"participant {pid}: {listing(names)} missing; give "
+            f"{'it' if len(names) == 1 else 'them'}{also} before the first trial"
+        )
+
+    def said(name: str, v: Any) -> str:
+        label = words.fields.get(name, name)
+        return f"{label} {v}" if label.startswith("--") else f"{label} = {v!r}"
 
     def num(name: str, v: Any, lo: float, hi: float) -> float:
         try:
@@ -80,25 +94,28 @@ def make_participant(
             x = math.nan
         if not (math.isfinite(x) and lo <= x <= hi):
             raise UserError(
-                f"participant {pid}: {name} = {v!r}: give a number from {lo:g} to {hi:g}"
+                f"participant {pid}: {said(name, v)}: give a number from {lo:g} to {hi:g}"
             )
         return x
 
+    def choice(name: str, v: Any, options: tuple[str, ...]) -> str:
+        k = str(v).strip().lower()
+        hits = [o for o in options if o == k] or [o for o in options if o.startswith(k)]
+        if len(hits) != 1:
+            raise UserError(f"participant {pid}: {said(name, v)}: use one of {', '.join(options)}")
+        return hits[0]
+
     a = num("age", age, 1, 120)
     if a != int(a):
-        raise UserError(f"participant {pid}: age = {age!r}: give whole years")
-    if sex not in SEXES:
-        raise UserError(f"participant {pid}: sex = {sex!r}: use one of {', '.join(SEXES)}")
-    if handedness not in HANDEDNESS:
-        raise UserError(
-            f"participant {pid}: handedness = {handedness!r}: use one of {', '.join(HANDEDNESS)}"
-        )
+        raise UserError(f"participant {pid}: {said('age', age)}: give whole years")
+    sex = choice("sex", sex, SEXES)
+    handedness = choice("handedness", handedness, HANDEDNESS)
     w = num("hand_width_cm", hand_width_cm, 3, 30)
     length = num("hand_length_cm", hand_length_cm, 5, 40)
     if consent is not True:
         raise UserError(
             f"participant {pid}: consent not noted; note the participant's informed consent "
-            "(--consent) before the first trial"
+            f"({words.consent}) before the first trial"
         )
     return Participant(
         pid,
@@ -148,12 +165,12 @@ def read_events(path: Path) -> list[dict[str, Any]]:
     return out
 
 
-def read_json(path: Path) -> Any:
+def read_json(path: Path, words: Words = CLI) -> Any:
     try:
         return json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise UserError(
-            f"{path}: cannot read it ({exc}); restore it or start a new --out"
+            f"{path}: cannot read it ({exc}); restore it or start a new {words.out}"
         ) from None
 
 
@@ -187,8 +204,9 @@ def participant_dir(out: Path, pid: str) -> Path:
     return Path(out).expanduser() / check_id(pid)
 
 
-def load_participant(files: RunFiles) -> dict[str, Any] | None:
-    return read_json(files.participant_path) if files.participant_path.is_file() else None
+def load_participant(files: RunFiles, words: Words = CLI) -> dict[str, Any] | None:
+    path = files.participant_path
+    return read_json(path, words) if path.is_file() else None
 
 
 def save_participant(files: RunFiles, p: Participant) -> None:
@@ -232,7 +250,21 @@ def progress(plan: dict[str, Any], events: list[dict[str, Any]]) -> Progress:
     return Progress(frozenset(done), open_start, nxt, q_done, n)
 
 
-def open_run(out: Path, pid: str, plan: dict[str, Any]) -> tuple[RunFiles, dict[str, Any]]:
+def resume_text(plan: dict[str, Any], events: list[dict[str, Any]]) -> str | None:
+    """Where a run resumes, for one line ("resuming at trial 5 of 200 (4 done; trial 5 was
+    interrupted and runs again)"); None for a run not started yet or finished."""
+    st = progress(plan, events)
+    if st.next_trial is None or not (st.done or events):
+        return None
+    n = st.next_trial
+    cut = any(e.get("event") == "interrupted" and e.get("trial") == n for e in events)
+    why = f"; trial {n + 1} was interrupted and runs again" if cut else ""
+    return f"resuming at trial {n + 1} of {st.total} ({len(st.done)} done{why})"
+
+
+def open_run(
+    out: Path, pid: str, plan: dict[str, Any], words: Words = CLI
+) -> tuple[RunFiles, dict[str, Any]]:
     """The participant's folder ready to run: a new plan stored (atomically) before any
     trial, or the stored one when its protocol and seed agree (a resume; a trial in flight
     at a crash is marked ``interrupted``). Returns the files and the plan to follow."""
@@ -242,15 +274,16 @@ def open_run(out: Path, pid: str, plan: dict[str, Any]) -> tuple[RunFiles, dict[
     except OSError as exc:
         raise UserError(
             f"{files.root}: cannot make the participant's folder ({exc.strerror or exc}); "
-            "give a writable --out"
+            f"give a writable {words.out}"
         ) from None
     if files.plan_path.is_file():
-        stored = read_json(files.plan_path)
+        stored = read_json(files.plan_path, words)
         for key in ("experiment", "protocol_sha256"):
             if stored.get(key) != plan.get(key):
                 raise UserError(
                     f"{files.plan_path}: {key} = {stored.get(key)!r} but this run has "
-                    f"{plan.get(key)!r}; resume with the same protocol file or use a new --out"
+                    f"{plan.get(key)!r}; resume with the same protocol file or use a new "
+                    f"{words.out}"
                 )
         plan = stored
     else:

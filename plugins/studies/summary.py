@@ -69,6 +69,21 @@ def anova_rows(res: dict[str, Any]) -> list[tuple[str, ...]]:
     return rows
 
 
+def undefined_notes(aov: dict[str, Any]) -> list[str]:
+    """Why a row of a two-way ANOVA (its table, simple main effects, post-hoc tests) has
+    no F, t or p: one line each."""
+    notes = [r["note"] for r in aov.get("anova", []) if r.get("note")]
+    notes += [
+        f"simple main effect of {r['effect']} at {r['at']}: {r['note']}"
+        for r in aov.get("simple_main_effects", [])
+        if r.get("note")
+    ]
+    post = [r["note"] for r in aov.get("posthoc_bonferroni", []) if r.get("note")]
+    if len(post) > 3:  # often every pair of a constant cell: the report lists them all
+        post = [*post[:2], f"and {len(post) - 2} more post-hoc comparisons without spread"]
+    return notes + post
+
+
 def headline(res: dict[str, Any]) -> list[str]:
     """Who was analysed, the overall accuracy, and every note or ANOVA not run."""
     who = res["participants"]
@@ -80,18 +95,31 @@ def headline(res: dict[str, Any]) -> list[str]:
     acc = res.get("accuracy")
     if acc:
         part = "; ".join(
-            f"{r['participant']} {r['accuracy_pct']:.1f} %" for r in acc.get("participants", [])
+            f"{r['participant']} "
+            + ("no main-phase trial" if r["accuracy_pct"] is None else f"{r['accuracy_pct']:.1f} %")
+            for r in acc.get("participants", [])
         )
-        lines.append(f"accuracy {acc['overall_pct']:.1f} %" + (f" ({part})" if part else ""))
+        overall = acc["overall_pct"]
+        if overall is None:
+            practice = "; ".join(f"{ph} {v:.1f} %" for ph, v in acc.get("practice", {}).items())
+            lines.append(
+                f"accuracy: {acc.get('main_phase')}"
+                + (f" (practice: {practice})" if practice else "")
+            )
+        else:
+            lines.append(f"accuracy {overall:.1f} %" + (f" ({part})" if part else ""))
     lines += list(res.get("notes", []))
     aov = res.get("anova")
     if isinstance(aov, dict) and "skipped" in aov:
         lines.append(aov["skipped"])
+    elif isinstance(aov, dict):
+        lines += undefined_notes(aov)
     knob = res.get("knob") or {}
     for m in (knob.get("measures") or {}).values():
         a = m.get("anova", m)
         if "skipped" in a:
             lines.append(a["skipped"])
+        lines += [r["note"] for r in a.get("rows", []) if r.get("note")]
     q = knob.get("questionnaire") or {}
     if "skipped" in q:
         lines.append(q["skipped"])
@@ -100,4 +128,32 @@ def headline(res: dict[str, Any]) -> list[str]:
             a = c.get("anova") if isinstance(c, dict) else None
             if isinstance(a, dict) and "skipped" in a:
                 lines.append(f"questionnaire {cat}: {a['skipped']}")
+            elif isinstance(a, list) and a and a[0].get("note"):
+                lines.append(a[0]["note"])
     return lines
+
+
+def screen_lines(res: dict[str, Any]) -> tuple[str, list[str]]:
+    """What the Studies screen shows around its ANOVA table at 80 x 24: a title line (who,
+    the accuracy) and the notes, those about the ANOVA first (a test not run, an effect
+    without F), then the runs' notes and each participant's accuracy."""
+    who = res["participants"]
+    sim = len(res.get("simulated", []))
+    title = f"{res['experiment']}: {len(who)} participant(s)" + (
+        f", {sim} simulated" if sim else ""
+    )
+    acc = res.get("accuracy")
+    lines = headline(res)
+    if acc:
+        overall = acc["overall_pct"]
+        title += (
+            f"; accuracy: {acc.get('main_phase')}"
+            if overall is None
+            else f"; accuracy {overall:.1f} %"
+        )
+    run_notes = list(res.get("notes", []))
+    notes = [x for x in lines[2 if acc else 1 :] if x not in run_notes] + run_notes
+    if acc:
+        notes.append(lines[1].replace("accuracy", "accuracy (main phase)", 1))
+    notes.append("participants: " + ", ".join(who))
+    return title, notes

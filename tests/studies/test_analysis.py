@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import re
 import sys
 from pathlib import Path
@@ -367,3 +368,252 @@ def test_one_experiment_out_of_a_mixed_folder(tmp_path):
     assert set(an.load([tmp_path / "mixed"], experiment="exp1").participants) == {"P01"}
     with pytest.raises(UserError, match=r"mixed: no participant of knob left to analyse; run"):
         an.load([tmp_path / "mixed"], experiment="knob")
+
+
+# --------------------------------------------------------------------- degenerate cells
+def _all_right_in_r4(i, region, direction):
+    """Every participant 100 % in R4, 0 % in R1 (no spread at all in either)."""
+    return {"R4": 1.0, "R1": 0.0}.get(region, 0.6 + 0.05 * i)
+
+
+def test_rm_anova_without_variance_has_no_f_and_no_p():
+    from statsmodels.stats.anova import AnovaRM
+
+    # every subject the same at every level: no variance at all
+    (r,) = rm.rm_anova(np.full((5, 4), 1.0), ["A"])
+    assert r.undefined == "no variance" and r.sphericity == "undefined"
+    assert all(math.isnan(x) for x in (r.f, r.p, r.p_gg, r.np2, r.p_reported))
+    # subjects differ, levels do not: SS and SS_error both zero (to rounding: 0.1 + 0.2)
+    y = np.array([[0.1 + 0.2] * 3, [0.3] * 3, [0.7] * 3])
+    (r,) = rm.rm_anova(y, ["A"])
+    assert r.undefined == "no variance" and math.isnan(r.p)
+    # the same differences in every subject: SS_error zero, the effect is not
+    y = np.array([[0.1, 0.5, 0.2], [0.3, 0.7, 0.4], [0.0, 0.4, 0.1]]) + 0.1
+    (r,) = rm.rm_anova(y, ["A"])
+    assert r.undefined == "no error variance" and math.isnan(r.f) and math.isnan(r.p)
+    assert r.np2 == 1.0
+    assert r.as_dict()["p_reported"] is None and r.as_dict()["f"] is None
+    # a normal case is untouched and still agrees with statsmodels
+    y = _random_cells((6, 3), seed=4)
+    (r,) = rm.rm_anova(y, ["A"])
+    ref = AnovaRM(_long(y, ["A"]), "y", "s", within=["A"]).fit().anova_table.loc["A"]
+    assert not r.undefined and r.f == pytest.approx(ref["F Value"], rel=1e-9)
+    assert r.p == pytest.approx(ref["Pr > F"], rel=1e-7)
+
+
+def test_a_constant_cell_is_no_significant_simple_main_effect(tmp_path):
+    """All participants 100 % in R4: the simple main effect of direction in R4 is
+    undefined (no F, no p, a note naming R4), never F = inf, p = 0; the other regions'
+    simple main effects agree with statsmodels."""
+    from statsmodels.stats.anova import AnovaRM
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _all_right_in_r4, 5, 6, seed=4)
+    res = an.analyze(an.load([root]))
+    sme = {(e["effect"], e["at"]): e for e in res["anova"]["simple_main_effects"]}
+    r4 = sme[("direction", "region = R4")]
+    assert r4["f"] is None and r4["p"] is None and r4["p_bonferroni"] is None
+    assert r4["np2"] is None
+    assert r4["note"].startswith("no variance: every participant scored the same in R4 (100 %")
+    r1 = sme[("direction", "region = R1")]
+    assert r1["p"] is None and "in R1 (0 % in every direction)" in r1["note"]
+    # a normal cell: the same F as statsmodels on the per-participant accuracies
+    recs = [json.loads(x) for f in root.glob("*/trials.jsonl") for x in f.read_text().splitlines()]
+    df = pd.DataFrame([r for r in recs if r["phase"] == "main" and r["region"] == "R2"])
+    cells = df.groupby(["participant", "direction"])["correct"].mean().reset_index()
+    ref = AnovaRM(cells, "correct", "participant", within=["direction"]).fit().anova_table
+    r2 = sme[("direction", "region = R2")]
+    assert r2["note"] is None
+    assert r2["f"] == pytest.approx(ref.loc["direction", "F Value"], rel=1e-9)
+    # what a user reads: the CLI and the screen's lines say why, no p of 0
+    from plugins.studies import summary
+    from plugins.studies.analyze_cli import _lines
+
+    text = "\n".join(_lines(res))
+    assert "simple main effect of direction at region = R4: no variance: every participant" in text
+    assert any("R4 (100 %" in h for h in summary.headline(res))
+
+
+def test_a_comparison_without_spread_has_no_t_and_no_p(tmp_path):
+    """R1 0 % and R4 100 % for everybody: the R1 vs R4 post-hoc test has no t and no p
+    (pingouin's T is inf and its p 0), and says why; the others keep theirs."""
+    from scipy import stats
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _all_right_in_r4, 5, 6, seed=4)
+    res = an.analyze(an.load([root]))
+    post = res["anova"]["posthoc_bonferroni"]
+    main = {(p["A"], p["B"]): p for p in post if p["Contrast"] == "region"}
+    bad = main[("R1", "R4")]
+    assert bad["T"] is None and bad["p-unc"] is None and bad["p-corr"] is None
+    assert bad["note"] == (
+        "R1 vs R4: no spread: every participant's R1 - R4 difference is the same; t and p undefined"
+    )
+    within_r4 = [p for p in post if p.get("region") == "R4"]
+    assert within_r4 and all(p["p-unc"] is None and "no spread" in p["note"] for p in within_r4)
+    assert not any(p["p-unc"] == 0 or p["p-corr"] == 0 for p in post)
+    # a comparison with spread: the paired t-test of the participants' region means
+    ok = main[("R2", "R3")]
+    recs = [json.loads(x) for f in root.glob("*/trials.jsonl") for x in f.read_text().splitlines()]
+    df = pd.DataFrame([r for r in recs if r["phase"] == "main"])
+    m = df.groupby(["participant", "region"])["correct"].mean().unstack()
+    t, p = stats.ttest_rel(m["R2"], m["R3"])
+    assert ok["note"] is None and ok["T"] == pytest.approx(t) and ok["p-unc"] == pytest.approx(p)
+
+
+# --------------------------------------------------------------------- runs under way
+def test_accuracy_is_the_main_phase_only_and_says_when_there_is_none(tmp_path, capsys):
+    """P01 in the practice phase only: no accuracy (the practice's is apart), not the
+    practice's number as the accuracy."""
+    from plugins.studies import summary
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, lambda *a: 0.5, 1, 2, drop={"P01": 32})
+    res = an.analyze(an.load([root]))
+    acc = res["accuracy"]
+    assert acc["overall_pct"] is None and acc["main_phase"] == "no main-phase trials yet"
+    assert acc["participants"] == [{"participant": "P01", "accuracy_pct": None, "trials": 0}]
+    assert set(acc["practice"]) == {"practice"}
+    head = summary.headline(res)
+    assert head[1].startswith("accuracy: no main-phase trials yet (practice: practice ")
+    assert _cli(root) == 0
+    assert "accuracy (main phase): no main-phase trials yet" in capsys.readouterr().out
+
+
+def test_a_participant_without_main_trials_is_missing_cells_not_left_out(tmp_path):
+    """P01 finished, P02 still in the practice phase: the accuracy is P01's, and the ANOVA
+    line says P02's cells are missing (not that there is one participant)."""
+    from plugins.studies import summary
+
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, lambda *a: 0.8, 2, 2, drop={"P02": 32})
+    res = an.analyze(an.load([root]))
+    p1 = [
+        json.loads(x)["correct"]
+        for x in (root / "P01" / "trials.jsonl").read_text().splitlines()
+        if json.loads(x)["phase"] == "main"
+    ]
+    acc = res["accuracy"]
+    assert acc["overall_pct"] == pytest.approx(100 * np.mean(p1))
+    assert acc["participants"][1] == {"participant": "P02", "accuracy_pct": None, "trials": 0}
+    line = res["anova"]["skipped"]
+    assert "missing cells: P02 (all 16 cells)" in line and "one participant" not in line
+    assert any("P02 no main-phase trial" in h for h in summary.headline(res))
+
+
+# --------------------------------------------------------------------- order and figures
+def _shuffled_with_protocol_levels(root: Path, factors: dict | None, responses=None) -> None:
+    """The trial lines in a random order (the first trial R3 or so, as a run's random
+    order would have it) and the plan's protocol levels as ``make_plan`` stores them."""
+    import random
+
+    for k, d in enumerate(sorted(root.iterdir())):
+        lines = (d / "trials.jsonl").read_text().splitlines()
+        random.Random(k).shuffle(lines)
+        (d / "trials.jsonl").write_text("\n".join(lines) + "\n")
+        plan = json.loads((d / "plan.json").read_text())
+        if factors is not None:
+            plan["factors"] = factors
+        if responses is not None:
+            plan["responses"] = responses
+        (d / "plan.json").write_text(json.dumps(plan))
+
+
+def test_tables_list_the_levels_in_the_protocol_order(tmp_path):
+    from plugins.studies.plan import make_plan
+    from plugins.studies.protocol import load as load_protocol
+
+    plan = make_plan(load_protocol("exp2"), "P01")
+    assert plan["factors"]["main"] == {
+        "region": ["R1", "R2", "R3", "R4"],
+        "direction": ["up", "down", "left", "right"],
+    }
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, seed=1)
+    _shuffled_with_protocol_levels(root, {"main": plan["factors"]["main"]})
+    res = an.analyze(an.load([root]))
+    acc = res["accuracy"]
+    order = ["up", "down", "left", "right"]
+    assert [r["direction"] for r in acc["by_direction"]] == order
+    assert [r["region"] for r in acc["by_region"]] == list(REGIONS)
+    assert [(c["region"], c["direction"]) for c in acc["cells"]] == [
+        (r, d) for r in REGIONS for d in order
+    ]
+    sme = [e["at"] for e in res["anova"]["simple_main_effects"]]
+    assert sme == [f"direction = {d}" for d in order] + [f"region = {r}" for r in REGIONS]
+    # a plan written before the levels were stored: the directions as its responses
+    old = sr.write_flow(tmp_path / "o", "exp2", REGIONS, _weak_r4_right, 3, 2, seed=1)
+    _shuffled_with_protocol_levels(old, None, responses=order)
+    acc = an.analyze(an.load([old]))["accuracy"]
+    assert [r["direction"] for r in acc["by_direction"]] == order
+    assert [r["region"] for r in acc["by_region"]] == list(REGIONS)
+
+
+def test_the_legend_of_the_cells_figure_covers_no_bar(exp2_dir):
+    from plugins.studies import report
+
+    res = an.analyze(an.load([exp2_dir]))
+    fig = report.cells_figure(res["accuracy"], "region")
+    fig.canvas.draw()
+    (ax,) = fig.axes
+    legend = (fig.legends or [ax.get_legend()])[0].get_window_extent()
+    bars = [b.get_window_extent() for b in ax.patches]
+    assert len(bars) == 16 and max(b.y1 for b in bars) > ax.get_window_extent().y1 - 20
+    assert not any(legend.overlaps(b) for b in bars)
+    assert legend.y1 <= ax.get_window_extent().y0  # below the axes, outside the plot
+
+
+def test_a_file_is_not_a_folder_and_the_screen_hears_its_own_words(tmp_path, capsys):
+    from plugins.studies.words import SCREEN
+
+    f = tmp_path / "notes.txt"
+    f.write_text("x")
+    assert _cli(f) == 2
+    err = capsys.readouterr().err
+    assert f"{f}: is a file, not a folder; give the --out folder of `haptable study run`" in err
+    with pytest.raises(UserError) as e:
+        an.load([f], words=SCREEN)
+    assert str(e.value) == (
+        f"{f}: is a file, not a folder; set folder to the study's results folder (the one "
+        "holding P01/ ...)"
+    )
+    with pytest.raises(UserError, match="no such folder; set folder to"):
+        an.load([tmp_path / "nope"], words=SCREEN)
+    # what to do about missing cells, as the screen can do it
+    root = sr.write_flow(tmp_path / "e", "exp2", REGIONS, _weak_r4_right, 3, 2, drop={"P02": 5})
+    line = an.analyze(an.load([root], words=SCREEN))["anova"]["skipped"]
+    assert line.endswith(
+        "finish those runs (s with the same participant resumes) or move their folders out "
+        "of the results folder"
+    )
+    assert "--" not in line and "`" not in line
+    cli_line = an.analyze(an.load([root]))["anova"]["skipped"]
+    assert "(the same `study run` command resumes)" in cli_line and "--exclude" in cli_line
+
+
+def test_a_questionnaire_category_without_variance_has_no_f(tmp_path, capsys):
+    """Every participant gives 4 in every condition ("ease of use"), or the same scores
+    per condition ("effectiveness"): no F, no p (pingouin's inf, NaN or missing columns
+    are not passed on), a note each; the CLI prints it without failing."""
+    from plugins.studies import summary
+
+    root = sr.write_knob(tmp_path / "k", 4)
+    same = {"V": 2, "HD": 5, "HD+CF": 6, "HD+VF": 6}
+    for d in root.iterdir():
+        f = d / "trials.jsonl"
+        recs = [json.loads(x) for x in f.read_text().splitlines()]
+        for e in recs:
+            if e["event"] == "questionnaire":
+                e["score"] = 4 if e["category"] == "ease of use" else same[e["condition"]]
+        f.write_text("".join(json.dumps(e) + "\n" for e in recs))
+    res = an.analyze(an.load([root]))
+    q = res["knob"]["questionnaire"]
+    ease, eff = q["ease of use"]["anova"][0], q["effectiveness"]["anova"][0]
+    assert ease.get("F") is None and ease["p_reported"] is None and ease["np2"] is None
+    assert ease["note"].endswith(
+        "no variance: every participant scored the same (4 in every condition); F and p undefined"
+    )
+    assert eff["F"] is None and eff["p-unc"] is None and eff["np2"] == 1.0
+    assert "no error variance" in eff["note"]
+    post = {(r["A"], r["B"]): r for r in q["effectiveness"]["posthoc_bonferroni"]}
+    assert post[("HD", "V")]["p-corr"] is None and "no spread" in post[("HD", "V")]["note"]
+    assert "no difference and no spread" in post[("HD+CF", "HD+VF")]["note"]
+    rows = {r[0]: r for r in summary.anova_rows(res)}
+    assert rows["questionnaire ease of use: condition"][1:3] == ("- (3, 9)", "-")
+    assert _cli(root) == 0
+    assert "questionnaire ease of use: F(3, 9) = -, p = - (undefined)" in capsys.readouterr().out

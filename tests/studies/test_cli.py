@@ -87,6 +87,42 @@ def test_a_person_needs_their_details_and_consent(
     assert part["consent_noted"] is True and part["handedness"] == "left" and not part["simulated"]
 
 
+def test_input_that_ends_is_bad_input_not_ctrl_c_and_the_resume_says_where(
+    cli, capsys, tmp_path, map_file, small_exp2, monkeypatch
+):
+    """A script's answers run out (stdin closed): exit 2 with one line, not 130 (Ctrl-C);
+    the same command then says in one line where it resumes."""
+    monkeypatch.setattr(sys.stdin, "isatty", lambda: False)
+    base = ["study", "run", str(small_exp2), "--participant", "P01", "--out", str(tmp_path)]
+    base += ["--map", str(map_file), "--age", "31", "--sex", "F", "--handedness", "L"]
+    base += ["--hand-width-cm", "8.2", "--hand-length-cm", "18", "--consent"]
+
+    def answers(*keys):
+        it = iter(keys)
+
+        def read(prompt=""):
+            try:
+                return next(it)
+            except StopIteration:
+                raise EOFError from None
+
+        return read
+
+    monkeypatch.setattr("builtins.input", answers("8", "6"))
+    assert cli(base) == 2
+    cap = capsys.readouterr()
+    assert cap.err.count("\n") == 1 and cap.err.startswith("haptable: error: input ended")
+    assert "P01's trial 3" in cap.err and "resumes" in cap.err
+    part = json.loads((tmp_path / "P01" / "participant.json").read_text())
+    assert (part["sex"], part["handedness"]) == ("female", "left")  # F and L accepted
+    monkeypatch.setattr("builtins.input", answers("8", "2", "4", "6"))
+    assert cli(base) == 0
+    out = capsys.readouterr().out
+    line = "P01: resuming at trial 3 of 6 (2 done; trial 3 was interrupted and runs again)"
+    assert out.count(line) == 1
+    assert [e["trial"] for e in _done(tmp_path / "P01")] == list(range(6))
+
+
 def test_errors_are_one_line(cli, capsys, tmp_path):
     assert cli(["study", "run", "exp9", "--participant", "P01", "--out", str(tmp_path)]) == 2
     assert "no protocol of that name" in capsys.readouterr().err
@@ -141,8 +177,13 @@ def test_kill_9_mid_trial_marks_it_interrupted_and_repeats_it(tmp_path, map_file
     assert [e["event"] for e in events][-1] == "start" and events[-1]["trial"] == 3
     assert [e["trial"] for e in events if e["event"] == "done"] == [0, 1, 2]
     # the same command again (the double no longer hangs: its file exists)
-    done = subprocess.run([sys.executable, "-c", script], env=env, cwd=ROOT, timeout=600)
-    assert done.returncode == 0
+    done = subprocess.run(
+        [sys.executable, "-c", script], env=env, cwd=ROOT, timeout=600, capture_output=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert "P03: resuming at trial 4 of 6 (3 done; trial 4 was interrupted and runs again)" in (
+        done.stdout.decode()
+    )
     events = [json.loads(x) for x in (d / "trials.jsonl").read_text().splitlines()]
     kinds = [(e["event"], e["trial"]) for e in events]
     assert kinds[6:9] == [("start", 3), ("interrupted", 3), ("start", 3)]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 
 import pytest
 
@@ -112,8 +113,10 @@ def test_a_person_answers_with_the_keys_and_replays_once(
             await wait_for(
                 pilot, lambda: pane.running is None and pane.last.get("stopped"), what="refused"
             )
-            assert (
-                "participant P01: age is missing" in pane.last["stopped"]
+            assert (  # every missing field at once, as the screen names them
+                "participant P01: age, sex, handedness, hand width cm and hand length cm "
+                "missing; give them and note the consent (tick 'consent noted')"
+                in pane.last["stopped"]
                 and not (tmp_path / "P01").exists()
             )
             for wid, v in (
@@ -324,14 +327,20 @@ def test_the_next_participant_id():
 
 
 def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path):
-    """n on the Studies screen: the folder's runs of the chosen protocol (an exp1 run in
-    the same folder is left aside), the report next to them, the ANOVA table shown."""
+    """n on the Studies screen at 80 x 24: the folder's runs of the chosen protocol (an exp1
+    run in the same folder is left aside), the report next to them, the ANOVA table shown
+    whole on screen (the key result, region * direction, too), the notes in one line (o
+    shows them all), the footer's keys with ^e and ? beside them. A failed analysis (a
+    folder without runs, a file, a folder that does not exist) is its line alone: no table
+    of the analysis before it."""
     import sys
     from pathlib import Path
 
     from textual.widgets import DataTable, Static
 
     from console.tui.app import HapTableApp
+
+    from .test_panel_readable import screen_text
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import synth_runs as sr
@@ -343,6 +352,7 @@ def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path)
     sr.write_flow(tmp_path / "x", "exp1", ("1",), lambda *a: 1.0, 1, 1)
     (tmp_path / "x" / "P01").rename(tmp_path / "runs" / "Q01")
     (tmp_path / "empty").mkdir()
+    (tmp_path / "a-file").write_text("x")
 
     async def scenario():
         app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
@@ -361,25 +371,63 @@ def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path)
             assert pane.query_one("#study-analysis").display
             assert not pane.query_one("#study-trials").display
             report = tmp_path / "runs" / "exp2-report.html"
-            text = str(head.render())
-            assert text.splitlines()[0].startswith("exp2: 6 participant(s) (P01, ")
-            assert f"report: {report}" in text
+            assert str(head.render()).startswith("exp2: 6 participant(s), 6 simulated; accuracy")
             assert "<h1>HapTable study: exp2</h1>" in report.read_text()
             rows = [[str(c) for c in table.get_row_at(i)] for i in range(3)]
             effects = {r[0]: r for r in rows}
             inter = effects["region * direction"]
             assert inter[2].endswith(" GG") == (inter[3] != "assumed")
             assert float(inter[1].split()[0]) > 2  # the weak R4 cell: an interaction
+            # what the screen shows at 80 x 24: every row, the notes line, the report
+            await pilot.pause(0.3)
+            text = screen_text(app)
+            lines = text.splitlines()
+            for effect, row in effects.items():
+                assert any(
+                    ln.strip().startswith(effect) and row[1] in ln and row[2] in ln for ln in lines
+                ), (effect, text)
+            assert "report: exp2-report.html in the folder" in [ln.strip() for ln in lines]
+            assert re.search(r"^\d+ notes? \(o shows all\): ", text, re.M), text
+            footer = lines[-1]
+            for key in ("s start", "p pause", "a abort", "n analyse", "t view", "^e E-STOP"):
+                assert key in footer, footer
+            assert "? help" in footer, footer
+            # o: the notes in the table's place, and back
+            await pilot.press("o")
+            await pilot.pause(0.2)
+            text = screen_text(app)
+            assert "notes (" in text and "region * direction" not in text
+            assert "accuracy (main phase) " in text and "participants: P01, P02" in text
+            await pilot.press("o")
+            await pilot.pause(0.2)
+            assert "region * direction" in screen_text(app)
             await pilot.press("t")
             assert pane.query_one("#study-trials").display
             await pilot.press("t")
             assert pane.query_one("#study-analysis").display
-            # a folder without runs of this protocol: one line, no table
-            pane.query_one("#out").value = str(tmp_path / "empty")
-            await pilot.press("n")
-            await wait_for(pilot, lambda: "no participant folder" in str(head.render()), what="why")
-            assert str(head.render()).startswith(f"analysis: {tmp_path / 'empty'}: no participant")
-            assert len(str(head.render()).splitlines()) == 1
+            # failed analyses: one line each, the table of the analysis before gone
+            for folder, why in (
+                ("empty", "no participant folder"),
+                ("a-file", "is a file, not a folder"),
+                ("missing", "no such folder"),
+            ):
+                pane.query_one("#out").value = str(tmp_path / folder)
+                await pilot.press("n")
+                await wait_for(pilot, lambda why=why: why in str(head.render()), what=why)
+                shown = str(head.render())
+                assert shown.startswith(f"analysis: {tmp_path / folder}: {why}")
+                assert shown.endswith(
+                    "set folder to the study's results folder (the one holding P01/ ...)"
+                )
+                assert len(shown.splitlines()) == 1 and "--out" not in shown
+                assert table.row_count == 0
+                await pilot.pause(0.2)
+                text = screen_text(app)
+                assert "region * direction" not in text and "report: " not in text, text
+                # the next good analysis brings the table back
+                pane.query_one("#out").value = str(tmp_path / "runs")
+                await pilot.press("n")
+                await wait_for(pilot, lambda: table.row_count == 3, what="again", timeout_s=120)
 
     asyncio.run(scenario())
 
@@ -473,3 +521,77 @@ def test_a_console_killed_mid_trial_resumes_from_the_screen(double_plugins, map_
     assert kinds[8:11] == [("start", 4), ("interrupted", 4), ("start", 4)]
     done = [e["trial"] for e in events if e["event"] == "done"]
     assert done[:7] == list(range(7)) and done == sorted(set(done))
+
+
+def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_the_analysis(
+    double_plugins, tmp_path, small_exp2
+):
+    """No vibration map yet: the status says so before s, and s measures it first (as
+    `haptable study run` does). Pausing shows the trial that comes next. The analysis
+    shown for the folder is marked stale while the run writes to it and analysed again
+    when it stops. A refused start after it shows no stale progress."""
+    from textual.widgets import DataTable, ProgressBar, Static
+
+    from console.tui.app import HapTableApp
+    from plugins.studies import protocol as P
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+            pane = app.pane("studies")
+            sel = pane.query_one("#protocol")
+            sel.set_options([(n, n) for n in (*P.available(), str(small_exp2))])
+            await pilot.pause(0.2)
+            sel.value = str(small_exp2)
+            pane.query_one("#out").value = str(tmp_path)
+            status = pane.query_one("#study-status", Static)
+            head = pane.query_one("#analysis-head", Static)
+            await wait_for(pilot, lambda: "needs a vibration map" in str(status.render()), 10)
+            assert "s measures the twin's grid first" in str(status.render())
+            assert app.session.vibration.current is None
+            pane.focus()
+            await pilot.press("n")  # nothing in the folder yet
+            await wait_for(pilot, lambda: "no participant folder" in str(head.render()), 30)
+            await pilot.press("s")
+            seen = []
+            for _ in range(1200):
+                seen.append(str(status.render()))
+                if pane.last.get("done", 0) >= 1:
+                    break
+                await pilot.pause(0.05)
+            assert any("vibration map: " in x for x in seen), seen[:5]
+            assert app.session.vibration.current is not None  # measured, now the console's
+            assert str(head.render()).startswith(f"stale: P01's run is writing to {tmp_path}")
+            await pilot.press("p")
+            await wait_for(pilot, lambda: pane.last.get("state") == "paused (p resumes)", 60)
+            await pilot.pause(0.2)
+            done = [e for e in _events(tmp_path / "P01" / "trials.jsonl") if e["event"] == "done"]
+            plan = json.loads((tmp_path / "P01" / "plan.json").read_text())
+            nxt = plan["trials"][len(done)]
+            shown = str(status.render())
+            from plugins.studies.panel import trial_text
+
+            assert f"next: trial {len(done) + 1}: {trial_text(nxt)}" in shown, shown
+            await pilot.press("a")
+            await wait_for(pilot, lambda: pane.running is None, what="stopped")
+            # the analysis shown before the run is done again, with the run in it
+            await wait_for(pilot, lambda: str(head.render()).startswith("exp2: 1 participant"), 60)
+            assert pane.query_one("#study-trials").display  # the view the experimenter had
+            assert pane.query_one("#study-anova", DataTable).row_count == 0  # missing cells
+            await pilot.press("t")
+            assert pane.query_one("#study-analysis").display
+            # a refused start: no progress left over from the run before
+            bar = pane.query_one("#study-progress", ProgressBar)
+            assert (bar.progress or 0) >= 1
+            pane.query_one("#participant").value = "P02"
+            pane.query_one("#simulate").value = False
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.running is None and "P02" in str(status.render()))
+            await pilot.pause(0.2)
+            assert (bar.progress or 0) == 0
+            shown = str(status.render())
+            assert shown.startswith("P02: not started") and "0/0" not in shown, shown
+
+    asyncio.run(scenario())

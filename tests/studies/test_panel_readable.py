@@ -41,8 +41,9 @@ def test_keys_in_the_footer_and_fields_readable_on_show(double_plugins, size):
             await pilot.pause(0.2)
             text = screen_text(app)
             footer = text.splitlines()[-1]
-            for key in ("s start", "p pause", "r replay", "a abort"):
+            for key in ("s start", "p pause", "a abort", "n analyse", "t view"):
                 assert key in footer, footer
+            assert "^e E-STOP" in footer and "? help" in footer, footer  # at 80 columns too
             for label in (
                 "protocol",
                 "participant",
@@ -94,7 +95,7 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
             await pilot.pause(0.2)
             shown = str(status.render())
             assert shown.startswith("P07: ")
-            assert shown.count("age is missing") == 1, shown
+            assert shown.count("hand length cm missing") == 1, shown
             # a simulated run, aborted: the status still names the participant
             pane.query_one("#simulate").value = True
             await pilot.click("#start")
@@ -107,5 +108,68 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
             done = int(bar.progress)
             assert shown.startswith(f"P07: {done}/200 trials done"), shown
             assert "aborted" in shown and shown.count(f"{done}/200") <= 2
+
+    asyncio.run(scenario())
+
+
+def test_the_help_has_a_line_per_key(double_plugins):
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _studies(app, pilot)
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus")
+            await pilot.press("question_mark")
+            await pilot.pause(0.3)
+            help_text = str(app.screen.query_one("#help-text", Static).render())
+            lines = [ln.strip() for ln in help_text.splitlines()]
+            assert "t             show the trials / the analysis" in lines
+            assert any(ln.startswith("arrows        answer up/down/left/right") for ln in lines)
+            assert max(len(ln) for ln in pane.HELP_TEXT.splitlines()) <= 76  # no wrapping
+
+    asyncio.run(scenario())
+
+
+def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
+    double_plugins, map_file, tmp_path
+):
+    """ctrl+e, then s (twice): one line saying how to go on, no run folder, no trial
+    line. Before s the status says the flow study needs a vibration map, until one is
+    loaded."""
+    from console.tui.app import HapTableApp
+
+    async def scenario():
+        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await _studies(app, pilot)
+            status = pane.query_one("#study-status", Static)
+            pane.query_one("#protocol").value = "exp1"
+            pane.query_one("#out").value = str(tmp_path)
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus")
+            await pilot.pause(0.2)
+            assert "exp1 needs a vibration map: none yet, s measures the twin's grid first" in (
+                str(status.render())
+            )
+            pane.query_one("#protocol").value = "knob"  # no map needed
+            await pilot.pause(0.2)
+            assert "vibration map" not in str(status.render())
+            pane.query_one("#protocol").value = "exp1"
+            await asyncio.to_thread(app.session.vibration.load, map_file)
+            await wait_for(pilot, lambda: "vibration map" not in str(status.render()), 10)
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stop")
+            for _ in range(2):
+                await pilot.press("s")
+                await pilot.pause(0.3)
+                assert str(status.render()) == "e-stop engaged: ctrl+r resets it first"
+                assert pane.running is None
+            assert not (tmp_path / "P01").exists()
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped, what="reset")
+            await pilot.press("s")  # now it runs
+            await wait_for(pilot, lambda: (tmp_path / "P01" / "trials.jsonl").exists(), 60)
+            await pilot.press("a")
+            await wait_for(pilot, lambda: pane.running is None, what="stopped")
 
     asyncio.run(scenario())

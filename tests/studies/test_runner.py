@@ -73,16 +73,66 @@ def test_participants_are_checked_with_one_line_each():
     p = make_participant("P01", **PERSON)
     assert p.consent_noted and p.consent_time.endswith("Z")
     for key, bad, msg in [
-        ("age", 300, "age = 300: give a number from 1 to 120"),
-        ("sex", "x", "sex = 'x': use one of female"),
-        ("handedness", "both", "handedness = 'both'"),
-        ("hand_width_cm", "wide", "hand_width_cm = 'wide'"),
-        ("consent", None, "consent not noted"),
+        ("age", 300, "--age 300: give a number from 1 to 120"),
+        ("sex", "x", "--sex x: use one of female"),
+        ("handedness", "both", "--handedness both: use one of left"),
+        ("hand_width_cm", "wide", "--hand-width-cm wide: give a number"),
+        (
+            "consent",
+            None,
+            r"consent not noted; note the participant's informed consent \(--consent\)",
+        ),
     ]:
         with pytest.raises(UserError, match=msg):
             make_participant("P01", **{**PERSON, key: bad})
     with pytest.raises(UserError, match="participant 'a/b'"):
         make_participant("a/b", **PERSON)
+
+
+def test_sex_and_handedness_in_any_case_or_by_their_start():
+    for given, sex in (("F", "female"), ("Female", "female"), ("m", "male"), ("U", "undisclosed")):
+        assert make_participant("P01", **{**PERSON, "sex": given}).sex == sex
+    assert make_participant("P01", **{**PERSON, "handedness": "L"}).handedness == "left"
+    assert make_participant("P01", **{**PERSON, "handedness": " Ambi "}).handedness == (
+        "ambidextrous"
+    )
+    with pytest.raises(UserError, match="--sex x: use one of female, male, other, undisclosed"):
+        make_participant("P01", **{**PERSON, "sex": "x"})
+
+
+def test_the_screen_hears_every_missing_field_at_once_in_its_own_words(tmp_path, small_exp2):
+    """The Studies screen's refusals name its fields ("folder", "consent noted",
+    "simulated"), every missing one at once; the CLI's name its flags."""
+    from plugins.studies.start import prepare
+    from plugins.studies.words import SCREEN
+
+    empty = dict.fromkeys(PERSON)
+    with pytest.raises(UserError) as err:
+        make_participant("P01", **empty, words=SCREEN)
+    assert str(err.value) == (
+        "participant P01: age, sex, handedness, hand width cm and hand length cm missing; "
+        "give them and note the consent (tick 'consent noted') before the first trial"
+    )
+    with pytest.raises(UserError) as err:
+        make_participant("P01", **{**PERSON, "hand_width_cm": "wide"}, words=SCREEN)
+    assert "hand width cm = 'wide': give a number from 3 to 30" in str(err.value)
+    with pytest.raises(UserError, match=r"\(tick 'consent noted'\) before the first trial"):
+        make_participant("P01", **{**PERSON, "consent": None}, words=SCREEN)
+    with pytest.raises(UserError, match="--age and --sex missing; give them before"):
+        make_participant("P01", **{**PERSON, "age": None, "sex": ""})
+    # a folder that cannot be made, a participant stored as simulated
+    (tmp_path / "file").write_text("")
+    with pytest.raises(UserError) as err:
+        prepare(str(small_exp2), "P01", tmp_path / "file", details=PERSON, words=SCREEN)
+    assert str(err.value).endswith("give a writable folder") and "--" not in str(err.value)
+    prepare(str(small_exp2), "P01", tmp_path / "runs", simulate=True)
+    with pytest.raises(UserError) as err:
+        prepare(str(small_exp2), "P01", tmp_path / "runs", details=PERSON, words=SCREEN)
+    assert str(err.value).endswith(
+        "participant P01 is simulated; tick 'simulated' to resume it, or use another folder"
+    )
+    with pytest.raises(UserError, match="resume it with --simulate, or use another --out"):
+        prepare(str(small_exp2), "P01", tmp_path / "runs", details=PERSON)
 
 
 def test_a_run_writes_plan_first_then_start_and_done_with_the_columns(tmp_path, small_exp2):
