@@ -27,6 +27,7 @@ from textual.widgets import Log, Static
 
 from console import paths
 from console.tui.safety_bar import SafetyBar
+from console.tui.util import from_thread
 
 #: the lines the log view keeps (the file keeps everything)
 LOG_VIEW_LINES = 1000
@@ -57,7 +58,7 @@ class NotifyHandler(logging.Handler):
             if threading.current_thread() is threading.main_thread():
                 self.app.notify(msg, severity=sev, timeout=6)
             else:
-                self.app.call_from_thread(self.app.notify, msg, severity=sev, timeout=6)
+                from_thread(self.app, self.app.notify, msg, severity=sev, timeout=6)
         except Exception:
             pass
 
@@ -82,7 +83,7 @@ class ViewHandler(logging.Handler):
             if threading.current_thread() is threading.main_thread():
                 self._show(line)
             else:
-                self.app.call_from_thread(self._show, line)
+                from_thread(self.app, self._show, line)
         except Exception:
             pass
 

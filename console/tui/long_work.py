@@ -12,7 +12,6 @@ only while a job runs. When it ends,
 
 from __future__ import annotations
 
-import contextlib
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -24,6 +23,7 @@ from textual.widgets import Label, ProgressBar
 from textual.worker import get_current_worker
 
 from console.errors import UserError
+from console.tui.util import from_thread
 
 Progress = Callable[[float, str], None]
 Job = Callable[[Progress, Callable[[], bool]], Any]
@@ -148,8 +148,7 @@ class LongWork(Horizontal):
         self._call(self._end, name, "done", result, text)
 
     def _call(self, fn, *args) -> None:
-        with contextlib.suppress(RuntimeError):  # the app is closing
-            self.app.call_from_thread(fn, *args)
+        from_thread(self.app, fn, *args)  # dropped if the app is closing
 
     def _end(self, name: str, outcome: str, result: Any, text: str) -> None:
         self.name_running = None

@@ -20,6 +20,7 @@ from textual.widgets.option_list import Option
 from console.contracts import Conditions, Presets
 from console.errors import UserError
 from console.tui.text import escape
+from console.tui.util import from_thread
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -160,7 +161,7 @@ class ElectrostaticPane(Vertical):
             text = force_text(plan.meta)
         except UserError as exc:
             text = f"[red]{escape(exc)}[/]"
-        self.app.call_from_thread(self._show_setting, text)
+        from_thread(self.app, self._show_setting, text)
 
     def _show_setting(self, text: str) -> None:
         notes = "".join(f"\n[yellow]{escape(n)}[/]" for n in self.notes)
@@ -195,10 +196,10 @@ class ElectrostaticPane(Vertical):
         try:
             plan = self._render_setting(1.0)
         except UserError as exc:
-            self.app.call_from_thread(self.app.notify, str(exc), severity="error")
+            from_thread(self.app, self.app.notify, str(exc), severity="error")
             return
-        self.app.call_from_thread(
-            self.app.notify, f"playing {plan.segments[0].label} on the screen", timeout=3
+        from_thread(
+            self.app, self.app.notify, f"playing {plan.segments[0].label} on the screen", timeout=3
         )
         self.app.session.play_plan(plan)
 
@@ -207,9 +208,10 @@ class ElectrostaticPane(Vertical):
         try:
             plan = self._effect(Conditions).render(condition=condition)
         except UserError as exc:
-            self.app.call_from_thread(self.app.notify, str(exc), severity="error")
+            from_thread(self.app, self.app.notify, str(exc), severity="error")
             return
-        self.app.call_from_thread(
+        from_thread(
+            self.app,
             self.app.notify,
             f"knob {condition}: a canned rotation, {plan.duration_s:.1f} s, "
             f"{plan.meta.get('crossings', 0)} detents",

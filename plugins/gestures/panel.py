@@ -24,7 +24,7 @@ from console.errors import UserError
 from console.tui.long_work import LongWork
 from console.tui.safety_bar import SafetyBar
 from console.tui.text import escape
-from console.tui.util import short_path
+from console.tui.util import from_thread, short_path
 
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder\n"
@@ -210,7 +210,7 @@ class GesturesPanel(Screen):
 
         info = describe_files(ds, model)
         with contextlib.suppress(RuntimeError):  # the console is closing
-            self.app.call_from_thread(self._show_files, info)
+            from_thread(self.app, self._show_files, info)
 
     def _show_files(self, info: dict) -> None:
         self.files = info

@@ -431,3 +431,18 @@ def test_the_view_turns_with_the_camera_and_the_roi_is_set_from_the_screen(plugi
     prof = load_profile("sim", plugins)
     assert (prof.get("vision.rotate_deg"), prof.get("vision.roi_left_px")) == (90, 16)
     assert plugins.build("classifier", "svm", prof).orientation.margins_px == (16, 0, 0, 0)
+
+
+def test_a_worker_s_result_after_the_console_closed_is_dropped(plugins):
+    """``from_thread``, the way every pane's worker hands its result to the screen: once
+    the console has stopped the result is dropped (None), never raised."""
+    from console.tui.util import from_thread
+
+    async def scenario():
+        app = _app(plugins, "devices")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.pause()
+        return app
+
+    app = asyncio.run(scenario())
+    assert from_thread(app, lambda: 1 / 0) is None

@@ -76,7 +76,13 @@ def test_an_estop_ramp_is_visible(plugins):
             t_end = time.monotonic() + 10
             while time.monotonic() < t_end and not report.segment_start:
                 await pilot.pause(0.02)
-            await pilot.pause(0.3)  # well inside the tone
+            # well inside the tone: the amplifiers get it (a loaded machine may start late)
+            await wait_for(
+                pilot,
+                lambda: app.session.scope(0.02).peak_v()["piezo"] > 5.0,
+                10,
+                "the tone at the amplifiers",
+            )
             await pilot.press("ctrl+e")
             assert out.gate.wait_safe(5)
             await pilot.pause(0.1)

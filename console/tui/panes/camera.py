@@ -18,6 +18,7 @@ from textual.widgets import Input, Static
 
 from console.errors import UserError
 from console.tui.text import escape
+from console.tui.util import from_thread
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
 VISION_VIEWS = ("diff", "highpass", "body")
@@ -350,9 +351,9 @@ class CameraPane(Horizontal):
         try:
             path = self.service.save_tuning()
         except UserError as exc:
-            self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
+            from_thread(self.app, self.app.notify, str(exc), severity="warning")
             return
-        self.app.call_from_thread(self.app.notify, f"vision settings kept in {path}", timeout=4)
+        from_thread(self.app, self.app.notify, f"vision settings kept in {path}", timeout=4)
 
     def _output(self) -> str | None:
         names = list(self.service.switches())
@@ -398,10 +399,11 @@ class CameraPane(Horizontal):
         try:
             path = self.service.set_sink(name, on, target)
         except UserError as exc:
-            self.app.call_from_thread(self.app.notify, str(exc), severity="warning")
+            from_thread(self.app, self.app.notify, str(exc), severity="warning")
             return
         on, where = self.service.sink_state(name)
-        self.app.call_from_thread(
+        from_thread(
+            self.app,
             self.app.notify,
             f"{name} {'on' if on else 'off'} -> {where} (kept in {path})",
             timeout=4,

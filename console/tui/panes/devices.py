@@ -16,7 +16,7 @@ from textual.widgets import DataTable, Select, Static
 
 from console.stimuli import STIMULI
 from console.tui.text import LiteralTable
-from console.tui.util import short_path
+from console.tui.util import from_thread, short_path
 
 
 def _ms(seconds: float) -> str:
@@ -121,7 +121,7 @@ class DevicesPane(VerticalScroll):
         from console.runtime.doctor import diagnose
 
         rows = diagnose(self._profile(), self.app.ctx.pm)
-        self.app.call_from_thread(self._show, rows)
+        from_thread(self.app, self._show, rows)
 
     def _show(self, rows) -> None:
         if not self.query("#device-table"):  # a worker finishing while the console closes
@@ -144,7 +144,7 @@ class DevicesPane(VerticalScroll):
         prof, pm = self._profile(), self.app.ctx.pm
         audio = output_devices(prof, pm)
         relays = relay_boards(prof, pm)
-        self.app.call_from_thread(self._show_devices, audio, relays)
+        from_thread(self.app, self._show_devices, audio, relays)
 
     def _show_devices(self, audio, relays) -> None:
         if not self.query("#audio-table"):  # a worker finishing while the console closes
@@ -252,7 +252,7 @@ class DevicesPane(VerticalScroll):
                 f"{what} did not open: {session.reopen_error}; {back} and "
                 f"{short_path(path)} keeps its previous settings"
             )
-        self.app.call_from_thread(self._after_pick)
+        from_thread(self.app, self._after_pick)
 
     def _after_pick(self) -> None:
         self._show_profile_line()
@@ -265,7 +265,7 @@ class DevicesPane(VerticalScroll):
         from console.errors import UserError
         from console.stimuli import make_stimulus
 
-        name = self.app.call_from_thread(lambda: self.query_one("#stimulus", Select).value)
+        name = from_thread(self.app, lambda: self.query_one("#stimulus", Select).value)
         session = self.app.session
         prof = self._profile()
         try:
@@ -295,4 +295,4 @@ class DevicesPane(VerticalScroll):
             self.result = text
             self.query_one("#devices-result", Static).update(text)
 
-        self.app.call_from_thread(show)
+        from_thread(self.app, show)

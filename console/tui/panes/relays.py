@@ -9,6 +9,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
 from console.tui.text import LiteralTable, escape
+from console.tui.util import from_thread
 
 
 def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int, str]) -> str:
@@ -139,9 +140,9 @@ class RelaysPane(VerticalScroll):
             want = set(out.scheduler.operator_relays)  # not a stimulus's temporary routing
             want = want | {ch} if closed else want - {ch}
             out.set_relays(want)
-            self.app.call_from_thread(self._done, ch, "")
+            from_thread(self.app, self._done, ch, "")
         except Exception as exc:
-            self.app.call_from_thread(self._done, ch, str(exc))
+            from_thread(self.app, self._done, ch, str(exc))
 
     def _done(self, ch: int, error: str) -> None:
         self.pending.pop(ch, None)

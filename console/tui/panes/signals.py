@@ -27,6 +27,7 @@ from console.signal_library import (
     remove_signal,
 )
 from console.tui.charts import Chart, Series
+from console.tui.util import from_thread
 
 DEFAULT_EXPR = BUILTIN["tone-250"].expr
 #: the spectrum shows this many dB below its peak
@@ -187,10 +188,10 @@ class SignalsPane(Vertical):
             fs = int(prof.get("audio.sample_rate_hz"))
             x = render(parse(expr), fs, max_s=float(prof.get("limits.max_plan_s")))
         except UserError as exc:
-            self.app.call_from_thread(self._refused, gen, str(exc))
+            from_thread(self.app, self._refused, gen, str(exc))
             return
         p = Preview(expr, target, fs, x, summarize(x, fs))
-        self.app.call_from_thread(self._show, gen, p, name if then_play else None)
+        from_thread(self.app, self._show, gen, p, name if then_play else None)
 
     def _refused(self, gen: int, message: str) -> None:
         if gen != self._gen:
@@ -234,7 +235,7 @@ class SignalsPane(Vertical):
     def _play(self, p: Preview, name: str) -> None:
         ok = self.app.session.audition(p.expr, p.target, name=name)
         if ok:
-            self.app.call_from_thread(self._played, name, p)
+            from_thread(self.app, self._played, name, p)
 
     def _played(self, name: str, p: Preview) -> None:
         if self._playing == name:

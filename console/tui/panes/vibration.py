@@ -21,6 +21,7 @@ from console.tui.charts import Chart
 from console.tui.long_work import stop_check
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape, styled
+from console.tui.util import from_thread
 
 HELP = (
     "enter: audition the point\n"
@@ -215,23 +216,24 @@ class VibrationPane(VerticalScroll):
         try:
             session = self.service.load_cached()
         except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+            from_thread(self.app, self._error, str(exc))
             return
         if session is None:
-            self.app.call_from_thread(self.status, self.service.no_map_text())
+            from_thread(self.app, self.status, self.service.no_map_text())
             return
         self._show_map(session)
 
     def _show_map(self, session) -> None:
         """In a worker: show the session's new current map; its lookup tables are built
         in their own worker (group ``vib-tables``: a new map or x cancels it)."""
-        self.app.call_from_thread(self._ready, session, session.summary)
+        from_thread(self.app, self._ready, session, session.summary)
 
     def _build_tables(self, session, summary: str, stop: threading.Event) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
         from console.session.vibration import Cancelled
 
-        show = self.app.call_from_thread
+        def show(*args):
+            return from_thread(self.app, *args)
 
         def progress(frac: float, msg: str) -> None:
             show(self._tables_status, session, summary, f"{summary}; lookup tables: {msg}", frac)
@@ -264,7 +266,7 @@ class VibrationPane(VerticalScroll):
             try:
                 svc.prepare_again()
             except Exception as exc:  # the projector is optional: say so, keep going
-                self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
+                from_thread(self.app, self.app.notify, f"projector: {exc}", severity="warning")
 
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
@@ -301,14 +303,14 @@ class VibrationPane(VerticalScroll):
         from console.session.vibration import Cancelled
 
         def progress(frac: float, msg: str) -> None:
-            self.app.call_from_thread(self.status, f"measuring: {msg}", frac)
+            from_thread(self.app, self.status, f"measuring: {msg}", frac)
 
         try:
             self._show_map(self.service.measure(progress, stop_check(stop)))
         except Cancelled:
-            self.app.call_from_thread(self.status, "measurement cancelled; the map is unchanged")
+            from_thread(self.app, self.status, "measurement cancelled; the map is unchanged")
         except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+            from_thread(self.app, self._error, str(exc))
 
     def action_cancel(self) -> None:
         long_work = 0
@@ -325,12 +327,12 @@ class VibrationPane(VerticalScroll):
         from console.session.vibration import Cancelled
 
         try:
-            self.app.call_from_thread(self.status, "importing UFF ...", 0.0)
+            from_thread(self.app, self.status, "importing UFF ...", 0.0)
             self._show_map(self.service.import_uff(specs, stop_check(stop)))
         except Cancelled:
-            self.app.call_from_thread(self.status, "import cancelled; the map is unchanged")
+            from_thread(self.app, self.status, "import cancelled; the map is unchanged")
         except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+            from_thread(self.app, self._error, str(exc))
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _load(self, path: str, stop: threading.Event) -> None:
@@ -339,9 +341,9 @@ class VibrationPane(VerticalScroll):
         try:
             self._show_map(self.service.load(path, stop_check(stop)))
         except Cancelled:
-            self.app.call_from_thread(self.status, "loading cancelled; the map is unchanged")
+            from_thread(self.app, self.status, "loading cancelled; the map is unchanged")
         except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+            from_thread(self.app, self._error, str(exc))
 
     def _error(self, msg: str) -> None:
         self.status(msg, error=True)
@@ -415,13 +417,13 @@ class VibrationPane(VerticalScroll):
         try:
             plan = make(self.session)
         except UserError as exc:
-            self.app.call_from_thread(self._error, str(exc))
+            from_thread(self.app, self._error, str(exc))
             return
-        self.app.call_from_thread(self._playing, plan)
+        from_thread(self.app, self._playing, plan)
         played = self.app.session.play_plan(plan)
         out = self.app.session.outputs
         estopped = out is not None and out.gate.estopped
-        self.app.call_from_thread(self._played, plan, played, estopped)
+        from_thread(self.app, self._played, plan, played, estopped)
 
     def _playing(self, plan) -> None:
         self._now_playing = plan
@@ -467,7 +469,7 @@ class VibrationPane(VerticalScroll):
         try:
             svc.update(event)
         except Exception as exc:  # the projector is optional: say so, keep playing
-            self.app.call_from_thread(self.app.notify, f"projector: {exc}", severity="warning")
+            from_thread(self.app, self.app.notify, f"projector: {exc}", severity="warning")
 
     def action_command(self) -> None:
         self.query_one("#vib-cmd", Input).focus()
@@ -564,7 +566,7 @@ class VibrationPane(VerticalScroll):
             except UserError as exc:
                 lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
         freq, mags = s.frf(n)
-        self.app.call_from_thread(self._show_info, "\n".join(lines), freq, mags, mark, n)
+        from_thread(self.app, self._show_info, "\n".join(lines), freq, mags, mark, n)
 
     def _show_info(self, text: str, freq, mags, mark, point: int) -> None:
         from console.tui.plots import frf_series
