@@ -29,9 +29,8 @@ from console.bench import machine_info, summarize_s
 
 from . import evaluate as ev
 from .background import illumination, subtract
-from .contacts import find_contacts
-from .segmentation import contact_window, highpass_window, relative_body
-from .vision import VisionParams, hands_of, process_frame
+from .segmentation import relative_body
+from .vision import VisionParams, part_contacts, process_frame
 
 HARMONICS = (0, 2, 4, 6, 8, 12, 16)
 NOISE = (0.0, 3.0, 6.0, 12.0)
@@ -95,13 +94,7 @@ def frame_latency(samples, params: VisionParams, n_frames: int = 300, repeats: i
         steps["parts"].append(time.perf_counter() - t)
         t = time.perf_counter()
         if parts is not None:
-            win = contact_window(d, p.contact_threshold * 0.3, parts.win)
-            if win is not None:
-                thr = parts.image(
-                    np.minimum(p.contact_threshold * parts.scale, 255).astype(np.float32), win
-                )
-                find_contacts(highpass_window(d, p.highpass_sigma_px, win), thr, origin_px=win[:2])
-            hands_of(body, parts, [], p.min_hand_area_px, 1e9)
+            part_contacts(d, parts, p, 4.0 * noise / 3.0 + 2.0, 2.0)
         steps["contacts"].append(time.perf_counter() - t)
     h, w = frames[0].shape
     return {

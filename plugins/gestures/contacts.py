@@ -23,10 +23,11 @@ def find_contacts(
     that a flat palm leaves in the high-pass image becomes one large blob, rejected by
     ``max_size_px`` (bounding box) or ``max_area_px``; fingertips stay separate.
     ``hp`` may be a crop of the frame's high-pass at ``origin_px`` (x, y): positions
-    are in the frame's pixels. ``threshold``: one for every pixel, or an image of them.
+    are in the frame's pixels. ``threshold``: one for every pixel, or a uint8 image of them
+    (each the floor of the real threshold).
     """
-    if np.ndim(threshold):
-        m = np.where(hp > threshold, 255, 0).astype(np.uint8)
+    if np.ndim(threshold):  # uint8: above floor(t) is above t for integer pixels
+        m = cv2.compare(hp, np.asarray(threshold, np.uint8), cv2.CMP_GT)
     else:
         _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
     md = cv2.dilate(m, _DISK5)

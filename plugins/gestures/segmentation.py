@@ -202,30 +202,27 @@ def relative_body(
     floor = 4.0 * noise / b + 2.0
     low = max(threshold * scale_range[0], floor)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_32S)
-    peak = np.zeros(n)
-    for i in range(1, n):
-        x, y, w, h = stats[i, :4]
-        peak[i] = float(small[y : y + h, x : x + w][lab[y : y + h, x : x + w] == i].max())
+    n, lab = cv2.connectedComponents(lowm, connectivity=8, ltype=cv2.CV_32S)
     # a hand's part rises above the lowest threshold and well above the noise (specks of
-    # noise and background drift do not)
-    real = peak >= max(low, SEED_FACTOR * floor)
-    real[0] = False
-    if not real.any():
+    # noise and background drift do not): the parts holding such a block
+    seeded = np.unique(lab[small >= max(low, SEED_FACTOR * floor)])
+    seeded = seeded[seeded > 0]
+    if len(seeded) == 0:
         return body, None
+    real = np.zeros(n, bool)
+    real[seeded] = True
+    peak = np.zeros(n)
+    for i in seeded:
+        peak[i] = float(small[lab == i].max())
     # each block keeps its part's label, grown by one block so a part's edge pixels
     # (brighter than their block's mean) keep it too
     blocks = cv2.dilate(np.where(real, np.arange(n), 0).astype(np.float32)[lab], _BLOCK3)
     blocks = blocks.astype(np.int32)
-    boxes = stats[real, :4]
+    rows = np.flatnonzero(blocks.any(axis=1))
+    cols = np.flatnonzero(blocks.any(axis=0))
     reach = smooth_px // 2 if smooth_px > 1 else 0
-    box = (
-        int(boxes[:, 0].min()) * b,
-        int(boxes[:, 1].min()) * b,
-        int((boxes[:, 0] + boxes[:, 2]).max()) * b,
-        int((boxes[:, 1] + boxes[:, 3]).max()) * b,
-    )
-    x0, y0, x1, y1 = win = _grow(box, b + reach, diff.shape)
+    box = (int(cols[0]) * b, int(rows[0]) * b, (int(cols[-1]) + 1) * b, (int(rows[-1]) + 1) * b)
+    x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
     cx0, cy0, cx1, cy1 = _grow(win, reach, diff.shape)
     src = diff[cy0:cy1, cx0:cx1]
     sm = cv2.blur(src, (smooth_px, smooth_px)) if smooth_px > 1 else src

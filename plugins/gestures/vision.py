@@ -282,6 +282,35 @@ def analyse_hand(
     ), extras
 
 
+def part_contacts(
+    diff: np.ndarray,
+    parts: Parts,
+    p: VisionParams,
+    floor: float,
+    outside_scale: float,
+    to_mm=None,
+) -> list[Contact]:
+    """The contacts in the hands' parts, each part at its own contact threshold
+    (``contact_threshold`` x its light, at least ``floor``; off the parts
+    ``outside_scale`` x it), looked for only around the pixels above the lowest of them."""
+    # an integer high-pass exceeds t where it exceeds floor(t): one uint8 per part
+    per_part = np.maximum(p.contact_threshold * parts.scale, floor)
+    per_part[0] = p.contact_threshold * outside_scale
+    per_part = np.floor(np.minimum(per_part, 255)).astype(np.uint8)
+    win = contact_window(diff, float(per_part[parts.peak > 0].min()), parts.win)
+    if win is None:
+        return []
+    return find_contacts(
+        highpass_window(diff, p.highpass_sigma_px, win),
+        parts.image(per_part, win),
+        p.min_contact_area_px,
+        p.max_contact_area_px,
+        to_mm,
+        p.max_contact_size_px,
+        origin_px=win[:2],
+    )
+
+
 def foreground(parts: Parts | None, shape: tuple[int, int]) -> np.ndarray:
     """Everything of the hands down to the lowest threshold (uint8 0/255, the parts'
     blocks grown by one): what the background must never learn."""
@@ -363,22 +392,8 @@ def process_frame(
     # contacts only around the pixels above the lowest contact threshold (the rest of the
     # frame cannot reach it through the smoothing), each part at its own threshold
     contacts = []
-    win = None
     if parts is not None:
-        win = contact_window(diff, max(p.contact_threshold * lo_s, noise_contact), parts.win)
-    if win is not None and parts is not None:
-        per_part = np.maximum(p.contact_threshold * parts.scale, noise_contact)
-        per_part[0] = p.contact_threshold * hi_s  # off the hands' parts
-        thr = parts.image(np.minimum(per_part, 255).astype(np.float32), win)
-        contacts = find_contacts(
-            highpass_window(diff, p.highpass_sigma_px, win),
-            thr,
-            p.min_contact_area_px,
-            p.max_contact_area_px,
-            to_mm,
-            p.max_contact_size_px,
-            origin_px=win[:2],
-        )
+        contacts = part_contacts(diff, parts, p, noise_contact, hi_s, to_mm)
     found = []
     max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
     for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area):
