@@ -208,6 +208,11 @@ def test_harmonics_and_frames_are_chosen_on_the_training_samples(dataset, capsys
     assert best == max(sel["inner_cv_accuracy"].values()) and len(sel["inner_cv_accuracy"]) == 12
     saved = GestureModel.load(model)
     assert saved.meta["selection"] == sel and saved.n_frames == out["n_frames"]
+    # the SVMs' C and gamma, chosen by cross-validation, are in the model and the output
+    for part in ("static", "dynamic", "kind"):
+        assert sel["svm"][part]["C"] in (1.0, 10.0, 100.0)
+        assert sel["svm"][part]["gamma"] in ("scale", 0.003, 0.03)
+    assert sel["svm"] == saved.svm_settings()
     # given values are kept, nothing searched
     code, fixed = run_json(
         capsys, "gestures", "train", str(dataset), "--out", str(model), "--harmonics", "4",
@@ -220,6 +225,7 @@ def test_harmonics_and_frames_are_chosen_on_the_training_samples(dataset, capsys
     assert [f["subject"] for f in rep["folds"]] == ["s1", "s2"]
     assert len(rep["selection"]["chosen_per_fold"]) == 2
     assert all(f["n_frames"] in (2, 3, 4) and len(f["selection"]) == 12 for f in rep["folds"])
+    assert all(f["svm"]["static"]["C"] in (1.0, 10.0, 100.0) for f in rep["folds"])
     # the choice sees the training samples only: other samples' labels do not matter
     fs = extract(dataset)
     tr = np.flatnonzero(fs.subjects == "s1")
