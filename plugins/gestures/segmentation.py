@@ -1,7 +1,8 @@
 """Segmentation of the difference image: the high-pass image (sharp bright parts touching
-the glass), the body mask (hands and forearms, including the dim parts above the glass), and
-the windows of the frame where either can be non-zero, so the pipeline works on crops only
-(with results equal to the whole frame's)."""
+the glass), the body mask (hands and forearms, including the dim parts above the glass,
+each part at a threshold that follows its own light: ``relative_body``), and the windows
+of the frame where either can be non-zero, so the pipeline works on crops only (with
+results equal to the whole frame's)."""
 
 from __future__ import annotations
 
@@ -79,25 +80,6 @@ def contact_window(
     return None if box is None else _grow(box, 3, diff.shape)
 
 
-def body_window(
-    diff: np.ndarray, threshold: float, smooth_px: int = 5
-) -> tuple[np.ndarray, tuple[int, int, int, int] | None]:
-    """``body_mask(diff, threshold, smooth_px)`` made only where it can be non-zero: the
-    mean over ``smooth_px`` exceeds ``threshold`` only within ``smooth_px // 2`` of a
-    ``diff`` pixel that does. The full-size mask, and the box that holds all of it
-    (None: the mask is empty)."""
-    body = np.zeros_like(diff)
-    box = above_box(diff, threshold)
-    if box is None:
-        return body, None
-    reach = smooth_px // 2 if smooth_px > 1 else 0
-    x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
-    cx0, cy0, cx1, cy1 = _grow(win, reach, diff.shape)  # the mean's input
-    m = body_mask(diff[cy0:cy1, cx0:cx1], threshold, smooth_px)
-    body[y0:y1, x0:x1] = m[y0 - cy0 : y1 - cy0, x0 - cx0 : x1 - cx0]
-    return body, win
-
-
 def highpass_window(
     diff: np.ndarray, sigma_px: float, window: tuple[int, int, int, int]
 ) -> np.ndarray:
@@ -122,14 +104,6 @@ def highpass_window(
     return hp[y0 - cy0 : y1 - cy0, x0 - cx0 : x1 - cx0]
 
 
-def body_mask(diff: np.ndarray, threshold: float, smooth_px: int = 5) -> np.ndarray:
-    """Hands and forearms: the smoothed difference above ``threshold`` (uint8 0/255)."""
-    if smooth_px > 1:
-        diff = cv2.blur(diff, (smooth_px, smooth_px))
-    _, m = cv2.threshold(diff, threshold, 255, cv2.THRESH_BINARY)
-    return m
-
-
 #: parts are found on block means of this size; a part is a hand's when its brightest
 #: block rises this many times above the noise floor
 PART_BLOCK_PX = 4
@@ -141,7 +115,8 @@ class Parts:
     """The body's connected parts at the lowest threshold, each with the light it shows:
     ``blocks`` (int32, one label per ``PART_BLOCK_PX`` block of the frame; 0 = no hand's
     part), ``scale[i]`` the brightness of part i relative to the reference level,
-    ``peak[i]`` its brightest block mean (grey levels above the background), and
+    ``peak[i]`` its brightest block mean (grey levels above the background; 0 for the
+    labels that are no hand's part), and
     ``win`` (x0, y0, x1, y1) the frame's box that holds every hand's part."""
 
     win: tuple[int, int, int, int]

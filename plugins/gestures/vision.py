@@ -1,7 +1,7 @@
 """Rear-DI vision pipeline, one frame: its settings (``VisionParams``), its result
 (``FrameResult``), the input check and ``process_frame``, which runs the steps held by the
 sibling modules: ``background`` (background model, illumination, subtraction),
-``segmentation`` (high-pass, body mask and the windows they are made in), ``contacts``
+``segmentation`` (high-pass, the body's parts and the windows they are made in), ``contacts``
 (contact blobs) and ``hand_shape`` (palm, wrist, canonical pose, fingers, brightness grid).
 Pure functions of arrays (numpy + OpenCV 5); the one stateful part, the background
 model, is in ``background``.
@@ -13,12 +13,15 @@ Steps for one frame (paper section 3, Fig. 4):
    (a sudden illumination change is a gain and an offset on the whole frame: a robust
    line fit of frame against background over a pixel grid estimates them; the hands
    cover a minority of the pixels and are left out as the brighter residuals).
-3. ``body_mask``: smoothed difference above ``body_threshold``: hands and forearms,
-   including the dim, blurred parts above the glass.
-4. ``highpass`` (difference minus its blur) above ``contact_threshold``: the sharp bright
-   parts touching the glass -> contact blobs. Both thresholds rise with the noise
-   measured in step 2.
-5. per body component: palm centre (maximum of the distance transform), the forearm
+3. ``relative_body``: the smoothed difference split into parts (on 4 px block means),
+   each cut at ``body_threshold`` scaled by the light that part shows (its brightest
+   block over ``contact_level``): hands and forearms, including the dim, blurred parts
+   above the glass, with the same extent under another light.
+4. ``highpass`` (difference minus its blur) above ``contact_threshold``, scaled the same
+   way per part: the sharp bright parts touching the glass -> contact blobs. Both
+   thresholds stay above the noise measured in step 2.
+5. per part (a hand whose pieces the threshold split stays one): its largest piece's
+   palm centre (maximum of the distance transform), the forearm
    direction (the thick part reaching farthest, or leaving the image; its sign checked
    against the brightness axis, as the forearm is higher above the glass and dimmer),
    the wrist arc where it crosses a circle about the palm, the angle that turns the

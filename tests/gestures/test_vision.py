@@ -228,14 +228,20 @@ def test_no_contact_window_on_the_empty_table_and_the_highpass_view_on_demand():
 @pytest.mark.parametrize("smooth", [1, 4, 5, 7])
 @pytest.mark.parametrize("where", [((320, 220), -90.0), ((615, 240), 180.0), ((30, 470), 45.0)])
 def test_body_found_in_its_window_equals_the_full_frame_mask(smooth, where):
-    from plugins.gestures.segmentation import body_mask, body_window
+    """With fixed thresholds the parts' mask is the whole frame's smoothed difference
+    above the threshold (made on crops only); each hand is a part of its own."""
+    import cv2
+
+    from plugins.gestures.segmentation import relative_body
 
     diff = cv2_subtract(frame(pose("open_hand", *where), pose("one_finger", (200, 100))))
-    body, win = body_window(diff, 14.0, smooth)
-    assert np.array_equal(body, body_mask(diff, 14.0, smooth))
-    x0, y0, x1, y1 = win
+    body, parts = relative_body(diff, 14.0, 1.0, 0.0, smooth, (1.0, 1.0))
+    sm = cv2.blur(diff, (smooth, smooth)) if smooth > 1 else diff
+    assert np.array_equal(body, np.where(sm > 14.0, 255, 0).astype(np.uint8))
+    x0, y0, x1, y1 = parts.win
     assert body.any() and not body.sum() - body[y0:y1, x0:x1].sum()
-    empty, none = body_window(cv2_subtract(frame()), 14.0, smooth)
+    assert (parts.peak > 0).sum() == 2  # the two hands
+    empty, none = relative_body(cv2_subtract(frame()), 14.0, 1.0, 0.0, smooth, (1.0, 1.0))
     assert none is None and not empty.any()
 
 
