@@ -31,6 +31,17 @@ async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
     raise AssertionError(f"{what} not reached in {timeout_s:g} s")
 
 
+async def pick_protocol(pilot, pane, path, out):
+    """Offer the protocol file ``path`` beside the studies/ ones, pick it, set the folder."""
+    from plugins.studies import protocol as P
+
+    sel = pane.query_one("#protocol")
+    sel.set_options([(n, n) for n in (*P.available(), str(path))])
+    await pilot.pause(0.2)
+    sel.value = str(path)
+    pane.query_one("#out").value = str(out)
+
+
 def _events(path):
     return [json.loads(x) for x in path.read_text().splitlines() if x.strip()]
 
@@ -99,15 +110,7 @@ def test_a_person_answers_with_the_keys_and_replays_once(
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             await asyncio.to_thread(app.session.vibration.load, map_file)
             pane = app.pane("studies")
-            from plugins.studies import protocol as P
-
-            pane.query_one("#protocol").set_options(
-                [(n, n) for n in (*P.available(), str(small_exp2))]
-            )
-            await pilot.pause(0.2)
-            pane.query_one("#protocol").value = str(small_exp2)
-            await pilot.pause(0.2)
-            pane.query_one("#out").value = str(tmp_path)
+            await pick_protocol(pilot, pane, small_exp2, tmp_path)
             pane.query_one("#simulate").value = False
             await pilot.click("#start")  # no details: refused in one line, nothing stored
             await wait_for(
@@ -158,7 +161,6 @@ def test_a_person_answers_on_the_projected_arrows_the_camera_sees(
     """Fig. 12b: the hand guide on the trial's region and four projected arrows; the twin
     camera sees the operator's finger on an arrow and that is the answer."""
     from console.tui.app import HapTableApp
-    from plugins.studies import protocol as P
 
     small_exp2.write_text(
         small_exp2.read_text().replace("seed = 3", 'seed = 3\nscene = "flow_hand"')
@@ -171,11 +173,7 @@ def test_a_person_answers_on_the_projected_arrows_the_camera_sees(
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             await asyncio.to_thread(app.session.vibration.load, map_file)
             pane = app.pane("studies")
-            sel = pane.query_one("#protocol")
-            sel.set_options([(n, n) for n in (*P.available(), str(small_exp2))])
-            await pilot.pause(0.2)
-            sel.value = str(small_exp2)
-            pane.query_one("#out").value = str(tmp_path)
+            await pick_protocol(pilot, pane, small_exp2, tmp_path)
             pane.query_one("#simulate").value = False
             pane.query_one("#projector").value = True
             for wid, v in (
@@ -240,11 +238,7 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             pane = app.pane("studies")
-            sel = pane.query_one("#protocol")
-            sel.set_options([(n, n) for n in (*P.available(), str(path))])
-            await pilot.pause(0.2)
-            sel.value = str(path)
-            pane.query_one("#out").value = str(tmp_path)
+            await pick_protocol(pilot, pane, path, tmp_path)
             pane.query_one("#simulate").value = False
             pane.query_one("#projector").value = True  # the knob and its menu (Fig. 16a)
             for wid, v in (
@@ -533,7 +527,6 @@ def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_th
     from textual.widgets import DataTable, ProgressBar, Static
 
     from console.tui.app import HapTableApp
-    from plugins.studies import protocol as P
 
     async def scenario():
         app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
@@ -541,11 +534,7 @@ def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_th
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             pane = app.pane("studies")
-            sel = pane.query_one("#protocol")
-            sel.set_options([(n, n) for n in (*P.available(), str(small_exp2))])
-            await pilot.pause(0.2)
-            sel.value = str(small_exp2)
-            pane.query_one("#out").value = str(tmp_path)
+            await pick_protocol(pilot, pane, small_exp2, tmp_path)
             status = pane.query_one("#study-status", Static)
             head = pane.query_one("#analysis-head", Static)
             await wait_for(pilot, lambda: "needs a vibration map" in str(status.render()), 10)
