@@ -1,4 +1,4 @@
-"""The knob's feedback conditions, synthesized block by block (a ``StreamSource``).
+"""The knob's feedback conditions, as a live stream described by parameters.
 
 Conditions (paper 5.4 and its discussion), as ``<detent>[+<friction>]``:
 
@@ -10,13 +10,17 @@ Conditions (paper 5.4 and its discussion), as ``<detent>[+<friction>]``:
 * ``VD+CF``, ``VD+VF``, ``VD+BF`` variant: the detent is a vibrotactile burst on the piezo
   channel while the friction stays on the screen channel (both modalities at once).
 
-Click-free by construction: the sine's phase is accumulated (never reset), frequency and
-amplitude glide linearly over ``glide_ms``; pulses are shaped by raised-cosine edges; a
-detent ducks the friction sine (a convex mix, so the peak never exceeds the larger of
-the two); the whole stream starts and stops with ``ramp_ms`` raised-cosine ramps.
-A crossing posted with ``post()`` (thread-safe) starts its detent at the first sample of
-the next block. Pulses alternate polarity (no net charge); a crossing during a pulse
-extends it without a jump.
+The samples are synthesised by ``console.stream_synth``: ``KnobStream`` describes its
+condition once as a ``StreamSpec`` (the friction sine is the carrier, the detent its
+pulse) and maps the knob's angle, velocity and touch to carrier targets, which it posts
+with the crossings to its sink: a local ``StreamSynth`` (offline rendering), or, after
+``bind()``, the outputs process's synth (where no plugin code runs). Click-free
+by construction: the sine's phase is accumulated (never reset), frequency and amplitude
+glide over ``glide_ms``; pulses are shaped by raised-cosine edges; a detent ducks the
+friction sine (a convex mix, so the peak never exceeds the larger of the two); the whole
+stream starts and stops with ``ramp_ms`` raised-cosine ramps. A crossing posted with
+``post()`` (thread-safe) starts its detent at the first sample of the next block. Pulses
+alternate polarity (no net charge); a crossing during a pulse extends it without a jump.
 """
 
 from __future__ import annotations
@@ -31,6 +35,15 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.stream_synth import (
+    Envelope,
+    PulseSpec,
+    StreamSink,
+    StreamSpec,
+    StreamSynth,
+    smooth_square,
+    spec_problem,
+)
 from console.types import patches_of
 
 DETENTS = {"HD": "screen", "VD": "piezo"}
@@ -59,81 +72,19 @@ def parse_condition(name: str) -> Condition:
     )
 
 
-class Envelope:
-    """A 0..1 gate with raised-cosine edges: ``trigger()`` (re)starts a hold of
-    ``hold_n`` samples (``None`` = until ``release()``); the level is always continuous."""
-
-    def __init__(self, edge_n: int, hold_n: int | None) -> None:
-        self.edge_n = max(int(edge_n), 1)
-        self.hold_n = hold_n
-        self.k = 0.0  # position on the edge, 0..edge_n (level = 0.5 - 0.5 cos(pi k / edge_n))
-        self.state = "idle"  # idle | rise | hold | fall
-        self.hold_left = 0
-
-    @property
-    def level(self) -> float:
-        return 0.5 - 0.5 * math.cos(math.pi * max(self.k, 0.0) / self.edge_n)
-
-    @property
-    def active(self) -> bool:
-        return self.state != "idle"
-
-    def trigger(self) -> None:
-        self.hold_left = self.hold_n if self.hold_n is not None else -1
-        if self.state in ("idle", "fall"):
-            self.state = "rise"
-
-    def release(self) -> None:
-        if self.state != "idle":
-            self.state = "fall"
-
-    def block(self, n: int) -> np.ndarray:
-        out = np.empty(n)
-        i = 0
-        e = self.edge_n
-        while i < n:
-            if self.state == "idle":
-                out[i:] = 0.0
-                break
-            if self.state == "hold":
-                if self.hold_left < 0:
-                    out[i:] = 1.0
-                    break
-                m = min(self.hold_left, n - i)
-                out[i : i + m] = 1.0
-                i += m
-                self.hold_left -= m
-                if self.hold_left == 0:
-                    self.state = "fall"
-                continue
-            step = 1.0 if self.state == "rise" else -1.0
-            left = (e - self.k) if step > 0 else self.k
-            m = max(min(int(math.ceil(left - 1e-9)), n - i), 0)
-            ks = self.k + step * np.arange(1, m + 1)
-            ks = np.clip(ks, 0.0, e)
-            out[i : i + m] = 0.5 - 0.5 * np.cos(np.pi * ks / e)
-            self.k = float(ks[-1]) if m else self.k
-            i += m
-            if step > 0 and self.k >= e:
-                self.state = "hold"
-                if self.hold_left == 0:
-                    self.state = "fall"
-            elif step < 0 and self.k <= 0:
-                self.state = "idle"
-        return out
-
-
-def smooth_square(phase: np.ndarray, edge_frac: float) -> np.ndarray:
-    """A square wave of ``phase`` (rad) whose transitions take ``edge_frac`` of a period."""
-    g = 1.0 / math.sin(math.pi * min(max(edge_frac, 1e-4), 0.5))
-    return np.clip(g * np.sin(phase), -1.0, 1.0)
-
-
 class KnobStream:
     """Live knob feedback: ``next_block(n) -> (piezo_v, screen_v)`` in volts at the actuator.
 
     Feed it with ``post(crossings=..., angle_deg=..., velocity_deg_s=..., touching=...)``
     from any thread. ``request_stop()`` ramps down; then ``next_block`` returns ``None``.
+
+    It synthesises nothing itself: ``spec`` describes the stream, and ``post`` forwards
+    the crossings' ids and the friction's carrier targets to its sink. By default that is
+    a local ``StreamSynth`` (offline rendering: ``next_block``, ``samples_out``, ``done``,
+    ``detent_log`` and ``trace`` are its). After ``bind(sink)`` they go to ``sink`` (the
+    outputs process's handle of a synth built from ``spec``): the stream plays there,
+    ``next_block`` raises ``RuntimeError``, and the local ``samples_out``, ``done``,
+    ``detent_log`` and ``trace`` stay as they were (the outputs process keeps its own).
     """
 
     def __init__(
@@ -182,41 +133,104 @@ class KnobStream:
         self.patches = patches_of(s["vd_excitation"]) if c.detent == "piezo" else frozenset()
         self.screen = c.detent == "screen" or c.friction != "none"
 
-        ms = self.fs / 1000.0
         # a raised cosine of length L stays under the gate's linear ramp of length R
         # (at full scale) when L >= pi/2 R: its steepest slope is pi / (2 L)
         ramp_min = max(float(lim.get("ramp_min_ms", 5.0)), 5.0)
-        ramp_ms = max(float(s["ramp_ms"]), math.pi / 2 * ramp_min)
-        self._master = Envelope(round(ramp_ms * ms), None)
-        self._master.trigger()
-        self._master.k = -1.0  # the first sample is exactly zero (the gate's start rule)
-        edge_n = max(round(s["detent_edge_ms"] * ms), 1)
-        self._detent = Envelope(edge_n, max(round(s["detent_ms"] * ms) - 2 * edge_n, 0))
-        vd_n = max(round(s["vd_ms"] * ms), 4)
-        self._vd = Envelope(vd_n // 2, 0)  # a Hann-shaped burst (rise, then fall)
-        self._glide_n = max(round(s["glide_ms"] * ms), 1)
+        # the gate counts its ramp in whole samples (rounded): never fall short of that
+        ramp_min = max(ramp_min, max(1, round(ramp_min * 1e-3 * self.fs)) * 1e3 / self.fs)
+        try:
+            self._spec = self._make_spec(max(float(s["ramp_ms"]), math.pi / 2 * ramp_min))
+        except ValueError as e:
+            raise UserError(f"[knob] {c.name}: {e}") from None
+        why = spec_problem(
+            self._spec,
+            piezo_lo_v=float(lim["piezo_min_v"]),
+            piezo_hi_v=float(lim["piezo_max_v"]),
+            screen_peak_v=float(lim["screen_max_vpp"]) / 2,
+            ramp_min_ms=ramp_min,
+            sample_rate_hz=self.fs,
+        )
+        if why is not None:
+            raise UserError(f"[knob] {c.name}: {why}")
 
         self._lock = threading.Lock()
-        self._pending: deque[tuple[int, float]] = deque()  # (crossing id, direction)
         self._angle_deg = 0.0
         self._velocity_deg_s = 0.0
         self._touching = True
-        self._stop = False
-        self._done = False
-
-        self._phase = 0.0
-        self._detent_phase = 0.0
-        self._vd_phase = 0.0
-        self._freq_hz = float(s["cf_freq_hz"])
-        self._freq_hz, _ = self._targets()
-        self._amp_v = 0.0  # the master ramp and the glide start from silence
-        self._polarity = 1.0
         self._next_id = 0
-        self.samples_out = 0
-        #: (crossing id, sample index where its detent started or was extended)
-        self.detent_log: deque[tuple[int, int]] = deque(maxlen=100000)
-        #: per block: (first sample, target frequency Hz, target amplitude V)
-        self.trace: deque[tuple[int, float, float]] = deque(maxlen=100000)
+        self._synth = StreamSynth(self._spec)
+        self._sink: StreamSink = self._synth
+        self._sink.post((), *self._targets())
+
+    def _make_spec(self, ramp_ms: float) -> StreamSpec:
+        """The condition as parameters: the friction is the carrier, the detent its pulse."""
+        s, c = self.s, self.condition
+        cf = float(s["cf_freq_hz"])
+        lo_hz = hi_hz = start_hz = cf
+        carrier_v = 0.0
+        if c.friction in ("constant", "velocity"):
+            carrier_v = float(s["carrier_vpp"]) / 2
+        elif c.friction == "boundary":
+            carrier_v = max(float(s["bf_max_vpp"]), float(s["bf_min_vpp"])) / 2
+        if c.friction == "velocity":
+            # the ends of _targets' mapping as it rounds them (a target clamped by an ulp
+            # would shift the phase ever after)
+            rest, speed = float(s["vf_freq_at_rest_hz"]), float(s["vf_freq_at_speed_hz"])
+            at_speed = rest + 1.0 * (speed - rest)
+            lo_hz, hi_hz, start_hz = min(rest, at_speed), max(rest, at_speed), rest
+        pulse = None
+        if c.detent == "screen":
+            pulse = PulseSpec(
+                "square",
+                "screen",
+                peak_v=float(s["detent_vpp"]) / 2,
+                freq_hz=float(s["detent_freq_hz"]),
+                length_ms=float(s["detent_ms"]),
+                edge_ms=float(s["detent_edge_ms"]),
+            )
+        elif c.detent == "piezo":
+            pulse = PulseSpec(
+                "burst",
+                "piezo",
+                peak_v=float(s["vd_peak_v"]),
+                freq_hz=float(s["vd_freq_hz"]),
+                length_ms=float(s["vd_ms"]),
+                edge_ms=0.0,
+            )
+        return StreamSpec(
+            sample_rate_hz=self.fs,
+            patches=self.patches,
+            screen=self.screen,
+            carrier_max_v=carrier_v,
+            carrier_min_hz=lo_hz,
+            carrier_max_hz=hi_hz,
+            start_hz=start_hz,
+            glide_ms=float(s["glide_ms"]),
+            ramp_ms=ramp_ms,
+            pulse=pulse,
+        )
+
+    @property
+    def spec(self) -> StreamSpec:
+        """The stream as parameters (``spec.to_json()`` for the outputs process)."""
+        return self._spec
+
+    def bind(self, sink: StreamSink) -> None:
+        """Post to ``sink`` from now on (``post(ids, carrier_hz, carrier_v)``,
+        ``request_stop()``: a synth of ``spec`` in the outputs process); it gets the
+        current targets at once. Bind before the stream plays locally."""
+        if not isinstance(sink, StreamSink):
+            raise TypeError(f"bind: {type(sink).__name__} has no post() and request_stop()")
+        if self._synth.samples_out:
+            raise RuntimeError("bind: this stream already plays locally; bind a new one")
+        with self._lock:
+            self._sink = sink
+            sink.post((), *self._targets())
+
+    @property
+    def bound(self) -> bool:
+        """True after ``bind()``: the stream plays in the outputs process."""
+        return self._sink is not self._synth
 
     # ------------------------------------------------------------------ inputs
     def post(
@@ -227,35 +241,35 @@ class KnobStream:
         touching: bool | None = None,
     ) -> list[int]:
         """Knob events from any thread; returns the ids given to the crossings."""
-        ids = []
         with self._lock:
-            for _ in range(max(int(crossings), 0)):
-                ids.append(self._next_id)
-                self._pending.append((self._next_id, 1.0))
-                self._next_id += 1
+            ids = list(range(self._next_id, self._next_id + max(int(crossings), 0)))
+            self._next_id += len(ids)
             if angle_deg is not None and math.isfinite(angle_deg):
                 self._angle_deg = float(angle_deg)
             if velocity_deg_s is not None and math.isfinite(velocity_deg_s):
                 self._velocity_deg_s = float(velocity_deg_s)
             if touching is not None:
                 self._touching = bool(touching)
+            # under the lock: targets reach the sink in the order they were computed
+            self._sink.post(ids, *self._targets())
         return ids
 
     @property
     def done(self) -> bool:
-        """True once the stream has ramped down after ``request_stop()``."""
-        return self._done
+        """True once the stream has ramped down after ``request_stop()`` (local only)."""
+        return self._synth.done
 
     def request_stop(self) -> None:
         with self._lock:
-            self._stop = True
+            self._sink.request_stop()
 
     # ------------------------------------------------------------------ targets
-    def _targets(self) -> tuple[float, float]:
-        """(frequency Hz, amplitude V peak) the friction sine should have now."""
+    def _targets(self) -> tuple[float | None, float]:
+        """(frequency Hz, amplitude V peak) the friction sine should have now; a
+        frequency of ``None`` keeps the current one (the synth holds it while silent)."""
         s, c = self.s, self.condition
         if c.friction == "none" or not self._touching:
-            return self._freq_hz, 0.0
+            return None, 0.0
         if c.friction == "constant":
             return s["cf_freq_hz"], s["carrier_vpp"] / 2
         if c.friction == "velocity":
@@ -268,59 +282,49 @@ class KnobStream:
         return s["cf_freq_hz"], vpp / 2
 
     # ------------------------------------------------------------------ output
+    @property
+    def samples_out(self) -> int:
+        """Samples rendered locally."""
+        return self._synth.samples_out
+
+    @property
+    def detent_log(self) -> deque[tuple[int, int]]:
+        """(crossing id, sample index where its detent started or was extended): the local
+        synth's, or, once bound to a sink that keeps one (the outputs process's stream),
+        the sink's (assign a shorter deque to bound the local one)."""
+        remote = getattr(self._sink, "detent_log", None) if self.bound else None
+        return remote if remote is not None else self._synth.detent_log
+
+    @detent_log.setter
+    def detent_log(self, log: deque[tuple[int, int]]) -> None:
+        self._synth.detent_log = log
+
+    @property
+    def trace(self) -> deque[tuple[int, float, float]]:
+        """Per block: (first sample, target frequency Hz, target amplitude V); local
+        rendering only (assign a shorter deque to bound it)."""
+        return self._synth.trace
+
+    @trace.setter
+    def trace(self, log: deque[tuple[int, float, float]]) -> None:
+        self._synth.trace = log
+
     def next_block(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
-        if self._done:
-            return None
-        with self._lock:
-            events = list(self._pending)
-            self._pending.clear()
-            stop = self._stop
-            f1, a1 = self._targets()
-        start = self.samples_out
-        if stop:
-            self._master.release()
-        c = self.condition
-        if events:
-            if c.detent == "screen":
-                if not self._detent.active:
-                    self._polarity = -self._polarity
-                self._detent.trigger()
-            elif c.detent == "piezo":
-                self._vd.trigger()
-            for cid, _ in events:
-                self.detent_log.append((cid, start))
-        self.trace.append((start, f1, a1))
+        if self.bound:
+            raise RuntimeError(
+                f"knob stream {self.condition.name}: it plays in the outputs process "
+                "(bound to a remote synth); next_block renders only unbound streams"
+            )
+        return self._synth.next_block(n)
 
-        idx = np.arange(1, n + 1)
-        frac = np.minimum(idx / self._glide_n, 1.0)
-        f = self._freq_hz + (f1 - self._freq_hz) * frac
-        a = self._amp_v + (a1 - self._amp_v) * frac
-        self._freq_hz = float(f[-1])
-        self._amp_v = float(a[-1])
-        phase = self._phase + 2 * np.pi * np.cumsum(f) / self.fs
-        self._phase = float(phase[-1] % (2 * np.pi))
-        screen = a * np.sin(phase)
-        piezo = np.zeros(n)
 
-        if c.detent == "screen":
-            env = self._detent.block(n)
-            if self.s["detent_freq_hz"] > 0:
-                fd = self.s["detent_freq_hz"]
-                ph = self._detent_phase + 2 * np.pi * fd * idx / self.fs
-                self._detent_phase = float(ph[-1] % (2 * np.pi))
-                edge_frac = self.s["detent_edge_ms"] * 1e-3 * fd
-                pulse = smooth_square(ph, edge_frac)
-            else:
-                pulse = self._polarity
-            screen = screen * (1.0 - env) + (self.s["detent_vpp"] / 2) * env * pulse
-        elif c.detent == "piezo":
-            env = self._vd.block(n)
-            ph = self._vd_phase + 2 * np.pi * self.s["vd_freq_hz"] * idx / self.fs
-            self._vd_phase = float(ph[-1] % (2 * np.pi))
-            piezo = self.s["vd_peak_v"] * env * np.sin(ph)
-
-        g = self._master.block(n)
-        self.samples_out += n
-        if stop and not self._master.active:
-            self._done = True
-        return piezo * g, screen * g
+__all__ = [
+    "CONDITIONS",
+    "DETENTS",
+    "FRICTIONS",
+    "Condition",
+    "Envelope",
+    "KnobStream",
+    "parse_condition",
+    "smooth_square",
+]
