@@ -1,6 +1,9 @@
 """The safety gate: every audio block on its way to the driver and every relay switch.
 
-See ``console.safety`` for the rules it keeps."""
+See ``console.safety`` for the rules it keeps. The gate is sealed: code holding it reads
+its state through read-only properties and changes it only through its methods (an
+attribute assignment raises ``AttributeError``); its limits, relay map and screen relay
+channel are fixed when it is built."""
 
 from __future__ import annotations
 
@@ -10,40 +13,48 @@ import threading
 import time
 import weakref
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from types import MappingProxyType
+from typing import Any, NamedTuple, NoReturn
 
 import numpy as np
 
+from console.channels import ChannelLayout
 from console.contracts import RelayBoard
 from console.errors import SafetyRefusal
 from console.safety.limits import Limits, range_problem, slew_problem
-from console.safety.scope import ScopeTap
-from console.safety.sources import Source, SourceCaller, SourceInterrupted
+from console.safety.scope import ScopeTap, ScopeTrace
+from console.safety.sources import Source
 from console.types import PATCHES
 
-if TYPE_CHECKING:
-    pass
-
 log = logging.getLogger("haptable.safety")
+
+#: the refusal when the one-pass check fails and the per-rule search names no rule
+GENERIC_REFUSAL = "block refused by the gate's check (no single rule named)"
 
 
 @dataclass(frozen=True)
 class GateEvent:
     t_s: float
     clock: int
-    kind: str  # "estop", "refused", "switch", "fault", "reset"
+    kind: str  # "estop", "shutdown", "refused", "switch", "fault", "reset"
     message: str
     #: an e-stop a driver may answer by dropping its queued blocks at once (an operator's),
     #: and then every block until the gate hands one ending in silence (the rest of its
     #: ramp down, played after the drop, would step up from 0 V); a fault's e-stop is not
     #: cut: the gate's ramp to zero at the slew limit plays out
     cut: bool = True
+    #: on "estop", "shutdown" and "fault": the step (volts per sample, one per sound-card
+    #: channel) the gate ramps down with at that moment, for a driver ramping on its own
+    ramp_step_v: tuple[float, ...] = ()
 
 
 #: every gate alive in this process (what ``estop_all`` reaches)
 LIVE_GATES: weakref.WeakSet[SafetyGate] = weakref.WeakSet()
+
+#: events that carry the ramp-down step
+_RAMP_KINDS = frozenset({"estop", "shutdown", "fault"})
 
 
 def _as_volts(x: Any, n: int, name: str) -> tuple[np.ndarray | None, str | None]:
@@ -59,141 +70,381 @@ def _as_volts(x: Any, n: int, name: str) -> tuple[np.ndarray | None, str | None]
     return a.astype(np.float64, copy=False), None
 
 
+def _read_only(a: Any) -> np.ndarray:
+    """A float copy of ``a`` that cannot be written to."""
+    out = np.array(a, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
+class _Judged(NamedTuple):
+    """The state one block is judged on, read once: both checks look at this alone."""
+
+    clock: int  # of the block's first sample
+    quiet_until: int
+    level_v: tuple[float, ...]
+    relays: tuple[bool, ...]
+    patches: frozenset[str]  # connected by ``relays``
+    steps: np.ndarray  # each channel's slew step for ``relays`` (read-only)
+    screen_relay_open: bool  # a screen relay channel is set and it is open
+
+
+class _State:
+    """The gate's changing state. Only the gate's own methods write it."""
+
+    __slots__ = (
+        "audio_thread",
+        "clock",
+        "estop_reason",
+        "estopped",
+        "events",
+        "in_fill",
+        "last_nonzero",
+        "last_switch",
+        "latency_fixed",
+        "latency_samples",
+        "level_v",
+        "listeners",
+        "quiet_until",
+        "relays",
+        "source",
+        "steps_for",
+        "switching",
+    )
+
+    def __init__(self, n_channels: int, relays: tuple[bool, ...], latency_samples: int) -> None:
+        self.source: Source | None = None
+        self.estopped = False
+        self.estop_reason = ""
+        self.switching = False
+        self.clock = 0  # samples handed to the driver
+        self.last_nonzero = -(10**12)
+        self.quiet_until = 0  # no signal before this clock (post-switch settle)
+        self.last_switch: dict[int, int] = {}  # channel -> clock of its last switch
+        #: (relays, connected patches, read-only steps) for the last relay state looked up
+        self.steps_for: tuple[tuple[bool, ...], frozenset[str], np.ndarray] | None = None
+        #: last sample handed out per channel, volts at the actuators
+        self.level_v: tuple[float, ...] = (0.0,) * n_channels
+        self.relays = relays
+        self.events: deque[GateEvent] = deque(maxlen=1000)
+        self.audio_thread: threading.Thread | None = None
+        #: the driver is inside ``fill`` (waiting on the gate: it has not stopped pulling)
+        self.in_fill = False
+        self.listeners: tuple[Callable[[GateEvent], None], ...] = ()
+        self.latency_samples = latency_samples
+        self.latency_fixed = False  # ``set_device_latency`` was called
+
+
+class ScopeView:
+    """Read-only access to the gate's scope tap: only the gate writes to it."""
+
+    __slots__ = ("_tap",)
+
+    def __init__(self, tap: ScopeTap) -> None:
+        object.__setattr__(self, "_tap", tap)
+
+    def __setattr__(self, name: str, value: Any) -> NoReturn:
+        raise AttributeError(f"the gate's scope is read-only: {name!r} cannot be set")
+
+    def __delattr__(self, name: str) -> NoReturn:
+        raise AttributeError(f"the gate's scope is read-only: {name!r} cannot be deleted")
+
+    @property
+    def sample_rate_hz(self) -> int:
+        return self._tap.sample_rate_hz
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        return self._tap.channels
+
+    @property
+    def capacity(self) -> int:
+        return self._tap.capacity
+
+    def read(self, seconds: float | None = None) -> ScopeTrace:
+        """The newest ``seconds`` (all kept when None) in volts at the actuators."""
+        return self._tap.read(seconds)
+
+
 class SafetyGate:
     """Owns the relay board, checks every block, and holds the e-stop.
 
-    ``fill(out)`` is what the audio driver calls. The scheduler attaches itself; any other
-    source (``attach(source)``) is called on a guarded thread and checked the same way.
-    Only the gate ever calls ``board.set``.
+    ``fill(out)`` is what the audio driver calls; it plays from the scheduler attached with
+    ``attach_scheduler`` (the only source). Only the gate ever calls ``board.set``.
+
+    Sealed: every attribute is read-only (``AttributeError`` on assignment or deletion).
+    The limits, relay map and screen relay channel are fixed at construction; the device
+    latency is raised once with ``set_device_latency``; listeners come and go with
+    ``add_listener`` / ``remove_listener``.
     """
+
+    __slots__ = (
+        "__weakref__",
+        "_board",
+        "_check_order",
+        "_events_lock",
+        "_layout",
+        "_limits",
+        "_lock",
+        "_ranges",
+        "_relay_channels",
+        "_s",
+        "_safe",
+        "_scale",
+        "_scope",
+        "_scope_view",
+        "_screen_channel",
+        "_switch_lock",
+    )
 
     def __init__(
         self,
         limits: Limits,
         board: RelayBoard | None,
         *,
-        relay_channels: dict[str, int] | None = None,
+        relay_channels: Mapping[str, int] | None = None,
         screen_channel: int | None = None,
         latency_samples: int = 0,
     ) -> None:
-        self.limits = limits
-        self._board = board
-        self.relay_channels = dict(relay_channels or {})
-        self.screen_channel = screen_channel
-        self.latency_samples = latency_samples
-        self._lock = threading.RLock()
-        # held across a relay switch: an e-stop opening the relays waits for a switch in
-        # flight to finish, so a late command can never close a relay after the e-stop
-        self._switch_lock = threading.RLock()
-        self._source: Source | None = None
-        self._caller: SourceCaller | None = None  # set for sources other than the scheduler
-        self._estopped = False
-        self.estop_reason = ""
-        self._switching = False
-        self.clock = 0  # samples handed to the driver
-        self._last_nonzero = -(10**12)
-        self._quiet_until = 0  # no signal before this clock (post-switch settle)
-        self._last_switch: dict[int, int] = {}  # channel -> clock of its last switch
-        self._steps_for: tuple | None = None  # _max_steps() for one relay state
-        self.layout = limits.layout  # what each sound-card channel drives
-        names = self.layout.names
-        #: the order the block checks look at the channels: piezo ones first
-        self._check_order = sorted(range(len(names)), key=lambda k: names[k] == "screen")
+        if not isinstance(limits, Limits):
+            raise TypeError(f"limits must be a Limits, not {type(limits).__name__}")
+        latency = int(latency_samples)
+        if latency < 0:
+            raise ValueError(f"latency_samples = {latency_samples!r}: must be >= 0")
+        layout = limits.layout  # what each sound-card channel drives
+        names = layout.names
         ranges = np.array(limits.column_ranges())
-        self._ranges = (ranges[:, 0], ranges[:, 1])
-        #: last sample handed out per channel, volts at the actuators
-        self.level_v: tuple[float, ...] = (0.0,) * len(names)
-        self.relays: tuple[bool, ...] = tuple(board.states()) if board else ()
-        self.events: deque[GateEvent] = deque(maxlen=1000)
-        self._safe = threading.Event()
-        self._safe.set()
-        self._audio_thread: threading.Thread | None = None
-        #: the driver is inside ``fill`` (waiting on the gate: it has not stopped pulling)
-        self._in_fill = False
-        self.listeners: list[Callable[[GateEvent], None]] = []
         card_v = tuple(
             limits.screen_card_v if kind == "screen" else limits.piezo_card_v
-            for kind in self.layout.kinds()
+            for kind in layout.kinds()
         )
-        self._scale = 1.0 / np.array(card_v)
+        scope = ScopeTap(limits.sample_rate_hz, names, card_v)
+        init = object.__setattr__  # the one way in: __setattr__ refuses everyone
+        init(self, "_limits", limits)
+        init(self, "_board", board)
+        init(
+            self,
+            "_relay_channels",
+            MappingProxyType({str(p): int(c) for p, c in dict(relay_channels or {}).items()}),
+        )
+        init(self, "_screen_channel", None if screen_channel is None else int(screen_channel))
+        init(self, "_layout", layout)
+        #: the order the block checks look at the channels: piezo ones first
+        init(
+            self,
+            "_check_order",
+            tuple(sorted(range(len(names)), key=lambda k: names[k] == "screen")),
+        )
+        init(self, "_ranges", (_read_only(ranges[:, 0]), _read_only(ranges[:, 1])))
+        init(self, "_scale", _read_only(1.0 / np.array(card_v)))
         #: the last seconds handed to the driver, per sound-card channel (``scope.read``)
-        self.scope = ScopeTap(limits.sample_rate_hz, self.layout.names, card_v)
+        init(self, "_scope", scope)
+        init(self, "_scope_view", ScopeView(scope))
+        init(self, "_lock", threading.RLock())
+        # held across a relay switch: an e-stop opening the relays waits for a switch in
+        # flight to finish, so a late command can never close a relay after the e-stop
+        init(self, "_switch_lock", threading.RLock())
+        init(self, "_events_lock", threading.Lock())
+        safe = threading.Event()
+        safe.set()
+        init(self, "_safe", safe)
+        init(self, "_s", _State(len(names), tuple(board.states()) if board else (), latency))
         LIVE_GATES.add(self)
 
-    # ------------------------------------------------------------------ state
+    def __setattr__(self, name: str, value: Any) -> NoReturn:
+        raise AttributeError(
+            f"the safety gate is sealed: {name!r} cannot be set (its state changes only "
+            f"through its own methods)"
+        )
+
+    def __delattr__(self, name: str) -> NoReturn:
+        raise AttributeError(f"the safety gate is sealed: {name!r} cannot be deleted")
+
+    # ------------------------------------------------------------------ read-only state
+    @property
+    def limits(self) -> Limits:
+        """The limits every block is checked against (deep-immutable, fixed)."""
+        return self._limits
+
+    @property
+    def relay_channels(self) -> Mapping[str, int]:
+        """Patch -> relay channel (read-only, fixed at construction)."""
+        return self._relay_channels
+
+    @property
+    def screen_channel(self) -> int | None:
+        """The screen's relay channel (fixed at construction)."""
+        return self._screen_channel
+
+    @property
+    def latency_samples(self) -> int:
+        """The device latency in samples (raised once by ``set_device_latency``)."""
+        return self._s.latency_samples
+
+    @property
+    def clock(self) -> int:
+        """Samples handed to the driver."""
+        return self._s.clock
+
+    @property
+    def level_v(self) -> tuple[float, ...]:
+        """The last sample handed out per channel, volts at the actuators."""
+        return self._s.level_v
+
+    @property
+    def relays(self) -> tuple[bool, ...]:
+        """Each relay channel's state as the board last reported it (closed: True)."""
+        return self._s.relays
+
+    @property
+    def events(self) -> tuple[GateEvent, ...]:
+        """The last (up to 1000) events, oldest first: a snapshot."""
+        with self._events_lock:
+            return tuple(self._s.events)
+
+    @property
+    def layout(self) -> ChannelLayout:
+        """What each sound-card channel drives."""
+        return self._layout
+
+    @property
+    def estop_reason(self) -> str:
+        return self._s.estop_reason
+
+    @property
+    def scope(self) -> ScopeView:
+        """The last seconds handed to the driver, per sound-card channel (read-only)."""
+        return self._scope_view
+
     @property
     def estopped(self) -> bool:
-        return self._estopped
+        return self._s.estopped
 
     @property
     def idle(self) -> bool:
         """Nothing to play; but samples must keep flowing while an e-stop ramps down and
         opens relays (a fast-forward driver only pulls while this is False)."""
-        if not self._safe.is_set() or any(self.level_v):
+        s = self._s
+        if not self._safe.is_set() or any(s.level_v):
             return False
-        src = self._source
-        if self._estopped or src is None:
+        src = s.source
+        if s.estopped or src is None:
             return True
         try:
             return bool(src.idle)
         except Exception:
             return False
 
-    def attach(self, source: Source) -> None:
-        """Play from ``source``: every block it gives passes the same checks as a plan's,
-        and it runs on a guarded thread (a stall never holds the audio thread)."""
-        with self._lock:
-            self._source = source
-            self._caller = SourceCaller("haptable-source")
-
+    # ------------------------------------------------------------------ set-up
     def attach_scheduler(self, scheduler: Source) -> None:
-        """The output scheduler: core code that guards the plugin code it calls itself."""
+        """Play from the output scheduler (the only source): core code that guards the
+        plugin code it calls itself. Every block it gives is checked."""
         with self._lock:
-            self._source = scheduler
-            self._caller = None
+            self._s.source = scheduler
 
+    def set_device_latency(self, samples: int) -> None:
+        """The device latency, known once the driver started: set once, never lowered,
+        only while nothing plays. Raises ``SafetyRefusal`` otherwise."""
+        value = int(samples)
+        if value < 0:
+            raise ValueError(f"device latency {samples!r}: must be >= 0 samples")
+        if not self.idle:  # outside the lock: the source's ``idle`` takes its own
+            raise SafetyRefusal("the device latency is set only while nothing plays")
+        s = self._s
+        with self._lock:
+            if s.latency_fixed:
+                raise SafetyRefusal(
+                    f"the device latency is already set ({s.latency_samples} samples)"
+                )
+            if value < s.latency_samples:
+                raise SafetyRefusal(
+                    f"device latency {value} samples is below the {s.latency_samples} the "
+                    f"gate was built with; it can only be raised"
+                )
+            if any(s.level_v) or s.switching:
+                raise SafetyRefusal("the device latency is set only while nothing plays")
+            s.latency_samples = value
+            s.latency_fixed = True
+
+    def add_listener(self, fn: Callable[[GateEvent], None]) -> None:
+        """Call ``fn(event)`` on every event (on the thread that raised it; it must be
+        quick and never raise: an exception is logged and ignored)."""
+        with self._lock:
+            if fn not in self._s.listeners:
+                self._s.listeners = (*self._s.listeners, fn)
+
+    def remove_listener(self, fn: Callable[[GateEvent], None]) -> None:
+        """Stop calling ``fn`` (nothing happens when it was not added)."""
+        with self._lock:
+            self._s.listeners = tuple(f for f in self._s.listeners if f != fn)
+
+    # ------------------------------------------------------------------ state
     def quiet_samples(self) -> int:
         """How long both channels have been silent, in samples handed to the driver."""
         with self._lock:
-            return self.clock - self._last_nonzero
+            return self._s.clock - self._s.last_nonzero
 
     def settled(self) -> bool:
         """True once the settle time after the last relay switch has passed."""
         with self._lock:
-            return self.clock >= self._quiet_until
+            return self._s.clock >= self._s.quiet_until
 
     def relay_state(self) -> frozenset[int]:
-        return frozenset(i + 1 for i, closed in enumerate(self.relays) if closed)
-
-    def _max_steps(self) -> tuple[frozenset[str], np.ndarray]:
-        """The connected patches and each channel's slew step for the relays as they
-        are: worked out once per relay state, not in every audio block."""
-        relays = self.relays
-        hit = self._steps_for
-        if hit is None or hit[0] != relays:
-            patches = self.closed_patches()
-            hit = (relays, patches, self.limits.column_steps_v(patches))
-            self._steps_for = hit
-        return hit[1], hit[2]
+        return frozenset(i + 1 for i, closed in enumerate(self._s.relays) if closed)
 
     def closed_patches(self) -> frozenset[str]:
         """The patches an amplifier reaches now: relay closed, or (a patch with a channel
         of its own and no relay) always."""
-        relays = self.relays
+        return self._closed_patches(self._s.relays)
+
+    def ramp_steps_v(self) -> tuple[float, ...]:
+        """Each sound-card channel's slew step (volts per sample) for the relays as they
+        are now: what the gate ramps down with."""
+        return tuple(float(x) for x in self._steps(self._s.relays)[1])
+
+    def _closed_patches(self, relays: tuple[bool, ...]) -> frozenset[str]:
         closed = {
             p
-            for p, c in self.relay_channels.items()
+            for p, c in self._relay_channels.items()
             if p in PATCHES and 1 <= c <= len(relays) and relays[c - 1]
         }
-        if self.layout.independent:
-            closed.update(p for p in self.layout.patch_index if p not in self.relay_channels)
+        if self._layout.independent:
+            closed.update(p for p in self._layout.patch_index if p not in self._relay_channels)
         return frozenset(closed)
 
+    def _steps(self, relays: tuple[bool, ...]) -> tuple[frozenset[str], np.ndarray]:
+        """The connected patches and each channel's slew step for ``relays``: worked out
+        once per relay state, not in every audio block."""
+        s = self._s
+        hit = s.steps_for
+        if hit is None or hit[0] != relays:
+            patches = self._closed_patches(relays)
+            hit = (relays, patches, _read_only(self._limits.column_steps_v(patches)))
+            s.steps_for = hit
+        return hit[1], hit[2]
+
+    def _judge_state(
+        self, relays: tuple[bool, ...], level_v: tuple[float, ...], quiet_until: int, clock: int
+    ) -> _Judged:
+        """What a block starting at ``clock`` is judged on, for this state."""
+        patches, steps = self._steps(relays)
+        sc = self._screen_channel
+        screen_open = sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1])
+        return _Judged(clock, quiet_until, level_v, relays, patches, steps, screen_open)
+
+    def _judged(self) -> _Judged:
+        """The gate's state now, for the next block (call with the lock held)."""
+        s = self._s
+        return self._judge_state(s.relays, s.level_v, s.quiet_until, s.clock)
+
     def _event(self, kind: str, message: str, *, cut: bool = True) -> None:
-        ev = GateEvent(time.monotonic(), self.clock, kind, message, cut)
-        self.events.append(ev)
+        s = self._s
+        ramp = self.ramp_steps_v() if kind in _RAMP_KINDS else ()
+        ev = GateEvent(time.monotonic(), s.clock, kind, message, cut, ramp)
+        with self._events_lock:
+            s.events.append(ev)
         log.warning("%s: %s", kind, message) if kind in ("estop", "fault") else log.info(message)
-        for fn in list(self.listeners):
+        for fn in s.listeners:
             try:
                 fn(ev)
             except Exception:  # a listener must never break the gate
@@ -202,50 +453,41 @@ class SafetyGate:
     # ------------------------------------------------------------------ audio path
     def fill(self, out: np.ndarray) -> None:
         """Fill ``out`` (frames, channels) float32 in sound-card units, one column per
-        ``[audio] channels`` name. Called by the driver; never raises and never waits on
-        plugin code longer than ``source_stall_s``."""
-        self._audio_thread = threading.current_thread()
-        if out.ndim != 2 or out.shape[1] != self.layout.n:
+        ``[audio] channels`` name. Called by the driver; never raises."""
+        s = self._s
+        s.audio_thread = threading.current_thread()
+        if out.ndim != 2 or out.shape[1] != self._layout.n:
             out[...] = 0.0
             self._fault(
                 f"the audio output gave a block of shape {out.shape}, but [audio] channels "
-                f"names {self.layout.n} channels; open the device with that many"
+                f"names {self._layout.n} channels; open the device with that many"
             )
             return
-        clock = self.clock  # of the block's first sample (only this thread moves it)
-        self._in_fill = True
+        clock = s.clock  # of the block's first sample (only this thread moves it)
+        s.in_fill = True
         try:
             self._fill(out)
         except Exception as exc:  # the audio thread must survive anything
             self._hand_ramp_down(out)
             self._fault(f"output path failed: {exc!r}")
         finally:
-            self._in_fill = False
+            s.in_fill = False
         try:
-            self.scope.write(out, clock)  # what the driver got, as it got it
+            self._scope.write(out, clock)  # what the driver got, as it got it
         except Exception:  # the scope is an observer: never the output's problem
             log.exception("scope tap failed")
 
     def _fill(self, out: np.ndarray) -> None:
         n = out.shape[0]
+        s = self._s
         with self._lock:
-            src, caller = self._source, self._caller
-            hold = self._estopped or self._switching
-            clock = self.clock
-            # an e-stop after this look interrupts the call below (estop() sets its flag
-            # under this lock, then interrupts): none falls between the look and the call
-            seen = caller.interrupts if caller is not None else 0
+            src = s.source
+            hold = s.estopped or s.switching
         if hold or src is None:
             self._hand_ramp_down(out)
             return
         try:
-            block = (
-                src.next_block(n)
-                if caller is None
-                else caller.call(src.next_block, n, self.limits.source_stall_s, since=seen)
-            )
-        except SourceInterrupted:
-            block = None
+            block = src.next_block(n)
         except Exception as exc:
             self._hand_ramp_down(out)
             self._fault(f"output source failed: {exc}")
@@ -254,24 +496,32 @@ class SafetyGate:
             self._hand_ramp_down(out)
             return
         cols, problem = self._columns(block, n)
-        if problem is None:
-            problem = self._block_problem(cols, clock)
-        if problem:
+        if problem is not None:
             self._hand_ramp_down(out)
             self._fault(problem)
             return
+        # judged and handed over under the lock: no switch, e-stop or settle time can
+        # fall between the look at the state, the verdict and the samples going out
         with self._lock:
-            if self._estopped or self._switching:  # e-stop or switch arrived meanwhile
-                cols = None
-        if cols is None:
+            if s.estopped or s.switching:  # e-stop or switch arrived meanwhile
+                judged = None
+            else:
+                judged = self._judged()
+                if self._block_ok(cols, judged):
+                    self._hand(out, cols)
+                    return
+        if judged is None:
             self._hand_ramp_down(out)
             return
-        self._hand(out, cols)
+        # refused: the message is looked for on the same snapshot, and never overrules
+        problem = self._block_first_problem(cols, judged) or GENERIC_REFUSAL
+        self._hand_ramp_down(out)
+        self._fault(problem)
 
     def _columns(self, block: Any, n: int) -> tuple[list[np.ndarray] | None, str | None]:
         """A source's block as one float array of ``n`` samples per channel, or why not:
         a block is a sequence of one array per channel (the bus: ``(piezo, screen)``)."""
-        names = self.layout.names
+        names = self._layout.names
         try:
             raw = tuple(block)
         except Exception:
@@ -293,42 +543,46 @@ class SafetyGate:
 
     def _hand(self, out: np.ndarray, cols: list[np.ndarray]) -> None:
         nz = False
+        scale = self._scale
         for k, x in enumerate(cols):
-            out[:, k] = x * self._scale[k]
+            out[:, k] = x * scale[k]
             nz = nz or bool(x.any())
+        s = self._s
         with self._lock:
-            self.clock += out.shape[0]
+            s.clock += out.shape[0]
             if nz:
-                self._last_nonzero = self.clock
-            self.level_v = tuple(float(x[-1]) for x in cols)
+                s.last_nonzero = s.clock
+            s.level_v = tuple(float(x[-1]) for x in cols)
 
     def _hand_ramp_down(self, out: np.ndarray) -> None:
         """Hand the driver a ramp from the last level to zero at the slew limit (zeros
         once there), every channel at once: the only way the gate ever goes silent."""
         n = out.shape[0]
-        levels = self.level_v
+        s = self._s
+        levels = s.level_v
         if not any(levels) or len(levels) != out.shape[1]:
             out[:] = 0.0
             with self._lock:
-                self.clock += n
+                s.clock += n
             return
         k = np.arange(1, n + 1)
-        _, steps = self._max_steps()
+        _, steps = self._steps(s.relays)
         cols = [
             np.sign(level) * np.maximum(abs(level) - step * k, 0.0)
             for level, step in zip(levels, steps, strict=True)
         ]
         self._hand(out, cols)
 
-    def _block_problem(self, cols: list[np.ndarray], clock: int) -> str | None:
+    def _block_problem(self, cols: list[np.ndarray], judged: _Judged) -> str | None:
         """Why the block must not play (the first rule it breaks), or ``None``. Every
         channel at once first (one pass over the block); only a block that fails is
-        looked at channel by channel, for the message."""
-        if self._block_ok(cols, clock):
+        looked at channel by channel, for the message, on the same state; a failed block
+        is refused whatever that search finds."""
+        if self._block_ok(cols, judged):
             return None
-        return self._block_first_problem(cols, clock)
+        return self._block_first_problem(cols, judged) or GENERIC_REFUSAL
 
-    def _block_ok(self, cols: list[np.ndarray], clock: int) -> bool:
+    def _block_ok(self, cols: list[np.ndarray], j: _Judged) -> bool:
         """True when the block keeps every rule: finite, inside each channel's range, no
         signal while settling or on a channel whose load is disconnected, each step within
         its channel's slew limit (tolerances as in ``range_problem`` / ``slew_problem``)."""
@@ -342,50 +596,41 @@ class SafetyGate:
             return False
         on = x.any(axis=1)
         if on.any():
-            if clock < self._quiet_until:
+            if j.clock < j.quiet_until:
                 return False
-            patches, _ = self._max_steps()
+            names, patches = self._layout.names, j.patches
             for k in np.flatnonzero(on):
-                name = self.layout.names[k]
+                name = names[k]
                 if name == "screen":
-                    sc, relays = self.screen_channel, self.relays
-                    if sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1]):
+                    if j.screen_relay_open:
                         return False
                 elif (name == "piezo" and not patches) or (name != "piezo" and name not in patches):
                     return False
-        _, steps = self._max_steps()
-        d = np.abs(np.diff(x, axis=1, prepend=np.asarray(self.level_v)[:, None]))
-        return bool((d.max(axis=1) <= steps * (1 + 1e-9) + 1e-9).all())
+        d = np.abs(np.diff(x, axis=1, prepend=np.asarray(j.level_v)[:, None]))
+        return bool((d.max(axis=1) <= j.steps * (1 + 1e-9) + 1e-9).all())
 
-    def _block_first_problem(self, cols: list[np.ndarray], clock: int) -> str | None:
-        lim = self.limits
-        names = self.layout.names
-        ranges = lim.column_ranges()
+    def _block_first_problem(self, cols: list[np.ndarray], j: _Judged) -> str | None:
+        """The first rule the block breaks, worded, judged on ``j`` (``None``: none found)."""
+        names = self._layout.names
+        ranges = self._limits.column_ranges()
         for k in self._check_order:
             if (p := range_problem(cols[k], *ranges[k], math.inf)) is not None:
                 return f"{names[k]} channel {p} of a block"
         on = [bool(x.any()) for x in cols]
-        if clock < self._quiet_until and any(on):
+        if j.clock < j.quiet_until and any(on):
             return "signal during the relay settle time"
-        patches, steps = self._max_steps()
         for k in self._check_order:
             name = names[k]
             if not on[k] or name == "screen":
                 continue
-            if name == "piezo" and not patches:
+            if name == "piezo" and not j.patches:
                 return "piezo signal while no patch relay is closed"
-            if name != "piezo" and name not in patches:
+            if name != "piezo" and name not in j.patches:
                 return f"{name} signal while its patch relay is open"
-        relays = self.relays
-        sc = self.screen_channel
-        if (
-            on[self.layout.screen_index]
-            and sc is not None
-            and not (1 <= sc <= len(relays) and relays[sc - 1])
-        ):
+        if on[self._layout.screen_index] and j.screen_relay_open:
             return "screen signal while the screen relay is open"
         for k in self._check_order:
-            if (p := slew_problem(cols[k], self.level_v[k], steps[k], end=False)) is not None:
+            if (p := slew_problem(cols[k], j.level_v[k], j.steps[k], end=False)) is not None:
                 return f"{names[k]} channel {p} (a block)"
         return None
 
@@ -393,18 +638,19 @@ class SafetyGate:
         self._event("fault", message)
         self.estop(
             f"fault: {message}",
-            wait=threading.current_thread() is not self._audio_thread,
+            wait=threading.current_thread() is not self._s.audio_thread,
             cut=False,
         )
 
     # ------------------------------------------------------------------ relays
     def switch_wait_samples(self, closed: frozenset[int]) -> int:
         """Samples until every channel that would change may switch again (relay life)."""
-        gap = self.limits.min_switch_interval_samples
+        gap = self._limits.min_switch_interval_samples
+        s = self._s
         with self._lock:
-            changing = [i + 1 for i, c in enumerate(self.relays) if c != (i + 1 in closed)]
-            last = [self._last_switch.get(ch) for ch in changing]
-            return max([0] + [t + gap - self.clock for t in last if t is not None])
+            changing = [i + 1 for i, c in enumerate(s.relays) if c != (i + 1 in closed)]
+            last = [s.last_switch.get(ch) for ch in changing]
+            return max([0] + [t + gap - s.clock for t in last if t is not None])
 
     def switch_relays(self, closed: frozenset[int]) -> None:
         """Set the relay board to exactly ``closed`` (1-based channels), in silence.
@@ -414,11 +660,12 @@ class SafetyGate:
         ago, when the e-stop is active (only opening is allowed then), or the driver fails.
         """
         board = self._board
+        closed = frozenset(closed)
         if board is None:
             if closed:
                 raise SafetyRefusal("no relay board: cannot close relays")
             return
-        n = len(self.relays)
+        n = len(self._s.relays)
         bad = [c for c in closed if not 1 <= c <= n]
         if bad:
             raise SafetyRefusal(f"relay channel {bad[0]} does not exist (board has {n})")
@@ -426,60 +673,66 @@ class SafetyGate:
             self._switch_held(board, closed, n)
 
     def _switch_held(self, board: RelayBoard, closed: frozenset[int], n: int) -> None:
+        s, lim = self._s, self._limits
         with self._lock:
-            if self._estopped and closed:
+            if s.estopped and closed:
                 raise SafetyRefusal(
-                    f"e-stop active ({self.estop_reason}): relays stay open; reset first"
+                    f"e-stop active ({s.estop_reason}): relays stay open; reset first"
                 )
-            if self._switching:
+            if s.switching:
                 raise SafetyRefusal("relay switch refused: another switch is under way")
-            need = self.limits.guard_samples + self.latency_samples
-            quiet = self.clock - self._last_nonzero
-            if quiet < need or any(self.level_v):
+            need = lim.guard_samples + s.latency_samples
+            quiet = s.clock - s.last_nonzero
+            if quiet < need or any(s.level_v):
                 raise SafetyRefusal(
                     f"relay switch refused: outputs silent for {quiet} samples, "
                     f"need {need} (guard gap + device latency)"
                 )
             wait = self.switch_wait_samples(closed)
             if wait > 0:
-                fs = self.limits.sample_rate_hz
+                fs = lim.sample_rate_hz
                 raise SafetyRefusal(
                     f"relay switch refused: a channel switched "
-                    f"{(self.limits.min_switch_interval_samples - wait) / fs * 1e3:.1f} ms ago; "
+                    f"{(lim.min_switch_interval_samples - wait) / fs * 1e3:.1f} ms ago; "
                     f"the rate limit allows one switch per "
-                    f"{self.limits.min_switch_interval_samples / fs * 1e3:g} ms "
+                    f"{lim.min_switch_interval_samples / fs * 1e3:g} ms "
                     f"([relays] min_switch_interval_ms)"
                 )
-            self._switching = True
+            s.switching = True
         try:
             target = tuple(i + 1 in closed for i in range(n))
-            for i, (now, want) in enumerate(zip(self.relays, target, strict=True)):
+            for i, (now, want) in enumerate(zip(s.relays, target, strict=True)):
                 if now != want:
                     board.set(i + 1, want)
-                    self._last_switch[i + 1] = self.clock
-            self.relays = tuple(board.states())
+                    s.last_switch[i + 1] = s.clock
+            states = tuple(bool(c) for c in board.states())
+            with self._lock:
+                s.relays = states
             self._event("switch", f"relays closed: {sorted(closed) or 'none'}")
         except Exception as exc:
             with self._lock:
-                self._switching = False
+                s.switching = False
             self._fault(f"relay board failed: {exc!r}")
             raise SafetyRefusal(f"relay board failed: {exc}") from None
         with self._lock:
-            self._quiet_until = self.clock + self.limits.settle_samples + self.latency_samples
-            self._switching = False
+            s.quiet_until = s.clock + lim.settle_samples + s.latency_samples
+            s.switching = False
 
     def _open_all_relays(self) -> None:
         board = self._board
         if board is None:
             return
+        s = self._s
         for ch in range(1, board.channels + 1):
             try:
                 board.set(ch, False)
-                self._last_switch[ch] = self.clock
+                s.last_switch[ch] = s.clock
             except Exception as exc:  # keep opening the others
                 self._event("fault", f"relay {ch} failed to open: {exc!r}")
         try:
-            self.relays = tuple(board.states())
+            states = tuple(bool(c) for c in board.states())
+            with self._lock:
+                s.relays = states
         except Exception as exc:
             self._event("fault", f"relay board state unreadable: {exc!r}")
 
@@ -495,15 +748,14 @@ class SafetyGate:
         ``cut=False`` (a fault) lets the ramp down reach the amplifiers instead of inviting
         the driver to drop its queue.
         """
+        s = self._s
         with self._lock:
-            first = not self._estopped
-            self._estopped = True
+            first = not s.estopped
+            s.estopped = True
             if first:
-                self.estop_reason = reason
-            src, caller = self._source, self._caller
+                s.estop_reason = str(reason)
+            src = s.source
             self._safe.clear()
-        if caller is not None:
-            caller.interrupt()
         if src is not None:
             try:
                 src.abort(reason)
@@ -523,21 +775,22 @@ class SafetyGate:
         every relay. A driver that stopped pulling (no clock for ``estop_timeout_ms``) is
         not playing anything: the relays open then too, and the event says so. A driver
         inside ``fill`` (a block checked before the e-stop, its thread starved or waiting
-        on a source) has not stopped: its block may still be signal, so the wait goes on
+        on its source) has not stopped: its block may still be signal, so the wait goes on
         (at most the give-up time)."""
-        need = self.limits.guard_samples + self.latency_samples
-        timeout = self.limits.estop_timeout_s
-        last_clock, last_move = self.clock, time.monotonic()
+        s, lim = self._s, self._limits
+        need = lim.guard_samples + s.latency_samples
+        timeout = lim.estop_timeout_s
+        last_clock, last_move = s.clock, time.monotonic()
         give_up = last_move + max(20 * timeout, 1.0)
         note = ""
         while True:
             with self._lock:
-                silent = self.clock - self._last_nonzero >= need and not any(self.level_v)
-                clock = self.clock
+                silent = s.clock - s.last_nonzero >= need and not any(s.level_v)
+                clock = s.clock
             now = time.monotonic()
             if silent:
                 break
-            if clock != last_clock or self._in_fill:
+            if clock != last_clock or s.in_fill:
                 last_clock, last_move = clock, now
             elif now - last_move > timeout:
                 note = "the audio driver stopped pulling samples"
@@ -550,13 +803,13 @@ class SafetyGate:
             self._event("fault", f"relays opened without observed silence: {note}")
         with self._switch_lock:
             with self._lock:
-                self._switching = True
+                s.switching = True
             try:
                 self._open_all_relays()
             finally:
                 with self._lock:
-                    self._switching = False
-                    self._quiet_until = self.clock + self.limits.settle_samples
+                    s.switching = False
+                    s.quiet_until = s.clock + lim.settle_samples
                 self._safe.set()
 
     def wait_safe(self, timeout_s: float = 5.0) -> bool:
@@ -565,20 +818,22 @@ class SafetyGate:
 
     def reset(self) -> None:
         """Clear the e-stop (an operator action). Relays stay open until a plan asks."""
+        s = self._s
         with self._lock:
-            if not self._estopped:
+            if not s.estopped:
                 return
-            self._estopped = False
-            self._event("reset", f"e-stop cleared (was: {self.estop_reason})")
-            self.estop_reason = ""
+            s.estopped = False
+            self._event("reset", f"e-stop cleared (was: {s.estop_reason})")
+            s.estop_reason = ""
 
     def status(self) -> dict[str, Any]:
+        s = self._s
         return {
-            "estopped": self._estopped,
-            "estop_reason": self.estop_reason,
-            "clock": self.clock,
-            "level_v": self.level_v,
-            "channels": list(self.layout.names),
+            "estopped": s.estopped,
+            "estop_reason": s.estop_reason,
+            "clock": s.clock,
+            "level_v": s.level_v,
+            "channels": list(self._layout.names),
             "relays_closed": sorted(self.relay_state()),
             "quiet_samples": self.quiet_samples(),
         }

@@ -1,13 +1,18 @@
 """Limits per channel from the profile and the check every plan passes before it plays:
 volts at the actuator, finite numbers, ramps at start and end, the slew limit for its routing
-(dV/dt <= I / C), its length. A plan out of limits is refused, never clipped."""
+(dV/dt <= I / C), its length. A plan out of limits is refused, never clipped.
+
+``Limits`` is deep-immutable: its fields cannot be assigned and the mappings inside it are
+read-only views of private copies (``dataclasses.replace`` makes a new object)."""
 
 from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,7 +29,12 @@ RAMP_TOLERANCE = 1.02  # a sine under a linear envelope may touch the envelope
 
 @dataclass(frozen=True)
 class Limits:
-    """Per-channel limits in volts at the actuator, and the timing rules."""
+    """Per-channel limits in volts at the actuator, and the timing rules.
+
+    Deep-immutable: assigning a field raises ``FrozenInstanceError``; ``patch_capacitance_f``
+    and ``patch_relay`` are read-only mappings over private copies (an item assignment
+    raises ``TypeError``, and changing the dict a caller passed in changes nothing here);
+    ``channels`` is a tuple."""
 
     sample_rate_hz: int
     piezo_min_v: float
@@ -42,13 +52,26 @@ class Limits:
     piezo_current_a: float = 0.2
     screen_current_a: float = 0.2
     relay_current_a: float = 0.1
-    patch_capacitance_f: dict[str, float] = field(default_factory=dict)
-    patch_relay: dict[str, int] = field(default_factory=dict)
+    patch_capacitance_f: Mapping[str, float] = field(default_factory=dict)
+    patch_relay: Mapping[str, int] = field(default_factory=dict)
     screen_capacitance_f: float = 200e-9
     min_switch_interval_samples: int = 0
-    source_stall_s: float = 0.1
     #: what each sound-card channel drives (``[audio] channels``)
     channels: tuple[str, ...] = BUS_CHANNELS
+
+    def __post_init__(self) -> None:
+        caps = {str(p): float(c) for p, c in dict(self.patch_capacitance_f).items()}
+        relays = {str(p): int(c) for p, c in dict(self.patch_relay).items()}
+        object.__setattr__(self, "patch_capacitance_f", MappingProxyType(caps))
+        object.__setattr__(self, "patch_relay", MappingProxyType(relays))
+        object.__setattr__(self, "channels", tuple(str(c) for c in self.channels))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle and copy by the field values (a read-only mapping does not pickle)."""
+        values = {f.name: vars(self)[f.name] for f in fields(self)}
+        for name in ("patch_capacitance_f", "patch_relay"):
+            values[name] = dict(values[name])
+        return _limits_from_fields, (type(self), values)
 
     @classmethod
     def from_profile(cls, profile: Profile) -> Limits:
@@ -81,7 +104,6 @@ class Limits:
             min_switch_interval_samples=round(
                 profile.get("relays.min_switch_interval_ms") * 1e-3 * fs
             ),
-            source_stall_s=float(profile.get("limits.source_stall_ms")) * 1e-3,
             channels=ChannelLayout.from_profile(profile).names,
         )
 
@@ -136,6 +158,11 @@ class Limits:
     def screen_range(self) -> tuple[float, float]:
         peak = min(self.screen_max_v, self.screen_card_v)
         return -peak, peak
+
+
+def _limits_from_fields(cls: type[Limits], values: dict[str, Any]) -> Limits:
+    """``Limits`` from its field values (``Limits.__reduce__``)."""
+    return cls(**values)
 
 
 def range_problem(x: np.ndarray, lo: float, hi: float, rating_vpp: float) -> str | None:
