@@ -1,10 +1,10 @@
 """What the amplifiers and relays received, checked against the gate's promises.
 
 Used by the property tests and ``haptable bench safety`` on the twin's recording and
-relay log: every sample inside the limits, no change faster than the slew limit (but a
-step down to 0 V at a driver's cut for an operator's e-stop, where the device drops its
-queue), relays switched only after the guard gap of silence, and silence within a block
-(plus the ramp down) of every e-stop until the next reset.
+relay log: every sample inside the limits, no change faster than the slew limit anywhere
+(an operator's e-stop ramps at the driver too: no exemption at a cut), relays switched
+only after the guard gap of silence, and silence within a block (plus the ramp down) of
+every e-stop until the next reset.
 """
 
 from __future__ import annotations
@@ -57,23 +57,11 @@ def received_problems(
     steps_v = limits.column_steps_v(route)
     if part.shape[0]:
         steps = np.abs(np.diff(np.vstack([prev[None, :], part]), axis=0))
-        # where a driver's cut lands: the block under way at the e-stop (checked before
-        # it, handed before or after the event took its clock) is dropped or played whole,
-        # so the cut is at most a block either side of the event's clock, both ends included
-        near_cut = np.zeros(steps.shape[0], bool)
-        for e in evs:
-            if e.kind in ("estop", "shutdown") and e.cut:
-                i = e.clock - rec0
-                near_cut[max(i - block, 0) : max(i + block + 1, 0)] = True
-        # a cut drops the output to 0 V: only a step that lands at zero is one (a step up
-        # from the silence after it is the ramp's tail played late, never a cut)
-        ok = ~(near_cut[:, None] & (part == 0.0))
         tol = 1.0005
         for ch, (name, step) in enumerate(zip(names, steps_v, strict=True)):
-            checked = np.where(ok[:, ch], steps[:, ch], 0.0)
-            worst = float(checked.max(initial=0.0))
+            worst = float(steps[:, ch].max(initial=0.0))
             if worst > step * tol + 1e-4:
-                k = rec0 + int(np.argmax(checked))
+                k = rec0 + int(np.argmax(steps[:, ch]))
                 out.append(f"{name} steps {worst:.2f} V at sample {k} (limit {step:.2f})")
     guard = limits.guard_samples
     for sw in relay_log[log0:]:

@@ -6,6 +6,17 @@ callback pulls every block from the source (the safety gate) and never raises: a
 exception or a bad sample from the source silences the output for the rest of the
 stream (state ``fault``). A device that disappears ends the stream (state ``lost``).
 In both cases a source with ``estop(reason, wait=False)`` (the gate) is told.
+
+``stop()`` never cuts the gate's ramp down: the callbacks keep pulling until the last
+block with sound in it has reached the DAC (the ramp, then the gate's silence), then the
+stream is stopped so that what is queued plays out (``stream.stop()``), bounded by
+``close_timeout_s``; ``abort()`` (which drops the queue) is only the fallback. Waiting
+for the silence first matters: PortAudio's ALSA host API drops the ALSA buffer even on a
+stop (its drain is disabled), and JACK's silences the next period.
+
+PortAudio's ``output_underflow`` flag is counted per cause: ``slow_fill`` when the
+callback before it spent longer than a block period in the source's ``fill``, else
+``late_callback`` (the callback thread came late: the machine, not the gate).
 ``sounddevice`` is imported only when a stream is opened or probed, so machines without
 PortAudio can still run the twin.
 """
@@ -16,7 +27,7 @@ import contextlib
 import threading
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -29,6 +40,9 @@ from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
 TIMING_WINDOW = 2000  # callbacks kept for the period / fill-time statistics
+UNDERFLOW_CAUSES = ("late_callback", "slow_fill")
+#: ``stop()`` gives up on callbacks that stopped coming after this many block periods
+STALLED_PERIODS = 4
 
 _open_streams = 0  # streams this process holds open; PortAudio is only rescanned when 0
 _open_lock = threading.Lock()
@@ -175,6 +189,15 @@ class SounddeviceOutput:
         self._error = ""
         self._label = ""
         self._underruns = 0
+        self._underruns_by_cause: dict[str, int] = dict.fromkeys(UNDERFLOW_CAUSES, 0)
+        self._last_fill_s = 0.0  # the previous callback's time in the source's fill
+        #: when (``clock``) the last block with sound in it has been played by the DAC
+        self._sound_until_s = 0.0
+        self._handed_sound = False  # the last block handed had sound in it
+        self._stream_latency_s = 0.0
+        self._last_stop = ""  # how the last stop() ended: drained, aborted or hung
+        #: the callbacks' clock (a test may drive it)
+        self.clock: Callable[[], float] = time.perf_counter
         self._blocks = 0
         self._callback_errors = 0
         self._t_last_s: float | None = None
@@ -198,6 +221,9 @@ class SounddeviceOutput:
         self._silent = False
         self._stopping = False
         self._error = ""
+        self._last_fill_s = 0.0
+        self._sound_until_s = 0.0
+        self._handed_sound = False
         try:
             stream = sd.OutputStream(
                 samplerate=self.sample_rate_hz,
@@ -219,6 +245,8 @@ class SounddeviceOutput:
         with _open_lock:
             _open_streams += 1
         self._stream = stream
+        with contextlib.suppress(Exception):
+            self._stream_latency_s = float(stream.latency)
         try:
             stream.start()
         except Exception as exc:
@@ -232,36 +260,56 @@ class SounddeviceOutput:
         self._state = "running"
 
     def stop(self) -> None:
-        """Silence and close the stream. Safe to call twice, from any thread.
+        """Play out and close the stream. Safe to call twice, from any thread.
 
-        Returns within ``close_timeout_s`` even when PortAudio blocks closing a stream
-        whose device is gone (it does with a dead JACK server); the stream is then
+        The callbacks keep pulling from the source until the last block with sound in it
+        has reached the DAC (the gate's ramp down, then its silence), then
+        ``stream.stop()`` plays out what is queued; ``abort()`` only when that fails or
+        hangs. Returns within ``close_timeout_s`` even when PortAudio blocks closing a
+        stream whose device is gone (it does with a dead JACK server); the stream is then
         abandoned and the state says so.
         """
         global _open_streams
-        self._silent = True
         with self._lock:
             stream, self._stream = self._stream, None
         if stream is None:
+            self._silent = True
             return
         self._stopping = True
+        deadline = time.monotonic() + self.close_timeout_s
+        self._play_out(stream, time.monotonic() + self.close_timeout_s / 3)
         errors: list[str] = []
+
+        def drain() -> None:
+            try:
+                stream.stop(ignore_errors=True)  # plays out what is queued
+            except Exception as exc:  # a vanished device may refuse even this
+                errors.append(f"stopping: {exc}")
+
+        drainer = threading.Thread(target=drain, name="sounddevice-drain", daemon=True)
+        drainer.start()
+        drainer.join(max(0.0, (deadline - time.monotonic()) / 2))
+        aborted = drainer.is_alive() or bool(errors)
+        self._silent = True
 
         def close() -> None:
             try:
-                stream.abort(ignore_errors=True)  # drop queued blocks: silent now
+                if aborted:  # the fallback: drop what is left
+                    stream.abort(ignore_errors=True)
                 stream.close(ignore_errors=True)
             except Exception as exc:  # a vanished device may refuse even this
                 errors.append(f"closing: {exc}")
 
         closer = threading.Thread(target=close, name="sounddevice-close", daemon=True)
         closer.start()
-        closer.join(self.close_timeout_s)
+        closer.join(max(0.0, deadline - time.monotonic()))
         if closer.is_alive():  # leave _open_streams counted: never rescan under it
             hung = "closing the stream hung; restart haptable before using this device again"
+            self._last_stop = "hung"
             self._lose(f"audio device {self._label!r} is gone")
             self._error = f"{self._error}; {hung}"
             return
+        self._last_stop = "aborted" if aborted else "drained"
         with _open_lock:
             _open_streams -= 1
         if errors:
@@ -269,27 +317,65 @@ class SounddeviceOutput:
         if self._state in ("running", "fault"):
             self._state = "stopped" if self._state == "running" else "fault"
 
+    def _play_out(self, stream: Any, until: float) -> bool:
+        """Let the callbacks keep pulling until the last block with sound in it has been
+        played (the gate's ramp down, then its silence, reached the DAC); gives up at
+        ``until`` (``time.monotonic()``) or when the callbacks stopped coming. True if
+        the sound has played out."""
+        period = self.block_size / self.sample_rate_hz
+        while True:
+            if self._silent or not self._is_active(stream):
+                return not self._handed_sound  # nothing more will play
+            now = self.clock()
+            if not self._handed_sound and now >= self._sound_until_s:
+                return True
+            last = self._t_last_s
+            if last is None or now - last > STALLED_PERIODS * period:
+                return False  # no callbacks coming: nothing more will be pulled
+            if time.monotonic() >= until:
+                return False
+            time.sleep(period / 4)
+
+    @staticmethod
+    def _is_active(stream: Any) -> bool:
+        try:
+            return bool(stream.active)
+        except Exception:  # PortAudioError from a vanished device
+            return False
+
     # ------------------------------------------------------------------ callbacks
     def _callback(self, outdata: np.ndarray, frames: int, time_info: Any, status: Any) -> None:
-        t0_s = time.perf_counter()
+        clock = self.clock
+        t0_s = clock()
         if self._t_last_s is not None:
             self._periods_s.append(t0_s - self._t_last_s)
         self._t_last_s = t0_s
         dac_s = getattr(time_info, "outputBufferDacTime", 0.0)
         now_s = getattr(time_info, "currentTime", 0.0)
+        lead_s = self._stream_latency_s
         if dac_s > 0 and now_s > 0:  # when this block reaches the DAC (0 if unknown)
-            self._dac_leads_s.append(dac_s - now_s)
+            lead_s = dac_s - now_s
+            self._dac_leads_s.append(lead_s)
         if getattr(status, "output_underflow", False):
+            period_s = frames / self.sample_rate_hz
+            cause = "slow_fill" if self._last_fill_s > period_s else "late_callback"
             self._underruns += 1
+            self._underruns_by_cause[cause] += 1
         self._blocks += 1
         if self._silent or self._source is None:
             outdata.fill(0.0)
+            self._last_fill_s = 0.0
+            self._handed_sound = False
             return
         try:
             self._source.fill(outdata)
-            self._fills_s.append(time.perf_counter() - t0_s)
+            self._last_fill_s = clock() - t0_s
+            self._fills_s.append(self._last_fill_s)
             if not np.all(np.isfinite(outdata)) or float(np.max(np.abs(outdata))) > 1.0:
                 raise ValueError("source produced samples outside [-1, 1] or not finite")
+            self._handed_sound = bool(outdata.any())
+            if self._handed_sound:  # played out once the DAC is past this block
+                self._sound_until_s = t0_s + max(lead_s, 0.0) + frames / self.sample_rate_hz
         except Exception as exc:  # never let the audio thread die with signal on the wire
             outdata.fill(0.0)
             self._silent = True
@@ -322,10 +408,12 @@ class SounddeviceOutput:
 
     # ------------------------------------------------------------------ status
     def status(self) -> dict[str, Any]:
-        """State, output latency, underruns, and per-callback timing (p50/p99/max in ms
-        over the last ``TIMING_WINDOW`` callbacks): the period between callbacks, the time
-        spent in the source's ``fill``, and how far ahead of the DAC each block was
-        written (``dac_lead_ms``, when the host API reports it)."""
+        """State, output latency, underruns (and per cause: ``underruns_by_cause``), how
+        the last ``stop()`` ended (``last_stop``: drained, aborted or hung), and
+        per-callback timing (p50/p99/max in ms over the last ``TIMING_WINDOW``
+        callbacks): the period between callbacks, the time spent in the source's
+        ``fill``, and how far ahead of the DAC each block was written (``dac_lead_ms``,
+        when the host API reports it)."""
         stream = self._stream
         latency_s = float("nan")
         if stream is not None:
@@ -344,6 +432,8 @@ class SounddeviceOutput:
             "block_size": self.block_size,
             "latency_s": latency_s,
             "underruns": self._underruns,
+            "underruns_by_cause": dict(self._underruns_by_cause),
+            "last_stop": self._last_stop,
             "blocks": self._blocks,
             "callback_errors": self._callback_errors,
             "period_ms": summarize_s(list(self._periods_s)),

@@ -1,4 +1,7 @@
-"""The sounddevice driver against a fake ``sounddevice`` module (no PortAudio needed)."""
+"""The sounddevice driver against a fake ``sounddevice`` module (no PortAudio needed).
+
+The fake's callbacks run when a test pumps them, on a fake clock the driver's timing reads
+(``out.clock``): the tests assert what happened, never how long it took."""
 
 from __future__ import annotations
 
@@ -36,12 +39,23 @@ class FakeStream:
             raise self.sd.PortAudioError("Device unavailable [PaErrorCode -9985]")
         self.active = True
 
+    def stop(self, ignore_errors: bool = True) -> None:
+        """Plays out what is queued (no more callbacks), then the stream is inactive."""
+        self.sd.calls.append("stop")
+        if self.sd.stop_hangs:
+            self.sd.release_stop.wait(10)
+        if self.active:
+            self.active = False
+            self.kw["finished_callback"]()
+
     def abort(self, ignore_errors: bool = True) -> None:
+        self.sd.calls.append("abort")
         if self.active:
             self.active = False
             self.kw["finished_callback"]()
 
     def close(self, ignore_errors: bool = True) -> None:
+        self.sd.calls.append("close")
         if self.sd.close_hangs:
             self.sd.release_close.wait(10)
         self.closed = True
@@ -52,6 +66,8 @@ class FakeStream:
         outs = []
         for k in range(n_blocks):
             out = np.full((frames, 2), 7.0, np.float32)  # garbage, must be overwritten
+            if self.sd.clock is not None:
+                self.sd.clock.t += frames / self.kw["samplerate"]
             now = 50.0 + k * frames / self.kw["samplerate"]
             when = SimpleNamespace(currentTime=now, outputBufferDacTime=now + 0.008)
             status = SimpleNamespace(output_underflow=underflow)
@@ -76,6 +92,10 @@ class FakeSd:
         self.fail_start = False
         self.close_hangs = False
         self.release_close = threading.Event()
+        self.stop_hangs = False
+        self.release_stop = threading.Event()
+        self.calls: list[str] = []  # stop / abort / close, in order
+        self.clock: FakeClock | None = None  # advanced a block period per callback
         self.rescans = 0
         self.plugged_on_rescan: list[dict] = []
 
@@ -96,6 +116,14 @@ class FakeSd:
         if kw["samplerate"] not in (44100, 48000):
             raise self.PortAudioError("Invalid sample rate [PaErrorCode -9997]")
         return FakeStream(self, **kw)
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def now(self) -> float:
+        return self.t
 
 
 class RampSource:
@@ -199,6 +227,41 @@ def test_underruns_are_counted():
     stream.pump(2, underflow=True)
     stream.pump(1)
     assert out.status()["underruns"] == 2
+    assert out.status()["underruns_by_cause"] == {"late_callback": 2, "slow_fill": 0}
+    out.stop()
+
+
+def test_an_underflow_after_a_slow_fill_is_counted_as_its_cause():
+    """PortAudio flags the callback after the late one: the fill before it took longer
+    than a block period (the gate) -> ``slow_fill``; a quick one -> ``late_callback``."""
+    clock = FakeClock()
+
+    class Slow(RampSource):
+        slow = False
+
+        def fill(self, out: np.ndarray) -> None:
+            super().fill(out)
+            if self.slow:
+                clock.t += 1.5 * len(out) / 48000  # the fill takes 1.5 periods
+                self.slow = False
+
+    sd = FakeSd()
+    sd.clock = clock
+    out = SounddeviceOutput("system", sd=sd)
+    out.clock = clock.now
+    src = Slow()
+    out.start(src)
+    stream = sd.streams[0]
+    stream.pump(3)
+    src.slow = True
+    stream.pump(1)
+    stream.pump(1, underflow=True)  # after the slow fill
+    stream.pump(2)
+    stream.pump(1, underflow=True)  # after a quick one: the callback itself came late
+    st = out.status()
+    assert st["underruns"] == 2
+    assert st["underruns_by_cause"] == {"late_callback": 1, "slow_fill": 1}
+    out.close_timeout_s = 0.1  # the fake clock stands still: stop() waits out its share
     out.stop()
 
 
@@ -252,6 +315,76 @@ def test_stop_is_idempotent_and_silences_before_closing():
     assert st["state"] == "stopped" and st["error"] == ""
     assert src.alarms == []  # an ordinary stop is no alarm
     SounddeviceOutput("system", sd=FakeSd()).stop()  # never started: fine too
+
+
+def test_stop_drains_the_queue_instead_of_dropping_it():
+    """The queued blocks (the gate's ramp down among them) play out: ``stop()``, not
+    ``abort()``, then close."""
+    sd = FakeSd()
+    out, stream, src = started(RampSource(), sd)
+    stream.pump(3)
+    out.stop()
+    assert sd.calls == ["stop", "close"]
+    st = out.status()
+    assert st["state"] == "stopped" and st["last_stop"] == "drained" and st["error"] == ""
+    assert np.all(stream.pump(1) == 0)
+
+
+def test_stop_falls_back_to_abort_when_the_drain_hangs():
+    sd = FakeSd()
+    sd.stop_hangs = True
+    out, stream, _ = started(RampSource(), sd)
+    out.close_timeout_s = 0.2
+    out.stop()  # returns within close_timeout_s
+    sd.release_stop.set()
+    assert sd.calls[:3] == ["stop", "abort", "close"]
+    st = out.status()
+    assert st["last_stop"] == "aborted" and st["state"] == "stopped"
+    assert asd._open_streams == 0
+
+
+def test_stop_lets_the_gates_ramp_down_reach_the_dac_before_stopping():
+    """Stopped while the gate still ramps down: the callbacks keep pulling the ramp and
+    the silence after it, and the stream is only stopped once the last block with sound
+    has reached the DAC (PortAudio's ALSA stop drops the ALSA buffer, JACK's silences the
+    next period: stopping earlier would cut the ramp, a step)."""
+
+    class RampDown(RampSource):
+        def __init__(self) -> None:
+            super().__init__()
+            self.level = 0.5
+            self.handed: list[float] = []
+
+        def fill(self, out: np.ndarray) -> None:
+            k = np.arange(1, len(out) + 1)
+            x = np.maximum(self.level - 0.001 * k, 0.0)
+            out[:, 0] = x
+            out[:, 1] = 0.0
+            self.level = float(x[-1])
+            self.handed.append(self.level)
+
+    clock = FakeClock()
+    sd = FakeSd()
+    sd.clock = clock
+    out = SounddeviceOutput("system", sd=sd)
+    out.clock = clock.now
+    src = RampDown()
+    out.start(src)
+    stream = sd.streams[0]
+    stream.pump(1)
+    stopper = threading.Thread(target=out.stop)
+    stopper.start()
+    for _ in range(200):  # PortAudio keeps calling back until the stream is stopped
+        if "stop" in sd.calls:
+            break
+        stream.pump(1)
+        stopper.join(0.002)
+    stopper.join(5)
+    assert not stopper.is_alive() and "abort" not in sd.calls
+    assert src.level == 0.0, "the whole ramp was pulled before the stream stopped"
+    silent_after = len(src.handed) - src.handed.index(0.0)
+    assert silent_after >= 2, "and silence after it, until it had reached the DAC"
+    assert out.status()["last_stop"] == "drained"
 
 
 def test_restart_after_stop_opens_a_new_stream():
