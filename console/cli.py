@@ -7,11 +7,11 @@ import logging
 import os
 import sys
 
-from console.errors import EStopped, UserError
+from console.errors import EStopLatched, EStopped, UserError
 from console.options import seconds_option
 from console.runtime.context import Context
 
-__all__ = ["Context", "build_parser", "estop_first", "main", "one_line", "seconds_option"]
+__all__ = ["Context", "build_parser", "main", "one_line", "seconds_option"]
 
 
 def build_parser(plugins) -> argparse.ArgumentParser:
@@ -31,32 +31,6 @@ def build_parser(plugins) -> argparse.ArgumentParser:
     return parser
 
 
-def estop_first(argv: list[str]) -> tuple[list, str] | None:
-    """For `haptable estop`: reach every process holding outputs before the plugins load
-    (an e-stop must not wait for imports). None for any other command, or arguments the
-    full parser must judge."""
-    if "-h" in argv or "--help" in argv:
-        return None
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--profile", "-p")
-    pre.add_argument("--verbose", "-v", action="store_true")
-    pre.add_argument("command", nargs="?")
-    pre.add_argument("--timeout", type=float, default=2.0)
-    pre.add_argument("--json", action="store_true")
-    try:
-        known, rest = pre.parse_known_args(argv)
-    except (SystemExit, ValueError):
-        return None
-    if known.command != "estop" or rest or not 0.01 <= known.timeout <= 60:
-        return None
-    try:
-        from console.runtime.outputs_registry import estop_or_refusal
-
-        return estop_or_refusal(known.timeout)
-    except Exception:  # the command's own run tries again and reports
-        return None
-
-
 def one_line(message: str) -> str:
     """An error message as one line: line breaks and other control characters (from
     a file's keys or values quoted in it) are escaped, a runaway message is cut."""
@@ -69,7 +43,6 @@ def main(argv: list[str] | None = None) -> int:
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
     ctx = None
     try:
-        early = estop_first(argv)
         from console import core_commands
         from console.plugins import load_plugins
 
@@ -81,7 +54,6 @@ def main(argv: list[str] | None = None) -> int:
         )
         command = args.command or "console"
         ctx = Context(getattr(args, "profile_sub", None) or args.profile, plugins)
-        ctx.estop_first = early
         if command == "console" and args.command is None:
             args = parser.parse_args([*argv, "console"])
         code = int(plugins.commands[command].run(args, ctx) or 0)
@@ -90,6 +62,9 @@ def main(argv: list[str] | None = None) -> int:
         return code
     except EStopped as exc:
         return _estopped(str(exc))
+    except EStopLatched as exc:
+        print(f"haptable: {one_line(str(exc))}", file=sys.stderr)
+        return EStopLatched.EXIT_CODE
     except UserError as exc:
         if ctx is not None and ctx.estopped_by:  # what the e-stop made fail
             return _estopped(ctx.estopped_by)
@@ -122,10 +97,6 @@ def main(argv: list[str] | None = None) -> int:
         if debug:
             raise
         return _internal(exc)
-    finally:
-        from console.safety import estop_all
-
-        estop_all("command finished")
 
 
 def _internal(exc: BaseException) -> int:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import inspect
 import json
 import shutil
@@ -151,81 +150,35 @@ def run_play(args, ctx) -> int:
     return play_and_report(ctx, plan, fast=args.fast, out=args.out, dry_run=args.dry_run)
 
 
-# ---------------------------------------------------------------------- estop
+# ---------------------------------------------------------------------- estop, reset
 def configure_estop(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
     p.add_argument(
         "--timeout",
         type=float,
         default=2.0,
-        help="seconds each process has to confirm its silence (default 2)",
+        help="seconds each table's outputs process has to confirm its silence (default 2)",
     )
 
 
-def _open_relays_here(ctx) -> str:
-    """Open the profile's relay board from this process (when no other holds it)."""
-    from console.safety import Limits, SafetyGate
-
-    try:
-        reg = ctx.pm.get("relay_board", ctx.profile.get("relays.driver"))
-        board = reg.factory(ctx.profile)
-        gate = SafetyGate(Limits.from_profile(ctx.profile), board)
-        gate.estop("haptable estop")
-        board.close()
-        return "all open"
-    except Exception as exc:  # a process holding the board opened them (one at a time)
-        return f"not reachable here: {exc}"
-
-
 def run_estop(args, ctx) -> int:
-    """E-stop every process holding outputs (all at once, each with a deadline), tell the
-    profile's console, and open the profile's relays. Exit 1 when anything is unconfirmed."""
-    import threading
+    """`haptable estop` (``console.kernel.shell``; the ``haptable`` entry point runs it
+    before anything heavy is imported: this path serves ``console.cli.main``)."""
+    from console.kernel.shell import main as shell_main
 
-    from console.runtime.control import send_command
-    from console.runtime.outputs_registry import estop_or_refusal
+    argv = ["estop", "--timeout", str(args.timeout)] + (["--json"] if args.json else [])
+    return shell_main((["--profile", ctx.profile_arg] if ctx.profile_arg else []) + argv)
 
-    if not 0.01 <= args.timeout <= 60:
-        raise UserError(f"--timeout {args.timeout:g}: give seconds from 0.01 to 60")
-    console: dict[str, str | None] = {}
 
-    def tell_console() -> None:
-        try:
-            console["reply"] = send_command(ctx.profile, "estop", timeout_s=args.timeout)
-        except UserError as exc:  # a broken profile: the processes matter first
-            console["reply"] = f"not reached: {exc}"
+def configure_reset(p: argparse.ArgumentParser) -> None:
+    pass
 
-    th = threading.Thread(target=tell_console, daemon=True)
-    th.start()
-    # the processes first: `haptable estop` did it before loading the plugins (cli.main)
-    early = ctx.estop_first
-    reached, refused = early if early is not None else estop_or_refusal(args.timeout)
-    th.join(args.timeout + 0.5)
-    relays = _open_relays_here(ctx)
-    live = [r for r in reached if not r.stale]
-    unconfirmed = [r for r in live if not r.confirmed]
-    result = {
-        "processes": [dataclasses.asdict(r) for r in reached],
-        "confirmed": bool(live) and not unconfirmed,
-        "console": console.get("reply") or "no console running",
-        "relays": relays,
-    }
-    if refused:
-        result["error"] = refused
-    if args.json:
-        print(json.dumps(result))
-    else:
-        for r in reached:
-            print(f"e-stop: {r.line()}")
-        if not live:
-            print("e-stop: no process holds outputs")
-        print(f"e-stop: console: {result['console']}; relays: {relays}")
-    if refused:
-        print(f"haptable: error: {refused}", file=sys.stderr)
-        return 2
-    if unconfirmed or (not live and relays != "all open"):
-        return 1
-    return 0
+
+def run_reset(args, ctx) -> int:
+    """`haptable reset`: an operator's, at a terminal (``console.kernel.shell``)."""
+    from console.kernel.shell import main as shell_main
+
+    return shell_main((["--profile", ctx.profile_arg] if ctx.profile_arg else []) + ["reset"])
 
 
 # ---------------------------------------------------------------------- bench
@@ -310,7 +263,18 @@ def register_core(register) -> None:
     register("plugins", configure_plugins, run_plugins, help="list plugins and what they provide")
     register("doctor", configure_doctor, run_doctor, help="check each device of the profile")
     register("play", configure_play, run_play, help="play a named test stimulus through the gate")
-    register("estop", configure_estop, run_estop, help="silence the outputs and open every relay")
+    register(
+        "estop",
+        configure_estop,
+        run_estop,
+        help="silence the outputs, open every relay and latch the e-stop (every table)",
+    )
+    register(
+        "reset",
+        configure_reset,
+        run_reset,
+        help="an operator's, at a terminal: clear a latched e-stop, saying who and when",
+    )
     register("bench", configure_bench, run_bench, help="run a benchmark (timing + accuracy)")
     register("console", configure_console, run_console, help="the operator console (default)")
 

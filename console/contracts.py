@@ -57,14 +57,23 @@ PosMm = tuple[float, float]
 
 # --------------------------------------------------------------------------- outputs
 @runtime_checkable
-class StreamSource(Protocol):
-    """A live output (e.g. the knob): produces the next block in volts at the actuator.
+class ParametricStream(Protocol):
+    """What outputs play as a live stream: ``spec`` (a ``console.stream_synth.StreamSpec``)
+    is what the table's kernel synthesises, and ``bind(sink)`` makes the source post its
+    targets and crossings to the kernel's side (``sink.post(ids, carrier_hz, carrier_v)``,
+    ``sink.request_stop()``). No plugin code runs on the audio path."""
 
-    ``next_block`` returns ``(piezo_v, screen_v)`` arrays of length ``n`` or ``None``
-    when the stream has finished (after ramping down to zero). ``piezo_v`` plays on the
-    piezo bus, or, where ``[audio] channels`` gives each patch its own channel, on each of
-    ``patches``' channels.
-    """
+    @property
+    def spec(self) -> Any: ...
+
+    def bind(self, sink: Any) -> None: ...
+
+
+@runtime_checkable
+class StreamSource(ParametricStream, Protocol):
+    """A live output (e.g. the knob) a ``StreamingEffect`` gives: parameters for the
+    outputs (``ParametricStream``), and ``next_block`` renders it locally (offline: the
+    twin, tests) until it is bound."""
 
     patches: frozenset[str]
     screen: bool

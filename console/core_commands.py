@@ -39,10 +39,10 @@ def haptable_register_benchmarks(register):
 
     register("console", console_startup, help="console start-up to first paint (target < 1 s)")
 
-    def console_demo(ctx, quick: bool) -> dict:
+    def console_demo(ctx, quick: bool, minutes: float | None = None) -> dict:
         from console.benchmarks.console_demo import run
 
-        return run(ctx, quick)
+        return run(ctx, quick, minutes=minutes)
 
     def safety(ctx, quick: bool) -> dict:
         from console.benchmarks.safety import run
@@ -52,9 +52,10 @@ def haptable_register_benchmarks(register):
     register(
         "safety",
         safety,
-        help="the gate under random faulty plans, streams, sources and relay commands "
-        "(cases per second, problems found) and e-stop latency to the last non-zero sample "
-        "for the console, a demo host and a CLI demo",
+        help="what a client can send the table's kernel (random faulty plans, stream "
+        "parameters, relay commands, malformed messages: cases per second, problems found, "
+        "on a private twin), `haptable estop` from a shell, and e-stop -> silence of a "
+        "running demo beside the console",
     )
 
     def gate_fill(ctx, quick: bool) -> dict:
@@ -84,8 +85,9 @@ def haptable_register_benchmarks(register):
     register(
         "console-demo",
         console_demo,
-        help="demos started from the console: the knob's loop latency per screen, the "
-        "operator's finger moved on the flow demo (key -> flow scheduled), output log check",
+        help="demos started from the console for --minutes (5): the knob's loop latency "
+        "per screen, its crossing -> detent at the driver, underruns (by cause, audible), "
+        "the operator's finger moved on the flow demo (key -> flow scheduled), output log",
     )
 
     def tracking(ctx, quick: bool) -> dict:

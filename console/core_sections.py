@@ -97,6 +97,20 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
         False,
         "the screen's conductive layer (electrovibration)",
     ),
+    "kernel": (
+        {
+            "linger_s": Field(
+                "float",
+                2.0,
+                min=0.0,
+                max=3600.0,
+                help="the table's outputs process stays this long after its last client "
+                "left (the next command starts at once); it ends silent, relays open",
+            ),
+        },
+        False,
+        "the table's outputs process (console.kernel)",
+    ),
     "audio": (
         {
             "driver": Field("str", "twin", help="audio output driver (see `haptable plugins`)"),
@@ -225,14 +239,6 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 max=5000,
                 help="an e-stop opens the relays once silence reached the driver; this long "
                 "without the driver pulling samples, it opens them anyway",
-            ),
-            "source_stall_ms": Field(
-                "float",
-                100.0,
-                min=5,
-                max=5000,
-                help="a stream or attached source that gives no block in this time is a "
-                "fault: the gate ramps down and e-stops",
             ),
         },
         False,

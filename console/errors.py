@@ -18,3 +18,10 @@ class EStopped(Exception):
 
     #: the exit status of a command stopped this way
     EXIT_CODE = 4
+
+
+class EStopLatched(UserError):
+    """The table's e-stop is latched: nothing plays until an operator resets it (a
+    command that would open its outputs refuses in one line)."""
+
+    EXIT_CODE = 4

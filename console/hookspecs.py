@@ -219,7 +219,7 @@ def haptable_register_demos(register: RegisterFactory) -> None:
     ``stop()``, ``snapshot() -> dict`` (camera, latency, watchdog and demo state as JSON
     values), ``scene_name`` and ``status_lines(snapshot)`` (what the operator reads of a
     snapshot; the factory formats one too, without a running demo). The console runs it in its
-    own process (``console.runtime.demo_host``, with the outputs handed over) and passes
+    own process (``console.runtime.demo_host``, a client of the console's table) and passes
     ``script=True``, ``camera_apart=True`` (a simulated camera may render in a process of
     its own), ``sinks=`` (frame sinks ``sink(frame, work)``), ``projector=`` (``update(event)``
     for the scene's events), ``progress(done, total, what)`` (raising stops the

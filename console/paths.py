@@ -13,7 +13,7 @@ runtime_dir    --                        ``$XDG_RUNTIME_DIR/haptable``      ``/t
 An override names the directory itself (no ``haptable`` appended). An empty or relative XDG
 variable is ignored, as the XDG base-directory spec says. These functions only compute paths;
 they create nothing. The runtime directory holds sockets and the process registry, so its
-users take it from ``console.runtime.private_dir.runtime_dir``, which creates it 0700 and
+users take it from ``console.kernel.private_dir.runtime_dir``, which creates it 0700 and
 refuses one that is not private.
 """
 
@@ -63,7 +63,7 @@ def data_dir(*parts: str) -> Path:
 def runtime_dir() -> Path:
     """Where sockets, the process registry and run logs go: ``$XDG_RUNTIME_DIR/haptable``
     or, without it, ``/tmp/haptable-<uid>``. Unchecked and not created: use
-    ``console.runtime.private_dir.runtime_dir()``, which is."""
+    ``console.kernel.private_dir.runtime_dir()``, which is."""
     base = os.environ.get("XDG_RUNTIME_DIR")
     return Path(base) / APP if base else Path(f"/tmp/{APP}-{os.getuid()}")
 

@@ -19,6 +19,7 @@ import difflib
 import importlib
 import os
 import threading
+import types
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -126,6 +127,9 @@ class Plugins:
     commands: dict[str, Command] = field(default_factory=dict)
     benchmarks: dict[str, Benchmark] = field(default_factory=dict)
     sections: dict[str, tuple[dict, bool, str, str]] = field(default_factory=dict)
+    #: plugins registered with ``load_plugins(extra=...)`` that are modules: (name, module
+    #: name, file) -- what another process (a table's kernel) loads to have the same ones
+    extra_modules: tuple[tuple[str, str, str], ...] = ()
     _built: dict[tuple[str, str, int], tuple[Any, Any]] = field(default_factory=dict, repr=False)
     _build_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
@@ -331,6 +335,29 @@ def _collect(plugins: Plugins) -> None:
         impl.function(register=reg_section)
 
 
+def import_extra(modules: Any) -> dict[str, Any]:
+    """The plugin modules ``Plugins.extra_modules`` names, imported here (by name, else
+    from their file): another process loads the plugins a client process was given."""
+    import importlib.util
+    import sys
+
+    out = {}
+    for name, modname, file in modules:
+        try:
+            out[name] = importlib.import_module(modname)
+            continue
+        except ImportError:
+            pass
+        spec = importlib.util.spec_from_file_location(modname, file)
+        if spec is None or spec.loader is None:
+            raise UserError(f"plugin {name!r}: cannot load {file}")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[modname] = mod
+        spec.loader.exec_module(mod)
+        out[name] = mod
+    return out
+
+
 def load_plugins(
     *,
     core: Any = None,
@@ -376,11 +403,15 @@ def load_plugins(
                 ) from None
             pm.register(plugin, name=ep.name)
 
+    portable = []
     for name, plugin in (extra or {}).items():
         if not is_blocked(name, blocked):
             pm.register(plugin, name=name)
+            file = vars(plugin).get("__file__") if isinstance(plugin, types.ModuleType) else None
+            if file:
+                portable.append((name, plugin.__name__, str(file)))
 
     _check_hooks(pm)
-    plugins = Plugins(pm)
+    plugins = Plugins(pm, extra_modules=tuple(portable))
     _collect(plugins)
     return plugins

@@ -25,47 +25,21 @@ from typing import TYPE_CHECKING, Any
 from console import paths
 from console.atomic import write_text_atomic
 from console.errors import ProfileError
+from console.profile_paths import (  # noqa: F401 - re-exported
+    DEFAULT_PROFILE,
+    PROJECT_PROFILES,
+    find_profile,
+    search_dirs,
+)
 from console.schema import Field, check
 
 if TYPE_CHECKING:
     from console.plugins import Plugins
 
-DEFAULT_PROFILE = "sim"
 #: the file of the operator's saved settings in each profile's config directory
 OVERRIDES_FILE = "overrides.toml"
 #: A profile is a page of settings; anything larger is refused before it is read.
 MAX_PROFILE_BYTES = 1024 * 1024
-PROJECT_PROFILES = Path(__file__).resolve().parent.parent / "profiles"
-
-
-def search_dirs() -> list[Path]:
-    dirs = []
-    if env := os.environ.get("HAPTABLE_PROFILES"):
-        dirs += [Path(p) for p in env.split(os.pathsep) if p]
-    dirs.append(paths.config_dir("profiles"))
-    dirs.append(PROJECT_PROFILES)
-    return dirs
-
-
-def find_profile(name_or_path: str | os.PathLike | None) -> Path:
-    """Resolve ``--profile`` (a name like ``sim`` or a path to a .toml file)."""
-    raw = str(name_or_path or os.environ.get("HAPTABLE_PROFILE") or DEFAULT_PROFILE)
-    p = Path(raw).expanduser()
-    if p.suffix == ".toml" or os.sep in raw:
-        if p.is_file():
-            return p.resolve()
-        raise ProfileError(f"{raw}: profile file not found; give an existing .toml path or a name")
-    for d in search_dirs():
-        cand = d / f"{raw}.toml"
-        if cand.is_file():
-            return cand.resolve()
-    known = sorted({q.stem for d in search_dirs() if d.is_dir() for q in d.glob("*.toml")})
-    guess = difflib.get_close_matches(raw, known, n=1)
-    hint = f" (did you mean {guess[0]!r}?)" if guess else ""
-    raise ProfileError(
-        f"profile {raw!r} not found{hint}; known profiles: {', '.join(known) or 'none'} "
-        f"(searched {', '.join(str(d) for d in search_dirs())})"
-    )
 
 
 @dataclass(frozen=True)

@@ -92,11 +92,24 @@ def profile(plugins):
 @pytest.fixture
 def outputs(profile, plugins):
     """The sim profile's outputs behind the safety gate, fast-forwarded; closed after."""
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     out = open_outputs(profile, plugins, fast=True)
     yield out
     out.close()
+
+
+@pytest.fixture
+def table(profile, plugins):
+    """The sim profile's table core built in this process (``TableOutputs``: the relay
+    board and audio driver behind the gate and the scheduler), fast-forwarded; closed
+    after. For tests of the gate's and the scheduler's internals (``table.gate``,
+    ``table.scheduler``, ``table.board``, ``table.audio``)."""
+    from console.kernel.table import TableOutputs
+
+    t = TableOutputs(profile, plugins, fast=True)
+    yield t
+    t.close()
 
 
 @pytest.fixture

@@ -1,7 +1,7 @@
 """``haptable bench gate-fill``: the work the audio callback does, block by block.
 
-The profile's safety gate and output scheduler are built around an in-memory relay
-board (no driver: nothing plays anywhere) and ``gate.fill(out)`` is called back to back,
+The profile's safety gate and output scheduler (the kernel's, ``console.kernel``) are
+built around an in-memory relay board (no driver: nothing plays anywhere) and ``gate.fill(out)`` is called back to back,
 as a fast-forward driver would, timing each call: while idle (no plan), while a plan
 plays (the ``sine-PALL`` stimulus: 250 Hz, 20 V peak on every patch, relays switching
 before and after), and while an e-stop ramps a playing plan down. Medians and p99 per
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from console.bench import machine_info
-from console.runtime.scheduler import Scheduler
+from console.kernel.scheduler import Scheduler
 from console.safety import Limits, SafetyGate
 from console.stimuli import make_stimulus
 
@@ -74,7 +74,7 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
     out = np.zeros((block, limits.layout.n), np.float32)  # a column per [audio] channels name
     times: dict[str, list[float]] = {"idle": [], "playing": [], "estop_ramp": []}
     rounds = rounds if rounds is not None else (2 if quick else 8)
-    plan = make_stimulus("sine-PALL", fs)
+    plan = sched.check(make_stimulus("sine-PALL", fs))  # checked once, played each round
 
     def tick(phase: str) -> None:
         t0 = time.perf_counter()
@@ -104,8 +104,7 @@ def run(ctx: Any, quick: bool, rounds: int | None = None) -> dict[str, Any]:
                 for _ in range(200):
                     tick("idle")
                 gate.wait_safe(5)
-                gate.reset()
-                sched.attach_to_gate()
+                gate.reset()  # the scheduler stays the gate's source
     finally:
         sched.close()
     return {

@@ -1,15 +1,18 @@
-"""``haptable bench safety``: how fast the gate is checked, and how fast an e-stop silences.
+"""``haptable bench safety``: what a client can send the kernel, and how fast an e-stop
+silences.
 
-- ``cases``: random plans, streams, attached sources and relay command sequences with
-  injected faults (NaN, steps, exceptions, wrong dtypes and lengths, stalls, e-stops at
-  random moments) played on the fast-forward twin; each case's recording and relay log
-  checked by ``console.safety_audit``. Cases per second and the problems found (0 expected).
-- ``estop``: e-stop latency, the request to the last non-zero sample at the driver (the
-  twin's DAC, paced in real time; the sample at the DAC when the request came is taken as
-  the gate's clock less the device latency, which errs late by up to one block), for the gate in the console's own process, for a demo
-  in its own process (the console's Scenes screen) and for a CLI demo stopped by
-  ``haptable estop`` from another process (there also the whole command's time, Python's
-  start-up included, and the demo's own request -> confirmed silent).
+- ``cases``: random cases of everything a process can hand its table's kernel, on a
+  private fast-forward twin table of the bench's own (it resets its own e-stops there and
+  never an operator's): plans with injected faults (NaN, steps, object arrays, wrong
+  lengths), live streams with random and broken parameters and posts, relay command
+  sequences with e-stops and resets, malformed messages on a raw connection, e-stops at
+  random moments. Each case's recording, relay log and gate events are checked by
+  ``console.safety_audit``. Cases per second and the problems found (0 expected).
+- ``estop``: ``shell_ms``: `haptable estop` from a shell with nothing running, wall time
+  (interpreter start-up included); ``demo_silence_ms``: from running `haptable estop`
+  to the last non-zero sample at the twin's DAC, a demo playing on the table and (with
+  ``console``) the console open on the Camera screen in a terminal; each trial in a fresh
+  runtime directory of its own (the e-stop latches; only an operator resets).
 """
 
 from __future__ import annotations
@@ -17,10 +20,12 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
+import socket
+import struct
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -29,132 +34,139 @@ import numpy as np
 
 from console.bench import machine_info, summarize_s
 from console.errors import SafetyRefusal
-from console.safety import Source
 from console.safety_audit import Window, received_problems
 from console.signals import ramp_envelope, tone
 from console.types import OutputPlan, Segment
 
-FAULTS = ("none", "nan", "step", "raise", "object", "stall", "wrong_len")
+FAULTS = ("none", "nan", "step", "object", "wrong_len", "inf")
 ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
+ROOT = Path(__file__).resolve().parents[2]
 
 
-class FaultyStream:
-    """A ramped sine that misbehaves (``fault``) from sample ``at`` on."""
-
-    def __init__(self, route, amp, f, fault, at, n_total, fs=48000):
-        self.patches, self.screen = route, False
-        self.amp, self.f, self.fault, self.at = amp, f, fault, at
-        self.n_total, self.fs, self.k = n_total, fs, 0
-
-    def next_block(self, n):
-        if self.k >= self.n_total:
-            return None
-        k = self.k + np.arange(n)
-        x = self.amp * np.sin(2 * np.pi * self.f * k / self.fs) * np.minimum(1.0, k / 480)
-        if self.k >= self.at:
-            if self.fault == "nan":
-                x[0] = np.nan
-            elif self.fault == "step":
-                x = x + 60.0
-            elif self.fault == "raise":
-                raise RuntimeError("effect crashed")
-            elif self.fault == "object":
-                x = x.astype(object)
-            elif self.fault == "stall":
-                time.sleep(0.15)
-            elif self.fault == "wrong_len":
-                x = x[:-1]
-        self.k += n
-        return x, np.zeros(len(x))
-
-    def request_stop(self):
-        self.n_total = self.k
-
-
-class FaultySource(Source, FaultyStream):
-    @property
-    def idle(self):
-        return False
-
-    def abort(self, reason):
-        pass
-
-    def next_block(self, n):
-        out = FaultyStream.next_block(self, n)
-        return out if out is not None else (np.zeros(n), np.zeros(n))
-
-
+# ---------------------------------------------------------------------- the cases
 def fresh_window(out) -> Window:
-    """A clean, attached, reset gate; where the next case's records begin."""
-    if out.gate.estopped:
-        out.gate.wait_safe(5)
-        out.reset()
-    out.scheduler.attach_to_gate()
+    """A clean table (its own e-stop reset, nothing queued); where the next case's
+    records begin."""
+    if out.estopped:
+        out.wait_safe(5)
+        out.reset("the safety bench, on its own table")
     t = time.monotonic() + 5
-    while out.scheduler.busy and time.monotonic() < t:
+    while out.status()["busy"] and time.monotonic() < t:
         time.sleep(0.001)
     return Window(out.recording().shape[0], len(out.relay_log()), time.monotonic())
 
 
-def _estop_later(out, delay_s: float | None) -> threading.Thread | None:
-    if delay_s is None:
-        return None
-    th = threading.Thread(target=lambda: (time.sleep(delay_s), out.estop("case")), daemon=True)
-    th.start()
-    return th
-
-
-def _finish(out, th: threading.Thread | None) -> None:
-    """Let a case end: its e-stop thread joined, the queue empty, the relays safe."""
-    if th is not None:
-        th.join()
+def _finish(out) -> None:
+    """Let a case end: the queue empty, the relays safe."""
     t_end = time.monotonic() + 10
-    while out.scheduler.busy and time.monotonic() < t_end:
+    while out.status()["busy"] and time.monotonic() < t_end:
         time.sleep(0.001)
-    out.gate.wait_safe(5)
+    if out.estopped:
+        out.wait_safe(5)
+
+
+def _estop_after(out, delay_s: float | None) -> None:
+    if delay_s is not None:
+        time.sleep(delay_s)
+        out.estop("case")
 
 
 def plan_case(out, route, amp, f, fault, nan_at, step_at, step_v, estop_s) -> None:
-    """A ramped sine plan, broken by ``fault`` (a NaN at ``nan_at``, a ``step_v`` step from
-    ``step_at``, object dtype), e-stopped ``estop_s`` after it is asked for."""
+    """A ramped sine plan, broken by ``fault`` (a NaN or inf at ``nan_at``, a ``step_v``
+    step from ``step_at``, object dtype, channels of different lengths), e-stopped
+    ``estop_s`` after it is asked for."""
     fs, n = out.limits.sample_rate_hz, 4800
     x = amp * np.sin(2 * np.pi * f * np.arange(n) / fs) * ramp_envelope(n, 480)
-    if fault == "nan":
-        x[nan_at % n] = np.nan
+    screen = np.zeros(n)
+    if fault in ("nan", "inf"):
+        x[nan_at % n] = np.nan if fault == "nan" else np.inf
     elif fault == "step":
         x[step_at:] += step_v
         x[-1] = 0.0
     elif fault == "object":
         x = x.astype(object)
-    th = _estop_later(out, estop_s)
+    elif fault == "wrong_len":
+        screen = np.zeros(n - 1)
     with contextlib.suppress(SafetyRefusal):
-        out.play(OutputPlan(fs, (Segment(x, np.zeros(n), route),), name="case"), timeout_s=10)
-    _finish(out, th)
+        report = out.play(OutputPlan(fs, (Segment(x, screen, route),), name="case"), wait=False)
+        _estop_after(out, estop_s)
+        report.wait(10)
+    _finish(out)
 
 
-def source_case(out, route, amp, f, fault, at, estop_s, attach) -> None:
-    """A live stream (or, with ``attach``, a source attached to the gate directly) that
-    misbehaves from sample ``at``; an attached one is always e-stopped in the end."""
+def stream_spec(route, rng: np.random.Generator, fs: int) -> dict[str, Any]:
+    """A live stream's parameters as a client sends them: a knob-like carrier and pulse,
+    sometimes out of the limits or broken (NaN, negative, huge, wrong types)."""
+    spec: dict[str, Any] = {
+        "sample_rate_hz": fs,
+        "patches": sorted(route),
+        "screen": True,
+        "carrier_max_v": float(rng.uniform(0, 120)),
+        "carrier_min_hz": 60.0,
+        "carrier_max_hz": 400.0,
+        "start_hz": 180.0,
+        "glide_ms": float(rng.uniform(0, 30)),
+        "ramp_ms": float(rng.uniform(5, 30)),
+        "pulse": {
+            "shape": "burst",
+            "channel": "piezo",
+            "peak_v": float(rng.uniform(0, 300)),
+            "freq_hz": 250.0,
+            "length_ms": 20.0,
+            "edge_ms": 0,
+        },
+    }
+    bad = rng.integers(0, 8)
+    if bad == 1:
+        spec["carrier_max_v"] = float("nan")
+    elif bad == 2:
+        spec["ramp_ms"] = 0.5  # too short a ramp
+    elif bad == 3:
+        spec["pulse"]["peak_v"] = 1e6
+    elif bad == 4:
+        spec["sample_rate_hz"] = 44100
+    elif bad == 5:
+        spec["patches"] = ["PZ"]
+    return spec
+
+
+def stream_case(out, route, rng: np.random.Generator, estop_s) -> None:
+    """A live stream from random parameters, posted to with garbage among good targets,
+    then stopped (or e-stopped)."""
+    from console.kernel.client import RemoteStream
+
     fs = out.limits.sample_rate_hz
-    if attach:
-        with contextlib.suppress(SafetyRefusal):  # a refused command is an outcome too
-            # a patch without a relay (a channel of its own) is always connected
-            out.set_relays({c for p in route if (c := out.gate.relay_channels.get(p))})
-        out.gate.attach(FaultySource(route, amp, f, fault, at, 9600, fs))
-        th = _estop_later(out, estop_s if estop_s is not None else 0.03)
-        t_end = time.monotonic() + 5
-        while not out.gate.estopped and time.monotonic() < t_end:
-            time.sleep(0.001)
-    else:
-        th = _estop_later(out, estop_s)
+    spec = stream_spec(route, rng, fs)
+    try:
+        h, _ = out._call("stream", spec=spec, name="case")
+    except SafetyRefusal:
+        return
+    report = out._register(int(h["job"]), "case")
+    sink = RemoteStream(out, int(h["job"]))
+    junk = (float("nan"), float("inf"), -1e300, 1e300, -5.0, 0.0, 123.0)
+    t_end = time.monotonic() + float(rng.uniform(0.01, 0.06))
+    k = 0
+    while time.monotonic() < t_end and not report.done.is_set():
         with contextlib.suppress(SafetyRefusal):
-            out.stream(FaultyStream(route, amp, f, fault, at, 9600, fs)).wait(10)
-    _finish(out, th)
+            sink.post(
+                [k] if rng.random() < 0.3 else [],
+                float(rng.choice(junk)) if rng.random() < 0.3 else float(rng.uniform(60, 400)),
+                float(rng.choice(junk)) if rng.random() < 0.3 else float(rng.uniform(0, 120)),
+            )
+        k += 1
+        time.sleep(0.002)
+    if estop_s is not None:
+        _estop_after(out, estop_s)
+    else:
+        with contextlib.suppress(SafetyRefusal):
+            sink.request_stop()
+    report.done.wait(10)
+    _finish(out)
 
 
 def relay_case(out, cmds: list[tuple[str, frozenset[int]]]) -> None:
-    """Relay commands, plays, e-stops, resets and direct gate switches in the given order
-    (on PA); refusals are outcomes."""
+    """Relay commands, plays, e-stops and resets in the given order (on PA); refusals
+    are outcomes."""
     fs = out.limits.sample_rate_hz
     x = tone(250, 20.0, 0.05, fs, 0.01)
     plan = OutputPlan(fs, (Segment(x, np.zeros_like(x), ROUTES["PA"]),), name="p")
@@ -167,30 +179,75 @@ def relay_case(out, cmds: list[tuple[str, frozenset[int]]]) -> None:
             elif op == "estop":
                 out.estop("case")
             elif op == "reset":
-                out.gate.wait_safe(5)
-                out.reset()
-            else:
-                out.gate.switch_relays(frozenset(chans))
+                out.wait_safe(5)
+                out.reset("the safety bench, on its own table")
         except SafetyRefusal:
             continue
-    _finish(out, None)
+    _finish(out)
+
+
+def _raw_frames(rng: np.random.Generator) -> bytes:
+    """A malformed message a broken or hostile client could send the kernel."""
+    pick = int(rng.integers(0, 7))
+    if pick == 0:
+        return struct.pack("!II", 9, 0) + b"{not json"
+    if pick == 1:
+        return struct.pack("!II", 2**31 - 1, 0)  # a header over the bound
+    if pick == 2:
+        head = b'{"op":"plan","id":1}'
+        return struct.pack("!II", len(head), 2**31 - 1) + head  # a payload over it
+    if pick == 3:
+        head = json.dumps(
+            {
+                "op": "plan",
+                "id": 1,
+                "arrays": [["<f8", [100]], ["<f8", [100]]],
+                "fs": 48000,
+                "segments": [{"patches": ["PA"], "screen": False, "own": []}],
+            }
+        ).encode()
+        return struct.pack("!II", len(head), 800) + head + b"\x00" * 800  # short payload
+    if pick == 4:
+        head = b'{"op":"play","id":1,"plan":999999}'
+        return struct.pack("!II", len(head), 0) + head
+    if pick == 5:
+        return bytes(rng.integers(0, 256, int(rng.integers(1, 64)), dtype=np.uint8))
+    head = json.dumps({"op": "relays", "id": 1, "closed": ["1", None, 1e9]}).encode()
+    return struct.pack("!II", len(head), 0) + head
+
+
+def wire_case(out, rng: np.random.Generator) -> None:
+    """A raw connection sends a malformed message: the kernel drops it (or refuses the
+    request) and keeps serving; nothing plays from it."""
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.settimeout(2.0)
+    try:
+        s.connect(str(out.table.kernel_sock))
+        with contextlib.suppress(OSError):
+            s.sendall(_raw_frames(rng))
+            s.shutdown(socket.SHUT_WR)
+            while s.recv(65536):
+                pass
+    finally:
+        s.close()
+    _finish(out)
 
 
 def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
-    """A random case of one of the three kinds; its kind and the routing it played on."""
+    """A random case of one kind; its kind and the routing it played on."""
     route = ROUTES[str(rng.choice(sorted(ROUTES)))]
-    fault = str(rng.choice(FAULTS))
-    amp, f = float(rng.uniform(0.5, 95)), float(rng.uniform(20, 700))
-    estop_s = float(rng.uniform(0, 0.02)) if rng.random() < 0.4 else None
-    at = int(rng.integers(0, 6000))
-    kind = str(rng.choice(["plan", "stream", "attach", "relays"]))
+    estop_s = float(rng.uniform(0, 0.02)) if rng.random() < 0.3 else None
+    kind = str(rng.choice(["plan", "stream", "relays", "wire"], p=[0.4, 0.25, 0.2, 0.15]))
     if kind == "plan":
+        fault = str(rng.choice(FAULTS))
+        amp, f = float(rng.uniform(0.5, 95)), float(rng.uniform(20, 700))
         step_v = float(rng.uniform(0, 200))
+        at = int(rng.integers(0, 6000))
         plan_case(out, route, amp, f, fault, at, int(rng.integers(4800)), step_v, estop_s)
-    elif kind in ("stream", "attach"):
-        source_case(out, route, amp, f, fault, at, estop_s, kind == "attach")
-    else:
-        ops = ["set", "play", "estop", "reset", "switch"]
+    elif kind == "stream":
+        stream_case(out, route, rng, estop_s)
+    elif kind == "relays":
+        ops = ["set", "play", "estop", "reset"]
         cmds = [
             (
                 str(rng.choice(ops)),
@@ -200,30 +257,36 @@ def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
         ]
         relay_case(out, cmds)
         route = ROUTES["PA"]
+    else:
+        wire_case(out, rng)
     return kind, route
 
 
 def fuzz_cases(ctx, seconds: float, seed: int = 0) -> dict[str, Any]:
-    """Random faulty cases on the fast-forward twin for ``seconds``; each one audited."""
-    from console.runtime.outputs import open_outputs
+    """Random faulty cases on a private fast-forward twin for ``seconds``; each audited."""
+    from console.kernel.client import open_outputs
 
     rng = np.random.default_rng(seed)
     per_kind: dict[str, int] = {}
     problems: list[str] = []
-    with open_outputs(ctx.profile, ctx.pm, fast=True) as out:
+    with open_outputs(ctx.profile, ctx.pm, fast=True) as out:  # a private table
+        latency = int(out.status()["latency_samples"])
         t0 = time.perf_counter()
         while time.perf_counter() - t0 < seconds:
             start = fresh_window(out)
             kind, route = _one_case(out, rng)
             per_kind[kind] = per_kind.get(kind, 0) + 1
+            if out.lost:
+                problems.append(f"{kind}: the kernel went away ({out.lost})")
+                break
             found = received_problems(
                 out.limits,
                 out.recording(),
                 out.relay_log(),
-                list(out.gate.events),
+                out.events(),
                 start,
                 route,
-                int(out.gate.latency_samples),
+                latency,
             )
             problems += [f"{kind}: {p}" for p in found]
         elapsed = time.perf_counter() - t0
@@ -235,7 +298,38 @@ def fuzz_cases(ctx, seconds: float, seed: int = 0) -> dict[str, Any]:
         "per_kind": per_kind,
         "problems": problems[:20],
         "problem_count": len(problems),
+        "table": "private twin (fast-forward): the bench's own; never an operator's",
     }
+
+
+# ---------------------------------------------------------------------- e-stop timings
+def _sandbox_env(run_dir: Path, **extra: str) -> dict[str, str]:
+    """The environment of a trial: a runtime directory of its own (its own tables, its
+    own latches), the project on the path."""
+    env = {**os.environ, "XDG_RUNTIME_DIR": str(run_dir), "PYTHONPATH": str(ROOT)}
+    env.pop("HAPTABLE_TWIN_LOG", None)
+    env.update(extra)
+    return env
+
+
+def _haptable() -> list[str]:
+    """`haptable` as a user runs it: the installed script, else the entry module."""
+    script = Path(sys.executable).with_name("haptable")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "console.entry"]
+
+
+def shell_estop_ms(trials: int) -> dict[str, Any]:
+    """`haptable estop` with nothing running: its wall time from a shell."""
+    times = []
+    with tempfile.TemporaryDirectory() as d:
+        run = Path(d) / "run"
+        run.mkdir(mode=0o700)
+        env = _sandbox_env(run)
+        for _ in range(trials):
+            t0 = time.perf_counter()
+            subprocess.run([*_haptable(), "estop"], env=env, capture_output=True, timeout=30)
+            times.append(time.perf_counter() - t0)
+    return summarize_s(times)
 
 
 def _last_nonzero(rec: np.ndarray) -> int:
@@ -243,120 +337,134 @@ def _last_nonzero(rec: np.ndarray) -> int:
     return int(nz[-1]) if nz.size else -1
 
 
-def estop_in_process(ctx, trials: int, seed: int = 1) -> dict[str, Any]:
-    """The console's case: the gate in this process, the paced twin, a long tone playing."""
-    from console.runtime.outputs import open_outputs
-
-    rng = np.random.default_rng(seed)
-    lat: list[float] = []
-    with open_outputs(ctx.profile, ctx.pm, fast=False) as out:
-        fs = out.limits.sample_rate_hz
-        x = tone(250, 50.0, 2.0, fs, 0.01)
-        plan = OutputPlan(fs, (Segment(x, np.zeros_like(x), frozenset({"PA"})),), name="tone")
-        for _ in range(trials):
-            if out.gate.estopped:
-                out.gate.wait_safe(5)
-                out.reset()
-            time.sleep(0.03)  # the rate limit and the settle time after the last e-stop
-            report = out.play(plan, wait=False)
-            t_end = time.monotonic() + 5
-            while not report.segment_start and time.monotonic() < t_end:
-                time.sleep(0.001)
-            time.sleep(float(rng.uniform(0.05, 0.2)))
-            # the sample at the amplifiers now: handed out, less the device buffer (as
-            # for the other rows, from the gate alone)
-            at_dac = out.gate.clock - out.gate.latency_samples
-            out.estop("bench")
-            out.gate.wait_safe(5)
-            last = _last_nonzero(out.recording())
-            lat.append(max(0, last + 1 - at_dac) / fs)
-    return summarize_s(lat)
-
-
-def _latency_from_log(path: Path) -> float | None:
+def _from_log(path: Path, t_command: float) -> tuple[float | None, float | None]:
+    """(command -> last sample at the DAC, the kernel's own request -> silence), from a
+    demo's twin log; the DAC sample at the e-stop is the gate's clock less the device
+    latency (errs late by up to one block)."""
     data = json.loads(path.read_text())
     fs = int(data["sample_rate_hz"])
     stops = [e for e in data.get("gate_events", []) if e["kind"] == "estop"]
     if not stops:
-        return None
+        return None, None
     rec = np.load(path.with_suffix(".npz"))["recording_v"]
     at_dac = stops[0]["clock"] - int(data.get("latency_samples", 0))
-    return max(0, _last_nonzero(rec) + 1 - at_dac) / fs
+    ramp_s = max(0, _last_nonzero(rec) + 1 - at_dac) / fs
+    t_event = stops[0].get("t_s")
+    if t_event is None:
+        return None, ramp_s
+    return (float(t_event) - t_command) + ramp_s, ramp_s
 
 
-def estop_demo_host(ctx, trials: int) -> dict[str, Any]:
-    """A demo in its own process (as the Scenes screen starts it), e-stopped by the console."""
-    from console.runtime.demo_process import DemoProcess
+def _wait(cond, timeout_s: float) -> bool:
+    t_end = time.monotonic() + timeout_s
+    while time.monotonic() < t_end:
+        if cond():
+            return True
+        time.sleep(0.02)
+    return False
 
-    lat: list[float] = []
-    with tempfile.TemporaryDirectory() as d:
-        for i in range(trials):
-            log = Path(d) / f"knob{i}.json"
-            run = DemoProcess(ctx.profile, "knob", twin_log=log)
+
+def demo_silence_ms(profile_path: str, trials: int, *, console: bool) -> dict[str, Any]:
+    """`haptable estop` -> silence at the twin's DAC while `haptable demo knob` plays
+    (with ``console``: beside a console on the Camera screen in tmux, where tmux is)."""
+    from console.kernel.line_server import request
+
+    lat, confirm, command, failed = [], [], [], []
+    camera_seen = 0  # trials whose console showed the Camera screen's IR view
+    use_tmux = console and shutil.which("tmux") is not None
+    for i in range(trials):
+        with tempfile.TemporaryDirectory() as d:
+            run = Path(d) / "run"
+            run.mkdir(mode=0o700)
+            log = Path(d) / f"demo{i}.json"
+            env = _sandbox_env(run, HAPTABLE_TWIN_LOG=str(log))
+            tmux_sock = str(Path(d) / "tmux.sock")
+            procs = []
             try:
-                run.wait_started(lambda f, text: None)
-                t_end = time.monotonic() + 30
-                while time.monotonic() < t_end:
-                    s = run.snapshot()
-                    if (s.get("knob") or {}).get("crossings", 0) >= 2:
-                        break
-                    time.sleep(0.05)
-                run.estop("bench")
-                run.proc.wait(20)
-            finally:
-                run.stop()
-            got = _latency_from_log(log) if log.exists() else None
-            if got is not None:
-                lat.append(got)
-    return {**summarize_s(lat), "trials": trials}
-
-
-def estop_cli_demo(ctx, trials: int) -> dict[str, Any]:
-    """``haptable demo knob`` from a shell, stopped by ``haptable estop`` from another one."""
-    lat: list[float] = []
-    command_s: list[float] = []  # `haptable estop` started -> exited (Python start-up included)
-    server_s: list[float] = []  # the demo's own e-stop request -> confirmed silent
-    failed: list[str] = []
-    profile = str(ctx.profile.path)
-    with tempfile.TemporaryDirectory() as d:
-        for i in range(trials):
-            log = Path(d) / f"cli{i}.json"
-            env = {**os.environ, "HAPTABLE_TWIN_LOG": str(log)}
-            cmd = [sys.executable, "-m", "console.cli", "--profile", profile]
-            demo = subprocess.Popen(
-                [*cmd, "demo", "knob", "--seconds", "30"],
-                env=env,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.PIPE,
-                text=True,
-            )
-            try:
-                time.sleep(4.0)  # started and turning
-                t0 = time.perf_counter()
-                stop = subprocess.run(
-                    [*cmd, "estop", "--json"], env=env, capture_output=True, text=True, timeout=30
+                if use_tmux:
+                    subprocess.run(
+                        [
+                            "tmux",
+                            "-S",
+                            tmux_sock,
+                            "new-session",
+                            "-d",
+                            "-x",
+                            "120",
+                            "-y",
+                            "40",
+                            " ".join([*_haptable(), "--profile", profile_path]),
+                        ],
+                        env=_sandbox_env(run),
+                        check=True,
+                        timeout=30,
+                    )
+                demo = subprocess.Popen(
+                    [*_haptable(), "--profile", profile_path, "demo", "knob", "--seconds", "60"],
+                    env=env,
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.PIPE,
+                    text=True,
                 )
-                command_s.append(time.perf_counter() - t0)
+                procs.append(demo)
+                from console.kernel.tables import table_key
+
+                sock = run / "haptable" / "tables" / table_key(profile_path) / "control.sock"
+
+                def playing(sock=sock) -> bool:
+                    with contextlib.suppress(OSError, ValueError):
+                        return any(json.loads(request(sock, "status", timeout_s=1)[0])["level_v"])
+                    return False
+
+                if not _wait(playing, 120):
+                    failed.append(f"trial {i}: the demo did not play")
+                    continue
+                if use_tmux:
+                    subprocess.run(["tmux", "-S", tmux_sock, "send-keys", "F2"], timeout=10)
+                    time.sleep(2.0)  # the Camera screen open and drawing
+                    pane = subprocess.run(
+                        ["tmux", "-S", tmux_sock, "capture-pane", "-p"],
+                        capture_output=True,
+                        text=True,
+                        timeout=10,
+                    ).stdout
+                    camera_seen += "IR " in pane and "E-STOP" in pane
+                time.sleep(0.5)
+                t0_wall = time.perf_counter()
+                t0 = time.monotonic()
+                stop = subprocess.run(
+                    [*_haptable(), "estop", "--json"],
+                    env=_sandbox_env(run),
+                    capture_output=True,
+                    text=True,
+                    timeout=30,
+                )
+                command.append(time.perf_counter() - t0_wall)
                 with contextlib.suppress(ValueError, KeyError):
-                    for proc in json.loads(stop.stdout)["processes"]:
-                        if proc.get("pid") == demo.pid and proc.get("server_ms") is not None:
-                            server_s.append(proc["server_ms"] * 1e-3)
-                demo.wait(30)
+                    for t in json.loads(stop.stdout)["tables"]:
+                        if t.get("server_ms") is not None:
+                            confirm.append(t["server_ms"] * 1e-3)
+                demo.wait(60)
+                got, _ = _from_log(log, t0) if log.exists() else (None, None)
+                if got is None:
+                    failed.append(f"trial {i}: no twin log with an e-stop ({demo.returncode})")
+                else:
+                    lat.append(got)
             finally:
-                if demo.poll() is None:
-                    demo.kill()
-            if stop.returncode != 0:
-                failed.append(stop.stdout.strip() + stop.stderr.strip())
-            got = _latency_from_log(log) if log.exists() else None
-            if got is None:
-                failed.append(f"trial {i}: no twin log with an e-stop ({demo.returncode})")
-            else:
-                lat.append(got)
+                for p in procs:
+                    if p.poll() is None:
+                        p.kill()
+                if use_tmux:
+                    subprocess.run(
+                        ["tmux", "-S", tmux_sock, "kill-server"], capture_output=True, timeout=10
+                    )
     return {
         **summarize_s(lat),
         "trials": trials,
-        "estop_command_ms": summarize_s(command_s),
-        "process_confirm_ms": summarize_s(server_s),
+        "console_on_camera_screen": use_tmux,
+        "trials_camera_screen_seen": camera_seen,
+        "estop_command_ms": summarize_s(command),
+        "kernel_confirm_ms": summarize_s(confirm),
         "failed": failed[:5],
     }
 
@@ -364,9 +472,14 @@ def estop_cli_demo(ctx, trials: int) -> dict[str, Any]:
 def run(ctx, quick: bool) -> dict[str, Any]:
     result: dict[str, Any] = {"machine": machine_info(), "quick": quick}
     result["cases"] = fuzz_cases(ctx, 5.0 if quick else 30.0)
+    prof = str(ctx.profile.path)
     result["estop_ms"] = {
-        "console_process": estop_in_process(ctx, 10 if quick else 50),
-        "demo_host": estop_demo_host(ctx, 2 if quick else 8),
-        "cli_demo": estop_cli_demo(ctx, 2 if quick else 8),
+        "shell_nothing_running": shell_estop_ms(5 if quick else 20),
+        "demo_to_silence": demo_silence_ms(prof, 2 if quick else 10, console=True),
+    }
+    result["goals"] = {
+        "shell_p50_ms": 150,
+        "demo_to_silence_p99_ms": 300,
+        "problems": 0,
     }
     return result

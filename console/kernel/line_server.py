@@ -1,7 +1,7 @@
 """One-line commands over a private Unix socket that no idle, slow or hostile client can hold up.
 
 ``LineServer(path, handler)`` binds ``path`` (0600, in a directory checked by
-``console.runtime.private_dir``) and serves every connection from one selector thread:
+``console.kernel.private_dir``) and serves every connection from one selector thread:
 a connection must send its line (at most ``MAX_LINE`` bytes) within its read deadline or
 it is dropped; a longer line is dropped at the bound (never buffered); past
 ``MAX_CLIENTS`` open connections the oldest is dropped; a peer of another uid

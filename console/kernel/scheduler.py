@@ -1,9 +1,14 @@
 """Output scheduler: plays plans and live streams sample-accurately through the gate.
 
-The audio driver pulls blocks from the gate, the gate pulls them from here. A plan
-becomes steps: set relays (in silence) -> play the segment's samples -> gap -> ... ->
-open the relays. Relay switches run on a worker thread (USB is slow) while the audio
-path emits silence; the gate itself refuses any switch that is not in silence.
+It runs inside the kernel process (``console.kernel.server``). The audio driver pulls
+blocks from the gate, the gate pulls them from here. A checked plan becomes steps: set
+relays (in silence) -> play the segment's samples -> gap -> ... -> open the relays. A live
+stream is synthesised here from its parameters (``console.stream_synth``): no client code
+runs on the audio path. Relay switches run on a worker thread (USB is slow) while the
+audio path emits silence; the gate itself refuses any switch that is not in silence.
+
+Every job has an owner (the kernel's client that asked for it): ``abort_owner`` ramps
+down what a client that went away was playing and drops what it queued.
 """
 
 from __future__ import annotations
@@ -14,22 +19,17 @@ import math
 import queue
 import threading
 import time
-import weakref
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
-from console.contracts import StreamSource
 from console.errors import SafetyRefusal
-from console.safety import (
-    Limits,
-    SafetyGate,
-    Source,
-    SourceCaller,
-    SourceInterrupted,
-    check_plan,
-)
+from console.safety import Limits, SafetyGate, Source, check_plan
+from console.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
 from console.types import OutputPlan, Segment
 
 log = logging.getLogger("haptable.scheduler")
@@ -37,7 +37,10 @@ log = logging.getLogger("haptable.scheduler")
 
 @dataclass
 class PlayReport:
-    """What happened to a plan: the gate clock at each segment's first and last sample."""
+    """What happened to a plan: the gate clock at each segment's first and last sample.
+
+    ``on_change(report, what)`` (the kernel's: it tells the client) is called on the
+    audio thread after each change; it must not block."""
 
     name: str
     segment_start: list[int] = field(default_factory=list)
@@ -46,11 +49,44 @@ class PlayReport:
     t_first_sample_s: float | None = None
     error: str = ""
     done: threading.Event = field(default_factory=threading.Event, repr=False)
+    owner: int = 0
+    on_change: Any = field(default=None, repr=False)
+    #: a stream's pulses: (crossing id, gate clock of its first sample, monotonic time)
+    detents: list[tuple[int, int, float]] = field(default_factory=list, repr=False)
 
     def wait(self, timeout_s: float | None = None) -> PlayReport:
         if not self.done.wait(timeout_s):
             raise TimeoutError(f"{self.name}: still playing after {timeout_s} s")
         return self
+
+    def changed(self, what: str) -> None:
+        fn = self.on_change
+        if fn is not None:
+            try:
+                fn(self, what)
+            except Exception:  # an observer never breaks the audio path
+                log.exception("play report listener failed")
+
+    def finish(self, error: str = "") -> None:
+        """Done (with ``error`` when it did not play through); said once."""
+        if self.done.is_set():
+            return
+        if error and not self.error:
+            self.error = error
+        self.done.set()
+        self.changed("done")
+
+
+@dataclass(frozen=True)
+class CheckedPlan:
+    """A plan that passed ``check_plan``: private read-only samples per segment and
+    output channel, what each segment routes, and the gap between segments."""
+
+    name: str
+    samples: tuple[tuple[np.ndarray, ...], ...]
+    routes: tuple[tuple[frozenset[str], bool], ...]
+    gap_samples: int
+    duration_s: float
 
 
 @dataclass
@@ -60,7 +96,8 @@ class _Step:
     cols: tuple[np.ndarray, ...] = ()  # play: one array per output channel
     n: int = 0
     pos: int = 0
-    stream: StreamSource | None = None
+    stream: StreamSynth | None = None
+    peak: tuple[float, ...] = ()  # stream: the declared peak per output channel
     phase: str = ""  # relays: "", "switching", "settling"
     token: int = 0  # relays: the switch request this step waits for
     segment: int = -1
@@ -73,26 +110,45 @@ class _Job:
     report: PlayReport
     previous: frozenset[int] | None = None  # an operator relay command: the setting before
     prearm: bool = False  # relays closed ahead of a plan (or opened again): no samples
+    owner: int = 0  # the kernel client that asked for it (0: the kernel itself)
+    cancelled: str = ""  # its owner went away: the audio thread ramps it down
 
 
-def stream_start_problem(x: np.ndarray, k0: int, ramp: int, vmax: float) -> str | None:
-    """A live stream must rise from zero no faster than the start ramp allows."""
+def stream_start_problem(x: np.ndarray, k0: int, ramp: int, peak_v: float) -> str | None:
+    """A live stream must rise from zero no faster than a plan may: under a linear ramp
+    ``ramp`` samples long to its own declared peak (the rule ``check_plan`` applies to a
+    plan's start, to the plan's peak)."""
     if k0 >= ramp or x.size == 0:
         return None
     k = np.arange(k0, min(ramp, k0 + x.size))
-    env = vmax * (k / ramp) * 1.02 + 1e-9
+    env = peak_v * (k / ramp) * 1.02 + 1e-9
     over = np.flatnonzero(np.abs(x[: k.size]) > env)
     if over.size:
-        return f"live stream jumps to {x[over[0]]:.1f} V at sample {k0 + over[0]} (no start ramp)"
+        return (
+            f"live stream jumps to {x[over[0]]:.1f} V at sample {k0 + over[0]} (no start ramp "
+            f"to its peak of {peak_v:.1f} V)"
+        )
     return None
 
 
+def ramp_to_zero(last: np.ndarray, steps: np.ndarray, ramp: int) -> tuple[np.ndarray, ...] | None:
+    """From the levels ``last`` (one per channel) to zero on every channel: linear, over
+    ``ramp`` samples or longer where the slew limit ``steps`` needs it; None at zero."""
+    if not np.any(last):
+        return None
+    need = max(ramp, *(math.ceil(abs(v) / st) for v, st in zip(last, steps, strict=True)))
+    r = np.linspace(1.0, 0.0, need + 1)[1:]
+    return tuple(float(v) * r for v in last)
+
+
 class Scheduler(Source):
-    def __init__(self, gate: SafetyGate, *, relay_channels: dict[str, int], screen_channel: int):
+    """Plans, streams and relay steps for the gate (see the module's doc)."""
+
+    def __init__(self, gate: SafetyGate, *, relay_channels: Mapping[str, int], screen_channel: int):
         self.gate = gate
         self.limits: Limits = gate.limits
-        self.relay_channels = relay_channels
-        self.screen_channel = screen_channel
+        self.relay_channels = MappingProxyType(dict(relay_channels))
+        self.screen_channel = int(screen_channel)
         self._lock = threading.Lock()
         self._jobs: deque[_Job] = deque()
         self._job: _Job | None = None
@@ -108,21 +164,18 @@ class Scheduler(Source):
         self._stream_last: tuple[float, ...] = (0.0,) * self.layout.n
         #: the operator's own relay setting (console toggles); a stimulus routes the relays
         #: its own way while it plays and this setting comes back after it
-        self.operator_relays: frozenset[int] = frozenset()
-        self._caller = SourceCaller("haptable-stream")
-        # plans that passed check_plan against these limits, by identity, with the private
-        # read-only copy of their samples that was checked (a demo replays its cached
-        # plans: the check of a 3 s plan costs ~0.5 ms on the frame that plays it)
-        self._checked: dict[int, tuple[weakref.ref, tuple, tuple[int, ...]]] = {}
+        self._operator_relays: frozenset[int] = frozenset()
+        self.plans_checked = 0  # how many plans ``check`` judged (accepted or refused)
         self._worker = threading.Thread(
             target=self._relay_worker, name="haptable-relays", daemon=True
         )
         self._worker.start()
         gate.attach_scheduler(self)
 
-    def attach_to_gate(self) -> None:
-        """Make the gate play from this scheduler again (after another source was attached)."""
-        self.gate.attach_scheduler(self)
+    @property
+    def operator_relays(self) -> frozenset[int]:
+        """The operator's own relay setting (what comes back after a stimulus)."""
+        return self._operator_relays
 
     # ------------------------------------------------------------------ API
     def relays_for(self, patches: frozenset[str], screen: bool) -> frozenset[int]:
@@ -133,48 +186,42 @@ class Scheduler(Source):
             chans.add(self.screen_channel)
         return frozenset(chans)
 
-    def play(self, plan: OutputPlan) -> PlayReport:
-        """Check and queue a plan. Raises ``SafetyRefusal`` (nothing queued) if refused.
-
-        A plan object played again is not re-checked: what plays is the private read-only
-        copy of its samples taken when it passed the check, so changing the caller's
-        arrays afterwards cannot slip past the gate (which also checks every block)."""
-        if self.gate.estopped:
-            raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
-        samples = self._checked_samples(plan)
-        steps: deque[_Step] = deque()
-        gap = round(plan.gap_s * plan.sample_rate_hz)
-        for i, seg in enumerate(plan.segments):
-            steps.append(_Step("relays", relays=self.relays_for(seg.patches, seg.screen)))
-            steps.append(_Step("play", cols=samples[i], n=seg.n_samples, segment=i))
-            if gap and i < len(plan.segments) - 1:
-                steps.append(_Step("silence", n=gap))
-        steps.append(_Step("relays", restore=True))
-        report = PlayReport(plan.name or "plan")
-        self._enqueue(_Job(steps, report))
-        return report
-
-    def precheck(self, plan: OutputPlan) -> None:
-        """Check ``plan`` now (``SafetyRefusal`` if refused) so that playing this plan
-        object later skips the check: what plays is still the copy checked here."""
-        self._checked_samples(plan)
-
-    def _checked_samples(self, plan: OutputPlan) -> tuple[tuple[np.ndarray, ...], ...]:
-        """Each segment's samples per output channel as checked (copied read-only;
-        checked once per plan object)."""
-        hit = self._checked.get(id(plan))
-        seg_ids = tuple(map(id, plan.segments))
-        if hit is not None and hit[0]() is plan and hit[2] == seg_ids:
-            return hit[1]
+    def check(self, plan: OutputPlan) -> CheckedPlan:
+        """Check ``plan`` against the limits; its private read-only samples. Raises
+        ``SafetyRefusal`` (the plan is never remembered then)."""
+        self.plans_checked += 1
         frozen = tuple(_frozen_segment(seg) for seg in plan.segments)
         check_plan(dataclasses.replace(plan, segments=frozen), self.limits)
         samples = tuple(tuple(self.layout.columns(seg)) for seg in frozen)
-        key = id(plan)
-        ref = weakref.ref(plan, lambda _r: self._checked.pop(key, None))
-        self._checked[key] = (ref, samples, seg_ids)
-        return samples
+        gap = round(plan.gap_s * plan.sample_rate_hz)
+        n = sum(seg.n_samples for seg in frozen) + gap * max(len(frozen) - 1, 0)
+        return CheckedPlan(
+            plan.name or "plan",
+            samples,
+            tuple((frozenset(seg.patches), bool(seg.screen)) for seg in frozen),
+            gap,
+            n / plan.sample_rate_hz,
+        )
 
-    def prearm(self, patches: frozenset[str], screen: bool) -> PlayReport | None:
+    def play(self, plan: CheckedPlan, *, owner: int = 0, on_change: Any = None) -> PlayReport:
+        """Queue a checked plan. Raises ``SafetyRefusal`` (nothing queued) during an
+        e-stop."""
+        self._refuse_if_estopped()
+        steps: deque[_Step] = deque()
+        last = len(plan.samples) - 1
+        for i, (cols, (patches, screen)) in enumerate(zip(plan.samples, plan.routes, strict=True)):
+            steps.append(_Step("relays", relays=self.relays_for(patches, screen)))
+            steps.append(_Step("play", cols=cols, n=cols[0].size, segment=i))
+            if plan.gap_samples and i < last:
+                steps.append(_Step("silence", n=plan.gap_samples))
+        steps.append(_Step("relays", restore=True))
+        report = PlayReport(plan.name, owner=owner, on_change=on_change)
+        self._enqueue(_Job(steps, report, owner=owner))
+        return report
+
+    def prearm(
+        self, patches: frozenset[str], screen: bool, *, owner: int = 0, on_change: Any = None
+    ) -> PlayReport | None:
         """Close the relays a plan's first segment needs ahead of it, in silence and
         through the gate like every switch (its guard gap before, its settling after), so
         that the plan, queued later, plays at the next block. Closing a relay to a silent
@@ -184,31 +231,33 @@ class Scheduler(Source):
         all open (an operator's setting is never overridden); ``None`` when not done.
         A newer pre-arm replaces one not started yet."""
         relays = self.relays_for(frozenset(patches), bool(screen))
-        report = PlayReport("prearm")
+        report = PlayReport("prearm", owner=owner, on_change=on_change)
         with self._lock:
-            if self.gate.estopped or self.operator_relays or self._others_queued():
+            if self.gate.estopped or self._operator_relays or self._others_queued():
                 return None
             self._drop_queued_prearms()
             current = self._job is not None and self._job.prearm
             if not current and self.gate.relay_state() == relays:
-                report.done.set()  # armed so already
+                report.finish()  # armed so already
                 return report
-            self._jobs.append(_Job(deque([_Step("relays", relays=relays)]), report, prearm=True))
+            job = _Job(deque([_Step("relays", relays=relays)]), report, prearm=True, owner=owner)
+            self._jobs.append(job)
         return report
 
-    def disarm(self) -> PlayReport | None:
+    def disarm(self, *, owner: int = 0, on_change: Any = None) -> PlayReport | None:
         """Cancel a pre-arm: the relays go back to the operator's setting (all open), in
         silence. A plan already queued behind it is left alone (it opens them when it
         ends); ``None`` when there was nothing to undo."""
-        report = PlayReport("disarm")
+        report = PlayReport("disarm", owner=owner, on_change=on_change)
         with self._lock:
             self._drop_queued_prearms()
             if self.gate.estopped or self._others_queued():
                 return None
             current = self._job is not None and self._job.prearm
-            if not current and self.gate.relay_state() == self.operator_relays:
+            if not current and self.gate.relay_state() == self._operator_relays:
                 return None
-            self._jobs.append(_Job(deque([_Step("relays", restore=True)]), report, prearm=True))
+            job = _Job(deque([_Step("relays", restore=True)]), report, prearm=True, owner=owner)
+            self._jobs.append(job)
         return report
 
     def _others_queued(self) -> bool:
@@ -220,54 +269,68 @@ class Scheduler(Source):
         """Pre-arms (and disarms) not started yet are dropped (under ``_lock``)."""
         for job in [j for j in self._jobs if j.prearm]:
             self._jobs.remove(job)
-            job.report.error = "replaced"
-            job.report.done.set()
+            job.report.finish("replaced")
 
-    def stream(self, source: StreamSource, name: str = "stream") -> PlayReport:
-        """Queue a live stream; it plays until it returns ``None`` (after its ramp-down)."""
-        if self.gate.estopped:
-            raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
+    def stream(
+        self, spec: StreamSpec, name: str = "stream", *, owner: int = 0, on_change: Any = None
+    ) -> tuple[PlayReport, StreamSynth]:
+        """Queue a live stream synthesised here from ``spec``; it plays until its synth
+        ends (after its ramp down). Refused (``SafetyRefusal``) when the spec breaks the
+        limits or the layout has no channel for it."""
+        self._refuse_if_estopped()
+        lim = self.limits
+        lo, hi = lim.piezo_range()
+        problem = spec_problem(
+            spec,
+            piezo_lo_v=lo,
+            piezo_hi_v=hi,
+            screen_peak_v=lim.screen_range()[1],
+            ramp_min_ms=lim.ramp_samples * 1e3 / lim.sample_rate_hz,
+            sample_rate_hz=lim.sample_rate_hz,
+        )
+        if problem:
+            raise SafetyRefusal(f"{name}: {problem}")
         if self.layout.independent:
-            missing = sorted(set(source.patches) - set(self.layout.patch_index))
+            missing = sorted(set(spec.patches) - set(self.layout.patch_index))
             if missing:
                 raise SafetyRefusal(
                     f"{name}: streams to {', '.join(missing)}, but [audio] channels = "
                     f"{list(self.layout.names)} has no channel for it"
                 )
+        synth = StreamSynth(spec)
+        bus = declared_peak_v(spec)
+        peak = tuple(
+            float(bus["screen"] if kind == "screen" else bus["piezo"])
+            for kind in self.layout.kinds()
+        )
         steps = deque(
             [
-                _Step(
-                    "relays", relays=self.relays_for(frozenset(source.patches), bool(source.screen))
-                ),
-                _Step("stream", stream=source, segment=0),
+                _Step("relays", relays=self.relays_for(frozenset(spec.patches), bool(spec.screen))),
+                _Step("stream", stream=synth, segment=0, peak=peak),
                 _Step("relays", restore=True),
             ]
         )
-        report = PlayReport(name)
-        self._enqueue(_Job(steps, report))
-        return report
+        report = PlayReport(name, owner=owner, on_change=on_change)
+        self._enqueue(_Job(steps, report, owner=owner))
+        return report, synth
 
-    def set_relays(self, closed: frozenset[int], name: str = "relays") -> PlayReport:
+    def set_relays(
+        self, closed: frozenset[int], name: str = "relays", *, owner: int = 0, on_change: Any = None
+    ) -> PlayReport:
         """The operator's relay setting (console toggles). Refused during an e-stop; while
         a stimulus plays it takes effect when the stimulus ends (its routing is only
         temporary); otherwise it switches in the next silence."""
-        if self.gate.estopped:
-            raise SafetyRefusal(
-                f"e-stop active ({self.gate.estop_reason}): relays stay open; reset first"
-            )
+        self._refuse_if_estopped(relays=True)
         n = len(self.gate.relays)
         bad = sorted(c for c in closed if not 1 <= c <= n)
         if bad:
             raise SafetyRefusal(f"relay channel {bad[0]} does not exist (board has {n})")
-        report = PlayReport(name)
-        job = _Job(deque([_Step("relays", restore=True)]), report)
+        report = PlayReport(name, owner=owner, on_change=on_change)
+        job = _Job(deque([_Step("relays", restore=True)]), report, owner=owner)
         with self._lock:
-            if self.gate.estopped:
-                raise SafetyRefusal(
-                    f"e-stop active ({self.gate.estop_reason}): relays stay open; reset first"
-                )
-            job.previous = self.operator_relays
-            self.operator_relays = frozenset(closed)
+            self._refuse_if_estopped(relays=True)
+            job.previous = self._operator_relays
+            self._operator_relays = frozenset(closed)
             self._jobs.append(job)
         return report
 
@@ -282,22 +345,42 @@ class Scheduler(Source):
             else:
                 return False
             if job.previous is not None:
-                self.operator_relays = job.previous
-        report.error = report.error or why
-        report.done.set()
+                self._operator_relays = job.previous
+        report.finish(why)
         return True
+
+    def abort_owner(self, owner: int, reason: str) -> int:
+        """A client went away (or asked): drop what it queued, ramp down what it plays
+        (its plan's rest becomes a ramp to zero, its stream ramps down), then the relays
+        go back to the operator's setting. How many jobs it touched."""
+        with self._lock:
+            mine = [j for j in self._jobs if j.owner == owner]
+            for job in mine:
+                self._jobs.remove(job)
+                if job.previous is not None:
+                    self._operator_relays = job.previous
+            current = self._job
+            if current is not None and current.owner == owner and not current.cancelled:
+                current.cancelled = reason
+                mine.append(current)
+        for job in mine:
+            if job is not current:
+                job.report.finish(f"stopped: {reason}")
+        return len(mine)
+
+    def _refuse_if_estopped(self, *, relays: bool = False) -> None:
+        if self.gate.estopped:
+            what = ": relays stay open; reset first" if relays else "; reset it first"
+            raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}){what}")
 
     def _enqueue(self, job: _Job) -> None:
         with self._lock:  # the e-stop flag is set before abort() takes this lock: no race
-            if self.gate.estopped:
-                raise SafetyRefusal(f"e-stop active ({self.gate.estop_reason}); reset it first")
+            self._refuse_if_estopped()
             self._jobs.append(job)
 
     def abort(self, reason: str) -> None:
         """E-stop: drop every job and pending relay command; the operator setting becomes
         all open (the e-stop opens every relay)."""
-        self._caller.interrupt()
-        self._caller = SourceCaller("haptable-stream")  # a stalled call keeps the old one
         with self._lock:
             self._epoch += 1  # switch requests queued before now are dropped
             jobs = list(self._jobs)
@@ -305,15 +388,12 @@ class Scheduler(Source):
                 jobs.insert(0, self._job)
             self._jobs.clear()
             self._job = None
-            self.operator_relays = frozenset()
-        streams = [st.stream for job in jobs for st in job.steps if st.stream is not None]
-        if streams:  # plugin code: never on the e-stop's own thread (it may hang)
-            threading.Thread(
-                target=_stop_streams, args=(streams,), name="haptable-stream-stop", daemon=True
-            ).start()
+            self._operator_relays = frozenset()
         for job in jobs:
-            job.report.error = job.report.error or f"stopped: {reason}"
-            job.report.done.set()
+            for st in job.steps:
+                if st.stream is not None:
+                    st.stream.request_stop()
+            job.report.finish(f"stopped: {reason}")
 
     @property
     def idle(self) -> bool:
@@ -349,6 +429,8 @@ class Scheduler(Source):
                 job = self._job
             if job is None:
                 break
+            if job.cancelled:
+                self._wind_down(job, cols, pos)
             if not job.steps:
                 self._finish(job)
                 continue
@@ -358,6 +440,8 @@ class Scheduler(Source):
                     job.report.segment_start.append(self.gate.clock + pos)
                     if job.report.t_first_sample_s is None:
                         job.report.t_first_sample_s = time.monotonic()
+                        job.report.changed("first_sample")
+                    job.report.changed("segment_start")
                 k = min(n - pos, st.n - st.pos)
                 for dst, src in zip(cols, st.cols, strict=True):
                     dst[pos : pos + k] = src[st.pos : st.pos + k]
@@ -367,6 +451,7 @@ class Scheduler(Source):
                 if st.pos >= st.n:
                     if st.segment >= 0:
                         job.report.segment_end.append(self.gate.clock + pos)
+                        job.report.changed("segment_end")
                     job.steps.popleft()
             elif st.kind == "silence":
                 k = min(n - pos, st.n - st.pos)
@@ -389,64 +474,85 @@ class Scheduler(Source):
                     break
         return cols if any_signal else None
 
-    def _pull_stream(self, job, st, cols, pos, n) -> int | None:
-        """Copy stream samples; return the position where the stream ended, or None.
+    def _wind_down(self, job: _Job, cols: tuple[np.ndarray, ...], pos: int) -> None:
+        """The owner of ``job`` went away (audio thread): a stream ramps down by its own
+        envelope; a plan's rest becomes a ramp to zero from the level it left off at;
+        then the relays go back to the operator's setting."""
+        st = job.steps[0] if job.steps else None
+        if st is not None and st.kind == "stream" and st.stream is not None:
+            st.stream.request_stop()
+            job.cancelled = ""  # it ends by itself now, then the relays restore
+            return
+        last = np.zeros(self.layout.n)
+        if st is not None and st.kind == "play" and st.pos > 0:
+            last = np.array([c[st.pos - 1] for c in st.cols])
+        elif pos > 0:
+            last = np.array([c[pos - 1] for c in cols])
+        tail = ramp_to_zero(
+            last, self.limits.column_steps_v(self.gate.closed_patches()), self.limits.ramp_samples
+        )
+        steps: deque[_Step] = deque()
+        if tail is not None:
+            steps.append(_Step("play", cols=tail, n=tail[0].size))
+        steps.append(_Step("relays", restore=True))
+        job.steps = steps
+        job.report.error = job.report.error or f"stopped: {job.cancelled}"
+        job.cancelled = ""
 
-        The stream's own code runs on a guarded thread: a stall longer than ``[limits]
-        source_stall_ms`` raises (the gate e-stops), an e-stop ends the wait at once. A
-        stream that stops mid-signal is ramped down at the slew limit, across blocks."""
-        src = st.stream
+    def _pull_stream(self, job, st, cols, pos, n) -> int | None:
+        """Copy the stream's next ``n - pos`` samples; the position where it ended, or
+        None while it goes on.
+
+        The stream is synthesised here from its checked parameters; its first samples
+        must rise under the start ramp to its declared peak (``stream_start_problem``)
+        and stay under that peak, or the block fails (the gate e-stops). A stream ends at
+        zero by its own ramp."""
+        synth = st.stream
         if st.pos == 0:
             job.report.segment_start.append(self.gate.clock + pos)
+            job.report.t_first_sample_s = time.monotonic()
+            job.report.changed("first_sample")
+            job.report.changed("segment_start")
             self._stream_k = 0
             self._stream_last = (0.0,) * self.layout.n
-        while pos < n:
-            try:
-                blk = self._caller.call(src.next_block, n - pos, self.limits.source_stall_s)
-            except SourceInterrupted:
-                return n  # the e-stop has it: the gate ramps down
-            if blk is None:
-                job.report.segment_end.append(self.gate.clock + pos)
-                tail = self._ramp_down(frozenset(src.patches))
-                if tail is not None:
-                    job.steps.insert(1, _Step("play", cols=tail, n=tail[0].size))
-                return pos
-            p, s = (np.asarray(a) for a in blk)
-            if p.dtype.kind not in "fiu" or s.dtype.kind not in "fiu":
-                raise ValueError(f"stream block has dtype {p.dtype}/{s.dtype}, not numbers")
-            p, s = p.astype(float, copy=False), s.astype(float, copy=False)
-            k = p.size
-            if k == 0 or k > n - pos or s.size != k or p.ndim != 1 or s.ndim != 1:
-                raise ValueError(f"stream returned {k} samples, asked for at most {n - pos}")
-            for x, lim in (
-                (p, max(map(abs, self.limits.piezo_range()))),
-                (s, self.limits.screen_range()[1]),
-            ):
-                if prob := stream_start_problem(x, self._stream_k, self.limits.ramp_samples, lim):
-                    raise ValueError(prob)
-            for dst, x in zip(cols, self.layout.from_bus(p, s, src.patches), strict=True):
-                dst[pos : pos + k] = x
-            self._stream_k += k
-            st.pos += k
-            pos += k
-            self._stream_last = tuple(float(dst[pos - 1]) for dst in cols)
+        blk = synth.next_block(n - pos)
+        if blk is None:
+            job.report.segment_end.append(self.gate.clock + pos)
+            job.report.changed("segment_end")
+            tail = ramp_to_zero(
+                np.array(self._stream_last),
+                self.limits.column_steps_v(frozenset(synth.spec.patches)),
+                self.limits.ramp_samples,
+            )
+            self._stream_last = (0.0,) * self.layout.n
+            if tail is not None:  # never: the synth ends at zero (kept as the rule)
+                job.steps.insert(1, _Step("play", cols=tail, n=tail[0].size))
+            return pos
+        p, s = blk
+        k = p.size
+        start = self.gate.clock + pos
+        parts = self.layout.from_bus(p, s, synth.spec.patches)
+        for x, peak in zip(parts, st.peak, strict=True):
+            if prob := stream_start_problem(x, self._stream_k, self.limits.ramp_samples, peak):
+                raise ValueError(prob)
+            if x.size and float(np.max(np.abs(x))) > peak * (1 + 1e-9) + 1e-9:
+                raise ValueError(f"live stream exceeds its declared peak of {peak:.1f} V")
+        for dst, x in zip(cols, parts, strict=True):
+            dst[pos : pos + k] = x
+        new = []  # pulses this block started: logged at the block's first stream sample
+        for cid, sample in reversed(synth.detent_log):
+            if sample < self._stream_k:
+                break
+            new.append((int(cid), start + int(sample) - self._stream_k))
+        if new:
+            now = time.monotonic()
+            job.report.detents.extend((cid, clock, now) for cid, clock in reversed(new))
+            job.report.changed("detent")
+        self._stream_k += k
+        st.pos += k
+        pos += k
+        self._stream_last = tuple(float(dst[pos - 1]) for dst in cols)
         return None
-
-    def _ramp_down(self, patches: frozenset[str]) -> tuple[np.ndarray, ...] | None:
-        """From the stream's last sample to zero on every channel: linear, over the start
-        ramp's length or longer where the slew limit needs it; ``None`` when it ended at
-        zero."""
-        last = np.array(self._stream_last)
-        self._stream_last = (0.0,) * self.layout.n
-        if not last.any():
-            return None
-        lim = self.limits
-        steps = lim.column_steps_v(patches)
-        need = max(
-            lim.ramp_samples, *(math.ceil(abs(v) / st) for v, st in zip(last, steps, strict=True))
-        )
-        r = np.linspace(1.0, 0.0, need + 1)[1:]
-        return tuple(v * r for v in last)
 
     def _relay_step(self, job: _Job, st: _Step) -> bool:
         """Advance a relay step; True when done (the block may continue)."""
@@ -454,7 +560,7 @@ class Scheduler(Source):
         if st.phase == "":
             if st.restore:
                 with self._lock:
-                    st.relays = self.operator_relays
+                    st.relays = self._operator_relays
             if gate.relay_state() == st.relays:
                 job.steps.popleft()
                 if job.previous is not None:  # an operator command: it is now in force
@@ -478,11 +584,10 @@ class Scheduler(Source):
                 if token == st.token:
                     break  # (an answer to a request of an aborted job is dropped)
             if not ok:
-                job.report.error = msg
                 if job.previous is not None:
                     with self._lock:
-                        self.operator_relays = job.previous
-                self._finish(job)
+                        self._operator_relays = job.previous
+                self._finish(job, msg)
                 return False
             st.phase = "settling"
         if st.phase == "settling":
@@ -492,11 +597,11 @@ class Scheduler(Source):
             return True
         return False
 
-    def _finish(self, job: _Job) -> None:
+    def _finish(self, job: _Job, error: str = "") -> None:
         with self._lock:
             if self._job is job:
                 self._job = None
-        job.report.done.set()
+        job.report.finish(error)
 
     def _relay_worker(self) -> None:
         from console.realtime import SUPPORT_PRIORITY, realtime_priority
@@ -520,14 +625,6 @@ class Scheduler(Source):
 
     def close(self) -> None:
         self._switch_q.put(None)
-
-
-def _stop_streams(streams: list[StreamSource]) -> None:
-    for stream in streams:
-        try:
-            stream.request_stop()
-        except Exception:
-            log.exception("stream stop failed")
 
 
 def _frozen_segment(seg: Segment) -> Segment:

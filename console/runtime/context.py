@@ -1,5 +1,5 @@
 """What a command (and the console) gets: the profile, loaded on first use, the plugins, and
-the profile's outputs behind the safety gate, which another process's e-stop ends."""
+the profile's outputs (its table's kernel), which an e-stop from elsewhere ends."""
 
 from __future__ import annotations
 
@@ -17,7 +17,6 @@ class Context:
         self.profile_arg = profile_arg
         self.pm = plugins
         self._remote_stops: list = []
-        self.estop_first: tuple[list, str] | None = None  # `haptable estop`'s early reach
 
     @property
     def estopped_by(self) -> str | None:
@@ -32,19 +31,23 @@ class Context:
 
     @contextlib.contextmanager
     def outputs(self, fast: bool | None = None) -> Iterator:
-        """The profile's outputs behind the safety gate; silent and open on leaving.
+        """The profile's outputs (its table's kernel); this command's share is released
+        on leaving (what it plays ramps down).
 
-        An e-stop from another process (`haptable estop`) ends the command: whatever it
-        was doing is interrupted and ``EStopped`` leaves (exit status 4). With
+        A table whose e-stop is latched refuses to open (``EStopLatched``, one line). An
+        e-stop from elsewhere (`haptable estop`, the console) ends the command: whatever
+        it was doing is interrupted and ``EStopped`` leaves (exit status 4). With
         ``$HAPTABLE_TWIN_LOG`` set, the twin's log is written there on leaving."""
-        from console.runtime.outputs import open_outputs
-        from console.runtime.outputs_registry import RemoteStop
-        from console.runtime.twin_log import write_env_twin_log
+        import os
+
+        from console.kernel.client import open_outputs
+        from console.runtime.remote_stop import RemoteStop
+        from console.runtime.twin_log import ENV, write_env_twin_log
 
         out = open_outputs(self.profile, self.pm, fast=fast)
         stop = None
         try:
-            stop = RemoteStop(out.registration)  # from here its interrupt may come
+            stop = RemoteStop(out)  # from here its interrupt may come
             self._remote_stops.append(stop)
             try:
                 yield out
@@ -57,7 +60,7 @@ class Context:
                 raise EStopped(stop.reason) from None
             raise
         finally:
-            out.close()
+            out.close(keep_record=bool(os.environ.get(ENV)))
             write_env_twin_log(out)
         if stop.reason:
             raise EStopped(stop.reason)

@@ -1,9 +1,9 @@
 """The console's command channel, and "one console at a time" per user and profile.
 
 A console holds an exclusive lock on ``console-<profile>-<key>.lock`` in the private
-runtime directory (``console.runtime.private_dir``) while it runs: the lock ends with the
+runtime directory (``console.kernel.private_dir``) while it runs: the lock ends with the
 process, so the socket of a console that died is never taken for another console. Beside
-it, ``console-<profile>-<key>.sock`` (0600, ``console.runtime.line_server``: bounded lines,
+it, ``console-<profile>-<key>.sock`` (0600, ``console.kernel.line_server``: bounded lines,
 a deadline per connection, peers of this uid only) answers ``ping`` and ``estop`` (which
 also stops what the console's screens run). The outputs themselves are reached by
 `haptable estop` through ``console.runtime.outputs_registry``, like any process's.
@@ -13,19 +13,18 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
-import hashlib
 import os
 from collections.abc import Callable
 from pathlib import Path
 
 from console.errors import UserError
-from console.runtime.line_server import LineServer, PeerRefused, request
-from console.runtime.private_dir import open_private, runtime_dir
+from console.kernel.line_server import LineServer, PeerRefused, request
+from console.kernel.private_dir import open_private
+from console.kernel.tables import table_for
 
 
 def socket_path(profile) -> Path:
-    key = hashlib.sha1(str(profile.path).encode()).hexdigest()[:10]
-    return runtime_dir() / f"console-{profile.name}-{key}.sock"
+    return table_for(profile.path).ensure().dir / "console.sock"
 
 
 def send_command(profile, command: str, timeout_s: float = 1.0) -> str | None:
@@ -51,7 +50,7 @@ class ControlServer:
 
     def __init__(self, profile, handler: Callable[[str], str]):
         self.path = socket_path(profile)
-        self.lock_path = self.path.with_suffix(".lock")
+        self.lock_path = table_for(profile.path).console_lock
         self.handler = handler
         self._lock_fd = open_private(self.lock_path, append=True)
         try:

@@ -1,10 +1,11 @@
-"""A demo in its own process: the frame loop, the outputs and nothing else.
+"""A demo in its own process: the frame loop and nothing else.
 
 The console's interpreter draws the screens; a frame loop beside it shares its GIL and
-misses the loop's latency target (and the audio its blocks) whenever the console paints.
-So the console runs a demo here, as it runs the projector: ``python -m
-console.runtime.demo_host`` opens the profile's outputs, starts the registered demo
-(``haptable_register_demos``) and talks over its standard streams, one JSON object a line.
+misses the loop's latency target whenever the console paints. So the console runs a demo
+here, as it runs the projector: ``python -m console.runtime.demo_host`` joins the table's
+outputs kernel (the console's table: ``table_dir`` in the request), starts the registered
+demo (``haptable_register_demos``) and talks over its standard streams, one JSON object a
+line. An e-stop of the table (from anywhere) ends the run.
 
 In (stdin, after the pickled start request): ``{"cmd": "stop"}``, ``{"cmd": "estop",
 "reason": ...}``, ``{"cmd": "target", "pos_mm": [x, y] | null}`` (the operator's finger
@@ -132,6 +133,12 @@ class Host:
                 pos = msg.get("pos_mm")
                 cam.set_target(None if pos is None else (float(pos[0]), float(pos[1])))
 
+    def _on_table(self, kind: str, message: str) -> None:
+        if kind == "estop":  # the table is silent already: the run ends
+            if self.estop_reason is None:
+                self.estop_reason = message
+            self.stop_asked.set()
+
     def estop(self, reason: str) -> None:
         if self.estop_reason is None:
             self.estop_reason = reason
@@ -153,8 +160,9 @@ class Host:
         return snap
 
     def serve(self) -> int:
+        from console.kernel.client import open_outputs
+        from console.kernel.tables import table_at
         from console.plugins import load_plugins
-        from console.runtime.outputs import open_outputs
 
         req = self.request
         profile, name = req["profile"], req["demo"]
@@ -164,8 +172,9 @@ class Host:
             self.proto.send("error", f"demo {name!r}: no plugin registers it in this process")
             return 2
         self.proto.send("step", "opening the outputs")
-        self.outputs = open_outputs(profile, pm, fast=False)
-        self.outputs.registration.listeners.append(self.estop)  # `haptable estop` ends the run
+        table = table_at(req["table_dir"]) if req.get("table_dir") else None
+        self.outputs = open_outputs(profile, pm, fast=bool(req.get("fast")), table=table)
+        self.outputs.add_listener(self._on_table)  # an e-stop of the table ends the run
         if self.estop_reason is not None:
             self.outputs.estop(self.estop_reason)
         try:
@@ -256,7 +265,16 @@ class _SceneOut:
         return {}
 
 
+def _on_term(signum: int, frame: Any) -> None:
+    """SIGTERM (the console gave up waiting for a stop): leave through ``serve``'s own
+    way out (the run stopped, the table left), exit 128 + the signal."""
+    raise SystemExit(128 + signum)
+
+
 def main() -> int:
+    import signal
+
+    signal.signal(signal.SIGTERM, _on_term)
     proto = _Protocol(os.fdopen(os.dup(1), "w", buffering=1))
     os.dup2(2, 1)  # a stray print must not break the protocol
     sys.stdout = sys.stderr

@@ -4,8 +4,8 @@
 preparation; ``snapshot()`` is the newest status it sent (the demo's latency, watchdog,
 state, plus its outputs and what its camera saw), ``status_lines(snapshot)`` what the
 operator reads of one (the demo plugin formats it); ``stop``/``estop``/``set_target`` send
-commands. The process owns the profile's outputs while it runs: the console hands its own
-over first (a sound card or relay board opens once) and takes them back after.
+commands. The process is a client of the table's outputs kernel, as the console is
+(``table_dir``: the console's table; without it, the profile's own).
 """
 
 from __future__ import annotations
@@ -41,6 +41,8 @@ class DemoProcess:
         on_scene: Callable[[dict], Any] | None = None,
         twin_log: str | os.PathLike | None = None,
         plugins: Any = None,
+        table_dir: str | os.PathLike | None = None,
+        fast: bool = False,
     ) -> None:
         self.name = name
         self._plugins = plugins  # whose demo registration formats the snapshots
@@ -61,7 +63,13 @@ class DemoProcess:
         # the process's stderr (its traceback if it fails), kept while it lives
         self._log = tempfile.TemporaryFile(mode="w+", prefix="haptable-demo-")  # noqa: SIM115
         self.twin_log = str(twin_log) if twin_log else None
-        request = {"profile": profile, "demo": name, "params": params or {}}
+        request = {
+            "profile": profile,
+            "demo": name,
+            "params": params or {},
+            "table_dir": str(table_dir) if table_dir else None,
+            "fast": bool(fast),
+        }
         if self.twin_log:
             request["twin_log"] = self.twin_log
         blob = pickle.dumps(request)
@@ -188,7 +196,7 @@ class DemoProcess:
                 self._stop_reason = reason
         self._send({"cmd": "stop"})
         if not self._ended.wait(timeout_s):
-            self.proc.terminate()  # SIGTERM: the host's emergency hook e-stops its gate
+            self.proc.terminate()  # SIGTERM: the host leaves the table (its plans ramp down)
             if not self._ended.wait(5.0):
                 self.proc.kill()
                 self._ended.wait(5.0)
@@ -247,12 +255,6 @@ class DemoProcess:
 
             self._plugins = load_plugins()
         return list(self._plugins.get("demo", self.name).factory.status_lines(snapshot))
-
-    def outputs_status(self) -> dict | None:
-        """The demo's outputs (gate, audio, busy) as its last status said."""
-        with self._lock:
-            st = self._status
-        return None if st is None else st.get("outputs")
 
     def wait_ended(self, timeout_s: float) -> bool:
         return self._ended.wait(timeout_s)

@@ -52,7 +52,7 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
 
 def realtime_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread can keep its memory in RAM (``[audio] lock_memory``)."""
-    from console.runtime.memory_lock import HOW_TO_ALLOW, _may_lock
+    from console.kernel.memory_lock import HOW_TO_ALLOW, _may_lock
 
     if not profile.get("audio.lock_memory"):
         return DeviceStatus("realtime", "memory", "ok", "lock_memory = false: not asked for")

@@ -23,7 +23,7 @@ import time
 
 def probe(seconds: float, period_s: float, slack_s: float) -> dict:
     """Wake every ``period_s`` for ``seconds`` on a real-time thread; lateness stats."""
-    from .memory_lock import lock_memory
+    from console.kernel.memory_lock import lock_memory
 
     locked, _ = lock_memory()
     late: list[float] = []

@@ -10,7 +10,7 @@ column per ``[audio] channels`` name) and each played segment's waveforms
 its own) so a test can check sample by sample that what was auditioned is what the
 amplifiers received. The
 gate's events (e-stops, switches, with their sample clock) are listed too. Both files are
-written without following a symlink (``console.runtime.private_dir``).
+written without following a symlink (``console.kernel.private_dir``).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from console.runtime.private_dir import open_private, write_private
+from console.kernel.private_dir import open_private, write_private
 
 ENV = "HAPTABLE_TWIN_LOG"
 
@@ -93,10 +93,16 @@ def _plan_entry(plan, i: int, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
 
 
 def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | None:
-    """Write the JSON summary (and the .npz of samples) for ``outputs``; ``played`` lists
-    the ``OutputPlan``s the console sent. Returns the JSON path (None on real hardware)."""
-    rec = outputs.recording()
-    log = outputs.relay_log()
+    """Write the JSON summary (and the .npz of samples) for ``outputs``: open ones, or
+    closed ones that kept their ``record`` (``close(keep_record=True)``); ``played`` lists
+    the ``OutputPlan``s the console sent. Returns the JSON path (None on real hardware, or
+    when nothing was kept)."""
+    record = outputs.record
+    if record is None:
+        if outputs.closed or outputs.lost:
+            return None
+        record = outputs.snapshot()
+    rec, log = record.recording_v, record.relay_log
     if rec is None and log is None:
         return None
     fs = int(outputs.limits.sample_rate_hz)
@@ -116,11 +122,17 @@ def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | Non
             for r in (log or [])
         ],
         "played": [_plan_entry(p, i, arrays) for i, p in enumerate(played)],
-        "estop_reason": outputs.gate.estop_reason,
-        "latency_samples": int(outputs.gate.latency_samples),
+        "estop_reason": record.estop_reason,
+        "latency_samples": int(record.latency_samples),
         "gate_events": [
-            {"kind": e.kind, "clock": int(e.clock), "message": e.message, "cut": e.cut}
-            for e in list(outputs.gate.events)
+            {
+                "kind": e.kind,
+                "clock": int(e.clock),
+                "t_s": float(e.t_s),
+                "message": e.message,
+                "cut": e.cut,
+            }
+            for e in record.events
         ],
     }
     p = Path(path)

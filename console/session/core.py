@@ -2,7 +2,7 @@
 
 The camera service, vibration session, demo lifecycle and projector service hang off the
 session as attributes (``camera``, ``vibration``, ``demos``, ``projector``), each in its own
-module of this package. Blocking calls (open, hand over, play, close) run on the caller's
+module of this package. Blocking calls (open, play, close) run on the caller's
 thread: screens call them from workers.
 """
 
@@ -130,12 +130,13 @@ class ConsoleSession:
         self.emit(Failed(topic, name, message=message, severity=severity))
 
     # ------------------------------------------------------------------ outputs
-    def open_outputs(self, estop_reason: str | None = None) -> bool:
-        """Open the profile's outputs (again after a demo: ``estop_reason`` keeps an e-stop
-        that happened meanwhile until the operator resets it). Blocking. The first call
-        also takes the console's control socket: a second console opens no outputs."""
+    def open_outputs(self) -> bool:
+        """Connect to the profile's table (its kernel starts when none runs), opening into
+        a latched e-stop if there is one (the safety bar shows it; ctrl+r resets it).
+        Blocking. The first call also takes the console's control socket and lock: a
+        second console of the same profile opens no outputs."""
+        from console.kernel.client import Outputs
         from console.runtime.control import ControlServer
-        from console.runtime.outputs import open_outputs
 
         if self.closed:
             return False
@@ -147,13 +148,18 @@ class ConsoleSession:
                 self.emit(Stopped("outputs", reason=self.outputs_error))
                 return False
         try:
-            out = open_outputs(self.outputs_profile or self.profile, self.plugins, fast=self.fast)
+            out = Outputs(
+                self.outputs_profile or self.profile,
+                self.plugins,
+                fast=self.fast,
+                allow_latched=True,
+                role="console",
+            )
         except Exception as exc:  # noqa: BLE001 - shown in the bar; the console stays usable
             self.outputs_error = str(exc)
             self.emit(Stopped("outputs", reason=self.outputs_error))
             return False
-        if estop_reason:
-            out.estop(estop_reason)
+        out.add_listener(self._on_table_event)
         with self._lock:
             if self.closed:  # closed while opening: nobody will close these
                 out.close()
@@ -163,37 +169,34 @@ class ConsoleSession:
         self.emit(Started("outputs"))
         return True
 
-    def hand_over_outputs(self, borrower: str) -> None:
-        """Close the console's outputs for ``borrower`` (a demo process opens them: a sound
-        card or relay board opens once). Refused while they play or are e-stopped.
-        Blocking; ``open_outputs`` takes them back."""
-        with self._lock:
-            out = self.outputs
-            if out is None:
-                raise UserError(
-                    f"{borrower}: outputs not open ({self.outputs_error or 'starting'})"
-                )
-            if out.gate.estopped:
-                raise UserError(f"{borrower}: the e-stop is active; ctrl+r resets it")
-            if out.status()["busy"]:
-                raise UserError(f"{borrower}: the outputs are playing; wait or stop them (s)")
-            self.outputs = None
-            self.outputs_error = f"in use by {borrower} (its own process)"
-        out.close()
-        self.emit(Stopped("outputs", reason=self.outputs_error))
+    def _on_table_event(self, kind: str, message: str) -> None:
+        """The table's kernel said: an e-stop (from anywhere: `haptable estop`, a demo's
+        watchdog, a fault), a reset, or that it ended."""
+        if kind == "estop":
+            if self.demos.run is not None:
+                threading.Thread(
+                    target=self.demos.stop,
+                    args=("e-stopped",),
+                    name="haptable-demo-estop",
+                    daemon=True,
+                ).start()
+            self.emit(Stopped("estop", reason=message))
+        elif kind == "reset":
+            self.emit(Started("estop", detail=message))
 
     def reopen_outputs(self, profile: Any) -> bool:
-        """Close the console's outputs and open ``profile``'s (the console's profile
-        reloaded after another sound card or relay board was saved to it). Refused with
-        one line (``UserError``) while they play, are e-stopped or a demo holds them.
-        Blocking; True when the new outputs opened. When they fail to open, the previous
-        profile's outputs open again and ``reopen_error`` says what failed (False)."""
+        """Leave the table's outputs and open ``profile``'s (the console's profile
+        reloaded after another sound card or relay board was saved to it: the table's
+        kernel is replaced when nothing else uses it). Refused with one line
+        (``UserError``) while they play, are e-stopped or a demo runs. Blocking; True when
+        the new outputs opened. When they fail to open, the previous profile's outputs
+        open again and ``reopen_error`` says what failed (False)."""
         with self._lock:
             out = self.outputs
-            if out is None and self.demos.run is not None:
-                raise UserError("a demo holds the outputs; stop it first (Scenes, s)")
+            if self.demos.run is not None:
+                raise UserError("a demo uses the outputs; stop it first (Scenes, s)")
             if out is not None:
-                if out.gate.estopped:
+                if out.estopped:
                     raise UserError("the e-stop is active; ctrl+r resets it first")
                 if out.status()["busy"]:
                     raise UserError("the outputs are playing; wait or stop them first")
@@ -245,16 +248,19 @@ class ConsoleSession:
         """The last ``seconds`` (all kept: None) of what the gate handed the driver, per
         channel in volts at the actuators (``console.safety.scope.ScopeTrace``, with the
         gate's e-stops and relay switches inside it as marks); None while the console
-        holds no outputs (a demo process has them, or they never opened)."""
+        holds no outputs (they never opened, or the table's kernel went away)."""
         out = self.outputs
         if out is None:
             return None
-        gate = out.gate
-        trace = gate.scope.read(seconds)
+        try:
+            trace = out.scope(seconds)
+            events = out.events()
+        except SafetyRefusal:
+            return None
         end = trace.clock + trace.n
         marks = tuple(
             (ev.clock, ev.kind, ev.message)
-            for ev in list(gate.events)
+            for ev in events
             if trace.clock <= ev.clock < end and ev.kind in ("estop", "fault", "switch")
         )
         return dataclasses.replace(trace, marks=marks)
@@ -267,19 +273,22 @@ class ConsoleSession:
 
         if not report.done.wait(3600) or not report.segment_start:
             return
-        fs = out.gate.scope.sample_rate_hz
+        fs = out.limits.sample_rate_hz
         margin = int(round(PLAN_MARGIN_S * fs))
-        if len(report.segment_end) < len(report.segment_start):  # stopped (an e-stop):
-            newest = out.gate.scope.read(0.0)  # keep its ramp to silence too
-            end = newest.clock + newest.n + int(round(STOPPED_TAIL_S * fs))
-        else:
-            end = report.segment_end[-1]
-        deadline = time.monotonic() + 1.0
-        while time.monotonic() < deadline:  # the margin after it reaches the ring
-            newest = out.gate.scope.read(0.0)
-            if newest.clock + newest.n >= end + margin or self.outputs is not out:
-                break
-            time.sleep(0.01)
+        try:
+            if len(report.segment_end) < len(report.segment_start):  # stopped (an e-stop):
+                newest = out.scope(0.0)  # keep its ramp to silence too
+                end = newest.clock + newest.n + int(round(STOPPED_TAIL_S * fs))
+            else:
+                end = report.segment_end[-1]
+            deadline = time.monotonic() + 1.0
+            while time.monotonic() < deadline:  # the margin after it reaches the ring
+                newest = out.scope(0.0)
+                if newest.clock + newest.n >= end + margin or self.outputs is not out:
+                    break
+                time.sleep(0.01)
+        except SafetyRefusal:
+            return
         if self.outputs is not out:
             return
         whole = self.scope(None)
@@ -324,16 +333,17 @@ class ConsoleSession:
         return self.play_plan(plan, wait=wait)
 
     def estop(self, reason: str) -> None:
-        """Silence every output now: the console's own, or every process holding outputs
-        (a demo process) when the console has handed its outputs over; a running demo
-        then stops (on a thread: the e-stop itself never waits)."""
+        """Silence every output of the table now and latch the e-stop (its kernel tells
+        every process using it: a running demo stops); without outputs here, the table
+        is e-stopped the way `haptable estop` does it."""
         out = self.outputs
-        if out is not None:
+        if out is not None and not out.lost:
             out.estop(reason)
         else:
-            from console.safety import estop_all
+            from console.kernel.shell import estop as shell_estop
 
-            estop_all(reason)
+            with contextlib.suppress(Exception):
+                shell_estop(str(self.profile.path), 2.0)
         if self.demos.run is not None:
             self.demos.estop(reason)
             threading.Thread(
@@ -342,24 +352,32 @@ class ConsoleSession:
         self.emit(Stopped("estop", reason=reason))
 
     def reset_estop(self) -> bool:
+        """The operator's reset (ctrl+r): the kernel clears the latch for the console
+        (it checks the console's lock); a refusal is a ``Failed`` event."""
         out = self.outputs
-        if out is not None and out.gate.estopped:
-            out.reset()
-            return True
-        return False
+        if out is None or not out.estopped:
+            return False
+        try:
+            out.reset("the console (ctrl+r)")
+        except SafetyRefusal as exc:
+            self.fail("estop", str(exc), name="reset refused")
+            return False
+        return True
 
     def output_status(self) -> tuple[dict | None, Any]:
-        """(status, relay log) of the outputs: the console's, else what the running demo
-        process last said of its own (status None: nobody holds them)."""
+        """(status, relay log) of the table's outputs (status None: not open)."""
         out = self.outputs
-        if out is not None:
+        if out is None:
+            return None, None
+        try:
             return out.status(), out.relay_log()
-        return self.demos.outputs_status(), None
+        except SafetyRefusal:
+            return None, None
 
     # ------------------------------------------------------------------ exit
     def silence(self) -> None:
-        """Quitting, first of all: close the console's outputs now (they ramp to silence
-        and open the relays; the twin log is written); none open again. Idempotent."""
+        """Quitting, first of all: leave the table's outputs now (what the console plays
+        ramps down in the kernel; the twin log is written); none open again. Idempotent."""
         with self._lock:
             if self.closed:
                 return
@@ -368,12 +386,12 @@ class ConsoleSession:
         if out is None:
             return
         path = os.environ.get("HAPTABLE_TWIN_LOG")
+        out.close(keep_record=bool(path))
         if path:
             from console.runtime.twin_log import write_twin_log
 
             with contextlib.suppress(Exception):  # never block the shutdown
                 write_twin_log(path, out, list(self.played))
-        out.close()
 
     def close(self) -> None:
         """Silence the outputs, then stop everything the session runs: the demo (its
@@ -392,13 +410,10 @@ class ConsoleSession:
                 self._control.close()
 
     def abandon(self, reason: str) -> None:
-        """``close`` did not finish in time (a demo or the projector hangs): silence every
-        process still holding outputs now. Never blocks."""
+        """``close`` did not finish in time (a demo or the projector hangs): the demo is
+        told to stop; the table's kernel ramps down what this console played when its
+        connection closes. Never blocks."""
         self.demos.estop(reason)
-        from console.safety import estop_all
-
-        with contextlib.suppress(Exception):
-            estop_all(reason)
 
     def _close_camera(self) -> None:
         if self._camera is not None:

@@ -1,10 +1,11 @@
-"""The demo lifecycle: a registered demo run in its own process on the console's outputs,
+"""The demo lifecycle: a registered demo run in its own process on the console's table,
 camera and projector.
 
-``DemoControl.start(name)`` hands the outputs and the camera over (each opens once),
-starts the ``DemoProcess``, waits for it to run (``progress``/``cancelled`` follow its
-preparation) and forwards its scene events to the projector; ``stop()`` stops it, shows
-black if it showed its scene and takes outputs and camera back. It reports events with
+``DemoControl.start(name)`` hands the camera over (it opens once), starts the
+``DemoProcess`` on the console's table (a client of the same outputs kernel), waits for
+it to run (``progress``/``cancelled`` follow its preparation) and forwards its scene
+events to the projector; ``stop()`` stops it, shows black if it showed its scene and
+takes the camera back. It reports events with
 topic ``demo``: ``Progress`` while it prepares, ``Started`` when it runs, ``Snapshot``
 (``poll()``), ``Stopped`` (``reason``: stopped, cancelled, e-stopped, an error ...) and
 ``Failed``. Blocking calls run on the caller's thread: screens call them from workers.
@@ -27,7 +28,7 @@ def twin_log_path(name: str) -> Path:
     """Where a demo process writes what the twin's outputs received (``.json`` bursts and
     relay switches, ``.npz`` samples: ``console.runtime.twin_log``): the private runtime
     directory; the next run of the same demo overwrites it."""
-    from console.runtime.private_dir import runtime_dir
+    from console.kernel.private_dir import runtime_dir
 
     return runtime_dir() / f"demo-{os.getpid()}-{name}.json"
 
@@ -92,7 +93,7 @@ class DemoControl:
         out = s.outputs
         if out is None:
             raise UserError(f"demo {name}: outputs not open ({s.outputs_error or 'starting'})")
-        if out.gate.estopped:
+        if out.estopped:
             raise UserError(f"demo {name}: the e-stop is active; ctrl+r resets it")
 
     def start(
@@ -122,12 +123,12 @@ class DemoControl:
         params = dict(self.params.get(name, {}))
         run = None
         try:
-            step(0.0, "handing over the outputs and the camera")
+            step(0.0, "handing over the camera")
             camera = s.camera
             vision = camera.params()
             if vision:
                 params.setdefault("vision", vision)  # the Camera screen's tuned thresholds
-            s.hand_over_outputs(f"demo {name}")
+            out = s.outputs
             try:
                 camera.release(f"demo {name}")
                 if cancelled():
@@ -141,6 +142,8 @@ class DemoControl:
                     on_scene=fwd.update if fwd is not None else None,
                     twin_log=twin_log_path(name),
                     plugins=s.plugins,
+                    table_dir=out.table.dir,
+                    fast=out.fast,
                 )
                 self.run, self._forward = run, fwd
                 run.wait_started(step, cancelled)
@@ -166,8 +169,8 @@ class DemoControl:
     # ------------------------------------------------------------------ stop
     def stop(self, reason: str = "stopped") -> str:
         """Stop the running demo (blocking): the process lets the playing plan end,
-        closes its outputs and exits; black on the projector if it showed its scene;
-        outputs and camera taken back. Returns how it ended (``Stopped`` says so too)."""
+        leaves the table and exits; black on the projector if it showed its scene; the
+        camera taken back. Returns how it ended (``Stopped`` says so too)."""
         with self._lock:
             run, name = self.run, self.name
             if run is None or name is None or self._stopping is run:
@@ -183,7 +186,8 @@ class DemoControl:
         return reason
 
     def estop(self, reason: str) -> None:
-        """The e-stop: the demo process silences its outputs now (``stop`` then ends it)."""
+        """The e-stop: the demo process is told at once (the table's kernel silenced its
+        outputs already; ``stop`` then ends it)."""
         run = self.run
         if run is not None:
             run.estop(reason)
@@ -203,16 +207,8 @@ class DemoControl:
                 self._take_back(run)
 
     def _take_back(self, run: Any) -> None:
-        """The demo process has ended: the console's camera and outputs again (an e-stop
-        it had stays until the operator resets it). Not once the session closes."""
-        s = self.session
-        s.camera.give_back()
-        if s.closed or s.outputs is not None:
-            return
-        reason = run.estop_reason if run is not None else None  # None: it never started
-        if reason is None and run is not None and run.crashed:
-            reason = f"demo {run.name}: {run.exit_reason}"
-        s.open_outputs(reason)
+        """The demo process has ended: the console's camera again."""
+        self.session.camera.give_back()
 
     def _ended(self, name: str, reason: str) -> None:
         with self._lock:
@@ -250,11 +246,6 @@ class DemoControl:
                 daemon=True,
             ).start()
         return snap
-
-    def outputs_status(self) -> dict | None:
-        """The running demo's outputs (for the safety bar while the demo holds them)."""
-        run = self.run
-        return run.outputs_status() if run is not None else None
 
     def set_target(self, pos_mm: tuple[float, float] | None) -> bool:
         """The operator's finger on the twin the running demo watches (None lifts it);

@@ -276,9 +276,14 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     return res
 
 
+def _twin(profile: Any, pm: Any) -> bool:
+    """The profile's audio output and relay board are the twin's (their probes say so)."""
+    return pm.simulated("audio_output", profile) and pm.simulated("relay_board", profile)
+
+
 def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
+    from console.kernel.client import open_outputs
     from console.runtime.jitter import finish_probe, start_probe
-    from console.runtime.outputs import open_outputs
 
     from .run import start_demo
 
@@ -292,7 +297,8 @@ def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     tot = {"frames": 0, "dropped_queue": 0, "dropped_camera": 0, "errors": 0, "crossings": 0}
     warm_rss = None
     last_snap: dict = {}
-    with open_outputs(prof, pm, fast=False) as out:
+    private = _twin(prof, pm)  # its own table: it may reset its watchdog's e-stops there
+    with open_outputs(prof, pm, fast=False, private=private) as out:
         rss0 = rss_mb()
         a = out.status()["audio"]
         period_s = a["block_size"] / a["sample_rate_hz"]
@@ -344,7 +350,10 @@ def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
                 trips.append(
                     {"t_s": round(time.monotonic() - t0, 1), "reason": run_.watchdog.reason}
                 )
-                out.reset()
+                if not private:  # an operator's table: only an operator resets it
+                    break
+                out.wait_safe(5.0)
+                out.reset("the soak on its own twin table")
         ran_s = time.monotonic() - t0
         jitter = finish_probe(probe)
         rss1 = rss_mb()

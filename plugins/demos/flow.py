@@ -35,14 +35,14 @@ log = logging.getLogger("haptable.demos.flow")
 
 @runtime_checkable
 class Prechecks(Protocol):
-    """Outputs that check a plan ahead of playing it (``console.runtime.outputs``)."""
+    """Outputs that check a plan ahead of playing it (``console.kernel.client``)."""
 
     def precheck(self, plan: Any) -> None: ...
 
 
 @runtime_checkable
 class Prearms(Protocol):
-    """Outputs that close a plan's first relays ahead of it (``console.runtime.outputs``)."""
+    """Outputs that close a plan's first relays ahead of it (``console.kernel.client``)."""
 
     def prearm(self, patches: frozenset[str], screen: bool) -> Any: ...
 

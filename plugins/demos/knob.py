@@ -50,6 +50,8 @@ class KnobDemo:
         self.crossings_total = 0
         self.events: list[dict] = []
         self.frames_touching = 0
+        #: crossing id -> when it was posted to the stream (monotonic s; bounded)
+        self._posted: dict[int, float] = {}
 
     def start(self, progress=None) -> None:
         if self.scene is not None:
@@ -68,6 +70,12 @@ class KnobDemo:
         pts = [c for c in contacts if c.pos_mm is not None] or list(contacts)
         t = frame.t_capture_s
         crossed = self.session.feed(t, pts)
+        if crossed:
+            now = time.monotonic()
+            for cid in list(self.session.crossing_ids)[-len(crossed) :]:
+                self._posted[int(cid)] = now
+            while len(self._posted) > 512:
+                self._posted.pop(next(iter(self._posted)))
         tr = self.session.tracker
         work["knob"] = {
             "angle_deg": float(tr.angle_deg),
@@ -83,6 +91,14 @@ class KnobDemo:
             self.crossings.append(
                 {"t_s": c.t_s, "seq": frame.seq, "item": c.to_item, "direction": c.direction}
             )
+
+    def crossing_to_output_s(self) -> list[float]:
+        """Per crossing the outputs reported: from its post to the stream to the block
+        holding its detent's first sample handed to the audio driver (seconds)."""
+        rep = self.report
+        if rep is None:
+            return []
+        return [t - self._posted[cid] for cid, _, t in list(rep.detents) if cid in self._posted]
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         # feed() posted to the stream; its next block (<= one audio block away) plays it

@@ -66,8 +66,8 @@ class ScenesPane(Vertical):
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
         "space    on the twin: your finger touches the table (again: lifts it); arrows\n"
         "         lift it and touch 20 mm further (a flow plays under a resting hand)\n"
-        "A demo runs in its own process with the console's outputs and camera (handed\n"
-        "over until it ends) and, when the projector runs, shows its scene there.\n"
+        "A demo runs in its own process on the console's table (the same outputs) and\n"
+        "camera (lent until it ends) and, when the projector runs, shows its scene there.\n"
         "The Latency screen shows its loop."
     )
     BINDINGS = [

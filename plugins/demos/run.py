@@ -163,7 +163,10 @@ class DemoRun:
 
 def demo_state(demo: Any) -> dict:
     if demo.name == "knob":
+        from console.bench import summarize_s
+
         s = demo.session
+        lat = demo.crossing_to_output_s()
         return {
             "knob": {
                 "condition": demo.condition,
@@ -171,6 +174,8 @@ def demo_state(demo: Any) -> dict:
                 "angle_deg": float(s.tracker.angle_deg),
                 "touching": bool(s.tracker.touching),
                 "crossings": demo.crossings_total,
+                # post -> the detent's first sample handed to the driver (the last 512)
+                "crossing_to_output_ms": summarize_s(lat) if lat else None,
             }
         }
     evs = [{k: v for k, v in e.items() if k != "report"} for e in list(demo.events)[-10:]]

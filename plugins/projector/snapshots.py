@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 
 from console.errors import UserError
-from console.runtime.private_dir import ensure_private_dir, runtime_dir, write_private
+from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
 
 
 def snapshot_dir(configured: str | os.PathLike | None = None) -> Path:

@@ -247,7 +247,7 @@ class StudiesPane(Vertical):
             self.app.notify(f"{self.running} is running: a aborts it", severity="warning")
             return
         out = self.app.session.outputs
-        if out is not None and out.gate.estopped:
+        if out is not None and out.estopped:
             # refused on the key: a run would only write a start and its interruption
             self._status("e-stop engaged: ctrl+r resets it first")
             return

@@ -124,7 +124,7 @@ def knob_trial(plugins: Any, profile: Any, trial: dict[str, Any], seed: int, att
 
 
 def play_on(outputs: Any) -> Callable[[OutputPlan], bool]:
-    """``play(plan)`` on outputs opened by ``console.runtime.outputs.open_outputs``:
+    """``play(plan)`` on outputs opened by ``console.kernel.client.open_outputs``:
     through the safety gate, blocking until played; a refusal is a ``UserError``."""
 
     def play(plan: OutputPlan) -> bool:
@@ -205,9 +205,8 @@ def play_on_session(session: Any) -> Callable[[OutputPlan], bool]:
         if session.play_plan(plan):
             return True
         out = session.outputs
-        st = out.gate.status() if out is not None else {}
-        if st.get("estopped"):
-            raise UserError(f"e-stop ({st.get('estop_reason') or 'no reason given'}): {plan.name}")
+        if out is not None and out.estopped:
+            raise UserError(f"e-stop ({out.estop_reason or 'no reason given'}): {plan.name}")
         raise UserError(f"the outputs refused {plan.name!r} (the console's message says why)")
 
     return play

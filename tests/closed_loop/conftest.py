@@ -61,7 +61,7 @@ def loop_tables(measured_map, loop_effects):
 
 @pytest.fixture(scope="session")
 def loop_outputs(loop_profile, loop_plugins):
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     out = open_outputs(loop_profile, loop_plugins, fast=True)
     yield out

@@ -4,8 +4,8 @@ gate's per-channel checks and e-stop ramp, and the twin's five-channel outputs."
 from __future__ import annotations
 
 import dataclasses
-import os
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -13,10 +13,11 @@ import pytest
 
 from console.channels import ChannelLayout, layout_problem
 from console.errors import ProfileError, SafetyRefusal
+from console.kernel.client import open_outputs
 from console.profile import PROJECT_PROFILES, load_profile
-from console.runtime.outputs import open_outputs
 from console.safety import Limits, SafetyGate, check_plan
 from console.signals import ramp_envelope
+from console.stream_synth import PulseSpec, StreamSpec
 from console.types import PATCHES, OutputPlan, Segment
 
 FS = 48000
@@ -201,7 +202,7 @@ def test_estop_ramps_all_five_channels_at_their_slew_limits():
     for _ in range(lim.settle_samples // 64 + 1):
         gate.fill(out)
     levels = [40.0, -30.0, 20.0, -10.0, 25.0]
-    gate.attach(Level(levels, rise=4000))
+    gate.attach_scheduler(Level(levels, rise=4000))
     rows = []
     for _ in range(100):
         gate.fill(out)
@@ -234,18 +235,18 @@ def test_gate_refuses_a_patch_channel_whose_relay_is_open():
     out = np.zeros((64, 5), np.float32)
     for _ in range(10):
         gate.fill(out)
-    gate.attach(Level([0.0, 0.0, 5.0, -5.0, 0.0]))
+    gate.attach_scheduler(Level([0.0, 0.0, 5.0, -5.0, 0.0]))
     for _ in range(20):
         gate.fill(out)
     assert not gate.estopped and out[-1, 2] > 0 and out[-1, 3] < 0
-    gate.attach(Level([0.0, 5.0, 0.0, 0.0, 0.0]))
+    gate.attach_scheduler(Level([0.0, 5.0, 0.0, 0.0, 0.0]))
     gate.fill(out)
     assert gate.estopped and "PB signal while its patch relay is open" in gate.estop_reason
 
 
 def test_gate_faults_on_a_block_of_the_wrong_width():
     gate = SafetyGate(limits4(), Board(), relay_channels={}, screen_channel=5)
-    gate.attach(Level([1.0, 0, 0, 0, 0]))
+    gate.attach_scheduler(Level([1.0, 0, 0, 0, 0]))
     gate.fill(np.ones((64, 2), np.float32))  # a two-channel driver on a five-channel profile
     assert gate.estopped and "names 5 channels" in gate.estop_reason
     two = SafetyGate(limits4(), Board(), relay_channels={}, screen_channel=5)
@@ -254,7 +255,7 @@ def test_gate_faults_on_a_block_of_the_wrong_width():
         def next_block(self, n):
             return np.zeros(n), np.zeros(n)
 
-    two.attach(Pair([0.0]))
+    two.attach_scheduler(Pair([0.0]))
     out = np.ones((64, 5), np.float32)
     two.fill(out)
     assert two.estopped and "gave 2 channels, expected 5" in two.estop_reason
@@ -291,14 +292,41 @@ def test_different_waveforms_on_pa_and_pc_reach_their_channels(outputs4):
     assert outputs4.relay_log() == []  # no patch relays on sim-4ch, the screen unused
 
 
-def test_streams_play_on_their_patches_channels(outputs4):
-    from console.benchmarks.safety import FaultyStream
+class Burst:
+    """A client's live stream: its parameters (a 20 V, 200 Hz piezo burst of 50 ms on PB
+    and PC at each crossing) and, once the kernel opened it, its side to post to."""
 
-    outputs4.stream(FaultyStream(frozenset({"PB", "PC"}), 20.0, 200.0, "none", 0, 4800)).wait(10)
+    def __init__(self):
+        self.spec = StreamSpec(
+            sample_rate_hz=FS,
+            patches=frozenset({"PB", "PC"}),
+            screen=False,
+            carrier_max_v=0.0,
+            carrier_min_hz=60,
+            carrier_max_hz=400,
+            start_hz=180,
+            glide_ms=10,
+            ramp_ms=10,
+            pulse=PulseSpec("burst", "piezo", 20.0, 200.0, 50.0, 0),
+        )
+        self.sink = None
+
+    def bind(self, sink):
+        self.sink = sink
+
+
+def test_streams_play_on_their_patches_channels(outputs4):
+    stream = Burst()
+    report = outputs4.stream(stream)
+    stream.sink.post([1])
+    time.sleep(0.1)  # the burst (50 ms) played
+    stream.sink.request_stop()
+    report.wait(10)
+    assert not report.error and report.detents and report.detents[0][0] == 1
     rec = outputs4.recording()
     assert np.abs(rec[:, 1]).max() > 15 and np.array_equal(rec[:, 1], rec[:, 2])
     assert not rec[:, [0, 3, 4]].any()
-    assert not outputs4.gate.estopped
+    assert not outputs4.estopped
 
 
 def test_relays_on_a_four_channel_profile_switch_in_silence(tmp_path, plugins):
@@ -317,9 +345,8 @@ def test_relays_on_a_four_channel_profile_switch_in_silence(tmp_path, plugins):
             (4, False),
         }
         assert all(r.level_v == (0.0,) * 5 for r in log)
-        # the other patches' relays stay open: a signal there is refused by the gate
-        gate = out.gate
-        assert gate.closed_patches() == frozenset()
+        # every relay is open again (a signal on a patch whose relay is open is refused)
+        assert out.relay_state() == frozenset()
 
 
 def test_estop_on_sim_4ch_silences_every_channel_and_the_audit_agrees(outputs4):
@@ -347,19 +374,19 @@ def test_estop_on_sim_4ch_silences_every_channel_and_the_audit_agrees(outputs4):
     report.done.wait(10)
     stop.set()
     th.join()
-    assert outputs4.gate.wait_safe(5)
+    assert outputs4.wait_safe(5)
     rec = outputs4.recording()
     s = report.segment_start[0]
     assert all(np.abs(rec[s:, k]).max() > 5 for k in range(5))  # all five were playing
-    assert not rec[-64:].any() and outputs4.gate.level_v == (0.0,) * 5
+    assert not rec[-64:].any() and tuple(outputs4.status()["gate"]["level_v"]) == (0.0,) * 5
     problems = received_problems(
         outputs4.limits,
         rec,
         outputs4.relay_log(),
-        list(outputs4.gate.events),
+        outputs4.events(),
         start,
         frozenset(PATCHES),
-        int(outputs4.gate.latency_samples),
+        int(outputs4.status()["latency_samples"]),
     )
     assert not problems, problems
 
@@ -379,7 +406,7 @@ def test_play_writes_a_wav_with_a_channel_per_output(tmp_path):
 
 
 def test_haptable_estop_reaches_five_channel_outputs_mid_plan(plugins):
-    from console.runtime.outputs_registry import estop_everywhere
+    from console.kernel.shell import estop
 
     prof = load_profile("sim-4ch", plugins)
     with open_outputs(prof, plugins, fast=False) as out:
@@ -389,12 +416,19 @@ def test_haptable_estop_reaches_five_channel_outputs_mid_plan(plugins):
         while not report.segment_start:
             report.done.wait(0.005)
         report.done.wait(0.05)
-        reached = [r for r in estop_everywhere(timeout_s=2.0) if r.pid == os.getpid()]
-        assert reached and reached[0].confirmed, reached
-        assert out.gate.level_v == (0.0,) * 5 and out.gate.estopped
+        everywhere, latched = estop(None, 2.0)  # `haptable estop`, every table
+        reached = [r for r in everywhere if r.pid == out.kernel_pid]
+        assert reached and reached[0].confirmed, everywhere
+        assert out.table.key in {t.key for t in latched}
+        st = out.status()["gate"]
+        assert tuple(st["level_v"]) == (0.0,) * 5 and st["estopped"] and not st["relays_closed"]
+        t_end = time.monotonic() + 2
+        while not out.estopped and time.monotonic() < t_end:  # the kernel's event
+            time.sleep(0.005)
+        assert out.estopped and "haptable estop" in out.estop_reason
         rec = out.recording()
         assert all(np.abs(rec[:, k]).max() > 10 for k in range(4))  # they were all playing
-        assert not rec[-out.gate.latency_samples :].any()
+        assert not rec[-out.status()["latency_samples"] :].any()
 
 
 @pytest.mark.parametrize("layout", [("piezo", "screen"), FOUR])
@@ -408,12 +442,16 @@ def test_the_gates_one_pass_check_agrees_with_the_per_channel_one(layout):
     n, agree, refused = 64, 0, 0
     for trial in range(600):
         closed = frozenset(int(c) for c in np.flatnonzero(rng.random(5) < 0.8) + 1)
-        gate.relays = tuple(i + 1 in closed for i in range(8))
-        gate.level_v = tuple(rng.uniform(-20, 20, len(layout)) * rng.integers(0, 2))
-        steps = lim.column_steps_v(gate.closed_patches())
+        relays_now = tuple(i + 1 in closed for i in range(8))
+        level = tuple(float(v) for v in rng.uniform(-20, 20, len(layout)) * rng.integers(0, 2))
+        clock = int(rng.integers(0, 8 * lim.settle_samples))
+        # the state a block is judged on (the sealed gate's is set only by its methods)
+        judged = gate._judge_state(relays_now, level, lim.settle_samples, clock)
+        steps = judged.steps
+        np.testing.assert_array_equal(steps, lim.column_steps_v(judged.patches))
         cols = []
         for k in range(len(layout)):
-            walk = gate.level_v[k] + np.cumsum(rng.uniform(-1, 1, n) * steps[k] * 1.001)
+            walk = level[k] + np.cumsum(rng.uniform(-1, 1, n) * steps[k] * 1.001)
             if rng.random() < 0.5:
                 walk = np.zeros(n)
             cols.append(walk)
@@ -423,10 +461,8 @@ def test_the_gates_one_pass_check_agrees_with_the_per_channel_one(layout):
             cols[k][rng.integers(n)] = np.nan
         elif fault == 2:
             cols[k] = cols[k] + rng.choice([-1, 1]) * 110.0
-        clock = int(rng.integers(0, 8 * lim.settle_samples))
-        gate._quiet_until = lim.settle_samples
-        ok = gate._block_ok(cols, clock)
-        problem = gate._block_first_problem(cols, clock)
+        ok = gate._block_ok(cols, judged)
+        problem = gate._block_first_problem(cols, judged)
         assert ok == (problem is None), (trial, problem)
         agree += 1
         refused += problem is not None

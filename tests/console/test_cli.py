@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 import re
+import time
 
 from console.cli import main
-from console.runtime.control import ControlServer, send_command
+from console.runtime.control import send_command
 
 
 def test_doctor_json_reports_each_device(capsys):
@@ -21,8 +23,9 @@ def test_doctor_json_reports_each_device(capsys):
 
 
 def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins):
+    from console.kernel import memory_lock
     from console.profile import load_profile
-    from console.runtime import doctor, memory_lock
+    from console.runtime import doctor
 
     monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
     prof = load_profile("haptable-lab", plugins)
@@ -74,22 +77,40 @@ def test_play_writes_wav(tmp_path, capsys):
         assert w.getnchannels() == 2 and w.getframerate() == 48000 and w.getnframes() == 48000
 
 
-def test_estop_reaches_a_running_console(profile, capsys):
-    calls = []
-    server = ControlServer(profile, lambda line: calls.append(line) or "ok: silenced")
+def test_estop_reaches_a_running_console(plugins, capsys):
+    """`haptable estop` e-stops the table's kernel; the console, a client of it, hears it
+    from there (its screens stop what they run) and is named among the table's users."""
+    from console.runtime.context import Context
+    from console.session.core import ConsoleSession
+    from console.session.events import Stopped
+
+    session = ConsoleSession(Context("sim", plugins), fast=False)  # the profile's table
+    seen = []
+    session.subscribe(seen.append)
     try:
-        assert send_command(profile, "ping") == "pong"
+        assert session.open_outputs(), session.outputs_error
+        assert send_command(session.profile, "ping") == "pong"  # the console runs
+        kernel_pid = session.outputs.kernel_pid
         assert main(["estop", "--json"]) == 0
         data = json.loads(capsys.readouterr().out)
+        t_end = time.monotonic() + 5
+        while not any(isinstance(e, Stopped) and e.topic == "estop" for e in seen):
+            assert time.monotonic() < t_end, seen
+            time.sleep(0.01)
+        estopped = session.outputs.estopped
+        reason = session.outputs.estop_reason
     finally:
-        server.close()
-    assert calls == ["estop"]
-    assert data["console"] == "ok: silenced" and data["relays"] == "all open"
+        session.close()
+    reached = [t for t in data["tables"] if t["pid"] == kernel_pid]
+    assert reached and reached[0]["confirmed"] and data["confirmed"], data
+    assert any(f"(pid {os.getpid()})" in c for c in reached[0]["clients"]), reached
+    assert estopped and "haptable estop" in reason
 
 
 def test_estop_without_console(capsys):
     assert main(["estop"]) == 0
-    assert "no console running" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "no outputs open" in out and "latched until an operator resets it" in out
 
 
 def test_an_output_path_that_cannot_be_written_is_one_line(capsys):

@@ -1,5 +1,7 @@
 """What used to get past the safety gate (issue: "no way past the gate"), each reproduced
-on the twin and checked on what the twin's amplifiers and relays received."""
+on the twin and checked on what the twin's amplifiers and relays received: through a
+kernel client (``outputs``) where a process could do it, on the table's core built here
+(``table``) where it takes the gate's or the scheduler's insides."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 from console.errors import SafetyRefusal
 from console.safety import Source
 from console.signals import tone
+from console.stream_synth import PulseSpec, StreamSpec
 from console.types import OutputPlan, Segment
 
 FS = 48000
@@ -68,19 +71,35 @@ def test_paper_waveforms_stay_within_the_slew_limit(outputs):
     outputs.play(
         OutputPlan(FS, (Segment(pall, np.zeros_like(pall), frozenset({"PA", "PB", "PC", "PD"})),))
     )
-    assert not outputs.gate.estopped
+    assert not outputs.estopped and not outputs.status()["gate"]["estopped"]
 
 
-class StepStream:
-    """A live stream: a ramped 1 V sine that steps to 99 V after ``step_at`` samples."""
+def stream_spec(peak_v: float) -> StreamSpec:
+    """A live stream on PA declaring a piezo peak of ``peak_v`` (a burst per crossing)."""
+    return StreamSpec(
+        sample_rate_hz=FS,
+        patches=frozenset({"PA"}),
+        screen=False,
+        carrier_max_v=0.0,
+        carrier_min_hz=60,
+        carrier_max_hz=400,
+        start_hz=180,
+        glide_ms=10,
+        ramp_ms=10,
+        pulse=PulseSpec("burst", "piezo", peak_v, 200.0, 50.0, 0),
+    )
 
-    patches = frozenset({"PA"})
-    screen = False
+
+class BrokenSynth:
+    """The kernel's own synth gone wrong (what takes a plugin stream's place now that
+    no plugin code is on the audio path): a ramped 1 V sine that steps to 99 V after
+    ``step_at`` samples, or (``end_level``) rises slowly to it and ends there, at
+    ``n_total`` samples, without its ramp down."""
 
     def __init__(self, step_at=4860, end_level=None, n_total=9600):  # 4860: a crest
         self.k, self.step_at, self.end_level, self.n_total = 0, step_at, end_level, n_total
 
-    def next_block(self, n):
+    def next_block(self, synth, n):
         if self.k >= self.n_total:
             return None
         k = self.k + np.arange(n)
@@ -92,27 +111,45 @@ class StepStream:
         self.k += n
         return x, np.zeros(n)
 
-    def request_stop(self):
-        self.n_total = self.k
+
+def broken_stream(table, monkeypatch, broken, peak_v):
+    """Play a stream on ``table`` whose synth renders ``broken`` (what the scheduler and
+    the gate get block by block); its report."""
+    report, synth = table.scheduler.stream(stream_spec(peak_v), "broken")
+    monkeypatch.setattr(synth, "next_block", lambda n: broken.next_block(synth, n))
+    return report
 
 
-def test_stream_stepping_mid_way_is_ramped_down_and_estops(outputs):
-    report = outputs.stream(StepStream())
+@pytest.mark.parametrize(
+    "peak_v, why",
+    [(99.0, "slew"), (30.0, "exceeds its declared peak")],
+    ids=["step-within-its-peak", "step-over-its-peak"],
+)
+def test_stream_stepping_mid_way_is_ramped_down_and_estops(table, monkeypatch, peak_v, why):
+    """The per-block checks on a live stream: a step inside the stream's declared peak is
+    the gate's slew check; over it, the scheduler's peak check. Either e-stops, and the
+    step never reaches the amplifier."""
+    report = broken_stream(table, monkeypatch, BrokenSynth(), peak_v)
     report.wait(10)
-    assert outputs.gate.estopped and "slew" in outputs.gate.estop_reason
-    assert outputs.gate.wait_safe(5)
-    assert_within_slew(outputs)
-    assert np.abs(outputs.recording()[:, 0]).max() < 5.0, "the 99 V step never reached the amp"
+    assert report.error
+    assert table.gate.estopped and why in table.gate.estop_reason, table.gate.estop_reason
+    assert table.gate.wait_safe(5)
+    assert_within_slew(table)
+    rec = table.recording()
+    assert np.abs(rec[:, 0]).max() > 0.9, "the stream played before its step"
+    assert np.abs(rec[:, 0]).max() < 5.0, "the 99 V step never reached the amp"
+    assert rec[-1, 0] == 0.0
 
 
-def test_stream_ending_high_ramps_down_across_blocks(outputs):
-    report = outputs.stream(StepStream(end_level=80.0, n_total=12000))
+def test_stream_ending_high_ramps_down_across_blocks(table, monkeypatch):
+    report = broken_stream(table, monkeypatch, BrokenSynth(end_level=80.0, n_total=12000), 99.0)
     report.wait(10)
-    rec = outputs.recording()
+    assert not report.error, report.error
+    rec = table.recording()
     assert np.abs(rec[:, 0]).max() >= 79.0
     assert rec[-1, 0] == 0.0
-    assert_within_slew(outputs)
-    assert not outputs.gate.estopped
+    assert_within_slew(table)
+    assert not table.gate.estopped
 
 
 # ---------------------------------------------------------------- 2. immutable plans
@@ -141,7 +178,7 @@ def test_segment_arrays_changed_after_check_do_not_play(outputs):
     assert np.abs(outputs.recording()[:, 0]).max() <= 10.0 + 1e-4  # float32 recording
 
 
-# ---------------------------------------------------------------- 3. attached sources
+# ------------------------------------------- 3. sources in the scheduler's place
 class DCSource(Source):
     def __init__(self, level=50.0, dtype=float):
         self.level, self.dtype = level, dtype
@@ -157,62 +194,63 @@ class DCSource(Source):
         pass
 
 
-def test_attached_source_stepping_to_dc_is_stopped(outputs):
-    outputs.set_relays({1})
-    outputs.gate.attach(DCSource(50.0))
-    wait_until(lambda: outputs.gate.estopped)
-    assert outputs.gate.wait_safe(5)
-    assert np.abs(outputs.recording()[:, 0]).max() < 1.0, "0 -> 50 V DC never reached the amp"
+def test_attached_source_stepping_to_dc_is_stopped(table):
+    table.set_relays({1})
+    table.gate.attach_scheduler(DCSource(50.0))
+    wait_until(lambda: table.gate.estopped)
+    assert "slew" in table.gate.estop_reason, table.gate.estop_reason
+    assert table.gate.wait_safe(5)
+    assert np.abs(table.recording()[:, 0]).max() < 1.0, "0 -> 50 V DC never reached the amp"
 
 
-def test_object_dtype_block_estops_without_killing_the_audio_thread(outputs):
-    outputs.set_relays({1})
-    outputs.gate.attach(DCSource(0.0, dtype=object))
-    wait_until(lambda: outputs.gate.estopped)
-    assert outputs.gate.wait_safe(5)
-    c0 = outputs.gate.clock
-    outputs.reset()
-    outputs.scheduler.attach_to_gate()
+def test_object_dtype_block_estops_without_killing_the_audio_thread(table):
+    table.set_relays({1})
+    table.gate.attach_scheduler(DCSource(0.0, dtype=object))
+    wait_until(lambda: table.gate.estopped)
+    assert "dtype object" in table.gate.estop_reason, table.gate.estop_reason
+    assert table.gate.wait_safe(5)
+    c0 = table.gate.clock
+    table.reset()
+    table.gate.attach_scheduler(table.scheduler)
     x = tone(250, 10.0, 0.05, FS, 0.01)
-    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
-    assert outputs.gate.clock > c0, "the audio thread still runs"
+    table.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
+    assert table.gate.clock > c0, "the audio thread still runs"
 
 
 # ---------------------------------------------------------------- 4. a stalled stream
-class StallingStream:
-    patches = frozenset({"PA"})
-    screen = False
+def test_estop_with_a_stalled_stream_opens_relays_only_after_silence(table, monkeypatch):
+    """The kernel's synth stalls the audio thread inside ``fill`` (its block may still
+    be signal): the e-stop waits for that block and the ramp down after it, then opens
+    the relays in silence; it does not wait for the give-up time."""
+    stall_s = 0.3
+    stalling, stalled_until = threading.Event(), []
+    report, synth = table.scheduler.stream(stream_spec(10.0), "stalls")
+    real = synth.next_block
 
-    def __init__(self, stall_after=2400, stall_s=0.5):
-        self.k, self.stall_after, self.stall_s = 0, stall_after, stall_s
-        self.stalling = threading.Event()
+    def stalls(n):
+        if synth.samples_out >= 2400 and not stalling.is_set():
+            stalling.set()
+            time.sleep(stall_s)
+            stalled_until.append(time.monotonic())
+        return real(n)
 
-    def next_block(self, n):
-        if self.k >= self.stall_after:
-            self.stalling.set()
-            time.sleep(self.stall_s)
-        k = self.k + np.arange(n)
-        self.k += n
-        return 10 * np.sin(2 * np.pi * 200 * k / FS) * np.minimum(1.0, k / 480), np.zeros(n)
-
-    def request_stop(self):
-        pass
-
-
-def test_estop_with_a_stalled_stream_opens_relays_only_after_silence(outputs):
-    stream_obj = StallingStream()
-    outputs.stream(stream_obj)
-    assert stream_obj.stalling.wait(10)
+    monkeypatch.setattr(synth, "next_block", stalls)
+    synth.post([1])  # a 10 V burst, playing when the stall comes
+    assert stalling.wait(10)
     t0 = time.monotonic()
-    outputs.estop()
-    assert time.monotonic() - t0 < 0.4, "the e-stop did not wait for the stalled stream"
-    assert outputs.gate.relay_state() == frozenset()
-    rec = outputs.recording()
-    guard = outputs.limits.guard_samples
-    for sw in outputs.relay_log():
-        if not sw.closed:
-            assert sw.level_v == (0.0, 0.0), sw
-            assert not np.any(rec[max(0, sw.clock - guard) : sw.clock]), "signal before opening"
+    table.estop()
+    assert time.monotonic() - t0 < stall_s + 0.4, "the e-stop waited for the give-up time"
+    assert table.gate.relay_state() == frozenset()
+    assert not [e for e in table.gate.events if "without observed silence" in e.message]
+    rec = table.recording()
+    assert np.abs(rec[:, 0]).max() > 1.0, "the stream was playing"
+    guard = table.limits.guard_samples
+    opened = [sw for sw in table.relay_log() if not sw.closed]
+    assert opened
+    for sw in opened:
+        assert sw.t_s >= stalled_until[0], "a relay opened while the stalled block was out"
+        assert sw.level_v == (0.0, 0.0), sw
+        assert not np.any(rec[max(0, sw.clock - guard) : sw.clock]), "signal before opening"
 
 
 # ---------------------------------------------------------------- 5. relay commands
@@ -224,7 +262,7 @@ def test_relay_command_refused_during_estop_never_runs_later(outputs):
     x = tone(250, 10.0, 0.02, FS, 0.005)
     outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PA"})),)))
     time.sleep(0.05)
-    assert outputs.gate.relay_state() == frozenset()
+    assert outputs.relay_state() == frozenset()
     assert not any(s.closed and s.channel == 5 for s in outputs.relay_log())
 
 
@@ -237,7 +275,7 @@ def test_timed_out_relay_command_is_dropped(outputs):
         outputs.set_relays({3}, timeout_s=0.01)
     report.wait(10)
     time.sleep(0.05)
-    assert 3 not in outputs.gate.relay_state()
+    assert 3 not in outputs.relay_state() and 3 not in outputs.operator_relays()
     assert not any(s.channel == 3 for s in outputs.relay_log())
 
 
@@ -251,12 +289,13 @@ def test_operator_relays_are_restored_after_a_stimulus(outputs):
     toggle = outputs.set_relays({3, 6}, wait=False)  # pressed while the stimulus plays
     report.wait(10)
     toggle.wait(10)
-    assert outputs.gate.relay_state() == frozenset({3, 6}), "operator's setting restored"
-    assert outputs.gate.relay_state() != frozenset({1}), "the stimulus's routing is gone"
+    assert outputs.relay_state() == frozenset({3, 6}), "operator's setting restored"
+    assert outputs.operator_relays() == frozenset({3, 6})
+    assert any(s.channel == 1 and s.closed for s in outputs.relay_log()), "PA was routed"
 
 
-def test_relay_switching_is_rate_limited(outputs):
-    gate = outputs.gate
+def test_relay_switching_is_rate_limited(table):
+    gate = table.gate
     ok = refused = 0
     t_end = time.monotonic() + 0.5
     while time.monotonic() < t_end:
@@ -265,7 +304,7 @@ def test_relay_switching_is_rate_limited(outputs):
             ok += 1
         except SafetyRefusal as exc:
             refused += "rate" in str(exc) or "switched" in str(exc)
-    lim = outputs.limits
+    lim = table.limits
     assert refused > 0
     # the gate's own clock bounds it: at most one switch per interval of samples played
     assert ok <= gate.clock / max(lim.min_switch_interval_samples, 1) + 2
@@ -281,8 +320,8 @@ def test_a_plan_gap_is_checked_and_counted(outputs, gap_s):
     assert not np.any(outputs.recording())
 
 
-def test_a_switch_answer_from_before_an_estop_is_not_taken_by_the_next_stimulus(outputs):
-    board = outputs._board
+def test_a_switch_answer_from_before_an_estop_is_not_taken_by_the_next_stimulus(table):
+    board = table.board
     release = threading.Event()
     orig = board.set
 
@@ -294,16 +333,16 @@ def test_a_switch_answer_from_before_an_estop_is_not_taken_by_the_next_stimulus(
         orig(ch, closed)
 
     board.set = slow_set
-    outputs.set_relays({1}, wait=False)  # the worker is now inside the switch
+    table.set_relays({1}, wait=False)  # the worker is now inside the switch
     time.sleep(0.05)
-    t = threading.Thread(target=outputs.estop)
+    t = threading.Thread(target=table.estop)
     t.start()
     time.sleep(0.05)
     release.set()
     t.join(5)
-    assert outputs.gate.relay_state() == frozenset(), "the e-stop waited and opened it"
-    outputs.reset()
+    assert table.gate.relay_state() == frozenset(), "the e-stop waited and opened it"
+    table.reset()
     x = tone(250, 10.0, 0.05, FS, 0.01)
-    outputs.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PB"})),)))
-    assert not outputs.gate.estopped, outputs.gate.estop_reason
-    assert any(s.channel == 2 and s.closed for s in outputs.relay_log())
+    table.play(OutputPlan(FS, (Segment(x, np.zeros_like(x), frozenset({"PB"})),)))
+    assert not table.gate.estopped, table.gate.estop_reason
+    assert any(s.channel == 2 and s.closed for s in table.relay_log())

@@ -1,5 +1,5 @@
-"""console/ in layers without cycles: types -> profile -> safety -> runtime -> session -> tui
--> cli, the benchmarks beside cli at the top. A module imports its own layer or lower ones,
+"""console/ in layers without cycles: types -> profile -> safety -> kernel -> runtime ->
+session -> tui -> cli, the benchmarks beside cli at the top. A module imports its own layer or lower ones,
 function-local imports included (only ``if TYPE_CHECKING:`` imports are left out: they never
 run), and no chain of imports comes back to where it started."""
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 
-LAYERS = ("types", "profile", "safety", "runtime", "session", "tui", "cli")
+LAYERS = ("types", "profile", "safety", "kernel", "runtime", "session", "tui", "cli")
 
 #: module (or package prefix) -> layer. The longest match wins; ``console`` alone is the
 #: package's ``__init__``. A new module gets a line here.
@@ -23,6 +23,8 @@ LAYER_OF: dict[str, str] = {
     "console.hookspecs": "types",
     "console.contracts": "types",
     "console.paths": "types",
+    "console.profile_paths": "types",  # where profiles are found (stdlib: `haptable estop`)
+    "console.stream_synth": "types",  # live streams from their parameters (pure numpy)
     "console.atomic": "types",
     "console.npz_safe": "types",
     "console.signals": "types",
@@ -40,10 +42,12 @@ LAYER_OF: dict[str, str] = {
     "console.profile_files": "profile",  # the files kept per profile (state directory)
     "console.safety": "safety",
     "console.safety_audit": "safety",
+    "console.kernel": "kernel",  # the outputs process of a table, and its clients' side
     "console.runtime": "runtime",
     "console.session": "session",
     "console.tui": "tui",
     "console.cli": "cli",
+    "console.entry": "cli",  # `haptable`: estop/reset before anything heavy, else the CLI
     "console.commands": "cli",
     "console.core_commands": "cli",
     "console.signal_commands": "cli",

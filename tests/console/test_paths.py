@@ -36,7 +36,7 @@ def test_override_then_xdg_then_home(kind, tmp_path, monkeypatch):
 
 
 def test_runtime_dir_rule_is_the_checked_one(tmp_path, monkeypatch):
-    from console.runtime.private_dir import runtime_dir
+    from console.kernel.private_dir import runtime_dir
 
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
     assert paths.runtime_dir() == tmp_path / "haptable"

@@ -42,24 +42,29 @@ def test_plugin_example_plays_through_the_gate():
         cm = real_outputs(fast=True)
         out = cm.__enter__()
         played["out"] = out
-        return _Wrap(cm, out)
+        return _Wrap(cm, out, played)
 
     ctx.outputs = spy
     assert cmd.run(args, ctx) == 0
-    out = played["out"]
-    rec = out.recording()
+    assert played["out"].closed  # the command left its table
+    rec = played["recording"]
     assert np.max(np.abs(rec[:, 0])) > 19.0  # the 20 V tick reached the piezo channel
-    assert [(r.channel, r.closed) for r in out.relay_log()] == [(3, True), (3, False)]
+    assert [(r.channel, r.closed) for r in played["relay_log"]] == [(3, True), (3, False)]
 
 
 class _Wrap:
-    def __init__(self, cm, out):
-        self.cm, self.out = cm, out
+    """The command's outputs (a kernel client); what the twin got is read from the
+    kernel as the command leaves, before the client closes."""
+
+    def __init__(self, cm, out, played):
+        self.cm, self.out, self.played = cm, out, played
 
     def __enter__(self):
         return self.out
 
     def __exit__(self, *exc):
+        self.played["recording"] = self.out.recording()
+        self.played["relay_log"] = self.out.relay_log()
         return self.cm.__exit__(*exc)
 
 

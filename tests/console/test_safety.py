@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -15,8 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from console.errors import SafetyRefusal
+from console.kernel.table import DriverPort
 from console.safety import Limits, check_plan
 from console.signals import ramp_envelope, tone
+from console.stream_synth import PulseSpec, StreamSpec, StreamSynth
 from console.types import PATCHES, OutputPlan, Segment
 
 FS = 48000
@@ -124,99 +127,177 @@ def test_bad_values_are_refused_never_clipped(outputs, kind, where, size):
     assert_recording_safe(outputs)
 
 
-class FailingStream:
-    """An effect that raises mid-stimulus."""
+def burst_spec(**pulse) -> StreamSpec:
+    """A live stream's parameters: a 30 V, 200 Hz piezo burst on PB, 200 ms long, at
+    each posted crossing."""
+    kw = dict(shape="burst", channel="piezo", peak_v=30.0, freq_hz=200.0, length_ms=200.0)
+    kw.update(edge_ms=0, **pulse)
+    return StreamSpec(
+        sample_rate_hz=FS,
+        patches=frozenset({"PB"}),
+        screen=False,
+        carrier_max_v=0.0,
+        carrier_min_hz=60,
+        carrier_max_hz=400,
+        start_hz=180,
+        glide_ms=10,
+        ramp_ms=10,
+        pulse=PulseSpec(**kw),
+    )
 
-    patches = frozenset({"PB"})
-    screen = False
 
-    def __init__(self, fail_after: int):
-        self.k = 0
-        self.fail_after = fail_after
+def test_kernel_synth_raising_mid_stream_estops_and_opens_relays(table, monkeypatch):
+    """No plugin code runs on the audio path any more: what can raise there is the
+    kernel's own synth. It breaks mid-pulse; the gate's per-block guard e-stops, ramps
+    down from where it was and opens the relays."""
+    real = StreamSynth.next_block
 
-    def next_block(self, n):
-        if self.k >= self.fail_after:
+    def crashing(self, n):
+        if self.samples_out >= 4800:
             raise RuntimeError("effect crashed")
-        t = (self.k + np.arange(n)) / FS
-        env = np.minimum(1.0, (self.k + np.arange(n)) / 480)
-        self.k += n
-        return 30 * np.sin(2 * np.pi * 200 * t) * env, np.zeros(n)
+        return real(self, n)
 
-    def request_stop(self):
-        pass
-
-
-def test_effect_raising_mid_stimulus_estops_and_opens_relays(outputs):
-    report = outputs.stream(FailingStream(fail_after=4800))
+    monkeypatch.setattr(StreamSynth, "next_block", crashing)
+    report, synth = table.scheduler.stream(burst_spec(), "effect")
+    synth.post([1])
     report.wait(10)
-    assert outputs.gate.estopped and "effect crashed" in outputs.gate.estop_reason
-    assert outputs.gate.wait_safe(5)
-    assert outputs.gate.relay_state() == frozenset()
+    assert table.gate.estopped and "effect crashed" in table.gate.estop_reason
+    assert report.error
+    assert table.gate.wait_safe(5)
+    assert table.gate.relay_state() == frozenset()
     time.sleep(0.01)
-    rec = outputs.recording()
-    assert np.any(rec[:, 0]), "the stream played before it crashed"
+    rec = table.recording()
+    s = report.segment_start[0]
+    assert np.abs(rec[s : s + 4800, 0]).max() > 20, "the stream played before it crashed"
+    assert np.abs(rec[s + 4736 : s + 4800, 0]).max() > 20, "it crashed mid-pulse"
     assert not np.any(rec[-64:]), "outputs silent after the crash"
+    assert_recording_safe(table)
+
+
+class SpecOf:
+    """What a client hands ``stream``: an object with a ``spec``, bound to the kernel's
+    side of the stream (``sink``) once it opened."""
+
+    def __init__(self, spec):
+        self.spec, self.sink = spec, None
+
+    def bind(self, sink):
+        self.sink = sink
+
+
+class RawSpec:
+    """Parameters that were never a ``StreamSpec``: its JSON only."""
+
+    def __init__(self, **changes):
+        self.d = {**burst_spec().to_json(), **changes}
+
+    def to_json(self):
+        return self.d
+
+
+@pytest.mark.parametrize(
+    "spec, why",
+    [
+        (burst_spec(peak_v=1e6), "outside the limits"),
+        (dataclasses.replace(burst_spec(), sample_rate_hz=44100), "sample_rate_hz"),
+        (dataclasses.replace(burst_spec(), ramp_ms=1.0), "ramp_ms"),
+        (RawSpec(carrier_max_v=-5.0), "carrier_max_v"),
+        (RawSpec(carrier_max_v=float("nan")), "not sent"),
+        (RawSpec(patches=["PZ"]), "patches"),
+        (RawSpec(screen="yes"), "screen"),
+        (RawSpec(extra=1), "unknown key"),
+    ],
+)
+def test_bad_stream_parameters_are_refused_at_open(outputs, spec, why):
+    """A client's stream is parameters, checked when it asks: broken or out-of-limits
+    ones are refused in one line, nothing plays and nothing e-stops."""
+    bad = SpecOf(spec)
+    with pytest.raises(SafetyRefusal) as err:
+        outputs.stream(bad, "bad")
+    assert bad.sink is None, "a refused stream is never bound"
+    assert why in str(err.value) and "\n" not in str(err.value)
+    assert not outputs.estopped and not outputs.status()["busy"]
+    assert outputs.relay_state() == frozenset()
+    assert not np.any(outputs.recording()), "a refused stream reached the amplifiers"
+    # the table still plays a good one
+    good = SpecOf(burst_spec(length_ms=20.0))
+    report = outputs.stream(good, "good")
+    good.sink.post([1])
+    time.sleep(0.05)
+    good.sink.request_stop()
+    report.wait(10)
+    assert not report.error and np.abs(outputs.recording()[:, 0]).max() > 20
     assert_recording_safe(outputs)
 
 
-def test_relay_driver_failure_estops_and_reports(outputs):
-    board = outputs._board
-    board.fail_on = {2}
+def test_relay_driver_failure_estops_and_reports(table):
+    table.board.fail_on = {2}
     plan = OutputPlan(
         FS, (Segment(tone(250, 10, 0.05, FS, 0.01), np.zeros(2400), frozenset({"PB"})),), name="pb"
     )
     with pytest.raises(SafetyRefusal, match="relay"):
-        outputs.play(plan)
-    assert outputs.gate.estopped
-    assert not np.any(outputs.recording()), "nothing played through a failed relay"
-    assert outputs.gate.relay_state() == frozenset()
+        table.play(plan)
+    assert table.gate.estopped and "relay board failed" in table.gate.estop_reason
+    assert not np.any(table.recording()), "nothing played through a failed relay"
+    assert table.gate.relay_state() == frozenset()
 
 
-def test_audio_device_vanishing_silences(outputs):
+def test_audio_device_vanishing_silences(table):
     plan = OutputPlan(
         FS, (Segment(tone(250, 10, 2.0, FS), np.zeros(96000), frozenset({"PA"})),), name="long"
     )
-    report = outputs.play(plan, wait=False)
+    report = table.play(plan, wait=False)
     while not report.segment_start:
         time.sleep(0.001)
-    outputs.gate.estop("audio device vanished")  # what a driver calls on PortAudioError
+    # what a driver calls on PortAudioError, through the port it was started with
+    DriverPort(table.gate).estop("audio device vanished")
     report.wait(5)
-    assert report.error and outputs.gate.relay_state() == frozenset()
-    stop = [e for e in outputs.gate.events if e.kind == "estop"][0].clock
-    rec = outputs.recording()
-    block = outputs.limits.sample_rate_hz and 64
+    assert report.error
+    assert table.gate.wait_safe(5) and table.gate.relay_state() == frozenset()
+    assert "audio device vanished" in table.gate.estop_reason
+    stop = [e for e in table.gate.events if e.kind == "estop"][0].clock
+    rec = table.recording()
+    assert np.any(rec[report.segment_start[0] : stop]), "the tone was playing"
+    block = 64
     assert not np.any(rec[stop + block :]), "e-stop silences within one audio block"
+    assert_recording_safe(table)
 
 
-def test_switch_under_signal_is_refused_whatever_is_asked(outputs):
+def test_switch_under_signal_is_refused_whatever_is_asked(table):
     plan = OutputPlan(FS, (Segment(tone(250, 10, 1.0, FS), np.zeros(48000), frozenset({"PA"})),))
-    report = outputs.play(plan, wait=False)
+    report = table.play(plan, wait=False)
     # the tone is at the amplifiers (a segment's start is reported as its first block is
     # made, before the gate has handed it over: a switch then meets the rate limit first)
-    while not any(outputs.gate.level_v):
+    while not any(table.gate.level_v):
         time.sleep(0.001)
     with pytest.raises(SafetyRefusal, match="silent"):
-        outputs.gate.switch_relays(frozenset({2}))
+        table.gate.switch_relays(frozenset({2}))
     # a queued toggle waits for silence instead
-    toggle = outputs.set_relays({3}, wait=False)
+    toggle = table.set_relays({3}, wait=False)
     report.wait(10)
     toggle.wait(10)
-    assert outputs.gate.relay_state() == frozenset({3})
-    assert_recording_safe(outputs)
+    assert not report.error and not toggle.error
+    assert table.gate.relay_state() == frozenset({3})
+    assert_recording_safe(table)
 
 
 def test_estop_is_idempotent_and_blocks_until_reset(outputs):
     outputs.set_relays({1, 5})
+    assert outputs.relay_state() == frozenset({1, 5})
+    first = outputs.estop()
     outputs.estop()
-    outputs.estop()
-    assert outputs.gate.relay_state() == frozenset()
-    assert sum(e.kind == "estop" for e in outputs.gate.events) == 1
+    assert first["confirmed"], first
+    assert outputs.relay_state() == frozenset()
+    assert sum(e.kind == "estop" for e in outputs.events()) == 1
     plan = OutputPlan(
         FS, (Segment(tone(250, 10, 0.05, FS, 0.01), np.zeros(2400), frozenset({"PA"})),)
     )
     with pytest.raises(SafetyRefusal, match="e-stop"):
         outputs.play(plan)
+    with pytest.raises(SafetyRefusal, match="e-stop"):
+        outputs.set_relays({1})
     outputs.reset()
+    assert not outputs.estopped and not outputs.status()["gate"]["estopped"]
     outputs.play(plan)
     assert_recording_safe(outputs)
 
@@ -226,19 +307,20 @@ SCRIPT = textwrap.dedent("""
     import numpy as np
     from console.plugins import load_plugins
     from console.profile import load_profile
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
     from console.signals import tone
     from console.types import OutputPlan, Segment
     log = open(sys.argv[1], "a", buffering=1)
     plugins = load_plugins()
-    out = open_outputs(load_profile("sim", plugins), plugins)
-    out.gate.listeners.append(lambda e: log.write(f"{e.kind} {e.message}\\n"))
-    orig = out._board.set
-    out._board.set = lambda ch, closed: (orig(ch, closed), log.write(f"relay {ch} {closed}\\n"))
+    out = open_outputs(load_profile("sim", plugins), plugins)  # the table's kernel
     sig = tone(250, 10, 20.0, 48000)
-    out.play(OutputPlan(48000, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),)), wait=False)
+    plan = OutputPlan(48000, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
+    report = out.play(plan, wait=False)
+    t_end = time.monotonic() + 20
+    while report.t_first_sample_s is None and time.monotonic() < t_end:
+        time.sleep(0.01)
     time.sleep(0.3)
-    log.write("playing\\n")
+    log.write(f"playing relays {sorted(out.relay_state())}\\n")
     MODE = sys.argv[2]
     if MODE == "raise":
         raise RuntimeError("boom")
@@ -249,35 +331,72 @@ SCRIPT = textwrap.dedent("""
 
 
 @pytest.mark.parametrize("how", ["SIGTERM", "SIGINT", "raise", "exit"])
-def test_estop_runs_on_signals_exceptions_and_exit(tmp_path, how):
+def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
+    tmp_path, profile, plugins, how
+):
+    """The outputs live in the table's kernel: a process playing there that ends in any
+    way (killed by a signal, an exception, ``sys.exit``) has what it played ramped down
+    and the patch relay opened in silence by the kernel. Watched from a second client of
+    the same (paced) table, which keeps its kernel up to be asked."""
+    from console.kernel.client import open_outputs
+    from console.safety_audit import Window, received_problems
+
     script = tmp_path / "run.py"
     script.write_text(SCRIPT)
     log = tmp_path / "log.txt"
     mode = how if how in ("raise", "exit") else "wait"
-    proc = subprocess.Popen(
-        [sys.executable, str(script), str(log), mode],
-        env={**os.environ, "HAPTABLE_LOAD_ENTRYPOINTS": "0"},
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    if how.startswith("SIG"):
-        deadline = time.monotonic() + 20
-        while (
-            not log.exists() or "playing" not in log.read_text()
-        ) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        proc.send_signal(getattr(signal, how))
-    proc.wait(timeout=30)
-    text = log.read_text()
-    assert "relay 1 True" in text, text
-    after = text.split("playing", 1)[1]
-    assert "estop" in after or "shutdown" in after, text
-    assert "relay 1 False" in after, "the patch relay was opened on the way out"
+    with open_outputs(profile, plugins) as watch:
+        assert not watch.table.private  # the script's table: the profile's own
+        proc = subprocess.Popen(
+            [sys.executable, str(script), str(log), mode],
+            env={**os.environ, "HAPTABLE_LOAD_ENTRYPOINTS": "0"},
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        try:
+            deadline = time.monotonic() + 40
+            while (
+                not log.exists() or "playing" not in log.read_text()
+            ) and time.monotonic() < deadline:
+                assert proc.poll() is None, proc.communicate()
+                time.sleep(0.05)
+            assert "playing relays [1]" in log.read_text(), proc.communicate()
+            assert any(watch.status()["gate"]["level_v"]), "the tone plays"
+            if how.startswith("SIG"):
+                proc.send_signal(getattr(signal, how))
+            proc.wait(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        t_end = time.monotonic() + 10
+        while (watch.status()["busy"] or watch.relay_state()) and time.monotonic() < t_end:
+            time.sleep(0.02)
+        assert not watch.status()["busy"], "what the client played was dropped"
+        assert watch.relay_state() == frozenset(), "the patch relay was opened on the way out"
+        st = watch.status()["gate"]
+        assert not any(st["level_v"])
+        assert not watch.estopped, "a client leaving is no e-stop: nothing is latched"
+        rec = watch.recording()
+        ch1 = [r for r in watch.relay_log() if r.channel == 1]
+        assert ch1[0].closed and not ch1[-1].closed and len(ch1) == 2, ch1
+        assert np.abs(rec[ch1[0].clock : ch1[1].clock, 0]).max() > 5, "the tone played"
+        assert not np.any(rec[ch1[1].clock - watch.limits.guard_samples :])
+        assert_recording_safe(watch)
+        problems = received_problems(
+            watch.limits,
+            rec,
+            watch.relay_log(),
+            watch.events(),
+            Window(0, 0, 0.0),
+            frozenset({"PA"}),
+            int(watch.status()["latency_samples"]),
+        )
+        assert not problems, problems  # ramped down at the slew limit, never cut
 
 
 def test_switch_log_lines_up_with_recording_after_other_outputs(profile, plugins):
     """Twin relay clocks count the samples of the outputs they belong to, not earlier ones."""
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
     from console.stimuli import make_stimulus
 
     with open_outputs(profile, plugins, fast=True) as first:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.runtime.scheduler import Scheduler
+from console.kernel.scheduler import Scheduler
 from console.safety import Limits, SafetyGate
 from console.safety.scope import ScopeTap
 from console.stimuli import make_stimulus
@@ -50,13 +50,15 @@ def test_an_empty_tap_reads_nothing():
 
 
 def test_the_scope_equals_what_the_twin_amplifiers_received(outputs):
+    """Through a kernel client: the scope the kernel's gate keeps, as a process reads it."""
     outputs.play(make_stimulus("sine-PA", FS))
-    trace = outputs.gate.scope.read(None)
+    trace = outputs.scope(None)
     rec = outputs.recording()
     n = min(trace.n, rec.shape[0])
     assert n > FS  # the whole 1 s tone is in the ring
     np.testing.assert_allclose(trace.volts[-n:], rec[-n:], atol=1e-4)
-    assert trace.clock + trace.n == outputs.gate.clock
+    assert trace.clock + trace.n == outputs.status()["gate"]["clock"]
+    assert trace.channels == ("piezo", "screen")
     peaks = trace.peak_v()
     assert peaks["piezo"] == pytest.approx(20.0, rel=1e-3) and peaks["screen"] == 0.0
 
@@ -88,7 +90,7 @@ def test_an_estop_ramp_reaches_zero_at_the_slew_limit_in_the_scope(profile):
     sched = Scheduler(gate, relay_channels=relay_channels, screen_channel=8)
     out = np.zeros((64, 2), np.float32)
     try:
-        sched.play(make_stimulus("sine-PA", FS))
+        sched.play(sched.check(make_stimulus("sine-PA", FS)))
         for _ in range(100000):
             gate.fill(out)
             if abs(gate.level_v[0]) > 15.0 and gate.clock > FS // 4:

@@ -1,4 +1,5 @@
-"""A whole OutputPlan through gate + scheduler + sounddevice into JACK's dummy server."""
+"""A whole OutputPlan through the table's kernel (gate + scheduler + sounddevice, in its
+own process) into JACK's dummy server."""
 
 from __future__ import annotations
 
@@ -7,8 +8,9 @@ import time
 import numpy as np
 import pytest
 
+from console.kernel.client import open_outputs
+from console.kernel.private_dir import pid_alive
 from console.profile import PROJECT_PROFILES, load_profile
-from console.runtime.outputs import open_outputs
 from console.stimuli import make_stimulus
 
 #: one JACK dummy server (a session fixture) serves them all: on one xdist worker
@@ -40,6 +42,12 @@ def test_plan_plays_paced_and_equal_through_portaudio(jack_server, plugins, tmp_
     finally:
         out.close()
         capture.close()
+        # the table's kernel holds the sound card until it ends (its linger after the last
+        # client): the next test on this JACK server must find only its own ports
+        t_end = time.monotonic() + 15
+        while pid_alive(out.kernel_pid) and time.monotonic() < t_end:
+            time.sleep(0.02)
+    assert not pid_alive(out.kernel_pid), "the table's kernel ended with its last client"
     assert not report.error
     # paced by the device clock (loose bound: timing belongs in benchmarks)
     assert plan.duration_s * 0.8 < wall_s < plan.duration_s * 4, (wall_s, plan.duration_s)

@@ -1,6 +1,7 @@
 """The twin sound card: a device buffer of ``[twin_audio] buffer_periods`` blocks, underruns
-only when the simulated DAC finds it empty, e-stop drops the queued blocks, recordings stay
-sample-exact and relay switches see the level actually at the amplifiers.
+only when the simulated DAC finds it empty, an e-stop ramps the queued blocks to 0 V at the
+slew step, recordings stay sample-exact and relay switches see the level actually at the
+amplifiers. (E-stops at random moments and late blocks: test_twin_audio_slew.py.)
 
 The DAC model is driven with a fake clock (``TwinAudioOutput.step(now)``), so these tests
 assert what happened, never how long it took.
@@ -106,19 +107,29 @@ def test_a_stall_in_silence_is_an_underrun_nobody_hears(profile):
     assert out.status()["underruns_audible"] == 1
 
 
-def test_estop_drops_the_queued_blocks(profile):
+def test_estop_ramps_the_queued_blocks_from_the_sample_playing(profile):
+    """The queued blocks from the sample playing at the e-stop become a ramp from its level
+    to 0 V at the event's slew step (no step at the cut), then silence; the block under way
+    is replaced too."""
     out, src = twin(profile, 4)
     t = run_until(out, 0.1)
     out.step(t)  # the buffer is full again
     played, written = out._played(t), out._written
     assert written - played > BS, "blocks are queued"
-    out._on_gate_event(GateEvent(t, written, "estop", "operator e-stop"))
+    step_v = (5.0, 4.0)
+    out._on_gate_event(GateEvent(t, written, "estop", "operator e-stop", ramp_step_v=step_v))
     src.n = 10**6  # whatever the next fill holds (a block under way at the e-stop) is dropped
     out.step(t + PERIOD_S)
     rec = out.recording_card()
     np.testing.assert_array_equal(rec[:played], expected(played), "the past is untouched")
-    assert not np.any(rec[played:]), "silent from the sample playing at the e-stop"
-    assert out._bus.now()[1] == (0.0, 0.0)
+    level = expected(played)[-1].astype(np.float64)
+    k = np.arange(1, rec.shape[0] - played + 1)[:, None]
+    ramp = np.sign(level) * np.maximum(np.abs(level) - k * np.array(step_v) / out._to_v, 0.0)
+    np.testing.assert_allclose(rec[played:], ramp, atol=1e-6)
+    volts = out.recording_v()[played - 1 :]
+    assert np.all(np.abs(np.diff(volts, axis=0)) <= np.array(step_v) * (1 + 1e-6) + 1e-4)
+    assert not np.any(rec[-BS:]), "silent once the ramp is over"
+    assert out._probe(t + 10 * PERIOD_S)[1] == (0.0, 0.0)
 
 
 def test_other_gate_events_keep_the_buffer(profile):
@@ -129,7 +140,7 @@ def test_other_gate_events_keep_the_buffer(profile):
 
 
 def test_paced_plan_is_sample_exact_and_switches_only_in_played_silence(profile, plugins):
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     sig = tone(250, 10, 0.3, FS)
     plan = OutputPlan(
@@ -142,7 +153,7 @@ def test_paced_plan_is_sample_exact_and_switches_only_in_played_silence(profile,
     )
     with open_outputs(profile, plugins, fast=False) as out:
         periods = out.status()["audio"]["buffer_periods"]
-        assert out.gate.latency_samples == periods * out.status()["audio"]["block_size"]
+        assert out.status()["latency_samples"] == periods * out.status()["audio"]["block_size"]
         report = out.play(plan, timeout_s=30)
         rec = out.recording()
         for k, seg in enumerate(plan.segments):
@@ -158,7 +169,7 @@ def test_paced_plan_is_sample_exact_and_switches_only_in_played_silence(profile,
 
 
 def test_paced_estop_cuts_within_the_buffer(profile, plugins):
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     sig = tone(250, 10, 3.0, FS)
     plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
@@ -166,15 +177,21 @@ def test_paced_estop_cuts_within_the_buffer(profile, plugins):
         bs = out.status()["audio"]["block_size"]
         periods = out.status()["audio"]["buffer_periods"]
         report = out.play(plan, wait=False)
-        while not report.segment_start or out.gate.clock < report.segment_start[0] + FS // 5:
+        while (
+            not report.segment_start
+            or out.status()["gate"]["clock"] < report.segment_start[0] + FS // 5
+        ):
             report.done.wait(0.01)
         out.estop("test e-stop")
-        stop = [e for e in out.gate.events if e.kind == "estop"][0].clock
+        stop = [e for e in out.events() if e.kind == "estop"][0].clock
         rec = out.recording()
-        assert not np.any(rec[stop:]), "nothing handed over after the e-stop plays"
+        step_v = out.limits.column_steps_v(frozenset({"PA"}))
+        assert np.all(np.abs(np.diff(rec, axis=0)) <= step_v * 1.0005 + 1e-4), "no step"
+        ramp = int(np.ceil(max(out.limits.piezo_range()) / step_v[0]))
+        assert not np.any(rec[stop + ramp :]), "the queued blocks ramp down, nothing after"
         quiet = np.flatnonzero(np.any(rec[:stop] != 0, axis=1))
         last_signal = int(quiet[-1]) + 1 if quiet.size else 0
-        assert last_signal >= stop - periods * bs - bs, "only the queued blocks were dropped"
+        assert last_signal >= stop - periods * bs - bs, "only the queued blocks were cut"
         assert out.relay_log()[-1].level_v == (0.0, 0.0)
 
 
@@ -198,19 +215,21 @@ def fast_twin(profile, src) -> TwinAudioOutput:
 
 
 def test_estop_drops_the_gate_ramp_down_until_it_ends_in_silence(profile):
-    """After the cut the gate still ramps down from the level it last handed: the device
-    that dropped its queue stays silent through that ramp (its first sample, played after
-    the silence, would step the amplifiers up from 0 V)."""
+    """After the cut the gate still ramps down from the level it last handed: the driver
+    ramps on its own from the sample playing, and the gate's ramp (from a level the driver
+    has left behind) is dropped until the gate hands a block that ends in silence."""
     src = Ramp([0.3, 0.3, 0.2, 0.1, 0.0, 0.4])  # block 5: a new signal after the ramp
     out = fast_twin(profile, src)
     out.step(0.0)
     out.step(0.0)
-    out._on_gate_event(GateEvent(0.0, 2 * BS, "estop", "operator e-stop"))
+    step_v = (3.0, 3.0)  # volts per sample: 0.03 of the piezo channel's 100 V full scale
+    out._on_gate_event(GateEvent(0.0, 2 * BS, "estop", "operator e-stop", ramp_step_v=step_v))
     for _ in range(4):
         out.step(0.0)
     rec = out.recording_card()[:, 0]
     assert np.all(rec[: 2 * BS] == np.float32(0.3)), "what played before the cut stays"
-    assert not np.any(rec[2 * BS : 5 * BS]), "the ramp after the cut is dropped"
+    ramp = np.maximum(0.3 - 0.03 * np.arange(1, 3 * BS + 1), 0.0)
+    np.testing.assert_allclose(rec[2 * BS : 5 * BS], ramp, atol=1e-6)
     assert np.all(rec[5 * BS :] == np.float32(0.4)), "the cut ends with the gate's silence"
 
 
@@ -235,7 +254,7 @@ def test_a_stopped_output_leaves_the_relays_to_the_live_one_of_the_same_profile(
     (they carried the stopped output's, so a closed loop read the wrong samples)."""
     import dataclasses
 
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     first = open_outputs(profile, plugins, fast=True)
     try:

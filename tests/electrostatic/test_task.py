@@ -113,7 +113,7 @@ def test_live_trial_completes_when_fed_contacts_in_real_time(profile, plugins):
     import threading
     import time
 
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
     from plugins.electrostatic.simulate import min_jerk, rotation_frames
     from plugins.electrostatic.task import run_live_trial
 

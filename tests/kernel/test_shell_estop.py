@@ -1,10 +1,11 @@
-"""`haptable estop` reaches every process holding outputs (issue #12, items 6-8).
+"""`haptable estop` reaches every table's outputs process (issue #12, items 6-8; #24).
 
 A CLI demo, play or audition started from a shell is e-stopped by `haptable estop` from
-another shell: it says so per process, the command ends with its own e-stopped line and
-exit status 4, and the twin's log shows nothing after the e-stop. A process that cannot
-confirm is named and makes the e-stop fail within its deadline; idle, huge and many
-clients do not delay it; sockets and directories of another user are refused.
+another shell: it says so per table (with the processes using it), the command ends with
+its own e-stopped line and exit status 4, and the twin's log shows nothing after the
+e-stop. A table whose kernel cannot confirm is named and makes the e-stop fail within its
+deadline; idle, huge and many clients of its control socket do not delay it; sockets and
+directories of another user are refused.
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import resource
 import socket
 import subprocess
 import sys
@@ -25,7 +25,8 @@ import pytest
 
 from console.cli import main
 from console.errors import UserError
-from console.runtime.private_dir import ensure_private_dir, runtime_dir
+from console.kernel.private_dir import runtime_dir
+from console.kernel.tables import Table, table_for, tables_root
 
 from .conftest import connect
 
@@ -34,18 +35,8 @@ ROOT = Path(__file__).resolve().parents[2]
 EXIT_ESTOPPED = 4
 
 
-def registry_dir() -> Path:
-    return ensure_private_dir(runtime_dir() / "outputs")
-
-
-def estop_everywhere(timeout_s: float):
-    from console.runtime.outputs_registry import estop_everywhere
-
-    return estop_everywhere(timeout_s=timeout_s)
-
-
 def _status(sock: Path) -> dict:
-    from console.runtime.line_server import request
+    from console.kernel.line_server import request
 
     return json.loads(request(sock, "status", timeout_s=2.0)[0])
 
@@ -63,7 +54,7 @@ class _Cli:
 
     def __init__(self, *args: str, env: dict[str, str]) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "console.cli", *args],
+            [sys.executable, "-m", "console.entry", *args],
             cwd=ROOT,
             env=env,
             stdout=subprocess.PIPE,
@@ -99,8 +90,16 @@ class _Cli:
         return code
 
 
-def _registered(pid: int) -> bool:
-    return any(p.name.startswith(f"{pid}-") for p in registry_dir().glob("*.sock"))
+def _table_of(prof: str) -> Table:
+    return table_for(prof)
+
+
+def _using(table: Table, pid: int) -> bool:
+    """The command of ``pid`` is a client of the table's kernel."""
+    try:
+        return any(f"(pid {pid})" in c for c in _status(table.control_sock)["clients"])
+    except (OSError, ValueError):
+        return False
 
 
 def _silent_after_estop(log_json: Path) -> tuple[int, float]:
@@ -111,6 +110,8 @@ def _silent_after_estop(log_json: Path) -> tuple[int, float]:
     clock = stops[0]["clock"]
     rec = np.load(log_json.with_suffix(".npz"))["recording_v"]
     assert rec.shape[0] > clock, "the twin recorded past the e-stop"
+    # the driver ramps from the sample playing at the e-stop (a few samples at the slew
+    # limit, inside the block queued ahead): silent from the e-stop's clock on
     after = np.flatnonzero(np.any(rec[clock:] != 0.0, axis=1))
     assert after.size == 0, f"{after.size} non-zero samples after the e-stop"
     return clock, float(np.abs(rec[:clock]).max())
@@ -118,7 +119,7 @@ def _silent_after_estop(log_json: Path) -> tuple[int, float]:
 
 def _estop_cli(env: dict[str, str], *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "console.cli", "estop", *extra],
+        [sys.executable, "-m", "console.entry", "estop", *extra],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -147,10 +148,9 @@ def _patient_sim(tmp_path: Path) -> Path:
     return path
 
 
-def _playing(pid: int) -> bool:
-    """The registered process's gate is handing out signal right now."""
-    (sock,) = [p for p in registry_dir().glob(f"{pid}-*.sock")]
-    return _status(sock)["level_v"] != [0.0, 0.0]
+def _playing(table: Table) -> bool:
+    """The table's gate is handing out signal right now."""
+    return any(_status(table.control_sock)["level_v"])
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -159,22 +159,25 @@ def test_haptable_estop_stops_a_cli_command_run_from_a_shell(case, tmp_path, cap
     log = tmp_path / "twin.json"
     prof = str(_patient_sim(tmp_path))
     cmd = _Cli("--profile", prof, *args, env=_env(HAPTABLE_TWIN_LOG=str(log)))
+    table = _table_of(prof)
     try:
-        cmd.wait_for(lambda: _registered(cmd.proc.pid), 60, "the command registered")
-        cmd.wait_for(lambda: _playing(cmd.proc.pid), 60, "the command playing")
+        cmd.wait_for(lambda: _using(table, cmd.proc.pid), 60, "the command uses the table")
+        cmd.wait_for(lambda: _playing(table), 60, "the command playing")
         if own_process:
             stop = _estop_cli(_env())
             out, stop_code = stop.stdout + stop.stderr, stop.returncode
-        else:
-            stop_code = main(["estop"])
+        else:  # what `haptable estop` runs (console.entry), in this process
+            from console.kernel.shell import main as shell_main
+
+            stop_code = shell_main(["estop"])
             cap = capsys.readouterr()
             out = cap.out + cap.err
     finally:
         code = cmd.finish(20)
-    lines = [ln for ln in out.splitlines() if f"pid {cmd.proc.pid} " in ln]
+    lines = [ln for ln in out.splitlines() if f"(pid {cmd.proc.pid})" in ln]
     assert len(lines) == 1, (out, code, cmd.err[-5:])
     assert "confirmed silent (0 V / 0 V), relays open" in lines[0], lines[0]
-    assert f"haptable --profile {prof} {args[0]}" in lines[0] and "profile sim" in lines[0]
+    assert f"haptable --profile {prof} {args[0]}" in lines[0] and "table sim " in lines[0]
     assert stop_code == 0, out
     assert code == EXIT_ESTOPPED, cmd.err[-5:]
     said = [e for e in cmd.err if e.startswith("haptable: e-stopped by haptable estop (pid ")]
@@ -182,17 +185,15 @@ def test_haptable_estop_stops_a_cli_command_run_from_a_shell(case, tmp_path, cap
     assert not any("Traceback" in e or "internal error" in e for e in cmd.err), cmd.err
     _, peak = _silent_after_estop(log)
     assert peak > 0.0, "the command was playing when the e-stop came"
-    assert not _registered(cmd.proc.pid), "its registration left with it"
+    assert not _using(table, cmd.proc.pid), "it left the table"
 
 
 # ---------------------------------------------------------------------- (b) unconfirmable
-def _fake_registration(pid: int, *, answer: bytes | None = None, command: str = "hung"):
-    """A registered socket that accepts and answers ``answer`` (never, if None)."""
-    d = registry_dir()
-    path = d / f"{pid}-{int(time.monotonic_ns() % 10**9)}.sock"
-    path.with_suffix(".json").write_text(
-        json.dumps({"pid": pid, "command": command, "profile": "sim"})
-    )
+def _fake_kernel(name: str, *, answer: bytes | None = None):
+    """A table's control socket that accepts and answers ``answer`` (never, if None)."""
+    d = tables_root() / f"{name}-0123456789"
+    d.mkdir(mode=0o700)
+    path = d / "control.sock"
     srv = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     srv.bind(str(path))
     srv.listen(8)
@@ -214,11 +215,13 @@ def _fake_registration(pid: int, *, answer: bytes | None = None, command: str = 
     return path, srv, held
 
 
-def test_estop_names_a_process_that_does_not_answer_and_fails_within_its_deadline(outputs, capsys):
-    hung = [_fake_registration(os.getpid(), command=f"hung {i}") for i in range(3)]
+def test_estop_names_a_table_that_does_not_answer_and_fails_within_its_deadline(shared, capsys):
+    from console.kernel.shell import main as shell_main  # what `haptable estop` runs
+
+    hung = [_fake_kernel(f"hung{i}") for i in range(3)]
     try:
         t0 = time.monotonic()
-        code = main(["estop", "--timeout", "0.5"])
+        code = shell_main(["estop", "--timeout", "0.5"])
         took = time.monotonic() - t0
     finally:
         for _, srv, held in hung:
@@ -228,28 +231,25 @@ def test_estop_names_a_process_that_does_not_answer_and_fails_within_its_deadlin
     out = capsys.readouterr().out
     assert code == 1, out
     for i in range(3):
-        line = next(ln for ln in out.splitlines() if f"(hung {i};" in ln)
-        assert f"pid {os.getpid()}" in line and "NOT confirmed: no answer within 0.5 s" in line
+        line = next(ln for ln in out.splitlines() if f"table hung{i}:" in ln)
+        assert "NOT confirmed: no answer within 0.5 s" in line, line
     mine = [ln for ln in out.splitlines() if "confirmed silent" in ln]
-    assert len(mine) == 1, out  # the real outputs of this process: confirmed
-    assert outputs.gate.estopped and outputs.status()["gate"]["relays_closed"] == []
-    assert took < 1.5, f"three hung processes took {took:.2f} s: not reached at once"
+    assert len(mine) == 1, out  # the real outputs of this table: confirmed
+    assert shared.wait_safe(2) and shared.status()["gate"]["estopped"]
+    assert took < 1.5, f"three hung tables took {took:.2f} s: not reached at once"
 
 
-def test_stale_registrations_of_dead_processes_are_removed(capsys):
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], **_cap())
-    pid = int(dead.stdout)
-    d = registry_dir()
-    for stem in (f"{pid}-1", f"{os.getpid()}-999"):  # a dead pid; a live pid, nobody listening
-        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        s.bind(str(d / f"{stem}.sock"))
-        s.close()
-        (d / f"{stem}.json").write_text(json.dumps({"command": "gone", "profile": "sim"}))
+def test_a_table_whose_kernel_ended_is_named_and_stays_latched(capsys):
+    d = tables_root() / "gone-0123456789"
+    d.mkdir(mode=0o700)
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    s.bind(str(d / "control.sock"))  # nobody listens on it
+    s.close()
     assert main(["estop"]) == 0
     out = capsys.readouterr().out
-    assert out.count("gone, its stale registration removed") == 2, out
-    assert "no process holds outputs" in out
-    assert list(d.iterdir()) == []
+    assert "table gone: no outputs process answers (it ended); latched" in out, out
+    assert "no outputs open" in out
+    assert (d / "estop.json").exists()
 
 
 def _cap() -> dict:
@@ -267,36 +267,49 @@ def _idle_clients(path: Path, n: int) -> list[socket.socket]:
 
 
 def _confirmed_quickly(outputs, limit_s: float = 1.0) -> None:
+    from console.kernel.shell import estop
+
     t0 = time.monotonic()
-    (r,) = estop_everywhere(timeout_s=2.0)
+    reached, _ = estop(None, 2.0)
     took = time.monotonic() - t0
-    assert r.pid == os.getpid() and r.confirmed, r
+    (r,) = reached
+    assert r.pid == outputs.kernel_pid and r.confirmed, r
     assert took < limit_s, f"the e-stop took {took:.2f} s"
-    assert outputs.gate.estopped
+    assert outputs.wait_safe(2) and outputs.status()["gate"]["estopped"]
 
 
-def test_an_idle_client_does_not_delay_the_estop(outputs):
-    idle = _idle_clients(outputs.registration.path, 1)
+@pytest.fixture
+def shared(profile, plugins):
+    """The sim table's shared kernel (fast-forward): what `haptable estop` reaches."""
+    from console.kernel.client import open_outputs
+
+    out = open_outputs(profile, plugins, fast=True, private=False)
+    yield out
+    out.close()
+
+
+def test_an_idle_client_does_not_delay_the_estop(shared):
+    idle = _idle_clients(shared.table.control_sock, 1)
     try:
-        _confirmed_quickly(outputs)
+        _confirmed_quickly(shared)
     finally:
         for s in idle:
             s.close()
 
 
-def test_fifty_idle_clients_do_not_delay_the_estop(outputs):
-    idle = _idle_clients(outputs.registration.path, 50)
+def test_fifty_idle_clients_do_not_delay_the_estop(shared):
+    idle = _idle_clients(shared.table.control_sock, 50)
     try:
-        _confirmed_quickly(outputs)
+        _confirmed_quickly(shared)
     finally:
         for s in idle:
             s.close()
 
 
-def test_two_hundred_idle_clients_past_the_limit_still_leave_the_estop(outputs):
-    idle = _idle_clients(outputs.registration.path, 200)  # the oldest are dropped
+def test_two_hundred_idle_clients_past_the_limit_still_leave_the_estop(shared):
+    idle = _idle_clients(shared.table.control_sock, 200)  # the oldest are dropped
     try:
-        _confirmed_quickly(outputs)
+        _confirmed_quickly(shared)
     finally:
         for s in idle:
             s.close()
@@ -322,23 +335,19 @@ def flood(path: Path, total: int = 300 * 2**20) -> int:
     return sent
 
 
-def test_a_300_mb_line_is_cut_at_the_bound(outputs):
-    rss0 = _rss_kb()
-    sent = flood(outputs.registration.path)
-    grew_mb = (_rss_kb() - rss0) / 1024
-    assert sent < 8 * 2**20, f"the server took {sent / 2**20:.0f} MB of one line"
-    assert grew_mb < 20, f"the process grew by {grew_mb:.0f} MB"
-    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss < 2 * 2**20  # under 2 GB
-    _confirmed_quickly(outputs)
+def test_a_300_mb_line_is_cut_at_the_bound(shared):
+    sent = flood(shared.table.control_sock)
+    assert sent < 8 * 2**20, f"the kernel took {sent / 2**20:.0f} MB of one line"
+    _confirmed_quickly(shared)
 
 
-def test_a_slow_reader_of_the_answer_does_not_hold_the_server(outputs):
+def test_a_slow_reader_of_the_answer_does_not_hold_the_server(shared):
     """Many clients send ``status`` and never read: the e-stop is still answered."""
-    clients = _idle_clients(outputs.registration.path, 40)
+    clients = _idle_clients(shared.table.control_sock, 40)
     for s in clients:
         s.sendall(b"status\n")
     try:
-        _confirmed_quickly(outputs)
+        _confirmed_quickly(shared)
     finally:
         for s in clients:
             s.close()
@@ -346,9 +355,7 @@ def test_a_slow_reader_of_the_answer_does_not_hold_the_server(outputs):
 
 # ---------------------------------------------------------------------- (d) refused
 def test_a_socket_of_another_user_is_refused_and_never_reported_confirmed(capsys):
-    path, srv, held = _fake_registration(
-        os.getpid(), answer=b'{"confirmed": true, "why": "silent"}\n', command="planted"
-    )
+    path, srv, held = _fake_kernel("planted", answer=b'{"confirmed": true, "why": "silent"}\n')
     try:
         os.chown(path, 12345, -1)  # root here: a socket file of another user
         assert main(["estop"]) == 1
@@ -359,11 +366,9 @@ def test_a_socket_of_another_user_is_refused_and_never_reported_confirmed(capsys
 
 
 def test_a_server_of_another_uid_is_refused_by_its_peer_credentials(capsys, monkeypatch):
-    from console.runtime import line_server
+    from console.kernel import line_server
 
-    path, srv, _ = _fake_registration(
-        os.getpid(), answer=b'{"confirmed": true, "why": "silent"}\n', command="replaced"
-    )
+    path, srv, _ = _fake_kernel("replaced", answer=b'{"confirmed": true, "why": "silent"}\n')
     real = line_server.peer_cred
     monkeypatch.setattr(  # what SO_PEERCRED says of a process of uid 12345
         line_server, "peer_cred", lambda s: (real(s)[0], 12345, 12345)
@@ -376,21 +381,30 @@ def test_a_server_of_another_uid_is_refused_by_its_peer_credentials(capsys, monk
     assert "replaced" in out and "NOT confirmed: refused:" in out and "uid 12345" in out, out
 
 
-def test_the_server_drops_a_client_of_another_uid_unanswered(outputs, monkeypatch):
-    from console.runtime import line_server
+def test_a_line_server_drops_a_client_of_another_uid_unanswered(tmp_path, monkeypatch):
+    from console.kernel import line_server
+    from console.kernel.line_server import LineServer, request
 
     real = line_server.peer_cred
 
     def cred(s):
         pid, uid, gid = real(s)
-        if threading.current_thread().name == "haptable-outputs-estop":  # the server's view
+        if threading.current_thread().name == "haptable-test-server":  # the server's view
             return pid, 12345, gid
         return pid, uid, gid
 
     monkeypatch.setattr(line_server, "peer_cred", cred)
-    (r,) = estop_everywhere(timeout_s=1.0)
-    assert not r.confirmed and "closed without an answer" in r.why, r
-    assert not outputs.gate.estopped, "a stranger's e-stop did nothing"
+    tmp_path.chmod(0o700)
+    got: list[str] = []
+    srv = LineServer(
+        tmp_path / "c.sock", lambda line, pid: got.append(line) or "ok", name="haptable-test-server"
+    )
+    try:
+        with pytest.raises(ConnectionResetError, match="closed without an answer"):
+            request(tmp_path / "c.sock", "estop", timeout_s=1.0)
+    finally:
+        srv.close()
+    assert got == [], "a stranger's e-stop did nothing"
 
 
 @pytest.mark.parametrize("how", ["mode 777", "symlink", "another owner"])
@@ -413,33 +427,25 @@ def test_a_shared_or_foreign_runtime_directory_is_refused_in_one_line(how, tmp_p
     assert code == 2
     err = cap.err.strip()
     assert err.count("\n") == 0 and err.startswith("haptable: error: ") and fix in err, err
-    assert "relays: all open" in cap.out  # it still opened the profile's relays
     with pytest.raises(UserError, match=fix):
         runtime_dir()
-    assert main(["play", "sine-PA", "--fast"]) == 2  # nothing opens outputs unregistered
+    assert main(["play", "sine-PA", "--fast"]) == 2  # no table opens outside it
     assert fix in capsys.readouterr().err
 
 
-def test_registration_sockets_are_private():
-    from console.plugins import load_plugins
-    from console.profile import load_profile
-    from console.runtime.outputs import open_outputs
-
-    pm = load_plugins()
-    with open_outputs(load_profile("sim", pm), pm, fast=True) as out:
-        path = out.registration.path
-        assert path.parent == runtime_dir() / "outputs"
-        assert os.stat(path.parent).st_mode & 0o777 == 0o700
-        assert os.stat(path).st_mode & 0o777 == 0o600
-        assert os.stat(path.with_suffix(".json")).st_mode & 0o777 == 0o600
-    assert not path.exists() and not path.with_suffix(".json").exists()
+def test_a_tables_files_are_private(shared):
+    d = shared.table.dir
+    assert d.parent == runtime_dir() / "tables"
+    assert os.stat(d.parent).st_mode & 0o777 == 0o700 and os.stat(d).st_mode & 0o777 == 0o700
+    for name in ("control.sock", "kernel.sock", "kernel.json", "kernel.lock"):
+        assert os.stat(d / name).st_mode & 0o777 == 0o600, name
 
 
 # ---------------------------------------------------------------------- a demo process
 def test_haptable_estop_ends_a_demo_process_of_the_console(profile, tmp_path):
     from console.runtime.demo_process import DemoProcess
 
-    run = DemoProcess(profile, "knob", twin_log=tmp_path / "knob.json")
+    run = DemoProcess(profile, "knob", twin_log=tmp_path / "knob.json")  # the shared table
     try:
         run.wait_started(lambda f, text: None)
         assert main(["estop"]) == 0

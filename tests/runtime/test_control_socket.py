@@ -11,8 +11,8 @@ import time
 import pytest
 
 from console.errors import UserError
+from console.kernel.private_dir import runtime_dir
 from console.runtime.control import ControlServer, send_command, socket_path
-from console.runtime.private_dir import runtime_dir
 
 from .conftest import connect
 
@@ -25,8 +25,9 @@ def _server(profile, calls=None):
 def test_the_socket_lives_in_the_private_directory_mode_0600(profile):
     srv = _server(profile)
     try:
-        path = socket_path(profile)
-        assert path.parent == runtime_dir()
+        path = socket_path(profile)  # in its table's folder, beside the kernel's files
+        assert path.parent.parent == runtime_dir() / "tables"
+        assert os.stat(path.parent).st_mode & 0o777 == 0o700
         assert os.stat(path).st_mode & 0o777 == 0o600
     finally:
         srv.close()
@@ -129,7 +130,7 @@ def test_a_hung_socket_left_behind_is_replaced_not_obeyed(profile):
 
 
 def test_a_console_socket_of_another_uid_is_not_believed(profile, monkeypatch):
-    from console.runtime import line_server
+    from console.kernel import line_server
 
     srv = _server(profile)
     real = line_server.peer_cred

@@ -7,7 +7,7 @@ import os
 import pytest
 
 from console.errors import UserError
-from console.runtime.private_dir import ensure_private_dir, runtime_dir, write_private
+from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
 
 
 def test_created_0700_under_xdg(tmp_path, monkeypatch):

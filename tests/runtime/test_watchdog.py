@@ -89,30 +89,33 @@ def test_loop_reports_where_it_is_stuck():
     assert where == "camera (no frame arriving)"
 
 
-class Ramp:
-    """A live stream: a 200 Hz sine on the screen channel, ramped in, never ending."""
-
-    patches = frozenset()
-    screen = True
+class Carrier:
+    """A live stream as a client describes it: a 200 Hz sine of 40 V on the screen channel,
+    ramped in by the kernel's synth, never ending (its targets posted once it is bound)."""
 
     def __init__(self) -> None:
-        self.k = 0
-        self.stop = False
+        from console.stream_synth import StreamSpec
 
-    def next_block(self, n):
-        if self.stop:
-            return None
-        k = np.arange(self.k, self.k + n)
-        self.k += n
-        env = np.minimum(k / 4800.0, 1.0)
-        return np.zeros(n), 40.0 * env * np.sin(2 * np.pi * 200 * k / 48000)
+        self.spec = StreamSpec(
+            sample_rate_hz=48000,
+            patches=frozenset(),
+            screen=True,
+            carrier_max_v=40.0,
+            carrier_min_hz=60,
+            carrier_max_hz=400,
+            start_hz=200,
+            glide_ms=10,
+            ramp_ms=100,
+        )
+        self.sink = None
 
-    def request_stop(self):
-        self.stop = True
+    def bind(self, sink) -> None:
+        self.sink = sink
+        sink.post(carrier_hz=200.0, carrier_v=40.0)
 
 
 def test_a_stalled_loop_silences_a_playing_stream(profile, plugins):
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     release = threading.Event()
     entered = threading.Event()
@@ -122,8 +125,9 @@ def test_a_stalled_loop_silences_a_playing_stream(profile, plugins):
         release.wait(10)
 
     with open_outputs(profile, plugins, fast=False) as out:
-        src = Ramp()
+        src = Carrier()
         report = out.stream(src, name="carrier")
+        assert src.sink is not None
         loop = FrameLoop(OneFrameCamera(), [("effect", hang)]).start()
         wd = Watchdog(loop, out.estop, limit_s=0.15).start()
         try:
@@ -143,4 +147,4 @@ def test_a_stalled_loop_silences_a_playing_stream(profile, plugins):
         threading.Event().wait(0.05)
         rec2 = out.recording()
         assert np.all(rec2[-(out.status()["audio"]["blocks"] - blocks_after) * 64 - 64 :] == 0.0)
-        assert 5 not in out.gate.relay_state()
+        assert 5 not in out.relay_state()

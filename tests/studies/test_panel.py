@@ -300,7 +300,7 @@ def test_the_e_stop_stops_a_run_and_its_trial_is_repeated(double_plugins, map_fi
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             assert "e-stop" in pane.last["stopped"]
             assert not app.session.outputs.status()["busy"]
-            assert app.session.outputs.gate.estopped
+            assert app.session.outputs.estopped
 
     asyncio.run(scenario())
     events = _events(tmp_path / "P01" / "trials.jsonl")

@@ -158,7 +158,7 @@ def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
             await asyncio.to_thread(app.session.vibration.load, map_file)
             await wait_for(pilot, lambda: "vibration map" not in str(status.render()), 10)
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stop")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, what="e-stop")
             for _ in range(2):
                 await pilot.press("s")
                 await pilot.pause(0.3)
@@ -166,7 +166,7 @@ def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
                 assert pane.running is None
             assert not (tmp_path / "P01").exists()
             await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped, what="reset")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
             await pilot.press("s")  # now it runs
             await wait_for(pilot, lambda: (tmp_path / "P01" / "trials.jsonl").exists(), 60)
             await pilot.press("a")

@@ -38,7 +38,7 @@ def test_safety_bar_names_five_channels_and_the_estop_silences_them(plugins):
             assert _level(text(), "PA") == 0.0 and _level(text(), "PD") == 0.0
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: text().startswith(" E-STOP:"), what="e-stop shown")
-            assert app.session.outputs.gate.wait_safe(5)
-            assert app.session.outputs.gate.level_v == (0.0,) * 5
+            assert app.session.outputs.wait_safe(5)
+            assert tuple(app.session.outputs.status()["gate"]["level_v"]) == (0.0,) * 5
 
     asyncio.run(scenario())

@@ -131,8 +131,10 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             app.session.demos.params = {"flow": {"prepare": False, "watchdog_ms": 5000}}
             pane = await _start(app, pilot, "flow")
             run = app.session.demos.run
-            assert app.session.outputs is None  # handed over to the demo's process
-            assert app.session.camera_started.borrower == "demo flow"  # and the camera
+            # the demo's process is a client of the console's table; only the camera is lent
+            clients = app.session.outputs.status()["kernel"]["clients"]
+            assert any(f"(pid {run.proc.pid})" in c for c in clients), clients
+            assert app.session.camera_started.borrower == "demo flow"
 
             def flow_done() -> bool:
                 snap = run.snapshot()
@@ -174,7 +176,7 @@ def test_flow_demo_from_the_scenes_screen_plays_the_flow_it_reports(flow_ctx):
             assert run.stopped and not run.running
             assert app.session.camera_started.borrower is None  # given back
             out = await _outputs_back(app, pilot)
-            assert not out.gate.estopped
+            assert not out.estopped
             _silent_and_open(run)
             rec, log = twin_record(run)
             assert run.final["twin_log"] in str(app.query_one("#demo-status").render())
@@ -217,7 +219,7 @@ def test_estop_stops_a_running_demo(plugins):
             assert np.any(rec[:, 1])  # it did play on the screen electrode
             # the console's outputs come back e-stopped, until the operator resets them
             out = await _outputs_back(app, pilot)
-            assert out.gate.estopped and "operator e-stop" in out.gate.estop_reason
+            assert out.estopped and "operator e-stop" in out.estop_reason
             assert "E-STOP" in str(app.query_one("#safety").render())
 
     asyncio.run(scenario())
@@ -233,7 +235,7 @@ def test_quitting_with_a_demo_running_leaves_nothing_running(plugins):
             await pilot.press("q")
         assert run.stopped and not run.running
         _silent_and_open(run)
-        assert app.session.outputs is None  # not reopened while quitting
+        assert app.session.outputs.closed  # left the table while quitting
 
     asyncio.run(scenario())
 
@@ -252,7 +254,7 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
             await wait_for(pilot, lambda: "preparing" in lw.text, 30, "preparation shown")
             assert lw.progress is not None  # the bar shows
             run = app.session.demos.run  # its process prepares the flow's plans
-            assert run is not None and app.session.outputs is None
+            assert run is not None and app.session.outputs is not None
             await pilot.press("x")
             await wait_for(pilot, lambda: lw.outcome == "cancelled", 60, "cancelled")
             # the pane tidies up when the worker's end reaches it (a message later)
@@ -265,7 +267,7 @@ def test_preparing_the_flow_shows_progress_and_can_be_cancelled(flow_ctx):
             assert app.session.camera_started.borrower is None  # the camera is the console's again
             assert run.proc.wait(10) is not None and run.exit_reason == "cancelled"
             out = await _outputs_back(app, pilot)
-            assert not out.gate.estopped
+            assert not out.estopped
             table = app.query_one("#demo-table")
             assert str(table.get_cell("flow", "state")) == "cancelled"
 
@@ -330,7 +332,9 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
     asyncio.run(scenario())
 
 
-def test_a_demo_process_that_dies_is_shown_and_the_outputs_come_back_estopped(plugins):
+def test_a_demo_process_that_dies_is_shown_and_its_outputs_ramp_down(plugins):
+    """kill -9 of the demo's process: the table's kernel ramps down what it played and
+    opens the relays (a client that went away, not an e-stop); the console says so."""
     import os
     import signal
 
@@ -343,10 +347,10 @@ def test_a_demo_process_that_dies_is_shown_and_the_outputs_come_back_estopped(pl
             await wait_for(pilot, lambda: pane.demo_name is None, 20, "the console noticed")
             assert "exited (code -9)" in pane.demo_state
             assert app.session.camera_started.borrower is None
-            # back e-stopped: the process did not close its outputs itself
             out = await _outputs_back(app, pilot)
-            assert out.gate.estopped and "exited (code -9)" in out.gate.estop_reason
-            assert out.status()["gate"]["relays_closed"] == []
+            await wait_for(pilot, lambda: not out.status()["busy"], 10, "its stream ramped down")
+            st = out.status()["gate"]
+            assert not out.estopped and st["relays_closed"] == [] and not any(st["level_v"])
 
     asyncio.run(scenario())
 
@@ -366,33 +370,30 @@ def test_haptable_estop_from_a_shell_reaches_the_demo_process(plugins):
             assert "another process" in run.estop_reason
             _silent_and_open(run)
             out = await _outputs_back(app, pilot)
-            assert out.gate.estopped
+            assert out.estopped
 
     asyncio.run(scenario())
 
 
-def test_a_demo_is_refused_while_the_console_plays_and_nothing_is_handed_over(plugins):
+def test_a_demo_started_while_the_console_plays_waits_its_turn_on_the_table(plugins):
+    """The console and the demo are clients of one kernel: an audition under way plays
+    to its end, the demo's stream after it; nothing is handed over."""
     from console.signals import tone
-    from console.tui.long_work import LongWork
     from console.types import OutputPlan, Segment
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
             out = await _outputs_back(app, pilot)
-            sig = tone(200, 20, 3.0, FS, 0.01)
+            sig = tone(200, 20, 1.0, FS, 0.01)
             plan = OutputPlan(FS, (Segment(sig, np.zeros_like(sig), frozenset({"PA"})),))
-            out.play(plan, wait=False)  # an audition under way
+            report = out.play(plan, wait=False)  # an audition under way
             await wait_for(pilot, lambda: out.status()["busy"], 5, "playing")
-            pane = app.pane("scenes")
-            assert pane.start_demo("knob")
-            lw = app.query_one("#demo-work", LongWork)
-            await wait_for(pilot, lambda: lw.outcome is not None, 10, "refused")
-            assert "outputs are playing" in lw.text and "\n" not in lw.text.strip()
-            assert app.session.outputs is out and app.session.camera_started.borrower is None
-            # the session's Stopped reaches the screen a message later
-            await wait_for(pilot, lambda: pane.demo_name is None, 5, "the screen saw it end")
-            assert pane.demo_state == "failed"
-            assert "outputs are playing" in lw.text  # the refusal's line stays
+            await _start(app, pilot, "knob")
+            assert app.session.outputs is out
+            await wait_for(pilot, lambda: report.done.is_set(), 20, "the audition played")
+            assert not report.error and len(report.segment_end) == 1
+            run = app.session.demos.run
+            await wait_for(pilot, lambda: outputs_of(run)["busy"], 20, "then the knob")
 
     asyncio.run(scenario())

@@ -4,48 +4,34 @@ file, the outputs reopened with them), play a named test signal through the gate
 from __future__ import annotations
 
 import asyncio
-from types import SimpleNamespace
 
 import numpy as np
 from textual.widgets import DataTable, Static
 
 from console.cli import main
-from console.hookspecs import hookimpl
 from console.plugins import load_plugins
 from console.profile import load_profile, overrides_path
 from console.runtime.context import Context
 from console.tui.app import HapTableApp
-from console.types import DeviceStatus, OutputDevice
 
 from .conftest import wait_for
 
-CARDS = (
-    OutputDevice("bench-card", "Bench Card A (ALSA)", "ALSA", 2, 0.005, 0.02, default=True),
-    OutputDevice("bench-card", "Bench Card B (JACK)", "JACK", 8, 0.003, 0.01),
-    OutputDevice("bench-card", "Bench mic (ALSA)", "ALSA", 1, 0.005, 0.02, note="1 output"),
-)
+
+def _module(name: str):
+    """A test plugin module of ``card_plugins`` (the table's outputs process loads it
+    from its file too)."""
+    import importlib.util
+    from pathlib import Path
+
+    file = Path(__file__).parent / "card_plugins" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"haptable_test_{name}", file)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def _bench_card_plugin():
-    """An audio output listing three cards; what it opens is the twin's amplifiers (so
-    the test hears what the gate passed)."""
-
-    @hookimpl
-    def haptable_register_audio_outputs(register):
-        def factory(profile):
-            from plugins.twin.outputs import TwinAudioOutput
-
-            return TwinAudioOutput(profile)
-
-        register(
-            "bench-card",
-            factory,
-            description="a test sound card",
-            probe=lambda p: DeviceStatus("audio", "bench-card", "simulated", "test card"),
-            devices=lambda profile: list(CARDS),
-        )
-
-    return SimpleNamespace(haptable_register_audio_outputs=haptable_register_audio_outputs)
+    return _module("bench_card")
 
 
 def _row_of(table: DataTable, text: str) -> int | None:
@@ -157,47 +143,18 @@ def test_a_pick_during_an_estop_is_saved_but_the_estopped_outputs_stay():
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             before = app.session.outputs
             await pilot.press("ctrl+e")
-            assert before.gate.wait_safe(5)
+            assert before.wait_safe(5)
             await _select(pilot, app, "#audio-table", "Bench Card A (ALSA)")
             await wait_for(pilot, lambda: "stay as they are" in _result(app), 20, "refusal")
             assert "e-stop is active" in _result(app)
-            assert app.session.outputs is before and before.gate.estopped  # never reopened
+            assert app.session.outputs is before and before.estopped  # never reopened
             assert load_profile("sim", plugins).get("audio.device") == "Bench Card A (ALSA)"
 
     asyncio.run(scenario())
 
 
 def _failing_card_plugin():
-    """A sound card that lists one device and fails to start it, and a driver that lists
-    its devices and finds none."""
-
-    @hookimpl
-    def haptable_register_audio_outputs(register):
-        def factory(profile):
-            from plugins.twin.outputs import TwinAudioOutput
-
-            class DeadCard(TwinAudioOutput):
-                def start(self, gate):
-                    raise OSError("device unavailable")
-
-            return DeadCard(profile)
-
-        register(
-            "dead-card",
-            factory,
-            description="a card that never starts",
-            probe=lambda p: DeviceStatus("audio", "dead-card", "simulated", "test card"),
-            devices=lambda profile: [OutputDevice("dead-card", "Dead Card", "ALSA", 2, 0, 0)],
-        )
-        register(
-            "empty-card",
-            factory,
-            description="a driver with no device plugged in",
-            probe=lambda p: DeviceStatus("audio", "empty-card", "missing", "none"),
-            devices=lambda profile: [],
-        )
-
-    return SimpleNamespace(haptable_register_audio_outputs=haptable_register_audio_outputs)
+    return _module("dead_card")
 
 
 def test_a_row_with_no_device_cannot_be_picked_and_the_outputs_stay():
@@ -212,7 +169,7 @@ def test_a_row_with_no_device_cannot_be_picked_and_the_outputs_stay():
             await wait_for(pilot, lambda: "no device on this row" in _result(app), 10)
             assert "empty-card" in _result(app) and "\n" not in _result(app)
             await pilot.pause(0.3)
-            assert app.session.outputs is before and not before.gate.estopped
+            assert app.session.outputs is before and not before.estopped
             assert not overrides_path("sim").exists()  # nothing saved
 
     asyncio.run(scenario())
@@ -234,7 +191,7 @@ def test_a_pick_that_fails_to_open_brings_back_the_outputs_and_the_overrides():
             assert "device unavailable" in msg and "previous outputs are back" in msg
             assert "\n" not in msg
             out = app.session.outputs
-            assert out is not None and not out.gate.estopped
+            assert out is not None and not out.estopped
             assert (app.session.outputs_profile or app.ctx.profile).get("audio.driver") == "twin"
             await pilot.press("t")  # the twin plays again
             await wait_for(pilot, lambda: "through the gate" in _result(app), 30, "played")

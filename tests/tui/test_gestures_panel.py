@@ -84,7 +84,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
 
             # the e-stop works here too, and the panel's safety bar shows it
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stop")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, what="e-stop")
             bar = panel.query_one("#safety")
             await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP"), what="bar")
 

@@ -53,7 +53,7 @@ def test_notifications_never_cover_the_bar_at_80x24(plugins):
             await pilot.press("1")  # close relay 1, then e-stop: it opens again
             await wait_for(pilot, lambda: "relays closed: 1" in str(bar.render()))
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
+            await wait_for(pilot, lambda: app.session.outputs.estopped)
             await wait_for(pilot, lambda: bool(app.screen.query(Toast)), what="a toast")
             await wait_for(pilot, lambda: "ctrl+r" in str(bar.render()))
             text = str(bar.render())
@@ -89,8 +89,10 @@ def test_the_bar_shows_on_the_help_and_the_log(plugins):
                 await pilot.press(key)
                 await wait_for(pilot, lambda m=modal: type(app.screen).__name__ == m, 5, modal)
                 await pilot.press("ctrl+e")
-                await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
-                await wait_for(pilot, lambda: "E-STOP: operator" in last(), 5, "the bar")
+                await wait_for(pilot, lambda: app.session.outputs.estopped)
+                await wait_for(
+                    pilot, lambda: "E-STOP: operator" in last(), 5, f"the bar: {last()!r}"
+                )
                 assert "relays closed: none" in last() and "ctrl+r" in last()
                 await pilot.press("ctrl+r")
                 await wait_for(pilot, lambda: "| idle |" in last(), 5, "the bar idle")

@@ -84,7 +84,7 @@ def test_an_estop_ramp_is_visible(plugins):
                 "the tone at the amplifiers",
             )
             await pilot.press("ctrl+e")
-            assert out.gate.wait_safe(5)
+            assert out.wait_safe(5)
             await pilot.pause(0.1)
             await pilot.press("p")
             await wait_for(

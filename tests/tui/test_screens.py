@@ -60,12 +60,12 @@ def test_relay_toggle_and_estop(plugins):
             bar = app.query_one(SafetyBar)
             await wait_for(pilot, lambda: "E-STOP" in str(bar.render()))
             await pilot.press("1")
-            await wait_for(pilot, lambda: app.session.outputs.gate.relay_state() == frozenset({1}))
+            await wait_for(pilot, lambda: app.session.outputs.relay_state() == frozenset({1}))
             await wait_for(pilot, lambda: "relays closed: 1" in str(bar.render()))
             await wait_for(pilot, lambda: app.query_one("#relay-1", Switch).value)
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
-            assert app.session.outputs.gate.relay_state() == frozenset()
+            await wait_for(pilot, lambda: app.session.outputs.estopped)
+            assert app.session.outputs.relay_state() == frozenset()
             await wait_for(pilot, lambda: str(bar.render()).startswith(" E-STOP:"))
             assert bar.has_class("estop")
             # a toggle during the e-stop is refused, and the screen says why (the label says
@@ -74,15 +74,15 @@ def test_relay_toggle_and_estop(plugins):
             await pilot.press("2")
             await wait_for(pilot, lambda: "e-stop" in pane.refused.get(2, "") and not pane.pending)
             assert "e-stop" in str(app.query_one("#interlock-2").render())
-            assert app.session.outputs.gate.relay_state() == frozenset()
+            assert app.session.outputs.relay_state() == frozenset()
             log = app.session.outputs.relay_log()
             assert [(r.channel, r.closed) for r in log] == [(1, True), (1, False)]
             assert all(r.level_v == (0.0, 0.0) for r in log)
             await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped)
+            await wait_for(pilot, lambda: not app.session.outputs.estopped)
             # the refused toggle is gone: it never runs after the reset
             await asyncio.sleep(0.3)
-            assert app.session.outputs.gate.relay_state() == frozenset()
+            assert app.session.outputs.relay_state() == frozenset()
             assert not any(r.channel == 2 for r in app.session.outputs.relay_log())
 
     asyncio.run(scenario())
@@ -100,7 +100,7 @@ def test_a_toggle_during_the_estop_never_runs_after_a_quick_reset(plugins, monke
             out = app.session.outputs
             pane = app.pane("relays")
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: out.gate.estopped and out.gate.wait_safe(0))
+            await wait_for(pilot, lambda: out.estopped and out.wait_safe(0))
             reset = threading.Event()
             set_relays = out.set_relays
 
@@ -111,11 +111,11 @@ def test_a_toggle_during_the_estop_never_runs_after_a_quick_reset(plugins, monke
             monkeypatch.setattr(out, "set_relays", held_until_reset)
             await pilot.press("2")
             await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: not out.gate.estopped)
+            await wait_for(pilot, lambda: not out.estopped)
             reset.set()
             await wait_for(pilot, lambda: not pane.pending, what="the toggle answered")
             await asyncio.sleep(0.3)
-            assert out.gate.relay_state() == frozenset()
+            assert out.relay_state() == frozenset()
             assert not any(r.channel == 2 for r in out.relay_log())
             assert "e-stop" in pane.refused[2]
 
@@ -162,7 +162,7 @@ def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
             await wait_for(pilot, lambda: len(app.session.played) == 5, 30, "hand flow")
             hand = app.session.played[4]
             assert hand.meta["direction"] == "right" and len(hand.segments) == 2
-            await wait_for(pilot, lambda: not app.session.outputs.scheduler.busy, 30)
+            await wait_for(pilot, lambda: not app.session.outputs.status()["busy"], 30)
             for plan in app.session.played:
                 assert _played_in_recording(app.session.outputs, plan) < 1e-3
 
@@ -232,7 +232,7 @@ def test_electrostatic_setting_and_preset(plugins):
             await wait_for(pilot, lambda: len(app.session.played) == 1)
             plan = app.session.played[0]
             assert plan.segments[0].screen and abs(np.ptp(plan.segments[0].screen_v) - 200) < 1
-            await wait_for(pilot, lambda: not app.session.outputs.scheduler.busy, 10)
+            await wait_for(pilot, lambda: not app.session.outputs.status()["busy"], 10)
             rec = app.session.outputs.recording()
             assert abs(np.ptp(rec[:, 1]) - 200.0) < 1.0 and not np.any(rec[:, 0])
             # the first list entry is a knob condition: enter auditions it
@@ -268,7 +268,7 @@ def test_help_on_question_mark_and_estop_over_it(plugins):
             assert "ctrl+e" in text and "toggle that relay" in text  # this screen's keys
             # the e-stop works on top of the help too
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped)
+            await wait_for(pilot, lambda: app.session.outputs.estopped)
             await pilot.press("escape")
             await wait_for(pilot, lambda: type(app.screen).__name__ != "HelpScreen")
 

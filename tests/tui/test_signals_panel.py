@@ -154,7 +154,7 @@ def test_estop_stops_an_audition(plugins):
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: "e-stop" in _status(app).lower(), 10, "e-stopped")
             out = app.session.outputs
-            assert out.gate.estopped
+            assert out.estopped
             await wait_for(pilot, lambda: not out.status()["busy"], 10, "silent")
             assert "played" not in _status(app)
 

@@ -50,7 +50,7 @@ def test_relays_after_a_toggle(snap_compare):
     async def run_before(pilot):
         await _settle(app, pilot)
         await pilot.press("3")
-        await wait_for(pilot, lambda: app.session.outputs.gate.relay_state() == frozenset({3}))
+        await wait_for(pilot, lambda: app.session.outputs.relay_state() == frozenset({3}))
         await wait_for(pilot, lambda: app.query_one("#relaylog").row_count == 1)
         await pilot.pause(0.5)
         await pilot.wait_for_scheduled_animations()

@@ -63,13 +63,13 @@ def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
             await pilot.press("enter")
             await wait_for(pilot, lambda: "playing point 14" in _status(app), what="playing")
             await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.gate.estopped, what="e-stopped")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, what="e-stopped")
             await wait_for(
                 pilot, lambda: "stopped by the e-stop" in _status(app), what="status after e-stop"
             )
             assert "point 14" in _status(app) and "playing" not in _status(app)
             await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: not app.session.outputs.gate.estopped, what="reset")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
             await pilot.pause(0.5)
             assert "point 14 stopped by the e-stop" in _status(app)
             # the next audition plays and then says it played

@@ -18,12 +18,12 @@ from .test_literal_text import screen_text
 def test_lab_profile_says_outputs_are_closed_and_keeps_the_twin_map_out(
     plugins, map_file, monkeypatch
 ):
-    from console.runtime import outputs
+    from console.kernel import client
 
-    def no_card(profile, pm, fast=None):
+    def no_card(profile, pm, **kw):
         raise UserError("[audio] device = 'Scarlett': no stereo output device matches")
 
-    monkeypatch.setattr(outputs, "open_outputs", no_card)
+    monkeypatch.setattr(client, "Outputs", no_card)
 
     async def scenario():
         app = HapTableApp(Context("haptable-lab", plugins), fast=True, initial="vibration")

@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
-from console.runtime.private_dir import ensure_own_dir, runtime_dir
+from console.kernel.private_dir import ensure_own_dir, runtime_dir
 
 #: The protocol version both ends announce in their ``hello``.
 PROTOCOL = 1

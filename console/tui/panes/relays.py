@@ -116,16 +116,16 @@ class RelaysPane(VerticalScroll):
         out = self.app.session.outputs
         if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
             return
-        closed = ch in out.scheduler.operator_relays  # the operator's own setting
+        closed = ch in out.operator_relays()  # the operator's own setting
         self.request(ch, not closed)
 
     def request(self, ch: int, closed: bool) -> None:
         self.refused.pop(ch, None)
         out = self.app.session.outputs
-        if out is not None and out.gate.estopped:
+        if out is not None and out.estopped:
             # refused on the key itself: the worker may run only after a quick reset, and
             # would then switch a relay the operator asked for during the e-stop
-            reason = out.gate.estop_reason
+            reason = out.estop_reason
             self._done(ch, f"e-stop active ({reason}): relays stay open; reset first")
             return
         self.pending[ch] = closed
@@ -137,7 +137,7 @@ class RelaysPane(VerticalScroll):
         try:
             if out is None:
                 raise RuntimeError("outputs are not open")
-            want = set(out.scheduler.operator_relays)  # not a stimulus's temporary routing
+            want = set(out.operator_relays())  # not a stimulus's temporary routing
             want = want | {ch} if closed else want - {ch}
             out.set_relays(want)
             from_thread(self.app, self._done, ch, "")

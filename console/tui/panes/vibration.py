@@ -422,7 +422,7 @@ class VibrationPane(VerticalScroll):
         from_thread(self.app, self._playing, plan)
         played = self.app.session.play_plan(plan)
         out = self.app.session.outputs
-        estopped = out is not None and out.gate.estopped
+        estopped = out is not None and out.estopped
         from_thread(self.app, self._played, plan, played, estopped)
 
     def _playing(self, plan) -> None:

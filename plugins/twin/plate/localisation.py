@@ -405,7 +405,7 @@ def _gate_check(profile, pm, flow, vmap, player, shapes, ls) -> dict:
     (``flow_pairs_check``), and the independent flows of the same pairs played through
     the gate with a channel per patch (``independent``), against the same parts played
     here: contrast difference."""
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     from .loop_check import flow_pairs_check
 
@@ -446,7 +446,7 @@ def independent_through_gate(profile4, pm, vmap, pairs_no, ls, player) -> list[d
     """Independent flows between grid numbers played through the safety gate on a
     per-patch profile, recorded, then into the plate twin; per part the achieved
     contrast there and here (the same answer played by ``play_pairs``)."""
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     from .loop_check import _play_and_envelope
 

@@ -565,7 +565,7 @@ def run_bench(ctx, quick: bool) -> dict:
     ``--quick`` also every hand region at 60 mm steps, four directions (left/down play the parts of right/up in the other
     order: same tones, different ring-down overlap)."""
     from console.bench import machine_info
-    from console.runtime.outputs import open_outputs
+    from console.kernel.client import open_outputs
 
     profile, pm = ctx.profile, ctx.pm
     t0 = time.perf_counter()

@@ -1,0 +1,241 @@
+"""A table's identity and its files in the private runtime directory, and its latch.
+
+A table is a profile file: its key is ``<name>-<sha1 of the file's path>[:10]``, the same
+for every process that loads that file. Its kernel keeps its files in
+``runtime_dir()/tables/<key>/``:
+
+=================  =================================================================
+``kernel.lock``    held (flock) by the kernel process while it runs: one per table
+``kernel.json``    the running kernel: pid, profile, when it started
+``kernel.sock``    clients' connections (framed messages: ``console.kernel.wire``)
+``control.sock``   one-line commands: ``ping``, ``status``, ``estop``, ``reset``
+``estop.json``     the latched e-stop: while it exists nothing plays on this table
+``console.lock``   held by the table's console (its reset key is an operator's)
+=================  =================================================================
+
+A *private* table (``runtime_dir()/private/<key>/``) is a twin of one process's own (the
+bench's safety fuzz, tests): a bare `haptable estop` never reaches it and its owner may
+reset it; it never drives hardware.
+
+The latch is written before the kernel's e-stop returns and read by a kernel before it
+opens anything, so an e-stop sent while no kernel runs is remembered: `haptable estop`
+writes the latch first and then looks for kernels; a kernel binds its control socket
+first and then reads the latch. Whatever the order, one of them sees the other.
+Standard library only.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from console.kernel.private_dir import ensure_private_dir, open_private, runtime_dir
+
+#: a latch record is a few lines; anything larger is not ours
+MAX_LATCH_BYTES = 16 * 1024
+
+
+def table_key(profile_path: str | os.PathLike) -> str:
+    """The key of the table a profile file describes (its resolved path's hash)."""
+    p = Path(profile_path)
+    with contextlib.suppress(OSError):
+        p = p.resolve()
+    stem = "".join(c if c.isalnum() or c in "-_." else "_" for c in p.stem)[:40] or "table"
+    return f"{stem}-{hashlib.sha1(str(p).encode()).hexdigest()[:10]}"
+
+
+@dataclass(frozen=True)
+class Table:
+    """Where one table's kernel keeps its files (``dir``); ``private``: a twin of one
+    process (see the module's doc)."""
+
+    key: str
+    dir: Path
+    private: bool = False
+
+    @property
+    def kernel_sock(self) -> Path:
+        return self.dir / "kernel.sock"
+
+    @property
+    def control_sock(self) -> Path:
+        return self.dir / "control.sock"
+
+    @property
+    def lock_path(self) -> Path:
+        return self.dir / "kernel.lock"
+
+    @property
+    def info_path(self) -> Path:
+        return self.dir / "kernel.json"
+
+    @property
+    def latch_path(self) -> Path:
+        return self.dir / "estop.json"
+
+    @property
+    def console_lock(self) -> Path:
+        return self.dir / "console.lock"
+
+    @property
+    def name(self) -> str:
+        """The profile's name as the key starts with it."""
+        return self.key.rsplit("-", 1)[0]
+
+    def ensure(self) -> Table:
+        """Create the directory (0700, checked like the runtime directory)."""
+        ensure_private_dir(self.dir)
+        return self
+
+    def info(self) -> dict[str, Any]:
+        """What the running kernel wrote of itself ({} when none or unreadable)."""
+        return _read_json(self.info_path) or {}
+
+
+def tables_root() -> Path:
+    return ensure_private_dir(runtime_dir() / "tables")
+
+
+def table_for(profile_path: str | os.PathLike) -> Table:
+    """The shared table of the profile file ``profile_path``."""
+    key = table_key(profile_path)
+    return Table(key, tables_root() / key)
+
+
+_private_seq = 0
+
+
+def private_table(label: str = "twin") -> Table:
+    """A new private twin table of this process (see the module's doc)."""
+    global _private_seq
+    _private_seq += 1
+    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)[:20]
+    key = f"{safe}-{os.getpid()}-{_private_seq}"
+    root = ensure_private_dir(runtime_dir() / "private")
+    return Table(key, root / key, private=True)
+
+
+def table_at(directory: str | os.PathLike) -> Table:
+    """The table whose files are in ``directory`` (a demo process joins its console's)."""
+    d = Path(directory)
+    return Table(d.name, d, private=d.parent.name == "private")
+
+
+def running_tables() -> list[Table]:
+    """The shared tables whose kernel has a control socket (alive or stale)."""
+    root = tables_root()
+    return sorted(
+        (Table(d.name, d) for d in root.iterdir() if (d / "control.sock").exists()),
+        key=lambda t: t.key,
+    )
+
+
+def known_tables(profile_paths: list[Path]) -> list[Table]:
+    """Every shared table a bare `haptable estop` latches: each one that ever ran since
+    the runtime directory was made, and the tables of ``profile_paths``."""
+    root = tables_root()
+    found = {d.name: Table(d.name, d) for d in root.iterdir() if d.is_dir()}
+    for p in profile_paths:
+        key = table_key(p)
+        found.setdefault(key, Table(key, root / key))
+    return sorted(found.values(), key=lambda t: t.key)
+
+
+# ---------------------------------------------------------------------- the latch
+def latch_record(reason: str, by: str, pid: int | None = None) -> dict[str, Any]:
+    """What a latch says: why, who, which process, when."""
+    now = time.time()
+    return {
+        "reason": str(reason)[:300],
+        "by": str(by)[:200],
+        "pid": int(os.getpid() if pid is None else pid),
+        "t": now,
+        "time": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(now)),
+    }
+
+
+def describe_latch(rec: dict[str, Any]) -> str:
+    """One line: ``haptable estop (pid 12) at 2026-11-27 10:00:01``."""
+    why = str(rec.get("reason") or "e-stop")
+    when = rec.get("time") or "?"
+    return f"{why} at {when}"
+
+
+def read_latch(table: Table) -> dict[str, Any] | None:
+    """The table's latched e-stop, or None. A latch file that cannot be read as ours is
+    still a latch (fail safe): its record says so."""
+    p = table.latch_path
+    try:
+        os.lstat(p)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        return {"reason": f"latch file unreadable ({exc.strerror})", "by": "?", "time": "?"}
+    rec = _read_json(p)
+    if not isinstance(rec, dict) or not isinstance(rec.get("reason"), str):
+        return {"reason": f"latch file {p} unreadable", "by": "?", "time": "?"}
+    return rec
+
+
+def write_latch(table: Table, record: dict[str, Any]) -> None:
+    """Latch the table (atomically, synced): kept until ``clear_latch``. The first latch
+    is kept when one exists (its reason is the one an operator must read)."""
+    table.ensure()
+    if read_latch(table) is not None:
+        return
+    tmp = table.dir / f".estop-{os.getpid()}-{time.monotonic_ns()}.tmp"
+    fd = open_private(tmp)
+    try:
+        os.write(fd, json.dumps(record).encode())
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+    os.replace(tmp, table.latch_path)
+    _sync_dir(table.dir)
+
+
+def clear_latch(table: Table) -> dict[str, Any] | None:
+    """Remove the latch; what it said (None: there was none)."""
+    rec = read_latch(table)
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(table.latch_path)
+        _sync_dir(table.dir)
+    return rec
+
+
+def _read_json(p: Path) -> Any:
+    try:
+        fd = os.open(p, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return None
+    try:
+        import stat
+
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return None
+        raw = os.read(fd, MAX_LATCH_BYTES + 1)
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+    if len(raw) > MAX_LATCH_BYTES:
+        return None
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        return None
+
+
+def _sync_dir(d: Path) -> None:
+    with contextlib.suppress(OSError):
+        fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
