@@ -19,6 +19,10 @@ HOW_TO_ALLOW = (
 )
 
 AUDIO_PRIORITY = 10
+#: the outputs kernel's other threads (serving clients, relays, the latch): a thread that
+#: holds the interpreter lock while another program's real-time thread keeps it off the
+#: CPU makes the audio thread wait for that lock, so they run above any client's loop
+KERNEL_PRIORITY = 8
 FRAMES_PRIORITY = 5
 SUPPORT_PRIORITY = 1
 

@@ -17,7 +17,10 @@ standard-library ones):
 - ``shell``: `haptable estop` and `haptable reset`, standard library only;
 - ``wire``: the framed messages between clients and the kernel;
 - ``scheduler``: plans, streams and relay steps, block by block, inside the kernel;
-- ``stream_host``: live streams synthesised in the kernel from their parameters;
+- ``table``: the drivers, the gate and the scheduler of a table in one process;
+- ``requests``: what a client may ask, each checked before it reaches the scheduler;
 - ``server``: the kernel process (``python -m console.kernel``);
-- ``client``: what a process holds instead of outputs (``Outputs``).
+- ``spawn``: starting it for a client; ``client``: what a process holds instead of
+  outputs (``Outputs``);
+- ``memory_lock``: the kernel's memory kept in RAM while it plays in real time.
 """

@@ -20,12 +20,8 @@ from __future__ import annotations
 import contextlib
 import itertools
 import os
-import pickle
 import queue
-import select
 import socket
-import subprocess
-import sys
 import threading
 import time
 import weakref
@@ -37,14 +33,12 @@ import numpy as np
 
 from console.errors import EStopLatched, SafetyRefusal, UserError
 from console.kernel import wire
-from console.kernel.private_dir import open_private
 from console.kernel.scheduler import PlayReport
+from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
 from console.kernel.tables import Table, describe_latch, private_table, table_for
 from console.safety import GateEvent, Limits
 from console.safety.scope import ScopeTrace
 
-#: how long a client waits for a kernel it started to say it is ready
-START_TIMEOUT_S = 30.0
 #: the largest reply a client reads (a twin recording of [twin_audio] record_s)
 MAX_REPLY_BYTES = 2 << 30
 
@@ -129,89 +123,6 @@ class _Pending:
         self.arrays: list = []
 
 
-def _log_path(table: Table) -> str:
-    return str(table.dir / "kernel.log")
-
-
-def spawn_kernel(
-    table: Table, profile: Any, *, fast: bool, owner: int | None, plugins: Any = None
-) -> str:
-    """Start the table's kernel; its first line: ``ready``, ``busy: ...`` (another one
-    started meanwhile) or ``error: ...``."""
-    table.ensure()
-    log_fd = open_private(_log_path(table), append=True)
-    blob = pickle.dumps(
-        {
-            "table_dir": str(table.dir),
-            "profile": profile,
-            "fast": fast,
-            "owner": owner,
-            # plugins this process was given beyond the installed ones (their drivers)
-            "extra_plugins": list(plugins.extra_modules if plugins is not None else ()),
-        }
-    )
-    env = dict(os.environ)
-    env.pop("HAPTABLE_TWIN_LOG", None)  # the clients write their own
-    try:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "console.kernel"],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=log_fd,
-            start_new_session=True,  # its terminal's signals are not an e-stop
-            close_fds=True,
-            env=env,
-        )
-    finally:
-        os.close(log_fd)
-    try:
-        proc.stdin.write(f"{len(blob)}\n".encode() + blob)
-        proc.stdin.close()
-    except BrokenPipeError:
-        pass
-    deadline = time.monotonic() + START_TIMEOUT_S
-    buf = b""
-    fd = proc.stdout.fileno()
-    while b"\n" not in buf:
-        left = deadline - time.monotonic()
-        if left <= 0:
-            proc.kill()
-            return f"error: the outputs process did not start within {START_TIMEOUT_S:g} s"
-        r, _, _ = select.select([fd], [], [], left)
-        if not r:
-            continue
-        chunk = os.read(fd, 4096)
-        if not chunk:
-            code = proc.wait()
-            return (
-                f"error: the outputs process ended at start (exit {code}; see {_log_path(table)})"
-            )
-        buf += chunk
-    proc.stdout.close()
-    # the kernel outlives us; wait for it in a thread so it never stays a zombie
-    threading.Thread(target=proc.wait, name="haptable-kernel-reaper", daemon=True).start()
-    return buf.split(b"\n", 1)[0].decode("utf-8", "replace").strip()
-
-
-def command_line() -> str:
-    """This process's command as a user would recognise it (``haptable demo knob``)."""
-    import shlex
-    from pathlib import Path
-
-    argv = list(getattr(sys, "orig_argv", sys.argv))
-    if "-m" in argv[:-1]:
-        i = argv.index("-m")
-        mod, rest = argv[i + 1], argv[i + 2 :]
-        words = (
-            ["haptable", *rest]
-            if mod in ("console.cli", "console.entry")
-            else ["python", "-m", mod, *rest]
-        )
-    else:
-        words = [Path(sys.argv[0]).name or "python", *sys.argv[1:]]
-    return shlex.join(words)[:200]
-
-
 class Outputs:
     """Play plans and streams, switch relays, e-stop: requests to the table's kernel,
     which checks each through the gate (see the module's doc)."""
@@ -269,9 +180,7 @@ class Outputs:
 
     # ------------------------------------------------------------------ connection
     def _connect(self, profile: Any) -> tuple[socket.socket, dict[str, Any]]:
-        from console.kernel.server import _settings_key
-
-        want = _settings_key(profile)
+        want = wire.settings_key(profile)
         owner = os.getpid() if self.table.private else None
         spawned = 0
         deadline = time.monotonic() + START_TIMEOUT_S
@@ -292,7 +201,7 @@ class Outputs:
                 if time.monotonic() > deadline or spawned >= 3:
                     raise UserError(
                         f"table {self.table.name}: the outputs process does not answer; "
-                        f"see {_log_path(self.table)}"
+                        f"see {log_path(self.table)}"
                     )
                 line = spawn_kernel(
                     self.table, profile, fast=self.fast, owner=owner, plugins=self._plugins
@@ -693,10 +602,12 @@ class Outputs:
             for t, c, k, m, cut in h["events"]
         ]
 
-    def recording(self) -> np.ndarray | None:
+    def recording(self, *, as_played: bool = False) -> np.ndarray | None:
         """What the twin amplifiers received, (n, channels) volts (a column per ``[audio]
-        channels`` name); ``None`` on real hardware."""
-        h, arrays = self._call("recording", timeout_s=60.0)
+        channels`` name); ``None`` on real hardware. Row k is the gate's clock k; with
+        ``as_played`` the underruns' gaps (the DAC's hold and ramp) are inserted: what the
+        amplifiers got in real time, no longer indexed by the clock."""
+        h, arrays = self._call("recording", timeout_s=60.0, as_played=as_played)
         if not h.get("recording"):
             return None
         card_v = np.array(

@@ -122,6 +122,7 @@ class LineServer:
         read_timeout_s: float = 1.0,
         max_line: int = MAX_LINE,
         max_clients: int = MAX_CLIENTS,
+        priority: int | None = None,
     ) -> None:
         self.path = Path(path)
         self.handler = handler
@@ -129,6 +130,7 @@ class LineServer:
         self.max_line = max_line
         self.max_clients = max_clients
         self.dropped = 0  # connections dropped (deadline, bound, peer, crowd)
+        self.priority = priority  # its threads' real-time priority (console.realtime)
         if len(os.fsencode(self.path)) > MAX_SOCKET_PATH:
             from console.errors import UserError
 
@@ -158,7 +160,14 @@ class LineServer:
         self._thread.start()
 
     # ------------------------------------------------------------------ the loop
+    def _realtime(self) -> None:
+        if self.priority is not None:
+            from console.realtime import realtime_priority
+
+            realtime_priority(self.priority)
+
     def _serve(self) -> None:
+        self._realtime()
         try:
             while not self._closed:
                 now = time.monotonic()
@@ -244,6 +253,7 @@ class LineServer:
         th.start()
 
     def _answer(self, c: _Conn, line: str) -> None:
+        self._realtime()
         try:
             try:
                 reply = self.handler(line, c.pid)

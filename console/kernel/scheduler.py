@@ -604,9 +604,9 @@ class Scheduler(Source):
         job.report.finish(error)
 
     def _relay_worker(self) -> None:
-        from console.realtime import SUPPORT_PRIORITY, realtime_priority
+        from console.realtime import KERNEL_PRIORITY, realtime_priority
 
-        realtime_priority(SUPPORT_PRIORITY)  # part of the output path, as the audio thread
+        realtime_priority(KERNEL_PRIORITY)  # part of the output path, as the audio thread
         while True:
             item = self._switch_q.get()
             if item is None:

@@ -19,7 +19,6 @@ import contextlib
 import fcntl
 import json
 import logging
-import math
 import os
 import pickle
 import queue
@@ -36,6 +35,7 @@ from console.kernel import wire
 from console.kernel.line_server import LineServer, peer_cred
 from console.kernel.operator import reset_refusal
 from console.kernel.private_dir import open_private, pid_alive, write_private
+from console.kernel.requests import REQUESTS
 from console.kernel.tables import (
     Table,
     clear_latch,
@@ -45,6 +45,7 @@ from console.kernel.tables import (
     table_at,
     write_latch,
 )
+from console.realtime import KERNEL_PRIORITY, realtime_priority
 
 log = logging.getLogger("haptable.kernel")
 
@@ -54,27 +55,6 @@ FIRST_CLIENT_S = 10.0
 ESTOP_WAIT_S = 1.0
 #: a client's outgoing events waiting to be sent; past it the client is dropped
 MAX_PENDING_EVENTS = 20000
-#: plans one client may keep checked at once (each is its samples, copied)
-MAX_PLANS = 4096
-#: bytes of checked samples one client may keep
-MAX_PLAN_BYTES = 512 * 1024 * 1024
-
-
-def jsonable(o: Any) -> Any:
-    """``o`` with tuples, sets and numpy values made JSON's, non-finite floats None."""
-    if isinstance(o, dict):
-        return {str(k): jsonable(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple, set, frozenset)):
-        return [jsonable(v) for v in o]
-    if isinstance(o, bool) or o is None or isinstance(o, (int, str)):
-        return o
-    if isinstance(o, float):
-        return o if math.isfinite(o) else None
-    import numpy as np
-
-    if isinstance(o, (np.ndarray, np.generic)):
-        return jsonable(o.tolist())
-    return str(o)
 
 
 # ---------------------------------------------------------------------- clients
@@ -114,8 +94,8 @@ class Kernel:
         self._clients: dict[int, Client] = {}
         self._clients_lock = threading.Lock()
         self._next_cid = 1
-        self._next_job = 1
-        self._next_plan = 1
+        self._next_id = 1
+        self._request_s: dict[str, tuple[int, float, float]] = {}  # op -> (n, total, max)
         self._events: queue.SimpleQueue = queue.SimpleQueue()
         self._gate_lock = threading.Lock()  # the gate appears; an early e-stop latches
         self._quit = threading.Event()
@@ -154,7 +134,9 @@ class Kernel:
         for stale in (t.control_sock, t.kernel_sock):
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(stale)
-        self.control = LineServer(t.control_sock, self._control, name="haptable-kernel-control")
+        self.control = LineServer(
+            t.control_sock, self._control, name="haptable-kernel-control", priority=KERNEL_PRIORITY
+        )
         self._latch_dead_predecessor()
 
         def before_start(gate: Any) -> None:
@@ -261,9 +243,7 @@ class Kernel:
         self._events.put(ev)
 
     def _event_loop(self) -> None:
-        from console.realtime import SUPPORT_PRIORITY, realtime_priority
-
-        realtime_priority(SUPPORT_PRIORITY)
+        realtime_priority(KERNEL_PRIORITY)
         while True:
             ev = self._events.get()
             if ev is None:
@@ -279,10 +259,10 @@ class Kernel:
                 "message": str(ev.message),
                 "cut": bool(ev.cut),
             }
-            for c in self._client_list():
+            for c in self.client_list():
                 self._send_event(c, msg)
 
-    def _client_list(self) -> list[Client]:
+    def client_list(self) -> list[Client]:
         with self._clients_lock:
             return list(self._clients.values())
 
@@ -291,7 +271,7 @@ class Kernel:
         """E-stop now, latch it (``by``: who asked), wait for open relays; whether
         silence is confirmed."""
         t0 = time.monotonic()
-        clients = [c.label() for c in self._client_list()]  # before they leave
+        clients = [c.label() for c in self.client_list()]  # before they leave
         gate = self.gate
         gate.estop(reason)
         with contextlib.suppress(Exception):
@@ -337,7 +317,7 @@ class Kernel:
         when = time.strftime("%H:%M:%S")
         note = f"e-stop reset by {who[:120]} at {when} (was: {was})"
         log.warning("%s", note)
-        for c in self._client_list():
+        for c in self.client_list():
             self._send_event(c, {"op": "reset", "message": note})
         return f"ok: {note}"
 
@@ -369,7 +349,7 @@ class Kernel:
                     }
                 )
         if cmd == "status":
-            return json.dumps(jsonable(self.status_brief()))
+            return json.dumps(wire.jsonable(self.status_brief()))
         if cmd == "estop":
             return json.dumps(self.estop(arg.strip() or f"haptable estop (pid {peer_pid})"))
         if cmd == "reset":
@@ -385,11 +365,12 @@ class Kernel:
             "estop_reason": st["estop_reason"],
             "relays_closed": st["relays_closed"],
             "level_v": st["level_v"],
-            "clients": [c.label() for c in self._client_list()],
+            "clients": [c.label() for c in self.client_list()],
         }
 
     # ------------------------------------------------------------------ clients
     def _accept_loop(self) -> None:
+        realtime_priority(KERNEL_PRIORITY)
         lst = self._listener
         while not self._quit.is_set():
             try:
@@ -417,6 +398,7 @@ class Kernel:
         return (lim.max_plan_samples + 1024) * 8 * (len(lim.channels) + 6) + (1 << 20)
 
     def _read_loop(self, c: Client) -> None:
+        realtime_priority(KERNEL_PRIORITY)
         max_payload = self._max_payload()
         try:
             while not c.gone.is_set():
@@ -444,6 +426,7 @@ class Kernel:
             self._drop(c, "its connection closed")
 
     def _write_loop(self, c: Client) -> None:
+        realtime_priority(KERNEL_PRIORITY)
         while True:
             msg = c.out.get()
             if msg is None or c.gone.is_set():
@@ -455,7 +438,7 @@ class Kernel:
     def _reply(self, c: Client, header: dict[str, Any], arrays: Any = ()) -> bool:
         try:
             with c.send_lock:  # blocking: only this client's threads wait on its reading
-                wire.send(c.sock, jsonable(header) if not arrays else header, arrays)
+                wire.send(c.sock, wire.jsonable(header) if not arrays else header, arrays)
             return True
         except (OSError, ValueError, wire.WireError):
             c.gone.set()
@@ -489,7 +472,7 @@ class Kernel:
         with contextlib.suppress(OSError):
             c.sock.close()
 
-    def _job_listener(self, c: Client, job_id: int) -> Any:
+    def job_listener(self, c: Client, job_id: int) -> Any:
         def on_change(report: Any, what: str) -> None:
             msg: dict[str, Any] = {"op": "job", "job": job_id, "what": what}
             if what in ("segment_start", "segment_end"):
@@ -507,172 +490,29 @@ class Kernel:
 
         return on_change
 
-    def _new_job(self) -> int:
+    def new_id(self) -> int:
+        """A fresh id for a job or a checked plan."""
         with self._clients_lock:
-            j = self._next_job
-            self._next_job += 1
+            j = self._next_id
+            self._next_id += 1
         return j
+
+    def quit(self) -> None:
+        """End after the current requests (``serve`` returns, ``shutdown`` follows)."""
+        self._quit.set()
 
     def _handle(self, c: Client, h: dict[str, Any], payload: bytearray) -> dict[str, Any] | None:
         op = h["op"]
-        sch, gate = self.scheduler, self.gate
-        if op == "hello":
-            c.command = str(h.get("command", ""))[:200]
-            c.role = str(h.get("role", "client"))[:20]
-            return {
-                "ok": True,
-                "kernel_pid": os.getpid(),
-                "table": self.table.key,
-                "client": c.cid,
-                "private": self.table.private,
-                "fast": self.fast,
-                "latched": read_latch(self.table),
-                "estopped": gate.estopped,
-                "estop_reason": gate.estop_reason,
-                "settings": _settings_key(self.profile),
-            }
-        if op == "plan":
-            plan = _plan_from(h, wire.arrays(h, payload))
-            checked = sch.check(plan)
-            nbytes = sum(a.nbytes for seg in checked.samples for a in seg)
-            if len(c.plans) >= MAX_PLANS or c.plan_bytes + nbytes > MAX_PLAN_BYTES:
-                raise SafetyRefusal(
-                    f"{checked.name}: this process keeps {len(c.plans)} checked plans "
-                    f"({c.plan_bytes / 2**20:.0f} MB); forget some first"
-                )
-            with self._clients_lock:
-                pid_ = self._next_plan
-                self._next_plan += 1
-            c.plans[pid_] = (checked, nbytes)
-            c.plan_bytes += nbytes
-            return {"ok": True, "plan": pid_, "duration_s": checked.duration_s}
-        if op == "forget":
-            got = c.plans.pop(int(h["plan"]), None)
-            if got is not None:
-                c.plan_bytes -= got[1]
-            return None
-        if op == "play":
-            got = c.plans.get(int(h["plan"]))
-            if got is None:
-                return {"error": f"plan {h['plan']!r} is not checked here; send it first"}
-            j = self._new_job()
-            rep = sch.play(got[0], owner=c.cid, on_change=self._job_listener(c, j))
-            c.jobs[j] = rep
-            return {"ok": True, "job": j}
-        if op in ("prearm", "disarm"):
-            j = self._new_job()
-            if op == "prearm":
-                rep = sch.prearm(
-                    _patches(h.get("patches")),
-                    bool(h.get("screen")),
-                    owner=c.cid,
-                    on_change=self._job_listener(c, j),
-                )
-            else:
-                rep = sch.disarm(owner=c.cid, on_change=self._job_listener(c, j))
-            if rep is None:
-                return {"ok": True, "job": None}
-            c.jobs[j] = rep
-            return {"ok": True, "job": j, "done": rep.done.is_set()}
-        if op == "relays":
-            closed = h.get("closed")
-            if not isinstance(closed, list) or not all(type(x) is int for x in closed):
-                raise ValueError("'closed' must be a list of relay channel numbers")
-            j = self._new_job()
-            rep = sch.set_relays(frozenset(closed), owner=c.cid, on_change=self._job_listener(c, j))
-            c.jobs[j] = rep
-            return {"ok": True, "job": j}
-        if op == "cancel":
-            rep = c.jobs.get(int(h["job"]))
-            dropped = rep is not None and sch.cancel(rep, str(h.get("why", "cancelled"))[:200])
-            return {"ok": True, "dropped": dropped}
-        if op == "stream":
-            from console.stream_synth import StreamSpec
-
-            spec = StreamSpec.from_json(h.get("spec"))
-            j = self._new_job()
-            name = str(h.get("name", "stream"))[:100]
-            rep, synth = sch.stream(spec, name, owner=c.cid, on_change=self._job_listener(c, j))
-            c.jobs[j] = rep
-            c.streams[j] = synth
-            return {"ok": True, "job": j}
-        if op == "post":
-            synth = c.streams.get(int(h["job"]))
-            if synth is not None:
-                ids = h.get("ids") or []
-                if not isinstance(ids, list) or len(ids) > 1000:
-                    raise ValueError("'ids' must be a list of at most 1000 crossing ids")
-                synth.post(
-                    [int(i) for i in ids],
-                    _finite_or_none(h.get("hz")),
-                    _finite_or_none(h.get("v")),
-                )
-            return None
-        if op == "stop_stream":
-            synth = c.streams.get(int(h["job"]))
-            if synth is not None:
-                synth.request_stop()
-            return None
-        if op == "release":
-            n = sch.abort_owner(c.cid, str(h.get("reason", "released"))[:200])
-            return {"ok": True, "jobs": n}
-        if op == "estop":
-            reason = str(h.get("reason") or "e-stop")[:300]
-            return {"ok": True, **self.estop(reason, by=c.label())}
-        if op == "reset":
-            line = self.reset(c.pid, str(h.get("who") or c.label())[:200], via_terminal=False)
-            if line.startswith("ok"):
-                return {"ok": True, "message": line[4:]}
-            return {"error": line, "refused": True}
-        if op == "status":
-            return {"ok": True, "status": jsonable(self.status())}
-        if op == "events":
-            since = int(h.get("since", 0))
-            evs = [e for e in gate.events if e.clock >= since] if since else list(gate.events)
-            return {
-                "ok": True,
-                "events": [
-                    [e.t_s, int(e.clock), e.kind, e.message, bool(e.cut)] for e in evs[-1000:]
-                ],
-            }
-        if op == "recording":
-            from console.contracts import SimulatedAudio
-
-            if not isinstance(self.audio, SimulatedAudio):
-                return {"ok": True, "recording": False}
-            rec = self.audio.recording_card()  # card units, float32: half the bytes
-            since = max(0, int(h.get("since", 0)))
-            return {"ok": True, "recording": True, "_arrays": [rec[since:]]}
-        if op == "relay_log":
-            log_ = self.outputs.relay_log()
-            if log_ is None:
-                return {"ok": True, "log": None}
-            since = max(0, int(h.get("since", 0)))
-            return {
-                "ok": True,
-                "log": [
-                    [r.t_s, int(r.clock), int(r.channel), bool(r.closed), list(r.level_v)]
-                    for r in list(log_)[since:]
-                ],
-            }
-        if op == "scope":
-            sec = h.get("seconds")
-            trace = gate.scope.read(None if sec is None else max(0.0, float(sec)))
-            return {
-                "ok": True,
-                "clock": int(trace.clock),
-                "_arrays": [trace.volts.astype("<f4")],
-            }
-        if op == "retire":  # a client with other settings takes the table, if it is free
-            others = [o.label() for o in self._client_list() if o is not c]
-            if others or sch.busy:
-                return {"ok": False, "clients": others or ["a plan that plays"]}
-            self._quit.set()
-            return {"ok": True}
-        if op == "bye":
-            c.gone.set()
-            return {"ok": True}
-        return {"error": f"unknown request {op[:40]!r}"}
+        fn = REQUESTS.get(op)
+        if fn is None:
+            return {"error": f"unknown request {op[:40]!r}"}
+        t0 = time.perf_counter()
+        try:
+            return fn(self, c, h, payload)
+        finally:  # what serving clients costs beside the audio thread (status: requests)
+            dt = time.perf_counter() - t0
+            n, total, worst = self._request_s.get(op, (0, 0.0, 0.0))
+            self._request_s[op] = (n + 1, total + dt, max(worst, dt))
 
     def status(self) -> dict[str, Any]:
         sch = self.scheduler
@@ -683,8 +523,12 @@ class Kernel:
                 "table": self.table.key,
                 "private": self.table.private,
                 "fast": self.fast,
-                "clients": [c.label() for c in self._client_list()],
+                "clients": [c.label() for c in self.client_list()],
                 "plans_checked": sch.plans_checked,
+                "requests": {
+                    op: {"n": n, "mean_ms": round(t / n * 1e3, 3), "max_ms": round(m * 1e3, 3)}
+                    for op, (n, t, m) in sorted(self._request_s.items())
+                },
                 "latched": read_latch(self.table),
             },
         }
@@ -697,68 +541,6 @@ def _get(profile: Any, key: str, default: Any) -> Any:
     except Exception:
         v = None
     return default if v is None else v
-
-
-def _settings_key(profile: Any) -> str:
-    """What a client compares to know it talks to a kernel of the same settings."""
-    import hashlib
-
-    raw = json.dumps(jsonable(profile.data), sort_keys=True)
-    return hashlib.sha1(raw.encode()).hexdigest()[:16]
-
-
-def _finite_or_none(v: Any) -> float | None:
-    if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
-        return float(v)
-    return None
-
-
-def _patches(v: Any) -> frozenset[str]:
-    if not isinstance(v, list) or not all(isinstance(p, str) for p in v) or len(v) > 16:
-        raise ValueError("'patches' must be a list of patch names")
-    return frozenset(v)
-
-
-def _plan_from(h: dict[str, Any], arrays: list) -> Any:
-    """The ``OutputPlan`` a ``plan`` request describes (its arrays in order: each
-    segment's piezo, screen, then its own patch drives)."""
-    from console.types import OutputPlan, Segment
-
-    segs_in = h.get("segments")
-    if not isinstance(segs_in, list) or len(segs_in) > 10000:
-        raise ValueError("'segments' must be a list")
-    it = iter(arrays)
-    segs = []
-    try:
-        for s in segs_in:
-            if not isinstance(s, dict):
-                raise ValueError("a segment is not an object")
-            piezo, screen = next(it), next(it)
-            own = s.get("own", [])
-            if not isinstance(own, list) or not all(isinstance(p, str) for p in own):
-                raise ValueError("'own' must be a list of patch names")
-            patch_v = {p: next(it) for p in own}
-            segs.append(
-                Segment(
-                    piezo,
-                    screen,
-                    _patches(s.get("patches", [])),
-                    bool(s.get("screen")),
-                    str(s.get("label", ""))[:200],
-                    patch_v,
-                )
-            )
-    except StopIteration:
-        raise ValueError("fewer arrays than the segments name") from None
-    if next(it, None) is not None:
-        raise ValueError("more arrays than the segments name")
-    fs = h.get("fs")
-    gap = h.get("gap_s", 0.0)
-    if type(fs) is not int:
-        raise ValueError("'fs' must be an integer sample rate")
-    if not isinstance(gap, (int, float)) or isinstance(gap, bool):
-        raise ValueError("'gap_s' must be a number")
-    return OutputPlan(fs, tuple(segs), str(h.get("name", ""))[:200], float(gap))
 
 
 # ---------------------------------------------------------------------- main

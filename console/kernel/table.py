@@ -13,6 +13,7 @@ stops the audio.
 from __future__ import annotations
 
 import contextlib
+import gc
 import logging
 import math
 import sys
@@ -131,6 +132,11 @@ class TableOutputs:
             want_s = float(profile.get("audio.switch_interval_ms")) * 1e-3
             if sys.getswitchinterval() > want_s:
                 sys.setswitchinterval(want_s)
+        # everything loaded so far (plugins, libraries) stays: a full garbage collection
+        # walking it holds the interpreter for ~10 ms, the audio thread waiting for it;
+        # frozen before the first sample, the collector only looks at what comes after
+        gc.collect()
+        gc.freeze()
         try:
             audio.start(DriverPort(self.gate))
         except Exception as exc:

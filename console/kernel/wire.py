@@ -116,3 +116,30 @@ def arrays(header: dict[str, Any], payload: bytearray, *, max_items: int = 1 << 
     if pos != len(payload):
         raise WireError(f"{len(payload) - pos} payload bytes belong to no array")
     return out
+
+
+def jsonable(o: Any) -> Any:
+    """``o`` with tuples, sets and numpy values made JSON's, non-finite floats None."""
+    import math
+
+    if isinstance(o, dict):
+        return {str(k): jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple, set, frozenset)):
+        return [jsonable(v) for v in o]
+    if isinstance(o, bool) or o is None or isinstance(o, (int, str)):
+        return o
+    if isinstance(o, float):
+        return o if math.isfinite(o) else None
+    import numpy as np
+
+    if isinstance(o, (np.ndarray, np.generic)):
+        return jsonable(o.tolist())
+    return str(o)
+
+
+def settings_key(profile: Any) -> str:
+    """What a client compares to know a kernel runs its profile's settings."""
+    import hashlib
+
+    raw = json.dumps(jsonable(profile.data), sort_keys=True)
+    return hashlib.sha1(raw.encode()).hexdigest()[:16]

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from console.bench import summarize_s
 from console.channels import ChannelLayout
 from console.contracts import BlockSource
 from console.realtime import realtime_priority
@@ -322,7 +323,13 @@ class TwinAudioOutput:
             "underruns_audible": self.underruns_audible,
             "underruns_by_cause": dict(self.underruns_by_cause),
             "underrun_hold_s": self.hold_samples / self.sample_rate_hz,
+            # the last few gaps: when (the gate's clock), how long, why, heard or not
+            "underrun_last": [
+                [g.clock, g.samples, g.cause, g.audible] for g in list(self.underrun_log)[-8:]
+            ],
             "blocks": self.blocks,
+            # the gate's fill per block, as this driver timed it (the last 4096 blocks)
+            "fill_ms": summarize_s(list(self.callback_s)),
         }
 
     # the simulated DAC ---------------------------------------------------------------
@@ -595,6 +602,10 @@ class TwinAudioOutput:
             i = j
         parts.append(rec[i:])
         return np.concatenate(parts)
+
+    def dac_output_card(self) -> np.ndarray:
+        """``dac_output_v`` in sound-card units, float32 (what the kernel sends a client)."""
+        return (self.dac_output_v() / self._to_v).astype(np.float32)
 
     def _gap_v(self, g: Underrun) -> np.ndarray:
         level, step = np.array(g.level_v), np.array(g.step_v)

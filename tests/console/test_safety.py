@@ -321,6 +321,10 @@ SCRIPT = textwrap.dedent("""
         time.sleep(0.01)
     time.sleep(0.3)
     log.write(f"playing relays {sorted(out.relay_state())}\\n")
+    import os
+    t_end = time.monotonic() + 20
+    while not os.path.exists(sys.argv[1] + ".go") and time.monotonic() < t_end:
+        time.sleep(0.01)  # the test has seen it play: now end as asked
     MODE = sys.argv[2]
     if MODE == "raise":
         raise RuntimeError("boom")
@@ -362,6 +366,7 @@ def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
                 time.sleep(0.05)
             assert "playing relays [1]" in log.read_text(), proc.communicate()
             assert any(watch.status()["gate"]["level_v"]), "the tone plays"
+            (tmp_path / "log.txt.go").touch()
             if how.startswith("SIG"):
                 proc.send_signal(getattr(signal, how))
             proc.wait(timeout=30)
