@@ -152,6 +152,21 @@ class GestureStage:
         self.window: deque[Frame] = deque(maxlen=6)
         self._named = False
         self.last: Gesture | None = None
+        self._palms: deque[tuple[float, np.ndarray]] = deque(maxlen=600)
+
+    def _settle_palm(self, t_s: float, palm: Any) -> tuple[float, float] | None:
+        """The mean palm position over the still window (since the tracked hand came to
+        rest within ``still_mm``), or None without a hand."""
+        if palm is None:
+            self._palms.clear()
+            return None
+        hist = self.still._hist
+        t0 = hist[0][0] if hist else t_s
+        self._palms.append((t_s, np.asarray(palm, float)))
+        while self._palms and self._palms[0][0] < t0:
+            self._palms.popleft()
+        c = np.mean([q for _, q in self._palms], axis=0)
+        return (float(c[0]), float(c[1]))
 
     def __call__(self, frame: Frame, work: dict) -> None:
         hand: Hand | None = work.get("hand")
@@ -164,10 +179,15 @@ class GestureStage:
         if hand is not None and tracks is not None and tracks.in_mm and tracks.hand_tracks:
             pos = tuple(tracks.hand_tracks[0].pos)
         rest = self.still.update(t, pos)
+        settle = self._settle_palm(t, palm)
+        if settle is not None:
+            work["settle_mm"] = settle  # where the palm rests so far (the warm-up's place)
         g = None
         if rest is not None and hand is not None:
             g = Gesture("static_hand", "static", 1.0, t, hand)
-            work["rest_mm"] = rest if pos is palm else palm  # where the palm rests
+            # where the palm rests: over the still window, as the warm-up saw it (one
+            # frame's palm can jump by centimetres between two views of a resting hand)
+            work["rest_mm"] = rest if pos is palm else (settle or palm)
         elif hand is not None and len(hand.contacts) == 2:
             g = Gesture("two_finger", "static", 1.0, t, hand)
         if hand is None:

@@ -153,7 +153,6 @@ class FlowDemo:
         self._warm_key: tuple | None = None  # the plan made ahead for the hand on the table
         self._armed: tuple | None = None  # (patches, screen) the last pre-arm asked for
         self._rearm = False
-        self._settle: deque[np.ndarray] = deque(maxlen=600)  # the settling hand's centres
         self._warm_next: tuple | None = None
         self._warm_ready = threading.Event()
         self._warm_thread: threading.Thread | None = None
@@ -218,7 +217,9 @@ class FlowDemo:
         """The place made (and pre-armed) while the hand settled when the resting
         position lies within ``ARMED_SLACK_MM`` of that place's half-step cell (a hand
         resting on the border between two places: the resting detector knows it to
-        within ``still_mm`` only), else ``center``."""
+        within ``still_mm`` only), else ``center``. The warm-up keeps its place the same
+        way: a hand settling on a border does not switch the place it prepares from one
+        frame to the next (each switch a plan to check and relays to close again)."""
         key = self._warm_key
         if key is None or key[0] == center or key[1] != self.current_direction():
             return center
@@ -307,23 +308,18 @@ class FlowDemo:
         frame that decides plays it at the next block (atlas places only: a search is
         never started speculatively). The hand leaving cancels the pre-arm."""
         hand = work.get("hand")
-        pos = hand.center_mm if hand is not None else None
-        if pos is None:
-            self._settle.clear()
-            if self._warm_key is not None:  # the hand left: cancel the pre-arm
-                self._warm_key = None
-                self._disarm()
+        # the classify stage's mean palm over its still window (``settle_mm``), else the
+        # hand's centre (a pipeline without that stage)
+        pos = (work.get("settle_mm") or hand.center_mm) if hand is not None else None
+        if pos is None and self._warm_key is not None:  # the hand left: cancel the pre-arm
+            self._warm_key = None
+            self._disarm()
         if pos is None or self.plans is None or self.plans.atlas is None or not self._running:
             return
-        # where the resting detector will say the hand rests: the mean of its positions
-        # since it came within ``still_mm`` (as ``StillHand``), so the plan armed is the
-        # plan the decision picks
-        p = np.asarray(pos, float)
-        if self._settle and np.hypot(*(p - self._settle[0])) > self.pair.still_mm:
-            self._settle.clear()
-        self._settle.append(p)
-        pos = tuple(np.mean(self._settle, axis=0))
-        key = (self.target(pos), self.current_direction())
+        # where the resting detector will say the hand rests: the classify stage's mean
+        # palm over its still window (``settle_mm``), so the plan armed is the plan the
+        # decision picks
+        key = (self.prefer_armed(pos, self.target(pos)), self.current_direction())
         if key == self._warm_key and not (self._rearm and not self.busy()):
             return  # (a pre-arm skipped while the last flow played is tried again after)
         self._warm_key, self._rearm = key, False

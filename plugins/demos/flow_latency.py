@@ -100,7 +100,8 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
             run_.stop()
             events = list(run_.demo.events)
             snap = run_.snapshot()
-        audio = out.status()["audio"]
+        st = out.status()
+        audio, kernel = st["audio"], st["kernel"]
     flows = [e for e in events if e.get("kind") == "flow"]
     queued = [e["t_scheduled_s"] - e["t_decided_s"] for e in flows if e.get("t_decided_s")]
     output = [
@@ -124,6 +125,11 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "decision_to_output_ms": summarize_s(output),
         "processing": snap["latency"]["processing"],
         "underruns": audio.get("underruns"),
+        "underruns_by_cause": audio.get("underruns_by_cause"),
+        "underruns_audible": audio.get("underruns_audible"),
+        "underrun_s": audio.get("underrun_s"),
+        "buffer_periods": audio.get("buffer_periods"),
+        "kernel_requests": kernel.get("requests"),
         "hands_mm": truth,  # where each placement put the hand (the twin's truth)
         "flows_rest_mm": [e.get("rest_mm") for e in flows],  # where the camera saw it rest
         "flows_not_prearmed": not_armed[:10],
