@@ -11,15 +11,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
 
 from console.errors import UserError
+from console.profile import _printable
 from console.signal_design import parse_target, render, summarize
 from console.signal_expr import parse
 from console.signal_library import (
     add_signal,
     get_signal,
     library_path,
-    load_library,
+    read_library,
     remove_signal,
 )
 
@@ -52,6 +55,30 @@ def configure(p: argparse.ArgumentParser) -> None:
     rm.add_argument("name")
 
 
+def _list(path: Path, as_json: bool) -> int:
+    """The library; an entry that does not validate is one line on stderr (exit 2), the
+    others are listed all the same."""
+    lib = read_library(path)
+    problems = list(lib.problems.values())
+    if as_json:
+        rows = [
+            {"name": e.name, "expr": e.expr, "description": e.description, "builtin": e.builtin}
+            for e in lib.entries.values()
+        ]
+        print(json.dumps({"file": str(path), "signals": rows, "problems": problems}, indent=2))
+    else:
+        print(f"library: {path}" + ("" if path.exists() else " (none saved yet)"))
+        width = max(len(n) for n in lib.entries)
+        for e in lib.entries.values():
+            tag = " [built-in]" if e.builtin else ""
+            print(f"  {e.name:<{width}}  {e.expr}{tag}")
+            if e.description:
+                print(f"  {'':<{width}}  {e.description}")
+    for line in problems:
+        print(f"haptable: error: {line}", file=sys.stderr)
+    return 2 if problems else 0
+
+
 def _resolve(ctx, text: str) -> tuple[str, str]:
     """(name, expression) for a library name or an expression typed in place."""
     path = library_path(ctx.profile.name)
@@ -64,29 +91,19 @@ def run(args, ctx) -> int:
     path = library_path(ctx.profile.name)
     action = args.action
     if action == "list":
-        lib = load_library(path)
-        if args.json:
-            rows = [
-                {"name": e.name, "expr": e.expr, "description": e.description, "builtin": e.builtin}
-                for e in lib.values()
-            ]
-            print(json.dumps({"file": str(path), "signals": rows}, indent=2))
-            return 0
-        print(f"library: {path}" + ("" if path.exists() else " (none saved yet)"))
-        width = max(len(n) for n in lib)
-        for e in lib.values():
-            tag = " [built-in]" if e.builtin else ""
-            print(f"  {e.name:<{width}}  {e.expr}{tag}")
-            if e.description:
-                print(f"  {'':<{width}}  {e.description}")
-        return 0
+        return _list(path, args.json)
     if action == "add":
-        e = add_signal(path, args.name, args.expr, args.description, replace=args.replace)
+        from console.safety import Limits
+
+        limits = Limits.from_profile(ctx.profile)
+        e = add_signal(
+            path, args.name, args.expr, args.description, replace=args.replace, limits=limits
+        )
         print(f"saved {e.name} in {path}")
         return 0
     if action == "rm":
         remove_signal(path, args.name)
-        print(f"removed {args.name} from {path}")
+        print(f"removed {_printable(args.name)} from {path}")
         return 0
     name, expr = _resolve(ctx, args.signal)
     if action == "show":

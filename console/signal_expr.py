@@ -16,15 +16,15 @@
   ratios as plain numbers, % or dB.
 
 Every mistake is a ``UserError`` of one line naming the part of the expression and the fix.
+The words (units, functions) and the bounds every text is held to before and while it is
+parsed (number length and size, printable characters, signs in a row, the dB range) are
+in ``console.signal_syntax``; nothing typed can overflow, recurse without end or allocate.
 """
 
 from __future__ import annotations
 
 import ast
 import difflib
-import math
-import re
-from dataclasses import dataclass
 
 from console.errors import UserError
 from console.signal_design import (
@@ -41,67 +41,26 @@ from console.signal_design import (
     Silence,
     Wave,
 )
-
-MAX_EXPR_CHARS = 2000
-MAX_DEPTH = 40
-MAX_REPEAT = 100_000
-
-#: unit -> (dimension, factor to SI); dB is converted where it is used
-UNITS: dict[str, tuple[str, float]] = {
-    "Hz": ("Hz", 1.0),
-    "kHz": ("Hz", 1e3),
-    "V": ("V", 1.0),
-    "mV": ("V", 1e-3),
-    "Vpp": ("V", 0.5),
-    "s": ("s", 1.0),
-    "ms": ("s", 1e-3),
-    "us": ("s", 1e-6),
-    "%": ("ratio", 1e-2),
-    "dB": ("dB", 1.0),
-}
-_UNIT_FN = "_unit_"
-_NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
-_QUANTITY = re.compile(rf"(?<![\w.])({_NUMBER})\s*(kHz|Hz|Vpp|mV|V|ms|us|s|%|dB)(?![\w])", re.ASCII)
-DIM_NAMES = {"Hz": "a frequency", "V": "a voltage", "s": "a duration", "ratio": "a ratio"}
-EXAMPLE_UNIT = {"Hz": "Hz", "V": "V", "s": "s"}
-
-
-@dataclass(frozen=True)
-class Quantity:
-    value: float  # SI (Hz, V peak, s), a ratio, or dB
-    dim: str
-    text: str
-
-
-# name -> ((parameter, dimension, default or None) ...); "int" and "ratio" are plain
-_SPEC: dict[str, tuple[tuple[str, str, object], ...]] = {
-    "sine": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "square": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "saw": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "triangle": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "chirp": (("f0", "Hz", None), ("f1", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "logchirp": (("f0", "Hz", None), ("f1", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
-    "noise": (("amplitude", "V", None), ("duration", "s", None), ("seed", "int", 0)),
-    "silence": (("duration", "s", None),),
-    "adsr": (("attack", "s", None), ("decay", "s", None), ("sustain", "ratio", None), ("release", "s", None), ("duration", "s", "")),
-    "ramp": (("ramp", "s", None),),
-    "linramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
-    "expramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
-    "repeat": (("signal", "node", None), ("count", "int", None)),
-    "lowpass": (("signal", "node", None), ("cutoff", "Hz", None)),
-}  # fmt: skip
-FUNCTIONS = (*_SPEC, "seq")
-
-
-def _mark_units(text: str) -> str:
-    """``250 Hz`` -> ``_unit_(250, "Hz")``: Python's grammar has no units."""
-    return _QUANTITY.sub(lambda m: f'{_UNIT_FN}({m.group(1)}, "{m.group(2)}")', text)
-
-
-def _show(node: ast.AST) -> str:
-    """The part as the operator wrote it (units back in place)."""
-    text = ast.unparse(node)
-    return re.sub(rf"{_UNIT_FN}\(([^,]+), '([^']+)'\)", r"\1 \2", text)
+from console.signal_syntax import (
+    DIM_NAMES,
+    EXAMPLE_UNIT,
+    FUNCTIONS,
+    MAX_DB,
+    MAX_DEPTH,
+    MAX_EXPR_CHARS,
+    MAX_REPEAT,
+    MAX_SIGNS,
+    SPEC,
+    UNIT_FN,
+    UNITS,
+    Quantity,
+    check_text,
+    clip,
+    keep_source,
+    mark_units,
+    number,
+    show,
+)
 
 
 def parse(text: str) -> Node:
@@ -115,18 +74,21 @@ def parse(text: str) -> Node:
         )
     if "\n" in text.strip() or "\r" in text:
         raise UserError("a signal is one line; join its lines")
-    if _UNIT_FN in text:
-        raise UserError(f"{_UNIT_FN!r} is not part of the signal syntax; write values as 250 Hz")
+    if UNIT_FN in text:
+        raise UserError(f"{UNIT_FN!r} is not part of the signal syntax; write values as 250 Hz")
+    check_text(text.strip())
+    marked = mark_units(text.strip())
     try:
-        tree = ast.parse(_mark_units(text.strip()), mode="eval")
+        tree = ast.parse(marked, mode="eval")
     except SyntaxError as exc:
         col = f" at column {exc.offset}" if exc.offset else ""
         raise UserError(
-            f"signal {text.strip()!r} does not read{col}: {exc.msg}; write calls like "
+            f"signal {clip(text.strip())!r} does not read{col}: {exc.msg}; write calls like "
             "sine(250 Hz, 20 V, 1 s) with a unit after every value"
         ) from None
     except (RecursionError, MemoryError):
         raise UserError("signal nested too deeply; use seq(...) and repeat(...)") from None
+    keep_source(tree, marked)
     value = _eval(tree.body, 0)
     if not isinstance(value, Node):
         raise UserError(
@@ -137,25 +99,16 @@ def parse(text: str) -> Node:
 
 def _eval(node: ast.AST, depth: int):
     if depth > MAX_DEPTH:
-        raise UserError(f"{_show(node)}: nested too deeply (at most {MAX_DEPTH} levels)")
+        raise UserError(f"{show(node)}: nested too deeply (at most {MAX_DEPTH} levels)")
     if isinstance(node, ast.Constant):
         v = node.value
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise UserError(f"{_show(node)}: only numbers with units are allowed here")
-        if not math.isfinite(v):
-            raise UserError(f"{_show(node)}: not a finite number")
-        return v
+            raise UserError(f"{show(node)}: only numbers with units are allowed here")
+        return number(v, show(node))
     if isinstance(node, ast.Call):
         return _call(node, depth)
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        v = _eval(node.operand, depth + 1)
-        if isinstance(node.op, ast.UAdd):
-            return v
-        if isinstance(v, Node):
-            return Gain(-1.0, v, _show(node))
-        if isinstance(v, Quantity):
-            return Quantity(-v.value, v.dim, _show(node))
-        return -v
+        return _signed(node, depth)
     if isinstance(node, ast.BinOp):
         return _binop(node, depth)
     if isinstance(node, ast.Name):
@@ -165,9 +118,31 @@ def _eval(node: ast.AST, depth: int):
             f"use numbers with units and {', '.join(FUNCTIONS)}"
         )
     raise UserError(
-        f"{_show(node)}: not part of the signal syntax; use numbers with units, "
+        f"{show(node)}: not part of the signal syntax; use numbers with units, "
         f"{', '.join(FUNCTIONS)}, + - and *"
     )
+
+
+def _signed(node: ast.UnaryOp, depth: int):
+    """``-x``, ``+x``: a run of signs folded without recursion (and kept short)."""
+    negative, signs, inner = False, 0, node
+    while isinstance(inner, ast.UnaryOp) and isinstance(inner.op, (ast.USub, ast.UAdd)):
+        negative ^= isinstance(inner.op, ast.USub)
+        signs += 1
+        inner = inner.operand
+    if signs > MAX_SIGNS:
+        raise UserError(
+            f"{signs} signs in a row before {show(inner)}: nested too deeply (at most "
+            f"{MAX_SIGNS}); write one '-' (or none)"
+        )
+    v = _eval(inner, depth + signs)
+    if not negative:
+        return v
+    if isinstance(v, Node):
+        return Gain(-1.0, v, show(node))
+    if isinstance(v, Quantity):
+        return Quantity(-v.value, v.dim, show(node))
+    return -v
 
 
 def _guess(name: str) -> str:
@@ -176,7 +151,7 @@ def _guess(name: str) -> str:
 
 
 def _binop(node: ast.BinOp, depth: int) -> Node:
-    part = _show(node)
+    part = show(node)
     if not isinstance(node.op, (ast.Add, ast.Sub, ast.Mult)):
         raise UserError(
             f"{part}: only +, - and * combine signals; for a gain write x * 50 % or x * -6 dB"
@@ -237,6 +212,11 @@ def _repeat(sig: Node, count, part: str) -> Node:
 
 def _ratio(q, part: str) -> float:
     if isinstance(q, Quantity) and q.dim == "dB":
+        if not -MAX_DB <= q.value <= MAX_DB:
+            raise UserError(
+                f"{part}: gain {q.text} is outside -{MAX_DB:g}..{MAX_DB:g} dB; give a gain "
+                "within it (or an amplitude in V)"
+            )
         return 10.0 ** (q.value / 20.0)
     if isinstance(q, Quantity) and q.dim == "ratio":
         return q.value
@@ -246,16 +226,13 @@ def _ratio(q, part: str) -> float:
 
 
 def _call(node: ast.Call, depth: int):
-    part = _show(node)
+    part = show(node)
     if not isinstance(node.func, ast.Name):
         raise UserError(f"{part}: call one of {', '.join(FUNCTIONS)} by name")
     name = node.func.id
-    if name == _UNIT_FN:
-        value = node.args[0].value  # the regex only marks plain numbers
-        unit = node.args[1].value
-        dim, factor = UNITS[unit]
-        if not math.isfinite(float(value) * factor):
-            raise UserError(f"{part}: not a finite number; give a smaller value")
+    if name == UNIT_FN:
+        value = number(node.args[0].value, part)  # the regex only marks plain numbers
+        dim, factor = UNITS[node.args[1].value]
         return Quantity(float(value) * factor, dim, part)
     if name == "seq":
         if node.keywords or not node.args:
@@ -264,17 +241,17 @@ def _call(node: ast.Call, depth: int):
         for a, p in zip(node.args, parts, strict=True):
             if not isinstance(p, Node) or p.duration_s() is None:
                 raise UserError(
-                    f"{part}: {_show(a)} has no length of its own; seq takes signals "
+                    f"{part}: {show(a)} has no length of its own; seq takes signals "
                     "(multiply an envelope by a signal first)"
                 )
         if len({p.volts for p in parts}) > 1:
             raise UserError(f"{part}: mixes volts and ratios; {_both_units}")
         return Seq(parts, 1, part)
-    if name not in _SPEC:
+    if name not in SPEC:
         raise UserError(
             f"{part}: unknown function {name!r}{_guess(name)}; use {', '.join(FUNCTIONS)}"
         )
-    spec = _SPEC[name]
+    spec = SPEC[name]
     args = _bind(name, spec, node, depth, part)
     return _build(name, args, part)
 
@@ -308,7 +285,7 @@ def _bind(name: str, spec, node: ast.Call, depth: int, part: str) -> dict:
 
 
 def _value(v, dim: str, pname: str, part: str, node: ast.AST):
-    shown = _show(node)
+    shown = show(node)
     if dim == "node":
         if not isinstance(v, Node):
             raise UserError(f"{part}: {pname} {shown} is not a signal")

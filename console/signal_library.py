@@ -6,28 +6,38 @@ signals offered read-only.
     expr = "seq(sine(250 Hz, 40 V, 0.5 s) * adsr(10 ms, 50 ms, 0.7, 100 ms), silence(0.2 s)) * 3"
     description = "three 250 Hz pulses"
 
-The file is validated like a profile (unknown keys, bad values and expressions that do not
-parse are refused with one line naming the file, key, value and fix) and written
-atomically (a temporary file renamed over it, under a lock), re-read just before each
-change so another console's entries are never lost. A file that does not validate is never
-rewritten: the operator's entries stay as they were.
+The file is read bounded (``console.file_read``: a regular file of at most 1 MB, so a
+FIFO or ``/dev/zero`` in its place is one line, not a hang) and validated like a profile,
+entry by entry: an entry that does not validate (an unknown key, a bad name, an expression
+that does not parse) is one line naming the file, entry, value and fix, and the others stay
+usable. A file that cannot be read as a whole is one line and is never rewritten.
+
+Writes (``console.signal_library_file``) happen under a lock, re-read the file just before
+each change so another console's entries are never lost, keep entries that do not validate
+as they were, and replace the file atomically only once the new text reads back as itself.
+Names match ``NAME_RE`` in full; with the profile's limits, ``add_signal`` refuses a signal
+that could never play (``console.signal_check``).
 """
 
 from __future__ import annotations
 
-import contextlib
 import difflib
-import json
 import re
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from console.atomic import write_text_atomic
+from console import signal_library_file as signal_file
 from console.errors import ProfileError, UserError
+from console.file_read import read_toml_capped
 from console.paths import profile_config_dir
-from console.profile import _fmt, _printable, _where, parse_toml
+from console.profile import _fmt, _printable, _where
+from console.signal_check import never_plays
 from console.signal_expr import parse
+from console.signal_syntax import clip
+
+if TYPE_CHECKING:
+    from console.safety import Limits
 
 FILE_NAME = "signals.toml"
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,39}$")
@@ -80,11 +90,16 @@ def library_path(profile_name: str) -> Path:
     return profile_config_dir(profile_name, FILE_NAME)
 
 
+def _show(value: Any) -> str:
+    """A value from the file or the command line as a message shows it: one line, short."""
+    return _fmt(clip(value, 60) if isinstance(value, str) else value)
+
+
 def check_name(name: str) -> str:
-    if not isinstance(name, str) or not NAME_RE.match(name):
+    if not isinstance(name, str) or not NAME_RE.fullmatch(name):
         raise UserError(
-            f"signal name {_fmt(name)}: use up to 40 letters, digits, '-' or '_', starting "
-            "with a letter or digit"
+            f"signal name {_show(name)}: use up to 40 letters, digits, '-' or '_', starting "
+            f"with a letter or digit (the pattern {NAME_RE.pattern})"
         )
     if name in BUILTIN:
         raise UserError(f"signal name {name!r} is a built-in signal (read-only); choose another")
@@ -94,140 +109,147 @@ def check_name(name: str) -> str:
 def check_description(text: str) -> str:
     if not isinstance(text, str) or len(text) > MAX_DESCRIPTION or not text.isprintable():
         raise UserError(
-            f"description {_fmt(text)}: give one printable line of at most "
+            f"description {_show(text)}: give one printable line of at most "
             f"{MAX_DESCRIPTION} characters"
         )
     return text
 
 
-def _entries(path: Path) -> dict[str, Entry]:
-    """The user's entries in ``path`` (none when it does not exist), validated."""
-    if not path.exists():
-        return {}
+@dataclass(frozen=True)
+class Library:
+    """What a library file holds: ``entries`` (the built-ins, then the user's that
+    validate, by name), ``problems`` (name -> one line, for each entry that does not) and
+    ``raw`` (the ``[signals]`` table as read: what a rewrite keeps)."""
+
+    entries: dict[str, Entry]
+    problems: dict[str, str]
+    raw: dict[str, Any]
+
+
+def _entry(name: str, entry: Any) -> Entry:
+    """The entry ``[signals.NAME]`` holds, or a ``UserError`` saying what is wrong."""
+    check_name(name)
+    if not isinstance(entry, dict):
+        raise UserError(f'must be a table with expr = "..."; got {_show(entry)}')
+    for key in entry:
+        if key not in ENTRY_KEYS:
+            guess = difflib.get_close_matches(key, ENTRY_KEYS, n=1)
+            hint = f"did you mean {guess[0]!r}?" if guess else f"known: {', '.join(ENTRY_KEYS)}"
+            raise UserError(f"unknown key {_printable(clip(key, 60))!r} ({hint})")
+    expr = entry.get("expr")
+    if not isinstance(expr, str):
+        raise UserError(
+            f"expr = {_show(expr) if 'expr' in entry else '(missing)'}: give the signal as a "
+            'string, e.g. expr = "sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"'
+        )
+    try:
+        parse(expr)
+    except UserError as exc:
+        raise UserError(f"expr = {_show(expr)}: {exc}") from None
+    desc = entry.get("description", "")
+    check_description(desc)
+    return Entry(name, expr, desc)
+
+
+def read_library(path: Path) -> Library:
+    """The library at ``path`` (none when it does not exist). A file that cannot be read
+    as a whole is one ``ProfileError``; an entry that does not validate is left out of
+    ``entries`` with its line in ``problems``, the others stay usable."""
     where = _where(path)
-    raw = parse_toml(path)
+    raw = read_toml_capped(
+        path,
+        what="signal library",
+        fix="give the library as a TOML file (or remove it: the built-ins stay)",
+        max_bytes=signal_file.MAX_LIBRARY_BYTES,
+        error=ProfileError,
+        missing_ok=True,
+    )
+    raw = {} if raw is None else raw
     for key in raw:
         if key != "signals":
             raise ProfileError(
-                f"{where}: unknown key {_printable(key)!r} at the top; a signal library holds "
-                "[signals.NAME] tables only"
+                f"{where}: unknown key {_printable(clip(key, 60))!r} at the top; a signal "
+                "library holds [signals.NAME] tables only"
             )
     table = raw.get("signals", {})
     if not isinstance(table, dict):
-        raise ProfileError(f"{where}: signals = {_fmt(table)}: write [signals.NAME] tables")
-    out: dict[str, Entry] = {}
+        raise ProfileError(f"{where}: signals = {_show(table)}: write [signals.NAME] tables")
+    if len(table) > signal_file.MAX_ENTRIES:
+        raise ProfileError(
+            f"{where}: {len(table)} signals, more than the {signal_file.MAX_ENTRIES} a library "
+            "keeps; move some to another file"
+        )
+    user: dict[str, Entry] = {}
+    problems: dict[str, str] = {}
     for name, entry in table.items():
-        label = f"[signals.{_printable(name)}]"
         try:
-            check_name(name)
+            user[name] = _entry(name, entry)
         except UserError as exc:
-            raise ProfileError(f"{where}: {label} {exc}") from None
-        if not isinstance(entry, dict):
-            raise ProfileError(
-                f'{where}: {label} must be a table with expr = "..."; got {_fmt(entry)}'
+            problems[name] = (
+                f"{where}: [signals.{_fmt_key(name)}] {exc}; or remove the entry "
+                "(haptable signals rm)"
             )
-        for key in entry:
-            if key not in ENTRY_KEYS:
-                guess = difflib.get_close_matches(key, ENTRY_KEYS, n=1)
-                hint = f"did you mean {guess[0]!r}?" if guess else f"known: {', '.join(ENTRY_KEYS)}"
-                raise ProfileError(f"{where}: {label} unknown key {_printable(key)!r} ({hint})")
-        expr = entry.get("expr")
-        if not isinstance(expr, str):
-            raise ProfileError(
-                f"{where}: {label} expr = {_fmt(expr) if 'expr' in entry else '(missing)'}: "
-                'give the signal as a string, e.g. expr = "sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"'
-            )
-        try:
-            parse(expr)
-        except UserError as exc:
-            raise ProfileError(f"{where}: {label} expr = {_fmt(expr)}: {exc}") from None
-        desc = entry.get("description", "")
-        try:
-            check_description(desc)
-        except UserError as exc:
-            raise ProfileError(f"{where}: {label} {exc}") from None
-        out[name] = Entry(name, expr, desc)
-    return out
+    return Library({**BUILTIN, **dict(sorted(user.items()))}, problems, table)
+
+
+def _fmt_key(name: str) -> str:
+    return name if NAME_RE.fullmatch(name) else _show(name)
 
 
 def load_library(path: Path) -> dict[str, Entry]:
-    """Built-in signals, then the user's (sorted by name)."""
-    user = _entries(path)
-    return {**BUILTIN, **dict(sorted(user.items()))}
+    """Built-in signals, then the user's that validate (sorted by name)."""
+    return read_library(path).entries
 
 
 def get_signal(path: Path, name: str) -> Entry:
-    lib = load_library(path)
-    if name not in lib:
-        guess = difflib.get_close_matches(name, list(lib), n=1)
+    lib = read_library(path)
+    if name in lib.problems:
+        raise UserError(lib.problems[name])
+    if name not in lib.entries:
+        guess = difflib.get_close_matches(name, list(lib.entries), n=1)
         hint = f"did you mean {guess[0]!r}? " if guess else ""
         raise UserError(
             f"no signal {name!r} in {_where(path)}; {hint}`haptable signals list` shows them"
         )
-    return lib[name]
-
-
-def _toml(entries: dict[str, Entry]) -> str:
-    lines = [
-        "# HapTable signal library: named signals in the console's expression syntax.",
-        "# Written by `haptable signals add` and the console's Signals screen; edits by hand",
-        "# are kept (comments are not).",
-    ]
-    for e in entries.values():
-        lines += ["", f"[signals.{e.name}]", f"expr = {json.dumps(e.expr, ensure_ascii=False)}"]
-        if e.description:
-            lines.append(f"description = {json.dumps(e.description, ensure_ascii=False)}")
-    return "\n".join(lines) + "\n"
-
-
-@contextlib.contextmanager
-def _locked(path: Path) -> Iterator[None]:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    import fcntl
-
-    with open(path.with_name(path.name + ".lock"), "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-
-
-def _write(path: Path, entries: dict[str, Entry]) -> None:
-    write_text_atomic(path, _toml(entries))
+    return lib.entries[name]
 
 
 def add_signal(
-    path: Path, name: str, expr: str, description: str = "", *, replace: bool = False
+    path: Path,
+    name: str,
+    expr: str,
+    description: str = "",
+    *,
+    replace: bool = False,
+    limits: Limits | None = None,
 ) -> Entry:
-    """Save ``name`` = ``expr`` (checked: it must parse) keeping every other entry."""
+    """Save ``name`` = ``expr`` keeping every other entry (those that do not validate
+    too). ``expr`` must parse and, with ``limits``, be able to play on some target."""
     check_name(name)
     check_description(description)
-    parse(expr)
-    try:
-        with _locked(path):
-            entries = _entries(path)
-            if name in entries and not replace and entries[name].expr != expr:
-                raise UserError(
-                    f"signal {name!r} is already in {_where(path)}; choose another name or "
-                    "replace it (--replace)"
-                )
-            entries[name] = Entry(name, expr, description)
-            _write(path, dict(sorted(entries.items())))
-    except OSError as exc:
-        raise UserError(f"{_where(path)}: cannot write: {exc.strerror or exc}") from None
-    return entries[name]
+    node = parse(expr)
+    if limits is not None and (why := never_plays(node, limits)) is not None:
+        raise UserError(f"signal {name!r} can never play on this table: {why}; nothing saved")
+    with signal_file.locked(path):
+        lib = read_library(path)
+        old = lib.raw.get(name)
+        if old is not None and not replace and (name in lib.problems or old.get("expr") != expr):
+            raise UserError(
+                f"signal {name!r} is already in {_where(path)}; choose another name or "
+                "replace it (--replace)"
+            )
+        entry = {"expr": expr, **({"description": description} if description else {})}
+        signal_file.write(path, dict(sorted({**lib.raw, name: entry}.items())))
+    return Entry(name, expr, description)
 
 
 def remove_signal(path: Path, name: str) -> None:
-    if name in BUILTIN:
-        raise UserError(f"{name!r} is a built-in signal (read-only); it cannot be removed")
-    try:
-        with _locked(path):
-            entries = _entries(path)
-            if name not in entries:
-                raise UserError(f"no signal {name!r} in {_where(path)} to remove")
-            del entries[name]
-            _write(path, entries)
-    except OSError as exc:
-        raise UserError(f"{_where(path)}: cannot write: {exc.strerror or exc}") from None
+    """Remove ``name`` (also an entry that does not validate, such as one written by hand
+    under a built-in's name), keeping every other one."""
+    with signal_file.locked(path):
+        lib = read_library(path)
+        if name in BUILTIN and name not in lib.raw:
+            raise UserError(f"{name!r} is a built-in signal (read-only); it cannot be removed")
+        if name not in lib.raw:
+            raise UserError(f"no signal {name!r} in {_where(path)} to remove")
+        signal_file.write(path, {k: v for k, v in lib.raw.items() if k != name})

@@ -27,9 +27,13 @@ LAYER_OF: dict[str, str] = {
     "console.stream_synth": "types",  # live streams from their parameters (pure numpy)
     "console.atomic": "types",
     "console.npz_safe": "types",
+    "console.cache_files": "types",  # keyed cache files: the inputs' hash inside, checked
     "console.signals": "types",
     "console.signal_design": "types",
     "console.signal_expr": "types",
+    "console.signal_syntax": "types",  # the signal syntax's units, functions and bounds
+    "console.signal_check": "types",  # whether a designed signal can ever play
+    "console.file_read": "types",  # a small file read bounded: kind and size first
     "console.stimuli": "types",
     "console.vibration_map": "types",
     "console.options": "types",
@@ -39,6 +43,7 @@ LAYER_OF: dict[str, str] = {
     "console.plugins": "profile",
     "console.core_sections": "profile",
     "console.signal_library": "profile",
+    "console.signal_library_file": "profile",
     "console.profile_files": "profile",  # the files kept per profile (state directory)
     "console.safety": "safety",
     "console.safety_audit": "safety",

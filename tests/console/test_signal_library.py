@@ -16,6 +16,7 @@ from console.signal_library import (
     get_signal,
     library_path,
     load_library,
+    read_library,
     remove_signal,
 )
 
@@ -58,18 +59,12 @@ def test_builtins_are_read_only_and_valid(tmp_path):
 @pytest.mark.parametrize(
     ("text", "says"),
     [
-        ("[signals.a]\nexpr = \"sine(1 Hz, 1 V, 1 s)\"\ncolour = 3\n", "[signals.a] unknown key 'colour'"),
-        ("[signals.a]\nexprr = \"x\"\n", "did you mean 'expr'?"),
-        ("[signals.a]\nexpr = 3\n", "[signals.a] expr = 3: give the signal as a string"),
-        ("[signals.a]\ndescription = \"x\"\n", "expr = (missing)"),
-        ("[signals.a]\nexpr = \"sine(250, 1 V, 1 s)\"\n", "frequency 250 needs a unit"),
-        ("[signals.\"bad name\"]\nexpr = \"silence(1 s)\"\n", "signal name"),
-        ("[signals.sweep]\nexpr = \"silence(1 s)\"\n", "built-in"),
         ("[other]\nx = 1\n", "unknown key 'other' at the top"),
         ("[signals.a\n", "not valid TOML"),
+        ("signals = 3\n", "write [signals.NAME] tables"),
     ],
 )  # fmt: skip
-def test_bad_library_files_get_one_line_and_are_never_rewritten(tmp_path, text, says):
+def test_unreadable_library_files_get_one_line_and_are_never_rewritten(tmp_path, text, says):
     path = tmp_path / "signals.toml"
     path.write_text(text)
     with pytest.raises(UserError) as err:
@@ -79,6 +74,40 @@ def test_bad_library_files_get_one_line_and_are_never_rewritten(tmp_path, text, 
     with pytest.raises(UserError):
         add_signal(path, "new", "silence(1 s)")
     assert path.read_text() == text  # the operator's file stays as it was
+
+
+GOOD = '[signals.good]\nexpr = "silence(1 s)"\n\n'
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("[signals.a]\nexpr = \"sine(1 Hz, 1 V, 1 s)\"\ncolour = 3\n", "[signals.a] unknown key 'colour'"),
+        ("[signals.a]\nexprr = \"x\"\n", "did you mean 'expr'?"),
+        ("[signals.a]\nexpr = 3\n", "[signals.a] expr = 3: give the signal as a string"),
+        ("[signals.a]\ndescription = \"x\"\n", "expr = (missing)"),
+        ("[signals.a]\nexpr = \"sine(250, 1 V, 1 s)\"\n", "frequency 250 needs a unit"),
+        ("[signals.\"bad name\"]\nexpr = \"silence(1 s)\"\n", "signal name"),
+        ("[signals.sweep]\nexpr = \"silence(1 s)\"\n", "built-in"),
+    ],
+)  # fmt: skip
+def test_a_bad_entry_is_one_line_and_the_others_stay_usable(tmp_path, text, says):
+    path = tmp_path / "signals.toml"
+    path.write_text(GOOD + text)
+    bad_table = tomllib.loads(text)["signals"]
+    lib = read_library(path)
+    assert "good" in lib.entries and len(lib.problems) == 1
+    (msg,) = lib.problems.values()
+    assert says in msg and path.name in msg and "\n" not in msg
+    assert get_signal(path, "good").expr == "silence(1 s)"
+    # a change keeps the entry that does not validate as it was written
+    add_signal(path, "new", "silence(2 s)")
+    kept = tomllib.loads(path.read_text())["signals"]
+    assert {k: kept[k] for k in bad_table} == bad_table
+    assert set(kept) == {"good", "new", *bad_table}
+    (name,) = bad_table
+    remove_signal(path, name)  # and it can be removed by its name
+    assert not read_library(path).problems and "good" in load_library(path)
 
 
 def test_bad_names_and_descriptions(tmp_path):

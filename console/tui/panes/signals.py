@@ -15,6 +15,7 @@ from textual.widgets import Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
 from console.errors import UserError
+from console.safety import Limits
 from console.session.events import Failed, Stopped
 from console.signal_design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signal_expr import parse
@@ -23,7 +24,7 @@ from console.signal_library import (
     Entry,
     add_signal,
     library_path,
-    load_library,
+    read_library,
     remove_signal,
 )
 from console.tui.charts import Chart, Series
@@ -144,10 +145,14 @@ class SignalsPane(Vertical):
         if select is None and ol.highlighted is not None and ol.option_count:
             select = ol.get_option_at_index(ol.highlighted).id
         try:
-            self.entries = load_library(self.library_file)
+            lib = read_library(self.library_file)
         except UserError as exc:
             self.entries = dict(BUILTIN)
             self.status(str(exc), error=True)
+        else:  # an entry that does not validate is named; the others are listed
+            self.entries = lib.entries
+            if lib.problems:
+                self.status(next(iter(lib.problems.values())), error=True)
         ol.clear_options()
         ol.add_options(  # built-ins dimmed (read-only); Text: names are never markup
             Option(Text(e.name, style="dim" if e.builtin else ""), id=e.name)
@@ -271,7 +276,8 @@ class SignalsPane(Vertical):
             self.status(f"{name} is already saved: ctrl+s again replaces it", error=True)
             return
         try:
-            add_signal(self.library_file, name, expr, replace=True)
+            limits = Limits.from_profile(self.app.ctx.profile)
+            add_signal(self.library_file, name, expr, replace=True, limits=limits)
         except UserError as exc:
             self.status(str(exc), error=True)
             return
