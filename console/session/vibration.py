@@ -31,6 +31,7 @@ from console import contracts
 from console.errors import UserError
 from console.runtime.measured_map import (
     Cancelled,
+    kept_measured_map,
     measure_map,
     measured_map_file,
     measured_map_path,
@@ -213,10 +214,11 @@ class VibrationService:
         """The measured map when one is kept (made current), else None. On a real table
         whose only vibrometer is the twin the kept map is the twin's: it is not loaded
         (``no_map_text`` says so and how to load it anyway)."""
-        path = self.cached_map_path()
-        if not path.is_file() or self.twin_plate_only():
+        if self.twin_plate_only():
             return None
-        vmap = load_map(path)
+        vmap = kept_measured_map(self.profile)  # another plate's or damaged: deleted, None
+        if vmap is None:
+            return None
         date = str(vmap.provenance.get("date") or "")[:16].replace("T", " ")
         when = f" of {date} UTC" if date else ""
         return self.open(
@@ -277,7 +279,7 @@ class VibrationService:
                 "no vibration map of this table yet (the kept one was measured on the plate "
                 "twin): import or load one on the Vibration screen"
             )
-        if path.is_file():
+        if kept_measured_map(self.profile) is not None:
             return path
         raise UserError("no vibration map yet: measure (m) or load one on the Vibration screen")
 

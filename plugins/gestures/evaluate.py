@@ -9,7 +9,6 @@ fold (hyper-parameters searched inside the training part only) and tests on the 
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import time
@@ -19,10 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from console import paths
+from console import cache_files, paths
 from console.bench import summarize_s
 from console.errors import UserError
-from console.npz_safe import read_npz
 
 from . import features as F
 from .model import GESTURES, GestureModel
@@ -84,7 +82,7 @@ def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:
             if p is not None:
                 st = p.stat()
                 h.update(f"{p.name}:{st.st_size}:{st.st_mtime_ns}".encode())
-    return h.hexdigest()[:24]
+    return h.hexdigest()
 
 
 def sample_records(
@@ -161,25 +159,26 @@ def extract(
         )
     size = (params.width_px, params.height_px)
     key = _key(samples, params, frames_list)
-    cfile = cache_dir() / f"{key}.npz"
-    if use_cache and cfile.is_file():
-        try:
-            return _load_cache(cfile)
-        except (OSError, ValueError, KeyError, UserError):
-            pass  # a damaged cache entry: computed again and rewritten
-    import cv2
+    cfile = cache_files.entry_path(cache_dir(), "features", key) if use_cache else None
 
-    threads = cv2.getNumThreads()
-    cv2.setNumThreads(1)  # the per-frame time is for one core
-    try:
-        fs = _extract(samples, params, frames_list, size, progress, cancelled)
-    finally:
-        cv2.setNumThreads(threads)
-    fs.meta["root"] = str(root)
-    if use_cache:
-        with contextlib.suppress(OSError):
-            _save_cache(cfile, fs)
-    return fs
+    def compute() -> dict:
+        import cv2
+
+        threads = cv2.getNumThreads()
+        cv2.setNumThreads(1)  # the per-frame time is for one core
+        try:
+            fs = _extract(samples, params, frames_list, size, progress, cancelled)
+        finally:
+            cv2.setNumThreads(threads)
+        fs.meta["root"] = str(root)
+        return _arrays(fs)
+
+    # the entry carries its key: another set's features (copied over this name), a
+    # damaged or empty entry is logged, deleted and extracted again, never used
+    arrays, _ = cache_files.cached_arrays(
+        cfile, key, compute, what="gesture feature cache entry", check=_feature_set
+    )
+    return _feature_set(arrays)
 
 
 def _extract(samples, params, frames_list, size, progress, cancelled) -> FeatureSet:
@@ -222,29 +221,29 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
     )
 
 
-def _save_cache(path: Path, fs: FeatureSet) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
+def _arrays(fs: FeatureSet) -> dict:
+    """A feature set as the arrays of a cache entry."""
     arrays = {
         "names": np.array(fs.names),
         "labels": fs.labels,
         "subjects": fs.subjects,
         "frame_s": fs.frame_s,
         "frame_cpu_s": fs.frame_cpu_s,
-        "meta": np.array(json.dumps(fs.meta)),
+        "meta_json": fs.meta,
     }
     for k in fs.dynamic:
         arrays[f"static_{k}"] = fs.static[k]
         arrays[f"kind_{k}"] = fs.kind[k]
         arrays[f"dyn_{k}"] = fs.dynamic[k]
         arrays[f"score_{k}"] = fs.score[k]
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)
+    return arrays
 
 
-def _load_cache(path: Path) -> FeatureSet:
-    z = read_npz(path, what="gesture feature cache", fix="it is rebuilt")
+def _feature_set(z: dict) -> FeatureSet:
+    """The feature set of a cache entry's arrays (``KeyError`` when one is missing)."""
     ks = sorted(int(n[4:]) for n in z if n.startswith("dyn_"))
+    if not isinstance(z["meta_json"], dict):
+        raise UserError("key 'meta_json': not an object")
     return FeatureSet(
         [str(n) for n in z["names"]],
         z["labels"].astype(str),
@@ -254,7 +253,7 @@ def _load_cache(path: Path) -> FeatureSet:
         {k: z[f"dyn_{k}"] for k in ks},
         {k: z[f"score_{k}"] for k in ks},
         z["frame_s"],
-        json.loads(str(z["meta"])),
+        dict(z["meta_json"]),
         z["frame_cpu_s"],
     )
 

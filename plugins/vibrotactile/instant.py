@@ -17,20 +17,19 @@ the hand change by less than a fifth of a square.
 The atlas is built in worker processes (``workers``; cancel by raising in ``progress``)
 and cached on disk keyed by a hash of everything it depends on: the map's content, the
 perception model, the drive cap, band, interpolation, hand geometry, search parameters and
-the step. A cache file that cannot be read or fails its checks is logged, deleted and
-rebuilt: it is never played. Memory: ~100 bytes per place and direction plus at most
+the step; the file carries that key inside it (``console.cache_files``). A cache file of
+other inputs (another map's atlas under this name), that cannot be read or fails its
+checks is logged, deleted and rebuilt: it is never played. Memory: ~100 bytes per place and direction plus at most
 ``max_plans`` synthesised plans (``nbytes`` says how much).
 """
 
 from __future__ import annotations
 
-import logging
 import math
 import os
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -38,8 +37,6 @@ import numpy as np
 from console.errors import UserError
 from console.types import DIRECTIONS, OutputPlan, patches_of
 from console.vibration_map import VibrationMap
-
-log = logging.getLogger("haptable.vibrotactile.instant")
 
 #: Bumped when the stored arrays or the search change (old cache files are not read).
 ATLAS_VERSION = 1
@@ -442,17 +439,17 @@ def load_or_build(
     max_plans: int = 8,
 ) -> FlowAtlas:
     """The atlas of ``m``: read from ``cache_dir`` when a valid file for these inputs is
-    there, else built (``build_arrays``) and stored. A file that cannot be read or fails
-    ``check_arrays`` is logged, deleted and rebuilt."""
+    there, else built (``build_arrays``) and stored. A file made from other inputs (it
+    carries their key: ``console.cache_files``), that cannot be read or fails
+    ``check_arrays`` is logged, deleted and rebuilt, never played."""
     import time
 
-    from plugins.vibrotactile.cache import key_hash, read_entry, write_entry
+    from plugins.vibrotactile.cache import cached_entry
 
     xs, ys = atlas_axes(m, hand_mm, step_mm)
     centers = np.array([(x, y) for y in ys for x in xs], float)
     kw = {"hand_mm": hand_mm, "subgrid": subgrid, "band_hz": band_hz, "method": method}
     key = atlas_key(m, per, cap_v=cap_v, step_mm=step_mm, squares=squares, **kw)
-    path = None if cache_dir is None else Path(cache_dir) / f"flowatlas-{key_hash(key)}.npz"
     checks = {
         "n": len(centers),
         "excitations": len(m.excitations),
@@ -466,22 +463,26 @@ def load_or_build(
         "step_mm": step_mm,
         "max_plans": max_plans,
     }
-    if path is not None and path.exists():
-        try:
-            arrays = read_entry(path)
-            check_arrays(arrays, **checks)
-            if not np.allclose(arrays["centers_mm"], centers):
-                raise UserError("key 'centers_mm': not this grid's places")
-            return FlowAtlas(m, arrays, xs, ys, from_cache=True, **common)
-        except UserError as exc:
-            log.warning("flow atlas cache %s is damaged (%s): rebuilding it", path, exc)
-            path.unlink(missing_ok=True)
-    t0 = time.perf_counter()
-    arrays = build_arrays(
-        m, per, centers, cap_v=cap_v, squares=squares, workers=workers, progress=progress, **kw
+
+    def check(arrays: dict) -> None:
+        check_arrays(arrays, **checks)
+        if not np.allclose(arrays["centers_mm"], centers):
+            raise UserError("key 'centers_mm': not this grid's places")
+
+    took: list[float] = []
+
+    def build() -> dict:
+        t0 = time.perf_counter()
+        arrays = build_arrays(
+            m, per, centers, cap_v=cap_v, squares=squares, workers=workers, progress=progress, **kw
+        )
+        took.append(time.perf_counter() - t0)
+        check_arrays(arrays, **checks)
+        return arrays
+
+    arrays, from_cache = cached_entry(
+        cache_dir, "flowatlas", key, build, what="flow atlas cache entry", check=check
     )
-    build_s = time.perf_counter() - t0
-    check_arrays(arrays, **checks)
-    if path is not None:
-        write_entry(path, arrays)
-    return FlowAtlas(m, arrays, xs, ys, build_s=build_s, **common)
+    if from_cache:
+        return FlowAtlas(m, arrays, xs, ys, from_cache=True, **common)
+    return FlowAtlas(m, arrays, xs, ys, build_s=took[0], **common)

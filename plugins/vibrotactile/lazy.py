@@ -11,9 +11,8 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable
 
-from console.errors import UserError
 from console.vibration_map import VibrationMap
-from plugins.vibrotactile.cache import cached
+from plugins.vibrotactile.cache import cached, cached_entry
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables, query_points, validate_tables
@@ -54,13 +53,16 @@ def tables_cached(
             )
         )
 
-    res = cached(cache_dir, "tables", key, build)
-    try:
+    def tables_of(res: dict) -> Tables:
         t = _tables(res, m, band_hz, min_contrast_db, perceptual)
         validate_tables(t, where="tables cache")
-    except (UserError, KeyError):  # a damaged cache entry: build without the cache
-        t = _tables(cached(None, "tables", key, build), m, band_hz, min_contrast_db, perceptual)
-    return t
+        return t
+
+    # an entry of other inputs, damaged or failing the tables' checks is rebuilt
+    res, _ = cached_entry(
+        cache_dir, "tables", key, build, what="lookup-tables cache entry", check=tables_of
+    )
+    return tables_of(res)
 
 
 def _tables(

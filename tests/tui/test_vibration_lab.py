@@ -55,10 +55,12 @@ def test_lab_profile_says_outputs_are_closed_and_keeps_the_twin_map_out(
 
 def test_sim_profile_names_the_map_it_loads_and_b_says_tables_are_built(plugins, map_file):
     async def scenario():
+        from console.runtime.measured_map import keep_measured_map
+        from console.vibration_map import load_map
+
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
-        kept = app.session.vibration.cached_map_path()
-        kept.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy(map_file, kept)
+        vib = app.session.vibration
+        keep_measured_map(vib.profile, load_map(map_file))  # as a measurement keeps it
         async with app.run_test(size=(120, 40)) as pilot:
             pane = app.pane("vibration")
             await wait_for(pilot, lambda: pane.session is not None, 30, "the kept map")

@@ -169,26 +169,29 @@ def test_a_changed_map_invalidates_the_cache(setup, tmp_path):
 
 @pytest.mark.parametrize("damage", ["truncated", "amplitude_over_cap"])
 def test_a_corrupt_cache_file_is_rebuilt_with_a_log_line_never_played(setup, caplog, damage):
-    from plugins.vibrotactile.cache import read_entry, write_entry
+    from console.cache_files import read_entry, write_entry
 
     s = setup
     eff = _effect(s)
     good = eff.hand_flow_atlas(str(s.path), STEP_MM, workers=1)
     (path,) = s.cache.glob("flowatlas-*.npz")
+    with np.load(path) as z:
+        key = str(z["cache_key"])  # the hash of the atlas's inputs, inside the file
     if damage == "truncated":
         path.write_bytes(path.read_bytes()[:200])
-    else:  # a readable file whose amplitudes the gate would have to refuse
-        arrays = read_entry(path)
+    else:  # a readable file of the right key whose amplitudes the gate would refuse
+        arrays = read_entry(path, key, what="atlas")
         arrays["amplitude_v"] = arrays["amplitude_v"] * 50.0
-        write_entry(path, arrays)
+        write_entry(path, key, arrays)
     fresh = _effect(s)
-    with caplog.at_level(logging.WARNING, logger="haptable.vibrotactile.instant"):
+    with caplog.at_level(logging.WARNING, logger="haptable.cache"):
         again = fresh.hand_flow_atlas(str(s.path), STEP_MM, workers=1)
     assert not again.from_cache, "rebuilt, not read"
-    lines = [r.getMessage() for r in caplog.records if "damaged" in r.getMessage()]
+    lines = [r.getMessage() for r in caplog.records if "deleted and rebuilt" in r.getMessage()]
     assert len(lines) == 1 and str(path) in lines[0]
     np.testing.assert_array_equal(again.a["amplitude_v"], good.a["amplitude_v"])
-    assert read_entry(path)["amplitude_v"].max() <= eff.setup.cap_v * (1 + 1e-9)  # replaced
+    replaced = read_entry(path, key, what="atlas")
+    assert replaced["amplitude_v"].max() <= eff.setup.cap_v * (1 + 1e-9)
     c = (float(again.xs[1]), float(again.ys[1]))
     ok = [d for d in DIRECTIONS if again.result(c, d)["ok"]]
     _same_plan(again.plan(c, ok[0]), eff.render(center_mm=c, direction=ok[0], vmap=str(s.path)))
