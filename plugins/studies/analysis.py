@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -29,122 +27,15 @@ import numpy as np
 from console.errors import UserError
 
 from .rmanova import rm_anova
-from .store import read_events, read_json
+from .runs import Study, load, participant_dirs
 from .words import CLI, Words
+
+__all__ = ["Study", "analyze", "load", "participant_dirs"]
 
 #: Factors of each experiment's main phase (the plan's trial keys).
 FACTORS = {"exp1": ("pair", "direction"), "exp2": ("region", "direction")}
 KNOB_MEASURES = ("completion_time_s", "overshoots", "recovery_time_s")
 KNOB_FACTORS = ("condition", "sectors", "distance_deg")
-DONE_KEYS = ("participant", "experiment", "phase", "trial")
-
-
-@dataclass
-class Study:
-    """Everything read from the folders: one experiment."""
-
-    experiment: str
-    participants: dict[str, dict[str, Any]]
-    plans: dict[str, dict[str, Any]]
-    trials: Any  # pandas DataFrame of the done records
-    questionnaire: Any  # pandas DataFrame of the questionnaire lines
-    notes: list[str] = field(default_factory=list)
-    #: how the analysis's lines name a fix (the CLI's flags or the screen's fields)
-    words: Words = CLI
-
-
-def participant_dirs(paths: list[Path], words: Words = CLI) -> list[Path]:
-    """Each path is a participant's folder (it holds ``plan.json``) or a study's
-    ``--out`` folder (its sub-folders that do)."""
-    out: list[Path] = []
-    for p in paths:
-        p = Path(p).expanduser()
-        if p.exists() and not p.is_dir():
-            raise UserError(f"{p}: is a file, not a folder; {words.runs}")
-        if not p.is_dir():
-            raise UserError(f"{p}: no such folder; {words.runs}")
-        if (p / "plan.json").is_file():
-            out.append(p)
-            continue
-        subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "plan.json").is_file())
-        if not subs:
-            raise UserError(f"{p}: no participant folder (P01/plan.json ...) in it; {words.runs}")
-        out.extend(subs)
-    return list(dict.fromkeys(out))
-
-
-def load(
-    paths: list[Path],
-    *,
-    exclude: tuple[str, ...] = (),
-    experiment: str | None = None,
-    words: Words = CLI,
-) -> Study:
-    """The study in ``paths`` (one experiment; participants in ``exclude`` left out; with
-    ``experiment``, only the participants of that experiment; ``words``: how its lines
-    name a fix)."""
-    import pandas as pd
-
-    dirs = participant_dirs(paths, words)
-    done, quest, parts, plans, notes, twice = [], [], {}, {}, [], []
-    exps: dict[str, list[str]] = {}
-    for d in dirs:
-        plan = read_json(d / "plan.json", words)
-        if not isinstance(plan, dict) or "experiment" not in plan or "trials" not in plan:
-            raise UserError(f"{d / 'plan.json'}: not a study plan (no experiment/trials)")
-        pid = str(plan.get("participant") or d.name)
-        if experiment is not None and plan["experiment"] != experiment:
-            continue
-        if pid in exclude:
-            notes.append(f"{pid}: left out (--exclude)")
-            continue
-        exps.setdefault(plan["experiment"], []).append(pid)
-        if pid in plans:
-            twice.append(f"{d}: participant {pid} appears twice; give each folder once")
-            continue
-        plans[pid] = plan
-        pj = d / "participant.json"
-        parts[pid] = read_json(pj, words) if pj.is_file() else {"id": pid}
-        last: dict[int, dict] = {}
-        for n, e in enumerate(read_events(d / "trials.jsonl"), 1):
-            ev = e.get("event")
-            if ev == "done":
-                miss = [k for k in DONE_KEYS if k not in e]
-                if miss:
-                    raise UserError(
-                        f"{d / 'trials.jsonl'}: event {n} ('done') has no {', '.join(miss)}; "
-                        "the file is not from `haptable study run` or was edited"
-                    )
-                last[int(e["trial"])] = e
-            elif ev == "questionnaire":
-                quest.append({k: e.get(k) for k in ("condition", "category", "item", "score")})
-                quest[-1]["participant"] = pid
-                quest[-1]["after_trial"] = e.get("after_trial")
-        done.extend(last.values())
-        total = len(plan["trials"])
-        if len(last) < total:
-            notes.append(f"{pid}: {len(last)}/{total} trials done (run not finished)")
-    if len(exps) > 1:
-        raise UserError(
-            "the folders hold different experiments ("
-            + "; ".join(f"{k}: {', '.join(v)}" for k, v in exps.items())
-            + "); analyse one experiment at a time"
-        )
-    if twice:
-        raise UserError(twice[0])
-    if not exps:
-        what = f" of {experiment}" if experiment else ""
-        raise UserError(
-            f"{', '.join(map(str, paths))}: no participant{what} left to analyse; run one first"
-        )
-    exp = next(iter(exps))
-    trials = pd.DataFrame(done)
-    if trials.empty:
-        raise UserError(f"{', '.join(map(str, paths))}: no trial is done yet; run some first")
-    q = pd.DataFrame(quest)
-    if not q.empty:  # the last answer per participant, condition and item
-        q = q.drop_duplicates(["participant", "after_trial", "category", "item"], keep="last")
-    return Study(exp, parts, plans, trials, q, notes, words)
 
 
 # --------------------------------------------------------------------------- order

@@ -22,8 +22,9 @@ from typing import Any
 from console.errors import UserError
 
 from . import protocol as protocols
+from .plan import check_seed_row
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
-from .store import resume_text
+from .store import check_id, resume_text
 
 MAX_PARTICIPANTS = 500
 
@@ -37,9 +38,9 @@ def configure(p: argparse.ArgumentParser) -> None:
     r.add_argument("--simulate", action="store_true", help="simulated participant(s)")
     r.add_argument("--participants", type=int, default=None, help="with --simulate: run N")
     r.add_argument("--map", type=Path, default=None, help="vibration map (default: measured)")
-    r.add_argument("--seed", type=int, default=None, help="the participant's seed")
+    r.add_argument("--seed", default=None, help="the participant's seed (0 .. 2^63 - 1)")
     r.add_argument(
-        "--row", type=int, default=None, help="Latin-square row (default: id's number - 1)"
+        "--row", default=None, help="Latin-square row, 0-based (default: id's number - 1)"
     )
     r.add_argument("--trials", type=int, default=None, help="run at most this many trials now")
     r.add_argument("--age", type=int, default=None)
@@ -56,7 +57,18 @@ def configure(p: argparse.ArgumentParser) -> None:
     add_parser(sub)
 
 
+def whole(text: str | None, flag: str) -> int | None:
+    """A whole-number option given as text (``None``: not given); one line otherwise."""
+    if text is None:
+        return None
+    if not re.fullmatch(r"[+-]?[0-9]{1,100}", text.strip()):
+        raise UserError(f"{flag} {text!r}: give a whole number (digits only)")
+    return int(text)
+
+
 def _ids(args: argparse.Namespace) -> list[str]:
+    if args.participant is not None:
+        check_id(args.participant)
     if args.participants is None:
         if not args.participant:
             raise UserError("study run: give --participant P01 (or --simulate --participants N)")
@@ -67,7 +79,7 @@ def _ids(args: argparse.Namespace) -> list[str]:
         raise UserError(f"--participants {args.participants}: give 1..{MAX_PARTICIPANTS}")
     first, prefix, width = 1, "P", 2
     if args.participant:
-        m = re.match(r"^(.*?)(\d+)$", args.participant)
+        m = re.fullmatch(r"(.*?)([0-9]+)", args.participant)
         if not m:
             raise UserError(
                 f"--participant {args.participant!r}: with --participants it is the first id "
@@ -164,6 +176,8 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.trials is not None and args.trials < 1:
         raise UserError(f"--trials {args.trials}: give at least 1")
     proto = protocols.load(args.study)
+    seed, row = whole(args.seed, "--seed"), whole(args.row, "--row")
+    check_seed_row(proto, seed, row)
     ids = _ids(args)
     obs = observer(ctx.pm, ctx.profile) if args.simulate and proto.stimulus != "knob" else None
     if proto.stimulus == "knob" and not args.simulate:
@@ -193,8 +207,8 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     details=details,
                     simulate=args.simulate,
                     observer=obs,
-                    seed=args.seed,
-                    row=args.row,
+                    seed=seed,
+                    row=row,
                 )
                 if vmap is not None:
                     check_places(prep.plan, vmap)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import math
 import re
 from typing import Any
 
@@ -20,6 +21,7 @@ import numpy as np
 from console.errors import UserError
 
 from .protocol import Phase, Protocol
+from .records import MAX_SEED
 
 
 def balanced_latin_square(n: int) -> list[list[int]]:
@@ -53,6 +55,35 @@ def participant_number(participant_id: str, row_hint: str = "or give --row") -> 
             f"row; name participants P01, P02 ...{' ' + row_hint if row_hint else ''}"
         )
     return int(m.group(1))
+
+
+def square_rows(protocol: Protocol) -> int:
+    """The rows a participant's ``row`` picks from: the least common multiple of the
+    rows of each ``latin_square`` phase's square (0: the protocol has none)."""
+    sizes = [
+        len(balanced_latin_square(len(p.factors[p.block_by])))
+        for p in protocol.phases
+        if p.block_order == "latin_square"
+    ]
+    return math.lcm(*sizes) if sizes else 0
+
+
+def check_seed_row(protocol: Protocol, seed: int | None, row: int | None) -> None:
+    """A seed and row given by the user (``--seed``, ``--row``) in range: one line if not."""
+    if seed is not None and not (isinstance(seed, int) and 0 <= seed <= MAX_SEED):
+        raise UserError(f"--seed {seed}: give a whole number from 0 to {MAX_SEED}")
+    if row is None:
+        return
+    rows = square_rows(protocol)
+    if not rows:
+        raise UserError(
+            f"--row {row}: {protocol.name} has no latin_square block order, so no "
+            "counterbalancing row to pick; leave --row out"
+        )
+    if not (isinstance(row, int) and 0 <= row < rows):
+        raise UserError(
+            f"--row {row}: {protocol.name}'s Latin square has {rows} rows; give 0 to {rows - 1}"
+        )
 
 
 def participant_seed(protocol: Protocol, participant_id: str) -> int:
@@ -115,6 +146,7 @@ def make_plan(
     ``protocol_sha256``, ``seed``, ``latin_square_row``, ``factors`` (each phase's factor
     levels in the protocol's order), ``trials`` (ordered) and ``questionnaires`` (each
     after a trial index)."""
+    check_seed_row(protocol, seed, row)
     seed = participant_seed(protocol, participant_id) if seed is None else int(seed)
     needs_row = any(p.block_order == "latin_square" for p in protocol.phases)
     if row is None:

@@ -13,19 +13,24 @@ responses, seed, and the projected ``scene`` whose touched buttons answer), the 
 - ``replays``: replays allowed per trial, an integer or ``"unlimited"``;
 - ``questionnaire_after_block``: the questionnaire after each block.
 
-Every mistake is a ``UserError`` naming the file, the key, the value and the fix.
+A pair, region or questionnaire category is named once (a second would silently redefine
+it); a factor's levels are names or numbers. The file is read bounded (``textfiles``: a
+regular file of at most 1 MB, UTF-8, nesting TOML can parse). Every mistake is a
+``UserError`` naming the file, the key, the value and the fix.
 """
 
 from __future__ import annotations
 
 import hashlib
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
+from console.file_read import parse_toml_text
 from console.schema import Field, check
+
+from . import textfiles
 
 STIMULI = ("flow", "hand_flow", "knob")
 ORDERS = ("random", "same_for_all")
@@ -111,10 +116,10 @@ def available() -> list[str]:
 def find(name_or_path: str | Path) -> Path:
     """A protocol's file: a path, or a name in ``studies/``."""
     p = Path(name_or_path).expanduser()
-    if p.suffix == ".toml" or p.is_file():
-        if not p.is_file():
-            raise UserError(f"{p}: no such protocol file; give a TOML file or one of {available()}")
-        return p
+    if p.exists() or p.is_symlink():
+        return p  # what it is (a FIFO, a folder ...) is checked when it is read
+    if p.suffix == ".toml":
+        raise UserError(f"{p}: no such protocol file; give a TOML file or one of {available()}")
     q = studies_dir() / f"{name_or_path}.toml"
     if not q.is_file():
         raise UserError(
@@ -127,11 +132,12 @@ def find(name_or_path: str | Path) -> Path:
 def load(name_or_path: str | Path) -> Protocol:
     """Read and check a protocol (a name in ``studies/`` or a file path)."""
     path = find(name_or_path)
-    raw_bytes = path.read_bytes()
-    try:
-        raw = tomllib.loads(raw_bytes.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise UserError(f"{path}: not valid TOML ({exc}); fix the syntax") from None
+    fix = f"give a protocol .toml file or one of {', '.join(available()) or '(none)'}"
+    raw_bytes = textfiles.read_bytes(
+        path, what="study protocol", fix=fix, limit=textfiles.MAX_PROTOCOL_BYTES
+    )
+    text = textfiles.decode(raw_bytes, str(path), "save the protocol as UTF-8 text")
+    raw = parse_toml_text(text, where=str(path), what="study protocol")
     return parse(raw, str(path), sha256=hashlib.sha256(raw_bytes).hexdigest())
 
 
@@ -232,8 +238,21 @@ def _pairs(where: str, items: Any) -> dict[str, dict[str, int]]:
         _unknown(where, it, set(f), f"pairs[{i}].")
         if v["left"] == v["right"]:
             raise _bad(where, f"pairs[{i}].right", v["right"], "a pair needs two different points")
+        _unique(where, "pairs", i, v["name"], out)
         out[v["name"]] = {"left": v["left"], "right": v["right"]}
     return out
+
+
+def _unique(where: str, table: str, i: int, name: str, seen: dict[str, Any]) -> None:
+    """A name given twice in ``[[table]]`` (the later would silently redefine it)."""
+    if name in seen:
+        first = list(seen).index(name)
+        raise _bad(
+            where,
+            f"{table}[{i}].name",
+            name,
+            f"{table}[{first}] has that name already; give each its own name",
+        )
 
 
 def _regions(where: str, items: Any) -> dict[str, dict[str, Any]]:
@@ -248,6 +267,7 @@ def _regions(where: str, items: Any) -> dict[str, dict[str, Any]]:
     for i, it in enumerate(items):
         v = _fields(where, it, f, f"regions[{i}].")
         _unknown(where, it, set(f), f"regions[{i}].")
+        _unique(where, "regions", i, v["name"], out)
         out[v["name"]] = {"center_mm": v["center_mm"], "hand": v["hand"]}
     return out
 
@@ -269,6 +289,11 @@ def _phase(
         vals = factors[name]
         if not isinstance(vals, list) or not vals or len(set(map(str, vals))) != len(vals):
             raise _bad(where, f"{pre}factors.{name}", vals, "give a list of distinct levels")
+        for x in vals:
+            if isinstance(x, bool) or not isinstance(x, str | int | float):
+                raise _bad(
+                    where, f"{pre}factors.{name}", x, "a level is a name or a number, not a list"
+                )
         known = {
             "pair": pairs,
             "region": regions,
@@ -335,10 +360,13 @@ def _questionnaire(where: str, q: Any) -> dict[str, Any]:
     if not isinstance(cats, list) or not cats:
         raise UserError(f"{where}: questionnaire.categories is missing; list the categories")
     out = []
+    names: dict[str, Any] = {}
     for i, c in enumerate(cats):
         pre = f"questionnaire.categories[{i}]"
         if not isinstance(c, dict) or not isinstance(c.get("name"), str):
             raise _bad(where, pre, c, 'give { name = "...", items = ["...", ...] }')
+        _unique(where, "questionnaire.categories", i, c["name"], names)
+        names[c["name"]] = c
         items = c.get("items")
         if not isinstance(items, list) or not items or not all(isinstance(s, str) for s in items):
             raise _bad(where, pre + ".items", items, "give a list of item texts")

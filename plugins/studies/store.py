@@ -11,7 +11,6 @@ plan without a ``done``.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
@@ -24,11 +23,13 @@ from typing import Any
 from console.atomic import write_text_atomic
 from console.errors import UserError
 
+from . import records
+from .events import load_events, read_events
+from .records import HANDEDNESS, SEXES
 from .words import CLI, Words, listing
 
-SEXES = ("female", "male", "other", "undisclosed")
-HANDEDNESS = ("left", "right", "ambidextrous")
-_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+__all__ = ["HANDEDNESS", "SEXES", "read_events"]
+_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,7 @@ class Participant:
 
 
 def check_id(pid: str) -> str:
-    if not isinstance(pid, str) or not _ID.match(pid):
+    if not isinstance(pid, str) or not _ID.fullmatch(pid):
         raise UserError(
             f"participant {pid!r}: use letters, digits, '_', '-' or '.' (e.g. P01), "
             "at most 64 characters"
@@ -151,35 +152,14 @@ def append_event(path: Path, record: dict[str, Any]) -> None:
         os.fsync(f.fileno())
 
 
-def read_events(path: Path) -> list[dict[str, Any]]:
-    """The events of a ``trials.jsonl``; a torn line (crash mid-write) is skipped."""
-    p = Path(path)
-    if not p.is_file():
-        return []
-    out = []
-    for line in p.read_text(encoding="utf-8").splitlines():
-        with contextlib.suppress(json.JSONDecodeError):
-            rec = json.loads(line)
-            if isinstance(rec, dict):
-                out.append(rec)
-    return out
-
-
-def read_json(path: Path, words: Words = CLI) -> Any:
-    try:
-        return json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise UserError(
-            f"{path}: cannot read it ({exc}); restore it or start a new {words.out}"
-        ) from None
-
-
 # ------------------------------------------------------------------ a participant's run
 @dataclass
 class RunFiles:
-    """One participant's folder: ``participant.json``, ``plan.json``, ``trials.jsonl``."""
+    """One participant's folder: ``participant.json``, ``plan.json``, ``trials.jsonl``;
+    ``plan``: the checked plan its events are checked against (``open_run`` sets it)."""
 
     root: Path
+    plan: dict[str, Any] | None = None
 
     @property
     def participant_path(self) -> Path:
@@ -194,7 +174,10 @@ class RunFiles:
         return self.root / "trials.jsonl"
 
     def events(self) -> list[dict[str, Any]]:
-        return read_events(self.trials_path)
+        """The events, checked against the plan (``records``) once it is known."""
+        if self.plan is None:
+            return read_events(self.trials_path)
+        return load_events(self.trials_path, self.plan)
 
     def append(self, record: dict[str, Any]) -> None:
         append_event(self.trials_path, record)
@@ -205,8 +188,8 @@ def participant_dir(out: Path, pid: str) -> Path:
 
 
 def load_participant(files: RunFiles, words: Words = CLI) -> dict[str, Any] | None:
-    path = files.participant_path
-    return read_json(path, words) if path.is_file() else None
+    """The stored participant (checked: ``records.PARTICIPANT``), None when there is none."""
+    return records.load_participant(files.participant_path, words, pid=files.root.name)
 
 
 def save_participant(files: RunFiles, p: Participant) -> None:
@@ -262,6 +245,52 @@ def resume_text(plan: dict[str, Any], events: list[dict[str, Any]]) -> str | Non
     return f"resuming at trial {n + 1} of {st.total} ({len(st.done)} done{why})"
 
 
+#: what a stored plan must share with the plan this run would make to be resumed by it
+SAME = ("experiment", "protocol_sha256", "participant", "stimulus", "responses", "seed")
+#: how a resume fixes each difference
+HOW = {
+    **dict.fromkeys(
+        ("experiment", "protocol_sha256", "stimulus", "responses"),
+        "resume with the same protocol file",
+    ),
+    "participant": "restore it (it is another participant's plan)",
+    "seed": "resume it as it was started (the same --seed and --row)",
+}
+
+
+def _cells(plan: dict[str, Any]) -> list[str]:
+    """The plan's trials as a sorted list (their order may come from another numpy) and
+    its questionnaires."""
+    keys = [k for k in records.TRIAL if k != "index"]
+    rows = [json.dumps([t.get(k) for k in keys], sort_keys=True) for t in plan["trials"]]
+    qkeys = list(records.QUESTIONNAIRE)
+    qs = [
+        json.dumps([q.get(k) for k in qkeys], sort_keys=True)
+        for q in plan.get("questionnaires", [])
+    ]
+    return sorted(rows) + qs
+
+
+def resumable(
+    stored: dict[str, Any], plan: dict[str, Any], path: Path, words: Words = CLI
+) -> dict[str, Any]:
+    """The stored plan (``path``, read by ``records.load_plan(..., run=True)``) when it is
+    the plan this run would make (the same protocol, participant, seed and row; the same
+    trials, in its own order); else one line naming the first difference."""
+    for key in (*SAME, "latin_square_row"):
+        if stored.get(key) != plan.get(key):
+            raise UserError(
+                f"{path}: {key} = {stored.get(key)!r} but this run has {plan.get(key)!r}; "
+                f"{HOW.get(key, HOW['seed'])} or use a new {words.out}"
+            )
+    if _cells(stored) != _cells(plan):
+        raise UserError(
+            f"{path}: its trials or questionnaires are not those of this protocol and seed "
+            f"(the file was edited); restore it or start a new {words.out}"
+        )
+    return stored
+
+
 def open_run(
     out: Path, pid: str, plan: dict[str, Any], words: Words = CLI
 ) -> tuple[RunFiles, dict[str, Any]]:
@@ -276,18 +305,12 @@ def open_run(
             f"{files.root}: cannot make the participant's folder ({exc.strerror or exc}); "
             f"give a writable {words.out}"
         ) from None
-    if files.plan_path.is_file():
-        stored = read_json(files.plan_path, words)
-        for key in ("experiment", "protocol_sha256"):
-            if stored.get(key) != plan.get(key):
-                raise UserError(
-                    f"{files.plan_path}: {key} = {stored.get(key)!r} but this run has "
-                    f"{plan.get(key)!r}; resume with the same protocol file or use a new "
-                    f"{words.out}"
-                )
-        plan = stored
+    if files.plan_path.exists() or files.plan_path.is_symlink():
+        stored = records.load_plan(files.plan_path, words, run=True)
+        plan = resumable(stored, plan, files.plan_path, words)
     else:
         write_json_atomic(files.plan_path, plan)
+    files.plan = plan
     st = progress(plan, files.events())
     if st.in_flight is not None:
         files.append(

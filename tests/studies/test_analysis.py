@@ -215,10 +215,12 @@ def test_the_last_done_of_a_trial_counts(tmp_path):
     root = sr.write_flow(tmp_path / "e", "exp1", ("1", "2"), lambda *a: 1.0, 3, 2)
     f = root / "P01" / "trials.jsonl"
     recs = [json.loads(x) for x in f.read_text().splitlines()]
-    again = {**recs[-1], "correct": False, "response": "x"}
-    f.write_text(
-        f.read_text() + '{"event": "start", "trial": 99}\n{torn\n' + json.dumps(again) + "\n"
-    )
+    wrong = next(r for r in ("left_to_right", "right_to_left") if r != recs[-1]["direction"])
+    again = {**recs[-1], "correct": False, "response": wrong}
+    start = {k: recs[-1][k] for k in ("participant", "experiment", "phase", "trial")}
+    start["event"] = "start"
+    torn = json.dumps(again)[:25]  # a crash mid-write, then the run went on
+    f.write_text(f.read_text() + json.dumps(start) + f"\n{torn}\n" + json.dumps(again) + "\n")
     res = an.analyze(an.load([root]))
     p1 = res["accuracy"]["participants"][0]
     assert p1["trials"] == 8 and p1["accuracy_pct"] == pytest.approx(100 * 7 / 8)
@@ -258,7 +260,7 @@ def test_bad_folders_are_one_line(tmp_path):
         an.load([tmp_path / "a", tmp_path / "b"])
     bad = tmp_path / "a" / "P01" / "trials.jsonl"
     bad.write_text('{"event": "done", "trial": 0}\n')
-    with pytest.raises(UserError, match=r"trials.jsonl: event 1 \('done'\) has no participant"):
+    with pytest.raises(UserError, match=r"trials.jsonl: line 1: participant is missing; restore"):
         an.load([tmp_path / "a"])
 
 
