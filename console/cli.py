@@ -6,16 +6,17 @@ import argparse
 import logging
 import os
 import sys
+import warnings
 
 from console.errors import EStopLatched, EStopped, UserError
-from console.options import seconds_option
+from console.options import Parser, seconds_option
 from console.runtime.context import Context
 
 __all__ = ["Context", "build_parser", "main", "one_line", "seconds_option"]
 
 
 def build_parser(plugins) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="haptable",
         description="HapTable operator console. Without a command: start the console.",
     )
@@ -38,8 +39,34 @@ def one_line(message: str) -> str:
     return text if len(text) <= 2000 else text[:2000] + " ..."
 
 
+def first_line(message: str) -> str:
+    """The first non-empty line of a message (a library's multi-line text cut to it)."""
+    return next((ln.strip() for ln in message.splitlines() if ln.strip()), "")
+
+
+def _log_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: str | None = None,
+) -> None:
+    """``warnings.showwarning`` while a command runs: a library's warning (numpy,
+    scikit-learn ...) is one log line (shown with ``--verbose``), never its source line
+    or an embedded traceback on the user's terminal."""
+    text = one_line(first_line(str(message)))[:300]
+    logging.getLogger("haptable.warnings").info("%s: %s", category.__name__, text)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    with warnings.catch_warnings():
+        warnings.showwarning = _log_warning
+        return _main(argv)
+
+
+def _main(argv: list[str]) -> int:
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
     ctx = None
     try:
@@ -100,8 +127,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _internal(exc: BaseException) -> int:
+    what = one_line(first_line(str(exc)))[:300]
     print(
-        f"haptable: internal error: {type(exc).__name__}: {exc} "
+        f"haptable: internal error: {type(exc).__name__}: {what} "
         f"(outputs silenced; HAPTABLE_DEBUG=1 shows the traceback; please report it)",
         file=sys.stderr,
     )

@@ -12,6 +12,7 @@ import wave
 import numpy as np
 
 from console.errors import UserError
+from console.options import minutes, seconds
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 
 
@@ -155,7 +156,7 @@ def configure_estop(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
     p.add_argument(
         "--timeout",
-        type=float,
+        type=seconds(60.0, lo=0.01),
         default=2.0,
         help="seconds each table's outputs process has to confirm its silence (default 2)",
     )
@@ -187,7 +188,7 @@ def configure_bench(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
     p.add_argument("--quick", action="store_true", help="fewer repetitions")
     p.add_argument("--report", help="write a Markdown report (and plots) into this folder")
-    p.add_argument("--minutes", type=float, help="duration, for benchmarks that run for a time")
+    p.add_argument("--minutes", type=minutes(), help="duration, for benchmarks that run for a time")
 
 
 def run_bench(args, ctx) -> int:
@@ -197,10 +198,8 @@ def run_bench(args, ctx) -> int:
         return 0
     if args.name not in benches:
         raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
-    from console.options import seconds_option
-
     run = benches[args.name].run
-    kwargs = {"report_dir": args.report, "minutes": seconds_option(args.minutes, "--minutes")}
+    kwargs = {"report_dir": args.report, "minutes": args.minutes}
     accepted = inspect.signature(run).parameters
     takes_any = any(p.kind is p.VAR_KEYWORD for p in accepted.values())
     for key, value in list(kwargs.items()):

@@ -251,8 +251,12 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
             "width_px": Field("int", 640, min=16, max=8192),
             "height_px": Field("int", 480, min=16, max=8192),
             "fps": Field("float", 60.0, min=1, max=1000),
-            "exposure": Field("float", -1.0, help="driver exposure; -1 = automatic"),
-            "gain": Field("float", -1.0, help="driver gain; -1 = automatic"),
+            # what V4L2 / UVC drivers take (exposure in 100 us steps up to 1 s, gain a
+            # byte); the OpenCV driver's live controls have the same ranges
+            "exposure": Field(
+                "float", -1.0, min=-1, max=10000, help="driver exposure; -1 = automatic"
+            ),
+            "gain": Field("float", -1.0, min=-1, max=255, help="driver gain; -1 = automatic"),
         },
         False,
         "the infrared camera under the glass",

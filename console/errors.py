@@ -5,6 +5,12 @@ class UserError(Exception):
     """Bad input (profile, file, argument): the message names what, where, and the fix."""
 
 
+class UsageError(UserError):
+    """A command line argparse refused (unknown option, bad number, missing argument):
+    the message names the command, the option and what to give
+    (``console.options.Parser``)."""
+
+
 class ProfileError(UserError):
     """A profile that does not validate."""
 

@@ -93,6 +93,7 @@ class RegisterSection(Protocol):
         *,
         per_item: bool = False,
         help: str = "",  # noqa: A002
+        check: Callable[[Any], None] | None = None,
     ) -> None: ...
 
 
@@ -300,7 +301,11 @@ def haptable_profile_sections(register: RegisterSection) -> None:
     """Declare the profile sections a plugin reads, so profiles are validated.
 
     ``register(section: str, fields: dict[str, console.schema.Field], *,
-    per_item: bool = False, help: str = "")``. With ``per_item`` the section holds named
-    sub-tables (``[patches.PA]``) that each have ``fields``. A key no plugin declares is
-    an error naming the file and the closest known key.
+    per_item: bool = False, help: str = "", check=None)``. With ``per_item`` the section
+    holds named sub-tables (``[patches.PA]``) that each have ``fields``. A key no plugin
+    declares is an error naming the file and the closest known key. ``check(profile)``,
+    when given, is called with the validated profile at load for what one key's ``Field``
+    cannot see (a point id against ``[grid]``, a position against ``[table]``); it raises
+    ``console.errors.UserError`` naming the key, and the load fails with that line
+    prefixed by the file.
     """

@@ -127,6 +127,9 @@ class Plugins:
     commands: dict[str, Command] = field(default_factory=dict)
     benchmarks: dict[str, Benchmark] = field(default_factory=dict)
     sections: dict[str, tuple[dict, bool, str, str]] = field(default_factory=dict)
+    #: a section's check across keys and sections (``register(..., check=)``): called
+    #: with the validated profile at load, raises ``UserError`` naming the key
+    section_checks: dict[str, Callable[[Any], None]] = field(default_factory=dict)
     #: plugins registered with ``load_plugins(extra=...)`` that are modules: (name, module
     #: name, file) -- what another process (a table's kernel) loads to have the same ones
     extra_modules: tuple[tuple[str, str, str], ...] = ()
@@ -329,8 +332,18 @@ def _collect(plugins: Plugins) -> None:
     for impl in reversed(pm.hook.haptable_profile_sections.get_hookimpls()):
         owner = _plugin_name(pm, impl)
 
-        def reg_section(section, fields, *, per_item=False, help="", _owner=owner):  # noqa: A002
+        def reg_section(
+            section,
+            fields,
+            *,
+            per_item=False,
+            help="",
+            check=None,
+            _owner=owner,  # noqa: A002
+        ):
             plugins.sections[section] = (fields, per_item, help, _owner)
+            if check is not None:
+                plugins.section_checks[section] = check
 
         impl.function(register=reg_section)
 

@@ -24,14 +24,14 @@ from typing import TYPE_CHECKING, Any
 
 from console import paths
 from console.atomic import write_text_atomic
-from console.errors import ProfileError
+from console.errors import ProfileError, UserError
 from console.profile_paths import (  # noqa: F401 - re-exported
     DEFAULT_PROFILE,
     PROJECT_PROFILES,
     find_profile,
     search_dirs,
 )
-from console.schema import Field, check
+from console.schema import Field, check, explain
 
 if TYPE_CHECKING:
     from console.plugins import Plugins
@@ -119,7 +119,7 @@ def _validate_table(
         ok, norm = check(f, value)
         if not ok:
             raise ProfileError(
-                f"{where}: [{label}] {key} = {_fmt(value)}: expected {f.allowed()}"
+                f"{where}: [{label}] {key} = {_fmt(value)}: {explain(f, value)}"
                 + (f" ({f.help})" if f.help else "")
             )
         if f.kind == "path" and norm and f.must_exist:
@@ -203,20 +203,53 @@ def check_drivers(profile: Profile, plugins: Plugins) -> None:
             )
 
 
-def parse_toml(path: Path) -> dict[str, Any]:
-    """The profile file's TOML, refused with one line when too large, not UTF-8, not
-    TOML or nested too deeply."""
-    where = _where(path)
+def check_sections(profile: Profile, plugins: Plugins) -> None:
+    """Each plugin's check across keys (``register(..., check=)``), its ``UserError``
+    as a ``ProfileError`` naming the file."""
+    for fn in plugins.section_checks.values():
+        try:
+            fn(profile)
+        except ProfileError:
+            raise
+        except UserError as exc:
+            raise ProfileError(f"{_where(profile.path)}: {exc}") from None
+
+
+def _read_settings_file(path: Path) -> bytes:
+    """A profile's or an override file's bytes, after checking it is a regular file
+    (not a folder, a FIFO that would block, a device that never ends, a dangling link)
+    of at most ``MAX_PROFILE_BYTES`` (``console.file_read``)."""
+    from console.file_read import read_bytes_capped
+
+    if path.name == OVERRIDES_FILE:
+        what = "settings file"
+        fix = (
+            "the settings the console saved there (device picks) are not loaded; make it a "
+            "regular file or remove it"
+        )
+    else:
+        what, fix = "profile", "give the profile's .toml file"
     try:
-        size = path.stat().st_size
-        if size > MAX_PROFILE_BYTES:
+        os.stat(path)
+    except FileNotFoundError:
+        if path.is_symlink():
             raise ProfileError(
-                f"{where}: {size / 1e6:.1f} MB is too large for a profile (at most "
-                f"{MAX_PROFILE_BYTES / 1e6:.1f} MB); give the profile's .toml, not another file"
-            )
-        data = path.read_bytes()
-    except OSError as exc:
-        raise ProfileError(f"{where}: cannot read: {exc.strerror or exc}") from None
+                f"{_where(path)}: a link to {os.readlink(path)}, which does not exist; {fix}"
+            ) from None
+    except OSError:
+        pass  # a link loop, a folder we may not enter: named below
+    data = read_bytes_capped(
+        path, what=what, fix=fix, max_bytes=MAX_PROFILE_BYTES, error=ProfileError
+    )
+    assert data is not None
+    return data
+
+
+def parse_toml(path: Path) -> dict[str, Any]:
+    """The profile file's TOML, refused with one line when not a regular file, too
+    large, not UTF-8, not TOML or nested too deeply."""
+    where = _where(path)
+    data = _read_settings_file(path)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -271,6 +304,7 @@ def _build(path: Path, raw: dict[str, Any], over: dict[str, Any], plugins: Plugi
 
     try:
         check_consistency(profile)
+        check_sections(profile, plugins)
     except ProfileError as exc:
         if not over:
             raise
@@ -301,9 +335,9 @@ def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
 def read_overrides(path: Path, profile_path: Path, plugins: Plugins) -> dict[str, Any]:
     """The override file's raw tables ({} when there is none), each key checked like the
     profile's (a bad one: one line naming this file, the key and the fix)."""
-    if not path.is_file():
+    if not os.path.lexists(path):
         return {}
-    raw = parse_toml(path)
+    raw = parse_toml(path)  # a folder, FIFO or dangling link there: one line, not ignored
     data = validate(raw, path, plugins, partial=True, base=profile_path.parent)
     check_drivers(Profile(name=profile_path.stem, path=path, data=data), plugins)
     return raw
@@ -322,9 +356,12 @@ def save_overrides(
 
         plugins = load_plugins()
     path = overrides_path(profile.name)
-    if path.is_file():
-        parse_toml(path)  # a broken file is refused with its line, never overwritten
+    if os.path.lexists(path):
+        # a broken file, a folder, a FIFO or a dangling link is refused with its line,
+        # never overwritten; a link to a file is written through (the link stays)
+        parse_toml(path)
         doc = tomlkit.parse(path.read_text(encoding="utf-8"))
+        path = path.resolve()
     else:
         doc = tomlkit.document()
     for dotted, value in settings.items():

@@ -12,6 +12,8 @@ import argparse
 import asyncio
 from pathlib import Path
 
+from console.options import seconds
+
 
 async def _shoot(args) -> Path:
     from console.plugins import load_plugins
@@ -51,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--size", default="100x30", help="terminal size, columns x rows")
     p.add_argument("--map", help="vibration map to load on the vibration screen")
     p.add_argument("--profile", default=None)
-    p.add_argument("--wait-s", type=float, default=1.0, help="settle time before the shot")
+    p.add_argument("--wait-s", type=seconds(600.0), default=1.0, help="settle time before the shot")
     args = p.parse_args(argv)
     print(asyncio.run(_shoot(args)))
     return 0

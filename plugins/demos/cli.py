@@ -8,6 +8,10 @@ import sys
 import time
 
 from console.errors import UserError
+from console.options import integer, minutes, seconds
+
+#: the knob's sectors ([knob] sectors, the electrostatic plugin's key: same range)
+SECTORS = integer(2, 64, note="the paper's: 8, 16, 32")
 
 
 def configure(p: argparse.ArgumentParser) -> None:
@@ -15,12 +19,17 @@ def configure(p: argparse.ArgumentParser) -> None:
         "demo", choices=("flow", "knob", "soak"), help="which demo (soak: the benchmark)"
     )
     p.add_argument("--condition", default=None, help="knob condition (default: [demos])")
-    p.add_argument("--sectors", type=int, default=None, help="knob sectors (default: [knob])")
+    p.add_argument("--sectors", type=SECTORS, default=None, help="knob sectors (default: [knob])")
     p.add_argument(
         "--direction", choices=("left", "right", "up", "down"), default=None, help="flow direction"
     )
-    p.add_argument("--seconds", type=float, default=10.0, help="run this long (0: until Ctrl-C)")
-    p.add_argument("--minutes", type=float, default=None, help="soak: run this long")
+    p.add_argument(
+        "--seconds",
+        type=seconds(zero="until Ctrl-C"),
+        default=10.0,
+        help="run this long (0: until Ctrl-C)",
+    )
+    p.add_argument("--minutes", type=minutes(), default=None, help="soak: run this long")
     p.add_argument("--no-script", action="store_true", help="twin: no scripted hand")
     p.add_argument("--tuio", action="store_true", help="also stream TUIO 1.1 ([tuio] host/port)")
     p.add_argument("--json", action="store_true", help="print the final snapshot as JSON")
@@ -52,10 +61,6 @@ def _progress(done: int, total: int, what: str) -> None:
 
 
 def run(args, ctx) -> int:
-    from console.cli import seconds_option
-
-    seconds_option(args.seconds, "--seconds")
-    seconds_option(args.minutes, "--minutes")
     if args.demo == "soak":
         from .bench import run_soak
 

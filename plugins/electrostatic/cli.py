@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.options import finite_float, from_field, positive_int, seconds, seed
 
 from .effects import condition_report
-from .settings import audio, knob_settings, limits
+from .settings import KNOB_FIELDS, audio, knob_settings, limits
 from .simulate import canned_rotation, run_pipeline
 from .synth import CONDITIONS, parse_condition
 from .task import DISTANCES_DEG, PAPER_CONDITIONS, SECTOR_SETS, make_trials, run_task, summarize
@@ -34,13 +35,22 @@ def configure(p: argparse.ArgumentParser) -> None:
         "--condition", default="HD+VF", help=f"one of {', '.join(CONDITIONS)} (default HD+VF)"
     )
     p.add_argument(
-        "--sectors", type=int, default=None, help="8, 16 or 32 (default: [knob] sectors)"
+        "--sectors",
+        type=from_field(KNOB_FIELDS["sectors"], note="the paper's: 8, 16, 32"),
+        default=None,
+        help="8, 16 or 32 (default: [knob] sectors)",
     )
     p.add_argument(
-        "--distance", type=float, action="append", help="deg; repeatable (default 135 270 450)"
+        "--distance",
+        type=finite_float(0, MAX_DISTANCE_DEG, above=True, unit="deg"),
+        action="append",
+        help="deg; repeatable (default 135 270 450)",
     )
     p.add_argument(
-        "--trials", type=int, default=None, help="number of trials (default: 6 per distance)"
+        "--trials",
+        type=positive_int(MAX_TRIALS, note="the paper's design is 216"),
+        default=None,
+        help="number of trials (default: 6 per distance)",
     )
     p.add_argument(
         "--design",
@@ -60,9 +70,12 @@ def configure(p: argparse.ArgumentParser) -> None:
         default="sim",
         help="sim: the twin's finger; live: camera contacts",
     )
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed(), default=0)
     p.add_argument(
-        "--max-time", type=float, default=30.0, help="live: seconds before a trial times out"
+        "--max-time",
+        type=seconds(3600.0, above=True),
+        default=30.0,
+        help="live: seconds before a trial times out",
     )
     p.add_argument(
         "--audition", metavar="CONDITION", help="play a canned rotation with this condition"
@@ -85,7 +98,7 @@ def _profile(ctx: Any) -> Any:
 
 
 def _sectors(args: argparse.Namespace, k: dict[str, Any]) -> int:
-    n = int(args.sectors or k["sectors"])
+    n = int(k["sectors"] if args.sectors is None else args.sectors)
     if not 2 <= n <= 64:
         raise UserError(f"--sectors {n}: out of range; use 8, 16 or 32 (2-64 allowed)")
     if k["hysteresis_deg"] >= 180.0 / n:
@@ -296,16 +309,6 @@ def _run_live(
 
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
-    from console.cli import seconds_option
-
-    seconds_option(args.max_time, "--max-time")
-    if args.trials is not None and args.trials > MAX_TRIALS:
-        raise UserError(f"--trials {args.trials}: at most {MAX_TRIALS} (the paper's design is 216)")
-    for d in args.distance or ():
-        if not (math.isfinite(d) and 0 < d <= MAX_DISTANCE_DEG):
-            raise UserError(
-                f"--distance {d!r}: give degrees above 0 and at most {MAX_DISTANCE_DEG:g}"
-            )
     if args.forces:
         return _forces(args, ctx)
     if args.audition:

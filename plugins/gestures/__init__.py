@@ -9,13 +9,14 @@ Profile sections: ``[gestures]`` and ``[vision]``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
 
 from console.hookspecs import hookimpl
 from console.schema import Field
+
+from .cli_options import _dataset_commands, configure
 
 VISION_FIELDS = {
     "body_threshold": Field(
@@ -182,74 +183,6 @@ def haptable_register_panels(register):
 
 
 # ---------------------------------------------------------------------- CLI
-def _dataset_commands() -> dict:
-    try:
-        from .dataset_commands import COMMANDS
-    except ImportError:
-        return {}
-    return COMMANDS
-
-
-def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--harmonics",
-        type=int,
-        default=None,
-        help="Fourier harmonics for the classifiers (default: chosen by cross-validation "
-        "on the training samples among 2, 4, 6, 8)",
-    )
-    p.add_argument(
-        "--frames",
-        type=int,
-        default=None,
-        help="frames a dynamic gesture is decided from (default: chosen by cross-validation "
-        "among 2 .. [gestures] frames)",
-    )
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--no-cache", action="store_true", help="recompute the features")
-
-
-def configure(parser: argparse.ArgumentParser) -> None:
-    sub = parser.add_subparsers(dest="gestures_cmd", metavar="ACTION", required=True)
-    e = sub.add_parser("eval", help="cross-validate the classifiers on a dataset")
-    e.add_argument("dataset", type=Path)
-    e.add_argument("--cv", choices=("2fold", "loso"), default="2fold")
-    e.add_argument(
-        "--model",
-        type=Path,
-        default=None,
-        help="evaluate this trained model (.skops) on the whole dataset instead of cross-validating",
-    )
-    e.add_argument("--json", action="store_true")
-    _common(e)
-    t = sub.add_parser("train", help="train the classifiers on a dataset and save the model")
-    t.add_argument("dataset", type=Path)
-    t.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help="model file (.skops; default: [gestures] model, which the classifier reads)",
-    )
-    t.add_argument("--json", action="store_true")
-    _common(t)
-    c = sub.add_parser("classify", help="classify one sample folder with a trained model")
-    c.add_argument("model", type=Path)
-    c.add_argument("sample", type=Path)
-    c.add_argument("--json", action="store_true")
-    k = sub.add_parser(
-        "calibrate",
-        help="touch calibration: touch the shown targets; saves camera px -> table mm",
-    )
-    k.add_argument("--columns", type=int, default=5, help="targets across the table (5)")
-    k.add_argument("--rows", type=int, default=4, help="targets along the short edge (4)")
-    k.add_argument("--margin-mm", type=float, default=40.0, help="targets' distance from the edge")
-    k.add_argument("--out", type=Path, default=None, help="file (default: [vision] calibration)")
-    k.add_argument("--camera", default=None, help="camera driver (default: the profile's)")
-    k.add_argument("--json", action="store_true")
-    for name, (conf, _run, help_) in _dataset_commands().items():
-        conf(sub.add_parser(name, help=help_, description=help_))
-
-
 def _progress(args):
     if getattr(args, "json", False) or not sys.stderr.isatty():
         return None
@@ -266,6 +199,7 @@ def run(args, ctx) -> int:
     if cmd in extra:
         return int(extra[cmd][1](args, ctx) or 0)
     from . import evaluate as ev
+    from .dataset_checks import require_hands
 
     profile = _profile(ctx)
     n_h = getattr(args, "harmonics", None)
@@ -279,12 +213,14 @@ def run(args, ctx) -> int:
         fs = ev.extract(
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
+        require_hands(fs, args.dataset)
         _print(evaluate_model(fs, model, str(args.model)), args.json)
         return 0
     if cmd == "eval":
         fs = ev.extract(
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
+        require_hands(fs, args.dataset)
         rep = ev.cross_validate(
             fs, args.cv, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed
         )
@@ -294,6 +230,7 @@ def run(args, ctx) -> int:
         fs = ev.extract(
             args.dataset, _params(profile), use_cache=not args.no_cache, progress=_progress(args)
         )
+        require_hands(fs, args.dataset)
         model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed)
         if args.out is None and profile is None:
             from console.errors import UserError

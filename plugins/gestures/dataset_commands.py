@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from console.errors import UserError
+from console.options import finite_float, integer, positive_int, seed
 
 from .dataset import GESTURES
 
@@ -21,12 +22,8 @@ from .dataset import GESTURES
 MAX_FRAMES = 600
 MAX_SUBJECTS = 1000
 MAX_REPS = 100000
-
-
-def check_count(value: int | None, flag: str, lo: int, hi: int) -> None:
-    """A count option within [lo, hi] (``None``: not given), else one line."""
-    if value is not None and not lo <= value <= hi:
-        raise UserError(f"{flag} {value}: give {lo} to {hi}")
+#: processes for synth: more than the jobs are not started anyway
+MAX_WORKERS = 1024
 
 
 def check_folder_name(value: str | None, flag: str) -> None:
@@ -47,23 +44,32 @@ def check_folder_name(value: str | None, flag: str) -> None:
 
 
 def configure_synth(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--subjects", type=int, default=5, help="number of subjects (5)")
-    parser.add_argument("--reps", type=int, default=40, help="repetitions per gesture (40)")
+    parser.add_argument(
+        "--subjects", type=positive_int(MAX_SUBJECTS), default=5, help="number of subjects (5)"
+    )
+    parser.add_argument(
+        "--reps", type=positive_int(MAX_REPS), default=40, help="repetitions per gesture (40)"
+    )
     parser.add_argument("--out", required=True, type=Path, help="dataset folder to create")
-    parser.add_argument("--seed", type=int, default=0, help="seed (same seed, same dataset)")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    parser.add_argument("--seed", type=seed(), default=0, help="seed (same seed, same dataset)")
+    parser.add_argument(
+        "--workers",
+        type=positive_int(MAX_WORKERS),
+        default=None,
+        help="processes (default: cores)",
+    )
     parser.add_argument(
         "--gestures", default=None, help="comma-separated subset of: " + ", ".join(GESTURES)
     )
     parser.add_argument(
         "--static-frames",
-        type=int,
+        type=integer(2, MAX_FRAMES),
         default=None,
         help="frames per static sample (6; a gesture is decided from its first 2 to 6)",
     )
     parser.add_argument(
         "--dynamic-frames",
-        type=int,
+        type=integer(2, MAX_FRAMES),
         default=None,
         help="frames per dynamic sample (8)",
     )
@@ -79,13 +85,13 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--left-handed",
-        type=int,
+        type=integer(0, MAX_SUBJECTS),
         default=1,
         help="how many subjects (the last ones) use their left hand (1)",
     )
     parser.add_argument(
         "--exposure-ms",
-        type=float,
+        type=finite_float(0, 1000, unit="ms"),
         default=0.0,
         help="motion blur: shutter time in ms (0 = sharp; a 60 fps camera allows up to 16.7)",
     )
@@ -96,11 +102,14 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         "per subject and session",
     )
     parser.add_argument(
-        "--sessions", type=int, default=2, help="with --vary: sessions per subject (2)"
+        "--sessions",
+        type=positive_int(MAX_REPS),
+        default=2,
+        help="with --vary: sessions per subject (2)",
     )
     parser.add_argument(
         "--light-scale",
-        type=float,
+        type=finite_float(0.1, 3.0),
         default=1.0,
         help="multiply every sample's IR light (the same performances under another light; "
         "0.1 to 3, default 1)",
@@ -112,11 +121,6 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
 def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
     from .jobs import synth_atomic
     from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, synth
-
-    check_count(args.subjects, "--subjects", 1, MAX_SUBJECTS)
-    check_count(args.reps, "--reps", 1, MAX_REPS)
-    check_count(args.static_frames, "--static-frames", 2, MAX_FRAMES)
-    check_count(args.dynamic_frames, "--dynamic-frames", 1, MAX_FRAMES)
 
     gestures = GESTURES
     if args.gestures:
@@ -169,7 +173,10 @@ def configure_record(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--subject", required=True, help="subject name, e.g. s1")
     parser.add_argument("--out", required=True, type=Path, help="dataset folder")
     parser.add_argument(
-        "--frames", type=int, default=None, help="frames to record (static 3, dynamic 8)"
+        "--frames",
+        type=positive_int(MAX_FRAMES),
+        default=None,
+        help="frames to record (static 3, dynamic 8)",
     )
     parser.add_argument("--hand", choices=("right", "left"), default="right")
     parser.add_argument("--name", default=None, help="sample folder name (default subject_NNN)")
@@ -194,7 +201,6 @@ def open_camera(ctx: Any, driver: str | None = None) -> Any:
 def run_record(args: argparse.Namespace, ctx: Any) -> int:
     from .synth import capture_background, record
 
-    check_count(args.frames, "--frames", 1, MAX_FRAMES)
     check_folder_name(args.subject, "--subject")
     check_folder_name(args.name, "--name")
 

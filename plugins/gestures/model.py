@@ -174,10 +174,15 @@ def inner_splitter(y: np.ndarray, groups: np.ndarray | None, folds: int, seed: i
     no split is possible."""
     from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
-    _, counts = np.unique(y, return_counts=True)
+    classes, counts = np.unique(y, return_counts=True)
     if groups is not None and len(np.unique(groups)) >= 2:
-        k = int(min(folds, len(np.unique(groups))))
-        return StratifiedGroupKFold(k, shuffle=True, random_state=seed)
+        # a gesture only one subject performed would be missing from a fold's training
+        # side: by group only when every gesture has at least 2 subjects
+        g = np.asarray(groups)
+        per_class = min(len(np.unique(g[y == c])) for c in classes)
+        k = int(min(folds, len(np.unique(g)), per_class))
+        if k >= 2:
+            return StratifiedGroupKFold(k, shuffle=True, random_state=seed)
     k = int(min(folds, counts.min()))
     return _Ungrouped(StratifiedKFold(k, shuffle=True, random_state=seed)) if k >= 2 else None
 
@@ -209,10 +214,11 @@ def fit_svm(
     if len(classes) < 2:
         return _Constant(str(classes[0])) if len(classes) else None
     cv = inner_splitter(y, groups, inner_folds, seed)
-    if cv is None:
-        pipe = make_pipeline(seed)
-        return pipe.fit(x, y)
-    grid = GridSearchCV(make_pipeline(seed), SVC_GRID, cv=list(cv.split(x, y, groups)), n_jobs=1)
+    folds = [] if cv is None else list(cv.split(x, y, groups))
+    # every training side needs two classes, or each of its fits fails
+    if not folds or any(len(np.unique(y[tr])) < 2 for tr, _ in folds):
+        return make_pipeline(seed).fit(x, y)
+    grid = GridSearchCV(make_pipeline(seed), SVC_GRID, cv=folds, n_jobs=1)
     grid.fit(x, y)
     return grid.best_estimator_
 

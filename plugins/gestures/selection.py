@@ -70,7 +70,10 @@ def select_settings(
     groups = fs.subjects[idx]
     splitter = inner_splitter(labels, groups, INNER_FOLDS, seed)
     if splitter is None:
-        raise UserError("model selection: every gesture needs at least 2 training samples")
+        raise UserError(
+            "model selection: a gesture has fewer than 2 training samples to choose the "
+            "harmonics and frames on; give --harmonics and --frames, or record more samples"
+        )
     correct = {c: 0 for c in grid}
     for tr, te in splitter.split(idx, labels, groups):
         step(None, cancelled, 0, "model selection")

@@ -29,10 +29,13 @@ def haptable_register_projectors(register) -> None:
 
 @hookimpl
 def haptable_profile_sections(register) -> None:
-    from plugins.projector.settings import FIELDS
+    from plugins.projector.settings import FIELDS, check_profile
 
     register(
-        "projector", FIELDS, help="the projector process, its link, calibration and scene layout"
+        "projector",
+        FIELDS,
+        help="the projector process, its link, calibration and scene layout",
+        check=check_profile,
     )
 
 

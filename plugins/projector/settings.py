@@ -2,11 +2,43 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
-from console.schema import Field
+from console.errors import UserError
+from console.runtime.projector.protocol import MAX_SOCKET_PATH
+from console.schema import Field, path_problem
 from plugins.projector.layout import DEFAULT_CITIES, DEFAULT_FLOW_PAIRS, DEFAULT_HAND_REGIONS
+
+
+def pair_problem(spec: str) -> str | None:
+    """What is wrong with a ``name:active:passive`` flow pair (ids checked against the
+    grid by ``check_profile``), or None."""
+    parts = spec.split(":")
+    if len(parts) != 3 or not parts[0] or not all(p.strip().isdigit() for p in parts[1:]):
+        return "is not 'name:active:passive' with two point ids (e.g. \"F:51:52\")"
+    if int(parts[1]) < 1 or int(parts[2]) < 1:
+        return "names point 0; point ids start at 1"
+    if int(parts[1]) == int(parts[2]):
+        return "names one point twice; a flow goes between two points"
+    return None
+
+
+def region_problem(spec: str) -> str | None:
+    """What is wrong with a ``name:x_mm:y_mm:left|right`` hand region, or None."""
+    parts = spec.split(":")
+    try:
+        ok = len(parts) == 4 and bool(parts[0]) and parts[3] in ("left", "right")
+        xy = (float(parts[1]), float(parts[2])) if ok else ()
+    except ValueError:
+        ok = False
+    if not ok:
+        return "is not 'name:x_mm:y_mm:left|right' (e.g. \"R1:170:140:left\")"
+    if not all(math.isfinite(v) for v in xy):
+        return "has a position that is not a finite number of mm"
+    return None
+
 
 FIELDS: dict[str, Field] = {
     "driver": Field("str", "moderngl", help="the registered projector the console starts"),
@@ -14,7 +46,10 @@ FIELDS: dict[str, Field] = {
     "width_px": Field("int", 1280, min=16, max=16384, help="projector frame width (Asus B1M: 1280)"),
     "height_px": Field("int", 800, min=16, max=16384, help="projector frame height (Asus B1M: 800)"),
     "fps": Field("float", 60.0, min=1, max=240, help="headless render rate (a window follows the display)"),
-    "socket_path": Field("str", "", help="Unix socket of the link; empty = per-user runtime folder"),
+    "socket_path": Field(
+        "str", "", max_bytes=MAX_SOCKET_PATH, check=path_problem,
+        help="Unix socket of the link; empty = per-user runtime folder",
+    ),
     "calibration_path": Field(
         "path", "", must_exist=False,
         help="projector calibration JSON; empty = projector.json in the profile's state directory",
@@ -30,8 +65,14 @@ FIELDS: dict[str, Field] = {
     "touch_cal_rows": Field("int", 3, min=1, max=20),
     "touch_cal_columns": Field("int", 4, min=1, max=30),
     "touch_cal_margin_mm": Field("float", 60.0, min=0, max=300, help="targets' distance from the glass edge"),
-    "flow_pairs": Field("strs", DEFAULT_FLOW_PAIRS, min_length=1, help="Fig. 10a pairs 'name:active:passive'"),
-    "hand_regions": Field("strs", DEFAULT_HAND_REGIONS, min_length=1, help="Fig. 12a regions 'name:x_mm:y_mm:left|right'"),
+    "flow_pairs": Field(
+        "strs", DEFAULT_FLOW_PAIRS, min_length=1, check=pair_problem,
+        help="Fig. 10a pairs 'name:active:passive' (grid point ids)",
+    ),
+    "hand_regions": Field(
+        "strs", DEFAULT_HAND_REGIONS, min_length=1, check=region_problem,
+        help="Fig. 12a regions 'name:x_mm:y_mm:left|right'",
+    ),
     "hand_region_mm": Field("float", 120.0, min=30, max=400, help="side of the square under the hand"),
     "knob_center_mm": Field("floats", [520.0, 224.0], length=2, min=0),
     "knob_radius_mm": Field("float", 80.0, min=10, max=300),
@@ -40,6 +81,29 @@ FIELDS: dict[str, Field] = {
 }  # fmt: skip
 
 DEFAULTS = {k: f.default for k, f in FIELDS.items()}
+
+
+def check_profile(profile: Any) -> None:
+    """What one key cannot see: flow pairs on the profile's grid, hand regions and the
+    knob on its glass (``register(..., check=)``: at profile load)."""
+    from plugins.projector import layout
+
+    pairs = list(profile.get("projector.flow_pairs") or [])
+    layout.parse_pairs(pairs, len(layout.grid_points_mm(profile)))
+    w, h = layout.table_mm(profile)
+    on_glass = f"inside the glass (0..{w:g} x 0..{h:g} mm)"
+    for spec, (x, y, _hand) in zip(
+        profile.get("projector.hand_regions") or [],
+        layout.parse_regions(list(profile.get("projector.hand_regions") or [])).values(),
+        strict=False,
+    ):
+        if not (0 <= x <= w and 0 <= y <= h):
+            raise UserError(f"[projector] hand_regions: {spec!r} is not {on_glass}; move it")
+    cx, cy = profile.get("projector.knob_center_mm") or (0.0, 0.0)
+    if not (0 <= cx <= w and 0 <= cy <= h):
+        raise UserError(
+            f"[projector] knob_center_mm = [{cx:g}, {cy:g}]: not {on_glass}; move the knob"
+        )
 
 
 def calibration_path_for(profile: Any) -> Path | None:

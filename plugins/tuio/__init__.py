@@ -18,14 +18,17 @@ import json
 import time
 from typing import Any
 
+from console.errors import UserError
 from console.hookspecs import hookimpl
-from console.schema import Field
+from console.options import host_name, seconds
+from console.options import port as udp_port
+from console.schema import Field, check
 
 GESTURE_ADDRESS = "/haptable/gesture"
 
 FIELDS = {
     "enabled": Field("bool", False, help="send TUIO 1.1 (contacts, hands, gestures) over UDP"),
-    "host": Field("str", "127.0.0.1", help="where the TUIO client listens"),
+    "host": Field("host", "127.0.0.1", help="where the TUIO client listens"),
     "port": Field("int", 3333, min=1, max=65535, help="its UDP port (TUIO default 3333)"),
     "source": Field("str", "haptable", help="source name in the TUIO 1.1 source message"),
 }
@@ -43,16 +46,30 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
         return None
     from .sender import TuioSender
 
-    return TuioSender(
-        host or profile.get("tuio.host") or "127.0.0.1",
-        int(port or profile.get("tuio.port") or 3333),
-        table_mm=(float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))),
-        image_px=(
-            int(profile.get("camera.width_px", 640)),
-            int(profile.get("camera.height_px", 480)),
-        ),
-        source=profile.get("tuio.source") or "haptable",
-    )
+    host = (profile.get("tuio.host") or "127.0.0.1") if host is None else host
+    port = int(profile.get("tuio.port") or 3333) if port is None else port
+    ok, _ = check(FIELDS["host"], host)
+    if not ok or not check(FIELDS["port"], port)[0]:
+        raise UserError(
+            f"TUIO target {host!r}:{port}: give a host name or IP address and a port from 1 "
+            "to 65535 (--host/--port or [tuio] host/port)"
+        )
+    try:
+        return TuioSender(
+            host,
+            port,
+            table_mm=(float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))),
+            image_px=(
+                int(profile.get("camera.width_px", 640)),
+                int(profile.get("camera.height_px", 480)),
+            ),
+            source=profile.get("tuio.source") or "haptable",
+        )
+    except OSError as exc:  # the name resolves to nothing, or no socket for its family
+        raise UserError(
+            f"TUIO host {host!r}: cannot send there ({exc.strerror or exc}); give a host name "
+            "this computer resolves or an IP address (--host or [tuio] host)"
+        ) from None
 
 
 class SenderFactory:
@@ -75,18 +92,23 @@ def haptable_register_frame_sinks(register) -> None:
 
 
 def configure(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--host", default=None, help="TUIO client host (default: profile)")
-    p.add_argument("--port", type=int, default=None, help="TUIO client port (default: profile)")
-    p.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: Ctrl-C)")
+    p.add_argument(
+        "--host", type=host_name, default=None, help="TUIO client host (default: profile)"
+    )
+    p.add_argument(
+        "--port", type=udp_port(), default=None, help="TUIO client port (default: profile)"
+    )
+    p.add_argument(
+        "--seconds",
+        type=seconds(zero="until Ctrl-C"),
+        default=0.0,
+        help="stop after this long (0: Ctrl-C)",
+    )
     p.add_argument("--json", action="store_true", help="print a summary as JSON at the end")
 
 
 def run(args, ctx) -> int:
-    from console.cli import seconds_option
-    from console.errors import UserError
     from console.runtime.stages import open_camera, vision_loop
-
-    seconds_option(args.seconds, "--seconds")
 
     sender = make_sender(ctx.profile, host=args.host, port=args.port, force=True)
     camera = open_camera(ctx.profile, ctx.pm)

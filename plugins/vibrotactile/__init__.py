@@ -194,6 +194,12 @@ def _sections() -> dict:
     }
 
 
+def field(section: str, key: str) -> Field:
+    """The declared field of ``[section] key`` (a command-line option overriding the key
+    takes its range: ``console.options.from_field``)."""
+    return _sections()[section][0][key]
+
+
 @hookimpl
 def haptable_profile_sections(register) -> None:
     for name, (fields, help_) in _sections().items():

@@ -11,6 +11,14 @@ from pathlib import Path
 import numpy as np
 
 from console.errors import UserError
+from console.options import finite_float, from_field
+
+
+def _key(name: str, unit: str = ""):
+    """The option type of one overriding ``[vibrotactile] name``: the key's range."""
+    from plugins.vibrotactile import field
+
+    return from_field(field("vibrotactile", name), unit=unit)
 
 
 # ---------------------------------------------------------------------- helpers
@@ -69,6 +77,9 @@ def cache_dir_of(args, ctx) -> Path | None:
         return None
     return Path(raw).expanduser() if raw else default_cache_dir()
 
+
+#: an amplifier gain (generator volts -> piezo volts; PI E413.D2: 50)
+GAIN = finite_float(1e-6, 1e6, note="the amplifier's gain, e.g. 50")
 
 #: the map argument naming the profile's measured map (HapTable's one cache)
 MEASURED = "measured"
@@ -243,14 +254,14 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     )
     i.add_argument(
         "--gain",
-        type=float,
+        type=GAIN,
         default=None,
         help="amplifier gain: the UFF reference is generator volts (default: the gain a "
         "HapTable export stored, else profile amplifiers.piezo_gain)",
     )
     i.add_argument(
         "--mask-below-hz",
-        type=float,
+        type=_key("mask_below_hz", "Hz"),
         default=None,
         help="mask bins below (default: a HapTable export's mask, else profile)",
     )
@@ -263,7 +274,7 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     )
     i.add_argument(
         "--sensitivity-n-per-v",
-        type=float,
+        type=finite_float(1e-9, 1e9, unit="N/V"),
         default=None,
         help="with --reference force: newtons of that force per generator volt",
     )
@@ -283,7 +294,7 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
     )
     e.add_argument(
         "--gain",
-        type=float,
+        type=GAIN,
         default=1.0,
         help="amplifier gain: write per generator volt = map x gain (1: per piezo volt); "
         "stored in the files, so import reads it back",
@@ -330,15 +341,6 @@ def run_frf(args, ctx) -> int:
                     raise UserError(f"--ref-node {item!r}: write EXC=NODE, e.g. PA=1") from None
         g = ctx.profile.section("grid")
         grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
-        finite("--gain", args.gain, 1e-6, 1e6, "the amplifier gain must be > 0 (PI E413.D2: 50)")
-        finite("--mask-below-hz", args.mask_below_hz, 0, 1e5, "give 0 or more Hz (default 5)")
-        finite(
-            "--sensitivity-n-per-v",
-            args.sensitivity_n_per_v,
-            1e-9,
-            1e9,
-            "give the newtons per generator volt (> 0)",
-        )
         m = import_uff(
             files,
             gain=args.gain,
@@ -437,17 +439,23 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
     b.add_argument("map", help=MAP_HELP)
     b.add_argument("--out", required=True)
     b.add_argument(
-        "--band-hz", type=float, default=None, help="usable band (default: profile, 650 Hz)"
+        "--band-hz",
+        type=_key("band_hz", "Hz"),
+        default=None,
+        help="usable band (default: profile, 650 Hz)",
     )
     b.add_argument(
         "--allow-missing", action="store_true", help="build from the excitations present"
     )
     b.add_argument(
-        "--zeta", type=float, default=0.01, help="damping assumed by the resolution check"
+        "--zeta",
+        type=finite_float(0, 1, above=True),
+        default=0.01,
+        help="damping assumed by the resolution check",
     )
     b.add_argument(
         "--min-contrast-db",
-        type=float,
+        type=_key("min_contrast_db", "dB"),
         default=None,
         help="contrast-aware ranking: an entry needs active/passive >= this many dB (largest "
         "difference among those; best contrast where none reaches it). Default: profile "
@@ -483,7 +491,6 @@ def run_tables(args, ctx) -> int:
         nyq = sample_rate(ctx) / 2
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
         c, per = table_rule_of(ctx, args)
-        finite("--min-contrast-db", c, 0, 200, "give 0 (the paper's rule) or more dB")
         m = load_map(map_source(args.map, ctx), require_all=not args.allow_missing)
         t0 = time.perf_counter()
         t = build_tables(
@@ -559,7 +566,10 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
         "--direction", choices=("left", "right", "up", "down"), help="flow direction under the hand"
     )
     p.add_argument(
-        "--hand-mm", type=float, default=None, help="hand area side (default: profile, 120 mm)"
+        "--hand-mm",
+        type=_key("hand_mm", "mm"),
+        default=None,
+        help="hand area side (default: profile, 120 mm)",
     )
     p.add_argument(
         "--exhaustive",
@@ -568,7 +578,7 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--min-contrast-db",
-        type=float,
+        type=_key("min_contrast_db", "dB"),
         default=None,
         help="from a map: the paper's tables with this contrast floor (default: profile; "
         "0 = the paper's rule without floor)",
@@ -576,7 +586,7 @@ def configure_flow(p: argparse.ArgumentParser) -> None:
     add_rule_option(p)
     p.add_argument(
         "--ringdown-k",
-        type=float,
+        type=_key("ringdown_gap_k"),
         default=None,
         help="silence between the parts >= k decay times of part 1's mode (default: "
         "profile [vibrotactile] ringdown_gap_k; 0 = relay gap only)",
@@ -594,7 +604,6 @@ def with_ringdown(st, args):
     k = getattr(args, "ringdown_k", None)
     if k is None:
         return st
-    finite("--ringdown-k", k, 0, 1e3, "give 0 (off) or a positive number of decay times")
     return replace(st, ringdown_gap_k=float(k))
 
 
@@ -641,7 +650,6 @@ def hand_plan(args, ctx, lim):
         raise UserError(f"--hand {args.hand!r}: give the hand centre as x,y in mm") from None
     if not (np.isfinite(cx) and np.isfinite(cy)):
         raise UserError(f"--hand {args.hand!r}: x and y must be finite numbers in mm")
-    finite("--hand-mm", args.hand_mm, 1, 1e4, "give the hand's square side in mm (e.g. 120)")
     setup = replace(
         setup_from_profile(ctx.profile),
         cache_dir=cache_dir_of(args, ctx),
@@ -649,7 +657,6 @@ def hand_plan(args, ctx, lim):
         piezo_max_v=lim["piezo_max_v"],
     )
     k = getattr(args, "ringdown_k", None)
-    with_ringdown(setup.settings, args)  # validates --ringdown-k
     plan = HandFlowEffect(ctx.profile, setup).render(
         (cx, cy),
         args.direction,

@@ -45,6 +45,8 @@ from console.types import EXCITATIONS
 from console.vibration_map import VibrationMap, make_map
 
 ORD_TYPES = {8: "displacement", 11: "velocity", 12: "acceleration"}
+#: the fewest frequency lines an imported FRF may have (a table picks among them)
+MIN_BINS = 8
 #: the import's default excitation of each reference node (one file for all excitations)
 REF_NODES = {"PA": 1, "PB": 2, "PC": 3, "PD": 4, "PALL": 5}
 #: denominators read as a voltage: 1 "general" (unit label V), 0 "unknown"
@@ -249,8 +251,12 @@ def _read_set(s: dict, where: str, p: Path, state: dict, opts: dict) -> None:
             raise UserError(
                 f"{where} (node {node}): NaN or inf in the data; re-export or drop that point"
             )
-        if x.size < 2:
-            raise UserError(f"{where} (node {node}): fewer than 2 frequencies; re-export it")
+        if x.size < MIN_BINS:
+            raise UserError(
+                f"{where} (node {node}): {x.size} frequencies; a vibrometer FRF has hundreds "
+                f"of lines and a table needs at least {MIN_BINS} to choose from: export the "
+                "whole spectrum"
+            )
         if x[0] < 0:
             raise UserError(f"{where} (node {node}): negative frequency {x[0]:g} Hz")
         if np.any(np.diff(x) <= 0):
@@ -270,6 +276,14 @@ def _read_set(s: dict, where: str, p: Path, state: dict, opts: dict) -> None:
             raise UserError(
                 f"{where}: node {node} appears twice for reference node {ref}; one FRF per "
                 "point and excitation"
+            )
+        kind = int(s.get("ordinate_spec_data_type", 0))
+        first_kind, first_node = state.setdefault("ordinate", (kind, node))
+        if kind != first_kind and {kind, first_kind} <= set(ORD_TYPES):
+            raise UserError(
+                f"{where} (node {node}): ordinate {ORD_TYPES[kind]} ({kind}), but node "
+                f"{first_node}'s is {ORD_TYPES[first_kind]} ({first_kind}); a file holds one "
+                "kind of FRF: export every point as displacement, velocity or acceleration"
             )
         scale = _denominator(s, where, node, state, opts) / state["length"]
         if rdir == -3:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 
+from console.options import finite_float, positive_int
+
 EDGE_CHOICES = ("ssss", "cccc", "ffff", "profile")
 
 
@@ -20,11 +22,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--aspect",
-        type=float,
+        type=finite_float(0.05, 20),
         default=None,
         help="long/short side ratio (short side = long side / aspect); default: the profile's",
     )
-    p.add_argument("--count", type=int, default=10, help="number of elastic modes (default 10)")
+    p.add_argument(
+        "--count", type=positive_int(1000), default=10, help="number of elastic modes (default 10)"
+    )
     p.add_argument("--json", action="store_true", help="print JSON")
 
 
