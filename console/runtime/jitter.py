@@ -15,14 +15,18 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import threading
 import time
 
 
-def probe(seconds: float, period_s: float, slack_s: float) -> dict:
-    """Wake every ``period_s`` for ``seconds`` on a real-time thread; lateness stats."""
+def probe(
+    seconds: float, period_s: float, slack_s: float, stop: threading.Event | None = None
+) -> dict:
+    """Wake every ``period_s`` for ``seconds`` (or until ``stop``) on a real-time thread;
+    lateness stats."""
     from console.kernel.memory_lock import lock_memory
 
     locked, _ = lock_memory()
@@ -38,7 +42,7 @@ def probe(seconds: float, period_s: float, slack_s: float) -> dict:
             rt.append(False)
         end = time.monotonic() + seconds
         due = time.monotonic()
-        while due < end:
+        while due < end and not (stop is not None and stop.is_set()):
             due += period_s
             w = due - time.monotonic()
             if w > 0:
@@ -88,7 +92,18 @@ def start_probe(seconds: float, period_s: float, slack_s: float) -> subprocess.P
     )
 
 
-def finish_probe(proc: subprocess.Popen, timeout_s: float = 60.0) -> dict:
+def start_probe_beside(audio_status: dict, seconds: float) -> subprocess.Popen:
+    """The probe for ``seconds`` at the period and slack of the running audio output
+    (its ``status()``: block size, sample rate, buffer periods)."""
+    period_s = float(audio_status["block_size"]) / float(audio_status["sample_rate_hz"])
+    periods = int(audio_status.get("buffer_periods") or 2)
+    return start_probe(seconds, period_s, max(1, periods - 1) * period_s)
+
+
+def finish_probe(proc: subprocess.Popen, timeout_s: float = 60.0, *, now: bool = False) -> dict:
+    """The probe's JSON; ``now``: stop it first (it reports the wakes so far)."""
+    if now and proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
     try:
         out, err = proc.communicate(timeout=timeout_s)
     except subprocess.TimeoutExpired:
@@ -101,4 +116,6 @@ def finish_probe(proc: subprocess.Popen, timeout_s: float = 60.0) -> dict:
 
 if __name__ == "__main__":
     secs, period_ms, slack_ms = (float(x) for x in sys.argv[1:4])
-    print(json.dumps(probe(secs, period_ms / 1e3, slack_ms / 1e3)))
+    stopped = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stopped.set())
+    print(json.dumps(probe(secs, period_ms / 1e3, slack_ms / 1e3, stopped)))

@@ -84,6 +84,8 @@ def _profile_with(profile: Any, section: str, **values: Any) -> Any:
 
 def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
     """The flow demo on ``n`` placements; its flows' latencies."""
+    from console.runtime.jitter import finish_probe, start_probe_beside
+
     from .run import start_demo
 
     hold = HOLD_S["after" if atlas else "before"]
@@ -91,10 +93,12 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
     prof = _profile_with(ctx.profile, "demos", flow_atlas=atlas)
     fps = cam.fps
     with ctx.outputs(fast=False) as out:
+        run_s = len(cam.images) / fps + 0.5
+        probe = start_probe_beside(out.status()["audio"], run_s + 2.0)
         with start_demo(
             "flow", prof, ctx.pm, out, camera=cam, script=False, watchdog_ms=1e9
         ) as run_:
-            end = time.monotonic() + len(cam.images) / fps + 0.5
+            end = time.monotonic() + run_s
             while time.monotonic() < end:
                 time.sleep(0.2)
             run_.stop()
@@ -102,6 +106,7 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
             snap = run_.snapshot()
         st = out.status()
         audio, kernel = st["audio"], st["kernel"]
+        jitter = finish_probe(probe)
     flows = [e for e in events if e.get("kind") == "flow"]
     queued = [e["t_scheduled_s"] - e["t_decided_s"] for e in flows if e.get("t_decided_s")]
     output = [
@@ -130,6 +135,8 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "underrun_s": audio.get("underrun_s"),
         "buffer_periods": audio.get("buffer_periods"),
         "kernel_requests": kernel.get("requests"),
+        # the machine's own stalls over the run (a small real-time process beside it)
+        "machine_jitter": jitter,
         "hands_mm": truth,  # where each placement put the hand (the twin's truth)
         "flows_rest_mm": [e.get("rest_mm") for e in flows],  # where the camera saw it rest
         "flows_not_prearmed": not_armed[:10],
