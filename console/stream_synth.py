@@ -40,6 +40,7 @@ import numbers
 import operator
 import reprlib
 import threading
+import time
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -443,6 +444,8 @@ class StreamSynth:
 
         self._lock = threading.Lock()
         self._pending: deque[int] = deque(maxlen=PENDING_MAX)
+        #: crossing id -> when its post arrived (monotonic s), until its pulse is logged
+        self._arrived_s: dict[int, float] = {}
         self._target_hz = spec.start_hz
         self._target_v = 0.0
         self._stop = False
@@ -473,12 +476,23 @@ class StreamSynth:
         s = self.spec
         f = _target(carrier_hz, s.carrier_min_hz, s.carrier_max_hz)
         v = _target(carrier_v, 0.0, s.carrier_max_v)
+        now = time.monotonic()
         with self._lock:
             self._pending.extend(got)
+            for i in got:
+                self._arrived_s.setdefault(i, now)
+            while len(self._arrived_s) > PENDING_MAX:
+                del self._arrived_s[next(iter(self._arrived_s))]
             if f is not None:
                 self._target_hz = f
             if v is not None:
                 self._target_v = v
+
+    def arrival_s(self, crossing: int) -> float:
+        """When crossing ``crossing``'s post arrived (monotonic s; NaN if unknown), once:
+        the audio path reads it when it logs the pulse."""
+        with self._lock:
+            return self._arrived_s.pop(crossing, math.nan)
 
     def request_stop(self) -> None:
         """Ramp down over ``ramp_ms``; then ``next_block`` returns ``None``."""

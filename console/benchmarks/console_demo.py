@@ -149,6 +149,7 @@ async def _scenario(ctx, seconds: float, knob_s: float, flow_s: float) -> dict:
         snap = run.snapshot()
         knob["audio"] = _underruns(first, _audio(snap))
         knob["crossing_to_output_ms"] = (snap.get("knob") or {}).get("crossing_to_output_ms")
+        knob["crossing_in_kernel_ms"] = (snap.get("knob") or {}).get("crossing_in_kernel_ms")
         final = await _stop(app, pilot, run)
         knob["crossings"] = (final.get("final") or {}).get("knob", {}).get("crossings")
         out["knob"] = knob
@@ -232,7 +233,9 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
         k: got["knob"]["audio"][k] + got.get("flow", {}).get("audio", {}).get(k, 0)
         for k in ("underruns", "underruns_audible")
     }
-    cto = got["knob"].get("crossing_to_output_ms") or {}
+    # "within one block": the post's arrival at the outputs process -> its pulse's block
+    # handed to the driver; the wall time from the demo's post adds the socket hop
+    cto = got["knob"].get("crossing_in_kernel_ms") or {}
     return {
         **got,
         "minutes": minutes,
@@ -242,12 +245,12 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
         "goals": {
             "underruns": 0,
             "underruns_audible": 0,
-            "crossing_to_output_p99_ms": block_ms,
+            "crossing_in_kernel_p99_ms": block_ms,
             "loop_p99_ms": 5.0,
         },
         "meets_goals": {
             "underruns": total["underruns"] == 0 and total["underruns_audible"] == 0,
-            "crossing_to_output": bool(cto) and cto.get("p99_ms", 1e9) <= block_ms,
+            "crossing_within_one_block": bool(cto) and cto.get("p99_ms", 1e9) <= block_ms,
         },
         "target_p99_ms": 5.0,
         "worst_screen_p99_processing_ms": max(p99),

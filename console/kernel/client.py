@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 import os
 import queue
 import socket
@@ -87,7 +88,7 @@ class RemoteStream:
         if rep is None or not rep.segment_start:
             return []
         start = rep.segment_start[0]
-        return [(cid, clock - start) for cid, clock, _ in list(rep.detents)]
+        return [(d[0], d[1] - start) for d in list(rep.detents)]
 
     def post(
         self, ids: Any = (), carrier_hz: float | None = None, carrier_v: float | None = None
@@ -345,7 +346,7 @@ class Outputs:
         elif what == "detent":
             seen = {d[0] for d in rep.detents}
             rep.detents.extend(
-                (int(d[0]), int(d[1]), float(d[2]))
+                (int(d[0]), int(d[1]), float(d[2]), float(d[3]) if len(d) > 3 else math.nan)
                 for d in h.get("detents", [])
                 if d[0] not in seen
             )

@@ -52,7 +52,8 @@ class PlayReport:
     owner: int = 0
     on_change: Any = field(default=None, repr=False)
     #: a stream's pulses: (crossing id, gate clock of its first sample, monotonic time)
-    detents: list[tuple[int, int, float]] = field(default_factory=list, repr=False)
+    #: (crossing id, clock of its pulse, when its block was handed, when its post arrived)
+    detents: list[tuple[int, int, float, float]] = field(default_factory=list, repr=False)
 
     def wait(self, timeout_s: float | None = None) -> PlayReport:
         if not self.done.wait(timeout_s):
@@ -546,7 +547,9 @@ class Scheduler(Source):
             new.append((int(cid), start + int(sample) - self._stream_k))
         if new:
             now = time.monotonic()
-            job.report.detents.extend((cid, clock, now) for cid, clock in reversed(new))
+            job.report.detents.extend(
+                (cid, clock, now, synth.arrival_s(cid)) for cid, clock in reversed(new)
+            )
             job.report.changed("detent")
         self._stream_k += k
         st.pos += k

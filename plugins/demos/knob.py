@@ -98,7 +98,15 @@ class KnobDemo:
         rep = self.report
         if rep is None:
             return []
-        return [t - self._posted[cid] for cid, _, t in list(rep.detents) if cid in self._posted]
+        return [d[2] - self._posted[d[0]] for d in list(rep.detents) if d[0] in self._posted]
+
+    def crossing_in_kernel_s(self) -> list[float]:
+        """Per crossing: from its post arriving at the outputs process to the block holding
+        its pulse's first sample handed to the driver (the socket hop left out)."""
+        rep = self.report
+        if rep is None:
+            return []
+        return [d[2] - d[3] for d in list(rep.detents) if len(d) > 3 and d[3] == d[3]]
 
     def scheduled_stage(self, frame: Frame, work: dict) -> None:
         # feed() posted to the stream; its next block (<= one audio block away) plays it

@@ -167,6 +167,7 @@ def demo_state(demo: Any) -> dict:
 
         s = demo.session
         lat = demo.crossing_to_output_s()
+        kern = demo.crossing_in_kernel_s()
         return {
             "knob": {
                 "condition": demo.condition,
@@ -176,6 +177,8 @@ def demo_state(demo: Any) -> dict:
                 "crossings": demo.crossings_total,
                 # post -> the detent's first sample handed to the driver (the last 512)
                 "crossing_to_output_ms": summarize_s(lat) if lat else None,
+                # its post arrived at the outputs process -> that block handed (no socket)
+                "crossing_in_kernel_ms": summarize_s(kern) if kern else None,
             }
         }
     evs = [{k: v for k, v in e.items() if k != "report"} for e in list(demo.events)[-10:]]

@@ -90,7 +90,7 @@ def test_knob_rotation_drives_the_knob_with_the_condition_on_the_screen(
     assert np.abs(live).max() <= 100.0 + 1e-9
     # the constant friction: a 180 Hz, 100 Vpp sine while the fingers touch, between
     # detents (each detent's first sample: the kernel reports it with its gate clock)
-    detents = [clock for _, clock, _ in demo.report.detents]
+    detents = [d[1] for d in demo.report.detents]
     detent_n = int(profile.get("knob.detent_ms") * FS / 1000)
     glide_n = int(profile.get("knob.glide_ms") * FS / 1000)
     from scipy.ndimage import maximum_filter1d
@@ -121,7 +121,11 @@ def test_knob_vf_frequency_rises_with_the_rotation_speed(profile, plugins, outpu
     scr = out.recording()[:, 1]
     on = np.flatnonzero(np.abs(scr) > 40.0)  # the friction at its full 50 V
     win = FS // 50
-    pulses = [clock for _, clock, _ in run.demo.report.detents]
+    pulses = [d[1] for d in run.demo.report.detents]
+    # each pulse says when its crossing's post reached the outputs process, before its
+    # block was handed (what `bench console-demo` reports as crossing_in_kernel_ms)
+    waits = run.demo.crossing_in_kernel_s()
+    assert len(waits) == len(pulses) and all(0.0 <= w < 1.0 for w in waits)
     pulse_n = int(profile.get("knob.detent_ms") * FS / 1000) + 480
     f = [
         zero_crossing_hz(scr[k : k + win])
