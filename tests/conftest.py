@@ -5,6 +5,7 @@ a fresh set of them for each test."""
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from types import SimpleNamespace
@@ -70,9 +71,13 @@ def _pinned_dirs(pinned_root, monkeypatch):
 
 @pytest.fixture(autouse=True)
 def _private_runtime(tmp_path_factory, monkeypatch):
-    run = tmp_path_factory.mktemp("run")
+    """A private runtime dir per test, short whatever pytest's base temp is (sockets in
+    it must fit the 107 bytes of a Unix socket address: pytest's own run counters grow)."""
+    run = Path(tempfile.mkdtemp(prefix="ht-run-", dir="/tmp"))
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(run))
     monkeypatch.setenv("HOME", str(tmp_path_factory.mktemp("home")))
+    yield
+    shutil.rmtree(run, ignore_errors=True)
 
 
 @pytest.fixture
