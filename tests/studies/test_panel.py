@@ -138,8 +138,13 @@ def test_a_person_answers_with_the_keys_and_replays_once(
                 pane.focus()
                 if k == 2:  # one replay allowed in the main phase, a second is refused
                     await pilot.press("r")
-                    await wait_for(
-                        pilot, lambda: pane.last.get("state") == "replay 1", what="replay"
+                    await wait_for(  # the replay, or already its wait for the answer after it
+                        pilot,
+                        lambda: (
+                            pane.last.get("state") == "replay 1"
+                            or "0 replay(s) left" in str(pane.last.get("state"))
+                        ),
+                        what="replay",
                     )
                     await wait_for(pilot, lambda: pane.asking is not None, what="asked again")
                 await pilot.press(key)
