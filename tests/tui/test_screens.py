@@ -178,12 +178,17 @@ def test_vibration_command_line_and_bad_input(plugins, map_file):
             await command(app, pilot, "99")
             await pilot.pause(0.3)
             assert app.session.played == []  # point 99 does not exist: nothing plays
-            await command(app, pilot, "51 52")
-            await wait_for(pilot, lambda: len(app.session.played) == 1)
+            await command(app, pilot, "51 52")  # its tables are built first: minutes loaded
+            await wait_for(pilot, lambda: len(app.session.played) == 1, 120, "flow 51->52")
             assert app.session.played[0].name == "flow 51->52"
             assert pane.selected == [51, 52]
             await command(app, pilot, "import PA")
-            await wait_for(pilot, lambda: "EXC=FILE" in str(app.query_one("#vib-status").render()))
+            await wait_for(
+                pilot,
+                lambda: "EXC=FILE" in str(app.query_one("#vib-status").render()),
+                60,
+                "import",
+            )
 
     asyncio.run(scenario())
 

@@ -120,8 +120,13 @@ class DevicesPane(VerticalScroll):
     def action_doctor(self) -> None:
         from console.runtime.doctor import diagnose
 
-        rows = diagnose(self._profile(), self.app.ctx.pm)
-        from_thread(self.app, self._show, rows)
+        try:
+            app = self.app
+            prof = self._profile()
+        except RuntimeError:  # Textual's NoActiveAppError: the console closed before this ran
+            return
+        rows = diagnose(prof, app.ctx.pm)
+        from_thread(app, self._show, rows)
 
     def _show(self, rows) -> None:
         if not self.query("#device-table"):  # a worker finishing while the console closes
@@ -141,10 +146,14 @@ class DevicesPane(VerticalScroll):
     def action_list_devices(self) -> None:
         from console.runtime.devices import output_devices, relay_boards
 
-        prof, pm = self._profile(), self.app.ctx.pm
+        try:
+            app = self.app
+            prof, pm = self._profile(), app.ctx.pm
+        except RuntimeError:  # Textual's NoActiveAppError: the console closed before this ran
+            return
         audio = output_devices(prof, pm)
         relays = relay_boards(prof, pm)
-        from_thread(self.app, self._show_devices, audio, relays)
+        from_thread(app, self._show_devices, audio, relays)
 
     def _show_devices(self, audio, relays) -> None:
         if not self.query("#audio-table"):  # a worker finishing while the console closes
