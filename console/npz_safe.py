@@ -185,7 +185,7 @@ def read_npz(
     return out
 
 
-def _depth(obj: Any) -> int:
+def json_depth(obj: Any) -> int:
     """Nesting depth of a parsed JSON value (iterative: no recursion limit)."""
     deepest, stack = 0, [(obj, 1)]
     while stack:
@@ -231,7 +231,7 @@ def read_json_text(
         ) from None
     except ValueError as exc:
         raise UserError(f"{where}: key {key!r} is not valid JSON ({exc}); {fix}") from None
-    if _depth(obj) > max_depth:
+    if json_depth(obj) > max_depth:
         raise UserError(f"{where}: key {key!r} nests deeper than {max_depth} levels; {fix}")
     return obj
 

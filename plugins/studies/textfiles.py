@@ -24,6 +24,7 @@ from typing import Any
 
 from console.errors import UserError
 from console.file_read import read_bytes_capped
+from console.npz_safe import json_depth
 
 #: limits of each kind of file (a plan of 100,000 trials is about 40 MB)
 MAX_PROTOCOL_BYTES = 1 * 2**20
@@ -72,16 +73,6 @@ class _Twice(ValueError):
     pass
 
 
-def _depth(obj: Any) -> int:
-    deepest, stack = 0, [(obj, 1)]
-    while stack:
-        o, d = stack.pop()
-        if isinstance(o, (dict, list)):
-            deepest = max(deepest, d)
-            stack.extend((v, d + 1) for v in (o.values() if isinstance(o, dict) else o))
-    return deepest
-
-
 def parse_json(text: str, where: str, fix: str, *, depth: bool = True) -> Any:
     """A JSON value; every way it can fail is one line (``depth``: check the nesting
     limit too; a line of ``trials.jsonl`` is checked key by key instead)."""
@@ -97,7 +88,7 @@ def parse_json(text: str, where: str, fix: str, *, depth: bool = True) -> Any:
         raise UserError(f"{where}: not valid JSON ({exc}); {fix}") from None
     except ValueError as exc:  # an integer beyond the digit limit
         raise UserError(f"{where}: not valid JSON ({str(exc).split(';')[0]}); {fix}") from None
-    if depth and _depth(obj) > MAX_DEPTH:
+    if depth and json_depth(obj) > MAX_DEPTH:
         raise UserError(f"{where}: nested deeper than {MAX_DEPTH} levels; {fix}")
     return obj
 
