@@ -77,3 +77,25 @@ def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
             await wait_for(pilot, lambda: "played point 14" in _status(app), 30, "played")
 
     asyncio.run(scenario())
+
+
+def test_an_error_typed_while_a_point_plays_keeps_the_status_line(plugins, map_file):
+    """The play's end does not write over a newer message: a bad command typed during an
+    audition stays on the line after the audition ends."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("vibration")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            await command(app, pilot, f"load {map_file}")
+            await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
+            await command(app, pilot, "14")
+            await wait_for(pilot, lambda: "playing point 14" in _status(app), what="playing")
+            await command(app, pilot, "import PA")
+            await wait_for(pilot, lambda: "EXC=FILE" in _status(app), 30, "import error")
+            await wait_for(pilot, lambda: pane._now_playing is None, 30, "audition ended")
+            await pilot.pause(0.2)
+            assert "EXC=FILE" in _status(app)
+
+    asyncio.run(scenario())

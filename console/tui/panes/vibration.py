@@ -431,13 +431,16 @@ class VibrationPane(VerticalScroll):
         self._show_on_projector(plan)
 
     def _played(self, plan, played: bool, estopped: bool) -> None:
-        """The status line says how the plan it shows as playing ended."""
+        """The status line says how the plan it shows as playing ended, unless a newer
+        message took the line (a play that failed says why in its notice too)."""
         if plan is not self._now_playing:
             return
         if estopped and not played:  # a play that ended before the e-stop says so
             self._estopped(plan, "")
             return
         self._now_playing = None
+        if not self.status_text.startswith(f"playing {plan.name}:"):
+            return  # a newer message (an error typed meanwhile) keeps the line
         if played:
             self.status(f"played {plan.name}: {describe_plan(plan)}")
         else:
