@@ -113,6 +113,7 @@ def _audio(snap: dict) -> dict:
         "underruns": int(a.get("underruns") or 0),
         "underruns_audible": int(a.get("underruns_audible") or 0),
         "by_cause": dict(a.get("underruns_by_cause") or {}),
+        "by_origin": dict(a.get("underruns_by_origin") or {}),
         "blocks": int(a.get("blocks") or 0),
     }
 
@@ -120,10 +121,15 @@ def _audio(snap: dict) -> dict:
 def _underruns(before: dict, after: dict) -> dict:
     """What the kernel's DAC counted between two snapshots."""
     causes = set(before["by_cause"]) | set(after["by_cause"])
+    origins = set(before["by_origin"]) | set(after["by_origin"])
     return {
         "underruns": after["underruns"] - before["underruns"],
         "underruns_audible": after["underruns_audible"] - before["underruns_audible"],
         "by_cause": {c: after["by_cause"].get(c, 0) - before["by_cause"].get(c, 0) for c in causes},
+        # where the late thread's time went (console.stall_witness)
+        "by_origin": {
+            o: after["by_origin"].get(o, 0) - before["by_origin"].get(o, 0) for o in origins
+        },
         "blocks": after["blocks"] - before["blocks"],
     }
 

@@ -131,6 +131,7 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "processing": snap["latency"]["processing"],
         "underruns": audio.get("underruns"),
         "underruns_by_cause": audio.get("underruns_by_cause"),
+        "underruns_by_origin": audio.get("underruns_by_origin"),
         "underruns_audible": audio.get("underruns_audible"),
         "underrun_s": audio.get("underrun_s"),
         "buffer_periods": audio.get("buffer_periods"),

@@ -56,6 +56,7 @@ from console.channels import ChannelLayout
 from console.contracts import BlockSource
 from console.realtime import realtime_priority
 from console.safety.limits import Limits
+from console.stall_witness import ORIGINS, StallWitness
 from console.types import PATCHES
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
@@ -132,6 +133,7 @@ class Underrun:
     ramped: bool  # longer than the hold, with signal held: ramped toward 0 V
     cause: str  # one of ``UNDERRUN_CAUSES``
     audible: bool  # it cut into sound (the block before it was not silent)
+    origin: str = "unknown"  # where the time went: one of ``stall_witness.ORIGINS``
 
 
 @dataclass
@@ -144,6 +146,7 @@ class _Gap:
     step: np.ndarray
     cause: str
     audible: bool
+    origin: str = "unknown"
 
 
 def _slew_follow(x: np.ndarray, y0: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -243,6 +246,9 @@ class TwinAudioOutput:
         self.underrun_s = 0.0  # gap the DAC played while the buffer was empty
         self.underruns_audible = 0  # ... of them, cutting into output (the last block not silent)
         self.underruns_by_cause: dict[str, int] = dict.fromkeys(UNDERRUN_CAUSES, 0)
+        #: ... and by where the late thread's time went (``console.stall_witness``)
+        self.underruns_by_origin: dict[str, int] = dict.fromkeys(ORIGINS, 0)
+        self._witness: StallWitness | None = None  # the paced driver thread's own
         self.underrun_log: deque[Underrun] = deque(maxlen=10_000)
         self._last_block_sounded = False
         self.blocks = 0
@@ -322,10 +328,12 @@ class TwinAudioOutput:
             "underrun_s": round(self.underrun_s, 4),
             "underruns_audible": self.underruns_audible,
             "underruns_by_cause": dict(self.underruns_by_cause),
+            "underruns_by_origin": dict(self.underruns_by_origin),
             "underrun_hold_s": self.hold_samples / self.sample_rate_hz,
             # the last few gaps: when (the gate's clock), how long, why, heard or not
             "underrun_last": [
-                [g.clock, g.samples, g.cause, g.audible] for g in list(self.underrun_log)[-8:]
+                [g.clock, g.samples, g.cause, g.audible, g.origin]
+                for g in list(self.underrun_log)[-8:]
             ],
             "blocks": self.blocks,
             # the gate's fill per block, as this driver timed it (the last 4096 blocks)
@@ -478,13 +486,16 @@ class TwinAudioOutput:
         self._last_fill_s = clock() - t0
         self.callback_s.append(self._last_fill_s)
 
-    def _begin_gap(self, t_out: float) -> _Gap:
+    def _begin_gap(self, t_out: float, origin: str = "unknown") -> _Gap:
         """The DAC ran out at ``t_out``: it holds the last sample (caller holds the lock)."""
         cause = "slow_fill" if self._last_fill_s > self.slack_s else "late_wakeup"
-        g = _Gap(self._written, t_out, self._last(), self._step, cause, self._last_block_sounded)
+        g = _Gap(
+            self._written, t_out, self._last(), self._step, cause, self._last_block_sounded, origin
+        )
         self._gap = g
         self.underruns += 1
         self.underruns_by_cause[cause] = self.underruns_by_cause.get(cause, 0) + 1
+        self.underruns_by_origin[origin] = self.underruns_by_origin.get(origin, 0) + 1
         self.underruns_audible += g.audible
         self._t0, self._s0 = None, self._written  # re-prime, then restart
         return g
@@ -512,6 +523,7 @@ class TwinAudioOutput:
                 ramped=n > self.hold_samples and bool(np.any(g.level != 0)),
                 cause=g.cause,
                 audible=g.audible,
+                origin=g.origin,
             )
         )
 
@@ -523,6 +535,15 @@ class TwinAudioOutput:
             # Python hands it over only every switch interval (5 ms by default)
             if sys.getswitchinterval() > self.slack_s / 2:
                 sys.setswitchinterval(self.slack_s / 2)
+            self._witness = StallWitness()
+        try:
+            self._loop(src)
+        finally:
+            if self._witness is not None:
+                self._witness.close()
+                self._witness = None
+
+    def _loop(self, src: BlockSource) -> None:
         while not self._stop.is_set():
             if not self.paced:
                 if src.idle:
@@ -547,13 +568,22 @@ class TwinAudioOutput:
                 self._store(out)
             return 0.0
         gap = None
+        witness = self._witness
+        if witness is not None and threading.current_thread() is not self._thread:
+            witness = None  # (a test stepping the driver: the witness is the thread's)
+
+        def origin() -> str:
+            return witness.why(self.slack_s) if witness is not None else "unknown"
+
         with self._lock:
             if self._t0 is not None:
                 due = self._s0 + (now - self._t0) * fs
                 if due > self._written:  # the DAC ran out: it holds, then ramps to 0 V
-                    gap = self._begin_gap(self._t0 + (self._written - self._s0) / fs)
+                    gap = self._begin_gap(self._t0 + (self._written - self._s0) / fs, origin())
             played = self._played(now)
             room = (played // bs) * bs + self.buffer_periods * bs - self._written
+        if witness is not None:  # the next cycle's lateness is judged from here
+            witness.note()
         if gap is not None:  # the slew step for the relays now (outside the lock)
             step = self._source_steps()
             with self._lock:

@@ -273,3 +273,39 @@ def test_a_stopped_output_leaves_the_relays_to_the_live_one_of_the_same_profile(
         assert first.status()["audio"]["blocks"] * BS >= report.segment_end[0]
     finally:
         first.close()
+
+
+def test_an_underrun_says_where_the_late_thread_s_time_went(profile):
+    """The paced thread's fill waits 60 ms on a lock another thread holds (as it would for
+    the interpreter lock): the underrun is counted with origin ``process`` (``host`` if
+    the hypervisor happened to take the machine's CPUs then), never ``unknown`` on Linux."""
+    import threading
+    import time
+    from pathlib import Path
+
+    out = TwinAudioOutput(profile, buffer_periods=3, record_s=1.0)
+    out.paced = True
+    held = threading.Lock()
+    src = Counter()
+    plain_fill = src.fill
+
+    def fill(block):
+        with held:  # another thread has it for a while once
+            plain_fill(block)
+
+    src.fill = fill
+    out.start(src)
+    try:
+        time.sleep(0.1)
+        with held:
+            time.sleep(0.06)
+        time.sleep(0.1)
+    finally:
+        out.stop()
+    st = out.status()
+    assert st["underruns"] >= 1
+    assert sum(st["underruns_by_origin"].values()) == st["underruns"]
+    if Path("/proc/thread-self/schedstat").exists():
+        assert st["underruns_by_origin"]["unknown"] == 0
+        assert st["underruns_by_origin"]["process"] + st["underruns_by_origin"]["host"] >= 1
+        assert st["underrun_last"][-1][4] in ("process", "host", "scheduler")
