@@ -190,11 +190,12 @@ def recording(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Re
 
     if not isinstance(k.audio, SimulatedAudio):
         return {"ok": True, "recording": False}
+    since = max(0, _int(h, "since", 0))
     if h.get("as_played") is True and hasattr(k.audio, "dac_output_card"):
-        rec = k.audio.dac_output_card()  # underrun gaps inserted: not clock-indexed
+        rec = k.audio.dac_output_card()[since:]  # underrun gaps inserted: not clock-indexed
     else:
-        rec = k.audio.recording_card()
-    return {"ok": True, "recording": True, "_arrays": [rec[max(0, _int(h, "since", 0)) :]]}
+        rec = k.audio.recording_card(since=since)  # only the rows asked for are copied
+    return {"ok": True, "recording": True, "_arrays": [rec]}
 
 
 def relay_log(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:

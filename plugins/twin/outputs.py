@@ -601,15 +601,41 @@ class TwinAudioOutput:
         return max(1e-6, self._t0 + ((played // bs + 1) * bs - self._s0) / fs - now)
 
     # twin extras
-    def recording_card(self) -> np.ndarray:
+    def recording_card(self, since: int = 0) -> np.ndarray:
         """Everything played (the last ``record_s``), (n, channels) in sound-card units
         (a column per ``[audio] channels`` name); row k is
-        clock ``k`` unless the ring wrapped (then the oldest kept sample comes first)."""
+        clock ``k`` unless the ring wrapped (then the oldest kept sample comes first).
+        ``since``: only the rows from that one on (what a reader polling for new samples
+        has not seen yet)."""
+        return self._snapshot(since)[1]
+
+    def _snapshot(self, since: int = 0) -> tuple[int, np.ndarray]:
+        """(clock of the first row, rows ``since`` on) of the ring, copied without holding
+        the driver thread: the bulk in chunks outside the lock (a 120 s recording is
+        ~100 MB: copied under the lock, or in one call that keeps the interpreter, it
+        would starve the DAC), then under the lock the last blocks, which an e-stop or an
+        underrun may still rewrite, and the check that the ring did not overwrite the
+        oldest rows meanwhile (those are dropped)."""
         with self._lock:
-            a, b = self._kept_from, self._written
-            if b <= a:
-                return np.zeros((0, len(self.channels)), np.float32)
-            return self._ring_read(a, b)
+            a, b = self._kept_from + max(0, since), self._written
+        if b <= a:
+            return a, np.zeros((0, len(self.channels)), np.float32)
+        tail = (self.buffer_periods + 1) * self.block_size
+        mid = max(a, b - tail)
+        out = np.empty((b - a, len(self.channels)), np.float32)
+        chunk = self.sample_rate_hz // 4  # a quarter second: ~100 us to copy
+        for c in range(a, mid, chunk):
+            e = min(mid, c + chunk)
+            out[c - a : e - a] = self._ring_view(c, e)
+        with self._lock:
+            out[mid - a :] = self._ring_read(mid, b)
+            lost = self._kept_from - a  # the ring wrapped over them during the copy
+        return (a, out) if lost <= 0 else (a + lost, out[lost:])
+
+    def _ring_view(self, a: int, b: int) -> np.ndarray:
+        """Clocks ``a..b`` of the ring as stored (no lock; the two pieces when it wraps)."""
+        i, j = a % self._cap, b % self._cap
+        return self._rec[i:j] if i < j else np.concatenate([self._rec[i:], self._rec[:j]])
 
     def recording_v(self) -> np.ndarray:
         """Everything played, (n, channels) in volts at the piezo patches / screen."""
@@ -619,12 +645,10 @@ class TwinAudioOutput:
         """What the amplifiers got in real time, (n, channels) volts: the recording with
         every logged underrun's gap (the held sample, then the ramp to 0 V) inserted where
         it fell. Not indexed by the gate's clock (use ``recording_v`` for that)."""
+        a, card = self._snapshot()
         with self._lock:
-            a = self._kept_from
-            card = self._ring_read(a, self._written) if self._written > a else None
             gaps = [g for g in self.underrun_log if g.clock >= a]
-        n_ch = len(self.channels)
-        rec = np.zeros((0, n_ch)) if card is None else card.astype(np.float64) * self._to_v
+        rec = card.astype(np.float64) * self._to_v
         parts, i = [], 0
         for g in gaps:
             j = g.clock - a

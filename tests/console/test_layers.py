@@ -38,6 +38,7 @@ LAYER_OF: dict[str, str] = {
     "console.vibration_map": "types",
     "console.options": "types",
     "console.realtime": "types",  # the OS scheduling calls, for the gate and the loops
+    "console.stall_witness": "types",  # where a late real-time thread's time went (OS counters)
     "console.bench": "types",  # percentiles and machine info, used by drivers and runtime too
     "console.profile": "profile",
     "console.plugins": "profile",

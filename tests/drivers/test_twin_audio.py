@@ -309,3 +309,35 @@ def test_an_underrun_says_where_the_late_thread_s_time_went(profile):
         assert st["underruns_by_origin"]["unknown"] == 0
         assert st["underruns_by_origin"]["process"] + st["underruns_by_origin"]["host"] >= 1
         assert st["underrun_last"][-1][4] in ("process", "host", "scheduler")
+
+
+def test_a_recording_read_while_it_plays_is_whole_and_since_reads_the_rest(profile):
+    """Read while the paced thread writes and the 1 s ring wraps: every copy is the
+    gate's samples in order (the bulk is copied outside the driver's lock, the rows the
+    ring overwrote meanwhile dropped, never garbled); ``since`` returns the rows after."""
+    import threading
+    import time
+
+    out = TwinAudioOutput(profile, buffer_periods=3, record_s=1.0)
+    out.paced = True
+    src = Counter()
+    out.start(src)
+    copies = []
+    try:
+        t_end = time.monotonic() + 1.6
+        while time.monotonic() < t_end:
+            copies.append(out.recording_card())
+            time.sleep(0.01)
+    finally:
+        out.stop()
+    assert threading.active_count() >= 1 and len(copies) > 20
+    for rec in copies:
+        if rec.shape[0] == 0:
+            continue
+        k0 = int(round(rec[0, 0] * 1000)) - 1  # the counter's value names its clock (mod 1000)
+        want = ((np.arange(rec.shape[0]) + k0) % 1000 + 1) / 1000.0
+        np.testing.assert_array_equal(rec[:, 0], want.astype(np.float32))
+    assert max(c.shape[0] for c in copies) == out._cap  # the ring wrapped during the reads
+    whole = out.recording_card()
+    np.testing.assert_array_equal(out.recording_card(since=100), whole[100:])
+    assert out.recording_card(since=whole.shape[0] + 5).shape == (0, whole.shape[1])
