@@ -1,11 +1,16 @@
-"""Writing a file so that a reader sees the old whole file or the new one, never a part."""
+"""Durable writes: a whole file replaced so that a reader sees the old file or the new
+one, never a part (``write_text_atomic``); a JSON line appended and on disk before the
+call returns (``append_json_line``)."""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 
 def write_text_atomic(
@@ -35,6 +40,21 @@ def write_text_atomic(
             os.unlink(tmp)
         raise
     fsync_dir(path.parent)
+
+
+def append_json_line(path: str | os.PathLike, record: Mapping[str, Any]) -> None:
+    """Append ``record`` as one JSON line (keys sorted) and make it durable (flush +
+    fsync) before returning; a torn last line (a crash mid-write) gets a newline first so
+    it cannot swallow this one. ``OSError`` as raised."""
+    line = json.dumps(record, sort_keys=True) + "\n"
+    with open(path, "ab+") as f:
+        if f.tell() > 0:
+            f.seek(-1, os.SEEK_END)
+            if f.read(1) != b"\n":
+                line = "\n" + line
+        f.write(line.encode("utf-8"))
+        f.flush()
+        os.fsync(f.fileno())
 
 
 def fsync_dir(folder: Path) -> None:

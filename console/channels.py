@@ -84,11 +84,6 @@ class ChannelLayout:
         return self.names.index("screen")
 
     @property
-    def piezo_index(self) -> int | None:
-        """The bus's column (``None`` on an independent layout)."""
-        return self.names.index("piezo") if "piezo" in self.names else None
-
-    @property
     def patch_index(self) -> dict[str, int]:
         """Column of each patch with a channel of its own."""
         return {n: i for i, n in enumerate(self.names) if n in PATCHES}

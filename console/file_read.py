@@ -163,16 +163,22 @@ def read_toml_capped(
 
 
 def parse_toml_text(
-    text: str, *, where: str, what: str, error: type[UserError] = UserError
+    text: str,
+    *,
+    where: str,
+    what: str,
+    error: type[UserError] = UserError,
+    levels: str = "a few levels",
 ) -> dict[str, Any]:
-    """``text`` as TOML, or one line naming ``where``."""
+    """``text`` as TOML, or one line naming ``where``; ``levels``: how deep a ``what``
+    nests (said when the text nests too deeply to read)."""
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{where}: not valid TOML: {exc}; correct the {what} by hand") from None
     except RecursionError:
         raise error(
-            f"{where}: arrays or tables nested too deeply to read; a {what} needs a few levels"
+            f"{where}: arrays or tables nested too deeply to read; a {what} needs {levels}"
         ) from None
     except ValueError as exc:  # an integer beyond Python's digit limit
         raise error(

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import stat
 import zipfile
 import zlib
 from pathlib import Path
@@ -32,6 +31,7 @@ import numpy as np
 from numpy.lib import format as npformat
 
 from console.errors import UserError
+from console.file_read import check_regular
 
 #: the largest total uncompressed size accepted (a map of 5 x 84 points x 64k bins is
 #: 430 MB; the maps and tables HapTable writes are a few MB)
@@ -50,14 +50,11 @@ def _mb(n: int) -> str:
 
 
 def _regular_file(p: Path, what: str, fix: str) -> int:
-    try:
-        st = p.stat()
-    except FileNotFoundError:
-        raise UserError(f"{p}: no such {what}; {fix}") from None
-    except OSError as exc:
-        raise UserError(f"{p}: cannot read the {what} ({exc.strerror}); {fix}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise UserError(f"{p}: not a regular file, so not a {what}; {fix}")
+    """The size of ``p``, a non-empty regular file (``file_read.check_regular``); else
+    one line naming ``what``."""
+    st = check_regular(p, what=what, fix=fix, missing_ok=True)
+    if st is None:
+        raise UserError(f"{p}: no such {what}; {fix}")
     if st.st_size == 0:
         raise UserError(f"{p}: empty file, not a {what} (.npz); {fix}")
     return st.st_size

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 from console import paths
 from console.atomic import write_text_atomic
 from console.errors import ProfileError, UserError
+from console.file_read import parse_toml_text, read_text_capped
 from console.profile_paths import (  # noqa: F401 - re-exported
     DEFAULT_PROFILE,
     PROJECT_PROFILES,
@@ -215,20 +216,21 @@ def check_sections(profile: Profile, plugins: Plugins) -> None:
             raise ProfileError(f"{_where(profile.path)}: {exc}") from None
 
 
-def _read_settings_file(path: Path) -> bytes:
-    """A profile's or an override file's bytes, after checking it is a regular file
-    (not a folder, a FIFO that would block, a device that never ends, a dangling link)
-    of at most ``MAX_PROFILE_BYTES`` (``console.file_read``)."""
-    from console.file_read import read_bytes_capped
-
+def _file_words(path: Path) -> tuple[str, str]:
+    """(what, fix) naming a profile or its override file in a message."""
     if path.name == OVERRIDES_FILE:
-        what = "settings file"
-        fix = (
+        return "settings file", (
             "the settings the console saved there (device picks) are not loaded; make it a "
             "regular file or remove it"
         )
-    else:
-        what, fix = "profile", "give the profile's .toml file"
+    return "profile", "give the profile's .toml file"
+
+
+def _read_settings_file(path: Path) -> str:
+    """A profile's or an override file's text, after checking it is a regular file
+    (not a folder, a FIFO that would block, a device that never ends, a dangling link)
+    of at most ``MAX_PROFILE_BYTES``, and UTF-8 (``console.file_read``)."""
+    what, fix = _file_words(path)
     try:
         os.stat(path)
     except FileNotFoundError:
@@ -238,40 +240,23 @@ def _read_settings_file(path: Path) -> bytes:
             ) from None
     except OSError:
         pass  # a link loop, a folder we may not enter: named below
-    data = read_bytes_capped(
+    text = read_text_capped(
         path, what=what, fix=fix, max_bytes=MAX_PROFILE_BYTES, error=ProfileError
     )
-    assert data is not None
-    return data
+    assert text is not None
+    return text
 
 
 def parse_toml(path: Path) -> dict[str, Any]:
     """The profile file's TOML, refused with one line when not a regular file, too
-    large, not UTF-8, not TOML or nested too deeply."""
-    where = _where(path)
-    data = _read_settings_file(path)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data[: exc.start].count(b"\n") + 1
-        raise ProfileError(
-            f"{where}: not UTF-8 text (byte {data[exc.start]:#04x} on line {line}); "
-            "save the profile as UTF-8"
-        ) from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ProfileError(f"{where}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise ProfileError(
-            f"{where}: arrays or tables nested too deeply to read; a profile needs at most "
-            "two levels ([section] and [section.item])"
-        ) from None
-    except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-        raise ProfileError(
-            f"{where}: a value TOML allows but no setting can hold "
-            f"({str(exc).split(';')[0]}); write it as a short number"
-        ) from None
+    large, not UTF-8, not TOML or nested too deeply (``file_read.parse_toml_text``)."""
+    return parse_toml_text(
+        _read_settings_file(path),
+        where=_where(path),
+        what=_file_words(path)[0],
+        error=ProfileError,
+        levels="at most two levels ([section] and [section.item])",
+    )
 
 
 def load_profile(

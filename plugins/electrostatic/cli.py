@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from console.atomic import append_json_line
 from console.errors import UserError
 from console.options import finite_float, from_field, positive_int, seconds, seed
 
@@ -243,7 +244,7 @@ def _run_live(
     """Trials with the profile's camera: vision -> contacts -> the trial's knob session."""
     from console.runtime.stages import open_camera, vision_loop
 
-    from .task import append_jsonl, run_live_trial
+    from .task import run_live_trial
 
     prof = _profile(ctx)
     a = audio(prof)
@@ -289,7 +290,7 @@ def _run_live(
                         max_time_s=args.max_time,
                     )
                     results.append(res)
-                    append_jsonl(log, {**asdict(res), "session": session, "t_utc": time.time()})
+                    append_json_line(log, {**asdict(res), "session": session, "t_utc": time.time()})
                     say(res)
             except KeyboardInterrupt:
                 print(f"stopped: {len(results)} finished trials are in {log}")

@@ -6,7 +6,7 @@ A trial: navigate from a start item to a target item ``distance_deg`` away (135,
 (times the selection left the target after reaching it) and recovery time (first
 overshoot to the final entry). A trial ends when the selection has stayed on the target
 for ``dwell_s``. Each finished trial is appended to a JSON-lines log and flushed with
-``os.fsync`` so a crash loses no finished trial.
+``os.fsync`` (``console.atomic.append_json_line``) so a crash loses no finished trial.
 
 ``SimFinger`` is a simple human-like controller: minimum-jerk submovements toward the
 target's centre whose duration follows Fitts' law and whose endpoint scatter grows with
@@ -20,7 +20,6 @@ import contextlib
 import itertools
 import json
 import math
-import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -29,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from console.atomic import append_json_line
 from console.errors import UserError
 
 from .session import KnobSession
@@ -346,19 +346,6 @@ def run_live_trial(
     )
 
 
-def append_jsonl(path: Path, record: Mapping[str, Any]) -> None:
-    """Append one JSON line and make it durable (flush + fsync) before returning."""
-    line = json.dumps(record, sort_keys=True) + "\n"
-    with open(path, "ab+") as f:
-        if f.tell() > 0:  # a torn last line (crash mid-write) must not swallow this one
-            f.seek(-1, os.SEEK_END)
-            if f.read(1) != b"\n":
-                line = "\n" + line
-        f.write(line.encode("utf-8"))
-        f.flush()
-        os.fsync(f.fileno())
-
-
 def read_jsonl(path: Path) -> list[dict[str, Any]]:
     """Finished trials from a log; a torn last line (crash mid-write) is skipped."""
     out = []
@@ -398,7 +385,7 @@ def run_task(
         )
         results.append(res)
         if log_path is not None:
-            append_jsonl(
+            append_json_line(
                 log_path,
                 {**asdict(res), "session": session, "seed": seed, "t_utc": time.time()},
             )

@@ -79,10 +79,6 @@ class EffectRow:
         return "violated" if self.mauchly_p < 0.05 else "assumed"
 
     @property
-    def sphericity_violated(self) -> bool:
-        return self.sphericity == "violated"
-
-    @property
     def p_reported(self) -> float:
         """The p to report: Greenhouse-Geisser corrected unless sphericity holds."""
         return self.p if self.sphericity == "assumed" else self.p_gg

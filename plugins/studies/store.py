@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.atomic import write_text_atomic
+from console.atomic import append_json_line, write_text_atomic
 from console.errors import UserError
 
 from . import records
@@ -138,20 +137,6 @@ def write_json_atomic(path: Path, obj: Any) -> None:
     write_text_atomic(Path(path), json.dumps(obj, indent=1, sort_keys=True) + "\n")
 
 
-def append_event(path: Path, record: dict[str, Any]) -> None:
-    """Append one JSON line and make it durable (flush + fsync) before returning; a torn
-    last line (a crash mid-write) gets a newline first so it cannot swallow this one."""
-    line = json.dumps(record, sort_keys=True) + "\n"
-    with open(path, "ab+") as f:
-        if f.tell() > 0:
-            f.seek(-1, os.SEEK_END)
-            if f.read(1) != b"\n":
-                line = "\n" + line
-        f.write(line.encode("utf-8"))
-        f.flush()
-        os.fsync(f.fileno())
-
-
 # ------------------------------------------------------------------ a participant's run
 @dataclass
 class RunFiles:
@@ -180,7 +165,7 @@ class RunFiles:
         return load_events(self.trials_path, self.plan)
 
     def append(self, record: dict[str, Any]) -> None:
-        append_event(self.trials_path, record)
+        append_json_line(self.trials_path, record)
 
 
 def participant_dir(out: Path, pid: str) -> Path:

@@ -20,11 +20,6 @@ BANDS = ((5, 150), (150, 300), (300, 450), (450, 625))
 METHODS = ("bilinear", "keys", "spline", "spline5", "modal")
 
 
-def _time(fn, reps: int) -> list[float]:
-    """Wall-clock durations of ``reps`` calls (see ``_timed`` for CPU time too)."""
-    return _timed(fn, reps)[0]
-
-
 def _timed(fn, reps: int) -> tuple[list[float], list[float]]:
     """(wall, CPU) durations: on a loaded machine the CPU time of a single-threaded call
     is the better estimate of its unloaded wall time."""

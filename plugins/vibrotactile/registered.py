@@ -1,4 +1,4 @@
-"""The ``flow`` effect as registered: ``effects.FlowEffect`` plus what an operator's
+"""The ``flow`` effect as registered: ``flow_effect.FlowEffect`` plus what an operator's
 tool needs from it without reaching into this plugin's modules.
 
 - ``tables(vmap=, progress=)`` builds the lookup tables step by step (a slice of active
@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from console.vibration_map import VibrationMap
-from plugins.vibrotactile.effects import FlowEffect
+from plugins.vibrotactile.flow_effect import FlowEffect
 from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables
 
@@ -59,7 +59,7 @@ def tables_stepwise_cached(
 
 
 class RegisteredFlowEffect(FlowEffect):
-    """Effect ``flow`` (see ``effects.FlowEffect``) with a stepwise, cancellable table
+    """Effect ``flow`` (see ``flow_effect.FlowEffect``) with a stepwise, cancellable table
     build and UFF import (module docstring)."""
 
     def tables(
@@ -100,7 +100,7 @@ class RegisteredFlowEffect(FlowEffect):
         masked, the profile's grid for files without
         point coordinates. Bad files are a ``UserError`` naming the file."""
         from console.vibration_map import grid_points_mm
-        from plugins.vibrotactile.uff_io import import_uff
+        from plugins.vibrotactile.uff_import import import_uff
 
         p = self.profile
         g = p.section("grid")

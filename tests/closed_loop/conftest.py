@@ -39,16 +39,16 @@ def loop_profile(loop_plugins):
 
 @pytest.fixture(scope="session")
 def measured_map(loop_profile, loop_plugins):
-    from plugins.twin.plate.loop_check import _one_blas_thread, measured_map
+    from plugins.twin.plate.loop_play import measured_map, one_blas_thread
 
-    with _one_blas_thread():
+    with one_blas_thread():
         return measured_map(loop_profile, loop_plugins)
 
 
 @pytest.fixture(scope="session")
 def loop_effects(loop_profile, loop_plugins):
     """The registered flow and hand_flow effects with the check's 1.5 s parts."""
-    from plugins.twin.plate.loop_check import effects_of
+    from plugins.twin.plate.loop_play import effects_of
 
     return effects_of(loop_profile, loop_plugins)
 
@@ -70,7 +70,8 @@ def loop_outputs(loop_profile, loop_plugins):
 
 @pytest.fixture(scope="session")
 def pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
-    from plugins.twin.plate.loop_check import flow_pairs_check, format_pairs
+    from plugins.twin.plate.loop_check import flow_pairs_check
+    from plugins.twin.plate.loop_report import format_pairs
 
     rows = flow_pairs_check(
         loop_outputs, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=0
@@ -82,7 +83,8 @@ def pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
 
 @pytest.fixture(scope="session")
 def region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
-    from plugins.twin.plate.loop_check import format_regions, hand_regions_check
+    from plugins.twin.plate.loop_check import hand_regions_check
+    from plugins.twin.plate.loop_report import format_regions
 
     rows = hand_regions_check(
         loop_outputs,
@@ -101,7 +103,8 @@ def region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
 @pytest.fixture(scope="session")
 def option_pair_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     """The same pairs with a 10 dB contrast floor and a 3-decay-time ring-down gap."""
-    from plugins.twin.plate.loop_check import flow_pairs_check, format_pairs
+    from plugins.twin.plate.loop_check import flow_pairs_check
+    from plugins.twin.plate.loop_report import format_pairs
 
     rows = flow_pairs_check(
         loop_outputs,
@@ -130,7 +133,8 @@ def gap_pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
 @pytest.fixture(scope="session")
 def gap_region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     """The hand regions played with the ring-down gap (3 decay times)."""
-    from plugins.twin.plate.loop_check import format_regions, hand_regions_check
+    from plugins.twin.plate.loop_check import hand_regions_check
+    from plugins.twin.plate.loop_report import format_regions
 
     rows = hand_regions_check(
         loop_outputs,

@@ -158,7 +158,7 @@ def test_the_recording_route_equals_the_plan_route(
     import numpy as np
 
     from plugins.twin.plate import closed_loop as cl
-    from plugins.twin.plate.loop_check import (
+    from plugins.twin.plate.loop_play import (
         LoopSettings,
         effects_of,
         recording_with_offset,

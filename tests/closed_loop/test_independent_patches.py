@@ -13,7 +13,7 @@ from console.kernel.client import open_outputs
 from console.profile import load_profile
 from console.types import OutputPlan, Segment
 from plugins.twin.plate import closed_loop as cl
-from plugins.twin.plate.loop_check import recording_with_offset, relay_channels_of
+from plugins.twin.plate.loop_play import recording_with_offset, relay_channels_of
 
 FS = 48000
 PTS = np.array([[401.73, 223.645], [100.0, 100.0], [700.0, 400.0], [580.0, 150.0]])

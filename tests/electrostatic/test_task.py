@@ -5,11 +5,11 @@ import json
 import numpy as np
 import pytest
 
+from console.atomic import append_json_line
 from console.errors import UserError
 from plugins.electrostatic.settings import knob_settings
 from plugins.electrostatic.task import (
     SimFinger,
-    append_jsonl,
     make_trials,
     read_jsonl,
     run_task,
@@ -69,7 +69,7 @@ def test_each_finished_trial_is_on_disk_before_the_next_starts(tmp_path):
     # a torn last line (crash mid-write) is skipped, earlier trials survive; appends go on
     with open(log, "a") as f:
         f.write('{"trial": 99, "condi')
-    append_jsonl(log, {"trial": 100})
+    append_json_line(log, {"trial": 100})
     assert [r["trial"] for r in read_jsonl(log)][-1] == 100
     assert len(read_jsonl(log)) == 4
 

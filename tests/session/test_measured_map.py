@@ -82,7 +82,8 @@ def test_the_commands_use_the_same_measured_map(fake_vibrometer, tmp_path, capsy
     from console.session import ConsoleSession
     from console.vibration_map import load_map
     from plugins.demos.run import flow_map_path
-    from plugins.vibrotactile import cli
+    from plugins.vibrotactile.cli import frf as frf_cli
+    from plugins.vibrotactile.cli import tables as tables_cli
     from plugins.vibrotactile.tables import load_tables
 
     fv = fake_vibrometer
@@ -90,7 +91,7 @@ def test_the_commands_use_the_same_measured_map(fake_vibrometer, tmp_path, capsy
     assert fv.calls == [1] and path == measured_map_path(fv.profile)
     out = tmp_path / "tables.npz"
     argv = ["build", "measured", "--out", str(out), "--rule", "paper"]
-    assert _cli(cli.configure_tables, cli.run_tables, argv, fv) == 0
+    assert _cli(tables_cli.configure_tables, tables_cli.run_tables, argv, fv) == 0
     assert fv.calls == [1]  # the command reused the demo's file
     assert load_tables(out).vmap.content_hash() == load_map(path).content_hash()
     session = ConsoleSession(SimpleNamespace(profile=fv.profile, pm=fv.pm))
@@ -98,12 +99,15 @@ def test_the_commands_use_the_same_measured_map(fake_vibrometer, tmp_path, capsy
 
     argv = ["query", "measured", "--active", "51", "--passive", "52", "--json"]
     capsys.readouterr()
-    assert _cli(cli.configure_tables, cli.run_tables, [*argv, "--rule", "paper"], fv) == 0
+    assert (
+        _cli(tables_cli.configure_tables, tables_cli.run_tables, [*argv, "--rule", "paper"], fv)
+        == 0
+    )
     assert "actuator" in capsys.readouterr().out and fv.calls == [1]
 
     # measuring on purpose replaces the one file; every user then reads the new one
     copy = tmp_path / "copy.npz"
-    assert _cli(cli.configure_frf, cli.run_frf, ["measure", "--out", str(copy)], fv) == 0
+    assert _cli(frf_cli.configure_frf, frf_cli.run_frf, ["measure", "--out", str(copy)], fv) == 0
     assert fv.calls == [1, 1]
     assert str(path) in capsys.readouterr().out
     assert load_map(copy).content_hash() == load_map(path).content_hash()
@@ -113,11 +117,11 @@ def test_the_commands_use_the_same_measured_map(fake_vibrometer, tmp_path, capsy
 def test_a_command_measures_first_and_the_demo_reuses_it(fake_vibrometer, capsys):
     from console.runtime.measured_map import measured_map_path
     from plugins.demos.run import flow_map_path
-    from plugins.vibrotactile import cli
+    from plugins.vibrotactile.cli import frf as frf_cli
 
     fv = fake_vibrometer
     assert not measured_map_path(fv.profile).exists()
-    assert _cli(cli.configure_frf, cli.run_frf, ["info", "measured", "--json"], fv) == 0
+    assert _cli(frf_cli.configure_frf, frf_cli.run_frf, ["info", "measured", "--json"], fv) == 0
     assert fv.calls == [1]  # nothing kept yet: measured once, for the command
     assert json.loads(capsys.readouterr().out)["points"] == fv.map.points.size
     assert flow_map_path(fv.profile, fv.pm) == measured_map_path(fv.profile)
@@ -126,7 +130,7 @@ def test_a_command_measures_first_and_the_demo_reuses_it(fake_vibrometer, capsys
 
 def test_a_file_named_measured_is_a_file(fake_vibrometer, tmp_path, monkeypatch):
     from console.vibration_map import save_map
-    from plugins.vibrotactile.cli import map_source
+    from plugins.vibrotactile.cli.common import map_source
 
     fv = fake_vibrometer
     monkeypatch.chdir(tmp_path)

@@ -48,14 +48,14 @@ def _lines(caplog) -> list[str]:
 def _query(fv, capsys) -> dict:
     """`haptable tables query measured --active 51 --passive 52 --json` (no tables cache:
     the map is what is under test)."""
-    from plugins.vibrotactile import cli
+    from plugins.vibrotactile.cli import tables as tables_cli
 
     p = argparse.ArgumentParser()
-    cli.configure_tables(p)
+    tables_cli.configure_tables(p)
     argv = ["query", "measured", "--active", "51", "--passive", "52", "--json", "--rule", "paper"]
     args = p.parse_args([*argv, "--cache-dir", "none"])
     capsys.readouterr()
-    assert cli.run_tables(args, SimpleNamespace(profile=fv.profile, pm=fv.pm)) == 0
+    assert tables_cli.run_tables(args, SimpleNamespace(profile=fv.profile, pm=fv.pm)) == 0
     return json.loads(capsys.readouterr().out)
 
 

@@ -8,12 +8,12 @@ import threading
 
 import pytest
 
+from console.atomic import append_json_line
 from console.errors import UserError
 from plugins.studies import protocol as P
 from plugins.studies.plan import make_plan
 from plugins.studies.runner import Answer, Control, run_plan
 from plugins.studies.store import (
-    append_event,
     make_participant,
     open_run,
     progress,
@@ -59,10 +59,10 @@ def _events(files, kind):
 
 def test_events_are_durable_lines_and_a_torn_line_is_skipped(tmp_path):
     path = tmp_path / "t.jsonl"
-    append_event(path, {"event": "start", "trial": 0})
+    append_json_line(path, {"event": "start", "trial": 0})
     with open(path, "ab") as f:
         f.write(b'{"event": "done", "tri')  # a crash mid-write
-    append_event(path, {"event": "done", "trial": 0})
+    append_json_line(path, {"event": "done", "trial": 0})
     assert [e["event"] for e in read_events(path)] == ["start", "done"]
     write_json_atomic(tmp_path / "p.json", {"a": 1})
     assert json.loads((tmp_path / "p.json").read_text()) == {"a": 1}

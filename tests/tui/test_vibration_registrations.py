@@ -103,7 +103,7 @@ def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
 def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
     from console.profile import load_profile
     from console.vibration_map import load_map, make_map
-    from plugins.vibrotactile.uff_io import export_uff
+    from plugins.vibrotactile.uff_export import export_uff
 
     full = load_map(map_file)
     row = make_map(

@@ -10,8 +10,10 @@ import pytest
 
 from console.errors import UserError
 from console.vibration_map import save_map
-from plugins.vibrotactile import cli
 from plugins.vibrotactile.cache import cached
+from plugins.vibrotactile.cli import flow as flow_cli
+from plugins.vibrotactile.cli import frf as frf_cli
+from plugins.vibrotactile.cli import tables as tables_cli
 
 
 def test_cache_computes_once_per_key(tmp_path):
@@ -45,11 +47,19 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
     monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
     mp = save_map(tmp_path / "map.npz", ss_map)
     tp = tmp_path / "tables.npz"
-    assert run(cli.configure_tables, cli.run_tables, ["build", str(mp), "--out", str(tp)], ctx) == 0
+    assert (
+        run(
+            tables_cli.configure_tables,
+            tables_cli.run_tables,
+            ["build", str(mp), "--out", str(tp)],
+            ctx,
+        )
+        == 0
+    )
     capsys.readouterr()
     run(
-        cli.configure_tables,
-        cli.run_tables,
+        tables_cli.configure_tables,
+        tables_cli.run_tables,
         ["query", str(tp), "--active", "51", "--passive", "52", "--json"],
         ctx,
     )
@@ -66,38 +76,38 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
     assert ans["rule"] == "perceptual"  # the default for new tables
     # the same answer from the map itself (tables built lazily and cached)
     run(
-        cli.configure_tables,
-        cli.run_tables,
+        tables_cli.configure_tables,
+        tables_cli.run_tables,
         ["query", str(mp), "--active", "51", "--passive", "52", "--json"],
         ctx,
     )
     assert json.loads(capsys.readouterr().out) == ans
     assert list((tmp_path / "cache").glob("tables-*.npz"))
     run(
-        cli.configure_tables,
-        cli.run_tables,
+        tables_cli.configure_tables,
+        tables_cli.run_tables,
         ["query", str(tp), "--active", "300,200", "--passive", "52", "--json"],
         ctx,
     )
     assert json.loads(capsys.readouterr().out)["actuator"] in ("PA", "PB", "PC", "PD", "PALL")
     with pytest.raises(UserError, match="grid point 99"):
         run(
-            cli.configure_tables,
-            cli.run_tables,
+            tables_cli.configure_tables,
+            tables_cli.run_tables,
             ["query", str(tp), "--active", "99", "--passive", "1"],
             ctx,
         )
     # UFF export -> import through the commands
     run(
-        cli.configure_frf,
-        cli.run_frf,
+        frf_cli.configure_frf,
+        frf_cli.run_frf,
         ["export", str(mp), "--out", str(tmp_path / "uff"), "--binary"],
         ctx,
     )
     files = [f"{e}={tmp_path / 'uff' / e}.uff" for e in ("PA", "PB", "PC", "PD", "PALL")]
     run(
-        cli.configure_frf,
-        cli.run_frf,
+        frf_cli.configure_frf,
+        frf_cli.run_frf,
         ["import", *files, "--out", str(tmp_path / "m2.npz"), "--gain", "1"],
         ctx,
     )
@@ -105,8 +115,8 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
     # a flow plan written as WAV + JSON, a point pulse, a flow under a hand
     wav = tmp_path / "flow.wav"
     run(
-        cli.configure_flow,
-        cli.run_flow,
+        flow_cli.configure_flow,
+        flow_cli.run_flow,
         [str(tp), "--from", "51", "--to", "52", "--out", str(wav), "--json"],
         ctx,
     )
@@ -116,18 +126,18 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
 
     fs, data = wavfile.read(wav)
     assert fs == 48000 and data.shape[1] == 2 and np.abs(data).max() <= 1.0
-    run(cli.configure_point, cli.run_point, [str(tp), "51", "--json"], ctx)
+    run(flow_cli.configure_point, flow_cli.run_point, [str(tp), "51", "--json"], ctx)
     assert json.loads(capsys.readouterr().out)["kind"] == "point"
     run(
-        cli.configure_flow,
-        cli.run_flow,
+        flow_cli.configure_flow,
+        flow_cli.run_flow,
         [str(mp), "--hand", "300,200", "--direction", "left", "--json"],
         ctx,
     )
     hand = json.loads(capsys.readouterr().out)
     assert hand["kind"] == "hand_flow" and hand["ok"]
     with pytest.raises(UserError, match="needs --direction"):
-        run(cli.configure_flow, cli.run_flow, [str(mp), "--hand", "300,200"], ctx)
+        run(flow_cli.configure_flow, flow_cli.run_flow, [str(mp), "--hand", "300,200"], ctx)
 
 
 def test_prepare_builds_only_what_is_asked(tmp_path, ss_map):

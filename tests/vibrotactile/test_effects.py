@@ -10,7 +10,7 @@ from console.errors import UserError
 
 
 def test_effects_are_registered_and_render_what_the_functions_give(ctx, ss_map, ss_tables):
-    from plugins.vibrotactile.cli import perception_of, piezo_limits, settings_of
+    from plugins.vibrotactile.cli.common import perception_of, piezo_limits, settings_of
     from plugins.vibrotactile.stimuli import flow_plan
 
     regs = ctx.pm.of("effect")
@@ -140,21 +140,21 @@ def test_tables_build_min_contrast_cli(ctx, ss_map, tmp_path, capsys):
     import argparse
 
     from console.vibration_map import save_map
-    from plugins.vibrotactile import cli
+    from plugins.vibrotactile.cli import tables as tables_cli
     from plugins.vibrotactile.tables import load_tables
 
     mp = tmp_path / "map.npz"
     save_map(mp, ss_map)
     p = argparse.ArgumentParser()
-    cli.configure_tables(p)
+    tables_cli.configure_tables(p)
     out = tmp_path / "t6.npz"
     args = p.parse_args(["build", str(mp), "--out", str(out), "--min-contrast-db", "6"])
-    assert cli.run_tables(args, ctx) == 0
+    assert tables_cli.run_tables(args, ctx) == 0
     assert "contrast >= 6 dB" in capsys.readouterr().out
     t = load_tables(out)
     assert t.min_contrast_db == 6.0
     args = p.parse_args(["query", str(out), "--active", "52", "--passive", "51", "--json"])
-    cli.run_tables(args, ctx)
+    tables_cli.run_tables(args, ctx)
     import json
 
     ans = json.loads(capsys.readouterr().out)
@@ -163,7 +163,7 @@ def test_tables_build_min_contrast_cli(ctx, ss_map, tmp_path, capsys):
     from console.options import Parser
 
     strict = Parser(prog="haptable tables")
-    cli.configure_tables(strict)
+    tables_cli.configure_tables(strict)
     with pytest.raises(UserError, match=r"tables build --min-contrast-db -1: out of range"):
         strict.parse_args(["build", str(mp), "--out", str(out), "--min-contrast-db", "-1"])
 
@@ -194,16 +194,16 @@ def test_flow_command_options_contrast_and_ringdown(ctx, ss_map, tmp_path, capsy
     import json
 
     from console.vibration_map import save_map
-    from plugins.vibrotactile import cli
+    from plugins.vibrotactile.cli import flow as flow_cli
 
     mp = tmp_path / "map.npz"
     save_map(mp, ss_map)
 
     def flow(*extra):
         p = argparse.ArgumentParser()
-        cli.configure_flow(p)
+        flow_cli.configure_flow(p)
         args = p.parse_args([str(mp), "--from", "52", "--to", "51", "--json", *extra])
-        assert cli.run_flow(args, ctx) == 0
+        assert flow_cli.run_flow(args, ctx) == 0
         return json.loads(capsys.readouterr().out)
 
     paper = flow("--cache-dir", "none", "--rule", "paper")
@@ -216,8 +216,8 @@ def test_flow_command_options_contrast_and_ringdown(ctx, ss_map, tmp_path, capsy
     rd = opt["ringdown"]
     assert rd["k"] == 3 and rd["gap_s"] == pytest.approx(3 * rd["tau_s"])
     p = argparse.ArgumentParser()
-    cli.configure_flow(p)
+    flow_cli.configure_flow(p)
     argv = [str(mp), "--hand", "300,200", "--direction", "up", "--ringdown-k", "3", "--json"]
-    assert cli.run_flow(p.parse_args([*argv, "--cache-dir", "none"]), ctx) == 0
+    assert flow_cli.run_flow(p.parse_args([*argv, "--cache-dir", "none"]), ctx) == 0
     hand = json.loads(capsys.readouterr().out)
     assert hand["kind"] == "hand_flow" and hand["ringdown"]["k"] == 3

@@ -199,11 +199,11 @@ def test_tables_file_keeps_the_rule_and_old_files_load_as_paper(tmp_path):
 def twin_map():
     from console.plugins import load_plugins
     from console.profile import load_profile
-    from plugins.twin.plate.loop_check import _one_blas_thread, measured_map
+    from plugins.twin.plate.loop_play import measured_map, one_blas_thread
 
     pm = load_plugins()
     prof = load_profile("sim", pm)
-    with _one_blas_thread():
+    with one_blas_thread():
         return measured_map(prof, pm), prof
 
 

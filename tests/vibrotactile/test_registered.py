@@ -88,7 +88,7 @@ def test_flow_effect_build_cancelled_then_built_on_demand(ctx, ss_map, tmp_path)
 
 def test_flow_effect_imports_uff(ctx, ss_map, tmp_path):
     from console.vibration_map import make_map
-    from plugins.vibrotactile.uff_io import export_uff
+    from plugins.vibrotactile.uff_export import export_uff
 
     sub = make_map(
         ss_map.frf_um_per_v[:, :12],
@@ -113,7 +113,7 @@ def test_tables_cache_only_in_haptables_cache_or_nowhere(ctx, plugins, tmp_path)
     is refused with the line that says so."""
     from console.errors import ProfileError
     from console.profile import load_profile
-    from plugins.vibrotactile.effects import setup_from_profile
+    from plugins.vibrotactile.settings import setup_from_profile
 
     assert setup_from_profile(ctx.profile).cache_dir == paths.cache_dir()
     ctx.profile.data["vibrotactile"]["cache_dir"] = "none"

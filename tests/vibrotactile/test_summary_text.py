@@ -10,7 +10,8 @@ import re
 import pytest
 
 from console.vibration_map import save_map
-from plugins.vibrotactile import cli
+from plugins.vibrotactile.cli import flow as flow_cli
+from plugins.vibrotactile.cli import frf as frf_cli
 from plugins.vibrotactile.summary_text import label_and_unit, summary_lines
 
 
@@ -63,8 +64,8 @@ def test_flow_and_point_print_readable_values(tmp_path, ctx, ss_map, capsys, mon
     monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path / "cache"))
     mp = str(save_map(tmp_path / "map.npz", ss_map))
     for configure, runner, argv in (
-        (cli.configure_point, cli.run_point, [mp, "51"]),
-        (cli.configure_flow, cli.run_flow, [mp, "--from", "51", "--to", "52"]),
+        (flow_cli.configure_point, flow_cli.run_point, [mp, "51"]),
+        (flow_cli.configure_flow, flow_cli.run_flow, [mp, "--from", "51", "--to", "52"]),
     ):
         assert run(configure, runner, [*argv, "--json"], ctx) == 0
         data = json.loads(capsys.readouterr().out)
@@ -90,7 +91,7 @@ def test_flow_and_point_print_readable_values(tmp_path, ctx, ss_map, capsys, mon
 
 def test_frf_info_prints_readable_values(tmp_path, ctx, ss_map, capsys):
     mp = str(save_map(tmp_path / "map.npz", ss_map))
-    assert run(cli.configure_frf, cli.run_frf, ["info", mp], ctx) == 0
+    assert run(frf_cli.configure_frf, frf_cli.run_frf, ["info", mp], ctx) == 0
     text = capsys.readouterr().out
     assert re.search(rf"^points +{ss_map.points.size}$", text, re.M)
     assert re.search(r"^excitations +PA PB PC PD PALL$", text, re.M)

@@ -10,7 +10,8 @@ from console.errors import UserError
 from console.types import EXCITATIONS
 from console.vibration_map import grid_points_mm
 from plugins.vibrotactile.tables import build_tables
-from plugins.vibrotactile.uff_io import export_uff, import_uff
+from plugins.vibrotactile.uff_export import export_uff
+from plugins.vibrotactile.uff_import import import_uff
 
 GAIN = 50.0
 F_HZ = np.arange(0.0, 625.01, 1.0)

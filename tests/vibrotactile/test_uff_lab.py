@@ -16,7 +16,9 @@ from console.cli import main
 from console.errors import UserError
 from console.types import EXCITATIONS
 from console.vibration_map import grid_points_mm, load_map, make_map, save_map
-from plugins.vibrotactile.uff_io import REF_NODES, export_uff, import_uff
+from plugins.vibrotactile.uff_export import export_uff
+from plugins.vibrotactile.uff_format import REF_NODES
+from plugins.vibrotactile.uff_import import import_uff
 
 F_HZ = np.arange(0.0, 400.01, 2.0)
 GRID = grid_points_mm(7, 12, 60.0, (41.73, 43.645))

@@ -228,7 +228,7 @@ def haptable_register_benchmarks(register) -> None:
     register("plate", run, help="modal solve vs basis size, FRF truncation, vibrometer time")
 
     def run_loop(ctx, quick: bool) -> dict:
-        from .loop_check import run_bench as run_loop_bench
+        from .loop_bench import run_bench as run_loop_bench
 
         return run_loop_bench(ctx, quick)
 

@@ -42,7 +42,16 @@ from .closed_loop import (
     steady_window,
     twin_of,
 )
-from .loop_check import DEFAULT_PAIRS, DEFAULT_REGIONS, LoopSettings, effects_of, measured_map
+from .loop_check import flow_pairs_check
+from .loop_play import (
+    DEFAULT_PAIRS,
+    DEFAULT_REGIONS,
+    LoopSettings,
+    effects_of,
+    measured_map,
+    one_blas_thread,
+    play_and_envelope,
+)
 from .model import Twin
 
 METHODS = ("paper_tables", "independent_patches", "time_reversal")
@@ -292,9 +301,7 @@ def run_bench(ctx, quick: bool) -> dict:
     profile, pm = ctx.profile, ctx.pm
     t_all = time.perf_counter()
     ls = LoopSettings()
-    from .loop_check import _one_blas_thread
-
-    with _one_blas_thread():
+    with one_blas_thread():
         vmap = measured_map(profile, pm)
         flow, hand = effects_of(profile, pm, ls)
         twin = twin_of(profile)
@@ -407,8 +414,6 @@ def _gate_check(profile, pm, flow, vmap, player, shapes, ls) -> dict:
     here: contrast difference."""
     from console.kernel.client import open_outputs
 
-    from .loop_check import flow_pairs_check
-
     pairs_no = DEFAULT_PAIRS[:2]
     tables = flow.tables(vmap=vmap, rule="paper")
     with open_outputs(profile, pm, fast=True) as out:
@@ -448,8 +453,6 @@ def independent_through_gate(profile4, pm, vmap, pairs_no, ls, player) -> list[d
     contrast there and here (the same answer played by ``play_pairs``)."""
     from console.kernel.client import open_outputs
 
-    from .loop_check import _play_and_envelope
-
     flow4, _ = effects_of(profile4, pm, ls)
     shapes = point_shapes_um(player.twin, vmap.points_mm)
     rows = []
@@ -458,7 +461,7 @@ def independent_through_gate(profile4, pm, vmap, pairs_no, ls, player) -> list[d
             plan = flow4.render(int(a_no), int(b_no), vmap=vmap, method="independent")
             pts = np.array([plan.meta["from_mm"], plan.meta["to_mm"]])
             freqs = [p["frequency_hz"] for p in plan.meta["parts"]]
-            env = _play_and_envelope(out, profile4, player.twin, plan, pts, ls, 2, freqs)
+            env = play_and_envelope(out, profile4, player.twin, plan, pts, ls, 2, freqs)
             a, b = vmap.point_index(a_no), vmap.point_index(b_no)
             pair = [(a, b), (b, a)]
             here = play_pairs(

@@ -168,7 +168,9 @@ def compare_rules(
     ``acc_map`` (default ``accelerance_map(vmap)``) the frequency each rule picks for
     51 -> 52 and the steady-state levels of all its pairs on the twin."""
     from .closed_loop import twin_of
-    from .loop_check import effects_of, flow_pairs_check, pair_problems
+    from .loop_check import flow_pairs_check
+    from .loop_play import effects_of
+    from .loop_report import pair_problems
 
     twin = twin_of(profile)
     flow, _ = effects_of(profile, plugins)
