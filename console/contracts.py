@@ -242,11 +242,14 @@ class VisionResult(Protocol):
 class Classifier(Protocol):
     """A gesture classifier with its per-frame vision.
 
-    - ``names``: the gestures it knows; ``classify(frames) -> Gesture | None`` decides
-      from the first ``n_frames`` frames (``n_frames == 0``: no trained model, it names
-      nothing).
-    - ``process(frame) -> VisionResult``: one frame through the vision (stamps
+    - ``names``: the gestures it knows; ``classify(window, t_s) -> Gesture | None``
+      decides from the first ``n_frames`` ``VisionResult``s its ``process`` gave, in
+      frame order, none processed again (``t_s``: the gesture's time; ``n_frames == 0``:
+      no trained model, it names nothing).
+    - ``process(frame) -> VisionResult``: one frame through the vision, once (stamps
       ``vision`` on the frame); ``views``: the names its results' ``view`` knows.
+    - ``gesture_stage(*, still_mm, still_s)``: the loop's ``classify`` stage, the gesture
+      rules (its ``work`` keys: ``console.runtime.stages``).
     - ``to_mm``: camera px -> table mm, ``(n, 2) -> (n, 2)``, or ``None`` (positions stay
       in pixels; the console may set a fallback).
     - ``set_background(image)``: the empty table, learnt at once.
@@ -262,7 +265,11 @@ class Classifier(Protocol):
     @property
     def n_frames(self) -> int: ...
 
-    def classify(self, frames: list[Frame]) -> Gesture | None: ...
+    def classify(self, window: Sequence[VisionResult], t_s: float) -> Gesture | None: ...
+
+    def gesture_stage(
+        self, *, still_mm: float = 12.0, still_s: float = 0.3
+    ) -> Callable[[Frame, dict], Any]: ...
 
     def process(self, frame: Frame) -> VisionResult: ...
 

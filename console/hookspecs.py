@@ -120,8 +120,9 @@ def haptable_register_cameras(register: RegisterFactory) -> None:
 def haptable_register_classifiers(register: RegisterFactory) -> None:
     """Register gesture classifiers.
 
-    The factory returns a ``contracts.Classifier``: ``classify(frames) -> Gesture |
-    None``, ``names`` (the gestures it knows), ``n_frames``, the per-frame vision
+    The factory returns a ``contracts.Classifier``: ``classify(window, t_s) -> Gesture |
+    None`` (from its own vision results), ``gesture_stage()`` (the loop's ``classify``
+    stage), ``names`` (the gestures it knows), ``n_frames``, the per-frame vision
     ``process(frame) -> contracts.VisionResult`` with its ``views``, ``to_mm``,
     ``set_background(image)`` and its tunables (``tunables()``, ``tunable_ranges()``,
     ``set_tunable(name, value)``). Selected by ``[gestures] classifier`` in the profile.

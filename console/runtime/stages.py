@@ -1,23 +1,26 @@
-"""Stages every loop shares: vision (through the registered classifier) and gesture
-recognition, the camera -> table mapping the twin uses without a touch calibration, and
-``vision_loop`` (camera + vision + gestures + sinks: what TUIO alone needs).
+"""Stages every loop shares: vision (through the registered classifier) and the
+classifier's own ``classify`` stage (its gesture rules: ``Classifier.gesture_stage``), the
+camera -> table mapping the twin uses without a touch calibration, and ``vision_loop``
+(camera + vision + gestures + sinks: what TUIO alone needs).
 
 Stage functions take ``(frame, work)`` (see ``console.runtime.loop``); they put their
-results in ``work``: ``result`` (the vision result: ``hands``, ``contacts``), ``hand``
-(the largest hand or ``None``), ``contacts`` (contacts with ``pos_mm``), ``gesture``.
+results in ``work``: ``result`` (the vision result: ``hands``, ``contacts``), ``tracks``,
+``hands``, ``hand`` (the largest hand or ``None``), ``contacts`` (contacts with
+``pos_mm``); the gesture stage ``gesture`` (or ``None``), ``rest_mm`` and ``settle_mm``
+(where a resting palm rests), ``named`` (on the frame the model decided on). Each frame
+goes through the vision once: the gesture stage decides from the ``result``s in ``work``.
 """
 
 from __future__ import annotations
 
-from collections import deque
-from dataclasses import dataclass, field
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from console.contracts import Classifier, RendersBackground
 from console.errors import UserError
-from console.types import Frame, Gesture, Hand
+from console.types import Frame, Hand
 
 
 def corners_homography(
@@ -93,119 +96,6 @@ class VisionStage:
         work["contacts"] = tracks.contacts
 
 
-@dataclass
-class StillHand:
-    """A hand resting on the table: present and within ``still_mm`` for ``still_s``.
-
-    ``update(t_s, pos_mm)`` returns the resting position once per placement; it re-arms
-    when the hand lifts for ``lift_s`` or moves more than ``moved_mm`` away.
-    """
-
-    still_mm: float = 12.0
-    still_s: float = 0.3
-    lift_s: float = 0.2
-    moved_mm: float = 40.0
-    _hist: deque = field(default_factory=deque, repr=False)
-    _absent_since: float | None = None
-    _fired_at: tuple[float, float] | None = None
-
-    def reset(self) -> None:
-        self._hist.clear()
-        self._fired_at = None
-
-    def update(self, t_s: float, pos_mm: tuple[float, float] | None) -> tuple[float, float] | None:
-        if pos_mm is None:
-            if self._absent_since is None:
-                self._absent_since = t_s
-            if t_s - self._absent_since >= self.lift_s:
-                self.reset()
-            return None
-        self._absent_since = None
-        p = np.asarray(pos_mm, dtype=float)
-        if self._fired_at is not None:
-            if np.hypot(*(p - self._fired_at)) <= self.moved_mm:
-                return None
-            self.reset()
-        if self._hist and np.hypot(*(p - self._hist[0][1])) > self.still_mm:
-            self._hist.clear()  # moving: start over from here
-        self._hist.append((t_s, p))
-        if t_s - self._hist[0][0] < self.still_s:
-            return None
-        pts = np.array([q for _, q in self._hist])
-        c = pts.mean(0)
-        self._fired_at = (float(c[0]), float(c[1]))
-        return self._fired_at
-
-
-class GestureStage:
-    """Stage ``classify``: a gesture for the frame, or ``None``.
-
-    Rules on the vision result name what the demos act on: ``static_hand`` (a hand
-    resting still, once per placement), ``two_finger`` (two contacts on one hand:
-    the knob's grip). When the classifier has a trained model it names the gesture of a
-    new placement from its first frames (``[gestures] frames``) once.
-    """
-
-    def __init__(self, classifier: Any, still: StillHand | None = None) -> None:
-        self.clf = classifier
-        self.still = still or StillHand()
-        self.window: deque[Frame] = deque(maxlen=6)
-        self._named = False
-        self.last: Gesture | None = None
-        self._palms: deque[tuple[float, np.ndarray]] = deque(maxlen=600)
-
-    def _settle_palm(self, t_s: float, palm: Any) -> tuple[float, float] | None:
-        """The mean palm position over the still window (since the tracked hand came to
-        rest within ``still_mm``), or None without a hand."""
-        if palm is None:
-            self._palms.clear()
-            return None
-        hist = self.still._hist
-        t0 = hist[0][0] if hist else t_s
-        self._palms.append((t_s, np.asarray(palm, float)))
-        while self._palms and self._palms[0][0] < t0:
-            self._palms.popleft()
-        c = np.mean([q for _, q in self._palms], axis=0)
-        return (float(c[0]), float(c[1]))
-
-    def __call__(self, frame: Frame, work: dict) -> None:
-        hand: Hand | None = work.get("hand")
-        t = frame.t_capture_s
-        pos = hand.center_mm if hand is not None else None
-        if hand is not None and pos is None:
-            pos = hand.center_px
-        palm = pos
-        tracks = work.get("tracks")  # stillness of the tracked centre: the palm's can jump
-        if hand is not None and tracks is not None and tracks.in_mm and tracks.hand_tracks:
-            pos = tuple(tracks.hand_tracks[0].pos)
-        rest = self.still.update(t, pos)
-        settle = self._settle_palm(t, palm)
-        if settle is not None:
-            work["settle_mm"] = settle  # where the palm rests so far (the warm-up's place)
-        g = None
-        if rest is not None and hand is not None:
-            g = Gesture("static_hand", "static", 1.0, t, hand)
-            # where the palm rests: over the still window, as the warm-up saw it (one
-            # frame's palm can jump by centimetres between two views of a resting hand)
-            work["rest_mm"] = rest if pos is palm else (settle or palm)
-        elif hand is not None and len(hand.contacts) == 2:
-            g = Gesture("two_finger", "static", 1.0, t, hand)
-        if hand is None:
-            self.window.clear()
-            self._named = False
-        else:
-            self.window.append(frame)
-            n = self.clf.n_frames  # 0: no trained model
-            if n > 0 and not self._named and len(self.window) >= n:
-                self._named = True
-                named = self.clf.classify(list(self.window))
-                if named is not None:
-                    g = named
-        work["gesture"] = g
-        if g is not None:
-            self.last = g
-
-
 def open_camera(profile: Any, plugins: Any) -> Any:
     """The profile's camera (``[camera] driver``), opened through its registration."""
     reg = plugins.get("camera", profile.get("camera.driver"))
@@ -225,9 +115,12 @@ def learn_background(camera: Any, classifier: Any) -> None:
         classifier.set_background(camera.background())
 
 
-def base_stages(classifier: Any, gestures: GestureStage | None = None) -> list:
-    """``vision`` then ``classify``."""
-    return [("vision", VisionStage(classifier)), ("classify", gestures or GestureStage(classifier))]
+def base_stages(classifier: Any, gestures: Callable[[Frame, dict], Any] | None = None) -> list:
+    """``vision`` then ``classify`` (``gestures``, else the classifier's gesture stage)."""
+    return [
+        ("vision", VisionStage(classifier)),
+        ("classify", gestures or classifier.gesture_stage()),
+    ]
 
 
 def vision_loop(profile: Any, plugins: Any, camera: Any, *, sinks=(), extra_stages=()):

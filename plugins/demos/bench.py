@@ -14,6 +14,7 @@ import time
 from typing import Any
 
 from console.bench import machine_info, summarize_s
+from console.runtime.latency import DEQUEUED
 
 TARGET_P99_MS = 5.0
 
@@ -163,19 +164,55 @@ def _over_limit(run_, limit_ms: float) -> dict:
     return {"limit_ms": limit_ms, "frames_over": int((vals > limit_ms).sum()), "of": int(vals.size)}
 
 
+class DecisionFrames:
+    """A frame sink timing each frame with a hand from the start of its processing to the
+    end of its ``classify`` stage (vision + gestures: the ``dequeued`` and ``classify``
+    stamps), the frames on which the classifier's model decided a placement's gesture
+    (``work["named"]``) apart from the others."""
+
+    def __init__(self) -> None:
+        self.decision_s: list[float] = []
+        self.other_s: list[float] = []
+
+    def __call__(self, frame: Any, work: dict) -> None:
+        st = frame.stamps_s
+        if work.get("hand") is None or "classify" not in st or DEQUEUED not in st:
+            return
+        dt = st["classify"] - st[DEQUEUED]
+        (self.decision_s if "named" in work else self.other_s).append(dt)
+
+    def summary(self) -> dict:
+        return {
+            "decision_frames": summarize_s(self.decision_s),
+            "other_frames_with_hand": summarize_s(self.other_s),
+            "means": "dequeued -> classify stamps (vision + classify) of each frame with "
+            "a hand; decision frames: the model named the placement's gesture on them",
+        }
+
+
 def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any) -> dict:
     from .run import start_demo
 
     prof, pm = ctx.profile, ctx.pm
     limit = float(prof.get("runtime.watchdog_ms") or 250.0)
+    decisions = DecisionFrames()
     with ctx.outputs(fast=False) as out:
         # the benchmark measures latency: a stall is counted, not acted on
         with start_demo(
-            demo, prof, pm, out, camera=camera, script=camera is None, watchdog_ms=1e9, **kw
+            demo,
+            prof,
+            pm,
+            out,
+            camera=camera,
+            script=camera is None,
+            watchdog_ms=1e9,
+            sinks=[decisions],
+            **kw,
         ) as run_:
             _run_for(run_, seconds)
             run_.stop()
             res = _latency_summary(run_.snapshot())
+            res["vision_and_classify"] = decisions.summary()
             res["would_trip_watchdog"] = _over_limit(run_, limit)
             if demo == "knob":
                 res["crossings"] = run_.demo.crossings_total

@@ -14,42 +14,29 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.contracts import SimulatedCamera
+from console.bench import summarize_s
 from console.errors import UserError
 from console.runtime.latency import LatencyMonitor
 from console.runtime.loop import FrameLoop
+from console.runtime.measured_map import measured_map_file
 from console.runtime.stages import (
-    GestureStage,
-    StillHand,
     VisionStage,
     learn_background,
     open_camera,
     open_classifier,
 )
 from console.runtime.watchdog import Watchdog
-from console.types import GestureScript, GestureStep
+
+from .adapters import flow_renderers
+from .camproc import ProcessCamera
+from .flow import FlowDemo
+from .knob import KnobDemo
+from .planner import PlanProcess
+from .script import script_twin
 
 log = logging.getLogger("haptable.demos")
 
 DEMOS = ("flow", "knob")
-
-
-def script_twin(camera: Any, demo: str, profile: Any, *, hold_frames: int | None = None) -> bool:
-    """On a simulated camera (the twin): a scripted hand performing the demo, looping.
-    False if the camera is not scriptable (real hardware: the operator's hand does it)."""
-    if not isinstance(camera, SimulatedCamera):
-        return False
-    fps = float(profile.get("camera.fps") or 60.0)
-    subject = profile.get("twin_camera.subject") or "s1"
-    seed = int(profile.get("twin_camera.seed") or 0)
-    if demo == "flow":
-        step = GestureStep("open_hand", subject, None, hold_frames or int(4 * fps))
-        gap = int(1.0 * fps)
-    else:
-        step = GestureStep("rotate", subject, None, hold_frames or int(1.5 * fps))
-        gap = int(0.5 * fps)
-    camera.set_script(GestureScript((step,), gap_frames=gap, loop=True, seed=seed))
-    return True
 
 
 def open_frame_sinks(profile: Any, plugins: Any, *, force: dict[str, bool] | None = None):
@@ -139,7 +126,7 @@ class DemoRun:
 
     def status_lines(self, snapshot: dict) -> list[str]:
         """``snapshot`` as the operator reads it (``plugins.demos.status``)."""
-        from .status import status_lines
+        from .status import status_lines  # local: it keeps Textual (its markup) lazy
 
         return status_lines(snapshot)
 
@@ -163,8 +150,6 @@ class DemoRun:
 
 def demo_state(demo: Any) -> dict:
     if demo.name == "knob":
-        from console.bench import summarize_s
-
         s = demo.session
         lat = demo.crossing_to_output_s()
         kern = demo.crossing_in_kernel_s()
@@ -197,8 +182,6 @@ def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
     """The profile's camera; the twin scripted for ``demo`` in its own process
     (``[runtime] twin_camera_process``)."""
     if _twin_apart(profile, plugins):
-        from .camproc import ProcessCamera
-
         return ProcessCamera(profile, demo)
     return open_camera(profile, plugins)
 
@@ -207,7 +190,6 @@ def flow_map_path(profile: Any, plugins: Any = None) -> Path:
     """The flow's vibration map: ``[demos] flow_map``, else (on the twin) the profile's
     measured map in HapTable's one cache, the file the console's Vibration screen and
     ``haptable tables measured`` use (measured once)."""
-    from console.runtime.measured_map import measured_map_file
 
     raw = profile.get("demos.flow_map") or ""
     if raw:
@@ -289,12 +271,10 @@ def start_demo(
             learn_background(camera, clf)
         for key, value in (vision or {}).items():  # the console's tuned thresholds
             clf.set_tunable(key, value)
-        still = StillHand(
+        gestures = clf.gesture_stage(
             still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
         )
         if name == "knob":
-            from .knob import KnobDemo
-
             demo = KnobDemo(
                 profile,
                 plugins,
@@ -304,15 +284,10 @@ def start_demo(
                 projector=projector,
             )
         else:
-            from .adapters import flow_renderers
-            from .flow import FlowDemo
-
             pairs, planner = None, None
             plans = flow_plans
             if plans is None:
                 if dm.get("plan_process", True):
-                    from .planner import PlanProcess
-
                     planner = PlanProcess(profile)
                 plans, pairs = flow_renderers(
                     plugins, profile, flow_map_path(profile, plugins), planner
@@ -334,7 +309,7 @@ def start_demo(
             )
         stages = [
             ("vision", VisionStage(clf)),
-            ("classify", GestureStage(clf, still)),
+            ("classify", gestures),
             *demo.stage_fns(),
         ]
         mon = LatencyMonitor(

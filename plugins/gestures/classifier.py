@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,9 +14,10 @@ from console.types import Frame, Gesture, TunableRange
 
 from .background import Background
 from .evaluate import N_HARMONICS_MAX, record_features, sample_records
-from .features import select_dynamic, select_kind, select_static
+from .features import frame_record, select_dynamic, select_kind, select_static
 from .model import GESTURES, GestureModel
 from .orientation import Orientation
+from .rules import GestureRules, StillHand
 from .sketch import DYNAMIC
 from .vision import FrameResult, VisionParams, process_frame
 
@@ -133,10 +135,12 @@ def _orientation_values(o: Orientation) -> dict[str, int]:
 
 class SvmClassifier:
     """The ``svm`` classifier plugin (a ``console.contracts.Classifier`` and
-    ``TouchCalibrating``): ``classify(frames) -> Gesture | None``.
+    ``TouchCalibrating``): ``process(frame)`` once per frame, then ``classify(window,
+    t_s) -> Gesture | None`` from those frames' results; ``gesture_stage()`` is the loop's
+    ``classify`` stage (``rules.GestureRules``).
 
     Needs a trained model (``[gestures] model``) and a background (``set_background``,
-    or the first frame given while no hand is seen). Frames beyond the model's window
+    or the first frame given while no hand is seen). Results beyond the model's window
     are ignored: a dynamic gesture is decided from its first ``n_frames`` frames.
     """
 
@@ -274,16 +278,22 @@ class SvmClassifier:
         frame.stamp("vision", time.monotonic())
         return res
 
-    def classify(self, frames: list[Frame]) -> Gesture | None:
-        if self.model is None or not frames:
+    def classify(self, window: Sequence[FrameResult], t_s: float) -> Gesture | None:
+        """The gesture of the first ``n_frames`` vision results (``process``'s, in frame
+        order; nothing is processed again), seen at ``t_s``; ``None`` without a model or
+        a hand."""
+        if self.model is None or not window:
             return None
-        n = self.model.n_frames
-        results = [self.process(f) for f in frames[:n]]
-        from .features import frame_record
-
+        results = list(window[: self.model.n_frames])
         recs = [frame_record(r) for r in results]
         if all(r is None for r in recs):
             return None
         name, kind, conf, _ = decide(self.model, recs)
         hand = next((r.hands[0] for r in reversed(results) if r.hands), None)
-        return Gesture(name, kind, conf, frames[min(n, len(frames)) - 1].t_capture_s, hand)
+        return Gesture(name, kind, conf, t_s, hand)
+
+    def gesture_stage(self, *, still_mm: float = 12.0, still_s: float = 0.3) -> GestureRules:
+        """The frame loop's ``classify`` stage: a resting hand (within ``still_mm`` for
+        ``still_s``), a two-finger grip, and this classifier's decision once per
+        placement from the ``vision`` stage's results."""
+        return GestureRules(self, StillHand(still_mm=still_mm, still_s=still_s))

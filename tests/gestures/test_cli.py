@@ -100,11 +100,12 @@ def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
 
     s = read_sample(dataset / "drag" / "s1_000")
     clf = SvmClassifier(GestureModel.load(model), background=s.background())
-    frames = [Frame(img, i, i / 60) for i, img in enumerate(s.frames())]
-    g = clf.classify(frames)
+    frames = [Frame(img, i, i / 60) for i, img in enumerate(s.frames())][: clf.n_frames]
+    results = [clf.process(f) for f in frames]  # as the loop's vision stage does
+    g = clf.classify(results, frames[-1].t_capture_s)
     assert g.name == "drag" and g.kind == "dynamic" and 0 <= g.confidence <= 1
     assert g.hand is not None and "vision" in frames[0].stamps_s
-    assert SvmClassifier(None).classify(frames) is None
+    assert SvmClassifier(None).classify(results, frames[-1].t_capture_s) is None
 
 
 def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path):

@@ -997,7 +997,7 @@ def test_extreme_frames_through_the_live_classifier(name, fx):
     frame, bg = FRAMES[name]
     clf = SvmClassifier(GestureModel.load(fx.model), background=bg)
     frames = [Frame(frame.copy(), i, i / 60) for i in range(4)]
-    g = clf.classify(frames)
+    g = clf.classify([clf.process(f) for f in frames], frames[-1].t_capture_s)
     assert g is None or g.name in GESTURES
     res = clf.process(Frame(frame.copy(), 9, 9 / 60))
     assert isinstance(res.hands, tuple)

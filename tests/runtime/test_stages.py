@@ -1,4 +1,5 @@
-"""Shared stages: resting-hand detection, camera -> table mapping, vision on the twin."""
+"""Shared stages: camera -> table mapping, vision on the twin, the classifier's own
+classify stage (its gesture rules: tests/gestures/test_rules.py)."""
 
 from __future__ import annotations
 
@@ -6,49 +7,14 @@ import numpy as np
 import pytest
 
 from console.runtime.stages import (
-    StillHand,
     VisionStage,
+    base_stages,
     corners_homography,
     fallback_to_mm,
     learn_background,
     open_camera,
     open_classifier,
 )
-
-
-def test_still_hand_fires_once_per_placement():
-    s = StillHand(still_mm=5, still_s=0.3, lift_s=0.2, moved_mm=40)
-    fired = [s.update(t, (100.0, 100.0)) for t in np.arange(0, 1.0, 1 / 60)]
-    hits = [i for i, f in enumerate(fired) if f is not None]
-    assert len(hits) == 1
-    assert hits[0] == 18  # 0.3 s at 60 fps
-    assert fired[hits[0]] == pytest.approx((100.0, 100.0))
-
-
-def test_still_hand_waits_while_moving_and_rearms_after_a_lift_or_a_move():
-    s = StillHand(still_mm=5, still_s=0.2, lift_s=0.1, moved_mm=40)
-    t = 0.0
-    for k in range(30):  # sliding 2 mm per frame: never still
-        assert s.update(t, (100.0 + 2 * k, 50.0)) is None
-        t += 1 / 60
-    got = None
-    for _ in range(20):
-        got = got or s.update(t, (160.0, 50.0))
-        t += 1 / 60
-    assert got == pytest.approx((160.0, 50.0))
-    for _ in range(3):  # a short gap (under lift_s) does not re-arm
-        s.update(t, None)
-        t += 1 / 60
-    assert all(s.update(t + i / 60, (160.0, 50.0)) is None for i in range(20))
-    t += 20 / 60
-    for _ in range(10):  # lifted
-        s.update(t, None)
-        t += 1 / 60
-    again = [s.update(t + i / 60, (160.0, 50.0)) for i in range(20)]
-    assert sum(a is not None for a in again) == 1
-    t += 20 / 60
-    moved = [s.update(t + i / 60, (260.0, 50.0)) for i in range(20)]
-    assert sum(m is not None for m in moved) == 1
 
 
 def test_corners_homography_maps_the_corners_exactly():
@@ -105,44 +71,37 @@ def test_no_fallback_mapping_off_the_twin(profile):
     assert fallback_to_mm(profile) is not None
 
 
-class FakeModelClassifier:
-    """A classifier with a trained model: names a gesture from a window of frames."""
+def test_the_classify_stage_is_the_classifier_s():
+    """The gesture rules are the classifier's (``Classifier.gesture_stage``): the shared
+    stages hold none."""
 
-    n_frames = 3  # the trained model's window
+    class Clf:
+        to_mm = None
 
-    def __init__(self) -> None:
-        self.calls: list[int] = []
+        def gesture_stage(self):
+            return stage
 
-    def classify(self, frames):
-        from console.types import Gesture
+    def stage(frame, work):
+        work["gesture"] = None
 
-        self.calls.append(len(frames))
-        return Gesture("l_shape", "static", 0.8, frames[-1].t_capture_s, None)
-
-
-def _hand(center_mm, n_contacts=0):
-    from console.types import Contact, Hand
-
-    cs = tuple(Contact(i, (0.0, 0.0), (0.0, 0.0)) for i in range(n_contacts))
-    return Hand(np.zeros((3, 2)), (0.0, 0.0), 10.0, 0.0, np.zeros(3), n_contacts, cs, center_mm)
+    assert [(n, fn) for n, fn in base_stages(Clf())][1] == ("classify", stage)
 
 
-def test_gesture_stage_names_a_placement_once_and_reports_rest_and_grip():
-    from console.runtime.stages import GestureStage
-    from console.types import Frame
+def test_console_names_no_gesture():
+    """console/ builds no ``Gesture``: naming one (a resting hand, a grip, the model's
+    decision) is the classifier plugin's (plugins/gestures/rules.py)."""
+    import ast
+    from pathlib import Path
 
-    clf = FakeModelClassifier()
-    st = GestureStage(clf, StillHand(still_mm=5, still_s=0.1))
-    names = []
-    for k in range(20):
-        f = Frame(np.zeros((2, 2), np.uint8), k, k / 60)
-        work = {"hand": _hand((200.0, 100.0), 2 if k >= 12 else 0)}
-        st(f, work)
-        names.append((work["gesture"].name if work["gesture"] else None, work.get("rest_mm")))
-    assert clf.calls == [3]  # once per placement, from the model's window
-    assert names[2][0] == "l_shape"
-    rest = [i for i, (_, r) in enumerate(names) if r is not None]
-    assert rest == [6] and names[6][0] == "static_hand"
-    assert all(n == "two_finger" for n, _ in names[12:])
-    st(Frame(np.zeros((2, 2), np.uint8), 20, 1.0), {"hand": None})
-    assert st.window.maxlen and len(st.window) == 0
+    import console
+
+    root = Path(console.__file__).parent
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.id if isinstance(f, ast.Name) else getattr(f, "attr", "")
+                if name == "Gesture":
+                    found.append(f"{path.relative_to(root.parent)}:{node.lineno}")
+    assert found == []
