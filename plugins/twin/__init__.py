@@ -82,7 +82,7 @@ def haptable_register_audio_outputs(register):
 @hookimpl
 def haptable_register_relay_boards(register):
     def factory(profile):
-        from plugins.twin.outputs import TwinRelayBoard
+        from plugins.twin.relays import TwinRelayBoard
 
         return TwinRelayBoard(profile)
 

@@ -1,4 +1,4 @@
-"""Twin audio output and relay board: the table's outputs simulated and recorded.
+"""Twin audio output: the table's sound card and amplifiers simulated and recorded.
 
 The audio output pulls blocks from the safety gate and records what the amplifiers got.
 Paced (real time), it behaves like a sound card with a device buffer of
@@ -30,12 +30,10 @@ changed. The gaps themselves are in ``underrun_log`` (clock, length, level, whet
 ramped, cause); ``dac_output_v()`` is the recording with them inserted: what the amplifiers
 got in real time. Underruns are counted per cause: ``late_wakeup`` (the driver thread came
 back late though its fill was quick) and ``slow_fill`` (the gate's fill itself took longer
-than the buffer's slack).
+than the buffer's slack), and by where the late thread's time went
+(``console.stall_witness``: the host, the scheduler, its own work, the process).
 
-The relay board has the MaxiCoupler's channels and logs every switch with the output
-level at that moment (the level the twin DAC puts out then, a gap's hold or ramp
-included, as the real contacts would see it) and the clock of that sample (an index into
-the recording).
+The relay board it drives the level of is in ``plugins.twin.relays``.
 """
 
 from __future__ import annotations
@@ -46,7 +44,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -58,6 +56,7 @@ from console.realtime import realtime_priority
 from console.safety.limits import Limits
 from console.stall_witness import ORIGINS, StallWitness
 from console.types import PATCHES
+from plugins.twin.relays import bus_for
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
 DEFAULT_BUFFER_PERIODS = 3
@@ -70,48 +69,6 @@ UNDERRUN_HOLD_BLOCKS = 1
 FALLBACK_STEP_FRACTION = 0.01
 #: Underrun causes counted in ``status()["underruns_by_cause"]``.
 UNDERRUN_CAUSES = ("late_wakeup", "slow_fill")
-
-
-@dataclass
-class _Bus:
-    """The wire between the twin amplifiers' output and the twin relays.
-
-    The live twin audio output that started last drives it (one live set of outputs per
-    profile, as on the real table): its probe gives the clock of the sample at the
-    amplifiers now (samples played since that output started) and its level in volts.
-    When it stops, the output that was driving before it (still live) drives again: two
-    outputs of one profile file (a profile changed in memory keeps its path) never leave
-    a stopped output's clock on the other's relay log.
-    """
-
-    level_v: tuple[float, ...] = (0.0, 0.0)
-    clock: int = 0
-    probes: list[Callable[[], tuple[int, tuple[float, ...]]]] = field(default_factory=list)
-
-    def now(self) -> tuple[int, tuple[float, ...]]:
-        probes = self.probes
-        return probes[-1]() if probes else (self.clock, self.level_v)
-
-    def drive(self, probe: Callable[[], tuple[int, tuple[float, ...]]]) -> None:
-        """``probe``'s output drives the wire from now on."""
-        self.release(probe)
-        self.clock = 0
-        self.probes.append(probe)
-
-    def release(self, probe: Callable[[], tuple[int, tuple[float, ...]]]) -> None:
-        """``probe``'s output stopped: the one before it drives again (its last clock and
-        level stay on the wire when no output is left)."""
-        if probe in self.probes:
-            if self.probes[-1] == probe:
-                self.clock, self.level_v = probe()
-            self.probes.remove(probe)
-
-
-_BUSES: dict[str, _Bus] = {}
-
-
-def bus_for(profile) -> _Bus:
-    return _BUSES.setdefault(str(profile.path), _Bus())
 
 
 def _key(profile, dotted: str, default):
@@ -664,50 +621,3 @@ class TwinAudioOutput:
     def _gap_v(self, g: Underrun) -> np.ndarray:
         level, step = np.array(g.level_v), np.array(g.step_v)
         return _gap_values(level, step, np.arange(1, g.samples + 1), self.hold_samples)
-
-
-@dataclass(frozen=True)
-class SwitchRecord:
-    t_s: float
-    clock: int
-    channel: int
-    closed: bool
-    level_v: tuple[float, ...]  # every output channel's volts at the switch
-
-
-class TwinRelayBoard:
-    """An 8-channel solid-state relay board like the Yocto-MaxiCoupler."""
-
-    def __init__(self, profile):
-        self.channels = int(profile.get("relays.channels"))
-        self.switch_time_s = profile.get("relays.switch_time_ms") * 1e-3
-        self._state = [False] * self.channels
-        self._bus = bus_for(profile)
-        self.log: list[SwitchRecord] = []
-        self.fail_on: set[int] = set()  # fault injection: channels whose command fails
-
-    def set(self, channel: int, closed: bool) -> None:
-        if not 1 <= channel <= self.channels:
-            raise ValueError(f"relay channel {channel} out of 1..{self.channels}")
-        if channel in self.fail_on:
-            raise OSError(f"twin relay {channel} did not respond")
-        if self._state[channel - 1] != closed:
-            self._state[channel - 1] = closed
-            clock, level_v = self._bus.now()
-            self.log.append(SwitchRecord(time.monotonic(), clock, channel, closed, level_v))
-
-    def states(self) -> tuple[bool, ...]:
-        return tuple(self._state)
-
-    def close(self) -> None:
-        for ch in range(1, self.channels + 1):
-            if ch not in self.fail_on:
-                self.set(ch, False)
-
-    def status(self) -> dict[str, Any]:
-        return {
-            "driver": "twin",
-            "channels": self.channels,
-            "closed": [i + 1 for i, s in enumerate(self._state) if s],
-            "switches": len(self.log),
-        }

@@ -19,6 +19,16 @@ def _locked_kb(pid: int | str = "self") -> int:
         return int(next(ln for ln in f if ln.startswith("VmLck:")).split()[1])
 
 
+@pytest.fixture
+def unlocked():
+    """Start from an unlocked process: PortAudio's JACK host API, scanned by an earlier
+    test in this worker (tests/drivers), locks the whole process's memory (libjack)."""
+    import ctypes
+
+    if sys.platform.startswith("linux") and _locked_kb() > 0:
+        ctypes.CDLL(None, use_errno=True).munlockall()
+
+
 @linux_only
 def test_not_allowed_is_a_notice_with_the_fix_and_nothing_locked(monkeypatch):
     monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
@@ -28,7 +38,7 @@ def test_not_allowed_is_a_notice_with_the_fix_and_nothing_locked(monkeypatch):
 
 
 @linux_only
-def test_paced_outputs_lock_memory_until_the_last_closes(plugins):
+def test_paced_outputs_lock_memory_until_the_last_closes(plugins, unlocked):
     """The table's core (what a kernel builds, here two in this process): the lock is
     held while any paced one is open."""
     from console.kernel.table import TableOutputs
@@ -56,7 +66,7 @@ def test_paced_outputs_lock_memory_until_the_last_closes(plugins):
 
 
 @linux_only
-def test_a_paced_tables_kernel_locks_its_memory_and_its_clients_do_not(plugins):
+def test_a_paced_tables_kernel_locks_its_memory_and_its_clients_do_not(plugins, unlocked):
     """The outputs play in the kernel's process: that one locks its memory (its status
     says so); a client holds no audio thread and locks nothing."""
     from console.kernel.client import open_outputs
