@@ -31,8 +31,10 @@ seconds handed to the driver) and ``emergency`` (e-stop of every live gate on ex
 signals and unhandled exceptions). Import from ``console.safety``.
 """
 
+from console.safety.block_rules import GENERIC_REFUSAL
 from console.safety.emergency import estop_all, install_emergency_hooks
-from console.safety.gate import GENERIC_REFUSAL, GateEvent, SafetyGate, ScopeView
+from console.safety.gate import SafetyGate
+from console.safety.gate_state import GateEvent, ScopeView
 from console.safety.limits import RAMP_TOLERANCE, Limits, check_plan
 from console.safety.sources import Source
 

@@ -8,46 +8,35 @@ channel are fixed when it is built."""
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 import weakref
-from collections import deque
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, NamedTuple, NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 
 from console.channels import ChannelLayout
 from console.contracts import RelayBoard
 from console.errors import SafetyRefusal
-from console.safety.limits import Limits, range_problem, slew_problem
-from console.safety.scope import ScopeTap, ScopeTrace
+from console.safety.block_rules import (
+    GENERIC_REFUSAL,
+    Judged,
+    as_volts,
+    block_first_problem,
+    block_ok,
+    block_problem,
+    block_rules,
+    read_only,
+)
+from console.safety.gate_state import GateEvent, GateState, ScopeView
+from console.safety.limits import Limits
+from console.safety.scope import ScopeTap
 from console.safety.sources import Source
 from console.types import PATCHES
 
 log = logging.getLogger("haptable.safety")
-
-#: the refusal when the one-pass check fails and the per-rule search names no rule
-GENERIC_REFUSAL = "block refused by the gate's check (no single rule named)"
-
-
-@dataclass(frozen=True)
-class GateEvent:
-    t_s: float
-    clock: int
-    kind: str  # "estop", "shutdown", "refused", "switch", "fault", "reset"
-    message: str
-    #: an e-stop a driver may answer by dropping its queued blocks at once (an operator's),
-    #: and then every block until the gate hands one ending in silence (the rest of its
-    #: ramp down, played after the drop, would step up from 0 V); a fault's e-stop is not
-    #: cut: the gate's ramp to zero at the slew limit plays out
-    cut: bool = True
-    #: on "estop", "shutdown" and "fault": the step (volts per sample, one per sound-card
-    #: channel) the gate ramps down with at that moment, for a driver ramping on its own
-    ramp_step_v: tuple[float, ...] = ()
 
 
 #: every gate alive in this process (what ``estop_all`` reaches)
@@ -55,115 +44,6 @@ LIVE_GATES: weakref.WeakSet[SafetyGate] = weakref.WeakSet()
 
 #: events that carry the ramp-down step
 _RAMP_KINDS = frozenset({"estop", "shutdown", "fault"})
-
-
-def _as_volts(x: Any, n: int, name: str) -> tuple[np.ndarray | None, str | None]:
-    """A block channel as a float array of ``n`` samples, or why it is not one."""
-    try:
-        a = np.asarray(x)
-    except Exception as exc:
-        return None, f"{name} block is not an array ({type(exc).__name__})"
-    if a.dtype.kind not in "fiu":
-        return None, f"{name} block has dtype {a.dtype}, not numbers"
-    if a.shape != (n,):
-        return None, f"output block has shape {a.shape} on the {name} channel, expected ({n},)"
-    return a.astype(np.float64, copy=False), None
-
-
-def _read_only(a: Any) -> np.ndarray:
-    """A float copy of ``a`` that cannot be written to."""
-    out = np.array(a, dtype=np.float64)
-    out.setflags(write=False)
-    return out
-
-
-class _Judged(NamedTuple):
-    """The state one block is judged on, read once: both checks look at this alone."""
-
-    clock: int  # of the block's first sample
-    quiet_until: int
-    level_v: tuple[float, ...]
-    relays: tuple[bool, ...]
-    patches: frozenset[str]  # connected by ``relays``
-    steps: np.ndarray  # each channel's slew step for ``relays`` (read-only)
-    screen_relay_open: bool  # a screen relay channel is set and it is open
-
-
-class _State:
-    """The gate's changing state. Only the gate's own methods write it."""
-
-    __slots__ = (
-        "audio_thread",
-        "clock",
-        "estop_reason",
-        "estopped",
-        "events",
-        "in_fill",
-        "last_nonzero",
-        "last_switch",
-        "latency_fixed",
-        "latency_samples",
-        "level_v",
-        "listeners",
-        "quiet_until",
-        "relays",
-        "source",
-        "steps_for",
-        "switching",
-    )
-
-    def __init__(self, n_channels: int, relays: tuple[bool, ...], latency_samples: int) -> None:
-        self.source: Source | None = None
-        self.estopped = False
-        self.estop_reason = ""
-        self.switching = False
-        self.clock = 0  # samples handed to the driver
-        self.last_nonzero = -(10**12)
-        self.quiet_until = 0  # no signal before this clock (post-switch settle)
-        self.last_switch: dict[int, int] = {}  # channel -> clock of its last switch
-        #: (relays, connected patches, read-only steps) for the last relay state looked up
-        self.steps_for: tuple[tuple[bool, ...], frozenset[str], np.ndarray] | None = None
-        #: last sample handed out per channel, volts at the actuators
-        self.level_v: tuple[float, ...] = (0.0,) * n_channels
-        self.relays = relays
-        self.events: deque[GateEvent] = deque(maxlen=1000)
-        self.audio_thread: threading.Thread | None = None
-        #: the driver is inside ``fill`` (waiting on the gate: it has not stopped pulling)
-        self.in_fill = False
-        self.listeners: tuple[Callable[[GateEvent], None], ...] = ()
-        self.latency_samples = latency_samples
-        self.latency_fixed = False  # ``set_device_latency`` was called
-
-
-class ScopeView:
-    """Read-only access to the gate's scope tap: only the gate writes to it."""
-
-    __slots__ = ("_tap",)
-
-    def __init__(self, tap: ScopeTap) -> None:
-        object.__setattr__(self, "_tap", tap)
-
-    def __setattr__(self, name: str, value: Any) -> NoReturn:
-        raise AttributeError(f"the gate's scope is read-only: {name!r} cannot be set")
-
-    def __delattr__(self, name: str) -> NoReturn:
-        raise AttributeError(f"the gate's scope is read-only: {name!r} cannot be deleted")
-
-    @property
-    def sample_rate_hz(self) -> int:
-        return self._tap.sample_rate_hz
-
-    @property
-    def channels(self) -> tuple[str, ...]:
-        return self._tap.channels
-
-    @property
-    def capacity(self) -> int:
-        return self._tap.capacity
-
-    def read(self, seconds: float | None = None) -> ScopeTrace:
-        """The newest ``seconds`` (all kept when None) in volts at the actuators."""
-        return self._tap.read(seconds)
 
 
 class SafetyGate:
@@ -181,12 +61,11 @@ class SafetyGate:
     __slots__ = (
         "__weakref__",
         "_board",
-        "_check_order",
         "_events_lock",
         "_layout",
         "_limits",
         "_lock",
-        "_ranges",
+        "_rules",
         "_relay_channels",
         "_s",
         "_safe",
@@ -213,7 +92,6 @@ class SafetyGate:
             raise ValueError(f"latency_samples = {latency_samples!r}: must be >= 0")
         layout = limits.layout  # what each sound-card channel drives
         names = layout.names
-        ranges = np.array(limits.column_ranges())
         card_v = tuple(
             limits.screen_card_v if kind == "screen" else limits.piezo_card_v
             for kind in layout.kinds()
@@ -229,14 +107,8 @@ class SafetyGate:
         )
         init(self, "_screen_channel", None if screen_channel is None else int(screen_channel))
         init(self, "_layout", layout)
-        #: the order the block checks look at the channels: piezo ones first
-        init(
-            self,
-            "_check_order",
-            tuple(sorted(range(len(names)), key=lambda k: names[k] == "screen")),
-        )
-        init(self, "_ranges", (_read_only(ranges[:, 0]), _read_only(ranges[:, 1])))
-        init(self, "_scale", _read_only(1.0 / np.array(card_v)))
+        init(self, "_rules", block_rules(limits))
+        init(self, "_scale", read_only(1.0 / np.array(card_v)))
         #: the last seconds handed to the driver, per sound-card channel (``scope.read``)
         init(self, "_scope", scope)
         init(self, "_scope_view", ScopeView(scope))
@@ -248,7 +120,7 @@ class SafetyGate:
         safe = threading.Event()
         safe.set()
         init(self, "_safe", safe)
-        init(self, "_s", _State(len(names), tuple(board.states()) if board else (), latency))
+        init(self, "_s", GateState(len(names), tuple(board.states()) if board else (), latency))
         LIVE_GATES.add(self)
 
     def __setattr__(self, name: str, value: Any) -> NoReturn:
@@ -419,20 +291,20 @@ class SafetyGate:
         hit = s.steps_for
         if hit is None or hit[0] != relays:
             patches = self._closed_patches(relays)
-            hit = (relays, patches, _read_only(self._limits.column_steps_v(patches)))
+            hit = (relays, patches, read_only(self._limits.column_steps_v(patches)))
             s.steps_for = hit
         return hit[1], hit[2]
 
     def _judge_state(
         self, relays: tuple[bool, ...], level_v: tuple[float, ...], quiet_until: int, clock: int
-    ) -> _Judged:
+    ) -> Judged:
         """What a block starting at ``clock`` is judged on, for this state."""
         patches, steps = self._steps(relays)
         sc = self._screen_channel
         screen_open = sc is not None and not (1 <= sc <= len(relays) and relays[sc - 1])
-        return _Judged(clock, quiet_until, level_v, relays, patches, steps, screen_open)
+        return Judged(clock, quiet_until, level_v, relays, patches, steps, screen_open)
 
-    def _judged(self) -> _Judged:
+    def _judged(self) -> Judged:
         """The gate's state now, for the next block (call with the lock held)."""
         s = self._s
         return self._judge_state(s.relays, s.level_v, s.quiet_until, s.clock)
@@ -507,14 +379,14 @@ class SafetyGate:
                 judged = None
             else:
                 judged = self._judged()
-                if self._block_ok(cols, judged):
+                if block_ok(cols, judged, self._rules):
                     self._hand(out, cols)
                     return
         if judged is None:
             self._hand_ramp_down(out)
             return
         # refused: the message is looked for on the same snapshot, and never overrules
-        problem = self._block_first_problem(cols, judged) or GENERIC_REFUSAL
+        problem = block_first_problem(cols, judged, self._rules) or GENERIC_REFUSAL
         self._hand_ramp_down(out)
         self._fault(problem)
 
@@ -535,7 +407,7 @@ class SafetyGate:
             )
         cols = []
         for name, x in zip(names, raw, strict=True):
-            a, problem = _as_volts(x, n, name)
+            a, problem = as_volts(x, n, name)
             if problem is not None:
                 return None, problem
             cols.append(a)
@@ -573,66 +445,9 @@ class SafetyGate:
         ]
         self._hand(out, cols)
 
-    def _block_problem(self, cols: list[np.ndarray], judged: _Judged) -> str | None:
-        """Why the block must not play (the first rule it breaks), or ``None``. Every
-        channel at once first (one pass over the block); only a block that fails is
-        looked at channel by channel, for the message, on the same state; a failed block
-        is refused whatever that search finds."""
-        if self._block_ok(cols, judged):
-            return None
-        return self._block_first_problem(cols, judged) or GENERIC_REFUSAL
-
-    def _block_ok(self, cols: list[np.ndarray], j: _Judged) -> bool:
-        """True when the block keeps every rule: finite, inside each channel's range, no
-        signal while settling or on a channel whose load is disconnected, each step within
-        its channel's slew limit (tolerances as in ``range_problem`` / ``slew_problem``)."""
-        x = np.stack(cols)  # (channels, n)
-        if x.shape[1] == 0:
-            return True
-        if not np.isfinite(x).all():
-            return False
-        lo, hi = self._ranges
-        if (x.min(axis=1) < lo - 1e-9).any() or (x.max(axis=1) > hi + 1e-9).any():
-            return False
-        on = x.any(axis=1)
-        if on.any():
-            if j.clock < j.quiet_until:
-                return False
-            names, patches = self._layout.names, j.patches
-            for k in np.flatnonzero(on):
-                name = names[k]
-                if name == "screen":
-                    if j.screen_relay_open:
-                        return False
-                elif (name == "piezo" and not patches) or (name != "piezo" and name not in patches):
-                    return False
-        d = np.abs(np.diff(x, axis=1, prepend=np.asarray(j.level_v)[:, None]))
-        return bool((d.max(axis=1) <= j.steps * (1 + 1e-9) + 1e-9).all())
-
-    def _block_first_problem(self, cols: list[np.ndarray], j: _Judged) -> str | None:
-        """The first rule the block breaks, worded, judged on ``j`` (``None``: none found)."""
-        names = self._layout.names
-        ranges = self._limits.column_ranges()
-        for k in self._check_order:
-            if (p := range_problem(cols[k], *ranges[k], math.inf)) is not None:
-                return f"{names[k]} channel {p} of a block"
-        on = [bool(x.any()) for x in cols]
-        if j.clock < j.quiet_until and any(on):
-            return "signal during the relay settle time"
-        for k in self._check_order:
-            name = names[k]
-            if not on[k] or name == "screen":
-                continue
-            if name == "piezo" and not j.patches:
-                return "piezo signal while no patch relay is closed"
-            if name != "piezo" and name not in j.patches:
-                return f"{name} signal while its patch relay is open"
-        if on[self._layout.screen_index] and j.screen_relay_open:
-            return "screen signal while the screen relay is open"
-        for k in self._check_order:
-            if (p := slew_problem(cols[k], j.level_v[k], j.steps[k], end=False)) is not None:
-                return f"{names[k]} channel {p} (a block)"
-        return None
+    def _block_problem(self, cols: list[np.ndarray], judged: Judged) -> str | None:
+        """Why the block must not play, or ``None`` (``block_rules.block_problem``)."""
+        return block_problem(cols, judged, self._rules)
 
     def _fault(self, message: str) -> None:
         self._event("fault", message)

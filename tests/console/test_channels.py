@@ -16,6 +16,7 @@ from console.errors import ProfileError, SafetyRefusal
 from console.kernel.client import open_outputs
 from console.profile import PROJECT_PROFILES, load_profile
 from console.safety import Limits, SafetyGate, check_plan
+from console.safety.block_rules import block_first_problem, block_ok
 from console.signals import ramp_envelope
 from console.stream_synth import PulseSpec, StreamSpec
 from console.types import PATCHES, OutputPlan, Segment
@@ -461,8 +462,8 @@ def test_the_gates_one_pass_check_agrees_with_the_per_channel_one(layout):
             cols[k][rng.integers(n)] = np.nan
         elif fault == 2:
             cols[k] = cols[k] + rng.choice([-1, 1]) * 110.0
-        ok = gate._block_ok(cols, judged)
-        problem = gate._block_first_problem(cols, judged)
+        ok = block_ok(cols, judged, gate._rules)
+        problem = block_first_problem(cols, judged, gate._rules)
         assert ok == (problem is None), (trial, problem)
         agree += 1
         refused += problem is not None

@@ -17,6 +17,8 @@ import pytest
 
 from console.errors import SafetyRefusal
 from console.safety import GENERIC_REFUSAL, GateEvent, Limits, SafetyGate, Source, check_plan
+from console.safety import gate as gate_module
+from console.safety.block_rules import block_first_problem, block_ok
 from console.signals import ramp_envelope
 from console.types import PATCHES, OutputPlan, Segment
 
@@ -236,7 +238,7 @@ def test_what_the_gate_hands_out_cannot_be_changed():
     with pytest.raises(dataclasses.FrozenInstanceError):
         gate.events[-1].kind = "reset"  # type: ignore[misc]
     with pytest.raises(ValueError):
-        gate._ranges[1][0] = 1e9  # the checks' own arrays are read-only too
+        gate._rules.hi[0] = 1e9  # the checks' own arrays are read-only too
     with pytest.raises(ValueError):
         gate._steps(gate.relays)[1][0] = 1e9
 
@@ -293,7 +295,7 @@ def test_a_failed_fast_check_refuses_the_block_whatever_the_message_search_finds
     """The audit's fail-open path: the one-pass check refuses a block, the per-rule search
     (here made to find nothing) names no rule. The block must not play: the e-stop trips
     with the generic message and the driver gets the ramp down."""
-    monkeypatch.setattr(SafetyGate, "_block_first_problem", lambda self, cols, judged: None)
+    monkeypatch.setattr(gate_module, "block_first_problem", lambda cols, judged, rules: None)
     rig = Rig()
     gate = rig.gate
     rig.close({1})
@@ -317,18 +319,18 @@ def test_a_failed_fast_check_refuses_the_block_whatever_the_message_search_finds
 def test_both_checks_judge_one_snapshot_of_the_state(monkeypatch):
     """The fast check and the message search see the same state object, taken once."""
     seen: list[tuple[str, object]] = []
-    ok, first = SafetyGate._block_ok, SafetyGate._block_first_problem
+    ok, first = gate_module.block_ok, gate_module.block_first_problem
 
-    def spy_ok(self, cols, judged):
+    def spy_ok(cols, judged, rules):
         seen.append(("ok", judged))
-        return ok(self, cols, judged)
+        return ok(cols, judged, rules)
 
-    def spy_first(self, cols, judged):
+    def spy_first(cols, judged, rules):
         seen.append(("first", judged))
-        return first(self, cols, judged)
+        return first(cols, judged, rules)
 
-    monkeypatch.setattr(SafetyGate, "_block_ok", spy_ok)
-    monkeypatch.setattr(SafetyGate, "_block_first_problem", spy_first)
+    monkeypatch.setattr(gate_module, "block_ok", spy_ok)
+    monkeypatch.setattr(gate_module, "block_first_problem", spy_first)
     rig = Rig()
     rig.close({1})
     rig.gate.attach_scheduler(Wave(lambda k: (np.full(k.size, 60.0), np.zeros(k.size))))
@@ -612,8 +614,8 @@ def test_the_one_pass_check_and_the_message_search_agree_on_a_snapshot(layout):
             cols[k][rng.integers(n)] = np.nan
         elif fault == 2:
             cols[k] = cols[k] + rng.choice([-1, 1]) * 110.0
-        ok = gate._block_ok(cols, judged)
-        problem = gate._block_first_problem(cols, judged)
+        ok = block_ok(cols, judged, gate._rules)
+        problem = block_first_problem(cols, judged, gate._rules)
         assert ok == (problem is None), (trial, problem)
         assert gate._block_problem(cols, judged) == problem
         refused += problem is not None

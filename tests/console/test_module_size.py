@@ -15,7 +15,6 @@ MAX_LINES = 700
 TODO: frozenset[str] = frozenset(
     {
         "console/contracts.py",
-        "console/safety/gate.py",
     }
 )
 

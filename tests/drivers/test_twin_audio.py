@@ -311,33 +311,50 @@ def test_an_underrun_says_where_the_late_thread_s_time_went(profile):
         assert st["underrun_last"][-1][4] in ("process", "host", "scheduler")
 
 
-def test_a_recording_read_while_it_plays_is_whole_and_since_reads_the_rest(profile):
-    """Read while the paced thread writes and the 1 s ring wraps: every copy is the
-    gate's samples in order (the bulk is copied outside the driver's lock, the rows the
-    ring overwrote meanwhile dropped, never garbled); ``since`` returns the rows after."""
-    import threading
+def test_a_recording_read_while_it_plays_is_what_was_played(profile):
+    """Copies taken while the paced thread writes (the bulk outside the driver's lock)
+    hold exactly the rows the recording holds after, none garbled or shifted."""
     import time
 
-    out = TwinAudioOutput(profile, buffer_periods=3, record_s=1.0)
+    out = TwinAudioOutput(profile, buffer_periods=3, record_s=3.0)
     out.paced = True
-    src = Counter()
-    out.start(src)
+    out.start(Counter())
     copies = []
     try:
-        t_end = time.monotonic() + 1.6
+        t_end = time.monotonic() + 1.0
         while time.monotonic() < t_end:
             copies.append(out.recording_card())
             time.sleep(0.01)
     finally:
         out.stop()
-    assert threading.active_count() >= 1 and len(copies) > 20
+    final = out.recording_card()
+    assert len(copies) > 20 and final.shape[0] > max(c.shape[0] for c in copies) > 0
     for rec in copies:
-        if rec.shape[0] == 0:
-            continue
-        k0 = int(round(rec[0, 0] * 1000)) - 1  # the counter's value names its clock (mod 1000)
-        want = ((np.arange(rec.shape[0]) + k0) % 1000 + 1) / 1000.0
-        np.testing.assert_array_equal(rec[:, 0], want.astype(np.float32))
-    assert max(c.shape[0] for c in copies) == out._cap  # the ring wrapped during the reads
+        np.testing.assert_array_equal(rec, final[: rec.shape[0]])
+
+
+def test_rows_the_ring_overwrites_during_a_copy_are_dropped_and_since_reads_the_rest(profile):
+    """While the first chunk is copied the writer wraps the ring over the oldest rows:
+    the copy starts at the oldest row still kept, its rows are the gate's in order."""
+    out = TwinAudioOutput(profile, buffer_periods=3, record_s=0.5)
+    out.paced = True
+    src = Counter()
+    out._source = src
+    t = run_until(out, 0.4)
+    plain_view = out._ring_view
+    advanced = []
+
+    def view_while_writing(a, b):
+        if not advanced:  # the driver runs 0.3 s meanwhile: the ring wraps past ``a``
+            advanced.append(run_until(out, t + 0.3, t))
+        return plain_view(a, b)
+
+    out._ring_view = view_while_writing
+    first, rec = out._snapshot()
+    assert advanced and first == out._kept_from > 0
+    k = np.arange(first, first + rec.shape[0], dtype=np.float64)
+    np.testing.assert_array_equal(rec[:, 0], ((k % 1000 + 1) / 1000.0).astype(np.float32))
+    out._ring_view = plain_view
     whole = out.recording_card()
     np.testing.assert_array_equal(out.recording_card(since=100), whole[100:])
     assert out.recording_card(since=whole.shape[0] + 5).shape == (0, whole.shape[1])
