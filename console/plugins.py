@@ -27,7 +27,7 @@ from typing import Any
 
 import pluggy
 
-from console import contracts, hookspecs
+from console import contracts, core_sections, hookspecs
 from console.errors import UserError
 
 ENTRY_POINT_GROUP = "haptable"
@@ -391,9 +391,7 @@ def load_plugins(
     for name in blocked:
         pm.set_blocked(name)
 
-    if core is None:
-        from console import core_sections as core
-    pm.register(core, name="core")
+    pm.register(core_sections if core is None else core, name="core")
     # the console's own screens: a tui module, registered by name as the built-in plugins
     # are (this layer imports neither)
     pm.register(importlib.import_module(CORE_PANELS), name="core.panels")

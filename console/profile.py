@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from console import paths
 from console.atomic import write_text_atomic
+from console.core_sections import check_consistency
 from console.errors import ProfileError, UserError
 from console.file_read import parse_toml_text, read_text_capped
 from console.profile_paths import (  # noqa: F401 - re-exported
@@ -259,15 +260,10 @@ def parse_toml(path: Path) -> dict[str, Any]:
     )
 
 
-def load_profile(
-    name_or_path: str | os.PathLike | None = None, plugins: Plugins | None = None
-) -> Profile:
-    """Find, parse and validate a profile, with its override file (``overrides_path``)
-    merged over it. Raises ``ProfileError`` with one line."""
-    if plugins is None:
-        from console.plugins import load_plugins
-
-        plugins = load_plugins()
+def load_profile(name_or_path: str | os.PathLike | None, plugins: Plugins) -> Profile:
+    """Find, parse and validate a profile (``None``: the default one) against the
+    sections ``plugins`` declare, with its override file (``overrides_path``) merged over
+    it. Raises ``ProfileError`` with one line."""
     path = find_profile(name_or_path)
     over_path = overrides_path(path.stem)
     return _build(path, parse_toml(path), read_overrides(over_path, path, plugins), plugins)
@@ -285,8 +281,6 @@ def _build(path: Path, raw: dict[str, Any], over: dict[str, Any], plugins: Plugi
         overrides=over_path if over else None,
     )
     check_drivers(profile, plugins)
-    from console.core_sections import check_consistency
-
     try:
         check_consistency(profile)
         check_sections(profile, plugins)
@@ -328,18 +322,12 @@ def read_overrides(path: Path, profile_path: Path, plugins: Plugins) -> dict[str
     return raw
 
 
-def save_overrides(
-    profile: Profile, settings: dict[str, Any], plugins: Plugins | None = None
-) -> Path:
+def save_overrides(profile: Profile, settings: dict[str, Any], plugins: Plugins) -> Path:
     """Save ``settings`` (``{"audio.device": "...", ...}``) to ``profile``'s override
     file, keeping every other key (and comment) in it, checked like the profile before
     anything is written; written atomically. Returns the file's path."""
-    import tomlkit
+    import tomlkit  # third-party, loaded only when settings are saved
 
-    if plugins is None:
-        from console.plugins import load_plugins
-
-        plugins = load_plugins()
     path = overrides_path(profile.name)
     if os.path.lexists(path):
         # a broken file, a folder, a FIFO or a dangling link is refused with its line,

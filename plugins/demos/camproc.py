@@ -25,7 +25,11 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.plugins import load_plugins
+from console.runtime.stages import open_camera
 from console.types import Frame
+
+from .script import script_twin
 
 #: Shared-memory frame slots (the loop copies a frame out before it is reused).
 SLOTS = 8
@@ -35,11 +39,6 @@ MSG = struct.Struct("<iqdq")
 
 def _child() -> None:
     """``python -m plugins.demos.camproc SHM DEMO``, the pickled profile on stdin."""
-    from console.plugins import load_plugins
-    from console.runtime.stages import open_camera
-
-    from .run import script_twin
-
     shm_name, demo = sys.argv[1], sys.argv[2]
     profile = pickle.loads(sys.stdin.buffer.read(int(sys.stdin.buffer.readline())))
     cam = open_camera(profile, load_plugins())

@@ -34,6 +34,8 @@ import numpy as np
 
 from console.errors import UserError
 from console.vibration_map import VibrationMap
+from plugins.vibrotactile.hand import side_masks
+from plugins.vibrotactile.interp import interpolate_lattice
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
 
@@ -331,8 +333,6 @@ def solve_region(
     line, at most ``cap_v``). ``independent``: the summed generalised eigenproblem per
     bin, then the max-min reweighting on the best ``candidates`` bins; ``time_reversal``:
     the drive of most energy on the active side (the principal eigenvector of A)."""
-    from plugins.vibrotactile.hand import side_masks
-    from plugins.vibrotactile.interp import interpolate_lattice
 
     if method not in METHODS:
         raise UserError(f"method {method!r}: use {', '.join(METHODS)}")

@@ -29,6 +29,7 @@ from plugins.vibrotactile.independent import (
     scale_to_peak,
     solve_pairs,
 )
+from plugins.vibrotactile.interp import interpolate
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
 
@@ -95,7 +96,6 @@ def describe_part(ans: dict, amp: float) -> dict:
 def _with_points(m: VibrationMap, pts: list, method: str) -> tuple[VibrationMap, np.ndarray]:
     """A map of just these points (grid indices, or (x, y) mm interpolated) and the
     error variance of the whole map (the solution's regularisation stays the map's)."""
-    from plugins.vibrotactile.interp import interpolate
 
     xy = np.array([m.points_mm[p] if isinstance(p, int) else p for p in pts], float)
     frf = np.stack(

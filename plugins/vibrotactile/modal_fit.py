@@ -38,7 +38,7 @@ import numpy as np
 from console.errors import UserError
 from console.vibration_map import VibrationMap
 
-from .interp import Grid, grid_of, spline_weights_1d
+from .grid import Grid, grid_of, spline_weights_1d
 
 STABLE_DF = 0.005  # relative frequency change between orders for a stable pole
 STABLE_DZETA = 0.2  # relative damping change

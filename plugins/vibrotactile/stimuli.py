@@ -22,8 +22,10 @@ import numpy as np
 from console.errors import UserError
 from console.signals import MAX_PLAN_S, check_duration, plan_samples
 from console.types import OutputPlan, Segment, patches_of
+from plugins.vibrotactile.interp import interpolate
 from plugins.vibrotactile.perception import Perception
-from plugins.vibrotactile.tables import Tables, query_indices, usable_bins
+from plugins.vibrotactile.ringdown import ringdown_gap_s
+from plugins.vibrotactile.tables import Tables, query_indices, query_points, usable_bins
 
 Point = int | tuple[float, float]  # map point index, or (x, y) mm
 
@@ -68,8 +70,6 @@ def tone_segment(
 
 def _choice(t: Tables, a: Point, b: Point, method: str) -> dict:
     """Table answer for a (index or mm) pair plus |H| at the active point (um/V)."""
-    from plugins.vibrotactile.interp import interpolate
-    from plugins.vibrotactile.tables import query_points
 
     m = t.vmap
     xy = [
@@ -102,8 +102,6 @@ def gap_after_part_1(m, part1: dict, settings: StimulusSettings, band_hz: float)
     at least ``k`` decay times of part 1's mode (``ringdown`` says which and why)."""
     out = {"gap_s": float(settings.gap_s)}
     if settings.ringdown_gap_k > 0:
-        from plugins.vibrotactile.ringdown import ringdown_gap_s
-
         rd = ringdown_gap_s(
             m,
             part1["actuator"],
@@ -215,7 +213,6 @@ def point_plan(
 ) -> OutputPlan:
     """A localized pulse at one point: the excitation and frequency where its
     displacement per volt is largest (paper 4.1), at the target sensation level."""
-    from plugins.vibrotactile.interp import interpolate
 
     m = t.vmap
     keep = usable_bins(m, t.band_hz)

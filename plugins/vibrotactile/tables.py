@@ -29,8 +29,11 @@ from pathlib import Path
 import numpy as np
 
 from console.errors import UserError
-from console.vibration_map import VibrationMap, save_map
-from plugins.vibrotactile.perceptual import PerceptualRule
+from console.npz_safe import read_npz
+from console.vibration_map import FIX, KEYS, VibrationMap, map_from_arrays, save_map
+from plugins.vibrotactile.interp import interpolate
+from plugins.vibrotactile.perceptual import PerceptualRule, felt_db
+from plugins.vibrotactile.perceptual import pair_best as perceptual_pair_best
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 
@@ -177,9 +180,7 @@ def rule_bins(
 
 def pair_best(rule, freq_hz, amp_active, amp_passive):
     """``perceptual.pair_best`` (imported here so both rules sit side by side)."""
-    from plugins.vibrotactile.perceptual import pair_best as best
-
-    return best(rule, freq_hz, amp_active, amp_passive)
+    return perceptual_pair_best(rule, freq_hz, amp_active, amp_passive)
 
 
 def query_indices(t: Tables, active: int, passive: int) -> dict:
@@ -205,7 +206,6 @@ def _with_felt(t: Tables, ans: dict, h: np.ndarray) -> dict:
     ans["rule"] = t.rule
     if t.perceptual is None:
         return ans
-    from plugins.vibrotactile.perceptual import felt_db
 
     e = t.excitations.index(ans["actuator"])
     k = int(np.argmin(np.abs(t.vmap.freq_hz - ans["frequency_hz"])))
@@ -226,7 +226,6 @@ def query_points(
     extrapolate: bool = False,
 ) -> dict:
     """The same answer for arbitrary points (x, y mm), through interpolated FRFs."""
-    from plugins.vibrotactile.interp import interpolate
 
     if np.allclose(active_mm, passive_mm):
         return query_indices(t, 0, 0)
@@ -285,8 +284,6 @@ def load_tables(
     """Read and validate a tables file: its map (``map_*``), the stored ``map_hash``
     against that map, and every entry (``validate_tables``). ``sample_rate_hz``: the
     profile's, for the Nyquist check; ``data``: the arrays when already read."""
-    from console.npz_safe import read_npz
-    from console.vibration_map import KEYS, map_from_arrays
 
     p = Path(path)
     where = str(p)
@@ -481,8 +478,6 @@ def load_map_or_tables(
     grid_points: int | None = None,
 ) -> VibrationMap:
     """The vibration map held in a map or a tables file."""
-    from console.npz_safe import read_npz
-    from console.vibration_map import FIX, map_from_arrays
 
     data = read_npz(path, what="vibration map or tables file", fix=FIX)
     if "max_diff_um_per_v" in data:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 from console.errors import UserError
+from console.plugins import load_plugins
 from console.profile import load_profile
 from console.safety import Limits
 from console.signal_check import never_plays
@@ -67,7 +68,7 @@ def test_what_stays_allowed():
 
 @pytest.fixture(scope="module")
 def limits() -> Limits:
-    return Limits.from_profile(load_profile("sim"))
+    return Limits.from_profile(load_profile("sim", load_plugins()))
 
 
 @pytest.mark.parametrize(

@@ -228,7 +228,7 @@ def twin_setup():
     from console.runtime.measured_map import measured_map
 
     pm = load_plugins()
-    prof = load_profile(None)
+    prof = load_profile(None, pm)
     return pm, prof, measured_map(prof, pm, None)
 
 

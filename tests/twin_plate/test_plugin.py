@@ -20,19 +20,19 @@ def test_sections_command_and_benchmark_are_registered(plugins):
     assert "plate" in plugins.commands and "plate" in plugins.benchmarks
 
 
-def test_defaults_fill_in_when_the_sections_are_absent():
-    p = load_profile("sim")
+def test_defaults_fill_in_when_the_sections_are_absent(plugins):
+    p = load_profile("sim", plugins)
     assert p.get("plate.damping_ratio") == 0.01
     assert p.get("glass.youngs_modulus_gpa") == 72.0
     assert p.get("piezo.d31_pc_per_n") == -180.0
 
 
-def test_a_bad_plate_value_is_a_one_line_profile_error(tmp_path):
-    src = load_profile("sim").path.read_text(encoding="utf-8")
+def test_a_bad_plate_value_is_a_one_line_profile_error(tmp_path, plugins):
+    src = load_profile("sim", plugins).path.read_text(encoding="utf-8")
     bad = tmp_path / "bad.toml"
     bad.write_text(src + "\n[plate]\ndamping_ratio = -0.01\n", encoding="utf-8")
     with pytest.raises(ProfileError, match="damping_ratio") as exc:
-        load_profile(str(bad))
+        load_profile(str(bad), plugins)
     assert "\n" not in str(exc.value)
 
 

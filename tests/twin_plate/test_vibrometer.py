@@ -115,12 +115,12 @@ def test_point_on_a_nodal_line_is_measured_without_blowing_up(sim):
     assert np.mean(z_scores(r, sim, s) ** 2) < 1.3
 
 
-def test_grid_measurement_saves_as_a_vibration_map(tmp_path):
+def test_grid_measurement_saves_as_a_vibration_map(tmp_path, plugins):
     from console.profile import load_profile
     from console.vibration_map import load_map, make_map, save_map
     from plugins.twin.plate.vibrometer import measure_grid, settings_from_profile
 
-    profile = load_profile("sim")
+    profile = load_profile("sim", plugins)
     s = settings_from_profile(profile, sweep_s=2.0, record_s=3.0)
     assert s.amplifier_gain == profile.get("amplifiers.piezo_gain")
     out = measure_grid(profile, s)

@@ -11,7 +11,7 @@ from console.bench import machine_info, summarize_s
 
 from . import model, ritz
 from .frf import missed_peaks
-from .model import build_twin, default_params, grid_points_mm, params_from_profile
+from .model import build_twin, default_params, grid_points_mm, params_from_profile, truncation_error
 from .reference import LAMBDA_TABLE
 from .vibrometer import SweepSettings, measure
 
@@ -100,7 +100,6 @@ def run_bench(profile=None, quick: bool = False) -> dict:
     out["sim_modes_kept"] = int(twin.freq_hz.size)
 
     # FRF: truncation error vs modes kept vs time (84 points x 2501 bins x 5 excitations)
-    from .model import truncation_error
 
     trunc = truncation_error(params)
     f = np.linspace(0.0, params.band_max_hz, 2501)

@@ -44,7 +44,15 @@ import numpy as np
 
 from console.channels import BUS_CHANNELS
 
-from .model import EXCITATIONS, Twin, TwinParams, _eval_coeffs
+from .model import (
+    EXCITATIONS,
+    Twin,
+    TwinParams,
+    _eval_coeffs,
+    build_twin,
+    default_params,
+    params_from_profile,
+)
 
 PATCHES: tuple[str, ...] = EXCITATIONS[:4]
 
@@ -54,7 +62,6 @@ Span = tuple[int, int, Iterable[str]]  # (start sample, stop sample, patches con
 # --------------------------------------------------------------------------- inputs
 def twin_of(profile_or_twin=None) -> Twin:
     """A solved twin from a Twin, TwinParams, a profile, or None (documented defaults)."""
-    from .model import build_twin, default_params, params_from_profile
 
     if isinstance(profile_or_twin, Twin):
         return profile_or_twin

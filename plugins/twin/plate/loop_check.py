@@ -20,8 +20,11 @@ subgrid points reach) against the 3-JND line X(f) of the palm.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from console.errors import UserError
 
 from .closed_loop import hand_subgrid_mm, square_levels_um, twin_of
 from .loop_play import (
@@ -34,6 +37,9 @@ from .loop_play import (
 )
 from .loop_report import pair_problems, summarize
 
+if TYPE_CHECKING:
+    from console.plugins import Plugins
+
 
 def flow_pairs_check(
     outputs,
@@ -42,7 +48,7 @@ def flow_pairs_check(
     pairs=DEFAULT_PAIRS,
     ls: LoopSettings | None = None,
     *,
-    plugins=None,
+    plugins: Plugins,
     min_contrast_db: float | None = None,
     ringdown_gap_k: float | None = None,
 ) -> list[dict]:
@@ -138,7 +144,7 @@ def hand_regions_check(
     ls: LoopSettings | None = None,
     screen_stride: int = 3,
     *,
-    plugins=None,
+    plugins: Plugins,
     ringdown_gap_k: float | None = None,
 ) -> list[dict]:
     """One row per (region, direction, part): square levels predicted from the map vs
@@ -155,7 +161,6 @@ def hand_regions_check(
 def _hand_regions_check(
     outputs, profile, vmap, regions, directions, ls, screen_stride, plugins, ringdown_gap_k
 ):
-    from console.errors import UserError
 
     ls = ls or LoopSettings()
     twin = twin_of(profile)
@@ -248,7 +253,7 @@ def compare_options(
     regions=DEFAULT_REGIONS,
     directions=("left", "right", "up", "down"),
     *,
-    plugins=None,
+    plugins: Plugins,
     min_contrast_db: float = OPTION_CONTRAST_DB,
     ringdown_gap_k: float = OPTION_RINGDOWN_K,
     ls: LoopSettings | None = None,

@@ -6,13 +6,20 @@ RECORDING and the relay log)."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from console.channels import ChannelLayout
+from console.errors import UserError
+from console.vibration_map import VibrationMap, make_map
 
 from .closed_loop import drive_from_recording, part_envelopes
+
+if TYPE_CHECKING:
+    from console.plugins import Plugins
+    from console.profile import Profile
 
 #: Pairs (grid numbers, active -> passive) checked by default: the paper's 51/52 example
 #: both ways, diagonal neighbours as in Fig. 10's pairs 1-1, 3-3, 4-4, and a long pair.
@@ -43,17 +50,11 @@ class LoopSettings:
     pre_s: float = 0.05  # recording kept before the first part (plate at rest)
 
 
-def measured_map(profile, plugins=None, progress=None):
-    """The profile's vibration map measured by its ``[vibrometer] driver`` (twin default)."""
-    from console.vibration_map import make_map
-
+def measured_map(profile: Profile, plugins: Plugins, progress: Any = None) -> VibrationMap:
+    """The profile's vibration map measured by its ``[vibrometer] driver`` (twin default),
+    built by ``plugins``."""
     name = str(profile.get("vibrometer.driver", "twin"))
-    if plugins is None:
-        from .vibrometer import TwinVibrometer
-
-        dev = TwinVibrometer(profile)
-    else:
-        dev = plugins.get("vibrometer", name).factory(profile)
+    dev = plugins.get("vibrometer", name).factory(profile)
     out = dev.measure(progress=progress)
     return make_map(**{k: v for k, v in out.items() if k != "meta"})
 
@@ -69,19 +70,13 @@ def relay_channels_of(profile) -> dict[str, int]:
 def loop_profile(profile, ls: LoopSettings):
     """The profile with the flow parts' length and ramp of ``ls`` (``[vibrotactile]
     part_s`` / ``ramp_ms``); everything else as the profile says."""
-    from dataclasses import replace
-
     vt = {**profile.section("vibrotactile"), "part_s": ls.part_s, "ramp_ms": ls.ramp_ms}
     return replace(profile, data={**profile.data, "vibrotactile": vt})
 
 
-def effects_of(profile, plugins=None, ls: LoopSettings | None = None) -> tuple:
-    """The registered ``flow`` and ``hand_flow`` effects for ``profile`` with ``ls``'s
-    part length (``plugins`` default: the installed plugins)."""
-    if plugins is None:
-        from console.plugins import load_plugins
-
-        plugins = load_plugins()
+def effects_of(profile: Profile, plugins: Plugins, ls: LoopSettings | None = None) -> tuple:
+    """The ``flow`` and ``hand_flow`` effects ``plugins`` register, for ``profile`` with
+    ``ls``'s part length."""
     prof = loop_profile(profile, ls or LoopSettings())
     return (
         plugins.get("effect", "flow").factory(prof),
@@ -97,8 +92,6 @@ def recording_with_offset(outputs, tries: int = 200) -> tuple[np.ndarray, int]:
     block count is stable around the read.
     """
     if outputs.recording() is None:
-        from console.errors import UserError
-
         raise UserError(
             "closed loop: these outputs record nothing (real hardware); use a profile whose "
             "[audio] driver is the twin"

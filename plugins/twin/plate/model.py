@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from console.errors import UserError
+
 from . import defaults as dflt
 from .frf import displacement_frf, modal_receptance, static_residual
 from .piezo import PiezoPatch, modal_forces, patch_loads, pin_force_moment
@@ -207,8 +209,6 @@ def params_from_profile(
     }
     missing = [n for n in EXCITATIONS[:4] if n not in items]
     if missing:
-        from console.errors import UserError
-
         raise UserError(
             f"{profile.path}: [patches] missing {', '.join(missing)}; add [patches.NAME] "
             "center_mm = [x, y] and size_mm = [w, h] for each of PA PB PC PD"

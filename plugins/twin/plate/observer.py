@@ -55,9 +55,11 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.safety import Limits
 from console.types import OutputPlan
 
 from .closed_loop import PATCHES, hand_subgrid_mm, part_envelopes, square_levels_um, twin_of
+from .model import grid_points_mm
 
 #: Candidate answers per stimulus kind, and the sides their parts should be felt on.
 FLOW_ANSWERS = ("left_to_right", "right_to_left")
@@ -307,7 +309,6 @@ class TwinObserver:
         meta = played.meta or {}
         if "from_mm" in meta and "to_mm" in meta and "from_point" in stim:
             where = {int(stim["from_point"]): meta["from_mm"], int(stim["to_point"]): meta["to_mm"]}
-        from .model import grid_points_mm
 
         gx, gy = grid_points_mm(self.profile)
         out = []
@@ -338,7 +339,6 @@ class TwinObserver:
         return self._twin
 
     def _percept(self, kind: str, trial: Mapping[str, Any], played: OutputPlan) -> Percept:
-        from console.safety import Limits
 
         fs = float(played.sample_rate_hz)
         guard_s = Limits.from_profile(self.profile).guard_samples / fs if self.profile else 0.0

@@ -19,10 +19,20 @@ converted back to displacement (``-A / omega^2``): the low-frequency blow-up of 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from console.safety import Limits
 from console.vibration_map import VibrationMap, make_map
+
+from .closed_loop import twin_of
+from .loop_check import flow_pairs_check
+from .loop_play import effects_of
+from .loop_report import pair_problems
+
+if TYPE_CHECKING:
+    from console.plugins import Plugins
 
 #: Accelerance noise: complex Gaussian at 1 % (-40 dB) of the map's median accelerance
 #: above 50 Hz, per excitation (an assumption for a swept-sine LDV measurement with few
@@ -77,7 +87,6 @@ def jnd_db(profile, freq_hz) -> np.ndarray:
 
 
 def drive_cap_v(profile) -> float:
-    from console.safety import Limits
 
     lo, hi = Limits.from_profile(profile).piezo_range()
     return float(min(float(profile.get("vibrotactile.drive_max_v")), -float(lo), float(hi)))
@@ -158,7 +167,7 @@ def compare_rules(
     profile,
     vmap: VibrationMap,
     *,
-    plugins=None,
+    plugins: Plugins,
     played_pairs=(),
     regions=(),
     acc_map: VibrationMap | None = None,
@@ -167,11 +176,6 @@ def compare_rules(
     under ``regions``, ``played_pairs`` (grid numbers) played through the gate; on
     ``acc_map`` (default ``accelerance_map(vmap)``) the frequency each rule picks for
     51 -> 52 and the steady-state levels of all its pairs on the twin."""
-    from .closed_loop import twin_of
-    from .loop_check import flow_pairs_check
-    from .loop_play import effects_of
-    from .loop_report import pair_problems
-
     twin = twin_of(profile)
     flow, _ = effects_of(profile, plugins)
     acc = accelerance_map(vmap) if acc_map is None else acc_map

@@ -32,7 +32,15 @@ from scipy import fft as sfft
 
 from . import defaults as dflt
 from .frf import modal_receptance
-from .model import EXCITATIONS, Twin, _eval_coeffs
+from .model import (
+    EXCITATIONS,
+    Twin,
+    _eval_coeffs,
+    build_twin,
+    default_params,
+    grid_points_mm,
+    params_from_profile,
+)
 
 
 @dataclass(frozen=True)
@@ -286,8 +294,6 @@ def measure_grid(
     ``make_map(**{k: v for k, v in out.items() if k != "meta"})``.
     """
     import json
-
-    from .model import build_twin, default_params, grid_points_mm, params_from_profile
 
     twin = build_twin(params_from_profile(profile) if profile is not None else default_params())
     if settings is None:
