@@ -27,7 +27,7 @@ from typing import Any
 
 import pluggy
 
-from console import contracts, core_sections, hookspecs
+from console import contract_check, contracts, core_sections, hookspecs
 from console.errors import UserError
 
 ENTRY_POINT_GROUP = "haptable"
@@ -192,7 +192,7 @@ class Plugins:
         return [
             (name, obj)
             for name in self.of(kind)
-            if contracts.satisfies(obj := self.built(kind, name, profile), proto)
+            if contract_check.satisfies(obj := self.built(kind, name, profile), proto)
         ]
 
     def provider_name(self, kind: str, proto: type, profile: Any, *, plugin_hint: str = "") -> str:
@@ -202,11 +202,11 @@ class Plugins:
         found = self.providers(kind, proto, profile)
         if found:
             return found[0][0]
-        what = ", ".join(m for m in contracts.members(proto) if m != "__call__")
+        what = ", ".join(m for m in contract_check.members(proto) if m != "__call__")
         have = ", ".join(self.of(kind)) or "none"
         enable = f"install/enable {plugin_hint}" if plugin_hint else "install/enable a plugin"
         raise UserError(
-            f"no {kind.replace('_', ' ')} plugin offers {contracts.summary(proto)} "
+            f"no {kind.replace('_', ' ')} plugin offers {contract_check.summary(proto)} "
             f"({proto.__name__}: {what}): {enable} (registered: {have})"
         )
 
@@ -256,7 +256,7 @@ def _check_hooks(pm: pluggy.PluginManager) -> None:
 
 def refuse(reg: Registration, obj: Any, proto: type) -> None:
     """One line naming the plugin, the kind and what ``obj`` lacks of ``proto``."""
-    bad = contracts.problems(obj, proto)
+    bad = contract_check.problems(obj, proto)
     if bad:
         kind = reg.kind.replace("_", " ")
         raise UserError(
@@ -277,7 +277,7 @@ def check_registration(reg: Registration) -> None:
     if factory_proto is not None:
         refuse(reg, reg.factory, factory_proto)
     elif isinstance(reg.factory, type) and reg.kind in contracts.KIND_CONTRACTS:
-        lacking = contracts.missing(reg.factory, contracts.KIND_CONTRACTS[reg.kind])
+        lacking = contract_check.missing(reg.factory, contracts.KIND_CONTRACTS[reg.kind])
         if lacking:
             refuse(reg, reg.factory, contracts.KIND_CONTRACTS[reg.kind])
 

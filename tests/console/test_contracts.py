@@ -10,7 +10,7 @@ import typing
 import numpy as np
 import pytest
 
-from console import contracts
+from console import contract_check, contracts
 from console.errors import UserError
 from console.hookspecs import hookimpl
 from console.plugins import load_plugins
@@ -47,7 +47,7 @@ def _built_class(factory) -> type | None:
 def _check(obj, proto) -> None:
     assert isinstance(obj, proto), f"{obj!r} is not a {proto.__name__}"
     # the members and each method's signature against the Protocol's (inspect)
-    assert contracts.problems(obj, proto) == [], (obj, proto.__name__)
+    assert contract_check.problems(obj, proto) == [], (obj, proto.__name__)
 
 
 def _check_profile(pm, profile, *, must_build: bool) -> list[str]:
@@ -67,7 +67,7 @@ def _check_profile(pm, profile, *, must_build: bool) -> list[str]:
                 cls = _built_class(reg.factory)
                 assert cls is not None, f"{kind} {name!r} neither builds nor names its class"
                 assert not must_build or reg.plugin == "drivers", f"{kind} {name}: {exc}"
-                assert contracts.problems(cls, proto) == [], (kind, name)
+                assert contract_check.problems(cls, proto) == [], (kind, name)
                 checked.append(f"{kind}:{name} (class)")
                 continue
             try:
@@ -209,7 +209,7 @@ def test_a_method_with_the_wrong_signature_is_no_capability(profile):
         def render_point(self, point):  # no vmap
             return None
 
-    bad = contracts.problems(HalfPoint(), contracts.PointEffect)
+    bad = contract_check.problems(HalfPoint(), contracts.PointEffect)
     assert len(bad) == 1 and "render_point" in bad[0] and "vmap" in bad[0]
 
     class Broken:
@@ -229,7 +229,7 @@ def test_a_required_parameter_the_contract_does_not_pass_is_a_problem():
         def measure(self, progress=None, *, laser):
             return {}
 
-    (bad,) = contracts.problems(Needy(), contracts.Vibrometer)
+    (bad,) = contract_check.problems(Needy(), contracts.Vibrometer)
     assert "laser" in bad
 
 

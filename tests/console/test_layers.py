@@ -22,6 +22,7 @@ LAYER_OF: dict[str, str] = {
     "console.schema": "types",
     "console.hookspecs": "types",
     "console.contracts": "types",
+    "console.contract_check": "types",  # an object against a contracts Protocol
     "console.paths": "types",
     "console.profile_paths": "types",  # where profiles are found (stdlib: `haptable estop`)
     "console.stream_synth": "types",  # live streams from their parameters (pure numpy)

@@ -1,8 +1,5 @@
 """No module in console/ or plugins/ over ``MAX_LINES`` lines: past it a module does
-several jobs; split it by job into modules whose names say what they hold (issue 26).
-
-``TODO`` names the modules known to be over while they are being split; the list may
-only shrink: a module under the limit must leave it, and no module joins it."""
+several jobs; split it by job into modules whose names say what they hold (issue 26)."""
 
 from __future__ import annotations
 
@@ -10,13 +7,6 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 MAX_LINES = 700
-
-#: over the limit, being split (issue 26, point 4): remove each line when its split lands
-TODO: frozenset[str] = frozenset(
-    {
-        "console/contracts.py",
-    }
-)
 
 
 def line_counts(root: Path = ROOT) -> dict[str, int]:
@@ -34,20 +24,11 @@ def over_limit(counts: dict[str, int]) -> dict[str, int]:
 
 
 def test_no_module_over_the_limit():
-    new = {p: n for p, n in over_limit(line_counts()).items() if p not in TODO}
+    new = over_limit(line_counts())
     assert not new, (
         f"over {MAX_LINES} lines: "
         + ", ".join(f"{p} ({n})" for p, n in sorted(new.items()))
         + "; split each by job into modules whose names say what they hold"
-    )
-
-
-def test_the_todo_list_only_shrinks():
-    counts = line_counts()
-    done = sorted(p for p in TODO if counts.get(p, 0) <= MAX_LINES)
-    assert not done, (
-        f"{', '.join(done)}: now within {MAX_LINES} lines (or gone); remove from TODO in "
-        "tests/console/test_module_size.py"
     )
 
 
