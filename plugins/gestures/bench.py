@@ -23,13 +23,20 @@ import tempfile
 import time
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from console.bench import machine_info, summarize_s
 
 from . import evaluate as ev
 from .background import illumination, subtract
+from .dataset import load_dataset
+from .feature_set import FeatureSet
+from .features import N_HARMONICS_MAX, record_features, sample_records
 from .segmentation import relative_body
+from .selection import condition_report
+from .sketch import STATIC
+from .synth import synth
 from .vision import VisionParams, part_contacts, process_frame
 
 HARMONICS = (0, 2, 4, 6, 8, 12, 16)
@@ -43,8 +50,6 @@ def _datasets(quick: bool, tmp: Path) -> tuple[Path, dict[float, Path], str]:
     env = os.environ.get("HAPTABLE_GESTURES_DATASET")
     if env:
         return Path(env), {}, env
-    from .synth import synth
-
     reps = 6 if quick else 20
     kw = {"seed": 1, "workers": None, "vary": True, "sessions": 2}
     base = tmp / "set"
@@ -113,14 +118,10 @@ def frame_latency(samples, params: VisionParams, n_frames: int = 300, repeats: i
 def _clipped(root: Path, n_frames: int) -> dict[str, bool]:
     """Sample name -> whether any of its first ``n_frames`` frames reaches the sensor's
     maximum (255: only touching skin gets there on a rear-DI table)."""
-    from .dataset import load_dataset
-
     return {s.name: bool(s.frames(limit=n_frames).max() >= 255) for s in load_dataset(root)}
 
 
 def _accuracies(labels, pred, mask) -> dict:
-    from .sketch import STATIC
-
     labels, pred = np.asarray(labels).astype(str), np.asarray(pred).astype(str)
     st = np.isin(labels, STATIC)
 
@@ -155,18 +156,13 @@ def light_shift(fs, shifted: dict[float, tuple], seed: int = 0) -> dict:
 
 
 def run_benchmark(ctx, quick: bool) -> dict:
-    import cv2
-
-    from .dataset import load_dataset
-    from .selection import condition_report
-
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
     try:
         with tempfile.TemporaryDirectory(prefix="haptable-gestures-") as tmp:
             root, shifted_roots, source = _datasets(quick, Path(tmp))
             samples = load_dataset(root)
-            params = VisionParams(n_harmonics=ev.N_HARMONICS_MAX)
+            params = VisionParams(n_harmonics=N_HARMONICS_MAX)
             lat = frame_latency(samples, params, 120 if quick else 600)
             t0 = time.perf_counter()
             fs = ev.extract(root, params)  # cached by content
@@ -236,15 +232,15 @@ def _noisy_accuracy(samples, params: VisionParams, sigma: float, seed: int = 0) 
         if sigma > 0:
             frames = frames + rng.normal(0, sigma, frames.shape).astype(np.float32)
         frames = np.clip(frames, 0, 255).astype(np.uint8)
-        recs = ev.sample_records(frames, s.background(), params)
-        xs, xk, xd, sc = ev.record_features(recs, (4,), ev.N_HARMONICS_MAX)
+        recs = sample_records(frames, s.background(), params)
+        xs, xk, xd, sc = record_features(recs, (4,), N_HARMONICS_MAX)
         xk_all.append(xk[4])
         labels.append(s.gesture)
         subjects.append(s.subject)
         xs_all.append(xs[4])
         xd_all.append(xd[4])
         sc_all.append(sc[4])
-    fs = ev.FeatureSet(
+    fs = FeatureSet(
         [s.name for s in samples],
         np.array(labels),
         np.array(subjects),
@@ -253,7 +249,7 @@ def _noisy_accuracy(samples, params: VisionParams, sigma: float, seed: int = 0) 
         {4: np.array(xd_all)},
         {4: np.array(sc_all)},
         np.zeros(0),
-        {"n_harmonics_max": ev.N_HARMONICS_MAX},
+        {"n_harmonics_max": N_HARMONICS_MAX},
     )
     r = ev.cross_validate(fs, "2fold", n_harmonics=2, n_frames=4)
     return {

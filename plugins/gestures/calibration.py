@@ -29,6 +29,9 @@ import numpy as np
 
 from console.errors import UserError
 
+from .dataset import read_json
+from .vision import VisionParams, process_frame
+
 #: Smoothing candidates for the residual RBF (thin-plate kernel on pixel distances).
 SMOOTHING = (0.0, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6)
 MIN_PAIRS_FOR_CORRECTION = 8
@@ -178,8 +181,6 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
-        from .dataset import read_json
-
         p = Path(path)
         if not p.exists():
             raise UserError(f"{p}: no touch calibration there; run the touch calibration")
@@ -447,8 +448,6 @@ def run_touch_calibration(
     pos_mm)``, or the camera's own ``set_target`` if it has one, like the twin), feed the
     contacts the vision pipeline finds, and fit. A target not touched within
     ``max_frames_per_target`` frames is skipped."""
-    from .vision import VisionParams, process_frame
-
     params = params or VisionParams()
     session = CalibrationSession(targets_mm, hold_frames=hold_frames)
     if show_target is None and hasattr(camera, "set_target"):

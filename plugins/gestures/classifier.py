@@ -7,19 +7,30 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from console.errors import UserError
 from console.types import Frame, Gesture, TunableRange
 
 from .background import Background
-from .evaluate import N_HARMONICS_MAX, record_features, sample_records
-from .features import frame_record, select_dynamic, select_kind, select_static
+from .calibration import Calibration, CalibrationSession, target_grid
+from .dataset import read_sample
+from .features import (
+    N_HARMONICS_MAX,
+    frame_record,
+    record_features,
+    sample_records,
+    select_dynamic,
+    select_kind,
+    select_static,
+)
 from .model import GESTURES, GestureModel
 from .orientation import Orientation
 from .rules import GestureRules, StillHand
+from .settings import calibration_file, model_file
 from .sketch import DYNAMIC
-from .vision import FrameResult, VisionParams, process_frame
+from .vision import FrameResult, VisionParams, check_frame, process_frame, vision_params
 
 
 def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, float, float]:
@@ -37,8 +48,6 @@ def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, floa
 
 def classify_sample(model: GestureModel, folder: str | Path, params: VisionParams) -> dict:
     """Classify one sample folder of the dataset format; the CLI's ``classify`` output."""
-    from .dataset import read_sample
-
     s = read_sample(folder)
     size = (params.width_px, params.height_px)
     frames = s.frames(limit=model.n_frames, size_px=size)
@@ -164,8 +173,6 @@ class SvmClassifier:
 
     @classmethod
     def from_profile(cls, profile) -> SvmClassifier:
-        from . import calibration_file, model_file, vision_params
-
         model = None
         path = model_file(profile)
         if Path(path).is_file():
@@ -173,15 +180,12 @@ class SvmClassifier:
         to_mm = None
         cal = calibration_file(profile)
         if Path(cal).is_file():
-            from .calibration import Calibration
-
             to_mm = Calibration.load(cal).px_to_mm
         threads = int(profile.get("vision.opencv_threads"))
-        if threads > 0:  # process-wide: the frame loop's vision is what OpenCV runs most
-            import cv2
-
-            if cv2.getNumThreads() != threads:  # once: resizing the pool under a running
-                cv2.setNumThreads(threads)  # parallel loop in another thread is not safe
+        # process-wide: the frame loop's vision is what OpenCV runs most; set once:
+        # resizing the pool under a running parallel loop in another thread is not safe
+        if threads > 0 and cv2.getNumThreads() != threads:
+            cv2.setNumThreads(threads)
         return cls(
             model,
             vision_params(profile),
@@ -196,8 +200,6 @@ class SvmClassifier:
         """A touch-calibration session for the console's wizard (the classifier contract's
         optional ``touch_calibration``): targets from ``[projector] touch_cal_columns``,
         ``touch_cal_rows``, ``touch_cal_margin_mm`` over the profile's table."""
-        from .calibration import CalibrationSession, target_grid
-
         table = (float(profile.get("table.width_mm")), float(profile.get("table.height_mm")))
         targets = target_grid(
             table,
@@ -256,8 +258,6 @@ class SvmClassifier:
     def process(self, frame: Frame) -> FrameResult:
         """One frame through the pipeline (the background learns where no hand is); the
         result is a ``console.contracts.VisionResult`` (``view(name)`` of ``views``)."""
-        from .vision import check_frame
-
         check_frame(frame.image, self.params.shape)
         if self.background.image is None:
             self.background.update(frame.image)

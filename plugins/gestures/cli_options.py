@@ -8,13 +8,7 @@ from pathlib import Path
 
 from console.options import finite_float, integer, positive_int, seed
 
-
-def _dataset_commands() -> dict:
-    try:
-        from .dataset_commands import COMMANDS
-    except ImportError:
-        return {}
-    return COMMANDS
+from .dataset_commands import COMMANDS
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -82,5 +76,5 @@ def configure(parser: argparse.ArgumentParser) -> None:
     k.add_argument("--out", type=Path, default=None, help="file (default: [vision] calibration)")
     k.add_argument("--camera", default=None, help="camera driver (default: the profile's)")
     k.add_argument("--json", action="store_true")
-    for name, (conf, _run, help_) in _dataset_commands().items():
+    for name, (conf, _run, help_) in COMMANDS.items():
         conf(sub.add_parser(name, help=help_, description=help_))

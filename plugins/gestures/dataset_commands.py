@@ -16,6 +16,8 @@ from console.errors import UserError
 from console.options import finite_float, integer, positive_int, seed
 
 from .dataset import GESTURES
+from .jobs import synth_atomic
+from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, capture_background, record, synth
 
 #: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
 #: at 60 fps; the paper's set is 5 subjects x 40 repetitions)
@@ -119,9 +121,6 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
 
 
 def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
-    from .jobs import synth_atomic
-    from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, synth
-
     gestures = GESTURES
     if args.gestures:
         gestures = tuple(g.strip() for g in args.gestures.split(",") if g.strip())
@@ -199,8 +198,6 @@ def open_camera(ctx: Any, driver: str | None = None) -> Any:
 
 
 def run_record(args: argparse.Namespace, ctx: Any) -> int:
-    from .synth import capture_background, record
-
     check_folder_name(args.subject, "--subject")
     check_folder_name(args.name, "--name")
 

@@ -2,68 +2,52 @@
 
 ``extract`` runs the vision pipeline on every sample (the first frames only) and keeps,
 for each decision window (the first k frames, ``FRAMES_LIST``), the static, motion
-(kind) and dynamic features and the motion score, and the per-frame pipeline time. ``cross_validate`` trains inside each outer
-fold (hyper-parameters searched inside the training part only) and tests on the rest:
-``2fold`` (stratified, as in the paper) or ``loso`` (leave one subject out).
+(kind) and dynamic features and the motion score, and the per-frame pipeline time
+(``feature_set.FeatureSet``; the per-frame features are ``features``'). ``cross_validate``
+trains inside each outer fold (hyper-parameters searched inside the training part only,
+``selection``) and tests on the rest: ``2fold`` (stratified, as in the paper) or ``loso``
+(leave one subject out); ``reports`` makes its report. Evaluation only: the live
+classifier never imports this module.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from console import cache_files, paths
-from console.bench import summarize_s
 from console.errors import UserError
 
-from . import features as F
-from .model import GESTURES, GestureModel
+from .dataset import load_dataset
+from .feature_set import FeatureSet, columns
+from .features import FRAMES_LIST, N_HARMONICS_MAX, record_features, sample_records
+from .model import GestureModel
 from .progress import CancelCheck, Progress, step
-from .selection import INNER_FOLDS
-from .sketch import DYNAMIC, STATIC
-from .vision import VisionParams, process_frame
+from .reports import fold_report, report
+from .selection import INNER_FOLDS, candidates, select_settings
+from .vision import VisionParams
 
-N_HARMONICS_MAX = 16
-FRAMES_LIST = (2, 3, 4, 5, 6)
+__all__ = [  # what the evaluation's callers use, wherever it is defined
+    "FRAMES_LIST",
+    "N_HARMONICS_MAX",
+    "FeatureSet",
+    "columns",
+    "cross_validate",
+    "extract",
+    "fold_report",
+    "record_features",
+    "report",
+    "sample_records",
+    "train",
+]
+
 FEATURES_VERSION = 8  # bump when features change: old caches are ignored
-
-
-@dataclass
-class FeatureSet:
-    """Per-sample features of a dataset."""
-
-    names: list[str]
-    labels: np.ndarray
-    subjects: np.ndarray
-    # per decision window k (the first k frames): static features (mean over the
-    # window), motion features (static vs dynamic), dynamic features, motion score
-    static: dict[int, np.ndarray]
-    kind: dict[int, np.ndarray]
-    dynamic: dict[int, np.ndarray]
-    score: dict[int, np.ndarray]
-    frame_s: np.ndarray  # pipeline wall time of every frame processed
-    meta: dict = field(default_factory=dict)
-    frame_cpu_s: np.ndarray = field(default_factory=lambda: np.zeros(0))  # thread CPU time
-
-    def subset(self, idx: np.ndarray) -> FeatureSet:
-        return FeatureSet(
-            [self.names[i] for i in idx],
-            self.labels[idx],
-            self.subjects[idx],
-            {k: v[idx] for k, v in self.static.items()},
-            {k: v[idx] for k, v in self.kind.items()},
-            {k: v[idx] for k, v in self.dynamic.items()},
-            {k: v[idx] for k, v in self.score.items()},
-            self.frame_s,
-            self.meta,
-            self.frame_cpu_s,
-        )
 
 
 def cache_dir() -> Path:
@@ -83,41 +67,6 @@ def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:
                 st = p.stat()
                 h.update(f"{p.name}:{st.st_size}:{st.st_mtime_ns}".encode())
     return h.hexdigest()
-
-
-def sample_records(
-    frames: np.ndarray,
-    background: np.ndarray,
-    params: VisionParams,
-    times: list | None = None,
-    cpu: list | None = None,
-) -> list[dict | None]:
-    """Frame records of a sample's frames; the pipeline's wall time (and thread CPU
-    time) of each frame is appended to ``times`` (and ``cpu``)."""
-    out = []
-    for img in frames:
-        c0 = time.thread_time()
-        t0 = time.perf_counter()
-        res = process_frame(img, background, params)
-        t1 = time.perf_counter()
-        if times is not None:
-            times.append(t1 - t0)
-        if cpu is not None:
-            cpu.append(time.thread_time() - c0)
-        out.append(F.frame_record(res))
-    return out
-
-
-def record_features(
-    recs: list[dict | None], frames_list: Sequence[int], n_harmonics: int
-) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray], dict[int, np.ndarray], dict[int, float]]:
-    """Per decision window k in ``frames_list`` (the first k records): (static, kind,
-    dynamic features, motion score)."""
-    xs = {k: F.static_features(recs, n_harmonics, k) for k in frames_list}
-    xk = {k: F.motion_features(recs[:k]) for k in frames_list}
-    xd = {k: F.dynamic_features(recs, n_harmonics, k) for k in frames_list}
-    sc = {k: F.motion_score(recs[:k]) for k in frames_list}
-    return xs, xk, xd, sc
 
 
 def _fallback_background(samples, size_px) -> np.ndarray:
@@ -141,12 +90,8 @@ def extract(
     decision windows of ``frames_list`` no longer than the shortest sample (a window is
     the same length for every sample). ``progress(frac, msg)`` after each sample;
     ``cancelled()`` stops it (``Cancelled``)."""
-    from .dataset import load_dataset
-
     params = params or VisionParams(n_harmonics=N_HARMONICS_MAX)
     if params.n_harmonics != N_HARMONICS_MAX:
-        from dataclasses import replace
-
         params = replace(params, n_harmonics=N_HARMONICS_MAX)
     samples = load_dataset(root)
     shortest = min(len(s.frame_paths) for s in samples)
@@ -162,8 +107,6 @@ def extract(
     cfile = cache_files.entry_path(cache_dir(), "features", key) if use_cache else None
 
     def compute() -> dict:
-        import cv2
-
         threads = cv2.getNumThreads()
         cv2.setNumThreads(1)  # the per-frame time is for one core
         try:
@@ -258,24 +201,8 @@ def _feature_set(z: dict) -> FeatureSet:
     )
 
 
-def columns(fs: FeatureSet, n_harmonics: int, n_frames: int):
-    """(static X, dynamic X, kind X, motion score) with ``n_harmonics``, decided from the
-    first ``n_frames`` frames."""
-    if n_frames not in fs.dynamic:
-        raise UserError(
-            f"--frames {n_frames}: features exist for {sorted(fs.dynamic)} frames (no longer "
-            "than the dataset's shortest sample); pick one of them"
-        )
-    nmax = int(fs.meta.get("n_harmonics_max", N_HARMONICS_MAX))
-    if not (n_harmonics == 0 or 2 <= n_harmonics <= nmax):
-        raise UserError(f"--harmonics {n_harmonics}: use 0 (no descriptors) or 2 to {nmax}")
-    xs = F.select_static(fs.static[n_frames], n_harmonics, nmax)
-    xd = F.select_dynamic(fs.dynamic[n_frames], n_harmonics, nmax)
-    return xs, xd, F.select_kind(fs.kind[n_frames]), fs.score[n_frames]
-
-
 def splits(fs: FeatureSet, cv: str, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
-    from sklearn.model_selection import LeaveOneGroupOut, StratifiedKFold
+    from sklearn.model_selection import LeaveOneGroupOut, StratifiedKFold  # lazy: heavy
 
     idx = np.arange(len(fs.labels))
     if cv == "2fold":
@@ -312,8 +239,6 @@ def cross_validate(
     under another light, say); each outer fold's model also classifies its test samples
     there, and ``transfer[name]`` in the report has that set's accuracies and its
     per-sample predictions (``predicted``)."""
-    from .selection import candidates, select_settings
-
     hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
     for h in hs:
         columns(fs, h, frs[0])  # a bad --harmonics / --frames is refused before any fit
@@ -364,60 +289,6 @@ def cross_validate(
     return rep
 
 
-def fold_report(fs: FeatureSet, test: np.ndarray, pred: np.ndarray, cv: str) -> dict:
-    """One outer fold: what was tested (a subject under ``loso``) and its accuracies."""
-    labels = fs.labels[test].astype(str)
-    is_st = np.isin(labels, STATIC)
-    out = {
-        "n_test": int(len(test)),
-        "accuracy": float(np.mean(pred == labels)),
-        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
-        "dynamic_accuracy": (
-            float(np.mean(pred[~is_st] == labels[~is_st])) if (~is_st).any() else None
-        ),
-    }
-    if cv == "loso":
-        out["subject"] = str(fs.subjects[test][0])
-    return out
-
-
-def report(labels, pred, fs, cv, n_harmonics, n_frames, thresholds) -> dict:
-    labels = np.asarray(labels).astype(str)
-    is_st = np.isin(labels, STATIC)
-    is_dy = np.isin(labels, DYNAMIC)
-    present = [g for g in GESTURES if g in set(labels)] + sorted(set(labels) - set(GESTURES))
-    recall = {g: float(np.mean(pred[labels == g] == g)) for g in present}
-    conf = {
-        g: {
-            p: int(np.sum((labels == g) & (pred == p)))
-            for p in present
-            if np.any((labels == g) & (pred == p))
-        }
-        for g in present
-    }
-    kind_ok = np.isin(pred, DYNAMIC) == is_dy
-    t = summarize_s(fs.frame_s)
-    c = summarize_s(fs.frame_cpu_s)
-    return {
-        "cv": cv,
-        "n_samples": int(len(labels)),
-        "subjects": sorted(set(fs.subjects.tolist())),
-        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
-        "dynamic_accuracy": float(np.mean(pred[is_dy] == labels[is_dy])) if is_dy.any() else None,
-        "kind_accuracy": float(np.mean(kind_ok)),
-        "per_class_recall": recall,
-        "confusion": conf,
-        "frame_ms_p50": t["p50_ms"],
-        "frame_ms_p99": t["p99_ms"],
-        "frame_cpu_ms_p50": c["p50_ms"],
-        "frame_cpu_ms_p99": c["p99_ms"],
-        "frames_timed": t["n"],
-        "n_harmonics": n_harmonics,
-        "n_frames": n_frames,
-        "motion_threshold": float(np.median(thresholds)) if thresholds else None,
-    }
-
-
 def train(
     fs: FeatureSet,
     *,
@@ -432,8 +303,6 @@ def train(
     metadata); ``n_harmonics`` / ``n_frames`` None: chosen by cross-validation on the set
     (what was searched and each candidate's accuracy are kept in ``meta["selection"]``);
     ``cancelled()`` is checked before fitting."""
-    from .selection import candidates, select_settings
-
     hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
     for h in hs:
         columns(fs, h, frs[0])

@@ -16,17 +16,24 @@ radii). The number of contacts is given to the classifiers as a category as well
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
 from .hand_shape import GRID_RINGS, GRID_SECTORS
-from .vision import FrameResult
+from .vision import FrameResult, VisionParams, process_frame, vision_params
 
 N_GRID = GRID_SECTORS * (len(GRID_RINGS) - 1)
 N_CONTACT = 6
 TRACK_GATE = 1.5  # palm radii a contact may move between frames and stay the same
 MOTION_TURN_DEG = 20.0  # a turn of this many degrees counts as one palm radius of motion
+#: harmonics the features are built with (a model selects its own ``n_harmonics`` of them)
+N_HARMONICS_MAX = 16
+#: decision windows (the first k frames) features are kept for
+FRAMES_LIST = (2, 3, 4, 5, 6)
 
 
 def desc_size(n_harmonics: int) -> int:
@@ -309,3 +316,44 @@ def select_kind(x: np.ndarray) -> np.ndarray:
     x = np.atleast_2d(x)
     keep = [i for i in range(x.shape[1]) if i not in KIND_DROP]
     return x[:, keep]
+
+
+def sample_records(
+    frames: np.ndarray,
+    background: np.ndarray,
+    params: VisionParams,
+    times: list | None = None,
+    cpu: list | None = None,
+) -> list[dict | None]:
+    """Frame records of a sample's frames; the pipeline's wall time (and thread CPU
+    time) of each frame is appended to ``times`` (and ``cpu``)."""
+    out = []
+    for img in frames:
+        c0 = time.thread_time()
+        t0 = time.perf_counter()
+        res = process_frame(img, background, params)
+        t1 = time.perf_counter()
+        if times is not None:
+            times.append(t1 - t0)
+        if cpu is not None:
+            cpu.append(time.thread_time() - c0)
+        out.append(frame_record(res))
+    return out
+
+
+def record_features(
+    recs: list[dict | None], frames_list: Sequence[int], n_harmonics: int
+) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray], dict[int, np.ndarray], dict[int, float]]:
+    """Per decision window k in ``frames_list`` (the first k records): (static, kind,
+    dynamic features, motion score)."""
+    xs = {k: static_features(recs, n_harmonics, k) for k in frames_list}
+    xk = {k: motion_features(recs[:k]) for k in frames_list}
+    xd = {k: dynamic_features(recs, n_harmonics, k) for k in frames_list}
+    sc = {k: motion_score(recs[:k]) for k in frames_list}
+    return xs, xk, xd, sc
+
+
+def analysis_params(profile: Any) -> VisionParams:
+    """The profile's vision settings with every harmonic the features keep (what
+    datasets are analysed with: a model picks its own harmonics from them)."""
+    return replace(vision_params(profile), n_harmonics=N_HARMONICS_MAX)

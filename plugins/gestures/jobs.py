@@ -18,7 +18,9 @@ from typing import Any
 
 from console.errors import UserError
 
+from .dataset import load_dataset
 from .progress import CancelCheck, Progress, part, step
+from .synth import synth
 
 SYNTH_MARK = "synth.json"  # a folder with this file was made by the twin (replaceable)
 
@@ -43,8 +45,6 @@ def synth_atomic(
     dataset (has ``synth.json``): then it is swapped for the new one at the end.
     ``Cancelled`` (or any error) removes the partial folder and leaves ``out`` as it was.
     """
-    from .synth import synth
-
     out = Path(out).expanduser()
     if subjects < 1 or reps < 1:
         raise UserError(f"subjects {subjects}, reps {reps}: both must be at least 1")
@@ -95,7 +95,7 @@ def train_and_evaluate(
     model to ``model_out``; the evaluation (accuracy per fold) goes into the model's
     metadata. Progress: features 0-50 %, folds 50-90 %, final fit and save. Nothing is
     written when cancelled."""
-    from . import evaluate as ev
+    from . import evaluate as ev  # lazy: OpenCV, scikit-learn (dataset_commands loads jobs)
 
     dataset, model_out = Path(dataset).expanduser(), Path(model_out).expanduser()
     if model_out.is_dir():
@@ -142,8 +142,6 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
         info: dict[str, Any] = {"path": str(d), "exists": d.is_dir()}
         if d.is_dir():
             try:
-                from .dataset import load_dataset
-
                 samples = load_dataset(d)
                 reps: dict[tuple[str, str], int] = {}
                 for smp in samples:
@@ -164,7 +162,7 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
         if m.is_file():
             info["bytes"] = m.stat().st_size
             try:
-                from .model import read_settings
+                from .model import read_settings  # lazy: OpenCV (the sketches)
 
                 meta = read_settings(m).get("meta", {})
                 info["n_samples"] = meta.get("n_samples")

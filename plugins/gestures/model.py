@@ -20,6 +20,7 @@ import numpy as np
 
 from console.errors import UserError
 
+from .model_checks import check_classifiers, check_settings, check_widths
 from .sketch import DYNAMIC, STATIC
 
 GESTURES = STATIC + DYNAMIC
@@ -402,8 +403,6 @@ class GestureModel:
             _check_format(obj.get("format") if isinstance(obj, dict) else None)
         except ValueError as e:
             raise UserError(f"{p}: {e}; train it again") from None
-        from .model_checks import check_classifiers, check_settings
-
         s = check_settings(obj.get("settings"), p)
         svms = {k: obj.get(k) for k in ("static_svm", "dynamic_svm", "kind_svm")}
         check_classifiers(svms, p)
@@ -417,7 +416,5 @@ class GestureModel:
             s["meta"],
         )
         if check_features:
-            from .model_checks import check_widths
-
             check_widths(model, p)
         return model

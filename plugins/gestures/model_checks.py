@@ -18,6 +18,14 @@ import numpy as np
 
 from console.errors import UserError
 
+from .features import (
+    FRAMES_LIST,
+    N_HARMONICS_MAX,
+    record_features,
+    select_dynamic,
+    select_kind,
+    select_static,
+)
 from .sketch import DYNAMIC, STATIC
 
 #: classes each classifier may answer
@@ -37,8 +45,6 @@ def _int_in(s: dict, key: str, allowed: tuple[int, ...], p: Path) -> int:
 
 def check_settings(raw: Any, p: Path) -> dict[str, Any]:
     """The model's settings (a JSON string in the file), checked and normalised."""
-    from .evaluate import FRAMES_LIST, N_HARMONICS_MAX
-
     if not isinstance(raw, str):
         raise UserError(f"{p}: no settings (a JSON text) in the model; {RETRAIN}")
     try:
@@ -85,7 +91,7 @@ def _array(est: Any, attr: str, shape: tuple, where: str, p: Path, *, numeric=Tr
 
 def check_pipeline(name: str, pipe: Any, p: Path) -> int:
     """One classifier (StandardScaler + RBF SVC) checked; returns its input width."""
-    from sklearn.pipeline import Pipeline
+    from sklearn.pipeline import Pipeline  # lazy: scikit-learn is heavy
     from sklearn.preprocessing import StandardScaler
     from sklearn.svm import SVC
 
@@ -146,9 +152,6 @@ def check_classifiers(svms: dict[str, Any], p: Path) -> dict[str, int]:
 
 def feature_widths(n_harmonics: int, n_frames: int) -> dict[str, int]:
     """Feature widths the vision pipeline makes for each classifier with these settings."""
-    from .evaluate import N_HARMONICS_MAX, record_features
-    from .features import select_dynamic, select_kind, select_static
-
     k = n_frames
     xs, xk, xd, _ = record_features([None] * k, (k,), N_HARMONICS_MAX)
     return {

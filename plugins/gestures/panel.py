@@ -26,6 +26,11 @@ from console.tui.safety_bar import SafetyBar
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
 
+from .features import analysis_params
+from .jobs import describe_files, synth_atomic, train_and_evaluate
+from .model import GestureModel
+from .settings import model_file
+
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder\n"
     "t: train + evaluate (cross-validation, then the model on every sample)\n"
@@ -144,8 +149,6 @@ class GesturesPanel(Screen):
         prof = ctx.profile
         self.harmonics = int(prof.get("gestures.harmonics", 2))  # 0 (no descriptors) is valid
         self.frames = int(prof.get("gestures.frames", 4))
-        from . import model_file
-
         self.default_model = model_file(prof)
         self.files: dict[str, Any] = {}
 
@@ -206,8 +209,6 @@ class GesturesPanel(Screen):
         self.run_worker(lambda: self._describe(ds, model), thread=True, group="gp-files")
 
     def _describe(self, ds: Path, model: Path) -> None:
-        from .jobs import describe_files
-
         info = describe_files(ds, model)
         with contextlib.suppress(RuntimeError):  # the console is closing
             from_thread(self.app, self._show_files, info)
@@ -218,8 +219,6 @@ class GesturesPanel(Screen):
             w.update(describe(info))
 
     def action_synth(self) -> None:
-        from .jobs import synth_atomic
-
         try:
             ds, _ = self.paths()
             subjects = count(self.field("subjects"), "subjects", 1, 50)
@@ -244,9 +243,6 @@ class GesturesPanel(Screen):
         self.work.start(f"synthesizing {subjects} x 10 x {reps}", job, summary)
 
     def action_train(self) -> None:
-        from . import _params
-        from .jobs import train_and_evaluate
-
         try:
             ds, model = self.paths()
             cv = self.field("cv").strip().lower()
@@ -255,7 +251,7 @@ class GesturesPanel(Screen):
         except UserError as exc:
             self.work.error(str(exc))
             return
-        params = _params(self.ctx.profile)
+        params = analysis_params(self.ctx.profile)
         live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
@@ -270,8 +266,6 @@ class GesturesPanel(Screen):
                 cancelled=cancelled,
             )
             if live:  # the profile's model: the running classifier switches to it
-                from .model import GestureModel
-
                 res["loaded"] = GestureModel.load(res["model"])
             return res
 

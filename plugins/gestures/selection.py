@@ -15,8 +15,10 @@ import numpy as np
 
 from console.errors import UserError
 
+from .feature_set import FeatureSet, columns
 from .model import GestureModel, inner_splitter
 from .progress import CancelCheck, step
+from .reports import fold_report, report
 
 #: Candidates searched when the harmonics / frames are not given.
 HARMONICS_CANDIDATES = (2, 4, 6, 8)
@@ -25,7 +27,7 @@ INNER_FOLDS = 3
 
 
 def candidates(
-    fs, harmonics: int | None, frames: int | None, max_frames: int | None = None
+    fs: FeatureSet, harmonics: int | None, frames: int | None, max_frames: int | None = None
 ) -> tuple[tuple[int, ...], tuple[int, ...]]:
     """The harmonics and frames to search: a given value alone, else the candidates
     (frames no more than ``max_frames``, the latency budget, and only those extracted)."""
@@ -48,7 +50,7 @@ def candidates(
 
 
 def select_settings(
-    fs,
+    fs: FeatureSet,
     idx: np.ndarray,
     harmonics: Sequence[int],
     frames: Sequence[int],
@@ -61,8 +63,6 @@ def select_settings(
     with every candidate's accuracy. The inner folds keep each subject on one side
     (``model.inner_splitter``): settings that only suit the people they were tuned on
     are not chosen. One candidate: returned without fitting."""
-    from .evaluate import columns
-
     grid = [(h, f) for h in harmonics for f in frames]
     if len(grid) == 1:
         return {"n_harmonics": grid[0][0], "n_frames": grid[0][1], "scores": None}
@@ -97,10 +97,8 @@ def select_settings(
     }
 
 
-def evaluate_model(fs, model: GestureModel, path: str) -> dict:
+def evaluate_model(fs: FeatureSet, model: GestureModel, path: str) -> dict:
     """The eval report (same keys as ``cross_validate``) of ``model`` on every sample."""
-    from .evaluate import columns, fold_report, report
-
     xs, xd, xk, _ = columns(fs, model.n_harmonics, model.n_frames)
     pred = model.predict(xs, xd, xk).astype(str)
     rep = report(
@@ -114,7 +112,7 @@ def evaluate_model(fs, model: GestureModel, path: str) -> dict:
 
 
 def holdout(
-    fs,
+    fs: FeatureSet,
     train_idx: np.ndarray,
     test_idx: np.ndarray,
     *,
@@ -125,8 +123,6 @@ def holdout(
 ) -> dict:
     """Train on ``train_idx`` (settings chosen there, as ``train`` does) and test on
     ``test_idx``: the fold's report with the chosen harmonics and frames."""
-    from .evaluate import columns, fold_report
-
     hs, frs = candidates(fs, n_harmonics, n_frames, max_frames)
     sel = select_settings(fs, train_idx, hs, frs, seed=seed)
     h, f = sel["n_harmonics"], sel["n_frames"]
@@ -141,7 +137,7 @@ def holdout(
 
 
 def condition_report(
-    fs,
+    fs: FeatureSet,
     conditions: dict[str, dict],
     *,
     n_harmonics: int | None = None,

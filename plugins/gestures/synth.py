@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from console.errors import UserError
+from console.plugins import load_plugins
 
 from .dataset import (
     DYNAMIC,
@@ -111,8 +112,6 @@ def _session_t0(subject: int, gesture: int, rep: int) -> float:
 def _twin_camera(seed: int, lens_distortion: bool, exposure_ms: float) -> tuple[Any, dict]:
     """The registered ``twin`` camera's factory and the settings it renders with
     (``console.contracts.SimulatedCamera``); both pickle, so worker processes build it too."""
-    from console.plugins import load_plugins
-
     factory = load_plugins(entrypoints=False).get("camera", "twin").factory
     return factory, {
         "twin_camera.seed": seed,

@@ -37,6 +37,7 @@ import functools
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
@@ -108,6 +109,20 @@ class VisionParams:
     @property
     def shape(self) -> tuple[int, int]:
         return (self.height_px, self.width_px)
+
+
+def vision_params(profile: Any) -> VisionParams:
+    """``VisionParams`` from the profile's ``[vision]`` and ``[camera]`` sections (the
+    defaults without a profile)."""
+    v = profile.section("vision") if profile is not None else {}
+    cam = profile.section("camera") if profile is not None else {}
+    keys = set(VisionParams.__dataclass_fields__)
+    kw = {k: v[k] for k in v if k in keys}
+    if "width_px" in cam:
+        kw["width_px"] = int(cam["width_px"])
+    if "height_px" in cam:
+        kw["height_px"] = int(cam["height_px"])
+    return VisionParams(**kw)
 
 
 @dataclass(frozen=True)

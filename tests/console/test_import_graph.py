@@ -18,20 +18,7 @@ PACKAGES = ("console", "plugins")
 
 #: Cycles (strongly connected components) that exist today, each a set of modules that
 #: import one another. Remove an entry when its cycle is broken; never add one.
-KNOWN: tuple[frozenset[str], ...] = (
-    # gestures (issue 26 point 1 reworks the classifier contract): the hook module, the
-    # live classifier and the panel import one another inside functions
-    frozenset({"plugins.gestures", "plugins.gestures.classifier", "plugins.gestures.panel"}),
-    # gestures: model selection and evaluation share the model paths and features
-    frozenset(
-        {
-            "plugins.gestures.evaluate",
-            "plugins.gestures.model",
-            "plugins.gestures.model_checks",
-            "plugins.gestures.selection",
-        }
-    ),
-)
+KNOWN: tuple[frozenset[str], ...] = ()
 
 
 def module_files(root: Path = ROOT) -> dict[str, Path]:

@@ -59,7 +59,7 @@ def _touch_fit():
 
 
 def test_defaults_are_in_the_profiles_state_directory(ro_folder, plugins):
-    from plugins.gestures import calibration_file, model_file
+    from plugins.gestures.settings import calibration_file, model_file
     from plugins.projector.settings import calibration_path_for
 
     prof = load_profile(ro_folder / "bench.toml", plugins)
@@ -103,7 +103,7 @@ def test_projector_calibration_on_a_read_only_profile(ro_folder, capsys):
 
 
 def test_a_path_the_profile_names_is_honoured(tmp_path, plugins):
-    from plugins.gestures import calibration_file
+    from plugins.gestures.settings import calibration_file
     from plugins.projector.settings import calibration_path_for
 
     text = (PROJECT_PROFILES / "sim.toml").read_text()
@@ -121,8 +121,8 @@ def test_a_path_the_profile_names_is_honoured(tmp_path, plugins):
 
 
 def test_an_old_default_file_beside_the_profile_is_read_and_said_once(ro_folder, plugins, caplog):
-    from plugins.gestures import calibration_file
     from plugins.gestures.classifier import SvmClassifier
+    from plugins.gestures.settings import calibration_file
 
     fit, px, mm = _touch_fit()
     old = fit.save(ro_folder / "touch_calibration.json")  # where earlier versions kept it
@@ -162,7 +162,7 @@ def test_an_old_projector_calibration_keeps_its_old_name(ro_folder, plugins):
 
 
 def test_a_state_directory_that_cannot_be_written_is_one_line(ro_folder, plugins, monkeypatch):
-    from plugins.gestures import calibration_file
+    from plugins.gestures.settings import calibration_file
 
     fit, _, _ = _touch_fit()
     fit.save(ro_folder / "touch_calibration.json")

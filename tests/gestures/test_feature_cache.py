@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plugins.gestures.evaluate import FeatureSet, cache_dir, extract
+from plugins.gestures.evaluate import cache_dir, extract
+from plugins.gestures.feature_set import FeatureSet
 from plugins.gestures.synth import synth
 
 DAMAGES = ["other-set", "truncated", "empty", "dev-zero", "keyless"]

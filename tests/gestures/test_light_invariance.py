@@ -6,7 +6,7 @@ thresholds (``contact_level = 0``) they do not."""
 import numpy as np
 import pytest
 
-from plugins.gestures.evaluate import record_features, sample_records
+from plugins.gestures.features import record_features, sample_records
 from plugins.gestures.segmentation import relative_body
 from plugins.gestures.vision import VisionParams, process_frame
 from plugins.twin.camera.camera import TwinCamera

@@ -4,8 +4,8 @@ import pytest
 
 
 def test_the_tunable_ranges_are_the_profile_s_bounds():
-    from plugins.gestures import VISION_FIELDS
     from plugins.gestures.classifier import TUNABLES
+    from plugins.gestures.settings import VISION_FIELDS
 
     for name, rng in TUNABLES.items():
         field = VISION_FIELDS[name]

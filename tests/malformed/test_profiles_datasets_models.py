@@ -883,10 +883,14 @@ def _play_long(tmp: Path, fx):
 def fx(tmp_path_factory, vmap_file):
     """A tiny model with the pipeline's real feature widths and a good 'drag' sample."""
     from plugins.gestures import sketch
-    from plugins.gestures.classifier import record_features
     from plugins.gestures.dataset import write_background, write_sample
-    from plugins.gestures.evaluate import N_HARMONICS_MAX
-    from plugins.gestures.features import select_dynamic, select_kind, select_static
+    from plugins.gestures.features import (
+        N_HARMONICS_MAX,
+        record_features,
+        select_dynamic,
+        select_kind,
+        select_static,
+    )
     from plugins.gestures.model import GestureModel
 
     base = tmp_path_factory.mktemp("gfx")

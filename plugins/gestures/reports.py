@@ -1,0 +1,76 @@
+"""Accuracy reports of the gesture classifiers: per outer fold and over a whole
+evaluation (accuracies, per-class recall, confusion, the pipeline's frame times)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from console.bench import summarize_s
+
+from .feature_set import FeatureSet
+from .model import GESTURES
+from .sketch import DYNAMIC, STATIC
+
+
+def fold_report(fs: FeatureSet, test: np.ndarray, pred: np.ndarray, cv: str) -> dict:
+    """One outer fold: what was tested (a subject under ``loso``) and its accuracies."""
+    labels = fs.labels[test].astype(str)
+    is_st = np.isin(labels, STATIC)
+    out = {
+        "n_test": int(len(test)),
+        "accuracy": float(np.mean(pred == labels)),
+        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
+        "dynamic_accuracy": (
+            float(np.mean(pred[~is_st] == labels[~is_st])) if (~is_st).any() else None
+        ),
+    }
+    if cv == "loso":
+        out["subject"] = str(fs.subjects[test][0])
+    return out
+
+
+def report(
+    labels: np.ndarray,
+    pred: np.ndarray,
+    fs: FeatureSet,
+    cv: str,
+    n_harmonics: int,
+    n_frames: int,
+    thresholds: list[float],
+) -> dict:
+    """The whole evaluation's report: accuracies (static, dynamic, kind), per-class
+    recall, confusion, the pipeline's frame times and the settings used."""
+    labels = np.asarray(labels).astype(str)
+    is_st = np.isin(labels, STATIC)
+    is_dy = np.isin(labels, DYNAMIC)
+    present = [g for g in GESTURES if g in set(labels)] + sorted(set(labels) - set(GESTURES))
+    recall = {g: float(np.mean(pred[labels == g] == g)) for g in present}
+    conf = {
+        g: {
+            p: int(np.sum((labels == g) & (pred == p)))
+            for p in present
+            if np.any((labels == g) & (pred == p))
+        }
+        for g in present
+    }
+    kind_ok = np.isin(pred, DYNAMIC) == is_dy
+    t = summarize_s(fs.frame_s)
+    c = summarize_s(fs.frame_cpu_s)
+    return {
+        "cv": cv,
+        "n_samples": int(len(labels)),
+        "subjects": sorted(set(fs.subjects.tolist())),
+        "static_accuracy": float(np.mean(pred[is_st] == labels[is_st])) if is_st.any() else None,
+        "dynamic_accuracy": float(np.mean(pred[is_dy] == labels[is_dy])) if is_dy.any() else None,
+        "kind_accuracy": float(np.mean(kind_ok)),
+        "per_class_recall": recall,
+        "confusion": conf,
+        "frame_ms_p50": t["p50_ms"],
+        "frame_ms_p99": t["p99_ms"],
+        "frame_cpu_ms_p50": c["p50_ms"],
+        "frame_cpu_ms_p99": c["p99_ms"],
+        "frames_timed": t["n"],
+        "n_harmonics": n_harmonics,
+        "n_frames": n_frames,
+        "motion_threshold": float(np.median(thresholds)) if thresholds else None,
+    }
