@@ -332,7 +332,7 @@ def _stdlib_modules(tree) -> set[str]:
 def probes() -> list[str]:
     """``getattr``/``hasattr`` calls in console/ on anything but a stdlib module the file
     imports (``getattr(os, "O_CLOEXEC", 0)`` asks the platform, not a plugin). The
-    contract checker itself (console/contracts.py) reads members by name: that is its
+    contract checker itself (console/contract_check.py) reads members by name: that is its
     job."""
     import ast
     from pathlib import Path
@@ -340,7 +340,7 @@ def probes() -> list[str]:
     root = Path(__file__).resolve().parents[2]
     out = []
     for path in sorted((root / "console").rglob("*.py")):
-        if path.name == "contracts.py" and path.parent.name == "console":
+        if path.name == "contract_check.py" and path.parent.name == "console":
             continue
         tree = ast.parse(path.read_text(), str(path))
         modules = _stdlib_modules(tree)
