@@ -24,8 +24,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.hookspecs import hookimpl
-from console.schema import Field
+from console.plugin_api import Field, hookimpl
 
 DEMOS = ("flow", "knob")
 
@@ -156,7 +155,7 @@ def _scenes_panel(app: Any) -> Any:
 
 @hookimpl
 def haptable_register_panels(register) -> None:
-    from console.plugins import PanelTab
+    from console.plugin_api import PanelTab
 
     register(
         "scenes",

@@ -21,9 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.contracts import PrecomputedHandFlows
-from console.errors import UserError
-from console.types import DIRECTIONS, OutputPlan
+from console.plugin_api import DIRECTIONS, OutputPlan, PrecomputedHandFlows, UserError
 
 
 def _effect(plugins: Any, name: str, profile: Any) -> Any:

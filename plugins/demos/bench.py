@@ -13,8 +13,8 @@ import sys
 import time
 from typing import Any
 
-from console.bench import machine_info, summarize_s
-from console.runtime.latency import DEQUEUED
+from console.plugin_api import machine_info, summarize_s
+from console.plugin_api.runtime import DEQUEUED
 
 TARGET_P99_MS = 5.0
 
@@ -105,7 +105,7 @@ class ReplayCamera:
         self._closed = False
 
     def read(self, timeout_s: float = 0.1):
-        from console.types import Frame
+        from console.plugin_api import Frame
 
         if self._closed:
             return None
@@ -139,7 +139,7 @@ class ReplayCamera:
 
 def render_script(ctx: Any, demo: str, seconds: float) -> ReplayCamera:
     """The twin camera performing ``demo``'s script, rendered ahead of time."""
-    from console.runtime.stages import open_camera
+    from console.plugin_api.runtime import open_camera
 
     from .run import script_twin
 
@@ -158,7 +158,7 @@ def render_script(ctx: Any, demo: str, seconds: float) -> ReplayCamera:
 def _over_limit(run_, limit_ms: float) -> dict:
     """Frames (in the monitor's window) whose processing took longer than the watchdog
     limit: each would have e-stopped the outputs."""
-    from console.runtime.latency import PROCESSING
+    from console.plugin_api.runtime import PROCESSING
 
     vals = run_.monitor.values_s(PROCESSING) * 1e3
     return {"limit_ms": limit_ms, "frames_over": int((vals > limit_ms).sum()), "of": int(vals.size)}
@@ -230,7 +230,7 @@ def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any)
 
 
 def run_loop(ctx: Any, quick: bool) -> dict:
-    from console.realtime import support_priority
+    from console.plugin_api import support_priority
 
     with support_priority() as rt:  # as the console's demo process serves its loop
         res = _run_loop(ctx, quick)
@@ -305,7 +305,7 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     reset and the demo restarted, so the soak always covers the whole time. RSS is taken
     after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between.
     The polling thread runs as the console's demo process runs its status thread."""
-    from console.realtime import support_priority
+    from console.plugin_api import support_priority
 
     with support_priority() as rt:
         res = _run_soak(ctx, quick, minutes)
@@ -319,8 +319,7 @@ def _twin(profile: Any, pm: Any) -> bool:
 
 
 def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
-    from console.kernel.client import open_outputs
-    from console.runtime.jitter import finish_probe, start_probe
+    from console.plugin_api.runtime import finish_probe, open_outputs, start_probe
 
     from .run import start_demo
 

@@ -24,10 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.plugins import load_plugins
-from console.runtime.stages import open_camera
-from console.types import Frame
+from console.plugin_api import Frame, UserError, load_plugins
+from console.plugin_api.runtime import open_camera
 
 from .script import script_twin
 

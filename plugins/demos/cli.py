@@ -7,8 +7,7 @@ import json
 import sys
 import time
 
-from console.errors import UserError
-from console.options import integer, minutes, seconds
+from console.plugin_api import UserError, integer, minutes, seconds
 
 #: the knob's sectors ([knob] sectors, the electrostatic plugin's key: same range)
 SECTORS = integer(2, 64, note="the paper's: 8, 16, 32")

@@ -25,8 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from console.errors import SafetyRefusal, UserError
-from console.types import DIRECTIONS_MM, Frame
+from console.plugin_api import DIRECTIONS_MM, Frame, SafetyRefusal, UserError
 
 from .adapters import summary_parts
 

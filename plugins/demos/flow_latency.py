@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 
 from .bench import ReplayCamera, load_avg, rss_mb
 
@@ -48,10 +48,8 @@ def placements_camera(ctx: Any, n: int, hold_s: float, seed: int) -> tuple[Repla
     """A replay camera showing ``n`` resting open hands at random places (the camera
     twin's own placement), each for ``hold_s``, lifted for ``GAP_S`` between; and the
     true hand centres (mm)."""
-    from console.contracts import SimulatedCamera
-    from console.errors import UserError
-    from console.runtime.stages import open_camera
-    from console.types import GestureScript, GestureStep
+    from console.plugin_api import GestureScript, GestureStep, SimulatedCamera, UserError
+    from console.plugin_api.runtime import open_camera
 
     cam = open_camera(ctx.profile, ctx.pm)
     fps = float(ctx.profile.get("camera.fps") or 60.0)
@@ -84,7 +82,7 @@ def _profile_with(profile: Any, section: str, **values: Any) -> Any:
 
 def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
     """The flow demo on ``n`` placements; its flows' latencies."""
-    from console.runtime.jitter import finish_probe, start_probe_beside
+    from console.plugin_api.runtime import finish_probe, start_probe_beside
 
     from .run import start_demo
 
@@ -171,7 +169,7 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
     import tempfile
     from pathlib import Path
 
-    from console.contracts import PrecomputedHandFlows
+    from console.plugin_api import PrecomputedHandFlows
 
     from .run import flow_map_path
 
@@ -234,7 +232,7 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
 
 
 def run_flow_latency(ctx: Any, quick: bool) -> dict:
-    from console.realtime import support_priority
+    from console.plugin_api import support_priority
 
     with support_priority() as rt:  # as the console's demo process serves its loop
         res = _run(ctx, quick)

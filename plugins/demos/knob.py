@@ -13,8 +13,7 @@ import time
 from collections import deque
 from typing import Any
 
-from console.errors import UserError
-from console.types import Frame
+from console.plugin_api import Frame, UserError
 
 
 class KnobDemo:

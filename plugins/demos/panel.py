@@ -20,11 +20,9 @@ from textual.binding import Binding
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
-from console.errors import UserError
-from console.session.events import Progress, Snapshot, Started, Stopped
-from console.tui.long_work import LongWork
-from console.tui.session_messages import SessionMessage
-from console.tui.text import LiteralTable, escape
+from console.plugin_api import UserError
+from console.plugin_api.runtime import Progress, Snapshot, Started, Stopped
+from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escape
 
 from .status import status_lines, unprepared_text
 

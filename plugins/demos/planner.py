@@ -14,12 +14,12 @@ import multiprocessing
 import threading
 from typing import Any
 
-from console.types import OutputPlan
+from console.plugin_api import OutputPlan
 
 
 def _serve(profile: Any, conn) -> None:
     """The worker: the registered flow effects, one request at a time, until closed."""
-    from console.plugins import load_plugins
+    from console.plugin_api import load_plugins
 
     pm = load_plugins()
     effects = {}
@@ -34,7 +34,7 @@ def _serve(profile: Any, conn) -> None:
             return
         try:
             if effect not in effects:
-                from console.errors import UserError
+                from console.plugin_api import UserError
 
                 raise UserError(f"the flow demo needs the {effect!r} effect; it is not registered")
             conn.send((True, effects[effect].render(**req)))
@@ -58,7 +58,7 @@ class PlanProcess:
         self._lock = threading.Lock()
 
     def render(self, effect: str, **req: Any) -> OutputPlan:
-        from console.errors import UserError
+        from console.plugin_api import UserError
 
         with self._lock:
             try:

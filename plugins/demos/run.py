@@ -14,18 +14,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.bench import summarize_s
-from console.errors import UserError
-from console.runtime.latency import LatencyMonitor
-from console.runtime.loop import FrameLoop
-from console.runtime.measured_map import measured_map_file
-from console.runtime.stages import (
+from console.plugin_api import UserError, summarize_s
+from console.plugin_api.runtime import (
+    FrameLoop,
+    LatencyMonitor,
     VisionStage,
+    Watchdog,
     learn_background,
+    measured_map_file,
     open_camera,
     open_classifier,
 )
-from console.runtime.watchdog import Watchdog
 
 from .adapters import flow_renderers
 from .camproc import ProcessCamera

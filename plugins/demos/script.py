@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.contracts import SimulatedCamera
-from console.types import GestureScript, GestureStep
+from console.plugin_api import GestureScript, GestureStep, SimulatedCamera
 
 
 def script_twin(camera: Any, demo: str, profile: Any, *, hold_frames: int | None = None) -> bool:

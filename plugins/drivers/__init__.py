@@ -9,8 +9,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from console.hookspecs import hookimpl
-from console.schema import Field
+from console.plugin_api import Field, hookimpl
 
 
 @hookimpl

@@ -32,10 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import summarize_s
-from console.channels import ChannelLayout
-from console.contracts import BlockSource
-from console.types import DeviceStatus, OutputDevice
+from console.plugin_api import BlockSource, ChannelLayout, DeviceStatus, OutputDevice, summarize_s
 from plugins.drivers.errors import DeviceError
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"

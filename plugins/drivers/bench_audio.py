@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from console.bench import machine_info
+from console.plugin_api import machine_info
 
 
 def run(ctx: Any, quick: bool, duration_s: float | None = None) -> dict[str, Any]:

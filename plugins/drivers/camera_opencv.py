@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from console.types import DeviceStatus, Frame, TunableRange
+from console.plugin_api import DeviceStatus, Frame, TunableRange
 from plugins.drivers.errors import DeviceError
 
 

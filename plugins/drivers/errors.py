@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 
 class DeviceError(UserError):

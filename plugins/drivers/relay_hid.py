@@ -16,7 +16,7 @@ import re
 import threading
 from typing import Any
 
-from console.types import DeviceStatus
+from console.plugin_api import DeviceStatus
 from plugins.drivers.errors import DeviceError, check_channel
 
 VENDOR_ID = 0x16C0

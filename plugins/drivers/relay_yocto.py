@@ -24,7 +24,7 @@ import threading
 from types import SimpleNamespace
 from typing import Any
 
-from console.types import DeviceStatus
+from console.plugin_api import DeviceStatus
 from plugins.drivers.errors import DeviceError, check_channel
 
 CHANNELS = 8

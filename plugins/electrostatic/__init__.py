@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 
 
 @hookimpl
@@ -97,7 +97,7 @@ def _electrostatic_panel(app: Any) -> Any:
 
 @hookimpl
 def haptable_register_panels(register: Any) -> None:
-    from console.plugins import PanelTab
+    from console.plugin_api import PanelTab
 
     register(
         "electrostatic",

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 
 from .settings import KNOB_DEFAULTS
 from .synth import CONDITIONS, KnobStream

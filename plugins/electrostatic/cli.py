@@ -13,9 +13,15 @@ from typing import Any
 
 import numpy as np
 
-from console.atomic import append_json_line
-from console.errors import UserError
-from console.options import finite_float, from_field, positive_int, seconds, seed
+from console.plugin_api import (
+    UserError,
+    append_json_line,
+    finite_float,
+    from_field,
+    positive_int,
+    seconds,
+    seed,
+)
 
 from .effects import condition_report
 from .settings import KNOB_FIELDS, audio, knob_settings, limits
@@ -242,7 +248,7 @@ def _run_live(
     args: argparse.Namespace, ctx: Any, trials: list, k: dict[str, Any], log: Path, say: Any
 ) -> list:
     """Trials with the profile's camera: vision -> contacts -> the trial's knob session."""
-    from console.runtime.stages import open_camera, vision_loop
+    from console.plugin_api.runtime import open_camera, vision_loop
 
     from .task import run_live_trial
 

@@ -6,9 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.safety import Limits
-from console.types import OutputPlan, Segment
+from console.plugin_api import Limits, OutputPlan, Segment, UserError
 
 from .force import Material, expected_force, threshold_check
 from .settings import audio, electrostatic_settings, knob_settings, limits

@@ -17,10 +17,8 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import OptionList, Static
 from textual.widgets.option_list import Option
 
-from console.contracts import Conditions, Presets
-from console.errors import UserError
-from console.tui.text import escape
-from console.tui.util import from_thread
+from console.plugin_api import Conditions, Presets, UserError
+from console.plugin_api.tui import escape, from_thread
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -103,7 +101,7 @@ class ElectrostaticPane(Vertical):
         return lst.first() if lst else None
 
     def on_mount(self) -> None:
-        from console.safety import Limits
+        from console.plugin_api import Limits
 
         if not self.query("#es-list"):
             return

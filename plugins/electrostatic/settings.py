@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.schema import Field
+from console.plugin_api import Field
 
 from .force import DEFAULTS as FORCE_DEFAULTS
 

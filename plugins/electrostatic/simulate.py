@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from console.types import Contact
+from console.plugin_api import Contact
 
 from .knob import Crossing
 from .rotation import RotationState

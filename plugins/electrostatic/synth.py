@@ -34,17 +34,17 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.stream_synth import (
+from console.plugin_api import (
     Envelope,
     PulseSpec,
     StreamSink,
     StreamSpec,
     StreamSynth,
+    UserError,
+    patches_of,
     smooth_square,
     spec_problem,
 )
-from console.types import patches_of
 
 DETENTS = {"HD": "screen", "VD": "piezo"}
 FRICTIONS = {"CF": "constant", "VF": "velocity", "BF": "boundary"}

@@ -28,8 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from console.atomic import append_json_line
-from console.errors import UserError
+from console.plugin_api import UserError, append_json_line
 
 from .session import KnobSession
 from .simulate import min_jerk, rotation_frames

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 
 from .cli_options import configure
 from .settings import GESTURES_FIELDS, VISION_FIELDS, calibration_file, model_file

@@ -8,7 +8,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 
 class Background:

@@ -26,7 +26,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 
 from . import evaluate as ev
 from .background import illumination, subtract

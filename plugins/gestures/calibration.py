@@ -27,7 +27,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .dataset import read_json
 from .vision import VisionParams, process_frame

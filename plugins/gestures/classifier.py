@@ -10,8 +10,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from console.errors import UserError
-from console.types import Frame, Gesture, TunableRange
+from console.plugin_api import Frame, Gesture, TunableRange, UserError
 
 from .background import Background
 from .calibration import Calibration, CalibrationSession, target_grid

@@ -10,7 +10,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import evaluate as ev
 from .calibration import run_touch_calibration, target_grid

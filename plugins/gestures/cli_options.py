@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from console.options import finite_float, integer, positive_int, seed
+from console.plugin_api import finite_float, integer, positive_int, seed
 
 from .dataset_commands import COMMANDS
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from console.types import Contact
+from console.plugin_api import Contact
 
 
 def find_contacts(

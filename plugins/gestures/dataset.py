@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 STATIC: tuple[str, ...] = ("one_finger", "two_finger", "l_shape", "closed_hand", "open_hand")
 DYNAMIC: tuple[str, ...] = ("drag", "rotate", "spread_pile", "wipe", "zoom")

@@ -12,8 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.options import finite_float, integer, positive_int, seed
+from console.plugin_api import UserError, finite_float, integer, positive_int, seed
 
 from .dataset import GESTURES
 from .jobs import synth_atomic

@@ -21,8 +21,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from console import cache_files, paths
-from console.errors import UserError
+from console.plugin_api import UserError, cached_arrays, entry_path
+from console.plugin_api import cache_dir as console_cache_dir
 
 from .dataset import load_dataset
 from .feature_set import FeatureSet, columns
@@ -52,7 +52,7 @@ FEATURES_VERSION = 8  # bump when features change: old caches are ignored
 
 def cache_dir() -> Path:
     """``gestures`` in HapTable's cache directory (``console.paths``)."""
-    return paths.cache_dir("gestures")
+    return console_cache_dir("gestures")
 
 
 def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:
@@ -104,7 +104,7 @@ def extract(
         )
     size = (params.width_px, params.height_px)
     key = _key(samples, params, frames_list)
-    cfile = cache_files.entry_path(cache_dir(), "features", key) if use_cache else None
+    cfile = entry_path(cache_dir(), "features", key) if use_cache else None
 
     def compute() -> dict:
         threads = cv2.getNumThreads()
@@ -118,7 +118,7 @@ def extract(
 
     # the entry carries its key: another set's features (copied over this name), a
     # damaged or empty entry is logged, deleted and extracted again, never used
-    arrays, _ = cache_files.cached_arrays(
+    arrays, _ = cached_arrays(
         cfile, key, compute, what="gesture feature cache entry", check=_feature_set
     )
     return _feature_set(arrays)

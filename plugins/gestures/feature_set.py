@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import features as F
 from .features import N_HARMONICS_MAX

@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .dataset import load_dataset
 from .progress import CancelCheck, Progress, part, step

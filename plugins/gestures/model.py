@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .model_checks import check_classifiers, check_settings, check_widths
 from .sketch import DYNAMIC, STATIC

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .features import (
     FRAMES_LIST,

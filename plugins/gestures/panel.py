@@ -19,12 +19,9 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Button, Footer, Input, Label, Static
 
-from console import paths
-from console.errors import UserError
-from console.tui.long_work import LongWork
-from console.tui.safety_bar import SafetyBar
-from console.tui.text import escape
-from console.tui.util import from_thread, short_path
+from console.plugin_api import UserError
+from console.plugin_api import data_dir as console_data_dir
+from console.plugin_api.tui import LongWork, SafetyBar, escape, from_thread, short_path
 
 from .features import analysis_params
 from .jobs import describe_files, synth_atomic, train_and_evaluate
@@ -41,7 +38,7 @@ HELP = (
 
 def data_dir() -> Path:
     """Where the panel keeps twin datasets by default."""
-    return paths.data_dir("gestures")
+    return console_data_dir("gestures")
 
 
 def _mb(n: int | None) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from console.bench import summarize_s
+from console.plugin_api import summarize_s
 
 from .feature_set import FeatureSet
 from .model import GESTURES

@@ -20,8 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import Classifier, VisionResult
-from console.types import Frame, Gesture, Hand
+from console.plugin_api import Classifier, Frame, Gesture, Hand, VisionResult
 
 #: vision results kept for the model's decision (``[gestures] frames`` is at most 6)
 WINDOW_FRAMES = 6

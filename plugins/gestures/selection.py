@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .feature_set import FeatureSet, columns
 from .model import GestureModel, inner_splitter

@@ -7,8 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.profile_files import profile_file
-from console.schema import Field
+from console.plugin_api import Field, profile_file
 
 VISION_FIELDS: dict[str, Field] = {
     "body_threshold": Field(

@@ -41,8 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.plugins import load_plugins
+from console.plugin_api import UserError, load_plugins
 
 from .dataset import (
     DYNAMIC,

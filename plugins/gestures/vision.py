@@ -42,8 +42,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from console.errors import UserError
-from console.types import Contact, Hand
+from console.plugin_api import Contact, Hand, UserError
 
 from .background import illumination, subtract
 from .contacts import find_contacts

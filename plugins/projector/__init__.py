@@ -9,7 +9,7 @@ Scenes are registered here (``haptable_register_scenes``), drawn in table millim
 
 from __future__ import annotations
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 
 
 @hookimpl

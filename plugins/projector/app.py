@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.projector.geometry import (
     Calibration,
     glass_corners_mm,

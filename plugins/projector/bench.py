@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 from plugins.projector.draw import build_layer, primitives
 from plugins.projector.geometry import default_calibration
 from plugins.projector.layout import hand_outline_mm
@@ -94,7 +94,7 @@ def frame_times(profile: Any, n_frames: int) -> dict:
 
 
 def link_latency(n_messages: int) -> dict:
-    from console.runtime.projector.service import ProjectorService
+    from console.plugin_api.runtime import ProjectorService
     from plugins.projector.launch import projector_command
 
     with tempfile.TemporaryDirectory(prefix="hpt-bench-") as d:

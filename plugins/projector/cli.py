@@ -8,9 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.options import Parser
-from console.runtime.projector.protocol import default_socket_path, socket_path_for
+from console.plugin_api import Parser, UserError
+from console.plugin_api.runtime import default_socket_path, socket_path_for
 from plugins.projector import layout
 from plugins.projector.cli_options import configure
 from plugins.projector.settings import DEFAULTS, calibration_path_for
@@ -140,7 +139,7 @@ def show(args: Any, ctx: Any) -> int:
     """Be a console: start or adopt the projector, show a scene, wait, then stop it."""
     import time
 
-    from console.runtime.projector.service import ProjectorService
+    from console.plugin_api.runtime import ProjectorService
     from plugins.projector.launch import projector_command
 
     prof = _profile(ctx)
@@ -249,7 +248,7 @@ class StandaloneContext:
     @property
     def pm(self) -> Any:
         if self._pm is None:
-            from console.plugins import load_plugins
+            from console.plugin_api import load_plugins
 
             self._pm = load_plugins()
         return self._pm
@@ -259,7 +258,7 @@ class StandaloneContext:
         if not self._use:
             return None
         if self._profile is None:
-            from console.profile import load_profile
+            from console.plugin_api import load_profile
 
             self._profile = load_profile(self._arg, self.pm)
         return self._profile

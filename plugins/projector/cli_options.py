@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from console.options import BadValue, finite_float, from_field, seconds
+from console.plugin_api import BadValue, finite_float, from_field, seconds
 from plugins.projector.settings import FIELDS
 
 #: a calibration coordinate: pixels or millimetres, finite, off the frame by a frame at most

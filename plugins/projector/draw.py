@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from console.types import DIRECTIONS_MM
+from console.plugin_api import DIRECTIONS_MM
 from plugins.projector import tessellate as T
 
 PALETTE: dict[str, tuple[float, float, float, float]] = {

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 #: 3M SCT-3250 glass (paper, section 2); used when no profile gives [table].
 GLASS_MM: tuple[float, float] = (743.46, 447.29)

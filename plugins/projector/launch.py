@@ -12,7 +12,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from console.runtime.projector.supervisor import ProjectorLaunch
+from console.plugin_api.runtime import ProjectorLaunch
 
 NAME = "moderngl"
 DESCRIPTION = "full-screen pyglet + moderngl window, or offscreen through EGL (headless)"

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.projector.geometry import GLASS_MM
 
 #: Fig. 10a pairs as "name:active:passive" grid points. F-F uses the paper's example

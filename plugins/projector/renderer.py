@@ -321,7 +321,7 @@ def write_png(path: str, rgb: np.ndarray) -> None:
     """Write an RGB image as PNG (OpenCV wants BGR)."""
     import cv2
 
-    from console.errors import UserError
+    from console.plugin_api import UserError
 
     if not cv2.imwrite(str(path), np.ascontiguousarray(rgb[:, :, ::-1])):
         raise UserError(

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.projector import layout
 from plugins.projector.draw import DIRECTIONS
 
@@ -381,7 +381,7 @@ class GridAudition(Scene):
         return int(n)
 
     def state(self) -> dict:
-        from console.types import patches_of
+        from console.plugin_api import patches_of
 
         lit = sorted(patches_of(self.excitation)) if self.excitation else []
         cap = f"point {self.active}" if self.active else ""

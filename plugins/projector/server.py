@@ -26,9 +26,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from console.errors import UserError
-from console.runtime.projector import protocol as proto
-from console.runtime.projector.protocol import (
+from console.plugin_api import UserError
+from console.plugin_api.runtime import (
     HEARTBEAT_S,
     PEER_TIMEOUT_S,
     TO_PROJECTOR,
@@ -38,6 +37,7 @@ from console.runtime.projector.protocol import (
     prepare_socket_dir,
     probe,
 )
+from console.plugin_api.runtime import projector_protocol as proto
 from plugins.projector.snapshots import snapshot_dir, snapshot_target
 
 log = logging.getLogger("haptable.projector")

@@ -6,9 +6,8 @@ import math
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.runtime.projector.protocol import MAX_SOCKET_PATH
-from console.schema import Field, path_problem
+from console.plugin_api import Field, UserError, path_problem
+from console.plugin_api.runtime import MAX_SOCKET_PATH
 from plugins.projector.layout import DEFAULT_CITIES, DEFAULT_FLOW_PAIRS, DEFAULT_HAND_REGIONS
 
 
@@ -113,7 +112,7 @@ def calibration_path_for(profile: Any) -> Path | None:
     ``console.profile_files``)."""
     if profile is None:
         return None
-    from console.profile_files import profile_file
+    from console.plugin_api import profile_file
 
     legacy = f"{Path(profile.path).stem}.projector.json"
     return profile_file(profile, "projector.calibration_path", "projector.json", legacy)

@@ -13,8 +13,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from console.errors import UserError
-from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
+from console.plugin_api import UserError
+from console.plugin_api.runtime import ensure_private_dir, runtime_dir, write_private
 
 
 def snapshot_dir(configured: str | os.PathLike | None = None) -> Path:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 
 
 @hookimpl
@@ -40,7 +40,7 @@ def _studies_panel(app: Any) -> Any:
 
 @hookimpl
 def haptable_register_panels(register) -> None:
-    from console.plugins import PanelTab
+    from console.plugin_api import PanelTab
 
     register(
         "studies",

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .rmanova import rm_anova
 from .runs import Study, load, participant_dirs

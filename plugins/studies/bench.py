@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from console import contracts
+from console.plugin_api import FlowEffect, HandFlowEffect, SimulatedObserver
 
 #: The paper's numbers (section 5.2.1, 5.2.2 and Fig. 14's caption); direction names ours.
 PAPER_EXP1_PCT = 100.0
@@ -67,9 +67,9 @@ def predictions(pm, profile, vmap, participants: int) -> dict[str, Any]:
     from . import protocol as protocols
     from .plan import participant_seed
 
-    obs = pm.provider("observer", contracts.SimulatedObserver, profile, plugin_hint="twin")
-    hand = pm.provider("effect", contracts.HandFlowEffect, profile, plugin_hint="vibrotactile")
-    flow = pm.provider("effect", contracts.FlowEffect, profile, plugin_hint="vibrotactile")
+    obs = pm.provider("observer", SimulatedObserver, profile, plugin_hint="twin")
+    hand = pm.provider("effect", HandFlowEffect, profile, plugin_hint="vibrotactile")
+    flow = pm.provider("effect", FlowEffect, profile, plugin_hint="vibrotactile")
     out: dict[str, Any] = {"participants": participants, "exp2": [], "exp1": []}
     first_s, answer_s = [], []
     for name in ("exp2", "exp1"):
@@ -223,8 +223,8 @@ def table(res: dict[str, Any]) -> list[str]:
 
 
 def run_bench(ctx: Any, quick: bool) -> dict[str, Any]:
-    from console.bench import machine_info
-    from console.runtime.measured_map import measured_map
+    from console.plugin_api import machine_info
+    from console.plugin_api.runtime import measured_map
 
     t0 = time.perf_counter()
     vmap = measured_map(ctx.profile, ctx.pm, None)

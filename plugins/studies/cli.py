@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import protocol as protocols
 from .plan import check_seed_row
@@ -119,10 +119,10 @@ def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
 
 def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
     if args.map is not None:
-        from console.vibration_map import load_map
+        from console.plugin_api import load_map
 
         return load_map(args.map.expanduser(), require_all=False)
-    from console.runtime.measured_map import measured_map
+    from console.plugin_api.runtime import measured_map
 
     def progress(frac: float, text: str) -> None:
         print(f"\rvibration map: {frac:4.0%} {text}"[:100], end="", file=sys.stderr, flush=True)

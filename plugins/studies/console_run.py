@@ -16,7 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import protocol as protocols
 from .runner import Control
@@ -28,7 +28,7 @@ TOPIC = "study"
 def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) -> None:
     """Run ``spec`` (the screen's choices) and report it through the session (blocking:
     the screen's worker thread). Any failure is one line (``Failed``), then ``Stopped``."""
-    from console.session.events import Snapshot, Stopped
+    from console.plugin_api.runtime import Snapshot, Stopped
 
     pid = spec["pid"]
 
@@ -56,7 +56,7 @@ def report_path(out: Path, experiment: str) -> Path:
 def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
     """Analyse ``experiment``'s participants in ``out``, write the report, and tell the
     screen (a ``Snapshot`` of kind ``analysis``: headline, columns, rows, report)."""
-    from console.session.events import Snapshot
+    from console.plugin_api.runtime import Snapshot
 
     from . import analysis, report, summary
 
@@ -111,8 +111,8 @@ def study_map(session: Any, control: Control, emit: Any) -> Any:
     console's current map, else the kept measured map of the profile, else measured now
     with the profile's vibrometer (progress as ``map`` notices; ``a`` cancels). On a real
     table whose only vibrometer is the twin none is measured: one line says what to do."""
-    from console.runtime.measured_map import Cancelled
-    from console.vibration_map import VibrationMap
+    from console.plugin_api import VibrationMap
+    from console.plugin_api.runtime import Cancelled
 
     vib = session.vibration
     try:
@@ -168,7 +168,7 @@ class _Asking:
 
 def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
     """Prepare the participant and run the plan on the console session (blocking)."""
-    from console.session.events import Started
+    from console.plugin_api.runtime import Started
 
     from .responders import ObserverResponder, observer
     from .runner import run_plan

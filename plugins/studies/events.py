@@ -16,7 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import textfiles
 from .records import COMMON, EVENT, TRIAL_COLUMNS, _show, check_record

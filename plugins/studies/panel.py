@@ -41,10 +41,9 @@ from textual.widgets import (
     Static,
 )
 
-from console.errors import UserError
-from console.session.events import Failed, Snapshot, Started, Stopped
-from console.tui.session_messages import SessionMessage
-from console.tui.text import LiteralTable, escape
+from console.plugin_api import UserError
+from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
+from console.plugin_api.tui import LiteralTable, SessionMessage, escape
 
 from . import protocol as protocols
 from .console_run import TOPIC
@@ -56,9 +55,9 @@ IDLE = "no study running: pick a protocol and a participant, then s"
 
 def default_out(study: str = "") -> Path:
     """A protocol's default results folder: ``<data dir>/studies/<protocol>``."""
-    from console import paths
+    from console.plugin_api import data_dir
 
-    return paths.data_dir("studies", study) if study else paths.data_dir("studies")
+    return data_dir("studies", study) if study else data_dir("studies")
 
 
 def next_id(pid: str) -> str:

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .protocol import Phase, Protocol
 from .records import MAX_SEED

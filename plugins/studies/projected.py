@@ -18,7 +18,7 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .runner import Answer
 

@@ -26,9 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.file_read import parse_toml_text
-from console.schema import Field, check
+from console.plugin_api import Field, UserError, check, parse_toml_text
 
 from . import textfiles
 

@@ -19,8 +19,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.schema import KINDS, Field, check
+from console.plugin_api import KINDS, Field, UserError, check
 
 from . import textfiles
 from .words import CLI, Words

@@ -188,6 +188,6 @@ class ObserverResponder:
 def observer(plugins: Any, profile: Any) -> Any:
     """The first registered ``SimulatedObserver`` (a one-line error naming the plugin to
     enable when none is)."""
-    from console import contracts
+    from console.plugin_api import SimulatedObserver
 
-    return plugins.provider("observer", contracts.SimulatedObserver, profile, plugin_hint="twin")
+    return plugins.provider("observer", SimulatedObserver, profile, plugin_hint="twin")

@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .plan import expected_response
 from .store import RunFiles, progress

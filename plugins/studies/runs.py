@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import records
 from .events import checked_events

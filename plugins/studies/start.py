@@ -91,7 +91,7 @@ def prepare(
     stored = stored_participant(out, pid, words)
     if stored is not None:
         if bool(stored.get("simulated")) != bool(simulate):
-            from console.errors import UserError
+            from console.plugin_api import UserError
 
             sim = bool(stored.get("simulated"))
             how = words.resume_simulated if sim else words.resume_person

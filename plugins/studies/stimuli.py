@@ -20,9 +20,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from console import contracts
-from console.errors import UserError
-from console.types import OutputPlan
+from console.plugin_api import FlowEffect, HandFlowEffect, KnobTrials, OutputPlan, UserError
 
 
 def check_places(plan: dict[str, Any], vmap: Any) -> None:
@@ -88,10 +86,10 @@ class EffectPlayer:
         plan = self._plans.get(k)
         if plan is None:
             if s.get("effect") == "flow":
-                eff = self._effect(contracts.FlowEffect)
+                eff = self._effect(FlowEffect)
                 plan = eff.render_flow(int(s["from_point"]), int(s["to_point"]), self.vmap)
             elif s.get("effect") == "hand_flow":
-                eff = self._effect(contracts.HandFlowEffect)
+                eff = self._effect(HandFlowEffect)
                 cx, cy = s["center_mm"]
                 plan = eff.render_hand_flow((float(cx), float(cy)), s["direction"], self.vmap)
             else:
@@ -114,7 +112,7 @@ class EffectPlayer:
 def knob_trial(plugins: Any, profile: Any, trial: dict[str, Any], seed: int, attempt: int) -> Any:
     """One knob trial with the simulated finger (``contracts.KnobTrials``)."""
     s = trial["stimulus"]
-    eff = plugins.provider("effect", contracts.KnobTrials, profile, plugin_hint="electrostatic")
+    eff = plugins.provider("effect", KnobTrials, profile, plugin_hint="electrostatic")
     return eff.knob_trial(
         condition=s["condition"],
         sectors=int(s["sectors"]),
@@ -181,9 +179,7 @@ class LiveKnob:
 
     def play(self, trial: dict[str, Any]) -> dict[str, Any]:
         s = trial["stimulus"]
-        eff = self.plugins.provider(
-            "effect", contracts.KnobTrials, self.profile, plugin_hint="electrostatic"
-        )
+        eff = self.plugins.provider("effect", KnobTrials, self.profile, plugin_hint="electrostatic")
         res = eff.knob_live_trial(
             condition=s["condition"],
             sectors=int(s["sectors"]),

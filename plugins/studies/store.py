@@ -19,8 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.atomic import append_json_line, write_text_atomic
-from console.errors import UserError
+from console.plugin_api import UserError, append_json_line, write_text_atomic
 
 from . import records
 from .events import load_events, read_events

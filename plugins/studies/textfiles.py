@@ -22,9 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.file_read import read_bytes_capped
-from console.npz_safe import json_depth
+from console.plugin_api import UserError, json_depth, read_bytes_capped
 
 #: limits of each kind of file (a plan of 100,000 trials is about 40 MB)
 MAX_PROTOCOL_BYTES = 1 * 2**20

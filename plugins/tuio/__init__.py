@@ -18,11 +18,8 @@ import json
 import time
 from typing import Any
 
-from console.errors import UserError
-from console.hookspecs import hookimpl
-from console.options import host_name, seconds
-from console.options import port as udp_port
-from console.schema import Field, check
+from console.plugin_api import Field, UserError, check, hookimpl, host_name, seconds
+from console.plugin_api import port as udp_port
 
 GESTURE_ADDRESS = "/haptable/gesture"
 
@@ -108,7 +105,7 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 
 def run(args, ctx) -> int:
-    from console.runtime.stages import open_camera, vision_loop
+    from console.plugin_api.runtime import open_camera, vision_loop
 
     sender = make_sender(ctx.profile, host=args.host, port=args.port, force=True)
     camera = open_camera(ctx.profile, ctx.pm)

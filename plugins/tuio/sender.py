@@ -70,7 +70,7 @@ class TuioSender:
     ) -> None:
         from pythonosc.udp_client import UDPClient
 
-        from console.runtime.tracking import Announcer, Tracking
+        from console.plugin_api.runtime import Announcer, Tracking
 
         self.host, self.port = host, int(port)
         self.table_mm, self.image_px = table_mm, image_px
@@ -186,7 +186,7 @@ class TuioSender:
 
     def close(self) -> None:
         """An empty frame (nothing alive) so clients drop every object."""
-        from console.runtime.tracking import Announcer, TrackFrame, Tracking
+        from console.plugin_api.runtime import Announcer, TrackFrame, Tracking
 
         self.tracking, self.announcer = Tracking(), Announcer()
         self.send(0.0, (), (), None, TrackFrame(0.0, (), (), (), (), (), (), True))

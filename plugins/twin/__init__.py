@@ -6,10 +6,7 @@ separate plugins of the twin.
 
 from __future__ import annotations
 
-from console.channels import ChannelLayout
-from console.hookspecs import hookimpl
-from console.schema import Field
-from console.types import DeviceStatus, OutputDevice
+from console.plugin_api import ChannelLayout, DeviceStatus, Field, OutputDevice, hookimpl
 
 AUDIO_FIELDS = {
     "buffer_periods": Field(

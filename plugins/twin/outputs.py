@@ -49,13 +49,16 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import summarize_s
-from console.channels import ChannelLayout
-from console.contracts import BlockSource
-from console.realtime import realtime_priority
-from console.safety.limits import Limits
-from console.stall_witness import ORIGINS, StallWitness
-from console.types import PATCHES
+from console.plugin_api import (
+    ORIGINS,
+    PATCHES,
+    BlockSource,
+    ChannelLayout,
+    Limits,
+    StallWitness,
+    realtime_priority,
+    summarize_s,
+)
 from plugins.twin.relays import bus_for
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).

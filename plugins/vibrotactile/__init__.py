@@ -13,7 +13,7 @@ vmap=)``), ``prepare``/``cached`` and UFF import (``import_map({"PA": path, ...}
 
 from __future__ import annotations
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 from plugins.vibrotactile.settings import sections
 
 

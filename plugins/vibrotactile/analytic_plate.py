@@ -12,8 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.types import EXCITATIONS
-from console.vibration_map import VibrationMap, grid_points_mm, make_map
+from console.plugin_api import EXCITATIONS, VibrationMap, grid_points_mm, make_map
 
 
 @dataclass(frozen=True)

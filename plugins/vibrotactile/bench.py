@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 
 BANDS = ((5, 150), (150, 300), (300, 450), (450, 625))
 METHODS = ("bilinear", "keys", "spline", "spline5", "modal")
@@ -79,7 +79,7 @@ def add_ldv_noise(m, rel: float = NOISE_REL, floor: float = NOISE_FLOOR, seed: i
     """The map with complex Gaussian noise of ``rel`` x |H| per bin plus ``floor`` x the
     map's RMS per excitation: an LDV's H1 over 3 averages at coherence 0.999 has a random
     error of ~1.3 %; speckle and drop-outs on glass add to it, hence 2 %."""
-    from console.vibration_map import make_map
+    from console.plugin_api import make_map
 
     rng = np.random.default_rng(seed)
     h = m.frf_um_per_v
@@ -109,7 +109,7 @@ def twin_maps(ctx):
     the profile's twin vibrometer (through its registration) on a lattice twice as dense
     as the grid, noise-free: its even rows and columns are the map, the rest (midpoints
     in x, in y and cell centres) the reference."""
-    from console.vibration_map import make_map
+    from console.plugin_api import make_map
 
     dev = ctx.pm.get("vibrometer", "twin")
     r = dev.factory(_lattice_profile(ctx.profile, 2, 0.0)).measure()

@@ -16,7 +16,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console import cache_files, paths
+from console.plugin_api import cache_dir as console_cache_dir
+from console.plugin_api import cached_arrays, input_hash
+from console.plugin_api import entry_path as cache_entry_path
 
 #: bumped when what an entry holds changes meaning
 CODE_VERSION = 2
@@ -24,16 +26,16 @@ CODE_VERSION = 2
 
 def default_cache_dir() -> Path:
     """HapTable's cache directory (``console.paths.cache_dir``)."""
-    return paths.cache_dir()
+    return console_cache_dir()
 
 
 def key_hash(key: dict) -> str:
     """The entry's key: SHA-256 of ``key`` and this module's version."""
-    return cache_files.input_hash({"v": CODE_VERSION, **key})
+    return input_hash({"v": CODE_VERSION, **key})
 
 
 def entry_path(cache_dir: str | os.PathLike, kind: str, key: dict) -> Path:
-    return cache_files.entry_path(cache_dir, kind, key_hash(key))
+    return cache_entry_path(cache_dir, kind, key_hash(key))
 
 
 def cached_entry(
@@ -48,7 +50,7 @@ def cached_entry(
     """``(result, from_cache)``; ``check(result)`` raising ``UserError`` refuses an entry
     whose content fails it (recomputed)."""
     path = None if cache_dir is None else entry_path(cache_dir, kind, key)
-    return cache_files.cached_arrays(
+    return cached_arrays(
         path, key_hash(key), compute, what=what or f"{kind} cache entry", check=check
     )
 

@@ -7,8 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import OutputPlan
+from console.plugin_api import OutputPlan, UserError
 from plugins.vibrotactile.map_user import MapUser, Progress, map_point, point_label
 
 

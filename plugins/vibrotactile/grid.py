@@ -10,8 +10,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap
+from console.plugin_api import UserError, VibrationMap
 
 TOL_MM = 1e-6
 

@@ -26,9 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import DIRECTIONS
-from console.vibration_map import VibrationMap
+from console.plugin_api import DIRECTIONS, UserError, VibrationMap
 from plugins.vibrotactile.interp import interpolate_lattice
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins

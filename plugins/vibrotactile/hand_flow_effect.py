@@ -8,8 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import OutputPlan
+from console.plugin_api import OutputPlan, UserError
 from plugins.vibrotactile.map_user import MapUser, Progress
 
 

@@ -32,8 +32,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap
+from console.plugin_api import UserError, VibrationMap
 from plugins.vibrotactile.hand import side_masks
 from plugins.vibrotactile.interp import interpolate_lattice
 from plugins.vibrotactile.perception import Perception

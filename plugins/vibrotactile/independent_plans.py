@@ -16,10 +16,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from console.errors import UserError
-from console.signals import check_duration, plan_samples
-from console.types import OutputPlan, Segment
-from console.vibration_map import VibrationMap
+from console.plugin_api import (
+    OutputPlan,
+    Segment,
+    UserError,
+    VibrationMap,
+    check_duration,
+    plan_samples,
+)
 from plugins.vibrotactile.independent import (
     PATCHES,
     choose_bins,

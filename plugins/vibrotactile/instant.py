@@ -34,9 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import DIRECTIONS, OutputPlan, patches_of
-from console.vibration_map import VibrationMap
+from console.plugin_api import DIRECTIONS, OutputPlan, UserError, VibrationMap, patches_of
 
 #: Bumped when the stored arrays or the search change (old cache files are not read).
 ATLAS_VERSION = 1

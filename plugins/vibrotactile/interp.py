@@ -28,8 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap
+from console.plugin_api import UserError, VibrationMap
 
 from .grid import (
     Grid,

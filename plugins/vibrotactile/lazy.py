@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable
 
-from console.vibration_map import VibrationMap
+from console.plugin_api import VibrationMap
 from plugins.vibrotactile.cache import cached, cached_entry
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.perceptual import PerceptualRule

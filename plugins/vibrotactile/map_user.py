@@ -31,9 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import OutputPlan
-from console.vibration_map import VibrationMap
+from console.plugin_api import OutputPlan, UserError, VibrationMap
 from plugins.vibrotactile.settings import Setup, setup_from_profile
 
 Progress = Callable[[int, int, str], None]  # (done, total, what)

@@ -35,8 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap
+from console.plugin_api import UserError, VibrationMap
 
 from .grid import Grid, grid_of, spline_weights_1d
 

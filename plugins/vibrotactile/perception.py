@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 #: Defaults (FACTS.md "Human vibrotactile sensitivity"): palm model, [recalled] values.
 DEFAULT_FREQ_HZ = [10.0, 40.0, 63.0, 100.0, 160.0, 250.0, 400.0, 500.0, 700.0]

@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.vibrotactile.perception import Perception
 
 RULES = ("perceptual", "paper")
@@ -105,7 +105,7 @@ class PerceptualRule:
 
 def rule_from_profile(profile, sample_rate_hz: float | None = None) -> PerceptualRule:
     """The rule from ``[perception]``, ``[vibrotactile]`` and the piezo limits."""
-    from console.safety import Limits
+    from console.plugin_api import Limits
 
     vt = profile.section("vibrotactile")
     lo, hi = Limits.from_profile(profile).piezo_range()

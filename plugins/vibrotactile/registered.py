@@ -17,7 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console.vibration_map import VibrationMap
+from console.plugin_api import VibrationMap
 from plugins.vibrotactile.flow_effect import FlowEffect
 from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables
@@ -99,7 +99,7 @@ class RegisteredFlowEffect(FlowEffect):
         else gain ``[amplifiers] piezo_gain`` and bins below ``[vibrotactile] mask_below_hz``
         masked, the profile's grid for files without
         point coordinates. Bad files are a ``UserError`` naming the file."""
-        from console.vibration_map import grid_points_mm
+        from console.plugin_api import grid_points_mm
         from plugins.vibrotactile.uff_import import import_uff
 
         p = self.profile

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from console.vibration_map import VibrationMap
+from console.plugin_api import VibrationMap
 
 
 def resonances(r: np.ndarray, f: np.ndarray) -> list[tuple[float, float, float]]:

@@ -10,8 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
-from console.schema import Field
+from console.plugin_api import Field, UserError
 
 
 def sections() -> dict:
@@ -258,7 +257,7 @@ class Setup:
 
 def setup_from_profile(profile: Any) -> Setup:
     """Settings, perception, piezo range, band, ranking, cache and hand geometry."""
-    from console.safety import Limits
+    from console.plugin_api import Limits
     from plugins.vibrotactile.cache import default_cache_dir
     from plugins.vibrotactile.perception import Perception
     from plugins.vibrotactile.perceptual import rule_from_profile

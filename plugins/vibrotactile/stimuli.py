@@ -19,9 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.errors import UserError
-from console.signals import MAX_PLAN_S, check_duration, plan_samples
-from console.types import OutputPlan, Segment, patches_of
+from console.plugin_api import (
+    MAX_PLAN_S,
+    OutputPlan,
+    Segment,
+    UserError,
+    check_duration,
+    patches_of,
+    plan_samples,
+)
 from plugins.vibrotactile.interp import interpolate
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.ringdown import ringdown_gap_s

@@ -28,9 +28,15 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
-from console.npz_safe import read_npz
-from console.vibration_map import FIX, KEYS, VibrationMap, map_from_arrays, save_map
+from console.plugin_api import (
+    FIX,
+    KEYS,
+    UserError,
+    VibrationMap,
+    map_from_arrays,
+    read_npz,
+    save_map,
+)
 from plugins.vibrotactile.interp import interpolate
 from plugins.vibrotactile.perceptual import PerceptualRule, felt_db
 from plugins.vibrotactile.perceptual import pair_best as perceptual_pair_best

@@ -15,8 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap
+from console.plugin_api import UserError, VibrationMap
 from plugins.vibrotactile.uff_format import REF_NODES, TAG, mask_text
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 #: the import's default excitation of each reference node (one file for all excitations)
 REF_NODES = {"PA": 1, "PB": 2, "PC": 3, "PD": 4, "PALL": 5}

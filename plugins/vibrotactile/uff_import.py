@@ -22,9 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
-from console.types import EXCITATIONS
-from console.vibration_map import VibrationMap, make_map
+from console.plugin_api import EXCITATIONS, UserError, VibrationMap, make_map
 from plugins.vibrotactile.uff_format import REF_NODES, mask_from_text
 from plugins.vibrotactile.uff_read import read_uff
 
@@ -202,7 +200,7 @@ def import_uff(
 
 
 def _check_magnitudes(frf, f, nodes, order, parts, gain: float) -> None:
-    from console.vibration_map import MAX_FRF_UM_PER_V
+    from console.plugin_api import MAX_FRF_UM_PER_V
 
     mag = np.abs(frf)
     if np.all(np.isfinite(mag)) and mag.max() <= MAX_FRF_UM_PER_V:

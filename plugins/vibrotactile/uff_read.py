@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.vibrotactile.uff_format import TAG
 
 ORD_TYPES = {8: "displacement", 11: "velocity", 12: "acceleration"}

@@ -5,13 +5,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 
 def is_tables_file(path: str | os.PathLike) -> bool:
     """True for a lookup-tables file, False for a vibration map (its archive checked,
     no array read); anything else is a one-line ``UserError``."""
-    from console.npz_safe import npz_keys
+    from console.plugin_api import npz_keys
 
     p = Path(path)
     if not p.exists():

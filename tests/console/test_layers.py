@@ -49,10 +49,13 @@ LAYER_OF: dict[str, str] = {
     "console.profile_files": "profile",  # the files kept per profile (state directory)
     "console.safety": "safety",
     "console.safety_audit": "safety",
+    "console.plugin_api": "safety",  # the plugin API's core: re-exports up to safety.limits
     "console.kernel": "kernel",  # the outputs process of a table, and its clients' side
     "console.runtime": "runtime",
     "console.session": "session",
+    "console.plugin_api.runtime": "session",  # the plugin API: runtime, kernel client, events
     "console.tui": "tui",
+    "console.plugin_api.tui": "tui",  # the plugin API: the Textual helpers panels use
     "console.cli": "cli",
     "console.entry": "cli",  # `haptable`: estop/reset before anything heavy, else the CLI
     "console.commands": "cli",

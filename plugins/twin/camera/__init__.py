@@ -22,8 +22,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from console.hookspecs import hookimpl
-from console.schema import Field
+from console.plugin_api import Field, hookimpl
 
 from .constants import DEFAULT_CORNERS_PX
 
@@ -208,7 +207,7 @@ def _grid_points(profile: Any, table: tuple[float, float]) -> list[tuple[float, 
 
 
 def _probe(profile: Any = None):
-    from console.types import DeviceStatus
+    from console.plugin_api import DeviceStatus
 
     return DeviceStatus("camera", "twin", "simulated", "the IR camera twin (no hardware)")
 

@@ -12,7 +12,7 @@ import numpy as np
 def run(ctx: Any = None, quick: bool = False) -> dict:
     """Frame render time per gesture (p50/p99) and sample render throughput (the
     twin's share of ``gestures synth``, extrapolated to the paper's 2000 samples)."""
-    from console.bench import machine_info, summarize_s
+    from console.plugin_api import machine_info, summarize_s
 
     from .gestures import GESTURES
     from .render import Rig

@@ -26,7 +26,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from console.types import Frame, GestureScript
+from console.plugin_api import Frame, GestureScript
 
 from .geometry import TableMapping
 from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose

@@ -12,14 +12,14 @@ operator's cancel) stops the measurement and propagates.
 
 from __future__ import annotations
 
-from console.hookspecs import hookimpl
+from console.plugin_api import hookimpl
 
 from . import defaults as dflt
 
 
 @hookimpl
 def haptable_profile_sections(register) -> None:
-    from console.schema import Field
+    from console.plugin_api import Field
 
     register(
         "glass",
@@ -173,7 +173,7 @@ def haptable_profile_sections(register) -> None:
 
 @hookimpl
 def haptable_register_vibrometers(register) -> None:
-    from console.types import DeviceStatus
+    from console.plugin_api import DeviceStatus
 
     def factory(profile):
         from .vibrometer import TwinVibrometer

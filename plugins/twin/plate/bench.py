@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
+from console.plugin_api import machine_info, summarize_s
 
 from . import model, ritz
 from .frf import missed_peaks

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from console.options import finite_float, positive_int
+from console.plugin_api import finite_float, positive_int
 
 EDGE_CHOICES = ("ssss", "cccc", "ffff", "profile")
 
@@ -34,7 +34,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def plate_modes(profile, edges: str, aspect: float | None, count: int) -> list[dict]:
     """Elastic modes, ascending: [{"frequency_hz", "lambda"}...] for the profile's glass."""
-    from console.errors import UserError
+    from console.plugin_api import UserError
 
     from .model import params_from_profile
     from .ritz import solve_modes

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from console.channels import BUS_CHANNELS
+from console.plugin_api import BUS_CHANNELS
 
 from .model import (
     EXCITATIONS,

@@ -30,8 +30,8 @@ def run_bench(ctx, quick: bool) -> dict:
     steady state, the default pairs played, and the accelerance-derived map); without
     ``--quick`` also every hand region at 60 mm steps, four directions (left/down play the parts of right/up in the other
     order: same tones, different ring-down overlap)."""
-    from console.bench import machine_info
-    from console.kernel.client import open_outputs
+    from console.plugin_api import machine_info
+    from console.plugin_api.runtime import open_outputs
 
     profile, pm = ctx.profile, ctx.pm
     t0 = time.perf_counter()

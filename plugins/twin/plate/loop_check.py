@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from .closed_loop import hand_subgrid_mm, square_levels_um, twin_of
 from .loop_play import (
@@ -38,7 +38,7 @@ from .loop_play import (
 from .loop_report import pair_problems, summarize
 
 if TYPE_CHECKING:
-    from console.plugins import Plugins
+    from console.plugin_api import Plugins
 
 
 def flow_pairs_check(

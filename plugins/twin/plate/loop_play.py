@@ -11,15 +11,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from console.channels import ChannelLayout
-from console.errors import UserError
-from console.vibration_map import VibrationMap, make_map
+from console.plugin_api import ChannelLayout, UserError, VibrationMap, make_map
 
 from .closed_loop import drive_from_recording, part_envelopes
 
 if TYPE_CHECKING:
-    from console.plugins import Plugins
-    from console.profile import Profile
+    from console.plugin_api import Plugins, Profile
 
 #: Pairs (grid numbers, active -> passive) checked by default: the paper's 51/52 example
 #: both ways, diagonal neighbours as in Fig. 10's pairs 1-1, 3-3, 4-4, and a long pair.

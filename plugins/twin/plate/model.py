@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 
 from . import defaults as dflt
 from .frf import displacement_frf, modal_receptance, static_residual

@@ -54,9 +54,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import UserError
-from console.safety import Limits
-from console.types import OutputPlan
+from console.plugin_api import Limits, OutputPlan, UserError
 
 from .closed_loop import PATCHES, hand_subgrid_mm, part_envelopes, square_levels_um, twin_of
 from .model import grid_points_mm

@@ -23,8 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from console.safety import Limits
-from console.vibration_map import VibrationMap, make_map
+from console.plugin_api import Limits, VibrationMap, make_map
 
 from .closed_loop import twin_of
 from .loop_check import flow_pairs_check
@@ -32,7 +31,7 @@ from .loop_play import effects_of
 from .loop_report import pair_problems
 
 if TYPE_CHECKING:
-    from console.plugins import Plugins
+    from console.plugin_api import Plugins
 
 #: Accelerance noise: complex Gaussian at 1 % (-40 dB) of the map's median accelerance
 #: above 50 Hz, per excitation (an assumption for a swept-sine LDV measurement with few

@@ -11,8 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
-from console.options import from_field
+from console.plugin_api import UserError, from_field
 
 
 def key_type(name: str, unit: str = ""):
@@ -54,7 +53,7 @@ def settings_of(ctx):
 
 def piezo_limits(ctx) -> dict:
     """The piezo range the safety gate allows (profile limits and amplifier/card reach)."""
-    from console.safety import Limits
+    from console.plugin_api import Limits
 
     lo, hi = Limits.from_profile(ctx.profile).piezo_range()
     return {
@@ -93,7 +92,7 @@ def map_source(source: str, ctx) -> str:
     vibrometer first when the cache has none."""
     if source != MEASURED or Path(source).exists():
         return source
-    from console.runtime.measured_map import measured_map_file
+    from console.plugin_api.runtime import measured_map_file
 
     return str(measured_map_file(ctx.profile, ctx.pm, progress_printer()))
 
@@ -123,7 +122,7 @@ def parse_point(text: str, vmap):
 
 def tables_for(path: str, ctx, args, band_hz: float | None = None):
     """Tables from a tables file, or built (and cached) from a vibration map."""
-    from console.vibration_map import load_map
+    from console.plugin_api import load_map
     from plugins.vibrotactile.lazy import tables_cached
     from plugins.vibrotactile.tables import load_tables
     from plugins.vibrotactile.vibration_io import is_tables_file

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
+from console.plugin_api import UserError
 from plugins.vibrotactile.cli.common import (
     add_rule_option,
     cache_dir_of,

@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.errors import UserError
-from console.options import finite_float
+from console.plugin_api import UserError, finite_float
 from plugins.vibrotactile.cli.common import (
     MAP_HELP,
     key_type,
@@ -104,7 +103,7 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
 
 def run_frf(args, ctx) -> int:
     if args.frf_cmd == "import":
-        from console.vibration_map import grid_points_mm, save_map
+        from console.plugin_api import grid_points_mm, save_map
         from plugins.vibrotactile.uff_import import import_uff
 
         plain = [f for f in args.files if "=" not in f]
@@ -155,7 +154,7 @@ def run_frf(args, ctx) -> int:
         return 0
     if args.frf_cmd == "measure":
         return measure_map(args, ctx)
-    from console.vibration_map import load_map
+    from console.plugin_api import load_map
 
     if args.frf_cmd == "export":
         from plugins.vibrotactile.uff_export import export_uff
@@ -189,8 +188,8 @@ def measure_map(args, ctx) -> int:
     """Measure the grid with the vibrometer the profile names into HapTable's cache (the
     file the console and the demos read: ``console.runtime.measured_map``), and copy it
     to ``--out`` when given."""
-    from console.runtime.measured_map import measured_map_file
-    from console.vibration_map import load_map, save_map
+    from console.plugin_api import load_map, save_map
+    from console.plugin_api.runtime import measured_map_file
 
     cached = measured_map_file(ctx.profile, ctx.pm, progress_printer(), remeasure=True)
     m = load_map(cached)

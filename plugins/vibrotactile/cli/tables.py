@@ -7,8 +7,7 @@ import json
 import sys
 import time
 
-from console.errors import UserError
-from console.options import finite_float
+from console.plugin_api import UserError, finite_float
 from plugins.vibrotactile.cli.common import (
     MAP_HELP,
     add_rule_option,
@@ -83,7 +82,7 @@ def run_tables(args, ctx) -> int:
     from plugins.vibrotactile.tables import build_tables, query_indices, query_points, save_tables
 
     if args.tables_cmd == "build":
-        from console.vibration_map import load_map
+        from console.plugin_api import load_map
 
         nyq = sample_rate(ctx) / 2
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")

@@ -1,0 +1,230 @@
+"""The plugin API: all a plugin may import from the console (its core part).
+
+A plugin, built-in or third-party, imports the console through three modules and no
+other (``tests/console/test_plugin_api.py`` holds every module under ``plugins/`` to it,
+and takes the root of any other plugin package):
+
+- ``console.plugin_api`` (this module): the values, contracts and helpers below. Light:
+  numpy and pluggy, no Textual, no runtime.
+- ``console.plugin_api.runtime``: the frame loop's stages, latency, tracking, the
+  projector link, the outputs client, session events (loaded name by name, on first use).
+- ``console.plugin_api.tui``: the console's Textual helpers a panel uses.
+
+What this module offers, by where it comes from:
+
+- errors: ``UserError``, ``SafetyRefusal``
+- the values that cross plugin boundaries (``console.types``): ``Frame``, ``Hand``,
+  ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan``,
+  ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
+  ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
+- the typed capabilities (``console.contracts``): ``BlockSource``, ``Classifier``,
+  ``Conditions``, ``FlowEffect``, ``HandFlowEffect``, ``KnobTrials``,
+  ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
+  ``VisionResult``
+- the hook marker: ``hookimpl`` (the hooks are documented in ``console.hookspecs``)
+- plugin manager and profile: ``Plugins``, ``PanelTab``, ``load_plugins``, ``Profile``,
+  ``load_profile``, ``profile_file``
+- settings schema and CLI options: ``Field``, ``KINDS``, ``check``, ``path_problem``;
+  ``Parser``, ``BadValue``, ``finite_float``, ``from_field``, ``host_name``, ``integer``,
+  ``minutes``, ``port``, ``positive_int``, ``seconds``, ``seed``
+- safety: ``Limits``
+- outputs: ``ChannelLayout``, ``BUS_CHANNELS``, ``MAX_PLAN_S``, ``check_duration``,
+  ``plan_samples``, ``tone``; live streams ``StreamSynth``, ``StreamSpec``, ``StreamSink``,
+  ``PulseSpec``, ``Envelope``, ``smooth_square``, ``spec_problem``
+- the vibration map: ``VibrationMap``, ``make_map``, ``map_from_arrays``, ``load_map``,
+  ``save_map``, ``grid_points_mm``, ``KEYS``, ``FIX``, ``MAX_FRF_UM_PER_V``
+- files: ``write_text_atomic``, ``append_json_line``, ``read_bytes_capped``,
+  ``parse_toml_text``, ``read_npz``, ``npz_keys``, ``json_depth``, ``cache_dir``,
+  ``data_dir``, ``cached_arrays``, ``entry_path``, ``input_hash``
+- real time and benchmarks: ``realtime_priority``, ``support_priority``,
+  ``StallWitness``, ``ORIGINS``, ``machine_info``, ``summarize_s``
+"""
+
+from __future__ import annotations
+
+from console.atomic import append_json_line, write_text_atomic
+from console.bench import machine_info, summarize_s
+from console.cache_files import cached_arrays, entry_path, input_hash
+from console.channels import BUS_CHANNELS, ChannelLayout
+from console.contracts import (
+    BlockSource,
+    Classifier,
+    Conditions,
+    FlowEffect,
+    HandFlowEffect,
+    KnobTrials,
+    PrecomputedHandFlows,
+    Presets,
+    SimulatedCamera,
+    SimulatedObserver,
+    VisionResult,
+)
+from console.errors import SafetyRefusal, UserError
+from console.file_read import parse_toml_text, read_bytes_capped
+from console.hookspecs import hookimpl
+from console.npz_safe import json_depth, npz_keys, read_npz
+from console.options import (
+    BadValue,
+    Parser,
+    finite_float,
+    from_field,
+    host_name,
+    integer,
+    minutes,
+    port,
+    positive_int,
+    seconds,
+    seed,
+)
+from console.paths import cache_dir, data_dir
+from console.plugins import PanelTab, Plugins, load_plugins
+from console.profile import Profile, load_profile
+from console.profile_files import profile_file
+from console.realtime import realtime_priority, support_priority
+from console.safety.limits import Limits
+from console.schema import KINDS, Field, check, path_problem
+from console.signals import MAX_PLAN_S, check_duration, plan_samples, tone
+from console.stall_witness import ORIGINS, StallWitness
+from console.stream_synth import (
+    Envelope,
+    PulseSpec,
+    StreamSink,
+    StreamSpec,
+    StreamSynth,
+    smooth_square,
+    spec_problem,
+)
+from console.types import (
+    DIRECTIONS,
+    DIRECTIONS_MM,
+    EXCITATIONS,
+    PATCHES,
+    Contact,
+    DeviceStatus,
+    Frame,
+    Gesture,
+    GestureScript,
+    GestureStep,
+    Hand,
+    OutputDevice,
+    OutputPlan,
+    Segment,
+    TunableRange,
+    patches_of,
+)
+from console.vibration_map import (
+    FIX,
+    KEYS,
+    MAX_FRF_UM_PER_V,
+    VibrationMap,
+    grid_points_mm,
+    load_map,
+    make_map,
+    map_from_arrays,
+    save_map,
+)
+
+__all__ = [
+    # errors
+    "SafetyRefusal",
+    "UserError",
+    # values (console.types)
+    "DIRECTIONS",
+    "DIRECTIONS_MM",
+    "EXCITATIONS",
+    "PATCHES",
+    "Contact",
+    "DeviceStatus",
+    "Frame",
+    "Gesture",
+    "GestureScript",
+    "GestureStep",
+    "Hand",
+    "OutputDevice",
+    "OutputPlan",
+    "Segment",
+    "TunableRange",
+    "patches_of",
+    # capabilities (console.contracts)
+    "BlockSource",
+    "Classifier",
+    "Conditions",
+    "FlowEffect",
+    "HandFlowEffect",
+    "KnobTrials",
+    "PrecomputedHandFlows",
+    "Presets",
+    "SimulatedCamera",
+    "SimulatedObserver",
+    "VisionResult",
+    # hooks, plugin manager, profile
+    "hookimpl",
+    "PanelTab",
+    "Plugins",
+    "load_plugins",
+    "Profile",
+    "load_profile",
+    "profile_file",
+    # settings schema, CLI options
+    "KINDS",
+    "Field",
+    "check",
+    "path_problem",
+    "BadValue",
+    "Parser",
+    "finite_float",
+    "from_field",
+    "host_name",
+    "integer",
+    "minutes",
+    "port",
+    "positive_int",
+    "seconds",
+    "seed",
+    # safety
+    "Limits",
+    # outputs: channels, plans, live streams
+    "BUS_CHANNELS",
+    "ChannelLayout",
+    "MAX_PLAN_S",
+    "check_duration",
+    "plan_samples",
+    "tone",
+    "Envelope",
+    "PulseSpec",
+    "StreamSink",
+    "StreamSpec",
+    "StreamSynth",
+    "smooth_square",
+    "spec_problem",
+    # the vibration map
+    "FIX",
+    "KEYS",
+    "MAX_FRF_UM_PER_V",
+    "VibrationMap",
+    "grid_points_mm",
+    "load_map",
+    "make_map",
+    "map_from_arrays",
+    "save_map",
+    # files
+    "append_json_line",
+    "write_text_atomic",
+    "parse_toml_text",
+    "read_bytes_capped",
+    "json_depth",
+    "npz_keys",
+    "read_npz",
+    "cache_dir",
+    "data_dir",
+    "cached_arrays",
+    "entry_path",
+    "input_hash",
+    # real time, benchmarks
+    "realtime_priority",
+    "support_priority",
+    "ORIGINS",
+    "StallWitness",
+    "machine_info",
+    "summarize_s",
+]

@@ -1,0 +1,189 @@
+"""The plugin API, runtime part: what a plugin may import from the console's runtime,
+its outputs client and its session (see ``console.plugin_api`` for the whole API).
+
+Each name is loaded on first use (a module ``__getattr__``), so ``from
+console.plugin_api.runtime import MAX_SOCKET_PATH`` costs what importing the projector
+protocol costs, not the whole runtime (scipy and all): a plugin's settings can name a
+runtime value at registration time without making the console start slower. Each source
+module is imported by a plain ``from ... import`` in ``_source`` below, so the import
+graph and layer tests see every edge.
+
+What it offers, by where it comes from:
+
+- frame loop and stages: ``FrameLoop``, ``VisionStage``, ``learn_background``,
+  ``open_camera``, ``open_classifier``, ``vision_loop``, ``Watchdog``
+- latency and timing: ``LatencyMonitor``, ``DEQUEUED``, ``PROCESSING``; jitter probes
+  ``start_probe``, ``start_probe_beside``, ``finish_probe``
+- tracking: ``Tracking``, ``TrackFrame``, ``Announcer``
+- the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``
+- the projector link: ``ProjectorService``, ``ProjectorLaunch``, the wire protocol as
+  ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
+  ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
+  ``HEARTBEAT_S``, ``PEER_TIMEOUT_S``, ``MAX_SOCKET_PATH``, ``TO_PROJECTOR``
+- the outputs (the table's safety kernel): ``open_outputs``; private runtime files
+  ``runtime_dir``, ``ensure_private_dir``, ``write_private``
+- session events: ``Started``, ``Progress``, ``Snapshot``, ``Stopped``, ``Failed``
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
+    from console.kernel.client import open_outputs
+    from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
+    from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
+    from console.runtime.latency import DEQUEUED, PROCESSING, LatencyMonitor
+    from console.runtime.loop import FrameLoop
+    from console.runtime.measured_map import Cancelled, measured_map, measured_map_file
+    from console.runtime.projector import protocol as projector_protocol
+    from console.runtime.projector.protocol import (
+        HEARTBEAT_S,
+        MAX_SOCKET_PATH,
+        PEER_TIMEOUT_S,
+        TO_PROJECTOR,
+        MessageReader,
+        ProtocolError,
+        default_socket_path,
+        encode,
+        prepare_socket_dir,
+        probe,
+        socket_path_for,
+    )
+    from console.runtime.projector.service import ProjectorService
+    from console.runtime.projector.supervisor import ProjectorLaunch
+    from console.runtime.stages import (
+        VisionStage,
+        learn_background,
+        open_camera,
+        open_classifier,
+        vision_loop,
+    )
+    from console.runtime.tracking import Announcer, TrackFrame, Tracking
+    from console.runtime.watchdog import Watchdog
+    from console.session.events import Failed, Progress, Snapshot, Started, Stopped
+
+#: source module (short name) -> the names it gives the API
+_NAMES: dict[str, tuple[str, ...]] = {
+    "loop": ("FrameLoop",),
+    "stages": ("VisionStage", "learn_background", "open_camera", "open_classifier", "vision_loop"),
+    "watchdog": ("Watchdog",),
+    "latency": ("DEQUEUED", "PROCESSING", "LatencyMonitor"),
+    "jitter": ("finish_probe", "start_probe", "start_probe_beside"),
+    "tracking": ("Announcer", "TrackFrame", "Tracking"),
+    "measured_map": ("Cancelled", "measured_map", "measured_map_file"),
+    "protocol": (
+        "HEARTBEAT_S",
+        "MAX_SOCKET_PATH",
+        "PEER_TIMEOUT_S",
+        "TO_PROJECTOR",
+        "MessageReader",
+        "ProtocolError",
+        "default_socket_path",
+        "encode",
+        "prepare_socket_dir",
+        "probe",
+        "socket_path_for",
+    ),
+    "service": ("ProjectorService",),
+    "supervisor": ("ProjectorLaunch",),
+    "client": ("open_outputs",),
+    "private_dir": ("ensure_private_dir", "runtime_dir", "write_private"),
+    "events": ("Failed", "Progress", "Snapshot", "Started", "Stopped"),
+}
+_SOURCE_OF = {name: source for source, names in _NAMES.items() for name in names}
+
+__all__ = [
+    "projector_protocol",
+    "Announcer",
+    "Cancelled",
+    "default_socket_path",
+    "DEQUEUED",
+    "encode",
+    "ensure_private_dir",
+    "Failed",
+    "finish_probe",
+    "FrameLoop",
+    "HEARTBEAT_S",
+    "LatencyMonitor",
+    "learn_background",
+    "MAX_SOCKET_PATH",
+    "measured_map",
+    "measured_map_file",
+    "MessageReader",
+    "open_camera",
+    "open_classifier",
+    "open_outputs",
+    "PEER_TIMEOUT_S",
+    "prepare_socket_dir",
+    "probe",
+    "PROCESSING",
+    "Progress",
+    "ProjectorLaunch",
+    "ProjectorService",
+    "ProtocolError",
+    "runtime_dir",
+    "Snapshot",
+    "socket_path_for",
+    "start_probe",
+    "start_probe_beside",
+    "Started",
+    "Stopped",
+    "TO_PROJECTOR",
+    "TrackFrame",
+    "Tracking",
+    "vision_loop",
+    "VisionStage",
+    "Watchdog",
+    "write_private",
+]
+
+
+def _source(source: str) -> ModuleType:
+    """The module behind a short source name, imported now (first use)."""
+    if source == "loop":
+        from console.runtime import loop as module
+    elif source == "stages":
+        from console.runtime import stages as module
+    elif source == "watchdog":
+        from console.runtime import watchdog as module
+    elif source == "latency":
+        from console.runtime import latency as module
+    elif source == "jitter":
+        from console.runtime import jitter as module
+    elif source == "tracking":
+        from console.runtime import tracking as module
+    elif source == "measured_map":
+        from console.runtime import measured_map as module
+    elif source == "protocol":
+        from console.runtime.projector import protocol as module
+    elif source == "service":
+        from console.runtime.projector import service as module
+    elif source == "supervisor":
+        from console.runtime.projector import supervisor as module
+    elif source == "client":
+        from console.kernel import client as module
+    elif source == "private_dir":
+        from console.kernel import private_dir as module
+    elif source == "events":
+        from console.session import events as module
+    else:  # pragma: no cover - _NAMES and this list are kept together
+        raise KeyError(source)
+    return module
+
+
+def __getattr__(name: str) -> Any:
+    """Load ``name`` from its runtime module on first use, then keep it here."""
+    if name == "projector_protocol":
+        value: Any = _source("protocol")
+    elif name in _SOURCE_OF:
+        value = vars(_source(_SOURCE_OF[name]))[name]  # listed in _NAMES: always there
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

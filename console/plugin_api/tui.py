@@ -1,0 +1,31 @@
+"""The plugin API, console part: the console's Textual helpers a plugin's panel may
+import (see ``console.plugin_api`` for the whole API). Importing it loads Textual.
+
+What it offers:
+
+- text: ``escape`` (markup-safe text), ``LiteralTable`` (a table that shows its cells
+  as written)
+- workers and threads: ``LongWork`` (a long job with progress and cancel),
+  ``from_thread`` (call the app from a worker thread)
+- the session: ``SessionMessage`` (a session event posted to the screen)
+- widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows)
+- paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
+"""
+
+from __future__ import annotations
+
+from console.tui.long_work import LongWork
+from console.tui.safety_bar import SafetyBar
+from console.tui.session_messages import SessionMessage
+from console.tui.text import LiteralTable, escape
+from console.tui.util import from_thread, short_path
+
+__all__ = [
+    "LiteralTable",
+    "LongWork",
+    "SafetyBar",
+    "SessionMessage",
+    "escape",
+    "from_thread",
+    "short_path",
+]
