@@ -80,7 +80,7 @@ def test_an_estop_ramp_is_visible(plugins):
             await wait_for(
                 pilot,
                 lambda: app.session.scope(0.02).peak_v()["piezo"] > 5.0,
-                10,
+                30,
                 "the tone at the amplifiers",
             )
             await pilot.press("ctrl+e")

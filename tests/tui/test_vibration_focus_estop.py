@@ -61,7 +61,7 @@ def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
             await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
             pane.move_cursor(14)
             await pilot.press("enter")
-            await wait_for(pilot, lambda: "playing point 14" in _status(app), what="playing")
+            await wait_for(pilot, lambda: "playing point 14" in _status(app), 30, "playing")
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: app.session.outputs.estopped, what="e-stopped")
             await wait_for(
@@ -91,7 +91,7 @@ def test_an_error_typed_while_a_point_plays_keeps_the_status_line(plugins, map_f
             await command(app, pilot, f"load {map_file}")
             await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
             await command(app, pilot, "14")
-            await wait_for(pilot, lambda: "playing point 14" in _status(app), what="playing")
+            await wait_for(pilot, lambda: "playing point 14" in _status(app), 30, "playing")
             await command(app, pilot, "import PA")
             await wait_for(pilot, lambda: "EXC=FILE" in _status(app), 30, "import error")
             await wait_for(pilot, lambda: pane._now_playing is None, 30, "audition ended")
