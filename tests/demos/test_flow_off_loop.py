@@ -54,6 +54,9 @@ def test_two_finger_flow_is_planned_off_the_frame_loop(profile, plugins):
         frame = SimpleNamespace(t_capture_s=k / 60, seq=k, stamps_s={"arrival": k / 60})
         work = {"contacts": fingers, "hands": ()}
         results.append(demo.effect_stage(frame, work))
+    t_end = time.monotonic() + 10  # the planner thread asks (late on a loaded machine)
+    while not pairs.asked and time.monotonic() < t_end:
+        time.sleep(0.01)
     assert pairs.asked, "the resting pair asked for a plan"
     assert not any(results) and out.played == []  # the loop went on while it was computed
     pairs.release.set()
