@@ -28,6 +28,18 @@ from .vision import vision_params
 __all__ = ["analysis_params", "configure", "run"]
 
 
+def _dataset_features(ev, args, profile):
+    """The dataset's features (cached unless ``--no-cache``), refused without hands."""
+    fs = ev.extract(
+        args.dataset,
+        analysis_params(profile),
+        use_cache=not args.no_cache,
+        progress=_progress(args),
+    )
+    require_hands(fs, args.dataset)
+    return fs
+
+
 def _progress(args: argparse.Namespace) -> Callable[[float, str], None] | None:
     if getattr(args, "json", False) or not sys.stderr.isatty():
         return None
@@ -49,36 +61,18 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     top = int(_get(profile, "gestures.frames", 4))
     if cmd == "eval" and args.model is not None:
         model = GestureModel.load(args.model)  # a bad model is refused before extracting
-        fs = ev.extract(
-            args.dataset,
-            analysis_params(profile),
-            use_cache=not args.no_cache,
-            progress=_progress(args),
-        )
-        require_hands(fs, args.dataset)
+        fs = _dataset_features(ev, args, profile)
         _print(evaluate_model(fs, model, str(args.model)), args.json)
         return 0
     if cmd == "eval":
-        fs = ev.extract(
-            args.dataset,
-            analysis_params(profile),
-            use_cache=not args.no_cache,
-            progress=_progress(args),
-        )
-        require_hands(fs, args.dataset)
+        fs = _dataset_features(ev, args, profile)
         rep = ev.cross_validate(
             fs, args.cv, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed
         )
         _print(rep, args.json)
         return 0
     if cmd == "train":
-        fs = ev.extract(
-            args.dataset,
-            analysis_params(profile),
-            use_cache=not args.no_cache,
-            progress=_progress(args),
-        )
-        require_hands(fs, args.dataset)
+        fs = _dataset_features(ev, args, profile)
         model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed)
         if args.out is None and profile is None:
             raise UserError("gestures train: give --out MODEL or a valid profile (--profile)")
