@@ -90,6 +90,18 @@ def haptable_register_benchmarks(register):
         "the operator's finger moved on the flow demo (key -> flow scheduled), output log",
     )
 
+    def console_idle(ctx, quick: bool) -> dict:
+        from console.benchmarks.console_idle import run
+
+        return run(ctx, quick)
+
+    register(
+        "console-idle",
+        console_idle,
+        help="the console's CPU while idle, per screen (haptable in tmux 120x40, each "
+        "screen 10 s from /proc/<pid>/stat, % of one core; goal <= 3 %, Camera <= 20 %)",
+    )
+
     def tracking(ctx, quick: bool) -> dict:
         from console.benchmarks.tracking import run
 

@@ -11,14 +11,16 @@ import threading
 import time
 
 from textual import work
-from textual.app import App, ComposeResult, ScreenStackError, SystemCommand
+from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
+from textual.widget import Widget
 from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
+from console.tui.live import OutputsChanged, OutputsWatch
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
 from console.tui.text import escape
@@ -122,6 +124,13 @@ class HapTableApp(App):
         self._bind_tabs()
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
+        self._panes: dict[str, Widget] = {}  # the panes built so far, by tab
+        self._tab_widget: TabbedContent | None = None
+        #: the safety bars mounted now (the main one, a modal's): ``SafetyBar`` adds itself
+        self.safety_bars: set[SafetyBar] = set()
+        #: the table's output state, read off the UI thread; what shows: ``outputs_now``
+        self.outputs_watch = OutputsWatch(self.session, self)
+        self.outputs_now: tuple[dict | None, object] = (None, None)
 
     def _bind_tabs(self) -> None:
         """A key per tab (the first one shown in the footer for them all)."""
@@ -141,6 +150,7 @@ class HapTableApp(App):
     def _build_pane(self, tab: str):
         pane = self.tabs[tab][2].factory(self)
         pane.id = f"{tab}-pane"
+        self._panes[tab] = pane
         return pane
 
     # ------------------------------------------------------------------ layout
@@ -157,10 +167,12 @@ class HapTableApp(App):
     def on_mount(self) -> None:
         prof = self.ctx.profile
         self.sub_title = f"{prof.get('profile.title') or prof.name} - {short_path(prof.path)}"
-        self.query_one(SafetyBar).show(None)
+        # Textual hands the focus of a widget being hidden to a sibling, which can be in
+        # the same hidden pane: each move of the focus is checked (no polling)
+        self.watch(self.screen, "focused", self._keep_focus_visible, init=False)
         # after the first paint: the outputs' imports and threads must not delay it
         self.call_after_refresh(self._open_outputs)
-        self.set_interval(0.1, self.refresh_state)
+        self.outputs_watch.start()  # the bar and the screens hear of changes only
         self.set_interval(0.25, self.session.demos.poll)  # a running demo's Snapshot
         self.call_after_refresh(self._set_visible, self.initial)
         self.call_after_refresh(self._focus_pane, self.initial)
@@ -172,8 +184,21 @@ class HapTableApp(App):
 
     def pane(self, tab: str):
         """The pane of ``tab`` (None until its tab was first opened)."""
-        found = self.base.query(f"#{tab}-pane")
-        return found.first() if found else None
+        return self._panes.get(tab)
+
+    @property
+    def tab_widget(self) -> TabbedContent | None:
+        """The screens' tabs (found once; None before they are composed)."""
+        if self._tab_widget is None and self.screen_stack:
+            found = self.base.query("#tabs")
+            self._tab_widget = found.first(TabbedContent) if found else None
+        return self._tab_widget
+
+    @property
+    def active_tab(self) -> str | None:
+        """The tab shown now (None before the tabs are composed)."""
+        tabs = self.tab_widget
+        return None if tabs is None else tabs.active
 
     def ensure_pane(self, tab: str):
         """Build the pane of ``tab`` on first use (mounting completes later)."""
@@ -212,18 +237,18 @@ class HapTableApp(App):
                 target.focus()
         self.set_timer(0.03, self._apply_focus)
 
-    def _keep_focus_visible(self) -> None:
+    def _keep_focus_visible(self, *_changed) -> None:
         """Focus never rests in a hidden screen: Textual hands the focus of a widget being
-        hidden to a sibling, which can be in the same hidden pane (keys would go nowhere)."""
+        hidden to a sibling, which can be in the same hidden pane (keys would go nowhere).
+        Runs when the focus moves and when the tab changes."""
         if not self.screen_stack or self.screen is not self.base:
             return
-        tabs = self.base.query("#tabs")
         focused = self.base.focused
-        if not tabs or focused is None:
+        active = self.active_tab
+        if active is None or focused is None:
             return
-        active = tabs.first(TabbedContent).active
-        for tab in self.tabs:
-            if tab != active and self.pane(tab) in focused.ancestors_with_self:
+        for tab, pane in self._panes.items():
+            if tab != active and pane in focused.ancestors_with_self:
                 target = self._focus_target(active)
                 if target is not None:
                     target.focus()
@@ -231,9 +256,8 @@ class HapTableApp(App):
 
     def _focus_target(self, tab: str):
         """The main widget of ``tab``'s pane once that tab shows and the pane is composed."""
-        tabs = self.base.query("#tabs")
         pane = self.pane(tab)
-        if not tabs or tabs.first(TabbedContent).active != tab or pane is None:
+        if self.active_tab != tab or pane is None:
             return None
         try:
             return pane.focus_target
@@ -247,7 +271,9 @@ class HapTableApp(App):
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
         # sibling in the same (hidden) pane, and focus in a pane makes it the active tab.
         self.base.set_focus(None)
-        self.base.query_one("#tabs", TabbedContent).active = tab
+        tabs = self.tab_widget
+        if tabs is not None:
+            tabs.active = tab
         self.call_after_refresh(self._focus_pane, tab)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
@@ -257,14 +283,17 @@ class HapTableApp(App):
         self.ensure_pane(tab)
         self.call_after_refresh(self._set_visible, tab)
         self.call_after_refresh(self._focus_pane, tab)
+        self.call_after_refresh(self._keep_focus_visible)
 
     def _set_visible(self, tab: str) -> None:
+        """Tell each pane whether it shows (a hidden one stops its timers); the one
+        shown gets the output state now (it heard of no change while hidden)."""
         if not self.screen_stack:
             return
-        for name in self.tabs:
-            p = self.pane(name)
+        for name, p in list(self._panes.items()):
             if hasattr(p, "set_visible"):
                 p.set_visible(name == tab)
+        self._pane_show_state()
 
     # ------------------------------------------------------------------ the session
     @work(thread=True, exclusive=True, group="outputs")
@@ -279,41 +308,38 @@ class HapTableApp(App):
         if isinstance(ev, Failed):
             title = "refused" if ev.name == "refused" else ev.topic
             self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
+        if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
+            self.outputs_watch.poke()  # lost: the bar at once, not at the next read
         if not self.screen_stack:
             return
-        for tab in self.tabs:
-            pane = self.pane(tab)
-            if pane is not None:
-                pane.post_message(SessionMessage(ev))
+        for pane in list(self._panes.values()):
+            pane.post_message(SessionMessage(ev))
         if isinstance(ev, Stopped) and ev.topic == "demo":  # the camera is back: the
-            tabs = self.base.query("#tabs")  # screen showing it starts its loop again
-            if tabs:
-                self._set_visible(tabs.first(TabbedContent).active)
+            active = self.active_tab  # screen showing it starts its loop again
+            if active is not None:
+                self._set_visible(active)
 
     # ------------------------------------------------------------------ live state
-    def refresh_state(self) -> None:
-        self._keep_focus_visible()
-        try:
-            screen = self.screen
-        except ScreenStackError:  # the app is closing: its timer may tick once more
+    def on_outputs_changed(self, message: OutputsChanged) -> None:
+        """What the outputs show changed (``console.tui.live``): the safety bars and the
+        screen shown are redrawn; nothing else runs while the table is idle."""
+        self.outputs_now = (message.status, message.log)
+        if not self.screen_stack:  # closing
             return
-        bars = [*screen.query(SafetyBar)]  # a modal shows its own (help, log) ...
-        if screen is not self.base:  # ... above the main screen's, which shows under it
-            bars += self.base.query(SafetyBar)
-        # the console's outputs, else what the demo process holding them last said
-        status, log = self.session.output_status()
-        if status is None:
-            for bar in bars:
-                bar.show(None, self.session.outputs_error)
-            return
-        for bar in bars:
-            bar.show(status)
-        tabs = self.base.query("#tabs")
-        if not tabs:
-            return
-        active = tabs.first(TabbedContent).active
-        pane = self.pane(active)
-        if pane is not None and hasattr(pane, "show_state"):
+        for bar in list(self.safety_bars):
+            self.show_bar(bar)
+        self._pane_show_state()
+
+    def show_bar(self, bar: SafetyBar) -> None:
+        """``bar`` with the output state as last read (it draws only what changed)."""
+        status, _log = self.outputs_now
+        bar.show(status, "" if status is not None else self.session.outputs_error)
+
+    def _pane_show_state(self) -> None:
+        """The shown pane's ``show_state(status, log)`` (while the outputs are open)."""
+        status, log = self.outputs_now
+        pane = self.pane(self.active_tab) if self.active_tab is not None else None
+        if status is not None and pane is not None and hasattr(pane, "show_state"):
             pane.show_state(status, log)
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
@@ -336,12 +362,10 @@ class HapTableApp(App):
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     def action_help(self) -> None:
-        tabs = self.base.query("#tabs")
         pane_help = ""
-        if tabs:
-            pane = self.pane(tabs.first(TabbedContent).active)
-            if pane is not None:
-                pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
+        pane = self.pane(self.active_tab) if self.active_tab is not None else None
+        if pane is not None:
+            pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
         self.push_screen(HelpScreen(HELP.format(tabs=_keys_help(self.tabs), pane=pane_help)))
 
     def action_log(self) -> None:
@@ -388,6 +412,7 @@ class HapTableApp(App):
         """Quitting: the session closes off the UI thread (outputs silenced first, then a
         running demo, the projector, the camera); after ``QUIT_WAIT_S`` the console
         e-stops whatever still runs and exits anyway."""
+        self.outputs_watch.stop()
         closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
         closer.start()
         closer.join(self.QUIT_WAIT_S)

@@ -133,16 +133,46 @@ class HalfBlockImage:
 
         return Measurement(self.rgb.shape[1], self.rgb.shape[1])
 
+    @property
+    def size(self) -> tuple[int, int]:
+        """(cols, rows) in character cells."""
+        return self.rgb.shape[1], self.rgb.shape[0] // 2
+
+    def changed_rows(self, other: HalfBlockImage | None) -> list[int]:
+        """The cell rows that differ from ``other`` (all of them: a size apart, or None)."""
+        cols, rows = self.size
+        if other is None or other.size != (cols, rows):
+            return list(range(rows))
+        cells = (self.rgb[: 2 * rows] != other.rgb[: 2 * rows]).any(axis=2)
+        changed = set(np.flatnonzero(cells.reshape(rows, 2, cols).any(axis=(1, 2))).tolist())
+        changed.update(row for (row, _col), _ch in self.text.items() ^ other.text.items())
+        return sorted(changed)
+
+    def row_segments(self, row: int) -> list[Segment]:
+        """Cell row ``row`` as segments: a run of equal cells is one segment."""
+        rgb, text, cols = self.rgb, self.text, self.rgb.shape[1]
+        top, bot = rgb[2 * row], rgb[2 * row + 1]
+        # a cell's two colours as one number: where it changes, a new run starts
+        cells = (top.astype(np.int64) << np.array([40, 32, 24])).sum(axis=1) + (
+            bot.astype(np.int64) << np.array([16, 8, 0])
+        ).sum(axis=1)
+        cuts = {0, cols, *(np.flatnonzero(np.diff(cells)) + 1).tolist()}
+        for r, col in text:  # a label's cell is a run of its own
+            if r == row:
+                cuts.update((col, col + 1))
+        edges = sorted(cuts)
+        out = []
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            ch = text.get((row, a))
+            if ch is not None:
+                out.append(Segment(ch, _LABEL))
+            else:
+                t, u = top[a], bot[a]
+                style = _style((int(t[0]), int(t[1]), int(t[2])), (int(u[0]), int(u[1]), int(u[2])))
+                out.append(Segment("▀" * (b - a), style))
+        return out
+
     def __rich_console__(self, console, options):
-        rgb, text = self.rgb, self.text
-        for r in range(0, rgb.shape[0] - 1, 2):
-            top, bot = rgb[r], rgb[r + 1]
-            for c in range(rgb.shape[1]):
-                ch = text.get((r // 2, c))
-                if ch is not None:
-                    yield Segment(ch, _LABEL)
-                    continue
-                yield Segment(
-                    "▀", _style(tuple(int(v) for v in top[c]), tuple(int(v) for v in bot[c]))
-                )
+        for row in range(self.size[1]):
+            yield from self.row_segments(row)
             yield Segment.line()

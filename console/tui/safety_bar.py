@@ -68,7 +68,9 @@ def describe(status: dict, width: int | None = None) -> tuple[str, str]:
 
 
 class SafetyBar(Static):
-    """One line above the footer of every screen."""
+    """One line above the footer of every screen. It registers with the app while
+    mounted (``app.safety_bars``), which shows it each output change; it redraws only
+    when its text or colour changes."""
 
     DEFAULT_CSS = """
     SafetyBar { height: 1; background: $panel; color: $text; }
@@ -81,18 +83,43 @@ class SafetyBar(Static):
         kw.setdefault("markup", False)
         super().__init__(*args, **kw)
         self._shown: tuple[dict | None, str] | None = None
+        self._drawn: tuple[str, str] | None = None  # (text, css class) on screen now
+        self.draws = 0  # how often the bar was redrawn (tests count it)
+
+    def on_mount(self) -> None:
+        bars = getattr(self.app, "safety_bars", None)
+        if bars is not None:
+            bars.add(self)
+        show = getattr(self.app, "show_bar", None)
+        if show is not None:  # the state as the app last read it, at once
+            show(self)
+        else:
+            self.show(None)
+
+    def on_unmount(self) -> None:
+        bars = getattr(self.app, "safety_bars", None)
+        if bars is not None:
+            bars.discard(self)
 
     def _width(self) -> int | None:
         return self.size.width or self.app.size.width or None
 
     def show(self, status: dict | None, error: str = "") -> None:
+        """Draw ``status`` (None: the outputs are not open, ``error`` says why). A bare
+        ``show(None)`` (a screen setting its bar up) draws the state the app knows."""
+        if status is None and not error:
+            status = getattr(self.app, "outputs_now", (None, None))[0]
         self._shown = (status, error)
         if status is None:
-            self.update(f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}")
-            self.set_classes("nooutputs")
+            text = f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}"
+            cls = "nooutputs"
+        else:
+            text, cls = describe(status, self._width())
+        if (text, cls) == self._drawn:
             return
-        text, cls = describe(status, self._width())
-        self.update(text)
+        self._drawn = (text, cls)
+        self.draws += 1
+        self.update(text, layout=False)  # one line, always: no layout to redo
         self.set_classes(cls)
 
     def on_resize(self) -> None:

@@ -87,7 +87,8 @@ class ScenesPane(Vertical):
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
-        self._tick = 0
+        self._projector_timer = None  # reads the projector's state while the screen shows
+        self._projector_said = ""  # the projector line as shown
         self.demo_name: str | None = None  # running or being prepared (as last reported)
         self.demo_state = "idle"
         self.hand_mm: tuple[float, float] | None = None  # the operator's hand on the twin
@@ -353,10 +354,23 @@ class ScenesPane(Vertical):
         if lw and lw.first(LongWork).busy:
             lw.first(LongWork).cancel()
 
-    def show_state(self, status: dict, log) -> None:
-        self._tick += 1
-        if self._tick % 5:
-            return
+    #: how often the projector's state is read while the screen shows
+    PROJECTOR_TICK_S = 0.5
+
+    def set_visible(self, visible: bool) -> None:
+        """Shown: the projector line is read every ``PROJECTOR_TICK_S``; hidden: no timer."""
+        if visible and self._projector_timer is None:
+            self._projector_timer = self.set_interval(self.PROJECTOR_TICK_S, self.show_projector)
+        elif not visible and self._projector_timer is not None:
+            self._projector_timer.stop()
+            self._projector_timer = None
+
+    def show_projector(self) -> None:
+        """The projector line, redrawn only when it changed."""
         found = self.query("#projector-status")
-        if found:  # gone while the console shuts down
-            found.first(Static).update(status_text(self.app.session.scenes.status()))
+        if not found:  # gone while the console shuts down
+            return
+        text = status_text(self.app.session.scenes.status())
+        if text != self._projector_said:
+            self._projector_said = text
+            found.first(Static).update(text)

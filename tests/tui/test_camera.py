@@ -129,8 +129,12 @@ def test_latency_screen_shows_stage_percentiles(plugins):
             assert float(str(rows()["vision"][1])) > 0  # p50 ms (cells are text)
             head = str(app.query_one("#lat-head").render())
             assert "fps" in head and "dropped" in head
-            audio = str(app.query_one("#lat-audio").render())
-            assert "output latency" in audio and "underruns 0" in audio
+            # the audio line once the outputs are open (they may open after the camera)
+            lat_audio = app.query_one("#lat-audio")
+            await wait_for(
+                pilot, lambda: "output latency" in str(lat_audio.render()), 30, "audio line"
+            )
+            assert "underruns 0" in str(lat_audio.render())
 
     asyncio.run(scenario())
 

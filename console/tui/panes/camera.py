@@ -1,11 +1,14 @@
 """Camera: the live IR view with the detected hand, contacts and gesture drawn over it:
 an image of real pixels where the terminal speaks Sixel or the Kitty graphics protocol
-(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz), its title saying
-which; background capture; threshold and high-pass tuning with immediate effect (every
-vision setting the classifier offers: ``[``/``]`` choose one, ``-``/``+`` change it;
-``W`` keeps them all for the profile); contact ids written next to each contact on the
-view; the touch-calibration wizard (``console.session.calibration``: this
-screen shows it and forwards its keys); ``g`` opens the registered ``gestures`` panel (datasets, training)."""
+(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz: a frame is
+converted only when it is drawn, and only the rows whose cells changed by a grey step
+are redrawn, ``console.tui.halfblock_view``), its title saying which; the side panel's
+live numbers at ~2 Hz; nothing while the screen is hidden. Background capture; threshold
+and high-pass tuning with immediate effect (every vision setting the classifier offers:
+``[``/``]`` choose one, ``-``/``+`` change it; ``W`` keeps them all for the profile);
+contact ids written next to each contact on the view; the touch-calibration wizard
+(``console.session.calibration``: this screen shows it and forwards its keys); ``g``
+opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Input, Static
 
 from console.errors import UserError
+from console.tui.halfblock_view import HalfBlockView
 from console.tui.text import escape
 from console.tui.util import from_thread
 
@@ -75,6 +79,10 @@ def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, i
     return out
 
 
+def _line_lengths(text: str) -> list[int]:
+    return [len(line) for line in text.split("\n")]
+
+
 class CameraPane(Horizontal):
     HELP_TEXT = (
         "b        capture the background (show the empty table)\n"
@@ -127,6 +135,13 @@ class CameraPane(Horizontal):
         self._image = None  # textual-image's widget, made at the first frame it shows
         self._image_at = -1e9  # monotonic time of its last update
         self._image_frame = None  # what it shows: (frame, view, target, area)
+        self._drawn = None  # what the half-block view shows: (frame, view, target, size)
+        self._grey: np.ndarray | None = None  # its grey levels as drawn
+        self._info_stable: tuple | None = None  # (view, settings lines) on the panel
+        self._info_at = -1e9  # monotonic time the panel was last written
+        self._said: dict[str, str] = {}  # widget id -> the text it shows
+        self._status: tuple[float, dict] | None = None  # (monotonic time, svc.status())
+        self.draws = 0  # how often the view was redrawn (tests count it)
 
     @property
     def image_mode(self) -> str:
@@ -136,7 +151,7 @@ class CameraPane(Horizontal):
     def compose(self) -> ComposeResult:
         with Vertical(id="camera-main"):
             yield Static("", id="camera-title", markup=False)
-            yield Static("camera stopped", id="camera-view")
+            yield HalfBlockView("camera stopped", id="camera-view")
         with Vertical(id="camera-side"):
             yield Static("", id="camera-info")
             box = Input(placeholder="host:port, Enter", id="camera-target")
@@ -157,7 +172,7 @@ class CameraPane(Horizontal):
         if visible:
             self._watch(True)
             if self._timer is None:
-                self._timer = self.set_interval(0.1, self.redraw)
+                self._timer = self.set_interval(self.HALFBLOCK_PERIOD_S, self.redraw)
         else:
             if self._timer is not None:
                 self._timer.stop()
@@ -173,6 +188,15 @@ class CameraPane(Horizontal):
     SIDE_COLS = 34
     #: the image's shortest interval in graphics modes (each update sends a new image)
     GRAPHICS_PERIOD_S = 0.2
+    #: how often the half-block view may change (a new frame drawn at most this often)
+    HALFBLOCK_PERIOD_S = 0.1
+    #: how long the loop's numbers (fps, drops) on the side panel are kept
+    STATUS_PERIOD_S = 0.5
+    #: a half-block pixel changes when its grey moved by one of the view's grey steps
+    #: (``HalfBlockImage``: 32 levels), not with every frame's noise
+    GREY_STEP = 8.0
+    #: the side panel's live numbers (fps, hands, readings) change at most this often
+    INFO_PERIOD_S = 0.5
 
     def view_area(self) -> tuple[int, int]:
         """(cols, rows) the view may take beside the side panel, below its title."""
@@ -185,18 +209,29 @@ class CameraPane(Horizontal):
         rows = min(rows, int(cols / aspect / 2) + 1)
         return cols, rows
 
+    def _say(self, widget_id: str, text, layout: bool = True) -> bool:
+        """``text`` on the Static ``widget_id`` when it changed (True then)."""
+        found = self.query(f"#{widget_id}")  # gone while the console shuts down
+        if not found or self._said.get(widget_id) == text:
+            return False
+        self._said[widget_id] = text
+        found.first(Static).update(text, layout=layout)
+        return True
+
     def _message(self, text: str) -> None:
         """``text`` in place of the view (the camera stopped, borrowed, starting)."""
         if self._image is not None:
             self._image.display = False
-        view = self.query_one("#camera-view", Static)
-        view.display = True
-        view.update(text)
-        self.query_one("#camera-title", Static).update("")
+        self._drawn = None
+        self.query_one("#camera-view", Static).display = True
+        self._say("camera-view", text)
+        self._say("camera-title", "")
 
     def redraw(self) -> None:
+        """Every ``HALFBLOCK_PERIOD_S`` while the screen shows: a frame is converted and
+        drawn only when it is new (or the view, the target or the size changed); the
+        side panel only when its text changed."""
         svc = self.service
-        info = self.query_one("#camera-info", Static)
         if svc.error:
             self._message(f"[red]camera: {escape(svc.error)}[/]")
             return
@@ -219,27 +254,54 @@ class CameraPane(Horizontal):
         if self.image_mode in ("sixel", "kitty"):
             self._draw_graphics(frame, img, work)
         else:
-            self._draw_halfblock(img, work)
-        info.update(self.info_text(svc, work))
+            self._draw_halfblock(frame, img, work)
+        self._show_info(svc, work)
 
-    def _draw_halfblock(self, img: np.ndarray, work: dict) -> None:
+    def _show_info(self, svc, work: dict) -> None:
+        """The side panel: at once when a setting or the wizard changed (a key), else
+        the loop's live numbers at most every ``INFO_PERIOD_S``."""
+        import time
+
+        live, settings = self.info_lines(svc, work)
+        now = time.monotonic()
+        stable = (self.view, settings)
+        if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
+            return
+        self._info_stable, self._info_at = stable, now
+        info = "\n".join([*live, "", *settings])
+        before = self._said.get("camera-info")
+        # lines as long as before: the panel keeps its size, no layout to redo
+        same = before is not None and _line_lengths(before) == _line_lengths(info)
+        self._say("camera-info", info, layout=not same)
+
+    def _draw_halfblock(self, frame, img: np.ndarray, work: dict) -> None:
         from console.tui.plots import HalfBlockImage, downsample
 
         cols, rows = self.view_size(img.shape[1] / img.shape[0])
+        target = self._target_px()
+        shows = (frame, self.view, None if target is None else tuple(target), cols, rows)
+        last = self._drawn
+        if last is not None and last[0] is frame and last[1:] == shows[1:]:
+            return  # the same picture: nothing converted, nothing drawn
+        kept = self._grey if last is not None and last[1:] == shows[1:] else None
+        self._drawn = shows
         grey = downsample(img, cols, rows)
         if self.view != "camera":
             grey = np.clip(grey * (255.0 / max(grey.max(), 1.0)), 0, 255)
-        target = self._target_px()
+        if kept is not None:  # the sensor's noise does not redraw the view
+            grey = np.where(np.abs(grey - kept) >= self.GREY_STEP, grey, kept)
+        self._grey = grey
         ov = overlay_pixels(img.shape, cols, rows, work, target)
         labels = blob_labels(img.shape, cols, rows, work)
-        self.shown = HalfBlockImage(grey, ov, labels)
-        view = self.query_one("#camera-view", Static)
+        picture = HalfBlockImage(grey, ov, labels)
+        view = self.query_one("#camera-view", HalfBlockView)
         view.display = True
-        view.update(self.shown)
+        self._said.pop("camera-view", None)
+        self.shown = picture
+        if view.show_picture(picture):  # only the rows that changed are redrawn
+            self.draws += 1
         h, w = img.shape[:2]
-        self.query_one("#camera-title", Static).update(
-            f"IR {w}x{h} as half-block {cols}x{rows} cells"
-        )
+        self._say("camera-title", f"IR {w}x{h} as half-block {cols}x{rows} cells")
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
@@ -280,12 +342,25 @@ class CameraPane(Horizontal):
         self._image.styles.height = rows
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
-        self.query_one("#camera-title", Static).update(
-            f"IR {w}x{h} via {MODE_NAMES[self.image_mode]}, {pw}x{ph} px"
-        )
+        self._say("camera-title", f"IR {w}x{h} via {MODE_NAMES[self.image_mode]}, {pw}x{ph} px")
+
+    def _loop_status(self, svc) -> dict:
+        """``svc.status()`` (fps, drops: their percentiles cost), read at most every
+        ``STATUS_PERIOD_S``."""
+        import time
+
+        now = time.monotonic()
+        if self._status is None or now - self._status[0] >= self.STATUS_PERIOD_S:
+            self._status = (now, svc.status())
+        return self._status[1]
 
     def info_text(self, svc, work: dict) -> str:
-        st = svc.status()
+        live, settings = self.info_lines(svc, work)
+        return "\n".join([*live, "", *settings])
+
+    def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
+        """The side panel: (what the loop sees now, the settings and the wizard)."""
+        st = self._loop_status(svc)
         cam, lat = st["camera"], st["latency"] or {}
         g = work.get("gesture")
         hands = work.get("hands", ()) or ()
@@ -306,7 +381,7 @@ class CameraPane(Horizontal):
         res = work.get("result")
         if res is not None:
             lines += reading_lines(res.readings())
-        lines.append("")
+        live, lines = lines, []
         chosen = self.chosen_key()
         for k, v in svc.params().items():
             lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
@@ -320,7 +395,7 @@ class CameraPane(Horizontal):
             lines += ["", "[b]touch calibration[/b]", self.cal_message]
         else:
             lines.append("k: touch calibration")
-        return "\n".join(lines)
+        return live, lines
 
     # ------------------------------------------------------------------ tuning
     def action_tune(self, key: str, sign: int) -> None:

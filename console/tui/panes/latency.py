@@ -42,6 +42,8 @@ def stage_rows(snap: dict) -> list[tuple[str, dict]]:
 
 #: p50 values kept per stage for its sparkline (it shows as many as fit)
 HISTORY = 500
+#: how often the loop's numbers are read while the screen shows (a history point each)
+TICK_S = 0.5
 
 
 def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
@@ -64,7 +66,9 @@ class LatencyPane(Vertical):
         self.source = ""  # "camera" or "demo NAME": whose loop the numbers are
         self._history_source = ""
         self.history: dict[str, deque] = defaultdict(lambda: deque(maxlen=HISTORY))
-        self._tick = 0
+        self._timer = None  # the loop's numbers, read while the screen shows
+        self._said: dict[str, str] = {}  # widget id -> the text it shows
+        self._rows: list[tuple[str, ...]] = []  # the table's rows as drawn
 
     def compose(self) -> ComposeResult:
         try:
@@ -101,10 +105,17 @@ class LatencyPane(Vertical):
             )
 
     def set_visible(self, visible: bool) -> None:
+        """Shown: the camera loop runs for it and its numbers are read every ``TICK_S``;
+        hidden: no timer, no loop of its own."""
         self.visible_now = visible
         if visible and self.available:
             self._watch()
+            if self._timer is None:
+                self._timer = self.set_interval(TICK_S, self.show_loop)
         elif not visible:
+            if self._timer is not None:
+                self._timer.stop()
+                self._timer = None
             self.app.call_later(self.app.session.camera.watch, self, False)
 
     @work(thread=True, exclusive=True, group="camera")
@@ -115,16 +126,21 @@ class LatencyPane(Vertical):
         """The session's running demo (else None)."""
         return self.app.session.demos.running
 
+    def _say(self, widget_id: str, text: str) -> None:
+        """``text`` on the Static ``widget_id``, redrawn only when it changed."""
+        found = self.query(f"#{widget_id}")  # gone while the console shuts down
+        if found and self._said.get(widget_id) != text:
+            self._said[widget_id] = text
+            found.first(Static).update(text)
+
     def show_state(self, status: dict, log) -> None:
-        self._tick += 1
-        if not self.available or self._tick % 5:
+        """The audio line (the app calls this when the output state changed)."""
+        if not self.available or not self.is_mounted:
             return
-        tables = self.query("#lat-table")
-        if not tables or not tables.first(DataTable).columns:
-            return  # not composed/mounted yet
         a = status.get("audio", {})
         lat = a.get("latency_s")
-        self.query_one("#lat-audio", Static).update(
+        self._say(
+            "lat-audio",
             f"[b]audio[/b] {escape(a.get('driver', '?'))}: output latency "
             f"{escape('-' if lat is None else f'{lat * 1e3:.1f} ms')}, "
             f"underruns {escape(a.get('underruns', 0))}"
@@ -134,8 +150,17 @@ class LatencyPane(Vertical):
                 else ""
             )
             + ", "
-            f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz"
+            f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz",
         )
+
+    def show_loop(self) -> None:
+        """The camera loop's or the running demo's numbers (every ``TICK_S`` while the
+        screen shows); a history point per stage each time."""
+        if not self.available:
+            return
+        tables = self.query("#lat-table")
+        if not tables or not tables.first(DataTable).columns:
+            return  # not composed/mounted yet
         run = self.demo_run()
         if run is not None:
             try:
@@ -151,7 +176,7 @@ class LatencyPane(Vertical):
             svc = self.app.session.camera_started
             self.source = "camera"
             if svc is None:
-                self.query_one("#lat-head", Static).update("camera not started")
+                self._say("lat-head", "camera not started")
                 return
             st = svc.status()
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
@@ -159,10 +184,11 @@ class LatencyPane(Vertical):
             self.history.clear()
             self._history_source = self.source
         if st.get("error"):
-            self.query_one("#lat-head", Static).update(f"[red]camera: {escape(st['error'])}[/]")
+            self._say("lat-head", f"[red]camera: {escape(st['error'])}[/]")
             return
         cam, snap = st.get("camera") or {}, st.get("latency")
-        self.query_one("#lat-head", Static).update(
+        self._say(
+            "lat-head",
             what + "\n"
             f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {cam.get('fps', 0):.1f} fps, "
             f"{escape(cam.get('dropped', 0))} frames dropped by the camera"
@@ -171,12 +197,11 @@ class LatencyPane(Vertical):
                 f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
                 if snap
                 else ""
-            )
+            ),
         )
         if not snap:
             return
-        table = self.query_one("#lat-table", DataTable)
-        table.clear()
+        table = tables.first(DataTable)
         cells = []
         for label, d in stage_rows(snap):
             p50 = d.get("p50_ms")
@@ -189,5 +214,18 @@ class LatencyPane(Vertical):
             [max(len(r[i]) for r in [heads, *cells]) for i in range(len(heads))],
             table.cell_padding,
         )
-        for row in cells:
-            table.add_row(*row, sparkline(self.history[row[0]], width))
+        self._set_rows(table, [(*r, sparkline(self.history[r[0]], width)) for r in cells])
+
+    def _set_rows(self, table: DataTable, rows: list[tuple[str, ...]]) -> None:
+        """The table's rows as ``rows``: the cells that changed, or all when the stages
+        did."""
+        if [r[0] for r in rows] != [r[0] for r in self._rows] or table.row_count != len(rows):
+            table.clear()
+            for row in rows:
+                table.add_row(*row)
+        else:
+            for i, (old, new) in enumerate(zip(self._rows, rows, strict=True)):
+                for j, (a, b) in enumerate(zip(old, new, strict=True)):
+                    if a != b:
+                        table.update_cell_at((i, j), b, update_width=True)
+        self._rows = rows

@@ -57,6 +57,9 @@ class RelaysPane(VerticalScroll):
         self.pending: dict[int, bool] = {}
         self.refused: dict[int, str] = {}
         self._log_len = -1
+        self._rows: dict[int, tuple[Switch, Static]] = {}  # channel -> its switch, state
+        self._said: dict[int, str] = {}  # channel -> the interlock text shown
+        self._table: DataTable | None = None  # the switch log, once mounted
 
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
@@ -79,7 +82,12 @@ class RelaysPane(VerticalScroll):
         return self.query_one("#relay-1", Switch)
 
     def on_mount(self) -> None:
-        self.query_one("#relaylog", DataTable).add_columns("sample", "relay", "", "outputs then")
+        self._table = self.query_one("#relaylog", DataTable)
+        self._table.add_columns("sample", "relay", "", "outputs then")
+        for sw in self.query(Switch):
+            ch = int(sw.id.split("-")[1])
+            self._rows[ch] = (sw, self.query_one(f"#interlock-{ch}", Static))
+        self._redraw()
 
     def _relay_label(self, ch: int) -> str:
         prof = self.app.ctx.profile
@@ -89,24 +97,31 @@ class RelaysPane(VerticalScroll):
         return f"relay {ch}  {' '.join(names) or '-'}"
 
     def show_state(self, status: dict, log) -> None:
-        tables = self.query("#relaylog")
-        if not tables or not tables.first(DataTable).columns:
-            return  # not composed/mounted yet (the app's timer may run first)
+        """The switches, each relay's interlock and the log as ``status`` says (the app
+        calls it when the output state changed); only what changed is redrawn."""
+        if self._table is None:
+            return  # not mounted yet: ``on_mount`` draws the state then
         closed = set(status["gate"]["relays_closed"])
-        for sw in self.query(Switch):
-            ch = int(sw.id.split("-")[1])
+        for ch, (sw, state) in self._rows.items():
             if ch not in self.pending and sw.value != (ch in closed):
                 with sw.prevent(Switch.Changed):
                     sw.value = ch in closed
-            self.query_one(f"#interlock-{ch}", Static).update(
-                interlock(ch, status, self.pending, self.refused)
-            )
+            text = interlock(ch, status, self.pending, self.refused)
+            if self._said.get(ch) != text:
+                self._said[ch] = text
+                state.update(text, layout=False)  # one line each
         if log is not None and len(log) != self._log_len:
             self._log_len = len(log)
-            table = self.query_one("#relaylog", DataTable)
-            table.clear()
+            self._table.clear()
             for row in log_rows(log)[:50]:
-                table.add_row(*row)
+                self._table.add_row(*row)
+
+    def _redraw(self) -> None:
+        """Draw with the output state as the app last read it (a request or its result
+        changed what a relay's line says, not the outputs)."""
+        status, log = getattr(self.app, "outputs_now", (None, None))
+        if status is not None:
+            self.show_state(status, log)
 
     def on_switch_changed(self, event: Switch.Changed) -> None:
         event.stop()
@@ -129,6 +144,7 @@ class RelaysPane(VerticalScroll):
             self._done(ch, f"e-stop active ({reason}): relays stay open; reset first")
             return
         self.pending[ch] = closed
+        self._redraw()
         self._switch(ch, closed)
 
     @work(thread=True, group="relays")
@@ -149,3 +165,8 @@ class RelaysPane(VerticalScroll):
         if error:
             self.refused[ch] = error
             self.app.notify(f"relay {ch}: {error}", severity="error", timeout=6)
+        watch = getattr(self.app, "outputs_watch", None)
+        if watch is not None:  # the relays as they are now, not as last read
+            watch.poke(force=True)
+        else:
+            self._redraw()

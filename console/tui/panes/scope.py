@@ -18,6 +18,8 @@ from console.tui.charts import Chart, Series
 WINDOWS_MS = (5, 10, 20, 50, 100, 200, 500, 1000, 2000, 4000)
 #: around the last plan (``p``): this much before and after it, in ms
 PLAN_MARGIN_MS = PLAN_MARGIN_S * 1e3
+#: how often the live view is read while the screen shows
+TICK_S = 0.2
 
 
 def plan_line(last) -> str:
@@ -75,7 +77,9 @@ class ScopePane(Vertical):
         self.plan_view = False  # frozen on the last plan's span
         self.plan_report = None  # the PlayReport of the plan frozen on (``p``)
         self.shown = None  # the ScopeTrace drawn now
-        self._tick = 0
+        self._timer = None  # the live view's, while the screen shows
+        self._drawn: tuple | None = None  # what the chart shows (``_signature``)
+        self.draws = 0  # how often the chart was drawn (tests count it)
 
     def compose(self) -> ComposeResult:
         yield Static("", id="scope-head", markup=False)
@@ -94,6 +98,14 @@ class ScopePane(Vertical):
 
     def on_mount(self) -> None:
         self._redraw()
+
+    def set_visible(self, visible: bool) -> None:
+        """Shown: the live view is read every ``TICK_S``; hidden: no timer."""
+        if visible and self._timer is None:
+            self._timer = self.set_interval(TICK_S, self.tick)
+        elif not visible and self._timer is not None:
+            self._timer.stop()
+            self._timer = None
 
     # ------------------------------------------------------------------ keys
     def action_freeze(self) -> None:
@@ -118,9 +130,9 @@ class ScopePane(Vertical):
         self._redraw()
 
     # ------------------------------------------------------------------ drawing
-    def show_state(self, status: dict, log) -> None:
-        """The app's 10 Hz tick while this screen shows: live, redraw every other."""
-        self._tick += 1
+    def tick(self) -> None:
+        """Every ``TICK_S`` while the screen shows: the live view redrawn when what the
+        gate passed changed; a new plan unfreezes the last plan's view."""
         if self.plan_view:
             last = self.app.session.last_played()
             if last is not None and last[1] is not self.plan_report:  # another plan played
@@ -129,8 +141,8 @@ class ScopePane(Vertical):
             kept = self.app.session.last_plan_trace()
             if kept is not None and kept[1] is not self.shown:
                 self._redraw()
-        elif self.frozen is None and self._tick % 2 == 0:
-            self._redraw()
+        elif self.frozen is None:
+            self._redraw(only_changed=True)
 
     def _view(self):
         """What to draw: the live window, the frozen window or the last plan's span."""
@@ -163,13 +175,27 @@ class ScopePane(Vertical):
                 )
         return trace.last(self.window_ms / 1e3), "frozen"
 
-    def _redraw(self) -> None:
+    def _signature(self, trace, mode: str, plan: str) -> tuple:
+        """What a drawing of ``trace`` shows: its samples (not its clock: the live view
+        of a silent gate stays the same picture), marks, mode, window and plan line."""
+        if trace is None:
+            return (None, mode, plan, self.window_ms, self.app.session.outputs_error)
+        volts = np.ascontiguousarray(trace.volts)
+        marks = tuple((c - trace.clock, k, m) for c, k, m in trace.marks)
+        return (hash(volts.tobytes()), volts.shape, marks, mode, plan, self.window_ms)
+
+    def _redraw(self, only_changed: bool = False) -> None:
         session = self.app.session
         chart = self.query_one("#scope-chart", Chart)
         head = self.query_one("#scope-head", Static)
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
         plan = plan_line(session.last_played())
+        sig = self._signature(trace, mode, plan)
+        if only_changed and sig == self._drawn:
+            return  # the same picture: nothing is redrawn
+        self._drawn = sig
+        self.draws += 1
         if trace is None and mode == "aged out":
             head.update(
                 "FROZEN | the last plan aged out of the scope and was not kept: "

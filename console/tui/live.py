@@ -1,0 +1,156 @@
+"""The table's output state for the screens, read off the UI thread.
+
+``OutputsWatch`` asks the table's kernel for its status (``Outputs.status``) every
+``POLL_S`` on a thread of its own, at once when poked (a session event: an e-stop, a
+reset, the outputs opening), and hands the app an ``OutputsChanged`` message only when
+something a screen shows has changed (``status_key``: the gate's clock, the audio
+blocks counted, the kernel's request counters are left out). The relay log (every
+switch of the board, growing) is read only when the board's switch count moved. Idle,
+the UI thread does nothing for it.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from typing import Any
+
+from textual.message import Message
+
+from console.errors import SafetyRefusal
+
+log = logging.getLogger(__name__)
+
+#: how often the kernel is asked for its status (the safety bar's live levels)
+POLL_S = 0.1
+
+#: status fields that change while nothing a screen shows does, by section
+_CHURN: dict[str | None, frozenset[str]] = {
+    None: frozenset({"latency_samples"}),
+    "gate": frozenset({"clock", "quiet_samples"}),
+    "audio": frozenset({"blocks", "fill_ms"}),
+    "kernel": frozenset({"requests"}),
+}
+
+
+def _shown_v(v: Any) -> float:
+    """A level as the bar shows it (0.1 V; what shows as zero is zero)."""
+    v = float(v)
+    return 0.0 if abs(v) < 0.05 else round(v, 1)
+
+
+def status_key(status: dict | None, error: str = "") -> str:
+    """What the screens show of ``status`` (None: outputs not open, ``error`` why), as a
+    string that changes only when that does."""
+    if status is None:
+        return f"closed:{error}"
+    kept: dict[str, Any] = {}
+    for k, v in status.items():
+        if k in _CHURN[None]:
+            continue
+        if isinstance(v, dict) and k in _CHURN:
+            v = {kk: vv for kk, vv in v.items() if kk not in _CHURN[k]}
+        kept[k] = v
+    gate = kept.get("gate")
+    if isinstance(gate, dict) and "level_v" in gate:
+        kept["gate"] = {**gate, "level_v": [_shown_v(x) for x in gate["level_v"]]}
+    return json.dumps(kept, sort_keys=True, default=str)
+
+
+def switches(status: dict | None) -> Any:
+    """The relay board's switch count in ``status`` (None: not reported)."""
+    relays = (status or {}).get("relays")
+    return relays.get("switches") if isinstance(relays, dict) else None
+
+
+class OutputsChanged(Message, bubble=False):
+    """The output state a screen shows changed: ``status`` (None: not open) and the
+    relay ``log`` (None: not read, or real hardware)."""
+
+    def __init__(self, status: dict | None, log: Any) -> None:
+        super().__init__()
+        self.status = status
+        self.log = log
+
+
+class OutputsWatch:
+    """Polls ``session``'s outputs on a daemon thread; posts ``OutputsChanged`` to
+    ``target`` (the app) when ``status_key`` changes."""
+
+    def __init__(self, session: Any, target: Any, poll_s: float = POLL_S) -> None:
+        self.session = session
+        self.target = target
+        self.poll_s = poll_s
+        self.status: dict | None = None  # the newest status read (every poll)
+        self.log: Any = None  # the relay log as of ``_log_switches``
+        self.polls = 0  # status reads so far
+        self.changes = 0  # ``OutputsChanged`` posted so far
+        self._key: str | None = None
+        self._log_switches: Any = object()  # never equal: the first read fetches it
+        self._force = False  # the next read is posted even if nothing changed
+        self._wake = threading.Event()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="haptable-tui-outputs")
+            self._thread.daemon = True
+            self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+
+    def poke(self, force: bool = False) -> None:
+        """Read the status now (an event says it changed); ``force``: hand it over
+        even if what shows is the same (a screen needs it fresh after a request)."""
+        self._force = self._force or force
+        self._wake.set()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            self.poll()
+            self._wake.wait(self.poll_s)
+            self._wake.clear()
+
+    def poll(self) -> bool:
+        """Read the status once; True (and a message posted) if what shows changed."""
+        self.polls += 1
+        force, self._force = self._force, False
+        status = self._read()
+        key = status_key(status, getattr(self.session, "outputs_error", "") or "")
+        self.status = status
+        if key == self._key and not force:
+            return False
+        count = switches(status)
+        if status is not None and (count is None or count != self._log_switches):
+            self.log, self._log_switches = self._read_log(), count
+        self._key = key
+        self.changes += 1
+        try:
+            self.target.post_message(OutputsChanged(status, self.log))
+        except Exception:  # noqa: BLE001 - the app is closing: nobody to tell
+            return False
+        return True
+
+    def _read(self) -> dict | None:
+        out = self.session.outputs
+        if out is None:
+            return None
+        try:
+            return out.status()
+        except SafetyRefusal:  # the kernel went away: the bar says not open
+            return None
+        except Exception:  # noqa: BLE001 - logged; the watch goes on
+            log.exception("reading the outputs' status")
+            return None
+
+    def _read_log(self) -> Any:
+        out = self.session.outputs
+        try:
+            return None if out is None else out.relay_log()
+        except Exception:  # noqa: BLE001 - as above; the log stays as it was
+            log.debug("reading the relay log", exc_info=True)
+            return self.log

@@ -1,0 +1,319 @@
+"""The console does nothing while nothing changes: an idle screen is not redrawn, a
+hidden screen does no per-tick work, and a change (an e-stop, a relay switched here or
+elsewhere) still shows. Behaviour only: the CPU and the delays are measured by
+``haptable bench console-idle``."""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import threading
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from textual.app import App
+from textual.widget import Widget
+from textual.widgets import Switch
+
+from console.cli import Context
+from console.tui.app import HapTableApp
+from console.tui.halfblock_view import HalfBlockView
+from console.tui.live import status_key
+from console.tui.plots import HalfBlockImage
+from console.tui.safety_bar import SafetyBar
+
+from .conftest import app_processed, wait_for
+
+SIZES = [(80, 24), (120, 40)]
+#: the screens with nothing live on them (Camera and Latency show the camera loop,
+#: Signals' expression line blinks its cursor)
+STILL = ["devices", "vibration", "relays", "electrostatic", "scenes", "scope", "studies"]
+
+
+def _bar(app) -> str:
+    return str(app.query_one("#safety", SafetyBar).render())
+
+
+def _bar_idle(app) -> bool:
+    """The bar says the outputs are open and idle (at any width)."""
+    return "outputs idle" in _bar(app) or "| idle |" in _bar(app)
+
+
+class RefreshCounter:
+    """``Widget.refresh`` calls per widget while installed (``monkeypatch``)."""
+
+    def __init__(self, monkeypatch) -> None:
+        self.calls: collections.Counter = collections.Counter()
+        original = Widget.refresh
+
+        def counting(widget, *args, **kw):
+            self.calls[widget] += 1
+            return original(widget, *args, **kw)
+
+        monkeypatch.setattr(Widget, "refresh", counting)
+
+    def within(self, root: Widget) -> dict[str, int]:
+        """The calls on ``root`` and the widgets inside it, by widget."""
+        return {
+            f"{type(w).__name__}#{w.id}": n
+            for w, n in self.calls.items()
+            if w is root or root in w.ancestors
+        }
+
+
+async def _idle(app, pilot) -> None:
+    """Outputs open, the bar drawn with them, the first draw of the screen over."""
+    await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
+    await wait_for(pilot, lambda: _bar_idle(app), 10, "the bar: outputs idle")
+    await pilot.pause(0.5)
+
+
+@pytest.mark.parametrize("size", SIZES)
+@pytest.mark.parametrize("tab", STILL)
+def test_an_idle_screen_is_not_redrawn(plugins, monkeypatch, size, tab):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial=tab)
+        async with app.run_test(size=size) as pilot:
+            await _idle(app, pilot)
+            pane = app.pane(tab)
+            await wait_for(pilot, lambda: pane.is_mounted, 10, "pane mounted")
+            await pilot.pause(1.0)  # a screen's first work (a doctor run, a listing) ends
+            shown = collections.Counter()
+            if hasattr(pane, "show_state"):
+                original = pane.show_state
+
+                def counting(status, log):
+                    shown["show_state"] += 1
+                    original(status, log)
+
+                monkeypatch.setattr(pane, "show_state", counting)
+            bar = app.query_one("#safety", SafetyBar)
+            draws = bar.draws
+            refreshes = RefreshCounter(monkeypatch)
+            polls, changes = app.outputs_watch.polls, app.outputs_watch.changes
+            await pilot.pause(1.2)
+            assert app.outputs_watch.polls > polls  # the outputs were read meanwhile; a
+            # screen hears only of changes (none, unless an underrun on a loaded machine)
+            assert shown["show_state"] <= app.outputs_watch.changes - changes
+            assert bar.draws == draws  # the bar's text stayed the same: not redrawn
+            assert refreshes.within(pane) == {}
+            assert refreshes.within(bar) == {}
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_an_estop_reaches_the_bar_by_its_event_alone(plugins, size):
+    """The periodic read is put off for an hour: the e-stop's session event (from
+    another thread, as `haptable estop` in a shell or a demo's watchdog) is what brings
+    the bar up to date; the reset too."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=size) as pilot:
+            await _idle(app, pilot)
+            app.outputs_watch.poll_s = 3600.0
+            app.outputs_watch.poke()  # the watch now sleeps for the hour
+            await pilot.pause(0.2)
+            polls = app.outputs_watch.polls
+            threading.Thread(target=app.session.estop, args=("from a shell",)).start()
+            await wait_for(pilot, lambda: "E-STOP: from a shell" in _bar(app), 10, "e-stop")
+            assert app.outputs_watch.polls <= polls + 2  # read on the event, not a timer
+            assert "ctrl+r" in _bar(app)
+            assert "refused: e-stop active" in str(app.query_one("#interlock-1").render())
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: _bar_idle(app), 10, "reset")
+            assert "ready" in str(app.query_one("#interlock-1").render())
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_a_relay_switch_shows_here_and_from_elsewhere(plugins, size):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=size) as pilot:
+            await _idle(app, pilot)
+            switch1 = app.query_one("#relay-1", Switch)
+            await pilot.press("1")  # the operator's key
+            await wait_for(pilot, lambda: "relays closed: 1" in _bar(app), 10, "bar")
+            await wait_for(pilot, lambda: switch1.value, 10, "switch 1 on")
+            log = app.query_one("#relaylog")
+            await wait_for(pilot, lambda: log.row_count == 1, 10, "logged")
+            # another client of the table (a demo, a script) switches relay 2
+            out = app.session.outputs
+            threading.Thread(target=out.set_relays, args=({1, 2},)).start()
+            switch2 = app.query_one("#relay-2", Switch)
+            await wait_for(pilot, lambda: switch2.value, 10, "switch 2 on")
+            await wait_for(pilot, lambda: "relays closed: 1,2" in _bar(app), 10, "bar")
+            await wait_for(pilot, lambda: log.row_count == 2, 10, "logged")
+
+    asyncio.run(scenario())
+
+
+def test_a_hidden_screen_does_no_per_tick_work(plugins, monkeypatch):
+    """Camera, Latency, Scope and Relays opened and left: no timer of theirs runs, no
+    draw; the relays switched meanwhile show at once when Relays opens again."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await _idle(app, pilot)
+            for key, tab in (
+                ("f2", "camera"),
+                ("f7", "latency"),
+                ("f9", "scope"),
+                ("f4", "relays"),
+            ):
+                await pilot.press(key)
+                await wait_for(pilot, lambda t=tab: app.pane(t) is not None, 10, tab)
+                await wait_for(pilot, lambda t=tab: app.pane(t).is_mounted, 10, tab)
+                await pilot.pause(0.5)
+            await pilot.press("f1")
+            await wait_for(pilot, lambda: app.active_tab == "devices", 10, "devices")
+            await pilot.pause(0.3)
+            camera, latency, scope, relays = (
+                app.pane(t) for t in ("camera", "latency", "scope", "relays")
+            )
+            assert camera._timer is None and latency._timer is None and scope._timer is None
+            ticks = collections.Counter()
+            for pane, name in (
+                (camera, "redraw"),
+                (latency, "show_loop"),
+                (scope, "tick"),
+                (relays, "show_state"),
+            ):
+                original = getattr(pane, name)
+
+                def counting(*args, _name=name, _original=original):
+                    ticks[_name] += 1
+                    return _original(*args)
+
+                monkeypatch.setattr(pane, name, counting)
+            refreshes = RefreshCounter(monkeypatch)
+            # the outputs change (another client switches a relay) while Relays is hidden
+            threading.Thread(target=app.session.outputs.set_relays, args=({3},)).start()
+            await wait_for(pilot, lambda: "relays closed: 3" in _bar(app), 10, "bar")
+            await pilot.pause(1.0)
+            assert ticks == {}
+            for pane in (camera, latency, scope, relays):
+                assert refreshes.within(pane) == {}, pane
+            assert not app.session.camera.watched  # no loop runs for a hidden screen
+            await pilot.press("f4")
+            await wait_for(pilot, lambda: app.query_one("#relay-3", Switch).value, 10, "shown")
+            assert ticks["show_state"] >= 1
+
+    asyncio.run(scenario())
+
+
+def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypatch):
+    """The same frame is not converted again; a new frame whose pixels moved by less
+    than a grey step (sensor noise) draws nothing; a bright patch redraws only the
+    rows it covers."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=(120, 40)) as pilot:
+            pane = app.pane("camera")
+            await wait_for(pilot, lambda: pane.shown is not None, 30, "a picture")
+            rng = np.random.default_rng(2)
+            base = rng.uniform(60.0, 200.0, (480, 640))
+            now = {"frame": SimpleNamespace(image=base)}
+            monkeypatch.setattr(app.session.camera, "snapshot", lambda: (now["frame"], {}))
+            view = app.query_one("#camera-view", HalfBlockView)
+            await wait_for(pilot, lambda: view.picture is pane.shown, 10, "drawn")
+            await pilot.pause(0.3)
+            draws, rows = pane.draws, view.rows_drawn
+            shown = pane.shown
+            await pilot.pause(0.5)  # the same frame: not converted again
+            assert pane.shown is shown and pane.draws == draws
+            for _ in range(6):  # new frames, noise only
+                now["frame"] = SimpleNamespace(image=base + rng.normal(0.0, 0.5, base.shape))
+                await pilot.pause(0.12)
+            assert pane.draws == draws and view.rows_drawn == rows
+            bright = base.copy()
+            bright[200:260, 100:300] = 255.0  # a hand's palm
+            now["frame"] = SimpleNamespace(image=bright)
+            await wait_for(pilot, lambda: pane.draws > draws, 10, "the palm drawn")
+            changed = view.rows_drawn - rows
+            assert 0 < changed < pane.shown.size[1] // 2  # its rows, not the picture
+
+    asyncio.run(scenario())
+
+
+# ---------------------------------------------------------------------- pieces
+def _status(**gate) -> dict:
+    base = {"estopped": False, "estop_reason": "", "clock": 0, "quiet_samples": 0}
+    base |= {"level_v": [0.0, 0.0], "relays_closed": []}
+    return {
+        "gate": base | gate,
+        "audio": {"underruns": 0, "blocks": 1, "fill_ms": {"p50_ms": 0.02}},
+        "relays": {"switches": 0},
+        "busy": False,
+        "latency_samples": 3,
+        "kernel": {"requests": {"status": {"n": 1}}, "clients": ["console"]},
+    }
+
+
+def test_the_status_key_changes_only_with_what_shows():
+    key = status_key(_status())
+    churn = _status(clock=48000, quiet_samples=48000)
+    churn["audio"] |= {"blocks": 750, "fill_ms": {"p50_ms": 0.03}}
+    churn["latency_samples"] = 99
+    churn["kernel"]["requests"] = {"status": {"n": 40}}
+    assert status_key(churn) == key
+    assert status_key(_status(level_v=[0.04, -0.04])) == key  # shows as zero
+    assert status_key(_status(level_v=[1.0, 0.0])) != key
+    assert status_key(_status(estopped=True, estop_reason="x")) != key
+    assert status_key(_status(relays_closed=[1])) != key
+    more = _status()
+    more["relays"]["switches"] = 1
+    assert status_key(more) != key
+    assert status_key(None, "starting") != status_key(None, "no sound card")
+
+
+def test_a_halfblock_picture_redraws_only_the_rows_that_changed():
+    rng = np.random.default_rng(1)
+    grey = rng.uniform(0, 255, (12, 10))
+    a = HalfBlockImage(grey, None, {(1, 2): "7"})
+    assert a.changed_rows(HalfBlockImage(grey.copy(), None, {(1, 2): "7"})) == []
+    moved = grey.copy()
+    moved[9, 4] = 255 - moved[9, 4]
+    assert a.changed_rows(HalfBlockImage(moved, None, {(1, 2): "7"})) == [4]
+    assert a.changed_rows(HalfBlockImage(grey, None, {(2, 2): "7"})) == [1, 2]
+    assert a.changed_rows(HalfBlockImage(grey[:10], None)) == list(range(6))  # resized
+
+    async def scenario():
+        class One(App):
+            def compose(self):
+                yield HalfBlockView("waiting", id="v")
+
+        app = One()
+        async with app.run_test(size=(40, 12)) as pilot:
+            view = app.query_one(HalfBlockView)
+            assert view.show_picture(a) == 6  # the first picture: every row
+            await app_processed(app)
+            refreshes = collections.Counter()
+            original = view.refresh
+
+            def counting(*regions, **kw):
+                refreshes["rows"] += len(regions) or 99
+                return original(*regions, **kw)
+
+            view.refresh = counting
+            assert view.show_picture(HalfBlockImage(grey.copy(), None, {(1, 2): "7"})) == 0
+            assert refreshes["rows"] == 0
+            assert view.show_picture(HalfBlockImage(moved, None, {(1, 2): "7"})) == 1
+            assert refreshes["rows"] == 1  # one line repainted
+            await pilot.pause(0.05)
+            # the repainted line is the new picture's row
+            new = HalfBlockImage(moved, None, {(1, 2): "7"}).row_segments(4)
+            assert [(s.text, s.style) for s in view.render_line(4)] == [
+                (s.text, s.style) for s in new
+            ]
+            view.update("camera stopped")
+            await pilot.pause(0.05)
+            assert "camera stopped" in view.render_line(0).text
+
+    asyncio.run(scenario())
