@@ -292,7 +292,7 @@ def run(ctx, quick: bool) -> dict:
         shutil.rmtree(runtime, ignore_errors=True)
     if shutil.which("tmux") and sys.platform.startswith("linux"):
         how = f"haptable in tmux {SIZE[0]}x{SIZE[1]}, /proc/<pid>/stat once a second"
-        screens, estop = _in_tmux(getattr(ctx, "profile_arg", None), tabs, seconds)
+        screens, estop = _in_tmux(ctx.profile_arg, tabs, seconds)
     else:
         how = "headless (no tmux): Textual run_test in this process, time.process_time"
         screens, estop = asyncio.run(_headless(ctx, tabs, seconds)), None

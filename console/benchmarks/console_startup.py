@@ -65,7 +65,7 @@ def run(ctx, quick: bool) -> dict:
     from console.bench import machine_info, summarize_s
 
     n = 3 if quick else 10
-    prof = getattr(ctx, "profile_arg", None)
+    prof = ctx.profile_arg
     runs = [startup_once(prof) for _ in range(n)]
     return {
         "first_paint": summarize_s([r["paint_s"] for r in runs]),

@@ -20,7 +20,7 @@ from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
-from console.tui.live import OutputsChanged, OutputsWatch
+from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
 from console.tui.text import escape
@@ -126,11 +126,9 @@ class HapTableApp(App):
         self._focus_wanted: tuple[str, float] | None = None
         self._panes: dict[str, Widget] = {}  # the panes built so far, by tab
         self._tab_widget: TabbedContent | None = None
-        #: the safety bars mounted now (the main one, a modal's): ``SafetyBar`` adds itself
-        self.safety_bars: set[SafetyBar] = set()
-        #: the table's output state, read off the UI thread; what shows: ``outputs_now``
-        self.outputs_watch = OutputsWatch(self.session, self)
-        self.outputs_now: tuple[dict | None, object] = (None, None)
+        #: the table's output state, read off the UI thread (``live.watch``), what shows
+        #: (``live.now``) and the safety bars mounted (the main one, a modal's)
+        self.live = LiveOutputs(self.session, self)
 
     def _bind_tabs(self) -> None:
         """A key per tab (the first one shown in the footer for them all)."""
@@ -172,7 +170,7 @@ class HapTableApp(App):
         self.watch(self.screen, "focused", self._keep_focus_visible, init=False)
         # after the first paint: the outputs' imports and threads must not delay it
         self.call_after_refresh(self._open_outputs)
-        self.outputs_watch.start()  # the bar and the screens hear of changes only
+        self.live.watch.start()  # the bar and the screens hear of changes only
         self.set_interval(0.25, self.session.demos.poll)  # a running demo's Snapshot
         self.call_after_refresh(self._set_visible, self.initial)
         self.call_after_refresh(self._focus_pane, self.initial)
@@ -291,7 +289,7 @@ class HapTableApp(App):
         if not self.screen_stack:
             return
         for name, p in list(self._panes.items()):
-            if hasattr(p, "set_visible"):
+            if isinstance(p, Hides):
                 p.set_visible(name == tab)
         self._pane_show_state()
 
@@ -309,7 +307,7 @@ class HapTableApp(App):
             title = "refused" if ev.name == "refused" else ev.topic
             self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
-            self.outputs_watch.poke()  # lost: the bar at once, not at the next read
+            self.live.watch.poke()  # lost: the bar at once, not at the next read
         if not self.screen_stack:
             return
         for pane in list(self._panes.values()):
@@ -323,23 +321,23 @@ class HapTableApp(App):
     def on_outputs_changed(self, message: OutputsChanged) -> None:
         """What the outputs show changed (``console.tui.live``): the safety bars and the
         screen shown are redrawn; nothing else runs while the table is idle."""
-        self.outputs_now = (message.status, message.log)
+        self.live.now = (message.status, message.log)
         if not self.screen_stack:  # closing
             return
-        for bar in list(self.safety_bars):
+        for bar in list(self.live.bars):
             self.show_bar(bar)
         self._pane_show_state()
 
     def show_bar(self, bar: SafetyBar) -> None:
         """``bar`` with the output state as last read (it draws only what changed)."""
-        status, _log = self.outputs_now
+        status, _log = self.live.now
         bar.show(status, "" if status is not None else self.session.outputs_error)
 
     def _pane_show_state(self) -> None:
         """The shown pane's ``show_state(status, log)`` (while the outputs are open)."""
-        status, log = self.outputs_now
+        status, log = self.live.now
         pane = self.pane(self.active_tab) if self.active_tab is not None else None
-        if status is not None and pane is not None and hasattr(pane, "show_state"):
+        if status is not None and isinstance(pane, ShowsState):
             pane.show_state(status, log)
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
@@ -412,7 +410,7 @@ class HapTableApp(App):
         """Quitting: the session closes off the UI thread (outputs silenced first, then a
         running demo, the projector, the camera); after ``QUIT_WAIT_S`` the console
         e-stops whatever still runs and exits anyway."""
-        self.outputs_watch.stop()
+        self.live.watch.stop()
         closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
         closer.start()
         closer.join(self.QUIT_WAIT_S)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import logging
 import threading
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from textual.message import Message
 
@@ -120,7 +120,7 @@ class OutputsWatch:
         self.polls += 1
         force, self._force = self._force, False
         status = self._read()
-        key = status_key(status, getattr(self.session, "outputs_error", "") or "")
+        key = status_key(status, self.session.outputs_error or "")
         self.status = status
         if key == self._key and not force:
             return False
@@ -154,3 +154,44 @@ class OutputsWatch:
         except Exception:  # noqa: BLE001 - as above; the log stays as it was
             log.debug("reading the relay log", exc_info=True)
             return self.log
+
+
+class LiveOutputs:
+    """The app's output state for its widgets: the ``watch`` reading it, what shows
+    ``now`` (status, relay log) and the safety ``bars`` mounted (each adds itself)."""
+
+    def __init__(self, session: Any, target: Any) -> None:
+        self.watch = OutputsWatch(session, target)
+        self.now: tuple[dict | None, Any] = (None, None)
+        self.bars: set[Any] = set()
+        self.session = session
+
+    def error(self) -> str:
+        """Why the outputs are not open ('' while they are, or still opening)."""
+        return self.session.outputs_error or ""
+
+
+@runtime_checkable
+class LiveHost(Protocol):
+    """An app that keeps the output state for its widgets (``HapTableApp``)."""
+
+    live: LiveOutputs
+
+
+@runtime_checkable
+class ShowsState(Protocol):
+    """A pane drawn from the output state when it changes."""
+
+    def show_state(self, status: dict, log: Any) -> None: ...
+
+
+@runtime_checkable
+class Hides(Protocol):
+    """A pane that stops its timers while hidden."""
+
+    def set_visible(self, shown: bool) -> None: ...
+
+
+def live_of(app: Any) -> LiveOutputs | None:
+    """``app``'s output state, or None for an app that keeps none (a test harness)."""
+    return app.live if isinstance(app, LiveHost) else None

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from textual.widgets import Static
 
+from console.tui.live import live_of
+
 
 def _fit(variants: list[str], width: int | None) -> str:
     """The first (longest) variant that fits ``width`` columns, else the last one cut."""
@@ -87,19 +89,15 @@ class SafetyBar(Static):
         self.draws = 0  # how often the bar was redrawn (tests count it)
 
     def on_mount(self) -> None:
-        bars = getattr(self.app, "safety_bars", None)
-        if bars is not None:
-            bars.add(self)
-        show = getattr(self.app, "show_bar", None)
-        if show is not None:  # the state as the app last read it, at once
-            show(self)
-        else:
-            self.show(None)
+        live = live_of(self.app)
+        if live is not None:
+            live.bars.add(self)
+        self.show(None)  # the state as the app last read it, at once
 
     def on_unmount(self) -> None:
-        bars = getattr(self.app, "safety_bars", None)
-        if bars is not None:
-            bars.discard(self)
+        live = live_of(self.app)
+        if live is not None:
+            live.bars.discard(self)
 
     def _width(self) -> int | None:
         return self.size.width or self.app.size.width or None
@@ -107,8 +105,10 @@ class SafetyBar(Static):
     def show(self, status: dict | None, error: str = "") -> None:
         """Draw ``status`` (None: the outputs are not open, ``error`` says why). A bare
         ``show(None)`` (a screen setting its bar up) draws the state the app knows."""
-        if status is None and not error:
-            status = getattr(self.app, "outputs_now", (None, None))[0]
+        live = live_of(self.app)
+        if status is None and not error and live is not None:
+            status = live.now[0]
+            error = "" if status is not None else live.error()
         self._shown = (status, error)
         if status is None:
             text = f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}"

@@ -91,11 +91,11 @@ def test_an_idle_screen_is_not_redrawn(plugins, monkeypatch, size, tab):
             bar = app.query_one("#safety", SafetyBar)
             draws = bar.draws
             refreshes = RefreshCounter(monkeypatch)
-            polls, changes = app.outputs_watch.polls, app.outputs_watch.changes
+            polls, changes = app.live.watch.polls, app.live.watch.changes
             await pilot.pause(1.2)
-            assert app.outputs_watch.polls > polls  # the outputs were read meanwhile; a
+            assert app.live.watch.polls > polls  # the outputs were read meanwhile; a
             # screen hears only of changes (none, unless an underrun on a loaded machine)
-            assert shown["show_state"] <= app.outputs_watch.changes - changes
+            assert shown["show_state"] <= app.live.watch.changes - changes
             assert bar.draws == draws  # the bar's text stayed the same: not redrawn
             assert refreshes.within(pane) == {}
             assert refreshes.within(bar) == {}
@@ -113,13 +113,13 @@ def test_an_estop_reaches_the_bar_by_its_event_alone(plugins, size):
         app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
         async with app.run_test(size=size) as pilot:
             await _idle(app, pilot)
-            app.outputs_watch.poll_s = 3600.0
-            app.outputs_watch.poke()  # the watch now sleeps for the hour
+            app.live.watch.poll_s = 3600.0
+            app.live.watch.poke()  # the watch now sleeps for the hour
             await pilot.pause(0.2)
-            polls = app.outputs_watch.polls
+            polls = app.live.watch.polls
             threading.Thread(target=app.session.estop, args=("from a shell",)).start()
             await wait_for(pilot, lambda: "E-STOP: from a shell" in _bar(app), 10, "e-stop")
-            assert app.outputs_watch.polls <= polls + 2  # read on the event, not a timer
+            assert app.live.watch.polls <= polls + 2  # read on the event, not a timer
             assert "ctrl+r" in _bar(app)
             assert "refused: e-stop active" in str(app.query_one("#interlock-1").render())
             await pilot.press("ctrl+r")

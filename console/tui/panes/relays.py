@@ -8,6 +8,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
+from console.tui.live import live_of
 from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread
 
@@ -119,7 +120,8 @@ class RelaysPane(VerticalScroll):
     def _redraw(self) -> None:
         """Draw with the output state as the app last read it (a request or its result
         changed what a relay's line says, not the outputs)."""
-        status, log = getattr(self.app, "outputs_now", (None, None))
+        live = live_of(self.app)
+        status, log = live.now if live is not None else (None, None)
         if status is not None:
             self.show_state(status, log)
 
@@ -165,8 +167,8 @@ class RelaysPane(VerticalScroll):
         if error:
             self.refused[ch] = error
             self.app.notify(f"relay {ch}: {error}", severity="error", timeout=6)
-        watch = getattr(self.app, "outputs_watch", None)
-        if watch is not None:  # the relays as they are now, not as last read
-            watch.poke(force=True)
+        live = live_of(self.app)
+        if live is not None:  # the relays as they are now, not as last read
+            live.watch.poke(force=True)
         else:
             self._redraw()
