@@ -25,6 +25,9 @@ def test_the_sparklines_fill_the_row_and_no_more(plugins, size):
         async with app.run_test(size=size) as pilot:
             pane = app.pane("latency")
             table = app.query_one("#lat-table")
+            head = app.query_one("#lat-head")
+            await wait_for(pilot, lambda: "m measures" in str(head.render()), 20, "the hint")
+            await pilot.press("m")  # the camera loop runs for the screen's numbers
             await wait_for(pilot, lambda: table.row_count >= 3, 30, "latency rows")
             for label in ("vision", "classify"):
                 pane.history[label].extend(float(v % 7 + 1) for v in range(400))

@@ -3,6 +3,7 @@ camera fps and drops. Reads the frame loop's ``LatencyMonitor`` (console.runtime
 
 from __future__ import annotations
 
+import time
 from collections import defaultdict, deque
 
 from textual import work
@@ -44,6 +45,8 @@ def stage_rows(snap: dict) -> list[tuple[str, dict]]:
 HISTORY = 500
 #: how often the loop's numbers are read while the screen shows (a history point each)
 TICK_S = 0.5
+#: how long ``m`` runs the camera loop for its numbers
+MEASURE_S = 10.0
 
 
 def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
@@ -59,6 +62,7 @@ def _ms(v) -> str:
 
 class LatencyPane(Vertical):
     can_focus = True
+    BINDINGS = [("m", "measure", "measure the camera loop")]
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
@@ -69,6 +73,7 @@ class LatencyPane(Vertical):
         self._timer = None  # the loop's numbers, read while the screen shows
         self._said: dict[str, str] = {}  # widget id -> the text it shows
         self._rows: list[tuple[str, ...]] = []  # the table's rows as drawn
+        self._measure_until: float | None = None  # ``m``: when its camera loop stops
 
     def compose(self) -> ComposeResult:
         try:
@@ -88,9 +93,9 @@ class LatencyPane(Vertical):
         yield LiteralTable(id="lat-table", cursor_type="none", show_cursor=False)
         yield Static("", id="lat-audio")
         yield Static(
-            "numbers come from the camera frame loop while this screen (or Camera) is open, "
-            "or from the demo's loop while a demo runs (Scenes screen, F6): it adds the "
-            "scene, effect and output stages",
+            "numbers come from the loop that runs: a demo's (Scenes screen, F6: camera to "
+            "output) or the camera's while the Camera screen had it; m runs the camera loop "
+            f"for {MEASURE_S:.0f} s. The numbers stay when the loop stops.",
             classes="hint",
         )
 
@@ -105,22 +110,36 @@ class LatencyPane(Vertical):
             )
 
     def set_visible(self, visible: bool) -> None:
-        """Shown: the camera loop runs for it and its numbers are read every ``TICK_S``;
-        hidden: no timer, no loop of its own."""
+        """Shown: the numbers of the loop that runs anyway (a demo's, or the camera's
+        while Camera or a measurement keeps it) are read every ``TICK_S``; nothing is
+        started for this screen but by ``m``. Hidden: no timer."""
         self.visible_now = visible
         if visible and self.available:
-            self._watch()
             if self._timer is None:
                 self._timer = self.set_interval(TICK_S, self.show_loop)
-        elif not visible:
-            if self._timer is not None:
-                self._timer.stop()
-                self._timer = None
-            self.app.call_later(self.app.session.camera.watch, self, False)
+            self.show_loop()
+        elif not visible and self._timer is not None:
+            self._timer.stop()
+            self._timer = None
+
+    def action_measure(self) -> None:
+        """Run the camera loop for ``MEASURE_S`` and show its numbers (they stay)."""
+        if not self.available or self.demo_run() is not None:
+            return  # a demo's loop is what shows; it runs anyway
+        self._measure_until = time.monotonic() + MEASURE_S
+        self._watch(True)
+
+    def _measure_done(self) -> None:
+        self._measure_until = None
+        self._watch(False)
 
     @work(thread=True, exclusive=True, group="camera")
-    def _watch(self) -> None:
-        self.app.session.camera.watch(self, True)
+    def _watch(self, on: bool) -> None:
+        self.app.session.camera.watch(self, on)
+
+    def on_unmount(self) -> None:
+        if self._measure_until is not None:
+            self.app.session.camera.watch(self, False)
 
     def demo_run(self):
         """The session's running demo (else None)."""
@@ -173,13 +192,23 @@ class LatencyPane(Vertical):
                 "scene -> effect -> output)"
             )
         else:
+            if self._measure_until is not None and time.monotonic() >= self._measure_until:
+                self._measure_done()
             svc = self.app.session.camera_started
-            self.source = "camera"
-            if svc is None:
-                self._say("lat-head", "camera not started")
+            if svc is None or not (svc.running or self._measure_until is not None):
+                self._say(
+                    "lat-head",
+                    ("[b]last numbers[/b] (no loop runs now): " if self._rows else "")
+                    + f"nothing runs: m measures the camera loop for {MEASURE_S:.0f} s, "
+                    "a demo (F6) shows its own loop here",
+                )
                 return
+            self.source = "camera"
             st = svc.status()
+            left = self._measure_until
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
+            if left is not None:
+                what += f", measuring: {max(0.0, left - time.monotonic()):.0f} s left"
         if self.source != self._history_source:  # sparklines: one loop
             self.history.clear()
             self._history_source = self.source
