@@ -89,10 +89,9 @@ class HandFlows:
         k = _key(center_mm, direction)
         if k not in self._plans:
             req = {"center_mm": k[:2], "direction": direction, "vmap": self.vmap}
-            if exhaustive:  # preparing, before the loop runs: here
+            if exhaustive:  # preparing: the reference search
                 req["exhaustive"] = True
-                self._plans[k] = self.effect.render(**req)
-            elif self.planner is not None:
+            if self.planner is not None:  # in its process: the loop keeps the interpreter
                 self._plans[k] = self.planner.render("hand_flow", **req)
             else:
                 self._plans[k] = self.effect.render(**req)

@@ -5,10 +5,10 @@ flow direction is the scene's selected arrow, else the demo's ``direction``) ->
 ``effect`` (a resting hand -> the plan for its position and direction) -> ``scheduled``
 (the plan handed to the output scheduler, non-blocking).
 
-Plans for the scene's hand regions are prepared at start (exhaustive search, cached on
-disk), and every flow under a hand on the ``grid_mm`` grid is chosen ahead in all four
-directions (the effect's atlas, cached on disk): the frame that decides the gesture plays
-the nearest place's plan by lookup. While the hand settles, that plan is made and checked
+The demo runs at once; behind it, plans for the scene's hand regions are prepared
+(exhaustive search, cached on disk), then every flow under a hand on the ``grid_mm`` grid
+is chosen ahead in all four directions (the effect's atlas, cached on disk): once there,
+the frame that decides the gesture plays the nearest place's plan by lookup. While the hand settles, that plan is made and checked
 ahead and its first segment's relays are closed (pre-armed, in silence, through the gate):
 it plays at the next audio block after the decision. A hand where neither serves (no atlas, or off the
 table's measured part) gets the staged search on a worker thread and its plan plays when
@@ -104,6 +104,10 @@ class StillPair:
         return (tuple(map(float, self._ref[0])), tuple(map(float, self._ref[1])))
 
 
+class _Stopped(Exception):
+    """The demo stopped while its preparation ran (cancels the atlas's build)."""
+
+
 class FlowDemo:
     name = "flow"
     stages = ("scene", "effect", "scheduled")
@@ -155,28 +159,85 @@ class FlowDemo:
         self._warm_next: tuple | None = None
         self._warm_ready = threading.Event()
         self._warm_thread: threading.Thread | None = None
+        #: preparation behind the running demo (``start``): its step, or None when done
+        self.preparing: dict | None = None
+        self.prepared = threading.Event()
+        self._prep_thread: threading.Thread | None = None
+        self._progress = None  # ``start(wait=True)``'s progress
 
     # ------------------------------------------------------------------ lifecycle
-    def start(self, progress=None) -> None:
-        """Prepare the plans the scene needs: its regions in the demo's direction
-        (exhaustive) and, with ``precompute``, every flow on the ``grid_mm`` grid in every
-        direction (the first time costs seconds per region and minutes for the grid; then
-        cached). ``progress(done, total, what)``; raising in it cancels."""
-        if self.prepare_regions and self.precompute and self.grid_mm > 0:
-            try:
-                if not self.plans.prepare_atlas(self.grid_mm, progress):
-                    log.info("the hand_flow effect offers no atlas: flows are planned when asked")
-            except UserError as exc:  # e.g. per-patch drives: no atlas of those yet
-                log.warning("%s", exc)
-        if self.prepare_regions:
+    def start(self, progress=None, *, wait: bool = False) -> None:
+        """Run at once: what the scene needs is prepared behind the running demo, on a
+        thread of its own (``preparing`` says how far, ``prepared`` is set when done):
+        first the scene's regions in the demo's direction (exhaustive; where the scene
+        asks the hand to go), then, with ``precompute``, every flow on the ``grid_mm``
+        grid in every direction (the atlas: minutes the first time, then cached). Until
+        a place is ready a hand there gets its flow planned when asked (1-3 s late).
+        ``wait``: prepare first, here, reporting ``progress(done, total, what)`` (a
+        benchmark measuring the prepared demo); raising in it cancels."""
+        self._running = True
+        if not self.prepare_regions:
+            self.prepared.set()
+            return
+        if wait:
+            self._progress = progress
+            self._prepare()
+            return
+        t = threading.Thread(target=self._prepare, name="haptable-flow-prepare", daemon=True)
+        self._prep_thread = t
+        t.start()
+
+    def _prepare(self) -> None:
+        """The regions, then the atlas (``start``); each step's progress in ``preparing``."""
+        try:
+            n = len(self.regions)
+            self._prep_step("the scene's regions", 0, n)
             for i, c in enumerate(self.regions):
-                if progress is not None:
-                    progress(i, len(self.regions), f"flow {self.direction} at {c[0]:g},{c[1]:g} mm")
+                if not self._running:
+                    return
                 try:
                     self.plans.plan(c, self.direction, exhaustive=True)
                 except UserError as exc:
                     log.warning("%s", exc)
-        self._running = True
+                self._prep_step("the scene's regions", i + 1, n)
+            if self.precompute and self.grid_mm > 0 and self._running:
+                try:
+                    if not self.plans.prepare_atlas(self.grid_mm, self._atlas_progress):
+                        log.info("the hand_flow effect offers no atlas: flows planned when asked")
+                except UserError as exc:  # e.g. per-patch drives: no atlas of those yet
+                    log.warning("%s", exc)
+        except _Stopped:
+            return
+        except Exception:  # noqa: BLE001 - logged; the demo runs on, planning when asked
+            if self._progress is not None:
+                raise  # waited for: the caller's cancel or failure
+            log.exception("preparing the flow demo")
+        finally:
+            with self._lock:
+                self.preparing = None
+            self.prepared.set()
+
+    def _atlas_progress(self, done: int, total: int, what: str) -> None:
+        if not self._running:
+            raise _Stopped  # cancels the build: its workers are terminated
+        self._prep_step("every flow on the grid (atlas)", done, total)
+
+    def _prep_step(self, what: str, done: int, total: int) -> None:
+        """``preparing``: what, done/total, and the seconds left at this step's pace."""
+        now = time.monotonic()
+        with self._lock:
+            prev = self.preparing
+            t0 = prev["t0"] if prev is not None and prev["what"] == what else now
+            left = (now - t0) / done * (total - done) if done and now > t0 else None
+            self.preparing = {"what": what, "done": done, "total": total, "t0": t0, "left_s": left}
+        if self._progress is not None:
+            self._progress(done, total, what)
+
+    def preparation(self) -> dict | None:
+        """What is prepared behind the demo now (None: nothing, all done)."""
+        with self._lock:
+            p = self.preparing
+        return None if p is None else {k: v for k, v in p.items() if k != "t0"}
 
     def stop(self) -> None:
         """No new flows; a flow already playing ends by its own ramps (max one plan)."""
@@ -184,9 +245,9 @@ class FlowDemo:
         self._disarm()
         if self.planner is not None:
             self.planner.close()  # a plan under way is abandoned
-        t = self._pending
-        if t is not None:
-            t.join(5.0)
+        for t in (self._pending, self._prep_thread):
+            if t is not None:
+                t.join(5.0)
 
     # ------------------------------------------------------------------ stages
     def current_direction(self) -> str:

@@ -94,7 +94,7 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         run_s = len(cam.images) / fps + 0.5
         probe = start_probe_beside(out.status()["audio"], run_s + 2.0)
         with start_demo(
-            "flow", prof, ctx.pm, out, camera=cam, script=False, watchdog_ms=1e9
+            "flow", prof, ctx.pm, out, camera=cam, script=False, watchdog_ms=1e9, prepare_first=True
         ) as run_:
             end = time.monotonic() + run_s
             while time.monotonic() < end:

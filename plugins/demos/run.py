@@ -167,7 +167,12 @@ def demo_state(demo: Any) -> dict:
         }
     evs = [{k: v for k, v in e.items() if k != "report"} for e in list(demo.events)[-10:]]
     return {
-        "flow": {"direction": demo.current_direction(), "flows": demo.events_total, "last": evs}
+        "flow": {
+            "direction": demo.current_direction(),
+            "flows": demo.events_total,
+            "last": evs,
+            "preparing": demo.preparation(),
+        }
     }
 
 
@@ -233,6 +238,7 @@ def start_demo(
     classifier: Any = None,
     camera_apart: bool = False,
     vision: dict | None = None,
+    prepare_first: bool = False,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
 
@@ -249,8 +255,10 @@ def start_demo(
     ``vision``: classifier parameters to override (the console's tuned thresholds).
     On the twin, the flow's map is the measured map in HapTable's one cache, shared with
     the console's Vibration screen (``console.runtime.measured_map``).
-    ``progress(done, total, what)`` reports preparation (the flow's plans: seconds per
-    scene region the first time, cached on disk after); call this from a worker thread.
+    The flow demo runs at once and prepares its plans behind itself (seconds per scene
+    region, minutes for the atlas the first time, cached on disk after; its snapshot says
+    how far); ``prepare_first``: prepare before the loop starts, reporting
+    ``progress(done, total, what)`` (call this from a worker thread).
     """
     if name not in DEMOS:
         raise UserError(f"demo {name!r}: unknown; use one of {', '.join(DEMOS)}")
@@ -331,7 +339,10 @@ def start_demo(
         )
         limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
         wd = Watchdog(loop, outputs.estop, limit_ms / 1e3, realtime=loop.realtime)
-        demo.start(progress)
+        if name == "flow":
+            demo.start(progress, wait=prepare_first)
+        else:
+            demo.start(progress)
         loop.start()
         wd.start()
     except BaseException:

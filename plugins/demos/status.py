@@ -139,4 +139,23 @@ def _flow_text(f: dict[str, Any]) -> str:
     newest = (f.get("last") or [None])[-1]
     if newest is not None and not newest.get("parts"):  # a refusal or no flow there
         text += f"\n[yellow]{escape(newest.get('kind'))}: {escape(newest.get('reason', ''))}[/]"
+    prep = f.get("preparing")
+    if prep:
+        text += "\n" + escape(preparing_text(prep))
     return text
+
+
+def preparing_text(prep: dict[str, Any]) -> str:
+    """What the flow demo prepares behind itself, how far, and the time left."""
+    done, total = int(prep.get("done", 0)), int(prep.get("total", 0)) or 1
+    left = prep.get("left_s")
+    eta = "estimating the time left" if left is None else f"about {_duration(left)} left"
+    return (
+        f"preparing {prep.get('what', '?')}: {100 * done // total} % ({done}/{total}), "
+        f"{eta}; a hand elsewhere gets its flow planned when asked (1-3 s)"
+    )
+
+
+def _duration(s: float) -> str:
+    s = max(0.0, float(s))
+    return f"{s:.0f} s" if s < 90 else f"{s / 60:.0f} min"

@@ -25,6 +25,7 @@ checks is logged, deleted and rebuilt: it is never played. Memory: ~100 bytes pe
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import threading
@@ -167,6 +168,18 @@ def _init_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict) -> None:
     _WORKER.update(m=m, per=per, cap_v=cap_v, kw=kw)
 
 
+#: the atlas's worker processes yield the CPU to everything live (the frame loop, the
+#: audio, the projector's heartbeat): the atlas is built behind a running demo
+WORKER_NICE = 10
+
+
+def _init_pool_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict) -> None:
+    """A spawned worker: lowest priority first (``WORKER_NICE``), then ``_init_worker``."""
+    with contextlib.suppress(OSError):  # not permitted: the normal priority
+        os.nice(WORKER_NICE)
+    _init_worker(m, per, cap_v, kw)
+
+
 def _chunk_rows(args: tuple) -> tuple[int, list[list[dict]]]:
     start, centers = args
     w = _WORKER
@@ -240,7 +253,7 @@ def build_arrays(
     import multiprocessing
 
     ctx = multiprocessing.get_context("spawn")  # never fork a threaded process
-    pool = ctx.Pool(workers, initializer=_init_worker, initargs=(m, per, cap_v, kw))
+    pool = ctx.Pool(workers, initializer=_init_pool_worker, initargs=(m, per, cap_v, kw))
     try:
         for start, got in pool.imap_unordered(_chunk_rows, chunks):
             rows[start : start + len(got)] = got

@@ -77,7 +77,7 @@ def test_a_flow_at_a_random_position_plays_the_plan_the_effect_computes(setup, t
     demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
     demo.regions = []  # the scene's regions have their own prepared plans
     seen: list = []
-    demo.start(lambda done, total, what: seen.append((done, total)))
+    demo.start(lambda done, total, what: seen.append((done, total)), wait=True)
     assert seen[-1][0] == seen[-1][1] > 0  # progress reached the end
     atlas = hand.atlas
     assert atlas is not None and atlas.places == seen[-1][1]
@@ -252,7 +252,7 @@ def test_the_plan_under_a_settling_hand_is_made_and_checked_before_the_decision(
     out = Checking()
     demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
     demo.regions = []
-    demo.start()
+    demo.start(wait=True)
     try:
         c = (float(hand.atlas.xs[2]), float(hand.atlas.ys[1]))
         ok = [d for d in DIRECTIONS if hand.atlas.result(c, d)["ok"]]
@@ -298,7 +298,7 @@ def test_the_relays_of_the_plan_under_a_settling_hand_are_prearmed_and_disarmed(
     out = Arming()
     demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
     demo.regions = []
-    demo.start()
+    demo.start(wait=True)
     try:
         c = (float(hand.atlas.xs[2]), float(hand.atlas.ys[1]))
         ok = [d for d in DIRECTIONS if hand.atlas.result(c, d)["ok"]]
@@ -337,7 +337,7 @@ def test_a_scene_region_in_a_direction_not_prepared_plays_its_atlas_place_at_onc
     demo = FlowDemo(s.profile, s.pm, out, hand, grid_mm=STEP_MM, prepare=True)
     region = (float(hand.effect.region_centers(STEP_MM, vmap=str(s.path))[3][0]) + 7.0, 230.0)
     demo.regions, demo.direction = [region], "right"  # prepared (exhaustive) for "right"
-    demo.start()
+    demo.start(wait=True)
     try:
         assert hand.lookup(region, "right") is not None and hand.lookup(region, "up") is None
         place = hand.nearest(region)
@@ -367,7 +367,7 @@ def test_per_patch_profiles_get_no_atlas_and_plan_when_asked(setup, caplog):
     demo = FlowDemo(prof, s.pm, Outputs(), hand, grid_mm=STEP_MM, prepare=True)
     demo.regions = []
     with caplog.at_level(logging.WARNING, logger="haptable.demos.flow"):
-        demo.start()
+        demo.start(wait=True)
     demo.stop()
     assert hand.atlas is None and "flow atlas" in caplog.text
     assert not list(s.cache.glob("flowatlas-*"))
