@@ -17,7 +17,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   TouchCalibrating (the touch-calibration wizard's session);
                   TunablesInProfile (the profile keys its tunables are kept under)
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
-                  FlowEffect, HandFlowEffect, PrecomputedHandFlows, Conditions, Presets
+                  FlowEffect, FlowPatchDrives, HandFlowEffect, HandFlowGeometry,
+                  PrecomputedHandFlows, Conditions, Presets
     audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v)
     relay_board   RelayBoard; SimulatedRelays (the twin: switch log)
     vibrometer    Vibrometer
@@ -398,6 +399,46 @@ class HandFlowEffect(Effect, Protocol):
 
 
 @runtime_checkable
+class FlowPatchDrives(FlowEffect, Protocol):
+    """A two-point flow effect that says how it drives each patch:
+    ``patch_drives(pairs, vmap=, method=)`` -> per (active, passive) pair of map
+    indices a dict (``frequency_hz``, ``weights`` (4,) complex, ``amplitude_v``,
+    ``x_um``) or ``None`` where no flow serves (``method``: ``paper`` or
+    ``independent``). The twin's localisation and loop checks play these."""
+
+    def patch_drives(
+        self, pairs: Any, *, vmap: Any = None, method: str = "independent"
+    ) -> list[dict | None]: ...
+
+
+@runtime_checkable
+class HandFlowGeometry(HandFlowEffect, Protocol):
+    """A flow-under-hand effect that shows its geometry: ``patch_drives(center_mm,
+    direction, vmap=, method=, hand_mm=)`` (the two parts as per-patch drives),
+    ``sides(direction)`` (start and end side square masks), ``square_levels_um_per_v(
+    center_mm, actuator, frequency_hz, vmap=)`` (each square's level per volt) and
+    ``region_centers(step_mm, vmap=)`` (the hand centres the map serves)."""
+
+    def patch_drives(
+        self,
+        center_mm: PosMm,
+        direction: str,
+        *,
+        vmap: Any = None,
+        method: str = "independent",
+        hand_mm: float | None = None,
+    ) -> list[dict]: ...
+
+    def sides(self, direction: str) -> tuple[Any, Any]: ...
+
+    def square_levels_um_per_v(
+        self, center_mm: PosMm, actuator: str, frequency_hz: float, *, vmap: Any = None
+    ) -> Any: ...
+
+    def region_centers(self, step_mm: float, *, vmap: Any = None) -> list: ...
+
+
+@runtime_checkable
 class HandFlowAtlas(Protocol):
     """Every flow under a hand on a grid of centres, chosen ahead: ``nearest(pos_mm)`` the
     centre serving a hand there (``None``: outside), ``has(center_mm)``,
@@ -556,7 +597,10 @@ class KnobTrials(Effect, Protocol):
     ``attach(session)`` feeds it the camera's contacts, ``session.feed(t_capture_s,
     contacts)``, and ``attach(None)`` ends that). Both return a dict with ``start_item``,
     ``target_item``, ``completion_time_s``, ``overshoots``, ``recovery_time_s`` (None
-    when it timed out), ``timed_out``, ``crossings``, ``detents`` and ``error``."""
+    when it timed out), ``timed_out``, ``crossings``, ``detents`` and ``error``.
+    ``session(condition, sectors)``: a live knob session (the knob demo drives it)."""
+
+    def session(self, condition: str = "HD+VF", sectors: int | None = None) -> Any: ...
 
     def knob_trial(
         self, *, condition: str, sectors: int, distance_deg: float, seed: int

@@ -12,13 +12,16 @@ and takes the root of any other plugin package):
 
 What this module offers, by where it comes from:
 
-- errors: ``UserError``, ``SafetyRefusal``
+- errors: ``UserError``, ``SafetyRefusal``; a message's fix where the user is
+  (``console.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
+  ``AT_CONSOLE``, ``listing``
 - the values that cross plugin boundaries (``console.types``): ``Frame``, ``Hand``,
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan``,
   ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
 - the typed capabilities (``console.contracts``): ``BlockSource``, ``Classifier``,
-  ``Conditions``, ``FlowEffect``, ``HandFlowEffect``, ``KnobTrials``,
+  ``Conditions``, ``FlowEffect``, ``FlowPatchDrives``, ``HandFlowEffect``,
+  ``HandFlowGeometry``, ``KnobTrials``,
   ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
   ``VisionResult``
 - the hook marker: ``hookimpl`` (the hooks are documented in ``console.hookspecs``)
@@ -51,7 +54,9 @@ from console.contracts import (
     Classifier,
     Conditions,
     FlowEffect,
+    FlowPatchDrives,
     HandFlowEffect,
+    HandFlowGeometry,
     KnobTrials,
     PrecomputedHandFlows,
     Presets,
@@ -123,11 +128,17 @@ from console.vibration_map import (
     map_from_arrays,
     save_map,
 )
+from console.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
 
 __all__ = [
-    # errors
+    # errors, and their fix where the user is
     "SafetyRefusal",
     "UserError",
+    "AT_CLI",
+    "AT_CONSOLE",
+    "Placed",
+    "listing",
+    "worded",
     # values (console.types)
     "DIRECTIONS",
     "DIRECTIONS_MM",
@@ -150,7 +161,9 @@ __all__ = [
     "Classifier",
     "Conditions",
     "FlowEffect",
+    "FlowPatchDrives",
     "HandFlowEffect",
+    "HandFlowGeometry",
     "KnobTrials",
     "PrecomputedHandFlows",
     "Presets",

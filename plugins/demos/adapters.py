@@ -1,9 +1,9 @@
 """The demos' view of other plugins' capabilities: registrations only.
 
-- the flow under a hand: the registered effect ``hand_flow``
+- the flow under a hand: the effect offering ``HandFlowEffect``
   (``render(center_mm=, direction=, vmap=) -> OutputPlan``; ``exhaustive=True`` when
   preparing a scene's regions);
-- the flow between two points: the registered effect ``flow``
+- the flow between two points: the effect offering ``FlowEffect``
   (``render(from_point=, to_point=, vmap=) -> OutputPlan``);
 - the vibration map on the twin: the console's measured map
   (``console.runtime.measured_map``: measured once per plate configuration with the
@@ -21,17 +21,26 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import DIRECTIONS, OutputPlan, PrecomputedHandFlows, UserError
+from console.plugin_api import (
+    DIRECTIONS,
+    FlowEffect,
+    HandFlowEffect,
+    OutputPlan,
+    PrecomputedHandFlows,
+    UserError,
+)
 
 
-def _effect(plugins: Any, name: str, profile: Any) -> Any:
-    reg = plugins.of("effect").get(name)
-    if reg is None:
-        raise UserError(
-            f"the flow demo needs the {name!r} effect (plugin vibrotactile); it is not "
-            "registered (blocked with HAPTABLE_BLOCK_PLUGINS?)"
-        )
-    return reg.factory(profile)
+def flow_effects(plugins: Any, profile: Any) -> dict[str, Any]:
+    """The flow effects by role, asked by capability and built fresh: ``hand`` (a
+    ``HandFlowEffect``: the flow under a hand; required) and ``pair`` (a ``FlowEffect``:
+    between two points; ``None`` when no plugin offers one)."""
+    hand = plugins.provider(
+        "effect", HandFlowEffect, profile, plugin_hint="vibrotactile", fresh=True
+    )
+    pairs = plugins.providers("effect", FlowEffect, profile)
+    pair = plugins.build("effect", pairs[0][0], profile) if pairs else None
+    return {"hand": hand, "pair": pair}
 
 
 def _key(center_mm, direction: str) -> tuple:
@@ -92,7 +101,7 @@ class HandFlows:
             if exhaustive:  # preparing: the reference search
                 req["exhaustive"] = True
             if self.planner is not None:  # in its process: the loop keeps the interpreter
-                self._plans[k] = self.planner.render("hand_flow", **req)
+                self._plans[k] = self.planner.render("hand", **req)
             else:
                 self._plans[k] = self.effect.render(**req)
         return self._plans[k]
@@ -139,7 +148,7 @@ class TwoPointFlows:
             "name": f"flow {k[0]:g},{k[1]:g} -> {k[2]:g},{k[3]:g}",
         }
         if self.planner is not None:
-            plan = self.planner.render("flow", **req)
+            plan = self.planner.render("pair", **req)
         else:
             plan = self.effect.render(**req)
         meta = {
@@ -157,17 +166,16 @@ class TwoPointFlows:
 def flow_renderers(
     plugins: Any, profile: Any, vmap_path: str | Path, planner: Any = None
 ) -> tuple[Any, Any]:
-    """(hand flows, two-point flows) over the registered ``hand_flow`` and ``flow``
-    effects; two-point flows are ``None`` when no ``flow`` effect is registered.
-    ``planner`` (``plugins.demos.planner.PlanProcess``) computes the plans not prepared
-    at the start in its own process."""
-    hand = HandFlows(_effect(plugins, "hand_flow", profile), vmap_path, planner)
-    pairs = None
-    if plugins.of("effect").get("flow") is not None:
-        pairs = TwoPointFlows(_effect(plugins, "flow", profile), vmap_path, planner)
+    """(hand flows, two-point flows) over the registered flow effects (``flow_effects``);
+    two-point flows are ``None`` when no plugin offers them. ``planner``
+    (``plugins.demos.planner.PlanProcess``) computes the plans not prepared at the start
+    in its own process."""
+    effects = flow_effects(plugins, profile)
+    hand = HandFlows(effects["hand"], vmap_path, planner)
+    pairs = None if effects["pair"] is None else TwoPointFlows(effects["pair"], vmap_path, planner)
     return hand, pairs
 
 
 def flow_effect(plugins: Any, profile: Any, vmap_path: str | Path, cache_dir: Path | None = None):
     """The flow-under-a-hand renderer (kept for callers of the earlier API)."""
-    return HandFlows(_effect(plugins, "hand_flow", profile), vmap_path)
+    return HandFlows(flow_effects(plugins, profile)["hand"], vmap_path)

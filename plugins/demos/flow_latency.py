@@ -181,9 +181,10 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
         tempfile.TemporaryDirectory(prefix="haptable-atlas-") as tmp,
         _env("HAPTABLE_CACHE_DIR", tmp),  # a fresh cache: the build is timed
     ):
-        eff = ctx.pm.get("effect", "hand_flow").factory(ctx.profile)
-        if not isinstance(eff, PrecomputedHandFlows):
-            return {"note": "the registered hand_flow effect offers no atlas"}
+        found = ctx.pm.providers("effect", PrecomputedHandFlows, ctx.profile)
+        if not found:
+            return {"note": "no registered effect offers an atlas of hand flows"}
+        eff = ctx.pm.build("effect", found[0][0], ctx.profile)  # fresh: the build is timed
         marks: list[tuple[float, int, int]] = []
 
         def progress(done: int, total: int, what: str) -> None:

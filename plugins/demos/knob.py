@@ -13,7 +13,7 @@ import time
 from collections import deque
 from typing import Any
 
-from console.plugin_api import Frame, UserError
+from console.plugin_api import Frame, KnobTrials
 
 
 class KnobDemo:
@@ -29,10 +29,9 @@ class KnobDemo:
         sectors: int | None = None,
         projector: Any = None,
     ) -> None:
-        reg = plugins.of("effect").get("knob")
-        if reg is None:
-            raise UserError("the knob demo needs the 'knob' effect (plugin electrostatic)")
-        effect = reg.factory(profile)
+        effect = plugins.provider(
+            "effect", KnobTrials, profile, plugin_hint="electrostatic", fresh=True
+        )
         self.session = effect.session(condition, sectors)
         self.condition, self.outputs = condition, outputs
         from .scene import SceneLink

@@ -3,8 +3,8 @@
 A plan that was not prepared (a hand resting away from the scene's regions) costs up to
 a second or two of search. On a thread of the demo's process that search shares the
 interpreter with the frame loop and the audio thread: frames wait and audio blocks come
-late. ``PlanProcess`` runs the same registered effects (``hand_flow``, ``flow``) in a
-spawned worker process; the demo's plan thread waits for the answer without holding the
+late. ``PlanProcess`` runs the same registered effects (``adapters.flow_effects``: the
+flow under a hand, the flow between two points) in a spawned worker process; the demo's plan thread waits for the answer without holding the
 interpreter. The plans are the effects' own: the same request gives the same samples.
 """
 
@@ -18,32 +18,31 @@ from console.plugin_api import OutputPlan
 
 
 def _serve(profile: Any, conn) -> None:
-    """The worker: the registered flow effects, one request at a time, until closed."""
+    """The worker: the flow effects by role (``flow_effects``), one request at a time,
+    until closed."""
     from console.plugin_api import load_plugins
 
-    pm = load_plugins()
-    effects = {}
-    for name in ("hand_flow", "flow"):
-        reg = pm.of("effect").get(name)
-        if reg is not None:
-            effects[name] = reg.factory(profile)
+    from .adapters import flow_effects
+
+    effects = flow_effects(load_plugins(), profile)
     while True:
         try:
-            effect, req = conn.recv()
+            role, req = conn.recv()
         except (EOFError, OSError):
             return
         try:
-            if effect not in effects:
+            if effects.get(role) is None:
                 from console.plugin_api import UserError
 
-                raise UserError(f"the flow demo needs the {effect!r} effect; it is not registered")
-            conn.send((True, effects[effect].render(**req)))
+                raise UserError(f"the flow demo needs a {role} flow effect; none is registered")
+            conn.send((True, effects[role].render(**req)))
         except Exception as exc:  # the caller raises it
             conn.send((False, exc))
 
 
 class PlanProcess:
-    """``render(effect, **request)``: the registered effect's plan, computed in the worker
+    """``render(role, **request)``: the plan of the effect in ``role`` (``hand`` or
+    ``pair``, ``adapters.flow_effects``), computed in the worker
     process (blocking; call it from a thread that may wait). ``close()`` ends it, a plan
     under way included."""
 
@@ -57,12 +56,12 @@ class PlanProcess:
         child.close()
         self._lock = threading.Lock()
 
-    def render(self, effect: str, **req: Any) -> OutputPlan:
+    def render(self, role: str, **req: Any) -> OutputPlan:
         from console.plugin_api import UserError
 
         with self._lock:
             try:
-                self._conn.send((effect, req))
+                self._conn.send((role, req))
                 ok, value = self._conn.recv()
             except (EOFError, OSError):
                 raise UserError("flow planner: its process ended (the demo stopped)") from None

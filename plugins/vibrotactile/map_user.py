@@ -16,8 +16,8 @@ The request vocabulary, shared by the three effects (``flow_effect``,
 - a point: a point id of the map (``int``, the measurement's node number) or ``(x, y)`` in mm.
 - ``name``: the plan's name (default: a description of the request).
 
-Consumers (scenes, demos, benchmarks) reach the effects only through
-``plugins.get("effect", name).factory(profile)``.
+Consumers (scenes, demos, benchmarks) reach the effects only by capability:
+``plugins.provider("effect", HandFlowEffect, profile)`` (``console.contracts``).
 """
 
 from __future__ import annotations

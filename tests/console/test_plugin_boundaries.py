@@ -117,3 +117,39 @@ def test_the_guard_catches_what_it_should(tmp_path, source, where, expect):
     f.parent.mkdir(parents=True)
     f.write_text(source + "\n")
     assert bool(cross_plugin_imports(tmp_path)) is expect
+
+
+def effects_by_name(root: Path) -> list[str]:
+    """Places in plugins/ that fetch another registration of kind ``effect`` by its name
+    (``plugins.get("effect", "x")``, ``plugins.of("effect").get("x")``)."""
+    found = []
+    for path in sorted((root / "plugins").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+                continue
+            args = [a.value for a in node.args if isinstance(a, ast.Constant)]
+            inner = node.func.value
+            by_get = node.func.attr == "get" and args[:1] == ["effect"] and len(args) == 2
+            by_of = (
+                node.func.attr == "get"
+                and isinstance(inner, ast.Call)
+                and isinstance(inner.func, ast.Attribute)
+                and inner.func.attr == "of"
+                and [a.value for a in inner.args if isinstance(a, ast.Constant)] == ["effect"]
+            )
+            if by_get or by_of:
+                found.append(f"{path.relative_to(root)}:{node.lineno}")
+    return found
+
+
+def test_plugins_ask_for_effects_by_capability_never_by_name():
+    assert effects_by_name(REPO) == [], (
+        "ask plugins.provider('effect', <a console.contracts Protocol>, profile) instead"
+    )
+
+
+def test_the_effect_name_guard_catches_both_spellings(tmp_path):
+    f = tmp_path / "plugins" / "x" / "a.py"
+    f.parent.mkdir(parents=True)
+    f.write_text('pm.get("effect", "flow")\npm.of("effect").get("knob")\npm.get("x")\n')
+    assert effects_by_name(tmp_path) == ["plugins/x/a.py:1", "plugins/x/a.py:2"]

@@ -341,7 +341,7 @@ def test_pair_order_follows_the_direction():
     assert sum(f is not None for f in fired) == 1
 
 
-def test_the_demo_renders_flows_with_whichever_plugin_registers_hand_flow(
+def test_the_demo_renders_flows_with_whichever_plugin_offers_flows_under_a_hand(
     profile, tmp_path, monkeypatch
 ):
     import plugins.demos
@@ -361,15 +361,18 @@ def test_the_demo_renders_flows_with_whichever_plugin_registers_hand_flow(
             asked.append(request)
             return OutputPlan(48000, (), name="registered")
 
+        def render_hand_flow(self, center_mm, direction, vmap):  # HandFlowEffect
+            return self.render(center_mm=center_mm, direction=direction, vmap=vmap)
+
     class FakePlugin:
         @hookimpl
         def haptable_register_effects(self, register):
-            register("hand_flow", Effect)
+            register("palm_waves", Effect)  # any name: the demo asks for the capability
 
     mine = {"demos": plugins.demos, "tuio": plugins.tuio, "fakeflow": FakePlugin()}
     monkeypatch.setenv("HAPTABLE_BLOCK_PLUGINS", "vibrotactile")  # the fake replaces it
     pm = load_plugins(extra={k: v for k, v in mine.items() if k not in BUILTIN_PLUGINS})
-    assert pm.get("effect", "hand_flow").plugin == "fakeflow"
+    assert pm.get("effect", "palm_waves").plugin == "fakeflow"
     eff = flow_effect(pm, profile, tmp_path / "map.npz", None)
     assert eff.cached((100.0, 200.0), "up") is None
     plan = eff.plan((100.04, 200.0), "up")

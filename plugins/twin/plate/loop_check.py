@@ -2,8 +2,8 @@
 and the plate twin's true response to what was played, against what the tables predicted.
 
 Used by ``tests/closed_loop`` and the ``closed-loop`` benchmark (``loop_bench``). The stimuli come from the
-registered effects ``flow`` and ``hand_flow`` (``plugins.get("effect", name)``: this is a
-consumer of their plans, exactly as a scene is); the outputs are the profile's (twin
+effects offering ``FlowPatchDrives`` and ``HandFlowGeometry`` (``loop_play.effects_of``,
+asked by capability: this is a consumer of their plans, exactly as a scene is); the outputs are the profile's (twin
 audio + relays), so every sample went through ``console.safety``. The effects' options
 are checked here too: ``min_contrast_db`` (contrast-aware tables) and
 ``ringdown_gap_k`` (silence of k decay times after part 1); ``compare_options`` plays

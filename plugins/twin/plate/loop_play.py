@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from console.plugin_api import ChannelLayout, UserError, VibrationMap, make_map
+from console.plugin_api import (
+    ChannelLayout,
+    FlowPatchDrives,
+    HandFlowGeometry,
+    UserError,
+    VibrationMap,
+    make_map,
+)
 
 from .closed_loop import drive_from_recording, part_envelopes
 
@@ -72,12 +79,14 @@ def loop_profile(profile, ls: LoopSettings):
 
 
 def effects_of(profile: Profile, plugins: Plugins, ls: LoopSettings | None = None) -> tuple:
-    """The ``flow`` and ``hand_flow`` effects ``plugins`` register, for ``profile`` with
-    ``ls``'s part length."""
+    """The effects ``plugins`` register that drive two-point flows and flows under a
+    hand patch by patch (``FlowPatchDrives``, ``HandFlowGeometry``: asked by capability,
+    built fresh), for ``profile`` with ``ls``'s part length."""
     prof = loop_profile(profile, ls or LoopSettings())
+    hint = "vibrotactile"
     return (
-        plugins.get("effect", "flow").factory(prof),
-        plugins.get("effect", "hand_flow").factory(prof),
+        plugins.provider("effect", FlowPatchDrives, prof, plugin_hint=hint, fresh=True),
+        plugins.provider("effect", HandFlowGeometry, prof, plugin_hint=hint, fresh=True),
     )
 
 
