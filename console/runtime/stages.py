@@ -46,15 +46,11 @@ def corners_homography(
     return to_mm
 
 
-def fallback_to_mm(profile: Any, plugins: Any = None):
+def fallback_to_mm(profile: Any, plugins: Any):
     """Without a touch calibration: a simulated camera's glass corners from the profile
     (``[twin_camera] corners_px``), else ``None`` (positions stay in pixels). Whether the
     camera is simulated is its registration's to say (``plugins.simulated``)."""
     corners = profile.get("twin_camera.corners_px")
-    if plugins is None:
-        from console.plugins import load_plugins
-
-        plugins = load_plugins()
     if not corners or not plugins.simulated("camera", profile):
         return None
     w, h = float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))

@@ -141,7 +141,7 @@ def render_script(ctx: Any, demo: str, seconds: float) -> ReplayCamera:
     """The twin camera performing ``demo``'s script, rendered ahead of time."""
     from console.plugin_api.runtime import open_camera
 
-    from .run import script_twin
+    from .script import script_twin
 
     cam = open_camera(ctx.profile, ctx.pm)
     try:

@@ -62,13 +62,13 @@ def test_twin_contacts_land_where_the_ground_truth_says(profile, plugins, twin):
     assert np.median(errs) < 6.0  # mm: a fingertip is ~15 mm wide
 
 
-def test_no_fallback_mapping_off_the_twin(profile):
+def test_no_fallback_mapping_off_the_twin(profile, plugins):
     class P:
         def get(self, key, default=None):
             return {"camera.driver": "opencv"}.get(key, profile.get(key, default))
 
-    assert fallback_to_mm(P()) is None
-    assert fallback_to_mm(profile) is not None
+    assert fallback_to_mm(P(), plugins) is None
+    assert fallback_to_mm(profile, plugins) is not None
 
 
 def test_the_classify_stage_is_the_classifier_s():
