@@ -87,8 +87,9 @@ def test_stopping_the_demo_cancels_its_preparation(profile, plugins):
     demo.start()
     plans.release.set()
     assert _wait(
-        lambda: (p := demo.preparation() or {}).get("what", "").endswith("(atlas)")
-        and p["done"] >= 2
+        lambda: (
+            (p := demo.preparation() or {}).get("what", "").endswith("(atlas)") and p["done"] >= 2
+        )
     )
     demo.stop()
     assert demo.prepared.is_set() and plans.cancelled and plans.atlas is None
@@ -102,6 +103,6 @@ def test_the_atlas_workers_yield_the_cpu_to_the_live_loop():
 
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(1, initializer=_init_pool_worker, initargs=(None, None, 1.0, {})) as pool:
-        assert pool.apply(os.nice, (0,)) >= os.nice(0) + WORKER_NICE or pool.apply(
-            os.nice, (0,)
-        ) == 19  # at most the lowest priority
+        assert (
+            pool.apply(os.nice, (0,)) >= os.nice(0) + WORKER_NICE or pool.apply(os.nice, (0,)) == 19
+        )  # at most the lowest priority
