@@ -7,6 +7,7 @@ import inspect
 import json
 import shutil
 import sys
+import textwrap
 import wave
 
 import numpy as np
@@ -14,6 +15,7 @@ import numpy as np
 from console.errors import UserError
 from console.options import minutes, seconds
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.suggest import suggestion
 
 
 # ---------------------------------------------------------------------- plugins
@@ -197,7 +199,10 @@ def run_bench(args, ctx) -> int:
         _list_benchmarks(benches, args.json)
         return 0
     if args.name not in benches:
-        raise UserError(f"no benchmark {args.name!r}; available: {', '.join(sorted(benches))}")
+        hint = suggestion(args.name, [*sorted(benches), "list"], "did you mean {!r}? ")
+        raise UserError(
+            f"no benchmark {args.name!r}; {hint}available: {', '.join(sorted(benches))}"
+        )
     run = benches[args.name].run
     kwargs = {"report_dir": args.report, "minutes": args.minutes}
     accepted = inspect.signature(run).parameters
@@ -216,17 +221,22 @@ def run_bench(args, ctx) -> int:
 
 
 def _list_benchmarks(benches: dict, as_json: bool) -> None:
-    """One line per benchmark: its name and what it measures, cut to the terminal's width
-    (``--json``: the whole descriptions)."""
+    """Each benchmark: its name and what it measures, the whole description wrapped to
+    the terminal's width under its own column (``--json``: as data)."""
     if as_json:
         rows = [{"name": n, "help": b.help} for n, b in sorted(benches.items())]
         print(json.dumps(rows, indent=2))
         return
     width = shutil.get_terminal_size((100, 24)).columns
     pad = max((len(n) for n in benches), default=0)
+    indent = " " * (pad + 2)
+    text_width = max(width - len(indent), 30)  # a narrow terminal: words, not letters
     for name, b in sorted(benches.items()):
-        line = f"{name:<{pad}}  {' '.join(str(b.help).split())}"
-        print(line if len(line) <= width else line[: width - 3].rstrip() + "...")
+        words = " ".join(str(b.help).split())
+        lines = textwrap.wrap(words, text_width, break_on_hyphens=False) or [""]
+        print(f"{name:<{pad}}  {lines[0]}".rstrip())
+        for more in lines[1:]:
+            print(indent + more)
 
 
 def _print_nested(d, indent: int = 0) -> None:

@@ -255,6 +255,20 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         raise UsageError(usage_line(self.prog, message))
 
+    def _check_value(self, action: argparse.Action, value: object) -> None:
+        """A word that is none of the choices (a command, a ``choices=`` option): the
+        one meant first (``console.suggest``), then the choices."""
+        choices = action.choices
+        if choices is None or value in choices:
+            return
+        from console.suggest import suggestion
+
+        hint = suggestion(str(value), [str(c) for c in choices], "; did you mean {!r}?")
+        listed = ", ".join(map(repr, choices))
+        raise argparse.ArgumentError(
+            action, f"invalid choice: {value!r}{hint} (choose from {listed})"
+        )
+
     def _get_value(self, action: argparse.Action, arg_string: str) -> object:
         """A value a converter of this module refused: ``<command> <option> <value>:
         <why>; give ...``."""

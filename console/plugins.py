@@ -15,7 +15,6 @@ effect offering ``render_point`` (built once per profile).
 
 from __future__ import annotations
 
-import difflib
 import importlib
 import os
 import threading
@@ -29,6 +28,7 @@ import pluggy
 
 from console import contract_check, contracts, core_sections, hookspecs
 from console.errors import UserError
+from console.suggest import suggestion
 
 ENTRY_POINT_GROUP = "haptable"
 
@@ -242,8 +242,7 @@ def _check_hooks(pm: pluggy.PluginManager) -> None:
         if caller.spec is None:
             impls = caller.get_hookimpls()
             who = ", ".join(sorted({_plugin_name(pm, i) for i in impls}))
-            guess = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+            hint = suggestion(name, known)
             raise UserError(
                 f"plugin {who!r} implements unknown hook {name!r}{hint}; "
                 f"the hooks are listed in console/hookspecs.py"

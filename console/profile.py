@@ -15,7 +15,6 @@ itself: it is merged over the profile at load and validated exactly like it
 
 from __future__ import annotations
 
-import difflib
 import os
 import tomllib
 from dataclasses import dataclass, field
@@ -34,6 +33,7 @@ from console.profile_paths import (  # noqa: F401 - re-exported
     search_dirs,
 )
 from console.schema import Field, check, explain
+from console.suggest import did_you_mean, suggestion
 
 if TYPE_CHECKING:
     from console.plugins import Plugins
@@ -114,8 +114,8 @@ def _validate_table(
     out: dict[str, Any] = {}
     for key, value in table.items():
         if key not in fields:
-            guess = difflib.get_close_matches(key, list(fields), n=1)
-            hint = f"did you mean {guess[0]!r}?" if guess else f"known keys: {', '.join(fields)}"
+            guess = did_you_mean(key, fields)
+            hint = f"did you mean {guess!r}?" if guess else f"known keys: {', '.join(fields)}"
             raise ProfileError(f"{where}: [{label}] unknown key {key!r} ({hint})")
         f = fields[key]
         ok, norm = check(f, value)
@@ -161,8 +161,8 @@ def validate(
     data: dict[str, Any] = {}
     for name, table in raw.items():
         if name not in sections:
-            guess = difflib.get_close_matches(name, list(sections), n=1)
-            hint = f"did you mean [{guess[0]}]?" if guess else "no loaded plugin declares it"
+            guess = did_you_mean(name, sections)
+            hint = f"did you mean [{guess}]?" if guess else "no loaded plugin declares it"
             raise ProfileError(f"{where}: unknown section [{_printable(name)}] ({hint})")
         fields, per_item, _help, _owner = sections[name]
         if per_item:
@@ -197,8 +197,7 @@ def check_drivers(profile: Profile, plugins: Plugins) -> None:
             continue
         regs = plugins.of(kind)
         if name not in regs:
-            guess = difflib.get_close_matches(name, list(regs), n=1)
-            hint = f"did you mean {guess[0]!r}? " if guess else ""
+            hint = suggestion(name, regs, "did you mean {!r}? ")
             raise ProfileError(
                 f"{where}: [{section}] driver = {_fmt(name)}: unknown {kind.replace('_', ' ')} "
                 f"driver; {hint}available: {', '.join(sorted(regs)) or 'none'}"

@@ -44,11 +44,10 @@ def find_profile(name_or_path: str | os.PathLike | None) -> Path:
         cand = d / f"{raw}.toml"
         if cand.is_file():
             return cand.resolve()
-    import difflib
+    from console.suggest import suggestion
 
     known = sorted(known_profiles())
-    guess = difflib.get_close_matches(raw, known, n=1)
-    hint = f" (did you mean {guess[0]!r}?)" if guess else ""
+    hint = suggestion(raw, known)
     raise ProfileError(
         f"profile {raw!r} not found{hint}; known profiles: {', '.join(known) or 'none'} "
         f"(searched {', '.join(str(d) for d in search_dirs())})"

@@ -24,7 +24,6 @@ in ``console.signal_syntax``; nothing typed can overflow, recurse without end or
 from __future__ import annotations
 
 import ast
-import difflib
 
 from console.errors import UserError
 from console.signal_design import (
@@ -61,6 +60,7 @@ from console.signal_syntax import (
     number,
     show,
 )
+from console.suggest import suggestion
 
 
 def parse(text: str) -> Node:
@@ -146,8 +146,7 @@ def _signed(node: ast.UnaryOp, depth: int):
 
 
 def _guess(name: str) -> str:
-    g = difflib.get_close_matches(name, [*FUNCTIONS, *UNITS], n=1)
-    return f" (did you mean {g[0]!r}?)" if g else ""
+    return suggestion(name, [*FUNCTIONS, *UNITS])
 
 
 def _binop(node: ast.BinOp, depth: int) -> Node:

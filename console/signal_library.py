@@ -21,7 +21,6 @@ that could never play (``console.signal_check``).
 
 from __future__ import annotations
 
-import difflib
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +34,7 @@ from console.profile import _fmt, _printable, _where
 from console.signal_check import never_plays
 from console.signal_expr import parse
 from console.signal_syntax import clip
+from console.suggest import did_you_mean, suggestion
 
 if TYPE_CHECKING:
     from console.safety import Limits
@@ -133,8 +133,8 @@ def _entry(name: str, entry: Any) -> Entry:
         raise UserError(f'must be a table with expr = "..."; got {_show(entry)}')
     for key in entry:
         if key not in ENTRY_KEYS:
-            guess = difflib.get_close_matches(key, ENTRY_KEYS, n=1)
-            hint = f"did you mean {guess[0]!r}?" if guess else f"known: {', '.join(ENTRY_KEYS)}"
+            guess = did_you_mean(key, ENTRY_KEYS)
+            hint = f"did you mean {guess!r}?" if guess else f"known: {', '.join(ENTRY_KEYS)}"
             raise UserError(f"unknown key {_printable(clip(key, 60))!r} ({hint})")
     expr = entry.get("expr")
     if not isinstance(expr, str):
@@ -206,8 +206,7 @@ def get_signal(path: Path, name: str) -> Entry:
     if name in lib.problems:
         raise UserError(lib.problems[name])
     if name not in lib.entries:
-        guess = difflib.get_close_matches(name, list(lib.entries), n=1)
-        hint = f"did you mean {guess[0]!r}? " if guess else ""
+        hint = suggestion(name, lib.entries, "did you mean {!r}? ")
         raise UserError(
             f"no signal {name!r} in {_where(path)}; {hint}`haptable signals list` shows them"
         )
@@ -243,9 +242,10 @@ def add_signal(
     return Entry(name, expr, description)
 
 
-def remove_signal(path: Path, name: str) -> None:
+def remove_signal(path: Path, name: str) -> Any:
     """Remove ``name`` (also an entry that does not validate, such as one written by hand
-    under a built-in's name), keeping every other one."""
+    under a built-in's name), keeping every other one. Returns its table as the file had
+    it (``restore_signal`` puts it back)."""
     with signal_file.locked(path):
         lib = read_library(path)
         if name in BUILTIN and name not in lib.raw:
@@ -253,3 +253,14 @@ def remove_signal(path: Path, name: str) -> None:
         if name not in lib.raw:
             raise UserError(f"no signal {name!r} in {_where(path)} to remove")
         signal_file.write(path, {k: v for k, v in lib.raw.items() if k != name})
+        return lib.raw[name]
+
+
+def restore_signal(path: Path, name: str, raw: Any) -> None:
+    """Put back ``name`` as ``remove_signal`` returned it (an undo), keeping every other
+    entry; refused when an entry of that name was saved since."""
+    with signal_file.locked(path):
+        lib = read_library(path)
+        if name in lib.raw:
+            raise UserError(f"signal {name!r} is in {_where(path)} again; nothing restored")
+        signal_file.write(path, dict(sorted({**lib.raw, name: raw}.items())))

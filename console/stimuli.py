@@ -69,10 +69,9 @@ def make_stimulus(name: str, fs: int, max_s: float = MAX_PLAN_S) -> OutputPlan:
     """The named stimulus at ``fs``, refused before it is built when longer than
     ``max_s`` (the profile's ``[limits] max_plan_s``)."""
     if name not in STIMULI:
-        import difflib
+        from console.suggest import suggestion
 
-        guess = difflib.get_close_matches(name, list(STIMULI), n=1)
-        hint = f"did you mean {guess[0]!r}? " if guess else ""
+        hint = suggestion(name, STIMULI, "did you mean {!r}? ")
         raise UserError(f"no test stimulus {name!r}; {hint}available: {', '.join(STIMULI)}")
     check_duration(DURATION_S[name], max_s, f"play {name}")
     return STIMULI[name][1](fs)

@@ -16,7 +16,15 @@ from collections.abc import Callable
 from typing import Any
 
 from console.errors import SafetyRefusal, UserError
-from console.session.events import Failed, SessionEvent, Started, Stopped
+from console.session.events import (
+    ESTOP_FIX,
+    ESTOP_REFUSAL,
+    Failed,
+    PlayOutcome,
+    SessionEvent,
+    Started,
+    Stopped,
+)
 
 Subscriber = Callable[[SessionEvent], None]
 
@@ -243,6 +251,57 @@ class ConsoleSession:
             self.fail("outputs", str(exc), name="refused")
             return False
         return True
+
+    def play(self, plan: Any, *, on_started: Callable[[], None] | None = None) -> PlayOutcome:
+        """Play ``plan`` through the safety gate and wait for what became of it
+        (``PlayOutcome``), for a screen whose status line says what happened: refused
+        before it started (the e-stop: ``refused: e-stop active, ctrl+r resets``), started
+        (``on_started()`` is called then, on this thread), stopped early or played through.
+        Blocking; nothing is reported as a ``Failed`` event (the caller's line says it)."""
+        import time
+
+        name = plan.name or "plan"
+        out = self.outputs
+        if out is None:
+            why = self.outputs_error or "starting"
+            return PlayOutcome(name, refused=f"refused: outputs not open ({why})")
+        if out.estopped:
+            return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
+        try:
+            report = out.play(plan, wait=False)
+        except (SafetyRefusal, UserError) as exc:
+            if out.estopped:
+                return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
+            return PlayOutcome(name, refused=f"refused: {exc}")
+        with self._lock:
+            self.played.append(plan)
+            self._last_play = (plan, report)
+        threading.Thread(target=self._keep_plan_trace, args=(out, report), daemon=True).start()
+        told = False
+        deadline = time.monotonic() + 3 * plan.duration_s + 10
+        while not report.done.wait(0.01):
+            if not told and report.segment_start:
+                told = True
+                if on_started is not None:
+                    on_started()
+            if time.monotonic() > deadline:
+                return PlayOutcome(name, started=told, stopped="no end reported in time")
+        started = bool(report.segment_start)
+        if started and not told and on_started is not None:
+            on_started()  # it started and ended between two looks: in that order
+        if not report.error and len(report.segment_end) >= len(report.segment_start) > 0:
+            return PlayOutcome(name, started=True, played=True)
+        estopped = out.estopped or "e-stop" in report.error
+        if not started:
+            if estopped:
+                return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
+            return PlayOutcome(name, refused=f"refused: {report.error or 'not played'}")
+        if estopped:
+            why = out.estop_reason or report.error
+            return PlayOutcome(
+                name, started=True, stopped=f"the e-stop ({why})" if why else "the e-stop"
+            )
+        return PlayOutcome(name, started=True, stopped=report.error or "stopped")
 
     def scope(self, seconds: float | None = 0.1) -> Any:
         """The last ``seconds`` (all kept: None) of what the gate handed the driver, per

@@ -247,6 +247,17 @@ class DemoControl:
             ).start()
         return snap
 
+    def scene_feed(self) -> dict | None:
+        """What the running demo sends to the projector: ``demo`` (its name), ``scene``
+        (the scene it drives) and ``sent`` (its scene events reach the console's
+        projector: the projector ran when it started and its scene shows there); None
+        while no demo runs. A screen's projector line derives from this whether the
+        scene's live input comes."""
+        run, fwd, name = self.running, self._forward, self.name
+        if run is None or name is None:
+            return None
+        return {"demo": name, "scene": run.scene_name, "sent": fwd is not None and fwd.ready}
+
     def set_target(self, pos_mm: tuple[float, float] | None) -> bool:
         """The operator's finger on the twin the running demo watches (None lifts it);
         False when the demo's camera cannot be touched."""

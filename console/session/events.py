@@ -52,3 +52,29 @@ class Failed(SessionEvent):
 
     message: str = ""
     severity: str = "error"
+
+
+@dataclass(frozen=True)
+class PlayOutcome:
+    """What became of a plan the console asked to play (``ConsoleSession.play``): a
+    status line says what happened from this, never from having asked.
+
+    ``refused``: why it never started ("" when it did); ``started``: its first segment
+    reached the outputs; ``stopped``: why it ended early once started (an e-stop);
+    ``played``: it played through."""
+
+    name: str
+    started: bool = False
+    played: bool = False
+    refused: str = ""
+    stopped: str = ""
+
+    @property
+    def estop_refused(self) -> bool:
+        return self.refused.startswith(ESTOP_REFUSAL)
+
+
+#: how a request refused before it started because of the e-stop is worded (screens
+#: clear such refusals when the e-stop is reset)
+ESTOP_REFUSAL = "refused: e-stop active"
+ESTOP_FIX = "ctrl+r resets"

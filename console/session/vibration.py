@@ -39,10 +39,17 @@ from console.runtime.measured_map import (
 from console.session.events import Progress as ProgressEvent
 from console.session.events import Started, Stopped
 from console.types import DIRECTIONS
+from console.words import AT_CLI, AT_CONSOLE, Placed
 
 __all__ = ["Cancelled", "VibrationService", "VibrationSession", "measure_map"]
 
 Progress = Callable[[float, str], None]
+
+#: the square under a hand when the profile does not say (``[vibrotactile] hand_mm``)
+HAND_MM = 120.0
+#: a hand centre this close outside the area still fits: the effect rounds a centre to
+#: 0.1 mm, and its outermost samples lie half a subgrid step (> 0.05 mm) inside the square
+HAND_TOL_MM = 0.05 + 1e-6
 
 
 def _get(profile, key: str, default: Any = None) -> Any:
@@ -123,10 +130,43 @@ class VibrationSession:
             raise UserError(f"flow {a} -> {b}: pick two different points")
         return self.effect(contracts.FlowEffect).render_flow(int(a), int(b), self.vmap)
 
+    @property
+    def hand_mm(self) -> float:
+        """The side of the square under a hand (``[vibrotactile] hand_mm``)."""
+        return float(_get(self.profile, "vibrotactile.hand_mm", HAND_MM) or HAND_MM)
+
+    def hand_area(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lowest, highest) hand centre (x, y) in mm whose hand square lies inside the
+        measured grid: where a flow under a hand is possible (the effect's own rule for
+        its regions; past it the effect would extrapolate the map)."""
+        pts = np.asarray(self.vmap.points_mm, float)
+        half = self.hand_mm / 2
+        return pts.min(axis=0) + half, pts.max(axis=0) - half
+
+    def hand_fits(self, center_mm: tuple[float, float]) -> bool:
+        lo, hi = self.hand_area()
+        c = np.asarray(center_mm, float)
+        return bool(np.all(c >= lo - HAND_TOL_MM) and np.all(c <= hi + HAND_TOL_MM))
+
     def hand_plan(self, center_mm: tuple[float, float], direction: str):
+        """The flow under a hand centred at ``center_mm`` toward ``direction``; a centre
+        whose hand reaches past the measured grid is refused (``Placed``: the fix worded
+        for the console and for the command line)."""
         if direction not in DIRECTIONS:
             raise UserError(f"direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
         cx, cy = (round(float(c), 1) for c in center_mm)
+        if not self.hand_fits((cx, cy)):
+            pts = np.asarray(self.vmap.points_mm, float)
+            (x0, y0), (x1, y1) = pts.min(axis=0), pts.max(axis=0)
+            raise Placed(
+                f"no flow under a hand at {cx:.0f},{cy:.0f} mm: a {self.hand_mm:g} mm hand "
+                f"there reaches past the measured grid (x {x0:.0f}..{x1:.0f}, "
+                f"y {y0:.0f}..{y1:.0f} mm)",
+                {
+                    AT_CLI: "pick a point inside or allow extrapolation (--extrapolate)",
+                    AT_CONSOLE: "move to a point marked · on the grid (the hand fits there)",
+                },
+            )
         return self.effect(contracts.HandFlowEffect).render_hand_flow(
             (cx, cy), direction, self.vmap
         )

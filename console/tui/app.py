@@ -10,38 +10,41 @@ import contextlib
 import threading
 import time
 
-from textual import work
+from textual import events, work
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
+from textual.command import CommandPalette
 from textual.containers import VerticalScroll
+from textual.keys import key_to_character
 from textual.screen import ModalScreen
 from textual.widget import Widget
-from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
+from textual.widgets import Header, Input, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
+from console.tui.help import HelpText
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
+from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
-from console.tui.text import escape
+from console.tui.typed import TypedHistory
 from console.tui.util import short_path
 
+#: the console's keys, as the help shows them (plain text: ``console.tui.help``; one
+#: line per entry, wrapped by the help screen); ``{tabs}``: the screens' keys
 HELP = """\
-[b]HapTable console[/b]
-
-[b]ctrl+e[/b]  E-STOP: silence both outputs and open every relay (any screen)
-[b]ctrl+r[/b]  reset the e-stop (outputs stay silent until something plays)
+ctrl+e  E-STOP: silence both outputs and open every relay (any screen, any field)
+ctrl+r  reset the e-stop (outputs stay silent until something plays)
 {tabs}
-[b]?[/b]       this help    [b]ctrl+p[/b]  command palette    [b]q[/b] / [b]ctrl+q[/b]  quit
-[b]ctrl+l[/b]  the log: the console's messages and what drivers wrote to stderr
+?       this help, wherever the focus is (no field takes a ?); ? or escape closes it
+ctrl+z  in a text field: undo its last change (a key that replaced the line too)
+ctrl+p  command palette    ctrl+q  quit (q too, outside a text field)
+ctrl+l  the log: the console's messages and what drivers wrote to stderr
 
 Relays switch only in silence: a toggle waits until both channels have been silent \
 for the guard gap, and is refused during an e-stop. Quitting silences the outputs and \
 opens the relays. Long work (measurement, tables, calibration) shows a progress bar; \
 x cancels it.
-
-[b]This screen[/b]
-{pane}
 """
 
 #: how long a screen switch keeps trying to focus the new screen's main widget
@@ -63,7 +66,7 @@ def _keys_help(tabs: dict) -> str:
     keys = keyed[0][0] if len(keyed) == 1 else f"{keyed[0][0]}-{keyed[-1][0]}"
     pad = " " * max(2, 8 - len(keys))  # the key column, as the lines around it
     titles = " ".join(title for _, title in keyed)
-    return f"[b]{escape(keys)}[/b]" + pad + escape(titles)
+    return keys + pad + titles
 
 
 class ScreenTabs(TabbedContent):
@@ -73,8 +76,16 @@ class ScreenTabs(TabbedContent):
     def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
         event.stop()
 
+    def on_resize(self, event: events.Resize) -> None:
+        """Every tab shows at any width (``console.tui.narrow``)."""
+        titles = {tab: title for tab, (title, _key, _reg) in self.app.tabs.items()}
+        fit_tab_bar(self, titles, event.size.width)
+
 
 class HelpScreen(ModalScreen):
+    """The console's keys and the screen's own help, as written and wrapped to the
+    terminal (``console.tui.help``). ``?`` (the app's, from any field) closes it too."""
+
     BINDINGS = [("escape,q,question_mark", "dismiss", "close")]
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
@@ -83,13 +94,13 @@ class HelpScreen(ModalScreen):
         border: thick $accent; background: $panel; padding: 0 1; }
     """
 
-    def __init__(self, text: str) -> None:
+    def __init__(self, sections: list[tuple[str, str]]) -> None:
         super().__init__()
-        self.text = text
+        self.sections = sections  # (title, text as written)
 
     def compose(self) -> ComposeResult:
         with VerticalScroll():
-            yield Static(self.text, id="help-text")
+            yield HelpText(self.sections, id="help-text")
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
 
@@ -99,7 +110,9 @@ class HapTableApp(App):
     BINDINGS = [
         Binding("ctrl+e", "estop", "E-STOP", priority=True),
         Binding("ctrl+r", "reset_estop", "reset", priority=True, show=False),
-        Binding("question_mark", "help", "help"),
+        # the footer's keys work wherever the focus is: no text field takes a "?"
+        Binding("question_mark", "help", "help", priority=True),
+        Binding("ctrl+z", "undo", "undo", show=False),  # a text field's last change
         Binding("ctrl+l", "log", "log", show=False),
         Binding("q", "quit", "quit", show=False),
     ]
@@ -129,6 +142,7 @@ class HapTableApp(App):
         #: the table's output state, read off the UI thread (``live.watch``), what shows
         #: (``live.now``) and the safety bars mounted (the main one, a modal's)
         self.live = LiveOutputs(self.session, self)
+        self.typed = TypedHistory(self)  # ctrl+z in a text field (``console.tui.typed``)
 
     def _bind_tabs(self) -> None:
         """A key per tab (the first one shown in the footer for them all)."""
@@ -160,7 +174,7 @@ class HapTableApp(App):
                     if tab == self.initial:  # the others are built when first opened
                         yield self._build_pane(tab)
         yield SafetyBar(id="safety")
-        yield Footer()
+        yield ConsoleFooter()  # whole keys only, E-STOP and ? always (console.tui.narrow)
 
     def on_mount(self) -> None:
         prof = self.ctx.profile
@@ -359,12 +373,52 @@ class HapTableApp(App):
         if self.session.reset_estop():
             self.notify("e-stop reset: outputs stay silent until something plays")
 
+    async def on_event(self, event: events.Event) -> None:
+        key = isinstance(event, events.Key) and not event.is_forwarded
+        if key and await self._key_everywhere(event.key):
+            return
+        await super().on_event(event)
+
+    async def _key_everywhere(self, key: str) -> bool:
+        """The app's priority keys work wherever the focus is, as the footer promises:
+        Textual gives a key a focused text field would type (``?``) to the field, and
+        leaves the binding out. No field of the console takes a ``?``."""
+        focused = self.focused
+        if focused is None or not focused.check_consume_key(key, key_to_character(key)):
+            return False
+        for binding in self._bindings.key_to_bindings.get(key, ()):
+            if binding.priority and await self.run_action(binding.action, self):
+                return True
+        return False
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "help" and isinstance(self.screen, CommandPalette):
+            return False  # its search line is typed in, whatever it finds
+        return super().check_action(action, parameters)
+
     def action_help(self) -> None:
-        pane_help = ""
-        pane = self.pane(self.active_tab) if self.active_tab is not None else None
+        """The help (``?`` from any screen and any field); ``?`` again closes it."""
+        if isinstance(self.screen, HelpScreen):
+            self.screen.dismiss()
+            return
+        tab = self.active_tab
+        pane = self.pane(tab) if tab is not None else None
+        title = self.tabs[tab][0] if tab in self.tabs else tab
+        if self.screen is not self.base and getattr(self.screen, "HELP_TEXT", ""):
+            pane = self.screen  # a panel opened on top (the palette's "Panel: ...")
+            title = type(pane).__name__.removesuffix("Panel").removesuffix("Screen")
+        sections = [("HapTable console", HELP.format(tabs=_keys_help(self.tabs)))]
         if pane is not None:
-            pane_help = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
-        self.push_screen(HelpScreen(HELP.format(tabs=_keys_help(self.tabs), pane=pane_help)))
+            text = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
+            sections.append((f"This screen: {title}", text))
+        self.push_screen(HelpScreen(sections))
+
+    def on_input_changed(self, event: Input.Changed) -> None:
+        self.typed.follow(event.input)  # its first Changed: mounted (``console.tui.typed``)
+
+    def action_undo(self) -> None:
+        """ctrl+z: the focused text field's last change undone."""
+        self.typed.undo(self.focused)
 
     def action_log(self) -> None:
         """The log view: the console's records and what drivers wrote to stderr."""
@@ -423,7 +477,7 @@ def _bindings_help(pane) -> str:
     lines = []
     for b in getattr(pane, "BINDINGS", []):
         key, action, desc = (b.key, b.action, b.description) if isinstance(b, Binding) else b
-        lines.append(f"  {key:<8} {desc}")
+        lines.append(f"{key:<8} {desc}")
     return "\n".join(lines)
 
 

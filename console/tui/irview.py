@@ -150,20 +150,26 @@ def ir_rgb(
     *,
     target_px=None,
     stretch: bool = False,
+    levels: tuple[float, float] | None = None,
     canvas_px: tuple[int, int] | None = None,
 ) -> np.ndarray:
     """The IR ``image`` (H, W) scaled to ``size_px`` (width, height) as (h, w, 3) RGB
     uint8 with the overlay drawn into it: each hand's outline green, each contact a red
     ring with its id written right of it, the calibration target ``target_px`` a yellow
     cross. Positions in ``work`` are pixels of ``image``. ``stretch`` spreads the grey
-    levels to the image's maximum (the diff and high-pass views). ``canvas_px`` pads
+    levels to the image's maximum (the diff and high-pass views); ``levels`` (black,
+    white) spreads those over the range instead (``GreyStretch``: a dark IR frame). ``canvas_px`` pads
     the result with black to that size (whole character cells)."""
     import cv2
 
     h, w = image.shape[:2]
     pw, ph = size_px
     grey = cv2.resize(np.asarray(image, np.float32), (pw, ph), interpolation=cv2.INTER_AREA)
-    if stretch:
+    if levels is not None:
+        from console.tui.halfblock_view import stretch_grey
+
+        grey = stretch_grey(grey, *levels)
+    elif stretch:
         grey = grey * (255.0 / max(float(grey.max()), 1.0))
     grey = np.clip(grey, 0, 255).astype(np.uint8)
     rgb = np.ascontiguousarray(np.repeat(grey[..., None], 3, axis=2))

@@ -24,11 +24,43 @@ def _fit(variants: list[str], width: int | None) -> str:
     return variants[-1][:width]
 
 
-def describe(status: dict, width: int | None = None) -> tuple[str, str]:
+def relay_names(profile) -> dict[int, str]:
+    """What each relay channel switches, as the profile names it: its patches (``PA``
+    .. ``PD``, ``[patches.*] relay_channel``) and the screen (``[screen]
+    relay_channel``); a channel nothing names is left out."""
+    names: dict[int, list[str]] = {}
+    try:
+        patches = profile.items("patches")
+        screen = profile.get("screen.relay_channel")
+    except Exception:  # noqa: BLE001 - a bare profile stub: no names, the numbers show
+        return {}
+    for name, p in patches.items():
+        if p.get("relay_channel"):
+            names.setdefault(int(p["relay_channel"]), []).append(str(name))
+    if screen:
+        names.setdefault(int(screen), []).append("screen")
+    return {ch: "+".join(n) for ch, n in sorted(names.items())}
+
+
+def closed_relays(closed, names: dict[int, str] | None = None) -> str:
+    """The closed relays by number, then what they switch by name: ``1,2,5,6 (PA PB
+    screen)``; ``none``."""
+    if not closed:
+        return "none"
+    numbers = ",".join(str(c) for c in closed)
+    named = [names[int(c)] for c in closed if names and int(c) in names]
+    return f"{numbers} ({' '.join(named)})" if named else numbers
+
+
+def describe(
+    status: dict, width: int | None = None, names: dict[int, str] | None = None
+) -> tuple[str, str]:
     """(text, css class) for the gate/scheduler status of an ``Outputs``, fitted to
-    ``width`` columns (None: the full text)."""
+    ``width`` columns (None: the full text); ``names``: what each relay channel
+    switches (``relay_names``), shown after the numbers while they fit."""
     gate = status["gate"]
-    relays = ",".join(str(c) for c in gate["relays_closed"]) or "none"
+    numbers = closed_relays(gate["relays_closed"])
+    relays = closed_relays(gate["relays_closed"], names)
     if gate["estopped"]:
         reason = gate["estop_reason"]
         return (
@@ -37,6 +69,7 @@ def describe(status: dict, width: int | None = None) -> tuple[str, str]:
                     f" E-STOP: {reason}  [ctrl+r: reset]  relays closed: {relays}",
                     # the key and the relays first: the reason is cut when it must be
                     f" E-STOP: ctrl+r resets | relays closed: {relays} | {reason}",
+                    f" E-STOP: ctrl+r resets | relays closed: {numbers} | {reason}",
                 ],
                 width,
             ),
@@ -60,8 +93,9 @@ def describe(status: dict, width: int | None = None) -> tuple[str, str]:
                 f" ctrl+e E-STOP | outputs {state} | {full} | relays closed: {relays}",
                 f" ctrl+e E-STOP | {state} | {mid} | relays closed: {relays}",
                 f" ^e E-STOP | {state} | {short} | closed: {relays}",
+                f" ^e E-STOP | {state} | {short} | closed: {numbers}",
                 # the levels last: what does not fit is cut from them
-                f" ^e E-STOP | {state} | closed: {relays} | {short}",
+                f" ^e E-STOP | {state} | closed: {numbers} | {short}",
             ],
             width,
         ),
@@ -87,6 +121,7 @@ class SafetyBar(Static):
         self._shown: tuple[dict | None, str] | None = None
         self._drawn: tuple[str, str] | None = None  # (text, css class) on screen now
         self.draws = 0  # how often the bar was redrawn (tests count it)
+        self._names: dict[int, str] | None = None  # what each relay switches (profile)
 
     def on_mount(self) -> None:
         live = live_of(self.app)
@@ -114,7 +149,13 @@ class SafetyBar(Static):
             text = f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}"
             cls = "nooutputs"
         else:
-            text, cls = describe(status, self._width())
+            if self._names is None:
+                try:
+                    profile = self.app.ctx.profile
+                except AttributeError:  # an app without a profile: the numbers show
+                    profile = None
+                self._names = relay_names(profile)
+            text, cls = describe(status, self._width(), self._names)
         if (text, cls) == self._drawn:
             return
         self._drawn = (text, cls)

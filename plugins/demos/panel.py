@@ -27,8 +27,32 @@ from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escap
 from .status import status_lines, unprepared_text
 
 
-def status_text(st: dict | None) -> str:
-    """One paragraph about the projector from ``ProjectorService.status()``."""
+def needs_text(st: dict, feed: dict | None) -> str:
+    """Why the shown scene's needs are not prepared (markup), derived from what runs: a
+    need with a reason says it; the live input (a need nothing in the console
+    prepares: the knob's angle, the contacts) is sent by the running demo when it drives
+    this scene and its events reach the projector (``DemoControl.scene_feed``), else it
+    says what would send it."""
+    scene = st.get("scene")
+    needs, why = list(st["unprepared_needs"]), st.get("unprepared_why") or {}
+    live = [k for k in needs if not why.get(k)]
+    if not live or feed is None or feed.get("scene") != scene:
+        return "[yellow]" + unprepared_text(scene, needs, why) + "[/]"
+    reasoned = [k for k in needs if why.get(k)]
+    head = "[yellow]" + unprepared_text(scene, reasoned, why) + "[/]  " if reasoned else ""
+    if feed.get("sent"):
+        return head + escape(f"{' and '.join(live)}: sent by the {feed['demo']} demo (running)")
+    text = (
+        f"{' and '.join(live)}: live input the scene waits for; the {feed['demo']} demo "
+        "runs but sends its scene to no projector (it started before the projector): s "
+        "stops it, enter starts it again"
+    )
+    return head + f"[yellow]{escape(text)}[/]"
+
+
+def status_text(st: dict | None, feed: dict | None = None) -> str:
+    """One paragraph about the projector from ``ProjectorService.status()`` and what
+    the running demo sends it (``feed``: ``DemoControl.scene_feed()``)."""
     if st is None:
         return "projector: not started (enter on a scene starts it)"
     conn = "[green]connected[/]" if st.get("connected") else "[yellow]not connected[/]"
@@ -39,10 +63,7 @@ def status_text(st: dict | None) -> str:
     if st.get("headless"):
         parts.append("headless (no display)")
     if st.get("unprepared_needs"):
-        text = unprepared_text(
-            st.get("scene"), list(st["unprepared_needs"]), st.get("unprepared_why") or {}
-        )
-        parts.append("[yellow]" + text + "[/]")  # markup: its values are escaped
+        parts.append(needs_text(st, feed))  # markup: its values are escaped
     if st.get("last_error"):
         parts.append(f"[red]{escape(st['last_error'])}[/]")
     elif not st.get("connected") and st.get("last_drop"):
@@ -370,7 +391,7 @@ class ScenesPane(Vertical):
         found = self.query("#projector-status")
         if not found:  # gone while the console shuts down
             return
-        text = status_text(self.app.session.scenes.status())
+        text = status_text(self.app.session.scenes.status(), self.demos.scene_feed())
         if text != self._projector_said:
             self._projector_said = text
             found.first(Static).update(text)

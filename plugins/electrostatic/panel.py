@@ -18,7 +18,8 @@ from textual.widgets import OptionList, Static
 from textual.widgets.option_list import Option
 
 from console.plugin_api import Conditions, Presets, UserError
-from console.plugin_api.tui import escape, from_thread
+from console.plugin_api.runtime import Started
+from console.plugin_api.tui import SessionMessage, escape, from_thread
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -68,6 +69,9 @@ class ElectrostaticPane(Vertical):
         self.conditions: tuple[str, ...] = ()
         self.presets: dict[str, dict] = {}
         self.notes: list[str] = []
+        self.status_text = ""  # the status line: what became of the last play asked for
+        self._asked = None  # the plan the status line is about (a newer one takes it)
+        self._estop_refused = False  # the line shows a refusal the e-stop caused
 
     def _offering(self, capability: type) -> Any:
         """The effect offering ``capability`` (``Conditions``, ``Presets``), or None."""
@@ -94,6 +98,7 @@ class ElectrostaticPane(Vertical):
             "t: waveform   p: play the setting",
             classes="hint",
         )
+        yield Static("", id="es-status", markup=False)
 
     @property
     def focus_target(self):
@@ -194,25 +199,62 @@ class ElectrostaticPane(Vertical):
         try:
             plan = self._render_setting(1.0)
         except UserError as exc:
-            from_thread(self.app, self.app.notify, str(exc), severity="error")
+            from_thread(self.app, self.say, str(exc), True)
             return
-        from_thread(
-            self.app, self.app.notify, f"playing {plan.segments[0].label} on the screen", timeout=3
-        )
-        self.app.session.play_plan(plan)
+        self._play(plan, f"{plan.segments[0].label} on the screen")
 
     @work(thread=True, group="es-play")
     def _play_condition(self, condition: str) -> None:
         try:
             plan = self._effect(Conditions).render(condition=condition)
         except UserError as exc:
-            from_thread(self.app, self.app.notify, str(exc), severity="error")
+            from_thread(self.app, self.say, str(exc), True)
             return
-        from_thread(
-            self.app,
-            self.app.notify,
+        self._play(
+            plan,
             f"knob {condition}: a canned rotation, {plan.duration_s:.1f} s, "
             f"{plan.meta.get('crossings', 0)} detents",
-            timeout=4,
         )
-        self.app.session.play_plan(plan)
+
+    # ------------------------------------------------------------------ status
+    def _play(self, plan, what: str) -> None:
+        """In a worker: ask the outputs to play ``plan``; the status line says asking,
+        then playing when the outputs report its start, then what became of it
+        (``ConsoleSession.play``), never ahead of it."""
+        from_thread(self.app, self._asking, plan, what)
+        outcome = self.app.session.play(
+            plan, on_started=lambda: from_thread(self.app, self._about, plan, f"playing {what}")
+        )
+        if outcome.played:
+            text, error = f"played {what}", False
+        elif outcome.refused:
+            text, error = f"{what}: {outcome.refused}", True
+        else:
+            text, error = f"{what}: stopped by {outcome.stopped}", True
+        from_thread(self.app, self._about, plan, text, error, outcome.estop_refused)
+
+    def _asking(self, plan, what: str) -> None:
+        self._asked = plan
+        self.say(f"asking to play {what} ...")
+
+    def _about(self, plan, text: str, error: bool = False, by_estop: bool = False) -> None:
+        """``text`` on the line if it is still about ``plan`` (no newer play took it)."""
+        if plan is self._asked:
+            self.say(text, error)
+            self._estop_refused = by_estop
+
+    def say(self, text: str, error: bool = False) -> None:
+        """The status line (one line, the newest message replaces it)."""
+        self.status_text = text
+        self._estop_refused = False
+        found = self.query("#es-status")
+        if found:
+            found.first(Static).update(text)
+            found.first(Static).set_class(error, "error")
+
+    def on_session_message(self, message: SessionMessage) -> None:
+        """A reset clears the refusal the e-stop caused."""
+        ev = message.event
+        if isinstance(ev, Started) and ev.topic == "estop" and self._estop_refused:
+            self._asked = None
+            self.say("e-stop reset: p or enter plays")

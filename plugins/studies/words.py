@@ -1,9 +1,12 @@
 """How a message tells the fix where the user is: the CLI's flags (``CLI``) or the Studies
 screen's fields (``SCREEN``, as its labels read: "folder", "simulated", "consent noted").
 
-The code both share (``store``, ``start``, ``plan``, ``analysis``) takes a ``Words`` and
-words its refusals with it: "give a writable --out" at a shell, "give a writable folder"
-on the screen. The CLI's messages keep their flag names.
+The console's rule (``console.words``, through the plugin API): a message names the fix
+where the user is. The code both share (``store``, ``start``, ``plan``, ``analysis``)
+takes a ``Words`` and words its refusals with it: "give a writable --out" at a shell,
+"give a writable folder" on the screen; each ``Words`` is for one place (``where``), and
+``Words.worded`` words an error that carries its fix per place (``Placed``) for it. The
+CLI's messages keep their flag names.
 """
 
 from __future__ import annotations
@@ -11,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
+
+from console.plugin_api import AT_CLI, AT_CONSOLE, listing, worded
 
 
 @dataclass(frozen=True)
@@ -32,6 +37,12 @@ class Words:
     exclude: str = ""
     #: how a stopped run resumes
     resume: str = ""
+    #: the place these words are for (``console.words``: ``AT_CLI``, ``AT_CONSOLE``)
+    where: str = AT_CLI
+
+    def worded(self, exc: BaseException) -> str:
+        """``exc`` as one line for this place (its fix for here, when it has one)."""
+        return worded(exc, self.where)
 
 
 CLI = Words(
@@ -52,6 +63,7 @@ CLI = Words(
     row="or give --row",
     exclude="leave the participants out with --exclude",
     resume="the same `study run` command resumes",
+    where=AT_CLI,
 )
 
 SCREEN = Words(
@@ -72,9 +84,8 @@ SCREEN = Words(
     row="",
     exclude="move their folders out of the results folder",
     resume="s with the same participant resumes",
+    where=AT_CONSOLE,
 )
 
 
-def listing(items: list[str]) -> str:
-    """``a``, ``a and b``, ``a, b and c``."""
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+__all__ = ["CLI", "SCREEN", "Words", "listing"]

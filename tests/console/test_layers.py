@@ -19,6 +19,8 @@ LAYER_OF: dict[str, str] = {
     "console.types": "types",
     "console.channels": "types",
     "console.errors": "types",
+    "console.words": "types",  # a message's fix where the user is (errors only)
+    "console.suggest": "types",  # the word meant for a word mistyped (stdlib only)
     "console.schema": "types",
     "console.hookspecs": "types",
     "console.contracts": "types",

@@ -112,6 +112,9 @@ def test_latency_screen_shows_stage_percentiles(plugins):
     async def scenario():
         app = _app(plugins, "latency")
         async with app.run_test(size=(100, 30)) as pilot:
+            head = app.query_one("#lat-head")
+            await wait_for(pilot, lambda: "m measures" in str(head.render()), 20, "the hint")
+            await pilot.press("m")  # the screen starts no loop by itself: m measures
             await _first_frame(app, pilot)
             table = app.query_one("#lat-table")
 
@@ -148,7 +151,7 @@ def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
         async with app.run_test(size=(100, 30)) as pilot:
             await _first_frame(app, pilot)
             pane = app.pane("camera")
-            info = app.query_one("#camera-info")
+            info = app.query_one("#camera-wizard")
             await pilot.press("k")
             assert pane.calibration is not None
             assert len(pane.calibration.targets_mm) == 12  # [projector] 4 x 3 targets
@@ -191,14 +194,16 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
                 ("dataset", str(tmp_path / "set")),
                 ("model", str(panel.default_model)),
                 ("subjects", "1"),
-                ("reps", "2"),
+                ("reps", "4"),  # the harmonics and frames are chosen inside each half
             ):
                 panel.query_one(f"#gp-{name}", Input).value = value
             work = panel.work
-            await pilot.press("s")
-            await wait_for(pilot, lambda: work.outcome is not None, 60, "synthesized")
+            await pilot.press("s")  # its size and time first
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "estimate")
+            await pilot.press("s")  # then it runs
+            await wait_for(pilot, lambda: work.outcome is not None, 180, "synthesized")
             await pilot.press("t")
-            await wait_for(pilot, lambda: work.outcome is not None, 60, "trained")
+            await wait_for(pilot, lambda: work.outcome is not None, 300, "trained")
             assert work.outcome == "done", work.text
             res = panel.query_one("#gp-result")
             await wait_for(pilot, lambda: "uses it now" in str(res.render()), 10)
@@ -290,7 +295,7 @@ def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
             await _first_frame(app, pilot)
             svc = app.session.camera_started
             pane = app.pane("camera")
-            info = app.query_one("#camera-info")
+            info = app.query_one("#camera-settings")
             # the twin's driver takes no exposure or gain: the screen says so, offers none
             await wait_for(
                 pilot, lambda: "exposure, gain: not set by the" in str(info.render()), 10
@@ -346,7 +351,7 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
         async with app.run_test(size=(110, 40)) as pilot:
             await _first_frame(app, pilot)
             svc = app.session.camera_started
-            info = app.query_one("#camera-info")
+            info = app.query_one("#camera-settings")
             await wait_for(
                 pilot, lambda: "tuio: off -> 127.0.0.1:3333" in str(info.render()), 10, "tuio off"
             )

@@ -154,3 +154,75 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
                 logging.getLogger().removeHandler(handler)
 
     asyncio.run(scenario())
+
+
+# ---------------------------------------------------------------------- the help screens
+#: a word in square brackets the help must show as written: ``[console]``, ``[limits]``
+BRACKETED = re.compile(r"\[[^\[\]\n]+\]")
+
+
+def pane_help_texts() -> dict[str, str]:
+    """Every screen's help (``HELP_TEXT``) in console/tui and the plugins' panels, by
+    the class that carries it; the AST finds the classes, so a new pane is not missed."""
+    import importlib
+
+    found = {}
+    for path, rel in screen_files():
+        tree = ast.parse(path.read_text())
+        classes = [
+            n.name
+            for n in tree.body
+            if isinstance(n, ast.ClassDef)
+            and any(
+                isinstance(s, ast.Assign)
+                and any(getattr(t, "id", "") == "HELP_TEXT" for t in s.targets)
+                for s in n.body
+            )
+        ]
+        if not classes:
+            continue
+        module = importlib.import_module(rel.removesuffix(".py").replace("/", "."))
+        for name in classes:
+            found[f"{rel}:{name}"] = getattr(module, name).HELP_TEXT
+    return found
+
+
+def test_every_help_shows_its_brackets():
+    from console.tui.help import help_text
+
+    texts = pane_help_texts()
+    # the core's screens and the plugins' panels are all there
+    assert {"CameraPane", "LatencyPane", "SignalsPane", "ElectrostaticPane"} <= {
+        k.split(":")[1] for k in texts
+    }
+    missing = []
+    for where, text in texts.items():
+        shown = " ".join(help_text(text).plain.split())
+        for word in BRACKETED.findall(text):
+            if " ".join(word.split()) not in shown:
+                missing.append(f"{where}: {word}")
+    assert not missing, "help text lost its brackets:\n" + "\n".join(missing)
+
+
+def test_help_screens_show_profile_keys(plugins):
+    """Camera's help names ``[console] image``, Electrostatic's ``[limits]``: on the
+    help screen as written, at 80 and 120 columns."""
+
+    async def scenario(size, tab, want):
+        app = HapTableApp(Context("sim", plugins), fast=True, initial=tab)
+        async with app.run_test(size=size) as pilot:
+            await wait_for(pilot, lambda: app.pane(tab) is not None, 10, "pane")
+            await pilot.pause(0.3)
+            await pilot.press("question_mark")
+            await wait_for(pilot, lambda: app.screen.query("#help-text"), 5, "help")
+            await pilot.pause(0.1)
+            w = app.screen.query_one("#help-text")
+            from textual.geometry import Region
+
+            strips = w.render_lines(Region(0, 0, w.size.width, w.size.height))
+            shown = " ".join(" ".join(s.text for s in strips).split())
+            assert want in shown, (size, tab, shown)
+
+    for size in ((80, 24), (120, 40)):
+        asyncio.run(scenario(size, "camera", "[console] image"))
+        asyncio.run(scenario(size, "electrostatic", "[limits] screen_max_vpp"))

@@ -129,6 +129,8 @@ def test_refusals_and_loading_from_the_library(plugins):
             await pilot.press("home", "down", "down", "enter")  # the third entry: sweep
             await wait_for(pilot, lambda: expr.value.startswith("chirp("), 5, "loaded")
             assert app.query_one("#sig-name", Input).value == "sweep"
+            pane = app.pane("signals")  # its preview's line first (it would overwrite the next)
+            await wait_for(pilot, lambda: pane.preview and pane.preview.expr == expr.value, 10)
             await pilot.press("delete")
             await wait_for(pilot, lambda: "read-only" in _status(app), 5, "built-in kept")
 
@@ -174,7 +176,9 @@ def test_a_chirp_draws_a_flat_band_on_the_log_frequency_axis(plugins):
             spec = app.query_one("#sig-spectrum", Chart)
             expr.value = "chirp(10 Hz, 625 Hz, 20 V, 1 s)"
             await pilot.press("enter")
-            await wait_for(pilot, lambda: bool(spec.series), 10, "spectrum drawn")
+            pane = app.pane("signals")  # the chirp's, not the first preview's (a race)
+            drawn = lambda: pane.preview is not None and pane.preview.expr == expr.value  # noqa: E731
+            await wait_for(pilot, lambda: drawn() and bool(spec.series), 10, "spectrum drawn")
             ((_label, f, db),) = spec.drawn()
             assert f.size <= max(10, spec.size.width)
             band = (f >= 10.0) & (f <= 625.0)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
 from textual.widgets import DataTable, Input
 from textual.widgets._tabbed_content import ContentTabs
 
@@ -50,9 +51,22 @@ def test_tab_never_focuses_an_invisible_widget(plugins):
     asyncio.run(scenario())
 
 
-def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
+@pytest.fixture
+def long_pulse(tmp_path, plugins):
+    """The sim profile with 3 s point pulses: "playing" (said once the outputs report the
+    start) stays on the line long enough to be seen and e-stopped on a loaded machine."""
+    from console.profile import PROJECT_PROFILES
+
+    path = tmp_path / "longpulse.toml"
+    path.write_text(
+        (PROJECT_PROFILES / "sim.toml").read_text() + "\n[vibrotactile]\npulse_s = 3.0\n"
+    )
+    return Context(str(path), plugins)
+
+
+def test_estop_during_an_audition_says_so_in_the_status(long_pulse, map_file):
     async def scenario():
-        app = HapTableApp(Context("sim", plugins), fast=False, initial="vibration")
+        app = HapTableApp(long_pulse, fast=False, initial="vibration")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = app.pane("vibration")
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
@@ -79,12 +93,12 @@ def test_estop_during_an_audition_says_so_in_the_status(plugins, map_file):
     asyncio.run(scenario())
 
 
-def test_an_error_typed_while_a_point_plays_keeps_the_status_line(plugins, map_file):
+def test_an_error_typed_while_a_point_plays_keeps_the_status_line(long_pulse, map_file):
     """The play's end does not write over a newer message: a bad command typed during an
     audition stays on the line after the audition ends."""
 
     async def scenario():
-        app = HapTableApp(Context("sim", plugins), fast=False, initial="vibration")
+        app = HapTableApp(long_pulse, fast=False, initial="vibration")
         async with app.run_test(size=(80, 24)) as pilot:
             pane = app.pane("vibration")
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")

@@ -16,11 +16,12 @@ import numpy as np
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.errors import UserError
-from console.tui.halfblock_view import HalfBlockView
+from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.text import escape
 from console.tui.util import from_thread
 
@@ -83,6 +84,16 @@ def _line_lengths(text: str) -> list[int]:
     return [len(line) for line in text.split("\n")]
 
 
+class SidePanel(VerticalScroll):
+    """The side panel's scrolling part: when its height changes (a notification takes
+    rows, the terminal is resized) what it keeps in view stays there."""
+
+    def on_resize(self, _event) -> None:
+        pane = next((a for a in self.ancestors if isinstance(a, CameraPane)), None)
+        if pane is not None:
+            self.call_after_refresh(pane.keep_in_view)
+
+
 class CameraPane(Horizontal):
     HELP_TEXT = (
         "b        capture the background (show the empty table)\n"
@@ -90,7 +101,8 @@ class CameraPane(Horizontal):
         "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
         "[ / ]    choose a setting (thresholds, smoothing, blob sizes, background, rotation,\n"
         "         mirror, region of interest; exposure and gain where the driver takes them)\n"
-        "- / +    change the chosen setting by one step\n"
+        "- / +    change the chosen setting by one step (t/T c/C h/H choose theirs too):\n"
+        "         its row (▸) shows the new value and stays in view\n"
         "W        keep every vision setting for this profile (its overrides file)\n"
         "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
         "g        gestures panel: datasets, training and evaluation\n"
@@ -98,29 +110,32 @@ class CameraPane(Horizontal):
         "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
         "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
         "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
-        "(its title says which; [console] image or haptable console --image chooses)."
+        "(its title says which, and the grey levels shown black and white: the frame's\n"
+        "levels are spread over the display's; [console] image or haptable console --image\n"
+        "chooses)."
     )
+    # in the order of importance: the footer shows as many as fit (whole), ? lists them all
     BINDINGS = [
-        Binding("b", "background", "background"),
-        Binding("t", "tune('body_threshold', -1)", "body -", show=False),
-        Binding("T", "tune('body_threshold', 1)", "body t/T"),
-        Binding("c", "tune('contact_threshold', -1)", "contact -", show=False),
-        Binding("C", "tune('contact_threshold', 1)", "contact c/C"),
-        Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
-        Binding("H", "tune('highpass_sigma_px', 1)", "high-pass h/H"),
-        Binding("v", "view", "view"),
-        Binding("left_square_bracket", "choose(-1)", "previous setting", show=False),
-        Binding("right_square_bracket", "choose(1)", "setting [/]"),
-        Binding("minus", "tune_chosen(-1)", "setting -", show=False),
-        Binding("plus", "tune_chosen(1)", "setting -/+"),
-        Binding("W", "save_tuning", "keep settings", show=False),
         Binding("k", "calibrate", "calibrate"),
+        Binding("g", "gestures_panel", "gestures"),
+        Binding("u", "toggle_output", "TUIO"),
+        Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
+        Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
+        Binding("v", "view", "view"),
+        Binding("b", "background", "background"),
+        Binding("W", "save_tuning", "keep settings"),
+        Binding("U", "edit_target", "TUIO target"),
+        Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
+        Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
+        Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),
+        Binding("left_square_bracket", "choose(-1)", "previous setting", show=False),
+        Binding("minus", "tune_chosen(-1)", "setting -", show=False),
+        Binding("t", "tune('body_threshold', -1)", "body -", show=False),
+        Binding("c", "tune('contact_threshold', -1)", "contact -", show=False),
+        Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
         Binding("n", "skip_target", "skip target", show=False),
         Binding("S", "save_calibration", "save cal.", show=False),
         Binding("x", "cancel", "cancel", show=False),
-        Binding("g", "gestures_panel", "gestures"),
-        Binding("u", "toggle_output", "TUIO u/U"),
-        Binding("U", "edit_target", "output target", show=False),
     ]
     can_focus = True
 
@@ -142,6 +157,9 @@ class CameraPane(Horizontal):
         self._said: dict[str, str] = {}  # widget id -> the text it shows
         self._status: tuple[float, dict] | None = None  # (monotonic time, svc.status())
         self.draws = 0  # how often the view was redrawn (tests count it)
+        self._reveal_chosen = False  # scroll the chosen setting into view at the next write
+        self._stretches: dict[str, GreyStretch] = {}  # view -> its display grey levels
+        self._info_rows = 0  # the most lines the live block had
 
     @property
     def image_mode(self) -> str:
@@ -153,10 +171,19 @@ class CameraPane(Horizontal):
             yield Static("", id="camera-title", markup=False)
             yield HalfBlockView("camera stopped", id="camera-view")
         with Vertical(id="camera-side"):
-            yield Static("", id="camera-info")
-            box = Input(placeholder="host:port, Enter", id="camera-target")
-            box.display = False
-            yield box
+            # the wizard's step or result (with the key it asks for) above what scrolls:
+            # always in view while it has something to say
+            wizard = Static("", id="camera-wizard")
+            wizard.display = False
+            yield wizard
+            # what does not fit the screen's height scrolls; the chosen setting (▸) and the
+            # target field are scrolled into view when they change or take the focus
+            with SidePanel(id="camera-scroll"):
+                yield Static("", id="camera-info")
+                yield Static("", id="camera-settings")
+                box = Input(placeholder="host:port, Enter", id="camera-target")
+                box.display = False
+                yield box
 
     @property
     def focus_target(self):
@@ -263,16 +290,56 @@ class CameraPane(Horizontal):
         import time
 
         live, settings = self.info_lines(svc, work)
+        wizard = self.wizard_text()
         now = time.monotonic()
-        stable = (self.view, settings)
+        stable = (self.view, settings, wizard)
         if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
             return
         self._info_stable, self._info_at = stable, now
-        info = "\n".join([*live, "", *settings])
+        # the live block keeps the most lines it had (a hand's lines come and go): what
+        # lies below it (the settings, the target field) stays where it is
+        self._info_rows = max(self._info_rows, len(live))
+        info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
         before = self._said.get("camera-info")
         # lines as long as before: the panel keeps its size, no layout to redo
         same = before is not None and _line_lengths(before) == _line_lengths(info)
-        self._say("camera-info", info, layout=not same)
+        moved = self._say("camera-info", info, layout=not same) and not same
+        moved |= self._say("camera-settings", "\n".join(settings))
+        found = self.query("#camera-wizard")
+        if found:
+            found.first().display = bool(wizard)
+            moved |= self._say("camera-wizard", wizard)
+        if moved or self._reveal_chosen:  # the rows moved, or a key chose one
+            self._reveal_chosen = False
+            self.call_after_refresh(self.keep_in_view)
+
+    def _scroll_to_chosen(self) -> None:
+        """Scroll the side panel so the chosen setting's row (``▸``) shows: the settings
+        list starts with a row per setting, in ``params()`` order."""
+        scroll, settings = self.query("#camera-scroll"), self.query("#camera-settings")
+        keys = list(self.service.params())
+        key = self.chosen_key()
+        if not scroll or not settings or key not in keys:
+            return
+        y = settings.first().virtual_region.y + keys.index(key)
+        scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
+
+    def keep_in_view(self) -> None:
+        """The side panel's widget with the focus (the target field), else the chosen
+        setting, scrolled into view."""
+        focused = self.app.focused
+        scroll = self.query("#camera-scroll")
+        if focused is not None and scroll and scroll.first() in focused.ancestors:
+            scroll.first().scroll_to_widget(focused, animate=False, immediate=True)
+        else:
+            self._scroll_to_chosen()
+
+    def _reveal(self) -> None:
+        """Show the chosen setting now (a key changed it), scrolled into view."""
+        self._reveal_chosen = True
+        self._info_stable = None
+        snap = self.service.snapshot() if self.is_mounted else None
+        self._show_info(self.service, snap[1] if snap is not None else {})
 
     def _draw_halfblock(self, frame, img: np.ndarray, work: dict) -> None:
         from console.tui.plots import HalfBlockImage, downsample
@@ -286,8 +353,11 @@ class CameraPane(Horizontal):
         kept = self._grey if last is not None and last[1:] == shows[1:] else None
         self._drawn = shows
         grey = downsample(img, cols, rows)
-        if self.view != "camera":
-            grey = np.clip(grey * (255.0 / max(grey.max(), 1.0)), 0, 255)
+        grey = self._stretch()(grey)  # a dark IR frame over the display's grey range
+        # in GREY_STEP levels (32 greys: what a 256-colour terminal shows, 24): longer
+        # runs of equal cells to send, fewer rows changed by the sensor's noise
+        grey = np.round(grey / self.GREY_STEP) * self.GREY_STEP
+        lo, hi = self._stretch().levels()
         if kept is not None:  # the sensor's noise does not redraw the view
             grey = np.where(np.abs(grey - kept) >= self.GREY_STEP, grey, kept)
         self._grey = grey
@@ -301,7 +371,7 @@ class CameraPane(Horizontal):
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
-        self._say("camera-title", f"IR {w}x{h} as half-block {cols}x{rows} cells")
+        self._say("camera-title", f"IR {w}x{h} as half-block {cols}x{rows}, grey {lo:.0f}-{hi:.0f}")
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
@@ -324,12 +394,13 @@ class CameraPane(Horizontal):
             return
         self._image_frame, self._image_at = (frame, shows), now
         (pw, ph), (cols, rows) = fit_px(img.shape[:2], *area, cell)
+        lo, hi = self._stretch().update(img[::8, ::8])
         rgb = ir_rgb(
             img,
             work,
             (pw, ph),
             target_px=target,
-            stretch=self.view != "camera",
+            levels=(lo, hi),
             canvas_px=(cols * cell[0], rows * cell[1]),
         )
         self.shown_rgb = rgb
@@ -342,7 +413,16 @@ class CameraPane(Horizontal):
         self._image.styles.height = rows
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
-        self._say("camera-title", f"IR {w}x{h} via {MODE_NAMES[self.image_mode]}, {pw}x{ph} px")
+        mode = MODE_NAMES[self.image_mode]
+        self._say("camera-title", f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {lo:.0f}-{hi:.0f}")
+
+    def _stretch(self) -> GreyStretch:
+        """The grey levels shown black and white for the view on screen (each view its
+        own: a difference image has other levels than the camera's)."""
+        found = self._stretches.get(self.view)
+        if found is None:
+            found = self._stretches[self.view] = GreyStretch()
+        return found
 
     def _loop_status(self, svc) -> dict:
         """``svc.status()`` (fps, drops: their percentiles cost), read at most every
@@ -356,7 +436,17 @@ class CameraPane(Horizontal):
 
     def info_text(self, svc, work: dict) -> str:
         live, settings = self.info_lines(svc, work)
-        return "\n".join([*live, "", *settings])
+        return "\n".join([*live, "", *settings, "", self.wizard_text()]).rstrip()
+
+    def wizard_text(self) -> str:
+        """The touch-calibration wizard's step or result and the keys it takes ("" when
+        it has nothing to say)."""
+        if self.calibration is None and self.cal_result is None and not self.cal_message:
+            return ""
+        lines = ["[b]touch calibration[/b]", self.cal_message]
+        if self.calibration is not None:
+            lines.append("n: skip target  x: cancel")
+        return "\n".join(lines)
 
     def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
         """The side panel: (what the loop sees now, the settings and the wizard)."""
@@ -391,20 +481,21 @@ class CameraPane(Horizontal):
         for name in svc.switches():
             on, target = svc.sink_state(name)
             lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
-        if self.calibration is not None or self.cal_result is not None or self.cal_message:
-            lines += ["", "[b]touch calibration[/b]", self.cal_message]
-        else:
+        if not self.wizard_text():  # else the wizard's block says where it stands
             lines.append("k: touch calibration")
         return live, lines
 
     # ------------------------------------------------------------------ tuning
     def action_tune(self, key: str, sign: int) -> None:
+        """Change ``key`` by one step; it becomes the chosen setting: its row (``▸``, the
+        new value) is the feedback, scrolled into view (no notification over the panel)."""
         svc = self.service
         cur, rng = svc.params().get(key), svc.param_ranges().get(key)
         if cur is None or rng is None:
             return
         svc.set_param(key, cur + sign * rng.step)
-        self.app.notify(f"{key} = {svc.params()[key]:g}", timeout=2)
+        self.chosen = list(svc.params()).index(key)
+        self._reveal()
 
     def chosen_key(self) -> str | None:
         keys = list(self.service.params())
@@ -414,7 +505,7 @@ class CameraPane(Horizontal):
         keys = list(self.service.params())
         if keys:
             self.chosen = (self.chosen + step) % len(keys)
-            self.app.notify(f"- / + change {keys[self.chosen]}", timeout=2)
+            self._reveal()
 
     def action_tune_chosen(self, sign: int) -> None:
         key = self.chosen_key()
@@ -450,7 +541,8 @@ class CameraPane(Horizontal):
         box = self.query_one("#camera-target", Input)
         box.value = self.service.sink_state(name)[1]
         box.display = True
-        box.focus()
+        box.focus()  # the side panel scrolls to it (Textual scrolls to the focused widget)
+        self.call_after_refresh(box.scroll_visible, animate=False, immediate=True)
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "camera-target":

@@ -4,6 +4,7 @@ reopened with them), a named test signal through the gate, and every plugin."""
 
 from __future__ import annotations
 
+import logging
 import math
 
 from rich.markup import escape
@@ -17,6 +18,31 @@ from textual.widgets import DataTable, Select, Static
 from console.stimuli import STIMULI
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
+
+log = logging.getLogger(__name__)
+
+#: the widest a table cell gets on this screen (a longer text ends in "…": the whole
+#: text is in the log, ctrl+l, and enter on the row says it)
+CELL_MAX = 36
+
+
+def clip(text: str, width: int = CELL_MAX) -> str:
+    """``text`` on one line within ``width`` columns, ending in "…" when cut."""
+    one = " ".join(str(text).split())
+    return one if len(one) <= width else one[: width - 1].rstrip() + "…"
+
+
+def _cell(text: str, where: str, width: int = CELL_MAX) -> Text:
+    """A table cell within ``width``; a cut text is logged whole (``where`` says
+    whose), so the log (ctrl+l) has what the cell could not show."""
+    shown = clip(text, width)
+    if shown != " ".join(str(text).split()) and (where, text) not in _LOGGED:
+        _LOGGED.add((where, text))  # once: listing again does not repeat it
+        log.info("%s: %s", where, text)
+    return Text(shown)
+
+
+_LOGGED: set[tuple[str, str]] = set()
 
 
 def _ms(seconds: float) -> str:
@@ -54,6 +80,10 @@ class DevicesPane(VerticalScroll):
 
     def compose(self) -> ComposeResult:
         yield Static(id="profile-line", markup=False)
+        # the screen's status line: what a pick or a test did, where it is seen whole
+        result = Static("", id="devices-result", markup=False)
+        result.display = False  # shown once it has something to say
+        yield result
         yield LiteralTable(id="device-table", cursor_type="row")
         yield Static(
             "sound card (enter uses it; saved to the profile's overrides)", classes="heading"
@@ -68,7 +98,6 @@ class DevicesPane(VerticalScroll):
             allow_blank=False,
             id="stimulus",
         )
-        yield Static("", id="devices-result", markup=False)
         yield Static("plugins and what they provide", classes="heading")
         yield LiteralTable(id="plugin-table", cursor_type="row")
 
@@ -138,7 +167,11 @@ class DevicesPane(VerticalScroll):
                 s.state, f"[red]{escape(s.state)}[/]"
             )
             table.add_row(
-                Text(s.kind), Text(s.name), Text.from_markup(state), Text(s.why), Text(s.fix)
+                Text(s.kind),
+                Text(s.name),
+                Text.from_markup(state),
+                _cell(s.why, f"{s.kind} {s.name}"),
+                _cell(s.fix, f"{s.kind} {s.name}: fix"),
             )
 
     # ------------------------------------------------------------------ listing
@@ -170,9 +203,8 @@ class DevicesPane(VerticalScroll):
                 if d.lists:  # it lists its devices and found none: nothing to open
                     self.no_device_rows[key] = f"{d.driver}: {d.problem}"
                 mark = "●" if d.driver == drv else ""
-                table.add_row(
-                    mark, Text(d.driver), Text(f"none: {d.problem}"), "", "", "", "", "", key=key
-                )
+                none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}")
+                table.add_row(mark, Text(d.driver), none, "", "", "", "", "", key=key)
             for dev in d.devices:
                 key = f"{dev.driver}\x00{dev.name}"
                 self.audio_rows[key] = (dev.driver, dev.name)
@@ -180,12 +212,12 @@ class DevicesPane(VerticalScroll):
                 table.add_row(
                     "●" if used else ("default" if dev.default else ""),
                     Text(dev.driver),
-                    Text(dev.name),
-                    Text(dev.host_api),
+                    _cell(dev.name, f"sound card {dev.driver}"),
+                    _cell(dev.host_api, f"sound card {dev.name}: host API", 16),
                     str(dev.output_channels),
                     _ms(dev.low_latency_s),
                     _ms(dev.high_latency_s),
-                    Text(dev.note),
+                    _cell(dev.note, f"sound card {dev.name}: note"),
                     key=key,
                 )
         rtable = self.query_one("#relay-table", DataTable)
@@ -198,8 +230,8 @@ class DevicesPane(VerticalScroll):
                 "●" if name == relay_drv else "",
                 Text(name),
                 Text(status.state),
-                Text(status.why),
-                Text(description),
+                _cell(status.why, f"relay board {name}"),
+                _cell(description, f"relay board {name}: description"),
                 key=key,
             )
 
@@ -211,11 +243,10 @@ class DevicesPane(VerticalScroll):
         if choice is None:
             return
         if key in self.no_device_rows:
-            self.result = (
+            self._show_result(
                 f"{self.no_device_rows[key]}: no device on this row to use; "
                 "connect one and list again (l)"
             )
-            self.query_one("#devices-result", Static).update(self.result)
             return
         driver, device = choice
         label = device or driver
@@ -287,9 +318,13 @@ class DevicesPane(VerticalScroll):
             self._say(f"test signal: {exc}")
             return
         where = prof.get("audio.device") or prof.get("audio.driver")
-        self._say(f"{name}: playing on {where!r} ...")
-        if not session.play_plan(plan):
-            self._say(f"{name}: not played (the message says why)")
+        self._say(f"{name}: asking to play on {where!r} ...")
+        outcome = session.play(
+            plan, on_started=lambda: self._say(f"{name}: playing on {where!r} ...")
+        )
+        if not outcome.played:  # the line says what became of it, from the outcome
+            why = outcome.refused or f"stopped by {outcome.stopped}"
+            self._say(f"{name} on {where!r}: {why}")
             return
         trace = session.scope(plan.duration_s + 0.5)
         peaks = (
@@ -299,9 +334,14 @@ class DevicesPane(VerticalScroll):
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    def _say(self, text: str) -> None:
-        def show() -> None:
-            self.result = text
-            self.query_one("#devices-result", Static).update(text)
+    def _show_result(self, text: str) -> None:
+        """The screen's status line (under the profile line, seen whole), the newest
+        message replacing it."""
+        self.result = text
+        found = self.query("#devices-result")
+        if found:
+            found.first(Static).update(text)
+            found.first(Static).display = bool(text)
 
-        from_thread(self.app, show)
+    def _say(self, text: str) -> None:
+        from_thread(self.app, self._show_result, text)

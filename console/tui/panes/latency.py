@@ -61,6 +61,20 @@ def _ms(v) -> str:
 
 
 class LatencyPane(Vertical):
+    HELP_TEXT = (
+        "How fast the table answers: the numbers of the loop that runs now, a demo's "
+        "(started on the Scenes screen, F6) or the console's camera loop (while the Camera "
+        "screen or m keeps it running). They stay on the screen when the loop stops.\n"
+        "stages  one row per stage of a frame (capture, vision, classify, scene, effect, "
+        "output, end to end): p50, p99 and max in ms, and a sparkline of the p50 history "
+        "as wide as the screen (read every half second while the screen shows)\n"
+        "camera  the driver's fps and the frames it dropped; the loop's fps, frames, "
+        "frames dropped because processing fell behind, and errors\n"
+        "audio   the output latency, underruns (and those cutting into sound), block size "
+        "and sample rate\n"
+        f"m       run the camera loop for {MEASURE_S:.0f} s and show its numbers (while no "
+        "demo runs: a demo's loop is what shows then)"
+    )
     can_focus = True
     BINDINGS = [("m", "measure", "measure the camera loop")]
 

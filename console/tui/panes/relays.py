@@ -8,16 +8,26 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
+from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started
 from console.tui.live import live_of
+from console.tui.safety_bar import relay_names
+from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread
 
 
-def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int, str]) -> str:
-    """Why channel ``ch`` can or cannot switch now (what the operator reads)."""
+def interlock(
+    ch: int,
+    status: dict,
+    pending: dict[int, bool],
+    refused: dict[int, str],
+    cleared: set[int] | frozenset[int] = frozenset(),
+) -> str:
+    """Why channel ``ch`` can or cannot switch now (what the operator reads); ``cleared``:
+    channels whose refusal the e-stop caused and a reset has cleared since."""
     gate = status["gate"]
     if gate["estopped"]:
-        return "[red]refused: e-stop active (ctrl+r resets)[/]"
+        return f"[red]{escape(ESTOP_REFUSAL)} ({escape(ESTOP_FIX)})[/]"
     if ch in pending:
         want = "close" if pending[ch] else "open"
         if status["busy"]:
@@ -26,17 +36,29 @@ def interlock(ch: int, status: dict, pending: dict[int, bool], refused: dict[int
                 f"when it ends[/]"
             )
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
+    if ch in refused and ch in cleared:
+        return "[green]ready[/] (the e-stop dropped your toggle: press again)"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
     return "[green]ready[/] (switches only in silence)"
 
 
-def log_rows(log) -> list[tuple[str, ...]]:
-    """The newest switches first: sample clock, channel, state, output level then."""
+def since_start(clock: int, sample_rate_hz: float) -> str:
+    """A gate clock (samples handed to the driver since the table's outputs started)
+    as seconds since that start, to the millisecond."""
+    return f"{clock / float(sample_rate_hz):.3f} s"
+
+
+def log_rows(
+    log, sample_rate_hz: float, names: dict[int, str] | None = None
+) -> list[tuple[str, ...]]:
+    """The newest switches first: seconds since the outputs started, relay (number
+    and what it switches), state, output level then."""
+    names = names or {}
     return [
         (
-            str(r.clock),
-            str(r.channel),
+            since_start(r.clock, sample_rate_hz),
+            f"{r.channel} {names[r.channel]}" if r.channel in names else str(r.channel),
             "closed" if r.closed else "opened",
             " / ".join(f"{v:+.1f} V" for v in r.level_v),
         )
@@ -57,6 +79,9 @@ class RelaysPane(VerticalScroll):
         super().__init__(**kw)
         self.pending: dict[int, bool] = {}
         self.refused: dict[int, str] = {}
+        self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
+        self._cleared: set[int] = set()  # ... and a reset cleared since (kept in ``refused``)
+        self._names: dict[int, str] = {}  # what each relay switches, as the profile says
         self._log_len = -1
         self._rows: dict[int, tuple[Switch, Static]] = {}  # channel -> its switch, state
         self._said: dict[int, str] = {}  # channel -> the interlock text shown
@@ -84,18 +109,16 @@ class RelaysPane(VerticalScroll):
 
     def on_mount(self) -> None:
         self._table = self.query_one("#relaylog", DataTable)
-        self._table.add_columns("sample", "relay", "", "outputs then")
+        self._table.add_columns("since start", "relay", "", "outputs then")
         for sw in self.query(Switch):
             ch = int(sw.id.split("-")[1])
             self._rows[ch] = (sw, self.query_one(f"#interlock-{ch}", Static))
         self._redraw()
 
     def _relay_label(self, ch: int) -> str:
-        prof = self.app.ctx.profile
-        names = [n for n, p in prof.items("patches").items() if p.get("relay_channel") == ch]
-        if prof.get("screen.relay_channel") == ch:
-            names.append("screen")
-        return f"relay {ch}  {' '.join(names) or '-'}"
+        if not self._names:
+            self._names = relay_names(self.app.ctx.profile)
+        return f"relay {ch}  {self._names.get(ch, '-')}"
 
     def show_state(self, status: dict, log) -> None:
         """The switches, each relay's interlock and the log as ``status`` says (the app
@@ -107,14 +130,15 @@ class RelaysPane(VerticalScroll):
             if ch not in self.pending and sw.value != (ch in closed):
                 with sw.prevent(Switch.Changed):
                     sw.value = ch in closed
-            text = interlock(ch, status, self.pending, self.refused)
+            text = interlock(ch, status, self.pending, self.refused, self._cleared)
             if self._said.get(ch) != text:
                 self._said[ch] = text
                 state.update(text, layout=False)  # one line each
         if log is not None and len(log) != self._log_len:
             self._log_len = len(log)
             self._table.clear()
-            for row in log_rows(log)[:50]:
+            fs = float(self.app.ctx.profile.get("audio.sample_rate_hz"))
+            for row in log_rows(log[-50:], fs, self._names):
                 self._table.add_row(*row)
 
     def _redraw(self) -> None:
@@ -136,14 +160,26 @@ class RelaysPane(VerticalScroll):
         closed = ch in out.operator_relays()  # the operator's own setting
         self.request(ch, not closed)
 
+    def on_session_message(self, message: SessionMessage) -> None:
+        """A reset (``Started`` on topic ``estop``) clears the refusals the e-stop
+        caused: the relays can switch again, and their lines say so."""
+        ev = message.event
+        if isinstance(ev, Started) and ev.topic == "estop" and self._estop_refused:
+            self._cleared |= self._estop_refused
+            self._estop_refused.clear()
+            self._redraw()
+
     def request(self, ch: int, closed: bool) -> None:
         self.refused.pop(ch, None)
+        self._estop_refused.discard(ch)
+        self._cleared.discard(ch)
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key itself: the worker may run only after a quick reset, and
             # would then switch a relay the operator asked for during the e-stop
             reason = out.estop_reason
-            self._done(ch, f"e-stop active ({reason}): relays stay open; reset first")
+            self._estop_refused.add(ch)
+            self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
             return
         self.pending[ch] = closed
         self._redraw()
@@ -160,6 +196,8 @@ class RelaysPane(VerticalScroll):
             out.set_relays(want)
             from_thread(self.app, self._done, ch, "")
         except Exception as exc:
+            if out is not None and out.estopped:  # the e-stop came while it waited
+                from_thread(self.app, self._estop_refused.add, ch)
             from_thread(self.app, self._done, ch, str(exc))
 
     def _done(self, ch: int, error: str) -> None:

@@ -26,6 +26,7 @@ from console.signal_library import (
     library_path,
     read_library,
     remove_signal,
+    restore_signal,
 )
 from console.tui.charts import Chart, Series
 from console.tui.util import from_thread
@@ -45,20 +46,25 @@ class Preview:
 
 
 class SignalsPane(Vertical):
+    # one line per entry or paragraph: the help screen wraps it (console/tui/help.py)
     HELP_TEXT = (
-        "Type a signal on the top line, a name and where it plays (PA, PA,PC, PALL, screen).\n"
+        "Type a signal on the top line, a name and where it plays (PA, PA,PC, PALL, "
+        "screen).\n"
         "enter    show its waveform and spectrum (before anything plays)\n"
         "ctrl+o   play it through the safety gate (ctrl+e e-stops as everywhere)\n"
         "ctrl+s   save it under its name in the profile's library (twice replaces)\n"
         "ctrl+t   multiply it by the gate's minimum ramp (you see it in the expression)\n"
-        "library  enter loads a signal, delete removes a saved one (built-ins, dimmed, are\n"
-        "         read-only)\n"
-        "Syntax: sine|square|saw|triangle(250 Hz, 20 V, 1 s), chirp|logchirp(10 Hz, 600 Hz,\n"
-        "10 V, 2 s), noise(5 V, 1 s, seed=1), silence(0.2 s); envelopes adsr(10 ms, 50 ms,\n"
-        "0.7, 100 ms), ramp(10 ms), linramp(0, 1), expramp(1 %, 100 %); a + b, a * b,\n"
-        "seq(a, b), a * 3 (repeat), a * 50 % or a * -6 dB (gain), lowpass(a, 2 kHz) (smooth\n"
-        "edges). Volts at the actuator; the gate needs a ramp at both ends (ctrl+t) and\n"
-        "steps within the slew limit (lowpass)."
+        "ctrl+z   in a field: undo its last change; in the library: bring back the signal "
+        "just removed\n"
+        "library  enter loads a signal; delete asks, delete again removes a saved one "
+        "(built-ins, dimmed, are read-only)\n"
+        "Syntax: sine|square|saw|triangle(250 Hz, 20 V, 1 s), chirp|logchirp(10 Hz, 600 Hz, "
+        "10 V, 2 s), noise(5 V, 1 s, seed=1), silence(0.2 s); envelopes adsr(10 ms, 50 ms, "
+        "0.7, 100 ms), ramp(10 ms), linramp(0, 1), expramp(1 %, 100 %); a + b, a * b, "
+        "seq(a, b), a * 3 (repeat), a * 50 % or a * -6 dB (gain), lowpass(a, 2 kHz) (smooth "
+        "edges).\n"
+        "Volts at the actuator; the gate needs a ramp at both ends (ctrl+t) and steps within "
+        "the slew limit (lowpass)."
     )
     DEFAULT_CSS = """
     SignalsPane { height: 1fr; }
@@ -75,12 +81,15 @@ class SignalsPane(Vertical):
         Binding("ctrl+o", "play", "play"),
         Binding("ctrl+s", "save", "save"),
         Binding("ctrl+t", "add_ramp", "add ramp"),
+        Binding("ctrl+z", "undo", "undo", show=False),
     ]
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.preview: Preview | None = None
         self._replace: str | None = None  # a name ctrl+s was pressed on once already
+        self._delete: str | None = None  # a name delete was pressed on once already
+        self._removed: tuple[str, dict] | None = None  # the last removed: ctrl+z restores
         self._playing = ""
         self._gen = 0
         self.entries: dict[str, Entry] = {}
@@ -294,15 +303,51 @@ class SignalsPane(Vertical):
         self._replace = None
         self.show_preview()
 
+    def on_option_list_option_highlighted(self, event: OptionList.OptionHighlighted) -> None:
+        if event.option.id != self._delete:
+            self._delete = None  # a delete asked for another signal: it lapses
+
     def on_key(self, event) -> None:
         ol = self.query_one("#sig-library", OptionList)
-        if event.key == "delete" and self.app.focused is ol and ol.highlighted is not None:
+        if event.key != "delete":
+            self._delete = None  # any other key: the question lapses
+            return
+        if self.app.focused is ol and ol.highlighted is not None:
             event.stop()
-            name = ol.get_option_at_index(ol.highlighted).id or ""
-            try:
-                remove_signal(self.library_file, name)
-            except UserError as exc:
-                self.status(str(exc), error=True)
-                return
-            self.reload_library()
-            self.status(f"removed {name} from the library")
+            self._delete_pressed(ol.get_option_at_index(ol.highlighted).id or "")
+
+    def _delete_pressed(self, name: str) -> None:
+        """Delete on a library entry: the first press asks, a second on the same entry
+        removes it (ctrl+z brings it back); a built-in is read-only."""
+        entry = self.entries.get(name)
+        if self._delete != name and (entry is None or not entry.builtin):
+            self._delete = name
+            self.status(f"delete again to remove {name!r} (any other key keeps it)")
+            return
+        self._delete = None
+        try:
+            raw = remove_signal(self.library_file, name)
+        except UserError as exc:
+            self.status(str(exc), error=True)
+            return
+        self._removed = (name, raw)
+        self.reload_library()
+        self.status(f"removed {name} from the library (ctrl+z brings it back)")
+
+    def action_undo(self) -> None:
+        """ctrl+z: a text field's last change (``console.tui.typed``), else the signal
+        just removed, back in the library as it was."""
+        if isinstance(self.app.focused, Input):
+            self.app.action_undo()
+            return
+        if self._removed is None:
+            return
+        name, raw = self._removed
+        try:
+            restore_signal(self.library_file, name, raw)
+        except UserError as exc:
+            self.status(str(exc), error=True)
+            return
+        self._removed = None
+        self.reload_library(select=name)
+        self.status(f"{name} is back in the library")

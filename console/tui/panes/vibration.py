@@ -16,17 +16,18 @@ from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 
 from console.errors import UserError
-from console.session.events import Stopped
+from console.session.events import ESTOP_REFUSAL, Started, Stopped
 from console.tui.charts import Chart
 from console.tui.long_work import stop_check
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape, styled
 from console.tui.util import from_thread
+from console.words import AT_CONSOLE, worded
 
 HELP = (
     "enter: audition the point\n"
     "f / r: flow between the last two, either way\n"
-    "w a s d: flow under a hand at the cursor\n"
+    "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
     "m: measure   b: build the lookup tables   x: cancel   : command line\n"
     "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz | tables)"
 )
@@ -61,7 +62,8 @@ class VibrationPane(VerticalScroll):
         self.id_at: dict[tuple[int, int], int] = {}  # (row, column) -> point id
         self.cell_of: dict[int, tuple[int, int]] = {}  # point id -> (row, column)
         self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
-        self._now_playing = None  # the plan the status line says is playing
+        self._now_playing = None  # the plan the status line says is asked for or playing
+        self._now_started = False  # ... and whether the outputs said it started
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -113,10 +115,16 @@ class VibrationPane(VerticalScroll):
         grid.clear(columns=True)
         self._fill_grid()
 
+    @property
+    def cell_w(self) -> int:
+        """A grid cell's width: the longest id and a column for the hand mark (·)."""
+        return max(4, 1 + max((len(str(n)) for n in self.cell_of), default=3))
+
     def _fill_grid(self) -> None:
         grid = self.query_one("#grid", DataTable)
+        w = self.cell_w
         for c in range(self.cols):
-            grid.add_column(f"{c + 1:>4}", key=str(c), width=4)
+            grid.add_column(f"{c + 1:>{w - 1}} ", key=str(c), width=w)
         for r in range(self.rows):
             grid.add_row(*self._row_cells(r), key=str(r), label=f"{r + 1:>2}")
 
@@ -129,20 +137,30 @@ class VibrationPane(VerticalScroll):
 
     def _row_cells(self, r: int) -> list:
         cells = []
+        w = self.cell_w - 1  # the id, right-aligned; then its hand mark
         for c in range(self.cols):
             n = self.id_at.get((r, c))
             if n is None:  # no point measured at this place
-                cells.append("    ")
+                cells.append(" " * (w + 1))
                 continue
-            txt = styled(f"{n:>4}", "")
+            # · after the id: a flow under a hand is possible here (w a s d)
+            mark = styled("·" if self._hand_fits(n) else " ", "")
             if self.selected and n == self.selected[-1]:
-                txt = styled(" ", "") + styled(f"{n:>3}", "bold reverse")
+                txt = styled(f"{n:>{w}}", "bold reverse")
             elif len(self.selected) > 1 and n == self.selected[-2]:
-                txt = styled(" ", "") + styled(f"{n:>3}", "bold underline")
+                txt = styled(f"{n:>{w}}", "bold underline")
             elif self.session is not None and not self.session.has(n):
-                txt = styled(f"{n:>4}", "dim")
-            cells.append(txt)
+                txt = styled(f"{n:>{w}}", "dim")
+            else:
+                txt = styled(f"{n:>{w}}", "")
+            cells.append(txt + mark)
         return cells
+
+    def _hand_fits(self, n: int) -> bool:
+        s = self.session
+        if s is None or not s.has(n):
+            return False
+        return s.hand_fits(tuple(float(v) for v in s.vmap.points_mm[s.vmap.point_index(n)]))
 
     def _redraw_grid(self) -> None:
         grid = self.query_one("#grid", DataTable)
@@ -202,8 +220,11 @@ class VibrationPane(VerticalScroll):
         ev = message.event
         if ev.topic == "outputs":
             self._show_outputs()
-        elif isinstance(ev, Stopped) and ev.topic == "estop" and self._now_playing is not None:
-            self._estopped(self._now_playing, ev.reason)
+        elif isinstance(ev, Stopped) and ev.topic == "estop":
+            if self._now_playing is not None and self._now_started:  # it was playing
+                self._estopped(self._now_playing, ev.reason)
+        elif isinstance(ev, Started) and ev.topic == "estop" and ESTOP_REFUSAL in self.status_text:
+            self.status(self.summary)  # the reset clears what the e-stop refused
 
     # ------------------------------------------------------------------ map
     @property
@@ -282,11 +303,10 @@ class VibrationPane(VerticalScroll):
             return
         if self.session.tables_ready:
             text = "lookup tables already built for this map: nothing to build"
-            self.status(f"{self.summary}; {text}")
-            self.app.notify(f"{text} (a new map builds its own)", timeout=4)
+            self.status(f"{self.summary}; {text} (a new map builds its own)")
             return
         if any(w.group == "vib-tables" and w.is_running for w in self.app.workers):
-            self.app.notify("the lookup tables are being built: x cancels", timeout=4)
+            self.status(f"{self.summary}; the lookup tables are being built: x cancels")
             return
         self._tables_worker(self.session, self.summary, self._new_stop("vib-tables"))
 
@@ -346,17 +366,25 @@ class VibrationPane(VerticalScroll):
             from_thread(self.app, self._error, str(exc))
 
     def _error(self, msg: str) -> None:
+        """An error: the status line says it, replacing what it said (its one place)."""
+        self._now_playing = None  # a play under way no longer owns the line
         self.status(msg, error=True)
-        self.app.notify(msg, severity="error", timeout=8)
 
     # ------------------------------------------------------------------ actions
     def _need_session(self) -> bool:
         if self.session is None:
-            self.app.notify(
-                "no vibration map yet: press m to measure, or import one", severity="warning"
-            )
+            self._error("no vibration map yet: press m to measure, or import one")
             return False
         return True
+
+    def _check_point(self, n: int) -> None:
+        """``UserError`` unless point ``n`` is in the current map (checked before a
+        command changes anything)."""
+        if not self.session.has(n):
+            pts = self.session.points
+            raise UserError(
+                f"point {n} is not in the vibration map (its points: {min(pts)}..{max(pts)})"
+            )
 
     def on_data_table_cell_selected(self, event: DataTable.CellSelected) -> None:
         event.stop()
@@ -367,87 +395,119 @@ class VibrationPane(VerticalScroll):
     def select(self, n: int) -> None:
         if self.selected and self.selected[-1] == n:
             return
-        self.selected = [*self.selected[-1:], n]
-        self.move_cursor(n)
+        self._select([*self.selected[-1:], n])
+
+    def _select(self, points: list[int]) -> None:
+        """``points`` become the selection (one point: it follows the last one)."""
+        if len(points) == 1:
+            if self.selected and self.selected[-1] == points[0]:
+                return
+            points = [*self.selected[-1:], points[0]]
+        self.selected = points
+        self.move_cursor(points[-1])
         self._redraw_grid()
         self._show_selection()
 
     def audition(self, n: int) -> None:
+        """Enter or ``:51``: play point ``n``; it becomes the selection once its plan is
+        made (a refused point changes nothing)."""
         if not self._need_session():
             return
-        if not self.session.has(n):
-            self.app.notify(f"point {n} is not in the vibration map", severity="error")
+        try:
+            self._check_point(n)
+        except UserError as exc:
+            self._error(str(exc))
             return
-        self.select(n)
-        self._play(lambda s: s.point_plan(n))
+        self._play(lambda s: s.point_plan(n), f"point {n}", select=[n])
 
     def action_flow(self, reverse: bool) -> None:
         if not self._need_session():
             return
         if len(self.selected) < 2:
-            self.app.notify(
-                "audition two points first (enter on each), then f or r", severity="warning"
-            )
+            self._error("audition two points first (enter on each), then f or r")
             return
         a, b = self.selected[-2], self.selected[-1]
         if reverse:
             a, b = b, a
-        self.flow(a, b)
+        self.flow(a, b, select=False)  # the selection stays: f and r play it either way
 
-    def flow(self, a: int, b: int) -> None:
+    def flow(self, a: int, b: int, select: bool = True) -> None:
+        """The flow ``a -> b``; ``a, b`` become the selection once its plan is made
+        (``select``)."""
         if not self._need_session():
             return
-        self._play(lambda s: s.flow_plan(a, b))
+        try:
+            self._check_point(a)
+            self._check_point(b)
+            if a == b:
+                raise UserError(f"flow {a} -> {b}: pick two different points")
+        except UserError as exc:
+            self._error(str(exc))
+            return
+        chosen = [a, b] if select else None
+        self._play(lambda s: s.flow_plan(a, b), f"flow {a} -> {b}", select=chosen)
 
     def action_hand(self, direction: str, n: int | None = None) -> None:
         if not self._need_session():
             return
         try:
             n = n or self.cursor_point()
+            self._check_point(n)
         except UserError as exc:
-            self.app.notify(str(exc), severity="error")
+            self._error(str(exc))
             return
         i = self.session.vmap.point_index(n)
         x, y = (float(v) for v in self.session.vmap.points_mm[i])
         self.status(f"flow {direction} under a hand at point {n} ({x:.0f}, {y:.0f} mm) ...")
-        self._play(lambda s: s.hand_plan((x, y), direction))
+        self._play(lambda s: s.hand_plan((x, y), direction), f"point {n}")
 
     @work(thread=True, group="vib-plan")
-    def _play(self, make) -> None:
+    def _play(self, make, what: str, select: list[int] | None = None) -> None:
+        """Make the plan, ask the outputs to play it and show what became of it: the
+        line says "asking", then "playing" when the outputs report its start, then how
+        it ended (``ConsoleSession.play``)."""
         try:
             plan = make(self.session)
         except UserError as exc:
-            from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._error, f"{what}: {worded(exc, AT_CONSOLE)}")
             return
-        from_thread(self.app, self._playing, plan)
-        played = self.app.session.play_plan(plan)
-        out = self.app.session.outputs
-        estopped = out is not None and out.estopped
-        from_thread(self.app, self._played, plan, played, estopped)
+        from_thread(self.app, self._asking, plan, select)
+        outcome = self.app.session.play(
+            plan, on_started=lambda: from_thread(self.app, self._playing, plan)
+        )
+        from_thread(self.app, self._played, plan, outcome)
+
+    def _asking(self, plan, select: list[int] | None) -> None:
+        if select is not None:
+            self._select(select)
+        self._now_playing, self._now_started = plan, False
+        self.status(f"asking to play {plan.name}: {describe_plan(plan)} ...")
 
     def _playing(self, plan) -> None:
-        self._now_playing = plan
+        if plan is not self._now_playing:
+            return
+        self._now_started = True
         self.status(f"playing {plan.name}: {describe_plan(plan)}")
         self._show_on_projector(plan)
 
-    def _played(self, plan, played: bool, estopped: bool) -> None:
-        """The status line says how the plan it shows as playing ended, unless a newer
-        message took the line (a play that failed says why in its notice too)."""
+    def _played(self, plan, outcome) -> None:
+        """The status line says how the plan it shows as asked for or playing ended,
+        unless a newer message took the line."""
         if plan is not self._now_playing:
-            return
-        if estopped and not played:  # a play that ended before the e-stop says so
-            self._estopped(plan, "")
-            return
-        self._now_playing = None
-        if not self.status_text.startswith(f"playing {plan.name}:"):
             return  # a newer message (an error typed meanwhile) keeps the line
-        if played:
+        self._now_playing = None
+        if outcome.played:
             self.status(f"played {plan.name}: {describe_plan(plan)}")
+        elif outcome.refused:
+            self.status(f"{plan.name} {outcome.refused}", error=True)
+        elif outcome.stopped.startswith("the e-stop"):
+            self._estopped(plan, outcome.stopped.removeprefix("the e-stop").strip(" ()"))
         else:
-            self.status(f"{plan.name} did not play (the notice says why)", error=True)
+            self.status(f"{plan.name} stopped: {outcome.stopped}", error=True)
 
     def _estopped(self, plan, reason: str) -> None:
-        """An e-stop silenced ``plan``: the line says so until something else plays."""
+        """An e-stop silenced ``plan`` while it played: the line says so until
+        something else plays."""
         self._now_playing = None
         why = f" ({reason})" if reason else ""
         self.status(
@@ -514,12 +574,7 @@ class VibrationPane(VerticalScroll):
         elif len(words) == 1:
             self.audition(_point(words[0]))
         elif len(words) == 2:
-            a, b = _point(words[0]), _point(words[1])
-            self.selected = [a, b]
-            self.move_cursor(b)
-            self._redraw_grid()
-            self._show_selection()
-            self.flow(a, b)
+            self.flow(_point(words[0]), _point(words[1]))
         else:
             raise UserError(f"{text!r}: not a command; {HELP.splitlines()[-1]}")
 
@@ -549,25 +604,27 @@ class VibrationPane(VerticalScroll):
             mark = None
             lines.append(f"point {n:d}: {escape(exc)}")
         if len(sel) > 1:
-            a = sel[-2]
-            lines.append("[b]lookup table[/b] (active / passive: difference, frequency, actuator)")
+            a, rule = sel[-2], None
+            entries = []
             for act, pas in ((a, n), (n, a)):
                 try:
                     e = s.lookup(act, pas)
                 except UserError as exc:
-                    lines.append(f"  {escape(exc)}")
+                    entries.append(f"  {escape(exc)}")
                     break
-                if e["actuator"] is None:
-                    lines.append(f"  {act:d} / {pas:d}: {escape(e.get('note', 'no entry'))}")
-                else:
-                    lines.append(
-                        f"  {act:d} / {pas:d}: {e['max_difference_um_per_v']:.4g} um/V at "
-                        f"{e['frequency_hz']:g} Hz with {escape(e['actuator'])}"
-                    )
+                rule = rule or e.get("rule")
+                entries.append(f"  {act:d} / {pas:d}: {escape(table_entry(e))}")
+            lines.append(
+                "[b]lookup tables[/b]"
+                + (f", rule {escape(rule)}" if rule else "")
+                + " (active / passive: difference, frequency, actuator, contrast)"
+            )
+            lines.extend(entries)
             try:
                 lines.append(f"[b]flow {a:d} -> {n:d}[/b]: {escape(rendering(s.flow_plan(a, n)))}")
             except UserError as exc:
                 lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
+        lines.append(f"· on the grid: a {s.hand_mm:g} mm hand fits there (w a s d)")
         freq, mags = s.frf(n)
         from_thread(self.app, self._show_info, "\n".join(lines), freq, mags, mark, n)
 
@@ -595,15 +652,34 @@ def _point(word: str) -> int:
         raise UserError(f"{word!r}: give a point id (the map's node number), e.g. 51") from None
 
 
+def table_entry(e: dict) -> str:
+    """A lookup-table entry (``TableEffect.query``) in words: what the tables hold for
+    the pair, its contrast under the tables' rule where they give it."""
+    if e.get("actuator") is None:
+        return str(e.get("note", "no entry"))
+    c = e.get("contrast_db")
+    return (
+        f"{e['max_difference_um_per_v']:.4g} um/V at {e['frequency_hz']:g} Hz with "
+        f"{e['actuator']}" + ("" if c is None else f", contrast {c:.1f} dB")
+    )
+
+
 def rendering(plan) -> str:
-    """How a flow was rendered, from its plan's ``meta`` (``contracts.FlowEffect``)."""
-    method = plan.meta.get("method")
+    """How a flow was rendered, from its plan's ``meta`` (``contracts.FlowEffect``): the
+    effect's ``method`` (how it renders: ``paper``, the lookup tables' two parts, or a
+    drive per patch), the contrast it predicts (of a flow in parts: the weaker part's,
+    the number the tables give for that pair) and the tables' ``rule`` (which pair entry
+    the tables pick) when it used them. One name each, as the tables name them."""
+    meta = plan.meta
+    method = meta.get("method")
     if method is None:
         return "method not given by the effect"
-    c = plan.meta.get("predicted_contrast_db")
+    c = meta.get("predicted_contrast_db")
     patches = " (a drive per patch)" if any(s.patch_v for s in plan.segments) else ""
-    tail = "" if c is None else f", predicted contrast {c:.1f} dB"
-    return f"method {method}{patches}{tail}"
+    weaker = " (the weaker part)" if len(meta.get("parts") or ()) > 1 else ""
+    tail = "" if c is None else f", predicted contrast {c:.1f} dB{weaker}"
+    rule = f", tables rule {meta['rule']}" if meta.get("rule") else ""
+    return f"method {method}{patches}{tail}{rule}"
 
 
 def describe_plan(plan) -> str:

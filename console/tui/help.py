@@ -1,0 +1,116 @@
+"""The help screen's text: shown as written, wrapped to the terminal.
+
+A screen's help (``HELP_TEXT``) is plain text, never markup: ``[console] image`` and
+``[ / ]`` keep their brackets. It is written as paragraphs, one line each: an entry
+starts with its key and two spaces or a colon (``b        capture the background``,
+``s: synthesize ...``), anything else is prose. The widget wraps each paragraph to the
+width it has, an entry's lines under its description (a hanging indent), so no word is
+left alone on a line at any width. A help written with hard line breaks is joined back
+into its paragraphs first (a line that starts indented, or lower-case and not as an
+entry, continues the line above), so every pane's help reads well at 80 and 120 columns.
+"""
+
+from __future__ import annotations
+
+import re
+import textwrap
+from collections.abc import Sequence
+
+from textual.content import Content
+from textual.widgets import Static
+
+__all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
+
+#: the start of an entry: its key (a word, or a few short ones: ``t / T``, ``w a s d``)
+#: then two spaces or ``": "``, then its description
+ENTRY = re.compile(r"^(?P<key>\S{1,12}(?: \S{1,6}){0,3}?)(?P<sep>: |\s{2,})(?=\S)")
+#: an entry's description starts at most this far right to be wrapped under itself
+MAX_HANG = 18
+
+
+def _continues(line: str) -> bool:
+    """Whether ``line`` (of a hard-wrapped help) continues the line above."""
+    if line[0].isspace():
+        return True
+    return (line[0].islower() or line[0].isdigit() or line[0] == "(") and not ENTRY.match(line)
+
+
+def paragraphs(text: str) -> list[str]:
+    """``text`` as its paragraphs: one line per entry or paragraph, ``""`` for a blank
+    line; hard line breaks inside a paragraph are joined back (see the module)."""
+    out: list[str] = []
+    for raw in text.splitlines():
+        line = raw.rstrip()
+        if not line.strip():
+            out.append("")
+        elif out and out[-1] and _continues(line):
+            out[-1] = f"{out[-1]} {line.strip()}"
+        else:
+            out.append(line)
+    return out
+
+
+def wrap(paragraph: str, width: int) -> list[tuple[str, str]]:
+    """``paragraph`` wrapped to ``width`` columns as ``(key, rest)`` line pieces: the
+    first line of an entry has its key apart (shown bold), the others ``("", line)``."""
+    if not paragraph:
+        return [("", "")]
+    width = max(width, 8)
+    m = ENTRY.match(paragraph)
+    key = m.group(0) if m is not None else ""
+    hang = len(key) if key and len(key) <= min(MAX_HANG, width // 2) else 0
+    if hang and max(map(len, paragraph[len(key) :].split()), default=0) > width - hang:
+        hang = 0  # a word wider than the column (a path): the lines wrap whole
+    body = paragraph[len(key) :] if hang else paragraph
+    lines = textwrap.wrap(
+        body,
+        width - hang,
+        break_on_hyphens=False,
+        drop_whitespace=True,
+        replace_whitespace=False,
+    ) or [""]
+    if not hang:
+        if key:  # a long key: the line wraps whole, the key still bold
+            first = lines[0]
+            cut = min(len(key.rstrip()), len(first))
+            return [(first[:cut], first[cut:])] + [("", ln) for ln in lines[1:]]
+        return [("", ln) for ln in lines]
+    return [(key, lines[0])] + [("", " " * hang + ln) for ln in lines[1:]]
+
+
+def help_text(body: str, width: int = 76, title: str = "") -> Content:
+    """``body`` (a help as written) wrapped to ``width``, literal, keys bold; ``title``
+    (bold) above it."""
+    return _content([(title, body)], width)
+
+
+def _content(sections: Sequence[tuple[str, str]], width: int) -> Content:
+    lines: list[Content] = []
+    for title, body in sections:
+        if title:
+            if lines:
+                lines.append(Content(""))
+            lines.append(Content.styled(title, "bold"))
+        for para in paragraphs(body):
+            for key, rest in wrap(para, width):
+                lines.append(Content.assemble((key, "bold"), rest) if key else Content(rest))
+    return Content("\n").join(lines)
+
+
+class HelpText(Static):
+    """Help sections (title, text as written) wrapped to the widget's width."""
+
+    DEFAULT_CSS = "HelpText { width: 1fr; height: auto; }"
+
+    def __init__(self, sections: Sequence[tuple[str, str]], **kw) -> None:
+        super().__init__(**kw)
+        self.sections = list(sections)
+
+    def render(self) -> Content:
+        return _content(self.sections, self.content_size.width or 76)
+
+    def get_content_width(self, container, viewport) -> int:
+        return container.width
+
+    def get_content_height(self, container, viewport, width: int) -> int:
+        return len(_content(self.sections, width).plain.split("\n"))
