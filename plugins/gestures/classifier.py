@@ -82,6 +82,57 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
     }
 
 
+def classify_folder(model: GestureModel, folder: str | Path, params: VisionParams) -> dict:
+    """Classify a sample folder, or every sample of a gesture folder or a whole dataset
+    (the CLI's ``classify`` given ``DATASET/drag`` or ``DATASET``): what the folder
+    holds, the count correct and one short result per sample. A folder with neither a
+    ``sample.json`` nor sample folders is one line saying what to give."""
+    folder = Path(folder)
+    if (
+        not folder.is_dir()
+        or (folder / "sample.json").exists()
+        or any(folder.glob("frame_*.png"))  # a sample missing its sample.json: say so
+    ):
+        return classify_sample(model, folder, params)
+
+    def samples_in(d: Path) -> list[Path]:
+        return sorted(p for p in d.iterdir() if p.is_dir() and (p / "sample.json").is_file())
+
+    holds, found = "gesture folder", samples_in(folder)
+    if not found:
+        holds = "dataset"
+        found = [
+            s
+            for g in sorted(p for p in folder.iterdir() if p.is_dir() and p.name in GESTURES)
+            for s in samples_in(g)
+        ]
+    if not found:
+        raise UserError(
+            f"{folder}: no sample.json and no sample folders in it; give a sample folder "
+            "(DATASET/drag/s1_000), a gesture folder (DATASET/drag) or a dataset"
+        )
+    results = []
+    for f in found:
+        r = classify_sample(model, f, params)
+        results.append(
+            {
+                "sample": f"{f.parent.name}/{f.name}",
+                "label": r["label"],
+                "gesture": r["gesture"],
+                "confidence": r["confidence"],
+            }
+        )
+    correct = sum(r["gesture"] == r["label"] for r in results)
+    return {
+        "folder": str(folder),
+        "holds": holds,
+        "samples": len(results),
+        "correct": correct,
+        "accuracy": correct / len(results),
+        "results": results,
+    }
+
+
 #: The vision settings an operator tunes (``VisionParams`` fields, and the background's
 #: ``background_alpha``): the ``[vision]`` profile bounds and one operator step.
 TUNABLES: dict[str, TunableRange] = {

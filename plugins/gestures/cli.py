@@ -14,7 +14,7 @@ from console.plugin_api import UserError
 
 from . import evaluate as ev
 from .calibration import run_touch_calibration, target_grid
-from .classifier import classify_sample
+from .classifier import classify_folder
 from .cli_options import configure
 from .dataset_checks import require_hands
 from .dataset_commands import COMMANDS, open_camera
@@ -58,16 +58,22 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     profile = _profile(ctx)
     n_h = getattr(args, "harmonics", None)
     n_f = getattr(args, "frames", None)
-    top = int(_get(profile, "gestures.frames", 4))
+    top = ev.max_frames(profile)
     if cmd == "eval" and args.model is not None:
         model = GestureModel.load(args.model)  # a bad model is refused before extracting
         fs = _dataset_features(ev, args, profile)
         _print(evaluate_model(fs, model, str(args.model)), args.json)
         return 0
-    if cmd == "eval":
-        fs = _dataset_features(ev, args, profile)
-        rep = ev.cross_validate(
-            fs, args.cv, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed
+    if cmd == "eval":  # the procedure the console's Gestures panel runs too
+        _, rep = ev.evaluation(
+            args.dataset,
+            profile,
+            cv=args.cv,
+            n_harmonics=n_h,
+            n_frames=n_f,
+            seed=args.seed,
+            use_cache=not args.no_cache,
+            progress=_progress(args),
         )
         _print(rep, args.json)
         return 0
@@ -93,7 +99,16 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         return _calibrate(args, ctx, profile)
     if cmd == "classify":
         model = GestureModel.load(args.model)
-        out = classify_sample(model, args.sample, analysis_params(profile))
+        out = classify_folder(model, args.sample, analysis_params(profile))
+        if "results" in out and not args.json:  # a gesture folder or a dataset
+            print(
+                f"{out['folder']}: a {out['holds']}: {out['samples']} samples classified, "
+                f"{out['correct']} as labelled ({100 * out['accuracy']:.1f} %)"
+            )
+            for r in out["results"]:
+                mark = "" if r["gesture"] == r["label"] else f"  (labelled {r['label']})"
+                print(f"  {r['sample']}: {r['gesture']} {r['confidence']:.2f}{mark}")
+            return 0
         _print(out, args.json)
         return 0
     return 2

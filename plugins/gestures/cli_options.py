@@ -53,9 +53,17 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     t.add_argument("--json", action="store_true")
     _common(t)
-    c = sub.add_parser("classify", help="classify one sample folder with a trained model")
+    c = sub.add_parser(
+        "classify",
+        help="classify a sample folder (or each sample of a gesture folder or a dataset) "
+        "with a trained model",
+    )
     c.add_argument("model", type=Path)
-    c.add_argument("sample", type=Path)
+    c.add_argument(
+        "sample",
+        type=Path,
+        help="DATASET/drag/s1_000 (one sample), DATASET/drag or DATASET (each sample in it)",
+    )
     c.add_argument("--json", action="store_true")
     k = sub.add_parser(
         "calibrate",

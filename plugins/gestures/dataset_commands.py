@@ -16,7 +16,7 @@ from console.plugin_api import UserError, finite_float, integer, positive_int, s
 
 from .dataset import GESTURES
 from .jobs import synth_atomic
-from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, capture_background, record, synth
+from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, capture_background, estimate, record, synth
 
 #: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
 #: at 60 fps; the paper's set is 5 subjects x 40 repetitions)
@@ -116,6 +116,12 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         "0.1 to 3, default 1)",
     )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
+    parser.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="only say how big and how long (measured on one static and one dynamic "
+        "sample); write nothing",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
@@ -135,8 +141,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
     if not args.force and out.is_dir() and any(out.iterdir()):
         raise UserError(f"{out}: folder is not empty; choose a new --out (or --force to add to it)")
     make = synth if args.force else synth_atomic
-    info = make(
-        args.out,
+    kw = dict(
         subjects=args.subjects,
         reps=args.reps,
         seed=args.seed,
@@ -151,17 +156,28 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         vary=args.vary,
         sessions=args.sessions,
         light_scale=args.light_scale,
-        progress=progress,
-        **({"force": True} if args.force else {}),
     )
+    bad = [g for g in gestures if g not in GESTURES]
+    if bad:
+        raise UserError(f"--gestures {bad}: unknown; use {', '.join(GESTURES)}")
+    # said before the work starts: a big set takes gigabytes and many minutes
+    est = estimate(**kw)
+    if args.dry_run:
+        print(json.dumps(est) if args.json else f"would write {est['text']}")
+        return 0
+    if not args.json:
+        print(f"writing {est['text']}", file=sys.stderr, flush=True)
+    info = make(args.out, progress=progress, **kw, **({"force": True} if args.force else {}))
+    info["estimate"] = {k: est[k] for k in ("bytes", "seconds", "workers")}
     if not quiet:
         print(file=sys.stderr)
     if args.json:
         print(json.dumps(info))
     else:
+        size = sum(f.stat().st_size for f in Path(info["out"]).rglob("*") if f.is_file())
         print(
-            f"wrote {info['samples']} samples ({info['frames']} frames) to {info['out']} "
-            f"in {info['seconds']:.1f} s with {info['workers']} process(es)"
+            f"wrote {info['samples']} samples ({info['frames']} frames, {size / 1e6:.0f} MB) "
+            f"to {info['out']} in {info['seconds']:.1f} s with {info['workers']} process(es)"
         )
     return 0
 

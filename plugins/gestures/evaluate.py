@@ -25,22 +25,32 @@ from console.plugin_api import UserError, cached_arrays, entry_path
 from console.plugin_api import cache_dir as console_cache_dir
 
 from .dataset import load_dataset
+from .dataset_checks import require_hands
 from .feature_set import FeatureSet, columns
-from .features import FRAMES_LIST, N_HARMONICS_MAX, record_features, sample_records
+from .features import (
+    FRAMES_LIST,
+    N_HARMONICS_MAX,
+    analysis_params,
+    record_features,
+    sample_records,
+)
 from .model import GestureModel
-from .progress import CancelCheck, Progress, step
+from .progress import CancelCheck, Progress, part, step
 from .reports import fold_report, report
 from .selection import INNER_FOLDS, candidates, select_settings
 from .vision import VisionParams
 
 __all__ = [  # what the evaluation's callers use, wherever it is defined
+    "DEFAULT_CV",
     "FRAMES_LIST",
     "N_HARMONICS_MAX",
     "FeatureSet",
     "columns",
     "cross_validate",
+    "evaluation",
     "extract",
     "fold_report",
+    "procedure",
     "record_features",
     "report",
     "sample_records",
@@ -48,6 +58,27 @@ __all__ = [  # what the evaluation's callers use, wherever it is defined
 ]
 
 FEATURES_VERSION = 8  # bump when features change: old caches are ignored
+#: the modules whose code makes the features: their source is part of the cache key, so a
+#: change to any of them is never answered with features the old code computed
+FEATURE_MODULES = (
+    "background.py", "contacts.py", "dataset.py", "descriptors.py", "feature_set.py",
+    "features.py", "hand_shape.py", "orientation.py", "segmentation.py", "vision.py",
+)  # fmt: skip
+DEFAULT_CV = "2fold"
+
+
+def features_code() -> str:
+    """A short hash of the feature code's source (``FEATURE_MODULES``)."""
+    h = hashlib.sha256(str(FEATURES_VERSION).encode())
+    here = Path(__file__).parent
+    for name in FEATURE_MODULES:
+        h.update((here / name).read_bytes())
+    return h.hexdigest()[:8]
+
+
+def vision_settings_id(params: VisionParams) -> str:
+    """A short hash of the vision settings the features were made with."""
+    return hashlib.sha256(repr(params).encode()).hexdigest()[:6]
 
 
 def cache_dir() -> Path:
@@ -57,7 +88,11 @@ def cache_dir() -> Path:
 
 def _key(samples, params: VisionParams, frames: Sequence[int]) -> str:
     h = hashlib.sha256()
-    h.update(json.dumps([FEATURES_VERSION, repr(params), list(frames), N_HARMONICS_MAX]).encode())
+    h.update(
+        json.dumps(
+            [FEATURES_VERSION, features_code(), repr(params), list(frames), N_HARMONICS_MAX]
+        ).encode()
+    )
     for s in samples:
         h.update(s.name.encode())
         h.update(s.gesture.encode())
@@ -114,6 +149,8 @@ def extract(
         finally:
             cv2.setNumThreads(threads)
         fs.meta["root"] = str(root)
+        fs.meta["vision_settings"] = vision_settings_id(params)
+        fs.meta["features_code"] = features_code()
         return _arrays(fs)
 
     # the entry carries its key: another set's features (copied over this name), a
@@ -201,6 +238,83 @@ def _feature_set(z: dict) -> FeatureSet:
     )
 
 
+CV_WORDS = {
+    "2fold": "2-fold CV (stratified by gesture, subjects on both sides)",
+    "loso": "leave-one-subject-out CV",
+}
+
+
+def procedure(
+    cv: str, harmonics: Sequence[int], frames: Sequence[int], seed: int, meta: Mapping
+) -> str:
+    """The evaluation in one line, as both the CLI and the console print it: the outer
+    folds, the harmonics and frames (fixed, or chosen inside each training part), the
+    seed and the settings the features were made with."""
+
+    def which(what: str, vals: Sequence[int]) -> str:
+        if len(vals) == 1:
+            return f"{what} {vals[0]}"
+        return f"{what} chosen from {'/'.join(map(str, vals))} by {INNER_FOLDS}-fold inner CV"
+
+    return (
+        f"{CV_WORDS.get(cv, cv)}, {which('harmonics', harmonics)}, {which('frames', frames)}, "
+        f"seed {seed}; vision settings {meta.get('vision_settings', '?')}, "
+        f"feature code {meta.get('features_code', '?')}"
+    )
+
+
+def evaluation(
+    dataset: str | Path,
+    profile: object = None,
+    *,
+    cv: str = DEFAULT_CV,
+    n_harmonics: int | None = None,
+    n_frames: int | None = None,
+    seed: int = 0,
+    use_cache: bool = True,
+    progress: Progress | None = None,
+    cancelled: CancelCheck | None = None,
+) -> tuple[FeatureSet, dict]:
+    """The one evaluation procedure of a dataset (``haptable gestures eval`` and the
+    console's Gestures panel both run it, with these defaults): features with the
+    profile's vision settings (cached by content and code), refused without hands, then
+    ``cross_validate`` with harmonics and frames chosen inside each training part
+    unless given (frames up to the profile's ``[gestures] frames``). Returns the
+    features and the report, whose ``procedure`` names all of it. Progress: features
+    0-50 %, folds 50-100 %."""
+    fs = extract(
+        dataset,
+        analysis_params(profile),
+        use_cache=use_cache,
+        progress=part(progress, 0.0, 0.5),
+        cancelled=cancelled,
+    )
+    require_hands(fs, dataset)
+    rep = cross_validate(
+        fs,
+        cv,
+        n_harmonics=n_harmonics,
+        n_frames=n_frames,
+        max_frames=max_frames(profile),
+        seed=seed,
+        progress=part(progress, 0.5, 1.0),
+        cancelled=cancelled,
+    )
+    return fs, rep
+
+
+def max_frames(profile: object) -> int:
+    """The profile's ``[gestures] frames`` (4 without a profile): the most frames a
+    gesture is decided from."""
+    if profile is None:
+        return 4
+    try:
+        v = profile.get("gestures.frames")  # type: ignore[attr-defined]
+    except Exception:
+        return 4
+    return 4 if v is None else int(v)
+
+
 def splits(fs: FeatureSet, cv: str, seed: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
     from sklearn.model_selection import LeaveOneGroupOut, StratifiedKFold  # lazy: heavy
 
@@ -273,6 +387,7 @@ def cross_validate(
         step(progress, None, (k + 1) / len(parts), f"fold {k + 1}/{len(parts)}: {acc:.1%}")
     h, f = max(set(chosen), key=chosen.count)  # the most frequent choice, for the summary
     rep = report(fs.labels, pred.astype(str), fs, cv, h, f, thresholds)
+    rep = {"cv": cv, "procedure": procedure(cv, hs, frs, seed, fs.meta), **rep}
     rep["folds"] = folds
     rep["selection"] = {
         "searched": {"n_harmonics": list(hs), "n_frames": list(frs)},

@@ -82,45 +82,45 @@ def train_and_evaluate(
     dataset: str | Path,
     model_out: str | Path,
     *,
+    profile: Any = None,
     cv: str = "2fold",
-    params: Any = None,
-    n_harmonics: int = 2,
-    n_frames: int = 4,
+    n_harmonics: int | None = None,
+    n_frames: int | None = None,
     seed: int = 0,
     use_cache: bool = True,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
 ) -> dict[str, Any]:
-    """Cross-validate (``2fold`` or ``loso``) then train on every sample and save the
-    model to ``model_out``; the evaluation (accuracy per fold) goes into the model's
-    metadata. Progress: features 0-50 %, folds 50-90 %, final fit and save. Nothing is
-    written when cancelled."""
+    """``evaluate.evaluation`` (``haptable gestures eval``'s procedure and defaults:
+    ``2fold`` or ``loso``, harmonics and frames chosen inside each training part unless
+    given) then train on every sample as ``haptable gestures train`` does and save the
+    model to ``model_out``; the evaluation (its procedure, accuracy per fold) goes into
+    the model's metadata. Progress: features and folds 0-90 %, final fit and save.
+    Nothing is written when cancelled."""
     from . import evaluate as ev  # lazy: OpenCV, scikit-learn (dataset_commands loads jobs)
 
     dataset, model_out = Path(dataset).expanduser(), Path(model_out).expanduser()
     if model_out.is_dir():
         raise UserError(f"{model_out}: is a folder; give a model file such as gestures.skops")
-    fs = ev.extract(
-        dataset, params, use_cache=use_cache, progress=part(progress, 0.0, 0.5), cancelled=cancelled
-    )
-    rep = ev.cross_validate(
-        fs,
-        cv,
+    fs, rep = ev.evaluation(  # the same procedure as `haptable gestures eval`
+        dataset,
+        profile,
+        cv=cv,
         n_harmonics=n_harmonics,
         n_frames=n_frames,
         seed=seed,
-        progress=part(progress, 0.5, 0.9),
+        use_cache=use_cache,
+        progress=part(progress, 0.0, 0.9),
         cancelled=cancelled,
     )
-    evaluation = {
-        k: rep[k]
-        for k in ("cv", "n_samples", "subjects", "static_accuracy", "dynamic_accuracy", "folds")
-    }
+    keys = ("cv", "procedure", "n_samples", "subjects", "static_accuracy", "dynamic_accuracy")
+    evaluation = {k: rep[k] for k in (*keys, "folds")}
     step(progress, cancelled, 0.9, "training on every sample")
     model = ev.train(
         fs,
         n_harmonics=n_harmonics,
         n_frames=n_frames,
+        max_frames=ev.max_frames(profile),
         seed=seed,
         meta={"evaluation": evaluation, "dataset": str(dataset)},
         cancelled=cancelled,

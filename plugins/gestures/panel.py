@@ -10,6 +10,7 @@ and renamed into place, the model is written to a temporary file and renamed.
 from __future__ import annotations
 
 import contextlib
+import time
 from pathlib import Path
 from typing import Any
 
@@ -19,18 +20,23 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Button, Footer, Input, Label, Static
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, load_profile
 from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import LongWork, SafetyBar, escape, from_thread, short_path
 
-from .features import analysis_params
 from .jobs import describe_files, synth_atomic, train_and_evaluate
 from .model import GestureModel
 from .settings import model_file
+from .synth import estimate as synth_estimate
+
+#: seconds in which a second ``s`` starts the synthesis whose size was shown
+CONFIRM_S = 20.0
 
 HELP = (
-    "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder\n"
-    "t: train + evaluate (cross-validation, then the model on every sample)\n"
+    "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
+    "   first its size and time, then s again to start\n"
+    "t: train + evaluate (`haptable gestures eval`'s cross-validation, then the model on\n"
+    "   every sample, as `haptable gestures train`)\n"
     "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
     "tab: edit the fields (enter returns here)"
 )
@@ -39,6 +45,14 @@ HELP = (
 def data_dir() -> Path:
     """Where the panel keeps twin datasets by default."""
     return console_data_dir("gestures")
+
+
+def saved_profile(ctx: Any) -> Any:
+    """The console's profile read again from its file and override file, as a
+    ``haptable`` command started now reads it (the console keeps the one it started
+    with); a broken file is the one-line error it would be there."""
+    prof = ctx.profile
+    return load_profile(prof.path, ctx.pm)
 
 
 def _mb(n: int | None) -> str:
@@ -93,6 +107,7 @@ def describe(info: dict[str, Any]) -> str:
                     + ", ".join(_pct(f["accuracy"]) for f in ev.get("folds", []))
                 )
             )
+            lines.append(escape(f"  {ev.get('procedure', 'procedure not recorded')}"))
         else:
             lines.append("  no evaluation in its metadata (trained by the CLI)")
     return "\n".join(lines)
@@ -102,7 +117,8 @@ def fold_lines(res: dict[str, Any]) -> str:
     """The result block after training: accuracy per fold and overall."""
     lines = [
         f"[b]{escape(res['cv'])}[/b] on {escape(res['n_samples'])} samples: static "
-        f"{escape(_pct(res['static_accuracy']))}, dynamic {escape(_pct(res['dynamic_accuracy']))}"
+        f"{escape(_pct(res['static_accuracy']))}, dynamic {escape(_pct(res['dynamic_accuracy']))}",
+        escape(f"  {res.get('procedure', '?')} (as `haptable gestures eval`)"),
     ]
     for i, f in enumerate(res["folds"], 1):
         who = f" (subject {f['subject']})" if "subject" in f else ""
@@ -143,10 +159,10 @@ class GesturesPanel(Screen):
     def __init__(self, ctx) -> None:
         super().__init__()
         self.ctx = ctx
-        prof = ctx.profile
-        self.harmonics = int(prof.get("gestures.harmonics", 2))  # 0 (no descriptors) is valid
-        self.frames = int(prof.get("gestures.frames", 4))
-        self.default_model = model_file(prof)
+        self.default_model = model_file(ctx.profile)
+        #: the synthesis the operator was told the size of: (dataset, subjects, reps) and
+        #: until when ``s`` starts it
+        self._synth_asked: tuple[tuple[Path, int, int], float] | None = None
         self.files: dict[str, Any] = {}
 
     def compose(self) -> ComposeResult:
@@ -216,12 +232,22 @@ class GesturesPanel(Screen):
             w.update(describe(info))
 
     def action_synth(self) -> None:
+        """``s``: first the size and time (measured on one sample of each kind), then
+        ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis."""
         try:
             ds, _ = self.paths()
             subjects = count(self.field("subjects"), "subjects", 1, 50)
             reps = count(self.field("reps"), "reps", 1, 500)
         except UserError as exc:
             self.work.error(str(exc))
+            return
+        if self.work.busy:
+            self.app.notify("busy: x cancels the running job first", timeout=3)
+            return
+        asked = (ds, subjects, reps)
+        pending, self._synth_asked = self._synth_asked, None
+        if pending is None or pending[0] != asked or time.monotonic() > pending[1]:
+            self._estimate(asked)
             return
 
         def job(progress, cancelled):
@@ -239,6 +265,20 @@ class GesturesPanel(Screen):
         self.query_one("#gp-result", Static).update("")
         self.work.start(f"synthesizing {subjects} x 10 x {reps}", job, summary)
 
+    def _estimate(self, asked: tuple[Path, int, int]) -> None:
+        _, subjects, reps = asked
+
+        def job(progress, cancelled):
+            progress(0.1, "measuring one static and one dynamic sample")
+            return synth_estimate(subjects, reps, workers=1)
+
+        def summary(est) -> str:
+            self._synth_asked = (asked, time.monotonic() + CONFIRM_S)
+            return f"{est['text']}: s again to start, within {CONFIRM_S:.0f} s"
+
+        self.query_one("#gp-result", Static).update("")
+        self.work.start("estimate", job, summary)
+
     def action_train(self) -> None:
         try:
             ds, model = self.paths()
@@ -248,19 +288,15 @@ class GesturesPanel(Screen):
         except UserError as exc:
             self.work.error(str(exc))
             return
-        params = analysis_params(self.ctx.profile)
         live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
+            # `haptable gestures eval DATASET --cv CV`'s procedure, with its defaults, on
+            # the profile as saved (what that command reads: vision settings kept with W
+            # on the Camera screen since the console started count)
+            profile = saved_profile(self.ctx)
             res = train_and_evaluate(
-                ds,
-                model,
-                cv=cv,
-                params=params,
-                n_harmonics=self.harmonics,
-                n_frames=self.frames,
-                progress=progress,
-                cancelled=cancelled,
+                ds, model, profile=profile, cv=cv, progress=progress, cancelled=cancelled
             )
             if live:  # the profile's model: the running classifier switches to it
                 res["loaded"] = GestureModel.load(res["model"])

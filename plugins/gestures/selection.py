@@ -104,6 +104,16 @@ def evaluate_model(fs: FeatureSet, model: GestureModel, path: str) -> dict:
     rep = report(
         fs.labels, pred, fs, "model", model.n_harmonics, model.n_frames, [model.motion_threshold]
     )
+    rep = {
+        "cv": rep["cv"],
+        "procedure": (
+            f"the model {path} (harmonics {model.n_harmonics}, frames {model.n_frames}) on "
+            "every sample, no cross-validation; vision settings "
+            f"{fs.meta.get('vision_settings', '?')}, feature code "
+            f"{fs.meta.get('features_code', '?')}"
+        ),
+        **rep,
+    }
     rep["model"] = str(path)
     rep["trained_on"] = model.meta.get("trained_on")
     rep["selection"] = model.meta.get("selection")

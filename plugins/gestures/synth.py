@@ -171,6 +171,108 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
     return job["reps"], frames_total
 
 
+def _size(n_bytes: float) -> str:
+    return f"{n_bytes / 1e9:.1f} GB" if n_bytes >= 1e9 else f"{n_bytes / 1e6:.0f} MB"
+
+
+def _duration(seconds: float) -> str:
+    if seconds >= 5400:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 60:.0f} min" if seconds >= 90 else f"{max(1, round(seconds))} s"
+
+
+def estimate(
+    subjects: int = 5,
+    reps: int = 40,
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    gestures: tuple[str, ...] = GESTURES,
+    static_frames: int = STATIC_FRAMES,
+    dynamic_frames: int = DYNAMIC_FRAMES,
+    lens_distortion: bool = False,
+    per_sample_background: bool = True,
+    exposure_ms: float = 0.0,
+    **_ignored: Any,
+) -> dict[str, Any]:
+    """What ``synth`` with these arguments will take, from a measured cost: one static
+    and one dynamic sample rendered and written here (into a temporary folder, removed)
+    as ``synth`` does, then scaled to the whole set: ``bytes``, ``seconds`` (the camera
+    built once per process, the samples spread over ``workers`` processes on the cores
+    the machine's load leaves free), the
+    counts and the measured cost per image (``image_s``, ``image_bytes``); ``text``
+    says it in one line. Takes about a second."""
+    import shutil
+    import tempfile
+
+    gestures = tuple(gestures)
+    camera_factory, camera_profile = _twin_camera(seed, lens_distortion, exposure_ms)
+    t0 = time.perf_counter()
+    camera_factory(camera_profile)
+    build_s = time.perf_counter() - t0
+    kinds = {"static": static_frames, "dynamic": dynamic_frames}
+    per_image: dict[str, tuple[float, float]] = {}
+    tmp = Path(tempfile.mkdtemp(prefix="haptable-synth-estimate-"))
+    try:  # the first render warms up (caches, imports): measured again, the faster kept
+        for kind, group in (("static", STATIC), ("dynamic", DYNAMIC), ("static", STATIC)):
+            g = next((g for g in gestures if g in group), group[0])
+            n = kinds[kind] + (1 if per_sample_background else 0)
+            job = {
+                "out": str(tmp), "seed": seed, "subject": 0, "gesture": GESTURES.index(g),
+                "reps": 1, "static_frames": static_frames, "dynamic_frames": dynamic_frames,
+                "camera": camera_factory, "camera_profile": camera_profile,
+                "per_sample_bg": per_sample_background, "side": "right", "sessions": 0,
+                "subjects": 1, "light_scale": 1.0,
+            }  # fmt: skip
+            shutil.rmtree(tmp / g, ignore_errors=True)
+            t0 = time.perf_counter()
+            _render_job(job)  # the camera is built: cached in this process
+            took = time.perf_counter() - t0
+            written = sum(f.stat().st_size for f in (tmp / g).rglob("*.png"))
+            cost = (took / n, written / n)
+            per_image[kind] = min(per_image[kind], cost) if kind in per_image else cost
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    n_static = sum(g in STATIC for g in gestures)
+    n_dyn = len(gestures) - n_static
+    bg = 1 if per_sample_background else 0
+    images = {
+        "static": subjects * reps * n_static * (static_frames + bg),
+        "dynamic": subjects * reps * n_dyn * (dynamic_frames + bg),
+    }
+    n_jobs = subjects * len(gestures)
+    workers = max(1, min(workers or os.cpu_count() or 1, n_jobs))
+    cpu_s = sum(images[k] * per_image[k][0] for k in images)
+    n_bytes = sum(images[k] * per_image[k][1] for k in images)
+    n_images = images["static"] + images["dynamic"]
+    samples = subjects * reps * len(gestures)
+    image_s = sum(images[k] * per_image[k][0] for k in images) / max(1, n_images)
+    image_bytes = n_bytes / max(1, n_images)
+    # the processes share the cores other work leaves free (the measurement above ran
+    # on one core with that load), and each builds its camera once
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        load = 0.0
+    free = max(1.0, (os.cpu_count() or 1) - max(0.0, load - 1.0))
+    seconds = build_s + cpu_s / min(workers, free)
+    text = (
+        f"{subjects} x {len(gestures)} x {reps} = {samples} samples ({n_images} images): "
+        f"about {_size(n_bytes)} and {_duration(seconds)} with {workers} process(es) "
+        f"(measured here: {image_s * 1e3:.0f} ms and {image_bytes / 1e3:.0f} kB per image)"
+    )
+    return {
+        "samples": samples,
+        "images": n_images,
+        "bytes": int(n_bytes),
+        "seconds": round(seconds, 1),
+        "workers": workers,
+        "image_s": image_s,
+        "image_bytes": image_bytes,
+        "text": text,
+    }
+
+
 def synth(
     out: str | Path,
     subjects: int = 5,
@@ -375,4 +477,4 @@ def record(
     )
 
 
-__all__ = ["capture_background", "record", "synth", "write_png"]
+__all__ = ["capture_background", "estimate", "record", "synth", "write_png"]

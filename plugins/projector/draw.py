@@ -447,6 +447,46 @@ def draw_contacts(s: dict) -> list[dict]:
     return out
 
 
+#: a grid point's label height, and where it may go: below right of the point (the
+#: default), above right, below left, above left (offsets in mm, the text's anchor)
+POINT_LABEL_MM = 6.5
+LABEL_PLACES = ((4.0, 7.0, "l"), (4.0, -7.0, "l"), (-4.0, 7.0, "r"), (-4.0, -7.0, "r"))
+#: a text's width per character over its height, at least (digits and capitals in the
+#: projector's fonts are narrower: a box this wide holds them)
+TEXT_ASPECT = 0.62
+
+Box = tuple[float, float, float, float]
+
+
+def _rect_box(center: Any, size: Any, margin: float = 0.0) -> Box:
+    (cx, cy), (w, h) = center, size
+    return (cx - w / 2 - margin, cy - h / 2 - margin, cx + w / 2 + margin, cy + h / 2 + margin)
+
+
+def text_box(xy: Any, text: str, size_mm: float, anchor: str = "l") -> Box:
+    """The box (x0, y0, x1, y1 in mm) a text item takes at most: ``size_mm`` high centred
+    on ``xy``'s y, ``TEXT_ASPECT`` x height per character from its anchor."""
+    w = TEXT_ASPECT * size_mm * max(1, len(text))
+    x = float(xy[0]) - {"l": 0.0, "c": w / 2, "r": w}.get(anchor, 0.0)
+    y = float(xy[1]) - size_mm / 2
+    return (x, y, x + w, y + size_mm)
+
+
+def _overlaps(a: Box, b: Box) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _label_place(c: Any, text: str, size_mm: float, keep_out: list[Box]) -> tuple[list, str]:
+    """The first of ``LABEL_PLACES`` around point ``c`` whose text box meets none of
+    ``keep_out`` (the patches' outlines); the default place when every one does."""
+    for dx, dy, anchor in LABEL_PLACES:
+        xy = [float(c[0]) + dx, float(c[1]) + dy]
+        if not any(_overlaps(text_box(xy, text, size_mm, anchor), k) for k in keep_out):
+            return xy, anchor
+    dx, dy, anchor = LABEL_PLACES[0]
+    return [float(c[0]) + dx, float(c[1]) + dy], anchor
+
+
 def draw_grid(s: dict) -> list[dict]:
     out: list[dict] = []
     lit = set(s.get("excitation_patches", []))
@@ -476,18 +516,23 @@ def draw_grid(s: dict) -> list[dict]:
     pts = s.get("points_mm", [])
     ids = s.get("point_ids") or list(range(1, len(pts) + 1))
     act, pas = s.get("active"), s.get("passive")
+    # a point's label goes where no patch outline crosses it (patches sit under points)
+    keep_out = [_rect_box(p["center_mm"], p["size_mm"], 1.5 / 2) for p in s.get("patches", [])]
     for n, c in enumerate(pts, start=1):
         if n == act:
             continue
         out.append({"p": "disc", "c": c, "r": 2.5, "fill": "grey"})
         if s.get("labels", True):
+            text = str(ids[n - 1] if n - 1 < len(ids) else n)
+            xy, anchor = _label_place(c, text, POINT_LABEL_MM, keep_out)
             out.append(
                 {
                     "p": "text",
-                    "xy": [c[0] + 4, c[1] + 7],
-                    "text": str(ids[n - 1] if n - 1 < len(ids) else n),
-                    "size_mm": 6.5,
+                    "xy": xy,
+                    "text": text,
+                    "size_mm": POINT_LABEL_MM,
                     "color": "dim",
+                    "anchor": anchor,
                 }
             )
     if pas is not None and 1 <= pas <= len(pts):

@@ -15,7 +15,11 @@ from typing import Any
 
 
 def add_parser(sub: Any) -> None:
-    a = sub.add_parser("analyze", help="accuracy, RM-ANOVA, figures of finished (or partial) runs")
+    a = sub.add_parser(
+        "analyze",
+        aliases=["analyse"],  # the console's Studies screen says "Analyse"
+        help="accuracy, RM-ANOVA, figures of finished (or partial) runs (also: analyse)",
+    )
     a.add_argument("dirs", nargs="+", type=Path, help="--out folders or participant folders")
     a.add_argument("--json", action="store_true", help="print the analysis as JSON")
     a.add_argument("--report", type=Path, default=None, help="write an HTML report here")

@@ -159,7 +159,7 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
 
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
-    if args.study_cmd == "analyze":
+    if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         from . import analyze_cli
 
         return analyze_cli.run(args)

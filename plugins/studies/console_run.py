@@ -236,7 +236,11 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
         )
         from .store import resume_text
 
-        again = resume_text(prep.plan, prep.files.events())
+        events = prep.files.events()
+        again = resume_text(prep.plan, events)
+        earlier = [e for e in events if e.get("event") == "done"]
+        if earlier:  # a resumed run: the screen's table shows the trials done before
+            emit("earlier", {"records": earlier})
         detail = f"{proto.title} -> {prep.files.root}" + (f"; {again}" if again else "")
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
         return run_plan(

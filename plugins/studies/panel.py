@@ -23,6 +23,7 @@ its folder is marked stale, and analysed again when the run stops.
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +51,8 @@ from .console_run import TOPIC
 from .runner import Answer, Control
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
+#: seconds in which a second ``a`` (or Abort) aborts the run the first one asked about
+CONFIRM_S = 3.0
 IDLE = "no study running: pick a protocol and a participant, then s"
 
 
@@ -118,7 +121,8 @@ class StudiesPane(Vertical):
         "              stopped); refused during an e-stop (ctrl+r resets it)\n"
         "p             pause after this trial / resume\n"
         "r             replay the stimulus (within the phase's replays)\n"
-        "a             abort now (the trial in flight is repeated on resume)\n"
+        "a             abort: a again within 3 s (the trial in flight is repeated\n"
+        "              on resume)\n"
         "n / Analyse   analyse the folder's runs of this protocol: the report\n"
         "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
         "t             show the trials / the analysis\n"
@@ -159,6 +163,8 @@ class StudiesPane(Vertical):
         self.run_out: Path | None = None  # the folder of the run going on
         self._show_result = True  # the analysis coming in switches to its view
         self.notes: list[str] = []
+        #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
+        self.abort_until: float | None = None
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -243,7 +249,7 @@ class StudiesPane(Vertical):
 
     def action_start(self) -> None:
         if self.running is not None:
-            self.app.notify(f"{self.running} is running: a aborts it", severity="warning")
+            self.app.notify(f"{self.running} is running: a twice aborts it", severity="warning")
             return
         out = self.app.session.outputs
         if out is not None and out.estopped:
@@ -307,12 +313,33 @@ class StudiesPane(Vertical):
         self._show()
 
     def action_replay(self) -> None:
-        if self.responder is not None and self.asking and "trial" in self.asking:
+        if self.running is None:
+            self.app.notify("replay: no study running", timeout=3)
+        elif self.responder is None:
+            self.app.notify(
+                "replay: a simulated participant answers by itself and asks for no replay",
+                timeout=3,
+            )
+        elif self.asking and "trial" in self.asking:
             self.responder.put(Answer(replay=True))
+            self.app.notify("replaying the stimulus", timeout=2)
+        else:
+            self.app.notify("replay: no stimulus is waiting for an answer", timeout=3)
 
     def action_abort(self) -> None:
-        if self.control is not None and self.running is not None:
+        """``a`` (or Abort): the first asks on the status line, a second within
+        ``CONFIRM_S`` seconds aborts the run."""
+        if self.control is None or self.running is None:
+            self.abort_until = None
+            return
+        now = time.monotonic()
+        if self.abort_until is not None and now <= self.abort_until:
+            self.abort_until = None
             self.control.abort("aborted by the experimenter")
+            return
+        self.abort_until = now + CONFIRM_S
+        self._show()
+        self.set_timer(CONFIRM_S + 0.05, self._show)  # the question goes when it expires
 
     def action_analyse(self) -> None:
         study = self._value("protocol")
@@ -426,6 +453,7 @@ class StudiesPane(Vertical):
         elif isinstance(ev, Stopped):
             self.running = None
             self.asking = None
+            self.abort_until = None
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
             if ev.reason.startswith("finished"):  # ready for the next participant
@@ -473,26 +501,13 @@ class StudiesPane(Vertical):
             self.last["state"] = f"replay {d['replays']}"
         elif kind == "refused":
             self.app.notify(d.get("why", "refused"), severity="warning", timeout=3)
+        elif kind == "earlier":  # a resumed run: the trials done before it
+            for r in d.get("records", []):
+                self._add_row(r)
         elif kind == "done":
             self.asking = None
             self.last["state"] = "answered"
-            r = d["record"]
-            rt = r.get("response_time_s")
-            if r.get("completion_time_s") is not None or "overshoots" in r:
-                ct = r.get("completion_time_s")
-                resp = f"{'timeout' if ct is None else f'{ct:.2f} s'} {r.get('overshoots')} ovs"
-            else:
-                resp = str(r.get("response"))
-            table = self.query_one("#study-trials", DataTable)
-            table.add_row(
-                str(r["trial"] + 1),
-                trial_text(r),
-                resp,
-                "yes" if r.get("correct") else "no",
-                str(r.get("replays", 0)),
-                "-" if rt is None else f"{rt:.2f} s",
-            )
-            table.move_cursor(row=table.row_count - 1)
+            self._add_row(d["record"])
         elif kind == "questionnaire":
             self.last["state"] = f"questionnaire after {d['condition']}"
         elif kind == "rate":
@@ -507,6 +522,25 @@ class StudiesPane(Vertical):
         elif kind == "finished":
             self.last["state"] = "finished"
         self._show()
+
+    def _add_row(self, r: dict[str, Any]) -> None:
+        """A done trial's row in the trials table (the cursor follows it)."""
+        rt = r.get("response_time_s")
+        if r.get("completion_time_s") is not None or "overshoots" in r:
+            ct = r.get("completion_time_s")
+            resp = f"{'timeout' if ct is None else f'{ct:.2f} s'} {r.get('overshoots')} ovs"
+        else:
+            resp = str(r.get("response"))
+        table = self.query_one("#study-trials", DataTable)
+        table.add_row(
+            str(r["trial"] + 1),
+            trial_text(r),
+            resp,
+            "yes" if r.get("correct") else "no",
+            str(r.get("replays", 0)),
+            "-" if rt is None else f"{rt:.2f} s",
+        )
+        table.move_cursor(row=table.row_count - 1)
 
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])
@@ -553,6 +587,14 @@ class StudiesPane(Vertical):
             lines.append(f"{which} {t['index'] + 1}: {escape(trial_text(t))}")
         if L.get("state") and self.running:
             lines.append(escape(L["state"]))
+        if self.running and self.abort_until is not None:
+            if time.monotonic() <= self.abort_until:
+                lines.append(
+                    f"[b]a again within {CONFIRM_S:g} s aborts {escape(self.running)}'s run[/b] "
+                    "(the trial in flight runs again on resume)"
+                )
+            else:
+                self.abort_until = None
         if not self.running and L.get("stopped"):
             error = L.get("error")
             if error and error == L["stopped"]:  # a failure: its reason once, in red

@@ -10,6 +10,16 @@ import pytest
 HERE = Path(__file__).resolve().parent
 
 
+@pytest.fixture(autouse=True)
+def _abort_confirmed_in_time(monkeypatch):
+    """The Studies screen aborts on a second ``a`` within ``CONFIRM_S`` seconds; on a
+    loaded machine two pilot key presses can be further apart than the 3 s an
+    experimenter gets, so the tests get longer (a test of the window sets its own)."""
+    from plugins.studies import panel
+
+    monkeypatch.setattr(panel, "CONFIRM_S", 30.0)
+
+
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
     from console.vibration_map import save_map

@@ -67,6 +67,7 @@ def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_fil
             assert bar.total == 200
             status = str(pane.query_one("#study-status", Static).render())
             assert "P01" in status and "/200 trials done" in status and "Rprelim" in status
+            await pilot.click("#abort")  # asks first
             await pilot.click("#abort")
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             stopped_at = int(bar.progress)
@@ -79,6 +80,7 @@ def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_fil
             # start again: the stored plan continues at the next trial
             await pilot.click("#start")
             await wait_for(pilot, lambda: (bar.progress or 0) >= stopped_at + 2, what="resumed")
+            await pilot.click("#abort")  # asks first
             await pilot.click("#abort")
             await wait_for(pilot, lambda: pane.running is None, what="stopped again")
             events = _events(tmp_path / "P01" / "trials.jsonl")
@@ -510,7 +512,7 @@ def test_a_console_killed_mid_trial_resumes_from_the_screen(double_plugins, map_
             await pilot.press("s")
             bar = pane.query_one("#study-progress", ProgressBar)
             await wait_for(pilot, lambda: (bar.progress or 0) >= 7, what="resumed to trial 7")
-            await pilot.press("a")
+            await pilot.press("a", "a")  # the second confirms
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
 
     asyncio.run(scenario())
@@ -568,7 +570,7 @@ def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_th
             from plugins.studies.panel import trial_text
 
             assert f"next: trial {len(done) + 1}: {trial_text(nxt)}" in shown, shown
-            await pilot.press("a")
+            await pilot.press("a", "a")  # the second confirms
             await wait_for(pilot, lambda: pane.running is None, what="stopped")
             # the analysis shown before the run is done again, with the run in it
             await wait_for(pilot, lambda: str(head.render()).startswith("exp2: 1 participant"), 60)

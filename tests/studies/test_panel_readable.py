@@ -101,6 +101,7 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
             await pilot.click("#start")
             bar = pane.query_one("#study-progress")
             await wait_for(pilot, lambda: (bar.progress or 0) >= 2, what="two trials done")
+            await pilot.click("#abort")  # asks first
             await pilot.click("#abort")
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             await pilot.pause(0.2)
@@ -169,7 +170,7 @@ def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
             await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
             await pilot.press("s")  # now it runs
             await wait_for(pilot, lambda: (tmp_path / "P01" / "trials.jsonl").exists(), 60)
-            await pilot.press("a")
+            await pilot.press("a", "a")  # the second confirms
             await wait_for(pilot, lambda: pane.running is None, what="stopped")
 
     asyncio.run(scenario())

@@ -1,5 +1,6 @@
 """The Gestures panel, driven as an operator would: opened from the command palette,
-a tiny twin dataset synthesized with a progress bar and a summary, training cancelled
+a tiny twin dataset synthesized (its size and time first, then confirmed) with a
+progress bar and a summary, training cancelled
 (no model file appears), training run to the end (accuracy per fold), bad input."""
 
 from __future__ import annotations
@@ -42,8 +43,13 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
             assert work.query_one("Label").has_class("error")
             assert not work.busy and not ds.exists()
 
-            # a tiny dataset: the bar shows while it runs, a summary when done
-            _set(panel, "reps", "2")
+            # a tiny dataset (4 repetitions: the harmonics and frames are chosen inside
+            # each training half): its size and time first, then s again starts it; the
+            # bar shows while it runs, a summary when done
+            _set(panel, "reps", "4")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "estimate")
+            assert "s again to start" in work.text and not ds.exists()
             await pilot.press("s")
             assert work.busy and work.progress is not None
             seen = set()
@@ -53,18 +59,18 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
                     seen.add(round(work.progress, 2))
                 return work.outcome is not None
 
-            await wait_for(pilot, done, 60, "synthesis done")
+            await wait_for(pilot, done, 180, "synthesis done")
             assert work.outcome == "done", work.text
-            assert "synthesized 20 samples (1 x 10 x 2)" in work.text
+            assert "synthesized 40 samples (1 x 10 x 4)" in work.text
             assert len(seen) >= 3  # the bar moved through the work
             files = panel.query_one("#gp-files")
-            await wait_for(pilot, lambda: "20 samples" in str(files.render()), 10, "files")
-            assert "2 reps" in str(files.render())
+            await wait_for(pilot, lambda: "40 samples" in str(files.render()), 10, "files")
+            assert "4 reps" in str(files.render())
             assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
 
             # training cancelled: says so, no model file, no temporary left behind
             await pilot.press("t", "x")
-            await wait_for(pilot, lambda: work.outcome is not None, 60, "training stopped")
+            await wait_for(pilot, lambda: work.outcome is not None, 180, "training stopped")
             assert work.outcome == "cancelled" and "training cancelled" in work.text
             res = panel.query_one("#gp-result")
             await wait_for(pilot, lambda: "no model was written" in str(res.render()), 10)
@@ -72,7 +78,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
 
             # training to the end: accuracy per fold, the model in the files block
             await pilot.press("t")
-            await wait_for(pilot, lambda: work.outcome is not None, 60, "training done")
+            await wait_for(pilot, lambda: work.outcome is not None, 300, "training done")
             assert work.outcome == "done", work.text
             res = panel.query_one("#gp-result")
             await wait_for(pilot, lambda: "fold 2" in str(res.render()), 10, "result")
