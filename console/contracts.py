@@ -383,9 +383,8 @@ class PointEffect(Effect, Protocol):
 @runtime_checkable
 class FlowEffect(Effect, Protocol):
     """A two-point flow: from grid point ``a`` to grid point ``b`` of the map ``vmap``
-    (Fig. 9). The plan's ``meta`` says how it was rendered: ``method`` (e.g. ``paper``,
-    ``independent``) and ``predicted_contrast_db`` (active over passive, the weaker
-    part, as the map predicts it)."""
+    (Fig. 9). The plan's ``meta`` (``console.types.PlanInfo``) says how it was rendered:
+    ``method``, ``predicted_contrast_db``, ``rule``, ``parts``."""
 
     def render_flow(self, a: int, b: int, vmap: Any) -> OutputPlan: ...
 

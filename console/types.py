@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, TypedDict, get_type_hints
 
 import numpy as np
 
@@ -172,7 +172,7 @@ class OutputPlan:
     segments: tuple[Segment, ...]
     name: str = ""
     gap_s: float = 0.0  # extra silence between segments beyond the relay guard gap
-    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)  # a ``PlanInfo``
 
     def __post_init__(self) -> None:
         # a plan is a value: a changed plan is a new plan (the gate plays what it checked)
@@ -181,6 +181,63 @@ class OutputPlan:
     @property
     def duration_s(self) -> float:
         return sum(s.n_samples for s in self.segments) / self.sample_rate_hz
+
+
+class PlanPart(TypedDict, total=False):
+    """One part of a plan as its effect describes it: the patch it drives
+    (``actuator``), at ``frequency_hz`` and ``amplitude_v`` (peak), the map's
+    displacement per volt there (``um_per_v``), the 3-JND line (``x_um``) and the margin
+    over it (``margin_db``)."""
+
+    actuator: str
+    frequency_hz: float
+    amplitude_v: float
+    um_per_v: float
+    x_um: float
+    margin_db: float
+
+
+class PlanInfo(PlanPart, total=False):
+    """What an effect says of its plan (``OutputPlan.meta``), the keys the console reads:
+    ``kind`` (``point``, ``flow``, ``hand_flow``, ``two_point`` ...), ``method`` (how it
+    was rendered: ``paper``, ``independent`` ...), ``rule`` (the tables' rule, when it
+    used them), ``predicted_contrast_db`` (active over passive; of a flow in parts the
+    weaker part's) and ``parts`` (``PlanPart``, in playing order). A one-part plan (a
+    point) carries its part's keys at the top level. An effect may add keys of its own;
+    the console reads none of them."""
+
+    kind: str
+    method: str
+    rule: str
+    predicted_contrast_db: float
+    parts: list[PlanPart]
+
+
+def plan_parts(meta: PlanInfo) -> list[PlanPart]:
+    """The parts a plan's ``meta`` describes (a one-part plan: itself)."""
+    return list(meta.get("parts") or [meta])
+
+
+def plan_info_problems(meta: dict[str, Any]) -> list[str]:
+    """Where ``meta`` disagrees with ``PlanInfo``: a declared key of another type
+    (numbers may be ints; ``parts`` a list or tuple of ``PlanPart``)."""
+    out = []
+    hints = get_type_hints(PlanInfo)
+    part_hints = get_type_hints(PlanPart)
+    want = {str: (str,), float: (int, float)}
+    for key, hint in hints.items():
+        if key not in meta or key == "parts":
+            continue
+        if not isinstance(meta[key], want[hint]) or isinstance(meta[key], bool):
+            out.append(f"{key}: {type(meta[key]).__name__}, not {hint.__name__}")
+    parts = meta.get("parts", ())
+    if not isinstance(parts, list | tuple):
+        return [*out, f"parts: {type(parts).__name__}, not a list"]
+    for i, part in enumerate(parts):
+        for key, hint in part_hints.items():
+            if key in part and not isinstance(part[key], want[hint]):
+                out.append(f"parts[{i}].{key}: {type(part[key]).__name__}, not {hint.__name__}")
+    return out
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,8 @@ What this module offers, by where it comes from:
   (``console.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
   ``AT_CONSOLE``, ``listing``
 - the values that cross plugin boundaries (``console.types``): ``Frame``, ``Hand``,
-  ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan``,
-  ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
+  ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
+  ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
 - the typed capabilities (``console.contracts``): ``BlockSource``, ``Classifier``,
   ``Conditions``, ``FlowEffect``, ``FlowPatchDrives``, ``HandFlowEffect``,
@@ -113,6 +113,8 @@ from console.types import (
     Hand,
     OutputDevice,
     OutputPlan,
+    PlanInfo,
+    PlanPart,
     Segment,
     TunableRange,
     patches_of,
@@ -153,6 +155,8 @@ __all__ = [
     "Hand",
     "OutputDevice",
     "OutputPlan",
+    "PlanInfo",
+    "PlanPart",
     "Segment",
     "TunableRange",
     "patches_of",

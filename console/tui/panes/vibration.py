@@ -22,6 +22,7 @@ from console.tui.long_work import stop_check
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape, styled
 from console.tui.util import from_thread
+from console.types import plan_parts
 from console.words import AT_CONSOLE, worded
 
 HELP = (
@@ -522,7 +523,7 @@ class VibrationPane(VerticalScroll):
         if svc is None or svc.scene_name != "grid" or not self.selected:
             return
         meta = plan.meta
-        parts = meta.get("parts") or [meta]
+        parts = plan_parts(meta)
         event = {
             "type": "audition",
             "point": self.selected[-1] if meta.get("kind") == "point" else self.selected[-2],
