@@ -5,10 +5,10 @@ flow direction is the scene's selected arrow, else the demo's ``direction``) ->
 ``effect`` (a resting hand -> the plan for its position and direction) -> ``scheduled``
 (the plan handed to the output scheduler, non-blocking).
 
-The demo runs at once; behind it, plans for the scene's hand regions are prepared
-(exhaustive search, cached on disk), then every flow under a hand on the ``grid_mm`` grid
-is chosen ahead in all four directions (the effect's atlas, cached on disk): once there,
-the frame that decides the gesture plays the nearest place's plan by lookup. While the hand settles, that plan is made and checked
+The demo runs at once; behind it, every flow under a hand on the ``grid_mm`` grid is
+chosen ahead in all four directions (the effect's atlas, cached on disk), then plans for
+the scene's hand regions are prepared (exhaustive search, cached on disk): once there, the
+frame that decides the gesture plays the nearest place's plan by lookup. While the hand settles, that plan is made and checked
 ahead and its first segment's relays are closed (pre-armed, in silence, through the gate):
 it plays at the next audio block after the decision. A hand where neither serves (no atlas, or off the
 table's measured part) gets the staged search on a worker thread and its plan plays when
@@ -169,10 +169,10 @@ class FlowDemo:
     def start(self, progress=None, *, wait: bool = False) -> None:
         """Run at once: what the scene needs is prepared behind the running demo, on a
         thread of its own (``preparing`` says how far, ``prepared`` is set when done):
-        first the scene's regions in the demo's direction (exhaustive; where the scene
-        asks the hand to go), then, with ``precompute``, every flow on the ``grid_mm``
-        grid in every direction (the atlas: minutes the first time, then cached). Until
-        a place is ready a hand there gets its flow planned when asked (1-3 s late).
+        with ``precompute``, every flow on the ``grid_mm`` grid in every direction (the
+        atlas: minutes the first time, then cached), then the scene's regions in the
+        demo's direction (exhaustive). Until a place is ready a hand there gets its flow
+        planned when asked (1-3 s late).
         ``wait``: prepare first, here, reporting ``progress(done, total, what)`` (a
         benchmark measuring the prepared demo); raising in it cancels."""
         self._running = True
@@ -188,10 +188,20 @@ class FlowDemo:
         t.start()
 
     def _prepare(self) -> None:
-        """The regions, then the atlas (``start``); each step's progress in ``preparing``."""
+        """The atlas, then the regions (``start``); each step's progress in ``preparing``.
+        The atlas first: its workers are other processes at low priority, so the planner
+        stays free for a hand placed meanwhile; the regions' reference searches run in
+        the planner after it (a hand in a region has the atlas's place by then)."""
         try:
+            if self.precompute and self.grid_mm > 0 and self._running:
+                try:
+                    if not self.plans.prepare_atlas(self.grid_mm, self._atlas_progress):
+                        log.info("the hand_flow effect offers no atlas: flows planned when asked")
+                except UserError as exc:  # e.g. per-patch drives: no atlas of those yet
+                    log.warning("%s", exc)
             n = len(self.regions)
-            self._prep_step("the scene's regions", 0, n)
+            if n:
+                self._prep_step("the scene's regions", 0, n)
             for i, c in enumerate(self.regions):
                 if not self._running:
                     return
@@ -200,12 +210,6 @@ class FlowDemo:
                 except UserError as exc:
                     log.warning("%s", exc)
                 self._prep_step("the scene's regions", i + 1, n)
-            if self.precompute and self.grid_mm > 0 and self._running:
-                try:
-                    if not self.plans.prepare_atlas(self.grid_mm, self._atlas_progress):
-                        log.info("the hand_flow effect offers no atlas: flows planned when asked")
-                except UserError as exc:  # e.g. per-patch drives: no atlas of those yet
-                    log.warning("%s", exc)
         except _Stopped:
             return
         except Exception:  # noqa: BLE001 - logged; the demo runs on, planning when asked
