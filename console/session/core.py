@@ -78,6 +78,12 @@ class ConsoleSession:
         return self.ctx.profile
 
     @property
+    def table_profile(self) -> Any:
+        """The profile the console's outputs run with: its own, or the one reloaded
+        after the operator picked another device (a demo opens the table with it)."""
+        return self.outputs_profile or self.profile
+
+    @property
     def plugins(self) -> Any:
         return self.ctx.pm
 

@@ -136,7 +136,7 @@ class DemoControl:
                 projector = s.scenes.service
                 fwd = ProjectorForward(projector) if projector is not None else None
                 run = DemoProcess(
-                    s.profile,
+                    s.table_profile,  # the outputs' settings: the table is shared
                     name,
                     params=params,
                     on_scene=fwd.update if fwd is not None else None,

@@ -57,3 +57,20 @@ def test_estop_and_scene_failures_reach_every_subscriber(session, monkeypatch):
     assert not session.scenes.start("grid")
     assert a[-1].topic == "projector" and "scene grid: no" in a[-1].message
     assert not any(isinstance(e, Started) for e in a)
+
+
+def test_a_demo_starts_after_the_operator_picked_another_device(session, tmp_path):
+    """A device picked on the Devices screen reopens the console's outputs with the
+    profile reloaded with it; a demo then opens the same table with those settings (it
+    was refused: 'its outputs are open with other settings by haptable; quit it first')."""
+    import dataclasses
+
+    assert session.open_outputs()
+    prof = session.profile
+    data = {**prof.data, "audio": {**prof.data["audio"], "device": "digital twin amplifiers"}}
+    assert session.reopen_outputs(dataclasses.replace(prof, data=data))
+    run = session.demos.start("knob")
+    try:
+        assert session.demos.state == "running" and run is not None
+    finally:
+        session.demos.stop()
