@@ -147,6 +147,12 @@ async def _scenario(ctx, seconds: float, knob_s: float, flow_s: float) -> dict:
     app = HapTableApp(ctx, fast=False, initial="devices")
     out: dict = {}
     async with app.run_test(size=(120, 40)) as pilot:
+        # the projector runs as in the lab (headless here without a display): the demos
+        # forward their scenes to it, and its restarts are counted
+        loop = asyncio.get_running_loop()
+        out["projector_started"] = await loop.run_in_executor(
+            None, app.session.scenes.start, "grid"
+        )
         run, t_start = await _start(app, pilot, "knob")
         first = _audio(run.snapshot())
         knob: dict = {"start_s": round(t_start, 3), "screens": {}, "rounds": 0}

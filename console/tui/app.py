@@ -24,6 +24,7 @@ from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
 from console.tui.help import HelpText
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
+from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.safety_bar import SafetyBar
 from console.tui.session_messages import SessionMessage
@@ -38,7 +39,7 @@ ctrl+r  reset the e-stop (outputs stay silent until something plays)
 {tabs}
 ?       this help, wherever the focus is (no field takes a ?); ? or escape closes it
 ctrl+z  in a text field: undo its last change (a key that replaced the line too)
-ctrl+p  command palette    ctrl+q  quit (q too, outside a text field)
+ctrl+p  command palette    ctrl+q  quit (q too, outside a text field; while a demo, long work or a study run would stop, press it again)
 ctrl+l  the log: the console's messages and what drivers wrote to stderr
 
 Relays switch only in silence: a toggle waits until both channels have been silent \
@@ -120,6 +121,8 @@ class HapTableApp(App):
     #: how long quitting waits for the session to close (a demo to stop, the projector,
     #: the camera) before it e-stops what is left and exits anyway
     QUIT_WAIT_S = 15.0
+    #: while work runs, a second q (ctrl+q) within this many seconds quits
+    QUIT_CONFIRM_S = 3.0
 
     def __init__(
         self, ctx, *, fast: bool | None = None, initial: str = "devices", image: str = "halfblock"
@@ -137,6 +140,7 @@ class HapTableApp(App):
         self._bind_tabs()
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
+        self._quit_asked = -1e9  # when q last asked to be pressed again
         self._panes: dict[str, Widget] = {}  # the panes built so far, by tab
         self._tab_widget: TabbedContent | None = None
         #: the table's output state, read off the UI thread (``live.watch``), what shows
@@ -364,6 +368,33 @@ class HapTableApp(App):
     def estop(self, reason: str) -> None:
         """Silence everything now (screens observe the ``estop`` event)."""
         self.session.estop(reason)
+
+    def work_under_way(self) -> list[str]:
+        """What quitting would stop: a running demo, long work (a ``LongWork`` busy on
+        any screen) and what panes say (``RunsWork``: a study run)."""
+        out = []
+        if self.session.demos.run is not None:
+            out.append(f"the {self.session.demos.name} demo")
+        for screen in self.screen_stack:
+            out += [f"{lw.name_running}" for lw in screen.query(LongWork) if lw.busy]
+        for pane in list(self._panes.values()):
+            if isinstance(pane, RunsWork) and (what := pane.work_under_way()):
+                out.append(what)
+        return out
+
+    async def action_quit(self) -> None:
+        """Quit; while work runs (``work_under_way``) only when asked twice."""
+        busy = self.work_under_way()
+        now = time.monotonic()
+        if busy and now - self._quit_asked > self.QUIT_CONFIRM_S:
+            self._quit_asked = now
+            self.notify(
+                f"q again to quit: it stops {', '.join(busy)}",
+                severity="warning",
+                timeout=self.QUIT_CONFIRM_S,
+            )
+            return
+        await super().action_quit()
 
     def action_estop(self) -> None:
         self.estop("operator e-stop (console)")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from textual.app import ComposeResult
 from textual.containers import Horizontal
@@ -160,3 +160,11 @@ class LongWork(Horizontal):
         else:
             self.show(text)
         self.post_message(self.Finished(self, name, outcome, result))
+
+
+@runtime_checkable
+class RunsWork(Protocol):
+    """A pane with work that quitting would stop (a study run): ``work_under_way()``
+    says what ('' when none); the console asks before it quits."""
+
+    def work_under_way(self) -> str: ...

@@ -150,6 +150,10 @@ class StudiesPane(Vertical):
         *(Binding(str(k), f"digit({k})", show=False) for k in range(1, 10)),
     ]
 
+    def work_under_way(self) -> str:
+        """What quitting would stop (the console asks first): a participant's run."""
+        return f"{self.running}'s study run" if self.running is not None else ""
+
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
         self.control: Control | None = None
