@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -210,10 +211,14 @@ class ElectrostaticPane(Vertical):
         except UserError as exc:
             from_thread(self.app, self.say, str(exc), True)
             return
+        silent = not any(
+            np.any(seg.screen_v) or np.any(seg.piezo_v) for seg in plan.segments
+        )  # a condition without haptic feedback (V: visual only)
         self._play(
             plan,
             f"knob {condition}: a canned rotation, {plan.duration_s:.1f} s, "
-            f"{plan.meta.get('crossings', 0)} detents",
+            f"{plan.meta.get('crossings', 0)} detents"
+            + (": no haptic feedback in this condition, the outputs stay at 0 V" if silent else ""),
         )
 
     # ------------------------------------------------------------------ status

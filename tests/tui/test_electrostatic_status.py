@@ -69,3 +69,21 @@ def test_p_says_asking_then_playing_then_played(plugins):
             assert "on the screen" in _status(app)
 
     asyncio.run(scenario())
+
+
+def test_a_condition_without_haptics_says_the_outputs_stay_at_zero(plugins):
+    """Knob V is visual only: the line says so instead of a bare "playing"."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="electrostatic")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await _ready(app, pilot)
+            pane = app.pane("electrostatic")
+            seen = _spy(pane)
+            pane._play_condition("V")
+            await wait_for(pilot, lambda: any("no haptic feedback" in t for t in seen), 20)
+            pane._play_condition("HD")
+            await wait_for(pilot, lambda: any("knob HD:" in t for t in seen), 20)
+            assert not any("knob HD:" in t and "no haptic" in t for t in seen)
+
+    asyncio.run(scenario())

@@ -205,7 +205,9 @@ class SignalsPane(Vertical):
             from_thread(self.app, self._refused, gen, str(exc))
             return
         p = Preview(expr, target, fs, x, summarize(x, fs))
-        from_thread(self.app, self._show, gen, p, name if then_play else None)
+        from_thread(
+            self.app, self._show, gen, p, self.play_label(expr, name) if then_play else None
+        )
 
     def _refused(self, gen: int, message: str) -> None:
         if gen != self._gen:
@@ -235,6 +237,14 @@ class SignalsPane(Vertical):
         self.status(p.summary.line())
         if play_name is not None:
             self._audition(p, play_name or "designed")
+
+    def play_label(self, expr: str, name: str) -> str:
+        """What a play of ``expr`` is called: the name field's signal when ``expr`` is its
+        saved expression, else the designed signal (the name a save would give it)."""
+        entry = self.entries.get(name)
+        if entry is not None and entry.expr.strip() == expr.strip():
+            return name
+        return f"designed ({name} edited)" if entry is not None else name or "designed"
 
     # ------------------------------------------------------------------ play, save, load
     def action_play(self) -> None:
