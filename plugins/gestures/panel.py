@@ -274,12 +274,14 @@ class GesturesPanel(Screen):
 
         def summary(est) -> str:
             self._synth_asked = (asked, time.monotonic() + CONFIRM_S)
-            return f"{est['text']}: s again to start, within {CONFIRM_S:.0f} s"
+            # the key first: a narrow screen cuts the end of the line
+            return f"s again within {CONFIRM_S:.0f} s to start: {est['text']}"
 
         self.query_one("#gp-result", Static).update("")
         self.work.start("estimate", job, summary)
 
     def action_train(self) -> None:
+        self._synth_asked = None  # another action: the estimate's s-again lapses
         try:
             ds, model = self.paths()
             cv = self.field("cv").strip().lower()
@@ -322,6 +324,7 @@ class GesturesPanel(Screen):
         return "the Camera screen's classifier uses it now"
 
     def action_cancel(self) -> None:
+        self._synth_asked = None
         if not self.work.cancel():
             self.app.notify("nothing to cancel", timeout=2)
 

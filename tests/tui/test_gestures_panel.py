@@ -49,7 +49,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
             _set(panel, "reps", "4")
             await pilot.press("s")
             await wait_for(pilot, lambda: work.outcome is not None, 60, "estimate")
-            assert "s again to start" in work.text and not ds.exists()
+            assert "s again within" in work.text and not ds.exists()
             await pilot.press("s")
             assert work.busy and work.progress is not None
             seen = set()

@@ -35,7 +35,7 @@ def test_synth_says_size_and_time_then_asks(plugins, tmp_path):
             assert work.outcome == "done", work.text
             text = work.text
             assert "1 x 10 x 1 = 10 samples" in text and "about" in text, text
-            assert " MB and " in text and "s again to start" in text, text
+            assert " MB and " in text and text.startswith("s again within"), text
             assert not ds.exists()
 
             # the fields changed: s measures again instead of starting
@@ -43,6 +43,14 @@ def test_synth_says_size_and_time_then_asks(plugins, tmp_path):
             await pilot.press("s")
             await wait_for(pilot, lambda: work.outcome is not None, 60, "estimate again")
             assert "1 x 10 x 2 = 20 samples" in work.text and not ds.exists()
+
+            # another action in between (t: no dataset yet) replaces the question: s
+            # then measures again, it never starts what is no longer on the screen
+            await pilot.press("t")
+            await wait_for(pilot, lambda: "s again" not in work.text, 30, "t answered")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: work.outcome is not None, 60, "estimate, third")
+            assert "s again within" in work.text and not ds.exists()
 
             # s again: the synthesis it announced
             await pilot.press("s")
