@@ -141,6 +141,7 @@ class HapTableApp(App):
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
         self._quit_asked = -1e9  # when q last asked to be pressed again
+        self._left_focus: dict[str, Widget] = {}  # per tab: the widget focused when left
         self._panes: dict[str, Widget] = {}  # the panes built so far, by tab
         self._tab_widget: TabbedContent | None = None
         #: the table's output state, read off the UI thread (``live.watch``), what shows
@@ -275,6 +276,11 @@ class HapTableApp(App):
         pane = self.pane(tab)
         if self.active_tab != tab or pane is None:
             return None
+        kept = self._left_focus.get(tab)  # where the operator left it (a half-typed line)
+        if kept is not None and kept.is_mounted and kept.focusable and kept.visible:
+            if isinstance(kept, Input):
+                kept.select_on_focus = False  # back to the line as it was, nothing selected
+            return kept
         try:
             return pane.focus_target
         except Exception:  # not composed yet
@@ -284,6 +290,12 @@ class HapTableApp(App):
         # the pane is built on first use; it finishes mounting after the switch (the focus
         # request waits for it): awaiting its mount here could hold the switch back
         self.ensure_pane(tab)
+        # the widget with the focus is where the operator comes back to (a text field's
+        # rest of a line must not become the screen's keys)
+        left, focused = self.active_tab, self.base.focused
+        pane = self.pane(left) if left is not None else None
+        if focused is not None and pane is not None and pane in focused.ancestors_with_self:
+            self._left_focus[left] = focused
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
         # sibling in the same (hidden) pane, and focus in a pane makes it the active tab.
         self.base.set_focus(None)

@@ -75,7 +75,8 @@ def test_ctrl_z_brings_back_what_a_key_replaced(plugins):
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(120, 40)) as pilot:
             expr = await _signals_with_expression(app, pilot)
-            # the focus selected the whole line: a typed key replaces it (as in any editor)
+            # with the whole line selected, a typed key replaces it (as in any editor)
+            expr.select_all()
             await pilot.press("x")
             assert expr.value == "x"
             await pilot.press("ctrl+z")
