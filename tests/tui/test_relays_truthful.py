@@ -80,3 +80,12 @@ def test_the_bar_names_the_closed_relays_from_the_profile(plugins):
         text, _ = describe({"gate": gate, "busy": False}, width, names)
         assert "ctrl+e" in text or "^e" in text
         assert len(text) <= width
+
+
+def test_during_an_estop_only_the_pressed_relay_reads_refused():
+    from console.tui.panes.relays import interlock
+
+    status = {"gate": {"estopped": True}, "busy": False}
+    assert "refused: e-stop active" in interlock(1, status, {}, {1: "e-stop active"})
+    other = interlock(2, status, {}, {1: "e-stop active"})
+    assert "refused" not in other and "open: e-stop active" in other and "ctrl+r" in other

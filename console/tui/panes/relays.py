@@ -26,8 +26,9 @@ def interlock(
     """Why channel ``ch`` can or cannot switch now (what the operator reads); ``cleared``:
     channels whose refusal the e-stop caused and a reset has cleared since."""
     gate = status["gate"]
-    if gate["estopped"]:
-        return f"[red]{escape(ESTOP_REFUSAL)} ({escape(ESTOP_FIX)})[/]"
+    if gate["estopped"]:  # every relay is held open; refused: the one the operator pressed
+        said = ESTOP_REFUSAL if ch in refused or ch in pending else "open: e-stop active"
+        return f"[red]{escape(said)} ({escape(ESTOP_FIX)})[/]"
     if ch in pending:
         want = "close" if pending[ch] else "open"
         if status["busy"]:
