@@ -135,9 +135,9 @@ class DevicesPane(VerticalScroll):
     def _show_profile_line(self) -> None:
         prof = self._profile()
         saved = f"; saved settings: {short_path(prof.overrides)}" if prof.overrides else ""
+        about = (prof.get("profile.description") or "").strip().rstrip(".")
         self.query_one("#profile-line", Static).update(
-            f"profile {prof.name} ({short_path(prof.path)}): "
-            f"{prof.get('profile.description') or ''}{saved}"
+            f"profile {prof.name} ({short_path(prof.path)}): {about}{saved}"
         )
 
     def _in_use(self) -> tuple[str, str, str]:

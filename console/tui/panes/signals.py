@@ -106,7 +106,7 @@ class SignalsPane(Vertical):
             yield Input("", placeholder="(to save)", id="sig-name", compact=True)
             yield Label(" on ")
             yield Input("PA", placeholder="PA,PC|screen", id="sig-target", compact=True)
-            yield Static(" enter plots, ctrl+o plays, ctrl+s saves, ? help", classes="hint")
+            yield Static(" enter plot  ^o play  ^s save  ? help", classes="hint")
         yield Static("", id="sig-status")
         with Horizontal(id="sig-main"):
             yield OptionList(id="sig-library")
