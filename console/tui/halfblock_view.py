@@ -76,11 +76,16 @@ class GreyStretch:
     LOW_PCT = 1.0
     HIGH_PCT = 99.5
 
+    #: the levels shown move only when the followed ones are this far from them: a
+    #: picture is redrawn whole when they move, not on every frame of a slow follow
+    HYSTERESIS = 4.0
+
     def __init__(self, rate: float = 0.1, min_span: float = 32.0) -> None:
         self.rate = rate
         self.min_span = min_span
         self.lo: float | None = None
         self.hi: float | None = None
+        self._shown: tuple[float, float] | None = None
 
     def update(self, grey: np.ndarray) -> tuple[float, float]:
         """(lo, hi) after seeing ``grey``: the first frame sets them."""
@@ -93,12 +98,16 @@ class GreyStretch:
         return self.levels()
 
     def levels(self) -> tuple[float, float]:
-        """(black, white) as shown: ``lo``, ``hi`` at least ``min_span`` apart."""
+        """(black, white) as shown: ``lo``, ``hi`` at least ``min_span`` apart, changed
+        only when they moved more than ``HYSTERESIS`` from what is shown."""
         lo, hi = self.lo or 0.0, self.hi if self.hi is not None else 255.0
         if hi - lo < self.min_span:
             mid = (lo + hi) / 2
             lo, hi = mid - self.min_span / 2, mid + self.min_span / 2
-        return lo, hi
+        shown = self._shown
+        if shown is None or max(abs(lo - shown[0]), abs(hi - shown[1])) > self.HYSTERESIS:
+            self._shown = (lo, hi)
+        return self._shown
 
     def __call__(self, grey: np.ndarray) -> np.ndarray:
         lo, hi = self.update(grey)
