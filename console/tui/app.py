@@ -388,7 +388,7 @@ class HapTableApp(App):
         if self.session.demos.run is not None:
             out.append(f"the {self.session.demos.name} demo")
         for screen in self.screen_stack:
-            out += [f"{lw.name_running}" for lw in screen.query(LongWork) if lw.busy]
+            out += [lw.name_running for lw in screen.query(LongWork) if lw.busy]
         for pane in list(self._panes.values()):
             if isinstance(pane, RunsWork) and (what := pane.work_under_way()):
                 out.append(what)

@@ -7,29 +7,10 @@ from __future__ import annotations
 import asyncio
 import json
 
-import pytest
-
 from console.cli import Context, main
 
 from . import synth_runs as sr
-
-
-@pytest.fixture(autouse=True)
-def _quick_key_presses(monkeypatch):
-    import textual.app
-
-    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
-        await asyncio.sleep(0.02)
-
-    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
-
-
-async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
-    for _ in range(int(timeout_s / 0.05)):
-        if cond():
-            return
-        await pilot.pause(0.05)
-    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+from .test_panel import _quick_key_presses, wait_for  # noqa: F401 - the autouse fixture too
 
 
 def _done(path):

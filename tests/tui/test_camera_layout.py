@@ -19,6 +19,7 @@ from console.cli import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
+from .test_camera import _first_frame as first_frame
 
 SIZES = [(80, 24), (120, 40)]
 
@@ -28,15 +29,7 @@ def _app(plugins) -> HapTableApp:
 
 
 async def _first_frame(app, pilot) -> None:
-    await wait_for(
-        pilot,
-        lambda: (
-            app.session.camera_started is not None
-            and app.session.camera_started.snapshot() is not None
-        ),
-        30,
-        "first camera frame",
-    )
+    await first_frame(app, pilot)
     await wait_for(pilot, lambda: app.focused is app.pane("camera"), 10, "camera focused")
 
 
