@@ -71,6 +71,8 @@ def test_vibration_with_a_pair_selected(snap_compare, map_file):
         pane._redraw_grid()
         pane._show_selection()
         await wait_for(pilot, lambda: "lookup table" in str(app.query_one("#vib-info").render()))
+        # the tables build in their own worker: under load the status still shows progress
+        await wait_for(pilot, lambda: pane.status_text.endswith("; ready"), 60)
         await pilot.pause(0.3)
         await pilot.wait_for_scheduled_animations()
 
