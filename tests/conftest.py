@@ -1,5 +1,5 @@
 """Hermetic tests: no installed third-party plugins, private runtime dir, sim profile, and
-every directory ``console.paths`` names under one tmp root per session (per xdist worker),
+every directory ``console.files.paths`` names under one tmp root per session (per xdist worker),
 a fresh set of them for each test."""
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def pytest_cmdline_main(config):
             config.option.dist = "loadgroup"
 
 
-#: ``console.paths``' variables, each pinned below the session's tmp root.
+#: ``console.files.paths``' variables, each pinned below the session's tmp root.
 PINNED_DIRS = (
     "HAPTABLE_CONFIG_DIR",
     "HAPTABLE_STATE_DIR",
@@ -82,14 +82,14 @@ def _private_runtime(tmp_path_factory, monkeypatch):
 
 @pytest.fixture
 def plugins():
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     return load_plugins()
 
 
 @pytest.fixture
 def profile(plugins):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     return load_profile("sim", plugins)
 
@@ -123,8 +123,8 @@ def fake_vibrometer(profile):
     and the sim profile naming it: ``pm``, ``profile``, ``calls``, ``map``."""
     import plugins.demos
     import plugins.tuio
-    from console.hookspecs import hookimpl
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.config.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.core.hookspecs import hookimpl
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     m = analytic_map(SSPlate())

@@ -1,3 +1,3 @@
 """The console's own benchmarks (``haptable bench console|console-demo|safety``): the top
-layer beside ``console.cli``; nothing below imports them. Registered by
-``console.core_commands``."""
+layer beside ``console.cli.main``; nothing below imports them. Registered by
+``console.cli.core_commands``."""

@@ -133,7 +133,7 @@ def _underruns(before: dict, after: dict) -> dict:
         "underruns": after["underruns"] - before["underruns"],
         "underruns_audible": after["underruns_audible"] - before["underruns_audible"],
         "by_cause": {c: after["by_cause"].get(c, 0) - before["by_cause"].get(c, 0) for c in causes},
-        # where the late thread's time went (console.stall_witness)
+        # where the late thread's time went (console.core.stall_witness)
         "by_origin": {
             o: after["by_origin"].get(o, 0) - before["by_origin"].get(o, 0) for o in origins
         },
@@ -220,7 +220,7 @@ async def _flow(app, pilot, flow_s: float) -> dict:
     window = _window(snap)
     audio = _underruns(first, _audio(snap))
     final = await _stop(app, pilot, run)
-    from console.bench import summarize_s
+    from console.core.bench_stats import summarize_s
 
     return {
         "start_s": round(t_start, 3),
@@ -241,7 +241,7 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
     """Knob from the console, the operator moving between screens, for half of
     ``minutes`` (default 5; quick: 1.5); then the flow with the operator's finger moved
     for the other half."""
-    from console.bench import machine_info
+    from console.core.bench_stats import machine_info
     from console.runtime.jitter import finish_probe, start_probe
 
     if minutes is None:

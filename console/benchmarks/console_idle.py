@@ -126,7 +126,11 @@ def _console_command(profile: str | None, runtime: str) -> str:
     env = {"XDG_RUNTIME_DIR": runtime, "TERM": "tmux-256color"}
     if os.environ.get("PYTHONPATH"):
         env["PYTHONPATH"] = os.environ["PYTHONPATH"]
-    argv = [sys.executable, "-c", "import sys; from console.entry import main; sys.exit(main())"]
+    argv = [
+        sys.executable,
+        "-c",
+        "import sys; from console.cli.entry import main; sys.exit(main())",
+    ]
     if profile:
         argv += ["--profile", profile]
     pairs = " ".join(f"{k}={shlex.quote(v)}" for k, v in env.items())
@@ -159,7 +163,7 @@ def _estop_to_bar(tmux: Tmux, times: int) -> dict:
             tmux, lambda s: BAR_ESTOP not in s and "| idle |" in s.replace("outputs ", ""), 10
         )
         time.sleep(0.5)
-    from console.bench import summarize_s
+    from console.core.bench_stats import summarize_s
 
     return summarize_s(delays)
 
@@ -229,7 +233,7 @@ async def _event_to_bar(ctx, times: int) -> dict:
     thread, as `haptable estop` in a shell or a demo's watchdog."""
     import threading
 
-    from console.bench import summarize_s
+    from console.core.bench_stats import summarize_s
     from console.session.events import Stopped
     from console.tui.app import HapTableApp
     from console.tui.safety_bar import SafetyBar
@@ -272,7 +276,7 @@ def _goal(tab: str) -> float:
 
 def run(ctx, quick: bool) -> dict:
     """Each screen ``seconds`` (10; quick 4) idle: the console process's CPU."""
-    from console.bench import machine_info
+    from console.core.bench_stats import machine_info
     from console.tui.app import panel_tabs
 
     seconds = 4.0 if quick else 10.0

@@ -21,7 +21,7 @@ import time
 
 def _child(profile: str | None) -> None:
     times: dict[str, float] = {"main": time.monotonic()}
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
     from console.runtime.context import Context
 
     plugins = load_plugins()
@@ -62,7 +62,7 @@ def startup_once(profile: str | None = None) -> dict[str, float]:
 
 def run(ctx, quick: bool) -> dict:
     """``haptable bench console``: start-up to first paint (target < 1 s)."""
-    from console.bench import machine_info, summarize_s
+    from console.core.bench_stats import machine_info, summarize_s
 
     n = 3 if quick else 10
     prof = ctx.profile_arg

@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import machine_info
+from console.core.bench_stats import machine_info
 from console.kernel.scheduler import Scheduler
 from console.safety import Limits, SafetyGate
-from console.stimuli import make_stimulus
+from console.signals.stimuli import make_stimulus
 
 
 class _MemoryBoard:

@@ -7,7 +7,7 @@ silences.
   lengths), live streams with random and broken parameters and posts, relay command
   sequences with e-stops and resets, malformed messages on a raw connection, e-stops at
   random moments. Each case's recording, relay log and gate events are checked by
-  ``console.safety_audit``. Cases per second and the problems found (0 expected).
+  ``console.safety.audit``. Cases per second and the problems found (0 expected).
 - ``estop``: ``shell_ms``: `haptable estop` from a shell with nothing running, wall time
   (interpreter start-up included); ``demo_silence_ms``: from running `haptable estop`
   to the last non-zero sample at the twin's DAC, a demo playing on the table and (with
@@ -32,11 +32,11 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
-from console.errors import SafetyRefusal
-from console.safety_audit import Window, received_problems
-from console.signals import ramp_envelope, tone
-from console.types import OutputPlan, Segment
+from console.core.bench_stats import machine_info, summarize_s
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
+from console.safety.audit import Window, received_problems
+from console.signals.waveforms import ramp_envelope, tone
 
 FAULTS = ("none", "nan", "step", "object", "wrong_len", "inf")
 ROUTES = {"PA": frozenset({"PA"}), "PALL": frozenset({"PA", "PB", "PC", "PD"})}
@@ -315,7 +315,7 @@ def _sandbox_env(run_dir: Path, **extra: str) -> dict[str, str]:
 def _haptable() -> list[str]:
     """`haptable` as a user runs it: the installed script, else the entry module."""
     script = Path(sys.executable).with_name("haptable")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "console.entry"]
+    return [str(script)] if script.exists() else [sys.executable, "-m", "console.cli.entry"]
 
 
 def shell_estop_ms(trials: int) -> dict[str, Any]:

@@ -7,7 +7,7 @@ Accuracy (independent references):
   interpolated spectral peak) against the frequency asked for;
 - ``chirp_inst_freq_rel_err``: a linear and a log chirp's instantaneous frequency (the
   phase of the analytic signal, scipy's Hilbert transform) against ``f(t)`` in closed form;
-- ``sine_vs_tone_max_abs_v``: the designed ``sine * ramp`` against ``console.signals.tone``;
+- ``sine_vs_tone_max_abs_v``: the designed ``sine * ramp`` against ``console.signals.waveforms.tone``;
 - ``adsr_level_err``: ADSR envelope levels at the segment ends against their set values.
 """
 
@@ -18,11 +18,11 @@ import time
 import numpy as np
 from scipy.signal import hilbert
 
-from console.bench import machine_info, summarize_s
+from console.core.bench_stats import machine_info, summarize_s
 from console.safety import Limits, check_plan
-from console.signal_design import dominant_hz, parse_target, render, signal_plan
-from console.signal_expr import parse
-from console.signals import tone
+from console.signals.design import dominant_hz, parse_target, render, signal_plan
+from console.signals.expr import parse
+from console.signals.waveforms import tone
 
 CASES = {
     "tone 1 s": "sine(250 Hz, 20 V, 1 s) * ramp(20 ms)",

@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from console.bench import machine_info, summarize_s
-from console.contracts import SimulatedCamera
-from console.errors import UserError
+from console.core.bench_stats import machine_info, summarize_s
+from console.core.contracts import SimulatedCamera
+from console.core.errors import UserError
+from console.core.types import GestureScript, GestureStep
 from console.runtime.stages import learn_background, open_classifier
 from console.runtime.tracking import Tracking
-from console.types import GestureScript, GestureStep
 
 
 def _steps_mm(points: list[tuple[int, np.ndarray]]) -> dict[str, float]:

@@ -3,7 +3,7 @@
 ``open_outputs(profile, plugins)`` connects to the kernel of the profile's table (starting
 it when none runs) and returns ``Outputs``: plans go to the kernel once (checked there
 on arrival; ``precheck``) and play by reference, live streams go as parameters
-(``console.stream_synth``) and are steered with posts, relay settings are requests.
+(``console.signals.stream_synth``) and are steered with posts, relay settings are requests.
 Nothing here touches a driver, a relay board or the gate: their state comes back as
 replies and events (e-stops, resets, each plan's first sample and segments).
 
@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import EStopLatched, SafetyRefusal, UserError
+from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.kernel import wire
 from console.kernel.scheduler import PlayReport
 from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
@@ -493,12 +493,12 @@ class Outputs:
     def stream(self, source: Any, name: str = "stream") -> PlayReport:
         """Play a live stream: its ``spec`` goes to the kernel, which synthesises it; the
         source is bound to the kernel's side (``bind``) so its posts steer it there."""
-        from console.contracts import ParametricStream
+        from console.core.contracts import ParametricStream
 
         if not isinstance(source, ParametricStream):
             raise SafetyRefusal(
                 f"{name}: a live stream is described by its parameters (a "
-                f"console.contracts.ParametricStream: a StreamSpec and bind); "
+                f"console.core.contracts.ParametricStream: a StreamSpec and bind); "
                 f"{type(source).__name__} is not one"
             )
         h, _ = self._call("stream", spec=source.spec.to_json(), name=str(name))

@@ -130,9 +130,9 @@ class LineServer:
         self.max_line = max_line
         self.max_clients = max_clients
         self.dropped = 0  # connections dropped (deadline, bound, peer, crowd)
-        self.priority = priority  # its threads' real-time priority (console.realtime)
+        self.priority = priority  # its threads' real-time priority (console.core.realtime)
         if len(os.fsencode(self.path)) > MAX_SOCKET_PATH:
-            from console.errors import UserError
+            from console.core.errors import UserError
 
             raise UserError(
                 f"{self.path}: socket path too long for the system; set XDG_RUNTIME_DIR "
@@ -162,7 +162,7 @@ class LineServer:
     # ------------------------------------------------------------------ the loop
     def _realtime(self) -> None:
         if self.priority is not None:
-            from console.realtime import realtime_priority
+            from console.core.realtime import realtime_priority
 
             realtime_priority(self.priority)
 

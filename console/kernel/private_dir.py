@@ -14,8 +14,8 @@ import os
 import stat
 from pathlib import Path
 
-from console import paths
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files import paths
 
 
 def runtime_dir() -> Path:

@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
 from console.kernel import wire
 from console.kernel.tables import read_latch
 
@@ -122,7 +122,7 @@ def cancel(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 
 def stream(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """A live stream from its parameters: checked against the limits, synthesised here."""
-    from console.stream_synth import StreamSpec
+    from console.signals.stream_synth import StreamSpec
 
     spec = StreamSpec.from_json(h.get("spec"))
     j = k.new_id()
@@ -186,7 +186,7 @@ def events(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 
 def recording(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """What the twin's amplifiers got, in sound-card units (float32: half the bytes)."""
-    from console.contracts import SimulatedAudio
+    from console.core.contracts import SimulatedAudio
 
     if not isinstance(k.audio, SimulatedAudio):
         return {"ok": True, "recording": False}
@@ -282,7 +282,7 @@ def _patches(v: Any) -> frozenset[str]:
 def _plan_from(h: dict[str, Any], arrays: list) -> Any:
     """The ``OutputPlan`` a ``plan`` request describes (its arrays in order: each
     segment's piezo, screen, then its own patch drives)."""
-    from console.types import OutputPlan, Segment
+    from console.core.types import OutputPlan, Segment
 
     segs_in = h.get("segments")
     if not isinstance(segs_in, list) or len(segs_in) > 10000:

@@ -3,7 +3,7 @@
 It runs inside the kernel process (``console.kernel.server``). The audio driver pulls
 blocks from the gate, the gate pulls them from here. A checked plan becomes steps: set
 relays (in silence) -> play the segment's samples -> gap -> ... -> open the relays. A live
-stream is synthesised here from its parameters (``console.stream_synth``): no client code
+stream is synthesised here from its parameters (``console.signals.stream_synth``): no client code
 runs on the audio path. Relay switches run on a worker thread (USB is slow) while the
 audio path emits silence; the gate itself refuses any switch that is not in silence.
 
@@ -27,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
 from console.safety import Limits, SafetyGate, Source, check_plan
-from console.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
-from console.types import OutputPlan, Segment
+from console.signals.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
 
 log = logging.getLogger("haptable.scheduler")
 
@@ -607,7 +607,7 @@ class Scheduler(Source):
         job.report.finish(error)
 
     def _relay_worker(self) -> None:
-        from console.realtime import KERNEL_PRIORITY, realtime_priority
+        from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 
         realtime_priority(KERNEL_PRIORITY)  # part of the output path, as the audio thread
         while True:

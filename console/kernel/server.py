@@ -30,7 +30,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from console.errors import SafetyRefusal, UserError
+from console.core.errors import SafetyRefusal, UserError
+from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 from console.kernel import wire
 from console.kernel.line_server import LineServer, peer_cred
 from console.kernel.operator import reset_refusal
@@ -45,7 +46,6 @@ from console.kernel.tables import (
     table_at,
     write_latch,
 )
-from console.realtime import KERNEL_PRIORITY, realtime_priority
 
 log = logging.getLogger("haptable.kernel")
 
@@ -554,7 +554,7 @@ def main() -> int:
     sys.stdout = sys.stderr
     logging.basicConfig(level=logging.WARNING, format="haptable kernel: %(name)s: %(message)s")
     table = table_at(request["table_dir"])
-    from console.plugins import import_extra, load_plugins
+    from console.config.plugins import import_extra, load_plugins
 
     try:
         pm = load_plugins(extra=import_extra(request.get("extra_plugins") or ()))

@@ -25,7 +25,8 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files.profile_paths import find_profile, known_profiles
 from console.kernel.line_server import PeerRefused, request
 from console.kernel.operator import WHO_MAY_RESET
 from console.kernel.tables import (
@@ -38,7 +39,6 @@ from console.kernel.tables import (
     table_for,
     write_latch,
 )
-from console.profile_paths import find_profile, known_profiles
 
 
 @dataclass(frozen=True)

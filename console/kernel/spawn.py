@@ -99,7 +99,7 @@ def command_line() -> str:
         mod, rest = argv[i + 1], argv[i + 2 :]
         words = (
             ["haptable", *rest]
-            if mod in ("console.cli", "console.entry")
+            if mod in ("console.cli.main", "console.cli.entry")
             else ["python", "-m", mod, *rest]
         )
     else:

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import SimulatedAudio, SimulatedRelays
-from console.errors import SafetyRefusal, UserError
+from console.core.contracts import SimulatedAudio, SimulatedRelays
+from console.core.errors import SafetyRefusal, UserError
 from console.kernel.scheduler import CheckedPlan, PlayReport, Scheduler
 from console.safety import Limits, SafetyGate
 

@@ -13,18 +13,18 @@ and takes the root of any other plugin package):
 What this module offers, by where it comes from:
 
 - errors: ``UserError``, ``SafetyRefusal``; a message's fix where the user is
-  (``console.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
+  (``console.core.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
   ``AT_CONSOLE``, ``listing``
-- the values that cross plugin boundaries (``console.types``): ``Frame``, ``Hand``,
+- the values that cross plugin boundaries (``console.core.types``): ``Frame``, ``Hand``,
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
   ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
-- the typed capabilities (``console.contracts``): ``BlockSource``, ``Classifier``,
+- the typed capabilities (``console.core.contracts``): ``BlockSource``, ``Classifier``,
   ``Conditions``, ``FlowEffect``, ``FlowPatchDrives``, ``HandFlowEffect``,
   ``HandFlowGeometry``, ``KnobTrials``,
   ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
   ``VisionResult``
-- the hook marker: ``hookimpl`` (the hooks are documented in ``console.hookspecs``)
+- the hook marker: ``hookimpl`` (the hooks are documented in ``console.core.hookspecs``)
 - plugin manager and profile: ``Plugins``, ``PanelTab``, ``load_plugins``, ``Profile``,
   ``load_profile``, ``profile_file``
 - settings schema and CLI options: ``Field``, ``KINDS``, ``check``, ``path_problem``;
@@ -45,11 +45,12 @@ What this module offers, by where it comes from:
 
 from __future__ import annotations
 
-from console.atomic import append_json_line, write_text_atomic
-from console.bench import machine_info, summarize_s
-from console.cache_files import cached_arrays, entry_path, input_hash
-from console.channels import BUS_CHANNELS, ChannelLayout
-from console.contracts import (
+from console.config.plugins import PanelTab, Plugins, load_plugins
+from console.config.profile import Profile, load_profile
+from console.config.profile_files import profile_file
+from console.core.bench_stats import machine_info, summarize_s
+from console.core.channels import BUS_CHANNELS, ChannelLayout
+from console.core.contracts import (
     BlockSource,
     Classifier,
     Conditions,
@@ -64,11 +65,9 @@ from console.contracts import (
     SimulatedObserver,
     VisionResult,
 )
-from console.errors import SafetyRefusal, UserError
-from console.file_read import parse_toml_text, read_bytes_capped
-from console.hookspecs import hookimpl
-from console.npz_safe import json_depth, npz_keys, read_npz
-from console.options import (
+from console.core.errors import SafetyRefusal, UserError
+from console.core.hookspecs import hookimpl
+from console.core.options import (
     BadValue,
     Parser,
     finite_float,
@@ -81,25 +80,10 @@ from console.options import (
     seconds,
     seed,
 )
-from console.paths import cache_dir, data_dir
-from console.plugins import PanelTab, Plugins, load_plugins
-from console.profile import Profile, load_profile
-from console.profile_files import profile_file
-from console.realtime import realtime_priority, support_priority
-from console.safety.limits import Limits
-from console.schema import KINDS, Field, check, path_problem
-from console.signals import MAX_PLAN_S, check_duration, plan_samples, tone
-from console.stall_witness import ORIGINS, StallWitness
-from console.stream_synth import (
-    Envelope,
-    PulseSpec,
-    StreamSink,
-    StreamSpec,
-    StreamSynth,
-    smooth_square,
-    spec_problem,
-)
-from console.types import (
+from console.core.realtime import realtime_priority, support_priority
+from console.core.schema import KINDS, Field, check, path_problem
+from console.core.stall_witness import ORIGINS, StallWitness
+from console.core.types import (
     DIRECTIONS,
     DIRECTIONS_MM,
     EXCITATIONS,
@@ -119,7 +103,13 @@ from console.types import (
     TunableRange,
     patches_of,
 )
-from console.vibration_map import (
+from console.core.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
+from console.files.atomic import append_json_line, write_text_atomic
+from console.files.cache_files import cached_arrays, entry_path, input_hash
+from console.files.file_read import parse_toml_text, read_bytes_capped
+from console.files.npz_safe import json_depth, npz_keys, read_npz
+from console.files.paths import cache_dir, data_dir
+from console.files.vibration_map import (
     FIX,
     KEYS,
     MAX_FRF_UM_PER_V,
@@ -130,7 +120,17 @@ from console.vibration_map import (
     map_from_arrays,
     save_map,
 )
-from console.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
+from console.safety.limits import Limits
+from console.signals.stream_synth import (
+    Envelope,
+    PulseSpec,
+    StreamSink,
+    StreamSpec,
+    StreamSynth,
+    smooth_square,
+    spec_problem,
+)
+from console.signals.waveforms import MAX_PLAN_S, check_duration, plan_samples, tone
 
 __all__ = [
     # errors, and their fix where the user is
@@ -141,7 +141,7 @@ __all__ = [
     "Placed",
     "listing",
     "worded",
-    # values (console.types)
+    # values (console.core.types)
     "DIRECTIONS",
     "DIRECTIONS_MM",
     "EXCITATIONS",
@@ -160,7 +160,7 @@ __all__ = [
     "Segment",
     "TunableRange",
     "patches_of",
-    # capabilities (console.contracts)
+    # capabilities (console.core.contracts)
     "BlockSource",
     "Classifier",
     "Conditions",

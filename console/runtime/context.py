@@ -7,7 +7,7 @@ import contextlib
 from collections.abc import Iterator
 from functools import cached_property
 
-from console.errors import EStopped
+from console.core.errors import EStopped
 
 
 class Context:
@@ -25,7 +25,7 @@ class Context:
 
     @cached_property
     def profile(self):
-        from console.profile import load_profile
+        from console.config.profile import load_profile
 
         return load_profile(self.profile_arg, self.pm)
 

@@ -17,7 +17,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.kernel.line_server import LineServer, PeerRefused, request
 from console.kernel.private_dir import open_private
 from console.kernel.tables import table_for

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import TouchableCamera
-from console.realtime import SUPPORT_PRIORITY, realtime_priority
+from console.core.contracts import TouchableCamera
+from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
 
 #: status lines per second
 STATUS_HZ = 5.0
@@ -160,9 +160,9 @@ class Host:
         return snap
 
     def serve(self) -> int:
+        from console.config.plugins import load_plugins
         from console.kernel.client import open_outputs
         from console.kernel.tables import table_at
-        from console.plugins import load_plugins
 
         req = self.request
         profile, name = req["profile"], req["demo"]
@@ -202,7 +202,7 @@ class Host:
                 },
             )
             period = 1.0 / STATUS_HZ
-            realtime_priority(SUPPORT_PRIORITY)  # prepared; now see console.realtime
+            realtime_priority(SUPPORT_PRIORITY)  # prepared; now see console.core.realtime
             self.proto.send("status", self.status())
             while not self.stop_asked.wait(period):
                 self.proto.send("status", self.status())
@@ -230,7 +230,7 @@ class Host:
     def write_logs(self) -> dict:
         """The twin's recording and relay log (``console.runtime.twin_log``) where the
         console asked, and beside ``$HAPTABLE_TWIN_LOG`` when that is set."""
-        from console.errors import UserError
+        from console.core.errors import UserError
         from console.runtime.twin_log import copy_twin_log, write_twin_log
 
         paths = []
@@ -288,7 +288,7 @@ def main() -> int:
         daemon=True,
     )
     commands.start()
-    from console.errors import UserError
+    from console.core.errors import UserError
 
     try:
         return host.serve()

@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from console.errors import UserError
+from console.core.errors import UserError
 
 
 class DemoCancelled(Exception):
@@ -248,10 +248,10 @@ class DemoProcess:
 
     def status_lines(self, snapshot: dict) -> list[str]:
         """``snapshot`` as the operator reads it: the demo registration's own
-        ``status_lines`` (``console.contracts.DemoFactory``), here in the console's
+        ``status_lines`` (``console.core.contracts.DemoFactory``), here in the console's
         process (the run's last snapshot stays readable after the process ended)."""
         if self._plugins is None:
-            from console.plugins import load_plugins
+            from console.config.plugins import load_plugins
 
             self._plugins = load_plugins()
         return list(self._plugins.get("demo", self.name).factory.status_lines(snapshot))

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from console.types import DeviceStatus, OutputDevice
+from console.core.types import DeviceStatus, OutputDevice
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from console.types import DeviceStatus
+from console.core.types import DeviceStatus
 
 DEVICE_KINDS = (
     ("audio", "audio_output"),
@@ -72,7 +72,7 @@ def realtime_status(profile, plugins) -> DeviceStatus:
 
 def scheduling_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread and a demo's frame loop can run with real-time priority."""
-    from console.realtime import HOW_TO_ALLOW, may_use_realtime
+    from console.core.realtime import HOW_TO_ALLOW, may_use_realtime
 
     if may_use_realtime():
         return DeviceStatus("realtime", "scheduling", "ok", "real-time (FIFO) priority allowed")

@@ -19,8 +19,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from console.bench import summarize_s
-from console.types import Frame
+from console.core.bench_stats import summarize_s
+from console.core.types import Frame
 
 #: The stage a frame's processing is measured from (the camera thread stamps it).
 ARRIVAL = "arrival"

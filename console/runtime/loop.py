@@ -28,9 +28,9 @@ from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-from console.contracts import Camera
+from console.core.contracts import Camera
+from console.core.types import Frame
 from console.runtime.latency import ARRIVAL, DEQUEUED, LatencyMonitor
-from console.types import Frame
 
 log = logging.getLogger("haptable.loop")
 
@@ -165,7 +165,7 @@ class FrameLoop:
     # ------------------------------------------------------------------ threads
     def _want_realtime(self) -> None:
         if self.realtime:
-            from console.realtime import FRAMES_PRIORITY, realtime_priority
+            from console.core.realtime import FRAMES_PRIORITY, realtime_priority
 
             self.realtime_granted = realtime_priority(FRAMES_PRIORITY)
 

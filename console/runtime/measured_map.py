@@ -14,7 +14,7 @@ hash of those inputs; its name holds the first 16 digits) and ``content_sha256``
 ``content_hash()``). A kept file without them, with another key (another plate's map,
 or any map copied over the name), another content, or that cannot be read (truncated,
 empty, not a file) is logged in one line and deleted: the map is measured again, never
-played (``console.cache_files``). ``kept_measured_map`` reads the kept map without ever
+played (``console.files.cache_files``). ``kept_measured_map`` reads the kept map without ever
 measuring (the console's Vibration screen).
 """
 
@@ -26,8 +26,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console import cache_files
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files import cache_files
 
 Progress = Callable[[float, str], None]
 
@@ -46,8 +46,8 @@ class Cancelled(Exception):
 
 def cache_dir() -> Path:
     """Where measured maps are kept: ``console`` in HapTable's one cache directory
-    (``console.paths.cache_dir``, ``$HAPTABLE_CACHE_DIR``); nothing else keeps them."""
-    from console import paths
+    (``console.files.paths.cache_dir``, ``$HAPTABLE_CACHE_DIR``); nothing else keeps them."""
+    from console.files import paths
 
     return paths.cache_dir("console")
 
@@ -67,8 +67,8 @@ def measured_map_path(profile: Any) -> Path:
 
 def _read_kept(path: Path, key: str) -> Any:
     """The kept map at ``path`` when it is the one of ``key``, whole; ``UserError`` else."""
-    from console.vibration_map import FIX as MAP_FIX
-    from console.vibration_map import load_map
+    from console.files.vibration_map import FIX as MAP_FIX
+    from console.files.vibration_map import load_map
 
     try:
         vmap = load_map(path)
@@ -90,7 +90,7 @@ def _read_kept(path: Path, key: str) -> Any:
 
 
 def _keep(path: Path, vmap: Any) -> None:
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
 
     try:
         with cache_files.atomic_target(path) as tmp:
@@ -178,7 +178,7 @@ def measured_map(
 def measure_map(profile: Any, plugins: Any, progress: Progress, cancelled: Callable[[], bool]):
     """Measure the grid (all five excitations) with the registered vibrometer and return
     the ``VibrationMap`` (not cached); ``Cancelled`` when ``cancelled()`` turns true."""
-    from console.vibration_map import make_map
+    from console.files.vibration_map import make_map
 
     regs = plugins.of("vibrometer")
     if not regs:

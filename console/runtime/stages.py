@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import Classifier, RendersBackground
-from console.errors import UserError
-from console.types import Frame, Hand
+from console.core.contracts import Classifier, RendersBackground
+from console.core.errors import UserError
+from console.core.types import Frame, Hand
 
 
 def corners_homography(
@@ -60,7 +60,7 @@ def fallback_to_mm(profile: Any, plugins: Any):
 
 
 def open_classifier(profile: Any, plugins: Any) -> Classifier:
-    """The profile's classifier, checked against ``console.contracts.Classifier`` (its
+    """The profile's classifier, checked against ``console.core.contracts.Classifier`` (its
     per-frame vision included); positions in mm through ``fallback_to_mm`` when it has
     no calibration of its own."""
     clf = plugins.build("classifier", profile.get("gestures.classifier") or "svm", profile)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from console.types import Contact, Gesture, Hand
+from console.core.types import Contact, Gesture, Hand
 
 ToMm = Callable[[np.ndarray], np.ndarray]
 

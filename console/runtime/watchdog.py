@@ -92,7 +92,7 @@ class Watchdog:
 
     def _run(self) -> None:
         if self.realtime:
-            from console.realtime import SUPPORT_PRIORITY, realtime_priority
+            from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
 
             realtime_priority(SUPPORT_PRIORITY)
         while not self._stop.wait(self.period_s):

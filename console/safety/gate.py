@@ -17,9 +17,10 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from console.channels import ChannelLayout
-from console.contracts import RelayBoard
-from console.errors import SafetyRefusal
+from console.core.channels import ChannelLayout
+from console.core.contracts import RelayBoard
+from console.core.errors import SafetyRefusal
+from console.core.types import PATCHES
 from console.safety.block_rules import (
     GENERIC_REFUSAL,
     Judged,
@@ -34,7 +35,6 @@ from console.safety.gate_state import GateEvent, GateState, ScopeView
 from console.safety.limits import Limits
 from console.safety.scope import ScopeTap
 from console.safety.sources import Source
-from console.types import PATCHES
 
 log = logging.getLogger("haptable.safety")
 

@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from console.channels import BUS_CHANNELS, ChannelLayout
-from console.errors import SafetyRefusal
-from console.types import PATCHES, OutputPlan
+from console.core.channels import BUS_CHANNELS, ChannelLayout
+from console.core.errors import SafetyRefusal
+from console.core.types import PATCHES, OutputPlan
 
 if TYPE_CHECKING:
-    from console.profile import Profile
+    from console.config.profile import Profile
 
 log = logging.getLogger("haptable.safety")
 RAMP_TOLERANCE = 1.02  # a sine under a linear envelope may touch the envelope

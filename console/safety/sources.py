@@ -1,6 +1,6 @@
 """What the gate pulls samples from: the output scheduler (``console.kernel.scheduler``),
 the only source. No plugin code runs on the audio path: live streams are synthesised by
-the kernel from their parameters (``console.stream_synth``)."""
+the kernel from their parameters (``console.signals.stream_synth``)."""
 
 from __future__ import annotations
 

@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan
 from console.safety import RAMP_TOLERANCE, Limits, check_plan
-from console.signal_design import Node, Target, render, signal_plan
-from console.signal_expr import parse
-from console.types import OutputPlan
+from console.signals.design import Node, Target, render, signal_plan
+from console.signals.expr import parse
 
 
 def ramp_hint(limits: Limits) -> str:

@@ -1,7 +1,7 @@
 """The touch-calibration wizard on the console's camera, outside the screens.
 
 The classifier offers a calibration session (its optional ``touch_calibration(profile)``,
-see ``console.hookspecs``): targets in table millimetres, fed the contacts of each frame.
+see ``console.core.hookspecs``): targets in table millimetres, fed the contacts of each frame.
 The wizard hooks the camera service's frames, shows the targets on the projector (when
 one runs), lets a camera twin touch the shown target, and reports to the session's
 observers with topic ``calibration``: ``Started`` (the targets), ``Progress`` (each
@@ -19,8 +19,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console.contracts import TouchableCamera, TouchCalibrating
-from console.errors import UserError
+from console.core.contracts import TouchableCamera, TouchCalibrating
+from console.core.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
 TOPIC = "calibration"
@@ -187,7 +187,7 @@ class TouchCalibration:
         calibration`` file, which the classifier reads); ``UserError`` when none is."""
         if self.result is None:
             raise UserError("no calibration to save: run it first (k)")
-        from console.profile_files import profile_file
+        from console.config.profile_files import profile_file
 
         prof = self.session.profile
         dest = (

@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from console.core.types import TunableRange
 from console.session.events import SessionEvent, Started, Stopped
-from console.types import TunableRange
 
 
 class CameraService:
@@ -52,7 +52,7 @@ class CameraService:
         """``viewer`` shows the camera (``on``) or no longer does. The loop starts with the
         first viewer and stops when the last one leaves. Blocking (opening the camera, or
         joining its loop): call in a worker. A failure to open is kept in ``error``."""
-        from console.errors import UserError
+        from console.core.errors import UserError
 
         with self._lock:
             if on:
@@ -173,13 +173,13 @@ class CameraService:
 
     def _adjustable(self):
         """The camera when its driver takes exposure, gain ... (``AdjustableCamera``)."""
-        from console.contracts import AdjustableCamera
+        from console.core.contracts import AdjustableCamera
 
         cam = self.camera
         return cam if isinstance(cam, AdjustableCamera) else None
 
     def params(self) -> dict[str, float]:
-        """The classifier's tunables (``console.contracts.Classifier``) and the camera's
+        """The classifier's tunables (``console.core.contracts.Classifier``) and the camera's
         controls (``AdjustableCamera``: exposure, gain), by name."""
         out = self.classifier.tunables() if self.classifier is not None else {}
         cam = self._adjustable()
@@ -208,11 +208,11 @@ class CameraService:
 
     def save_tuning(self) -> Path:
         """Keep the tuned thresholds for the next start: written to the profile's override
-        file in the user's config directory (``console.profile.save_overrides``) under the
+        file in the user's config directory (``console.config.profile.save_overrides``) under the
         keys the classifier names (``TunablesInProfile``); returns the file."""
-        from console.contracts import TunablesInProfile
-        from console.errors import UserError
-        from console.profile import save_overrides
+        from console.config.profile import save_overrides
+        from console.core.contracts import TunablesInProfile
+        from console.core.errors import UserError
 
         clf = self.classifier
         if clf is None:
@@ -235,7 +235,7 @@ class CameraService:
     def switches(self) -> dict[str, Any]:
         """The frame sinks the console can switch (``contracts.SwitchableSink``, e.g. the
         TUIO sender), by name."""
-        from console.contracts import SwitchableSink
+        from console.core.contracts import SwitchableSink
 
         return {
             name: reg.factory
@@ -253,8 +253,8 @@ class CameraService:
         """Switch sink ``name`` on or off (and point it at ``target`` "host:port"), saved
         to the profile's overrides file (the next start has it); a running loop feeds it
         from the next frame. Returns the file. Bad ``target``: a ``UserError``."""
-        from console.errors import UserError
-        from console.profile import load_profile, save_overrides
+        from console.config.profile import load_profile, save_overrides
+        from console.core.errors import UserError
 
         factory = self.switches().get(name)
         if factory is None:

@@ -15,7 +15,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from console.errors import SafetyRefusal, UserError
+from console.core.errors import SafetyRefusal, UserError
 from console.session.events import (
     ESTOP_FIX,
     ESTOP_REFUSAL,
@@ -384,7 +384,7 @@ class ConsoleSession:
     def audition(
         self, signal: Any, target: Any, *, name: str = "audition", wait: bool = True
     ) -> bool:
-        """Play a designed signal (an expression or a ``console.signal_design`` node) on
+        """Play a designed signal (an expression or a ``console.signals.design`` node) on
         ``target`` (a ``Target``: patches or the screen) through the gate, checked against
         the limits first (``console.session.audition``). A refusal is a ``Failed`` event
         (topic ``signals``); returns True when it played (or queued)."""

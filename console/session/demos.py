@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.session.events import Progress, Snapshot, Started, Stopped
 
 

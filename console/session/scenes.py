@@ -13,7 +13,7 @@ import os
 import threading
 from typing import Any
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.session.events import Started, Stopped
 
 #: how long a scene start waits for the projector process to connect

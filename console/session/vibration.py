@@ -6,7 +6,7 @@ loaded from a file; the Vibration screen shows it, the Scenes screen and the pro
 service read it there. ``VibrationSession`` is one map with the effects that play it.
 
 The console computes no haptics and imports no plugin: it asks the registered plugins
-for capabilities (``console/contracts.py``):
+for capabilities (``console/core/contracts.py``):
 
 - stimuli: the effects offering ``PointEffect``, ``FlowEffect`` and ``HandFlowEffect``;
 - the lookup tables: a ``TableEffect``'s ``tables(vmap=, progress=)`` (built step by
@@ -27,8 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from console import contracts
-from console.errors import UserError
+from console.core import contracts
+from console.core.errors import UserError
+from console.core.types import DIRECTIONS
+from console.core.words import AT_CLI, AT_CONSOLE, Placed
 from console.runtime.measured_map import (
     Cancelled,
     kept_measured_map,
@@ -38,8 +40,6 @@ from console.runtime.measured_map import (
 )
 from console.session.events import Progress as ProgressEvent
 from console.session.events import Started, Stopped
-from console.types import DIRECTIONS
-from console.words import AT_CLI, AT_CONSOLE, Placed
 
 __all__ = ["Cancelled", "VibrationService", "VibrationSession", "measure_map"]
 
@@ -60,7 +60,7 @@ def _get(profile, key: str, default: Any = None) -> Any:
 
 
 def effect(plugins, profile, capability: type) -> Any:
-    """A new effect offering ``capability`` (a ``console.contracts`` Protocol) built for
+    """A new effect offering ``capability`` (a ``console.core.contracts`` Protocol) built for
     ``profile``, or a ``UserError`` naming the capability and the plugin to enable."""
     return plugins.provider("effect", capability, profile, plugin_hint="vibrotactile", fresh=True)
 
@@ -173,7 +173,7 @@ class VibrationSession:
 
 
 def save_map(path: Path, vmap) -> Path:
-    from console.vibration_map import save_map as _save
+    from console.files.vibration_map import save_map as _save
 
     return _save(path, vmap)
 
@@ -182,7 +182,7 @@ def load_map(path: Path, profile=None):
     """A vibration map file (any subset of excitations); its point ids are the
     measurement's node numbers (any positive number); bad files are a one-line
     ``UserError``. ``profile`` is accepted for the callers' symmetry."""
-    from console.vibration_map import load_map as _load
+    from console.files.vibration_map import load_map as _load
 
     return _load(Path(path).expanduser(), require_all=False)
 

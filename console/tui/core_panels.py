@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.hookspecs import hookimpl
-from console.plugins import PanelTab
+from console.config.plugins import PanelTab
+from console.core.hookspecs import hookimpl
 
 
 def _devices(app: Any) -> Any:

@@ -31,7 +31,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from console.core_sections import IMAGE_MODES  # [console] image, haptable console --image
+from console.config.core_sections import IMAGE_MODES  # [console] image, haptable console --image
 
 __all__ = [
     "IMAGE_MODES",
@@ -95,7 +95,7 @@ def choose_image_mode(setting: str, ask: Callable[[], str | None] = probe) -> st
     the keys; half-block where it cannot load); ``auto``: what ``ask`` finds, else
     ``halfblock``."""
     if setting not in IMAGE_MODES:
-        from console.errors import UserError
+        from console.core.errors import UserError
 
         raise UserError(f"image = {setting!r}: expected one of {', '.join(map(repr, IMAGE_MODES))}")
     if setting == "halfblock":

@@ -18,7 +18,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from textual.message import Message
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
 
 log = logging.getLogger(__name__)
 

@@ -25,7 +25,7 @@ from textual.binding import Binding
 from textual.screen import ModalScreen
 from textual.widgets import Log, Static
 
-from console import paths
+from console.files import paths
 from console.tui.safety_bar import SafetyBar
 from console.tui.util import from_thread
 

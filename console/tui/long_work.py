@@ -22,7 +22,7 @@ from textual.message import Message
 from textual.widgets import Label, ProgressBar
 from textual.worker import get_current_worker
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.tui.util import from_thread
 
 Progress = Callable[[float, str], None]

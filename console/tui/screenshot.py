@@ -12,11 +12,11 @@ import argparse
 import asyncio
 from pathlib import Path
 
-from console.options import seconds
+from console.core.options import seconds
 
 
 async def _shoot(args) -> Path:
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
     from console.runtime.context import Context
     from console.tui.app import HapTableApp
 

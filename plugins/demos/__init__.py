@@ -110,7 +110,7 @@ def start_demo(name: str, profile: Any, plugins: Any, outputs: Any, **params: An
 
 
 class DemoFactory:
-    """A registered demo (``console.contracts.DemoFactory``): called ``(profile, plugins,
+    """A registered demo (``console.core.contracts.DemoFactory``): called ``(profile, plugins,
     outputs, **params)`` it starts the demo (``plugins.demos.run.start_demo``);
     ``status_lines(snapshot)`` formats a snapshot of it (``plugins.demos.status``)."""
 

@@ -50,7 +50,7 @@ class Prearms(Protocol):
 
 #: A resting hand this close past the border of the place pre-armed keeps that place (mm).
 ARMED_SLACK_MM = 2.0
-#: Direction -> unit vector in table mm (console.types: up = -y, as the projected arrows).
+#: Direction -> unit vector in table mm (console.core.types: up = -y, as the projected arrows).
 UNIT = DIRECTIONS_MM  # the projector's arrows use the same convention
 
 

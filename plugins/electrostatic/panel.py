@@ -2,7 +2,7 @@
 friction presets; amplitude and frequency controls kept inside the limits, with the
 expected force of the setting.
 
-Everything goes through effect capabilities (``console.contracts``): the ``Conditions``
+Everything goes through effect capabilities (``console.core.contracts``): the ``Conditions``
 effect's conditions and the ``Presets`` effect's presets fill the list; the setting is
 rendered by the ``Presets`` effect."""
 

@@ -10,7 +10,7 @@ Conditions (paper 5.4 and its discussion), as ``<detent>[+<friction>]``:
 * ``VD+CF``, ``VD+VF``, ``VD+BF`` variant: the detent is a vibrotactile burst on the piezo
   channel while the friction stays on the screen channel (both modalities at once).
 
-The samples are synthesised by ``console.stream_synth``: ``KnobStream`` describes its
+The samples are synthesised by ``console.signals.stream_synth``: ``KnobStream`` describes its
 condition once as a ``StreamSpec`` (the friction sine is the carrier, the detent its
 pulse) and maps the knob's angle, velocity and touch to carrier targets, which it posts
 with the crossings to its sink: a local ``StreamSynth`` (offline rendering), or, after

@@ -6,7 +6,7 @@ A trial: navigate from a start item to a target item ``distance_deg`` away (135,
 (times the selection left the target after reaching it) and recovery time (first
 overshoot to the final entry). A trial ends when the selection has stayed on the target
 for ``dwell_s``. Each finished trial is appended to a JSON-lines log and flushed with
-``os.fsync`` (``console.atomic.append_json_line``) so a crash loses no finished trial.
+``os.fsync`` (``console.files.atomic.append_json_line``) so a crash loses no finished trial.
 
 ``SimFinger`` is a simple human-like controller: minimum-jerk submovements toward the
 target's centre whose duration follows Fitts' law and whose endpoint scatter grows with

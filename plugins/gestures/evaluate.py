@@ -82,7 +82,7 @@ def vision_settings_id(params: VisionParams) -> str:
 
 
 def cache_dir() -> Path:
-    """``gestures`` in HapTable's cache directory (``console.paths``)."""
+    """``gestures`` in HapTable's cache directory (``console.files.paths``)."""
     return console_cache_dir("gestures")
 
 

@@ -109,7 +109,7 @@ def calibration_path_for(profile: Any) -> Path | None:
     """The projector calibration JSON: ``[projector] calibration_path`` (relative to the
     profile) or ``projector.json`` in the profile's state directory (an old
     ``<profile name>.projector.json`` beside the profile is copied there:
-    ``console.profile_files``)."""
+    ``console.config.profile_files``)."""
     if profile is None:
         return None
     from console.plugin_api import profile_file

@@ -10,7 +10,7 @@ and abort, and resumes after a crash at the next trial of the stored plan.
 ``haptable study run exp1|exp2|knob --participant P01 --out DIR`` (``cli.py``) and the
 Studies screen (``panel.py``, tab F10). Stimuli through the contracts only: the
 ``FlowEffect`` and ``HandFlowEffect`` effects and the knob's ``KnobTrials``; simulated
-participants through a registered ``SimulatedObserver`` (``console.contracts``).
+participants through a registered ``SimulatedObserver`` (``console.core.contracts``).
 """
 
 from __future__ import annotations

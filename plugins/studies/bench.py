@@ -162,7 +162,7 @@ def pipeline(trials: int) -> dict[str, Any]:
         cmd = [
             sys.executable,
             "-m",
-            "console.cli",
+            "console.cli.main",
             "study",
             "run",
             "exp2",

@@ -70,7 +70,7 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
 
 
 class SenderFactory:
-    """``make_sender`` as a ``console.contracts.SwitchableSink``: the console's Camera
+    """``make_sender`` as a ``console.core.contracts.SwitchableSink``: the console's Camera
     screen switches it (``[tuio] enabled``) and sets its target (``host``, ``port``)."""
 
     keys = {"enabled": "tuio.enabled", "host": "tuio.host", "port": "tuio.port"}

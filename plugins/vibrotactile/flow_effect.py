@@ -130,7 +130,7 @@ class FlowEffect(MapUser):
 
     def render_flow(self, a: int, b: int, vmap: Any) -> OutputPlan:
         """The flow from grid point ``a`` to ``b`` of ``vmap``
-        (``console.contracts.FlowEffect``)."""
+        (``console.core.contracts.FlowEffect``)."""
         return self.render(int(a), int(b), vmap=vmap)
 
     def patch_drives(

@@ -123,7 +123,7 @@ class HandFlowEffect(MapUser):
 
     def render_hand_flow(self, center_mm: Any, direction: str, vmap: Any) -> OutputPlan:
         """The flow under a hand at ``center_mm`` toward ``direction`` on ``vmap``, the
-        staged search (``console.contracts.HandFlowEffect``)."""
+        staged search (``console.core.contracts.HandFlowEffect``)."""
         return self.render(center_mm=center_mm, direction=direction, vmap=vmap, screen_stride=3)
 
     def hand_flow_atlas(

@@ -17,7 +17,7 @@ the hand change by less than a fifth of a square.
 The atlas is built in worker processes (``workers``; cancel by raising in ``progress``)
 and cached on disk keyed by a hash of everything it depends on: the map's content, the
 perception model, the drive cap, band, interpolation, hand geometry, search parameters and
-the step; the file carries that key inside it (``console.cache_files``). A cache file of
+the step; the file carries that key inside it (``console.files.cache_files``). A cache file of
 other inputs (another map's atlas under this name), that cannot be read or fails its
 checks is logged, deleted and rebuilt: it is never played. Memory: ~100 bytes per place and direction plus at most
 ``max_plans`` synthesised plans (``nbytes`` says how much).
@@ -451,7 +451,7 @@ def load_or_build(
 ) -> FlowAtlas:
     """The atlas of ``m``: read from ``cache_dir`` when a valid file for these inputs is
     there, else built (``build_arrays``) and stored. A file made from other inputs (it
-    carries their key: ``console.cache_files``), that cannot be read or fails
+    carries their key: ``console.files.cache_files``), that cannot be read or fails
     ``check_arrays`` is logged, deleted and rebuilt, never played."""
     import time
 

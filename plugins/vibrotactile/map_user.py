@@ -17,7 +17,7 @@ The request vocabulary, shared by the three effects (``flow_effect``,
 - ``name``: the plan's name (default: a description of the request).
 
 Consumers (scenes, demos, benchmarks) reach the effects only by capability:
-``plugins.provider("effect", HandFlowEffect, profile)`` (``console.contracts``).
+``plugins.provider("effect", HandFlowEffect, profile)`` (``console.core.contracts``).
 """
 
 from __future__ import annotations

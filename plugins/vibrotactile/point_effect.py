@@ -32,7 +32,7 @@ class PointEffect(MapUser):
 
     def render_point(self, point: Any, vmap: Any) -> OutputPlan:
         """The pulse at ``point`` (a grid number or (x, y) mm) of ``vmap``
-        (``console.contracts.PointEffect``)."""
+        (``console.core.contracts.PointEffect``)."""
         return self.render(point=point, vmap=vmap)
 
     def render(

@@ -193,7 +193,7 @@ def sections() -> dict:
 
 def field(section: str, key: str) -> Field:
     """The declared field of ``[section] key`` (a command-line option overriding the key
-    takes its range: ``console.options.from_field``)."""
+    takes its range: ``console.core.options.from_field``)."""
     return sections()[section][0][key]
 
 

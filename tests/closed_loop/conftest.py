@@ -25,14 +25,14 @@ DIRECTIONS = ("right", "up")
 
 @pytest.fixture(scope="session")
 def loop_plugins():
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     return load_plugins()
 
 
 @pytest.fixture(scope="session")
 def loop_profile(loop_plugins):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     return load_profile("sim", loop_plugins)
 

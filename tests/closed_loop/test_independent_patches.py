@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from console.config.profile import load_profile
+from console.core.types import OutputPlan, Segment
 from console.kernel.client import open_outputs
-from console.profile import load_profile
-from console.types import OutputPlan, Segment
 from plugins.twin.plate import closed_loop as cl
 from plugins.twin.plate.loop_play import recording_with_offset, relay_channels_of
 

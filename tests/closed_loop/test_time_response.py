@@ -173,7 +173,7 @@ def test_twin_vibrometer_is_registered_and_reports_progress(loop_plugins, loop_p
     calls = []
     out = TwinVibrometer(loop_profile, coarse).measure(progress=lambda d, n: calls.append((d, n)))
     assert calls == [(k, 7) for k in range(1, 8)]  # 5 excitations, then 2 sweeps
-    from console.vibration_map import make_map
+    from console.files.vibration_map import make_map
 
     m = make_map(**{k: v for k, v in out.items() if k != "meta"})
     assert m.frf_um_per_v.shape == (5, 84, out["freq_hz"].size)

@@ -1,4 +1,4 @@
-"""The one cache mechanism (console/cache_files.py): an entry carries the hash of its inputs
+"""The one cache mechanism (console/files/cache_files.py): an entry carries the hash of its inputs
 and of its content inside it; an entry of other inputs, a damaged, empty, truncated or
 foreign one is logged (one line), deleted and rebuilt, never used."""
 
@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console import cache_files as cf
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files import cache_files as cf
 
 WHAT = "test cache entry"
 

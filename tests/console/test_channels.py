@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.channels import ChannelLayout, layout_problem
-from console.errors import ProfileError, SafetyRefusal
+from console.config.profile import PROJECT_PROFILES, load_profile
+from console.core.channels import ChannelLayout, layout_problem
+from console.core.errors import ProfileError, SafetyRefusal
+from console.core.types import PATCHES, OutputPlan, Segment
 from console.kernel.client import open_outputs
-from console.profile import PROJECT_PROFILES, load_profile
 from console.safety import Limits, SafetyGate, check_plan
 from console.safety.block_rules import block_first_problem, block_ok
-from console.signals import ramp_envelope
-from console.stream_synth import PulseSpec, StreamSpec
-from console.types import PATCHES, OutputPlan, Segment
+from console.signals.stream_synth import PulseSpec, StreamSpec
+from console.signals.waveforms import ramp_envelope
 
 FS = 48000
 FOUR = ("PA", "PB", "PC", "PD", "screen")
@@ -352,7 +352,7 @@ def test_relays_on_a_four_channel_profile_switch_in_silence(tmp_path, plugins):
 
 def test_estop_on_sim_4ch_silences_every_channel_and_the_audit_agrees(outputs4):
     from console.benchmarks.safety import fresh_window
-    from console.safety_audit import received_problems
+    from console.safety.audit import received_problems
 
     start = fresh_window(outputs4)
     n = FS * 2
@@ -396,7 +396,7 @@ def test_estop_on_sim_4ch_silences_every_channel_and_the_audit_agrees(outputs4):
 def test_play_writes_a_wav_with_a_channel_per_output(tmp_path):
     import wave
 
-    from console.cli import main
+    from console.cli.main import main
 
     path = tmp_path / "pc.wav"
     assert main(["--profile", "sim-4ch", "play", "sine-PC", "--dry-run", "--out", str(path)]) == 0

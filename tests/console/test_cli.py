@@ -7,7 +7,7 @@ import os
 import re
 import time
 
-from console.cli import main
+from console.cli.main import main
 from console.runtime.control import send_command
 
 
@@ -23,8 +23,8 @@ def test_doctor_json_reports_each_device(capsys):
 
 
 def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins):
+    from console.config.profile import load_profile
     from console.kernel import memory_lock
-    from console.profile import load_profile
     from console.runtime import doctor
 
     monkeypatch.setattr(memory_lock, "_may_lock", lambda: (False, "memlock limit 8192 kB"))
@@ -34,8 +34,8 @@ def test_doctor_names_the_memory_lock_fix_for_a_sound_card(monkeypatch, plugins)
 
 
 def test_doctor_names_the_realtime_fix_for_a_sound_card(monkeypatch, plugins):
-    from console import realtime
-    from console.profile import load_profile
+    from console.config.profile import load_profile
+    from console.core import realtime
     from console.runtime import doctor
 
     monkeypatch.setattr(realtime, "realtime_priority", lambda above_min=10: False)
@@ -115,7 +115,7 @@ def test_estop_without_console(capsys):
 
 def test_an_output_path_that_cannot_be_written_is_one_line(capsys):
     """A file the command must write into a place that cannot hold it: one line, exit 2."""
-    from console.cli import main
+    from console.cli.main import main
 
     assert main(["play", "sine-PA", "--dry-run", "--out", "/dev/null/x.wav"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -123,8 +123,8 @@ def test_an_output_path_that_cannot_be_written_is_one_line(capsys):
 
 
 def test_bench_list_names_every_benchmark_in_a_column(capsys, monkeypatch):
-    from console import core_commands
-    from console.plugins import load_plugins
+    from console.cli import core_commands
+    from console.config.plugins import load_plugins
 
     monkeypatch.setenv("COLUMNS", "80")
     assert main(["bench", "list"]) == 0

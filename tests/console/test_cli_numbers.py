@@ -1,5 +1,5 @@
 """Numbers on the command line: every one declared with its range in one place
-(``console.options``), every bad one refused before the command runs as ONE line
+(``console.core.options``), every bad one refused before the command runs as ONE line
 ``haptable: error: <command> <option>: <value> ...; give ...``, exit 2: never a
 traceback, an internal error, a silent default or a run that never ends.
 
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from console.cli import build_parser, main
-from console.options import (
+from console.cli.main import build_parser, main
+from console.core.options import (
     MAX_SEED,
     Number,
     finite_float,
@@ -29,7 +29,7 @@ from console.options import (
     seconds,
     usage_line,
 )
-from console.schema import Field
+from console.core.schema import Field
 
 F_HZ = [float(f) for f in range(0, 651, 25)]
 
@@ -184,7 +184,7 @@ def fx(tmp_path_factory) -> dict:
     """A small valid vibration map (84 points, 27 bins)."""
     import numpy as np
 
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import analytic_map
 
     d = tmp_path_factory.mktemp("numbers")
@@ -232,14 +232,14 @@ def _number_actions(parser: argparse.ArgumentParser, path: tuple[str, ...] = ())
             yield path, a
 
 
-#: commands whose numbers other work moves to console.options (issue 25's studies part)
+#: commands whose numbers other work moves to console.core.options (issue 25's studies part)
 PENDING = {("study", "run")}
 
 
 def test_every_number_option_is_declared_with_its_range(plugins):
     """No ``type=int`` / ``type=float``: a plain converter takes NaN, infinity, -1."""
-    from console import core_commands
-    from console.plugins import load_plugins
+    from console.cli import core_commands
+    from console.config.plugins import load_plugins
 
     parser = build_parser(load_plugins(core=core_commands))
     plain = [
@@ -247,7 +247,7 @@ def test_every_number_option_is_declared_with_its_range(plugins):
         for path, a in _number_actions(parser)
         if a.type in (int, float) and path not in PENDING
     ]
-    assert not plain, "declare these with console.options (finite_float, integer, ...):\n" + (
+    assert not plain, "declare these with console.core.options (finite_float, integer, ...):\n" + (
         "\n".join(plain)
     )
 

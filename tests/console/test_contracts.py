@@ -1,4 +1,4 @@
-"""Every registered thing satisfies its kind's Protocol (console/contracts.py), and a
+"""Every registered thing satisfies its kind's Protocol (console/core/contracts.py), and a
 plugin that does not is refused with one line naming the plugin, the kind and the
 member it lacks."""
 
@@ -10,11 +10,11 @@ import typing
 import numpy as np
 import pytest
 
-from console import contract_check, contracts
-from console.errors import UserError
-from console.hookspecs import hookimpl
-from console.plugins import load_plugins
-from console.types import Frame, TunableRange
+from console.config.plugins import load_plugins
+from console.core import contract_check, contracts
+from console.core.errors import UserError
+from console.core.hookspecs import hookimpl
+from console.core.types import Frame, TunableRange
 
 #: What the built-in registrations offer beyond their kind's contract (kind, name): the
 #: capabilities console/ asks for instead of these names.
@@ -90,7 +90,7 @@ def test_every_sim_registration_satisfies_its_contract(plugins, profile):
 
 
 def test_the_lab_profile_s_registrations_too(plugins):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     lab = load_profile("haptable-lab", plugins)
     checked = _check_profile(plugins, lab, must_build=False)
@@ -127,7 +127,7 @@ def test_a_missing_capability_names_it_and_the_plugin_to_enable(profile):
 
 
 def test_effects_are_built_once_per_profile(plugins, profile):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     a = plugins.built("effect", "flow", profile)
     assert plugins.built("effect", "flow", profile) is a
@@ -234,7 +234,7 @@ def test_a_required_parameter_the_contract_does_not_pass_is_a_problem():
 
 
 def test_the_register_callbacks_are_typed():
-    from console import hookspecs
+    from console.core import hookspecs
 
     hints = {
         name: typing.get_type_hints(fn)["register"]
@@ -332,7 +332,7 @@ def _stdlib_modules(tree) -> set[str]:
 def probes() -> list[str]:
     """``getattr``/``hasattr`` calls in console/ on anything but a stdlib module the file
     imports (``getattr(os, "O_CLOEXEC", 0)`` asks the platform, not a plugin). The
-    contract checker itself (console/contract_check.py) reads members by name: that is its
+    contract checker itself (console/core/contract_check.py) reads members by name: that is its
     job."""
     import ast
     from pathlib import Path
@@ -340,7 +340,7 @@ def probes() -> list[str]:
     root = Path(__file__).resolve().parents[2]
     out = []
     for path in sorted((root / "console").rglob("*.py")):
-        if path.name == "contract_check.py" and path.parent.name == "console":
+        if path.name == "contract_check.py" and path.parent.name == "core":
             continue
         tree = ast.parse(path.read_text(), str(path))
         modules = _stdlib_modules(tree)
@@ -364,5 +364,5 @@ def test_few_probes():
     found = probes()
     assert len(found) < PROBE_LIMIT, (
         f"{len(found)} getattr/hasattr probes in console/ (ask for a capability of "
-        "console/contracts.py instead):\n" + "\n".join(found)
+        "console/core/contracts.py instead):\n" + "\n".join(found)
     )

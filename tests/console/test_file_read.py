@@ -7,8 +7,8 @@ import os
 
 import pytest
 
-from console.errors import ProfileError, UserError
-from console.file_read import read_bytes_capped, read_text_capped, read_toml_capped
+from console.core.errors import ProfileError, UserError
+from console.files.file_read import read_bytes_capped, read_text_capped, read_toml_capped
 
 KW = {"what": "settings file", "fix": "give a TOML file"}
 

@@ -28,15 +28,15 @@ from console.benchmarks.safety import (
     relay_case,
     stream_case,
 )
-from console.errors import SafetyRefusal
+from console.config.profile import PROJECT_PROFILES, load_profile
+from console.core.errors import SafetyRefusal
+from console.core.types import PATCHES, OutputPlan, Segment
 from console.kernel.client import open_outputs
 from console.kernel.table import TableOutputs
-from console.profile import PROJECT_PROFILES, load_profile
 from console.safety import Source
-from console.safety_audit import Window, received_problems
-from console.signals import ramp_envelope, tone
-from console.stream_synth import PulseSpec, StreamSpec
-from console.types import PATCHES, OutputPlan, Segment
+from console.safety.audit import Window, received_problems
+from console.signals.stream_synth import PulseSpec, StreamSpec
+from console.signals.waveforms import ramp_envelope, tone
 
 FS = 48000
 BLOCK = 64
@@ -53,7 +53,7 @@ FAULTS = st.sampled_from(["none", "nan", "step", "raise", "object", "stall", "wr
 def profile5(request, tmp_path_factory):
     """The sim-4ch profile (a channel per patch and the screen), with or without a relay
     per patch; and the plugins."""
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     plugins = load_plugins()
     text = (PROJECT_PROFILES / "sim-4ch.toml").read_text()

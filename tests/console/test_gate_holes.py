@@ -12,11 +12,11 @@ import time
 import numpy as np
 import pytest
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
 from console.safety import Source
-from console.signals import tone
-from console.stream_synth import PulseSpec, StreamSpec
-from console.types import OutputPlan, Segment
+from console.signals.stream_synth import PulseSpec, StreamSpec
+from console.signals.waveforms import tone
 
 FS = 48000
 

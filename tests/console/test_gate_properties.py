@@ -31,13 +31,13 @@ from console.benchmarks.safety import (
     relay_case,
     stream_case,
 )
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
 from console.kernel.table import TableOutputs
 from console.safety import SafetyGate, Source
-from console.safety_audit import Window, received_problems
-from console.signals import ramp_envelope, tone
-from console.stream_synth import PulseSpec, StreamSpec
-from console.types import OutputPlan, Segment
+from console.safety.audit import Window, received_problems
+from console.signals.stream_synth import PulseSpec, StreamSpec
+from console.signals.waveforms import ramp_envelope, tone
 from plugins.twin.outputs import TwinAudioOutput
 
 FS = 48000

@@ -15,12 +15,12 @@ from types import MappingProxyType
 import numpy as np
 import pytest
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import PATCHES, OutputPlan, Segment
 from console.safety import GENERIC_REFUSAL, GateEvent, Limits, SafetyGate, Source, check_plan
 from console.safety import gate as gate_module
 from console.safety.block_rules import block_first_problem, block_ok
-from console.signals import ramp_envelope
-from console.types import PATCHES, OutputPlan, Segment
+from console.signals.waveforms import ramp_envelope
 
 FS = 48000
 BLOCK = 64

@@ -12,57 +12,24 @@ ROOT = Path(__file__).resolve().parents[2]
 
 LAYERS = ("types", "profile", "safety", "kernel", "runtime", "session", "tui", "cli")
 
-#: module (or package prefix) -> layer. The longest match wins; ``console`` alone is the
-#: package's ``__init__``. A new module gets a line here.
+#: folder -> layer: every console module sits in a folder, and the folder says its layer
+#: (``console`` alone is the package's ``__init__``). The longest match wins, so the
+#: plugin API's modules can sit at the layer of what each re-exports.
 LAYER_OF: dict[str, str] = {
     "console": "types",
-    "console.types": "types",
-    "console.channels": "types",
-    "console.errors": "types",
-    "console.words": "types",  # a message's fix where the user is (errors only)
-    "console.suggest": "types",  # the word meant for a word mistyped (stdlib only)
-    "console.schema": "types",
-    "console.hookspecs": "types",
-    "console.contracts": "types",
-    "console.contract_check": "types",  # an object against a contracts Protocol
-    "console.paths": "types",
-    "console.profile_paths": "types",  # where profiles are found (stdlib: `haptable estop`)
-    "console.stream_synth": "types",  # live streams from their parameters (pure numpy)
-    "console.atomic": "types",
-    "console.npz_safe": "types",
-    "console.cache_files": "types",  # keyed cache files: the inputs' hash inside, checked
-    "console.signals": "types",
-    "console.signal_design": "types",
-    "console.signal_expr": "types",
-    "console.signal_syntax": "types",  # the signal syntax's units, functions and bounds
-    "console.signal_check": "types",  # whether a designed signal can ever play
-    "console.file_read": "types",  # a small file read bounded: kind and size first
-    "console.stimuli": "types",
-    "console.vibration_map": "types",
-    "console.options": "types",
-    "console.realtime": "types",  # the OS scheduling calls, for the gate and the loops
-    "console.stall_witness": "types",  # where a late real-time thread's time went (OS counters)
-    "console.bench": "types",  # percentiles and machine info, used by drivers and runtime too
-    "console.profile": "profile",
-    "console.plugins": "profile",
-    "console.core_sections": "profile",
-    "console.signal_library": "profile",
-    "console.signal_library_file": "profile",
-    "console.profile_files": "profile",  # the files kept per profile (state directory)
-    "console.safety": "safety",
-    "console.safety_audit": "safety",
-    "console.plugin_api": "safety",  # the plugin API's core: re-exports up to safety.limits
+    "console.core": "types",  # types, errors, words, contracts, hook specs, option checks
+    "console.files": "types",  # paths, atomic writes, bounded reads, cache files, map format
+    "console.signals": "types",  # waveforms, the signal language, stimuli, live streams
+    "console.config": "profile",  # the profile, the plugin manager, per-profile files
+    "console.safety": "safety",  # the gate, its limits, the e-stop
+    "console.plugin_api": "safety",  # the plugin API's core: re-exports up to safety
     "console.kernel": "kernel",  # the outputs process of a table, and its clients' side
-    "console.runtime": "runtime",
-    "console.session": "session",
+    "console.runtime": "runtime",  # loops, devices, the projector process, the watchdog
+    "console.session": "session",  # what the console does, with no Textual
     "console.plugin_api.runtime": "session",  # the plugin API: runtime, kernel client, events
-    "console.tui": "tui",
+    "console.tui": "tui",  # the Textual screens
     "console.plugin_api.tui": "tui",  # the plugin API: the Textual helpers panels use
-    "console.cli": "cli",
-    "console.entry": "cli",  # `haptable`: estop/reset before anything heavy, else the CLI
-    "console.commands": "cli",
-    "console.core_commands": "cli",
-    "console.signal_commands": "cli",
+    "console.cli": "cli",  # `haptable`: entry (estop/reset before anything heavy), commands
     "console.benchmarks": "cli",  # the top, beside the CLI that registers them
 }
 
@@ -160,6 +127,12 @@ def test_every_console_module_has_a_layer():
     )
 
 
+def test_every_console_module_sits_in_a_layer_folder():
+    """No module flat at console/'s root: a new module goes into the folder of its layer."""
+    flat = sorted(p.name for p in (ROOT / "console").glob("*.py") if p.name != "__init__.py")
+    assert not flat, f"{flat}: move each into the console/ folder of its layer (see LAYER_OF)"
+
+
 def test_no_module_imports_a_higher_layer():
     rank = {layer: i for i, layer in enumerate(LAYERS)}
     up = [
@@ -181,17 +154,23 @@ def test_the_checks_see_function_local_imports_and_skip_type_checking(tmp_path):
     TYPE_CHECKING import is not an edge; a relative import is resolved."""
     pkg = tmp_path / "console"
     (pkg / "tui").mkdir(parents=True)
+    (pkg / "config").mkdir(parents=True)
     (pkg / "__init__.py").write_text("")
     (pkg / "tui" / "__init__.py").write_text("")
-    (pkg / "profile.py").write_text(
+    (pkg / "config" / "__init__.py").write_text("")
+    (pkg / "config" / "profile.py").write_text(
         "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from console.tui import app\n"
         "def f():\n    from console import safety\n"
     )
-    (pkg / "safety.py").write_text("from . import profile\n")
+    (pkg / "safety.py").write_text("from .config import profile\n")
     (pkg / "tui" / "app.py").write_text("from ..safety import check\n")
     graph = import_graph(tmp_path)
-    assert graph["console.profile"] == {"console.safety"}
-    assert graph["console.safety"] == {"console.profile"}
+    assert graph["console.config.profile"] == {"console.safety"}
+    assert graph["console.safety"] == {"console.config.profile"}
     assert graph["console.tui.app"] == {"console.safety"}
-    assert find_cycle(graph) == ["console.profile", "console.safety", "console.profile"]
+    assert find_cycle(graph) == [
+        "console.config.profile",
+        "console.safety",
+        "console.config.profile",
+    ]
     assert layer_of("console.tui.app") == "tui" and layer_of("console.new_thing") is None

@@ -41,8 +41,8 @@ def test_not_allowed_is_a_notice_with_the_fix_and_nothing_locked(monkeypatch):
 def test_paced_outputs_lock_memory_until_the_last_closes(plugins, unlocked):
     """The table's core (what a kernel builds, here two in this process): the lock is
     held while any paced one is open."""
+    from console.config.profile import load_profile
     from console.kernel.table import TableOutputs
-    from console.profile import load_profile
 
     if not memory_lock._may_lock()[0]:
         pytest.skip("this machine does not allow locking memory (no CAP_IPC_LOCK)")
@@ -69,8 +69,8 @@ def test_paced_outputs_lock_memory_until_the_last_closes(plugins, unlocked):
 def test_a_paced_tables_kernel_locks_its_memory_and_its_clients_do_not(plugins, unlocked):
     """The outputs play in the kernel's process: that one locks its memory (its status
     says so); a client holds no audio thread and locks nothing."""
+    from console.config.profile import load_profile
     from console.kernel.client import open_outputs
-    from console.profile import load_profile
 
     if not memory_lock._may_lock()[0]:
         pytest.skip("this machine does not allow locking memory (no CAP_IPC_LOCK)")
@@ -88,8 +88,8 @@ def test_a_paced_tables_kernel_locks_its_memory_and_its_clients_do_not(plugins, 
 
 def test_paced_outputs_shorten_the_gil_switch_interval(plugins):
     """In the process that runs the audio thread (the kernel's: the table's core)."""
+    from console.config.profile import load_profile
     from console.kernel.table import TableOutputs
-    from console.profile import load_profile
 
     before = sys.getswitchinterval()
     try:

@@ -1,4 +1,4 @@
-"""console.paths: one rule per directory, and the tests never write outside their tmp root."""
+"""console.files.paths: one rule per directory, and the tests never write outside their tmp root."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from console import paths
+from console.files import paths
 
 FUNCS = {
     "config": ("HAPTABLE_CONFIG_DIR", "XDG_CONFIG_HOME", ".config", paths.config_dir),
@@ -47,7 +47,7 @@ def test_runtime_dir_rule_is_the_checked_one(tmp_path, monkeypatch):
 
 def test_every_directory_the_project_writes_is_under_the_tests_tmp_roots(pinned_root):
     """conftest pins them: a test that caches a table cannot touch the user's ~/.cache."""
-    from console.profile import search_dirs
+    from console.config.profile import search_dirs
     from console.runtime.measured_map import cache_dir as console_cache
     from console.tui.logs import log_path
     from plugins.gestures.evaluate import cache_dir as gestures_cache

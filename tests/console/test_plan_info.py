@@ -1,4 +1,4 @@
-"""A plan's description is typed (``console.types.PlanInfo``): every key the console
+"""A plan's description is typed (``console.core.types.PlanInfo``): every key the console
 reads from a plan's ``meta`` is declared there, and the built-in effects' plans (a
 point, a two-point flow, a flow under a hand) agree with its types."""
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from console.types import PlanInfo, plan_info_problems, plan_parts
+from console.core.types import PlanInfo, plan_info_problems, plan_parts
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -73,7 +73,7 @@ def test_every_plan_key_the_console_reads_is_declared():
     read = meta_keys_read(ROOT)
     assert {"kind", "frequency_hz", "method"} <= set(read)  # the scan sees the pane's reads
     undeclared = {k: v for k, v in read.items() if k not in PlanInfo.__optional_keys__}
-    assert not undeclared, f"declare these in console.types.PlanInfo: {undeclared}"
+    assert not undeclared, f"declare these in console.core.types.PlanInfo: {undeclared}"
 
 
 def test_the_checker_names_a_wrong_type():
@@ -85,8 +85,8 @@ def test_the_checker_names_a_wrong_type():
 
 @pytest.fixture
 def rendered(plugins):
-    from console.contracts import FlowEffect, HandFlowEffect, PointEffect
-    from console.profile import load_profile
+    from console.config.profile import load_profile
+    from console.core.contracts import FlowEffect, HandFlowEffect, PointEffect
     from console.runtime.measured_map import measured_map_file
 
     profile = load_profile("sim", plugins)

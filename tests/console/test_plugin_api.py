@@ -117,9 +117,9 @@ def test_the_core_api_stays_light():
 @pytest.mark.parametrize(
     ("source", "expect"),
     [
-        ("from console.errors import UserError", ["console.errors"]),
+        ("from console.core.errors import UserError", ["console.core.errors"]),
         ("def f():\n    from console.runtime.loop import FrameLoop", ["console.runtime.loop"]),
-        ("import console.types", ["console.types"]),
+        ("import console.core.types", ["console.core.types"]),
         ("from console import paths", ["console.paths"]),
         (
             "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from console.tui.text import escape",

@@ -1,5 +1,5 @@
 """Plugin boundaries (DESIGN.md): a plugin never imports another plugin's internals; they
-meet through registrations (console/hookspecs.py) and the values of console/types.py.
+meet through registrations (console/core/hookspecs.py) and the values of console/core/types.py.
 Read from the source (AST), so an import inside a function, a relative import and
 ``importlib.import_module("plugins...")`` all count. Sub-plugins (``twin.plate``,
 ``twin.camera``) are plugins of their own. (console/ importing no plugin at all is
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from console.plugins import BUILTIN_PLUGINS
+from console.config.plugins import BUILTIN_PLUGINS
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -109,7 +109,7 @@ def test_every_plugins_package_is_a_plugin_the_guard_knows():
         ("from plugins.twin.outputs import TwinAudioOutput", "plugins/twin/__init__.py", False),
         ("from .render import Rig", "plugins/twin/camera/camera.py", False),
         ("from plugins.demos.run import start_demo", "plugins/demos/cli.py", False),
-        ("from console.types import Frame", "plugins/demos/run.py", False),
+        ("from console.core.types import Frame", "plugins/demos/run.py", False),
     ],
 )
 def test_the_guard_catches_what_it_should(tmp_path, source, where, expect):
@@ -144,7 +144,7 @@ def effects_by_name(root: Path) -> list[str]:
 
 def test_plugins_ask_for_effects_by_capability_never_by_name():
     assert effects_by_name(REPO) == [], (
-        "ask plugins.provider('effect', <a console.contracts Protocol>, profile) instead"
+        "ask plugins.provider('effect', <a console.core.contracts Protocol>, profile) instead"
     )
 
 

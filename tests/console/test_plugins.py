@@ -16,11 +16,11 @@ from pathlib import Path
 import pytest
 
 import console
-from console import hookspecs
-from console.cli import main
-from console.errors import UserError
-from console.hookspecs import hookimpl
-from console.plugins import load_plugins
+from console.cli.main import main
+from console.config.plugins import load_plugins
+from console.core import hookspecs
+from console.core.errors import UserError
+from console.core.hookspecs import hookimpl
 
 
 def test_plugins_json_lists_builtins_with_kinds(capsys):
@@ -92,7 +92,7 @@ def _toycam_wheel(folder: Path) -> Path:
     info = "haptable_toycam-0.1.dist-info"
     files = {
         "haptable_toycam/__init__.py": textwrap.dedent("""
-            from console.hookspecs import hookimpl
+            from console.core.hookspecs import hookimpl
 
             @hookimpl
             def haptable_register_cameras(register):
@@ -132,7 +132,7 @@ def test_out_of_tree_distribution_shows_up(tmp_path):
     here = Path(console.__file__).resolve().parent.parent
     deps = [p for p in sys.path if p.endswith(("site-packages", "dist-packages"))]
     out = subprocess.run(
-        [str(py), "-m", "console.cli", "plugins", "--json"],
+        [str(py), "-m", "console.cli.main", "plugins", "--json"],
         capture_output=True,
         text=True,
         check=True,

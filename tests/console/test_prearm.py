@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from console.benchmarks.safety import fresh_window
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
 from console.kernel.table import TableOutputs
-from console.safety_audit import Window, received_problems
-from console.signals import ramp_envelope
-from console.types import OutputPlan, Segment
+from console.safety.audit import Window, received_problems
+from console.signals.waveforms import ramp_envelope
 
 FS = 48000
 

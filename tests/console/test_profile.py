@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from console.errors import ProfileError
-from console.profile import PROJECT_PROFILES, load_profile
+from console.config.profile import PROJECT_PROFILES, load_profile
+from console.core.errors import ProfileError
 
 SIM = (PROJECT_PROFILES / "sim.toml").read_text()
 
@@ -81,7 +81,7 @@ def test_missing_profile_suggests(plugins):
 def test_cli_bad_profile_no_traceback(tmp_path):
     path = bad(tmp_path, SIM.replace("guard_ms = 5.0", "gaurd_ms = 5.0"))
     r = subprocess.run(
-        [sys.executable, "-m", "console.cli", "--profile", str(path), "doctor"],
+        [sys.executable, "-m", "console.cli.main", "--profile", str(path), "doctor"],
         capture_output=True,
         text=True,
         env={"PATH": "/usr/bin:/bin", "HAPTABLE_LOAD_ENTRYPOINTS": "0", "HOME": str(tmp_path)},

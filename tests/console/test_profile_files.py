@@ -15,10 +15,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console import paths, profile_files
-from console.cli import main
-from console.errors import UserError
-from console.profile import PROJECT_PROFILES, load_profile
+from console.cli.main import main
+from console.config import profile_files
+from console.config.profile import PROJECT_PROFILES, load_profile
+from console.core.errors import UserError
+from console.files import paths
 
 TABLE = (743.46, 447.29)
 

@@ -7,8 +7,8 @@ import hashlib
 
 import pytest
 
-from console.errors import ProfileError
-from console.profile import PROJECT_PROFILES, load_profile, overrides_path, save_overrides
+from console.config.profile import PROJECT_PROFILES, load_profile, overrides_path, save_overrides
+from console.core.errors import ProfileError
 
 
 def _digest(path) -> str:

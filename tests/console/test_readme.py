@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from console.cli import Context
-from console.plugins import load_plugins
+from console.cli.main import Context
+from console.config.plugins import load_plugins
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()

@@ -15,12 +15,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import PATCHES, OutputPlan, Segment
 from console.kernel.table import DriverPort
 from console.safety import Limits, check_plan
-from console.signals import ramp_envelope, tone
-from console.stream_synth import PulseSpec, StreamSpec, StreamSynth
-from console.types import PATCHES, OutputPlan, Segment
+from console.signals.stream_synth import PulseSpec, StreamSpec, StreamSynth
+from console.signals.waveforms import ramp_envelope, tone
 
 FS = 48000
 HYP = settings(
@@ -305,11 +305,11 @@ def test_estop_is_idempotent_and_blocks_until_reset(outputs):
 SCRIPT = textwrap.dedent("""
     import sys, time
     import numpy as np
-    from console.plugins import load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
     from console.kernel.client import open_outputs
-    from console.signals import tone
-    from console.types import OutputPlan, Segment
+    from console.signals.waveforms import tone
+    from console.core.types import OutputPlan, Segment
     log = open(sys.argv[1], "a", buffering=1)
     plugins = load_plugins()
     out = open_outputs(load_profile("sim", plugins), plugins)  # the table's kernel
@@ -343,7 +343,7 @@ def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
     and the patch relay opened in silence by the kernel. Watched from a second client of
     the same (paced) table, which keeps its kernel up to be asked."""
     from console.kernel.client import open_outputs
-    from console.safety_audit import Window, received_problems
+    from console.safety.audit import Window, received_problems
 
     script = tmp_path / "run.py"
     script.write_text(SCRIPT)
@@ -402,7 +402,7 @@ def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
 def test_switch_log_lines_up_with_recording_after_other_outputs(profile, plugins):
     """Twin relay clocks count the samples of the outputs they belong to, not earlier ones."""
     from console.kernel.client import open_outputs
-    from console.stimuli import make_stimulus
+    from console.signals.stimuli import make_stimulus
 
     with open_outputs(profile, plugins, fast=True) as first:
         first.play(make_stimulus("sine-PB", FS))

@@ -8,7 +8,7 @@ import pytest
 from console.kernel.scheduler import Scheduler
 from console.safety import Limits, SafetyGate
 from console.safety.scope import ScopeTap
-from console.stimuli import make_stimulus
+from console.signals.stimuli import make_stimulus
 
 FS = 48000
 

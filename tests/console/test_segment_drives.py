@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from console.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
 from console.safety import Limits, check_plan
-from console.types import OutputPlan, Segment
 
 FS = 48000
 

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import pytest
 
-from console.errors import UserError
-from console.plugins import load_plugins
-from console.profile import load_profile
+from console.config.plugins import load_plugins
+from console.config.profile import load_profile
+from console.core.errors import UserError
 from console.safety import Limits
-from console.signal_check import never_plays
-from console.signal_expr import parse
+from console.signals.check import never_plays
+from console.signals.expr import parse
 
 BIG = "1" * 400
 OK = "sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.signal_library import library_path
+from console.cli.main import main
+from console.config.signal_library import library_path
 
 PULSE = "seq(sine(250 Hz, 40 V, 0.5 s) * adsr(10 ms, 50 ms, 0.7, 100 ms), silence(0.2 s)) * 3"
 

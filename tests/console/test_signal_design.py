@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.signal import hilbert
 
-from console.errors import UserError
-from console.signal_design import (
+from console.core.errors import UserError
+from console.signals.design import (
     Target,
     dominant_hz,
     parse_target,
@@ -16,8 +16,8 @@ from console.signal_design import (
     spectrum,
     summarize,
 )
-from console.signal_expr import parse
-from console.signals import linear_chirp, ramp_envelope, tone
+from console.signals.expr import parse
+from console.signals.waveforms import linear_chirp, ramp_envelope, tone
 
 FS = 48_000
 
@@ -166,7 +166,7 @@ def test_bad_expressions_get_one_line_naming_the_part(expr, says):
 
 
 def test_huge_durations_are_refused_before_allocation(monkeypatch):
-    import console.signal_design as sd
+    import console.signals.design as sd
 
     def no_alloc(*a, **k):
         raise AssertionError("allocated")
@@ -196,7 +196,7 @@ def test_targets_and_plans():
 
 
 def test_nan_and_inf_never_reach_a_plan():
-    from console.signal_design import Level, Mix, Wave
+    from console.signals.design import Level, Mix, Wave
 
     for bad in ("nan", "inf", "sine(250 Hz, nan V, 1 s)", "sine(250 Hz, 1e999 V, 1 s)"):
         with pytest.raises(UserError) as err:

@@ -7,10 +7,7 @@ import tomllib
 
 import pytest
 
-from console.errors import UserError
-from console.paths import profile_config_dir
-from console.signal_expr import parse
-from console.signal_library import (
+from console.config.signal_library import (
     BUILTIN,
     add_signal,
     get_signal,
@@ -19,6 +16,9 @@ from console.signal_library import (
     read_library,
     remove_signal,
 )
+from console.core.errors import UserError
+from console.files.paths import profile_config_dir
+from console.signals.expr import parse
 
 
 def test_library_lives_in_the_profiles_config_dir():
@@ -123,7 +123,7 @@ def test_bad_names_and_descriptions(tmp_path):
 
 
 def test_a_failed_write_leaves_the_library_as_it_was(tmp_path, monkeypatch):
-    import console.atomic
+    import console.files.atomic
 
     path = tmp_path / "signals.toml"
     add_signal(path, "keep", "silence(1 s)")
@@ -132,7 +132,7 @@ def test_a_failed_write_leaves_the_library_as_it_was(tmp_path, monkeypatch):
     def broken_replace(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(console.atomic.os, "replace", broken_replace)
+    monkeypatch.setattr(console.files.atomic.os, "replace", broken_replace)
     with pytest.raises(UserError, match="cannot write: No space left on device"):
         add_signal(path, "new", "silence(2 s)")
     assert path.read_bytes() == before

@@ -11,10 +11,10 @@ import tomllib
 
 import pytest
 
-import console.signal_library_file as signal_file
-from console.cli import main
-from console.errors import UserError
-from console.signal_library import add_signal, library_path, read_library, remove_signal
+import console.config.signal_library_file as signal_file
+from console.cli.main import main
+from console.config.signal_library import add_signal, library_path, read_library, remove_signal
+from console.core.errors import UserError
 
 BIG = "1" * 400
 OK = "sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from console.realtime import realtime_priority
-from console.stall_witness import ORIGINS, StallWitness
+from console.core.realtime import realtime_priority
+from console.core.stall_witness import ORIGINS, StallWitness
 
 SLACK_S = 0.010
 

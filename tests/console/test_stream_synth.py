@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from console.stream_synth import (
+from console.signals.stream_synth import (
     PulseSpec,
     StreamSink,
     StreamSpec,

@@ -1,5 +1,5 @@
 """A mistyped word is met with the word meant, as it is written: one helper
-(``console.suggest``) for every "did you mean" of the console, case-insensitive, and
+(``console.core.suggest``) for every "did you mean" of the console, case-insensitive, and
 the lists a user reads whole."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import ast
 from pathlib import Path
 
 import console
-from console.cli import main
-from console.suggest import did_you_mean, suggestion
+from console.cli.main import main
+from console.core.suggest import did_you_mean, suggestion
 
 
 def _error(capsys, argv: list[str]) -> str:
@@ -39,7 +39,7 @@ def test_bench_suggests_a_benchmark(capsys):
 
 
 def test_bench_list_shows_each_description_whole(capsys, monkeypatch):
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     monkeypatch.setenv("COLUMNS", "80")
     assert main(["bench", "list"]) == 0
@@ -66,7 +66,7 @@ CONSOLE = Path(console.__file__).resolve().parent
 
 
 def test_one_helper_makes_every_suggestion():
-    """``difflib.get_close_matches`` is called in ``console/suggest.py`` only."""
+    """``difflib.get_close_matches`` is called in ``console/core/suggest.py`` only."""
     found = []
     for path in sorted(CONSOLE.rglob("*.py")):
         if path.name == "suggest.py":
@@ -75,4 +75,4 @@ def test_one_helper_makes_every_suggestion():
             name = getattr(n, "attr", None) or getattr(n, "id", None)
             if isinstance(n, ast.Attribute | ast.Name) and name == "get_close_matches":
                 found.append(f"{path.relative_to(CONSOLE)}:{n.lineno}")
-    assert not found, "use console.suggest.did_you_mean:\n" + "\n".join(found)
+    assert not found, "use console.core.suggest.did_you_mean:\n" + "\n".join(found)

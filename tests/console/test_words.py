@@ -1,12 +1,12 @@
-"""A message names the fix where the user is (issue 27): one mechanism, ``console.words``,
+"""A message names the fix where the user is (issue 27): one mechanism, ``console.core.words``,
 for the console's screens and the command line, and the Studies plugin's words use it."""
 
 from __future__ import annotations
 
 import pytest
 
-from console.errors import UserError
-from console.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
+from console.core.errors import UserError
+from console.core.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
 
 
 def test_a_placed_error_is_worded_for_each_place():
@@ -39,7 +39,7 @@ def test_the_studies_words_are_for_a_place_each():
 def test_the_consoles_hand_flow_refusal_names_no_command_line_switch(plugins):
     import numpy as np
 
-    from console.profile import load_profile
+    from console.config.profile import load_profile
     from console.session.vibration import VibrationSession
     from plugins.vibrotactile.analytic_plate import analytic_map
 

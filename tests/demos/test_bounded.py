@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from console.types import Contact
+from console.core.types import Contact
 
 
 def test_live_knob_session_keeps_bounded_logs_and_counts_every_crossing(profile, plugins):

@@ -10,17 +10,17 @@ import pytest
 
 @pytest.fixture
 def cli(monkeypatch):
-    from console import plugins as cp
+    from console.config import plugins as cp
 
     monkeypatch.setitem(cp.BUILTIN_PLUGINS, "demos", "plugins.demos")
     monkeypatch.setitem(cp.BUILTIN_PLUGINS, "tuio", "plugins.tuio")
-    from console.cli import main
+    from console.cli.main import main
 
     return main
 
 
 def test_demo_knob_runs_and_reports_the_loop(cli, capsys, tmp_path):
-    from console.profile import PROJECT_PROFILES
+    from console.config.profile import PROJECT_PROFILES
 
     prof = tmp_path / "calm.toml"  # a busy test machine must not trip the watchdog
     prof.write_text(

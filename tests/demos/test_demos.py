@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from console.types import patches_of
+from console.core.types import patches_of
 
 TABLE = (743.46, 447.29)
 FS = 48000
@@ -142,8 +142,8 @@ def test_knob_vf_frequency_rises_with_the_rotation_speed(profile, plugins, outpu
 @pytest.fixture
 def flow_profile(tmp_path, plugins):
     """The sim profile with a vibration map (the analytic simply supported plate)."""
-    from console.profile import PROJECT_PROFILES, load_profile
-    from console.vibration_map import save_map
+    from console.config.profile import PROJECT_PROFILES, load_profile
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     save_map(tmp_path / "map.npz", analytic_map(SSPlate()))
@@ -224,7 +224,7 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
 
 
 def test_unknown_demo_and_missing_map_are_one_line_errors(profile, plugins, outputs):
-    from console.errors import UserError
+    from console.core.errors import UserError
     from plugins.demos import start_demo
 
     with pytest.raises(UserError, match="unknown"):
@@ -263,7 +263,7 @@ def test_flow_targets_snap_to_scene_regions_or_the_grid(profile, plugins):
 
 def test_twin_map_is_measured_once_through_the_registered_vibrometer(fake_vibrometer, tmp_path):
     """The demos' flow map on the twin is the console's measured map (one provider)."""
-    from console.vibration_map import load_map
+    from console.files.vibration_map import load_map
     from plugins.demos.run import flow_map_path
 
     fv = fake_vibrometer
@@ -346,9 +346,9 @@ def test_the_demo_renders_flows_with_whichever_plugin_offers_flows_under_a_hand(
 ):
     import plugins.demos
     import plugins.tuio
-    from console.hookspecs import hookimpl
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
-    from console.types import OutputPlan
+    from console.config.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.core.hookspecs import hookimpl
+    from console.core.types import OutputPlan
     from plugins.demos.adapters import flow_effect
 
     asked = []

@@ -9,8 +9,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from console.signals import tone
-from console.types import OutputPlan, Segment
+from console.core.types import OutputPlan, Segment
+from console.signals.waveforms import tone
 
 FS = 48000
 

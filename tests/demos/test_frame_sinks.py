@@ -7,8 +7,8 @@ import time
 
 import pytest
 
-from console.errors import UserError
-from console.hookspecs import hookimpl
+from console.core.errors import UserError
+from console.core.hookspecs import hookimpl
 
 
 class Recorder:
@@ -43,7 +43,7 @@ class SinkPlugin:
 
 def load(**extra):
     """The built-in plugins (demos and tuio among them) and ``extra`` ones by name."""
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     return load_plugins(extra=extra)
 

@@ -9,14 +9,14 @@ import time
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.demos.adapters import flow_renderers
 from plugins.demos.planner import PlanProcess
 
 
 @pytest.fixture
 def map_path(tmp_path):
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     path = tmp_path / "map.npz"

@@ -27,7 +27,7 @@ JACK_PERIOD = 256
 
 
 class StubProfile:
-    """The part of ``console.profile.Profile`` the drivers read: ``get("section.key")``."""
+    """The part of ``console.config.profile.Profile`` the drivers read: ``get("section.key")``."""
 
     DEFAULTS: dict[str, Any] = {
         "audio.sample_rate_hz": 48000,

@@ -379,7 +379,7 @@ def test_exposure_and_gain_change_while_running_from_the_grab_thread(world, came
     """The console sets exposure and gain on a running camera (``AdjustableCamera``): the
     grab thread hands them to the capture before its next read; -1 is automatic again;
     a value the driver refuses is reported, and reported no more once one is taken."""
-    from console.contracts import AdjustableCamera
+    from console.core.contracts import AdjustableCamera
 
     cam = camera()
     cap = world.captures[-1]

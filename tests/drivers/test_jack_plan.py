@@ -8,10 +8,10 @@ import time
 import numpy as np
 import pytest
 
+from console.config.profile import PROJECT_PROFILES, load_profile
 from console.kernel.client import open_outputs
 from console.kernel.private_dir import pid_alive
-from console.profile import PROJECT_PROFILES, load_profile
-from console.stimuli import make_stimulus
+from console.signals.stimuli import make_stimulus
 
 #: one JACK dummy server (a session fixture) serves them all: on one xdist worker
 pytestmark = [pytest.mark.hardware, pytest.mark.xdist_group("jack")]

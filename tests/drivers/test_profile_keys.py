@@ -37,7 +37,7 @@ class Recorder:
 
 @pytest.mark.parametrize("name", ["sim", "haptable-lab"])
 def test_factories_and_probes_read_existing_keys(name, plugins, monkeypatch):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     prof = Strict(load_profile(name, plugins))
     for module, cls in (

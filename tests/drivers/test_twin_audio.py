@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from console.core.types import OutputPlan, Segment
 from console.safety import GateEvent
-from console.signals import tone
-from console.types import OutputPlan, Segment
+from console.signals.waveforms import tone
 from plugins.twin.outputs import TwinAudioOutput
 
 FS, BS = 48000, 64

@@ -13,8 +13,8 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from console.core.types import PATCHES
 from console.safety import GateEvent, Limits
-from console.types import PATCHES
 from plugins.twin.outputs import TwinAudioOutput
 
 FS, BS = 48000, 64

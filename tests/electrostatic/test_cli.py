@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.io import wavfile
 
-from console.cli import main
-from console.errors import UserError
+from console.cli.main import main
+from console.core.errors import UserError
 from plugins.electrostatic.effects import KnobEffect
 from plugins.electrostatic.task import read_jsonl
 
@@ -118,7 +118,7 @@ def test_audition_plays_through_the_outputs(capsys):
 
 
 def test_a_bad_threshold_table_in_the_profile_is_named(tmp_path, capsys):
-    from console.profile import PROJECT_PROFILES
+    from console.config.profile import PROJECT_PROFILES
 
     prof = tmp_path / "lab.toml"
     prof.write_text(

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from console.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
+from console.signals.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
 from plugins.electrostatic.session import LIVE_LOG, KnobSession
 from plugins.electrostatic.settings import KNOB_DEFAULTS
 from plugins.electrostatic.synth import CONDITIONS, KnobStream

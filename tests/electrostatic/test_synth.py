@@ -5,8 +5,8 @@ import threading
 import numpy as np
 import pytest
 
-from console.contracts import StreamSource
-from console.errors import UserError
+from console.core.contracts import StreamSource
+from console.core.errors import UserError
 from plugins.electrostatic.settings import KNOB_DEFAULTS
 from plugins.electrostatic.synth import CONDITIONS, Envelope, KnobStream, parse_condition
 

@@ -1,7 +1,7 @@
 """Golden output of the knob stream: every condition (and a few settings that reach the
 other code paths) on one scripted run of posts, blocks of varying size and a stop must
 reproduce, to 1e-12, what the original plugin-side ``KnobStream`` (before the synthesis
-moved to ``console/stream_synth.py``) produced.
+moved to ``console/signals/stream_synth.py``) produced.
 
 The reference, ``synth_golden.npz`` next to this file, keeps per case and channel the
 samples at ``IDX_PER_CASE`` fixed indices plus a plain and a weighted sum of every block

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from console.atomic import append_json_line
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files.atomic import append_json_line
 from plugins.electrostatic.settings import knob_settings
 from plugins.electrostatic.task import (
     SimFinger,
@@ -157,7 +157,7 @@ def test_live_trial_completes_when_fed_contacts_in_real_time(profile, plugins):
 
 
 def test_live_task_on_the_twin_camera_runs_and_logs(tmp_path, capsys):
-    from console.cli import main
+    from console.cli.main import main
 
     log = tmp_path / "live.jsonl"
     rc = main(["knob", "--input", "live", "--trials", "1", "--max-time", "1.0", "--log", str(log)])

@@ -11,8 +11,8 @@ from plugins.electrostatic.rotation import RotationTracker, wrap_deg
 
 @pytest.fixture(scope="module")
 def rotation_through_vision():
-    from console.plugins import load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
     from console.runtime.stages import open_camera, vision_loop
 
     twin_camera = pytest.importorskip("plugins.twin.camera")

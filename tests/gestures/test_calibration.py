@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.types import Contact
+from console.core.errors import UserError
+from console.core.types import Contact
 from plugins.gestures.calibration import (
     Calibration,
     CalibrationSession,

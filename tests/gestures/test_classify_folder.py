@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from console.cli import main
+from console.cli.main import main
 from plugins.gestures import sketch
 from plugins.gestures.dataset import write_background, write_sample
 

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from console.cli import main
+from console.cli.main import main
 from plugins.gestures import sketch
 from plugins.gestures.dataset import write_background, write_sample
 
@@ -93,7 +93,7 @@ def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
     assert code == 0 and res["kind"] == "static"
 
     # the same model as the live classifier plugin, frame by frame
-    from console.types import Frame
+    from console.core.types import Frame
     from plugins.gestures.classifier import SvmClassifier
     from plugins.gestures.dataset import read_sample
     from plugins.gestures.model import GestureModel
@@ -141,8 +141,8 @@ def test_train_without_out_saves_the_profiles_model_where_the_classifier_reads_i
     """No --out: the model goes to the profile's state directory, not beside the profile."""
     import shutil
 
-    from console import paths
-    from console.profile import PROJECT_PROFILES, load_profile
+    from console.config.profile import PROJECT_PROFILES, load_profile
+    from console.files import paths
     from plugins.gestures.classifier import SvmClassifier
 
     shutil.copy(PROJECT_PROFILES / "sim.toml", tmp_path / "bench.toml")

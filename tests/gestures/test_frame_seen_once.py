@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from console.core.types import GestureScript, GestureStep
 from console.runtime.loop import FrameLoop
 from console.runtime.stages import base_stages, learn_background, open_camera, open_classifier
-from console.types import GestureScript, GestureStep
 
 
 class NamingModel:

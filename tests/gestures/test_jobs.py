@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.gestures import sketch
 from plugins.gestures.dataset import write_background, write_sample
 from plugins.gestures.jobs import describe_files, synth_atomic, train_and_evaluate

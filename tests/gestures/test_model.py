@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import skops.io as sio
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.gestures.model import GestureModel, fit_threshold
 from plugins.gestures.sketch import DYNAMIC, STATIC
 

@@ -6,8 +6,8 @@ import itertools
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.types import Frame
+from console.core.errors import UserError
+from console.core.types import Frame
 from plugins.gestures.orientation import Orientation
 
 TURNS = list(itertools.product((0, 90, 180, 270), (False, True)))

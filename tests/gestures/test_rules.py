@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.types import Contact, Frame, Gesture, Hand
+from console.core.types import Contact, Frame, Gesture, Hand
 from plugins.gestures.classifier import SvmClassifier
 from plugins.gestures.rules import GestureRules, StillHand
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from console.cli import main
+from console.cli.main import main
 from plugins.gestures.synth import estimate, synth
 
 

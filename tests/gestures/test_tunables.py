@@ -16,7 +16,7 @@ def test_the_tunable_ranges_are_the_profile_s_bounds():
 def test_a_tuned_threshold_reaches_the_next_frame(plugins, profile):
     import numpy as np
 
-    from console.types import Frame
+    from console.core.types import Frame
 
     clf = plugins.build("classifier", "svm", profile)
     clf.set_tunable("contact_level", 0)  # thresholds in grey levels, whatever the light
@@ -45,7 +45,7 @@ def _hand_with_two_contacts():
 
 
 def test_blob_size_limits_decide_which_contacts_count(plugins, profile):
-    from console.types import Frame
+    from console.core.types import Frame
 
     clf = plugins.build("classifier", "svm", profile)
     clf.set_tunable("contact_level", 0)  # thresholds in grey levels, whatever the light
@@ -72,7 +72,7 @@ def test_background_alpha_is_the_weight_of_a_new_frame(plugins, profile):
     whole frame is the light, followed at once."""
     import numpy as np
 
-    from console.types import Frame
+    from console.core.types import Frame
 
     clf = plugins.build("classifier", "svm", profile)
     clf.set_background(np.full((480, 640), 100, np.uint8))
@@ -96,7 +96,7 @@ def test_background_alpha_is_the_weight_of_a_new_frame(plugins, profile):
 def test_every_tuned_setting_is_restored_at_the_next_start(plugins, profile):
     """What the Camera screen's W writes (the classifier's keys) is what a classifier
     opened from the reloaded profile starts with."""
-    from console.profile import load_profile, save_overrides
+    from console.config.profile import load_profile, save_overrides
     from plugins.gestures.classifier import TUNABLES
 
     clf = plugins.build("classifier", "svm", profile)

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.gestures import sketch
 from plugins.gestures.background import Background
 from plugins.gestures.vision import VisionParams, check_frame, process_frame

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.gestures.dataset import (
     GESTURES,
     load_dataset,
@@ -240,7 +240,7 @@ class _PlainCamera:
         self.frames, self.k = frames, 0
 
     def read(self, timeout_s=0.1):
-        from console.types import Frame
+        from console.core.types import Frame
 
         if self.frames is not None and self.k >= self.frames:
             return None
@@ -298,7 +298,7 @@ def test_cli_synth_and_record(tmp_path, plugins, capsys):
     assert run(args, None) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["samples"] == 2
-    from console.profile import PROJECT_PROFILES, load_profile
+    from console.config.profile import PROJECT_PROFILES, load_profile
 
     toml = tmp_path / "fast.toml"
     sim = (PROJECT_PROFILES / "sim.toml").read_text()  # a profile needs its patches

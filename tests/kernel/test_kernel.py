@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.errors import EStopLatched, SafetyRefusal, UserError
+from console.core.errors import EStopLatched, SafetyRefusal, UserError
+from console.core.types import OutputPlan, Segment
 from console.kernel.client import open_outputs
 from console.kernel.line_server import request
 from console.kernel.tables import read_latch, table_for
-from console.signals import tone
-from console.types import OutputPlan, Segment
+from console.signals.waveforms import tone
 
 ROOT = Path(__file__).resolve().parents[2]
 FS = 48000
@@ -39,7 +39,7 @@ def _env(**extra: str) -> dict[str, str]:
 
 def haptable(*args: str, timeout: float = 60, **env: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "console.entry", *args],
+        [sys.executable, "-m", "console.cli.entry", *args],
         env=_env(**env),
         capture_output=True,
         text=True,
@@ -53,7 +53,7 @@ def at_terminal(*args: str, timeout: float = 30) -> tuple[int, str]:
     pid, fd = pty.fork()
     if pid == 0:  # the child: session leader with the pty as its controlling terminal
         os.environ.update(_env())
-        os.execv(sys.executable, [sys.executable, "-m", "console.entry", *args])
+        os.execv(sys.executable, [sys.executable, "-m", "console.cli.entry", *args])
     out = b""
     t_end = time.monotonic() + timeout
     while time.monotonic() < t_end:
@@ -148,7 +148,7 @@ def test_an_estop_while_a_command_still_starts_stops_it(tmp_path):
     """`haptable play sweep & sleep 0.3; haptable estop`: the sweep never plays on."""
     log = tmp_path / "twin.json"
     play = subprocess.Popen(
-        [sys.executable, "-m", "console.entry", "play", "sweep"],
+        [sys.executable, "-m", "console.cli.entry", "play", "sweep"],
         env=_env(HAPTABLE_TWIN_LOG=str(log)),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -186,7 +186,7 @@ def test_a_private_table_is_not_an_operators_table(profile, plugins):
 def test_the_shell_estop_loads_the_standard_library_only():
     code = (
         "import io, contextlib, sys\n"
-        "from console.entry import main\n"
+        "from console.cli.entry import main\n"
         "with contextlib.redirect_stdout(io.StringIO()): main(['estop'])\n"
         "print(' '.join(sorted(sys.modules)))\n"
     )
@@ -221,11 +221,11 @@ def test_a_client_killed_mid_plan_is_ramped_down_not_latched(profile, plugins):
             sys.executable,
             "-c",
             "import time\n"
-            "from console.plugins import load_plugins\n"
-            "from console.profile import load_profile\n"
+            "from console.config.plugins import load_plugins\n"
+            "from console.config.profile import load_profile\n"
             "from console.kernel.client import open_outputs\n"
-            "from console.signals import tone\n"
-            "from console.types import OutputPlan, Segment\n"
+            "from console.signals.waveforms import tone\n"
+            "from console.core.types import OutputPlan, Segment\n"
             "pm = load_plugins(); p = load_profile('sim', pm)\n"
             "out = open_outputs(p, pm, fast=False)\n"
             "x = tone(250, 60, 3.0, 48000, 0.01)\n"
@@ -323,7 +323,7 @@ def test_a_stream_rises_under_the_ramp_to_its_own_declared_peak(profile, plugins
     the full range (250 V): the rule is a plan's, to the stream's own declared peak. The
     kernel's synth always ramps; one broken to jump is caught block by block."""
     from console.kernel.table import TableOutputs
-    from console.stream_synth import StreamSpec
+    from console.signals.stream_synth import StreamSpec
 
     spec = StreamSpec(
         sample_rate_hz=FS,

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.errors import UserError
+from console.cli.main import main
+from console.core.errors import UserError
 from console.kernel.private_dir import runtime_dir
 from console.kernel.tables import Table, table_for, tables_root
 
@@ -54,7 +54,7 @@ class _Cli:
 
     def __init__(self, *args: str, env: dict[str, str]) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "console.entry", *args],
+            [sys.executable, "-m", "console.cli.entry", *args],
             cwd=ROOT,
             env=env,
             stdout=subprocess.PIPE,
@@ -119,7 +119,7 @@ def _silent_after_estop(log_json: Path) -> tuple[int, float]:
 
 def _estop_cli(env: dict[str, str], *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "console.entry", "estop", *extra],
+        [sys.executable, "-m", "console.cli.entry", "estop", *extra],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -166,7 +166,7 @@ def test_haptable_estop_stops_a_cli_command_run_from_a_shell(case, tmp_path, cap
         if own_process:
             stop = _estop_cli(_env())
             out, stop_code = stop.stdout + stop.stderr, stop.returncode
-        else:  # what `haptable estop` runs (console.entry), in this process
+        else:  # what `haptable estop` runs (console.cli.entry), in this process
             from console.kernel.shell import main as shell_main
 
             stop_code = shell_main(["estop"])

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.profile import PROJECT_PROFILES
+from console.cli.main import main
+from console.config.profile import PROJECT_PROFILES
 
 SIM = (PROJECT_PROFILES / "sim.toml").read_text()
 DRY = ["play", "sine-PA", "--dry-run"]
@@ -281,8 +281,8 @@ def test_hostile_config_or_kit_file(case, fx, tmp_path, capsys, monkeypatch):
 def test_saving_over_an_override_that_is_no_file_is_refused_untouched(kind, plugins, tmp_path):
     """The console's device picks are saved to the override file: a folder, a FIFO or a
     dangling link there is refused in one line, never replaced or written into."""
-    from console.errors import ProfileError
-    from console.profile import load_profile, overrides_path, save_overrides
+    from console.config.profile import load_profile, overrides_path, save_overrides
+    from console.core.errors import ProfileError
 
     sim = load_profile("sim", plugins)
     p = overrides_path("sim")
@@ -306,7 +306,7 @@ def test_saving_over_an_override_that_is_no_file_is_refused_untouched(kind, plug
 def test_saving_through_a_linked_override_file_keeps_the_link(plugins, tmp_path):
     """An override file that is a link to a regular file (kept in a dotfiles folder) is
     written through: the link stays, the target gets the setting."""
-    from console.profile import load_profile, overrides_path, save_overrides
+    from console.config.profile import load_profile, overrides_path, save_overrides
 
     target = tmp_path / "dotfiles" / "sim-overrides.toml"
     target.parent.mkdir()
@@ -327,7 +327,7 @@ def test_saving_through_a_linked_override_file_keeps_the_link(plugins, tmp_path)
      "xn--bcher-kva.example", "a" * 63 + ".lan"],
 )  # fmt: skip
 def test_hosts_a_network_has_pass(host):
-    from console.schema import host_problem
+    from console.core.schema import host_problem
 
     assert host_problem(host) is None
 
@@ -336,14 +336,14 @@ def test_hosts_a_network_has_pass(host):
     "host", ["256.1.1.1", "10.0.1", "1.2.3.4.5", "-pc", "pc-", "a..b", "a" * 64, "", " pc"]
 )
 def test_hosts_no_network_has_fail(host):
-    from console.schema import host_problem
+    from console.core.schema import host_problem
 
     assert host_problem(host)
 
 
 def test_a_socket_path_of_107_bytes_loads_and_108_does_not(plugins, tmp_path):
-    from console.errors import ProfileError
-    from console.profile import load_profile
+    from console.config.profile import load_profile
+    from console.core.errors import ProfileError
 
     for n, ok in ((107, True), (108, False)):
         p = tmp_path / f"s{n}.toml"

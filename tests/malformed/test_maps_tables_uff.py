@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.types import EXCITATIONS
+from console.cli.main import main
+from console.core.types import EXCITATIONS
 
 F_HZ = np.arange(0.0, 651.0, 25.0)
 
@@ -29,7 +29,7 @@ F_HZ = np.arange(0.0, 651.0, 25.0)
 @pytest.fixture(scope="module")
 def good(tmp_path_factory) -> dict:
     """A small valid map (84 points, 27 bins) and the tables built from it."""
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import analytic_map
     from plugins.vibrotactile.tables import build_tables, save_tables
 
@@ -602,7 +602,7 @@ CASES = MAP_CASES + TABLE_CASES + UFF_CASES + ARG_CASES
 
 def run_case(case: Case, d: Path, g: dict, capsys, monkeypatch) -> tuple[int, str, list[str]]:
     """Run one case; returns (exit code, stderr, the words the line must hold)."""
-    import console.npz_safe as npz_safe
+    import console.files.npz_safe as npz_safe
 
     monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(d / "cache"))
     monkeypatch.setattr(npz_safe, "MAX_TOTAL_BYTES", 8 * 2**20, raising=False)
@@ -626,10 +626,10 @@ def test_malformed_input_one_line(case, good, tmp_path, capsys, monkeypatch):
 def test_tables_with_another_maps_hash_refused_with_that_map(good, tmp_path):
     """The flow effect given a map AND a tables file: tables built from another map are
     refused (its stimuli would pair one plate's frequencies with another's amplitudes)."""
-    from console.errors import UserError
-    from console.plugins import load_plugins
-    from console.profile import load_profile
-    from console.vibration_map import save_map
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
+    from console.core.errors import UserError
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     other = save_map(tmp_path / "other.npz", analytic_map(SSPlate(zeta=0.02), freq_hz=F_HZ))
@@ -646,9 +646,9 @@ def test_tables_with_another_maps_hash_refused_with_that_map(good, tmp_path):
 def test_console_vibration_screen_loads_refuse_with_one_line(good, tmp_path):
     """The Vibration screen's ``load`` and ``import`` raise only ``UserError`` (a worker
     that raised anything else would stop the console)."""
-    from console.errors import UserError
-    from console.plugins import load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
+    from console.core.errors import UserError
     from console.session import vibration as vs
 
     pm = load_plugins()
@@ -668,7 +668,7 @@ def test_console_vibration_screen_loads_refuse_with_one_line(good, tmp_path):
 def test_damaged_tables_cache_entry_is_rebuilt_not_used(good, tmp_path):
     """A cache entry that is a valid archive with wrong content (another size of table,
     an empty file) is rebuilt, never used nor a crash."""
-    from console.vibration_map import load_map
+    from console.files.vibration_map import load_map
     from plugins.vibrotactile.lazy import tables_cached
     from plugins.vibrotactile.tables import build_tables
 
@@ -686,8 +686,8 @@ def test_damaged_tables_cache_entry_is_rebuilt_not_used(good, tmp_path):
 
 def test_read_npz_checks_size_before_reading(tmp_path):
     """The shared reader: the bound is a parameter; within it the arrays come back."""
-    from console.errors import UserError
-    from console.npz_safe import read_npz
+    from console.core.errors import UserError
+    from console.files.npz_safe import read_npz
 
     p = write_npz(tmp_path / "a.npz", {"x": np.zeros(1000), "s": np.array("text")})
     got = read_npz(p, what="test file", fix="fix it")

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.profile import PROJECT_PROFILES
+from console.cli.main import main
+from console.config.profile import PROJECT_PROFILES
 from plugins.gestures.model import GESTURES
 
 SIM = (PROJECT_PROFILES / "sim.toml").read_text()
@@ -834,7 +834,7 @@ def _(p, fx):
 # ---------------------------------------------------------------------------- plan lengths
 @pytest.fixture(scope="module")
 def vmap_file(tmp_path_factory):
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     return save_map(tmp_path_factory.mktemp("map") / "map.npz", analytic_map(SSPlate()))
@@ -994,7 +994,7 @@ def test_extreme_frames_are_answered(name, fx, tmp_path, capsys):
 @pytest.mark.parametrize("name", sorted(FRAMES))
 def test_extreme_frames_through_the_live_classifier(name, fx):
     """The frame loop's classifier (the console's path) takes them too."""
-    from console.types import Frame
+    from console.core.types import Frame
     from plugins.gestures.classifier import SvmClassifier
     from plugins.gestures.model import GestureModel
 
@@ -1023,8 +1023,8 @@ def test_signal_lengths_are_refused_before_any_array(dur_s):
     nothing is allocated for it (1e12 s would be 4.8e16 samples)."""
     import tracemalloc
 
-    from console.errors import UserError
-    from console.signals import linear_chirp, tone
+    from console.core.errors import UserError
+    from console.signals.waveforms import linear_chirp, tone
 
     tracemalloc.start()
     try:
@@ -1040,8 +1040,8 @@ def test_signal_lengths_are_refused_before_any_array(dur_s):
 
 
 def test_a_stimulus_is_refused_unbuilt_when_longer_than_max_plan(monkeypatch):
-    from console import stimuli
-    from console.errors import UserError
+    from console.core.errors import UserError
+    from console.signals import stimuli
 
     def never(fs):
         raise AssertionError("the sweep was built")

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.projector.geometry import (
     GLASS_MM,
     Calibration,

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from console.plugins import load_plugins
-from console.profile import load_profile
+from console.config.plugins import load_plugins
+from console.config.profile import load_profile
 from plugins.projector.draw import build_layer, draw_grid
 from plugins.projector.scenes import GridAudition
 from plugins.projector.text import text_bitmap

@@ -10,9 +10,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from console.errors import UserError
-from console.plugins import BUILTIN_PLUGINS, load_plugins
-from console.profile import load_profile
+from console.config.plugins import BUILTIN_PLUGINS, load_plugins
+from console.config.profile import load_profile
+from console.core.errors import UserError
 from console.runtime.projector.service import ProjectorService, projector_launch
 from console.runtime.projector.supervisor import ProjectorLaunch
 
@@ -98,7 +98,7 @@ def test_a_projector_that_gives_no_command_is_named(tmp_path):
 
 
 def test_a_profile_naming_an_unknown_projector_is_refused_when_loaded(plugins, tmp_path):
-    from console.profile import ProfileError
+    from console.config.profile import ProfileError
 
     sim = (Path(__file__).parents[2] / "profiles" / "sim.toml").read_text()
     path = tmp_path / "bad.toml"

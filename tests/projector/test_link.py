@@ -18,7 +18,7 @@ import time
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.projector.protocol import LineBuffer, ProtocolError, encode, probe
 from console.runtime.projector.service import ProjectorService
 from plugins.projector.launch import projector_command

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.protocol import (
     MAX_LINE_BYTES,

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.projector.service import prepare_needs
 from plugins.projector.draw import DRAWERS, primitives
 from plugins.projector.layout import grid_points_mm, parse_pairs, parse_regions
@@ -145,7 +145,7 @@ def test_runtime_prepares_only_what_a_scene_declares():
 
 
 def test_plugin_registers_scenes_section_command_and_bench():
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     plugins = load_plugins(builtins={"projector": "plugins.projector"}, entrypoints=False)
     assert set(BUILTIN_SCENES) <= set(plugins.of("scene"))
@@ -156,7 +156,7 @@ def test_plugin_registers_scenes_section_command_and_bench():
 
 
 def test_contacts_overlay_takes_the_pipeline_value_types():
-    from console.types import Contact, Hand
+    from console.core.types import Contact, Hand
 
     c = BUILTIN_SCENES["contacts"][0](None)
     hand = Hand(

@@ -12,7 +12,7 @@ import pytest
 def plugins():
     import plugins.demos
     import plugins.tuio
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.config.plugins import BUILTIN_PLUGINS, load_plugins
 
     mine = {"demos": plugins.demos, "tuio": plugins.tuio}
     listed = set(BUILTIN_PLUGINS)

@@ -10,7 +10,7 @@ import time
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.kernel.private_dir import runtime_dir
 from console.runtime.control import ControlServer, send_command, socket_path
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.demo_process import DemoCancelled, DemoProcess
 
 

@@ -7,6 +7,7 @@ import threading
 import numpy as np
 import pytest
 
+from console.core.types import Frame
 from console.runtime.latency import (
     ARRIVAL,
     LatencyMonitor,
@@ -15,7 +16,6 @@ from console.runtime.latency import (
     stage_durations_s,
 )
 from console.runtime.loop import FrameLoop, FrameQueue
-from console.types import Frame
 
 
 def frame(seq: int, **stamps: float) -> Frame:

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
 
 

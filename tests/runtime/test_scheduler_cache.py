@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.errors import SafetyRefusal
-from console.signals import tone
-from console.types import OutputPlan, Segment
+from console.core.errors import SafetyRefusal
+from console.core.types import OutputPlan, Segment
+from console.signals.waveforms import tone
 
 FS = 48000
 

@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
+from console.core.types import Contact, Gesture, Hand
 from console.runtime.tracking import Announcer, IdTracker, Tracking, outline_centroid
-from console.types import Contact, Gesture, Hand
 
 
 def test_crossing_points_keep_their_ids_where_greedy_matching_swaps_them():

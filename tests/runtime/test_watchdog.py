@@ -7,9 +7,9 @@ import threading
 import numpy as np
 import pytest
 
+from console.core.types import Frame
 from console.runtime.loop import FrameLoop
 from console.runtime.watchdog import Watchdog, stall_reason
-from console.types import Frame
 
 
 class Stuck:
@@ -94,7 +94,7 @@ class Carrier:
     ramped in by the kernel's synth, never ending (its targets posted once it is bound)."""
 
     def __init__(self) -> None:
-        from console.stream_synth import StreamSpec
+        from console.signals.stream_synth import StreamSpec
 
         self.spec = StreamSpec(
             sample_rate_hz=48000,

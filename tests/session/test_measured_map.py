@@ -53,7 +53,7 @@ def test_another_plate_is_another_map(fake_vibrometer, monkeypatch, tmp_path):
 
 
 def test_no_map_yet_is_one_line(fake_vibrometer, monkeypatch, tmp_path):
-    from console.errors import UserError
+    from console.core.errors import UserError
     from console.session import ConsoleSession
 
     monkeypatch.setenv("HAPTABLE_CACHE_DIR", str(tmp_path))
@@ -78,9 +78,9 @@ def test_the_commands_use_the_same_measured_map(fake_vibrometer, tmp_path, capsy
     """`haptable tables build measured` reuses the map the flow demo measured; the console
     then finds it too; `frf measure` measures again into the same file, and the demo
     reuses that one."""
+    from console.files.vibration_map import load_map
     from console.runtime.measured_map import measured_map_path
     from console.session import ConsoleSession
-    from console.vibration_map import load_map
     from plugins.demos.run import flow_map_path
     from plugins.vibrotactile.cli import frf as frf_cli
     from plugins.vibrotactile.cli import tables as tables_cli
@@ -129,7 +129,7 @@ def test_a_command_measures_first_and_the_demo_reuses_it(fake_vibrometer, capsys
 
 
 def test_a_file_named_measured_is_a_file(fake_vibrometer, tmp_path, monkeypatch):
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.cli.common import map_source
 
     fv = fake_vibrometer

@@ -21,7 +21,7 @@ DAMAGES = ["other-map", "truncated", "empty", "dev-zero", "keyless", "bit-flip"]
 
 
 def _damage(path: Path, fv, how: str, tmp: Path) -> None:
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
 
     if how == "other-map":  # `cp B.npz $HAPTABLE_CACHE_DIR/console/measured-map-<key>.npz`
         b = dataclasses.replace(fv.map, frf_um_per_v=np.roll(fv.map.frf_um_per_v, 13, axis=1))
@@ -84,7 +84,7 @@ def test_a_bad_kept_map_is_measured_again_never_played(
 def test_the_console_never_loads_a_bad_kept_map(fake_vibrometer, tmp_path, caplog, damage):
     """The Vibration screen (``load_cached``) and a scene (``current_map``) find no map
     instead of another plate's; asking never measures; the file is gone."""
-    from console.errors import UserError
+    from console.core.errors import UserError
     from console.runtime.measured_map import measured_map_file
     from console.session import ConsoleSession
 
@@ -101,9 +101,9 @@ def test_the_console_never_loads_a_bad_kept_map(fake_vibrometer, tmp_path, caplo
 
 
 def test_a_good_kept_map_carries_its_key_and_is_found(fake_vibrometer):
+    from console.files.vibration_map import load_map
     from console.runtime.measured_map import measured_map_file
     from console.session import ConsoleSession
-    from console.vibration_map import load_map
 
     fv = fake_vibrometer
     path = measured_map_file(fv.profile, fv.pm)

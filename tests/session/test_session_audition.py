@@ -8,8 +8,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.signal_design import parse_target, render
-from console.signal_expr import parse
+from console.signals.design import parse_target, render
+from console.signals.expr import parse
 
 EXPR = "sine(250 Hz, 30 V, 0.2 s) * ramp(10 ms)"
 

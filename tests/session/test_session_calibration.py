@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from console.types import Contact
+from console.core.types import Contact
 
 
 def _px(pos_mm) -> tuple[float, float]:
@@ -119,7 +119,7 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
 
 
 def test_skip_cancel_and_a_classifier_without_calibration(profile):
-    from console.errors import UserError
+    from console.core.errors import UserError
     from console.session.events import Failed, Stopped
 
     session, cam, events = _session(profile, Classifier())

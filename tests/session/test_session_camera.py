@@ -84,9 +84,9 @@ def test_tuned_thresholds_are_kept_for_the_next_start(profile, plugins):
     the profile starts the classifier with them."""
     import pytest
 
-    from console import paths
-    from console.errors import UserError
-    from console.profile import PROJECT_PROFILES, load_profile
+    from console.config.profile import PROJECT_PROFILES, load_profile
+    from console.core.errors import UserError
+    from console.files import paths
     from console.runtime.stages import open_classifier
     from console.session import ConsoleSession
 
@@ -117,7 +117,7 @@ class _DialCamera:
     """A camera whose driver takes exposure and gain (an ``AdjustableCamera``)."""
 
     def __init__(self) -> None:
-        from console.types import TunableRange
+        from console.core.types import TunableRange
 
         self.values = {"exposure": -1.0, "gain": -1.0}
         self.ranges = {"exposure": TunableRange(-1, 1000, 10), "gain": TunableRange(-1, 100, 4)}
@@ -145,7 +145,7 @@ class _DialCamera:
 
 
 def test_exposure_and_gain_are_tuned_and_kept_where_the_driver_takes_them(profile, plugins):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
     from console.session.camera import CameraService
 
     svc = CameraService(profile, plugins)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.context import Context
 from console.session import ConsoleSession, Started, Stopped
 

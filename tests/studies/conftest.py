@@ -22,7 +22,7 @@ def _abort_confirmed_in_time(monkeypatch):
 
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 
     return save_map(tmp_path_factory.mktemp("map") / "plate.npz", analytic_map(SSPlate()))
@@ -32,7 +32,7 @@ def map_file(tmp_path_factory):
 def double_plugins(monkeypatch):
     """Plugins with the observer test double registered as ``double``."""
     monkeypatch.syspath_prepend(str(HERE))
-    from console import plugins as cp
+    from console.config import plugins as cp
 
     monkeypatch.setitem(cp.BUILTIN_PLUGINS, "double", "observer_double")
     sys.modules.pop("observer_double", None)

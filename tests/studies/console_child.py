@@ -14,8 +14,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
 async def _console(out: str, map_file: str) -> None:
-    from console import plugins as cp
-    from console.cli import Context
+    from console.cli.main import Context
+    from console.config import plugins as cp
     from console.tui.app import HapTableApp
 
     cp.BUILTIN_PLUGINS["double"] = "observer_double"

@@ -12,8 +12,8 @@ import time
 
 import numpy as np
 
-from console.hookspecs import hookimpl
-from console.types import OutputPlan
+from console.core.hookspecs import hookimpl
+from console.core.types import OutputPlan
 
 P_CORRECT = 0.8
 ANSWERS = {

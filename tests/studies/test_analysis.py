@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.studies import analysis as an
 from plugins.studies import rmanova as rm
 
@@ -296,7 +296,7 @@ def test_knob_analysis(tmp_path):
 
 # --------------------------------------------------------------------- report and CLI
 def _cli(*args):
-    from console.cli import main
+    from console.cli.main import main
 
     return main(["study", "analyze", *map(str, args)])
 

@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.studies import protocol as P
 from plugins.studies.start import prepare
 
@@ -114,7 +114,7 @@ def test_a_protocol_that_is_no_file_is_one_line_not_a_hang(tmp_path, kind, what)
 
 @pytest.fixture
 def cli(double_plugins):
-    from console.cli import main
+    from console.cli.main import main
 
     return main
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.studies import analysis as an
 from plugins.studies.runner import Answer, run_plan
 from plugins.studies.start import prepare

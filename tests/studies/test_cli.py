@@ -19,7 +19,7 @@ ROOT = HERE.parents[1]
 
 @pytest.fixture
 def cli(double_plugins, monkeypatch):
-    from console.cli import main
+    from console.cli.main import main
 
     return main
 
@@ -141,9 +141,9 @@ def test_study_list_shows_the_counts(cli, capsys):
 SCRIPT = """
 import sys
 sys.path.insert(0, {here!r})
-from console import plugins as cp
+from console.config import plugins as cp
 cp.BUILTIN_PLUGINS["double"] = "observer_double"
-from console.cli import main
+from console.cli.main import main
 sys.exit(main({args!r}))
 """
 

@@ -10,7 +10,7 @@ import re
 
 import pytest
 
-from console.cli import Context
+from console.cli.main import Context
 
 
 @pytest.fixture(autouse=True)
@@ -436,7 +436,7 @@ def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path)
 def test_each_protocol_has_its_default_folder(double_plugins):
     from textual.widgets import Input
 
-    from console import paths
+    from console.files import paths
     from console.tui.app import HapTableApp
 
     async def scenario():

@@ -7,7 +7,7 @@ from __future__ import annotations
 import asyncio
 import json
 
-from console.cli import Context, main
+from console.cli.main import Context, main
 
 from . import synth_runs as sr
 from .test_panel import _quick_key_presses, wait_for  # noqa: F401 - the autouse fixture too

@@ -9,7 +9,7 @@ import asyncio
 import pytest
 from textual.widgets import Button, Static
 
-from console.cli import Context
+from console.cli.main import Context
 
 from .test_panel import wait_for
 

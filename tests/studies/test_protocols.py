@@ -7,7 +7,7 @@ from collections import Counter
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.studies import protocol as P
 from plugins.studies.plan import balanced_latin_square, make_plan
 

@@ -8,8 +8,8 @@ import threading
 
 import pytest
 
-from console.atomic import append_json_line
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files.atomic import append_json_line
 from plugins.studies import protocol as P
 from plugins.studies.plan import make_plan
 from plugins.studies.runner import Answer, Control, run_plan
@@ -306,7 +306,7 @@ def test_knob_questionnaire_follows_each_condition_and_resumes_per_item(tmp_path
 def test_stimuli_are_played_through_the_effects_and_the_gate(
     tmp_path, small_exp2, map_file, outputs, profile, plugins
 ):
-    from console.vibration_map import load_map
+    from console.files.vibration_map import load_map
     from plugins.studies.stimuli import EffectPlayer, check_places, play_on
 
     vmap = load_map(map_file)
@@ -338,7 +338,7 @@ def test_stimuli_are_played_through_the_effects_and_the_gate(
 
 
 def test_places_off_the_map_are_one_line(tmp_path, small_exp2, map_file):
-    from console.vibration_map import load_map
+    from console.files.vibration_map import load_map
     from plugins.studies.stimuli import check_places
 
     bad = small_exp2.read_text().replace("[580.0, 320.0]", "[5800.0, 320.0]")

@@ -43,7 +43,7 @@ replays = 1
 
 @pytest.mark.slow
 def test_simulated_run_on_the_twin_then_analyze(tmp_path, capsys):
-    from console.cli import main
+    from console.cli.main import main
 
     proto = tmp_path / "exp2-small.toml"
     proto.write_text(SMALL)

@@ -49,7 +49,7 @@ def _quick_key_presses(monkeypatch):
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
     """An analytic (simply supported plate) vibration map of the sim grid, as a file."""
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.analytic_plate import analytic_map
 
     path = tmp_path_factory.mktemp("maps") / "analytic.npz"

@@ -10,12 +10,12 @@ import json
 import numpy as np
 import pytest
 
-from console import paths
-from console.cli import Context
-from console.profile import PROJECT_PROFILES
+from console.cli.main import Context
+from console.config.profile import PROJECT_PROFILES
+from console.core.types import Contact, Hand
+from console.files import paths
 from console.tui.app import HapTableApp
 from console.tui.panes.camera import overlay_pixels
-from console.types import Contact, Hand
 
 from .conftest import wait_for
 
@@ -223,7 +223,7 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, t
 def test_w_keeps_the_tuned_thresholds_for_the_profile(plugins):
     """T raises the body threshold, W writes it to the profile's overrides file and says
     where; the next load of the profile has it."""
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     async def scenario():
         app = _app(plugins, "camera")
@@ -287,7 +287,7 @@ def test_contact_ids_are_written_next_to_the_contacts_on_the_view():
 def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
     """] walks to the smoothing setting, + raises it (the next frame uses it), W keeps
     every setting; the next console's classifier starts with them."""
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     async def scenario():
         app = _app(plugins, "camera")
@@ -338,7 +338,7 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
     again; a bad target is one line and changes nothing."""
     import socket
 
-    from console.profile import load_profile
+    from console.config.profile import load_profile
     from console.session.camera import CameraService
 
     rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -403,7 +403,7 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
 def test_the_view_turns_with_the_camera_and_the_roi_is_set_from_the_screen(plugins):
     """rotate_deg + turns the view upright for a camera mounted a quarter turn off (the
     view becomes portrait), roi_left_px + narrows what segmentation sees; W keeps both."""
-    from console.profile import load_profile
+    from console.config.profile import load_profile
 
     async def scenario():
         app = _app(plugins, "camera")

@@ -6,8 +6,8 @@ from __future__ import annotations
 import asyncio
 import re
 
-from console.cli import Context
-from console.stimuli import make_stimulus
+from console.cli.main import Context
+from console.signals.stimuli import make_stimulus
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar
 

@@ -14,9 +14,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.cli import Context
+from console.cli.main import Context
+from console.core.types import patches_of
 from console.tui.app import HapTableApp
-from console.types import patches_of
 
 from .conftest import wait_for
 
@@ -65,7 +65,7 @@ def part_n(app) -> int:
 @pytest.fixture
 def flow_ctx(tmp_path, plugins, map_file):
     """The sim profile with a vibration map for the flow demo (no twin measurement)."""
-    from console.profile import PROJECT_PROFILES
+    from console.config.profile import PROJECT_PROFILES
 
     text = (PROJECT_PROFILES / "sim.toml").read_text()
     path = tmp_path / "flow.toml"
@@ -383,8 +383,8 @@ def test_haptable_estop_from_a_shell_reaches_the_demo_process(plugins):
 def test_a_demo_started_while_the_console_plays_waits_its_turn_on_the_table(plugins):
     """The console and the demo are clients of one kernel: an audition under way plays
     to its end, the demo's stream after it; nothing is handed over."""
-    from console.signals import tone
-    from console.types import OutputPlan, Segment
+    from console.core.types import OutputPlan, Segment
+    from console.signals.waveforms import tone
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="scenes")

@@ -8,9 +8,9 @@ import asyncio
 import numpy as np
 from textual.widgets import DataTable, Static
 
-from console.cli import main
-from console.plugins import load_plugins
-from console.profile import load_profile, overrides_path
+from console.cli.main import main
+from console.config.plugins import load_plugins
+from console.config.profile import load_profile, overrides_path
 from console.runtime.context import Context
 from console.tui.app import HapTableApp
 

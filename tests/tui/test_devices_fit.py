@@ -11,8 +11,8 @@ from pathlib import Path
 
 from textual.widgets import DataTable
 
-from console.plugins import load_plugins
-from console.profile import overrides_path
+from console.config.plugins import load_plugins
+from console.config.profile import overrides_path
 from console.runtime.context import Context
 from console.tui.app import HapTableApp
 

@@ -9,7 +9,7 @@ import asyncio
 
 from textual.widgets import Input
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -103,7 +103,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
 def test_gestures_panel_at_80x24(snap_compare):
     """The panel at the smallest supported terminal, after a bad repetition count (stable
     plugins and relative paths, so the picture does not depend on the machine)."""
-    from console.plugins import load_plugins
+    from console.config.plugins import load_plugins
 
     names = ("twin", "twin.camera", "twin.plate", "gestures")
     plugins = load_plugins(builtins={n: f"plugins.{n}" for n in names})

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from textual.widgets import Input
 
-from console.cli import Context, main
+from console.cli.main import Context, main
 from console.tui.app import HapTableApp
 from plugins.gestures import sketch
 from plugins.gestures.dataset import write_background, write_sample
@@ -47,7 +47,7 @@ def dataset(tmp_path):
 
 
 def test_panel_and_cli_evaluate_alike(plugins, dataset, tmp_path, capsys):
-    from console.profile import save_overrides
+    from console.config.profile import save_overrides
 
     model = tmp_path / "gestures.skops"
 

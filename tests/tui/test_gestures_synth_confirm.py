@@ -7,7 +7,7 @@ import asyncio
 
 from textual.widgets import Input
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for

@@ -13,7 +13,7 @@ import pytest
 from textual.geometry import Region
 from textual.widgets import Input
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for

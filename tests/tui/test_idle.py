@@ -16,7 +16,7 @@ from textual.app import App
 from textual.widget import Widget
 from textual.widgets import Switch
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 from console.tui.halfblock_view import HalfBlockView
 from console.tui.live import status_key

@@ -12,9 +12,10 @@ import sys
 import numpy as np
 import pytest
 
-from console.cli import Context, main
-from console.errors import ProfileError
-from console.profile import PROJECT_PROFILES, load_profile
+from console.cli.main import Context, main
+from console.config.profile import PROJECT_PROFILES, load_profile
+from console.core.errors import ProfileError
+from console.core.types import Contact, Hand
 from console.tui.app import HapTableApp
 from console.tui.irview import (
     GREEN,
@@ -25,7 +26,6 @@ from console.tui.irview import (
     ir_rgb,
     probe,
 )
-from console.types import Contact, Hand
 
 from .conftest import wait_for
 

@@ -6,7 +6,7 @@ import asyncio
 
 import pytest
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 from console.tui.panes.latency import spark_width
 

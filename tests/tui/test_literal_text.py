@@ -15,7 +15,7 @@ from pathlib import Path
 
 import console
 import plugins
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -117,10 +117,10 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
 
     from textual.widgets._toast import Toast
 
+    from console.core.types import DeviceStatus
     from console.runtime import doctor
     from console.tui.logs import NotifyHandler
     from console.tui.safety_bar import SafetyBar
-    from console.types import DeviceStatus
 
     real = doctor.diagnose
 

@@ -10,7 +10,7 @@ import pytest
 from textual.widgets import Footer, Tabs
 from textual.widgets._footer import FooterKey
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for

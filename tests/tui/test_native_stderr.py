@@ -9,7 +9,7 @@ import ctypes
 import logging
 import os
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 from console.tui.logs import LogScreen, NativeStderr, ViewHandler, on_terminal
 

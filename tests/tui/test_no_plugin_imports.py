@@ -1,5 +1,5 @@
 """The console never imports a plugin: it meets them through registrations
-(``console/hookspecs.py``) and ``console`` types. An AST scan of every module under
+(``console/core/hookspecs.py``) and ``console`` types. An AST scan of every module under
 ``console/`` for imports of ``plugins`` (static, or a module name given to
 ``importlib.import_module`` / ``__import__``) and for ``plugins.*`` module-name strings,
 allowing only the built-in plugin list (the projector plugin registers its own command)."""
@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 import console
-from console.plugins import BUILTIN_PLUGINS
+from console.config.plugins import BUILTIN_PLUGINS
 
 ROOT = Path(console.__file__).resolve().parent
 

@@ -9,7 +9,7 @@ import asyncio
 
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.service import ProjectorService, effect_providers
 from plugins.demos.panel import status_text
@@ -73,8 +73,8 @@ def test_without_a_map_the_scene_says_why_and_is_prepared_later(
 
 
 def test_without_vibrotactile_the_status_names_the_plugin(tmp_path, map_file):
-    from console.plugins import BUILTIN_PLUGINS, load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import BUILTIN_PLUGINS, load_plugins
+    from console.config.profile import load_profile
 
     pm = load_plugins(builtins={k: v for k, v in BUILTIN_PLUGINS.items() if k != "vibrotactile"})
     svc = _service(pm, load_profile("sim", pm), tmp_path, lambda: map_file)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import asyncio
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for

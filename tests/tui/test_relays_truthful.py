@@ -9,7 +9,7 @@ import re
 
 from textual.widgets import DataTable
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar, describe
 
@@ -62,7 +62,7 @@ def test_the_switch_log_gives_times_and_names_and_the_bar_names_the_relays(plugi
 
 
 def test_the_bar_names_the_closed_relays_from_the_profile(plugins):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
     from console.tui.safety_bar import relay_names
 
     names = relay_names(load_profile("sim", plugins))

@@ -8,7 +8,7 @@ import asyncio
 
 from textual.widgets._toast import Toast
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar, describe
 

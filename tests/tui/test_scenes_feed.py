@@ -8,7 +8,7 @@ from __future__ import annotations
 import asyncio
 from types import SimpleNamespace
 
-from console.cli import Context
+from console.cli.main import Context
 from console.session.demos import DemoControl
 from console.tui.app import HapTableApp
 

@@ -8,8 +8,8 @@ import time
 
 from textual.widgets import Static
 
-from console.cli import Context
-from console.stimuli import make_stimulus
+from console.cli.main import Context
+from console.signals.stimuli import make_stimulus
 from console.tui.app import HapTableApp
 from console.tui.charts import Chart
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from textual.widgets import Switch
 
-from console.cli import Context
+from console.cli.main import Context
+from console.core.types import patches_of
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar
-from console.types import patches_of
 
 from .conftest import command, segment_in, wait_for
 

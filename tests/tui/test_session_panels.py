@@ -12,9 +12,9 @@ from types import SimpleNamespace
 from textual.containers import Vertical
 from textual.widgets import Static, TabPane
 
-from console.cli import Context
-from console.hookspecs import hookimpl
-from console.plugins import PanelTab, load_plugins
+from console.cli.main import Context
+from console.config.plugins import PanelTab, load_plugins
+from console.core.hookspecs import hookimpl
 from console.session.events import Snapshot, Started
 from console.tui.app import HapTableApp, panel_tabs
 from console.tui.session_messages import SessionMessage

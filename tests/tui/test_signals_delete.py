@@ -9,8 +9,8 @@ import asyncio
 import pytest
 from textual.widgets import OptionList, Static
 
-from console.cli import Context
-from console.signal_library import add_signal, library_path, read_library
+from console.cli.main import Context
+from console.config.signal_library import add_signal, library_path, read_library
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for

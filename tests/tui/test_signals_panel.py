@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from textual.widgets import Input, OptionList, Static
 
-from console.cli import Context
-from console.signal_design import render
-from console.signal_expr import parse
-from console.signal_library import add_signal, library_path
+from console.cli.main import Context
+from console.config.signal_library import add_signal, library_path
+from console.signals.design import render
+from console.signals.expr import parse
 from console.tui.app import HapTableApp
 from console.tui.charts import Chart
 

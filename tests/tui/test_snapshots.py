@@ -5,8 +5,8 @@ after checking the new SVGs by eye."""
 
 from __future__ import annotations
 
-from console.cli import Context
-from console.plugins import load_plugins
+from console.cli.main import Context
+from console.config.plugins import load_plugins
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from console.types import patches_of
+from console.core.types import patches_of
 
 from .conftest import segment_in
 

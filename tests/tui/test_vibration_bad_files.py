@@ -9,7 +9,7 @@ import zipfile
 
 import numpy as np
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for

@@ -10,7 +10,7 @@ import pytest
 from textual.widgets import DataTable, Input
 from textual.widgets._tabbed_content import ContentTabs
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for
@@ -55,7 +55,7 @@ def test_tab_never_focuses_an_invisible_widget(plugins):
 def long_pulse(tmp_path, plugins):
     """The sim profile with 3 s point pulses: "playing" (said once the outputs report the
     start) stays on the line long enough to be seen and e-stopped on a loaded machine."""
-    from console.profile import PROJECT_PROFILES
+    from console.config.profile import PROJECT_PROFILES
 
     path = tmp_path / "longpulse.toml"
     path.write_text(

@@ -7,8 +7,8 @@ from __future__ import annotations
 import asyncio
 import shutil
 
-from console.cli import Context
-from console.errors import UserError
+from console.cli.main import Context
+from console.core.errors import UserError
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -55,8 +55,8 @@ def test_lab_profile_says_outputs_are_closed_and_keeps_the_twin_map_out(
 
 def test_sim_profile_names_the_map_it_loads_and_b_says_tables_are_built(plugins, map_file):
     async def scenario():
+        from console.files.vibration_map import load_map
         from console.runtime.measured_map import keep_measured_map
-        from console.vibration_map import load_map
 
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         vib = app.session.vibration

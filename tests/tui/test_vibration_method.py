@@ -8,7 +8,7 @@ import asyncio
 
 import pytest
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for

@@ -7,14 +7,14 @@ import asyncio
 
 import numpy as np
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for
 
 
 def test_grid_from_coordinates_with_the_files_numbers(plugins, map_file, tmp_path):
-    from console.vibration_map import load_map, make_map, save_map
+    from console.files.vibration_map import load_map, make_map, save_map
 
     m = load_map(map_file)
     r, c = np.divmod(np.arange(84), 12)  # the fixture is row by row

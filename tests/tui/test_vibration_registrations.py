@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from console.cli import Context
-from console.plugins import BUILTIN_PLUGINS, load_plugins
+from console.cli.main import Context
+from console.config.plugins import BUILTIN_PLUGINS, load_plugins
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for
@@ -101,8 +101,8 @@ def test_without_vibrotactile_the_screen_names_the_plugin(map_file):
 
 
 def test_uff_import_through_the_flow_effect(plugins, tmp_path, map_file):
-    from console.profile import load_profile
-    from console.vibration_map import load_map, make_map
+    from console.config.profile import load_profile
+    from console.files.vibration_map import load_map, make_map
     from plugins.vibrotactile.uff_export import export_uff
 
     full = load_map(map_file)
@@ -143,7 +143,7 @@ def test_measurement_uses_the_vibrometer_the_profile_names():
 
     import pytest
 
-    from console.errors import UserError
+    from console.core.errors import UserError
     from console.session import vibration as vs
 
     def measured(name: str, progress) -> dict:

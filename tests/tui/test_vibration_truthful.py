@@ -14,7 +14,7 @@ import asyncio
 
 from textual.widgets import DataTable
 
-from console.cli import Context
+from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import command, wait_for

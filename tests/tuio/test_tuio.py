@@ -11,7 +11,7 @@ from pythonosc import osc_packet
 from pythonosc.dispatcher import Dispatcher
 from pythonosc.osc_server import ThreadingOSCUDPServer
 
-from console.types import Contact, Gesture, Hand
+from console.core.types import Contact, Gesture, Hand
 
 TABLE = (743.46, 447.29)
 

@@ -63,8 +63,8 @@ def client():
 
 
 def test_a_resting_hand_is_one_blob_and_its_fingers_keep_their_ids(client, profile, plugins):
+    from console.core.types import GestureScript, GestureStep
     from console.runtime.stages import base_stages, learn_background, open_classifier
-    from console.types import GestureScript, GestureStep
     from plugins.tuio.sender import TuioSender
 
     # 10 s of a resting open hand, lifted, then placed again with two fingers down (60 fps)

@@ -16,7 +16,7 @@ from plugins.twin.plate.reference import GLASS_ASPECT, LAMBDA_TABLE, ssss_exact
 
 
 class FakeProfile:
-    """Just enough of console.profile.Profile: the sim geometry, no plate sections."""
+    """Just enough of console.config.profile.Profile: the sim geometry, no plate sections."""
 
     path = Path("fake.toml")
 
@@ -83,7 +83,7 @@ def test_profile_edges_use_the_seal_springs(capsys):
 
 
 def test_bad_arguments_are_user_errors():
-    from console.errors import UserError
+    from console.core.errors import UserError
 
     with pytest.raises(UserError, match="--count"):
         cli.plate_modes(FakeProfile(), "ssss", None, 0)

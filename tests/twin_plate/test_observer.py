@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from console import contracts
-from console.types import OutputPlan, Segment
+from console.core import contracts
+from console.core.types import OutputPlan, Segment
 from plugins.twin.plate import closed_loop as cl
 from plugins.twin.plate import observer as ob
 from plugins.twin.plate.model import EXCITATIONS
@@ -213,7 +213,7 @@ def test_tone_frequency_between_fft_bins(f_hz):
 
 
 def test_not_a_flow_is_one_line():
-    from console.errors import UserError
+    from console.core.errors import UserError
 
     obs = ob.TwinObserver(None)
     with pytest.raises(UserError, match="flow and hand-flow trials"):
@@ -223,8 +223,8 @@ def test_not_a_flow_is_one_line():
 # --------------------------------------------------------------------- on the twin
 @pytest.fixture(scope="module")
 def twin_setup():
-    from console.plugins import load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
     from console.runtime.measured_map import measured_map
 
     pm = load_plugins()

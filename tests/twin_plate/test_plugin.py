@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from console.errors import ProfileError
-from console.plugins import load_plugins
-from console.profile import load_profile
+from console.config.plugins import load_plugins
+from console.config.profile import load_profile
+from console.core.errors import ProfileError
 
 
 @pytest.fixture(scope="module")

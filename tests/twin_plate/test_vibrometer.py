@@ -116,8 +116,8 @@ def test_point_on_a_nodal_line_is_measured_without_blowing_up(sim):
 
 
 def test_grid_measurement_saves_as_a_vibration_map(tmp_path, plugins):
-    from console.profile import load_profile
-    from console.vibration_map import load_map, make_map, save_map
+    from console.config.profile import load_profile
+    from console.files.vibration_map import load_map, make_map, save_map
     from plugins.twin.plate.vibrometer import measure_grid, settings_from_profile
 
     profile = load_profile("sim", plugins)

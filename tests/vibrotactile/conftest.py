@@ -31,7 +31,7 @@ def ss_tables(ss_map):
 @pytest.fixture
 def ctx(plugins, tmp_path):
     """A command context whose profile is every section's defaults (no device drivers)."""
-    from console.profile import Profile, validate
+    from console.config.profile import Profile, validate
 
     path = tmp_path / "defaults.toml"
     path.write_text("")

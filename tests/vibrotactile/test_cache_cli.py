@@ -8,8 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.vibration_map import save_map
+from console.core.errors import UserError
+from console.files.vibration_map import save_map
 from plugins.vibrotactile.cache import cached
 from plugins.vibrotactile.cli import flow as flow_cli
 from plugins.vibrotactile.cli import frf as frf_cli
@@ -170,8 +170,8 @@ def test_plugin_registers_commands_sections_and_benchmark(plugins):
 
 
 def test_profile_perception_section_is_validated(plugins, tmp_path):
-    from console.errors import ProfileError
-    from console.profile import validate
+    from console.config.profile import validate
+    from console.core.errors import ProfileError
 
     p = tmp_path / "bad.toml"
     with pytest.raises(ProfileError):

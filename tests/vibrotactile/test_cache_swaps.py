@@ -16,8 +16,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.cli import main
-from console.vibration_map import VibrationMap, save_map
+from console.cli.main import main
+from console.files.vibration_map import VibrationMap, save_map
 
 DAMAGES = ["other-map", "truncated", "empty", "dev-zero", "keyless"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.types import DIRECTIONS_MM
+from console.core.types import DIRECTIONS_MM
 from plugins.projector.draw import DIRECTIONS as ARROWS
 from plugins.vibrotactile.hand import side_masks
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 
 
 def test_effects_are_registered_and_render_what_the_functions_give(ctx, ss_map, ss_tables):
@@ -139,7 +139,7 @@ def test_half_power_damping_matches_the_plate_and_sets_the_gap(ctx, ss_plate):
 def test_tables_build_min_contrast_cli(ctx, ss_map, tmp_path, capsys):
     import argparse
 
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.cli import tables as tables_cli
     from plugins.vibrotactile.tables import load_tables
 
@@ -159,8 +159,8 @@ def test_tables_build_min_contrast_cli(ctx, ss_map, tmp_path, capsys):
 
     ans = json.loads(capsys.readouterr().out)
     assert ans["frequency_hz"] > 60.0  # not the first mode
-    # a bad floor is refused as typed (console.options), before anything is built
-    from console.options import Parser
+    # a bad floor is refused as typed (console.core.options), before anything is built
+    from console.core.options import Parser
 
     strict = Parser(prog="haptable tables")
     tables_cli.configure_tables(strict)
@@ -193,7 +193,7 @@ def test_flow_command_options_contrast_and_ringdown(ctx, ss_map, tmp_path, capsy
     import argparse
     import json
 
-    from console.vibration_map import save_map
+    from console.files.vibration_map import save_map
     from plugins.vibrotactile.cli import flow as flow_cli
 
     mp = tmp_path / "map.npz"

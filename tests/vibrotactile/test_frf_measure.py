@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 
-from console.cli import main
-from console.vibration_map import load_map
+from console.cli.main import main
+from console.files.vibration_map import load_map
 
 
 def test_measure_then_query_51_52(tmp_path, capsys):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 from plugins.vibrotactile.hand import (
     DIRECTIONS,
     choose,

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
 
 FOUR = ["PA", "PB", "PC", "PD", "screen"]
 

@@ -13,9 +13,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.types import DIRECTIONS, Gesture
-from console.vibration_map import VibrationMap, save_map
+from console.core.errors import UserError
+from console.core.types import DIRECTIONS, Gesture
+from console.files.vibration_map import VibrationMap, save_map
 
 STEP_MM = 40.0  # a coarse grid keeps the tests fast (the demo's is 10 mm)
 
@@ -169,7 +169,7 @@ def test_a_changed_map_invalidates_the_cache(setup, tmp_path):
 
 @pytest.mark.parametrize("damage", ["truncated", "amplitude_over_cap"])
 def test_a_corrupt_cache_file_is_rebuilt_with_a_log_line_never_played(setup, caplog, damage):
-    from console.cache_files import read_entry, write_entry
+    from console.files.cache_files import read_entry, write_entry
 
     s = setup
     eff = _effect(s)
@@ -354,7 +354,7 @@ def test_a_scene_region_in_a_direction_not_prepared_plays_its_atlas_place_at_onc
 
 
 def test_per_patch_profiles_get_no_atlas_and_plan_when_asked(setup, caplog):
-    from console.profile import load_profile
+    from console.config.profile import load_profile
     from plugins.demos.adapters import flow_renderers
     from plugins.demos.flow import FlowDemo
 

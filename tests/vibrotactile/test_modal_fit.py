@@ -14,9 +14,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.types import EXCITATIONS
-from console.vibration_map import make_map
+from console.core.errors import UserError
+from console.core.types import EXCITATIONS
+from console.files.vibration_map import make_map
 from plugins.twin.plate.model import build_twin, default_params, grid_points_mm
 from plugins.vibrotactile import modal_fit as mf
 from plugins.vibrotactile.interp import interpolate
@@ -197,8 +197,8 @@ def test_tables_query_modal_cli(exact_map, twin, tmp_path, capsys):
     difference of the twin's exact FRFs there (same frequency, same actuator)."""
     import json
 
-    from console.cli import main
-    from console.vibration_map import save_map
+    from console.cli.main import main
+    from console.files.vibration_map import save_map
 
     path = save_map(tmp_path / "twin.npz", exact_map)
     a, p = (251.73, 223.645), (311.73, 253.645)  # a midpoint and a cell centre

@@ -15,8 +15,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.vibration_map import make_map
+from console.core.errors import UserError
+from console.files.vibration_map import make_map
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.perceptual import PerceptualRule, felt_db
 from plugins.vibrotactile.tables import build_tables, load_tables, query_indices, save_tables
@@ -197,8 +197,8 @@ def test_tables_file_keeps_the_rule_and_old_files_load_as_paper(tmp_path):
 
 @pytest.fixture(scope="module")
 def twin_map():
-    from console.plugins import load_plugins
-    from console.profile import load_profile
+    from console.config.plugins import load_plugins
+    from console.config.profile import load_profile
     from plugins.twin.plate.loop_play import measured_map, one_blas_thread
 
     pm = load_plugins()

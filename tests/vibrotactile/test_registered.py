@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console import paths
-from console.errors import UserError
+from console.core.errors import UserError
+from console.files import paths
 from plugins.vibrotactile import lazy
 from plugins.vibrotactile.registered import TABLE_STEPS, tables_stepwise_cached
 from plugins.vibrotactile.tables import build_tables
@@ -87,7 +87,7 @@ def test_flow_effect_build_cancelled_then_built_on_demand(ctx, ss_map, tmp_path)
 
 
 def test_flow_effect_imports_uff(ctx, ss_map, tmp_path):
-    from console.vibration_map import make_map
+    from console.files.vibration_map import make_map
     from plugins.vibrotactile.uff_export import export_uff
 
     sub = make_map(
@@ -111,8 +111,8 @@ def test_flow_effect_imports_uff(ctx, ss_map, tmp_path):
 def test_tables_cache_only_in_haptables_cache_or_nowhere(ctx, plugins, tmp_path):
     """`[vibrotactile] cache_dir` is empty (the one cache) or "none"; a folder of its own
     is refused with the line that says so."""
-    from console.errors import ProfileError
-    from console.profile import load_profile
+    from console.config.profile import load_profile
+    from console.core.errors import ProfileError
     from plugins.vibrotactile.settings import setup_from_profile
 
     assert setup_from_profile(ctx.profile).cache_dir == paths.cache_dir()

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.errors import UserError
+from console.core.errors import UserError
+from console.core.types import patches_of
 from console.safety import Limits, check_plan
-from console.types import patches_of
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.stimuli import StimulusSettings, flow_plan, point_plan
 from plugins.vibrotactile.tables import build_tables, query_indices
@@ -78,7 +78,7 @@ def test_closed_loop_active_beats_passive(ss_plate, ss_tables):
 
 
 def test_weak_map_caps_voltage_and_says_so(ss_map):
-    from console.vibration_map import VibrationMap
+    from console.files.vibration_map import VibrationMap
 
     weak = VibrationMap(
         ss_map.frf_um_per_v * 1e-4,

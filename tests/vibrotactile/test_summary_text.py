@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from console.vibration_map import save_map
+from console.files.vibration_map import save_map
 from plugins.vibrotactile.cli import flow as flow_cli
 from plugins.vibrotactile.cli import frf as frf_cli
 from plugins.vibrotactile.summary_text import label_and_unit, summary_lines

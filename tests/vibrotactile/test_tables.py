@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap, load_map, save_map
+from console.core.errors import UserError
+from console.files.vibration_map import VibrationMap, load_map, save_map
 from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
 from plugins.vibrotactile.tables import (
     build_tables,

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import pyuff
 
-from console.errors import UserError
-from console.types import EXCITATIONS
-from console.vibration_map import grid_points_mm
+from console.core.errors import UserError
+from console.core.types import EXCITATIONS
+from console.files.vibration_map import grid_points_mm
 from plugins.vibrotactile.tables import build_tables
 from plugins.vibrotactile.uff_export import export_uff
 from plugins.vibrotactile.uff_import import import_uff
@@ -144,7 +144,7 @@ def test_tables_from_foreign_uff_equal_brute_force(velocity_files, grid_mm):
 
 @pytest.mark.parametrize("binary", [False, True])
 def test_export_import_round_trip(tmp_path, ss_map, binary):
-    from console.vibration_map import make_map
+    from console.files.vibration_map import make_map
 
     sub = make_map(
         ss_map.frf_um_per_v[:, :24],

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import pyuff
 
-from console.cli import main
-from console.errors import UserError
-from console.types import EXCITATIONS
-from console.vibration_map import grid_points_mm, load_map, make_map, save_map
+from console.cli.main import main
+from console.core.errors import UserError
+from console.core.types import EXCITATIONS
+from console.files.vibration_map import grid_points_mm, load_map, make_map, save_map
 from plugins.vibrotactile.uff_export import export_uff
 from plugins.vibrotactile.uff_format import REF_NODES
 from plugins.vibrotactile.uff_import import import_uff
@@ -345,7 +345,7 @@ def test_column_major_numbers_are_point_ids_neighbours_from_coordinates(tmp_path
 
 
 def test_console_grid_is_laid_out_from_coordinates():
-    from console.vibration_map import grid_cells
+    from console.files.vibration_map import grid_cells
 
     nodes, order = column_major(None)
     rows, cols, cells = grid_cells(GRID[order])

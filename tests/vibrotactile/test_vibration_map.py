@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from console.errors import UserError
-from console.vibration_map import VibrationMap, load_map, make_map, save_map
+from console.core.errors import UserError
+from console.files.vibration_map import VibrationMap, load_map, make_map, save_map
 
 
 def _tiny(**over):

@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.runtime.projector import protocol as proto
 from console.runtime.projector.protocol import (
     HEARTBEAT_S,

@@ -47,7 +47,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.kernel.private_dir import ensure_own_dir, runtime_dir
 
 #: The protocol version both ends announce in their ``hello``.

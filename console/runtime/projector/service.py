@@ -3,7 +3,7 @@ projector process plus the active scene and the preparation of what it needs.
 
 ::
 
-    svc = ProjectorService.from_profile(profile, plugins)   # plugins: console.plugins.Plugins
+    svc = ProjectorService.from_profile(profile, plugins)   # plugins: console.config.plugins.Plugins
     svc.start()                        # spawn (or adopt) the projector, connect
     svc.start_scene("knob")            # build the scene, prepare its needs, show it
     svc.update({"type": "rotate", "delta_deg": 45})   # events go to the active scene
@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from console.contracts import TableEffect, points_event
-from console.errors import UserError
+from console.core.contracts import TableEffect, points_event
+from console.core.errors import UserError
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.protocol import HEARTBEAT_S, PEER_TIMEOUT_S, socket_path_for
 from console.runtime.projector.supervisor import ProjectorLaunch, ProjectorSupervisor
@@ -72,7 +72,7 @@ def effect_providers(
     """Need providers backed by the registered effects (no plugin imported).
 
     ``tables`` (a list of grid points, or of (a, b) pairs, or ``"map"``: all of them):
-    the lookup tables (a ``console.contracts.TableEffect``) of ``current_map()`` (the console's
+    the lookup tables (a ``console.core.contracts.TableEffect``) of ``current_map()`` (the console's
     vibration map: a ``VibrationMap`` or a map file; it raises ``UserError`` when there
     is none), checked to cover the declared points. Returns ``{"tables": Tables,
     "points": [...]}`` (and ``"points_mm"`` for ``"map"``: the scene is told them as a
@@ -244,7 +244,7 @@ class ProjectorService:
             raise UserError(
                 f"no scene named {name!r}; available: {', '.join(sorted(self.scenes)) or 'none'}"
             )
-        scene = self.scenes[name](self.profile)  # a console.contracts.Scene
+        scene = self.scenes[name](self.profile)  # a console.core.contracts.Scene
         why: dict[str, str] = {}
         prepared, missing = prepare_needs(scene.needs or {}, self.providers, why)
         _tell_points(scene, prepared)

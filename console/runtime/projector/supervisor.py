@@ -20,7 +20,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.kernel.private_dir import open_private, pid_alive
 from console.runtime.projector.client import ProjectorLink
 from console.runtime.projector.protocol import prepare_socket_dir, probe

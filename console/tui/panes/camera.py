@@ -20,7 +20,7 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.geometry import Region
 from textual.widgets import Input, Static
 
-from console.errors import UserError
+from console.core.errors import UserError
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.text import escape
 from console.tui.util import from_thread

@@ -15,7 +15,7 @@ from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
-from console.stimuli import STIMULI
+from console.signals.stimuli import STIMULI
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -262,8 +262,8 @@ class DevicesPane(VerticalScroll):
     def _apply(self, settings: dict, what: str) -> None:
         """Save ``settings`` to the profile's override file, reload the profile and
         reopen the outputs with it (refused while they play or are e-stopped)."""
-        from console.errors import UserError
-        from console.profile import load_profile, overrides_path, save_overrides
+        from console.config.profile import load_profile, overrides_path, save_overrides
+        from console.core.errors import UserError
 
         session, pm = self.app.session, self.app.ctx.pm
         self._say(f"{what}: saving ...")
@@ -302,8 +302,8 @@ class DevicesPane(VerticalScroll):
     # ------------------------------------------------------------------ testing
     @work(thread=True, exclusive=True, group="test-output")
     def action_test_output(self) -> None:
-        from console.errors import UserError
-        from console.stimuli import make_stimulus
+        from console.core.errors import UserError
+        from console.signals.stimuli import make_stimulus
 
         name = from_thread(self.app, lambda: self.query_one("#stimulus", Select).value)
         session = self.app.session

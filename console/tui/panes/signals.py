@@ -14,12 +14,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
-from console.errors import UserError
-from console.safety import Limits
-from console.session.events import Failed, Stopped
-from console.signal_design import Summary, Target, parse_target, render, spectrum, summarize
-from console.signal_expr import parse
-from console.signal_library import (
+from console.config.signal_library import (
     BUILTIN,
     Entry,
     add_signal,
@@ -28,6 +23,11 @@ from console.signal_library import (
     remove_signal,
     restore_signal,
 )
+from console.core.errors import UserError
+from console.safety import Limits
+from console.session.events import Failed, Stopped
+from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
+from console.signals.expr import parse
 from console.tui.charts import Chart, Series
 from console.tui.util import from_thread
 

@@ -15,15 +15,15 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 
-from console.errors import UserError
+from console.core.errors import UserError
+from console.core.types import plan_parts
+from console.core.words import AT_CONSOLE, worded
 from console.session.events import ESTOP_REFUSAL, Started, Stopped
 from console.tui.charts import Chart
 from console.tui.long_work import stop_check
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape, styled
 from console.tui.util import from_thread
-from console.types import plan_parts
-from console.words import AT_CONSOLE, worded
 
 HELP = (
     "enter: audition the point\n"
@@ -104,7 +104,7 @@ class VibrationPane(VerticalScroll):
 
     def _layout_from_map(self, vmap) -> None:
         """The grid the map's points form by their coordinates, labelled with their ids."""
-        from console.vibration_map import grid_cells
+        from console.files.vibration_map import grid_cells
 
         rows, cols, cells = grid_cells(vmap.points_mm)
         self._set_layout(

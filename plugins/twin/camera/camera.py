@@ -1,4 +1,4 @@
-"""The streaming camera twin: a ``console.contracts.Camera`` driven by a script.
+"""The streaming camera twin: a ``console.core.contracts.Camera`` driven by a script.
 
 Scripts say which hands are where at frame ``k``:
 
@@ -265,7 +265,7 @@ class TwinCamera:
 
     # ------------------------------------------------------------------ scripting
     def set_script(self, script: Script | GestureScript) -> None:
-        """Show ``script`` from the next frame on: a ``console.types.GestureScript``
+        """Show ``script`` from the next frame on: a ``console.core.types.GestureScript``
         (how other plugins script the twin) or one of this module's scripts."""
         if isinstance(script, GestureScript):
             script = self.sequence(script)
@@ -361,7 +361,7 @@ class TwinCamera:
 
     def mm_to_px(self, pos_mm: tuple[float, float]) -> tuple[float, float] | None:
         """Where the table point ``pos_mm`` shows in this camera's image (pixels; the
-        lens included), as ``console.contracts.TouchableCamera`` asks."""
+        lens included), as ``console.core.contracts.TouchableCamera`` asks."""
         p = np.asarray(self.rig.mapping.mm_to_px(np.asarray([pos_mm], float)), float)
         x, y = p.reshape(-1, 2)[0]
         return (float(x), float(y))

@@ -1,9 +1,9 @@
 """A test sound card plugin: an audio output listing three cards; what it opens is the
 twin's amplifiers (so a test hears what the gate passed). A module, so that the table's
-outputs process loads it too (``console.plugins.import_extra``)."""
+outputs process loads it too (``console.config.plugins.import_extra``)."""
 
-from console.hookspecs import hookimpl
-from console.types import DeviceStatus, OutputDevice
+from console.core.hookspecs import hookimpl
+from console.core.types import DeviceStatus, OutputDevice
 
 CARDS = (
     OutputDevice("bench-card", "Bench Card A (ALSA)", "ALSA", 2, 0.005, 0.02, default=True),

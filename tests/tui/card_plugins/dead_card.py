@@ -1,9 +1,9 @@
 """A test plugin: a sound card that lists one device and fails to start it, and a driver
 that lists its devices and finds none. A module, so that the table's outputs process
-loads it too (``console.plugins.import_extra``)."""
+loads it too (``console.config.plugins.import_extra``)."""
 
-from console.hookspecs import hookimpl
-from console.types import DeviceStatus, OutputDevice
+from console.core.hookspecs import hookimpl
+from console.core.types import DeviceStatus, OutputDevice
 
 
 @hookimpl

@@ -1,9 +1,9 @@
 """A test plugin: a sound-card driver whose listing fails with a long PortAudio error
 (as a missing or broken PortAudio says it). A module, so that the table's outputs
-process loads it too (``console.plugins.import_extra``)."""
+process loads it too (``console.config.plugins.import_extra``)."""
 
-from console.hookspecs import hookimpl
-from console.types import DeviceStatus
+from console.core.hookspecs import hookimpl
+from console.core.types import DeviceStatus
 
 LONG_ERROR = (
     "PortAudio library not found: sounddevice could not load libportaudio.so.2 "

@@ -1,0 +1,33 @@
+"""Errors a user can fix. The CLI and the console print them as one line, never a traceback."""
+
+
+class UserError(Exception):
+    """Bad input (profile, file, argument): the message names what, where, and the fix."""
+
+
+class UsageError(UserError):
+    """A command line argparse refused (unknown option, bad number, missing argument):
+    the message names the command, the option and what to give
+    (``console.core.options.Parser``)."""
+
+
+class ProfileError(UserError):
+    """A profile that does not validate."""
+
+
+class SafetyRefusal(UserError):
+    """The safety gate refused a plan or a relay switch; the message says why."""
+
+
+class EStopped(Exception):
+    """Another process (`haptable estop`) e-stopped this command's outputs; it stopped."""
+
+    #: the exit status of a command stopped this way
+    EXIT_CODE = 4
+
+
+class EStopLatched(UserError):
+    """The table's e-stop is latched: nothing plays until an operator resets it (a
+    command that would open its outputs refuses in one line)."""
+
+    EXIT_CODE = 4

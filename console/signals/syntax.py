@@ -1,0 +1,154 @@
+"""The signal syntax's words: units, functions and their parameters, and the bounds a
+signal's text is held to before and while it is parsed (``console.signals.expr``).
+
+Bounds are checked on the text and on each literal before any conversion, so nothing an
+operator types can overflow, recurse without end or allocate: a number of at most
+``MAX_NUMBER_CHARS`` characters and ``MAX_MAGNITUDE`` in size, only printable
+characters, no comments, a gain within +-``MAX_DB`` dB, ``MAX_SIGNS`` signs in a row.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import re
+from dataclasses import dataclass
+
+from console.core.errors import UserError
+
+MAX_EXPR_CHARS = 2000
+MAX_DEPTH = 40
+MAX_REPEAT = 100_000
+#: a number is at most this many characters as written (``1.2345e-3``: 9) ...
+MAX_NUMBER_CHARS = 30
+#: ... and at most this large: far above any frequency, voltage, count or seed a signal
+#: uses, far below where ``float`` overflows
+MAX_MAGNITUDE = 1e18
+#: a gain in dB within +-this (1e10 as a ratio)
+MAX_DB = 200.0
+#: ``-`` and ``+`` in a row before a value or signal
+MAX_SIGNS = 2
+#: a token that starts like a number: digits, a point, letters (exponent, hex), ``_``
+_NUMBER_TOKEN = re.compile(r"(?<![\w.])\.?\d[\w.]*")
+
+#: unit -> (dimension, factor to SI); dB is converted where it is used
+UNITS: dict[str, tuple[str, float]] = {
+    "Hz": ("Hz", 1.0),
+    "kHz": ("Hz", 1e3),
+    "V": ("V", 1.0),
+    "mV": ("V", 1e-3),
+    "Vpp": ("V", 0.5),
+    "s": ("s", 1.0),
+    "ms": ("s", 1e-3),
+    "us": ("s", 1e-6),
+    "%": ("ratio", 1e-2),
+    "dB": ("dB", 1.0),
+}
+UNIT_FN = "_unit_"
+_NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+_QUANTITY = re.compile(rf"(?<![\w.])({_NUMBER})\s*(kHz|Hz|Vpp|mV|V|ms|us|s|%|dB)(?![\w])", re.ASCII)
+DIM_NAMES = {"Hz": "a frequency", "V": "a voltage", "s": "a duration", "ratio": "a ratio"}
+EXAMPLE_UNIT = {"Hz": "Hz", "V": "V", "s": "s"}
+
+
+@dataclass(frozen=True)
+class Quantity:
+    value: float  # SI (Hz, V peak, s), a ratio, or dB
+    dim: str
+    text: str
+
+
+# name -> ((parameter, dimension, default or None) ...); "int" and "ratio" are plain
+SPEC: dict[str, tuple[tuple[str, str, object], ...]] = {
+    "sine": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "square": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "saw": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "triangle": (("frequency", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "chirp": (("f0", "Hz", None), ("f1", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "logchirp": (("f0", "Hz", None), ("f1", "Hz", None), ("amplitude", "V", None), ("duration", "s", None)),
+    "noise": (("amplitude", "V", None), ("duration", "s", None), ("seed", "int", 0)),
+    "silence": (("duration", "s", None),),
+    "adsr": (("attack", "s", None), ("decay", "s", None), ("sustain", "ratio", None), ("release", "s", None), ("duration", "s", "")),
+    "ramp": (("ramp", "s", None),),
+    "linramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
+    "expramp": (("start", "ratio", None), ("end", "ratio", None), ("duration", "s", "")),
+    "repeat": (("signal", "node", None), ("count", "int", None)),
+    "lowpass": (("signal", "node", None), ("cutoff", "Hz", None)),
+}  # fmt: skip
+FUNCTIONS = (*SPEC, "seq")
+
+
+def mark_units(text: str) -> str:
+    """``250 Hz`` -> ``_unit_(250, "Hz")``: Python's grammar has no units."""
+    return _QUANTITY.sub(lambda m: f'{UNIT_FN}({m.group(1)}, "{m.group(2)}")', text)
+
+
+_MARKED = re.compile(rf"""{UNIT_FN}\(([^,]+), ["']([^"']+)["']\)""")
+
+
+def _unmark(m: re.Match[str]) -> str:
+    return f"{m.group(1)} {m.group(2)}"
+
+
+def keep_source(tree: ast.AST, marked: str) -> None:
+    """Give every part of ``tree`` the text it was parsed from (``show`` returns it): one
+    slice per part, where ``ast.unparse`` at every level would cost the square."""
+    raw = marked.encode("utf-8")  # ast's columns count UTF-8 bytes
+    for n in ast.walk(tree):
+        if isinstance(n, ast.expr):
+            part = raw[n.col_offset : n.end_col_offset].decode("utf-8", "replace")
+            if UNIT_FN in part:
+                part = _MARKED.sub(_unmark, part)
+            n._source = part  # type: ignore[attr-defined]
+
+
+def show(node: ast.AST) -> str:
+    """The part as the operator wrote it (units back in place), at most 120 characters."""
+    text = getattr(node, "_source", None)
+    if text is None:
+        try:
+            text = _MARKED.sub(_unmark, ast.unparse(node))
+        except RecursionError:  # a deep part: its head says which one
+            text = type(node).__name__
+    return clip(text)
+
+
+def clip(text: str, limit: int = 120) -> str:
+    """``text`` short enough for a message line."""
+    return text if len(text) <= limit else text[: limit - 20] + f"... ({len(text)} characters)"
+
+
+def check_text(text: str) -> None:
+    """Refuse what Python's grammar would take but a signal must not hold: characters
+    that are not printable (control codes, a byte that was not UTF-8), comments, numbers
+    too long to be meant. Runs before ``ast.parse`` so nothing big is ever built."""
+    for col, c in enumerate(text, 1):
+        if not c.isprintable() and c != "\t":
+            raise UserError(
+                f"signal has {c!r} at column {col}, not a printable character (a control "
+                "code, or a byte that is not UTF-8); retype the signal without it"
+            )
+    if "#" in text:
+        raise UserError(
+            f"'#' at column {text.index('#') + 1} is not part of the signal syntax; put a note "
+            "in the description instead"
+        )
+    for m in _NUMBER_TOKEN.finditer(text):
+        if len(m.group()) > MAX_NUMBER_CHARS:
+            raise UserError(
+                f"number {m.group()[:12]}... at column {m.start() + 1} is {len(m.group())} "
+                f"characters long (at most {MAX_NUMBER_CHARS}); write it shorter, e.g. 2.5e3"
+            )
+
+
+def number(v: int | float, shown: str) -> int | float:
+    """A literal within bounds (compared before any conversion: a long ``int`` never
+    reaches ``float``)."""
+    if isinstance(v, float) and not math.isfinite(v):
+        raise UserError(f"{shown}: not a finite number; give a smaller value")
+    if abs(v) > MAX_MAGNITUDE:
+        raise UserError(
+            f"{shown}: {float(v):.3g} is larger than any value a signal uses (at most "
+            f"{MAX_MAGNITUDE:.0e}); check the number"
+        )
+    return v
