@@ -12,7 +12,7 @@
 Each renderer keeps the plans it made (per position, 0.1 mm) so a hand placed again at
 the same spot reuses its plan; ``cached(...)`` answers without computing. Flows under a
 hand can all be chosen ahead (``HandFlows.prepare_atlas``: the effect's
-``hand_flow_atlas``, ``console.contracts.PrecomputedHandFlows``); a hand then gets the
+``hand_flow_atlas``, ``console.core.contracts.PrecomputedHandFlows``); a hand then gets the
 plan of the nearest atlas place by lookup (``nearest``, ``lookup``).
 """
 

@@ -13,8 +13,18 @@ import sys
 import time
 from typing import Any
 
-from console.plugin_api import machine_info, summarize_s
-from console.plugin_api.runtime import DEQUEUED
+from console.plugin_api import Frame, machine_info, summarize_s, support_priority
+from console.plugin_api.runtime import (
+    DEQUEUED,
+    PROCESSING,
+    finish_probe,
+    open_camera,
+    open_outputs,
+    start_probe,
+)
+
+from .run import start_demo
+from .script import script_twin
 
 TARGET_P99_MS = 5.0
 
@@ -105,8 +115,6 @@ class ReplayCamera:
         self._closed = False
 
     def read(self, timeout_s: float = 0.1):
-        from console.plugin_api import Frame
-
         if self._closed:
             return None
         now = time.monotonic()
@@ -139,10 +147,6 @@ class ReplayCamera:
 
 def render_script(ctx: Any, demo: str, seconds: float) -> ReplayCamera:
     """The twin camera performing ``demo``'s script, rendered ahead of time."""
-    from console.plugin_api.runtime import open_camera
-
-    from .script import script_twin
-
     cam = open_camera(ctx.profile, ctx.pm)
     try:
         cam.realtime = False
@@ -158,8 +162,6 @@ def render_script(ctx: Any, demo: str, seconds: float) -> ReplayCamera:
 def _over_limit(run_, limit_ms: float) -> dict:
     """Frames (in the monitor's window) whose processing took longer than the watchdog
     limit: each would have e-stopped the outputs."""
-    from console.plugin_api.runtime import PROCESSING
-
     vals = run_.monitor.values_s(PROCESSING) * 1e3
     return {"limit_ms": limit_ms, "frames_over": int((vals > limit_ms).sum()), "of": int(vals.size)}
 
@@ -191,8 +193,6 @@ class DecisionFrames:
 
 
 def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any) -> dict:
-    from .run import start_demo
-
     prof, pm = ctx.profile, ctx.pm
     limit = float(prof.get("runtime.watchdog_ms") or 250.0)
     decisions = DecisionFrames()
@@ -230,8 +230,6 @@ def _measure(ctx: Any, demo: str, seconds: float, camera: Any = None, **kw: Any)
 
 
 def run_loop(ctx: Any, quick: bool) -> dict:
-    from console.plugin_api import support_priority
-
     with support_priority() as rt:  # as the console's demo process serves its loop
         res = _run_loop(ctx, quick)
     res["support_threads_realtime"] = rt
@@ -305,8 +303,6 @@ def run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
     reset and the demo restarted, so the soak always covers the whole time. RSS is taken
     after ``SOAK_WARMUP_S`` and at the end, with a least-squares slope (MB/min) between.
     The polling thread runs as the console's demo process runs its status thread."""
-    from console.plugin_api import support_priority
-
     with support_priority() as rt:
         res = _run_soak(ctx, quick, minutes)
     res["support_threads_realtime"] = rt
@@ -319,9 +315,6 @@ def _twin(profile: Any, pm: Any) -> bool:
 
 
 def _run_soak(ctx: Any, quick: bool, minutes: float | None = None) -> dict:
-    from console.plugin_api.runtime import finish_probe, open_outputs, start_probe
-
-    from .run import start_demo
 
     if minutes is None:
         minutes = float(os.environ.get("HAPTABLE_SOAK_MINUTES", 0.5 if quick else 10.0))

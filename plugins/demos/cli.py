@@ -61,6 +61,7 @@ def _progress(done: int, total: int, what: str) -> None:
 
 def run(args, ctx) -> int:
     if args.demo == "soak":
+        # lazy: this module loads at every haptable start; bench only when used
         from .bench import run_soak
 
         out = run_soak(ctx, False, minutes=args.minutes if args.minutes is not None else 10.0)

@@ -28,6 +28,7 @@ import numpy as np
 from console.plugin_api import DIRECTIONS_MM, Frame, SafetyRefusal, UserError
 
 from .adapters import summary_parts
+from .scene import SceneLink
 
 log = logging.getLogger("haptable.demos.flow")
 
@@ -135,7 +136,6 @@ class FlowDemo:
         self.direction = direction
         self.snap_mm = float(snap_mm)
         self.grid_mm = float(grid_mm)
-        from .scene import SceneLink
 
         self.link = SceneLink(plugins, profile, "flow_hand", projector)
         self.scene = self.link.scene

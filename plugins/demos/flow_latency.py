@@ -32,9 +32,20 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import machine_info, summarize_s
+from console.plugin_api import (
+    GestureScript,
+    GestureStep,
+    PrecomputedHandFlows,
+    SimulatedCamera,
+    UserError,
+    machine_info,
+    summarize_s,
+    support_priority,
+)
+from console.plugin_api.runtime import finish_probe, open_camera, start_probe_beside
 
 from .bench import ReplayCamera, load_avg, rss_mb
+from .run import flow_map_path, start_demo
 
 TARGET_P99_MS = 5.0
 #: A placement: the hand rests this long (the flow plays ~3.1 s; a decision while a flow
@@ -48,9 +59,6 @@ def placements_camera(ctx: Any, n: int, hold_s: float, seed: int) -> tuple[Repla
     """A replay camera showing ``n`` resting open hands at random places (the camera
     twin's own placement), each for ``hold_s``, lifted for ``GAP_S`` between; and the
     true hand centres (mm)."""
-    from console.plugin_api import GestureScript, GestureStep, SimulatedCamera, UserError
-    from console.plugin_api.runtime import open_camera
-
     cam = open_camera(ctx.profile, ctx.pm)
     fps = float(ctx.profile.get("camera.fps") or 60.0)
     try:
@@ -82,10 +90,6 @@ def _profile_with(profile: Any, section: str, **values: Any) -> Any:
 
 def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
     """The flow demo on ``n`` placements; its flows' latencies."""
-    from console.plugin_api.runtime import finish_probe, start_probe_beside
-
-    from .run import start_demo
-
     hold = HOLD_S["after" if atlas else "before"]
     cam, truth = placements_camera(ctx, n, hold, seed)
     prof = _profile_with(ctx.profile, "demos", flow_atlas=atlas)
@@ -169,10 +173,6 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
     import tempfile
     from pathlib import Path
 
-    from console.plugin_api import PrecomputedHandFlows
-
-    from .run import flow_map_path
-
     vmap = str(flow_map_path(ctx.profile, ctx.pm))
     step = float(ctx.profile.get("demos.flow_grid_mm") or 10.0)
     rss0 = rss_mb()
@@ -233,8 +233,6 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
 
 
 def run_flow_latency(ctx: Any, quick: bool) -> dict:
-    from console.plugin_api import support_priority
-
     with support_priority() as rt:  # as the console's demo process serves its loop
         res = _run(ctx, quick)
     res["support_threads_realtime"] = rt

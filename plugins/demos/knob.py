@@ -15,6 +15,8 @@ from typing import Any
 
 from console.plugin_api import Frame, KnobTrials
 
+from .scene import SceneLink
+
 
 class KnobDemo:
     name = "knob"
@@ -34,7 +36,6 @@ class KnobDemo:
         )
         self.session = effect.session(condition, sectors)
         self.condition, self.outputs = condition, outputs
-        from .scene import SceneLink
 
         self.link = SceneLink(plugins, profile, "knob", projector)
         self.scene = self.link.scene

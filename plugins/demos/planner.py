@@ -14,16 +14,14 @@ import multiprocessing
 import threading
 from typing import Any
 
-from console.plugin_api import OutputPlan
+from console.plugin_api import OutputPlan, UserError, load_plugins
+
+from .adapters import flow_effects
 
 
 def _serve(profile: Any, conn) -> None:
     """The worker: the flow effects by role (``flow_effects``), one request at a time,
     until closed."""
-    from console.plugin_api import load_plugins
-
-    from .adapters import flow_effects
-
     effects = flow_effects(load_plugins(), profile)
     while True:
         try:
@@ -32,8 +30,6 @@ def _serve(profile: Any, conn) -> None:
             return
         try:
             if effects.get(role) is None:
-                from console.plugin_api import UserError
-
                 raise UserError(f"the flow demo needs a {role} flow effect; none is registered")
             conn.send((True, effects[role].render(**req)))
         except Exception as exc:  # the caller raises it
@@ -57,8 +53,6 @@ class PlanProcess:
         self._lock = threading.Lock()
 
     def render(self, role: str, **req: Any) -> OutputPlan:
-        from console.plugin_api import UserError
-
         with self._lock:
             try:
                 self._conn.send((role, req))

@@ -1,7 +1,7 @@
 """What the operator reads of a demo: its snapshot as status lines (Textual markup).
 
 The console shows these lines and never decodes the snapshot's keys itself
-(``console.contracts.Demo.status_lines``); the demo process and the console's process
+(``console.core.contracts.Demo.status_lines``); the demo process and the console's process
 format the same snapshot the same way.
 """
 

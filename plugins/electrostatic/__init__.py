@@ -13,13 +13,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.plugin_api import hookimpl
+from console.plugin_api import PanelTab, hookimpl
+
+from . import cli
+from .effects import ElectrostaticEffect, KnobEffect
+from .settings import ELECTROSTATIC_FIELDS, FRICTION_PRESETS, KNOB_FIELDS
+from .synth import CONDITIONS
 
 
 @hookimpl
 def haptable_profile_sections(register: Any) -> None:
-    from .settings import ELECTROSTATIC_FIELDS, KNOB_FIELDS
-
     register(
         "electrostatic",
         ELECTROSTATIC_FIELDS,
@@ -28,51 +31,16 @@ def haptable_profile_sections(register: Any) -> None:
     register("knob", KNOB_FIELDS, help="haptic knob: sectors, feedback signals, tracker, task")
 
 
-#: Friction presets an operator auditions on the ``electrostatic`` effect (its
-#: ``presets``): ``render`` keywords plus ``help``.
-FRICTION_PRESETS: dict[str, dict[str, Any]] = {
-    "knob carrier": {
-        "vpp": 100.0,
-        "freq_hz": 180.0,
-        "waveform": "sine",
-        "help": "the paper's knob friction: 100 Vpp, 180 Hz",
-    },
-    "slow-turn friction": {
-        "vpp": 100.0,
-        "freq_hz": 60.0,
-        "waveform": "sine",
-        "help": "velocity friction at rest (60 Hz)",
-    },
-    "most sensitive": {
-        "vpp": 60.0,
-        "freq_hz": 80.0,
-        "waveform": "sine",
-        "help": "near the threshold minimum (~80 Hz)",
-    },
-    "square 40 Hz": {
-        "vpp": 80.0,
-        "freq_hz": 40.0,
-        "waveform": "square",
-        "help": "square waves are felt lower below ~60 Hz",
-    },
-}
-
-
 @hookimpl
 def haptable_register_effects(register: Any) -> None:
     def electrostatic(profile: Any) -> Any:
         """``ElectrostaticEffect`` with ``presets`` (``FRICTION_PRESETS``)."""
-        from .effects import ElectrostaticEffect
-
         eff = ElectrostaticEffect(profile)
         eff.presets = {k: dict(v) for k, v in FRICTION_PRESETS.items()}
         return eff
 
     def knob(profile: Any) -> Any:
         """``KnobEffect`` with ``conditions``: the names ``render(condition=)`` takes."""
-        from .effects import KnobEffect
-        from .synth import CONDITIONS
-
         eff = KnobEffect(profile)
         eff.conditions = tuple(CONDITIONS)
         return eff
@@ -89,19 +57,17 @@ def haptable_register_effects(register: Any) -> None:
     )
 
 
-def _electrostatic_panel(app: Any) -> Any:
-    from .panel import ElectrostaticPane
-
-    return ElectrostaticPane()
-
-
 @hookimpl
 def haptable_register_panels(register: Any) -> None:
-    from console.plugin_api import PanelTab
+    def electrostatic_panel(app: Any) -> Any:
+        # lazy: Textual loads only with the console's panels
+        from .panel import ElectrostaticPane
+
+        return ElectrostaticPane()
 
     register(
         "electrostatic",
-        _electrostatic_panel,
+        electrostatic_panel,
         description="friction settings and knob conditions on the screen",
         tab=PanelTab("Electrostatic", "f5", 50),
     )
@@ -109,8 +75,6 @@ def haptable_register_panels(register: Any) -> None:
 
 @hookimpl
 def haptable_register_commands(register: Any) -> None:
-    from . import cli
-
     register(
         "knob", cli.configure, cli.run, help="haptic knob: run the menu task, audition a condition"
     )
@@ -119,6 +83,7 @@ def haptable_register_commands(register: Any) -> None:
 @hookimpl
 def haptable_register_benchmarks(register: Any) -> None:
     def run(ctx: Any, quick: bool, report_dir: str | None = None) -> dict:
+        # lazy: bench loads when called, not at every haptable start
         from .bench import run as bench_run
 
         return bench_run(ctx, quick, report_dir=report_dir)

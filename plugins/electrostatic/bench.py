@@ -12,7 +12,15 @@ import numpy as np
 
 from console.plugin_api import machine_info, summarize_s
 
+from .session import KnobSession
 from .settings import KNOB_DEFAULTS
+from .simulate import (
+    canned_rotation,
+    instantaneous_freq_hz,
+    min_jerk,
+    rotation_frames,
+    run_pipeline,
+)
 from .synth import CONDITIONS, KnobStream
 
 
@@ -158,9 +166,6 @@ def cpu_per_block(n_blocks: int, fs: int = 48000, block: int = 64, seed: int = 0
 
 def pipeline_per_frame(n_frames: int) -> dict[str, Any]:
     """Tracker + knob + post per camera frame."""
-    from .session import KnobSession
-    from .simulate import min_jerk, rotation_frames
-
     t = np.arange(n_frames) / 60.0
     frames = rotation_frames(min_jerk(t, 0.0, t[-1], 0.0, 150.0), t, lift_frames=[(30, "index", 2)])
     ses = KnobSession("HD+VF", sectors=32, settings=KNOB_DEFAULTS, record=False)
@@ -179,8 +184,6 @@ def write_report(folder: Path, result: dict[str, Any]) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from .simulate import canned_rotation, instantaneous_freq_hz, run_pipeline
 
     folder.mkdir(parents=True, exist_ok=True)
     fs, block = result["sample_rate_hz"], result["block"]

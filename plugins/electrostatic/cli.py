@@ -24,10 +24,19 @@ from console.plugin_api import (
 )
 
 from .effects import condition_report
+from .session import KnobSession
 from .settings import KNOB_FIELDS, audio, knob_settings, limits
 from .simulate import canned_rotation, run_pipeline
 from .synth import CONDITIONS, parse_condition
-from .task import DISTANCES_DEG, PAPER_CONDITIONS, SECTOR_SETS, make_trials, run_task, summarize
+from .task import (
+    DISTANCES_DEG,
+    PAPER_CONDITIONS,
+    SECTOR_SETS,
+    make_trials,
+    run_live_trial,
+    run_task,
+    summarize,
+)
 
 MAX_TRIALS = 10000
 MAX_DISTANCE_DEG = 3600.0  # ten turns of the knob
@@ -192,7 +201,6 @@ def _audition(args: argparse.Namespace, ctx: Any) -> int:
         raise UserError(
             "live outputs are not available in this build; use --out FILE.wav to render the audition"
         )
-    from .session import KnobSession
 
     ses = KnobSession(
         cond,
@@ -248,9 +256,8 @@ def _run_live(
     args: argparse.Namespace, ctx: Any, trials: list, k: dict[str, Any], log: Path, say: Any
 ) -> list:
     """Trials with the profile's camera: vision -> contacts -> the trial's knob session."""
+    # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import open_camera, vision_loop
-
-    from .task import run_live_trial
 
     prof = _profile(ctx)
     a = audio(prof)

@@ -9,9 +9,11 @@ import numpy as np
 from console.plugin_api import Limits, OutputPlan, Segment, UserError
 
 from .force import Material, expected_force, threshold_check
+from .session import KnobSession
 from .settings import audio, electrostatic_settings, knob_settings, limits
 from .simulate import canned_rotation, run_pipeline
-from .synth import KnobStream, parse_condition
+from .synth import KnobStream, parse_condition, smooth_square
+from .task import SimFinger, make_trials, run_live_trial, run_trial
 
 
 def raised_cosine_ramps(n: int, ramp_n: int) -> np.ndarray:
@@ -43,8 +45,6 @@ def friction_stimulus(
     if waveform == "sine":
         x = np.sin(ph)
     elif waveform == "square":
-        from .synth import smooth_square
-
         x = smooth_square(ph, edge_ms * 1e-3 * freq_hz)
     else:
         raise UserError(f"waveform {waveform!r}: unknown; use sine or square")
@@ -162,8 +162,6 @@ class KnobEffect:
     def session(self, condition: str = "HD+VF", sectors: int | None = None) -> Any:
         """A live ``KnobSession``: ``feed(t_s, contacts)`` per camera frame drives
         ``.stream`` (the StreamSource to give ``out.stream``) and ``.knob.item``."""
-        from .session import KnobSession
-
         k = knob_settings(self.profile)
         a = audio(self.profile)
         return KnobSession(
@@ -182,8 +180,6 @@ class KnobEffect:
         """One trial of the paper's knob task (``task.run_trial``) with the simulated
         finger (``contracts.KnobTrials``): its measures as a dict."""
         from dataclasses import asdict
-
-        from .task import SimFinger, make_trials, run_trial
 
         c = parse_condition(condition).name
         (trial,) = make_trials([c], [int(sectors)], [float(distance_deg)], 1, seed=0)
@@ -213,8 +209,6 @@ class KnobEffect:
         which feeds it the camera's contacts (``session.feed(t_capture_s, contacts)``),
         then ``attach(None)``. Its measures as a dict."""
         from dataclasses import asdict
-
-        from .task import make_trials, run_live_trial
 
         c = parse_condition(condition).name
         (trial,) = make_trials([c], [int(sectors)], [float(distance_deg)], 1, seed=0)

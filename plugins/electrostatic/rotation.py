@@ -78,7 +78,7 @@ def _point_of(c: Any) -> tuple[float, float]:
 class RotationTracker:
     """Feed ``update(t_s, contacts)`` once per frame; read the returned ``RotationState``.
 
-    ``contacts``: ``console.types.Contact`` objects (``pos_mm`` used when present, else
+    ``contacts``: ``console.core.types.Contact`` objects (``pos_mm`` used when present, else
     ``pos_px``) or ``(x, y)`` pairs.
     """
 

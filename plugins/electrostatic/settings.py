@@ -356,3 +356,33 @@ def audio(profile: Any = None) -> dict[str, int]:
     d = {"sample_rate_hz": 48000, "block_size": 64}
     d.update({k: int(v) for k, v in _section(profile, "audio").items() if k in d})
     return d
+
+
+#: Friction presets an operator auditions on the ``electrostatic`` effect (its
+#: ``presets``): ``render`` keywords plus ``help``.
+FRICTION_PRESETS: dict[str, dict[str, Any]] = {
+    "knob carrier": {
+        "vpp": 100.0,
+        "freq_hz": 180.0,
+        "waveform": "sine",
+        "help": "the paper's knob friction: 100 Vpp, 180 Hz",
+    },
+    "slow-turn friction": {
+        "vpp": 100.0,
+        "freq_hz": 60.0,
+        "waveform": "sine",
+        "help": "velocity friction at rest (60 Hz)",
+    },
+    "most sensitive": {
+        "vpp": 60.0,
+        "freq_hz": 80.0,
+        "waveform": "sine",
+        "help": "near the threshold minimum (~80 Hz)",
+    },
+    "square 40 Hz": {
+        "vpp": 80.0,
+        "freq_hz": 40.0,
+        "waveform": "square",
+        "help": "square waves are felt lower below ~60 Hz",
+    },
+}

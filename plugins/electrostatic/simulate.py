@@ -20,6 +20,7 @@ from console.plugin_api import Contact
 from .knob import Crossing
 from .rotation import RotationState
 from .session import KnobSession
+from .settings import KNOB_DEFAULTS
 
 
 def min_jerk(t_s: np.ndarray, t0_s: float, dur_s: float, a0: float, a1: float) -> np.ndarray:
@@ -116,8 +117,6 @@ def run_pipeline(
     Blocks that start before a frame's time are rendered before the frame is processed
     (the audio callback runs on its own clock; a crossing lands in the next block).
     """
-    from .settings import KNOB_DEFAULTS
-
     s = {**KNOB_DEFAULTS, **(settings or {})}
     ses = KnobSession(
         condition,

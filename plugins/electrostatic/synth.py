@@ -46,6 +46,8 @@ from console.plugin_api import (
     spec_problem,
 )
 
+from .settings import KNOB_DEFAULTS
+
 DETENTS = {"HD": "screen", "VD": "piezo"}
 FRICTIONS = {"CF": "constant", "VF": "velocity", "BF": "boundary"}
 #: The paper's four conditions first, then the discussion's variants.
@@ -95,8 +97,6 @@ class KnobStream:
         limits: Mapping[str, float] | None = None,
         sectors: int | None = None,
     ) -> None:
-        from .settings import KNOB_DEFAULTS
-
         self.condition = (
             condition if isinstance(condition, Condition) else parse_condition(condition)
         )

@@ -6,7 +6,8 @@ A trial: navigate from a start item to a target item ``distance_deg`` away (135,
 (times the selection left the target after reaching it) and recovery time (first
 overshoot to the final entry). A trial ends when the selection has stayed on the target
 for ``dwell_s``. Each finished trial is appended to a JSON-lines log and flushed with
-``os.fsync`` (``console.files.atomic.append_json_line``) so a crash loses no finished trial.
+``os.fsync`` (``console.plugin_api.append_json_line``) so a crash loses no finished trial;
+``trial_log.read_trials`` reads it back.
 
 ``SimFinger`` is a simple human-like controller: minimum-jerk submovements toward the
 target's centre whose duration follows Fitts' law and whose endpoint scatter grows with
@@ -18,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import itertools
-import json
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -343,19 +343,6 @@ def run_live_trial(
         finger="live",
         error=error,
     )
-
-
-def read_jsonl(path: Path) -> list[dict[str, Any]]:
-    """Finished trials from a log; a torn last line (crash mid-write) is skipped."""
-    out = []
-    if not Path(path).exists():
-        return out
-    for line in Path(path).read_text(encoding="utf-8").splitlines():
-        try:
-            out.append(json.loads(line))
-        except json.JSONDecodeError:
-            continue
-    return out
 
 
 def run_task(

@@ -18,9 +18,11 @@ from typing import Any
 from console.plugin_api import hookimpl
 
 from .cli_options import configure
-from .settings import GESTURES_FIELDS, VISION_FIELDS, calibration_file, model_file
+from .settings import GESTURES_FIELDS, VISION_FIELDS
 
-__all__ = ["GESTURES_FIELDS", "VISION_FIELDS", "calibration_file", "model_file"]
+# The factories below import their module when called: the classifier, the CLI's actions
+# and the benchmark load OpenCV and scikit-learn, the panel Textual, and every `haptable`
+# call loads this plugin to register them.
 
 
 @hookimpl
@@ -33,68 +35,59 @@ def haptable_profile_sections(register: Any) -> None:
     register("gestures", GESTURES_FIELDS, help="gesture classifier and its trained model")
 
 
-# The factories below import their module when called: the classifier, the CLI's actions
-# and the benchmark load OpenCV and scikit-learn, the panel Textual, and every `haptable`
-# call loads this plugin to register them.
-
-
-def _classifier(profile: Any) -> Any:
-    from .classifier import SvmClassifier  # lazy: OpenCV, scikit-learn
-
-    return SvmClassifier.from_profile(profile)
-
-
 @hookimpl
 def haptable_register_classifiers(register: Any) -> None:
+    def classifier(profile: Any) -> Any:
+        from .classifier import SvmClassifier  # lazy: OpenCV, scikit-learn
+
+        return SvmClassifier.from_profile(profile)
+
     register(
         "svm",
-        _classifier,
+        classifier,
         description="Fourier-descriptor + contact-trajectory SVMs (static: 1 pose, dynamic: 4 frames)",
     )
 
 
-def _panel(app: Any) -> Any:
-    from .panel import GesturesPanel  # lazy: Textual, OpenCV
-
-    return GesturesPanel(app.ctx)
-
-
 @hookimpl
 def haptable_register_panels(register: Any) -> None:
+    def panel(app: Any) -> Any:
+        from .panel import GesturesPanel  # lazy: Textual, OpenCV
+
+        return GesturesPanel(app.ctx)
+
     register(
         "gestures",
-        _panel,
+        panel,
         description="gesture datasets: synthesize a twin set, train + evaluate the classifier",
     )
 
 
-def _run(args: argparse.Namespace, ctx: Any) -> int:
-    """``cli.run``: the parser (``cli_options.configure``) is built on every call."""
-    from . import cli  # lazy: OpenCV, scikit-learn
-
-    return cli.run(args, ctx)
-
-
 @hookimpl
 def haptable_register_commands(register: Any) -> None:
+    def run(args: argparse.Namespace, ctx: Any) -> int:
+        """``cli.run``: the parser (``cli_options.configure``) is built on every call."""
+        from . import cli  # lazy: OpenCV, scikit-learn
+
+        return cli.run(args, ctx)
+
     register(
         "gestures",
         configure,
-        _run,
+        run,
         help="gesture datasets, training, evaluation (2-fold / leave-one-subject-out), classify",
     )
 
 
-def _bench(ctx: Any, quick: bool) -> dict:
-    from .bench import run_benchmark  # lazy: OpenCV, scikit-learn
-
-    return run_benchmark(ctx, quick)
-
-
 @hookimpl
 def haptable_register_benchmarks(register: Any) -> None:
+    def bench(ctx: Any, quick: bool) -> dict:
+        from .bench import run_benchmark  # lazy: OpenCV, scikit-learn
+
+        return run_benchmark(ctx, quick)
+
     register(
         "gestures",
-        _bench,
+        bench,
         help="frame latency; accuracy vs Fourier harmonics, frames used, image noise",
     )

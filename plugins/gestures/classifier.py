@@ -193,7 +193,7 @@ def _orientation_values(o: Orientation) -> dict[str, int]:
 
 
 class SvmClassifier:
-    """The ``svm`` classifier plugin (a ``console.contracts.Classifier`` and
+    """The ``svm`` classifier plugin (a ``console.core.contracts.Classifier`` and
     ``TouchCalibrating``): ``process(frame)`` once per frame, then ``classify(window,
     t_s) -> Gesture | None`` from those frames' results; ``gesture_stage()`` is the loop's
     ``classify`` stage (``rules.GestureRules``).
@@ -307,7 +307,7 @@ class SvmClassifier:
 
     def process(self, frame: Frame) -> FrameResult:
         """One frame through the pipeline (the background learns where no hand is); the
-        result is a ``console.contracts.VisionResult`` (``view(name)`` of ``views``)."""
+        result is a ``console.core.contracts.VisionResult`` (``view(name)`` of ``views``)."""
         check_frame(frame.image, self.params.shape)
         if self.background.image is None:
             self.background.update(frame.image)

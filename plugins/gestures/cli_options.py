@@ -1,5 +1,5 @@
 """``haptable gestures``' sub-commands and options: every number with its range
-(``console.options``); ``synth`` and ``record`` come from ``dataset_commands``."""
+(``console.core.options``); ``synth`` and ``record`` come from ``dataset_commands``."""
 
 from __future__ import annotations
 

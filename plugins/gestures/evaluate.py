@@ -40,23 +40,6 @@ from .reports import fold_report, report
 from .selection import INNER_FOLDS, candidates, select_settings
 from .vision import VisionParams
 
-__all__ = [  # what the evaluation's callers use, wherever it is defined
-    "DEFAULT_CV",
-    "FRAMES_LIST",
-    "N_HARMONICS_MAX",
-    "FeatureSet",
-    "columns",
-    "cross_validate",
-    "evaluation",
-    "extract",
-    "fold_report",
-    "procedure",
-    "record_features",
-    "report",
-    "sample_records",
-    "train",
-]
-
 FEATURES_VERSION = 8  # bump when features change: old caches are ignored
 #: the modules whose code makes the features: their source is part of the cache key, so a
 #: change to any of them is never answered with features the old code computed

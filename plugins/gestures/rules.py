@@ -1,7 +1,7 @@
 """The live gesture rules: what the frame loop's ``classify`` stage names on each frame.
 
 ``GestureRules`` is the stage the classifier hands the loop (``SvmClassifier.gesture_stage``,
-``console.contracts.Classifier``). It reads what the ``vision`` stage put in ``work``
+``console.core.contracts.Classifier``). It reads what the ``vision`` stage put in ``work``
 (``result``: the frame's vision result; ``hand``, ``tracks``) and names:
 
 - ``static_hand``: a hand resting still (``StillHand``), once per placement; ``rest_mm``

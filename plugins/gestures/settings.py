@@ -107,7 +107,7 @@ GESTURES_FIELDS: dict[str, Field] = {
 
 def calibration_file(profile: Any) -> Path:
     """The touch calibration's file: ``[vision] calibration``, else the profile's state
-    directory (``console.profile_files``)."""
+    directory (``console.config.profile_files``)."""
     return profile_file(profile, "vision.calibration", "touch_calibration.json")
 
 

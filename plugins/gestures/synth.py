@@ -24,7 +24,7 @@ height of lifted parts (per subject, times a smaller per-session change). Each s
 light. ``light_scale`` multiplies every sample's light (the same performances, seen
 under another light: the same seed and a scale of 0.7 or 1.3 make the light-shift sets).
 
-``record(camera, out, gesture, subject)`` records from any ``console.contracts.Camera``
+``record(camera, out, gesture, subject)`` records from any ``console.core.contracts.Camera``
 into the same format (the twin acts the gesture out when asked).
 """
 
@@ -110,7 +110,7 @@ def _session_t0(subject: int, gesture: int, rep: int) -> float:
 
 def _twin_camera(seed: int, lens_distortion: bool, exposure_ms: float) -> tuple[Any, dict]:
     """The registered ``twin`` camera's factory and the settings it renders with
-    (``console.contracts.SimulatedCamera``); both pickle, so worker processes build it too."""
+    (``console.core.contracts.SimulatedCamera``); both pickle, so worker processes build it too."""
     factory = load_plugins(entrypoints=False).get("camera", "twin").factory
     return factory, {
         "twin_camera.seed": seed,

@@ -149,11 +149,11 @@ class FrameResult:
 
     def view(self, name: str) -> np.ndarray | None:
         """The intermediate image ``name`` (``diff``, ``body``, ``highpass``), or ``None``
-        when this result kept none (``console.contracts.VisionResult``)."""
+        when this result kept none (``console.core.contracts.VisionResult``)."""
         return self.masks.get(name)
 
     def readings(self) -> dict[str, float]:
-        """What an operator tunes against (``console.contracts.VisionResult``): the
+        """What an operator tunes against (``console.core.contracts.VisionResult``): the
         main hand's touch level and light scale, clipped pixels, the noise and the
         illumination gain against the background."""
         out: dict[str, float] = {}

@@ -10,27 +10,26 @@ Scenes are registered here (``haptable_register_scenes``), drawn in table millim
 from __future__ import annotations
 
 from console.plugin_api import hookimpl
+from plugins.projector import cli
+from plugins.projector.launch import DESCRIPTION, NAME
+from plugins.projector.launch import launch as launch_projector
+from plugins.projector.scenes import BUILTIN_SCENES
+from plugins.projector.settings import FIELDS, check_profile
 
 
 @hookimpl
 def haptable_register_scenes(register) -> None:
-    from plugins.projector.scenes import BUILTIN_SCENES
-
     for name, (cls, description) in BUILTIN_SCENES.items():
         register(name, cls, description=description)
 
 
 @hookimpl
 def haptable_register_projectors(register) -> None:
-    from plugins.projector.launch import DESCRIPTION, NAME, launch
-
-    register(NAME, launch, description=DESCRIPTION)
+    register(NAME, launch_projector, description=DESCRIPTION)
 
 
 @hookimpl
 def haptable_profile_sections(register) -> None:
-    from plugins.projector.settings import FIELDS, check_profile
-
     register(
         "projector",
         FIELDS,
@@ -41,8 +40,6 @@ def haptable_profile_sections(register) -> None:
 
 @hookimpl
 def haptable_register_commands(register) -> None:
-    from plugins.projector import cli
-
     register(
         "projector",
         cli.configure,
@@ -54,6 +51,7 @@ def haptable_register_commands(register) -> None:
 @hookimpl
 def haptable_register_benchmarks(register) -> None:
     def run(ctx, quick: bool) -> dict:
+        # lazy: bench loads when called, not at every haptable start
         from plugins.projector.bench import run_bench
 
         return run_bench(ctx, quick)

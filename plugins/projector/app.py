@@ -19,6 +19,7 @@ from plugins.projector.geometry import (
 )
 from plugins.projector.renderer import Offscreen, Renderer
 from plugins.projector.server import LinkServer
+from plugins.projector.snapshots import write_snapshot
 
 log = logging.getLogger("haptable.projector")
 
@@ -200,8 +201,6 @@ def read_screen(renderer: Renderer):
 
 def save_frames(server: LinkServer, shots: list[tuple[str, Path]], rgb) -> None:
     """Write the frame for each snapshot request (paths checked by the server) and answer."""
-    from plugins.projector.snapshots import write_snapshot
-
     for request, path in shots:
         try:
             write_snapshot(path, rgb)

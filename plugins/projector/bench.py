@@ -8,9 +8,12 @@ from pathlib import Path
 from typing import Any
 
 from console.plugin_api import machine_info, summarize_s
+from console.plugin_api.runtime import ProjectorService
 from plugins.projector.draw import build_layer, primitives
 from plugins.projector.geometry import default_calibration
+from plugins.projector.launch import projector_command
 from plugins.projector.layout import hand_outline_mm
+from plugins.projector.renderer import Offscreen, egl_context
 from plugins.projector.scenes import BUILTIN_SCENES
 
 SIZE = (1920, 1080)
@@ -54,8 +57,6 @@ def scene_states(profile: Any) -> dict[str, list[dict]]:
 
 
 def frame_times(profile: Any, n_frames: int) -> dict:
-    from plugins.projector.renderer import Offscreen, egl_context
-
     ctx = egl_context()
     off = Offscreen(SIZE, default_calibration(SIZE), ctx=ctx)
     results = {"renderer": ctx.info.get("GL_RENDERER", "?")}
@@ -94,9 +95,6 @@ def frame_times(profile: Any, n_frames: int) -> dict:
 
 
 def link_latency(n_messages: int) -> dict:
-    from console.plugin_api.runtime import ProjectorService
-    from plugins.projector.launch import projector_command
-
     with tempfile.TemporaryDirectory(prefix="hpt-bench-") as d:
         sock = Path(d) / "p.sock"
         svc = ProjectorService(

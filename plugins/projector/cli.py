@@ -8,10 +8,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import Parser, UserError
+from console.plugin_api import Parser, UserError, load_plugins, load_profile
 from console.plugin_api.runtime import default_socket_path, socket_path_for
 from plugins.projector import layout
 from plugins.projector.cli_options import configure
+from plugins.projector.geometry import glass_corners_mm, load_calibration, save_calibration
+from plugins.projector.launch import projector_command
+from plugins.projector.scenes import BUILTIN_SCENES
 from plugins.projector.settings import DEFAULTS, calibration_path_for
 
 __all__ = ["configure", "main", "run"]
@@ -34,7 +37,6 @@ def scene_factories(ctx: Any) -> dict[str, Any]:
     pm = getattr(ctx, "pm", None)
     if pm is not None:
         return {name: reg.factory for name, reg in pm.of("scene").items()}
-    from plugins.projector.scenes import BUILTIN_SCENES
 
     return {name: cls for name, (cls, _) in BUILTIN_SCENES.items()}
 
@@ -71,8 +73,6 @@ def _snapshot_dir(args: Any, ctx: Any) -> Path | None:
 
 
 def calibrate(args: Any, ctx: Any) -> int:
-    from plugins.projector.geometry import glass_corners_mm, load_calibration, save_calibration
-
     path = _calibration_path(args, ctx)
     table = layout.table_mm(_profile(ctx))
     frame = _frame_px(args, ctx)
@@ -116,7 +116,7 @@ def calibrate(args: Any, ctx: Any) -> int:
 
 
 def screenshot(args: Any, ctx: Any) -> int:
-    from plugins.projector.geometry import load_calibration
+    # lazy: this module loads at every haptable start; renderer only when used
     from plugins.projector.renderer import Offscreen, egl_available, write_png
 
     state = build_state(ctx, args.scene or "alignment", args.event)
@@ -139,8 +139,8 @@ def show(args: Any, ctx: Any) -> int:
     """Be a console: start or adopt the projector, show a scene, wait, then stop it."""
     import time
 
+    # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import ProjectorService
-    from plugins.projector.launch import projector_command
 
     prof = _profile(ctx)
     extra: list[str] = []
@@ -208,6 +208,7 @@ def run(args: Any, ctx: Any) -> int:
         return screenshot(args, ctx)
     if args.show:
         return show(args, ctx)
+    # lazy: this module loads at every haptable start; app only when used
     from plugins.projector.app import ProjectorOptions
     from plugins.projector.app import run as run_projector
 
@@ -248,8 +249,6 @@ class StandaloneContext:
     @property
     def pm(self) -> Any:
         if self._pm is None:
-            from console.plugin_api import load_plugins
-
             self._pm = load_plugins()
         return self._pm
 
@@ -258,8 +257,6 @@ class StandaloneContext:
         if not self._use:
             return None
         if self._profile is None:
-            from console.plugin_api import load_profile
-
             self._profile = load_profile(self._arg, self.pm)
         return self._profile
 
@@ -301,8 +298,6 @@ class _builtin_only:
     @staticmethod
     def of(kind: str) -> dict:
         from types import SimpleNamespace
-
-        from plugins.projector.scenes import BUILTIN_SCENES
 
         if kind != "scene":
             return {}

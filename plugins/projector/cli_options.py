@@ -1,4 +1,4 @@
-"""``haptable projector``'s options: every number with its range (``console.options``;
+"""``haptable projector``'s options: every number with its range (``console.core.options``;
 the ones overriding a ``[projector]`` key with the key's), ``--size`` and ``--event``
 checked as typed."""
 

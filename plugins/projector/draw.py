@@ -225,7 +225,7 @@ def draw_flow_two_point(s: dict) -> list[dict]:
 
 
 #: Unit arrow vectors in table mm (y grows away from the reference edge: "down" as projected).
-DIRECTIONS = DIRECTIONS_MM  # one convention for arrows and flows (console.types)
+DIRECTIONS = DIRECTIONS_MM  # one convention for arrows and flows (console.core.types)
 
 
 def arrow_button(c, size_mm: float, direction: str, selected: bool) -> list[dict]:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from console.plugin_api import UserError
 from plugins.projector.draw import Layer, build_layer, primitives
 from plugins.projector.geometry import Calibration
 from plugins.projector.text import text_bitmap
@@ -320,8 +321,6 @@ class Offscreen:
 def write_png(path: str, rgb: np.ndarray) -> None:
     """Write an RGB image as PNG (OpenCV wants BGR)."""
     import cv2
-
-    from console.plugin_api import UserError
 
     if not cv2.imwrite(str(path), np.ascontiguousarray(rgb[:, :, ::-1])):
         raise UserError(

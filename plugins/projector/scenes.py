@@ -14,9 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, patches_of
 from plugins.projector import layout
 from plugins.projector.draw import DIRECTIONS
+from plugins.projector.settings import DEFAULTS
 
 
 class Scene:
@@ -39,8 +40,6 @@ class Scene:
 
 
 def _cfg(profile: Any, key: str) -> Any:
-    from plugins.projector.settings import DEFAULTS
-
     return layout.get(profile, f"projector.{key}", DEFAULTS[key])
 
 
@@ -381,8 +380,6 @@ class GridAudition(Scene):
         return int(n)
 
     def state(self) -> dict:
-        from console.plugin_api import patches_of
-
         lit = sorted(patches_of(self.excitation)) if self.excitation else []
         cap = f"point {self.active}" if self.active else ""
         if self.active and self.excitation:

@@ -6,8 +6,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import Field, UserError, path_problem
+from console.plugin_api import Field, UserError, path_problem, profile_file
 from console.plugin_api.runtime import MAX_SOCKET_PATH
+from plugins.projector import layout
 from plugins.projector.layout import DEFAULT_CITIES, DEFAULT_FLOW_PAIRS, DEFAULT_HAND_REGIONS
 
 
@@ -85,8 +86,6 @@ DEFAULTS = {k: f.default for k, f in FIELDS.items()}
 def check_profile(profile: Any) -> None:
     """What one key cannot see: flow pairs on the profile's grid, hand regions and the
     knob on its glass (``register(..., check=)``: at profile load)."""
-    from plugins.projector import layout
-
     pairs = list(profile.get("projector.flow_pairs") or [])
     layout.parse_pairs(pairs, len(layout.grid_points_mm(profile)))
     w, h = layout.table_mm(profile)
@@ -112,7 +111,6 @@ def calibration_path_for(profile: Any) -> Path | None:
     ``console.config.profile_files``)."""
     if profile is None:
         return None
-    from console.plugin_api import profile_file
 
     legacy = f"{Path(profile.path).stem}.projector.json"
     return profile_file(profile, "projector.calibration_path", "projector.json", legacy)

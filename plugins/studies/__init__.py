@@ -17,13 +17,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from console.plugin_api import hookimpl
+from console.plugin_api import PanelTab, hookimpl
+
+from . import cli
 
 
 @hookimpl
 def haptable_register_commands(register) -> None:
-    from . import cli
-
     register(
         "study",
         cli.configure,
@@ -32,19 +32,17 @@ def haptable_register_commands(register) -> None:
     )
 
 
-def _studies_panel(app: Any) -> Any:
-    from .panel import StudiesPane
-
-    return StudiesPane()
-
-
 @hookimpl
 def haptable_register_panels(register) -> None:
-    from console.plugin_api import PanelTab
+    def studies_panel(app: Any) -> Any:
+        # lazy: Textual loads only with the console's panels
+        from .panel import StudiesPane
+
+        return StudiesPane()
 
     register(
         "studies",
-        _studies_panel,
+        studies_panel,
         description="user studies: protocol, participant, progress, pause, replay, abort",
         tab=PanelTab("Studies", "f10", 100),
     )
@@ -53,6 +51,7 @@ def haptable_register_panels(register) -> None:
 @hookimpl
 def haptable_register_benchmarks(register) -> None:
     def run(ctx, quick: bool) -> dict:
+        # lazy: bench loads when called, not at every haptable start
         from .bench import run_bench
 
         return run_bench(ctx, quick)

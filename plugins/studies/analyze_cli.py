@@ -29,6 +29,7 @@ def add_parser(sub: Any) -> None:
 
 
 def _lines(res: dict[str, Any]) -> list[str]:
+    # lazy: this module loads at every haptable start; summary only when used
     from .summary import undefined_notes
 
     out = [f"{res['experiment']}: {len(res['participants'])} participant(s)"]
@@ -109,6 +110,7 @@ def _f(v: Any, fmt: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    # lazy: this module loads at every haptable start; analysis, report only when used
     from . import analysis, report
 
     study = analysis.load(list(args.dirs), exclude=tuple(args.exclude))

@@ -31,7 +31,11 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import FlowEffect, HandFlowEffect, SimulatedObserver
+from console.plugin_api import FlowEffect, HandFlowEffect, SimulatedObserver, machine_info
+from console.plugin_api.runtime import measured_map
+
+from . import protocol as protocols
+from .plan import participant_seed
 
 #: The paper's numbers (section 5.2.1, 5.2.2 and Fig. 14's caption); direction names ours.
 PAPER_EXP1_PCT = 100.0
@@ -64,9 +68,6 @@ def _accuracy(
 
 
 def predictions(pm, profile, vmap, participants: int) -> dict[str, Any]:
-    from . import protocol as protocols
-    from .plan import participant_seed
-
     obs = pm.provider("observer", SimulatedObserver, profile, plugin_hint="twin")
     hand = pm.provider("effect", HandFlowEffect, profile, plugin_hint="vibrotactile")
     flow = pm.provider("effect", FlowEffect, profile, plugin_hint="vibrotactile")
@@ -223,9 +224,6 @@ def table(res: dict[str, Any]) -> list[str]:
 
 
 def run_bench(ctx: Any, quick: bool) -> dict[str, Any]:
-    from console.plugin_api import machine_info
-    from console.plugin_api.runtime import measured_map
-
     t0 = time.perf_counter()
     vmap = measured_map(ctx.profile, ctx.pm, None)
     res: dict[str, Any] = {"machine": machine_info(), "map_s": time.perf_counter() - t0}

@@ -19,9 +19,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, load_map
 
+from . import analyze_cli
 from . import protocol as protocols
+from .analyze_cli import add_parser
 from .plan import check_seed_row
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
@@ -52,7 +54,6 @@ def configure(p: argparse.ArgumentParser) -> None:
     r.add_argument("--json", action="store_true", help="print a JSON summary at the end")
     r.add_argument("--quiet", action="store_true", help="no line per trial")
     sub.add_parser("list", help="the protocols in studies/ and their trial counts")
-    from .analyze_cli import add_parser
 
     add_parser(sub)
 
@@ -119,9 +120,8 @@ def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
 
 def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
     if args.map is not None:
-        from console.plugin_api import load_map
-
         return load_map(args.map.expanduser(), require_all=False)
+    # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map
 
     def progress(frac: float, text: str) -> None:
@@ -160,8 +160,6 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
-        from . import analyze_cli
-
         return analyze_cli.run(args)
     if args.study_cmd == "list":
         for name in protocols.available():
@@ -169,6 +167,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             phases = ", ".join(f"{ph.name} {ph.n_trials}" for ph in p.phases)
             print(f"  {name:<8} {p.n_trials:4d} trials ({phases}): {p.title}")
         return 0
+    # lazy: this module loads at every haptable start; responders, runner, stimuli only when used
     from .responders import INPUT_ENDED, ObserverResponder, TerminalResponder, observer
     from .runner import Control, run_plan
     from .stimuli import EffectPlayer, check_places, play_on

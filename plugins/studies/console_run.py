@@ -16,10 +16,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, VibrationMap
+from console.plugin_api.runtime import Cancelled, Snapshot, Started, Stopped
 
 from . import protocol as protocols
-from .runner import Control
+from .projected import ProjectedAnswers
+from .responders import ObserverResponder, observer
+from .runner import Control, run_plan
+from .start import prepare, stored_participant
+from .stimuli import EffectPlayer, LiveKnob, check_places, play_on_session
+from .store import resume_text
 from .words import SCREEN
 
 TOPIC = "study"
@@ -28,8 +34,6 @@ TOPIC = "study"
 def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) -> None:
     """Run ``spec`` (the screen's choices) and report it through the session (blocking:
     the screen's worker thread). Any failure is one line (``Failed``), then ``Stopped``."""
-    from console.plugin_api.runtime import Snapshot, Stopped
-
     pid = spec["pid"]
 
     def emit(kind: str, info: dict[str, Any]) -> None:
@@ -56,8 +60,8 @@ def report_path(out: Path, experiment: str) -> Path:
 def analyse(session: Any, out: Path, experiment: str) -> dict[str, Any]:
     """Analyse ``experiment``'s participants in ``out``, write the report, and tell the
     screen (a ``Snapshot`` of kind ``analysis``: headline, columns, rows, report)."""
-    from console.plugin_api.runtime import Snapshot
 
+    # lazy: SciPy loads only when this runs
     from . import analysis, report, summary
 
     study = analysis.load([Path(out)], experiment=experiment, words=SCREEN)
@@ -111,9 +115,6 @@ def study_map(session: Any, control: Control, emit: Any) -> Any:
     console's current map, else the kept measured map of the profile, else measured now
     with the profile's vibrometer (progress as ``map`` notices; ``a`` cancels). On a real
     table whose only vibrometer is the twin none is measured: one line says what to do."""
-    from console.plugin_api import VibrationMap
-    from console.plugin_api.runtime import Cancelled
-
     vib = session.vibration
     try:
         cur = vib.current_map()
@@ -168,17 +169,9 @@ class _Asking:
 
 def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
     """Prepare the participant and run the plan on the console session (blocking)."""
-    from console.plugin_api.runtime import Started
-
-    from .responders import ObserverResponder, observer
-    from .runner import run_plan
-    from .start import prepare
-    from .stimuli import EffectPlayer, check_places, play_on_session
-
     pm, profile = session.plugins, session.profile
     proto = protocols.load(spec["study"])
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
-    from .start import stored_participant
 
     stored = stored_participant(spec["out"], spec["pid"], SCREEN)
     prep = prepare(
@@ -211,14 +204,13 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
         if spec.get("projector") and not spec["simulate"]:
             if not proto.scene:
                 raise UserError(str(proto.path) + ": no [study] scene to show; untick 'projector'")
-            from .projected import ProjectedAnswers
 
-            projected = ProjectedAnswers(session, responder, proto.scene)
+            by = f"{spec['pid']}'s study run (Studies screen)"
+            projected = ProjectedAnswers(session, responder, proto.scene, by=by)
             projected.open()
         if proto.stimulus == "knob" and not spec["simulate"]:
             if session.outputs is None:
                 raise UserError(f"outputs not open: {session.outputs_error or 'starting'}")
-            from .stimuli import LiveKnob
 
             show = projected.show if projected is not None else None
             live = LiveKnob(pm, profile, session.outputs, show=show)
@@ -234,8 +226,6 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
             knob_seed=prep.participant_seed,
             live_knob=live,
         )
-        from .store import resume_text
-
         events = prep.files.events()
         again = resume_text(prep.plan, events)
         earlier = [e for e in events if e.get("event") == "done"]

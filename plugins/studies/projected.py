@@ -30,10 +30,11 @@ class ProjectedAnswers:
     """The scene ``scene`` on the session's projector and its touched arrows as answers
     put to ``responder`` (a ``QueueResponder``)."""
 
-    def __init__(self, session: Any, responder: Any, scene: str) -> None:
+    def __init__(self, session: Any, responder: Any, scene: str, by: str = "a study run") -> None:
         self.session = session
         self.responder = responder
         self.scene = scene
+        self.by = by  # who holds the projector, as the Scenes screen says it
         self.armed = False
         self._down: list[tuple[float, float]] = []
         self._lock = threading.Lock()
@@ -41,7 +42,7 @@ class ProjectedAnswers:
 
     def open(self) -> None:
         """Show the scene and watch the camera (blocking: from a worker)."""
-        if not self.session.scenes.start(self.scene):
+        if not self.session.scenes.start(self.scene, by=self.by):
             raise UserError(
                 f"scene {self.scene}: the projector did not show it (the Scenes screen says "
                 "why); untick 'projector' to answer with the keys"

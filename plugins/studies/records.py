@@ -36,7 +36,7 @@ TRIAL_COLUMNS = ("phase", "block", "pair", "region", "direction", "condition", "
 
 @dataclass(frozen=True)
 class Key:
-    """One key of a record: a ``console.schema`` kind (or ``dict``, ``list``,
+    """One key of a record: a ``console.core.schema`` kind (or ``dict``, ``list``,
     ``scalar``: a string or number), whether it may be null and when it is required."""
 
     kind: str

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from console.plugin_api import UserError, write_text_atomic
+
 
 def _png(fig) -> str:
     buf = io.BytesIO()
@@ -284,10 +286,7 @@ def write(res: dict[str, Any], path: Path, title: str = "") -> Path:
     """Write the report (atomically: the old file or the new one, never half)."""
     path = Path(path).expanduser()
     if path.parent and not path.parent.is_dir():
-        from console.plugin_api import UserError
-
         raise UserError(f"--report {path}: folder {path.parent} does not exist; create it first")
-    from console.plugin_api import write_text_atomic
 
     write_text_atomic(path, render(res, title))
     return path

@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from console.plugin_api import SimulatedObserver
+
 from .runner import Answer, Control
 
 KEYS = {
@@ -188,6 +190,4 @@ class ObserverResponder:
 def observer(plugins: Any, profile: Any) -> Any:
     """The first registered ``SimulatedObserver`` (a one-line error naming the plugin to
     enable when none is)."""
-    from console.plugin_api import SimulatedObserver
-
     return plugins.provider("observer", SimulatedObserver, profile, plugin_hint="twin")

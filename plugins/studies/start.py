@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from console.plugin_api import UserError
+
 from . import protocol as protocols
 from .plan import make_plan, participant_seed
 from .store import (
@@ -91,8 +93,6 @@ def prepare(
     stored = stored_participant(out, pid, words)
     if stored is not None:
         if bool(stored.get("simulated")) != bool(simulate):
-            from console.plugin_api import UserError
-
             sim = bool(stored.get("simulated"))
             how = words.resume_simulated if sim else words.resume_person
             raise UserError(

@@ -8,7 +8,7 @@ stimulus (a replay plays the same samples). Knob trials run the ``KnobTrials`` t
 simulated finger closing the loop through the knob session), or with a person
 ``LiveKnob``: the knob session streams through the outputs while the camera loop's
 contacts drive it, until the selection rests on the target or ``max_time_s``. The studies plugin knows
-only the contracts (``console.contracts``), never the plugins that offer them.
+only the contracts (``console.core.contracts``), never the plugins that offer them.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 ``participant.json`` and ``trials.jsonl``.
 
 Nothing is read before the file is known to be a regular file of an allowed size
-(``console.file_read``: a FIFO, a directory, a device such as ``/dev/zero`` is a line,
+(``console.files.file_read``: a FIFO, a directory, a device such as ``/dev/zero`` is a line,
 never a hang or a read until memory runs out), and no more than the limit is ever read. Text must be UTF-8 (a bad byte is named with its line); JSON must parse, without
 a key twice in an object, nesting at most ``MAX_DEPTH`` deep and no integer beyond
 Python's digit limit: every failure is one ``UserError`` naming the file, the line and

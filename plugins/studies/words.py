@@ -1,7 +1,7 @@
 """How a message tells the fix where the user is: the CLI's flags (``CLI``) or the Studies
 screen's fields (``SCREEN``, as its labels read: "folder", "simulated", "consent noted").
 
-The console's rule (``console.words``, through the plugin API): a message names the fix
+The console's rule (``console.core.words``, through the plugin API): a message names the fix
 where the user is. The code both share (``store``, ``start``, ``plan``, ``analysis``)
 takes a ``Words`` and words its refusals with it: "give a writable --out" at a shell,
 "give a writable folder" on the screen; each ``Words`` is for one place (``where``), and
@@ -37,7 +37,7 @@ class Words:
     exclude: str = ""
     #: how a stopped run resumes
     resume: str = ""
-    #: the place these words are for (``console.words``: ``AT_CLI``, ``AT_CONSOLE``)
+    #: the place these words are for (``console.core.words``: ``AT_CLI``, ``AT_CONSOLE``)
     where: str = AT_CLI
 
     def worded(self, exc: BaseException) -> str:

@@ -70,6 +70,7 @@ class TuioSender:
     ) -> None:
         from pythonosc.udp_client import UDPClient
 
+        # lazy: the runtime part loads on first use, not at every haptable start
         from console.plugin_api.runtime import Announcer, Tracking
 
         self.host, self.port = host, int(port)
@@ -186,6 +187,7 @@ class TuioSender:
 
     def close(self) -> None:
         """An empty frame (nothing alive) so clients drop every object."""
+        # lazy: the runtime part loads on first use, not at every haptable start
         from console.plugin_api.runtime import Announcer, TrackFrame, Tracking
 
         self.tracking, self.announcer = Tracking(), Announcer()

@@ -1,30 +1,16 @@
 """The digital twin's outputs: simulated audio output and relay board (always present).
 
 The plate model (``plugins.twin.plate``) and the IR camera (``plugins.twin.camera``) are
-separate plugins of the twin.
+separate plugins of the twin. Here: ``settings`` (``[twin_audio]``), ``probes`` (what
+``haptable doctor`` says), ``outputs`` and ``relays`` (the simulated devices).
 """
 
 from __future__ import annotations
 
-from console.plugin_api import ChannelLayout, DeviceStatus, Field, OutputDevice, hookimpl
+from console.plugin_api import ChannelLayout, OutputDevice, hookimpl
 
-AUDIO_FIELDS = {
-    "buffer_periods": Field(
-        "int",
-        3,
-        min=2,
-        max=16,
-        help="paced twin: device buffer in audio blocks (a real card's driver fills 2-4 "
-        "periods ahead); adds this many blocks of output latency, underrun only when empty",
-    ),
-    "record_s": Field(
-        "float",
-        120.0,
-        min=0.01,
-        max=3600,
-        help="seconds of played audio the twin keeps for its recording (a bounded ring)",
-    ),
-}
+from . import probes
+from .settings import AUDIO_FIELDS
 
 
 @hookimpl
@@ -34,21 +20,10 @@ def haptable_profile_sections(register) -> None:
     )
 
 
-def _simulated(kind: str):
-    return lambda profile: DeviceStatus(kind, "twin", "simulated", "digital twin")
-
-
-def _twin_audio_probe(profile) -> DeviceStatus:
-    """The twin opens as many channels as ``[audio] channels`` names: say which."""
-    names = ChannelLayout.from_profile(profile).names
-    return DeviceStatus(
-        "audio", "twin", "simulated", f"digital twin, {len(names)} channels: {', '.join(names)}"
-    )
-
-
 @hookimpl
 def haptable_register_audio_outputs(register):
     def factory(profile):
+        # lazy: outputs loads when called, not at every haptable start
         from plugins.twin.outputs import TwinAudioOutput
 
         return TwinAudioOutput(profile)
@@ -71,7 +46,7 @@ def haptable_register_audio_outputs(register):
         "twin",
         factory,
         description="simulated amplifiers; records what was played",
-        probe=_twin_audio_probe,
+        probe=probes.twin_audio,
         devices=devices,
     )
 
@@ -79,6 +54,7 @@ def haptable_register_audio_outputs(register):
 @hookimpl
 def haptable_register_relay_boards(register):
     def factory(profile):
+        # lazy: relays loads when called, not at every haptable start
         from plugins.twin.relays import TwinRelayBoard
 
         return TwinRelayBoard(profile)
@@ -87,5 +63,5 @@ def haptable_register_relay_boards(register):
         "twin",
         factory,
         description="simulated 8-channel relay board with a switch log",
-        probe=_simulated("relays"),
+        probe=probes.simulated("relays"),
     )

@@ -31,7 +31,7 @@ ramped, cause); ``dac_output_v()`` is the recording with them inserted: what the
 got in real time. Underruns are counted per cause: ``late_wakeup`` (the driver thread came
 back late though its fill was quick) and ``slow_fill`` (the gate's fill itself took longer
 than the buffer's slack), and by where the late thread's time went
-(``console.stall_witness``: the host, the scheduler, its own work, the process).
+(``console.core.stall_witness``: the host, the scheduler, its own work, the process).
 
 The relay board it drives the level of is in ``plugins.twin.relays``.
 """
@@ -206,7 +206,7 @@ class TwinAudioOutput:
         self.underrun_s = 0.0  # gap the DAC played while the buffer was empty
         self.underruns_audible = 0  # ... of them, cutting into output (the last block not silent)
         self.underruns_by_cause: dict[str, int] = dict.fromkeys(UNDERRUN_CAUSES, 0)
-        #: ... and by where the late thread's time went (``console.stall_witness``)
+        #: ... and by where the late thread's time went (``console.core.stall_witness``)
         self.underruns_by_origin: dict[str, int] = dict.fromkeys(ORIGINS, 0)
         self._witness: StallWitness | None = None  # the paced driver thread's own
         self.underrun_log: deque[Underrun] = deque(maxlen=10_000)

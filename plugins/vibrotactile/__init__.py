@@ -13,7 +13,16 @@ vmap=)``), ``prepare``/``cached`` and UFF import (``import_map({"PA": path, ...}
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Callable
+from typing import Any
+
 from console.plugin_api import hookimpl
+
+# each CLI module by another name: ``tables`` is a module of this package too
+from plugins.vibrotactile.cli import flow as flow_cli
+from plugins.vibrotactile.cli import frf as frf_cli
+from plugins.vibrotactile.cli import tables as tables_cli
 from plugins.vibrotactile.settings import sections
 
 
@@ -23,63 +32,67 @@ def haptable_profile_sections(register) -> None:
         register(name, fields, help=help_)
 
 
-def _effect(cls_name: str, module: str):
-    def factory(profile):
-        import importlib
-
-        return getattr(importlib.import_module(f"plugins.vibrotactile.{module}"), cls_name)(profile)
-
-    factory.__doc__ = f"``plugins.vibrotactile.{module}.{cls_name}(profile)``"
-    return factory
-
-
 @hookimpl
 def haptable_register_effects(register) -> None:
+    def effect(cls_name: str, module: str) -> Callable[[Any], Any]:
+        """A factory of ``plugins.vibrotactile.<module>.<cls_name>(profile)``, the module
+        imported on first use (numpy tables, SciPy)."""
+
+        def factory(profile: Any) -> Any:
+            return getattr(importlib.import_module(f"{__name__}.{module}"), cls_name)(profile)
+
+        factory.__doc__ = f"``plugins.vibrotactile.{module}.{cls_name}(profile)``"
+        return factory
+
     # flow also offers: tables(vmap=, progress=) (stepwise, cancellable: raise in
     # progress), query(active, passive, vmap=), prepare(pairs, vmap=, progress=),
     # cached(...), import_map({"PA": "pa.uff", ...}) -> VibrationMap (UFF 58)
     register(
         "flow",
-        _effect("RegisteredFlowEffect", "registered"),
+        effect("RegisteredFlowEffect", "registered"),
         description="two-point flow (paper Fig. 9): render(from_point=, to_point=, vmap=|tables=)",
     )
     register(
         "hand_flow",
-        _effect("HandFlowEffect", "hand_flow_effect"),
+        effect("HandFlowEffect", "hand_flow_effect"),
         description="flow under a hand: render(center_mm=, direction=, vmap=, hand_mm=)",
     )
     register(
         "point",
-        _effect("PointEffect", "point_effect"),
+        effect("PointEffect", "point_effect"),
         description="localized pulse at one point: render(point=, vmap=|tables=)",
     )
 
 
 @hookimpl
 def haptable_register_commands(register) -> None:
-    from plugins.vibrotactile.cli import flow, frf, tables
-
     register(
-        "frf", frf.configure_frf, frf.run_frf, help="vibration map: import/export UFF 58, info"
+        "frf",
+        frf_cli.configure_frf,
+        frf_cli.run_frf,
+        help="vibration map: import/export UFF 58, info",
     )
     register(
         "tables",
-        tables.configure_tables,
-        tables.run_tables,
+        tables_cli.configure_tables,
+        tables_cli.run_tables,
         help="excitation lookup tables: build, query",
     )
     register(
         "flow",
-        flow.configure_flow,
-        flow.run_flow,
+        flow_cli.configure_flow,
+        flow_cli.run_flow,
         help="vibrotactile flow between points or under a hand",
     )
-    register("point", flow.configure_point, flow.run_point, help="localized pulse at one point")
+    register(
+        "point", flow_cli.configure_point, flow_cli.run_point, help="localized pulse at one point"
+    )
 
 
 @hookimpl
 def haptable_register_benchmarks(register) -> None:
     def run(ctx, quick: bool, report_dir: str | None = None) -> dict:
+        # lazy: bench loads when called, not at every haptable start
         from plugins.vibrotactile.bench import run_bench
 
         return run_bench(ctx, quick, report_dir=report_dir)

@@ -14,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from console.plugin_api import machine_info, summarize_s
+from console.plugin_api import machine_info, make_map, summarize_s
+from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map, default_freq_hz
+from plugins.vibrotactile.perception import Perception
 
 BANDS = ((5, 150), (150, 300), (300, 450), (450, 625))
 METHODS = ("bilinear", "keys", "spline", "spline5", "modal")
@@ -40,6 +42,7 @@ def _summ(fn, reps: int) -> dict:
 
 
 def bench_interpolation(plate, m, n_points: int, reps: int) -> dict:
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.interp import interpolate
 
     rng = np.random.default_rng(0)
@@ -79,8 +82,6 @@ def add_ldv_noise(m, rel: float = NOISE_REL, floor: float = NOISE_FLOOR, seed: i
     """The map with complex Gaussian noise of ``rel`` x |H| per bin plus ``floor`` x the
     map's RMS per excitation: an LDV's H1 over 3 averages at coherence 0.999 has a random
     error of ~1.3 %; speckle and drop-outs on glass add to it, hence 2 %."""
-    from console.plugin_api import make_map
-
     rng = np.random.default_rng(seed)
     h = m.frf_um_per_v
     std = rel * np.abs(h) + floor * np.sqrt(np.mean(np.abs(h) ** 2, axis=(1, 2), keepdims=True))
@@ -109,8 +110,6 @@ def twin_maps(ctx):
     the profile's twin vibrometer (through its registration) on a lattice twice as dense
     as the grid, noise-free: its even rows and columns are the map, the rest (midpoints
     in x, in y and cell centres) the reference."""
-    from console.plugin_api import make_map
-
     dev = ctx.pm.get("vibrometer", "twin")
     r = dev.factory(_lattice_profile(ctx.profile, 2, 0.0)).measure()
     rows = int(ctx.profile.get("grid.rows", 7))
@@ -141,6 +140,7 @@ def twin_maps(ctx):
 
 def bench_twin_interpolation(ctx, quick: bool) -> dict:
     """Error vs time of the four methods on the twin, clean and with LDV noise."""
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile import modal_fit
     from plugins.vibrotactile.interp import interpolate
 
@@ -194,6 +194,7 @@ def bench_twin_interpolation(ctx, quick: bool) -> dict:
 
 
 def bench_tables(m, reps: int) -> dict:
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.tables import build_tables, query_indices, query_points
 
     build = _summ(lambda: build_tables(m), reps)
@@ -217,6 +218,7 @@ def bench_tables(m, reps: int) -> dict:
 
 def _table_chunk(args):
     m, per, centers, kw = args
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.hand import hand_flow_table
 
     try:  # one BLAS thread per process: the processes are the parallelism
@@ -243,6 +245,7 @@ def hand_flow_table_parallel(m, per, centers, workers: int = 2, **kw) -> dict:
 
 
 def bench_hand(m, per, quick: bool) -> dict:
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.hand import DIRECTIONS, hand_flow, region_centers
 
     centers = region_centers(m, 120.0, 10.0)
@@ -302,9 +305,6 @@ def bench_hand(m, per, quick: bool) -> dict:
 
 
 def run_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
-    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map, default_freq_hz
-    from plugins.vibrotactile.perception import Perception
-
     plate = SSPlate()
     m = analytic_map(plate, default_freq_hz(625.0, 0.1))  # the twin vibrometer's 0.1 Hz lines
     per = Perception()

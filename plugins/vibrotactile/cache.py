@@ -2,7 +2,7 @@
 
 ``cached(cache_dir, kind, key, compute)`` returns ``compute()``'s dict of arrays (and
 JSON-able values under ``*_json`` names), stored as ``<cache_dir>/<kind>-<hash[:24]>.npz``
-through ``console.cache_files``: the entry carries the hash of ``key`` and of its content
+through ``console.files.cache_files``: the entry carries the hash of ``key`` and of its content
 inside it, and an entry of other inputs (another map's copied over this name), damaged or
 empty is logged, deleted and recomputed, never returned. The key is any JSON-able dict; it
 must contain everything the result depends on (the map's ``content_hash()``, parameters,
@@ -25,7 +25,7 @@ CODE_VERSION = 2
 
 
 def default_cache_dir() -> Path:
-    """HapTable's cache directory (``console.paths.cache_dir``)."""
+    """HapTable's cache directory (``console.files.paths.cache_dir``)."""
     return console_cache_dir()
 
 

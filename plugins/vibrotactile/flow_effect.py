@@ -76,6 +76,7 @@ class FlowEffect(MapUser):
         rule: str | None = None,
         method: str | None = None,
     ) -> OutputPlan:
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.stimuli import flow_plan
 
         a, b = (from_point, to_point) if from_point is not None else (active, passive)
@@ -109,6 +110,7 @@ class FlowEffect(MapUser):
 
     def _render_patches(self, a, b, vmap, tables, name, how, key) -> OutputPlan:
         """The flow with a drive per patch (``independent_plans.flow_plan``)."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile import independent_plans
 
         m = self.vibration_map(vmap, tables)
@@ -141,6 +143,7 @@ class FlowEffect(MapUser):
         predicted ``contrast_db`` and ``amplitude_v``, by ``method``: ``paper`` (the
         paper's tables), ``independent`` or ``time_reversal``
         (``plugins.vibrotactile.independent``); ``None`` where there is no flow."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile import independent as ind
 
         s = self.setup
@@ -166,6 +169,7 @@ class FlowEffect(MapUser):
         """The lookup-table entry of a pair (grid numbers or (x, y) mm): the
         ``max_difference_um_per_v``, its ``frequency_hz`` and ``actuator`` (``None`` for
         the same point twice), under the tables' ranking (``min_contrast_db``)."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.tables import query_indices, query_points
 
         t = self.tables(vmap, tables, min_contrast_db=min_contrast_db, rule=rule)

@@ -42,7 +42,7 @@ def side_masks(direction: str, squares: int = 3) -> tuple[np.ndarray, np.ndarray
         lo[0, :], hi[-1, :] = True, True
     else:
         raise UserError(f"--direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
-    # rows grow with y; "up" runs toward -y (console.types.DIRECTIONS_MM)
+    # rows grow with y; "up" runs toward -y (console.core.types.DIRECTIONS_MM)
     return (lo, hi) if direction in ("right", "down") else (hi, lo)
 
 

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from console.plugin_api import OutputPlan, UserError
+from plugins.vibrotactile.instant import load_or_build, no_flow_error, plan_from_search
 from plugins.vibrotactile.map_user import MapUser, Progress
 
 
@@ -75,8 +76,8 @@ class HandFlowEffect(MapUser):
         ringdown_gap_k: float | None = None,
         method: str | None = None,
     ) -> OutputPlan:
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.hand import DIRECTIONS
-        from plugins.vibrotactile.instant import no_flow_error, plan_from_search
         from plugins.vibrotactile.lazy import hand_flow_cached
 
         if direction not in DIRECTIONS:
@@ -112,6 +113,7 @@ class HandFlowEffect(MapUser):
 
     def _render_patches(self, key, direction, vmap, hand_mm, name, how) -> OutputPlan:
         """The flow under a hand with a drive per patch (``independent.solve_region``)."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.independent_plans import hand_flow_plan
 
         (cx, cy), hm = key[1], float(hand_mm or self.setup.hand["hand_mm"])
@@ -137,8 +139,6 @@ class HandFlowEffect(MapUser):
         """Every flow ``render_hand_flow`` gives on a ``step_mm`` grid of hand centres, in
         all directions, chosen ahead (``plugins.vibrotactile.instant.FlowAtlas``; cached
         on disk; ``progress`` raising cancels; ``workers`` processes, default up to 2)."""
-        from plugins.vibrotactile.instant import load_or_build
-
         how = self.method_of(None, "hand flow")
         if how != "paper":
             raise UserError(
@@ -195,6 +195,7 @@ class HandFlowEffect(MapUser):
         """The two parts of the flow under a hand as per-patch drives: ``frequency_hz``,
         ``weights`` (4,) complex (1 V peak on the strongest patch), ``amplitude_v``,
         ``x_um`` (3-JND line); ``paper``: the staged search's answer on its actuator."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile import independent as ind
 
         if method == "paper":
@@ -217,6 +218,7 @@ class HandFlowEffect(MapUser):
     def sides(self, direction: str) -> tuple[np.ndarray, np.ndarray]:
         """(start side, end side) square masks [row(y), col(x)] for ``direction``:
         part 1 activates the start side, part 2 the end side."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.hand import side_masks
 
         return side_masks(direction, int(self.setup.hand["squares"]))
@@ -227,6 +229,7 @@ class HandFlowEffect(MapUser):
         """(squares, squares) level of each square per volt on ``actuator`` at the map bin
         nearest ``frequency_hz``: the displacement at least half of the square's subgrid
         points reach (the map's prediction, interpolated)."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.hand import square_levels
 
         m = self.vibration_map(vmap)
@@ -236,6 +239,7 @@ class HandFlowEffect(MapUser):
 
     def region_centers(self, step_mm: float, *, vmap: Any = None, hand_mm=None) -> list:
         """Hand centres (x, y) mm at ``step_mm`` steps where the hand lies inside the grid."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.hand import region_centers
 
         m = self.vibration_map(vmap)

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from console.plugin_api import DIRECTIONS, OutputPlan, UserError, VibrationMap, patches_of
+from plugins.vibrotactile.cache import cached_entry
 
 #: Bumped when the stored arrays or the search change (old cache files are not read).
 ATLAS_VERSION = 1
@@ -60,6 +61,7 @@ def plan_from_search(
 ) -> OutputPlan:
     """The plan (the paper's method) of a hand-flow search result ``res`` (``hand.hand_flow``'s dict with
     ``ok``): two tones with ramps, the gap after part 1, the effect's ``meta``."""
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.stimuli import gap_after_part_1, tone_segment
 
     st = settings
@@ -134,6 +136,7 @@ def place_rows(m: VibrationMap, per: Any, center_mm, cap_v: float, **kw) -> list
     """The staged search's result at one place for each of ``DIRECTIONS``, equal to
     ``hand.hand_flow(m, center_mm, d, per, cap_v=cap_v, **SEARCH, **kw)`` per direction,
     with the direction-free first stage done once."""
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.hand import choose, refine_levels, screen_levels
 
     sk = {k: v for k, v in SEARCH.items() if k != "top"}
@@ -454,8 +457,6 @@ def load_or_build(
     carries their key: ``console.files.cache_files``), that cannot be read or fails
     ``check_arrays`` is logged, deleted and rebuilt, never played."""
     import time
-
-    from plugins.vibrotactile.cache import cached_entry
 
     xs, ys = atlas_axes(m, hand_mm, step_mm)
     centers = np.array([(x, y) for y in ys for x in xs], float)

@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable
 
 from console.plugin_api import VibrationMap
 from plugins.vibrotactile.cache import cached, cached_entry
+from plugins.vibrotactile.hand import hand_flow
 from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables, query_points, validate_tables
@@ -110,8 +111,6 @@ def hand_flow_cached(
     m: VibrationMap, center_mm, direction: str, per: Perception, cache_dir: CacheDir, **kw
 ) -> dict:
     """``hand.hand_flow`` for one region and direction, cached."""
-    from plugins.vibrotactile.hand import hand_flow
-
     key = {
         "map": m.content_hash(),
         "center": [float(c) for c in center_mm],

@@ -66,6 +66,7 @@ class MapUser:
         key = (str(p.resolve()), st.st_mtime_ns, st.st_size)
         with self._lock:
             if key not in self._maps:
+                # lazy: SciPy loads only when this runs
                 from plugins.vibrotactile.tables import load_map_or_tables
 
                 if len(self._maps) >= 4:
@@ -93,6 +94,7 @@ class MapUser:
         ``tables`` given: used as is (a ``Tables`` or a tables file). Else built from
         ``vmap`` with the profile's ``[vibrotactile] band_hz`` under ``rule``
         (``perceptual`` or ``paper``; ``Setup.rule_of`` says which when not given)."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.tables import Tables, load_tables
 
         if tables is not None:
@@ -107,6 +109,7 @@ class MapUser:
                         self._tables[key] = load_tables(p, **self._file_checks())
                     t = self._tables[key]
             if vmap is not None:  # both given: the tables must come from that map
+                # lazy: SciPy loads only when this runs
                 from plugins.vibrotactile.tables import check_tables_map
 
                 check_tables_map(
@@ -122,6 +125,7 @@ class MapUser:
         with self._lock:
             hit = self._tables.get(key)
             if hit is None or hit.vmap is not m:
+                # lazy: SciPy loads only when this runs
                 from plugins.vibrotactile.lazy import tables_cached
 
                 hit = tables_cached(
@@ -149,6 +153,7 @@ class MapUser:
     def method_of(self, method: str | None, what: str) -> str:
         """The request's rendering method (default ``[vibrotactile] method``); a method
         with per-patch drives on a bus profile is refused in one line."""
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.independent_plans import refuse_on_bus
 
         m = self.setup.method if method is None else str(method)

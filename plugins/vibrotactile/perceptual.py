@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import Limits, UserError
 from plugins.vibrotactile.perception import Perception
 
 RULES = ("perceptual", "paper")
@@ -105,8 +105,6 @@ class PerceptualRule:
 
 def rule_from_profile(profile, sample_rate_hz: float | None = None) -> PerceptualRule:
     """The rule from ``[perception]``, ``[vibrotactile]`` and the piezo limits."""
-    from console.plugin_api import Limits
-
     vt = profile.section("vibrotactile")
     lo, hi = Limits.from_profile(profile).piezo_range()
     band = tuple(float(v) for v in vt.get("play_band_hz", (0.0, 625.0)))

@@ -44,6 +44,7 @@ class PointEffect(MapUser):
         name: str = "",
         method: str | None = None,
     ) -> OutputPlan:
+        # lazy: SciPy loads only when this runs
         from plugins.vibrotactile.stimuli import point_plan
 
         if point is None:
@@ -54,6 +55,7 @@ class PointEffect(MapUser):
         if key in self._plans:
             return self._plans[key]
         if how != "paper":
+            # lazy: SciPy loads only when this runs
             from plugins.vibrotactile import independent_plans
 
             m, s = self.vibration_map(vmap, tables), self.setup
@@ -66,6 +68,7 @@ class PointEffect(MapUser):
                 self._plans[key] = plan
             return plan
         if tables is None:  # a pulse needs the map only, not the pair tables
+            # lazy: SciPy loads only when this runs
             from plugins.vibrotactile.tables import Tables
 
             t = Tables(

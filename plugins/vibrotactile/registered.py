@@ -17,10 +17,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import VibrationMap
+from console.plugin_api import VibrationMap, grid_points_mm
 from plugins.vibrotactile.flow_effect import FlowEffect
+from plugins.vibrotactile.lazy import tables_cached
 from plugins.vibrotactile.perceptual import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables
+from plugins.vibrotactile.uff_import import import_uff
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 
@@ -38,8 +40,6 @@ def tables_stepwise_cached(
     perceptual: PerceptualRule | None = None,
 ) -> Tables:
     """``lazy.tables_cached`` (same cache key and file) built in ``TABLE_STEPS`` steps."""
-    from plugins.vibrotactile.lazy import tables_cached
-
     return tables_cached(
         m,
         band_hz,
@@ -99,9 +99,6 @@ class RegisteredFlowEffect(FlowEffect):
         else gain ``[amplifiers] piezo_gain`` and bins below ``[vibrotactile] mask_below_hz``
         masked, the profile's grid for files without
         point coordinates. Bad files are a ``UserError`` naming the file."""
-        from console.plugin_api import grid_points_mm
-        from plugins.vibrotactile.uff_import import import_uff
-
         p = self.profile
         g = p.section("grid")
         grid = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))

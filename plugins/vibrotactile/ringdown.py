@@ -59,6 +59,7 @@ def half_power_zeta(
     ``height / sqrt(1 + ((f - f_n) / (zeta f_n))^2)``). ``None`` when the resolved peaks
     explain less than half the response at ``freq_hz`` (the lines are too coarse for the
     damping of the mode that rings there)."""
+    # lazy: SciPy loads only when this runs
     from plugins.vibrotactile.tables import usable_bins
 
     keep = usable_bins(m, max(band_hz, float(freq_hz)))

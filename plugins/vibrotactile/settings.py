@@ -10,19 +10,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import Field, UserError
+from console.plugin_api import Field, Limits, UserError
+from plugins.vibrotactile.perception import (
+    DEFAULT_FREQ_HZ,
+    DEFAULT_THRESHOLD_DB,
+    DEFAULT_WEBER_FRACTION,
+    DEFAULT_WEBER_FREQ_HZ,
+    SOURCES,
+    Perception,
+)
 
 
 def sections() -> dict:
     """The ``[perception]`` and ``[vibrotactile]`` profile sections: name -> (fields, help)."""
-    from plugins.vibrotactile.perception import (
-        DEFAULT_FREQ_HZ,
-        DEFAULT_THRESHOLD_DB,
-        DEFAULT_WEBER_FRACTION,
-        DEFAULT_WEBER_FREQ_HZ,
-        SOURCES,
-    )
-
     return {
         "perception": (
             {
@@ -242,6 +242,7 @@ class Setup:
 
     @property
     def cap_v(self) -> float:
+        # lazy: this module loads at every haptable start; stimuli only when used
         from plugins.vibrotactile.stimuli import drive_cap_v
 
         return drive_cap_v(self.settings, self.piezo_min_v, self.piezo_max_v)
@@ -257,9 +258,8 @@ class Setup:
 
 def setup_from_profile(profile: Any) -> Setup:
     """Settings, perception, piezo range, band, ranking, cache and hand geometry."""
-    from console.plugin_api import Limits
+    # lazy: this module loads at every haptable start; cache, perceptual, stimuli only when used
     from plugins.vibrotactile.cache import default_cache_dir
-    from plugins.vibrotactile.perception import Perception
     from plugins.vibrotactile.perceptual import rule_from_profile
     from plugins.vibrotactile.stimuli import StimulusSettings
 
@@ -301,6 +301,7 @@ def setup_from_profile(profile: Any) -> Setup:
 
 def _default_method(profile: Any, method: str) -> str:
     """``auto``: independent patches when each has its own channel, else the paper's."""
+    # lazy: this module loads at every haptable start; independent_plans only when used
     from plugins.vibrotactile.independent_plans import per_patch_channels
 
     if method != "auto":

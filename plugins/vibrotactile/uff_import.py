@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.plugin_api import EXCITATIONS, UserError, VibrationMap, make_map
+from console.plugin_api import EXCITATIONS, MAX_FRF_UM_PER_V, UserError, VibrationMap, make_map
 from plugins.vibrotactile.uff_format import REF_NODES, mask_from_text
 from plugins.vibrotactile.uff_read import read_uff
 
@@ -200,8 +200,6 @@ def import_uff(
 
 
 def _check_magnitudes(frf, f, nodes, order, parts, gain: float) -> None:
-    from console.plugin_api import MAX_FRF_UM_PER_V
-
     mag = np.abs(frf)
     if np.all(np.isfinite(mag)) and mag.max() <= MAX_FRF_UM_PER_V:
         return

@@ -5,14 +5,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, npz_keys
 
 
 def is_tables_file(path: str | os.PathLike) -> bool:
     """True for a lookup-tables file, False for a vibration map (its archive checked,
     no array read); anything else is a one-line ``UserError``."""
-    from console.plugin_api import npz_keys
-
     p = Path(path)
     if not p.exists():
         raise UserError(

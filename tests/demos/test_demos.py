@@ -52,7 +52,7 @@ def outputs_rt(profile, plugins):
 def test_knob_rotation_drives_the_knob_with_the_condition_on_the_screen(
     profile, plugins, outputs_rt
 ):
-    from plugins.demos import start_demo
+    from plugins.demos.run import start_demo
     from plugins.twin.camera import SequenceScript
 
     out = outputs_rt
@@ -157,7 +157,7 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
     flow_profile, plugins, tmp_path
 ):
     from console.kernel.client import open_outputs
-    from plugins.demos import start_demo
+    from plugins.demos.run import start_demo
     from plugins.twin.camera import SequenceScript
 
     prof = flow_profile
@@ -225,7 +225,7 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
 
 def test_unknown_demo_and_missing_map_are_one_line_errors(profile, plugins, outputs):
     from console.core.errors import UserError
-    from plugins.demos import start_demo
+    from plugins.demos.run import start_demo
 
     with pytest.raises(UserError, match="unknown"):
         start_demo("dance", profile, plugins, outputs)
@@ -289,8 +289,8 @@ class BothHands:
 
 def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugins, tmp_path):
     from console.kernel.client import open_outputs
-    from plugins.demos import start_demo
     from plugins.demos.adapters import summary_parts
+    from plugins.demos.run import start_demo
     from plugins.twin.camera import SequenceScript
 
     prof = flow_profile
@@ -386,7 +386,7 @@ def test_the_demo_renders_flows_with_whichever_plugin_offers_flows_under_a_hand(
 def test_scene_events_reach_the_projector_and_its_knob_follows_the_knob(
     profile, plugins, outputs_rt
 ):
-    from plugins.demos import start_demo
+    from plugins.demos.run import start_demo
 
     class Projector:
         def __init__(self) -> None:

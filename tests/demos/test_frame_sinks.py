@@ -78,7 +78,7 @@ def test_forcing_a_sink_nobody_registers_is_a_one_line_error(profile, monkeypatc
 
 
 def test_a_running_demo_feeds_every_enabled_sink_and_closes_it(profile, outputs):
-    from plugins.demos import start_demo
+    from plugins.demos.run import start_demo
 
     rec = SinkPlugin(enabled=True)
     pm = load(rec=rec)

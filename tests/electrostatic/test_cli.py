@@ -11,7 +11,7 @@ from scipy.io import wavfile
 from console.cli.main import main
 from console.core.errors import UserError
 from plugins.electrostatic.effects import KnobEffect
-from plugins.electrostatic.task import read_jsonl
+from plugins.electrostatic.trial_log import read_trials
 
 
 def test_knob_task_runs_and_logs_each_trial(tmp_path, capsys):
@@ -22,10 +22,10 @@ def test_knob_task_runs_and_logs_each_trial(tmp_path, capsys):
     assert rc == 0
     out = capsys.readouterr().out
     assert "trial   4/4" in out and f"logged 4 trials to {log}" in out
-    rows = read_jsonl(log)
+    rows = read_trials(log)
     assert len(rows) == 4 and all(r["condition"] == "HD+VF" and r["sectors"] == 16 for r in rows)
     assert main(["knob", "--trials", "2", "--log", str(log), "--json"]) == 0
-    assert len(read_jsonl(log)) == 6  # appended, never truncated
+    assert len(read_trials(log)) == 6  # appended, never truncated
 
 
 def test_bad_arguments_are_one_line_errors(tmp_path, capsys):

@@ -11,11 +11,11 @@ from plugins.electrostatic.settings import knob_settings
 from plugins.electrostatic.task import (
     SimFinger,
     make_trials,
-    read_jsonl,
     run_task,
     run_trial,
     trial_metrics,
 )
+from plugins.electrostatic.trial_log import read_trials
 
 
 def test_the_paper_design_has_216_trials_in_a_fixed_random_order():
@@ -61,7 +61,7 @@ def test_each_finished_trial_is_on_disk_before_the_next_starts(tmp_path):
     with pytest.raises(RuntimeError):
         run_task(trials, settings=knob_settings(), log_path=log, on_trial=check, render=False)
     assert seen == [1, 2, 3]
-    rows = read_jsonl(log)
+    rows = read_trials(log)
     assert len(rows) == 3
     assert {"completion_time_s", "overshoots", "recovery_time_s", "condition", "sectors"} <= set(
         rows[0]
@@ -70,8 +70,8 @@ def test_each_finished_trial_is_on_disk_before_the_next_starts(tmp_path):
     with open(log, "a") as f:
         f.write('{"trial": 99, "condi')
     append_json_line(log, {"trial": 100})
-    assert [r["trial"] for r in read_jsonl(log)][-1] == 100
-    assert len(read_jsonl(log)) == 4
+    assert [r["trial"] for r in read_trials(log)][-1] == 100
+    assert len(read_trials(log)) == 4
 
 
 def test_sim_finger_completes_trials_and_every_detent_is_timely():
@@ -162,6 +162,6 @@ def test_live_task_on_the_twin_camera_runs_and_logs(tmp_path, capsys):
     log = tmp_path / "live.jsonl"
     rc = main(["knob", "--input", "live", "--trials", "1", "--max-time", "1.0", "--log", str(log)])
     assert rc == 0
-    rows = read_jsonl(log)
+    rows = read_trials(log)
     assert len(rows) == 1 and rows[0]["finger"] == "live"
     assert "turn from item" in capsys.readouterr().out

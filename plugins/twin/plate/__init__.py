@@ -12,15 +12,14 @@ operator's cancel) stops the measurement and propagates.
 
 from __future__ import annotations
 
-from console.plugin_api import hookimpl
+from console.plugin_api import DeviceStatus, Field, hookimpl
 
+from . import cli
 from . import defaults as dflt
 
 
 @hookimpl
 def haptable_profile_sections(register) -> None:
-    from console.plugin_api import Field
-
     register(
         "glass",
         {
@@ -173,9 +172,8 @@ def haptable_profile_sections(register) -> None:
 
 @hookimpl
 def haptable_register_vibrometers(register) -> None:
-    from console.plugin_api import DeviceStatus
-
     def factory(profile):
+        # lazy: vibrometer loads when called, not at every haptable start
         from .vibrometer import TwinVibrometer
 
         return TwinVibrometer(profile)
@@ -199,6 +197,7 @@ def haptable_register_vibrometers(register) -> None:
 @hookimpl
 def haptable_register_observers(register) -> None:
     def factory(profile):
+        # lazy: observer loads when called, not at every haptable start
         from .observer import TwinObserver
 
         return TwinObserver(profile)
@@ -213,14 +212,13 @@ def haptable_register_observers(register) -> None:
 
 @hookimpl
 def haptable_register_commands(register) -> None:
-    from . import cli
-
     register("plate", cli.configure, cli.run, help="plate twin: natural modes")
 
 
 @hookimpl
 def haptable_register_benchmarks(register) -> None:
     def run(ctx, quick: bool) -> dict:
+        # lazy: bench loads when called, not at every haptable start
         from .bench import run_bench
 
         return run_bench(getattr(ctx, "profile", None), quick)
@@ -228,6 +226,7 @@ def haptable_register_benchmarks(register) -> None:
     register("plate", run, help="modal solve vs basis size, FRF truncation, vibrometer time")
 
     def run_loop(ctx, quick: bool) -> dict:
+        # lazy: loop_bench loads when called, not at every haptable start
         from .loop_bench import run_bench as run_loop_bench
 
         return run_loop_bench(ctx, quick)
@@ -239,6 +238,7 @@ def haptable_register_benchmarks(register) -> None:
     )
 
     def run_localisation(ctx, quick: bool) -> dict:
+        # lazy: localisation loads when called, not at every haptable start
         from .localisation import run_bench as run_localisation_bench
 
         return run_localisation_bench(ctx, quick)

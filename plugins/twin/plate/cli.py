@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from console.plugin_api import finite_float, positive_int
+from console.plugin_api import UserError, finite_float, positive_int
 
 EDGE_CHOICES = ("ssss", "cccc", "ffff", "profile")
 
@@ -34,8 +34,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def plate_modes(profile, edges: str, aspect: float | None, count: int) -> list[dict]:
     """Elastic modes, ascending: [{"frequency_hz", "lambda"}...] for the profile's glass."""
-    from console.plugin_api import UserError
 
+    # lazy: this module loads at every haptable start; model, ritz only when used
     from .model import params_from_profile
     from .ritz import solve_modes
 

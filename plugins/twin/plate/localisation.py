@@ -33,6 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from console.plugin_api import UserError, machine_info
+from console.plugin_api.runtime import open_outputs
+
 from .closed_loop import (
     foh_filters,
     hand_subgrid_mm,
@@ -296,8 +299,6 @@ def grid_pairs(n_points: int, quick: bool, seed: int = 0) -> list[tuple[int, int
 
 def run_bench(ctx, quick: bool) -> dict:
     """``haptable bench localisation``: see the module docstring."""
-    from console.plugin_api import machine_info
-
     profile, pm = ctx.profile, ctx.pm
     t_all = time.perf_counter()
     ls = LoopSettings()
@@ -364,8 +365,6 @@ def run_bench(ctx, quick: bool) -> dict:
 
 
 def _regions(player: Player, hand, vmap, quick: bool, cap: float) -> dict:
-    from console.plugin_api import UserError
-
     centers = list(DEFAULT_REGIONS[:2]) if quick else hand.region_centers(60.0, vmap=vmap)
     dirs = ("right", "up") if quick else ("left", "right", "up", "down")
     geo = dict(hand.setup.hand)
@@ -412,8 +411,6 @@ def _gate_check(profile, pm, flow, vmap, player, shapes, ls) -> dict:
     (``flow_pairs_check``), and the independent flows of the same pairs played through
     the gate with a channel per patch (``independent``), against the same parts played
     here: contrast difference."""
-    from console.plugin_api.runtime import open_outputs
-
     pairs_no = DEFAULT_PAIRS[:2]
     tables = flow.tables(vmap=vmap, rule="paper")
     with open_outputs(profile, pm, fast=True) as out:
@@ -451,8 +448,6 @@ def independent_through_gate(profile4, pm, vmap, pairs_no, ls, player) -> list[d
     """Independent flows between grid numbers played through the safety gate on a
     per-patch profile, recorded, then into the plate twin; per part the achieved
     contrast there and here (the same answer played by ``play_pairs``)."""
-    from console.plugin_api.runtime import open_outputs
-
     flow4, _ = effects_of(profile4, pm, ls)
     shapes = point_shapes_um(player.twin, vmap.points_mm)
     rows = []

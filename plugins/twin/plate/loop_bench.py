@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import time
 
+from console.plugin_api import machine_info
+from console.plugin_api.runtime import open_outputs
+
 from .loop_check import (
     OPTION_REGIONS,
     compare_options,
@@ -30,9 +33,6 @@ def run_bench(ctx, quick: bool) -> dict:
     steady state, the default pairs played, and the accelerance-derived map); without
     ``--quick`` also every hand region at 60 mm steps, four directions (left/down play the parts of right/up in the other
     order: same tones, different ring-down overlap)."""
-    from console.plugin_api import machine_info
-    from console.plugin_api.runtime import open_outputs
-
     profile, pm = ctx.profile, ctx.pm
     t0 = time.perf_counter()
     with one_blas_thread():

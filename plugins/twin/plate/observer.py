@@ -62,7 +62,7 @@ from .model import grid_points_mm
 #: Candidate answers per stimulus kind, and the sides their parts should be felt on.
 FLOW_ANSWERS = ("left_to_right", "right_to_left")
 HAND_ANSWERS = ("up", "down", "left", "right")
-#: Each answer's unit direction (x right, y down: ``console.types.DIRECTIONS_MM``).
+#: Each answer's unit direction (x right, y down: ``console.core.types.DIRECTIONS_MM``).
 AXES = {
     FLOW_ANSWERS: np.array([[1.0], [-1.0]]),
     HAND_ANSWERS: np.array([[0.0, -1.0], [0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]]),
@@ -176,7 +176,7 @@ def tone_hz(v: np.ndarray, fs: float) -> float:
 
 def _side_masks(direction: str, squares: int) -> tuple[np.ndarray, np.ndarray]:
     """(first side, second side) square masks [row(y), col(x)] of a flow ``direction``
-    (``up`` runs toward -y, ``console.types.DIRECTIONS_MM``)."""
+    (``up`` runs toward -y, ``console.core.types.DIRECTIONS_MM``)."""
     lo = np.zeros((squares, squares), bool)
     hi = np.zeros((squares, squares), bool)
     if direction in ("left", "right"):

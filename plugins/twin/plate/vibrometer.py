@@ -287,7 +287,7 @@ def measure_grid(
 ) -> dict:
     """Measure the profile's 84-point grid on the profile's twin (all five excitations).
 
-    Returns the arguments of ``console.vibration_map.make_map`` as plain values:
+    Returns the arguments of ``console.files.vibration_map.make_map`` as plain values:
     ``frf_um_per_v`` (5, P, F) with masked bins set to 0, ``freq_hz``, ``points``
     (1..P), ``points_mm`` (P, 2), ``excitations``, ``masked``, ``source``, ``gain``,
     ``note``; plus ``meta`` (the measurement metadata). Save it with
@@ -336,5 +336,5 @@ class TwinVibrometer:
         self.settings = settings
 
     def measure(self, progress: Callable[[int, int], None] | None = None) -> dict:
-        """``console.vibration_map.make_map`` arguments plus ``meta`` (see measure_grid)."""
+        """``console.files.vibration_map.make_map`` arguments plus ``meta`` (see measure_grid)."""
         return measure_grid(self.profile, self.settings, progress=progress)

@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
-from console.plugin_api import UserError, from_field
+from console.plugin_api import Limits, UserError, from_field, load_map
+from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.settings import field, setup_from_profile
 
 
 def key_type(name: str, unit: str = ""):
     """The option type of one overriding ``[vibrotactile] name``: the key's range."""
-    from plugins.vibrotactile.settings import field
-
     return from_field(field("vibrotactile", name), unit=unit)
 
 
@@ -46,15 +46,11 @@ def vt_section(ctx) -> dict:
 
 def settings_of(ctx):
     """Stimulus settings from the profile (the registered effects read the same)."""
-    from plugins.vibrotactile.settings import setup_from_profile
-
     return setup_from_profile(ctx.profile).settings
 
 
 def piezo_limits(ctx) -> dict:
     """The piezo range the safety gate allows (profile limits and amplifier/card reach)."""
-    from console.plugin_api import Limits
-
     lo, hi = Limits.from_profile(ctx.profile).piezo_range()
     return {
         "piezo_min_v": lo,
@@ -64,12 +60,11 @@ def piezo_limits(ctx) -> dict:
 
 
 def perception_of(ctx):
-    from plugins.vibrotactile.perception import Perception
-
     return Perception.from_section(ctx.profile.section("perception"))
 
 
 def cache_dir_of(args, ctx) -> Path | None:
+    # lazy: this module loads at every haptable start; cache only when used
     from plugins.vibrotactile.cache import default_cache_dir
 
     raw = getattr(args, "cache_dir", None) or vt_section(ctx)["cache_dir"]
@@ -92,6 +87,7 @@ def map_source(source: str, ctx) -> str:
     vibrometer first when the cache has none."""
     if source != MEASURED or Path(source).exists():
         return source
+    # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map_file
 
     return str(measured_map_file(ctx.profile, ctx.pm, progress_printer()))
@@ -122,7 +118,7 @@ def parse_point(text: str, vmap):
 
 def tables_for(path: str, ctx, args, band_hz: float | None = None):
     """Tables from a tables file, or built (and cached) from a vibration map."""
-    from console.plugin_api import load_map
+    # lazy: this module loads at every haptable start; lazy, tables, vibration_io only when used
     from plugins.vibrotactile.lazy import tables_cached
     from plugins.vibrotactile.tables import load_tables
     from plugins.vibrotactile.vibration_io import is_tables_file
@@ -155,6 +151,7 @@ def tables_for(path: str, ctx, args, band_hz: float | None = None):
 def table_rule_of(ctx, args):
     """(min_contrast_db, PerceptualRule or None) from ``--rule``/``--min-contrast-db`` and
     the profile's ``[vibrotactile] table_rule`` and ``min_contrast_db``."""
+    # lazy: this module loads at every haptable start; perceptual only when used
     from plugins.vibrotactile.perceptual import rule_from_profile
 
     c = getattr(args, "min_contrast_db", None)

@@ -22,9 +22,11 @@ from plugins.vibrotactile.cli.common import (
     settings_of,
     tables_for,
 )
+from plugins.vibrotactile.settings import setup_from_profile
 
 
 def emit_plan(plan, args, ctx, summary: dict) -> int:
+    # lazy: this module loads at every haptable start; stimuli only when used
     from plugins.vibrotactile.stimuli import plan_to_wav
 
     if args.out:
@@ -48,6 +50,7 @@ def emit_plan(plan, args, ctx, summary: dict) -> int:
     if args.json:
         print(json.dumps(summary, indent=2, default=float))
     else:
+        # lazy: this module loads at every haptable start; summary_text only when used
         from plugins.vibrotactile.summary_text import summary_lines
 
         print("\n".join(summary_lines(summary)))
@@ -125,6 +128,7 @@ def with_ringdown(st, args):
 
 
 def run_flow(args, ctx) -> int:
+    # lazy: this module loads at every haptable start; stimuli only when used
     from plugins.vibrotactile.stimuli import flow_plan
 
     lim = piezo_limits(ctx)
@@ -153,8 +157,8 @@ def hand_plan(args, ctx, lim):
     """The flow under a hand through the ``hand_flow`` effect (same plan as a scene's)."""
     from dataclasses import replace
 
+    # lazy: this module loads at every haptable start; hand_flow_effect, tables only when used
     from plugins.vibrotactile.hand_flow_effect import HandFlowEffect
-    from plugins.vibrotactile.settings import setup_from_profile
     from plugins.vibrotactile.tables import load_map_or_tables
 
     vm = load_map_or_tables(
@@ -203,6 +207,7 @@ def configure_point(p: argparse.ArgumentParser) -> None:
 
 
 def run_point(args, ctx) -> int:
+    # lazy: this module loads at every haptable start; stimuli only when used
     from plugins.vibrotactile.stimuli import point_plan
 
     t = tables_for(args.source, ctx, args)

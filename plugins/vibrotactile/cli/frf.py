@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.plugin_api import UserError, finite_float
+from console.plugin_api import UserError, finite_float, grid_points_mm, load_map, save_map
 from plugins.vibrotactile.cli.common import (
     MAP_HELP,
     key_type,
@@ -103,7 +103,7 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
 
 def run_frf(args, ctx) -> int:
     if args.frf_cmd == "import":
-        from console.plugin_api import grid_points_mm, save_map
+        # lazy: this module loads at every haptable start; uff_import only when used
         from plugins.vibrotactile.uff_import import import_uff
 
         plain = [f for f in args.files if "=" not in f]
@@ -154,9 +154,9 @@ def run_frf(args, ctx) -> int:
         return 0
     if args.frf_cmd == "measure":
         return measure_map(args, ctx)
-    from console.plugin_api import load_map
 
     if args.frf_cmd == "export":
+        # lazy: this module loads at every haptable start; uff_export only when used
         from plugins.vibrotactile.uff_export import export_uff
 
         m = load_map(map_source(args.map, ctx), require_all=False)
@@ -178,6 +178,7 @@ def run_frf(args, ctx) -> int:
     if args.json:
         print(json.dumps(info, indent=2))
     else:
+        # lazy: this module loads at every haptable start; summary_text only when used
         from plugins.vibrotactile.summary_text import summary_lines
 
         print("\n".join(summary_lines(info)))
@@ -188,7 +189,7 @@ def measure_map(args, ctx) -> int:
     """Measure the grid with the vibrometer the profile names into HapTable's cache (the
     file the console and the demos read: ``console.runtime.measured_map``), and copy it
     to ``--out`` when given."""
-    from console.plugin_api import load_map, save_map
+    # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map_file
 
     cached = measured_map_file(ctx.profile, ctx.pm, progress_printer(), remeasure=True)

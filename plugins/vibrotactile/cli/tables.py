@@ -7,7 +7,7 @@ import json
 import sys
 import time
 
-from console.plugin_api import UserError, finite_float
+from console.plugin_api import UserError, finite_float, load_map
 from plugins.vibrotactile.cli.common import (
     MAP_HELP,
     add_rule_option,
@@ -79,11 +79,10 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
 
 
 def run_tables(args, ctx) -> int:
+    # lazy: this module loads at every haptable start; tables only when used
     from plugins.vibrotactile.tables import build_tables, query_indices, query_points, save_tables
 
     if args.tables_cmd == "build":
-        from console.plugin_api import load_map
-
         nyq = sample_rate(ctx) / 2
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
         c, per = table_rule_of(ctx, args)
@@ -98,6 +97,7 @@ def run_tables(args, ctx) -> int:
         )
         dt = time.perf_counter() - t0
         save_tables(args.out, t)
+        # lazy: this module loads at every haptable start; tables only when used
         from plugins.vibrotactile.tables import coarse_peaks
 
         missed = coarse_peaks(m, args.zeta, t.band_hz)

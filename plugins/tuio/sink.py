@@ -1,0 +1,52 @@
+"""The TUIO sender as a frame sink: made from the profile (``make_sender``), switched by
+the console's Camera screen (``SenderFactory``, a ``console.core.contracts.SwitchableSink``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from console.plugin_api import UserError, check
+
+from .sender import TuioSender
+from .settings import FIELDS
+
+
+def make_sender(profile: Any, *, host: str | None = None, port: int | None = None, force=False):
+    """A TUIO frame sink for the profile, or ``None`` when ``[tuio] enabled`` is false
+    (``force`` sends anyway, e.g. ``haptable tuio``)."""
+    if not (force or profile.get("tuio.enabled")):
+        return None
+    host = (profile.get("tuio.host") or "127.0.0.1") if host is None else host
+    port = int(profile.get("tuio.port") or 3333) if port is None else port
+    ok, _ = check(FIELDS["host"], host)
+    if not ok or not check(FIELDS["port"], port)[0]:
+        raise UserError(
+            f"TUIO target {host!r}:{port}: give a host name or IP address and a port from 1 "
+            "to 65535 (--host/--port or [tuio] host/port)"
+        )
+    try:
+        return TuioSender(
+            host,
+            port,
+            table_mm=(float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))),
+            image_px=(
+                int(profile.get("camera.width_px", 640)),
+                int(profile.get("camera.height_px", 480)),
+            ),
+            source=profile.get("tuio.source") or "haptable",
+        )
+    except OSError as exc:  # the name resolves to nothing, or no socket for its family
+        raise UserError(
+            f"TUIO host {host!r}: cannot send there ({exc.strerror or exc}); give a host name "
+            "this computer resolves or an IP address (--host or [tuio] host)"
+        ) from None
+
+
+class SenderFactory:
+    """``make_sender`` as a ``console.core.contracts.SwitchableSink``: the console's Camera
+    screen switches it (``[tuio] enabled``) and sets its target (``host``, ``port``)."""
+
+    keys = {"enabled": "tuio.enabled", "host": "tuio.host", "port": "tuio.port"}
+
+    def __call__(self, profile: Any, *, force: bool = False):
+        return make_sender(profile, force=force)
