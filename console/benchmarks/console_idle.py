@@ -2,10 +2,12 @@
 
 As an operator runs it: ``haptable`` started in a private tmux server at 120 x 40 on the
 profile, the screens opened one after the other with their function keys
-(``tmux send-keys``), and on each, after a settling pause, the console process's CPU
-read from ``/proc/<pid>/stat`` once a second for ``seconds`` (10; quick: 4): the
-median of those one-second readings in % of one core, their mean and max, and the share
-of the busiest threads (``/proc/<pid>/task``: the UI's main thread, the camera loop ...).
+(``tmux send-keys``), and on each, after a settling pause, the console's CPU read from
+``/proc/<pid>/stat`` once a second for ``seconds`` (10; quick: 4): the console process
+and every process it started for itself (the twin camera rendering apart ...), summed;
+the median of those one-second readings in % of one core, their mean and max, each
+process's share, and the console process's threads (``/proc/<pid>/task``: the UI's main
+thread, the camera loop ...).
 Goal: <= 3 % on every screen but Camera, <= 20 % on Camera. Then, on Devices, ctrl+e
 five times: the delay from the key to the E-STOP on the terminal's safety bar (ctrl+r
 resets in between); and headless, in this process, the delay from the e-stop's session
@@ -13,7 +15,8 @@ event to the bar drawn with it (goal: 100 ms).
 
 The console gets its own runtime directory (its own table kernel and control socket: a
 console already running elsewhere does not change what is measured); the kernel is
-another process and is not counted. Without tmux the console runs headless in this
+another process (in a session of its own: it serves every client of the table and
+outlives the console) and is not counted, its CPU is reported beside (``kernel_pct``). Without tmux the console runs headless in this
 process (Textual's ``run_test``) and its CPU is this process's, which the report says.
 """
 
@@ -65,17 +68,80 @@ def threads(pid: int) -> dict[int, tuple[str, float]]:
     return out
 
 
+def _children(pid: int) -> list[int]:
+    out: list[int] = []
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return out
+    for task in tasks:
+        try:
+            out += [int(c) for c in (task / "children").read_text().split()]
+        except (OSError, ValueError):
+            continue
+    return out
+
+
+def process_tree(pid: int) -> tuple[list[int], list[int]]:
+    """(``pid`` and the processes it started for itself, the ones it started in a
+    session of their own: the table's kernel), with their descendants each."""
+    mine, apart, todo = [], [], [(pid, True)]
+    while todo:
+        p, own = todo.pop()
+        if p != pid:
+            try:
+                own = own and os.getsid(p) != p
+            except OSError:
+                continue
+        (mine if own else apart).append(p)
+        todo += [(c, own) for c in _children(p)]
+    return mine, apart
+
+
+def _name(pid: int) -> str:
+    try:
+        argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:
+        return "?"
+    words = [a.decode(errors="replace") for a in argv if a]
+    if len(words) > 2 and words[1] in ("-m", "-c"):
+        return " ".join(words[1:3])[:60]
+    return " ".join(words[:2])[:60]
+
+
+def _tree_cpu(pids: list[int]) -> dict[int, float]:
+    out = {}
+    for p in pids:
+        try:
+            out[p] = cpu_s(p)
+        except (OSError, ValueError):
+            continue  # ended meanwhile
+    return out
+
+
 def sample(pid: int, seconds: float) -> dict:
-    """The CPU of ``pid`` over ``seconds``: per-second readings (% of one core), their
-    median, mean and max, and the threads that used the most."""
+    """The CPU of ``pid`` and the processes it started for itself over ``seconds``:
+    per-second readings of their sum (% of one core), their median, mean and max, each
+    process's share, and the threads of ``pid`` that used the most."""
     t0, before = time.monotonic(), threads(pid)
-    readings, last_t, last = [], t0, cpu_s(pid)
+    mine, apart = process_tree(pid)
+    first = _tree_cpu(mine)
+    first_apart = _tree_cpu(apart)
+    readings, last_t, last = [], t0, dict(first)
     while time.monotonic() - t0 < seconds:
         time.sleep(1.0)
-        now_t, now = time.monotonic(), cpu_s(pid)
-        readings.append(100.0 * (now - last) / (now_t - last_t))
-        last_t, last = now_t, now
+        now_t = time.monotonic()
+        now = _tree_cpu(process_tree(pid)[0])
+        # a process started meanwhile counts from 0; one that ended loses its last second
+        used = sum(c - last.get(p, 0.0) for p, c in now.items())
+        readings.append(100.0 * used / (now_t - last_t))
+        last_t, last = now_t, {**last, **now}
     span = time.monotonic() - t0
+    per_process = {
+        f"{p} {_name(p)}": round(100.0 * (c - first.get(p, 0.0)) / span, 2) for p, c in last.items()
+    }
+    kernel = _tree_cpu(apart)
+    kernel_pct = sum(c - first_apart.get(p, 0.0) for p, c in kernel.items())
     after = threads(pid)
     main_s = after.get(pid, ("", 0.0))[1] - before.get(pid, ("", 0.0))[1]
     others = [
@@ -86,8 +152,13 @@ def sample(pid: int, seconds: float) -> dict:
         "mean_pct": round(statistics.fmean(readings), 2),
         "max_pct": round(max(readings), 2),
         "readings_pct": [round(r, 1) for r in readings],
-        # the UI (Textual's loop) runs on the main thread; the camera loop, the kernel
-        # link and the workers on the others (threads that ended meanwhile are missed)
+        # the console and the processes it started for itself, each (% of one core)
+        "processes_pct": per_process,
+        # the table's kernel (not counted above: another session, every client's)
+        "kernel_pct": round(100.0 * kernel_pct / span, 2),
+        # the console process: the UI (Textual's loop) runs on the main thread; the
+        # camera loop, the kernel link and the workers on the others (threads that
+        # ended meanwhile are missed)
         "main_thread_pct": round(100.0 * main_s / span, 2),
         "other_threads_pct": round(100.0 * sum(others) / span, 2),
         "threads": len(after),
@@ -275,7 +346,8 @@ def _goal(tab: str) -> float:
 
 
 def run(ctx, quick: bool) -> dict:
-    """Each screen ``seconds`` (10; quick 4) idle: the console process's CPU."""
+    """Each screen ``seconds`` (10; quick 4) idle: the console's CPU (its process and
+    the processes it started for itself, summed)."""
     from console.core.bench_stats import machine_info
     from console.tui.app import panel_tabs
 
@@ -295,7 +367,10 @@ def run(ctx, quick: bool) -> dict:
             os.environ["XDG_RUNTIME_DIR"] = old
         shutil.rmtree(runtime, ignore_errors=True)
     if shutil.which("tmux") and sys.platform.startswith("linux"):
-        how = f"haptable in tmux {SIZE[0]}x{SIZE[1]}, /proc/<pid>/stat once a second"
+        how = (
+            f"haptable in tmux {SIZE[0]}x{SIZE[1]}, /proc/<pid>/stat once a second, summed "
+            "over the console's process and the processes it started (not the kernel)"
+        )
         screens, estop = _in_tmux(ctx.profile_arg, tabs, seconds)
     else:
         how = "headless (no tmux): Textual run_test in this process, time.process_time"

@@ -4,8 +4,14 @@ frame and result for the Camera view and a latency monitor for the Latency scree
 
 Screens that show it say so with ``watch(viewer, True)`` (the Camera and Latency screens
 when shown) and ``watch(viewer, False)`` when hidden: the loop runs while someone watches
-and stops when nobody does. A demo started from the console runs in its own process and
-opens the camera there: the service closes it meanwhile (``release``/``give_back``).
+and stops when nobody does. A viewer that shows frames only so often says so
+(``watch(viewer, True, fps=15)``, the Camera screen): while every viewer asks for a rate
+and nothing else takes the frames (no frame hook: a calibration, a study, TUIO), a camera
+that can be paced (``PacedCamera``: the twin) delivers frames at that rate, and the
+vision runs on those only. A camera that renders in Python runs apart (``RunsApart``: the
+twin in its own process, as a camera device, ``[runtime] twin_camera_process``). A demo
+started from the console runs in its own process and opens the camera there: the service
+closes it meanwhile (``release``/``give_back``).
 """
 
 from __future__ import annotations
@@ -14,12 +20,49 @@ import threading
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from console.core.types import TunableRange
 from console.session.events import SessionEvent, Started, Stopped
+
+
+@runtime_checkable
+class RunsApart(Protocol):
+    """A camera that can stream from its own process (the twin renders its frames in
+    Python): ``apart()`` returns that camera (closing it ends the process)."""
+
+    def apart(self) -> Any: ...
+
+
+@runtime_checkable
+class PacedCamera(Protocol):
+    """A camera that delivers frames at most ``fps`` a second when asked (``None``: at
+    its own rate; ``0``: none, while nobody reads), rendering or transferring no more."""
+
+    def set_rate(self, fps: float | None) -> None: ...
+
+
+class _Hooks(list):
+    """``frame_hooks``: a list that tells the service when hooks come and go (a hook
+    takes every frame: the camera's full rate)."""
+
+    def __init__(self, changed: Callable[[], None]) -> None:
+        super().__init__()
+        self._changed = changed
+
+    def append(self, hook) -> None:
+        super().append(hook)
+        self._changed()
+
+    def remove(self, hook) -> None:
+        super().remove(hook)
+        self._changed()
+
+    def clear(self) -> None:
+        super().clear()
+        self._changed()
 
 
 class CameraService:
@@ -39,30 +82,36 @@ class CameraService:
         self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
-        self.frame_hooks: list = []  # fn(frame, work) called from the processing thread
+        # fn(frame, work) called from the processing thread (each takes every frame)
+        self.frame_hooks: list = _Hooks(self._pace)
         self.borrower: str | None = None  # the demo running on this camera, if any
-        self._viewers: set[int] = set()  # id() of whoever watches (see ``watch``)
+        self._viewers: dict[int, float | None] = {}  # id() of whoever watches -> its fps
+        self.rate_fps: float | None = None  # the rate asked of the camera (None: its own)
         self._sinks: dict[str, Any] = {}  # the switchable frame sinks on, by name
 
     @property
     def running(self) -> bool:
         return self.loop is not None and self.loop.running
 
-    def watch(self, viewer: object, on: bool) -> None:
-        """``viewer`` shows the camera (``on``) or no longer does. The loop starts with the
-        first viewer and stops when the last one leaves. Blocking (opening the camera, or
-        joining its loop): call in a worker. A failure to open is kept in ``error``."""
+    def watch(self, viewer: object, on: bool, fps: float | None = None) -> None:
+        """``viewer`` shows the camera (``on``) or no longer does; ``fps``: it shows at
+        most that many frames a second (``None``: it wants every frame). The loop starts
+        with the first viewer and stops when the last one leaves. Blocking (opening the
+        camera, or joining its loop): call in a worker. A failure to open is kept in
+        ``error``."""
         from console.core.errors import UserError
 
         with self._lock:
             if on:
-                self._viewers.add(id(viewer))
+                self._viewers[id(viewer)] = None if fps is None else float(fps)
             else:
-                self._viewers.discard(id(viewer))
+                self._viewers.pop(id(viewer), None)
             watched = bool(self._viewers)
         if not watched:
             self.stop("nobody watches")
+            self._pace()  # an open camera renders nothing meanwhile
             return
+        self._pace()
         if on:
             try:
                 with self._start_lock:
@@ -71,6 +120,27 @@ class CameraService:
                     self._start_locked()
             except UserError as exc:
                 self.error = str(exc)
+
+    def wanted_rate(self) -> float | None:
+        """The frames a second the camera must deliver: none (0) while the loop is
+        stopped and nobody watches; the fastest viewer's rate when every viewer named one
+        and no frame hook takes frames; else ``None`` (all: a loop started without a
+        viewer, ``start()``, too)."""
+        with self._lock:
+            rates = list(self._viewers.values())
+        if not rates:
+            return None if self.running else 0.0
+        if self.frame_hooks or any(r is None for r in rates):
+            return None
+        return max(rates)
+
+    def _pace(self) -> None:
+        """Ask the camera for ``wanted_rate()`` (a ``PacedCamera``; others deliver all)."""
+        rate = self.wanted_rate()
+        cam = self.camera
+        if isinstance(cam, PacedCamera):
+            cam.set_rate(rate)
+            self.rate_fps = rate
 
     @property
     def watched(self) -> bool:
@@ -101,15 +171,26 @@ class CameraService:
         self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
         self._open_sinks()
         self.loop.start()
+        self._pace()
         self.emit(Started("camera"))
 
     def _open(self, open_camera, open_classifier, learn_background) -> None:
         if self.camera is None:
             camera = open_camera(self.profile, self.plugins)
+            if isinstance(camera, RunsApart) and self._apart():
+                camera = camera.apart()
             if self.classifier is None:  # kept across a demo: its tuned thresholds
                 self.classifier = open_classifier(self.profile, self.plugins)
             learn_background(camera, self.classifier)
             self.camera = camera
+
+    def _apart(self) -> bool:
+        """``[runtime] twin_camera_process`` (on when the profile does not say)."""
+        try:
+            value = self.profile.get("runtime.twin_camera_process")
+        except Exception:  # a profile without the section (its plugin not loaded)
+            value = None
+        return True if value is None else bool(value)
 
     def release(self, borrower: str) -> None:
         """Stop this service's loop and close the camera for ``borrower`` (a demo process

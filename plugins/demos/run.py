@@ -27,7 +27,6 @@ from console.plugin_api.runtime import (
 )
 
 from .adapters import flow_renderers
-from .camproc import ProcessCamera
 from .flow import FlowDemo
 from .knob import KnobDemo
 from .planner import PlanProcess
@@ -125,7 +124,7 @@ class DemoRun:
 
     def status_lines(self, snapshot: dict) -> list[str]:
         """``snapshot`` as the operator reads it (``plugins.demos.status``)."""
-        from .status import status_lines  # local: it keeps Textual (its markup) lazy
+        from .status import status_lines  # lazy: it keeps Textual (its markup) lazy
 
         return status_lines(snapshot)
 
@@ -184,10 +183,14 @@ def _twin_apart(profile: Any, plugins: Any) -> bool:
 
 def _open_camera(profile: Any, plugins: Any, demo: str) -> Any:
     """The profile's camera; the twin scripted for ``demo`` in its own process
-    (``[runtime] twin_camera_process``)."""
-    if _twin_apart(profile, plugins):
-        return ProcessCamera(profile, demo)
-    return open_camera(profile, plugins)
+    (``[runtime] twin_camera_process``: the twin's ``apart()``, its rendering out of
+    this process's GIL)."""
+    camera = open_camera(profile, plugins)
+    apart = getattr(camera, "apart", None)
+    if _twin_apart(profile, plugins) and callable(apart):
+        script_twin(camera, demo, profile)  # from the child's first frame on
+        return apart()
+    return camera
 
 
 def flow_map_path(profile: Any, plugins: Any = None) -> Path:

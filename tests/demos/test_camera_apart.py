@@ -1,14 +1,21 @@
-"""The twin camera rendering in its own process delivers the scripted demo's frames."""
+"""A demo's twin camera rendering in its own process (``[runtime] twin_camera_process``:
+the twin's ``apart()``) delivers the scripted demo's frames."""
 
 from __future__ import annotations
 
 import numpy as np
 
 
-def test_process_camera_delivers_the_scripted_hand_and_cleans_up(profile):
-    from plugins.demos.camproc import ProcessCamera
+def _open(profile, plugins, demo):
+    from plugins.demos.run import _open_camera
 
-    cam = ProcessCamera(profile, "knob")
+    cam = _open_camera(profile, plugins, demo)
+    assert cam.status().get("process"), "the twin renders in its own process"
+    return cam
+
+
+def test_process_camera_delivers_the_scripted_hand_and_cleans_up(profile, plugins):
+    cam = _open(profile, plugins, "knob")
     try:
         bg = cam.background()
         assert bg.shape == (
@@ -44,11 +51,9 @@ def _hand_centroid_px(cam, bg) -> np.ndarray:
     return np.array([xs.mean(), ys.mean()])
 
 
-def test_the_operators_hand_reaches_the_twin_in_its_own_process(profile):
+def test_the_operators_hand_reaches_the_twin_in_its_own_process(profile, plugins):
     """``set_target`` crosses to the child: the hand shows where the operator put it."""
-    from plugins.demos.camproc import ProcessCamera
-
-    cam = ProcessCamera(profile, "flow")
+    cam = _open(profile, plugins, "flow")
     try:
         bg = cam.background().astype(int)
         cam.set_target((200.0, 150.0))
@@ -57,6 +62,8 @@ def test_the_operators_hand_reaches_the_twin_in_its_own_process(profile):
         b = _hand_centroid_px(cam, bg)
         # 400 mm along the table is over 250 px in the 640 px image
         assert np.hypot(*(b - a)) > 250
+        # the mapping stays with the parent: targets are drawn on the demo's view
+        assert cam.mm_to_px((200.0, 150.0)) is not None
         assert cam.status()["alive"]
     finally:
         cam.close()

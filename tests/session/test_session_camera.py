@@ -71,7 +71,7 @@ def test_a_viewer_leaving_before_the_start_keeps_it_closed(profile, plugins):
         worker.start()
         assert _wait(lambda: cam.watched, 5)  # counted, waiting to start
         with cam._lock:  # the screen is hidden: its viewer leaves
-            cam._viewers.discard(id(viewer))
+            cam._viewers.pop(id(viewer), None)
     worker.join(30)
     assert not worker.is_alive()
     assert not cam.running and cam.camera is None
@@ -166,3 +166,72 @@ def test_exposure_and_gain_are_tuned_and_kept_where_the_driver_takes_them(profil
     again = load_profile(profile.path, plugins)
     assert (again.get("camera.exposure"), again.get("camera.gain")) == (250.0, 100.0)
     assert again.get("vision.body_threshold") == 20.0
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_the_twin_renders_apart_at_the_rate_its_viewers_need(profile, plugins):
+    """On the twin the console's camera renders in its own process; while only viewers
+    that show a few frames a second watch (the Camera screen), it delivers that many;
+    a frame hook (a calibration, a study, TUIO) or a viewer wanting every frame (the
+    Latency screen) gets the camera's full rate. Closing the session ends the process."""
+    from console.session import ConsoleSession
+
+    session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    cam = session.camera
+    camera_screen, latency_screen = object(), object()
+    try:
+        cam.watch(camera_screen, True, fps=7.5)
+        st = cam.status()["camera"]
+        assert st["process"] and st["alive"], st
+        pid = st["pid"]
+        assert _process_alive(pid)
+        assert cam.wanted_rate() == 7.5 and st["rate_fps"] == 7.5
+        assert _wait(lambda: cam.snapshot() is not None), "a first frame"
+        seq0 = cam.snapshot()[0].seq
+        assert _wait(lambda: cam.snapshot()[0].seq >= seq0 + 3 * 8), "frames 8 apart"
+
+        def hook(frame, work):
+            return None
+
+        cam.frame_hooks.append(hook)
+        assert cam.wanted_rate() is None and cam.status()["camera"]["rate_fps"] is None
+        cam.frame_hooks.remove(hook)
+        assert cam.status()["camera"]["rate_fps"] == 7.5
+        cam.watch(latency_screen, True)  # the Latency screen measures every frame
+        assert cam.wanted_rate() is None
+        cam.watch(latency_screen, False)
+        assert cam.wanted_rate() == 7.5
+    finally:
+        session.close()
+    assert not _process_alive(pid), "no camera process left after the console closed"
+
+
+def test_a_hidden_camera_screen_leaves_the_twin_rendering_nothing(profile, plugins):
+    """The camera stays open when its last viewer leaves (the next visit starts at once),
+    but the twin's process renders nothing meanwhile (rate 0)."""
+    from console.session import ConsoleSession
+
+    session = ConsoleSession(SimpleNamespace(profile=profile, pm=plugins), fast=True)
+    cam = session.camera
+    viewer = object()
+    try:
+        cam.watch(viewer, True, fps=7.5)
+        assert _wait(lambda: cam.snapshot() is not None), "a first frame"
+        cam.watch(viewer, False)
+        assert not cam.running and cam.camera is not None
+        assert cam.wanted_rate() == 0.0 and cam.status()["camera"]["rate_fps"] == 0.0
+        frames = cam.camera.status()["frames"]
+        time.sleep(0.5)
+        assert cam.camera.status()["frames"] == frames
+        cam.watch(viewer, True, fps=7.5)  # back: frames again
+        seq = cam.snapshot()[0].seq
+        assert _wait(lambda: cam.snapshot()[0].seq > seq), "frames after the pause"
+    finally:
+        session.close()

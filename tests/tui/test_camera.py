@@ -455,3 +455,45 @@ def test_a_worker_s_result_after_the_console_closed_is_dropped(plugins):
 
     app = asyncio.run(scenario())
     assert from_thread(app, lambda: 1 / 0) is None
+
+
+def test_the_twin_renders_apart_at_the_view_s_rate_and_closing_ends_it(plugins):
+    """On the twin the Camera screen's camera renders in its own process, at the rate the
+    view shows (its info says so); the console's end leaves no camera process behind."""
+    from console.tui.panes.camera import CameraPane
+
+    async def scenario():
+        app = _app(plugins, "camera")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await _first_frame(app, pilot)
+            st = app.session.camera_started.status()["camera"]
+            assert st["process"] and st["alive"]
+            assert st["rate_fps"] == CameraPane.VIEW_FPS
+            info = app.query_one("#camera-info")
+            await wait_for(pilot, lambda: "(view rate)" in str(info.render()), 10, "rate")
+            return st["pid"]
+
+    pid = asyncio.run(scenario())
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            state = f.read().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        state = "gone"
+    assert state in ("gone", "Z"), "the camera process ended with the console"
+
+
+def test_the_live_numbers_re_layout_the_panel_only_when_its_rows_may_change():
+    """The side panel's live block: numbers changing within lines that fit (or keep their
+    length) take the same rows (no layout of the screen); a line more, or a line that
+    wraps and changed its length, may not."""
+    from console.tui.panes.camera import _same_height
+
+    a = "twin: 7 fps\nloop 7 fps, dropped 0 (camera) + 0 (queue)\ngain 1"
+    assert _same_height(
+        a, "twin: 8 fps\nloop 8 fps, dropped 0 (camera) + 0 (queue)\ngain 0.995", 31
+    )
+    assert not _same_height(a, a + "\nnoise 2.9", 31)
+    assert not _same_height(
+        a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 31
+    )
+    assert _same_height(a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 60)

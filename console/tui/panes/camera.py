@@ -1,9 +1,12 @@
 """Camera: the live IR view with the detected hand, contacts and gesture drawn over it:
 an image of real pixels where the terminal speaks Sixel or the Kitty graphics protocol
-(``console.tui.irview``, ~5 Hz), else half-block characters (~10 Hz: a frame is
-converted only when it is drawn, and only the rows whose cells changed by a grey step
-are redrawn, ``console.tui.halfblock_view``), its title saying which; the side panel's
-live numbers at ~2 Hz; nothing while the screen is hidden. Background capture; threshold
+(``console.tui.irview``), else half-block characters (a frame is converted only when
+it is drawn, and only the rows whose cells changed by a grey step are redrawn,
+``console.tui.halfblock_view``), its title saying which, both at ~5 Hz; the side panel's
+live numbers at ~2 Hz; nothing while the screen is hidden. The screen asks the camera for
+the frames it can show (``VIEW_FPS``): the twin renders (in its own process) and the
+vision processes no more while nothing else takes the frames (a calibration, TUIO: then
+all of them). Background capture; threshold
 and high-pass tuning with immediate effect (every vision setting the classifier offers:
 ``[``/``]`` choose one, ``-``/``+`` change it; ``W`` keeps them all for the profile);
 contact ids written next to each contact on the view; the touch-calibration wizard
@@ -82,6 +85,15 @@ def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, i
 
 def _line_lengths(text: str) -> list[int]:
     return [len(line) for line in text.split("\n")]
+
+
+def _same_height(before: str, after: str, width: int) -> bool:
+    """Whether ``after`` takes the rows ``before`` took in a ``width`` cells wide panel:
+    as many lines, each as long as before or (then and now) no longer than ``width``
+    (markup counted: a line that fits may be taken for one that does not, never the
+    other way)."""
+    a, b = _line_lengths(before), _line_lengths(after)
+    return len(a) == len(b) and all(x == y or max(x, y) <= width for x, y in zip(a, b, strict=True))
 
 
 class SidePanel(VerticalScroll):
@@ -208,15 +220,21 @@ class CameraPane(Horizontal):
 
     @work(thread=True, exclusive=True, group="camera")
     def _watch(self, on: bool) -> None:
-        self.service.watch(self, on)
+        # the view shows VIEW_FPS frames a second at most: the camera (the twin) renders
+        # and the vision processes no more while nothing else takes its frames
+        self.service.watch(self, on, fps=self.VIEW_FPS)
 
     # ------------------------------------------------------------------ drawing
     #: the side panel's width in cells (the view takes the rest, below its title)
     SIDE_COLS = 34
     #: the image's shortest interval in graphics modes (each update sends a new image)
     GRAPHICS_PERIOD_S = 0.2
-    #: how often the half-block view may change (a new frame drawn at most this often)
-    HALFBLOCK_PERIOD_S = 0.1
+    #: how often the half-block view may change (a new frame drawn at most this often: as
+    #: the graphics modes: each redraw of a moving hand costs the UI thread milliseconds)
+    HALFBLOCK_PERIOD_S = 0.2
+    #: the frames a second this screen asks of the camera (a new one for each redraw, and
+    #: some slack: the camera's clock and the redraw timer drift apart)
+    VIEW_FPS = 7.5
     #: how long the loop's numbers (fps, drops) on the side panel are kept
     STATUS_PERIOD_S = 0.5
     #: a half-block pixel changes when its grey moved by one of the view's grey steps
@@ -244,6 +262,13 @@ class CameraPane(Horizontal):
         self._said[widget_id] = text
         found.first(Static).update(text, layout=layout)
         return True
+
+    def _title(self, text: str) -> None:
+        """The view's title: laid out again only when its length changed (the grey
+        levels it names follow the frames; a layout of the screen costs more than the
+        picture's rows)."""
+        before = self._said.get("camera-title")
+        self._say("camera-title", text, layout=before is None or len(before) != len(text))
 
     def _message(self, text: str) -> None:
         """``text`` in place of the view (the camera stopped, borrowed, starting)."""
@@ -301,8 +326,9 @@ class CameraPane(Horizontal):
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
         before = self._said.get("camera-info")
-        # lines as long as before: the panel keeps its size, no layout to redo
-        same = before is not None and _line_lengths(before) == _line_lengths(info)
+        # as many lines as before, each as long as before or within the panel's width
+        # then and now (it wraps as before): the panel keeps its size, no layout to redo
+        same = before is not None and _same_height(before, info, self._info_width())
         moved = self._say("camera-info", info, layout=not same) and not same
         moved |= self._say("camera-settings", "\n".join(settings))
         found = self.query("#camera-wizard")
@@ -312,6 +338,11 @@ class CameraPane(Horizontal):
         if moved or self._reveal_chosen:  # the rows moved, or a key chose one
             self._reveal_chosen = False
             self.call_after_refresh(self.keep_in_view)
+
+    def _info_width(self) -> int:
+        """The live block's width in cells (0 before it is laid out)."""
+        found = self.query("#camera-info")
+        return found.first().content_size.width if found else 0
 
     def _scroll_to_chosen(self) -> None:
         """Scroll the side panel so the chosen setting's row (``▸``) shows: the settings
@@ -352,14 +383,16 @@ class CameraPane(Horizontal):
             return  # the same picture: nothing converted, nothing drawn
         kept = self._grey if last is not None and last[1:] == shows[1:] else None
         self._drawn = shows
-        grey = downsample(img, cols, rows)
-        grey = self._stretch()(grey)  # a dark IR frame over the display's grey range
+        level = downsample(img, cols, rows)
+        level = self._stretch()(level)  # a dark IR frame over the display's grey range
         # in GREY_STEP levels (32 greys: what a 256-colour terminal shows, 24): longer
         # runs of equal cells to send, fewer rows changed by the sensor's noise
-        grey = np.round(grey / self.GREY_STEP) * self.GREY_STEP
+        grey = np.round(level / self.GREY_STEP) * self.GREY_STEP
         lo, hi = self._stretch().levels()
-        if kept is not None:  # the sensor's noise does not redraw the view
-            grey = np.where(np.abs(grey - kept) >= self.GREY_STEP, grey, kept)
+        if kept is not None:  # the sensor's noise does not redraw the view: a cell
+            # changes when its level moved a whole step from the one shown (noise about
+            # a rounding edge does not flip it back and forth)
+            grey = np.where(np.abs(level - kept) >= self.GREY_STEP, grey, kept)
         self._grey = grey
         ov = overlay_pixels(img.shape, cols, rows, work, target)
         labels = blob_labels(img.shape, cols, rows, work)
@@ -371,7 +404,7 @@ class CameraPane(Horizontal):
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
-        self._say("camera-title", f"IR {w}x{h} as half-block {cols}x{rows}, grey {lo:.0f}-{hi:.0f}")
+        self._title(f"IR {w}x{h} as half-block {cols}x{rows}, grey {lo:.0f}-{hi:.0f}")
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
@@ -414,7 +447,7 @@ class CameraPane(Horizontal):
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
         mode = MODE_NAMES[self.image_mode]
-        self._say("camera-title", f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {lo:.0f}-{hi:.0f}")
+        self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {lo:.0f}-{hi:.0f}")
 
     def _stretch(self) -> GreyStretch:
         """The grey levels shown black and white for the view on screen (each view its
@@ -454,8 +487,13 @@ class CameraPane(Horizontal):
         cam, lat = st["camera"], st["latency"] or {}
         g = work.get("gesture")
         hands = work.get("hands", ()) or ()
+        rate = (
+            f" of {cam['nominal_fps']:.0f} (view rate)"
+            if cam.get("rate_fps") and cam.get("nominal_fps")
+            else ""
+        )
         lines = [
-            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps",
+            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{rate}",
             # what this loop lost since it started: frames the camera dropped while the
             # loop read it, and frames the processing was too slow for (never the frames
             # that passed while nobody watched)

@@ -2,7 +2,7 @@
 
 Registers the camera driver ``twin`` (``[camera] driver = "twin"``) and the profile
 section ``[twin_camera]``. Other plugins reach it only through that registration: the
-camera it builds is a ``console.contracts.SimulatedCamera`` (``set_script(GestureScript)``
+camera it builds is a ``console.core.contracts.SimulatedCamera`` (``set_script(GestureScript)``
 for a scripted hand on the stream, as the demos do; ``render_sample`` and
 ``render_background`` offline, as ``gestures synth`` does, with ``mapping``).
 

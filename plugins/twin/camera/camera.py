@@ -262,6 +262,49 @@ class TwinCamera:
         self._closed = False
         self.truth: dict[str, Any] | None = None
         self.lights_changed = False  # a sudden ambient change (gain and offset step)
+        self.rate_fps: float | None = None  # frames at most this often (``set_rate``)
+        self._stride = 1  # every how many frames of the script's time one is rendered
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Picklable (``apart``): the lock is made anew, the stream's clock restarts."""
+        state = dict(self.__dict__)
+        del state["_lock"]
+        state["_t0"] = None
+        state["_last_read"] = None
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
+    def apart(self):
+        """This camera (rig, script, state) streaming from its own process, as a camera
+        device does (``process.ProcessCamera``): its rendering no longer competes with
+        the reader's process for the GIL. This object stays the parent's copy for the
+        mapping and offline renders; close the returned camera to end the process."""
+        from .process import ProcessCamera  # lazy: the subprocess and shared-memory machinery
+
+        return ProcessCamera(self)
+
+    def set_rate(self, fps: float | None) -> None:
+        """Deliver frames at most ``fps`` a second (``None``: every frame, the camera's
+        fps; ``0``: none, ``read`` renders nothing until another rate is set): a viewer
+        that shows a few frames a second needs no more rendered. The script's time still
+        runs at the camera's fps (a gesture lasts as long; the frames' ``seq`` skip the
+        ones not rendered, which count as neither dropped nor unread)."""
+        if fps is not None and fps <= 0:
+            with self._lock:
+                self.rate_fps = 0.0
+            return
+        stride = 1 if fps is None else max(1, int(self.fps // float(fps)))
+        with self._lock:
+            self.rate_fps = None if stride == 1 else float(fps)
+            self._stride = stride
+
+    @property
+    def paused(self) -> bool:
+        """``set_rate(0)``: no frames wanted."""
+        return self.rate_fps == 0.0
 
     # ------------------------------------------------------------------ scripting
     def set_script(self, script: Script | GestureScript) -> None:
@@ -436,6 +479,9 @@ class TwinCamera:
     def read(self, timeout_s: float = 0.1) -> Frame | None:
         if self._closed:
             return None
+        if self.paused:  # nobody wants frames: the time passes unread
+            time.sleep(max(timeout_s, 0.0))
+            return None
         now = time.monotonic()
         away = self._last_read is not None and now - self._last_read > READER_AWAY_S
         self._last_read = now
@@ -448,6 +494,7 @@ class TwinCamera:
                     self._unread += late
                     self._k += late
                 self._t0 = now - self._k / self.fps
+            step = self._stride
             due = self._t0 + self._k / self.fps
             wait = due - now
             if wait > timeout_s:
@@ -455,17 +502,17 @@ class TwinCamera:
                 return None
             if wait > 0:
                 time.sleep(wait)
-            elif -wait >= 1.0 / self.fps:  # we are late: those frames were lost
-                missed = int(-wait * self.fps)
+            elif -wait >= step / self.fps:  # we are late: those frames were lost
+                missed = int(-wait * self.fps / step)  # frames it would have delivered
                 self._dropped += missed
-                self._k += missed
+                self._k += missed * step
                 due = self._t0 + self._k / self.fps
             t_capture = due
         else:
             t_capture = now
         with self._lock:
             k = self._k
-            self._k += 1
+            self._k += self._stride
             t_s = k / self.fps
             hands, label, extra = self.script.hands(k, t_s, self._rng)
             img, truth = render_frame(
@@ -506,6 +553,7 @@ class TwinCamera:
             "driver": "twin",
             "fps": round(self.measured_fps(), 2),
             "nominal_fps": self.fps,
+            "rate_fps": self.rate_fps,
             "dropped": self._dropped,
             "unread": self._unread,
             "frames": self._frames,
