@@ -10,12 +10,15 @@ What it offers:
 - the session: ``SessionMessage`` (a session event posted to the screen)
 - widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
+- messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
+  a toast only when the screen is not in view; the console's rule, ``console.tui.said``)
 """
 
 from __future__ import annotations
 
 from console.tui.long_work import LongWork
 from console.tui.safety_bar import SafetyBar
+from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread, short_path
@@ -26,6 +29,7 @@ __all__ = [
     "SafetyBar",
     "SessionMessage",
     "escape",
+    "said_here",
     "from_thread",
     "short_path",
 ]

@@ -72,14 +72,38 @@ def slew_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
     )
 
 
+def range_source(channel: str, limits: Limits) -> str:
+    """Where the gate's range for ``channel`` (``piezo``, ``screen``) comes from, as the
+    operator checks it: the profile's ``[limits]``, and the card's full scale times the
+    amplifier's gain where that is what holds it lower."""
+    if channel == "screen":
+        cap = f"[limits] screen_max_vpp = {2 * limits.screen_max_v:g} Vpp"
+        card = limits.screen_card_v
+        held = card < limits.screen_max_v
+    else:
+        cap = (
+            f"[limits] piezo_min_v..piezo_max_v = {limits.piezo_min_v:g}..{limits.piezo_max_v:+g} V"
+        )
+        card = limits.piezo_card_v
+        held = card < max(-limits.piezo_min_v, limits.piezo_max_v)
+    if not held:
+        return f"the profile's {cap}"
+    return (
+        f"the profile's {cap}, held to +-{card:g} V by what the sound card's full scale "
+        "times the amplifier's gain can produce ([audio] full_scale_v, [amplifiers])"
+    )
+
+
 def level_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
+    """A peak beyond the gate's range for ``target``, with the range as the gate holds
+    it and where it comes from (``range_source``)."""
     if target.screen:
         lo, hi = limits.screen_range()
         peak = float(np.max(np.abs(x)))
         if peak > hi + 1e-9:
             return (
-                f"peak {peak:.1f} V ({2 * peak:.0f} Vpp) is beyond the screen's {2 * hi:g} Vpp; "
-                "lower the amplitude"
+                f"peak {peak:.1f} V ({2 * peak:.0f} Vpp) is beyond the screen's {2 * hi:g} Vpp "
+                f"({range_source('screen', limits)}); lower the amplitude"
             )
         return None
     lo, hi = limits.piezo_range()
@@ -87,8 +111,8 @@ def level_problem(x: np.ndarray, target: Target, limits: Limits) -> str | None:
     if mn < lo - 1e-9 or mx > hi + 1e-9:
         worst = mx if mx > hi + 1e-9 else mn
         return (
-            f"peak {worst:.1f} V is beyond the piezo range {lo:g}..{hi:g} V at the patch; "
-            "lower the amplitude"
+            f"peak {worst:.1f} V is beyond the piezo range {lo:g}..{hi:+g} V at the patch "
+            f"({range_source('piezo', limits)}); lower the amplitude"
         )
     return None
 

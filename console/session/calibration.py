@@ -19,11 +19,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from console.config.profile_files import profile_file
 from console.core.contracts import TouchableCamera, TouchCalibrating
 from console.core.errors import UserError
 from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 
 TOPIC = "calibration"
+#: what a finished calibration's result asks for, until it is saved
+SAVE_KEY = "S: save"
 
 
 class TouchCalibration:
@@ -36,6 +39,7 @@ class TouchCalibration:
         self.active: Any = None  # the classifier's calibration session while it runs
         self.result: Any = None  # the finished fit (``report()``, ``save(path)``)
         self.message = ""
+        self.report_text = ""  # the finished fit's numbers (``message`` adds its key)
         self.failed = False  # ``message`` reports a failure
         self._lock = threading.RLock()
         self._to_projector: queue.Queue = queue.Queue()
@@ -173,11 +177,12 @@ class TouchCalibration:
         r = result.report()
         with self._lock:
             self.result = result
-            self.message = (
+            self.report_text = (
                 f"{r['pairs']} targets: reprojection error {r['rms_mm']:.2f} mm rms, "
                 f"{r['max_mm']:.2f} mm max (leave-one-out {r['loo_rms_mm']:.2f} mm); "
-                f"outliers {r['outliers'] or 'none'}. S: save"
+                f"outliers {r['outliers'] or 'none'}."
             )
+            self.message = f"{self.report_text} {SAVE_KEY}"
         self._project("stop")
         self.session.emit(Snapshot(TOPIC, data=dict(r)))
         self.session.emit(Stopped(TOPIC, reason="done"))
@@ -187,8 +192,6 @@ class TouchCalibration:
         calibration`` file, which the classifier reads); ``UserError`` when none is."""
         if self.result is None:
             raise UserError("no calibration to save: run it first (k)")
-        from console.config.profile_files import profile_file
-
         prof = self.session.profile
         dest = (
             Path(path)
@@ -196,8 +199,8 @@ class TouchCalibration:
             else profile_file(prof, "vision.calibration", "touch_calibration.json")
         )
         self.result.save(dest)
-        with self._lock:
-            self.message += f"\nsaved to {dest}"
+        with self._lock:  # the key it asked for is done: the line says so, not "S: save"
+            self.message = f"{self.report_text} saved to {dest}"
         self.session.emit(Stopped(TOPIC, name="saved", reason=str(dest)))
         return dest
 

@@ -27,11 +27,17 @@ class SceneControl:
         self.session = session
         self.service: Any = None  # the running ProjectorService
         self._lock = threading.Lock()
+        #: (scene, who asked for it) of the last ``start(name, by=...)``: what a screen
+        #: says holds the projector while that scene shows; ``starting``: the same
+        #: while the projector starts for it
+        self.holder: tuple[str, str] | None = None
+        self.starting: tuple[str, str] | None = None
 
     def ensure(self) -> Any:
         """The projector service, started on first use (blocking)."""
         with self._lock:
             if self.service is None:
+                # lazy: the projector's service (numpy, its process) loads when a scene starts
                 from console.runtime.projector.service import ProjectorService, effect_providers
 
                 s = self.session
@@ -51,9 +57,11 @@ class SceneControl:
         else this profile's measured map, else a ``UserError``."""
         return self.session.vibration.current_map()
 
-    def start(self, name: str) -> bool:
-        """Show scene ``name`` on the projector (starting it). Blocking; a failure is
-        reported as a ``Failed`` event."""
+    def start(self, name: str, by: str = "the Scenes screen") -> bool:
+        """Show scene ``name`` on the projector (starting it) for ``by`` (who holds the
+        projector then, as the screens say it). Blocking; a failure is reported as a
+        ``Failed`` event."""
+        self.starting = (name, by)
         try:
             svc = self.ensure()
             svc.link.wait_connected(CONNECT_WAIT_S)
@@ -61,30 +69,44 @@ class SceneControl:
         except (UserError, OSError) as exc:
             self.session.fail("projector", f"scene {name}: {exc}", name=name, severity="warning")
             return False
+        finally:
+            self.starting = None
+        self.holder = (name, by)
         self.session.emit(Started("projector", name, detail=f"scene {name} started"))
         return True
 
     def stop(self) -> None:
         """Show black (the projector keeps running)."""
         svc = self.service
+        self.holder = None
         if svc is not None:
             svc.stop_scene()
             self.session.emit(Stopped("projector", reason="black"))
 
     def status(self) -> dict | None:
-        """``ProjectorService.status()`` (None: not started)."""
-        svc = self.service
+        """``ProjectorService.status()`` with ``holder`` (who asked for the scene shown);
+        ``{"starting": True, "scene": ..., "holder": ...}`` while the projector starts;
+        None: not started."""
+        svc, starting = self.service, self.starting
         if svc is None:
-            return None
+            if starting is None:
+                return None
+            return {"starting": True, "scene": starting[0], "holder": starting[1]}
         try:
-            return svc.status()
+            st = dict(svc.status())
         except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
-            return {"last_error": str(exc)}
+            st = {"last_error": str(exc)}
+        if starting is not None:
+            st["holder"] = starting[1]
+        elif self.holder is not None and st.get("scene") == self.holder[0]:
+            st["holder"] = self.holder[1]  # another scene (a demo's): not theirs
+        return st
 
     def close_projector(self) -> None:
         """Stop the projector process (blocking)."""
         with self._lock:
             svc, self.service = self.service, None
+        self.holder = None
         if svc is not None:
             with contextlib.suppress(Exception):
                 svc.close()

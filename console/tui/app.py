@@ -24,9 +24,18 @@ from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
 from console.tui.help import HelpText
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
+from console.tui.logs import (
+    LogScreen,
+    NativeStderr,
+    capture_logs,
+    on_terminal,
+    release_logs,
+    view_handler,
+)
 from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.safety_bar import SafetyBar
+from console.tui.said import log_said
 from console.tui.session_messages import SessionMessage
 from console.tui.typed import TypedHistory
 from console.tui.util import short_path
@@ -150,7 +159,8 @@ class HapTableApp(App):
         self.typed = TypedHistory(self)  # ctrl+z in a text field (``console.tui.typed``)
 
     def _bind_tabs(self) -> None:
-        """A key per tab (the first one shown in the footer for them all)."""
+        """A key per tab; the footer shows them all as one key, ``f1-f10 screens``, on
+        every screen (``ConsoleFooter.ALWAYS``: one rule, whatever the width)."""
         keys = [key for _title, key, _reg in self.tabs.values() if key]
         span = keys[0] if len(keys) == 1 else f"{keys[0]}-{keys[-1]}" if keys else ""
         for tab, (title, key, _reg) in self.tabs.items():
@@ -159,10 +169,12 @@ class HapTableApp(App):
                 self._bindings.bind(
                     key,
                     f"show_tab('{tab}')",
-                    f"screens {span}" if first else title,
+                    "screens" if first else title,
                     show=first,
+                    key_display=span if first else None,
                     priority=True,
                 )
+        self.screens_key = keys[0] if keys else ""
 
     def _build_pane(self, tab: str):
         pane = self.tabs[tab][2].factory(self)
@@ -216,6 +228,21 @@ class HapTableApp(App):
         """The tab shown now (None before the tabs are composed)."""
         tabs = self.tab_widget
         return None if tabs is None else tabs.active
+
+    def shows(self, widget: Widget) -> bool:
+        """Whether the operator sees ``widget``'s screen now: its tab is the one shown and
+        no modal is over it (a widget on a modal shows while that modal is on top)."""
+        try:
+            screen = widget.screen
+        except Exception:  # not mounted
+            return False
+        if screen is not self.screen:
+            return False
+        panes = set(self._panes.values())
+        pane = next((n for n in widget.ancestors_with_self if n in panes), None)
+        if pane is None:
+            return True  # on a modal panel, or the app's own frame
+        return self.active_tab is not None and self._panes.get(self.active_tab) is pane
 
     def ensure_pane(self, tab: str):
         """Build the pane of ``tab`` on first use (mounting completes later)."""
@@ -333,7 +360,7 @@ class HapTableApp(App):
 
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
-        if isinstance(ev, Failed):
+        if isinstance(ev, Failed) and not self._says_it(ev):
             title = "refused" if ev.name == "refused" else ev.topic
             self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
@@ -346,6 +373,17 @@ class HapTableApp(App):
             active = self.active_tab  # screen showing it starts its loop again
             if active is not None:
                 self._set_visible(active)
+
+    def _says_it(self, ev: Failed) -> bool:
+        """One error, one place (``console.tui.said``): a failure that is the outcome of
+        a screen's own action is said on its status line (the pane's ``says(event)``:
+        it shows it there and logs it; a toast only when that screen is not in view),
+        not as a toast of the app's too."""
+        for pane in list(self._panes.values()):
+            says = getattr(pane, "says", None)
+            if says is not None and says(ev):
+                return True
+        return False
 
     # ------------------------------------------------------------------ live state
     def on_outputs_changed(self, message: OutputsChanged) -> None:
@@ -373,7 +411,11 @@ class HapTableApp(App):
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written: its messages carry profile keys
         (``[audio] device``), file names and plugins' errors (``console/tui/text.py``).
-        ``markup=True`` for a message that is a template with its values escaped."""
+        ``markup=True`` for a message that is a template with its values escaped.
+        Every toast is in the log too (``ctrl+l``: ``console.tui.said``); ``logged=True``:
+        it is there already (a log record or a status line shown as a toast)."""
+        if not kw.pop("logged", False):
+            log_said("toast", message, kw.get("severity", "information"))
         super().notify(message, markup=markup, **kw)
 
     # ------------------------------------------------------------------ actions
@@ -420,7 +462,28 @@ class HapTableApp(App):
         key = isinstance(event, events.Key) and not event.is_forwarded
         if key and await self._key_everywhere(event.key):
             return
+        if key and await self._field_key_in_order(event.key):
+            return
         await super().on_event(event)
+
+    async def _field_key_in_order(self, key: str) -> bool:
+        """A text field's own keys (ctrl+u, backspace, home, enter ...) act in the order
+        they were typed. Textual inserts a typed character in the field's queue but runs
+        the field's bindings only when the key has bubbled back to the app, after the
+        characters that followed it: ``ctrl+u`` then ``host:3333`` in one write (tmux
+        send-keys, a paste of keys, a fast typist) cleared the text typed after it. The
+        field's binding is queued to the field behind the characters before it (the app's
+        priority keys first, at once, as always)."""
+        field = self.focused
+        if not isinstance(field, Input):
+            return False
+        bindings = [b for b in field._bindings.key_to_bindings.get(key, ()) if not b.priority]
+        if not bindings or field.check_consume_key(key, key_to_character(key)):
+            return False
+        if await self._check_bindings(key, priority=True):  # E-STOP, the screens, ...
+            return True
+        field.call_later(self.run_action, bindings[0].action, field)
+        return True
 
     async def _key_everywhere(self, key: str) -> bool:
         """The app's priority keys work wherever the focus is, as the footer promises:
@@ -465,7 +528,6 @@ class HapTableApp(App):
 
     def action_log(self) -> None:
         """The log view: the console's records and what drivers wrote to stderr."""
-        from console.tui.logs import LogScreen, view_handler
 
         if isinstance(self.screen, LogScreen):
             return
@@ -527,8 +589,8 @@ def _bindings_help(pane) -> str:
 def run_app(ctx, *, fast: bool | None = None, image: str | None = None) -> int:
     """The console in this terminal. ``image`` (else ``[console] image``) picks the
     Camera screen's IR view; the terminal is asked here, before Textual reads the keys."""
+    # lazy: the IR view (numpy, the terminal's image protocols) loads when the console opens
     from console.tui.irview import image_mode_for
-    from console.tui.logs import NativeStderr, capture_logs, on_terminal, release_logs
 
     _ = ctx.profile  # a bad profile fails here, as one line, before the screen opens
     mode = image_mode_for(ctx.profile, image)

@@ -48,6 +48,8 @@ class NotifyHandler(logging.Handler):
         self._last: dict[str, float] = {}
 
     def emit(self, record: logging.LogRecord) -> None:
+        if getattr(record, "on_screen", False):  # what the console said: shown already
+            return
         msg = f"{record.name}: {record.getMessage()}"
         now = time.monotonic()
         if now - self._last.get(msg, -1e9) < 5.0:
@@ -56,9 +58,9 @@ class NotifyHandler(logging.Handler):
         sev = "error" if record.levelno >= logging.ERROR else "warning"
         try:
             if threading.current_thread() is threading.main_thread():
-                self.app.notify(msg, severity=sev, timeout=6)
+                self.app.notify(msg, severity=sev, timeout=6, logged=True)
             else:
-                from_thread(self.app, self.app.notify, msg, severity=sev, timeout=6)
+                from_thread(self.app, self.app.notify, msg, severity=sev, timeout=6, logged=True)
         except Exception:
             pass
 

@@ -23,6 +23,7 @@ from textual.widgets import Label, ProgressBar
 from textual.worker import get_current_worker
 
 from console.core.errors import UserError
+from console.tui.said import said_here
 from console.tui.util import from_thread
 
 Progress = Callable[[float, str], None]
@@ -60,6 +61,7 @@ class LongWork(Horizontal):
         super().__init__(**kw)
         self.idle_text = idle_text
         self.name_running: str | None = None
+        self.last_name = ""  # of the last job (its error names it once it ended)
         self.outcome: str | None = None  # of the last job
         self.result: Any = None
         self.text = idle_text
@@ -93,16 +95,17 @@ class LongWork(Horizontal):
             bar.update(total=1.0, progress=frac)
 
     def error(self, text: str) -> None:
-        """A one-line error on the status line and as a notification."""
+        """A one-line error on the status line (its one place; in the log too, and a
+        toast only when its screen is not in view: ``console.tui.said``)."""
         self.show(text, error=True)
-        self.app.notify(text, severity="error", timeout=8)
+        said_here(self, self.name_running or self.last_name or "long work", text)
 
     def start(self, name: str, job: Job, summary: Callable[[Any], str] | None = None) -> bool:
         """Run ``job`` in a thread worker; False (and a notice) when one already runs."""
         if self.busy:
-            self.app.notify(f"{self.name_running} is running: x cancels it", severity="warning")
+            self.say_busy()
             return False
-        self.name_running = name
+        self.name_running = self.last_name = name
         self.outcome = self.result = None
         self._stop = stop = threading.Event()
         self.show(f"{name} ...", 0.0)
@@ -114,6 +117,13 @@ class LongWork(Horizontal):
             exit_on_error=False,
         )
         return True
+
+    def say_busy(self) -> None:
+        """A key that would start work while a job runs: its line says so (the screen's
+        own outcome, ``console.tui.said``), the bar where it was."""
+        text = f"{self.name_running} is running: x cancels it"
+        self.show(text, self.progress)
+        said_here(self, self.name_running or "long work", text, "warning")
 
     def cancel(self) -> bool:
         """Ask the running job to stop (it stops at its next check).

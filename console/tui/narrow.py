@@ -46,8 +46,9 @@ def fit_tab_bar(tabbed: TabbedContent, titles: dict[str, str], width: int) -> No
 class ConsoleFooter(Footer):
     """The footer: only keys that show whole, in the order the bindings come (the
     screen's own first, as the screen orders them by importance); the keys in
-    ``ALWAYS`` (E-STOP, the help) are kept whatever the width, the command palette's
-    only where there is room. Compact below ``COMPACT_BELOW`` columns."""
+    ``ALWAYS`` (E-STOP, the help) and the screens' key (``f1-f10 screens``: the app's
+    ``screens_key``) are kept whatever the width, on every screen alike; the command
+    palette's only where there is room. Compact below ``COMPACT_BELOW`` columns."""
 
     ALWAYS = ("ctrl+e", "question_mark")
     COMPACT_BELOW = 100
@@ -77,11 +78,16 @@ class ConsoleFooter(Footer):
                 ).data_bind(compact=Footer.compact)
         return None
 
+    def _always(self) -> tuple[str, ...]:
+        screens = getattr(self.app, "screens_key", "")
+        return (*self.ALWAYS, screens) if screens else self.ALWAYS
+
     def compose(self):
         items = list(super().compose())
         width = self.size.width
         keys = [k for k in items if isinstance(k, FooterKey)]
-        missing = [self._app_key(a) for a in self.ALWAYS if a not in {k.key for k in keys}]
+        always = self._always()
+        missing = [self._app_key(a) for a in always if a not in {k.key for k in keys}]
         at = next((i for i, k in enumerate(items) if k.has_class("-command-palette")), len(items))
         items[at:at] = [k for k in missing if k is not None]
         keys = [k for k in items if isinstance(k, FooterKey)]
@@ -90,7 +96,7 @@ class ConsoleFooter(Footer):
             return
         palette = [k for k in keys if k.has_class("-command-palette")]
         rest = [k for k in keys if k not in palette]
-        kept = [k for k in rest if k.key in self.ALWAYS]
+        kept = [k for k in rest if k.key in always]
         room = width - sum(map(self._key_width, kept))
         for k in rest:
             if k not in kept and self._key_width(k) <= room:

@@ -21,8 +21,8 @@ from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
-from console.plugin_api.runtime import Progress, Snapshot, Started, Stopped
-from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escape
+from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
+from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escape, said_here
 
 from .status import status_lines, unprepared_text
 
@@ -55,8 +55,11 @@ def status_text(st: dict | None, feed: dict | None = None) -> str:
     the running demo sends it (``feed``: ``DemoControl.scene_feed()``)."""
     if st is None:
         return "projector: not started (enter on a scene starts it)"
+    holder = f" for {escape(st['holder'])}" if st.get("holder") else ""
+    if st.get("starting"):
+        return f"projector: starting{holder} (scene {escape(st.get('scene') or '')}) ..."
     conn = "[green]connected[/]" if st.get("connected") else "[yellow]not connected[/]"
-    parts = [f"projector: {conn}", f"scene: {escape(st.get('scene') or 'black')}"]
+    parts = [f"projector: {conn}", f"scene: {escape(st.get('scene') or 'black')}{holder}"]
     for key, label in (("pid", "pid"), ("fps", "fps"), ("restarts", "restarts")):
         if st.get(key) is not None:
             parts.append(f"{label} {escape(st[key])}")
@@ -71,6 +74,38 @@ def status_text(st: dict | None, feed: dict | None = None) -> str:
     return "  ".join(parts)
 
 
+#: each key's one label: the footer's and the hints' (``s`` stops what runs: the demo,
+#: else the scene, and the projector shows black)
+KEYS = {"s": "stop", "k": "close projector", "d": "demos", "x": "cancel"}
+
+
+def _hint(*keys: str) -> str:
+    return "  ".join(f"{k} {KEYS[k]}" for k in keys)
+
+
+#: the width of a demo's state cell (``running 123 s``)
+STATE_W = 12
+
+
+def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width: int) -> None:
+    """``table`` with ``columns`` (each as wide as its widest cell; ``state``: STATE_W)
+    and a last ``description`` column taking the rest of ``width``: ``rows`` ((key,
+    cells) each) wrap there, shown whole. The cursor stays on its row."""
+    at = table.cursor_row
+    table.clear(columns=True)
+    used = 0
+    for i, label in enumerate(columns):
+        w = STATE_W if label == "state" else max([len(label), *(len(c[i]) for _, c in rows)])
+        used += w + 2 * table.cell_padding
+        table.add_column(label, key=label, width=w)
+    rest = max(12, width - used - 2 * table.cell_padding)
+    table.add_column("description", key="description", width=rest)
+    for key, cells in rows:
+        table.add_row(*cells, key=key, height=None)
+    if table.row_count:
+        table.move_cursor(row=min(at, table.row_count - 1))
+
+
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
     ScenesPane #demo-table { height: auto; max-height: 5; }
@@ -79,7 +114,8 @@ class ScenesPane(Vertical):
     HELP_TEXT = (
         "Scenes table:\n"
         "enter    start the highlighted scene on the projector (starts the projector)\n"
-        "s        show black (or stop the running demo)   k  stop the projector process\n"
+        "s        stop: the running demo, else the scene (the projector shows black)\n"
+        "k        close the projector (its process stops)\n"
         "Demos table (tab or d moves there):\n"
         "enter    start the highlighted demo on the outputs (enter again stops it)\n"
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
@@ -91,10 +127,10 @@ class ScenesPane(Vertical):
     )
     BINDINGS = [
         Binding("enter", "start_scene", "start on projector", show=False),
-        Binding("s", "stop", "stop"),
-        Binding("k", "close_projector", "stop projector"),
-        Binding("d", "focus_demos", "demos"),
-        Binding("x", "cancel_demo", "cancel", show=False),
+        Binding("s", "stop", KEYS["s"]),
+        Binding("k", "close_projector", KEYS["k"]),
+        Binding("d", "focus_demos", KEYS["d"]),
+        Binding("x", "cancel_demo", KEYS["x"], show=False),
         # the operator's hand on the twin while a demo runs (table mm; y grows downwards)
         Binding("space", "place_hand", "place/lift hand", priority=True),
         Binding("up", "move_hand(0, -1)", "hand up", show=False, priority=True),
@@ -115,6 +151,10 @@ class ScenesPane(Vertical):
         self.hand_mm: tuple[float, float] | None = None  # the operator's hand on the twin
         self.hand_placed = False  # the operator drives the twin (not the script)
         self._touch_timer = None  # the finger's landing after a lift
+        self._demo_states: dict[str, str] = {}  # each demo's state cell
+        self._asked_scene: str | None = None  # the scene Enter asked the projector for
+        self._scene_error = ""  # ... and why it did not show
+        self._filled_width = 0  # the width the tables were laid out for
 
     @property
     def demos(self) -> Any:
@@ -123,15 +163,13 @@ class ScenesPane(Vertical):
     def compose(self) -> ComposeResult:
         yield LiteralTable(id="scene-table", cursor_type="row")
         yield Static(status_text(None), id="projector-status")
-        yield Static(
-            "enter: start the scene on the projector  s: black  k: stop the projector",
-            classes="hint",
-        )
+        # the keys as the footer labels them (``KEYS``: one label per key)
+        yield Static(f"enter start on projector  {_hint('s', 'k')}", classes="hint")
         yield LiteralTable(id="demo-table", cursor_type="row")
         yield LongWork("", id="demo-work")
         yield Static("", id="demo-status")
         yield Static(
-            "demos (d): enter start/stop  s stop  x cancel  F7: its latency  ? more",
+            f"demos (d): enter start/stop  {_hint('s', 'x')}  F7 its latency  ? more",
             classes="hint",
         )
 
@@ -143,28 +181,37 @@ class ScenesPane(Vertical):
         t = self.query_one("#scene-table", DataTable)
         # the scenes take what the demos leave (it scrolls): usable at 80 x 24
         t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 4, 12
-        t.add_columns("scene", "plugin", "description")
-        regs = self.app.ctx.pm.of("scene")
-        for name, reg in sorted(regs.items()):
-            t.add_row(name, reg.plugin, reg.description, key=name)
-        if not regs:
+        if not self.app.ctx.pm.of("scene"):
             self.query_one("#projector-status", Static).update(
                 "no scenes: no plugin registers one (install the projector plugin)"
             )
-        d = self.query_one("#demo-table", DataTable)
-        d.add_column("demo", key="demo")
-        d.add_column("state", key="state", width=12)
-        d.add_column("description", key="description")
         demos = self.app.ctx.pm.of("demo")
-        for name, reg in sorted(demos.items()):
-            d.add_row(name, "idle", reg.description, key=name)
+        self._demo_states = {name: "idle" for name in demos}
         if not demos:
             self.query_one("#demo-status", Static).update(
                 "no demos: no plugin registers one (install the demos plugin)"
             )
+        self._fill_tables(self.app.size.width)
         if self.demos.name is not None:  # a demo started before this screen was built
             self.demo_name, self.demo_state = self.demos.name, self.demos.state
             self._set_state(self.demo_state)
+
+    def _fill_tables(self, width: int) -> None:
+        """The scenes and the demos, each description whole in ``width`` columns (it
+        wraps under itself, at 80 columns too)."""
+        width = max(width - 2, 40)  # the pane's scrollbar
+        if width == self._filled_width:
+            return
+        self._filled_width = width
+        scenes = sorted(self.app.ctx.pm.of("scene").items())
+        rows = [(n, [n, r.plugin, r.description]) for n, r in scenes]
+        fill_wrapped(self.query_one("#scene-table", DataTable), ["scene", "plugin"], rows, width)
+        demos = sorted(self.app.ctx.pm.of("demo").items())
+        rows = [(n, [n, self._demo_states.get(n, "idle"), r.description]) for n, r in demos]
+        fill_wrapped(self.query_one("#demo-table", DataTable), ["demo", "state"], rows, width)
+
+    def on_resize(self, event) -> None:
+        self._fill_tables(event.size.width + 2)
 
     def on_data_table_row_selected(self, event: DataTable.RowSelected) -> None:
         event.stop()
@@ -178,12 +225,28 @@ class ScenesPane(Vertical):
         if t.row_count:
             self._start(t.coordinate_to_cell_key(t.cursor_coordinate).row_key.value)
 
-    @work(thread=True, exclusive=True, group="projector")
+    def _say(self, text: str, severity: str = "information") -> None:
+        """What became of this screen's own demo key, on the demos' line."""
+        self.query_one("#demo-work", LongWork).show(text, error=severity == "error")
+        if severity != "information":
+            said_here(self, "Scenes", text, severity)
+
     def _start(self, name: str) -> None:
+        self._asked_scene, self._scene_error = name, ""
+        self._start_worker(name)
+
+    @work(thread=True, exclusive=True, group="projector")
+    def _start_worker(self, name: str) -> None:
         self.app.session.scenes.start(name)  # Started / Failed come back as messages
+
+    def says(self, ev: Any) -> bool:
+        """A scene this screen started that failed: its projector line says it (no
+        toast of the console's too)."""
+        return isinstance(ev, Failed) and ev.topic == "projector" and ev.name == self._asked_scene
 
     def action_stop(self) -> None:
         """``s``: stop the running demo, else show black on the projector."""
+        self._scene_error = ""
         if self.demo_name is not None:
             self.stop_demo()
         else:
@@ -207,12 +270,14 @@ class ScenesPane(Vertical):
             self.start_demo(name)
         elif self.demo_name == name:
             self.stop_demo()
-        else:
-            self.app.notify(f"demo {self.demo_name} is running: s stops it", severity="warning")
+        else:  # this screen's own key: its demo line says it (console.tui.said)
+            self._say(f"demo {self.demo_name} is running: s stops it", "warning")
 
     def _set_state(self, text: str) -> None:
         self.demo_state = text
         name = self.demo_name
+        if name is not None:
+            self._demo_states[name] = text
         t = self.query("#demo-table")
         if name is not None and t and name in t.first(DataTable).rows:
             t.first(DataTable).update_cell(name, "state", text)
@@ -259,6 +324,11 @@ class ScenesPane(Vertical):
     # ------------------------------------------------------------------ observing
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
+        if self.says(ev):
+            self._scene_error = ev.message
+            said_here(self, "Scenes", ev.message, ev.severity)
+            self.show_projector()
+            return
         if ev.topic != "demo":
             return
         if isinstance(ev, Started):
@@ -303,6 +373,7 @@ class ScenesPane(Vertical):
         if self.demo_state.startswith("running") and self.demo_name is not None:
             up = snap.get("uptime_s", 0.0)
             state = f"running {up:.0f} s" if snap.get("running") else "loop stopped"
+            self._demo_states[self.demo_name] = state
             t = self.query_one("#demo-table", DataTable)
             if self.demo_name in t.rows:
                 t.update_cell(self.demo_name, "state", state)
@@ -333,7 +404,7 @@ class ScenesPane(Vertical):
             if self._touch_timer is not None:
                 self._touch_timer.stop()  # a landing under way is called off
             self.demos.set_target(None)
-            self.app.notify("hand lifted (space places it again)", timeout=2)
+            self._say("hand lifted (space places it again)")
             return
         if self.hand_mm is None:
             w, h = self._table_mm()
@@ -343,7 +414,7 @@ class ScenesPane(Vertical):
         self.hand_placed = True
         self._touch(self.hand_mm)
         x, y = self.hand_mm
-        self.app.notify(f"hand placed at {x:.0f},{y:.0f} mm (arrows move it)", timeout=2)
+        self._say(f"hand placed at {x:.0f},{y:.0f} mm (arrows move it)")
 
     def action_move_hand(self, dx: int, dy: int) -> None:
         if self._twin() is None or not self.hand_placed or self.hand_mm is None:
@@ -381,6 +452,7 @@ class ScenesPane(Vertical):
     def set_visible(self, visible: bool) -> None:
         """Shown: the projector line is read every ``PROJECTOR_TICK_S``; hidden: no timer."""
         if visible and self._projector_timer is None:
+            self.show_projector()  # what is true now, not what compose assumed
             self._projector_timer = self.set_interval(self.PROJECTOR_TICK_S, self.show_projector)
         elif not visible and self._projector_timer is not None:
             self._projector_timer.stop()
@@ -392,6 +464,8 @@ class ScenesPane(Vertical):
         if not found:  # gone while the console shuts down
             return
         text = status_text(self.app.session.scenes.status(), self.demos.scene_feed())
+        if self._scene_error:  # the scene this screen asked for did not show
+            text += f"  [red]{escape(self._scene_error)}[/]"
         if text != self._projector_said:
             self._projector_said = text
             found.first(Static).update(text)

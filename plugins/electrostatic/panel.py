@@ -18,9 +18,9 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import OptionList, Static
 from textual.widgets.option_list import Option
 
-from console.plugin_api import Conditions, Presets, UserError
+from console.plugin_api import Conditions, Limits, Presets, UserError
 from console.plugin_api.runtime import Started
-from console.plugin_api.tui import SessionMessage, escape, from_thread
+from console.plugin_api.tui import SessionMessage, escape, from_thread, said_here
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -107,8 +107,6 @@ class ElectrostaticPane(Vertical):
         return lst.first() if lst else None
 
     def on_mount(self) -> None:
-        from console.plugin_api import Limits
-
         if not self.query("#es-list"):
             return
         lo, hi = Limits.from_profile(self.app.ctx.profile).screen_range()
@@ -256,6 +254,8 @@ class ElectrostaticPane(Vertical):
         if found:
             found.first(Static).update(text)
             found.first(Static).set_class(error, "error")
+            if error:  # in the log too; a toast only while the screen is not in view
+                said_here(found.first(Static), "Electrostatic", text)
 
     def on_session_message(self, message: SessionMessage) -> None:
         """A reset clears the refusal the e-stop caused."""

@@ -241,8 +241,8 @@ class GesturesPanel(Screen):
         except UserError as exc:
             self.work.error(str(exc))
             return
-        if self.work.busy:
-            self.app.notify("busy: x cancels the running job first", timeout=3)
+        if self.work.busy:  # its own line says it (console.tui.said: one place)
+            self.work.say_busy()
             return
         asked = (ds, subjects, reps)
         pending, self._synth_asked = self._synth_asked, None
@@ -326,7 +326,7 @@ class GesturesPanel(Screen):
     def action_cancel(self) -> None:
         self._synth_asked = None
         if not self.work.cancel():
-            self.app.notify("nothing to cancel", timeout=2)
+            self.work.show("nothing to cancel")
 
     def action_back(self) -> None:
         if isinstance(self.focused, Input):

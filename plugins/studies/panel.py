@@ -41,47 +41,23 @@ from textual.widgets import (
     Select,
     Static,
 )
+from textual.widgets.data_table import ColumnKey
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
-from console.plugin_api.tui import LiteralTable, SessionMessage, escape
+from console.plugin_api.tui import LiteralTable, SessionMessage, escape, said_here
 
+from . import console_run
 from . import protocol as protocols
-from .console_run import TOPIC
+from .console_run import TOPIC, map_hint, run_analysis
+from .panel_text import clip, default_out, next_id, same_folder, trial_text
+from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 #: seconds in which a second ``a`` (or Abort) aborts the run the first one asked about
 CONFIRM_S = 3.0
 IDLE = "no study running: pick a protocol and a participant, then s"
-
-
-def default_out(study: str = "") -> Path:
-    """A protocol's default results folder: ``<data dir>/studies/<protocol>``."""
-    from console.plugin_api import data_dir
-
-    return data_dir("studies", study) if study else data_dir("studies")
-
-
-def next_id(pid: str) -> str:
-    """The next participant's id (``P01`` -> ``P02``; an id without a number: itself)."""
-    import re
-
-    m = re.match(r"^(.*?)(\d+)$", pid)
-    if not m:
-        return pid
-    return f"{m.group(1)}{int(m.group(2)) + 1:0{len(m.group(2))}d}"
-
-
-def trial_text(t: dict[str, Any]) -> str:
-    """A trial as the experimenter reads it: phase, place, direction or condition."""
-    place = t.get("region") or (f"pair {t['pair']}" if t.get("pair") else "")
-    what = t.get("direction") or t.get("condition") or ""
-    if t.get("stimulus", {}).get("task") == "knob":
-        s = t["stimulus"]
-        what = f"{s['condition']} {s['sectors']} sectors {s['distance_deg']:g} deg"
-    hand = f" ({t['hand']} hand)" if t.get("hand") else ""
-    return " ".join(x for x in (t.get("phase", ""), place, what) if x) + hand
 
 
 class StudiesPane(Vertical):
@@ -169,6 +145,12 @@ class StudiesPane(Vertical):
         self.notes: list[str] = []
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
+        #: what became of the experimenter's last key or button (text, severity): the
+        #: status's last line (the screen's own outcome: never a toast, console.tui.said)
+        self.said: tuple[str, str] = ("", "information")
+        self._status_text = ""
+        self._what: dict[Any, str] = {}  # the trials table's row -> its whole description
+        self._what_room = 40  # the columns the description gets (``_fit_trials``)
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -224,7 +206,8 @@ class StudiesPane(Vertical):
         yield ProgressBar(total=1, show_eta=False, id="study-progress")
         yield Static(IDLE, id="study-status")
         table = LiteralTable(id="study-trials", cursor_type="row")
-        table.add_columns("trial", "what", "response", "correct", "replays", "time")
+        for column in ("trial", "what", "response", "correct", "replays", "time"):
+            table.add_column(column, key=column)
         yield table
         with Vertical(id="study-analysis"):
             yield Static("", id="analysis-head", markup=False)
@@ -253,16 +236,16 @@ class StudiesPane(Vertical):
 
     def action_start(self) -> None:
         if self.running is not None:
-            self.app.notify(f"{self.running} is running: a twice aborts it", severity="warning")
+            self._say(f"{self.running} is running: a twice aborts it", "warning")
             return
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key: a run would only write a start and its interruption
-            self._status("e-stop engaged: ctrl+r resets it first")
+            self._say("e-stop engaged: ctrl+r resets it first", "error")
             return
         study = self._value("protocol")
         if study is Select.BLANK or not study:
-            self.app.notify("no protocol in studies/", severity="error")
+            self._say("no protocol in studies/", "error")
             return
         spec = {
             "study": str(study),
@@ -279,8 +262,6 @@ class StudiesPane(Vertical):
                 "consent": True if self._value("consent") else None,
             },
         }
-        from .responders import QueueResponder
-
         self.control = Control()
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
@@ -288,13 +269,15 @@ class StudiesPane(Vertical):
         try:
             self.responses = list(protocols.load(str(study)).responses)
         except UserError as exc:
-            self.app.notify(str(exc), severity="error")
             self.running = None
+            self._say(str(exc), "error")
             return
+        self.said = ("", "information")  # a new run: the last key's outcome is history
         self.query_one("#study-trials", DataTable).clear()
+        self._what.clear()
         self.query_one("#study-progress", ProgressBar).update(total=1, progress=0)
         self.run_out = spec["out"]
-        if self.analysed is not None and _same(self.analysed[0], spec["out"]):
+        if self.analysed is not None and same_folder(self.analysed[0], spec["out"]):
             self.query_one("#analysis-head", Static).update(
                 f"stale: {spec['pid']}'s run is writing to {spec['out']}; analysed again "
                 "when it stops"
@@ -310,25 +293,25 @@ class StudiesPane(Vertical):
             return
         if c.paused:
             c.resume()
-            self.app.notify("resumed")
+            self.said = ("resumed", "information")
         else:
             c.pause()
-            self.app.notify("pausing after this trial (p resumes)")
+            self.said = ("pausing after this trial (p resumes)", "information")
         self._show()
 
     def action_replay(self) -> None:
         if self.running is None:
-            self.app.notify("replay: no study running", timeout=3)
+            self._say("replay: no study running", "warning")
         elif self.responder is None:
-            self.app.notify(
+            self._say(
                 "replay: a simulated participant answers by itself and asks for no replay",
-                timeout=3,
+                "warning",
             )
         elif self.asking and "trial" in self.asking:
             self.responder.put(Answer(replay=True))
-            self.app.notify("replaying the stimulus", timeout=2)
+            self._say("replaying the stimulus")
         else:
-            self.app.notify("replay: no stimulus is waiting for an answer", timeout=3)
+            self._say("replay: no stimulus is waiting for an answer", "warning")
 
     def action_abort(self) -> None:
         """``a`` (or Abort): the first asks on the status line, a second within
@@ -348,12 +331,12 @@ class StudiesPane(Vertical):
     def action_analyse(self) -> None:
         study = self._value("protocol")
         if study is Select.BLANK or not study:
-            self.app.notify("no protocol in studies/", severity="error")
+            self._say("no protocol in studies/", "error")
             return
         try:
             experiment = protocols.load(str(study)).name
         except UserError as exc:
-            self.app.notify(str(exc), severity="error")
+            self._say(str(exc), "error")
             return
         out = Path(self._value("out").strip() or default_out(str(study))).expanduser()
         self._start_analysis(out, experiment)
@@ -417,8 +400,6 @@ class StudiesPane(Vertical):
                 self.asking = None  # one score per item: the next item asks again
                 self.responder.put(int(k))
             return
-        from .responders import parse_key
-
         a = parse_key(str(k), self.responses)  # a keypad: 8 2 4 6 (exp2), 1 2 (exp1)
         if a is not None and a.response:
             self._answer(a.response)
@@ -432,15 +413,16 @@ class StudiesPane(Vertical):
     # ------------------------------------------------------------------ the run
     @work(thread=True, exclusive=True, group="study", exit_on_error=False)
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
-        from .console_run import run
-
-        run(self.app.session, spec, control, responder)
+        console_run.run(self.app.session, spec, control, responder)
 
     @work(thread=True, exclusive=True, group="study-analysis", exit_on_error=False)
     def _analyse(self, out: Path, experiment: str) -> None:
-        from .console_run import run_analysis
-
         run_analysis(self.app.session, out, experiment)
+
+    def says(self, ev: Any) -> bool:
+        """A run's or an analysis's failure: this screen's status says it (no toast of
+        the console's too; one while the screen is not in view: ``said_here``)."""
+        return isinstance(ev, Failed) and ev.topic == TOPIC
 
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
@@ -466,10 +448,11 @@ class StudiesPane(Vertical):
                     field.value = next_id(ev.name)
             self._show()
             out, self.run_out = self.run_out, None
-            if self.analysed is not None and out is not None and _same(self.analysed[0], out):
+            if self.analysed is not None and out is not None and same_folder(self.analysed[0], out):
                 again = f" again after {ev.name}'s run"
                 self._start_analysis(*self.analysed, why=again, show=False)
         elif isinstance(ev, Failed):
+            said_here(self, "Studies", ev.message, ev.severity)  # the log has it too
             if ev.name == "study analysis":  # not a participant id (a space)
                 self._analysis_failed(ev.message)
                 return
@@ -503,8 +486,8 @@ class StudiesPane(Vertical):
         elif kind == "replay":
             self.asking = None  # answers count once the replay has played
             self.last["state"] = f"replay {d['replays']}"
-        elif kind == "refused":
-            self.app.notify(d.get("why", "refused"), severity="warning", timeout=3)
+        elif kind == "refused":  # the experimenter's answer or replay, refused
+            self._say(d.get("why", "refused"), "warning")
         elif kind == "earlier":  # a resumed run: the trials done before it
             for r in d.get("records", []):
                 self._add_row(r)
@@ -536,15 +519,44 @@ class StudiesPane(Vertical):
         else:
             resp = str(r.get("response"))
         table = self.query_one("#study-trials", DataTable)
-        table.add_row(
+        what = trial_text(r)
+        key = table.add_row(
             str(r["trial"] + 1),
-            trial_text(r),
+            clip(what, self._what_room),
             resp,
             "yes" if r.get("correct") else "no",
             str(r.get("replays", 0)),
             "-" if rt is None else f"{rt:.2f} s",
         )
+        self._what[key] = what
+        self._fit_trials()
+        self.call_after_refresh(self._fit_trials)  # once the table measured the new row
         table.move_cursor(row=table.row_count - 1)
+
+    def _fit_trials(self) -> None:
+        """Every column of the trials table whole at any width (80 columns: the time
+        too): the trial's description gives what the others leave, ending in ``…``."""
+        table = self.query_one("#study-trials", DataTable)
+        width = table.size.width or self.app.size.width
+        others = sum(
+            c.get_render_width(table) for k, c in table.columns.items() if k.value != "what"
+        )
+        # its padding, and room for the scrollbar that more rows bring
+        room = max(12, width - others - 2 * table.cell_padding - 2)
+        if room == self._what_room:
+            return
+        self._what_room = room
+        column = table.columns.get(ColumnKey("what"))
+        if column is not None:  # a set width: a column's widest cell never shrinks it
+            column.auto_width, column.width = False, room
+        for key, what in self._what.items():
+            if key in table.rows:
+                table.update_cell(key, "what", clip(what, room))
+        table.refresh(layout=True)
+
+    def on_resize(self) -> None:
+        if self.query("#study-trials"):
+            self.call_after_refresh(self._fit_trials)
 
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])
@@ -559,7 +571,9 @@ class StudiesPane(Vertical):
         self._notes(open_=not d["rows"])  # without a table the notes take its place
         report = Path(d["report"])
         out = self.analysed[0] if self.analysed else None
-        where = f"{report.name} in the folder" if out and _same(report.parent, out) else report
+        where = (
+            f"{report.name} in the folder" if out and same_folder(report.parent, out) else report
+        )
         self.query_one("#analysis-report", Static).update(f"report: {where}")
         if self._show_result:
             self._view("analysis")
@@ -610,7 +624,24 @@ class StudiesPane(Vertical):
         self._status("\n".join(lines) + ("" if self.running else self._map_hint()))
 
     def _status(self, text: str) -> None:
+        """The status block (markup) and, last, what became of the last key."""
+        self._status_text = text
+        said, severity = self.said
+        if said and severity == "error":
+            text += f"\n[red]{escape(said)}[/]"
+        elif said and severity == "warning":
+            text += f"\n[yellow]{escape(said)}[/]"
+        elif said:
+            text += f"\n{escape(said)}"
         self.query_one("#study-status", Static).update(text)
+
+    def _say(self, text: str, severity: str = "information") -> None:
+        """The outcome of the experimenter's own key or button, on this screen's status
+        (its one place: logged, a toast only while the screen is not in view)."""
+        self.said = (text, severity)
+        if severity != "information":
+            said_here(self, "Studies", text, severity)
+        self._status(self._status_text)
 
     def on_mount(self) -> None:
         self._idle()
@@ -630,19 +661,9 @@ class StudiesPane(Vertical):
         study = self._value("protocol")
         if study is Select.BLANK or not study:
             return ""
-        from .console_run import map_hint
-
         hint = map_hint(self.app.session, str(study))
         return f"\n[yellow]{escape(hint)}[/]" if hint else ""
 
     def on_unmount(self) -> None:
         if self.control is not None:
             self.control.abort("the console closed")
-
-
-def _same(a: Path, b: Path) -> bool:
-    """The same folder (as typed, or resolved)."""
-    try:
-        return Path(a).expanduser().resolve() == Path(b).expanduser().resolve()
-    except OSError:
-        return Path(a) == Path(b)

@@ -113,9 +113,15 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
     assert sent[0] == ("start", "touch_calibration", 6) and sent[-1] == ("stop",)
     assert sent.count(("update", "touch")) == 6  # in order, from the projector's thread
 
+    assert wizard.message.endswith("S: save")  # the key the result asks for
     path = wizard.save(tmp_path / "cal.json")
     assert json.loads(path.read_text())["format"].startswith("haptable-touch-calibration")
     assert isinstance(events[-1], Stopped) and events[-1].name == "saved"
+    # saved: the line says so (issue 27), no longer asking for S as if unsaved
+    assert "S: save" not in wizard.message and wizard.message.endswith(f"saved to {path}")
+    assert "reprojection error" in wizard.message
+    wizard.save(tmp_path / "cal.json")  # again: one "saved to", the newest
+    assert wizard.message.count("saved to") == 1
 
 
 def test_skip_cancel_and_a_classifier_without_calibration(profile):

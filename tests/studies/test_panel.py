@@ -316,7 +316,7 @@ def test_the_e_stop_stops_a_run_and_its_trial_is_repeated(double_plugins, map_fi
 
 
 def test_the_next_participant_id():
-    from plugins.studies.panel import next_id
+    from plugins.studies.panel_text import next_id
 
     assert [next_id(p) for p in ("P01", "P09", "S099", "P1", "alice")] == [
         "P02",
@@ -567,7 +567,7 @@ def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_th
             plan = json.loads((tmp_path / "P01" / "plan.json").read_text())
             nxt = plan["trials"][len(done)]
             shown = str(status.render())
-            from plugins.studies.panel import trial_text
+            from plugins.studies.panel_text import trial_text
 
             assert f"next: trial {len(done) + 1}: {trial_text(nxt)}" in shown, shown
             await pilot.press("a", "a")  # the second confirms

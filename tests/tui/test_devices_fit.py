@@ -98,9 +98,9 @@ def test_a_test_signal_during_an_estop_is_refused_on_the_line(plugins):
             seen: list[str] = []
             real = pane._show_result
 
-            def spy(text):
+            def spy(text, *a, **kw):
                 seen.append(text)
-                return real(text)
+                return real(text, *a, **kw)
 
             pane._show_result = spy
             await pilot.press("ctrl+e")

@@ -36,7 +36,10 @@ def test_tab_never_focuses_an_invisible_widget(plugins):
                 seen.append(app.focused)
             assert pane not in seen
             assert all(isinstance(w, (Input, DataTable, ContentTabs)) for w in seen), seen
-            assert {type(w) for w in seen} >= {Input, ContentTabs}
+            assert {Input if isinstance(w, Input) else type(w) for w in seen} >= {
+                Input,
+                ContentTabs,
+            }
             # back on the grid, enter auditions the point under the cursor
             for _ in range(3):
                 if app.focused is pane.focus_target:

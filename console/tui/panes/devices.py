@@ -15,7 +15,12 @@ from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
-from console.signals.stimuli import STIMULI
+from console.config.profile import load_profile, overrides_path, save_overrides
+from console.core.errors import UserError
+from console.runtime.devices import output_devices, relay_boards
+from console.runtime.doctor import diagnose
+from console.signals.stimuli import STIMULI, make_stimulus
+from console.tui.said import said_here
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -147,7 +152,6 @@ class DevicesPane(VerticalScroll):
     # ------------------------------------------------------------------ doctor
     @work(thread=True, exclusive=True, group="doctor")
     def action_doctor(self) -> None:
-        from console.runtime.doctor import diagnose
 
         try:
             app = self.app
@@ -177,7 +181,6 @@ class DevicesPane(VerticalScroll):
     # ------------------------------------------------------------------ listing
     @work(thread=True, exclusive=True, group="devices")
     def action_list_devices(self) -> None:
-        from console.runtime.devices import output_devices, relay_boards
 
         try:
             app = self.app
@@ -262,8 +265,6 @@ class DevicesPane(VerticalScroll):
     def _apply(self, settings: dict, what: str) -> None:
         """Save ``settings`` to the profile's override file, reload the profile and
         reopen the outputs with it (refused while they play or are e-stopped)."""
-        from console.config.profile import load_profile, overrides_path, save_overrides
-        from console.core.errors import UserError
 
         session, pm = self.app.session, self.app.ctx.pm
         self._say(f"{what}: saving ...")
@@ -273,14 +274,15 @@ class DevicesPane(VerticalScroll):
             path = save_overrides(self._profile(), settings, pm)
             new = load_profile(self._profile().path, pm)
         except UserError as exc:  # ProfileError too: one line naming the file and key
-            self._say(f"{what}: not saved: {exc}")
+            self._say(f"{what}: not saved: {exc}", error=True)
             return
         try:
             opened = session.reopen_outputs(new)
         except UserError as exc:  # playing, e-stopped or lent to a demo
             self._say(
                 f"{what} saved to {short_path(path)}; the outputs stay as they are: {exc} "
-                "(pick it again then, or restart the console)"
+                "(pick it again then, or restart the console)",
+                error=True,
             )
             return
         if opened:
@@ -290,7 +292,8 @@ class DevicesPane(VerticalScroll):
             back = "the previous outputs are back" if session.outputs else "no outputs open"
             self._say(
                 f"{what} did not open: {session.reopen_error}; {back} and "
-                f"{short_path(path)} keeps its previous settings"
+                f"{short_path(path)} keeps its previous settings",
+                error=True,
             )
         from_thread(self.app, self._after_pick)
 
@@ -302,8 +305,6 @@ class DevicesPane(VerticalScroll):
     # ------------------------------------------------------------------ testing
     @work(thread=True, exclusive=True, group="test-output")
     def action_test_output(self) -> None:
-        from console.core.errors import UserError
-        from console.signals.stimuli import make_stimulus
 
         name = from_thread(self.app, lambda: self.query_one("#stimulus", Select).value)
         session = self.app.session
@@ -315,7 +316,7 @@ class DevicesPane(VerticalScroll):
                 float(prof.get("limits.max_plan_s")),
             )
         except UserError as exc:
-            self._say(f"test signal: {exc}")
+            self._say(f"test signal: {exc}", error=True)
             return
         where = prof.get("audio.device") or prof.get("audio.driver")
         self._say(f"{name}: asking to play on {where!r} ...")
@@ -324,7 +325,7 @@ class DevicesPane(VerticalScroll):
         )
         if not outcome.played:  # the line says what became of it, from the outcome
             why = outcome.refused or f"stopped by {outcome.stopped}"
-            self._say(f"{name} on {where!r}: {why}")
+            self._say(f"{name} on {where!r}: {why}", error=True)
             return
         trace = session.scope(plan.duration_s + 0.5)
         peaks = (
@@ -334,14 +335,19 @@ class DevicesPane(VerticalScroll):
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    def _show_result(self, text: str) -> None:
-        """The screen's status line (under the profile line, seen whole), the newest
-        message replacing it."""
+    def _show_result(self, text: str, error: bool = False) -> None:
+        """The screen's status line, the newest message replacing it: docked at the
+        top of the screen, in view wherever the list is scrolled (a pick on a row far
+        down says what it did where it is seen); an error is in the log too."""
         self.result = text
         found = self.query("#devices-result")
         if found:
-            found.first(Static).update(text)
-            found.first(Static).display = bool(text)
+            line = found.first(Static)
+            line.update(text)
+            line.display = bool(text)
+            line.set_class(error, "error")
+            if error:
+                said_here(line, "Devices", text)
 
-    def _say(self, text: str) -> None:
-        from_thread(self.app, self._show_result, text)
+    def _say(self, text: str, error: bool = False) -> None:
+        from_thread(self.app, self._show_result, text, error)

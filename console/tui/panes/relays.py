@@ -11,6 +11,7 @@ from textual.widgets import DataTable, Label, Static, Switch
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started
 from console.tui.live import live_of
 from console.tui.safety_bar import relay_names
+from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread
@@ -96,9 +97,13 @@ class RelaysPane(VerticalScroll):
             "when it ends; during an e-stop a toggle is refused and never runs later.",
             classes="hint",
         )
-        for ch in range(1, int(prof.get("relays.channels")) + 1):
+        channels = range(1, int(prof.get("relays.channels")) + 1)
+        width = max(len(self._relay_label(ch)) for ch in channels) + 1  # the names align
+        for ch in channels:
             with Horizontal(classes="relay"):
-                yield Label(self._relay_label(ch), classes="relay-name", markup=False)
+                label = Label(self._relay_label(ch), classes="relay-name", markup=False)
+                label.styles.width = width
+                yield label
                 yield Switch(value=False, id=f"relay-{ch}")
                 yield Static("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
@@ -203,9 +208,9 @@ class RelaysPane(VerticalScroll):
 
     def _done(self, ch: int, error: str) -> None:
         self.pending.pop(ch, None)
-        if error:
+        if error:  # the relay's row says it (its one place), the log keeps it
             self.refused[ch] = error
-            self.app.notify(f"relay {ch}: {error}", severity="error", timeout=6)
+            said_here(self, "Relays", f"relay {ch}: {error}")
         live = live_of(self.app)
         if live is not None:  # the relays as they are now, not as last read
             live.watch.poke(force=True)

@@ -29,6 +29,7 @@ from console.session.events import Failed, Stopped
 from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
+from console.tui.said import said_here
 from console.tui.util import from_thread
 
 DEFAULT_EXPR = BUILTIN["tone-250"].expr
@@ -72,14 +73,17 @@ class SignalsPane(Vertical):
     #sig-row .hint { width: 1fr; }
     #sig-name { width: 18; }
     #sig-target { width: 14; }
-    #sig-status { height: 1; }
+    #sig-status { height: auto; }  /* a refusal wraps: whole at 80 columns */
     #sig-status.error { color: $error; }
     #sig-main { height: 1fr; }
     #sig-library { width: 20; height: 1fr; border: none; padding: 0; }
     """
     BINDINGS = [
         Binding("ctrl+o", "play", "play"),
+        # one of the two shows: "save" while the fields differ from the library, "saved"
+        # once they are in it as they are (``check_action``); ctrl+s saves either way
         Binding("ctrl+s", "save", "save"),
+        Binding("ctrl+s", "save_saved", "saved"),
         Binding("ctrl+t", "add_ramp", "add ramp"),
         Binding("ctrl+z", "undo", "undo", show=False),
     ]
@@ -93,6 +97,7 @@ class SignalsPane(Vertical):
         self._playing = ""
         self._gen = 0
         self.entries: dict[str, Entry] = {}
+        self._saved_shown = False  # the save key's label says "saved"
 
     def compose(self) -> ComposeResult:
         yield Input(
@@ -106,7 +111,7 @@ class SignalsPane(Vertical):
             yield Input("", placeholder="(to save)", id="sig-name", compact=True)
             yield Label(" on ")
             yield Input("PA", placeholder="PA,PC|screen", id="sig-target", compact=True)
-            yield Static(" enter plot  ^o play  ^s save  ? help", classes="hint")
+            yield Static(self._hint(), classes="hint", id="sig-hint")
         yield Static("", id="sig-status")
         with Horizontal(id="sig-main"):
             yield OptionList(id="sig-library")
@@ -143,6 +148,8 @@ class SignalsPane(Vertical):
         w = self.query_one("#sig-status", Static)
         w.update(Text(line))  # literal: "[limits]" in a message is no markup
         w.set_class(error, "error")
+        if error:  # in the log too; a toast only when this screen is not in view
+            said_here(w, "Signals", line)
 
     @property
     def library_file(self):
@@ -169,6 +176,7 @@ class SignalsPane(Vertical):
         )
         if select in self.entries:
             ol.highlighted = list(self.entries).index(select)
+        self._show_saved()  # removed, replaced or saved elsewhere: the label follows
 
     def _fields(self) -> tuple[str, str, str]:
         return (
@@ -185,6 +193,36 @@ class SignalsPane(Vertical):
     def on_input_changed(self, event: Input.Changed) -> None:
         if event.input.id == "sig-name":
             self._replace = None
+        self._show_saved()
+
+    def saved_now(self) -> bool:
+        """Whether the name and the expression are in the library as they are (saved,
+        not a built-in): the footer and the hint say ``saved``, else ``save``."""
+        if not self.is_mounted or not self.query("#sig-name"):
+            return False
+        expr, name, _target = self._fields()
+        entry = self.entries.get(name)
+        return entry is not None and not entry.builtin and entry.expr.strip() == expr
+
+    def _hint(self, saved: bool = False) -> str:
+        return f" enter plot  ^o play  ^s {'saved' if saved else 'save'}  ? help"
+
+    def _show_saved(self) -> None:
+        """The save key's label as it is true now (a change makes it ``save`` again)."""
+        saved = self.saved_now()
+        if saved != self._saved_shown:
+            self._saved_shown = saved
+            self.query_one("#sig-hint", Static).update(self._hint(saved))
+            self.refresh_bindings()
+
+    def check_action(self, action: str, parameters: tuple) -> bool | None:
+        """Of ctrl+s's two labels, the one that is true shows (and runs)."""
+        if action in ("save", "save_saved"):
+            return (action == "save_saved") == self.saved_now()
+        return True
+
+    def action_save_saved(self) -> None:
+        self.action_save()
 
     def show_preview(self, then_play: bool = False) -> None:
         """Parse and render the fields' signal (off the UI thread), then plot it; with
@@ -266,6 +304,11 @@ class SignalsPane(Vertical):
             self._playing = ""
             self.status(f"played {name} on {p.target.label} ({p.summary.duration_s:.2f} s)")
 
+    def says(self, ev) -> bool:
+        """A refusal of this screen's play: its status line says it (``on_session_message``),
+        no toast (``console.tui.said``)."""
+        return isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and bool(self._playing)
+
     def on_session_message(self, message) -> None:
         ev = message.event
         if isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and self._playing:
@@ -303,6 +346,7 @@ class SignalsPane(Vertical):
         self._replace = None
         self.reload_library(select=name)
         self.status(f"saved {name} in {self.library_file}")
+        self._show_saved()
 
     def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
         e = self.entries.get(event.option.id or "")

@@ -18,9 +18,15 @@ from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 from console.core.errors import UserError
 from console.core.types import plan_parts
 from console.core.words import AT_CONSOLE, worded
+from console.files.vibration_map import grid_cells
 from console.session.events import ESTOP_REFUSAL, Started, Stopped
+from console.session.vibration import Cancelled
 from console.tui.charts import Chart
+from console.tui.command_line import CommandLine
 from console.tui.long_work import stop_check
+from console.tui.panes.vibration_words import describe_plan, point_word, rendering, table_entry
+from console.tui.plots import frf_series
+from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape, styled
 from console.tui.util import from_thread
@@ -49,7 +55,9 @@ class VibrationPane(VerticalScroll):
         Binding("m", "measure", "measure"),
         Binding("b", "build_tables", "tables"),
         Binding("x", "cancel", "cancel"),
-        Binding("colon", "command", "command", show=False),
+        # priority: the line takes the focus before the keys typed after ":" are handed
+        # on (one write: tmux send-keys, a fast typist), never the grid's keys
+        Binding("colon", "command", "command", show=False, priority=True),
     ]
 
     def __init__(self, **kw) -> None:
@@ -65,16 +73,16 @@ class VibrationPane(VerticalScroll):
         self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
         self._now_playing = None  # the plan the status line says is asked for or playing
         self._now_started = False  # ... and whether the outputs said it started
+        self._command_failed = False  # an error was said while a typed command ran
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
         rows, cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
         self._set_layout(rows, cols, {(n // cols, n % cols): n + 1 for n in range(rows * cols)})
-        yield Input(
+        yield CommandLine(
             placeholder="51 | 51 52 | hand 51 right | measure | import PA=a.uff ... | load F.npz",
             id="vib-cmd",
-            compact=True,
         )
         yield Static("", id="vib-outputs", markup=False)
         with Horizontal(id="vib-work"):
@@ -104,7 +112,6 @@ class VibrationPane(VerticalScroll):
 
     def _layout_from_map(self, vmap) -> None:
         """The grid the map's points form by their coordinates, labelled with their ids."""
-        from console.files.vibration_map import grid_cells
 
         rows, cols, cells = grid_cells(vmap.points_mm)
         self._set_layout(
@@ -176,6 +183,8 @@ class VibrationPane(VerticalScroll):
         label = self.query_one("#vib-status", Label)
         label.update(text)
         label.set_class(error, "error")
+        if error:  # in the log too; a toast only when this screen is not in view
+            said_here(label, "Vibration", text)
         bar = self.query_one("#vib-progress", ProgressBar)
         bar.display = progress is not None
         if progress is not None:
@@ -252,7 +261,6 @@ class VibrationPane(VerticalScroll):
 
     def _build_tables(self, session, summary: str, stop: threading.Event) -> None:
         """In a worker: the lookup tables with progress; cancel (x) stops the build."""
-        from console.session.vibration import Cancelled
 
         def show(*args):
             return from_thread(self.app, *args)
@@ -315,23 +323,24 @@ class VibrationPane(VerticalScroll):
     def _tables_worker(self, session, summary: str, stop: threading.Event) -> None:
         self._build_tables(session, summary, stop)
 
-    def action_measure(self) -> None:
+    def action_measure(self, command: str | None = None) -> None:
         self.status("measuring ...", 0.0)
-        self._measure(self._new_stop("vib-long"))
+        self._measure(self._new_stop("vib-long"), command)
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _measure(self, stop: threading.Event) -> None:
-        from console.session.vibration import Cancelled
+    def _measure(self, stop: threading.Event, command: str | None = None) -> None:
 
         def progress(frac: float, msg: str) -> None:
             from_thread(self.app, self.status, f"measuring: {msg}", frac)
 
         try:
             self._show_map(self.service.measure(progress, stop_check(stop)))
+            from_thread(self.app, self._command_done, command, True)
         except Cancelled:
             from_thread(self.app, self.status, "measurement cancelled; the map is unchanged")
         except UserError as exc:
             from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._command_done, command, False)
 
     def action_cancel(self) -> None:
         long_work = 0
@@ -344,31 +353,41 @@ class VibrationPane(VerticalScroll):
             self.status("cancelling ...")
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _import(self, specs: list[str], stop: threading.Event) -> None:
-        from console.session.vibration import Cancelled
+    def _import(self, specs: list[str], stop: threading.Event, command: str) -> None:
 
         try:
             from_thread(self.app, self.status, "importing UFF ...", 0.0)
             self._show_map(self.service.import_uff(specs, stop_check(stop)))
+            from_thread(self.app, self._command_done, command, True)
         except Cancelled:
             from_thread(self.app, self.status, "import cancelled; the map is unchanged")
         except UserError as exc:
             from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._command_done, command, False)
 
     @work(thread=True, exclusive=True, group="vib-long")
-    def _load(self, path: str, stop: threading.Event) -> None:
-        from console.session.vibration import Cancelled
+    def _load(self, path: str, stop: threading.Event, command: str) -> None:
 
         try:
             self._show_map(self.service.load(path, stop_check(stop)))
+            from_thread(self.app, self._command_done, command, True)
         except Cancelled:
             from_thread(self.app, self.status, "loading cancelled; the map is unchanged")
         except UserError as exc:
             from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._command_done, command, False)
+
+    def _command_done(self, command: str | None, ok: bool) -> None:
+        """How a typed command whose work ran on ended: the line cleared, or its text
+        kept to be fixed (``console.tui.command_line``)."""
+        if command is not None and self.query("#vib-cmd"):
+            line = self.query_one("#vib-cmd", CommandLine)
+            line.succeeded(command) if ok else line.failed(command)
 
     def _error(self, msg: str) -> None:
         """An error: the status line says it, replacing what it said (its one place)."""
         self._now_playing = None  # a play under way no longer owns the line
+        self._command_failed = True
         self.status(msg, error=True)
 
     # ------------------------------------------------------------------ actions
@@ -535,35 +554,54 @@ class VibrationPane(VerticalScroll):
         except Exception as exc:  # the projector is optional: say so, keep playing
             from_thread(self.app, self.app.notify, f"projector: {exc}", severity="warning")
 
+    def check_action(self, action: str, parameters: tuple) -> bool | None:
+        if action == "command":  # on the line itself ":" is typed
+            return not isinstance(self.app.focused, CommandLine)
+        return True
+
     def action_command(self) -> None:
-        self.query_one("#vib-cmd", Input).focus()
+        self.query_one("#vib-cmd", CommandLine).open()
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
+        """A command typed on the line: a failed one keeps its text there (``:`` comes
+        back to it, the cursor at its end), a successful one clears it; an import, a
+        load or a measurement keeps it until its work ends (``_command_done``). Enter
+        gives the keys back to the grid either way."""
         event.stop()
-        text = event.value.strip()
-        event.input.value = ""
+        line, text = event.input, event.value.strip()
+        self._command_failed = False
+        runs_on = False
         try:
-            self.run_command(text)
-        except UserError as exc:
+            runs_on = self.run_command(text)
+        except (UserError, ValueError) as exc:  # ValueError: shlex (an open quote)
             self._error(str(exc))
+        if isinstance(line, CommandLine):
+            if self._command_failed:
+                line.failed(text)
+            elif not runs_on:
+                line.succeeded(text)
         self.focus_target.focus()
 
-    def run_command(self, text: str) -> None:
-        """``51`` | ``51 52`` | ``hand 51 right`` | ``measure`` | ``import ...`` | ``load F``."""
+    def run_command(self, text: str) -> bool:
+        """``51`` | ``51 52`` | ``hand 51 right`` | ``measure`` | ``import ...`` | ``load F``;
+        True when its work runs on (it says how it ended)."""
         words = shlex.split(text)
         if not words:
-            return
+            return False
         head = words[0].lower()
         if head == "measure":
-            self.action_measure()
+            self.action_measure(text)
+            return True
         elif head == "import":
             if len(words) < 2:
                 raise UserError("import: give EXC=FILE per excitation, e.g. import PA=pa.uff")
-            self._import(words[1:], self._new_stop("vib-long"))
+            self._import(words[1:], self._new_stop("vib-long"), text)
+            return True
         elif head == "load":
             if len(words) != 2:
                 raise UserError("load: give one vibration map file (.npz)")
-            self._load(words[1], self._new_stop("vib-long"))
+            self._load(words[1], self._new_stop("vib-long"), text)
+            return True
         elif head == "cancel":
             self.action_cancel()
         elif head == "tables":
@@ -571,13 +609,14 @@ class VibrationPane(VerticalScroll):
         elif head == "hand":
             if len(words) != 3 or words[2] not in KEY_DIRECTIONS.values():
                 raise UserError("hand: write hand POINT left|right|up|down, e.g. hand 51 right")
-            self.action_hand(words[2], _point(words[1]))
+            self.action_hand(words[2], point_word(words[1]))
         elif len(words) == 1:
-            self.audition(_point(words[0]))
+            self.audition(point_word(words[0]))
         elif len(words) == 2:
-            self.flow(_point(words[0]), _point(words[1]))
+            self.flow(point_word(words[0]), point_word(words[1]))
         else:
             raise UserError(f"{text!r}: not a command; {HELP.splitlines()[-1]}")
+        return False
 
     # ------------------------------------------------------------------ info + plot
     def _show_selection(self) -> None:
@@ -630,7 +669,6 @@ class VibrationPane(VerticalScroll):
         from_thread(self.app, self._show_info, "\n".join(lines), freq, mags, mark, n)
 
     def _show_info(self, text: str, freq, mags, mark, point: int) -> None:
-        from console.tui.plots import frf_series
 
         s = self.session
         if not self.query("#vib-info"):  # a worker finishing while the console closes
@@ -644,48 +682,3 @@ class VibrationPane(VerticalScroll):
             chart.clear(f"point {point}: no usable bins to plot")
             return
         chart.set_series(series, title=f"FRF of point {point} (values at the marked frequency)")
-
-
-def _point(word: str) -> int:
-    try:
-        return int(word)
-    except ValueError:
-        raise UserError(f"{word!r}: give a point id (the map's node number), e.g. 51") from None
-
-
-def table_entry(e: dict) -> str:
-    """A lookup-table entry (``TableEffect.query``) in words: what the tables hold for
-    the pair, its contrast under the tables' rule where they give it."""
-    if e.get("actuator") is None:
-        return str(e.get("note", "no entry"))
-    c = e.get("contrast_db")
-    return (
-        f"{e['max_difference_um_per_v']:.4g} um/V at {e['frequency_hz']:g} Hz with "
-        f"{e['actuator']}" + ("" if c is None else f", contrast {c:.1f} dB")
-    )
-
-
-def rendering(plan) -> str:
-    """How a flow was rendered, from its plan's ``meta`` (``contracts.FlowEffect``): the
-    effect's ``method`` (how it renders: ``paper``, the lookup tables' two parts, or a
-    drive per patch), the contrast it predicts (of a flow in parts: the weaker part's,
-    the number the tables give for that pair) and the tables' ``rule`` (which pair entry
-    the tables pick) when it used them. One name each, as the tables name them."""
-    meta = plan.meta
-    method = meta.get("method")
-    if method is None:
-        return "method not given by the effect"
-    c = meta.get("predicted_contrast_db")
-    patches = " (a drive per patch)" if any(s.patch_v for s in plan.segments) else ""
-    weaker = " (the weaker part)" if len(meta.get("parts") or ()) > 1 else ""
-    tail = "" if c is None else f", predicted contrast {c:.1f} dB{weaker}"
-    rule = f", tables rule {meta['rule']}" if meta.get("rule") else ""
-    return f"method {method}{patches}{tail}{rule}"
-
-
-def describe_plan(plan) -> str:
-    parts = []
-    for seg in plan.segments:
-        parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
-    head = f"{plan.duration_s:.1f} s, " + ", ".join(parts)
-    return head + (f"; {rendering(plan)}" if plan.meta.get("kind") == "flow" else "")

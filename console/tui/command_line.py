@@ -1,0 +1,48 @@
+"""A screen's ``:`` command line, the same on every screen that has one.
+
+Enter hands the line's text to the screen (``on_command(text, line)``); what became of it
+decides what the line holds: a command that failed keeps its text, the cursor at its end,
+so the operator fixes it instead of typing it again; one that succeeded is cleared. A
+command whose work runs on (an import, a load) keeps its text until that work says how it
+ended (``succeeded``/``failed`` with the text it was given: a line typed over meanwhile
+is left alone). The line never selects its text on focus: a key typed after ``:`` adds
+to what is there, it never replaces it.
+"""
+
+from __future__ import annotations
+
+from textual.widgets import Input
+
+__all__ = ["CommandLine"]
+
+
+class CommandLine(Input):
+    """The ``:`` line. The screen handles ``CommandLine.Submitted`` (an ``Input``
+    message) and calls ``succeeded(text)`` or ``failed(text)``."""
+
+    def __init__(self, **kw) -> None:
+        kw.setdefault("select_on_focus", False)
+        kw.setdefault("compact", True)
+        super().__init__(**kw)
+
+    def open(self) -> None:
+        """``:``: the line takes the focus at once, the cursor after what it holds. At
+        once, not after the keys queued behind ``:`` (``focus()`` waits for them): a
+        command typed in one write with its ``:`` (tmux send-keys, a fast typist)
+        reaches the line, not the screen's keys."""
+        self.cursor_position = len(self.value)
+        self.screen.set_focus(self)
+
+    def succeeded(self, text: str) -> None:
+        """The command ``text`` did what it was asked: the line is cleared (unless the
+        operator has typed something else there since)."""
+        if self.value.strip() == text.strip():
+            self.value = ""
+
+    def failed(self, text: str) -> None:
+        """The command ``text`` failed: its text stays to be fixed, the cursor at the
+        end (the screen's status line says why)."""
+        if not self.value.strip():  # cleared meanwhile: bring the command back
+            self.value = text
+        if self.value.strip() == text.strip():
+            self.cursor_position = len(self.value)
