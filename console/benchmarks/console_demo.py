@@ -32,6 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
+from console.core.bench_stats import machine_info, summarize_s
+from console.runtime.jitter import finish_probe, start_probe
+from console.runtime.twin_log import bursts, dominant_hz
+
 #: screens the operator looks at while the knob turns, with their keys
 SCREENS = (("scenes", "f6"), ("latency", "f7"), ("camera", "f2"), ("devices", "f1"))
 
@@ -90,8 +94,6 @@ def _log_matches(final: dict, snap: dict, part_s: float) -> dict:
     into bursts at silences, a burst of k parts' length (parts on the same patch follow
     each other without a gap) into k pieces; a part matches a piece at its frequency
     (within 1 Hz)."""
-    from console.runtime.twin_log import bursts, dominant_hz
-
     path = final.get("twin_log")
     if not path:
         return {"checked": 0, "note": "no twin log (real outputs)"}
@@ -142,6 +144,7 @@ def _underruns(before: dict, after: dict) -> dict:
 
 
 async def _scenario(ctx, seconds: float, knob_s: float, flow_s: float) -> dict:
+    # lazy: Textual loads only when the console opens
     from console.tui.app import HapTableApp
 
     app = HapTableApp(ctx, fast=False, initial="devices")
@@ -220,8 +223,6 @@ async def _flow(app, pilot, flow_s: float) -> dict:
     window = _window(snap)
     audio = _underruns(first, _audio(snap))
     final = await _stop(app, pilot, run)
-    from console.core.bench_stats import summarize_s
-
     return {
         "start_s": round(t_start, 3),
         "preparing_at_end": (snap.get("flow") or {}).get("preparing"),
@@ -241,9 +242,6 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
     """Knob from the console, the operator moving between screens, for half of
     ``minutes`` (default 5; quick: 1.5); then the flow with the operator's finger moved
     for the other half."""
-    from console.core.bench_stats import machine_info
-    from console.runtime.jitter import finish_probe, start_probe
-
     if minutes is None:
         minutes = 1.5 if quick else 5.0
     seconds = 21.0  # one latency window (1200 frames at 60 fps) per screen

@@ -33,6 +33,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from console.session.events import Stopped
+
 #: the goals in % of one core: every screen, and the Camera screen
 GOAL_PCT = 3.0
 GOAL_CAMERA_PCT = 20.0
@@ -234,6 +236,7 @@ def _estop_to_bar(tmux: Tmux, times: int) -> dict:
             tmux, lambda s: BAR_ESTOP not in s and "| idle |" in s.replace("outputs ", ""), 10
         )
         time.sleep(0.5)
+    # lazy: bench_stats brings NumPy; this module loads none
     from console.core.bench_stats import summarize_s
 
     return summarize_s(delays)
@@ -271,6 +274,7 @@ def _in_tmux(profile: str | None, tabs: dict, seconds: float) -> dict:
 # ---------------------------------------------------------------------- headless
 async def _headless(ctx, tabs: dict, seconds: float) -> dict:
     """Textual's pilot in this process; CPU from ``time.process_time`` (the process)."""
+    # lazy: Textual loads only when the console opens
     from console.tui.app import HapTableApp
 
     app = HapTableApp(ctx, initial="devices")
@@ -302,10 +306,10 @@ async def _event_to_bar(ctx, times: int) -> dict:
     """The e-stop's session event -> the safety bar drawn with it, in this process
     (Textual's pilot, the bar read every millisecond), ``times`` times; from another
     thread, as `haptable estop` in a shell or a demo's watchdog."""
+    # lazy: Textual and NumPy load only when this bench runs
     import threading
 
     from console.core.bench_stats import summarize_s
-    from console.session.events import Stopped
     from console.tui.app import HapTableApp
     from console.tui.safety_bar import SafetyBar
 
@@ -348,6 +352,7 @@ def _goal(tab: str) -> float:
 def run(ctx, quick: bool) -> dict:
     """Each screen ``seconds`` (10; quick 4) idle: the console's CPU (its process and
     the processes it started for itself, summed)."""
+    # lazy: Textual and NumPy load only when this bench runs
     from console.core.bench_stats import machine_info
     from console.tui.app import panel_tabs
 

@@ -21,6 +21,7 @@ import time
 
 def _child(profile: str | None) -> None:
     times: dict[str, float] = {"main": time.monotonic()}
+    # lazy: the child times these imports
     from console.config.plugins import load_plugins
     from console.runtime.context import Context
 
@@ -29,6 +30,7 @@ def _child(profile: str | None) -> None:
     ctx = Context(profile, plugins)
     _ = ctx.profile
     times["profile"] = time.monotonic()
+    # lazy: the child times Textual's import
     from console.tui.app import HapTableApp
 
     times["textual"] = time.monotonic()
@@ -62,6 +64,7 @@ def startup_once(profile: str | None = None) -> dict[str, float]:
 
 def run(ctx, quick: bool) -> dict:
     """``haptable bench console``: start-up to first paint (target < 1 s)."""
+    # lazy: bench_stats brings NumPy; this module loads none
     from console.core.bench_stats import machine_info, summarize_s
 
     n = 3 if quick else 10

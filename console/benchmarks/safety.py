@@ -35,6 +35,9 @@ import numpy as np
 from console.core.bench_stats import machine_info, summarize_s
 from console.core.errors import SafetyRefusal
 from console.core.types import OutputPlan, Segment
+from console.kernel.client import RemoteStream, open_outputs
+from console.kernel.line_server import request
+from console.kernel.tables import table_key
 from console.safety.audit import Window, received_problems
 from console.signals.waveforms import ramp_envelope, tone
 
@@ -133,8 +136,6 @@ def stream_spec(route, rng: np.random.Generator, fs: int) -> dict[str, Any]:
 def stream_case(out, route, rng: np.random.Generator, estop_s) -> None:
     """A live stream from random parameters, posted to with garbage among good targets,
     then stopped (or e-stopped)."""
-    from console.kernel.client import RemoteStream
-
     fs = out.limits.sample_rate_hz
     spec = stream_spec(route, rng, fs)
     try:
@@ -264,8 +265,6 @@ def _one_case(out, rng: np.random.Generator) -> tuple[str, frozenset[str]]:
 
 def fuzz_cases(ctx, seconds: float, seed: int = 0) -> dict[str, Any]:
     """Random faulty cases on a private fast-forward twin for ``seconds``; each audited."""
-    from console.kernel.client import open_outputs
-
     rng = np.random.default_rng(seed)
     per_kind: dict[str, int] = {}
     problems: list[str] = []
@@ -367,8 +366,6 @@ def _wait(cond, timeout_s: float) -> bool:
 def demo_silence_ms(profile_path: str, trials: int, *, console: bool) -> dict[str, Any]:
     """`haptable estop` -> silence at the twin's DAC while `haptable demo knob` plays
     (with ``console``: beside a console on the Camera screen in tmux, where tmux is)."""
-    from console.kernel.line_server import request
-
     lat, confirm, command, failed = [], [], [], []
     camera_seen = 0  # trials whose console showed the Camera screen's IR view
     use_tmux = console and shutil.which("tmux") is not None
@@ -407,8 +404,6 @@ def demo_silence_ms(profile_path: str, trials: int, *, console: bool) -> dict[st
                     text=True,
                 )
                 procs.append(demo)
-                from console.kernel.tables import table_key
-
                 sock = run / "haptable" / "tables" / table_key(profile_path) / "control.sock"
 
                 def playing(sock=sock) -> bool:

@@ -16,6 +16,7 @@ from console.core.errors import UserError
 from console.core.options import minutes, seconds
 from console.core.suggest import suggestion
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.safety import Limits, check_plan
 
 
 # ---------------------------------------------------------------------- plugins
@@ -114,8 +115,6 @@ def play_and_report(
     ctx, plan, *, fast: bool = False, out: str | None = None, dry_run: bool = False
 ) -> int:
     """Check a plan through the gate, optionally write it, play it, and say what happened."""
-    from console.safety import Limits, check_plan
-
     limits = Limits.from_profile(ctx.profile)
     check_plan(plan, limits)
     if out:
@@ -139,6 +138,7 @@ def play_and_report(
 
 
 def run_play(args, ctx) -> int:
+    # lazy: keeps `haptable` startup light
     from console.signals.stimuli import STIMULI, make_stimulus
 
     if args.list or not args.name:
@@ -167,6 +167,7 @@ def configure_estop(p: argparse.ArgumentParser) -> None:
 def run_estop(args, ctx) -> int:
     """`haptable estop` (``console.kernel.shell``; the ``haptable`` entry point runs it
     before anything heavy is imported: this path serves ``console.cli.main.main``)."""
+    # lazy: keeps `haptable` startup light
     from console.kernel.shell import main as shell_main
 
     argv = ["estop", "--timeout", str(args.timeout)] + (["--json"] if args.json else [])
@@ -179,6 +180,7 @@ def configure_reset(p: argparse.ArgumentParser) -> None:
 
 def run_reset(args, ctx) -> int:
     """`haptable reset`: an operator's, at a terminal (``console.kernel.shell``)."""
+    # lazy: keeps `haptable` startup light
     from console.kernel.shell import main as shell_main
 
     return shell_main((["--profile", ctx.profile_arg] if ctx.profile_arg else []) + ["reset"])
@@ -250,6 +252,7 @@ def _print_nested(d, indent: int = 0) -> None:
 
 # ---------------------------------------------------------------------- console
 def configure_console(p: argparse.ArgumentParser) -> None:
+    # lazy: pluggy loads only when the console is configured
     from console.config.core_sections import IMAGE_MODES
 
     p.add_argument(
@@ -263,6 +266,7 @@ def configure_console(p: argparse.ArgumentParser) -> None:
 
 
 def run_console(args, ctx) -> int:
+    # lazy: Textual loads only when the console opens
     from console.tui.app import run_app
 
     return run_app(ctx, image=getattr(args, "image", None))

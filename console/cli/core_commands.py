@@ -19,6 +19,7 @@ __all__ = [
 
 @hookimpl
 def haptable_register_commands(register):
+    # lazy: SciPy loads only when a command is registered
     from console.cli import commands, signal_commands
 
     commands.register_core(register)
@@ -33,6 +34,7 @@ def haptable_register_commands(register):
 @hookimpl
 def haptable_register_benchmarks(register):
     def console_startup(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.console_startup import run
 
         return run(ctx, quick)
@@ -40,11 +42,13 @@ def haptable_register_benchmarks(register):
     register("console", console_startup, help="console start-up to first paint (target < 1 s)")
 
     def console_demo(ctx, quick: bool, minutes: float | None = None) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.console_demo import run
 
         return run(ctx, quick, minutes=minutes)
 
     def safety(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.safety import run
 
         return run(ctx, quick)
@@ -59,6 +63,7 @@ def haptable_register_benchmarks(register):
     )
 
     def gate_fill(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.gate_fill import run
 
         return run(ctx, quick)
@@ -71,6 +76,7 @@ def haptable_register_benchmarks(register):
     )
 
     def signals(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.signals import run
 
         return run(ctx, quick)
@@ -91,6 +97,7 @@ def haptable_register_benchmarks(register):
     )
 
     def console_idle(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.console_idle import run
 
         return run(ctx, quick)
@@ -103,6 +110,7 @@ def haptable_register_benchmarks(register):
     )
 
     def tracking(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
         from console.benchmarks.tracking import run
 
         return run(ctx, quick)

@@ -26,9 +26,11 @@ def _command(argv: list[str]) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if _command(argv) in ("estop", "reset"):
+        # lazy: the estop path stays standard-library only
         from console.kernel.shell import main as shell_main
 
         return shell_main(argv)
+    # lazy: the estop path stays standard-library only
     from console.cli.main import main as cli_main
 
     return cli_main(argv)

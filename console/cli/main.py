@@ -70,6 +70,7 @@ def _main(argv: list[str]) -> int:
     debug = os.environ.get("HAPTABLE_DEBUG") == "1"
     ctx = None
     try:
+        # lazy: NumPy and plugins load after the arguments are read
         from console.cli import core_commands
         from console.config.plugins import load_plugins
 

@@ -14,6 +14,7 @@ import json
 import sys
 from pathlib import Path
 
+from console.cli.commands import play_and_report
 from console.config.profile import _printable
 from console.config.signal_library import (
     add_signal,
@@ -23,6 +24,7 @@ from console.config.signal_library import (
     remove_signal,
 )
 from console.core.errors import UserError
+from console.safety import Limits
 from console.signals.design import parse_target, render, summarize
 from console.signals.expr import parse
 
@@ -93,8 +95,6 @@ def run(args, ctx) -> int:
     if action == "list":
         return _list(path, args.json)
     if action == "add":
-        from console.safety import Limits
-
         limits = Limits.from_profile(ctx.profile)
         e = add_signal(
             path, args.name, args.expr, args.description, replace=args.replace, limits=limits
@@ -120,7 +120,7 @@ def run(args, ctx) -> int:
             print(f"  dominant {s.dominant_hz:.1f} Hz")
         return 0
     if action == "play":
-        from console.cli.commands import play_and_report
+        # lazy: keeps `haptable` startup light
         from console.session.audition import audition_plan
 
         target = parse_target("screen" if args.screen else args.patch)

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, NoReturn
 
 from console.core.errors import UsageError, UserError
+from console.core.schema import host_problem
+from console.core.suggest import suggestion
 
 if TYPE_CHECKING:
     from console.core.schema import Field
@@ -215,8 +217,6 @@ def from_field(field: Field, *, unit: str = "", note: str = "") -> Number:
 def host_name(text: str) -> str:
     """An argparse ``type=`` for a host to send to: a host name or an IP address by its
     form (``console.core.schema.host_problem``; nothing is looked up here)."""
-    from console.core.schema import host_problem
-
     why = host_problem(text)
     if why:
         raise BadValue(text, why.removeprefix("empty: ").removeprefix("is "))
@@ -261,8 +261,6 @@ class Parser(argparse.ArgumentParser):
         choices = action.choices
         if choices is None or value in choices:
             return
-        from console.core.suggest import suggestion
-
         hint = suggestion(str(value), [str(c) for c in choices], "; did you mean {!r}?")
         listed = ", ".join(map(repr, choices))
         raise argparse.ArgumentError(

@@ -44,6 +44,7 @@ def find_profile(name_or_path: str | os.PathLike | None) -> Path:
         cand = d / f"{raw}.toml"
         if cand.is_file():
             return cand.resolve()
+    # lazy: the estop path stays standard-library only
     from console.core.suggest import suggestion
 
     known = sorted(known_profiles())

@@ -49,6 +49,7 @@ import numpy as np
 
 from console.core.errors import UserError
 from console.core.types import EXCITATIONS
+from console.files.npz_safe import read_json_text, read_npz
 
 FORMAT = "haptable-vibration-map"
 VERSION = 1
@@ -275,8 +276,6 @@ def load_map(
     path: str | os.PathLike, *, require_all: bool = True, grid_points: int | None = None
 ) -> VibrationMap:
     """Read and validate a map written by ``save_map`` (bounded: ``console.files.npz_safe``)."""
-    from console.files.npz_safe import read_npz
-
     data = read_npz(path, what="vibration map", fix=FIX)
     if "max_diff_um_per_v" in data:
         raise UserError(
@@ -315,8 +314,6 @@ def _grid_numbers(where: str, key: str, a: np.ndarray) -> np.ndarray:
 
 def _meta(where: str, raw: np.ndarray, key: str) -> dict[str, Any]:
     """The checked ``meta_json`` object: format, version, units (and provenance)."""
-    from console.files.npz_safe import read_json_text
-
     meta = read_json_text(raw, where=where, key=key, fix=FIX)
     if not isinstance(meta, dict):
         raise UserError(f"{where}: {key} must be a JSON object, not {type(meta).__name__}; {FIX}")

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from console.core.contracts import ParametricStream
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.kernel import wire
 from console.kernel.scheduler import PlayReport
@@ -493,8 +494,6 @@ class Outputs:
     def stream(self, source: Any, name: str = "stream") -> PlayReport:
         """Play a live stream: its ``spec`` goes to the kernel, which synthesises it; the
         source is bound to the kernel's side (``bind``) so its posts steer it there."""
-        from console.core.contracts import ParametricStream
-
         if not isinstance(source, ParametricStream):
             raise SafetyRefusal(
                 f"{name}: a live stream is described by its parameters (a "

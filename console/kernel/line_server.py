@@ -27,6 +27,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from console.core.errors import UserError
+
 log = logging.getLogger("haptable.line_server")
 
 #: longest command line a server reads (bytes, without the newline)
@@ -132,8 +134,6 @@ class LineServer:
         self.dropped = 0  # connections dropped (deadline, bound, peer, crowd)
         self.priority = priority  # its threads' real-time priority (console.core.realtime)
         if len(os.fsencode(self.path)) > MAX_SOCKET_PATH:
-            from console.core.errors import UserError
-
             raise UserError(
                 f"{self.path}: socket path too long for the system; set XDG_RUNTIME_DIR "
                 f"to a shorter directory"
@@ -162,6 +162,7 @@ class LineServer:
     # ------------------------------------------------------------------ the loop
     def _realtime(self) -> None:
         if self.priority is not None:
+            # lazy: the estop path stays standard-library only
             from console.core.realtime import realtime_priority
 
             realtime_priority(self.priority)

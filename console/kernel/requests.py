@@ -122,6 +122,7 @@ def cancel(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 
 def stream(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """A live stream from its parameters: checked against the limits, synthesised here."""
+    # lazy: keeps NumPy out of this module's import
     from console.signals.stream_synth import StreamSpec
 
     spec = StreamSpec.from_json(h.get("spec"))
@@ -186,6 +187,7 @@ def events(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 
 def recording(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """What the twin's amplifiers got, in sound-card units (float32: half the bytes)."""
+    # lazy: keeps NumPy out of this module's import
     from console.core.contracts import SimulatedAudio
 
     if not isinstance(k.audio, SimulatedAudio):
@@ -282,6 +284,7 @@ def _patches(v: Any) -> frozenset[str]:
 def _plan_from(h: dict[str, Any], arrays: list) -> Any:
     """The ``OutputPlan`` a ``plan`` request describes (its arrays in order: each
     segment's piezo, screen, then its own patch drives)."""
+    # lazy: keeps NumPy out of this module's import
     from console.core.types import OutputPlan, Segment
 
     segs_in = h.get("segments")

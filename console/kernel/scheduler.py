@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from console.core.errors import SafetyRefusal
+from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 from console.core.types import OutputPlan, Segment
 from console.safety import Limits, SafetyGate, Source, check_plan
 from console.signals.stream_synth import StreamSpec, StreamSynth, declared_peak_v, spec_problem
@@ -607,8 +608,6 @@ class Scheduler(Source):
         job.report.finish(error)
 
     def _relay_worker(self) -> None:
-        from console.core.realtime import KERNEL_PRIORITY, realtime_priority
-
         realtime_priority(KERNEL_PRIORITY)  # part of the output path, as the audio thread
         while True:
             item = self._switch_q.get()

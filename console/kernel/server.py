@@ -128,6 +128,7 @@ class Kernel:
     def start(self) -> None:
         """Control socket, latch, relays, audio, then the clients' socket (the order
         ``console.kernel.tables`` relies on)."""
+        # lazy: keeps NumPy out of this module's import
         from console.kernel.table import TableOutputs
 
         t = self.table
@@ -554,6 +555,7 @@ def main() -> int:
     sys.stdout = sys.stderr
     logging.basicConfig(level=logging.WARNING, format="haptable kernel: %(name)s: %(message)s")
     table = table_at(request["table_dir"])
+    # lazy: plugins load on first use
     from console.config.plugins import import_extra, load_plugins
 
     try:
@@ -571,6 +573,7 @@ def main() -> int:
     def on_signal(signum: int, frame: Any) -> None:  # a deliberate stop: silent, not latched
         kernel._quit.set()
 
+    # lazy: keeps NumPy out of this module's import
     from console.safety import install_emergency_hooks
 
     install_emergency_hooks()  # an unhandled exception in any thread e-stops (and latches)

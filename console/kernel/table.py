@@ -24,6 +24,7 @@ import numpy as np
 
 from console.core.contracts import SimulatedAudio, SimulatedRelays
 from console.core.errors import SafetyRefusal, UserError
+from console.kernel.memory_lock import lock_memory, unlock_memory
 from console.kernel.scheduler import CheckedPlan, PlayReport, Scheduler
 from console.safety import Limits, SafetyGate
 
@@ -154,8 +155,6 @@ class TableOutputs:
         )
         self.memory_locked, self.memory_note = False, "real-time memory lock not asked for"
         if profile.get("audio.lock_memory") and self.paced:
-            from console.kernel.memory_lock import lock_memory
-
             self.memory_locked, self.memory_note = lock_memory()
             if not self.memory_locked:
                 log.warning("%s", self.memory_note)
@@ -256,8 +255,6 @@ class TableOutputs:
                 except Exception:
                     log.exception("relay board close failed")
                 if self.memory_locked:
-                    from console.kernel.memory_lock import unlock_memory
-
                     unlock_memory()
 
     def __enter__(self) -> TableOutputs:

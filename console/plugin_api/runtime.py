@@ -143,31 +143,31 @@ __all__ = [
 def _source(source: str) -> ModuleType:
     """The module behind a short source name, imported now (first use)."""
     if source == "loop":
-        from console.runtime import loop as module
+        from console.runtime import loop as module  # lazy: loads on first use
     elif source == "stages":
-        from console.runtime import stages as module
+        from console.runtime import stages as module  # lazy: loads on first use
     elif source == "watchdog":
-        from console.runtime import watchdog as module
+        from console.runtime import watchdog as module  # lazy: loads on first use
     elif source == "latency":
-        from console.runtime import latency as module
+        from console.runtime import latency as module  # lazy: loads on first use
     elif source == "jitter":
-        from console.runtime import jitter as module
+        from console.runtime import jitter as module  # lazy: loads on first use
     elif source == "tracking":
-        from console.runtime import tracking as module
+        from console.runtime import tracking as module  # lazy: loads on first use
     elif source == "measured_map":
-        from console.runtime import measured_map as module
+        from console.runtime import measured_map as module  # lazy: loads on first use
     elif source == "protocol":
-        from console.runtime.projector import protocol as module
+        from console.runtime.projector import protocol as module  # lazy: loads on first use
     elif source == "service":
-        from console.runtime.projector import service as module
+        from console.runtime.projector import service as module  # lazy: loads on first use
     elif source == "supervisor":
-        from console.runtime.projector import supervisor as module
+        from console.runtime.projector import supervisor as module  # lazy: loads on first use
     elif source == "client":
-        from console.kernel import client as module
+        from console.kernel import client as module  # lazy: loads on first use
     elif source == "private_dir":
-        from console.kernel import private_dir as module
+        from console.kernel import private_dir as module  # lazy: loads on first use
     elif source == "events":
-        from console.session import events as module
+        from console.session import events as module  # lazy: loads on first use
     else:  # pragma: no cover - _NAMES and this list are kept together
         raise KeyError(source)
     return module

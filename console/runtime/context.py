@@ -25,6 +25,7 @@ class Context:
 
     @cached_property
     def profile(self):
+        # lazy: plugins load on first use
         from console.config.profile import load_profile
 
         return load_profile(self.profile_arg, self.pm)
@@ -38,6 +39,7 @@ class Context:
         e-stop from elsewhere (`haptable estop`, the console) ends the command: whatever
         it was doing is interrupted and ``EStopped`` leaves (exit status 4). With
         ``$HAPTABLE_TWIN_LOG`` set, the twin's log is written there on leaving."""
+        # lazy: keeps `haptable` startup light
         import os
 
         from console.kernel.client import open_outputs

@@ -31,7 +31,11 @@ from typing import Any
 import numpy as np
 
 from console.core.contracts import TouchableCamera
+from console.core.errors import UserError
 from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
+from console.kernel.client import open_outputs
+from console.kernel.tables import table_at
+from console.runtime.twin_log import copy_twin_log, write_twin_log
 
 #: status lines per second
 STATUS_HZ = 5.0
@@ -160,9 +164,8 @@ class Host:
         return snap
 
     def serve(self) -> int:
+        # lazy: plugins load on first use
         from console.config.plugins import load_plugins
-        from console.kernel.client import open_outputs
-        from console.kernel.tables import table_at
 
         req = self.request
         profile, name = req["profile"], req["demo"]
@@ -230,9 +233,6 @@ class Host:
     def write_logs(self) -> dict:
         """The twin's recording and relay log (``console.runtime.twin_log``) where the
         console asked, and beside ``$HAPTABLE_TWIN_LOG`` when that is set."""
-        from console.core.errors import UserError
-        from console.runtime.twin_log import copy_twin_log, write_twin_log
-
         paths = []
         if self.request.get("twin_log"):
             paths.append(Path(self.request["twin_log"]))
@@ -288,8 +288,6 @@ def main() -> int:
         daemon=True,
     )
     commands.start()
-    from console.core.errors import UserError
-
     try:
         return host.serve()
     except UserError as exc:

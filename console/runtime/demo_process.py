@@ -251,6 +251,7 @@ class DemoProcess:
         ``status_lines`` (``console.core.contracts.DemoFactory``), here in the console's
         process (the run's last snapshot stays readable after the process ended)."""
         if self._plugins is None:
+            # lazy: plugins load on first use
             from console.config.plugins import load_plugins
 
             self._plugins = load_plugins()

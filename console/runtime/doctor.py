@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from console.core.realtime import HOW_TO_ALLOW, may_use_realtime
 from console.core.types import DeviceStatus
 
 DEVICE_KINDS = (
@@ -52,6 +53,7 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
 
 def realtime_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread can keep its memory in RAM (``[audio] lock_memory``)."""
+    # lazy: keeps `haptable` startup light
     from console.kernel.memory_lock import HOW_TO_ALLOW, _may_lock
 
     if not profile.get("audio.lock_memory"):
@@ -72,8 +74,6 @@ def realtime_status(profile, plugins) -> DeviceStatus:
 
 def scheduling_status(profile, plugins) -> DeviceStatus:
     """Whether the audio thread and a demo's frame loop can run with real-time priority."""
-    from console.core.realtime import HOW_TO_ALLOW, may_use_realtime
-
     if may_use_realtime():
         return DeviceStatus("realtime", "scheduling", "ok", "real-time (FIFO) priority allowed")
     twin = plugins.simulated("audio_output", profile)

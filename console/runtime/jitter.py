@@ -21,14 +21,14 @@ import sys
 import threading
 import time
 
+from console.kernel.memory_lock import lock_memory
+
 
 def probe(
     seconds: float, period_s: float, slack_s: float, stop: threading.Event | None = None
 ) -> dict:
     """Wake every ``period_s`` for ``seconds`` (or until ``stop``) on a real-time thread;
     lateness stats."""
-    from console.kernel.memory_lock import lock_memory
-
     locked, _ = lock_memory()
     late: list[float] = []
     rt: list[bool] = []

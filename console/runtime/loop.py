@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 from console.core.contracts import Camera
+from console.core.realtime import FRAMES_PRIORITY, realtime_priority
 from console.core.types import Frame
 from console.runtime.latency import ARRIVAL, DEQUEUED, LatencyMonitor
 
@@ -165,8 +166,6 @@ class FrameLoop:
     # ------------------------------------------------------------------ threads
     def _want_realtime(self) -> None:
         if self.realtime:
-            from console.core.realtime import FRAMES_PRIORITY, realtime_priority
-
             self.realtime_granted = realtime_priority(FRAMES_PRIORITY)
 
     def _camera_run(self) -> None:

@@ -27,7 +27,9 @@ from pathlib import Path
 from typing import Any
 
 from console.core.errors import UserError
-from console.files import cache_files
+from console.files import cache_files, paths
+from console.files.vibration_map import FIX as MAP_FIX
+from console.files.vibration_map import load_map, make_map, save_map
 
 Progress = Callable[[float, str], None]
 
@@ -47,8 +49,6 @@ class Cancelled(Exception):
 def cache_dir() -> Path:
     """Where measured maps are kept: ``console`` in HapTable's one cache directory
     (``console.files.paths.cache_dir``, ``$HAPTABLE_CACHE_DIR``); nothing else keeps them."""
-    from console.files import paths
-
     return paths.cache_dir("console")
 
 
@@ -67,9 +67,6 @@ def measured_map_path(profile: Any) -> Path:
 
 def _read_kept(path: Path, key: str) -> Any:
     """The kept map at ``path`` when it is the one of ``key``, whole; ``UserError`` else."""
-    from console.files.vibration_map import FIX as MAP_FIX
-    from console.files.vibration_map import load_map
-
     try:
         vmap = load_map(path)
     except UserError as exc:
@@ -90,8 +87,6 @@ def _read_kept(path: Path, key: str) -> Any:
 
 
 def _keep(path: Path, vmap: Any) -> None:
-    from console.files.vibration_map import save_map
-
     try:
         with cache_files.atomic_target(path) as tmp:
             save_map(tmp, vmap)
@@ -178,8 +173,6 @@ def measured_map(
 def measure_map(profile: Any, plugins: Any, progress: Progress, cancelled: Callable[[], bool]):
     """Measure the grid (all five excitations) with the registered vibrometer and return
     the ``VibrationMap`` (not cached); ``Cancelled`` when ``cancelled()`` turns true."""
-    from console.files.vibration_map import make_map
-
     regs = plugins.of("vibrometer")
     if not regs:
         raise UserError(

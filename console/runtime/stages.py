@@ -21,6 +21,8 @@ import numpy as np
 from console.core.contracts import Classifier, RendersBackground
 from console.core.errors import UserError
 from console.core.types import Frame, Hand
+from console.runtime.latency import LatencyMonitor
+from console.runtime.loop import FrameLoop
 
 
 def corners_homography(
@@ -75,6 +77,7 @@ class VisionStage:
     frame's ``TrackFrame``; ``contacts`` (and each hand's) carry their track ids."""
 
     def __init__(self, classifier: Any) -> None:
+        # lazy: SciPy loads only when tracking runs
         from console.runtime.tracking import Tracking
 
         self.clf = classifier
@@ -121,9 +124,6 @@ def base_stages(classifier: Any, gestures: Callable[[Frame, dict], Any] | None =
 
 def vision_loop(profile: Any, plugins: Any, camera: Any, *, sinks=(), extra_stages=()):
     """A ``FrameLoop``: camera -> vision -> classify (+ extra stages) -> sinks."""
-    from console.runtime.latency import LatencyMonitor
-    from console.runtime.loop import FrameLoop
-
     clf = open_classifier(profile, plugins)
     learn_background(camera, clf)
     stages = [*base_stages(clf), *extra_stages]

@@ -16,6 +16,8 @@ import time
 from collections.abc import Callable
 from typing import Protocol
 
+from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
+
 log = logging.getLogger("haptable.watchdog")
 
 
@@ -92,8 +94,6 @@ class Watchdog:
 
     def _run(self) -> None:
         if self.realtime:
-            from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
-
             realtime_priority(SUPPORT_PRIORITY)
         while not self._stop.wait(self.period_s):
             self.check(time.monotonic())

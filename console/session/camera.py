@@ -24,7 +24,17 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from console.core.contracts import AdjustableCamera, SwitchableSink, TunablesInProfile
+from console.core.errors import UserError
 from console.core.types import TunableRange
+from console.runtime.latency import LatencyMonitor
+from console.runtime.loop import FrameLoop
+from console.runtime.stages import (
+    base_stages,
+    learn_background,
+    open_camera,
+    open_classifier,
+)
 from console.session.events import SessionEvent, Started, Stopped
 
 
@@ -99,8 +109,6 @@ class CameraService:
         with the first viewer and stops when the last one leaves. Blocking (opening the
         camera, or joining its loop): call in a worker. A failure to open is kept in
         ``error``."""
-        from console.core.errors import UserError
-
         with self._lock:
             if on:
                 self._viewers[id(viewer)] = None if fps is None else float(fps)
@@ -153,15 +161,6 @@ class CameraService:
             self._start_locked()
 
     def _start_locked(self) -> None:
-        from console.runtime.latency import LatencyMonitor
-        from console.runtime.loop import FrameLoop
-        from console.runtime.stages import (
-            base_stages,
-            learn_background,
-            open_camera,
-            open_classifier,
-        )
-
         if self.running or self.borrower is not None:
             return
         self._open(open_camera, open_classifier, learn_background)
@@ -254,8 +253,6 @@ class CameraService:
 
     def _adjustable(self):
         """The camera when its driver takes exposure, gain ... (``AdjustableCamera``)."""
-        from console.core.contracts import AdjustableCamera
-
         cam = self.camera
         return cam if isinstance(cam, AdjustableCamera) else None
 
@@ -291,9 +288,8 @@ class CameraService:
         """Keep the tuned thresholds for the next start: written to the profile's override
         file in the user's config directory (``console.config.profile.save_overrides``) under the
         keys the classifier names (``TunablesInProfile``); returns the file."""
+        # lazy: pluggy loads only when tunables are saved
         from console.config.profile import save_overrides
-        from console.core.contracts import TunablesInProfile
-        from console.core.errors import UserError
 
         clf = self.classifier
         if clf is None:
@@ -316,8 +312,6 @@ class CameraService:
     def switches(self) -> dict[str, Any]:
         """The frame sinks the console can switch (``contracts.SwitchableSink``, e.g. the
         TUIO sender), by name."""
-        from console.core.contracts import SwitchableSink
-
         return {
             name: reg.factory
             for name, reg in self.plugins.of("frame_sink").items()
@@ -334,8 +328,8 @@ class CameraService:
         """Switch sink ``name`` on or off (and point it at ``target`` "host:port"), saved
         to the profile's overrides file (the next start has it); a running loop feeds it
         from the next frame. Returns the file. Bad ``target``: a ``UserError``."""
+        # lazy: pluggy loads only when tunables are saved
         from console.config.profile import load_profile, save_overrides
-        from console.core.errors import UserError
 
         factory = self.switches().get(name)
         if factory is None:

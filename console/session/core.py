@@ -16,6 +16,9 @@ from collections.abc import Callable
 from typing import Any
 
 from console.core.errors import SafetyRefusal, UserError
+from console.kernel.shell import estop as shell_estop
+from console.runtime.control import ControlServer
+from console.session.demos import DemoControl
 from console.session.events import (
     ESTOP_FIX,
     ESTOP_REFUSAL,
@@ -25,6 +28,7 @@ from console.session.events import (
     Started,
     Stopped,
 )
+from console.session.scenes import SceneControl
 
 Subscriber = Callable[[SessionEvent], None]
 
@@ -67,9 +71,6 @@ class ConsoleSession:
         self._camera: Any = None
         self._calibration: Any = None
         self._vibration: Any = None
-        from console.session.demos import DemoControl
-        from console.session.scenes import SceneControl
-
         self.demos = DemoControl(self)
         self.scenes = SceneControl(self)
 
@@ -95,6 +96,7 @@ class ConsoleSession:
                 if self.camera_factory is not None:
                     self._camera = self.camera_factory(self.profile, self.plugins)
                 else:
+                    # lazy: keeps NumPy out of this module's import
                     from console.session.camera import CameraService
 
                     self._camera = CameraService(self.profile, self.plugins, self.emit)
@@ -105,6 +107,7 @@ class ConsoleSession:
         """The touch-calibration wizard (``console.session.calibration``) on the camera."""
         with self._lock:
             if self._calibration is None:
+                # lazy: keeps NumPy out of this module's import
                 from console.session.calibration import TouchCalibration
 
                 self._calibration = TouchCalibration(self, projector=lambda: self.projector)
@@ -125,6 +128,7 @@ class ConsoleSession:
         """The console's vibration map and its effects (``console.session.vibration``)."""
         with self._lock:
             if self._vibration is None:
+                # lazy: keeps NumPy out of this module's import
                 from console.session.vibration import VibrationService
 
                 self._vibration = VibrationService(self)
@@ -149,8 +153,8 @@ class ConsoleSession:
         a latched e-stop if there is one (the safety bar shows it; ctrl+r resets it).
         Blocking. The first call also takes the console's control socket and lock: a
         second console of the same profile opens no outputs."""
+        # lazy: keeps NumPy out of this module's import
         from console.kernel.client import Outputs
-        from console.runtime.control import ControlServer
 
         if self.closed:
             return False
@@ -388,6 +392,7 @@ class ConsoleSession:
         ``target`` (a ``Target``: patches or the screen) through the gate, checked against
         the limits first (``console.session.audition``). A refusal is a ``Failed`` event
         (topic ``signals``); returns True when it played (or queued)."""
+        # lazy: NumPy and SciPy load only when a signal is auditioned
         from console.session.audition import audition_plan
 
         try:
@@ -405,8 +410,6 @@ class ConsoleSession:
         if out is not None and not out.lost:
             out.estop(reason)
         else:
-            from console.kernel.shell import estop as shell_estop
-
             with contextlib.suppress(Exception):
                 shell_estop(str(self.profile.path), 2.0)
         if self.demos.run is not None:
@@ -453,6 +456,7 @@ class ConsoleSession:
         path = os.environ.get("HAPTABLE_TWIN_LOG")
         out.close(keep_record=bool(path))
         if path:
+            # lazy: keeps NumPy out of this module's import
             from console.runtime.twin_log import write_twin_log
 
             with contextlib.suppress(Exception):  # never block the shutdown

@@ -21,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from console.core.errors import UserError
+from console.kernel.private_dir import runtime_dir
+from console.runtime.demo_process import DemoCancelled, DemoProcess
 from console.session.events import Progress, Snapshot, Started, Stopped
 
 
@@ -28,8 +30,6 @@ def twin_log_path(name: str) -> Path:
     """Where a demo process writes what the twin's outputs received (``.json`` bursts and
     relay switches, ``.npz`` samples: ``console.runtime.twin_log``): the private runtime
     directory; the next run of the same demo overwrites it."""
-    from console.kernel.private_dir import runtime_dir
-
     return runtime_dir() / f"demo-{os.getpid()}-{name}.json"
 
 
@@ -105,8 +105,6 @@ class DemoControl:
         """Start demo ``name`` and wait until it runs (blocking); returns its process.
         A refusal or failure raises (``UserError``, ``DemoCancelled``) after outputs and
         camera were taken back, and is reported as ``Stopped``."""
-        from console.runtime.demo_process import DemoCancelled, DemoProcess
-
         s = self.session
         with self._lock:
             self.check_start(name)

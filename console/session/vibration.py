@@ -31,6 +31,8 @@ from console.core import contracts
 from console.core.errors import UserError
 from console.core.types import DIRECTIONS
 from console.core.words import AT_CLI, AT_CONSOLE, Placed
+from console.files.vibration_map import load_map as _load
+from console.files.vibration_map import save_map as _save
 from console.runtime.measured_map import (
     Cancelled,
     kept_measured_map,
@@ -173,8 +175,6 @@ class VibrationSession:
 
 
 def save_map(path: Path, vmap) -> Path:
-    from console.files.vibration_map import save_map as _save
-
     return _save(path, vmap)
 
 
@@ -182,8 +182,6 @@ def load_map(path: Path, profile=None):
     """A vibration map file (any subset of excitations); its point ids are the
     measurement's node numbers (any positive number); bad files are a one-line
     ``UserError``. ``profile`` is accepted for the callers' symmetry."""
-    from console.files.vibration_map import load_map as _load
-
     return _load(Path(path).expanduser(), require_all=False)
 
 

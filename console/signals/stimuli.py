@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.suggest import suggestion
 from console.core.types import PATCHES, OutputPlan, Segment, patches_of
 from console.signals.waveforms import MAX_PLAN_S, check_duration, linear_chirp, tone
 
@@ -69,8 +70,6 @@ def make_stimulus(name: str, fs: int, max_s: float = MAX_PLAN_S) -> OutputPlan:
     """The named stimulus at ``fs``, refused before it is built when longer than
     ``max_s`` (the profile's ``[limits] max_plan_s``)."""
     if name not in STIMULI:
-        from console.core.suggest import suggestion
-
         hint = suggestion(name, STIMULI, "did you mean {!r}? ")
         raise UserError(f"no test stimulus {name!r}; {hint}available: {', '.join(STIMULI)}")
     check_duration(DURATION_S[name], max_s, f"play {name}")

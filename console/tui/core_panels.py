@@ -14,42 +14,49 @@ from console.core.hookspecs import hookimpl
 
 
 def _devices(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.devices import DevicesPane
 
     return DevicesPane()
 
 
 def _camera(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.camera import CameraPane
 
     return CameraPane()
 
 
 def _vibration(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.vibration import VibrationPane
 
     return VibrationPane()
 
 
 def _relays(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.relays import RelaysPane
 
     return RelaysPane()
 
 
 def _latency(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.latency import LatencyPane
 
     return LatencyPane()
 
 
 def _scope(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.scope import ScopePane
 
     return ScopePane()
 
 
 def _signals(app: Any) -> Any:
+    # lazy: Textual loads only when the console opens
     from console.tui.panes.signals import SignalsPane
 
     return SignalsPane()

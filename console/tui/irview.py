@@ -32,6 +32,7 @@ from collections.abc import Callable
 import numpy as np
 
 from console.config.core_sections import IMAGE_MODES  # [console] image, haptable console --image
+from console.core.errors import UserError
 
 __all__ = [
     "IMAGE_MODES",
@@ -95,8 +96,6 @@ def choose_image_mode(setting: str, ask: Callable[[], str | None] = probe) -> st
     the keys; half-block where it cannot load); ``auto``: what ``ask`` finds, else
     ``halfblock``."""
     if setting not in IMAGE_MODES:
-        from console.core.errors import UserError
-
         raise UserError(f"image = {setting!r}: expected one of {', '.join(map(repr, IMAGE_MODES))}")
     if setting == "halfblock":
         return "halfblock"
@@ -166,6 +165,7 @@ def ir_rgb(
     pw, ph = size_px
     grey = cv2.resize(np.asarray(image, np.float32), (pw, ph), interpolation=cv2.INTER_AREA)
     if levels is not None:
+        # lazy: Textual loads only when the console opens
         from console.tui.halfblock_view import stretch_grey
 
         grey = stretch_grey(grey, *levels)

@@ -13,11 +13,12 @@ import asyncio
 from pathlib import Path
 
 from console.core.options import seconds
+from console.runtime.context import Context
 
 
 async def _shoot(args) -> Path:
+    # lazy: Textual and plugins load only when a screenshot is taken
     from console.config.plugins import load_plugins
-    from console.runtime.context import Context
     from console.tui.app import HapTableApp
 
     app = HapTableApp(Context(args.profile, load_plugins()), fast=True, initial=args.tab)

@@ -52,7 +52,9 @@ class KnobDemo:
         #: crossing id -> when it was posted to the stream (monotonic s; bounded)
         self._posted: dict[int, float] = {}
 
-    def start(self, progress=None) -> None:
+    def start(self, progress=None, *, wait: bool = False) -> None:
+        """Open the knob's stream (its detents are synthesised in the kernel: nothing to
+        prepare, so ``wait`` and ``progress`` change nothing)."""
         if self.scene is not None:
             self.link.emit({"type": "trial", "sectors": int(self.sectors), "distance_deg": 270.0})
         self.report = self.outputs.stream(self.session.stream, name=f"knob {self.condition}")

@@ -342,10 +342,7 @@ def start_demo(
         )
         limit_ms = watchdog_ms or float(rt.get("watchdog_ms", 250))
         wd = Watchdog(loop, outputs.estop, limit_ms / 1e3, realtime=loop.realtime)
-        if name == "flow":
-            demo.start(progress, wait=prepare_first)
-        else:
-            demo.start(progress)
+        demo.start(progress, wait=prepare_first)
         loop.start()
         wd.start()
     except BaseException:

@@ -16,7 +16,7 @@ import numpy as np
 
 from console.plugin_api import machine_info, make_map, summarize_s
 from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map, default_freq_hz
-from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.thresholds import Perception
 
 BANDS = ((5, 150), (150, 300), (300, 450), (450, 625))
 METHODS = ("bilinear", "keys", "spline", "spline5", "modal")

@@ -28,8 +28,8 @@ import numpy as np
 
 from console.plugin_api import DIRECTIONS, UserError, VibrationMap
 from plugins.vibrotactile.interp import interpolate_lattice
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
+from plugins.vibrotactile.thresholds import Perception
 
 
 def side_masks(direction: str, squares: int = 3) -> tuple[np.ndarray, np.ndarray]:

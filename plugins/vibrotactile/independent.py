@@ -35,8 +35,8 @@ import numpy as np
 from console.plugin_api import UserError, VibrationMap
 from plugins.vibrotactile.hand import side_masks
 from plugins.vibrotactile.interp import interpolate_lattice
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
+from plugins.vibrotactile.thresholds import Perception
 
 PATCHES: tuple[str, ...] = ("PA", "PB", "PC", "PD")
 METHODS: tuple[str, ...] = ("independent", "time_reversal")

@@ -34,8 +34,8 @@ from plugins.vibrotactile.independent import (
     solve_pairs,
 )
 from plugins.vibrotactile.interp import interpolate
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.tables import usable_bins
+from plugins.vibrotactile.thresholds import Perception
 
 #: [audio] channels of the paper's bus (the default)
 BUS = ("piezo", "screen")

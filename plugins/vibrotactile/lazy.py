@@ -14,9 +14,9 @@ from collections.abc import Callable, Iterable
 from console.plugin_api import VibrationMap
 from plugins.vibrotactile.cache import cached, cached_entry
 from plugins.vibrotactile.hand import hand_flow
-from plugins.vibrotactile.perception import Perception
-from plugins.vibrotactile.perceptual import PerceptualRule
+from plugins.vibrotactile.perceptual_rule import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables, query_points, validate_tables
+from plugins.vibrotactile.thresholds import Perception
 
 CacheDir = str | os.PathLike | None
 

@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from console.plugin_api import Limits, UserError
-from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.thresholds import Perception
 
 RULES = ("perceptual", "paper")
 

@@ -20,7 +20,7 @@ from typing import Any
 from console.plugin_api import VibrationMap, grid_points_mm
 from plugins.vibrotactile.flow_effect import FlowEffect
 from plugins.vibrotactile.lazy import tables_cached
-from plugins.vibrotactile.perceptual import PerceptualRule
+from plugins.vibrotactile.perceptual_rule import PerceptualRule
 from plugins.vibrotactile.tables import Tables, build_tables
 from plugins.vibrotactile.uff_import import import_uff
 

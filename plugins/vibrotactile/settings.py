@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from console.plugin_api import Field, Limits, UserError
-from plugins.vibrotactile.perception import (
+from plugins.vibrotactile.thresholds import (
     DEFAULT_FREQ_HZ,
     DEFAULT_THRESHOLD_DB,
     DEFAULT_WEBER_FRACTION,
@@ -260,7 +260,7 @@ def setup_from_profile(profile: Any) -> Setup:
     """Settings, perception, piezo range, band, ranking, cache and hand geometry."""
     # lazy: this module loads at every haptable start; cache, perceptual, stimuli only when used
     from plugins.vibrotactile.cache import default_cache_dir
-    from plugins.vibrotactile.perceptual import rule_from_profile
+    from plugins.vibrotactile.perceptual_rule import rule_from_profile
     from plugins.vibrotactile.stimuli import StimulusSettings
 
     vt = profile.section("vibrotactile")

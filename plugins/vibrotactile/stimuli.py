@@ -29,9 +29,9 @@ from console.plugin_api import (
     plan_samples,
 )
 from plugins.vibrotactile.interp import interpolate
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.ringdown import ringdown_gap_s
 from plugins.vibrotactile.tables import Tables, query_indices, query_points, usable_bins
+from plugins.vibrotactile.thresholds import Perception
 
 Point = int | tuple[float, float]  # map point index, or (x, y) mm
 

@@ -11,7 +11,7 @@ candidate instead (the flow's ``contrast_db`` says how far it falls short).
 
 Two rules choose the entry (``Tables.rule``, stored in the tables file's ``rule`` key;
 files without it are the paper's): ``paper`` as above, and ``perceptual``
-(``plugins.vibrotactile.perceptual``: the candidate whose flow part the finger tells
+(``plugins.vibrotactile.perceptual_rule``: the candidate whose flow part the finger tells
 apart best, in JND above the ``[perception]`` threshold at the drive the amplifier can
 deliver), the default for new tables.
 
@@ -38,8 +38,8 @@ from console.plugin_api import (
     save_map,
 )
 from plugins.vibrotactile.interp import interpolate
-from plugins.vibrotactile.perceptual import PerceptualRule, felt_db
-from plugins.vibrotactile.perceptual import pair_best as perceptual_pair_best
+from plugins.vibrotactile.perceptual_rule import PerceptualRule, felt_db
+from plugins.vibrotactile.perceptual_rule import pair_best as perceptual_pair_best
 
 Progress = Callable[[float, str], None]  # (fraction 0..1, message)
 

@@ -53,7 +53,7 @@ def test_knob_rotation_drives_the_knob_with_the_condition_on_the_screen(
     profile, plugins, outputs_rt
 ):
     from plugins.demos.run import start_demo
-    from plugins.twin.camera import SequenceScript
+    from plugins.twin.camera.camera import SequenceScript
 
     out = outputs_rt
     run = start_demo(
@@ -158,7 +158,7 @@ def test_a_resting_hand_gets_the_flow_for_its_position_and_direction(
 ):
     from console.kernel.client import open_outputs
     from plugins.demos.run import start_demo
-    from plugins.twin.camera import SequenceScript
+    from plugins.twin.camera.camera import SequenceScript
 
     prof = flow_profile
     with open_outputs(prof, plugins, fast=False) as out:
@@ -291,7 +291,7 @@ def test_two_resting_index_fingers_get_the_flow_between_them(flow_profile, plugi
     from console.kernel.client import open_outputs
     from plugins.demos.adapters import summary_parts
     from plugins.demos.run import start_demo
-    from plugins.twin.camera import SequenceScript
+    from plugins.twin.camera.camera import SequenceScript
 
     prof = flow_profile
     a = SequenceScript([("one_finger", "s1", "right", 900)], table_mm=TABLE, gap_frames=0, seed=3)

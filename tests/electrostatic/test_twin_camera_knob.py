@@ -15,7 +15,7 @@ def rotation_through_vision():
     from console.config.profile import load_profile
     from console.runtime.stages import open_camera, vision_loop
 
-    twin_camera = pytest.importorskip("plugins.twin.camera")
+    twin_camera = pytest.importorskip("plugins.twin.camera.camera")
     pm = load_plugins()
     prof = load_profile("sim", pm)
     table = (prof.get("table.width_mm"), prof.get("table.height_mm"))

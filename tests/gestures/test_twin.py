@@ -4,18 +4,22 @@ blur, noise, drift, lens distortion), through the twin's public API."""
 import numpy as np
 import pytest
 
-twin = pytest.importorskip("plugins.twin.camera")
+pytest.importorskip("cv2")
 
 from plugins.gestures.calibration import calibrate, run_touch_calibration, target_grid  # noqa: E402
 from plugins.gestures.vision import VisionParams, process_frame  # noqa: E402
+from plugins.twin.camera.camera import TwinCamera  # noqa: E402
+from plugins.twin.camera.geometry import TableMapping  # noqa: E402
+from plugins.twin.camera.render import Rig  # noqa: E402
+from plugins.twin.camera.sample import render_background, render_sample  # noqa: E402
 
 P = VisionParams()
 
 
 def frames_of(gesture, hard=(), seed=0, **kw):
     rng = np.random.default_rng(seed)
-    frames, truth = twin.render_sample(gesture, "s1", 0, rng, hard=hard, t0_s=10.0, **kw)
-    bg = twin.render_background(twin.Rig(), 10.0, rng)
+    frames, truth = render_sample(gesture, "s1", 0, rng, hard=hard, t0_s=10.0, **kw)
+    bg = render_background(Rig(), 10.0, rng)
     return frames, truth, bg
 
 
@@ -51,8 +55,8 @@ def test_rotated_180_degrees_hand_is_turned_to_the_reference_edge():
 
 @pytest.mark.slow
 def test_touch_calibration_end_to_end_with_lens_distortion():
-    mapping = twin.TableMapping(k1=-0.18, k2=0.03)
-    cam = twin.TwinCamera(twin.Rig(mapping=mapping), realtime=False, seed=1)
+    mapping = TableMapping(k1=-0.18, k2=0.03)
+    cam = TwinCamera(Rig(mapping=mapping), realtime=False, seed=1)
     targets = target_grid(mapping.table_mm, 5, 4)
     cal, session = run_touch_calibration(cam, targets, cam.background(), P)
     assert session.progress() == (20, 20) and cal.outliers == []

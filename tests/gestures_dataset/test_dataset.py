@@ -220,7 +220,7 @@ def test_synth_refuses_a_non_empty_folder_and_bad_counts(tmp_path):
 
 
 def test_record_from_the_twin_camera(tmp_path):
-    from plugins.twin.camera import TwinCamera
+    from plugins.twin.camera.camera import TwinCamera
 
     cam = TwinCamera(realtime=False)
     p1 = record(cam, tmp_path, "rotate", "s4", hand="left", frames=6)

@@ -1,10 +1,10 @@
-"""No unexplained function-local import of a project module under plugins/.
+"""No unexplained function-local import of a project module under console/ or plugins/.
 
 An import inside a function hides an edge of the import graph (issue 26): it stays only
 where it keeps a heavy or hardware library lazy, or keeps a module that every ``haptable``
 start loads from loading more, and then says so with a comment starting ``# lazy:`` on its
 line or the line before; one comment above a run of consecutive imports covers the run.
-Every file under plugins/ is held to it, whoever owns it."""
+Every file under console/ and plugins/ is held to it, whoever owns it."""
 
 from __future__ import annotations
 
@@ -38,12 +38,12 @@ def runs(tree: ast.AST) -> dict[int, tuple[int, int]]:
 
 def unexplained(root: Path = ROOT) -> list[str]:
     """``file:line module`` of each function-local import of a project module under
-    plugins/ with no ``# lazy:`` comment on its line, the line before, or (for a run of
+    console/ or plugins/ with no ``# lazy:`` comment on its line, the line before, or (for a run of
     consecutive imports) the line before the run or a line of it."""
     mods = module_files(root)
     bad = []
     for name, path in mods.items():
-        if not name.startswith("plugins"):
+        if name.partition(".")[0] not in ("console", "plugins"):
             continue
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
         text = path.read_text(encoding="utf-8")

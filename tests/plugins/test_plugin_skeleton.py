@@ -12,8 +12,6 @@ ROOT = Path(__file__).resolve().parents[2]
 
 #: sub-plugins with a package of their own (``plugins/<name>/<sub>/__init__.py``)
 SUB_PLUGINS = ("twin/plate", "twin/camera")
-#: packages still being reworked by their owners; this list may only shrink
-PENDING: frozenset[str] = frozenset({"plugins/twin/camera/__init__.py"})
 #: module-level names an ``__init__`` may bind besides its imports and hooks
 ALLOWED_NAMES = frozenset({"__all__"})
 
@@ -58,18 +56,12 @@ def _rel(p: Path, root: Path = ROOT) -> str:
 
 
 def test_a_plugins_init_holds_hook_implementations_only():
-    bad = [s for p in plugin_inits() if _rel(p) not in PENDING for s in strays(p)]
+    bad = [s for p in plugin_inits() for s in strays(p)]
     assert not bad, (
         "a plugin's __init__.py holds its @hookimpl functions only; move each of these to "
         "a module named for what it holds (settings.py, cli.py, bench.py, ...) or nest a "
         "factory inside the hook that registers it:\n" + "\n".join(bad)
     )
-
-
-def test_the_pending_packages_still_need_the_exemption():
-    """PENDING only shrinks: a package that has the skeleton leaves the list."""
-    done = [p for p in sorted(PENDING) if (ROOT / p).is_file() and not strays(ROOT / p)]
-    assert not done, f"has the skeleton now, remove from PENDING in {__file__}: {done}"
 
 
 def test_the_check_names_file_and_stray(tmp_path):

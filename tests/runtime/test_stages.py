@@ -34,7 +34,7 @@ def twin(profile, plugins):
 
 
 def test_twin_contacts_land_where_the_ground_truth_says(profile, plugins, twin):
-    from plugins.twin.camera import SequenceScript
+    from plugins.twin.camera.camera import SequenceScript
 
     twin.set_script(
         SequenceScript(

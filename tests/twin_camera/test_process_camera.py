@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 
-from plugins.twin.camera import make_camera
+from plugins.twin.camera.factory import make_camera
 
 
 def _twin(realtime: bool = True):

@@ -8,7 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plugins.twin.camera import Rig, TableMapping, TwinCamera
+from plugins.twin.camera.camera import TwinCamera
+from plugins.twin.camera.geometry import TableMapping
+from plugins.twin.camera.render import Rig
 
 calibration = pytest.importorskip("plugins.gestures.calibration")
 vision = pytest.importorskip("plugins.gestures.vision")

@@ -9,22 +9,12 @@ import cv2
 import numpy as np
 import pytest
 
-from plugins.twin.camera import (
-    DYNAMIC,
-    GESTURES,
-    STATIC,
-    IdleScript,
-    Rig,
-    TableMapping,
-    TouchScript,
-    TwinCamera,
-    make_subject,
-    render_sample,
-)
-from plugins.twin.camera.gestures import plan_take, take_pose
-from plugins.twin.camera.hand import hand_pieces
-from plugins.twin.camera.render import hand_layer
-from plugins.twin.camera.sample import render_background, render_frame
+from plugins.twin.camera.camera import IdleScript, TouchScript, TwinCamera
+from plugins.twin.camera.geometry import TableMapping
+from plugins.twin.camera.gestures import DYNAMIC, GESTURES, STATIC, plan_take, take_pose
+from plugins.twin.camera.hand import hand_pieces, make_subject
+from plugins.twin.camera.render import Rig, hand_layer
+from plugins.twin.camera.sample import render_background, render_frame, render_sample
 
 QUIET = Rig(noise_sigma=0.0, shot_gain=0.0)
 

@@ -142,7 +142,7 @@ def test_commands_end_to_end(tmp_path, ctx, ss_map, capsys, monkeypatch):
 
 def test_prepare_builds_only_what_is_asked(tmp_path, ss_map):
     from plugins.vibrotactile.lazy import prepare
-    from plugins.vibrotactile.perception import Perception
+    from plugins.vibrotactile.thresholds import Perception
 
     seen = []
     out = prepare(

@@ -17,7 +17,7 @@ from plugins.vibrotactile.hand import (
     square_levels,
 )
 from plugins.vibrotactile.interp import interpolate
-from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.thresholds import Perception
 
 PER = Perception()
 C = (300.0, 200.0)

@@ -23,7 +23,7 @@ from plugins.vibrotactile.independent import (
     solve_pairs,
     square_levels_of,
 )
-from plugins.vibrotactile.perception import Perception
+from plugins.vibrotactile.thresholds import Perception
 
 
 def objective(h_a, h_b, x, eps):

@@ -1,4 +1,4 @@
-"""Perceptual lookup tables (plugins.vibrotactile.perceptual) against the paper's rule.
+"""Perceptual lookup tables (plugins.vibrotactile.perceptual_rule) against the paper's rule.
 
 Hand-computed cases (2 points, 3 bins) for both rules, a brute-force second
 implementation of the score, masked bins and Nyquist, the tables file's ``rule`` key
@@ -17,9 +17,9 @@ import pytest
 
 from console.core.errors import UserError
 from console.files.vibration_map import make_map
-from plugins.vibrotactile.perception import Perception
-from plugins.vibrotactile.perceptual import PerceptualRule, felt_db
+from plugins.vibrotactile.perceptual_rule import PerceptualRule, felt_db
 from plugins.vibrotactile.tables import build_tables, load_tables, query_indices, save_tables
+from plugins.vibrotactile.thresholds import Perception
 
 RULE = PerceptualRule(Perception(), drive_v=10.0, target_sl_db=20.0)
 
@@ -210,7 +210,7 @@ def twin_map():
 @pytest.mark.slow
 def test_accelerance_map_paper_picks_low_bin_perceptual_a_tactile_one(twin_map):
     from plugins.twin.plate.rule_check import accelerance_map
-    from plugins.vibrotactile.perceptual import rule_from_profile
+    from plugins.vibrotactile.perceptual_rule import rule_from_profile
 
     m, prof = twin_map
     rule = rule_from_profile(prof)
@@ -229,7 +229,7 @@ def test_accelerance_map_paper_picks_low_bin_perceptual_a_tactile_one(twin_map):
 
 @pytest.mark.slow
 def test_perceptual_entries_at_least_as_perceptible_on_the_twin_map(twin_map):
-    from plugins.vibrotactile.perceptual import rule_from_profile
+    from plugins.vibrotactile.perceptual_rule import rule_from_profile
 
     m, prof = twin_map
     rule = rule_from_profile(prof)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.stimuli import StimulusSettings, flow_plan, point_plan
+from plugins.vibrotactile.thresholds import Perception
 
 
 def test_flow_plays_through_the_gate_with_relays_switched_between_parts(

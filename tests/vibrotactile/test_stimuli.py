@@ -9,9 +9,9 @@ import pytest
 from console.core.errors import UserError
 from console.core.types import patches_of
 from console.safety import Limits, check_plan
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.stimuli import StimulusSettings, flow_plan, point_plan
 from plugins.vibrotactile.tables import build_tables, query_indices
+from plugins.vibrotactile.thresholds import Perception
 
 LIMITS = Limits(
     sample_rate_hz=48000,

@@ -25,6 +25,7 @@ from textual.widgets import Input, Static
 
 from console.core.errors import UserError
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
+from console.tui.plots import HalfBlockImage, downsample
 from console.tui.text import escape
 from console.tui.util import from_thread
 
@@ -373,8 +374,6 @@ class CameraPane(Horizontal):
         self._show_info(self.service, snap[1] if snap is not None else {})
 
     def _draw_halfblock(self, frame, img: np.ndarray, work: dict) -> None:
-        from console.tui.plots import HalfBlockImage, downsample
-
         cols, rows = self.view_size(img.shape[1] / img.shape[0])
         target = self._target_px()
         shows = (frame, self.view, None if target is None else tuple(target), cols, rows)
@@ -409,6 +408,7 @@ class CameraPane(Horizontal):
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
         the overlay drawn into it; a new image at most every ``GRAPHICS_PERIOD_S``."""
+        # lazy: plugins load on first use
         import time
 
         from PIL import Image as PILImage
@@ -493,7 +493,7 @@ class CameraPane(Horizontal):
             else ""
         )
         lines = [
-            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{rate}",
+            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{escape(rate)}",
             # what this loop lost since it started: frames the camera dropped while the
             # loop read it, and frames the processing was too slow for (never the frames
             # that passed while nobody watched)

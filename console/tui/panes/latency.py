@@ -91,6 +91,7 @@ class LatencyPane(Vertical):
 
     def compose(self) -> ComposeResult:
         try:
+            # lazy: probes whether the camera loop can load
             import console.runtime.latency  # noqa: F401
             import console.runtime.loop  # noqa: F401
 

@@ -8,25 +8,23 @@ from typing import Any
 
 import numpy as np
 
+from console.plugin_api import machine_info, summarize_s
+
+from .gestures import GESTURES, plan_take, take_pose
+from .hand import make_subject
+from .render import Rig
+from .sample import render_background, render_frame, render_sample
+
 
 def run(ctx: Any = None, quick: bool = False) -> dict:
     """Frame render time per gesture (p50/p99) and sample render throughput (the
     twin's share of ``gestures synth``, extrapolated to the paper's 2000 samples)."""
-    from console.plugin_api import machine_info, summarize_s
-
-    from .gestures import GESTURES
-    from .render import Rig
-    from .sample import render_background, render_frame, render_sample
-
     rig = Rig()
     render_sample("drag", "s1", 0, np.random.default_rng(0), rig=rig)  # warm caches
     reps = 2 if quick else 8
     per_gesture = {}
     all_s: list[float] = []
     cpu_s: list[float] = []
-    from .gestures import plan_take, take_pose
-    from .hand import make_subject
-
     for g in GESTURES:
         times = []
         for rep in range(reps):

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from console.plugin_api import Limits, UserError, from_field, load_map
-from plugins.vibrotactile.perception import Perception
 from plugins.vibrotactile.settings import field, setup_from_profile
+from plugins.vibrotactile.thresholds import Perception
 
 
 def key_type(name: str, unit: str = ""):
@@ -152,7 +152,7 @@ def table_rule_of(ctx, args):
     """(min_contrast_db, PerceptualRule or None) from ``--rule``/``--min-contrast-db`` and
     the profile's ``[vibrotactile] table_rule`` and ``min_contrast_db``."""
     # lazy: this module loads at every haptable start; perceptual only when used
-    from plugins.vibrotactile.perceptual import rule_from_profile
+    from plugins.vibrotactile.perceptual_rule import rule_from_profile
 
     c = getattr(args, "min_contrast_db", None)
     rule = getattr(args, "rule", None)
