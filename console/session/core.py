@@ -56,6 +56,7 @@ class ConsoleSession:
         self.fast = fast
         self.outputs: Any = None
         self.outputs_error = ""
+        self._holder: str | None = None  # who holds the outputs for a run (``hold_outputs``)
         #: the profile the console's outputs open with: the console's own, or that
         #: profile reloaded after the operator saved another device (``reopen_outputs``)
         self.outputs_profile: Any = None
@@ -240,12 +241,46 @@ class ConsoleSession:
             return "ok: outputs silenced, relays open"
         return f"error: unknown command {line!r}"
 
-    def play_plan(self, plan: Any, *, wait: bool = True) -> bool:
+    @contextlib.contextmanager
+    def hold_outputs(self, who: str):
+        """``with session.hold_outputs("P01's study run (Studies screen)") as token:``
+        a run that must not be mixed with other sounds holds the outputs: while it does,
+        the screens' plays and auditions are refused, saying who holds them; the run
+        plays with ``play_plan(plan, holder=token)``. One holder at a time."""
+        with self._lock:
+            if self._holder is not None:
+                raise UserError(f"{self._holder} holds the outputs: stop it first")
+            self._holder = who
+        try:
+            yield who
+        finally:
+            with self._lock:
+                self._holder = None
+
+    @property
+    def outputs_holder(self) -> str | None:
+        """Who holds the outputs for a run (``hold_outputs``), else None."""
+        return self._holder
+
+    def _held_from(self, holder: str | None) -> str:
+        """Why a play from someone other than the outputs' holder is refused ("" if not)."""
+        who = self._holder
+        if who is None or holder == who:
+            return ""
+        return f"refused: {who} holds the outputs (pause or stop it first)"
+
+    def play_plan(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> bool:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an
-        error is reported as a ``Failed`` event; returns True when it played (or queued)."""
+        error is reported as a ``Failed`` event; returns True when it played (or queued).
+        While a run holds the outputs (``hold_outputs``) only its ``holder`` token plays;
+        a refusal of the holder's own plan is no event: the run reports it (one place)."""
         out = self.outputs
         if out is None:
             self.fail("outputs", f"outputs not open: {self.outputs_error or 'starting'}")
+            return False
+        held = self._held_from(holder)
+        if held:
+            self.fail("outputs", f"{plan.name or 'plan'}: {held}", name="refused")
             return False
         try:
             report = out.play(plan, wait=False)
@@ -258,7 +293,8 @@ class ConsoleSession:
                 if report.error:
                     raise SafetyRefusal(f"{report.name}: {report.error}")
         except (SafetyRefusal, UserError) as exc:
-            self.fail("outputs", str(exc), name="refused")
+            if holder is None:  # a run's own plan: the run says what became of it, once
+                self.fail("outputs", f"{plan.name or 'plan'}: {exc}", name="refused")
             return False
         return True
 
@@ -277,6 +313,9 @@ class ConsoleSession:
             return PlayOutcome(name, refused=f"refused: outputs not open ({why})")
         if out.estopped:
             return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
+        held = self._held_from(None)
+        if held:
+            return PlayOutcome(name, refused=held)
         try:
             report = out.play(plan, wait=False)
         except (SafetyRefusal, UserError) as exc:
@@ -399,6 +438,10 @@ class ConsoleSession:
             plan = audition_plan(self.profile, signal, target, name)
         except UserError as exc:
             self.fail("signals", str(exc), name=name)
+            return False
+        held = self._held_from(None)
+        if held:
+            self.fail("signals", f"{name}: {held}", name=name)
             return False
         return self.play_plan(plan, wait=wait)
 

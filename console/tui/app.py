@@ -362,7 +362,8 @@ class HapTableApp(App):
         ev = message.event
         if isinstance(ev, Failed) and not self._says_it(ev):
             title = "refused" if ev.name == "refused" else ev.topic
-            self.notify(ev.message, title=title, severity=ev.severity, timeout=8)
+            # one line, the title with it: the log (ctrl+l) keeps what the toast said
+            self.notify(f"{title}: {ev.message}", severity=ev.severity, timeout=8)
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
             self.live.watch.poke()  # lost: the bar at once, not at the next read
         if not self.screen_stack:

@@ -42,7 +42,9 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
             session.emit(Snapshot(TOPIC, name=pid, data={"kind": "ask", **_plain(info)}))
 
     try:
-        res = run_study(session, spec, control, responder, emit)
+        # the trials are not mixed with other sounds: the screens' plays are refused meanwhile
+        with session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder:
+            res = run_study(session, spec, control, responder, emit, holder=holder)
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, why, name=pid)
@@ -167,8 +169,17 @@ class _Asking:
         return self.inner.rate(item, questionnaire, records, control)
 
 
-def run_study(session: Any, spec: dict[str, Any], control: Control, responder: Any, emit: Any):
-    """Prepare the participant and run the plan on the console session (blocking)."""
+def run_study(
+    session: Any,
+    spec: dict[str, Any],
+    control: Control,
+    responder: Any,
+    emit: Any,
+    *,
+    holder: str | None = None,
+):
+    """Prepare the participant and run the plan on the console session (blocking), its
+    plans played as ``holder`` (the run holding the session's outputs)."""
     pm, profile = session.plugins, session.profile
     proto = protocols.load(spec["study"])
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
@@ -222,7 +233,7 @@ def run_study(session: Any, spec: dict[str, Any], control: Control, responder: A
             pm,
             profile,
             vmap,
-            play_on_session(session),
+            play_on_session(session, holder),
             knob_seed=prep.participant_seed,
             live_knob=live,
         )

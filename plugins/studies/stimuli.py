@@ -193,12 +193,13 @@ class LiveKnob:
         return res
 
 
-def play_on_session(session: Any) -> Callable[[OutputPlan], bool]:
+def play_on_session(session: Any, holder: str | None = None) -> Callable[[OutputPlan], bool]:
     """``play(plan)`` through the console session (``play_plan``: the gate, the session's
-    record of what played); a refusal says why (the e-stop and its reason)."""
+    record of what played), as ``holder`` (the run holding the outputs: ``hold_outputs``);
+    a refusal says why (the e-stop and its reason)."""
 
     def play(plan: OutputPlan) -> bool:
-        if session.play_plan(plan):
+        if session.play_plan(plan, holder=holder):
             return True
         out = session.outputs
         if out is not None and out.estopped:

@@ -76,3 +76,34 @@ def test_the_suggested_lowpass_makes_a_square_wave_playable(session):
     cutoff = fail.message.split("lowpass(..., ")[1].rstrip(")")
     assert session.audition(f"lowpass({square}, {cutoff}) * ramp(5 ms)", parse_target("PA,PC"))
     assert np.max(np.abs(session.outputs.recording()[:, 0])) > 40  # the square's overshoot
+
+
+def test_a_run_holding_the_outputs_refuses_the_screens_plays_and_says_who(session):
+    """A study run holds the outputs: an audition (Signals), a play (Vibration, Devices,
+    Electrostatic) or a plan of anyone else is refused, naming the run; the run's own plans
+    play; once it ends, the screens play again."""
+    from console.core.errors import UserError
+
+    who = "P01's study run (Studies screen)"
+    from console.session.audition import audition_plan
+
+    tone = audition_plan(session.profile, EXPR, parse_target("PA"), "tone")
+    with session.hold_outputs(who) as token:
+        n = session.outputs.recording().shape[0]
+        assert not session.audition(EXPR, parse_target("PA"), name="designed")
+        assert (
+            who in session.failures[-1].message
+            and "holds the outputs" in session.failures[-1].message
+        )
+        outcome = session.play(tone)
+        assert not outcome.started and who in outcome.refused
+        assert not session.play_plan(tone)
+        assert (
+            session.outputs.recording().shape[0] == n or not session.outputs.recording()[n:].any()
+        )
+        with pytest.raises(UserError, match="holds the outputs"), session.hold_outputs("another"):
+            pass
+        assert session.play_plan(tone, holder=token)  # the run's own plan plays
+        assert np.abs(session.outputs.recording()[n:, 0]).max() > 1.0
+    assert session.outputs_holder is None
+    assert session.play(tone).played

@@ -101,8 +101,11 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
             await pilot.click("#start")
             bar = pane.query_one("#study-progress")
             await wait_for(pilot, lambda: (bar.progress or 0) >= 2, what="two trials done")
-            await pilot.click("#abort")  # asks first
-            await pilot.click("#abort")
+            # pressed, not clicked: a toast in the corner may cover the button at 80 x 24
+            abort = pane.query_one("#abort", Button)
+            abort.press()  # asks first
+            await pilot.pause(0.1)
+            abort.press()
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             await pilot.pause(0.2)
             shown = str(status.render())
