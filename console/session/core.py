@@ -282,6 +282,11 @@ class ConsoleSession:
         if held:
             self.fail("outputs", f"{plan.name or 'plan'}: {held}", name="refused")
             return False
+        if out.estopped and holder is None:  # one wording on every screen
+            self.fail(
+                "outputs", f"{plan.name or 'plan'}: {ESTOP_REFUSAL}, {ESTOP_FIX}", name="refused"
+            )
+            return False
         try:
             report = out.play(plan, wait=False)
             with self._lock:

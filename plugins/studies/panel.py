@@ -58,6 +58,8 @@ ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 #: seconds in which a second ``a`` (or Abort) aborts the run the first one asked about
 CONFIRM_S = 3.0
 IDLE = "no study running: pick a protocol and a participant, then s"
+#: ``s`` during an e-stop, in the console's words for it (``console.session.events``)
+ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
 
 
 class StudiesPane(Vertical):
@@ -241,7 +243,7 @@ class StudiesPane(Vertical):
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key: a run would only write a start and its interruption
-            self._say("e-stop engaged: ctrl+r resets it first", "error")
+            self._say(ESTOP_REFUSED, "error")
             return
         study = self._value("protocol")
         if study is Select.BLANK or not study:
@@ -428,6 +430,10 @@ class StudiesPane(Vertical):
         ev = message.event
         if ev.topic == "vibration" and isinstance(ev, Started) and self.running is None:
             self._idle()  # a map now: the hint before s goes
+            return
+        if ev.topic == "estop" and isinstance(ev, Started) and self.said[0] == ESTOP_REFUSED:
+            self.said = ("", "information")  # the reset: what the e-stop refused is past
+            self._status(self._status_text)
             return
         if ev.topic != TOPIC:
             return

@@ -168,11 +168,13 @@ def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
                 await pilot.pause(0.3)
                 # the screen's own key: the last line of its status (console.tui.said)
                 said = str(status.render()).splitlines()[-1]
-                assert said == "e-stop engaged: ctrl+r resets it first"
+                assert said == "refused: e-stop active, ctrl+r resets"  # as every screen says it
                 assert pane.running is None
             assert not (tmp_path / "P01").exists()
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
+            # the reset: the line no longer says the e-stop refused anything
+            await wait_for(pilot, lambda: "e-stop active" not in str(status.render()), 10)
             await pilot.press("s")  # now it runs
             await wait_for(pilot, lambda: (tmp_path / "P01" / "trials.jsonl").exists(), 60)
             await pilot.press("a", "a")  # the second confirms

@@ -79,6 +79,28 @@ def test_a_refused_play_is_said_once_on_its_screen_and_is_in_the_log(plugins):
     asyncio.run(scenario())
 
 
+def test_signals_says_the_estop_refusal_in_the_console_s_words_and_drops_it_at_the_reset(plugins):
+    """The refusal reads as on every screen (``refused: e-stop active, ctrl+r resets``);
+    after the operator's reset the line no longer says the e-stop refused anything."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            status = app.query_one("#sig-status", Static)
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, what="e-stopped")
+            await pilot.press("ctrl+o")
+            await wait_for(pilot, lambda: "e-stop" in str(status.render()), 20, "refused")
+            assert "refused: e-stop active, ctrl+r resets" in _flat(status.render())
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
+            await wait_for(pilot, lambda: "refused" not in str(status.render()), 10, "cleared")
+            assert "e-stop reset" in _flat(status.render())
+
+    asyncio.run(scenario())
+
+
 def test_a_relay_refused_during_an_estop_is_said_on_its_row_not_as_a_toast(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")

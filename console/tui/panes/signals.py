@@ -25,7 +25,7 @@ from console.config.signal_library import (
 )
 from console.core.errors import UserError
 from console.safety import Limits
-from console.session.events import Failed, Stopped
+from console.session.events import Failed, Started, Stopped
 from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
@@ -95,6 +95,7 @@ class SignalsPane(Vertical):
         self._delete: str | None = None  # a name delete was pressed on once already
         self._removed: tuple[str, dict] | None = None  # the last removed: ctrl+z restores
         self._playing = ""
+        self._estop_said = False  # the status line says what an e-stop did or refused
         self._gen = 0
         self.entries: dict[str, Entry] = {}
         self._saved_shown = False  # the save key's label says "saved"
@@ -145,6 +146,7 @@ class SignalsPane(Vertical):
     # ------------------------------------------------------------------ helpers
     def status(self, text: str, error: bool = False) -> None:
         line = " ".join(str(text).split())
+        self._estop_said = error and ("e-stop" in line)  # a reset replaces it
         w = self.query_one("#sig-status", Static)
         w.update(Text(line))  # literal: "[limits]" in a message is no markup
         w.set_class(error, "error")
@@ -318,6 +320,8 @@ class SignalsPane(Vertical):
         elif isinstance(ev, Stopped) and ev.topic == "estop" and self._playing:
             self._playing = ""
             self.status(f"e-stopped: {ev.reason} (ctrl+r resets)", error=True)
+        elif isinstance(ev, Started) and ev.topic == "estop" and self._estop_said:
+            self.status("e-stop reset: ctrl+o plays")  # what the e-stop refused is past
 
     def action_add_ramp(self) -> None:
         """The designer adds the gate's minimum ramp to the expression, in plain sight."""
