@@ -235,7 +235,9 @@ def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypat
             bright = base.copy()
             bright[200:260, 100:300] = 255.0  # a hand's palm
             now["frame"] = SimpleNamespace(image=bright)
-            await wait_for(pilot, lambda: pane.draws > draws, 10, "the palm drawn")
+            await wait_for(
+                pilot, lambda: pane.draws > draws, 30, "the palm drawn"
+            )  # a bound on a wait
             changed = view.rows_drawn - rows
             assert 0 < changed < pane.shown.size[1] // 2  # its rows, not the picture
 

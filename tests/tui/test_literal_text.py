@@ -136,7 +136,7 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
             handler = NotifyHandler(app)
             logging.getLogger().addHandler(handler)
             try:
-                await wait_for(pilot, lambda: "cardx" in screen_text(app), 20, "doctor rows")
+                await wait_for(pilot, lambda: "cardx" in screen_text(app), 60, "doctor rows")
                 shown = screen_text(app)
                 assert "gestures ([tuio] enabled)" in shown  # a plugin's description
                 assert "[audio] device = 'x'" in shown and "fix [b]" in shown
