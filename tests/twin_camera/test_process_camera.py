@@ -5,11 +5,13 @@ and no process left behind."""
 from __future__ import annotations
 
 import os
+import pickle
 import time
 
 import numpy as np
 
 from plugins.twin.camera.factory import make_camera
+from plugins.twin.camera.process import CMD
 
 
 def _twin(realtime: bool = True):
@@ -145,6 +147,32 @@ def test_commands_reach_the_child():
         cam.set_target((600.0, 300.0))
         b = centroid()
         assert np.hypot(*(b - a)) > 250
+    finally:
+        cam.close()
+
+
+def test_commands_that_arrive_together_all_reach_the_child():
+    """The calibration's "lift" and "touch the next target" leave in one breath: the
+    child applies both (the hand ends at the second target), not only the first of what
+    one read of the pipe brought."""
+    cam = _twin().apart()
+    try:
+        bg = cam.background().astype(int)
+        cam.set_target((200.0, 150.0))
+        # three commands in one write: the pipe delivers them together
+        blobs = [
+            pickle.dumps(("set_target", (None,))),
+            pickle.dumps(("set_target", ((600.0, 300.0),))),
+            pickle.dumps(("set_rate", (20.0,))),
+        ]
+        cam._proc.stdin.write(b"".join(CMD.pack(len(b)) + b for b in blobs))
+        cam._proc.stdin.flush()
+        time.sleep(0.6)
+        frames = [f for f in (cam.read(2.0) for _ in range(12)) if f is not None]
+        ys, xs = np.nonzero(np.abs(frames[-1].image.astype(int) - bg) > 30)
+        assert xs.size > 200, "the hand came back on the table at the second target"
+        want = np.array(cam.mm_to_px((600.0, 300.0)))
+        assert np.hypot(*(np.array([xs.mean(), ys.mean()]) - want)) < 150
     finally:
         cam.close()
 

@@ -42,19 +42,35 @@ CMD = struct.Struct("<I")
 COMMANDS = ("set_script", "set_target", "set_targets", "set_rate", "place")
 
 
-def _read_exact(stream, n: int) -> bytes | None:
-    data = stream.read(n)
-    return data if data is not None and len(data) == n else None
+def _commands(buf: bytearray) -> list[bytes]:
+    """The complete commands at the head of ``buf`` (taken out of it)."""
+    out = []
+    while len(buf) >= CMD.size:
+        n = CMD.unpack_from(buf)[0]
+        if len(buf) < CMD.size + n:
+            break
+        out.append(bytes(buf[CMD.size : CMD.size + n]))
+        del buf[: CMD.size + n]
+    return out
 
 
 def _child() -> None:
     """``python -m plugins.twin.camera.process SHM``, the pickled twin on stdin."""
     shm_name = sys.argv[1]
-    inp, out = sys.stdin.buffer, sys.stdout.buffer
-    head = _read_exact(inp, CMD.size)
-    if head is None:
-        return
-    cam = pickle.loads(_read_exact(inp, CMD.unpack(head)[0]) or b"")
+    out = sys.stdout.buffer
+    # commands are read from the descriptor itself: a buffered reader could keep a second
+    # command that came with the first where ``select`` cannot see it (the calibration's
+    # "lift" and "touch the next target" arrive together: the finger would never move)
+    fd = sys.stdin.fileno()
+    buf = bytearray()
+    pending: list[bytes] = []
+    while not pending:
+        chunk = os.read(fd, 1 << 20)
+        if not chunk:
+            return
+        buf += chunk
+        pending = _commands(buf)
+    cam = pickle.loads(pending.pop(0))
     shm = shared_memory.SharedMemory(name=shm_name)
     resource_tracker.unregister(shm._name, "shared_memory")  # the parent owns it
     slots = None
@@ -65,14 +81,17 @@ def _child() -> None:
         out.write(MSG.pack(-1, bg.shape[0], float(bg.shape[1]), 0))
         out.flush()
         k = 0
-        fd = inp.fileno()
+        for blob in pending:  # commands that came with the twin
+            _command(cam, blob)
         while True:
             # paused (``set_rate(0)``: nobody reads): wait for the next command, render nothing
             if select.select([fd], [], [], None if cam.paused else 0)[0]:
-                head = _read_exact(inp, CMD.size)
-                if head is None:  # stdin closed: the parent closed us, or ended
+                chunk = os.read(fd, 1 << 20)
+                if not chunk:  # stdin closed: the parent closed us, or ended
                     break
-                _command(cam, _read_exact(inp, CMD.unpack(head)[0]))
+                buf += chunk
+            for blob in _commands(buf):  # every command that came, before the next frame
+                _command(cam, blob)
             f = cam.read(0.1)
             if f is None:
                 continue
@@ -90,10 +109,8 @@ def _child() -> None:
         shm.close()
 
 
-def _command(cam: Any, blob: bytes | None) -> None:
+def _command(cam: Any, blob: bytes) -> None:
     """One command from the parent: ``(method, args)``, a method of ``COMMANDS``."""
-    if blob is None:
-        return
     name, args = pickle.loads(blob)
     if name in COMMANDS:
         getattr(cam, name)(*args)
