@@ -120,6 +120,7 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
     from console.core.types import DeviceStatus
     from console.runtime import doctor
     from console.tui.logs import NotifyHandler
+    from console.tui.panes import devices
     from console.tui.safety_bar import SafetyBar
 
     real = doctor.diagnose
@@ -128,7 +129,9 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
         why = "[audio] device = 'x': no stereo output matches"
         return [*real(profile, pm), DeviceStatus("audio", "cardx", "missing", why, "fix [b]")]
 
-    monkeypatch.setattr(doctor, "diagnose", diagnose)
+    # where the Devices screen looks it up (patching ``doctor`` alone reaches it only
+    # when the screen's module is imported after the patch: a test run alone)
+    monkeypatch.setattr(devices, "diagnose", diagnose)
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
