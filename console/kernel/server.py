@@ -107,6 +107,7 @@ class Kernel:
         self.board: Any = None
         self.gate: Any = None
         self.scheduler: Any = None
+        self.guard: Any = None  # console.kernel.relay_guard.Guard, for a board outside us
         # a private table is its owner's: it ends with its last client
         self.linger_s = 0.0 if table.private else float(_get(profile, "kernel.linger_s", 2.0))
 
@@ -179,6 +180,16 @@ class Kernel:
             target=self._accept_loop, name="haptable-kernel-accept", daemon=True
         ).start()
 
+    def guard_relays(self, request_blob: bytes) -> None:
+        """Start the relay guard (``console.kernel.relay_guard``) for a board outside
+        this process's memory: it opens every relay if this process dies."""
+        # lazy: keeps NumPy out of this module's import
+        from console.core.contracts import SimulatedRelays
+        from console.kernel.relay_guard import Guard
+
+        if self.board is not None and not isinstance(self.board, SimulatedRelays):
+            self.guard = Guard(request_blob)
+
     def _latch_dead_predecessor(self) -> None:
         """A kernel that ended without closing its outputs (killed, crashed) left its
         ``kernel.json`` unclean: the outputs may have been cut mid-signal and its relays
@@ -214,9 +225,15 @@ class Kernel:
                 self._listener.close()
         with contextlib.suppress(FileNotFoundError):
             os.unlink(self.table.kernel_sock)
+        closed = True
         if self.outputs is not None:
-            with contextlib.suppress(Exception):
+            try:
                 self.outputs.close(reason)
+            except Exception:  # noqa: BLE001 - the guard opens the relays then
+                closed = False
+        if self.guard is not None and closed:  # every relay is open: nothing to guard
+            self.guard.release()
+            self.guard = None
         with self._clients_lock:
             clients = list(self._clients.values())
         for c in clients:
@@ -549,7 +566,8 @@ def main() -> int:
     """``python -m console.kernel``: the start request (pickled) on stdin; "ready" or
     one error line on stdout, then serve until idle."""
     raw = sys.stdin.buffer
-    request = pickle.loads(raw.read(int(raw.readline())))
+    blob = raw.read(int(raw.readline()))
+    request = pickle.loads(blob)
     out = os.fdopen(os.dup(1), "w", buffering=1)
     os.dup2(2, 1)  # a stray print must not break the start line
     sys.stdout = sys.stderr
@@ -593,6 +611,7 @@ def main() -> int:
         out.write(f"error: the outputs process failed to start: {type(exc).__name__}: {exc}\n")
         kernel.shutdown("could not start")
         return 3
+    kernel.guard_relays(blob)
     out.write("ready\n")
     out.close()
     try:

@@ -362,8 +362,9 @@ def test_a_stream_rises_under_the_ramp_to_its_own_declared_peak(profile, plugins
 
 def test_only_the_kernel_builds_an_audio_output_or_a_relay_board():
     """``plugins.build("audio_output" | "relay_board", ...)``, or a function that gets such
-    a registration and calls a ``factory``, is in ``console/kernel/table.py`` and nowhere
-    else in console/ or plugins/ (a driver's probe may look, never open for output)."""
+    a registration and calls a ``factory``, is in ``console/kernel/table.py`` (and the
+    kernel's relay guard) and nowhere else in console/ or plugins/ (a driver's probe may
+    look, never open for output)."""
     import ast
 
     kinds = {"audio_output", "relay_board"}
@@ -395,4 +396,6 @@ def test_only_the_kernel_builds_an_audio_output_or_a_relay_board():
                     )
                     if gets and makes:
                         found.append(f"{where}:{node.lineno} ({node.name})")
-    assert found and all(f.startswith("console/kernel/table.py:") for f in found), found
+    # the kernel's outputs, and its relay guard (opens every relay once the kernel died)
+    kernel = ("console/kernel/table.py:", "console/kernel/relay_guard.py:")
+    assert found and all(f.startswith(kernel) for f in found), found
