@@ -109,7 +109,7 @@ class DemoControl:
         with self._lock:
             self.check_start(name)
             self.name, self.state = name, "starting"
-            self.last_snapshot = None
+            self.last_snapshot = self.last_final = None  # this run's, not the last one's
         s.emit(Started("demo", name, detail="starting"))
 
         def step(frac: float, text: str) -> None:
@@ -148,6 +148,7 @@ class DemoControl:
             except BaseException:
                 if run is not None:
                     run.stop("cancelled")
+                    self.last_snapshot, self.last_final = run.snapshot(), run.final
                 self.run = None
                 self._take_back(run)
                 raise
@@ -160,6 +161,9 @@ class DemoControl:
                 fwd.start(run.scene_name)
             except (UserError, OSError) as exc:
                 s.fail("projector", f"projector: {exc}", severity="warning")
+        if cancelled():  # cancelled while it came up: it does not run on
+            self.stop("cancelled")
+            raise DemoCancelled(name)
         self.state = "running"
         s.emit(Started("demo", name, detail="running"))
         return run

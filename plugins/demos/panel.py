@@ -180,7 +180,8 @@ class ScenesPane(Vertical):
     def on_mount(self) -> None:
         t = self.query_one("#scene-table", DataTable)
         # the scenes take what the demos leave (it scrolls): usable at 80 x 24
-        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 4, 12
+        # (a header and one row at least: a running flow's status needs the rest)
+        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 2, 12
         if not self.app.ctx.pm.of("scene"):
             self.query_one("#projector-status", Static).update(
                 "no scenes: no plugin registers one (install the projector plugin)"
@@ -304,7 +305,13 @@ class ScenesPane(Vertical):
         event.stop()  # the session's Started/Stopped say what happened
 
     def action_cancel_demo(self) -> None:
-        self.query_one("#demo-work", LongWork).cancel()
+        """``x``: cancel the demo's start (its line says when there is none to cancel)."""
+        if self.query_one("#demo-work", LongWork).cancel():
+            return
+        if self.demo_name is not None:
+            self._say(f"demo {self.demo_name} has started: s stops it", "warning")
+        else:
+            self._say("x: no demo is starting (enter starts one)", "warning")
 
     def stop_demo(self, reason: str = "stopped") -> None:
         """Stop the running demo (or cancel its preparation)."""
@@ -425,6 +432,7 @@ class ScenesPane(Vertical):
         y = min(max(self.hand_mm[1] + dy * self.HAND_STEP_MM, m), h - m)
         self.hand_mm = (x, y)
         self._touch(self.hand_mm)
+        self._say(f"hand moved to {x:.0f},{y:.0f} mm (arrows move it, space lifts it)")
 
     #: how long the finger is off the table between two placements (the demo's resting
     #: hand re-arms after a lift of [StillHand] lift_s = 0.2 s)

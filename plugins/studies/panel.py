@@ -50,7 +50,15 @@ from console.plugin_api.tui import LiteralTable, SessionMessage, escape, said_he
 from . import console_run
 from . import protocol as protocols
 from .console_run import TOPIC, map_hint, run_analysis
-from .panel_text import clip, default_out, next_id, same_folder, trial_text
+from .panel_text import (
+    NUMBER_FIELDS,
+    clip,
+    default_out,
+    field_refusal,
+    next_id,
+    same_folder,
+    trial_text,
+)
 from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 
@@ -108,6 +116,7 @@ class StudiesPane(Vertical):
         "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2:\n"
         "              left to right / right to left (experiment 1)\n"
         "1..7          a questionnaire score\n"
+        "escape        leave a text field (what was typed stays)\n"
         "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
         "none loaded or kept, s measures the twin's grid first."
     )
@@ -121,6 +130,7 @@ class StudiesPane(Vertical):
         Binding("n", "analyse", "analyse"),
         Binding("t", "toggle_view", "view"),
         Binding("o", "toggle_notes", "notes", show=False),
+        Binding("escape", "leave_field", show=False),
         Binding("up", "answer('up')", show=False),
         Binding("down", "answer('down')", show=False),
         Binding("left", "answer('left')", show=False),
@@ -249,6 +259,10 @@ class StudiesPane(Vertical):
         if study is Select.BLANK or not study:
             self._say("no protocol in studies/", "error")
             return
+        refused = self._bad_number()
+        if refused:
+            self._say(refused, "error")
+            return
         spec = {
             "study": str(study),
             "pid": self._value("participant").strip(),
@@ -289,12 +303,40 @@ class StudiesPane(Vertical):
         self.focus()
         self._run(spec, self.control, self.responder)
 
+    def _bad_number(self) -> str:
+        """The first of the participant's number fields holding what it does not take."""
+        for wid in NUMBER_FIELDS:
+            refused = field_refusal(wid, self._value(wid))
+            if refused:
+                return refused
+        return ""
+
+    def on_input_changed(self, event: Input.Changed) -> None:
+        """A number field refuses what it does not take as it is typed (one line); the
+        line goes once the field is right again."""
+        wid = event.input.id or ""
+        if wid not in NUMBER_FIELDS:
+            return
+        refused = field_refusal(wid, event.value)
+        if refused:
+            self._say(refused, "warning")
+        elif self.said[0].startswith(f"{NUMBER_FIELDS[wid][0]} = "):
+            self._say("")
+
+    def action_leave_field(self) -> None:
+        """Escape: out of a text field, back to the screen's keys (the text stays)."""
+        if isinstance(self.app.focused, Input):
+            self.focus()
+
     def action_pause(self) -> None:
         c = self.control
         if c is None or self.running is None:
+            self._say("p: no study running to pause (s starts one)", "warning")
             return
         if c.paused:
             c.resume()
+            if self.last.get("state", "").startswith("paused"):
+                self.last["state"] = "resuming"
             self.said = ("resumed", "information")
         else:
             c.pause()
@@ -320,6 +362,7 @@ class StudiesPane(Vertical):
         ``CONFIRM_S`` seconds aborts the run."""
         if self.control is None or self.running is None:
             self.abort_until = None
+            self._say("a: nothing to abort, no study running", "warning")
             return
         now = time.monotonic()
         if self.abort_until is not None and now <= self.abort_until:
@@ -510,6 +553,8 @@ class StudiesPane(Vertical):
             if isinstance(d.get("trial"), dict):  # the trial that comes, not the last one
                 self.last["trial"], self.last["next"] = d["trial"], True
             self.last["state"] = "paused (p resumes)"
+            if self.said[0].startswith("pausing"):  # it is paused now: the state says it
+                self.said = ("", "information")
         elif kind == "aborted":
             self.last["state"] = f"aborted: {d.get('reason', '')}"
         elif kind == "finished":
@@ -603,7 +648,8 @@ class StudiesPane(Vertical):
             done = "not started" if not self.running else "preparing"
         head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above
         if self.control is not None and self.control.paused and self.running:
-            head += "  [yellow]paused[/]"
+            paused = L.get("state", "").startswith("paused")  # the runner stopped there
+            head += "  [yellow]paused[/]" if paused else "  [yellow]pausing after this trial[/]"
         lines = [head]
         if L.get("trial") and self.running:
             t = L["trial"]
@@ -621,10 +667,11 @@ class StudiesPane(Vertical):
                 self.abort_until = None
         if not self.running and L.get("stopped"):
             error = L.get("error")
+            ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
             if error and error == L["stopped"]:  # a failure: its reason once, in red
-                lines.append(f"[red]stopped: {escape(error)}[/]")
+                lines.append(f"[red]{ended}: {escape(error)}[/]")
             else:
-                lines.append(f"stopped: {escape(L['stopped'])}")
+                lines.append(f"{ended}: {escape(L['stopped'])}")
                 if error:
                     lines.append(f"[red]{escape(error)}[/]")
         self._status("\n".join(lines) + ("" if self.running else self._map_hint()))

@@ -45,3 +45,27 @@ def same_folder(a: Path, b: Path) -> bool:
         return Path(a).expanduser().resolve() == Path(b).expanduser().resolve()
     except OSError:
         return Path(a) == Path(b)
+
+
+#: the participant's number fields: (label, lowest, highest, whole numbers only)
+NUMBER_FIELDS = {
+    "age": ("age", 1, 120, True),
+    "hand_width_cm": ("hand width cm", 3, 30, False),
+    "hand_length_cm": ("hand length cm", 5, 40, False),
+}
+
+
+def field_refusal(field: str, value: str) -> str:
+    """Why ``value`` in the participant's number ``field`` is refused ('' when it is
+    empty or fits), one line naming the field and what it takes."""
+    if field not in NUMBER_FIELDS or not value.strip():
+        return ""
+    label, lo, hi, whole = NUMBER_FIELDS[field]
+    try:
+        x = float(value)
+    except ValueError:
+        x = float("nan")
+    if not lo <= x <= hi or (whole and x != int(x)):
+        what = "whole years" if whole else "a number"
+        return f"{label} = {value.strip()!r}: give {what} from {lo} to {hi}"
+    return ""

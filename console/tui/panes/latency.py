@@ -12,6 +12,7 @@ from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
 from console.tui.plots import sparkline
+from console.tui.said import said_here
 from console.tui.text import LiteralTable, escape
 
 #: the stages the issue names, in order, and where their numbers come from
@@ -88,6 +89,7 @@ class LatencyPane(Vertical):
         self._said: dict[str, str] = {}  # widget id -> the text it shows
         self._rows: list[tuple[str, ...]] = []  # the table's rows as drawn
         self._measure_until: float | None = None  # ``m``: when its camera loop stops
+        self._said_for = ""  # the loop (``source``) the line about ``m`` was true of
 
     def compose(self) -> ComposeResult:
         try:
@@ -107,6 +109,7 @@ class LatencyPane(Vertical):
         yield Static("", id="lat-head")
         yield LiteralTable(id="lat-table", cursor_type="none", show_cursor=False)
         yield Static("", id="lat-audio")
+        yield Static("", id="lat-said", markup=False)  # what became of m
         yield Static(
             "numbers come from the loop that runs: a demo's (Scenes screen, F6: camera to "
             "output) or the camera's while the Camera screen had it; m runs the camera loop "
@@ -139,10 +142,26 @@ class LatencyPane(Vertical):
 
     def action_measure(self) -> None:
         """Run the camera loop for ``MEASURE_S`` and show its numbers (they stay)."""
-        if not self.available or self.demo_run() is not None:
-            return  # a demo's loop is what shows; it runs anyway
+        if not self.available:
+            return
+        run = self.demo_run()
+        if run is not None:  # a demo's loop is what shows; it runs anyway
+            name = getattr(run, "name", "?")
+            self._tell(
+                f"m: demo {name} runs; its own loop is measured above (F6, s stops it)",
+                f"demo {name}",
+            )
+            return
+        self._tell("", "")
         self._measure_until = time.monotonic() + MEASURE_S
         self._watch(True)
+
+    def _tell(self, text: str, source: str) -> None:
+        """What became of ``m`` on its one line, true while ``source`` is the loop shown."""
+        self._said_for = source
+        self._say("lat-said", text)
+        if text:
+            said_here(self, "Latency", text, "information")
 
     def _measure_done(self) -> None:
         self._measure_until = None
@@ -211,6 +230,8 @@ class LatencyPane(Vertical):
                 self._measure_done()
             svc = self.app.session.camera_started
             if svc is None or not (svc.running or self._measure_until is not None):
+                if self._said_for:  # the demo m was told of has stopped
+                    self._tell("", "")
                 self._say(
                     "lat-head",
                     ("[b]last numbers[/b] (no loop runs now): " if self._rows else "")
@@ -224,6 +245,8 @@ class LatencyPane(Vertical):
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
             if left is not None:
                 what += f", measuring: {max(0.0, left - time.monotonic()):.0f} s left"
+        if self._said_for and self._said_for != self.source:  # what m was told is past
+            self._tell("", "")
         if self.source != self._history_source:  # sparklines: one loop
             self.history.clear()
             self._history_source = self.source
