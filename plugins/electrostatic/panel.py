@@ -72,7 +72,7 @@ class ElectrostaticPane(Vertical):
         self.notes: list[str] = []
         self.status_text = ""  # the status line: what became of the last play asked for
         self._asked = None  # the plan the status line is about (a newer one takes it)
-        self._estop_refused = False  # the line shows a refusal the e-stop caused
+        self._estop_refused = False  # the line says what the e-stop did (refused, stopped)
 
     def _offering(self, capability: type) -> Any:
         """The effect offering ``capability`` (``Conditions``, ``Presets``), or None."""
@@ -234,7 +234,8 @@ class ElectrostaticPane(Vertical):
             text, error = f"{what}: {outcome.refused}", True
         else:
             text, error = f"{what}: stopped by {outcome.stopped}", True
-        from_thread(self.app, self._about, plan, text, error, outcome.estop_refused)
+        by_estop = outcome.estop_refused or outcome.stopped.startswith("the e-stop")
+        from_thread(self.app, self._about, plan, text, error, by_estop)
 
     def _asking(self, plan, what: str) -> None:
         self._asked = plan
@@ -258,7 +259,7 @@ class ElectrostaticPane(Vertical):
                 said_here(found.first(Static), "Electrostatic", text)
 
     def on_session_message(self, message: SessionMessage) -> None:
-        """A reset clears the refusal the e-stop caused."""
+        """A reset clears what the line said the e-stop did (a refusal, a stopped play)."""
         ev = message.event
         if isinstance(ev, Started) and ev.topic == "estop" and self._estop_refused:
             self._asked = None

@@ -115,12 +115,12 @@ def test_a_relay_refused_during_an_estop_is_said_on_its_row_not_as_a_toast(plugi
             row = app.query_one("#interlock-1", Static)
             assert "refused: e-stop active" in text_in(app, row)
             assert not any("relay 1" in t for t in _toasts(app)), _toasts(app)
-            # after the reset the row says what became of the toggle, whole at 80 columns
+            # after the reset the row says the relay's state now, whole at 80 columns
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
-            await wait_for(pilot, lambda: "press again" in str(row.render()), 10, "cleared")
+            await wait_for(pilot, lambda: "refused" not in str(row.render()), 10, "cleared")
             await pilot.pause(0.2)
-            assert_whole(app, row, "ready (the e-stop dropped your toggle: press again)")
+            assert_whole(app, row, "open - ready (switches only in silence)")
 
     asyncio.run(scenario())
 

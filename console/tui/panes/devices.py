@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 
 from rich.markup import escape
 from rich.text import Text
@@ -17,6 +18,7 @@ from textual.widgets import DataTable, Select, Static
 
 from console.config.profile import load_profile, overrides_path, save_overrides
 from console.core.errors import UserError
+from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose
 from console.signals.stimuli import STIMULI, make_stimulus
@@ -29,6 +31,8 @@ log = logging.getLogger(__name__)
 #: the widest a table cell gets on this screen (a longer text ends in "…": the whole
 #: text is in the log, ctrl+l, and enter on the row says it)
 CELL_MAX = 36
+#: the plugins table's description column: the table fits 80 columns with it
+PLUGIN_DESC_MAX = 24
 
 
 def clip(text: str, width: int = CELL_MAX) -> str:
@@ -48,6 +52,16 @@ def _cell(text: str, where: str, width: int = CELL_MAX) -> Text:
 
 
 _LOGGED: set[tuple[str, str]] = set()
+
+
+def found(rows) -> str:
+    """What a doctor check found, counted by state ("4 simulated, 1 missing")."""
+    counts: dict[str, int] = {}
+    for s in rows:
+        counts[s.state] = counts.get(s.state, 0) + 1
+    told = ", ".join(f"{n} {state}" for state, n in counts.items()) or "no devices"
+    bad = any(state in ("missing", "error") for state in counts)
+    return told + ("; the fix column says what to do" if bad else "")
 
 
 def _ms(seconds: float) -> str:
@@ -71,7 +85,7 @@ class DevicesPane(VerticalScroll):
         "d        re-check the profile's devices (doctor)"
     )
     BINDINGS = [
-        Binding("d", "doctor", "Re-check devices"),
+        Binding("d", "doctor(True)", "Re-check devices"),
         Binding("l", "list_devices", "List again"),
         Binding("t", "test_output", "Test signal"),
     ]
@@ -81,6 +95,8 @@ class DevicesPane(VerticalScroll):
         self.audio_rows: dict[str, tuple[str, str]] = {}  # row key -> (driver, device)
         self.no_device_rows: dict[str, str] = {}  # row key -> why it cannot be picked
         self.relay_rows: dict[str, str] = {}  # row key -> driver
+        self.missing_boards: dict[str, DeviceStatus] = {}  # row key -> probe found nothing
+        self.plugin_rows: dict[str, str] = {}  # row key -> the plugin's line, whole
         self.result = ""  # the last pick or test, as shown
 
     def compose(self) -> ComposeResult:
@@ -127,7 +143,10 @@ class DevicesPane(VerticalScroll):
             for name, reg in sorted(regs.items()):
                 if reg.tab is not None:
                     continue  # a screen of the console: its tab shows it
-                plug.add_row(Text(kind), Text(name), Text(reg.plugin), Text(reg.description))
+                key = f"{kind}\x00{name}"
+                self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
+                about = _cell(reg.description, f"{kind} {name}", PLUGIN_DESC_MAX)
+                plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
         self.call_after_refresh(self.action_doctor)
         self.call_after_refresh(self.action_list_devices)
 
@@ -151,19 +170,24 @@ class DevicesPane(VerticalScroll):
 
     # ------------------------------------------------------------------ doctor
     @work(thread=True, exclusive=True, group="doctor")
-    def action_doctor(self) -> None:
-
+    def action_doctor(self, said: bool = False) -> None:
+        """Re-check the profile's devices; ``said`` (the key d): the status line says
+        it is checking, then what the check found."""
         try:
             app = self.app
             prof = self._profile()
         except RuntimeError:  # Textual's NoActiveAppError: the console closed before this ran
             return
+        if said:
+            self._say("re-checking the profile's devices ...")
         rows = diagnose(prof, app.ctx.pm)
-        from_thread(app, self._show, rows)
+        from_thread(app, self._show, rows, said)
 
-    def _show(self, rows) -> None:
+    def _show(self, rows, said: bool = False) -> None:
         if not self.query("#device-table"):  # a worker finishing while the console closes
             return
+        if said:
+            self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         table = self.query_one("#device-table", DataTable)
         table.clear()
         for s in rows:
@@ -226,9 +250,12 @@ class DevicesPane(VerticalScroll):
         rtable = self.query_one("#relay-table", DataTable)
         rtable.clear()
         self.relay_rows.clear()
+        self.missing_boards.clear()
         for name, description, status in relays:
             key = f"relay\x00{name}"
             self.relay_rows[key] = name
+            if status.state == "missing":  # its probe found nothing to open
+                self.missing_boards[key] = status
             rtable.add_row(
                 "●" if name == relay_drv else "",
                 Text(name),
@@ -257,9 +284,23 @@ class DevicesPane(VerticalScroll):
 
     @on(DataTable.RowSelected, "#relay-table")
     def _pick_relays(self, event: DataTable.RowSelected) -> None:
-        driver = self.relay_rows.get(str(event.row_key.value))
-        if driver is not None:
-            self._apply({"relays.driver": driver}, f"relay board {driver!r}")
+        key = str(event.row_key.value)
+        driver = self.relay_rows.get(key)
+        if driver is None:
+            return
+        missing = self.missing_boards.get(key)
+        if missing is not None:  # nothing there to open: the outputs stay as they are
+            fix = missing.fix or "connect it"
+            self._show_result(
+                f"relay board {driver!r} is missing ({missing.why}): {fix}, then press l"
+            )
+            return
+        self._apply({"relays.driver": driver}, f"relay board {driver!r}")
+
+    @on(DataTable.RowSelected, "#plugin-table")
+    def _about_plugin(self, event: DataTable.RowSelected) -> None:
+        """Enter on a plugin's row: its whole line (the table cuts it)."""
+        self._show_result(self.plugin_rows.get(str(event.row_key.value), ""))
 
     @work(thread=True, exclusive=True, group="pick")
     def _apply(self, settings: dict, what: str) -> None:
@@ -290,11 +331,12 @@ class DevicesPane(VerticalScroll):
         else:  # the session reopened the previous outputs: their settings come back too
             _restore(path, old_text)
             back = "the previous outputs are back" if session.outputs else "no outputs open"
-            self._say(
-                f"{what} did not open: {session.reopen_error}; {back} and "
-                f"{short_path(path)} keeps its previous settings",
-                error=True,
+            kept = (  # name the file only if it is there
+                "nothing was saved"
+                if old_text is None
+                else f"{short_path(path)} keeps its previous settings"
             )
+            self._say(f"{what} did not open: {session.reopen_error}; {back}, {kept}", error=True)
         from_thread(self.app, self._after_pick)
 
     def _after_pick(self) -> None:

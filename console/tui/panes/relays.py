@@ -8,7 +8,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
-from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started
+from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.tui.live import live_of
 from console.tui.safety_bar import relay_names
 from console.tui.said import said_here
@@ -22,13 +22,27 @@ def interlock(
     status: dict,
     pending: dict[int, bool],
     refused: dict[int, str],
-    cleared: set[int] | frozenset[int] = frozenset(),
+    opened: set[int] | frozenset[int] = frozenset(),
 ) -> str:
-    """Why channel ``ch`` can or cannot switch now (what the operator reads); ``cleared``:
-    channels whose refusal the e-stop caused and a reset has cleared since."""
+    """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``), then
+    why it can or cannot switch now; ``opened``: relays the operator had closed and an
+    e-stop opened (said until the operator toggles them or they close again)."""
     gate = status["gate"]
-    if gate["estopped"]:  # every relay is held open; refused: the one the operator pressed
-        said = ESTOP_REFUSAL if ch in refused or ch in pending else "open: e-stop active"
+    state = "closed" if ch in gate.get("relays_closed", ()) else "open"
+    return f"{state} - {_why(ch, state, status, pending, refused, opened)}"
+
+
+def _why(
+    ch: int,
+    state: str,
+    status: dict,
+    pending: dict[int, bool],
+    refused: dict[int, str],
+    opened: set[int] | frozenset[int],
+) -> str:
+    """Why relay ``ch`` can or cannot switch now (markup)."""
+    if status["gate"]["estopped"]:  # every relay is held open; refused: the one pressed
+        said = ESTOP_REFUSAL if ch in refused or ch in pending else "e-stop active"
         return f"[red]{escape(said)} ({escape(ESTOP_FIX)})[/]"
     if ch in pending:
         want = "close" if pending[ch] else "open"
@@ -38,10 +52,10 @@ def interlock(
                 f"when it ends[/]"
             )
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
-    if ch in refused and ch in cleared:
-        return "[green]ready[/] (the e-stop dropped your toggle: press again)"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
+    if ch in opened and state == "open":
+        return f"[yellow]the e-stop opened it; press {ch} to close again[/]"
     return "[green]ready[/] (switches only in silence)"
 
 
@@ -82,7 +96,11 @@ class RelaysPane(VerticalScroll):
         self.pending: dict[int, bool] = {}
         self.refused: dict[int, str] = {}
         self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
-        self._cleared: set[int] = set()  # ... and a reset cleared since (kept in ``refused``)
+        self._operator: frozenset[int] = frozenset()  # the operator's setting, last read
+        self._mine: set[int] = set()  # ... and as the toggles here set it (a read can race)
+        self._reset = True  # no e-stop since the last reset (a status read before the
+        # e-stop can arrive after it: it says nothing about the operator's setting then)
+        self._opened: set[int] = set()  # ... of it, what an e-stop opened (said on its row)
         self._names: dict[int, str] = {}  # what each relay switches, as the profile says
         self._log_len = -1
         self._rows: dict[int, tuple[Switch, Static]] = {}  # channel -> its switch, state
@@ -132,11 +150,12 @@ class RelaysPane(VerticalScroll):
         if self._table is None:
             return  # not mounted yet: ``on_mount`` draws the state then
         closed = set(status["gate"]["relays_closed"])
+        self._note_operator(status)
         for ch, (sw, state) in self._rows.items():
             if ch not in self.pending and sw.value != (ch in closed):
                 with sw.prevent(Switch.Changed):
                     sw.value = ch in closed
-            text = interlock(ch, status, self.pending, self.refused, self._cleared)
+            text = interlock(ch, status, self.pending, self.refused, self._opened)
             if self._said.get(ch) != text:
                 self._said[ch] = text
                 state.update(text, layout=False)  # one line each
@@ -146,6 +165,14 @@ class RelaysPane(VerticalScroll):
             fs = float(self.app.ctx.profile.get("audio.sample_rate_hz"))
             for row in log_rows(log[-50:], fs, self._names):
                 self._table.add_row(*row)
+
+    def _note_operator(self, status: dict) -> None:
+        """Keep the operator's own setting as last read outside an e-stop (what an e-stop
+        opens); a relay of it closed again no longer reads as opened by the e-stop."""
+        if not self._reset or status["gate"]["estopped"] or "operator_relays" not in status:
+            return
+        self._operator = frozenset(status["operator_relays"])
+        self._opened -= self._operator
 
     def _redraw(self) -> None:
         """Draw with the output state as the app last read it (a request or its result
@@ -167,18 +194,25 @@ class RelaysPane(VerticalScroll):
         self.request(ch, not closed)
 
     def on_session_message(self, message: SessionMessage) -> None:
-        """A reset (``Started`` on topic ``estop``) clears the refusals the e-stop
-        caused: the relays can switch again, and their lines say so."""
+        """An e-stop (``Stopped`` on topic ``estop``) opens the operator's relays: their
+        rows say so after the reset. A reset (``Started`` on topic ``estop``) clears the
+        refusals the e-stop caused: the rows say the relays' state now."""
         ev = message.event
-        if isinstance(ev, Started) and ev.topic == "estop" and self._estop_refused:
-            self._cleared |= self._estop_refused
+        if ev.topic != "estop":
+            return
+        if isinstance(ev, Stopped):
+            self._opened |= self._operator | self._mine
+            self._operator, self._mine, self._reset = frozenset(), set(), False
+        elif isinstance(ev, Started):
+            self._reset = True
+            for ch in self._estop_refused:
+                self.refused.pop(ch, None)
             self._estop_refused.clear()
-            self._redraw()
+        self._redraw()
 
     def request(self, ch: int, closed: bool) -> None:
         self.refused.pop(ch, None)
         self._estop_refused.discard(ch)
-        self._cleared.discard(ch)
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key itself: the worker may run only after a quick reset, and
@@ -187,6 +221,7 @@ class RelaysPane(VerticalScroll):
             self._estop_refused.add(ch)
             self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
             return
+        self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
         self.pending[ch] = closed
         self._redraw()
         self._switch(ch, closed)
@@ -207,7 +242,9 @@ class RelaysPane(VerticalScroll):
             from_thread(self.app, self._done, ch, str(exc))
 
     def _done(self, ch: int, error: str) -> None:
-        self.pending.pop(ch, None)
+        want = self.pending.pop(ch, None)
+        if not error and want is not None:  # the operator's setting now has it so
+            (self._mine.add if want else self._mine.discard)(ch)
         if error:  # the relay's row says it (its one place), the log keeps it
             self.refused[ch] = error
             said_here(self, "Relays", f"relay {ch}: {error}")
