@@ -68,6 +68,7 @@ def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_fil
             status = str(pane.query_one("#study-status", Static).render())
             assert "P01" in status and "/200 trials done" in status and "Rprelim" in status
             await pilot.click("#abort")  # asks first
+            await pilot.pause(0.4)  # a click in the button's 0.2 s press effect is no press
             await pilot.click("#abort")
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             stopped_at = int(bar.progress)
@@ -81,6 +82,7 @@ def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_fil
             await pilot.click("#start")
             await wait_for(pilot, lambda: (bar.progress or 0) >= stopped_at + 2, what="resumed")
             await pilot.click("#abort")  # asks first
+            await pilot.pause(0.4)  # a click in the button's 0.2 s press effect is no press
             await pilot.click("#abort")
             await wait_for(pilot, lambda: pane.running is None, what="stopped again")
             events = _events(tmp_path / "P01" / "trials.jsonl")
