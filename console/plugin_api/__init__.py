@@ -36,7 +36,8 @@ What this module offers, by where it comes from:
   ``PulseSpec``, ``Envelope``, ``smooth_square``, ``spec_problem``
 - the vibration map: ``VibrationMap``, ``make_map``, ``map_from_arrays``, ``load_map``,
   ``save_map``, ``grid_points_mm``, ``KEYS``, ``FIX``, ``MAX_FRF_UM_PER_V``
-- files: ``write_text_atomic``, ``append_json_line``, ``read_bytes_capped``,
+- files: ``write_text_atomic``, ``append_json_line`` and its reader ``read_json_lines``
+  (``decode``, ``parse_json``, ``torn``, ``MAX_JSON_DEPTH``), ``read_bytes_capped``,
   ``parse_toml_text``, ``read_npz``, ``npz_keys``, ``json_depth``, ``cache_dir``,
   ``data_dir``, ``cached_arrays``, ``entry_path``, ``input_hash``
 - real time and benchmarks: ``realtime_priority``, ``support_priority``,
@@ -107,6 +108,8 @@ from console.core.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
 from console.files.atomic import append_json_line, write_text_atomic
 from console.files.cache_files import cached_arrays, entry_path, input_hash
 from console.files.file_read import parse_toml_text, read_bytes_capped
+from console.files.json_lines import MAX_DEPTH as MAX_JSON_DEPTH
+from console.files.json_lines import decode, parse_json, read_json_lines, torn
 from console.files.npz_safe import json_depth, npz_keys, read_npz
 from console.files.paths import cache_dir, data_dir
 from console.files.vibration_map import (
@@ -229,6 +232,11 @@ __all__ = [
     "write_text_atomic",
     "parse_toml_text",
     "read_bytes_capped",
+    "read_json_lines",
+    "decode",
+    "parse_json",
+    "torn",
+    "MAX_JSON_DEPTH",
     "json_depth",
     "npz_keys",
     "read_npz",
