@@ -8,7 +8,8 @@ What it offers:
 - workers and threads: ``LongWork`` (a long job with progress and cancel),
   ``from_thread`` (call the app from a worker thread)
 - the session: ``SessionMessage`` (a session event posted to the screen)
-- widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows)
+- widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows),
+  ``ConsoleFooter`` (the footer every screen shows: E-STOP, ``f1-f10`` and ``?`` always)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
   a toast only when the screen is not in view; the console's rule, ``console.tui.said``)
@@ -17,6 +18,7 @@ What it offers:
 from __future__ import annotations
 
 from console.tui.long_work import LongWork
+from console.tui.narrow import ConsoleFooter
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
@@ -24,6 +26,7 @@ from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread, short_path
 
 __all__ = [
+    "ConsoleFooter",
     "LiteralTable",
     "LongWork",
     "SafetyBar",

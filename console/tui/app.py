@@ -314,6 +314,9 @@ class HapTableApp(App):
             return None
 
     async def action_show_tab(self, tab: str) -> None:
+        leave = getattr(self.screen, "leave_for_screen", None)  # a panel on top (F-key):
+        if self.screen is not self.base and leave is not None and not leave():
+            return  # it closes first, or says on its own line why not
         # the pane is built on first use; it finishes mounting after the switch (the focus
         # request waits for it): awaiting its mount here could hold the switch back
         self.ensure_pane(tab)

@@ -18,11 +18,19 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
-from textual.widgets import Button, Footer, Input, Label, Static
+from textual.widgets import Button, Input, Label, Static
 
 from console.plugin_api import UserError, load_profile
 from console.plugin_api import data_dir as console_data_dir
-from console.plugin_api.tui import LongWork, SafetyBar, escape, from_thread, short_path
+from console.plugin_api.tui import (
+    ConsoleFooter,
+    LongWork,
+    SafetyBar,
+    escape,
+    from_thread,
+    said_here,
+    short_path,
+)
 
 from .jobs import describe_files, synth_atomic, train_and_evaluate
 from .model import GestureModel
@@ -146,13 +154,15 @@ class GesturesPanel(Screen):
     GesturesPanel #gp-buttons > Button { min-width: 10; height: 1; border: none; margin-right: 1; }
     GesturesPanel #gp-files { margin-top: 1; }
     GesturesPanel #gp-result { margin-top: 1; }
+    GesturesPanel #gp-work { height: auto; }  /* the estimate's line whole, wrapped */
+    GesturesPanel #gp-work > Label { height: auto; }
     """
     BINDINGS = [
         Binding("s", "synth", "synthesize"),
         Binding("t", "train", "train+eval"),
         Binding("x", "cancel", "cancel"),
+        Binding("escape", "back", "back"),  # before r: the footer keeps it at 80 columns
         Binding("r", "refresh", "refresh"),
-        Binding("escape", "back", "back"),
         Binding("question_mark", "help", "help", show=False),
     ]
 
@@ -189,7 +199,7 @@ class GesturesPanel(Screen):
             yield Static("", id="gp-files")
             yield Static("", id="gp-result")
         yield SafetyBar(id="safety")
-        yield Footer()
+        yield ConsoleFooter()  # E-STOP, f1-f10 and ? whatever the width
 
     def on_mount(self) -> None:
         self.query_one(SafetyBar).show(None)
@@ -334,6 +344,17 @@ class GesturesPanel(Screen):
             return
         self.work.cancel()
         self.app.pop_screen()
+
+    def leave_for_screen(self) -> bool:
+        """An F-key (another screen, ``HapTableApp.action_show_tab``): the panel closes
+        and the screen shows; while work runs here it stays and says why."""
+        if self.work.busy:
+            text = f"{self.work.name_running} runs here: x cancels it, then the F-key again"
+            self.query_one("#gp-result", Static).update(text)
+            said_here(self.work, "Gestures", text, "warning")
+            return False
+        self.app.pop_screen()
+        return True
 
     def action_help(self) -> None:
         self.app.notify(HELP, title="Gestures", timeout=10)

@@ -24,6 +24,12 @@ def _app(plugins, initial):
     return HapTableApp(Context("sim", plugins), fast=True, initial=initial)
 
 
+def _said(app) -> str:
+    """The Camera screen's status line (its own outcomes: one error, one place)."""
+    found = app.query("#camera-status")
+    return str(found.first().render()) if found else ""
+
+
 async def _first_frame(app, pilot):
     await wait_for(
         pilot,
@@ -234,12 +240,11 @@ def test_w_keeps_the_tuned_thresholds_for_the_profile(plugins):
             await pilot.press("T")
             await wait_for(pilot, lambda: svc.params()["body_threshold"] == before + 2)
             await pilot.press("W")
-            where = paths.profile_config_dir("sim", "overrides.toml")
             await wait_for(
                 pilot,
-                lambda: any(str(where) in str(n.message) for n in app._notifications),
+                lambda: "overrides.toml" in _said(app),
                 10,
-                "the notification naming the file",
+                "the status line naming the file",
             )
             return before
 
@@ -315,12 +320,11 @@ def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
             await pilot.press("minus")
             assert svc.classifier.background.alpha == pytest.approx(alpha - 0.005)
             await pilot.press("W")
-            where = paths.profile_config_dir("sim", "overrides.toml")
             await wait_for(
                 pilot,
-                lambda: any(str(where) in str(n.message) for n in app._notifications),
+                lambda: "overrides.toml" in _said(app),
                 10,
-                "the notification naming the file",
+                "the status line naming the file",
             )
             return before + 2, alpha - 0.005
 
@@ -362,7 +366,7 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
             await pilot.press("enter")
             await wait_for(
                 pilot,
-                lambda: any("host:port" in str(n.message) for n in app._notifications),
+                lambda: "host:port" in _said(app),
                 10,
                 "the bad target refused",
             )
@@ -431,7 +435,7 @@ def test_the_view_turns_with_the_camera_and_the_roi_is_set_from_the_screen(plugi
             await pilot.press("W")
             await wait_for(
                 pilot,
-                lambda: any("overrides.toml" in str(n.message) for n in app._notifications),
+                lambda: "overrides.toml" in _said(app),
                 10,
                 "kept",
             )

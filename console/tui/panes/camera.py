@@ -15,6 +15,8 @@ opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from textual import work
 from textual.app import ComposeResult
@@ -26,11 +28,22 @@ from textual.widgets import Input, Static
 from console.core.errors import UserError
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.plots import HalfBlockImage, downsample
+from console.tui.said import said_here
 from console.tui.text import escape
-from console.tui.util import from_thread
+from console.tui.util import from_thread, short_path
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
 VISION_VIEWS = ("diff", "highpass", "body")
+
+
+def wrap_markup(line: str, width: int) -> str:
+    """``line`` broken at spaces into lines of at most ``width`` cells (its markup tags,
+    which take no cells, counted: a line may break early, never late)."""
+    return "\n".join(textwrap.wrap(line, width, break_on_hyphens=False)) or line
+
+
+#: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
+KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
 
 
 def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:
@@ -127,14 +140,15 @@ class CameraPane(Horizontal):
         "levels are spread over the display's; [console] image or haptable console --image\n"
         "chooses)."
     )
-    # in the order of importance: the footer shows as many as fit (whole), ? lists them all
+    # in the order of importance: the footer shows as many as fit (whole: at 80 columns
+    # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all
     BINDINGS = [
+        Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
+        Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
+        Binding("v", "view", "view"),
         Binding("k", "calibrate", "calibrate"),
         Binding("g", "gestures_panel", "gestures"),
         Binding("u", "toggle_output", "TUIO"),
-        Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
-        Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
-        Binding("v", "view", "view"),
         Binding("b", "background", "background"),
         Binding("W", "save_tuning", "keep settings"),
         Binding("U", "edit_target", "TUIO target"),
@@ -173,6 +187,7 @@ class CameraPane(Horizontal):
         self._reveal_chosen = False  # scroll the chosen setting into view at the next write
         self._stretches: dict[str, GreyStretch] = {}  # view -> its display grey levels
         self._info_rows = 0  # the most lines the live block had
+        self._refused_for: str | None = None  # the borrower the status line names
 
     @property
     def image_mode(self) -> str:
@@ -183,7 +198,12 @@ class CameraPane(Horizontal):
         with Vertical(id="camera-main"):
             yield Static("", id="camera-title", markup=False)
             yield HalfBlockView("camera stopped", id="camera-view")
+            yield Static(KEYS_LINE, id="camera-keys", markup=False)
         with Vertical(id="camera-side"):
+            # the screen's status line: the outcome of its keys (``console.tui.said``)
+            status = Static("", id="camera-status", markup=False)
+            status.display = False
+            yield status
             # the wizard's step or result (with the key it asks for) above what scrolls:
             # always in view while it has something to say
             wizard = Static("", id="camera-wizard")
@@ -198,9 +218,50 @@ class CameraPane(Horizontal):
                 box.display = False
                 yield box
 
+    DEFAULT_CSS = """
+    #camera-keys { dock: bottom; height: 1; color: $text-muted; }
+    #camera-status { height: auto; padding: 0 0 1 1; }
+    #camera-status.error { color: $error; }
+    """
+
     @property
     def focus_target(self):
         return self
+
+    def on_resize(self, _event) -> None:
+        """The view's column never takes the side panel's: a long message in place of
+        the picture wraps (a demo holding the camera), the panel keeps ``SIDE_COLS``."""
+        self.query_one("#camera-main").styles.max_width = self.view_area()[0]
+
+    # ------------------------------------------------------------------ status line
+    def say(self, text: str, severity: str = "information") -> None:
+        """``text`` on the screen's status line ("" clears it): the outcome of its own
+        keys, in the log too (a toast only when the screen is not in view)."""
+        found = self.query("#camera-status")
+        if not found:  # the console is closing
+            return
+        line = found.first(Static)
+        line.update(text)
+        line.display = bool(text)
+        line.set_class(severity != "information", "error")
+        if text:
+            said_here(line, "Camera", text, severity)
+
+    def _borrowed(self, key: str) -> bool:
+        """Whether a demo holds the camera: then the status line says ``key`` is refused,
+        who holds the camera and where to stop it."""
+        holder = self.service.borrower
+        if holder is None:
+            return False
+        self._refused_for = holder
+        self.say(f"{key} refused: {holder} holds the camera (stop it on Scenes, F6)", "warning")
+        return True
+
+    def _refusal_still_true(self) -> None:
+        """The refusal on the status line is cleared when the camera is back."""
+        if self._refused_for is not None and self.service.borrower != self._refused_for:
+            self._refused_for = None
+            self.say("")
 
     @property
     def service(self):
@@ -245,7 +306,8 @@ class CameraPane(Horizontal):
     INFO_PERIOD_S = 0.5
 
     def view_area(self) -> tuple[int, int]:
-        """(cols, rows) the view may take beside the side panel, below its title."""
+        """(cols, rows) the view may take beside the side panel, between its title and
+        the keys line."""
         return max(16, self.size.width - self.SIDE_COLS), max(4, self.size.height - 2)
 
     def view_size(self, aspect: float = 4 / 3) -> tuple[int, int]:
@@ -277,7 +339,8 @@ class CameraPane(Horizontal):
             self._image.display = False
         self._drawn = None
         self.query_one("#camera-view", Static).display = True
-        self._say("camera-view", text)
+        width = self.view_area()[0]  # wrapped here: the view's column is as wide as its text
+        self._say("camera-view", "\n".join(wrap_markup(line, width) for line in text.split("\n")))
         self._say("camera-title", "")
 
     def redraw(self) -> None:
@@ -285,6 +348,7 @@ class CameraPane(Horizontal):
         drawn only when it is new (or the view, the target or the size changed); the
         side panel only when its text changed."""
         svc = self.service
+        self._refusal_still_true()
         if svc.error:
             self._message(f"[red]camera: {escape(svc.error)}[/]")
             return
@@ -439,7 +503,8 @@ class CameraPane(Horizontal):
         self.shown_rgb = rgb
         if self._image is None:
             self._image = graphics_widget(self.image_mode, "camera-image")
-            self.query_one("#camera-main").mount(self._image)
+            keys = self.query_one("#camera-keys")
+            self.query_one("#camera-main").mount(self._image, before=keys)
         self.query_one("#camera-view", Static).display = False
         self._image.display = True
         self._image.styles.width = cols
@@ -555,16 +620,14 @@ class CameraPane(Horizontal):
         try:
             path = self.service.save_tuning()
         except UserError as exc:
-            from_thread(self.app, self.app.notify, str(exc), severity="warning")
+            from_thread(self.app, self.say, f"W: {exc}", "warning")
             return
-        from_thread(self.app, self.app.notify, f"vision settings kept in {path}", timeout=4)
+        from_thread(self.app, self.say, f"vision settings kept in {short_path(path)}")
 
     def _output(self) -> str | None:
         names = list(self.service.switches())
         if not names:
-            self.app.notify(
-                "no switchable output: the tuio plugin is not loaded", severity="warning"
-            )
+            self.say("no switchable output: the tuio plugin is not loaded", "warning")
         return names[0] if names else None
 
     def action_toggle_output(self) -> None:
@@ -602,25 +665,27 @@ class CameraPane(Horizontal):
     @work(thread=True, exclusive=True, group="camera-output")
     def _switch(self, name: str, on: bool, target: str | None) -> None:
         try:
-            path = self.service.set_sink(name, on, target)
+            self.service.set_sink(name, on, target)
         except UserError as exc:
-            from_thread(self.app, self.app.notify, str(exc), severity="warning")
+            again = "U" if target is not None else "u"
+            from_thread(self.app, self.say, f"{exc} ({again} again to retry)", "warning")
             return
-        on, where = self.service.sink_state(name)
-        from_thread(
-            self.app,
-            self.app.notify,
-            f"{name} {'on' if on else 'off'} -> {where} (kept in {path})",
-            timeout=4,
-        )
+        on, where = self.service.sink_state(name)  # the file: ? help, profile overrides
+        said = f"{name} {'on' if on else 'off'} -> {where} (kept for the profile)"
+        from_thread(self.app, self.say, said)
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)
         self.view = views[(views.index(self.view) + 1) % len(views)]
 
     def action_background(self) -> None:
+        if self._borrowed("b"):
+            return
         n = self.service.capture_background()
-        self.app.notify(f"background captured from {n} frames" if n else "no frames yet", timeout=3)
+        if n:
+            self.say(f"background captured from {n} frames")
+        else:
+            self.say("b: no frames yet: wait for the view, then b again", "warning")
 
     # ------------------------------------------------------------------ calibration
     @property
@@ -647,7 +712,8 @@ class CameraPane(Horizontal):
         return self.wizard.target_px()
 
     def action_calibrate(self) -> None:
-        self.wizard.start()
+        if not self._borrowed("k"):
+            self.wizard.start()
 
     def action_skip_target(self) -> None:
         self.wizard.skip()
@@ -658,9 +724,7 @@ class CameraPane(Horizontal):
     def action_gestures_panel(self) -> None:
         reg = self.app.ctx.pm.of("panel").get("gestures")
         if reg is None:
-            self.app.notify(
-                "no gestures panel: the gestures plugin is not loaded", severity="warning"
-            )
+            self.say("no gestures panel: the gestures plugin is not loaded", "warning")
             return
         self.app.push_screen(reg.factory(self.app))
 
@@ -668,6 +732,6 @@ class CameraPane(Horizontal):
         try:
             path = self.wizard.save()
         except UserError as exc:
-            self.app.notify(str(exc), severity="warning")
+            self.say(f"S: {exc}", "warning")
             return
-        self.app.notify(f"touch calibration saved to {path}")
+        self.say(f"touch calibration saved to {short_path(path)}")
