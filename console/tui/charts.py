@@ -109,6 +109,7 @@ class Chart(PlotextPlot):
         db_y: bool = False,
         db_ref: float = 1.0,
         db_floor: float = -120.0,
+        zero_y: bool = False,
         name: str | None = None,
         id: str | None = None,  # noqa: A002 - Textual's name
         classes: str | None = None,
@@ -118,6 +119,7 @@ class Chart(PlotextPlot):
         self.x_label, self.x_unit = x_label, x_unit
         self.y_label, self.y_unit = y_label, y_unit
         self.log_x, self.db_y, self.db_ref, self.db_floor = log_x, db_y, db_ref, db_floor
+        self.zero_y = zero_y  # y symmetric about 0, its zero labelled (a voltage)
         self.series: tuple[Series, ...] = ()
         self.empty_text = "nothing to plot"
 
@@ -200,9 +202,22 @@ class Chart(PlotextPlot):
         plt.ylabel(self.y_axis_label)
         if self.log_x:
             plt.xscale("log")
+        drawn = self.drawn()
         for (label, x, y), colour in zip(
-            self.drawn(), SERIES_COLOURS * (1 + len(self.series)), strict=False
+            drawn, SERIES_COLOURS * (1 + len(self.series)), strict=False
         ):
             if x.size:
                 plt.plot(x.tolist(), y.tolist(), label=label, color=colour, marker="braille")
+        if self.zero_y:
+            self._zero_centred(plt, drawn)
         return super().render()
+
+    def _zero_centred(self, plt, drawn: list[tuple[str, np.ndarray, np.ndarray]]) -> None:
+        """y from -top to top with 0 a labelled tick (``zero_y``); fewer ticks on a short
+        chart, so no label lands on 0's row."""
+        top = max((float(np.max(np.abs(y))) for _l, _x, y in drawn if y.size), default=0.0)
+        top = top or 1.0
+        rows = self.size.height - 5  # title, the x axis, its ticks and label, a margin
+        half = 3 if rows >= 9 else 2 if rows >= 5 else 1
+        plt.ylim(-top, top)
+        plt.yticks([top * k / half for k in range(-half, half + 1)])

@@ -37,6 +37,21 @@ def plan_line(last) -> str:
     )
 
 
+def ramp_words(trace, clock: int) -> str:
+    """How the outputs went silent from gate clock ``clock``: from the level of the
+    sample before it to the first silent sample (at least one sample period, shown to
+    a sample's precision: never "0.00 ms"); silent already: no ramp, said so."""
+    ramp = trace.silent_after(clock)
+    if ramp is None:
+        return "ramp not finished in view"
+    level_v, loud_ms = ramp
+    if level_v == 0.0 and loud_ms == 0.0:
+        return "already silent: no ramp"
+    sample_ms = 1e3 / trace.sample_rate_hz
+    digits = max(1, 1 - int(np.floor(np.log10(sample_ms))))  # a sample shows
+    return f"ramp {level_v:.1f} V -> 0 V in {loud_ms + sample_ms:.{digits}f} ms"
+
+
 def marks_lines(trace) -> list[str]:
     """One line per e-stop or fault in ``trace``: when, from what level, how long the
     ramp to silence took (as the trace shows it)."""
@@ -45,13 +60,7 @@ def marks_lines(trace) -> list[str]:
         if kind not in ("estop", "fault"):
             continue
         at_ms = (clock - trace.clock) * 1e3 / trace.sample_rate_hz
-        ramp = trace.silent_after(clock)
-        how = (
-            f"ramp {ramp[0]:.1f} V -> 0 V in {ramp[1]:.2f} ms"
-            if ramp is not None
-            else "ramp not finished in view"
-        )
-        lines.append(f"{kind} at {at_ms:.1f} ms: {how} ({message})")
+        lines.append(f"{kind} at {at_ms:.1f} ms: {ramp_words(trace, clock)} ({message})")
     return lines
 
 
@@ -88,6 +97,7 @@ class ScopePane(Vertical):
             x_unit="ms",
             y_label="output",
             y_unit="V",
+            zero_y=True,  # a voltage axis shows its zero
             id="scope-chart",
         )
         yield Static("", id="scope-info", markup=False)

@@ -99,6 +99,8 @@ class SignalsPane(Vertical):
         self._gen = 0
         self.entries: dict[str, Entry] = {}
         self._saved_shown = False  # the save key's label says "saved"
+        self._status_line = ""  # what the status line says now
+        self._refusal: str | None = None  # why the last preview failed (plots empty)
 
     def compose(self) -> ComposeResult:
         yield Input(
@@ -150,8 +152,20 @@ class SignalsPane(Vertical):
         w = self.query_one("#sig-status", Static)
         w.update(Text(line))  # literal: "[limits]" in a message is no markup
         w.set_class(error, "error")
+        self._status_line = line
         if error:  # in the log too; a toast only when this screen is not in view
             said_here(w, "Signals", line)
+        if self.preview is None:
+            self._show_no_signal()
+
+    def _show_no_signal(self) -> None:
+        """The empty plots point at the line above only while it says why they are
+        empty (the preview's refusal); once another message took it, they say how to
+        plot again."""
+        said = self._refusal is not None and self._status_line == self._refusal
+        text = "no signal: see the line above" if said else "no signal: enter plots it"
+        for cid in ("#sig-wave", "#sig-spectrum"):
+            self.query_one(cid, Chart).clear(text)
 
     @property
     def library_file(self):
@@ -253,9 +267,8 @@ class SignalsPane(Vertical):
         if gen != self._gen:
             return
         self.preview = None
+        self._refusal = " ".join(message.split())
         self.status(message, error=True)
-        for cid in ("#sig-wave", "#sig-spectrum"):
-            self.query_one(cid, Chart).clear("no signal: see the line above")
 
     def _show(self, gen: int, p: Preview, play_name: str | None) -> None:
         if gen != self._gen:

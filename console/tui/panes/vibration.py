@@ -19,7 +19,7 @@ from console.core.errors import UserError
 from console.core.types import plan_parts
 from console.core.words import AT_CONSOLE, worded
 from console.files.vibration_map import grid_cells
-from console.session.events import ESTOP_REFUSAL, Started, Stopped
+from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.session.vibration import Cancelled
 from console.tui.charts import Chart
 from console.tui.command_line import CommandLine
@@ -33,7 +33,7 @@ from console.tui.util import from_thread
 
 HELP = (
     "enter: audition the point\n"
-    "f / r: flow between the last two, either way\n"
+    "f / r: flow between the last two points, either way (listed here once chosen)\n"
     "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
     "m: measure   b: build the lookup tables   x: cancel   : command line\n"
     "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz | tables)"
@@ -46,8 +46,9 @@ class VibrationPane(VerticalScroll):
     # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
     can_focus = False
     BINDINGS = [
-        Binding("f", "flow(False)", "flow 1->2"),
-        Binding("r", "flow(True)", "flow 2->1"),
+        # no point numbers here: the info beside the grid names the two points f and r play
+        Binding("f", "flow(False)", "flow"),
+        Binding("r", "flow(True)", "flow back"),
         Binding("w", "hand('up')", "hand up", show=False),
         Binding("a", "hand('left')", "hand left", show=False),
         Binding("s", "hand('down')", "hand down", show=False),
@@ -323,7 +324,15 @@ class VibrationPane(VerticalScroll):
     def _tables_worker(self, session, summary: str, stop: threading.Event) -> None:
         self._build_tables(session, summary, stop)
 
+    def _estop_active(self) -> bool:
+        out = self.app.session.outputs
+        return out is not None and out.estopped
+
     def action_measure(self, command: str | None = None) -> None:
+        """``m``: measure the map, refused in the console's words during an e-stop."""
+        if self._estop_active():
+            self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
+            return
         self.status("measuring ...", 0.0)
         self._measure(self._new_stop("vib-long"), command)
 
@@ -397,14 +406,26 @@ class VibrationPane(VerticalScroll):
             return False
         return True
 
-    def _check_point(self, n: int) -> None:
-        """``UserError`` unless point ``n`` is in the current map (checked before a
-        command changes anything)."""
-        if not self.session.has(n):
-            pts = self.session.points
-            raise UserError(
-                f"point {n} is not in the vibration map (its points: {min(pts)}..{max(pts)})"
-            )
+    def _grid_range(self) -> str:
+        """The ids the grid shows, as ``1-84``."""
+        ids = self.cell_of or {0: (0, 0)}
+        return f"{min(ids)}-{max(ids)}"
+
+    def _points_ok(self, *points: int) -> bool:
+        """Whether ``points`` can play (checked before a command changes anything); if
+        not, the status line says why: a point off the grid names the grid's range (map
+        or not), no map says how to get one, a hole in the map says so."""
+        off = [n for n in points if n not in self.cell_of]
+        if off:
+            self._error(f"point {off[0]}: the grid has points {self._grid_range()}")
+            return False
+        if not self._need_session():
+            return False
+        hole = [n for n in points if not self.session.has(n)]
+        if hole:
+            self._error(f"point {hole[0]}: not measured in this map (its id is dimmed)")
+            return False
+        return True
 
     def on_data_table_cell_selected(self, event: DataTable.CellSelected) -> None:
         event.stop()
@@ -431,14 +452,8 @@ class VibrationPane(VerticalScroll):
     def audition(self, n: int) -> None:
         """Enter or ``:51``: play point ``n``; it becomes the selection once its plan is
         made (a refused point changes nothing)."""
-        if not self._need_session():
-            return
-        try:
-            self._check_point(n)
-        except UserError as exc:
-            self._error(str(exc))
-            return
-        self._play(lambda s: s.point_plan(n), f"point {n}", select=[n])
+        if self._points_ok(n):
+            self._play(lambda s: s.point_plan(n), f"point {n}", select=[n])
 
     def action_flow(self, reverse: bool) -> None:
         if not self._need_session():
@@ -454,27 +469,21 @@ class VibrationPane(VerticalScroll):
     def flow(self, a: int, b: int, select: bool = True) -> None:
         """The flow ``a -> b``; ``a, b`` become the selection once its plan is made
         (``select``)."""
-        if not self._need_session():
+        if not self._points_ok(a, b):
             return
-        try:
-            self._check_point(a)
-            self._check_point(b)
-            if a == b:
-                raise UserError(f"flow {a} -> {b}: pick two different points")
-        except UserError as exc:
-            self._error(str(exc))
+        if a == b:
+            self._error(f"flow {a} -> {b}: pick two different points")
             return
         chosen = [a, b] if select else None
         self._play(lambda s: s.flow_plan(a, b), f"flow {a} -> {b}", select=chosen)
 
     def action_hand(self, direction: str, n: int | None = None) -> None:
-        if not self._need_session():
-            return
         try:
             n = n or self.cursor_point()
-            self._check_point(n)
         except UserError as exc:
             self._error(str(exc))
+            return
+        if not self._points_ok(n):
             return
         i = self.session.vmap.point_index(n)
         x, y = (float(v) for v in self.session.vmap.points_mm[i])
@@ -660,10 +669,13 @@ class VibrationPane(VerticalScroll):
                 + " (active / passive: difference, frequency, actuator, contrast)"
             )
             lines.extend(entries)
+            lines.append(f"[b]f[/b]: flow {a:d} -> {n:d}   [b]r[/b]: flow {n:d} -> {a:d}")
             try:
-                lines.append(f"[b]flow {a:d} -> {n:d}[/b]: {escape(rendering(s.flow_plan(a, n)))}")
+                lines.append(f"flow {a:d} -> {n:d}: {escape(rendering(s.flow_plan(a, n)))}")
             except UserError as exc:
                 lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
+        else:
+            lines.append("f / r: audition a second point, then f flows to it")
         lines.append(f"· on the grid: a {s.hand_mm:g} mm hand fits there (w a s d)")
         freq, mags = s.frf(n)
         from_thread(self.app, self._show_info, "\n".join(lines), freq, mags, mark, n)
