@@ -669,7 +669,7 @@ class StudiesPane(Vertical):
             error = L.get("error")
             ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
             if error and error == L["stopped"]:  # a failure: its reason once, in red
-                lines.append(f"[red]{ended}: {escape(error)}[/]")
+                lines.append(f"[red]{escape(ended)}: {escape(error)}[/]")
             else:
                 lines.append(f"{ended}: {escape(L['stopped'])}")
                 if error:

@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 #: the widest a table cell gets on this screen (a longer text ends in "…": the whole
 #: text is in the log, ctrl+l, and enter on the row says it)
 CELL_MAX = 36
-#: the plugins table's description column: the table fits 80 columns with it
+#: the plugins table's description column at least (at 80 columns: the table fits)
 PLUGIN_DESC_MAX = 24
 
 
@@ -139,14 +139,24 @@ class DevicesPane(VerticalScroll):
         )
         plug = self.query_one("#plugin-table", DataTable)
         plug.add_columns("kind", "name", "plugin", "description")
-        for kind, regs in sorted(ctx.pm.registrations.items()):
-            for name, reg in sorted(regs.items()):
-                if reg.tab is not None:
-                    continue  # a screen of the console: its tab shows it
-                key = f"{kind}\x00{name}"
-                self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
-                about = _cell(reg.description, f"{kind} {name}", PLUGIN_DESC_MAX)
-                plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
+        regs = [
+            (kind, name, reg)
+            for kind, by_name in sorted(ctx.pm.registrations.items())
+            for name, reg in sorted(by_name.items())
+            if reg.tab is None  # a screen of the console: its tab shows it
+        ]
+        # the description takes what the other columns leave of the screen (each column
+        # has a cell of padding either side), at least PLUGIN_DESC_MAX
+        others = sum(
+            max((len(str(r[i] if i < 2 else r[2].plugin)) for r in regs), default=0) + 2
+            for i in range(3)
+        )
+        width = max(PLUGIN_DESC_MAX, self.app.size.width - others - 6)
+        for kind, name, reg in regs:
+            key = f"{kind}\x00{name}"
+            self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
+            about = _cell(reg.description, f"{kind} {name}", width)
+            plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
         self.call_after_refresh(self.action_doctor)
         self.call_after_refresh(self.action_list_devices)
 

@@ -55,7 +55,7 @@ def _why(
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
     if ch in opened and state == "open":
-        return f"[yellow]the e-stop opened it; press {ch} to close again[/]"
+        return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
     return "[green]ready[/] (switches only in silence)"
 
 
