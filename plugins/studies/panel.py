@@ -57,6 +57,7 @@ from .panel_text import (
     field_refusal,
     next_id,
     same_folder,
+    status_lines,
     trial_text,
 )
 from .responders import QueueResponder, parse_key
@@ -64,10 +65,11 @@ from .runner import Answer, Control
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 #: seconds in which a second ``a`` (or Abort) aborts the run the first one asked about
-CONFIRM_S = 3.0
 IDLE = "no study running: pick a protocol and a participant, then s"
 #: ``s`` during an e-stop, in the console's words for it (``console.session.events``)
 ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
+#: seconds within which a second ``a`` aborts the run
+CONFIRM_S = 3.0
 
 
 class StudiesPane(Vertical):
@@ -640,40 +642,13 @@ class StudiesPane(Vertical):
             self._view("analysis")
 
     def _show(self) -> None:
-        L = self.last
-        who = self.running or L.get("pid") or "-"  # the participant also once stopped
-        if "total" in L:
-            done = f"{escape(L['done'])}/{escape(L['total'])} trials done"
-        else:  # no plan reached yet (a refused start): no count to show
-            done = "not started" if not self.running else "preparing"
-        head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above
-        if self.control is not None and self.control.paused and self.running:
-            paused = L.get("state", "").startswith("paused")  # the runner stopped there
-            head += "  [yellow]paused[/]" if paused else "  [yellow]pausing after this trial[/]"
-        lines = [head]
-        if L.get("trial") and self.running:
-            t = L["trial"]
-            which = "next: trial" if L.get("next") else "trial"
-            lines.append(f"{which} {t['index'] + 1}: {escape(trial_text(t))}")
-        if L.get("state") and self.running:
-            lines.append(escape(L["state"]))
-        if self.running and self.abort_until is not None:
-            if time.monotonic() <= self.abort_until:
-                lines.append(
-                    f"[b]a again within {CONFIRM_S:g} s aborts {escape(self.running)}'s run[/b] "
-                    "(the trial in flight runs again on resume)"
-                )
-            else:
-                self.abort_until = None
-        if not self.running and L.get("stopped"):
-            error = L.get("error")
-            ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
-            if error and error == L["stopped"]:  # a failure: its reason once, in red
-                lines.append(f"[red]{escape(ended)}: {escape(error)}[/]")
-            else:
-                lines.append(f"{ended}: {escape(L['stopped'])}")
-                if error:
-                    lines.append(f"[red]{escape(error)}[/]")
+        if self.abort_until is not None and (
+            not self.running or time.monotonic() > self.abort_until
+        ):
+            self.abort_until = None  # the question expired
+        paused = bool(self.control is not None and self.control.paused and self.running)
+        asking = CONFIRM_S if self.abort_until is not None else None
+        lines = status_lines(self.last, self.running, paused, asking)
         self._status("\n".join(lines) + ("" if self.running else self._map_hint()))
 
     def _status(self, text: str) -> None:

@@ -1,5 +1,6 @@
 """What the Studies screen works out beside its widgets: a protocol's default results
-folder, the next participant's id, a trial in words, a text clipped to a column."""
+folder, the next participant's id, a trial in words, a text clipped to a column, the
+status block of a run."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from console.plugin_api import data_dir
+from console.plugin_api.tui import escape
 
 
 def default_out(study: str = "") -> Path:
@@ -69,3 +71,43 @@ def field_refusal(field: str, value: str) -> str:
         what = "whole years" if whole else "a number"
         return f"{label} = {value.strip()!r}: give {what} from {lo} to {hi}"
     return ""
+
+
+def status_lines(
+    last: dict[str, Any], running: str | None, paused: bool, abort_within_s: float | None
+) -> list[str]:
+    """The Studies status block (markup) for the run's ``last`` state: who and how far,
+    the trial, the runner's state, the abort question (``abort_within_s``: a second
+    ``a`` within that many seconds aborts), or how the run ended."""
+    L = last
+    who = running or L.get("pid") or "-"  # the participant also once stopped
+    if "total" in L:
+        done = f"{escape(L['done'])}/{escape(L['total'])} trials done"
+    else:  # no plan reached yet (a refused start): no count to show
+        done = "not started" if not running else "preparing"
+    head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above
+    if paused:
+        stopped_there = L.get("state", "").startswith("paused")  # the runner stopped there
+        head += "  [yellow]paused[/]" if stopped_there else "  [yellow]pausing after this trial[/]"
+    lines = [head]
+    if L.get("trial") and running:
+        t = L["trial"]
+        which = "next: trial" if L.get("next") else "trial"
+        lines.append(f"{which} {t['index'] + 1}: {escape(trial_text(t))}")
+    if L.get("state") and running:
+        lines.append(escape(L["state"]))
+    if running and abort_within_s is not None:
+        lines.append(
+            f"[b]a again within {abort_within_s:g} s aborts {escape(running)}'s run[/b] "
+            "(the trial in flight runs again on resume)"
+        )
+    if not running and L.get("stopped"):
+        error = L.get("error")
+        ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
+        if error and error == L["stopped"]:  # a failure: its reason once, in red
+            lines.append(f"[red]{escape(ended)}: {escape(error)}[/]")
+        else:
+            lines.append(f"{escape(ended)}: {escape(L['stopped'])}")
+            if error:
+                lines.append(f"[red]{escape(error)}[/]")
+    return lines

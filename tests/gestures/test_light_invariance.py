@@ -86,7 +86,7 @@ def test_noise_alone_is_no_hand_and_a_faint_hand_still_is():
 
 
 def test_clipped_touching_skin_is_counted_for_the_operator():
-    from console.tui.panes.camera import reading_lines
+    from console.tui.camera_picture import reading_lines
 
     got = {}
     for light in (1.0, 1.6):

@@ -15,7 +15,7 @@ from console.config.profile import PROJECT_PROFILES
 from console.core.types import Contact, Hand
 from console.files import paths
 from console.tui.app import HapTableApp
-from console.tui.panes.camera import overlay_pixels
+from console.tui.camera_picture import overlay_pixels
 
 from .conftest import wait_for
 
@@ -275,7 +275,7 @@ def test_contact_ids_are_written_next_to_the_contacts_on_the_view():
     contact's cell; the picture stays half blocks elsewhere."""
     from rich.console import Console
 
-    from console.tui.panes.camera import blob_labels
+    from console.tui.camera_picture import blob_labels
     from console.tui.plots import HalfBlockImage
 
     work = {"contacts": (Contact(7, (320.0, 240.0)), Contact(12, (630.0, 10.0)))}
@@ -490,14 +490,14 @@ def test_the_live_numbers_re_layout_the_panel_only_when_its_rows_may_change():
     """The side panel's live block: numbers changing within lines that fit (or keep their
     length) take the same rows (no layout of the screen); a line more, or a line that
     wraps and changed its length, may not."""
-    from console.tui.panes.camera import _same_height
+    from console.tui.camera_picture import same_height
 
     a = "twin: 7 fps\nloop 7 fps, dropped 0 (camera) + 0 (queue)\ngain 1"
-    assert _same_height(
+    assert same_height(
         a, "twin: 8 fps\nloop 8 fps, dropped 0 (camera) + 0 (queue)\ngain 0.995", 31
     )
-    assert not _same_height(a, a + "\nnoise 2.9", 31)
-    assert not _same_height(
+    assert not same_height(a, a + "\nnoise 2.9", 31)
+    assert not same_height(
         a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 31
     )
-    assert _same_height(a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 60)
+    assert same_height(a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 60)

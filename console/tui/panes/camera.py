@@ -15,8 +15,6 @@ opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
 
-import textwrap
-
 import numpy as np
 from textual import work
 from textual.app import ComposeResult
@@ -26,6 +24,13 @@ from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
+from console.tui.camera_picture import (
+    blob_labels,
+    overlay_pixels,
+    reading_lines,
+    same_height,
+    wrap_markup,
+)
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.plots import HalfBlockImage, downsample
 from console.tui.said import said_here
@@ -36,78 +41,8 @@ from console.tui.util import from_thread, short_path
 VISION_VIEWS = ("diff", "highpass", "body")
 
 
-def wrap_markup(line: str, width: int) -> str:
-    """``line`` broken at spaces into lines of at most ``width`` cells (its markup tags,
-    which take no cells, counted: a line may break early, never late)."""
-    return "\n".join(textwrap.wrap(line, width, break_on_hyphens=False)) or line
-
-
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
 KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
-
-
-def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:
-    """(2*rows, cols, 3) RGB overlay: hand outlines green, contacts red, target yellow."""
-    h, w = shape_px
-    ov = np.zeros((2 * rows, cols, 3), np.uint8)
-    sx, sy = cols / w, 2 * rows / h
-
-    def put(pts, rgb, grow: int = 0) -> None:
-        p = np.asarray(pts, float).reshape(-1, 2)
-        if p.size == 0:
-            return
-        c = np.clip((p[:, 0] * sx).astype(int), 0, cols - 1)
-        r = np.clip((p[:, 1] * sy).astype(int), 0, 2 * rows - 1)
-        for dr in range(-grow, grow + 1):
-            for dc in range(-grow, grow + 1):
-                ov[np.clip(r + dr, 0, 2 * rows - 1), np.clip(c + dc, 0, cols - 1)] = rgb
-
-    for hand in work.get("hands", ()) or ():
-        put(hand.contour_px, (60, 220, 60))
-    put([c.pos_px for c in work.get("contacts", ()) or ()], (255, 60, 60), grow=1)
-    if target_px is not None:
-        put([target_px], (255, 230, 0), grow=1)
-    return ov
-
-
-def reading_lines(readings: dict[str, float]) -> list[str]:
-    """The vision's readings as lines for the info panel: one line of values, and a
-    warning with the fix when the sensor clips on a hand."""
-    if not readings:
-        return []
-    out = [f"{escape(k)} {v:.3g}" for k, v in readings.items()]
-    clipped = readings.get("clipped px", 0)
-    if clipped > 0:
-        out.append(
-            f"[red]touching skin clips ({clipped:.0f} px at 255): lower the exposure or gain[/]"
-        )
-    return out
-
-
-def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, int], str]:
-    """``{(cell row, col): id}``: each contact's id (the classifier's) written just right
-    of the contact on a ``cols`` x ``rows`` half-block view of a ``shape_px`` image."""
-    h, w = shape_px
-    out: dict[tuple[int, int], str] = {}
-    for c in work.get("contacts", ()) or ():
-        x, y = c.pos_px
-        col = min(cols - 1, max(0, int(x * cols / w)))
-        row = min(rows - 1, max(0, int(y * 2 * rows / h) // 2))
-        out[(row, min(col + 2, cols - 1))] = str(c.id)
-    return out
-
-
-def _line_lengths(text: str) -> list[int]:
-    return [len(line) for line in text.split("\n")]
-
-
-def _same_height(before: str, after: str, width: int) -> bool:
-    """Whether ``after`` takes the rows ``before`` took in a ``width`` cells wide panel:
-    as many lines, each as long as before or (then and now) no longer than ``width``
-    (markup counted: a line that fits may be taken for one that does not, never the
-    other way)."""
-    a, b = _line_lengths(before), _line_lengths(after)
-    return len(a) == len(b) and all(x == y or max(x, y) <= width for x, y in zip(a, b, strict=True))
 
 
 class SidePanel(VerticalScroll):
@@ -393,7 +328,7 @@ class CameraPane(Horizontal):
         before = self._said.get("camera-info")
         # as many lines as before, each as long as before or within the panel's width
         # then and now (it wraps as before): the panel keeps its size, no layout to redo
-        same = before is not None and _same_height(before, info, self._info_width())
+        same = before is not None and same_height(before, info, self._info_width())
         moved = self._say("camera-info", info, layout=not same) and not same
         moved |= self._say("camera-settings", "\n".join(settings))
         found = self.query("#camera-wizard")
