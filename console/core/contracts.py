@@ -19,7 +19,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
                   FlowEffect, FlowPatchDrives, HandFlowEffect, HandFlowGeometry,
                   PrecomputedHandFlows, Conditions, Presets
-    audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v)
+    audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v);
+                  RecordsUnderruns (the twin: its underrun log)
     relay_board   RelayBoard; SimulatedRelays (the twin: switch log)
     vibrometer    Vibrometer
     scene         Scene (its events: e.g. PointsEvent)
@@ -41,6 +42,9 @@ from typing import Any, Literal, Protocol, TypedDict, runtime_checkable
 
 import numpy as np
 
+# the frame sinks' and panels' contracts: here too, where every kind's contract is found
+from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory
+from console.core.sink_contracts import SwitchableSink as SwitchableSink
 from console.core.types import (
     Contact,
     Frame,
@@ -122,6 +126,17 @@ class SimulatedAudio(AudioOutput, Protocol):
     paced: bool
 
     def recording_v(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class RecordsUnderruns(Protocol):
+    """A simulated card that logs its underruns (the twin): ``underrun_log`` (records
+    with ``clock``: the gap fell before that sample of the recording, and ``samples``),
+    and ``dac_output_card()``: the recording with the gaps inserted, card units."""
+
+    underrun_log: Any
+
+    def dac_output_card(self) -> np.ndarray: ...
 
 
 @runtime_checkable
@@ -625,47 +640,6 @@ class Vibrometer(Protocol):
     ``progress(done, total)`` may raise (an operator's cancel) to stop it."""
 
     def measure(self, progress: Callable[[int, int], None] | None = None) -> dict[str, Any]: ...
-
-
-@runtime_checkable
-class FrameSink(Protocol):
-    """Fed ``sink(frame, work)`` after the frame loop's stages (``work``: ``contacts``,
-    ``hands``, ``gesture`` ...), untimed; ``close()`` when the run ends."""
-
-    def __call__(self, frame: Frame, work: dict[str, Any]) -> None: ...
-
-    def close(self) -> None: ...
-
-
-@runtime_checkable
-class FrameSinkFactory(Protocol):
-    """``factory(profile, *, force=False) -> FrameSink | None`` (``None``: the profile
-    leaves it off; ``force`` opens it anyway)."""
-
-    def __call__(self, profile: Any, *, force: bool = False) -> FrameSink | None: ...
-
-
-@runtime_checkable
-class SwitchableSink(FrameSinkFactory, Protocol):
-    """A frame-sink factory the console switches on and off and points at a host:port
-    (the Camera screen; saved per profile): ``keys`` names its profile keys,
-    ``{"enabled": "<section>.enabled", "host": ..., "port": ...}``."""
-
-    keys: dict[str, str]
-
-
-@runtime_checkable
-class Panel(Protocol):
-    """A console panel: a Textual ``Screen`` (anything with ``compose``)."""
-
-    def compose(self) -> Any: ...
-
-
-@runtime_checkable
-class PanelFactory(Protocol):
-    """``factory(app) -> Panel``: built with the running app, not a profile."""
-
-    def __call__(self, app: Any) -> Panel: ...
 
 
 #: The contract of what each kind's factory builds (``plugins.Plugins.build`` checks it).

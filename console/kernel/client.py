@@ -73,6 +73,8 @@ class TwinRecord:
     events: list[GateEvent]
     estop_reason: str
     latency_samples: int
+    #: the twin DAC's underruns: (clock the gap fell before, its length in samples)
+    underruns: tuple[tuple[int, int], ...] = ()
 
 
 class RemoteStream:
@@ -155,6 +157,7 @@ class Outputs:
         self.role = role
         self._closed = False
         self._lost = ""
+        self._underruns: tuple[tuple[int, int], ...] = ()  # as the last recording said
         self._ids = itertools.count(1)
         self._pending: dict[int, _Pending] = {}
         self._reports: dict[int, PlayReport] = {}
@@ -610,6 +613,7 @@ class Outputs:
         h, arrays = self._call("recording", timeout_s=60.0, as_played=as_played)
         if not h.get("recording"):
             return None
+        self._underruns = tuple((int(c), int(n)) for c, n in h.get("underruns") or ())
         card_v = np.array(
             [
                 self.limits.screen_card_v if k == "screen" else self.limits.piezo_card_v
@@ -641,12 +645,14 @@ class Outputs:
     def snapshot(self) -> TwinRecord:
         """The twin's recording, relay log and the gate's events now."""
         st = self.status()
+        rec = self.recording()
         return TwinRecord(
-            self.recording(),
+            rec,
             self.relay_log(),
             self.events(),
             str(st["gate"].get("estop_reason", "")),
             int(st.get("latency_samples", 0)),
+            self._underruns if rec is not None else (),
         )
 
     @property

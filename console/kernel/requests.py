@@ -188,16 +188,19 @@ def events(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 def recording(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """What the twin's amplifiers got, in sound-card units (float32: half the bytes)."""
     # lazy: keeps NumPy out of this module's import
-    from console.core.contracts import SimulatedAudio
+    from console.core.contracts import RecordsUnderruns, SimulatedAudio
 
     if not isinstance(k.audio, SimulatedAudio):
         return {"ok": True, "recording": False}
     since = max(0, _int(h, "since", 0))
-    if h.get("as_played") is True and hasattr(k.audio, "dac_output_card"):
+    logs = isinstance(k.audio, RecordsUnderruns)
+    if h.get("as_played") is True and logs:
         rec = k.audio.dac_output_card()[since:]  # underrun gaps inserted: not clock-indexed
     else:
         rec = k.audio.recording_card(since=since)  # only the rows asked for are copied
-    return {"ok": True, "recording": True, "_arrays": [rec]}
+    # where the DAC starved (the gap fell before that clock) and for how many samples
+    gaps = [[int(g.clock), int(g.samples)] for g in list(k.audio.underrun_log)] if logs else []
+    return {"ok": True, "recording": True, "underruns": gaps, "_arrays": [rec]}
 
 
 def relay_log(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:

@@ -124,6 +124,9 @@ def write_twin_log(path: str | os.PathLike, outputs, played: list) -> Path | Non
         "played": [_plan_entry(p, i, arrays) for i, p in enumerate(played)],
         "estop_reason": record.estop_reason,
         "latency_samples": int(record.latency_samples),
+        # the DAC starved before these clocks: the samples after each (until the
+        # slew-limited follower caught up with the gate) differ from what was sent
+        "underruns": [{"clock": c, "samples": n} for c, n in record.underruns],
         "gate_events": [
             {
                 "kind": e.kind,

@@ -139,7 +139,7 @@ def test_console_in_a_terminal(tmp_path, map_file):
     pos, starts = 0, []
     for wave, meta in waves:
         first = pos + int(np.flatnonzero(rec[pos:, 0])[0])
-        err = segment_in(rec[:, 0], wave, first)
+        err = segment_in(rec[:, 0], wave, first, data["underruns"])
         assert err < 1e-3, f"{meta['label']}: differs by {err:.3g} V at sample {first}"
         start = first - int(np.flatnonzero(wave)[0])
         starts.append(start)
