@@ -10,6 +10,7 @@ What it offers:
 - the session: ``SessionMessage`` (a session event posted to the screen)
 - widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows),
   ``ConsoleFooter`` (the footer every screen shows: E-STOP, ``f1-f10`` and ``?`` always)
+- panels over a screen: ``LeavesForScreen`` (an F-key closes the panel, or it says why not)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
   a toast only when the screen is not in view; the console's rule, ``console.tui.said``)
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
+from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
@@ -27,6 +29,7 @@ from console.tui.util import from_thread, short_path
 
 __all__ = [
     "ConsoleFooter",
+    "LeavesForScreen",
     "LiteralTable",
     "LongWork",
     "SafetyBar",

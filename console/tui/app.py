@@ -34,6 +34,7 @@ from console.tui.logs import (
 )
 from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
+from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import log_said
 from console.tui.session_messages import SessionMessage
@@ -314,9 +315,10 @@ class HapTableApp(App):
             return None
 
     async def action_show_tab(self, tab: str) -> None:
-        leave = getattr(self.screen, "leave_for_screen", None)  # a panel on top (F-key):
-        if self.screen is not self.base and leave is not None and not leave():
-            return  # it closes first, or says on its own line why not
+        panel = self.screen  # a panel on top (F-key): it closes first, or says why not
+        leaves = panel is not self.base and isinstance(panel, LeavesForScreen)
+        if leaves and not panel.leave_for_screen():
+            return
         # the pane is built on first use; it finishes mounting after the switch (the focus
         # request waits for it): awaiting its mount here could hold the switch back
         self.ensure_pane(tab)

@@ -146,11 +146,8 @@ class LatencyPane(Vertical):
             return
         run = self.demo_run()
         if run is not None:  # a demo's loop is what shows; it runs anyway
-            name = getattr(run, "name", "?")
-            self._tell(
-                f"m: demo {name} runs; its own loop is measured above (F6, s stops it)",
-                f"demo {name}",
-            )
+            who = self.source if self.source.startswith("demo ") else "a demo"  # as shown
+            self._tell(f"m: {who} runs; its own loop is measured above (F6, s stops it)", who)
             return
         self._tell("", "")
         self._measure_until = time.monotonic() + MEASURE_S
