@@ -493,9 +493,7 @@ def test_the_live_numbers_re_layout_the_panel_only_when_its_rows_may_change():
     from console.tui.camera_picture import same_height
 
     a = "twin: 7 fps\nloop 7 fps, dropped 0 (camera) + 0 (queue)\ngain 1"
-    assert same_height(
-        a, "twin: 8 fps\nloop 8 fps, dropped 0 (camera) + 0 (queue)\ngain 0.995", 31
-    )
+    assert same_height(a, "twin: 8 fps\nloop 8 fps, dropped 0 (camera) + 0 (queue)\ngain 0.995", 31)
     assert not same_height(a, a + "\nnoise 2.9", 31)
     assert not same_height(
         a, "twin: 7 fps\nloop 7 fps, dropped 12 (camera) + 0 (queue)\ngain 1", 31

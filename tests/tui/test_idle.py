@@ -121,7 +121,7 @@ def test_an_estop_reaches_the_bar_by_its_event_alone(plugins, size):
             await wait_for(pilot, lambda: "E-STOP: from a shell" in _bar(app), 10, "e-stop")
             assert app.live.watch.polls <= polls + 2  # read on the event, not a timer
             assert "ctrl+r" in _bar(app)
-            assert "open: e-stop active" in str(app.query_one("#interlock-1").render())
+            assert "open - e-stop active" in str(app.query_one("#interlock-1").render())
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: _bar_idle(app), 10, "reset")
             assert "ready" in str(app.query_one("#interlock-1").render())
