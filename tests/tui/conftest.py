@@ -65,6 +65,12 @@ async def wait_for(pilot, cond, timeout_s: float = 10.0, what: str = "condition"
     raise AssertionError(f"{what} not reached in {timeout_s:g} s")
 
 
+def words_on(app, selector: str) -> str:
+    """What the widget ``selector`` shows, its words joined by single spaces (a line
+    wrapped at 80 columns reads as one)."""
+    return " ".join(str(app.query_one(selector).render()).split())
+
+
 async def command(app, pilot, text: str) -> None:
     """Type ``text`` on the screen's command line (``:`` opens it) and press enter; waits
     for the line to take the focus first (under load a key can beat the focus change)."""

@@ -8,11 +8,11 @@ import asyncio
 from console.cli.main import Context
 from console.tui.app import HapTableApp
 
-from .conftest import wait_for
+from .conftest import wait_for, words_on
 
 
 def _status(app) -> str:
-    return " ".join(str(app.query_one("#es-status").render()).split())
+    return words_on(app, "#es-status")
 
 
 def test_a_play_stopped_by_the_estop_is_not_said_after_the_reset(plugins):

@@ -15,17 +15,17 @@ from console.session.vibration import Cancelled
 from console.tui.app import HapTableApp
 from console.tui.command_line import CommandLine
 
-from .conftest import command, wait_for
+from .conftest import command, wait_for, words_on
 from .test_camera_layout import screen_lines
 from .test_screens import _load_map, _ready
 
 
 def _status(app) -> str:
-    return " ".join(str(app.query_one("#vib-status").render()).split())
+    return words_on(app, "#vib-status")
 
 
 def _info(app) -> str:
-    return " ".join(str(app.query_one("#vib-info").render()).split())
+    return words_on(app, "#vib-info")
 
 
 def test_m_during_an_estop_is_refused_in_the_console_s_words(plugins):

@@ -147,10 +147,8 @@ class DevicesPane(VerticalScroll):
         ]
         # the description takes what the other columns leave of the screen (each column
         # has a cell of padding either side), at least PLUGIN_DESC_MAX
-        others = sum(
-            max((len(str(r[i] if i < 2 else r[2].plugin)) for r in regs), default=0) + 2
-            for i in range(3)
-        )
+        cells = [(kind, name, reg.plugin) for kind, name, reg in regs]
+        others = sum(max(map(len, col), default=0) + 2 for col in zip(*cells, strict=True))
         width = max(PLUGIN_DESC_MAX, self.app.size.width - others - 6)
         for kind, name, reg in regs:
             key = f"{kind}\x00{name}"
