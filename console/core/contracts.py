@@ -470,12 +470,20 @@ class HandFlowAtlas(Protocol):
 @runtime_checkable
 class PrecomputedHandFlows(HandFlowEffect, Protocol):
     """A flow-under-hand effect that chooses every flow of a map ahead:
-    ``hand_flow_atlas(vmap, step_mm, progress=)`` (``progress(done, total, what)``;
-    raising cancels) -> ``HandFlowAtlas``, the same plans ``render_hand_flow`` gives at
-    its centres."""
+    ``hand_flow_atlas(vmap, step_mm, progress=, partial=, focus=)`` (``progress(done,
+    total, what)``; raising cancels) -> ``HandFlowAtlas``, the same plans
+    ``render_hand_flow`` gives at its centres. While it is built, ``partial(atlas)`` gets
+    the atlas whose ``has`` is true of the places searched so far, the place ``focus()``
+    returns (a hand's, or ``None``) searched next."""
 
     def hand_flow_atlas(
-        self, vmap: Any, step_mm: float, *, progress: Any = None
+        self,
+        vmap: Any,
+        step_mm: float,
+        *,
+        progress: Any = None,
+        partial: Any = None,
+        focus: Any = None,
     ) -> HandFlowAtlas: ...
 
 

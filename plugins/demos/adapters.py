@@ -18,6 +18,7 @@ plan of the nearest atlas place by lookup (``nearest``, ``lookup``).
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +30,11 @@ from console.plugin_api import (
     PrecomputedHandFlows,
     UserError,
 )
+
+#: How long a hand's flow waits for the atlas being built to search its place (searched
+#: next) before it is searched on its own: about two chunks of the atlas on a busy 2-core
+#: machine (``plugins.vibrotactile.instant.CHUNK``)
+ATLAS_WAIT_S = 3.0
 
 
 def flow_effects(plugins: Any, profile: Any) -> dict[str, Any]:
@@ -61,15 +67,46 @@ class HandFlows:
         self.planner = planner
         self._plans: dict[tuple, OutputPlan] = {}
         self.atlas: Any = None  # every flow on a grid, chosen ahead (prepare_atlas)
+        self.focus_mm: tuple[float, float] | None = None  # the place last asked for
+        self._building = False  # prepare_atlas under way
 
     def prepare_atlas(self, step_mm: float, progress=None) -> bool:
         """Choose every flow on a ``step_mm`` grid of hand centres ahead (minutes the first
         time, then read from the effect's cache); ``progress(done, total, what)``, raising
-        cancels. False when the registered effect offers no atlas."""
+        cancels. While it is built ``atlas`` holds the places searched so far, the place
+        last asked for (``lookup``) first. False when the registered effect offers no
+        atlas."""
         if not isinstance(self.effect, PrecomputedHandFlows) or step_mm <= 0:
             return False
-        self.atlas = self.effect.hand_flow_atlas(self.vmap, step_mm, progress=progress)
+
+        def partial(atlas: Any) -> None:
+            self.atlas = atlas
+
+        self._building = True
+        try:
+            self.atlas = self.effect.hand_flow_atlas(
+                self.vmap, step_mm, progress=progress, partial=partial, focus=lambda: self.focus_mm
+            )
+        finally:
+            self._building = False
         return True
+
+    def _from_atlas(self, center_mm, direction: str) -> OutputPlan | None:
+        """The atlas's plan when ``center_mm`` is one of its places: at once when searched,
+        and while the atlas is built, after waiting for its search of the place (searched
+        next, being the place last asked for) for up to ``ATLAS_WAIT_S`` rather than
+        search it twice on a busy machine. ``None``: search it here."""
+        atlas = self.atlas
+        if atlas is None:
+            return None
+        c = (float(center_mm[0]), float(center_mm[1]))
+        if atlas.nearest(c) != c:
+            return None
+        self.focus_mm = c  # searched next
+        deadline = time.monotonic() + ATLAS_WAIT_S
+        while not atlas.has(c) and self._building and time.monotonic() < deadline:
+            time.sleep(0.02)
+        return self.lookup(c, direction) if atlas.has(c) else None
 
     def nearest(self, pos_mm) -> tuple[float, float] | None:
         """The atlas place serving a hand resting at ``pos_mm`` (``None``: no atlas, or
@@ -78,7 +115,9 @@ class HandFlows:
 
     def lookup(self, center_mm, direction: str) -> OutputPlan | None:
         """The plan without a search: one made before, or the atlas's (``UserError`` when
-        the atlas says there is no flow there); ``None`` when it needs a search."""
+        the atlas says there is no flow there); ``None`` when it needs a search (or the
+        atlas being built has not searched it yet: it is searched next)."""
+        self.focus_mm = (float(center_mm[0]), float(center_mm[1]))
         hit = self._plans.get(_key(center_mm, direction))
         if hit is not None or self.atlas is None or not self.atlas.has(center_mm):
             return hit
@@ -96,6 +135,10 @@ class HandFlows:
         if direction not in DIRECTIONS:
             raise UserError(f"flow direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
         k = _key(center_mm, direction)
+        if k not in self._plans and not exhaustive:
+            soon = self._from_atlas(center_mm, direction)
+            if soon is not None:
+                return soon
         if k not in self._plans:
             req = {"center_mm": k[:2], "direction": direction, "vmap": self.vmap}
             if exhaustive:  # preparing: the reference search

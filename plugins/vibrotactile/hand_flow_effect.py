@@ -135,10 +135,14 @@ class HandFlowEffect(MapUser):
         *,
         progress: Progress | None = None,
         workers: int | None = None,
+        partial: Any = None,
+        focus: Any = None,
     ):
         """Every flow ``render_hand_flow`` gives on a ``step_mm`` grid of hand centres, in
         all directions, chosen ahead (``plugins.vibrotactile.instant.FlowAtlas``; cached
-        on disk; ``progress`` raising cancels; ``workers`` processes, default up to 2)."""
+        on disk; ``progress`` raising cancels; ``workers`` processes, default up to 2).
+        While it is built ``partial(atlas)`` gets it, its places usable as they come, the
+        one ``focus()`` names (a hand on the table) first."""
         how = self.method_of(None, "hand flow")
         if how != "paper":
             raise UserError(
@@ -156,6 +160,8 @@ class HandFlowEffect(MapUser):
             **self._kw(None),
             workers=min(2, os.cpu_count() or 1) if workers is None else int(workers),
             progress=progress,
+            partial=partial,
+            focus=focus,
         )
 
     def prepare(

@@ -42,10 +42,12 @@ from plugins.vibrotactile.cache import cached_entry
 ATLAS_VERSION = 1
 #: The staged search the atlas stores (the effect's default ``render``).
 SEARCH = {"screen_stride": 3, "screen_df_hz": 0.5, "top": 8}
-#: Places per task sent to a worker (about half a second of work: progress and cancel).
-CHUNK = 12
+#: Places per task sent to a worker (under a second of work on a busy 2-core machine: the
+#: wait before a hand's place is searched, progress and cancel).
+CHUNK = 4
 
 Progress = Callable[[int, int, str], None]  # (done, total, what); raising cancels
+Focus = Callable[[], "tuple[float, float] | None"]  # where a hand is now (None: nowhere)
 
 
 # --------------------------------------------------------------------------- synthesis
@@ -177,9 +179,12 @@ WORKER_NICE = 10
 
 
 def _init_pool_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict) -> None:
-    """A spawned worker: lowest priority first (``WORKER_NICE``), then ``_init_worker``."""
+    """A spawned worker: lowest priority first (Linux's ``SCHED_IDLE``: it runs only on a
+    CPU nothing else wants; elsewhere ``WORKER_NICE``), then ``_init_worker``."""
     with contextlib.suppress(OSError):  # not permitted: the normal priority
         os.nice(WORKER_NICE)
+    with contextlib.suppress(AttributeError, OSError):  # not Linux: the nice value only
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
     _init_worker(m, per, cap_v, kw)
 
 
@@ -189,9 +194,10 @@ def _chunk_rows(args: tuple) -> tuple[int, list[list[dict]]]:
     return start, [place_rows(w["m"], w["per"], c, w["cap_v"], **w["kw"]) for c in centers]
 
 
-def _pack(centers: np.ndarray, rows: list[list[dict]], squares: int) -> dict:
+def empty_arrays(centers: np.ndarray, squares: int) -> dict:
+    """The atlas's arrays for ``centers`` (N, 2) with no place searched yet."""
     n, nd = len(centers), len(DIRECTIONS)
-    a = {
+    return {
         "centers_mm": np.asarray(centers, float),
         "ok": np.zeros((n, nd), bool),
         "excitation": np.full((n, nd, 2), -1, np.int8),
@@ -201,12 +207,16 @@ def _pack(centers: np.ndarray, rows: list[list[dict]], squares: int) -> dict:
         "x_um": np.full((n, nd, 2), np.nan),
         "active": np.zeros((n, nd, 2, squares, squares), bool),
         "level_db": np.full((n, nd), np.nan),
+        "reasons_json": {},
     }
-    reasons: dict[str, str] = {}
-    for i, per_dir in enumerate(rows):
+
+
+def fill_rows(a: dict, start: int, rows: list[list[dict]]) -> None:
+    """Write the search's results of places ``start, start + 1, ...`` into ``a``."""
+    for i, per_dir in enumerate(rows, start):
         for j, r in enumerate(per_dir):
             if not r["ok"]:
-                reasons[f"{i},{j}"] = str(r["reason"])
+                a["reasons_json"][f"{i},{j}"] = str(r["reason"])
                 continue
             a["ok"][i, j] = True
             a["level_db"][i, j] = r["level_above_3jnd_db"]
@@ -215,8 +225,16 @@ def _pack(centers: np.ndarray, rows: list[list[dict]], squares: int) -> dict:
                 for key in ("frequency_hz", "amplitude_v", "margin_db", "x_um"):
                     a[key][i, j, k] = p[key]
                 a["active"][i, j, k] = np.asarray(p["active"], bool)
-    a["reasons_json"] = reasons
-    return a
+
+
+def _nearest_chunk(left: list[tuple], focus: Focus | None) -> tuple:
+    """Take the chunk to search next out of ``left``: the one with a place nearest the
+    place ``focus()`` names (a hand on the table), else the first."""
+    f = focus() if focus is not None else None
+    if f is None:
+        return left.pop(0)
+    d = [float(np.min(np.hypot(c[:, 0] - f[0], c[:, 1] - f[1]))) for _, c in left]
+    return left.pop(int(np.argmin(d)))
 
 
 def build_arrays(
@@ -228,47 +246,65 @@ def build_arrays(
     squares: int,
     workers: int = 2,
     progress: Progress | None = None,
+    into: tuple[dict, np.ndarray] | None = None,
+    focus: Focus | None = None,
     **kw: Any,
 ) -> dict:
     """The atlas's arrays for ``centers`` (N, 2), in ``workers`` spawned processes (1: here).
     ``progress(done, total, what)`` per chunk; an exception from it cancels (the workers
-    are terminated) and propagates."""
+    are terminated) and propagates. ``into``: (arrays, known) filled as places come
+    (``known[i]`` set once place ``i`` is written: a partial atlas reads them meanwhile).
+    ``focus()``: the place a hand is at, whose chunk is searched next."""
     centers = np.asarray(centers, float)
     kw = {**kw, "squares": squares}
     n = len(centers)
-    chunks = [(i, centers[i : i + CHUNK]) for i in range(0, n, CHUNK)]
-    rows: list = [None] * n
+    a, known = into if into is not None else (empty_arrays(centers, squares), np.zeros(n, bool))
+    left = [(i, centers[i : i + CHUNK]) for i in range(0, n, CHUNK)]
+    done = 0
 
-    def report(done: int) -> None:
+    def take(got: tuple[int, list]) -> None:
+        nonlocal done
+        start, rows = got
+        fill_rows(a, start, rows)
+        known[start : start + len(rows)] = True
+        done += len(rows)
         if progress is not None:
             progress(done, n, f"flows under a hand: {done}/{n} places x 4 directions")
 
-    report(0)
-    done = 0
-    if workers <= 1 or len(chunks) <= 1:
+    if progress is not None:
+        progress(0, n, f"flows under a hand: 0/{n} places x 4 directions")
+    if workers <= 1 or len(left) <= 1:
         _init_worker(m, per, cap_v, kw)
-        for ch in chunks:
-            start, got = _chunk_rows(ch)
-            rows[start : start + len(got)] = got
-            done += len(got)
-            report(done)
-        return _pack(centers, rows, squares)
+        while left:
+            take(_chunk_rows(_nearest_chunk(left, focus)))
+        return a
     import multiprocessing
+    import queue
 
     ctx = multiprocessing.get_context("spawn")  # never fork a threaded process
     pool = ctx.Pool(workers, initializer=_init_pool_worker, initargs=(m, per, cap_v, kw))
+    came: queue.Queue = queue.Queue()
     try:
-        for start, got in pool.imap_unordered(_chunk_rows, chunks):
-            rows[start : start + len(got)] = got
-            done += len(got)
-            report(done)
+        # one chunk per worker in flight: the next is chosen when one ends, so a hand
+        # placed meanwhile has its place searched after at most one chunk
+        busy = 0
+        while left or busy:
+            while left and busy < workers:
+                chunk = _nearest_chunk(left, focus)
+                pool.apply_async(_chunk_rows, (chunk,), callback=came.put, error_callback=came.put)
+                busy += 1
+            got = came.get()
+            busy -= 1
+            if isinstance(got, BaseException):
+                raise got
+            take(got)
         pool.close()
     except BaseException:
         pool.terminate()  # cancelled (or failed): the workers stop now
         raise
     finally:
         pool.join()
-    return _pack(centers, rows, squares)
+    return a
 
 
 # --------------------------------------------------------------------------- the atlas
@@ -310,7 +346,9 @@ class FlowAtlas:
     """Every flow under a hand on a ``step_mm`` grid: ``nearest(pos_mm)`` -> the centre
     serving a hand there (or ``None``), ``plan(center_mm, direction)`` -> its plan (the
     effect's, sample for sample; a place with no flow raises the effect's ``UserError``).
-    At most ``max_plans`` synthesised plans are kept (least recently used dropped)."""
+    At most ``max_plans`` synthesised plans are kept (least recently used dropped).
+    While it is built (``known``: a mask of the places searched so far, ``None`` once all
+    are) ``has`` is true of the places already searched only."""
 
     def __init__(
         self,
@@ -326,8 +364,10 @@ class FlowAtlas:
         max_plans: int = 8,
         build_s: float = 0.0,
         from_cache: bool = False,
+        known: np.ndarray | None = None,
     ) -> None:
         self.m, self.a = m, arrays
+        self.known = known
         self.xs, self.ys = xs, ys
         self.settings, self.band_hz, self.hand_mm = settings, band_hz, hand_mm
         self.step_mm = float(step_mm)
@@ -371,15 +411,23 @@ class FlowAtlas:
         return out[0], out[1]
 
     def has(self, center_mm) -> bool:
-        return self._index(center_mm) is not None
+        i = self._index(center_mm)
+        known = self.known
+        return i is not None and (known is None or bool(known[i]))
+
+    @property
+    def complete(self) -> bool:
+        """Every place searched (a built or cached atlas; not one still being built)."""
+        return self.known is None
 
     def result(self, center_mm, direction: str) -> dict:
         """The search's result at an atlas centre, as ``hand.hand_flow`` gives it."""
         i = self._index(center_mm)
-        if i is None:
+        if i is None or not self.has(center_mm):
+            what = "is not one of its places" if i is None else "is not searched yet"
             raise UserError(
-                f"flow atlas: {center_mm[0]:g},{center_mm[1]:g} mm is not one of its "
-                f"places (a {self.step_mm:g} mm grid); use nearest()"
+                f"flow atlas: {center_mm[0]:g},{center_mm[1]:g} mm {what} "
+                f"(a {self.step_mm:g} mm grid); use nearest() and has()"
             )
         if direction not in DIRECTIONS:
             raise UserError(f"flow direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
@@ -451,11 +499,15 @@ def load_or_build(
     workers: int = 2,
     progress: Progress | None = None,
     max_plans: int = 8,
+    partial: Callable[[FlowAtlas], None] | None = None,
+    focus: Focus | None = None,
 ) -> FlowAtlas:
     """The atlas of ``m``: read from ``cache_dir`` when a valid file for these inputs is
     there, else built (``build_arrays``) and stored. A file made from other inputs (it
     carries their key: ``console.files.cache_files``), that cannot be read or fails
-    ``check_arrays`` is logged, deleted and rebuilt, never played."""
+    ``check_arrays`` is logged, deleted and rebuilt, never played.
+    A build hands ``partial`` the atlas at once, its places usable as they are searched
+    (the place ``focus()`` names first); the same object is returned, complete."""
     import time
 
     xs, ys = atlas_axes(m, hand_mm, step_mm)
@@ -482,11 +534,26 @@ def load_or_build(
             raise UserError("key 'centers_mm': not this grid's places")
 
     took: list[float] = []
+    growing: list[FlowAtlas] = []
 
     def build() -> dict:
         t0 = time.perf_counter()
-        arrays = build_arrays(
-            m, per, centers, cap_v=cap_v, squares=squares, workers=workers, progress=progress, **kw
+        arrays, known = empty_arrays(centers, squares), np.zeros(len(centers), bool)
+        atlas = FlowAtlas(m, arrays, xs, ys, known=known, **common)
+        growing.append(atlas)
+        if partial is not None:
+            partial(atlas)
+        build_arrays(
+            m,
+            per,
+            centers,
+            cap_v=cap_v,
+            squares=squares,
+            workers=workers,
+            progress=progress,
+            into=(arrays, known),
+            focus=focus,
+            **kw,
         )
         took.append(time.perf_counter() - t0)
         check_arrays(arrays, **checks)
@@ -497,4 +564,6 @@ def load_or_build(
     )
     if from_cache:
         return FlowAtlas(m, arrays, xs, ys, from_cache=True, **common)
-    return FlowAtlas(m, arrays, xs, ys, build_s=took[0], **common)
+    atlas = growing[-1]
+    atlas.a, atlas.build_s, atlas.known = arrays, took[0], None  # complete
+    return atlas

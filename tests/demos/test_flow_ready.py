@@ -106,3 +106,5 @@ def test_the_atlas_workers_yield_the_cpu_to_the_live_loop():
         assert (
             pool.apply(os.nice, (0,)) >= os.nice(0) + WORKER_NICE or pool.apply(os.nice, (0,)) == 19
         )  # at most the lowest priority
+        if hasattr(os, "SCHED_IDLE"):  # Linux: only on a CPU nothing else wants
+            assert pool.apply(os.sched_getscheduler, (0,)) == os.SCHED_IDLE

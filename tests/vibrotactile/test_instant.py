@@ -371,3 +371,99 @@ def test_per_patch_profiles_get_no_atlas_and_plan_when_asked(setup, caplog):
     demo.stop()
     assert hand.atlas is None and "flow atlas" in caplog.text
     assert not list(s.cache.glob("flowatlas-*"))
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_hand_s_place_is_searched_first_and_usable_while_the_rest_is_built(setup, workers):
+    """The atlas being built is handed out at once: the place under a hand (``focus``) is
+    searched in the first chunks sent, its plan is the whole atlas's, and places not searched
+    yet say so (``has`` false) rather than play a half-filled row."""
+    from plugins.vibrotactile.instant import CHUNK
+
+    s = setup
+    eff = _effect(s)
+    seen: dict = {}
+    focus_place: list = []
+
+    def partial(atlas):
+        seen["atlas"] = atlas
+        focus_place.append((float(atlas.xs[-1]), float(atlas.ys[-1])))  # the far corner
+
+    def progress(done, total, what):
+        at = seen.get("atlas")
+        # the chunks first sent (one per worker) have come back
+        if at is None or done < workers * CHUNK or "first" in seen:
+            return
+        seen["first"] = (
+            done,
+            total,
+            at.has(focus_place[0]),
+            sum(at.has((float(x), float(y))) for x in at.xs for y in at.ys),
+        )
+
+    whole = eff.hand_flow_atlas(
+        str(s.path),
+        STEP_MM,
+        workers=workers,
+        progress=progress,
+        partial=partial,
+        focus=lambda: focus_place[0] if focus_place else None,
+    )
+    done, total, focus_known, known = seen["first"]
+    assert 0 < done < total, "the first chunk is reported before the build ends"
+    assert focus_known, "the place under the hand came first"
+    assert known == done < whole.places, "only searched places are usable meanwhile"
+    assert whole is seen["atlas"] and whole.complete
+    assert all(whole.has((float(x), float(y))) for x in whole.xs for y in whole.ys)
+    # the same choices as an atlas built in the grid's own order
+    ref = _effect(_uncached_setup(s)).hand_flow_atlas(str(s.path), STEP_MM, workers=1)
+    for k in ("ok", "excitation", "amplitude_v", "frequency_hz", "active"):
+        np.testing.assert_array_equal(whole.a[k], ref.a[k])
+
+
+def _uncached_setup(s):
+    return SimpleNamespace(**{**vars(s), "profile": _uncached(s.profile)})
+
+
+def test_a_hand_s_flow_waits_for_the_atlas_being_built_rather_than_search_it_twice(
+    setup, monkeypatch
+):
+    """A hand resting on a place the atlas has not searched yet gets the atlas's plan
+    (searched next, being the place asked for), not a second search of its own."""
+    import time
+
+    from plugins.demos import adapters
+    from plugins.demos.adapters import HandFlows
+
+    # the atlas's workers run only on an idle CPU: on a loaded test machine they may
+    # take longer than the demo waits before it searches on its own
+    monkeypatch.setattr(adapters, "ATLAS_WAIT_S", 120.0)
+    s = setup
+
+    class NoSearch:
+        def render(self, role, **req):
+            raise AssertionError(f"searched a second time: {req}")
+
+    hands = HandFlows(_effect(s), s.path, planner=NoSearch())
+    build = threading.Thread(
+        target=hands.prepare_atlas, args=(STEP_MM, lambda *_: time.sleep(0.2)), daemon=True
+    )
+    build.start()
+    t_end = time.monotonic() + 30
+    while hands.atlas is None and time.monotonic() < t_end:
+        time.sleep(0.01)
+    at = hands.atlas
+    place = (float(at.xs[-1]), float(at.ys[-1]))  # the last in the grid's own order
+    assert not at.has(place)
+    direct = _effect(s, cached=False)
+    for d in DIRECTIONS:
+        try:
+            ref = direct.render(center_mm=place, direction=d, vmap=str(s.path))
+        except UserError as exc:
+            with pytest.raises(UserError) as got:
+                hands.plan(place, d)
+            assert str(got.value) == str(exc)
+            continue
+        _same_plan(hands.plan(place, d), ref)
+    build.join(60)
+    assert hands.atlas.complete
