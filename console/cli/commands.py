@@ -12,7 +12,7 @@ import wave
 
 import numpy as np
 
-from console.core.errors import UserError
+from console.core.errors import EStopped, SafetyRefusal, UserError
 from console.core.options import minutes, seconds
 from console.core.suggest import suggestion
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
@@ -124,7 +124,7 @@ def play_and_report(
         print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")
         return 0
     with ctx.outputs(fast=fast) as outputs:
-        outputs.play(plan)
+        play_or_estopped(outputs, plan)
         print(f"played {plan.name}: {plan.duration_s:.2f} s in {len(plan.segments)} segment(s)")
         log = outputs.relay_log()
         if log is not None:
@@ -135,6 +135,20 @@ def play_and_report(
                     f"(outputs {' / '.join(f'{v:.1f} V' for v in r.level_v)})"
                 )
     return 0
+
+
+def play_or_estopped(outputs, plan) -> None:
+    """Play ``plan`` and wait for it; a play the e-stop ended leaves as ``EStopped``
+    (exit 4) even when its end reached us before the e-stop's event (a loaded machine:
+    the kernel sends the two from two threads), asking the kernel whether it is
+    e-stopped (its flag is set before the play ends)."""
+    try:
+        outputs.play(plan)
+    except SafetyRefusal:
+        gate = outputs.status()["gate"]
+        if gate["estopped"]:
+            raise EStopped(outputs.estopped_by or gate["estop_reason"]) from None
+        raise
 
 
 def run_play(args, ctx) -> int:

@@ -35,6 +35,7 @@ import numpy as np
 from console.core.contracts import ParametricStream
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.kernel import wire
+from console.kernel.last_plan import kernel_plan
 from console.kernel.scheduler import PlayReport
 from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
 from console.kernel.tables import Table, describe_latch, private_table, table_for
@@ -174,6 +175,7 @@ class Outputs:
         self.record: TwinRecord | None = None  # kept by ``close(keep_record=True)``
         self._sock, hello = self._connect(profile)
         self.kernel_pid = int(hello.get("kernel_pid", 0))
+        self.client_id, self.last_plan = int(hello.get("client", 0)), None  # ``scope``
         self._estopped = bool(hello.get("estopped"))
         self._estop_reason = str(hello.get("estop_reason") or "")
         latched = hello.get("latched")
@@ -633,8 +635,9 @@ class Outputs:
         ]
 
     def scope(self, seconds: float | None = 0.1) -> ScopeTrace:
-        """The newest ``seconds`` (all kept: None) of what the gate handed the driver."""
+        """The newest ``seconds`` (all: None) the gate passed; ``last_plan`` its last plan."""
         h, arrays = self._call("scope", seconds=seconds)
+        self.last_plan = kernel_plan(h.get("last_plan"), self.client_id)
         return ScopeTrace(
             arrays[0].astype(np.float64),
             self.limits.sample_rate_hz,

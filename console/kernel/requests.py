@@ -26,6 +26,8 @@ if TYPE_CHECKING:
 MAX_PLANS = 4096
 #: bytes of checked samples one client may keep
 MAX_PLAN_BYTES = 512 * 1024 * 1024
+#: plays the kernel remembers for the scope's "last plan" (whoever asked)
+PLAYS_KEPT = 8
 
 Reply = dict[str, Any] | None
 Request = Callable[["Kernel", "Client", dict[str, Any], bytearray], Reply]
@@ -76,7 +78,23 @@ def play(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
         return {"error": f"plan {h.get('plan')!r} is not checked here; send it first"}
     j = k.new_id()
     c.jobs[j] = k.scheduler.play(got[0], owner=c.cid, on_change=k.job_listener(c, j))
+    k.plays.append((_play_words(j, got[0], c), c.jobs[j]))
     return {"ok": True, "job": j}
+
+
+def _play_words(job: int, checked: Any, c: Client) -> dict[str, Any]:
+    """What the scope's "last plan" says of a play: its name, who sent it, where."""
+    return {
+        "job": job,
+        "name": checked.name,
+        "client": c.cid,
+        "pid": c.pid,
+        "role": c.role,
+        "command": c.command,
+        "duration_s": float(checked.duration_s),
+        "patches": sorted({p for patches, _ in checked.routes for p in patches}),
+        "screen": any(screen for _, screen in checked.routes),
+    }
 
 
 def prearm(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
@@ -219,7 +237,24 @@ def relay_log(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Re
 def scope(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     sec = _finite_or_none(h.get("seconds"))
     trace = k.gate.scope.read(None if sec is None else max(0.0, sec))
-    return {"ok": True, "clock": int(trace.clock), "_arrays": [trace.volts.astype("<f4")]}
+    return {
+        "ok": True,
+        "clock": int(trace.clock),
+        "last_plan": last_plan(k),
+        "_arrays": [trace.volts.astype("<f4")],
+    }
+
+
+def last_plan(k: Kernel) -> dict[str, Any] | None:
+    """The newest plan the gate started passing, whoever asked (None: none yet): its
+    name, who sent it, where it plays and its segments' clocks."""
+    for words, rep in reversed(list(k.plays)):
+        start = list(rep.segment_start)
+        if start:
+            done = rep.done.is_set()
+            end = list(rep.segment_end)
+            return {**words, "start": start, "end": end, "done": done, "error": rep.error}
+    return None
 
 
 def retire(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:

@@ -15,6 +15,7 @@ control socket, the events (latch writes and broadcasts) and the main thread (li
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import fcntl
 import json
@@ -36,7 +37,7 @@ from console.kernel import wire
 from console.kernel.line_server import LineServer, peer_cred
 from console.kernel.operator import reset_refusal
 from console.kernel.private_dir import open_private, pid_alive, write_private
-from console.kernel.requests import REQUESTS
+from console.kernel.requests import PLAYS_KEPT, REQUESTS
 from console.kernel.tables import (
     Table,
     clear_latch,
@@ -96,6 +97,8 @@ class Kernel:
         self._next_cid = 1
         self._next_id = 1
         self._request_s: dict[str, tuple[int, float, float]] = {}  # op -> (n, total, max)
+        #: the last plays, whoever asked: (what the scope says of it, its PlayReport)
+        self.plays: collections.deque = collections.deque(maxlen=PLAYS_KEPT)
         self._events: queue.SimpleQueue = queue.SimpleQueue()
         self._gate_lock = threading.Lock()  # the gate appears; an early e-stop latches
         self._quit = threading.Event()

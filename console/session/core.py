@@ -423,6 +423,19 @@ class ConsoleSession:
             return None
         return kept
 
+    def last_plan(self) -> Any:
+        """The last plan the gate passed, whoever sent it (this console, the CLI, a demo):
+        a ``console.kernel.last_plan.KernelPlan`` read from the kernel now; None before
+        any or while the console holds no outputs."""
+        out = self.outputs
+        if out is None:
+            return None
+        try:
+            out.scope(0.0)
+        except SafetyRefusal:
+            return None
+        return out.last_plan
+
     def last_played(self) -> tuple[Any, Any] | None:
         """(plan, report) of the last plan accepted for playing, else None: the report
         (``PlayReport``) has the gate clock of each segment's first and last sample."""

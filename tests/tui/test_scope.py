@@ -110,8 +110,9 @@ def test_an_estop_ramp_is_visible(plugins):
 
 
 def test_the_last_plan_is_kept_after_the_ring_moved_on_and_a_new_play_unfreezes(plugins):
-    """The scope's ring keeps ~4 s: 5 s more through the gate after a plan, ``p`` still
-    shows that plan whole (kept when it ended); the next plan played unfreezes the view."""
+    """The scope's ring keeps ~4 s: 5 s more through the gate after a plan, the session
+    still keeps that plan whole (kept when it ended); ``p`` shows the last plan the gate
+    passed (whoever sent it: issue 27); the next plan played unfreezes the view."""
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="scope")
@@ -124,12 +125,14 @@ def test_the_last_plan_is_kept_after_the_ring_moved_on_and_a_new_play_unfreezes(
             for _ in range(5):  # another part of the console plays on the outputs
                 out.play(make_stimulus("screen-180hz", FS), wait=True)
             assert app.session.scope(None).clock > start  # the ring lost the plan's start
+            kept = app.session.last_plan_trace()[1]
+            assert kept.n >= FS and kept.peak_v()["piezo"] == 20.0  # sine-PB, whole
             await pilot.press("p")
             head = _text(app, "#scope-head")
             assert "FROZEN ON THE LAST PLAN |" in head, head
-            assert "gone" not in head and "last plan sine-PB: 1.00 s on PB (done)" in head
+            assert "gone" not in head and "last plan screen-180hz: 1.00 s on screen (done)" in head
             assert pane.shown.n >= FS  # the whole second
-            assert "peak: piezo 20.0 V, screen 0.0 V" in _text(app, "#scope-info")
+            assert "peak: piezo 0.0 V" in _text(app, "#scope-info")
             assert "space runs live" in head
             # the next plan played unfreezes the view
             assert app.session.play_plan(make_stimulus("sine-PA", FS), wait=False)

@@ -23,18 +23,25 @@ TICK_S = 0.2
 
 
 def plan_line(last) -> str:
-    """The last played plan in words: name, length, where it played, and whether done."""
+    """The last plan the gate passed in words (a ``KernelPlan``): name, who sent it
+    (when not this console), length, where it played, and whether done."""
     if last is None:
         return "no plan played yet"
-    plan, report = last
-    where = sorted({p for seg in plan.segments for p in seg.patches})
-    if any(seg.screen for seg in plan.segments):
-        where.append("screen")
-    state = "playing" if not report.done.is_set() else (report.error or "done")
+    state = "playing" if not last.done else (last.error or "done")
+    sender = "" if last.own else f" from {last.who}"
     return (
-        f"last plan {plan.name or 'plan'}: {plan.duration_s:.2f} s on "
-        f"{', '.join(where) or 'nothing'} ({state})"
+        f"last plan {last.name}{sender}: {last.duration_s:.2f} s on "
+        f"{', '.join(last.where) or 'nothing'} ({state})"
     )
+
+
+def kept_trace(session, last):
+    """The copy of ``last``'s span the session kept when it ended (this console's own
+    plans only), else None."""
+    kept = session.last_plan_trace() if last is not None and last.own else None
+    if kept is None or list(kept[0].segment_start[:1]) != list(last.segment_start[:1]):
+        return None
+    return kept[1]
 
 
 def ramp_words(trace, clock: int) -> str:
@@ -84,7 +91,9 @@ class ScopePane(Vertical):
         self.window_ms = 50
         self.frozen = None  # the whole ring (ScopeTrace) while frozen
         self.plan_view = False  # frozen on the last plan's span
-        self.plan_report = None  # the PlayReport of the plan frozen on (``p``)
+        self.plan_key = None  # the key of the KernelPlan frozen on (``p``)
+        self.plan_done = False  # it had ended when the ring was frozen
+        self.last = None  # the last plan the gate passed (``KernelPlan``), as last read
         self.shown = None  # the ScopeTrace drawn now
         self._timer = None  # the live view's, while the screen shows
         self._drawn: tuple | None = None  # what the chart shows (``_signature``)
@@ -120,17 +129,18 @@ class ScopePane(Vertical):
     # ------------------------------------------------------------------ keys
     def action_freeze(self) -> None:
         if self.frozen is not None:
-            self.frozen, self.plan_view, self.plan_report = None, False, None
+            self.frozen, self.plan_view, self.plan_key = None, False, None
         else:
             self.frozen = self.app.session.scope(None)
         self._redraw()
 
     def action_last_plan(self) -> None:
         session = self.app.session
+        self.last = session.last_plan()
         self.frozen = session.scope(None)
         self.plan_view = self.frozen is not None
-        last = session.last_played()
-        self.plan_report = None if last is None else last[1]
+        self.plan_key = None if self.last is None else self.last.key
+        self.plan_done = self.last is not None and self.last.done
         self._redraw()
 
     def action_zoom(self, step: int) -> None:
@@ -143,13 +153,16 @@ class ScopePane(Vertical):
     def tick(self) -> None:
         """Every ``TICK_S`` while the screen shows: the live view redrawn when what the
         gate passed changed; a new plan unfreezes the last plan's view."""
-        if self.plan_view:
-            last = self.app.session.last_played()
-            if last is not None and last[1] is not self.plan_report:  # another plan played
-                self.frozen, self.plan_view, self.plan_report = None, False, None
-        if self.plan_view:  # the plan's copy is kept when it ends: show it then
-            kept = self.app.session.last_plan_trace()
-            if kept is not None and kept[1] is not self.shown:
+        session = self.app.session
+        self.last = session.last_plan()
+        if self.plan_view and self.last is not None and self.last.key != self.plan_key:
+            self.frozen, self.plan_view, self.plan_key = None, False, None  # another plan
+        if self.plan_view and self.last is not None and self.last.done and not self.plan_done:
+            self.frozen, self.plan_done = session.scope(None), True  # it ended: its end too
+            self._redraw()
+        elif self.plan_view:  # this console's plan's copy is kept when it ends: show it
+            kept = kept_trace(session, self.last)
+            if kept is not None and kept is not self.shown:
                 self._redraw()
         elif self.frozen is None:
             self._redraw(only_changed=True)
@@ -157,17 +170,17 @@ class ScopePane(Vertical):
     def _view(self):
         """What to draw: the live window, the frozen window or the last plan's span."""
         session = self.app.session
-        last = session.last_played()
+        last = self.last
         if self.frozen is None:
             trace = session.scope(self.window_ms / 1e3)
             return trace, "live"
         trace = self.frozen
         if self.plan_view and last is not None:
-            _plan, report = last
-            kept = session.last_plan_trace()
-            if kept is not None and report.segment_start:  # copied when it ended
-                gone = "" if report.segment_start[0] >= kept[1].clock else " (its start is gone)"
-                return kept[1], f"frozen on the last plan{gone}"
+            report = last
+            kept = kept_trace(session, last)
+            if kept is not None:  # copied when it ended
+                gone = "" if report.segment_start[0] >= kept.clock else " (its start is gone)"
+                return kept, f"frozen on the last plan{gone}"
             if report.segment_start:
                 fs = trace.sample_rate_hz
                 margin = int(PLAN_MARGIN_MS * fs / 1e3)
@@ -200,7 +213,7 @@ class ScopePane(Vertical):
         head = self.query_one("#scope-head", Static)
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
-        plan = plan_line(session.last_played())
+        plan = plan_line(self.last)
         sig = self._signature(trace, mode, plan)
         if only_changed and sig == self._drawn:
             return  # the same picture: nothing is redrawn

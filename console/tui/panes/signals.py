@@ -25,7 +25,7 @@ from console.config.signal_library import (
 )
 from console.core.errors import UserError
 from console.safety import Limits
-from console.session.events import Failed, Started, Stopped
+from console.session.events import ESTOP_FIX, Failed, PlayOutcome, Started
 from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
@@ -310,30 +310,55 @@ class SignalsPane(Vertical):
 
     @work(thread=True, group="sig-play")
     def _play(self, p: Preview, name: str) -> None:
-        ok = self.app.session.audition(p.expr, p.target, name=name)
-        if ok:
-            from_thread(self.app, self._played, name, p)
+        """Check the signal against the limits, play it through the gate and say what
+        became of it (``ConsoleSession.play``): once, on this screen's status line."""
+        from console.session.audition import audition_plan  # lazy: SciPy on first play
 
-    def _played(self, name: str, p: Preview) -> None:
+        try:
+            plan = audition_plan(self.app.ctx.profile, p.expr, p.target, name)
+        except UserError as exc:
+            from_thread(self.app, self._refused_play, name, str(exc))
+            return
+        outcome = self.app.session.play(plan)
+        from_thread(self.app, self._played, p, outcome)
+
+    def _refused_play(self, name: str, message: str) -> None:
         if self._playing == name:
             self._playing = ""
+            hint = " (ctrl+t adds it)" if "ramp_min_ms" in message else ""
+            self.status(message + hint, error=True)
+
+    def _played(self, p: Preview, outcome: PlayOutcome) -> None:
+        """The status line says how the play it announced ended (unless another play
+        took the line meanwhile)."""
+        name = outcome.name
+        if self._playing != name:
+            return
+        self._playing = ""
+        if outcome.played:
             self.status(f"played {name} on {p.target.label} ({p.summary.duration_s:.2f} s)")
+        elif outcome.refused:
+            self.status(f"{name} {outcome.refused}", error=True)
+        elif outcome.stopped.startswith("the e-stop"):
+            why = outcome.stopped.removeprefix("the e-stop").strip()
+            self.status(
+                f"{name} stopped by the e-stop{' ' + why if why else ''}; {ESTOP_FIX}, "
+                "then ctrl+o plays",
+                error=True,
+            )
+        else:
+            self.status(f"{name} stopped: {outcome.stopped}", error=True)
 
     def says(self, ev) -> bool:
-        """A refusal of this screen's play: its status line says it (``on_session_message``),
-        no toast (``console.tui.said``)."""
+        """A refusal of this screen's play: its status line says it (``_played``), no
+        toast (``console.tui.said``)."""
         return isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and bool(self._playing)
 
     def on_session_message(self, message) -> None:
+        """The e-stop's reset clears what the e-stop stopped or refused here (the play's
+        own end is said by ``_played``, once)."""
         ev = message.event
-        if isinstance(ev, Failed) and ev.topic in ("signals", "outputs") and self._playing:
-            self._playing = ""
-            hint = " (ctrl+t adds it)" if "ramp_min_ms" in ev.message else ""
-            self.status(ev.message + hint, error=True)
-        elif isinstance(ev, Stopped) and ev.topic == "estop" and self._playing:
-            self._playing = ""
-            self.status(f"e-stopped: {ev.reason} (ctrl+r resets)", error=True)
-        elif isinstance(ev, Started) and ev.topic == "estop" and self._estop_said:
+        if isinstance(ev, Started) and ev.topic == "estop" and self._estop_said:
             self.status("e-stop reset: ctrl+o plays")  # what the e-stop refused is past
 
     def action_add_ramp(self) -> None:
