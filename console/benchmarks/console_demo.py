@@ -186,7 +186,15 @@ def _camera_drops(snap: dict) -> dict:
     """Frames the demo's camera lost, in all and as a share of those it delivered."""
     lat = snap.get("latency") or {}
     lost, frames = int(lat.get("dropped_camera", 0) or 0), int(lat.get("frames", 0) or 0)
-    return {"dropped": lost, "frames": frames, "pct": 100 * lost / max(1, lost + frames)}
+    cam = snap.get("camera") or {}
+    return {
+        "dropped": lost,
+        "frames": frames,
+        "pct": 100 * lost / max(1, lost + frames),
+        # the twin camera's split (over its life): the loop reading late, or its renderer
+        "reading": cam.get("dropped_reading"),
+        "rendering": cam.get("dropped_rendering"),
+    }
 
 
 def _projector_restarts(app) -> int | None:

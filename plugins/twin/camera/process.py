@@ -311,6 +311,10 @@ class ProcessCamera:
             "rate_fps": self._rate,
             "frames": self._frames,
             "dropped": self._dropped + self._render_dropped,
+            # which side was late: the reader (the frame loop) or the renderer (the twin
+            # standing in for the camera's own hardware)
+            "dropped_reading": self._dropped,
+            "dropped_rendering": self._render_dropped,
             "alive": self._proc.poll() is None,
             "closed": self._closed,
         }
