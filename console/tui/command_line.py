@@ -6,11 +6,14 @@ so the operator fixes it instead of typing it again; one that succeeded is clear
 command whose work runs on (an import, a load) keeps its text until that work says how it
 ended (``succeeded``/``failed`` with the text it was given: a line typed over meanwhile
 is left alone). The line never selects its text on focus: a key typed after ``:`` adds
-to what is there, it never replaces it.
+to what is there, it never replaces it. ``ctrl+u`` clears the whole line (wherever the
+cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back).
 """
 
 from __future__ import annotations
 
+from textual.binding import Binding
+from textual.message import Message
 from textual.widgets import Input
 
 __all__ = ["CommandLine"]
@@ -18,7 +21,24 @@ __all__ = ["CommandLine"]
 
 class CommandLine(Input):
     """The ``:`` line. The screen handles ``CommandLine.Submitted`` (an ``Input``
-    message) and calls ``succeeded(text)`` or ``failed(text)``."""
+    message) and calls ``succeeded(text)`` or ``failed(text)``; it keeps the focus on
+    the line after a failure and handles ``CommandLine.Left`` (escape)."""
+
+    BINDINGS = [
+        Binding("ctrl+u", "clear_line", "clear the line", show=False),
+        Binding("escape", "leave", "leave the line", show=False),
+    ]
+
+    class Left(Message):
+        """Escape on the line: the screen's keys are wanted back (what was typed stays)."""
+
+        def __init__(self, line: CommandLine) -> None:
+            super().__init__()
+            self.line = line
+
+        @property
+        def control(self) -> CommandLine:
+            return self.line
 
     def __init__(self, **kw) -> None:
         kw.setdefault("select_on_focus", False)
@@ -46,3 +66,11 @@ class CommandLine(Input):
             self.value = text
         if self.value.strip() == text.strip():
             self.cursor_position = len(self.value)
+
+    def action_clear_line(self) -> None:
+        """``ctrl+u``: the whole line cleared (ctrl+z brings it back)."""
+        self.delete(0, len(self.value))
+
+    def action_leave(self) -> None:
+        """``escape``: the screen takes its keys back."""
+        self.post_message(self.Left(self))

@@ -54,13 +54,15 @@ class ElectrostaticPane(Vertical):
         "+ / -    amplitude (Vpp, held inside [limits] screen_max_vpp)\n"
         "[ / ]    frequency (10-1000 Hz)   t  sine/square   p  play the setting (1 s)"
     )
+    # the footer shows every key at 80 columns: p (the main action) first, each pair of
+    # keys (+ -, [ ]) as one entry
     BINDINGS = [
-        Binding("plus,equals_sign", "vpp(10)", "+10 Vpp"),
-        Binding("minus", "vpp(-10)", "-10 Vpp"),
-        Binding("right_square_bracket", "freq(10)", "+10 Hz"),
-        Binding("left_square_bracket", "freq(-10)", "-10 Hz"),
+        Binding("p", "play_custom", "play"),
         Binding("t", "waveform", "sine/square"),
-        Binding("p", "play_custom", "play setting"),
+        Binding("plus,equals_sign", "vpp(10)", "+10 Vpp", show=False),
+        Binding("minus", "vpp(-10)", "Vpp ±10", key_display="+ -"),
+        Binding("right_square_bracket", "freq(10)", "+10 Hz", show=False),
+        Binding("left_square_bracket", "freq(-10)", "Hz ±10", key_display="[ ]"),
     ]
 
     def __init__(self, **kw) -> None:

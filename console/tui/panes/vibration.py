@@ -16,7 +16,6 @@ from textual.coordinate import Coordinate
 from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 
 from console.core.errors import UserError
-from console.core.types import plan_parts
 from console.core.words import AT_CONSOLE, worded
 from console.files.vibration_map import grid_cells
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
@@ -24,21 +23,22 @@ from console.session.vibration import Cancelled
 from console.tui.charts import Chart
 from console.tui.command_line import CommandLine
 from console.tui.long_work import stop_check
-from console.tui.panes.vibration_words import describe_plan, point_word, rendering, table_entry
+from console.tui.panes.vibration_projector import light_audition, prepare_projector
+from console.tui.panes.vibration_words import (
+    COMMANDS,
+    HELP,
+    KEY_DIRECTIONS,
+    MEASURE_ESTOPPED,
+    Ask,
+    describe_plan,
+    info_text,
+    point_word,
+)
 from console.tui.plots import frf_series
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
-from console.tui.text import LiteralTable, escape, styled
+from console.tui.text import LiteralTable, styled
 from console.tui.util import from_thread
-
-HELP = (
-    "enter: audition the point\n"
-    "f / r: flow between the last two points, either way (listed here once chosen)\n"
-    "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
-    "m: measure   b: build the lookup tables   x: cancel   : command line\n"
-    "(51 | 51 52 | hand 51 right | import PA=a.uff ... | load map.npz | tables)"
-)
-KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
 
 class VibrationPane(VerticalScroll):
@@ -72,19 +72,17 @@ class VibrationPane(VerticalScroll):
         self.id_at: dict[tuple[int, int], int] = {}  # (row, column) -> point id
         self.cell_of: dict[int, tuple[int, int]] = {}  # point id -> (row, column)
         self._stops: dict[str, threading.Event] = {}  # per worker group: x sets it
-        self._now_playing = None  # the plan the status line says is asked for or playing
-        self._now_started = False  # ... and whether the outputs said it started
+        self._now_playing: Ask | None = None  # the play the status line speaks of
         self._command_failed = False  # an error was said while a typed command ran
+        self._typed: str | None = None  # the command being run (a play keeps it)
+        self._measuring: threading.Event | None = None  # the measurement's stop flag
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
         rows, cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
         self._set_layout(rows, cols, {(n // cols, n % cols): n + 1 for n in range(rows * cols)})
-        yield CommandLine(
-            placeholder="51 | 51 52 | hand 51 right | measure | import PA=a.uff ... | load F.npz",
-            id="vib-cmd",
-        )
+        yield CommandLine(placeholder=COMMANDS, id="vib-cmd")
         yield Static("", id="vib-outputs", markup=False)
         with Horizontal(id="vib-work"):
             yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
@@ -232,10 +230,14 @@ class VibrationPane(VerticalScroll):
         if ev.topic == "outputs":
             self._show_outputs()
         elif isinstance(ev, Stopped) and ev.topic == "estop":
-            if self._now_playing is not None and self._now_started:  # it was playing
-                self._estopped(self._now_playing, ev.reason)
-        elif isinstance(ev, Started) and ev.topic == "estop" and ESTOP_REFUSAL in self.status_text:
-            self.status(self.summary)  # the reset clears what the e-stop refused
+            ask = self._now_playing
+            if ask is not None and ask.started:  # it was playing
+                self._estopped(ask.plan, ev.reason)
+            if self._measuring is not None:  # the measurement stops at once
+                self._measuring.set()
+                self._measure_estopped()
+        elif isinstance(ev, Started) and ev.topic == "estop":
+            self._estop_reset()
 
     # ------------------------------------------------------------------ map
     @property
@@ -273,7 +275,7 @@ class VibrationPane(VerticalScroll):
             show(self._tables_status, session, summary, f"{summary}; lookup tables ...", 0.0, True)
             self.service.build_tables(session, progress, stop_check(stop))
             text = f"{summary}; ready"
-            self._prepare_projector()
+            prepare_projector(self.app)  # a scene waiting for the tables
         except Cancelled:
             text = (
                 f"{summary}; lookup-table build cancelled (b builds them; a flow builds "
@@ -289,15 +291,6 @@ class VibrationPane(VerticalScroll):
         """Show the table build's state unless another map or message took the line."""
         if self.session is session and (claim or self.status_text.startswith(summary)):
             self.status(text, frac)
-
-    def _prepare_projector(self) -> None:
-        """In a worker: a projected scene waiting for lookup tables gets them now."""
-        svc = self.app.session.projector
-        if svc is not None and "tables" in svc.unprepared:
-            try:
-                svc.prepare_again()
-            except Exception as exc:  # the projector is optional: say so, keep going
-                from_thread(self.app, self.app.notify, f"projector: {exc}", severity="warning")
 
     def _ready(self, session, summary: str) -> None:
         self.session, self.summary = session, summary
@@ -334,22 +327,61 @@ class VibrationPane(VerticalScroll):
             self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
             return
         self.status("measuring ...", 0.0)
-        self._measure(self._new_stop("vib-long"), command)
+        self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
+        self._measure(stop, command)
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _measure(self, stop: threading.Event, command: str | None = None) -> None:
+        """The measurement; x or an e-stop stops it (the e-stop polled here as well: it
+        stops at once even before its message reaches the screen)."""
+        stopped = stop_check(stop)
+
+        def cancelled() -> bool:
+            return stopped() or self._estop_active()
 
         def progress(frac: float, msg: str) -> None:
-            from_thread(self.app, self.status, f"measuring: {msg}", frac)
+            if not cancelled():
+                from_thread(self.app, self._measure_progress, stop, f"measuring: {msg}", frac)
 
         try:
-            self._show_map(self.service.measure(progress, stop_check(stop)))
+            self._show_map(self.service.measure(progress, cancelled))
             from_thread(self.app, self._command_done, command, True)
         except Cancelled:
-            from_thread(self.app, self.status, "measurement cancelled; the map is unchanged")
+            from_thread(self.app, self._measure_cancelled, stop, command)
         except UserError as exc:
             from_thread(self.app, self._error, str(exc))
             from_thread(self.app, self._command_done, command, False)
+        finally:
+            from_thread(self.app, self._measure_ended, stop)
+
+    def _measure_progress(self, stop: threading.Event, text: str, frac: float) -> None:
+        if not stop.is_set() and not self._estop_active():
+            self.status(text, frac)
+
+    def _measure_cancelled(self, stop: threading.Event, command: str | None) -> None:
+        """A measurement stopped: by the e-stop (said as such) or by x."""
+        if self._estop_active():
+            self._measure_estopped()
+        elif stop is self._measuring:
+            self.status("measurement cancelled; the map is unchanged")
+        self._command_done(command, False)
+
+    def _measure_ended(self, stop: threading.Event) -> None:
+        if stop is self._measuring:
+            self._measuring = None
+
+    def _measure_estopped(self) -> None:
+        """The line says the e-stop stopped the measurement (once)."""
+        if self.status_text != MEASURE_ESTOPPED:
+            self._error(MEASURE_ESTOPPED)
+
+    def _estop_reset(self) -> None:
+        """The reset: what the e-stop refused is cleared; a measurement it stopped stays
+        said, without the reset it no longer needs."""
+        if ESTOP_REFUSAL in self.status_text:
+            self.status(self.summary)
+        elif self.status_text == MEASURE_ESTOPPED:
+            self.status("measurement stopped by the e-stop; map unchanged; m measures again")
 
     def action_cancel(self) -> None:
         long_work = 0
@@ -406,18 +438,14 @@ class VibrationPane(VerticalScroll):
             return False
         return True
 
-    def _grid_range(self) -> str:
-        """The ids the grid shows, as ``1-84``."""
-        ids = self.cell_of or {0: (0, 0)}
-        return f"{min(ids)}-{max(ids)}"
-
     def _points_ok(self, *points: int) -> bool:
         """Whether ``points`` can play (checked before a command changes anything); if
         not, the status line says why: a point off the grid names the grid's range (map
         or not), no map says how to get one, a hole in the map says so."""
         off = [n for n in points if n not in self.cell_of]
         if off:
-            self._error(f"point {off[0]}: the grid has points {self._grid_range()}")
+            ids = self.cell_of or {0: (0, 0)}
+            self._error(f"point {off[0]}: the grid has points {min(ids)}-{max(ids)}")
             return False
         if not self._need_session():
             return False
@@ -453,7 +481,7 @@ class VibrationPane(VerticalScroll):
         """Enter or ``:51``: play point ``n``; it becomes the selection once its plan is
         made (a refused point changes nothing)."""
         if self._points_ok(n):
-            self._play(lambda s: s.point_plan(n), f"point {n}", select=[n])
+            self._play(lambda s: s.point_plan(n), f"point {n}", [n])
 
     def action_flow(self, reverse: bool) -> None:
         if not self._need_session():
@@ -475,7 +503,7 @@ class VibrationPane(VerticalScroll):
             self._error(f"flow {a} -> {b}: pick two different points")
             return
         chosen = [a, b] if select else None
-        self._play(lambda s: s.flow_plan(a, b), f"flow {a} -> {b}", select=chosen)
+        self._play(lambda s: s.flow_plan(a, b), f"flow {a} -> {b}", chosen)
 
     def action_hand(self, direction: str, n: int | None = None) -> None:
         try:
@@ -487,46 +515,64 @@ class VibrationPane(VerticalScroll):
             return
         i = self.session.vmap.point_index(n)
         x, y = (float(v) for v in self.session.vmap.points_mm[i])
-        self.status(f"flow {direction} under a hand at point {n} ({x:.0f}, {y:.0f} mm) ...")
-        self._play(lambda s: s.hand_plan((x, y), direction), f"point {n}")
+        asking = f"flow {direction} under a hand at point {n} ({x:.0f}, {y:.0f} mm) ..."
+        self._play(lambda s: s.hand_plan((x, y), direction), f"point {n}", None, asking)
 
-    @work(thread=True, group="vib-plan")
-    def _play(self, make, what: str, select: list[int] | None = None) -> None:
+    def _play(self, make, what: str, select: list[int] | None = None, asking: str = "") -> None:
+        """Ask for the plan ``make(session)`` makes: the line says so at once and owns
+        the play (``Ask``) until another message takes it; the worker says the rest."""
+        ask = Ask(what, self._typed)
+        self.status(asking or f"asking to play {what} ...")
+        self._now_playing = ask
+        self._play_worker(ask, make, select)
+
+    @work(thread=True, group="vib-plan", exit_on_error=False)
+    def _play_worker(self, ask: Ask, make, select: list[int] | None) -> None:
         """Make the plan, ask the outputs to play it and show what became of it: the
         line says "asking", then "playing" when the outputs report its start, then how
-        it ended (``ConsoleSession.play``)."""
+        it ended (``ConsoleSession.play``); a failure here is said, whatever it is."""
         try:
             plan = make(self.session)
+            from_thread(self.app, self._asking, ask, plan, select)
+            outcome = self.app.session.play(
+                plan, on_started=lambda: from_thread(self.app, self._playing, ask)
+            )
         except UserError as exc:
-            from_thread(self.app, self._error, f"{what}: {worded(exc, AT_CONSOLE)}")
+            from_thread(self.app, self._play_failed, ask, worded(exc, AT_CONSOLE))
             return
-        from_thread(self.app, self._asking, plan, select)
-        outcome = self.app.session.play(
-            plan, on_started=lambda: from_thread(self.app, self._playing, plan)
-        )
-        from_thread(self.app, self._played, plan, outcome)
+        except Exception as exc:  # noqa: BLE001 - an effect's or a driver's bug: said
+            from_thread(self.app, self._play_failed, ask, f"failed ({type(exc).__name__}: {exc})")
+            return
+        from_thread(self.app, self._played, ask, outcome)
 
-    def _asking(self, plan, select: list[int] | None) -> None:
+    def _play_failed(self, ask: Ask, why: str) -> None:
+        """A play failed in its worker: the line says so (and a typed command's text
+        comes back to the line to be fixed)."""
+        self._error(f"{ask.what}: {why}")
+        self._command_done(ask.command, False)
+
+    def _asking(self, ask: Ask, plan, select: list[int] | None) -> None:
+        ask.plan = plan
         if select is not None:
             self._select(select)
-        self._now_playing, self._now_started = plan, False
-        self.status(f"asking to play {plan.name}: {describe_plan(plan)} ...")
+        if ask is self._now_playing:
+            self.status(f"asking to play {plan.name}: {describe_plan(plan)} ...")
 
-    def _playing(self, plan) -> None:
-        if plan is not self._now_playing:
-            return
-        self._now_started = True
-        self.status(f"playing {plan.name}: {describe_plan(plan)}")
-        self._show_on_projector(plan)
+    def _playing(self, ask: Ask) -> None:
+        ask.started = True
+        self._show_on_projector(ask.plan)
+        if ask is self._now_playing:
+            self.status(f"playing {ask.plan.name}: {describe_plan(ask.plan)}")
 
-    def _played(self, plan, outcome) -> None:
-        """The status line says how the plan it shows as asked for or playing ended,
-        unless a newer message took the line."""
-        if plan is not self._now_playing:
-            return  # a newer message (an error typed meanwhile) keeps the line
-        self._now_playing = None
+    def _played(self, ask: Ask, outcome) -> None:
+        """How the play ended: a failure is said; a success only on the line it owns
+        (a newer message, an error typed meanwhile, keeps the line)."""
+        plan, mine = ask.plan, ask is self._now_playing
+        if mine:
+            self._now_playing = None
         if outcome.played:
-            self.status(f"played {plan.name}: {describe_plan(plan)}")
+            if mine:
+                self.status(f"played {plan.name}: {describe_plan(plan)}")
         elif outcome.refused:
             self.status(f"{plan.name} {outcome.refused}", error=True)
         elif outcome.stopped.startswith("the e-stop"):
@@ -546,22 +592,7 @@ class VibrationPane(VerticalScroll):
 
     @work(thread=True, group="vib-projector")
     def _show_on_projector(self, plan) -> None:
-        """With the projector showing the ``grid`` scene, light the auditioned point."""
-        svc = self.app.session.projector
-        if svc is None or svc.scene_name != "grid" or not self.selected:
-            return
-        meta = plan.meta
-        parts = plan_parts(meta)
-        event = {
-            "type": "audition",
-            "point": self.selected[-1] if meta.get("kind") == "point" else self.selected[-2],
-            "passive": self.selected[-1] if meta.get("kind") == "flow" else None,
-            "excitation": parts[0].get("actuator"),
-        }
-        try:
-            svc.update(event)
-        except Exception as exc:  # the projector is optional: say so, keep playing
-            from_thread(self.app, self.app.notify, f"projector: {exc}", severity="warning")
+        light_audition(self.app, plan, list(self.selected))
 
     def check_action(self, action: str, parameters: tuple) -> bool | None:
         if action == "command":  # on the line itself ":" is typed
@@ -574,21 +605,32 @@ class VibrationPane(VerticalScroll):
     def on_input_submitted(self, event: Input.Submitted) -> None:
         """A command typed on the line: a failed one keeps its text there (``:`` comes
         back to it, the cursor at its end), a successful one clears it; an import, a
-        load or a measurement keeps it until its work ends (``_command_done``). Enter
-        gives the keys back to the grid either way."""
+        load or a measurement keeps it until its work ends (``_command_done``). A failed
+        command keeps the keys on the line (the next keys fix it, they never play from
+        the grid); an accepted one gives them back to the grid."""
         event.stop()
         line, text = event.input, event.value.strip()
         self._command_failed = False
+        self._typed = text
         runs_on = False
         try:
             runs_on = self.run_command(text)
         except (UserError, ValueError) as exc:  # ValueError: shlex (an open quote)
             self._error(str(exc))
-        if isinstance(line, CommandLine):
-            if self._command_failed:
-                line.failed(text)
-            elif not runs_on:
-                line.succeeded(text)
+        finally:
+            self._typed = None
+        if not isinstance(line, CommandLine):
+            return
+        if self._command_failed:
+            line.failed(text)
+            return
+        if not runs_on:
+            line.succeeded(text)
+        self.focus_target.focus()
+
+    def on_command_line_left(self, event: CommandLine.Left) -> None:
+        """Escape on the line: the grid's keys again (what was typed stays)."""
+        event.stop()
         self.focus_target.focus()
 
     def run_command(self, text: str) -> bool:
@@ -624,7 +666,7 @@ class VibrationPane(VerticalScroll):
         elif len(words) == 2:
             self.flow(point_word(words[0]), point_word(words[1]))
         else:
-            raise UserError(f"{text!r}: not a command; {HELP.splitlines()[-1]}")
+            raise UserError(f"{text!r}: not a command; {COMMANDS}")
         return False
 
     # ------------------------------------------------------------------ info + plot
@@ -636,49 +678,9 @@ class VibrationPane(VerticalScroll):
     @work(thread=True, exclusive=True, group="vib-info")
     def _info(self) -> None:
         s, sel = self.session, list(self.selected)
-        n = sel[-1]
-        lines = []
-        i = s.vmap.point_index(n)
-        x, y = s.vmap.points_mm[i]
-        try:
-            plan = s.point_plan(n)
-            mark = plan.meta["frequency_hz"]
-            who = plan.meta.get("actuator") or f"{plan.meta.get('method')} patches"
-            lines.append(
-                f"[b]point {n:d}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
-                f"{escape(who)}, {plan.meta['amplitude_v']:.1f} V "
-                f"({plan.meta['um_per_v']:.3g} um/V)"
-            )
-        except UserError as exc:
-            mark = None
-            lines.append(f"point {n:d}: {escape(exc)}")
-        if len(sel) > 1:
-            a, rule = sel[-2], None
-            entries = []
-            for act, pas in ((a, n), (n, a)):
-                try:
-                    e = s.lookup(act, pas)
-                except UserError as exc:
-                    entries.append(f"  {escape(exc)}")
-                    break
-                rule = rule or e.get("rule")
-                entries.append(f"  {act:d} / {pas:d}: {escape(table_entry(e))}")
-            lines.append(
-                "[b]lookup tables[/b]"
-                + (f", rule {escape(rule)}" if rule else "")
-                + " (active / passive: difference, frequency, actuator, contrast)"
-            )
-            lines.extend(entries)
-            lines.append(f"[b]f[/b]: flow {a:d} -> {n:d}   [b]r[/b]: flow {n:d} -> {a:d}")
-            try:
-                lines.append(f"flow {a:d} -> {n:d}: {escape(rendering(s.flow_plan(a, n)))}")
-            except UserError as exc:
-                lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
-        else:
-            lines.append("f / r: audition a second point, then f flows to it")
-        lines.append(f"· on the grid: a {s.hand_mm:g} mm hand fits there (w a s d)")
-        freq, mags = s.frf(n)
-        from_thread(self.app, self._show_info, "\n".join(lines), freq, mags, mark, n)
+        text, mark = info_text(s, sel)
+        freq, mags = s.frf(sel[-1])
+        from_thread(self.app, self._show_info, text, freq, mags, mark, sel[-1])
 
     def _show_info(self, text: str, freq, mags, mark, point: int) -> None:
 

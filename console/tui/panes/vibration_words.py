@@ -1,9 +1,37 @@
-"""The Vibration screen's words for what it shows: a typed point id, a lookup-table entry,
-how a flow was rendered and a plan described in a line."""
+"""The Vibration screen's words for what it shows: its help and command names, a typed
+point id, a lookup-table entry, how a flow was rendered, a plan described in a line and
+the info panel of the selected points."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 from console.core.errors import UserError
+from console.tui.text import escape
+
+#: the ``:`` line's commands, one name each: its hint and the help show this line
+COMMANDS = "51; 51 52; hand 51 up; measure; tables; cancel; import PA=F.uff; load F.npz"
+HELP = (
+    "enter: audition the point\n"
+    "f / r: flow between the last two points, either way (listed here once chosen)\n"
+    "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
+    "m: measure   b: build the lookup tables   x: cancel   : command line\n"
+    f"{COMMANDS}"
+)
+MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"
+KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
+
+
+@dataclass
+class Ask:
+    """A play asked for: ``what`` it plays, the typed ``command`` that asked (or None),
+    its ``plan`` once made and whether the outputs said it ``started``."""
+
+    what: str
+    command: str | None = None
+    plan: Any = None
+    started: bool = False
 
 
 def point_word(word: str) -> int:
@@ -50,3 +78,51 @@ def describe_plan(plan) -> str:
         parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
     head = f"{plan.duration_s:.1f} s, " + ", ".join(parts)
     return head + (f"; {rendering(plan)}" if plan.meta.get("kind") == "flow" else "")
+
+
+def info_text(s: Any, sel: list[int]) -> tuple[str, float | None]:
+    """The info panel for the selected points ``sel`` (the last one shown) of the
+    Vibration session ``s``: the point's plan, the lookup tables and the flow between
+    the last two; (Rich text, the frequency to mark on the FRF or None)."""
+    n = sel[-1]
+    lines = []
+    i = s.vmap.point_index(n)
+    x, y = s.vmap.points_mm[i]
+    try:
+        plan = s.point_plan(n)
+        mark = plan.meta["frequency_hz"]
+        who = plan.meta.get("actuator") or f"{plan.meta.get('method')} patches"
+        lines.append(
+            f"[b]point {n:d}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
+            f"{escape(who)}, {plan.meta['amplitude_v']:.1f} V "
+            f"({plan.meta['um_per_v']:.3g} um/V)"
+        )
+    except UserError as exc:
+        mark = None
+        lines.append(f"point {n:d}: {escape(exc)}")
+    if len(sel) > 1:
+        a, rule = sel[-2], None
+        entries = []
+        for act, pas in ((a, n), (n, a)):
+            try:
+                e = s.lookup(act, pas)
+            except UserError as exc:
+                entries.append(f"  {escape(exc)}")
+                break
+            rule = rule or e.get("rule")
+            entries.append(f"  {act:d} / {pas:d}: {escape(table_entry(e))}")
+        lines.append(
+            "[b]lookup tables[/b]"
+            + (f", rule {escape(rule)}" if rule else "")
+            + " (active / passive: difference, frequency, actuator, contrast)"
+        )
+        lines.extend(entries)
+        lines.append(f"[b]f[/b]: flow {a:d} -> {n:d}   [b]r[/b]: flow {n:d} -> {a:d}")
+        try:
+            lines.append(f"flow {a:d} -> {n:d}: {escape(rendering(s.flow_plan(a, n)))}")
+        except UserError as exc:
+            lines.append(f"flow {a:d} -> {n:d}: {escape(exc)}")
+    else:
+        lines.append("f / r: audition a second point, then f flows to it")
+    lines.append(f"· on the grid: a {s.hand_mm:g} mm hand fits there (w a s d)")
+    return "\n".join(lines), mark
