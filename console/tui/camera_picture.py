@@ -80,3 +80,34 @@ def same_height(before: str, after: str, width: int) -> bool:
     other way)."""
     a, b = _line_lengths(before), _line_lengths(after)
     return len(a) == len(b) and all(x == y or max(x, y) <= width for x, y in zip(a, b, strict=True))
+
+
+def live_lines(st: dict, work: dict, view: str) -> list[str]:
+    """The side panel's live block: what the loop sees now (``st``: the camera
+    service's ``status()``, ``work``: the frame's vision results) and the ``view`` shown."""
+    cam, lat = st["camera"], st["latency"] or {}
+    g = work.get("gesture")
+    hands = work.get("hands", ()) or ()
+    rate = (
+        f" of {cam['nominal_fps']:.0f} (view rate)"
+        if cam.get("rate_fps") and cam.get("nominal_fps")
+        else ""
+    )
+    lines = [
+        f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{escape(rate)}",
+        # what this loop lost since it started: frames the camera dropped while the
+        # loop read it, and frames the processing was too slow for (never the frames
+        # that passed while nobody watched)
+        f"loop {lat.get('fps', 0):.0f} fps, dropped {escape(lat.get('dropped_camera', 0))}"
+        f" (camera) + {escape(lat.get('dropped_queue', 0))} (queue)",
+        f"view: {view} (v)",
+        f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
+        f"gesture: {g.name if g else '-'}",
+    ]
+    for h in hands[:1]:
+        pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
+        lines.append(f"hand at {pos}, {h.finger_count} fingers")
+    res = work.get("result")
+    if res is not None:
+        lines += reading_lines(res.readings())
+    return lines

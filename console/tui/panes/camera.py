@@ -18,16 +18,16 @@ from __future__ import annotations
 import numpy as np
 from textual import work
 from textual.app import ComposeResult
-from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
+from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE
 from console.tui.camera_picture import (
     blob_labels,
+    live_lines,
     overlay_pixels,
-    reading_lines,
     same_height,
     wrap_markup,
 )
@@ -41,10 +41,6 @@ from console.tui.util import from_thread, short_path
 VISION_VIEWS = ("diff", "highpass", "body")
 
 
-#: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
-KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
-
-
 class SidePanel(VerticalScroll):
     """The side panel's scrolling part: when its height changes (a notification takes
     rows, the terminal is resized) what it keeps in view stays there."""
@@ -56,49 +52,8 @@ class SidePanel(VerticalScroll):
 
 
 class CameraPane(Horizontal):
-    HELP_TEXT = (
-        "b        capture the background (show the empty table)\n"
-        "t / T    body threshold down / up      c / C  contact threshold down / up\n"
-        "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
-        "[ / ]    choose a setting (thresholds, smoothing, blob sizes, background, rotation,\n"
-        "         mirror, region of interest; exposure and gain where the driver takes them)\n"
-        "- / +    change the chosen setting by one step (t/T c/C h/H choose theirs too):\n"
-        "         its row (▸) shows the new value and stays in view\n"
-        "W        keep every vision setting for this profile (its overrides file)\n"
-        "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
-        "g        gestures panel: datasets, training and evaluation\n"
-        "u        TUIO (or another switchable output) on / off, kept for the profile\n"
-        "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
-        "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
-        "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
-        "(its title says which, and the grey levels shown black and white: the frame's\n"
-        "levels are spread over the display's; [console] image or haptable console --image\n"
-        "chooses)."
-    )
-    # in the order of importance: the footer shows as many as fit (whole: at 80 columns
-    # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all
-    BINDINGS = [
-        Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
-        Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
-        Binding("v", "view", "view"),
-        Binding("k", "calibrate", "calibrate"),
-        Binding("g", "gestures_panel", "gestures"),
-        Binding("u", "toggle_output", "TUIO"),
-        Binding("b", "background", "background"),
-        Binding("W", "save_tuning", "keep settings"),
-        Binding("U", "edit_target", "TUIO target"),
-        Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
-        Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
-        Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),
-        Binding("left_square_bracket", "choose(-1)", "previous setting", show=False),
-        Binding("minus", "tune_chosen(-1)", "setting -", show=False),
-        Binding("t", "tune('body_threshold', -1)", "body -", show=False),
-        Binding("c", "tune('contact_threshold', -1)", "contact -", show=False),
-        Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
-        Binding("n", "skip_target", "skip target", show=False),
-        Binding("S", "save_calibration", "save cal.", show=False),
-        Binding("x", "cancel", "cancel", show=False),
-    ]
+    HELP_TEXT = HELP_TEXT
+    BINDINGS = BINDINGS
     can_focus = True
 
     def __init__(self, **kw) -> None:
@@ -123,6 +78,9 @@ class CameraPane(Horizontal):
         self._stretches: dict[str, GreyStretch] = {}  # view -> its display grey levels
         self._info_rows = 0  # the most lines the live block had
         self._refused_for: str | None = None  # the borrower the status line names
+        self._said_at: tuple | None = None  # the wizard's state when the status was said
+        self._typed: str | None = None  # a TUIO target refused: the field shows it again
+        self._saved_to = None  # the path S saved the calibration to
 
     @property
     def image_mode(self) -> str:
@@ -179,8 +137,21 @@ class CameraPane(Horizontal):
         line.update(text)
         line.display = bool(text)
         line.set_class(severity != "information", "error")
+        self._said_at = self._wizard_state() if text else None
         if text:
             said_here(line, "Camera", text, severity)
+
+    def _wizard_state(self) -> tuple:
+        """What the calibration wizard shows now: a status line said under another
+        state (a save before a new calibration, TUIO switched before it) is stale."""
+        w = self.wizard  # a running calibration's progress leaves the line as it is
+        return (id(w.active), id(w.result), w.message if w.active is None else None)
+
+    def _status_still_true(self) -> None:
+        """The status line is cleared when the calibration started, ended or was
+        cancelled since it was said (the wizard's block says where it stands)."""
+        if self._said_at is not None and self._said_at != self._wizard_state():
+            self.say("")
 
     def _borrowed(self, key: str) -> bool:
         """Whether a demo holds the camera: then the status line says ``key`` is refused,
@@ -284,14 +255,17 @@ class CameraPane(Horizontal):
         side panel only when its text changed."""
         svc = self.service
         self._refusal_still_true()
+        self._status_still_true()
         if svc.error:
             self._message(f"[red]camera: {escape(svc.error)}[/]")
+            self._no_live_numbers("no live numbers: the camera is not running")
             return
         if svc.borrower is not None:
             self._message(
                 f"the camera is in use by {svc.borrower}, which runs in its own process:\n"
                 "the Scenes screen (F6) shows what it sees, the Latency screen (F7) its loop"
             )
+            self._no_live_numbers(f"no live numbers here: {svc.borrower}'s are on Scenes (F6)")
             return
         snap = svc.snapshot()
         if snap is None:
@@ -308,6 +282,11 @@ class CameraPane(Horizontal):
         else:
             self._draw_halfblock(frame, img, work)
         self._show_info(svc, work)
+
+    def _no_live_numbers(self, why: str) -> None:
+        """The live block says why it has no numbers (none are read here meanwhile)."""
+        self._info_stable = None  # the numbers are written again when the camera is back
+        self._say("camera-info", escape(why))
 
     def _show_info(self, svc, work: dict) -> None:
         """The side panel: at once when a setting or the wizard changed (a key), else
@@ -484,32 +463,8 @@ class CameraPane(Horizontal):
     def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
         """The side panel: (what the loop sees now, the settings and the wizard)."""
         st = self._loop_status(svc)
-        cam, lat = st["camera"], st["latency"] or {}
-        g = work.get("gesture")
-        hands = work.get("hands", ()) or ()
-        rate = (
-            f" of {cam['nominal_fps']:.0f} (view rate)"
-            if cam.get("rate_fps") and cam.get("nominal_fps")
-            else ""
-        )
-        lines = [
-            f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{escape(rate)}",
-            # what this loop lost since it started: frames the camera dropped while the
-            # loop read it, and frames the processing was too slow for (never the frames
-            # that passed while nobody watched)
-            f"loop {lat.get('fps', 0):.0f} fps, dropped {escape(lat.get('dropped_camera', 0))}"
-            f" (camera) + {escape(lat.get('dropped_queue', 0))} (queue)",
-            f"view: {self.view} (v)",
-            f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
-            f"gesture: {g.name if g else '-'}",
-        ]
-        for h in hands[:1]:
-            pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
-            lines.append(f"hand at {pos}, {h.finger_count} fingers")
-        res = work.get("result")
-        if res is not None:
-            lines += reading_lines(res.readings())
-        live, lines = lines, []
+        live, lines = live_lines(st, work, self.view), []
+        cam = st["camera"]
         chosen = self.chosen_key()
         for k, v in svc.params().items():
             lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
@@ -527,6 +482,8 @@ class CameraPane(Horizontal):
     def action_tune(self, key: str, sign: int) -> None:
         """Change ``key`` by one step; it becomes the chosen setting: its row (``▸``, the
         new value) is the feedback, scrolled into view (no notification over the panel)."""
+        if self._borrowed(key):
+            return
         svc = self.service
         cur, rng = svc.params().get(key), svc.param_ranges().get(key)
         if cur is None or rng is None:
@@ -550,8 +507,12 @@ class CameraPane(Horizontal):
         if key is not None:
             self.action_tune(key, sign)
 
-    @work(thread=True, exclusive=True, group="camera-tuning")
     def action_save_tuning(self) -> None:
+        if not self._borrowed("W"):
+            self._save_tuning()
+
+    @work(thread=True, exclusive=True, group="camera-tuning")
+    def _save_tuning(self) -> None:
         try:
             path = self.service.save_tuning()
         except UserError as exc:
@@ -566,16 +527,19 @@ class CameraPane(Horizontal):
         return names[0] if names else None
 
     def action_toggle_output(self) -> None:
+        if self._borrowed("u"):
+            return
         name = self._output()
         if name is not None:
             self._switch(name, not self.service.sink_state(name)[0], None)
 
     def action_edit_target(self) -> None:
-        name = self._output()
+        name = None if self._borrowed("U") else self._output()
         if name is None:
             return
         box = self.query_one("#camera-target", Input)
-        box.value = self.service.sink_state(name)[1]
+        # a refused target comes back as typed, to be corrected (else the one in use)
+        box.value = self._typed if self._typed is not None else self.service.sink_state(name)[1]
         box.display = True
         box.focus()  # the side panel scrolls to it (Textual scrolls to the focused widget)
         self.call_after_refresh(box.scroll_visible, animate=False, immediate=True)
@@ -594,8 +558,24 @@ class CameraPane(Horizontal):
         box = self.query_one("#camera-target", Input)
         if event.key == "escape" and box.has_focus:
             event.stop()
+            self._typed = None  # Esc: unchanged, the next U shows the target in use
             box.display = False
             self.focus()
+        elif event.key == "escape" and self.calibration is not None:
+            event.stop()
+            self.action_cancel()  # as x: a user leaving the wizard with Esc cancels it
+
+    def check_action(self, action: str, parameters: tuple) -> bool | None:
+        """While the target field has the focus every key of this screen types into it:
+        the footer promises none of them."""
+        found = self.query("#camera-target")
+        return not (found and found.first().has_focus)
+
+    def on_descendant_focus(self, _event) -> None:
+        self.refresh_bindings()
+
+    def on_descendant_blur(self, _event) -> None:
+        self.refresh_bindings()
 
     @work(thread=True, exclusive=True, group="camera-output")
     def _switch(self, name: str, on: bool, target: str | None) -> None:
@@ -603,8 +583,10 @@ class CameraPane(Horizontal):
             self.service.set_sink(name, on, target)
         except UserError as exc:
             again = "U" if target is not None else "u"
+            self._typed = target  # U shows what was typed, to be corrected
             from_thread(self.app, self.say, f"{exc} ({again} again to retry)", "warning")
             return
+        self._typed = None
         on, where = self.service.sink_state(name)  # the file: ? help, profile overrides
         said = f"{name} {'on' if on else 'off'} -> {where} (kept for the profile)"
         from_thread(self.app, self.say, said)
@@ -641,7 +623,10 @@ class CameraPane(Horizontal):
         from textual.markup import escape
 
         w = self.wizard
-        return f"[red]{escape(w.message)}[/]" if w.failed else escape(w.message)
+        text = w.message
+        if self._saved_to is not None:  # paths shown one way on the screens
+            text = text.replace(str(self._saved_to), short_path(self._saved_to))
+        return f"[red]{escape(text)}[/]" if w.failed else escape(text)
 
     def _target_px(self):
         return self.wizard.target_px()
@@ -649,12 +634,17 @@ class CameraPane(Horizontal):
     def action_calibrate(self) -> None:
         if not self._borrowed("k"):
             self.wizard.start()
+            self._status_still_true()  # at once: a cancel may follow before a redraw
 
     def action_skip_target(self) -> None:
-        self.wizard.skip()
+        if not self._borrowed("n"):
+            self.wizard.skip()
+            self._status_still_true()
 
     def action_cancel(self) -> None:
-        self.wizard.cancel()
+        if not self._borrowed("x"):
+            self.wizard.cancel()
+            self._status_still_true()
 
     def action_gestures_panel(self) -> None:
         reg = self.app.ctx.pm.of("panel").get("gestures")
@@ -664,9 +654,12 @@ class CameraPane(Horizontal):
         self.app.push_screen(reg.factory(self.app))
 
     def action_save_calibration(self) -> None:
+        if self._borrowed("S"):
+            return
         try:
             path = self.wizard.save()
         except UserError as exc:
             self.say(f"S: {exc}", "warning")
             return
+        self._saved_to = path
         self.say(f"touch calibration saved to {short_path(path)}")

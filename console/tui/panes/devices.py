@@ -64,6 +64,25 @@ def found(rows) -> str:
     return told + ("; the fix column says what to do" if bad else "")
 
 
+#: a relay board's probe states in which enter opens nothing (it says why instead)
+UNUSABLE = ("missing", "error")
+
+
+def listed(audio, relays) -> str:
+    """What a listing found ("1 sound card, 3 relay boards, 1 missing")."""
+    cards = sum(len(d.devices) for d in audio)
+    told = [_many(cards, "sound card"), _many(len(relays), "relay board")]
+    bad: dict[str, int] = {}
+    for _, _, status in relays:
+        if status.state in UNUSABLE:
+            bad[status.state] = bad.get(status.state, 0) + 1
+    return ", ".join(told + [f"{n} {state}" for state, n in bad.items()])
+
+
+def _many(n: int, what: str) -> str:
+    return f"{n} {what}{'' if n == 1 else 's'}"
+
+
 def _ms(seconds: float) -> str:
     return "-" if seconds is None or not math.isfinite(seconds) else f"{seconds * 1e3:.1f}"
 
@@ -86,7 +105,7 @@ class DevicesPane(VerticalScroll):
     )
     BINDINGS = [
         Binding("d", "doctor(True)", "Re-check devices"),
-        Binding("l", "list_devices", "List again"),
+        Binding("l", "list_devices(True)", "List again"),
         Binding("t", "test_output", "Test signal"),
     ]
 
@@ -95,7 +114,8 @@ class DevicesPane(VerticalScroll):
         self.audio_rows: dict[str, tuple[str, str]] = {}  # row key -> (driver, device)
         self.no_device_rows: dict[str, str] = {}  # row key -> why it cannot be picked
         self.relay_rows: dict[str, str] = {}  # row key -> driver
-        self.missing_boards: dict[str, DeviceStatus] = {}  # row key -> probe found nothing
+        #: row key -> its probe's status when the board cannot be opened (missing, error)
+        self.unusable_boards: dict[str, DeviceStatus] = {}
         self.plugin_rows: dict[str, str] = {}  # row key -> the plugin's line, whole
         self.result = ""  # the last pick or test, as shown
 
@@ -212,20 +232,27 @@ class DevicesPane(VerticalScroll):
 
     # ------------------------------------------------------------------ listing
     @work(thread=True, exclusive=True, group="devices")
-    def action_list_devices(self) -> None:
-
+    def action_list_devices(self, said: bool = False) -> None:
+        """List the sound cards and relay boards again; ``said`` (the key l): the status
+        line says it is listing, then what the listing found."""
         try:
             app = self.app
             prof, pm = self._profile(), app.ctx.pm
         except RuntimeError:  # Textual's NoActiveAppError: the console closed before this ran
             return
+        if said:
+            self._say("listing the sound cards and relay boards ...")
         audio = output_devices(prof, pm)
         relays = relay_boards(prof, pm)
-        from_thread(app, self._show_devices, audio, relays)
+        from_thread(app, self._show_devices, audio, relays, said)
 
-    def _show_devices(self, audio, relays) -> None:
+    def _show_devices(self, audio, relays, said: bool = False) -> None:
         if not self.query("#audio-table"):  # a worker finishing while the console closes
             return
+        if said:
+            self._show_result(
+                f"listed again at {time.strftime('%H:%M:%S')}: {listed(audio, relays)}"
+            )
         drv, device, relay_drv = self._in_use()
         table = self.query_one("#audio-table", DataTable)
         table.clear()
@@ -258,12 +285,12 @@ class DevicesPane(VerticalScroll):
         rtable = self.query_one("#relay-table", DataTable)
         rtable.clear()
         self.relay_rows.clear()
-        self.missing_boards.clear()
+        self.unusable_boards.clear()
         for name, description, status in relays:
             key = f"relay\x00{name}"
             self.relay_rows[key] = name
-            if status.state == "missing":  # its probe found nothing to open
-                self.missing_boards[key] = status
+            if status.state in UNUSABLE:  # its probe found nothing it can open
+                self.unusable_boards[key] = status
             rtable.add_row(
                 "●" if name == relay_drv else "",
                 Text(name),
@@ -296,11 +323,11 @@ class DevicesPane(VerticalScroll):
         driver = self.relay_rows.get(key)
         if driver is None:
             return
-        missing = self.missing_boards.get(key)
-        if missing is not None:  # nothing there to open: the outputs stay as they are
-            fix = missing.fix or "connect it"
+        status = self.unusable_boards.get(key)
+        if status is not None:  # nothing there to open: the outputs stay as they are
+            fix = status.fix or "connect it"
             self._show_result(
-                f"relay board {driver!r} is missing ({missing.why}): {fix}, then press l"
+                f"relay board {driver!r} is {status.state} ({status.why}): {fix}, then press l"
             )
             return
         self._apply({"relays.driver": driver}, f"relay board {driver!r}")

@@ -1,0 +1,54 @@
+"""The Camera screen's keys: its bindings (in the order the footer shows them), the keys
+line under the view and its help."""
+
+from __future__ import annotations
+
+from textual.binding import Binding
+
+#: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
+KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
+
+
+HELP_TEXT = (
+    "b        capture the background (show the empty table)\n"
+    "t / T    body threshold down / up      c / C  contact threshold down / up\n"
+    "h / H    high-pass blur down / up      v      view: camera, diff, high-pass, body\n"
+    "[ / ]    choose a setting (thresholds, smoothing, blob sizes, background, rotation,\n"
+    "         mirror, region of interest; exposure and gain where the driver takes them)\n"
+    "- / +    change the chosen setting by one step (t/T c/C h/H choose theirs too):\n"
+    "         its row (▸) shows the new value and stays in view\n"
+    "W        keep every vision setting for this profile (its overrides file)\n"
+    "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
+    "g        gestures panel: datasets, training and evaluation\n"
+    "u        TUIO (or another switchable output) on / off, kept for the profile\n"
+    "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
+    "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
+    "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
+    "(its title says which, and the grey levels shown black and white: the frame's\n"
+    "levels are spread over the display's; [console] image or haptable console --image\n"
+    "chooses)."
+)
+# in the order of importance: the footer shows as many as fit (whole: at 80 columns
+# up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all
+BINDINGS = [
+    Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
+    Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
+    Binding("v", "view", "view"),
+    Binding("k", "calibrate", "calibrate"),
+    Binding("g", "gestures_panel", "gestures"),
+    Binding("u", "toggle_output", "TUIO"),
+    Binding("b", "background", "background"),
+    Binding("W", "save_tuning", "keep settings"),
+    Binding("U", "edit_target", "TUIO target"),
+    Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
+    Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
+    Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),
+    Binding("left_square_bracket", "choose(-1)", "previous setting", show=False),
+    Binding("minus", "tune_chosen(-1)", "setting -", show=False),
+    Binding("t", "tune('body_threshold', -1)", "body -", show=False),
+    Binding("c", "tune('contact_threshold', -1)", "contact -", show=False),
+    Binding("h", "tune('highpass_sigma_px', -1)", "high-pass -", show=False),
+    Binding("n", "skip_target", "skip target", show=False),
+    Binding("S", "save_calibration", "save cal.", show=False),
+    Binding("x", "cancel", "cancel", show=False),
+]
