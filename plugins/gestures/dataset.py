@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import AT_CLI, AT_CONSOLE, Placed, UserError
 
 STATIC: tuple[str, ...] = ("one_finger", "two_finger", "l_shape", "closed_hand", "open_hand")
 DYNAMIC: tuple[str, ...] = ("drag", "rotate", "spread_pile", "wipe", "zoom")
@@ -53,6 +53,12 @@ MAX_FRAME_PX = 8192 * 8192  # the largest camera frame a profile allows ([camera
 MAX_PNG_BYTES = 256 * 1024 * 1024
 MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_FPS = 10000.0
+#: how to make a dataset, where the user is
+MAKE_DATASET = {
+    AT_CLI: "make one with `haptable gestures synth --out DIR` or record into it with "
+    "`haptable gestures record`",
+    AT_CONSOLE: "s synthesizes one here",
+}
 
 
 def kind_of(gesture: str) -> str:
@@ -328,10 +334,7 @@ def load_dataset(
     PNG (slow on big sets; otherwise images are checked when loaded)."""
     root = Path(root)
     if not root.is_dir():
-        raise UserError(
-            f"{root}: no such dataset folder; make one with `haptable gestures "
-            "synth --out DIR` or record into it with `haptable gestures record`"
-        )
+        raise Placed(f"{root}: no such dataset folder", MAKE_DATASET)
     want = set(GESTURES if gestures is None else gestures)
     samples: list[Sample] = []
     for d in sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith(".")):
@@ -349,9 +352,9 @@ def load_dataset(
                 sample.background(size_px=size_px)
             samples.append(sample)
     if not samples:
-        raise UserError(
-            f"{root}: no samples found (expected {root}/<gesture>/<sample>/"
-            "sample.json); see `haptable gestures synth --help`"
+        raise Placed(
+            f"{root}: no samples found (expected {root}/<gesture>/<sample>/sample.json)",
+            MAKE_DATASET,
         )
     return samples
 

@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError
+from console.plugin_api import AT_CONSOLE, UserError, worded
 
 from .dataset import load_dataset
 from .progress import CancelCheck, Progress, part, step
@@ -135,7 +135,7 @@ def train_and_evaluate(
 def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict[str, Any]:
     """Where the dataset and model are, their size, the dataset's subjects and
     repetitions and the model's evaluation (from its metadata). A missing or unreadable
-    file is described, never raised."""
+    file is described (worded for the panel), never raised."""
     out: dict[str, Any] = {}
     if dataset is not None:
         d = Path(dataset).expanduser()
@@ -154,7 +154,7 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
                     bytes=_tree_bytes(d),
                 )
             except UserError as exc:
-                info["error"] = str(exc)
+                info["error"] = worded(exc, AT_CONSOLE)
         out["dataset"] = info
     if model is not None:
         m = Path(model).expanduser()
@@ -169,6 +169,6 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
                 info["evaluation"] = meta.get("evaluation")
                 info["trained_on"] = meta.get("trained_on")
             except UserError as exc:
-                info["error"] = str(exc)
+                info["error"] = worded(exc, AT_CONSOLE)
         out["model"] = info
     return out

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import AT_CLI, AT_CONSOLE, Placed, UserError
 
 from .model_checks import check_classifiers, check_settings, check_widths
 from .sketch import DYNAMIC, STATIC
@@ -398,7 +398,13 @@ class GestureModel:
 
         p = Path(path)
         if not p.is_file():
-            raise UserError(f"{p}: no gesture model there; make one with `haptable gestures train`")
+            raise Placed(
+                f"{p}: no gesture model there",
+                {
+                    AT_CLI: "make one with `haptable gestures train`",
+                    AT_CONSOLE: "t trains one here",
+                },
+            )
         try:
             found = file_types(p)
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:

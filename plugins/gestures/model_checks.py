@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import AT_CLI, AT_CONSOLE, Placed
 
 from .features import (
     FRAMES_LIST,
@@ -33,12 +33,17 @@ CLASSES = {"static_svm": STATIC, "dynamic_svm": DYNAMIC, "kind_svm": ("static", 
 RETRAIN = "train it again with `haptable gestures train`"
 
 
+def retrain(what: str) -> Placed:
+    """A model that cannot be used: ``what``, and how to make a good one where the user
+    is (the command at a shell, the Gestures panel's key in the console)."""
+    return Placed(what, {AT_CLI: RETRAIN, AT_CONSOLE: "t trains it again here"})
+
+
 def _int_in(s: dict, key: str, allowed: tuple[int, ...], p: Path) -> int:
     v = s.get(key)
     if isinstance(v, bool) or not isinstance(v, int) or v not in allowed:
-        raise UserError(
-            f"{p}: settings {key} = {v!r}: expected one of {', '.join(map(str, allowed))}; "
-            f"{RETRAIN}"
+        raise retrain(
+            f"{p}: settings {key} = {v!r}: expected one of {', '.join(map(str, allowed))}"
         )
     return v
 
@@ -46,19 +51,19 @@ def _int_in(s: dict, key: str, allowed: tuple[int, ...], p: Path) -> int:
 def check_settings(raw: Any, p: Path) -> dict[str, Any]:
     """The model's settings (a JSON string in the file), checked and normalised."""
     if not isinstance(raw, str):
-        raise UserError(f"{p}: no settings (a JSON text) in the model; {RETRAIN}")
+        raise retrain(f"{p}: no settings (a JSON text) in the model")
     try:
         s = json.loads(raw)
     except (ValueError, RecursionError) as e:
-        raise UserError(f"{p}: settings are not readable JSON ({e}); {RETRAIN}") from None
+        raise retrain(f"{p}: settings are not readable JSON ({e})") from None
     if not isinstance(s, dict):
-        raise UserError(f"{p}: settings are not a JSON object; {RETRAIN}")
+        raise retrain(f"{p}: settings are not a JSON object")
     thr = s.get("motion_threshold")
     if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not math.isfinite(thr):
-        raise UserError(f"{p}: settings motion_threshold = {thr!r}: expected a number; {RETRAIN}")
+        raise retrain(f"{p}: settings motion_threshold = {thr!r}: expected a number")
     meta = s.get("meta", {})
     if not isinstance(meta, dict):
-        raise UserError(f"{p}: settings meta = {meta!r}: expected an object; {RETRAIN}")
+        raise retrain(f"{p}: settings meta = {meta!r}: expected an object")
     return {
         "motion_threshold": float(thr),
         "n_harmonics": _int_in(s, "n_harmonics", (0, *range(2, N_HARMONICS_MAX + 1)), p),
@@ -71,21 +76,21 @@ def _array(est: Any, attr: str, shape: tuple, where: str, p: Path, *, numeric=Tr
     """``est.attr`` as an array of ``shape`` (``None`` entries: any), finite if numeric."""
     a = getattr(est, attr, None)
     if not isinstance(a, np.ndarray):
-        raise UserError(f"{p}: {where} has no array {attr}; {RETRAIN}")
+        raise retrain(f"{p}: {where} has no array {attr}")
     ok = a.ndim == len(shape) and all(
         w is None or w == n for w, n in zip(shape, a.shape, strict=False)
     )
     if not ok:
         want = " x ".join("any" if w is None else str(w) for w in shape)
-        raise UserError(
+        raise retrain(
             f"{p}: {where} {attr} has shape {a.shape}, expected ({want}): the model's "
-            f"arrays do not fit together; {RETRAIN}"
+            f"arrays do not fit together"
         )
     if numeric:
         if not np.issubdtype(a.dtype, np.number):
-            raise UserError(f"{p}: {where} {attr} holds {a.dtype}, not numbers; {RETRAIN}")
+            raise retrain(f"{p}: {where} {attr} holds {a.dtype}, not numbers")
         if not np.all(np.isfinite(a)):
-            raise UserError(f"{p}: {where} {attr} holds values that are not finite; {RETRAIN}")
+            raise retrain(f"{p}: {where} {attr} holds values that are not finite")
     return a
 
 
@@ -98,14 +103,14 @@ def check_pipeline(name: str, pipe: Any, p: Path) -> int:
     steps = getattr(pipe, "steps", None) if isinstance(pipe, Pipeline) else None
     kinds = [(n, type(e)) for n, e in steps or []]
     if kinds != [("scale", StandardScaler), ("svc", SVC)]:
-        raise UserError(
+        raise retrain(
             f"{p}: {name} is {type(pipe).__name__}, not the StandardScaler + SVC pipeline "
-            f"`haptable gestures train` makes; {RETRAIN}"
+            f"`haptable gestures train` makes"
         )
     scale, svc = pipe.named_steps["scale"], pipe.named_steps["svc"]
     nf = getattr(scale, "n_features_in_", None)
     if isinstance(nf, bool) or not isinstance(nf, (int, np.integer)) or nf < 1:
-        raise UserError(f"{p}: {name} scaler has no input width (n_features_in_); {RETRAIN}")
+        raise retrain(f"{p}: {name} scaler has no input width (n_features_in_)")
     nf = int(nf)
     for attr in ("mean_", "scale_"):
         _array(scale, attr, (nf,), f"{name} scaler", p)
@@ -113,18 +118,18 @@ def check_pipeline(name: str, pipe: Any, p: Path) -> int:
     classes = _array(svc, "classes_", (None,), where, p, numeric=False)
     unknown = sorted(set(map(str, classes)) - set(CLASSES[name]))
     if unknown or len(classes) < 2:
-        raise UserError(
+        raise retrain(
             f"{p}: {name} answers {', '.join(map(repr, unknown)) or 'fewer than two classes'}"
-            f"; it may answer {', '.join(CLASSES[name])}; {RETRAIN}"
+            f"; it may answer {', '.join(CLASSES[name])}"
         )
     k = len(classes)
     sv = _array(svc, "support_vectors_", (None, nf), where, p)
     n_sv = sv.shape[0]
     n_support = _array(svc, "_n_support", (k,), where, p)
     if n_sv < 1 or int(n_support.sum()) != n_sv or np.any(n_support < 0):
-        raise UserError(
+        raise retrain(
             f"{p}: {where} _n_support {n_support.tolist()} does not add up to the "
-            f"{n_sv} support vectors; {RETRAIN}"
+            f"{n_sv} support vectors"
         )
     for attr in ("dual_coef_", "_dual_coef_"):
         _array(svc, attr, (k - 1, n_sv), where, p)
@@ -132,21 +137,19 @@ def check_pipeline(name: str, pipe: Any, p: Path) -> int:
         _array(svc, attr, (k * (k - 1) // 2,), where, p)
     gamma = getattr(svc, "_gamma", None)
     if not isinstance(gamma, (float, np.floating)) or not (math.isfinite(gamma) and gamma > 0):
-        raise UserError(f"{p}: {where} gamma {gamma!r} is not a positive number; {RETRAIN}")
+        raise retrain(f"{p}: {where} gamma {gamma!r} is not a positive number")
     try:  # the last word: the classifier answers a row of its own width
         pipe.predict(np.zeros((1, nf)))
         pipe.decision_function(np.zeros((1, nf)))
     except Exception as e:  # noqa: BLE001 - whatever scikit-learn raises, one line
-        raise UserError(
-            f"{p}: {name} cannot classify ({type(e).__name__}: {e}); {RETRAIN}"
-        ) from None
+        raise retrain(f"{p}: {name} cannot classify ({type(e).__name__}: {e})") from None
     return nf
 
 
 def check_classifiers(svms: dict[str, Any], p: Path) -> dict[str, int]:
     """Every classifier present checked; at least one of static and dynamic."""
     if svms.get("static_svm") is None and svms.get("dynamic_svm") is None:
-        raise UserError(f"{p}: neither static_svm nor dynamic_svm in the model; {RETRAIN}")
+        raise retrain(f"{p}: neither static_svm nor dynamic_svm in the model")
     return {n: check_pipeline(n, m, p) for n, m in svms.items() if m is not None}
 
 
@@ -169,8 +172,8 @@ def check_widths(model: Any, p: Path) -> None:
         svm = getattr(model, name)
         nf = getattr(svm, "n_features_in_", None) if svm is not None else None
         if nf is not None and int(nf) != w:
-            raise UserError(
+            raise retrain(
                 f"{p}: {name} takes {int(nf)} features but the vision pipeline makes {w} "
                 f"(n_harmonics = {model.n_harmonics}, n_frames = {model.n_frames}): it was "
-                f"trained on another feature set; {RETRAIN}"
+                f"trained on another feature set"
             )

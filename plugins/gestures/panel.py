@@ -20,7 +20,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import Button, Input, Label, Static
 
-from console.plugin_api import UserError, load_profile
+from console.plugin_api import AT_CONSOLE, UserError, load_profile, worded
 from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
@@ -82,6 +82,17 @@ def count(text: str, what: str, lo: int = 1, hi: int = 1000) -> int:
     return n
 
 
+def in_panel(exc: BaseException | str, *shown: Path) -> str:
+    """A message of the plugin as the panel says it: worded for the console (its fix
+    names this panel's keys: ``console.core.words``) with its paths written as the
+    panel writes them (``short_path``)."""
+    text = exc if isinstance(exc, str) else worded(exc, AT_CONSOLE)
+    for path in shown:
+        for form in {str(path), str(path.expanduser()), str(path.expanduser().resolve())}:
+            text = text.replace(form, short_path(path))
+    return text
+
+
 def describe(info: dict[str, Any]) -> str:
     """The files block of the panel from ``jobs.describe_files``."""
     d, m = info.get("dataset", {}), info.get("model", {})
@@ -89,7 +100,7 @@ def describe(info: dict[str, Any]) -> str:
     if not d.get("exists"):
         lines.append("  none yet: s synthesizes one from the camera twin")
     elif "error" in d:
-        lines.append(f"  [red]{escape(d['error'])}[/]")
+        lines.append(f"  [red]{escape(in_panel(d['error'], Path(d.get('path', '?'))))}[/]")
     else:
         subj = d["subjects"]
         lines.append(
@@ -103,7 +114,7 @@ def describe(info: dict[str, Any]) -> str:
     if not m.get("exists"):
         lines.append("  none yet: t trains and evaluates one")
     elif "error" in m:
-        lines.append(f"  [red]{escape(m['error'])}[/]")
+        lines.append(f"  [red]{escape(in_panel(m['error'], Path(m.get('path', '?'))))}[/]")
     else:
         ev = m.get("evaluation") or {}
         lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
@@ -180,7 +191,7 @@ class GesturesPanel(Screen):
             yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
-                yield Input(str(data_dir() / "twin"), id="gp-dataset", compact=True)
+                yield Input(short_path(data_dir() / "twin"), id="gp-dataset", compact=True)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 yield Input("5", id="gp-subjects", classes="gp-num", compact=True)
@@ -190,7 +201,7 @@ class GesturesPanel(Screen):
                 yield Input("2fold", id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
                 yield Label("model")
-                yield Input(str(self.default_model), id="gp-model", compact=True)
+                yield Input(short_path(self.default_model), id="gp-model", compact=True)
             with Horizontal(id="gp-buttons"):
                 yield Button("synthesize (s)", id="gp-synth", compact=True)
                 yield Button("train+eval (t)", id="gp-train", compact=True)
@@ -261,9 +272,13 @@ class GesturesPanel(Screen):
             return
 
         def job(progress, cancelled):
-            return synth_atomic(
-                ds, subjects, reps, replace=True, workers=1, progress=progress, cancelled=cancelled
-            )
+            try:
+                return synth_atomic(
+                    ds, subjects, reps, replace=True, workers=1, progress=progress,
+                    cancelled=cancelled,
+                )  # fmt: skip
+            except UserError as exc:
+                raise UserError(in_panel(exc, ds)) from exc
 
         def summary(info) -> str:
             return (
@@ -300,6 +315,9 @@ class GesturesPanel(Screen):
         except UserError as exc:
             self.work.error(str(exc))
             return
+        if not ds.is_dir():
+            self.work.error(f"dataset {short_path(ds)}: none yet, s synthesizes one")
+            return
         live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
@@ -307,9 +325,12 @@ class GesturesPanel(Screen):
             # the profile as saved (what that command reads: vision settings kept with W
             # on the Camera screen since the console started count)
             profile = saved_profile(self.ctx)
-            res = train_and_evaluate(
-                ds, model, profile=profile, cv=cv, progress=progress, cancelled=cancelled
-            )
+            try:
+                res = train_and_evaluate(
+                    ds, model, profile=profile, cv=cv, progress=progress, cancelled=cancelled
+                )
+            except UserError as exc:
+                raise UserError(in_panel(exc, ds, model)) from exc
             if live:  # the profile's model: the running classifier switches to it
                 res["loaded"] = GestureModel.load(res["model"])
             return res
