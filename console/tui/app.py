@@ -114,6 +114,11 @@ class HelpScreen(ModalScreen):
             yield HelpText(self.sections, id="help-text")
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
+    def leave_for_screen(self) -> bool:
+        """An F-key closes the help to show its screen (``LeavesForScreen``)."""
+        self.dismiss()
+        return True
+
 
 class HapTableApp(App):
     TITLE = "HapTable"
@@ -433,10 +438,14 @@ class HapTableApp(App):
         """What quitting would stop: a running demo, long work (a ``LongWork`` busy on
         any screen) and what panes say (``RunsWork``: a study run)."""
         out = []
-        if self.session.demos.run is not None:
-            out.append(f"the {self.session.demos.name} demo")
+        demo = self.session.demos.name if self.session.demos.run is not None else None
+        if demo is not None:
+            out.append(f"the {demo} demo")
         for screen in self.screen_stack:
-            out += [lw.name_running for lw in screen.query(LongWork) if lw.busy]
+            for lw in screen.query(LongWork):
+                # the demo's start (``demo flow``) is the demo named above: said once
+                if lw.busy and lw.name_running != f"demo {demo}":
+                    out.append(lw.name_running)
         for pane in list(self._panes.values()):
             if isinstance(pane, RunsWork) and (what := pane.work_under_way()):
                 out.append(what)

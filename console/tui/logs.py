@@ -120,6 +120,11 @@ class LogScreen(ModalScreen):
         log.write_lines(self.lines or ["(nothing logged yet)"])
         log.focus()
 
+    def leave_for_screen(self) -> bool:
+        """An F-key closes the log to show its screen (``LeavesForScreen``)."""
+        self.dismiss()
+        return True
+
 
 def view_handler() -> ViewHandler | None:
     """The log view's handler installed by ``capture_logs`` (None when not installed)."""

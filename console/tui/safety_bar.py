@@ -2,7 +2,7 @@
 
 The bar is one line at any width: the closed relays and the e-stop / reset key always
 show; what does not fit (the e-stop's reason, words around the voltages) is shortened
-first. Notifications sit above it (``console.tcss``: the toast rack keeps clear of the
+first, by whole words and fields (never a word cut). Notifications sit above it (``console.tcss``: the toast rack keeps clear of the
 bar and the footer). Its text is shown literally (``markup=False``): a reason or a
 driver's error naming ``[audio] device`` keeps its brackets.
 """
@@ -15,13 +15,30 @@ from console.tui.live import live_of
 
 
 def _fit(variants: list[str], width: int | None) -> str:
-    """The first (longest) variant that fits ``width`` columns, else the last one cut."""
+    """The first (longest) variant that fits ``width`` columns, else the last one
+    shortened by whole words from its end (its least important part: ``_cut_words``)."""
     if not width:
         return variants[0]
     for text in variants:
         if len(text) <= width:
             return text
-    return variants[-1][:width]
+    return _cut_words(variants[-1], width)
+
+
+def _cut_words(text: str, width: int) -> str:
+    """``text`` within ``width`` columns, whole words dropped from its end (``…`` says
+    words went); a field left empty goes with its ``|``. Never a word cut."""
+    words = text.split(" ")
+    while len(words) > 1:
+        words.pop()
+        head = " ".join(words).rstrip()
+        if head.endswith("|"):  # the whole last field went: its separator too
+            head = head[:-1].rstrip()
+            if len(head) <= width:
+                return head
+        elif len(head) + 1 <= width:
+            return head + "…"
+    return ""
 
 
 def relay_names(profile) -> dict[int, str]:
@@ -96,6 +113,7 @@ def describe(
                 f" ^e E-STOP | {state} | {short} | closed: {numbers}",
                 # the levels last: what does not fit is cut from them
                 f" ^e E-STOP | {state} | closed: {numbers} | {short}",
+                f" ^e E-STOP | {state} | closed: {numbers}",  # no level rather than half
             ],
             width,
         ),
@@ -146,8 +164,12 @@ class SafetyBar(Static):
             error = "" if status is not None else live.error()
         self._shown = (status, error)
         if status is None:
-            text = f" ctrl+e E-STOP | outputs not open: {error or 'starting...'}"
-            cls = "nooutputs"
+            why = error or "starting..."
+            variants = [
+                f" ctrl+e E-STOP | outputs not open: {why}",
+                f" ^e E-STOP | not open: {why}",
+            ]
+            text, cls = _fit(variants, self._width()), "nooutputs"
         else:
             if self._names is None:
                 try:

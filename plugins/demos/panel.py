@@ -79,6 +79,14 @@ def status_text(st: dict | None, feed: dict | None = None) -> str:
 KEYS = {"s": "stop", "k": "close projector", "d": "demos", "x": "cancel"}
 
 
+#: words of a line that says the e-stop is active (stale once the operator reset it)
+ESTOP_ACTIVE = ("e-stop active", "e-stop is active", "reset it first", "ctrl+r resets")
+
+
+def _says_estop(line: str) -> bool:
+    return any(w in line for w in ESTOP_ACTIVE)
+
+
 def _hint(*keys: str) -> str:
     return "  ".join(f"{k} {KEYS[k]}" for k in keys)
 
@@ -110,6 +118,8 @@ class ScenesPane(Vertical):
     DEFAULT_CSS = """
     ScenesPane #demo-table { height: auto; max-height: 5; }
     ScenesPane #demo-status { height: auto; }
+    /* the demos' keys stay in view however short the screen gets (a toast's rows) */
+    ScenesPane #demo-keys { dock: bottom; }
     """
     HELP_TEXT = (
         "Scenes table:\n"
@@ -152,6 +162,8 @@ class ScenesPane(Vertical):
         self.hand_placed = False  # the operator drives the twin (not the script)
         self._touch_timer = None  # the finger's landing after a lift
         self._demo_states: dict[str, str] = {}  # each demo's state cell
+        self._estop_demo = ""  # the demo the e-stop stopped or refused (its line says so)
+        self._last_run = ""  # the demo status after a run ended (markup)
         self._asked_scene: str | None = None  # the scene Enter asked the projector for
         self._scene_error = ""  # ... and why it did not show
         self._filled_width = 0  # the width the tables were laid out for
@@ -171,6 +183,7 @@ class ScenesPane(Vertical):
         yield Static(
             f"demos (d): enter start/stop  {_hint('s', 'x')}  F7 its latency  ? more",
             classes="hint",
+            id="demo-keys",
         )
 
     @property
@@ -179,9 +192,9 @@ class ScenesPane(Vertical):
 
     def on_mount(self) -> None:
         t = self.query_one("#scene-table", DataTable)
-        # the scenes take what the demos leave (it scrolls): usable at 80 x 24
-        # (a header and one row at least: a running flow's status needs the rest)
-        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 2, 12
+        # the scenes take what the demos leave (it scrolls): usable at 80 x 24; a
+        # running demo's status comes first (toasts take rows: the table gives them)
+        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 0, 12
         if not self.app.ctx.pm.of("scene"):
             self.query_one("#projector-status", Static).update(
                 "no scenes: no plugin registers one (install the projector plugin)"
@@ -276,12 +289,35 @@ class ScenesPane(Vertical):
 
     def _set_state(self, text: str) -> None:
         self.demo_state = text
-        name = self.demo_name
-        if name is not None:
-            self._demo_states[name] = text
+        if self.demo_name is not None:
+            self._set_cell(self.demo_name, text)
+
+    def _set_cell(self, name: str, text: str) -> None:
+        """Demo ``name``'s state cell."""
+        self._demo_states[name] = text
         t = self.query("#demo-table")
-        if name is not None and t and name in t.first(DataTable).rows:
+        if t and name in t.first(DataTable).rows:
             t.first(DataTable).update_cell(name, "state", text)
+
+    def _estop_reset(self) -> None:
+        """The operator's reset (ctrl+r): what said the e-stop is active says what is
+        true now (a demo it stopped can start again)."""
+        for name, state in list(self._demo_states.items()):
+            if state == "e-stopped":
+                self._set_cell(name, "stopped")
+        if any(w in self._last_run for w in ESTOP_ACTIVE):  # the last run's error said it
+            kept = [ln for ln in self._last_run.split("\n") if not _says_estop(ln)]
+            self._show_last_run("\n".join(kept))
+        lw = self.query_one("#demo-work", LongWork)
+        name = self._estop_demo or lw.last_name.removeprefix("demo ")
+        self._estop_demo = ""
+        if not lw.busy and name and "e-stop" in lw.text:
+            lw.show(f"demo {name}: the e-stop is reset; enter starts it again")
+
+    def _show_last_run(self, text: str) -> None:
+        """The demo status: how the last run ended and its last numbers (markup)."""
+        self._last_run = text
+        self.query_one("#demo-status", Static).update(text)
 
     def start_demo(self, name: str) -> bool:
         """Start demo ``name`` in its own process (the session's work, in a worker)."""
@@ -291,6 +327,7 @@ class ScenesPane(Vertical):
         try:
             self.demos.check_start(name)
         except UserError as exc:
+            self._estop_demo = name
             lw.error(str(exc))
             return False
         demos = self.demos
@@ -336,6 +373,9 @@ class ScenesPane(Vertical):
             said_here(self, "Scenes", ev.message, ev.severity)
             self.show_projector()
             return
+        if ev.topic == "estop" and isinstance(ev, Started):  # the operator's reset
+            self._estop_reset()
+            return
         if ev.topic != "demo":
             return
         if isinstance(ev, Started):
@@ -362,11 +402,13 @@ class ScenesPane(Vertical):
             log = (demos.last_final or {}).get("twin_log")
             if log:
                 text += f"\nwhat the twin's outputs received: {log}"
-            self.query_one("#demo-status", Static).update(f"last run ({reason}):\n{text}")
+            self._show_last_run(f"last run ({reason}):\n{text}")
         self.demo_name = None
         lw = self.query_one("#demo-work", LongWork)
+        if reason == "e-stopped":
+            self._estop_demo = name
         if not lw.busy and reason not in ("failed", "cancelled"):  # those: its own line
-            lw.show(f"demo {reason}")
+            lw.show(f"demo {name} {reason}")
 
     def _show_snapshot(self, snap: dict) -> None:
         text = "\n".join(status_lines(snap))
@@ -377,6 +419,7 @@ class ScenesPane(Vertical):
             else:
                 text += "\ntwin: the scripted hand performs; space: touch it yourself"
         self.query_one("#demo-status", Static).update(text)
+        self._last_run = ""
         if self.demo_state.startswith("running") and self.demo_name is not None:
             up = snap.get("uptime_s", 0.0)
             state = f"running {up:.0f} s" if snap.get("running") else "loop stopped"

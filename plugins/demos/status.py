@@ -78,7 +78,7 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
         + state
         + f" {snap.get('uptime_s', 0):.0f} s  "
         + dog
-        + f"  camera {cam.get('fps', 0):.0f} fps, dropped "
+        + f"  {_rates(cam, lat)}, dropped "
         f"{escape(lat.get('dropped_camera', 0))} (camera) + "
         f"{escape(lat.get('dropped_queue', 0))} (queue)"
     ]
@@ -106,6 +106,16 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     if snap.get("last_error"):
         lines.append(f"[red]{escape(snap['last_error'])}[/]")
     return lines
+
+
+def _rates(cam: dict[str, Any], lat: dict[str, Any]) -> str:
+    """The camera's frame rate (its set rate, else its nominal one, else as measured)
+    and the rate the demo's loop reads frames at (its latency monitor's)."""
+    camera = cam.get("rate_fps") or cam.get("nominal_fps") or cam.get("fps") or 0
+    loop = lat.get("fps")
+    if loop is None:  # no monitor numbers: what the camera delivered is the loop's rate
+        loop = cam.get("fps", 0)
+    return f"camera {float(camera):.0f} fps, loop {float(loop):.0f} fps"
 
 
 def _hand_line(hand: dict[str, Any]) -> str:

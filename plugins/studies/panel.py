@@ -493,6 +493,8 @@ class StudiesPane(Vertical):
             self.abort_until = None
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
+            if self.said[1] != "error":  # "resumed", "pausing ...": the run's, past now
+                self.said = ("", "information")
             if ev.reason.startswith("finished"):  # ready for the next participant
                 field = self.query_one("#participant", Input)
                 if field.value.strip() == ev.name:

@@ -91,7 +91,7 @@ def test_ctrl_z_brings_back_what_a_key_replaced(plugins):
 
 # ---------------------------------------------------------------------- the help's text
 #: the start of a new entry: ``b        capture``, ``t / T    body``, ``s: synthesize``
-ENTRY = re.compile(r"^\s*\S{1,12}( \S{1,6}){0,3}(: |\s{2,})")
+ENTRY = re.compile(r"^\s*\S{1,12}( \S{1,8}){0,3}(: |\s{2,})")
 
 
 def _help_lines(app) -> tuple[list[str], int]:

@@ -1,0 +1,47 @@
+"""The safety bar at 80 columns is shortened by whole words and fields, never cut in a
+word (issue 27, third new-user try): a long e-stop reason loses its last words."""
+
+from __future__ import annotations
+
+import asyncio
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+from console.tui.safety_bar import SafetyBar, describe
+
+from .conftest import wait_for
+
+REASON = "e-stop from another process: a demo's watchdog tripped in stage vision (p99 412 ms)"
+
+
+def _whole_words(shown: str, full: str) -> bool:
+    """Every word of ``shown`` (a ``…`` at its end aside) is a word of ``full``."""
+    words = set(full.split())
+    return all(w in words for w in shown.removesuffix("…").split())
+
+
+def test_a_long_estop_reason_loses_whole_words_at_80(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
+            app.estop(REASON)
+            bar = app.query_one("#safety", SafetyBar)
+            await wait_for(pilot, lambda: "ctrl+r" in str(bar.render()), 30, "e-stop shown")
+            shown = str(bar.render())
+            assert len(shown) <= 80 and "relays closed: none" in shown
+            assert _whole_words(shown, f"E-STOP: ctrl+r resets | relays closed: none | {REASON}")
+
+    asyncio.run(scenario())
+
+
+def test_the_bar_never_cuts_a_word_at_any_width():
+    status = {
+        "gate": {"estopped": True, "estop_reason": REASON, "relays_closed": [5], "level_v": []},
+        "busy": False,
+    }
+    full_text = describe(status, None)[0]
+    full_text += " E-STOP: ctrl+r resets | relays closed: 5"
+    for width in range(30, 100):
+        text, _ = describe(status, width)
+        assert len(text) <= width and _whole_words(text, full_text), (width, text)
