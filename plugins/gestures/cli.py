@@ -62,7 +62,10 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     if cmd == "eval" and args.model is not None:
         model = GestureModel.load(args.model)  # a bad model is refused before extracting
         fs = _dataset_features(ev, args, profile)
-        _print(evaluate_model(fs, model, str(args.model)), args.json)
+        rep = evaluate_model(fs, model, str(args.model))
+        rep["clipping"] = ev.clipping_report(fs)
+        _print(rep, args.json)
+        _warn_clipping(rep["clipping"], args.dataset)
         return 0
     if cmd == "eval":  # the procedure the console's Gestures panel runs too
         _, rep = ev.evaluation(
@@ -76,6 +79,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             progress=_progress(args),
         )
         _print(rep, args.json)
+        _warn_clipping(rep["clipping"], args.dataset)
         return 0
     if cmd == "train":
         fs = _dataset_features(ev, args, profile)
@@ -92,8 +96,10 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             "n_harmonics": model.n_harmonics,
             "n_frames": model.n_frames,
             "selection": model.meta.get("selection"),
+            "clipping": ev.clipping_report(fs),
         }
         _print(out, args.json)
+        _warn_clipping(out["clipping"], args.dataset)
         return 0
     if cmd == "calibrate":
         return _calibrate(args, ctx, profile)
@@ -112,6 +118,12 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         _print(out, args.json)
         return 0
     return 2
+
+
+def _warn_clipping(clip: dict, dataset: Any) -> None:
+    """The clipping warning, one line on stderr, if the report has one."""
+    if "warning" in clip:
+        print(f"warning: {dataset}: {clip['warning']}", file=sys.stderr)
 
 
 def _calibrate(args: argparse.Namespace, ctx: Any, profile: Any) -> int:

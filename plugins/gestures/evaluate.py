@@ -36,11 +36,11 @@ from .features import (
 )
 from .model import GestureModel
 from .progress import CancelCheck, Progress, part, step
-from .reports import fold_report, report
+from .reports import clipping, fold_report, report, sample_clipped_share
 from .selection import INNER_FOLDS, candidates, select_settings
 from .vision import VisionParams
 
-FEATURES_VERSION = 8  # bump when features change: old caches are ignored
+FEATURES_VERSION = 9  # bump when features change: old caches are ignored
 #: the modules whose code makes the features: their source is part of the cache key, so a
 #: change to any of them is never answered with features the old code computed
 FEATURE_MODULES = (
@@ -146,7 +146,7 @@ def extract(
 
 def _extract(samples, params, frames_list, size, progress, cancelled) -> FeatureSet:
     fallback = None
-    names, labels, subjects, times, cpu = [], [], [], [], []
+    names, labels, subjects, times, cpu, shares = [], [], [], [], [], []
     xs_all: dict[int, list] = {k: [] for k in frames_list}
     xk_all: dict[int, list] = {k: [] for k in frames_list}
     xd_all: dict[int, list] = {k: [] for k in frames_list}
@@ -159,7 +159,9 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
             if fallback is None:
                 fallback = _fallback_background(samples, size)
             bg = fallback
-        recs = sample_records(frames, bg, params, times, cpu)
+        clip: list = []
+        recs = sample_records(frames, bg, params, times, cpu, clip)
+        shares.append(sample_clipped_share(clip))
         xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX)
         names.append(s.name)
         labels.append(s.gesture)
@@ -179,9 +181,16 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
         {k: np.array(v) for k, v in xd_all.items()},
         {k: np.array(v) for k, v in sc_all.items()},
         np.array(times),
-        {"n_harmonics_max": N_HARMONICS_MAX},
+        {"n_harmonics_max": N_HARMONICS_MAX, "clipped_share": shares},
         np.array(cpu),
     )
+
+
+def clipping_report(fs: FeatureSet) -> dict:
+    """The set's clipped touching skin (``reports.clipping``; per sample in
+    ``fs.meta["clipped_share"]``)."""
+    shares = fs.meta.get("clipped_share") or [0.0] * len(fs.names)
+    return clipping(list(fs.names), shares)
 
 
 def _arrays(fs: FeatureSet) -> dict:
@@ -283,6 +292,7 @@ def evaluation(
         progress=part(progress, 0.5, 1.0),
         cancelled=cancelled,
     )
+    rep["clipping"] = clipping_report(fs)
     return fs, rep
 
 

@@ -324,9 +324,11 @@ def sample_records(
     params: VisionParams,
     times: list | None = None,
     cpu: list | None = None,
+    clip: list | None = None,
 ) -> list[dict | None]:
     """Frame records of a sample's frames; the pipeline's wall time (and thread CPU
-    time) of each frame is appended to ``times`` (and ``cpu``)."""
+    time) of each frame is appended to ``times`` (and ``cpu``), its clipped and touching
+    pixel counts to ``clip``."""
     out = []
     for img in frames:
         c0 = time.thread_time()
@@ -337,6 +339,8 @@ def sample_records(
             times.append(t1 - t0)
         if cpu is not None:
             cpu.append(time.thread_time() - c0)
+        if clip is not None:
+            clip.append((res.clipped_px, res.touching_px))
         out.append(frame_record(res))
     return out
 

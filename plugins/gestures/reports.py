@@ -74,3 +74,34 @@ def report(
         "n_frames": n_frames,
         "motion_threshold": float(np.median(thresholds)) if thresholds else None,
     }
+
+
+#: a sample whose touching skin clips over this share is reported (``clipping``)
+CLIP_WARN = 0.05
+
+
+def sample_clipped_share(counts: list[tuple[int, int]]) -> float:
+    """A sample's clipped share: its frames' clipped over touching pixels (0: none)."""
+    clipped = sum(c for c, _ in counts)
+    touching = sum(t for _, t in counts)
+    return clipped / touching if touching else 0.0
+
+
+def clipping(names: list[str], shares: list[float], warn: float = CLIP_WARN) -> dict:
+    """Per set: the mean clipped share of touching skin, the share of samples over
+    ``warn``, those samples (at most 5 named) and a one-line warning when any."""
+    v = np.asarray(shares, float)
+    over = [n for n, x in zip(names, v, strict=True) if x > warn]
+    out = {
+        "clipped_share_mean": float(v.mean()) if v.size else 0.0,
+        "samples_over": float(len(over) / v.size) if v.size else 0.0,
+        "threshold": warn,
+    }
+    if over:
+        some = ", ".join(over[:5]) + (f" and {len(over) - 5} more" if len(over) > 5 else "")
+        out["warning"] = (
+            f"touching skin clips at 255 on over {warn:.0%} of its pixels in {len(over)}/"
+            f"{v.size} samples ({some}): lower the IR exposure or gain (Camera screen: "
+            "exposure) and record again"
+        )
+    return out

@@ -137,6 +137,9 @@ class FrameResult:
     #: pixels of the hands' outlines at the sensor's maximum (255): touching skin clips,
     #: so the hands' light and thresholds are underestimated; lower exposure or gain
     clipped_px: int = 0
+    #: pixels of the hands' touching skin (at least half their part's level, or clipped):
+    #: ``clipped_px`` over this is the clipped share (``clipped_share``); 0 unless some clip
+    touching_px: int = 0
     #: "diff", "body", "highpass" and "foreground" (the last two computed on first
     #: access) with ``keep_masks``
     masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
@@ -299,6 +302,24 @@ def analyse_hand(
     ), extras
 
 
+def clipped_share(frame: np.ndarray, touching: np.ndarray) -> tuple[int, int]:
+    """``(clipped, touching)`` pixel counts: of the touching-skin mask ``touching``
+    (uint8 0/255, or bool), those at the sensor's maximum (255) in ``frame``."""
+    t = np.asarray(touching, bool)
+    return int(np.count_nonzero(frame[t] >= 255)), int(np.count_nonzero(t))
+
+
+def touching_mask(img: np.ndarray, diff: np.ndarray, body: np.ndarray, parts: Parts) -> np.ndarray:
+    """The hands' touching skin inside ``parts.win``: body pixels at least half their
+    part's level above the background, or at the sensor's maximum."""
+    x0, y0, x1, y1 = win = parts.win
+    half = np.floor(np.minimum(0.5 * parts.peak, 255)).astype(np.uint8)
+    half[0] = 255
+    bright = cv2.compare(diff[y0:y1, x0:x1], parts.image(half, win), cv2.CMP_GE)
+    hot = cv2.compare(img[y0:y1, x0:x1], 254, cv2.CMP_GT)
+    return cv2.bitwise_and(cv2.bitwise_or(bright, hot), body[y0:y1, x0:x1])
+
+
 def part_contacts(
     diff: np.ndarray,
     parts: Parts,
@@ -418,12 +439,13 @@ def process_frame(
         if got is not None:
             got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))
             found.append(got)
-    clipped = 0
-    if found:  # the sensor's maximum inside the hands' outlines
+    clipped = touching = 0
+    if found:  # the sensor's maximum on the hands' touching skin
         x0, y0, x1, y1 = parts.win
-        hot = cv2.compare(img[y0:y1, x0:x1], 254, cv2.CMP_GT)
-        if cv2.countNonZero(hot):
-            clipped = cv2.countNonZero(cv2.bitwise_and(hot, body[y0:y1, x0:x1]))
+        if cv2.minMaxLoc(img[y0:y1, x0:x1])[1] >= 255:
+            clipped, touching = clipped_share(
+                img[y0:y1, x0:x1], touching_mask(img, diff, body, parts)
+            )
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     masks: Mapping[str, np.ndarray] = {}
     if keep_masks:  # the whole high-pass image only if someone looks at it
@@ -443,6 +465,7 @@ def process_frame(
         noise=float(noise),
         illumination_changed=bool(changed),
         clipped_px=int(clipped),
+        touching_px=int(touching),
         masks=masks,
         extras=tuple(e for _, e in found),
     )
