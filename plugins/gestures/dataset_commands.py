@@ -25,6 +25,8 @@ MAX_SUBJECTS = 1000
 MAX_REPS = 100000
 #: processes for synth: more than the jobs are not started anyway
 MAX_WORKERS = 1024
+#: ``synth --renderer``: the camera twin, or the independent phalanx renderer
+RENDERERS = ("twin", "phalanx")
 
 
 def check_folder_name(value: str | None, flag: str) -> None:
@@ -115,6 +117,13 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         help="multiply every sample's IR light (the same performances under another light; "
         "0.1 to 3, default 1)",
     )
+    parser.add_argument(
+        "--renderer",
+        choices=RENDERERS,
+        default="twin",
+        help="image source: the camera twin (default) or the independent phalanx renderer "
+        "(a second instrument for cross-renderer checks)",
+    )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument(
         "--dry-run",
@@ -160,6 +169,8 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
     bad = [g for g in gestures if g not in GESTURES]
     if bad:
         raise UserError(f"--gestures {bad}: unknown; use {', '.join(GESTURES)}")
+    if getattr(args, "renderer", "twin") == "phalanx":
+        return _run_phalanx(args, kw)
     # said before the work starts: a big set takes gigabytes and many minutes
     est = estimate(**kw)
     if args.dry_run:
@@ -177,6 +188,46 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         size = sum(f.stat().st_size for f in Path(info["out"]).rglob("*") if f.is_file())
         print(
             f"wrote {info['samples']} samples ({info['frames']} frames, {size / 1e6:.0f} MB) "
+            f"to {info['out']} in {info['seconds']:.1f} s with {info['workers']} process(es)"
+        )
+    return 0
+
+
+def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
+    """``synth --renderer phalanx``: the same options, the independent renderer."""
+    from .phalanx_synth import DYNAMIC_FRAMES as PH_DYNAMIC
+    from .phalanx_synth import synth_phalanx
+
+    twin_only = [
+        flag
+        for flag, used in (
+            ("--lens-distortion", args.lens_distortion),
+            ("--exposure-ms", args.exposure_ms > 0),
+            ("--vary", args.vary),
+        )
+        if used
+    ]
+    if twin_only:
+        raise UserError(
+            f"{', '.join(twin_only)}: twin options; the phalanx renderer does not model them "
+            "(leave them out, or use --renderer twin)"
+        )
+    kw["dynamic_frames"] = args.dynamic_frames or PH_DYNAMIC
+    if args.dry_run:
+        n = kw["subjects"] * kw["reps"] * len(kw["gestures"])
+        msg = f"would write {n} phalanx samples to {args.out}"
+        print(json.dumps({"samples": n}) if args.json else msg)
+        return 0
+    if args.force:
+        info = synth_phalanx(args.out, force=True, **kw)
+    else:
+        info = synth_atomic(args.out, make=synth_phalanx, **kw)
+    if args.json:
+        print(json.dumps(info))
+    else:
+        print(
+            f"wrote {info['samples']} phalanx samples ({info['frames']} frames, light x"
+            f"{info['light_scale']:g}; {info['clipped_share']:.0%} with clipped touching skin) "
             f"to {info['out']} in {info['seconds']:.1f} s with {info['workers']} process(es)"
         )
     return 0
@@ -246,7 +297,7 @@ COMMANDS = {
     "synth": (
         configure_synth,
         run_synth,
-        "make a synthetic dataset from the camera twin (paper: 5 x 10 x 40)",
+        "make a synthetic dataset from the camera twin or --renderer phalanx (paper: 5 x 10 x 40)",
     ),
     "record": (
         configure_record,

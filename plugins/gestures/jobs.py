@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -37,9 +38,11 @@ def synth_atomic(
     replace: bool = False,
     progress: Progress | None = None,
     cancelled: CancelCheck | None = None,
+    make: Callable[..., dict[str, Any]] = synth,
     **synth_kw: Any,
 ) -> dict[str, Any]:
-    """``synth.synth`` into a hidden sibling folder, renamed to ``out`` when complete.
+    """``make`` (``synth.synth``, or another renderer's writer of the same signature)
+    into a hidden sibling folder, renamed to ``out`` when complete.
 
     An existing non-empty ``out`` is an error, unless ``replace`` and it is a synthesized
     dataset (has ``synth.json``): then it is swapped for the new one at the end.
@@ -58,7 +61,7 @@ def synth_atomic(
     tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
     try:
-        info = synth(tmp, subjects, reps, progress=progress, cancelled=cancelled, **synth_kw)
+        info = make(tmp, subjects, reps, progress=progress, cancelled=cancelled, **synth_kw)
         step(None, cancelled, 1.0, "renaming")
         info["out"] = str(out)
         (tmp / SYNTH_MARK).write_text(json.dumps(info, indent=1) + "\n")
