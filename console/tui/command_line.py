@@ -5,7 +5,7 @@ decides what the line holds: a command that failed keeps its text, the cursor at
 so the operator fixes it instead of typing it again; one that succeeded is cleared. A
 command whose work runs on (an import, a load) keeps its text until that work says how it
 ended (``succeeded``/``failed`` with the text it was given: a line typed over meanwhile
-is left alone). The line never selects its text on focus: a key typed after ``:`` adds
+is left alone); when it failed the line takes the keys back. The line never selects its text on focus: a key typed after ``:`` adds
 to what is there, it never replaces it. ``ctrl+u`` clears the whole line (wherever the
 cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back).
 """
@@ -61,11 +61,16 @@ class CommandLine(Input):
 
     def failed(self, text: str) -> None:
         """The command ``text`` failed: its text stays to be fixed, the cursor at the
-        end (the screen's status line says why)."""
+        end (the screen's status line says why), and the line takes the keys back while
+        its screen shows: a command whose work failed after the keys went back to the
+        screen (a load, an import) is fixed there too, the letters typed next never act
+        as the screen's keys."""
         if not self.value.strip():  # cleared meanwhile: bring the command back
             self.value = text
         if self.value.strip() == text.strip():
             self.cursor_position = len(self.value)
+            if self.region.area and self.screen.focused is not self:
+                self.screen.set_focus(self)
 
     def action_clear_line(self) -> None:
         """``ctrl+u``: the whole line cleared (ctrl+z brings it back)."""
