@@ -19,7 +19,7 @@ What this module offers, by where it comes from:
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
   ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
-- the typed capabilities (``console.core.contracts``): ``BlockSource``, ``Classifier``,
+- the typed capabilities (``console.core.contracts``): ``AdjustableCamera``, ``BlockSource``, ``Classifier``,
   ``Conditions``, ``FlowEffect``, ``FlowPatchDrives``, ``HandFlowEffect``,
   ``HandFlowGeometry``, ``KnobTrials``,
   ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
@@ -52,6 +52,7 @@ from console.config.profile_files import profile_file
 from console.core.bench_stats import machine_info, summarize_s
 from console.core.channels import BUS_CHANNELS, ChannelLayout
 from console.core.contracts import (
+    AdjustableCamera,
     BlockSource,
     Classifier,
     Conditions,
@@ -164,6 +165,7 @@ __all__ = [
     "TunableRange",
     "patches_of",
     # capabilities (console.core.contracts)
+    "AdjustableCamera",
     "BlockSource",
     "Classifier",
     "Conditions",

@@ -263,6 +263,16 @@ class CameraService:
         cam = self._adjustable()
         return {**out, **cam.control_values()} if cam is not None else out
 
+    def vision_params(self) -> dict[str, float]:
+        """The classifier's tunables alone (what a demo's classifier takes)."""
+        return self.classifier.tunables() if self.classifier is not None else {}
+
+    def control_values(self) -> dict[str, float]:
+        """The camera's controls alone (exposure, gain: what a demo's camera takes; empty
+        when its driver takes none)."""
+        cam = self._adjustable()
+        return cam.control_values() if cam is not None else {}
+
     def param_ranges(self) -> dict[str, TunableRange]:
         out = self.classifier.tunable_ranges() if self.classifier is not None else {}
         cam = self._adjustable()

@@ -123,9 +123,11 @@ class DemoControl:
         try:
             step(0.0, "handing over the camera")
             camera = s.camera
-            vision = camera.params()
+            vision, controls = camera.vision_params(), camera.control_values()
             if vision:
                 params.setdefault("vision", vision)  # the Camera screen's tuned thresholds
+            if controls:
+                params.setdefault("camera_controls", controls)  # its exposure and gain
             out = s.outputs
             try:
                 camera.release(f"demo {name}")

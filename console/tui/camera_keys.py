@@ -17,6 +17,8 @@ HELP_TEXT = (
     "         mirror, region of interest; exposure and gain where the driver takes them)\n"
     "- / +    change the chosen setting by one step (t/T c/C h/H choose theirs too):\n"
     "         its row (▸) shows the new value and stays in view\n"
+    "e        exposure assistant: with a flat hand on the glass, steps the exposure (then\n"
+    "         gain) down until touching skin is below 255; x stops (values as before)\n"
     "W        keep every vision setting for this profile (its overrides file)\n"
     "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
     "g        gestures panel: datasets, training and evaluation\n"
@@ -40,6 +42,7 @@ BINDINGS = [
     Binding("b", "background", "background"),
     Binding("W", "save_tuning", "keep settings"),
     Binding("U", "edit_target", "TUIO target"),
+    Binding("e", "exposure", "exposure"),
     Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
     Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
     Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),

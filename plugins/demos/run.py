@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, summarize_s
+from console.plugin_api import AdjustableCamera, UserError, summarize_s
 from console.plugin_api.runtime import (
     FrameLoop,
     LatencyMonitor,
@@ -241,6 +241,7 @@ def start_demo(
     classifier: Any = None,
     camera_apart: bool = False,
     vision: dict | None = None,
+    camera_controls: dict | None = None,
     prepare_first: bool = False,
 ) -> DemoRun:
     """Start demo ``name`` on the profile's camera (or ``camera``) and ``outputs``.
@@ -255,7 +256,9 @@ def start_demo(
     in-process twin; rendering it beside the loop and the audio costs them the GIL).
     ``projector``: the console's projector service (``update(event)``, after its
     ``start_scene("knob"|"flow_hand")``): the demo's scene events are forwarded to it.
-    ``vision``: classifier parameters to override (the console's tuned thresholds).
+    ``vision``: classifier parameters to override (the console's tuned thresholds);
+    ``camera_controls``: the camera's exposure and gain as the console set them (given to
+    a camera whose driver takes them, ``AdjustableCamera``; others ignore them).
     On the twin, the flow's map is the measured map in HapTable's one cache, shared with
     the console's Vibration screen (``console.runtime.measured_map``).
     The flow demo runs at once and prepares its plans behind itself (seconds per scene
@@ -275,6 +278,10 @@ def start_demo(
     try:
         if script:
             script_twin(camera, name, profile)
+        if isinstance(camera, AdjustableCamera):
+            for key, value in (camera_controls or {}).items():  # the console's exposure, gain
+                if key in camera.controls():
+                    camera.set_control(key, value)
         clf = classifier
         if clf is None:
             clf = open_classifier(profile, plugins)

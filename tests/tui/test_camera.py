@@ -318,11 +318,9 @@ def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
             svc = app.session.camera_started
             pane = app.pane("camera")
             info = app.query_one("#camera-settings")
-            # the twin's driver takes no exposure or gain: the screen says so, offers none
-            await wait_for(
-                pilot, lambda: "exposure, gain: not set by the" in str(info.render()), 10
-            )
-            assert "gain" not in svc.params()
+            # the twin takes exposure and gain (multipliers of its light): rows to tune
+            await wait_for(pilot, lambda: "gain" in str(info.render()), 10)
+            assert "gain" in svc.params() and "exposure" in svc.params()
             while pane.chosen_key() != "smooth_px":
                 await pilot.press("right_square_bracket")
             before = svc.params()["smooth_px"]

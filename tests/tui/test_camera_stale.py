@@ -112,12 +112,17 @@ def test_a_demo_holding_the_camera_refuses_every_key_that_changes_it(plugins):
             info = app.query_one("#camera-info")
             await wait_for(pilot, lambda: "demo knob" in text_in(app, info), 30, "numbers")
             assert "fps" not in text_in(app, info), text_in(app, info)
-            for key in ("n", "S", "x", "T", "plus", "W", "u", "U"):
+            for key in ("n", "S", "x", "T", "plus", "W", "u", "U", "e"):
                 await pilot.press(key)
                 await wait_for(pilot, lambda: "demo knob" in _status(app), 30, key)
                 assert "refused" in _status(app) and "F6" in _status(app), (key, _status(app))
                 app.pane("camera").say("")
-            assert svc.params() == before
+            # every vision setting as it was (the camera's own exposure and gain are not
+            # listed while the demo holds the camera)
+            after = svc.params()
+            assert {k: after[k] for k in before if k in after} == {
+                k: v for k, v in before.items() if k in after
+            }
             assert not isinstance(app.focused, Input)
             await asyncio.to_thread(svc.give_back)
 

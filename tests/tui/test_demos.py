@@ -402,3 +402,26 @@ def test_a_demo_started_while_the_console_plays_waits_its_turn_on_the_table(plug
             await wait_for(pilot, lambda: outputs_of(run)["busy"], 20, "then the knob")
 
     asyncio.run(scenario())
+
+
+def test_a_demo_runs_with_the_exposure_and_gain_the_console_set(plugins):
+    """The Camera screen's exposure and gain go to the demo's camera, its thresholds to
+    the demo's classifier (a camera control given to the classifier failed the start)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="camera")
+        async with app.run_test(size=(80, 24)) as pilot:
+
+            def controls() -> bool:
+                svc = app.session.camera_started
+                return svc is not None and "gain" in svc.params()
+
+            await wait_for(pilot, controls, 60, "the camera's exposure and gain")
+            app.session.camera_started.set_param("gain", 1.5)
+            await pilot.press("f6")
+            await _start(app, pilot, "knob")
+            snap = app.session.demos.run.snapshot()
+            assert snap["camera"].get("gain") == 1.5, snap["camera"]
+            assert not snap.get("last_error")
+
+    asyncio.run(scenario())

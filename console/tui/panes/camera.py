@@ -23,6 +23,7 @@ from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
+from console.runtime.exposure_assist import assist_service
 from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE
 from console.tui.camera_picture import (
     blob_labels,
@@ -81,6 +82,7 @@ class CameraPane(Horizontal):
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
         self._saved_to = None  # the path S saved the calibration to
+        self._assisting = None  # the exposure assistant's cancel event while it runs
 
     @property
     def image_mode(self) -> str:
@@ -470,6 +472,8 @@ class CameraPane(Horizontal):
             lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
         if not svc.camera_controls():
             lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
+        else:
+            lines.append("e: exposure assistant")
         lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
         for name in svc.switches():
             on, target = svc.sink_state(name)
@@ -642,9 +646,32 @@ class CameraPane(Horizontal):
             self._status_still_true()
 
     def action_cancel(self) -> None:
-        if not self._borrowed("x"):
+        if self._assisting is not None:
+            self._assisting.set()  # the assistant puts the values back and says so
+        elif not self._borrowed("x"):
             self.wizard.cancel()
             self._status_still_true()
+
+    # ------------------------------------------------------------------ exposure
+    def action_exposure(self) -> None:
+        """``e``: the exposure assistant (``console.runtime.exposure_assist``) in a worker,
+        its steps and its outcome on the status line; ``x`` cancels it."""
+        if self._assisting is not None or self._borrowed("e"):
+            return
+        import threading
+
+        self._assisting = threading.Event()
+        self.say("e: measuring touching skin ... x stops")
+        self._assist(self._assisting)
+
+    @work(thread=True, exclusive=True, group="camera-exposure")
+    def _assist(self, cancel) -> None:
+        try:
+            out = assist_service(self.service, cancel, lambda s: from_thread(self.app, self.say, s))
+        finally:
+            self._assisting = None
+        from_thread(self.app, self.say, out.line, "information" if out.ok else "warning")
+        from_thread(self.app, self._reveal)
 
     def action_gestures_panel(self) -> None:
         reg = self.app.ctx.pm.of("panel").get("gestures")

@@ -26,7 +26,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from console.plugin_api import Frame, GestureScript
+from console.plugin_api import Frame, GestureScript, TunableRange
 
 from .geometry import TableMapping
 from .gestures import DYNAMIC, GESTURES, SIDES, plan_take, take_pose
@@ -219,6 +219,11 @@ class TouchScript:
 #: a reader that has not called ``read`` for this long is away: the frames meanwhile are
 #: ``unread``, not dropped (a paced reader that is late drops them)
 READER_AWAY_S = 0.5
+#: the sensor's controls, as a camera driver's (``AdjustableCamera``): multipliers on the
+#: light before the 8-bit clip (1: the nominal frame); gain never below 1 (as a sensor's)
+CONTROLS = {"exposure": TunableRange(0.05, 4.0, 0.05), "gain": TunableRange(1.0, 8.0, 0.25)}
+#: where they are kept in the profile
+CONTROL_KEYS = {"exposure": "twin_camera.exposure", "gain": "twin_camera.gain"}
 
 
 class TwinCamera:
@@ -240,8 +245,12 @@ class TwinCamera:
         touch_bias_mm: float = 2.0,
         hand_scale: float = 1.0,
         hover_scale: float = 1.0,
+        exposure: float = 1.0,
+        gain: float = 1.0,
     ) -> None:
         self.rig = rig or Rig()
+        self.exposure = CONTROLS["exposure"].clamp(exposure)
+        self.gain = CONTROLS["gain"].clamp(gain)
         self.hand_scale, self.hover_scale = hand_scale, hover_scale
         self.fps = float(fps)
         self.realtime = realtime
@@ -274,8 +283,31 @@ class TwinCamera:
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+        self.__dict__.update({"exposure": 1.0, "gain": 1.0, **state})
         self._lock = threading.Lock()
+
+    # ------------------------------------------------------------------ AdjustableCamera
+    def controls(self) -> dict[str, TunableRange]:
+        """Exposure and gain: multipliers on the light before the 8-bit clip."""
+        return dict(CONTROLS)
+
+    def control_values(self) -> dict[str, float]:
+        return {"exposure": self.exposure, "gain": self.gain}
+
+    def control_keys(self) -> dict[str, str]:
+        return dict(CONTROL_KEYS)
+
+    def set_control(self, name: str, value: float) -> None:
+        """Exposure or gain from the next frame on (kept in its range)."""
+        rng = CONTROLS.get(name)
+        if rng is None:
+            raise ValueError(f"{name!r} is no camera control: use one of {', '.join(CONTROLS)}")
+        setattr(self, name, rng.clamp(value))
+
+    @property
+    def light(self) -> float:
+        """The sensor's exposure x gain (1: the nominal frame)."""
+        return self.exposure * self.gain
 
     def apart(self):
         """This camera (rig, script, state) streaming from its own process, as a camera
@@ -523,6 +555,7 @@ class TwinCamera:
                 label=label,
                 noise=self.noise,
                 step=self.lights_changed,
+                light=self.light,
             )
         truth.update(extra)
         truth["seq"] = k
@@ -536,7 +569,13 @@ class TwinCamera:
         """The empty table now (for a background capture without lifting the hands)."""
         t_s = self._k / self.fps
         return render_frame(
-            [], self.rig, t_s, self._rng, noise=self.noise, step=self.lights_changed
+            [],
+            self.rig,
+            t_s,
+            self._rng,
+            noise=self.noise,
+            step=self.lights_changed,
+            light=self.light,
         )[0]
 
     def close(self) -> None:
@@ -562,6 +601,7 @@ class TwinCamera:
             "size_px": list(self.rig.mapping.image_px),
             "lens_distortion": self.rig.mapping.distorted,
             "closed": self._closed,
+            **self.control_values(),
         }
 
 

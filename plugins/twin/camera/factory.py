@@ -84,6 +84,8 @@ def make_camera(profile: Any = None):
         touch_bias_mm=float(tw("touch_bias_mm")),
         hand_scale=float(tw("hand_scale")),
         hover_scale=float(tw("hover_scale")),
+        exposure=float(tw("exposure")),
+        gain=float(tw("gain")),
     )
 
 

@@ -39,7 +39,7 @@ MSG = struct.Struct("<iqdq")
 #: One command's length (a pickled ``(method name, args)`` follows).
 CMD = struct.Struct("<I")
 #: The commands the child applies to its twin (its methods of those names).
-COMMANDS = ("set_script", "set_target", "set_targets", "set_rate", "place")
+COMMANDS = ("set_script", "set_target", "set_targets", "set_rate", "place", "set_control")
 
 
 def _commands(buf: bytearray) -> list[bytes]:
@@ -265,6 +265,22 @@ class ProcessCamera:
             self._stale = True  # the reader's next read skips what came before the pause
         self._send("set_rate", self._rate)
 
+    # ------------------------------------------------------------------ AdjustableCamera
+    def controls(self) -> dict[str, Any]:
+        """The twin's exposure and gain (``TwinCamera.controls``)."""
+        return self.twin.controls()
+
+    def control_values(self) -> dict[str, float]:
+        return self.twin.control_values()
+
+    def control_keys(self) -> dict[str, str]:
+        return self.twin.control_keys()
+
+    def set_control(self, name: str, value: float) -> None:
+        """Exposure or gain from the child's next frame on (the parent's copy says it)."""
+        self.twin.set_control(name, value)
+        self._send("set_control", name, getattr(self.twin, name))
+
     # ------------------------------------------------------------------ in the parent
     @property
     def mapping(self) -> Any:
@@ -317,6 +333,7 @@ class ProcessCamera:
             "dropped_rendering": self._render_dropped,
             "alive": self._proc.poll() is None,
             "closed": self._closed,
+            **self.twin.control_values(),
         }
 
 

@@ -221,14 +221,16 @@ def compose(
     step_gain: float = 1.0,
     step_offset: float = 0.0,
     noise: bool = True,
+    light: float = 1.0,
 ) -> np.ndarray:
-    """Illumination, glow, drift, steps and sensor noise -> uint8 frame."""
+    """Illumination, glow, drift, steps and sensor noise -> uint8 frame; ``light`` is
+    the sensor's exposure x gain (1: nominal), a multiplier before the 8-bit clip."""
     illum, glow, maskf = rig_maps(rig)
     g, o = drift(rig, t_s)
     img = layer * illum
     img *= maskf
     img += glow
-    img *= g * step_gain * rig.illumination
+    img *= g * step_gain * rig.illumination * light
     img += o + step_offset
     if noise:
         h, w = img.shape

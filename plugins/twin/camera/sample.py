@@ -114,9 +114,11 @@ def render_frame(
     step: bool = False,
     noise: bool = True,
     blur_hands: tuple[list[tuple[Subject, HandPose]], ...] = (),
+    light: float = 1.0,
 ) -> tuple[np.ndarray, dict[str, Any]]:
     """One uint8 frame of posed hands and its ground truth (of ``hands``). Motion blur:
-    ``blur_hands`` are the same hands at other instants of the exposure, averaged in."""
+    ``blur_hands`` are the same hands at other instants of the exposure, averaged in.
+    ``light``: the sensor's exposure x gain (``compose``)."""
     pieces, truth = frame_truth(hands, rig.mapping, label, t_s)
     layer = hand_layer(pieces, rig.mapping)
     if blur_hands:
@@ -124,7 +126,7 @@ def render_frame(
             layer += hand_layer(frame_truth(other, rig.mapping, label, t_s)[0], rig.mapping)
         layer /= 1 + len(blur_hands)
     g, o = (STEP_GAIN, STEP_OFFSET) if step else (1.0, 0.0)
-    img = compose(layer, rig, t_s, rng, step_gain=g, step_offset=o, noise=noise)
+    img = compose(layer, rig, t_s, rng, step_gain=g, step_offset=o, noise=noise, light=light)
     return img, truth
 
 

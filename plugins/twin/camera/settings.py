@@ -43,6 +43,17 @@ FIELDS = {
     "illumination": Field(
         "float", 1.0, min=0.2, max=3.0, help="IR LED power (x; scales hands, glow, hot spots)"
     ),
+    "exposure": Field(
+        "float",
+        1.0,
+        min=0.05,
+        max=4.0,
+        help="sensor exposure (x the nominal light before the 8-bit clip; the Camera "
+        "screen's exposure row; exposure_ms is the motion blur)",
+    ),
+    "gain": Field(
+        "float", 1.0, min=1.0, max=8.0, help="sensor gain (x, after the exposure; 1: nominal)"
+    ),
     "led_seed": Field(
         "int", -1, min=-1, help="seed of the LED lobes and hot-spot layout (-1: the seed)"
     ),
