@@ -11,6 +11,8 @@ from typing import Any
 #: what the reply may carry (longer lists or texts are not a plan's)
 _MAX_ITEMS = 4096
 _MAX_TEXT = 300
+#: the module a demo's process runs (its command line names it)
+DEMO_HOST = "console.runtime.demo_host"
 
 
 @dataclass(frozen=True)
@@ -41,6 +43,10 @@ def who_sent(role: str, command: str, pid: int, own: bool) -> str:
         return "this console"
     if role == "console":
         return f"another console (pid {pid})"
+    if role.startswith("demo "):  # the console's demo host (``console.runtime.demo_host``)
+        return f"the {role[5:]} demo (pid {pid})"
+    if DEMO_HOST in command:
+        return f"a demo (pid {pid})"
     program = os.path.basename(command.split(" ", 1)[0]) if command else ""
     if program == "haptable":
         return f"the CLI (pid {pid})"

@@ -176,7 +176,9 @@ class Host:
             return 2
         self.proto.send("step", "opening the outputs")
         table = table_at(req["table_dir"]) if req.get("table_dir") else None
-        self.outputs = open_outputs(profile, pm, fast=bool(req.get("fast")), table=table)
+        self.outputs = open_outputs(
+            profile, pm, fast=bool(req.get("fast")), table=table, role=f"demo {name}"
+        )
         self.outputs.add_listener(self._on_table)  # an e-stop of the table ends the run
         if self.estop_reason is not None:
             self.outputs.estop(self.estop_reason)

@@ -36,6 +36,8 @@ Subscriber = Callable[[SessionEvent], None]
 PLAN_MARGIN_S = 0.02
 #: after a plan that was stopped (e-stop): this much after it stopped is kept (seconds)
 STOPPED_TAIL_S = 0.1
+#: how often the kernel's last plan is read, to keep a copy of another sender's plan
+WATCH_PLANS_S = 0.25
 
 
 class ConsoleSession:
@@ -64,6 +66,9 @@ class ConsoleSession:
         self.played: list = []  # OutputPlans accepted for playing (the twin log lists them)
         self._last_play: tuple[Any, Any] | None = None  # (plan, its PlayReport)
         self._last_trace: tuple[Any, Any] | None = None  # (PlayReport, its ScopeTrace)
+        #: another sender's last plan as kept when it ended: (KernelPlan.key, its first
+        #: segment's start, its ScopeTrace) (``_watch_plans``)
+        self._other_trace: tuple[Any, tuple[int, ...], Any] | None = None
         self._control: Any = None
         self._lock = threading.Lock()
         self._subscribers: list[Subscriber] = []
@@ -185,6 +190,9 @@ class ConsoleSession:
                 return False
             self.outputs = out
             self.outputs_error = ""
+        threading.Thread(
+            target=self._watch_plans, args=(out,), name="haptable-plans", daemon=True
+        ).start()
         self.emit(Started("outputs"))
         return True
 
@@ -379,21 +387,48 @@ class ConsoleSession:
         return dataclasses.replace(trace, marks=marks)
 
     def _keep_plan_trace(self, out: Any, report: Any) -> None:
-        """When ``report``'s plan ends, copy what the gate passed for it (with
-        ``PLAN_MARGIN_S`` around it) out of the scope's ring, which keeps only seconds:
-        bounded by the ring's length (a longer plan keeps its newest part)."""
-        import time
-
+        """When this console's ``report``'s plan ends, keep its span (``_plan_span``)."""
         if not report.done.wait(3600) or not report.segment_start:
             return
+        trace = self._plan_span(out, report.segment_start, report.segment_end)
+        with self._lock:
+            if trace is not None and self._last_play is not None and self._last_play[1] is report:
+                self._last_trace = (report, trace)
+
+    def _watch_plans(self, out: Any) -> None:
+        """While ``out`` are the console's outputs: the kernel's last plan, every
+        ``WATCH_PLANS_S``; one another sender (the CLI, a demo) played is kept when it
+        ends, as this console's own are, whether or not the Scope screen shows."""
+        import time
+
+        kept = None
+        while self.outputs is out and not self.closed:
+            time.sleep(WATCH_PLANS_S)
+            last = self.last_plan()
+            if last is None or last.own or not last.done or not last.segment_start:
+                continue
+            if (last.key, last.segment_start[:1]) == kept:
+                continue
+            kept = (last.key, last.segment_start[:1])
+            trace = self._plan_span(out, last.segment_start, last.segment_end)
+            if trace is not None:
+                with self._lock:
+                    self._other_trace = (last.key, last.segment_start[:1], trace)
+
+    def _plan_span(self, out: Any, start: Any, end_at: Any) -> Any:
+        """What the gate passed for an ended plan (segments' first and last clocks), with
+        ``PLAN_MARGIN_S`` around it, copied out of the scope's ring, which keeps only
+        seconds: bounded by the ring's length (a longer plan keeps its newest part)."""
+        import time
+
         fs = out.limits.sample_rate_hz
         margin = int(round(PLAN_MARGIN_S * fs))
         try:
-            if len(report.segment_end) < len(report.segment_start):  # stopped (an e-stop):
-                newest = out.scope(0.0)  # keep its ramp to silence too
+            if len(end_at) < len(start):  # stopped (an e-stop): its ramp to silence too
+                newest = out.scope(0.0)
                 end = newest.clock + newest.n + int(round(STOPPED_TAIL_S * fs))
             else:
-                end = report.segment_end[-1]
+                end = end_at[-1]
             deadline = time.monotonic() + 1.0
             while time.monotonic() < deadline:  # the margin after it reaches the ring
                 newest = out.scope(0.0)
@@ -401,16 +436,11 @@ class ConsoleSession:
                     break
                 time.sleep(0.01)
         except SafetyRefusal:
-            return
+            return None
         if self.outputs is not out:
-            return
+            return None
         whole = self.scope(None)
-        if whole is None:
-            return
-        trace = whole.span(report.segment_start[0] - margin, end + margin)
-        with self._lock:
-            if self._last_play is not None and self._last_play[1] is report:
-                self._last_trace = (report, trace)
+        return None if whole is None else whole.span(start[0] - margin, end + margin)
 
     def last_plan_trace(self) -> tuple[Any, Any] | None:
         """(PlayReport, ScopeTrace) of the last played plan as the gate passed it, read
@@ -422,6 +452,21 @@ class ConsoleSession:
         if kept is None or last is None or kept[0] is not last[1]:
             return None
         return kept
+
+    def kept_plan_trace(self, last: Any) -> Any:
+        """The ScopeTrace kept of ``last`` (a ``KernelPlan``, whoever sent it) when it
+        ended, else None (it plays, or another plan was kept since)."""
+        if last is None or not last.segment_start:
+            return None
+        if last.own:
+            kept = self.last_plan_trace()
+            same = kept is not None and list(kept[0].segment_start[:1]) == [last.segment_start[0]]
+            return kept[1] if same else None
+        with self._lock:
+            other = self._other_trace
+        if other is None or other[:2] != (last.key, last.segment_start[:1]):
+            return None
+        return other[2]
 
     def last_plan(self) -> Any:
         """The last plan the gate passed, whoever sent it (this console, the CLI, a demo):

@@ -409,7 +409,7 @@ class Target:
 
     @property
     def label(self) -> str:
-        return "screen" if self.screen else "+".join(sorted(self.patches))
+        return "screen" if self.screen else ",".join(sorted(self.patches))
 
 
 SCREEN = Target(screen=True)

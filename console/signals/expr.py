@@ -60,6 +60,7 @@ from console.signals.syntax import (
     mark_units,
     number,
     show,
+    typed_column,
 )
 
 
@@ -76,12 +77,14 @@ def parse(text: str) -> Node:
         raise UserError("a signal is one line; join its lines")
     if UNIT_FN in text:
         raise UserError(f"{UNIT_FN!r} is not part of the signal syntax; write values as 250 Hz")
-    check_text(text.strip())
-    marked = mark_units(text.strip())
+    typed = text.strip()
+    check_text(typed)
+    marked = mark_units(typed)
     try:
         tree = ast.parse(marked, mode="eval")
     except SyntaxError as exc:
-        col = f" at column {exc.offset}" if exc.offset else ""
+        lead = len(text) - len(text.lstrip())  # the column counts in what was typed
+        col = f" at column {lead + typed_column(typed, exc.offset)}" if exc.offset else ""
         raise UserError(
             f"signal {clip(text.strip())!r} does not read{col}: {exc.msg}; write calls like "
             "sine(250 Hz, 20 V, 1 s) with a unit after every value"

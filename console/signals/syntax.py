@@ -80,7 +80,26 @@ FUNCTIONS = (*SPEC, "seq")
 
 def mark_units(text: str) -> str:
     """``250 Hz`` -> ``_unit_(250, "Hz")``: Python's grammar has no units."""
-    return _QUANTITY.sub(lambda m: f'{UNIT_FN}({m.group(1)}, "{m.group(2)}")', text)
+    return _QUANTITY.sub(_mark, text)
+
+
+def _mark(m: re.Match[str]) -> str:
+    return f'{UNIT_FN}({m.group(1)}, "{m.group(2)}")'
+
+
+def typed_column(text: str, marked_col: int) -> int:
+    """The 1-based column in ``text`` of column ``marked_col`` of ``mark_units(text)``
+    (a unit's mark stands for its whole quantity)."""
+    at, shift = marked_col - 1, 0  # shift: how much longer the marks made the text
+    for m in _QUANTITY.finditer(text):
+        start = m.start() + shift
+        if at < start:
+            break
+        mark = len(_mark(m))
+        if at < start + mark:
+            return m.start() + 1
+        shift += mark - (m.end() - m.start())
+    return at - shift + 1
 
 
 _MARKED = re.compile(rf"""{UNIT_FN}\(([^,]+), ["']([^"']+)["']\)""")

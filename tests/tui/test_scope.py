@@ -71,18 +71,21 @@ def test_an_estop_ramp_is_visible(plugins):
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
             out = app.session.outputs
             plan = make_stimulus("sine-PA", FS)
-            assert app.session.play_plan(plan, wait=False)
-            report = app.session.last_played()[1]
-            t_end = time.monotonic() + 10
-            while time.monotonic() < t_end and not report.segment_start:
-                await pilot.pause(0.02)
-            # well inside the tone: the amplifiers get it (a loaded machine may start late)
-            await wait_for(
-                pilot,
-                lambda: app.session.scope(0.02).peak_v()["piezo"] > 5.0,
-                30,
-                "the tone at the amplifiers",
-            )
+            # well inside the 1 s tone: the amplifiers get it (on a loaded machine the
+            # tone may end before a look finds it: then it is played again)
+            inside = False
+            for _ in range(5):
+                assert app.session.play_plan(plan, wait=False)
+                report = app.session.last_played()[1]
+                t_end = time.monotonic() + 30
+                while time.monotonic() < t_end and not report.done.is_set():
+                    if app.session.scope(0.02).peak_v()["piezo"] > 5.0:
+                        inside = True
+                        break
+                    await pilot.pause(0.02)
+                if inside:
+                    break
+            assert inside, "the tone never reached the amplifiers"
             await pilot.press("ctrl+e")
             assert out.wait_safe(5)
             await pilot.pause(0.1)

@@ -31,17 +31,8 @@ def plan_line(last) -> str:
     sender = "" if last.own else f" from {last.who}"
     return (
         f"last plan {last.name}{sender}: {last.duration_s:.2f} s on "
-        f"{', '.join(last.where) or 'nothing'} ({state})"
+        f"{','.join(last.where) or 'nothing'} ({state})"
     )
-
-
-def kept_trace(session, last):
-    """The copy of ``last``'s span the session kept when it ended (this console's own
-    plans only), else None."""
-    kept = session.last_plan_trace() if last is not None and last.own else None
-    if kept is None or list(kept[0].segment_start[:1]) != list(last.segment_start[:1]):
-        return None
-    return kept[1]
 
 
 def ramp_words(trace, clock: int) -> str:
@@ -97,6 +88,7 @@ class ScopePane(Vertical):
         self.shown = None  # the ScopeTrace drawn now
         self._timer = None  # the live view's, while the screen shows
         self._drawn: tuple | None = None  # what the chart shows (``_signature``)
+        self._head = ""  # what the header says
         self.draws = 0  # how often the chart was drawn (tests count it)
 
     def compose(self) -> ComposeResult:
@@ -151,21 +143,18 @@ class ScopePane(Vertical):
 
     # ------------------------------------------------------------------ drawing
     def tick(self) -> None:
-        """Every ``TICK_S`` while the screen shows: the live view redrawn when what the
-        gate passed changed; a new plan unfreezes the last plan's view."""
+        """Every ``TICK_S`` while the screen shows: redrawn when what it shows changed (the
+        live view, the plan line, the last plan's kept copy); a new plan unfreezes the
+        last plan's view."""
         session = self.app.session
         self.last = session.last_plan()
         if self.plan_view and self.last is not None and self.last.key != self.plan_key:
             self.frozen, self.plan_view, self.plan_key = None, False, None  # another plan
         if self.plan_view and self.last is not None and self.last.done and not self.plan_done:
             self.frozen, self.plan_done = session.scope(None), True  # it ended: its end too
-            self._redraw()
-        elif self.plan_view:  # this console's plan's copy is kept when it ends: show it
-            kept = kept_trace(session, self.last)
-            if kept is not None and kept is not self.shown:
-                self._redraw()
-        elif self.frozen is None:
-            self._redraw(only_changed=True)
+        # live: what the gate passed; frozen: the plan line (its state, as it changes);
+        # the last plan: its copy, kept when it ended
+        self._redraw(only_changed=True)
 
     def _view(self):
         """What to draw: the live window, the frozen window or the last plan's span."""
@@ -177,7 +166,7 @@ class ScopePane(Vertical):
         trace = self.frozen
         if self.plan_view and last is not None:
             report = last
-            kept = kept_trace(session, last)
+            kept = session.kept_plan_trace(last)
             if kept is not None:  # copied when it ended
                 gone = "" if report.segment_start[0] >= kept.clock else " (its start is gone)"
                 return kept, f"frozen on the last plan{gone}"
@@ -198,50 +187,55 @@ class ScopePane(Vertical):
                 )
         return trace.last(self.window_ms / 1e3), "frozen"
 
-    def _signature(self, trace, mode: str, plan: str) -> tuple:
+    def _signature(self, trace, mode: str) -> tuple:
         """What a drawing of ``trace`` shows: its samples (not its clock: the live view
-        of a silent gate stays the same picture), marks, mode, window and plan line."""
+        of a silent gate stays the same picture), marks, mode and window."""
         if trace is None:
-            return (None, mode, plan, self.window_ms, self.app.session.outputs_error)
+            return (None, mode, self.window_ms, self.app.session.outputs_error)
         volts = np.ascontiguousarray(trace.volts)
         marks = tuple((c - trace.clock, k, m) for c, k, m in trace.marks)
-        return (hash(volts.tobytes()), volts.shape, marks, mode, plan, self.window_ms)
+        return (hash(volts.tobytes()), volts.shape, marks, mode, self.window_ms)
+
+    def _head_text(self, trace, mode: str, plan: str) -> str:
+        """The header: what shows, the keys, and the last plan's line (``plan``)."""
+        if trace is None and mode == "aged out":
+            return (
+                "FROZEN | the last plan aged out of the scope and was not kept: "
+                f"play it again (space runs live) | {plan}"
+            )
+        if trace is None:
+            return f"outputs not here: {self.app.session.outputs_error or 'not open yet'}; {plan}"
+        span_ms = trace.n * 1e3 / trace.sample_rate_hz
+        space = "space runs live" if self.frozen is not None else "space freezes"
+        return (
+            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; {space}, "
+            f"p last plan, +/- zoom) | {plan}"
+        )
 
     def _redraw(self, only_changed: bool = False) -> None:
-        session = self.app.session
+        """Draw what ``_view`` says; ``only_changed``: the chart only if its picture
+        changed (the header follows the plan's state either way)."""
         chart = self.query_one("#scope-chart", Chart)
-        head = self.query_one("#scope-head", Static)
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
-        plan = plan_line(self.last)
-        sig = self._signature(trace, mode, plan)
+        text = self._head_text(trace, mode, plan_line(self.last))
+        if text != self._head:
+            self._head = text
+            self.query_one("#scope-head", Static).update(text)
+        sig = self._signature(trace, mode)
         if only_changed and sig == self._drawn:
             return  # the same picture: nothing is redrawn
         self._drawn = sig
         self.draws += 1
-        if trace is None and mode == "aged out":
-            head.update(
-                "FROZEN | the last plan aged out of the scope and was not kept: "
-                f"play it again (space runs live) | {plan}"
-            )
-            chart.clear("the last plan aged out: play it again, space runs live")
-            info.update("")
-            self.shown = None
-            return
-        if trace is None:
-            why = session.outputs_error or "not open yet"
-            head.update(f"outputs not here: {why}; {plan}")
-            chart.clear("no outputs in this console: nothing to show")
-            info.update("")
-            self.shown = None
-            return
         self.shown = trace
-        span_ms = trace.n * 1e3 / trace.sample_rate_hz
-        space = "space runs live" if self.frozen is not None else "space freezes"
-        head.update(
-            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; {space}, "
-            f"p last plan, +/- zoom) | {plan}"
-        )
+        if trace is None:
+            chart.clear(
+                "the last plan aged out: play it again, space runs live"
+                if mode == "aged out"
+                else "no outputs in this console: nothing to show"
+            )
+            info.update("")
+            return
         t_ms = np.arange(trace.n) * (1e3 / trace.sample_rate_hz)
         chart.set_series(
             [Series(ch, t_ms, trace.volts[:, c]) for c, ch in enumerate(trace.channels)],
