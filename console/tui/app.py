@@ -6,6 +6,7 @@ key works on every screen and the safety bar shows the live output state on ever
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import threading
 import time
@@ -463,7 +464,21 @@ class HapTableApp(App):
                 timeout=self.QUIT_CONFIRM_S,
             )
             return
+        # the session closes while the screen still shows (the projector and the camera
+        # take a moment to end): the title says so, then the console exits
+        self.sub_title = "quitting: closing the outputs, projector and camera ..."
+        await asyncio.to_thread(self._close_session)
         await super().action_quit()
+
+    def _close_session(self) -> None:
+        """``session.close`` within ``QUIT_WAIT_S``; what still runs after is e-stopped
+        and left (the console exits anyway). Idempotent."""
+        closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
+        closer.start()
+        closer.join(self.QUIT_WAIT_S)
+        if closer.is_alive():
+            with contextlib.suppress(Exception):
+                self.session.abandon("the console quit while its session was still closing")
 
     def action_estop(self) -> None:
         self.estop("operator e-stop (console)")
@@ -493,12 +508,28 @@ class HapTableApp(App):
         if not isinstance(field, Input):
             return False
         bindings = [b for b in field._bindings.key_to_bindings.get(key, ()) if not b.priority]
-        if not bindings or field.check_consume_key(key, key_to_character(key)):
+        if not bindings:
+            return await self._focus_key_at_once(field, key)
+        if field.check_consume_key(key, key_to_character(key)):
             return False
         if await self._check_bindings(key, priority=True):  # E-STOP, the screens, ...
             return True
         field.call_later(self.run_action, bindings[0].action, field)
         return True
+
+    async def _focus_key_at_once(self, field: Input, key: str) -> bool:
+        """Tab / shift+tab in a text field move the focus when the key arrives, not when
+        it has bubbled back: the keys typed after it in the same write (a paste, tmux
+        send-keys) go to the next field; those before it are in this field's queue."""
+        for node in field.ancestors:
+            found = [b for b in node._bindings.key_to_bindings.get(key, ()) if not b.priority]
+            if found:
+                if found[0].action not in ("app.focus_next", "app.focus_previous"):
+                    return False
+                if await self._check_bindings(key, priority=True):
+                    return True
+                return await self.run_action(found[0].action, node)
+        return False
 
     async def _key_everywhere(self, key: str) -> bool:
         """The app's priority keys work wherever the focus is, as the footer promises:
@@ -585,12 +616,7 @@ class HapTableApp(App):
         running demo, the projector, the camera); after ``QUIT_WAIT_S`` the console
         e-stops whatever still runs and exits anyway."""
         self.live.watch.stop()
-        closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
-        closer.start()
-        closer.join(self.QUIT_WAIT_S)
-        if closer.is_alive():
-            with contextlib.suppress(Exception):
-                self.session.abandon("the console quit while its session was still closing")
+        self._close_session()  # at once when q closed it already
 
 
 def _bindings_help(pane) -> str:

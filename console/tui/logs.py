@@ -14,6 +14,7 @@ import collections
 import contextlib
 import logging
 import os
+import select
 import sys
 import threading
 import time
@@ -154,6 +155,7 @@ class NativeStderr:
         self._saved: int | None = None
         self._terminal: TextIO | None = None
         self._thread: threading.Thread | None = None
+        self._stopping = threading.Event()
 
     def start(self) -> TextIO:
         for stream in (sys.stderr, sys.__stderr__):
@@ -171,9 +173,18 @@ class NativeStderr:
         return self._terminal
 
     def _pump(self, fd: int) -> None:
+        """Log the pipe's lines until ``stop()``: then what is already in it, and end
+        (not at the pipe's end of file: a process the console started, such as the
+        multiprocessing resource tracker, inherits fd 2 and may hold the pipe open until
+        after the console has gone)."""
         buf = b""
         with os.fdopen(fd, "rb", buffering=0) as pipe:
             while True:
+                ready = select.select([fd], [], [], 0.1)[0]
+                if not ready:
+                    if self._stopping.is_set():
+                        break
+                    continue
                 try:
                     chunk = pipe.read(4096)
                 except OSError:
@@ -208,9 +219,10 @@ class NativeStderr:
             return
         with contextlib.suppress(Exception):
             sys.stderr.flush()
-        os.dup2(self._saved, 2)  # the pipe's last writer closes: the pump ends
+        os.dup2(self._saved, 2)  # the terminal again; the pump logs what is left, then ends
         os.close(self._saved)
         self._saved = None
+        self._stopping.set()
         if self._thread is not None:
             self._thread.join(timeout_s)
         if self._terminal is not None:

@@ -99,3 +99,26 @@ def test_a_handler_writing_to_fd2_does_not_feed_back(capfd):
         native.stop()
     assert native.lines == 1 and native.echoes >= 1
     capfd.readouterr()
+
+
+def test_a_child_holding_the_pipe_does_not_hold_the_console_at_quit(caplog):
+    """A process the console started inherits fd 2 (the pipe) and may outlive it (the
+    multiprocessing resource tracker does): stopping logs what was written and ends the
+    pump without waiting for that process; the console quits at once."""
+    import subprocess
+    import sys
+
+    caplog.set_level(logging.INFO, logger="haptable.native")
+    native = NativeStderr()
+    native.start()
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        os.write(2, b"a driver's line\n")
+        native.stop(timeout_s=10.0)
+        pump = native._thread
+        assert pump is not None and not pump.is_alive(), "the pump waited for the child"
+    finally:
+        child.kill()
+        child.wait()
+    got = [r.getMessage() for r in caplog.records if r.name == "haptable.native"]
+    assert got and got[0].startswith("a driver's line")
