@@ -24,7 +24,7 @@ from typing import Any, TextIO
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.screen import ModalScreen
-from textual.widgets import Log, Static
+from textual.widgets import RichLog, Static
 
 from console.files import paths
 from console.tui.safety_bar import SafetyBar
@@ -93,7 +93,7 @@ class ViewHandler(logging.Handler):
     def _show(self, line: str) -> None:
         screen = self.app.screen if self.app.is_running else None
         if isinstance(screen, LogScreen):
-            screen.query_one(Log).write_line(line)
+            screen.query_one(RichLog).write(line)
 
 
 class LogScreen(ModalScreen):
@@ -102,7 +102,7 @@ class LogScreen(ModalScreen):
     BINDINGS = [Binding("escape,q,ctrl+l", "dismiss", "close")]
     DEFAULT_CSS = """
     LogScreen { align: center top; }
-    LogScreen > Log { width: 100%; height: 1fr; border: thick $accent; background: $panel; }
+    LogScreen > RichLog { width: 100%; height: 1fr; border: thick $accent; background: $panel; }
     LogScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
     LogScreen > Static { width: 100%; height: 1; background: $panel; }
     """
@@ -113,12 +113,15 @@ class LogScreen(ModalScreen):
 
     def compose(self) -> ComposeResult:
         yield Static(f" log (also in {log_path()}): escape closes", markup=False)
-        yield Log(highlight=False, auto_scroll=True)
+        # long lines wrap (a driver's message is read whole, no sideways scrolling);
+        # plain text: brackets show as written
+        yield RichLog(wrap=True, markup=False, highlight=False, auto_scroll=True)
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
     def on_mount(self) -> None:
-        log = self.query_one(Log)
-        log.write_lines(self.lines or ["(nothing logged yet)"])
+        log = self.query_one(RichLog)
+        for line in self.lines or ["(nothing logged yet)"]:
+            log.write(line)
         log.focus()
 
     def leave_for_screen(self) -> bool:
@@ -259,7 +262,10 @@ def capture_logs(app) -> list[logging.Handler]:
         path = log_path()
         path.parent.mkdir(parents=True, exist_ok=True)
         fh = logging.FileHandler(path)
-        fh.setFormatter(logging.Formatter("%(asctime)s %(name)s %(levelname)s: %(message)s"))
+        # one file for every console of the user: each line names its process
+        fh.setFormatter(
+            logging.Formatter("%(asctime)s [pid %(process)d] %(name)s %(levelname)s: %(message)s")
+        )
         root.addHandler(fh)
     except OSError:
         pass

@@ -69,7 +69,7 @@ def test_the_log_view_shows_records_and_driver_lines_as_written(plugins):
                 await wait_for(pilot, lambda: isinstance(app.screen, LogScreen), 5, "log")
                 logging.getLogger("haptable.test").warning("[relays] serial = 'Z' later")
                 await pilot.pause(0.2)
-                text = "\n".join(str(line) for line in app.screen.query_one("Log").lines)
+                text = "\n".join(strip.text for strip in app.screen.query_one("RichLog").lines)
                 assert "haptable.native: [ WARN:0] [audio] gone" in text
                 assert "haptable.test: [relays] serial = 'Z' later" in text
                 await pilot.press("escape")
@@ -122,3 +122,27 @@ def test_a_child_holding_the_pipe_does_not_hold_the_console_at_quit(caplog):
         child.wait()
     got = [r.getMessage() for r in caplog.records if r.name == "haptable.native"]
     assert got and got[0].startswith("a driver's line")
+
+
+def test_a_long_log_line_wraps_at_80_columns(plugins):
+    """A driver's long message is read whole in the log view at 80 x 24: it wraps
+    instead of running off the right edge."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        handler = ViewHandler(app)
+        logging.getLogger().addHandler(handler)
+        tail = "the end of a long message"
+        try:
+            async with app.run_test(size=(80, 24)) as pilot:
+                logging.getLogger("haptable.native").warning("x" * 120 + " " + tail)
+                await pilot.press("ctrl+l")
+                await wait_for(pilot, lambda: isinstance(app.screen, LogScreen), 5, "log")
+                await pilot.pause(0.3)
+                strips = [s.text for s in app.screen.query_one("RichLog").lines]
+                assert all(len(t.rstrip()) <= 80 for t in strips), strips
+                assert tail in " ".join(t.strip() for t in strips), strips
+        finally:
+            logging.getLogger().removeHandler(handler)
+
+    asyncio.run(scenario())

@@ -70,9 +70,9 @@ def test_a_refused_play_is_said_once_on_its_screen_and_is_in_the_log(plugins):
                 assert_whole(app, status, said)
                 await pilot.press("ctrl+l")
                 await wait_for(pilot, lambda: isinstance(app.screen, LogScreen), 5, "log")
-                log = "\n".join(str(x) for x in app.screen.query_one("Log").lines)
+                log = "\n".join(s.text for s in app.screen.query_one("RichLog").lines)
                 assert said[:40] in _flat(log), log  # the status line's error
-                assert "E-STOP: outputs silenced" in log  # and the e-stop's toast
+                assert "E-STOP: outputs silenced" in _flat(log)  # and the e-stop's toast (wrapped)
         finally:
             logging.getLogger().removeHandler(handler)
 
