@@ -5,10 +5,9 @@ camera and projector.
 ``DemoProcess`` on the console's table (a client of the same outputs kernel), waits for
 it to run (``progress``/``cancelled`` follow its preparation) and forwards its scene
 events to the projector; ``stop()`` stops it, shows black if it showed its scene and
-takes the camera back. It reports events with
-topic ``demo``: ``Progress`` while it prepares, ``Started`` when it runs, ``Snapshot``
-(``poll()``), ``Stopped`` (``reason``: stopped, cancelled, e-stopped, an error ...) and
-``Failed``. Blocking calls run on the caller's thread: screens call them from workers.
+takes the camera back. It reports events with topic ``demo``: ``Started`` (``detail``:
+starting, running, stopping), ``Progress`` while it prepares, ``Snapshot`` (``poll()``),
+``Stopped`` (``reason``: stopped, cancelled, e-stopped, an error ...) and ``Failed``. Blocking calls run on the caller's thread: screens call them from workers.
 """
 
 from __future__ import annotations
@@ -76,6 +75,7 @@ class DemoControl:
         self.state = "idle"
         self.last_snapshot: dict | None = None
         self.last_final: dict | None = None  # the last run's "stopped" message
+        self.estop_after = ""  # an e-stop that came while the last run stopped (its reason)
         self._forward: ProjectorForward | None = None
         self._lock = threading.Lock()
         self._stop_lock = threading.Lock()
@@ -110,6 +110,7 @@ class DemoControl:
             self.check_start(name)
             self.name, self.state = name, "starting"
             self.last_snapshot = self.last_final = None  # this run's, not the last one's
+            self.estop_after = ""
         s.emit(Started("demo", name, detail="starting"))
 
         def step(frac: float, text: str) -> None:
@@ -180,14 +181,25 @@ class DemoControl:
             if run is None or name is None or self._stopping is run:
                 return self.state  # nothing runs, or its stop is under way
             self._stopping, self.state = run, "stopping"
+        self.session.emit(Started("demo", name, detail="stopping"))
         try:
             self._stop_run(run)
         except Exception as exc:  # noqa: BLE001 - one line, the console stays up
             reason = f"stop failed: {exc}"
-        if run.exit_reason and run.exit_reason not in ("stopped", reason):
-            reason = run.exit_reason  # it ended by itself (an error, its watchdog ...)
+        reason = self._how_it_ended(run, reason)
         self._ended(name, reason)
         return reason
+
+    def _how_it_ended(self, run: Any, reason: str) -> str:
+        """The stop's ``reason``, unless the run ended otherwise first (an error, its
+        watchdog ...); an e-stop that came while it stopped is ``estop_after``."""
+        ended = run.exit_reason
+        if not ended or ended in ("stopped", reason):
+            return reason
+        if ended == "e-stopped" and reason != "e-stopped" and not run.error:
+            self.estop_after = run.estop_reason or "e-stop"  # the stop was asked first
+            return reason
+        return ended
 
     def estop(self, reason: str) -> None:
         """The e-stop: the demo process is told at once (the table's kernel silenced its
@@ -233,8 +245,8 @@ class DemoControl:
         runs). Never blocks: a demo that ended by itself is stopped on a thread
         (``Stopped`` says why)."""
         run, name = self.run, self.name
-        if run is None or name is None:
-            return None
+        if run is None or name is None or self.state == "starting":
+            return None  # (a starting demo has no numbers yet: its Progress says how far)
         try:
             snap = run.snapshot()
         except Exception as exc:  # noqa: BLE001 - shown, never raised

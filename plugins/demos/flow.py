@@ -243,15 +243,21 @@ class FlowDemo:
             p = self.preparing
         return None if p is None else {k: v for k, v in p.items() if k != "t0"}
 
+    #: how long ``stop`` gives the preparation to end: it is told (``_running``) and
+    #: cancels at its next progress call (an atlas build asks it while its workers
+    #: search, then terminates them); a preparation slower than that is not waited for
+    PREP_STOP_WAIT_S = 2.0
+
     def stop(self) -> None:
         """No new flows; a flow already playing ends by its own ramps (max one plan)."""
         self._running = False
         self._disarm()
         if self.planner is not None:
             self.planner.close()  # a plan under way is abandoned
-        for t in (self._pending, self._prep_thread):
-            if t is not None:
-                t.join(5.0)
+        if self._pending is not None:
+            self._pending.join(5.0)
+        if self._prep_thread is not None:
+            self._prep_thread.join(self.PREP_STOP_WAIT_S)
 
     # ------------------------------------------------------------------ stages
     def current_direction(self) -> str:

@@ -188,6 +188,8 @@ def measure_atlas(ctx: Any, quick: bool) -> dict:
         marks: list[tuple[float, int, int]] = []
 
         def progress(done: int, total: int, what: str) -> None:
+            if marks and marks[-1][1] == done:
+                return  # asked again while the workers search: no new place
             marks.append((time.perf_counter(), done, total))
             if quick and done >= 48:
                 raise _Enough()

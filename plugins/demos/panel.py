@@ -117,7 +117,8 @@ def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width:
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
     ScenesPane #demo-table { height: auto; max-height: 5; }
-    ScenesPane #demo-status { height: auto; }
+    /* one row per line, cut with … (a wrapped line pushed the last ones off at 80 x 24) */
+    ScenesPane #demo-status { height: auto; text-wrap: nowrap; text-overflow: ellipsis; }
     /* the demos' keys stay in view however short the screen gets (a toast's rows) */
     ScenesPane #demo-keys { dock: bottom; }
     """
@@ -129,8 +130,8 @@ class ScenesPane(Vertical):
         "Demos table (tab or d moves there):\n"
         "enter    start the highlighted demo on the outputs (enter again stops it)\n"
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
-        "space    on the twin: your finger touches the table (again: lifts it); arrows\n"
-        "         lift it and touch 20 mm further (a flow plays under a resting hand)\n"
+        "space    your finger on the twin: it touches the table (again: lifts it);\n"
+        "         arrows lift it and touch 20 mm further (a flow plays under it at rest)\n"
         "A demo runs in its own process on the console's table (the same outputs) and\n"
         "camera (lent until it ends) and, when the projector runs, shows its scene there.\n"
         "The Latency screen shows its loop."
@@ -142,11 +143,11 @@ class ScenesPane(Vertical):
         Binding("d", "focus_demos", KEYS["d"]),
         Binding("x", "cancel_demo", KEYS["x"], show=False),
         # the operator's hand on the twin while a demo runs (table mm; y grows downwards)
-        Binding("space", "place_hand", "place/lift hand", priority=True),
-        Binding("up", "move_hand(0, -1)", "hand up", show=False, priority=True),
-        Binding("down", "move_hand(0, 1)", "hand down", show=False, priority=True),
-        Binding("left", "move_hand(-1, 0)", "hand left", show=False, priority=True),
-        Binding("right", "move_hand(1, 0)", "hand right", show=False, priority=True),
+        Binding("space", "place_hand", "finger on/off", priority=True),
+        Binding("up", "move_hand(0, -1)", "finger up", show=False, priority=True),
+        Binding("down", "move_hand(0, 1)", "finger down", show=False, priority=True),
+        Binding("left", "move_hand(-1, 0)", "finger left", show=False, priority=True),
+        Binding("right", "move_hand(1, 0)", "finger right", show=False, priority=True),
     ]
 
     #: how far one arrow key moves the operator's hand on the twin
@@ -164,6 +165,8 @@ class ScenesPane(Vertical):
         self._demo_states: dict[str, str] = {}  # each demo's state cell
         self._estop_demo = ""  # the demo the e-stop stopped or refused (its line says so)
         self._last_run = ""  # the demo status after a run ended (markup)
+        self._stop_key = ""  # the key that asked the running demo to stop (s, enter)
+        self._after_stop = ""  # "demo NAME stopped by s" when an e-stop came after it
         self._asked_scene: str | None = None  # the scene Enter asked the projector for
         self._scene_error = ""  # ... and why it did not show
         self._filled_width = 0  # the width the tables were laid out for
@@ -194,7 +197,8 @@ class ScenesPane(Vertical):
         t = self.query_one("#scene-table", DataTable)
         # the scenes take what the demos leave (it scrolls): usable at 80 x 24; a
         # running demo's status comes first (toasts take rows: the table gives them)
-        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 0, 12
+        # (at least its header and two scenes: the cursor's row stays in view)
+        t.styles.height, t.styles.min_height, t.styles.max_height = "1fr", 3, 12
         if not self.app.ctx.pm.of("scene"):
             self.query_one("#projector-status", Static).update(
                 "no scenes: no plugin registers one (install the projector plugin)"
@@ -262,7 +266,7 @@ class ScenesPane(Vertical):
         """``s``: stop the running demo, else show black on the projector."""
         self._scene_error = ""
         if self.demo_name is not None:
-            self.stop_demo()
+            self.stop_demo(key="s")
         else:
             self.action_stop_scene()
 
@@ -283,7 +287,7 @@ class ScenesPane(Vertical):
         if self.demo_name is None:
             self.start_demo(name)
         elif self.demo_name == name:
-            self.stop_demo()
+            self.stop_demo(key="enter")
         else:  # this screen's own key: its demo line says it (console.tui.said)
             self._say(f"demo {self.demo_name} is running: s stops it", "warning")
 
@@ -309,9 +313,13 @@ class ScenesPane(Vertical):
             kept = [ln for ln in self._last_run.split("\n") if not _says_estop(ln)]
             self._show_last_run("\n".join(kept))
         lw = self.query_one("#demo-work", LongWork)
+        after, self._after_stop = self._after_stop, ""
+        if after and not lw.busy and lw.text.startswith(after):  # the stop came first
+            lw.show(f"{after}; the e-stop after it is reset")
+            return
         name = self._estop_demo or lw.last_name.removeprefix("demo ")
         self._estop_demo = ""
-        if not lw.busy and name and "e-stop" in lw.text:
+        if not lw.busy and name and (_says_estop(lw.text) or lw.text.endswith("e-stopped")):
             lw.show(f"demo {name}: the e-stop is reset; enter starts it again")
 
     def _show_last_run(self, text: str) -> None:
@@ -350,16 +358,33 @@ class ScenesPane(Vertical):
         else:
             self._say("x: no demo is starting (enter starts one)", "warning")
 
-    def stop_demo(self, reason: str = "stopped") -> None:
-        """Stop the running demo (or cancel its preparation)."""
+    def stop_demo(self, reason: str = "stopped", key: str = "") -> None:
+        """Stop the running demo (or cancel its preparation); ``key``: the operator's."""
         lw = self.query_one("#demo-work", LongWork)
         if lw.busy:
             lw.cancel()
             return
-        if self.demos.run is None:
+        if self.demos.run is None or self.demo_state == "stopping":
             return
-        self._set_state("stopping")
+        self._stop_key = key
+        self._stopping(self.demo_name or "")
         self._stop_worker(reason)
+
+    #: why a stop takes a moment (the demo process's ``finish``: ``wait_silent``)
+    STOPPING_WHY = "what plays now ends, nothing new starts, then it exits"
+
+    def _stopping(self, name: str) -> None:
+        """Every line says the demo stops: its row, the demos' line, its status block."""
+        self._set_state("stopping")
+        lw = self.query_one("#demo-work", LongWork)
+        if not lw.busy:
+            lw.show(f"demo {name} stopping: {self.STOPPING_WHY}")
+        if self.demos.last_snapshot is not None:
+            self._show_snapshot(self.demos.last_snapshot)
+
+    def _starting(self, name: str) -> None:
+        """A demo starting: its status block has no numbers yet (its progress shows)."""
+        self._show_last_run(f"{escape(name)} starting: its numbers show here once it runs")
 
     @work(thread=True, group="demo-stop", exit_on_error=False)
     def _stop_worker(self, reason: str) -> None:
@@ -382,7 +407,12 @@ class ScenesPane(Vertical):
             if self.demo_name != ev.name:
                 self.hand_placed, self.hand_mm = False, None
             self.demo_name = ev.name
+            if ev.detail == "stopping":
+                self._stopping(ev.name)
+                return
             self._set_state(ev.detail or "running")
+            if ev.detail == "starting":
+                self._starting(ev.name)
         elif isinstance(ev, Progress):
             lw = self.query_one("#demo-work", LongWork)
             if not lw.busy:  # started elsewhere: its progress shows here too
@@ -392,32 +422,49 @@ class ScenesPane(Vertical):
         elif isinstance(ev, Stopped):
             self._stopped(ev.name, ev.reason)
 
+    def _how_stopped(self, reason: str) -> tuple[str, bool]:
+        """How the run ended as said (``stopped by s``), and whether an e-stop came
+        while it stopped (``DemoControl.estop_after``: the stop came first)."""
+        key, self._stop_key = self._stop_key, ""
+        if reason != "stopped":
+            return reason, False
+        how = f"stopped by {key}" if key else reason
+        return how, bool(self.demos.estop_after)
+
     def _stopped(self, name: str, reason: str) -> None:
         self.demo_name = name
         self._set_state(reason)
+        how, after = self._how_stopped(reason)
         demos = self.demos
         if demos.last_snapshot is not None:
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
             text = "\n".join(status_lines(snap))
             log = (demos.last_final or {}).get("twin_log")
             if log:
-                text += f"\nwhat the twin's outputs received: {log}"
-            self._show_last_run(f"last run ({reason}):\n{text}")
+                text += f"\nwhat the twin's outputs received:\n{escape(log)}"
+            head = f"{how}; an e-stop came after" if after else how
+            self._show_last_run(f"last run ({head}):\n{text}")
         self.demo_name = None
         lw = self.query_one("#demo-work", LongWork)
         if reason == "e-stopped":
             self._estop_demo = name
+        self._after_stop = f"demo {name} {how}" if after else ""
         if not lw.busy and reason not in ("failed", "cancelled"):  # those: its own line
-            lw.show(f"demo {name} {reason}")
+            fix = "; an e-stop came after: ctrl+r resets it" if after else ""
+            lw.show(f"demo {name} {how}{fix}")
 
     def _show_snapshot(self, snap: dict) -> None:
+        if self.demo_state == "starting":
+            return  # no numbers yet (``_starting``)
+        if self.demo_state == "stopping":
+            snap = {**snap, "stopping": True}
         text = "\n".join(status_lines(snap))
-        if self._twin() is not None:
+        if self.demo_state != "stopping" and self._twin() is not None:
             if self.hand_placed and self.hand_mm is not None:
                 x, y = self.hand_mm
                 text += f"\nyour finger on the twin at {x:.0f},{y:.0f} mm: arrows move, space lifts"
             else:
-                text += "\ntwin: the scripted hand performs; space: touch it yourself"
+                text += "\ntwin: the scripted hand performs; space puts your finger on the twin"
         self.query_one("#demo-status", Static).update(text)
         self._last_run = ""
         if self.demo_state.startswith("running") and self.demo_name is not None:
@@ -445,8 +492,8 @@ class ScenesPane(Vertical):
         return (float(prof.get("table.width_mm")), float(prof.get("table.height_mm")))
 
     def action_place_hand(self) -> None:
-        """Space: the operator's hand touches the twin (where it was, else mid-table);
-        again: lifts it (the demo's scripted hand comes back when the demo stops)."""
+        """Space: your finger on the twin (where it was, else mid-table); again: lifts
+        it (the demo's scripted hand comes back when the demo stops)."""
         if self._twin() is None:
             return
         if self.hand_placed:
@@ -454,7 +501,7 @@ class ScenesPane(Vertical):
             if self._touch_timer is not None:
                 self._touch_timer.stop()  # a landing under way is called off
             self.demos.set_target(None)
-            self._say("hand lifted (space places it again)")
+            self._say("your finger lifted off the twin (space puts it back)")
             return
         if self.hand_mm is None:
             w, h = self._table_mm()
@@ -464,7 +511,7 @@ class ScenesPane(Vertical):
         self.hand_placed = True
         self._touch(self.hand_mm)
         x, y = self.hand_mm
-        self._say(f"hand placed at {x:.0f},{y:.0f} mm (arrows move it)")
+        self._say(self._finger_text())
 
     def action_move_hand(self, dx: int, dy: int) -> None:
         if self._twin() is None or not self.hand_placed or self.hand_mm is None:
@@ -475,7 +522,11 @@ class ScenesPane(Vertical):
         y = min(max(self.hand_mm[1] + dy * self.HAND_STEP_MM, m), h - m)
         self.hand_mm = (x, y)
         self._touch(self.hand_mm)
-        self._say(f"hand moved to {x:.0f},{y:.0f} mm (arrows move it, space lifts it)")
+        self._say(self._finger_text())
+
+    def _finger_text(self) -> str:
+        x, y = self.hand_mm or (0.0, 0.0)
+        return f"your finger on the twin at {x:.0f},{y:.0f} mm (arrows move it, space lifts it)"
 
     #: how long the finger is off the table between two placements (the demo's resting
     #: hand re-arms after a lift of [StillHand] lift_s = 0.2 s)

@@ -62,8 +62,9 @@ def _ms(v: Any) -> str:
 
 def status_lines(snap: dict[str, Any]) -> list[str]:
     """A demo snapshot (``DemoRun.snapshot()``, with ``hand``: what its camera last saw,
-    when the host adds it) as lines: state, watchdog and camera; latency per stage; the
-    hand; the flow's last stimulus (or a newer refusal) or the knob's state; an error."""
+    when the host adds it; ``stopping``: the console stops it) as lines: state, watchdog
+    and camera; latency per stage; the hand; the flow's last stimulus (or a newer
+    refusal) or the knob's state; an error."""
     name = snap.get("demo", "?")
     wd = snap.get("watchdog", {})
     if wd.get("tripped"):
@@ -72,13 +73,13 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
         dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
     cam = snap.get("camera", {})
     lat = snap.get("latency") or {}
-    state = "running" if snap.get("running") else "[yellow]loop stopped[/]"
+    up = f"{snap.get('uptime_s', 0):.0f} s"
+    if snap.get("stopping"):  # the console asked it to stop (its last numbers)
+        state = f"[yellow]stopping[/] (ran {up})"
+    else:
+        state = ("running " if snap.get("running") else "[yellow]loop stopped[/] ") + up
     lines = [
-        f"[b]{escape(name)}[/b] "
-        + state
-        + f" {snap.get('uptime_s', 0):.0f} s  "
-        + dog
-        + f"  {_rates(cam, lat)}, dropped "
+        f"[b]{escape(name)}[/b] " + state + "  " + dog + f"  {_rates(cam, lat)}, dropped "
         f"{escape(lat.get('dropped_camera', 0))} (camera) + "
         f"{escape(lat.get('dropped_queue', 0))} (queue)"
     ]
@@ -95,7 +96,7 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     if hand is not None:
         lines.append(_hand_line(hand))
     if "flow" in snap:
-        lines.append(_flow_text(snap["flow"]))
+        lines.append(_flow_text(snap["flow"], stopping=bool(snap.get("stopping"))))
     if "knob" in snap:
         k = snap["knob"]
         lines.append(
@@ -133,7 +134,7 @@ def _hand_line(hand: dict[str, Any]) -> str:
     return seen
 
 
-def _flow_text(f: dict[str, Any]) -> str:
+def _flow_text(f: dict[str, Any], stopping: bool = False) -> str:
     text = escape(f"flow {f.get('direction')}: {f.get('flows', 0)} played")
     last = [e for e in f.get("last", []) if e.get("parts")]
     if last:
@@ -150,7 +151,7 @@ def _flow_text(f: dict[str, Any]) -> str:
     if newest is not None and not newest.get("parts"):  # a refusal or no flow there
         text += f"\n[yellow]{escape(newest.get('kind'))}: {escape(newest.get('reason', ''))}[/]"
     prep = f.get("preparing")
-    if prep:
+    if prep and not stopping:  # (a stop ends the preparation too)
         text += "\n" + escape(preparing_text(prep))
     return text
 

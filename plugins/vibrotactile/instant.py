@@ -268,11 +268,13 @@ def build_arrays(
         fill_rows(a, start, rows)
         known[start : start + len(rows)] = True
         done += len(rows)
+        tell()
+
+    def tell() -> None:
         if progress is not None:
             progress(done, n, f"flows under a hand: {done}/{n} places x 4 directions")
 
-    if progress is not None:
-        progress(0, n, f"flows under a hand: 0/{n} places x 4 directions")
+    tell()
     if workers <= 1 or len(left) <= 1:
         _init_worker(m, per, cap_v, kw)
         while left:
@@ -293,7 +295,7 @@ def build_arrays(
                 chunk = _nearest_chunk(left, focus)
                 pool.apply_async(_chunk_rows, (chunk,), callback=came.put, error_callback=came.put)
                 busy += 1
-            got = came.get()
+            got = _next(came, tell)  # (a cancel while the workers search: at once)
             busy -= 1
             if isinstance(got, BaseException):
                 raise got
@@ -305,6 +307,22 @@ def build_arrays(
     finally:
         pool.join()
     return a
+
+
+#: how often a build waiting for its workers asks ``progress`` again (it may cancel)
+WAIT_POLL_S = 0.2
+
+
+def _next(came: Any, still: Callable[[], Any]) -> Any:
+    """The next chunk (or error) from ``came``; ``still()`` every ``WAIT_POLL_S`` while
+    none comes, so a cancel raised there ends the build at once, not after a chunk."""
+    import queue
+
+    while True:
+        try:
+            return came.get(timeout=WAIT_POLL_S)
+        except queue.Empty:
+            still()
 
 
 # --------------------------------------------------------------------------- the atlas

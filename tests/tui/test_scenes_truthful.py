@@ -103,10 +103,10 @@ def test_a_running_flow_fits_and_the_placed_hand_follows_the_arrows(plugins, mon
             app.session.emit(Snapshot("demo", "flow", data={"demo": "flow", "running": True}))
             await wait_for(pilot, lambda: "twin:" in _screen(app), 30, "status shown")
             screen = _screen(app)
-            assert "space: touch it yourself" in screen  # the flow's last line, whole
+            assert "space puts your finger on the twin" in screen  # the flow's last line, whole
             assert "demos (d): enter start/stop" in screen  # and the keys under it
             await pilot.press("space")
-            await wait_for(pilot, lambda: "hand placed at" in _work(app), 30, "placed")
+            await wait_for(pilot, lambda: "your finger on the twin at" in _work(app), 30, "placed")
             x, y = app.pane("scenes").hand_mm
             await pilot.press("down")
             await wait_for(pilot, lambda: f"{x:.0f},{y + 20:.0f} mm" in _work(app), 30, "moved")

@@ -28,7 +28,7 @@ def test_toasts_leave_the_scenes_status_in_view(plugins, monkeypatch):
             await wait_for(pilot, lambda: len(app.screen.query(Toast)) >= 2, 30, "toasts")
             await pilot.pause(0.3)  # laid out
             screen = _screen(app)
-            assert "space: touch it yourself" in screen, screen
+            assert "space puts your finger on the twin" in screen, screen
             assert "demos (d): enter start/stop" in screen, screen
             assert "e-stop reset: outputs stay silent" in screen.splitlines()[0]  # the newest
             tabs = app.query_one("#tabs")
