@@ -85,4 +85,20 @@ def configure(parser: argparse.ArgumentParser) -> None:
     k.add_argument("--camera", default=None, help="camera driver (default: the profile's)")
     k.add_argument("--json", action="store_true")
     for name, (conf, _run, help_) in COMMANDS.items():
-        conf(sub.add_parser(name, help=help_, description=help_))
+        p = sub.add_parser(name, help=help_, description=help_)
+        conf(p)
+        if name == "synth":
+            _randomise(p)
+
+
+def _randomise(p: argparse.ArgumentParser) -> None:
+    """``synth --randomise``: ``vary="wide"`` (``synth`` takes ``args.vary`` as it is)."""
+    p.add_argument(
+        "--randomise",
+        dest="vary",
+        action="store_const",
+        const="wide",
+        help="domain randomisation: a condition per sample over wide ranges (light x0.5-1.6 "
+        "with clipping, LED lobes, noise, hand size, finger widths, hover, glow, defocus, "
+        "gamma, frame rate, shutter)",
+    )

@@ -203,7 +203,7 @@ def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
         for flag, used in (
             ("--lens-distortion", args.lens_distortion),
             ("--exposure-ms", args.exposure_ms > 0),
-            ("--vary", args.vary),
+            ("--randomise" if args.vary == "wide" else "--vary", bool(args.vary)),
         )
         if used
     ]

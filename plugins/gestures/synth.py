@@ -24,6 +24,12 @@ height of lifted parts (per subject, times a smaller per-session change). Each s
 light. ``light_scale`` multiplies every sample's light (the same performances, seen
 under another light: the same seed and a scale of 0.7 or 1.3 make the light-shift sets).
 
+``vary="wide"`` (domain randomisation, ``--randomise``) draws a condition per sample
+instead, over wider ranges (``augment.WIDE_RANGES``): light x0.5-1.6 clipping at 255, LED
+lobes and a smooth light field, read noise, hand size, finger widths, hover heights,
+glass glow against skin, defocus, gamma, drift, frame rate and shutter time; the
+twin renders what it models, ``augment`` changes the rendered images for the rest.
+
 ``record(camera, out, gesture, subject)`` records from any ``console.core.contracts.Camera``
 into the same format (the twin acts the gesture out when asked).
 """
@@ -43,6 +49,7 @@ import numpy as np
 
 from console.plugin_api import UserError, load_plugins
 
+from .augment import WIDE_RANGES, augment_sample, twin_profile, wide_condition, wide_subject
 from .dataset import (
     DYNAMIC,
     GESTURES,
@@ -135,6 +142,9 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
         if on_rep is not None:
             on_rep()
         rng = np.random.default_rng(_sample_seed(seed, si, gi, rep))
+        if job.get("wide"):
+            frames_total += _render_wide(job, gesture, rep, n, rng)
+            continue
         session = rep * sessions // job["reps"] if sessions else 0
         cond = condition(seed, si, session, job["subjects"], sessions) if sessions else None
         if job["light_scale"] != 1.0:
@@ -169,6 +179,53 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
         )
         frames_total += len(frames)
     return job["reps"], frames_total
+
+
+def _render_wide(job: dict, gesture: str, rep: int, n: int, rng: np.random.Generator) -> int:
+    """Render and write one sample of ``vary="wide"``: its own seeded condition
+    (``augment.wide_condition``), a twin camera built for it, the image-level changes
+    applied to its frames and background. Returns the frames written."""
+    si, gi = job["subject"], job["gesture"]
+    subject = subject_names(si + 1)[si]
+    cond = wide_condition(job["seed"], si, gi, rep)
+    cond["illumination"] = round(cond["illumination"] * job["light_scale"], 4)
+    camera = job["camera"]({**job["camera_profile"], **twin_profile(cond)})
+    t0 = _session_t0(si, gi, rep)
+    frames, truth = _render_wide_hand(camera, gesture, subject, rep, rng, n, t0, job, cond)
+    bg = camera.render_background(t0 - BACKGROUND_LEAD_S, rng)
+    frames, bg = augment_sample(frames, bg, cond["augment"], rng)
+    extra = {"rep": rep, "source": "twin", "variant": truth["variant"], "condition": cond}
+    extra["session"] = f"{subject}/wide"  # one per subject: each sample has its own light
+    if job["light_scale"] != 1.0:
+        extra["light_scale"] = job["light_scale"]
+    write_sample(
+        job["out"],
+        gesture,
+        f"{subject}_{rep:03d}",
+        frames,
+        subject=subject,
+        hand=truth["hand"],
+        fps=truth["fps"],
+        background=bg,
+        truth=truth,
+        extra=extra,
+    )
+    return len(frames)
+
+
+def _render_wide_hand(camera, gesture, subject, rep, rng, n, t0, job, cond) -> tuple:
+    """The twin's ``render_sample`` with the subject's hand changed by ``cond["hand"]``
+    (``augment.wide_subject``) on top of the camera's hand and hover scales."""
+    from plugins.twin.camera.hand import make_subject, scaled_subject
+    from plugins.twin.camera.sample import render_sample
+
+    twin = getattr(camera, "twin", camera)  # the twin itself, in or out of its process
+    subj = scaled_subject(make_subject(subject, job["seed"]), twin.hand_scale, twin.hover_scale)
+    subj = wide_subject(subj, cond["hand"])
+    return render_sample(
+        gesture, subj, rep, rng, n_frames=n, fps=twin.fps, rig=twin.rig, side=job["side"],
+        t0_s=t0, subject_seed=job["seed"],
+    )  # fmt: skip
 
 
 def _size(n_bytes: float) -> str:
@@ -287,7 +344,7 @@ def synth(
     per_sample_background: bool = True,
     left_handed: int = 1,
     exposure_ms: float = 0.0,
-    vary: bool = False,
+    vary: bool | str = False,
     sessions: int = 2,
     light_scale: float = 1.0,
     force: bool = False,
@@ -308,7 +365,14 @@ def synth(
         raise UserError(f"--exposure-ms {exposure_ms}: must be from 0 to 1000")
     if not 0 <= left_handed <= subjects:
         raise UserError(f"--left-handed {left_handed}: must be from 0 to --subjects {subjects}")
-    if vary and not 1 <= sessions <= reps:
+    wide = vary == "wide"
+    if vary not in (True, False, "wide"):
+        raise UserError(f"vary={vary!r}: use False, True (per session) or 'wide' (per sample)")
+    if wide and not per_sample_background:
+        raise UserError(
+            "--randomise needs per-sample backgrounds (leave out --no-sample-background)"
+        )
+    if vary is True and not 1 <= sessions <= reps:
         raise UserError(f"--sessions {sessions}: must be from 1 to --reps {reps}")
     if static_frames < 2 or dynamic_frames < 4:
         raise UserError("frames: static samples need >= 2 frames, dynamic >= 4")
@@ -338,7 +402,8 @@ def synth(
             "camera_profile": camera_profile,
             "per_sample_bg": per_sample_background,
             "side": sides[si],
-            "sessions": sessions if vary else 0,
+            "sessions": sessions if vary is True else 0,
+            "wide": wide,
             "subjects": subjects,
             "light_scale": float(light_scale),
         }
@@ -388,8 +453,8 @@ def synth(
         "hands": dict(zip(subject_names(subjects), sides, strict=True)),
         "exposure_ms": exposure_ms,
         "vary": vary,
-        "sessions": sessions if vary else None,
-        "condition_ranges": CONDITION_RANGES if vary else None,
+        "sessions": sessions if vary is True else None,
+        "condition_ranges": WIDE_RANGES if wide else CONDITION_RANGES if vary else None,
         "light_scale": light_scale,
         "mapping": mapping.to_dict(),
         "workers": workers,
