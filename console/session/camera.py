@@ -347,10 +347,7 @@ class CameraService:
         keys = factory.keys
         settings: dict[str, Any] = {keys["enabled"]: bool(on)}
         if target is not None:
-            host, sep, port = target.strip().rpartition(":")
-            if not sep or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
-                raise UserError(f"{name} target {target!r}: write host:port, e.g. 127.0.0.1:3333")
-            settings[keys["host"]], settings[keys["port"]] = host, int(port)
+            settings[keys["host"]], settings[keys["port"]] = parse_target(name, target)
         path = save_overrides(self.profile, settings, self.plugins)
         self.profile = load_profile(self.profile.path, self.plugins)
         self._close_sink(name)
@@ -386,3 +383,31 @@ class CameraService:
                 cam = {"error": str(exc)}
         mon = self.loop.monitor.snapshot() if self.loop is not None else None
         return {"camera": cam, "latency": mon, "error": self.error, "borrower": self.borrower}
+
+
+def target_problems(host: str, port: str) -> list[str]:
+    """What is wrong with a "host:port" target's two halves, in words ([] when nothing):
+    a port outside 1-65535, an IPv4 address with a number outside 0-255."""
+    problems = []
+    parts = host.split(".")
+    if all(p.isdigit() for p in parts):  # digits and dots: an IPv4 address
+        if len(parts) != 4:
+            problems.append(f"{host} is not an IPv4 address (four numbers 0-255)")
+        problems += [f"{p} is not 0-255 in an IPv4 address" for p in parts if int(p) > 255][:1]
+    if not port.isdigit():
+        problems.append(f"port {port!r} is not a number 1-65535")
+    elif not 1 <= int(port) <= 65535:
+        problems.append(f"port {port} is not 1-65535")
+    return problems
+
+
+def parse_target(name: str, target: str) -> tuple[str, int]:
+    """(host, port) of sink ``name``'s ``target`` "host:port", or a ``UserError`` saying
+    what is wrong with it (its shape, its address, its port)."""
+    host, sep, port = target.strip().rpartition(":")
+    if not sep or not host or not port:
+        raise UserError(f"{name} target {target!r}: write host:port, e.g. 127.0.0.1:3333")
+    problems = target_problems(host, port)
+    if problems:
+        raise UserError(f"{name} target {target!r}: {'; '.join(problems)}")
+    return host, int(port)

@@ -33,6 +33,10 @@ HELP_TEXT = (
 # in the order of importance: the footer shows as many as fit (whole: at 80 columns
 # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all
 BINDINGS = [
+    # the calibration wizard's keys, first while it runs (x: or the exposure assistant);
+    # at other times their hidden bindings below take the keys (a refusal says why)
+    Binding("n", "skip_target(True)", "skip target"),
+    Binding("x", "cancel(True)", "cancel"),
     Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
     Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
     Binding("v", "view", "view"),
@@ -55,3 +59,16 @@ BINDINGS = [
     Binding("S", "save_calibration", "save cal.", show=False),
     Binding("x", "cancel", "cancel", show=False),
 ]
+
+
+def key_shown(action: str, shown: tuple, calibrating: bool, assisting: bool) -> bool:
+    """Whether ``action``'s binding is on: its footer entry (``shown``: ``(True,)``) for
+    ``n`` while the calibration runs, for ``x`` while it or the exposure assistant runs;
+    every other binding always."""
+    if not shown:
+        return True
+    if action == "skip_target":
+        return calibrating
+    if action == "cancel":
+        return calibrating or assisting
+    return True

@@ -33,6 +33,19 @@ def clamp_setting(vpp: float, freq_hz: float, max_vpp: float) -> tuple[float, fl
     )
 
 
+def limit_line(vpp: float, freq_hz: float, max_vpp: float, max_from: str) -> str:
+    """Why a setting asked for (``vpp``, ``freq_hz``) stays where it is: the limit it
+    would pass, and where that limit is set (``max_from``, for the maximum Vpp)."""
+    lo, hi = FREQ_RANGE_HZ
+    if vpp > max_vpp:
+        return f"{max_vpp:g} Vpp is the screen's maximum ({max_from})"
+    if vpp < 0:
+        return "0 Vpp is the minimum: + raises it"
+    if freq_hz > hi:
+        return f"{hi:g} Hz is the maximum ({lo:g}-{hi:g} Hz): [ lowers it"
+    return f"{lo:g} Hz is the minimum ({lo:g}-{hi:g} Hz): ] raises it"
+
+
 def force_text(meta: dict) -> str:
     """The expected force of a stimulus (effect meta) in words."""
     felt = (
@@ -69,6 +82,8 @@ class ElectrostaticPane(Vertical):
         super().__init__(**kw)
         self.vpp, self.freq_hz, self.waveform = 100.0, 180.0, "sine"
         self.max_vpp = 200.0
+        self.max_from = "[limits] screen_max_vpp"  # where max_vpp is set
+        self._at_limit = False  # the line says a key met a limit (stale once one moves)
         self.conditions: tuple[str, ...] = ()
         self.presets: dict[str, dict] = {}
         self.notes: list[str] = []
@@ -111,8 +126,11 @@ class ElectrostaticPane(Vertical):
     def on_mount(self) -> None:
         if not self.query("#es-list"):
             return
-        lo, hi = Limits.from_profile(self.app.ctx.profile).screen_range()
+        limits = Limits.from_profile(self.app.ctx.profile)
+        lo, hi = limits.screen_range()
         self.max_vpp = hi - lo
+        if limits.screen_card_v < limits.screen_max_v:  # the card, not the limit, caps it
+            self.max_from = "the sound card's range times [amplifiers] screen_gain"
         lst = self.query_one("#es-list", OptionList)
         notes = []
         knob, screen = self._offering(Conditions), self._offering(Presets)
@@ -147,11 +165,22 @@ class ElectrostaticPane(Vertical):
 
     # ------------------------------------------------------------------ setting
     def action_vpp(self, step: float) -> None:
-        self.vpp, self.freq_hz = clamp_setting(self.vpp + step, self.freq_hz, self.max_vpp)
-        self._update_setting()
+        self._change(self.vpp + step, self.freq_hz)
 
     def action_freq(self, step: float) -> None:
-        self.vpp, self.freq_hz = clamp_setting(self.vpp, self.freq_hz + step, self.max_vpp)
+        self._change(self.vpp, self.freq_hz + step)
+
+    def _change(self, vpp: float, freq_hz: float) -> None:
+        """The setting moved toward (``vpp``, ``freq_hz``) inside the limits; a key that
+        cannot move it says which limit stops it on the status line."""
+        new = clamp_setting(vpp, freq_hz, self.max_vpp)
+        if new == (self.vpp, self.freq_hz):
+            self.say(limit_line(vpp, freq_hz, self.max_vpp, self.max_from))
+            self._at_limit = True
+            return
+        if self._at_limit:  # that limit no longer stops anything
+            self.say("")
+        self.vpp, self.freq_hz = new
         self._update_setting()
 
     def action_waveform(self) -> None:
@@ -252,7 +281,7 @@ class ElectrostaticPane(Vertical):
     def say(self, text: str, error: bool = False) -> None:
         """The status line (one line, the newest message replaces it)."""
         self.status_text = text
-        self._estop_refused = False
+        self._estop_refused = self._at_limit = False
         found = self.query("#es-status")
         if found:
             found.first(Static).update(text)

@@ -64,7 +64,6 @@ from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
-#: seconds in which a second ``a`` (or Abort) aborts the run the first one asked about
 IDLE = "no study running: pick a protocol and a participant, then s"
 #: ``s`` during an e-stop, in the console's words for it (``console.session.events``)
 ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
@@ -368,8 +367,9 @@ class StudiesPane(Vertical):
             return
         now = time.monotonic()
         if self.abort_until is not None and now <= self.abort_until:
-            self.abort_until = None
+            self.abort_until, self.said = None, ("", "information")  # "aborting" says it
             self.control.abort("aborted by the experimenter")
+            self._show()  # at once, until the run stopped
             return
         self.abort_until = now + CONFIRM_S
         self._show()
@@ -648,9 +648,10 @@ class StudiesPane(Vertical):
             not self.running or time.monotonic() > self.abort_until
         ):
             self.abort_until = None  # the question expired
-        paused = bool(self.control is not None and self.control.paused and self.running)
+        c = self.control if self.running else None
+        paused, aborting = bool(c and c.paused), bool(c and c.aborted)
         asking = CONFIRM_S if self.abort_until is not None else None
-        lines = status_lines(self.last, self.running, paused, asking)
+        lines = status_lines(self.last, self.running, paused, asking, aborting)
         self._status("\n".join(lines) + ("" if self.running else self._map_hint()))
 
     def _status(self, text: str) -> None:

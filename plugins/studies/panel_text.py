@@ -74,11 +74,16 @@ def field_refusal(field: str, value: str) -> str:
 
 
 def status_lines(
-    last: dict[str, Any], running: str | None, paused: bool, abort_within_s: float | None
+    last: dict[str, Any],
+    running: str | None,
+    paused: bool,
+    abort_within_s: float | None,
+    aborting: bool = False,
 ) -> list[str]:
     """The Studies status block (markup) for the run's ``last`` state: who and how far,
     the trial, the runner's state, the abort question (``abort_within_s``: a second
-    ``a`` within that many seconds aborts), or how the run ended."""
+    ``a`` within that many seconds aborts) or the abort asked for (``aborting``, until
+    the run stopped), or how the run ended."""
     L = last
     who = running or L.get("pid") or "-"  # the participant also once stopped
     if "total" in L:
@@ -96,7 +101,12 @@ def status_lines(
         lines.append(f"{which} {t['index'] + 1}: {escape(trial_text(t))}")
     if L.get("state") and running:
         lines.append(escape(L["state"]))
-    if running and abort_within_s is not None:
+    if running and aborting:
+        lines.append(
+            f"[b]aborting {escape(running)}'s run[/b] (the trial in flight stops; it runs "
+            "again on resume)"
+        )
+    elif running and abort_within_s is not None:
         lines.append(
             f"[b]a again within {abort_within_s:g} s aborts {escape(running)}'s run[/b] "
             "(the trial in flight runs again on resume)"

@@ -16,6 +16,7 @@ from textual.widgets import DataTable
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.command_line import CommandLine
 
 from .conftest import command, wait_for
 from .test_screens import _load_map, _ready
@@ -110,7 +111,10 @@ def test_a_hand_flow_off_the_grid_names_the_fix_on_the_screen(plugins, map_file)
             assert all("·" not in str(c) for c in grid.get_row_at(0))
             assert all("·" not in str(c) for c in grid.get_row_at(6))
             assert "·" in _info(app) or "·" in str(app.query_one("#vib-legend").render())
-            # w on a marked point plays
+            # the refused command keeps the keys on its line: escape gives them back to
+            # the grid, where w on a marked point plays
+            assert isinstance(app.focused, CommandLine)
+            await pilot.press("escape")
             pane.move_cursor(51)
             await pilot.press("w")
             await wait_for(pilot, lambda: len(app.session.played) == 1, 60, "hand flow played")

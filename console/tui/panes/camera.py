@@ -24,7 +24,7 @@ from textual.widgets import Input, Static
 
 from console.core.errors import UserError
 from console.runtime.exposure_assist import assist_service
-from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE
+from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, key_shown
 from console.tui.camera_picture import (
     blob_labels,
     live_lines,
@@ -83,6 +83,7 @@ class CameraPane(Horizontal):
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
         self._saved_to = None  # the path S saved the calibration to
         self._assisting = None  # the exposure assistant's cancel event while it runs
+        self._busy = (False, False)  # (calibrating, assisting) as the footer shows it
 
     @property
     def image_mode(self) -> str:
@@ -258,6 +259,9 @@ class CameraPane(Horizontal):
         svc = self.service
         self._refusal_still_true()
         self._status_still_true()
+        if self._busy != (busy := (self.calibration is not None, self._assisting is not None)):
+            self._busy = busy  # the footer shows the wizard's keys while it runs
+            self.refresh_bindings()
         if svc.error:
             self._message(f"[red]camera: {escape(svc.error)}[/]")
             self._no_live_numbers("no live numbers: the camera is not running")
@@ -571,9 +575,10 @@ class CameraPane(Horizontal):
 
     def check_action(self, action: str, parameters: tuple) -> bool | None:
         """While the target field has the focus every key of this screen types into it:
-        the footer promises none of them."""
+        the footer promises none of them (nor n, x while nothing takes them)."""
         found = self.query("#camera-target")
-        return not (found and found.first().has_focus)
+        busy = (self.calibration is not None, self._assisting is not None)  # as it is now
+        return not (found and found.first().has_focus) and key_shown(action, parameters, *busy)
 
     def on_descendant_focus(self, _event) -> None:
         self.refresh_bindings()
@@ -640,12 +645,12 @@ class CameraPane(Horizontal):
             self.wizard.start()
             self._status_still_true()  # at once: a cancel may follow before a redraw
 
-    def action_skip_target(self) -> None:
+    def action_skip_target(self, _shown: bool = False) -> None:
         if not self._borrowed("n"):
             self.wizard.skip()
             self._status_still_true()
 
-    def action_cancel(self) -> None:
+    def action_cancel(self, _shown: bool = False) -> None:
         if self._assisting is not None:
             self._assisting.set()  # the assistant puts the values back and says so
         elif not self._borrowed("x"):

@@ -33,6 +33,9 @@ log = logging.getLogger(__name__)
 CELL_MAX = 36
 #: the plugins table's description column at least (at 80 columns: the table fits)
 PLUGIN_DESC_MAX = 24
+#: the sound-card table's device column at most, and its note column at least (the note
+#: takes what the other columns leave of the screen's width)
+DEVICE_MAX, NOTE_MIN = 23, 6
 
 
 def clip(text: str, width: int = CELL_MAX) -> str:
@@ -85,6 +88,17 @@ def _many(n: int, what: str) -> str:
 
 def _ms(seconds: float) -> str:
     return "-" if seconds is None or not math.isfinite(seconds) else f"{seconds * 1e3:.1f}"
+
+
+def _note(dev) -> str:
+    """A card's note, "default" first for the system's default output."""
+    return "; ".join(n for n in ("default" if dev.default else "", dev.note) if n)
+
+
+def _latency(low_s: float, high_s: float) -> str:
+    """A card's default low and high latency in ms, "low-high" ("-" when unknown)."""
+    low, high = _ms(low_s), _ms(high_s)
+    return "-" if low == high == "-" else f"{low}-{high}"
 
 
 def _restore(path, text: str | None) -> None:
@@ -152,7 +166,7 @@ class DevicesPane(VerticalScroll):
         dev = self.query_one("#device-table", DataTable)
         dev.add_columns("device", "driver", "state", "why", "fix")
         self.query_one("#audio-table", DataTable).add_columns(
-            "", "driver", "device", "host API", "out ch", "low ms", "high ms", "note"
+            "", "driver", "device", "host API", "ch", "latency ms", "note"
         )
         self.query_one("#relay-table", DataTable).add_columns(
             "", "driver", "probe", "what it finds", "description"
@@ -191,6 +205,7 @@ class DevicesPane(VerticalScroll):
         self.query_one("#profile-line", Static).update(
             f"profile {prof.name} ({short_path(prof.path)}): {about}{saved}"
         )
+        self.call_after_refresh(self._focused_in_view)
 
     def _in_use(self) -> tuple[str, str, str]:
         prof = self._profile()
@@ -246,6 +261,45 @@ class DevicesPane(VerticalScroll):
         relays = relay_boards(prof, pm)
         from_thread(app, self._show_devices, audio, relays, said)
 
+    def _audio_row(self, d, dev, drv: str, device: str) -> tuple[str, list, tuple[str, str]]:
+        """(key, cells but the note, (note, whose)) of sound card ``dev`` of driver
+        ``d`` (``dev`` None: the driver found none); the card in use marked ●, the
+        system's default one in its note."""
+        if dev is None:
+            key = f"{d.driver}\x00"
+            self.audio_rows[key] = (d.driver, "")
+            if d.lists:  # it lists its devices and found none: nothing to open
+                self.no_device_rows[key] = f"{d.driver}: {d.problem}"
+            none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}", DEVICE_MAX)
+            mark = "●" if d.driver == drv else ""
+            return key, [mark, Text(d.driver), none, "", "", ""], ("", "")
+        key = f"{dev.driver}\x00{dev.name}"
+        self.audio_rows[key] = (dev.driver, dev.name)
+        used = dev.driver == drv and (drv == "twin" or dev.name == device)
+        return (
+            key,
+            [
+                "●" if used else "",
+                Text(dev.driver),
+                _cell(dev.name, f"sound card {dev.driver}", DEVICE_MAX),
+                _cell(dev.host_api, f"sound card {dev.name}: host API", 12),
+                str(dev.output_channels),
+                _latency(dev.low_latency_s, dev.high_latency_s),
+            ],
+            (_note(dev), f"sound card {dev.name}: note"),
+        )
+
+    @staticmethod
+    def _note_width(table: DataTable, rows: list[list]) -> int:
+        """What the note column can show: the table's width less the other columns
+        (each as wide as its widest cell or header, plus its padding), cut with …."""
+        heads = [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
+        width = table.size.width or table.app.size.width - 2  # the screen's scrollbar
+        used = sum(
+            max(len(str(c)) for c in [h, *col]) + 2 for h, *col in zip(heads, *rows, strict=True)
+        )
+        return max(NOTE_MIN, width - used - 2)  # the note's own padding
+
     def _show_devices(self, audio, relays, said: bool = False) -> None:
         if not self.query("#audio-table"):  # a worker finishing while the console closes
             return
@@ -258,30 +312,10 @@ class DevicesPane(VerticalScroll):
         table.clear()
         self.audio_rows.clear()
         self.no_device_rows.clear()
-        for d in audio:
-            if not d.devices:
-                key = f"{d.driver}\x00"
-                self.audio_rows[key] = (d.driver, "")
-                if d.lists:  # it lists its devices and found none: nothing to open
-                    self.no_device_rows[key] = f"{d.driver}: {d.problem}"
-                mark = "●" if d.driver == drv else ""
-                none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}")
-                table.add_row(mark, Text(d.driver), none, "", "", "", "", "", key=key)
-            for dev in d.devices:
-                key = f"{dev.driver}\x00{dev.name}"
-                self.audio_rows[key] = (dev.driver, dev.name)
-                used = dev.driver == drv and (drv == "twin" or dev.name == device)
-                table.add_row(
-                    "●" if used else ("default" if dev.default else ""),
-                    Text(dev.driver),
-                    _cell(dev.name, f"sound card {dev.driver}"),
-                    _cell(dev.host_api, f"sound card {dev.name}: host API", 16),
-                    str(dev.output_channels),
-                    _ms(dev.low_latency_s),
-                    _ms(dev.high_latency_s),
-                    _cell(dev.note, f"sound card {dev.name}: note"),
-                    key=key,
-                )
+        rows = [self._audio_row(d, dev, drv, device) for d in audio for dev in d.devices or [None]]
+        note_w = self._note_width(table, [cells for _key, cells, _note in rows])
+        for key, cells, (note, where) in rows:
+            table.add_row(*cells, _cell(note, where, note_w) if note else "", key=key)
         rtable = self.query_one("#relay-table", DataTable)
         rtable.clear()
         self.relay_rows.clear()
@@ -425,6 +459,14 @@ class DevicesPane(VerticalScroll):
             line.set_class(error, "error")
             if error:
                 said_here(line, "Devices", text)
+            self.call_after_refresh(self._focused_in_view)
+
+    def _focused_in_view(self) -> None:
+        """The table with the focus stays in view when the lines above it grow (a
+        pick's outcome, the saved-settings path): the row picked is where it is seen."""
+        focused = self.app.focused
+        if isinstance(focused, DataTable) and self in focused.ancestors:
+            self.scroll_to_widget(focused, animate=False)
 
     def _say(self, text: str, error: bool = False) -> None:
         from_thread(self.app, self._show_result, text, error)

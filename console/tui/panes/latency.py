@@ -57,6 +57,21 @@ def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
     return max(8, table_width - used - 1)  # one for the scrollbar's gutter
 
 
+def camera_line(cam: dict, snap: dict | None) -> str:
+    """The camera's line: the driver's fps and drops, the loop's numbers when it has
+    them."""
+    return (
+        f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {cam.get('fps', 0):.1f} fps, "
+        f"{escape(cam.get('dropped', 0))} frames dropped by the camera"
+        + (
+            f"; loop {snap['fps']:.1f} fps, {snap['frames']} frames, "
+            f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
+            if snap
+            else ""
+        )
+    )
+
+
 def _ms(v) -> str:
     return "-" if v is None or v != v else f"{v:.2f}"
 
@@ -90,6 +105,7 @@ class LatencyPane(Vertical):
         self._rows: list[tuple[str, ...]] = []  # the table's rows as drawn
         self._measure_until: float | None = None  # ``m``: when its camera loop stops
         self._said_for = ""  # the loop (``source``) the line about ``m`` was true of
+        self._camera = ""  # the camera line of the loop shown last (it stays when it stops)
 
     def compose(self) -> ComposeResult:
         try:
@@ -229,12 +245,7 @@ class LatencyPane(Vertical):
             if svc is None or not (svc.running or self._measure_until is not None):
                 if self._said_for:  # the demo m was told of has stopped
                     self._tell("", "")
-                self._say(
-                    "lat-head",
-                    ("[b]last numbers[/b] (no loop runs now): " if self._rows else "")
-                    + f"nothing runs: m measures the camera loop for {MEASURE_S:.0f} s, "
-                    "a demo (F6) shows its own loop here",
-                )
+                self._say("lat-head", self._stopped_head())
                 return
             self.source = "camera"
             st = svc.status()
@@ -251,18 +262,8 @@ class LatencyPane(Vertical):
             self._say("lat-head", f"[red]camera: {escape(st['error'])}[/]")
             return
         cam, snap = st.get("camera") or {}, st.get("latency")
-        self._say(
-            "lat-head",
-            what + "\n"
-            f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {cam.get('fps', 0):.1f} fps, "
-            f"{escape(cam.get('dropped', 0))} frames dropped by the camera"
-            + (
-                f"; loop {snap['fps']:.1f} fps, {snap['frames']} frames, "
-                f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
-                if snap
-                else ""
-            ),
-        )
+        self._camera = camera_line(cam, snap)
+        self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
         table = tables.first(DataTable)
@@ -279,6 +280,18 @@ class LatencyPane(Vertical):
             table.cell_padding,
         )
         self._set_rows(table, [(*r, sparkline(self.history[r[0]], width)) for r in cells])
+
+    def _stopped_head(self) -> str:
+        """The head while no loop runs: the last loop's numbers, its camera line with
+        the stage table, stay (marked as the last run's)."""
+        hint = (
+            f"nothing runs: m measures the camera loop for {MEASURE_S:.0f} s, a demo (F6) "
+            "shows its own loop here"
+        )
+        if not (self._rows or self._camera):
+            return hint
+        last = f"[b]last numbers, the {escape(self.source)} loop's[/b] (it stopped); {hint}"
+        return last + "\n" + self._camera if self._camera else last
 
     def _set_rows(self, table: DataTable, rows: list[tuple[str, ...]]) -> None:
         """The table's rows as ``rows``: the cells that changed, or all when the stages

@@ -89,7 +89,10 @@ class RelaysPane(VerticalScroll):
         "its way and yours come back when it ends; during an e-stop a toggle is refused and\n"
         "never runs later. The log lists every switch with the output level then."
     )
-    BINDINGS = [Binding(str(k), f"toggle({k})", f"relay {k}", show=k == 1) for k in range(1, 9)]
+    BINDINGS = [  # one footer entry for the eight keys: "1-8 toggle"
+        Binding("1", "toggle(1)", "toggle", key_display="1-8"),
+        *(Binding(str(k), f"toggle({k})", f"relay {k}", show=False) for k in range(2, 9)),
+    ]
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)

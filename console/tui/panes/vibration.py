@@ -31,6 +31,8 @@ from console.tui.panes.vibration_words import (
     MEASURE_ESTOPPED,
     Ask,
     describe_plan,
+    estop_line,
+    estop_reason,
     info_text,
     point_word,
 )
@@ -52,7 +54,7 @@ class VibrationPane(VerticalScroll):
         Binding("w", "hand('up')", "hand up", show=False),
         Binding("a", "hand('left')", "hand left", show=False),
         Binding("s", "hand('down')", "hand down", show=False),
-        Binding("d", "hand('right')", "hand w/a/s/d"),
+        Binding("d", "hand('right')", "hand", key_display="w a s d"),
         Binding("m", "measure", "measure"),
         Binding("b", "build_tables", "tables"),
         Binding("x", "cancel", "cancel"),
@@ -232,7 +234,7 @@ class VibrationPane(VerticalScroll):
         elif isinstance(ev, Stopped) and ev.topic == "estop":
             ask = self._now_playing
             if ask is not None and ask.started:  # it was playing
-                self._estopped(ask.plan, ev.reason)
+                self._estopped(ask, ev.reason)
             if self._measuring is not None:  # the measurement stops at once
                 self._measuring.set()
                 self._measure_estopped()
@@ -576,19 +578,17 @@ class VibrationPane(VerticalScroll):
         elif outcome.refused:
             self.status(f"{plan.name} {outcome.refused}", error=True)
         elif outcome.stopped.startswith("the e-stop"):
-            self._estopped(plan, outcome.stopped.removeprefix("the e-stop").strip(" ()"))
+            self._estopped(ask, estop_reason(outcome.stopped))
         else:
             self.status(f"{plan.name} stopped: {outcome.stopped}", error=True)
 
-    def _estopped(self, plan, reason: str) -> None:
-        """An e-stop silenced ``plan`` while it played: the line says so until
-        something else plays."""
-        self._now_playing = None
-        why = f" ({reason})" if reason else ""
-        self.status(
-            f"{plan.name} stopped by the e-stop{why}; ctrl+r resets it, then play again",
-            error=True,
-        )
+    def _estopped(self, ask: Ask, reason: str) -> None:
+        """An e-stop silenced ``ask``'s plan while it played: the line says so once,
+        until something else plays."""
+        if ask.estopped:
+            return
+        ask.estopped, self._now_playing = True, None
+        self.status(estop_line(ask.plan.name, reason), error=True)
 
     @work(thread=True, group="vib-projector")
     def _show_on_projector(self, plan) -> None:

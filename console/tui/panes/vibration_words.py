@@ -26,12 +26,27 @@ KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 @dataclass
 class Ask:
     """A play asked for: ``what`` it plays, the typed ``command`` that asked (or None),
-    its ``plan`` once made and whether the outputs said it ``started``."""
+    its ``plan`` once made, whether the outputs said it ``started`` and whether its
+    e-stop was ``estopped`` said already (the line says it once)."""
 
     what: str
     command: str | None = None
     plan: Any = None
     started: bool = False
+    estopped: bool = False
+
+
+def estop_reason(stopped: str) -> str:
+    """The reason in a play's ``"the e-stop (reason)"`` outcome, its own parentheses
+    kept (``"operator e-stop (console)"``); "" when none is given."""
+    why = stopped.removeprefix("the e-stop").strip()
+    return why[1:-1].strip() if why.startswith("(") and why.endswith(")") else why
+
+
+def estop_line(name: str, reason: str) -> str:
+    """The status line of a play the e-stop stopped: why, and what to do."""
+    why = f" ({reason})" if reason else ""
+    return f"{name} stopped by the e-stop{why}; ctrl+r resets it, then play again"
 
 
 def point_word(word: str) -> int:
