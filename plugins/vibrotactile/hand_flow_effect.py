@@ -13,6 +13,14 @@ from plugins.vibrotactile.instant import load_or_build, no_flow_error, plan_from
 from plugins.vibrotactile.map_user import MapUser, Progress
 
 
+def atlas_workers() -> int:
+    """Processes for an atlas built behind a running demo: all cores but one (at most
+    2, at least 1). On a 2-core table the frame loop, the camera and the audio keep a
+    core of their own: with both cores building, the camera lost 12 % of its frames
+    (``haptable bench console-demo``) though the builders run at idle priority."""
+    return max(1, min(2, (os.cpu_count() or 1) - 1))
+
+
 class HandFlowEffect(MapUser):
     """Effect ``hand_flow``: the flow under a hand (paper 5.2.2, Figs. 11 and 14).
 
@@ -140,7 +148,8 @@ class HandFlowEffect(MapUser):
     ):
         """Every flow ``render_hand_flow`` gives on a ``step_mm`` grid of hand centres, in
         all directions, chosen ahead (``plugins.vibrotactile.instant.FlowAtlas``; cached
-        on disk; ``progress`` raising cancels; ``workers`` processes, default up to 2).
+        on disk; ``progress`` raising cancels; ``workers`` processes, by default
+        ``atlas_workers()``: one core stays with the live loop).
         While it is built ``partial(atlas)`` gets it, its places usable as they come, the
         one ``focus()`` names (a hand on the table) first."""
         how = self.method_of(None, "hand flow")
@@ -158,7 +167,7 @@ class HandFlowEffect(MapUser):
             cap_v=s.cap_v,
             settings=s.settings,
             **self._kw(None),
-            workers=min(2, os.cpu_count() or 1) if workers is None else int(workers),
+            workers=atlas_workers() if workers is None else int(workers),
             progress=progress,
             partial=partial,
             focus=focus,
