@@ -217,8 +217,9 @@ class SimulatedCamera(RendersBackground, Protocol):
 
     ``set_script(GestureScript)`` shows a scripted hand on the live stream from the next
     frame on; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
-    side=None, subject_seed=None) -> (frames (n, H, W) uint8, truth dict)`` renders one
-    performance offline (dataset synthesis); ``render_background(t_s, rng)`` the empty
+    side=None, subject_seed=None, subject_change=None) -> (frames (n, H, W) uint8, truth
+    dict)`` renders one performance offline (dataset synthesis; ``subject_change`` a
+    function of the simulated subject, for randomised sets); ``render_background(t_s, rng)`` the empty
     table at session time ``t_s``; ``mapping`` the table mm <-> px mapping (``to_dict()``).
     A real camera is none of this: the operator's hand does it.
     """

@@ -75,7 +75,7 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     lat = snap.get("latency") or {}
     up = f"{snap.get('uptime_s', 0):.0f} s"
     if snap.get("stopping"):  # the console asked it to stop (its last numbers)
-        state = f"[yellow]stopping[/] (ran {up})"
+        state = f"[yellow]stopping[/] (ran {escape(up)})"
     else:
         state = ("running " if snap.get("running") else "[yellow]loop stopped[/] ") + up
     lines = [

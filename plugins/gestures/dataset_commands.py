@@ -195,6 +195,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
 
 def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
     """``synth --renderer phalanx``: the same options, the independent renderer."""
+    # lazy: the second renderer loads only when it is asked for
     from .phalanx_synth import DYNAMIC_FRAMES as PH_DYNAMIC
     from .phalanx_synth import synth_phalanx
 

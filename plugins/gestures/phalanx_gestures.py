@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .dataset import DYNAMIC, STATIC
-from .phalanx_renderer import HEIGHT, PX_PER_MM, WIDTH, Finger, Pose, Subject
+from .phalanx_renderer import HEIGHT, PX_PER_MM, WIDTH, Finger, Pose, Subject, hand_parts
 
 FPS = 60.0
 #: speed ranges per dynamic gesture: mm/s (drag, wipe), deg/s (rotate), pose fraction/s
@@ -158,8 +158,6 @@ def plan_take(gesture: str, subject: Subject, rng: np.random.Generator) -> Take:
 
 
 def _tip_px(pose: Pose, subject: Subject, finger: int) -> np.ndarray:
-    from .phalanx_renderer import hand_parts
-
     parts = [p for p in hand_parts(pose, subject) if p.ellipse is not None and p.z_mm == 0.0]
     # the contact pads come last, one per touching finger, in finger order
     touching = [i for i, f in enumerate(pose.fingers) if f.touch and not f.flat]

@@ -41,6 +41,7 @@ import os
 import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
@@ -191,7 +192,10 @@ def _render_wide(job: dict, gesture: str, rep: int, n: int, rng: np.random.Gener
     cond["illumination"] = round(cond["illumination"] * job["light_scale"], 4)
     camera = job["camera"]({**job["camera_profile"], **twin_profile(cond)})
     t0 = _session_t0(si, gi, rep)
-    frames, truth = _render_wide_hand(camera, gesture, subject, rep, rng, n, t0, job, cond)
+    frames, truth = camera.render_sample(
+        gesture, subject, rep, rng, n_frames=n, t0_s=t0, side=job["side"],
+        subject_seed=job["seed"], subject_change=partial(wide_subject, hand=cond["hand"]),
+    )  # fmt: skip
     bg = camera.render_background(t0 - BACKGROUND_LEAD_S, rng)
     frames, bg = augment_sample(frames, bg, cond["augment"], rng)
     extra = {"rep": rep, "source": "twin", "variant": truth["variant"], "condition": cond}
@@ -211,21 +215,6 @@ def _render_wide(job: dict, gesture: str, rep: int, n: int, rng: np.random.Gener
         extra=extra,
     )
     return len(frames)
-
-
-def _render_wide_hand(camera, gesture, subject, rep, rng, n, t0, job, cond) -> tuple:
-    """The twin's ``render_sample`` with the subject's hand changed by ``cond["hand"]``
-    (``augment.wide_subject``) on top of the camera's hand and hover scales."""
-    from plugins.twin.camera.hand import make_subject, scaled_subject
-    from plugins.twin.camera.sample import render_sample
-
-    twin = getattr(camera, "twin", camera)  # the twin itself, in or out of its process
-    subj = scaled_subject(make_subject(subject, job["seed"]), twin.hand_scale, twin.hover_scale)
-    subj = wide_subject(subj, cond["hand"])
-    return render_sample(
-        gesture, subj, rep, rng, n_frames=n, fps=twin.fps, rig=twin.rig, side=job["side"],
-        t0_s=t0, subject_seed=job["seed"],
-    )  # fmt: skip
 
 
 def _size(n_bytes: float) -> str:

@@ -290,7 +290,7 @@ class LatencyPane(Vertical):
         )
         if not (self._rows or self._camera):
             return hint
-        last = f"[b]last numbers, the {escape(self.source)} loop's[/b] (it stopped); {hint}"
+        last = f"[b]last numbers, the {escape(self.source)} loop's[/b] (it stopped); {escape(hint)}"
         return last + "\n" + self._camera if self._camera else last
 
     def _set_rows(self, table: DataTable, rows: list[tuple[str, ...]]) -> None:

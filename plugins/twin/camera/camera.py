@@ -21,6 +21,7 @@ from __future__ import annotations
 import collections
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
@@ -375,12 +376,17 @@ class TwinCamera:
         t0_s: float | None = None,
         side: str | None = None,
         subject_seed: int | None = None,
+        subject_change: Callable[[Any], Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """One performance rendered offline (not on the stream): frames and truth
         (``sample.render_sample`` on this camera's rig and fps, the subject's hand scaled
-        by ``hand_scale`` and its lifted parts' heights by ``hover_scale``)."""
+        by ``hand_scale`` and its lifted parts' heights by ``hover_scale``, then changed
+        by ``subject_change`` (a function of the ``hand.Subject``, a frozen dataclass:
+        finger widths, lengths, hover ... for a randomised dataset))."""
         seed = self.subject_seed if subject_seed is None else subject_seed
         subj = scaled_subject(make_subject(subject, seed), self.hand_scale, self.hover_scale)
+        if subject_change is not None:
+            subj = subject_change(subj)
         return render_sample(
             gesture,
             subj,
