@@ -92,7 +92,7 @@ def test_tuio_target_field_shows_when_it_takes_the_focus(plugins, size):
             assert_focus_in_view(app, "start")
             await pilot.press("U")
             await wait_for(pilot, lambda: isinstance(app.focused, Input), 10, "the field")
-            await wait_for(pilot, lambda: _focus_shows(app, "U"), 2, "the field in view")
+            await wait_for(pilot, lambda: _focus_shows(app, "U"), 15, "the field in view")
             await pilot.pause(1.0)  # and it stays there as the live numbers change
             assert_focus_in_view(app, "U")
             assert ":" in text_in(app, app.focused)  # host:port, readable
@@ -103,7 +103,7 @@ def test_tuio_target_field_shows_when_it_takes_the_focus(plugins, size):
                 await pilot.press(key)
                 # within a few frames (a notification arriving takes rows: the side
                 # panel scrolls again)
-                await wait_for(pilot, lambda k=key: _focus_shows(app, k), 2, f"focus after {key}")
+                await wait_for(pilot, lambda k=key: _focus_shows(app, k), 15, f"focus after {key}")
 
     asyncio.run(scenario())
 
