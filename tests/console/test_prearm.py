@@ -172,12 +172,14 @@ def test_estop_during_a_prearm_opens_every_relay_and_refuses_more(outputs):
     fresh_window(outputs)
     relays = relays_for(outputs, {"PA", "PB", "PC", "PD"}, True)
     report = outputs.prearm(frozenset({"PA", "PB", "PC", "PD"}), True)
-    # e-stop while it waits for the guard gap or switches, and once it is armed
+    # e-stop while it waits for the guard gap or switches (on a loaded machine it may
+    # have armed already before the e-stop reached it: then it ended without an error),
+    # and once it is armed
     outputs.estop("test during pre-arm")
     report.wait(5)
     assert outputs.wait_safe(5)
-    assert outputs.relay_state() == frozenset()
-    assert report.error.startswith("stopped")
+    assert outputs.relay_state() == frozenset()  # every relay open either way
+    assert report.error == "" or report.error.startswith("stopped"), report.error
     assert outputs.prearm(frozenset({"PA"}), False) is None  # none during an e-stop
     outputs.reset()
     outputs.prearm(frozenset({"PA", "PB", "PC", "PD"}), True)
