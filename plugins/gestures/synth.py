@@ -164,22 +164,19 @@ def _render_job(job: dict, on_rep: Callable[[], None] | None = None) -> tuple[in
         extra = {"rep": rep, "source": "twin", "variant": truth["variant"]}
         if cond is not None:
             extra.update(session=f"{subject_names(si + 1)[si]}/{session}", condition=cond)
-        if job["light_scale"] != 1.0:
-            extra["light_scale"] = job["light_scale"]
-        write_sample(
-            out,
-            gesture,
-            f"{subject}_{rep:03d}",
-            frames,
-            subject=subject,
-            hand=truth["hand"],
-            fps=truth["fps"],
-            background=bg,
-            truth=truth,
-            extra=extra,
-        )
+        _write(out, gesture, subject, rep, frames, truth, bg, extra, job["light_scale"])
         frames_total += len(frames)
     return job["reps"], frames_total
+
+
+def _write(out, gesture, subject, rep, frames, truth, bg, extra: dict, light_scale) -> None:
+    """One rendered sample into the dataset (``write_sample``), its light scale noted."""
+    if light_scale != 1.0:
+        extra["light_scale"] = light_scale
+    write_sample(
+        out, gesture, f"{subject}_{rep:03d}", frames, subject=subject, hand=truth["hand"],
+        fps=truth["fps"], background=bg, truth=truth, extra=extra,
+    )  # fmt: skip
 
 
 def _render_wide(job: dict, gesture: str, rep: int, n: int, rng: np.random.Generator) -> int:
@@ -200,20 +197,7 @@ def _render_wide(job: dict, gesture: str, rep: int, n: int, rng: np.random.Gener
     frames, bg = augment_sample(frames, bg, cond["augment"], rng)
     extra = {"rep": rep, "source": "twin", "variant": truth["variant"], "condition": cond}
     extra["session"] = f"{subject}/wide"  # one per subject: each sample has its own light
-    if job["light_scale"] != 1.0:
-        extra["light_scale"] = job["light_scale"]
-    write_sample(
-        job["out"],
-        gesture,
-        f"{subject}_{rep:03d}",
-        frames,
-        subject=subject,
-        hand=truth["hand"],
-        fps=truth["fps"],
-        background=bg,
-        truth=truth,
-        extra=extra,
-    )
+    _write(job["out"], gesture, subject, rep, frames, truth, bg, extra, job["light_scale"])
     return len(frames)
 
 
