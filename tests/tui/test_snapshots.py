@@ -5,6 +5,14 @@ after checking the new SVGs by eye."""
 
 from __future__ import annotations
 
+import difflib
+import html
+import pickle
+import re
+
+import pytest
+from pytest_textual_snapshot import node_to_report_path
+
 from console.cli.main import Context
 from console.config.plugins import load_plugins
 from console.tui.app import HapTableApp
@@ -27,13 +35,38 @@ def _app(initial: str, *extra: str) -> HapTableApp:
     return HapTableApp(Context("sim", load_plugins(builtins=builtins)), fast=True, initial=initial)
 
 
+def svg_rows(svg: str) -> list[str]:
+    """The text of a snapshot, one string per terminal row."""
+    rows: dict[float, list[tuple[float, str]]] = {}
+    for m in re.finditer(r'<text class="[^"]*" x="([\d.]+)" y="([\d.]+)"[^>]*>(.*?)</text>', svg):
+        rows.setdefault(float(m[2]), []).append((float(m[1]), html.unescape(m[3])))
+    return ["".join(t for _, t in sorted(r)) for _, r in sorted(rows.items())]
+
+
+@pytest.fixture
+def snap(snap_compare, request):
+    """snap_compare that, on a mismatch, prints which rows of text differ (a CI run has
+    no report to open)."""
+
+    def compare(app, **kwargs) -> bool:
+        if snap_compare(app, **kwargs):
+            return True
+        data = pickle.loads(node_to_report_path(request.node).read_bytes())
+        expected, actual = svg_rows(data[1]), svg_rows(data[2])
+        diff = "\n".join(difflib.unified_diff(expected, actual, "expected", "actual", lineterm=""))
+        print(diff or "the text is the same: colours or styles differ")
+        return False
+
+    return compare
+
+
 async def _settle(app, pilot) -> None:
     await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
     await pilot.pause(0.3)
     await pilot.wait_for_scheduled_animations()
 
 
-def test_devices(snap_compare):
+def test_devices(snap):
     app = _app("devices")
 
     async def run_before(pilot):
@@ -41,10 +74,10 @@ def test_devices(snap_compare):
         await wait_for(pilot, lambda: app.query_one("#device-table").row_count >= 3)
         await pilot.pause(0.5)
 
-    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+    assert snap(app, terminal_size=SIZE, run_before=run_before)
 
 
-def test_relays_after_a_toggle(snap_compare):
+def test_relays_after_a_toggle(snap):
     app = _app("relays")
 
     async def run_before(pilot):
@@ -55,10 +88,10 @@ def test_relays_after_a_toggle(snap_compare):
         await pilot.pause(0.5)
         await pilot.wait_for_scheduled_animations()
 
-    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+    assert snap(app, terminal_size=SIZE, run_before=run_before)
 
 
-def test_vibration_with_a_pair_selected(snap_compare, map_file):
+def test_vibration_with_a_pair_selected(snap, map_file):
     app = _app("vibration", "vibrotactile")
 
     async def run_before(pilot):
@@ -76,10 +109,10 @@ def test_vibration_with_a_pair_selected(snap_compare, map_file):
         await pilot.pause(0.3)
         await pilot.wait_for_scheduled_animations()
 
-    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+    assert snap(app, terminal_size=SIZE, run_before=run_before)
 
 
-def test_electrostatic(snap_compare):
+def test_electrostatic(snap):
     app = _app("electrostatic", "electrostatic")
 
     async def run_before(pilot):
@@ -89,10 +122,10 @@ def test_electrostatic(snap_compare):
         )
         await pilot.pause(0.2)
 
-    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+    assert snap(app, terminal_size=SIZE, run_before=run_before)
 
 
-def test_help(snap_compare):
+def test_help(snap):
     app = _app("relays")
 
     async def run_before(pilot):
@@ -102,4 +135,4 @@ def test_help(snap_compare):
         await pilot.pause(0.3)
         await pilot.wait_for_scheduled_animations()
 
-    assert snap_compare(app, terminal_size=SIZE, run_before=run_before)
+    assert snap(app, terminal_size=SIZE, run_before=run_before)
