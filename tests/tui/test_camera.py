@@ -199,7 +199,9 @@ def test_calibration_comes_from_the_classifier_and_is_absent_plainly(plugins):
     asyncio.run(scenario())
 
 
-def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(plugins, tmp_path):
+def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(
+    plugins, tmp_path, one_model_setting
+):
     """From the Camera screen, g opens the Gestures panel; a model trained there to the
     profile's [gestures] model file goes straight to the camera's classifier."""
     from textual.widgets import Input

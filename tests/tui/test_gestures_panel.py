@@ -19,7 +19,7 @@ def _set(panel, name: str, value: str) -> None:
     panel.query_one(f"#gp-{name}", Input).value = value
 
 
-def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path):
+def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_model_setting):
     ds, model = tmp_path / "set", tmp_path / "gestures.skops"
 
     async def scenario():
