@@ -256,12 +256,18 @@ def run(opts: ProjectorOptions) -> int:
         "headless" if opts.headless else "window",
     )
     period = 1.0 / opts.fps
+    # headless, a frame whose state and calibration are unchanged is not drawn again:
+    # nothing in a scene moves on its own (the drawing is a function of the two), the
+    # buffer already holds it, and software GL costs a core at 60 fps
+    drawn: int | None = None
+    calibrated = False
     next_t = time.monotonic()
     alone_since = time.monotonic()
     try:
         while not stop.is_set() and not server.quit_requested.is_set():
             now = time.monotonic()
             if (cal := watcher.poll(now)) is not None:
+                calibrated = True
                 renderer.set_calibration(cal)
                 renderer._key = None  # text sizes depend on the scale: re-tessellate
                 if window is not None and not adjust.active:
@@ -281,9 +287,11 @@ def run(opts: ProjectorOptions) -> int:
                     save_frames(server, shots, read_screen(renderer))
                 window.flip()  # blocks to the display rate (vsync)
             else:
-                off.render(state)
-                off.finish()
                 shots = server.take_snapshot_requests()
+                if version != drawn or calibrated or shots:
+                    off.render(state)
+                    off.finish()
+                    drawn, calibrated = version, False
                 if shots:
                     save_frames(server, shots, off.read_rgb())
             server.frame_done(version, time.monotonic())
