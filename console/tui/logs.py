@@ -102,7 +102,10 @@ class LogScreen(ModalScreen):
     BINDINGS = [Binding("escape,q,ctrl+l", "dismiss", "close")]
     DEFAULT_CSS = """
     LogScreen { align: center top; }
-    LogScreen > RichLog { width: 100%; height: 1fr; border: thick $accent; background: $panel; }
+    LogScreen > RichLog {
+        width: 100%; height: 1fr; border: thick $accent; background: $panel;
+        scrollbar-gutter: stable;  /* lines wrap to one width, scrollbar or not */
+    }
     LogScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
     LogScreen > Static { width: 100%; height: 1; background: $panel; }
     """
@@ -114,8 +117,9 @@ class LogScreen(ModalScreen):
     def compose(self) -> ComposeResult:
         yield Static(f" log (also in {log_path()}): escape closes", markup=False)
         # long lines wrap (a driver's message is read whole, no sideways scrolling);
-        # plain text: brackets show as written
-        yield RichLog(wrap=True, markup=False, highlight=False, auto_scroll=True)
+        # plain text: brackets show as written; min_width=1: a line wraps at the view's
+        # width (RichLog's default of 78 columns cut 2 at each wrap at 80 columns)
+        yield RichLog(wrap=True, markup=False, highlight=False, auto_scroll=True, min_width=1)
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
     def on_mount(self) -> None:

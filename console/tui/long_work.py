@@ -23,7 +23,7 @@ from textual.widgets import Label, ProgressBar
 from textual.worker import get_current_worker
 
 from console.core.errors import UserError
-from console.tui.said import said_here
+from console.tui.said import said_here, screen_name
 from console.tui.util import from_thread
 
 Progress = Callable[[float, str], None]
@@ -98,7 +98,7 @@ class LongWork(Horizontal):
         """A one-line error on the status line (its one place; in the log too, and a
         toast only when its screen is not in view: ``console.tui.said``)."""
         self.show(text, error=True)
-        said_here(self, self.name_running or self.last_name or "long work", text)
+        said_here(self, screen_name(self, self.name_running or self.last_name or "long work"), text)
 
     def start(self, name: str, job: Job, summary: Callable[[Any], str] | None = None) -> bool:
         """Run ``job`` in a thread worker; False (and a notice) when one already runs."""
@@ -123,7 +123,7 @@ class LongWork(Horizontal):
         own outcome, ``console.tui.said``), the bar where it was."""
         text = f"{self.name_running} is running: x cancels it"
         self.show(text, self.progress)
-        said_here(self, self.name_running or "long work", text, "warning")
+        said_here(self, screen_name(self, self.name_running or "long work"), text, "warning")
 
     def cancel(self) -> bool:
         """Ask the running job to stop (it stops at its next check).

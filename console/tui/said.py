@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 from typing import Any, Protocol, runtime_checkable
 
-__all__ = ["LOGGER", "ShowsWidgets", "log_said", "shows_now", "said_here"]
+__all__ = ["LOGGER", "ShowsWidgets", "log_said", "screen_name", "shows_now", "said_here"]
 
 LOGGER = "haptable.console"
 _log = logging.getLogger(LOGGER)
@@ -30,6 +30,18 @@ def log_said(where: str, text: str, severity: str = "error") -> None:
     log, at the level of ``severity`` (``information``, ``warning``, ``error``)."""
     level = _LEVELS.get(severity, logging.INFO)
     _log.log(level, "%s: %s", where, " ".join(str(text).split()), extra={"on_screen": True})
+
+
+def screen_name(widget: Any, default: str) -> str:
+    """The name of the screen or panel ``widget`` is on, as the log names it (its
+    nearest ``...Pane`` or ``...Panel``: ``GesturesPanel`` is ``Gestures``), else
+    ``default``."""
+    for node in getattr(widget, "ancestors_with_self", [widget]):
+        cls = type(node).__name__
+        for tail in ("Panel", "Pane"):
+            if cls.endswith(tail) and len(cls) > len(tail):
+                return cls.removesuffix(tail)
+    return default
 
 
 @runtime_checkable

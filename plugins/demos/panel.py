@@ -12,8 +12,11 @@ demo started elsewhere shows here too. ``s`` or the e-stop stops a demo, so does
 
 from __future__ import annotations
 
+import re
+import textwrap
 from typing import Any
 
+from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -114,10 +117,42 @@ def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width:
         table.move_cursor(row=min(at, table.row_count - 1))
 
 
+def fit_fields(markup: str, width: int) -> Text:
+    """``markup``'s lines within ``width``: a longer line drops whole fields (parted by
+    two spaces, a comma or a semicolon), its middle ones first (its last one, the end
+    to end latency or the drop counts, stays), "…" where they were; a number is never
+    cut."""
+    out = Text()
+    for i, line in enumerate(markup.split("\n")):
+        out.append("\n" if i else "")
+        out.append_text(_shorter(Text.from_markup(line), width))
+    return out
+
+
+def _shorter(text: Text, width: int) -> Text:
+    """``text`` within ``width`` by dropping whole fields (``fit_fields``)."""
+    if text.cell_len <= width:
+        return text
+    seps = [(m.start(), m.end()) for m in re.finditer(r"  |, |; ", text.plain)]
+    if not seps:
+        return text  # one field: the ellipsis cuts it
+    tail = text[seps[-1][1] :]
+    for start, _end in reversed(seps[:-1]):  # the head, "…", the last field
+        shorter = text[:start] + Text("  …  ") + tail
+        if shorter.cell_len <= width:
+            return shorter
+    for start, _end in reversed(seps):  # the head alone
+        shorter = text[:start] + Text(" …")
+        if shorter.cell_len <= width:
+            return shorter
+    return text
+
+
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
     ScenesPane #demo-table { height: auto; max-height: 5; }
-    /* one row per line, cut with … (a wrapped line pushed the last ones off at 80 x 24) */
+    /* one row per line (a wrapped line pushed the last ones off at 80 x 24): a line
+       too long drops whole fields (``fit_fields``: a number is never cut) */
     ScenesPane #demo-status { height: auto; text-wrap: nowrap; text-overflow: ellipsis; }
     /* the demos' keys stay in view however short the screen gets (a toast's rows) */
     ScenesPane #demo-keys { dock: bottom; }
@@ -170,6 +205,7 @@ class ScenesPane(Vertical):
         self._asked_scene: str | None = None  # the scene Enter asked the projector for
         self._scene_error = ""  # ... and why it did not show
         self._filled_width = 0  # the width the tables were laid out for
+        self._estop_why = ""  # the last e-stop's reason (the operator's, a watchdog's ...)
 
     @property
     def demos(self) -> Any:
@@ -325,7 +361,11 @@ class ScenesPane(Vertical):
     def _show_last_run(self, text: str) -> None:
         """The demo status: how the last run ended and its last numbers (markup)."""
         self._last_run = text
-        self.query_one("#demo-status", Static).update(text)
+        self._put_status(text)
+
+    def _put_status(self, text: str) -> None:
+        """The demo status (markup), each line fitted to the screen (``fit_fields``)."""
+        self.query_one("#demo-status", Static).update(fit_fields(text, self.app.size.width - 2))
 
     def start_demo(self, name: str) -> bool:
         """Start demo ``name`` in its own process (the session's work, in a worker)."""
@@ -352,6 +392,7 @@ class ScenesPane(Vertical):
     def action_cancel_demo(self) -> None:
         """``x``: cancel the demo's start (its line says when there is none to cancel)."""
         if self.query_one("#demo-work", LongWork).cancel():
+            self._cancelling()
             return
         if self.demo_name is not None:
             self._say(f"demo {self.demo_name} has started: s stops it", "warning")
@@ -362,7 +403,8 @@ class ScenesPane(Vertical):
         """Stop the running demo (or cancel its preparation); ``key``: the operator's."""
         lw = self.query_one("#demo-work", LongWork)
         if lw.busy:
-            lw.cancel()
+            if lw.cancel():
+                self._cancelling()
             return
         if self.demos.run is None or self.demo_state == "stopping":
             return
@@ -382,6 +424,22 @@ class ScenesPane(Vertical):
         if self.demos.last_snapshot is not None:
             self._show_snapshot(self.demos.last_snapshot)
 
+    def _cancelling(self) -> None:
+        """``x`` (or s) while a demo starts: its row and status say it is cancelled."""
+        name = self.query_one("#demo-work", LongWork).last_name.removeprefix("demo ")
+        if self.demo_name is not None and self.demo_state == "starting":
+            self._set_state("cancelling")
+        self._show_last_run(f"{escape(name)} cancelling: its start stops at its next step")
+
+    def _now_running(self, name: str) -> None:
+        """The demo runs: the start's progress and "starting" line go (its numbers come
+        with its first snapshot)."""
+        lw = self.query_one("#demo-work", LongWork)
+        if lw.progress is not None:
+            lw.show(f"demo {name} running: s stops it")
+        if not self._last_run.startswith("last run"):
+            self._show_last_run(f"{escape(name)} running: its numbers show at its first report")
+
     def _starting(self, name: str) -> None:
         """A demo starting: its status block has no numbers yet (its progress shows)."""
         self._show_last_run(f"{escape(name)} starting: its numbers show here once it runs")
@@ -399,7 +457,11 @@ class ScenesPane(Vertical):
             self.show_projector()
             return
         if ev.topic == "estop" and isinstance(ev, Started):  # the operator's reset
+            self._estop_why = ""
             self._estop_reset()
+            return
+        if ev.topic == "estop" and isinstance(ev, Stopped):  # why (a demo's end says it)
+            self._estop_why = ev.reason
             return
         if ev.topic != "demo":
             return
@@ -410,11 +472,17 @@ class ScenesPane(Vertical):
             if ev.detail == "stopping":
                 self._stopping(ev.name)
                 return
+            if self.demo_state == "cancelling" and ev.detail == "starting":
+                return  # (the x came first: it is cancelled)
             self._set_state(ev.detail or "running")
             if ev.detail == "starting":
                 self._starting(ev.name)
+            else:
+                self._now_running(ev.name)
         elif isinstance(ev, Progress):
             lw = self.query_one("#demo-work", LongWork)
+            if self.demo_state != "starting":
+                return  # running (or cancelling): no progress bar says otherwise
             if not lw.busy:  # started elsewhere: its progress shows here too
                 lw.show(f"demo {ev.name}: {ev.text}", ev.fraction)
         elif isinstance(ev, Snapshot):
@@ -435,26 +503,44 @@ class ScenesPane(Vertical):
         self.demo_name = name
         self._set_state(reason)
         how, after = self._how_stopped(reason)
+        why = self._why_estopped() if reason == "e-stopped" else ""
+        if why:  # not the operator's e-stop: its reason, whole (the bar's is cut)
+            how = f"e-stopped: {why}"
         demos = self.demos
-        if demos.last_snapshot is not None:
+        if demos.last_snapshot is None:  # no numbers: how it ended
+            said = textwrap.wrap(f"{name} {how}", self.app.size.width - 2)
+            self._show_last_run(escape("\n".join(said)))
+        else:
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
             text = "\n".join(status_lines(snap))
             log = (demos.last_final or {}).get("twin_log")
             if log:
                 text += f"\nwhat the twin's outputs received:\n{escape(log)}"
             head = f"{how}; an e-stop came after" if after else how
-            self._show_last_run(f"last run ({head}):\n{text}")
+            head = "\n".join(textwrap.wrap(f"last run ({head}):", self.app.size.width - 2))
+            self._show_last_run(f"{escape(head)}\n{text}")
         self.demo_name = None
         lw = self.query_one("#demo-work", LongWork)
         if reason == "e-stopped":
             self._estop_demo = name
         self._after_stop = f"demo {name} {how}" if after else ""
-        if not lw.busy and reason not in ("failed", "cancelled"):  # those: its own line
+        if why:  # the line says it is e-stopped, the status below says why
+            lw.show(f"demo {name} e-stopped (why below): ctrl+r resets")
+            said_here(self, "Scenes", f"demo {name} {how}")
+        elif not lw.busy and reason not in ("failed", "cancelled"):  # those: its own line
             fix = "; an e-stop came after: ctrl+r resets it" if after else ""
             lw.show(f"demo {name} {how}{fix}")
 
+    def _why_estopped(self) -> str:
+        """Why a demo was e-stopped when it was not the operator (a watchdog, a fault):
+        the table's e-stop event, else the demo's last report; "" for the operator's."""
+        final = self.demos.last_final or {}
+        gate = ((final.get("final") or {}).get("outputs") or {}).get("gate") or {}
+        why = self._estop_why or final.get("estop") or gate.get("estop_reason") or ""
+        return "" if why.startswith("operator") else why
+
     def _show_snapshot(self, snap: dict) -> None:
-        if self.demo_state == "starting":
+        if self.demo_state in ("starting", "cancelling"):
             return  # no numbers yet (``_starting``)
         if self.demo_state == "stopping":
             snap = {**snap, "stopping": True}
@@ -465,7 +551,7 @@ class ScenesPane(Vertical):
                 text += f"\nyour finger on the twin at {x:.0f},{y:.0f} mm: arrows move, space lifts"
             else:
                 text += "\ntwin: the scripted hand performs; space puts your finger on the twin"
-        self.query_one("#demo-status", Static).update(text)
+        self._put_status(text)
         self._last_run = ""
         if self.demo_state.startswith("running") and self.demo_name is not None:
             up = snap.get("uptime_s", 0.0)

@@ -21,8 +21,10 @@ from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose
+from console.session.events import Started
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.said import said_here
+from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -99,6 +101,32 @@ def _latency(low_s: float, high_s: float) -> str:
     """A card's default low and high latency in ms, "low-high" ("-" when unknown)."""
     low, high = _ms(low_s), _ms(high_s)
     return "-" if low == high == "-" else f"{low}-{high}"
+
+
+def _says_estop(line: str) -> bool:
+    """Whether ``line`` says the e-stop is active (stale once the operator reset it)."""
+    return any(w in line for w in ("e-stop active", "e-stop is active", "ctrl+r resets"))
+
+
+def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:
+    """Two last columns' widths within ``left`` columns (with the 2 between them), from
+    the widest text or header of each: both whole when they fit, else the narrower one
+    kept up to half and the rest to the other; never under ``NOTE_MIN``."""
+    room = left - 2
+    a, b = needs
+    if a + b <= room:
+        return a, b
+    if a <= b:
+        a = max(NOTE_MIN, min(a, room // 2))
+        return a, max(NOTE_MIN, room - a)
+    b = max(NOTE_MIN, min(b, room // 2))
+    return max(NOTE_MIN, room - b), b
+
+
+def _need(head: str, texts) -> int:
+    """A column's width: its widest text on one line, or its header."""
+    widest = max((len(" ".join(str(t or "").split())) for t in texts), default=0)
+    return max(widest, len(head))
 
 
 def _restore(path, text: str | None) -> None:
@@ -233,6 +261,12 @@ class DevicesPane(VerticalScroll):
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         table = self.query_one("#device-table", DataTable)
         table.clear()
+        firsts = [[s.kind, s.name, s.state] for s in rows]
+        # why and fix share what the first columns leave: a cut cell ends in "…"
+        why_w, fix_w = share(
+            self._note_width(table, firsts),
+            (_need("why", [s.why for s in rows]), _need("fix", [s.fix for s in rows])),
+        )
         for s in rows:
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
@@ -241,8 +275,8 @@ class DevicesPane(VerticalScroll):
                 Text(s.kind),
                 Text(s.name),
                 Text.from_markup(state),
-                _cell(s.why, f"{s.kind} {s.name}"),
-                _cell(s.fix, f"{s.kind} {s.name}: fix"),
+                _cell(s.why, f"{s.kind} {s.name}", why_w),
+                _cell(s.fix, f"{s.kind} {s.name}: fix", fix_w),
             )
 
     # ------------------------------------------------------------------ listing
@@ -320,6 +354,15 @@ class DevicesPane(VerticalScroll):
         rtable.clear()
         self.relay_rows.clear()
         self.unusable_boards.clear()
+        firsts = [["●", name, status.state] for name, _d, status in relays]
+        # what it finds and the description share what the first columns leave
+        finds_w, desc_w = share(
+            self._note_width(rtable, firsts),
+            (
+                _need("what it finds", [st.why for _n, _d, st in relays]),
+                _need("description", [d for _n, d, _s in relays]),
+            ),
+        )
         for name, description, status in relays:
             key = f"relay\x00{name}"
             self.relay_rows[key] = name
@@ -329,8 +372,8 @@ class DevicesPane(VerticalScroll):
                 "●" if name == relay_drv else "",
                 Text(name),
                 Text(status.state),
-                _cell(status.why, f"relay board {name}"),
-                _cell(description, f"relay board {name}: description"),
+                _cell(status.why, f"relay board {name}", finds_w),
+                _cell(description, f"relay board {name}: description", desc_w),
                 key=key,
             )
 
@@ -344,7 +387,8 @@ class DevicesPane(VerticalScroll):
         if key in self.no_device_rows:
             self._show_result(
                 f"{self.no_device_rows[key]}: no device on this row to use; "
-                "connect one and list again (l)"
+                "connect one and list again (l)",
+                severity="warning",
             )
             return
         driver, device = choice
@@ -361,7 +405,8 @@ class DevicesPane(VerticalScroll):
         if status is not None:  # nothing there to open: the outputs stay as they are
             fix = status.fix or "connect it"
             self._show_result(
-                f"relay board {driver!r} is {status.state} ({status.why}): {fix}, then press l"
+                f"relay board {driver!r} is {status.state} ({status.why}): {fix}, then press l",
+                severity="warning",
             )
             return
         self._apply({"relays.driver": driver}, f"relay board {driver!r}")
@@ -446,10 +491,12 @@ class DevicesPane(VerticalScroll):
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    def _show_result(self, text: str, error: bool = False) -> None:
+    def _show_result(self, text: str, error: bool = False, severity: str = "") -> None:
         """The screen's status line, the newest message replacing it: docked at the
         top of the screen, in view wherever the list is scrolled (a pick on a row far
-        down says what it did where it is seen); an error is in the log too."""
+        down says what it did where it is seen); an error or a refusal (``severity``
+        ``warning``) is in the log too."""
+        severity = "error" if error else severity
         self.result = text
         found = self.query("#devices-result")
         if found:
@@ -457,9 +504,16 @@ class DevicesPane(VerticalScroll):
             line.update(text)
             line.display = bool(text)
             line.set_class(error, "error")
-            if error:
-                said_here(line, "Devices", text)
+            if severity:
+                said_here(line, "Devices", text, severity)
             self.call_after_refresh(self._focused_in_view)
+
+    def on_session_message(self, message: SessionMessage) -> None:
+        """The operator's reset (``Started`` on topic ``estop``): a line saying what the
+        e-stop refused is past; it says the reset instead."""
+        ev = message.event
+        if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
+            self._show_result("e-stop reset: t plays the test signal, enter picks a row")
 
     def _focused_in_view(self) -> None:
         """The table with the focus stays in view when the lines above it grow (a
