@@ -30,7 +30,13 @@ CLIP_FACTOR = 0.8
 MAX_STEPS = 16
 #: the controls stepped, in turn
 ORDER = ("exposure", "gain")
-NO_HAND = "e: no hand touching the glass: put a flat hand on the glass, then press e again"
+#: no hand in half the frames measured or more (a hand passing, or none on the glass)
+NO_HAND = "e: no hand held still in the frames measured: hold a flat hand on the glass, then e"
+#: the same on the twin, whose hand comes and goes: the Camera screen's P holds one
+NO_HAND_TWIN = (
+    "e: the twin's hand came and went in the frames measured: P holds a flat hand on its "
+    "glass, then e"
+)
 
 
 class Controls(Protocol):
@@ -149,10 +155,11 @@ def assist(
     driver: str = "?",
     cancelled: Callable[[], bool] = lambda: False,
     progress: Callable[[str], None] = lambda _line: None,
+    no_hand: str = NO_HAND,
 ) -> Outcome:
     """Step ``camera``'s exposure down (then gain) until ``measure()`` (the next settled
-    frames; ``None``: no hand touching) says touching skin is in range. Cancelled (or
-    any error) the camera gets its first values back."""
+    frames; ``None``: no hand held still, said as ``no_hand``) says touching skin is in
+    range. Cancelled (or any error) the camera gets its first values back."""
     ranges = camera.controls()
     names = [n for n in ORDER if n in ranges]
     if not names:
@@ -171,7 +178,7 @@ def assist(
             start,
         )
     try:
-        return _steps(camera, measure, ranges, start, cancelled, progress)
+        return _steps(camera, measure, ranges, start, cancelled, progress, no_hand)
     except Cancelled:
         _restore(camera, start)
         return Outcome(False, f"e cancelled: {_fmt(start)} as before", start)
@@ -180,10 +187,10 @@ def assist(
         return Outcome(False, f"e failed ({exc}): {_fmt(start)} as before", start)
 
 
-def _steps(camera, measure, ranges, start, cancelled, progress) -> Outcome:
+def _steps(camera, measure, ranges, start, cancelled, progress, no_hand) -> Outcome:
     r = measure()
     if r is None:
-        return Outcome(False, NO_HAND, start)
+        return Outcome(False, no_hand, start)
     if not r.clips():
         return Outcome(True, f"e: touching skin at {r.p99:.0f} of 255: kept {_fmt(start)}", start)
     now = dict(start)
@@ -205,7 +212,7 @@ def _steps(camera, measure, ranges, start, cancelled, progress) -> Outcome:
         nxt = measure()
         if nxt is None:
             _restore(camera, start)
-            return Outcome(False, NO_HAND + f" ({_fmt(start)} as before)", start)
+            return Outcome(False, no_hand + f" ({_fmt(start)} as before)", start)
         if nxt.too_dark():
             _restore(camera, before)
             return Outcome(
@@ -278,6 +285,7 @@ def assist_service(
         driver=driver,
         cancelled=cancel.is_set,
         progress=progress,
+        no_hand=NO_HAND_TWIN if hasattr(cam, "place") else NO_HAND,
     )
 
 

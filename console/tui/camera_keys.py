@@ -3,6 +3,8 @@ line under the view and its help."""
 
 from __future__ import annotations
 
+from typing import Any
+
 from textual.binding import Binding
 
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
@@ -19,6 +21,8 @@ HELP_TEXT = (
     "         its row (▸) shows the new value and stays in view\n"
     "e        exposure assistant: with a flat hand on the glass, steps the exposure (then\n"
     "         gain) down until touching skin is below 255; x stops (values as before)\n"
+    "P        the twin: hold a flat hand still on its glass (for e) / P again: its\n"
+    "         gestures in turn again\n"
     "W        keep every vision setting for this profile (its overrides file)\n"
     "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
     "g        gestures panel: datasets, training and evaluation\n"
@@ -47,6 +51,7 @@ BINDINGS = [
     Binding("W", "save_tuning", "keep settings"),
     Binding("U", "edit_target", "TUIO target"),
     Binding("e", "exposure", "exposure"),
+    Binding("P", "hold_hand", "hold hand", show=False),
     Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
     Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
     Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),
@@ -72,3 +77,29 @@ def key_shown(action: str, shown: tuple, calibrating: bool, assisting: bool) -> 
     if action == "cancel":
         return calibrating or assisting
     return True
+
+
+#: camera -> the script its hand followed before ``P`` held a flat hand still
+_HELD: dict[int, Any] = {}
+
+
+def hold_hand(svc: Any) -> tuple[str, str]:
+    """``P``: the twin holds a flat hand still at the glass's centre (for ``e``), or
+    goes back to what its hand did before; (the status line, its severity)."""
+    cam = getattr(svc, "camera", None)
+    if cam is None or not hasattr(cam, "place"):
+        return "P: only the twin holds a hand on the glass: put your own flat hand on it", "warning"
+    if id(cam) in _HELD:
+        cam.set_script(_HELD.pop(id(cam)))
+        return (
+            "P: the twin's hand goes back to its gestures in turn (P holds it again)",
+            "information",
+        )
+    _HELD[id(cam)] = getattr(getattr(cam, "twin", cam), "script", None)
+    w, h = cam.mapping.table_mm
+    cam.place("open_hand", (w / 2, h / 2))
+    return (
+        f"P: a flat hand held still on the twin's glass at {w / 2:.0f},{h / 2:.0f} mm: "
+        "e measures it; P lets it go",
+        "information",
+    )

@@ -39,6 +39,11 @@ from .synth import estimate as synth_estimate
 
 #: seconds in which a second ``s`` starts the synthesis whose size was shown
 CONFIRM_S = 20.0
+#: what a cancelled job left as it was, by its name's start (said after "NAME cancelled")
+_CANCELLED_KEPT = {
+    "train": ": no model was written",
+    "synth": ": the dataset folder is unchanged",
+}
 
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
@@ -401,10 +406,6 @@ class GesturesPanel(Screen):
             if "loaded" in event.result:
                 text += "\n" + self.use_model(event.result["loaded"])
             self.query_one("#gp-result", Static).update(text)
-        elif event.outcome == "cancelled" and event.name == "training":
-            self.query_one("#gp-result", Static).update("training cancelled: no model was written")
-        elif event.outcome == "cancelled":
-            self.query_one("#gp-result", Static).update(
-                "synthesis cancelled: the dataset folder is unchanged"
-            )
+        elif event.outcome == "cancelled":  # said once, on the work's own line
+            self.work.show(f"{event.name} cancelled{_CANCELLED_KEPT.get(event.name[:5], '')}")
         self.action_refresh()

@@ -41,7 +41,6 @@ from textual.widgets import (
     Select,
     Static,
 )
-from textual.widgets.data_table import ColumnKey
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
@@ -52,7 +51,6 @@ from . import protocol as protocols
 from .console_run import TOPIC, map_hint, run_analysis
 from .panel_text import (
     NUMBER_FIELDS,
-    clip,
     default_out,
     field_refusal,
     next_id,
@@ -62,6 +60,7 @@ from .panel_text import (
 )
 from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
+from .trials_table import TrialsTable
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
 IDLE = "no study running: pick a protocol and a participant, then s"
@@ -162,8 +161,6 @@ class StudiesPane(Vertical):
         #: status's last line (the screen's own outcome: never a toast, console.tui.said)
         self.said: tuple[str, str] = ("", "information")
         self._status_text = ""
-        self._what: dict[Any, str] = {}  # the trials table's row -> its whole description
-        self._what_room = 40  # the columns the description gets (``_fit_trials``)
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -218,7 +215,7 @@ class StudiesPane(Vertical):
                 yield Button(label, id=f"ans-{value}", classes="answer", compact=True)
         yield ProgressBar(total=1, show_eta=False, id="study-progress")
         yield Static(IDLE, id="study-status")
-        table = LiteralTable(id="study-trials", cursor_type="row")
+        table = TrialsTable(id="study-trials", cursor_type="row")
         for column in ("trial", "what", "response", "correct", "replays", "time"):
             table.add_column(column, key=column)
         yield table
@@ -290,8 +287,7 @@ class StudiesPane(Vertical):
             self._say(str(exc), "error")
             return
         self.said = ("", "information")  # a new run: the last key's outcome is history
-        self.query_one("#study-trials", DataTable).clear()
-        self._what.clear()
+        self.query_one("#study-trials", TrialsTable).clear_trials()
         self.query_one("#study-progress", ProgressBar).update(total=1, progress=0)
         self.run_out = spec["out"]
         if self.analysed is not None and same_folder(self.analysed[0], spec["out"]):
@@ -345,18 +341,21 @@ class StudiesPane(Vertical):
         self._show()
 
     def action_replay(self) -> None:
+        """``r``: replay the stimulus waiting for an answer, or say why not (one line)."""
+        waiting = bool(self.asking and "trial" in self.asking)
         if self.running is None:
-            self._say("replay: no study running", "warning")
+            self._say("r: no study running, nothing to replay", "warning")
+        elif self.control is not None and self.control.paused and not waiting:
+            self._say("r: paused, no stimulus waits for an answer (p resumes)", "warning")
         elif self.responder is None:
             self._say(
-                "replay: a simulated participant answers by itself and asks for no replay",
-                "warning",
+                "r: a simulated participant answers by itself and asks for no replay", "warning"
             )
-        elif self.asking and "trial" in self.asking:
+        elif waiting:
             self.responder.put(Answer(replay=True))
-            self._say("replaying the stimulus")
+            self._say("r: replaying the stimulus")
         else:
-            self._say("replay: no stimulus is waiting for an answer", "warning")
+            self._say("r: no stimulus is waiting for an answer", "warning")
 
     def action_abort(self) -> None:
         """``a`` (or Abort): the first asks on the status line, a second within
@@ -403,10 +402,12 @@ class StudiesPane(Vertical):
         self._view("trials" if box.display else "analysis")
 
     def action_toggle_notes(self) -> None:
-        """The analysis's notes: all of them in the table's place, or one line."""
-        box = self.query_one("#analysis-notes-box")
-        if self.notes and self.query_one("#study-anova", DataTable).row_count:
-            self._notes(open_=not box.has_class("-open"))  # else: no table to come back to
+        """``o``: the analysis's notes, all of them (in the table's place) or one line."""
+        if not self.notes:
+            self._say("o: no analysis notes yet (n analyses the folder)", "warning")
+            return
+        self._view("analysis")
+        self._notes(open_=not self.query_one("#analysis-notes-box").has_class("-open"))
 
     def _notes(self, open_: bool) -> None:
         box = self.query_one("#analysis-notes-box")
@@ -417,7 +418,7 @@ class StudiesPane(Vertical):
         if not n:
             text = ""
         elif open_:
-            more = "; o shows the table" if has_rows else ""
+            more = "; o shows the table" if has_rows else "; o: one line"
             text = f"notes ({n}{more}):\n" + "\n".join(f"- {x}" for x in self.notes)
         else:
             text = f"{n} note{'s' if n > 1 else ''} (o shows all): {self.notes[0]}"
@@ -566,52 +567,23 @@ class StudiesPane(Vertical):
         self._show()
 
     def _add_row(self, r: dict[str, Any]) -> None:
-        """A done trial's row in the trials table (the cursor follows it)."""
+        """A done trial's row in the trials table (followed unless the cursor moved)."""
         rt = r.get("response_time_s")
         if r.get("completion_time_s") is not None or "overshoots" in r:
             ct = r.get("completion_time_s")
             resp = f"{'timeout' if ct is None else f'{ct:.2f} s'} {r.get('overshoots')} ovs"
         else:
             resp = str(r.get("response"))
-        table = self.query_one("#study-trials", DataTable)
+        table = self.query_one("#study-trials", TrialsTable)
         what = trial_text(r)
-        key = table.add_row(
+        table.add_trial(
             str(r["trial"] + 1),
-            clip(what, self._what_room),
+            what,
             resp,
             "yes" if r.get("correct") else "no",
             str(r.get("replays", 0)),
             "-" if rt is None else f"{rt:.2f} s",
         )
-        self._what[key] = what
-        self._fit_trials()
-        self.call_after_refresh(self._fit_trials)  # once the table measured the new row
-        table.move_cursor(row=table.row_count - 1)
-
-    def _fit_trials(self) -> None:
-        """Every column of the trials table whole at any width (80 columns: the time
-        too): the trial's description gives what the others leave, ending in ``…``."""
-        table = self.query_one("#study-trials", DataTable)
-        width = table.size.width or self.app.size.width
-        others = sum(
-            c.get_render_width(table) for k, c in table.columns.items() if k.value != "what"
-        )
-        # its padding, and room for the scrollbar that more rows bring
-        room = max(12, width - others - 2 * table.cell_padding - 2)
-        if room == self._what_room:
-            return
-        self._what_room = room
-        column = table.columns.get(ColumnKey("what"))
-        if column is not None:  # a set width: a column's widest cell never shrinks it
-            column.auto_width, column.width = False, room
-        for key, what in self._what.items():
-            if key in table.rows:
-                table.update_cell(key, "what", clip(what, room))
-        table.refresh(layout=True)
-
-    def on_resize(self) -> None:
-        if self.query("#study-trials"):
-            self.call_after_refresh(self._fit_trials)
 
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])

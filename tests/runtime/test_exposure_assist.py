@@ -93,7 +93,7 @@ def test_no_hand_on_the_glass_changes_nothing():
     cam = FakeCamera()
     out = assist(cam, lambda: None)
     assert out.line == (
-        "e: no hand touching the glass: put a flat hand on the glass, then press e again"
+        "e: no hand held still in the frames measured: hold a flat hand on the glass, then e"
     )
     assert not cam.log
 

@@ -72,8 +72,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
             await pilot.press("t", "x")
             await wait_for(pilot, lambda: work.outcome is not None, 180, "training stopped")
             assert work.outcome == "cancelled" and "training cancelled" in work.text
-            res = panel.query_one("#gp-result")
-            await wait_for(pilot, lambda: "no model was written" in str(res.render()), 10)
+            assert "training cancelled: no model was written" in work.text  # said once
             assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
 
             # training to the end: accuracy per fold, the model in the files block

@@ -15,6 +15,8 @@ opens the registered ``gestures`` panel (datasets, training)."""
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from textual import work
 from textual.app import ComposeResult
@@ -24,7 +26,7 @@ from textual.widgets import Input, Static
 
 from console.core.errors import UserError
 from console.runtime.exposure_assist import assist_service
-from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, key_shown
+from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, hold_hand, key_shown
 from console.tui.camera_picture import (
     blob_labels,
     live_lines,
@@ -151,14 +153,12 @@ class CameraPane(Horizontal):
         return (id(w.active), id(w.result), w.message if w.active is None else None)
 
     def _status_still_true(self) -> None:
-        """The status line is cleared when the calibration started, ended or was
-        cancelled since it was said (the wizard's block says where it stands)."""
+        """The line cleared once the calibration started, ended or was cancelled."""
         if self._said_at is not None and self._said_at != self._wizard_state():
             self.say("")
 
     def _borrowed(self, key: str) -> bool:
-        """Whether a demo holds the camera: then the status line says ``key`` is refused,
-        who holds the camera and where to stop it."""
+        """Whether a demo holds the camera (the line then says ``key`` is refused, why)."""
         holder = self.service.borrower
         if holder is None:
             return False
@@ -663,8 +663,6 @@ class CameraPane(Horizontal):
         its steps and its outcome on the status line; ``x`` cancels it."""
         if self._assisting is not None or self._borrowed("e"):
             return
-        import threading
-
         self._assisting = threading.Event()
         self.say("e: measuring touching skin ... x stops")
         self._assist(self._assisting)
@@ -677,6 +675,11 @@ class CameraPane(Horizontal):
             self._assisting = None
         from_thread(self.app, self.say, out.line, "information" if out.ok else "warning")
         from_thread(self.app, self._reveal)
+
+    def action_hold_hand(self) -> None:
+        """``P`` on the twin: a flat hand held still on the glass / its gestures again."""
+        if not self._borrowed("P"):
+            self.say(*hold_hand(self.service))
 
     def action_gestures_panel(self) -> None:
         reg = self.app.ctx.pm.of("panel").get("gestures")

@@ -87,7 +87,8 @@ class RelaysPane(VerticalScroll):
         "1-8      toggle that relay (or the switch with enter/space)\n"
         "A toggle sets your own relay setting: while a stimulus plays it routes the relays\n"
         "its way and yours come back when it ends; during an e-stop a toggle is refused and\n"
-        "never runs later. The log lists every switch with the output level then."
+        "never runs later. The switch log below lists every switch with the output level\n"
+        "then (newest first)."
     )
     BINDINGS = [  # one footer entry for the eight keys: "1-8 toggle"
         Binding("1", "toggle(1)", "toggle", key_display="1-8"),

@@ -66,7 +66,8 @@ class ScopePane(Vertical):
     HELP_TEXT = (
         "space    freeze / run (frozen: the last 4 s are kept to look at)\n"
         "p        the last played plan, whole (frozen until the next plan plays)\n"
-        "+ / -    shorter / longer time window\n"
+        "+ / -    shorter / longer time window (on the last plan: around its middle,\n"
+        "         - back out to the whole plan)\n"
         "What the safety gate handed the driver, per channel, in volts at the actuators."
     )
     BINDINGS = [
@@ -84,6 +85,7 @@ class ScopePane(Vertical):
         self.plan_view = False  # frozen on the last plan's span
         self.plan_key = None  # the key of the KernelPlan frozen on (``p``)
         self.plan_done = False  # it had ended when the ring was frozen
+        self.plan_window_ms: int | None = None  # on the last plan: None = all of it
         self.last = None  # the last plan the gate passed (``KernelPlan``), as last read
         self.shown = None  # the ScopeTrace drawn now
         self._timer = None  # the live view's, while the screen shows
@@ -133,13 +135,33 @@ class ScopePane(Vertical):
         self.plan_view = self.frozen is not None
         self.plan_key = None if self.last is None else self.last.key
         self.plan_done = self.last is not None and self.last.done
+        self.plan_window_ms = None
         self._redraw()
 
     def action_zoom(self, step: int) -> None:
-        i = min(range(len(WINDOWS_MS)), key=lambda k: abs(WINDOWS_MS[k] - self.window_ms))
-        self.window_ms = WINDOWS_MS[min(max(i + step, 0), len(WINDOWS_MS) - 1)]
-        self.plan_view = False
+        """``+`` (-1) / ``-`` (1): a shorter / longer window; on the last plan, a window
+        around its middle, ``-`` back out to the whole plan."""
+        if self.plan_view:
+            self._zoom_plan(step)
+        else:
+            i = min(range(len(WINDOWS_MS)), key=lambda k: abs(WINDOWS_MS[k] - self.window_ms))
+            self.window_ms = WINDOWS_MS[min(max(i + step, 0), len(WINDOWS_MS) - 1)]
         self._redraw()
+
+    def _zoom_plan(self, step: int) -> None:
+        """The next window in ``WINDOWS_MS`` shorter than the plan's view (``step`` -1)
+        or longer (1; none shorter than the whole plan: the whole plan again)."""
+        trace, _mode = self._view(whole=True)
+        if trace is None:
+            return
+        whole_ms = trace.n * 1e3 / trace.sample_rate_hz
+        now = self.plan_window_ms or whole_ms
+        if step < 0:
+            shorter = [w for w in WINDOWS_MS if w < now]
+            self.plan_window_ms = shorter[-1] if shorter else self.plan_window_ms
+        else:
+            longer = [w for w in WINDOWS_MS if now < w < whole_ms]
+            self.plan_window_ms = longer[0] if longer else None
 
     # ------------------------------------------------------------------ drawing
     def tick(self) -> None:
@@ -150,14 +172,32 @@ class ScopePane(Vertical):
         self.last = session.last_plan()
         if self.plan_view and self.last is not None and self.last.key != self.plan_key:
             self.frozen, self.plan_view, self.plan_key = None, False, None  # another plan
+            self.plan_window_ms = None
         if self.plan_view and self.last is not None and self.last.done and not self.plan_done:
             self.frozen, self.plan_done = session.scope(None), True  # it ended: its end too
         # live: what the gate passed; frozen: the plan line (its state, as it changes);
         # the last plan: its copy, kept when it ended
         self._redraw(only_changed=True)
 
-    def _view(self):
-        """What to draw: the live window, the frozen window or the last plan's span."""
+    def _view(self, whole: bool = False):
+        """What to draw: the live window, the frozen window or the last plan's span
+        (``plan_window_ms`` of it around its middle, unless ``whole``)."""
+        trace, mode = self._whole_view()
+        if whole or trace is None or not mode.startswith("frozen on") or not self.plan_window_ms:
+            return trace, mode
+        half = int(self.plan_window_ms * trace.sample_rate_hz / 2e3)
+        middle = self._plan_middle(trace)
+        return trace.span(middle - half, middle + half), mode
+
+    def _plan_middle(self, trace) -> int:
+        """The gate clock in the middle of the last plan's segments (or of ``trace``)."""
+        last = self.last
+        if last is not None and last.segment_start and last.segment_end:
+            return (last.segment_start[0] + last.segment_end[-1]) // 2
+        return trace.clock + trace.n // 2
+
+    def _whole_view(self):
+        """The live window, the frozen window or the last plan's whole span."""
         session = self.app.session
         last = self.last
         if self.frozen is None:
@@ -207,8 +247,15 @@ class ScopePane(Vertical):
             return f"outputs not here: {self.app.session.outputs_error or 'not open yet'}; {plan}"
         span_ms = trace.n * 1e3 / trace.sample_rate_hz
         space = "space runs live" if self.frozen is not None else "space freezes"
+        window = f"window {self.window_ms} ms"
+        if mode.startswith("frozen on"):
+            window = (
+                f"window {self.plan_window_ms} ms around its middle"
+                if self.plan_window_ms
+                else "the whole plan"
+            )
         return (
-            f"{mode.upper()} | {span_ms:.0f} ms shown (window {self.window_ms} ms; {space}, "
+            f"{mode.upper()} | {span_ms:.0f} ms shown ({window}; {space}, "
             f"p last plan, +/- zoom) | {plan}"
         )
 

@@ -5,7 +5,6 @@ that plays marked, the lookup-table entry, UFF import and a simulated measuremen
 
 from __future__ import annotations
 
-import shlex
 import threading
 
 from textual import work
@@ -23,18 +22,19 @@ from console.session.vibration import Cancelled
 from console.tui.charts import Chart
 from console.tui.command_line import CommandLine
 from console.tui.long_work import stop_check
+from console.tui.panes.vibration_commands import run_command
 from console.tui.panes.vibration_projector import light_audition, prepare_projector
 from console.tui.panes.vibration_words import (
     COMMANDS,
     HELP,
-    KEY_DIRECTIONS,
+    HELP_KEYS,
     MEASURE_ESTOPPED,
+    NOTHING_TO_CANCEL,
     Ask,
     describe_plan,
     estop_line,
     estop_reason,
     info_text,
-    point_word,
 )
 from console.tui.plots import frf_series
 from console.tui.said import said_here
@@ -44,7 +44,7 @@ from console.tui.util import from_thread
 
 
 class VibrationPane(VerticalScroll):
-    HELP_TEXT = HELP
+    HELP_TEXT = HELP_KEYS
     # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
     can_focus = False
     BINDINGS = [
@@ -386,14 +386,17 @@ class VibrationPane(VerticalScroll):
             self.status("measurement stopped by the e-stop; map unchanged; m measures again")
 
     def action_cancel(self) -> None:
-        long_work = 0
+        """``x``: stop what runs (a table build says so itself); nothing: said so."""
+        stopped = []
         for w in self.app.workers:
             stop = self._stops.get(w.group or "")
             if stop is not None and w.is_running and not stop.is_set():
                 stop.set()
-                long_work += w.group != "vib-tables"  # a table build says so itself
-        if long_work:
+                stopped.append(w.group)
+        if any(g != "vib-tables" for g in stopped):
             self.status("cancelling ...")
+        elif not stopped:
+            self.status(NOTHING_TO_CANCEL)
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _import(self, specs: list[str], stop: threading.Event, command: str) -> None:
@@ -634,40 +637,9 @@ class VibrationPane(VerticalScroll):
         self.focus_target.focus()
 
     def run_command(self, text: str) -> bool:
-        """``51`` | ``51 52`` | ``hand 51 right`` | ``measure`` | ``import ...`` | ``load F``;
-        True when its work runs on (it says how it ended)."""
-        words = shlex.split(text)
-        if not words:
-            return False
-        head = words[0].lower()
-        if head == "measure":
-            self.action_measure(text)
-            return True
-        elif head == "import":
-            if len(words) < 2:
-                raise UserError("import: give EXC=FILE per excitation, e.g. import PA=pa.uff")
-            self._import(words[1:], self._new_stop("vib-long"), text)
-            return True
-        elif head == "load":
-            if len(words) != 2:
-                raise UserError("load: give one vibration map file (.npz)")
-            self._load(words[1], self._new_stop("vib-long"), text)
-            return True
-        elif head == "cancel":
-            self.action_cancel()
-        elif head == "tables":
-            self.action_build_tables()
-        elif head == "hand":
-            if len(words) != 3 or words[2] not in KEY_DIRECTIONS.values():
-                raise UserError("hand: write hand POINT left|right|up|down, e.g. hand 51 right")
-            self.action_hand(words[2], point_word(words[1]))
-        elif len(words) == 1:
-            self.audition(point_word(words[0]))
-        elif len(words) == 2:
-            self.flow(point_word(words[0]), point_word(words[1]))
-        else:
-            raise UserError(f"{text!r}: not a command; {COMMANDS}")
-        return False
+        """A command typed on the line (``vibration_commands``); True when its work runs
+        on (it says how it ended)."""
+        return run_command(self, text)
 
     # ------------------------------------------------------------------ info + plot
     def _show_selection(self) -> None:

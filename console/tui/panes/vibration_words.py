@@ -19,6 +19,17 @@ HELP = (
     "m: measure   b: build the lookup tables   x: cancel   : command line\n"
     f"{COMMANDS}"
 )
+#: the ``?`` help: every key of the screen, the side panel named as such
+HELP_KEYS = (
+    "arrows: move the cursor on the grid   enter: audition the point under it\n"
+    "f / r: flow between the last two points, either way (the side panel names them)\n"
+    "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
+    "m: measure   b: build the lookup tables   x: cancel what runs\n"
+    ": opens the command line; on it ctrl+u clears it, escape gives the keys back to "
+    "the grid\n"
+    f"commands: {COMMANDS}"
+)
+NOTHING_TO_CANCEL = "x: nothing to cancel (no measurement, import, load or table build runs)"
 MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 
