@@ -216,7 +216,8 @@ class SimulatedCamera(RendersBackground, Protocol):
     """A camera that renders on request (the camera twin).
 
     ``set_script(GestureScript)`` shows a scripted hand on the live stream from the next
-    frame on; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
+    frame on (``None``: back to the camera's own script, the profile's); ``place(gesture,
+    center_mm)`` holds a static gesture still with its palm centre at ``center_mm``; ``render_sample(gesture, subject, rep, rng, *, n_frames=None, t0_s=None,
     side=None, subject_seed=None, subject_change=None) -> (frames (n, H, W) uint8, truth
     dict)`` renders one performance offline (dataset synthesis; ``subject_change`` a
     function of the simulated subject, for randomised sets); ``render_background(t_s, rng)`` the empty
@@ -227,7 +228,9 @@ class SimulatedCamera(RendersBackground, Protocol):
     @property
     def mapping(self) -> Any: ...
 
-    def set_script(self, script: GestureScript) -> None: ...
+    def set_script(self, script: GestureScript | None) -> None: ...
+
+    def place(self, gesture: str, center_mm: PosMm) -> None: ...
 
     def render_sample(
         self, gesture: str, subject: str, rep: int, rng: np.random.Generator, **kw: Any

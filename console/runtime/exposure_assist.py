@@ -18,6 +18,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from console.core.contracts import SimulatedCamera
+
 #: touching skin's 99th percentile at most this (grey levels): a margin below 255
 TARGET_P99 = 240.0
 #: the vision's light scale (touch level over its ``contact_level``) stays above this:
@@ -285,7 +287,7 @@ def assist_service(
         driver=driver,
         cancelled=cancel.is_set,
         progress=progress,
-        no_hand=NO_HAND_TWIN if hasattr(cam, "place") else NO_HAND,
+        no_hand=NO_HAND_TWIN if isinstance(cam, SimulatedCamera) else NO_HAND,
     )
 
 

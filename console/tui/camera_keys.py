@@ -7,6 +7,8 @@ from typing import Any
 
 from textual.binding import Binding
 
+from console.core.contracts import SimulatedCamera
+
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
 KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
 
@@ -79,23 +81,24 @@ def key_shown(action: str, shown: tuple, calibrating: bool, assisting: bool) -> 
     return True
 
 
-#: camera -> the script its hand followed before ``P`` held a flat hand still
-_HELD: dict[int, Any] = {}
+#: cameras whose hand ``P`` holds still (``P`` again lets it go)
+_HELD: set[int] = set()
 
 
 def hold_hand(svc: Any) -> tuple[str, str]:
     """``P``: the twin holds a flat hand still at the glass's centre (for ``e``), or
     goes back to what its hand did before; (the status line, its severity)."""
-    cam = getattr(svc, "camera", None)
-    if cam is None or not hasattr(cam, "place"):
+    cam = svc.camera
+    if not isinstance(cam, SimulatedCamera):
         return "P: only the twin holds a hand on the glass: put your own flat hand on it", "warning"
     if id(cam) in _HELD:
-        cam.set_script(_HELD.pop(id(cam)))
+        _HELD.discard(id(cam))
+        cam.set_script(None)
         return (
             "P: the twin's hand goes back to its gestures in turn (P holds it again)",
             "information",
         )
-    _HELD[id(cam)] = getattr(getattr(cam, "twin", cam), "script", None)
+    _HELD.add(id(cam))
     w, h = cam.mapping.table_mm
     cam.place("open_hand", (w / 2, h / 2))
     return (

@@ -16,6 +16,8 @@ from __future__ import annotations
 import logging
 from typing import Any, Protocol, runtime_checkable
 
+from textual.dom import DOMNode
+
 __all__ = ["LOGGER", "ShowsWidgets", "log_said", "screen_name", "shows_now", "said_here"]
 
 LOGGER = "haptable.console"
@@ -32,11 +34,11 @@ def log_said(where: str, text: str, severity: str = "error") -> None:
     _log.log(level, "%s: %s", where, " ".join(str(text).split()), extra={"on_screen": True})
 
 
-def screen_name(widget: Any, default: str) -> str:
+def screen_name(widget: DOMNode, default: str) -> str:
     """The name of the screen or panel ``widget`` is on, as the log names it (its
     nearest ``...Pane`` or ``...Panel``: ``GesturesPanel`` is ``Gestures``), else
     ``default``."""
-    for node in getattr(widget, "ancestors_with_self", [widget]):
+    for node in widget.ancestors_with_self:
         cls = type(node).__name__
         for tail in ("Panel", "Pane"):
             if cls.endswith(tail) and len(cls) > len(tail):

@@ -256,6 +256,7 @@ class TwinCamera:
         self.fps = float(fps)
         self.realtime = realtime
         self.script: Script = script or IdleScript()
+        self._own_script = self.script  # what set_script(None) goes back to
         self.noise = noise
         self.subject_seed = subject_seed
         self.touch_error_mm, self.touch_bias_mm = touch_error_mm, touch_bias_mm
@@ -340,10 +341,13 @@ class TwinCamera:
         return self.rate_fps == 0.0
 
     # ------------------------------------------------------------------ scripting
-    def set_script(self, script: Script | GestureScript) -> None:
+    def set_script(self, script: Script | GestureScript | None) -> None:
         """Show ``script`` from the next frame on: a ``console.core.types.GestureScript``
-        (how other plugins script the twin) or one of this module's scripts."""
-        if isinstance(script, GestureScript):
+        (how other plugins script the twin) or one of this module's scripts; ``None``:
+        the script the camera was made with (the profile's) again."""
+        if script is None:
+            script = self._own_script
+        elif isinstance(script, GestureScript):
             script = self.sequence(script)
         with self._lock:
             self.script = script
