@@ -83,6 +83,18 @@ def _private_runtime(tmp_path_factory, monkeypatch):
 
 
 @pytest.fixture
+def one_model_setting(monkeypatch):
+    """Gesture training with one candidate setting (4 harmonics, 4 frames, one SVC
+    point): for tests of where a model goes and what the screen says, not of the model
+    selection (tests/gestures test that): the training takes seconds, not half a minute."""
+    from plugins.gestures import model, selection
+
+    monkeypatch.setattr(selection, "HARMONICS_CANDIDATES", (4,))
+    monkeypatch.setattr(selection, "FRAMES_CANDIDATES", (4,))
+    monkeypatch.setattr(model, "SVC_GRID", {"svc__C": [10.0], "svc__gamma": ["scale"]})
+
+
+@pytest.fixture
 def plugins():
     from console.config.plugins import load_plugins
 

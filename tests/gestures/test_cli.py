@@ -64,7 +64,7 @@ def run_json(capsys, *argv):
     return code, (json.loads(out.out) if code == 0 else out.err)
 
 
-def test_eval_two_fold_and_loso(dataset, cache, capsys):
+def test_eval_two_fold_and_loso(dataset, cache, capsys, one_model_setting):
     code, rep = run_json(capsys, "gestures", "eval", str(dataset), "--cv", "2fold", "--json")
     assert code == 0
     for key in ("static_accuracy", "dynamic_accuracy", "per_class_recall", "confusion"):
@@ -108,7 +108,7 @@ def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
     assert SvmClassifier(None).classify(results, frames[-1].t_capture_s) is None
 
 
-def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path):
+def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path, one_model_setting):
     import shutil
 
     bad = tmp_path / "bad"
@@ -122,7 +122,9 @@ def test_malformed_sample_json_is_a_one_line_error(dataset, capsys, tmp_path):
 
 
 @pytest.mark.slow
-def test_dataset_without_any_background_still_evaluates(dataset, capsys, tmp_path):
+def test_dataset_without_any_background_still_evaluates(
+    dataset, capsys, tmp_path, one_model_setting
+):
     """Someone else's recordings may have no background.png: the median of the samples'
     first frames stands in for the empty table."""
     import shutil
@@ -168,7 +170,9 @@ def _subset(src, dst, subject):
     return dst
 
 
-def test_a_model_trained_on_one_set_is_evaluated_on_another(dataset, capsys, tmp_path):
+def test_a_model_trained_on_one_set_is_evaluated_on_another(
+    dataset, capsys, tmp_path, one_model_setting
+):
     one = _subset(dataset, tmp_path / "one", "s1")
     two = _subset(dataset, tmp_path / "two", "s2")
     model = tmp_path / "m.skops"

@@ -46,18 +46,6 @@ def _quick_key_presses(monkeypatch):
     monkeypatch.setattr(textual.app.App, "_press_keys", press_each_key)
 
 
-@pytest.fixture
-def one_model_setting(monkeypatch):
-    """Gesture training with one candidate setting (4 harmonics, 4 frames, one SVC
-    point): for tests of where a model goes and what the screen says, not of the model
-    selection (tests/gestures test that): the training takes seconds, not half a minute."""
-    from plugins.gestures import model, selection
-
-    monkeypatch.setattr(selection, "HARMONICS_CANDIDATES", (4,))
-    monkeypatch.setattr(selection, "FRAMES_CANDIDATES", (4,))
-    monkeypatch.setattr(model, "SVC_GRID", {"svc__C": [10.0], "svc__gamma": ["scale"]})
-
-
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
     """An analytic (simply supported plate) vibration map of the sim grid, as a file."""
