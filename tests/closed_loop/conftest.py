@@ -61,11 +61,16 @@ def loop_tables(measured_map, loop_effects):
 
 @pytest.fixture(scope="session")
 def loop_outputs(loop_profile, loop_plugins):
-    from console.kernel.client import open_outputs
+    """Opens the sim outputs (fast-forward) for the time of a ``with`` block: each row set
+    plays on outputs of its own, closed after, rather than a kernel kept idle for the
+    rest of the session."""
 
-    out = open_outputs(loop_profile, loop_plugins, fast=True)
-    yield out
-    out.close()
+    def opened():
+        from console.kernel.client import open_outputs
+
+        return open_outputs(loop_profile, loop_plugins, fast=True)
+
+    return opened
 
 
 @pytest.fixture(scope="session")
@@ -73,9 +78,10 @@ def pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
     from plugins.twin.plate.loop_check import flow_pairs_check
     from plugins.twin.plate.loop_report import format_pairs
 
-    rows = flow_pairs_check(
-        loop_outputs, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=0
-    )
+    with loop_outputs() as out:
+        rows = flow_pairs_check(
+            out, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=0
+        )
     print("\nclosed loop, flows between points (um; tone amplitude at the part's frequency):")
     print(format_pairs(rows))
     return rows
@@ -86,15 +92,16 @@ def region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     from plugins.twin.plate.loop_check import hand_regions_check
     from plugins.twin.plate.loop_report import format_regions
 
-    rows = hand_regions_check(
-        loop_outputs,
-        loop_profile,
-        measured_map,
-        REGIONS,
-        DIRECTIONS,
-        plugins=loop_plugins,
-        ringdown_gap_k=0,
-    )
+    with loop_outputs() as out:
+        rows = hand_regions_check(
+            out,
+            loop_profile,
+            measured_map,
+            REGIONS,
+            DIRECTIONS,
+            plugins=loop_plugins,
+            ringdown_gap_k=0,
+        )
     print("\nclosed loop, flows under a hand (square levels, um; X = 3 JND above threshold):")
     print(format_regions(rows))
     return rows
@@ -106,15 +113,16 @@ def option_pair_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     from plugins.twin.plate.loop_check import flow_pairs_check
     from plugins.twin.plate.loop_report import format_pairs
 
-    rows = flow_pairs_check(
-        loop_outputs,
-        loop_profile,
-        measured_map,
-        PAIRS,
-        plugins=loop_plugins,
-        min_contrast_db=10.0,
-        ringdown_gap_k=3.0,
-    )
+    with loop_outputs() as out:
+        rows = flow_pairs_check(
+            out,
+            loop_profile,
+            measured_map,
+            PAIRS,
+            plugins=loop_plugins,
+            min_contrast_db=10.0,
+            ringdown_gap_k=3.0,
+        )
     print("\nclosed loop, the same flows with min_contrast_db 10 and ringdown_gap_k 3:")
     print(format_pairs(rows))
     return rows
@@ -125,9 +133,10 @@ def gap_pair_rows(loop_outputs, loop_profile, loop_tables, loop_plugins):
     """The paper's tables with only the ring-down gap (3 decay times)."""
     from plugins.twin.plate.loop_check import flow_pairs_check
 
-    return flow_pairs_check(
-        loop_outputs, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=3.0
-    )
+    with loop_outputs() as out:
+        return flow_pairs_check(
+            out, loop_profile, loop_tables, PAIRS, plugins=loop_plugins, ringdown_gap_k=3.0
+        )
 
 
 @pytest.fixture(scope="session")
@@ -136,15 +145,16 @@ def gap_region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     from plugins.twin.plate.loop_check import hand_regions_check
     from plugins.twin.plate.loop_report import format_regions
 
-    rows = hand_regions_check(
-        loop_outputs,
-        loop_profile,
-        measured_map,
-        REGIONS,
-        DIRECTIONS,
-        plugins=loop_plugins,
-        ringdown_gap_k=3.0,
-    )
+    with loop_outputs() as out:
+        rows = hand_regions_check(
+            out,
+            loop_profile,
+            measured_map,
+            REGIONS,
+            DIRECTIONS,
+            plugins=loop_plugins,
+            ringdown_gap_k=3.0,
+        )
     print("\nclosed loop, flows under a hand with ringdown_gap_k 3:")
     print(format_regions(rows))
     return rows

@@ -171,12 +171,12 @@ def test_the_recording_route_equals_the_plan_route(
     st = flow.setup.settings
     plan = flow.render(from_point=62, to_point=75, tables=loop_tables, ringdown_gap_k=0)
     assert len(plan.segments[0].piezo_v) == int(round(0.6 * st.sample_rate_hz))
-    report = loop_outputs.play(plan)
-    rec, clock0 = recording_with_offset(loop_outputs)
+    with loop_outputs() as out:
+        report = out.play(plan)
+        rec, clock0 = recording_with_offset(out)
+        log = out.relay_log()
     start, stop = report.segment_start[0], report.segment_end[-1]
-    v, w = cl.drive_from_recording(
-        rec, loop_outputs.relay_log(), relay_channels_of(loop_profile), start, stop, clock0
-    )
+    v, w = cl.drive_from_recording(rec, log, relay_channels_of(loop_profile), start, stop, clock0)
     parts_rec = [
         (s - start, e - start)
         for s, e in zip(report.segment_start, report.segment_end, strict=True)

@@ -17,14 +17,15 @@ PLAYED = ((51, 52),)
 def rules(loop_outputs, loop_profile, measured_map, loop_plugins):
     from plugins.twin.plate.rule_check import compare_rules, format_rules
 
-    res = compare_rules(
-        loop_outputs,
-        loop_profile,
-        measured_map,
-        plugins=loop_plugins,
-        played_pairs=PLAYED,
-        regions=REGIONS,
-    )
+    with loop_outputs() as out:
+        res = compare_rules(
+            out,
+            loop_profile,
+            measured_map,
+            plugins=loop_plugins,
+            played_pairs=PLAYED,
+            regions=REGIONS,
+        )
     print("\n" + format_rules(res))
     return res
 

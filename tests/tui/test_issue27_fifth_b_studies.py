@@ -54,13 +54,16 @@ def test_trials_follow_replay_paused_and_notes_toggle(plugins, map_file, tmp_pat
             notes = pane.query_one("#analysis-notes")
             await wait_for(pilot, lambda: pane.notes and notes.render(), 60, "analysis notes")
             assert pane.query_one("#study-anova", DataTable).row_count == 0  # one run
-            before = text_in(app, pane.query_one("#analysis-notes-box"))
+
+            def box() -> str:
+                return text_in(app, pane.query_one("#analysis-notes-box"))
+
+            # with no ANOVA table the notes show whole in its place (drawn after the title)
+            await wait_for(pilot, lambda: "no ANOVA table" in box(), 30, "the notes drawn")
+            before = box()
             await pilot.press("o")
-            await pilot.pause(0.2)
-            after = text_in(app, pane.query_one("#analysis-notes-box"))
-            assert after != before, after
+            await wait_for(pilot, lambda: box() != before, 30, "o: one line")
             await pilot.press("o")
-            await pilot.pause(0.2)
-            assert text_in(app, pane.query_one("#analysis-notes-box")) == before
+            await wait_for(pilot, lambda: box() == before, 30, "o: all of them again")
 
     asyncio.run(scenario())
