@@ -303,7 +303,11 @@ def test_estop_is_idempotent_and_blocks_until_reset(outputs):
 
 
 SCRIPT = textwrap.dedent("""
-    import sys, time
+    import faulthandler, signal, sys, time
+    faulthandler.register(signal.SIGUSR2, all_threads=True)  # where it hangs, if it does
+    # Ctrl-C as in a user's shell: an ignored SIGINT is inherited across exec, and a test
+    # before this one in the worker may have left it ignored
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import numpy as np
     from console.config.plugins import load_plugins
     from console.config.profile import load_profile
@@ -351,6 +355,7 @@ def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
     mode = how if how in ("raise", "exit") else "wait"
     with open_outputs(profile, plugins) as watch:
         assert not watch.table.private  # the script's table: the profile's own
+        inherited = signal.getsignal(signal.SIGINT)
         proc = subprocess.Popen(
             [sys.executable, str(script), str(log), mode],
             env={**os.environ, "HAPTABLE_LOAD_ENTRYPOINTS": "0"},
@@ -369,7 +374,16 @@ def test_a_client_ending_by_signal_exception_or_exit_leaves_the_table_safe(
             (tmp_path / "log.txt.go").touch()
             if how.startswith("SIG"):
                 proc.send_signal(getattr(signal, how))
-            proc.wait(timeout=30)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.send_signal(signal.SIGUSR2)  # its threads' stacks on stderr
+                time.sleep(1.0)
+                proc.kill()
+                err = proc.communicate()[1].decode(errors="replace")
+                pytest.fail(
+                    f"{how}: still running after 30 s (worker SIGINT {inherited!r}):\n{err}"
+                )
         finally:
             if proc.poll() is None:
                 proc.kill()
