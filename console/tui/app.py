@@ -35,6 +35,7 @@ from console.tui.logs import (
 )
 from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
+from console.tui.palette import SafetyPalette
 from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import log_said
@@ -579,6 +580,11 @@ class HapTableApp(App):
             return
         handler = view_handler()
         self.push_screen(LogScreen(list(handler.lines) if handler is not None else []))
+
+    def action_command_palette(self) -> None:
+        """ctrl+p: the command palette, with the safety bar in view (``SafetyPalette``)."""
+        if self.use_command_palette and not CommandPalette.is_open(self):
+            self.push_screen(SafetyPalette(id="--command-palette"))
 
     def get_system_commands(self, screen):
         yield from super().get_system_commands(screen)

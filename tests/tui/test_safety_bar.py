@@ -107,3 +107,22 @@ def test_a_level_that_shows_as_zero_has_no_sign():
     for width in (None, 80, 40):
         text, _ = describe(_status(level=(-1e-9, -0.0)), width)
         assert "-0" not in text, text
+
+
+def test_the_command_palette_leaves_the_bar_in_view_at_80x24(plugins):
+    """ctrl+p covers the screen with its list: the bar's row still shows the output
+    state, and follows an e-stop from another process while the palette is open."""
+    from .test_camera_layout import screen_lines
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            await pilot.press("ctrl+p")
+            await wait_for(pilot, lambda: len(app.screen_stack) > 1, what="the palette")
+            await pilot.pause(0.5)  # the list of every command, down the screen
+            await wait_for(pilot, lambda: "E-STOP" in screen_lines(app)[-2], what="bar row")
+            app.session.outputs.estop("test: another process")
+            await wait_for(pilot, lambda: "ctrl+r" in screen_lines(app)[-2], what="e-stop shown")
+
+    asyncio.run(scenario())
