@@ -42,10 +42,20 @@ def output_devices(profile: Any, plugins: Any) -> list[DriverDevices]:
     return found
 
 
-def relay_boards(profile: Any, plugins: Any) -> list[tuple[str, str, DeviceStatus]]:
-    """(driver, description, what its probe finds) for every registered relay board."""
+def relay_boards(
+    profile: Any, plugins: Any, held: dict[str, Any] | None = None
+) -> list[tuple[str, str, DeviceStatus]]:
+    """(driver, description, what its probe finds) for every registered relay board.
+
+    ``held``: the relay board the table's outputs process has open (its status: ``driver``,
+    ``serial``, ``url``, ``state``), shown as that process sees it instead of probed: a
+    board holds one owner (a Yoctopuce hub, a HID device), so a probe from here would
+    find it "busy" or fight the owner for it, and two consoles would disagree."""
     rows = []
     for name, reg in sorted(plugins.of("relay_board").items()):
+        if held and held.get("driver") == name:
+            rows.append((name, reg.description, _held_status(name, held)))
+            continue
         if reg.probe is None:
             status = DeviceStatus("relay_board", name, "missing", "no probe registered")
         else:
@@ -55,3 +65,13 @@ def relay_boards(profile: Any, plugins: Any) -> list[tuple[str, str, DeviceStatu
                 status = DeviceStatus("relay_board", name, "error", f"probe failed: {exc}")
         rows.append((name, reg.description, status))
     return rows
+
+
+def _held_status(name: str, held: dict[str, Any]) -> DeviceStatus:
+    """The row of the board the table's outputs process holds, from its status."""
+    what = " ".join(str(held[k]) for k in ("serial", "url") if held.get(k))
+    where = f"open in the table's outputs process{' (' + what + ')' if what else ''}"
+    if held.get("error"):
+        return DeviceStatus("relay_board", name, "error", f"{where}: {held['error']}")
+    state = "simulated" if name == "twin" else "ok"
+    return DeviceStatus("relay_board", name, state, where)

@@ -363,3 +363,20 @@ def test_the_api_starts_once_while_the_console_probes_and_opens_the_board(stub_p
     assert again.state == "ok" and fake.registered == ["usb"] and fake.freed == 0
     board.close()
     assert fake.freed == 1 and relay_yocto._users == 0  # the USB for other processes
+
+
+def test_the_board_the_outputs_process_holds_is_shown_not_probed(plugins, profile):
+    """A second console on the table lists the Yoctopuce board as its outputs process has
+    it open (serial, hub), the same as the first console does, instead of probing it and
+    finding the hub "busy" (fifth new-user try, finding 11)."""
+    from console.runtime.devices import relay_boards
+
+    probed = {n: s.state for n, _d, s in relay_boards(profile, plugins)}
+    assert probed["yoctopuce"] != "ok"  # no board on this machine: a probe cannot find one
+    held = {"driver": "yoctopuce", "serial": "MXCOUPL1-1A2B3", "url": "usb", "error": ""}
+    rows = {name: status for name, _d, status in relay_boards(profile, plugins, held=held)}
+    assert rows["yoctopuce"].state == "ok"
+    assert "outputs process" in rows["yoctopuce"].why and "MXCOUPL1-1A2B3" in rows["yoctopuce"].why
+    assert rows["twin"].state == "simulated"  # the others are probed as before
+    failed = relay_boards(profile, plugins, held={**held, "error": "hub lost (USB unplugged)"})
+    assert [s.state for n, _d, s in failed if n == "yoctopuce"] == ["error"]

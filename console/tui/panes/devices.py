@@ -292,7 +292,8 @@ class DevicesPane(VerticalScroll):
         if said:
             self._say("listing the sound cards and relay boards ...")
         audio = output_devices(prof, pm)
-        relays = relay_boards(prof, pm)
+        status, _log = app.live.now  # the board the outputs process holds is not probed
+        relays = relay_boards(prof, pm, held=(status or {}).get("relays"))
         from_thread(app, self._show_devices, audio, relays, said)
 
     def _audio_row(self, d, dev, drv: str, device: str) -> tuple[str, list, tuple[str, str]]:
