@@ -23,8 +23,8 @@ def _result(app) -> str:
 
 
 def _hid_missing(real):
-    def boards(profile, plugins):
-        rows = real(profile, plugins)
+    def boards(profile, plugins, held=None):
+        rows = real(profile, plugins, held)
         return [
             (n, d, DeviceStatus("relay_board", n, "missing", "no board", "plug it in"))
             if n == "hid"

@@ -18,8 +18,8 @@ from .conftest import wait_for, words_on
 
 
 def _hid_broken(real):
-    def boards(profile, plugins):
-        rows = real(profile, plugins)
+    def boards(profile, plugins, held=None):
+        rows = real(profile, plugins, held)
         bad = DeviceStatus("relay_board", "hid", "error", "permission denied", "add a udev rule")
         return [(n, d, bad) if n == "hid" else (n, d, s) for n, d, s in rows]
 
