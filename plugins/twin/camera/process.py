@@ -18,6 +18,7 @@ closes: ``close()``, or the parent's end however it comes (no orphan is left).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import select
@@ -36,6 +37,10 @@ from console.plugin_api import Frame, GestureScript, UserError
 SLOTS = 8
 #: One announcement: slot, frame seq, capture time (monotonic s), frames the renderer lost.
 MSG = struct.Struct("<iqdq")
+#: The renderer's nice value when it paces itself in real time: above the console, the
+#: projector and the tests (nice 0) but not real-time, so a busy machine cannot be starved
+#: by it; the frame loop and the outputs kernel stay above it (FIFO).
+RENDER_NICE = -5
 #: One command's length (a pickled ``(method name, args)`` follows).
 CMD = struct.Struct("<I")
 #: The commands the child applies to its twin (its methods of those names).
@@ -71,6 +76,9 @@ def _child() -> None:
         buf += chunk
         pending = _commands(buf)
     cam = pickle.loads(pending.pop(0))
+    if cam.realtime:  # it stands for a camera, whose frames do not wait for the CPU
+        with contextlib.suppress(OSError):  # (where raising the priority is allowed)
+            os.setpriority(os.PRIO_PROCESS, 0, RENDER_NICE)
     shm = shared_memory.SharedMemory(name=shm_name)
     resource_tracker.unregister(shm._name, "shared_memory")  # the parent owns it
     slots = None
