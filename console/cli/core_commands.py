@@ -88,6 +88,19 @@ def haptable_register_benchmarks(register):
         "renderers' error against analytic references (frequency, chirp, ADSR levels)",
     )
 
+    def haptic_files(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
+        from console.benchmarks.haptic_files import run
+
+        return run(ctx, quick)
+
+    register(
+        "haptic-files",
+        haptic_files,
+        help="AHAP and .haptic import/export time, the imported envelope against the "
+        "file's breakpoints and the export -> import round trip (fraction of full scale)",
+    )
+
     register(
         "console-demo",
         console_demo,

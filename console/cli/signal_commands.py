@@ -5,6 +5,8 @@ haptable signals show NAME|'EXPR'
 haptable signals play NAME|'EXPR' --patch PA[,PC] | --screen [--dry-run] [--fast]
 haptable signals add NAME 'EXPR' [--description TEXT] [--replace]
 haptable signals rm NAME
+haptable signals import FILE.ahap|FILE.haptic [--name N] [--level 40 V]
+haptable signals export NAME --format ahap|haptic -o FILE
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import json
 import sys
 from pathlib import Path
 
+from console.cli import haptic_commands
 from console.cli.commands import play_and_report
 from console.config.profile import _printable
 from console.config.signal_library import (
@@ -55,6 +58,7 @@ def configure(p: argparse.ArgumentParser) -> None:
     add.add_argument("--replace", action="store_true", help="replace a signal of that name")
     rm = sub.add_parser("rm", help="remove a saved signal")
     rm.add_argument("name")
+    haptic_commands.configure(sub)
 
 
 def _list(path: Path, as_json: bool) -> int:
@@ -105,7 +109,11 @@ def run(args, ctx) -> int:
         remove_signal(path, args.name)
         print(f"removed {_printable(args.name)} from {path}")
         return 0
+    if action == "import":
+        return haptic_commands.run_import(args, ctx, path)
     name, expr = _resolve(ctx, args.signal)
+    if action == "export":
+        return haptic_commands.run_export(args, ctx, name, expr)
     if action == "show":
         fs = int(ctx.profile.get("audio.sample_rate_hz"))
         x = render(parse(expr), fs, max_s=float(ctx.profile.get("limits.max_plan_s")), what=name)

@@ -9,6 +9,8 @@
   ``adsr(A, D, SUSTAIN, R[, DUR])``, ``ramp(T)`` (linear in and out, what the gate asks),
   ``linramp(FROM, TO[, DUR])``, ``expramp(FROM, TO[, DUR])``.
 - Filtering: ``lowpass(a, 4 kHz)`` (zero-phase Butterworth: smooths square/saw edges).
+- Breakpoints: ``env(T1, L1, ...)``, ``glide(AMP, T1, F1, ...)``, ``hann()``
+  (``console.signals.breakpoints``: what imported haptic files become).
 - Combining: ``a + b``, ``a - b`` (sum), ``a * b`` (product: an envelope shapes a signal),
   ``seq(a, b, ...)``, ``repeat(a, N)`` or ``a * N`` (N a whole number: N times over),
   ``a * 50 %`` or ``a * -6 dB`` (a gain), ``-a``.
@@ -27,6 +29,7 @@ import ast
 
 from console.core.errors import UserError
 from console.core.suggest import suggestion
+from console.signals import breakpoints
 from console.signals.design import (
     ADSR,
     Chirp,
@@ -249,6 +252,9 @@ def _call(node: ast.Call, depth: int):
         if len({p.volts for p in parts}) > 1:
             raise UserError(f"{part}: mixes volts and ratios; {_both_units}")
         return Seq(parts, 1, part)
+    if name in breakpoints.NAMES:
+        args = [_eval(a, depth + 1) for a in node.args]
+        return breakpoints.build(name, args, bool(node.keywords), part)
     if name not in SPEC:
         raise UserError(
             f"{part}: unknown function {name!r}{_guess(name)}; use {', '.join(FUNCTIONS)}"

@@ -75,7 +75,7 @@ SPEC: dict[str, tuple[tuple[str, str, object], ...]] = {
     "repeat": (("signal", "node", None), ("count", "int", None)),
     "lowpass": (("signal", "node", None), ("cutoff", "Hz", None)),
 }  # fmt: skip
-FUNCTIONS = (*SPEC, "seq")
+FUNCTIONS = (*SPEC, "seq", "env", "glide", "hann")  # the last three: signals.breakpoints
 
 
 def mark_units(text: str) -> str:
