@@ -90,6 +90,7 @@ class VisionStage:
         tracks = self.tracking.update(frame.t_capture_s, tuple(res.hands), tuple(res.contacts))
         hands: tuple[Hand, ...] = tracks.hands
         work["tracks"] = tracks
+        work["to_mm"] = self.clf.to_mm  # camera px -> table mm (or None): TUIO 2.0 outlines
         work["hands"] = hands
         work["hand"] = hands[0] if hands else None
         work["contacts"] = tracks.contacts

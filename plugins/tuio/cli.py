@@ -1,4 +1,5 @@
-"""``haptable tuio``: the camera and vision alone, streaming TUIO 1.1 until Ctrl-C."""
+"""``haptable tuio``: the camera and vision alone, streaming TUIO (``[tuio] version``)
+until Ctrl-C."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from console.plugin_api import UserError, host_name, runtime, seconds
 from console.plugin_api import port as udp_port
 
 from .sender import GESTURE_ADDRESS
+from .sender2 import Tuio2Sender
 from .sink import make_sender
+from .websocket import WebSocketServer
 
 
 def configure(p: argparse.ArgumentParser) -> None:
@@ -33,11 +36,13 @@ def run(args, ctx) -> int:
     sender = make_sender(ctx.profile, host=args.host, port=args.port, force=True)
     camera = runtime.open_camera(ctx.profile, ctx.pm)
     loop = runtime.vision_loop(ctx.profile, ctx.pm, camera, sinks=[sender]).start()
-    print(
-        f"TUIO 1.1 to {sender.host}:{sender.port} (/tuio/2Dcur, /tuio/2Dblb, {GESTURE_ADDRESS}); "
-        "Ctrl-C stops",
-        flush=True,
+    what = (
+        "TUIO 2.0 (/tuio2/ptr, /tuio2/bnd, /tuio2/ocg)"
+        if isinstance(sender, Tuio2Sender)
+        else f"TUIO 1.1 (/tuio/2Dcur, /tuio/2Dblb, {GESTURE_ADDRESS})"
     )
+    to = "over WebSocket on" if isinstance(sender.client, WebSocketServer) else "to"
+    print(f"{what} {to} {sender.host}:{sender.port}; Ctrl-C stops", flush=True)
     t0 = time.monotonic()
     try:
         while not args.seconds or time.monotonic() - t0 < args.seconds:
@@ -51,5 +56,7 @@ def run(args, ctx) -> int:
     if loop.monitor.frames == 0 and args.seconds:
         raise UserError("tuio: no camera frame arrived; check [camera] with `haptable doctor`")
     out = {"bundles_sent": sender.sent, "frames": loop.monitor.frames, "fseq": sender.fseq}
+    if isinstance(sender.client, WebSocketServer):  # bundles written to clients, dropped
+        out |= {"websocket_sent": sender.client.sent, "websocket_dropped": sender.client.dropped}
     print(json.dumps(out, indent=2) if args.json else out)
     return 0

@@ -8,12 +8,14 @@ from typing import Any
 from console.plugin_api import UserError, check
 
 from .sender import TuioSender
+from .sender2 import Tuio2Sender, Tuio11OverWebSocket
 from .settings import FIELDS
 
 
 def make_sender(profile: Any, *, host: str | None = None, port: int | None = None, force=False):
     """A TUIO frame sink for the profile, or ``None`` when ``[tuio] enabled`` is false
-    (``force`` sends anyway, e.g. ``haptable tuio``)."""
+    (``force`` sends anyway, e.g. ``haptable tuio``): ``[tuio] version`` 1.1 or 2.0, over
+    ``transport`` ``udp`` (to host:port) or ``websocket`` (a server on host:ws_port)."""
     if not (force or profile.get("tuio.enabled")):
         return None
     host = (profile.get("tuio.host") or "127.0.0.1") if host is None else host
@@ -24,8 +26,22 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
             f"TUIO target {host!r}:{port}: give a host name or IP address and a port from 1 "
             "to 65535 (--host/--port or [tuio] host/port)"
         )
+    version = str(profile.get("tuio.version") or "1.1")
+    transport = str(profile.get("tuio.transport") or "udp")
+    for key, value in (("version", version), ("transport", transport)):
+        if not check(FIELDS[key], value)[0]:
+            allowed = " or ".join(repr(c) for c in FIELDS[key].choices or ())
+            raise UserError(f"[tuio] {key} = {value!r}: give {allowed}")
+    server = None
+    if transport == "websocket":
+        from .websocket import WebSocketServer  # lazy: websockets loads only for it
+
+        server = WebSocketServer(host, int(profile.get("tuio.ws_port") or 3343))
+    kind = (
+        Tuio2Sender if version == "2.0" else TuioSender if server is None else Tuio11OverWebSocket
+    )
     try:
-        return TuioSender(
+        return kind(
             host,
             port,
             table_mm=(float(profile.get("table.width_mm")), float(profile.get("table.height_mm"))),
@@ -34,8 +50,11 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
                 int(profile.get("camera.height_px", 480)),
             ),
             source=profile.get("tuio.source") or "haptable",
+            **({"server": server} if server is not None else {}),
         )
     except OSError as exc:  # the name resolves to nothing, or no socket for its family
+        if server is not None:
+            server.close()
         raise UserError(
             f"TUIO host {host!r}: cannot send there ({exc.strerror or exc}); give a host name "
             "this computer resolves or an IP address (--host or [tuio] host)"
