@@ -77,35 +77,52 @@ def _format(path: Path, given: str | None) -> str:
 
 
 def run_import(args, ctx, lib_path: Path) -> int:
+    """Read the file, write its breakpoints to ``signals/NAME.json`` beside the library,
+    then save ``NAME`` = an expression naming them (``@NAME``). If the save is refused,
+    the data file is put back as it was (or removed): the library never points at data
+    it did not save with."""
     # lazy: the haptic file modules load only for these two commands
-    from console.config.signal_library import add_signal
-    from console.signals import ahap, meta_haptic
-    from console.signals.haptic_files import safe_name, to_expression
+    from console.config.signal_library import add_signal, check_name, read_library
+    from console.signals import ahap, breakpoint_data, meta_haptic
+    from console.signals.haptic_files import safe_name, to_data
 
     path = Path(args.file).expanduser()
     fmt = _format(path, args.format)
     scale = scale_for(ctx.profile, args.level)
+    name = check_name(args.name or safe_name(path))
+    if name in read_library(lib_path).raw and not args.replace:
+        raise UserError(f"signal {name!r} is already in {lib_path}; choose another name "
+                        "(--name) or replace it (--replace)")  # fmt: skip
     pattern = (ahap if fmt == "ahap" else meta_haptic).read(path)
-    expr, summary = to_expression(pattern, scale)
-    name = args.name or safe_name(path)
+    expr, curves, summary = to_data(pattern, scale, name)
     limits = Limits.from_profile(ctx.profile)
     desc = f"imported from {path.name}"[:200]
-    add_signal(lib_path, name, expr, desc, replace=args.replace, limits=limits)
+    data_file = breakpoint_data.data_path(lib_path, name)
+    old = data_file.read_bytes() if data_file.is_file() else None
+    breakpoint_data.write(lib_path, name, curves, path.name)
+    try:
+        add_signal(lib_path, name, expr, desc, replace=args.replace, limits=limits)
+    except BaseException:
+        if old is None:
+            data_file.unlink(missing_ok=True)
+        else:
+            data_file.write_bytes(old)
+        raise
     print(f"imported {summary}")
+    print(f"breakpoints in {data_file}")
     print(f"saved {name} in {lib_path}")
     return 0
 
 
-def run_export(args, ctx, name: str, expr: str) -> int:
+def run_export(args, ctx, name: str, node) -> int:
     # lazy: the haptic file modules load only for these two commands
     from console.files.atomic import write_text_atomic
     from console.signals import ahap, meta_haptic
     from console.signals.design import render
-    from console.signals.expr import parse
     from console.signals.haptic_files import export_signal
 
     scale = scale_for(ctx.profile, args.level, capped=False)
-    x = render(parse(expr), scale.fs, max_s=scale.max_s, what=name)
+    x = render(node, scale.fs, max_s=scale.max_s, what=name)
     e = export_signal(x, scale, name)
     desc = f"{name} from HapTable: intensity 1 = {scale.peak_v:g} V peak, carrier " \
         f"{scale.lo_hz:g}-{scale.hi_hz:g} Hz"  # fmt: skip

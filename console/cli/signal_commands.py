@@ -22,6 +22,7 @@ from console.config.profile import _printable
 from console.config.signal_library import (
     add_signal,
     get_signal,
+    library_data,
     library_path,
     read_library,
     remove_signal,
@@ -107,16 +108,21 @@ def run(args, ctx) -> int:
         return 0
     if action == "rm":
         remove_signal(path, args.name)
-        print(f"removed {_printable(args.name)} from {path}")
+        # lazy: the breakpoint data of an imported signal goes with it
+        from console.signals.breakpoint_data import remove
+
+        data = " and its breakpoint data" if remove(path, args.name) else ""
+        print(f"removed {_printable(args.name)}{data} from {path}")
         return 0
     if action == "import":
         return haptic_commands.run_import(args, ctx, path)
     name, expr = _resolve(ctx, args.signal)
+    node = parse(expr, data=library_data(path))  # @NAME: breakpoint data beside the library
     if action == "export":
-        return haptic_commands.run_export(args, ctx, name, expr)
+        return haptic_commands.run_export(args, ctx, name, node)
     if action == "show":
         fs = int(ctx.profile.get("audio.sample_rate_hz"))
-        x = render(parse(expr), fs, max_s=float(ctx.profile.get("limits.max_plan_s")), what=name)
+        x = render(node, fs, max_s=float(ctx.profile.get("limits.max_plan_s")), what=name)
         s = summarize(x, fs)
         if args.json:
             print(json.dumps({"name": name, "expr": expr, **s.__dict__}))
@@ -132,6 +138,6 @@ def run(args, ctx) -> int:
         from console.session.audition import audition_plan
 
         target = parse_target("screen" if args.screen else args.patch)
-        plan = audition_plan(ctx.profile, expr, target, name)
+        plan = audition_plan(ctx.profile, node, target, name)
         return play_and_report(ctx, plan, fast=args.fast, out=args.out, dry_run=args.dry_run)
     raise UserError(f"unknown action {action!r}")  # pragma: no cover - argparse refuses it

@@ -32,6 +32,7 @@ from console.core.errors import ProfileError, UserError
 from console.core.suggest import did_you_mean, suggestion
 from console.files.file_read import read_toml_capped
 from console.files.paths import profile_config_dir
+from console.signals.breakpoint_data import LibraryData
 from console.signals.check import never_plays
 from console.signals.expr import parse
 from console.signals.syntax import clip
@@ -126,7 +127,13 @@ class Library:
     raw: dict[str, Any]
 
 
-def _entry(name: str, entry: Any) -> Entry:
+def library_data(path: Path) -> LibraryData:
+    """What ``@NAME`` in the library ``path``'s signals refers to: ``signals/NAME.json``
+    beside it (``console.signals.breakpoint_data``); pass it to ``parse(expr, data=...)``."""
+    return LibraryData(path)
+
+
+def _entry(name: str, entry: Any, data: LibraryData | None = None) -> Entry:
     """The entry ``[signals.NAME]`` holds, or a ``UserError`` saying what is wrong."""
     check_name(name)
     if not isinstance(entry, dict):
@@ -143,7 +150,7 @@ def _entry(name: str, entry: Any) -> Entry:
             'string, e.g. expr = "sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"'
         )
     try:
-        parse(expr)
+        parse(expr, data=data)
     except UserError as exc:
         raise UserError(f"expr = {_show(expr)}: {exc}") from None
     desc = entry.get("description", "")
@@ -181,9 +188,10 @@ def read_library(path: Path) -> Library:
         )
     user: dict[str, Entry] = {}
     problems: dict[str, str] = {}
+    data = library_data(path)
     for name, entry in table.items():
         try:
-            user[name] = _entry(name, entry)
+            user[name] = _entry(name, entry, data)
         except UserError as exc:
             problems[name] = (
                 f"{where}: [signals.{_fmt_key(name)}] {exc}; or remove the entry "
@@ -226,7 +234,7 @@ def add_signal(
     too). ``expr`` must parse and, with ``limits``, be able to play on some target."""
     check_name(name)
     check_description(description)
-    node = parse(expr)
+    node = parse(expr, data=library_data(path))
     if limits is not None and (why := never_plays(node, limits)) is not None:
         raise UserError(f"signal {name!r} can never play on this table: {why}; nothing saved")
     with signal_file.locked(path):

@@ -9,6 +9,11 @@ become, usable in any expression.
   0 like ``sine``; as long as its last time.
 - ``hann()`` / ``hann(DUR)``: a Hann window (0 at both ends, 1 in the middle), stretched to
   what it multiplies: ``sine(250 Hz, 20 V, 12 ms) * hann()`` is a short burst.
+- ``env(@NAME)``, ``glide(AMP, @NAME)``, ``bursts(@NAME)``: the same shapes (and a list of
+  Hann-windowed sine bursts: time, peak volts, frequency, length) from the breakpoint data
+  file ``NAME.json`` beside the library (``console.signals.breakpoint_data``): an imported
+  haptic file of any size is a short expression. Only a parse given the library's data
+  (``parse(text, data=...)``) resolves ``@NAME``.
 
 Times are strictly increasing (a step is two breakpoints a little apart, which the slew
 limit asks for anyway); every mistake is one ``UserError`` naming the part and the fix.
@@ -24,7 +29,7 @@ from console.core.errors import UserError
 from console.signals.design import Node, _below_nyquist
 from console.signals.syntax import Quantity
 
-NAMES = ("env", "glide", "hann")
+NAMES = ("env", "glide", "hann", "bursts")
 #: at most this many breakpoints in one call
 MAX_POINTS = 4000
 
@@ -83,6 +88,79 @@ class Hann(Node):
         return np.hanning(n) if n > 2 else np.zeros(n)
 
 
+@dataclass(frozen=True, eq=False)
+class Bursts(Node):
+    """Hann-windowed sine bursts: at ``t_s[i]``, ``v[i]`` peak, ``hz[i]``, ``dur_s[i]`` long
+    (sine phase 0 at each start, like ``seq(silence(..), sine(..) * hann())``)."""
+
+    t_s: np.ndarray
+    v: np.ndarray
+    hz: np.ndarray
+    dur_s: np.ndarray
+    text: str = ""
+    volts: bool = True
+
+    def duration_s(self) -> float:
+        return float(np.max(self.t_s + self.dur_s))
+
+    def render(self, fs: int, n: int) -> np.ndarray:
+        out = np.zeros(n)
+        for t0, v, f, d in zip(self.t_s, self.v, self.hz, self.dur_s, strict=True):
+            _below_nyquist(self.text or "bursts", float(f), fs)
+            k, m = round(t0 * fs), round(d * fs)
+            m = min(m, n - k)
+            if m > 0:
+                w = np.hanning(round(d * fs))[:m]
+                out[k : k + m] += v * w * np.sin(2 * np.pi * f * np.arange(m) / fs)
+        return out
+
+
+@dataclass(frozen=True)
+class DataRef:
+    """``@NAME`` resolved: the curves of a breakpoint data file."""
+
+    curves: object
+    text: str
+
+
+def data_ref(name: str, part: str, data) -> DataRef:
+    """``@name`` in ``part``, looked up in ``data`` (a ``breakpoint_data.Resolver``)."""
+    if data is None:
+        raise UserError(
+            f"{part} is breakpoint data kept beside the signal library; use it in "
+            "a library signal or in an expression played with the library (haptable "
+            "signals play|show NAME)"
+        )
+    return DataRef(data(name), f"@{name}")
+
+
+def _from_data(name: str, args: list, part: str) -> Node | None:
+    """The node ``name(..., @NAME)`` makes, or None when no ``@NAME`` is given."""
+    refs = [a for a in args if isinstance(a, DataRef)]
+    if not refs:
+        return None
+    usage = {"env": "env(@NAME)", "glide": "glide(AMP, @NAME)", "bursts": "bursts(@NAME)"}
+    if name not in usage:
+        raise UserError(f"{part}: {name} takes no breakpoint data; use {', '.join(usage.values())}")
+    if len(refs) > 1 or args[-1] is not refs[0]:
+        raise UserError(f"{part}: breakpoint data goes last and alone; write {usage[name]}")
+    ref = refs[0]
+    if name == "env":
+        if len(args) != 1:
+            raise UserError(f"{part}: write env(@NAME) with nothing else")
+        c = ref.curves.curve("env", part)
+        return Env(tuple(c["t_s"]), tuple(c["level"]), part)
+    if name == "bursts":
+        if len(args) != 1:
+            raise UserError(f"{part}: write bursts(@NAME) with nothing else")
+        c = ref.curves.curve("bursts", part)
+        return Bursts(c["t_s"], c["v"], c["hz"], c["dur_s"], part)
+    if len(args) != 2:
+        raise UserError(f"{part}: write glide(AMP, @NAME), e.g. glide(40 V, @NAME)")
+    c = ref.curves.curve("glide", part)
+    return _glide(args[0], tuple(c["t_s"]), tuple(c["hz"]), part, "glide(AMP, @NAME)")
+
+
 def _seconds(v, part: str, what: str) -> float:
     if not (isinstance(v, Quantity) and v.dim == "s"):
         shown = v.text if isinstance(v, Quantity) else repr(v)
@@ -133,6 +211,11 @@ def build(name: str, args: list, has_keywords: bool, part: str) -> Node:
         raise UserError(f"{part}: {name} takes its values in order, without names")
     if any(isinstance(a, Node) for a in args):
         raise UserError(f"{part}: {name} takes values with units, not signals")
+    node = _from_data(name, args, part)
+    if node is not None:
+        return node
+    if name == "bursts":
+        raise UserError(f"{part}: bursts take their data from a file: bursts(@NAME)")
     if name == "hann":
         if len(args) > 1:
             raise UserError(f"{part}: hann() or hann(DUR)")
@@ -150,13 +233,16 @@ def build(name: str, args: list, has_keywords: bool, part: str) -> Node:
     usage = "glide(AMP, T1, F1, T2, F2, ...), e.g. glide(20 V, 0 s, 100 Hz, 1 s, 300 Hz)"
     if len(args) % 2 == 0:
         raise UserError(f"{part}: an amplitude then (time, frequency) pairs; {usage}")
-    amp = args[0]
+    times = _times(args[1::2], part, usage)
+    freqs = tuple(_hz(v, part, f"frequency {i + 1}") for i, v in enumerate(args[2::2]))
+    return _glide(args[0], times, freqs, part, usage)
+
+
+def _glide(amp, times: tuple, freqs: tuple, part: str, usage: str) -> Glide:
     volts = not (isinstance(amp, Quantity) and amp.dim in ("ratio", "dB"))
     if volts and not (isinstance(amp, Quantity) and amp.dim == "V"):
         raise UserError(f"{part}: amplitude needs a unit (V or %); {usage}")
     amp_v = amp.value if volts else _ratio(amp, part, "amplitude")
-    times = _times(args[1::2], part, usage)
-    freqs = tuple(_hz(v, part, f"frequency {i + 1}") for i, v in enumerate(args[2::2]))
     node = Glide(amp_v, times, freqs, part)
     return node if volts else _ratio_glide(node)
 

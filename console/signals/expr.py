@@ -26,6 +26,7 @@ in ``console.signals.syntax``; nothing typed can overflow, recurse without end o
 from __future__ import annotations
 
 import ast
+from contextvars import ContextVar
 
 from console.core.errors import UserError
 from console.core.suggest import suggestion
@@ -45,6 +46,7 @@ from console.signals.design import (
     Wave,
 )
 from console.signals.syntax import (
+    DATA_FN,
     DIM_NAMES,
     EXAMPLE_UNIT,
     FUNCTIONS,
@@ -66,9 +68,21 @@ from console.signals.syntax import (
     typed_column,
 )
 
+#: the ``data`` of the ``parse`` running (``@NAME`` references), for this call only
+_DATA: ContextVar = ContextVar("signal_data", default=None)
 
-def parse(text: str) -> Node:
-    """The signal ``text`` describes, or a one-line ``UserError`` naming the bad part."""
+
+def parse(text: str, data=None) -> Node:
+    """The signal ``text`` describes, or a one-line ``UserError`` naming the bad part.
+    ``data`` (``console.signals.breakpoint_data.LibraryData``) resolves ``@NAME``."""
+    token = _DATA.set(data)
+    try:
+        return _parse(text)
+    finally:
+        _DATA.reset(token)
+
+
+def _parse(text: str) -> Node:
     if not isinstance(text, str) or not text.strip():
         raise UserError("empty signal: write e.g. sine(250 Hz, 20 V, 1 s) * ramp(10 ms)")
     if len(text) > MAX_EXPR_CHARS:
@@ -78,8 +92,9 @@ def parse(text: str) -> Node:
         )
     if "\n" in text.strip() or "\r" in text:
         raise UserError("a signal is one line; join its lines")
-    if UNIT_FN in text:
-        raise UserError(f"{UNIT_FN!r} is not part of the signal syntax; write values as 250 Hz")
+    for fn in (UNIT_FN, DATA_FN):
+        if fn in text:
+            raise UserError(f"{fn!r} is not part of the signal syntax; write values as 250 Hz")
     typed = text.strip()
     check_text(typed)
     marked = mark_units(typed)
@@ -239,6 +254,8 @@ def _call(node: ast.Call, depth: int):
         value = number(node.args[0].value, part)  # the regex only marks plain numbers
         dim, factor = UNITS[node.args[1].value]
         return Quantity(float(value) * factor, dim, part)
+    if name == DATA_FN:  # the mark of @NAME (the regex only marks names)
+        return breakpoints.data_ref(node.args[0].value, part, _DATA.get())
     if name == "seq":
         if node.keywords or not node.args:
             raise UserError(f"{part}: seq takes the signals to play one after the other")

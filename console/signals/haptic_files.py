@@ -19,10 +19,13 @@ curve (0..1) on one time grid, plus transients (time, intensity, sharpness). The
   the envelope is held under the gate's start and end ramps (``[limits] ramp_min_ms``);
 - audio events and parameters the table has no use for are dropped and listed.
 
-The signal is an expression in the signal language (``glide(...) * env(...) +
-seq(silence(...), sine(...) * hann(), ...)``, ``console.signals.breakpoints``), its
-breakpoints thinned to within ``TOLERANCES`` of the file's envelope so it fits one library
-entry. Export goes the other way: the signal's envelope (Hilbert magnitude) and carrier
+An import (``to_data``) keeps every breakpoint in a data file beside the library
+(``console.signals.breakpoint_data``) under an expression naming it (``glide(PEAK, @NAME)
+* env(@NAME) + bursts(@NAME)``, ``console.signals.breakpoints``): only grid points on the
+straight line between others are merged, within ``DATA_TOL`` (0.001 % of full scale), so a
+file of any size imports whole. ``to_expression`` writes the same signal inline
+(``seq(silence(...), sine(...) * hann(), ...)`` for the bursts), its breakpoints thinned
+to within ``TOLERANCES`` so it fits one expression: for short files and the benchmark. Export goes the other way: the signal's envelope (Hilbert magnitude) and carrier
 (Hilbert phase) sampled at breakpoints. Every bad file is one ``UserError`` naming the
 file, the key and the fix.
 """
@@ -269,6 +272,99 @@ def to_expression(p: Pattern, scale: Scale) -> tuple[str, str]:
         + (", ".join(p.dropped) if p.dropped else "nothing")
     )
     return expr, summary
+
+
+# ---------------------------------------------------------------------- to data
+#: what the data keeps: collinear grid points merged, nothing a file holds thinned away
+DATA_TOL = 1e-5
+
+
+def to_data(p: Pattern, scale: Scale, name: str) -> tuple[str, dict, str]:
+    """(the expression ``glide(PEAK, @name) * env(@name) + bursts(@name)``, its curves for
+    ``console.signals.breakpoint_data``, a one-line summary): every breakpoint of the file
+    kept (only points on straight lines between others merged, within ``DATA_TOL``)."""
+    from console.signals.design import render  # lazy: rendering checks the peak of the sum
+    from console.signals.expr import parse
+
+    curves: dict[str, dict[str, np.ndarray]] = {}
+    parts = []
+    n_env = 0
+    if np.any(p.amp > 1e-6):
+        t, amp = _ramped(p.t_s, p.amp, scale.ramp_s)
+        ka = _knots(t, amp, DATA_TOL)
+        f_hz = scale.hz(np.interp(t, p.t_s, p.sharp))
+        kf = _knots(t, f_hz, DATA_TOL * f_hz)
+        curves["env"] = {"t_s": t[ka], "level": np.clip(amp[ka], 0.0, 1.0)}
+        curves["glide"] = {"t_s": t[kf], "hz": f_hz[kf]}
+        parts.append(f"glide({round(scale.peak_v, 3):g} V, @{name}) * env(@{name})")
+        n_env = ka.size
+    bursts = _burst_rows(p, scale)
+    if bursts:
+        curves["bursts"] = {k: np.array([b[i] for b in bursts]) for i, k in
+                            enumerate(("t_s", "v", "hz", "dur_s"))}  # fmt: skip
+        parts.append(f"bursts(@{name})")
+    if not parts:
+        raise UserError(f"{p.path}: nothing to play (no haptic event above 0); "
+                        "give the file a continuous or transient haptic event")  # fmt: skip
+    expr = " + ".join(parts)
+    data = _Inline(name, curves)
+    x = render(parse(expr, data=data), scale.fs, max_s=scale.max_s, what=str(p.path))
+    peak = float(np.max(np.abs(x)))
+    gain = ""
+    if peak > scale.peak_v * (1 + 1e-6):
+        g = math.floor(scale.peak_v / peak * 1e4) / 100
+        expr, gain = f"({expr}) * {g:g} %", f", overlaps lowered to {g:g} %"
+    summary = (
+        f"{p.path.name} ({p.fmt}): {', '.join(p.mapped)} -> envelope of {n_env} breakpoints "
+        f"(none thinned: within {DATA_TOL:.3%}), carrier {scale.lo_hz:g}-{scale.hi_hz:g} Hz, "
+        f"{len(bursts)} bursts, "
+        f"peak {min(peak, scale.peak_v):.1f} V{gain}; dropped: "
+        + (", ".join(p.dropped) if p.dropped else "nothing")
+    )
+    return expr, curves, summary
+
+
+def _knots(t: np.ndarray, y: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
+    """``_simplify`` after dropping the grid points that lie on the line through their
+    neighbours to rounding (what the grid added between a file's breakpoints): fast on
+    grids of many seconds."""
+    tol = np.broadcast_to(np.asarray(tol, float), y.shape)
+    mid = y[:-2] + (y[2:] - y[:-2]) * (t[1:-1] - t[:-2]) / (t[2:] - t[:-2])
+    bent = np.abs(y[1:-1] - mid) > 1e-12 * (1.0 + np.abs(y[1:-1]))
+    idx = np.flatnonzero(np.concatenate([[True], bent, [True]]))
+    return idx[_simplify(t[idx], y[idx], tol[idx])]
+
+
+def _burst_rows(p: Pattern, scale: Scale) -> list[tuple[float, float, float, float]]:
+    """(time, peak volts, frequency, length) of each transient's burst (as ``_bursts``)."""
+    rows, at = [], 0.0
+    for t0, level, sharp in sorted(p.transients):
+        f = float(scale.hz(sharp))
+        d = scale.burst_s(f)
+        if t0 < at - 1e-9:
+            p.dropped.append(f"transient at {t0:g} s (overlaps the burst before)")
+            continue
+        k = _end_factor(t0, d, p.t_s[-1], scale.ramp_s)
+        if k < 1.0 and not any(x.startswith("bursts lowered") for x in p.mapped):
+            p.mapped.append("bursts lowered under the gate's end ramps")
+        rows.append((t0, level * scale.peak_v * k, f, d))
+        at = t0 + d
+    return rows
+
+
+class _Inline:
+    """``@name`` -> the curves not yet written (a render before saving)."""
+
+    def __init__(self, name: str, curves: dict) -> None:
+        from console.signals.breakpoint_data import Curves  # lazy: import cycle
+
+        self.curves = Curves(name, Path(f"{name}.json"), **curves)
+        self.name = name
+
+    def __call__(self, name: str):
+        if name != self.name:
+            raise UserError(f"@{name}: only @{self.name} is being imported")
+        return self.curves
 
 
 # ---------------------------------------------------------------------- from a signal

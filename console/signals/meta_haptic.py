@@ -4,7 +4,8 @@
 A ``.haptic`` file is JSON::
 
     {"version": {"major": 1, "minor": 0, "patch": 0},
-     "metadata": {"editor": ..., "source": ..., "project": ..., "tags": [], "description": ...},
+     "metadata": {"editor": ..., "author": ..., "source": ..., "project": ..., "tags": [],
+                  "description": ...},
      "signals": {"continuous": {"envelopes": {
          "amplitude": [{"time": 0.0, "amplitude": 0.5,
                         "emphasis": {"amplitude": 0.9, "frequency": 0.7}}, ...],
@@ -14,6 +15,11 @@ Amplitude and frequency are breakpoint envelopes in 0..1, linear between breakpo
 at one time, a step, become an edge of ``EDGE_S``); an emphasis on an amplitude breakpoint
 is a transient there (its amplitude and frequency). Without a frequency envelope the
 carrier sits at frequency 0.5. Keys this reader does not use are dropped and listed.
+As Meta's own reader does, an amplitude envelope needs two breakpoints and a frequency
+breakpoint may not lie after the amplitude envelope's end. Checked against the files of
+facebook/meta-haptics-sdk ``core/haptic_data/test_files/`` (``multiple_emphasis.haptic``,
+``long_clip.haptic``, ``invalid_single_amplitude_breakpoint.haptic``,
+``invalid_freq_bp_outside_amp_env.haptic``): the same keys.
 """
 
 from __future__ import annotations
@@ -46,7 +52,7 @@ def _points(path: Path, env: dict, key: str, value: str, required: bool) -> list
         return []
     pts = need(path, env[key], list, where, f'[{{"time": 0, "{value}": 0.5}}, ...]')
     if required and not pts:
-        raise bad(path, where, "empty", "give at least one breakpoint")
+        raise bad(path, where, "empty", "give at least two breakpoints (a start and an end)")
     last = 0.0
     for i, p in enumerate(pts):
         need(path, p, dict, f"{where}[{i}]", f'{{"time": 0.1, "{value}": 0.5}}')
@@ -56,6 +62,8 @@ def _points(path: Path, env: dict, key: str, value: str, required: bool) -> list
                       "give breakpoints in time order")  # fmt: skip
         num(path, p, value, f"{where}[{i}]", 0.0, 1.0)
         last = t
+    if required and len(pts) < 2:  # as Meta's reader: a start and an end
+        raise bad(path, where, "holds one breakpoint", "give at least two (a start and an end)")
     return pts
 
 
@@ -86,6 +94,10 @@ def read(path: str | Path) -> Pattern:
             e = need(path, p["emphasis"], dict, w, '{"amplitude": 0.9, "frequency": 0.7}')
             transients.append((float(p["time"]), num(path, e, "amplitude", w, 0.0, 1.0),
                                num(path, e, "frequency", w, 0.0, 1.0)))  # fmt: skip
+    if freq_pts and freq_pts[-1]["time"] > amp_pts[-1]["time"]:
+        raise bad(path, f"signals.continuous.envelopes.frequency[{len(freq_pts) - 1}].time",
+                  f"{freq_pts[-1]['time']:g} s is after the amplitude envelope's end "
+                  f"({amp_pts[-1]['time']:g} s)", "end the frequency envelope by then")  # fmt: skip
     ta, va = strictly([p["time"] for p in amp_pts], [p["amplitude"] for p in amp_pts])
     tf, vf = strictly([p["time"] for p in freq_pts], [p["frequency"] for p in freq_pts])
     end = max(ta[-1], (tf[-1] if tf else 0.0), max((t for t, _a, _f in transients), default=0))
@@ -108,6 +120,7 @@ def write(e: Exported, description: str) -> str:
         "version": {"major": 1, "minor": 0, "patch": 0},
         "metadata": {
             "editor": "HapTable",
+            "author": "",
             "source": "",
             "project": "",
             "tags": [],

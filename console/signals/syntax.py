@@ -75,15 +75,22 @@ SPEC: dict[str, tuple[tuple[str, str, object], ...]] = {
     "repeat": (("signal", "node", None), ("count", "int", None)),
     "lowpass": (("signal", "node", None), ("cutoff", "Hz", None)),
 }  # fmt: skip
-FUNCTIONS = (*SPEC, "seq", "env", "glide", "hann")  # the last three: signals.breakpoints
+FUNCTIONS = (*SPEC, "seq", "env", "glide", "hann", "bursts")  # the last four: breakpoints
+#: ``@name``: breakpoint data kept beside the library (``console.signals.breakpoint_data``)
+DATA_FN = "_data_"
+_DATA_REF = re.compile(r"(?<![\w@])@([A-Za-z0-9][A-Za-z0-9_-]{0,39})(?![\w-])", re.ASCII)
+_MARKABLE = re.compile(f"{_QUANTITY.pattern}|{_DATA_REF.pattern}", re.ASCII)
 
 
 def mark_units(text: str) -> str:
-    """``250 Hz`` -> ``_unit_(250, "Hz")``: Python's grammar has no units."""
-    return _QUANTITY.sub(_mark, text)
+    """``250 Hz`` -> ``_unit_(250, "Hz")`` and ``@name`` -> ``_data_("name")``: Python's
+    grammar has neither units nor data references."""
+    return _MARKABLE.sub(_mark, text)
 
 
 def _mark(m: re.Match[str]) -> str:
+    if m.group(3) is not None:
+        return f'{DATA_FN}("{m.group(3)}")'
     return f'{UNIT_FN}({m.group(1)}, "{m.group(2)}")'
 
 
@@ -91,7 +98,7 @@ def typed_column(text: str, marked_col: int) -> int:
     """The 1-based column in ``text`` of column ``marked_col`` of ``mark_units(text)``
     (a unit's mark stands for its whole quantity)."""
     at, shift = marked_col - 1, 0  # shift: how much longer the marks made the text
-    for m in _QUANTITY.finditer(text):
+    for m in _MARKABLE.finditer(text):
         start = m.start() + shift
         if at < start:
             break
@@ -102,11 +109,11 @@ def typed_column(text: str, marked_col: int) -> int:
     return at - shift + 1
 
 
-_MARKED = re.compile(rf"""{UNIT_FN}\(([^,]+), ["']([^"']+)["']\)""")
+_MARKED = re.compile(rf"""{UNIT_FN}\(([^,]+), ["']([^"']+)["']\)|{DATA_FN}\("([^"]+)"\)""")
 
 
 def _unmark(m: re.Match[str]) -> str:
-    return f"{m.group(1)} {m.group(2)}"
+    return f"@{m.group(3)}" if m.group(3) is not None else f"{m.group(1)} {m.group(2)}"
 
 
 def keep_source(tree: ast.AST, marked: str) -> None:
@@ -116,7 +123,7 @@ def keep_source(tree: ast.AST, marked: str) -> None:
     for n in ast.walk(tree):
         if isinstance(n, ast.expr):
             part = raw[n.col_offset : n.end_col_offset].decode("utf-8", "replace")
-            if UNIT_FN in part:
+            if UNIT_FN in part or DATA_FN in part:
                 part = _MARKED.sub(_unmark, part)
             n._source = part  # type: ignore[attr-defined]
 

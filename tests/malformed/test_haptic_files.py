@@ -2,7 +2,10 @@
 
 Every case runs the real command in-process and must end with ONE line on stderr
 (``haptable: error: ...``, exit 2) naming the file, the key or value, and the fix; nothing
-is saved to the library. The files are written here from the public format descriptions.
+is saved to the library. The files are written here from the public format descriptions;
+the last two ``.haptic`` cases are the invalid files of facebook/meta-haptics-sdk
+(``core/haptic_data/test_files/invalid_single_amplitude_breakpoint.haptic`` and
+``invalid_freq_bp_outside_amp_env.haptic``), which Meta's own reader refuses too.
 """
 
 from __future__ import annotations
@@ -59,6 +62,14 @@ CASES = [
      _haptic(amp=[{"time": 0.2, "amplitude": 0.5}, {"time": 0.1, "amplitude": 0}]),
      ("amplitude[1].time", "order")),
     ("haptic-no-signals", "b.haptic", '{"version": {"major": 1}}', ("signals", "missing")),
+    ("haptic-one-breakpoint", "b.haptic", _haptic(amp=[{"time": 0, "amplitude": 0.2}]),
+     ("envelopes.amplitude", "one breakpoint", "at least two")),
+    ("haptic-freq-after-the-end", "b.haptic", json.dumps({"version": {"major": 1}, "signals": {
+        "continuous": {"envelopes": {
+            "amplitude": [{"time": 0, "amplitude": 1}, {"time": 1, "amplitude": 1}],
+            "frequency": [{"time": 0, "frequency": 1}, {"time": 1, "frequency": 1},
+                          {"time": 1.0001, "frequency": 0}]}}}}),
+     ("frequency[2].time", "1.0001", "amplitude envelope's end")),
     ("unknown-suffix", "c.json", _ahap(), ("c.json", "--format")),
 ]  # fmt: skip
 

@@ -18,6 +18,7 @@ from console.config.signal_library import (
     BUILTIN,
     Entry,
     add_signal,
+    library_data,
     library_path,
     read_library,
     remove_signal,
@@ -254,7 +255,8 @@ class SignalsPane(Vertical):
         try:
             target = parse_target(target_text)
             fs = int(prof.get("audio.sample_rate_hz"))
-            x = render(parse(expr), fs, max_s=float(prof.get("limits.max_plan_s")))
+            node = parse(expr, data=library_data(self.library_file))  # @NAME: imported data
+            x = render(node, fs, max_s=float(prof.get("limits.max_plan_s")))
         except UserError as exc:
             from_thread(self.app, self._refused, gen, str(exc))
             return
@@ -315,7 +317,8 @@ class SignalsPane(Vertical):
         from console.session.audition import audition_plan  # lazy: SciPy on first play
 
         try:
-            plan = audition_plan(self.app.ctx.profile, p.expr, p.target, name)
+            node = parse(p.expr, data=library_data(self.library_file))
+            plan = audition_plan(self.app.ctx.profile, node, p.target, name)
         except UserError as exc:
             from_thread(self.app, self._refused_play, name, str(exc))
             return
