@@ -66,14 +66,19 @@ class Curves:
     glide: dict[str, np.ndarray] | None = None
     bursts: dict[str, np.ndarray] | None = None
 
+    def held(self) -> dict[str, dict[str, np.ndarray]]:
+        """The curves the file holds, by key."""
+        every = {"env": self.env, "glide": self.glide, "bursts": self.bursts}
+        return {k: c for k, c in every.items() if c is not None}
+
     def curve(self, key: str, used_by: str) -> dict[str, np.ndarray]:
-        c = getattr(self, key)
-        if c is None:
+        held = self.held()
+        if key not in held:
             raise UserError(
                 f"{used_by}: {self.path} holds no {key!r} curve; use the parts it holds "
-                f"({', '.join(k for k in CURVES if getattr(self, k) is not None)})"
+                f"({', '.join(held)})"
             )
-        return c
+        return held[key]
 
 
 def data_path(library: Path, name: str) -> Path:
