@@ -3,6 +3,8 @@ import (see ``console.plugin_api`` for the whole API). Importing it loads Textua
 
 What it offers:
 
+- charts: ``Chart`` (a textual-plotext line chart with units; ``summary()`` says what
+  it shows) and its ``Series``
 - text: ``escape`` (markup-safe text), ``LiteralTable`` (a table that shows its cells
   as written)
 - workers and threads: ``LongWork`` (a long job with progress and cancel),
@@ -18,6 +20,7 @@ What it offers:
 
 from __future__ import annotations
 
+from console.tui.charts import Chart, Series
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.panels import LeavesForScreen
@@ -28,6 +31,8 @@ from console.tui.text import LiteralTable, escape
 from console.tui.util import from_thread, short_path
 
 __all__ = [
+    "Chart",
+    "Series",
     "ConsoleFooter",
     "LeavesForScreen",
     "LiteralTable",

@@ -62,3 +62,16 @@ def haptable_register_benchmarks(register) -> None:
         help="simulated participants: predicted accuracy per region/pair x direction vs "
         "the paper, trials per second",
     )
+
+    def psychophysics(ctx, quick: bool) -> dict:
+        # lazy: as above
+        from .bench_psychophysics import run_bench as run_psychophysics
+
+        return run_psychophysics(ctx, quick)
+
+    register(
+        "psychophysics",
+        psychophysics,
+        help="adaptive procedures (QUEST+, 1u2d, 1u3d) on 100 simulated observers: threshold "
+        "bias and spread vs the truth, convergence vs 70.7 / 79.4 %",
+    )

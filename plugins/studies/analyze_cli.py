@@ -112,9 +112,17 @@ def _f(v: Any, fmt: str) -> str:
 def run(args: argparse.Namespace) -> int:
     # lazy: this module loads at every haptable start; analysis, report only when used
     from . import analysis, report
+    from . import threshold_analysis as thresholds  # threshold runs: fits, curves
 
+    extra = None
+    if thresholds.run_folders(list(args.dirs)):
+        if not thresholds.has_plans(list(args.dirs)):
+            return thresholds.run(args)
+        extra = thresholds.run(args, embedded=True)  # both kinds here: thresholds first
     study = analysis.load(list(args.dirs), exclude=tuple(args.exclude))
     res = analysis.analyze(study)
+    if extra is not None:
+        res["thresholds"] = extra
     if args.report is not None:
         path = report.write(res, args.report)
         res["report"] = str(path)

@@ -161,8 +161,16 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         return analyze_cli.run(args)
+    # lazy: adaptive protocols (threshold_*, jnd_*) load only for a study command
+    from . import adaptive_protocol
+
     if args.study_cmd == "list":
         for name in protocols.available():
+            if adaptive_protocol.is_adaptive(name):
+                a = adaptive_protocol.load(name)
+                how = f"adaptive ({a.procedure['method']}, {len(a.tracks)} track(s))"
+                print(f"  {name:<8} {how}: {a.title}")
+                continue
             p = protocols.load(name)
             phases = ", ".join(f"{ph.name} {ph.n_trials}" for ph in p.phases)
             print(f"  {name:<8} {p.n_trials:4d} trials ({phases}): {p.title}")
@@ -172,6 +180,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     from .runner import Control, run_plan
     from .stimuli import EffectPlayer, check_places, play_on
 
+    if adaptive_protocol.is_adaptive(args.study):
+        from .adaptive_cli import run as run_adaptive  # lazy: as above
+
+        ids = _ids(args)
+        return run_adaptive(args, ctx, ids, whole(args.seed, "--seed"), _details, _vmap)
     if args.trials is not None and args.trials < 1:
         raise UserError(f"--trials {args.trials}: give at least 1")
     proto = protocols.load(args.study)
@@ -185,6 +198,10 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
             "camera turns the knob), or use --simulate here"
         )
     vmap = _vmap(args, ctx) if proto.stimulus != "knob" else None
+    from .sensation import resolver  # lazy: as above
+
+    base = EffectPlayer(ctx.pm, ctx.profile, vmap, lambda plan: False).render_base
+    resolve = resolver(proto, ctx.profile, base)  # None without a study.level
     control = Control()
     old = signal.getsignal(signal.SIGINT)
 
@@ -208,6 +225,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     observer=obs,
                     seed=seed,
                     row=row,
+                    resolve=resolve,
                 )
                 if vmap is not None:
                     check_places(prep.plan, vmap)

@@ -2,7 +2,8 @@
 start, pause, replay, abort; the experimenter's view of progress and the current trial;
 analyse the folder's runs (the report written next to them, the ANOVA table shown).
 
-Presentation only: a worker runs ``console_run.run`` (the participant prepared, the plan
+Presentation only: a worker runs ``console_run.run`` (an adaptive protocol:
+``adaptive_console.run``, its plot ``adaptive_view``; the participant prepared, the plan
 run with the console session's outputs through the safety gate) or
 ``console_run.run_analysis``; both report through the session (topic ``study``:
 ``Started``, ``Snapshot`` per step, ``Stopped``, ``Failed``) and this screen shows what it
@@ -46,8 +47,9 @@ from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
 from console.plugin_api.tui import LiteralTable, SessionMessage, escape, said_here
 
-from . import console_run
+from . import adaptive_console
 from . import protocol as protocols
+from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
 from .panel_text import (
     NUMBER_FIELDS,
@@ -112,10 +114,12 @@ class StudiesPane(Vertical):
         "n / Analyse   analyse the folder's runs of this protocol: the report\n"
         "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
         "t             show the trials / the analysis\n"
+        "[ / ]         an adaptive run's plot: previous / next track (t: the plot in\n"
+        "              the analysis's place); + correct, x wrong, ◆ reversal\n"
         "o             the analysis's notes: all of them / one line\n"
         "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2:\n"
         "              left to right / right to left (experiment 1)\n"
-        "1..7          a questionnaire score\n"
+        "1..7          a questionnaire score; an adaptive trial: the interval (1..3)\n"
         "escape        leave a text field (what was typed stays)\n"
         "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
         "none loaded or kept, s measures the twin's grid first."
@@ -130,6 +134,8 @@ class StudiesPane(Vertical):
         Binding("n", "analyse", "analyse"),
         Binding("t", "toggle_view", "view"),
         Binding("o", "toggle_notes", "notes", show=False),
+        Binding("left_square_bracket", "track(-1)", "track", show=False),
+        Binding("right_square_bracket", "track(1)", "track"),
         Binding("escape", "leave_field", show=False),
         Binding("up", "answer('up')", show=False),
         Binding("down", "answer('down')", show=False),
@@ -225,6 +231,14 @@ class StudiesPane(Vertical):
             with VerticalScroll(id="analysis-notes-box"):
                 yield Static("", id="analysis-notes", markup=False)
             yield Static("", id="analysis-report", markup=False)
+        yield AdaptiveView(id="study-plot")
+
+    def check_action(self, action: str, parameters: tuple) -> bool:
+        """At 80 columns the footer has room for ``]`` (an adaptive protocol's tracks) or
+        ``n`` (a fixed plan's analysis; an adaptive protocol has none)."""
+        if action not in ("track", "analyse") or not self.query("#protocol"):
+            return True
+        return (action == "track") == adaptive_console.is_adaptive(str(self._value("protocol")))
 
     @property
     def focus_target(self) -> Button:
@@ -281,7 +295,7 @@ class StudiesPane(Vertical):
         self.running = spec["pid"]
         self.last = {"pid": spec["pid"]}
         try:
-            self.responses = list(protocols.load(str(study)).responses)
+            self.responses = adaptive_console.responses_of(str(study))
         except UserError as exc:
             self.running = None
             self._say(str(exc), "error")
@@ -295,7 +309,8 @@ class StudiesPane(Vertical):
                 f"stale: {spec['pid']}'s run is writing to {spec['out']}; analysed again "
                 "when it stops"
             )
-        self._view("trials")
+        self.query_one(AdaptiveView).reset()
+        self._view("plot" if adaptive_console.is_adaptive(str(study)) else "trials")
         self._status(f"{escape(spec['pid'])}: preparing {spec['study']} ...")
         self.focus()
         self._run(spec, self.control, self.responder)
@@ -398,8 +413,15 @@ class StudiesPane(Vertical):
         self._analyse(out, experiment)
 
     def action_toggle_view(self) -> None:
-        box = self.query_one("#study-analysis")
-        self._view("trials" if box.display else "analysis")
+        now = next(
+            v for v in ("analysis", "plot", "trials") if self.query_one(f"#study-{v}").display
+        )
+        self._view(next_view(now, self.query_one(AdaptiveView).has_plot))
+
+    def action_track(self, step: int) -> None:
+        """``[`` / ``]``: the plot's previous / next track (the plot shown)."""
+        why = self.query_one(AdaptiveView).cycle(step)
+        self._say(why, "warning") if why else self._view("plot")
 
     def action_toggle_notes(self) -> None:
         """``o``: the analysis's notes, all of them (in the table's place) or one line."""
@@ -428,11 +450,13 @@ class StudiesPane(Vertical):
         """Show the trials table or the analysis in the screen's lower half."""
         self.query_one("#study-analysis").display = which == "analysis"
         self.query_one("#study-trials").display = which == "trials"
+        self.query_one("#study-plot").display = which == "plot"
 
     def on_select_changed(self, event: Select.Changed) -> None:
         """A new protocol: its own default folder, unless the folder was typed."""
         if event.select.id != "protocol" or event.value is Select.BLANK:
             return
+        self.refresh_bindings()  # ] or n in the footer (check_action)
         field = self.query_one("#out", Input)
         defaults = {str(default_out())} | {str(default_out(n)) for n in protocols.available()}
         if field.value.strip() in defaults:
@@ -461,7 +485,7 @@ class StudiesPane(Vertical):
     # ------------------------------------------------------------------ the run
     @work(thread=True, exclusive=True, group="study", exit_on_error=False)
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
-        console_run.run(self.app.session, spec, control, responder)
+        adaptive_console.run(self.app.session, spec, control, responder)
 
     @work(thread=True, exclusive=True, group="study-analysis", exit_on_error=False)
     def _analyse(self, out: Path, experiment: str) -> None:
@@ -517,6 +541,8 @@ class StudiesPane(Vertical):
         if kind == "analysis":
             self._analysis(d)
             return
+        if kind in adaptive_console.PLOT_KINDS:
+            self.query_one(AdaptiveView).snapshot(d)
         if kind == "progress":
             bar = self.query_one("#study-progress", ProgressBar)
             bar.update(total=max(int(d["total"]), 1), progress=int(d["done"]))

@@ -28,7 +28,7 @@ from typing import Any
 
 from console.plugin_api import Field, UserError, check, parse_toml_text
 
-from . import textfiles
+from . import sensation, textfiles
 
 STIMULI = ("flow", "hand_flow", "knob")
 ORDERS = ("random", "same_for_all")
@@ -50,6 +50,7 @@ STUDY_FIELDS = {
     "responses": Field("strs", [], help="the answers a participant may give"),
     "seed": Field("int", 0, min=0, help="seeds the orders shared by every participant"),
     "scene": Field("str", "", help="the projected scene whose touched buttons answer"),
+    "level": Field("str", "", help='stimulus level: "20 dB SL" or "1.5 V" (sensation.py)'),
 }
 PHASE_FIELDS = {
     "name": Field("str", help="the phase's name (familiarisation, main ...)"),
@@ -92,6 +93,7 @@ class Protocol:
     regions: dict[str, dict[str, Any]] = field(default_factory=dict)
     questionnaire: dict[str, Any] | None = None
     scene: str = ""
+    level: str = ""  # "" (the effect's own), "<n> dB SL" or "<v> V": sensation.parse_level
     path: str = ""
     sha256: str = ""
 
@@ -170,12 +172,18 @@ def _unknown(where: str, table: dict, known: set[str], prefix: str) -> None:
 
 def parse(raw: dict[str, Any], where: str = "<protocol>", *, sha256: str = "") -> Protocol:
     """A checked ``Protocol`` from a parsed TOML document."""
+    if "procedure" in raw:
+        raise UserError(
+            f"{where}: an adaptive protocol ([procedure]) has no ANOVA analysis; its thresholds "
+            "are in each participant's adaptive_result.json and thresholds.json"
+        )
     _unknown(where, raw, {"study", "pairs", "regions", "phases", "questionnaire"}, "")
     if "study" not in raw:
         raise UserError(f"{where}: [study] is missing; add it with name and stimulus")
     study = _fields(where, raw["study"], STUDY_FIELDS, "study.")
     _unknown(where, raw["study"], set(STUDY_FIELDS), "study.")
     stim = study["stimulus"]
+    sensation.parse_level(study["level"], where, stim)  # a bad level is one line here
     pairs = _pairs(where, raw.get("pairs", [])) if stim == "flow" else {}
     regions = _regions(where, raw.get("regions", [])) if stim == "hand_flow" else {}
     responses = tuple(study["responses"])
@@ -212,6 +220,7 @@ def parse(raw: dict[str, Any], where: str = "<protocol>", *, sha256: str = "") -
         regions=regions,
         questionnaire=questionnaire,
         scene=study["scene"],
+        level=study["level"],
         path=where,
         sha256=sha256,
     )

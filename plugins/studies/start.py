@@ -13,6 +13,7 @@ used) and the observer's own parameters.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -82,6 +83,7 @@ def prepare(
     seed: int | None = None,
     row: int | None = None,
     words: Words = CLI,
+    resolve: Callable[[dict[str, Any], Path, dict[str, Any]], dict[str, Any]] | None = None,
 ) -> Prepared:
     """Everything checked and stored before the first trial (see the module docstring).
     ``details``: the participant's fields (``PARTICIPANT_KEYS``) for a new participant;
@@ -111,6 +113,14 @@ def prepare(
     else:
         d = dict(details or {})
         person = make_participant(pid, **{k: d.get(k) for k in PARTICIPANT_KEYS}, words=words)
+    if proto.level:  # the participant's stimulus level (sensation.py), before plan.json
+        if resolve is None:
+            raise UserError(
+                f"{proto.path}: study.level = {proto.level!r}: run it with `haptable study "
+                f"run {proto.name} --participant {pid} --out DIR` (the screen plays no levels)"
+            )
+        who = stored if stored is not None else asdict(person)
+        plan = resolve(plan, participant_dir(out, pid), who)
     files, plan = open_run(out, pid, plan, words)
     if person is not None:
         save_participant(files, person)

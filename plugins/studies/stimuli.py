@@ -22,6 +22,8 @@ from typing import Any
 
 from console.plugin_api import FlowEffect, HandFlowEffect, KnobTrials, OutputPlan, UserError
 
+from .sensation import apply_level
+
 
 def check_places(plan: dict[str, Any], vmap: Any) -> None:
     """Every pair's points are on the map, each left point left of its right point
@@ -94,8 +96,15 @@ class EffectPlayer:
                 plan = eff.render_hand_flow((float(cx), float(cy)), s["direction"], self.vmap)
             else:
                 raise UserError(f"no effect plays {s!r}")
+            if s.get("level"):  # the participant's level, resolved in the plan (sensation.py)
+                plan = apply_level(plan, s["level"])
             self._plans[k] = plan
         return plan
+
+    def render_base(self, trial: dict[str, Any]) -> OutputPlan:
+        """The trial's plan at the effect's own level (without the plan's ``level``)."""
+        s = {k: v for k, v in trial["stimulus"].items() if k != "level"}
+        return self.prepare({**trial, "stimulus": s})
 
     def play(self, trial: dict[str, Any], attempt: int) -> Any:
         s = trial["stimulus"]

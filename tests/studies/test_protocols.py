@@ -210,7 +210,7 @@ def test_a_knob_distance_must_be_whole_sectors(tmp_path):
 
 
 def test_unknown_study_and_broken_toml(tmp_path):
-    with pytest.raises(UserError, match="no protocol of that name; use one of exp1, exp2, knob"):
+    with pytest.raises(UserError, match="no protocol of that name; use one of exp1, exp2, jnd_"):
         P.load("exp9")
     with pytest.raises(UserError, match="not valid TOML"):
         P.load(_write(tmp_path, "[study\n"))
