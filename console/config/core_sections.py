@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from console.core.audio_inputs import FIELDS as INPUT_FIELDS
+from console.core.audio_inputs import HELP as INPUTS_HELP
 from console.core.channels import BUS_CHANNELS, layout_problem
 from console.core.errors import ProfileError
 from console.core.hookspecs import hookimpl
@@ -275,6 +277,7 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
         False,
         "the operator console (also settable in the profile's overrides file)",
     ),
+    "audio_inputs": (INPUT_FIELDS, True, INPUTS_HELP),
 }
 
 

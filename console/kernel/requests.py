@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from console.core.errors import SafetyRefusal
 from console.kernel import wire
+from console.kernel.input_requests import INPUT_REQUESTS
 from console.kernel.tables import read_latch
 
 if TYPE_CHECKING:
@@ -295,6 +296,7 @@ REQUESTS: dict[str, Request] = {
         scope,
         retire,
         bye,
+        *INPUT_REQUESTS,
     )
 }
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from console.core.contracts import SimulatedAudio, SimulatedRelays
 from console.core.errors import SafetyRefusal, UserError
+from console.kernel.duplex import attach_plate
 from console.kernel.memory_lock import lock_memory, unlock_memory
 from console.kernel.scheduler import CheckedPlan, PlayReport, Scheduler
 from console.safety import Limits, SafetyGate
@@ -109,6 +110,7 @@ class TableOutputs:
             raise UserError("a private table runs on the twin only ([audio] and [relays] driver)")
         if fast is not None and simulated:
             audio.paced = not fast
+        attach_plate(audio, plugins, profile)  # a twin card's sensors read the plate
         self.audio, self.board = audio, board
         relay_channels = {
             n: int(p["relay_channel"])

@@ -33,7 +33,8 @@ What this module offers, by where it comes from:
 - safety: ``Limits``
 - outputs: ``ChannelLayout``, ``BUS_CHANNELS``, ``MAX_PLAN_S``, ``check_duration``,
   ``plan_samples``, ``tone``; live streams ``StreamSynth``, ``StreamSpec``, ``StreamSink``,
-  ``PulseSpec``, ``Envelope``, ``smooth_square``, ``spec_problem``
+  ``PulseSpec``, ``Envelope``, ``smooth_square``, ``spec_problem``; the card's inputs
+  (``console.core.audio_inputs``): ``InputSpec``, ``input_specs``, ``find_input``
 - the vibration map: ``VibrationMap``, ``make_map``, ``map_from_arrays``, ``load_map``,
   ``save_map``, ``grid_points_mm``, ``KEYS``, ``FIX``, ``MAX_FRF_UM_PER_V``
 - files: ``write_text_atomic``, ``append_json_line`` and its reader ``read_json_lines``
@@ -49,6 +50,7 @@ from __future__ import annotations
 from console.config.plugins import PanelTab, Plugins, load_plugins
 from console.config.profile import Profile, load_profile
 from console.config.profile_files import profile_file
+from console.core.audio_inputs import InputSpec, find_input, input_specs
 from console.core.bench_stats import machine_info, summarize_s
 from console.core.channels import BUS_CHANNELS, ChannelLayout
 from console.core.contracts import (
@@ -140,6 +142,9 @@ __all__ = [
     # errors, and their fix where the user is
     "SafetyRefusal",
     "UserError",
+    "InputSpec",
+    "find_input",
+    "input_specs",
     "AT_CLI",
     "AT_CONSOLE",
     "Placed",

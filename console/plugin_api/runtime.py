@@ -20,7 +20,9 @@ What it offers, by where it comes from:
   ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
   ``HEARTBEAT_S``, ``PEER_TIMEOUT_S``, ``MAX_SOCKET_PATH``, ``TO_PROJECTOR``
-- the outputs (the table's safety kernel): ``open_outputs``; private runtime files
+- the outputs (the table's safety kernel): ``open_outputs``; duplex inputs ``capture``
+  (play a plan, get what the inputs read), ``read_inputs``, ``move_sensor`` (the twin's),
+  ``Capture``; private runtime files
   ``runtime_dir``, ``ensure_private_dir``, ``write_private``
 - session events: ``Started``, ``Progress``, ``Snapshot``, ``Stopped``, ``Failed``
 """
@@ -31,6 +33,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
+    from console.kernel.capture import Capture, capture, move_sensor, read_inputs
     from console.kernel.client import open_outputs
     from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
@@ -89,6 +92,7 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "service": ("ProjectorService",),
     "supervisor": ("ProjectorLaunch",),
     "client": ("open_outputs",),
+    "capture": ("Capture", "capture", "move_sensor", "read_inputs"),
     "private_dir": ("ensure_private_dir", "runtime_dir", "write_private"),
     "events": ("Failed", "Progress", "Snapshot", "Started", "Stopped"),
 }
@@ -98,6 +102,8 @@ __all__ = [
     "projector_protocol",
     "Announcer",
     "Cancelled",
+    "Capture",
+    "capture",
     "default_socket_path",
     "DEQUEUED",
     "encode",
@@ -112,6 +118,7 @@ __all__ = [
     "measured_map",
     "measured_map_file",
     "MessageReader",
+    "move_sensor",
     "open_camera",
     "open_classifier",
     "open_outputs",
@@ -121,6 +128,7 @@ __all__ = [
     "PROCESSING",
     "Progress",
     "ProjectorLaunch",
+    "read_inputs",
     "ProjectorService",
     "ProtocolError",
     "runtime_dir",
@@ -164,6 +172,8 @@ def _source(source: str) -> ModuleType:
         from console.runtime.projector import supervisor as module  # lazy: loads on first use
     elif source == "client":
         from console.kernel import client as module  # lazy: loads on first use
+    elif source == "capture":
+        from console.kernel import capture as module  # lazy: loads on first use
     elif source == "private_dir":
         from console.kernel import private_dir as module  # lazy: loads on first use
     elif source == "events":

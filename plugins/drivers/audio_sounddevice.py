@@ -19,6 +19,11 @@ callback before it spent longer than a block period in the source's ``fill``, el
 ``late_callback`` (the callback thread came late: the machine, not the gate).
 ``sounddevice`` is imported only when a stream is opened or probed, so machines without
 PortAudio can still run the twin.
+
+Duplex: when the profile names inputs (``[audio_inputs.NAME]``) one ``sd.Stream`` opens
+the device's inputs beside its outputs; the callback fills the outputs from the gate as
+always, then copies the input block into an ``InputRing`` at the clock of the output block
+it filled (``read_inputs(a, b)``, ``input_clock()``): recording never plays anything.
 """
 
 from __future__ import annotations
@@ -32,8 +37,17 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import BlockSource, ChannelLayout, DeviceStatus, OutputDevice, summarize_s
+from console.plugin_api import (
+    BlockSource,
+    ChannelLayout,
+    DeviceStatus,
+    InputSpec,
+    OutputDevice,
+    input_specs,
+    summarize_s,
+)
 from plugins.drivers.errors import DeviceError
+from plugins.drivers.input_ring import InputRing
 
 PORTAUDIO_FIX = "install PortAudio: apt-get install libportaudio2"
 TIMING_WINDOW = 2000  # callbacks kept for the period / fill-time statistics
@@ -169,9 +183,15 @@ class SounddeviceOutput:
         latency_s: float = 0.0,
         sd: Any = None,
         channels: int = 2,
+        inputs: tuple[InputSpec, ...] = (),
     ) -> None:
         self.device = device
         self.channels = int(channels)
+        # duplex: the profile's [audio_inputs], kept by the output clock (InputRing)
+        self.input_specs = tuple(inputs)
+        self._in_cols = tuple(s.channel - 1 for s in self.input_specs)
+        self._ring = InputRing(len(inputs), int(sample_rate_hz)) if inputs else None
+        self._filled = 0  # samples the gate filled (its clock): the input rows' index
         self.sample_rate_hz = int(sample_rate_hz)
         self.block_size = int(block_size)
         self.latency_s = float(latency_s)
@@ -222,16 +242,24 @@ class SounddeviceOutput:
         self._sound_until_s = 0.0
         self._handed_sound = False
         try:
-            stream = sd.OutputStream(
+            kw = dict(
                 samplerate=self.sample_rate_hz,
                 blocksize=self.block_size,
-                device=index,
-                channels=self.channels,
                 dtype="float32",
                 latency=self.latency_s if self.latency_s > 0 else "low",
-                callback=self._callback,
                 finished_callback=self._finished,
             )
+            if self._ring is None:
+                stream = sd.OutputStream(
+                    device=index, channels=self.channels, callback=self._callback, **kw
+                )
+            else:  # one duplex stream: inputs and outputs on the same sample clock
+                stream = sd.Stream(
+                    device=(index, index),
+                    channels=(max(self._in_cols) + 1, self.channels),
+                    callback=self._duplex_callback,
+                    **kw,
+                )
         except Exception as exc:  # PortAudioError, ValueError for bad settings
             self._silent = True
             raise DeviceError(
@@ -366,6 +394,7 @@ class SounddeviceOutput:
             return
         try:
             self._source.fill(outdata)
+            self._filled += frames
             self._last_fill_s = clock() - t0_s
             self._fills_s.append(self._last_fill_s)
             if not np.all(np.isfinite(outdata)) or float(np.max(np.abs(outdata))) > 1.0:
@@ -380,6 +409,26 @@ class SounddeviceOutput:
             self._state = "fault"
             self._error = f"source failed in the audio callback: {type(exc).__name__}: {exc}"
             self._alarm(self._error)
+
+    def _duplex_callback(
+        self, indata: np.ndarray, outdata: np.ndarray, frames: int, time_info: Any, status: Any
+    ) -> None:
+        """The output callback, then the inputs kept at the clock of the block it filled."""
+        clock = self._filled
+        self._callback(outdata, frames, time_info, status)
+        if self._ring is not None and self._filled > clock:
+            self._ring.write(clock, indata, self._in_cols)
+
+    # duplex inputs (console.core.input_contracts.RecordsInputs)
+    def input_clock(self) -> int:
+        """Inputs are kept for the clocks before this one."""
+        return self._ring.clock if self._ring is not None else 0
+
+    def read_inputs(self, a: int, b: int) -> np.ndarray:
+        """The inputs over clocks ``a..b``, (b - a, inputs) float32 card units."""
+        if self._ring is None:
+            return np.zeros((max(0, b - a), 0), np.float32)
+        return self._ring.read(a, b)
 
     def _alarm(self, reason: str) -> None:
         """Tell the source (the safety gate's ``estop(reason, wait=False)``) if it listens."""
@@ -480,6 +529,7 @@ def from_profile(profile: Any) -> SounddeviceOutput:
         block_size=profile.get("audio.block_size"),
         latency_s=profile.get("sounddevice.latency_s"),
         channels=ChannelLayout.from_profile(profile).n,
+        inputs=input_specs(profile),
     )
 
 

@@ -59,6 +59,7 @@ from console.plugin_api import (
     realtime_priority,
     summarize_s,
 )
+from plugins.twin.inputs import TwinInputs
 from plugins.twin.relays import bus_for
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
@@ -219,6 +220,7 @@ class TwinAudioOutput:
         self._source: BlockSource | None = None
         self._out = np.zeros((self.block_size, n_ch), dtype=np.float32)
         self._zeros = np.zeros_like(self._out)
+        self.inputs = TwinInputs(profile, self)  # duplex: computed when read, never here
 
     # AudioOutput protocol
     def start(self, source: BlockSource) -> None:
@@ -559,6 +561,51 @@ class TwinAudioOutput:
             return 0.0
         # full: until the DAC finishes the block it is playing
         return max(1e-6, self._t0 + ((played // bs + 1) * bs - self._s0) / fs - now)
+
+    # duplex inputs (``console.core.contracts.RecordsInputs``; ``plugins.twin.inputs``)
+    @property
+    def input_specs(self) -> tuple:
+        return self.inputs.specs
+
+    def input_clock(self) -> int:
+        """Inputs are ready for the clocks before this one (the DAC has played them)."""
+        with self._lock:
+            return self._played(time.monotonic())
+
+    def read_inputs(self, a: int, b: int) -> np.ndarray:
+        """The inputs over clocks ``a..b``, (b - a, inputs) float32 card units."""
+        return self.inputs.read(a, b)
+
+    @property
+    def to_v(self) -> np.ndarray:
+        """Volts at the actuator per card unit, per output channel."""
+        return self._to_v
+
+    @property
+    def board(self) -> Any:
+        """The twin relay board on this output's wire (None: none yet)."""
+        return self._bus.board
+
+    def played_card(self, a: int, b: int) -> np.ndarray:
+        """Clocks ``a..b`` of the recording, card units (zeros outside what is kept)."""
+        out = np.zeros((max(0, b - a), len(self.channels)), np.float32)
+        with self._lock:
+            lo, hi = max(a, self._kept_from), min(b, self._written)
+        if hi <= lo:
+            return out
+        # the bulk copied outside the lock (as ``_snapshot``: a long record copied under
+        # it would keep the DAC thread waiting), the last blocks under it
+        mid = max(lo, hi - (self.buffer_periods + 1) * self.block_size)
+        chunk = self.sample_rate_hz // 4
+        for c in range(lo, mid, chunk):
+            e = min(mid, c + chunk)
+            out[c - a : e - a] = self._ring_view(c, e)
+        with self._lock:
+            out[mid - a : hi - a] = self._ring_read(mid, hi)
+            lost = self._kept_from - lo  # the ring wrapped over them during the copy
+        if lost > 0:
+            out[lo - a : lo - a + lost] = 0.0
+        return out
 
     # twin extras
     def recording_card(self, since: int = 0) -> np.ndarray:

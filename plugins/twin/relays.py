@@ -30,6 +30,7 @@ class _Bus:
     level_v: tuple[float, ...] = (0.0, 0.0)
     clock: int = 0
     probes: list[Callable[[], tuple[int, tuple[float, ...]]]] = field(default_factory=list)
+    board: Any = None  # the twin relay board on this wire (its log: the twin's inputs)
 
     def now(self) -> tuple[int, tuple[float, ...]]:
         probes = self.probes
@@ -74,6 +75,7 @@ class TwinRelayBoard:
         self.switch_time_s = profile.get("relays.switch_time_ms") * 1e-3
         self._state = [False] * self.channels
         self._bus = bus_for(profile)
+        self._bus.board = self
         self.log: list[SwitchRecord] = []
         self.fail_on: set[int] = set()  # fault injection: channels whose command fails
 

@@ -102,3 +102,16 @@ def haptable_register_benchmarks(register) -> None:
         run,
         help="interpolation error vs time, table build/query, flow-under-hand precompute",
     )
+
+    def run_instrument(ctx, quick: bool, report_dir: str | None = None) -> dict:
+        # lazy: bench_instrument loads when called, not at every haptable start
+        from plugins.vibrotactile.bench_instrument import run_instrument_bench
+
+        return run_instrument_bench(ctx, quick)
+
+    register(
+        "instrument",
+        run_instrument,
+        help="roving-accelerometer map (H1) on the twin vs its true FRFs: dB error per band "
+        "where coherence >= 0.9, sensor mass on/off, lookup-table agreement, time per map",
+    )

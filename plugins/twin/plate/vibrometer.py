@@ -31,6 +31,7 @@ import numpy as np
 from scipy import fft as sfft
 
 from . import defaults as dflt
+from . import sensor
 from .frf import modal_receptance
 from .model import (
     EXCITATIONS,
@@ -338,3 +339,22 @@ class TwinVibrometer:
     def measure(self, progress: Callable[[int, int], None] | None = None) -> dict:
         """``console.files.vibration_map.make_map`` arguments plus ``meta`` (see measure_grid)."""
         return measure_grid(self.profile, self.settings, progress=progress)
+
+    # what a sensor on the twin's plate reads (``console.core.input_contracts.PlateResponse``)
+    def _twin(self) -> Twin:
+        return build_twin(params_from_profile(self.profile))
+
+    def sensor_accel(self, x_mm, y_mm, mass_kg, patch_v, fs_hz) -> np.ndarray:
+        """Acceleration (N,) m/s^2 at a sensor of ``mass_kg`` (``plate.sensor``)."""
+        twin = sensor.with_point_mass(self._twin(), x_mm, y_mm, mass_kg)
+        return sensor.acceleration(twin, x_mm, y_mm, patch_v, fs_hz)
+
+    def sensor_ring_samples(self, fs_hz: float) -> int:
+        return sensor.ring_samples(self._twin(), fs_hz)
+
+    def plate_size_mm(self) -> tuple[float, float]:
+        p = self._twin().params.plate
+        return p.a_m * 1e3, p.b_m * 1e3
+
+    def true_frf_um_per_v(self, x_mm, y_mm, freqs_hz, excitations=EXCITATIONS) -> np.ndarray:
+        return self._twin().frf_um_per_v(x_mm, y_mm, freqs_hz, tuple(excitations))

@@ -96,6 +96,11 @@ def configure_frf(p: argparse.ArgumentParser) -> None:
         "HapTable's cache, where the console and the demos read it ('measured' as a MAP)",
     )
     m.add_argument("--out", default=None, help="also write the map (.npz) here")
+    # lazy: only the options' words (plugins.vibrotactile.cli.frf_roving holds the run)
+    from plugins.vibrotactile.cli.frf_roving import add_latency_parser, add_roving_options
+
+    add_roving_options(m)
+    add_latency_parser(sub)
     s = sub.add_parser("info", help="summarise a vibration map")
     s.add_argument("map", help=MAP_HELP)
     s.add_argument("--json", action="store_true")
@@ -152,6 +157,16 @@ def run_frf(args, ctx) -> int:
             + (f"; note: {m.provenance['note']}" if m.provenance.get("note") else "")
         )
         return 0
+    if args.frf_cmd == "latency":
+        # lazy: the loopback measurement loads only when asked for
+        from plugins.vibrotactile.cli.frf_roving import measure_latency
+
+        return measure_latency(args, ctx)
+    if args.frf_cmd == "measure" and args.sensor:
+        # lazy: the roving measurement loads only when asked for
+        from plugins.vibrotactile.cli.frf_roving import measure_roving
+
+        return measure_roving(args, ctx)
     if args.frf_cmd == "measure":
         return measure_map(args, ctx)
 

@@ -1,0 +1,167 @@
+"""``haptable frf measure --sensor accelerometer``: the vibration map from a roving sensor
+on the sound card's inputs (``plugins.vibrotactile.roving_run``), no laser needed."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from console.plugin_api import UserError, finite_float, positive_int
+
+LEVEL = finite_float(0.1, 100.0, unit="V", note="the chirp's peak at the patches, e.g. 20")
+
+
+def add_roving_options(m: argparse.ArgumentParser) -> None:
+    m.add_argument(
+        "--sensor",
+        choices=("accelerometer",),
+        default=None,
+        help="measure with the sensor on the sound card's inputs ([audio_inputs]) instead of "
+        "the vibrometer: the console says where to glue it, point by point (the twin moves "
+        "its own); needs --out; run again to resume after a stop",
+    )
+    m.add_argument("--fast", action="store_true", help="twin: fast-forward, not real time")
+    m.add_argument("--level-v", type=LEVEL, default=20.0, help="chirp peak at the patches")
+    m.add_argument("--repeats", type=positive_int(100), default=3, help="chirps per excitation")
+    m.add_argument(
+        "--points",
+        default=None,
+        help="only these grid points, e.g. 1,12,84 (default: every point)",
+    )
+    m.add_argument(
+        "--delay-samples",
+        type=finite_float(0.0, 1e6, unit="samples"),
+        default=0.0,
+        help="the converters' round trip when no loopback input is named",
+    )
+
+
+def _points(spec: str | None, n: int) -> list[int]:
+    if not spec:
+        return list(range(n))
+    try:
+        got = [int(p) for p in spec.split(",") if p.strip()]
+    except ValueError:
+        raise UserError(f"--points {spec!r}: give point numbers, e.g. 1,12,84") from None
+    bad = [p for p in got if not 1 <= p <= n]
+    if bad or not got:
+        raise UserError(f"--points {spec!r}: give point numbers 1..{n}, e.g. 1,12,84")
+    return [p - 1 for p in got]
+
+
+def measure_roving(args, ctx) -> int:
+    # lazy: numpy, the outputs client and the run load only when measuring
+    import numpy as np
+
+    from console.plugin_api import find_input, input_specs
+    from console.plugin_api.runtime import move_sensor, open_outputs
+    from plugins.vibrotactile.roving import RovingSettings
+    from plugins.vibrotactile.roving_run import RovingRun
+
+    if not args.out:
+        raise UserError("--sensor: give --out MAP.npz (its journal is kept beside it)")
+    g = ctx.profile.section("grid")
+    rows, cols, pitch = int(g["rows"]), int(g["columns"]), float(g["pitch_mm"])
+    ox, oy = g["origin_mm"]
+    k = np.arange(rows * cols)
+    pts = np.column_stack([ox + (k % cols) * pitch, oy + (k // cols) * pitch])
+    idx = _points(args.points, len(pts))
+    twin = ctx.profile.get("audio.driver") == "twin"
+    spec = find_input(input_specs(ctx.profile), args.sensor)
+    sensor = (
+        spec.to_json()
+        if spec
+        else {"kind": args.sensor, "name": "accel", "note": "the twin's default input"}
+    )
+    if spec is None and not twin:
+        raise UserError(
+            f"{ctx.profile.path}: no {args.sensor} among [audio_inputs]; add "
+            f"[audio_inputs.accel] channel = 1, kind = '{args.sensor}', sensitivity = 10.2"
+        )
+    if twin:
+        sensor["mass_g"] = float(ctx.profile.get("twin_inputs.sensor_mass_g") or 7.0)
+    settings = RovingSettings(level_v=args.level_v, repeats=args.repeats)
+    with open_outputs(ctx.profile, ctx.pm, fast=True if args.fast else None) as out:
+        run = RovingRun(
+            out,
+            args.out,
+            pts[idx],
+            settings,
+            sensor=sensor,
+            delay_default=args.delay_samples,
+        )
+
+        def place(point: int, x_mm: float, y_mm: float) -> None:
+            n = idx[point - 1] + 1
+            if twin:
+                move_sensor(out, x_mm, y_mm)  # the operator's move, simulated
+                return
+            print(f"glue the sensor on grid point {n} ({x_mm:.0f}, {y_mm:.0f}) mm, then Enter")
+            sys.stdin.readline()
+
+        def report(done: int, total: int, text: str) -> None:
+            print(f"[{done}/{total}] {text}", flush=True)
+
+        got = run.run(place, report)
+    print(
+        f"wrote {got['map']}: {len(idx)} points x 5 excitations, {got['bins']} bins; "
+        f"coherence >= 0.9 over {got['coherence_ge_0.9']:.0%} of them "
+        f"({got['elapsed_s']:.0f} s)"
+    )
+    return 0
+
+
+def add_latency_parser(sub) -> None:
+    lat = sub.add_parser(
+        "latency",
+        help="the converters' round trip on the loopback input (as jack_iodelay): a chirp "
+        "through the gate, cross-correlated with what came back, next to PortAudio's claim",
+    )
+    lat.add_argument("--level-v", type=LEVEL, default=2.0, help="chirp peak at the patches")
+    lat.add_argument("--fast", action="store_true", help="twin: fast-forward, not real time")
+    lat.add_argument("--json", action="store_true")
+
+
+def measure_latency(args, ctx) -> int:
+    """Play a short chirp on the piezo output and find it on the loopback input."""
+    # lazy: numpy, the outputs client and the estimator load only when measuring
+    import json
+
+    import numpy as np
+
+    from console.plugin_api import OutputPlan, Segment, find_input, input_specs
+    from console.plugin_api.runtime import capture, open_outputs
+    from plugins.vibrotactile.roving import RovingSettings, chirp_v, delay_samples
+
+    twin = ctx.profile.get("audio.driver") == "twin"
+    if find_input(input_specs(ctx.profile), "loopback") is None and not twin:
+        raise UserError(
+            f"{ctx.profile.path}: no loopback among [audio_inputs]; cable an output to an "
+            "input and add [audio_inputs.loopback] channel = 2, kind = 'loopback', "
+            "sensitivity = 1.0"
+        )
+    s = RovingSettings(level_v=args.level_v, f_start_hz=100.0, f_stop_hz=2000.0, sweep_s=0.3)
+    s = RovingSettings(**{**s.to_json(), "band_hz": (100.0, 2000.0), "tail_s": 0.2})
+    with open_outputs(ctx.profile, ctx.pm, fast=True if args.fast else None) as out:
+        fs = int(out.limits.sample_rate_hz)
+        x = np.concatenate([chirp_v(s, fs), np.zeros(int(s.tail_s * fs))])
+        seg = Segment(x, np.zeros_like(x), frozenset({"PA"}), False, "latency chirp")
+        cap = capture(out, OutputPlan(fs, (seg,), "loopback latency", 0.0))
+        claimed = out.status().get("audio", {}).get("latency_s")
+    lag = delay_samples(x, cap.physical("loopback"))
+    got = {
+        "round_trip_samples": round(lag, 2),
+        "round_trip_ms": round(lag / fs * 1e3, 3),
+        "portaudio_output_latency_ms": None if claimed is None else round(claimed * 1e3, 3),
+        "sample_rate_hz": fs,
+    }
+    if args.json:
+        print(json.dumps(got))
+    else:
+        print(
+            f"loopback round trip {got['round_trip_samples']:g} samples "
+            f"({got['round_trip_ms']:g} ms); the driver claims "
+            f"{got['portaudio_output_latency_ms']} ms of output latency; use "
+            f"--delay-samples {lag:.0f} for a roving run without a loopback"
+        )
+    return 0
