@@ -45,6 +45,7 @@ BUILTIN_PLUGINS: dict[str, str] = {
     "drivers": "plugins.drivers",
     "demos": "plugins.demos",
     "tuio": "plugins.tuio",
+    "recording": "plugins.recording",
     "studies": "plugins.studies",
 }
 

@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
+from pathlib import Path
 
 from console.plugin_api import UserError, integer, minutes, seconds
 
@@ -32,6 +34,7 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-script", action="store_true", help="twin: no scripted hand")
     p.add_argument("--tuio", action="store_true", help="also stream TUIO 1.1 ([tuio] host/port)")
     p.add_argument("--json", action="store_true", help="print the final snapshot as JSON")
+    p.add_argument("--record", metavar="FILE", default=None, help="record the run (HDF5)")
 
 
 def _ms(x: float) -> str:
@@ -59,6 +62,20 @@ def _progress(done: int, total: int, what: str) -> None:
     print(f"preparing {done + 1}/{total}: {what}", file=sys.stderr, flush=True)
 
 
+def _recording_to(ctx, path: str):
+    """The profile with ``[recording]`` on and writing to ``path`` (the sink ``recording``)."""
+    if "recording" not in ctx.pm.of("frame_sink"):
+        raise UserError("--record: no plugin registers the frame sink 'recording'; unblock it")
+    target = Path(path).expanduser().resolve()
+    if not target.parent.is_dir():  # said before the camera and the outputs start
+        raise UserError(
+            f"--record {target}: folder {target.parent} does not exist; create it or give "
+            "another path"
+        )
+    rec = {**ctx.profile.section("recording"), "enabled": True, "path": str(target)}
+    return replace(ctx.profile, data={**ctx.profile.data, "recording": rec})
+
+
 def run(args, ctx) -> int:
     if args.demo == "soak":
         # lazy: this module loads at every haptable start; bench only when used
@@ -68,9 +85,10 @@ def run(args, ctx) -> int:
         print(json.dumps(out, indent=2, default=float) if args.json else out)
         return 0
     start = ctx.pm.get("demo", args.demo).factory  # the registered demo (this plugin's)
+    profile = ctx.profile if args.record is None else _recording_to(ctx, args.record)
     with ctx.outputs(fast=False) as out:
         run_ = start(
-            ctx.profile,
+            profile,
             ctx.pm,
             out,
             script=not args.no_script,
@@ -79,6 +97,8 @@ def run(args, ctx) -> int:
             direction=args.direction,
             tuio=True if args.tuio else None,
             progress=None if args.json else _progress,
+            # a recording replays the same only from a prepared demo (its plans all ready)
+            prepare_first=args.record is not None,
         )
         t0 = time.monotonic()
         try:

@@ -291,6 +291,14 @@ def start_demo(
         gestures = clf.gesture_stage(
             still_mm=float(dm.get("still_mm", 12.0)), still_s=float(dm.get("still_ms", 300)) / 1e3
         )
+        all_sinks = list(sinks or [])
+        all_sinks += open_frame_sinks(
+            profile, plugins, force=None if tuio is None else {"tuio": tuio}
+        )
+        for s in all_sinks:  # a recorder sees the plans and relay requests the demo makes
+            watch = getattr(s, "watch_outputs", None)
+            if callable(watch):
+                outputs = watch(outputs)
         if name == "knob":
             demo = KnobDemo(
                 profile,
@@ -334,10 +342,10 @@ def start_demo(
             size=int(rt.get("latency_window_frames", 1200)),
             end_stage="scheduled",
         )
-        all_sinks = list(sinks or [])
-        all_sinks += open_frame_sinks(
-            profile, plugins, force=None if tuio is None else {"tuio": tuio}
-        )
+        for s in all_sinks:  # a recorder keeps what the run starts from
+            begin = getattr(s, "begin", None)
+            if callable(begin):
+                begin(demo=name, classifier=clf, scene=getattr(demo, "scene", None))
         loop = FrameLoop(
             camera,
             stages,
