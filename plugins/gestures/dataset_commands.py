@@ -15,8 +15,6 @@ from typing import Any
 from console.plugin_api import UserError, finite_float, integer, positive_int, seed
 
 from .dataset import GESTURES
-from .jobs import synth_atomic
-from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, capture_background, estimate, record, synth
 
 #: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
 #: at 60 fps; the paper's set is 5 subjects x 40 repetitions)
@@ -135,6 +133,10 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
 
 
 def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
+    # lazy: the renderer (OpenCV) loads when a command needs it, not at every start
+    from .jobs import synth_atomic
+    from .synth import DYNAMIC_FRAMES, STATIC_FRAMES, estimate, synth
+
     gestures = GESTURES
     if args.gestures:
         gestures = tuple(g.strip() for g in args.gestures.split(",") if g.strip())
@@ -196,6 +198,7 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
 def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
     """``synth --renderer phalanx``: the same options, the independent renderer."""
     # lazy: the second renderer loads only when it is asked for
+    from .jobs import synth_atomic
     from .phalanx_synth import DYNAMIC_FRAMES as PH_DYNAMIC
     from .phalanx_synth import synth_phalanx
 
@@ -265,6 +268,9 @@ def open_camera(ctx: Any, driver: str | None = None) -> Any:
 
 
 def run_record(args: argparse.Namespace, ctx: Any) -> int:
+    # lazy: the renderer (OpenCV) loads when a command needs it, not at every start
+    from .synth import capture_background, record
+
     check_folder_name(args.subject, "--subject")
     check_folder_name(args.name, "--name")
 
