@@ -486,7 +486,10 @@ class HapTableApp(App):
         self.notify("E-STOP: outputs silenced, relays open", severity="error")
 
     def action_reset_estop(self) -> None:
-        if self.session.reset_estop():
+        out = self.session.outputs
+        if out is not None and not out.estopped:  # said, not silence: the key was heard
+            self.notify("no e-stop to reset: the outputs are not e-stopped")
+        elif self.session.reset_estop():
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     async def on_event(self, event: events.Event) -> None:

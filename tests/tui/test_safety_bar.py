@@ -66,6 +66,17 @@ def test_notifications_never_cover_the_bar_at_80x24(plugins):
             for x in (1, 40, 79):
                 widget, _ = app.screen.get_widget_at(x, row)
                 assert widget is bar, (x, widget)
+            # ctrl+r resets the e-stop; again, with none latched, it says so (not silence)
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, what="reset")
+            await pilot.press("ctrl+r")
+            await wait_for(
+                pilot,
+                lambda: any(
+                    "no e-stop to reset" in str(t.render()) for t in app.screen.query(Toast)
+                ),
+                what="the no-e-stop toast",
+            )
 
     asyncio.run(scenario())
 
