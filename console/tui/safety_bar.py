@@ -102,7 +102,10 @@ def describe(
     else:  # a channel per patch
         full = "  ".join(f"{n} {v:+6.1f} V" for n, v in pairs)
     mid = " ".join(f"{n} {v:+.1f} V" for n, v in pairs)
-    short = " ".join(f"{n} {v:+.0f}" for n, v in pairs) + " V"
+    if len(pairs) <= 2:  # each level with its unit ("piezo -10 screen +0 V" read as no unit)
+        short = " ".join(f"{n} {v:+.0f} V" for n, v in pairs)
+    else:  # a channel per patch: the unit once, so that every channel keeps its name
+        short = " ".join(f"{n} {v:+.0f}" for n, v in pairs) + " V"
     state = "PLAYING" if status["busy"] else "idle"
     return (
         _fit(

@@ -5,6 +5,7 @@ e-stop or an audition)."""
 from __future__ import annotations
 
 import asyncio
+import re
 
 from textual.widgets._toast import Toast
 
@@ -40,6 +41,10 @@ def test_the_bar_keeps_relays_and_keys_at_any_width():
         assert len(text) <= width and "E-STOP" in text and "1,2,3,4" in text
         if width >= 80:  # every channel by name
             assert all(n in text for n in ("PA", "PB", "PC", "PD", "screen")), text
+    for width in (80, 72, 66):  # playing at a narrow width: every level keeps its unit
+        text, _ = describe(_status(relays=(1,), level=(-10.2, 0.0), busy=True), width)
+        levels = re.findall(r"(?:piezo|screen) ([+-][0-9.]+)( V)?", text)
+        assert levels and all(unit for _v, unit in levels), text
     wide, _ = describe(_status(estopped=True, reason="operator", relays=()), 200)
     assert "operator" in wide and "relays closed: none" in wide
 
