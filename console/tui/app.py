@@ -563,10 +563,11 @@ class HapTableApp(App):
         if self.screen is not self.base and getattr(self.screen, "HELP_TEXT", ""):
             pane = self.screen  # a panel opened on top (the palette's "Panel: ...")
             title = type(pane).__name__.removesuffix("Panel").removesuffix("Screen")
-        sections = [("HapTable console", HELP.format(tabs=_keys_help(self.tabs)))]
-        if pane is not None:
+        sections = []
+        if pane is not None:  # first: what the operator asked about, in view at once
             text = getattr(pane, "HELP_TEXT", "") or _bindings_help(pane)
             sections.append((f"This screen: {title}", text))
+        sections.append(("HapTable console", HELP.format(tabs=_keys_help(self.tabs))))
         self.push_screen(HelpScreen(sections))
 
     def on_input_changed(self, event: Input.Changed) -> None:
