@@ -3,7 +3,7 @@
 ``[study] level`` (``parse_level``): ``"<n> dB SL"``, a sensation level above the
 participant's own detection threshold, or ``"<v> V"``, a peak drive in volts for every
 part; empty: the effect's own level (the profile's population curve). Flow studies
-(``stimulus = "flow"``, exp1) take it so far.
+(exp1), hand flows (exp2) and the knob take it.
 
 At plan time (``start.prepare``, given ``resolver(...)``) each flow of the plan is
 rendered at the effect's level and every part's drive resolved from the participant's
@@ -19,6 +19,10 @@ one line, never played lower; so is a participant without a vibrotactile curve. 
 records it in the trial's ``stimulus["level"]``: ``level`` (the text), ``sl_db`` and per
 part ``freq_hz``, ``threshold_db``, ``reference``, ``um_per_v``, ``amplitude_v``;
 ``apply_level`` scales the rendered parts to those volts when the trial is played.
+
+Hand flows (exp2) and the knob take it too (``sensation_stimuli.py``: a hand flow's
+strongest active square at its carrier, the knob's electrovibration signals at their
+waveform and frequency, with the same refusals).
 
 A simulated participant without a curve gets one from its observer's parameters
 (``simulated_curve``: the profile's ``[perception]`` fingertip curve plus the observer's
@@ -43,7 +47,7 @@ from . import thresholds as th
 
 _LEVEL = re.compile(r"^\s*([+-]?\d+(?:\.\d+)?)\s*(dB\s*SL|V)\s*$", re.IGNORECASE)
 #: the stimuli whose level the plan resolves, and the modality of their thresholds
-MODALITY = {"flow": "vibrotactile"}
+MODALITY = {"flow": "vibrotactile", "hand_flow": "vibrotactile", "knob": "electrovibration"}
 MAX_SL_DB = 60.0
 #: how far the played drive may be from the resolved one before it is refused
 TOLERANCE_REL = 1e-6
@@ -71,8 +75,8 @@ def parse_level(text: str, where: str = "protocol", stimulus: str = "flow") -> L
     value, unit = float(m.group(1)), m.group(2).upper().replace(" ", "")
     if stimulus not in MODALITY:
         raise UserError(
-            f"{where}: study.level = {text!r}: only flow studies (exp1) take a level so far; "
-            "remove it"
+            f"{where}: study.level = {text!r}: only flow, hand_flow and knob studies take a "
+            "level; remove it"
         )
     if unit == "V" and not 0 < value <= 1000:
         raise UserError(f"{where}: study.level = {text!r}: give volts above 0 (at most 1000)")
@@ -107,16 +111,23 @@ def simulated_curve(observer: dict[str, Any], perception: dict[str, Any]) -> dic
 
 
 def participant_curves(
-    folder: Path, participant: dict[str, Any], modality: str, perception: dict[str, Any]
+    folder: Path,
+    participant: dict[str, Any],
+    modality: str,
+    perception: dict[str, Any],
+    make: Callable[[dict[str, Any]], list[dict[str, Any]]] | None = None,
 ) -> list[dict[str, Any]]:
     """The participant's curves; a simulated participant without a ``modality`` curve
-    gets ``simulated_curve`` saved first; a person without one is one line."""
+    gets ``simulated_curve`` (or ``make(observer)``'s curves) saved first; a person
+    without one is one line."""
     curves = th.load_curves(folder)
     if any(c["modality"] == modality for c in curves):
         return curves
     pid = participant.get("id", folder.name)
     if participant.get("simulated"):
-        th.save_curve(folder, simulated_curve(participant.get("observer") or {}, perception))
+        obs = participant.get("observer") or {}
+        for c in make(obs) if make is not None else [simulated_curve(obs, perception)]:
+            th.save_curve(folder, c)
         return th.load_curves(folder)
     raise UserError(
         f"{pid} has no {modality} threshold ({th.curve_path(folder)}): run `haptable study run "
@@ -233,6 +244,11 @@ def resolver(
     level = parse_level(protocol.level, protocol.path, protocol.stimulus)
     if level is None:
         return None
+    if protocol.stimulus != "flow":  # hand flows and the knob
+        from .sensation_stimuli import resolver_for
+
+        modality = MODALITY[protocol.stimulus]
+        return resolver_for(protocol, profile, render, level, modality, participant_curves)
     perception = dict(profile.section("perception") or {})
 
     def resolve(plan: dict[str, Any], folder: Path, participant: dict[str, Any]) -> dict[str, Any]:

@@ -121,6 +121,10 @@ class EffectPlayer:
 def knob_trial(plugins: Any, profile: Any, trial: dict[str, Any], seed: int, attempt: int) -> Any:
     """One knob trial with the simulated finger (``contracts.KnobTrials``)."""
     s = trial["stimulus"]
+    if s.get("level"):  # the participant's level, resolved in the plan (sensation_stimuli.py)
+        from .sensation_stimuli import knob_profile  # lazy: knob studies with a level only
+
+        profile = knob_profile(profile, s["level"])
     eff = plugins.provider("effect", KnobTrials, profile, plugin_hint="electrostatic")
     return eff.knob_trial(
         condition=s["condition"],

@@ -150,7 +150,7 @@ def test_missing_curve_and_too_loud_are_refused_in_one_line(
         ("20 dB", "flow", "give a sensation level"),
         ("0 V", "flow", "give volts above 0"),
         ("90 dB SL", "flow", "-20 .. 60 dB SL"),
-        ("20 dB SL", "knob", "only flow studies"),
+        ("20 dB SL", "tone", "only flow, hand_flow and knob studies"),
     ],
 )
 def test_bad_levels_are_one_line(text, stim, match):

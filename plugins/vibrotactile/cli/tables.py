@@ -58,6 +58,13 @@ def configure_tables(p: argparse.ArgumentParser) -> None:
         "[vibrotactile] min_contrast_db, 0 = the paper's rule (largest absolute difference)",
     )
     add_rule_option(b)
+    b.add_argument(
+        "--thresholds",
+        default=None,
+        metavar="FILE",
+        help="a person's thresholds.json (DIR/P01/thresholds.json): the perceptual rule "
+        "scores at their vibrotactile threshold instead of the [perception] curve",
+    )
     q = sub.add_parser("query", help="max difference, frequency and actuator for (active, passive)")
     q.add_argument(
         "tables",
@@ -87,10 +94,18 @@ def run_tables(args, ctx) -> int:
         finite("--band-hz", args.band_hz, 1e-3, nyq, f"give a band in Hz up to Nyquist ({nyq:g})")
         c, per = table_rule_of(ctx, args)
         m = load_map(map_source(args.map, ctx), require_all=not args.allow_missing)
+        band = args.band_hz or vt_section(ctx)["band_hz"]
+        if args.thresholds:  # a person's threshold curve (person_thresholds.py)
+            from plugins.vibrotactile.person_thresholds import personal_rule
+            from plugins.vibrotactile.tables import rule_bins
+
+            if per is None:
+                raise UserError("--thresholds applies to the perceptual rule: drop --rule paper")
+            per = personal_rule(per, args.thresholds, m.freq_hz[rule_bins(m, band, per, c)])
         t0 = time.perf_counter()
         t = build_tables(
             m,
-            args.band_hz or vt_section(ctx)["band_hz"],
+            band,
             progress_printer(),
             min_contrast_db=c,
             perceptual=per,
@@ -111,6 +126,7 @@ def run_tables(args, ctx) -> int:
                 file=sys.stderr,
             )
         rule = f", rule {t.rule}" + (f", contrast >= {c:g} dB" if c > 0 else "")
+        rule += f", thresholds of {args.thresholds}" if args.thresholds else ""
         print(
             f"wrote {args.out}: {m.points.size} x {m.points.size} pairs x {len(m.excitations)} "
             f"excitations up to {t.band_hz:g} Hz{rule} in {dt * 1e3:.0f} ms"
