@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import inspect
+import io
 import json
 import shutil
 import sys
@@ -63,13 +65,15 @@ def run_doctor(args, ctx) -> int:
         scheduling_status(ctx.profile, ctx.pm),
     ]
     bad = [s for s in statuses if s.state in ("missing", "error")]
+    code, part = _selftest_part(args, ctx)  # the self-test's quick part, when a plugin has one
     if args.json:
         print(
             json.dumps(
                 {
                     "profile": str(ctx.profile.path),
                     "devices": [s.__dict__ for s in statuses],
-                    "ok": not bad,
+                    "selftest": json.loads(part) if part else None,
+                    "ok": not bad and not code,
                 },
                 indent=2,
             )
@@ -81,7 +85,23 @@ def run_doctor(args, ctx) -> int:
             print(line.rstrip())
             if s.fix:
                 print(f"  {'':<10} {'':<12} fix: {s.fix}")
-    return 1 if bad else 0
+        print(part, end="")
+    return 1 if bad or code else 0
+
+
+def _selftest_part(args, ctx) -> tuple[int, str]:
+    """``haptable selftest --doctor``'s exit status and output (0, "" without one)."""
+    cmd = ctx.pm.commands.get("selftest")
+    if cmd is None:
+        return 0, ""
+    p = argparse.ArgumentParser()
+    cmd.configure(p)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = int(
+            cmd.run(p.parse_args(["--doctor"] + (["--json"] if args.json else [])), ctx) or 0
+        )
+    return code, buf.getvalue()
 
 
 # ---------------------------------------------------------------------- play

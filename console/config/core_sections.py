@@ -135,6 +135,14 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 help="sound-card output volts (peak) at sample value 1.0",
             ),
             "paced": Field("bool", True, help="twin: play in real time (false: fast-forward)"),
+            "measured_output_latency_ms": Field(
+                "float",
+                -1.0,
+                min=-1,
+                max=10000,
+                help="the output latency `haptable frf latency --save` measured on the "
+                "loopback; -1 = not measured",
+            ),
             "switch_interval_ms": Field(
                 "float",
                 0.25,

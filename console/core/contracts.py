@@ -26,7 +26,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
     scene         Scene (its events: e.g. PointsEvent)
     projector     ProjectorFactory -> ProjectorLauncher
     demo          DemoFactory -> Demo (with its own status_lines)
-    frame_sink    FrameSinkFactory -> FrameSink; SwitchableSink (its switch and target
+    frame_sink    FrameSinkFactory -> FrameSink; ReadsRecordings (reads a recorded run back:
+                  the Camera and Scope screens show it); SwitchableSink (its switch and target
                   in the profile: the Camera screen turns it on and off)
     panel         PanelFactory -> Panel
     observer      SimulatedObserver (a simulated study participant)
@@ -41,6 +42,9 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Literal, Protocol, TypedDict, runtime_checkable
 
 import numpy as np
+
+from console.core.recording_contracts import ReadsRecordings as ReadsRecordings
+from console.core.recording_contracts import RecordedRun as RecordedRun
 
 # the frame sinks' and panels' contracts: here too, where every kind's contract is found
 from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory

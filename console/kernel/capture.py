@@ -4,7 +4,8 @@
 gate: a plan over the limits is refused before a sample plays) and then asks the kernel
 for the input channels from the plan's first sample to its last plus ``tail_s`` (the
 ``inputs`` request, ``console.kernel.input_requests``). ``move_sensor`` places the twin's
-roving sensor (the operator's move, simulated; refused on a real table).
+roving sensor (the operator's move, simulated; refused on a real table);
+``inject_twin_faults`` breaks the twin as ``[twin_faults]`` would (tests, benches).
 """
 
 from __future__ import annotations
@@ -68,3 +69,8 @@ def move_sensor(outputs: Any, x_mm: float, y_mm: float, mass_g: float | None = N
     """Put the twin's roving sensor at (x_mm, y_mm) (and set its mass): its status."""
     h, _ = outputs._call("sensor", x_mm=float(x_mm), y_mm=float(y_mm), mass_g=mass_g)
     return {k: v for k, v in h.items() if k not in ("op", "id", "ok")}
+
+
+def inject_twin_faults(outputs: Any, faults: dict) -> None:
+    """The twin's faults from now on, as ``[twin_faults]`` keys (``{}``: healthy again)."""
+    outputs._call("twin_faults", faults=dict(faults))

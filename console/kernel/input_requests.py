@@ -2,7 +2,8 @@
 the input channels over a range of the gate's clock (what they read while a plan the
 client played went out: the plan itself is an ordinary ``plan`` + ``play``, through the
 gate like every plan), ``sensor`` moves the twin's roving sensor (the operator's move,
-simulated). Every field is checked here; a bad one is one line naming it.
+simulated), ``twin_faults`` injects faults into the twin (a self-test's tests and bench).
+Every field is checked here; a bad one is one line naming it.
 """
 
 from __future__ import annotations
@@ -68,4 +69,17 @@ def sensor(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> dict[
     return {"ok": True, **k.audio.inputs.status()}
 
 
-INPUT_REQUESTS = (inputs, sensor)
+def twin_faults(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> dict[str, Any]:
+    """Faults injected into the twin from now on (tests, benches): ``faults`` holds the
+    ``[twin_faults]`` keys (``plugins.twin.faults``); ``{}`` heals it."""
+    # lazy: keeps NumPy out of the requests' import
+    from console.core.input_contracts import MovesSensor
+
+    faults = h.get("faults")
+    if not isinstance(k.audio, MovesSensor) or not isinstance(faults, dict):
+        raise ValueError("faults are injected into the twin only, as a [twin_faults] table")
+    k.audio.inputs.set_faults(faults)
+    return {"ok": True}
+
+
+INPUT_REQUESTS = (inputs, sensor, twin_faults)

@@ -26,7 +26,7 @@ What this module offers, by where it comes from:
   ``VisionResult``
 - the hook marker: ``hookimpl`` (the hooks are documented in ``console.core.hookspecs``)
 - plugin manager and profile: ``Plugins``, ``PanelTab``, ``load_plugins``, ``Profile``,
-  ``load_profile``, ``profile_file``
+  ``load_profile``, ``profile_file``, ``save_overrides`` (the profile's overrides file)
 - settings schema and CLI options: ``Field``, ``KINDS``, ``check``, ``path_problem``;
   ``Parser``, ``BadValue``, ``finite_float``, ``from_field``, ``host_name``, ``integer``,
   ``minutes``, ``port``, ``positive_int``, ``seconds``, ``seed``
@@ -41,6 +41,9 @@ What this module offers, by where it comes from:
   (``decode``, ``parse_json``, ``torn``, ``MAX_JSON_DEPTH``), ``read_bytes_capped``,
   ``parse_toml_text``, ``read_npz``, ``npz_keys``, ``json_depth``, ``cache_dir``,
   ``data_dir``, ``cached_arrays``, ``entry_path``, ``input_hash``
+- what a run hands its outputs, as a recording keeps it (``console.core.plan_watch``):
+  ``WatchedOutputs``, ``plan_line``, ``plan_record``, ``plan_hash``, ``report_clocks``,
+  ``json_values``
 - real time and benchmarks: ``realtime_priority``, ``support_priority``,
   ``StallWitness``, ``ORIGINS``, ``machine_info``, ``summarize_s``
 """
@@ -48,7 +51,7 @@ What this module offers, by where it comes from:
 from __future__ import annotations
 
 from console.config.plugins import PanelTab, Plugins, load_plugins
-from console.config.profile import Profile, load_profile
+from console.config.profile import Profile, load_profile, save_overrides
 from console.config.profile_files import profile_file
 from console.core.audio_inputs import InputSpec, find_input, input_specs
 from console.core.bench_stats import machine_info, summarize_s
@@ -83,6 +86,14 @@ from console.core.options import (
     positive_int,
     seconds,
     seed,
+)
+from console.core.plan_watch import (
+    WatchedOutputs,
+    json_values,
+    plan_hash,
+    plan_line,
+    plan_record,
+    report_clocks,
 )
 from console.core.realtime import realtime_priority, support_priority
 from console.core.schema import KINDS, Field, check, path_problem
@@ -192,6 +203,7 @@ __all__ = [
     "Profile",
     "load_profile",
     "profile_file",
+    "save_overrides",
     # settings schema, CLI options
     "KINDS",
     "Field",
@@ -236,6 +248,12 @@ __all__ = [
     "save_map",
     # files
     "append_json_line",
+    "WatchedOutputs",
+    "json_values",
+    "plan_hash",
+    "plan_line",
+    "plan_record",
+    "report_clocks",
     "write_text_atomic",
     "parse_toml_text",
     "read_bytes_capped",

@@ -21,7 +21,8 @@ What it offers, by where it comes from:
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
   ``HEARTBEAT_S``, ``PEER_TIMEOUT_S``, ``MAX_SOCKET_PATH``, ``TO_PROJECTOR``
 - the outputs (the table's safety kernel): ``open_outputs``; duplex inputs ``capture``
-  (play a plan, get what the inputs read), ``read_inputs``, ``move_sensor`` (the twin's),
+  (play a plan, get what the inputs read), ``read_inputs``, ``move_sensor`` and
+  ``inject_twin_faults`` (the twin's),
   ``Capture``; private runtime files
   ``runtime_dir``, ``ensure_private_dir``, ``write_private``
 - session events: ``Started``, ``Progress``, ``Snapshot``, ``Stopped``, ``Failed``
@@ -33,7 +34,13 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
-    from console.kernel.capture import Capture, capture, move_sensor, read_inputs
+    from console.kernel.capture import (
+        Capture,
+        capture,
+        inject_twin_faults,
+        move_sensor,
+        read_inputs,
+    )
     from console.kernel.client import open_outputs
     from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
@@ -92,7 +99,7 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "service": ("ProjectorService",),
     "supervisor": ("ProjectorLaunch",),
     "client": ("open_outputs",),
-    "capture": ("Capture", "capture", "move_sensor", "read_inputs"),
+    "capture": ("Capture", "capture", "inject_twin_faults", "move_sensor", "read_inputs"),
     "private_dir": ("ensure_private_dir", "runtime_dir", "write_private"),
     "events": ("Failed", "Progress", "Snapshot", "Started", "Stopped"),
 }
@@ -118,6 +125,7 @@ __all__ = [
     "measured_map",
     "measured_map_file",
     "MessageReader",
+    "inject_twin_faults",
     "move_sensor",
     "open_camera",
     "open_classifier",

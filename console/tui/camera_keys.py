@@ -8,6 +8,7 @@ from typing import Any
 from textual.binding import Binding
 
 from console.core.contracts import SimulatedCamera
+from console.tui.recording_keys import REPLAY_BINDINGS
 
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
 KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
@@ -30,6 +31,9 @@ HELP_TEXT = (
     "g        gestures panel: datasets, training and evaluation\n"
     "u        TUIO (or another switchable output) on / off, kept for the profile\n"
     "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
+    "o        a recording (haptable demo ... --record FILE): type its path, Enter shows\n"
+    "         its frames instead of the live camera (which is let go): space plays /\n"
+    "         pauses, left / right step a frame, home / end jump, Esc: the live camera\n"
     "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
     "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
     "(its title says which, and the grey levels shown black and white: the frame's\n"
@@ -39,6 +43,7 @@ HELP_TEXT = (
 # in the order of importance: the footer shows as many as fit (whole: at 80 columns
 # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all
 BINDINGS = [
+    *REPLAY_BINDINGS,  # a recording's keys: only while one shows (``recording_view``)
     # the calibration wizard's keys, first while it runs (x: or the exposure assistant);
     # at other times their hidden bindings below take the keys (a refusal says why)
     Binding("n", "skip_target(True)", "skip target"),
@@ -53,6 +58,7 @@ BINDINGS = [
     Binding("W", "save_tuning", "keep settings"),
     Binding("U", "edit_target", "TUIO target"),
     Binding("e", "exposure", "exposure"),
+    Binding("o", "open_recording", "recording"),
     Binding("P", "hold_hand", "hold hand", show=False),
     Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
     Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),

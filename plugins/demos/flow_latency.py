@@ -7,6 +7,8 @@ output scheduler, the safety gate and the twin's paced audio output. Per flow:
 
 - ``decision_to_queued_ms``: the classify stage's decision -> the plan queued at the
   scheduler (the lookup, or the search, and the synthesis);
+- ``decision_to_dac_ms``: that plus the output latency to the DAC, the one ``haptable frf
+  latency --save`` measured, else the driver's claim, marked so (``plugins.demos.dac_latency``);
 - ``decision_to_output_ms``: the decision -> the block holding the plan's first sample
   handed to the audio driver (the scheduler stamps it; it then plays after the device
   buffer, ``dac_buffer_ms``, not included). Every flow first needs its patches' relays
@@ -137,6 +139,7 @@ def run_placements(ctx: Any, atlas: bool, n: int, seed: int) -> dict:
         "underruns_audible": audio.get("underruns_audible"),
         "underrun_s": audio.get("underrun_s"),
         "buffer_periods": audio.get("buffer_periods"),
+        "driver_latency_s": audio.get("latency_s"),
         "kernel_requests": kernel.get("requests"),
         # the machine's own stalls over the run (a small real-time process beside it)
         "machine_jitter": jitter,
@@ -270,6 +273,10 @@ def _run(ctx: Any, quick: bool) -> dict:
         "before": res["before"]["decision_to_output_ms"],
         "after": res["after"]["decision_to_output_ms"],
     }
+    from .dac_latency import to_dac  # + the output latency: measured, else claimed
+
+    claimed = res["after"].get("driver_latency_s")
+    res["decision_to_dac_ms"] = to_dac(res["decision_to_output_ms"], prof, claimed)
     periods = res["after"].get("buffer_periods") or 1
     res["dac_buffer_ms"] = periods * bs / fs * 1e3
     res["meets_target"] = bool(p99 is not None and p99 <= TARGET_P99_MS)

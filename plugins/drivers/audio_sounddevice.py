@@ -270,8 +270,8 @@ class SounddeviceOutput:
         with _open_lock:
             _open_streams += 1
         self._stream = stream
-        with contextlib.suppress(Exception):
-            self._stream_latency_s = float(stream.latency)
+        with contextlib.suppress(Exception):  # duplex: (input, output)
+            self._stream_latency_s = float(np.atleast_1d(stream.latency)[-1])
         try:
             stream.start()
         except Exception as exc:
@@ -461,10 +461,14 @@ class SounddeviceOutput:
         ``fill``, and how far ahead of the DAC each block was written (``dac_lead_ms``,
         when the host API reports it)."""
         stream = self._stream
-        latency_s = float("nan")
+        latency_s = in_latency_s = float("nan")
         if stream is not None:
             try:
-                latency_s = float(stream.latency)
+                both = np.atleast_1d(stream.latency)  # duplex: (input, output)
+                latency_s, in_latency_s = (
+                    float(both[-1]),
+                    float(both[0]) if both.size > 1 else in_latency_s,
+                )
                 if self._state == "running" and not stream.active and not self._stopping:
                     self._finished()
             except Exception as exc:  # PortAudioError from a vanished device
@@ -477,6 +481,7 @@ class SounddeviceOutput:
             "sample_rate_hz": self.sample_rate_hz,
             "block_size": self.block_size,
             "latency_s": latency_s,
+            "input_latency_s": in_latency_s,
             "underruns": self._underruns,
             "underruns_by_cause": dict(self._underruns_by_cause),
             "last_stop": self._last_stop,

@@ -14,6 +14,7 @@ from typing import Any
 
 from console.plugin_api import UserError, finite_float, integer, positive_int, seed
 
+from .cut import configure_cut, run_cut
 from .dataset import GESTURES
 
 #: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
@@ -310,5 +311,10 @@ COMMANDS = {
         configure_record,
         run_record,
         "record one gesture sample from the camera into a dataset folder",
+    ),
+    "cut": (
+        configure_cut,
+        run_cut,
+        "cut labelled samples out of a recording (haptable demo ... --record FILE)",
     ),
 }

@@ -3,7 +3,8 @@ results, gesture, scene state and plan, in one HDF5 file.
 
 Off by default. Profile section ``[recording]``: ``enabled``, ``path`` (empty: a new file
 under HapTable's data directory), ``codec`` (``lzf`` or ``gzip1``), ``queue_frames``,
-``flush_s``, ``replay_file`` (the camera ``replay``). ``haptable demo NAME --record FILE``
+``flush_s``, ``replay_file`` (the camera ``replay``), ``study_trials`` (the studies plugin
+records each trial: ``haptable study run ... --record``). ``haptable demo NAME --record FILE``
 records one run. The recorder is the frame sink ``recording``
 (``haptable_register_frame_sinks``): it copies each frame into a bounded queue (a full
 queue drops the frame and counts it) and a writer thread compresses and writes in SWMR
@@ -23,7 +24,8 @@ bytes per frame and dropped frames at 60 fps.
 
 Modules: ``settings``, ``decisions`` (a frame's decisions as JSON, ``plan_hash``),
 ``writer`` (``Recorder``), ``sink`` (``make_recorder``), ``reader`` (``open_recording``),
-``camera`` (``ReplayCamera``, the driver ``replay``), ``replay`` (``--vision-only``),
+``camera`` (``ReplayCamera``, the driver ``replay``), ``readback`` (the sink's factory,
+which also reads a recording back for the console's Camera and Scope screens), ``replay`` (``--vision-only``),
 ``replay_demo`` (through the demo), ``cli``, ``bench``.
 """
 
@@ -43,11 +45,11 @@ def haptable_profile_sections(register) -> None:
 
 @hookimpl
 def haptable_register_frame_sinks(register) -> None:
-    from .sink import make_recorder  # lazy: keeps numpy work off haptable's start
+    from .readback import RecorderFactory  # light: the recorder and reader load when used
 
     register(
         "recording",
-        make_recorder,
+        RecorderFactory(),
         description="frames, vision, gestures, plans into an HDF5 file ([recording] enabled)",
     )
 

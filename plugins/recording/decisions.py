@@ -8,59 +8,18 @@ as JSON text: equal text is equal bits (floats are written with ``repr``)."""
 
 from __future__ import annotations
 
-import hashlib
 import json
 from typing import Any
 
 import numpy as np
 
+from console.plugin_api import json_values as _num
+from console.plugin_api import plan_hash, plan_record
+
+__all__ = ["plan_hash", "plan_record"]
+
 #: the keys replay compares (the plan: only when the replay re-plans, see ``replay``)
 VISION_KEYS = ("contacts", "hands", "gesture", "named", "rest_mm")
-
-
-def _num(x: Any) -> Any:
-    """Numbers, tuples, arrays and dicts as JSON values (floats kept bit for bit)."""
-    if isinstance(x, dict):
-        return {str(k): _num(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_num(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _num(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        return float(x)
-    if isinstance(x, (np.integer, int)) and not isinstance(x, bool):
-        return int(x)
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if x is None or isinstance(x, str):
-        return x
-    return repr(x)
-
-
-def plan_hash(plan: Any) -> str:
-    """SHA-256 of what a plan plays: rate, gap, and each segment's drives, relays and label."""
-    h = hashlib.sha256()
-    h.update(repr((int(plan.sample_rate_hz), float(plan.gap_s), plan.name)).encode())
-    for seg in plan.segments:
-        h.update(repr((sorted(seg.patches), bool(seg.screen), seg.label)).encode())
-        for arr in (seg.piezo_v, seg.screen_v, *(seg.patch_v[p] for p in sorted(seg.patch_v))):
-            h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
-    return h.hexdigest()
-
-
-def plan_record(plan: Any) -> dict:
-    """A plan as the recording keeps it: name, hash, duration, relays and its ``meta``."""
-    return {
-        "name": plan.name,
-        "hash": plan_hash(plan),
-        "sample_rate_hz": int(plan.sample_rate_hz),
-        "duration_s": float(plan.duration_s),
-        "segments": [
-            {"patches": sorted(s.patches), "screen": bool(s.screen), "n": s.n_samples}
-            for s in plan.segments
-        ],
-        "meta": _num(dict(plan.meta)),
-    }
 
 
 def _hand(h: Any) -> dict:

@@ -23,6 +23,11 @@ FIELDS = {
     "flush_s": Field(
         "float", 0.5, min=0.05, max=60.0, help="flush to disk this often (a crash loses less)"
     ),
+    "study_trials": Field(
+        "bool",
+        False,
+        help="record each study trial into its participant's folder (study run --record)",
+    ),
     "replay_file": Field(
         "str", "", help="the recording the camera driver 'replay' plays (at its recorded pace)"
     ),

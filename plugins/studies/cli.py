@@ -53,6 +53,13 @@ def configure(p: argparse.ArgumentParser) -> None:
     r.add_argument("--consent", action="store_true", help="the informed consent is noted")
     r.add_argument("--json", action="store_true", help="print a JSON summary at the end")
     r.add_argument("--quiet", action="store_true", help="no line per trial")
+    r.add_argument(
+        "--record",
+        action="store_true",
+        help="record each trial into DIR/<participant>/recording/ ([recording] study_trials)",
+    )
+    rp = sub.add_parser("replay", help="re-render a recorded study's stimuli: the same?")
+    rp.add_argument("path", help="a trial file, a participant's folder or the study's --out")
     sub.add_parser("list", help="the protocols in studies/ and their trial counts")
 
     add_parser(sub)
@@ -161,6 +168,12 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         return analyze_cli.run(args)
+    if args.study_cmd == "replay":
+        from .trial_replay import replay_study  # lazy: only when replaying
+
+        same, line = replay_study(args.path, ctx)
+        print(line)
+        return 0 if same else 1
     # lazy: adaptive protocols (threshold_*, jnd_*) load only for a study command
     from . import adaptive_protocol
 
@@ -179,6 +192,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     from .responders import INPUT_ENDED, ObserverResponder, TerminalResponder, observer
     from .runner import Control, run_plan
     from .stimuli import EffectPlayer, check_places, play_on
+    from .trial_recording import TrialRecorder, recorded_files, wants_recording
 
     if adaptive_protocol.is_adaptive(args.study):
         from .adaptive_cli import run as run_adaptive  # lazy: as above
@@ -229,8 +243,18 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                 )
                 if vmap is not None:
                     check_places(prep.plan, vmap)
+                files, outs = prep.files, outputs
+                if wants_recording(args, ctx.profile):  # each trial into recording/
+                    rec = TrialRecorder(
+                        files.root,
+                        prep.plan,
+                        profile=ctx.profile,
+                        vmap=vmap,
+                        seed=prep.participant_seed,
+                    )
+                    files, outs = recorded_files(files, rec), rec.watch(outputs)
                 player = EffectPlayer(
-                    ctx.pm, ctx.profile, vmap, play_on(outputs), knob_seed=prep.participant_seed
+                    ctx.pm, ctx.profile, vmap, play_on(outs), knob_seed=prep.participant_seed
                 )
                 responder = (
                     ObserverResponder(obs, prep.participant_seed)
@@ -249,7 +273,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     if again:
                         print(f"{pid}: {again}", flush=True)
                 res = run_plan(
-                    prep.files,
+                    files,
                     prep.plan,
                     prep.participant,
                     player=player,

@@ -26,6 +26,7 @@ from .runner import Control, run_plan
 from .start import prepare, stored_participant
 from .stimuli import EffectPlayer, LiveKnob, check_places, play_on_session
 from .store import resume_text
+from .trial_recording import TrialRecorder, recorded_files
 from .words import SCREEN
 
 TOPIC = "study"
@@ -205,6 +206,7 @@ def run_study(
     )
     projected: Any = None
     live: Any = None
+    rec: Any = None
 
     def notify(kind: str, info: dict[str, Any]) -> None:
         if projected is not None:
@@ -229,11 +231,19 @@ def run_study(
             session.camera.watch(live, True)
             if session.camera.error:
                 raise UserError(f"camera: {session.camera.error}")
+        files, play = prep.files, play_on_session(session, holder)
+        if profile.get("recording.study_trials"):  # each trial into recording/ (its frames)
+            rec = TrialRecorder(
+                files.root, prep.plan, profile=profile, vmap=vmap, seed=prep.participant_seed
+            )
+            files, play = recorded_files(files, rec), rec.noted_play(play)
+            if projected is not None or live is not None:
+                session.camera.frame_hooks.append(rec.frame)
         player = EffectPlayer(
             pm,
             profile,
             vmap,
-            play_on_session(session, holder),
+            play,
             knob_seed=prep.participant_seed,
             live_knob=live,
         )
@@ -245,7 +255,7 @@ def run_study(
         detail = f"{proto.title} -> {prep.files.root}" + (f"; {again}" if again else "")
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
         return run_plan(
-            prep.files,
+            files,
             prep.plan,
             prep.participant,
             player=player,
@@ -254,6 +264,8 @@ def run_study(
             notify=notify,
         )
     finally:
+        if rec is not None and rec.frame in session.camera.frame_hooks:
+            session.camera.frame_hooks.remove(rec.frame)
         if projected is not None:
             projected.close()
         if live is not None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from console.plugin_api import ChannelLayout, OutputDevice, hookimpl
 
 from . import probes
+from .faults import FAULT_FIELDS
 from .input_settings import INPUT_FIELDS
 from .settings import AUDIO_FIELDS
 
@@ -20,6 +21,7 @@ def haptable_profile_sections(register) -> None:
         "twin_audio", AUDIO_FIELDS, help="the twin's sound card (used when [audio] driver = 'twin')"
     )
     register("twin_inputs", INPUT_FIELDS, help="the twin's sensors on the sound card's inputs")
+    register("twin_faults", FAULT_FIELDS, help="faults injected into the twin (self-test)")
 
 
 @hookimpl

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from console.plugin_api import PATCHES, InputSpec, UserError, input_specs
+from plugins.twin.faults import TwinFaults
 
 #: the inputs a twin offers when the profile names none
 DEFAULT_INPUTS = (
@@ -66,6 +67,7 @@ class TwinInputs:
                 self._relay_of[p] = int(profile.get(f"patches.{p}.relay_channel") or 0)
             except Exception:  # a stub without patches: the sim layout's channels
                 self._relay_of[p] = PATCHES.index(p) + 1
+        self.faults = TwinFaults.from_profile(profile)  # ``[twin_faults]``: none by default
         self._find_plate: Any = None  # -> ``PlateResponse`` or None (the kernel's attach)
         self._plate: Any = None
         self._lock = threading.Lock()
@@ -98,6 +100,10 @@ class TwinInputs:
             if mass_g is not None:
                 self.mass_kg = float(mass_g) / 1e3
 
+    def set_faults(self, faults: dict[str, Any]) -> None:
+        """Faults from now on, as ``[twin_faults]`` keys (a test's or a bench's table)."""
+        self.faults = TwinFaults.from_mapping(faults)
+
     def status(self) -> dict[str, Any]:
         return {
             "inputs": [s.to_json() for s in self.specs],
@@ -129,7 +135,7 @@ class TwinInputs:
                     (r.clock - a for r in log if r.channel == ch and a < r.clock < b), b - a
                 )
                 state[:first] = True
-            out[ch] = state
+            out[ch] = self.faults.contact(ch, state)
         return out
 
     def patch_volts(self, a: int, b: int) -> np.ndarray:
@@ -138,13 +144,14 @@ class TwinInputs:
         closed = self._closed(a, b)
         v = np.zeros((4, b - a))
         for j, name in enumerate(self.out.channels):
+            rows[:, j] = self.faults.amplifier(name, rows[:, j])
             for i, p in enumerate(PATCHES):
                 relay = self._relay_of[p]
                 if name == "piezo" and relay:
                     v[i] += rows[:, j] * closed[relay]
                 elif name == p:
                     v[i] += rows[:, j] * (closed[relay] if relay else 1.0)
-        return v
+        return self.faults.at_patches(v)
 
     def read(self, a: int, b: int) -> np.ndarray:
         """The inputs over clocks a..b, (b - a, inputs) float32 in card units."""
@@ -166,7 +173,10 @@ class TwinInputs:
             elif s.kind in ("loopback", "amp_monitor"):
                 j = self._source_column(s)
                 rows = self.out.played_card(a - d, b - d)[:, j].astype(np.float64)
-                volts = rows * (self.out_full_scale_v if s.kind == "loopback" else self.out.to_v[j])
+                if s.kind == "loopback":
+                    volts = rows * self.out_full_scale_v
+                else:  # the amplifier's monitor: 0 when it is dead
+                    volts = self.faults.amplifier(self.out.channels[j], rows * self.out.to_v[j])
                 out[:, k] = volts * s.sensitivity / s.full_scale_v
             card_sigma = self.card_noise_v / s.full_scale_v
             if card_sigma > 0:

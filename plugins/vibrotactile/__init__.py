@@ -22,6 +22,7 @@ from console.plugin_api import hookimpl
 # each CLI module by another name: ``tables`` is a module of this package too
 from plugins.vibrotactile.cli import flow as flow_cli
 from plugins.vibrotactile.cli import frf as frf_cli
+from plugins.vibrotactile.cli import selftest as selftest_cli
 from plugins.vibrotactile.cli import tables as tables_cli
 from plugins.vibrotactile.settings import sections
 
@@ -30,6 +31,7 @@ from plugins.vibrotactile.settings import sections
 def haptable_profile_sections(register) -> None:
     for name, (fields, help_) in sections().items():
         register(name, fields, help=help_)
+    register("selftest", selftest_cli.SELFTEST_FIELDS, help="the technician's self-test")
 
 
 @hookimpl
@@ -87,6 +89,13 @@ def haptable_register_commands(register) -> None:
     register(
         "point", flow_cli.configure_point, flow_cli.run_point, help="localized pulse at one point"
     )
+    register(
+        "selftest",
+        selftest_cli.configure_selftest,
+        selftest_cli.run_selftest_cmd,
+        help="chirp every relay path at the reference point, compare with the baseline: "
+        "dead channels, stuck relays, detached patches, swapped wires",
+    )
 
 
 @hookimpl
@@ -109,6 +118,18 @@ def haptable_register_benchmarks(register) -> None:
 
         return run_instrument_bench(ctx, quick)
 
+    def run_selftest_bench(ctx, quick: bool, report_dir: str | None = None) -> dict:
+        # lazy: bench_selftest loads when called, not at every haptable start
+        from plugins.vibrotactile.bench_selftest import run_selftest_bench
+
+        return run_selftest_bench(ctx, quick)
+
+    register(
+        "selftest",
+        run_selftest_bench,
+        help="self-test on twin tables with faults injected and healthy ones: found/named, "
+        "false alarms, time",
+    )
     register(
         "instrument",
         run_instrument,

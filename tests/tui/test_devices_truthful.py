@@ -20,7 +20,8 @@ from .conftest import wait_for, words_on
 def _hid_broken(real):
     def boards(profile, plugins, held=None):
         rows = real(profile, plugins, held)
-        bad = DeviceStatus("relay_board", "hid", "error", "permission denied", "add a udev rule")
+        why = "permission denied; add a udev rule"  # as drivers word it: the fix at the end
+        bad = DeviceStatus("relay_board", "hid", "error", why, "add a udev rule")
         return [(n, d, bad) if n == "hid" else (n, d, s) for n, d, s in rows]
 
     return boards
@@ -66,6 +67,7 @@ def test_enter_on_a_relay_board_in_error_says_why_and_touches_nothing(plugins, m
             await pilot.pause(0.5)  # a pick would be saving and reopening by now
             said = words_on(app, "#devices-result")
             assert "error" in said and "udev rule" in said and "press l" in said, said
+            assert said.count("udev rule") == 1 and "is error" not in said, said
             assert not overrides_path("sim").exists()
             assert app.session.outputs is outputs  # not reopened
 

@@ -16,6 +16,7 @@ opens the registered ``gestures`` panel (datasets, training)."""
 from __future__ import annotations
 
 import threading
+import time
 
 import numpy as np
 from textual import work
@@ -36,6 +37,7 @@ from console.tui.camera_picture import (
 )
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.plots import HalfBlockImage, downsample
+from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
@@ -54,7 +56,7 @@ class SidePanel(VerticalScroll):
             self.call_after_refresh(pane.keep_in_view)
 
 
-class CameraPane(Horizontal):
+class CameraPane(RecordingMixin, Horizontal):
     HELP_TEXT = HELP_TEXT
     BINDINGS = BINDINGS
     can_focus = True
@@ -180,7 +182,7 @@ class CameraPane(Horizontal):
     def set_visible(self, visible: bool) -> None:
         self.visible_now = visible
         if visible:
-            self._watch(True)
+            self._watch(self.replay is None)  # a recording shows: the camera is not opened
             if self._timer is None:
                 self._timer = self.set_interval(self.HALFBLOCK_PERIOD_S, self.redraw)
         else:
@@ -256,6 +258,8 @@ class CameraPane(Horizontal):
         """Every ``HALFBLOCK_PERIOD_S`` while the screen shows: a frame is converted and
         drawn only when it is new (or the view, the target or the size changed); the
         side panel only when its text changed."""
+        if self.replay_draw():  # a recording shows instead (``recording_view``)
+            return
         svc = self.service
         self._refusal_still_true()
         self._status_still_true()
@@ -297,8 +301,6 @@ class CameraPane(Horizontal):
     def _show_info(self, svc, work: dict) -> None:
         """The side panel: at once when a setting or the wizard changed (a key), else
         the loop's live numbers at most every ``INFO_PERIOD_S``."""
-        import time
-
         live, settings = self.info_lines(svc, work)
         wizard = self.wizard_text()
         now = time.monotonic()
@@ -393,8 +395,6 @@ class CameraPane(Horizontal):
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
         the overlay drawn into it; a new image at most every ``GRAPHICS_PERIOD_S``."""
         # lazy: plugins load on first use
-        import time
-
         from PIL import Image as PILImage
 
         from console.tui.irview import MODE_NAMES, cell_size_px, fit_px, graphics_widget, ir_rgb
@@ -445,8 +445,6 @@ class CameraPane(Horizontal):
     def _loop_status(self, svc) -> dict:
         """``svc.status()`` (fps, drops: their percentiles cost), read at most every
         ``STATUS_PERIOD_S``."""
-        import time
-
         now = time.monotonic()
         if self._status is None or now - self._status[0] >= self.STATUS_PERIOD_S:
             self._status = (now, svc.status())
@@ -578,7 +576,8 @@ class CameraPane(Horizontal):
         the footer promises none of them (nor n, x while nothing takes them)."""
         found = self.query("#camera-target")
         busy = (self.calibration is not None, self._assisting is not None)  # as it is now
-        return not (found and found.first().has_focus) and key_shown(action, parameters, *busy)
+        typing = found and found.first().has_focus
+        return self.replay_allows(action) and not typing and key_shown(action, parameters, *busy)
 
     def on_descendant_focus(self, _event) -> None:
         self.refresh_bindings()

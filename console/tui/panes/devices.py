@@ -24,6 +24,7 @@ from console.runtime.doctor import diagnose
 from console.session.events import Started
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.said import said_here
+from console.tui.selftest_action import run_selftest
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
@@ -143,12 +144,14 @@ class DevicesPane(VerticalScroll):
         "         override file; the outputs reopen with it)\n"
         "t        play the chosen test signal through the gate on the outputs now open\n"
         "l        list the sound cards and relay boards again\n"
-        "d        re-check the profile's devices (doctor)"
+        "d        re-check the profile's devices (doctor)\n"
+        "s        self-test: chirp every relay path, compare with the baseline"
     )
     BINDINGS = [
         Binding("d", "doctor(True)", "Re-check devices"),
         Binding("l", "list_devices(True)", "List again"),
         Binding("t", "test_output", "Test signal"),
+        Binding("s", "selftest", "Self-test"),
     ]
 
     def __init__(self, **kw) -> None:
@@ -405,8 +408,12 @@ class DevicesPane(VerticalScroll):
         status = self.unusable_boards.get(key)
         if status is not None:  # nothing there to open: the outputs stay as they are
             fix = status.fix or "connect it"
+            why = status.why  # a driver's message often ends with its fix: said once
+            if fix and why.endswith(fix):
+                why = why[: -len(fix)].rstrip("; :,")
             self._show_result(
-                f"relay board {driver!r} is {status.state} ({status.why}): {fix}, then press l",
+                f"relay board {driver!r} cannot be opened ({status.state}: {why}): {fix}, "
+                "then press l",
                 severity="warning",
             )
             return
@@ -491,6 +498,13 @@ class DevicesPane(VerticalScroll):
             else ", ".join(f"{ch} {v:.1f} V peak" for ch, v in trace.peak_v().items())
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
+
+    @work(thread=True, exclusive=True, group="test-output")
+    def action_selftest(self) -> None:
+        """Every relay path chirped and compared (``console.tui.selftest_action``)."""
+        self._say("self-test: chirping each relay path through the gate ...")
+        ok, line = run_selftest(self._profile(), self.app.ctx.pm)
+        self._say(line, error=not ok)
 
     def _show_result(self, text: str, error: bool = False, severity: str = "") -> None:
         """The screen's status line, the newest message replacing it: docked at the

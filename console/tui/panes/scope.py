@@ -13,6 +13,7 @@ from textual.widgets import Static
 
 from console.session.core import PLAN_MARGIN_S
 from console.tui.charts import Chart, Series
+from console.tui.scope_recording import SCOPE_REPLAY_BINDINGS, ScopeRecordingMixin
 
 #: the time windows ``+``/``-`` step through, in ms
 WINDOWS_MS = (5, 10, 20, 50, 100, 200, 500, 1000, 2000, 4000)
@@ -62,12 +63,15 @@ def marks_lines(trace) -> list[str]:
     return lines
 
 
-class ScopePane(Vertical):
+class ScopePane(ScopeRecordingMixin, Vertical):
     HELP_TEXT = (
         "space    freeze / run (frozen: the last 4 s are kept to look at)\n"
         "p        the last played plan, whole (frozen until the next plan plays)\n"
         "+ / -    shorter / longer time window (on the last plan: around its middle,\n"
         "         - back out to the whole plan)\n"
+        "o        a recording (haptable demo ... --record FILE): type its path, Enter shows\n"
+        "         its plans (re-rendered from their recorded parameters, the hash checked);\n"
+        "         [ / ] the previous / next plan, Esc the live view again\n"
         "What the safety gate handed the driver, per channel, in volts at the actuators."
     )
     BINDINGS = [
@@ -75,6 +79,7 @@ class ScopePane(Vertical):
         Binding("p", "last_plan", "Last plan"),
         Binding("plus,equals_sign", "zoom(-1)", "Shorter", show=False),
         Binding("minus", "zoom(1)", "Longer", show=False),
+        *SCOPE_REPLAY_BINDINGS,
     ]
     can_focus = True
 
@@ -168,6 +173,8 @@ class ScopePane(Vertical):
         """Every ``TICK_S`` while the screen shows: redrawn when what it shows changed (the
         live view, the plan line, the last plan's kept copy); a new plan unfreezes the
         last plan's view."""
+        if self.replay is not None:  # a recording's plans show (``scope_recording``)
+            return
         session = self.app.session
         self.last = session.last_plan()
         if self.plan_view and self.last is not None and self.last.key != self.plan_key:

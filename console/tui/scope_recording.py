@@ -1,0 +1,260 @@
+"""A recorded run's plans on the Scope screen (issue 31): ``o`` types a recording's path,
+then the Scope shows its plans one at a time on the chart it uses for a live plan, ``[`` /
+``]`` step between them, ``escape`` goes back to the live view.
+
+A recording keeps each plan's parameters (``meta``), the hash of its samples and the
+kernel's clocks, not the samples: a plan is drawn re-rendered from its recorded
+parameters through the same renderer (a flow under a hand: the effect offering
+``HandFlowEffect`` on the console's map, else the kept measured map the demos use), and
+the hash says whether the re-rendered samples are bit for bit those played. A plan of a
+kind with no renderer here is shown as its summary only. The file is read through the
+capability ``ReadsRecordings`` and plans are rendered in a worker."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from textual import work
+from textual.binding import Binding
+from textual.widgets import Input, Static
+
+from console.core.errors import UserError
+from console.core.words import AT_CONSOLE, worded
+from console.tui.charts import Chart, Series
+from console.tui.recording_view import open_run
+from console.tui.util import from_thread, short_path
+
+REPLAY_ACTIONS = {"plan_step", "replay_live"}
+LIVE_ONLY = {"freeze", "last_plan", "zoom"}
+
+
+def plan_summary(line: dict, t0_s: float | None) -> str:
+    """A recorded plan in one line: name, length, where, its parts, when it played."""
+    segs = line.get("segments") or []
+    where = sorted({p for s in segs for p in s.get("patches", ())})
+    if any(s.get("screen") for s in segs):
+        where.append("screen")
+    meta = line.get("meta") or {}
+    parts = "; ".join(
+        f"{p.get('actuator', '?')} {float(p.get('frequency_hz', 0)):.1f} Hz "
+        f"{float(p.get('amplitude_v', 0)):.1f} V"
+        for p in meta.get("parts") or ()
+        if isinstance(p, dict)
+    )
+    out = f"{line.get('name', '?')}: {float(line.get('duration_s', 0)):.2f} s on "
+    out += ",".join(where) or "nothing"
+    if parts:
+        out += f" ({parts})"
+    first = line.get("t_first_sample_s")
+    if first is not None and t0_s is not None:
+        out += f", played at {float(first) - t0_s:.2f} s"
+    if line.get("refused"):
+        out += f", refused: {line['refused']}"
+    return out
+
+
+def rerender(session: Any, line: dict) -> tuple[Any, str]:
+    """(the plan re-rendered from ``line``'s parameters, what its hash says), or
+    (``None``, why not). Blocking: a worker's."""
+    from console.core import contracts
+    from console.core.plan_watch import plan_hash
+    from console.runtime.measured_map import kept_measured_map
+    from console.session.vibration import VibrationSession
+
+    meta = line.get("meta") or {}
+    if meta.get("kind") != "hand_flow":
+        kind = meta.get("kind") or "unnamed"
+        return None, f"no renderer here for a plan of kind {kind}: its summary only"
+    vib = session.vibration
+    maps = [] if vib.current is None else [vib.current.vmap]
+    try:
+        kept = kept_measured_map(session.profile)
+    except UserError:
+        kept = None
+    maps += [] if kept is None else [kept]
+    if not maps:
+        return None, "no vibration map to re-render it with: measure one (m) on Vibration (F3)"
+    first = None
+    for vmap in maps:
+        vs = VibrationSession(session.profile, session.plugins, vmap)
+        plan = vs.effect(contracts.HandFlowEffect).render_hand_flow(
+            tuple(meta["center_mm"]), meta["direction"], vs.vmap
+        )
+        if plan_hash(plan) == line.get("hash"):
+            return plan, "re-rendered: the samples played, bit for bit (hash checked)"
+        first = first or plan
+    return first, "re-rendered, but not the samples played (hash differs: another map)"
+
+
+def plan_series(plan: Any, line: dict) -> list[Series]:
+    """Each patch's and the screen's drive over the plan, in volts vs ms, the segments at
+    the gate clocks they played at (else end to end with the plan's gap)."""
+    fs = float(plan.sample_rate_hz)
+    starts = list(line.get("segment_start") or [])
+    if len(starts) != len(plan.segments):
+        starts, at = [], 0
+        for seg in plan.segments:
+            starts.append(at)
+            at += seg.n_samples + int(plan.gap_s * fs)
+    base = starts[0]
+    n = max(s - base + seg.n_samples for s, seg in zip(starts, plan.segments, strict=True))
+    drives: dict[str, np.ndarray] = {}
+    for s, seg in zip(starts, plan.segments, strict=True):
+        a = s - base
+        names = {p: seg.patch_v.get(p, seg.piezo_v) for p in sorted(seg.patches)}
+        if seg.screen:
+            names["screen"] = seg.screen_v
+        for name, v in names.items():
+            drives.setdefault(name, np.zeros(n))[a : a + seg.n_samples] = v
+    t_ms = np.arange(n) * (1e3 / fs)
+    return [Series(name, t_ms, v) for name, v in sorted(drives.items())]
+
+
+#: its keys (the pane lists them in its ``BINDINGS``: Textual takes a widget class's only)
+SCOPE_REPLAY_BINDINGS = [
+    Binding("o", "open_recording", "recording"),
+    Binding("right_square_bracket", "plan_step(1)", "plan", key_display="[ ]"),
+    Binding("left_square_bracket", "plan_step(-1)", "previous plan", show=False),
+    Binding("escape", "replay_live", "live"),
+]
+
+
+class ScopeRecordingMixin:
+    """The Scope pane's recorded plans (mixed into ``ScopePane``)."""
+
+    replay: Any = None  # the open recording while its plans show
+    replay_plans: list = []  # its plan lines (``kind`` "plan")
+    replay_i = 0  # the plan shown
+    _replay_typed: str | None = None
+
+    def on_mount(self) -> None:
+        box = Input(placeholder="recording .h5 path, Enter (Esc: back)", id="scope-recording")
+        box.display = False
+        self.mount(box, after="#scope-head")
+
+    def check_action(self, action: str, parameters: tuple) -> bool | None:
+        found = self.query("#scope-recording")
+        if found and found.first().has_focus:
+            return False
+        if action in REPLAY_ACTIONS:
+            return self.replay is not None
+        return not (self.replay is not None and action in LIVE_ONLY)
+
+    def on_descendant_focus(self, _event) -> None:
+        self.refresh_bindings()
+
+    def on_descendant_blur(self, _event) -> None:
+        self.refresh_bindings()
+
+    def action_open_recording(self) -> None:
+        box = self.query_one("#scope-recording", Input)
+        box.value = self._replay_typed or ""
+        box.display = True
+        box.focus()
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        if event.input.id != "scope-recording":
+            return
+        event.stop()
+        event.input.display = False
+        self.focus()
+        self._say(f"o: opening {event.value.strip()} ...")
+        self._open_replay(event.value)
+
+    def on_key(self, event) -> None:
+        box = self.query_one("#scope-recording", Input)
+        if event.key == "escape" and box.has_focus:
+            event.stop()
+            box.display = False
+            self.focus()
+
+    def _say(self, text: str) -> None:
+        self.query_one("#scope-head", Static).update(text)
+        self._head = text
+
+    @work(thread=True, exclusive=True, group="scope-replay-open")
+    def _open_replay(self, path: str) -> None:
+        try:
+            run = open_run(self.app.ctx.pm, path)
+            plans = [p for p in run.plans() if p.get("kind") == "plan"]
+            other = [p for p in run.plans() if p.get("kind") != "plan"]
+        except UserError as exc:
+            self._replay_typed = path
+            from_thread(self.app, self._say, f"o: {worded(exc, AT_CONSOLE)}")
+            return
+        from_thread(self.app, self._replay_opened, run, plans, other)
+
+    def _replay_opened(self, run: Any, plans: list, other: list) -> None:
+        if self.replay is not None:
+            self.replay.close()
+        self._replay_typed = None
+        self.replay, self.replay_plans, self.replay_i = run, plans, 0
+        self._other = other
+        self.refresh_bindings()
+        self._show_plan()
+
+    def action_plan_step(self, step: int) -> None:
+        if self.replay is not None and self.replay_plans:
+            self.replay_i = min(max(self.replay_i + step, 0), len(self.replay_plans) - 1)
+            self._show_plan()
+
+    def action_replay_live(self) -> None:
+        run = self.replay
+        if run is None:
+            return
+        self.replay, self.replay_plans = None, []
+        run.close()
+        self._drawn = None
+        self.refresh_bindings()
+        self._redraw()
+
+    def _t0(self) -> float | None:
+        t = self.replay.t_capture_s
+        return float(t[0]) if len(t) else None
+
+    def _show_plan(self) -> None:
+        run, plans = self.replay, self.replay_plans
+        chart = self.query_one("#scope-chart", Chart)
+        info = self.query_one("#scope-info", Static)
+        name = short_path(run.path)
+        if not plans:
+            kinds = ", ".join(sorted({str(p.get("kind")) for p in self._other})) or "none"
+            self._say(f"RECORDING {name} | no plans in it (its outputs: {kinds}) | Esc live")
+            chart.clear("this recording holds no plans: o opens another, Esc the live view")
+            info.update("")
+            return
+        line = plans[self.replay_i]
+        self._say(
+            f"RECORDING {name} | plan {self.replay_i + 1}/{len(plans)} "
+            "([ ] other plans, o another file, Esc live)"
+        )
+        info.update(
+            f"plan {self.replay_i + 1}: {plan_summary(line, self._t0())}; "
+            f"hash {str(line.get('hash', ''))[:12]}"
+        )
+        chart.clear("re-rendering the plan from its recorded parameters ...")
+        self._render_plan(self.replay_i, line)
+
+    @work(thread=True, exclusive=True, group="scope-replay-render")
+    def _render_plan(self, i: int, line: dict) -> None:
+        try:
+            plan, said = rerender(self.app.session, line)
+        except (UserError, KeyError, TypeError, ValueError) as exc:
+            plan, said = None, f"not re-rendered: {exc}"
+        from_thread(self.app, self._rendered, i, line, plan, said)
+
+    def _rendered(self, i: int, line: dict, plan: Any, said: str) -> None:
+        if self.replay is None or i != self.replay_i:
+            return  # another plan (or the live view) shows meanwhile
+        chart = self.query_one("#scope-chart", Chart)
+        info = self.query_one("#scope-info", Static)
+        info.update(
+            f"plan {i + 1}: {plan_summary(line, self._t0())}; "
+            f"hash {str(line.get('hash', ''))[:12]}: {said}"
+        )
+        if plan is None:
+            chart.clear(said)
+            return
+        self.draws += 1
+        chart.set_series(plan_series(plan, line), title=f"recorded plan: {line.get('name', '?')}")

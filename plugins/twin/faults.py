@@ -1,0 +1,155 @@
+"""Faults a technician's self-test must find, injected into the twin (``[twin_faults]``).
+
+What the twin's inputs read (``plugins.twin.inputs``) honours them; nothing else changes:
+the gate, the relay board's log and the client see a healthy table, as they would see a
+broken one on the real table. Each fault is physical:
+
+- ``dead_channels``: output channels (``[audio] channels`` names: ``piezo`` on a bus
+  profile, ``PA``..``PD`` on a channel-per-patch one) whose amplifier gives 0 V (its
+  ``amp_monitor`` input reads 0 too);
+- ``stuck_open`` / ``stuck_closed``: relay channels whose contacts stay open / closed
+  whatever the board was told (the board logs the command; the patch follows the contact);
+- ``coupling``: each patch's coupling to the glass, PA..PD (1: bonded; ~0.05: detached,
+  it only shakes the glass through its cable and a corner of glue; 0.97-1.03: the
+  amplifier's and the bond's normal drift);
+- ``swapped``: two patches whose wires cross after the amplifier and relays (``["PA",
+  "PC"]``: what drives PA reaches PC and the other way round).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from console.plugin_api import PATCHES, Field, UserError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+
+def _patch_problem(v: Any) -> str | None:
+    return None if v in PATCHES else f"{v!r} is no patch; name one of {', '.join(PATCHES)}"
+
+
+FAULT_FIELDS = {
+    "dead_channels": Field(
+        "strs",
+        [],
+        help="output channels whose amplifier gives 0 V ('piezo', or 'PA'..'PD' on a "
+        "channel-per-patch card)",
+    ),
+    "stuck_open": Field("ints", [], min=1, max=64, help="relay channels stuck open"),
+    "stuck_closed": Field("ints", [], min=1, max=64, help="relay channels stuck closed"),
+    "coupling": Field(
+        "floats",
+        [1.0, 1.0, 1.0, 1.0],
+        length=4,
+        min=0.0,
+        max=2.0,
+        help="each patch's coupling to the glass, PA..PD (1 bonded, ~0.05 detached)",
+    ),
+    "swapped": Field(
+        "strs",
+        [],
+        check=_patch_problem,
+        help="two patches whose wires cross, e.g. ['PA', 'PC'] (empty: none)",
+    ),
+}
+
+
+def _get(profile: Any, key: str, default: Any) -> Any:
+    try:
+        v = profile.get(key)
+    except Exception:  # a bare profile stub without the section
+        v = None
+    return default if v is None else v
+
+
+class _Mapping:
+    """``[twin_faults]`` keys given as a dict, read as a profile's."""
+
+    def __init__(self, faults: dict[str, Any]):
+        self.faults = faults
+
+    def get(self, key: str) -> Any:
+        return self.faults.get(key.removeprefix("twin_faults."))
+
+
+@dataclass(frozen=True)
+class TwinFaults:
+    """The faults of one twin (none by default)."""
+
+    dead_channels: frozenset[str] = frozenset()
+    stuck_open: frozenset[int] = frozenset()
+    stuck_closed: frozenset[int] = frozenset()
+    coupling: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
+    swapped: tuple[str, ...] = ()
+
+    @classmethod
+    def from_profile(cls, profile: Any) -> TwinFaults:
+        swapped = tuple(_get(profile, "twin_faults.swapped", []))
+        if swapped and (len(swapped) != 2 or swapped[0] == swapped[1]):
+            raise UserError(
+                f"[twin_faults] swapped = {list(swapped)}: name two different patches, "
+                "e.g. ['PA', 'PC'], or none"
+            )
+        both = set(_get(profile, "twin_faults.stuck_open", [])) & set(
+            _get(profile, "twin_faults.stuck_closed", [])
+        )
+        if both:
+            raise UserError(
+                f"[twin_faults] relay {sorted(both)[0]} is both stuck_open and stuck_closed: "
+                "keep it in one"
+            )
+        return cls(
+            frozenset(_get(profile, "twin_faults.dead_channels", [])),
+            frozenset(int(c) for c in _get(profile, "twin_faults.stuck_open", [])),
+            frozenset(int(c) for c in _get(profile, "twin_faults.stuck_closed", [])),
+            tuple(float(c) for c in _get(profile, "twin_faults.coupling", [1.0] * 4)),
+            swapped,
+        )
+
+    @classmethod
+    def from_mapping(cls, faults: dict[str, Any]) -> TwinFaults:
+        """From ``[twin_faults]`` keys given at run time, checked as the profile's are."""
+        for key, v in faults.items():
+            f = FAULT_FIELDS.get(key)
+            ok = f is not None and isinstance(v, list)
+            if ok and f.kind == "strs":
+                ok = all(isinstance(x, str) and not (f.check and f.check(x)) for x in v)
+            elif ok:
+                num = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+                ok = num and all(f.min <= x <= f.max for x in v)
+                ok = ok and (f.length is None or len(v) == f.length)
+            if not ok:
+                raise UserError(
+                    f"[twin_faults] {key} = {v!r}: give {f.allowed() if f else 'a known key: ' + ', '.join(FAULT_FIELDS)}"
+                )
+        return cls.from_profile(_Mapping(faults))
+
+    def contact(self, relay: int, commanded: np.ndarray) -> np.ndarray:
+        """What relay ``relay``'s contacts did over a range the board was told ``commanded``."""
+        import numpy as np  # lazy: the profile's fields load without NumPy
+
+        if relay in self.stuck_open:
+            return np.zeros_like(commanded)
+        if relay in self.stuck_closed:
+            return np.ones_like(commanded)
+        return commanded
+
+    def amplifier(self, channel: str, volts: np.ndarray) -> np.ndarray:
+        """An output channel's amplifier output (0 when dead)."""
+        import numpy as np  # lazy
+
+        return np.zeros_like(volts) if channel in self.dead_channels else volts
+
+    def at_patches(self, v: np.ndarray) -> np.ndarray:
+        """Routed volts (4, n) PA..PD -> what each patch's bond puts into the glass."""
+        import numpy as np  # lazy
+
+        if self.swapped:
+            i, j = PATCHES.index(self.swapped[0]), PATCHES.index(self.swapped[1])
+            v = v.copy()
+            v[[i, j]] = v[[j, i]]
+        c = np.asarray(self.coupling, float)
+        return v if np.all(c == 1.0) else v * c[:, None]
