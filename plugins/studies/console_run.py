@@ -23,6 +23,7 @@ from . import protocol as protocols
 from .projected import ProjectedAnswers
 from .responders import ObserverResponder, observer
 from .runner import Control, run_plan
+from .sensation import resolver
 from .start import prepare, stored_participant
 from .stimuli import EffectPlayer, LiveKnob, check_places, play_on_session
 from .store import resume_text
@@ -186,6 +187,11 @@ def run_study(
     obs = observer(pm, profile) if spec["simulate"] and proto.stimulus != "knob" else None
 
     stored = stored_participant(spec["out"], spec["pid"], SCREEN)
+    vmap = None
+    if proto.stimulus != "knob":  # before the plan: a level in dB SL is set on the map
+        vmap = study_map(session, control, emit)
+    # the participant's level (``[study] level``, e.g. "20 dB SL"), as the CLI resolves it
+    base = EffectPlayer(pm, profile, vmap, lambda plan: False).render_base
     prep = prepare(
         spec["study"],
         spec["pid"],
@@ -194,10 +200,9 @@ def run_study(
         simulate=spec["simulate"],
         observer=obs,
         words=SCREEN,
+        resolve=resolver(proto, profile, base),
     )
-    vmap = None
-    if proto.stimulus != "knob":
-        vmap = study_map(session, control, emit)
+    if vmap is not None:
         check_places(prep.plan, vmap)
     resp = (
         ObserverResponder(obs, prep.participant_seed)

@@ -117,7 +117,7 @@ def prepare(
         if resolve is None:
             raise UserError(
                 f"{proto.path}: study.level = {proto.level!r}: run it with `haptable study "
-                f"run {proto.name} --participant {pid} --out DIR` (the screen plays no levels)"
+                f"run {proto.name} --participant {pid} --out DIR`"
             )
         who = stored if stored is not None else asdict(person)
         plan = resolve(plan, participant_dir(out, pid), who)

@@ -192,7 +192,12 @@ class LiveKnob:
 
     def play(self, trial: dict[str, Any]) -> dict[str, Any]:
         s = trial["stimulus"]
-        eff = self.plugins.provider("effect", KnobTrials, self.profile, plugin_hint="electrostatic")
+        profile = self.profile
+        if s.get("level"):  # the participant's level, resolved in the plan (sensation_stimuli.py)
+            from .sensation_stimuli import knob_profile  # lazy: knob studies with a level only
+
+            profile = knob_profile(profile, s["level"])
+        eff = self.plugins.provider("effect", KnobTrials, profile, plugin_hint="electrostatic")
         res = eff.knob_live_trial(
             condition=s["condition"],
             sectors=int(s["sectors"]),

@@ -139,7 +139,7 @@ def test_missing_curve_and_too_loud_are_refused_in_one_line(
     ) as e:
         prepare(small_exp1, "P04", tmp_path, simulate=True, observer=Obs(8.0), resolve=resolve)
     assert "\n" not in str(e.value)
-    # without a resolver (the Studies screen) a level is refused, never played at another
+    # without a resolver a level is refused, never played at another
     with pytest.raises(UserError, match="study.level = '20 dB SL': run it with"):
         prepare(small_exp1, "P05", tmp_path, simulate=True, observer=Obs(0.0))
 
