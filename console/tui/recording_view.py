@@ -248,6 +248,7 @@ class RecordingMixin:
 
     def _keys_line(self, text: str | None) -> None:
         """The line under the view: the recording's keys, or (``None``) the live ones."""
+        # lazy: loaded when this runs, not when the module is imported
         from console.tui.camera_keys import KEYS_LINE  # the live camera's, as composed
 
         self.query_one("#camera-keys").update(KEYS_LINE if text is None else text)

@@ -57,6 +57,7 @@ def plan_summary(line: dict, t0_s: float | None) -> str:
 def rerender(session: Any, line: dict) -> tuple[Any, str]:
     """(the plan re-rendered from ``line``'s parameters, what its hash says), or
     (``None``, why not). Blocking: a worker's."""
+    # lazy: loaded when this runs, not when the module is imported
     from console.core import contracts
     from console.core.plan_watch import plan_hash
     from console.runtime.measured_map import kept_measured_map

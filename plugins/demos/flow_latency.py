@@ -273,6 +273,7 @@ def _run(ctx: Any, quick: bool) -> dict:
         "before": res["before"]["decision_to_output_ms"],
         "after": res["after"]["decision_to_output_ms"],
     }
+    # lazy: loaded when this runs, not when the module is imported
     from .dac_latency import to_dac  # + the output latency: measured, else claimed
 
     claimed = res["after"].get("driver_latency_s")

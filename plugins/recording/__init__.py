@@ -45,6 +45,7 @@ def haptable_profile_sections(register) -> None:
 
 @hookimpl
 def haptable_register_frame_sinks(register) -> None:
+    # lazy: loaded when this runs, not when the module is imported
     from .readback import RecorderFactory  # light: the recorder and reader load when used
 
     register(

@@ -23,6 +23,7 @@ class RecorderFactory:
 
     def open_recording(self, path: str) -> Any:
         """``reader.open_recording(path)``; a bad file's line keeps its fix per place."""
+        # lazy: loaded when this runs, not when the module is imported
         from .reader import FIX, open_recording
 
         try:

@@ -245,6 +245,7 @@ def resolver(
     if level is None:
         return None
     if protocol.stimulus != "flow":  # hand flows and the knob
+        # lazy: loaded when this runs, not when the module is imported
         from .sensation_stimuli import resolver_for
 
         modality = MODALITY[protocol.stimulus]

@@ -38,7 +38,7 @@ def haptable_register_frame_sinks(register) -> None:
     register(
         "tuio",
         SenderFactory(),
-        description="TUIO 1.1/2.0 over OSC/UDP or WebSocket: contacts, hands ([tuio] enabled)",
+        description="TUIO 1.1/2.0 (UDP, WebSocket): contacts, hands, gestures ([tuio] enabled)",
     )
 
 

@@ -113,7 +113,7 @@ def _frames(path, with_hand=False):
 @pytest.mark.parametrize(
     ("line", "says"),
     [
-        ("5,9999999,one_finger", "frame 5 is not in the recording"),
+        ("{a},9999999,one_finger", "frame 9999999 is not in the recording"),
         ("{a},{b},pinch", "gesture 'pinch': use one of"),
         ("{a},{b}", "give start_frame,end_frame,gesture"),
     ],

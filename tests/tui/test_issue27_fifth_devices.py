@@ -53,7 +53,9 @@ def test_devices_refusals_logged_reset_said_cells_fit(plugins, caplog):
             relays.move_cursor(row=_row_of(relays, "hid"))
             await pilot.press("enter")
             pane = app.pane("devices")
-            await wait_for(pilot, lambda: "relay board 'hid' cannot be opened" in pane.result, 30, "said")
+            await wait_for(
+                pilot, lambda: "relay board 'hid' cannot be opened" in pane.result, 30, "said"
+            )
             logged = [r.getMessage() for r in caplog.records]
             assert any("relay board 'hid' cannot be opened" in m for m in logged), logged[-5:]
             # the e-stop refuses the test signal; the reset replaces the refusal

@@ -361,7 +361,7 @@ def test_command_palette_opens_a_screen(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             await _ready(app, pilot)
             await pilot.press("ctrl+p")
-            await wait_for(pilot, lambda: type(app.screen).__name__ == "CommandPalette")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "SafetyPalette")
             await pilot.press(*"Open Relays")
             await pilot.pause(0.5)
             await pilot.press("enter")

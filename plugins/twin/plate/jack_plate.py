@@ -83,6 +83,7 @@ class PlateFilter:
         patches: tuple[str, ...] = ("PA",),
         mass_kg: float = 0.0,
     ) -> None:
+        # lazy: loaded when this runs, not when the module is imported
         from . import sensor
         from .model import _eval_coeffs
 
@@ -118,6 +119,7 @@ class PlateFilter:
 def plate_filter_from_profile(profile: Any, fs_hz: float, patches=("PA",)) -> PlateFilter:
     """The profile's plate twin, its ``[twin_inputs]`` sensor point and mass, its amplifier
     gain (card unit -> volts at the patches: full_scale_v x piezo_gain)."""
+    # lazy: loaded when this runs, not when the module is imported
     from .model import build_twin, params_from_profile
 
     x, y = profile.get("twin_inputs.sensor_mm") or (371.73, 223.645)
@@ -246,6 +248,7 @@ class JackPlate:
 def main(argv: list[str] | None = None) -> int:
     import signal
 
+    # lazy: loaded when this runs, not when the module is imported
     from console.plugin_api import load_plugins, load_profile
 
     ap = argparse.ArgumentParser(

@@ -176,11 +176,13 @@ def measure_latency(args, ctx) -> int:
         seg = Segment(x, np.zeros_like(x), frozenset({"PA"}), False, "latency chirp")
         cap = capture(out, OutputPlan(fs, (seg,), "loopback latency", 0.0))
         audio = out.status().get("audio", {})
+    # lazy: loaded when this runs, not when the module is imported
     from plugins.vibrotactile.cli.latency_report import latency_report
 
     lag = delay_samples(x, cap.physical("loopback"))
     got = latency_report(lag, fs, audio)
     if args.save:
+        # lazy: loaded when this runs, not when the module is imported
         from console.plugin_api import save_overrides
 
         key = "audio.measured_output_latency_ms"

@@ -96,6 +96,7 @@ def run_tables(args, ctx) -> int:
         m = load_map(map_source(args.map, ctx), require_all=not args.allow_missing)
         band = args.band_hz or vt_section(ctx)["band_hz"]
         if args.thresholds:  # a person's threshold curve (person_thresholds.py)
+            # lazy: loaded when this runs, not when the module is imported
             from plugins.vibrotactile.person_thresholds import personal_rule
             from plugins.vibrotactile.tables import rule_bins
 
