@@ -128,6 +128,9 @@ class ScopeRecordingMixin:
     replay_plans: list = []  # its plan lines (``kind`` "plan")
     replay_i = 0  # the plan shown
     _replay_typed: str | None = None
+    #: what ``o`` said (a refusal, "opening ..."): shown instead of the live header until
+    #: the operator's next ``o`` or Esc, so that the live tick does not wipe it at once
+    said_head: str | None = None
 
     def on_mount(self) -> None:
         box = Input(placeholder="recording .h5 path, Enter (Esc: back)", id="scope-recording")
@@ -149,6 +152,7 @@ class ScopeRecordingMixin:
         self.refresh_bindings()
 
     def action_open_recording(self) -> None:
+        self.said_head = None
         box = self.query_one("#scope-recording", Input)
         box.value = self._replay_typed or ""
         box.display = True
@@ -167,10 +171,12 @@ class ScopeRecordingMixin:
         box = self.query_one("#scope-recording", Input)
         if event.key == "escape" and box.has_focus:
             event.stop()
+            self.said_head = None
             box.display = False
             self.focus()
 
     def _say(self, text: str) -> None:
+        self.said_head = text
         self.query_one("#scope-head", Static).update(text)
         self._head = text
 
@@ -187,6 +193,7 @@ class ScopeRecordingMixin:
         from_thread(self.app, self._replay_opened, run, plans, other)
 
     def _replay_opened(self, run: Any, plans: list, other: list) -> None:
+        self.said_head = None
         if self.replay is not None:
             self.replay.close()
         self._replay_typed = None
@@ -201,6 +208,7 @@ class ScopeRecordingMixin:
             self._show_plan()
 
     def action_replay_live(self) -> None:
+        self.said_head = None
         run = self.replay
         if run is None:
             return

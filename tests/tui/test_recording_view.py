@@ -156,6 +156,13 @@ def test_camera_and_scope_show_a_recording(plugins, recording, tmp_path):
             await wait_for(
                 pilot, lambda: "RECORDING" not in words_on(app, "#scope-head"), 30, "live scope"
             )
+            # a missing file on Scope: said, and still said after the live view's ticks
+            await _type_path(app, pilot, "#scope-recording", str(missing))
+            await wait_for(
+                pilot, lambda: "no such file" in words_on(app, "#scope-head"), 30, "refusal"
+            )
+            await pilot.pause(1.0)  # several ticks of the live scope
+            assert "none.h5" in words_on(app, "#scope-head"), words_on(app, "#scope-head")
 
     asyncio.run(scenario())
 

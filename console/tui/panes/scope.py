@@ -272,7 +272,7 @@ class ScopePane(ScopeRecordingMixin, Vertical):
         chart = self.query_one("#scope-chart", Chart)
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
-        text = self._head_text(trace, mode, plan_line(self.last))
+        text = self.said_head or self._head_text(trace, mode, plan_line(self.last))
         if text != self._head:
             self._head = text
             self.query_one("#scope-head", Static).update(text)
