@@ -40,6 +40,9 @@ class CommandLine(Input):
         def control(self) -> CommandLine:
             return self.line
 
+    #: a failed command's text as kept (``failed``), until the operator edits it
+    _kept: str | None = None
+
     def __init__(self, **kw) -> None:
         kw.setdefault("select_on_focus", False)
         kw.setdefault("compact", True)
@@ -69,8 +72,20 @@ class CommandLine(Input):
             self.value = text
         if self.value.strip() == text.strip():
             self.cursor_position = len(self.value)
+            self._kept = self.value
             if self.region.area and self.screen.focused is not self:
                 self.screen.set_focus(self)
+
+    def on_input_changed(self, event: Input.Changed) -> None:
+        """``:`` typed at the end of a failed command, as it was kept, starts a new
+        command (the operator typed ``:`` to give another one, not to glue it on); any
+        other key edits the kept one."""
+        kept = self._kept
+        if event.input is not self or kept is None or event.value == kept:
+            return
+        self._kept = None
+        if event.value == kept + ":":
+            self.value = ""
 
     def action_clear_line(self) -> None:
         """``ctrl+u``: the whole line cleared (ctrl+z brings it back)."""

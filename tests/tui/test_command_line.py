@@ -48,6 +48,11 @@ def test_a_failed_command_keeps_its_text_and_a_successful_one_clears_it(plugins,
             await command(app, pilot, "hand 51 sideways")
             await wait_for(pilot, lambda: "hand POINT" in _status(app), 10, "refused")
             assert line.value == "hand 51 sideways"
+            # ":" typed on the kept command starts a new one instead of gluing onto it
+            await wait_for(pilot, lambda: app.focused is line, 10, "the line")
+            await pilot.press("colon", "5", "1")
+            await wait_for(pilot, lambda: line.value == "51", 10, "a new command")
+            line.value = "hand 51 sideways"
             # a load that works clears the line (once its work has ended)
             await command(app, pilot, f"load {map_file}")
             await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
