@@ -210,22 +210,15 @@ def _continuous(p: Pattern, scale: Scale, tol: float) -> tuple[str, int]:
 
 
 def _bursts(p: Pattern, scale: Scale) -> tuple[str, int]:
-    parts, at, kept = [], 0.0, 0
-    for t0, level, sharp in sorted(p.transients):
-        f = float(scale.hz(sharp))
-        d = scale.burst_s(f)
-        if t0 < at - 1e-9:
-            p.dropped.append(f"transient at {t0:g} s (overlaps the burst before)")
-            continue
-        k = _end_factor(t0, d, p.t_s[-1], scale.ramp_s)
-        if k < 1.0 and not any(x.startswith("bursts lowered") for x in p.mapped):
-            p.mapped.append("bursts lowered under the gate's end ramps")
-        amp = level * scale.peak_v * k
+    """The transients' bursts as one ``seq(...)`` expression, and how many were kept."""
+    parts, at = [], 0.0
+    rows = _burst_rows(p, scale)
+    for t0, amp, f, d in rows:
         if t0 > at:
             parts.append(f"silence({_ms(t0 - at)})")
         parts.append(f"sine({round(f, 1):g} Hz, {round(amp, 3):g} V, {_ms(d)}) * hann()")
-        at, kept = t0 + round(d * 1e5) / 1e5, kept + 1
-    return (f"seq({', '.join(parts)})" if parts else ""), kept
+        at = t0 + round(d * 1e5) / 1e5  # as the expression spells the burst's length
+    return (f"seq({', '.join(parts)})" if parts else ""), len(rows)
 
 
 def _end_factor(t0: float, d: float, end: float, ramp_s: float) -> float:

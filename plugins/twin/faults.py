@@ -57,7 +57,8 @@ FAULT_FIELDS = {
 }
 
 
-def _get(profile: Any, key: str, default: Any) -> Any:
+def profile_value(profile: Any, key: str, default: Any) -> Any:
+    """``profile.get(key)``, or ``default`` when it is unset or the profile lacks it."""
     try:
         v = profile.get(key)
     except Exception:  # a bare profile stub without the section
@@ -87,14 +88,14 @@ class TwinFaults:
 
     @classmethod
     def from_profile(cls, profile: Any) -> TwinFaults:
-        swapped = tuple(_get(profile, "twin_faults.swapped", []))
+        swapped = tuple(profile_value(profile, "twin_faults.swapped", []))
         if swapped and (len(swapped) != 2 or swapped[0] == swapped[1]):
             raise UserError(
                 f"[twin_faults] swapped = {list(swapped)}: name two different patches, "
                 "e.g. ['PA', 'PC'], or none"
             )
-        both = set(_get(profile, "twin_faults.stuck_open", [])) & set(
-            _get(profile, "twin_faults.stuck_closed", [])
+        both = set(profile_value(profile, "twin_faults.stuck_open", [])) & set(
+            profile_value(profile, "twin_faults.stuck_closed", [])
         )
         if both:
             raise UserError(
@@ -102,10 +103,10 @@ class TwinFaults:
                 "keep it in one"
             )
         return cls(
-            frozenset(_get(profile, "twin_faults.dead_channels", [])),
-            frozenset(int(c) for c in _get(profile, "twin_faults.stuck_open", [])),
-            frozenset(int(c) for c in _get(profile, "twin_faults.stuck_closed", [])),
-            tuple(float(c) for c in _get(profile, "twin_faults.coupling", [1.0] * 4)),
+            frozenset(profile_value(profile, "twin_faults.dead_channels", [])),
+            frozenset(int(c) for c in profile_value(profile, "twin_faults.stuck_open", [])),
+            frozenset(int(c) for c in profile_value(profile, "twin_faults.stuck_closed", [])),
+            tuple(float(c) for c in profile_value(profile, "twin_faults.coupling", [1.0] * 4)),
             swapped,
         )
 

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from console.plugin_api import PATCHES, InputSpec, UserError, input_specs
-from plugins.twin.faults import TwinFaults
+from plugins.twin.faults import TwinFaults, profile_value
 
 #: the inputs a twin offers when the profile names none
 DEFAULT_INPUTS = (
@@ -37,14 +37,6 @@ DEFAULT_INPUTS = (
 NOISE_BLOCK = 4096
 
 
-def _get(profile: Any, key: str, default: Any) -> Any:
-    try:
-        v = profile.get(key)
-    except Exception:  # a bare profile stub without the section
-        v = None
-    return default if v is None else v
-
-
 class TwinInputs:
     """The inputs of one twin audio output (``out``: its ``played_card`` and layout)."""
 
@@ -53,14 +45,16 @@ class TwinInputs:
         self.out = out
         self.specs = input_specs(profile) or DEFAULT_INPUTS
         self.fs_hz = int(out.sample_rate_hz)
-        self.delay_samples = int(_get(profile, "twin_inputs.delay_samples", 45))
-        self.noise_density = float(_get(profile, "twin_inputs.noise_m_s2_per_sqrt_hz", 2e-4))
-        self.card_noise_v = float(_get(profile, "twin_inputs.input_noise_v_rms", 5e-6))
-        self.seed = int(_get(profile, "twin_inputs.seed", 0))
-        x, y = _get(profile, "twin_inputs.sensor_mm", [371.73, 223.645])
+        self.delay_samples = int(profile_value(profile, "twin_inputs.delay_samples", 45))
+        self.noise_density = float(
+            profile_value(profile, "twin_inputs.noise_m_s2_per_sqrt_hz", 2e-4)
+        )
+        self.card_noise_v = float(profile_value(profile, "twin_inputs.input_noise_v_rms", 5e-6))
+        self.seed = int(profile_value(profile, "twin_inputs.seed", 0))
+        x, y = profile_value(profile, "twin_inputs.sensor_mm", [371.73, 223.645])
         self.sensor_mm = (float(x), float(y))
-        self.mass_kg = float(_get(profile, "twin_inputs.sensor_mass_g", 7.0)) / 1e3
-        self.out_full_scale_v = float(_get(profile, "audio.full_scale_v", 2.0))
+        self.mass_kg = float(profile_value(profile, "twin_inputs.sensor_mass_g", 7.0)) / 1e3
+        self.out_full_scale_v = float(profile_value(profile, "audio.full_scale_v", 2.0))
         self._relay_of = {}  # patch -> relay channel (0: none)
         for p in PATCHES:
             try:
