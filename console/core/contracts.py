@@ -43,8 +43,10 @@ from typing import Any, Literal, Protocol, TypedDict, runtime_checkable
 
 import numpy as np
 
+from console.core.recording_contracts import BeginsRun as BeginsRun
 from console.core.recording_contracts import ReadsRecordings as ReadsRecordings
 from console.core.recording_contracts import RecordedRun as RecordedRun
+from console.core.recording_contracts import WatchesOutputs as WatchesOutputs
 
 # the frame sinks' and panels' contracts: here too, where every kind's contract is found
 from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory

@@ -40,3 +40,20 @@ class ReadsRecordings(FrameSinkFactory, Protocol):
     it (a ``console.core.words.Placed``: its fix worded for the console too)."""
 
     def open_recording(self, path: str) -> RecordedRun: ...
+
+
+@runtime_checkable
+class WatchesOutputs(Protocol):
+    """A frame sink that sees what a demo hands its outputs: ``watch_outputs(outputs)``
+    returns the outputs the demo uses instead (every call passed on, as
+    ``console.core.plan_watch.WatchedOutputs`` does)."""
+
+    def watch_outputs(self, outputs: Any) -> Any: ...
+
+
+@runtime_checkable
+class BeginsRun(Protocol):
+    """A frame sink that keeps what a demo starts from: ``begin(demo=, classifier=,
+    scene=)`` before the first frame."""
+
+    def begin(self, *, demo: str = "", classifier: Any = None, scene: Any = None) -> None: ...

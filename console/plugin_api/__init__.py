@@ -19,7 +19,7 @@ What this module offers, by where it comes from:
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
   ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
-- the typed capabilities (``console.core.contracts``): ``AdjustableCamera``, ``BlockSource``, ``Classifier``,
+- the typed capabilities (``console.core.contracts``): ``AdjustableCamera``, ``BeginsRun``, ``WatchesOutputs``, ``BlockSource``, ``Classifier``,
   ``Conditions``, ``FlowEffect``, ``FlowPatchDrives``, ``HandFlowEffect``,
   ``HandFlowGeometry``, ``KnobTrials``,
   ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
@@ -58,6 +58,7 @@ from console.core.bench_stats import machine_info, summarize_s
 from console.core.channels import BUS_CHANNELS, ChannelLayout
 from console.core.contracts import (
     AdjustableCamera,
+    BeginsRun,
     BlockSource,
     Classifier,
     Conditions,
@@ -71,6 +72,7 @@ from console.core.contracts import (
     SimulatedCamera,
     SimulatedObserver,
     VisionResult,
+    WatchesOutputs,
 )
 from console.core.errors import SafetyRefusal, UserError
 from console.core.hookspecs import hookimpl
@@ -182,6 +184,8 @@ __all__ = [
     "patches_of",
     # capabilities (console.core.contracts)
     "AdjustableCamera",
+    "BeginsRun",
+    "WatchesOutputs",
     "BlockSource",
     "Classifier",
     "Conditions",

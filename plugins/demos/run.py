@@ -14,7 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import AdjustableCamera, UserError, summarize_s
+from console.plugin_api import (
+    AdjustableCamera,
+    BeginsRun,
+    UserError,
+    WatchesOutputs,
+    summarize_s,
+)
 from console.plugin_api.runtime import (
     FrameLoop,
     LatencyMonitor,
@@ -296,9 +302,8 @@ def start_demo(
             profile, plugins, force=None if tuio is None else {"tuio": tuio}
         )
         for s in all_sinks:  # a recorder sees the plans and relay requests the demo makes
-            watch = getattr(s, "watch_outputs", None)
-            if callable(watch):
-                outputs = watch(outputs)
+            if isinstance(s, WatchesOutputs):
+                outputs = s.watch_outputs(outputs)
         if name == "knob":
             demo = KnobDemo(
                 profile,
@@ -343,9 +348,8 @@ def start_demo(
             end_stage="scheduled",
         )
         for s in all_sinks:  # a recorder keeps what the run starts from
-            begin = getattr(s, "begin", None)
-            if callable(begin):
-                begin(demo=name, classifier=clf, scene=getattr(demo, "scene", None))
+            if isinstance(s, BeginsRun):
+                s.begin(demo=name, classifier=clf, scene=getattr(demo, "scene", None))
         loop = FrameLoop(
             camera,
             stages,
