@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from console.core.bench_stats import machine_info, summarize_s
+from console.core.device_buffer import buffer_periods
 from console.runtime.jitter import finish_probe, start_probe
 from console.runtime.twin_log import bursts, dominant_hz
 
@@ -258,7 +259,8 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
     block_s = float(ctx.profile.get("audio.block_size")) / float(
         ctx.profile.get("audio.sample_rate_hz")
     )
-    periods = int(ctx.profile.get("twin_audio.buffer_periods") or 3)
+    # the card's buffer as the driver keeps it ([audio] buffer_ms, else the twin's own)
+    periods = buffer_periods(ctx.profile, int(ctx.profile.get("twin_audio.buffer_periods") or 3))
     probe = start_probe(minutes * 60 + 600, block_s, max(1, periods - 1) * block_s)
     # a fresh cache, as on a new machine: the demos build their maps and flows (the
     # seconds from Enter to running include it)
@@ -293,6 +295,8 @@ def run(ctx, quick: bool, minutes: float | None = None) -> dict:
         "seconds_per_screen": seconds,
         "underruns": total,
         "block_ms": block_ms,
+        "buffer_ms": round(periods * block_ms, 3),
+        "buffer_periods": periods,
         "goals": {
             "flow_start_s_fresh_cache": 10.0,
             "projector_restarts": 0,

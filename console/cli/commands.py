@@ -14,9 +14,12 @@ import wave
 
 import numpy as np
 
+from console.config.profile import save_overrides
 from console.core.errors import EStopped, SafetyRefusal, UserError
 from console.core.options import minutes, seconds
 from console.core.suggest import suggestion
+from console.runtime.buffer_doctor import describe as describe_buffer
+from console.runtime.buffer_doctor import measure as measure_buffer
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.safety import Limits, check_plan
 
@@ -56,6 +59,16 @@ def run_plugins(args, ctx) -> int:
 # ---------------------------------------------------------------------- doctor
 def configure_doctor(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
+    p.add_argument(
+        "--buffer",
+        type=float,
+        metavar="SECONDS",
+        help="also measure for SECONDS how late this machine wakes the audio thread and "
+        "size the sound card's buffer ([audio] buffer_ms) to it",
+    )
+    p.add_argument(
+        "--save", action="store_true", help="with --buffer: store the buffer in the profile"
+    )
 
 
 def run_doctor(args, ctx) -> int:
@@ -66,6 +79,7 @@ def run_doctor(args, ctx) -> int:
     ]
     bad = [s for s in statuses if s.state in ("missing", "error")]
     code, part = _selftest_part(args, ctx)  # the self-test's quick part, when a plugin has one
+    buffer = _buffer_part(args, ctx)
     if args.json:
         print(
             json.dumps(
@@ -73,6 +87,7 @@ def run_doctor(args, ctx) -> int:
                     "profile": str(ctx.profile.path),
                     "devices": [s.__dict__ for s in statuses],
                     "selftest": json.loads(part) if part else None,
+                    "buffer": buffer,
                     "ok": not bad and not code,
                 },
                 indent=2,
@@ -86,7 +101,35 @@ def run_doctor(args, ctx) -> int:
             if s.fix:
                 print(f"  {'':<10} {'':<12} fix: {s.fix}")
         print(part, end="")
+        if buffer is not None:
+            print("\n".join(describe_buffer(buffer)))
     return 1 if bad or code else 0
+
+
+def _buffer_part(args, ctx) -> dict | None:
+    """``--buffer SECONDS``: the machine's wake lateness and the buffer it needs (stored
+    with ``--save``); None without it."""
+    if args.buffer is None:
+        if args.save:
+            raise UserError("doctor --save stores the measured buffer: add --buffer SECONDS")
+        return None
+    if not 1 <= args.buffer <= 3600:
+        raise UserError(
+            f"doctor --buffer {args.buffer:g}: give 1 to 3600 seconds (60 is a good start)"
+        )
+    got = measure_buffer(ctx.profile, args.buffer)
+    if args.save and "error" not in got:
+        if got["too_long"]:
+            raise UserError(
+                f"doctor --buffer: {got['recommended_buffer_ms']:g} ms of buffer would be "
+                "needed; not saved: give the audio thread real-time priority or use a "
+                "quieter machine"
+            )
+        where = save_overrides(
+            ctx.profile, {"audio.buffer_ms": got["recommended_buffer_ms"]}, ctx.pm
+        )
+        got["saved_to"] = str(where)
+    return got
 
 
 def _selftest_part(args, ctx) -> tuple[int, str]:

@@ -135,6 +135,15 @@ SECTIONS: dict[str, tuple[dict[str, Field], bool, str]] = {
                 help="sound-card output volts (peak) at sample value 1.0",
             ),
             "paced": Field("bool", True, help="twin: play in real time (false: fast-forward)"),
+            "buffer_ms": Field(
+                "float",
+                0.0,
+                min=0,
+                max=1000,
+                help="the sound card's buffer for every driver (output latency it adds; the "
+                "audio thread may be late by it less one block); 0 = the driver's own. "
+                "`haptable doctor --buffer 60 --save` sizes it for this machine",
+            ),
             "measured_output_latency_ms": Field(
                 "float",
                 -1.0,

@@ -75,6 +75,8 @@ from console.core.contracts import (
     WatchesOutputs,
 )
 from console.core.errors import SafetyRefusal, UserError
+from console.core.device_buffer import buffer_latency_s as device_buffer_latency_s
+from console.core.device_buffer import buffer_periods as device_buffer_periods
 from console.core.hookspecs import hookimpl
 from console.core.options import (
     BadValue,
@@ -282,3 +284,5 @@ __all__ = [
     "machine_info",
     "summarize_s",
 ]
+    "device_buffer_latency_s",
+    "device_buffer_periods",

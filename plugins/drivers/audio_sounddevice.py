@@ -43,6 +43,7 @@ from console.plugin_api import (
     DeviceStatus,
     InputSpec,
     OutputDevice,
+    device_buffer_latency_s,
     input_specs,
     summarize_s,
 )
@@ -532,7 +533,7 @@ def from_profile(profile: Any) -> SounddeviceOutput:
         device=profile.get("audio.device"),
         sample_rate_hz=profile.get("audio.sample_rate_hz"),
         block_size=profile.get("audio.block_size"),
-        latency_s=profile.get("sounddevice.latency_s"),
+        latency_s=device_buffer_latency_s(profile, profile.get("sounddevice.latency_s")),
         channels=ChannelLayout.from_profile(profile).n,
         inputs=input_specs(profile),
     )

@@ -56,6 +56,7 @@ from console.plugin_api import (
     ChannelLayout,
     Limits,
     StallWitness,
+    device_buffer_periods,
     realtime_priority,
     summarize_s,
 )
@@ -162,7 +163,8 @@ class TwinAudioOutput:
         self.block_size = int(profile.get("audio.block_size"))
         self.paced = bool(profile.get("audio.paced"))
         if buffer_periods is None:
-            buffer_periods = _key(profile, "twin_audio.buffer_periods", DEFAULT_BUFFER_PERIODS)
+            own = _key(profile, "twin_audio.buffer_periods", DEFAULT_BUFFER_PERIODS)
+            buffer_periods = device_buffer_periods(profile, own)  # [audio] buffer_ms wins
         self.buffer_periods = max(2, int(buffer_periods))  # 1: no slack at all
         if record_s is None:
             record_s = float(_key(profile, "twin_audio.record_s", DEFAULT_RECORD_S))
