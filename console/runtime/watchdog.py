@@ -11,6 +11,7 @@ The limit is the profile's ``[runtime] watchdog_ms``.
 from __future__ import annotations
 
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -25,13 +26,31 @@ class Stallable(Protocol):
     def stall(self, now_s: float | None = None) -> tuple[float, str]: ...
 
 
-def stall_reason(stuck_s: float, where: str, limit_s: float) -> str:
-    """The e-stop reason the operator reads."""
+def stall_reason(
+    stuck_s: float, where: str, limit_s: float, load: tuple[float, int] | None = None
+) -> str:
+    """The e-stop reason the operator reads; ``load`` (1-minute load average, cores; the
+    machine's now when None): past one runnable process per core the reason says the
+    machine was overloaded, the likeliest cause of a stall then."""
     stuck = "forever" if stuck_s == float("inf") else f"{stuck_s * 1e3:.0f} ms"
-    return (
+    reason = (
         f"runtime watchdog: frame loop stalled {stuck} in {where} "
         f"(limit [runtime] watchdog_ms = {limit_s * 1e3:.0f}); outputs silenced"
     )
+    avg, cores = load if load is not None else _load_now()
+    if cores > 0 and avg > cores:
+        reason += (
+            f"; the machine is overloaded (load average {avg:.1f} on {cores} cores): "
+            "close other programs before resetting"
+        )
+    return reason
+
+
+def _load_now() -> tuple[float, int]:
+    try:
+        return os.getloadavg()[0], len(os.sched_getaffinity(0))
+    except (OSError, AttributeError):
+        return 0.0, 0
 
 
 class Watchdog:

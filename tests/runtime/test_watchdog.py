@@ -48,7 +48,14 @@ def test_a_failing_action_does_not_kill_the_watchdog():
 
 
 def test_reason_for_a_dead_thread():
-    assert "forever" in stall_reason(float("inf"), "a loop thread died", 0.25)
+    assert "forever" in stall_reason(float("inf"), "a loop thread died", 0.25, (0.5, 2))
+
+
+def test_reason_names_an_overloaded_machine_and_only_then():
+    busy = stall_reason(0.31, "stage 'vision'", 0.25, (20.4, 2))
+    assert "310 ms in stage 'vision'" in busy
+    assert "overloaded (load average 20.4 on 2 cores): close other programs" in busy
+    assert "overloaded" not in stall_reason(0.31, "stage 'vision'", 0.25, (1.5, 2))
 
 
 class OneFrameCamera:
