@@ -49,6 +49,15 @@ BUILTIN_PLUGINS: dict[str, str] = {
     "studies": "plugins.studies",
 }
 
+#: The kinds a table's outputs process (``console.kernel``) builds: its sound card, its
+#: relay board, and the vibrometer whose plate a simulated card's sensors read.
+KERNEL_KINDS = ("audio_output", "relay_board", "vibrometer")
+
+#: The built-in plugins registering ``KERNEL_KINDS``: the only built-ins the outputs
+#: process loads (a test checks that no other registers one), so that it starts in a
+#: fraction of the time; entry-point and extra plugins load as everywhere.
+KERNEL_BUILTINS = ("twin", "twin.plate", "drivers")
+
 #: The console's own screens, registered beside the core plugin as ``core.panels``.
 CORE_PANELS = "console.tui.core_panels"
 

@@ -435,6 +435,7 @@ class Kernel:
                     reply = self._handle(c, header, payload)
                 except SafetyRefusal as exc:
                     reply = {"error": str(exc), "refused": True}
+                    self.gate.note_refusal(f"{header.get('op')}: {exc}")  # in every recording
                 except (UserError, ValueError, TypeError, KeyError, wire.WireError) as exc:
                     reply = {"error": f"{header.get('op')}: {exc}"}
                 except Exception as exc:  # a kernel bug: say so, keep serving
@@ -577,10 +578,13 @@ def main() -> int:
     logging.basicConfig(level=logging.WARNING, format="haptable kernel: %(name)s: %(message)s")
     table = table_at(request["table_dir"])
     # lazy: plugins load on first use
-    from console.config.plugins import import_extra, load_plugins
+    from console.config.plugins import BUILTIN_PLUGINS, KERNEL_BUILTINS, import_extra, load_plugins
 
     try:
-        pm = load_plugins(extra=import_extra(request.get("extra_plugins") or ()))
+        pm = load_plugins(
+            builtins={n: BUILTIN_PLUGINS[n] for n in KERNEL_BUILTINS},
+            extra=import_extra(request.get("extra_plugins") or ()),
+        )
     except Exception as exc:  # a plugin that does not load here: one line for the client
         out.write(f"error: the outputs process could not load the plugins: {exc}\n")
         return 2

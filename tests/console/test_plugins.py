@@ -152,3 +152,13 @@ def test_out_of_tree_distribution_shows_up(tmp_path):
         "plugin": "toycam",
         "description": "out-of-tree camera",
     } in data["provides"]
+
+
+def test_the_outputs_process_loads_every_builtin_that_registers_what_it_builds(plugins):
+    """The kernel loads only ``KERNEL_BUILTINS``: a built-in that starts registering a
+    sound card, a relay board or a vibrometer must be added there, or the kernel would
+    not find its driver."""
+    from console.config.plugins import KERNEL_BUILTINS, KERNEL_KINDS
+
+    owners = {reg.plugin for kind in KERNEL_KINDS for reg in plugins.of(kind).values()}
+    assert owners and owners <= set(KERNEL_BUILTINS), owners - set(KERNEL_BUILTINS)
