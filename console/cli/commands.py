@@ -61,7 +61,7 @@ def configure_doctor(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true")
     p.add_argument(
         "--buffer",
-        type=float,
+        type=seconds(3600.0, lo=1.0),
         metavar="SECONDS",
         help="also measure for SECONDS how late this machine wakes the audio thread and "
         "size the sound card's buffer ([audio] buffer_ms) to it",
@@ -113,10 +113,6 @@ def _buffer_part(args, ctx) -> dict | None:
         if args.save:
             raise UserError("doctor --save stores the measured buffer: add --buffer SECONDS")
         return None
-    if not 1 <= args.buffer <= 3600:
-        raise UserError(
-            f"doctor --buffer {args.buffer:g}: give 1 to 3600 seconds (60 is a good start)"
-        )
     got = measure_buffer(ctx.profile, args.buffer)
     if args.save and "error" not in got:
         if got["too_long"]:

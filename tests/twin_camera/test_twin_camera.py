@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -337,13 +338,30 @@ def test_camera_sudden_lights_change():
     assert abs(cam.background().mean() - after.image.mean()) < 2
 
 
-def test_camera_paced_read_counts_dropped_frames():
+def test_a_reader_a_few_frames_late_gets_every_frame_in_order(monkeypatch):
+    """As from a camera driver's buffer queue: late by up to ``CATCH_UP_FRAMES`` frames,
+    the reader gets them all, each with its capture time; later, the ones beyond are
+    dropped (a fake clock: the test does not depend on the machine's load)."""
+    from plugins.twin.camera import camera as cam_mod
+
+    clock = SimpleNamespace(now=100.0)
+    fake = SimpleNamespace(
+        monotonic=lambda: clock.now,
+        sleep=lambda s: setattr(clock, "now", clock.now + max(0.0, s)),
+    )
+    monkeypatch.setattr(cam_mod, "time", fake)
     cam = TwinCamera(script=IdleScript(), fps=60.0, realtime=True)
-    assert cam.read(0.5) is not None
-    time.sleep(0.1)  # a slow consumer misses frames
-    f = cam.read(0.5)
-    assert f is not None and f.seq > 1
-    assert cam.status()["dropped"] >= 1
+    first = cam.read(0.5)
+    clock.now += 2.5 / 60  # a stall of 2.5 frames
+    got = [cam.read(0.5) for _ in range(4)]
+    assert [f.seq for f in got] == [first.seq + i for i in range(1, 5)]
+    assert [round((f.t_capture_s - first.t_capture_s) * 60) for f in got] == [1, 2, 3, 4]
+    assert cam.status()["dropped"] == 0
+    clock.now += 10.5 / 60  # 9.5 frames late: the newest 3 (and this one) kept, 6 lost
+    late = cam.read(0.5)
+    assert cam.status()["dropped"] == 9 - cam_mod.CATCH_UP_FRAMES == 6
+    assert late.seq == got[-1].seq + 1 + 6
+    assert [cam.read(0.5).seq for _ in range(3)] == [late.seq + 1, late.seq + 2, late.seq + 3]
 
 
 def test_camera_performs_a_gesture_for_recording():

@@ -35,6 +35,9 @@ from console.plugin_api import Frame, GestureScript, UserError
 
 #: Shared-memory frame slots (the reader copies a frame out before it is reused).
 SLOTS = 8
+#: Announced frames a late reader still gets, oldest first (fewer than SLOTS: a frame's
+#: slot is not reused before it is read); beyond them the oldest are skipped.
+READ_BACKLOG = 3
 #: One announcement: slot, frame seq, capture time (monotonic s), frames the renderer lost.
 MSG = struct.Struct("<iqdq")
 #: The renderer's nice value when it paces itself in real time: above the console, the
@@ -207,9 +210,14 @@ class ProcessCamera:
         msg = self._next(timeout_s)
         if msg is None:
             return None
-        # behind: skip to the newest announced frame (a late reader loses frames, as a
-        # camera driver's queue does); the skipped ones count as camera drops
-        while len(self._buf) >= MSG.size or select.select([self._fd], [], [], 0)[0]:
+        # behind: the frames announced meanwhile wait in order, as in a camera driver's
+        # buffer queue; past READ_BACKLOG the oldest are skipped (camera drops)
+        while select.select([self._fd], [], [], 0)[0]:
+            chunk = os.read(self._fd, 64 * MSG.size)
+            if not chunk:
+                break
+            self._buf += chunk
+        while len(self._buf) // MSG.size >= READ_BACKLOG:
             nxt = self._next(0)
             if nxt is None:
                 break
