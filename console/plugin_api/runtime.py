@@ -15,7 +15,8 @@ What it offers, by where it comes from:
 - latency and timing: ``LatencyMonitor``, ``DEQUEUED``, ``PROCESSING``; jitter probes
   ``start_probe``, ``start_probe_beside``, ``finish_probe``
 - tracking: ``Tracking``, ``TrackFrame``, ``Announcer``
-- the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``
+- the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``,
+  ``kept_measured_map`` (the kept one only, never measuring)
 - the projector link: ``ProjectorService``, ``ProjectorLaunch``, the wire protocol as
   ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
@@ -46,7 +47,12 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
     from console.runtime.latency import DEQUEUED, PROCESSING, LatencyMonitor
     from console.runtime.loop import FrameLoop
-    from console.runtime.measured_map import Cancelled, measured_map, measured_map_file
+    from console.runtime.measured_map import (
+        Cancelled,
+        kept_measured_map,
+        measured_map,
+        measured_map_file,
+    )
     from console.runtime.projector import protocol as projector_protocol
     from console.runtime.projector.protocol import (
         HEARTBEAT_S,
@@ -82,7 +88,7 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "latency": ("DEQUEUED", "PROCESSING", "LatencyMonitor"),
     "jitter": ("finish_probe", "start_probe", "start_probe_beside"),
     "tracking": ("Announcer", "TrackFrame", "Tracking"),
-    "measured_map": ("Cancelled", "measured_map", "measured_map_file"),
+    "measured_map": ("Cancelled", "kept_measured_map", "measured_map", "measured_map_file"),
     "protocol": (
         "HEARTBEAT_S",
         "MAX_SOCKET_PATH",
@@ -122,6 +128,7 @@ __all__ = [
     "LatencyMonitor",
     "learn_background",
     "MAX_SOCKET_PATH",
+    "kept_measured_map",
     "measured_map",
     "measured_map_file",
     "MessageReader",

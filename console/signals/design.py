@@ -15,11 +15,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal as sps
 
 from console.core.errors import UserError
 from console.core.types import EXCITATIONS, PATCHES, OutputPlan, Segment, patches_of
 from console.signals.waveforms import MAX_PLAN_S, plan_samples, ramp_envelope
+
+
+def _sps():
+    """scipy.signal on first use: importing it costs every ``haptable`` command ~1 s."""
+    from scipy import signal  # lazy: only a rendered wave, chirp or lowpass needs it
+
+    return signal
 
 
 class Node:
@@ -70,11 +76,11 @@ class Wave(Node):
         if self.kind == "sine":
             y = np.sin(phase)
         elif self.kind == "square":
-            y = sps.square(phase)
+            y = _sps().square(phase)
         elif self.kind == "saw":
-            y = sps.sawtooth(phase, width=1.0)
+            y = _sps().sawtooth(phase, width=1.0)
         elif self.kind == "triangle":  # starts at 0 rising, like the sine
-            y = sps.sawtooth(phase + np.pi / 2, width=0.5)
+            y = _sps().sawtooth(phase + np.pi / 2, width=0.5)
         else:  # pragma: no cover - the parser only builds the four
             raise ValueError(self.kind)
         return self.amp_v * y
@@ -101,7 +107,7 @@ class Chirp(Node):
         t = np.arange(n) / fs
         method = "logarithmic" if self.log else "linear"
         # scipy's chirp is a cosine: phase -90 degrees makes it start at zero like a sine
-        return self.amp_v * sps.chirp(t, self.f0_hz, self.dur_s, self.f1_hz, method, phi=-90)
+        return self.amp_v * _sps().chirp(t, self.f0_hz, self.dur_s, self.f1_hz, method, phi=-90)
 
 
 @dataclass(frozen=True)
@@ -257,9 +263,9 @@ class Lowpass(Node):
         y = self.part.render(fs, n)
         if y.size < 2:
             return y
-        sos = sps.butter(self.ORDER, self.cutoff_hz, fs=fs, output="sos")
+        sos = _sps().butter(self.ORDER, self.cutoff_hz, fs=fs, output="sos")
         pad = min(3 * (2 * len(sos) + 1), y.size - 1)
-        return sps.sosfiltfilt(sos, y, padlen=pad)
+        return _sps().sosfiltfilt(sos, y, padlen=pad)
 
 
 def _fit(part: Node, fs: int, n: int) -> np.ndarray:

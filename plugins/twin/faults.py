@@ -13,7 +13,12 @@ broken one on the real table. Each fault is physical:
   it only shakes the glass through its cable and a corner of glue; 0.97-1.03: the
   amplifier's and the bond's normal drift);
 - ``swapped``: two patches whose wires cross after the amplifier and relays (``["PA",
-  "PC"]``: what drives PA reaches PC and the other way round).
+  "PC"]``: what drives PA reaches PC and the other way round);
+- ``cracked``: patches whose ceramic cracked (``plugins.twin.crack``: part of the electrode
+  cut off, the bond's stiffness lowered: the level drops, more above a resonance the
+  crack brings into the band, and the phase turns there: the FRF shifted, not gone);
+- ``weak_channels``: output channels whose amplifier gives ``WEAK_GAIN`` of its volts (its
+  gain switch at 20 instead of 50, a failing output stage; the monitor reads it too).
 """
 
 from __future__ import annotations
@@ -22,6 +27,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from console.plugin_api import PATCHES, Field, UserError
+
+#: a weak amplifier channel's gain against the nominal one (a gain switch at 20 of 50)
+WEAK_GAIN = 0.4
 
 if TYPE_CHECKING:
     import numpy as np
@@ -54,6 +62,17 @@ FAULT_FIELDS = {
         check=_patch_problem,
         help="two patches whose wires cross, e.g. ['PA', 'PC'] (empty: none)",
     ),
+    "cracked": Field(
+        "strs",
+        [],
+        check=_patch_problem,
+        help="patches whose ceramic cracked (their FRF shifts and drops), e.g. ['PB']",
+    ),
+    "weak_channels": Field(
+        "strs",
+        [],
+        help="output channels whose amplifier gives 0.4 of its volts (a wrong gain setting)",
+    ),
 }
 
 
@@ -85,6 +104,8 @@ class TwinFaults:
     stuck_closed: frozenset[int] = frozenset()
     coupling: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
     swapped: tuple[str, ...] = ()
+    cracked: frozenset[str] = frozenset()
+    weak_channels: frozenset[str] = frozenset()
 
     @classmethod
     def from_profile(cls, profile: Any) -> TwinFaults:
@@ -108,6 +129,8 @@ class TwinFaults:
             frozenset(int(c) for c in profile_value(profile, "twin_faults.stuck_closed", [])),
             tuple(float(c) for c in profile_value(profile, "twin_faults.coupling", [1.0] * 4)),
             swapped,
+            frozenset(profile_value(profile, "twin_faults.cracked", [])),
+            frozenset(profile_value(profile, "twin_faults.weak_channels", [])),
         )
 
     @classmethod
@@ -139,14 +162,26 @@ class TwinFaults:
         return commanded
 
     def amplifier(self, channel: str, volts: np.ndarray) -> np.ndarray:
-        """An output channel's amplifier output (0 when dead)."""
+        """An output channel's amplifier output (0 when dead, ``WEAK_GAIN`` x when weak)."""
         import numpy as np  # lazy
 
-        return np.zeros_like(volts) if channel in self.dead_channels else volts
+        if channel in self.dead_channels:
+            return np.zeros_like(volts)
+        return volts * WEAK_GAIN if channel in self.weak_channels else volts
 
-    def at_patches(self, v: np.ndarray) -> np.ndarray:
-        """Routed volts (4, n) PA..PD -> what each patch's bond puts into the glass."""
+    def at_patches(self, v: np.ndarray, fs_hz: float | None = None) -> np.ndarray:
+        """Routed volts (4, n) PA..PD -> what each patch's bond puts into the glass
+        (a cracked patch's through its crack's filter: needs ``fs_hz``)."""
         import numpy as np  # lazy
+
+        if self.cracked:
+            from plugins.twin.crack import crack_filter  # lazy: scipy only when cracked
+
+            if fs_hz is None:
+                raise ValueError("a cracked patch's filter needs the sample rate")
+            v = v.copy()
+            for p in self.cracked:
+                v[PATCHES.index(p)] = crack_filter(v[PATCHES.index(p)], fs_hz)
 
         if self.swapped:
             i, j = PATCHES.index(self.swapped[0]), PATCHES.index(self.swapped[1])

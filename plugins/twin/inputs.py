@@ -14,7 +14,8 @@ divider. The twin does not model sound: a ``microphone`` reads the card's noise 
 
 The recording's clock ignores underrun gaps (the plate would feel them; a paced twin
 rarely has any); the profile names no inputs: the twin offers ``accel`` (accelerometer,
-10.2 mV per m/s^2, input 1) and ``loopback`` (the first piezo output, input 2).
+10.2 mV per m/s^2, input 1), ``loopback`` (the first piezo output, input 2) and
+``amp_mon`` (the piezo amplifier's monitor through a 200:1 divider, input 3).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from plugins.twin.faults import TwinFaults, profile_value
 DEFAULT_INPUTS = (
     InputSpec("accel", 1, "accelerometer", 10.2, 2.0),
     InputSpec("loopback", 2, "loopback", 1.0, 2.0),
+    InputSpec("amp_mon", 3, "amp_monitor", 0.005, 2.0),
 )
 #: noise is drawn per block of this many clocks (reproducible reads of any range)
 NOISE_BLOCK = 4096
@@ -145,7 +147,7 @@ class TwinInputs:
                     v[i] += rows[:, j] * closed[relay]
                 elif name == p:
                     v[i] += rows[:, j] * (closed[relay] if relay else 1.0)
-        return self.faults.at_patches(v)
+        return self.faults.at_patches(v, self.fs_hz)
 
     def read(self, a: int, b: int) -> np.ndarray:
         """The inputs over clocks a..b, (b - a, inputs) float32 in card units."""

@@ -1,6 +1,9 @@
 """``haptable selftest [--json] [--quick]``: every relay path chirped and compared with the
-baseline (``plugins.vibrotactile.selftest``); each finding one line with its fix, exit 1
-on a fault. ``doctor_part(ctx)`` is the quick part ``haptable doctor`` runs."""
+baseline, or the stored vibration map on a table without one (``--against-map``: always;
+``plugins.vibrotactile.selftest``, ``selftest_map``); ``--sensor amp_monitor``: the
+amplifiers' monitors instead of the accelerometer (``selftest_monitor``). Each finding
+one line with its fix, exit 1 on a fault. ``doctor_part(ctx)`` is the quick part
+``haptable doctor`` runs."""
 
 from __future__ import annotations
 
@@ -24,6 +27,13 @@ SELFTEST_FIELDS = {
         must_exist=False,
         help="the self-test baseline file (default: the data dir's selftest/PROFILE-baseline.npz)",
     ),
+    "map": Field(
+        "path",
+        "",
+        must_exist=False,
+        help="the vibration map a table without a baseline is tested against (default: the "
+        "profile's measured map)",
+    ),
 }
 
 
@@ -37,6 +47,20 @@ def configure_selftest(p: argparse.ArgumentParser) -> None:
         help="measure and keep this run as the baseline (a healthy table, after a repair)",
     )
     p.add_argument("--fast", action="store_true", help="twin: fast-forward, not real time")
+    p.add_argument(
+        "--against-map",
+        action="store_true",
+        help="compare with the stored vibration map at the reference point even when a "
+        "baseline is kept (a table without one always is)",
+    )
+    p.add_argument("--map", default=None, help="that vibration map file (see [selftest] map)")
+    p.add_argument(
+        "--sensor",
+        choices=("accelerometer", "amp_monitor"),
+        default=None,
+        help="what measures: the accelerometer at the reference point, or the amplifiers' "
+        "monitor inputs (channel gains only; default: the accelerometer when there is one)",
+    )
     p.add_argument("--doctor", action="store_true", help=argparse.SUPPRESS)  # doctor's part
 
 
@@ -44,23 +68,84 @@ def skipped_why(profile: Any) -> str | None:
     """Why no self-test can run on this profile (no sensor among the inputs), or None."""
     if profile.get("audio.driver") == "twin":
         return None  # the twin's sensor is always there
-    if find_input(input_specs(profile), "accelerometer") is None:
+    specs = input_specs(profile)
+    if find_input(specs, "accelerometer") is None and find_input(specs, "amp_monitor") is None:
         return (
             "no accelerometer among [audio_inputs]: add [audio_inputs.accel] channel = 1, "
             "kind = 'accelerometer', sensitivity = 10.2 and glue it at [selftest] "
-            "reference_point"
+            "reference_point (or an amp_monitor input for the amplifiers alone)"
         )
     return None
 
 
-def selftest_report(ctx: Any, *, quick: bool, baseline=None, save=False, fast=None) -> dict:
+def sensor_of(profile: Any, asked: str | None) -> str:
+    """The sensor a run uses: the one asked for, else the accelerometer when there is one
+    (the twin's always), else the amplifiers' monitors."""
+    if asked:
+        return asked
+    twin = profile.get("audio.driver") == "twin"
+    if twin or find_input(input_specs(profile), "accelerometer") is not None:
+        return "accelerometer"
+    return "amp_monitor"
+
+
+def stored_map(ctx: Any, given: str | None) -> Any:
+    """The map a table is tested against: ``--map``, ``[selftest] map``, the profile's
+    kept measured map, else (the twin) its measured map; None when there is none."""
+    # lazy: the map's loader and the runtime load only when a map is wanted
+    from pathlib import Path
+
+    from console.plugin_api import load_map
+    from console.plugin_api.runtime import kept_measured_map, measured_map
+
+    p = given or ctx.profile.get("selftest.map")
+    if p:
+        if not Path(p).is_file():
+            raise UserError(
+                f"{p}: no such vibration map; give the map the table's effects use (see "
+                "`haptable frf`) with --map or [selftest] map"
+            )
+        return load_map(Path(p))
+    vmap = kept_measured_map(ctx.profile)
+    if vmap is None and ctx.profile.get("audio.driver") == "twin":
+        vmap = measured_map(ctx.profile, ctx.pm)  # the twin's: measured once, then kept
+    return vmap
+
+
+def selftest_report(
+    ctx: Any,
+    *,
+    quick: bool,
+    baseline=None,
+    save=False,
+    fast=None,
+    against_map: bool = False,
+    map_file: str | None = None,
+    sensor: str | None = None,
+) -> dict:
     # lazy: numpy, the outputs client and the test load only when run
     from console.plugin_api.runtime import open_outputs
-    from plugins.vibrotactile.selftest import reference_point, run_selftest
+    from plugins.vibrotactile.selftest import baseline_path, reference_point, run_selftest
 
+    if sensor_of(ctx.profile, sensor) == "amp_monitor":
+        from plugins.vibrotactile.selftest_monitor import run_monitor_selftest  # lazy: as above
+
+        with open_outputs(ctx.profile, ctx.pm, fast=fast) as out:
+            return run_monitor_selftest(out, ctx.profile, input_specs(ctx.profile))
     reference_point(ctx.profile)  # a bad point is one line before anything plays
+    vmap = None
+    if not save and (against_map or map_file or not baseline_path(ctx.profile, baseline).exists()):
+        vmap = stored_map(ctx, map_file)
     with open_outputs(ctx.profile, ctx.pm, fast=fast) as out:
-        return run_selftest(out, ctx.profile, quick=quick, baseline=baseline, save=save)
+        return run_selftest(
+            out,
+            ctx.profile,
+            quick=quick,
+            baseline=baseline,
+            save=save,
+            vmap=vmap,
+            against="map" if against_map else "auto",
+        )
 
 
 def run_selftest_cmd(args, ctx) -> int:
@@ -77,16 +162,30 @@ def run_selftest_cmd(args, ctx) -> int:
         raise UserError(f"{ctx.profile.path}: selftest: {why}")
     fast = True if args.fast else None
     r = selftest_report(
-        ctx, quick=args.quick, baseline=args.baseline, save=args.save_baseline, fast=fast
+        ctx,
+        quick=args.quick,
+        baseline=args.baseline,
+        save=args.save_baseline,
+        fast=fast,
+        against_map=args.against_map,
+        map_file=args.map,
+        sensor=args.sensor,
     )
     if args.json:
         print(json.dumps(r, indent=1))
     else:
         for line in r["lines"]:
             print(line)
-        print(
-            f"({len(r['paths'])} paths at grid point {r['reference_point']}, {r['elapsed_s']:.1f} s)"
-        )
+        if r.get("sensor") == "amp_monitor":
+            print(
+                f"({len(r['paths'])} amplifier channels on their monitors, {r['elapsed_s']:.1f} s)"
+            )
+        else:
+            print(
+                f"({len(r['paths'])} paths at grid point {r['reference_point']}"
+                + (f" against the {r['against']}" if r.get("against") else "")
+                + f", {r['elapsed_s']:.1f} s)"
+            )
     return 0 if r["ok"] else 1
 
 
@@ -98,7 +197,8 @@ def doctor_part(ctx: Any) -> dict:
     # lazy: the test's module loads only when run
     from plugins.vibrotactile.selftest import baseline_path
 
-    if not baseline_path(ctx.profile).exists():
+    monitor = sensor_of(ctx.profile, None) == "amp_monitor"  # it needs no baseline
+    if not monitor and not baseline_path(ctx.profile).exists():
         why = "no baseline yet: run `haptable selftest` on a healthy table to keep one"
         return {"state": "skipped", "lines": [f"skipped: {why}"]}
     twin = ctx.profile.get("audio.driver") == "twin"
