@@ -17,7 +17,9 @@ class RecordedRun(Protocol):
     ``radius_px``, ``finger_count``, ``gesture`` ``[name, kind, confidence]``, a
     ``plan`` record ...), ``plans()`` (what the run handed its outputs, JSON lines with
     ``kind``; a plan's ``name``, ``hash``, ``duration_s``, ``segments``, ``meta`` and
-    the kernel's clocks: not its samples, re-rendered from ``meta`` where shown), ``close()``."""
+    the kernel's clocks: not its samples, re-rendered from ``meta`` where shown),
+    ``gate_events()`` (the kernel's own events: ``t_s``, ``clock``, ``kind``, ``message``;
+    ``console.core.gate_log``), ``close()``."""
 
     path: Any
     n_frames: int
@@ -29,6 +31,8 @@ class RecordedRun(Protocol):
     def decisions(self, k: int) -> dict: ...
 
     def plans(self) -> list[dict]: ...
+
+    def gate_events(self) -> list[dict]: ...
 
     def close(self) -> None: ...
 

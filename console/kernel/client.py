@@ -599,9 +599,9 @@ class Outputs:
         """The operator's own relay setting (what a stimulus's routing returns to)."""
         return frozenset(self.status()["operator_relays"])
 
-    def events(self) -> list[GateEvent]:
-        """The gate's last events (e-stops, switches, faults, resets), oldest first."""
-        h, _ = self._call("events")
+    def events(self, since: int = 0) -> list[GateEvent]:
+        """The gate's last events (e-stops, switches, refusals ...) from clock ``since``."""
+        h, _ = self._call("events", since=int(since))
         return [
             GateEvent(float(t), int(c), str(k), str(m), bool(cut))
             for t, c, k, m, cut in h["events"]

@@ -43,7 +43,8 @@ What this module offers, by where it comes from:
   ``data_dir``, ``cached_arrays``, ``entry_path``, ``input_hash``
 - what a run hands its outputs, as a recording keeps it (``console.core.plan_watch``):
   ``WatchedOutputs``, ``plan_line``, ``plan_record``, ``plan_hash``, ``report_clocks``,
-  ``json_values``
+  ``json_values``; the kernel's own gate events (``console.core.gate_log``): ``GateLog``,
+  ``gate_events_text``, ``read_gate_events``, ``GATE_EVENT_DTYPE``, ``GATE_EVENTS``
 - real time and benchmarks: ``realtime_priority``, ``support_priority``,
   ``StallWitness``, ``ORIGINS``, ``machine_info``, ``summarize_s``
 """
@@ -74,9 +75,14 @@ from console.core.contracts import (
     VisionResult,
     WatchesOutputs,
 )
-from console.core.errors import SafetyRefusal, UserError
 from console.core.device_buffer import buffer_latency_s as device_buffer_latency_s
 from console.core.device_buffer import buffer_periods as device_buffer_periods
+from console.core.errors import SafetyRefusal, UserError
+from console.core.gate_log import DATASET as GATE_EVENTS
+from console.core.gate_log import EVENT_DTYPE as GATE_EVENT_DTYPE
+from console.core.gate_log import GateLog
+from console.core.gate_log import counts_text as gate_events_text
+from console.core.gate_log import read_rows as read_gate_events
 from console.core.hookspecs import hookimpl
 from console.core.options import (
     BadValue,
@@ -256,6 +262,11 @@ __all__ = [
     "append_json_line",
     "WatchedOutputs",
     "json_values",
+    "GateLog",
+    "GATE_EVENTS",
+    "GATE_EVENT_DTYPE",
+    "gate_events_text",
+    "read_gate_events",
     "plan_hash",
     "plan_line",
     "plan_record",
@@ -282,7 +293,7 @@ __all__ = [
     "ORIGINS",
     "StallWitness",
     "machine_info",
-    "summarize_s",
-]
     "device_buffer_latency_s",
     "device_buffer_periods",
+    "summarize_s",
+]

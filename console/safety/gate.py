@@ -238,6 +238,11 @@ class SafetyGate:
             s.latency_samples = value
             s.latency_fixed = True
 
+    def note_refusal(self, message: str) -> None:
+        """Keep a request the kernel refused (a plan, a relay switch) as a ``refused``
+        event: it changes nothing but the event log."""
+        self._event("refused", str(message)[:500])
+
     def add_listener(self, fn: Callable[[GateEvent], None]) -> None:
         """Call ``fn(event)`` on every event (on the thread that raised it; it must be
         quick and never raise: an exception is logged and ignored)."""
@@ -547,7 +552,10 @@ class SafetyGate:
         try:
             states = tuple(bool(c) for c in board.states())
             with self._lock:
-                s.relays = states
+                was, s.relays = s.relays, states
+            if was != states:  # a relay switch like any other: an event on every driver
+                closed = sorted(i + 1 for i, c in enumerate(states) if c)
+                self._event("switch", f"relays opened by the e-stop; closed: {closed or 'none'}")
         except Exception as exc:
             self._event("fault", f"relay board state unreadable: {exc!r}")
 

@@ -1,6 +1,8 @@
 """A recorded run's plans on the Scope screen (issue 31): ``o`` types a recording's path,
 then the Scope shows its plans one at a time on the chart it uses for a live plan, ``[`` /
-``]`` step between them, ``escape`` goes back to the live view.
+``]`` step between them, ``e`` lists the kernel's own gate events of the run (relay
+switches, e-stops, resets, faults, refusals, with their gate clocks), ``escape`` goes back
+to the live view.
 
 A recording keeps each plan's parameters (``meta``), the hash of its samples and the
 kernel's clocks, not the samples: a plan is drawn re-rendered from its recorded
@@ -22,10 +24,13 @@ from textual.widgets import Input, Static
 from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.tui.charts import Chart, Series
+from console.tui.path_field import recording_field
 from console.tui.recording_view import open_run
 from console.tui.util import from_thread, short_path
 
-REPLAY_ACTIONS = {"plan_step", "replay_live"}
+REPLAY_ACTIONS = {"plan_step", "replay_live", "gate_events"}
+#: the gate events listed at most (the first ones; the count says how many there are)
+MAX_EVENTS_SHOWN = 40
 LIVE_ONLY = {"freeze", "last_plan", "zoom"}
 
 
@@ -52,6 +57,24 @@ def plan_summary(line: dict, t0_s: float | None) -> str:
     if line.get("refused"):
         out += f", refused: {line['refused']}"
     return out
+
+
+def gate_events_lines(events: list[dict], t0_s: float | None) -> str:
+    """A recording's gate events, one per line: when (s from the first frame, else the
+    first event), the gate clock, the kind and the message."""
+    # lazy: loaded when this runs, not when the module is imported
+    from console.core.gate_log import counts_text
+
+    if not events:
+        return "no gate events in this recording (none happened, or it predates them)"
+    t0 = t0_s if t0_s is not None else events[0]["t_s"]
+    rows = [
+        f"{e['t_s'] - t0:8.3f} s  clock {e['clock']:>10}  {e['kind']:<8} {e['message']}"
+        for e in events[:MAX_EVENTS_SHOWN]
+    ]
+    more = len(events) - MAX_EVENTS_SHOWN
+    tail = [f"... and {more} more"] if more > 0 else []
+    return "\n".join([f"{counts_text(events)}:", *rows, *tail])
 
 
 def rerender(session: Any, line: dict) -> tuple[Any, str]:
@@ -117,6 +140,7 @@ SCOPE_REPLAY_BINDINGS = [
     Binding("o", "open_recording", "recording"),
     Binding("right_square_bracket", "plan_step(1)", "plan", key_display="[ ]"),
     Binding("left_square_bracket", "plan_step(-1)", "previous plan", show=False),
+    Binding("e", "gate_events", "gate events"),
     Binding("escape", "replay_live", "live"),
 ]
 
@@ -133,8 +157,7 @@ class ScopeRecordingMixin:
     said_head: str | None = None
 
     def on_mount(self) -> None:
-        box = Input(placeholder="recording .h5 path, Enter (Esc: back)", id="scope-recording")
-        box.display = False
+        box = recording_field("scope-recording")  # labelled: what to type
         self.mount(box, after="#scope-head")
 
     def check_action(self, action: str, parameters: tuple) -> bool | None:
@@ -207,6 +230,11 @@ class ScopeRecordingMixin:
             self.replay_i = min(max(self.replay_i + step, 0), len(self.replay_plans) - 1)
             self._show_plan()
 
+    def action_gate_events(self) -> None:
+        if self.replay is not None:
+            text = gate_events_lines(self.replay.gate_events(), self._t0())
+            self.query_one("#scope-info", Static).update(text)
+
     def action_replay_live(self) -> None:
         self.said_head = None
         run = self.replay
@@ -229,14 +257,16 @@ class ScopeRecordingMixin:
         name = short_path(run.path)
         if not plans:
             kinds = ", ".join(sorted({str(p.get("kind")) for p in self._other})) or "none"
-            self._say(f"RECORDING {name} | no plans in it (its outputs: {kinds}) | Esc live")
+            self._say(
+                f"RECORDING {name} | no plans in it (its outputs: {kinds}) | e gate events, Esc live"
+            )
             chart.clear("this recording holds no plans: o opens another, Esc the live view")
             info.update("")
             return
         line = plans[self.replay_i]
         self._say(
             f"RECORDING {name} | plan {self.replay_i + 1}/{len(plans)} "
-            "([ ] other plans, o another file, Esc live)"
+            "([ ] other plans, e gate events, o another file, Esc live)"
         )
         info.update(
             f"plan {self.replay_i + 1}: {plan_summary(line, self._t0())}; "

@@ -15,7 +15,9 @@ also ``versions``, ``profile_name``, ``profile_json``, ``profile_toml``, ``demo`
 ``tunables``, ``codec``, ``created_utc``): ``frames`` (N, H, W) uint8 one chunk per
 frame; ``seq``, ``t_capture_s`` (N,); ``decisions`` the frames' decisions as JSON bytes,
 ``decisions_index`` (N, 2) offset and length of each; ``plans`` plans played off the
-frame loop (JSON lines); ``background`` the learned empty table; ``stats`` (written,
+frame loop (JSON lines); ``gate_events`` the kernel's own events during the run (rows of
+time, gate clock, kind, message: relay switches, e-stops, resets, faults, refusals;
+``console.core.gate_log``); ``background`` the learned empty table; ``stats`` (written,
 dropped).
 
 ``haptable replay FILE`` runs the frames through the same vision and gesture stages and

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import GATE_EVENTS, UserError, read_gate_events
 
 from .writer import FORMAT, FORMAT_VERSION
 
@@ -71,6 +71,14 @@ class Recording:
         """Plans the run played off the frame loop (computed later), in order."""
         raw = self.f["plans"][:].tobytes()
         return [json.loads(line) for line in raw.splitlines() if line.strip()]
+
+    def gate_events(self) -> list[dict]:
+        """The kernel's own events during the run, in its order: ``t_s``, ``clock`` (gate
+        samples), ``kind`` (``switch``, ``estop``, ``reset``, ``fault``, ``refused``,
+        ``shutdown``), ``message``; none in a recording made before they were kept."""
+        if GATE_EVENTS not in self.f:
+            return []
+        return read_gate_events(self.f[GATE_EVENTS][:])
 
     def close(self) -> None:
         self.f.close()

@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, gate_events_text
 from console.plugin_api.runtime import FrameLoop, VisionStage, open_classifier
 
 from .camera import ReplayCamera
@@ -71,7 +71,7 @@ def replay(path: str | Path, profile: Any, plugins: Any) -> tuple[bool, str]:
         tail = f"; {dropped} frames were dropped while recording" if dropped else ""
         return True, (
             f"replay: {rec.n_frames} frames, {n_g} gestures the same; {n_p} plans "
-            f"recorded (not re-planned){tail}"
+            f"recorded (not re-planned), {gate_events_text(rec.gate_events())}{tail}"
         )
 
 

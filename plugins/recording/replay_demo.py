@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, gate_events_text
 
 from .camera import ReplayCamera
 from .decisions import compare, frame_decisions
@@ -108,5 +108,5 @@ def replay_demo(path: str | Path, ctx: Any) -> tuple[bool, str]:
         tail = f"; {dropped} frames were dropped while recording" if dropped else ""
         return True, (
             f"replay: {sink.frames} frames, {n_g} gestures and {len(sink.plans)} plans the "
-            f"same ({name} demo){tail}"
+            f"same ({name} demo); {gate_events_text(rec.gate_events())} recorded{tail}"
         )

@@ -4,10 +4,11 @@ clock of each segment's first and last sample, when its first sample reached the
 driver, a refusal) and every relay request (pre-arm, disarm) and stream started.
 
 ``WatchedOutputs`` forwards everything to the outputs client unchanged (the kernel's
-safety gate checks and plays it as before); it only notes what passed. The kernel's
-own events (gate refusals of blocks, relay switches it made) stay in its twin log: this
-records what the client sees. Shared with the studies' trial recordings, so it lives in
-the console (``console.core.plan_watch``, through ``console.plugin_api``)."""
+safety gate checks and plays it as before); it only notes what passed: what the client
+sees. The kernel's own events (relay switches it made, e-stops, refusals) the recorder
+pulls from the kernel itself (``console.core.gate_log``, ``gate_events``). Shared with
+the studies' trial recordings, so it lives in the console (``console.core.plan_watch``,
+through ``console.plugin_api``)."""
 
 from __future__ import annotations
 

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import GATE_EVENT_DTYPE, GATE_EVENTS, GateLog, UserError
 
 from .decisions import dumps, frame_decisions, plan_record
 from .watch import WatchedOutputs, plan_line
@@ -106,6 +106,7 @@ class Recorder:
         self._lock = threading.Lock()
         self._outputs_seen: list[tuple[str, dict, Any]] = []
         self._dropped_seq: list[int] = []  # frames the full queue dropped, not yet written
+        self._gate_log: GateLog | None = None  # the kernel's own events (``watch_outputs``)
         self._closed = False
         self._thread = threading.Thread(target=self._run, name="haptable-recorder", daemon=True)
         self._thread.start()
@@ -139,7 +140,9 @@ class Recorder:
                 self._dropped_seq.append(item[1])
 
     def watch_outputs(self, outputs: Any) -> WatchedOutputs:
-        """``outputs`` noting every plan and relay request the run makes (``watch``)."""
+        """``outputs`` noting every plan and relay request the run makes (``watch``);
+        the kernel's own gate events from now on are pulled into ``gate_events``."""
+        self._gate_log = GateLog(outputs)
         return WatchedOutputs(outputs, self._note_output)
 
     def _note_output(self, kind: str, rec: dict, report: Any) -> None:
@@ -223,8 +226,15 @@ class Recorder:
             self.writer_cpu_s = time.thread_time()
 
     def _flush(self, f: Any, ds: dict, final: bool = False) -> None:
-        """Plans done, the frames dropped so far, the counts; then everything to disk."""
+        """Plans done, the kernel's new gate events, the frames dropped so far, the
+        counts; then everything to disk."""
         _append(ds["plans"], self._output_lines(final=final))
+        if self._gate_log is not None:
+            rows = self._gate_log.pull()
+            if len(rows):
+                n = ds["gate_events"].shape[0]
+                ds["gate_events"].resize((n + len(rows),))
+                ds["gate_events"][n:] = rows
         with self._lock:
             lost, self._dropped_seq = self._dropped_seq, []
         if lost:
@@ -273,6 +283,9 @@ class Recorder:
             ),
             "plans": f.create_dataset("plans", (0,), np.uint8, maxshape=(None,), chunks=(4096,)),
             "stats": f.create_dataset("stats", data=np.zeros(2, np.int64)),
+            "gate_events": f.create_dataset(
+                GATE_EVENTS, (0,), GATE_EVENT_DTYPE, maxshape=(None,), chunks=(256,)
+            ),
             "dropped_seq": f.create_dataset(
                 "dropped_seq", (0,), np.int64, maxshape=(None,), chunks=(1024,)
             ),

@@ -23,7 +23,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import Limits, UserError
+from console.plugin_api import Limits, UserError, append_json_line
 
 from . import adaptive_protocol as ap
 from .adaptive_observer import draw
@@ -152,6 +152,19 @@ def _person_answer(task: str):
     return answer
 
 
+def _recorded(args, ctx, root: Path, setup: Setup, vm: Any, pseed: int, outputs: Any):
+    """(play, log_event) for a participant: each trial recorded into ``recording/`` with
+    ``--record`` or ``[recording] study_trials`` (``adaptive_recording``), else plain."""
+    # lazy: the recorders load only when a run records
+    from .adaptive_recording import AdaptiveTrialRecorder, recorded_log
+    from .trial_recording import wants_recording
+
+    if not wants_recording(args, ctx.profile):
+        return play_on(outputs), append_json_line
+    rec = AdaptiveTrialRecorder(root, setup, profile=ctx.profile, vmap=vm, seed=pseed)
+    return play_on(rec.watch(outputs)), recorded_log(rec)
+
+
 def run(
     args: argparse.Namespace,
     ctx: Any,
@@ -170,16 +183,14 @@ def run(
     needs_map = (
         proto.stimulus["modality"] == "vibrotactile" and proto.stimulus["reference"] == "dB re 1 um"
     )
-    setup = make_setup(
-        proto, Limits.from_profile(ctx.profile), vmap(args, ctx) if needs_map else None
-    )
+    vm = vmap(args, ctx) if needs_map else None
+    setup = make_setup(proto, Limits.from_profile(ctx.profile), vm)
     control = Control()
     old = signal.getsignal(signal.SIGINT)
     signal.signal(signal.SIGINT, lambda s, f: control.abort("Ctrl-C"))
     summaries = []
     try:
         with ctx.outputs(fast=True if args.simulate else None) as outputs:
-            play = play_on(outputs)
             for pid in ids:
                 root = participant_dir(args.out, pid)
                 pseed = participant_seed(proto, pid) if seed is None else seed
@@ -213,6 +224,7 @@ def run(
                 if stored is None:
                     save_participant(files, person)
                     stored = asdict(person)
+                play, log_event = _recorded(args, ctx, root, setup, vm, pseed, outputs)
                 answer = (
                     simulated_answer(setup, stored["observer"], pseed)
                     if args.simulate
@@ -243,6 +255,7 @@ def run(
                         limit=args.trials,
                         control=control,
                         say=say,
+                        log_event=log_event,
                     )
                 except Aborted:
                     aborted = True

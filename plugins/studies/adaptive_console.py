@@ -30,6 +30,7 @@ from . import console_run
 from . import protocol as protocols
 from .adaptive_cli import save_results
 from .adaptive_observer import draw
+from .adaptive_recording import screen_recorded
 from .adaptive_run import (
     Setup,
     State,
@@ -45,7 +46,6 @@ from .plan import participant_seed
 from .quest import QuestTrack
 from .runner import Aborted, Answer
 from .start import PARTICIPANT_KEYS, simulated_participant
-from .stimuli import play_on_session
 from .store import RunFiles, load_participant, make_participant, participant_dir, save_participant
 from .words import SCREEN
 
@@ -237,7 +237,7 @@ def run_adaptive(
     emit("progress", {"done": mirror.done, "total": total})
     again = f"; resuming at trial {mirror.done + 1}" if mirror.done else ""
     session.emit(Started(TOPIC, name=pid, detail=f"{proto.title} -> {root}{again}"))
-    play = play_on_session(session, holder)
+    play, log_event = screen_recorded(session, spec, root, setup, vmap, pseed, holder)
 
     def played(plan: Any) -> bool:
         t = next_trial(setup, mirror, pseed)
@@ -271,6 +271,7 @@ def run_adaptive(
             simulated=simulated,
             control=_Steer(control, paused),
             say=say,
+            log_event=log_event,
         )
     except Aborted as exc:
         emit("aborted", {"reason": str(exc)})

@@ -346,13 +346,15 @@ def run_trials(
     limit: int | None = None,
     control: Any = None,
     say: Callable[[dict[str, Any]], None] = lambda rec: None,
+    log_event: Callable[[Path, dict[str, Any]], None] = append_json_line,
 ) -> State:
-    """Run trials from where the log stands (at most ``limit`` now)."""
+    """Run trials from where the log stands (at most ``limit`` now); each event line
+    through ``log_event`` (``adaptive_recording.recorded_log``: a trial's recording too)."""
     base = {"participant": pid, "experiment": setup.protocol.name}
     log = root / LOG
     cut = pending_start(root, setup)
     if cut is not None:
-        append_json_line(log, {**base, "event": "interrupted", "trial": cut, "t": time.time()})
+        log_event(log, {**base, "event": "interrupted", "trial": cut, "t": time.time()})
     state = rebuild(setup, root, seed)
     ran = 0
     task = setup.protocol.procedure["task"]
@@ -363,14 +365,14 @@ def run_trials(
             control.wait_if_paused()
         plan = trial_plan(setup, t)
         t_start = time.time()
-        append_json_line(log, {**base, "event": "start", **t, "t_start": t_start})
+        log_event(log, {**base, "event": "start", **t, "t_start": t_start})
         try:
             play(plan)
             response, rt = answer(t, plan)
             if control is not None:
                 control.check()
         except BaseException as exc:
-            append_json_line(
+            log_event(
                 log,
                 {
                     **base,
@@ -394,7 +396,7 @@ def run_trials(
             "t_start": t_start,
             "t_end": time.time(),
         }
-        append_json_line(log, rec)
+        log_event(log, rec)
         _apply(state, {**rec, "_where": str(log)}, root)
         ran += 1
         say(rec)

@@ -27,7 +27,7 @@ from .sensation import resolver
 from .start import prepare, stored_participant
 from .stimuli import EffectPlayer, LiveKnob, check_places, play_on_session
 from .store import resume_text
-from .trial_recording import TrialRecorder, recorded_files
+from .trial_recording import TrialRecorder, recorded_files, spec_wants_recording
 from .words import SCREEN
 
 TOPIC = "study"
@@ -237,11 +237,11 @@ def run_study(
             if session.camera.error:
                 raise UserError(f"camera: {session.camera.error}")
         files, play = prep.files, play_on_session(session, holder)
-        if profile.get("recording.study_trials"):  # each trial into recording/ (its frames)
+        if spec_wants_recording(spec, profile):  # the screen's switch: each trial recorded
             rec = TrialRecorder(
                 files.root, prep.plan, profile=profile, vmap=vmap, seed=prep.participant_seed
             )
-            files, play = recorded_files(files, rec), rec.noted_play(play)
+            files, play = recorded_files(files, rec), rec.noted_play(play, session.outputs)
             if projected is not None or live is not None:
                 session.camera.frame_hooks.append(rec.frame)
         player = EffectPlayer(

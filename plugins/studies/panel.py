@@ -47,7 +47,7 @@ from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
 from console.plugin_api.tui import LiteralTable, SessionMessage, escape, said_here
 
-from . import adaptive_console
+from . import adaptive_console, panel_fit
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
@@ -60,6 +60,7 @@ from .panel_text import (
     status_lines,
     trial_text,
 )
+from .record_switch import RECORD, folder_row
 from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 from .trials_table import TrialsTable
@@ -184,12 +185,7 @@ class StudiesPane(Vertical):
             yield Input("P01", placeholder="id", id="participant", compact=True)
             yield Checkbox("simulated", True, id="simulate", compact=True)
             yield Checkbox("projector", False, id="projector", compact=True)
-        with Horizontal(id="study-folder", classes="study-row"):
-            yield Label("folder", markup=False)
-            first = str(names[0]) if names else ""
-            yield Input(
-                str(default_out(first)), placeholder="where the results go", id="out", compact=True
-            )
+        yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
             yield Input(id="age", compact=True)
@@ -281,6 +277,7 @@ class StudiesPane(Vertical):
             "out": Path(self._value("out").strip() or default_out()).expanduser(),
             "simulate": bool(self._value("simulate")),
             "projector": bool(self._value("projector")),
+            RECORD: bool(self._value(RECORD)),
             "details": {
                 "age": self._value("age").strip() or None,
                 "sex": self._value("sex").strip() or None,
@@ -461,7 +458,7 @@ class StudiesPane(Vertical):
         defaults = {str(default_out())} | {str(default_out(n)) for n in protocols.available()}
         if field.value.strip() in defaults:
             field.value = str(default_out(str(event.value)))
-        self._idle()
+        panel_fit.protocol_changed(self, str(event.value))  # its status, now
 
     def action_answer(self, key: str) -> None:
         self._answer(ANSWERS.get(key, key))
@@ -673,7 +670,7 @@ class StudiesPane(Vertical):
         self._status(self._status_text)
 
     def on_mount(self) -> None:
-        self._idle()
+        panel_fit.mounted(self)  # its dropdown as wide as the names, its status
 
     def _idle(self) -> None:
         """No run going on: the last run's status (or what to do), and what the chosen

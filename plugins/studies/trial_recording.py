@@ -6,7 +6,10 @@ study_trials = true``).
 ``format_version`` 1) holds the trial as the plan gave it (``trial``: its stimulus
 parameters), its ``done`` record (the response, its time, replays, correct), every plan
 handed to the outputs with the kernel's report clocks (``outputs``: JSON lines of
-``console.plugin_api.plan_line``, through ``WatchedOutputs``) and, when the trial saw the
+``console.plugin_api.plan_line``, through ``WatchedOutputs``), the kernel's own events in
+the trial's window of gate clocks (``gate_events``: relay switches, e-stops, resets,
+faults, refusals; ``console.plugin_api.GateLog``; attributes ``gate_clock_start`` and
+``gate_clock_end``) and, when the trial saw the
 camera (a projected study on the Studies screen, ``[recording] study_trials``: the
 recorder is a frame hook of the console's camera loop), its ``frames`` (N, H, W) uint8
 with ``t_capture_s``, written into the trial's ``.part`` file by a writer thread as they
@@ -40,7 +43,15 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import UserError, WatchedOutputs, plan_line, save_map
+from console.plugin_api import (
+    GATE_EVENT_DTYPE,
+    GATE_EVENTS,
+    GateLog,
+    UserError,
+    WatchedOutputs,
+    plan_line,
+    save_map,
+)
 
 from .store import RunFiles
 
@@ -105,6 +116,8 @@ class TrialRecorder:
         vmap: Any = None,
         seed: int = 0,
         queue_frames: int = 240,
+        plan_file: str = "plan.json",
+        attrs: dict[str, Any] | None = None,
     ) -> None:
         self.folder = Path(root) / FOLDER
         try:
@@ -117,7 +130,10 @@ class TrialRecorder:
         self.plan = plan
         self.profile = profile
         self.seed = int(seed)
-        self.plan_sha256 = file_sha256(Path(root) / "plan.json")
+        self.plan_sha256 = file_sha256(Path(root) / plan_file)
+        self.attrs = dict(attrs or {})  # more root attributes (an adaptive run's protocol)
+        self._outputs: Any = None  # whose kernel's gate events each trial keeps
+        self._gate_log: GateLog | None = None
         self.map_sha256 = self._store_map(vmap) if vmap is not None else ""
         self.versions = json.dumps(versions())
         self._noted: list[tuple[str, dict, Any]] = []
@@ -151,11 +167,14 @@ class TrialRecorder:
         return new
 
     def watch(self, outputs: Any) -> WatchedOutputs:
+        self._outputs = outputs
         return WatchedOutputs(outputs, self._note)
 
-    def noted_play(self, play: Any) -> Any:
+    def noted_play(self, play: Any, outputs: Any = None) -> Any:
         """``play(plan)`` (the console session's, which gives no report) with each plan
-        noted as handed to the outputs (no kernel clocks: the session keeps them)."""
+        noted as handed to the outputs (no kernel clocks: the session keeps them); the
+        gate events of ``outputs`` (the session's) are kept per trial."""
+        self._outputs = outputs
 
         def recorded_play(plan: Any) -> Any:
             self._note("plan", {"plan": plan, "t_asked_s": time.monotonic()}, None)
@@ -171,6 +190,7 @@ class TrialRecorder:
         self._end_frames(keep=False)
         self.index = self._frames_for = int(index)
         self._noted = []
+        self._gate_log = GateLog(self._outputs) if self._outputs is not None else None
 
     def frame(self, frame: Any, work: dict[str, Any] | None = None) -> None:
         """A camera frame seen during the trial (a camera loop's frame hook: projected
@@ -268,7 +288,8 @@ class TrialRecorder:
 
         index = int(done["trial"])
         self._end_frames(keep=True)
-        trial = self.plan["trials"][index]
+        trial = self.trial_record(index, done)
+        events, clocks = self._trial_events()
         lines = [plan_line(*x) for x in self._noted]
         target = self.folder / trial_name(index)
         part = self._part(index)
@@ -288,6 +309,10 @@ class TrialRecorder:
         a["profile_name"] = str(getattr(self.profile, "name", ""))
         a["profile_json"] = json.dumps(getattr(self.profile, "data", {}), default=str)
         a["frames_dropped"] = int(self.frames_dropped)
+        a["gate_clock_start"], a["gate_clock_end"] = clocks
+        for k, v in self.attrs.items():
+            a[k] = v
+        f.create_dataset(GATE_EVENTS, data=events, dtype=GATE_EVENT_DTYPE)
         f.create_dataset("trial", data=json.dumps(trial, sort_keys=True))
         f.create_dataset("done", data=json.dumps(done, sort_keys=True))
         f.create_dataset("outputs", data="".join(json.dumps(x) + "\n" for x in lines))
@@ -298,6 +323,20 @@ class TrialRecorder:
         self.written += 1
         self._noted, self.frames_dropped = [], 0
         return target
+
+    def trial_record(self, index: int, done: dict[str, Any]) -> dict[str, Any]:
+        """The trial as the plan gave it (what its replay renders again)."""
+        return self.plan["trials"][index]
+
+    def _trial_events(self) -> tuple[np.ndarray, tuple[int, int]]:
+        """The kernel's gate events of the trial and its window of gate clocks (-1: no
+        kernel to ask)."""
+        log_, self._gate_log = self._gate_log, None
+        if log_ is None or not log_.live:
+            return np.zeros(0, GATE_EVENT_DTYPE), (-1, -1)
+        rows = log_.pull()
+        end = int(rows["clock"].max()) if len(rows) else log_.since
+        return rows, (log_.since, max(end, log_.clock_now()))
 
 
 @dataclass
@@ -327,3 +366,15 @@ def recorded_files(files: RunFiles, recorder: TrialRecorder) -> RecordedRunFiles
 def wants_recording(args: Any, profile: Any) -> bool:
     """``--record`` or ``[recording] study_trials = true``."""
     return bool(getattr(args, "record", False) or profile.get("recording.study_trials"))
+
+
+#: the Studies screen's "record trials" switch: its id, and its key in a run's ``spec``
+RECORD = "record"
+
+
+def spec_wants_recording(spec: dict[str, Any], profile: Any) -> bool:
+    """Whether a Studies screen run records its trials: its switch (``spec["record"]``),
+    else the profile's ``[recording] study_trials``."""
+    if RECORD in spec:
+        return bool(spec[RECORD])
+    return bool(profile.get("recording.study_trials"))

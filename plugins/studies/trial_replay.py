@@ -16,7 +16,14 @@ import json
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, load_map, plan_hash
+from console.plugin_api import (
+    GATE_EVENTS,
+    UserError,
+    gate_events_text,
+    load_map,
+    plan_hash,
+    read_gate_events,
+)
 
 from .stimuli import EffectPlayer, knob_trial
 from .trial_recording import FOLDER, FORMAT, FORMAT_VERSION, MAP_FILE, file_sha256
@@ -90,7 +97,15 @@ def read_trial(p: Path) -> dict[str, Any]:
         except (KeyError, ValueError) as exc:
             raise UserError(f"study recording {p}: damaged ({exc}); {FIX}") from None
         n_frames = int(f["frames"].shape[0]) if "frames" in f else 0
-    return {"attrs": attrs, "trial": trial, "done": done, "outputs": outputs, "frames": n_frames}
+        gate = read_gate_events(f[GATE_EVENTS][:]) if GATE_EVENTS in f else []
+    return {
+        "attrs": attrs,
+        "trial": trial,
+        "done": done,
+        "outputs": outputs,
+        "frames": n_frames,
+        "gate_events": gate,
+    }
 
 
 class _Maps:
@@ -122,6 +137,10 @@ def replay_trial(p: Path, rec: dict[str, Any], ctx: Any, maps: _Maps) -> tuple[s
     """(first difference or None, plans compared; -1: a person's knob trial, which
     nothing renders again) for one recorded trial."""
     trial, attrs = rec["trial"], rec["attrs"]
+    if "adaptive" in trial:  # an adaptive threshold run's trial
+        from .adaptive_recording import replay_adaptive  # lazy: only for adaptive runs
+
+        return replay_adaptive(p, rec, ctx, lambda: maps.get(p, str(attrs.get("map_sha256", ""))))
     stim = trial.get("stimulus") or {}
     if stim.get("task") == "knob":
         if not rec["done"].get("simulated"):
@@ -156,8 +175,10 @@ def replay_study(path: str | Path, ctx: Any) -> tuple[bool, str]:
     maps = _Maps()
     n_plans, n_knob, n_live, who, frames = 0, 0, 0, set(), 0
     experiment = ""
+    gate: list[dict[str, Any]] = []
     for p in files:
         rec = read_trial(p)
+        gate += rec["gate_events"]
         experiment = str(rec["attrs"].get("experiment", ""))
         who.add(str(rec["attrs"].get("participant", "")))
         frames += rec["frames"]
@@ -183,4 +204,5 @@ def replay_study(path: str | Path, ctx: Any) -> tuple[bool, str]:
         how.append(f"{n_live} knob trials of a person not re-run (nothing to render)")
     return True, (
         f"replay: {len(files)} trials of {experiment} ({people}) the same: {'; '.join(how)}{seen}"
+        f"; {gate_events_text(gate)} recorded"
     )

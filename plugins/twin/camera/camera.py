@@ -217,13 +217,9 @@ class TouchScript:
         return [(self.subject, pose)], "touch" if touching else "hover", extra
 
 
-#: a reader that has not called ``read`` for this long is away: the frames meanwhile are
-#: ``unread``, not dropped (a paced reader that is late drops them)
-READER_AWAY_S = 0.5
-#: a reader (or the renderer's own thread) late by up to this many frames gets them all,
-#: late and in order, each with its capture time, as from a camera driver's buffer queue;
-#: later than that, the frames beyond it are dropped
-CATCH_UP_FRAMES = 3
+#: a reader away this long: the frames meanwhile are ``unread``, not dropped; a reader
+#: late by up to CATCH_UP_FRAMES gets them all in order (a driver's queue), later drops
+READER_AWAY_S, CATCH_UP_FRAMES = 0.5, 3
 #: the sensor's controls, as a camera driver's (``AdjustableCamera``): multipliers on the
 #: light before the 8-bit clip (1: the nominal frame); gain never below 1 (as a sensor's)
 CONTROLS = {"exposure": TunableRange(0.05, 4.0, 0.05), "gain": TunableRange(1.0, 8.0, 0.25)}
@@ -549,15 +545,11 @@ class TwinCamera:
             if wait > 0:
                 time.sleep(wait)
             elif -wait >= (CATCH_UP_FRAMES + 1) * step / self.fps:
-                # late past the catch-up: the frames beyond it were lost (a real sensor
-                # exposes on schedule; a driver's queue holds a few frames, not more)
                 missed = int(-wait * self.fps / step) - CATCH_UP_FRAMES
                 self._dropped += missed
                 self._k += missed * step
                 due = self._t0 + self._k / self.fps
-            # late by fewer frames: this one is rendered now, at its own capture time,
-            # and the next ones right after it (the reader catches up, nothing is lost)
-            t_capture = due
+            t_capture = due  # late by fewer: rendered now, the next right after
         else:
             t_capture = now
         with self._lock:

@@ -1,0 +1,32 @@
+"""The Studies screen's "record trials" switch: what ``haptable study run ... --record``
+sets for a run started on the screen (each trial into ``<participant>/recording/``, see
+``trial_recording`` and ``adaptive_recording``). It starts as the profile's ``[recording]
+study_trials`` and sits on the folder row, beside where the files go."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from textual.containers import Horizontal
+from textual.widgets import Checkbox, Input, Label
+
+from .trial_recording import RECORD
+
+__all__ = ["RECORD", "folder_row"]
+
+
+def folder_row(out: str, profile: Any) -> Horizontal:
+    """The folder row: where the results go, and the record-trials switch."""
+    return Horizontal(
+        Label("folder", markup=False),
+        Input(out, placeholder="where the results go", id="out", compact=True),
+        Checkbox(
+            "record trials",
+            bool(profile.get("recording.study_trials")),
+            id=RECORD,
+            compact=True,
+            tooltip="each trial into <participant>/recording/ (haptable study replay)",
+        ),
+        id="study-folder",
+        classes="study-row",
+    )
