@@ -32,7 +32,11 @@ def configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--minutes", type=minutes(), default=None, help="soak: run this long")
     p.add_argument("--no-script", action="store_true", help="twin: no scripted hand")
-    p.add_argument("--tuio", action="store_true", help="also stream TUIO 1.1 ([tuio] host/port)")
+    p.add_argument(
+        "--tuio",
+        action="store_true",
+        help="also stream TUIO ([tuio] version 1.1 or 2.0, host/port)",
+    )
     p.add_argument("--json", action="store_true", help="print the final snapshot as JSON")
     p.add_argument("--record", metavar="FILE", default=None, help="record the run (HDF5)")
 

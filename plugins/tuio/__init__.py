@@ -11,8 +11,9 @@ is registered as the frame sink ``tuio`` (``haptable_register_frame_sinks``).
 Modules: ``settings`` (the section), ``sink`` (``make_sender(profile, host=None,
 port=None, force=False)`` -> a frame sink, or ``None`` when disabled), ``sender`` (the
 OSC messages, ``GESTURE_ADDRESS``), ``tuio2`` (TUIO 2.0 bundles), ``sender2`` (their
-frame sink), ``websocket`` (the WebSocket server), ``cli`` (``haptable tuio``), ``bench``
-(``haptable bench tuio``).
+frame sink), ``fingers`` (which hand, left or right, which finger: the pointers' type
+ids), ``pointers`` (those kept over the tracks), ``websocket`` (the WebSocket server),
+``cli`` (``haptable tuio``), ``bench`` and ``finger_bench`` (``haptable bench tuio``).
 """
 
 from __future__ import annotations
@@ -60,4 +61,8 @@ def haptable_register_benchmarks(register) -> None:
 
         return run_bench(ctx, quick)
 
-    register("tuio", run, help="TUIO 2.0 encoding per frame (twin frames, 1 and 4 hands)")
+    register(
+        "tuio",
+        run,
+        help="TUIO 2.0 encoding per frame (twin frames, 1 and 4 hands); fingers' type ids",
+    )

@@ -4,7 +4,8 @@ Frames from the profile's simulated camera through the vision (an open hand, the
 fingers down) are recorded once, then encoded again and again: ``one_hand`` as seen, and
 ``four_hands`` (the same hand four times, ids apart: the split path over UDP) timed
 per frame. Bytes per bundle, bundles per frame and the outline tolerance reached are
-reported beside the times.
+reported beside the times. ``fingers``: pointers' hands and fingers scored on the twin's
+rendered hands (``finger_bench``).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from console.plugin_api import (
 )
 from console.plugin_api import runtime as rt
 
+from .finger_bench import run_fingers
 from .tuio2 import UDP_LIMIT_BYTES, WS_LIMIT_BYTES, Tuio2Encoder
 
 
@@ -113,5 +115,6 @@ def run_bench(ctx: Any, quick: bool) -> dict:
         "one_hand_udp": _case(frames, ctx.profile, UDP_LIMIT_BYTES, reps),
         "four_hands_udp": _case(many, ctx.profile, UDP_LIMIT_BYTES, reps),
         "four_hands_websocket": _case(many, ctx.profile, WS_LIMIT_BYTES, reps),
+        "fingers": run_fingers(ctx.profile, ctx.pm, quick),
         "machine": machine_info(),
     }

@@ -20,11 +20,13 @@ Each camera frame is one bundle (several only when it cannot fit: below), in thi
   without a message.
 - ``tu_id = user_id << 16 | type_id`` (the spec's example ``0x00020005``: user 2's right
   thumb; the C++ ``TuioPointer::getTypeUserID``; its ``TuioClient`` decodes the halves
-  swapped, the spec and the server win). ``type_id`` is 0, the spec's unknown pointer
-  type (1-5 right index, middle, ring, little, thumb; 6-10 the left hand's): the vision
-  does not tell which finger touches nor which hand it is. ``user_id`` is the finger's
-  hand: ``1 + hand s_id mod 65535`` (0: a contact on no hand); ``c_id``, the component
-  id, is the hand's ``s_id`` itself (the pointer's own when it is on no hand).
+  swapped, the spec and the server win). ``type_id``: 1-5 right index, middle, ring,
+  little, thumb; 6-10 the left hand's; 0 (the spec's unknown) when the hand's side or
+  the finger is not clear (``fingers``, kept over the tracks by ``pointers``; always
+  without a camera -> table mapping). ``user_id`` is the finger's hand (the vision's,
+  else the hand whose outline holds it or is nearest, ``fingers.owner``):
+  ``1 + hand s_id mod 65535`` (0: a contact on no hand); ``c_id``, the component id, is
+  the hand's ``s_id`` itself (the pointer's own when it is on no hand).
 - Positions are normalised 0..1 over the glass as in TUIO 1.1 (``x_mm / width_mm``,
   clipped; px / image size without a camera -> table mapping); the outline goes through
   the same mapping point by point. ``bnd``: centre = the hand track's (the outline's
@@ -56,6 +58,8 @@ from typing import Any
 
 import numpy as np
 from pythonosc.parsing import ntp, osc_types
+
+from .pointers import PointerTypes
 
 UDP_LIMIT_BYTES = 4096
 WS_LIMIT_BYTES = 65536
@@ -131,6 +135,7 @@ class Tuio2Encoder:
         self.contours_dropped = 0
         self._wall_minus_capture_s: float | None = None
         self._last_t_s = -math.inf
+        self.pointers = PointerTypes()  # the pointers' hands and type ids, per track
 
     # ------------------------------------------------------------------ pieces
     def _frm(self, t_s: float) -> bytes:
@@ -172,7 +177,7 @@ class Tuio2Encoder:
         vals = [x, y, a, w, h, area, vx, vy, tr.rot_vel, tr.accel * k[0], tr.rot_accel]
         return message("/tuio2/bnd", "i" + "f" * 11, ints([tr.id]) + floats(vals))
 
-    def _ptr(self, tr: Any, contact: Any, hand_sid: int | None, in_mm: bool) -> bytes:
+    def _ptr(self, tr: Any, contact: Any, hand_sid: int | None, in_mm: bool, kind: int) -> bytes:
         x, y = self.normalise(tr.pos, in_mm)[0]
         k = 1.0 / np.asarray(self.table_mm if in_mm else self.image_px, float)
         vx, vy = tr.vel * k
@@ -180,7 +185,7 @@ class Tuio2Encoder:
         c_id = tr.id if hand_sid is None else hand_sid
         radius = math.sqrt(max(float(contact.area_px), 0.0) / math.pi) / self.image_px[0]
         vals = [x, y, 0.0, 0.0, radius, 0.0, vx, vy, 0.0, tr.accel * k[0], 0.0]
-        tu_id = user << 16 | TYPE_UNKNOWN
+        tu_id = user << 16 | kind
         return message("/tuio2/ptr", "iii" + "f" * 11, ints([tr.id, tu_id, c_id]) + floats(vals))
 
     # ------------------------------------------------------------------ frames
@@ -192,16 +197,13 @@ class Tuio2Encoder:
         live = sorted(t.id for t in (*tracks.live_hands, *tracks.live_contacts))
         alv = message("/tuio2/alv", "i" * len(live), ints(live))
         mapping = to_mm if tracks.in_mm else None
-        hand_of: dict[int, int] = {}
         groups: list[tuple[list[bytes], Any, int]] = []  # (bnd + ptrs, outline px, s_id)
-        for h, tr in zip(tracks.hands, tracks.hand_tracks, strict=True):
-            for c in h.contacts:
-                hand_of[c.id] = tr.id
+        pointers = self.pointers.update(tracks, mapping)
         ptrs: dict[int, list[bytes]] = {}
         lone: list[list[bytes]] = []
         for c, tr in zip(tracks.contacts, tracks.contact_tracks, strict=True):
-            sid = hand_of.get(tr.id)
-            m = self._ptr(tr, c, sid, tracks.in_mm)
+            sid, kind = pointers[tr.id].hand_sid, pointers[tr.id].type_id
+            m = self._ptr(tr, c, sid, tracks.in_mm, kind)
             if sid is None:
                 lone.append([m])
             else:

@@ -381,3 +381,80 @@ def test_a_bad_version_in_a_profile_is_one_line_naming_the_key(plugins, tmp_path
     msg = str(err.value)
     assert "\n" not in msg and str(bad) in msg
     assert '[tuio] version = "3"' in msg and "'1.1', '2.0'" in msg
+
+
+# ---------------------------------------------------------------- the flow demo, end to end
+def test_the_flow_demos_tuio2_stream_names_each_hand_and_finger(
+    udp_inbox, profile, plugins, outputs, tmp_path
+):
+    """``haptable demo flow --tuio`` with ``[tuio] version = "2.0"``: a right hand resting
+    flat (the flow's) and a left hand in an L (thumb and index flat, the others' knuckles
+    down), decoded by the spec's decoder."""
+    from console.files.vibration_map import save_map
+    from plugins.demos.run import start_demo
+    from plugins.twin.camera.camera import Together
+    from plugins.vibrotactile.analytic_plate import SSPlate, analytic_map
+
+    port, got = udp_inbox
+    save_map(tmp_path / "map.npz", analytic_map(SSPlate()))
+    demos = {"flow_map": str(tmp_path / "map.npz"), "plan_process": False, "flow_atlas": False}
+    data = {
+        **profile.data,
+        "tuio": {**profile.section("tuio"), "version": "2.0", "port": port},
+        "demos": {**profile.section("demos"), **demos},
+    }
+    prof = dataclasses.replace(profile, data=data)
+    cam = plugins.build("camera", "twin", prof)  # both hands posed before the first frame
+    holds = []
+    for gesture, centre_mm, side in (
+        ("open_hand", (230, 230), "right"),
+        ("l_shape", (520, 230), "left"),
+    ):
+        cam.place(gesture, centre_mm, subject="s1", side=side)
+        holds.append(cam.script)
+    cam.set_script(Together(holds))
+    try:
+        run = start_demo(
+            "flow", prof, plugins, outputs, camera=cam, script=False, prepare=False, tuio=True,
+            watchdog_ms=5000,
+        )  # fmt: skip
+    except BaseException:
+        cam.close()
+        raise
+    try:
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 20 and sum(1 for d in list(got) if b"/tuio2/ptr" in d) < 40:
+            time.sleep(0.05)
+    finally:
+        run.stop()
+        cam.close()
+    snap = run.snapshot()
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 2 and not (got and b"/tuio2/bnd" not in got[-1]):
+        time.sleep(0.02)  # the sender's last, empty frame
+    frames = [decode(d) for d in list(got)]  # frm first, alv last in each
+    check_stream(frames)
+    assert frames[-1].alive == []
+    both = [f for f in frames if len(f.bnd) == 2]
+    assert len(both) >= 30, "".join(str(len(f.bnd)) for f in frames) + str(snap["camera"])
+    hands = sorted({s for f in frames for s in f.bnd})
+    assert len(hands) == 2 and {s for f in frames for s in f.ocg} == set(hands)
+    left = max(hands, key=lambda s: both[0].bnd[s][0])  # the L is the hand at larger x
+    flat = min(hands, key=lambda s: both[0].bnd[s][0])
+    ptrs = {}
+    for f in both:
+        for s, p in f.ptr.items():
+            ptrs.setdefault(s, []).append(p)
+    assert all(
+        p["c_id"] == left and p["user"] == 1 + left % 0xFFFF for v in ptrs.values() for p in v
+    )
+    assert flat not in {p["c_id"] for v in ptrs.values() for p in v}  # a flat hand: no tips
+    # one session per touching finger: the L's 4 or 5 contacts, each its own, each steady
+    steady = {s: v for s, v in ptrs.items() if len(v) >= 0.8 * len(both)}
+    assert 4 <= len(steady) <= 5 and len(ptrs) <= len(steady) + 2
+    types = {s: {p["type"] for p in v[len(v) // 2 :]} for s, v in steady.items()}
+    assert all(len(t) == 1 for t in types.values())  # a finger keeps its type
+    named = sorted(t for (t,) in types.values() if t)
+    assert len(named) >= 3 and set(named) <= set(range(6, 11))  # the left hand's ids
+    assert len(set(named)) == len(named)  # never two sessions on one finger
+    assert 10 in named and 6 in named  # the left thumb and index, flat on the glass
