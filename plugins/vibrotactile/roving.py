@@ -36,6 +36,7 @@ class RovingSettings:
     """How each point is excited and analysed (volts at the patch, seconds, hertz)."""
 
     level_v: float = 10.0  # chirp peak, volts at the patches
+    knee_hz: float = 0.0  # above it the chirp's amplitude falls as knee_hz / f (0: flat)
     f_start_hz: float = 10.0
     f_stop_hz: float = 700.0
     sweep_s: float = 1.5
@@ -51,6 +52,8 @@ class RovingSettings:
         bad = None
         if not 0 < self.level_v <= 100:
             bad = f"level_v = {self.level_v:g}: give 0-100 V"
+        elif not 0 <= self.knee_hz < 1e5:
+            bad = f"knee_hz = {self.knee_hz:g}: give 0 (flat) or a frequency in Hz"
         elif not 0 <= self.f_start_hz < self.f_stop_hz:
             bad = "f_start_hz must be below f_stop_hz"
         elif self.band_hz[1] > self.f_stop_hz or self.band_hz[0] < 0:
@@ -66,7 +69,11 @@ class RovingSettings:
 
 def chirp_v(s: RovingSettings, fs_hz: int) -> np.ndarray:
     """The excitation: a chirp of ``level_v`` peak with raised-cosine fades, exponential
-    (``log_sweep``: f = f0 (f1/f0)^(t/T), scipy.signal.chirp 'logarithmic') or linear."""
+    (``log_sweep``: f = f0 (f1/f0)^(t/T), scipy.signal.chirp 'logarithmic') or linear.
+
+    With ``knee_hz`` the amplitude is ``level_v`` up to the knee and ``level_v knee / f(t)``
+    above it: a plate's acceleration grows ~f^2 at equal volts, so the low band (where the
+    sensor's noise wins) gets the full level and the top the sensor's input range can take."""
     # lazy: scipy.signal only when a chirp is made
     from scipy.signal import chirp
 
@@ -74,6 +81,12 @@ def chirp_v(s: RovingSettings, fs_hz: int) -> np.ndarray:
     t = np.arange(n) / fs_hz
     method = "logarithmic" if s.log_sweep and s.f_start_hz > 0 else "linear"
     x = s.level_v * chirp(t, s.f_start_hz, s.sweep_s, s.f_stop_hz, method=method, phi=-90)
+    if s.knee_hz > 0:
+        if method == "logarithmic":
+            f_t = s.f_start_hz * (s.f_stop_hz / s.f_start_hz) ** (t / s.sweep_s)
+        else:
+            f_t = s.f_start_hz + (s.f_stop_hz - s.f_start_hz) * t / s.sweep_s
+        x *= np.minimum(1.0, s.knee_hz / np.maximum(f_t, 1e-9))
     m = max(1, int(round(s.fade_s * fs_hz)))
     w = 0.5 * (1 - np.cos(math.pi * np.arange(m) / m))
     x[:m] *= w

@@ -15,6 +15,11 @@ skips the points kept, and with other settings it refuses in one line. At the en
 map is written as any vibration map (``save_map``), its provenance note holding the
 sensor, the settings and the coherence summary; the full coherence (E, P, F) is kept in
 ``<out>.parts/coherence.npz``.
+
+With a dummy mass (``dummy_mass_g``, ``plugins.vibrotactile.mass_cancel``) each point is
+measured twice, the sensor alone and then with the dummy clipped on (``dummy(point, x_mm,
+y_mm, on)`` asks for it and, after the second pass, for its removal); the map holds the
+mass-free FRFs extrapolated from the two, the part files both passes.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ from plugins.vibrotactile.roving import RovingSettings, chirp_v, delay_samples, 
 
 Place = Callable[[int, float, float], None]
 Report = Callable[[int, int, str], None]
+Dummy = Callable[[int, float, float, bool], None]
 
 
 def _patches(exc: str) -> frozenset[str]:
@@ -105,8 +111,15 @@ class RovingRun:
         sensor: dict[str, Any],
         excitations: tuple[str, ...] = EXCITATIONS,
         delay_default: float = 0.0,
+        dummy_mass_g: float | None = None,
     ):
         settings.check()
+        self.dummy_mass_g = dummy_mass_g
+        if dummy_mass_g is not None:
+            # lazy: the cancellation only for a run with a dummy
+            from plugins.vibrotactile.mass_cancel import check_masses
+
+            check_masses(sensor.get("mass_g"), dummy_mass_g)
         self.outputs, self.s = outputs, settings
         self.out = Path(out)
         if self.out.suffix.lower() != ".npz":
@@ -124,6 +137,7 @@ class RovingRun:
             "excitations": list(self.excitations),
             "points_mm": self.points_mm.round(3).tolist(),
             "sensor": self.sensor,
+            "dummy_mass_g": self.dummy_mass_g,
         }
 
     def _check_journal(self) -> None:
@@ -150,7 +164,37 @@ class RovingRun:
         """The points (0-based) whose measurement is kept."""
         return [i for i in range(len(self.points_mm)) if self._part(i).exists()]
 
-    def run(self, place: Place, report: Report | None = None) -> dict[str, Any]:
+    def _measure(self, i: int, x: float, y: float, dummy: Dummy | None) -> dict[str, Any]:
+        got = measure_point(
+            self.outputs, self.s, self.excitations, delay_default=self.delay_default
+        )
+        if self.dummy_mass_g is None:
+            return got
+        if dummy is None:
+            raise UserError("a roving run with --dummy-mass-g needs the dummy's guide")
+        # lazy: the cancellation only for a run with a dummy
+        from plugins.vibrotactile.mass_cancel import cancel, cancel_coherence
+
+        dummy(i + 1, x, y, True)
+        two = measure_point(
+            self.outputs, self.s, self.excitations, delay_default=self.delay_default
+        )
+        dummy(i + 1, x, y, False)
+        m_s = float(self.sensor["mass_g"])
+        return {
+            "freqs_hz": got["freqs_hz"],
+            "frf": cancel(got["frf"], two["frf"], m_s, self.dummy_mass_g),
+            "coherence": cancel_coherence(got["coherence"], two["coherence"]),
+            "delay_samples": got["delay_samples"],
+            "frf_sensor": got["frf"],
+            "frf_with_dummy": two["frf"],
+            "coherence_sensor": got["coherence"],
+            "coherence_with_dummy": two["coherence"],
+        }
+
+    def run(
+        self, place: Place, report: Report | None = None, dummy: Dummy | None = None
+    ) -> dict[str, Any]:
         """Measure every point not kept yet, then write the map: a summary."""
         t0 = time.perf_counter()
         total = len(self.points_mm)
@@ -161,9 +205,7 @@ class RovingRun:
             if report:
                 report(i, total, f"next: point {i + 1} at ({x:.0f}, {y:.0f}) mm")
             place(i + 1, float(x), float(y))
-            got = measure_point(
-                self.outputs, self.s, self.excitations, delay_default=self.delay_default
-            )
+            got = self._measure(i, float(x), float(y), dummy)
             tmp = self._part(i).with_suffix(".tmp.npz")
             np.savez(tmp, **got)
             os.replace(tmp, self._part(i))
@@ -195,6 +237,12 @@ class RovingRun:
             "delay_samples": [float(p["delay_samples"]) for p in parts],
             "coherence_file": str(self.parts / "coherence.npz"),
         }
+        if self.dummy_mass_g is not None:
+            note["mass_cancelled"] = {
+                "sensor_mass_g": self.sensor.get("mass_g"),
+                "dummy_mass_g": self.dummy_mass_g,
+                "method": "1/H = (1 + r)/H_sensor - r/H_sensor+dummy, r = m_s/m_d",
+            }
         m = make_map(
             frf,
             freqs,

@@ -21,12 +21,26 @@ def add_roving_options(m: argparse.ArgumentParser) -> None:
         "its own); needs --out; run again to resume after a stop",
     )
     m.add_argument("--fast", action="store_true", help="twin: fast-forward, not real time")
-    m.add_argument("--level-v", type=LEVEL, default=20.0, help="chirp peak at the patches")
+    m.add_argument(
+        "--level-v",
+        type=LEVEL,
+        default=90.0,
+        help="chirp peak at the patches below --knee-hz (with 6 repeats, 90: the twin's "
+        "20-100 Hz p95 error 0.7 dB, 20: 1.1 dB; the sensor's noise wins where the plate "
+        "barely accelerates)",
+    )
+    m.add_argument(
+        "--knee-hz",
+        type=finite_float(0.0, 1e4, unit="Hz", note="0 for a flat chirp, e.g. 300"),
+        default=300.0,
+        help="above it the chirp's amplitude falls as knee/f, keeping the sensor within its "
+        "input range where the plate's acceleration grows (0: flat)",
+    )
     m.add_argument(
         "--repeats",
         type=positive_int(100),
         default=6,
-        help="chirps per excitation (6: 20-100 Hz p95 error 1.1 dB, 3: 2.2 dB on the twin; "
+        help="chirps per excitation (at 20 V, 6: 20-100 Hz p95 error 1.1 dB, 3: 2.2 dB on the twin; "
         "each repeat adds 5 x 2.25 s of audio per point)",
     )
     m.add_argument(
@@ -40,6 +54,15 @@ def add_roving_options(m: argparse.ArgumentParser) -> None:
         default=None,
         help="take the sensor's mass out of the map (structural modification, "
         "plugins/vibrotactile/mass_correction.py); the loaded map is kept in MAP.npz.parts/",
+    )
+    m.add_argument(
+        "--dummy-mass-g",
+        type=finite_float(0.01, 500.0, unit="g", note="the clip-on dummy's mass, e.g. 14"),
+        default=None,
+        help="cancel the sensor's mass exactly: each point is measured again with a dummy "
+        "of this mass clipped on the sensor (the console asks for it), and 1/H = (1+r)/H_s "
+        "- r/H_s+d, r = sensor/dummy mass (plugins/vibrotactile/mass_cancel.py); needs "
+        "--sensor-mass-g; doubles the audio time; a dummy 2x the sensor costs less noise",
     )
     m.add_argument(
         "--delay-samples",
@@ -93,7 +116,15 @@ def measure_roving(args, ctx) -> int:
         )
     if twin:
         sensor["mass_g"] = float(ctx.profile.get("twin_inputs.sensor_mass_g") or 7.0)
-    settings = RovingSettings(level_v=args.level_v, repeats=args.repeats)
+    settings = RovingSettings(level_v=args.level_v, knee_hz=args.knee_hz, repeats=args.repeats)
+    dummy_g = args.dummy_mass_g
+    if dummy_g is not None:
+        # lazy: the cancellation only for a run with a dummy
+        from plugins.vibrotactile.mass_cancel import check_masses
+
+        check_masses(args.sensor_mass_g, dummy_g)
+        real_g = sensor.get("mass_g")  # the twin's sensor; on a table the one stated
+        sensor["mass_g"] = float(args.sensor_mass_g)
     with open_outputs(ctx.profile, ctx.pm, fast=True if args.fast else None) as out:
         run = RovingRun(
             out,
@@ -102,6 +133,7 @@ def measure_roving(args, ctx) -> int:
             settings,
             sensor=sensor,
             delay_default=args.delay_samples,
+            dummy_mass_g=dummy_g,
         )
 
         def place(point: int, x_mm: float, y_mm: float) -> None:
@@ -115,13 +147,23 @@ def measure_roving(args, ctx) -> int:
         def report(done: int, total: int, text: str) -> None:
             print(f"[{done}/{total}] {text}", flush=True)
 
-        got = run.run(place, report)
+        def dummy(point: int, x_mm: float, y_mm: float, on: bool) -> None:
+            if twin:  # the twin's sensor gets the dummy's mass (its own: the profile's)
+                move_sensor(out, x_mm, y_mm, (real_g or 0.0) + (dummy_g if on else 0.0))
+                return
+            what = f"clip the {dummy_g:g} g dummy on the sensor" if on else "remove the dummy"
+            print(f"point {idx[point - 1] + 1}: {what}, then Enter")
+            sys.stdin.readline()
+
+        got = run.run(place, report, dummy if dummy_g is not None else None)
     print(
         f"wrote {got['map']}: {len(idx)} points x 5 excitations, {got['bins']} bins; "
         f"coherence >= 0.9 over {got['coherence_ge_0.9']:.0%} of them "
         f"({got['elapsed_s']:.0f} s)"
     )
-    if args.sensor_mass_g:
+    if dummy_g is not None:
+        print(f"sensor mass {args.sensor_mass_g:g} g cancelled with the {dummy_g:g} g dummy")
+    elif args.sensor_mass_g:
         # lazy: the modal fit (sdypy-EMA) only when a correction is asked for
         from plugins.vibrotactile.mass_correction import correct_file
 
