@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 from console.core.errors import UserError
+from console.runtime.start_clock import StartClock
 
 
 class DemoCancelled(Exception):
@@ -118,7 +119,7 @@ class DemoProcess:
                 with contextlib.suppress(Exception):  # the projector never stops haptics
                     self.on_scene(value)
         elif kind == "step":
-            self._progress = (0.05, str(value))
+            self._progress = (0.0, str(value))  # how far: ``StartClock``
         elif kind == "progress":
             done, total = int(value[0]), max(int(value[1]), 1)
             self._progress = (
@@ -172,17 +173,22 @@ class DemoProcess:
         preparation; ``cancelled()`` true stops it (``DemoCancelled``); a failure raises
         ``UserError`` with the process's one line."""
         t_end = time.monotonic() + timeout_s
-        last = None
+        clock, last = StartClock(self.name), (-1.0, "")
         while not self._started.wait(0.05):
             if cancelled is not None and cancelled():
                 self.stop("cancelled")
                 raise DemoCancelled(self.name)
-            if progress is not None and self._progress is not None and self._progress != last:
-                last = self._progress
-                progress(*last)
+            if progress is not None:  # (its process says nothing while it loads)
+                floor, step = self._progress or (0.0, "starting its process")
+                frac, text = clock.fraction_text(step, floor)
+                if text != last[1] or frac - last[0] >= 0.02:  # moves on with the time
+                    last = (frac, text)
+                    progress(frac, text)
             if time.monotonic() > t_end:
                 self.stop("did not start")
                 raise UserError(f"demo {self.name}: did not start in {timeout_s:.0f} s")
+        if not self.stopped and self.scene_name is not None:
+            clock.done()  # the next start's estimate
         if self.stopped or self.scene_name is None:
             self._ended.wait(5.0)
             raise UserError(self.exit_reason or f"demo {self.name}: ended before it started")

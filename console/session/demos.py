@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,14 +23,23 @@ from typing import Any
 from console.core.errors import UserError
 from console.kernel.private_dir import runtime_dir
 from console.runtime.demo_process import DemoCancelled, DemoProcess
+from console.session.demo_history import RunHistory
 from console.session.events import Progress, Snapshot, Started, Stopped
+
+_ISSUED: set[Path] = set()  # the paths given to runs of this console
 
 
 def twin_log_path(name: str) -> Path:
     """Where a demo process writes what the twin's outputs received (``.json`` bursts and
     relay switches, ``.npz`` samples: ``console.runtime.twin_log``): the private runtime
-    directory; the next run of the same demo overwrites it."""
-    return runtime_dir() / f"demo-{os.getpid()}-{name}.json"
+    directory, one file per run named by its start time (none is overwritten)."""
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    for n in range(1000):  # two starts in one second: the second gets -2 ...
+        p = runtime_dir() / f"demo-{os.getpid()}-{name}-{stamp}{f'-{n + 1}' if n else ''}.json"
+        if p not in _ISSUED and not p.exists() and not p.with_suffix(".npz").exists():
+            _ISSUED.add(p)  # (its run writes it when it ends)
+            return p
+    raise UserError(f"{runtime_dir()}: 1000 demo logs of {name} this second; remove some")
 
 
 class ProjectorForward:
@@ -75,6 +85,7 @@ class DemoControl:
         self.state = "idle"
         self.last_snapshot: dict | None = None
         self.last_final: dict | None = None  # the last run's "stopped" message
+        self.history = RunHistory()  # its latency per poll, and when it ended
         self.estop_after = ""  # an e-stop that came while the last run stopped (its reason)
         self._forward: ProjectorForward | None = None
         self._lock = threading.Lock()
@@ -110,6 +121,7 @@ class DemoControl:
             self.check_start(name)
             self.name, self.state = name, "starting"
             self.last_snapshot = self.last_final = None  # this run's, not the last one's
+            self.history.begin(name)
             self.estop_after = ""
         s.emit(Started("demo", name, detail="starting"))
 
@@ -227,6 +239,7 @@ class DemoControl:
         self.session.camera.give_back()
 
     def _ended(self, name: str, reason: str) -> None:
+        self.history.end()
         with self._lock:
             self.run, self.name, self.state = None, None, reason
         self.session.emit(Stopped("demo", name, reason=reason))
@@ -252,6 +265,7 @@ class DemoControl:
         except Exception as exc:  # noqa: BLE001 - shown, never raised
             snap = {"demo": name, "last_error": f"snapshot failed: {exc}"}
         self.last_snapshot = snap
+        self.history.add(snap)
         self.session.emit(Snapshot("demo", name, data=snap))
         if run.stopped and self.state == "running":  # it ended by itself: tidy up
             self.state = "stopping"

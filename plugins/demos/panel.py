@@ -27,7 +27,7 @@ from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
 from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escape, said_here
 
-from .status import status_lines, unprepared_text
+from .status import estop_text, status_lines, unprepared_text
 
 
 def needs_text(st: dict, feed: dict | None) -> str:
@@ -109,7 +109,8 @@ def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width:
         w = STATE_W if label == "state" else max([len(label), *(len(c[i]) for _, c in rows)])
         used += w + 2 * table.cell_padding
         table.add_column(label, key=label, width=w)
-    rest = max(12, width - used - 2 * table.cell_padding)
+    bar = table.styles.scrollbar_size_vertical  # when it scrolls, its bar takes these
+    rest = max(12, width - used - 2 * table.cell_padding - bar)
     table.add_column("description", key="description", width=rest)
     for key, cells in rows:
         table.add_row(*cells, key=key, height=None)
@@ -418,9 +419,13 @@ class ScenesPane(Vertical):
     def _stopping(self, name: str) -> None:
         """Every line says the demo stops: its row, the demos' line, its status block."""
         self._set_state("stopping")
-        lw = self.query_one("#demo-work", LongWork)
-        if not lw.busy:
-            lw.show(f"demo {name} stopping: {self.STOPPING_WHY}")
+        lw, why = self.query_one("#demo-work", LongWork), self._why_estopped()
+        if not lw.busy:  # an e-stop (the watchdog's ...) says so from its first moment
+            lw.show(
+                f"demo {name} {estop_text(why)}: stopping"
+                if why
+                else f"demo {name} stopping: {self.STOPPING_WHY}"
+            )
         if self.demos.last_snapshot is not None:
             self._show_snapshot(self.demos.last_snapshot)
 
@@ -462,6 +467,12 @@ class ScenesPane(Vertical):
             return
         if ev.topic == "estop" and isinstance(ev, Stopped):  # why (a demo's end says it)
             self._estop_why = ev.reason
+            if (
+                self.demo_name
+                and self.demo_state in ("running", "stopping")
+                and self._why_estopped()
+            ):
+                self._stopping(self.demo_name)  # its lines say the e-stop at once
             return
         if ev.topic != "demo":
             return
@@ -505,7 +516,7 @@ class ScenesPane(Vertical):
         how, after = self._how_stopped(reason)
         why = self._why_estopped() if reason == "e-stopped" else ""
         if why:  # not the operator's e-stop: its reason, whole (the bar's is cut)
-            how = f"e-stopped: {why}"
+            how = estop_text(why)
         demos = self.demos
         if demos.last_snapshot is None:  # no numbers: how it ended
             said = textwrap.wrap(f"{name} {how}", self.app.size.width - 2)
@@ -543,7 +554,7 @@ class ScenesPane(Vertical):
         if self.demo_state in ("starting", "cancelling"):
             return  # no numbers yet (``_starting``)
         if self.demo_state == "stopping":
-            snap = {**snap, "stopping": True}
+            snap = {**snap, "stopping": True, "estop": self._why_estopped()}
         text = "\n".join(status_lines(snap))
         if self.demo_state != "stopping" and self._twin() is not None:
             if self.hand_placed and self.hand_mm is not None:

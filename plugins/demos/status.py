@@ -54,6 +54,19 @@ DEMO_STAGES = (
 )
 
 
+#: how the runtime watchdog's e-stop reasons begin (``console.runtime.watchdog``)
+WATCHDOG_SAYS = "runtime watchdog: "
+
+
+def estop_text(reason: str) -> str:
+    """An e-stop as the operator reads it: who asked it (the watchdog, else the reason's
+    own words) and why."""
+    reason = str(reason)
+    if reason.startswith(WATCHDOG_SAYS):
+        return f"e-stop by the watchdog ({reason.removeprefix(WATCHDOG_SAYS)})"
+    return f"e-stop: {reason}"
+
+
 def _ms(v: Any) -> str:
     if v is None or v != v:
         return "-"
@@ -66,11 +79,17 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     and camera; latency per stage; the hand; the flow's last stimulus (or a newer
     refusal) or the knob's state; an error."""
     name = snap.get("demo", "?")
-    wd = snap.get("watchdog", {})
+    wd = snap.get("watchdog") or {}
+    gate = (snap.get("outputs") or {}).get("gate") or {}
+    why = snap.get("estop") or gate.get("estop_reason") or ""
     if wd.get("tripped"):
-        dog = f"[red]watchdog tripped: {escape(wd.get('reason') or 'loop stalled')}[/]"
-    else:
+        why = WATCHDOG_SAYS + (wd.get("reason") or "loop stalled").removeprefix(WATCHDOG_SAYS)
+    if why:  # the e-stop, from the first snapshot that knows it, whoever asked it
+        dog = f"[red]{escape(estop_text(why))}[/]"
+    elif wd and snap.get("running") and not snap.get("stopping"):
         dog = f"watchdog ok ({wd.get('limit_ms', 0):.0f} ms)"
+    else:  # stopped, stopping or cancelled: no watchdog watches it any more
+        dog = "watchdog off"
     cam = snap.get("camera", {})
     lat = snap.get("latency") or {}
     up = f"{snap.get('uptime_s', 0):.0f} s"

@@ -37,8 +37,8 @@ def next_view(current: str, has_plot: bool) -> str:
 
 
 def track_title(v: dict[str, Any]) -> str:
-    """``sine 60 Hz (3/16)``."""
-    return f"{v['waveform']} {v['freq_hz']:g} Hz ({v['index'] + 1}/{v['count']})"
+    """``sine_60Hz (3/16)``: the protocol's name of the track, as the status says it."""
+    return f"{v['track']} ({v['index'] + 1}/{v['count']})"
 
 
 def estimate_text(v: dict[str, Any]) -> str:
@@ -147,6 +147,8 @@ class AdaptiveView(Vertical):
         self.order: list[str] = []
         self.current = 0
         self.follow = True  # the newest trial's track, until [ or ] picks one
+        self.picked: str | None = None  # the track [ or ] picked (kept over a resume)
+        self.running: str | None = None  # the newest trial's track
 
     def compose(self) -> ComposeResult:
         yield Static("", id="adaptive-head", markup=False)
@@ -165,7 +167,8 @@ class AdaptiveView(Vertical):
 
     def reset(self) -> None:
         """A new run: nothing drawn until its tracks come."""
-        self.tracks, self.order, self.current, self.follow = {}, [], 0, True
+        self.tracks, self.order, self.current = {}, [], 0
+        self.follow, self.running = self.picked is None, None  # a pick stays until [ ]
         self.query_one("#adaptive-head", Static).update("")
         self.query_one(LevelsChart).clear("waiting for the run's tracks")
 
@@ -174,16 +177,21 @@ class AdaptiveView(Vertical):
         if d.get("kind") == "tracks":
             self.tracks = {v["track"]: v for v in d["tracks"]}
             self.order = list(self.tracks)
-            self.current = 0
+            if self.picked not in self.tracks:  # another protocol's: the run is followed
+                self.picked, self.follow = None, True
+            self.current = self.order.index(self.picked) if self.picked else 0
         elif d.get("kind") == "track":
             v = d["track"]
             if v["track"] not in self.tracks:
                 self.order.append(v["track"])
             self.tracks[v["track"]] = v
+            moved, self.running = self.running != v["track"], v["track"]
             if self.follow:
                 self.current = self.order.index(v["track"])
             elif self.order[self.current] != v["track"]:
-                return  # another track than the one shown: nothing here changed
+                if moved:  # the line above says where the run is now
+                    self.draw()
+                return  # another track than the one picked: the plot stays on it
         self.draw()
 
     def cycle(self, step: int) -> str:
@@ -191,8 +199,11 @@ class AdaptiveView(Vertical):
         trial); returns what to say when there is none."""
         if not self.order:
             return "no adaptive run to plot: s starts one"
-        self.follow = False
         self.current = (self.current + step) % len(self.order)
+        self.picked = self.order[self.current]
+        if self.picked == self.running:  # back on the run's track: it follows it again
+            self.picked = None
+        self.follow = self.picked is None
         self.draw()
         return ""
 
@@ -200,7 +211,10 @@ class AdaptiveView(Vertical):
         if not self.order:
             return
         v = self.tracks[self.order[self.current]]
-        self.query_one("#adaptive-head", Static).update(head_text(v))
+        head = head_text(v)
+        if not self.follow and self.running and self.running != v["track"]:
+            head += f"; picked with [ ]: the run is on {self.running} ([ ] to it follows it)"
+        self.query_one("#adaptive-head", Static).update(head)
         self.query_one(LevelsChart).show(v)
         post = self.query_one("#adaptive-posterior", Chart)
         m = v.get("marginal")

@@ -30,7 +30,7 @@ def test_a_stopped_run_without_a_camera_view():
     snap["knob"] = {"condition": "HD", "item": 2, "angle_deg": 30.4, "touching": True}
     lines = status_lines(snap)
     assert lines[0].startswith("[b]knob[/b] [yellow]loop stopped[/]")
-    assert "[red]watchdog tripped: stuck[/]" in lines[0]
+    assert "[red]e-stop by the watchdog (stuck)[/]" in lines[0]
     assert lines[-1] == "knob HD: item 2, angle 30 deg, touching, 0 crossings"
     assert not any("hand" in line for line in lines)  # no camera view given
 

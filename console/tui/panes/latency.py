@@ -108,6 +108,7 @@ class LatencyPane(Vertical):
         self._measure_until: float | None = None  # ``m``: when its camera loop stops
         self._said_for = ""  # the loop (``source``) the line about ``m`` was true of
         self._camera = ""  # the camera line of the loop shown last (it stays when it stops)
+        self._camera_at = 0.0  # when the camera loop's numbers showed last (time.time)
 
     def compose(self) -> ComposeResult:
         try:
@@ -247,9 +248,10 @@ class LatencyPane(Vertical):
             if svc is None or not (svc.running or self._measure_until is not None):
                 if self._said_for:  # the demo m was told of has stopped
                     self._tell("", "")
-                self._say("lat-head", self._stopped_head())
+                if not self._show_finished_demo(tables.first(DataTable)):
+                    self._say("lat-head", self._stopped_head())
                 return
-            self.source = "camera"
+            self.source, self._camera_at = "camera", time.time()
             st = svc.status()
             left = self._measure_until
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
@@ -268,11 +270,19 @@ class LatencyPane(Vertical):
         self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
-        table = tables.first(DataTable)
+        self._show_rows(tables.first(DataTable), snap, run is not None)
+
+    def _show_rows(self, table: DataTable, snap: dict, demo: bool) -> None:
+        """The stage table of a monitor snapshot; a demo's sparklines are its whole run
+        as the console polled it (``DemoControl.history``), shown here or not."""
+        runs = self.app.session.demos.history
+        keys = {label: key for key, label in STAGE_LABELS.items()}
         cells = []
         for label, d in stage_rows(snap):
             p50 = d.get("p50_ms")
-            if p50 is not None and p50 == p50:
+            if demo:
+                self.history[label] = deque(runs.values(keys.get(label, label)), maxlen=HISTORY)
+            elif p50 is not None and p50 == p50:
                 self.history[label].append(p50)
             cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms"))))
         heads = ("stage", "p50 ms", "p99 ms", "max ms")
@@ -282,6 +292,26 @@ class LatencyPane(Vertical):
             table.cell_padding,
         )
         self._set_rows(table, [(*r, sparkline(self.history[r[0]], width)) for r in cells])
+
+    def _show_finished_demo(self, table: DataTable) -> bool:
+        """No loop runs: the last demo run's numbers (kept by the session whether or not
+        this screen showed during it), said to be the finished run's with its end time."""
+        demos = self.app.session.demos
+        snap, runs = demos.last_snapshot or {}, demos.history
+        if runs.ended_at is None or not runs.p50 or not snap.get("latency"):
+            return False
+        if runs.ended_at < self._camera_at:  # the camera loop showed after it: its numbers
+            return False
+        self.source = self._history_source = f"demo {runs.name}"
+        self._camera = camera_line(snap.get("camera") or {}, snap["latency"])
+        end = time.strftime("%H:%M:%S", time.localtime(runs.ended_at))
+        head = (
+            f"[b]the finished demo {escape(runs.name)} run's numbers[/b] (it ended at {end}); "
+            f"m measures the camera loop for {MEASURE_S:.0f} s, a new demo (F6) shows its own"
+        )
+        self._say("lat-head", head + "\n" + self._camera)
+        self._show_rows(table, snap["latency"], True)
+        return True
 
     def _stopped_head(self) -> str:
         """The head while no loop runs: the last loop's numbers, its camera line with
