@@ -13,7 +13,11 @@ harmonics and frames chosen inside each training part (nested); every LOSO fold'
 also tested on its held-out subject under the shifted light (split by whether touching
 skin clips at the sensor's maximum); leave-one-condition-out and light transfer between
 sessions; LOSO accuracy against the frames a decision is made from and against the
-Fourier harmonics; 2-fold accuracy against added image noise.
+Fourier harmonics; 2-fold accuracy against added image noise; cross-renderer transfer
+(``renderer_transfer.cross_renderer``: trained on the twin with domain randomisation,
+tested on the phalanx renderer at x0.7, x1.0 and x1.3 light, and back; per decision
+window of 2 to 6 frames, with the test set's clipped share; rendered in memory, 2
+subjects x 2 repetitions with ``--quick``, else 3 x 3).
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from .background import illumination, subtract
 from .dataset import load_dataset
 from .feature_set import FeatureSet
 from .features import N_HARMONICS_MAX, record_features, sample_records
+from .renderer_transfer import cross_renderer
 from .segmentation import relative_body
 from .selection import condition_report
 from .sketch import STATIC
@@ -199,6 +204,7 @@ def run_benchmark(ctx, quick: bool) -> dict:
                 by_noise.append({"noise_sigma": sigma, **_noisy_accuracy(sub, params, sigma)})
             conds = {s.name: s.meta for s in samples}
             by_condition = condition_report(fs, conds)
+            cross = cross_renderer(2 if quick else 3, 2 if quick else 3)
     finally:
         cv2.setNumThreads(threads)
     return {
@@ -213,6 +219,7 @@ def run_benchmark(ctx, quick: bool) -> dict:
         "accuracy_vs_harmonics": by_harm,
         "accuracy_vs_frames": by_frames,
         "accuracy_vs_noise": by_noise,
+        "cross_renderer": cross,
         "goals": {
             "static_accuracy": 0.98,
             "dynamic_accuracy": 0.95,

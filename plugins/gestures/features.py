@@ -55,21 +55,33 @@ def static_size(n_harmonics: int) -> int:
     return desc_size(n_harmonics) + N_GRID + 2 + N_CONTACT
 
 
+#: the hand's scale (palm radius, px) is never taken below this: a smaller palm on the
+#: 640 x 480 view is a palm above the glass too dim to segment whole (pointing poses
+#: under another light falloff: 9-20 px on the phalanx renderer, 32-50 px on the twin
+#: for the same poses), and contacts and motion measured in it would be renderer-bound
+MIN_PALM_PX = 30.0
+
+
 def frame_record(res: FrameResult) -> dict | None:
-    """The main (largest) hand of a frame, compactly; None if there is no hand."""
+    """The main (largest) hand of a frame, compactly; None if there is no hand. Its
+    scale (``palm_radius_px``) is at least ``MIN_PALM_PX``, the contacts' canonical
+    positions in that scale."""
     if not res.hands:
         return None
     h, ex = res.hands[0], res.extras[0]
+    pr = float(ex["palm_radius_px"])
+    scale = max(pr, MIN_PALM_PX)
     return {
         "palm_px": np.asarray(ex["palm_px"], dtype=float),
-        "palm_radius_px": float(ex["palm_radius_px"]),
+        "palm_radius_px": scale,
         "bright_px": np.asarray(ex["bright_px"], dtype=float),
         "angle_deg": float(h.angle_deg),
         "descriptors": np.asarray(h.descriptors, dtype=float),
         "grid": np.asarray(ex["grid"], dtype=float),
         "fingers": int(h.finger_count),
         "contacts_px": np.array([c.pos_px for c in h.contacts], dtype=float).reshape(-1, 2),
-        "contacts_canon": np.asarray(ex["contacts_canon"], dtype=float).reshape(-1, 2),
+        "contacts_canon": np.asarray(ex["contacts_canon"], dtype=float).reshape(-1, 2)
+        * (pr / scale),
     }
 
 
