@@ -118,6 +118,12 @@ def combined(readings: list[Reading | None]) -> Reading | None:
     )
 
 
+def skin_at(r: Reading) -> str:
+    """Touching skin's level as the assistant measures it: the same words and number on
+    its status line and on the Camera screen's live block (``snapshot_reading``)."""
+    return f"touching skin at {r.p99:.0f} of 255"
+
+
 def _fmt(values: dict[str, float]) -> str:
     return ", ".join(f"{k} {v:g}" for k, v in values.items())
 
@@ -194,7 +200,7 @@ def _steps(camera, measure, ranges, start, cancelled, progress, no_hand) -> Outc
     if r is None:
         return Outcome(False, no_hand, start)
     if not r.clips():
-        return Outcome(True, f"e: touching skin at {r.p99:.0f} of 255: kept {_fmt(start)}", start)
+        return Outcome(True, f"e: {skin_at(r)}: kept {_fmt(start)}", start)
     now = dict(start)
     for _ in range(MAX_STEPS):
         if cancelled():
@@ -210,7 +216,7 @@ def _steps(camera, measure, ranges, start, cancelled, progress, no_hand) -> Outc
         before = dict(now)
         now[name] = _lower(now[name], _factor(r), ranges[name])
         camera.set_control(name, now[name])
-        progress(f"e: {name} {now[name]:g} (touching skin at {r.p99:.0f}) ... x stops")
+        progress(f"e: {name} {now[name]:g} ({skin_at(r)}) ... x stops")
         nxt = measure()
         if nxt is None:
             _restore(camera, start)
@@ -225,9 +231,7 @@ def _steps(camera, measure, ranges, start, cancelled, progress, no_hand) -> Outc
             )
         r = nxt
         if not r.clips():
-            return Outcome(
-                True, f"e: set {_fmt(now)}: touching skin at {r.p99:.0f} of 255 (W keeps it)", now
-            )
+            return Outcome(True, f"e: set {_fmt(now)}: {skin_at(r)} (W keeps it)", now)
     return Outcome(False, f"e: still clipping at {_fmt(now)}: lower the IR LED power", now)
 
 
@@ -259,13 +263,15 @@ def service_measure(
             last, seen = snap[0].seq, seen + 1
             deadline = time.monotonic() + timeout_s
             if seen > settle:
-                got.append(_snapshot_reading(*snap))
+                got.append(snapshot_reading(*snap))
         return combined(got)
 
     return measure
 
 
-def _snapshot_reading(frame: Any, work: dict) -> Reading | None:
+def snapshot_reading(frame: Any, work: dict) -> Reading | None:
+    """The ``Reading`` of one camera snapshot (``None`` without a hand): what ``e``
+    measures, and what the Camera screen's live block shows of it."""
     res = work.get("result")
     if res is None:
         return None
@@ -300,3 +306,6 @@ class _NoControls:
 
     def set_control(self, name: str, value: float) -> None:
         raise ValueError(name)
+
+
+_snapshot_reading = snapshot_reading  # the name the tests knew

@@ -242,14 +242,25 @@ class CameraService:
                 self.camera = None
 
     # ------------------------------------------------------------------ tuning
-    def capture_background(self) -> int:
-        """Background = per-pixel median of the recent frames (show the empty table)."""
+    def median_background(self) -> np.ndarray | None:
+        """The per-pixel median of the recent frames (None before any): what ``b``
+        would learn (``console.session.background_check`` looks for a hand in it)."""
         with self._lock:
             frames = list(self.recent)
         if not frames or self.classifier is None:
+            return None
+        return np.median(np.stack(frames), axis=0).astype(np.float32)
+
+    def capture_background(self, image: np.ndarray | None = None) -> int:
+        """Background = ``image`` or the per-pixel median of the recent frames (show the
+        empty table); the number of recent frames (0: none yet)."""
+        with self._lock:
+            n = len(self.recent)
+        image = self.median_background() if image is None else image
+        if image is None or self.classifier is None:
             return 0
-        self.classifier.set_background(np.median(np.stack(frames), axis=0).astype(np.float32))
-        return len(frames)
+        self.classifier.set_background(image)
+        return n
 
     def _adjustable(self):
         """The camera when its driver takes exposure, gain ... (``AdjustableCamera``)."""

@@ -24,6 +24,7 @@ from textual.widgets import Header, Input, TabbedContent, TabPane
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Stopped
 from console.tui.help import HelpText
+from console.tui.key_hold import KeyHold
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
 from console.tui.logs import (
     LogScreen,
@@ -35,7 +36,7 @@ from console.tui.logs import (
 )
 from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
-from console.tui.palette import SafetyPalette
+from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import log_said
@@ -165,6 +166,7 @@ class HapTableApp(App):
         #: (``live.now``) and the safety bars mounted (the main one, a modal's)
         self.live = LiveOutputs(self.session, self)
         self.typed = TypedHistory(self)  # ctrl+z in a text field (``console.tui.typed``)
+        self.key_hold = KeyHold(self)  # keys behind a screen switch wait for its focus
 
     def _bind_tabs(self) -> None:
         """A key per tab; the footer shows them all as one key, ``f1-f10 screens``, on
@@ -277,6 +279,7 @@ class HapTableApp(App):
         tab, deadline = want
         if time.monotonic() > deadline:
             self._focus_wanted = None
+            self.key_hold.release()
             return
         target = self._focus_target(tab)  # None while the switch or the mount is on its way
         if target is not None:
@@ -284,6 +287,7 @@ class HapTableApp(App):
             focused = self.base.focused
             if focused is not None and pane in focused.ancestors_with_self:
                 self._focus_wanted = None  # done (or the operator chose a widget there)
+                self.key_hold.release()
                 return
             if self.screen is self.base:  # a modal on top keeps its focus
                 target.focus()
@@ -341,6 +345,7 @@ class HapTableApp(App):
         tabs = self.tab_widget
         if tabs is not None:
             tabs.active = tab
+        self._focus_wanted = (tab, time.monotonic() + FOCUS_WAIT_S)  # keys typed now wait
         self.call_after_refresh(self._focus_pane, tab)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
@@ -493,6 +498,8 @@ class HapTableApp(App):
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     async def on_event(self, event: events.Event) -> None:
+        if self.key_hold.hold(event):  # typed behind a screen switch (``console.tui.key_hold``)
+            return
         key = isinstance(event, events.Key) and not event.is_forwarded
         if key and await self._key_everywhere(event.key):
             return
@@ -591,7 +598,7 @@ class HapTableApp(App):
             self.push_screen(SafetyPalette(id="--command-palette"))
 
     def get_system_commands(self, screen):
-        yield from super().get_system_commands(screen)
+        yield from keys_as_console_help(super().get_system_commands(screen), self.action_help)
         yield SystemCommand(
             "Log", "the console's log and driver messages (ctrl+l)", self.action_log
         )

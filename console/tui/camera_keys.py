@@ -48,6 +48,7 @@ BINDINGS = [
     # at other times their hidden bindings below take the keys (a refusal says why)
     Binding("n", "skip_target(True)", "skip target"),
     Binding("x", "cancel(True)", "cancel"),
+    Binding("S", "save_calibration(True)", "save calibration"),  # while a result waits
     Binding("plus", "tune_chosen(1)", "change", key_display="- +"),
     Binding("right_square_bracket", "choose(1)", "setting", key_display="[ ]"),
     Binding("v", "view", "view"),
@@ -74,16 +75,20 @@ BINDINGS = [
 ]
 
 
-def key_shown(action: str, shown: tuple, calibrating: bool, assisting: bool) -> bool:
+def key_shown(
+    action: str, shown: tuple, calibrating: bool, assisting: bool, unsaved: bool = False
+) -> bool:
     """Whether ``action``'s binding is on: its footer entry (``shown``: ``(True,)``) for
-    ``n`` while the calibration runs, for ``x`` while it or the exposure assistant runs;
-    every other binding always."""
+    ``n`` while the calibration runs, for ``x`` while it or the exposure assistant runs,
+    for ``S`` while a finished calibration waits to be saved; every other binding always."""
     if not shown:
         return True
     if action == "skip_target":
         return calibrating
     if action == "cancel":
         return calibrating or assisting
+    if action == "save_calibration":
+        return unsaved
     return True
 
 

@@ -8,15 +8,33 @@ ended (``succeeded``/``failed`` with the text it was given: a line typed over me
 is left alone); when it failed the line takes the keys back. The line never selects its text on focus: a key typed after ``:`` adds
 to what is there, it never replaces it. ``ctrl+u`` clears the whole line (wherever the
 cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back).
+An empty line shows its hint as a hint (dim, italic), after a ``:`` prompt that stays
+whatever the line holds (``prompted``): never mistaken for a typed command.
 """
 
 from __future__ import annotations
 
 from textual.binding import Binding
+from textual.containers import Horizontal
 from textual.message import Message
-from textual.widgets import Input
+from textual.widgets import Input, Label
 
-__all__ = ["CommandLine"]
+__all__ = ["CommandLine", "prompted"]
+
+
+class CommandPrompt(Horizontal):
+    """A ``:`` prompt and its command line on one row."""
+
+    DEFAULT_CSS = """
+    CommandPrompt { height: 1; }
+    CommandPrompt > Label { width: 2; color: $accent; text-style: bold; }
+    CommandPrompt > CommandLine { width: 1fr; }
+    """
+
+
+def prompted(line: CommandLine) -> CommandPrompt:
+    """``line`` after its ``:`` prompt (yield it where the line goes)."""
+    return CommandPrompt(Label(": ", classes="command-prompt", markup=False), line)
 
 
 class CommandLine(Input):
@@ -24,6 +42,9 @@ class CommandLine(Input):
     message) and calls ``succeeded(text)`` or ``failed(text)``; it keeps the focus on
     the line after a failure and handles ``CommandLine.Left`` (escape)."""
 
+    DEFAULT_CSS = """
+    CommandLine > .input--placeholder { color: $text-muted; text-style: italic dim; }
+    """
     BINDINGS = [
         Binding("ctrl+u", "clear_line", "clear the line", show=False),
         Binding("escape", "leave", "leave the line", show=False),

@@ -107,6 +107,13 @@ class ConsoleFooter(Footer):
                 kept.append(k)
         yield from (item for item in items if not isinstance(item, FooterKey) or item in kept)
 
+    def on_mount(self) -> None:
+        """The screen's keys from the first draw: a screen that focused its widget before
+        the footer listened (a panel's ``on_mount``) signals no change until the next
+        focus move, and Textual's footer shows nothing until one."""
+        self._bindings_ready = True
+        self.call_after_refresh(self.recompose)
+
     def on_resize(self, event) -> None:
         self.compact = event.size.width < self.COMPACT_BELOW
         self.call_after_refresh(self.recompose)

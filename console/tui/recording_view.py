@@ -23,6 +23,7 @@ from textual.widgets import Input
 from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
+from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
@@ -110,8 +111,7 @@ class RecordingMixin:
     _replay_frame: Any = None  # (k, image, decisions) read for the frame to show
 
     def on_mount(self) -> None:
-        box = Input(placeholder="recording .h5 path, Enter (Esc: back)", id="camera-recording")
-        box.display = False
+        box = recording_field("camera-recording")  # labelled: what to type
         self.query_one("#camera-side").mount(box, before="#camera-scroll")
 
     # ------------------------------------------------------------------ keys

@@ -136,7 +136,8 @@ def test_camera_and_scope_show_a_recording(plugins, recording, tmp_path):
             )
             said = str(app.query_one("#camera-status").render())
             assert "none.h5" in said and "type a recording's path" in said, said
-            assert "\n" not in said.strip(), said  # one line (the panel wraps it)
+            # one line (the panel wraps it); a path too long for it breaks after a "/"
+            assert all(p.endswith("/") for p in said.strip().split("\n")[:-1]), said
             assert "frame" not in words_on(app, "#camera-title")  # still the live view
 
             await pilot.press("f9")

@@ -26,7 +26,7 @@ from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
-from console.runtime.exposure_assist import assist_service
+from console.runtime.exposure_assist import assist_service, skin_at, snapshot_reading
 from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, hold_hand, key_shown
 from console.tui.camera_picture import (
     blob_labels,
@@ -35,12 +35,14 @@ from console.tui.camera_picture import (
     same_height,
     wrap_markup,
 )
+from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
+from console.tui.wrap_paths import break_paths
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
 VISION_VIEWS = ("diff", "highpass", "body")
@@ -56,7 +58,7 @@ class SidePanel(VerticalScroll):
             self.call_after_refresh(pane.keep_in_view)
 
 
-class CameraPane(RecordingMixin, Horizontal):
+class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
     HELP_TEXT = HELP_TEXT
     BINDINGS = BINDINGS
     can_focus = True
@@ -85,9 +87,8 @@ class CameraPane(RecordingMixin, Horizontal):
         self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
-        self._saved_to = None  # the path S saved the calibration to
         self._assisting = None  # the exposure assistant's cancel event while it runs
-        self._busy = (False, False)  # (calibrating, assisting) as the footer shows it
+        self._busy = (False, False, False)  # (calibrating, assisting, unsaved): the footer
 
     @property
     def image_mode(self) -> str:
@@ -141,7 +142,7 @@ class CameraPane(RecordingMixin, Horizontal):
         if not found:  # the console is closing
             return
         line = found.first(Static)
-        line.update(text)
+        line.update(break_paths(text, self.side_width("camera-status")))  # a path whole
         line.display = bool(text)
         line.set_class(severity != "information", "error")
         self._said_at = self._wizard_state() if text else None
@@ -263,7 +264,7 @@ class CameraPane(RecordingMixin, Horizontal):
         svc = self.service
         self._refusal_still_true()
         self._status_still_true()
-        if self._busy != (busy := (self.calibration is not None, self._assisting is not None)):
+        if self._busy != (busy := self._keys_state()):
             self._busy = busy  # the footer shows the wizard's keys while it runs
             self.refresh_bindings()
         if svc.error:
@@ -454,20 +455,14 @@ class CameraPane(RecordingMixin, Horizontal):
         live, settings = self.info_lines(svc, work)
         return "\n".join([*live, "", *settings, "", self.wizard_text()]).rstrip()
 
-    def wizard_text(self) -> str:
-        """The touch-calibration wizard's step or result and the keys it takes ("" when
-        it has nothing to say)."""
-        if self.calibration is None and self.cal_result is None and not self.cal_message:
-            return ""
-        lines = ["[b]touch calibration[/b]", self.cal_message]
-        if self.calibration is not None:
-            lines.append("n: skip target  x: cancel")
-        return "\n".join(lines)
-
     def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
         """The side panel: (what the loop sees now, the settings and the wizard)."""
         st = self._loop_status(svc)
         live, lines = live_lines(st, work, self.view), []
+        snap = svc.snapshot()  # touching skin as e measures it (one computation, both say)
+        skin = snapshot_reading(*snap) if snap is not None else None
+        if skin is not None:
+            live.append(skin_at(skin))
         cam = st["camera"]
         chosen = self.chosen_key()
         for k, v in svc.params().items():
@@ -575,9 +570,13 @@ class CameraPane(RecordingMixin, Horizontal):
         """While the target field has the focus every key of this screen types into it:
         the footer promises none of them (nor n, x while nothing takes them)."""
         found = self.query("#camera-target")
-        busy = (self.calibration is not None, self._assisting is not None)  # as it is now
+        busy = self._keys_state()  # as it is now
         typing = found and found.first().has_focus
         return self.replay_allows(action) and not typing and key_shown(action, parameters, *busy)
+
+    def _keys_state(self) -> tuple[bool, bool, bool]:
+        """(calibrating, assisting, a calibration waits for S): the footer's keys."""
+        return (self.calibration is not None, self._assisting is not None, self.unsaved)
 
     def on_descendant_focus(self, _event) -> None:
         self.refresh_bindings()
@@ -602,59 +601,6 @@ class CameraPane(RecordingMixin, Horizontal):
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)
         self.view = views[(views.index(self.view) + 1) % len(views)]
-
-    def action_background(self) -> None:
-        if self._borrowed("b"):
-            return
-        n = self.service.capture_background()
-        if n:
-            self.say(f"background captured from {n} frames")
-        else:
-            self.say("b: no frames yet: wait for the view, then b again", "warning")
-
-    # ------------------------------------------------------------------ calibration
-    @property
-    def wizard(self):
-        """The session's touch-calibration wizard (the pane only shows it)."""
-        return self.app.session.calibration
-
-    @property
-    def calibration(self):
-        return self.wizard.active
-
-    @property
-    def cal_result(self):
-        return self.wizard.result
-
-    @property
-    def cal_message(self) -> str:
-        from textual.markup import escape
-
-        w = self.wizard
-        text = w.message
-        if self._saved_to is not None:  # paths shown one way on the screens
-            text = text.replace(str(self._saved_to), short_path(self._saved_to))
-        return f"[red]{escape(text)}[/]" if w.failed else escape(text)
-
-    def _target_px(self):
-        return self.wizard.target_px()
-
-    def action_calibrate(self) -> None:
-        if not self._borrowed("k"):
-            self.wizard.start()
-            self._status_still_true()  # at once: a cancel may follow before a redraw
-
-    def action_skip_target(self, _shown: bool = False) -> None:
-        if not self._borrowed("n"):
-            self.wizard.skip()
-            self._status_still_true()
-
-    def action_cancel(self, _shown: bool = False) -> None:
-        if self._assisting is not None:
-            self._assisting.set()  # the assistant puts the values back and says so
-        elif not self._borrowed("x"):
-            self.wizard.cancel()
-            self._status_still_true()
 
     # ------------------------------------------------------------------ exposure
     def action_exposure(self) -> None:
@@ -686,14 +632,3 @@ class CameraPane(RecordingMixin, Horizontal):
             self.say("no gestures panel: the gestures plugin is not loaded", "warning")
             return
         self.app.push_screen(reg.factory(self.app))
-
-    def action_save_calibration(self) -> None:
-        if self._borrowed("S"):
-            return
-        try:
-            path = self.wizard.save()
-        except UserError as exc:
-            self.say(f"S: {exc}", "warning")
-            return
-        self._saved_to = path
-        self.say(f"touch calibration saved to {short_path(path)}")

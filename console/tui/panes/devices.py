@@ -189,7 +189,9 @@ class DevicesPane(VerticalScroll):
 
     @property
     def focus_target(self):
-        return self.query_one("#device-table", DataTable)
+        """The sound cards: the list Up/Down and Enter act on, from the screen's first
+        key (the doctor's table above it takes no Enter)."""
+        return self.query_one("#audio-table", DataTable)
 
     def on_mount(self) -> None:
         ctx = self.app.ctx

@@ -1,0 +1,132 @@
+"""The Camera screen's touch-calibration wizard and background capture (a mixin of
+``CameraPane``): the wizard lives in the session (``console.session.calibration``), the
+screen shows its step or result and forwards its keys; ``S`` is in the footer while a
+result waits to be saved. ``b`` takes the background from the recent frames, unless a
+hand (a bright blob) would be learnt with it: then it asks to take the hands off and
+press ``b`` again (``b`` twice within ``BACKGROUND_AGAIN_S`` keeps it anyway)."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from console.core.errors import UserError
+from console.session.background_check import bright_blobs, describe_blobs
+from console.session.calibration import SAVE_KEY
+from console.tui.text import escape
+from console.tui.util import short_path
+from console.tui.wrap_paths import break_paths
+
+#: a second ``b`` within this many seconds keeps a background with a bright blob in it
+BACKGROUND_AGAIN_S = 3.0
+
+
+class CameraWizardMixin:
+    """Calibration and background keys of the Camera screen."""
+
+    _saved_to: Any = None  # the path S saved the calibration to
+    _background_asked = -1e9  # when b last warned of a hand in the background
+
+    @property
+    def wizard(self):
+        """The session's touch-calibration wizard (the pane only shows it)."""
+        return self.app.session.calibration
+
+    @property
+    def calibration(self):
+        return self.wizard.active
+
+    @property
+    def cal_result(self):
+        return self.wizard.result
+
+    @property
+    def unsaved(self) -> bool:
+        """A finished calibration waits for ``S`` (its line asks for it)."""
+        w = self.wizard
+        return w.result is not None and w.message.endswith(SAVE_KEY)
+
+    def side_width(self, widget_id: str) -> int:
+        """The cells a line of the side panel's ``widget_id`` has (before layout: the
+        panel's least)."""
+        found = self.query(f"#{widget_id}")
+        width = found.first().content_region.width if found else 0
+        return width if width >= 8 else self.SIDE_COLS - 2
+
+    @property
+    def cal_message(self) -> str:
+        w = self.wizard
+        text = w.message
+        if self._saved_to is not None:  # paths shown one way on the screens
+            text = text.replace(str(self._saved_to), short_path(self._saved_to))
+        text = break_paths(text, self.side_width("camera-wizard"))  # a path whole
+        return f"[red]{escape(text)}[/]" if w.failed else escape(text)
+
+    def wizard_text(self) -> str:
+        """The touch-calibration wizard's step or result and the keys it takes ("" when
+        it has nothing to say)."""
+        if self.calibration is None and self.cal_result is None and not self.cal_message:
+            return ""
+        lines = ["[b]touch calibration[/b]", self.cal_message]
+        if self.calibration is not None:
+            lines.append("n: skip target  x: cancel")
+        return "\n".join(lines)
+
+    def _target_px(self):
+        return self.wizard.target_px()
+
+    def action_calibrate(self) -> None:
+        if not self._borrowed("k"):
+            self.wizard.start()
+            self._status_still_true()  # at once: a cancel may follow before a redraw
+
+    def action_skip_target(self, _shown: bool = False) -> None:
+        if not self._borrowed("n"):
+            self.wizard.skip()
+            self._status_still_true()
+
+    def action_cancel(self, _shown: bool = False) -> None:
+        if self._assisting is not None:
+            self._assisting.set()  # the assistant puts the values back and says so
+        elif not self._borrowed("x"):
+            self.wizard.cancel()
+            self._status_still_true()
+
+    def action_save_calibration(self, _shown: bool = False) -> None:
+        if self._borrowed("S"):
+            return
+        try:
+            path = self.wizard.save()
+        except UserError as exc:
+            self.say(f"S: {exc}", "warning")
+            return
+        self._saved_to = path
+        self.say(f"touch calibration saved to {short_path(path)}")
+        self.refresh_bindings()  # S leaves the footer: nothing waits for it
+
+    def action_background(self) -> None:
+        """``b``: the background from the recent frames; a bright blob in it (a hand
+        held on the glass) is named and the background kept as it was, unless ``b`` is
+        pressed again within ``BACKGROUND_AGAIN_S``."""
+        if self._borrowed("b"):
+            return
+        svc = self.service
+        image = svc.median_background()
+        if image is None:
+            self.say("b: no frames yet: wait for the view, then b again", "warning")
+            return
+        now = time.monotonic()
+        again = now - self._background_asked <= BACKGROUND_AGAIN_S
+        blobs = [] if again else bright_blobs(image)
+        if blobs:
+            self._background_asked = now
+            self.say(
+                f"b: {describe_blobs(blobs)} in the frames: a hand on the glass? The "
+                "background is as before: take your hands off the glass, then b "
+                f"(b again within {BACKGROUND_AGAIN_S:g} s keeps it anyway)",
+                "warning",
+            )
+            return
+        self._background_asked = -1e9
+        n = svc.capture_background(image)
+        self.say(f"background captured from {n} frames" + (" (kept as asked)" if again else ""))
