@@ -306,7 +306,7 @@ class LatencyPane(Vertical):
         self._camera = camera_line(snap.get("camera") or {}, snap["latency"])
         end = time.strftime("%H:%M:%S", time.localtime(runs.ended_at))
         head = (
-            f"[b]the finished demo {escape(runs.name)} run's numbers[/b] (it ended at {end}); "
+            f"[b]the finished demo {escape(runs.name)} run's numbers[/b] (it ended at {escape(end)}); "
             f"m measures the camera loop for {MEASURE_S:.0f} s, a new demo (F6) shows its own"
         )
         self._say("lat-head", head + "\n" + self._camera)
