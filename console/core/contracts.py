@@ -18,7 +18,7 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   TunablesInProfile (the profile keys its tunables are kept under)
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
                   FlowEffect, FlowPatchDrives, HandFlowEffect, HandFlowGeometry,
-                  PrecomputedHandFlows, Conditions, Presets
+                  PrecomputedHandFlows, Conditions, Presets; RovingSensorMaps (roving_contracts)
     audio_output  AudioOutput; SimulatedAudio (the twin: paced, recording_v);
                   RecordsUnderruns (the twin: its underrun log)
     relay_board   RelayBoard; SimulatedRelays (the twin: switch log)
@@ -47,6 +47,7 @@ from console.core.recording_contracts import BeginsRun as BeginsRun
 from console.core.recording_contracts import ReadsRecordings as ReadsRecordings
 from console.core.recording_contracts import RecordedRun as RecordedRun
 from console.core.recording_contracts import WatchesOutputs as WatchesOutputs
+from console.core.roving_contracts import RovingSensorMaps as RovingSensorMaps
 
 # the frame sinks' and panels' contracts: here too, where every kind's contract is found
 from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory

@@ -550,6 +550,12 @@ def draw_grid(s: dict) -> list[dict]:
                 "color": "yellow",
             }
         )
+    sensor = s.get("sensor")
+    if sensor is not None and 1 <= sensor <= len(pts):  # where the roving sensor goes
+        label = str(ids[sensor - 1] if sensor - 1 < len(ids) else sensor)
+        out += _target(pts[sensor - 1], 7.0, "green", label)
+    if s.get("message"):
+        out += _caption(s, "message", above_mm=30, size_mm=11)
     return out + _caption(s, "caption", above_mm=12, size_mm=11)
 
 

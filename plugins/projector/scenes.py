@@ -356,6 +356,7 @@ class GridAudition(Scene):
         self.active: int | None = None  # point ids
         self.passive: int | None = None
         self.excitation: str | None = None
+        self.sensor: int | None = None  # where the roving sensor goes next (a point id)
 
     @property
     def needs(self) -> dict:  # type: ignore[override]
@@ -371,6 +372,9 @@ class GridAudition(Scene):
             self.active = self._known(event.get("point"))
             self.passive = self._known(event.get("passive"))
             self.excitation = event.get("excitation")
+        elif t == "sensor":  # the roving measurement's next point (None: no marker)
+            self.sensor = self._known(event.get("point"))
+            self.message = str(event.get("text", ""))
 
     def _known(self, n: Any) -> int | None:
         if n is None:
@@ -394,7 +398,17 @@ class GridAudition(Scene):
             "patches": self.patches,
             "excitation_patches": lit,
             "caption": cap,
+            "sensor": index.get(self.sensor),
         }
+
+
+class RovingSensor(GridAudition):
+    """The roving-sensor measurement: the grid with a marker where the sensor goes next
+    (``sensor`` events) and the console's line about it; it needs no map."""
+
+    @property
+    def needs(self) -> dict:  # type: ignore[override]
+        return {}
 
 
 class Alignment(Scene):
@@ -422,6 +436,7 @@ BUILTIN_SCENES: dict[str, tuple[type[Scene], str]] = {
     "knob": (Knob, "haptic knob with its city menu (Fig. 16a)"),
     "contacts": (ContactsOverlay, "live contacts and hands (diagnosis)"),
     "grid": (GridAudition, "the 7 x 12 grid with the auditioned point"),
+    "roving_sensor": (RovingSensor, "the grid with where the roving sensor goes next"),
     "alignment": (Alignment, "projector calibration: glass border and corners"),
     "black": (Scene, "nothing (black)"),
 }

@@ -64,6 +64,12 @@ def haptable_register_effects(register) -> None:
         effect("PointEffect", "point_effect"),
         description="localized pulse at one point: render(point=, vmap=|tables=)",
     )
+    register(
+        "roving",
+        effect("RovingEffect", "roving_console"),
+        description="the roving-sensor map for the console (RovingSensorMaps): "
+        "render(excitation=) one point's chirps",
+    )
 
 
 @hookimpl

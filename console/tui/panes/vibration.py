@@ -20,7 +20,7 @@ from console.files.vibration_map import grid_cells
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.session.vibration import Cancelled
 from console.tui.charts import Chart
-from console.tui.command_line import CommandLine
+from console.tui.command_line import CommandLine, prompted
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_commands import run_command
 from console.tui.panes.vibration_projector import light_audition, prepare_projector
@@ -37,6 +37,7 @@ from console.tui.panes.vibration_words import (
     info_text,
 )
 from console.tui.plots import frf_series
+from console.tui.roving_view import RovingView, add_accelerometer_text
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, styled
@@ -58,6 +59,7 @@ class VibrationPane(VerticalScroll):
         Binding("m", "measure", "measure"),
         Binding("b", "build_tables", "tables"),
         Binding("x", "cancel", "cancel"),
+        Binding("escape", "stop_roving", "stop", show=False),
         # priority: the line takes the focus before the keys typed after ":" are handed
         # on (one write: tmux send-keys, a fast typist), never the grid's keys
         Binding("colon", "command", "command", show=False, priority=True),
@@ -78,13 +80,14 @@ class VibrationPane(VerticalScroll):
         self._command_failed = False  # an error was said while a typed command ran
         self._typed: str | None = None  # the command being run (a play keeps it)
         self._measuring: threading.Event | None = None  # the measurement's stop flag
+        self.roving = RovingView(self)  # m with an accelerometer input: console.tui.roving_view
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
         prof = self.app.ctx.profile
         rows, cols = int(prof.get("grid.rows")), int(prof.get("grid.columns"))
         self._set_layout(rows, cols, {(n // cols, n % cols): n + 1 for n in range(rows * cols)})
-        yield CommandLine(placeholder=COMMANDS, id="vib-cmd")
+        yield prompted(CommandLine(placeholder=COMMANDS, id="vib-cmd"))
         yield Static("", id="vib-outputs", markup=False)
         with Horizontal(id="vib-work"):
             yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
@@ -325,10 +328,14 @@ class VibrationPane(VerticalScroll):
 
     def action_measure(self, command: str | None = None) -> None:
         """``m``: measure the map, refused in the console's words during an e-stop."""
+        if (self.roving.running or self.roving.wanted()) and not self._estop_active():
+            self.roving.measure(command)
+            return
         if self._estop_active():
             self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
             return
         self.status("measuring ...", 0.0)
+        self.roving.say(add_accelerometer_text(self.app.session.table_profile))
         self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
         self._measure(stop, command)
 
@@ -384,6 +391,9 @@ class VibrationPane(VerticalScroll):
             self.status(self.summary)
         elif self.status_text == MEASURE_ESTOPPED:
             self.status("measurement stopped by the e-stop; map unchanged; m measures again")
+
+    def action_stop_roving(self) -> None:
+        self.roving.stop()
 
     def action_cancel(self) -> None:
         """``x``: stop what runs (a table build says so itself); nothing: said so."""
