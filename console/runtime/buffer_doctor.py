@@ -29,8 +29,9 @@ MARGIN = 1.5
 #: Never recommend less than the twin's default (3 blocks: 2 of slack).
 MIN_PERIODS = 3
 #: A buffer longer than this is refused as a recommendation: the machine cannot play
-#: haptics in time (a flow under a hand would start this late).
-MAX_BUFFER_MS = 200.0
+#: haptics in time (a flow under a hand would start this late), and on a real card an
+#: e-stop's ramp waits behind what the card already holds (the twin rewrites its queue).
+MAX_BUFFER_MS = 100.0
 
 
 def recommend(late_max_ms: float, period_ms: float) -> dict[str, float | int]:
