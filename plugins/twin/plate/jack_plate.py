@@ -40,6 +40,9 @@ from typing import Any
 
 import numpy as np
 
+#: Seconds ``close()`` waits for the JACK client to deactivate before giving up on it.
+CLOSE_TIMEOUT_S = 5.0
+
 CLIENT = "haptable-plate"
 #: the modes above the kept band stand as one mode at this fraction of the sample rate
 RESIDUAL_HZ_FRACTION = 0.15
@@ -235,14 +238,24 @@ class JackPlate:
             self._wirer.join(5)
         c, self.client = self.client, None
         if c is not None:
-            c.deactivate()
-            c.close()
+            # a JACK server that stalls can hold deactivate() for good: given up on after
+            # CLOSE_TIMEOUT_S (the server drops a dead client's ports itself)
+            t = threading.Thread(target=_release, args=(c,), name="jack-plate-close", daemon=True)
+            t.start()
+            t.join(CLOSE_TIMEOUT_S)
+            if t.is_alive():
+                self.errors.append(f"the JACK client did not close within {CLOSE_TIMEOUT_S:g} s")
 
     def __enter__(self) -> JackPlate:
         return self.start()
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def _release(c: Any) -> None:
+    c.deactivate()
+    c.close()
 
 
 def main(argv: list[str] | None = None) -> int:
