@@ -210,6 +210,11 @@ class JackPlate:
                 self.last_wire_error = f"{type(exc).__name__}: {exc}"
 
     def _process(self, frames: int) -> None:
+        stop = getattr(self, "_stop", None)
+        if stop is not None and stop.is_set():  # closing: silence, no work (frees the GIL)
+            for p in self._outs:
+                p.get_array().fill(0.0)
+            return
         try:
             # a copy first: on a loaded machine the console may already be writing the
             # next cycle into this buffer while the modes are computed
