@@ -183,16 +183,16 @@ def play_and_report(
         print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")
         return 0
     with ctx.outputs(fast=fast) as outputs:
+        start = int(outputs.status()["gate"]["clock"])  # the table's earlier switches: not ours
         play_or_estopped(outputs, plan)
         print(f"played {plan.name}: {plan.duration_s:.2f} s in {len(plan.segments)} segment(s)")
         log = outputs.relay_log()
-        if log is not None:
-            for r in log:
-                state = "closed" if r.closed else "opened"
-                print(
-                    f"  relay {r.channel} {state} at sample {r.clock} "
-                    f"(outputs {' / '.join(f'{v:.1f} V' for v in r.level_v)})"
-                )
+        for r in (x for x in log or () if x.clock >= start):
+            state = "closed" if r.closed else "opened"
+            print(
+                f"  relay {r.channel} {state} at +{1e3 * (r.clock - start) / plan.sample_rate_hz:.1f}"
+                f" ms (outputs {' / '.join(f'{v:.1f} V' for v in r.level_v)})"
+            )
     return 0
 
 
