@@ -22,7 +22,7 @@ from textual.widget import Widget
 from textual.widgets import Header, Input, TabbedContent, TabPane
 
 from console.session import ConsoleSession
-from console.session.events import Failed, SessionEvent, Stopped
+from console.session.events import Failed, SessionEvent, Started, Stopped
 from console.tui.help import HelpText
 from console.tui.key_hold import KeyHold
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
@@ -81,6 +81,11 @@ def _keys_help(tabs: dict) -> str:
     pad = " " * max(2, 8 - len(keys))  # the key column, as the lines around it
     titles = " ".join(title for _, title in keyed)
     return keys + pad + titles
+
+
+#: An e-stop or reset event this soon after the console's own ctrl+e / ctrl+r is its own
+#: (already said); later ones came from elsewhere and get a toast.
+OWN_ESTOP_S = 3.0
 
 
 class ScreenTabs(TabbedContent):
@@ -153,6 +158,7 @@ class HapTableApp(App):
         #: (``console.tui.irview``; ``run_app`` asks the terminal before it starts)
         self.image_mode = image
         self.session = ConsoleSession(ctx, fast=fast)
+        self._own_estop_s = -1e9  # when this console's ctrl+e / ctrl+r last acted
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
         self._bind_tabs()
@@ -383,6 +389,13 @@ class HapTableApp(App):
             self.notify(f"{title}: {ev.message}", severity=ev.severity, timeout=8)
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
             self.live.watch.poke()  # lost: the bar at once, not at the next read
+        if ev.topic == "estop" and time.monotonic() - self._own_estop_s > OWN_ESTOP_S:
+            # from elsewhere (a shell's `haptable estop`, a demo's watchdog, a fault): a
+            # toast and the log, as the console's own ctrl+e and ctrl+r are
+            if isinstance(ev, Stopped):
+                self.notify(f"E-STOP: {ev.reason}", severity="error", timeout=12)
+            elif isinstance(ev, Started):
+                self.notify(f"e-stop reset: {ev.detail}".rstrip(": "))
         if not self.screen_stack:
             return
         for pane in list(self._panes.values()):
@@ -487,6 +500,7 @@ class HapTableApp(App):
                 self.session.abandon("the console quit while its session was still closing")
 
     def action_estop(self) -> None:
+        self._own_estop_s = time.monotonic()
         self.estop("operator e-stop (console)")
         self.notify("E-STOP: outputs silenced, relays open", severity="error")
 
@@ -495,6 +509,7 @@ class HapTableApp(App):
         if out is not None and not out.estopped:  # said, not silence: the key was heard
             self.notify("no e-stop to reset: the outputs are not e-stopped")
         elif self.session.reset_estop():
+            self._own_estop_s = time.monotonic()
             self.notify("e-stop reset: outputs stay silent until something plays")
 
     async def on_event(self, event: events.Event) -> None:
