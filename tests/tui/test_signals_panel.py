@@ -121,6 +121,7 @@ def test_refusals_and_loading_from_the_library(plugins):
             assert not app.session.played
             await pilot.press("ctrl+t")  # the operator adds the ramp, visibly
             assert expr.value == "(sine(250 Hz, 20 V, 0.5 s)) * ramp(5 ms)"
+            assert expr.cursor_position == len(expr.value)  # typing goes on at the end
             await pilot.press("ctrl+o")
             await wait_for(pilot, lambda: "played" in _status(app), 20, "played with its ramp")
             assert len(app.session.played) == 1

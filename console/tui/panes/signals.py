@@ -372,6 +372,7 @@ class SignalsPane(Vertical):
         if not expr:
             return
         box.value = f"({expr}) * ramp({ms:g} ms)"
+        box.cursor_position = len(box.value)  # typing goes on after it, not inside it
         self.show_preview()
 
     def action_save(self) -> None:
@@ -397,8 +398,9 @@ class SignalsPane(Vertical):
         e = self.entries.get(event.option.id or "")
         if e is None:
             return
-        self.query_one("#sig-expr", Input).value = e.expr
-        self.query_one("#sig-name", Input).value = e.name
+        for wid, text in (("#sig-expr", e.expr), ("#sig-name", e.name)):
+            box = self.query_one(wid, Input)
+            box.value, box.cursor_position = text, len(text)
         self._replace = None
         self.show_preview()
 
