@@ -269,7 +269,11 @@ def save_map(path: str | os.PathLike, m: VibrationMap) -> Path:
     return p
 
 
-FIX = "re-create it with `haptable frf measure` or `haptable frf import`"
+#: the fix wherever the map is read: the console's Vibration commands and the shell's
+FIX = (
+    "measure it again or import the vibrometer's file (Vibration screen: measure, import; "
+    "shell: haptable frf measure, haptable frf import)"
+)
 
 
 def load_map(

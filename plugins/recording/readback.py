@@ -10,7 +10,10 @@ from typing import Any
 from console.plugin_api import AT_CLI, AT_CONSOLE, Placed, UserError
 
 #: the fix in the console, where the path is typed in a field
-CONSOLE_FIX = "type a recording's path (haptable demo flow --record FILE makes one)"
+CONSOLE_FIX = (
+    "type a recording's path (a demo started with [recording] enabled = true in the "
+    "profile makes one, and a study run with 'record trials' one per trial)"
+)
 
 
 class RecorderFactory:

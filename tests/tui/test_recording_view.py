@@ -179,6 +179,7 @@ def test_the_reader_is_found_by_capability_and_words_its_fix_per_place(plugins, 
     cli, here = worded(got.value, AT_CLI), worded(got.value, AT_CONSOLE)
     assert str(missing) in here and "no such file" in here and "type a recording" in here
     assert "--record FILE" in cli and "\n" not in cli + here
+    assert "--record" not in here and "haptable" not in here  # no shell advice in the console
     not_h5 = tmp_path / "notes.h5"
     not_h5.write_text("hello")
     with pytest.raises(Exception) as got:
