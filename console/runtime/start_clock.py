@@ -72,11 +72,10 @@ class StartClock:
     def left_text(self) -> str:
         """The time left as the operator reads it."""
         left = self.expected_s - self.elapsed_s()
-        if left > 0:
-            basis = "as the last start" if self.learned else "a first start's estimate"
-            return f"about {math.ceil(left)} s left ({basis})"
-        than = "the last start" if self.learned else "a first start's estimate"
-        return f"taking longer than {than} ({self.expected_s:.0f} s)"
+        if left > 0:  # short: the line shares 80 columns with the bar
+            return f"~{math.ceil(left)} s left" + ("" if self.learned else " (a guess)")
+        than = "the last start" if self.learned else "guessed"
+        return f"longer than {than} ({self.expected_s:.0f} s)"
 
     def fraction_text(self, step: str, floor: float = 0.0) -> tuple[float, str]:
         """The fraction and the line to show for the step the demo is in."""
