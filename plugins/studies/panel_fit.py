@@ -4,11 +4,18 @@ longest name within the screen (a name never wraps)."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from typing import Any
 
-from textual.widgets import Select
+from textual.widgets import Input, Select
+
+from console.plugin_api import UserError
 
 from . import protocol as protocols
+from .events import read_events
+from .panel_text import next_id
+from .store import RunFiles, participant_dir, progress
 
 #: a compact Select's own columns beside the name: its padding and the "▼"
 SELECT_EXTRA = 4
@@ -52,6 +59,28 @@ def protocol_changed(pane: Any, name: str) -> None:
     protocol before, is replaced) with what it needs, unless a run is going on."""
     if pane.running is not None:
         return
-    pid = pane.query_one("#participant").value.strip() or "a participant"
-    pane.said = (f"protocol {name} chosen: s starts it with {pid}", "information")
+    field = pane.query_one("#participant", Input)
+    pid = field.value.strip()
+    out = Path(pane.query_one("#out", Input).value.strip() or ".").expanduser()
+    stored = stored_progress(out, pid) if pid else None
+    if stored is not None and stored[0] == stored[1]:  # this one is done: the next
+        field.value = next_id(pid)
+        said = f"{pid} has finished {name} ({stored[0]}/{stored[1]}): s starts {field.value}"
+    elif stored is not None and stored[0]:
+        said = f"protocol {name}: s resumes {pid} at trial {stored[0] + 1} of {stored[1]}"
+    else:
+        said = f"protocol {name} chosen: s starts it with {pid or 'a participant'}"
+    pane.said = (said, "information")
     pane._idle()
+
+
+def stored_progress(out: Path, pid: str) -> tuple[int, int] | None:
+    """(trials done, trials) of ``pid``'s run in ``out``; None without one (or a folder
+    that cannot be read: starting says why)."""
+    try:
+        files = RunFiles(participant_dir(out, pid))
+        plan = json.loads(files.plan_path.read_text(encoding="utf-8"))
+        st = progress(plan, read_events(files.trials_path) if files.trials_path.exists() else [])
+    except (OSError, ValueError, KeyError, TypeError, UserError):
+        return None
+    return len(st.done), st.total
