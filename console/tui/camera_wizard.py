@@ -12,7 +12,9 @@ from typing import Any
 
 from console.core.errors import UserError
 from console.session.background_check import bright_blobs, describe_blobs
-from console.session.calibration import SAVE_KEY
+from console.session.calibration import SAVE_KEY, TOPIC
+from console.session.events import Failed
+from console.tui.said import log_said, shows_now
 from console.tui.text import escape
 from console.tui.util import short_path
 from console.tui.wrap_paths import break_paths
@@ -26,6 +28,14 @@ class CameraWizardMixin:
 
     _saved_to: Any = None  # the path S saved the calibration to
     _background_asked = -1e9  # when b last warned of a hand in the background
+
+    def says(self, ev: Any) -> bool:
+        """The wizard's refusal (``k`` before the first frame ...) is in this screen's
+        panel: no toast of the app's too while the screen is in view (one place)."""
+        if isinstance(ev, Failed) and ev.topic == TOPIC and shows_now(self):
+            log_said("panel Camera", ev.message, ev.severity)
+            return True
+        return False
 
     @property
     def wizard(self):
