@@ -126,3 +126,27 @@ def test_a_point_off_the_grid_names_the_grid_s_range(plugins, map_file):
             assert app.session.played == []
 
     asyncio.run(scenario())
+
+
+def test_m_asks_before_replacing_the_kept_map(plugins):
+    """A single key never replaces the kept map silently (seventh new-user try): the first
+    m says what a second one does; only m again measures."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            kept = app.session.vibration.cached_map_path()
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            kept.write_bytes(b"")  # a kept map exists (its content is not read here)
+            asked: list[int] = []
+            app.session.vibration.measure = lambda *a, **kw: (
+                asked.append(1) or (_ for _ in ()).throw(Cancelled())
+            )
+            await pilot.press("m")
+            await pilot.pause(0.3)
+            assert "m again within 5 s" in _status(app) and not asked
+            await pilot.press("m")
+            await wait_for(pilot, lambda: asked, what="the second m measures")
+
+    asyncio.run(scenario())

@@ -6,6 +6,7 @@ that plays marked, the lookup-table entry, UFF import and a simulated measuremen
 from __future__ import annotations
 
 import threading
+import time
 
 from textual import work
 from textual.app import ComposeResult
@@ -43,8 +44,12 @@ from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, styled
 from console.tui.util import from_thread
 
+#: ``m`` with a kept map asks first; ``m`` again within this many seconds measures anew
+MEASURE_AGAIN_S = 5.0
+
 
 class VibrationPane(VerticalScroll):
+    _measure_asked = -1e9  # when m last asked before replacing the kept map
     HELP_TEXT = HELP_KEYS
     # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
     can_focus = False
@@ -334,6 +339,16 @@ class VibrationPane(VerticalScroll):
         if self._estop_active():
             self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
             return
+        now = time.monotonic()
+        kept = command is None and self.service.cached_map_path().is_file()
+        if kept and now - self._measure_asked > MEASURE_AGAIN_S:  # it would be replaced
+            self._measure_asked = now
+            self.status(
+                f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew and "
+                "replaces the kept map (the demos and studies use it too)"
+            )
+            return
+        self._measure_asked = -1e9
         self.status("measuring ...", 0.0)
         self.roving.say(add_accelerometer_text(self.app.session.table_profile))
         self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
