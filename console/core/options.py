@@ -247,12 +247,30 @@ def usage_line(prog: str, message: str) -> str:
     return " ".join(text.split())
 
 
+def _option_strings(parser: argparse.ArgumentParser) -> set[str]:
+    """Every long option of ``parser`` and of its sub-commands' parsers."""
+    out: set[str] = set()
+    for action in parser._actions:
+        out |= {o for o in action.option_strings if o.startswith("--")}
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in set(action.choices.values()):
+                out |= _option_strings(sub)
+    return out
+
+
 class Parser(argparse.ArgumentParser):
     """``argparse.ArgumentParser`` whose usage errors raise ``UsageError`` (one line,
     exit 2 from ``console.cli.main``) instead of printing the usage and exiting. Sub-parsers
     are of this class too."""
 
     def error(self, message: str) -> NoReturn:
+        if message.startswith("unrecognized arguments:"):  # a mistyped option: the one meant
+            bad = next((w for w in message.split()[2:] if w.startswith("--")), "")
+            hint = suggestion(
+                bad.split("=")[0], sorted(_option_strings(self)), "did you mean {!r}?"
+            )
+            if hint:
+                message = f"{message}; {hint}"
         raise UsageError(usage_line(self.prog, message))
 
     def _check_value(self, action: argparse.Action, value: object) -> None:

@@ -24,6 +24,11 @@ def test_play_suggests_the_name_as_written(capsys):
     assert "did you mean 'sine-PA'?" in err
 
 
+def test_a_mistyped_option_is_met_with_the_option_meant(capsys):
+    err = _error(capsys, ["doctor", "--bufer", "2"])
+    assert "did you mean '--buffer'?" in err
+
+
 def test_a_mistyped_command_is_met_with_the_command_meant(capsys):
     err = _error(capsys, ["docter"])
     assert "did you mean 'doctor'?" in err
