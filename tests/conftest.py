@@ -4,6 +4,7 @@ a fresh set of them for each test."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import tempfile
@@ -11,6 +12,16 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+
+# One thread per BLAS / OpenMP pool, in the workers and in every process they start: the
+# suite runs a worker per core and one more, and pools of a thread per core on top of
+# them only spin for work (OpenBLAS waits busily), costing CPU the others need.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+with contextlib.suppress(ImportError):
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)  # the pools of libraries already imported (numpy's OpenBLAS)
 
 os.environ["HAPTABLE_LOAD_ENTRYPOINTS"] = "0"
 os.environ.pop("HAPTABLE_BLOCK_PLUGINS", None)

@@ -19,10 +19,19 @@ def block_ms(profile: Any) -> float:
     return 1e3 * float(profile.get("audio.block_size")) / float(profile.get("audio.sample_rate_hz"))
 
 
+def _want_ms(profile: Any) -> float:
+    """``[audio] buffer_ms`` (0 when the profile has no such key: a driver's own test
+    profile)."""
+    try:
+        return float(profile.get("audio.buffer_ms") or 0.0)
+    except (KeyError, TypeError, ValueError):
+        return 0.0
+
+
 def buffer_periods(profile: Any, own_periods: int) -> int:
     """The blocks a paced driver keeps ahead: ``[audio] buffer_ms`` in whole blocks when
     set (at least 2), else the driver's own ``own_periods``."""
-    want_ms = float(profile.get("audio.buffer_ms") or 0.0)
+    want_ms = _want_ms(profile)
     if want_ms <= 0:
         return max(2, int(own_periods))
     return max(2, math.ceil(want_ms / block_ms(profile) - 1e-9))
@@ -31,5 +40,5 @@ def buffer_periods(profile: Any, own_periods: int) -> int:
 def buffer_latency_s(profile: Any, own_latency_s: float) -> float:
     """PortAudio's suggested output latency: ``[audio] buffer_ms`` when set, else the
     driver's own (0: PortAudio's lowest)."""
-    want_ms = float(profile.get("audio.buffer_ms") or 0.0)
+    want_ms = _want_ms(profile)
     return want_ms / 1e3 if want_ms > 0 else float(own_latency_s)

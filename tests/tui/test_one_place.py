@@ -184,7 +184,7 @@ def test_scenes_descriptions_show_whole_and_s_has_one_label(plugins):
             for reg in app.ctx.pm.of("demo").values():
                 assert_whole(app, demos, reg.description)
             scenes = app.query_one("#scene-table", DataTable)
-            for name, reg in list(app.ctx.pm.of("scene").items())[:3]:  # those in view
+            for name, reg in sorted(app.ctx.pm.of("scene").items())[:3]:  # those in view
                 assert_whole(app, scenes, f"{name} {reg.plugin} {reg.description}")
             # the s key: one label, the footer's, in both hints
             hints = [_flat(h.render()) for h in pane.query(".hint").results(Static)]
