@@ -135,7 +135,7 @@ def test_the_studies_screen_switch_records_the_trials(plugins, tmp_path):
             assert switch.value is False and "record trials" in str(switch.label)
             await pilot.click("#record")
             assert switch.value is True
-            await pilot.click("#start")
+            pane.query_one("#start").press()  # the button itself (a toast may cover it)
             await wait_for(pilot, lambda: pane.running is not None, "the run started")
             await wait_for(pilot, lambda: pane.running is None, "the run ended")
 
