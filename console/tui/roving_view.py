@@ -21,6 +21,7 @@ from typing import Any
 
 from textual.widgets import Static
 
+from console.config.profile import overrides_path
 from console.core.audio_inputs import find_input, input_specs
 from console.core.contracts import RovingSensorMaps
 from console.core.errors import SafetyRefusal, UserError
@@ -34,11 +35,13 @@ HOLDER = "the roving measurement (Vibration screen)"
 
 
 def add_accelerometer_text(profile: Any) -> str:
-    """What the screen says when ``m`` measures without an accelerometer input."""
+    """What the screen says when ``m`` measures without an accelerometer input: where to
+    add one is the profile's overrides file (the operator's settings; a shipped profile
+    stays as shipped)."""
     return (
         "m measures with the profile's vibrometer; to measure with an accelerometer on the "
         "sound card's inputs (roving sensor, no laser) add [audio_inputs.accel] channel = 1, "
-        f"kind = 'accelerometer', sensitivity = 10.2 to {profile.path}"
+        f"kind = 'accelerometer', sensitivity = 10.2 to {overrides_path(profile.name)}"
     )
 
 

@@ -49,6 +49,7 @@ def test_the_line_names_the_next_point_progress_and_the_last_verdict():
 
 class _Prof:
     path = "t.toml"
+    name = "t"
 
     def __init__(self, inputs):
         self.inputs = inputs
@@ -66,7 +67,7 @@ def test_only_an_accelerometer_input_starts_the_roving_run(tmp_path):
     # without one, m measures as before and the screen says how to add one, and where
     text = add_accelerometer_text(_Prof({}))
     assert "add [audio_inputs.accel] channel = 1, kind = 'accelerometer'" in text
-    assert text.endswith("to t.toml")
+    assert text.endswith("t/overrides.toml")  # the operator's file, not the shipped one
     kept = tmp_path / "measured-map-0123.npz"
     assert roving_map_path(kept) == tmp_path / "roving-map-0123.npz"
 
