@@ -23,7 +23,7 @@ from console.plugin_api import Limits, UserError, append_json_line, parse_toml_t
 from . import adaptive_protocol as ap
 from .adaptive_run import RUN, Setup, make_setup, trial_plan
 from .stimuli import play_on_session
-from .trial_recording import TrialRecorder, spec_wants_recording
+from .trial_recording import TrialRecorder, first_difference, spec_wants_recording
 
 #: what a recorded adaptive trial keeps of the procedure's proposal
 TRIAL_KEYS = ("trial", "track", "level_db", "target_interval")
@@ -61,14 +61,7 @@ def recorded_log(rec: TrialRecorder) -> Callable[[Path, dict[str, Any]], None]:
     line), an ``interrupted`` forgets it."""
 
     def log_event(path: Path, record: dict[str, Any]) -> None:
-        event = record.get("event")
-        if "trial" in record:
-            if event == "start":
-                rec.begin(record["trial"])
-            elif event == "done":
-                rec.finish(record)
-            elif event == "interrupted":
-                rec.discard()
+        rec.note(record)
         append_json_line(path, record)
 
     return log_event
@@ -116,11 +109,4 @@ def replay_adaptive(
         plan = trial_plan(setup, t)
     except (KeyError, TypeError, ValueError) as exc:
         return f"its recorded trial {t} does not render ({exc})", 0
-    name, digest = plan.name, plan_hash(plan)
-    for k, x in enumerate(played):
-        if (x.get("name"), x.get("hash")) != (name, digest):
-            return (
-                f"plan {k + 1}: recorded {x.get('name')!r} ({str(x.get('hash'))[:12]}) vs "
-                f"re-rendered {name!r} ({digest[:12]})"
-            ), k
-    return None, len(played)
+    return first_difference(played, plan.name, plan_hash(plan))

@@ -282,6 +282,19 @@ class TrialRecorder:
         self._end_frames(keep=False)
         self._noted = []
 
+    def note(self, record: dict[str, Any]) -> None:
+        """A trial log line's part: ``start`` begins the trial's recording, ``done``
+        writes its file (before the line is written), ``interrupted`` forgets it."""
+        if "trial" not in record:
+            return
+        event = record.get("event")
+        if event == "start":
+            self.begin(record["trial"])
+        elif event == "done":
+            self.finish(record)
+        elif event == "interrupted":
+            self.discard()
+
     def finish(self, done: dict[str, Any]) -> Path:
         """Write the trial's file (``.part``, fsync, rename, fsync the folder)."""
         import h5py  # lazy: only when recording
@@ -348,14 +361,8 @@ class RecordedRunFiles(RunFiles):
     recorder: TrialRecorder | None = None
 
     def append(self, record: dict[str, Any]) -> None:
-        rec, event = self.recorder, record.get("event")
-        if rec is not None and "trial" in record:
-            if event == "start":
-                rec.begin(record["trial"])
-            elif event == "done":
-                rec.finish(record)
-            elif event == "interrupted":
-                rec.discard()
+        if self.recorder is not None:
+            self.recorder.note(record)
         super().append(record)
 
 
@@ -378,3 +385,17 @@ def spec_wants_recording(spec: dict[str, Any], profile: Any) -> bool:
     if RECORD in spec:
         return bool(spec[RECORD])
     return bool(profile.get("recording.study_trials"))
+
+
+def first_difference(
+    played: list[dict[str, Any]], name: str, digest: str
+) -> tuple[str | None, int]:
+    """(the first recorded plan that is not ``name`` with hash ``digest``, said in one
+    line, and its index) or (None, how many matched): a replay's verdict on one trial."""
+    for k, x in enumerate(played):
+        if (x.get("name"), x.get("hash")) != (name, digest):
+            return (
+                f"plan {k + 1}: recorded {x.get('name')!r} ({str(x.get('hash'))[:12]}) vs "
+                f"re-rendered {name!r} ({digest[:12]})"
+            ), k
+    return None, len(played)

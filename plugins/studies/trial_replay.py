@@ -26,7 +26,14 @@ from console.plugin_api import (
 )
 
 from .stimuli import EffectPlayer, knob_trial
-from .trial_recording import FOLDER, FORMAT, FORMAT_VERSION, MAP_FILE, file_sha256
+from .trial_recording import (
+    FOLDER,
+    FORMAT,
+    FORMAT_VERSION,
+    MAP_FILE,
+    file_sha256,
+    first_difference,
+)
 
 FIX = "give a study recording (haptable study run ... --record)"
 #: the knob measures a simulated knob trial's replay compares
@@ -159,14 +166,7 @@ def replay_trial(p: Path, rec: dict[str, Any], ctx: Any, maps: _Maps) -> tuple[s
         plan = EffectPlayer(ctx.pm, ctx.profile, vmap, lambda plan: True).prepare(trial)
     except (KeyError, TypeError, ValueError) as exc:
         return f"its recorded stimulus {json.dumps(stim)} does not render ({exc})", 0
-    name, digest = plan.name, plan_hash(plan)
-    for k, x in enumerate(played):
-        if (x.get("name"), x.get("hash")) != (name, digest):
-            return (
-                f"plan {k + 1}: recorded {x.get('name')!r} ({str(x.get('hash'))[:12]}) vs "
-                f"re-rendered {name!r} ({digest[:12]})"
-            ), k
-    return None, len(played)
+    return first_difference(played, plan.name, plan_hash(plan))
 
 
 def replay_study(path: str | Path, ctx: Any) -> tuple[bool, str]:
