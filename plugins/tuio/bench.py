@@ -20,26 +20,19 @@ import numpy as np
 from console.plugin_api import (
     GestureScript,
     GestureStep,
-    SimulatedCamera,
-    UserError,
     machine_info,
     summarize_s,
 )
 from console.plugin_api import runtime as rt
 
-from .finger_bench import run_fingers
+from .finger_bench import open_twin_camera, run_fingers
 from .tuio2 import UDP_LIMIT_BYTES, WS_LIMIT_BYTES, Tuio2Encoder
 
 
 def record(profile: Any, plugins: Any, n_frames: int) -> list[tuple[Any, Any]]:
     """``(TrackFrame, to_mm)`` of ``n_frames`` twin frames with a hand on the glass."""
-    camera = rt.open_camera(profile, plugins)
+    camera = open_twin_camera(profile, plugins)
     try:
-        if not isinstance(camera, SimulatedCamera):
-            raise UserError(
-                "bench tuio: the profile's camera is not simulated; run it with the twin "
-                "(--profile sim)"
-            )
         half = n_frames // 2
         camera.set_script(
             GestureScript(

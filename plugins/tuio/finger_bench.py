@@ -101,16 +101,24 @@ def _shares(c: Counter) -> dict:
     }
 
 
+def open_twin_camera(profile: Any, plugins: Any) -> Any:
+    """The profile's camera for ``bench tuio``, which needs the twin's (closed and
+    refused in one line otherwise)."""
+    camera = rt.open_camera(profile, plugins)
+    if not isinstance(camera, SimulatedCamera):
+        camera.close()
+        raise UserError(
+            "bench tuio: the profile's camera is not simulated; run it with the twin "
+            "(--profile sim)"
+        )
+    return camera
+
+
 def run_fingers(profile: Any, plugins: Any, quick: bool) -> dict:
     """The ``fingers`` rows of ``haptable bench tuio``: every gesture of ``GESTURES``,
     both hands, 2 subjects (quick) or 5."""
-    camera = rt.open_camera(profile, plugins)
+    camera = open_twin_camera(profile, plugins)
     try:
-        if not isinstance(camera, SimulatedCamera):
-            raise UserError(
-                "bench tuio: the profile's camera is not simulated; run it with the twin "
-                "(--profile sim)"
-            )
         clf = rt.open_classifier(profile, plugins)
         subjects = ("s1", "s2") if quick else ("s1", "s2", "s3", "s4", "s5")
         cases = [(g, side, s) for g in GESTURES for side in ("right", "left") for s in subjects]
