@@ -115,6 +115,10 @@ def test_knob_vf_frequency_rises_with_the_rotation_speed(profile, plugins, outpu
     run = start(profile, plugins, out, condition="HD+VF", watchdog_ms=5000)
     try:
         assert wait_until(lambda: len(run.demo.crossings) >= 3, 30.0)
+        # three more once the stream surely plays at full level: on a loaded machine its
+        # ramp-in can cover the first turn, leaving only the hand's turn-around (at rest)
+        c0 = run.demo.crossings_total
+        assert wait_until(lambda: run.demo.crossings_total >= c0 + 3, 30.0)
     finally:
         run.stop()
     # what the screen got: its frequency in 20 ms windows while the fingers touched
