@@ -65,6 +65,32 @@ def cancel(
     return np.where((h1 == 0) | (h2 == 0), 0.0, h)
 
 
-def cancel_coherence(coh_sensor: np.ndarray, coh_with_dummy: np.ndarray) -> np.ndarray:
-    """The result's coherence: the worse of the two passes', bin by bin."""
-    return np.minimum(np.asarray(coh_sensor), np.asarray(coh_with_dummy))
+def cancel_coherence(
+    coh_sensor: np.ndarray,
+    coh_with_dummy: np.ndarray,
+    frf_sensor: np.ndarray | None = None,
+    frf_with_dummy: np.ndarray | None = None,
+    sensor_mass_g: float | None = None,
+    dummy_mass_g: float | None = None,
+) -> np.ndarray:
+    """The result's coherence, its noise propagated from the two passes'.
+
+    Each pass's noise-to-signal ratio is (1 - g^2) / g^2; to first order H's relative
+    error is (1 + r) (H / H1) e1 - r (H / H2) e2, so its ratio is
+    (1 + r)^2 |H / H1|^2 q1 + r^2 |H / H2|^2 q2, and the coherence 1 / (1 + q). Near an
+    antiresonance, where the line's value at zero mass divides two small numbers, H / H1
+    is large and the result is (rightly) not coherent. Without the FRFs and masses: the
+    worse of the two passes', bin by bin (a lower bound on the noise)."""
+    c1 = np.clip(np.asarray(coh_sensor, float), 1e-12, 1.0)
+    c2 = np.clip(np.asarray(coh_with_dummy, float), 1e-12, 1.0)
+    if frf_sensor is None or frf_with_dummy is None or not sensor_mass_g or not dummy_mass_g:
+        return np.minimum(np.asarray(coh_sensor), np.asarray(coh_with_dummy))
+    r = check_masses(sensor_mass_g, dummy_mass_g)
+    h1 = np.asarray(frf_sensor, complex)
+    h2 = np.asarray(frf_with_dummy, complex)
+    h = cancel(h1, h2, sensor_mass_g, dummy_mass_g)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = (1 + r) ** 2 * np.abs(h / h1) ** 2 * (1 - c1) / c1
+        q = q + r**2 * np.abs(h / h2) ** 2 * (1 - c2) / c2
+        coh = 1.0 / (1.0 + q)
+    return np.where(np.isfinite(coh), coh, 0.0)

@@ -184,7 +184,9 @@ class RovingRun:
         return {
             "freqs_hz": got["freqs_hz"],
             "frf": cancel(got["frf"], two["frf"], m_s, self.dummy_mass_g),
-            "coherence": cancel_coherence(got["coherence"], two["coherence"]),
+            "coherence": cancel_coherence(
+                got["coherence"], two["coherence"], got["frf"], two["frf"], m_s, self.dummy_mass_g
+            ),
             "delay_samples": got["delay_samples"],
             "frf_sensor": got["frf"],
             "frf_with_dummy": two["frf"],

@@ -70,3 +70,51 @@ def test_acceleration_becomes_displacement_and_low_bins_are_masked():
     assert masked.tolist() == [True, True, False, False]
     assert np.all(d[masked] == 0)
     assert np.allclose(d[~masked], disp_m[~masked] * 1e6)
+
+
+def _resonant_case(repeats: int, seed: int):
+    """A lightly damped resonance with an antiresonance-like dip (a known IIR), its
+    chirp response plus white sensor noise: (freqs, H, coherence, truth, true coherence)."""
+    s = RovingSettings(level_v=5.0, f_start_hz=20, f_stop_hz=1500, sweep_s=0.6, tail_s=0.4)
+    x = np.concatenate([chirp_v(s, FS), np.zeros(int(s.tail_s * FS))])
+    b, a = signal.iirpeak(400, 40, fs=FS)  # a resonance; far from it the response is small
+    y = signal.lfilter(b, a, x)
+    sigma = 0.02
+    rng = np.random.default_rng(seed)
+    ys = y + sigma * rng.standard_normal((repeats, x.size))
+    xs = np.broadcast_to(x, ys.shape)
+    f, h, coh = h1(xs, ys, FS, smooth_bins=8)
+    _, classic = h1(xs, ys, FS)[1:]
+    _, ref = signal.freqz(b, a, worN=f, fs=FS)
+    sig = np.abs(np.fft.rfft(y)) ** 2
+    true_coh = sig / (sig + sigma**2 * x.size)  # white noise: N = sigma^2 N per bin
+    return f, h, coh, classic, ref, true_coh
+
+
+def test_the_smoothed_coherence_is_the_true_one_where_the_classic_scatters():
+    f, _, coh, classic, _, true_coh = _resonant_case(repeats=3, seed=4)
+    band = (f > 30) & (f < 1400)
+    mid = band & (true_coh > 0.3) & (true_coh < 0.97)  # where a threshold at 0.9 decides
+    assert mid.sum() > 200
+    err_new = np.median(np.abs(coh[mid] - true_coh[mid]))
+    err_classic = np.median(np.abs(classic[mid] - true_coh[mid]))
+    assert err_new < 0.06 and err_new < 0.7 * err_classic  # (the response's own scatter stays)
+    # what a 0.9 threshold keeps: the classic estimate lets through bins truly below 0.8
+    assert np.sum((classic >= 0.9) & (true_coh < 0.8) & band) > 5 * max(
+        1, np.sum((coh >= 0.9) & (true_coh < 0.8) & band)
+    )
+
+
+def test_the_random_error_bound_holds_where_the_coherence_says():
+    from plugins.vibrotactile.roving import random_error_db
+
+    inside, total = 0, 0
+    for seed in range(3):
+        f, h, coh, _, ref, _ = _resonant_case(repeats=4, seed=seed)
+        ok = (f > 30) & (f < 1400) & (coh >= 0.5)
+        err = np.abs(20 * np.log10(np.abs(h[ok]) / np.abs(ref[ok])))
+        bound = 2 * random_error_db(coh[ok], 4)
+        inside += int(np.sum(err <= bound))
+        total += int(ok.sum())
+    assert total > 1000
+    assert 0.9 <= inside / total <= 0.995  # a 2-sigma bound: ~95 % inside, not all

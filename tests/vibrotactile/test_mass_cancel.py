@@ -145,3 +145,18 @@ def test_a_roving_run_with_a_dummy_asks_for_it_and_writes_the_mass_free_map(tmp_
     assert list(m.excitations) == list(EXCITATIONS)
     with pytest.raises(UserError, match="--sensor-mass-g"):
         rr.RovingRun(None, tmp_path / "n.npz", np.zeros((1, 2)), s, sensor={}, dummy_mass_g=7.0)
+
+
+def test_the_cancelled_coherence_carries_both_passes_noise_and_falls_where_it_divides():
+    """Two passes of coherence 0.99 each: the cancellation multiplies their noise
+    (``noise_gain``) where the mass hardly matters, and much more where H1 and H2 nearly
+    cancel in the line's denominator."""
+    h_far = np.array([1.0 + 0.0j])
+    c = cancel_coherence([0.99], [0.99], h_far, h_far, 7.0, 14.0)[0]
+    q_pass = 0.01 / 0.99
+    assert (1 - c) / c == pytest.approx(noise_gain(7.0, 14.0) ** 2 * q_pass, rel=1e-6)
+    # H2 = 3 H1 with r = 1/2: den = 1.5 * 3 - 0.5 = 4, H = 3/4 H1 ... and H2 close to
+    # r/(1+r) H1 makes den small: H grows and so does its error
+    h1_ = np.array([1.0 + 0.0j])
+    near = cancel_coherence([0.99], [0.99], h1_, np.array([0.36 + 0.0j]), 7.0, 14.0)[0]
+    assert near < 0.5 < c
