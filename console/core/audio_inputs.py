@@ -13,6 +13,9 @@ says what it carries and how volts at the input become a physical value:
   amplifies), ``sensitivity`` the divider ratio monitor volts / amplifier volts.
 
 ``full_scale_v`` is the input's volts at sample value 1.0 (the card's input range).
+An accelerometer may give its ``mass_g`` and a clip-on ``dummy_mass_g``: the console's
+roving map then measures each point again with the dummy on and cancels the sensor's
+mass (``plugins.vibrotactile.mass_cancel``).
 Sample values (card units) times ``full_scale_v`` times 1000 / ``sensitivity`` give m/s^2
 or Pa (``to_physical``); loopback and monitor inputs come out in volts at the actuator.
 """
@@ -48,6 +51,17 @@ FIELDS = {
         help="loopback and amp_monitor: the output channel it takes (an [audio] channels "
         "name; empty: the first piezo channel)",
     ),
+    "mass_g": Field(
+        "float", 0.0, min=0.0, max=500.0, help="accelerometer: its own mass in g (0: not given)"
+    ),
+    "dummy_mass_g": Field(
+        "float",
+        0.0,
+        min=0.0,
+        max=500.0,
+        help="accelerometer: a clip-on dummy's mass in g; the roving map measures each point "
+        "again with it and cancels the sensor's mass (needs mass_g; 0: no dummy)",
+    ),
 }
 HELP = "the sound card's input channels (duplex audio: sensors, loopbacks, monitors)"
 
@@ -62,6 +76,8 @@ class InputSpec:
     sensitivity: float
     full_scale_v: float = 2.0
     source: str = ""
+    mass_g: float = 0.0
+    dummy_mass_g: float = 0.0
 
     @property
     def unit(self) -> str:
@@ -82,7 +98,9 @@ class InputSpec:
             "full_scale_v": self.full_scale_v,
             "source": self.source,
             "unit": self.unit,
-        }
+        } | ({"mass_g": self.mass_g} if self.mass_g else {}) | (
+            {"dummy_mass_g": self.dummy_mass_g} if self.dummy_mass_g else {}
+        )
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> InputSpec:
@@ -93,6 +111,8 @@ class InputSpec:
             float(d["sensitivity"]),
             float(d.get("full_scale_v", 2.0)),
             str(d.get("source", "")),
+            float(d.get("mass_g", 0.0)),
+            float(d.get("dummy_mass_g", 0.0)),
         )
 
 
@@ -112,6 +132,8 @@ def input_specs(profile: Any) -> tuple[InputSpec, ...]:
                 float(d["sensitivity"]),
                 float(d.get("full_scale_v", 2.0)),
                 str(d.get("source", "")),
+                float(d.get("mass_g", 0.0)),
+                float(d.get("dummy_mass_g", 0.0)),
             )
         )
     specs.sort(key=lambda s: s.channel)

@@ -18,7 +18,9 @@ class RovingStep(TypedDict, total=False):
     (``x_mm``, ``y_mm``) (``done`` of ``total`` points kept); ``"measured"``: ``point``
     measured, its coherence over the band and every excitation (``coherence_min``,
     ``coherence_median``, ``good_fraction``: the part >= ``good_coherence``) and
-    whether it ``passes`` (``pass_fraction`` of its band good)."""
+    whether it ``passes`` (``pass_fraction`` of its band good); ``"dummy"``: the clip-on
+    dummy of ``dummy_mass_g`` goes on the sensor at ``point`` (``on``; the operator
+    confirms on a table) or comes off (``on`` false)."""
 
     event: str
     point: int
@@ -33,6 +35,8 @@ class RovingStep(TypedDict, total=False):
     pass_fraction: float
     passes: bool
     simulated: bool
+    on: bool
+    dummy_mass_g: float
 
 
 @runtime_checkable

@@ -69,15 +69,19 @@ class RovingProgress:
     simulated: bool = True
     waiting: bool = False  # a table: waiting for the operator to place the sensor
     last: dict[str, Any] = field(default_factory=dict)  # the last "measured" step
+    dummy_g: float = 0.0  # the clip-on dummy's mass (0: no dummy pass)
+    dummy_on: bool = False  # the dummy's pass is next (clip it on)
 
     def apply(self, step: dict[str, Any]) -> None:
         self.total = int(step.get("total", self.total))
         self.done = int(step.get("done", self.done))
-        if step.get("event") == "next":
+        if step.get("event") in ("next", "dummy"):
             self.next_point = int(step["point"])
             self.next_mm = (float(step["x_mm"]), float(step["y_mm"]))
             self.simulated = bool(step.get("simulated", True))
-            self.waiting = not self.simulated
+            self.dummy_on = step.get("event") == "dummy" and bool(step.get("on"))
+            self.dummy_g = float(step.get("dummy_mass_g", self.dummy_g) or 0.0)
+            self.waiting = not self.simulated and (step.get("event") == "next" or self.dummy_on)
         elif step.get("event") == "measured":
             self.last, self.next_point, self.waiting = dict(step), None, False
 
@@ -90,10 +94,17 @@ class RovingProgress:
             return ""
         x, y = self.next_mm
         where = f"point {self.next_point} at ({x:.0f}, {y:.0f}) mm"
+        if self.dummy_on:
+            what = f"clip the {self.dummy_g:g} g dummy on the sensor at {where}"
+            if self.waiting:
+                return f"{what}, then press m"
+            how = "the twin adds its mass" if self.simulated else "measuring"
+            return f"next: {what} ({how})"
+        bare = " (without the dummy)" if self.dummy_g else ""
         if self.waiting:
-            return f"glue the sensor on {where}, then press m"
+            return f"glue the sensor{bare} on {where}, then press m"
         how = "the twin moves the sensor there" if self.simulated else "measuring"
-        return f"next: {where} ({how})"
+        return f"next: {where}{bare} ({how})"
 
     def last_text(self) -> str:
         s = self.last
@@ -231,8 +242,9 @@ class RovingView:
     def _step(self, step: dict[str, Any], stop: threading.Event) -> None:
         """In the worker: a ``RovingStep`` to the screen and the projector."""
         from_thread(self.pane.app, self._show_step, dict(step), stop)
-        if step.get("event") == "next":
-            text = f"put the sensor on point {step['point']} ({step['done']}/{step['total']} done)"
+        if step.get("event") == "next" or (step.get("event") == "dummy" and step.get("on")):
+            what = "put the sensor on" if step["event"] == "next" else "clip the dummy on at"
+            text = f"{what} point {step['point']} ({step['done']}/{step['total']} done)"
             self._project({"type": "sensor", "point": int(step["point"]), "text": text})
 
     def _show_step(self, step: dict[str, Any], stop: threading.Event) -> None:

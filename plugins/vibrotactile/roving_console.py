@@ -8,7 +8,10 @@ good the last one was (coherence over the band and every excitation: min, median
 part >= 0.9, and whether it passes: ``PASS_FRACTION`` of the band >= 0.9). On the twin
 the operator's moves are simulated (the twin's sensor moves by itself, as
 ``haptable frf measure --sensor accelerometer`` does); on a table ``wait_placed`` waits
-for the operator.
+for the operator. An accelerometer input with ``dummy_mass_g`` (and its ``mass_g``) has
+each point measured again with the clip-on dummy (a ``dummy`` step, ``on`` true: the
+operator clips it on and confirms; false: it comes off with the next move) and the
+sensor's mass cancelled (``mass_cancel``).
 """
 
 from __future__ import annotations
@@ -69,9 +72,23 @@ class RovingEffect:
                 "[audio_inputs.accel] channel = 1, kind = 'accelerometer', sensitivity = 10.2"
             )
         sensor = spec.to_json() if spec else {"kind": "accelerometer", "name": "accel"}
-        if self.twin:
+        if self.twin and not sensor.get("mass_g"):
             sensor["mass_g"] = float(self.profile.get("twin_inputs.sensor_mass_g") or 7.0)
         return sensor
+
+    def _dummy_mass_g(self, sensor: dict[str, Any]) -> float | None:
+        """The clip-on dummy of the accelerometer's input (None: no dummy), its masses
+        checked in one line naming the profile keys."""
+        dummy_g = float(sensor.get("dummy_mass_g") or 0.0)
+        if not dummy_g:
+            return None
+        if not sensor.get("mass_g"):
+            raise UserError(
+                f"{self.profile.path}: [audio_inputs.{sensor.get('name', 'accel')}] "
+                f"dummy_mass_g = {dummy_g:g} needs mass_g (the sensor's own mass, e.g. 7): the "
+                "cancellation extrapolates the two passes to zero mass"
+            )
+        return dummy_g
 
     def measure_roving(
         self,
@@ -89,9 +106,14 @@ class RovingEffect:
         g = self.profile.section("grid")
         pts = grid_points_mm(g["rows"], g["columns"], g["pitch_mm"], tuple(g["origin_mm"]))
         s = CONSOLE_SETTINGS
-        run = RovingRun(StoppableOutputs(outputs, stopped), out, pts, s, sensor=self._sensor())
+        sensor = self._sensor()
+        dummy_g = self._dummy_mass_g(sensor)
+        run = RovingRun(
+            StoppableOutputs(outputs, stopped), out, pts, s, sensor=sensor, dummy_mass_g=dummy_g
+        )
         total, twin = len(pts), self.twin
         pending: list[int] = []
+        sensor_g = float(sensor.get("mass_g") or 0.0)
 
         def place(point: int, x_mm: float, y_mm: float) -> None:
             if stopped():
@@ -100,14 +122,32 @@ class RovingEffect:
             report(
                 {"event": "next", "point": point, "x_mm": x_mm, "y_mm": y_mm, "done": done}
                 | {"total": total, "simulated": twin}
+                | ({"dummy_mass_g": dummy_g} if dummy_g else {})
             )
-            if twin:
-                move_sensor(outputs, x_mm, y_mm)  # the operator's move, simulated
+            if twin:  # the operator's move, simulated (the dummy off)
+                move_sensor(outputs, x_mm, y_mm, sensor_g if dummy_g else None)
             else:
                 wait_placed(point, x_mm, y_mm)
                 if stopped():
                     raise Cancelled()
             pending[:] = [point]
+
+        def dummy(point: int, x_mm: float, y_mm: float, on: bool) -> None:
+            """The second pass's dummy: clipped on (the operator asked and waited for on a
+            table), then off (said; the next point's move takes it off)."""
+            if stopped():
+                raise Cancelled()
+            report(
+                {"event": "dummy", "point": point, "x_mm": x_mm, "y_mm": y_mm, "on": on}
+                | {"dummy_mass_g": dummy_g, "total": total, "simulated": twin}
+                | {"done": len(run.done())}
+            )
+            if twin:
+                move_sensor(outputs, x_mm, y_mm, sensor_g + (dummy_g or 0.0) * on)
+            elif on:
+                wait_placed(point, x_mm, y_mm)
+                if stopped():
+                    raise Cancelled()
 
         def progress(done: int, _total: int, _text: str) -> None:
             if pending and done == pending[0]:  # called after the point was kept
@@ -117,7 +157,7 @@ class RovingEffect:
                 done = len(run.done())
                 report({"event": "measured", "point": point, "done": done, "total": total} | step)
 
-        return run.run(place, progress) | {"total": total}
+        return run.run(place, progress, dummy if dummy_g else None) | {"total": total}
 
 
 class StoppableOutputs:

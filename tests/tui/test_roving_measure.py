@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -87,3 +88,47 @@ def test_m_runs_the_roving_sensor_stops_and_resumes(tiny, monkeypatch):
             assert "2 points" in words_on(app, "#vib-status")
 
     asyncio.run(scenario())
+
+
+def test_m_with_a_dummy_measures_each_point_twice_and_keeps_the_mass_free_map(tiny, monkeypatch):
+    """``dummy_mass_g`` on the accelerometer's input: each point's second pass is asked
+    for ("clip the 14 g dummy on"), and the map kept is the cancellation of the two."""
+    import numpy as np
+
+    from console.tui.roving_view import roving_map_path
+
+    path = Path(tiny.profile_arg)
+    path.write_text(
+        path.read_text().replace(
+            'kind = "accelerometer"', 'kind = "accelerometer"\nmass_g = 7.0\ndummy_mass_g = 14.0'
+        )
+    )
+    ctx = Context(str(path), tiny.pm)
+    lines, shown = [], RovingView._show_step
+
+    def show(self, s, stop):
+        shown(self, s, stop)
+        lines.append(self.progress.line())
+
+    monkeypatch.setattr(RovingView, "_show_step", show)
+    where = []
+
+    async def scenario():
+        app = HapTableApp(ctx, fast=True, initial="vibration")
+        async with app.run_test(size=(120, 40)) as pilot:
+            pane = app.pane("vibration")
+            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
+            await pilot.press("m")
+            await wait_for(pilot, lambda: pane.session is not None, 90, "map loaded")
+            where.append(roving_map_path(pane.service.cached_map_path()))
+
+    asyncio.run(scenario())
+    assert any("clip the 14 g dummy on the sensor at point 1" in t for t in lines)
+    assert any("point 2 at (102, 44) mm (without the dummy)" in t for t in lines)
+    parts = sorted(where[0].with_name(where[0].name + ".parts").glob("point_*.npz"))
+    assert len(parts) == 2
+    with np.load(parts[0]) as got:
+        assert {"frf_sensor", "frf_with_dummy"} <= set(got.files)
+        # the kept FRF is neither pass: the sensor's mass is taken out
+        assert not np.allclose(got["frf"], got["frf_sensor"])

@@ -108,3 +108,36 @@ def test_each_next_point_moves_the_projected_marker():
         assert svc.scene_name == SCENE and state["sensor"] == n
         assert state["points_mm"][n - 1] == pytest.approx([x, y])
         assert f"point {n} ({n - 1}/84 done)" in state["message"]
+
+
+def test_a_dummy_pass_asks_for_the_dummy_and_the_next_move_without_it():
+    p = RovingProgress()
+    common = {"point": 13, "x_mm": 41.7, "y_mm": 103.6, "simulated": False, "total": 84}
+    p.apply({"event": "next", "done": 12, **common, "dummy_mass_g": 14.0})
+    assert "glue the sensor (without the dummy) on point 13 at (42, 104) mm, then press m" in (
+        p.line()
+    )
+    p.waiting = False  # placed (m)
+    p.apply({"event": "dummy", "on": True, "done": 12, **common, "dummy_mass_g": 14.0})
+    assert p.waiting
+    assert "clip the 14 g dummy on the sensor at point 13 at (42, 104) mm, then press m" in (
+        p.line()
+    )
+    p.apply({"event": "dummy", "on": False, "done": 12, **common, "dummy_mass_g": 14.0})
+    assert not p.waiting and "clip" not in p.line()
+    twin = RovingProgress()
+    twin.apply({"event": "dummy", "on": True, **common, "simulated": True, "dummy_mass_g": 14.0})
+    assert not twin.waiting and "(the twin adds its mass)" in twin.line()
+
+
+def test_a_dummy_without_the_sensor_s_mass_is_one_line_naming_the_keys():
+    from console.plugin_api import UserError
+    from plugins.vibrotactile.roving_console import RovingEffect
+
+    eff = RovingEffect(_Prof({}))
+    assert eff._dummy_mass_g({"name": "accel"}) is None
+    assert eff._dummy_mass_g({"name": "accel", "mass_g": 7.0, "dummy_mass_g": 14.0}) == 14.0
+    with pytest.raises(UserError) as e:
+        eff._dummy_mass_g({"name": "accel", "dummy_mass_g": 14.0})
+    msg = str(e.value)
+    assert "\n" not in msg and "[audio_inputs.accel] dummy_mass_g = 14 needs mass_g" in msg
