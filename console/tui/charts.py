@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from rich.text import Text
 from textual_plotext import PlotextPlot
 
 #: Colours of successive series (plotext names); the legend shows them in this order.
@@ -78,6 +79,23 @@ def to_db(y: np.ndarray, ref: float = 1.0, floor_db: float = -120.0) -> np.ndarr
     with np.errstate(divide="ignore"):
         db = 20.0 * np.log10(np.abs(np.asarray(y, float)) / ref)
     return np.maximum(np.nan_to_num(db, nan=floor_db, neginf=floor_db), floor_db)
+
+
+#: the mark a series' legend entry shows (its line is drawn in braille)
+BRAILLE = "⣿"
+#: plotext colour names Rich spells otherwise
+RICH_COLOURS = {"orange": "dark_orange", "gray": "grey50"}
+
+
+def legend_row(legend: Sequence[tuple[str, str, str]], width: int) -> Text:
+    """One row ``⣿ label  + label ...`` in the series' colours, within ``width``."""
+    row = Text(" ")
+    for i, (label, colour, marker) in enumerate(legend):
+        row.append("  " if i else "")
+        row.append(marker, style=RICH_COLOURS.get(colour, colour))
+        row.append(f" {label}")
+    row.truncate(width, overflow="ellipsis")
+    return row
 
 
 def _axis(label: str, unit: str) -> str:
@@ -195,29 +213,44 @@ class Chart(PlotextPlot):
         plt.clear_figure()
         plt.title(self.title)
         if not self.series:
-            from rich.text import Text
-
             return Text(f"{self.title}\n{self.empty_text}" if self.title else self.empty_text)
         plt.xlabel(self.x_axis_label)
         plt.ylabel(self.y_axis_label)
         if self.log_x:
             plt.xscale("log")
-        drawn = self.drawn()
+        drawn, legend = self.drawn(), []
         for (label, x, y), colour in zip(
             drawn, SERIES_COLOURS * (1 + len(self.series)), strict=False
         ):
-            if x.size:
-                plt.plot(x.tolist(), y.tolist(), label=label, color=colour, marker="braille")
+            if x.size:  # no plotext label: its legend would sit on the curve
+                plt.plot(x.tolist(), y.tolist(), color=colour, marker="braille")
+                legend.append((label, colour, BRAILLE))
         if self.zero_y:
             self._zero_centred(plt, drawn)
-        return super().render()
+        return self.figure_and_legend(legend)
+
+    def figure_and_legend(self, legend: Sequence[tuple[str, str, str]]) -> Text:
+        """The figure set up on ``plt`` above one row naming its series, each as
+        (label, plotext colour, marker): plotext draws its own legend inside the plot's
+        top left corner, over the curve. No row for it on a chart of under two rows."""
+        width, height = self.size.width, self.size.height
+        if not legend or height < 2:
+            return super().render()
+        plt = self.plt
+        plt.plotsize(width, height - 1)
+        plt._set_size(width, height - 1)  # as textual-plotext's own render does
+        plt.theme(self._get_plotext_theme_name(self.app.theme))
+        text = Text.from_ansi(plt.build().removesuffix("\n"))
+        text.append("\n")
+        text.append_text(legend_row(legend, width))
+        return text
 
     def _zero_centred(self, plt, drawn: list[tuple[str, np.ndarray, np.ndarray]]) -> None:
         """y from -top to top with 0 a labelled tick (``zero_y``); fewer ticks on a short
         chart, so no label lands on 0's row."""
         top = max((float(np.max(np.abs(y))) for _l, _x, y in drawn if y.size), default=0.0)
         top = top or 1.0
-        rows = self.size.height - 5  # title, the x axis, its ticks and label, a margin
+        rows = self.size.height - 6  # title, the x axis, its ticks and label, legend, margin
         half = 3 if rows >= 9 else 2 if rows >= 5 else 1
         plt.ylim(-top, top)
         plt.yticks([top * k / half for k in range(-half, half + 1)])

@@ -6,7 +6,7 @@ E-STOP and ``?`` (the help, which lists every key) always among them."""
 from __future__ import annotations
 
 from rich.cells import cell_len
-from textual.widgets import Footer, TabbedContent
+from textual.widgets import Footer, TabbedContent, Tabs
 from textual.widgets._footer import FooterKey
 
 ELLIPSIS = "…"
@@ -82,8 +82,15 @@ class ConsoleFooter(Footer):
         screens = getattr(self.app, "screens_key", "")
         return (*self.ALWAYS, screens) if screens else self.ALWAYS
 
+    def _tabs_key(self) -> list[FooterKey]:
+        """The tab bar focused (Tab reaches it on every screen): its keys, which Textual
+        leaves out of the footer, name it, first."""
+        if not isinstance(self.screen.focused, Tabs):
+            return []
+        return [FooterKey("right", "←→", "screens", "").data_bind(compact=Footer.compact)]
+
     def compose(self):
-        items = list(super().compose())
+        items = [*self._tabs_key(), *super().compose()]
         width = self.size.width
         keys = [k for k in items if isinstance(k, FooterKey)]
         always = self._always()

@@ -121,11 +121,16 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
         lines.append(
             f"knob {escape(k.get('condition'))}: item {escape(k.get('item'))}, angle "
             f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
-            f", {k.get('crossings', 0)} crossings"
+            f", {counted(int(k.get('crossings', 0)), 'crossing')}"
         )
     if snap.get("last_error"):
         lines.append(f"[red]{escape(snap['last_error'])}[/]")
     return lines
+
+
+def counted(n: int, word: str) -> str:
+    """``1 contact``, ``2 contacts``."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
 def _rates(cam: dict[str, Any], lat: dict[str, Any]) -> str:
@@ -147,7 +152,7 @@ def _hand_line(hand: dict[str, Any]) -> str:
         if rest is not None
         else "hand seen (moving)"
     )
-    seen += f", {hand.get('contacts', 0)} contacts"
+    seen += ", " + counted(int(hand.get("contacts", 0)), "contact")
     if hand.get("gesture"):
         seen += f", gesture {escape(hand['gesture'])}"
     return seen

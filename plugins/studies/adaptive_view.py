@@ -101,22 +101,23 @@ class LevelsChart(Chart):
         plt.xlim(0.5, n + 0.5)
         plt.xticks(np.unique(np.linspace(1, n, min(n, 8)).round()).tolist())
         plt.plot(x.tolist(), lv.tolist(), color="gray", marker="braille")
+        legend = []  # below the plot (Chart.figure_and_legend), never on it
         if ok.any():
             plt.scatter(
                 x[ok].tolist(),
                 lv[ok].tolist(),
                 marker="+",
                 color="green",
-                label="correct" if tall else None,
             )
+            legend.append(("correct", "green", "+"))
         if (~ok).any():
             plt.scatter(
                 x[~ok].tolist(),
                 lv[~ok].tolist(),
                 marker="x",
                 color="red",
-                label="wrong" if tall else None,
             )
+            legend.append(("wrong", "red", "x"))
         rev = [i for i in v["reversals"] if i < lv.size]
         if rev:
             plt.scatter(
@@ -124,11 +125,11 @@ class LevelsChart(Chart):
                 lv[rev].tolist(),
                 marker="◆",
                 color="yellow",
-                label="reversal" if tall else None,
             )
+            legend.append(("reversal", "yellow", "◆"))
         if est is not None:
             plt.hline(est, "cyan")
-        return super(Chart, self).render()  # textual-plotext's: draws the figure above
+        return self.figure_and_legend(legend if tall else [])
 
 
 class AdaptiveView(Vertical):

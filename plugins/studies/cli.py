@@ -178,16 +178,9 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     from . import adaptive_protocol
 
     if args.study_cmd == "list":
-        for name in protocols.available():
-            if adaptive_protocol.is_adaptive(name):
-                a = adaptive_protocol.load(name)
-                how = f"adaptive ({a.procedure['method']}, {len(a.tracks)} track(s))"
-                print(f"  {name:<8} {how}: {a.title}")
-                continue
-            p = protocols.load(name)
-            phases = ", ".join(f"{ph.name} {ph.n_trials}" for ph in p.phases)
-            print(f"  {name:<8} {p.n_trials:4d} trials ({phases}): {p.title}")
-        return 0
+        from .list_table import print_protocols  # lazy: only when listing
+
+        return print_protocols()
     # lazy: this module loads at every haptable start; responders, runner, stimuli only when used
     from .responders import INPUT_ENDED, ObserverResponder, TerminalResponder, observer
     from .runner import Control, run_plan

@@ -672,6 +672,9 @@ class StudiesPane(Vertical):
     def on_mount(self) -> None:
         panel_fit.mounted(self)  # its dropdown as wide as the names, its status
 
+    def on_resize(self) -> None:
+        panel_fit.fit_protocols(self)  # the first row laid out again at the new width
+
     def _idle(self) -> None:
         """No run going on: the last run's status (or what to do), and what the chosen
         flow study still needs (a vibration map)."""
