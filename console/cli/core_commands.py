@@ -122,6 +122,20 @@ def haptable_register_benchmarks(register):
         "screen 10 s from /proc/<pid>/stat, % of one core; goal <= 3 %, Camera <= 20 %)",
     )
 
+    def demo_cancel(ctx, quick: bool) -> dict:
+        # lazy: a benchmark loads only when it runs
+        from console.benchmarks.demo_cancel import run
+
+        return run(ctx, quick)
+
+    register(
+        "demo-cancel",
+        demo_cancel,
+        help="the flow demo's start cancelled at points of its start (its process "
+        "starting, its preparation): cancel -> its process ended (p50/p99), starts that "
+        "came up first, processes left running, the outputs after",
+    )
+
     def tracking(ctx, quick: bool) -> dict:
         # lazy: a benchmark loads only when it runs
         from console.benchmarks.tracking import run

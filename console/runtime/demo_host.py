@@ -9,7 +9,8 @@ line. An e-stop of the table (from anywhere) ends the run.
 
 In (stdin, after the pickled start request): ``{"cmd": "stop"}``, ``{"cmd": "estop",
 "reason": ...}``, ``{"cmd": "target", "pos_mm": [x, y] | null}`` (the operator's finger
-on the twin). End of input (the console is gone) is an e-stop.
+on the twin). End of input (the console is gone) is an e-stop. A stop or e-stop before
+the demo runs ends its preparation at once (``console.runtime.prep_cancel``).
 
 Out (the protocol's own descriptor; stray prints go to stderr): ``{"step": what}``,
 ``{"progress": [done, total, what]}`` (the demo's preparation), ``{"started": {...}}``, ``{"status": snapshot}`` five times a second (the
@@ -35,6 +36,7 @@ from console.core.errors import UserError
 from console.core.realtime import SUPPORT_PRIORITY, realtime_priority
 from console.kernel.client import open_outputs
 from console.kernel.tables import table_at
+from console.runtime.prep_cancel import Preparation, PreparationCancelled, reap_children
 from console.runtime.twin_log import copy_twin_log, write_twin_log
 
 #: status lines per second
@@ -113,6 +115,7 @@ class Host:
         self.hand = HandWatch()  # the frame sink: what the demo's camera saw
         self.stop_asked = threading.Event()
         self.estop_reason: str | None = None
+        self.prep = Preparation()  # a stop cancels the preparation at once (``main`` arms it)
 
     # ---------------------------------------------------------------- commands
     def read_commands(self, stream) -> None:
@@ -129,6 +132,7 @@ class Host:
         cmd = msg.get("cmd")
         if cmd == "stop":
             self.stop_asked.set()
+            self.prep.cancel()
         elif cmd == "estop":
             self.estop(str(msg.get("reason") or "e-stop"))
         elif cmd == "target":
@@ -142,6 +146,7 @@ class Host:
             if self.estop_reason is None:
                 self.estop_reason = message
             self.stop_asked.set()
+            self.prep.cancel()
 
     def estop(self, reason: str) -> None:
         if self.estop_reason is None:
@@ -149,6 +154,7 @@ class Host:
         if self.outputs is not None:
             self.outputs.estop(reason)
         self.stop_asked.set()
+        self.prep.cancel()
 
     # ---------------------------------------------------------------- the run
     def progress(self, done: int, total: int, what: str) -> None:
@@ -164,39 +170,9 @@ class Host:
         return snap
 
     def serve(self) -> int:
-        # lazy: plugins load on first use
-        from console.config.plugins import load_plugins
-
-        req = self.request
-        profile, name = req["profile"], req["demo"]
-        pm = load_plugins()
-        reg = pm.of("demo").get(name)
-        if reg is None:
-            self.proto.send("error", f"demo {name!r}: no plugin registers it in this process")
-            return 2
-        self.proto.send("step", "opening the outputs")
-        table = table_at(req["table_dir"]) if req.get("table_dir") else None
-        self.outputs = open_outputs(
-            profile, pm, fast=bool(req.get("fast")), table=table, role=f"demo {name}"
-        )
-        self.outputs.add_listener(self._on_table)  # an e-stop of the table ends the run
-        if self.estop_reason is not None:
-            self.outputs.estop(self.estop_reason)
         try:
-            if self.stop_asked.is_set():
-                raise _Cancelled()
-            self.proto.send("step", "opening the camera")
-            self.run = reg.factory(
-                profile,
-                pm,
-                self.outputs,
-                script=True,
-                camera_apart=True,
-                sinks=[self.hand],
-                projector=_SceneOut(self.proto),
-                progress=self.progress,
-                **req.get("params", {}),
-            )
+            if not self.prepare():
+                return 2
             cam = self.run.camera
             self.proto.send(
                 "started",
@@ -212,13 +188,56 @@ class Host:
             while not self.stop_asked.wait(period):
                 self.proto.send("status", self.status())
             return self.finish()
-        except _Cancelled:
+        except (_Cancelled, PreparationCancelled):
+            reap_children()  # what it started: the flow planner, an atlas's workers
             self.proto.send("stopped", {"reason": "cancelled", "estop": self.estop_reason})
             return 0
         finally:
             if self.run is not None:
                 self.run.stop()
-            self.outputs.close()
+            if self.outputs is not None:
+                self.outputs.close()
+
+    def prepare(self) -> bool:
+        """The plugins, the table's outputs and the demo's run (``self.run``); False (its
+        error sent) when no plugin registers the demo. A stop (or e-stop) while the
+        plugins load or the demo prepares ends that at once (``prep_cancel``); joining
+        the table is never cut short (an e-stop asked meanwhile reaches it)."""
+        # lazy: plugins load on first use
+        from console.config.plugins import load_plugins
+
+        req = self.request
+        profile, name = req["profile"], req["demo"]
+        with self.prep.armed():
+            pm = load_plugins()
+        reg = pm.of("demo").get(name)
+        if reg is None:
+            self.proto.send("error", f"demo {name!r}: no plugin registers it in this process")
+            return False
+        self.proto.send("step", "opening the outputs")
+        table = table_at(req["table_dir"]) if req.get("table_dir") else None
+        self.outputs = open_outputs(
+            profile, pm, fast=bool(req.get("fast")), table=table, role=f"demo {name}"
+        )
+        self.outputs.add_listener(self._on_table)  # an e-stop of the table ends the run
+        if self.estop_reason is not None:
+            self.outputs.estop(self.estop_reason)
+        if self.stop_asked.is_set():
+            raise _Cancelled()
+        self.proto.send("step", "opening the camera")
+        with self.prep.armed():
+            self.run = reg.factory(
+                profile,
+                pm,
+                self.outputs,
+                script=True,
+                camera_apart=True,
+                sinks=[self.hand],
+                projector=_SceneOut(self.proto),
+                progress=self.progress,
+                **req.get("params", {}),
+            )
+        return True
 
     def finish(self) -> int:
         """Stop the run, let the playing plan end, write the twin's log, say so."""
@@ -283,6 +302,7 @@ def main() -> int:
     raw = sys.stdin.buffer
     request = pickle.loads(raw.read(int(raw.readline())))
     host = Host(request, proto)
+    host.prep.install()  # (the main thread's signal: a stop reaches its preparation)
     commands = threading.Thread(
         target=host.read_commands,
         args=(raw,),  # the same buffer: commands may already sit behind the request

@@ -201,6 +201,10 @@ class DemoProcess:
             if self._stop_reason is None:
                 self._stop_reason = reason
         self._send({"cmd": "stop"})
+        if self._progress is None and self.scene_name is None:
+            # still starting its interpreter (it hears no command before its imports) or
+            # loading plugins: it holds nothing of the table yet, so it ends now
+            self.proc.terminate()
         if not self._ended.wait(timeout_s):
             self.proc.terminate()  # SIGTERM: the host leaves the table (its plans ramp down)
             if not self._ended.wait(5.0):

@@ -163,7 +163,10 @@ class DemoControl:
             except BaseException:
                 if run is not None:
                     run.stop("cancelled")
-                    self.last_snapshot, self.last_final = run.snapshot(), run.final
+                    # numbers only from a run that came up (a start cut short has none)
+                    came_up = run.scene_name is not None
+                    self.last_snapshot = run.snapshot() if came_up else None
+                    self.last_final = run.final
                 self.run = None
                 self._take_back(run)
                 raise

@@ -25,9 +25,10 @@ from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
-from console.plugin_api.tui import LiteralTable, LongWork, SessionMessage, escape, said_here
+from console.plugin_api.tui import LongWork, SessionMessage, escape, said_here
 
 from .status import estop_text, status_lines, unprepared_text
+from .tables import DemoTable, SceneTable
 
 
 def needs_text(st: dict, feed: dict | None) -> str:
@@ -213,11 +214,11 @@ class ScenesPane(Vertical):
         return self.app.session.demos
 
     def compose(self) -> ComposeResult:
-        yield LiteralTable(id="scene-table", cursor_type="row")
+        yield SceneTable(id="scene-table", cursor_type="row")
         yield Static(status_text(None), id="projector-status")
         # the keys as the footer labels them (``KEYS``: one label per key)
         yield Static(f"enter start on projector  {_hint('s', 'k')}", classes="hint")
-        yield LiteralTable(id="demo-table", cursor_type="row")
+        yield DemoTable(id="demo-table", cursor_type="row")
         yield LongWork("", id="demo-work")
         yield Static("", id="demo-status")
         yield Static(
@@ -434,7 +435,7 @@ class ScenesPane(Vertical):
         name = self.query_one("#demo-work", LongWork).last_name.removeprefix("demo ")
         if self.demo_name is not None and self.demo_state == "starting":
             self._set_state("cancelling")
-        self._show_last_run(f"{escape(name)} cancelling: its start stops at its next step")
+        self._show_last_run(f"{escape(name)} cancelling: its start stops now")
 
     def _now_running(self, name: str) -> None:
         """The demo runs: the start's progress and "starting" line go (its numbers come
@@ -558,8 +559,8 @@ class ScenesPane(Vertical):
         text = "\n".join(status_lines(snap))
         if self.demo_state != "stopping" and self._twin() is not None:
             if self.hand_placed and self.hand_mm is not None:
-                x, y = self.hand_mm
-                text += f"\nyour finger on the twin at {x:.0f},{y:.0f} mm: arrows move, space lifts"
+                if self.query_one("#demo-work", LongWork).text != self._finger_text():
+                    text += "\n" + self._finger_text()  # said once: where the line is not
             else:
                 text += "\ntwin: the scripted hand performs; space puts your finger on the twin"
         self._put_status(text)

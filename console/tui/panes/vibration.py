@@ -24,6 +24,7 @@ from console.tui.charts import Chart
 from console.tui.command_line import CommandLine, prompted
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_commands import run_command
+from console.tui.panes.vibration_grid import PointGrid
 from console.tui.panes.vibration_projector import light_audition, prepare_projector
 from console.tui.panes.vibration_words import (
     COMMANDS,
@@ -41,7 +42,7 @@ from console.tui.plots import frf_series
 from console.tui.roving_view import RovingView, add_accelerometer_text
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
-from console.tui.text import LiteralTable, styled
+from console.tui.text import styled
 from console.tui.util import from_thread
 
 #: ``m`` with a kept map asks first; ``m`` again within this many seconds measures anew
@@ -54,9 +55,13 @@ class VibrationPane(VerticalScroll):
     # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
     can_focus = False
     BINDINGS = [
+        # first in the footer after the grid's enter (audition): the command line
+        # priority: the line takes the focus before the keys typed after ":" are handed
+        # on (one write: tmux send-keys, a fast typist), never the grid's keys
+        Binding("colon", "command", "command", priority=True),
         # no point numbers here: the info beside the grid names the two points f and r play
-        Binding("f", "flow(False)", "flow"),
-        Binding("r", "flow(True)", "flow back"),
+        Binding("r", "flow(True)", "flow back", show=False),
+        Binding("f", "flow(False)", "flow/back", key_display="f r"),  # one entry: room
         Binding("w", "hand('up')", "hand up", show=False),
         Binding("a", "hand('left')", "hand left", show=False),
         Binding("s", "hand('down')", "hand down", show=False),
@@ -65,9 +70,6 @@ class VibrationPane(VerticalScroll):
         Binding("b", "build_tables", "tables"),
         Binding("x", "cancel", "cancel"),
         Binding("escape", "stop_roving", "stop", show=False),
-        # priority: the line takes the focus before the keys typed after ":" are handed
-        # on (one write: tmux send-keys, a fast typist), never the grid's keys
-        Binding("colon", "command", "command", show=False, priority=True),
     ]
 
     def __init__(self, **kw) -> None:
@@ -98,7 +100,7 @@ class VibrationPane(VerticalScroll):
             yield ProgressBar(id="vib-progress", total=1.0, show_eta=False)
             yield Label("", id="vib-status", markup=False)
         with Horizontal(id="vib-top"):
-            yield LiteralTable(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
+            yield PointGrid(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
             yield Static(id="vib-info")
         yield Chart(
             title="FRF of the selected point",

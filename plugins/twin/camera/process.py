@@ -175,7 +175,12 @@ class ProcessCamera:
         self._rate: float | None = twin.rate_fps
         self._stale = False
         self._times: list[float] = []
-        first = self._next(start_timeout_s)
+        try:
+            first = self._next(start_timeout_s)
+        except BaseException:  # interrupted while it starts (a demo's start cancelled)
+            self._proc.kill()  # it has shown nothing: no orphan left loading
+            self.close()
+            raise
         if first is None:
             self.close()
             raise UserError("twin camera process did not start; run `haptable doctor`")
