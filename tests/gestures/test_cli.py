@@ -78,7 +78,10 @@ def test_eval_two_fold_and_loso(dataset, cache, capsys, one_model_setting):
     assert code == 0 and loso["cv"] == "loso" and loso["subjects"] == ["s1", "s2"]
 
 
-def test_train_then_classify_one_sample(dataset, capsys, tmp_path):
+def test_train_then_classify_one_sample(dataset, capsys, tmp_path, one_model_setting):
+    """Train, then classify with the saved model, from the command line and as the live
+    classifier (one candidate setting: the selection is
+    ``test_harmonics_and_frames_are_chosen_on_the_training_samples``'s)."""
     model = tmp_path / "m.skops"
     code, out = run_json(capsys, "gestures", "train", str(dataset), "--out", str(model), "--json")
     assert code == 0 and model.is_file() and out["samples"] == 80
@@ -138,7 +141,7 @@ def test_dataset_without_any_background_still_evaluates(
 
 
 def test_train_without_out_saves_the_profiles_model_where_the_classifier_reads_it(
-    dataset, capsys, tmp_path, plugins
+    dataset, capsys, tmp_path, plugins, one_model_setting
 ):
     """No --out: the model goes to the profile's state directory, not beside the profile."""
     import shutil

@@ -1,6 +1,9 @@
 """Leave-one-condition-out and light transfer on a `synth --vary` set."""
 
+import copy
+
 import numpy as np
+import pytest
 
 from plugins.gestures.dataset import load_dataset
 from plugins.gestures.evaluate import extract
@@ -36,21 +39,36 @@ def test_each_session_is_tested_by_a_model_trained_on_the_others(tmp_path):
     assert condition_report(fs, plain) == {"leave_one_condition_out": None, "light_transfer": None}
 
 
-def _varied_features(tmp_path):
-    root = tmp_path / "varied"
+@pytest.fixture(scope="module")
+def _varied_set(tmp_path_factory):
+    """The varied set (synthesised and extracted once for the module: most of its tests'
+    time) and its features."""
+    root = tmp_path_factory.mktemp("varied") / "varied"
     gestures = ("one_finger", "two_finger", "drag", "zoom")
     synth(root, 3, 4, seed=5, workers=1, gestures=gestures, vary=True, sessions=2)
     return root, extract(root, use_cache=False)
 
 
-def test_each_window_is_judged_with_its_own_kind_classifier(tmp_path):
+@pytest.fixture
+def varied(_varied_set):
+    """The varied set's folder (read only) and a copy of its features of each test's own."""
+    root, fs = _varied_set
+    return root, copy.deepcopy(fs)
+
+
+#: the tests of the shared varied set run in one worker (it is built once there)
+VARIED = pytest.mark.xdist_group("gestures_varied_set")
+
+
+@VARIED
+def test_each_window_is_judged_with_its_own_kind_classifier(varied):
     """A candidate's inner accuracy does not depend on which candidates were tried
     before it (each decision window has its own static-vs-dynamic classifier), and the
     inner folds keep a subject on one side."""
     from plugins.gestures.model import inner_splitter
     from plugins.gestures.selection import select_settings
 
-    _, fs = _varied_features(tmp_path)
+    _, fs = varied
     idx = np.arange(len(fs.labels))
     a = select_settings(fs, idx, (2,), (2, 4))["scores"]
     b = select_settings(fs, idx, (2,), (4, 2))["scores"]
@@ -60,12 +78,13 @@ def test_each_window_is_judged_with_its_own_kind_classifier(tmp_path):
         assert not set(fs.subjects[tr]) & set(fs.subjects[te])
 
 
-def test_a_fold_s_model_is_also_tested_under_another_light(tmp_path):
+@VARIED
+def test_a_fold_s_model_is_also_tested_under_another_light(tmp_path, varied):
     """``cross_validate(transfer=...)``: the same performances seen under x0.7 light are
     classified by each fold's model; the report has their accuracies and predictions."""
     from plugins.gestures.evaluate import cross_validate
 
-    root, fs = _varied_features(tmp_path)
+    root, fs = varied
     dim_root = tmp_path / "dim"
     gestures = ("one_finger", "two_finger", "drag", "zoom")
     synth(dim_root, 3, 4, seed=5, workers=1, gestures=gestures, vary=True, sessions=2,

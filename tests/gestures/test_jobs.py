@@ -99,7 +99,7 @@ def test_synth_refuses_to_replace_a_folder_it_did_not_make(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["recordings"]
 
 
-def test_training_cancelled_at_a_fold_writes_no_model(sketched, tmp_path):
+def test_training_cancelled_at_a_fold_writes_no_model(sketched, tmp_path, one_model_setting):
     model = tmp_path / "m.skops"
     msgs: list[str] = []
 
@@ -116,7 +116,7 @@ def test_training_cancelled_at_a_fold_writes_no_model(sketched, tmp_path):
 
 
 @pytest.mark.parametrize("cv", ["2fold", "loso"])
-def test_training_reports_accuracy_per_fold_in_the_model(sketched, tmp_path, cv):
+def test_training_reports_accuracy_per_fold_in_the_model(sketched, tmp_path, cv, one_model_setting):
     model = tmp_path / "m.skops"
     seen: list[float] = []
     res = train_and_evaluate(sketched, model, cv=cv, progress=lambda f, m: seen.append(f))

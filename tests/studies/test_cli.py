@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -22,6 +23,25 @@ def cli(double_plugins, monkeypatch):
     from console.cli.main import main
 
     return main
+
+
+@pytest.fixture
+def fast_twin():
+    """The operator's override ``audio.paced = false`` for the sim profile: a person's run
+    plays on the fast-forward twin (what these tests check is the typed answers, the stored
+    files and the lines printed, not the playback's real time)."""
+    from console.files.paths import profile_config_dir
+
+    path = profile_config_dir("sim", "overrides.toml")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    before = path.read_text() if path.exists() else None
+    path.write_text("[audio]\npaced = false\n")
+    yield
+    # the config root lives for the worker's session: the next test gets it as it was
+    if before is None:
+        path.unlink(missing_ok=True)
+    else:
+        path.write_text(before)
 
 
 def _done(d: Path) -> list[dict]:
@@ -61,7 +81,7 @@ def test_simulated_participants_run_exp2_and_resume(cli, capsys, tmp_path, map_f
 
 
 def test_a_person_needs_their_details_and_consent(
-    cli, capsys, tmp_path, map_file, small_exp2, monkeypatch
+    cli, capsys, tmp_path, map_file, small_exp2, monkeypatch, fast_twin
 ):
     monkeypatch.setattr(sys.stdin, "isatty", lambda: False)
     base = ["study", "run", str(small_exp2), "--participant", "P01", "--out", str(tmp_path)]
@@ -88,7 +108,7 @@ def test_a_person_needs_their_details_and_consent(
 
 
 def test_input_that_ends_is_bad_input_not_ctrl_c_and_the_resume_says_where(
-    cli, capsys, tmp_path, map_file, small_exp2, monkeypatch
+    cli, capsys, tmp_path, map_file, small_exp2, monkeypatch, fast_twin
 ):
     """A script's answers run out (stdin closed): exit 2 with one line, not 130 (Ctrl-C);
     the same command then says in one line where it resumes."""
@@ -133,9 +153,9 @@ def test_errors_are_one_line(cli, capsys, tmp_path):
 def test_study_list_shows_the_counts(cli, capsys):
     assert cli(["study", "list"]) == 0
     out = capsys.readouterr().out
-    assert "exp1       50 trials (familiarisation 10, main 40)" in out
-    assert "exp2      200 trials (preliminary 40, main 160)" in out
-    assert "knob      216 trials (main 216)" in out
+    assert re.search(r"^ +exp1 +50  familiarisation 10, main 40 +Experiment 1", out, re.M)
+    assert re.search(r"^ +exp2 +200  preliminary 40, main 160 +Experiment 2", out, re.M)
+    assert re.search(r"^ +knob +216  main 216 ", out, re.M)
 
 
 SCRIPT = """

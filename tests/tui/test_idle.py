@@ -69,36 +69,42 @@ async def _idle(app, pilot) -> None:
     await pilot.pause(0.5)
 
 
-@pytest.mark.parametrize("size", SIZES)
 @pytest.mark.parametrize("tab", STILL)
-def test_an_idle_screen_is_not_redrawn(plugins, monkeypatch, size, tab):
+def test_an_idle_screen_is_not_redrawn(plugins, monkeypatch, tab):
+    """At each of the sizes: the first as the console starts, the next after the terminal
+    is resized to it (one console start per screen)."""
+
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial=tab)
-        async with app.run_test(size=size) as pilot:
+        async with app.run_test(size=SIZES[0]) as pilot:
             await _idle(app, pilot)
             pane = app.pane(tab)
             await wait_for(pilot, lambda: pane.is_mounted, 10, "pane mounted")
-            await pilot.pause(1.0)  # a screen's first work (a doctor run, a listing) ends
-            shown = collections.Counter()
-            if hasattr(pane, "show_state"):
-                original = pane.show_state
+            for size in SIZES:
+                if tuple(app.size) != size:
+                    await pilot.resize_terminal(*size)
+                    await wait_for(pilot, lambda s=size: tuple(app.size) == s, 10, f"{size}")
+                await pilot.pause(1.0)  # a screen's first work (a doctor run, a listing) ends
+                shown = collections.Counter()
+                if hasattr(pane, "show_state"):
+                    original = pane.show_state
 
-                def counting(status, log):
-                    shown["show_state"] += 1
-                    original(status, log)
+                    def counting(status, log, _shown=shown, _original=original):
+                        _shown["show_state"] += 1
+                        _original(status, log)
 
-                monkeypatch.setattr(pane, "show_state", counting)
-            bar = app.query_one("#safety", SafetyBar)
-            draws = bar.draws
-            refreshes = RefreshCounter(monkeypatch)
-            polls, changes = app.live.watch.polls, app.live.watch.changes
-            await pilot.pause(1.2)
-            assert app.live.watch.polls > polls  # the outputs were read meanwhile; a
-            # screen hears only of changes (none, unless an underrun on a loaded machine)
-            assert shown["show_state"] <= app.live.watch.changes - changes
-            assert bar.draws == draws  # the bar's text stayed the same: not redrawn
-            assert refreshes.within(pane) == {}
-            assert refreshes.within(bar) == {}
+                    monkeypatch.setattr(pane, "show_state", counting)
+                bar = app.query_one("#safety", SafetyBar)
+                draws = bar.draws
+                refreshes = RefreshCounter(monkeypatch)
+                polls, changes = app.live.watch.polls, app.live.watch.changes
+                await pilot.pause(1.2)
+                assert app.live.watch.polls > polls, size  # the outputs were read meanwhile;
+                # a screen hears only of changes (none, unless an underrun on a loaded machine)
+                assert shown["show_state"] <= app.live.watch.changes - changes, size
+                assert bar.draws == draws, size  # the bar's text stayed the same: not redrawn
+                assert refreshes.within(pane) == {}, size
+                assert refreshes.within(bar) == {}, size
 
     asyncio.run(scenario())
 
