@@ -27,6 +27,11 @@ from console.session.events import Failed, Progress, Snapshot, Started, Stopped
 TOPIC = "calibration"
 #: what a finished calibration's result asks for, until it is saved
 SAVE_KEY = "S: save"
+#: ``projector_note`` while the wizard runs with no projector to show its targets
+NO_PROJECTOR = (
+    "projector not started: the targets show on the Camera view only (a scene on "
+    "Scenes, F6, starts it)"
+)
 
 
 class TouchCalibration:
@@ -41,6 +46,9 @@ class TouchCalibration:
         self.message = ""
         self.report_text = ""  # the finished fit's numbers (``message`` adds its key)
         self.failed = False  # ``message`` reports a failure
+        #: what the projector does for the running wizard ("" when none runs): set when
+        #: the targets are sent, when they showed, when sending failed
+        self.projector_note = ""
         self._lock = threading.RLock()
         self._to_projector: queue.Queue = queue.Queue()
         self._sender: threading.Thread | None = None
@@ -73,7 +81,7 @@ class TouchCalibration:
         svc, prof = self.camera, self.session.profile
         clf = svc.classifier
         if clf is None:
-            why = "the camera is not running yet; wait for the first frame, then press k"
+            why = "the vision is not running yet; wait for its numbers, then press k"
             if svc.error:
                 why = f"no camera ({svc.error})"
             return self._unavailable(f"touch calibration: {why}")
@@ -232,9 +240,13 @@ class TouchCalibration:
         """Tell the projector, in order, from a thread of its own (never stall the frame
         loop on the projector's socket)."""
         svc = self.projector()
+        if what != "touch":  # what is true from now on (the sender says how it went)
+            self.projector_note = "" if what == "stop" else NO_PROJECTOR
         if svc is None:  # no projector running: the console alone drives the wizard
             return
         with self._lock:
+            if what == "start":
+                self.projector_note = "projector: sending the targets ..."
             self._to_projector.put((svc, what, targets))
             if self._sender is None:
                 self._sender = threading.Thread(
@@ -254,11 +266,17 @@ class TouchCalibration:
                     svc.start_scene(
                         "touch_calibration", [{"type": "targets", "targets_mm": targets}]
                     )
+                    if self.active is not None:
+                        self.projector_note = "projector: shows the targets"
                 elif what == "touch":
                     svc.update({"type": "touch"})
                 else:
                     svc.stop_scene()
             except Exception as exc:  # noqa: BLE001 - the projector is optional here
+                if self.active is not None:
+                    self.projector_note = (
+                        f"projector: {exc}: the targets show on the Camera view only"
+                    )
                 self.session.emit(Failed("projector", message=str(exc), severity="warning"))
 
 

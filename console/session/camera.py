@@ -11,7 +11,9 @@ that can be paced (``PacedCamera``: the twin) delivers frames at that rate, and 
 vision runs on those only. A camera that renders in Python runs apart (``RunsApart``: the
 twin in its own process, as a camera device, ``[runtime] twin_camera_process``). A demo
 started from the console runs in its own process and opens the camera there: the service
-closes it meanwhile (``release``/``give_back``).
+closes it meanwhile (``release``/``give_back``). The camera opens first and its frames
+show (``to_show``) while the classifier is built (``camera_start``; ``starting`` says
+what is prepared); ``snapshot`` gives processed frames only.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from console.runtime.stages import (
     open_camera,
     open_classifier,
 )
+from console.session.camera_start import LOADING_VISION, OPENING_CAMERA, Starting, preview_loop
 from console.session.events import SessionEvent, Started, Stopped
 
 
@@ -52,6 +55,10 @@ class PacedCamera(Protocol):
     its own rate; ``0``: none, while nobody reads), rendering or transferring no more."""
 
     def set_rate(self, fps: float | None) -> None: ...
+
+
+#: how long the vision's build waits for the first frame to be taken by a screen
+FIRST_FRAME_WAIT_S = 2.0
 
 
 class _Hooks(list):
@@ -98,6 +105,9 @@ class CameraService:
         self._viewers: dict[int, float | None] = {}  # id() of whoever watches -> its fps
         self.rate_fps: float | None = None  # the rate asked of the camera (None: its own)
         self._sinks: dict[str, Any] = {}  # the switchable frame sinks on, by name
+        self.starting = Starting()  # what the start prepares now (the Camera screen says)
+        self._taken = threading.Event()  # a frame of this start was read (``to_show``)
+        self._preview: tuple[Any, dict] | None = None  # a frame while the vision loads
 
     @property
     def running(self) -> bool:
@@ -163,7 +173,10 @@ class CameraService:
     def _start_locked(self) -> None:
         if self.running or self.borrower is not None:
             return
-        self._open(open_camera, open_classifier, learn_background)
+        try:
+            self._open(open_camera, open_classifier, learn_background)
+        finally:
+            self.starting.set("")
         stages = base_stages(self.classifier)
         window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
         mon = LatencyMonitor([n for n, _ in stages], size=window)
@@ -174,14 +187,46 @@ class CameraService:
         self.emit(Started("camera"))
 
     def _open(self, open_camera, open_classifier, learn_background) -> None:
-        if self.camera is None:
-            camera = open_camera(self.profile, self.plugins)
-            if isinstance(camera, RunsApart) and self._apart():
-                camera = camera.apart()
+        """The camera first, its frames shown (``to_show``, ``camera_start``) while the
+        classifier is built: the first frame does not wait for the vision's libraries."""
+        if self.camera is not None:
+            return
+        self.starting.set(OPENING_CAMERA)
+        with self._lock:  # a closed camera's last frame is not this one's
+            self.latest = self._preview = None
+            self._taken.clear()
+        camera = open_camera(self.profile, self.plugins)
+        if isinstance(camera, RunsApart) and self._apart():
+            camera = camera.apart()
+        preview = None
+        try:
             if self.classifier is None:  # kept across a demo: its tuned thresholds
+                self.camera = camera  # its controls and status while the vision loads
+                self._pace()
+                preview = preview_loop(camera, self._preview_sink)
+                # the vision's libraries hold the interpreter while they load: the first
+                # frame is taken by the screen (``to_show``) before they start
+                with self._lock:  # a viewer that shows frames (it names its rate)
+                    shows = any(r is not None for r in self._viewers.values())
+                if shows:
+                    self._taken.wait(FIRST_FRAME_WAIT_S)
+                self.starting.set(LOADING_VISION)
                 self.classifier = open_classifier(self.profile, self.plugins)
             learn_background(camera, self.classifier)
-            self.camera = camera
+        except BaseException:
+            self.camera = None
+            camera.close()
+            raise
+        finally:
+            if preview is not None:
+                preview.stop()
+        self.camera = camera
+
+    def _preview_sink(self, frame, work: dict) -> None:
+        """A frame while the vision is prepared: shown, passed to no frame hook."""
+        with self._lock:
+            self._preview = (frame, work)
+            self.recent.append(frame.image)
 
     def _apart(self) -> bool:
         """``[runtime] twin_camera_process`` (on when the profile does not say)."""
@@ -204,7 +249,7 @@ class CameraService:
             if self.camera is not None:
                 self.camera.close()
                 self.camera = None
-            self.latest = None
+            self.latest = self._preview = None
             self.borrower = borrower
         self.emit(Stopped("camera", reason=f"in use by {borrower}"))
 
@@ -221,8 +266,17 @@ class CameraService:
             hook(frame, work)
 
     def snapshot(self) -> tuple[Any, dict] | None:
+        """The newest processed frame and its ``work`` (None before the vision runs)."""
         with self._lock:
             return self.latest
+
+    def to_show(self) -> tuple[Any, dict] | None:
+        """The newest frame to show: processed (``snapshot``), else one the camera
+        delivered while the vision is prepared (its ``work`` empty)."""
+        with self._lock:
+            if self.latest is None and self._preview is not None:
+                self._taken.set()
+            return self.latest if self.latest is not None else self._preview
 
     def stop(self, reason: str = "stopped") -> None:
         with self._start_lock:

@@ -9,7 +9,7 @@ import textwrap
 
 import numpy as np
 
-from console.tui.text import escape
+from console.tui.camera_live import reading_lines  # noqa: F401 - its former home
 
 
 def wrap_markup(line: str, width: int) -> str:
@@ -42,20 +42,6 @@ def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -
     return ov
 
 
-def reading_lines(readings: dict[str, float]) -> list[str]:
-    """The vision's readings as lines for the info panel: one line of values, and a
-    warning with the fix when the sensor clips on a hand."""
-    if not readings:
-        return []
-    out = [f"{escape(k)} {v:.3g}" for k, v in readings.items()]
-    clipped = readings.get("clipped px", 0)
-    if clipped > 0:
-        out.append(
-            f"[red]touching skin clips ({clipped:.0f} px at 255): lower the exposure or gain[/]"
-        )
-    return out
-
-
 def blob_labels(shape_px, cols: int, rows: int, work: dict) -> dict[tuple[int, int], str]:
     """``{(cell row, col): id}``: each contact's id (the classifier's) written just right
     of the contact on a ``cols`` x ``rows`` half-block view of a ``shape_px`` image."""
@@ -80,34 +66,3 @@ def same_height(before: str, after: str, width: int) -> bool:
     other way)."""
     a, b = _line_lengths(before), _line_lengths(after)
     return len(a) == len(b) and all(x == y or max(x, y) <= width for x, y in zip(a, b, strict=True))
-
-
-def live_lines(st: dict, work: dict, view: str) -> list[str]:
-    """The side panel's live block: what the loop sees now (``st``: the camera
-    service's ``status()``, ``work``: the frame's vision results) and the ``view`` shown."""
-    cam, lat = st["camera"], st["latency"] or {}
-    g = work.get("gesture")
-    hands = work.get("hands", ()) or ()
-    rate = (
-        f" of {cam['nominal_fps']:.0f} (view rate)"
-        if cam.get("rate_fps") and cam.get("nominal_fps")
-        else ""
-    )
-    lines = [
-        f"[b]{escape(cam.get('driver', '?'))}[/b]: {cam.get('fps', 0):.0f} fps{escape(rate)}",
-        # what this loop lost since it started: frames the camera dropped while the
-        # loop read it, and frames the processing was too slow for (never the frames
-        # that passed while nobody watched)
-        f"loop {lat.get('fps', 0):.0f} fps, dropped {escape(lat.get('dropped_camera', 0))}"
-        f" (camera) + {escape(lat.get('dropped_queue', 0))} (queue)",
-        f"view: {view} (v)",
-        f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
-        f"gesture: {g.name if g else '-'}",
-    ]
-    for h in hands[:1]:
-        pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
-        lines.append(f"hand at {pos}, {h.finger_count} fingers")
-    res = work.get("result")
-    if res is not None:
-        lines += reading_lines(res.readings())
-    return lines

@@ -79,6 +79,8 @@ class CameraWizardMixin:
             return ""
         lines = ["[b]touch calibration[/b]", self.cal_message]
         if self.calibration is not None:
+            note = self.wizard.projector_note  # where the targets show (a projector?)
+            lines += [escape(note)] if note else []
             lines.append("n: skip target  x: cancel")
         return "\n".join(lines)
 

@@ -228,7 +228,9 @@ def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypat
             base[:, :40], base[:, -40:] = 0.0, 255.0  # black and white in view: a palm
             # does not move the grey levels shown (that would redraw the whole picture)
             now = {"frame": SimpleNamespace(image=base)}
-            monkeypatch.setattr(app.session.camera, "snapshot", lambda: (now["frame"], {}))
+            # the picture takes what the camera service shows (processed or a preview)
+            for name in ("snapshot", "to_show"):
+                monkeypatch.setattr(app.session.camera, name, lambda: (now["frame"], {}))
             # a fresh picture of these frames: grey levels set from them (they follow a
             # new scene over ~1 s of frames, and a palm drawn while they crawl up from
             # the twin's dark frames would be white on white), no cells kept from before

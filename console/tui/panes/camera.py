@@ -26,15 +26,17 @@ from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
-from console.runtime.exposure_assist import assist_service, skin_at, snapshot_reading
+from console.runtime.exposure_assist import assist_service, snapshot_reading
 from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, hold_hand, key_shown
-from console.tui.camera_picture import (
-    blob_labels,
-    live_lines,
-    overlay_pixels,
-    same_height,
-    wrap_markup,
+from console.tui.camera_live import (
+    hang,
+    loop_lines,
+    reading_lines,
+    seen_lines,
+    skin_lines,
+    starting_lines,
 )
+from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.plots import HalfBlockImage, downsample
@@ -278,9 +280,9 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             )
             self._no_live_numbers(f"no live numbers here: {svc.borrower}'s are on Scenes (F6)")
             return
-        snap = svc.snapshot()
-        if snap is None:
-            self._message("waiting for the first frame ...")
+        snap, starting = svc.to_show(), svc.starting.line()
+        if snap is None:  # what the start prepares now, and for how long so far
+            self._message(starting or "waiting for the first frame ...")
             return
         frame, work = snap
         res = work.get("result")
@@ -457,12 +459,19 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
 
     def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
         """The side panel: (what the loop sees now, the settings and the wizard)."""
-        st = self._loop_status(svc)
-        live, lines = live_lines(st, work, self.view), []
-        snap = svc.snapshot()  # touching skin as e measures it (one computation, both say)
-        skin = snapshot_reading(*snap) if snap is not None else None
-        if skin is not None:
-            live.append(skin_at(skin))
+        st, lines = self._loop_status(svc), []
+        starting = svc.starting.line()
+        if starting:  # frames shown, the vision not running yet
+            live = starting_lines(st, starting)
+        else:
+            live = loop_lines(st, self.view) + seen_lines(work)
+            res = work.get("result")
+            readings = res.readings() if res is not None else {}
+            snap = svc.snapshot()  # touching skin as e measures it (one computation)
+            skin = snapshot_reading(*snap) if snap is not None else None
+            live += reading_lines(readings)
+            live += skin_lines(readings, svc.params().get("contact_level"), skin)
+        live = hang(live, self._info_width() or self.SIDE_COLS - 2)
         cam = st["camera"]
         chosen = self.chosen_key()
         for k, v in svc.params().items():

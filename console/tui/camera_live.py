@@ -1,0 +1,140 @@
+"""The Camera screen's live block as plain functions: each line says what it counts in
+an operator's words (the camera's rate, the frames the vision processed, the frames lost
+and where, the hands and contacts seen), touching skin's brightness next to the touch
+level its thresholds are given for with the relation between them, and every line cut to
+the panel's width with its continuation indented (a wrapped line never leaves a fragment
+that reads as a line of its own)."""
+
+from __future__ import annotations
+
+import re
+
+from console.runtime.exposure_assist import MIN_LIGHT, MIN_SNR, Reading, skin_at
+from console.tui.text import escape
+
+#: a wrapped line's continuation starts with this (a line of its own never does)
+HANG = "  "
+#: a markup tag (``[b]``, ``[/b]``, ``[red]``, ``[/]``), not an escaped bracket
+TAG = re.compile(r"(?<!\\)\[/?[a-z ]*\]")
+#: what the skin and touch level numbers are counted in
+UNITS = "both in grey over the background"
+
+
+def _cells(text: str) -> int:
+    """The cells ``text`` takes on screen: its markup tags take none (an escaped
+    bracket, ``\\[``, one)."""
+    return len(TAG.sub("", text).replace("\\[", "["))
+
+
+def hang(lines: list[str], width: int) -> list[str]:
+    """``lines`` cut at spaces to ``width`` cells (markup tags take none), each
+    continuation indented by ``HANG``; a word longer than a row keeps its own."""
+    width, out = max(width, 12), []
+    for line in lines:
+        row = ""
+        for word in line.split(" "):
+            joined = f"{row} {word}" if row.strip() else f"{row}{word}"
+            if row.strip() and _cells(joined) > width:
+                out.append(row)
+                row = HANG + word
+            else:
+                row = joined
+        out.append(row)
+    return out
+
+
+def loop_lines(st: dict, view: str) -> list[str]:
+    """What the camera and the vision loop deliver (``st``: the camera service's
+    ``status()``) and the ``view`` shown."""
+    cam, lat = st["camera"], st["latency"] or {}
+    driver = escape(cam.get("driver", "?"))
+    head = f"[b]{driver}[/b] camera: {cam.get('fps', 0):.0f} fps"
+    if cam.get("rate_fps") and cam.get("nominal_fps"):  # the view asks for fewer
+        head += " (view rate)"
+    return [
+        head,
+        f"vision: {lat.get('fps', 0):.0f} frames/s processed",
+        # what this loop lost since it started: frames the camera dropped while the
+        # loop read it, and frames the processing was too slow for (never the frames
+        # that passed while nobody watched)
+        f"camera lost {escape(lat.get('dropped_camera', 0))} frames",
+        f"vision skipped {escape(lat.get('dropped_queue', 0))} frames (busy)",
+        f"view: {view} (v: the next)",
+    ]
+
+
+def seen_lines(work: dict) -> list[str]:
+    """The hands, contacts and gesture of the newest processed frame."""
+    hands = work.get("hands", ()) or ()
+    g = work.get("gesture")
+    lines = [
+        f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
+        f"gesture: {g.name if g else '-'}",
+    ]
+    for h in hands[:1]:
+        pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
+        lines.append(f"hand at {pos}, {h.finger_count} fingers")
+    return lines
+
+
+def reading_lines(readings: dict[str, float]) -> list[str]:
+    """The vision's frame-wide readings, each named in words (the touch level has its
+    own lines, ``skin_lines``), and a warning with the fix when the sensor clips on a
+    hand."""
+    if not readings:
+        return []
+    out = []
+    if "clipped px" in readings:
+        out.append(f"clipped pixels (at 255): {readings['clipped px']:.0f}")
+    if "noise" in readings:
+        out.append(f"image noise: {readings['noise']:.3g} grey levels")
+    if "gain" in readings:
+        out.append(f"table light vs background: x{readings['gain']:.3g}")
+    known = {"clipped px", "noise", "gain", "touch level", "light x"}
+    out += [f"{escape(k)} {v:.3g}" for k, v in readings.items() if k not in known]
+    clipped = readings.get("clipped px", 0)
+    if clipped > 0:
+        out.append(
+            f"[red]touching skin clips ({clipped:.0f} px at 255): lower the exposure or gain[/]"
+        )
+    return out
+
+
+def touch_relation(level: float, contact_level: float, light: float, noise: float) -> str:
+    """Touching skin's level against the touch level its thresholds are given for
+    (``contact_level``; both grey levels over the background, ``UNITS``), and whether
+    touches are seen: they are while the light scale (level over touch level) stays at
+    ``MIN_LIGHT`` or more and the skin well above the noise (``exposure_assist``'s rule)."""
+    if contact_level <= 0:
+        return f"skin {level:.0f} (fixed thresholds: contact_level 0)"
+    side = "above" if level >= contact_level else "below"
+    head = f"skin {level:.0f} {side} touch level {contact_level:.0f}"
+    if light < MIN_LIGHT or level < MIN_SNR * max(noise, 1.0):
+        return (
+            f"{head}: touches may be missed: more light (e, exposure, gain) or a lower "
+            "contact_level"
+        )
+    return f"{head}: touches are seen"
+
+
+def skin_lines(readings: dict[str, float], contact_level: float | None, skin: Reading | None):
+    """Touching skin: its brightness in the image (what ``e`` measures, of the sensor's
+    255) and over the background against the touch level (``touch_relation``)."""
+    out = []
+    if skin is not None:
+        out.append(skin_at(skin))  # in the image: of the sensor's 255
+    if "touch level" in readings and contact_level is not None:
+        level, light = readings["touch level"], readings.get("light x", 1.0)
+        out += [touch_relation(level, contact_level, light, readings.get("noise", 0.0)), UNITS]
+    return out
+
+
+def starting_lines(st: dict, starting: str) -> list[str]:
+    """The live block while the vision is prepared (frames shown, none processed)."""
+    cam = st["camera"]
+    driver = escape(cam.get("driver", "?"))
+    return [
+        f"[b]{driver}[/b] camera: {cam.get('fps', 0):.0f} fps",
+        f"vision: {escape(starting)}",
+        "no hands or contacts until then",
+    ]
