@@ -90,16 +90,18 @@ class InputSpec:
         return self.full_scale_v / self.sensitivity
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "channel": self.channel,
-            "kind": self.kind,
-            "sensitivity": self.sensitivity,
-            "full_scale_v": self.full_scale_v,
-            "source": self.source,
-            "unit": self.unit,
-        } | ({"mass_g": self.mass_g} if self.mass_g else {}) | (
-            {"dummy_mass_g": self.dummy_mass_g} if self.dummy_mass_g else {}
+        return (
+            {
+                "name": self.name,
+                "channel": self.channel,
+                "kind": self.kind,
+                "sensitivity": self.sensitivity,
+                "full_scale_v": self.full_scale_v,
+                "source": self.source,
+                "unit": self.unit,
+            }
+            | ({"mass_g": self.mass_g} if self.mass_g else {})
+            | ({"dummy_mass_g": self.dummy_mass_g} if self.dummy_mass_g else {})
         )
 
     @classmethod
