@@ -47,8 +47,7 @@ def loop_lines(st: dict, view: str) -> list[str]:
     """What the camera and the vision loop deliver (``st``: the camera service's
     ``status()``) and the ``view`` shown."""
     cam, lat = st["camera"], st["latency"] or {}
-    driver = escape(cam.get("driver", "?"))
-    head = f"[b]{driver}[/b] camera: {cam.get('fps', 0):.0f} fps"
+    head = f"[b]{escape(cam.get('driver', '?'))}[/b] camera: {cam.get('fps', 0):.0f} fps"
     if cam.get("rate_fps") and cam.get("nominal_fps"):  # the view asks for fewer
         head += " (view rate)"
     return [
@@ -132,9 +131,8 @@ def skin_lines(readings: dict[str, float], contact_level: float | None, skin: Re
 def starting_lines(st: dict, starting: str) -> list[str]:
     """The live block while the vision is prepared (frames shown, none processed)."""
     cam = st["camera"]
-    driver = escape(cam.get("driver", "?"))
     return [
-        f"[b]{driver}[/b] camera: {cam.get('fps', 0):.0f} fps",
+        f"[b]{escape(cam.get('driver', '?'))}[/b] camera: {cam.get('fps', 0):.0f} fps",
         f"vision: {escape(starting)}",
         "no hands or contacts until then",
     ]
