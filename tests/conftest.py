@@ -45,6 +45,22 @@ def pytest_cmdline_main(config):
             config.option.dist = "loadgroup"
 
 
+#: The slowest tests of a full run (``--durations``, 7 s or more), slowest first: they are
+#: scheduled first, so no worker is left running a long one while the others wait at the
+#: end (longest first: the shortest run). Names no longer collected are ignored.
+SLOWEST = Path(__file__).with_name("slowest.txt")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The tests named in ``slowest.txt`` first, in its order; the rest as collected
+    (the same order in every xdist worker: it sorts the same list the same way)."""
+    try:
+        order = {name: i for i, name in enumerate(SLOWEST.read_text().split())}
+    except OSError:
+        return
+    items.sort(key=lambda item: order.get(item.nodeid, len(order)))
+
+
 #: ``console.files.paths``' variables, each pinned below the session's tmp root.
 PINNED_DIRS = (
     "HAPTABLE_CONFIG_DIR",
