@@ -57,6 +57,20 @@ def map_file(tmp_path_factory):
     return path
 
 
+@pytest.fixture
+def flow_ctx(tmp_path, plugins, map_file):
+    """The sim profile with a vibration map for the flow demo (no twin measurement)."""
+    from console.config.profile import PROJECT_PROFILES
+
+    text = (PROJECT_PROFILES / "sim.toml").read_text()
+    path = tmp_path / "flow.toml"
+    path.write_text(text + f'\n[demos]\nflow_map = "{map_file}"\n')
+    # lazy: the CLI context only for the tests that start a demo
+    from console.cli.main import Context
+
+    return Context(str(path), plugins)
+
+
 async def wait_for(pilot, cond, timeout_s: float = 10.0, what: str = "condition") -> None:
     for _ in range(int(timeout_s / 0.05)):
         if cond():

@@ -62,17 +62,6 @@ def part_n(app) -> int:
     return int(round(app.ctx.profile.get("vibrotactile.part_s") * FS))
 
 
-@pytest.fixture
-def flow_ctx(tmp_path, plugins, map_file):
-    """The sim profile with a vibration map for the flow demo (no twin measurement)."""
-    from console.config.profile import PROJECT_PROFILES
-
-    text = (PROJECT_PROFILES / "sim.toml").read_text()
-    path = tmp_path / "flow.toml"
-    path.write_text(text + f'\n[demos]\nflow_map = "{map_file}"\n')
-    return Context(str(path), plugins)
-
-
 async def _start(app, pilot, name: str):
     """Open the demos table, highlight ``name``, press enter; wait until it runs."""
     await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")

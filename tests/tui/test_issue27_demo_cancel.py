@@ -2,8 +2,8 @@
 process at once, in the middle of its preparation: the demo never comes up, what its
 process started (the twin camera's process) ends with it, the console's outputs are
 silent and not e-stopped, and the status says the start was cancelled (no numbers of a
-run that never ran). How long the cancel takes is measured by
-``/tmp``-free means in the report, not here: this checks where the process stopped."""
+run that never ran). How long the cancel takes is ``haptable bench demo-cancel``'s: this
+checks where the process stopped."""
 
 from __future__ import annotations
 
@@ -13,40 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from console.cli.main import Context
+from console.benchmarks.demo_cancel import descendants
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for, words_on
-
-
-@pytest.fixture
-def flow_ctx(tmp_path, plugins, map_file):
-    """The sim profile with a vibration map for the flow demo (no twin measurement)."""
-    from console.config.profile import PROJECT_PROFILES
-
-    text = (PROJECT_PROFILES / "sim.toml").read_text()
-    path = tmp_path / "flow.toml"
-    path.write_text(text + f'\n[demos]\nflow_map = "{map_file}"\n')
-    return Context(str(path), plugins)
-
-
-def descendants(pid: int) -> set[int]:
-    """The processes below ``pid`` now (Linux ``/proc``)."""
-    parent: dict[int, int] = {}
-    for d in Path("/proc").iterdir():
-        if d.name.isdigit():
-            try:
-                stat = (d / "stat").read_text()
-            except OSError:
-                continue
-            parent[int(d.name)] = int(stat.rsplit(")", 1)[1].split()[1])
-    out, todo = set(), [pid]
-    while todo:
-        p = todo.pop()
-        kids = [c for c, pp in parent.items() if pp == p]
-        out.update(kids)
-        todo += kids
-    return out
 
 
 def alive(pid: int) -> bool:

@@ -49,6 +49,15 @@ def tiny(tmp_path, plugins, monkeypatch):
     return Context(str(path), plugins)
 
 
+async def _press_m(app, pilot):
+    """The Vibration screen once its outputs are open and its grid focused, after ``m``."""
+    pane = app.pane("vibration")
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
+    await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
+    await pilot.press("m")
+    return pane
+
+
 def test_m_runs_the_roving_sensor_stops_and_resumes(tiny, monkeypatch):
     pressed, shown = threading.Event(), RovingView._step
 
@@ -62,10 +71,7 @@ def test_m_runs_the_roving_sensor_stops_and_resumes(tiny, monkeypatch):
     async def scenario():
         app = HapTableApp(tiny, fast=True, initial="vibration")
         async with app.run_test(size=(120, 40)) as pilot:
-            pane = app.pane("vibration")
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
-            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
-            await pilot.press("m")
+            pane = await _press_m(app, pilot)
 
             def line() -> str:
                 return words_on(app, "#vib-roving") if app.query("#vib-roving") else ""
@@ -116,10 +122,7 @@ def test_m_with_a_dummy_measures_each_point_twice_and_keeps_the_mass_free_map(ti
     async def scenario():
         app = HapTableApp(ctx, fast=True, initial="vibration")
         async with app.run_test(size=(120, 40)) as pilot:
-            pane = app.pane("vibration")
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs open")
-            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
-            await pilot.press("m")
+            pane = await _press_m(app, pilot)
             await wait_for(pilot, lambda: pane.session is not None, 90, "map loaded")
             where.append(roving_map_path(pane.service.cached_map_path()))
 
