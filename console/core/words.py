@@ -45,6 +45,11 @@ def worded(exc: BaseException, where: str) -> str:
     return exc.at(where) if isinstance(exc, Placed) else str(exc)
 
 
+def counted(n: int, word: str) -> str:
+    """``1 contact``, ``2 contacts``."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
 def listing(items: Iterable[str]) -> str:
     """``a``, ``a and b``, ``a, b and c``."""
     items = list(items)

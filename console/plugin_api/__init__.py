@@ -14,7 +14,7 @@ What this module offers, by where it comes from:
 
 - errors: ``UserError``, ``SafetyRefusal``; a message's fix where the user is
   (``console.core.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
-  ``AT_CONSOLE``, ``listing``
+  ``AT_CONSOLE``, ``listing``, ``counted``
 - the values that cross plugin boundaries (``console.core.types``): ``Frame``, ``Hand``,
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
   ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
@@ -128,7 +128,7 @@ from console.core.types import (
     TunableRange,
     patches_of,
 )
-from console.core.words import AT_CLI, AT_CONSOLE, Placed, listing, worded
+from console.core.words import AT_CLI, AT_CONSOLE, Placed, counted, listing, worded
 from console.files.atomic import append_json_line, write_text_atomic
 from console.files.cache_files import cached_arrays, entry_path, input_hash
 from console.files.file_read import parse_toml_text, read_bytes_capped
@@ -170,6 +170,7 @@ __all__ = [
     "AT_CONSOLE",
     "Placed",
     "listing",
+    "counted",
     "worded",
     # values (console.core.types)
     "DIRECTIONS",

@@ -11,6 +11,8 @@ from typing import Any
 
 from textual.markup import escape as _escape
 
+from console.plugin_api import counted
+
 #: the scene each demo drives on the projector (``SceneLink`` in flow.py and knob.py)
 DEMO_SCENES = {"flow": "flow_hand", "knob": "knob"}
 
@@ -126,11 +128,6 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     if snap.get("last_error"):
         lines.append(f"[red]{escape(snap['last_error'])}[/]")
     return lines
-
-
-def counted(n: int, word: str) -> str:
-    """``1 contact``, ``2 contacts``."""
-    return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
 def _rates(cam: dict[str, Any], lat: dict[str, Any]) -> str:

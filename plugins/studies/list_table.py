@@ -7,13 +7,10 @@ from collections.abc import Sequence
 
 from rich.cells import cell_len
 
+from console.plugin_api import counted
+
 #: the columns: (header, right-aligned); the last one is never padded
 COLUMNS = (("protocol", False), ("trials", True), ("design", False), ("title", False))
-
-
-def counted(n: int, word: str) -> str:
-    """``1 track``, ``16 tracks``."""
-    return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
 def protocol_rows() -> list[tuple[str, str, str, str]]:
