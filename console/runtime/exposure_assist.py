@@ -288,13 +288,30 @@ def assist_service(
     if cam is None or not svc.camera_controls():
         return assist(_NoControls(), lambda: None, driver=driver)
     return assist(
-        cam,
+        _ThroughService(svc, cam),
         service_measure(svc, cancel),
         driver=driver,
         cancelled=cancel.is_set,
         progress=progress,
         no_hand=NO_HAND_TWIN if isinstance(cam, SimulatedCamera) else NO_HAND,
     )
+
+
+class _ThroughService:
+    """The service's camera controls, set through the service (it restarts the frames
+    ``b`` learns from)."""
+
+    def __init__(self, svc: Any, camera: Any) -> None:
+        self.svc, self.camera = svc, camera
+
+    def controls(self) -> dict[str, Any]:
+        return self.camera.controls()
+
+    def control_values(self) -> dict[str, float]:
+        return self.camera.control_values()
+
+    def set_control(self, name: str, value: float) -> None:
+        self.svc.set_control(name, value)
 
 
 class _NoControls:

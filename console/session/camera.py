@@ -19,6 +19,7 @@ what is prepared); ``snapshot`` gives processed frames only.
 from __future__ import annotations
 
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
@@ -59,6 +60,9 @@ class PacedCamera(Protocol):
 
 #: how long the vision's build waits for the first frame to be taken by a screen
 FIRST_FRAME_WAIT_S = 2.0
+#: after an exposure or gain change, frames taken this soon are not kept for ``b`` (a
+#: camera applies a new exposure a frame or two later)
+CONTROL_SETTLE_S = 0.05
 
 
 class _Hooks(list):
@@ -99,6 +103,9 @@ class CameraService:
         self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
+        #: frames taken before this (monotonic s, the camera's clock) are not ``recent``:
+        #: the exposure or gain changed, and a background is learned under one setting
+        self._recent_from_s = 0.0
         # fn(frame, work) called from the processing thread (each takes every frame)
         self.frame_hooks: list = _Hooks(self._pace)
         self.borrower: str | None = None  # the demo running on this camera, if any
@@ -138,6 +145,35 @@ class CameraService:
                     self._start_locked()
             except UserError as exc:
                 self.error = str(exc)
+
+    def leave(self, viewer: object) -> None:
+        """``viewer`` no longer shows the camera; returns at once (call from the UI
+        thread). The loop stops in a thread of its own, after a start in progress ends,
+        unless a viewer came back meanwhile."""
+        with self._lock:
+            self._viewers.pop(id(viewer), None)
+            shows = any(r is not None for r in self._viewers.values())
+            watched = bool(self._viewers)
+        if not shows:
+            self._taken.set()  # a start waiting for a screen to take its first frame
+        if not watched:
+            threading.Thread(target=self._stop_unwatched, name="camera-leave", daemon=True).start()
+
+    def _stop_unwatched(self) -> None:
+        with self._start_lock:
+            if self.watched:  # a viewer came back while the start ended
+                return
+            stopped = self._stop_locked()
+        if stopped:
+            self.emit(Stopped("camera", reason="nobody watches"))
+        self._pace()
+
+    def _stop_locked(self) -> bool:
+        """Stop the loop (call with ``_start_lock`` held); whether one ran."""
+        loop, self.loop = self.loop, None
+        if loop is not None:
+            loop.stop()
+        return loop is not None
 
     def wanted_rate(self) -> float | None:
         """The frames a second the camera must deliver: none (0) while the loop is
@@ -226,7 +262,7 @@ class CameraService:
         """A frame while the vision is prepared: shown, passed to no frame hook."""
         with self._lock:
             self._preview = (frame, work)
-            self.recent.append(frame.image)
+            self._keep_recent(frame)
 
     def _apart(self) -> bool:
         """``[runtime] twin_camera_process`` (on when the profile does not say)."""
@@ -261,9 +297,15 @@ class CameraService:
     def _sink(self, frame, work: dict) -> None:
         with self._lock:
             self.latest = (frame, work)
-            self.recent.append(frame.image)
+            self._keep_recent(frame)
         for hook in list(self.frame_hooks):
             hook(frame, work)
+
+    def _keep_recent(self, frame) -> None:
+        """Add ``frame`` to ``recent`` unless it was taken before the controls changed
+        (call with ``_lock`` held)."""
+        if frame.t_capture_s >= self._recent_from_s:
+            self.recent.append(frame.image)
 
     def snapshot(self) -> tuple[Any, dict] | None:
         """The newest processed frame and its ``work`` (None before the vision runs)."""
@@ -280,10 +322,8 @@ class CameraService:
 
     def stop(self, reason: str = "stopped") -> None:
         with self._start_lock:
-            loop, self.loop = self.loop, None
-            if loop is not None:
-                loop.stop()
-        if loop is not None:
+            stopped = self._stop_locked()
+        if stopped:
             self.emit(Stopped("camera", reason=reason))
 
     def close(self) -> None:
@@ -355,9 +395,20 @@ class CameraService:
             return
         cam = self._adjustable()
         if cam is not None and key in cam.controls():
-            cam.set_control(key, rng.clamp(value))
+            self.set_control(key, rng.clamp(value))
         elif self.classifier is not None:
             self.classifier.set_tunable(key, rng.clamp(value))
+
+    def set_control(self, name: str, value: float) -> None:
+        """The camera's exposure or gain = ``value``; the recent frames start again (a
+        background is the median of frames under one setting)."""
+        cam = self._adjustable()
+        if cam is None:
+            raise UserError("this camera's driver takes no exposure or gain")
+        cam.set_control(name, value)
+        with self._lock:  # the frames so far were taken under the old setting
+            self.recent.clear()
+            self._recent_from_s = time.monotonic() + CONTROL_SETTLE_S
 
     def save_tuning(self) -> Path:
         """Keep the tuned thresholds for the next start: written to the profile's override

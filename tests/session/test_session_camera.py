@@ -6,6 +6,8 @@ from __future__ import annotations
 import time
 from types import SimpleNamespace
 
+import numpy as np
+
 
 def _wait(cond, timeout_s: float = 30.0) -> bool:
     end = time.monotonic() + timeout_s
@@ -236,3 +238,59 @@ def test_a_hidden_camera_screen_leaves_the_twin_rendering_nothing(profile, plugi
         assert _wait(lambda: cam.snapshot()[0].seq > seq), "frames after the pause"
     finally:
         session.close()
+
+
+def test_b_learns_only_from_frames_under_the_current_exposure(profile, plugins):
+    """A background is the median of frames under one exposure and gain: a change starts
+    the recent frames again, and a frame taken before the change (still in flight) is not
+    kept."""
+    from console.core.types import Frame
+    from console.session.camera import CameraService
+
+    svc = CameraService(profile, plugins)
+    svc.classifier = plugins.build("classifier", "svm", profile)
+    svc.camera = _DialCamera()
+    dark = np.full((4, 4), 40, np.uint8)
+    for k in range(5):
+        svc._sink(Frame(dark, k, time.monotonic()), {})
+    assert len(svc.recent) == 5
+    taken_before = time.monotonic()
+    svc.set_param("exposure", 250)  # the operator (or e) changes the exposure
+    assert len(svc.recent) == 0
+    svc._sink(Frame(np.full((4, 4), 250, np.uint8), 5, taken_before), {})  # in flight
+    time.sleep(0.06)
+    bright = np.full((4, 4), 120, np.uint8)
+    for k in range(3):
+        svc._sink(Frame(bright, 6 + k, time.monotonic()), {})
+    assert len(svc.recent) == 3
+    assert float(svc.median_background().max()) == 120.0
+
+
+def test_leaving_the_camera_screen_mid_start_returns_at_once(profile, plugins):
+    """The Camera screen is left while the camera is still opening (slow driver, vision
+    loading): the UI thread's leave returns at once, and the start that ends afterwards
+    leaves the loop stopped."""
+    import threading
+
+    from console.session.camera import CameraService
+
+    svc = CameraService(profile, plugins)
+    gate = threading.Event()
+
+    def slow_open(open_camera, open_classifier, learn_background):
+        gate.wait(10)  # a driver that takes its time
+        svc.camera = _DialCamera()
+        svc.classifier = plugins.build("classifier", "svm", profile)
+
+    svc._open = slow_open
+    viewer = object()
+    worker = threading.Thread(target=svc.watch, args=(viewer, True, 7.5))
+    worker.start()
+    assert _wait(lambda: svc._start_lock.locked(), 5)
+    t0 = time.monotonic()
+    svc.leave(viewer)
+    assert time.monotonic() - t0 < 0.1, "the UI thread waited for the camera's start"
+    gate.set()
+    worker.join(30)
+    assert _wait(lambda: not svc.running, 10), "started for nobody"
+    svc.close()

@@ -192,7 +192,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             if self._timer is not None:
                 self._timer.stop()
                 self._timer = None
-            self.app.call_later(self.service.watch, self, False)
+            self.service.leave(self)  # returns at once: a start may be under way
 
     @work(thread=True, exclusive=True, group="camera")
     def _watch(self, on: bool) -> None:
