@@ -203,3 +203,21 @@ def _cpu_s(pid: int) -> float:
     with open(f"/proc/{pid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def test_frames_before_the_first_read_are_unread_not_dropped():
+    """A demo prepares for seconds after opening the camera: what the child rendered
+    before the loop's first read is not a frame the loop dropped, and the first frame read
+    is a fresh one, not the oldest waiting."""
+    cam = _twin().apart()
+    try:
+        time.sleep(0.6)  # ~36 frames at 60 fps announced, nobody reading
+        first = cam.read(5.0)
+        assert first is not None and time.monotonic() - first.t_capture_s < 0.25
+        assert all(cam.read(5.0) is not None for _ in range(10))
+        st = cam.status()
+        # (the backlog alone was ~36; a loaded machine's renderer may burst a frame or two)
+        assert st["dropped_reading"] < 5, st
+        assert st["unread"] >= 20, st
+    finally:
+        cam.close()

@@ -170,10 +170,13 @@ class ProcessCamera:
         self._buf = b""
         self._closed = False
         self._dropped = 0
+        self._unread = 0  # announced before the first read or during a pause: not drops
         self._render_dropped = 0
         self._frames = 0
         self._rate: float | None = twin.rate_fps
-        self._stale = False
+        # frames announced before the first read are nobody's drops: a camera delivers
+        # nothing before its stream is read (a demo prepares for seconds meanwhile)
+        self._stale = True
         self._times: list[float] = []
         try:
             first = self._next(start_timeout_s)
@@ -208,10 +211,10 @@ class ProcessCamera:
     def read(self, timeout_s: float = 0.1) -> Frame | None:
         if self._closed:
             return None
-        if self._stale:  # frames announced before a pause: nobody read them, not drops
+        if self._stale:  # announced before the first read or a pause: unread, not drops
             self._stale = False
             while self._next(0) is not None:
-                pass
+                self._unread += 1
         msg = self._next(timeout_s)
         if msg is None:
             return None
@@ -352,6 +355,7 @@ class ProcessCamera:
             # standing in for the camera's own hardware)
             "dropped_reading": self._dropped,
             "dropped_rendering": self._render_dropped,
+            "unread": self._unread,  # before the first read, or while paused
             "alive": self._proc.poll() is None,
             "closed": self._closed,
             **self.twin.control_values(),
