@@ -350,6 +350,16 @@ class TouchCalibrating(Protocol):
 
 
 @runtime_checkable
+class ReportsProblem(Protocol):
+    """A plugin that runs with less than its settings ask says why: ``problem``, the
+    ``UserError`` (a ``console.core.words.Placed`` one carries the fix per place) or
+    ``None`` (e.g. a classifier whose saved model does not fit: the vision runs, no
+    gesture is named)."""
+
+    problem: Exception | None
+
+
+@runtime_checkable
 class TunablesInProfile(Protocol):
     """A classifier whose tunables are profile settings, so the console can keep the
     operator's tuning for the next start: ``tunable_keys() -> {tunable: "section.key"}``."""

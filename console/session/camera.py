@@ -27,9 +27,15 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from console.core.contracts import AdjustableCamera, SwitchableSink, TunablesInProfile
+from console.core.contracts import (
+    AdjustableCamera,
+    ReportsProblem,
+    SwitchableSink,
+    TunablesInProfile,
+)
 from console.core.errors import UserError
 from console.core.types import TunableRange
+from console.core.words import AT_CONSOLE, worded
 from console.runtime.latency import LatencyMonitor
 from console.runtime.loop import FrameLoop
 from console.runtime.stages import (
@@ -99,6 +105,8 @@ class CameraService:
         self.classifier = None
         self.loop = None
         self.error = ""
+        #: why the classifier names no gesture though a model is set ("": none)
+        self.classifier_problem = ""
         self._lock = threading.Lock()
         self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
@@ -248,6 +256,10 @@ class CameraService:
                     self._taken.wait(FIRST_FRAME_WAIT_S)
                 self.starting.set(LOADING_VISION)
                 self.classifier = open_classifier(self.profile, self.plugins)
+                problem = (
+                    self.classifier.problem if isinstance(self.classifier, ReportsProblem) else None
+                )
+                self.classifier_problem = "" if problem is None else worded(problem, AT_CONSOLE)
             learn_background(camera, self.classifier)
         except BaseException:
             self.camera = None

@@ -62,13 +62,15 @@ def loop_lines(st: dict, view: str) -> list[str]:
     ]
 
 
-def seen_lines(work: dict) -> list[str]:
-    """The hands, contacts and gesture of the newest processed frame."""
+def seen_lines(work: dict, problem: str = "") -> list[str]:
+    """The hands, contacts and gesture of the newest processed frame; ``problem``: why
+    no gesture is named (the classifier's saved model does not fit)."""
     hands = work.get("hands", ()) or ()
     g = work.get("gesture")
+    named = f"[yellow]gesture: none named: {escape(problem)}[/]" if problem else None
     lines = [
         f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
-        f"gesture: {g.name if g else '-'}",
+        named or f"gesture: {g.name if g else '-'}",
     ]
     for h in hands[:1]:
         pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"

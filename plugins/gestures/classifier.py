@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Sequence
 from dataclasses import replace
@@ -30,6 +31,8 @@ from .rules import GestureRules, StillHand
 from .settings import calibration_file, model_file
 from .sketch import DYNAMIC
 from .vision import FrameResult, VisionParams, check_frame, process_frame, vision_params
+
+log = logging.getLogger(__name__)
 
 
 def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, float, float]:
@@ -216,6 +219,8 @@ class SvmClassifier:
         orientation: Orientation | None = None,
     ) -> None:
         self.model = model
+        #: why it names no gesture though a model file is set (``contracts.ReportsProblem``)
+        self.problem: UserError | None = None
         self.orientation = orientation or Orientation()
         self.params = replace(params or VisionParams(), n_harmonics=N_HARMONICS_MAX)
         self.to_mm = to_mm
@@ -223,10 +228,14 @@ class SvmClassifier:
 
     @classmethod
     def from_profile(cls, profile) -> SvmClassifier:
-        model = None
+        model, problem = None, None
         path = model_file(profile)
         if Path(path).is_file():
-            model = GestureModel.load(path)
+            try:
+                model = GestureModel.load(path)
+            except UserError as exc:  # the vision runs on; the gestures wait for a model
+                problem = exc
+                log.warning("gesture model not used: %s", exc)
         to_mm = None
         cal = calibration_file(profile)
         if Path(cal).is_file():
@@ -236,7 +245,7 @@ class SvmClassifier:
         # resizing the pool under a running parallel loop in another thread is not safe
         if threads > 0 and cv2.getNumThreads() != threads:
             cv2.setNumThreads(threads)
-        return cls(
+        clf = cls(
             model,
             vision_params(profile),
             to_mm,
@@ -245,6 +254,8 @@ class SvmClassifier:
                 {k: profile.get(f"vision.{k}", 0) or 0 for k in ORIENTATION_TUNABLES}
             ),
         )
+        clf.problem = problem
+        return clf
 
     def touch_calibration(self, profile):
         """A touch-calibration session for the console's wizard (the classifier contract's

@@ -20,7 +20,7 @@ import numpy as np
 
 from console.plugin_api import AT_CLI, AT_CONSOLE, Placed, UserError
 
-from .model_checks import check_classifiers, check_settings, check_widths
+from .model_checks import check_classifiers, check_settings, check_widths, retrain
 from .sketch import DYNAMIC, STATIC
 
 GESTURES = STATIC + DYNAMIC
@@ -140,7 +140,7 @@ def read_settings(path: str | Path) -> dict:
         _check_format(json.loads(content["format"]["content"]))
         return json.loads(json.loads(content["settings"]["content"]))
     except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
-        raise UserError(f"{p}: not a readable gesture model ({e}); train it again") from None
+        raise retrain(f"{p}: not a readable gesture model ({e})") from None
 
 
 def _check_format(fmt: object) -> None:
@@ -402,29 +402,29 @@ class GestureModel:
                 f"{p}: no gesture model there",
                 {
                     AT_CLI: "make one with `haptable gestures train`",
-                    AT_CONSOLE: "t trains one here",
+                    AT_CONSOLE: "train one: Camera (F2), g, then t",
                 },
             )
         try:
             found = file_types(p)
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
-            raise UserError(f"{p}: not a skops gesture model ({e}); train it again") from None
+            raise retrain(f"{p}: not a skops gesture model ({e})") from None
         except RecursionError:
-            raise UserError(f"{p}: skops schema nested too deeply; train it again") from None
+            raise retrain(f"{p}: skops schema nested too deeply") from None
         bad = sorted(found - set(TRUSTED_TYPES))
         if bad:
-            raise UserError(
+            raise retrain(
                 f"{p}: contains types outside the allow-list ({', '.join(bad)}); "
-                "refusing to load it; train the model again"
+                "refusing to load it"
             )
         try:
             obj = sio.load(p, trusted=sorted(found))
         except Exception as e:
-            raise UserError(f"{p}: cannot load the gesture model ({e}); train it again") from None
+            raise retrain(f"{p}: cannot load the gesture model ({e})") from None
         try:
             _check_format(obj.get("format") if isinstance(obj, dict) else None)
         except ValueError as e:
-            raise UserError(f"{p}: {e}; train it again") from None
+            raise retrain(f"{p}: {e}") from None
         s = check_settings(obj.get("settings"), p)
         svms = {k: obj.get(k) for k in ("static_svm", "dynamic_svm", "kind_svm")}
         check_classifiers(svms, p)

@@ -31,12 +31,14 @@ from .sketch import DYNAMIC, STATIC
 #: classes each classifier may answer
 CLASSES = {"static_svm": STATIC, "dynamic_svm": DYNAMIC, "kind_svm": ("static", "dynamic")}
 RETRAIN = "train it again with `haptable gestures train`"
+#: the same in the console (the Gestures panel opens from the Camera screen)
+RETRAIN_HERE = "train it again: Camera (F2), g, then t"
 
 
 def retrain(what: str) -> Placed:
     """A model that cannot be used: ``what``, and how to make a good one where the user
     is (the command at a shell, the Gestures panel's key in the console)."""
-    return Placed(what, {AT_CLI: RETRAIN, AT_CONSOLE: "t trains it again here"})
+    return Placed(what, {AT_CLI: RETRAIN, AT_CONSOLE: RETRAIN_HERE})
 
 
 def _int_in(s: dict, key: str, allowed: tuple[int, ...], p: Path) -> int:

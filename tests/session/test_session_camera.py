@@ -294,3 +294,28 @@ def test_leaving_the_camera_screen_mid_start_returns_at_once(profile, plugins):
     worker.join(30)
     assert _wait(lambda: not svc.running, 10), "started for nobody"
     svc.close()
+
+
+def test_a_saved_model_that_does_not_fit_leaves_the_camera_running(profile, plugins):
+    """A gesture model the vision cannot use (another version's, a broken file): the
+    camera and its vision run on, no gesture is named, and the console says why with the
+    fix where the operator is (no shell command)."""
+    from console.session.camera import CameraService
+    from plugins.gestures.settings import model_file
+
+    path = model_file(profile)
+    assert not path.exists()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("a model from another version")
+    svc = CameraService(profile, plugins)
+    viewer = object()
+    try:
+        svc.watch(viewer, True)
+        assert svc.running and not svc.error, svc.error
+        assert _wait(lambda: svc.snapshot() is not None), "frames processed"
+        assert "gestures.skops" in svc.classifier_problem
+        assert "Camera (F2), g, then t" in svc.classifier_problem
+        assert "haptable gestures" not in svc.classifier_problem
+    finally:
+        svc.close()
+        path.unlink()

@@ -464,7 +464,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         if starting:  # frames shown, the vision not running yet
             live = starting_lines(st, starting)
         else:
-            live = loop_lines(st, self.view) + seen_lines(work)
+            live = loop_lines(st, self.view) + seen_lines(work, svc.classifier_problem)
             res = work.get("result")
             readings = res.readings() if res is not None else {}
             snap = svc.snapshot()  # touching skin as e measures it (one computation)
