@@ -357,6 +357,8 @@ class GesturesPanel(Screen):
         if clf is None or not hasattr(clf, "model"):
             return "the console's classifier loads it when the camera starts"
         clf.model = model
+        clf.problem = None  # a model that did not fit is replaced
+        svc.classifier_problem = ""
         return "the Camera screen's classifier uses it now"
 
     def action_cancel(self) -> None:
