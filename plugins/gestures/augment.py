@@ -50,7 +50,7 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     "lift_mm": (5.0, 25.0),  # curled fingers' height above the glass
     "palm_lift_mm": (18.0, 55.0),  # palm height in pointing poses
     "speed": (0.6, 1.6),  # gesture speed factor
-    "tremor_mm": (0.1, 0.9),  # frame-to-frame jitter
+    "tremor_mm": (0.1, 1.6),  # frame-to-frame jitter (tremor and centroid noise)
 }
 TWIN_KEYS = ("illumination", "noise_sigma", "hand_scale", "hover_scale", "drift_gain")
 IMAGE_KEYS = ("glow_scale", "finger_px", "lobe_gain", "blur_px", "gamma", "post_noise")

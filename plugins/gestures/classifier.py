@@ -35,11 +35,13 @@ from .vision import FrameResult, VisionParams, check_frame, process_frame, visio
 log = logging.getLogger(__name__)
 
 
-def decide(model: GestureModel, recs: list[dict | None]) -> tuple[str, str, float, float]:
-    """(gesture, kind, confidence, motion score) from frame records (features built
-    with ``N_HARMONICS_MAX`` harmonics)."""
+def decide(
+    model: GestureModel, recs: list[dict | None], fps: float = 60.0
+) -> tuple[str, str, float, float]:
+    """(gesture, kind, confidence, motion score) from frame records filmed at ``fps``
+    (features built with ``N_HARMONICS_MAX`` harmonics)."""
     k = model.n_frames
-    xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX)
+    xs, xk, xd, sc = record_features(recs, (k,), N_HARMONICS_MAX, fps)
     xs = select_static(xs[k], model.n_harmonics, N_HARMONICS_MAX)
     xd = select_dynamic(xd[k], model.n_harmonics, N_HARMONICS_MAX)
     xk = select_kind(xk[k])
@@ -60,12 +62,14 @@ def classify_sample(model: GestureModel, folder: str | Path, params: VisionParam
             "add an image of the empty table"
         )
     params = replace(params, n_harmonics=N_HARMONICS_MAX)
+    if s.meta.get("px_per_mm"):  # the camera's scale on the glass, if the sample gives it
+        params = replace(params, px_per_mm=float(s.meta["px_per_mm"]))
     times: list[float] = []
     t0 = time.perf_counter()
     recs = sample_records(frames, bg, params, times)
     seen = sum(r is not None for r in recs)
     if seen:
-        name, kind, conf, score = decide(model, recs)
+        name, kind, conf, score = decide(model, recs, s.fps)
     else:  # a blinded, covered or empty camera: no hand, nothing to classify
         name, kind, conf, score = "none", "none", 0.0, 0.0
     total = time.perf_counter() - t0

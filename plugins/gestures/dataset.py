@@ -285,6 +285,17 @@ def read_sample(folder: str | Path, root: str | Path | None = None) -> Sample:
         raise UserError(
             f"{where}/sample.json: fps {fps!r} must be a positive number up to {MAX_FPS:g}, e.g. 60"
         )
+    ppm = meta.get("px_per_mm")
+    if ppm is not None and (
+        isinstance(ppm, bool)
+        or not isinstance(ppm, (int, float))
+        or not math.isfinite(ppm)
+        or not 0.05 <= ppm <= 100
+    ):
+        raise UserError(
+            f"{where}/sample.json: px_per_mm {ppm!r} must be the camera's pixels per mm "
+            "on the glass, 0.05 to 100 (e.g. 0.86), or left out"
+        )
     numbered = []
     for p in folder.iterdir():
         m = FRAME_RE.match(p.name)

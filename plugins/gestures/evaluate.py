@@ -40,12 +40,13 @@ from .reports import clipping, fold_report, report, sample_clipped_share
 from .selection import INNER_FOLDS, candidates, select_settings
 from .vision import VisionParams
 
-FEATURES_VERSION = 9  # bump when features change: old caches are ignored
+FEATURES_VERSION = 10  # bump when features change: old caches are ignored
 #: the modules whose code makes the features: their source is part of the cache key, so a
 #: change to any of them is never answered with features the old code computed
 FEATURE_MODULES = (
     "background.py", "contacts.py", "dataset.py", "descriptors.py", "feature_set.py",
-    "features.py", "hand_shape.py", "orientation.py", "segmentation.py", "vision.py",
+    "features.py", "hand_shape.py", "orientation.py", "physical.py", "segmentation.py",
+    "touch.py", "vision.py",
 )  # fmt: skip
 DEFAULT_CV = "2fold"
 
@@ -160,9 +161,11 @@ def _extract(samples, params, frames_list, size, progress, cancelled) -> Feature
                 fallback = _fallback_background(samples, size)
             bg = fallback
         clip: list = []
-        recs = sample_records(frames, bg, params, times, cpu, clip)
+        ppm = s.meta.get("px_per_mm")  # the camera's scale on the glass, if given
+        sp = replace(params, px_per_mm=float(ppm)) if ppm else params
+        recs = sample_records(frames, bg, sp, times, cpu, clip)
         shares.append(sample_clipped_share(clip))
-        xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX)
+        xs, xk, xd, sc = record_features(recs, frames_list, N_HARMONICS_MAX, s.fps)
         names.append(s.name)
         labels.append(s.gesture)
         subjects.append(s.subject)

@@ -12,17 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from .feature_set import FeatureSet, columns
-from .features import MAX_COUNT_CODE, N_MOTION, desc_indices
-from .hand_shape import GRID_RINGS
+from .features import MAX_COUNT_CODE, desc_indices
+from .physical import MOTION_NAMES, STATIC_NAMES
 from .renderer_sets import is_static
-
-LAYOUT = ("contacts", "contact_r", "contact_pair", "contact_abs_x", "contact_y", "contact_spread")
-MOTION = (
-    "hand_dx", "hand_dy", "hand_d", "turn", "log_size", "grid_change", "hand_step",
-    "contacts_first", "contacts_last", "tracks", "track_dx", "track_dy", "track_d",
-    "track_turn", "track_zoom", "track_disp_max", "track_disp_min", "track_pivot",
-    "track_path_max", "bright_dx", "bright_dy", "bright_d",
-)  # fmt: skip
 
 
 def _harmonic_names(n: int, n_max: int) -> list[str]:
@@ -34,12 +26,9 @@ def _harmonic_names(n: int, n_max: int) -> list[str]:
 def feature_names(n_harmonics: int, n_max: int = 16) -> tuple[list[str], list[str]]:
     """(static columns, dynamic columns) as the classifiers see them."""
     counts = [f"count={k}" for k in range(MAX_COUNT_CODE + 1)]
-    rings = [f"ring{i}_share" for i in range(len(GRID_RINGS) - 1)]
     fourier = _harmonic_names(n_harmonics, n_max)
-    static = [*fourier, *rings, "fingers", "hand", *LAYOUT, *counts]
-    assert len(MOTION) == N_MOTION
-    dynamic = [*fourier, *LAYOUT, *MOTION, *counts]
-    return static, dynamic
+    static = [*fourier, *STATIC_NAMES, *counts]
+    return static, [*static, *MOTION_NAMES, "contact_zoom_log"]
 
 
 def ks_statistic(a: np.ndarray, b: np.ndarray) -> float:

@@ -39,7 +39,7 @@ def _twin_samples(
     light_scale: float,
     randomise: bool,
     gestures: tuple[str, ...] = GESTURES,
-) -> Iterator[tuple[str, str, np.ndarray, np.ndarray]]:
+) -> Iterator[tuple[str, str, np.ndarray, np.ndarray, float]]:
     from .augment import augment_sample, twin_profile, wide_condition, wide_subject  # lazy: twin
     from .synth import BACKGROUND_LEAD_S, _session_t0, _twin_camera, subject_names  # lazy: twin
 
@@ -55,8 +55,10 @@ def _twin_samples(
                 rng = np.random.default_rng(np.random.SeedSequence([seed, si, gi, rep]))
                 t0 = _session_t0(si, gi, rep)
                 kw = {"n_frames": N_FRAMES, "t0_s": t0, "side": sides[si], "subject_seed": seed}
+                fps = 60.0
                 if randomise:
                     cond = wide_condition(seed, si, gi, rep)
+                    fps = float(cond["fps"])
                     cond["illumination"] = cond["illumination"] * light_scale
                     cam = factory({**profile, **twin_profile(cond)})
                     change = partial(wide_subject, hand=cond["hand"])
@@ -68,7 +70,7 @@ def _twin_samples(
                 else:
                     frames, _ = plain.render_sample(gesture, name, rep, rng, **kw)
                     bg = plain.render_background(t0 - BACKGROUND_LEAD_S, rng)
-                yield name, gesture, frames, bg
+                yield name, gesture, frames, bg, fps
 
 
 def _phalanx_samples(
@@ -78,8 +80,9 @@ def _phalanx_samples(
     light_scale: float,
     randomise: bool,
     gestures: tuple[str, ...] = GESTURES,
-) -> Iterator[tuple[str, str, np.ndarray, np.ndarray]]:
+) -> Iterator[tuple[str, str, np.ndarray, np.ndarray, float]]:
     from .augment import augment_sample, wide_condition  # lazy: images
+    from .phalanx_gestures import FPS  # lazy: renderer
     from .phalanx_synth import _SAMPLE_KEY, optics_of, render_sample, subject_of  # lazy: renderer
 
     hands = ["right"] * (subjects - 1) + ["left"] if subjects > 1 else ["right"]
@@ -102,7 +105,7 @@ def _phalanx_samples(
                 )
                 if cond is not None:
                     frames, bg = augment_sample(frames, bg, cond["augment"], rng)
-                yield subject.name, gesture, frames, bg
+                yield subject.name, gesture, frames, bg, FPS
 
 
 def render_set(
@@ -133,12 +136,12 @@ def render_set(
     make = _twin_samples if renderer == "twin" else _phalanx_samples
     names, labels, subj, shares, cpu = [], [], [], [], []
     cols: dict[str, dict[int, list]] = {k: {f: [] for f in frames_list} for k in "skdc"}
-    for i, (who, gesture, frames, bg) in enumerate(
+    for i, (who, gesture, frames, bg, fps) in enumerate(
         make(subjects, reps, seed, light_scale, randomise, gestures)
     ):
         clip: list = []
         recs = sample_records(frames[: max(frames_list)], bg, params, cpu=cpu, clip=clip)
-        parts = record_features(recs, frames_list, N_HARMONICS_MAX)
+        parts = record_features(recs, frames_list, N_HARMONICS_MAX, fps)
         for key, got in zip("skdc", parts, strict=True):
             for f in frames_list:
                 cols[key][f].append(got[f])

@@ -26,6 +26,14 @@ VISION_FIELDS: dict[str, Field] = {
         "brightest part over this), so the light level does not change what counts as hand "
         "or contact; 0: fixed thresholds",
     ),
+    "px_per_mm": Field(
+        "float",
+        0.0,
+        min=0,
+        max=100,
+        help="the camera's pixels per mm on the glass (its calibration); the gesture "
+        "features are lengths in mm; 0: a camera seeing the whole 743 x 447 mm glass",
+    ),
     "highpass_sigma_px": Field(
         "float", 6.0, min=0.5, max=100, help="blur of the high-pass filter (image minus blur)"
     ),

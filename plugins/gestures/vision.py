@@ -67,6 +67,7 @@ from .segmentation import (
     highpass_window,
     relative_body,
 )
+from .touch import SAME_HAND_MM, default_px_per_mm, hand_touch, touch_regions
 
 #: the range a hand's light may scale the thresholds by (a hand dimmer than 0.3 of the
 #: reference is mostly noise; brighter than 2x, the sensor clips)
@@ -102,12 +103,20 @@ class VisionParams:
     #: shows, so its hovering parts and contacts keep their extent under another light
     #: (``segmentation.relative_body``); 0: fixed thresholds in grey levels
     contact_level: float = 180.0
+    #: the camera's scale on the glass (px per mm; 0: the frame seeing the whole glass,
+    #: ``touch.default_px_per_mm``): gesture features are lengths in mm
+    px_per_mm: float = 0.0
     illumination_tolerance: float = 0.15  # |gain - 1| above this flags an illumination change
     offset_tolerance: float = 8.0  # |offset| grey levels above this flags one too
 
     @property
     def shape(self) -> tuple[int, int]:
         return (self.height_px, self.width_px)
+
+    @property
+    def scale_px_per_mm(self) -> float:
+        """``px_per_mm``, or the frame's default when it is 0."""
+        return self.px_per_mm or default_px_per_mm(self.width_px, self.height_px)
 
 
 def vision_params(profile: Any) -> VisionParams:
@@ -147,7 +156,8 @@ class FrameResult:
     #: brightness-weighted centroid), grid (brightness in the canonical frame,
     #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii), level (the
     #: hand's brightest block, grey levels above the background), light (level over
-    #: ``contact_level``, the scale of its thresholds; 1.0 with fixed thresholds)
+    #: ``contact_level``, the scale of its thresholds; 1.0 with fixed thresholds),
+    #: touch (``touch.hand_touch``: its touching skin in mm) and px_per_mm
     extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
 
     def view(self, name: str) -> np.ndarray | None:
@@ -365,12 +375,15 @@ def hands_of(
     contacts: list[Contact],
     min_area_px: float,
     max_area_px: float,
+    same_px: float = 0.0,
 ) -> list[tuple[np.ndarray, list[Contact], int]]:
     """The hands in a body mask: per part (``relative_body``: everything of a hand
     above the lowest threshold), its largest piece's contour when its area is within
-    the bounds, the contacts that lie in that part, and the part's label. A hand whose fingertips touch
-    while the fingers above them rise out of the mask falls into pieces; the pieces
-    and their contacts stay one hand."""
+    the bounds (all its pieces together), the contacts that lie in that part, and the
+    part's label. A hand whose fingertips touch while the fingers above them rise out of
+    the mask falls into pieces; the pieces and their contacts stay one hand, and parts
+    too small to be a hand join the nearest hand within ``same_px`` (or, with none,
+    each other: fingertips under a palm too dim to see)."""
     if parts is None:
         return []
     x0, y0, x1, y1 = parts.win
@@ -378,19 +391,32 @@ def hands_of(
         body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
     )
     largest: dict[int, tuple[float, np.ndarray]] = {}
+    total: dict[int, float] = {}  # all of a part's pieces: fingertips under a dim palm too
     for c in contours:
         part = parts.label_at(*(int(v) for v in c[0, 0]))
         area = cv2.contourArea(c)
+        total[part] = total.get(part, 0.0) + area
         if part and area > largest.get(part, (-1.0, None))[0]:
             largest[part] = (area, c)
     owner: dict[int, list[Contact]] = {}
     for c in contacts:
         part = parts.label_at(int(round(c.pos_px[0])), int(round(c.pos_px[1])))
         owner.setdefault(part, []).append(c)
+    groups = {p: [p] for p in largest}
+    hosts = [p for p in largest if total[p] >= min_area_px]
+    if same_px > 0 and len(hosts) < len(largest):
+        at = {p: np.mean(largest[p][1].reshape(-1, 2), axis=0) for p in largest}
+        for p in sorted(set(largest) - set(hosts), key=lambda q: -total[q]):
+            d = {h: float(np.linalg.norm(at[h] - at[p])) for h in hosts}
+            host = min(d, key=d.get, default=None)
+            if host is not None and d[host] <= same_px:
+                groups[host] += groups.pop(p)
+            else:
+                hosts.append(p)
     return [
-        (c, owner.get(part, []), part)
-        for part, (area, c) in sorted(largest.items())
-        if min_area_px <= area <= max_area_px
+        (largest[p][1], [c for q in group for c in owner.get(q, [])], p)
+        for p, group in sorted(groups.items())
+        if min_area_px <= sum(total[q] for q in group) <= max_area_px
     ]
 
 
@@ -434,11 +460,18 @@ def process_frame(
         contacts = part_contacts(diff, parts, p, noise_contact, hi_s, to_mm)
     found = []
     max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
-    for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area):
+    ppm = p.scale_px_per_mm
+    same_px = SAME_HAND_MM * ppm
+    for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area, same_px):
         got = analyse_hand(main, body, p, diff, mine, to_mm)
         if got is not None:
             got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))
             found.append(got)
+    if found:  # the touching skin, each region to the hand whose palm is nearest
+        regions = touch_regions(diff, body, parts, ppm)
+        palms = [e["palm_px"] for _, e in found]
+        for i, (_, e) in enumerate(found):
+            e.update(touch=hand_touch(regions, palms, i, same_px), px_per_mm=ppm)
     clipped = touching = 0
     if found:  # the sensor's maximum on the hands' touching skin
         x0, y0, x1, y1 = parts.win

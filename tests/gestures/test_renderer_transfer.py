@@ -15,6 +15,7 @@ from plugins.gestures.features import (
     select_static,
     static_size,
 )
+from plugins.gestures.physical import N_PHYS_STATIC
 from plugins.gestures.renderer_gap import feature_names, ks_statistic, separation
 from plugins.gestures.renderer_sets import render_set
 from plugins.gestures.renderer_transfer import transfer_rows
@@ -66,7 +67,7 @@ def test_same_pose_from_both_renderers_gives_the_same_contacts_and_layout():
         counts, spacing = {}, {}
         for r in ("twin", "phalanx"):
             fs = render_set(r, 1, 1, light_scale=light, gestures=g, frames_list=(4,))
-            d = fs.static[4].shape[1] - N_CONTACT
+            d = fs.static[4].shape[1] - N_PHYS_STATIC - N_CONTACT
             counts[r] = np.rint(fs.static[4][:, d]).tolist()  # contact count, mean of 4
             spacing[r] = fs.static[4][1, d + 2]  # two_finger: largest pairwise distance
         assert counts["twin"] == counts["phalanx"] == [1.0, 2.0], (light, counts)
