@@ -13,14 +13,24 @@ What it offers:
 - widgets: ``SafetyBar`` (the e-stop and limits bar every screen shows),
   ``ConsoleFooter`` (the footer every screen shows: E-STOP, ``f1-f10`` and ``?`` always)
 - panels over a screen: ``LeavesForScreen`` (an F-key closes the panel, or it says why not)
+- time left: ``Pace`` (counts done over time: the seconds the rest takes) and
+  ``left_words`` ("about 1 min 10 s left": ``console.tui.time_left``)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
-  a toast only when the screen is not in view; the console's rule, ``console.tui.said``)
+  a toast only when the screen is not in view; the console's rule, ``console.tui.said``);
+  ``lapse`` and ``lapse_if_held`` (a status line true only for a while, or while a run
+  holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
+- keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
+  while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
+  their words wrapped without splitting a key from its word, a number from its unit)
 """
 
 from __future__ import annotations
 
 from console.tui.charts import Chart, Series
+from console.tui.focus_keys import show_keys
+from console.tui.kept_text import KeptText
+from console.tui.lapse import lapse, lapse_if_held
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.panels import LeavesForScreen
@@ -28,6 +38,7 @@ from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
+from console.tui.time_left import Pace, left_words
 from console.tui.util import from_thread, short_path
 
 __all__ = [
@@ -35,12 +46,18 @@ __all__ = [
     "Series",
     "ConsoleFooter",
     "LeavesForScreen",
+    "KeptText",
     "LiteralTable",
     "LongWork",
     "SafetyBar",
     "SessionMessage",
     "escape",
     "said_here",
+    "lapse",
+    "lapse_if_held",
+    "show_keys",
     "from_thread",
     "short_path",
+    "Pace",
+    "left_words",
 ]

@@ -297,7 +297,7 @@ class VibrationService:
         vs = VibrationSession(self.profile, self.plugins, vmap)
         summary = (
             f"{label}: {len(vmap.excitations)} excitations, {vmap.points.size} points, "
-            f"{vmap.freq_hz.size} bins"
+            f"{vmap.freq_hz.size} frequency bins"
         )
         vs.summary = summary
         with self._lock:

@@ -31,7 +31,7 @@ def _screen(fs: int) -> OutputPlan:
     return OutputPlan(
         fs,
         (Segment(np.zeros_like(sig), sig, frozenset(), True, "180 Hz 100 Vpp"),),
-        name="screen-180hz",
+        name="screen-180",
     )
 
 
@@ -47,7 +47,7 @@ def _relay_walk(fs: int) -> OutputPlan:
 
 STIMULI: dict[str, tuple[str, Callable[[int], OutputPlan]]] = {
     **{f"sine-{e}": (f"250 Hz, 20 V peak, 1 s on {e}", _sine_on(e)) for e in (*PATCHES, "PALL")},
-    "screen-180hz": ("180 Hz, 100 Vpp, 1 s on the screen (electrovibration)", _screen),
+    "screen-180": ("180 Hz, 100 Vpp, 1 s on the screen (electrovibration)", _screen),
     "sweep": ("10-625 Hz linear sweep, 10 V peak, 3 s on all patches", _sweep),
     "relay-walk": (
         "250 Hz bursts on PA, PB, PC, PD, PALL in turn (relays switch between)",
@@ -60,15 +60,21 @@ STIMULI: dict[str, tuple[str, Callable[[int], OutputPlan]]] = {
 #: its arrays are built.
 DURATION_S: dict[str, float] = {
     **{f"sine-{e}": 1.0 for e in (*PATCHES, "PALL")},
-    "screen-180hz": 1.0,
+    "screen-180": 1.0,
     "sweep": 3.0,
     "relay-walk": 0.3 * (len(PATCHES) + 1),
 }
 
 
+#: Former names, still played (scripts and notes use them); each stimulus has one name,
+#: the one listed, the same as the signal library's (``screen-180``).
+ALIASES: dict[str, str] = {"screen-180hz": "screen-180"}
+
+
 def make_stimulus(name: str, fs: int, max_s: float = MAX_PLAN_S) -> OutputPlan:
     """The named stimulus at ``fs``, refused before it is built when longer than
     ``max_s`` (the profile's ``[limits] max_plan_s``)."""
+    name = ALIASES.get(name, name)
     if name not in STIMULI:
         hint = suggestion(name, STIMULI, "did you mean {!r}? ")
         raise UserError(f"no test stimulus {name!r}; {hint}available: {', '.join(STIMULI)}")

@@ -8,11 +8,18 @@ shows the progress, then ``summary(result)``, "NAME cancelled" or the error as o
 line (a ``UserError`` as written, anything else as ``NAME failed: ...``); the bar shows
 only while a job runs. When it ends,
 ``LongWork.Finished`` is posted to the parents with the outcome.
+
+While a job runs its line says the time left (``console.tui.time_left``: from the pace
+so far) and, once a step reports nothing for a while, how long it has been in it, so a
+line never stands still; ``expect(frac, seconds)`` says how long the current step should
+take (the bar moves towards ``frac`` meanwhile). The line is wrapped on words, a number
+kept with its unit (``console.tui.kept_text``).
 """
 
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from typing import Any, Protocol, runtime_checkable
 
@@ -23,8 +30,13 @@ from textual.widgets import Label, ProgressBar
 from textual.worker import get_current_worker
 
 from console.core.errors import UserError
+from console.tui.kept_text import wrap_kept
 from console.tui.said import said_here, screen_name
+from console.tui.time_left import left_words, seconds_left
 from console.tui.util import from_thread
+
+#: a step silent this long (s) says how long it has been in it
+QUIET_S = 2.0
 
 Progress = Callable[[float, str], None]
 Job = Callable[[Progress, Callable[[], bool]], Any]
@@ -66,6 +78,12 @@ class LongWork(Horizontal):
         self.result: Any = None
         self.text = idle_text
         self._stop = threading.Event()
+        self._t0 = 0.0  # when the running job started (monotonic s)
+        #: the job's last report: (fraction, message, when), and the step's expected end
+        #: (fraction, seconds) from ``expect``
+        self._report: tuple[float, str, float] | None = None
+        self._expect: tuple[float, float] | None = None
+        self._ticker = None
 
     def compose(self) -> ComposeResult:
         bar = ProgressBar(total=1.0, show_eta=False)
@@ -87,7 +105,7 @@ class LongWork(Horizontal):
         """Status line (and the bar at ``frac``; hidden with None)."""
         self.text = text
         label = self.query_one(Label)
-        label.update(text)
+        label.update(wrap_kept(text, label.size.width))  # "45 MB" never split
         label.set_class(error, "error")
         bar = self.query_one(ProgressBar)
         bar.display = frac is not None
@@ -100,17 +118,29 @@ class LongWork(Horizontal):
         self.show(text, error=True)
         said_here(self, screen_name(self, self.name_running or self.last_name or "long work"), text)
 
-    def start(self, name: str, job: Job, summary: Callable[[Any], str] | None = None) -> bool:
-        """Run ``job`` in a thread worker; False (and a notice) when one already runs."""
+    def start(
+        self,
+        name: str,
+        job: Job,
+        summary: Callable[[Any], str] | None = None,
+        *,
+        cancelled_says: str = "",
+    ) -> bool:
+        """Run ``job`` in a thread worker; False (and a notice) when one already runs.
+        ``cancelled_says``: what a cancel left as it was, said once after "NAME cancelled"
+        (": no model was written")."""
         if self.busy:
             self.say_busy()
             return False
         self.name_running = self.last_name = name
         self.outcome = self.result = None
         self._stop = stop = threading.Event()
+        self._t0, self._report, self._expect = time.monotonic(), None, None
+        if self._ticker is None:
+            self._ticker = self.set_interval(1.0, self._tick)
         self.show(f"{name} ...", 0.0)
         self.run_worker(
-            lambda: self._run(name, job, summary, stop),
+            lambda: self._run(name, job, summary, stop, cancelled_says),
             name=name,
             group=f"long-work-{id(self)}",
             thread=True,
@@ -134,21 +164,58 @@ class LongWork(Horizontal):
             return False
         self._stop.set()
         self.show(f"cancelling {self.name_running} ...", self.progress)
+        self._report = None  # the line says the cancel until the job stopped
         return True
 
+    def expect(self, frac: float, seconds: float) -> None:
+        """The current step should take about ``seconds`` and end at ``frac``: the bar
+        moves towards it meanwhile and the line counts the time down (UI thread)."""
+        if self.busy and self._report is not None:
+            self._expect = (frac, max(seconds, 0.1))
+            self._progress(*self._report[:2], at=self._report[2])
+
+    def on_resize(self) -> None:
+        self.show(self.text, self.progress, error=self.query_one(Label).has_class("error"))
+
+    def _progress(self, frac: float, text: str, at: float | None = None) -> None:
+        """A report of the running job (``frac``, its line): the line with the time left."""
+        now = time.monotonic()
+        if at is None:  # a new report: the last one's expectation is past
+            self._expect, at = None, now
+        self._report = (frac, text, at)
+        shown, left = frac, seconds_left(now - self._t0, frac)
+        quiet = now - at
+        if self._expect is not None:
+            end, seconds = self._expect
+            shown = frac + (end - frac) * min(quiet / seconds, 0.99)
+            rest = seconds_left(now - self._t0, shown)
+            left = max(seconds - quiet, 0.0) + (rest or 0.0) * (1 - end) / max(1 - shown, 1e-9)
+            if quiet > seconds:
+                left = None  # later than expected: no number that is wrong
+        words = [w for w in (left_words(left),) if w]
+        if quiet >= QUIET_S:
+            words.append(f"{quiet:.0f} s in this step")
+        self.show(text + (f" ({', '.join(words)})" if words else ""), shown)
+
+    def _tick(self) -> None:
+        if self.busy and self._report is not None:
+            self._progress(*self._report[:2], at=self._report[2])
+
     # ------------------------------------------------------------------ worker thread
-    def _run(self, name: str, job: Job, summary, stop: threading.Event) -> None:
+    def _run(
+        self, name: str, job: Job, summary, stop: threading.Event, cancelled_says: str = ""
+    ) -> None:
         cancelled = stop_check(stop)
 
         def progress(frac: float, msg: str) -> None:
             if not cancelled():
-                self._call(self.show, f"{name}: {msg}", max(0.0, min(1.0, frac)))
+                self._call(self._progress, max(0.0, min(1.0, frac)), f"{name}: {msg}")
 
         try:
             result = job(progress, cancelled)
         except Exception as exc:  # noqa: BLE001 - every failure becomes one status line
             if cancelled():
-                self._call(self._end, name, "cancelled", None, f"{name} cancelled")
+                self._call(self._end, name, "cancelled", None, f"{name} cancelled{cancelled_says}")
             elif isinstance(exc, UserError):
                 self._call(self._end, name, "failed", exc, str(exc))
             else:
@@ -162,6 +229,10 @@ class LongWork(Horizontal):
 
     def _end(self, name: str, outcome: str, result: Any, text: str) -> None:
         self.name_running = None
+        self._report = self._expect = None
+        if self._ticker is not None:  # idle: no timer
+            self._ticker.stop()
+            self._ticker = None
         self.outcome, self.result = outcome, result
         if not self.is_attached:
             return

@@ -33,7 +33,7 @@ def frf_series(
     """|H| of ``mags`` (S, F) in um/V against frequency, one chart series per excitation
     (for ``charts.Chart`` with a dB axis). Masked bins and bins above ``band_hz`` are left
     out (NaN, never drawn). With ``mark_hz`` each label carries its value at that
-    frequency and a vertical line series ``plays at ... Hz`` marks it."""
+    frequency, in um/V, and a vertical line series ``plays at ... Hz`` marks it."""
     f = np.asarray(freq_hz, float)
     m = np.abs(np.asarray(mags, float))
     keep = np.ones(f.shape, bool) if masked is None else ~np.asarray(masked, bool)
@@ -46,7 +46,7 @@ def frf_series(
         k = int(np.flatnonzero(keep)[np.argmin(np.abs(f[keep] - mark_hz))])
     series = []
     for s, name in enumerate(names):
-        label = name if k is None else f"{name} {m[s, k]:.3g}"
+        label = name if k is None else f"{name} {m[s, k]:.3g} um/V"
         series.append(Series(label, f, np.where(keep, m[s], np.nan)))
     if mark_hz is not None:
         top = float(m[:, keep].max())

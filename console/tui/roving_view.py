@@ -41,7 +41,8 @@ def add_accelerometer_text(profile: Any) -> str:
     return (
         "m measures with the profile's vibrometer; to measure with an accelerometer on the "
         "sound card's inputs (roving sensor, no laser) add [audio_inputs.accel] channel = 1, "
-        f"kind = 'accelerometer', sensitivity = 10.2 to {overrides_path(profile.name)}"
+        "kind = 'accelerometer', sensitivity = 10.2 (mV per m/s^2: a 100 mV/g sensor) to "
+        f"{overrides_path(profile.name)}"
     )
 
 

@@ -16,22 +16,53 @@ from types import SimpleNamespace
 from typing import Any
 
 from console.core.errors import SafetyRefusal, UserError
+from console.core.types import DeviceStatus
+
+NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
+
+
+def _run(profile: Any, pm: Any, args: list[str]) -> tuple[int, Any]:
+    """(exit status, its JSON report) of the ``selftest`` command run with ``args``."""
+    cmd = pm.commands.get("selftest")
+    p = argparse.ArgumentParser()
+    cmd.configure(p)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = int(cmd.run(p.parse_args(args), SimpleNamespace(profile=profile, pm=pm)) or 0)
+    return code, json.loads(buf.getvalue())
+
+
+def selftest_estimate(profile: Any, pm: Any) -> tuple[float, int, bool] | None:
+    """(seconds of chirps a full self-test plays, its paths, whether the twin's map is
+    measured first), nothing played; None when no plugin can say (no such command, or
+    it has no estimate for this table)."""
+    if pm.commands.get("selftest") is None:
+        return None
+    try:
+        _code, got = _run(profile, pm, ["--estimate", "--json"])
+        return float(got["planned_s"]), int(got["paths"]), bool(got.get("map_first"))
+    except (UserError, SafetyRefusal, ValueError, KeyError, TypeError, SystemExit):
+        return None  # an older plugin without --estimate, or no estimate: said as such
+
+
+def selftest_row(done: tuple[bool, str, float] | None) -> DeviceStatus:
+    """The Devices doctor's self-test row: the last run here (healthy, line, seconds),
+    or where to run it (``haptable doctor`` runs its quick part; here s runs it)."""
+    if done is None:
+        return DeviceStatus(
+            "selftest", "full", "not run", "plays a chirp on every relay path", "press s"
+        )
+    ok, line, took_s = done
+    why = line.removeprefix("self-test: ")
+    return DeviceStatus("selftest", "full", "ok" if ok else "error", why, "" if ok else "see log")
 
 
 def run_selftest(profile: Any, pm: Any) -> tuple[bool, str]:
     """(healthy, one line for the status line) of a full self-test on ``profile``."""
-    cmd = pm.commands.get("selftest")
-    if cmd is None:
-        return False, "self-test: no plugin offers it (the vibrotactile plugin does)"
-    p = argparse.ArgumentParser()
-    cmd.configure(p)
-    buf = io.StringIO()
+    if pm.commands.get("selftest") is None:
+        return False, NO_PLUGIN
     try:
-        with contextlib.redirect_stdout(buf):
-            code = int(
-                cmd.run(p.parse_args(["--json"]), SimpleNamespace(profile=profile, pm=pm)) or 0
-            )
-        report = json.loads(buf.getvalue())
+        code, report = _run(profile, pm, ["--json"])
     except (UserError, SafetyRefusal) as exc:
         return False, f"self-test: {exc}"
     except ValueError:

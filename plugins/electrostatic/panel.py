@@ -20,7 +20,15 @@ from textual.widgets.option_list import Option
 
 from console.plugin_api import Conditions, Limits, Presets, UserError
 from console.plugin_api.runtime import Started
-from console.plugin_api.tui import SessionMessage, escape, from_thread, said_here
+from console.plugin_api.tui import (
+    KeptText,
+    SessionMessage,
+    escape,
+    from_thread,
+    lapse_if_held,
+    said_here,
+    show_keys,
+)
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
 
@@ -67,15 +75,15 @@ class ElectrostaticPane(Vertical):
         "+ / -    amplitude (Vpp, held inside [limits] screen_max_vpp)\n"
         "[ / ]    frequency (10-1000 Hz)   t  sine/square   p  play the setting (1 s)"
     )
-    # the footer shows every key at 80 columns: p (the main action) first, each pair of
-    # keys (+ -, [ ]) as one entry
+    # the footer shows every key at 80 columns, the list's Enter first, then p (the main
+    # action), each pair of keys (+ -, [ ]) as one entry
     BINDINGS = [
         Binding("p", "play_custom", "play"),
         Binding("t", "waveform", "sine/square"),
         Binding("plus,equals_sign", "vpp(10)", "+10 Vpp", show=False),
-        Binding("minus", "vpp(-10)", "Vpp ±10", key_display="+ -"),
+        Binding("minus", "vpp(-10)", "Vpp", key_display="+ -"),  # 10 Vpp a step
         Binding("right_square_bracket", "freq(10)", "+10 Hz", show=False),
-        Binding("left_square_bracket", "freq(-10)", "Hz ±10", key_display="[ ]"),
+        Binding("left_square_bracket", "freq(-10)", "Hz", key_display="[ ]"),  # 10 Hz a step
     ]
 
     def __init__(self, **kw) -> None:
@@ -109,11 +117,12 @@ class ElectrostaticPane(Vertical):
             )
             return
         with Horizontal(id="es-top"):
-            yield OptionList(id="es-list")
+            yield show_keys(OptionList(id="es-list"), enter="audition")  # first in the footer
             yield Static(id="es-setting")
-        yield Static(
+        yield KeptText(  # a key and its word on one line, whatever the width
             "enter: audition the highlighted item   + -: amplitude   [ ]: frequency   "
             "t: waveform   p: play the setting",
+            markup=False,
             classes="hint",
         )
         yield Static("", id="es-status", markup=False)
@@ -199,7 +208,7 @@ class ElectrostaticPane(Vertical):
     def _show_setting(self, text: str) -> None:
         notes = "".join(f"\n[yellow]{escape(n)}[/]" for n in self.notes)
         self.query_one("#es-setting", Static).update(
-            f"[b]setting[/b] {self.vpp:g} Vpp (max {self.max_vpp:g}), {self.freq_hz:g} Hz, "
+            f"[b]setting[/b] {self.vpp:g} Vpp (max {self.max_vpp:g} Vpp), {self.freq_hz:g} Hz, "
             f"{escape(self.waveform)}\n" + text + notes
         )
 
@@ -288,6 +297,8 @@ class ElectrostaticPane(Vertical):
             found.first(Static).set_class(error, "error")
             if error:  # in the log too; a toast only while the screen is not in view
                 said_here(found.first(Static), "Electrostatic", text)
+            # a refusal because a run holds the outputs leaves the line when the run ends
+            lapse_if_held(self, self.app.session, lambda: self.status_text, text, self.say)
 
     def on_session_message(self, message: SessionMessage) -> None:
         """A reset clears what the line said the e-stop did (a refusal, a stopped play)."""

@@ -10,6 +10,7 @@ and renamed into place, the model is written to a temporary file and renamed.
 from __future__ import annotations
 
 import contextlib
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -39,7 +40,14 @@ from .synth import estimate as synth_estimate
 
 #: seconds in which a second ``s`` starts the synthesis whose size was shown
 CONFIRM_S = 20.0
-#: what a cancelled job left as it was, by its name's start (said after "NAME cancelled")
+#: the final fit on every sample against one cross-validation fold's training (which
+#: fits (k-1)/k of the samples): measured on the twin (2fold, 1 subject x 10 x 4 and x 6,
+#: a loaded 2-core machine) the final fit took 0.7, 1.1, 1.6 and 7.7 x a fold's mean
+#: (median 1.4 = 2^0.5); a step over its estimate says its seconds instead (LongWork)
+FINAL_FIT_POWER = 0.5
+#: the fields a synthesis's size and time were measured for
+_SYNTH_FIELDS = ("gp-dataset", "gp-subjects", "gp-reps")
+#: what a cancelled job left as it was (said once, after "NAME cancelled": LongWork)
 _CANCELLED_KEPT = {
     "train": ": no model was written",
     "synth": ": the dataset folder is unchanged",
@@ -76,6 +84,16 @@ def _pct(x: float | None) -> str:
     return "-" if x is None else f"{100 * x:.1f} %"
 
 
+def _same(a: Path | str | None, b: Path | str | None) -> bool:
+    """The same file, as typed or resolved."""
+    if a is None or b is None:
+        return False
+    try:
+        return Path(a).expanduser().resolve() == Path(b).expanduser().resolve()
+    except OSError:
+        return str(a) == str(b)
+
+
 def count(text: str, what: str, lo: int = 1, hi: int = 1000) -> int:
     """A whole number from a field, or a one-line ``UserError`` naming the field."""
     try:
@@ -98,8 +116,9 @@ def in_panel(exc: BaseException | str, *shown: Path) -> str:
     return text
 
 
-def describe(info: dict[str, Any]) -> str:
-    """The files block of the panel from ``jobs.describe_files``."""
+def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
+    """The files block of the panel from ``jobs.describe_files``; ``evaluation_below``:
+    the model's evaluation is the result block's (said there, once)."""
     d, m = info.get("dataset", {}), info.get("model", {})
     lines = [f"[b]dataset[/b] {escape(short_path(d.get('path', '?')))}"]
     if not d.get("exists"):
@@ -123,7 +142,9 @@ def describe(info: dict[str, Any]) -> str:
     else:
         ev = m.get("evaluation") or {}
         lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
-        if ev:
+        if ev and evaluation_below:
+            lines.append("  its evaluation: the result below")
+        elif ev:
             lines.append(
                 escape(
                     f"  {ev.get('cv')}: static {_pct(ev.get('static_accuracy'))}, "
@@ -190,6 +211,8 @@ class GesturesPanel(Screen):
         #: until when ``s`` starts it
         self._synth_asked: tuple[tuple[Path, int, int], float] | None = None
         self.files: dict[str, Any] = {}
+        #: the model whose training result the result block shows (its one place)
+        self._result_model: Path | None = None
 
     def compose(self) -> ComposeResult:
         with VerticalScroll():
@@ -254,8 +277,11 @@ class GesturesPanel(Screen):
 
     def _show_files(self, info: dict) -> None:
         self.files = info
+        below = self._result_model is not None and _same(
+            self._result_model, info.get("model", {}).get("path")
+        )
         for w in self.query("#gp-files").results(Static):  # none while the panel closes
-            w.update(describe(info))
+            w.update(describe(info, evaluation_below=below))
 
     def action_synth(self) -> None:
         """``s``: first the size and time (measured on one sample of each kind), then
@@ -292,8 +318,13 @@ class GesturesPanel(Screen):
                 f"{info['seconds']:.1f} s"
             )
 
-        self.query_one("#gp-result", Static).update("")
-        self.work.start(f"synthesizing {subjects} x 10 x {reps}", job, summary)
+        self._clear_result()
+        self.work.start(
+            f"synthesizing {subjects} x 10 x {reps}",
+            job,
+            summary,
+            cancelled_says=_CANCELLED_KEPT["synth"],
+        )
 
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
         _, subjects, reps = asked
@@ -307,7 +338,7 @@ class GesturesPanel(Screen):
             # the key first: a narrow screen cuts the end of the line
             return f"s again within {CONFIRM_S:.0f} s to start: {est['text']}"
 
-        self.query_one("#gp-result", Static).update("")
+        self._clear_result()
         self.work.start("estimate", job, summary)
 
     def action_train(self) -> None:
@@ -326,6 +357,7 @@ class GesturesPanel(Screen):
         live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
+            progress = self._final_fit_paced(progress)
             # `haptable gestures eval DATASET --cv CV`'s procedure, with its defaults, on
             # the profile as saved (what that command reads: vision settings kept with W
             # on the Camera screen since the console started count)
@@ -340,14 +372,40 @@ class GesturesPanel(Screen):
                 res["loaded"] = GestureModel.load(res["model"])
             return res
 
-        def summary(res) -> str:
-            return (
-                f"trained: {res['cv']} static {_pct(res['static_accuracy'])}, dynamic "
-                f"{_pct(res['dynamic_accuracy'])}; saved {Path(res['model']).name}"
-            )
+        def summary(res) -> str:  # the numbers: the result block's, once
+            return f"trained and evaluated in {time.monotonic() - t0:.0f} s: the result below"
 
+        self._clear_result()
+        t0 = time.monotonic()
+        self.work.start("training", job, summary, cancelled_says=_CANCELLED_KEPT["train"])
+
+    def _final_fit_paced(self, progress):
+        """``progress`` that, at the fit on every sample (a step with no report of its
+        own), tells the work line how long it should take: a fold's training time
+        scaled to every sample (``FINAL_FIT_POWER``), so the bar moves and the time
+        left counts down."""
+        folds: list[float] = []
+        state: dict[str, Any] = {}
+
+        def paced(frac: float, msg: str) -> None:
+            progress(frac, msg)
+            now = time.monotonic()
+            m = re.match(r"fold (\d+)/(\d+): (\w+)", msg)
+            if m and m.group(3) == "training":
+                state["since"], state["k"] = now, int(m.group(2))
+            elif m and "since" in state:
+                folds.append(now - state.pop("since"))
+            elif msg.startswith("training on every") and folds:
+                k = max(state.get("k", 2), 2)
+                expect_s = sum(folds) / len(folds) * (k / (k - 1)) ** FINAL_FIT_POWER
+                from_thread(self.app, self.work.expect, 0.97, expect_s)
+
+        return paced
+
+    def _clear_result(self) -> None:
+        """New work: the last result is past (the files block shows its model whole)."""
+        self._result_model = None
         self.query_one("#gp-result", Static).update("")
-        self.work.start("training", job, summary)
 
     def use_model(self, model) -> str:
         """Hand a model trained to the profile's ``[gestures] model`` to the console's
@@ -398,6 +456,20 @@ class GesturesPanel(Screen):
         event.stop()
         self.query_one("#gp-synth", Button).focus()  # leaving the field refreshes the files
 
+    def on_input_changed(self, event: Input.Changed) -> None:
+        """A synthesis field changed under its size and time: the line says they are
+        for other fields now (what is true), and ``s`` measures again."""
+        if event.input.id in _SYNTH_FIELDS and self._synth_asked is not None:
+            self._synth_asked = None
+            self.work.show(f"{event.input.id[3:]} changed: s says the size and time again")
+
+    def _estimate_lapsed(self) -> None:
+        """The time for ``s`` again ran out: the line no longer offers it."""
+        asked = self._synth_asked
+        if asked is not None and time.monotonic() > asked[1] and not self.work.busy:
+            self._synth_asked = None
+            self.work.show("the estimate lapsed: s says the size and time again")
+
     def on_input_blurred(self, event: Input.Blurred) -> None:
         if event.input.id in ("gp-dataset", "gp-model"):
             self.action_refresh()  # the files block follows the fields
@@ -407,7 +479,8 @@ class GesturesPanel(Screen):
             text = fold_lines(event.result)
             if "loaded" in event.result:
                 text += "\n" + self.use_model(event.result["loaded"])
+            self._result_model = Path(event.result["model"])
             self.query_one("#gp-result", Static).update(text)
-        elif event.outcome == "cancelled":  # said once, on the work's own line
-            self.work.show(f"{event.name} cancelled{_CANCELLED_KEPT.get(event.name[:5], '')}")
+        elif event.outcome == "done" and event.name == "estimate":
+            self.set_timer(CONFIRM_S + 0.1, self._estimate_lapsed)
         self.action_refresh()

@@ -45,9 +45,16 @@ from textual.widgets import (
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
-from console.plugin_api.tui import LiteralTable, SessionMessage, escape, said_here
+from console.plugin_api.tui import (
+    LiteralTable,
+    Pace,
+    SessionMessage,
+    escape,
+    said_here,
+    show_keys,
+)
 
-from . import adaptive_console, panel_fit
+from . import adaptive_console, panel_fit, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
@@ -58,7 +65,6 @@ from .panel_text import (
     next_id,
     same_folder,
     status_lines,
-    trial_text,
 )
 from .record_switch import RECORD, folder_row
 from .responders import QueueResponder, parse_key
@@ -160,6 +166,8 @@ class StudiesPane(Vertical):
         #: (folder, experiment) of the analysis shown (analysed again after a run there)
         self.analysed: tuple[Path, str] | None = None
         self.run_out: Path | None = None  # the folder of the run going on
+        self.run_study: str | None = None  # and its protocol (analysed when it stops)
+        self.pace = Pace()  # trials done over time: the time left
         self._show_result = True  # the analysis coming in switches to its view
         self.notes: list[str] = []
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
@@ -175,11 +183,14 @@ class StudiesPane(Vertical):
         # is cut short and gone once the field is filled)
         with Horizontal(id="study-form", classes="study-row"):
             yield Label("protocol", markup=False)
-            yield Select(
-                [(n, n) for n in names],
-                value=names[0] if names else Select.BLANK,
-                id="protocol",
-                compact=True,
+            yield show_keys(  # its Enter in the footer while it has the focus
+                Select(
+                    [(n, n) for n in names],
+                    value=names[0] if names else Select.BLANK,
+                    id="protocol",
+                    compact=True,
+                ),
+                enter="protocols",
             )
             yield Label("participant", markup=False)
             yield Input("P01", placeholder="id", id="participant", compact=True)
@@ -300,7 +311,8 @@ class StudiesPane(Vertical):
         self.said = ("", "information")  # a new run: the last key's outcome is history
         self.query_one("#study-trials", TrialsTable).clear_trials()
         self.query_one("#study-progress", ProgressBar).update(total=1, progress=0)
-        self.run_out = spec["out"]
+        self.run_out, self.run_study = spec["out"], spec["study"]
+        self.pace.stop()  # the pace of this run, from its first count
         if self.analysed is not None and same_folder(self.analysed[0], spec["out"]):
             self.query_one("#analysis-head", Static).update(
                 f"stale: {spec['pid']}'s run is writing to {spec['out']}; analysed again "
@@ -382,7 +394,7 @@ class StudiesPane(Vertical):
             self.control.abort("aborted by the experimenter")
             self._show()  # at once, until the run stopped
             return
-        self.abort_until = now + CONFIRM_S
+        self.abort_until, self.said = now + CONFIRM_S, ("", "information")  # the question
         self._show()
         self.set_timer(CONFIRM_S + 0.05, self._show)  # the question goes when it expires
 
@@ -413,7 +425,11 @@ class StudiesPane(Vertical):
         now = next(
             v for v in ("analysis", "plot", "trials") if self.query_one(f"#study-{v}").display
         )
-        self._view(next_view(now, self.query_one(AdaptiveView).has_plot))
+        view = next_view(now, self.query_one(AdaptiveView).has_plot)
+        if view == "analysis" and self.analysed is None and self.check_action("analyse", ()):
+            self.action_analyse()  # nothing analysed yet: the folder's runs, now
+            return
+        self._view(view)
 
     def action_track(self, step: int) -> None:
         """``[`` / ``]``: the plot's previous / next track (the plot shown)."""
@@ -522,10 +538,7 @@ class StudiesPane(Vertical):
                 if field.value.strip() == ev.name:
                     field.value = next_id(ev.name)
             self._show()
-            out, self.run_out = self.run_out, None
-            if self.analysed is not None and out is not None and same_folder(self.analysed[0], out):
-                again = f" again after {ev.name}'s run"
-                self._start_analysis(*self.analysed, why=again, show=False)
+            panel_status.analyse_after_run(self, ev.name)  # t shows it at once
         elif isinstance(ev, Failed):
             said_here(self, "Studies", ev.message, ev.severity)  # the log has it too
             if ev.name == "study analysis":  # not a participant id (a space)
@@ -540,6 +553,9 @@ class StudiesPane(Vertical):
             return
         if kind in adaptive_console.PLOT_KINDS:
             self.query_one(AdaptiveView).snapshot(d)
+        if panel_status.said_lapses(self.said, kind):  # the run moved on: the key's past
+            self.said = ("", "information")
+        panel_status.pace_snapshot(self.pace, self.last, kind, d)
         if kind == "progress":
             bar = self.query_one("#study-progress", ProgressBar)
             bar.update(total=max(int(d["total"]), 1), progress=int(d["done"]))
@@ -591,22 +607,7 @@ class StudiesPane(Vertical):
 
     def _add_row(self, r: dict[str, Any]) -> None:
         """A done trial's row in the trials table (followed unless the cursor moved)."""
-        rt = r.get("response_time_s")
-        if r.get("completion_time_s") is not None or "overshoots" in r:
-            ct = r.get("completion_time_s")
-            resp = f"{'timeout' if ct is None else f'{ct:.2f} s'} {r.get('overshoots')} ovs"
-        else:
-            resp = str(r.get("response"))
-        table = self.query_one("#study-trials", TrialsTable)
-        what = trial_text(r)
-        table.add_trial(
-            str(r["trial"] + 1),
-            what,
-            resp,
-            "yes" if r.get("correct") else "no",
-            str(r.get("replays", 0)),
-            "-" if rt is None else f"{rt:.2f} s",
-        )
+        self.query_one("#study-trials", TrialsTable).add_trial(*panel_status.trial_row(r))
 
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])

@@ -88,6 +88,8 @@ def status_lines(
     who = running or L.get("pid") or "-"  # the participant also once stopped
     if "total" in L:
         done = f"{escape(L['done'])}/{escape(L['total'])} trials done"
+        if running and L.get("left"):  # at the pace so far (panel_status)
+            done += f", {escape(L['left'])}"
     else:  # no plan reached yet (a refused start): no count to show
         done = "not started" if not running else "preparing"
     head = f"[b]{escape(who)}[/b]: " + done  # done: escaped above

@@ -207,7 +207,7 @@ def hand_flow_plan(
     return OutputPlan(
         st.sample_rate_hz,
         segs,
-        name=name or f"hand flow {direction} at {cx:g},{cy:g} ({method})",
+        name=name or f"hand flow {direction} at {cx:g},{cy:g} mm ({method})",
         gap_s=st.gap_s,
         meta=meta,
     )

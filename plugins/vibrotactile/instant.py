@@ -99,7 +99,7 @@ def plan_from_search(
     return OutputPlan(
         st.sample_rate_hz,
         segs,
-        name=name or f"hand flow {direction} at {cx:g},{cy:g}",
+        name=name or f"hand flow {direction} at {cx:g},{cy:g} mm",
         gap_s=gap["gap_s"],
         meta=meta,
     )

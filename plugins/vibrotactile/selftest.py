@@ -192,6 +192,15 @@ def measure_paths(outputs: Any, s: SelftestSettings) -> dict[str, Any]:
     return {"paths": paths, "freqs_hz": freqs, "h": np.array(hs), "coherence": np.array(cohs)}
 
 
+def planned_s(profile: Any, quick: bool = False) -> tuple[float, int]:
+    """(seconds of chirp and ring-out a run plays, paths) of a self-test on ``profile``:
+    what it takes at least, said before it starts (nothing plays here)."""
+    s = QUICK if quick else FULL
+    fs = int(profile.get("audio.sample_rate_hz"))
+    paths = EXCITATIONS if s.pall else EXCITATIONS[:4]
+    return sum(path_plan(exc, s.roving(), fs)[0].duration_s for exc in paths), len(paths)
+
+
 def save_baseline(path: Path, got: dict[str, Any], ref: tuple[int, float, float]) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")

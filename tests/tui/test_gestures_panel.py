@@ -84,7 +84,9 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
             result = str(res.render())
             assert "fold 1" in result and "fold 2" in result and "2fold" in result
             assert model.is_file()
-            await wait_for(pilot, lambda: "folds" in str(files.render()), 10, "model files")
+            # the model in the files block; its evaluation said once, in the result
+            await wait_for(pilot, lambda: "result below" in str(files.render()), 10, "files")
+            assert "fold 1" not in str(files.render()) and "below" in work.text
             assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures.skops", "set"]
 
             # the e-stop works here too, and the panel's safety bar shows it

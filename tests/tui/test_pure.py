@@ -19,7 +19,8 @@ def test_frf_series_mark_the_chosen_frequency_with_each_excitations_value():
     f = np.linspace(0, 600, 601)
     mags = np.vstack([1 / (1 + ((f - f0) / 5) ** 2) for f0 in (100, 200, 300)])
     series = frf_series(f, mags, ("PA", "PB", "PALL"), mark_hz=200.0)
-    assert [s.label for s in series] == ["PA 0.00249", "PB 1", "PALL 0.00249", "plays at 200 Hz"]
+    labels = [s.label for s in series]  # each value with its unit
+    assert labels == ["PA 0.00249 um/V", "PB 1 um/V", "PALL 0.00249 um/V", "plays at 200 Hz"]
     np.testing.assert_array_equal(series[1].y, mags[1])  # um/V as measured: the chart does dB
     mark = series[-1]
     assert list(mark.x) == [200.0, 200.0] and mark.y[1] == 1.0 and mark.y[0] == 1e-3

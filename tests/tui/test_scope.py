@@ -133,7 +133,7 @@ def test_the_last_plan_is_kept_after_the_ring_moved_on_and_a_new_play_unfreezes(
             await pilot.press("p")
             head = _text(app, "#scope-head")
             assert "FROZEN ON THE LAST PLAN |" in head, head
-            assert "gone" not in head and "last plan screen-180hz: 1.00 s on screen (done)" in head
+            assert "gone" not in head and "last plan screen-180: 1.00 s on screen (done)" in head
             assert pane.shown.n >= FS  # the whole second
             assert "peak: piezo 0.0 V" in _text(app, "#scope-info")
             assert "space runs live" in head

@@ -20,17 +20,22 @@ from console.config.profile import load_profile, overrides_path, save_overrides
 from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
-from console.runtime.doctor import diagnose
+from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.session.events import Started
 from console.signals.stimuli import STIMULI, make_stimulus
+from console.tui.focus_keys import show_keys
+from console.tui.kept_text import KeptText, wrap_kept
+from console.tui.lapse import lapse_if_held
 from console.tui.said import said_here
-from console.tui.selftest_action import run_selftest
+from console.tui.selftest_action import run_selftest, selftest_estimate, selftest_row
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
 log = logging.getLogger(__name__)
 
+#: about how long the twin's vibration map takes to measure (the Vibration screen's m)
+TWIN_MAP_S = 10.0
 #: the widest a table cell gets on this screen (a longer text ends in "…": the whole
 #: text is in the log, ctrl+l, and enter on the row says it)
 CELL_MAX = 36
@@ -148,10 +153,11 @@ class DevicesPane(VerticalScroll):
         "s        self-test: chirp every relay path, compare with the baseline"
     )
     BINDINGS = [
-        Binding("d", "doctor(True)", "Re-check devices"),
-        Binding("l", "list_devices(True)", "List again"),
-        Binding("t", "test_output", "Test signal"),
-        Binding("s", "selftest", "Self-test"),
+        # short words: every key shows in the footer at 80 columns, a table's Enter first
+        Binding("d", "doctor(True)", "doctor"),
+        Binding("l", "list_devices(True)", "list"),
+        Binding("t", "test_output", "test"),
+        Binding("s", "selftest", "self-test"),
     ]
 
     def __init__(self, **kw) -> None:
@@ -163,20 +169,25 @@ class DevicesPane(VerticalScroll):
         self.unusable_boards: dict[str, DeviceStatus] = {}
         self.plugin_rows: dict[str, str] = {}  # row key -> the plugin's line, whole
         self.result = ""  # the last pick or test, as shown
+        self.doctor_rows: list[DeviceStatus] = []  # the doctor's rows, as shown
+        #: the self-test's row: its last run here (None: not run), its seconds then
+        self.selftest_done: tuple[bool, str, float] | None = None
+        self._selftest_timer = None  # the self-test's progress ticks while it runs
 
     def compose(self) -> ComposeResult:
-        yield Static(id="profile-line", markup=False)
+        yield KeptText(id="profile-line", markup=False)
         # the screen's status line: what a pick or a test did, where it is seen whole
-        result = Static("", id="devices-result", markup=False)
+        result = KeptText("", id="devices-result", markup=False)  # a number with its unit
         result.display = False  # shown once it has something to say
         yield result
-        yield LiteralTable(id="device-table", cursor_type="row")
+        # each table's Enter first in the footer while it has the focus
+        yield show_keys(LiteralTable(id="device-table", cursor_type="row"), enter="whole row")
         yield Static(
             "sound card (enter uses it; saved to the profile's overrides)", classes="heading"
         )
-        yield LiteralTable(id="audio-table", cursor_type="row")
+        yield show_keys(LiteralTable(id="audio-table", cursor_type="row"), enter="use")
         yield Static("relay board (enter uses it)", classes="heading")
-        yield LiteralTable(id="relay-table", cursor_type="row")
+        yield show_keys(LiteralTable(id="relay-table", cursor_type="row"), enter="use")
         yield Static("test signal (t plays it through the gate)", classes="heading")
         yield Select(
             [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
@@ -185,7 +196,7 @@ class DevicesPane(VerticalScroll):
             id="stimulus",
         )
         yield Static("plugins and what they provide", classes="heading")
-        yield LiteralTable(id="plugin-table", cursor_type="row")
+        yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole line")
 
     @property
     def focus_target(self):
@@ -196,8 +207,6 @@ class DevicesPane(VerticalScroll):
     def on_mount(self) -> None:
         ctx = self.app.ctx
         self._show_profile_line()
-        dev = self.query_one("#device-table", DataTable)
-        dev.add_columns("device", "driver", "state", "why", "fix")
         self.query_one("#audio-table", DataTable).add_columns(
             "", "driver", "device", "host API", "ch", "latency ms", "note"
         )
@@ -256,7 +265,9 @@ class DevicesPane(VerticalScroll):
             return
         if said:
             self._say("re-checking the profile's devices ...")
-        rows = diagnose(prof, app.ctx.pm)
+        # the same checks as `haptable doctor`; its quick self-test plays: here s runs it
+        rows = [*diagnose(prof, app.ctx.pm), realtime_status(prof, app.ctx.pm)]
+        rows += [scheduling_status(prof, app.ctx.pm)]
         from_thread(app, self._show, rows, said)
 
     def _show(self, rows, said: bool = False) -> None:
@@ -264,25 +275,40 @@ class DevicesPane(VerticalScroll):
             return
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
+        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done)]
         table = self.query_one("#device-table", DataTable)
-        table.clear()
+        table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
-        # why and fix share what the first columns leave: a cut cell ends in "…"
-        why_w, fix_w = share(
-            self._note_width(table, firsts),
-            (_need("why", [s.why for s in rows]), _need("fix", [s.fix for s in rows])),
-        )
+        for head in ("device", "driver", "state"):
+            table.add_column(head)
+        # why and fix share what the first columns leave, the fix whole first (it says
+        # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
+        left = self._note_width(table, firsts, ("device", "driver", "state"))
+        fix_w = min(_need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
+        why_w = max(NOTE_MIN, left - fix_w - 2)
+        table.add_column("why", width=why_w)
+        table.add_column("fix", width=fix_w)
         for s in rows:
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
             )
+            # wrapped here (a row's height known as it is added: the list below it is
+            # scrolled into view at once), a number with its unit on one line
+            why = wrap_kept(" ".join(s.why.split()), why_w)
+            fix = wrap_kept(" ".join(s.fix.split()), fix_w)
+            lines = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
             table.add_row(
-                Text(s.kind),
-                Text(s.name),
-                Text.from_markup(state),
-                _cell(s.why, f"{s.kind} {s.name}", why_w),
-                _cell(s.fix, f"{s.kind} {s.name}: fix", fix_w),
+                Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
             )
+        self._keep_focused_in_view()  # the rows above a list grew
+
+    @on(DataTable.RowSelected, "#device-table")
+    def _about_device(self, event: DataTable.RowSelected) -> None:
+        """Enter on a device's row: its whole line on the status line."""
+        if 0 <= event.cursor_row < len(self.doctor_rows):
+            s = self.doctor_rows[event.cursor_row]
+            fix = f"; fix: {s.fix}" if s.fix else ""
+            self._show_result(f"{s.kind} {s.name}: {s.state}: {s.why}{fix}")
 
     # ------------------------------------------------------------------ listing
     @work(thread=True, exclusive=True, group="devices")
@@ -330,15 +356,25 @@ class DevicesPane(VerticalScroll):
         )
 
     @staticmethod
-    def _note_width(table: DataTable, rows: list[list]) -> int:
+    def _note_width(table: DataTable, rows: list[list], heads: tuple = ()) -> int:
         """What the note column can show: the table's width less the other columns
-        (each as wide as its widest cell or header, plus its padding), cut with …."""
-        heads = [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
+        (each as wide as its widest cell or header ``heads``, default the table's, plus
+        its padding), cut with …."""
+        heads = (
+            heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
+        )
         width = table.size.width or table.app.size.width - 2  # the screen's scrollbar
         used = sum(
             max(len(str(c)) for c in [h, *col]) + 2 for h, *col in zip(heads, *rows, strict=True)
         )
         return max(NOTE_MIN, width - used - 2)  # the note's own padding
+
+    def _first_usable(self, rows) -> int:
+        """The row the sound-card cursor starts on: the card in use (●), else the first
+        Enter can use (a driver that found no card is no place to start)."""
+        marked = [i for i, (_k, cells, _n) in enumerate(rows) if cells[0] == "●"]
+        usable = [i for i, (key, _c, _n) in enumerate(rows) if key not in self.no_device_rows]
+        return (marked or usable or [0])[0]
 
     def _show_devices(self, audio, relays, said: bool = False) -> None:
         if not self.query("#audio-table"):  # a worker finishing while the console closes
@@ -356,6 +392,8 @@ class DevicesPane(VerticalScroll):
         note_w = self._note_width(table, [cells for _key, cells, _note in rows])
         for key, cells, (note, where) in rows:
             table.add_row(*cells, _cell(note, where, note_w) if note else "", key=key)
+        table.move_cursor(row=self._first_usable(rows), animate=False)
+        self._keep_focused_in_view()  # the list grew: the focused one is seen whole
         rtable = self.query_one("#relay-table", DataTable)
         rtable.clear()
         self.relay_rows.clear()
@@ -503,10 +541,44 @@ class DevicesPane(VerticalScroll):
 
     @work(thread=True, exclusive=True, group="test-output")
     def action_selftest(self) -> None:
-        """Every relay path chirped and compared (``console.tui.selftest_action``)."""
-        self._say("self-test: chirping each relay path through the gate ...")
-        ok, line = run_selftest(self._profile(), self.app.ctx.pm)
-        self._say(line, error=not ok)
+        """Every relay path chirped and compared (``console.tui.selftest_action``): the
+        line says how long it takes before it starts, then how far it is."""
+        prof, pm = self._profile(), self.app.ctx.pm
+        est = selftest_estimate(prof, pm)
+        last_s = self.selftest_done[2] if self.selftest_done else 0.0
+        about = f"{est[1]} relay paths, {est[0]:.0f} s of chirps" if est else "time unknown"
+        total_s = est[0] if est else 0.0
+        if est and est[2]:  # a fresh twin: its map first (the Vibration screen's m)
+            about += f", the twin's vibration map first (about {TWIN_MAP_S:.0f} s)"
+            total_s += TWIN_MAP_S
+        elif last_s:  # the last run here knows the setup around the chirps
+            about += f", the last run took {last_s:.0f} s"
+            total_s = max(total_s, last_s)
+        self._say(f"self-test ({about}): starting ...")
+        t0 = time.monotonic()
+        from_thread(self.app, self._selftest_ticks, t0, about, total_s)
+        ok, line = run_selftest(prof, pm)
+        took_s = 0.0 if est and est[2] else time.monotonic() - t0  # a map run: no guide
+        from_thread(self.app, self._selftest_ended, ok, line, took_s)
+
+    def _selftest_ticks(self, t0: float, about: str, total_s: float) -> None:
+        """While the self-test runs: the line says its seconds so far of the estimate."""
+
+        def tick() -> None:
+            gone_s = time.monotonic() - t0
+            done = f" ({gone_s / total_s:.0%})" if 0 < gone_s < total_s else ""
+            self._show_result(f"self-test ({about}): {gone_s:.0f} s so far{done} ...")
+
+        self._selftest_timer = self.set_interval(0.5, tick)
+
+    def _selftest_ended(self, ok: bool, line: str, took_s: float) -> None:
+        if self._selftest_timer is not None:
+            self._selftest_timer.stop()
+            self._selftest_timer = None
+        self.selftest_done = (ok, line, took_s)
+        self._show_result(line, error=not ok)
+        if self.doctor_rows:  # its row in the devices table says it too
+            self._show(self.doctor_rows[:-1])
 
     def _show_result(self, text: str, error: bool = False, severity: str = "") -> None:
         """The screen's status line, the newest message replacing it: docked at the
@@ -523,6 +595,8 @@ class DevicesPane(VerticalScroll):
             line.set_class(error, "error")
             if severity:
                 said_here(line, "Devices", text, severity)
+            # a refusal because a run holds the outputs leaves the line when it ends
+            lapse_if_held(self, self.app.session, lambda: self.result, text, self._show_result)
             self.call_after_refresh(self._focused_in_view)
 
     def on_session_message(self, message: SessionMessage) -> None:
@@ -531,6 +605,15 @@ class DevicesPane(VerticalScroll):
         ev = message.event
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
             self._show_result("e-stop reset: t plays the test signal, enter picks a row")
+
+    def _keep_focused_in_view(self) -> None:
+        """``_focused_in_view`` once a table's new rows are laid out (the table sizes
+        itself on its own refresh, after this screen's next one)."""
+        self.call_after_refresh(self.call_after_refresh, self._focused_in_view)
+
+    def on_descendant_focus(self, event) -> None:
+        """A list taking the focus (the screen's first, Tab) is scrolled into view."""
+        self._keep_focused_in_view()
 
     def _focused_in_view(self) -> None:
         """The table with the focus stays in view when the lines above it grow (a

@@ -9,6 +9,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
+from console.tui.focus_keys import show_keys
 from console.tui.live import live_of
 from console.tui.safety_bar import relay_names
 from console.tui.said import said_here
@@ -126,7 +127,8 @@ class RelaysPane(VerticalScroll):
                 label = Label(self._relay_label(ch), classes="relay-name", markup=False)
                 label.styles.width = width
                 yield label
-                yield Switch(value=False, id=f"relay-{ch}")
+                # its own keys first in the footer while it has the focus
+                yield show_keys(Switch(value=False, id=f"relay-{ch}"), enter="toggle")
                 yield Static("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
         yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)

@@ -13,6 +13,7 @@ from textual.widgets import Static
 
 from console.session.core import PLAN_MARGIN_S
 from console.tui.charts import Chart, Series
+from console.tui.kept_text import KeptText
 from console.tui.scope_recording import SCOPE_REPLAY_BINDINGS, ScopeRecordingMixin
 
 #: the time windows ``+``/``-`` step through, in ms
@@ -69,8 +70,9 @@ class ScopePane(ScopeRecordingMixin, Vertical):
         "p        the last played plan, whole (frozen until the next plan plays)\n"
         "+ / -    shorter / longer time window (on the last plan: around its middle,\n"
         "         - back out to the whole plan)\n"
-        "o        a recording (haptable demo ... --record FILE): type its path, Enter shows\n"
-        "         its plans (re-rendered from their recorded parameters, the hash checked);\n"
+        "o        a recording (Studies: record trials; a demo from a shell: haptable demo\n"
+        "         flow --record FILE): type its path, Enter shows its plans (re-rendered\n"
+        "         from their recorded parameters, the hash checked);\n"
         "         [ / ] the previous / next plan, Esc the live view again\n"
         "What the safety gate handed the driver, per channel, in volts at the actuators."
     )
@@ -99,7 +101,7 @@ class ScopePane(ScopeRecordingMixin, Vertical):
         self.draws = 0  # how often the chart was drawn (tests count it)
 
     def compose(self) -> ComposeResult:
-        yield Static("", id="scope-head", markup=False)
+        yield KeptText("", id="scope-head", markup=False)  # "50 ms" never split
         yield Chart(
             x_label="time",
             x_unit="ms",

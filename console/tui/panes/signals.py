@@ -30,6 +30,8 @@ from console.session.events import ESTOP_FIX, Failed, PlayOutcome, Started
 from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
+from console.tui.kept_text import KeptText
+from console.tui.list_keys import KeyedList
 from console.tui.said import said_here
 from console.tui.util import from_thread
 
@@ -116,9 +118,14 @@ class SignalsPane(Vertical):
             yield Label(" on ")
             yield Input("PA", placeholder="PA,PC|screen", id="sig-target", compact=True)
             yield Static(self._hint(), classes="hint", id="sig-hint")
-        yield Static("", id="sig-status")
+        yield KeptText("", id="sig-status", markup=False)  # "0.5 s" never split
         with Horizontal(id="sig-main"):
-            yield OptionList(id="sig-library")
+            # enter and delete in the footer while the library has the focus
+            yield KeyedList(
+                keys={"enter": "load", "delete": "remove"},
+                on_delete=self._delete_pressed,
+                id="sig-library",
+            )
             yield Chart(
                 title="waveform", x_label="time", x_unit="s", y_label="", y_unit="V", id="sig-wave"
             )
@@ -405,17 +412,18 @@ class SignalsPane(Vertical):
         self.show_preview()
 
     def on_option_list_option_highlighted(self, event: OptionList.OptionHighlighted) -> None:
-        if event.option.id != self._delete:
-            self._delete = None  # a delete asked for another signal: it lapses
+        if self._delete is not None and event.option.id != self._delete:
+            self._keep_asked()  # a delete asked for another signal: it lapses
 
     def on_key(self, event) -> None:
-        ol = self.query_one("#sig-library", OptionList)
-        if event.key != "delete":
-            self._delete = None  # any other key: the question lapses
-            return
-        if self.app.focused is ol and ol.highlighted is not None:
-            event.stop()
-            self._delete_pressed(ol.get_option_at_index(ol.highlighted).id or "")
+        if event.key != "delete" and self._delete is not None:
+            self._keep_asked()  # any other key: the question lapses
+
+    def _keep_asked(self) -> None:
+        """The delete question lapses: the status line says the signal stays (it asked)."""
+        name, self._delete = self._delete, None
+        if self._status_line.startswith("delete again to remove"):
+            self.status(f"{name} kept (delete twice removes it)")
 
     def _delete_pressed(self, name: str) -> None:
         """Delete on a library entry: the first press asks, a second on the same entry

@@ -22,6 +22,8 @@ from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.session.vibration import Cancelled
 from console.tui.charts import Chart
 from console.tui.command_line import CommandLine, prompted
+from console.tui.kept_text import KeptText
+from console.tui.lapse import lapse, lapse_if_held
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_commands import run_command
 from console.tui.panes.vibration_grid import PointGrid
@@ -30,6 +32,8 @@ from console.tui.panes.vibration_words import (
     COMMANDS,
     HELP,
     HELP_KEYS,
+    MEASURE_AGAIN,
+    MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
     NOTHING_TO_CANCEL,
     Ask,
@@ -44,9 +48,6 @@ from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
-
-#: ``m`` with a kept map asks first; ``m`` again within this many seconds measures anew
-MEASURE_AGAIN_S = 5.0
 
 
 class VibrationPane(VerticalScroll):
@@ -101,7 +102,7 @@ class VibrationPane(VerticalScroll):
             yield Label("", id="vib-status", markup=False)
         with Horizontal(id="vib-top"):
             yield PointGrid(id="grid", cursor_type="cell", zebra_stripes=False, cell_padding=0)
-            yield Static(id="vib-info")
+            yield KeptText(id="vib-info")  # a key and its word on one line
         yield Chart(
             title="FRF of the selected point",
             x_label="frequency",
@@ -345,10 +346,9 @@ class VibrationPane(VerticalScroll):
         kept = command is None and self.service.cached_map_path().is_file()
         if kept and now - self._measure_asked > MEASURE_AGAIN_S:  # it would be replaced
             self._measure_asked = now
-            self.status(
-                f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew and "
-                "replaces the kept map (the demos and studies use it too)"
-            )
+            self.status(MEASURE_AGAIN)  # the question leaves the line when it lapses
+            then, shown = self.summary, lambda: self.status_text  # the map's line after
+            lapse(self, shown, MEASURE_AGAIN, self.status, MEASURE_AGAIN_S, then=then)
             return
         self._measure_asked = -1e9
         self.status("measuring ...", 0.0)
@@ -606,7 +606,8 @@ class VibrationPane(VerticalScroll):
             if mine:
                 self.status(f"played {plan.name}: {describe_plan(plan)}")
         elif outcome.refused:
-            self.status(f"{plan.name} {outcome.refused}", error=True)
+            self.status(said := f"{plan.name} {outcome.refused}", error=True)
+            lapse_if_held(self, self.app.session, lambda: self.status_text, said, self.status)
         elif outcome.stopped.startswith("the e-stop"):
             self._estopped(ask, estop_reason(outcome.stopped))
         else:
@@ -682,7 +683,6 @@ class VibrationPane(VerticalScroll):
         from_thread(self.app, self._show_info, text, freq, mags, mark, sel[-1])
 
     def _show_info(self, text: str, freq, mags, mark, point: int) -> None:
-
         s = self.session
         if not self.query("#vib-info"):  # a worker finishing while the console closes
             return

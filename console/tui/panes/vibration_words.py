@@ -13,10 +13,10 @@ from console.tui.text import escape
 #: the ``:`` line's commands, one name each: its hint and the help show this line
 COMMANDS = "51; 51 52; hand 51 up; measure; tables; cancel; import PA=F.uff; load F.npz"
 HELP = (
-    "enter: audition the point\n"
+    "enter: audition a point\n"
     "f / r: flow between the last two points, either way (listed here once chosen)\n"
     "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
-    "m: measure   b: build the lookup tables   x: cancel   : command line\n"
+    "m: measure   b: build tables   x: cancel   : command line\n"
     f"{COMMANDS}"
 )
 #: the ``?`` help: every key of the screen, the side panel named as such
@@ -30,6 +30,12 @@ HELP_KEYS = (
     ": opens the command line; on it ctrl+u clears it, escape gives the keys back to "
     "the grid\n"
     f"commands: {COMMANDS}"
+)
+#: ``m`` with a kept map asks first; ``m`` again within this many seconds measures anew
+MEASURE_AGAIN_S = 5.0
+MEASURE_AGAIN = (
+    f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew and replaces the kept "
+    "map (the demos and studies use it too)"
 )
 NOTHING_TO_CANCEL = "x: nothing to cancel (no measurement, import, load or table build runs)"
 MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"

@@ -62,6 +62,11 @@ def configure_selftest(p: argparse.ArgumentParser) -> None:
         "monitor inputs (channel gains only; default: the accelerometer when there is one)",
     )
     p.add_argument("--doctor", action="store_true", help=argparse.SUPPRESS)  # doctor's part
+    p.add_argument(
+        "--estimate",
+        action="store_true",
+        help="say how long the run plays (seconds of chirps, paths) and play nothing",
+    )
 
 
 def skipped_why(profile: Any) -> str | None:
@@ -72,7 +77,8 @@ def skipped_why(profile: Any) -> str | None:
     if find_input(specs, "accelerometer") is None and find_input(specs, "amp_monitor") is None:
         return (
             "no accelerometer among [audio_inputs]: add [audio_inputs.accel] channel = 1, "
-            "kind = 'accelerometer', sensitivity = 10.2 and glue it at [selftest] "
+            "kind = 'accelerometer', sensitivity = 10.2 (mV per m/s^2: a 100 mV/g sensor) "
+            "and glue it at [selftest] "
             "reference_point (or an amp_monitor input for the amplifiers alone)"
         )
     return None
@@ -160,6 +166,8 @@ def run_selftest_cmd(args, ctx) -> int:
     why = skipped_why(ctx.profile)
     if why:
         raise UserError(f"{ctx.profile.path}: selftest: {why}")
+    if args.estimate:
+        return _estimate(args, ctx)
     fast = True if args.fast else None
     r = selftest_report(
         ctx,
@@ -187,6 +195,39 @@ def run_selftest_cmd(args, ctx) -> int:
                 + f", {r['elapsed_s']:.1f} s)"
             )
     return 0 if r["ok"] else 1
+
+
+def _estimate(args, ctx) -> int:
+    """``--estimate``: the seconds of audio a run plays and its paths, nothing played."""
+    # lazy: the test's module loads only when asked
+    from plugins.vibrotactile.selftest import planned_s
+
+    if sensor_of(ctx.profile, args.sensor) == "amp_monitor":
+        raise UserError("selftest --estimate: the amplifiers' monitor test has no estimate yet")
+    seconds, paths = planned_s(ctx.profile, quick=args.quick)
+    first = _map_first(ctx, args)
+    if args.json:
+        print(json.dumps({"planned_s": seconds, "paths": paths, "map_first": first}))
+    else:
+        then = "; the twin's vibration map is measured first" if first else ""
+        print(f"{paths} paths, {seconds:.1f} s of chirps and ring-out{then}")
+    return 0
+
+
+def _map_first(ctx, args) -> bool:
+    """Whether a run measures the twin's vibration map before its chirps (no baseline,
+    no map given or kept: the first run on a fresh twin)."""
+    # lazy: as in _estimate
+    from console.plugin_api.runtime import kept_measured_map
+    from plugins.vibrotactile.selftest import baseline_path
+
+    if ctx.profile.get("audio.driver") != "twin" or args.save_baseline:
+        return False
+    if args.map or ctx.profile.get("selftest.map"):
+        return False
+    if baseline_path(ctx.profile, args.baseline).exists() and not args.against_map:
+        return False
+    return kept_measured_map(ctx.profile) is None
 
 
 def doctor_part(ctx: Any) -> dict:

@@ -1,0 +1,38 @@
+"""A focused list's or table's own keys first in the footer (for a list or table built
+elsewhere; ``console.tui.list_keys.KeyedList`` is the list that does it itself).
+
+Textual's ``DataTable`` and ``OptionList`` bind Enter (and their other keys) hidden from
+the footer, so a new operator on a list sees the screen's keys but not the one the list
+answers to. ``show_keys(widget, enter="use it")`` shows the widget's own binding of a key
+with the screen's word for it, on this widget only: the footer lists the focused widget's
+keys before the screen's, so they come first while the list has the focus.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from textual.widget import Widget
+
+
+def show_keys(widget: Widget, **words: str) -> Widget:
+    """Show ``widget``'s own bindings of the keys named (``enter="use it"``,
+    ``delete="remove"``) in the footer with those words; returns ``widget``.
+    A key the widget does not bind is a mistake of the caller: ``ValueError``."""
+    by_key = widget._bindings.key_to_bindings  # this widget's own map (a copy per widget)
+    for key, word in words.items():
+        bound = by_key.get(key)
+        if not bound:
+            raise ValueError(f"{type(widget).__name__} has no {key!r} key to show")
+        by_key[key] = [replace(b, description=word, show=True) for b in bound]
+    return widget
+
+
+def shown_words(widget: Widget) -> dict[str, str]:
+    """The keys ``widget`` itself shows in the footer, key -> word (for a check)."""
+    return {
+        key: b.description
+        for key, bound in widget._bindings.key_to_bindings.items()
+        for b in bound[:1]
+        if b.show
+    }

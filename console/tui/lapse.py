@@ -1,0 +1,77 @@
+"""A status line says what is true now: a line that is true only for a while leaves it
+when that while ends.
+
+Two kinds of such lines, one mechanism (``lapse``):
+
+- a question with a time limit ("m again within 5 s ..."): it lapses ``after_s`` seconds
+  after it was asked;
+- a line true only while a condition holds ("refused: P01's study run holds the
+  outputs"): re-checked every ``every_s`` seconds while it is shown (and only then: a
+  line no longer shown stops the checks), it lapses once the condition is false.
+
+When it lapses, and only if the line still shows the same text (a newer message keeps
+its line), ``replace`` puts what is true now in its place ("" clears it).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from textual.widget import Widget
+
+#: how often a conditional line is re-checked while it is shown
+RECHECK_S = 0.5
+
+
+def lapse(
+    owner: Widget,
+    shown: Callable[[], str],
+    text: str,
+    replace: Callable[[str], None],
+    after_s: float | None = None,
+    *,
+    while_true: Callable[[], bool] | None = None,
+    then: str = "",
+    every_s: float = RECHECK_S,
+) -> None:
+    """Let the status line ``text`` (``shown()`` reads the line now) lapse: after
+    ``after_s`` seconds, or once ``while_true()`` is false; ``replace(then)`` writes what
+    is true then, unless the line says something else by that time."""
+    if after_s is None and while_true is None:
+        raise ValueError("lapse needs after_s or while_true")
+    ends_s = None if after_s is None else time.monotonic() + after_s
+
+    def check() -> None:
+        if shown() != text:  # a newer message took the line: nothing to do
+            timer.stop()
+            return
+        over = ends_s is not None and time.monotonic() >= ends_s
+        if over or (while_true is not None and not while_true()):
+            timer.stop()
+            replace(then)
+
+    step = every_s if while_true is not None else after_s
+    if ends_s is not None and while_true is not None:
+        step = min(every_s, after_s)
+    timer = owner.set_interval(step, check)
+
+
+HELD_ENDED = "the run that held the outputs has ended: plays work again"
+
+
+def lapse_if_held(
+    owner: Widget, session, shown: Callable[[], str], text: str, replace: Callable[[str], None]
+) -> None:
+    """A refusal ``text`` because a run holds the outputs ("... holds the outputs")
+    lapses when the run lets them go (``session.outputs_holder`` None again): the line
+    then says plays work again. Any other text: nothing to do."""
+    if "holds the outputs" in text and session.outputs_holder is not None:
+        lapse(
+            owner,
+            shown,
+            text,
+            replace,
+            then=HELD_ENDED,
+            while_true=lambda: session.outputs_holder is not None,
+        )
