@@ -114,6 +114,9 @@ class Host:
         self.run = None
         self.hand = HandWatch()  # the frame sink: what the demo's camera saw
         self.stop_asked = threading.Event()
+        #: the console quits: the playing plan ramps down now (through the kernel) rather
+        #: than playing to its end
+        self.stop_now = False
         self.estop_reason: str | None = None
         self.prep = Preparation()  # a stop cancels the preparation at once (``main`` arms it)
 
@@ -131,6 +134,7 @@ class Host:
     def command(self, msg: dict) -> None:
         cmd = msg.get("cmd")
         if cmd == "stop":
+            self.stop_now = self.stop_now or bool(msg.get("now"))
             self.stop_asked.set()
             self.prep.cancel()
         elif cmd == "estop":
@@ -243,6 +247,8 @@ class Host:
         """Stop the run, let the playing plan end, write the twin's log, say so."""
         self.run.stop()
         if self.estop_reason is None:
+            if self.stop_now:  # the kernel ramps it down, queued plans dropped
+                self.outputs.release("the console quits")
             wait_silent(self.outputs)
         final = self.status()  # the stopped run says running: false
         logs = self.write_logs()

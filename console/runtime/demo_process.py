@@ -193,14 +193,14 @@ class DemoProcess:
             self._ended.wait(5.0)
             raise UserError(self.exit_reason or f"demo {self.name}: ended before it started")
 
-    def stop(self, reason: str = "stopped", timeout_s: float = 20.0) -> None:
-        """Stop the demo: the playing plan ends by its ramps, the process closes its
-        outputs and exits (killed after ``timeout_s``; its outputs' e-stop hook silences
-        them on the signal)."""
+    def stop(self, reason: str = "stopped", timeout_s: float = 20.0, now: bool = False) -> None:
+        """Stop the demo: the playing plan ends by its ramps (``now``: the kernel ramps
+        it down at once, as at quit), the process closes its outputs and exits (killed
+        after ``timeout_s``; its outputs' e-stop hook silences them on the signal)."""
         with self._lock:
             if self._stop_reason is None:
                 self._stop_reason = reason
-        self._send({"cmd": "stop"})
+        self._send({"cmd": "stop", "now": now})
         if self._progress is None and self.scene_name is None:
             # still starting its interpreter (it hears no command before its imports) or
             # loading plugins: it holds nothing of the table yet, so it ends now

@@ -123,6 +123,10 @@ class CameraService:
         self.starting = Starting()  # what the start prepares now (the Camera screen says)
         self._taken = threading.Event()  # a frame of this start was read (``to_show``)
         self._preview: tuple[Any, dict] | None = None  # a frame while the vision loads
+        #: the last loop's ``status()`` as it stopped, and when (``time.time()``): the
+        #: Latency screen shows it while no loop runs
+        self.last_run: tuple[float, dict] | None = None
+        self._loop_started_s = 0.0  # when the running loop started (``time.time()``)
 
     @property
     def running(self) -> bool:
@@ -178,10 +182,18 @@ class CameraService:
 
     def _stop_locked(self) -> bool:
         """Stop the loop (call with ``_start_lock`` held); whether one ran."""
+        self._keep_last_run()
         loop, self.loop = self.loop, None
         if loop is not None:
             loop.stop()
         return loop is not None
+
+    def _keep_last_run(self) -> None:
+        """``last_run``: the running loop's numbers, before it stops."""
+        if self.loop is not None:
+            now, st = time.time(), self.status()
+            st["ran_s"] = now - self._loop_started_s  # its counts over its whole run
+            self.last_run = (now, st)
 
     def wanted_rate(self) -> float | None:
         """The frames a second the camera must deliver: none (0) while the loop is
@@ -227,6 +239,7 @@ class CameraService:
         self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
         self._open_sinks()
         self.loop.start()
+        self._loop_started_s = time.time()
         self._pace()
         self.emit(Started("camera"))
 
@@ -291,6 +304,7 @@ class CameraService:
         with self._start_lock:
             if self.borrower is not None:
                 raise RuntimeError(f"the camera is already in use by {self.borrower}")
+            self._keep_last_run()
             if self.loop is not None:
                 self.loop.stop()
                 self.loop = None

@@ -187,10 +187,11 @@ class DemoControl:
         return run
 
     # ------------------------------------------------------------------ stop
-    def stop(self, reason: str = "stopped") -> str:
-        """Stop the running demo (blocking): the process lets the playing plan end,
-        leaves the table and exits; black on the projector if it showed its scene; the
-        camera taken back. Returns how it ended (``Stopped`` says so too)."""
+    def stop(self, reason: str = "stopped", now: bool = False) -> str:
+        """Stop the running demo (blocking): the process lets the playing plan end
+        (``now``: ramps it down at once), leaves the table and exits; black on the
+        projector if it showed its scene; the camera taken back. Returns how it ended
+        (``Stopped`` says so too)."""
         with self._lock:
             run, name = self.run, self.name
             if run is None or name is None or self._stopping is run:
@@ -198,7 +199,7 @@ class DemoControl:
             self._stopping, self.state = run, "stopping"
         self.session.emit(Started("demo", name, detail="stopping"))
         try:
-            self._stop_run(run)
+            self._stop_run(run, now)
         except Exception as exc:  # noqa: BLE001 - one line, the console stays up
             reason = f"stop failed: {exc}"
         reason = self._how_it_ended(run, reason)
@@ -223,10 +224,13 @@ class DemoControl:
         if run is not None:
             run.estop(reason)
 
-    def _stop_run(self, run: Any) -> None:
+    def _stop_run(self, run: Any, now: bool = False) -> None:
         with self._stop_lock:
             try:
-                run.stop()
+                if now:
+                    run.stop(now=True)
+                else:
+                    run.stop()
                 self.last_snapshot = run.snapshot()
                 self.last_final = run.final
             finally:
@@ -282,14 +286,16 @@ class DemoControl:
 
     def scene_feed(self) -> dict | None:
         """What the running demo sends to the projector: ``demo`` (its name), ``scene``
-        (the scene it drives) and ``sent`` (its scene events reach the console's
-        projector: the projector ran when it started and its scene shows there); None
+        (the scene it drives), ``sent`` (its scene events reach the console's
+        projector: the projector ran when it started and its scene shows there) and
+        ``state`` (``running`` or ``stopping``: it sends until it ends); None
         while no demo runs. A screen's projector line derives from this whether the
         scene's live input comes."""
         run, fwd, name = self.running, self._forward, self.name
         if run is None or name is None:
             return None
-        return {"demo": name, "scene": run.scene_name, "sent": fwd is not None and fwd.ready}
+        sent = fwd is not None and fwd.ready
+        return {"demo": name, "scene": run.scene_name, "sent": sent, "state": self.state}
 
     def set_target(self, pos_mm: tuple[float, float] | None) -> bool:
         """The operator's finger on the twin the running demo watches (None lifts it);
@@ -308,6 +314,7 @@ class DemoControl:
         return run.camera
 
     def close(self) -> None:
-        """Quitting: stop the demo (blocking) before the session closes the outputs."""
+        """Quitting: stop the demo (blocking) before the session closes the outputs; what
+        it plays ramps down at once (not played to its end: the operator waits)."""
         if self.run is not None:
-            self.stop("stopped")
+            self.stop("stopped", now=True)

@@ -31,14 +31,15 @@ HELP_TEXT = (
     "g        gestures panel: datasets, training and evaluation\n"
     "u        TUIO (or another switchable output) on / off, kept for the profile\n"
     "U        its target: type host:port, Enter keeps it (Esc: unchanged)\n"
-    "o        a recording (haptable demo ... --record FILE): type its path, Enter shows\n"
+    'o        a recording (Studies\' "record trials" writes them): type its path, Enter shows\n'
     "         its frames instead of the live camera (which is let go): space plays /\n"
     "         pauses, left / right step a frame, home / end jump, Esc: the live camera\n"
     "Overlay: hand outline green, contacts red with their ids, calibration target yellow.\n"
     "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
     "(its title says which, and the grey levels shown black and white: the frame's\n"
-    "levels are spread over the display's; [console] image or haptable console --image\n"
-    "chooses)."
+    'levels are spread over the display\'s). To choose: [console] image = "halfblock",\n'
+    '"sixel" or "kitty" in the profile\'s overrides file (its path: Devices, F1), then\n'
+    "open the console again."
 )
 # in the order of importance: the footer shows as many as fit (whole: at 80 columns
 # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all

@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 
 from console.runtime.exposure_assist import MIN_LIGHT, MIN_SNR, Reading, skin_at
+from console.tui.loop_rates import CAMERA, VISION
 from console.tui.text import escape
 
 #: a wrapped line's continuation starts with this (a line of its own never does)
@@ -43,16 +44,26 @@ def hang(lines: list[str], width: int) -> list[str]:
     return out
 
 
-def loop_lines(st: dict, view: str) -> list[str]:
-    """What the camera and the vision loop deliver (``st``: the camera service's
-    ``status()``) and the ``view`` shown."""
+def rate_line(cam: dict, rates: dict[str, float] | None) -> str:
+    """The camera's and the vision's frames a second, counted over the same seconds
+    (``console.tui.loop_rates``): the line the live block starts with."""
+    head = f"[b]{escape(cam.get('driver', '?'))}[/b] camera"
+    if rates is None:
+        return f"{head}: counting frames/s ..."
+    return f"{head} {rates[CAMERA]:.0f} fps, vision {rates[VISION]:.0f} fps"
+
+
+def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
+    """What the rates are (``span_s``: the seconds both were counted over), the frames
+    lost and where (``st``: the camera service's ``status()``) and the ``view`` shown."""
     cam, lat = st["camera"], st["latency"] or {}
-    head = f"[b]{escape(cam.get('driver', '?'))}[/b] camera: {cam.get('fps', 0):.0f} fps"
+    out = [f"both rates: frames in the same last {max(span_s, 1):.0f} s"]
     if cam.get("rate_fps") and cam.get("nominal_fps"):  # the view asks for fewer
-        head += " (view rate)"
+        out.append(
+            f"view rate: the camera sends what the view shows (it can {cam['nominal_fps']:.0f} fps)"
+        )
     return [
-        head,
-        f"vision: {lat.get('fps', 0):.0f} frames/s processed",
+        *out,
         # what this loop lost since it started: frames the camera dropped while the
         # loop read it, and frames the processing was too slow for (never the frames
         # that passed while nobody watched)
@@ -104,18 +115,21 @@ def reading_lines(readings: dict[str, float]) -> list[str]:
 def touch_relation(level: float, contact_level: float, light: float, noise: float) -> str:
     """Touching skin's level against the touch level its thresholds are given for
     (``contact_level``; both grey levels over the background, ``UNITS``), and whether
-    touches are seen: they are while the light scale (level over touch level) stays at
-    ``MIN_LIGHT`` or more and the skin well above the noise (``exposure_assist``'s rule)."""
+    the light lets the vision see touches (it says nothing of touches being there): it
+    does while the light scale (level over touch level) stays at ``MIN_LIGHT`` or more
+    and the skin well above the noise (``exposure_assist``'s rule); the fix when not."""
     if contact_level <= 0:
         return f"skin {level:.0f} (fixed thresholds: contact_level 0)"
     side = "above" if level >= contact_level else "below"
     head = f"skin {level:.0f} {side} touch level {contact_level:.0f}"
     if light < MIN_LIGHT or level < MIN_SNR * max(noise, 1.0):
         return (
-            f"{head}: touches may be missed: more light (e, exposure, gain) or a lower "
-            "contact_level"
+            f"{head}: too dark, touches may be missed: e (exposure assistant), or "
+            "contact_level lower ([ ] to it, -)"
         )
-    return f"{head}: touches are seen"
+    if side == "below":  # the thresholds scale with the light down to MIN_LIGHT of it
+        return f"{head}, over {MIN_LIGHT:g}x of it: the light allows touches; e gives more margin"
+    return f"{head}: the light allows touches"
 
 
 def skin_lines(readings: dict[str, float], contact_level: float | None, skin: Reading | None):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 import textwrap
+import time
 from typing import Any
 
 from rich.text import Text
@@ -27,55 +28,12 @@ from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
 from console.plugin_api.tui import LongWork, SessionMessage, escape, said_here
 
-from .status import estop_text, status_lines, unprepared_text
+from .projector_line import status_text
+from .status import estop_text, status_lines
 from .tables import DemoTable, SceneTable
 
-
-def needs_text(st: dict, feed: dict | None) -> str:
-    """Why the shown scene's needs are not prepared (markup), derived from what runs: a
-    need with a reason says it; the live input (a need nothing in the console
-    prepares: the knob's angle, the contacts) is sent by the running demo when it drives
-    this scene and its events reach the projector (``DemoControl.scene_feed``), else it
-    says what would send it."""
-    scene = st.get("scene")
-    needs, why = list(st["unprepared_needs"]), st.get("unprepared_why") or {}
-    live = [k for k in needs if not why.get(k)]
-    if not live or feed is None or feed.get("scene") != scene:
-        return "[yellow]" + unprepared_text(scene, needs, why) + "[/]"
-    reasoned = [k for k in needs if why.get(k)]
-    head = "[yellow]" + unprepared_text(scene, reasoned, why) + "[/]  " if reasoned else ""
-    if feed.get("sent"):
-        return head + escape(f"{' and '.join(live)}: sent by the {feed['demo']} demo (running)")
-    text = (
-        f"{' and '.join(live)}: live input the scene waits for; the {feed['demo']} demo "
-        "runs but sends its scene to no projector (it started before the projector): s "
-        "stops it, enter starts it again"
-    )
-    return head + f"[yellow]{escape(text)}[/]"
-
-
-def status_text(st: dict | None, feed: dict | None = None) -> str:
-    """One paragraph about the projector from ``ProjectorService.status()`` and what
-    the running demo sends it (``feed``: ``DemoControl.scene_feed()``)."""
-    if st is None:
-        return "projector: not started (enter on a scene starts it)"
-    holder = f" for {escape(st['holder'])}" if st.get("holder") else ""
-    if st.get("starting"):
-        return f"projector: starting{holder} (scene {escape(st.get('scene') or '')}) ..."
-    conn = "[green]connected[/]" if st.get("connected") else "[yellow]not connected[/]"
-    parts = [f"projector: {conn}", f"scene: {escape(st.get('scene') or 'black')}{holder}"]
-    for key, label in (("pid", "pid"), ("fps", "fps"), ("restarts", "restarts")):
-        if st.get(key) is not None:
-            parts.append(f"{label} {escape(st[key])}")
-    if st.get("headless"):
-        parts.append("headless (no display)")
-    if st.get("unprepared_needs"):
-        parts.append(needs_text(st, feed))  # markup: its values are escaped
-    if st.get("last_error"):
-        parts.append(f"[red]{escape(st['last_error'])}[/]")
-    elif not st.get("connected") and st.get("last_drop"):
-        parts.append(f"[yellow]{escape(st['last_drop'])}[/]")
-    return "  ".join(parts)
+#: ``k`` closes a projector showing a scene only when pressed again within this
+CLOSE_AGAIN_S = 4.0
 
 
 #: each key's one label: the footer's and the hints' (``s`` stops what runs: the demo,
@@ -158,12 +116,16 @@ class ScenesPane(Vertical):
     ScenesPane #demo-status { height: auto; text-wrap: nowrap; text-overflow: ellipsis; }
     /* the demos' keys stay in view however short the screen gets (a toast's rows) */
     ScenesPane #demo-keys { dock: bottom; }
+    /* the demos' line shows every row it wraps to (one row cut a start's progress
+       after a comma: "opening the camera, 14 s,") */
+    ScenesPane #demo-work, ScenesPane #demo-work > Label { height: auto; }
     """
     HELP_TEXT = (
         "Scenes table:\n"
         "enter    start the highlighted scene on the projector (starts the projector)\n"
         "s        stop: the running demo, else the scene (the projector shows black)\n"
-        "k        close the projector (its process stops)\n"
+        f"k        close the projector (its process stops); while it shows a scene: k again\n"
+        f"         within {CLOSE_AGAIN_S:g} s (the line under the demos asks)\n"
         "Demos table (tab or d moves there):\n"
         "enter    start the highlighted demo on the outputs (enter again stops it)\n"
         "s        stop the demo   x  cancel its preparation   ctrl+e  e-stop (stops it too)\n"
@@ -208,6 +170,10 @@ class ScenesPane(Vertical):
         self._scene_error = ""  # ... and why it did not show
         self._filled_width = 0  # the width the tables were laid out for
         self._estop_why = ""  # the last e-stop's reason (the operator's, a watchdog's ...)
+        self._close_asked = -1e9  # when k asked to be pressed again (monotonic s)
+        self._shown = False  # the screen is in view (else a snapshot waits: ``_held``)
+        self._held: dict | None = None  # the newest snapshot that came while hidden
+        self._status_said: tuple | None = None  # (the demo status, the width) as shown
 
     @property
     def demos(self) -> Any:
@@ -312,8 +278,22 @@ class ScenesPane(Vertical):
     def action_stop_scene(self) -> None:
         self.app.session.scenes.stop()
 
-    @work(thread=True, exclusive=True, group="projector")
     def action_close_projector(self) -> None:
+        """``k``: close the projector; while it shows a scene (a demo's, or one enter
+        started) only when ``k`` comes again within ``CLOSE_AGAIN_S`` (the line asks)."""
+        st, feed = self.app.session.scenes.status(), self.demos.scene_feed()
+        scene = (st or {}).get("scene")
+        now = time.monotonic()
+        if st is not None and (scene or feed) and now - self._close_asked > CLOSE_AGAIN_S:
+            self._close_asked = now
+            what = f"the {feed['demo']} demo's scene" if feed else f"scene {scene}"
+            self._say(f"k again within {CLOSE_AGAIN_S:g} s closes the projector (it shows {what})")
+            return
+        self._close_asked = -1e9
+        self._close_projector()
+
+    @work(thread=True, exclusive=True, group="projector")
+    def _close_projector(self) -> None:
         self.app.session.scenes.close_projector()
 
     # ------------------------------------------------------------------ demos
@@ -333,6 +313,7 @@ class ScenesPane(Vertical):
         self.demo_state = text
         if self.demo_name is not None:
             self._set_cell(self.demo_name, text)
+        self.show_projector()  # its line says what the demo sends: as its state does
 
     def _set_cell(self, name: str, text: str) -> None:
         """Demo ``name``'s state cell."""
@@ -366,8 +347,12 @@ class ScenesPane(Vertical):
         self._put_status(text)
 
     def _put_status(self, text: str) -> None:
-        """The demo status (markup), each line fitted to the screen (``fit_fields``)."""
-        self.query_one("#demo-status", Static).update(fit_fields(text, self.app.size.width - 2))
+        """The demo status (markup), each line fitted to the screen (``fit_fields``);
+        redrawn only when it changed."""
+        said = (text, self.app.size.width)
+        if said != self._status_said:
+            self._status_said = said
+            self.query_one("#demo-status", Static).update(fit_fields(text, said[1] - 2))
 
     def start_demo(self, name: str) -> bool:
         """Start demo ``name`` in its own process (the session's work, in a worker)."""
@@ -497,8 +482,11 @@ class ScenesPane(Vertical):
                 return  # running (or cancelling): no progress bar says otherwise
             if not lw.busy:  # started elsewhere: its progress shows here too
                 lw.show(f"demo {ev.name}: {ev.text}", ev.fraction)
-        elif isinstance(ev, Snapshot):
-            self._show_snapshot(ev.data)
+        elif isinstance(ev, Snapshot):  # a hidden screen costs nothing: kept, drawn when shown
+            if self._shown:
+                self._show_snapshot(ev.data)
+            else:
+                self._held = ev.data
         elif isinstance(ev, Stopped):
             self._stopped(ev.name, ev.reason)
 
@@ -512,7 +500,7 @@ class ScenesPane(Vertical):
         return how, bool(self.demos.estop_after)
 
     def _stopped(self, name: str, reason: str) -> None:
-        self.demo_name = name
+        self.demo_name, self._held = name, None  # its last numbers: said below
         self._set_state(reason)
         how, after = self._how_stopped(reason)
         why = self._why_estopped() if reason == "e-stopped" else ""
@@ -568,6 +556,8 @@ class ScenesPane(Vertical):
         if self.demo_state.startswith("running") and self.demo_name is not None:
             up = snap.get("uptime_s", 0.0)
             state = f"running {up:.0f} s" if snap.get("running") else "loop stopped"
+            if self._demo_states.get(self.demo_name) == state:
+                return  # (its seconds change once a second, the snapshots 4 times)
             self._demo_states[self.demo_name] = state
             t = self.query_one("#demo-table", DataTable)
             if self.demo_name in t.rows:
@@ -650,7 +640,12 @@ class ScenesPane(Vertical):
     PROJECTOR_TICK_S = 0.5
 
     def set_visible(self, visible: bool) -> None:
-        """Shown: the projector line is read every ``PROJECTOR_TICK_S``; hidden: no timer."""
+        """Shown: the projector line is read every ``PROJECTOR_TICK_S`` and the newest
+        snapshot that came meanwhile drawn; hidden: no timer, no snapshot drawn."""
+        self._shown = visible
+        held, self._held = self._held, None
+        if visible and held is not None:
+            self._show_snapshot(held)
         if visible and self._projector_timer is None:
             self.show_projector()  # what is true now, not what compose assumed
             self._projector_timer = self.set_interval(self.PROJECTOR_TICK_S, self.show_projector)

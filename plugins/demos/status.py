@@ -131,13 +131,16 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
 
 
 def _rates(cam: dict[str, Any], lat: dict[str, Any]) -> str:
-    """The camera's frame rate (its set rate, else its nominal one, else as measured)
-    and the rate the demo's loop reads frames at (its latency monitor's)."""
-    camera = cam.get("rate_fps") or cam.get("nominal_fps") or cam.get("fps") or 0
+    """The camera's frame rate (the rate it is set to, else as measured: named which, two
+    measured rates of different windows never side by side) and the rate the demo's loop
+    reads frames at (its latency monitor's)."""
+    camera = cam.get("rate_fps") or cam.get("nominal_fps")
     loop = lat.get("fps")
     if loop is None:  # no monitor numbers: what the camera delivered is the loop's rate
         loop = cam.get("fps", 0)
-    return f"camera {float(camera):.0f} fps, loop {float(loop):.0f} fps"
+    if not camera:  # the camera names no rate: the loop's is the one measured
+        return f"loop {float(loop):.0f} fps"
+    return f"camera set to {float(camera):.0f} fps, loop {float(loop):.0f} fps"
 
 
 def _hand_line(hand: dict[str, Any]) -> str:

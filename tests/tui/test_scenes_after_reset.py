@@ -61,4 +61,4 @@ def test_the_demo_status_names_the_camera_rate_and_the_loop_rate():
         "latency": {"fps": 52.0, "dropped_camera": 2, "dropped_queue": 0, "stages": {}},
     }
     text = Content.from_markup("\n".join(status_lines(snap))).plain
-    assert "camera 60 fps" in text and "loop 52 fps" in text
+    assert "camera set to 60 fps" in text and "loop 52 fps" in text

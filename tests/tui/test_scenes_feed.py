@@ -66,8 +66,9 @@ def test_scene_feed_follows_the_running_demo_and_its_forward():
     assert demos.scene_feed() is None
     demos.run = SimpleNamespace(scene_name="knob", stopped=False)
     demos.name, demos.state = "knob", "running"
-    assert demos.scene_feed() == {"demo": "knob", "scene": "knob", "sent": False}
+    feed = {"demo": "knob", "scene": "knob", "sent": False, "state": "running"}
+    assert demos.scene_feed() == feed
     demos._forward = SimpleNamespace(ready=True)
-    assert demos.scene_feed() == {"demo": "knob", "scene": "knob", "sent": True}
+    assert demos.scene_feed() == {**feed, "sent": True}
     demos.state = "starting"  # preparing: nothing runs yet
     assert demos.scene_feed() is None

@@ -31,6 +31,7 @@ from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, hold_hand, k
 from console.tui.camera_live import (
     hang,
     loop_lines,
+    rate_line,
     reading_lines,
     seen_lines,
     skin_lines,
@@ -39,6 +40,7 @@ from console.tui.camera_live import (
 from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
+from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
@@ -91,6 +93,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
         self._assisting = None  # the exposure assistant's cancel event while it runs
         self._busy = (False, False, False)  # (calibrating, assisting, unsaved): the footer
+        self._rates = SameWindow()  # the camera's and the vision's fps, one window
 
     @property
     def image_mode(self) -> str:
@@ -103,6 +106,9 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             yield HalfBlockView("camera stopped", id="camera-view")
             yield Static(KEYS_LINE, id="camera-keys", markup=False)
         with Vertical(id="camera-side"):
+            # the live numbers (rates, hands, contacts, gesture): pinned above the status
+            # line, never scrolled away by it (the rest of them scroll, ``camera-detail``)
+            yield Static("", id="camera-info")
             # the screen's status line: the outcome of its keys (``console.tui.said``)
             status = Static("", id="camera-status", markup=False)
             status.display = False
@@ -115,7 +121,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             # what does not fit the screen's height scrolls; the chosen setting (▸) and the
             # target field are scrolled into view when they change or take the focus
             with SidePanel(id="camera-scroll"):
-                yield Static("", id="camera-info")
+                yield Static("", id="camera-detail")
                 yield Static("", id="camera-settings")
                 box = Input(placeholder="host:port, Enter", id="camera-target")
                 box.display = False
@@ -125,6 +131,8 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
     #camera-keys { dock: bottom; height: 1; color: $text-muted; }
     #camera-status { height: auto; padding: 0 0 1 1; }
     #camera-status.error { color: $error; }
+    #camera-info { height: auto; }
+    #camera-detail { width: 1fr; padding-left: 1; }
     """
 
     @property
@@ -262,6 +270,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         drawn only when it is new (or the view, the target or the size changed); the
         side panel only when its text changed."""
         if self.replay_draw():  # a recording shows instead (``recording_view``)
+            self._say("camera-detail", "")
             return
         svc = self.service
         self._refusal_still_true()
@@ -299,12 +308,14 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
     def _no_live_numbers(self, why: str) -> None:
         """The live block says why it has no numbers (none are read here meanwhile)."""
         self._info_stable = None  # the numbers are written again when the camera is back
+        self._rates = SameWindow()
         self._say("camera-info", escape(why))
+        self._say("camera-detail", "")
 
     def _show_info(self, svc, work: dict) -> None:
         """The side panel: at once when a setting or the wizard changed (a key), else
         the loop's live numbers at most every ``INFO_PERIOD_S``."""
-        live, settings = self.info_lines(svc, work)
+        head, live, settings = self.info_lines(svc, work)
         wizard = self.wizard_text()
         now = time.monotonic()
         stable = (self.view, settings, wizard)
@@ -315,11 +326,12 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         # lies below it (the settings, the target field) stays where it is
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
-        before = self._said.get("camera-info")
+        self._say("camera-info", "\n".join(head))
+        before = self._said.get("camera-detail")
         # as many lines as before, each as long as before or within the panel's width
         # then and now (it wraps as before): the panel keeps its size, no layout to redo
         same = before is not None and same_height(before, info, self._info_width())
-        moved = self._say("camera-info", info, layout=not same) and not same
+        moved = self._say("camera-detail", info, layout=not same) and not same
         moved |= self._say("camera-settings", "\n".join(settings))
         found = self.query("#camera-wizard")
         if found:
@@ -329,9 +341,10 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             self._reveal_chosen = False
             self.call_after_refresh(self.keep_in_view)
 
-    def _info_width(self) -> int:
-        """The live block's width in cells (0 before it is laid out)."""
-        found = self.query("#camera-info")
+    def _info_width(self, pinned: bool = False) -> int:
+        """The live block's width in cells (0 before it is laid out): its scrolled part's
+        (``pinned``: its part above the status line)."""
+        found = self.query("#camera-info" if pinned else "#camera-detail")
         return found.first().content_size.width if found else 0
 
     def _scroll_to_chosen(self) -> None:
@@ -451,27 +464,32 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         now = time.monotonic()
         if self._status is None or now - self._status[0] >= self.STATUS_PERIOD_S:
             self._status = (now, svc.status())
+            self._status[1]["rates"] = self._rates.add(now, frame_counts(self._status[1]))
         return self._status[1]
 
     def info_text(self, svc, work: dict) -> str:
-        live, settings = self.info_lines(svc, work)
-        return "\n".join([*live, "", *settings, "", self.wizard_text()]).rstrip()
+        head, live, settings = self.info_lines(svc, work)
+        return "\n".join([*head, *live, "", *settings, "", self.wizard_text()]).rstrip()
 
-    def info_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
-        """The side panel: (what the loop sees now, the settings and the wizard)."""
-        st, lines = self._loop_status(svc), []
+    def info_lines(self, svc, work: dict) -> tuple[list[str], list[str], list[str]]:
+        """The side panel: (the live numbers pinned at its top, the rest of what the
+        loop sees now, the settings and the wizard)."""
+        st, lines, live = self._loop_status(svc), [], []
         starting = svc.starting.line()
         if starting:  # frames shown, the vision not running yet
-            live = starting_lines(st, starting)
+            head = starting_lines(st, starting)
         else:
-            live = loop_lines(st, self.view) + seen_lines(work, svc.classifier_problem)
+            seen = seen_lines(work, svc.classifier_problem)
+            head = [rate_line(st["camera"], st.get("rates")), *seen[:2]]
+            live = loop_lines(st, self.view, self._rates.span_s()) + seen[2:]
             res = work.get("result")
             readings = res.readings() if res is not None else {}
             snap = svc.snapshot()  # touching skin as e measures it (one computation)
             skin = snapshot_reading(*snap) if snap is not None else None
             live += reading_lines(readings)
             live += skin_lines(readings, svc.params().get("contact_level"), skin)
-        live = hang(live, self._info_width() or self.SIDE_COLS - 2)
+        live = hang(live, self._info_width() or self.SIDE_COLS - 3)
+        head = hang(head, self._info_width(pinned=True) or self.SIDE_COLS - 2)
         cam = st["camera"]
         chosen = self.chosen_key()
         for k, v in svc.params().items():
@@ -486,7 +504,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
         if not self.wizard_text():  # else the wizard's block says where it stands
             lines.append("k: touch calibration")
-        return live, lines
+        return head, live, lines
 
     # ------------------------------------------------------------------ tuning
     def action_tune(self, key: str, sign: int) -> None:

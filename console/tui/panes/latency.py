@@ -11,6 +11,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
+from console.tui.loop_rates import CAMERA, VISION, WINDOW_S, SameWindow, frame_counts
 from console.tui.plots import sparkline
 from console.tui.said import said_here
 from console.tui.text import LiteralTable, escape
@@ -57,18 +58,61 @@ def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
     return max(8, table_width - used - 1)  # one for the scrollbar's gutter
 
 
-def camera_line(cam: dict, snap: dict | None) -> str:
-    """The camera's line: the driver's fps and drops, the loop's numbers when it has
-    them."""
-    return (
-        f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {cam.get('fps', 0):.1f} fps, "
-        f"{escape(cam.get('dropped', 0))} frames dropped by the camera"
-        + (
-            f"; loop {snap['fps']:.1f} fps, {snap['frames']} frames, "
-            f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
-            if snap
-            else ""
+def camera_line(
+    cam: dict, snap: dict | None, rates: dict | None = None, span_s=0.0, no_fps="counting ..."
+) -> str:
+    """The camera's line: the frames a second the camera delivered and the loop
+    processed, both counted over the same last ``span_s`` (``rates`` None: ``no_fps``
+    says why there are none, the frame counts alone), drops, errors."""
+    if rates is not None:
+        head = (
+            f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {rates[CAMERA]:.1f} fps "
+            f"delivered, loop {rates[VISION]:.1f} fps processed (both over the same "
+            f"{max(span_s, 1):.0f} s)"
         )
+    else:
+        head = (
+            f"[b]camera[/b] {escape(cam.get('driver', '?'))}: fps {escape(no_fps)}, "
+            f"{escape(cam.get('frames', '?'))} frames delivered"
+        )
+    return f"{head}, {escape(cam.get('dropped', 0))} frames dropped by the camera" + (
+        f"; loop {snap['frames']} frames, "
+        f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
+        if snap
+        else ""
+    )
+
+
+def whole_run_rates(st: dict) -> tuple[dict | None, float]:
+    """(rates, seconds) of a stopped loop over its whole run (``ran_s``): the frames it
+    took from the camera and those it processed, counted by the same monitor."""
+    lat, ran_s = st.get("latency") or {}, float(st.get("ran_s") or 0.0)
+    if ran_s <= 0 or not lat:
+        return None, 0.0
+    taken = lat.get("frames", 0) + lat.get("dropped_queue", 0)
+    return {CAMERA: taken / ran_s, VISION: lat.get("frames", 0) / ran_s}, ran_s
+
+
+def _loop_available() -> bool:
+    """Whether the frame loop and its latency monitor load in this version."""
+    try:
+        # lazy: probes whether the camera loop can load
+        import console.runtime.latency  # noqa: F401
+        import console.runtime.loop  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def last_camera_head(ended_s: float, now_s: float) -> str:
+    """The head over a stopped camera loop's numbers: whose they are and their age."""
+    age_s = max(0.0, now_s - ended_s)
+    age = f"{age_s:.0f} s" if age_s < 120 else f"{age_s / 60:.0f} min"
+    end = time.strftime("%H:%M:%S", time.localtime(ended_s))
+    return (
+        f"[b]the console's camera loop's last numbers[/b] (it stopped at {escape(end)}, "
+        f"{escape(age)} ago); "
+        f"m measures it again for {MEASURE_S:.0f} s, a demo (F6) shows its own loop"
     )
 
 
@@ -98,6 +142,8 @@ class LatencyPane(Vertical):
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
+        # known before compose: the output state may arrive first (``show_state``)
+        self.available = _loop_available()
         self.visible_now = False
         self.source = ""  # "camera" or "demo NAME": whose loop the numbers are
         self._history_source = ""
@@ -109,16 +155,10 @@ class LatencyPane(Vertical):
         self._said_for = ""  # the loop (``source``) the line about ``m`` was true of
         self._camera = ""  # the camera line of the loop shown last (it stays when it stops)
         self._camera_at = 0.0  # when the camera loop's numbers showed last (time.time)
+        self._rates = SameWindow()  # the camera's and the loop's fps over one window
+        self._last_rates: dict | None = None  # as they were at the last reading
 
     def compose(self) -> ComposeResult:
-        try:
-            # lazy: probes whether the camera loop can load
-            import console.runtime.latency  # noqa: F401
-            import console.runtime.loop  # noqa: F401
-
-            self.available = True
-        except ImportError:
-            self.available = False
         if not self.available:
             yield Static(
                 "the frame loop and latency monitor (console/runtime/loop.py, latency.py) are "
@@ -204,7 +244,7 @@ class LatencyPane(Vertical):
 
     def show_state(self, status: dict, log) -> None:
         """The audio line (the app calls this when the output state changed)."""
-        if not self.available or not self.is_mounted:
+        if not self.available or not self.query("#lat-audio"):  # not composed yet
             return
         a = status.get("audio", {})
         lat = a.get("latency_s")
@@ -248,7 +288,8 @@ class LatencyPane(Vertical):
             if svc is None or not (svc.running or self._measure_until is not None):
                 if self._said_for:  # the demo m was told of has stopped
                     self._tell("", "")
-                if not self._show_finished_demo(tables.first(DataTable)):
+                table = tables.first(DataTable)
+                if not (self._show_last_camera(table, svc) or self._show_finished_demo(table)):
                     self._say("lat-head", self._stopped_head())
                 return
             self.source, self._camera_at = "camera", time.time()
@@ -266,15 +307,18 @@ class LatencyPane(Vertical):
             self._say("lat-head", f"[red]camera: {escape(st['error'])}[/]")
             return
         cam, snap = st.get("camera") or {}, st.get("latency")
-        self._camera = camera_line(cam, snap)
+        rates = self._rates.add(time.monotonic(), frame_counts(st))
+        self._last_rates = rates  # None until counted: a stop then gives its whole run
+        self._camera = camera_line(cam, snap, rates, self._rates.span_s())
         self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
         self._show_rows(tables.first(DataTable), snap, run is not None)
 
-    def _show_rows(self, table: DataTable, snap: dict, demo: bool) -> None:
+    def _show_rows(self, table: DataTable, snap: dict, demo: bool, grow: bool = True) -> None:
         """The stage table of a monitor snapshot; a demo's sparklines are its whole run
-        as the console polled it (``DemoControl.history``), shown here or not."""
+        as the console polled it (``DemoControl.history``), shown here or not; ``grow``
+        False: a stopped loop's numbers, no point added to its sparklines."""
         runs = self.app.session.demos.history
         keys = {label: key for key, label in STAGE_LABELS.items()}
         cells = []
@@ -282,7 +326,7 @@ class LatencyPane(Vertical):
             p50 = d.get("p50_ms")
             if demo:
                 self.history[label] = deque(runs.values(keys.get(label, label)), maxlen=HISTORY)
-            elif p50 is not None and p50 == p50:
+            elif grow and p50 is not None and p50 == p50:
                 self.history[label].append(p50)
             cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms"))))
         heads = ("stage", "p50 ms", "p99 ms", "max ms")
@@ -292,6 +336,29 @@ class LatencyPane(Vertical):
             table.cell_padding,
         )
         self._set_rows(table, [(*r, sparkline(self.history[r[0]], width)) for r in cells])
+
+    def _show_last_camera(self, table: DataTable, svc) -> bool:
+        """No loop runs: the console's camera loop's last numbers as the camera service
+        kept them when it stopped (whether or not this screen showed then), said to be
+        the stopped loop's with their age; a demo that ended after it shows instead."""
+        last = svc.last_run if svc is not None else None
+        if last is None or not last[1].get("latency"):
+            return False
+        ended_s, st = last
+        demo_end = self.app.session.demos.history.ended_at
+        if demo_end is not None and demo_end > ended_s:
+            return False
+        if self._history_source != "camera":  # another loop's sparklines
+            self.history.clear()
+        self.source = self._history_source = "camera"
+        # this screen's rates when it read the loop just before it stopped, else those
+        # of its whole run (the frames the loop took and processed over the same seconds)
+        seen = ended_s - self._camera_at < 2 * TICK_S + 0.5 and self._last_rates
+        rates, span_s = (self._last_rates, WINDOW_S) if seen else whole_run_rates(st)
+        self._camera = camera_line(st.get("camera") or {}, st["latency"], rates, span_s)
+        self._say("lat-head", last_camera_head(ended_s, time.time()) + "\n" + self._camera)
+        self._show_rows(table, st["latency"], False, grow=False)
+        return True
 
     def _show_finished_demo(self, table: DataTable) -> bool:
         """No loop runs: the last demo run's numbers (kept by the session whether or not
