@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -24,8 +25,8 @@ MAX_SUBJECTS = 1000
 MAX_REPS = 100000
 #: processes for synth: more than the jobs are not started anyway
 MAX_WORKERS = 1024
-#: ``synth --renderer``: the camera twin, or the independent phalanx renderer
-RENDERERS = ("twin", "phalanx")
+#: ``synth --renderer``: the camera twin, or the independent phalanx or silhouette renderer
+RENDERERS = ("twin", "phalanx", "silhouette")
 
 
 def check_folder_name(value: str | None, flag: str) -> None:
@@ -120,8 +121,8 @@ def configure_synth(parser: argparse.ArgumentParser) -> None:
         "--renderer",
         choices=RENDERERS,
         default="twin",
-        help="image source: the camera twin (default) or the independent phalanx renderer "
-        "(a second instrument for cross-renderer checks)",
+        help="image source: the camera twin (default), or the independent phalanx or "
+        "silhouette renderer (other instruments for cross-renderer checks)",
     )
     parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
     parser.add_argument(
@@ -174,6 +175,8 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         raise UserError(f"--gestures {bad}: unknown; use {', '.join(GESTURES)}")
     if getattr(args, "renderer", "twin") == "phalanx":
         return _run_phalanx(args, kw)
+    if getattr(args, "renderer", "twin") == "silhouette":
+        return _run_silhouette(args, kw)
     # said before the work starts: a big set takes gigabytes and many minutes
     est = estimate(**kw)
     if args.dry_run:
@@ -235,6 +238,45 @@ def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
             f"{info['light_scale']:g}; {info['clipped_share']:.0%} with clipped touching skin) "
             f"to {info['out']} in {info['seconds']:.1f} s with {info['workers']} process(es)"
         )
+    return 0
+
+
+def _run_silhouette(args: argparse.Namespace, kw: dict[str, Any]) -> int:
+    """``synth --renderer silhouette``: every gesture, 6 frames each, at ``--light-scale``."""
+    # lazy: the third renderer loads only when it is asked for
+    from .silhouette_renderer import synth_silhouette
+
+    other = [
+        flag
+        for flag, used in (
+            ("--lens-distortion", args.lens_distortion),
+            ("--exposure-ms", args.exposure_ms > 0),
+            ("--vary/--randomise", bool(args.vary)),
+            ("--gestures", len(kw["gestures"]) != len(GESTURES)),
+            ("--dynamic-frames", bool(args.dynamic_frames)),
+        )
+        if used
+    ]
+    if other:
+        raise UserError(
+            f"{', '.join(other)}: the silhouette renderer does not take them (leave them "
+            "out, or use --renderer twin)"
+        )
+    n = kw["subjects"] * kw["reps"] * len(GESTURES)
+    if args.dry_run:
+        msg = f"would write {n} silhouette samples to {args.out}"
+        print(json.dumps({"samples": n}) if args.json else msg)
+        return 0
+    out = Path(args.out)
+    if out.is_dir() and any(out.iterdir()) and not args.force:
+        raise UserError(f"{out}: not empty; choose another --out, or --force")
+    t0 = time.monotonic()
+    wrote = synth_silhouette(out, kw["subjects"], kw["reps"], kw["light_scale"], kw["seed"])
+    info = {"samples": wrote, "out": str(out), "seconds": time.monotonic() - t0}
+    if args.json:
+        print(json.dumps(info))
+    else:
+        print(f"wrote {wrote} silhouette samples to {out} in {info['seconds']:.1f} s")
     return 0
 
 

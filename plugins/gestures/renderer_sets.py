@@ -27,7 +27,7 @@ from .features import FRAMES_LIST, N_HARMONICS_MAX, record_features, sample_reco
 from .reports import sample_clipped_share
 from .vision import VisionParams
 
-RENDERERS = ("twin", "phalanx")
+RENDERERS = ("twin", "phalanx", "silhouette")
 #: frames per sample (a decision is made from the first 2 .. 6)
 N_FRAMES = 6
 
@@ -108,6 +108,27 @@ def _phalanx_samples(
                 yield subject.name, gesture, frames, bg, FPS
 
 
+def _silhouette_samples(
+    subjects: int,
+    reps: int,
+    seed: int,
+    light_scale: float,
+    randomise: bool,
+    gestures: tuple[str, ...] = GESTURES,
+) -> Iterator[tuple[str, str, np.ndarray, np.ndarray, float]]:
+    """The third renderer's samples (``silhouette_renderer``: held out, never trained
+    on here, so ``randomise`` does not apply)."""
+    from .silhouette_renderer import render_sample  # lazy: renderer
+
+    for si in range(subjects):
+        for gesture in GESTURES:
+            if gesture not in gestures:
+                continue
+            for rep in range(reps):
+                frames, bg, meta = render_sample(gesture, si, rep, light_scale, seed)
+                yield str(meta["subject"]), gesture, frames, bg, float(meta["fps"])
+
+
 def render_set(
     renderer: str,
     subjects: int = 3,
@@ -121,7 +142,7 @@ def render_set(
     gestures: tuple[str, ...] = GESTURES,
 ) -> FeatureSet:
     """Features of ``subjects`` x 10 gestures x ``reps`` samples rendered by
-    ``renderer`` ("twin" or "phalanx") under ``light_scale`` times its light (only
+    ``renderer`` ("twin", "phalanx" or "silhouette") under ``light_scale`` times its light (only
     ``gestures``, each seeded as in the full set)."""
     if renderer not in RENDERERS:
         raise UserError(f"renderer {renderer!r}: use one of {', '.join(RENDERERS)}")
@@ -133,7 +154,11 @@ def render_set(
     if not frames_list or not all(2 <= k <= N_FRAMES for k in frames_list):
         raise UserError(f"frames {list(frames_list)}: each must be from 2 to {N_FRAMES}")
     params = replace(params or VisionParams(), n_harmonics=N_HARMONICS_MAX)
-    make = _twin_samples if renderer == "twin" else _phalanx_samples
+    make = {
+        "twin": _twin_samples,
+        "phalanx": _phalanx_samples,
+        "silhouette": _silhouette_samples,
+    }[renderer]
     names, labels, subj, shares, cpu = [], [], [], [], []
     cols: dict[str, dict[int, list]] = {k: {f: [] for f in frames_list} for k in "skdc"}
     for i, (who, gesture, frames, bg, fps) in enumerate(

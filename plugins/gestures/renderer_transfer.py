@@ -81,6 +81,16 @@ def transfer_rows(
     return rows
 
 
+#: (trained on, tested on): each way between the twin and phalanx, and both onto the
+#: silhouette renderer, which nothing is trained on (the held-out one)
+PAIRS = (
+    ("twin", "phalanx"),
+    ("phalanx", "twin"),
+    ("twin", "silhouette"),
+    ("phalanx", "silhouette"),
+)
+
+
 def cross_renderer(
     subjects: int = 2,
     reps: int = 2,
@@ -90,8 +100,8 @@ def cross_renderer(
     seed: int = 0,
     sets: dict | None = None,
 ) -> dict:
-    """Train on one renderer (domain-randomised), test on the other at each light, both
-    ways. ``sets``: a dict to keep the rendered feature sets in (reused if present)."""
+    """Train on one renderer (domain-randomised), test on another at each light
+    (``PAIRS``). ``sets``: a dict to keep the rendered feature sets in (reused if present)."""
     sets = {} if sets is None else sets
 
     def get(renderer: str, light: float, randomise: bool) -> FeatureSet:
@@ -103,7 +113,7 @@ def cross_renderer(
         return sets[key]
 
     out: dict = {"subjects": subjects, "reps": reps, "n_harmonics": N_HARMONICS, "rows": []}
-    for train_r, test_r in (("twin", "phalanx"), ("phalanx", "twin")):
+    for train_r, test_r in PAIRS:
         train = get(train_r, 1.0, True)
         tests = {f"x{k:g}": get(test_r, k, False) for k in lights}
         for row in transfer_rows(train, tests, frames):

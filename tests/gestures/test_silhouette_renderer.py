@@ -201,3 +201,18 @@ def test_bad_input_gets_one_line():
         render_sample("drag", 0, 0, light_scale=9)
     with pytest.raises(UserError, match="seed -1: must be a whole number"):
         render_sample("drag", 0, 0, seed=-1)
+
+
+def test_synth_renderer_silhouette_writes_a_set_the_tools_read(tmp_path, capsys):
+    """``haptable gestures synth --renderer silhouette`` writes every gesture; options
+    it does not model are refused in one line."""
+    from console.cli.main import main
+
+    out = tmp_path / "sil"
+    assert main(["gestures", "synth", "--renderer", "silhouette", "--subjects", "1",
+                 "--reps", "1", "--out", str(out)]) == 0  # fmt: skip
+    assert len(load_dataset(out, check_images=True)) == 10
+    assert main(["gestures", "synth", "--renderer", "silhouette", "--vary",
+                 "--out", str(tmp_path / "x")]) != 0  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("haptable: error: --vary") and "silhouette" in err[-1]
