@@ -34,6 +34,7 @@ import numpy as np
 
 from console.core.bench_stats import machine_info, summarize_s
 from console.core.device_buffer import buffer_periods
+from console.core.errors import UserError
 from console.runtime.jitter import finish_probe, start_probe
 from console.runtime.twin_log import bursts, dominant_hz
 
@@ -54,6 +55,11 @@ async def _start(app, pilot, name: str) -> tuple[object, float]:
     """Highlight ``name`` in the demos table and press enter, as the operator does;
     (the demo's process, seconds from the key to running)."""
     await _wait(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
+    if app.session.outputs.estopped:  # latched: only an operator resets it
+        raise UserError(
+            "bench console-demo: the e-stop is latched on this table; reset it in the "
+            "console (ctrl+r), then run the bench again"
+        )
     await pilot.press("f6")
     await _wait(pilot, lambda: app.query("#demo-table"), 10, "scenes screen")
     await pilot.press("d")
