@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import Frame, GestureScript, UserError, realtime_priority
+from console.plugin_api import Frame, GestureScript, UserError
 
 #: Shared-memory frame slots (the reader copies a frame out before it is reused).
 SLOTS = 8
@@ -40,16 +40,10 @@ SLOTS = 8
 READ_BACKLOG = 3
 #: One announcement: slot, frame seq, capture time (monotonic s), frames the renderer lost.
 MSG = struct.Struct("<iqdq")
-#: The renderer's nice value when it paces itself in real time and real-time scheduling
-#: is not allowed (or given up, below): above the console, the projector and the tests.
+#: The renderer's nice value when it paces itself in real time: above the console, the
+#: projector and the tests (nice 0) but not real-time, so a busy machine cannot be starved
+#: by it; the frame loop and the outputs kernel stay above it (FIFO).
 RENDER_NICE = -5
-#: FIFO priority above the minimum for a renderer that paces itself in real time: a
-#: camera's frames do not wait for the CPU, so the twin's do not wait for a demo's
-#: planning or the console; the frame loop (5), the outputs kernel and the audio stay
-#: above it. A renderer that needs more than ``RENDER_DUTY_MAX`` of its frame period (a
-#: slow machine) gives real-time scheduling up: it must never hold a core.
-RENDER_PRIORITY = 3
-RENDER_DUTY_MAX = 0.5
 #: One command's length (a pickled ``(method name, args)`` follows).
 CMD = struct.Struct("<I")
 #: The commands the child applies to its twin (its methods of those names).
@@ -85,10 +79,9 @@ def _child() -> None:
         buf += chunk
         pending = _commands(buf)
     cam = pickle.loads(pending.pop(0))
-    fifo = cam.realtime and realtime_priority(RENDER_PRIORITY)
-    if cam.realtime and not fifo:
-        _nice()
-    duty = 0.0  # the render time's share of the frame period (smoothed)
+    if cam.realtime:  # it stands for a camera, whose frames do not wait for the CPU
+        with contextlib.suppress(OSError):  # (where raising the priority is allowed)
+            os.setpriority(os.PRIO_PROCESS, 0, RENDER_NICE)
     shm = shared_memory.SharedMemory(name=shm_name)
     resource_tracker.unregister(shm._name, "shared_memory")  # the parent owns it
     slots = None
@@ -113,14 +106,6 @@ def _child() -> None:
             f = cam.read(0.1)
             if f is None:
                 continue
-            if fifo:  # how much of the frame period the render took (read waits first)
-                busy = time.monotonic() - max(f.t_capture_s, time.monotonic() - 1.0)
-                duty = 0.9 * duty + 0.1 * busy * cam.fps
-                if duty > RENDER_DUTY_MAX:
-                    fifo = False
-                    with contextlib.suppress(AttributeError, OSError):
-                        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-                    _nice()
             slot = k % SLOTS
             slots[slot] = f.image
             dropped = int(cam.status().get("dropped", 0) or 0)
@@ -133,11 +118,6 @@ def _child() -> None:
         cam.close()
         slots = None
         shm.close()
-
-
-def _nice() -> None:
-    with contextlib.suppress(OSError):  # (where raising the priority is allowed)
-        os.setpriority(os.PRIO_PROCESS, 0, RENDER_NICE)
 
 
 def _command(cam: Any, blob: bytes) -> None:
