@@ -163,17 +163,15 @@ class StudiesPane(Vertical):
         self.asking: dict[str, Any] | None = None
         self.responses: list[str] = []
         self.last: dict[str, Any] = {}
-        #: (folder, experiment) of the analysis shown (analysed again after a run there)
-        self.analysed: tuple[Path, str] | None = None
-        self.run_out: Path | None = None  # the folder of the run going on
-        self.run_study: str | None = None  # and its protocol (analysed when it stops)
+        self.analysed: tuple[Path, str] | None = None  # (folder, experiment) shown
+        self.run_out, self.run_study = None, None  # the run going on: folder, protocol
         self.pace = Pace()  # trials done over time: the time left
         self._show_result = True  # the analysis coming in switches to its view
         self.notes: list[str] = []
+        self._shown: tuple = ()  # the analysis shown (the same again keeps o's choice)
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
-        #: what became of the experimenter's last key or button (text, severity): the
-        #: status's last line (the screen's own outcome: never a toast, console.tui.said)
+        #: the last key's or button's outcome (text, severity): the status's last line
         self.said: tuple[str, str] = ("", "information")
         self._status_text = ""
 
@@ -611,6 +609,9 @@ class StudiesPane(Vertical):
 
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])
+        shown, self._shown = self._shown, (d["title"], repr(d["rows"]), tuple(d["notes"]))
+        if shown == self._shown:  # the same analysis again (after a run and n): as it is
+            return self._view("analysis") if self._show_result else None
         table = self.query_one("#study-anova", DataTable)
         table.clear(columns=True)
         table.add_columns(*d["columns"])
@@ -633,7 +634,7 @@ class StudiesPane(Vertical):
         """The analysis failed: its line alone, nothing of an earlier analysis under it."""
         self.query_one("#analysis-head", Static).update(message)
         self.query_one("#study-anova", DataTable).clear(columns=True)
-        self.notes = []
+        self.notes, self._shown = [], ()
         self._notes(open_=False)
         self.query_one("#analysis-report", Static).update("")
         if self._show_result:
