@@ -132,8 +132,7 @@ class StudiesPane(Vertical):
         "none loaded or kept, s measures the twin's grid first."
     )
     BINDINGS = [
-        # short labels: at 80 columns the footer keeps ^e E-STOP and ? help beside them
-        # (r replay is on its button and in the help)
+        # short labels: at 80 columns the footer keeps ^e E-STOP and ? help (r: its button)
         Binding("s", "start", "start"),
         Binding("p", "pause", "pause"),
         Binding("r", "replay", "replay", show=False),
@@ -177,8 +176,7 @@ class StudiesPane(Vertical):
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
-        # one labelled field per value, on rows that fit 80 columns (a placeholder alone
-        # is cut short and gone once the field is filled)
+        # one labelled field per value, on rows that fit 80 columns
         with Horizontal(id="study-form", classes="study-row"):
             yield Label("protocol", markup=False)
             yield show_keys(  # its Enter in the footer while it has the focus
@@ -250,7 +248,6 @@ class StudiesPane(Vertical):
         """Start, focused when the screen shows: the footer lists the screen's keys."""
         return self.query_one("#start", Button)
 
-    # ------------------------------------------------------------------ actions
     def _value(self, wid: str) -> Any:
         w = self.query_one(f"#{wid}")
         return w.value
@@ -410,10 +407,13 @@ class StudiesPane(Vertical):
         self._start_analysis(out, experiment)
 
     def _start_analysis(self, out: Path, experiment: str, why: str = "", show: bool = True) -> None:
-        """Analyse ``out`` (``show``: switch to the analysis view, as ``n`` does; a refresh
-        after a run leaves the view the experimenter has)."""
-        self.analysed = (out, experiment)
-        self._show_result = show
+        """Analyse ``out`` (``show``: switch to its view, as ``n`` does; after a run: the
+        view stays); one under way for the same folder is the one shown."""
+        again = self.analysed == (out, experiment) and self._shown is None
+        self.analysed, self._show_result = (out, experiment), show or (again and self._show_result)
+        if again:
+            return self._view("analysis") if show else None
+        self._shown = None  # under way: its result is drawn whatever it is
         self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out}{why} ...")
         if show:
             self._view("analysis")
@@ -493,7 +493,6 @@ class StudiesPane(Vertical):
         self.asking = None  # one answer per stimulus
         self.responder.put(Answer(response=value))
 
-    # ------------------------------------------------------------------ the run
     @work(thread=True, exclusive=True, group="study", exit_on_error=False)
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
         adaptive_console.run(self.app.session, spec, control, responder)
