@@ -132,7 +132,6 @@ class StudiesPane(Vertical):
         "none loaded or kept, s measures the twin's grid first."
     )
     BINDINGS = [
-        # short labels: at 80 columns the footer keeps ^e E-STOP and ? help (r: its button)
         Binding("s", "start", "start"),
         Binding("p", "pause", "pause"),
         Binding("r", "replay", "replay", show=False),
@@ -168,6 +167,7 @@ class StudiesPane(Vertical):
         self._show_result = True  # the analysis coming in switches to its view
         self.notes: list[str] = []
         self._shown: tuple = ()  # the analysis shown (the same again keeps o's choice)
+        self._busy = False  # an analysis under way
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
         #: the last key's or button's outcome (text, severity): the status's last line
@@ -409,11 +409,11 @@ class StudiesPane(Vertical):
     def _start_analysis(self, out: Path, experiment: str, why: str = "", show: bool = True) -> None:
         """Analyse ``out`` (``show``: switch to its view, as ``n`` does; after a run: the
         view stays); one under way for the same folder is the one shown."""
-        again = self.analysed == (out, experiment) and self._shown is None
+        again = self.analysed == (out, experiment) and self._busy
         self.analysed, self._show_result = (out, experiment), show or (again and self._show_result)
         if again:
             return self._view("analysis") if show else None
-        self._shown = None  # under way: its result is drawn whatever it is
+        self._busy = True  # under way (its result, if the same as shown, keeps o's choice)
         self.query_one("#analysis-head", Static).update(f"analysing {experiment} in {out}{why} ...")
         if show:
             self._view("analysis")
@@ -609,6 +609,7 @@ class StudiesPane(Vertical):
     def _analysis(self, d: dict[str, Any]) -> None:
         self.query_one("#analysis-head", Static).update(d["title"])
         shown, self._shown = self._shown, (d["title"], repr(d["rows"]), tuple(d["notes"]))
+        self._busy = False
         if shown == self._shown:  # the same analysis again (after a run and n): as it is
             return self._view("analysis") if self._show_result else None
         table = self.query_one("#study-anova", DataTable)
@@ -633,7 +634,7 @@ class StudiesPane(Vertical):
         """The analysis failed: its line alone, nothing of an earlier analysis under it."""
         self.query_one("#analysis-head", Static).update(message)
         self.query_one("#study-anova", DataTable).clear(columns=True)
-        self.notes, self._shown = [], ()
+        self.notes, self._shown, self._busy = [], (), False
         self._notes(open_=False)
         self.query_one("#analysis-report", Static).update("")
         if self._show_result:
