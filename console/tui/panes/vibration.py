@@ -126,12 +126,16 @@ class VibrationPane(VerticalScroll):
         """The grid the map's points form by their coordinates, labelled with their ids."""
 
         rows, cols, cells = grid_cells(vmap.points_mm)
+        before = (self.rows, self.cols, self.cell_w)
         self._set_layout(
             rows,
             cols,
             {(int(r), int(c)): int(n) for (r, c), n in zip(cells, vmap.points, strict=True)},
         )
         grid = self.query_one("#grid", DataTable)
+        if before == (rows, cols, self.cell_w) and grid.row_count == rows:
+            self._redraw_grid()  # the same frame: new ids in place, labels and cursor kept
+            return
         grid.clear(columns=True)
         self._fill_grid()
 
