@@ -199,6 +199,16 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
     return 0
 
 
+def _refuse_options(renderer: str, options: tuple[tuple[str, Any], ...]) -> None:
+    """One line naming the ``synth`` options the ``renderer`` does not take, if any used."""
+    used = [flag for flag, on in options if on]
+    if used:
+        raise UserError(
+            f"{', '.join(used)}: the {renderer} renderer does not take them (leave them out, "
+            "or use --renderer twin)"
+        )
+
+
 def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
     """``synth --renderer phalanx``: the same options, the independent renderer."""
     # lazy: the second renderer loads only when it is asked for
@@ -206,20 +216,14 @@ def _run_phalanx(args: argparse.Namespace, kw: dict[str, Any]) -> int:
     from .phalanx_synth import DYNAMIC_FRAMES as PH_DYNAMIC
     from .phalanx_synth import synth_phalanx
 
-    twin_only = [
-        flag
-        for flag, used in (
+    _refuse_options(
+        "phalanx",
+        (
             ("--lens-distortion", args.lens_distortion),
             ("--exposure-ms", args.exposure_ms > 0),
             ("--randomise" if args.vary == "wide" else "--vary", bool(args.vary)),
-        )
-        if used
-    ]
-    if twin_only:
-        raise UserError(
-            f"{', '.join(twin_only)}: twin options; the phalanx renderer does not model them "
-            "(leave them out, or use --renderer twin)"
-        )
+        ),
+    )
     kw["dynamic_frames"] = args.dynamic_frames or PH_DYNAMIC
     if args.dry_run:
         n = kw["subjects"] * kw["reps"] * len(kw["gestures"])
@@ -246,22 +250,16 @@ def _run_silhouette(args: argparse.Namespace, kw: dict[str, Any]) -> int:
     # lazy: the third renderer loads only when it is asked for
     from .silhouette_renderer import synth_silhouette
 
-    other = [
-        flag
-        for flag, used in (
+    _refuse_options(
+        "silhouette",
+        (
             ("--lens-distortion", args.lens_distortion),
             ("--exposure-ms", args.exposure_ms > 0),
             ("--vary/--randomise", bool(args.vary)),
             ("--gestures", len(kw["gestures"]) != len(GESTURES)),
             ("--dynamic-frames", bool(args.dynamic_frames)),
-        )
-        if used
-    ]
-    if other:
-        raise UserError(
-            f"{', '.join(other)}: the silhouette renderer does not take them (leave them "
-            "out, or use --renderer twin)"
-        )
+        ),
+    )
     n = kw["subjects"] * kw["reps"] * len(GESTURES)
     if args.dry_run:
         msg = f"would write {n} silhouette samples to {args.out}"
