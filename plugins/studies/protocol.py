@@ -361,8 +361,15 @@ def _questionnaire(where: str, q: Any) -> dict[str, Any]:
         raise _bad(where, "questionnaire", q, "must be a table")
     _unknown(where, q, {"scale", "categories"}, "questionnaire.")
     scale = q.get("scale", 7)
-    if not (isinstance(scale, int) and not isinstance(scale, bool) and 2 <= scale <= 11):
-        raise _bad(where, "questionnaire.scale", scale, "give the points of the scale, 2..11")
+    # one key per point on the Studies screen (``1``..``9``): a longer scale could not be
+    # answered there
+    if not (isinstance(scale, int) and not isinstance(scale, bool) and 2 <= scale <= 9):
+        raise _bad(
+            where,
+            "questionnaire.scale",
+            scale,
+            "give the points of the scale, 2..9 (one key each: 1..9)",
+        )
     cats = q.get("categories")
     if not isinstance(cats, list) or not cats:
         raise UserError(f"{where}: questionnaire.categories is missing; list the categories")

@@ -64,6 +64,11 @@ PROTOCOLS = [
         r"\[0\] has that name already",
     ),
     (
+        "questionnaire-scale-11",  # a key per point: the Studies screen takes 1..9
+        lambda e2: _changed(KNOB, "scale = 7", "scale = 11"),
+        r"questionnaire\.scale = 11: give the points of the scale, 2\.\.9 \(one key each",
+    ),
+    (
         "an-integer-of-5000-digits",
         lambda e2: _changed(e2, "seed = 3", "seed = " + "9" * 5000),
         "a value TOML allows but no setting can hold",
