@@ -20,6 +20,20 @@ def _abort_confirmed_in_time(monkeypatch):
     monkeypatch.setattr(panel, "CONFIRM_S", 30.0)
 
 
+@pytest.fixture(autouse=True)
+def _quick_key_presses(monkeypatch):
+    """Textual's pilot waits for the app to be idle after each key; the console's timers
+    keep it busy, so the wait is a short sleep here."""
+    import asyncio
+
+    import textual.app
+
+    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
+        await asyncio.sleep(0.02)
+
+    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
+
+
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
     from console.files.vibration_map import save_map

@@ -8,38 +8,7 @@ import asyncio
 import json
 import re
 
-import pytest
-
-from console.cli.main import Context
-
-
-@pytest.fixture(autouse=True)
-def _quick_key_presses(monkeypatch):
-    import textual.app
-
-    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
-        await asyncio.sleep(0.02)
-
-    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
-
-
-async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
-    for _ in range(int(timeout_s / 0.05)):
-        if cond():
-            return
-        await pilot.pause(0.05)
-    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
-
-
-async def pick_protocol(pilot, pane, path, out):
-    """Offer the protocol file ``path`` beside the studies/ ones, pick it, set the folder."""
-    from plugins.studies import protocol as P
-
-    sel = pane.query_one("#protocol")
-    sel.set_options([(n, n) for n in (*P.available(), str(path))])
-    await pilot.pause(0.2)
-    sel.value = str(path)
-    pane.query_one("#out").value = str(out)
+from .studies_pilot import pick_protocol, studies_app, studies_pane, wait_for
 
 
 def _events(path):
@@ -49,15 +18,10 @@ def _events(path):
 def test_exp2_simulated_from_the_screen_abort_and_resume(double_plugins, map_file, tmp_path):
     from textual.widgets import DataTable, ProgressBar, Static
 
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             pane.query_one("#protocol").value = "exp2"
             pane.query_one("#out").value = str(tmp_path)
             assert pane.query_one("#simulate").value is True
@@ -105,15 +69,10 @@ def test_a_person_answers_with_the_keys_and_replays_once(
 ):
     from textual.widgets import ProgressBar
 
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             await pick_protocol(pilot, pane, small_exp2, tmp_path)
             pane.query_one("#simulate").value = False
             await pilot.click("#start")  # no details: refused in one line, nothing stored
@@ -169,19 +128,15 @@ def test_a_person_answers_on_the_projected_arrows_the_camera_sees(
 ):
     """Fig. 12b: the hand guide on the trial's region and four projected arrows; the twin
     camera sees the operator's finger on an arrow and that is the answer."""
-    from console.tui.app import HapTableApp
 
     small_exp2.write_text(
         small_exp2.read_text().replace("seed = 3", 'seed = 3\nscene = "flow_hand"')
     )
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             await pick_protocol(pilot, pane, small_exp2, tmp_path)
             pane.query_one("#simulate").value = False
             pane.query_one("#projector").value = True
@@ -227,7 +182,6 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
     """Knob trials with a person from the screen: each streams through the outputs while
     the console's camera loop feeds it (on the twin nobody turns it: it times out), then
     the participant scores the 14 items with 1..7."""
-    from console.tui.app import HapTableApp
     from plugins.studies import protocol as P
     from plugins.studies import stimuli
 
@@ -242,11 +196,9 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
     hooked = []
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app)
             await pick_protocol(pilot, pane, path, tmp_path)
             pane.query_one("#simulate").value = False
             pane.query_one("#projector").value = True  # the knob and its menu (Fig. 16a)
@@ -292,15 +244,10 @@ def test_a_person_s_knob_trials_run_on_the_camera_then_the_questionnaire(
 
 
 def test_the_e_stop_stops_a_run_and_its_trial_is_repeated(double_plugins, map_file, tmp_path):
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             pane.query_one("#protocol").value = "exp1"
             pane.query_one("#out").value = str(tmp_path)
             await pilot.click("#start")
@@ -341,8 +288,6 @@ def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path)
 
     from textual.widgets import DataTable, Static
 
-    from console.tui.app import HapTableApp
-
     from .test_panel_readable import screen_text
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -358,7 +303,7 @@ def test_analyse_writes_the_report_and_shows_the_anova(double_plugins, tmp_path)
     (tmp_path / "a-file").write_text("x")
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(80, 24)) as pilot:
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             pane = app.pane("studies")
@@ -439,10 +384,9 @@ def test_each_protocol_has_its_default_folder(double_plugins):
     from textual.widgets import Input
 
     from console.files import paths
-    from console.tui.app import HapTableApp
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
             await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
             pane = app.pane("studies")
@@ -473,8 +417,6 @@ def test_a_console_killed_mid_trial_resumes_from_the_screen(double_plugins, map_
 
     from textual.widgets import ProgressBar
 
-    from console.tui.app import HapTableApp
-
     here = Path(__file__).resolve().parent
     out, hang = tmp_path / "runs", tmp_path / "hanging"
     env = {
@@ -502,12 +444,9 @@ def test_a_console_killed_mid_trial_resumes_from_the_screen(double_plugins, map_
     plan_before = (out / "P01" / "plan.json").read_text()
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             pane.query_one("#protocol").value = "exp2"
             pane.query_one("#out").value = str(out)
             await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus on Start")
@@ -535,14 +474,10 @@ def test_a_flow_study_measures_its_map_pauses_on_the_next_trial_and_refreshes_th
     when it stops. A refused start after it shows no stale progress."""
     from textual.widgets import DataTable, ProgressBar, Static
 
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app)
             await pick_protocol(pilot, pane, small_exp2, tmp_path)
             status = pane.query_one("#study-status", Static)
             head = pane.query_one("#analysis-head", Static)

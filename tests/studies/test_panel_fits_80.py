@@ -7,7 +7,7 @@ import asyncio
 
 from textual.widgets import DataTable
 
-from .test_panel import _quick_key_presses, wait_for  # noqa: F401 - the autouse fixture too
+from .studies_pilot import wait_for
 from .test_panel_issue27 import _app, _running
 
 

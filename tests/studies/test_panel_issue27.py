@@ -7,10 +7,10 @@ from __future__ import annotations
 import asyncio
 import json
 
-from console.cli.main import Context, main
+from console.cli.main import main
 
 from . import synth_runs as sr
-from .test_panel import _quick_key_presses, wait_for  # noqa: F401 - the autouse fixture too
+from .studies_pilot import studies_app, studies_pane, wait_for
 
 
 def _done(path):
@@ -22,10 +22,7 @@ async def _running(pilot, app, map_file, out):
     """The Studies screen with a simulated exp2 run of P01 going on, two trials done."""
     from textual.widgets import ProgressBar
 
-    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-    await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-    await asyncio.to_thread(app.session.vibration.load, map_file)
-    pane = app.pane("studies")
+    pane = await studies_pane(pilot, app, map_file)
     pane.query_one("#protocol").value = "exp2"
     pane.query_one("#out").value = str(out)
     pane.focus()
@@ -36,9 +33,7 @@ async def _running(pilot, app, map_file, out):
 
 
 def _app(double_plugins):
-    from console.tui.app import HapTableApp
-
-    return HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+    return studies_app(double_plugins)
 
 
 def test_abort_asks_first(double_plugins, map_file, tmp_path, monkeypatch):

@@ -9,9 +9,7 @@ import asyncio
 import pytest
 from textual.widgets import Button, Static
 
-from console.cli.main import Context
-
-from .test_panel import wait_for
+from .studies_pilot import studies_app, studies_pane, wait_for
 
 
 def screen_text(app) -> str:
@@ -19,17 +17,13 @@ def screen_text(app) -> str:
 
 
 async def _studies(app, pilot):
-    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-    await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-    return app.pane("studies")
+    return await studies_pane(pilot, app)
 
 
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)])
 def test_keys_in_the_footer_and_fields_readable_on_show(double_plugins, size):
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=size) as pilot:
             pane = await _studies(app, pilot)
             await wait_for(
@@ -77,10 +71,8 @@ def test_keys_in_the_footer_and_fields_readable_on_show(double_plugins, size):
 
 
 def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, map_file, tmp_path):
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _studies(app, pilot)
             await asyncio.to_thread(app.session.vibration.load, map_file)
@@ -117,10 +109,8 @@ def test_status_names_the_participant_and_says_a_refusal_once(double_plugins, ma
 
 
 def test_the_help_has_a_line_per_key(double_plugins):
-    from console.tui.app import HapTableApp
-
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _studies(app, pilot)
             await wait_for(pilot, lambda: app.focused is pane.focus_target, what="focus")
@@ -141,10 +131,9 @@ def test_start_during_an_e_stop_is_refused_on_the_key_and_writes_nothing(
     """ctrl+e, then s (twice): one line saying how to go on, no run folder, no trial
     line. Before s the status says the flow study needs a vibration map, until one is
     loaded."""
-    from console.tui.app import HapTableApp
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _studies(app, pilot)
             status = pane.query_one("#study-status", Static)

@@ -9,16 +9,12 @@ import asyncio
 
 from textual.widgets import Input
 
-from console.cli.main import Context
-
-from .test_panel import _quick_key_presses, wait_for  # noqa: F401 - the autouse fixture too
+from .studies_pilot import studies_app, studies_pane, wait_for
 from .test_panel_issue27 import _running
 
 
 def _app(double_plugins):
-    from console.tui.app import HapTableApp
-
-    return HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+    return studies_app(double_plugins)
 
 
 def _status(pane) -> str:
@@ -26,8 +22,7 @@ def _status(pane) -> str:
 
 
 async def _pane(pilot, app):
-    await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-    return app.pane("studies")
+    return await studies_pane(pilot, app)
 
 
 def test_a_without_a_run_and_a_bad_age_say_so_in_one_line(double_plugins, tmp_path):

@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import asyncio
 
-from console.cli.main import Context
-
 from .conftest import SMALL_EXP2
-from .test_panel import _quick_key_presses, pick_protocol, wait_for  # noqa: F401
+from .studies_pilot import pick_protocol, studies_app, studies_pane, wait_for
 
 #: four trials: one preliminary, three main
 FOUR_TRIALS = SMALL_EXP2.replace('direction = ["up", "right"]', 'direction = ["up"]').replace(
@@ -30,7 +28,6 @@ def test_time_left_outcomes_lapse_and_analysis_at_once(
 ):
     from textual.widgets import ProgressBar
 
-    from console.tui.app import HapTableApp
     from plugins.studies import panel as studies_panel
 
     monkeypatch.setattr(studies_panel, "CONFIRM_S", 1.0)
@@ -38,12 +35,9 @@ def test_time_left_outcomes_lapse_and_analysis_at_once(
     protocol.write_text(FOUR_TRIALS)
 
     async def scenario():
-        app = HapTableApp(Context("sim", double_plugins), fast=True, initial="studies")
+        app = studies_app(double_plugins)
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
-            await asyncio.to_thread(app.session.vibration.load, map_file)
-            pane = app.pane("studies")
+            pane = await studies_pane(pilot, app, map_file)
             await pick_protocol(pilot, pane, protocol, tmp_path / "runs")
             # the protocol list focused: its own key (Enter) first in the footer
             pane.query_one("#protocol").focus()

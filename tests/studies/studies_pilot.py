@@ -1,0 +1,45 @@
+"""The Studies screen driven by Textual's pilot: the console opened on it, waited for,
+with a map loaded; shared by the panel tests (their fixture ``_quick_key_presses``
+lives in conftest)."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+from console.cli.main import Context
+
+
+def studies_app(plugins):
+    """The console on the sim profile, opened on the Studies screen."""
+    from console.tui.app import HapTableApp  # lazy: the console loads with the pilot
+
+    return HapTableApp(Context("sim", plugins), fast=True, initial="studies")
+
+
+async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
+    for _ in range(int(timeout_s / 0.05)):
+        if cond():
+            return
+        await pilot.pause(0.05)
+    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+
+
+async def studies_pane(pilot, app, map_file: Path | None = None):
+    """The Studies pane once the outputs are open; ``map_file`` made the current map."""
+    await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
+    await wait_for(pilot, lambda: app.pane("studies") is not None, what="studies")
+    if map_file is not None:
+        await asyncio.to_thread(app.session.vibration.load, map_file)
+    return app.pane("studies")
+
+
+async def pick_protocol(pilot, pane, path, out):
+    """Offer the protocol file ``path`` beside the studies/ ones, pick it, set the folder."""
+    from plugins.studies import protocol as P  # lazy: with the plugin under test
+
+    sel = pane.query_one("#protocol")
+    sel.set_options([(n, n) for n in (*P.available(), str(path))])
+    await pilot.pause(0.2)
+    sel.value = str(path)
+    pane.query_one("#out").value = str(out)
