@@ -83,6 +83,8 @@ class LongWork(Horizontal):
         #: (fraction, seconds) from ``expect``
         self._report: tuple[float, str, float] | None = None
         self._expect: tuple[float, float] | None = None
+        #: the running job's lines say their own time left (a demo's start clock)
+        self._timed_by_job = False
         self._ticker = None
 
     def compose(self) -> ComposeResult:
@@ -125,10 +127,12 @@ class LongWork(Horizontal):
         summary: Callable[[Any], str] | None = None,
         *,
         cancelled_says: str = "",
+        timed_by_job: bool = False,
     ) -> bool:
         """Run ``job`` in a thread worker; False (and a notice) when one already runs.
         ``cancelled_says``: what a cancel left as it was, said once after "NAME cancelled"
-        (": no model was written")."""
+        (": no model was written"); ``timed_by_job``: the job's lines say their time
+        left themselves (one estimate on the line, not two)."""
         if self.busy:
             self.say_busy()
             return False
@@ -136,6 +140,7 @@ class LongWork(Horizontal):
         self.outcome = self.result = None
         self._stop = stop = threading.Event()
         self._t0, self._report, self._expect = time.monotonic(), None, None
+        self._timed_by_job = timed_by_job
         if self._ticker is None:
             self._ticker = self.set_interval(1.0, self._tick)
         self.show(f"{name} ...", 0.0)
@@ -192,6 +197,9 @@ class LongWork(Horizontal):
             left = max(seconds - quiet, 0.0) + (rest or 0.0) * (1 - end) / max(1 - shown, 1e-9)
             if quiet > seconds:
                 left = None  # later than expected: no number that is wrong
+        if self._timed_by_job:  # its line has its own clock
+            self.show(text, shown)
+            return
         words = [w for w in (left_words(left),) if w]
         if quiet >= QUIET_S:
             words.append(f"{quiet:.0f} s in this step")

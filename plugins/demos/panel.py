@@ -370,6 +370,7 @@ class ScenesPane(Vertical):
             f"demo {name}",
             lambda progress, cancelled: demos.start(name, progress, cancelled),
             lambda run: f"demo {name} running: s stops it",
+            timed_by_job=True,  # its start clock says the time left (console.runtime)
         )
         return True
 

@@ -73,3 +73,31 @@ def test_long_work_failure_is_one_line_and_a_second_job_waits():
             assert work.progress is None and not work.busy
 
     asyncio.run(scenario())
+
+
+def test_a_job_that_says_its_own_time_left_gets_no_second_estimate():
+    """A demo's start says its time left from its last start ("~12 s left"): the line
+    shows that one estimate, not the pace's as well ("(about 27 s left)")."""
+    release = threading.Event()
+
+    def job(progress, cancelled):
+        progress(0.2, "opening the camera, 3 s, ~12 s left")
+        release.wait(10)
+
+    async def scenario():
+        app = Host()
+        async with app.run_test(size=(100, 5)) as pilot:
+            work = app.query_one(LongWork)
+            work.start("demo flow", job, timed_by_job=True)
+            await wait_for(pilot, lambda: "camera" in work.text, 10, "the report")
+            await pilot.pause(1.2)  # the line's ticker has been round
+            assert work.text == "demo flow: opening the camera, 3 s, ~12 s left"
+            release.set()
+            await wait_for(pilot, lambda: not work.busy, 10, "the end")
+            release.clear()
+            work.start("copying", job)  # a job without its own clock: the pace's
+            await wait_for(pilot, lambda: "left)" in work.text, 10, "the pace's estimate")
+            release.set()
+            await wait_for(pilot, lambda: not work.busy, 10, "the end")
+
+    asyncio.run(scenario())
