@@ -27,6 +27,7 @@ from .analyze_cli import add_parser
 from .plan import check_seed_row
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
+from .store import progress as store_progress
 
 MAX_PARTICIPANTS = 500
 
@@ -165,6 +166,25 @@ def _line(kind: str, info: dict[str, Any]) -> str | None:
     return None
 
 
+class _Count:
+    """Trials done of those this run makes, and the time left at the pace so far (the
+    line of each trial ends with it: "[12/40, about 1 min 5 s left]")."""
+
+    def __init__(self, done: int, total: int) -> None:
+        # lazy: the pace and its words come with the console's plugin API
+        from console.plugin_api.tui import Pace
+
+        self.done, self.total, self.pace = done, total, Pace()  # from the first trial's end
+
+    def one_more(self) -> str:
+        from console.plugin_api.tui import left_words  # lazy: as above
+
+        self.done += 1
+        left = self.pace.left(self.done, self.total)
+        words = left_words(left) if self.done < self.total else ""
+        return f"{self.done}/{self.total}" + (f", {words}" if words else "")
+
+
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         return analyze_cli.run(args)
@@ -255,13 +275,23 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     else TerminalResponder(prep.plan["responses"])
                 )
 
-                def say(kind: str, info: dict[str, Any]) -> None:
+                st = store_progress(prep.plan, prep.files.events())
+                count = _Count(len(st.done), st.total if args.trials is None else
+                               min(st.total, len(st.done) + args.trials))  # fmt: skip
+
+                def say(kind: str, info: dict[str, Any], count=count) -> None:
                     line = _line(kind, info)
+                    if kind == "done":
+                        line = line and f"{line}  [{count.one_more()}]"
                     if line and not args.quiet and not args.json:
                         print(line, flush=True)
 
                 if not args.json:
-                    print(f"{pid}: {proto.name} -> {prep.files.root}", flush=True)
+                    left = count.total - count.done
+                    print(
+                        f"{pid}: {proto.name} -> {prep.files.root}: {left} trial(s) to run",
+                        flush=True,
+                    )
                     again = resume_text(prep.plan, prep.files.events())
                     if again:
                         print(f"{pid}: {again}", flush=True)

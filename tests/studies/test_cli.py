@@ -60,6 +60,10 @@ def test_simulated_participants_run_exp2_and_resume(cli, capsys, tmp_path, map_f
     assert cli(args) == 0  # the same command continues
     text = capsys.readouterr().out
     assert "P01: 6/6 trials done (finished)" in text and "P02: 6/6 trials done (finished)" in text
+    # said before the run, and each trial's line says how far the run is: the resume
+    # runs the 2 trials left of 6
+    assert f"P01: exp2 -> {out / 'P01'}: 2 trial(s) to run" in text
+    assert re.search(r"P01 trial 5: .*\[5/6", text) and re.search(r"P01 trial 6: .*\[6/6\]", text)
     for pid in ("P01", "P02"):
         d = out / pid
         part = json.loads((d / "participant.json").read_text())
