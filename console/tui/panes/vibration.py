@@ -124,7 +124,6 @@ class VibrationPane(VerticalScroll):
 
     def _layout_from_map(self, vmap) -> None:
         """The grid the map's points form by their coordinates, labelled with their ids."""
-
         rows, cols, cells = grid_cells(vmap.points_mm)
         before = (self.rows, self.cols, self.cell_w)
         self._set_layout(
