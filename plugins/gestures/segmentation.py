@@ -6,7 +6,7 @@ results equal to the whole frame's)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -123,6 +123,10 @@ class Parts:
     blocks: np.ndarray
     scale: np.ndarray
     peak: np.ndarray
+    #: the labels at full resolution over ``win`` (uint8), made on first use and shared
+    #: by every ``image`` of this frame (the body's thresholds, the contacts', the
+    #: foreground): one upsampling per frame, then a table look-up per image
+    _cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     def label_at(self, x: int, y: int) -> int:
         """The part at pixel (x, y) of the frame (0: none)."""
@@ -132,9 +136,8 @@ class Parts:
             return int(self.blocks[by, bx])
         return 0
 
-    def image(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
-        """``values[part]`` at every pixel of ``box`` (x0, y0, x1, y1) of the frame, in
-        ``values``' dtype (``values[0]`` where no part is)."""
+    def _upsampled(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+        """``image`` by nearest-neighbour upsampling of ``values[blocks]`` (any dtype)."""
         b = PART_BLOCK_PX
         x0, y0, x1, y1 = box
         bx0, by0 = x0 // b, y0 // b
@@ -145,6 +148,36 @@ class Parts:
         blk[: sub.shape[0], : sub.shape[1]] = values[sub]
         up = cv2.resize(blk, None, fx=b, fy=b, interpolation=cv2.INTER_NEAREST)
         return up[y0 - by0 * b : y1 - by0 * b, x0 - bx0 * b : x1 - bx0 * b]
+
+    def _labels(self) -> np.ndarray | None:
+        """The labels at every pixel of ``win`` (uint8; None if a label exceeds 255)."""
+        if "labels" not in self._cache:
+            ok = int(self.blocks.max(initial=0)) < 256
+            self._cache["labels"] = (
+                self._upsampled(np.arange(256, dtype=np.uint8), self.win) if ok else None
+            )
+        return self._cache["labels"]
+
+    def image(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+        """``values[part]`` at every pixel of ``box`` (x0, y0, x1, y1) of the frame, in
+        ``values``' dtype (``values[0]`` where no part is)."""
+        labels = self._labels() if values.dtype == np.uint8 else None
+        if labels is None:
+            return self._upsampled(values, box)
+        # every block outside ``win`` is no part's: values[0] there
+        lut = np.full(256, values[0], np.uint8)
+        lut[: min(len(values), 256)] = values[:256]
+        x0, y0, x1, y1 = box
+        wx0, wy0, wx1, wy1 = self.win
+        if (x0, y0, x1, y1) == (wx0, wy0, wx1, wy1):
+            return cv2.LUT(labels, lut)
+        out = np.full((y1 - y0, x1 - x0), values[0], np.uint8)
+        ix0, iy0, ix1, iy1 = max(x0, wx0), max(y0, wy0), min(x1, wx1), min(y1, wy1)
+        if ix0 < ix1 and iy0 < iy1:
+            out[iy0 - y0 : iy1 - y0, ix0 - x0 : ix1 - x0] = cv2.LUT(
+                labels[iy0 - wy0 : iy1 - wy0, ix0 - wx0 : ix1 - wx0], lut
+            )
+        return out
 
 
 def relative_body(
@@ -177,26 +210,33 @@ def relative_body(
     floor = 4.0 * noise / b + 2.0
     low = max(threshold * scale_range[0], floor)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
-    n, lab = cv2.connectedComponents(lowm, connectivity=8, ltype=cv2.CV_32S)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_16U)
     # a hand's part rises above the lowest threshold and well above the noise (specks of
-    # noise and background drift do not): the parts holding such a block
-    seeded = np.unique(lab[small >= max(low, SEED_FACTOR * floor)])
-    seeded = seeded[seeded > 0]
+    # noise and background drift do not): the parts holding such a block, whose
+    # brightest block is one of those
+    seed = small >= max(low, SEED_FACTOR * floor)
+    seed_lab, seed_val = lab[seed], small[seed]
+    real = np.zeros(n, bool)
+    real[seed_lab] = True
+    real[0] = False
+    seeded = np.flatnonzero(real)
     if len(seeded) == 0:
         return body, None
-    real = np.zeros(n, bool)
-    real[seeded] = True
     peak = np.zeros(n)
     for i in seeded:
-        peak[i] = float(small[lab == i].max())
+        peak[i] = float(seed_val[seed_lab == i].max())
     # each block keeps its part's label, grown by one block so a part's edge pixels
     # (brighter than their block's mean) keep it too
-    blocks = cv2.dilate(np.where(real, np.arange(n), 0).astype(np.float32)[lab], _BLOCK3)
-    blocks = blocks.astype(np.int32)
-    rows = np.flatnonzero(blocks.any(axis=1))
-    cols = np.flatnonzero(blocks.any(axis=0))
+    keep = np.where(real, np.arange(n), 0).astype(np.uint16)
+    blocks = cv2.dilate(keep[lab], _BLOCK3).astype(np.int32)
+    # the grown parts' box: the parts' boxes, one block wider on each side
+    st = stats[seeded]
+    c0 = max(int(st[:, cv2.CC_STAT_LEFT].min()) - 1, 0)
+    r0 = max(int(st[:, cv2.CC_STAT_TOP].min()) - 1, 0)
+    c1 = min(int((st[:, cv2.CC_STAT_LEFT] + st[:, cv2.CC_STAT_WIDTH]).max()) + 1, wb)
+    r1 = min(int((st[:, cv2.CC_STAT_TOP] + st[:, cv2.CC_STAT_HEIGHT]).max()) + 1, hb)
     reach = smooth_px // 2 if smooth_px > 1 else 0
-    box = (int(cols[0]) * b, int(rows[0]) * b, (int(cols[-1]) + 1) * b, (int(rows[-1]) + 1) * b)
+    box = (c0 * b, r0 * b, c1 * b, r1 * b)
     x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
     cx0, cy0, cx1, cy1 = _grow(win, reach, diff.shape)
     src = diff[cy0:cy1, cx0:cx1]
