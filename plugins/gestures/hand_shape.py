@@ -1,6 +1,6 @@
 """Hand geometry from one hand's mask: palm centre and radius, the wrist arc (where the
 forearm leaves the hand), the canonical pose (wrist turned to the image bottom) and its
-silhouette, the number of extended fingers, and the brightness grid in the canonical frame."""
+silhouette and the number of extended fingers."""
 
 from __future__ import annotations
 
@@ -318,29 +318,3 @@ def _canonical_xy(
     dx, dy = x - center[0], y - center[1]
     c, s_ = math.cos(t), math.sin(t)
     return (dx * c + dy * s_) / scale, (-dx * s_ + dy * c) / scale
-
-
-def brightness_grid(
-    roi_mask: np.ndarray,
-    roi_diff: np.ndarray,
-    center: tuple[float, float],
-    palm_radius: float,
-    angle_deg: float,
-) -> np.ndarray:
-    """Share of the hand's brightness in each cell of a polar grid in the canonical frame
-    (``GRID_SECTORS`` sectors x rings ``GRID_RINGS`` palm radii): where the hand touches
-    or nearly touches the glass, independent of position, rotation, size and gain."""
-    ys, xs = np.nonzero(roi_mask[::3, ::3])
-    n_cells = GRID_SECTORS * (len(GRID_RINGS) - 1)
-    if len(xs) == 0 or palm_radius <= 0:
-        return np.zeros(n_cells)
-    w = roi_diff[::3, ::3][ys, xs].astype(np.float64)
-    u, v = _canonical_xy(xs * 3, ys * 3, center, angle_deg, palm_radius)
-    r = np.hypot(u, v)
-    sector = ((np.arctan2(v, u) + math.pi) / (2 * math.pi) * GRID_SECTORS).astype(int)
-    sector = np.minimum(np.maximum(sector, 0, out=sector), GRID_SECTORS - 1, out=sector)
-    ring = np.searchsorted(GRID_RINGS, r, side="right") - 1
-    ok = (ring >= 0) & (ring < len(GRID_RINGS) - 1)
-    cells = np.bincount(ring[ok] * GRID_SECTORS + sector[ok], weights=w[ok], minlength=n_cells)
-    total = cells.sum()
-    return cells / total if total > 0 else cells

@@ -2,7 +2,7 @@
 (``FrameResult``), the input check and ``process_frame``, which runs the steps held by the
 sibling modules: ``background`` (background model, illumination, subtraction),
 ``segmentation`` (high-pass, the body's parts and the windows they are made in), ``contacts``
-(contact blobs) and ``hand_shape`` (palm, wrist, canonical pose, fingers, brightness grid).
+(contact blobs) and ``hand_shape`` (palm, wrist, canonical pose, fingers).
 Pure functions of arrays (numpy + OpenCV 5); the one stateful part, the background
 model, is in ``background``.
 
@@ -27,8 +27,7 @@ Steps for one frame (paper section 3, Fig. 4):
    the wrist arc where it crosses a circle about the palm, the angle that turns the
    wrist to the reference edge (image bottom), the hand rotated about the centre, the
    wrist and forearm cut off, the smallest enclosing circle, Fourier descriptors of the
-   canonical silhouette, the number of extended fingers, and a brightness grid in the
-   canonical frame (which parts press on the glass).
+   canonical silhouette and the number of extended fingers.
 """
 
 from __future__ import annotations
@@ -48,11 +47,8 @@ from .background import illumination, subtract
 from .contacts import find_contacts
 from .descriptors import fourier_descriptors
 from .hand_shape import (
-    GRID_RINGS,
-    GRID_SECTORS,
     bright_centroid,
     brightness_axis,
-    brightness_grid,
     canonical_angle_deg,
     canonical_silhouette,
     count_fingers,
@@ -153,8 +149,7 @@ class FrameResult:
     #: access) with ``keep_masks``
     masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
-    #: brightness-weighted centroid), grid (brightness in the canonical frame,
-    #: ``GRID_SECTORS`` x rings), contacts_canon ((k, 2) in palm radii), level (the
+    #: brightness-weighted centroid), contacts_canon ((k, 2) in palm radii), level (the
     #: hand's brightest block, grey levels above the background), light (level over
     #: ``contact_level``, the scale of its thresholds; 1.0 with fixed thresholds),
     #: touch (``touch.hand_touch``: its touching skin in mm) and px_per_mm
@@ -283,11 +278,6 @@ def analyse_hand(
     if to_mm is not None:
         cm = np.asarray(to_mm(np.array([[ex, ey]])))[0]
         center_mm = (float(cm[0]), float(cm[1]))
-    grid = (
-        brightness_grid(roi, diff[ya:yb, xa:xb], (pcx, pcy), pr, angle)
-        if diff is not None
-        else np.zeros(GRID_SECTORS * (len(GRID_RINGS) - 1))
-    )
     canon = (
         to_canonical(np.array([c.pos_px for c in mine]), center, angle, pr)
         if mine
@@ -297,7 +287,6 @@ def analyse_hand(
         "palm_radius_px": pr,
         "palm_px": center,
         "bright_px": bright_px,
-        "grid": grid,
         "contacts_canon": canon,
     }
     return Hand(
