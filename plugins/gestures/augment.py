@@ -5,7 +5,8 @@ sample, and the image-level changes the camera twin cannot make itself.
 ``WIDE_RANGES``: the twin's own keys (IR light, read noise, LED lobe layout, hand size,
 hover height of lifted parts, ambient drift, frame rate, shutter time), which the twin
 renders with clipping at 255; a ``hand`` part that ``wide_subject`` applies to the twin's
-subject (finger widths, lengths and directions, spread, hover heights, speed, tremor);
+subject (finger widths, lengths and directions, spread, hover heights, speed, tremor, how
+gently a motion starts);
 and an ``augment`` part that ``augment_sample`` applies to the rendered frames and their
 background alike:
 
@@ -51,10 +52,13 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     "palm_lift_mm": (18.0, 55.0),  # palm height in pointing poses
     "speed": (0.6, 1.6),  # gesture speed factor
     "tremor_mm": (0.1, 1.6),  # frame-to-frame jitter (tremor and centroid noise)
+    # how gently a motion starts: x the person's own time constant (0: at full speed
+    # from the first frame, as a gesture caught already under way)
+    "ease": (0.0, 1.3),
 }
 TWIN_KEYS = ("illumination", "noise_sigma", "hand_scale", "hover_scale", "drift_gain")
 IMAGE_KEYS = ("glow_scale", "finger_px", "lobe_gain", "blur_px", "gamma", "post_noise")
-HAND_KEYS = ("spread", "lift_mm", "palm_lift_mm", "speed", "tremor_mm")
+HAND_KEYS = ("spread", "lift_mm", "palm_lift_mm", "speed", "tremor_mm", "ease")
 FINGER_KEYS = ("finger_width", "finger_length", "finger_turn_deg")
 _WIDE_KEY = 613651
 _FIELD_LOW_RES = (80, 60)  # the light field is drawn at this size and resized
@@ -88,7 +92,8 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
 
 def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
     """The twin's ``Subject`` (a frozen dataclass) with a wide condition's ``hand`` part:
-    finger widths, lengths and rest directions, spread, hover heights, speed, tremor."""
+    finger widths, lengths and rest directions, spread, hover heights, speed, tremor,
+    and how gently motions start."""
     from dataclasses import replace
 
     turn = np.asarray(hand["finger_turn_deg"]) * [2, 1, 1, 1, 1]  # the thumb varies most
@@ -104,6 +109,7 @@ def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
         palm_lift_mm=hand["palm_lift_mm"],
         speed=hand["speed"],
         tremor_mm=hand["tremor_mm"],
+        ease_s=subject.ease_s * hand.get("ease", 1.0),
     )
 
 

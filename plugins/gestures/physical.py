@@ -1,11 +1,12 @@
 """Gesture features in physical units: what a hand's touching skin shows on the glass in
 mm, and how it moves in mm (per 1/60 s), the same on any rear-DI image of a hand.
 
-Per frame (``physical_static``): the touching skin's area, its largest region, the
-number of fingertip-sized regions, the spacing of the two largest of them and of all,
-and whether the hand lies flat on the glass with its outline's solidity (closed against
-spread fingers; a hand above the glass has no outline feature, as how much of its
-hovering palm is seen depends on the light's falloff). Over a decision window
+Per frame (``physical_static``): for a hand lying flat on the glass, the touching
+skin's area, its largest region and its outline's solidity (closed against spread
+fingers); for one above it, the number of fingertip-sized regions and the spacing of
+the two largest of them and of all (not their size, which light that clips grows; and
+no outline feature, as how much of a hovering palm is seen depends on the light's
+falloff). Over a decision window
 (``physical_motion``): the fingertips (or a flat hand's touching skin) followed
 through the frames, each track's least-squares line less what its own jitter explains
 (``beyond_jitter``): their common shift, largest / smallest / mean displacement, the
@@ -28,9 +29,11 @@ import numpy as np
 #: a hand whose touching skin exceeds this (mm^2) lies flat on the glass
 FLAT_MM2 = 2000.0
 #: fingertip-sized regions: within these areas (mm^2) and at least this share of the
-#: largest such region (a curled finger's knuckle brushing the glass is smaller)
-TIP_MM2 = (40.0, 600.0)
-TIP_SHARE = 0.4
+#: largest such region (a curled finger's knuckle brushing the glass is smaller); under
+#: light that clips, a fingertip's plateau takes in the finger just above the glass
+#: (600-1000 mm^2 at x1.3 on the silhouette renderer)
+TIP_MM2 = (40.0, 1500.0)
+TIP_SHARE = 0.3
 #: touching regions followed through the frames: at most this far between frames at
 #: 60 fps (mm)
 TRACK_GATE_MM = 25.0
@@ -118,17 +121,20 @@ def physical_static(rec: dict | None) -> np.ndarray:
     v = np.zeros(N_PHYS_STATIC)
     if rec is None or "regions_mm" not in rec:
         return v
-    area = rec["regions_mm"][:, 0]
+    if is_flat(rec):  # no fingertips: how a flat hand's skin splits into pads varies
+        area = rec["regions_mm"][:, 0]
+        v[0] = math.log1p(rec["touch_mm2"])
+        v[1] = math.log1p(float(area.max())) if len(area) else 0.0
+        v[5] = 1.0
+        v[6] = rec["solidity"]
+        return v
+    # fingertips: how many and how far apart, not how large (light that clips grows
+    # them to the finger just above the glass)
     tips = tips_mm(rec)
     sp = _spacings(tips)
-    v[0] = math.log1p(rec["touch_mm2"])
-    v[1] = math.log1p(float(area.max())) if len(area) else 0.0
     v[2] = min(len(tips), 6)
     v[3] = float(np.linalg.norm(tips[0] - tips[1])) if len(tips) > 1 else 0.0
     v[4] = float(sp.max()) if len(sp) else 0.0
-    if is_flat(rec):
-        v[5] = 1.0
-        v[6] = rec["solidity"]
     return v
 
 

@@ -1,14 +1,25 @@
-"""A hand's touching skin in millimetres: the parts of the hand at least half as bright
-as its brightest block (skin on the glass; skin above it dims quickly with height), as
-connected regions with their areas and centroids.
+"""A hand's touching skin in millimetres: connected regions with their areas and
+centroids.
+
+Touching skin is told from skin above the glass by two things every rear-DI image
+shares, whatever its light falloff: it is the brightest skin around, and it is sharp
+(the diffuser blurs skin by its height). Candidates are the pixels at least half as
+bright as the hand's brightest block; of those, the core is what is at least
+``CORE_SHARE`` as bright as the brightest skin within ``CORE_MM`` (a fingertip, not the
+finger rising from it; each pad of a flat hand under its own light), and a core
+touches when an edge on or next to it is steep (``SHARP_PER_MM`` of that level per mm).
+Curled fingers hovering a few mm up, 60-75 % as bright as a fingertip under a slow
+falloff or clipping, are neither.
 
 Measured relative to the hand's own light, so the regions keep their extent under
-dimmer or brighter light; where touching skin clips at 255 it stays above half the
+dimmer or brighter light; where touching skin clips at 255 it stays above the core's
 level and the plateau is kept whole. Lengths are in mm through ``px_per_mm`` (the
 camera's calibration, or the frame seeing the whole glass: ``default_px_per_mm``).
 """
 
 from __future__ import annotations
+
+import math
 
 import cv2
 import numpy as np
@@ -23,6 +34,19 @@ MIN_REGION_MM2 = 15.0
 SAME_HAND_MM = 200.0
 #: regions kept per hand (largest first)
 MAX_REGIONS = 8
+#: the touching core: at least this share of the brightest skin within ``CORE_MM``
+#: (skin just above the glass, however bright under a slow falloff or clipping, stays
+#: below the contact's level next to it)
+CORE_SHARE = 0.8
+CORE_MM = 10.0
+#: a core touches when an edge on or next to it rises at least this share of that
+#: level per mm (touching skin: 0.22-0.45 on three renderers; curled fingers 9 mm
+#: above the glass: 0.07-0.16)
+SHARP_PER_MM = 0.19
+#: ... or, in a frame where no core is as sharp (a camera out of focus, dim light),
+#: the first of these shares of it that some core reaches: the sharpest cores of the
+#: frame, not the skin above the glass beside them; a frame with one core keeps it
+SOFT_SHARES = (1.0, 0.85, 0.7, 0.6, 0.5)
 
 
 def default_px_per_mm(width_px: int, height_px: int) -> float:
@@ -34,24 +58,50 @@ def touch_regions(diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float) -
     """The touching skin of the hands (``body``: their mask, uint8 0/255; ``parts``:
     ``segmentation.Parts``; a fingertip whose finger rises out of the mask, a part of its
     own, counts too) in the difference image ``diff`` (uint8, grey levels above the
-    background): pixels above ``TOUCH_SHARE`` of the brightest part's level (a hovering
-    palm, however large, is not touching skin while a fingertip touches) as regions:
-    (k, 3) area mm^2, x px, y px, largest first."""
+    background): pixels above ``TOUCH_SHARE`` of the brightest part's level (a
+    hovering palm, however large, is not touching skin while a fingertip touches), their
+    bright and sharp cores (see the module's docstring) as regions: (k, 3) area mm^2,
+    x px, y px, largest first."""
     x0, y0, x1, y1 = parts.win
-    cut = float(np.clip(np.floor(TOUCH_SHARE * parts.peak.max()), 1, 254))
+    cut = min(max(math.floor(TOUCH_SHARE * float(parts.peak.max())), 1), 254)
     _, on = cv2.threshold(diff[y0:y1, x0:x1], cut, 255, cv2.THRESH_BINARY)
     on = cv2.bitwise_and(on, body[y0:y1, x0:x1])
     bx, by, bw, bh = cv2.boundingRect(on)  # the regions only: a small part of the hands
     if bw == 0:
         return np.zeros((0, 3))
-    on = on[by : by + bh, bx : bx + bw]
-    x0, y0 = x0 + bx, y0 + by
-    _, _, stats, cents = cv2.connectedComponentsWithStats(on, connectivity=8)
-    mm2 = 1.0 / (px_per_mm * px_per_mm)
-    area = stats[1:, cv2.CC_STAT_AREA].astype(float) * mm2
-    keep = np.flatnonzero(area >= MIN_REGION_MM2)
+    # a pixel more on each side: the edges' slope
+    bx0, by0 = max(bx - 1, 0), max(by - 1, 0)
+    on = on[by0 : by + bh + 1, bx0 : bx + bw + 1]
+    sub = diff[y0 + by0 : y0 + by0 + on.shape[0], x0 + bx0 : x0 + bx0 + on.shape[1]]
+    # the brightest skin within CORE_MM of each pixel, and the core: skin at least
+    # CORE_SHARE of it
+    k = 2 * max(round(CORE_MM * px_per_mm), 1) + 1
+    near = cv2.dilate(sub, cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)))
+    core = cv2.compare(sub, cv2.convertScaleAbs(near, alpha=CORE_SHARE), cv2.CMP_GE)
+    n, lab, stats, cents = cv2.connectedComponentsWithStats(cv2.bitwise_and(core, on), None, 8)
+    if n < 2:
+        return np.zeros((0, 3))
+    # steep: an edge rising at least SHARP_PER_MM of that level per mm (|Sobel| is 8 x
+    # the grey levels per px), on or next to a core (or SOFT_SHARES of that)
+    area = stats[:, cv2.CC_STAT_AREA] / (px_per_mm * px_per_mm)
+    sharp = area >= MIN_REGION_MM2
+    sharp[0] = False
+    if np.count_nonzero(sharp) > 1:  # one core is kept, sharp or soft (below)
+        dx, dy = cv2.spatialGradient(sub)
+        rise = cv2.max(
+            cv2.convertScaleAbs(dx, alpha=px_per_mm / 8.0),
+            cv2.convertScaleAbs(dy, alpha=px_per_mm / 8.0),
+        )
+        big = sharp
+        for share in SOFT_SHARES:
+            need = cv2.convertScaleAbs(near, alpha=share * SHARP_PER_MM)
+            steep = cv2.dilate(cv2.compare(rise, need, cv2.CMP_GE), None)
+            sharp = big & (np.bincount(lab[steep > 0], minlength=n) > 0)
+            if sharp.any():
+                break
+    keep = np.flatnonzero(sharp)
     keep = keep[np.argsort(-area[keep])]
-    return np.column_stack([area[keep], cents[1:][keep] + (x0, y0)]).reshape(-1, 3)
+    return np.column_stack([area[keep], cents[keep] + (x0 + bx0, y0 + by0)]).reshape(-1, 3)
 
 
 def hand_touch(regions: np.ndarray, palms_px: list, index: int, same_px: float) -> dict:
