@@ -36,6 +36,7 @@ from console.core.contracts import ParametricStream
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.kernel import wire
 from console.kernel.last_plan import kernel_plan
+from console.kernel.output_settings import refusal, settings_key
 from console.kernel.scheduler import PlayReport
 from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
 from console.kernel.tables import Table, describe_latch, private_table, table_for
@@ -187,7 +188,7 @@ class Outputs:
 
     # ------------------------------------------------------------------ connection
     def _connect(self, profile: Any) -> tuple[socket.socket, dict[str, Any]]:
-        want = wire.settings_key(profile)
+        want = settings_key(profile)
         owner = os.getpid() if self.table.private else None
         spawned = 0
         deadline = time.monotonic() + START_TIMEOUT_S
@@ -238,10 +239,8 @@ class Outputs:
             self._drop_connection()
             self._lost = ""
             if not got.get("ok"):
-                raise UserError(
-                    f"table {self.table.name}: its outputs are open with other settings by "
-                    f"{', '.join(got.get('clients') or ['another process'])}; quit it first"
-                )
+                theirs = hello.get("output_settings")  # which keys differ, and the fix
+                raise UserError(refusal(self.table.name, got.get("clients"), theirs, profile))
             self._wait_gone(deadline)
 
     def _wait_gone(self, deadline: float) -> None:

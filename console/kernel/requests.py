@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from console.core.errors import SafetyRefusal
 from console.kernel import wire
 from console.kernel.input_requests import INPUT_REQUESTS
+from console.kernel.output_settings import output_settings, settings_key
 from console.kernel.tables import read_latch
 
 if TYPE_CHECKING:
@@ -47,7 +48,8 @@ def hello(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
         "latched": read_latch(k.table),
         "estopped": k.gate.estopped,
         "estop_reason": k.gate.estop_reason,
-        "settings": wire.settings_key(k.profile),
+        "settings": settings_key(k.profile),
+        "output_settings": output_settings(k.profile),  # a refused client names the keys
     }
 
 

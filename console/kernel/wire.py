@@ -135,11 +135,3 @@ def jsonable(o: Any) -> Any:
     if isinstance(o, (np.ndarray, np.generic)):
         return jsonable(o.tolist())
     return str(o)
-
-
-def settings_key(profile: Any) -> str:
-    """What a client compares to know a kernel runs its profile's settings."""
-    import hashlib
-
-    raw = json.dumps(jsonable(profile.data), sort_keys=True)
-    return hashlib.sha1(raw.encode()).hexdigest()[:16]

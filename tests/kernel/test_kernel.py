@@ -307,7 +307,9 @@ def test_another_profile_on_a_used_table_is_refused_in_one_line(shared, profile,
     changed = dataclasses.replace(
         profile, data={**profile.data, "limits": {**profile.data["limits"], "piezo_max_v": 100.0}}
     )
-    with pytest.raises(UserError, match="open with other settings by .*pid"):
+    with pytest.raises(
+        UserError, match=r"open by .*pid.* other output settings \(limits.piezo_max_v"
+    ):
         open_outputs(changed, plugins, fast=True, private=False)
     shared.close()
     other = open_outputs(changed, plugins, fast=True, private=False)  # free now: replaced
