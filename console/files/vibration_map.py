@@ -38,6 +38,7 @@ Errors are ``UserError`` with one line naming the file, the key and the fix.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import hashlib
 import json
 import os
@@ -49,6 +50,7 @@ import numpy as np
 
 from console.core.errors import UserError
 from console.core.types import EXCITATIONS
+from console.core.words import AT_CLI, AT_CONSOLE, Placed
 from console.files.npz_safe import read_json_text, read_npz
 
 FORMAT = "haptable-vibration-map"
@@ -63,6 +65,37 @@ MAX_FRF_UM_PER_V = 1e4
 MAX_FREQ_HZ = 1e6
 #: positions are mm from the glass corner of a ~1 m table: 10 m means a wrong unit
 MAX_POSITION_MM = 1e4
+
+#: the fix wherever the map is read, at a shell (``str()`` of the error ends with it)
+FIX = "measure it again or import the vibrometer's file (haptable frf measure, haptable frf import)"
+#: ... and per place (``console.core.words``): in the console, the Vibration screen's keys
+#: and commands, the one place that reads a map file
+FIX_AT = {
+    AT_CLI: FIX,
+    AT_CONSOLE: (
+        "m measures the grid again, :import PA=F.uff ... imports the vibrometer's files, "
+        ":load F.npz loads another map"
+    ),
+}
+
+
+def _placed(fn):
+    """``fn``'s refusals that end with ``FIX`` raised as ``Placed``: each place words the
+    fix its own way (``worded(exc, AT_CONSOLE)``), ``str()`` stays the shell's line."""
+
+    @functools.wraps(fn)
+    def placed(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except Placed:
+            raise
+        except UserError as exc:
+            text = str(exc)
+            if not text.endswith(f"; {FIX}"):
+                raise
+            raise Placed(text[: -len(FIX) - 2], FIX_AT) from None
+
+    return placed
 
 
 @dataclass(frozen=True)
@@ -107,6 +140,7 @@ class VibrationMap:
         return h.hexdigest()
 
 
+@_placed
 def make_map(
     frf_um_per_v: np.ndarray,
     freq_hz: np.ndarray,
@@ -147,6 +181,7 @@ def make_map(
     return m
 
 
+@_placed
 def validate_map(
     m: VibrationMap,
     *,
@@ -269,13 +304,7 @@ def save_map(path: str | os.PathLike, m: VibrationMap) -> Path:
     return p
 
 
-#: the fix wherever the map is read: the console's Vibration commands and the shell's
-FIX = (
-    "measure it again or import the vibrometer's file (Vibration screen: measure, import; "
-    "shell: haptable frf measure, haptable frf import)"
-)
-
-
+@_placed
 def load_map(
     path: str | os.PathLike, *, require_all: bool = True, grid_points: int | None = None
 ) -> VibrationMap:
@@ -360,6 +389,7 @@ def _meta(where: str, raw: np.ndarray, key: str) -> dict[str, Any]:
     return meta
 
 
+@_placed
 def map_from_arrays(
     data: dict[str, np.ndarray],
     *,

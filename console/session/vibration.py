@@ -52,6 +52,8 @@ HAND_MM = 120.0
 #: a hand centre this close outside the area still fits: the effect rounds a centre to
 #: 0.1 mm, and its outermost samples lie half a subgrid step (> 0.05 mm) inside the square
 HAND_TOL_MM = 0.05 + 1e-6
+#: how long the plate twin's measurement of the grid takes (its steps at real time)
+TWIN_MEASURE_S = 10
 
 
 def _get(profile, key: str, default: Any = None) -> Any:
@@ -263,12 +265,22 @@ class VibrationService:
             vmap, f"map: the kept measurement{when} ({self._source(vmap)}; m measures again)"
         )
 
+    def measure_takes(self) -> str:
+        """How long ``measure`` takes, in words ("about 10 s" with the plate twin as the
+        vibrometer), "" when unknown (a real vibrometer's run depends on its settings)."""
+        try:
+            twin = self.plugins.simulated("vibrometer", self.profile)
+        except Exception:  # noqa: BLE001 - a profile without a vibrometer: not known
+            twin = False
+        return f"about {TWIN_MEASURE_S} s" if twin else ""
+
     def no_map_text(self) -> str:
         """Why there is no current map, and what to do (the Vibration screen shows it)."""
         if not self.twin_plate_only():
+            takes = self.measure_takes()
             return (
-                "no vibration map: press m to measure the twin's grid (about 10 s), or "
-                "type import PA=a.uff ... / load map.npz"
+                "no vibration map: press m to measure the twin's grid"
+                f"{f' ({takes})' if takes else ''}, or type import PA=a.uff ... / load map.npz"
             )
         path = self.cached_map_path()
         kept = f"; the twin's map is kept: load {path} uses it anyway" if path.is_file() else ""

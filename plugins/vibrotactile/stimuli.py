@@ -244,7 +244,7 @@ def point_plan(
         min(settings.ramp_ms / 1e3, settings.pulse_s / 4),
         settings.sample_rate_hz,
         patches_of(m.excitations[e]),
-        label=f"point {m.excitations[e]}",
+        label=f"excitation {m.excitations[e]}",
     )
     return OutputPlan(
         sample_rate_hz=settings.sample_rate_hz,

@@ -136,7 +136,7 @@ def build_tables(
             msg = (
                 "building lookup tables"
                 if bounds.size == 2
-                else f"pairs of points {a + 1}-{b} of {p}"
+                else f"pairs of points {a + 1} to {b} of {p}"
             )
             progress(i / (bounds.size - 1), msg)
         if perceptual is None:

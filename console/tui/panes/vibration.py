@@ -32,7 +32,6 @@ from console.tui.panes.vibration_words import (
     COMMANDS,
     HELP,
     HELP_KEYS,
-    MEASURE_AGAIN,
     MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
     NOTHING_TO_CANCEL,
@@ -41,6 +40,8 @@ from console.tui.panes.vibration_words import (
     estop_line,
     estop_reason,
     info_text,
+    measure_again,
+    with_time_left,
 )
 from console.tui.plots import frf_series
 from console.tui.roving_view import RovingView, add_accelerometer_text
@@ -126,11 +127,8 @@ class VibrationPane(VerticalScroll):
         """The grid the map's points form by their coordinates, labelled with their ids."""
         rows, cols, cells = grid_cells(vmap.points_mm)
         before = (self.rows, self.cols, self.cell_w)
-        self._set_layout(
-            rows,
-            cols,
-            {(int(r), int(c)): int(n) for (r, c), n in zip(cells, vmap.points, strict=True)},
-        )
+        ids = {(int(r), int(c)): int(n) for (r, c), n in zip(cells, vmap.points, strict=True)}
+        self._set_layout(rows, cols, ids)
         grid = self.query_one("#grid", DataTable)
         if before == (rows, cols, self.cell_w) and grid.row_count == rows:
             self._redraw_grid()  # the same frame: new ids in place, labels and cursor kept
@@ -266,7 +264,7 @@ class VibrationPane(VerticalScroll):
         try:
             session = self.service.load_cached()
         except UserError as exc:
-            from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
             return
         if session is None:
             from_thread(self.app, self.status, self.service.no_map_text())
@@ -284,6 +282,7 @@ class VibrationPane(VerticalScroll):
         def show(*args):
             return from_thread(self.app, *args)
 
+        @with_time_left
         def progress(frac: float, msg: str) -> None:
             show(self._tables_status, session, summary, f"{summary}; lookup tables: {msg}", frac)
 
@@ -298,7 +297,7 @@ class VibrationPane(VerticalScroll):
                 "what it needs)"
             )
         except UserError as exc:
-            text = f"{summary}; ready without lookup tables: {exc}"
+            text = f"{summary}; ready without lookup tables: {worded(exc, AT_CONSOLE)}"
         show(self._tables_status, session, summary, text)
 
     def _tables_status(
@@ -348,10 +347,10 @@ class VibrationPane(VerticalScroll):
         now = time.monotonic()
         kept = command is None and self.service.cached_map_path().is_file()
         if kept and now - self._measure_asked > MEASURE_AGAIN_S:  # it would be replaced
-            self._measure_asked = now
-            self.status(MEASURE_AGAIN)  # the question leaves the line when it lapses
+            self._measure_asked, ask = now, measure_again(self.service.measure_takes())
+            self.status(ask)  # the question leaves the line when it lapses
             then, shown = self.summary, lambda: self.status_text  # the map's line after
-            lapse(self, shown, MEASURE_AGAIN, self.status, MEASURE_AGAIN_S, then=then)
+            lapse(self, shown, ask, self.status, MEASURE_AGAIN_S, then=then)
             return
         self._measure_asked = -1e9
         self.status("measuring ...", 0.0)
@@ -368,6 +367,7 @@ class VibrationPane(VerticalScroll):
         def cancelled() -> bool:
             return stopped() or self._estop_active()
 
+        @with_time_left
         def progress(frac: float, msg: str) -> None:
             if not cancelled():
                 from_thread(self.app, self._measure_progress, stop, f"measuring: {msg}", frac)
@@ -378,7 +378,7 @@ class VibrationPane(VerticalScroll):
         except Cancelled:
             from_thread(self.app, self._measure_cancelled, stop, command)
         except UserError as exc:
-            from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
             from_thread(self.app, self._command_done, command, False)
         finally:
             from_thread(self.app, self._measure_ended, stop)
@@ -438,7 +438,7 @@ class VibrationPane(VerticalScroll):
         except Cancelled:
             from_thread(self.app, self.status, "import cancelled; the map is unchanged")
         except UserError as exc:
-            from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
             from_thread(self.app, self._command_done, command, False)
 
     @work(thread=True, exclusive=True, group="vib-long")
@@ -450,7 +450,7 @@ class VibrationPane(VerticalScroll):
         except Cancelled:
             from_thread(self.app, self.status, "loading cancelled; the map is unchanged")
         except UserError as exc:
-            from_thread(self.app, self._error, str(exc))
+            from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
             from_thread(self.app, self._command_done, command, False)
 
     def _command_done(self, command: str | None, ok: bool) -> None:
@@ -544,7 +544,7 @@ class VibrationPane(VerticalScroll):
         try:
             n = n or self.cursor_point()
         except UserError as exc:
-            self._error(str(exc))
+            self._error(worded(exc, AT_CONSOLE))
             return
         if not self._points_ok(n):
             return
@@ -650,7 +650,7 @@ class VibrationPane(VerticalScroll):
         try:
             runs_on = self.run_command(text)
         except (UserError, ValueError) as exc:  # ValueError: shlex (an open quote)
-            self._error(str(exc))
+            self._error(worded(exc, AT_CONSOLE))
         finally:
             self._typed = None
         if not isinstance(line, CommandLine):

@@ -4,11 +4,14 @@ the info panel of the selected points."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from console.core.errors import UserError
 from console.tui.text import escape
+from console.tui.time_left import left_words, seconds_left
 
 #: the ``:`` line's commands, one name each: its hint and the help show this line
 COMMANDS = "51; 51 52; hand 51 up; measure; tables; cancel; import PA=F.uff; load F.npz"
@@ -33,13 +36,37 @@ HELP_KEYS = (
 )
 #: ``m`` with a kept map asks first; ``m`` again within this many seconds measures anew
 MEASURE_AGAIN_S = 5.0
-MEASURE_AGAIN = (
-    f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew and replaces the kept "
-    "map (the demos and studies use it too)"
-)
 NOTHING_TO_CANCEL = "x: nothing to cancel (no measurement, import, load or table build runs)"
 MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
+
+
+def measure_again(takes: str) -> str:
+    """What ``m`` with a kept map asks: ``m`` again measures anew, for ``takes`` ("about
+    10 s"; "" when unknown), and replaces the kept map."""
+    how_long = f" ({takes})" if takes else ""
+    return (
+        f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew{how_long} and "
+        "replaces the kept map (the demos and studies use it too)"
+    )
+
+
+def with_time_left(progress: Callable[[float, str], Any]) -> Callable[[float, str], Any]:
+    """``progress(fraction, text)`` that says the time left after ``text`` ("step 4/8;
+    about 6 s left", ``console.tui.time_left``), at the pace since its first call (the
+    work counted from there: a first call past 0 does not skew it)."""
+    first: list[float] = []  # when and at which fraction it was first called
+
+    def said(frac: float, msg: str) -> Any:
+        now = time.monotonic()
+        if not first:
+            first.extend((now, frac))
+        t0, f0 = first
+        done = (frac - f0) / (1.0 - f0) if f0 < 1.0 else 0.0
+        left = left_words(seconds_left(now - t0, done))
+        return progress(frac, f"{msg}; {left}" if left else msg)
+
+    return said
 
 
 @dataclass
@@ -106,10 +133,18 @@ def rendering(plan) -> str:
     return f"method {method}{patches}{tail}{rule}"
 
 
+def segment_words(seg) -> str:
+    """A segment and where it plays: "excitation PALL (PA+PB+PC+PD)", "excitation PA" (an
+    excitation is its patches, named once), "point paper on PA+PB+PC+PD"."""
+    where = "+".join(sorted(seg.patches)) or "screen"
+    label = seg.label or "segment"
+    if label.startswith("excitation "):
+        return label if label.endswith(f" {where}") else f"{label} ({where})"
+    return f"{label} on {where}"
+
+
 def describe_plan(plan) -> str:
-    parts = []
-    for seg in plan.segments:
-        parts.append(f"{seg.label or 'segment'} on {'+'.join(sorted(seg.patches)) or 'screen'}")
+    parts = [segment_words(seg) for seg in plan.segments]
     head = f"{plan.duration_s:.1f} s, " + ", ".join(parts)
     return head + (f"; {rendering(plan)}" if plan.meta.get("kind") == "flow" else "")
 
