@@ -14,7 +14,8 @@ What it offers:
   ``ConsoleFooter`` (the footer every screen shows: E-STOP, ``f1-f10`` and ``?`` always)
 - panels over a screen: ``LeavesForScreen`` (an F-key closes the panel, or it says why not)
 - time left: ``Pace`` (counts done over time: the seconds the rest takes) and
-  ``left_words`` ("about 1 min 10 s left": ``console.tui.time_left``)
+  ``left_words`` ("about 1 min 10 s left": ``console.tui.time_left``), ``seconds_left``
+  (from the time so far and the fraction done)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
   a toast only when the screen is not in view; the console's rule, ``console.tui.said``);
@@ -38,7 +39,7 @@ from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
-from console.tui.time_left import Pace, left_words
+from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
 
 __all__ = [
@@ -60,4 +61,5 @@ __all__ = [
     "short_path",
     "Pace",
     "left_words",
+    "seconds_left",
 ]

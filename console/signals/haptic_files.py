@@ -97,10 +97,19 @@ class Scale:
 
 # ---------------------------------------------------------------------- reading helpers
 def load_json(path: str | Path, what: str) -> Any:
-    """The JSON a haptic file holds (bounded read, bad JSON named with its line)."""
+    """The JSON a haptic file holds (bounded read, bad JSON named with its line). A path
+    that is not there, or not a file, is told to check the path: its JSON was never read."""
     fix = f"give an {what} file: correct its JSON or save it again from the design tool"
-    data = read_bytes_capped(path, what="haptic file", fix=fix, max_bytes=MAX_FILE_BYTES)
-    return parse_json(decode(data or b"", str(path), fix), str(path), fix)
+    data = read_bytes_capped(
+        path,
+        what="haptic file",
+        fix=f"give the path of an {what} file",
+        max_bytes=MAX_FILE_BYTES,
+        missing_ok=True,
+    )
+    if data is None:
+        raise UserError(f"{path}: no such file; check the path (its folder and spelling)")
+    return parse_json(decode(data, str(path), fix), str(path), fix)
 
 
 def bad(path: Path, key: str, problem: str, fix: str) -> UserError:

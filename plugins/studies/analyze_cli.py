@@ -109,11 +109,37 @@ def _f(v: Any, fmt: str) -> str:
     return format(v, fmt)
 
 
+def _check_excluded(dirs: list[Path], exclude: tuple[str, ...]) -> None:
+    """An ``--exclude`` id no participant in ``dirs`` has: a one-line error naming it and
+    the participants there (a typo would otherwise leave everyone in, silently)."""
+    if not exclude:
+        return
+    # lazy: this module loads at every haptable start
+    from console.plugin_api import UserError
+
+    from . import records, runs
+    from . import threshold_analysis as thresholds
+
+    ids = [f.name for f in thresholds.run_folders(dirs)]
+    if thresholds.has_plans(dirs) or not ids:
+        for d in runs.participant_dirs(dirs):
+            ids.append(str(records.load_plan(d / "plan.json").get("participant") or d.name))
+    ids = sorted(set(ids))
+    unknown = [x for x in dict.fromkeys(exclude) if x not in ids]
+    if unknown:
+        where = ", ".join(map(str, dirs))
+        raise UserError(
+            f"--exclude {', '.join(unknown)}: no such participant in {where}; "
+            f"the participants are {', '.join(ids) or 'none'}"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     # lazy: this module loads at every haptable start; analysis, report only when used
     from . import analysis, report
     from . import threshold_analysis as thresholds  # threshold runs: fits, curves
 
+    _check_excluded(list(args.dirs), tuple(args.exclude))
     extra = None
     if thresholds.run_folders(list(args.dirs)):
         if not thresholds.has_plans(list(args.dirs)):

@@ -560,7 +560,7 @@ class StudiesPane(Vertical):
         elif kind == "map":
             bar = self.query_one("#study-progress", ProgressBar)
             bar.update(total=100, progress=round(100 * float(d.get("fraction") or 0)))
-            self.last["state"] = f"vibration map: {d.get('text', '')}"
+            self.last["state"] = panel_status.map_state(self.last, d)  # with the time left
         elif kind == "start":
             self.asking = None
             self.last["trial"] = d["trial"]

@@ -6,10 +6,11 @@ analysed at once, so ``t`` shows it without ``n`` first."""
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 from console.plugin_api import UserError
-from console.plugin_api.tui import Pace, left_words
+from console.plugin_api.tui import Pace, left_words, seconds_left
 
 from . import adaptive_console
 from . import protocol as protocols
@@ -43,6 +44,19 @@ def pace_snapshot(pace: Pace, last: dict[str, Any], kind: str, d: dict[str, Any]
     elif kind in ("aborted", "finished"):
         pace.stop()
         last["left"] = ""
+
+
+def map_state(last: dict[str, Any], d: dict[str, Any], clock=time.monotonic) -> str:
+    """The status line of the run's vibration-map step (a ``map`` snapshot: its text and
+    the fraction done) with the time it still needs at its pace so far, as the other long
+    steps say it ("about 8 s left"); its clock starts when the step reports no progress
+    yet (the measurement's start)."""
+    fraction, now = float(d.get("fraction") or 0.0), clock()
+    if fraction <= 0.0 or last.get("map_t0") is None:
+        last["map_t0"] = now
+    left = "" if fraction >= 1.0 else left_words(seconds_left(now - last["map_t0"], fraction))
+    text = f"vibration map: {d.get('text', '')}"
+    return f"{text}, {left}" if left else text
 
 
 def analyse_after_run(pane: Any, pid: str) -> None:
