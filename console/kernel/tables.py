@@ -183,6 +183,25 @@ def read_latch(table: Table) -> dict[str, Any] | None:
     return rec
 
 
+def latched_elsewhere(own: Table) -> list[str]:
+    """The names of the other shared tables latched now (a bare `haptable estop`
+    latches every table: the console shows those it cannot reset itself, each reset
+    from its own console's ctrl+r or `haptable reset`). Reads only; [] for a private
+    table (no shell e-stop reaches it)."""
+    if own.private:
+        return []
+    try:
+        dirs = sorted(d for d in tables_root().iterdir() if d.name != own.key and d.is_dir())
+    except OSError:
+        return []
+    out = []
+    for d in dirs:
+        t = Table(d.name, d)
+        if read_latch(t) is not None and t.name not in out:
+            out.append(t.name)
+    return out
+
+
 def write_latch(table: Table, record: dict[str, Any]) -> None:
     """Latch the table (atomically, synced): kept until ``clear_latch``. The first latch
     is kept when one exists (its reason is the one an operator must read)."""

@@ -38,7 +38,7 @@ from console.tui.long_work import LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
-from console.tui.safety_bar import SafetyBar
+from console.tui.safety_bar import SafetyBar, still_latched
 from console.tui.said import log_said
 from console.tui.session_messages import SessionMessage
 from console.tui.typed import TypedHistory
@@ -286,6 +286,7 @@ class HapTableApp(App):
         if time.monotonic() > deadline:
             self._focus_wanted = None
             self.key_hold.release()
+            self.base.refresh_bindings()  # the footer waited for this focus
             return
         target = self._focus_target(tab)  # None while the switch or the mount is on its way
         if target is not None:
@@ -298,6 +299,11 @@ class HapTableApp(App):
             if self.screen is self.base:  # a modal on top keeps its focus
                 target.focus()
         self.set_timer(0.03, self._apply_focus)
+
+    def switching(self, screen) -> bool:
+        """Whether ``screen`` (the main one) switches, the focus not given yet (the footer
+        keeps the old screen's keys until the new one's widget has it: ``Switches``)."""
+        return screen is self.base and self._focus_wanted is not None and screen.focused is None
 
     def _keep_focus_visible(self, *_changed) -> None:
         """Focus never rests in a hidden screen: Textual hands the focus of a widget being
@@ -351,8 +357,9 @@ class HapTableApp(App):
         tabs = self.tab_widget
         if tabs is not None:
             tabs.active = tab
-        self._focus_wanted = (tab, time.monotonic() + FOCUS_WAIT_S)  # keys typed now wait
-        self.call_after_refresh(self._focus_pane, tab)
+        # the focus asked for now, not after a refresh: the footer shows the screen's
+        # keys as soon as its widget has it (a refresh takes long while a demo runs)
+        self._focus_pane(tab)  # keys typed meanwhile wait for it (``KeyHold``)
 
     def on_tabbed_content_tab_activated(self, event: TabbedContent.TabActivated) -> None:
         if not self.screen_stack:  # a late activation while the console shuts down
@@ -506,11 +513,12 @@ class HapTableApp(App):
 
     def action_reset_estop(self) -> None:
         out = self.session.outputs
+        others = still_latched(out)  # other tables: their own consoles reset them
         if out is not None and not out.estopped:  # said, not silence: the key was heard
-            self.notify("no e-stop to reset: the outputs are not e-stopped")
+            self.notify("no e-stop to reset: the outputs are not e-stopped" + others)
         elif self.session.reset_estop():
             self._own_estop_s = time.monotonic()
-            self.notify("e-stop reset: outputs stay silent until something plays")
+            self.notify("e-stop reset: outputs stay silent until something plays" + others)
 
     async def on_event(self, event: events.Event) -> None:
         if self.key_hold.hold(event):  # typed behind a screen switch (``console.tui.key_hold``)

@@ -14,6 +14,7 @@ from console.core.errors import UserError
 from console.session.background_check import bright_blobs, describe_blobs
 from console.session.calibration import SAVE_KEY, TOPIC
 from console.session.events import Failed
+from console.tui.lapse import lapse
 from console.tui.said import log_said, shows_now
 from console.tui.text import escape
 from console.tui.util import short_path
@@ -116,6 +117,11 @@ class CameraWizardMixin:
         self.say(f"touch calibration saved to {short_path(path)}")
         self.refresh_bindings()  # S leaves the footer: nothing waits for it
 
+    def _status_shown(self) -> str:
+        """What the status line shows now (as ``say`` laid it out)."""
+        found = self.query("#camera-status")
+        return str(found.first().content) if found else ""
+
     def action_background(self) -> None:
         """``b``: the background from the recent frames; a bright blob in it (a hand
         held on the glass) is named and the background kept as it was, unless ``b`` is
@@ -138,6 +144,10 @@ class CameraWizardMixin:
                 f"(b again within {BACKGROUND_AGAIN_S:g} s keeps it anyway)",
                 "warning",
             )
+            # the question leaves the line when its window ends (``console.tui.lapse``)
+            then = "b: the background is as before: take your hands off the glass, then b"
+            shown = self._status_shown
+            lapse(self, shown, shown(), self.say, BACKGROUND_AGAIN_S, then=then)
             return
         self._background_asked = -1e9
         n = svc.capture_background(image)

@@ -14,16 +14,21 @@ from __future__ import annotations
 import json
 import logging
 import threading
+import time
 from typing import Any, Protocol, runtime_checkable
 
 from textual.message import Message
 
 from console.core.errors import SafetyRefusal
+from console.kernel.tables import latched_elsewhere
 
 log = logging.getLogger(__name__)
 
 #: how often the kernel is asked for its status (the safety bar's live levels)
 POLL_S = 0.1
+#: how often the other tables' latches are read (a shell's `haptable estop` latches every
+#: table; `haptable reset --profile P` clears one): the bar names those still latched
+OTHERS_S = 1.0
 
 #: status fields that change while nothing a screen shows does, by section
 _CHURN: dict[str | None, frozenset[str]] = {
@@ -89,6 +94,8 @@ class OutputsWatch:
         self._key: str | None = None
         self._log_switches: Any = object()  # never equal: the first read fetches it
         self._force = False  # the next read is posted even if nothing changed
+        self._others: list[str] = []  # the other tables latched (``latched_elsewhere``)
+        self._others_t = -1e9  # when they were last read
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -107,6 +114,7 @@ class OutputsWatch:
         """Read the status now (an event says it changed); ``force``: hand it over
         even if what shows is the same (a screen needs it fresh after a request)."""
         self._force = self._force or force
+        self._others_t = -1e9  # an e-stop or a reset: the other tables' latches too
         self._wake.set()
 
     def _run(self) -> None:
@@ -120,6 +128,8 @@ class OutputsWatch:
         self.polls += 1
         force, self._force = self._force, False
         status = self._read()
+        if status is not None:  # the other tables' latches, for the bar
+            status = {**status, "latched_elsewhere": self._latched_elsewhere(force)}
         key = status_key(status, self.session.outputs_error or "")
         self.status = status
         if key == self._key and not force:
@@ -146,6 +156,19 @@ class OutputsWatch:
         except Exception:  # noqa: BLE001 - logged; the watch goes on
             log.exception("reading the outputs' status")
             return None
+
+    def _latched_elsewhere(self, now: bool) -> list[str]:
+        """The other shared tables latched (read every ``OTHERS_S``, at once when poked
+        with ``force``: a reset or an e-stop here)."""
+        t = time.monotonic()
+        out = self.session.outputs
+        if now or t - self._others_t >= OTHERS_S:
+            self._others_t = t
+            try:
+                self._others = latched_elsewhere(out.table) if out is not None else []
+            except Exception:  # noqa: BLE001 - logged; the bar shows what it knew
+                log.debug("reading the other tables' latches", exc_info=True)
+        return self._others
 
     def _read_log(self) -> Any:
         out = self.session.outputs

@@ -5,11 +5,21 @@ E-STOP and ``?`` (the help, which lists every key) always among them."""
 
 from __future__ import annotations
 
+from typing import Protocol, runtime_checkable
+
 from rich.cells import cell_len
 from textual.widgets import Footer, TabbedContent, Tabs
 from textual.widgets._footer import FooterKey
 
 ELLIPSIS = "…"
+
+
+@runtime_checkable
+class Switches(Protocol):
+    """An app whose screen switch waits for its focus (the console's): ``switching(screen)``
+    says whether ``screen`` is the one switching, its new widget not focused yet."""
+
+    def switching(self, screen) -> bool: ...
 
 
 def fit_titles(titles: list[str], budget: int) -> list[str]:
@@ -48,79 +58,141 @@ class ConsoleFooter(Footer):
     screen's own first, as the screen orders them by importance); the keys in
     ``ALWAYS`` (E-STOP, the help) and the screens' key (``f1-f10 screens``: the app's
     ``screens_key``) are kept whatever the width, on every screen alike; the command
-    palette's only where there is room. Compact below ``COMPACT_BELOW`` columns."""
+    palette's only where there is room. Compact below ``COMPACT_BELOW`` columns.
+
+    It follows a screen switch at once, however busy the console is (a demo running):
+    the keys are worked out as data first and the footer is built again only when they
+    changed (a focus move inside a screen, or Textual's signal sent twice, costs nothing),
+    one rebuild at a time, each key built with its style (Textual's keys are each styled
+    twice after mounting, through a data binding: a dozen style passes per rebuild)."""
 
     ALWAYS = ("ctrl+e", "question_mark")
     COMPACT_BELOW = 100
 
-    def _key_width(self, key: FooterKey) -> int:
-        kd, desc = cell_len(key.key_display), cell_len(key.description)
-        if self.compact:
-            width = kd + (1 + desc if desc else 0) + 1  # margin-right 1
-        else:
-            width = kd + 2 + (desc + 1 if desc else 0)
-        if key.has_class("-command-palette"):
-            width += 1  # its border
-        return width
+    def __init__(self, *args, **kw) -> None:
+        super().__init__(*args, **kw)
+        self._shown: tuple | None = None  # the keys shown (``_wanted``'s value)
+        self._rebuild_queued = False
 
-    def _app_key(self, key: str) -> FooterKey | None:
-        """The app's binding of ``key`` as a footer key: Textual leaves a priority key out
-        of the footer when the focused field would type it (``?``), though the app takes
-        it there (``HapTableApp.on_event``)."""
+    @staticmethod
+    def _width(key: tuple, compact: bool) -> int:
+        _key, display, desc, *_rest, palette = key
+        kd, dl = cell_len(display), cell_len(desc)
+        width = kd + (1 + dl if dl else 0) + 1 if compact else kd + 2 + (dl + 1 if dl else 0)
+        return width + 1 if palette else width  # the palette key's border
+
+    def _key_data(self, binding, enabled: bool = True, tooltip: str = "", palette=False):
+        return (
+            binding.key,
+            self.app.get_key_display(binding),
+            binding.description,
+            binding.action,
+            not enabled,
+            tooltip,
+            palette,
+        )
+
+    def _app_key(self, key: str) -> tuple | None:
+        """The app's binding of ``key`` as footer key data: Textual leaves a priority key
+        out of the footer when the focused field would type it (``?``), though the app
+        takes it there (``HapTableApp.on_event``)."""
         for binding in self.app._bindings.key_to_bindings.get(key, ()):
             if binding.show:
-                return FooterKey(
-                    binding.key,
-                    self.app.get_key_display(binding),
-                    binding.description,
-                    binding.action,
-                    tooltip=binding.tooltip,
-                ).data_bind(compact=Footer.compact)
+                return self._key_data(binding, tooltip=binding.tooltip)
         return None
 
     def _always(self) -> tuple[str, ...]:
         screens = getattr(self.app, "screens_key", "")
         return (*self.ALWAYS, screens) if screens else self.ALWAYS
 
-    def _tabs_key(self) -> list[FooterKey]:
-        """The tab bar focused (Tab reaches it on every screen): its keys, which Textual
-        leaves out of the footer, name it, first."""
-        if not isinstance(self.screen.focused, Tabs):
-            return []
-        return [FooterKey("right", "←→", "screens", "").data_bind(compact=Footer.compact)]
+    def _wanted(self) -> tuple:
+        """(compact, the keys to show as data, in order): the focused widget's first (the
+        tab bar's, which Textual leaves out, names it), one key per action as Textual's
+        footer has them, the ``ALWAYS`` keys it lacks before the palette's, then only
+        what fits the width."""
+        if not self._bindings_ready or not self.is_attached:
+            return (self.compact, ())
+        app = self.app
+        if self._shown is not None and isinstance(app, Switches) and app.switching(self.screen):
+            return self._shown  # the old keys until the new screen's widget has the focus
+        active = self.screen.active_bindings
+        keys: list[tuple] = []
+        if isinstance(self.screen.focused, Tabs):
+            keys.append(("right", "←→", "screens", "", False, "", False))
+        actions: set[str] = set()
+        for _node, binding, enabled, tooltip in active.values():
+            if binding.show and binding.action not in actions:
+                actions.add(binding.action)
+                keys.append(self._key_data(binding, enabled, tooltip))
+        shown = {k[0] for k in keys}
+        keys += [k for a in self._always() if a not in shown and (k := self._app_key(a))]
+        if self.show_command_palette and self.app.ENABLE_COMMAND_PALETTE:
+            found = active.get(self.app.COMMAND_PALETTE_BINDING)
+            if found is not None:
+                _node, binding, enabled, _tip = found
+                tip = binding.tooltip or binding.description
+                keys.append(self._key_data(binding, enabled, tip, palette=True))
+        width, compact = self.size.width, self.compact
+        if width <= 0:
+            return (compact, tuple(keys))
+        always = self._always()
+        rest = [k for k in keys if not k[-1]]
+        kept = [k for k in rest if k[0] in always]
+        room = width - sum(self._width(k, compact) for k in kept)
+        for k in rest:
+            if k not in kept and self._width(k, compact) <= room:
+                kept.append(k)
+                room -= self._width(k, compact)
+        for k in keys:
+            if k[-1] and self._width(k, compact) <= room:
+                kept.append(k)
+        return (compact, tuple(k for k in keys if k in kept))
 
     def compose(self):
-        items = [*self._tabs_key(), *super().compose()]
-        width = self.size.width
-        keys = [k for k in items if isinstance(k, FooterKey)]
-        always = self._always()
-        missing = [self._app_key(a) for a in always if a not in {k.key for k in keys}]
-        at = next((i for i, k in enumerate(items) if k.has_class("-command-palette")), len(items))
-        items[at:at] = [k for k in missing if k is not None]
-        keys = [k for k in items if isinstance(k, FooterKey)]
-        if width <= 0 or not keys:
-            yield from items
+        compact, keys = self._shown = self._wanted()
+        for key, display, desc, action, disabled, tooltip, palette in keys:
+            item = FooterKey(
+                key,
+                display,
+                desc,
+                action,
+                disabled=disabled,
+                tooltip=tooltip,
+                classes="-command-palette" if palette else "",
+            )
+            # its style from the start: Textual's palette key stays compact
+            small = compact or palette
+            item.set_reactive(FooterKey.compact, small)
+            item.set_class(small, "-compact", update=False)
+            yield item
+
+    def _rebuild(self) -> None:
+        """Build the footer again, after the next refresh (the bindings then settled),
+        when the keys to show changed; one rebuild queued at a time (it looks at the keys
+        as they are when it runs)."""
+        if self._rebuild_queued or not self.is_attached:
             return
-        palette = [k for k in keys if k.has_class("-command-palette")]
-        rest = [k for k in keys if k not in palette]
-        kept = [k for k in rest if k.key in always]
-        room = width - sum(map(self._key_width, kept))
-        for k in rest:
-            if k not in kept and self._key_width(k) <= room:
-                kept.append(k)
-                room -= self._key_width(k)
-        for k in palette:
-            if self._key_width(k) <= room:
-                kept.append(k)
-        yield from (item for item in items if not isinstance(item, FooterKey) or item in kept)
+        self._rebuild_queued = True
+
+        async def rebuild() -> None:
+            self._rebuild_queued = False
+            if self.is_attached and self._wanted() != self._shown:
+                await self.recompose()
+
+        self.call_after_refresh(rebuild)
+
+    def bindings_changed(self, screen) -> None:
+        self._bindings_ready = True
+        if self.app.app_focus and self.is_attached and screen is self.screen:
+            self._rebuild()
 
     def on_mount(self) -> None:
         """The screen's keys from the first draw: a screen that focused its widget before
         the footer listened (a panel's ``on_mount``) signals no change until the next
         focus move, and Textual's footer shows nothing until one."""
         self._bindings_ready = True
-        self.call_after_refresh(self.recompose)
+        self.call_after_refresh(self._rebuild)
 
     def on_resize(self, event) -> None:
         self.compact = event.size.width < self.COMPACT_BELOW
-        self.call_after_refresh(self.recompose)
+        self.call_after_refresh(self._rebuild)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from textual.widgets import Static
 
+from console.kernel.tables import latched_elsewhere
 from console.tui.live import live_of
 
 
@@ -75,13 +76,54 @@ def describe(
     """(text, css class) for the gate/scheduler status of an ``Outputs``, fitted to
     ``width`` columns (None: the full text); ``names``: what each relay channel
     switches (``relay_names``), shown after the numbers while they fit."""
+    text, kind = _describe(status, width, names)
+    others = status.get("latched_elsewhere") or []
+    if not others:
+        return text, kind
+    # the other tables a shell's `haptable estop` latched: named, with where they reset
+    # (ctrl+r here resets this table only: the kernel takes a reset from its own console)
+    named = ",".join(others)
+    ends = [
+        f" | also e-stopped: {named} (reset in its console or `haptable reset`)",
+        f" | also e-stopped: {named}",
+        f" | +e-stop: {named}",
+    ]
+    variants = [_describe(status, None, names, k)[0] for k in range(_variants(status))]
+    return _fit([v + e for v in variants for e in ends], width), kind
+
+
+def still_latched(out) -> str:
+    """The other tables still latched (a shell's bare `haptable estop` latches every
+    table), said with ctrl+r's outcome: it resets this console's table only, the kernel
+    of each taking a reset from its own console or `haptable reset` at a terminal."""
+    names = latched_elsewhere(out.table) if out is not None else []
+    if not names:
+        return ""
+    return (
+        f"; still e-stopped: table {', '.join(names)} (ctrl+r in its console, or "
+        "`haptable reset` at a terminal)"
+    )
+
+
+def _variants(status: dict) -> int:
+    return 3 if status["gate"]["estopped"] else 6
+
+
+def _describe(
+    status: dict, width: int | None, names: dict[int, str] | None, pick: int | None = None
+) -> tuple[str, str]:
+    """``describe`` for this table alone; ``pick``: that variant whole (no fitting)."""
     gate = status["gate"]
     numbers = closed_relays(gate["relays_closed"])
     relays = closed_relays(gate["relays_closed"], names)
+
+    def fitted(variants: list[str], width: int | None) -> str:  # or the variant picked
+        return variants[min(pick, len(variants) - 1)] if pick is not None else _fit(variants, width)
+
     if gate["estopped"]:
         reason = gate["estop_reason"]
         return (
-            _fit(
+            fitted(
                 [
                     f" E-STOP: {reason}  [ctrl+r: reset]  relays closed: {relays}",
                     # the key and the relays first: the reason is cut when it must be
@@ -108,7 +150,7 @@ def describe(
         short = " ".join(f"{n} {v:+.0f}" for n, v in pairs) + " V"
     state = "PLAYING" if status["busy"] else "idle"
     return (
-        _fit(
+        fitted(
             [
                 f" ctrl+e E-STOP | outputs {state} | {full} | relays closed: {relays}",
                 f" ctrl+e E-STOP | {state} | {mid} | relays closed: {relays}",

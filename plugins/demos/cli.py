@@ -51,7 +51,8 @@ def _line(snap: dict) -> str:
     extra = ""
     if "knob" in snap:
         k = snap["knob"]
-        extra = f"item {k['item']:>3}  angle {k['angle_deg']:7.1f} deg  crossings {k['crossings']}"
+        item = f"item {k['item']:>3}" if int(k["item"]) >= 0 else "no item "
+        extra = f"{item}  angle {k['angle_deg']:7.1f} deg  crossings {k['crossings']}"
     elif "flow" in snap:
         extra = f"flows {snap['flow']['flows']} ({snap['flow']['direction']})"
     return (

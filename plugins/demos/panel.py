@@ -26,7 +26,7 @@ from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
-from console.plugin_api.tui import LongWork, SessionMessage, escape, said_here
+from console.plugin_api.tui import LongWork, SessionMessage, escape, lapse, said_here
 
 from .projector_line import status_text
 from .status import estop_text, status_lines
@@ -287,7 +287,13 @@ class ScenesPane(Vertical):
         if st is not None and (scene or feed) and now - self._close_asked > CLOSE_AGAIN_S:
             self._close_asked = now
             what = f"the {feed['demo']} demo's scene" if feed else f"scene {scene}"
-            self._say(f"k again within {CLOSE_AGAIN_S:g} s closes the projector (it shows {what})")
+            work = self.query_one("#demo-work", LongWork)
+            before = work.text  # true again once the question lapses
+            asked = f"k again within {CLOSE_AGAIN_S:g} s closes the projector (it shows {what})"
+            self._say(asked)
+            kept = f"the projector stays open (it shows {what})"
+            then = before if before and "again within" not in before else kept
+            lapse(self, lambda: work.text, asked, self._say, CLOSE_AGAIN_S, then=then)
             return
         self._close_asked = -1e9
         self._close_projector()

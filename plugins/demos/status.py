@@ -121,13 +121,23 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
     if "knob" in snap:
         k = snap["knob"]
         lines.append(
-            f"knob {escape(k.get('condition'))}: item {escape(k.get('item'))}, angle "
+            f"knob {escape(k.get('condition'))}: {escape(item_words(k.get('item')))}, angle "
             f"{k.get('angle_deg', 0):.0f} deg, {'touching' if k.get('touching') else 'not touched'}"
             f", {counted(int(k.get('crossings', 0)), 'crossing')}"
         )
     if snap.get("last_error"):
         lines.append(f"[red]{escape(snap['last_error'])}[/]")
     return lines
+
+
+def item_words(item: Any) -> str:
+    """The knob's item under the finger: ``item 3``; ``no item`` for its -1 (between
+    items, or no finger on the knob), never the raw index."""
+    try:
+        n = int(item)
+    except (TypeError, ValueError):
+        return "no item"
+    return f"item {n}" if n >= 0 else "no item"
 
 
 def _rates(cam: dict[str, Any], lat: dict[str, Any]) -> str:

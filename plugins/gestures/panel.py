@@ -29,6 +29,7 @@ from console.plugin_api.tui import (
     SafetyBar,
     escape,
     from_thread,
+    lapse,
     said_here,
     short_path,
 )
@@ -52,6 +53,50 @@ _CANCELLED_KEPT = {
     "train": ": no model was written",
     "synth": ": the dataset folder is unchanged",
 }
+
+#: seconds in which a second ``Esc`` (work under way) cancels it and closes the panel
+ESC_AGAIN_S = 3.0
+#: samples of each gesture training needs: the harmonics and frames are chosen inside
+#: each 2-fold training half, which must hold 2 of each (``selection.select_settings``)
+MIN_PER_GESTURE = 4
+
+
+def too_few(info: dict[str, Any], cv: str) -> str:
+    """Why the dataset ``info`` (``describe_files``'s) is too small to train with ``cv``,
+    in the panel's words (its fields, s), or "" when it is big enough or unknown."""
+    subjects = len(info.get("subjects") or ())
+    gestures, samples = info.get("gestures"), info.get("samples")
+    if not subjects or not gestures or not samples:
+        return ""
+    per = samples // gestures
+    reps = per // subjects
+    has = (
+        f"the dataset has {per} of each gesture ({subjects} "
+        f"{'subject' if subjects == 1 else 'subjects'} x {reps} reps)"
+    )
+    if cv == "loso" and subjects < 2:
+        return f"cv loso leaves a subject out and {has}: type 2fold in cv, or more subjects and s"
+    if cv == "loso" and subjects == 2 and reps < 2:
+        return f"{has}: loso trains on one subject, which needs 2 reps; reps 2 and s make them"
+    if cv != "loso" and per < MIN_PER_GESTURE:
+        need = -(-MIN_PER_GESTURE // subjects)
+        return (
+            f"{has}: training chooses its harmonics and frames on half of them and needs "
+            f"{MIN_PER_GESTURE}; type {need} in reps and s synthesizes a bigger one"
+        )
+    return ""
+
+
+def train_refusal(text: str, info: dict[str, Any], cv: str) -> str:
+    """A training error worded for the command line (its switches) said in the panel's
+    words: the dataset is too small for what ``cv`` asks."""
+    if "--harmonics" in text or "--cv" in text:
+        return too_few(info, cv) or (
+            "the dataset is too small to choose the harmonics and frames on: raise reps "
+            "and s synthesizes a bigger one"
+        )
+    return text
+
 
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
@@ -213,6 +258,8 @@ class GesturesPanel(Screen):
         self.files: dict[str, Any] = {}
         #: the model whose training result the result block shows (its one place)
         self._result_model: Path | None = None
+        #: until when a second Esc cancels the work under way (it asked once)
+        self._esc_until: float | None = None
 
     def compose(self) -> ComposeResult:
         with VerticalScroll():
@@ -354,6 +401,11 @@ class GesturesPanel(Screen):
         if not ds.is_dir():
             self.work.error(f"dataset {short_path(ds)}: none yet, s synthesizes one")
             return
+        known = self.files.get("dataset", {})  # the files block's: too small is said now
+        known = known if _same(known.get("path"), ds) else {}
+        if too_few(known, cv):
+            self.work.error(too_few(known, cv))
+            return
         live = model.resolve() == Path(self.default_model).resolve()
 
         def job(progress, cancelled):
@@ -367,7 +419,10 @@ class GesturesPanel(Screen):
                     ds, model, profile=profile, cv=cv, progress=progress, cancelled=cancelled
                 )
             except UserError as exc:
-                raise UserError(in_panel(exc, ds, model)) from exc
+                said = in_panel(exc, ds, model)
+                if "--" in said:  # a command line's switches: the dataset is too small
+                    said = train_refusal(said, describe_files(ds, None).get("dataset", {}), cv)
+                raise UserError(said) from exc
             if live:  # the profile's model: the running classifier switches to it
                 res["loaded"] = GestureModel.load(res["model"])
             return res
@@ -425,11 +480,48 @@ class GesturesPanel(Screen):
             self.work.show("nothing to cancel")
 
     def action_back(self) -> None:
+        """``Esc``: back to the Camera screen. With work under way it asks first (a
+        second ``Esc`` within ``ESC_AGAIN_S`` cancels the work and closes the panel) and
+        a cancel is said in the log and on the Camera screen's status line."""
         if isinstance(self.focused, Input):
             self.query_one("#gp-synth", Button).focus()
             return
-        self.work.cancel()
+        if self.work.busy:
+            asked, self._esc_until = self._esc_until, None
+            if asked is None or time.monotonic() > asked:
+                self._esc_until = time.monotonic() + ESC_AGAIN_S
+                name = self.work.name_running
+                self._result_says(
+                    f"Esc again within {ESC_AGAIN_S:g} s cancels the {name}; x cancels too",
+                    after_s=ESC_AGAIN_S,
+                )
+                return
+            name = self.work.name_running or "work"
+            self.work.cancel()
+            self.app.pop_screen()
+            self._tell_camera(f"Gestures: {name} cancelled (Esc){self._kept_after(name)}")
+            return
         self.app.pop_screen()
+
+    @staticmethod
+    def _kept_after(name: str) -> str:
+        """What a cancel of job ``name`` left as it was (": no model was written")."""
+        return _CANCELLED_KEPT["train" if name == "training" else "synth"]
+
+    def _result_says(self, text: str, after_s: float) -> None:
+        """A question on the result line that lapses after ``after_s`` seconds."""
+        line = self.query_one("#gp-result", Static)
+        line.update(text)
+        lapse(self, lambda: str(line.render()), text, line.update, after_s)
+
+    def _tell_camera(self, text: str) -> None:
+        """``text`` on the Camera screen's status line (and so in the log); the log
+        alone when no Camera screen is there."""
+        panes = self.app.base.query("CameraPane")
+        if panes:
+            panes.first().say(text, "warning")
+        else:
+            said_here(self.work, "Gestures", text, "warning")
 
     def leave_for_screen(self) -> bool:
         """An F-key (another screen, ``HapTableApp.action_show_tab``): the panel closes
@@ -475,6 +567,8 @@ class GesturesPanel(Screen):
             self.action_refresh()  # the files block follows the fields
 
     def on_long_work_finished(self, event: LongWork.Finished) -> None:
+        if event.outcome == "cancelled":  # x: the work line says it; the log keeps it
+            said_here(self.work, "Gestures", self.work.text, "warning")
         if event.outcome == "done" and isinstance(event.result, dict) and "folds" in event.result:
             text = fold_lines(event.result)
             if "loaded" in event.result:

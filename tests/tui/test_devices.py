@@ -76,7 +76,7 @@ def test_pick_a_sound_card_and_a_relay_board_the_next_load_has_them():
                 "card B marked",
             )
             row = [str(c) for c in table.get_row_at(_row_of(table, "Card B"))]
-            assert row[3:6] == ["JACK", "8", "3.0-10.0"]
+            assert row[3:6] == ["JACK", "8", "3.0/10.0"]
             audio_drivers = [str(c) for c in table.get_column_at(1)]
             assert {"twin", "sounddevice"} <= set(audio_drivers)  # every driver, the twin too
             mic = [str(c) for c in table.get_row_at(_row_of(table, "Bench mic"))]

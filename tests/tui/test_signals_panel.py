@@ -128,6 +128,9 @@ def test_refusals_and_loading_from_the_library(plugins):
             lib = app.query_one("#sig-library", OptionList)
             lib.focus()
             await pilot.press("home", "down", "down", "enter")  # the third entry: sweep
+            # over the typed expression (not in the library) enter asks first
+            await wait_for(pilot, lambda: "enter again within" in _status(app), 5, "asked")
+            await pilot.press("enter")
             await wait_for(pilot, lambda: expr.value.startswith("chirp("), 5, "loaded")
             assert app.query_one("#sig-name", Input).value == "sweep"
             pane = app.pane("signals")  # its preview's line first (it would overwrite the next)

@@ -45,11 +45,14 @@ from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
+from console.tui.units import control_words, span_words
 from console.tui.util import from_thread, short_path
 from console.tui.wrap_paths import break_paths
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
 VISION_VIEWS = ("diff", "highpass", "body")
+#: the live rows pinned at the side panel's top with the rates, hands and gesture
+PINNED = ("camera lost", "vision skipped", "hand at", "clipped pixels", "image noise")
 
 
 class SidePanel(VerticalScroll):
@@ -88,6 +91,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         self._reveal_chosen = False  # scroll the chosen setting into view at the next write
         self._stretches: dict[str, GreyStretch] = {}  # view -> its display grey levels
         self._info_rows = 0  # the most lines the live block had
+        self._head_rows = 0  # the most lines its pinned part had
         self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
@@ -405,7 +409,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
-        self._title(f"IR {w}x{h} as half-block {cols}x{rows}, grey {lo:.0f}-{hi:.0f}")
+        self._title(f"IR {w}x{h} as half-block {cols}x{rows}, grey {span_words(lo, hi)}")
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
@@ -448,7 +452,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
         mode = MODE_NAMES[self.image_mode]
-        self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {lo:.0f}-{hi:.0f}")
+        self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {span_words(lo, hi)}")
 
     def _stretch(self) -> GreyStretch:
         """The grey levels shown black and white for the view on screen (each view its
@@ -480,20 +484,30 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             head = starting_lines(st, starting)
         else:
             seen = seen_lines(work, svc.classifier_problem)
-            head = [rate_line(st["camera"], st.get("rates")), *seen[:2]]
-            live = loop_lines(st, self.view, self._rates.span_s()) + seen[2:]
+            loop = loop_lines(st, self.view, self._rates.span_s())
             res = work.get("result")
             readings = res.readings() if res is not None else {}
             snap = svc.snapshot()  # touching skin as e measures it (one computation)
             skin = snapshot_reading(*snap) if snap is not None else None
-            live += reading_lines(readings)
+            read = reading_lines(readings)
+            # pinned above the status line and the wizard (at 80x24 they would push the
+            # scrolled part out of view): the frames lost, the hand, clipped pixels, noise
+            pinned = [ln for ln in loop if ln.startswith(PINNED)] + seen[2:]
+            pinned += [ln for ln in read if ln.startswith(PINNED)]
+            head = [rate_line(st["camera"], st.get("rates")), *seen[:2], *pinned]
+            # as many rows as it had (a hand's row comes and goes): nothing below moves
+            self._head_rows = max(self._head_rows, len(head))
+            head += [""] * (self._head_rows - len(head))
+            live = [ln for ln in loop + read if ln not in pinned]
             live += skin_lines(readings, svc.params().get("contact_level"), skin)
         live = hang(live, self._info_width() or self.SIDE_COLS - 3)
         head = hang(head, self._info_width(pinned=True) or self.SIDE_COLS - 2)
         cam = st["camera"]
         chosen = self.chosen_key()
+        controls = svc.control_values()  # the camera's: in its driver's words
         for k, v in svc.params().items():
-            lines.append(f"{'▸' if k == chosen else ' '} {k} {v:g}")
+            said = control_words(k, v, cam.get("driver", "?")) if k in controls else f"{k} {v:g}"
+            lines.append(f"{'▸' if k == chosen else ' '} {escape(said)}")
         if not svc.camera_controls():
             lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
         else:

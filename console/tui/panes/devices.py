@@ -21,7 +21,7 @@ from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
-from console.session.events import Started
+from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText, wrap_kept
@@ -104,9 +104,18 @@ def _note(dev) -> str:
 
 
 def _latency(low_s: float, high_s: float) -> str:
-    """A card's default low and high latency in ms, "low-high" ("-" when unknown)."""
+    """A card's default low and high latency in ms, "low/high" as the column's head
+    says (never "low-high": it reads as a range); "-" when unknown."""
     low, high = _ms(low_s), _ms(high_s)
-    return "-" if low == high == "-" else f"{low}-{high}"
+    return "-" if low == high == "-" else f"{low}/{high}"
+
+
+#: the sound cards' latency column: which number is which (``_latency``)
+LATENCY_HEAD = "low/high ms"
+
+
+#: how the line says the operator reset the e-stop (a new e-stop replaces it)
+RESET = "e-stop reset"
 
 
 def _says_estop(line: str) -> bool:
@@ -183,7 +192,8 @@ class DevicesPane(VerticalScroll):
         # each table's Enter first in the footer while it has the focus
         yield show_keys(LiteralTable(id="device-table", cursor_type="row"), enter="whole row")
         yield Static(
-            "sound card (enter uses it; saved to the profile's overrides)", classes="heading"
+            f"sound card (enter uses it; saved to the profile; {LATENCY_HEAD}: its latency)",
+            classes="heading",
         )
         yield show_keys(LiteralTable(id="audio-table", cursor_type="row"), enter="use")
         yield Static("relay board (enter uses it)", classes="heading")
@@ -208,7 +218,7 @@ class DevicesPane(VerticalScroll):
         ctx = self.app.ctx
         self._show_profile_line()
         self.query_one("#audio-table", DataTable).add_columns(
-            "", "driver", "device", "host API", "ch", "latency ms", "note"
+            "", "driver", "device", "host API", "ch", LATENCY_HEAD, "note"
         )
         self.query_one("#relay-table", DataTable).add_columns(
             "", "driver", "probe", "what it finds", "description"
@@ -601,10 +611,15 @@ class DevicesPane(VerticalScroll):
 
     def on_session_message(self, message: SessionMessage) -> None:
         """The operator's reset (``Started`` on topic ``estop``): a line saying what the
-        e-stop refused is past; it says the reset instead."""
+        e-stop refused is past; it says the reset instead. A new e-stop (``Stopped``)
+        replaces a line saying the reset: it is latched again."""
         ev = message.event
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
-            self._show_result("e-stop reset: t plays the test signal, enter picks a row")
+            self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
+        elif isinstance(ev, Stopped) and ev.topic == "estop" and self.result.startswith(RESET):
+            # latched again: the line saying the reset is no longer true
+            why = " ".join(ev.reason.split())
+            self._show_result(f"e-stop active{': ' + why if why else ''}; {ESTOP_FIX}", True)
 
     def _keep_focused_in_view(self) -> None:
         """``_focused_in_view`` once a table's new rows are laid out (the table sizes

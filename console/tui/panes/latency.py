@@ -15,6 +15,7 @@ from console.tui.loop_rates import CAMERA, VISION, WINDOW_S, SameWindow, frame_c
 from console.tui.plots import sparkline
 from console.tui.said import said_here
 from console.tui.text import LiteralTable, escape
+from console.tui.units import block_words
 
 #: the stages the issue names, in order, and where their numbers come from
 STAGE_LABELS = {
@@ -49,6 +50,8 @@ HISTORY = 500
 TICK_S = 0.5
 #: how long ``m`` runs the camera loop for its numbers
 MEASURE_S = 10.0
+#: a stopped loop's fps when none were counted (never "counting ...": nothing counts)
+ENDED = "not counted (the run ended)"
 
 
 def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
@@ -157,6 +160,7 @@ class LatencyPane(Vertical):
         self._camera_at = 0.0  # when the camera loop's numbers showed last (time.time)
         self._rates = SameWindow()  # the camera's and the loop's fps over one window
         self._last_rates: dict | None = None  # as they were at the last reading
+        self._camera_kept = ""  # the camera line of its last reading, as a stopped run's
 
     def compose(self) -> ComposeResult:
         if not self.available:
@@ -259,7 +263,7 @@ class LatencyPane(Vertical):
                 else ""
             )
             + ", "
-            f"block {a.get('block_size', '?')} at {a.get('sample_rate_hz', '?')} Hz",
+            + escape(block_words(a.get("block_size"), a.get("sample_rate_hz"))),
         )
 
     def show_loop(self) -> None:
@@ -310,6 +314,8 @@ class LatencyPane(Vertical):
         rates = self._rates.add(time.monotonic(), frame_counts(st))
         self._last_rates = rates  # None until counted: a stop then gives its whole run
         self._camera = camera_line(cam, snap, rates, self._rates.span_s())
+        # the line kept once the loop stops: its last rates, or said ended
+        self._camera_kept = camera_line(cam, snap, rates, self._rates.span_s(), no_fps=ENDED)
         self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
@@ -355,7 +361,9 @@ class LatencyPane(Vertical):
         # of its whole run (the frames the loop took and processed over the same seconds)
         seen = ended_s - self._camera_at < 2 * TICK_S + 0.5 and self._last_rates
         rates, span_s = (self._last_rates, WINDOW_S) if seen else whole_run_rates(st)
-        self._camera = camera_line(st.get("camera") or {}, st["latency"], rates, span_s)
+        self._camera = self._camera_kept = camera_line(
+            st.get("camera") or {}, st["latency"], rates, span_s
+        )
         self._say("lat-head", last_camera_head(ended_s, time.time()) + "\n" + self._camera)
         self._show_rows(table, st["latency"], False, grow=False)
         return True
@@ -370,7 +378,13 @@ class LatencyPane(Vertical):
         if runs.ended_at < self._camera_at:  # the camera loop showed after it: its numbers
             return False
         self.source = self._history_source = f"demo {runs.name}"
-        self._camera = camera_line(snap.get("camera") or {}, snap["latency"])
+        # its frames a second over its whole run (its uptime), else said ended: a
+        # finished run counts nothing any more
+        ran = {**snap, "ran_s": snap.get("ran_s") or snap.get("uptime_s")}
+        rates, span_s = whole_run_rates(ran)
+        self._camera = self._camera_kept = camera_line(
+            snap.get("camera") or {}, snap["latency"], rates, span_s, no_fps=ENDED
+        )
         end = time.strftime("%H:%M:%S", time.localtime(runs.ended_at))
         head = (
             f"[b]the finished demo {escape(runs.name)} run's numbers[/b] (it ended at {escape(end)}); "
@@ -390,7 +404,7 @@ class LatencyPane(Vertical):
         if not (self._rows or self._camera):
             return hint
         last = f"[b]last numbers, the {escape(self.source)} loop's[/b] (it stopped); {escape(hint)}"
-        return last + "\n" + self._camera if self._camera else last
+        return last + "\n" + self._camera_kept if self._camera_kept else last
 
     def _set_rows(self, table: DataTable, rows: list[tuple[str, ...]]) -> None:
         """The table's rows as ``rows``: the cells that changed, or all when the stages

@@ -31,6 +31,7 @@ from console.signals.design import Summary, Target, parse_target, render, spectr
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
 from console.tui.kept_text import KeptText
+from console.tui.lapse import lapse
 from console.tui.list_keys import KeyedList
 from console.tui.said import said_here
 from console.tui.util import from_thread
@@ -38,6 +39,8 @@ from console.tui.util import from_thread
 DEFAULT_EXPR = BUILTIN["tone-250"].expr
 #: the spectrum shows this many dB below its peak
 SPECTRUM_RANGE_DB = 80.0
+#: seconds in which a second enter loads a library signal over an unsaved expression
+LOAD_AGAIN_S = 4.0
 
 
 @dataclass(frozen=True)
@@ -104,6 +107,9 @@ class SignalsPane(Vertical):
         self._saved_shown = False  # the save key's label says "saved"
         self._status_line = ""  # what the status line says now
         self._refusal: str | None = None  # why the last preview failed (plots empty)
+        self._load: str | None = None  # a signal enter asked to load over unsaved work
+        self._overwritten: tuple[str, str] | None = None  # (expr, name) ctrl+z brings back
+        self._loaded_note = ""  # what the next preview's line says first ("loaded ...")
 
     def compose(self) -> ComposeResult:
         yield Input(
@@ -276,6 +282,7 @@ class SignalsPane(Vertical):
         if gen != self._gen:
             return
         self.preview = None
+        self._loaded_note = ""
         self._refusal = " ".join(message.split())
         self.status(message, error=True)
 
@@ -296,7 +303,8 @@ class SignalsPane(Vertical):
         spec.db_floor = top - SPECTRUM_RANGE_DB
         keep = f >= 1.0  # a log axis: from 1 Hz
         spec.set_series([Series("|X|", f[keep], mag[keep])])
-        self.status(p.summary.line())
+        note, self._loaded_note = self._loaded_note, ""  # the fields: loaded or back
+        self.status(f"{note}: {p.summary.line()}" if note else p.summary.line())
         if play_name is not None:
             self._audition(p, play_name or "designed")
 
@@ -313,8 +321,10 @@ class SignalsPane(Vertical):
         self.show_preview(then_play=True)
 
     def _audition(self, p: Preview, name: str) -> None:
+        """The line says "playing" only once the outputs report the start: first the
+        gate's checks (as ``haptable signals play --dry-run``), then the play."""
         self._playing = name
-        self.status(f"playing {name} on {p.target.label}: {p.summary.line()}")
+        self.status(f"checking {name} on {p.target.label} against the limits ...")
         self._play(p, name)
 
     @work(thread=True, group="sig-play")
@@ -329,8 +339,16 @@ class SignalsPane(Vertical):
         except UserError as exc:
             from_thread(self.app, self._refused_play, name, str(exc))
             return
-        outcome = self.app.session.play(plan)
+        from_thread(self.app, self._checked, p, name, "starting")
+        outcome = self.app.session.play(
+            plan, on_started=lambda: from_thread(self.app, self._checked, p, name, "playing")
+        )
         from_thread(self.app, self._played, p, outcome)
+
+    def _checked(self, p: Preview, name: str, state: str) -> None:
+        """``starting`` (the checks passed) or ``playing`` (the outputs started it)."""
+        if self._playing == name:
+            self.status(f"{state} {name} on {p.target.label}: {p.summary.line()}")
 
     def _refused_play(self, name: str, message: str) -> None:
         if self._playing == name:
@@ -401,15 +419,47 @@ class SignalsPane(Vertical):
         self.status(f"saved {name} in {self.library_file}")
         self._show_saved()
 
+    def unsaved(self) -> bool:
+        """The expression field holds typed work the library does not have (not the
+        default, nor any library signal's expression)."""
+        expr, _name, _target = self._fields()
+        known = {e.expr.strip() for e in self.entries.values()}
+        return bool(expr) and expr != DEFAULT_EXPR.strip() and expr not in known
+
     def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
+        """Enter on a library signal loads it into the fields; over an unsaved
+        expression it asks first (enter again within ``LOAD_AGAIN_S``), and ctrl+z
+        brings the expression back."""
         e = self.entries.get(event.option.id or "")
         if e is None:
             return
+        asked, self._load = self._load, None
+        over = self.unsaved() and self._fields()[0] != e.expr.strip()
+        if over and asked != e.name:
+            self._load = e.name
+            text = (
+                f"enter again within {LOAD_AGAIN_S:g} s loads {e.name} over your unsaved "
+                "expression (ctrl+z then brings it back)"
+            )
+            self.status(text)
+            then = "your unsaved expression stays in the fields: ctrl+s saves it"
+            lapse(self, lambda: self._status_line, text, self._load_lapsed, LOAD_AGAIN_S, then=then)
+            return
+        if over:
+            self._overwritten = self._fields()[:2]
+            self._removed = None  # ctrl+z brings back the most recent: the expression
+        self._loaded_note = f"loaded {e.name}" + (
+            " over your expression (ctrl+z brings it back)" if over else ""
+        )
         for wid, text in (("#sig-expr", e.expr), ("#sig-name", e.name)):
             box = self.query_one(wid, Input)
             box.value, box.cursor_position = text, len(text)
         self._replace = None
         self.show_preview()
+
+    def _load_lapsed(self, then: str) -> None:
+        self._load = None
+        self.status(then)
 
     def on_option_list_option_highlighted(self, event: OptionList.OptionHighlighted) -> None:
         if self._delete is not None and event.option.id != self._delete:
@@ -439,7 +489,7 @@ class SignalsPane(Vertical):
         except UserError as exc:
             self.status(str(exc), error=True)
             return
-        self._removed = (name, raw)
+        self._removed, self._overwritten = (name, raw), None
         self.reload_library()
         self.status(f"removed {name} from the library (ctrl+z brings it back)")
 
@@ -448,6 +498,14 @@ class SignalsPane(Vertical):
         just removed, back in the library as it was."""
         if isinstance(self.app.focused, Input):
             self.app.action_undo()
+            return
+        if self._overwritten is not None:  # the expression a load replaced
+            (expr, name), self._overwritten = self._overwritten, None
+            for wid, text in (("#sig-expr", expr), ("#sig-name", name)):
+                box = self.query_one(wid, Input)
+                box.value, box.cursor_position = text, len(text)
+            self._loaded_note = "your expression is back"
+            self.show_preview()
             return
         if self._removed is None:
             return
