@@ -38,6 +38,9 @@ def test_the_sparklines_fill_the_row_and_no_more(plugins, size):
                 "long history drawn",
             )
             spark = str(table.get_row_at(_row(table, "vision"))[4])
+            # the table measures its new cells at its next idle: then it fills the row
+            fills = lambda: table.size.width - table.virtual_size.width <= 3  # noqa: E731
+            await wait_for(pilot, fills, 10, "the table laid out")
             assert table.virtual_size.width <= table.size.width  # no sideways scrolling
             assert table.size.width - table.virtual_size.width <= 3  # and no room left
             assert len(spark) >= size[0] - 45

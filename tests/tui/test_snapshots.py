@@ -72,7 +72,17 @@ def test_devices(snap):
     async def run_before(pilot):
         await _settle(app, pilot)
         await wait_for(pilot, lambda: app.query_one("#device-table").row_count >= 3)
-        await pilot.pause(0.5)
+        # the sound cards come from a worker: their rows set the columns' widths, and the
+        # header follows them at the table's next idle (the snapshot waits for that)
+        table = app.query_one("#audio-table")
+        await wait_for(pilot, lambda: table.row_count >= 1, 30)
+
+        def header_laid_out() -> bool:
+            head, row = table.render_line(0).text, table.render_line(1).text
+            return head.find("host API") == row.find("simulated") >= 0
+
+        await wait_for(pilot, header_laid_out, 30, "the sound cards' header laid out")
+        await pilot.pause(0.3)
 
     assert snap(app, terminal_size=SIZE, run_before=run_before)
 

@@ -113,15 +113,16 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             # the live numbers (rates, hands, contacts, gesture): pinned above the status
             # line, never scrolled away by it (the rest of them scroll, ``camera-detail``)
             yield Static("", id="camera-info")
+            # the wizard's step or result (with the key it asks for) next, above the
+            # status and what scrolls: in view while it has something to say, whatever
+            # the status's length at 80 x 24
+            wizard = Static("", id="camera-wizard")
+            wizard.display = False
+            yield wizard
             # the screen's status line: the outcome of its keys (``console.tui.said``)
             status = Static("", id="camera-status", markup=False)
             status.display = False
             yield status
-            # the wizard's step or result (with the key it asks for) above what scrolls:
-            # always in view while it has something to say
-            wizard = Static("", id="camera-wizard")
-            wizard.display = False
-            yield wizard
             # what does not fit the screen's height scrolls; the chosen setting (▸) and the
             # target field are scrolled into view when they change or take the focus
             with SidePanel(id="camera-scroll"):
