@@ -60,6 +60,9 @@ def test_trials_follow_replay_paused_and_notes_toggle(plugins, map_file, tmp_pat
 
             # with no ANOVA table the notes show whole in its place (drawn after the title)
             await wait_for(pilot, lambda: "no ANOVA table" in box(), 30, "the notes drawn")
+            # the stop's analysis and n's: o acts on the view once neither is under way
+            await wait_for(pilot, lambda: not pane._busy, 60, "the analysis done")
+            await pilot.pause(0.3)
             before = box()
             await pilot.press("o")
             await wait_for(pilot, lambda: box() != before, 30, "o: one line")
