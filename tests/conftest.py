@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 from types import SimpleNamespace
@@ -22,6 +23,11 @@ with contextlib.suppress(ImportError):
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)  # the pools of libraries already imported (numpy's OpenBLAS)
+
+# Bytecode cached, whatever the shell says: the suite starts hundreds of Python processes
+# (kernels, cameras, demos, the CLI), and each would compile the modules it imports anew.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 os.environ["HAPTABLE_LOAD_ENTRYPOINTS"] = "0"
 os.environ.pop("HAPTABLE_BLOCK_PLUGINS", None)
@@ -51,9 +57,34 @@ def pytest_cmdline_main(config):
 SLOWEST = Path(__file__).with_name("slowest.txt")
 
 
+#: Tests whose module- or session-scoped fixtures take seconds to build (a measured twin
+#: map and its flow rows, a synthesised gesture set, a hostile-file kit): each group runs
+#: on one xdist worker, which builds them once rather than once per worker.
+SHARED_FIXTURE_GROUPS = {
+    "tests/closed_loop/": "closed_loop",
+    "tests/gestures/test_cli.py": "gestures_cli",
+    "tests/gestures/test_classify_folder.py": "gestures_classify_folder",
+    "tests/gestures/test_jobs.py": "gestures_jobs",
+    "tests/malformed/test_config_files.py": "malformed_config_files",
+    "tests/vibrotactile/test_modal_fit.py": "modal_fit",
+    "tests/console/test_plan_info.py": "plan_info",
+    "tests/recording/test_cut_samples.py": "cut_samples",
+    "tests/instrument/test_selftest.py": "selftest",
+    "tests/twin_plate/test_observer.py": "observer",
+}
+
+
 def pytest_collection_modifyitems(config, items):
     """The tests named in ``slowest.txt`` first, in its order; the rest as collected
-    (the same order in every xdist worker: it sorts the same list the same way)."""
+    (the same order in every xdist worker: it sorts the same list the same way). Tests
+    of ``SHARED_FIXTURE_GROUPS`` get their group (unless marked with one already)."""
+    for item in items:
+        group = next(
+            (g for where, g in SHARED_FIXTURE_GROUPS.items() if item.nodeid.startswith(where)),
+            None,
+        )
+        if group and not item.get_closest_marker("xdist_group"):
+            item.add_marker(pytest.mark.xdist_group(group))
     try:
         order = {name: i for i, name in enumerate(SLOWEST.read_text().split())}
     except OSError:

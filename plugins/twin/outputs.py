@@ -63,6 +63,10 @@ from console.plugin_api import (
 from plugins.twin.inputs import TwinInputs
 from plugins.twin.relays import bus_for
 
+#: Fast-forward twin: how often an idle driver asks the gate for work, right after work
+#: (for ``FAST_BUSY_S``) and then.
+FAST_POLL_S, FAST_BUSY_S, FAST_IDLE_S = 0.0002, 0.05, 0.002
+
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
 DEFAULT_BUFFER_PERIODS = 3
 #: Seconds of audio the twin keeps for ``recording_v`` (a bounded ring).
@@ -180,10 +184,9 @@ class TwinAudioOutput:
         self._bus = bus_for(profile)
         bs = self.block_size
         self._cap = bs * max(1, math.ceil(record_s * self.sample_rate_hz / bs))
-        self._rec = np.empty((self._cap, n_ch), dtype=np.float32)  # ring, indexed by clock
-        # written here, not first in the audio thread: touching fresh pages there (each
-        # new 2 MB huge page zeroed on demand) stalled it 5-7 ms every ~5 s: underruns
-        self._rec.fill(0.0)
+        # the ring, indexed by clock; paced, its pages are touched at start (``start``)
+        self._rec = np.zeros((self._cap, n_ch), dtype=np.float32)
+        self._touched = False
         self._lock = threading.Lock()
         self._written = 0  # samples handed over by the gate (= the recording's clock)
         self._kept_from = 0  # oldest clock still in the ring
@@ -229,6 +232,12 @@ class TwinAudioOutput:
         if self._thread is not None:
             return
         self._source = source
+        if self.paced and not self._touched:
+            # here, not first in the audio thread: touching fresh pages there (each new
+            # 2 MB huge page zeroed on demand) stalled it 5-7 ms every ~5 s: underruns.
+            # Fast-forward has no deadline: its pages come as they are used.
+            self._rec.fill(0.0)
+            self._touched = True
         with self._lock:
             self._t0, self._s0 = None, self._written
         self._bus.level_v = (0.0,) * len(self.channels)
@@ -508,11 +517,18 @@ class TwinAudioOutput:
                 self._witness = None
 
     def _loop(self, src: BlockSource) -> None:
+        idle_since: float | None = None
         while not self._stop.is_set():
             if not self.paced:
-                if src.idle:
-                    time.sleep(0.0002)  # fast-forward: the clock only runs while there is work
+                if src.idle:  # fast-forward: the clock only runs while there is work
+                    now = time.monotonic()
+                    if idle_since is None:
+                        idle_since = now
+                    # at once after work (a plan's next step), every 2 ms once idle for
+                    # long: polling at 5 kHz cost an idle table 15 % of a core
+                    self._stop.wait(FAST_POLL_S if now - idle_since < FAST_BUSY_S else FAST_IDLE_S)
                     continue
+                idle_since = None
                 self.step(time.monotonic())
                 time.sleep(0)  # let feeders (camera, knob) run: a fast-forward loop starves them
                 continue

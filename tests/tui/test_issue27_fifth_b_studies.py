@@ -62,11 +62,12 @@ def test_trials_follow_replay_paused_and_notes_toggle(plugins, map_file, tmp_pat
             await wait_for(pilot, lambda: "no ANOVA table" in box(), 30, "the notes drawn")
             # the stop's analysis and n's: o acts on the view once neither is under way
             await wait_for(pilot, lambda: not pane._busy, 60, "the analysis done")
-            await pilot.pause(0.3)
-            before = box()
+            await wait_for(pilot, lambda: "o: one line" in box(), 30, "all the notes shown")
             await pilot.press("o")
-            await wait_for(pilot, lambda: box() != before, 30, "o: one line")
+            await wait_for(pilot, lambda: "(o shows all)" in box(), 30, "o: one line")
+            assert "o: one line" not in box(), box()
             await pilot.press("o")
-            await wait_for(pilot, lambda: box() == before, 30, "o: all of them again")
+            await wait_for(pilot, lambda: "o: one line" in box(), 30, "o: all of them again")
+            assert "(o shows all)" not in box(), box()
 
     asyncio.run(scenario())

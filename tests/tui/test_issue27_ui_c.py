@@ -128,8 +128,13 @@ def test_new_operator_at_80x24(plugins, monkeypatch):
             await wait_for(pilot, lambda: _footer(app).startswith("⏎ audition"), 10)
             for key in ("p play", "t sine/square", "+ - Vpp", "[ ] Hz"):
                 assert key in _footer(app), (key, _footer(app))
-            lines = screen_lines(app)
-            assert any("t: waveform" in line for line in lines), lines
+            # the pane's hint is drawn at the screen's next refresh after the focus moved
+            await wait_for(
+                pilot,
+                lambda: any("t: waveform" in line for line in screen_lines(app)),
+                10,
+                "the Electrostatic hint",
+            )
 
             # Relays: the focused switch's Enter
             await pilot.press("f4")

@@ -177,6 +177,7 @@ class DevicesPane(VerticalScroll):
         #: row key -> its probe's status when the board cannot be opened (missing, error)
         self.unusable_boards: dict[str, DeviceStatus] = {}
         self.plugin_rows: dict[str, str] = {}  # row key -> the plugin's line, whole
+        self._listed: tuple | None = None  # the sound cards and boards the tables show
         self.result = ""  # the last pick or test, as shown
         self.doctor_rows: list[DeviceStatus] = []  # the doctor's rows, as shown
         #: the self-test's row: its last run here (None: not run), its seconds then
@@ -395,13 +396,33 @@ class DevicesPane(VerticalScroll):
             )
         drv, device, relay_drv = self._in_use()
         table = self.query_one("#audio-table", DataTable)
-        table.clear()
         self.audio_rows.clear()
         self.no_device_rows.clear()
         rows = [self._audio_row(d, dev, drv, device) for d in audio for dev in d.devices or [None]]
-        note_w = self._note_width(table, [cells for _key, cells, _note in rows])
-        for key, cells, (note, where) in rows:
-            table.add_row(*cells, _cell(note, where, note_w) if note else "", key=key)
+        shown = (
+            repr(rows),
+            repr([(n, d, st.state, st.why) for n, d, st in relays]),
+            relay_drv,
+            table.size.width,
+        )
+        if shown == self._listed:  # the same listing: the tables stay as they are (a
+            return  # rebuilt table lays its columns out again at its next idle)
+        self._listed = shown
+        heads = [str(c.label) for c in table.columns.values()]
+        note_w = self._note_width(table, [cells for _key, cells, _note in rows], heads[:-1])
+        full = [
+            (key, [*cells, _cell(note, where, note_w) if note else ""])
+            for key, cells, (note, where) in rows
+        ]
+        # each column as wide as its widest cell, given: the header is drawn with the rows'
+        # widths at once (widths DataTable measures itself reach the header only at a
+        # later refresh, which a quiet screen may not get: misaligned headings)
+        table.clear(columns=True)
+        for i, head in enumerate(heads):
+            width = max([len(head), *(len(str(cells[i])) for _k, cells in full)])
+            table.add_column(head, width=width)
+        for key, cells in full:
+            table.add_row(*cells, key=key)
         table.move_cursor(row=self._first_usable(rows), animate=False)
         self._keep_focused_in_view()  # the list grew: the focused one is seen whole
         rtable = self.query_one("#relay-table", DataTable)
