@@ -46,7 +46,7 @@ def dataset(tmp_path):
     return root
 
 
-def test_panel_and_cli_evaluate_alike(plugins, dataset, tmp_path, capsys):
+def test_panel_and_cli_evaluate_alike(plugins, dataset, tmp_path, capsys, one_model_setting):
     from console.config.profile import save_overrides
 
     model = tmp_path / "gestures.skops"
