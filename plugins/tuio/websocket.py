@@ -12,11 +12,14 @@ from __future__ import annotations
 import contextlib
 import queue
 import threading
+import time
 from typing import Any
 
 from console.plugin_api import UserError
 
 QUEUE_BUNDLES = 16
+#: how long ``close`` waits for the clients' queues to be written out
+DRAIN_S = 2.0
 
 
 class WebSocketServer:
@@ -85,5 +88,13 @@ class WebSocketServer:
         for q in queues:
             with contextlib.suppress(queue.Full):
                 q.put(None, timeout=0.5)
+        # each client's thread ends on its None, its queue written out (a shutdown before
+        # that cut the last bundles off a client of a loaded machine)
+        deadline = time.monotonic() + DRAIN_S
+        while time.monotonic() < deadline:
+            with self._lock:
+                if not any(q in self._queues for q in queues):
+                    break
+            time.sleep(0.01)
         self._server.shutdown()
         self._thread.join(timeout=2.0)

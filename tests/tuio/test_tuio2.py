@@ -458,3 +458,36 @@ def test_the_flow_demos_tuio2_stream_names_each_hand_and_finger(
     assert len(named) >= 3 and set(named) <= set(range(6, 11))  # the left hand's ids
     assert len(set(named)) == len(named)  # never two sessions on one finger
     assert 10 in named and 6 in named  # the left thumb and index, flat on the glass
+
+
+def test_close_lets_a_slow_client_receive_every_queued_bundle(monkeypatch):
+    """``close`` ends the server only once each client's queue is written out: a client
+    the machine serves slowly still gets every bundle sent before the close."""
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+    from websockets.sync.server import ServerConnection
+
+    from plugins.tuio.websocket import WebSocketServer
+
+    send = ServerConnection.send
+
+    def slow(self, message, *a, **k):
+        time.sleep(0.05)  # a loaded machine: each write comes late
+        return send(self, message, *a, **k)
+
+    monkeypatch.setattr(ServerConnection, "send", slow)
+    srv = WebSocketServer("127.0.0.1", 0)
+    got: list[bytes] = []
+    with connect(f"ws://127.0.0.1:{srv.port}") as ws:
+        t0 = time.monotonic()
+        while srv.clients < 1 and time.monotonic() - t0 < 5:
+            time.sleep(0.01)
+        for k in range(8):
+            srv.send(bytes([k]) * 32)
+        srv.close()
+        try:
+            while True:
+                got.append(ws.recv(timeout=5))
+        except (ConnectionClosed, TimeoutError):
+            pass
+    assert got == [bytes([k]) * 32 for k in range(8)] and srv.dropped == 0
