@@ -72,8 +72,8 @@ def test_devices(snap):
     async def run_before(pilot):
         await _settle(app, pilot)
         await wait_for(pilot, lambda: app.query_one("#device-table").row_count >= 3)
-        # the sound cards come from a worker: their rows set the columns' widths, and the
-        # header follows them at the table's next idle (the snapshot waits for that)
+        # the sound cards come from a worker: the snapshot waits for their rows and the
+        # header drawn in line with them
         table = app.query_one("#audio-table")
         await wait_for(pilot, lambda: table.row_count >= 1, 30)
 

@@ -138,6 +138,11 @@ def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:
     return max(NOTE_MIN, room - b), b
 
 
+def _widths(heads, rows: list[list]) -> list[int]:
+    """Each column's width: its widest cell or its header."""
+    return [max(len(str(c)) for c in [h, *col]) for h, *col in zip(heads, *rows, strict=True)]
+
+
 def _need(head: str, texts) -> int:
     """A column's width: its widest text on one line, or its header."""
     widest = max((len(" ".join(str(t or "").split())) for t in texts), default=0)
@@ -375,9 +380,7 @@ class DevicesPane(VerticalScroll):
             heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
         )
         width = table.size.width or table.app.size.width - 2  # the screen's scrollbar
-        used = sum(
-            max(len(str(c)) for c in [h, *col]) + 2 for h, *col in zip(heads, *rows, strict=True)
-        )
+        used = sum(w + 2 for w in _widths(heads, rows))
         return max(NOTE_MIN, width - used - 2)  # the note's own padding
 
     def _first_usable(self, rows) -> int:
@@ -418,8 +421,7 @@ class DevicesPane(VerticalScroll):
         # widths at once (widths DataTable measures itself reach the header only at a
         # later refresh, which a quiet screen may not get: misaligned headings)
         table.clear(columns=True)
-        for i, head in enumerate(heads):
-            width = max([len(head), *(len(str(cells[i])) for _k, cells in full)])
+        for head, width in zip(heads, _widths(heads, [cells for _k, cells in full]), strict=True):
             table.add_column(head, width=width)
         for key, cells in full:
             table.add_row(*cells, key=key)
