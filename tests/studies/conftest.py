@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from ..pilot_harness import quicken_pilot
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -22,16 +24,8 @@ def _abort_confirmed_in_time(monkeypatch):
 
 @pytest.fixture(autouse=True)
 def _quick_key_presses(monkeypatch):
-    """Textual's pilot waits for the app to be idle after each key; the console's timers
-    keep it busy, so the wait is a short sleep here."""
-    import asyncio
-
-    import textual.app
-
-    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
-        await asyncio.sleep(0.02)
-
-    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
+    """The pilot's waits made cheap and its keys reliable (``tests/pilot_harness.py``)."""
+    quicken_pilot(monkeypatch)
 
 
 @pytest.fixture(scope="session")

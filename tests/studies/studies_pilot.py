@@ -9,6 +9,8 @@ from pathlib import Path
 
 from console.cli.main import Context
 
+from ..pilot_harness import wait_for as _wait_for
+
 
 def studies_app(plugins):
     """The console on the sim profile, opened on the Studies screen."""
@@ -18,11 +20,8 @@ def studies_app(plugins):
 
 
 async def wait_for(pilot, cond, timeout_s=60.0, what="condition"):
-    for _ in range(int(timeout_s / 0.05)):
-        if cond():
-            return
-        await pilot.pause(0.05)
-    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+    """``pilot_harness.wait_for`` with this screen's longer default (a simulated run)."""
+    await _wait_for(pilot, cond, timeout_s, what)
 
 
 async def studies_pane(pilot, app, map_file: Path | None = None):

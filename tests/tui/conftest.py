@@ -2,48 +2,16 @@
 
 from __future__ import annotations
 
-import asyncio
-
 import numpy as np
 import pytest
 
-
-async def app_processed(app, timeout_s: float = 30.0) -> None:
-    """Wait until ``app`` has handled every message queued to it before now: a callback
-    queued behind them runs. A key the pilot sent is then handled by the app, which
-    forwards it to the focused widget's queue (a second hop)."""
-    done = asyncio.Event()
-    if app.call_later(done.set):
-        await asyncio.wait_for(done.wait(), timeout_s)
+from ..pilot_harness import app_processed, quicken_pilot, wait_for  # noqa: F401 - the tests' helpers
 
 
 @pytest.fixture(autouse=True)
 def _quick_key_presses(monkeypatch):
-    """Pilot waits after each key until the process's CPU time stops advancing, for at
-    most 1 s twice. The console's output, camera and worker threads keep the process
-    busy, so every key would cost ~2 s: a short fixed pause replaces that wait.
-
-    A pause alone loses keys under load: the app handles a key in its own queue and then
-    forwards it to the focused widget, and the pilot's final wait (a callback queued on
-    every widget) only covers messages already in the widgets' queues. When the app's
-    queue is busy (timers, session messages) past the pause, the key reaches the widget
-    after the pilot returned and the test looks at the screen too early. So each key
-    waits for the app to have handled it (``app_processed``) before the pilot's final
-    wait: the widget's callback is then queued behind the forwarded key."""
-    import textual.app
-
-    async def short_idle(min_sleep: float = 0.0, max_sleep: float = 1.0) -> None:
-        await asyncio.sleep(0.02)
-
-    press_keys = textual.app.App._press_keys
-
-    async def press_each_key(self, keys) -> None:
-        for key in keys:
-            await press_keys(self, [key])
-            await app_processed(self)
-
-    monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
-    monkeypatch.setattr(textual.app.App, "_press_keys", press_each_key)
+    """The pilot's waits made cheap and its keys reliable (``tests/pilot_harness.py``)."""
+    quicken_pilot(monkeypatch)
 
 
 @pytest.fixture(scope="session")
@@ -69,14 +37,6 @@ def flow_ctx(tmp_path, plugins, map_file):
     from console.cli.main import Context
 
     return Context(str(path), plugins)
-
-
-async def wait_for(pilot, cond, timeout_s: float = 10.0, what: str = "condition") -> None:
-    for _ in range(int(timeout_s / 0.05)):
-        if cond():
-            return
-        await pilot.pause(0.05)
-    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
 
 
 def words_on(app, selector: str) -> str:
