@@ -327,8 +327,9 @@ class Outputs:
         if kind == "estop":
             self._estopped = True
             self._estop_reason = self._estop_reason or message
-        elif kind == "reset":
-            self._estopped, self._estop_reason = False, ""
+        elif kind == "reset":  # the kernel's own "reset" op says it, with who and when:
+            self._estopped, self._estop_reason = False, ""  # one reset, told once
+            return
         self._tell(kind, message)
 
     def _on_job(self, h: dict[str, Any]) -> None:

@@ -8,6 +8,7 @@ that reads as a line of its own)."""
 from __future__ import annotations
 
 import re
+from typing import Any
 
 from console.runtime.exposure_assist import MIN_LIGHT, MIN_SNR, Reading, skin_at
 from console.tui.loop_rates import CAMERA, VISION
@@ -83,10 +84,18 @@ def seen_lines(work: dict, problem: str = "") -> list[str]:
         f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
         named or f"gesture: {g.name if g else '-'}",
     ]
-    for h in hands[:1]:
-        pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
-        lines.append(f"hand at {pos}, {h.finger_count} fingers")
+    lines.extend(hand_line(h) for h in hands[:1])
     return lines
+
+
+def hand_line(h: Any) -> str:
+    """A hand's place and its two finger counts, each named: the fingers its outline
+    shows spread and those touching the glass (a flat hand touches with fingers its
+    outline does not show apart)."""
+    pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
+    touching = h.contacts  # None: a recording that kept no contacts per hand
+    line = f"hand at {pos}: {h.finger_count} fingers spread"
+    return line if touching is None else f"{line}, {len(touching)} touching"
 
 
 def reading_lines(readings: dict[str, float]) -> list[str]:

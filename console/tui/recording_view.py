@@ -23,6 +23,7 @@ from textual.widgets import Input
 from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
+from console.tui.camera_live import hand_line
 from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
@@ -82,6 +83,7 @@ def recorded_work(dec: dict) -> dict:
             contour_px=circle(h["center_px"], float(h["radius_px"])),
             center_mm=h.get("center_mm"),
             finger_count=int(h.get("finger_count", 0)),
+            contacts=h.get("contacts"),  # the ids of its contacts (None: not recorded)
         )
         for h in dec.get("hands") or ()
     ]
@@ -305,9 +307,7 @@ class RecordingMixin:
             f"hands {len(work['hands'])}  contacts {len(work['contacts'])}",
             gesture_words(dec),
         ]
-        for h in work["hands"][:1]:
-            pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
-            lines.append(f"hand at {pos}, {h.finger_count} fingers")
+        lines.extend(hand_line(h) for h in work["hands"][:1])
         plan = dec.get("plan")
         if plan:
             lines.append(f"plan: {escape(str(plan.get('name', '?')))}")

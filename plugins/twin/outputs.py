@@ -63,9 +63,12 @@ from console.plugin_api import (
 from plugins.twin.inputs import TwinInputs
 from plugins.twin.relays import bus_for
 
-#: Fast-forward twin: how often an idle driver asks the gate for work, right after work
-#: (for ``FAST_BUSY_S``) and then.
+#: Fast-forward twin: how often an idle driver asks the gate for work: every
+#: ``FAST_POLL_S`` right after work (for ``FAST_BUSY_S``: a plan's next step), every
+#: ``FAST_IDLE_S`` until ``FAST_QUIET_S`` of idle, then every ``FAST_QUIET_POLL_S`` (an idle
+#: table waits for its next request: polling at 5 kHz cost it 15 % of a core, at 500 Hz 5 %)
 FAST_POLL_S, FAST_BUSY_S, FAST_IDLE_S = 0.0002, 0.05, 0.002
+FAST_QUIET_S, FAST_QUIET_POLL_S = 1.0, 0.01
 
 #: Device buffer of the paced twin, in blocks (a real card's driver fills 2-4 periods ahead).
 DEFAULT_BUFFER_PERIODS = 3
@@ -86,6 +89,13 @@ def _key(profile, dotted: str, default):
     except Exception:  # a bare profile stub without the section
         v = None
     return default if v is None else v
+
+
+def _fast_poll_s(idle_s: float) -> float:
+    """How long a fast-forward driver idle for ``idle_s`` waits before asking again."""
+    if idle_s < FAST_BUSY_S:
+        return FAST_POLL_S
+    return FAST_IDLE_S if idle_s < FAST_QUIET_S else FAST_QUIET_POLL_S
 
 
 @dataclass(frozen=True)
@@ -524,9 +534,7 @@ class TwinAudioOutput:
                     now = time.monotonic()
                     if idle_since is None:
                         idle_since = now
-                    # at once after work (a plan's next step), every 2 ms once idle for
-                    # long: polling at 5 kHz cost an idle table 15 % of a core
-                    self._stop.wait(FAST_POLL_S if now - idle_since < FAST_BUSY_S else FAST_IDLE_S)
+                    self._stop.wait(_fast_poll_s(now - idle_since))
                     continue
                 idle_since = None
                 self.step(time.monotonic())

@@ -81,7 +81,7 @@ def test_a_watchdog_estop_is_said_at_once_and_its_run_numbers_stay(plugins):
             # its whole run, one bar per poll (not the 16 seen), once the table has its width
             polls = len(demos.history.values("vision"))  # 60 and the app's own polls
             assert polls >= 60
-            spark = lambda: str(table.get_row_at(row)[4])  # noqa: E731
+            spark = lambda: str(table.get_row_at(row)[5])  # noqa: E731
             await wait_for(pilot, lambda: len(spark()) == polls, 30, "the whole run")
             assert str(table.get_row_at(labels.index("vision"))[2]) == "9.00"
 

@@ -56,6 +56,8 @@ def test_the_switch_log_gives_times_and_names_and_the_bar_names_the_relays(plugi
             clock = app.session.outputs.relay_log()[-1].clock
             assert row[0] == f"{clock / 48000:.3f} s", row
             assert "PA" in row[1], row
+            # each output's level named, in the sound card's channel order
+            assert row[3] == "piezo +0.0 V / screen +0.0 V", row
             await wait_for(pilot, lambda: "PA" in _bar(app), 10, "bar names relay 1")
 
     asyncio.run(scenario())

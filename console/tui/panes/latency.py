@@ -123,14 +123,22 @@ def _ms(v) -> str:
     return "-" if v is None or v != v else f"{v:.2f}"
 
 
+def _count(n) -> str:
+    """A row's frame count (older snapshots have none: ``-``)."""
+    return "-" if n is None else str(int(n))
+
+
 class LatencyPane(Vertical):
     HELP_TEXT = (
         "How fast the table answers: the numbers of the loop that runs now, a demo's "
         "(started on the Scenes screen, F6) or the console's camera loop (while the Camera "
         "screen or m keeps it running). They stay on the screen when the loop stops.\n"
         "stages  one row per stage of a frame (capture, vision, classify, scene, effect, "
-        "output, end to end): p50, p99 and max in ms, and a sparkline of the p50 history: "
-        "a bar per reading (every half second while the screen shows, the newest on the "
+        "output, end to end): p50, p99 and max in ms over the frames it counts, and a "
+        "sparkline of the p50 history. frames: how many frames a row counts, those that "
+        "reached its stage (vision: every frame processed; output and end to end: the "
+        "frames that scheduled output), so end to end's p99 can be below another row's. "
+        "The sparkline: a bar per reading (every half second while the screen shows, the newest on the "
         "right), growing to the screen's width and then scrolling (m's "
         f"{MEASURE_S:.0f} s: {MEASURE_S / TICK_S:.0f} bars)\n"
         "camera  the driver's fps and the frames it dropped; the loop's fps, frames, "
@@ -187,7 +195,7 @@ class LatencyPane(Vertical):
     def on_mount(self) -> None:
         if self.available:
             self.query_one("#lat-table", DataTable).add_columns(
-                "stage", "p50 ms", "p99 ms", "max ms", "p50 history"
+                "stage", "p50 ms", "p99 ms", "max ms", "frames", "p50 history"
             )
 
     def set_visible(self, visible: bool) -> None:
@@ -334,8 +342,9 @@ class LatencyPane(Vertical):
                 self.history[label] = deque(runs.values(keys.get(label, label)), maxlen=HISTORY)
             elif grow and p50 is not None and p50 == p50:
                 self.history[label].append(p50)
-            cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms"))))
-        heads = ("stage", "p50 ms", "p99 ms", "max ms")
+            n = d.get("n")
+            cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms")), _count(n)))
+        heads = ("stage", "p50 ms", "p99 ms", "max ms", "frames")
         width = spark_width(
             table.size.width or self.size.width,
             [max(len(r[i]) for r in [heads, *cells]) for i in range(len(heads))],

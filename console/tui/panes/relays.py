@@ -8,6 +8,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Label, Static, Switch
 
+from console.core.channels import ChannelLayout
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.tui.focus_keys import show_keys
 from console.tui.live import live_of
@@ -67,20 +68,29 @@ def since_start(clock: int, sample_rate_hz: float) -> str:
 
 
 def log_rows(
-    log, sample_rate_hz: float, names: dict[int, str] | None = None
+    log, sample_rate_hz: float, names: dict[int, str] | None = None, outputs: tuple = ()
 ) -> list[tuple[str, ...]]:
     """The newest switches first: seconds since the outputs started, relay (number
-    and what it switches), state, output level then."""
+    and what it switches), state, each output's level then (named by ``outputs``, the
+    sound card's channels in order: ``[audio] channels``)."""
     names = names or {}
     return [
         (
             since_start(r.clock, sample_rate_hz),
             f"{r.channel} {names[r.channel]}" if r.channel in names else str(r.channel),
             "closed" if r.closed else "opened",
-            " / ".join(f"{v:+.1f} V" for v in r.level_v),
+            levels(r.level_v, outputs),
         )
         for r in reversed(log)
     ]
+
+
+def levels(level_v, outputs: tuple) -> str:
+    """Output levels as ``piezo +0.0 V / screen +0.0 V`` (unnamed if the count differs)."""
+    named = len(outputs) == len(level_v)
+    return " / ".join(
+        f"{outputs[i]} {v:+.1f} V" if named else f"{v:+.1f} V" for i, v in enumerate(level_v)
+    )
 
 
 class RelaysPane(VerticalScroll):
@@ -169,7 +179,8 @@ class RelaysPane(VerticalScroll):
             self._log_len = len(log)
             self._table.clear()
             fs = float(self.app.ctx.profile.get("audio.sample_rate_hz"))
-            for row in log_rows(log[-50:], fs, self._names):
+            outputs = ChannelLayout.from_profile(self.app.ctx.profile).names
+            for row in log_rows(log[-50:], fs, self._names, outputs):
                 self._table.add_row(*row)
 
     def _note_operator(self, status: dict) -> None:
