@@ -89,7 +89,9 @@ def test_live_numbers_stay_in_view_and_latency_keeps_them_at_80x24(plugins):
             def latency() -> str:
                 return text_in(app, head)
 
-            kept = re.compile(r"last numbers.* ago.*[\d.]+ fps delivered, loop [\d.]+ fps processed")
+            kept = re.compile(
+                r"last numbers.* ago.*[\d.]+ fps delivered, loop [\d.]+ fps processed"
+            )
             # the head grows to its rows at the layout after the text (a loaded machine
             # showed the first row alone for a moment): wait for what the operator reads
             await wait_for(pilot, lambda: kept.search(latency()), 20, "kept numbers")

@@ -32,7 +32,10 @@ def test_each_row_says_the_frames_it_counts(plugins):
             await pilot.pause(0.2)
             heads = [str(c.label) for c in table.columns.values()]
             assert heads[:5] == ["stage", "p50 ms", "p99 ms", "max ms", "frames"], heads
-            rows = {str(r[0]): [str(c) for c in r] for r in map(table.get_row_at, range(table.row_count))}
+            rows = {
+                str(r[0]): [str(c) for c in r]
+                for r in map(table.get_row_at, range(table.row_count))
+            }
             assert rows["vision"][2:5] == ["9.00", "10.00", "600"], rows
             assert rows["end to end"][2:5] == ["5.00", "6.00", "37"], rows
             assert rows["output"][4] == "37", rows
