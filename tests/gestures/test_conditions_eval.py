@@ -11,34 +11,6 @@ from plugins.gestures.selection import condition_report, holdout
 from plugins.gestures.synth import synth
 
 
-def test_each_session_is_tested_by_a_model_trained_on_the_others(tmp_path):
-    root = tmp_path / "varied"
-    gestures = ("one_finger", "open_hand", "drag", "zoom")
-    synth(root, 2, 4, seed=2, workers=1, gestures=gestures, vary=True, sessions=2)
-    fs = extract(root, use_cache=False)
-    meta = {s.name: s.meta for s in load_dataset(root)}
-    rep = condition_report(fs, meta, n_harmonics=4, n_frames=4)  # (choosing them: test_cli)
-    folds = rep["leave_one_condition_out"]["folds"]
-    assert sorted(f["session"] for f in folds) == ["s1/0", "s1/1", "s2/0", "s2/1"]
-    assert sum(f["n_test"] for f in folds) == len(fs.labels) == 32
-    pooled = sum(f["accuracy"] * f["n_test"] for f in folds) / 32
-    assert abs(rep["leave_one_condition_out"]["accuracy"] - pooled) < 1e-12
-    assert rep["leave_one_condition_out"]["accuracy"] >= 0.6
-    for f in folds:  # the fold's light is its session's
-        s = f["session"]
-        assert f["illumination"] == next(
-            m["condition"]["illumination"] for m in meta.values() if m["session"] == s
-        )
-        assert (f["n_harmonics"], f["n_frames"]) == (4, 4)
-    # a holdout tests only its test samples and predicts from the training part
-    idx = np.arange(32)
-    r = holdout(fs, idx[::2], idx[1::2], n_harmonics=2, n_frames=3)
-    assert r["n_test"] == 16 and 0 <= r["accuracy"] <= 1 and r["n_frames"] == 3
-    # a set without recorded conditions has no such report
-    plain = {n: {} for n in fs.names}
-    assert condition_report(fs, plain) == {"leave_one_condition_out": None, "light_transfer": None}
-
-
 @pytest.fixture(scope="module")
 def _varied_set(tmp_path_factory):
     """The varied set (synthesised and extracted once for the module: most of its tests'
@@ -58,6 +30,35 @@ def varied(_varied_set):
 
 #: the tests of the shared varied set run in one worker (it is built once there)
 VARIED = pytest.mark.xdist_group("gestures_varied_set")
+
+
+@VARIED
+def test_each_session_is_tested_by_a_model_trained_on_the_others(varied):
+    root, fs = varied
+    meta = {s.name: s.meta for s in load_dataset(root)}
+    rep = condition_report(fs, meta, n_harmonics=4, n_frames=4)  # (choosing them: test_cli)
+    folds = rep["leave_one_condition_out"]["folds"]
+    n = len(fs.labels)
+    sessions = sorted({m["session"] for m in meta.values()})
+    assert sorted(f["session"] for f in folds) == sessions
+    assert sessions == [f"s{k}/{j}" for k in (1, 2, 3) for j in (0, 1)]
+    assert sum(f["n_test"] for f in folds) == n == 48
+    pooled = sum(f["accuracy"] * f["n_test"] for f in folds) / n
+    assert abs(rep["leave_one_condition_out"]["accuracy"] - pooled) < 1e-12
+    assert rep["leave_one_condition_out"]["accuracy"] >= 0.6
+    for f in folds:  # the fold's light is its session's
+        s = f["session"]
+        assert f["illumination"] == next(
+            m["condition"]["illumination"] for m in meta.values() if m["session"] == s
+        )
+        assert (f["n_harmonics"], f["n_frames"]) == (4, 4)
+    # a holdout tests only its test samples and predicts from the training part
+    idx = np.arange(n)
+    r = holdout(fs, idx[::2], idx[1::2], n_harmonics=2, n_frames=3)
+    assert r["n_test"] == n // 2 and 0 <= r["accuracy"] <= 1 and r["n_frames"] == 3
+    # a set without recorded conditions has no such report
+    plain = {n: {} for n in fs.names}
+    assert condition_report(fs, plain) == {"leave_one_condition_out": None, "light_transfer": None}
 
 
 @VARIED

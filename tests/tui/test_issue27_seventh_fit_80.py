@@ -50,6 +50,7 @@ def test_descriptions_whole_beside_the_scrollbar_and_the_dropdown_fits(plugins):
             assert form.virtual_size.width <= form.size.width  # "projector" not cut
             assert "▐X▌ projector" in _screen(app)
             sel.focus()
+            await wait_for(pilot, lambda: app.focused is sel, 10, "the dropdown focused")
             await pilot.press("enter")  # the list opens: every name on one line
             overlay = sel.query_one("SelectOverlay")
             await wait_for(pilot, lambda: overlay.display, 30, "list open")
