@@ -30,6 +30,14 @@ def test_the_latency_column_says_low_and_high():
             await wait_for(pilot, lambda: table.row_count >= 4, 30, "sound cards listed")
             table.focus()
             await wait_for(pilot, lambda: "Bench Card A" in _line_with(app, "Bench Card A"), 10)
+            # the header as drawn with the rows (a listing arriving later lays the table
+            # out again: a loaded machine read it between the two)
+            await wait_for(
+                pilot,
+                lambda: _line_with(app, " ch ").rstrip().endswith("note"),
+                10,
+                "the header with the rows",
+            )
             header = _line_with(app, " ch ")
             assert "low/high ms" in header, "\n".join(screen_lines(app))
             cells = [str(table.get_row_at(i)[5]) for i in range(table.row_count)]

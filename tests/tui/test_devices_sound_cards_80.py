@@ -31,6 +31,14 @@ def test_the_sound_card_table_shows_every_column_at_80(plugins):
             await wait_for(pilot, lambda: table.row_count >= 4, 30, "sound cards listed")
             table.focus()
             await wait_for(pilot, lambda: "Bench mic" in _line_with(app, "Bench mic"), 10)
+            # the header as drawn with the rows (a listing arriving later lays the table
+            # out again: a loaded machine read it between the two)
+            await wait_for(
+                pilot,
+                lambda: _line_with(app, "driver       device").rstrip().endswith("note"),
+                10,
+                "the header with the rows",
+            )
             header = _line_with(app, "driver       device")
             assert header.rstrip().endswith("note"), header
             assert "low/high ms" in header, header
