@@ -28,6 +28,19 @@ def _live_rows(app, part: str = "#camera-info") -> list[str]:
     return lines
 
 
+async def _laid_out_rows(pilot, app, part: str = "#camera-info") -> list[str]:
+    """``_live_rows`` once the panel's layout has caught up with its text (a loaded
+    machine showed new text in the old height for a moment): a row wrapped again then
+    shows as more rows than lines."""
+
+    def grown() -> bool:
+        info = app.query_one(part)
+        return info.size.height >= len(str(info.render()).split("\n"))
+
+    await wait_for(pilot, grown, 10, f"{part} laid out")
+    return _live_rows(app, part)
+
+
 def _no_orphans(rows: list[str]) -> None:
     """Each row starts a line with a word, or continues the one above (indented)."""
     prev = ""
@@ -72,7 +85,9 @@ def test_first_frame_shows_while_the_vision_loads_then_lines_fit_80x24(plugins, 
             release.set()
             await wait_for(pilot, lambda: "hands 0" in words_on(app, "#camera-info"), 30, "vision")
             await pilot.pause(0.6)  # the loop's numbers
-            rows = _live_rows(app) + _live_rows(app, "#camera-detail")
+            rows = await _laid_out_rows(pilot, app) + await _laid_out_rows(
+                pilot, app, "#camera-detail"
+            )
             _no_orphans(rows)
             text = " ".join(r.strip() for r in rows)
             for words in ("camera", "vision", "camera lost", "vision skipped"):
@@ -105,7 +120,7 @@ def test_skin_stands_against_the_touch_level_at_120x40(plugins):
             assert said == round(level) and side == ("above" if skin >= said else "below")
             assert "the light allows touches" in info() or "touches may be missed" in info()
             assert "touching skin at" in info() and "of 255" in info(), info()
-            _no_orphans(_live_rows(app, "#camera-detail"))
+            _no_orphans(await _laid_out_rows(pilot, app, "#camera-detail"))
             await pilot.press("P")
 
     asyncio.run(scenario())
