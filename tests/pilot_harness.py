@@ -51,4 +51,12 @@ async def wait_for(pilot, cond, timeout_s: float = 10.0, what: str = "condition"
         if cond():
             return
         await pilot.pause(0.05)
-    raise AssertionError(f"{what} not reached in {timeout_s:g} s")
+    raise AssertionError(f"{what} not reached in {timeout_s:g} s; the screen:\n{_shown(pilot)}")
+
+
+def _shown(pilot) -> str:
+    """What the terminal shows now (a failed wait says what it saw instead)."""
+    try:
+        return "\n".join(s.text.rstrip() for s in pilot.app.screen._compositor.render_strips())
+    except Exception as exc:  # noqa: BLE001 - the failure's message, whatever the app's state
+        return f"(not readable: {exc})"

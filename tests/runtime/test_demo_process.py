@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import time
 from pathlib import Path
@@ -59,7 +60,9 @@ def test_a_knob_demo_runs_reports_and_stops_silent(profile, tmp_path):
     assert final["running"] is False
     lines = run.status_lines(run.snapshot())  # the demo plugin's words, here
     assert lines[0].startswith("[b]knob[/b] [yellow]loop stopped")
-    assert any(line.startswith("knob HD+CF: item") for line in lines)
+    # the knob's line: the item under the finger, or none (the scripted hand may have
+    # stopped between items or off the knob: a loaded run stopped it there)
+    assert any(re.match(r"knob HD\+CF: (item \d+|no item), angle", line) for line in lines), lines
     assert final["outputs"]["gate"]["level_v"] == [0.0, 0.0]
     assert final["outputs"]["gate"]["relays_closed"] == []
     log = _relay_log(run)
