@@ -92,6 +92,10 @@ class _Hooks(list):
         self._changed()
 
 
+class _Closing(Exception):
+    """``CameraService.close()`` was asked while the camera opened."""
+
+
 class CameraService:
     """``emit(event)`` reports the loop's start and stop (topic ``camera``)."""
 
@@ -122,6 +126,7 @@ class CameraService:
         self._sinks: dict[str, Any] = {}  # the switchable frame sinks on, by name
         self.starting = Starting()  # what the start prepares now (the Camera screen says)
         self._taken = threading.Event()  # a frame of this start was read (``to_show``)
+        self._closed = threading.Event()  # ``close()`` asked: a start under way gives up
         self._preview: tuple[Any, dict] | None = None  # a frame while the vision loads
         #: the last loop's ``status()`` as it stopped, and when (``time.time()``): the
         #: Latency screen shows it while no loop runs
@@ -227,10 +232,12 @@ class CameraService:
             self._start_locked()
 
     def _start_locked(self) -> None:
-        if self.running or self.borrower is not None:
+        if self.running or self.borrower is not None or self._closed.is_set():
             return
         try:
             self._open(open_camera, open_classifier, learn_background)
+        except _Closing:  # the console quit while the camera opened: nothing to start
+            return
         finally:
             self.starting.set("")
         stages = base_stages(self.classifier)
@@ -257,6 +264,7 @@ class CameraService:
             camera = camera.apart()
         preview = None
         try:
+            self._give_up_if_closed()
             if self.classifier is None:  # kept across a demo: its tuned thresholds
                 self.camera = camera  # its controls and status while the vision loads
                 self._pace()
@@ -267,12 +275,14 @@ class CameraService:
                     shows = any(r is not None for r in self._viewers.values())
                 if shows:
                     self._taken.wait(FIRST_FRAME_WAIT_S)
+                self._give_up_if_closed()
                 self.starting.set(LOADING_VISION)
                 self.classifier = open_classifier(self.profile, self.plugins)
                 problem = (
                     self.classifier.problem if isinstance(self.classifier, ReportsProblem) else None
                 )
                 self.classifier_problem = "" if problem is None else worded(problem, AT_CONSOLE)
+            self._give_up_if_closed()
             learn_background(camera, self.classifier)
         except BaseException:
             self.camera = None
@@ -352,7 +362,17 @@ class CameraService:
         if stopped:
             self.emit(Stopped("camera", reason=reason))
 
+    def _give_up_if_closed(self) -> None:
+        """A start under way ends at its next step once ``close()`` was asked (quitting
+        right after the Camera screen opened does not wait for the vision to load)."""
+        if self._closed.is_set():
+            raise _Closing
+
     def close(self) -> None:
+        """Stop the loop and close the camera and sinks; a start under way gives up at
+        its next step. The service does not start again."""
+        self._closed.set()
+        self._taken.set()  # a start waiting for a screen to take its first frame
         self.stop("closed")
         for name in list(self._sinks):
             self._close_sink(name)

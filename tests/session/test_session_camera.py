@@ -319,3 +319,41 @@ def test_a_saved_model_that_does_not_fit_leaves_the_camera_running(profile, plug
     finally:
         svc.close()
         path.unlink()
+
+
+def test_closing_while_the_camera_opens_loads_no_vision_and_starts_nothing(profile, plugins):
+    """The console quits while the Camera screen's start waits for the screen to take
+    its first frame: the start gives up there (no vision loaded, no loop), the close does
+    not wait for it, and nothing starts the camera again."""
+    import threading
+
+    from console.session.camera import CameraService
+
+    built: list[str] = []
+
+    class Counting:  # the plugins, counting what is built
+        def __getattr__(self, name):
+            return getattr(plugins, name)
+
+        def build(self, kind, name, prof):
+            built.append(kind)
+            return plugins.build(kind, name, prof)
+
+    svc = CameraService(profile, Counting())
+    viewer = object()  # a screen that shows frames but never takes the first one
+    worker = threading.Thread(target=svc.watch, args=(viewer, True, 30.0))
+    worker.start()
+    try:
+        assert _wait(lambda: svc.camera is not None, 30), "the camera opened"
+        assert "classifier" not in built  # still waiting for the first frame to be taken
+        closer = threading.Thread(target=svc.close)
+        closer.start()
+        worker.join(30)
+        closer.join(30)
+        assert not worker.is_alive() and not closer.is_alive()
+        assert "classifier" not in built, "the vision loaded for a console that quit"
+        assert not svc.running and svc.camera is None and svc.classifier is None
+        svc.watch(viewer, True, 30.0)  # a screen's late worker: the service stays closed
+        assert not svc.running and svc.camera is None
+    finally:
+        svc.close()
