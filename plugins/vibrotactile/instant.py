@@ -176,15 +176,19 @@ def _init_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict) -> None:
 #: the atlas's worker processes yield the CPU to everything live (the frame loop, the
 #: audio, the projector's heartbeat): the atlas is built behind a running demo
 WORKER_NICE = 10
+#: the workers at the lowest priority (off: at this process's, as a test on a machine
+#: loaded by other tests needs: there nothing would leave them a CPU)
+IDLE_WORKERS = True
 
 
-def _init_pool_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict) -> None:
-    """A spawned worker: lowest priority first (Linux's ``SCHED_IDLE``: it runs only on a
-    CPU nothing else wants; elsewhere ``WORKER_NICE``), then ``_init_worker``."""
-    with contextlib.suppress(OSError):  # not permitted: the normal priority
-        os.nice(WORKER_NICE)
-    with contextlib.suppress(AttributeError, OSError):  # not Linux: the nice value only
-        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+def _init_pool_worker(m: VibrationMap, per: Any, cap_v: float, kw: dict, idle: bool = True) -> None:
+    """A spawned worker: lowest priority first (``idle``; Linux's ``SCHED_IDLE``: it runs
+    only on a CPU nothing else wants; elsewhere ``WORKER_NICE``), then ``_init_worker``."""
+    if idle:
+        with contextlib.suppress(OSError):  # not permitted: the normal priority
+            os.nice(WORKER_NICE)
+        with contextlib.suppress(AttributeError, OSError):  # not Linux: the nice value only
+            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
     _init_worker(m, per, cap_v, kw)
 
 
@@ -284,7 +288,9 @@ def build_arrays(
     import queue
 
     ctx = multiprocessing.get_context("spawn")  # never fork a threaded process
-    pool = ctx.Pool(workers, initializer=_init_pool_worker, initargs=(m, per, cap_v, kw))
+    pool = ctx.Pool(
+        workers, initializer=_init_pool_worker, initargs=(m, per, cap_v, kw, IDLE_WORKERS)
+    )
     came: queue.Queue = queue.Queue()
     try:
         # one chunk per worker in flight: the next is chosen when one ends, so a hand

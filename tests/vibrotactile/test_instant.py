@@ -396,6 +396,10 @@ def test_a_hand_s_place_is_searched_first_and_usable_while_the_rest_is_built(
         return chunk
 
     monkeypatch.setattr(instant, "_nearest_chunk", recorded)
+    # the workers at this test's priority: at SCHED_IDLE, on a machine the other tests
+    # keep busy, they waited for every other process (6 s alone, 50 s in a full run);
+    # their priority is tests/demos/test_flow_ready.py's
+    monkeypatch.setattr(instant, "IDLE_WORKERS", False)
 
     def partial(atlas):
         seen["atlas"] = atlas
