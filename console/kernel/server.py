@@ -566,11 +566,13 @@ def _get(profile: Any, key: str, default: Any) -> Any:
 
 
 # ---------------------------------------------------------------------- main
-def main() -> int:
-    """``python -m console.kernel``: the start request (pickled) on stdin; "ready" or
-    one error line on stdout, then serve until idle."""
-    raw = sys.stdin.buffer
-    blob = raw.read(int(raw.readline()))
+def main(blob: bytes | None = None) -> int:
+    """``python -m console.kernel``: the start request (pickled) on stdin, or ``blob``
+    (from ``console.kernel.forkserver``); "ready" or one error line on stdout, then serve
+    until idle."""
+    if blob is None:
+        raw = sys.stdin.buffer
+        blob = raw.read(int(raw.readline()))
     request = pickle.loads(blob)
     out = os.fdopen(os.dup(1), "w", buffering=1)
     os.dup2(2, 1)  # a stray print must not break the start line
