@@ -60,6 +60,7 @@ def _recv_request(sock: socket.socket) -> tuple[dict, list[int]]:
 
 def _preload() -> None:
     """What every kernel imports before it is ready (``server.main``, ``Kernel.start``)."""
+    # lazy: the server imports these once, after it started (its client's process not)
     import console.kernel.server  # noqa: F401
     import console.kernel.table  # noqa: F401
     import console.safety  # noqa: F401
@@ -113,6 +114,7 @@ def _child(message: dict, fds: list[int]) -> int:
     import numpy as np
 
     np.random.seed()  # NumPy's global generator: this kernel's own, not the server's copy
+    # lazy: preloaded by the server (a module import here is a dictionary lookup)
     from console.kernel.server import main
 
     return main(message["request"])
