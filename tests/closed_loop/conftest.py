@@ -8,6 +8,8 @@ The map is the full default sweep (0-625 Hz, 0.1 Hz lines, 84 points, 5 excitati
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 #: What the tests play (a subset of the benchmark's): the paper's 51/52 both ways, a
@@ -158,3 +160,13 @@ def gap_region_rows(loop_outputs, loop_profile, measured_map, loop_plugins):
     print("\nclosed loop, flows under a hand with ringdown_gap_k 3:")
     print(format_regions(rows))
     return rows
+
+
+def pytest_collection_modifyitems(items) -> None:
+    """Every closed-loop test on one xdist worker: the session fixtures above (the twin's
+    measured map, the tables, the pair and region rows: ~20 s) are computed once, not on
+    each worker that runs one of these tests."""
+    here = Path(__file__).parent
+    for item in items:
+        if here in Path(item.fspath).parents:
+            item.add_marker(pytest.mark.xdist_group("closed_loop"))

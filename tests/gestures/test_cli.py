@@ -10,6 +10,10 @@ from console.cli.main import main
 from plugins.gestures import sketch
 from plugins.gestures.dataset import write_background, write_sample
 
+# one xdist worker runs this module: its module fixtures (a synthesised dataset, its
+# feature cache) computed once
+pytestmark = pytest.mark.xdist_group("gestures_cli")
+
 
 @pytest.fixture(scope="module")
 def cache(tmp_path_factory):

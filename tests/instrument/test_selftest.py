@@ -20,6 +20,10 @@ from console.plugin_api.runtime import inject_twin_faults, open_outputs
 from plugins.vibrotactile.cli import selftest as cli
 from plugins.vibrotactile.selftest import run_selftest
 
+# one xdist worker runs this module: its module fixture (a table's self-test) computed
+# once
+pytestmark = pytest.mark.xdist_group("selftest_table")
+
 
 @pytest.fixture(scope="module")
 def table(tmp_path_factory):

@@ -23,6 +23,10 @@ import pytest
 from console.cli.main import main
 from console.config.profile import PROJECT_PROFILES
 
+# one xdist worker runs this module: its module fixture (the kit of files every case
+# breaks) computed once
+pytestmark = pytest.mark.xdist_group("malformed_kit")
+
 SIM = (PROJECT_PROFILES / "sim.toml").read_text()
 DRY = ["play", "sine-PA", "--dry-run"]
 

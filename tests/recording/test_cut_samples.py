@@ -9,6 +9,10 @@ import json
 
 import pytest
 
+# one xdist worker runs this module: its module fixture (a recorded knob demo) computed
+# once
+pytestmark = pytest.mark.xdist_group("recorded_knob")
+
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):

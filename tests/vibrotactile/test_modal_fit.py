@@ -21,6 +21,10 @@ from plugins.twin.plate.model import build_twin, default_params, grid_points_mm
 from plugins.vibrotactile import modal_fit as mf
 from plugins.vibrotactile.interp import interpolate
 
+# one xdist worker runs this module: its module fixtures (the twin's exact and noisy
+# maps) computed once
+pytestmark = pytest.mark.xdist_group("modal_fit")
+
 F_HZ = np.arange(0.0, 625.0 + 1e-9, 0.2)
 NOISE_REL, NOISE_FLOOR = 0.02, 1e-3
 
