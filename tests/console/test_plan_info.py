@@ -83,25 +83,27 @@ def test_the_checker_names_a_wrong_type():
     assert plan_parts({"kind": "point", "actuator": "PA"}) == [{"kind": "point", "actuator": "PA"}]
 
 
-@pytest.fixture
-def rendered(plugins):
+def _rendered(plugins, kind: str):
+    """The built-in effect's plan of ``kind`` on the sim profile's measured map (only the
+    one a test asks: the hand flow's search takes seconds)."""
     from console.config.profile import load_profile
     from console.core.contracts import FlowEffect, HandFlowEffect, PointEffect
     from console.runtime.measured_map import measured_map_file
 
     profile = load_profile("sim", plugins)
     vmap = str(measured_map_file(profile, plugins))
-    point = plugins.provider("effect", PointEffect, profile).render_point(14, vmap)
-    flow = plugins.provider("effect", FlowEffect, profile).render_flow(51, 52, vmap)
-    hand = plugins.provider("effect", HandFlowEffect, profile).render_hand_flow(
+    if kind == "point":
+        return plugins.provider("effect", PointEffect, profile).render_point(14, vmap)
+    if kind == "flow":
+        return plugins.provider("effect", FlowEffect, profile).render_flow(51, 52, vmap)
+    return plugins.provider("effect", HandFlowEffect, profile).render_hand_flow(
         (370.0, 220.0), "right", vmap
     )
-    return {"point": point, "flow": flow, "hand_flow": hand}
 
 
 @pytest.mark.parametrize("kind", ["point", "flow", "hand_flow"])
-def test_the_built_in_effects_plans_agree_with_plan_info(rendered, kind):
-    meta = rendered[kind].meta
+def test_the_built_in_effects_plans_agree_with_plan_info(plugins, kind):
+    meta = _rendered(plugins, kind).meta
     assert meta.get("kind") == kind
     assert plan_info_problems(meta) == []
     for part in plan_parts(meta):
