@@ -34,7 +34,7 @@ from console.tui.logs import (
     release_logs,
     view_handler,
 )
-from console.tui.long_work import LongWork, RunsWork
+from console.tui.long_work import KeepsTypedWork, LongWork, RunsWork
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
@@ -478,14 +478,25 @@ class HapTableApp(App):
                 out.append(what)
         return out
 
+    def unsaved_work(self) -> list[str]:
+        """Typed work quitting would lose (``KeepsTypedWork``: an unsaved signal)."""
+        return [
+            what
+            for pane in list(self._panes.values())
+            if isinstance(pane, KeepsTypedWork) and (what := pane.unsaved_work())
+        ]
+
     async def action_quit(self) -> None:
-        """Quit; while work runs (``work_under_way``) only when asked twice."""
-        busy = self.work_under_way()
+        """Quit; while work runs (``work_under_way``) or typed work is unsaved
+        (``unsaved_work``) only when asked twice."""
+        busy, lost = self.work_under_way(), self.unsaved_work()
         now = time.monotonic()
-        if busy and now - self._quit_asked > self.QUIT_CONFIRM_S:
+        if (busy or lost) and now - self._quit_asked > self.QUIT_CONFIRM_S:
             self._quit_asked = now
+            said = [f"it stops {', '.join(busy)}"] if busy else []
+            said += [f"it loses {', '.join(lost)}"] if lost else []
             self.notify(
-                f"q again to quit: it stops {', '.join(busy)}",
+                f"q again to quit: {'; '.join(said)}",
                 severity="warning",
                 timeout=self.QUIT_CONFIRM_S,
             )

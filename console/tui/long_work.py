@@ -257,3 +257,11 @@ class RunsWork(Protocol):
     says what ('' when none); the console asks before it quits."""
 
     def work_under_way(self) -> str: ...
+
+
+@runtime_checkable
+class KeepsTypedWork(Protocol):
+    """A pane holding typed work nothing has saved (a signal expression):
+    ``unsaved_work()`` names it ('' when none); the console asks before it quits."""
+
+    def unsaved_work(self) -> str: ...

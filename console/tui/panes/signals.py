@@ -426,6 +426,10 @@ class SignalsPane(Vertical):
         known = {e.expr.strip() for e in self.entries.values()}
         return bool(expr) and expr != DEFAULT_EXPR.strip() and expr not in known
 
+    def unsaved_work(self) -> str:
+        """What quitting would lose (``console.tui.long_work.KeepsTypedWork``)."""
+        return "your unsaved signal (ctrl+s on Signals saves it)" if self.unsaved() else ""
+
     def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
         """Enter on a library signal loads it into the fields; over an unsaved
         expression it asks first (enter again within ``LOAD_AGAIN_S``), and ctrl+z
