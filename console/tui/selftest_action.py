@@ -15,7 +15,7 @@ import json
 from types import SimpleNamespace
 from typing import Any
 
-from console.core.errors import SafetyRefusal, UserError
+from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.core.types import DeviceStatus
 
 NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
@@ -57,13 +57,17 @@ def selftest_row(done: tuple[bool, str, float] | None) -> DeviceStatus:
     return DeviceStatus("selftest", "full", "ok" if ok else "error", why, "" if ok else "see log")
 
 
-def run_selftest(profile: Any, pm: Any) -> tuple[bool, str]:
-    """(healthy, one line for the status line) of a full self-test on ``profile``."""
+def run_selftest(profile: Any, pm: Any) -> tuple[bool | None, str]:
+    """(healthy, one line for the status line) of a full self-test on ``profile``;
+    healthy ``None``: it did not run (refused: the e-stop, the gate), which says nothing
+    of the table's health."""
     if pm.commands.get("selftest") is None:
         return False, NO_PLUGIN
     try:
         code, report = _run(profile, pm, ["--json"])
-    except (UserError, SafetyRefusal) as exc:
+    except (EStopLatched, SafetyRefusal) as exc:
+        return None, f"self-test refused: {exc}"
+    except UserError as exc:
         return False, f"self-test: {exc}"
     except ValueError:
         return False, "self-test: its report was not readable; run `haptable selftest`"

@@ -120,7 +120,8 @@ RESET = "e-stop reset"
 
 def _says_estop(line: str) -> bool:
     """Whether ``line`` says the e-stop is active (stale once the operator reset it)."""
-    return any(w in line for w in ("e-stop active", "e-stop is active", "ctrl+r resets"))
+    words = ("e-stop active", "e-stop is active", "e-stop latched", "ctrl+r resets")
+    return any(w in line for w in words)
 
 
 def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:
@@ -604,10 +605,13 @@ class DevicesPane(VerticalScroll):
 
         self._selftest_timer = self.set_interval(0.5, tick)
 
-    def _selftest_ended(self, ok: bool, line: str, took_s: float) -> None:
+    def _selftest_ended(self, ok: bool | None, line: str, took_s: float) -> None:
         if self._selftest_timer is not None:
             self._selftest_timer.stop()
             self._selftest_timer = None
+        if ok is None:  # refused (the e-stop): the row keeps the last run's result
+            self._show_result(line, error=True)
+            return
         self.selftest_done = (ok, line, took_s)
         self._show_result(line, error=not ok)
         if self.doctor_rows:  # its row in the devices table says it too

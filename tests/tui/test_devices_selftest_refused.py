@@ -1,0 +1,40 @@
+"""Devices (F1): a self-test refused by the e-stop says so, leaves the self-test row as it
+was (a refusal says nothing of the table's health), and the operator's reset replaces the
+refusal on the status line, as it does for t (found by a new operator at 80 x 24: the
+line stayed through resets and the row read "error")."""
+
+from __future__ import annotations
+
+import asyncio
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+
+
+def _result(app) -> str:
+    return app.pane("devices").result
+
+
+def test_s_during_an_estop_is_refused_and_the_reset_clears_it(plugins):
+    # the paced table the console shares with the self-test (a fast twin is each
+    # process's own: the self-test would open a table of its own)
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="devices")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: app.session.outputs is not None, 20, "outputs")
+            await wait_for(pilot, lambda: bool(pane.doctor_rows), 20, "doctor rows")
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, 10, "e-stop")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: "self-test refused" in _result(app), 30, "refused")
+            assert "e-stop latched" in _result(app)
+            row = pane.doctor_rows[-1]
+            assert (row.kind, row.state) == ("selftest", "not run"), row
+            assert pane.selftest_done is None
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: _result(app).startswith("e-stop reset"), 10, "reset")
+
+    asyncio.run(scenario())
