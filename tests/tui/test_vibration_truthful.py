@@ -177,3 +177,43 @@ def test_the_flow_names_its_method_and_the_tables_rule_with_their_contrasts(plug
             assert "rule perceptual" in _status(app)
 
     asyncio.run(scenario())
+
+
+def test_a_play_while_the_map_is_measured_is_refused(plugins, map_file):
+    """Enter and f during a measurement (the new operator's m m, then f): refused in one
+    line that names how to stop the measurement; nothing plays beside its sweeps."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid")
+            pane.move_cursor(51)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: "played point 51" in _status(app), 20, "51 played")
+            pane.move_cursor(52)
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: "played point 52" in _status(app), 20, "52 played")
+            played = list(app.session.played)
+            import time
+
+            from console.session.vibration import Cancelled
+
+            def held(progress, cancelled):  # a measurement that lasts until x (the
+                while not cancelled():  # fast twin's would end before the keys)
+                    time.sleep(0.02)
+                raise Cancelled
+
+            pane.service.measure = held
+            pane.action_measure("measure")  # as `:measure` (no question first)
+            await wait_for(pilot, lambda: pane._measuring is not None, 10, "measuring")
+            for key in ("f", "enter"):
+                await pilot.press(key)
+                await wait_for(pilot, lambda: "refused" in _status(app), 10, f"{key} refused")
+                assert "the map is being measured (x stops the measurement)" in _status(app)
+            assert app.session.played == played, "a stimulus played beside the sweeps"
+            await pilot.press("x")
+            await wait_for(pilot, lambda: pane._measuring is None, 20, "measurement stopped")
+
+    asyncio.run(scenario())

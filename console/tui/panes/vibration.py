@@ -34,6 +34,7 @@ from console.tui.panes.vibration_words import (
     HELP_KEYS,
     MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
+    MEASURING_REFUSAL,
     NOTHING_TO_CANCEL,
     Ask,
     describe_plan,
@@ -555,7 +556,13 @@ class VibrationPane(VerticalScroll):
 
     def _play(self, make, what: str, select: list[int] | None = None, asking: str = "") -> None:
         """Ask for the plan ``make(session)`` makes: the line says so at once and owns
-        the play (``Ask``) until another message takes it; the worker says the rest."""
+        the play (``Ask``) until another message takes it; the worker says the rest.
+        Refused while the map is measured here: the measurement plays its own sweeps
+        and a stimulus beside them would be in what it measures."""
+        if self._measuring is not None or self.roving.running:
+            self._error(f"{what}: {MEASURING_REFUSAL}")
+            self._command_done(self._typed, False)
+            return
         ask = Ask(what, self._typed)
         self.status(asking or f"asking to play {what} ...")
         self._now_playing = ask

@@ -39,6 +39,8 @@ MEASURE_AGAIN_S = 5.0
 NOTHING_TO_CANCEL = "x: nothing to cancel (no measurement, import, load or table build runs)"
 MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
+#: a play asked while this screen measures the map (its sweeps are what it measures)
+MEASURING_REFUSAL = "refused: the map is being measured (x stops the measurement)"
 
 
 def measure_again(takes: str) -> str:
