@@ -71,9 +71,13 @@ class ScopePane(ScopeRecordingMixin, Vertical):
         "+ / -    shorter / longer time window (on the last plan: around its middle,\n"
         "         - back out to the whole plan)\n"
         "o        a recording (Studies: record trials; a demo from a shell: haptable demo\n"
-        "         flow --record FILE): type its path, Enter shows its plans (re-rendered\n"
-        "         from their recorded parameters, the hash checked);\n"
-        "         [ / ] the previous / next plan, Esc the live view again\n"
+        "         flow --record FILE; one started here: [recording] enabled = true in\n"
+        "         the profile): type its path, Enter shows its plans (re-rendered from\n"
+        "         their recorded parameters, the hash checked)\n"
+        "[ / ]    in a recording: the previous / next plan\n"
+        "e        in a recording: the gate's own events of the run (relay switches,\n"
+        "         e-stops, resets, faults, refusals, with their gate clocks)\n"
+        "Esc      the live view again\n"
         "What the safety gate handed the driver, per channel, in volts at the actuators."
     )
     BINDINGS = [
