@@ -35,6 +35,7 @@ from console.tui.panes.vibration_words import (
     MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
     MEASURING_REFUSAL,
+    NO_MAP,
     NOTHING_TO_CANCEL,
     Ask,
     describe_plan,
@@ -42,6 +43,7 @@ from console.tui.panes.vibration_words import (
     estop_reason,
     info_text,
     measure_again,
+    point_problem,
     with_time_left,
 )
 from console.tui.plots import frf_series
@@ -470,26 +472,17 @@ class VibrationPane(VerticalScroll):
     # ------------------------------------------------------------------ actions
     def _need_session(self) -> bool:
         if self.session is None:
-            self._error("no vibration map yet: press m to measure, or import one")
+            self._error(NO_MAP)
             return False
         return True
 
     def _points_ok(self, *points: int) -> bool:
         """Whether ``points`` can play (checked before a command changes anything); if
-        not, the status line says why: a point off the grid names the grid's range (map
-        or not), no map says how to get one, a hole in the map says so."""
-        off = [n for n in points if n not in self.cell_of]
-        if off:
-            ids = self.cell_of or {0: (0, 0)}
-            self._error(f"point {off[0]}: the grid has points {min(ids)}-{max(ids)}")
-            return False
-        if not self._need_session():
-            return False
-        hole = [n for n in points if not self.session.has(n)]
-        if hole:
-            self._error(f"point {hole[0]}: not measured in this map (its id is dimmed)")
-            return False
-        return True
+        not, the status line says why (``point_problem``)."""
+        why = point_problem(points, self.cell_of, self.session)
+        if why:
+            self._error(why)
+        return not why
 
     def on_data_table_cell_selected(self, event: DataTable.CellSelected) -> None:
         event.stop()

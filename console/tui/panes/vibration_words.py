@@ -39,6 +39,8 @@ MEASURE_AGAIN_S = 5.0
 NOTHING_TO_CANCEL = "x: nothing to cancel (no measurement, import, load or table build runs)"
 MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r resets, m measures"
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
+#: a play or a table asked before any map is loaded
+NO_MAP = "no vibration map yet: press m to measure, or import one"
 #: a play asked while this screen measures the map (its sweeps are what it measures)
 MEASURING_REFUSAL = "refused: the map is being measured (x stops the measurement)"
 
@@ -197,3 +199,18 @@ def info_text(s: Any, sel: list[int]) -> tuple[str, float | None]:
         lines.append("f / r: audition a second point, then f flows to it")
     lines.append(f"· on the grid: a {s.hand_mm:g} mm hand fits there (w a s d)")
     return "\n".join(lines), mark
+
+
+def point_problem(points: tuple[int, ...], cell_of: dict, session: Any) -> str:
+    """Why ``points`` cannot play ('' when they can): a point off the grid names the
+    grid's range (map or not), no map says how to get one, a hole in the map says so."""
+    off = [n for n in points if n not in cell_of]
+    if off:
+        ids = cell_of or {0: (0, 0)}
+        return f"point {off[0]}: the grid has points {min(ids)}-{max(ids)}"
+    if session is None:
+        return NO_MAP
+    hole = [n for n in points if not session.has(n)]
+    if hole:
+        return f"point {hole[0]}: not measured in this map (its id is dimmed)"
+    return ""
