@@ -220,8 +220,13 @@ class LatencyPane(Vertical):
             who = self.source if self.source.startswith("demo ") else "a demo"  # as shown
             self._tell(f"m: {who} runs; its own loop is measured above (F6, s stops it)", who)
             return
+        now = time.monotonic()
+        if self._measure_until is not None and now < self._measure_until:  # not restarted
+            left = self._measure_until - now
+            self._tell(f"m: measuring already, {left:.0f} s left (its numbers above)", "camera")
+            return
         self._tell("", "")
-        self._measure_until = time.monotonic() + MEASURE_S
+        self._measure_until = now + MEASURE_S
         self._watch(True)
 
     def _tell(self, text: str, source: str) -> None:
