@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import re
 import threading
 from types import SimpleNamespace
 
@@ -330,5 +331,39 @@ def test_a_halfblock_picture_redraws_only_the_rows_that_changed():
             view.update("camera stopped")
             await pilot.pause(0.05)
             assert "camera stopped" in view.render_line(0).text
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_camera_s_live_numbers_change_without_laying_the_screen_out(plugins, monkeypatch, size):
+    """The twin's hand comes and goes (its lines on the side panel with it) and the
+    numbers change twice a second: the rows keep their place, so the screen is not laid
+    out again for them (a layout costs more than the numbers' repaint)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=size) as pilot:
+            pane = app.pane("camera")
+            await wait_for(pilot, lambda: pane.shown is not None, 30, "a picture")
+            info = app.query_one("#camera-info")
+            rates = re.compile(r"camera \d+ fps, vision \d+ fps")  # counted, vision on
+            await wait_for(pilot, lambda: rates.search(str(info.render())), 30, "the rates")
+            await pilot.pause(2.0)  # the hand seen once: its rows are kept from then on
+            layouts = collections.Counter()
+            texts = set()
+            original = Widget.refresh
+
+            def counting(widget, *args, layout=False, **kw):
+                if layout and widget is info:
+                    layouts["info"] += 1
+                return original(widget, *args, layout=layout, **kw)
+
+            monkeypatch.setattr(Widget, "refresh", counting)
+            for _ in range(30):
+                texts.add(str(info.render()))
+                await pilot.pause(0.2)
+            assert len(texts) >= 3, texts  # the numbers changed meanwhile ...
+            assert layouts["info"] <= 1, (layouts, texts)  # ... in their rows
 
     asyncio.run(scenario())

@@ -253,6 +253,14 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         found.first(Static).update(text, layout=layout)
         return True
 
+    def _say_kept(self, widget_id: str, text: str, width: int) -> bool:
+        """``text`` on ``widget_id``, laid out again only when it takes other rows than
+        the text before it (``same_height``): the live numbers change twice a second, a
+        layout of the screen costs more than repainting them."""
+        before = self._said.get(widget_id)
+        same = before is not None and same_height(before, text, width)
+        return self._say(widget_id, text, layout=not same) and not same
+
     def _title(self, text: str) -> None:
         """The view's title: laid out again only when its length changed (the grey
         levels it names follow the frames; a layout of the screen costs more than the
@@ -331,7 +339,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         # lies below it (the settings, the target field) stays where it is
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
-        self._say("camera-info", "\n".join(head))
+        self._say_kept("camera-info", "\n".join(head), self._info_width(pinned=True))
         before = self._said.get("camera-detail")
         # as many lines as before, each as long as before or within the panel's width
         # then and now (it wraps as before): the panel keeps its size, no layout to redo
@@ -496,13 +504,13 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             pinned = [ln for ln in loop if ln.startswith(PINNED)] + seen[2:]
             pinned += [ln for ln in read if ln.startswith(PINNED)]
             head = [rate_line(st["camera"], st.get("rates")), *seen[:2], *pinned]
-            # as many rows as it had (a hand's row comes and goes): nothing below moves
-            self._head_rows = max(self._head_rows, len(head))
-            head += [""] * (self._head_rows - len(head))
             live = [ln for ln in loop + read if ln not in pinned]
             live += skin_lines(readings, svc.params().get("contact_level"), skin)
         live = hang(live, self._info_width() or self.SIDE_COLS - 3)
         head = hang(head, self._info_width(pinned=True) or self.SIDE_COLS - 2)
+        if not starting:  # as many rows as it had, wrapped (a hand's rows come and go):
+            self._head_rows = max(self._head_rows, len(head))  # nothing below moves, and
+            head += [""] * (self._head_rows - len(head))  # no layout redone for them
         cam = st["camera"]
         chosen = self.chosen_key()
         controls = svc.control_values()  # the camera's: in its driver's words
