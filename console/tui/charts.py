@@ -87,15 +87,26 @@ BRAILLE = "⣿"
 RICH_COLOURS = {"orange": "dark_orange", "gray": "grey50"}
 
 
-def legend_row(legend: Sequence[tuple[str, str, str]], width: int) -> Text:
-    """One row ``⣿ label  + label ...`` in the series' colours, within ``width``."""
-    row = Text(" ")
-    for i, (label, colour, marker) in enumerate(legend):
-        row.append("  " if i else "")
-        row.append(marker, style=RICH_COLOURS.get(colour, colour))
-        row.append(f" {label}")
-    row.truncate(width, overflow="ellipsis")
-    return row
+def legend_rows(
+    legend: Sequence[tuple[str, str, str]], width: int, most: int = 1 << 20
+) -> list[Text]:
+    """Rows ``⣿ label  ⣿ label ...`` in the series' colours, each within ``width``: an
+    entry that does not fit a row starts the next one (every entry whole, at 80 columns
+    too), at most ``most`` rows (the last one then ends in "…")."""
+    rows: list[Text] = []
+    for label, colour, marker in legend:
+        entry = Text(marker, style=RICH_COLOURS.get(colour, colour))
+        entry.append(f" {label}")
+        if rows and rows[-1].cell_len + 2 + entry.cell_len <= width:
+            rows[-1].append("  ")
+        elif len(rows) < most:
+            rows.append(Text(" "))
+        else:  # no row left: the last one says there is more
+            rows[-1].append("  ")
+        rows[-1].append_text(entry)
+    for row in rows:
+        row.truncate(width, overflow="ellipsis")
+    return rows
 
 
 def _axis(label: str, unit: str) -> str:
@@ -230,19 +241,22 @@ class Chart(PlotextPlot):
         return self.figure_and_legend(legend)
 
     def figure_and_legend(self, legend: Sequence[tuple[str, str, str]]) -> Text:
-        """The figure set up on ``plt`` above one row naming its series, each as
+        """The figure set up on ``plt`` above the rows naming its series, each as
         (label, plotext colour, marker): plotext draws its own legend inside the plot's
         top left corner, over the curve. No row for it on a chart of under two rows."""
         width, height = self.size.width, self.size.height
         if not legend or height < 2:
             return super().render()
+        # the legend's rows below the figure (it keeps at least half of the height)
+        rows = legend_rows(legend, width, max(1, height // 2 - 1))
         plt = self.plt
-        plt.plotsize(width, height - 1)
-        plt._set_size(width, height - 1)  # as textual-plotext's own render does
+        plt.plotsize(width, height - len(rows))
+        plt._set_size(width, height - len(rows))  # as textual-plotext's own render does
         plt.theme(self._get_plotext_theme_name(self.app.theme))
         text = Text.from_ansi(plt.build().removesuffix("\n"))
-        text.append("\n")
-        text.append_text(legend_row(legend, width))
+        for row in rows:
+            text.append("\n")
+            text.append_text(row)
         return text
 
     def _zero_centred(self, plt, drawn: list[tuple[str, np.ndarray, np.ndarray]]) -> None:

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from textual.widgets import Input
 
-#: the field's label: what it takes
-RECORDING_LABEL = "recording to show: a .h5 file's path"
+#: the field's label: what it takes (whole on its border in the Camera screen's side
+#: panel at 80 columns)
+RECORDING_LABEL = "recording: a .h5 file's path"
 #: the hint inside it while it is empty: where the console writes such a file (the
 #: Studies screen's "record trials" switch); within the field at 80 columns
 RECORDING_HINT = "e.g. <study folder>/P01/recording/trial_0000.h5 (Studies: record trials)"
@@ -15,9 +16,11 @@ RECORDING_HINT = "e.g. <study folder>/P01/recording/trial_0000.h5 (Studies: reco
 RECORDING_KEYS = "Enter opens  Esc back"
 
 
-def recording_field(widget_id: str) -> Input:
-    """A hidden path field labelled ``RECORDING_LABEL`` (``o`` shows it)."""
-    box = Input(placeholder=RECORDING_HINT, id=widget_id)
+def recording_field(widget_id: str, hint: str = RECORDING_HINT) -> Input:
+    """A hidden path field labelled ``RECORDING_LABEL`` (``o`` shows it), ``hint`` in it
+    while it is empty (a narrow field says ``RECORDING_HINT`` on its screen's status
+    line instead: cut in the field, it read ``e.g. <study``)."""
+    box = Input(placeholder=hint, id=widget_id)
     box.border_title = RECORDING_LABEL
     box.border_subtitle = RECORDING_KEYS
     box.display = False

@@ -24,7 +24,7 @@ from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
 from console.tui.camera_live import hand_line
-from console.tui.path_field import recording_field
+from console.tui.path_field import RECORDING_HINT, recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
@@ -113,7 +113,8 @@ class RecordingMixin:
     _replay_frame: Any = None  # (k, image, decisions) read for the frame to show
 
     def on_mount(self) -> None:
-        box = recording_field("camera-recording")  # labelled: what to type
+        # labelled: what to type; the example on the status line (whole, it wraps there)
+        box = recording_field("camera-recording", hint="")
         self.query_one("#camera-side").mount(box, before="#camera-scroll")
 
     # ------------------------------------------------------------------ keys
@@ -132,6 +133,7 @@ class RecordingMixin:
         box.value = self._replay_typed or ""
         box.display = True
         box.focus()
+        self.say(f"o: type a recording's path, {RECORDING_HINT}")
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "camera-recording":
@@ -147,6 +149,7 @@ class RecordingMixin:
         if event.key == "escape" and box.has_focus:
             event.stop()
             box.display = False
+            self.say("")  # its example goes with it
             self.focus()
 
     @work(thread=True, exclusive=True, group="camera-replay-open")

@@ -42,7 +42,13 @@ def styled(text: str, style: str) -> Text:
 
 
 class LiteralTable(DataTable):
-    """A ``DataTable`` whose ``str`` cells and column labels are shown as written."""
+    """A ``DataTable`` whose ``str`` cells and column labels are shown as written, and
+    whose highlighted row stays in view when the table gets shorter (a line above it
+    grew, a notification took rows, the terminal was made smaller)."""
+
+    def on_resize(self, _event: Any) -> None:
+        if self.show_cursor and self.cursor_type != "none" and self.row_count:
+            self.call_after_refresh(self.move_cursor, animate=False)  # scrolls to it
 
     def add_column(self, label: Any, *args: Any, **kw: Any) -> Any:
         return super().add_column(literal(label), *args, **kw)

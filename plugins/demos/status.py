@@ -99,10 +99,12 @@ def status_lines(snap: dict[str, Any]) -> list[str]:
         state = f"[yellow]stopping[/] (ran {escape(up)})"
     else:
         state = ("running " if snap.get("running") else "[yellow]loop stopped[/] ") + up
+    # the rates and drops on a line of their own: within 80 columns, never dropped as a
+    # middle field of a line too long (``fit_fields``)
     lines = [
-        f"[b]{escape(name)}[/b] " + state + "  " + dog + f"  {_rates(cam, lat)}, dropped "
-        f"{escape(lat.get('dropped_camera', 0))} (camera) + "
-        f"{escape(lat.get('dropped_queue', 0))} (queue)"
+        f"[b]{escape(name)}[/b] " + state + "  " + dog,
+        f"{_rates(cam, lat)}, dropped {escape(lat.get('dropped_camera', 0))} (camera) + "
+        f"{escape(lat.get('dropped_queue', 0))} (queue)",
     ]
     stages = dict(lat.get("stages", {}))
     stages["capture_to_arrival"] = lat.get("capture_to_arrival") or {}

@@ -12,7 +12,15 @@ import pytest
 from .test_readme_camera_keys import SHOWN, _keys_named, _row
 
 #: ``=`` is ``+`` without shift: a row naming ``+`` names it
-SHOWN_TOO = {"up": "↑", "down": "↓", "equals_sign": "+", "colon": ":", "delete": "Delete"}
+SHOWN_TOO = {
+    "up": "↑",
+    "down": "↓",
+    "equals_sign": "+",
+    "colon": ":",
+    "delete": "Delete",
+    "pagedown": "PageDown",
+    "pageup": "PageUp",
+}
 
 #: screen -> the classes whose bindings it answers to
 SCREENS = {

@@ -50,6 +50,6 @@ def test_library_keys_first_in_the_footer_and_scope_field_whole(plugins):
             assert "record trials)" in shown, shown  # the hint whole, its end in view
             assert "--" not in shown, shown  # no command-line switch inside the console
             assert "Enter opens" in shown and "Esc back" in shown, shown
-            assert any("recording to show" in line for line in screen_lines(app))
+            assert any("recording: a .h5 file" in line for line in screen_lines(app))
 
     asyncio.run(scenario())

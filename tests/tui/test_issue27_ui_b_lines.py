@@ -40,7 +40,7 @@ def test_labelled_field_prompted_line_and_keys_after_a_switch(plugins):
             await wait_for(pilot, lambda: isinstance(app.focused, Input), 10, "the field")
             await pilot.pause(0.2)
             shown = " ".join(screen_lines(app))
-            assert "recording to show: a .h5 file's path" in shown, shown
+            assert "recording: a .h5 file's path" in shown, shown
             await pilot.press("escape")
             # F3 and : in one write: the : goes to Vibration (built on first use)
             app.post_message(events.Key("f3", None))  # queued together, as under load

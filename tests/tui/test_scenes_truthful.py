@@ -73,7 +73,8 @@ def test_x_while_the_demo_comes_up_cancels_it(plugins, monkeypatch):
 
 #: a running flow's status at 80 columns, as the twin's demo reports it
 FLOW_LINES = [
-    "flow running 12 s  watchdog ok (250 ms)  camera 48 fps, dropped 266 (camera) + 0 (queue)",
+    "flow running 12 s  watchdog ok (250 ms)",
+    "camera set to 60 fps, loop 48 fps, dropped 266 (camera) + 0 (queue)",
     "latency p50/p99 ms: capture 24/82  vision 4.2/10  classify 0.3/0.7  scene 0.0/0.1  "
     "effect 0.1/0.1  output 0.6/0.6  end to end 5.5/5.5",
     "hand resting at 543,181 mm, 0 contacts, gesture static_hand",

@@ -39,6 +39,7 @@ from console.tui.camera_live import (
 )
 from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
 from console.tui.camera_wizard import CameraWizardMixin
+from console.tui.give_way import give_way, outer_rows
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.plots import HalfBlockImage, downsample
@@ -163,6 +164,7 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         self._said_at = self._wizard_state() if text else None
         if text:
             said_here(line, "Camera", text, severity)
+        self.call_after_refresh(self.keep_in_view)  # the line whole, the rest gives way
 
     def _wizard_state(self) -> tuple:
         """What the calibration wizard shows now: a status line said under another
@@ -371,9 +373,29 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         y = settings.first().virtual_region.y + keys.index(key)
         scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
 
+    def fit_side(self) -> None:
+        """The side panel's field being typed in keeps its rows; the blocks above it give
+        way in turn when they do not fit: a finished wizard's result that asks for no
+        key first, then the status line, the wizard's step or ``S: save``, the live
+        numbers last."""
+        scroll = self.query("#camera-scroll")
+        if not scroll:
+            return
+        focused = self.app.focused
+        typing = focused if focused is not None and scroll.first() in focused.ancestors else None
+        kept = outer_rows([*self.query("#camera-recording"), typing])
+        info, wizard, status = (
+            self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
+        )
+        asks = self.calibration is not None or self.unsaved
+        blocks = [info, wizard, status] if asks else [info, status, wizard]
+        if give_way(self.query_one("#camera-side").content_region.height, kept, blocks):
+            self.call_after_refresh(self.keep_in_view)
+
     def keep_in_view(self) -> None:
         """The side panel's widget with the focus (the target field), else the chosen
-        setting, scrolled into view."""
+        setting, scrolled into view; what informs gives way to it (``fit_side``)."""
+        self.fit_side()
         focused = self.app.focused
         scroll = self.query("#camera-scroll")
         if focused is not None and scroll and scroll.first() in focused.ancestors:
@@ -630,9 +652,11 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
 
     def on_descendant_focus(self, _event) -> None:
         self.refresh_bindings()
+        self.call_after_refresh(self.keep_in_view)  # a field shown: in view
 
     def on_descendant_blur(self, _event) -> None:
         self.refresh_bindings()
+        self.call_after_refresh(self.keep_in_view)
 
     @work(thread=True, exclusive=True, group="camera-output")
     def _switch(self, name: str, on: bool, target: str | None) -> None:

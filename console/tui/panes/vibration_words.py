@@ -30,6 +30,8 @@ HELP_KEYS = (
     "m: measure (with an accelerometer input: the roving sensor, point by point; m again "
     "when the sensor is placed; x or escape stops, m resumes)\n"
     "b: build the lookup tables   x: cancel what runs\n"
+    "page down / page up: scroll to the FRF plot's axes and legend and back (the grid "
+    "keeps the cursor)\n"
     ": opens the command line; on it ctrl+u clears it, escape gives the keys back to "
     "the grid\n"
     f"commands: {COMMANDS}"

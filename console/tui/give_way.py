@@ -1,0 +1,45 @@
+"""Blocks of a panel that give way to what the operator acts on: a panel's field being
+typed in and the reply to it (its status line) keep their rows whole; the blocks above
+them that only inform (the live numbers, a calibration's result) take what is left, the
+one that yields last first, and are cut at the panel's height rather than push the field
+or the reply below it (Camera screen, 80 x 24: ``o``'s field under a calibration's
+result)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from textual.widget import Widget
+
+
+def natural_rows(widget: Widget) -> int:
+    """The rows ``widget`` takes unlimited: its content's at its width, and its padding."""
+    width = widget.content_region.width
+    parent = widget.parent if isinstance(widget.parent, Widget) else widget
+    content = widget.get_content_height(parent.size, widget.app.size, width) if width else 0
+    return content + widget.styles.gutter.height
+
+
+def outer_rows(widgets: Iterable[Widget | None]) -> int:
+    """The rows the shown ones of ``widgets`` take now (their margins too)."""
+    return sum(w.outer_size.height for w in widgets if w is not None and w.display)
+
+
+def give_way(room: int, kept: int, yielding: Iterable[Widget]) -> bool:
+    """Limit the shown ones of ``yielding`` (the first keeps its rows longest) to the
+    ``room`` rows ``kept`` leaves; each has its natural height again when there is room.
+    Whether a limit changed (the panel is laid out again)."""
+    left = room - kept
+    changed = False
+    for widget in yielding:
+        if not widget.display:
+            continue
+        rows = natural_rows(widget)
+        take = max(0, min(rows, left))
+        limit = None if take >= rows else take
+        now = widget.styles.max_height
+        if (now.value if now is not None else None) != limit:
+            widget.styles.max_height = limit
+            changed = True
+        left -= take
+    return changed
