@@ -273,7 +273,7 @@ class StudiesPane(Vertical):
         if study is Select.BLANK or not study:
             self._say("no protocol in studies/", "error")
             return
-        refused = self._bad_number()
+        refused = "" if self._value("simulate") else self._bad_number()  # a person's only
         if refused:
             self._say(refused, "error")
             return
@@ -328,10 +328,10 @@ class StudiesPane(Vertical):
         return ""
 
     def on_input_changed(self, event: Input.Changed) -> None:
-        """A number field refuses what it does not take as it is typed (one line); the
-        line goes once the field is right again."""
+        """A number field refuses what it does not take as it is typed (one line, for a
+        person's run); the line goes once the field is right again."""
         wid = event.input.id or ""
-        if wid not in NUMBER_FIELDS:
+        if wid not in NUMBER_FIELDS or self._value("simulate"):  # a simulated one: unused
             return
         refused = field_refusal(wid, event.value)
         if refused:
