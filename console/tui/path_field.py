@@ -17,7 +17,7 @@ RECORDING_KEYS = "Enter opens  Esc back"
 
 def recording_field(widget_id: str) -> Input:
     """A hidden path field labelled ``RECORDING_LABEL`` (``o`` shows it)."""
-    box = Input(placeholder=RECORDING_HINT, id=widget_id)
+    box = Input(placeholder=RECORDING_HINT, id=widget_id, select_on_focus=False)  # typed path kept
     box.border_title = RECORDING_LABEL
     box.border_subtitle = RECORDING_KEYS
     box.display = False

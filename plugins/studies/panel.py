@@ -66,7 +66,7 @@ from .panel_text import (
     same_folder,
     status_lines,
 )
-from .record_switch import RECORD, folder_row
+from .record_switch import RECORD, folder_row, typed_field
 from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 from .trials_table import TrialsTable
@@ -189,7 +189,7 @@ class StudiesPane(Vertical):
                 enter="protocols",
             )
             yield Label("participant", markup=False)
-            yield Input("P01", placeholder="id", id="participant", compact=True)
+            yield typed_field("P01", placeholder="id", id="participant")
             yield Checkbox("simulated", True, id="simulate", compact=True)
             yield Checkbox("projector", False, id="projector", compact=True)
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
