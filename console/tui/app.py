@@ -39,8 +39,8 @@ from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar, still_latched
-from console.tui.said import log_said
 from console.tui.session_messages import SessionMessage
+from console.tui.toasts import NewestToastOnly
 from console.tui.typed import TypedHistory
 from console.tui.util import short_path
 
@@ -128,7 +128,7 @@ class HelpScreen(ModalScreen):
         return True
 
 
-class HapTableApp(App):
+class HapTableApp(NewestToastOnly, App):
     TITLE = "HapTable"
     CSS_PATH = "console.tcss"
     BINDINGS = [
@@ -445,16 +445,6 @@ class HapTableApp(App):
         pane = self.pane(self.active_tab) if self.active_tab is not None else None
         if status is not None and isinstance(pane, ShowsState):
             pane.show_state(status, log)
-
-    def notify(self, message: str, *, markup: bool = False, **kw) -> None:
-        """A notification shown as written: its messages carry profile keys
-        (``[audio] device``), file names and plugins' errors (``console/tui/text.py``).
-        ``markup=True`` for a message that is a template with its values escaped.
-        Every toast is in the log too (``ctrl+l``: ``console.tui.said``); ``logged=True``:
-        it is there already (a log record or a status line shown as a toast)."""
-        if not kw.pop("logged", False):
-            log_said("toast", message, kw.get("severity", "information"))
-        super().notify(message, markup=markup, **kw)
 
     # ------------------------------------------------------------------ actions
     def estop(self, reason: str) -> None:

@@ -19,8 +19,9 @@ RECORDING_KEYS = "Enter opens  Esc back"
 def recording_field(widget_id: str, hint: str = RECORDING_HINT) -> Input:
     """A hidden path field labelled ``RECORDING_LABEL`` (``o`` shows it), ``hint`` in it
     while it is empty (a narrow field says ``RECORDING_HINT`` on its screen's status
-    line instead: cut in the field, it read ``e.g. <study``)."""
-    box = Input(placeholder=hint, id=widget_id)
+    line instead: cut in the field, it read ``e.g. <study``); focusing it selects
+    nothing (a typed key would replace the path)."""
+    box = Input(placeholder=hint, id=widget_id, select_on_focus=False)
     box.border_title = RECORDING_LABEL
     box.border_subtitle = RECORDING_KEYS
     box.display = False

@@ -266,7 +266,8 @@ class GesturesPanel(Screen):
             yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
-                yield Input(short_path(data_dir() / "twin"), id="gp-dataset", compact=True)
+                dataset = short_path(data_dir() / "twin")  # a path: kept on focus
+                yield Input(dataset, id="gp-dataset", compact=True, select_on_focus=False)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 yield Input("5", id="gp-subjects", classes="gp-num", compact=True)
@@ -276,7 +277,8 @@ class GesturesPanel(Screen):
                 yield Input("2fold", id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
                 yield Label("model")
-                yield Input(short_path(self.default_model), id="gp-model", compact=True)
+                model = short_path(self.default_model)
+                yield Input(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
                 yield Button("synthesize (s)", id="gp-synth", compact=True)
                 yield Button("train+eval (t)", id="gp-train", compact=True)

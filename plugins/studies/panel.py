@@ -66,7 +66,7 @@ from .panel_text import (
     same_folder,
     status_lines,
 )
-from .record_switch import RECORD, folder_row
+from .record_switch import RECORD, folder_row, typed_field
 from .responders import QueueResponder, parse_key
 from .runner import Answer, Control
 from .trials_table import TrialsTable
@@ -189,7 +189,7 @@ class StudiesPane(Vertical):
                 enter="protocols",
             )
             yield Label("participant", markup=False)
-            yield Input("P01", placeholder="id", id="participant", compact=True)
+            yield typed_field("P01", placeholder="id", id="participant")
             yield Checkbox("simulated", True, id="simulate", compact=True)
             yield Checkbox("projector", False, id="projector", compact=True)
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
@@ -273,7 +273,7 @@ class StudiesPane(Vertical):
         if study is Select.BLANK or not study:
             self._say("no protocol in studies/", "error")
             return
-        refused = self._bad_number()
+        refused = "" if self._value("simulate") else self._bad_number()  # a person's only
         if refused:
             self._say(refused, "error")
             return
@@ -328,10 +328,10 @@ class StudiesPane(Vertical):
         return ""
 
     def on_input_changed(self, event: Input.Changed) -> None:
-        """A number field refuses what it does not take as it is typed (one line); the
-        line goes once the field is right again."""
+        """A number field refuses what it does not take as it is typed (one line, for a
+        person's run); the line goes once the field is right again."""
         wid = event.input.id or ""
-        if wid not in NUMBER_FIELDS:
+        if wid not in NUMBER_FIELDS or self._value("simulate"):  # a simulated one: unused
             return
         refused = field_refusal(wid, event.value)
         if refused:

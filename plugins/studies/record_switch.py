@@ -12,14 +12,20 @@ from textual.widgets import Checkbox, Input, Label
 
 from .trial_recording import RECORD
 
-__all__ = ["RECORD", "folder_row"]
+__all__ = ["RECORD", "folder_row", "typed_field"]
+
+
+def typed_field(value: str = "", **kw: Any) -> Input:
+    """A field holding a path or typed work: the focus keeps its text (a key types into
+    it, not over it all, as a focus selecting everything made it)."""
+    return Input(value, compact=True, select_on_focus=False, **kw)
 
 
 def folder_row(out: str, profile: Any) -> Horizontal:
     """The folder row: where the results go, and the record-trials switch."""
     return Horizontal(
         Label("folder", markup=False),
-        Input(out, placeholder="where the results go", id="out", compact=True),
+        typed_field(out, placeholder="where the results go", id="out"),  # a path
         Checkbox(
             "record trials",
             bool(profile.get("recording.study_trials")),

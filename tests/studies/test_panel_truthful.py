@@ -35,6 +35,7 @@ def test_a_without_a_run_and_a_bad_age_say_so_in_one_line(double_plugins, tmp_pa
             await pilot.press("a")
             await wait_for(pilot, lambda: "nothing to abort" in _status(pane), 30, "a said")
             # the age field: typed, then Escape back to the screen's keys, text kept
+            pane.query_one("#simulate").value = False  # a person's run takes the age
             age = pane.query_one("#age", Input)
             age.focus()
             await wait_for(pilot, lambda: app.focused is age, 30, "age focused")
@@ -49,6 +50,30 @@ def test_a_without_a_run_and_a_bad_age_say_so_in_one_line(double_plugins, tmp_pa
             assert pane.running is None and said in _status(pane)
             age.value = "31"
             await wait_for(pilot, lambda: "age =" not in _status(pane), 30, "line gone")
+
+    asyncio.run(scenario())
+
+
+def test_a_simulated_run_ignores_the_person_fields(double_plugins, map_file, tmp_path):
+    """A simulated participant needs no age (the help says so): a bad age left in its
+    field neither refuses the start nor is said while typed."""
+
+    async def scenario():
+        app = _app(double_plugins)
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await studies_pane(pilot, app, map_file)
+            pane.query_one("#protocol").value = "exp1"
+            pane.query_one("#out").value = str(tmp_path)
+            assert pane.query_one("#simulate").value  # ticked
+            pane.query_one("#age", Input).value = "Q"
+            await pilot.pause(0.2)
+            assert "age =" not in _status(pane), _status(pane)
+            pane.focus()
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.running is not None, 30, "started")
+            assert "age =" not in _status(pane), _status(pane)
+            pane.control.abort("test over")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
 
     asyncio.run(scenario())
 

@@ -39,6 +39,20 @@ def flow_ctx(tmp_path, plugins, map_file):
     return Context(str(path), plugins)
 
 
+def spy_notifications(app) -> list[str]:
+    """Every notification ``app`` makes from now on, in order (the title row shows the
+    newest only: ``console.tui.toasts``)."""
+    said: list[str] = []
+    real = app.notify
+
+    def notify(message, **kw):
+        said.append(str(message))
+        return real(message, **kw)
+
+    app.notify = notify
+    return said
+
+
 def words_on(app, selector: str) -> str:
     """What the widget ``selector`` shows, its words joined by single spaces (a line
     wrapped at 80 columns reads as one)."""

@@ -143,13 +143,14 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
                 shown = screen_text(app)
                 assert "gestures ([tuio] enabled)" in shown  # a plugin's description
                 assert "[audio] device = 'x'" in shown and "fix [b]" in shown
+
+                def toasts() -> str:  # the newest only (``console.tui.toasts``)
+                    return " ".join(str(t.render()) for t in app.screen.query(Toast))
+
                 app.session.fail("outputs", "[audio] device = 'y': matches several outputs")
+                await wait_for(pilot, lambda: "[audio] device = 'y'" in toasts(), 5, "toast")
                 logging.getLogger("haptable.test").warning("[relays] serial = 'Z' not online")
-                await wait_for(pilot, lambda: len(app.screen.query(Toast)) >= 2, 5, "toasts")
-                await pilot.pause(0.2)
-                toasts = " ".join(str(t.render()) for t in app.screen.query(Toast))
-                assert "[audio] device = 'y'" in toasts
-                assert "[relays] serial = 'Z'" in toasts
+                await wait_for(pilot, lambda: "[relays] serial = 'Z'" in toasts(), 5, "toast")
                 bar = app.query_one(SafetyBar)
                 bar.show(None, "[audio] device = '': there is no default stereo output")
                 assert "not open: [audio] device = ''" in str(bar.render())

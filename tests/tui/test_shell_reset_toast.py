@@ -9,17 +9,18 @@ from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from ..kernel.test_kernel import at_terminal, haptable
-from .conftest import wait_for
+from .conftest import spy_notifications, wait_for
 from .test_screens import _ready
 
 
-def _said(app, start: str) -> list[str]:
-    return [str(n.message) for n in app._notifications if str(n.message).startswith(start)]
+def _said(said: list[str], start: str) -> list[str]:
+    return [m for m in said if m.startswith(start)]
 
 
 def test_a_shell_estop_and_reset_are_each_said_once(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="devices")
+        said = spy_notifications(app)  # the title row shows the newest only
         async with app.run_test(size=(120, 40), notifications=True) as pilot:
             await _ready(app, pilot)
             await asyncio.to_thread(haptable, "--profile", "sim", "estop")
@@ -28,9 +29,7 @@ def test_a_shell_estop_and_reset_are_each_said_once(plugins):
             assert code == 0, text
             await wait_for(pilot, lambda: not app.session.outputs.estopped, 20, "reset")
             await pilot.pause(1.0)  # a second toast would come with the next reads
-            assert len(_said(app, "E-STOP")) == 1, [str(n.message) for n in app._notifications]
-            assert len(_said(app, "e-stop reset")) == 1, [
-                str(n.message) for n in app._notifications
-            ]
+            assert len(_said(said, "E-STOP")) == 1, said
+            assert len(_said(said, "e-stop reset")) == 1, said
 
     asyncio.run(scenario())

@@ -129,7 +129,9 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
             with SidePanel(id="camera-scroll"):
                 yield Static("", id="camera-detail")
                 yield Static("", id="camera-settings")
-                box = Input(placeholder="host:port, Enter", id="camera-target")
+                box = Input(
+                    placeholder="host:port, Enter", id="camera-target", select_on_focus=False
+                )
                 box.display = False
                 yield box
 

@@ -13,7 +13,7 @@ from rich.text import Text
 from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import VerticalScroll
+from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
 from console.config.profile import load_profile, overrides_path, save_overrides
@@ -24,11 +24,12 @@ from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.focus_keys import show_keys
-from console.tui.kept_text import KeptText, wrap_kept
+from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
 from console.tui.said import said_here
 from console.tui.selftest_action import run_selftest, selftest_estimate, selftest_row
 from console.tui.session_messages import SessionMessage
+from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -41,15 +42,9 @@ TWIN_MAP_S = 10.0
 CELL_MAX = 36
 #: the plugins table's description column at least (at 80 columns: the table fits)
 PLUGIN_DESC_MAX = 24
-#: the sound-card table's device column at most, and its note column at least (the note
-#: takes what the other columns leave of the screen's width)
-DEVICE_MAX, NOTE_MIN = 23, 6
-
-
-def clip(text: str, width: int = CELL_MAX) -> str:
-    """``text`` on one line within ``width`` columns, ending in "…" when cut."""
-    one = " ".join(str(text).split())
-    return one if len(one) <= width else one[: width - 1].rstrip() + "…"
+#: the sound-card table's device column at most (the note takes what the other columns
+#: leave of the screen's width)
+DEVICE_MAX = 23
 
 
 def _cell(text: str, where: str, width: int = CELL_MAX) -> Text:
@@ -114,6 +109,10 @@ def _latency(low_s: float, high_s: float) -> str:
 LATENCY_HEAD = "low/high ms"
 
 
+#: the relay boards' table's column heads
+RELAY_HEADS = ("", "driver", "probe", "what it finds", "description")
+
+
 #: how the line says the operator reset the e-stop (a new e-stop replaces it)
 RESET = "e-stop reset"
 
@@ -122,32 +121,6 @@ def _says_estop(line: str) -> bool:
     """Whether ``line`` says the e-stop is active (stale once the operator reset it)."""
     words = ("e-stop active", "e-stop is active", "e-stop latched", "ctrl+r resets")
     return any(w in line for w in words)
-
-
-def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:
-    """Two last columns' widths within ``left`` columns (with the 2 between them), from
-    the widest text or header of each: both whole when they fit, else the narrower one
-    kept up to half and the rest to the other; never under ``NOTE_MIN``."""
-    room = left - 2
-    a, b = needs
-    if a + b <= room:
-        return a, b
-    if a <= b:
-        a = max(NOTE_MIN, min(a, room // 2))
-        return a, max(NOTE_MIN, room - a)
-    b = max(NOTE_MIN, min(b, room // 2))
-    return max(NOTE_MIN, room - b), b
-
-
-def _widths(heads, rows: list[list]) -> list[int]:
-    """Each column's width: its widest cell or its header."""
-    return [max(len(str(c)) for c in [h, *col]) for h, *col in zip(heads, *rows, strict=True)]
-
-
-def _need(head: str, texts) -> int:
-    """A column's width: its widest text on one line, or its header."""
-    widest = max((len(" ".join(str(t or "").split())) for t in texts), default=0)
-    return max(widest, len(head))
 
 
 def _restore(path, text: str | None) -> None:
@@ -184,6 +157,8 @@ class DevicesPane(VerticalScroll):
         self.unusable_boards: dict[str, DeviceStatus] = {}
         self.plugin_rows: dict[str, str] = {}  # row key -> the plugin's line, whole
         self._listed: tuple | None = None  # the sound cards and boards the tables show
+        self._listing: tuple | None = None  # the last listing (audio, relays), laid out
+        self._laid_out = 0  # the width the tables are laid out for
         self.result = ""  # the last pick or test, as shown
         self.doctor_rows: list[DeviceStatus] = []  # the doctor's rows, as shown
         #: the self-test's row: its last run here (None: not run), its seconds then
@@ -191,11 +166,13 @@ class DevicesPane(VerticalScroll):
         self._selftest_timer = None  # the self-test's progress ticks while it runs
 
     def compose(self) -> ComposeResult:
-        yield KeptText(id="profile-line", markup=False)
-        # the screen's status line: what a pick or a test did, where it is seen whole
-        result = KeptText("", id="devices-result", markup=False)  # a number with its unit
-        result.display = False  # shown once it has something to say
-        yield result
+        # the profile line and under it the screen's status line (what a pick or a test
+        # did): docked at the top, seen on entry and wherever the lists are scrolled
+        with Vertical(id="devices-top"):
+            yield KeptText(id="profile-line", markup=False)
+            result = KeptText("", id="devices-result", markup=False)  # a number, its unit
+            result.display = False  # shown once it has something to say
+            yield result
         # each table's Enter first in the footer while it has the focus
         yield show_keys(LiteralTable(id="device-table", cursor_type="row"), enter="whole row")
         yield Static(
@@ -222,15 +199,20 @@ class DevicesPane(VerticalScroll):
         return self.query_one("#audio-table", DataTable)
 
     def on_mount(self) -> None:
-        ctx = self.app.ctx
         self._show_profile_line()
         self.query_one("#audio-table", DataTable).add_columns(
             "", "driver", "device", "host API", "ch", LATENCY_HEAD, "note"
         )
-        self.query_one("#relay-table", DataTable).add_columns(
-            "", "driver", "probe", "what it finds", "description"
-        )
+        self.query_one("#relay-table", DataTable).add_columns(*RELAY_HEADS)
+        self._fill_plugins()
+        self.call_after_refresh(self.action_doctor)
+        self.call_after_refresh(self.action_list_devices)
+
+    def _fill_plugins(self) -> None:
+        """The plugins table, its description sized to the width the table has."""
+        ctx = self.app.ctx
         plug = self.query_one("#plugin-table", DataTable)
+        plug.clear(columns=True)
         plug.add_columns("kind", "name", "plugin", "description")
         regs = [
             (kind, name, reg)
@@ -242,14 +224,31 @@ class DevicesPane(VerticalScroll):
         # has a cell of padding either side), at least PLUGIN_DESC_MAX
         cells = [(kind, name, reg.plugin) for kind, name, reg in regs]
         others = sum(max(map(len, col), default=0) + 2 for col in zip(*cells, strict=True))
-        width = max(PLUGIN_DESC_MAX, self.app.size.width - others - 6)
+        width = max(PLUGIN_DESC_MAX, self._table_width() - others - 4)
         for kind, name, reg in regs:
             key = f"{kind}\x00{name}"
             self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
             about = _cell(reg.description, f"{kind} {name}", width)
             plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
-        self.call_after_refresh(self.action_doctor)
-        self.call_after_refresh(self.action_list_devices)
+
+    def _table_width(self) -> int:
+        """The width every table has: the screen's less its scrollbar's gutter (kept
+        whether or not the lists overflow); the terminal's while the screen is hidden."""
+        return self.scrollable_content_region.width or self.app.size.width - 2
+
+    def on_resize(self, event) -> None:
+        """The terminal's width changed (tmux resized, a window dragged): every table
+        laid out again within it (a table wider than the screen scrolls sideways and
+        cuts its first column)."""
+        width = self._table_width()
+        if width == self._laid_out:
+            return
+        self._laid_out = width
+        self._fill_plugins()
+        if self.doctor_rows:
+            self._show(self.doctor_rows[:-1])
+        if self._listing is not None:
+            self._show_devices(*self._listing)
 
     # ------------------------------------------------------------------ what is in use
     def _profile(self):
@@ -301,7 +300,7 @@ class DevicesPane(VerticalScroll):
         # why and fix share what the first columns leave, the fix whole first (it says
         # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
         left = self._note_width(table, firsts, ("device", "driver", "state"))
-        fix_w = min(_need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
+        fix_w = min(need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
         why_w = max(NOTE_MIN, left - fix_w - 2)
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
@@ -310,9 +309,9 @@ class DevicesPane(VerticalScroll):
                 s.state, f"[red]{escape(s.state)}[/]"
             )
             # wrapped here (a row's height known as it is added: the list below it is
-            # scrolled into view at once), a number with its unit on one line
-            why = wrap_kept(" ".join(s.why.split()), why_w)
-            fix = wrap_kept(" ".join(s.fix.split()), fix_w)
+            # scrolled into view at once), a number with its unit on one line, a word
+            # too long for its column ending in "…"
+            why, fix = fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)
             lines = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
             table.add_row(
                 Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
@@ -372,16 +371,15 @@ class DevicesPane(VerticalScroll):
             (_note(dev), f"sound card {dev.name}: note"),
         )
 
-    @staticmethod
-    def _note_width(table: DataTable, rows: list[list], heads: tuple = ()) -> int:
+    def _note_width(self, table: DataTable, rows: list[list], heads: tuple = ()) -> int:
         """What the note column can show: the table's width less the other columns
         (each as wide as its widest cell or header ``heads``, default the table's, plus
         its padding), cut with …."""
         heads = (
             heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
         )
-        width = table.size.width or table.app.size.width - 2  # the screen's scrollbar
-        used = sum(w + 2 for w in _widths(heads, rows))
+        width = self._table_width()
+        used = sum(w + 2 for w in widths(heads, rows))
         return max(NOTE_MIN, width - used - 2)  # the note's own padding
 
     def _first_usable(self, rows) -> int:
@@ -398,6 +396,7 @@ class DevicesPane(VerticalScroll):
             self._show_result(
                 f"listed again at {time.strftime('%H:%M:%S')}: {listed(audio, relays)}"
             )
+        self._listing = (audio, relays)
         drv, device, relay_drv = self._in_use()
         table = self.query_one("#audio-table", DataTable)
         self.audio_rows.clear()
@@ -407,7 +406,7 @@ class DevicesPane(VerticalScroll):
             repr(rows),
             repr([(n, d, st.state, st.why) for n, d, st in relays]),
             relay_drv,
-            table.size.width,
+            self._table_width(),
         )
         if shown == self._listed:  # the same listing: the tables stay as they are (a
             return  # rebuilt table lays its columns out again at its next idle)
@@ -422,25 +421,29 @@ class DevicesPane(VerticalScroll):
         # widths at once (widths DataTable measures itself reach the header only at a
         # later refresh, which a quiet screen may not get: misaligned headings)
         table.clear(columns=True)
-        for head, width in zip(heads, _widths(heads, [cells for _k, cells in full]), strict=True):
+        for head, width in zip(heads, widths(heads, [cells for _k, cells in full]), strict=True):
             table.add_column(head, width=width)
         for key, cells in full:
             table.add_row(*cells, key=key)
         table.move_cursor(row=self._first_usable(rows), animate=False)
         self._keep_focused_in_view()  # the list grew: the focused one is seen whole
         rtable = self.query_one("#relay-table", DataTable)
-        rtable.clear()
+        rtable.clear(columns=True)  # widths from this listing (a column never shrinks)
         self.relay_rows.clear()
         self.unusable_boards.clear()
         firsts = [["●", name, status.state] for name, _d, status in relays]
         # what it finds and the description share what the first columns leave
         finds_w, desc_w = share(
-            self._note_width(rtable, firsts),
+            self._note_width(rtable, firsts, RELAY_HEADS[:3]),
             (
-                _need("what it finds", [st.why for _n, _d, st in relays]),
-                _need("description", [d for _n, d, _s in relays]),
+                need("what it finds", [st.why for _n, _d, st in relays]),
+                need("description", [d for _n, d, _s in relays]),
             ),
         )
+        for head, width in zip(
+            RELAY_HEADS, [*widths(RELAY_HEADS[:3], firsts), finds_w, desc_w], strict=True
+        ):
+            rtable.add_column(head, width=width)
         for name, description, status in relays:
             key = f"relay\x00{name}"
             self.relay_rows[key] = name

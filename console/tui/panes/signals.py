@@ -117,12 +117,21 @@ class SignalsPane(Vertical):
             placeholder="sine(250 Hz, 20 V, 1 s) * ramp(10 ms)",
             id="sig-expr",
             compact=True,
+            select_on_focus=False,  # typed work: the focus keeps it, a key types into it
         )
         with Horizontal(id="sig-row"):
             yield Label("name ")
-            yield Input("", placeholder="(to save)", id="sig-name", compact=True)
+            yield Input(
+                "", placeholder="(to save)", id="sig-name", compact=True, select_on_focus=False
+            )
             yield Label(" on ")
-            yield Input("PA", placeholder="PA,PC|screen", id="sig-target", compact=True)
+            yield Input(
+                "PA",
+                placeholder="PA,PC|screen",
+                id="sig-target",
+                compact=True,
+                select_on_focus=False,
+            )
             yield Static(self._hint(), classes="hint", id="sig-hint")
         yield KeptText("", id="sig-status", markup=False)  # "0.5 s" never split
         with Horizontal(id="sig-main"):

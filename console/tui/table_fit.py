@@ -1,0 +1,67 @@
+"""A table's columns sized to the width it has: a cell within its column, on one line
+ending in "…" when cut (``clip``), or wrapped inside its row (``fit_cell``), never cut at
+the screen's edge mid-word; the widths of the last columns shared (``share``)."""
+
+from __future__ import annotations
+
+from rich.text import Text
+
+from console.tui.kept_text import wrap_kept
+
+#: the narrowest a column sized from what is left gets
+NOTE_MIN = 6
+
+
+def clip(text: str, width: int) -> str:
+    """``text`` on one line within ``width`` columns, ending in "…" when cut."""
+    one = " ".join(str(text).split())
+    return one if len(one) <= width else one[: width - 1].rstrip() + "…"
+
+
+def _word_fits(word: str, width: int) -> str:
+    """``word`` as wrapping can show it within ``width``: whole when each of its pieces
+    after a "/" fits (a path breaks there), else cut at the piece too long, ending in
+    "…" (never a word broken mid-letters over lines)."""
+    if len(word) <= width:
+        return word
+    start = 0
+    while start < len(word):
+        end = word.find("/", start)
+        end = len(word) if end < 0 else end + 1
+        if end - start > width:
+            return word[: start + width - 1] + "…"
+        start = end
+    return word
+
+
+def fit_cell(text: str, width: int) -> Text:
+    """``text`` wrapped within ``width`` columns (a number and its unit kept together,
+    a path broken after a "/"), a word too long for a line ending in "…"."""
+    words = [_word_fits(w, width) for w in str(text).split()]
+    return wrap_kept(" ".join(words), width)
+
+
+def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:
+    """Two last columns' widths within ``left`` columns (with the 2 between them), from
+    the widest text or header of each: both whole when they fit, else the narrower one
+    kept up to half and the rest to the other; never under ``NOTE_MIN``."""
+    room = left - 2
+    a, b = needs
+    if a + b <= room:
+        return a, b
+    if a <= b:
+        a = max(NOTE_MIN, min(a, room // 2))
+        return a, max(NOTE_MIN, room - a)
+    b = max(NOTE_MIN, min(b, room // 2))
+    return max(NOTE_MIN, room - b), b
+
+
+def widths(heads, rows: list[list]) -> list[int]:
+    """Each column's width: its widest cell or its header."""
+    return [max(len(str(c)) for c in [h, *col]) for h, *col in zip(heads, *rows, strict=True)]
+
+
+def need(head: str, texts) -> int:
+    """A column's width: its widest text on one line, or its header."""
+    widest = max((len(" ".join(str(t or "").split())) for t in texts), default=0)
+    return max(widest, len(head))

@@ -1,0 +1,55 @@
+"""One notification on the title row, the newest, whatever said it (a new operator at
+80 x 24 saw a watchdog's e-stop toast cut mid-word beside the reset's, and the e-stop's
+stayed after the reset): an e-stop latched elsewhere (the kernel, as a demo's watchdog
+latches it), a refusal, the operator's ctrl+r."""
+
+from __future__ import annotations
+
+import asyncio
+
+from textual.widgets._toast import Toast, ToastHolder
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+from .test_screens import _ready
+
+WATCHDOG = (
+    "runtime watchdog: frame loop stalled 261 ms in camera "
+    "(limit [runtime] watchdog_ms = 250); outputs silenced"
+)
+
+
+def _said(app) -> list[str]:
+    return [str(n.message) for n in app._notifications]
+
+
+def _top(app) -> str:
+    return app.screen._compositor.render_strips()[0].text
+
+
+def test_the_newest_notification_replaces_the_estop_and_goes_with_the_reset(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
+        async with app.run_test(size=(80, 24), notifications=True) as pilot:
+            await _ready(app, pilot)
+            # latched through the session's kernel client, as the watchdog does
+            app.session.outputs.estop(WATCHDOG)
+            await wait_for(pilot, lambda: "E-STOP: runtime" in _top(app), 30, "the toast")
+            await pilot.press("f1")
+            await pilot.press("t")
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: "refused" in pane.result, 20, "refused")
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, 20, "reset")
+            await wait_for(pilot, lambda: "e-stop reset" in _top(app), 20, "reset said")
+            await pilot.pause(0.5)
+            top = _top(app)
+            assert "E-STOP" not in top, top
+            assert not any("E-STOP" in m for m in _said(app)), _said(app)
+            assert len(_said(app)) == 1, _said(app)
+            toasts = [t for t in app.screen.query(Toast) if t.region]
+            assert len(toasts) == 1 and len(app.screen.query(ToastHolder)) == 1, toasts
+
+    asyncio.run(scenario())
