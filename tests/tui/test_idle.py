@@ -351,19 +351,24 @@ def test_the_camera_s_live_numbers_change_without_laying_the_screen_out(plugins,
             await wait_for(pilot, lambda: rates.search(str(info.render())), 30, "the rates")
             await pilot.pause(2.0)  # the hand seen once: its rows are kept from then on
             layouts = collections.Counter()
+            laid: list = []  # the text each layout was for
             texts = set()
             original = Widget.refresh
 
             def counting(widget, *args, layout=False, **kw):
                 if layout and widget is info:
                     layouts["info"] += 1
+                    laid.append(pane._said.get("camera-info"))
                 return original(widget, *args, layout=layout, **kw)
 
             monkeypatch.setattr(Widget, "refresh", counting)
-            for _ in range(30):
+            for _ in range(50):
                 texts.add(str(info.render()))
                 await pilot.pause(0.2)
-            assert len(texts) >= 3, texts  # the numbers changed meanwhile ...
-            assert layouts["info"] <= 1, (layouts, texts)  # ... in their rows
+            # the numbers changed meanwhile, in their rows: a row seen for the first time
+            # (a loaded machine's "skipped" count) may lay it out once or twice, not the
+            # ~17 times in 10 s of a layout per change
+            assert len(texts) >= 5, texts
+            assert layouts["info"] <= 2, laid
 
     asyncio.run(scenario())

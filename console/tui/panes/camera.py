@@ -38,6 +38,7 @@ from console.tui.camera_live import (
     starting_lines,
 )
 from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
+from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.give_way import give_way, outer_rows
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
@@ -47,7 +48,7 @@ from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
 from console.tui.units import control_words, span_words
-from console.tui.util import from_thread, short_path
+from console.tui.util import from_thread
 from console.tui.wrap_paths import break_paths
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)
@@ -66,7 +67,7 @@ class SidePanel(VerticalScroll):
             self.call_after_refresh(pane.keep_in_view)
 
 
-class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
+class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizontal):
     HELP_TEXT = HELP_TEXT
     BINDINGS = BINDINGS
     can_focus = True
@@ -552,48 +553,6 @@ class CameraPane(CameraWizardMixin, RecordingMixin, Horizontal):
         if not self.wizard_text():  # else the wizard's block says where it stands
             lines.append("k: touch calibration")
         return head, live, lines
-
-    # ------------------------------------------------------------------ tuning
-    def action_tune(self, key: str, sign: int) -> None:
-        """Change ``key`` by one step; it becomes the chosen setting: its row (``▸``, the
-        new value) is the feedback, scrolled into view (no notification over the panel)."""
-        if self._borrowed(key):
-            return
-        svc = self.service
-        cur, rng = svc.params().get(key), svc.param_ranges().get(key)
-        if cur is None or rng is None:
-            return
-        svc.set_param(key, cur + sign * rng.step)
-        self.chosen = list(svc.params()).index(key)
-        self._reveal()
-
-    def chosen_key(self) -> str | None:
-        keys = list(self.service.params())
-        return keys[self.chosen % len(keys)] if keys else None
-
-    def action_choose(self, step: int) -> None:
-        keys = list(self.service.params())
-        if keys:
-            self.chosen = (self.chosen + step) % len(keys)
-            self._reveal()
-
-    def action_tune_chosen(self, sign: int) -> None:
-        key = self.chosen_key()
-        if key is not None:
-            self.action_tune(key, sign)
-
-    def action_save_tuning(self) -> None:
-        if not self._borrowed("W"):
-            self._save_tuning()
-
-    @work(thread=True, exclusive=True, group="camera-tuning")
-    def _save_tuning(self) -> None:
-        try:
-            path = self.service.save_tuning()
-        except UserError as exc:
-            from_thread(self.app, self.say, f"W: {exc}", "warning")
-            return
-        from_thread(self.app, self.say, f"vision settings kept in {short_path(path)}")
 
     def _output(self) -> str | None:
         names = list(self.service.switches())

@@ -1,0 +1,61 @@
+"""The Camera screen's vision settings: ``[``/``]`` choose one, ``-``/``+`` (and the
+direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback; ``W``
+keeps them all for the profile."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from textual import work
+
+from console.core.errors import UserError
+from console.tui.util import from_thread, short_path
+
+
+class CameraTuningMixin:
+    """The tuning keys of the Camera screen (``CameraPane``: its camera service, its
+    status line ``say``, ``_borrowed`` and ``_reveal``)."""
+
+    chosen: int
+    service: Any
+
+    def action_tune(self, key: str, sign: int) -> None:
+        """Change ``key`` by one step; it becomes the chosen setting: its row (``▸``, the
+        new value) is the feedback, scrolled into view (no notification over the panel)."""
+        if self._borrowed(key):
+            return
+        svc = self.service
+        cur, rng = svc.params().get(key), svc.param_ranges().get(key)
+        if cur is None or rng is None:
+            return
+        svc.set_param(key, cur + sign * rng.step)
+        self.chosen = list(svc.params()).index(key)
+        self._reveal()
+
+    def chosen_key(self) -> str | None:
+        keys = list(self.service.params())
+        return keys[self.chosen % len(keys)] if keys else None
+
+    def action_choose(self, step: int) -> None:
+        keys = list(self.service.params())
+        if keys:
+            self.chosen = (self.chosen + step) % len(keys)
+            self._reveal()
+
+    def action_tune_chosen(self, sign: int) -> None:
+        key = self.chosen_key()
+        if key is not None:
+            self.action_tune(key, sign)
+
+    def action_save_tuning(self) -> None:
+        if not self._borrowed("W"):
+            self._save_tuning()
+
+    @work(thread=True, exclusive=True, group="camera-tuning")
+    def _save_tuning(self) -> None:
+        try:
+            path = self.service.save_tuning()
+        except UserError as exc:
+            from_thread(self.app, self.say, f"W: {exc}", "warning")
+            return
+        from_thread(self.app, self.say, f"vision settings kept in {short_path(path)}")
