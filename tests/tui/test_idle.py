@@ -362,13 +362,18 @@ def test_the_camera_s_live_numbers_change_without_laying_the_screen_out(plugins,
                 return original(widget, *args, layout=layout, **kw)
 
             monkeypatch.setattr(Widget, "refresh", counting)
+            comings = 0  # the hand's lines came or went (each laid the screen out before)
+            had = None
             for _ in range(50):
-                texts.add(str(info.render()))
+                text = str(info.render())
+                texts.add(text)
+                comings += had is not None and had != ("hand at" in text)
+                had = "hand at" in text
                 await pilot.pause(0.2)
             # the numbers changed meanwhile, in their rows: a row seen for the first time
-            # (a loaded machine's "skipped" count) may lay it out once or twice, not the
-            # ~17 times in 10 s of a layout per change
+            # (a loaded machine's "skipped" count) may lay it out a few times, not once
+            # per change of the hand's lines
             assert len(texts) >= 5, texts
-            assert layouts["info"] <= 2, laid
+            assert layouts["info"] <= max(4, comings // 2), (comings, laid)
 
     asyncio.run(scenario())
