@@ -51,7 +51,7 @@ TICK_S = 0.5
 #: how long ``m`` runs the camera loop for its numbers
 MEASURE_S = 10.0
 #: a stopped loop's fps when none were counted (never "counting ...": nothing counts)
-ENDED = "not counted (the run ended)"
+ENDED = "fps not counted (the run ended)"
 
 
 def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
@@ -61,12 +61,19 @@ def spark_width(table_width: int, other_widths: list[int], padding: int) -> int:
     return max(8, table_width - used - 1)  # one for the scrollbar's gutter
 
 
+#: the camera's line before its first numbers (``m``'s first second)
+COUNTING = "counting the fps (frames a second) ..."
+
+
 def camera_line(
-    cam: dict, snap: dict | None, rates: dict | None = None, span_s=0.0, no_fps="counting ..."
+    cam: dict, snap: dict | None, rates: dict | None = None, span_s=0.0, no_fps=COUNTING
 ) -> str:
     """The camera's line: the frames a second the camera delivered and the loop
     processed, both counted over the same last ``span_s`` (``rates`` None: ``no_fps``
-    says why there are none, the frame counts alone), drops, errors."""
+    says why there are none, the frame counts alone), drops, errors; what the camera
+    has not said yet (its driver, its counts) left out, never a "?"."""
+    if rates is None and not cam:  # nothing from the camera yet: it counts
+        return f"[b]camera[/b]: {escape(no_fps)}"
     if rates is not None:
         head = (
             f"[b]camera[/b] {escape(cam.get('driver', '?'))}: {rates[CAMERA]:.1f} fps "
@@ -74,10 +81,9 @@ def camera_line(
             f"{max(span_s, 1):.0f} s)"
         )
     else:
-        head = (
-            f"[b]camera[/b] {escape(cam.get('driver', '?'))}: fps {escape(no_fps)}, "
-            f"{escape(cam.get('frames', '?'))} frames delivered"
-        )
+        frames = cam.get("frames")
+        head = f"[b]camera[/b] {escape(cam.get('driver', ''))}".rstrip() + f": {escape(no_fps)}"
+        head += "" if frames is None else f", {escape(frames)} frames delivered"
     return f"{head}, {escape(cam.get('dropped', 0))} frames dropped by the camera" + (
         f"; loop {snap['frames']} frames, "
         f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
