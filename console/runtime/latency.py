@@ -166,6 +166,18 @@ class LatencyMonitor:
             return 0.0
         return float((t.size - 1) / (t[-1] - t[0]))
 
+    def counts(self) -> dict:
+        """The frame counters and the rate alone (``snapshot``'s without the
+        percentiles, which cost: the Camera screen reads these twice a second)."""
+        with self._lock:
+            counts = {
+                "frames": self.frames,
+                "dropped_queue": self.dropped_queue,
+                "dropped_camera": self.dropped_camera,
+                "errors": self.errors,
+            }
+        return {"fps": round(self.fps(), 2), **counts}
+
     def snapshot(self) -> dict:
         """Everything the console shows, as plain JSON values."""
         with self._lock:

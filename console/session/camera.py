@@ -536,14 +536,19 @@ class CameraService:
         """The classifier's intermediate images a result shows (``VisionResult.view``)."""
         return tuple(self.classifier.views) if self.classifier is not None else ()
 
-    def status(self) -> dict:
+    def status(self, percentiles: bool = True) -> dict:
+        """The camera's status and the loop's latency snapshot (``percentiles=False``:
+        its counters and rate only, ``LatencyMonitor.counts``)."""
         cam = {}
         if self.camera is not None:
             try:
                 cam = self.camera.status()
             except Exception as exc:
                 cam = {"error": str(exc)}
-        mon = self.loop.monitor.snapshot() if self.loop is not None else None
+        mon = None
+        if self.loop is not None:
+            m = self.loop.monitor
+            mon = m.snapshot() if percentiles else m.counts()
         return {"camera": cam, "latency": mon, "error": self.error, "borrower": self.borrower}
 
 

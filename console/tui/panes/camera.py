@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 import numpy as np
 from textual import work
@@ -94,6 +95,7 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         self._stretches: dict[str, GreyStretch] = {}  # view -> its display grey levels
         self._info_rows = 0  # the most lines the live block had
         self._head_rows = 0  # the most lines its pinned part had
+        self._parts: dict[str, Any] = {}  # widget id -> widget (``_part``)
         self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
@@ -249,13 +251,25 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         rows = min(rows, int(cols / aspect / 2) + 1)
         return cols, rows
 
+    def _part(self, widget_id: str) -> Any:
+        """This screen's widget ``widget_id`` (looked up once: a query matches the
+        selector over every widget, and the live numbers are written twice a second);
+        None once it is gone (the console shuts down)."""
+        w = self._parts.get(widget_id)
+        if w is None or not w.is_attached:
+            found = self.query(f"#{widget_id}")
+            w = self._parts[widget_id] = found.first() if found else None
+        return w
+
     def _say(self, widget_id: str, text, layout: bool = True) -> bool:
         """``text`` on the Static ``widget_id`` when it changed (True then)."""
-        found = self.query(f"#{widget_id}")  # gone while the console shuts down
-        if not found or self._said.get(widget_id) == text:
+        if self._said.get(widget_id) == text:
+            return False
+        found = self._part(widget_id)
+        if not isinstance(found, Static):
             return False
         self._said[widget_id] = text
-        found.first(Static).update(text, layout=layout)
+        found.update(text, layout=layout)
         return True
 
     def _say_kept(self, widget_id: str, text: str, width: int) -> bool:
@@ -362,8 +376,8 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     def _info_width(self, pinned: bool = False) -> int:
         """The live block's width in cells (0 before it is laid out): its scrolled part's
         (``pinned``: its part above the status line)."""
-        found = self.query("#camera-info" if pinned else "#camera-detail")
-        return found.first().content_size.width if found else 0
+        found = self._part("camera-info" if pinned else "camera-detail")
+        return found.content_size.width if found is not None else 0
 
     def _scroll_to_chosen(self) -> None:
         """Scroll the side panel so the chosen setting's row (``▸``) shows: the settings
@@ -497,11 +511,11 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         return found
 
     def _loop_status(self, svc) -> dict:
-        """``svc.status()`` (fps, drops: their percentiles cost), read at most every
-        ``STATUS_PERIOD_S``."""
+        """``svc.status()``'s camera and frame counters (no percentiles: none show
+        here), read at most every ``STATUS_PERIOD_S``."""
         now = time.monotonic()
         if self._status is None or now - self._status[0] >= self.STATUS_PERIOD_S:
-            self._status = (now, svc.status())
+            self._status = (now, svc.status(percentiles=False))
             self._status[1]["rates"] = self._rates.add(now, frame_counts(self._status[1]))
         return self._status[1]
 
