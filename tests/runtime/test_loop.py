@@ -102,6 +102,21 @@ def test_monitor_end_to_end_counts_only_frames_that_reached_the_end_stage():
     assert s["stages"]["scheduled"]["p50_ms"] == pytest.approx(1.0)
 
 
+def test_monitor_counts_are_the_snapshot_s_counters_and_rate():
+    """The Camera screen's cheap read: the same counters and rate as the snapshot."""
+    m = LatencyMonitor(["vision"])
+    for k in range(5):
+        f = frame(k, arrival=k / 60, dequeued=k / 60 + 0.001, vision=k / 60 + 0.004)
+        m.arrived(f)
+        m.record(f)
+    m.dropped(2)
+    m.dropped(camera=True)
+    s, c = m.snapshot(), m.counts()
+    assert c == {k: s[k] for k in ("fps", "frames", "dropped_queue", "dropped_camera", "errors")}
+    assert (c["frames"], c["dropped_queue"], c["dropped_camera"]) == (5, 2, 1)
+    assert c["fps"] == pytest.approx(60.0, rel=0.01)
+
+
 def test_loop_stamps_every_stage_in_order_and_stops_a_frame_on_false():
     seen: list[Frame] = []
 
