@@ -343,16 +343,18 @@ class DevicesPane(VerticalScroll):
         relays = relay_boards(prof, pm, held=(status or {}).get("relays"))
         from_thread(app, self._show_devices, audio, relays, said)
 
-    def _audio_row(self, d, dev, drv: str, device: str) -> tuple[str, list, tuple[str, str]]:
+    def _audio_row(
+        self, d, dev, drv: str, device: str, device_w: int = DEVICE_MAX
+    ) -> tuple[str, list, tuple[str, str]]:
         """(key, cells but the note, (note, whose)) of sound card ``dev`` of driver
-        ``d`` (``dev`` None: the driver found none); the card in use marked ●, the
-        system's default one in its note."""
+        ``d`` (``dev`` None: the driver found none), its name within ``device_w``; the
+        card in use marked ●, the system's default one in its note."""
         if dev is None:
             key = f"{d.driver}\x00"
             self.audio_rows[key] = (d.driver, "")
             if d.lists:  # it lists its devices and found none: nothing to open
                 self.no_device_rows[key] = f"{d.driver}: {d.problem}"
-            none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}", DEVICE_MAX)
+            none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}", device_w)
             mark = "●" if d.driver == drv else ""
             return key, [mark, Text(d.driver), none, "", "", ""], ("", "")
         key = f"{dev.driver}\x00{dev.name}"
@@ -363,7 +365,7 @@ class DevicesPane(VerticalScroll):
             [
                 "●" if used else "",
                 Text(dev.driver),
-                _cell(dev.name, f"sound card {dev.driver}", DEVICE_MAX),
+                _cell(dev.name, f"sound card {dev.driver}", device_w),
                 _cell(dev.host_api, f"sound card {dev.name}: host API", 12),
                 str(dev.output_channels),
                 _latency(dev.low_latency_s, dev.high_latency_s),
@@ -402,6 +404,20 @@ class DevicesPane(VerticalScroll):
         self.audio_rows.clear()
         self.no_device_rows.clear()
         rows = [self._audio_row(d, dev, drv, device) for d in audio for dev in d.devices or [None]]
+        # a narrow screen: the device's name gives up what the note needs (a long name,
+        # JACK's, would push the table past the screen's edge)
+        heads = [str(c.label) for c in table.columns.values()]
+        over = sum(w + 2 for w in widths(heads[:-1], [c for _k, c, _n in rows])) + 2 + NOTE_MIN
+        over -= self._table_width()
+        if over > 0:
+            device_w = max(NOTE_MIN, DEVICE_MAX - over)
+            self.audio_rows.clear()
+            self.no_device_rows.clear()
+            rows = [
+                self._audio_row(d, dev, drv, device, device_w)
+                for d in audio
+                for dev in d.devices or [None]
+            ]
         shown = (
             repr(rows),
             repr([(n, d, st.state, st.why) for n, d, st in relays]),
@@ -411,7 +427,6 @@ class DevicesPane(VerticalScroll):
         if shown == self._listed:  # the same listing: the tables stay as they are (a
             return  # rebuilt table lays its columns out again at its next idle)
         self._listed = shown
-        heads = [str(c.label) for c in table.columns.values()]
         note_w = self._note_width(table, [cells for _key, cells, _note in rows], heads[:-1])
         full = [
             (key, [*cells, _cell(note, where, note_w) if note else ""])
