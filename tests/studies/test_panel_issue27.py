@@ -46,6 +46,11 @@ def test_abort_asks_first(double_plugins, map_file, tmp_path, monkeypatch):
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await _running(pilot, app, map_file, tmp_path)
             status = pane.query_one("#study-status")
+            # paused: the simulated participant would finish the 200 trials within the
+            # seconds the questions take on a loaded machine (a run that ended has
+            # nothing to abort)
+            await pilot.press("p")
+            await wait_for(pilot, lambda: pane.control.paused, 5, "paused")
             # one a: the run goes on, the status line asks for a second one
             await pilot.press("a")
             await pilot.pause(0.1)
