@@ -274,8 +274,9 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
 
     def _say_kept(self, widget_id: str, text: str, width: int) -> bool:
         """``text`` on ``widget_id``, laid out again only when it takes other rows than
-        the text before it (``same_height``): the live numbers change twice a second, a
-        layout of the screen costs more than repainting them."""
+        the text before it (``same_height``: as many lines, each as long as before or
+        within ``width`` then and now): the live numbers change twice a second, a layout
+        of the screen costs more than repainting them. True when the rows moved."""
         before = self._said.get(widget_id)
         same = before is not None and same_height(before, text, width)
         return self._say(widget_id, text, layout=not same) and not same
@@ -359,15 +360,11 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
         self._say_kept("camera-info", "\n".join(head), self._info_width(pinned=True))
-        before = self._said.get("camera-detail")
-        # as many lines as before, each as long as before or within the panel's width
-        # then and now (it wraps as before): the panel keeps its size, no layout to redo
-        same = before is not None and same_height(before, info, self._info_width())
-        moved = self._say("camera-detail", info, layout=not same) and not same
+        moved = self._say_kept("camera-detail", info, self._info_width())
         moved |= self._say("camera-settings", "\n".join(settings))
-        found = self.query("#camera-wizard")
-        if found:
-            found.first().display = bool(wizard)
+        found = self._part("camera-wizard")
+        if found is not None:
+            found.display = bool(wizard)
             moved |= self._say("camera-wizard", wizard)
         if moved or self._reveal_chosen:  # the rows moved, or a key chose one
             self._reveal_chosen = False

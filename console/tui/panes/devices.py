@@ -374,15 +374,19 @@ class DevicesPane(VerticalScroll):
         )
 
     def _note_width(self, table: DataTable, rows: list[list], heads: tuple = ()) -> int:
-        """What the note column can show: the table's width less the other columns
-        (each as wide as its widest cell or header ``heads``, default the table's, plus
-        its padding), cut with …."""
+        """What the note column can show, cut with … (``_note_room``, at least
+        ``NOTE_MIN``)."""
+        return max(NOTE_MIN, self._note_room(table, rows, heads))
+
+    def _note_room(self, table: DataTable, rows: list[list], heads: tuple = ()) -> int:
+        """The table's width less the other columns (each as wide as its widest cell or
+        header ``heads``, default the table's, plus its padding) and the note's own
+        padding: below ``NOTE_MIN`` when the other columns take too much."""
         heads = (
             heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
         )
-        width = self._table_width()
         used = sum(w + 2 for w in widths(heads, rows))
-        return max(NOTE_MIN, width - used - 2)  # the note's own padding
+        return self._table_width() - used - 2
 
     def _first_usable(self, rows) -> int:
         """The row the sound-card cursor starts on: the card in use (●), else the first
@@ -407,8 +411,7 @@ class DevicesPane(VerticalScroll):
         # a narrow screen: the device's name gives up what the note needs (a long name,
         # JACK's, would push the table past the screen's edge)
         heads = [str(c.label) for c in table.columns.values()]
-        over = sum(w + 2 for w in widths(heads[:-1], [c for _k, c, _n in rows])) + 2 + NOTE_MIN
-        over -= self._table_width()
+        over = NOTE_MIN - self._note_room(table, [c for _k, c, _n in rows], heads[:-1])
         if over > 0:
             device_w = max(NOTE_MIN, DEVICE_MAX - over)
             self.audio_rows.clear()
