@@ -7,7 +7,7 @@ long edge, y along the short edge), ``_px`` camera pixels, ``_s`` seconds on the
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypedDict, get_type_hints
 
@@ -67,18 +67,66 @@ class Contact:
     area_px: float = 0.0
 
 
+class HandShape:
+    """A hand's outline descriptors and finger count: given (``HandShape.of``), or made
+    by ``make`` when first read. The vision finds them for every hand; only a gesture
+    decision's first frames and a screen showing the count read them, so a frame loop
+    does not pay for them on every frame. Pickles as its values."""
+
+    __slots__ = ("_make", "_value")
+
+    def __init__(self, make: Callable[[], tuple[np.ndarray, int]]) -> None:
+        self._make: Callable[[], tuple[np.ndarray, int]] | None = make
+        self._value: tuple[np.ndarray, int] | None = None
+
+    @classmethod
+    def of(cls, descriptors: np.ndarray, finger_count: int) -> HandShape:
+        shape = cls(lambda: (descriptors, finger_count))
+        shape.value()
+        return shape
+
+    def value(self) -> tuple[np.ndarray, int]:
+        """(descriptors, finger count), made on the first call."""
+        if self._value is None:
+            assert self._make is not None
+            desc, count = self._make()
+            self._value, self._make = (np.asarray(desc), int(count)), None
+        return self._value
+
+    @property
+    def known(self) -> bool:
+        """Whether the values are made (read once, or given)."""
+        return self._value is not None
+
+    def __reduce__(self):
+        return (HandShape.of, self.value())
+
+    def __repr__(self) -> str:
+        return f"HandShape(finger_count={self.value()[1]})" if self.known else "HandShape(...)"
+
+
 @dataclass(frozen=True)
 class Hand:
-    """A segmented hand: its outline, canonical pose and descriptors."""
+    """A segmented hand: its outline, canonical pose and shape (``descriptors``,
+    ``finger_count``: see ``HandShape``)."""
 
     contour_px: np.ndarray  # (N, 2) float
     center_px: tuple[float, float]
     radius_px: float
     angle_deg: float  # rotation that brings the hand to the canonical orientation
-    descriptors: np.ndarray  # invariant Fourier descriptor magnitudes
-    finger_count: int
+    shape: HandShape = field(compare=False)
     contacts: tuple[Contact, ...] = ()
     center_mm: tuple[float, float] | None = None
+
+    @property
+    def descriptors(self) -> np.ndarray:
+        """Invariant Fourier descriptors of the canonical outline."""
+        return self.shape.value()[0]
+
+    @property
+    def finger_count(self) -> int:
+        """Fingers spread from the palm."""
+        return self.shape.value()[1]
 
 
 GestureKind = Literal["static", "dynamic"]

@@ -15,7 +15,8 @@ What this module offers, by where it comes from:
 - errors: ``UserError``, ``SafetyRefusal``; a message's fix where the user is
   (``console.core.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
   ``AT_CONSOLE``, ``listing``, ``counted``
-- the values that cross plugin boundaries (``console.core.types``): ``Frame``, ``Hand``,
+- the values that cross plugin boundaries (``console.core.types``): ``Frame``, ``Hand`` (its
+  ``HandShape``),
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
   ``meta`` a ``PlanInfo`` of ``PlanPart``), ``Segment``, ``OutputDevice``, ``DeviceStatus``, ``TunableRange``, ``PATCHES``,
   ``patches_of``, ``DIRECTIONS``, ``DIRECTIONS_MM``, ``EXCITATIONS``
@@ -120,6 +121,7 @@ from console.core.types import (
     GestureScript,
     GestureStep,
     Hand,
+    HandShape,
     OutputDevice,
     OutputPlan,
     PlanInfo,
@@ -184,6 +186,7 @@ __all__ = [
     "GestureScript",
     "GestureStep",
     "Hand",
+    "HandShape",
     "OutputDevice",
     "OutputPlan",
     "PlanInfo",

@@ -96,7 +96,7 @@ def frame_record(res: FrameResult) -> dict | None:
         "contacts_px": np.array([c.pos_px for c in h.contacts], dtype=float).reshape(-1, 2),
         "contacts_canon": np.asarray(ex["contacts_canon"], dtype=float).reshape(-1, 2)
         * (pr / scale),
-        **physical_record(h, ex),
+        **physical_record(h, ex, res.touch.of(0) if res.touch is not None else {}),
     }
 
 

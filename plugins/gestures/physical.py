@@ -56,12 +56,11 @@ COUNT_INDEX = 2
 FLAT_INDEX = 5
 
 
-def physical_record(hand, extras: dict) -> dict:
-    """The physical part of a frame record from a ``Hand`` and its extras: the touching
-    regions (area mm^2, x mm, y mm in the camera's frame), the touching area, and the
-    outline's solidity."""
+def physical_record(hand, extras: dict, touch: dict) -> dict:
+    """The physical part of a frame record from a ``Hand``, its extras and its touching
+    skin (``touch.hand_touch``): the touching regions (area mm^2, x mm, y mm in the
+    camera's frame), the touching area, and the outline's solidity."""
     ppm = float(extras.get("px_per_mm") or 0.86)
-    touch = extras.get("touch") or {}
     regions = np.asarray(touch.get("regions", np.zeros((0, 3))), float).reshape(-1, 3)
     regions = np.column_stack([regions[:, 0], regions[:, 1:] / ppm]).reshape(-1, 3)
     solidity = 0.0

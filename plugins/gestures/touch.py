@@ -120,3 +120,33 @@ def hand_touch(regions: np.ndarray, palms_px: list, index: int, same_px: float) 
         return {"area_mm2": 0.0, "regions": np.zeros((0, 3)), "centroid_px": None}
     centroid = tuple(float(v) for v in (regions[:, 0] @ regions[:, 1:]) / total)
     return {"area_mm2": total, "regions": regions, "centroid_px": centroid}
+
+
+class FrameTouch:
+    """The touching skin of a frame's hands, found when first asked: only a gesture
+    decision's first frames read it, so a frame loop does not pay for it on every frame.
+    ``of(i)``: ``hand_touch`` of hand ``i`` (``palms_px`` in the hands' order)."""
+
+    def __init__(
+        self,
+        diff: np.ndarray,
+        body: np.ndarray,
+        parts,
+        px_per_mm: float,
+        palms_px: list,
+        same_px: float,
+    ) -> None:
+        self._inputs: tuple | None = (diff, body, parts, px_per_mm)
+        self._palms, self._same_px = list(palms_px), same_px
+        self._regions: np.ndarray | None = None
+
+    @property
+    def regions(self) -> np.ndarray:
+        """Every hand's touching regions (``touch_regions``)."""
+        if self._regions is None:
+            assert self._inputs is not None
+            self._regions, self._inputs = touch_regions(*self._inputs), None
+        return self._regions
+
+    def of(self, index: int) -> dict:
+        return hand_touch(self.regions, self._palms, index, self._same_px)

@@ -41,7 +41,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from console.plugin_api import Contact, Hand, UserError
+from console.plugin_api import Contact, Hand, HandShape, UserError
 
 from .background import illumination, subtract
 from .contacts import find_contacts
@@ -63,7 +63,7 @@ from .segmentation import (
     highpass_window,
     relative_body,
 )
-from .touch import SAME_HAND_MM, default_px_per_mm, hand_touch, touch_regions
+from .touch import SAME_HAND_MM, FrameTouch, default_px_per_mm
 
 #: the range a hand's light may scale the thresholds by (a hand dimmer than 0.3 of the
 #: reference is mostly noise; brighter than 2x, the sensor clips)
@@ -152,8 +152,11 @@ class FrameResult:
     #: brightness-weighted centroid), contacts_canon ((k, 2) in palm radii), level (the
     #: hand's brightest block, grey levels above the background), light (level over
     #: ``contact_level``, the scale of its thresholds; 1.0 with fixed thresholds),
-    #: touch (``touch.hand_touch``: its touching skin in mm) and px_per_mm
+    #: and px_per_mm
     extras: tuple[dict, ...] = field(default=(), compare=False, repr=False)
+    #: the hands' touching skin (``touch.FrameTouch``: found when first asked, per hand
+    #: in ``hands``' order); None without a hand
+    touch: FrameTouch | None = field(default=None, compare=False, repr=False)
 
     def view(self, name: str) -> np.ndarray | None:
         """The intermediate image ``name`` (``diff``, ``body``, ``highpass``), or ``None``
@@ -269,10 +272,6 @@ def analyse_hand(
     t = math.radians(angle)
     ex = center[0] + ecx * math.cos(t) - ecy * math.sin(t)
     ey = center[1] + ecx * math.sin(t) + ecy * math.cos(t)
-    desc = fourier_descriptors(
-        sil, params.n_harmonics, rotation_invariant=params.rotation_invariant
-    )
-    fingers = count_fingers(sil, pr, params)
     mine = tuple(contacts or ())
     center_mm = None
     if to_mm is not None:
@@ -294,11 +293,21 @@ def analyse_hand(
         center_px=(float(ex), float(ey)),
         radius_px=float(er),
         angle_deg=float(angle),
-        descriptors=desc,
-        finger_count=fingers,
+        shape=HandShape(functools.partial(hand_shape, sil, pr, params)),
         contacts=mine,
         center_mm=center_mm,
     ), extras
+
+
+def hand_shape(
+    silhouette: np.ndarray, palm_radius: float, params: VisionParams
+) -> tuple[np.ndarray, int]:
+    """A hand's ``HandShape`` values from its canonical silhouette: the Fourier
+    descriptors and the fingers counted."""
+    desc = fourier_descriptors(
+        silhouette, params.n_harmonics, rotation_invariant=params.rotation_invariant
+    )
+    return desc, count_fingers(silhouette, palm_radius, params)
 
 
 def clipped_share(frame: np.ndarray, touching: np.ndarray) -> tuple[int, int]:
@@ -456,11 +465,8 @@ def process_frame(
         if got is not None:
             got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))
             found.append(got)
-    if found:  # the touching skin, each region to the hand whose palm is nearest
-        regions = touch_regions(diff, body, parts, ppm)
-        palms = [e["palm_px"] for _, e in found]
-        for i, (_, e) in enumerate(found):
-            e.update(touch=hand_touch(regions, palms, i, same_px), px_per_mm=ppm)
+    for _, e in found:
+        e["px_per_mm"] = ppm
     clipped = touching = 0
     if found:  # the sensor's maximum on the hands' touching skin
         x0, y0, x1, y1 = parts.win
@@ -469,6 +475,10 @@ def process_frame(
                 img[y0:y1, x0:x1], touching_mask(img, diff, body, parts)
             )
     found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
+    touch = None
+    if found:  # the touching skin, each region to the hand whose palm is nearest
+        palms = [e["palm_px"] for _, e in found]
+        touch = FrameTouch(diff, body, parts, ppm, palms, same_px)
     masks: Mapping[str, np.ndarray] = {}
     if keep_masks:  # the whole high-pass image only if someone looks at it
         sigma = p.highpass_sigma_px
@@ -490,4 +500,5 @@ def process_frame(
         touching_px=int(touching),
         masks=masks,
         extras=tuple(e for _, e in found),
+        touch=touch,
     )

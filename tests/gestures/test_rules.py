@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from console.core.types import Contact, Frame, Gesture, Hand
+from console.core.types import Contact, Frame, Gesture, Hand, HandShape
 from plugins.gestures.classifier import SvmClassifier
 from plugins.gestures.rules import GestureRules, StillHand
 
@@ -64,7 +64,15 @@ class FakeModelClassifier:
 
 def _hand(center_mm, n_contacts=0):
     cs = tuple(Contact(i, (0.0, 0.0), (0.0, 0.0)) for i in range(n_contacts))
-    return Hand(np.zeros((3, 2)), (0.0, 0.0), 10.0, 0.0, np.zeros(3), n_contacts, cs, center_mm)
+    return Hand(
+        np.zeros((3, 2)),
+        (0.0, 0.0),
+        10.0,
+        0.0,
+        HandShape.of(np.zeros(3), n_contacts),
+        cs,
+        center_mm,
+    )
 
 
 def test_gesture_rules_name_a_placement_once_and_report_rest_and_grip():

@@ -156,7 +156,7 @@ def test_plugin_registers_scenes_section_command_and_bench():
 
 
 def test_contacts_overlay_takes_the_pipeline_value_types():
-    from console.core.types import Contact, Hand
+    from console.core.types import Contact, Hand, HandShape
 
     c = BUILTIN_SCENES["contacts"][0](None)
     hand = Hand(
@@ -164,8 +164,7 @@ def test_contacts_overlay_takes_the_pipeline_value_types():
         center_px=(10.0, 10.0),
         radius_px=5.0,
         angle_deg=0.0,
-        descriptors=np.zeros(8),
-        finger_count=2,
+        shape=HandShape.of(np.zeros(8), 2),
         center_mm=(300.0, 200.0),
     )
     c.update(

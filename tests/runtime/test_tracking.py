@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from console.core.types import Contact, Gesture, Hand
+from console.core.types import Contact, Gesture, Hand, HandShape
 from console.runtime.tracking import Announcer, IdTracker, Tracking, outline_centroid
 
 
@@ -78,7 +78,9 @@ def test_outline_centroid_matches_opencv_moments():
 
 
 def _hand(contour, palm_px, contacts=()):
-    return Hand(np.asarray(contour, float), palm_px, 30.0, 0.0, np.zeros(4), 0, contacts)
+    return Hand(
+        np.asarray(contour, float), palm_px, 30.0, 0.0, HandShape.of(np.zeros(4), 0), contacts
+    )
 
 
 def test_a_hand_is_tracked_at_its_outline_centre_not_its_jumping_palm_centre():

@@ -12,7 +12,7 @@ import pytest
 
 from console.cli.main import Context
 from console.config.profile import PROJECT_PROFILES
-from console.core.types import Contact, Hand
+from console.core.types import Contact, Hand, HandShape
 from console.files import paths
 from console.tui.app import HapTableApp
 from console.tui.camera_picture import overlay_pixels
@@ -68,8 +68,7 @@ def test_overlay_marks_hand_outline_contacts_and_target():
         center_px=(200.0, 200.0),
         radius_px=50.0,
         angle_deg=0.0,
-        descriptors=np.zeros(3),
-        finger_count=1,
+        shape=HandShape.of(np.zeros(3), 1),
     )
     work = {"hands": (hand,), "contacts": (Contact(1, (320.0, 240.0)),)}
     ov = overlay_pixels((480, 640), cols=64, rows=24, work=work, target_px=(0.0, 0.0))

@@ -15,7 +15,7 @@ import pytest
 from console.cli.main import Context, main
 from console.config.profile import PROJECT_PROFILES, load_profile
 from console.core.errors import ProfileError
-from console.core.types import Contact, Hand
+from console.core.types import Contact, Hand, HandShape
 from console.tui.app import HapTableApp
 from console.tui.irview import (
     GREEN,
@@ -78,8 +78,7 @@ def test_hand_outline_green_and_target_yellow_at_scaled_positions():
         center_px=(300.0, 250.0),
         radius_px=150.0,
         angle_deg=0.0,
-        descriptors=np.zeros(3),
-        finger_count=0,
+        shape=HandShape.of(np.zeros(3), 0),
     )
     rgb = ir_rgb(np.zeros((480, 640)), {"hands": (hand,)}, (320, 240), target_px=(600.0, 40.0))
     # the outline's top edge runs along y = 50 from x = 50 to 250 in the scaled image

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from console.core.types import Contact, Hand
+from console.core.types import Contact, Hand, HandShape
 
 R = 40.0  # palm radius (mm = px: the identity mapping, +y ahead of the fingers)
 PALM = np.array([300.0, 200.0])
@@ -100,8 +100,8 @@ def test_a_contact_belongs_to_the_hand_that_holds_it_or_is_near_and_keeps_its_ty
 
     a, b = right_hand(), mirror(right_hand()) + (200.0, 0.0)  # right at x 300, left at 500
     hands = [
-        Hand(a, tuple(PALM), 90.0, FORWARD_UP, np.zeros(4), 0, ()),
-        Hand(b, (500.0, 200.0), 90.0, FORWARD_UP, np.zeros(4), 0, ()),
+        Hand(a, tuple(PALM), 90.0, FORWARD_UP, HandShape.of(np.zeros(4), 0), ()),
+        Hand(b, (500.0, 200.0), 90.0, FORWARD_UP, HandShape.of(np.zeros(4), 0), ()),
     ]
     inside = Contact(0, tuple(at_angle(-14, 1.6)))  # on hand a, not in its vision list
     near = Contact(1, (500.0, 285.0))  # 10 px past b's outline (its top: y 275)

@@ -11,7 +11,7 @@ from pythonosc import osc_packet
 from pythonosc.dispatcher import Dispatcher
 from pythonosc.osc_server import ThreadingOSCUDPServer
 
-from console.core.types import Contact, Gesture, Hand
+from console.core.types import Contact, Gesture, Hand, HandShape
 
 TABLE = (743.46, 447.29)
 
@@ -79,7 +79,13 @@ def check_structure(b, profile):
 def hand(center_mm, angle_deg=30.0, contacts=()):
     c = np.array([[100, 100], [160, 100], [160, 180], [100, 180]], float)
     return Hand(
-        c, (130.0, 140.0), 30.0, angle_deg, np.zeros(4), len(contacts), tuple(contacts), center_mm
+        c,
+        (130.0, 140.0),
+        30.0,
+        angle_deg,
+        HandShape.of(np.zeros(4), len(contacts)),
+        tuple(contacts),
+        center_mm,
     )
 
 

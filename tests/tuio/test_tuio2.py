@@ -19,7 +19,7 @@ from pythonosc.osc_message import OscMessage
 from pythonosc.parsing import osc_types
 
 from console.core.errors import UserError
-from console.core.types import Contact, Hand
+from console.core.types import Contact, Hand, HandShape
 
 TABLE = (743.46, 447.29)
 IMAGE = (640, 480)
@@ -125,7 +125,12 @@ def circle(center_px, r_px, n=720, jitter_px=0.0, seed=0):
 def hand(contour, contacts=()):
     c = contour.mean(0)
     return Hand(
-        contour, (float(c[0]), float(c[1])), 40.0, 0.0, np.zeros(4), len(contacts), tuple(contacts)
+        contour,
+        (float(c[0]), float(c[1])),
+        40.0,
+        0.0,
+        HandShape.of(np.zeros(4), len(contacts)),
+        tuple(contacts),
     )
 
 
