@@ -154,6 +154,8 @@ def _tracks(recs: Sequence[dict], gate_mm: float) -> list[np.ndarray]:
     from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
 
     flat = sum(is_flat(r) for r in recs) * 2 > len(recs)  # one choice for the window
+    if flat:
+        return _flat_track(recs, gate_mm)
     tracks = [[(0, *p)] for p in _points(recs[0], flat)]
     for f, rec in enumerate(recs[1:], start=1):
         cur = _points(rec, flat)
@@ -168,6 +170,48 @@ def _tracks(recs: Sequence[dict], gate_mm: float) -> list[np.ndarray]:
                 tracks[i].append((f, *cur[j]))
     n = len(recs) - 1
     return [np.array(t) for t in tracks if t[-1][0] == n]
+
+
+#: pads whose displacements agree within this (mm) move together
+AGREE_MM = 2.0
+
+
+def consensus_shift(moves: np.ndarray) -> np.ndarray:
+    """The displacement most of ``moves`` ((m, 2) mm) agree on within ``AGREE_MM``:
+    the mean of the largest agreeing group (a pad that split or merged moves its
+    centroid its own way; the pads that stay whole move with the hand)."""
+    d = np.sqrt(((moves[:, None, :] - moves[None, :, :]) ** 2).sum(-1))
+    near = d <= AGREE_MM
+    best = int(np.argmax(near.sum(1) - 1e-6 * np.linalg.norm(moves, axis=1)))
+    return moves[near[best]].mean(0)
+
+
+def _flat_track(recs: Sequence[dict], gate_mm: float) -> list[np.ndarray]:
+    """A flat hand's touching skin as one track: from frame to frame, the displacement
+    its pads matched within ``gate_mm`` agree on (``consensus_shift``: pads that flicker
+    in and out, split or merge move the skin's centroid by millimetres; the pads that
+    stay whole do not), summed from the first frame's centroid."""
+    from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
+
+    start = _points(recs[0], True)
+    if not len(start):
+        return []
+    pos, track = start[0].copy(), [(0, *start[0])]
+    prev = recs[0]["regions_mm"][:, 1:]
+    for f, rec in enumerate(recs[1:], start=1):
+        cur = rec["regions_mm"][:, 1:]
+        if not len(cur) or not len(prev):
+            prev = cur if len(cur) else prev
+            continue
+        d = np.sqrt(((prev[:, None, :] - cur[None, :, :]) ** 2).sum(-1))
+        i, j = linear_sum_assignment(d)
+        ok = d[i, j] <= gate_mm
+        if ok.any():
+            pos = pos + consensus_shift(cur[j[ok]] - prev[i[ok]])
+            track.append((f, *pos))
+        prev = cur
+    n = len(recs) - 1
+    return [np.array(track)] if track[-1][0] == n else []
 
 
 #: how many standard errors of a fitted displacement are taken as jitter

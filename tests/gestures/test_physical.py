@@ -12,6 +12,7 @@ import pytest
 
 from plugins.gestures.features import frame_record, static_size
 from plugins.gestures.physical import (
+    MOTION_NAMES,
     STATIC_NAMES,
     TIP_MM2,
     physical_motion,
@@ -127,3 +128,33 @@ def test_static_and_dynamic_are_told_apart_by_millimetres_on_both_renderers():
         score = fs.score[6]
         assert score[fs.labels == "one_finger"].max() < 3.0, (r, score)
         assert score[fs.labels == "drag"].min() > 6.0, (r, score)
+
+
+def _flat(pads: list[tuple[float, float, float]], shift: tuple[float, float]) -> dict:
+    """A flat hand's record: pads (area mm^2, x mm, y mm) moved by ``shift``."""
+    reg = np.array([(a, x + shift[0], y + shift[1]) for a, x, y in pads], float)
+    return {"touch_mm2": float(reg[:, 0].sum()), "regions_mm": reg, "solidity": 0.8}
+
+
+#: a flat hand's pads: the palm and finger pads
+PALM = (3300.0, 330.0, 270.0)
+PADS = [(465.0, 332.0, 353.0), (235.0, 391.0, 349.0), (370.0, 417.0, 379.0),
+        (475.0, 424.0, 330.0), (345.0, 425.0, 365.0)]  # fmt: skip
+
+
+def test_a_resting_flat_hand_whose_pads_split_and_merge_does_not_move():
+    """Under dim light a flat hand's pads split, merge and flicker from frame to frame
+    (one pad into two 18 mm apart, a pad joining the palm): the skin's centroid jumps
+    by millimetres, the hand does not move. A wipe moving every pad moves as far."""
+    split = [(230.0, 374.0, 358.0), (350.0, 397.0, 388.0)]
+    frames = [
+        [PALM, (600.0, 388.0, 376.0), *PADS],
+        [PALM, *split, *PADS],
+        [PALM, (600.0, 388.0, 376.0), *PADS[1:]],
+        [(3800.0, 334.0, 281.0), *split, *PADS[1:]],
+        [PALM, *split, *PADS],
+    ]
+    rest = physical_motion([_flat(p, (0.0, 0.0)) for p in frames])
+    assert rest[MOTION_NAMES.index("track_dmax_mm")] < 0.5
+    wipe = physical_motion([_flat(p, (5.0 * i, 0.0)) for i, p in enumerate(frames)])
+    assert wipe[MOTION_NAMES.index("track_dmax_mm")] == pytest.approx(20.0, abs=0.5)
