@@ -27,7 +27,6 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -40,6 +39,7 @@ from console.kernel.output_settings import refusal, settings_key
 from console.kernel.scheduler import PlayReport
 from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
 from console.kernel.tables import Table, describe_latch, private_table, table_for
+from console.kernel.twin_record import SwitchRecord, TwinRecord
 from console.safety import GateEvent, Limits
 from console.safety.scope import ScopeTrace
 
@@ -53,30 +53,6 @@ def latched_line(table: Table, latched: dict[str, Any] | str) -> str:
         f"table {table.name}: e-stop latched ({why}); nothing plays until an operator "
         f"resets it: `haptable reset` at a terminal, or ctrl+r in the console"
     )
-
-
-@dataclass(frozen=True)
-class SwitchRecord:
-    """A relay switch of the twin's board: when, which, and the level at the amplifiers."""
-
-    t_s: float
-    clock: int
-    channel: int
-    closed: bool
-    level_v: tuple[float, ...]
-
-
-@dataclass(frozen=True)
-class TwinRecord:
-    """What the twin's amplifiers and relays got, kept when outputs close (twin logs)."""
-
-    recording_v: np.ndarray | None
-    relay_log: list[SwitchRecord] | None
-    events: list[GateEvent]
-    estop_reason: str
-    latency_samples: int
-    #: the twin DAC's underruns: (clock the gap fell before, its length in samples)
-    underruns: tuple[tuple[int, int], ...] = ()
 
 
 class RemoteStream:
@@ -534,6 +510,17 @@ class Outputs:
         """Ramp down what this process plays and drop what it queued (no e-stop)."""
         with contextlib.suppress(SafetyRefusal):
             self._call("release", reason=reason, timeout_s=5.0)
+
+    def hold(self, who: str) -> None:
+        """Hold the table's outputs for a run that must not be mixed with other sounds:
+        every other process's plays, relay settings and streams are refused naming
+        ``who`` until ``unhold`` (or this process leaves); ``SafetyRefusal`` if another
+        process holds them."""
+        self._call("hold", who=who, timeout_s=5.0)
+
+    def unhold(self) -> None:
+        with contextlib.suppress(SafetyRefusal):
+            self._call("unhold", timeout_s=5.0)
 
     # ------------------------------------------------------------------ safety
     @property

@@ -75,10 +75,38 @@ def forget(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
     return None
 
 
+def hold(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
+    """A run that must not be mixed with other sounds (a participant's study run): until
+    this client lets go (``unhold``) or leaves, every other client's plays, relay
+    settings and streams are refused, naming the run. One holder at a time; an e-stop
+    still silences everything."""
+    who = str(h.get("who") or c.label())[:200]
+    if k.holder is not None and k.holder[0] != c.cid:
+        raise SafetyRefusal(f"refused: {k.holder[1]} holds the outputs; stop it there first")
+    k.holder = (c.cid, who)
+    return {"ok": True}
+
+
+def unhold(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
+    if k.holder is not None and k.holder[0] == c.cid:
+        k.holder = None
+    return {"ok": True}
+
+
+def _not_held(k: Kernel, c: Client, what: str) -> None:
+    """``SafetyRefusal`` naming the run when another client holds the outputs."""
+    held = k.holder
+    if held is not None and held[0] != c.cid:
+        raise SafetyRefusal(
+            f"{what}: refused: {held[1]} holds the outputs (pause or stop it there first)"
+        )
+
+
 def play(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     got = c.plans.get(_int(h, "plan"))
     if got is None:
         return {"error": f"plan {h.get('plan')!r} is not checked here; send it first"}
+    _not_held(k, c, got[0].name or "plan")
     j = k.new_id()
     c.jobs[j] = k.scheduler.play(got[0], owner=c.cid, on_change=k.job_listener(c, j))
     k.plays.append((_play_words(j, got[0], c), c.jobs[j]))
@@ -101,6 +129,7 @@ def _play_words(job: int, checked: Any, c: Client) -> dict[str, Any]:
 
 
 def prearm(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
+    _not_held(k, c, "relays")
     j = k.new_id()
     rep = k.scheduler.prearm(
         _patches(h.get("patches")),
@@ -128,6 +157,7 @@ def relays(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
     closed = h.get("closed")
     if not isinstance(closed, list) or len(closed) > 64 or not all(type(x) is int for x in closed):
         raise ValueError("'closed' must be a list of relay channel numbers")
+    _not_held(k, c, "relays")
     j = k.new_id()
     c.jobs[j] = k.scheduler.set_relays(
         frozenset(closed), owner=c.cid, on_change=k.job_listener(c, j)
@@ -147,8 +177,9 @@ def stream(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
     from console.signals.stream_synth import StreamSpec
 
     spec = StreamSpec.from_json(h.get("spec"))
-    j = k.new_id()
     name = str(h.get("name", "stream"))[:100]
+    _not_held(k, c, name)
+    j = k.new_id()
     rep, synth = k.scheduler.stream(spec, name, owner=c.cid, on_change=k.job_listener(c, j))
     c.jobs[j] = rep
     c.streams[j] = synth
@@ -281,6 +312,8 @@ REQUESTS: dict[str, Request] = {
         plan,
         forget,
         play,
+        hold,
+        unhold,
         prearm,
         disarm,
         relays,

@@ -99,6 +99,9 @@ class Kernel:
         self._request_s: dict[str, tuple[int, float, float]] = {}  # op -> (n, total, max)
         #: the last plays, whoever asked: (what the scope says of it, its PlayReport)
         self.plays: collections.deque = collections.deque(maxlen=PLAYS_KEPT)
+        #: a run that must not be mixed with other sounds: (client id, who), or None;
+        #: only that client plays, sets relays or streams until it lets go or leaves
+        self.holder: tuple[int, str] | None = None
         self._events: queue.SimpleQueue = queue.SimpleQueue()
         self._gate_lock = threading.Lock()  # the gate appears; an early e-stop latches
         self._quit = threading.Event()
@@ -486,6 +489,8 @@ class Kernel:
             self._last_client_s = time.monotonic()
         c.gone.set()
         c.out.put(None)
+        if self.holder is not None and self.holder[0] == c.cid:
+            self.holder = None
         if self.scheduler is not None:
             self.scheduler.abort_owner(c.cid, f"{c.label()}: {why}")
         for synth in c.streams.values():
@@ -546,6 +551,7 @@ class Kernel:
                 "private": self.table.private,
                 "fast": self.fast,
                 "clients": [c.label() for c in self.client_list()],
+                "holder": self.holder[1] if self.holder else None,
                 "plans_checked": sch.plans_checked,
                 "requests": {
                     op: {"n": n, "mean_ms": round(t / n * 1e3, 3), "max_ms": round(m * 1e3, 3)}

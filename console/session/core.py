@@ -253,15 +253,25 @@ class ConsoleSession:
     def hold_outputs(self, who: str):
         """``with session.hold_outputs("P01's study run (Studies screen)") as token:``
         a run that must not be mixed with other sounds holds the outputs: while it does,
-        the screens' plays and auditions are refused, saying who holds them; the run
-        plays with ``play_plan(plan, holder=token)``. One holder at a time."""
+        the screens' plays and auditions are refused, saying who holds them, and so are
+        other processes' (the table's kernel holds them too: ``haptable play`` from a
+        shell is refused); the run plays with ``play_plan(plan, holder=token)``. One
+        holder at a time."""
         with self._lock:
             if self._holder is not None:
                 raise UserError(f"{self._holder} holds the outputs: stop it first")
             self._holder = who
+        out = self.outputs
         try:
+            if out is not None and hasattr(out, "hold"):  # other processes too
+                try:
+                    out.hold(who)
+                except SafetyRefusal as exc:
+                    raise UserError(str(exc)) from None
             yield who
         finally:
+            if out is not None and hasattr(out, "unhold"):
+                out.unhold()
             with self._lock:
                 self._holder = None
 

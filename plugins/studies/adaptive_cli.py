@@ -37,6 +37,7 @@ from .adaptive_run import (
     run_trials,
     simulated_answer,
 )
+from .hold import hold_for_run
 from .plan import participant_seed
 from .quest import QuestTrack
 from .records import MAX_SEED
@@ -191,6 +192,7 @@ def run(
     summaries = []
     try:
         with ctx.outputs(fast=True if args.simulate else None) as outputs:
+            hold_for_run(outputs, args.study)
             for pid in ids:
                 root = participant_dir(args.out, pid)
                 pseed = participant_seed(proto, pid) if seed is None else seed

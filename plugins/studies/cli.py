@@ -24,6 +24,7 @@ from console.plugin_api import UserError, load_map
 from . import analyze_cli
 from . import protocol as protocols
 from .analyze_cli import add_parser
+from .hold import hold_for_run
 from .plan import check_seed_row
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
@@ -237,6 +238,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
 
     summaries = []
     with ctx.outputs(fast=True if args.simulate else None) as outputs:
+        hold_for_run(outputs, args.study)
         signal.signal(signal.SIGINT, on_int)
         try:
             for pid in ids:
