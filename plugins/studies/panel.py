@@ -52,6 +52,7 @@ from console.plugin_api.tui import (
     escape,
     said_here,
     show_keys,
+    status_said,
 )
 
 from . import adaptive_console, panel_fit, panel_status
@@ -667,8 +668,7 @@ class StudiesPane(Vertical):
         """The outcome of the experimenter's own key or button, on this screen's status
         (its one place: logged, a toast only while the screen is not in view)."""
         self.said = (text, severity)
-        if severity != "information":
-            said_here(self, "Studies", text, severity)
+        status_said(self, "Studies", text, severity)  # news logged, an error toasted if hidden
         self._status(self._status_text)
 
     def on_mount(self) -> None:
