@@ -6,6 +6,8 @@ camera starting and stopping as the screens that watch it show and hide."""
 
 from __future__ import annotations
 
+import time
+
 from console.session.events import SessionEvent, Started, Stopped
 from console.tui.said import log_said
 
@@ -13,6 +15,10 @@ __all__ = ["event_line", "log_event"]
 
 #: the camera stopping for this reason follows the screens: not news
 QUIET_STOPS = {("camera", "nobody watches")}
+#: the same line again this soon is one event heard twice (an e-stop latched by the
+#: console is reported by the session and again by the table's kernel)
+ECHO_S = 2.0
+_last: list = [None, -1e9]  # the last line logged, when
 
 
 def event_line(ev: SessionEvent) -> tuple[str, str] | None:
@@ -36,8 +42,13 @@ def event_line(ev: SessionEvent) -> tuple[str, str] | None:
     return None
 
 
-def log_event(ev: SessionEvent) -> None:
-    """``ev`` into the log as ``session: ...`` when it is news (``event_line``)."""
+def log_event(ev: SessionEvent, now: float | None = None) -> bool:
+    """``ev`` into the log as ``session: ...`` when it is news (``event_line``) and not
+    the same line again within ``ECHO_S``; returns whether it was logged."""
     said = event_line(ev)
-    if said is not None:
-        log_said("session", *said)
+    now = time.monotonic() if now is None else now
+    if said is None or (said[0] == _last[0] and now - _last[1] < ECHO_S):
+        return False
+    _last[:] = [said[0], now]
+    log_said("session", *said)
+    return True

@@ -16,7 +16,7 @@ from console.session.events import Progress, Snapshot, Started, Stopped
 from console.tui.app import HapTableApp
 from console.tui.logs import ViewHandler
 from console.tui.said import PROGRESS_S, log_status
-from console.tui.session_log import event_line
+from console.tui.session_log import ECHO_S, event_line, log_event
 
 from .conftest import wait_for
 from .test_screens import _ready
@@ -101,3 +101,13 @@ def test_starts_and_stops_are_news_snapshots_and_the_camera_following_screens_ar
     assert event_line(Started("camera")) is None
     assert event_line(Stopped("camera", reason="nobody watches")) is None
     assert event_line(Stopped("camera", reason="in use by demo flow")) is not None
+
+
+def test_an_estop_heard_twice_is_logged_once():
+    """The console's ctrl+e is reported by the session and again by the table's kernel."""
+    ev = Stopped("estop", reason="operator e-stop (console)")
+    assert log_event(ev, now=1000.0)
+    assert not log_event(ev, now=1000.05)
+    assert log_event(Started("estop", detail="reset"), now=1001.0)
+    assert log_event(ev, now=1002.0)  # a second e-stop after the reset
+    assert log_event(ev, now=1002.0 + ECHO_S)
