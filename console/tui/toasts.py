@@ -83,10 +83,15 @@ class NewestToastOnly:
             rack = self.screen.get_child_by_type(ToastRack)
         except (ScreenStackError, NoMatches):
             return
+        self.call_later(self._show_fitted, rack)
+
+    def _show_fitted(self, rack: ToastRack) -> None:
+        """``rack`` shows the notifications as they are when it runs (a newer one may
+        have replaced them since it was asked), each fitted to the row."""
         shown = Notifications()
         for note in self._notifications:
             shown.add(self._fitted(note))
-        self.call_later(rack.show, shown)
+        rack.show(shown)
 
     async def _on_resize(self, event) -> None:
         """The toast shown cut again for the new width."""
