@@ -18,7 +18,9 @@ What it offers:
   (from the time so far and the fraction done)
 - paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
-  a toast only when the screen is not in view; the console's rule, ``console.tui.said``);
+  a toast only when the screen is not in view; the console's rule, ``console.tui.said``),
+  ``status_said`` (whatever a status line now says: an error as ``said_here``, news
+  into the log);
   ``lapse`` and ``lapse_if_held`` (a status line true only for a while, or while a run
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
@@ -36,7 +38,7 @@ from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar
-from console.tui.said import said_here
+from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 from console.tui.time_left import Pace, left_words, seconds_left
@@ -54,6 +56,7 @@ __all__ = [
     "SessionMessage",
     "escape",
     "said_here",
+    "status_said",
     "lapse",
     "lapse_if_held",
     "show_keys",

@@ -39,6 +39,7 @@ from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
 from console.tui.safety_bar import SafetyBar, still_latched
+from console.tui.session_log import log_event
 from console.tui.session_messages import SessionMessage
 from console.tui.toasts import NewestToastOnly
 from console.tui.typed import TypedHistory
@@ -390,6 +391,7 @@ class HapTableApp(NewestToastOnly, App):
 
     def on_session_message(self, message: SessionMessage) -> None:
         ev = message.event
+        log_event(ev)  # its starts and stops in the log (console.tui.session_log)
         if isinstance(ev, Failed) and not self._says_it(ev):
             title = "refused" if ev.name == "refused" else ev.topic
             # one line, the title with it: the log (ctrl+l) keeps what the toast said

@@ -31,7 +31,7 @@ from textual.worker import get_current_worker
 
 from console.core.errors import UserError
 from console.tui.kept_text import wrap_kept
-from console.tui.said import said_here, screen_name
+from console.tui.said import log_status, said_here, screen_name
 from console.tui.time_left import left_words, seconds_left
 from console.tui.util import from_thread
 
@@ -104,8 +104,11 @@ class LongWork(Horizontal):
         return float(bar.progress) if bar.display else None
 
     def show(self, text: str, frac: float | None = None, *, error: bool = False) -> None:
-        """Status line (and the bar at ``frac``; hidden with None)."""
+        """Status line (and the bar at ``frac``; hidden with None); its news in the log
+        (an error by ``error``; its ticks not: ``console.tui.said.log_status``)."""
         self.text = text
+        if not error:
+            log_status(screen_name(self, self.name_running or self.last_name or "long work"), text)
         label = self.query_one(Label)
         label.update(wrap_kept(text, label.size.width))  # "45 MB" never split
         label.set_class(error, "error")

@@ -9,16 +9,33 @@ Whatever the console says, on a status line or as a toast, is also a record of l
 ``haptable.console`` (the log view, ``ctrl+l``, and ``console.log``): a failure seen
 once is still there after its line was replaced or its toast went. Such records are
 marked ``on_screen``: ``console.tui.logs.NotifyHandler`` never shows them again.
+A status line's every new message is logged (``log_status``: what the operator read, in
+order, to reconstruct a session), but not its ticks: a line that differs from the last
+one logged for its screen in its numbers only (``measuring 34 %, 12 s left``) is logged
+again only after ``PROGRESS_S``.
 """
 
 from __future__ import annotations
 
 import logging
+import re
+import threading
+import time
 from typing import Any, Protocol, runtime_checkable
 
 from textual.dom import DOMNode
 
-__all__ = ["LOGGER", "ShowsWidgets", "log_said", "screen_name", "shows_now", "said_here"]
+__all__ = [
+    "LOGGER",
+    "PROGRESS_S",
+    "ShowsWidgets",
+    "log_said",
+    "log_status",
+    "screen_name",
+    "shows_now",
+    "said_here",
+    "status_said",
+]
 
 LOGGER = "haptable.console"
 _log = logging.getLogger(LOGGER)
@@ -32,6 +49,41 @@ def log_said(where: str, text: str, severity: str = "error") -> None:
     log, at the level of ``severity`` (``information``, ``warning``, ``error``)."""
     level = _LEVELS.get(severity, logging.INFO)
     _log.log(level, "%s: %s", where, " ".join(str(text).split()), extra={"on_screen": True})
+
+
+#: a status line differing from the last one logged for its screen in its numbers only
+#: is progress: logged again after this many seconds (a tick of work, not news)
+PROGRESS_S = 30.0
+_NUMBER = re.compile(r"\d+(?:[.,]\d+)*")
+_last_status: dict[str, tuple[str, float]] = {}  # where -> (shape, when logged)
+_status_lock = threading.Lock()
+
+
+def log_status(where: str, text: str, now: float | None = None) -> bool:
+    """A screen's status line, now ``text``, into the log as information (``status
+    Vibration: point 51 played``), unless it is the last line logged for ``where`` again
+    or that line with other numbers, within ``PROGRESS_S`` (a redraw or a tick). Returns
+    whether it was logged."""
+    line = " ".join(str(text).split())
+    if not line:
+        return False
+    if not _remember(where, line, now, repeat_ok=False):
+        return False
+    log_said(f"status {where}", line, "information")
+    return True
+
+
+def _remember(where: str, line: str, now: float | None, repeat_ok: bool) -> bool:
+    """``line`` as the last one logged for ``where``; False (nothing changed) when it
+    repeats the last one, numbers aside, within ``PROGRESS_S`` and not ``repeat_ok``."""
+    now = time.monotonic() if now is None else now
+    shape = _NUMBER.sub("#", line)
+    with _status_lock:
+        last = _last_status.get(where)
+        if not repeat_ok and last is not None and last[0] == shape and now - last[1] < PROGRESS_S:
+            return False
+        _last_status[where] = (shape, now)
+    return True
 
 
 def screen_name(widget: DOMNode, default: str) -> str:
@@ -65,5 +117,16 @@ def said_here(widget: Any, where: str, text: str, severity: str = "error") -> No
     logged; a toast too when the operator does not see that screen now (work that
     finished after they moved on)."""
     log_said(f"status {where}", text, severity)
+    _remember(where, " ".join(str(text).split()), None, repeat_ok=True)
     if not shows_now(widget):
         widget.app.notify(f"{where}: {text}", severity=severity, timeout=8, logged=True)
+
+
+def status_said(widget: Any, where: str, text: str, severity: str = "information") -> None:
+    """A screen's status line now says ``text``: a warning or an error as ``said_here``
+    (logged, a toast when the screen is not in view); information into the log only,
+    news and not ticks (``log_status``)."""
+    if severity in ("warning", "error"):
+        said_here(widget, where, text, severity)
+    else:
+        log_status(where, text)

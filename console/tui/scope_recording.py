@@ -26,6 +26,7 @@ from console.core.words import AT_CONSOLE, worded
 from console.tui.charts import Chart, Series
 from console.tui.path_field import recording_field
 from console.tui.recording_view import open_run
+from console.tui.said import log_status
 from console.tui.util import from_thread, short_path
 
 REPLAY_ACTIONS = {"plan_step", "replay_live", "gate_events"}
@@ -200,6 +201,7 @@ class ScopeRecordingMixin:
 
     def _say(self, text: str) -> None:
         self.said_head = text
+        log_status("Scope", text)  # what became of o, in the log too
         self.query_one("#scope-head", Static).update(text)
         self._head = text
 

@@ -1,30 +1,70 @@
 """The title row's notification: one, the newest, whatever said it (an e-stop latched
 by the kernel's watchdog or a shell, a log record, the operator's own keys); a longer
-one ends in "…" (``console.tcss``), the log (ctrl+l) has it whole.
+one is cut after its last whole word that fits and ends in "…", the log (ctrl+l) has
+it whole.
 
 Textual keeps every notification until its timeout and shows each in a holder of its
 own (``console.tcss`` shows the last holder only): an older toast went on showing
-beside the newer one, cut mid-word, and an e-stop's outlived the reset that followed.
-Here a new notification first removes the older ones and their holders."""
+beside the newer one, and an e-stop's outlived the reset that followed. Here a new
+notification first removes the older ones and their holders. Textual's own cut
+(``text-overflow: ellipsis``) falls mid-word: the message is fitted to the row here, at
+a word, when it comes and again when the terminal's width changes."""
 
 from __future__ import annotations
 
-from textual.widgets._toast import ToastHolder
+from dataclasses import replace
+
+from rich.cells import cell_len
+from textual.app import ScreenStackError
+from textual.content import Content
+from textual.css.query import NoMatches
+from textual.notifications import Notification, Notifications
+from textual.widgets._toast import Toast, ToastHolder, ToastRack
 
 from console.tui.said import log_said
+
+__all__ = ["TOAST_FRAME", "NewestToastOnly", "fit_words"]
+
+#: columns of the row a toast's text cannot use: its left border and its padding
+#: (``Toast`` in ``console.tcss``: ``padding: 0 1``, Textual's ``border-left``)
+TOAST_FRAME = 3
+ELLIPSIS = "…"
+
+
+def fit_words(text: Content, width: int) -> Content:
+    """``text`` (one line) in ``width`` cells: whole when it fits, else up to the end of
+    its last word that leaves room for ``…`` (a first word wider than that is cut)."""
+    text = Content(" ").join(text.split("\n")) if "\n" in text.plain else text
+    plain = text.plain
+    if cell_len(plain) <= width:
+        return text
+    room = max(width - 1, 0)
+    end = 0
+    while end < len(plain) and cell_len(plain[: end + 1]) <= room:
+        end += 1
+    if end < len(plain) and not plain[end].isspace():  # mid-word: back to the last space
+        space = plain.rfind(" ", 0, end)
+        if space > 0 and plain[:space].strip():
+            end = space
+    return text[:end].rstrip() + ELLIPSIS
 
 
 class NewestToastOnly:
     """The app's ``notify``: literal text (profile keys keep their ``[brackets]``:
-    ``console/tui/text.py``), in the log too, the newest replacing every older one."""
+    ``console/tui/text.py``), in the log too, the newest replacing every older one,
+    its toast fitted to the title row at a word (the notification keeps it whole)."""
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written; ``markup=True`` for a template with its
         values escaped. Every toast is in the log too (``ctrl+l``: ``console.tui.said``);
         ``logged=True``: it is there already (a log record or a status line shown as a
-        toast)."""
+        toast). A ``title`` goes before the message on its one row."""
+        title = kw.pop("title", "")
         if not kw.pop("logged", False):
-            log_said("toast", message, kw.get("severity", "information"))
+            said = f"{title}: {message}" if title else message
+            log_said("toast", said, kw.get("severity", "information"))
+        if title:
+            message = f"{Content(title).markup}: {message}" if markup else f"{title}: {message}"
         super().notify(message, markup=markup, **kw)
 
     def _on_notify(self, event) -> None:
@@ -34,3 +74,37 @@ class NewestToastOnly:
         for holder in self.screen.query(ToastHolder):
             holder.remove()
         super()._on_notify(event)
+
+    def _refresh_notifications(self) -> None:
+        """Textual's, the toast rack given copies of the notifications (the same
+        identities: Textual expires and removes them as its own) with their text fitted
+        to the row; the app keeps them whole."""
+        try:
+            rack = self.screen.get_child_by_type(ToastRack)
+        except (ScreenStackError, NoMatches):
+            return
+        self.call_later(self._show_fitted, rack)
+
+    def _show_fitted(self, rack: ToastRack) -> None:
+        """``rack`` shows the notifications as they are when it runs (a newer one may
+        have replaced them since it was asked), each fitted to the row."""
+        shown = Notifications()
+        for note in self._notifications:
+            shown.add(self._fitted(note))
+        rack.show(shown)
+
+    async def _on_resize(self, event) -> None:
+        """The toast shown cut again for the new width."""
+        await super()._on_resize(event)
+        whole = {n.identity: n for n in self._notifications}
+        for toast in self.screen.query(Toast):
+            note = whole.get(toast._notification.identity)
+            if note is not None:
+                toast._notification = self._fitted(note)
+                toast.refresh(layout=True)
+
+    def _fitted(self, note: Notification) -> Notification:
+        """A copy of ``note`` whose text fits the title row, cut at a word."""
+        text = Content.from_markup(note.message) if note.markup else Content(note.message)
+        fitted = fit_words(text, max(self.size.width - TOAST_FRAME, 1))
+        return replace(note, message=fitted.markup, markup=True)

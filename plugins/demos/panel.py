@@ -26,7 +26,7 @@ from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
-from console.plugin_api.tui import LongWork, SessionMessage, escape, lapse, said_here
+from console.plugin_api.tui import LongWork, SessionMessage, escape, lapse, said_here, status_said
 
 from .projector_line import status_text
 from .status import estop_text, status_lines
@@ -250,8 +250,7 @@ class ScenesPane(Vertical):
     def _say(self, text: str, severity: str = "information") -> None:
         """What became of this screen's own demo key, on the demos' line."""
         self.query_one("#demo-work", LongWork).show(text, error=severity == "error")
-        if severity != "information":
-            said_here(self, "Scenes", text, severity)
+        status_said(self, "Scenes", text, severity)  # news logged, an error toasted if hidden
 
     def _start(self, name: str) -> None:
         self._asked_scene, self._scene_error = name, ""

@@ -26,8 +26,8 @@ from console.plugin_api.tui import (
     escape,
     from_thread,
     lapse_if_held,
-    said_here,
     show_keys,
+    status_said,
 )
 
 FREQ_RANGE_HZ = (10.0, 1000.0)
@@ -295,8 +295,8 @@ class ElectrostaticPane(Vertical):
         if found:
             found.first(Static).update(text)
             found.first(Static).set_class(error, "error")
-            if error:  # in the log too; a toast only while the screen is not in view
-                said_here(found.first(Static), "Electrostatic", text)
+            # in the log too; an error as a toast while the screen is not in view
+            status_said(found.first(Static), "Electrostatic", text, "error" if error else "")
             # a refusal because a run holds the outputs leaves the line when the run ends
             lapse_if_held(self, self.app.session, lambda: self.status_text, text, self.say)
 

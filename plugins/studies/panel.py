@@ -52,6 +52,7 @@ from console.plugin_api.tui import (
     escape,
     said_here,
     show_keys,
+    status_said,
 )
 
 from . import adaptive_console, panel_fit, panel_status
@@ -59,6 +60,7 @@ from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
 from .panel_text import (
+    HELP,
     NUMBER_FIELDS,
     default_out,
     field_refusal,
@@ -109,28 +111,7 @@ class StudiesPane(Vertical):
     StudiesPane #analysis-notes-box.-open #analysis-notes { text-wrap: wrap; }
     StudiesPane #analysis-report { height: auto; }
     """
-    HELP_TEXT = (
-        "Pick the protocol, the participant and the folder; a person needs age,\n"
-        "sex, handedness, hand size and the consent noted (a simulated one not).\n"
-        "s / Start     start (or resume: the same participant continues where it\n"
-        "              stopped); refused during an e-stop (ctrl+r resets it)\n"
-        "p             pause after this trial / resume\n"
-        "r             replay the stimulus (within the phase's replays)\n"
-        "a             abort: a again within 3 s (the trial in flight is repeated\n"
-        "              on resume)\n"
-        "n / Analyse   analyse the folder's runs of this protocol: the report\n"
-        "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
-        "t             show the trials / the analysis\n"
-        "[ / ]         an adaptive run's plot: previous / next track (t: the plot in\n"
-        "              the analysis's place); + correct, x wrong, ◆ reversal\n"
-        "o             the analysis's notes: all of them / one line\n"
-        "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2:\n"
-        "              left to right / right to left (experiment 1)\n"
-        "1..7          a questionnaire score; an adaptive trial: the interval (1..3)\n"
-        "escape        leave a text field (what was typed stays)\n"
-        "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
-        "none loaded or kept, s measures the twin's grid first."
-    )
+    HELP_TEXT = HELP
     BINDINGS = [
         Binding("s", "start", "start"),
         Binding("p", "pause", "pause"),
@@ -667,8 +648,7 @@ class StudiesPane(Vertical):
         """The outcome of the experimenter's own key or button, on this screen's status
         (its one place: logged, a toast only while the screen is not in view)."""
         self.said = (text, severity)
-        if severity != "information":
-            said_here(self, "Studies", text, severity)
+        status_said(self, "Studies", text, severity)  # news logged, an error toasted if hidden
         self._status(self._status_text)
 
     def on_mount(self) -> None:

@@ -1,4 +1,4 @@
-"""What the Studies screen works out beside its widgets: a protocol's default results
+"""What the Studies screen says and works out beside its widgets: its help, a protocol's default results
 folder, the next participant's id, a trial in words, a text clipped to a column, the
 status block of a run."""
 
@@ -10,6 +10,31 @@ from typing import Any
 
 from console.plugin_api import data_dir
 from console.plugin_api.tui import escape
+
+#: the Studies screen's help (``?``): plain text, keys first (``console.tui.help``)
+HELP = (
+    "Pick the protocol, the participant and the folder; a person needs age,\n"
+    "sex, handedness, hand size and the consent noted (a simulated one not).\n"
+    "s / Start     start (or resume: the same participant continues where it\n"
+    "              stopped); refused during an e-stop (ctrl+r resets it)\n"
+    "p             pause after this trial / resume\n"
+    "r             replay the stimulus (within the phase's replays)\n"
+    "a             abort: a again within 3 s (the trial in flight is repeated\n"
+    "              on resume)\n"
+    "n / Analyse   analyse the folder's runs of this protocol: the report\n"
+    "              (<folder>/<protocol>-report.html) and the ANOVA table\n"
+    "t             show the trials / the analysis\n"
+    "[ / ]         an adaptive run's plot: previous / next track (t: the plot in\n"
+    "              the analysis's place); + correct, x wrong, ◆ reversal\n"
+    "o             the analysis's notes: all of them / one line\n"
+    "arrows        answer up/down/left/right (a keypad: 8 2 4 6); 1 / 2:\n"
+    "              left to right / right to left (experiment 1)\n"
+    "1..7          a questionnaire score (up to 9 on a protocol's longer\n"
+    "              scale); an adaptive trial: the interval (1..3)\n"
+    "escape        leave a text field (what was typed stays)\n"
+    "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
+    "none loaded or kept, s measures the twin's grid first."
+)
 
 
 def default_out(study: str = "") -> Path:

@@ -26,7 +26,7 @@ from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
-from console.tui.said import said_here
+from console.tui.said import status_said
 from console.tui.selftest_action import run_selftest, selftest_estimate, selftest_row
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
@@ -651,8 +651,7 @@ class DevicesPane(VerticalScroll):
             line.update(text)
             line.display = bool(text)
             line.set_class(error, "error")
-            if severity:
-                said_here(line, "Devices", text, severity)
+            status_said(line, "Devices", text, severity or "information")
             # a refusal because a run holds the outputs leaves the line when it ends
             lapse_if_held(self, self.app.session, lambda: self.result, text, self._show_result)
             self.call_after_refresh(self._focused_in_view)

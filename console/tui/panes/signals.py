@@ -33,7 +33,7 @@ from console.tui.charts import Chart, Series
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse
 from console.tui.list_keys import KeyedList
-from console.tui.said import said_here
+from console.tui.said import status_said
 from console.tui.util import from_thread
 
 DEFAULT_EXPR = BUILTIN["tone-250"].expr
@@ -176,8 +176,8 @@ class SignalsPane(Vertical):
         w.update(Text(line))  # literal: "[limits]" in a message is no markup
         w.set_class(error, "error")
         self._status_line = line
-        if error:  # in the log too; a toast only when this screen is not in view
-            said_here(w, "Signals", line)
+        # in the log too; an error as a toast when this screen is not in view
+        status_said(w, "Signals", line, "error" if error else "information")
         if self.preview is None:
             self._show_no_signal()
 

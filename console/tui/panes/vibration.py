@@ -48,7 +48,7 @@ from console.tui.panes.vibration_words import (
 )
 from console.tui.plots import frf_series
 from console.tui.roving_view import RovingView, add_accelerometer_text
-from console.tui.said import said_here
+from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
@@ -199,8 +199,7 @@ class VibrationPane(VerticalScroll):
         label = self.query_one("#vib-status", Label)
         label.update(text)
         label.set_class(error, "error")
-        if error:  # in the log too; a toast only when this screen is not in view
-            said_here(label, "Vibration", text)
+        status_said(label, "Vibration", text, "error" if error else "information")  # logged
         bar = self.query_one("#vib-progress", ProgressBar)
         bar.display = progress is not None
         if progress is not None:
