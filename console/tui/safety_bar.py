@@ -87,8 +87,10 @@ def describe(
         f" | also e-stopped: {named} (reset in its console or `haptable reset`)",
         f" | also e-stopped: {named}",
         f" | +e-stop: {named}",
+        f" | +{len(others)} e-stopped",
     ]
     variants = [_describe(status, None, names, k)[0] for k in range(_variants(status))]
+    # the others' names give way (to their count) before this table's live level does
     return _fit([v + e for v in variants for e in ends], width), kind
 
 

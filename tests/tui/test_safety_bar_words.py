@@ -45,3 +45,21 @@ def test_the_bar_never_cuts_a_word_at_any_width():
     for width in range(30, 100):
         text, _ = describe(status, width)
         assert len(text) <= width and _whole_words(text, full_text), (width, text)
+
+
+def test_other_tables_e_stopped_never_hide_the_live_level_at_80():
+    """A shell's `haptable estop` latched other tables too; this one, reset, plays: at
+    80 columns the bar keeps its live level and says the others are e-stopped."""
+    status = {
+        "gate": {
+            "estopped": False,
+            "estop_reason": "",
+            "relays_closed": [1, 2, 3, 4],
+            "level_v": [12.3, 0.0],
+        },
+        "busy": True,
+        "latched_elsewhere": ["haptable-lab", "sim-4ch"],
+    }
+    text, kind = describe(status, 80)
+    assert kind == "live" and len(text) <= 80
+    assert "piezo +12 V" in text and "e-stopped" in text, text
