@@ -243,7 +243,10 @@ def run(
                         )
 
                 if not args.json:
-                    print(f"{pid}: {proto.name} -> {root}", flush=True)
+                    print(
+                        f"{pid}: {proto.name} -> {root}; {proto.size_line(not args.simulate)}",
+                        flush=True,
+                    )
                 aborted = False
                 try:
                     state = run_trials(

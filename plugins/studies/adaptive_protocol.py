@@ -111,6 +111,18 @@ class AdaptiveProtocol:
     def n_intervals(self) -> int:
         return pf.INTERVALS[self.procedure["task"]]
 
+    def size_line(self, person: bool = True, answer_s: float = 1.0) -> str:
+        """What a run is before it starts: its trials at most and, for a person, their
+        time at the stimulus' pace (intervals and gaps, ``answer_s`` to answer each)."""
+        st, n = self.stimulus, len(self.tracks)
+        most = n * self.procedure["max_trials"]
+        line = f"at most {most} trials ({n} tracks x {self.procedure['max_trials']})"
+        if not person:
+            return line
+        k = self.n_intervals
+        trial_s = k * st["interval_s"] + (k - 1) * st["gap_s"] + answer_s
+        return f"{line}, about {trial_s:.1f} s each: up to {most * trial_s / 60:.0f} min"
+
 
 def track_name(freq_hz: float, waveform: str) -> str:
     return f"{waveform}_{freq_hz:g}Hz"

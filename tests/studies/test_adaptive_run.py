@@ -102,3 +102,15 @@ def test_kill_9_mid_run_resumes_with_the_same_posterior_and_next_level(tmp_path)
     assert lo <= curve["threshold_db"][0] <= hi and curve["procedure"] == "quest+ 2afc weibull"
     truth = json.loads((d / "participant.json").read_text())["observer"]["tracks"]["sine_120Hz"]
     assert abs(curve["threshold_db"][0] - truth["threshold_db"]) < 8  # 14 trials: roughly
+
+
+def test_a_run_says_its_size_before_it_starts():
+    """16 tracks of at most 80 2AFC trials (two 0.5 s intervals, a 0.4 s gap, ~1 s to
+    answer): a person's run says 1280 trials and up to 51 min before the first."""
+    from plugins.studies import adaptive_protocol as ap
+
+    proto = ap.load(ROOT / "studies" / "threshold_electrovibration.toml")
+    assert proto.size_line() == (
+        "at most 1280 trials (16 tracks x 80), about 2.4 s each: up to 51 min"
+    )
+    assert proto.size_line(person=False) == "at most 1280 trials (16 tracks x 80)"
