@@ -639,10 +639,7 @@ class HapTableApp(NewestToastOnly, App):
         yield SystemCommand(
             "Measure vibration map",
             "simulated vibrometer on the twin",
-            lambda: (
-                self.action_show_tab("vibration"),
-                self.ensure_pane("vibration").action_measure(),
-            ),
+            self._measure_from_palette,
         )
         for name, reg in sorted(self.ctx.pm.of("panel").items()):
             if reg.tab is not None:  # a tab: opened above
@@ -652,6 +649,12 @@ class HapTableApp(NewestToastOnly, App):
                 reg.description or "plugin panel",
                 lambda r=reg: self.push_screen(r.factory(self)),
             )
+
+    async def _measure_from_palette(self) -> None:
+        """The Vibration screen shown first: its question (a kept map would be replaced)
+        or its measurement in view, not on a hidden screen."""
+        await self.action_show_tab("vibration")
+        self.ensure_pane("vibration").action_measure()
 
     # ------------------------------------------------------------------ exit
     def on_unmount(self) -> None:
