@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NoReturn
 
@@ -272,6 +273,25 @@ class Parser(argparse.ArgumentParser):
             if hint:
                 message = f"{message}; {hint}"
         raise UsageError(usage_line(self.prog, message))
+
+    def parse_args(self, args=None, namespace=None):  # type: ignore[override]
+        """Unrecognized arguments are told by the sub-command they were given to: its
+        options are suggested, its ``--help`` named (``haptable doctor --help``)."""
+        ns, extras = self.parse_known_args(args, namespace)
+        if extras:
+            words = list(sys.argv[1:] if args is None else args)
+            self._named_sub(words).error(f"unrecognized arguments: {' '.join(extras)}")
+        return ns
+
+    def _named_sub(self, words: list[str]) -> argparse.ArgumentParser:
+        """The deepest sub-command parser ``words`` name (this parser without one)."""
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for i, w in enumerate(words):
+                    sub = action.choices.get(w)
+                    if sub is not None:
+                        return sub._named_sub(words[i + 1 :]) if isinstance(sub, Parser) else sub
+        return self
 
     def _check_value(self, action: argparse.Action, value: object) -> None:
         """A word that is none of the choices (a command, a ``choices=`` option): the

@@ -27,6 +27,9 @@ def test_play_suggests_the_name_as_written(capsys):
 def test_a_mistyped_option_is_met_with_the_option_meant(capsys):
     err = _error(capsys, ["doctor", "--bufer", "2"])
     assert "did you mean '--buffer'?" in err
+    assert "doctor: unrecognized" in err and "(see `haptable doctor --help`)" in err
+    err = _error(capsys, ["gestures", "eval", "DATA", "--cvv", "loso"])  # a nested command
+    assert "did you mean '--cv'?" in err and "`haptable gestures eval --help`" in err
 
 
 def test_a_mistyped_command_is_met_with_the_command_meant(capsys):
