@@ -96,6 +96,7 @@ def levels(level_v, outputs: tuple) -> str:
 class RelaysPane(VerticalScroll):
     HELP_TEXT = (
         "1-8      toggle that relay (or the switch with enter/space)\n"
+        "↑/↓      move between the switches\n"
         "A toggle sets your own relay setting: while a stimulus plays it routes the relays\n"
         "its way and yours come back when it ends; during an e-stop a toggle is refused and\n"
         "never runs later. The switch log below lists every switch with the output level\n"
@@ -104,6 +105,9 @@ class RelaysPane(VerticalScroll):
     BINDINGS = [  # one footer entry for the eight keys: "1-8 toggle"
         Binding("1", "toggle(1)", "toggle", key_display="1-8"),
         *(Binding(str(k), f"toggle({k})", f"relay {k}", show=False) for k in range(2, 9)),
+        # the arrows move between the switches (the screen scrolls to the one focused)
+        Binding("down", "step(1)", "next relay", show=False),
+        Binding("up", "step(-1)", "previous relay", show=False),
     ]
 
     def __init__(self, **kw) -> None:
@@ -142,6 +146,17 @@ class RelaysPane(VerticalScroll):
                 yield Static("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
         yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)
+
+    def action_step(self, by: int) -> None:
+        """Up/down: the focus to the previous/next relay's switch (from elsewhere on the
+        screen, to the first)."""
+        switches = [sw for sw, _ in self._rows.values()]
+        if not switches:
+            return
+        at = switches.index(self.app.focused) if self.app.focused in switches else -1
+        nxt = switches[max(0, min(len(switches) - 1, at + by))] if at >= 0 else switches[0]
+        nxt.focus()
+        self.scroll_to_widget(nxt, animate=False)
 
     @property
     def focus_target(self):
