@@ -71,8 +71,11 @@ class NewestToastOnly:
         """The newest notification alone: the older ones forgotten and their holders
         removed (their region drawn again: nothing of them stays on the title row)."""
         self._notifications.clear()
-        for holder in self.screen.query(ToastHolder):
+        holders = self.screen.query(ToastHolder)
+        for holder in holders:
             holder.remove()
+        if holders:  # the whole title row drawn again: no cell of the old toast stays
+            self.screen.refresh()
         super()._on_notify(event)
 
     def _refresh_notifications(self) -> None:

@@ -53,3 +53,38 @@ def test_the_newest_notification_replaces_the_estop_and_goes_with_the_reset(plug
             assert len(toasts) == 1 and len(app.screen.query(ToastHolder)) == 1, toasts
 
     asyncio.run(scenario())
+
+
+def test_an_estop_right_after_a_reset_shows_alone(plugins):
+    """ctrl+e, ctrl+r, ctrl+e within a second: the title row shows the e-stop alone (the
+    reset's toast stayed beside it for seconds)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=(80, 24), notifications=True) as pilot:
+            await _ready(app, pilot)
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stop")
+            await pilot.press("ctrl+r")
+            await pilot.pause(0.1)
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: "E-STOP" in _top(app), 20, "the e-stop's toast")
+            for _ in range(10):
+                await pilot.pause(0.1)
+                top = _top(app)
+                assert "reset" not in top, top
+                toasts = [t for t in app.screen.query(Toast) if t.region]
+                assert len(toasts) <= 1, top
+            # notifications in one burst (the kernel's events and the keys' own, as a
+            # loaded console delivers them): the last alone on the row, once drawn
+            app.notify("e-stop reset: outputs may play again")
+            app.notify("E-STOP: outputs silenced, relays open", severity="error")
+            app.notify("e-stop reset: outputs may play again")
+            app.notify("E-STOP: outputs silenced, relays open", severity="error")
+            for _ in range(10):
+                await pilot.pause(0.05)
+            top = _top(app)
+            assert "E-STOP" in top and "reset" not in top, top
+            assert len(app.screen.query(ToastHolder)) == 1, top
+
+    asyncio.run(scenario())
