@@ -117,6 +117,16 @@ def _start_line(table: Table, fd: int, ended: Callable[[], int | None]) -> str:
     return buf.split(b"\n", 1)[0].decode("utf-8", "replace").strip()
 
 
+def _parent_of(pid: int) -> int | None:
+    """The parent process of ``pid`` (None: no such process, or not Linux's /proc)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            stat = f.read()
+    except OSError:
+        return None
+    return int(stat[stat.rfind(b")") + 2 :].split()[1])
+
+
 class _Starter:
     """This process's fork server, started at its second kernel (a process that starts
     one kernel pays for no server); ``start`` returns None whenever it cannot serve (the
@@ -154,9 +164,14 @@ class _Starter:
             finally:
                 os.close(w)
 
+        server = self._proc.pid if self._proc is not None else -1
+
         def ended() -> None:
-            with contextlib.suppress(OSError):
-                os.kill(pid, signal.SIGKILL)
+            # only the server's child: a kernel that died was reaped there, and its pid
+            # may be another process's by now (pids wrap on a busy machine)
+            if _parent_of(pid) == server:
+                with contextlib.suppress(OSError):
+                    os.kill(pid, signal.SIGKILL)
 
         return r, ended
 

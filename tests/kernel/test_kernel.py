@@ -401,3 +401,18 @@ def test_only_the_kernel_builds_an_audio_output_or_a_relay_board():
     # the kernel's outputs, and its relay guard (opens every relay once the kernel died)
     kernel = ("console/kernel/table.py:", "console/kernel/relay_guard.py:")
     assert found and all(f.startswith(kernel) for f in found), found
+
+
+def test_a_kernel_that_ended_at_start_is_killed_only_while_it_is_the_servers_child():
+    """The fork server reaps a kernel that died; its pid may be another process's by the
+    time the client gives up on it (pids wrap on a busy machine): the client kills it
+    only while the server is still its parent."""
+    from console.kernel.spawn import _parent_of
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        assert _parent_of(child.pid) == os.getpid()
+    finally:
+        child.kill()
+        child.wait()
+    assert _parent_of(child.pid) != os.getpid()  # reaped: gone, or another's child
