@@ -107,7 +107,7 @@ class LogScreen(ModalScreen):
         scrollbar-gutter: stable;  /* lines wrap to one width, scrollbar or not */
     }
     LogScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
-    LogScreen > Static { width: 100%; height: 1; background: $panel; }
+    LogScreen > Static { width: 100%; height: auto; background: $panel; }
     """
 
     def __init__(self, lines: list[str]) -> None:
@@ -115,7 +115,8 @@ class LogScreen(ModalScreen):
         self.lines = lines
 
     def compose(self) -> ComposeResult:
-        yield Static(f" log (also in {log_path()}): escape closes", markup=False)
+        # the key first; a long path wraps rather than cutting the words after it
+        yield Static(f" escape closes · the log, also in {log_path()}", markup=False)
         # long lines wrap (a driver's message is read whole, no sideways scrolling);
         # plain text: brackets show as written; min_width=1: a line wraps at the view's
         # width (RichLog's default of 78 columns cut 2 at each wrap at 80 columns)
