@@ -23,7 +23,7 @@ __all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
 
 #: the start of an entry: its key (a word, or a few short ones: ``t / T``, ``w a s d``,
 #: ``n / Analyse``) then two spaces or ``": "``, then its description
-ENTRY = re.compile(r"^(?P<key>\S{1,12}(?: \S{1,8}){0,3}?)(?P<sep>: |\s{2,})(?=\S)")
+ENTRY = re.compile(r"^(?P<key>\S{1,12}(?: \S{1,8}){0,4}?)(?P<sep>: |\s{2,})(?=\S)")
 #: an entry's description starts at most this far right to be wrapped under itself
 MAX_HANG = 18
 

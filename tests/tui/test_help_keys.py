@@ -7,7 +7,6 @@ shows."""
 from __future__ import annotations
 
 import asyncio
-import re
 
 import pytest
 from textual.geometry import Region
@@ -15,6 +14,7 @@ from textual.widgets import Input
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.help import ENTRY  # the help's own notion of an entry
 
 from .conftest import wait_for
 
@@ -91,7 +91,6 @@ def test_ctrl_z_brings_back_what_a_key_replaced(plugins):
 
 # ---------------------------------------------------------------------- the help's text
 #: the start of a new entry: ``b        capture``, ``t / T    body``, ``s: synthesize``
-ENTRY = re.compile(r"^\s*\S{1,12}( \S{1,8}){0,3}(: |\s{2,})")
 
 
 def _help_lines(app) -> tuple[list[str], int]:
