@@ -163,7 +163,9 @@ def test_camera_and_scope_show_a_recording(plugins, recording, tmp_path):
                 pilot, lambda: "no such file" in words_on(app, "#scope-head"), 30, "refusal"
             )
             await pilot.pause(1.0)  # several ticks of the live scope
-            assert "none.h5" in words_on(app, "#scope-head"), words_on(app, "#scope-head")
+            head = words_on(app, "#scope-head")
+            assert "none.h5" in head, head
+            assert head.split()[0] in ("LIVE", "FROZEN"), head  # the view's mode stays said
 
     asyncio.run(scenario())
 

@@ -278,7 +278,9 @@ class ScopePane(ScopeRecordingMixin, Vertical):
         chart = self.query_one("#scope-chart", Chart)
         info = self.query_one("#scope-info", Static)
         trace, mode = self._view()
-        text = self.said_head or self._head_text(trace, mode, plan_line(self.last))
+        text = self._head_text(trace, mode, plan_line(self.last))
+        if self.said_head:  # what o said, after the view's mode (live or frozen)
+            text = f"{text.split(' | ', 1)[0]} | {self.said_head}"
         if text != self._head:
             self._head = text
             self.query_one("#scope-head", Static).update(text)
