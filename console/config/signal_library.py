@@ -100,7 +100,7 @@ def check_name(name: str) -> str:
     if not isinstance(name, str) or not NAME_RE.fullmatch(name):
         raise UserError(
             f"signal name {_show(name)}: use up to 40 letters, digits, '-' or '_', starting "
-            f"with a letter or digit (the pattern {NAME_RE.pattern})"
+            "with a letter or digit (for example tone-250)"
         )
     if name in BUILTIN:
         raise UserError(f"signal name {name!r} is a built-in signal (read-only); choose another")

@@ -46,7 +46,7 @@ def lib():
         (f'[signals.bad]\nexpr = "{OK} * {BIG}"\n', "400 characters long"),
         ('[signals.bad]\nexpr = "sine(250 Hz, 1 V, 1 s) #\\u001b[2J"\n', "'\\x1b' at column"),
         ('[signals.bad]\nexpr = "sine(250 Hz, 1 V, 1 s)\\u0000"\n', "'\\x00'"),
-        (f'[signals."tone\\n"]\nexpr = "{OK}"\n', "the pattern"),
+        (f'[signals."tone\\n"]\nexpr = "{OK}"\n', "starting with a letter or digit"),
         ('[signals.bad]\nexpr = "silence(1 s)"\nnotes = [1, 2.5, nan, 1979-05-27T07:32:00Z]\n', "unknown key 'notes'"),
         ('[signals.bad]\nexpr = "silence(1 s)"\n[signals.bad.sub]\n"a b" = "\\u007f\\""\n', "unknown key 'sub'"),
     ],
@@ -124,7 +124,7 @@ def test_a_library_that_is_not_a_small_file_is_one_line_never_a_hang(capsys, lib
 def test_names_match_the_pattern_in_full(capsys, lib):
     for bad in ("tone\n", "tone ", " tone", "tö", "a" * 41, "-a"):
         assert main(["signals", "add", "--", bad, OK]) == 2
-        assert "the pattern" in one_error(capsys)
+        assert "starting with a letter or digit" in one_error(capsys)
     assert not lib.exists()
 
 
