@@ -263,14 +263,14 @@ class ConsoleSession:
             self._holder = who
         out = self.outputs
         try:
-            if out is not None and hasattr(out, "hold"):  # other processes too
+            if out is not None:  # other processes too (the table's kernel holds them)
                 try:
                     out.hold(who)
                 except SafetyRefusal as exc:
                     raise UserError(str(exc)) from None
             yield who
         finally:
-            if out is not None and hasattr(out, "unhold"):
+            if out is not None:
                 out.unhold()
             with self._lock:
                 self._holder = None

@@ -257,14 +257,28 @@ def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer
             )
         yield server
     finally:
-        sd._terminate()  # close PortAudio's JACK client before its server goes away
-        stop_jackd(server)
+        # the server ends after this process does (``_stop_after_us``): closing
+        # PortAudio's JACK client at the session's end, in a worker full of other tests'
+        # threads, killed the worker there ("node down: Not properly terminated", its
+        # jackd left running); nothing in this process uses PortAudio after the session
+        _stop_after_us(server)
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
-        sd._initialize()
+
+
+def _stop_after_us(server: JackServer) -> None:
+    """Stop ``server`` once this process has exited (a watcher in a session of its own)."""
+    subprocess.Popen(
+        ["sh", "-c", "while kill -0 $0 2>/dev/null; do sleep 0.5; done; kill $1", str(os.getpid()),
+         str(server.process.pid)],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )  # fmt: skip
 
 
 def wait_until(predicate: Any, timeout_s: float = 10.0, what: str = "condition") -> None:
