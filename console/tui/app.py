@@ -33,6 +33,7 @@ from console.tui.logs import (
 )
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
+from console.tui.menus import close_menus
 from console.tui.panels import LeavesForScreen
 from console.tui.quitting import ConfirmsQuit
 from console.tui.safety_bar import SafetyBar, still_latched
@@ -340,6 +341,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         # rest of a line must not become the screen's keys)
         left, focused = self.active_tab, self.base.focused
         pane = self.pane(left) if left is not None else None
+        focused = close_menus(self.base, focused)  # an open menu closes with its screen
         if focused is not None and pane is not None and pane in focused.ancestors_with_self:
             self._left_focus[left] = focused
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
@@ -356,6 +358,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         if not self.screen_stack:  # a late activation while the console shuts down
             return
         tab = event.pane.id
+        close_menus(self.base, None)  # a click on the tab bar switches screens too
         self.ensure_pane(tab)
         self.call_after_refresh(self._set_visible, tab)
         self.call_after_refresh(self._focus_pane, tab)
