@@ -31,9 +31,9 @@ from console.tui.logs import (
     release_logs,
     view_handler,
 )
+from console.tui.menus import close_menus
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
-from console.tui.menus import close_menus
 from console.tui.panels import LeavesForScreen
 from console.tui.quitting import ConfirmsQuit
 from console.tui.safety_bar import SafetyBar, still_latched
