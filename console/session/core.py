@@ -338,7 +338,7 @@ class ConsoleSession:
     @staticmethod
     def _estop_why(out: Any) -> str:
         """An e-stop's refusal in one line: its reason and the key that resets it."""
-        reason = getattr(out, "estop_reason", "") or ""
+        reason = out.estop_reason or ""
         return (
             f"{ESTOP_REFUSAL} ({reason}), {ESTOP_FIX}"
             if reason
