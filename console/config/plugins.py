@@ -83,6 +83,7 @@ KINDS: dict[str, str] = {
     "panel": "haptable_register_panels",
     "frame_sink": "haptable_register_frame_sinks",
     "observer": "haptable_register_observers",
+    "recording_reader": "haptable_register_recording_readers",
 }
 
 

@@ -31,6 +31,7 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   in the profile: the Camera screen turns it on and off)
     panel         PanelFactory -> Panel
     observer      SimulatedObserver (a simulated study participant)
+    recording_reader  RecordingReader (a recorded run in a format of its own: a study trial)
 
 Values that cross (frames, gestures, plans ...) are the dataclasses of
 ``console.core.types``; only behaviour is typed here.
@@ -46,6 +47,7 @@ import numpy as np
 from console.core.recording_contracts import BeginsRun as BeginsRun
 from console.core.recording_contracts import ReadsRecordings as ReadsRecordings
 from console.core.recording_contracts import RecordedRun as RecordedRun
+from console.core.recording_contracts import RecordingReader
 from console.core.recording_contracts import WatchesOutputs as WatchesOutputs
 from console.core.roving_contracts import RovingSensorMaps as RovingSensorMaps
 
@@ -685,6 +687,7 @@ KIND_CONTRACTS: dict[str, type] = {
     "frame_sink": FrameSink,
     "panel": Panel,
     "observer": SimulatedObserver,
+    "recording_reader": RecordingReader,
 }
 
 #: The contract of the factory itself, for kinds whose factory is not ``f(profile)``.

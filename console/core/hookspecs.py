@@ -245,6 +245,18 @@ def haptable_register_frame_sinks(register: RegisterFactory) -> None:
 
 
 @hookspec
+def haptable_register_recording_readers(register: RegisterFactory) -> None:
+    """Register readers of recorded runs in formats of their own (a study's trial files).
+
+    The factory takes the profile and returns a ``contracts.RecordingReader``:
+    ``reads(path) -> bool`` (whether the file is in its format, cheap) and
+    ``open_recording(path) -> contracts.RecordedRun``. The console's Camera and Scope
+    screens open a file with the first reader that reads it, else with the recorder's own
+    (``contracts.ReadsRecordings``, a frame sink's).
+    """
+
+
+@hookspec
 def haptable_register_observers(register: RegisterFactory) -> None:
     """Register simulated study participants (``haptable study run --simulate``).
 

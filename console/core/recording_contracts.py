@@ -47,6 +47,17 @@ class ReadsRecordings(FrameSinkFactory, Protocol):
 
 
 @runtime_checkable
+class RecordingReader(Protocol):
+    """A reader of recorded runs in a format of its own (kind ``recording_reader``):
+    ``reads(path)`` says whether the file is one (cheap, never raises),
+    ``open_recording(path) -> RecordedRun`` opens it (one ``UserError`` line otherwise)."""
+
+    def reads(self, path: str) -> bool: ...
+
+    def open_recording(self, path: str) -> RecordedRun: ...
+
+
+@runtime_checkable
 class WatchesOutputs(Protocol):
     """A frame sink that sees what a demo hands its outputs: ``watch_outputs(outputs)``
     returns the outputs the demo uses instead (every call passed on, as

@@ -291,20 +291,28 @@ class ConsoleSession:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an
         error is reported as a ``Failed`` event; returns True when it played (or queued).
         While a run holds the outputs (``hold_outputs``) only its ``holder`` token plays;
-        a refusal of the holder's own plan is no event: the run reports it (one place)."""
+        a refusal of the holder's own plan is no event: the run reports it (one place,
+        ``play_plan_why`` gives it the words)."""
+        return not self.play_plan_why(plan, wait=wait, holder=holder)
+
+    def play_plan_why(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> str:
+        """``play_plan``, returning "" when it played (or queued), else why not in one
+        line (the e-stop with its reason and ``ctrl+r resets``, the gate's refusal ...)."""
+        name = plan.name or "plan"
         out = self.outputs
         if out is None:
-            self.fail("outputs", f"outputs not open: {self.outputs_error or 'starting'}")
-            return False
+            why = f"outputs not open: {self.outputs_error or 'starting'}"
+            self.fail("outputs", why)
+            return why
         held = self._held_from(holder)
         if held:
-            self.fail("outputs", f"{plan.name or 'plan'}: {held}", name="refused")
-            return False
-        if out.estopped and holder is None:  # one wording on every screen
-            self.fail(
-                "outputs", f"{plan.name or 'plan'}: {ESTOP_REFUSAL}, {ESTOP_FIX}", name="refused"
-            )
-            return False
+            self.fail("outputs", f"{name}: {held}", name="refused")
+            return held
+        if out.estopped:
+            why = self._estop_why(out)
+            if holder is None:  # one wording on every screen
+                self.fail("outputs", f"{name}: {ESTOP_REFUSAL}, {ESTOP_FIX}", name="refused")
+            return why
         try:
             report = out.play(plan, wait=False)
             with self._lock:
@@ -317,9 +325,25 @@ class ConsoleSession:
                     raise SafetyRefusal(f"{report.name}: {report.error}")
         except (SafetyRefusal, UserError) as exc:
             if holder is None:  # a run's own plan: the run says what became of it, once
-                self.fail("outputs", f"{plan.name or 'plan'}: {exc}", name="refused")
-            return False
-        return True
+                self.fail("outputs", f"{name}: {exc}", name="refused")
+            text = str(exc)
+            at, end = text.find("e-stop active ("), text.rfind("; reset")
+            if at >= 0:  # the kernel's words carry its reason
+                return f"refused: {text[at : end if end > at else None]}, {ESTOP_FIX}"
+            if out.estopped:
+                return self._estop_why(out)
+            return f"refused: {exc}"
+        return ""
+
+    @staticmethod
+    def _estop_why(out: Any) -> str:
+        """An e-stop's refusal in one line: its reason and the key that resets it."""
+        reason = out.estop_reason or ""
+        return (
+            f"{ESTOP_REFUSAL} ({reason}), {ESTOP_FIX}"
+            if reason
+            else f"{ESTOP_REFUSAL}, {ESTOP_FIX}"
+        )
 
     def play(self, plan: Any, *, on_started: Callable[[], None] | None = None) -> PlayOutcome:
         """Play ``plan`` through the safety gate and wait for what became of it

@@ -6,9 +6,6 @@ key works on every screen and the safety bar shows the live output state on ever
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
-import threading
 import time
 
 from textual import events, work
@@ -34,10 +31,11 @@ from console.tui.logs import (
     release_logs,
     view_handler,
 )
-from console.tui.long_work import KeepsTypedWork, LongWork, RunsWork
+from console.tui.menus import close_menus
 from console.tui.narrow import ConsoleFooter, fit_tab_bar
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
+from console.tui.quitting import ConfirmsQuit
 from console.tui.safety_bar import SafetyBar, still_latched
 from console.tui.session_log import log_event
 from console.tui.session_messages import SessionMessage
@@ -129,7 +127,7 @@ class HelpScreen(ModalScreen):
         return True
 
 
-class HapTableApp(NewestToastOnly, App):
+class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
     TITLE = "HapTable"
     CSS_PATH = "console.tcss"
     BINDINGS = [
@@ -141,12 +139,6 @@ class HapTableApp(NewestToastOnly, App):
         Binding("ctrl+l", "log", "log", show=False),
         Binding("q", "quit", "quit", show=False),
     ]
-
-    #: how long quitting waits for the session to close (a demo to stop, the projector,
-    #: the camera) before it e-stops what is left and exits anyway
-    QUIT_WAIT_S = 15.0
-    #: while work runs, a second q (ctrl+q) within this many seconds quits
-    QUIT_CONFIRM_S = 3.0
 
     def __init__(
         self, ctx, *, fast: bool | None = None, initial: str = "devices", image: str = "halfblock"
@@ -165,7 +157,6 @@ class HapTableApp(NewestToastOnly, App):
         self._bind_tabs()
         self._mounting = None
         self._focus_wanted: tuple[str, float] | None = None
-        self._quit_asked = -1e9  # when q last asked to be pressed again
         self._left_focus: dict[str, Widget] = {}  # per tab: the widget focused when left
         self._panes: dict[str, Widget] = {}  # the panes built so far, by tab
         self._tab_widget: TabbedContent | None = None
@@ -350,6 +341,7 @@ class HapTableApp(NewestToastOnly, App):
         # rest of a line must not become the screen's keys)
         left, focused = self.active_tab, self.base.focused
         pane = self.pane(left) if left is not None else None
+        focused = close_menus(self.base, focused)  # an open menu closes with its screen
         if focused is not None and pane is not None and pane in focused.ancestors_with_self:
             self._left_focus[left] = focused
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
@@ -366,6 +358,7 @@ class HapTableApp(NewestToastOnly, App):
         if not self.screen_stack:  # a late activation while the console shuts down
             return
         tab = event.pane.id
+        close_menus(self.base, None)  # a click on the tab bar switches screens too
         self.ensure_pane(tab)
         self.call_after_refresh(self._set_visible, tab)
         self.call_after_refresh(self._focus_pane, tab)
@@ -453,62 +446,6 @@ class HapTableApp(NewestToastOnly, App):
         """Silence everything now (screens observe the ``estop`` event)."""
         self.session.estop(reason)
 
-    def work_under_way(self) -> list[str]:
-        """What quitting would stop: a running demo, long work (a ``LongWork`` busy on
-        any screen) and what panes say (``RunsWork``: a study run)."""
-        out = []
-        demo = self.session.demos.name if self.session.demos.run is not None else None
-        if demo is not None:
-            out.append(f"the {demo} demo")
-        for screen in self.screen_stack:
-            for lw in screen.query(LongWork):
-                # the demo's start (``demo flow``) is the demo named above: said once
-                if lw.busy and lw.name_running != f"demo {demo}":
-                    out.append(lw.name_running)
-        for pane in list(self._panes.values()):
-            if isinstance(pane, RunsWork) and (what := pane.work_under_way()):
-                out.append(what)
-        return out
-
-    def unsaved_work(self) -> list[str]:
-        """Typed work quitting would lose (``KeepsTypedWork``: an unsaved signal)."""
-        return [
-            what
-            for pane in list(self._panes.values())
-            if isinstance(pane, KeepsTypedWork) and (what := pane.unsaved_work())
-        ]
-
-    async def action_quit(self) -> None:
-        """Quit; while work runs (``work_under_way``) or typed work is unsaved
-        (``unsaved_work``) only when asked twice."""
-        busy, lost = self.work_under_way(), self.unsaved_work()
-        now = time.monotonic()
-        if (busy or lost) and now - self._quit_asked > self.QUIT_CONFIRM_S:
-            self._quit_asked = now
-            said = [f"it stops {', '.join(busy)}"] if busy else []
-            said += [f"it loses {', '.join(lost)}"] if lost else []
-            self.notify(
-                f"q again to quit: {'; '.join(said)}",
-                severity="warning",
-                timeout=self.QUIT_CONFIRM_S,
-            )
-            return
-        # the session closes while the screen still shows (the projector and the camera
-        # take a moment to end): the title says so, then the console exits
-        self.sub_title = "quitting: closing the outputs, projector and camera ..."
-        await asyncio.to_thread(self._close_session)
-        await super().action_quit()
-
-    def _close_session(self) -> None:
-        """``session.close`` within ``QUIT_WAIT_S``; what still runs after is e-stopped
-        and left (the console exits anyway). Idempotent."""
-        closer = threading.Thread(target=self.session.close, name="haptable-quit", daemon=True)
-        closer.start()
-        closer.join(self.QUIT_WAIT_S)
-        if closer.is_alive():
-            with contextlib.suppress(Exception):
-                self.session.abandon("the console quit while its session was still closing")
-
     def action_estop(self) -> None:
         self._own_estop_s = time.monotonic()
         self.estop("operator e-stop (console)")
@@ -527,6 +464,8 @@ class HapTableApp(NewestToastOnly, App):
         if self.key_hold.hold(event):  # typed behind a screen switch (``console.tui.key_hold``)
             return
         key = isinstance(event, events.Key) and not event.is_forwarded
+        if key and await self.confirm_quit(event):  # q again: wherever the focus is
+            return
         if key and await self._key_everywhere(event.key):
             return
         if key and await self._field_key_in_order(event.key):

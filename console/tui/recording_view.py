@@ -63,7 +63,31 @@ def open_run(pm: Any, path: str) -> Any:
     """The recording at ``path`` (blocking: a worker's), a ``UserError`` line otherwise."""
     if not path.strip():
         raise UserError("no path typed: type a recording's path (an .h5 file), Enter opens it")
-    return recording_reader(pm).open_recording(path.strip())
+    return reader_for(pm, path.strip()).open_recording(path.strip())
+
+
+def reader_for(pm: Any, path: str, profile: Any = None) -> Any:
+    """The first registered ``recording_reader`` that reads ``path`` (a study's trial
+    file ...), else the recorder's own reader (whose refusal names the file)."""
+    for name in pm.of("recording_reader"):
+        reader = pm.built("recording_reader", name, profile)
+        if reader.reads(path):
+            return reader
+    return recording_reader(pm)
+
+
+def no_frames_fix(run: Any) -> str:
+    """What to do with a recording without frames: its plans show on Scope (a study
+    trial that did not see the camera), else another path."""
+    try:
+        n = sum(1 for p in run.plans() if p.get("kind") == "plan")
+    except Exception:  # unreadable plans: nothing to offer but another file
+        n = 0
+    finally:
+        run.close()
+    if n:
+        return f"its {n} plan{'s' * (n != 1)} show on Scope (F9, o); type another path"
+    return "type another path"
 
 
 def circle(center_px, radius_px: float, n: int = 48) -> np.ndarray:
@@ -162,9 +186,8 @@ class RecordingMixin:
             from_thread(self.app, self.say, f"o: {worded(exc, AT_CONSOLE)}", "warning")
             return
         if k0 is None:
-            run.close()
             self._replay_typed = path
-            line = f"o: recording {short_path(run.path)} has no frames: type another path"
+            line = f"o: recording {short_path(run.path)} has no frames: {no_frames_fix(run)}"
             from_thread(self.app, self.say, line, "warning")
             return
         from_thread(self.app, self._replay_opened, run, k0)

@@ -49,6 +49,20 @@ def haptable_register_panels(register) -> None:
 
 
 @hookimpl
+def haptable_register_recording_readers(register) -> None:
+    def study_trial(profile: Any) -> Any:
+        from .trial_view import make_reader  # lazy: h5py loads when a file is opened
+
+        return make_reader(profile)
+
+    register(
+        "study_trial",
+        study_trial,
+        description="a study's trial file (record trials): its plans and frames in the console",
+    )
+
+
+@hookimpl
 def haptable_register_benchmarks(register) -> None:
     def run(ctx, quick: bool) -> dict:
         # lazy: bench loads when called, not at every haptable start

@@ -217,11 +217,9 @@ def play_on_session(session: Any, holder: str | None = None) -> Callable[[Output
     a refusal says why (the e-stop and its reason)."""
 
     def play(plan: OutputPlan) -> bool:
-        if session.play_plan(plan, holder=holder):
+        why = session.play_plan_why(plan, holder=holder)
+        if not why:
             return True
-        out = session.outputs
-        if out is not None and out.estopped:
-            raise UserError(f"e-stop ({out.estop_reason or 'no reason given'}): {plan.name}")
-        raise UserError(f"the outputs refused {plan.name!r} (the console's message says why)")
+        raise UserError(f"the outputs refused {plan.name!r}: {why.removeprefix('refused: ')}")
 
     return play

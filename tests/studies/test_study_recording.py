@@ -135,3 +135,23 @@ def test_a_trial_that_sees_the_camera_keeps_its_frames_and_an_interrupted_one_no
     assert got["frames"] == 3 and got["done"]["response"] == "up"
     with h5py.File(path, "r") as f:
         assert np.array_equal(f["frames"][2], images[2]) and list(f["t_capture_s"]) == [0, 0.1, 0.2]
+
+
+def test_a_recorded_trial_opens_where_haptable_replay_reads_it(
+    cli, capsys, tmp_path, map_file, small_exp2, double_plugins
+):
+    """What ``haptable replay`` reads the console's recording view opens (F9/F2 ``o``):
+    a study run's trial file, with the plans the trial handed its outputs."""
+    from console.tui.recording_view import open_run
+
+    out = tmp_path / "study"
+    assert cli(_run_args(small_exp2, out, map_file, "P03")) == 0
+    trial = out / "P03" / "recording" / "trial_0000.h5"
+    capsys.readouterr()
+    assert cli(["replay", str(trial)]) == 0
+    assert "1 trials" in capsys.readouterr().out
+    run = open_run(double_plugins, str(trial))
+    try:
+        assert [p for p in run.plans() if p.get("kind") == "plan"], run.plans()
+    finally:
+        run.close()

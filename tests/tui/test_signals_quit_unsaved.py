@@ -46,6 +46,45 @@ def test_q_with_an_unsaved_expression_asks_before_it_quits(plugins):
     asyncio.run(scenario())
 
 
+def test_q_again_in_the_expression_field_quits_and_types_nothing(plugins):
+    """ctrl+q with the focus in the edited expression, then q: the second key is the
+    confirmation's (it used to be typed: ``... %q``, and the console stayed)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=(80, 24)) as pilot:
+            expr = app.query_one("#sig-expr", Input)
+            await wait_for(pilot, lambda: app.focused is expr, 10, "expression focused")
+            expr.value = ""
+            await _type(pilot, TYPED)
+            await pilot.press("ctrl+q")
+            await pilot.pause(0.3)
+            assert app.is_running and app.focused is expr
+            await pilot.press("q")
+            assert expr.value == TYPED, expr.value  # the typed work is not changed by it
+            await wait_for(pilot, lambda: not app.is_running, 10, "quit on the second q")
+
+    asyncio.run(scenario())
+
+
+def test_q_after_the_confirmation_ran_out_is_typed(plugins):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        app.QUIT_CONFIRM_S = 0.2
+        async with app.run_test(size=(80, 24)) as pilot:
+            expr = app.query_one("#sig-expr", Input)
+            await wait_for(pilot, lambda: app.focused is expr, 10, "expression focused")
+            expr.value = ""
+            await _type(pilot, TYPED)
+            await pilot.press("ctrl+q")
+            await pilot.pause(0.5)
+            await pilot.press("q")
+            await pilot.pause(0.2)
+            assert app.is_running and expr.value == TYPED + "q"
+
+    asyncio.run(scenario())
+
+
 def test_a_saved_or_untouched_expression_quits_at_once(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")

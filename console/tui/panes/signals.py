@@ -43,6 +43,20 @@ SPECTRUM_RANGE_DB = 80.0
 LOAD_AGAIN_S = 4.0
 
 
+def wave_title(plotted: Target | None, typed: str) -> str:
+    """The waveform's title: the target the plot shows, and when the target field says
+    another (typed since, not plotted yet) that Enter plots it there; none plotted:
+    no target."""
+    if plotted is None:
+        return "waveform"
+    try:
+        same = parse_target(typed) == plotted
+    except UserError:
+        same = False
+    shown = "screen" if plotted.screen else plotted.label
+    return f"waveform on {shown}" if same else f"waveform on {shown} (enter: {typed.strip()})"
+
+
 @dataclass(frozen=True)
 class Preview:
     expr: str
@@ -181,6 +195,14 @@ class SignalsPane(Vertical):
         if self.preview is None:
             self._show_no_signal()
 
+    def _show_wave_title(self) -> None:
+        plotted = self.preview.target if self.preview is not None else None
+        wave = self.query_one("#sig-wave", Chart)
+        title = wave_title(plotted, self._fields()[2])
+        if title != wave.title:
+            wave.title = title
+            wave.refresh()
+
     def _show_no_signal(self) -> None:
         """The empty plots point at the line above only while it says why they are
         empty (the preview's refusal); once another message took it, they say how to
@@ -189,6 +211,7 @@ class SignalsPane(Vertical):
         text = "no signal: see the line above" if said else "no signal: enter plots it"
         for cid in ("#sig-wave", "#sig-spectrum"):
             self.query_one(cid, Chart).clear(text)
+        self._show_wave_title()  # no plot: no target claimed
 
     @property
     def library_file(self):
@@ -232,6 +255,8 @@ class SignalsPane(Vertical):
     def on_input_changed(self, event: Input.Changed) -> None:
         if event.input.id == "sig-name":
             self._replace = None
+        if event.input.id == "sig-target":
+            self._show_wave_title()
         self._show_saved()
 
     def saved_now(self) -> bool:
@@ -303,7 +328,9 @@ class SignalsPane(Vertical):
         channel = "screen" if p.target.screen else p.target.label
         wave = self.query_one("#sig-wave", Chart)
         wave.y_label = "screen" if p.target.screen else "piezo"
-        wave.set_series([Series(channel, t, p.volts)], title=f"waveform on {channel}")
+        wave.set_series(
+            [Series(channel, t, p.volts)], title=wave_title(p.target, self._fields()[2])
+        )
         # the designed signal is finite and whole: no window, so a chirp's ends keep
         # their level (a Hann window would draw it as a bump)
         f, mag = spectrum(p.volts, p.fs, window=False)
@@ -427,6 +454,14 @@ class SignalsPane(Vertical):
         self.reload_library(select=name)
         self.status(f"saved {name} in {self.library_file}")
         self._show_saved()
+        # the saved signal is plotted (the plots said "no signal" since an error), where
+        # the target field says; a target that plots nowhere keeps the saved line
+        try:
+            parse_target(self._fields()[2])
+        except UserError:
+            return
+        self._loaded_note = f"saved {name} in {self.library_file}"
+        self.show_preview()
 
     def unsaved(self) -> bool:
         """The expression field holds typed work the library does not have (not the
