@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 
 import pytest
+from textual import events
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
@@ -21,10 +22,12 @@ def test_down_then_enter_toggles_relay_2(plugins, size):
             await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
             pane = app.pane("relays")
             await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "relay 1")
-            await pilot.press("down")
-            await pilot.pause(0.2)
+            # as a terminal delivers them: the Enter right behind the arrow, both queued
+            # before either is handled
+            app.post_message(events.Key("down", None))
+            app.post_message(events.Key("enter", "\r"))
+            await pilot.pause(0.3)
             assert app.focused.id == "relay-2"
-            await pilot.press("enter")
             out = app.session.outputs
             await wait_for(pilot, lambda: 2 in out.operator_relays(), 10, "relay 2 closed")
             assert 1 not in out.operator_relays()

@@ -155,7 +155,9 @@ class RelaysPane(VerticalScroll):
             return
         at = switches.index(self.app.focused) if self.app.focused in switches else -1
         nxt = switches[max(0, min(len(switches) - 1, at + by))] if at >= 0 else switches[0]
-        nxt.focus()
+        # at once, not after this key's handling (``focus()`` defers it): an Enter typed
+        # right behind the arrow toggles the switch the arrow went to
+        self.app.set_focus(nxt, scroll_visible=False)
         self.scroll_to_widget(nxt, animate=False)
 
     @property
