@@ -93,7 +93,41 @@ class ViewHandler(logging.Handler):
     def _show(self, line: str) -> None:
         screen = self.app.screen if self.app.is_running else None
         if isinstance(screen, LogScreen):
-            screen.query_one(RichLog).write(line)
+            screen.add(line)
+
+
+class ReflowLog(RichLog):
+    """A ``RichLog`` whose lines wrap again when its width changes (``RichLog`` wraps a
+    line once, as it is written: a wider terminal kept the narrow wrap)."""
+
+    def __init__(self, *args, **kw) -> None:
+        super().__init__(*args, **kw)
+        self._kept: list[str] = []
+        self._wrapped_at = 0
+
+    def show(self, lines: list[str]) -> None:
+        self._kept = list(lines)
+        self._rewrite()
+
+    def add(self, line: str) -> None:
+        self._kept.append(line)
+        self._write(line)
+
+    def _write(self, line: str) -> None:
+        width = self.scrollable_content_region.width  # the view's, not the console's
+        self.write(line, width=width if width > 0 else None)
+
+    def _rewrite(self) -> None:
+        self.clear()
+        for line in self._kept:
+            self._write(line)
+
+    def on_resize(self, event) -> None:
+        super().on_resize(event)
+        width = event.size.width
+        if width and self._wrapped_at and width != self._wrapped_at:
+            self.set_timer(0.05, self._rewrite)  # once the new region is laid out
+        self._wrapped_at = width or self._wrapped_at
 
 
 class LogScreen(ModalScreen):
@@ -120,14 +154,20 @@ class LogScreen(ModalScreen):
         # long lines wrap (a driver's message is read whole, no sideways scrolling);
         # plain text: brackets show as written; min_width=1: a line wraps at the view's
         # width (RichLog's default of 78 columns cut 2 at each wrap at 80 columns)
-        yield RichLog(wrap=True, markup=False, highlight=False, auto_scroll=True, min_width=1)
+        yield ReflowLog(wrap=True, markup=False, highlight=False, auto_scroll=True, min_width=1)
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
 
     def on_mount(self) -> None:
-        log = self.query_one(RichLog)
-        for line in self.lines or ["(nothing logged yet)"]:
-            log.write(line)
+        log = self.query_one(ReflowLog)
+        log.show(self.lines or ["(nothing logged yet)"])
         log.focus()
+
+    def add(self, line: str) -> None:
+        """A new record, shown at the end."""
+        if not self.lines:
+            self.query_one(ReflowLog).show([])  # "(nothing logged yet)" goes
+        self.lines.append(line)
+        self.query_one(ReflowLog).add(line)
 
     def leave_for_screen(self) -> bool:
         """An F-key closes the log to show its screen (``LeavesForScreen``)."""
