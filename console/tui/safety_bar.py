@@ -90,8 +90,12 @@ def describe(
         f" | +{len(others)} e-stopped",
     ]
     variants = [_describe(status, None, names, k)[0] for k in range(_variants(status))]
-    # the others' names give way (to their count) before this table's live level does
-    return _fit([v + e for v in variants for e in ends], width), kind
+    named, counted = ends[:-1], ends[-1:]
+    if status.get("busy"):  # playing: the others' names give way before the live level
+        fits = [v + e for v in variants for e in ends]
+    else:  # idle: the levels (zero) give way before the names
+        fits = [v + e for e in named for v in variants] + [v + e for v in variants for e in counted]
+    return _fit(fits, width), kind
 
 
 def still_latched(out) -> str:
