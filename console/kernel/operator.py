@@ -28,7 +28,7 @@ WHO_MAY_RESET = (
 )
 
 
-def _stat_fields(pid: int) -> list[str] | None:
+def stat_fields(pid: int) -> list[str] | None:
     """``/proc/<pid>/stat`` after the command name: state, ppid, pgrp, session, tty_nr,
     tpgid, ... (None: no such process or no /proc)."""
     try:
@@ -40,7 +40,7 @@ def _stat_fields(pid: int) -> list[str] | None:
 
 def at_terminal(pid: int) -> bool:
     """Whether process ``pid`` runs in the foreground of a controlling terminal."""
-    f = _stat_fields(pid)
+    f = stat_fields(pid)
     if f is None or len(f) < 6:
         return False
     try:

@@ -24,6 +24,7 @@ from collections.abc import Callable
 from typing import Any
 
 from console.kernel.forkserver import send_request
+from console.kernel.operator import stat_fields
 from console.kernel.private_dir import open_private
 from console.kernel.tables import Table
 
@@ -118,13 +119,9 @@ def _start_line(table: Table, fd: int, ended: Callable[[], int | None]) -> str:
 
 
 def _parent_of(pid: int) -> int | None:
-    """The parent process of ``pid`` (None: no such process, or not Linux's /proc)."""
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            stat = f.read()
-    except OSError:
-        return None
-    return int(stat[stat.rfind(b")") + 2 :].split()[1])
+    """The parent process of ``pid`` (None: no such process, or no /proc)."""
+    f = stat_fields(pid)
+    return int(f[1]) if f is not None and len(f) > 1 else None
 
 
 class _Starter:
