@@ -30,13 +30,14 @@ def test_the_sound_card_table_shows_every_column_at_80(plugins):
             table = app.query_one("#audio-table", DataTable)
             await wait_for(pilot, lambda: table.row_count >= 4, 30, "sound cards listed")
             table.focus()
-            await wait_for(pilot, lambda: "Bench mic" in _line_with(app, "Bench mic"), 10)
+            # a generous bound on a wait (the clean-clone CI, loaded, drew the rows after 10 s)
+            await wait_for(pilot, lambda: "Bench mic" in _line_with(app, "Bench mic"), 30)
             # the header as drawn with the rows (a listing arriving later lays the table
             # out again: a loaded machine read it between the two)
             await wait_for(
                 pilot,
                 lambda: _line_with(app, "driver       device").rstrip().endswith("note"),
-                10,
+                30,
                 "the header with the rows",
             )
             header = _line_with(app, "driver       device")
