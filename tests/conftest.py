@@ -5,6 +5,7 @@ a fresh set of them for each test."""
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import gc
 import os
 import shutil
@@ -62,6 +63,38 @@ def pytest_cmdline_main(config):
         config.option.numprocesses = len(os.sched_getaffinity(0)) + 1
         if config.option.dist == "no":
             config.option.dist = "loadgroup"
+    if config.option.maxworkerrestart is None:
+        # a worker that dies ends the run, naming the test it died in: xdist 3.8's
+        # loadgroup scheduler hangs for good after replacing a crashed worker
+        # (pytest-xdist#1323, #1378; seen as a CI run stalled at 98 % until its limit)
+        config.option.maxworkerrestart = "0"
+
+
+#: A test (its setup and teardown, the session's at the last) still running after this
+#: many seconds is ended with every thread's stack on the run's stderr, even when a C
+#: call holds the interpreter (pyproject's ``timeout`` fails it first from Python).
+#: Under xdist a worker's stdout is /dev/null: pytest-timeout's own stack dump for its
+#: thread method went there, and the worker died without a word.
+HARD_TIMEOUT_S = 420.0
+_STDERR_FD: int | None = None
+
+
+def pytest_configure(config):
+    global _STDERR_FD
+    with contextlib.suppress(AttributeError, OSError, ValueError):
+        _STDERR_FD = os.dup(sys.__stderr__.fileno())
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    if _STDERR_FD is None:
+        yield
+        return
+    faulthandler.dump_traceback_later(HARD_TIMEOUT_S, exit=True, file=_STDERR_FD)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
 
 
 #: The slowest tests of a full run (``--durations``, 7 s or more), slowest first: they are
