@@ -146,9 +146,12 @@ def sample(pid: int, seconds: float) -> dict:
     kernel_pct = sum(c - first_apart.get(p, 0.0) for p, c in kernel.items())
     after = threads(pid)
     main_s = after.get(pid, ("", 0.0))[1] - before.get(pid, ("", 0.0))[1]
-    others = [
-        cpu - before.get(tid, (name, 0.0))[1] for tid, (name, cpu) in after.items() if tid != pid
-    ]
+    others = {
+        tid: (name, cpu - before.get(tid, (name, 0.0))[1])
+        for tid, (name, cpu) in after.items()
+        if tid != pid
+    }
+    busiest = sorted(others.items(), key=lambda tnc: -tnc[1][1])[:6]
     return {
         "median_pct": round(statistics.median(readings), 2),
         "mean_pct": round(statistics.fmean(readings), 2),
@@ -162,7 +165,9 @@ def sample(pid: int, seconds: float) -> dict:
         # camera loop, the kernel link and the workers on the others (threads that
         # ended meanwhile are missed)
         "main_thread_pct": round(100.0 * main_s / span, 2),
-        "other_threads_pct": round(100.0 * sum(others) / span, 2),
+        "other_threads_pct": round(100.0 * sum(c for _n, c in others.values()) / span, 2),
+        # the busiest of them by name (% of one core)
+        "busiest_threads_pct": {f"{t} {n}": round(100.0 * c / span, 2) for t, (n, c) in busiest},
         "threads": len(after),
     }
 

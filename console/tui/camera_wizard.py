@@ -60,8 +60,8 @@ class CameraWizardMixin:
     def side_width(self, widget_id: str) -> int:
         """The cells a line of the side panel's ``widget_id`` has (before layout: the
         panel's least)."""
-        found = self.query(f"#{widget_id}")
-        width = found.first().content_region.width if found else 0
+        found = self._part(widget_id)  # kept: a query matches CSS on every redraw
+        width = found.content_region.width if found is not None else 0
         return width if width >= 8 else self.SIDE_COLS - 2
 
     @property

@@ -87,9 +87,26 @@ def downsample(image: np.ndarray, cols: int, rows: int) -> np.ndarray:
 
 
 _STYLES: dict[tuple, Style] = {}
+_PACKED: dict[int, Style] = {}
 
 
 _LABEL = Style(color="black", bgcolor="bright_white", bold=True)
+
+
+_TOP_SHIFTS = np.array([40, 32, 24])
+_BOTTOM_SHIFTS = np.array([16, 8, 0])
+
+
+def _packed_style(key: int) -> Style:
+    """The style of a cell whose two colours are packed in ``key`` (top RGB in bits
+    40..63, bottom RGB in 0..23), made once per pair of colours."""
+    s = _PACKED.get(key)
+    if s is None:
+        b = [(key >> k) & 0xFF for k in (40, 32, 24, 16, 8, 0)]
+        s = _style((b[0], b[1], b[2]), (b[3], b[4], b[5]))
+        if len(_PACKED) < 20000:
+            _PACKED[key] = s
+    return s
 
 
 def _style(top: tuple, bottom: tuple) -> Style:
@@ -153,23 +170,23 @@ class HalfBlockImage:
         rgb, text, cols = self.rgb, self.text, self.rgb.shape[1]
         top, bot = rgb[2 * row], rgb[2 * row + 1]
         # a cell's two colours as one number: where it changes, a new run starts
-        cells = (top.astype(np.int64) << np.array([40, 32, 24])).sum(axis=1) + (
-            bot.astype(np.int64) << np.array([16, 8, 0])
+        cells = (top.astype(np.int64) << _TOP_SHIFTS).sum(axis=1) + (
+            bot.astype(np.int64) << _BOTTOM_SHIFTS
         ).sum(axis=1)
-        cuts = {0, cols, *(np.flatnonzero(np.diff(cells)) + 1).tolist()}
+        starts = np.flatnonzero(np.diff(cells)) + 1
+        cuts = {0, cols, *starts.tolist()}
         for r, col in text:  # a label's cell is a run of its own
             if r == row:
                 cuts.update((col, col + 1))
         edges = sorted(cuts)
+        keys = cells.tolist()
         out = []
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             ch = text.get((row, a))
             if ch is not None:
                 out.append(Segment(ch, _LABEL))
             else:
-                t, u = top[a], bot[a]
-                style = _style((int(t[0]), int(t[1]), int(t[2])), (int(u[0]), int(u[1]), int(u[2])))
-                out.append(Segment("▀" * (b - a), style))
+                out.append(Segment("▀" * (b - a), _packed_style(keys[a])))
         return out
 
     def __rich_console__(self, console, options):

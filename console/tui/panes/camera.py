@@ -228,9 +228,10 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     #: how often the half-block view may change (a new frame drawn at most this often: as
     #: the graphics modes: each redraw of a moving hand costs the UI thread milliseconds)
     HALFBLOCK_PERIOD_S = 0.2
-    #: the frames a second this screen asks of the camera (a new one for each redraw, and
-    #: some slack: the camera's clock and the redraw timer drift apart)
-    VIEW_FPS = 7.5
+    #: the frames a second this screen asks of the camera: one for each redraw and a
+    #: tenth more (the camera's clock and the redraw timer drift apart: a frame the
+    #: view skips now and then rather than a third rendered and seen for nothing)
+    VIEW_FPS = 5.5
     #: how long the loop's numbers (fps, drops) on the side panel are kept
     STATUS_PERIOD_S = 0.5
     #: a half-block pixel changes when its grey moved by one of the view's grey steps
@@ -348,12 +349,12 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     def _show_info(self, svc, work: dict) -> None:
         """The side panel: at once when a setting or the wizard changed (a key), else
         the loop's live numbers at most every ``INFO_PERIOD_S``."""
-        head, live, settings = self.info_lines(svc, work)
-        wizard = self.wizard_text()
+        settings, wizard = self.settings_lines(svc), self.wizard_text()
         now = time.monotonic()
         stable = (self.view, settings, wizard)
         if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
-            return
+            return  # the live numbers (percentiles of the frame ...) not even computed
+        head, live = self.live_lines(svc, work)
         self._info_stable, self._info_at = stable, now
         # the live block keeps the most lines it had (a hand's lines come and go): what
         # lies below it (the settings, the target field) stays where it is
@@ -523,7 +524,11 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     def info_lines(self, svc, work: dict) -> tuple[list[str], list[str], list[str]]:
         """The side panel: (the live numbers pinned at its top, the rest of what the
         loop sees now, the settings and the wizard)."""
-        st, lines, live = self._loop_status(svc), [], []
+        return (*self.live_lines(svc, work), self.settings_lines(svc))
+
+    def live_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
+        """The side panel's live numbers: (pinned at its top, the rest)."""
+        st, live = self._loop_status(svc), []
         starting = svc.starting.line()
         if starting:  # frames shown, the vision not running yet
             head = starting_lines(st, starting)
@@ -547,7 +552,12 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         if not starting:  # as many rows as it had, wrapped (a hand's rows come and go):
             self._head_rows = max(self._head_rows, len(head))  # nothing below moves, and
             head += [""] * (self._head_rows - len(head))  # no layout redone for them
-        cam = st["camera"]
+        return head, live
+
+    def settings_lines(self, svc) -> list[str]:
+        """The side panel's settings (``▸`` the chosen one), switches and keys."""
+        lines: list[str] = []
+        cam = self._loop_status(svc)["camera"]
         chosen = self.chosen_key()
         controls = svc.control_values()  # the camera's: in its driver's words
         for k, v in svc.params().items():
@@ -563,7 +573,7 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
             lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
         if not self.wizard_text():  # else the wizard's block says where it stands
             lines.append("k: touch calibration")
-        return head, live, lines
+        return lines
 
     def _output(self) -> str | None:
         names = list(self.service.switches())
