@@ -132,6 +132,9 @@ def _restore(path, text: str | None) -> None:
 
 
 class DevicesPane(VerticalScroll):
+    #: no Tab stop of its own (it would only scroll, naming no key): the focused list
+    #: scrolls into view, and the screen's keys work from each of them
+    can_focus = False
     HELP_TEXT = (
         "enter    on a sound card or relay board row: use it (saved to the profile's\n"
         "         override file; the outputs reopen with it)\n"
@@ -183,11 +186,14 @@ class DevicesPane(VerticalScroll):
         yield Static("relay board (enter uses it)", classes="heading")
         yield show_keys(LiteralTable(id="relay-table", cursor_type="row"), enter="use")
         yield Static("test signal (t plays it through the gate)", classes="heading")
-        yield Select(
-            [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
-            value="sine-PA",
-            allow_blank=False,
-            id="stimulus",
+        yield show_keys(
+            Select(
+                [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
+                value="sine-PA",
+                allow_blank=False,
+                id="stimulus",
+            ),
+            enter="test signals",
         )
         yield Static("plugins and what they provide", classes="heading")
         yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole line")
