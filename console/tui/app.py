@@ -342,7 +342,11 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         left, focused = self.active_tab, self.base.focused
         pane = self.pane(left) if left is not None else None
         focused = close_menus(self.base, focused)  # an open menu closes with its screen
-        if focused is not None and pane is not None and pane in focused.ancestors_with_self:
+        # only a text field is come back to (a half-typed line): any other widget gives
+        # way to the screen's own on entry (README: F1's sound-card list)
+        if left is not None:
+            self._left_focus.pop(left, None)
+        if isinstance(focused, Input) and pane is not None and pane in focused.ancestors_with_self:
             self._left_focus[left] = focused
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
         # sibling in the same (hidden) pane, and focus in a pane makes it the active tab.

@@ -1,6 +1,6 @@
 """The Camera screen's vision settings: ``[``/``]`` choose one, ``-``/``+`` (and the
 direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback; ``W``
-keeps them all for the profile."""
+keeps them all for the profile (``W`` again within 3 s: it asks first)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from typing import Any
 from textual import work
 
 from console.core.errors import UserError
+from console.tui.ask_again import AskAgain
 from console.tui.util import from_thread, short_path
 
 
@@ -18,6 +19,7 @@ class CameraTuningMixin:
 
     chosen: int
     service: Any
+    _keep_asked: AskAgain | None = None  # W's question (made on its first use)
 
     def action_tune(self, key: str, sign: int) -> None:
         """Change ``key`` by one step; it becomes the chosen setting: its row (``▸``, the
@@ -48,8 +50,17 @@ class CameraTuningMixin:
             self.action_tune(key, sign)
 
     def action_save_tuning(self) -> None:
-        if not self._borrowed("W"):
+        """``W``: asks first (it overwrites the vision settings saved for the profile);
+        ``W`` again within 3 s keeps them (``console.tui.ask_again``)."""
+        if self._borrowed("W"):
+            return
+        if self._keep_asked is None:
+            self._keep_asked = AskAgain()
+        if self._keep_asked.confirmed("keep"):
             self._save_tuning()
+            return
+        does = "keeps these vision settings for the profile (the saved ones replaced)"
+        self._keep_asked.ask(self, "W", does, self._status_shown, self.say)
 
     @work(thread=True, exclusive=True, group="camera-tuning")
     def _save_tuning(self) -> None:

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 from textual.widget import Widget
+from textual.widgets import Button, Select
+from textual.widgets._toggle_button import ToggleButton
 
 
 def show_keys(widget: Widget, **words: str) -> Widget:
@@ -36,3 +38,28 @@ def shown_words(widget: Widget) -> dict[str, str]:
         for b in bound[:1]
         if b.show
     }
+
+
+def own_key(widget: Widget | None) -> tuple[str, str] | None:
+    """(key, word) naming the focused ``widget`` in the footer when it shows no key of its
+    own: a button's Enter with its label (``⏎ start``), a check box's Space with its label
+    (``space record trials``), a drop-down's Enter (``⏎ choose``). None for any other
+    widget, or one that shows its own keys already (``show_keys``)."""
+    if widget is None or shown_words(widget):
+        return None
+    if isinstance(widget, Button):
+        return ("enter", _label_word(widget.label))
+    if isinstance(widget, ToggleButton):
+        return ("space", _label_word(widget.label))
+    if isinstance(widget, Select):
+        return ("enter", "choose")
+    return None
+
+
+def _label_word(label: object) -> str:
+    """A control's label as the footer's word: ``Start`` -> ``start``, ``synthesize (s)``
+    -> ``synthesize`` (the key in brackets is the screen's own key, shown beside it)."""
+    text = " ".join(str(label).split())
+    if text.endswith(")") and " (" in text:
+        text = text[: text.rindex(" (")]
+    return text[:1].lower() + text[1:]

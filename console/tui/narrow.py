@@ -8,8 +8,11 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 from rich.cells import cell_len
+from textual.binding import Binding
 from textual.widgets import Footer, TabbedContent, Tabs
 from textual.widgets._footer import FooterKey
+
+from console.tui.focus_keys import own_key
 
 ELLIPSIS = "…"
 
@@ -107,7 +110,8 @@ class ConsoleFooter(Footer):
 
     def _wanted(self) -> tuple:
         """(compact, the keys to show as data, in order): the focused widget's first (the
-        tab bar's, which Textual leaves out, names it), one key per action as Textual's
+        tab bar's, a button's or a check box's, which Textual leaves out, name it:
+        ``focus_keys.own_key``), one key per action as Textual's
         footer has them, the ``ALWAYS`` keys it lacks before the palette's, then only
         what fits the width."""
         if not self._bindings_ready or not self.is_attached:
@@ -117,8 +121,14 @@ class ConsoleFooter(Footer):
             return self._shown  # the old keys until the new screen's widget has the focus
         active = self.screen.active_bindings
         keys: list[tuple] = []
-        if isinstance(self.screen.focused, Tabs):
+        focused = self.screen.focused
+        if isinstance(focused, Tabs):
             keys.append(("right", "←→", "screens", "", False, "", False))
+        elif (own := own_key(focused)) is not None:  # a button or check box names itself
+            key, word = own
+            keys.append(
+                (key, self.app.get_key_display(Binding(key, "")), word, "", False, "", False)
+            )
         actions: set[str] = set()
         for _node, binding, enabled, tooltip in active.values():
             if binding.show and binding.action not in actions:

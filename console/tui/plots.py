@@ -2,7 +2,7 @@
 
 - ``frf_series``: |H| (um/V) of several excitations against frequency as series of a
   ``console.tui.charts.Chart`` (dB axis), with one frequency marked.
-- ``sparkline``: values as ``▁▂▃▄▅▆▇█``, as many as the width allows.
+- ``sparkline``: values as ``▁▂▃▄▅▆▇█`` over their own range, as many as the width allows.
 - ``HalfBlockImage``: a grey image as half-block characters (two pixels per cell),
   with coloured overlay pixels.
 """
@@ -62,15 +62,17 @@ def frf_series(
 
 
 def sparkline(values: Sequence[float], width: int = 20) -> str:
-    """The last ``width`` values as bar characters scaled to their own max (``''`` if none)."""
+    """The last ``width`` values as bar characters scaled to their own range, lowest to
+    highest (``''`` if none): values that stay near one level show how they moved, not a
+    solid block, and constant values are a flat low line."""
     v = np.asarray(list(values)[-width:], float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return ""
-    hi = float(v.max())
-    if hi <= 0:
+    lo, span = float(v.min()), float(v.max() - v.min())
+    if span <= 0:
         return BARS[0] * v.size
-    idx = np.clip((v / hi * (len(BARS) - 1)).round().astype(int), 0, len(BARS) - 1)
+    idx = np.clip(((v - lo) / span * (len(BARS) - 1)).round().astype(int), 0, len(BARS) - 1)
     return "".join(BARS[i] for i in idx)
 
 

@@ -34,16 +34,21 @@ SCENE = "roving_sensor"
 HOLDER = "the roving measurement (Vibration screen)"
 
 
+#: how to add an accelerometer input, said whole in the screen's help (``?``)
+ADD_ACCELEROMETER = (
+    "m measures with the profile's vibrometer; to measure with an accelerometer on the "
+    "sound card's inputs (roving sensor, no laser) add [audio_inputs.accel] channel = 1, "
+    "kind = 'accelerometer', sensitivity = 10.2 (mV per m/s^2: a 100 mV/g sensor) to the "
+    "profile's overrides.toml"
+)
+
+
 def add_accelerometer_text(profile: Any) -> str:
-    """What the screen says when ``m`` measures without an accelerometer input: where to
-    add one is the profile's overrides file (the operator's settings; a shipped profile
-    stays as shipped)."""
-    return (
-        "m measures with the profile's vibrometer; to measure with an accelerometer on the "
-        "sound card's inputs (roving sensor, no laser) add [audio_inputs.accel] channel = 1, "
-        "kind = 'accelerometer', sensitivity = 10.2 (mV per m/s^2: a 100 mV/g sensor) to "
-        f"{overrides_path(profile.name)}"
-    )
+    """What the screen says when ``m`` measures without an accelerometer input, in one
+    line (at 80 columns it must not push the grid down for the rest of the session): the
+    profile's overrides file is where to add one (the operator's settings; a shipped
+    profile stays as shipped); ``?`` says what to add (``ADD_ACCELEROMETER``)."""
+    return f"vibrometer measures; accelerometer: ? and {overrides_path(profile.name).name}"
 
 
 def has_accelerometer(profile: Any) -> bool:

@@ -45,6 +45,28 @@ def selftest_estimate(profile: Any, pm: Any) -> tuple[float, int, bool] | None:
         return None  # an older plugin without --estimate, or no estimate: said as such
 
 
+#: about how long the twin's vibration map takes to measure (the Vibration screen's m)
+TWIN_MAP_S = 10.0
+
+
+def selftest_about(
+    profile: Any, pm: Any, last_s: float
+) -> tuple[str, float, tuple[float, int, bool] | None]:
+    """(what the self-test will do, in words; its seconds expected; the estimate) before
+    it starts: its paths and seconds of chirps, the twin's map first on a fresh twin, or
+    the last run's seconds here (``last_s``, 0: none), which know the setup around them."""
+    est = selftest_estimate(profile, pm)
+    about = f"{est[1]} relay paths, {est[0]:.0f} s of chirps" if est else "time unknown"
+    total_s = est[0] if est else 0.0
+    if est and est[2]:  # a fresh twin: its map first (the Vibration screen's m)
+        about += f", the twin's vibration map first (about {TWIN_MAP_S:.0f} s)"
+        total_s += TWIN_MAP_S
+    elif last_s:
+        about += f", the last run took {last_s:.0f} s"
+        total_s = max(total_s, last_s)
+    return about, total_s, est
+
+
 def selftest_row(done: tuple[bool, str, float] | None) -> DeviceStatus:
     """The Devices doctor's self-test row: the last run here (healthy, line, seconds),
     or where to run it (``haptable doctor`` runs its quick part; here s runs it)."""

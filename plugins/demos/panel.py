@@ -513,8 +513,11 @@ class ScenesPane(Vertical):
         if why:  # not the operator's e-stop: its reason, whole (the bar's is cut)
             how = estop_text(why)
         demos = self.demos
-        if demos.last_snapshot is None:  # no numbers: how it ended
-            said = textwrap.wrap(f"{name} {how}", self.app.size.width - 2)
+        if demos.last_snapshot is None:  # no numbers: how it ended, said once
+            # a cancelled or failed start has its own line above: no second one here
+            own_line = reason in ("failed", "cancelled")
+            said = f"{name}: no numbers, it never ran" if own_line else f"{name} {how}"
+            said = textwrap.wrap(said, self.app.size.width - 2)
             self._show_last_run(escape("\n".join(said)))
         else:
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers

@@ -202,7 +202,10 @@ class StudiesPane(Vertical):
                 ("L→R", "left_to_right"),
                 ("R→L", "right_to_left"),
             ):
-                yield Button(label, id=f"ans-{value}", classes="answer", compact=True)
+                # no Tab stops: the arrow keys (and digits) answer from anywhere on the screen
+                answer = Button(label, id=f"ans-{value}", classes="answer", compact=True)
+                answer.can_focus = False
+                yield answer
         yield ProgressBar(total=1, show_eta=False, id="study-progress")
         yield Static(IDLE, id="study-status")
         table = TrialsTable(id="study-trials", cursor_type="row")

@@ -257,7 +257,7 @@ def test_w_keeps_the_tuned_thresholds_for_the_profile(plugins):
             before = svc.params()["body_threshold"]
             await pilot.press("T")
             await wait_for(pilot, lambda: svc.params()["body_threshold"] == before + 2)
-            await pilot.press("W")
+            await pilot.press("W", "W")  # the first asks
             await wait_for(
                 pilot,
                 lambda: "overrides.toml" in _said(app),
@@ -335,7 +335,7 @@ def test_any_vision_setting_is_chosen_tuned_and_kept(plugins):
             alpha = svc.params()["background_alpha"]
             await pilot.press("minus")
             assert svc.classifier.background.alpha == pytest.approx(alpha - 0.005)
-            await pilot.press("W")
+            await pilot.press("W", "W")  # the first asks
             await wait_for(
                 pilot,
                 lambda: "overrides.toml" in _said(app),
@@ -448,7 +448,7 @@ def test_the_view_turns_with_the_camera_and_the_roi_is_set_from_the_screen(plugi
                 await pilot.press("right_square_bracket")
             await pilot.press("plus", "plus")
             assert svc.classifier.orientation.margins_px == (16, 0, 0, 0)
-            await pilot.press("W")
+            await pilot.press("W", "W")  # the first asks
             await wait_for(
                 pilot,
                 lambda: "overrides.toml" in _said(app),

@@ -43,7 +43,9 @@ def test_the_recording_field_and_its_reply_show_under_a_calibration_result(plugi
             wiz.result, wiz.message, wiz.failed = object(), SAVED, False
             wizard = app.query_one("#camera-wizard")
             await wait_for(pilot, lambda: "saved to" in text_in(app, wizard), 10, "result")
-            await pilot.press("W")  # its line names the overrides file (a long path)
+            await pilot.press(
+                "W", "W"
+            )  # (the first asks) its line names the overrides file (a long path)
             status = app.query_one("#camera-status")
             await wait_for(pilot, lambda: "kept in" in text_in(app, status), 10, "W's line")
             await pilot.press("o")

@@ -46,7 +46,7 @@ async def _select(pilot, app, table_id: str, text: str) -> DataTable:
     await wait_for(pilot, lambda: _row_of(table, text) is not None, 20, f"{text} listed")
     table.focus()
     table.move_cursor(row=_row_of(table, text))
-    await pilot.press("enter")
+    await pilot.press("enter", "enter")  # the first asks, the second uses it
     return table
 
 
@@ -83,7 +83,7 @@ def test_pick_a_sound_card_and_a_relay_board_the_next_load_has_them():
             assert mic[-1] == "1 output"
             # the relay board: every registered driver with what its probe finds
             await _select(pilot, app, "#relay-table", "twin")
-            await wait_for(pilot, lambda: "relay board 'twin' in use" in _result(app), 20)
+            await wait_for(pilot, lambda: "relay board 'twin' in use already" in _result(app), 20)
             relays = app.query_one("#relay-table", DataTable)
             drivers = [str(c) for c in relays.get_column_at(1)]
             assert {"twin", "yoctopuce", "hid"} <= set(drivers)

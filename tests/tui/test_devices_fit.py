@@ -67,23 +67,28 @@ def test_a_long_driver_error_stays_in_its_column_and_shows_whole_on_enter(caplog
     asyncio.run(scenario())
 
 
-def test_the_status_line_shows_the_saved_path_at_80_by_24(plugins):
+def test_the_status_line_shows_the_saved_path_at_80_by_24():
+    from .test_devices import _bench_card_plugin
+
+    plugins = load_plugins(extra={"bench_card": _bench_card_plugin()})
+
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(80, 24)) as pilot:
             await wait_for(pilot, lambda: app.session.outputs is not None, what="outputs")
-            table = app.query_one("#relay-table", DataTable)
-            await wait_for(pilot, lambda: _row_of(table, "twin") is not None, 20, "listed")
+            table = app.query_one("#audio-table", DataTable)
+            card = "Bench Card B"
+            await wait_for(pilot, lambda: _row_of(table, card) is not None, 20, "listed")
             table.focus()
-            table.move_cursor(row=_row_of(table, "twin"))
-            await pilot.press("enter")
+            table.move_cursor(row=_row_of(table, card))
+            await pilot.press("enter", "enter")  # the first asks, the second uses it
             pane = app.pane("devices")
-            await wait_for(pilot, lambda: "in use" in pane.result, 20, "picked")
+            await wait_for(pilot, lambda: "in use; saved" in pane.result, 20, "picked")
             pane.scroll_home(animate=False)
             table.focus()
             await pilot.pause(0.3)
             text = " ".join(line.strip() for line in screen_text(app).splitlines())
-            assert "relay board 'twin' in use; saved to" in text, text
+            assert "in use; saved to" in text, text
             assert overrides_path("sim").name in text, text
 
     asyncio.run(scenario())

@@ -108,7 +108,7 @@ def test_new_operator_at_80x24(plugins, monkeypatch):
             assert "…" not in shown and "piezo, screen" in shown, shown
             await wait_for(pilot, lambda: _footer(app).startswith("⏎ whole row"), 10, "its enter")
             # the self-test says how long before it starts, then how far it is
-            await pilot.press("s")
+            await pilot.press("s", "s")  # the first asks
             await wait_for(pilot, lambda: "s so far" in pane.result, 10, "progress")
             assert "5 relay paths, 5 s of chirps" in pane.result, pane.result
             gate.set()

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from console.tui.roving_view import (
+    ADD_ACCELEROMETER,
     RovingProgress,
     add_accelerometer_text,
     has_accelerometer,
@@ -65,9 +66,10 @@ def test_only_an_accelerometer_input_starts_the_roving_run(tmp_path):
     assert not has_accelerometer(_Prof({"loop": loop}))
     assert not has_accelerometer(_Prof({}))
     # without one, m measures as before and the screen says how to add one, and where
-    text = add_accelerometer_text(_Prof({}))
-    assert "add [audio_inputs.accel] channel = 1, kind = 'accelerometer'" in text
-    assert text.endswith("t/overrides.toml")  # the operator's file, not the shipped one
+    text = add_accelerometer_text(_Prof({}))  # one line, naming the file; ? says it whole
+    assert "accelerometer: ?" in text and len(text) < 78
+    assert "add [audio_inputs.accel] channel = 1, kind = 'accelerometer'" in ADD_ACCELEROMETER
+    assert text.endswith("overrides.toml")  # the operator's file, not the shipped one
     kept = tmp_path / "measured-map-0123.npz"
     assert roving_map_path(kept) == tmp_path / "roving-map-0123.npz"
 

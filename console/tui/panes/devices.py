@@ -16,18 +16,19 @@ from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
-from console.config.profile import load_profile, overrides_path, save_overrides
 from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
+from console.tui.ask_again import AskAgain
+from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
 from console.tui.said import status_said
-from console.tui.selftest_action import run_selftest, selftest_estimate, selftest_row
+from console.tui.selftest_action import run_selftest, selftest_about, selftest_row
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
 from console.tui.text import LiteralTable
@@ -35,8 +36,6 @@ from console.tui.util import from_thread, short_path
 
 log = logging.getLogger(__name__)
 
-#: about how long the twin's vibration map takes to measure (the Vibration screen's m)
-TWIN_MAP_S = 10.0
 #: the widest a table cell gets on this screen (a longer text ends in "…": the whole
 #: text is in the log, ctrl+l, and enter on the row says it)
 CELL_MAX = 36
@@ -123,22 +122,19 @@ def _says_estop(line: str) -> bool:
     return any(w in line for w in words)
 
 
-def _restore(path, text: str | None) -> None:
-    """Put the override file back as it was before a pick (absent: removed)."""
-    if text is None:
-        path.unlink(missing_ok=True)
-    else:
-        path.write_text(text, encoding="utf-8")
-
-
-class DevicesPane(VerticalScroll):
+class DevicesPane(DevicePicksMixin, VerticalScroll):
+    #: no Tab stop of its own (it would only scroll, naming no key): the focused list
+    #: scrolls into view, and the screen's keys work from each of them
+    can_focus = False
     HELP_TEXT = (
-        "enter    on a sound card or relay board row: use it (saved to the profile's\n"
-        "         override file; the outputs reopen with it)\n"
+        "enter    on a sound card or relay board row: enter again within 3 s uses it (saved\n"
+        "         to the profile's override file; the outputs reopen with it); on the one\n"
+        "         in use (●): nothing changes\n"
         "t        play the chosen test signal through the gate on the outputs now open\n"
         "l        list the sound cards and relay boards again\n"
         "d        re-check the profile's devices (doctor)\n"
-        "s        self-test: chirp every relay path, compare with the baseline"
+        "s        self-test: s again within 3 s chirps every relay path, compares with\n"
+        "         the baseline"
     )
     BINDINGS = [
         # short words: every key shows in the footer at 80 columns, a table's Enter first
@@ -164,6 +160,7 @@ class DevicesPane(VerticalScroll):
         #: the self-test's row: its last run here (None: not run), its seconds then
         self.selftest_done: tuple[bool, str, float] | None = None
         self._selftest_timer = None  # the self-test's progress ticks while it runs
+        self.ask = AskAgain()  # a pick and the self-test: their key again does it
 
     def compose(self) -> ComposeResult:
         # the profile line and under it the screen's status line (what a pick or a test
@@ -183,11 +180,14 @@ class DevicesPane(VerticalScroll):
         yield Static("relay board (enter uses it)", classes="heading")
         yield show_keys(LiteralTable(id="relay-table", cursor_type="row"), enter="use")
         yield Static("test signal (t plays it through the gate)", classes="heading")
-        yield Select(
-            [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
-            value="sine-PA",
-            allow_blank=False,
-            id="stimulus",
+        yield show_keys(
+            Select(
+                [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
+                value="sine-PA",
+                allow_blank=False,
+                id="stimulus",
+            ),
+            enter="test signals",
         )
         yield Static("plugins and what they provide", classes="heading")
         yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole line")
@@ -476,91 +476,6 @@ class DevicesPane(VerticalScroll):
                 key=key,
             )
 
-    # ------------------------------------------------------------------ picking
-    @on(DataTable.RowSelected, "#audio-table")
-    def _pick_audio(self, event: DataTable.RowSelected) -> None:
-        key = str(event.row_key.value)
-        choice = self.audio_rows.get(key)
-        if choice is None:
-            return
-        if key in self.no_device_rows:
-            self._show_result(
-                f"{self.no_device_rows[key]}: no device on this row to use; "
-                "connect one and list again (l)",
-                severity="warning",
-            )
-            return
-        driver, device = choice
-        label = device or driver
-        self._apply({"audio.driver": driver, "audio.device": device}, f"sound card {label!r}")
-
-    @on(DataTable.RowSelected, "#relay-table")
-    def _pick_relays(self, event: DataTable.RowSelected) -> None:
-        key = str(event.row_key.value)
-        driver = self.relay_rows.get(key)
-        if driver is None:
-            return
-        status = self.unusable_boards.get(key)
-        if status is not None:  # nothing there to open: the outputs stay as they are
-            fix = status.fix or "connect it"
-            why = status.why  # a driver's message often ends with its fix: said once
-            if fix and why.endswith(fix):
-                why = why[: -len(fix)].rstrip("; :,")
-            self._show_result(
-                f"relay board {driver!r} cannot be opened ({status.state}: {why}): {fix}, "
-                "then press l",
-                severity="warning",
-            )
-            return
-        self._apply({"relays.driver": driver}, f"relay board {driver!r}")
-
-    @on(DataTable.RowSelected, "#plugin-table")
-    def _about_plugin(self, event: DataTable.RowSelected) -> None:
-        """Enter on a plugin's row: its whole line (the table cuts it)."""
-        self._show_result(self.plugin_rows.get(str(event.row_key.value), ""))
-
-    @work(thread=True, exclusive=True, group="pick")
-    def _apply(self, settings: dict, what: str) -> None:
-        """Save ``settings`` to the profile's override file, reload the profile and
-        reopen the outputs with it (refused while they play or are e-stopped)."""
-
-        session, pm = self.app.session, self.app.ctx.pm
-        self._say(f"{what}: saving ...")
-        saved = overrides_path(self._profile().name)
-        old_text = saved.read_text(encoding="utf-8") if saved.is_file() else None
-        try:
-            path = save_overrides(self._profile(), settings, pm)
-            new = load_profile(self._profile().path, pm)
-        except UserError as exc:  # ProfileError too: one line naming the file and key
-            self._say(f"{what}: not saved: {exc}", error=True)
-            return
-        try:
-            opened = session.reopen_outputs(new)
-        except UserError as exc:  # playing, e-stopped or lent to a demo
-            self._say(
-                f"{what} saved to {short_path(path)}; the outputs stay as they are: {exc} "
-                "(pick it again then, or restart the console)",
-                error=True,
-            )
-            return
-        if opened:
-            self._say(f"{what} in use; saved to {short_path(path)}")
-        else:  # the session reopened the previous outputs: their settings come back too
-            _restore(path, old_text)
-            back = "the previous outputs are back" if session.outputs else "no outputs open"
-            kept = (  # name the file only if it is there
-                "nothing was saved"
-                if old_text is None
-                else f"{short_path(path)} keeps its previous settings"
-            )
-            self._say(f"{what} did not open: {session.reopen_error}; {back}, {kept}", error=True)
-        from_thread(self.app, self._after_pick)
-
-    def _after_pick(self) -> None:
-        self._show_profile_line()
-        self.action_list_devices()
-        self.action_doctor()
-
     # ------------------------------------------------------------------ testing
     @work(thread=True, exclusive=True, group="test-output")
     def action_test_output(self) -> None:
@@ -594,21 +509,23 @@ class DevicesPane(VerticalScroll):
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    @work(thread=True, exclusive=True, group="test-output")
     def action_selftest(self) -> None:
+        """``s``: asks first (it plays chirps on every relay path), ``s`` again within
+        3 s runs it; during an e-stop it is refused at once (nothing to ask)."""
+        out = self.app.session.outputs
+        if (out is not None and out.estopped) or self.ask.confirmed("selftest"):
+            self._selftest()
+            return
+        does = "runs the self-test: a chirp on every relay path"
+        self.ask.ask(self, "s", does, lambda: self.result, self._show_result)
+
+    @work(thread=True, exclusive=True, group="test-output")
+    def _selftest(self) -> None:
         """Every relay path chirped and compared (``console.tui.selftest_action``): the
         line says how long it takes before it starts, then how far it is."""
         prof, pm = self._profile(), self.app.ctx.pm
-        est = selftest_estimate(prof, pm)
         last_s = self.selftest_done[2] if self.selftest_done else 0.0
-        about = f"{est[1]} relay paths, {est[0]:.0f} s of chirps" if est else "time unknown"
-        total_s = est[0] if est else 0.0
-        if est and est[2]:  # a fresh twin: its map first (the Vibration screen's m)
-            about += f", the twin's vibration map first (about {TWIN_MAP_S:.0f} s)"
-            total_s += TWIN_MAP_S
-        elif last_s:  # the last run here knows the setup around the chirps
-            about += f", the last run took {last_s:.0f} s"
-            total_s = max(total_s, last_s)
+        about, total_s, est = selftest_about(prof, pm, last_s)
         self._say(f"self-test ({about}): starting ...")
         t0 = time.monotonic()
         from_thread(self.app, self._selftest_ticks, t0, about, total_s)

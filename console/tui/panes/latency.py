@@ -145,7 +145,7 @@ class LatencyPane(Vertical):
         "reached its stage (vision: every frame processed; output and end to end: the "
         "frames that scheduled output), so end to end's p99 can be below another row's. "
         "The sparkline: a bar per reading (every half second while the screen shows, the newest on the "
-        "right), growing to the screen's width and then scrolling (m's "
+        "right; scaled from its lowest reading to its highest, a steady p50 a flat low line), growing to the screen's width and then scrolling (m's "
         f"{MEASURE_S:.0f} s: {MEASURE_S / TICK_S:.0f} bars)\n"
         "camera  the driver's fps and the frames it dropped; the loop's fps, frames, "
         "frames dropped because processing fell behind, and errors\n"

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from console.core.errors import UserError
+from console.tui.roving_view import ADD_ACCELEROMETER
 from console.tui.text import escape
 from console.tui.time_left import left_words, seconds_left
 
@@ -29,6 +30,7 @@ HELP_KEYS = (
     "w a s d: flow under a hand at the cursor (· marks where a hand fits)\n"
     "m: measure (with an accelerometer input: the roving sensor, point by point; m again "
     "when the sensor is placed; x or escape stops, m resumes)\n"
+    f"{ADD_ACCELEROMETER}\n"
     "b: build the lookup tables   x: cancel what runs\n"
     "page down / page up: scroll to the FRF plot's axes and legend and back (the grid "
     "keeps the cursor)\n"
