@@ -44,6 +44,11 @@ def pytest_collection_finish(session):
 
 
 os.environ["HAPTABLE_LOAD_ENTRYPOINTS"] = "0"
+# A runtime dir of this process's own (each xdist worker's) for what starts outside a
+# test's own (``_private_runtime``): a module's or the session's kernels. Unset, they
+# would all meet in /tmp/haptable-<uid>, every worker's and the machine's.
+_WORKER_RUNTIME = tempfile.mkdtemp(prefix="ht-w-", dir="/tmp")
+os.environ["XDG_RUNTIME_DIR"] = _WORKER_RUNTIME
 os.environ.pop("HAPTABLE_BLOCK_PLUGINS", None)
 os.environ.pop("HAPTABLE_PROFILE", None)
 os.environ.pop("HAPTABLE_PROFILES", None)
@@ -77,6 +82,10 @@ def pytest_cmdline_main(config):
 #: thread method went there, and the worker died without a word.
 HARD_TIMEOUT_S = 420.0
 _STDERR_FD: int | None = None
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(_WORKER_RUNTIME, ignore_errors=True)
 
 
 def pytest_configure(config):
