@@ -76,3 +76,46 @@ def test_the_chosen_row_shows_under_a_result_and_a_tuio_error(plugins, size):
 
     asyncio.run(scenario())
 
+
+#: a finished calibration's numbers, as the twin's run reports them
+REPORT = (
+    "12 targets: reprojection error 0.61 mm rms, 1.32 mm max (leave-one-out 2.72 mm); "
+    "outliers none."
+)
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["80x24", "120x40"])
+def test_a_saved_calibration_result_shows_whole(plugins, size, monkeypatch):
+    """k's result, saved with S: the wizard's block (the numbers and where they were
+    saved) shows whole under the live numbers, no status line repeating it; the chosen
+    setting's row still shows."""
+    from console.files import paths
+
+    from .test_camera_layout import text_in
+    from .test_camera_stale import _Fit
+
+    # the state folder under the home folder, as on an operator's machine: shown with ~
+    monkeypatch.setenv("HOME", str(paths.profile_state_dir("sim", "x").parent.parent))
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=size) as pilot:
+            await _first_frame(app, pilot)
+            pane = app.pane("camera")
+            wiz = app.session.calibration
+            wiz.result, wiz.report_text = _Fit(), REPORT
+            wiz.message = f"{REPORT} S: save"
+            await pilot.press("S")
+            block = app.query_one("#camera-wizard")
+            whole = lambda: " ".join(str(block.render()).split())  # noqa: E731
+            await wait_for(pilot, lambda: "saved to" in whole(), 10, "saved")
+            await wait_for(pilot, lambda: "touch_calibration.json" in whole(), 10, "its path")
+            await pilot.pause(0.6)  # the live numbers' next write
+            await wait_for(pilot, lambda: text_in(app, block) == whole(), 5, "the block whole")
+            assert whole().endswith("touch_calibration.json"), whole()
+            assert "leave-one-out 2.72 mm" in text_in(app, block)
+            assert "saved to" not in words_on(app, "#camera-status")  # said once, above
+            key = pane.chosen_key()
+            assert _row(app, key) is not None, key
+
+    asyncio.run(scenario())
