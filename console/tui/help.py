@@ -13,11 +13,12 @@ entry, continues the line above), so every pane's help reads well at 80 and 120 
 from __future__ import annotations
 
 import re
-import textwrap
 from collections.abc import Sequence
 
 from textual.content import Content
 from textual.widgets import Static
+
+from console.tui import glue
 
 __all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
 
@@ -91,7 +92,7 @@ def wrap(paragraph: str, width: int) -> list[tuple[str, str]]:
     if hang and max(map(len, paragraph[len(key) :].split()), default=0) > width - hang:
         hang = 0  # a word wider than the column (a path): the lines wrap whole
     body = paragraph[len(key) :] if hang else paragraph
-    lines = textwrap.wrap(
+    lines = glue.wrap(
         body,
         width - hang,
         break_on_hyphens=False,
