@@ -19,14 +19,17 @@ ELLIPSIS = "…"
 def middle_ellipsis(path: str, width: int) -> str:
     """``path`` in at most ``width`` cells: whole when it fits, else its start, ``…``,
     and its end from a ``/`` on (the end, where the names that tell paths apart are,
-    gets up to two thirds)."""
+    gets up to two thirds; the last name whole when it fits)."""
     if cell_len(path) <= width:
         return path
     if width <= 1:
         return ELLIPSIS[:width]
     end = path[len(path) - (2 * (width - 1)) // 3 :] if width > 2 else ""
+    name = path[path.rfind("/") :] if "/" in path else ""
     if "/" in end[:-1]:  # it starts with a whole name
         end = end[end.index("/") :]
+    elif name and len(end) < len(name) <= width - 2:  # the file's name whole, if it fits
+        end = name
     return f"{path[: width - 1 - len(end)]}{ELLIPSIS}{end}"
 
 

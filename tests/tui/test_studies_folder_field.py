@@ -26,6 +26,9 @@ def test_middle_ellipsis_keeps_the_start_and_the_last_names():
         head, tail = shown.split("…")
         assert path.startswith(head) and path.endswith(tail), shown
     assert middle_ellipsis(path, 30) == "/home/someone/.…/jnd_amplitude"
+    # a file's name longer than two thirds of the width stays whole when it fits
+    log = "/tmp/ht-run-sbum76fq/haptable/demo-19922-flow-20261130-124113.json"
+    assert middle_ellipsis(log, 40) == "/t…/demo-19922-flow-20261130-124113.json"
 
 
 def _field_row(app) -> tuple[str, str]:
