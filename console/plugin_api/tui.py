@@ -16,7 +16,10 @@ What it offers:
 - time left: ``Pace`` (counts done over time: the seconds the rest takes) and
   ``left_words`` ("about 1 min 10 s left": ``console.tui.time_left``), ``seconds_left``
   (from the time so far and the fraction done)
-- paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``)
+- paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``),
+  ``PathInput`` (a field holding a path: too long for it, it shows ``…`` in its middle
+  while it has no focus), ``middle_ellipsis`` (a path in a given width, ``…`` in its
+  middle)
 - messages: ``said_here`` (an outcome shown on the screen's own status line: logged, and
   a toast only when the screen is not in view; the console's rule, ``console.tui.said``),
   ``status_said`` (whatever a status line now says: an error as ``said_here``, news
@@ -37,6 +40,7 @@ from console.tui.lapse import lapse, lapse_if_held
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.panels import LeavesForScreen
+from console.tui.path_field import PathInput, middle_ellipsis
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
@@ -62,6 +66,8 @@ __all__ = [
     "show_keys",
     "from_thread",
     "short_path",
+    "PathInput",
+    "middle_ellipsis",
     "Pace",
     "left_words",
     "seconds_left",

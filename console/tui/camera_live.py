@@ -11,6 +11,7 @@ import re
 from typing import Any
 
 from console.runtime.exposure_assist import MIN_LIGHT, MIN_SNR, Reading, skin_at
+from console.tui import glue
 from console.tui.loop_rates import CAMERA, VISION
 from console.tui.text import escape
 
@@ -34,7 +35,7 @@ def hang(lines: list[str], width: int) -> list[str]:
     width, out = max(width, 12), []
     for line in lines:
         row = ""
-        for word in line.split(" "):
+        for word in glue.groups(line):  # a number on the row of its unit
             joined = f"{row} {word}" if row.strip() else f"{row}{word}"
             if row.strip() and _cells(joined) > width:
                 out.append(row)

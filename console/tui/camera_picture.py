@@ -5,17 +5,17 @@ laid out again when its lines did not change size."""
 
 from __future__ import annotations
 
-import textwrap
-
 import numpy as np
 
+from console.tui import glue
 from console.tui.camera_live import reading_lines  # noqa: F401 - its former home
 
 
 def wrap_markup(line: str, width: int) -> str:
     """``line`` broken at spaces into lines of at most ``width`` cells (its markup tags,
-    which take no cells, counted: a line may break early, never late)."""
-    return "\n".join(textwrap.wrap(line, width, break_on_hyphens=False)) or line
+    which take no cells, counted: a line may break early, never late), a number on the
+    line of its unit (``glue``)."""
+    return "\n".join(glue.wrap(line, width, break_on_hyphens=False)) or line
 
 
 def overlay_pixels(shape_px, cols: int, rows: int, work: dict, target_px=None) -> np.ndarray:

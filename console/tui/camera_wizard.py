@@ -114,7 +114,9 @@ class CameraWizardMixin:
             self.say(f"S: {exc}", "warning")
             return
         self._saved_to = path
-        self.say(f"touch calibration saved to {short_path(path)}")
+        # the wizard's block says where it was saved (its result whole, no status line
+        # repeating it below: at 80 x 24 the two did not fit under the live numbers)
+        self.say("")
         self.refresh_bindings()  # S leaves the footer: nothing waits for it
 
     def _status_shown(self) -> str:

@@ -13,11 +13,12 @@ entry, continues the line above), so every pane's help reads well at 80 and 120 
 from __future__ import annotations
 
 import re
-import textwrap
 from collections.abc import Sequence
 
 from textual.content import Content
 from textual.widgets import Static
+
+from console.tui import glue
 
 __all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
 
@@ -35,19 +36,48 @@ def _continues(line: str) -> bool:
     return (line[0].islower() or line[0].isdigit() or line[0] == "(") and not ENTRY.match(line)
 
 
+#: where a second entry starts on a line (``b: build ...   x: cancel ...``): three or
+#: more spaces, then an entry's key and its separator
+_SEP = re.compile(r": |\s{2,}")
+NEXT_ENTRY = re.compile(r"(?<=\S)\s{3,}(?=" + ENTRY.pattern.lstrip("^") + ")")
+
+
+def entries(line: str) -> list[str]:
+    """``line`` cut where another entry starts after three or more spaces: each entry
+    is a paragraph of its own (two side by side ran together into one sentence once
+    wrapped: ``x: cancel what runs page down / page up: ...``)."""
+    # the line's own key and its separator stay (its first one: ENTRY takes the
+    # longest key it can, ``b: build the lookup tables   `` in the example)
+    sep = _SEP.search(line) if ENTRY.match(line) else None
+    start = sep.end() if sep is not None else 0
+    cut = NEXT_ENTRY.search(line, start)
+    if cut is None:
+        return [line]
+    return [line[: cut.start()], *entries(line[cut.end() :])]
+
+
 def paragraphs(text: str) -> list[str]:
     """``text`` as its paragraphs: one line per entry or paragraph, ``""`` for a blank
-    line; hard line breaks inside a paragraph are joined back (see the module)."""
+    line; hard line breaks inside a paragraph are joined back, and entries written side
+    by side are cut apart (see the module)."""
     out: list[str] = []
-    for raw in text.splitlines():
-        line = raw.rstrip()
-        if not line.strip():
-            out.append("")
-        elif out and out[-1] and _continues(line):
-            out[-1] = f"{out[-1]} {line.strip()}"
-        else:
-            out.append(line)
+    for whole in text.splitlines():
+        first, *more = entries(whole.rstrip()) if whole.strip() else [whole]
+        out += _joined(out, first)
+        out += more
     return out
+
+
+def _joined(out: list[str], raw: str) -> list[str]:
+    """The paragraphs ``raw`` adds to ``out``: none when it continues ``out``'s last
+    one (joined to it there), else itself (``""``: a blank line)."""
+    line = raw.rstrip()
+    if not line.strip():
+        return [""]
+    if out and out[-1] and _continues(line):
+        out[-1] = f"{out[-1]} {line.strip()}"
+        return []
+    return [line]
 
 
 def wrap(paragraph: str, width: int) -> list[tuple[str, str]]:
@@ -62,7 +92,7 @@ def wrap(paragraph: str, width: int) -> list[tuple[str, str]]:
     if hang and max(map(len, paragraph[len(key) :].split()), default=0) > width - hang:
         hang = 0  # a word wider than the column (a path): the lines wrap whole
     body = paragraph[len(key) :] if hang else paragraph
-    lines = textwrap.wrap(
+    lines = glue.wrap(
         body,
         width - hang,
         break_on_hyphens=False,

@@ -26,7 +26,16 @@ from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stopped
-from console.plugin_api.tui import LongWork, SessionMessage, escape, lapse, said_here, status_said
+from console.plugin_api.tui import (
+    LongWork,
+    SessionMessage,
+    escape,
+    lapse,
+    middle_ellipsis,
+    said_here,
+    short_path,
+    status_said,
+)
 
 from .projector_line import status_text
 from .status import estop_text, status_lines
@@ -110,7 +119,9 @@ def _shorter(text: Text, width: int) -> Text:
 
 class ScenesPane(Vertical):
     DEFAULT_CSS = """
-    ScenesPane #demo-table { height: auto; max-height: 5; }
+    /* the demos give rows to the status below them (down to the header and a demo):
+       a stopped run's last numbers and its twin log line stay on screen at 80 x 24 */
+    ScenesPane #demo-table { height: 1fr; min-height: 3; max-height: 5; }
     /* one row per line (a wrapped line pushed the last ones off at 80 x 24): a line
        too long drops whole fields (``fit_fields``: a number is never cut) */
     ScenesPane #demo-status { height: auto; text-wrap: nowrap; text-overflow: ellipsis; }
@@ -523,8 +534,10 @@ class ScenesPane(Vertical):
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
             text = "\n".join(status_lines(snap))
             log = (demos.last_final or {}).get("twin_log")
-            if log:
-                text += f"\nwhat the twin's outputs received:\n{escape(log)}"
+            if log:  # one line, its path fitted (two rows were cut at 80 x 24)
+                label = "the twin's outputs received: "
+                room = self.app.size.width - 2 - len(label)
+                text += f"\n{label}{escape(middle_ellipsis(short_path(log), room))}"
             head = f"{how}; an e-stop came after" if after else how
             head = "\n".join(textwrap.wrap(f"last run ({head}):", self.app.size.width - 2))
             self._show_last_run(f"{escape(head)}\n{text}")

@@ -91,7 +91,7 @@ class StudiesPane(Vertical):
     StudiesPane #protocol { width: 14; margin-right: 2; }
     StudiesPane #participant { margin-right: 1; }
     StudiesPane #participant { width: 10; }
-    StudiesPane #out { width: 1fr; margin-right: 0; }
+    StudiesPane #out { width: 1fr; margin-right: 1; }
     StudiesPane #age { width: 5; }
     StudiesPane #sex { width: 10; }
     StudiesPane #handedness { width: 13; }

@@ -10,6 +10,8 @@ from typing import Any
 from textual.containers import Horizontal
 from textual.widgets import Checkbox, Input, Label
 
+from console.plugin_api.tui import PathInput
+
 from .trial_recording import RECORD
 
 __all__ = ["RECORD", "folder_row", "typed_field"]
@@ -25,7 +27,11 @@ def folder_row(out: str, profile: Any) -> Horizontal:
     """The folder row: where the results go, and the record-trials switch."""
     return Horizontal(
         Label("folder", markup=False),
-        typed_field(out, placeholder="where the results go", id="out"),  # a path
+        # a path: too long for the field, it shows with … in its middle (never cut
+        # against the switch beside it)
+        PathInput(
+            out, placeholder="where the results go", id="out", compact=True, select_on_focus=False
+        ),
         Checkbox(
             "record trials",
             bool(profile.get("recording.study_trials")),

@@ -1,18 +1,60 @@
 """A help entry whose key is several words (``page down / page up: ...``) is an entry of
 its own, not joined to the line above (Vibration's help read ``x: cancel what runs page
-down / page up: ...``)."""
+down / page up: ...``); entries written side by side (``b: ...   x: ...``) each start
+a line of the help screen, at 80 x 24 and 120 x 40."""
 
 from __future__ import annotations
 
-from console.tui.help import paragraphs
+import asyncio
+
+import pytest
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+from console.tui.help import entries, paragraphs
 from console.tui.panes.vibration_words import HELP_KEYS
+
+from .conftest import wait_for
+from .test_camera_layout import SIZES, screen_lines
 
 
 def test_a_key_of_several_words_starts_its_own_entry():
     got = paragraphs(HELP_KEYS)
     assert any(p.startswith("page down / page up: scroll") for p in got), got
-    assert any(p == "b: build the lookup tables   x: cancel what runs" for p in got), got
+    assert "b: build the lookup tables" in got and "x: cancel what runs" in got, got
     # a hard-wrapped sentence still joins back
     assert paragraphs("m: measure the map\nwith the vibrometer") == [
         "m: measure the map with the vibrometer"
     ]
+
+
+def test_entries_side_by_side_are_cut_apart():
+    assert entries("b: build the lookup tables   x: cancel what runs") == [
+        "b: build the lookup tables",
+        "x: cancel what runs",
+    ]
+    # a key's own spaces stay; the next entry after them is cut
+    assert entries("t / T    body threshold down / up      c / C  contact up") == [
+        "t / T    body threshold down / up",
+        "c / C  contact up",
+    ]
+    # prose, a continued line's indent, a single entry: as written
+    for line in ("         the profile): type its path", "m: measure it  now", "a b c"):
+        assert entries(line) == [line]
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["80x24", "120x40"])
+def test_vibration_help_shows_each_entry_on_its_own_line(plugins, size):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=size) as pilot:
+            await pilot.press("question_mark")
+            rows = lambda: [r.strip(" █▎▊") for r in screen_lines(app)]  # noqa: E731
+            await wait_for(pilot, lambda: any("build the lookup" in r for r in rows()), 10, "help")
+            shown = rows()
+            assert any(r.startswith("x: cancel what runs") for r in shown), shown
+            assert any(r.startswith("enter: audition the point") for r in shown), shown
+            built = next(r for r in shown if "build the lookup tables" in r)
+            assert "x:" not in built, built
+
+    asyncio.run(scenario())

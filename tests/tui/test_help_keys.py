@@ -14,6 +14,7 @@ from textual.widgets import Input
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.glue import groups
 from console.tui.help import ENTRY  # the help's own notion of an entry
 
 from .conftest import wait_for
@@ -101,14 +102,14 @@ def _help_lines(app) -> tuple[list[str], int]:
 
 
 def broken_early(lines: list[str], width: int) -> list[str]:
-    """Lines that end inside a paragraph although the next line's first word would have
-    fit on them: a hard line break (an orphan word when the widget wraps it again)."""
+    """Lines that end inside a paragraph although the next line's first word (with the
+    unit glued to it, ``console.tui.glue``) would have fit on them: a hard line break (an orphan word when the widget wraps it again)."""
     bad = []
     for line, nxt in zip(lines, lines[1:], strict=False):
         if not line.strip() or not nxt.strip() or ENTRY.match(nxt.lstrip()):
             continue
         continues = nxt[0].isspace() or nxt[0].islower() or nxt[0] in "(0123456789"
-        word = nxt.split()[0]
+        word = groups(nxt.lstrip())[0]  # a number goes with its unit (``glue``)
         if continues and len(line) + 1 + len(word) <= width:
             bad.append(f"{line!r} / {nxt!r}")
     return bad

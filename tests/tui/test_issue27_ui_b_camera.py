@@ -67,7 +67,8 @@ def test_camera_save_key_path_exposure_and_background(plugins, monkeypatch):
             wizard.message = "12 targets: outliers none. S: save"
             await wait_for(pilot, lambda: "S save" in screen_lines(app)[-1], 10, "S in footer")
             await pilot.press("S")
-            await wait_for(pilot, lambda: "saved to" in _status(app), 30, "saved")
+            block = app.query_one("#camera-wizard")
+            await wait_for(pilot, lambda: "saved to" in text_in(app, block), 30, "saved")
             rows = screen_lines(app)
             assert any("touch_calibration.json" in r for r in rows), rows
             await wait_for(pilot, lambda: "S save" not in screen_lines(app)[-1], 10, "S gone")

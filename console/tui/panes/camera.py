@@ -388,17 +388,25 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         y = settings.first().virtual_region.y + keys.index(key)
         scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
 
+    #: the scrolled part's rows no block above it takes while nothing is typed in: the
+    #: chosen setting's row (``▸``) shows there, whatever the status lines say
+    CHOSEN_ROWS = 1
+
     def fit_side(self) -> None:
-        """The side panel's field being typed in keeps its rows; the blocks above it give
-        way in turn when they do not fit: a finished wizard's result that asks for no
-        key first, then the status line, the wizard's step or ``S: save``, the live
-        numbers last."""
+        """The side panel's field being typed in keeps its rows, else the chosen
+        setting's row (``CHOSEN_ROWS``: ``-``/``+`` never change a value out of view);
+        the blocks above give way in turn when they do not fit: a finished wizard's
+        result that asks for no key first, then the status line, the wizard's step or
+        ``S: save``, the live numbers last."""
         scroll = self.query("#camera-scroll")
         if not scroll:
             return
         focused = self.app.focused
         typing = focused if focused is not None and scroll.first() in focused.ancestors else None
-        kept = outer_rows([*self.query("#camera-recording"), typing])
+        fields = [*self.query("#camera-recording"), typing]
+        kept = outer_rows(fields)
+        if not any(f is not None and f.display for f in fields) and self.replay is None:
+            kept += self.CHOSEN_ROWS
         info, wizard, status = (
             self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
         )
