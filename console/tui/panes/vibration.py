@@ -562,6 +562,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         return True
 
     def action_command(self) -> None:
+        self.drop_accelerometer_hint()  # ":" is a key too (a priority one: no on_key)
         self.query_one("#vib-cmd", CommandLine).open()
 
     def on_input_submitted(self, event: Input.Submitted) -> None:

@@ -38,6 +38,9 @@ class VibrationMeasureMixin:
     status_text: str
     _measuring: threading.Event | None
     _measure_asked = -1e9  # when m last asked before replacing the kept map
+    #: the one-line accelerometer hint ``m`` shows without an accelerometer input ("": none);
+    #: it goes with the next key or when the measurement ends, whichever comes first
+    _accel_hint = ""
 
     def action_measure(self, command: str | None = None) -> None:
         """``m``: measure the map, refused in the console's words during an e-stop."""
@@ -57,7 +60,8 @@ class VibrationMeasureMixin:
             return
         self._measure_asked = -1e9
         self.status("measuring ...", 0.0)
-        self.roving.say(add_accelerometer_text(self.app.session.table_profile))
+        self._accel_hint = add_accelerometer_text(self.app.session.table_profile)
+        self.roving.say(self._accel_hint)
         self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
         self._measure(stop, command)
 
@@ -101,6 +105,17 @@ class VibrationMeasureMixin:
     def _measure_ended(self, stop: threading.Event) -> None:
         if stop is self._measuring:
             self._measuring = None
+            self.drop_accelerometer_hint()  # measured, cancelled or failed: said
+
+    def drop_accelerometer_hint(self) -> None:
+        """The accelerometer hint goes (the grid moves back up); ``?`` says it whole."""
+        if self._accel_hint:
+            self.roving.unsay(self._accel_hint)
+            self._accel_hint = ""
+
+    def on_key(self, event: Any) -> None:
+        """The next key after ``m`` (on its way to what it does) takes the hint away."""
+        self.drop_accelerometer_hint()
 
     def _measure_estopped(self) -> None:
         """The line says the e-stop stopped the measurement (once)."""
