@@ -333,7 +333,7 @@ class Kernel:
         if latched is None and not self.gate.estopped:
             return "ok: not e-stopped"
         try:
-            clear_latch(self.table)
+            latched = clear_latch(self.table) or latched  # every e-stop it removed
         except OSError as exc:
             return f"refused: the latch {self.table.latch_path} cannot be removed ({exc})"
         was = describe_latch(latched) if latched else self.gate.estop_reason

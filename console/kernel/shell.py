@@ -3,7 +3,8 @@
 ``haptable estop`` latches the e-stop of every table it names first (``--profile``: that
 one; none: every table that ran since the runtime directory was made and every profile
 found by name), then e-stops each running kernel at once (its control socket: ``estop``),
-each with the same deadline, and prints one line per table. A table whose kernel is not
+each with the same deadline, and prints one line per table, then one per table latched
+with the command that resets it (``reset_command``). A table whose kernel is not
 running stays latched: the next command that opens it refuses, the console opens into
 the e-stop. No numpy, no plugins, no profile parsing on this path: it must be instant.
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shlex
 import sys
 import threading
 import time
@@ -37,6 +39,7 @@ from console.kernel.tables import (
     latch_record,
     read_latch,
     table_for,
+    table_key,
     write_latch,
 )
 
@@ -148,6 +151,21 @@ def estop(profile_arg: str | None, timeout_s: float) -> tuple[list[Reached], lis
     return reached, tables
 
 
+def reset_command(table: Table, profile_arg: str | None) -> str:
+    """The command typed at a terminal that resets ``table``'s latch: ``haptable
+    --profile sim-4ch reset`` (by name when its name finds its file, else by the file its
+    kernel runs from); ``haptable reset`` (every latched table) when neither is known."""
+    if profile_arg:
+        return f"haptable --profile {shlex.quote(profile_arg)} reset"
+    by_name = known_profiles().get(table.name)
+    if by_name is not None and table_key(by_name) == table.key:
+        return f"haptable --profile {shlex.quote(table.name)} reset"
+    path = table.info().get("profile_path")
+    if isinstance(path, str) and path and table_key(path) == table.key:
+        return f"haptable --profile {shlex.quote(path)} reset"
+    return "haptable reset"
+
+
 def at_terminal_here() -> bool:
     """This process runs in the foreground of its controlling terminal."""
     try:
@@ -188,7 +206,7 @@ def reset(profile_arg: str | None, timeout_s: float) -> tuple[list[str], bool]:
             if profile_arg:
                 lines.append(f"table {t.name}: not e-stopped")
             continue
-        clear_latch(t)
+        latched = clear_latch(t) or latched  # every e-stop it removed
         lines.append(
             f"table {t.name}: e-stop reset by {who} at {time.strftime('%H:%M:%S')} "
             f"(was: {describe_latch(latched)})"
@@ -231,9 +249,10 @@ HELP = """usage: haptable [--profile P] estop [--json] [--timeout S]
        haptable [--profile P] reset
 
 estop: silence every output and open every relay now, and latch the e-stop: nothing
-plays on a table until an operator resets it. Without --profile every table is latched.
+plays on a table until an operator resets it. Without --profile every table is latched;
+each table latched is named with the command that resets it.
 reset: an operator's, typed at a terminal: clear the latched e-stop of the table
-(without --profile: of every latched table), saying who and when.
+(without --profile: of every latched table), saying who, when and every e-stop cleared.
 """
 
 
@@ -255,7 +274,7 @@ def main(argv: list[str]) -> int:
         return 2
     live = [r for r in reached if not r.stale]
     unconfirmed = [r for r in live if not r.confirmed]
-    names = ", ".join(t.name for t in tables)
+    resets = {t.key: reset_command(t, profile) for t in tables}
     if as_json:
         print(
             json.dumps(
@@ -263,6 +282,7 @@ def main(argv: list[str]) -> int:
                     "tables": [asdict(r) for r in reached],
                     "confirmed": not unconfirmed,
                     "latched": [t.key for t in tables],
+                    "reset": resets,
                 }
             )
         )
@@ -271,7 +291,13 @@ def main(argv: list[str]) -> int:
             print(f"e-stop: {r.line()}")
         if not live:
             print("e-stop: no outputs open")
-        print(f"e-stop: latched until an operator resets it (`haptable reset`): {names}")
+        for t in tables:  # each latched: what an operator types to reset it
+            print(f"e-stop: table {t.name} latched until an operator resets it: `{resets[t.key]}`")
+        if len(tables) > 1:
+            print(
+                "e-stop: ctrl+r in a table's console resets that table only; "
+                "`haptable reset` resets every one"
+            )
     return 1 if unconfirmed else 0
 
 

@@ -9,7 +9,8 @@ for every process that loads that file. Its kernel keeps its files in
 ``kernel.json``    the running kernel: pid, profile, when it started
 ``kernel.sock``    clients' connections (framed messages: ``console.kernel.wire``)
 ``control.sock``   one-line commands: ``ping``, ``status``, ``estop``, ``reset``
-``estop.json``     the latched e-stop: while it exists nothing plays on this table
+``estop.json``     the latched e-stop: while it exists nothing plays on this table; its
+                   first e-stop (the cause) and the later ones (``later``, ``count``)
 ``console.lock``   held by the table's console (its reset key is an operator's)
 =================  =================================================================
 
@@ -31,6 +32,7 @@ import hashlib
 import json
 import os
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +41,8 @@ from console.kernel.private_dir import ensure_private_dir, open_private, runtime
 
 #: a latch record is a few lines; anything larger is not ours
 MAX_LATCH_BYTES = 16 * 1024
+#: the e-stops a latch keeps after its first (the newest; ``count`` says how many came)
+MAX_LATER = 12
 
 
 def table_key(profile_path: str | os.PathLike) -> str:
@@ -160,27 +164,66 @@ def latch_record(reason: str, by: str, pid: int | None = None) -> dict[str, Any]
     }
 
 
+def latch_entries(rec: dict[str, Any]) -> list[dict[str, Any]]:
+    """The e-stops a latch records, the first (the cause) first, then the later ones
+    kept, oldest first. A latch file of one record (as written before later e-stops were
+    kept) is its first alone."""
+    later = rec.get("later")
+    kept = [e for e in later if _is_record(e)] if isinstance(later, list) else []
+    return [rec, *kept]
+
+
+def latch_count(rec: dict[str, Any]) -> int:
+    """How many e-stops latched the table, those not kept included."""
+    n = rec.get("count")
+    kept = len(latch_entries(rec))
+    return max(n, kept) if isinstance(n, int) and not isinstance(n, bool) else kept
+
+
 def describe_latch(rec: dict[str, Any]) -> str:
-    """One line: ``haptable estop (pid 12) at 2026-11-27 10:00:01``."""
+    """One line: ``haptable estop (pid 12) at 2026-11-27 10:00:01``; several e-stops:
+    ``2 e-stops: haptable estop (pid 12) at ...; haptable estop (pid 13) at ...``, those
+    not kept counted after the first."""
+    entries = latch_entries(rec)
+    n = latch_count(rec)
+    if n == 1:
+        return _one(rec)
+    said = [_one(entries[0])]
+    if n > len(entries):
+        said.append(f"({n - len(entries)} not kept)")
+    said += [_one(e) for e in entries[1:]]
+    return f"{n} e-stops: " + "; ".join(said)
+
+
+def _one(rec: dict[str, Any]) -> str:
     why = str(rec.get("reason") or "e-stop")
     when = rec.get("time") or "?"
     return f"{why} at {when}"
 
 
+def _is_record(e: Any) -> bool:
+    return isinstance(e, dict) and isinstance(e.get("reason"), str)
+
+
 def read_latch(table: Table) -> dict[str, Any] | None:
     """The table's latched e-stop, or None. A latch file that cannot be read as ours is
     still a latch (fail safe): its record says so."""
+    return _load_latch(table)[0]
+
+
+def _load_latch(table: Table) -> tuple[dict[str, Any] | None, bool]:
+    """(the latch as ``read_latch`` says it, whether its file is ours as written)."""
     p = table.latch_path
     try:
         os.lstat(p)
     except FileNotFoundError:
-        return None
+        return None, False
     except OSError as exc:
-        return {"reason": f"latch file unreadable ({exc.strerror})", "by": "?", "time": "?"}
+        return {"reason": f"latch file unreadable ({exc.strerror})", "by": "?", "time": "?"}, False
     rec = _read_json(p)
-    if not isinstance(rec, dict) or not isinstance(rec.get("reason"), str):
-        return {"reason": f"latch file {p} unreadable", "by": "?", "time": "?"}
-    return rec
+    if not _is_record(rec):
+        return {"reason": f"latch file {p} unreadable", "by": "?", "time": "?"}, False
+    return rec, True
 
 
 def latched_elsewhere(own: Table) -> list[str]:
@@ -203,28 +246,84 @@ def latched_elsewhere(own: Table) -> list[str]:
 
 
 def write_latch(table: Table, record: dict[str, Any]) -> None:
-    """Latch the table (atomically, synced): kept until ``clear_latch``. The first latch
-    is kept when one exists (its reason is the one an operator must read)."""
+    """Latch the table (atomically, synced): kept until ``clear_latch``. When it is
+    latched already the first e-stop stays the cause (its reason is the one an operator
+    reads first) and this one is added after it (``later``: the newest ``MAX_LATER``,
+    ``count``: all of them), unless an e-stop of the same reason is there (one e-stop
+    reaches a table on several paths: the shell's latch, its kernel's, the gate's event).
+    A latch file that is not ours as written stays as it is: it latches."""
     table.ensure()
-    if read_latch(table) is not None:
-        return
-    tmp = table.dir / f".estop-{os.getpid()}-{time.monotonic_ns()}.tmp"
-    fd = open_private(tmp)
+    with _latch_lock(table.dir):
+        current, ours = _load_latch(table)
+        if current is None:
+            data = record
+        elif not ours:
+            return
+        else:
+            data = _added(current, record)
+            if data is None:
+                return
+        tmp = table.dir / f".estop-{os.getpid()}-{time.monotonic_ns()}.tmp"
+        fd = open_private(tmp)
+        try:
+            os.write(fd, json.dumps(data).encode())
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, table.latch_path)
+        _sync_dir(table.dir)
+
+
+def _added(current: dict[str, Any], record: dict[str, Any]) -> dict[str, Any] | None:
+    """``current`` with ``record`` after its e-stops, within ``MAX_LATER`` and the file's
+    bound (the oldest later ones give way; the count keeps them); None: already there."""
+    entries = latch_entries(current)
+    if any(e.get("reason") == record.get("reason") for e in entries):
+        return None
+    later = [*entries[1:], record][-MAX_LATER:]
+    data = {**current, "later": later, "count": latch_count(current) + 1}
+    while len(json.dumps(data).encode()) > MAX_LATCH_BYTES and len(data["later"]) > 1:
+        data["later"] = data["later"][1:]
+    return data
+
+
+@contextlib.contextmanager
+def _latch_lock(d: Path, wait_s: float = 0.5) -> Iterator[None]:
+    """Two e-stops at once add both (an flock on the table's directory). Never holds an
+    e-stop back: not had within ``wait_s`` (its holder stopped), the latch is written
+    anyway (at worst the other's record is not kept; the table is latched)."""
+    import fcntl
+
     try:
-        os.write(fd, json.dumps(record).encode())
-        os.fsync(fd)
+        fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        yield
+        return
+    try:
+        t_end = time.monotonic() + wait_s
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > t_end:
+                    break
+                time.sleep(0.002)
+            except OSError:
+                break
+        yield
     finally:
-        os.close(fd)
-    os.replace(tmp, table.latch_path)
-    _sync_dir(table.dir)
+        os.close(fd)  # releases the lock
 
 
 def clear_latch(table: Table) -> dict[str, Any] | None:
-    """Remove the latch; what it said (None: there was none)."""
-    rec = read_latch(table)
-    with contextlib.suppress(FileNotFoundError):
-        os.unlink(table.latch_path)
-        _sync_dir(table.dir)
+    """Remove the latch; what it said (None: there was none): every e-stop it removed,
+    an e-stop latching at the same moment either in it or latching after it."""
+    with _latch_lock(table.dir):
+        rec = read_latch(table)
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(table.latch_path)
+            _sync_dir(table.dir)
     return rec
 
 

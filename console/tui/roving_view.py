@@ -39,7 +39,8 @@ ADD_ACCELEROMETER = (
     "m measures with the profile's vibrometer; to measure with an accelerometer on the "
     "sound card's inputs (roving sensor, no laser) add [audio_inputs.accel] channel = 1, "
     "kind = 'accelerometer', sensitivity = 10.2 (mV per m/s^2: a 100 mV/g sensor) to the "
-    "profile's overrides.toml"
+    "profile's overrides.toml (after m a line says where; it goes with the next key or "
+    "when the measurement ends)"
 )
 
 
@@ -137,6 +138,7 @@ class RovingView:
         self.stop_flag: threading.Event | None = None
         self.command: str | None = None  # a typed measure, its line kept until the end
         self._placed = threading.Event()
+        self.said = ""  # what the roving line says now ("" : no line)
 
     @property
     def running(self) -> bool:
@@ -155,6 +157,16 @@ class RovingView:
             found.first(Static).update(text)
         else:
             pane.mount(Static(text, id="vib-roving", markup=False), after="#vib-work")
+        self.said = text
+
+    def unsay(self, text: str) -> None:
+        """The roving line goes (what is under it moves back up) while it says ``text``:
+        a newer line (the roving run's) stays."""
+        if self.said != text:
+            return
+        self.said = ""
+        for line in self.pane.query("#vib-roving"):
+            line.remove()
 
     def measure(self, command: str | None = None) -> None:
         """``m`` (or the typed ``measure``, kept on its line until the run ends): start or

@@ -54,6 +54,12 @@ _CANCELLED_KEPT = {
     "synth": ": the dataset folder is unchanged",
 }
 
+#: the panel's buttons (label, id), left to right: one stop of the Tab order
+_BUTTONS = (
+    ("synthesize (s)", "gp-synth"),
+    ("train+eval (t)", "gp-train"),
+    ("cancel (x)", "gp-cancel"),
+)
 #: seconds in which a second ``Esc`` (work under way) cancels it and closes the panel
 ESC_AGAIN_S = 3.0
 #: samples of each gesture training needs: the harmonics and frames are chosen inside
@@ -104,7 +110,8 @@ HELP = (
     "t: train + evaluate (`haptable gestures eval`'s cross-validation, then the model on\n"
     "   every sample, as `haptable gestures train`)\n"
     "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
-    "tab: edit the fields (enter returns here)"
+    "tab: edit the fields (enter returns here)   left/right: between the buttons\n"
+    "PageUp/PageDown: scroll the panel"
 )
 
 
@@ -246,6 +253,10 @@ class GesturesPanel(Screen):
         Binding("escape", "back", "back"),  # before r: the footer keeps it at 80 columns
         Binding("r", "refresh", "refresh"),
         Binding("question_mark", "help", "help", show=False),
+        Binding("left", "button(-1)", "previous button", show=False),
+        Binding("right", "button(1)", "next button", show=False),
+        Binding("pageup", "page(-1)", "scroll up", show=False),
+        Binding("pagedown", "page(1)", "scroll down", show=False),
     ]
 
     def __init__(self, ctx) -> None:
@@ -262,7 +273,9 @@ class GesturesPanel(Screen):
         self._esc_until: float | None = None
 
     def compose(self) -> ComposeResult:
-        with VerticalScroll():
+        # not a Tab stop of its own (the first Tab from the buttons edits the first
+        # field): PageUp/PageDown scroll it, and a focused field scrolls into view
+        with VerticalScroll(can_focus=False):
             yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
@@ -280,9 +293,10 @@ class GesturesPanel(Screen):
                 model = short_path(self.default_model)
                 yield Input(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
-                yield Button("synthesize (s)", id="gp-synth", compact=True)
-                yield Button("train+eval (t)", id="gp-train", compact=True)
-                yield Button("cancel (x)", id="gp-cancel", compact=True)
+                for label, name in _BUTTONS:
+                    button = Button(label, id=name, compact=True)
+                    button.can_focus = name == _BUTTONS[0][1]  # the buttons: one Tab stop
+                    yield button
             yield LongWork("s: synthesize   t: train + evaluate   x: cancel", id="gp-work")
             yield Static("", id="gp-files")
             yield Static("", id="gp-result")
@@ -291,8 +305,32 @@ class GesturesPanel(Screen):
 
     def on_mount(self) -> None:
         self.query_one(SafetyBar).show(None)
-        self.query_one("#gp-synth", Button).focus()
+        self.to_buttons()
         self.action_refresh()
+
+    def to_buttons(self, name: str | None = None) -> None:
+        """Focus the buttons: ``name``, else the one last focused. The buttons are one
+        stop of the Tab order (the focusable one of them), so the first Tab from them
+        edits the first field and the Tab after the last field comes back to them."""
+        buttons = list(self.query("#gp-buttons > Button").results(Button))
+        target = next((b for b in buttons if b.id == name or (not name and b.can_focus)), None)
+        target = target or buttons[0]
+        for b in buttons:
+            b.can_focus = b is target
+        target.focus()
+
+    def action_page(self, step: int) -> None:
+        """PageUp/PageDown: scroll the panel (its files and results below the fold)."""
+        scroll = self.query_one(VerticalScroll)
+        (scroll.scroll_page_down if step > 0 else scroll.scroll_page_up)()
+
+    def action_button(self, step: int) -> None:
+        """Left/Right on the buttons: the previous or next one (the panel's keys s, t
+        and x press them from anywhere)."""
+        names = [name for _, name in _BUTTONS]
+        at = getattr(self.focused, "id", None)
+        if at in names:
+            self.to_buttons(names[(names.index(at) + step) % len(names)])
 
     @property
     def work(self) -> LongWork:
@@ -486,7 +524,7 @@ class GesturesPanel(Screen):
         second ``Esc`` within ``ESC_AGAIN_S`` cancels the work and closes the panel) and
         a cancel is said in the log and on the Camera screen's status line."""
         if isinstance(self.focused, Input):
-            self.query_one("#gp-synth", Button).focus()
+            self.to_buttons()
             return
         if self.work.busy:
             asked, self._esc_until = self._esc_until, None
@@ -548,7 +586,7 @@ class GesturesPanel(Screen):
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         event.stop()
-        self.query_one("#gp-synth", Button).focus()  # leaving the field refreshes the files
+        self.to_buttons()  # leaving the field refreshes the files
 
     def on_input_changed(self, event: Input.Changed) -> None:
         """A synthesis field changed under its size and time: the line says they are

@@ -18,6 +18,8 @@ SHOWN = {
     "escape": "Esc",
     "right": "→",
     "left": "←",
+    "pageup": "PageUp",
+    "pagedown": "PageDown",
 }
 
 

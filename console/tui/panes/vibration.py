@@ -6,7 +6,6 @@ that plays marked, the lookup-table entry, UFF import and a simulated measuremen
 from __future__ import annotations
 
 import threading
-import time
 
 from textual import work
 from textual.app import ComposeResult
@@ -18,21 +17,21 @@ from textual.widgets import DataTable, Input, Label, ProgressBar, Static
 from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.files.vibration_map import grid_cells
-from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
+from console.session.events import ESTOP_REFUSAL, Started, Stopped
 from console.session.vibration import Cancelled
 from console.tui.charts import Chart
 from console.tui.command_line import CommandLine, prompted
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse, lapse_if_held
+from console.tui.lapse import lapse_if_held
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_commands import run_command
 from console.tui.panes.vibration_grid import PointGrid
+from console.tui.panes.vibration_measure import VibrationMeasureMixin
 from console.tui.panes.vibration_projector import light_audition, prepare_projector
 from console.tui.panes.vibration_words import (
     COMMANDS,
     HELP,
     HELP_KEYS,
-    MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
     MEASURING_REFUSAL,
     NO_MAP,
@@ -42,20 +41,18 @@ from console.tui.panes.vibration_words import (
     estop_line,
     estop_reason,
     info_text,
-    measure_again,
     point_problem,
     with_time_left,
 )
 from console.tui.plots import frf_series
-from console.tui.roving_view import RovingView, add_accelerometer_text
+from console.tui.roving_view import RovingView
 from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
 
 
-class VibrationPane(VerticalScroll):
-    _measure_asked = -1e9  # when m last asked before replacing the kept map
+class VibrationPane(VibrationMeasureMixin, VerticalScroll):
     HELP_TEXT = HELP_KEYS
     # the pane itself shows no focus: Tab goes command line -> grid -> tabs, never to it
     can_focus = False
@@ -338,74 +335,6 @@ class VibrationPane(VerticalScroll):
         out = self.app.session.outputs
         return out is not None and out.estopped
 
-    def action_measure(self, command: str | None = None) -> None:
-        """``m``: measure the map, refused in the console's words during an e-stop."""
-        if (self.roving.running or self.roving.wanted()) and not self._estop_active():
-            self.roving.measure(command)
-            return
-        if self._estop_active():
-            self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
-            return
-        now = time.monotonic()
-        kept = command is None and self.service.cached_map_path().is_file()
-        if kept and now - self._measure_asked > MEASURE_AGAIN_S:  # it would be replaced
-            self._measure_asked, ask = now, measure_again(self.service.measure_takes())
-            self.status(ask)  # the question leaves the line when it lapses
-            then, shown = self.summary, lambda: self.status_text  # the map's line after
-            lapse(self, shown, ask, self.status, MEASURE_AGAIN_S, then=then)
-            return
-        self._measure_asked = -1e9
-        self.status("measuring ...", 0.0)
-        self.roving.say(add_accelerometer_text(self.app.session.table_profile))
-        self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
-        self._measure(stop, command)
-
-    @work(thread=True, exclusive=True, group="vib-long")
-    def _measure(self, stop: threading.Event, command: str | None = None) -> None:
-        """The measurement; x or an e-stop stops it (the e-stop polled here as well: it
-        stops at once even before its message reaches the screen)."""
-        stopped = stop_check(stop)
-
-        def cancelled() -> bool:
-            return stopped() or self._estop_active()
-
-        @with_time_left
-        def progress(frac: float, msg: str) -> None:
-            if not cancelled():
-                from_thread(self.app, self._measure_progress, stop, f"measuring: {msg}", frac)
-
-        try:
-            self._show_map(self.service.measure(progress, cancelled))
-            from_thread(self.app, self._command_done, command, True)
-        except Cancelled:
-            from_thread(self.app, self._measure_cancelled, stop, command)
-        except UserError as exc:
-            from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
-            from_thread(self.app, self._command_done, command, False)
-        finally:
-            from_thread(self.app, self._measure_ended, stop)
-
-    def _measure_progress(self, stop: threading.Event, text: str, frac: float) -> None:
-        if not stop.is_set() and not self._estop_active():
-            self.status(text, frac)
-
-    def _measure_cancelled(self, stop: threading.Event, command: str | None) -> None:
-        """A measurement stopped: by the e-stop (said as such) or by x."""
-        if self._estop_active():
-            self._measure_estopped()
-        elif stop is self._measuring:
-            self.status("measurement cancelled; the map is unchanged")
-        self._command_done(command, False)
-
-    def _measure_ended(self, stop: threading.Event) -> None:
-        if stop is self._measuring:
-            self._measuring = None
-
-    def _measure_estopped(self) -> None:
-        """The line says the e-stop stopped the measurement (once)."""
-        if self.status_text != MEASURE_ESTOPPED:
-            self._error(MEASURE_ESTOPPED)
-
     def _estop_reset(self) -> None:
         """The reset: what the e-stop refused is cleared; a measurement it stopped stays
         said, without the reset it no longer needs."""
@@ -633,6 +562,7 @@ class VibrationPane(VerticalScroll):
         return True
 
     def action_command(self) -> None:
+        self.drop_accelerometer_hint()  # ":" is a key too (a priority one: no on_key)
         self.query_one("#vib-cmd", CommandLine).open()
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
