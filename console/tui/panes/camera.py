@@ -2,7 +2,7 @@
 an image of real pixels where the terminal speaks Sixel or the Kitty graphics protocol
 (``console.tui.irview``), else half-block characters (a frame is converted only when
 it is drawn, and only the rows whose cells changed by a grey step are redrawn,
-``console.tui.halfblock_view``), its title saying which, both at ~5 Hz; the side panel's
+``console.tui.halfblock_view``), its title saying which, both at ~4 Hz; the side panel's
 live numbers at ~2 Hz; nothing while the screen is hidden. The screen asks the camera for
 the frames it can show (``VIEW_FPS``): the twin renders (in its own process) and the
 vision processes no more while nothing else takes the frames (a calibration, TUIO: then
@@ -224,19 +224,23 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     #: the side panel's width in cells (the view takes the rest, below its title)
     SIDE_COLS = 34
     #: the image's shortest interval in graphics modes (each update sends a new image)
-    GRAPHICS_PERIOD_S = 0.2
+    GRAPHICS_PERIOD_S = 0.25
     #: how often the half-block view may change (a new frame drawn at most this often: as
-    #: the graphics modes: each redraw of a moving hand costs the UI thread milliseconds)
-    HALFBLOCK_PERIOD_S = 0.2
+    #: the graphics modes: each redraw of a moving hand costs the UI thread ~6 ms and
+    #: Textual's compositor as much again; 4 Hz keeps the idle screen under a fifth of
+    #: a core with the twin's camera, `haptable bench console-idle`)
+    HALFBLOCK_PERIOD_S = 0.25
     #: the frames a second this screen asks of the camera: one for each redraw and a
     #: tenth more (the camera's clock and the redraw timer drift apart: a frame the
     #: view skips now and then rather than a third rendered and seen for nothing)
-    VIEW_FPS = 5.5
+    VIEW_FPS = 4.4
     #: how long the loop's numbers (fps, drops) on the side panel are kept
     STATUS_PERIOD_S = 0.5
-    #: a half-block pixel changes when its grey moved by one of the view's grey steps
-    #: (``HalfBlockImage``: 32 levels), not with every frame's noise
-    GREY_STEP = 8.0
+    #: a half-block pixel changes when its grey moved by one of the view's grey steps,
+    #: not with every frame's noise; 16 greys (a 256-colour terminal shows 24): a row of
+    #: the twin's lit table is half as many runs of equal cells as with 32, each a
+    #: segment to build and send (the moving hand's redraw 9.4 -> 6.5 ms)
+    GREY_STEP = 16.0
     #: the side panel's live numbers (fps, hands, readings) change at most this often
     INFO_PERIOD_S = 0.5
 
@@ -444,7 +448,7 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         self._drawn = shows
         level = downsample(img, cols, rows)
         level = self._stretch()(level)  # a dark IR frame over the display's grey range
-        # in GREY_STEP levels (32 greys: what a 256-colour terminal shows, 24): longer
+        # in GREY_STEP levels (16 greys: a 256-colour terminal shows 24): longer
         # runs of equal cells to send, fewer rows changed by the sensor's noise
         grey = np.round(level / self.GREY_STEP) * self.GREY_STEP
         lo, hi = self._stretch().levels()
