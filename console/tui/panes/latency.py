@@ -11,6 +11,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
+from console.tui.camera_picture import same_height
 from console.tui.loop_rates import CAMERA, VISION, WINDOW_S, SameWindow, frame_counts
 from console.tui.plots import sparkline
 from console.tui.said import said_here
@@ -259,11 +260,17 @@ class LatencyPane(Vertical):
         return self.app.session.demos.running
 
     def _say(self, widget_id: str, text: str) -> None:
-        """``text`` on the Static ``widget_id``, redrawn only when it changed."""
+        """``text`` on the Static ``widget_id``, redrawn only when it changed, the screen
+        laid out again only when it takes other rows (the stopped loop's age changes
+        every second)."""
         found = self.query(f"#{widget_id}")  # gone while the console shuts down
-        if found and self._said.get(widget_id) != text:
+        before = self._said.get(widget_id)
+        if found and before != text:
             self._said[widget_id] = text
-            found.first(Static).update(text)
+            static = found.first(Static)
+            width = static.content_size.width
+            same = before is not None and width > 0 and same_height(before, text, width)
+            static.update(text, layout=not same)
 
     def show_state(self, status: dict, log) -> None:
         """The audio line (the app calls this when the output state changed)."""
