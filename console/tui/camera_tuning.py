@@ -10,6 +10,8 @@ from textual import work
 
 from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
+from console.tui.text import escape
+from console.tui.units import control_words
 from console.tui.util import from_thread, short_path
 
 
@@ -70,3 +72,24 @@ class CameraTuningMixin:
             from_thread(self.app, self.say, f"W: {exc}", "warning")
             return
         from_thread(self.app, self.say, f"vision settings kept in {short_path(path)}")
+
+    def settings_lines(self, svc) -> list[str]:
+        """The side panel's settings (``▸`` the chosen one), switches and keys."""
+        lines: list[str] = []
+        cam = self._loop_status(svc)["camera"]
+        chosen = self.chosen_key()
+        controls = svc.control_values()  # the camera's: in its driver's words
+        for k, v in svc.params().items():
+            said = control_words(k, v, cam.get("driver", "?")) if k in controls else f"{k} {v:g}"
+            lines.append(f"{'▸' if k == chosen else ' '} {escape(said)}")
+        if not svc.camera_controls():
+            lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
+        else:
+            lines.append("e: exposure assistant")
+        lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
+        for name in svc.switches():
+            on, target = svc.sink_state(name)
+            lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
+        if not self.wizard_text():  # else the wizard's block says where it stands
+            lines.append("k: touch calibration")
+        return lines

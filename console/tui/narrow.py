@@ -122,18 +122,25 @@ class ConsoleFooter(Footer):
         active = self.screen.active_bindings
         keys: list[tuple] = []
         focused = self.screen.focused
+        own = own_key(focused) if not isinstance(focused, Tabs) else None
+        own_display = own and self.app.get_key_display(Binding(own[0], ""))
+        # a button or check box names itself; when a key of the screen says the same
+        # (Start: s start), that key's entry gains the focused control's (⏎/s start)
+        merged = own is not None and any(
+            b.show and b.description == own[1] for _n, b, _e, _t in active.values()
+        )
         if isinstance(focused, Tabs):
             keys.append(("right", "←→", "screens", "", False, "", False))
-        elif (own := own_key(focused)) is not None:  # a button or check box names itself
-            key, word = own
-            keys.append(
-                (key, self.app.get_key_display(Binding(key, "")), word, "", False, "", False)
-            )
+        elif own is not None and not merged:
+            keys.append((own[0], own_display, own[1], "", False, "", False))
         actions: set[str] = set()
         for _node, binding, enabled, tooltip in active.values():
             if binding.show and binding.action not in actions:
                 actions.add(binding.action)
-                keys.append(self._key_data(binding, enabled, tooltip))
+                data = self._key_data(binding, enabled, tooltip)
+                if merged and own is not None and binding.description == own[1]:
+                    data = (data[0], f"{own_display}/{data[1]}", *data[2:])
+                keys.append(data)
         shown = {k[0] for k in keys}
         keys += [k for a in self._always() if a not in shown and (k := self._app_key(a))]
         if self.show_command_palette and self.app.ENABLE_COMMAND_PALETTE:

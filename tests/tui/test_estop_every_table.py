@@ -47,9 +47,13 @@ def test_a_shell_estop_of_every_table_shows_the_others_after_ctrl_r(plugins, siz
                 text=True,
                 timeout=60,
             )
-            # the command names every table it latched, the other profiles' too
-            latched = done.stdout.splitlines()[-1]
-            assert "latched" in latched and "haptable-lab" in latched, done.stdout
+            # the command names every table it latched, the other profiles' too, each
+            # with the command that resets it
+            latched = [ln for ln in done.stdout.splitlines() if "latched" in ln]
+            assert any(
+                "haptable-lab" in ln and "haptable --profile haptable-lab reset" in ln
+                for ln in latched
+            ), done.stdout
             await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stopped")
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: not app.session.outputs.estopped, 20, "reset")

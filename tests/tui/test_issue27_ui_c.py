@@ -74,6 +74,7 @@ def _footer(app) -> str:
 def test_new_operator_at_80x24(plugins, monkeypatch):
     import console.tui.panes.devices as devices_mod
     import console.tui.panes.vibration as vibration_mod
+    import console.tui.panes.vibration_measure as vibration_measure_mod
 
     gate = threading.Event()
 
@@ -82,7 +83,7 @@ def test_new_operator_at_80x24(plugins, monkeypatch):
         return True, "self-test: all paths healthy (2 s)"
 
     monkeypatch.setattr(devices_mod, "run_selftest", slow_selftest)
-    monkeypatch.setattr(vibration_mod, "MEASURE_AGAIN_S", 0.6)
+    monkeypatch.setattr(vibration_measure_mod, "MEASURE_AGAIN_S", 0.6)
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")

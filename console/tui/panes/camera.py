@@ -48,7 +48,7 @@ from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
-from console.tui.units import control_words, span_words
+from console.tui.units import span_words
 from console.tui.util import from_thread
 from console.tui.wrap_paths import break_paths
 
@@ -565,27 +565,6 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
             self._head_rows = max(self._head_rows, len(head))  # nothing below moves, and
             head += [""] * (self._head_rows - len(head))  # no layout redone for them
         return head, live
-
-    def settings_lines(self, svc) -> list[str]:
-        """The side panel's settings (``▸`` the chosen one), switches and keys."""
-        lines: list[str] = []
-        cam = self._loop_status(svc)["camera"]
-        chosen = self.chosen_key()
-        controls = svc.control_values()  # the camera's: in its driver's words
-        for k, v in svc.params().items():
-            said = control_words(k, v, cam.get("driver", "?")) if k in controls else f"{k} {v:g}"
-            lines.append(f"{'▸' if k == chosen else ' '} {escape(said)}")
-        if not svc.camera_controls():
-            lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
-        else:
-            lines.append("e: exposure assistant")
-        lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
-        for name in svc.switches():
-            on, target = svc.sink_state(name)
-            lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
-        if not self.wizard_text():  # else the wizard's block says where it stands
-            lines.append("k: touch calibration")
-        return lines
 
     def _output(self) -> str | None:
         names = list(self.service.switches())
