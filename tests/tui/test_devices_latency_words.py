@@ -29,13 +29,15 @@ def test_the_latency_column_says_low_and_high():
             table = app.query_one("#audio-table", DataTable)
             await wait_for(pilot, lambda: table.row_count >= 4, 30, "sound cards listed")
             table.focus()
-            await wait_for(pilot, lambda: "Bench Card A" in _line_with(app, "Bench Card A"), 10)
+            await wait_for(
+                pilot, lambda: "Bench Card A" in _line_with(app, "Bench Card A"), 30, "the rows"
+            )
             # the header as drawn with the rows (a listing arriving later lays the table
             # out again: a loaded machine read it between the two)
             await wait_for(
                 pilot,
                 lambda: _line_with(app, " ch ").rstrip().endswith("note"),
-                10,
+                30,
                 "the header with the rows",
             )
             header = _line_with(app, " ch ")

@@ -168,6 +168,7 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         line.set_class(severity != "information", "error")
         self._said_at = self._wizard_state() if text else None
         if text:
+            self._spoken_at = time.monotonic()  # its rows before the chosen row's
             said_here(line, "Camera", text, severity)
         self.call_after_refresh(self.keep_in_view)  # the line whole, the rest gives way
 
@@ -395,6 +396,10 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     #: the scrolled part's rows no block above it takes while nothing is typed in: the
     #: chosen setting's row (``▸``) shows there, whatever the status lines say
     CHOSEN_ROWS = 1
+    #: when a key last tuned a setting and when the status line last said something:
+    #: whichever came last keeps its rows (the reply to a path typed, or the ``▸`` row)
+    _tuned_at = 0.0
+    _spoken_at = 0.0
 
     def fit_side(self) -> None:
         """The side panel's field being typed in keeps its rows, else the chosen
@@ -409,7 +414,8 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         typing = focused if focused is not None and scroll.first() in focused.ancestors else None
         fields = [*self.query("#camera-recording"), typing]
         kept = outer_rows(fields)
-        if not any(f is not None and f.display for f in fields) and self.replay is None:
+        tuning = self._tuned_at >= self._spoken_at  # the last key tuned, nothing said since
+        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
             kept += self.CHOSEN_ROWS
         info, wizard, status = (
             self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
@@ -432,6 +438,7 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
 
     def _reveal(self) -> None:
         """Show the chosen setting now (a key changed it), scrolled into view."""
+        self._tuned_at = time.monotonic()
         self._reveal_chosen = True
         self._info_stable = None
         snap = self.service.snapshot() if self.is_mounted else None
