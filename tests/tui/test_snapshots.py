@@ -127,12 +127,17 @@ def test_electrostatic(snap):
 
     async def run_before(pilot):
         await _settle(app, pilot)
-        await wait_for(
-            pilot, lambda: "expected attraction" in str(app.query_one("#es-setting").render())
-        )
+        # the setting's lines as the terminal shows them (a loaded machine paints them a
+        # frame after the widget has them)
+        await wait_for(pilot, lambda: "above threshold" in _painted(app), 30, "the setting")
         await pilot.pause(0.2)
 
     assert snap(app, terminal_size=SIZE, run_before=run_before)
+
+
+def _painted(app) -> str:
+    """What the terminal shows now."""
+    return "\n".join(strip.text for strip in app.screen._compositor.render_strips())
 
 
 def test_help(snap):

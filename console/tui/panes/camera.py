@@ -372,6 +372,9 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         if found is not None:
             found.display = bool(wizard)
             moved |= self._say("camera-wizard", wizard)
+            w = self.wizard  # a step, a result, saved: a reply (not a new wrap width)
+            if (told := (id(w.active), id(w.result), w.message)) != self._wizard_told:
+                self._wizard_at, self._wizard_told = time.monotonic(), told
         if moved or self._reveal_chosen:  # the rows moved, or a key chose one
             self._reveal_chosen = False
             self.call_after_refresh(self.keep_in_view)
@@ -396,17 +399,20 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
     #: the scrolled part's rows no block above it takes while nothing is typed in: the
     #: chosen setting's row (``▸``) shows there, whatever the status lines say
     CHOSEN_ROWS = 1
-    #: when a key last tuned a setting and when the status line last said something:
-    #: whichever came last keeps its rows (the reply to a path typed, or the ``▸`` row)
+    #: when a key last tuned a setting, the status line last said something and the
+    #: wizard's text last changed: the latest of them keeps its rows first
     _tuned_at = 0.0
     _spoken_at = 0.0
+    _wizard_at = 0.0
+    _wizard_told: tuple = (id(None), id(None), "")
 
     def fit_side(self) -> None:
-        """The side panel's field being typed in keeps its rows, else the chosen
-        setting's row (``CHOSEN_ROWS``: ``-``/``+`` never change a value out of view);
-        the blocks above give way in turn when they do not fit: a finished wizard's
-        result that asks for no key first, then the status line, the wizard's step or
-        ``S: save``, the live numbers last."""
+        """The side panel's field being typed in keeps its rows; then whatever answered
+        the operator last: the chosen setting's row (``CHOSEN_ROWS``: ``-``/``+`` never
+        change a value out of view) when a key tuned last, else the newest reply (the
+        status line or the wizard's text), and a wizard's step or ``S: save`` waiting
+        for a key. The live numbers give way next (the next glance shows them again),
+        then an older status line, then a finished wizard's result."""
         scroll = self.query("#camera-scroll")
         if not scroll:
             return
@@ -414,14 +420,18 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         typing = focused if focused is not None and scroll.first() in focused.ancestors else None
         fields = [*self.query("#camera-recording"), typing]
         kept = outer_rows(fields)
-        tuning = self._tuned_at >= self._spoken_at  # the last key tuned, nothing said since
-        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
-            kept += self.CHOSEN_ROWS
         info, wizard, status = (
             self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
         )
+        said = max((self._spoken_at, status), (self._wizard_at, wizard), key=lambda t: t[0])
+        tuning = self._tuned_at >= said[0]  # the last key tuned, nothing said since
+        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
+            kept += self.CHOSEN_ROWS
         asks = self.calibration is not None or self.unsaved
-        blocks = [info, wizard, status] if asks else [info, status, wizard]
+        first = [] if tuning else [said[1]]
+        if asks and wizard not in first:
+            first.append(wizard)
+        blocks = [*first, info, *(b for b in (status, wizard) if b not in first)]
         if give_way(self.query_one("#camera-side").content_region.height, kept, blocks):
             self.call_after_refresh(self.keep_in_view)
 
