@@ -274,6 +274,9 @@ class Outputs:
             self._estopped, self._estop_reason = True, self._lost
             self._tell("estop", self._lost)
 
+    #: how long the closed outputs' listeners' thread waits for a last event to tell
+    TELLER_LINGER_S = 0.5
+
     def _tell(self, kind: str, message: str) -> None:
         """Hand an event to the listeners' thread (they may call these outputs)."""
         if kind == "estop" and self.estopped_by is None:
@@ -288,8 +291,20 @@ class Outputs:
                     self._teller.start()
 
     def _tell_loop(self) -> None:
+        """Each event to every listener, in order; once the outputs are closed the
+        thread ends when nothing is left to tell (a later event starts one again)."""
         while True:
-            kind, message = self._told.get()
+            try:
+                item = self._told.get(timeout=self.TELLER_LINGER_S if self._closed else None)
+            except queue.Empty:
+                with self._lock:
+                    if self._told.empty():
+                        self._teller = None
+                        return
+                continue
+            if item is None:  # close() wakes the thread to see it closed
+                continue
+            kind, message = item
             for fn in list(self.listeners):
                 try:
                     fn(kind, message)
@@ -672,6 +687,7 @@ class Outputs:
             self._sock.shutdown(socket.SHUT_RDWR)
         with contextlib.suppress(OSError):
             self._sock.close()
+        self._told.put(None)  # the listeners' thread ends once the told events are out
 
     def __enter__(self) -> Outputs:
         return self

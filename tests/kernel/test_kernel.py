@@ -416,3 +416,24 @@ def test_a_kernel_that_ended_at_start_is_killed_only_while_it_is_the_servers_chi
         child.kill()
         child.wait()
     assert _parent_of(child.pid) != os.getpid()  # reaped: gone, or another's child
+
+
+def test_closed_outputs_leave_no_listener_thread_behind(profile, plugins):
+    """A console that opens its outputs again and again (each profile change, each
+    reconnect) keeps no thread per opening: the listeners hear every e-stop told before
+    the close, then their thread ends."""
+    tellers, heard = [], []
+    for i in range(3):
+        out = open_outputs(profile, plugins, fast=True)  # private
+        out.add_listener(lambda kind, msg: heard.append((kind, msg)))
+        out.estop(f"opening {i}")
+        t_end = time.monotonic() + 10
+        while (f"opening {i}" not in {m for _, m in heard}) and time.monotonic() < t_end:
+            time.sleep(0.01)
+        tellers.append(out._teller)
+        out.close()
+    assert [m for k, m in heard if k == "estop"] == [f"opening {i}" for i in range(3)], heard
+    for t in tellers:
+        assert t is not None
+        t.join(timeout=5)
+        assert not t.is_alive(), "a closed outputs' listeners' thread still runs"
