@@ -51,19 +51,42 @@ def test_plan_plays_paced_and_equal_through_portaudio(jack_server, plugins, tmp_
     assert not report.error
     # paced by the device clock (loose bound: timing belongs in benchmarks)
     assert plan.duration_s * 0.8 < wall_s < plan.duration_s * 4, (wall_s, plan.duration_s)
-    # what reached JACK equals the plan, segment by segment (card units, float32)
-    got = capture.samples()[:, 0]
+    # what reached JACK is the plan, sample for sample (card units, float32): every
+    # period the loopback caught is a slice of a segment, in order, and every segment
+    # came through (a dummy server on a loaded machine drops whole periods: not the
+    # table's doing, counted by `haptable bench`, so coverage is bounded, not total)
     scale = out.limits.piezo_card_v
-    for seg in plan.segments:
-        want = (seg.piezo_v / scale).astype(np.float32)
-        k = int(np.argmax(np.abs(want) > 0))
-        idx = np.flatnonzero(np.isclose(got, want[k], atol=1e-7))
-        assert any(
-            np.allclose(got[i - k : i - k + want.size], want, atol=1e-6)
-            for i in idx
-            if i - k >= 0 and i - k + want.size <= got.size
-        ), seg.label
+    wants = [(seg.piezo_v / scale).astype(np.float32) for seg in plan.segments]
+    found, at = [], (0, 0)
+    for b in list(capture.blocks):
+        if np.any(b[:, 0]):
+            f = _where_in_plan(b[:, 0], wants, at)
+            assert f is not None, f"a period that is no slice of the plan after {at}"
+            found.append(f)
+            at = (f[0], f[1] + 1)
+    for i, seg in enumerate(plan.segments):
+        got = sum(n for j, _, n in found if j == i)
+        assert got >= 0.5 * np.count_nonzero(wants[i]), (seg.label, got)
     assert all(r.level_v == (0.0, 0.0) for r in log)
     # underruns are not asserted: the non-realtime dummy server drops callbacks even when
     # the gate is idle on a loaded machine; `haptable bench` reports them.
     assert status["audio"]["driver"] == "sounddevice"
+
+
+def _where_in_plan(
+    block: np.ndarray, wants: list[np.ndarray], at: tuple[int, int]
+) -> tuple[int, int, int] | None:
+    """(segment, offset, samples): the first place at or after ``at`` where ``block``'s
+    non-zero part is an exact slice of a segment (what follows the segment's end in the
+    block is the gap's silence); the segments may repeat one another."""
+    j = int(np.argmax(block != 0))
+    for i in range(at[0], len(wants)):
+        want = wants[i]
+        start = at[1] if i == at[0] else 0
+        for p in start + np.flatnonzero(np.isclose(want[start:], block[j], atol=1e-7)):
+            n = min(block.size - j, want.size - p)
+            if np.allclose(block[j : j + n], want[p : p + n], atol=1e-6) and not np.any(
+                block[j + n :]
+            ):
+                return i, int(p), int(np.count_nonzero(block[j : j + n]))
+    return None
