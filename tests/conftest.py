@@ -4,6 +4,7 @@ a fresh set of them for each test."""
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import faulthandler
 import gc
@@ -11,6 +12,7 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -94,15 +96,57 @@ def pytest_configure(config):
         _STDERR_FD = os.dup(sys.__stderr__.fileno())
 
 
+#: A test still running after this many seconds has its event loop's tasks (what each
+#: coroutine awaits: a thread's stack ends at the loop's idle ``select``) written to the
+#: run's stderr, before pyproject's ``timeout`` fails it.
+TASKS_DUMP_S = 240.0
+
+
+def _main_loop():
+    """The asyncio loop the main thread runs now (found on its stack), or None."""
+    frame = sys._current_frames().get(threading.main_thread().ident)
+    while frame is not None:
+        candidate = frame.f_locals.get("self")
+        if isinstance(candidate, asyncio.AbstractEventLoop):
+            return candidate
+        frame = frame.f_back
+    return None
+
+
+def _dump_tasks(nodeid: str) -> None:
+    """Each pending task's stack on the run's stderr (called in the loop's thread)."""
+    with os.fdopen(os.dup(_STDERR_FD), "w") as out:
+        tasks = asyncio.all_tasks()
+        print(f"\n+++ {nodeid}: {len(tasks)} asyncio tasks after {TASKS_DUMP_S:g} s", file=out)
+        for task in tasks:
+            print(f"--- {task.get_name()}", file=out)
+            task.print_stack(limit=30, file=out)
+
+
+def _tasks_later(nodeid: str) -> threading.Timer:
+    def fire() -> None:
+        loop = _main_loop()
+        if loop is not None:
+            with contextlib.suppress(RuntimeError):  # the loop just closed
+                loop.call_soon_threadsafe(_dump_tasks, nodeid)
+
+    timer = threading.Timer(TASKS_DUMP_S, fire)
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     if _STDERR_FD is None:
         yield
         return
     faulthandler.dump_traceback_later(HARD_TIMEOUT_S, exit=True, file=_STDERR_FD)
+    tasks = _tasks_later(item.nodeid)
     try:
         yield
     finally:
+        tasks.cancel()
         faulthandler.cancel_dump_traceback_later()
 
 
