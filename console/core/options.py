@@ -267,6 +267,12 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         if message.startswith("unrecognized arguments:"):  # a mistyped option: the one meant
             bad = next((w for w in message.split()[2:] if w.startswith("--")), "")
+            own = {o for a in self._actions for o in a.option_strings}
+            if bad.split("=")[0] in own:  # its own option, given before the command's name
+                raise UsageError(
+                    f"{bad} goes after the command's name: `{self.prog} {bad}` "
+                    f"(see `{self.prog} --help`)"
+                )
             hint = suggestion(
                 bad.split("=")[0], sorted(_option_strings(self)), "did you mean {!r}?"
             )

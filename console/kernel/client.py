@@ -21,7 +21,6 @@ import contextlib
 import itertools
 import math
 import os
-import queue
 import socket
 import threading
 import time
@@ -39,6 +38,7 @@ from console.kernel.output_settings import refusal, settings_key
 from console.kernel.scheduler import PlayReport
 from console.kernel.spawn import START_TIMEOUT_S, command_line, log_path, spawn_kernel
 from console.kernel.tables import Table, describe_latch, private_table, table_for
+from console.kernel.teller import Teller
 from console.kernel.twin_record import SwitchRecord, TwinRecord
 from console.safety import GateEvent, Limits
 from console.safety.scope import ScopeTrace
@@ -145,9 +145,8 @@ class Outputs:
         self._plans: dict[int, tuple[weakref.ref, int, tuple[int, ...]]] = {}
         self._forget: list[int] = []
         self._leaving: socket.socket | None = None  # a connection being given up
-        self.listeners: list[Callable[[str, str], None]] = []
-        self._told: queue.SimpleQueue = queue.SimpleQueue()
-        self._teller: threading.Thread | None = None
+        self._teller = Teller()
+        self.listeners = self._teller.listeners  # ``add_listener``'s
         self.estopped_by: str | None = None  # why an e-stop came while these were open
         self.record: TwinRecord | None = None  # kept by ``close(keep_record=True)``
         self._sock, hello = self._connect(profile)
@@ -274,44 +273,11 @@ class Outputs:
             self._estopped, self._estop_reason = True, self._lost
             self._tell("estop", self._lost)
 
-    #: how long the closed outputs' listeners' thread waits for a last event to tell
-    TELLER_LINGER_S = 0.5
-
     def _tell(self, kind: str, message: str) -> None:
         """Hand an event to the listeners' thread (they may call these outputs)."""
         if kind == "estop" and self.estopped_by is None:
             self.estopped_by = message
-        if self.listeners:
-            self._told.put((kind, message))
-            with self._lock:
-                if self._teller is None:
-                    self._teller = threading.Thread(
-                        target=self._tell_loop, name="haptable-kernel-events", daemon=True
-                    )
-                    self._teller.start()
-
-    def _tell_loop(self) -> None:
-        """Each event to every listener, in order; once the outputs are closed the
-        thread ends when nothing is left to tell (a later event starts one again)."""
-        while True:
-            try:
-                item = self._told.get(timeout=self.TELLER_LINGER_S if self._closed else None)
-            except queue.Empty:
-                with self._lock:
-                    if self._told.empty():
-                        self._teller = None
-                        return
-                continue
-            if item is None:  # close() wakes the thread to see it closed
-                continue
-            kind, message = item
-            for fn in list(self.listeners):
-                try:
-                    fn(kind, message)
-                except Exception:  # a listener never breaks the link
-                    import logging
-
-                    logging.getLogger("haptable.outputs").exception("listener failed")
+        self._teller.tell(kind, message)
 
     def _on_gate(self, h: dict[str, Any]) -> None:
         kind, message = str(h.get("kind")), str(h.get("message", ""))
@@ -687,7 +653,7 @@ class Outputs:
             self._sock.shutdown(socket.SHUT_RDWR)
         with contextlib.suppress(OSError):
             self._sock.close()
-        self._told.put(None)  # the listeners' thread ends once the told events are out
+        self._teller.close()  # its thread ends once the events told before are out
 
     def __enter__(self) -> Outputs:
         return self

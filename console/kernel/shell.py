@@ -28,6 +28,7 @@ import time
 from dataclasses import asdict, dataclass
 
 from console.core.errors import UserError
+from console.core.suggest import suggestion
 from console.files.profile_paths import find_profile, known_profiles
 from console.kernel.line_server import PeerRefused, request
 from console.kernel.operator import WHO_MAY_RESET
@@ -241,7 +242,12 @@ def _args(argv: list[str]) -> tuple[str, str | None, bool, float]:
         elif a in ("estop", "reset") and not command:
             command = a
         else:
-            raise UserError(f"haptable {command or 'estop'}: unknown argument {a!r}")
+            known = ["--profile", "--json", "--timeout", "--verbose", "estop", "reset"]
+            hint = suggestion(a.split("=")[0], known, "; did you mean {!r}?")
+            raise UserError(
+                f"haptable {command or 'estop'}: unknown argument {a!r}{hint} "
+                f"(see `haptable {command or 'estop'} --help`)"
+            )
     return command, profile, as_json, timeout
 
 

@@ -231,18 +231,23 @@ def latched_elsewhere(own: Table) -> list[str]:
     latches every table: the console shows those it cannot reset itself, each reset
     from its own console's ctrl+r or `haptable reset`). Reads only; [] for a private
     table (no shell e-stop reaches it)."""
+    out: list[str] = []
+    for t in latched_others(own):
+        if t.name not in out:
+            out.append(t.name)
+    return out
+
+
+def latched_others(own: Table) -> list[Table]:
+    """The other shared tables latched now (``latched_elsewhere``'s tables)."""
     if own.private:
         return []
     try:
         dirs = sorted(d for d in tables_root().iterdir() if d.name != own.key and d.is_dir())
     except OSError:
         return []
-    out = []
-    for d in dirs:
-        t = Table(d.name, d)
-        if read_latch(t) is not None and t.name not in out:
-            out.append(t.name)
-    return out
+    tables = [Table(d.name, d) for d in dirs]
+    return [t for t in tables if read_latch(t) is not None]
 
 
 def write_latch(table: Table, record: dict[str, Any]) -> None:

@@ -23,8 +23,9 @@ from console.tui import glue
 __all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
 
 #: the start of an entry: its key (a word, or a few short ones: ``t / T``, ``w a s d``,
-#: ``n / Analyse``) then two spaces or ``": "``, then its description
-ENTRY = re.compile(r"^(?P<key>\S{1,12}(?: \S{1,8}){0,4}?)(?P<sep>: |\s{2,})(?=\S)")
+#: ``n / Analyse``; the fewest that reach a separator, so ``b: build the lookup tables``
+#: is the key ``b``) then two spaces or ``": "``, then its description
+ENTRY = re.compile(r"^(?P<key>\S{1,12}?(?: \S{1,8}?){0,4}?)(?P<sep>: |\s{2,})(?=\S)")
 #: an entry's description starts at most this far right to be wrapped under itself
 MAX_HANG = 18
 
@@ -38,7 +39,6 @@ def _continues(line: str) -> bool:
 
 #: where a second entry starts on a line (``b: build ...   x: cancel ...``): three or
 #: more spaces, then an entry's key and its separator
-_SEP = re.compile(r": |\s{2,}")
 NEXT_ENTRY = re.compile(r"(?<=\S)\s{3,}(?=" + ENTRY.pattern.lstrip("^") + ")")
 
 
@@ -46,11 +46,8 @@ def entries(line: str) -> list[str]:
     """``line`` cut where another entry starts after three or more spaces: each entry
     is a paragraph of its own (two side by side ran together into one sentence once
     wrapped: ``x: cancel what runs page down / page up: ...``)."""
-    # the line's own key and its separator stay (its first one: ENTRY takes the
-    # longest key it can, ``b: build the lookup tables   `` in the example)
-    sep = _SEP.search(line) if ENTRY.match(line) else None
-    start = sep.end() if sep is not None else 0
-    cut = NEXT_ENTRY.search(line, start)
+    m = ENTRY.match(line)  # the line's own key and its separator stay
+    cut = NEXT_ENTRY.search(line, m.end() if m is not None else 0)
     if cut is None:
         return [line]
     return [line[: cut.start()], *entries(line[cut.end() :])]

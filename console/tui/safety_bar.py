@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from textual.widgets import Static
 
-from console.kernel.tables import latched_elsewhere
+from console.kernel.shell import reset_command
+from console.kernel.tables import latched_others
 from console.tui.live import live_of
 
 
@@ -102,13 +103,11 @@ def still_latched(out) -> str:
     """The other tables still latched (a shell's bare `haptable estop` latches every
     table), said with ctrl+r's outcome: it resets this console's table only, the kernel
     of each taking a reset from its own console or `haptable reset` at a terminal."""
-    names = latched_elsewhere(out.table) if out is not None else []
-    if not names:
+    tables = latched_others(out.table) if out is not None else []
+    if not tables:
         return ""
-    return (
-        f"; still e-stopped: table {', '.join(names)} (ctrl+r in its console, or "
-        "`haptable reset` at a terminal)"
-    )
+    each = ", ".join(f"{t.name} (`{reset_command(t, None)}`)" for t in tables)
+    return f"; still e-stopped: table {each}: ctrl+r in its console, or that command at a terminal"
 
 
 def _variants(status: dict) -> int:

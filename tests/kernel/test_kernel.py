@@ -430,7 +430,7 @@ def test_closed_outputs_leave_no_listener_thread_behind(profile, plugins):
         t_end = time.monotonic() + 10
         while (f"opening {i}" not in {m for _, m in heard}) and time.monotonic() < t_end:
             time.sleep(0.01)
-        tellers.append(out._teller)
+        tellers.append(out._teller.thread)  # the thread that told it
         out.close()
     assert [m for k, m in heard if k == "estop"] == [f"opening {i}" for i in range(3)], heard
     for t in tellers:

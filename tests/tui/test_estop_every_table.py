@@ -59,7 +59,8 @@ def test_a_shell_estop_of_every_table_shows_the_others_after_ctrl_r(plugins, siz
             await wait_for(pilot, lambda: not app.session.outputs.estopped, 20, "reset")
             said = [m for m in _said(app) if m.startswith("e-stop reset")]
             assert said and "still e-stopped: table" in said[-1], _said(app)
-            assert "haptable-lab" in said[-1] and "haptable reset" in said[-1], said
+            # each named with the command that resets it at a terminal
+            assert "(`haptable --profile haptable-lab reset`)" in said[-1], said[-1]
             # the bar: this table's state, and the others still latched, by name
             await wait_for(pilot, lambda: "haptable-lab" in _bar(app), 10, "others on the bar")
             bar = _bar(app)

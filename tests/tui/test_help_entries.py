@@ -62,3 +62,15 @@ def test_vibration_help_shows_each_entry_on_its_own_line(plugins, size):
             assert "x:" not in built, built
 
     asyncio.run(scenario())
+
+
+def test_an_entry_s_key_is_the_fewest_words_before_its_separator():
+    """``b: build the lookup tables  ...`` is the key ``b`` (bold), and a description too
+    long for a line wraps under itself, not back at the screen's left edge."""
+    from console.tui.help import ENTRY, wrap
+
+    line = "b: build the lookup tables  from the measured maps, every point and patch"
+    assert ENTRY.match(line).group("key") == "b"
+    (key, first), *more = wrap(line, 40)
+    assert key == "b: " and first.startswith("build the lookup"), (key, first)
+    assert more and all(r.startswith("   ") and r[3] != " " for _, r in more), more
