@@ -10,15 +10,18 @@ import numpy as np
 
 from console.plugin_api import machine_info, summarize_s
 
-from .gestures import GESTURES, plan_take, take_pose
+from .coherent import held_hand_check
+from .gestures import GESTURES, STATIC, plan_take, take_pose
 from .hand import make_subject
 from .render import Rig
 from .sample import render_background, render_frame, render_sample
 
 
 def run(ctx: Any = None, quick: bool = False) -> dict:
-    """Frame render time per gesture (p50/p99) and sample render throughput (the
-    twin's share of ``gestures synth``, extrapolated to the paper's 2000 samples)."""
+    """Frame render time per gesture (p50/p99), a held hand's frames moved from its
+    last full render against full renders (speed, grey-level error, the vision's contact
+    gap) and sample render throughput (the twin's share of ``gestures synth``,
+    extrapolated to the paper's 2000 samples)."""
     rig = Rig()
     render_sample("drag", "s1", 0, np.random.default_rng(0), rig=rig)  # warm caches
     reps = 2 if quick else 8
@@ -59,12 +62,27 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
             render_background(rig, t_s - 0.5, rng)
             n_samples += 1
     per_sample_s = (time.perf_counter() - t0) / n_samples
+    # a held hand on the live camera: frames moved from the last full render
+    # (``coherent``) against full renders of the same poses, speed and error
+    held = {}
+    for i, g in enumerate(STATIC):
+        got = held_hand_check(g, 10 if quick else 40, rig, seed=i)
+        held[g] = {
+            "coherent": summarize_s(got["s_coherent"][1:]),  # the first is the full render
+            "full": summarize_s(got["s_full"]),
+            "grey_error_mean": round(got["grey_error_mean"], 4),
+            "grey_error_max": got["grey_error_max"],
+            "share_over_2_grey": round(got["share_over_2_grey"], 5),
+            "vision_contact_gap_px": round(got["contact_gap_px"], 3),
+            "vision_contact_counts_differ": got["contact_counts_differ"],
+        }
     cores = os.cpu_count() or 1
     return {
         "frame_render": summarize_s(all_s),
         # CPU time of this process (all threads): robust when other jobs load the machine
         "frame_render_cpu": summarize_s(cpu_s),
         "frame_render_empty_table": summarize_s(empty),
+        "held_hand_frames": held,
         "frame_render_per_gesture": per_gesture,
         "sample_render_one_process": {
             "samples": n_samples,

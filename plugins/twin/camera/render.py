@@ -162,14 +162,17 @@ def _composite(out, mask, val, items, sigma_px, scale) -> None:
     o += v
 
 
-def hand_layer(pieces: list[Piece], mapping: TableMapping) -> np.ndarray:
-    """Grey levels the hands add at illumination 1 (float32 image)."""
-    w, h = mapping.image_px
-    out = np.zeros((h, w), np.float32)
+#: bands blurred by at least this many pixels are smooth enough to be moved by an image
+#: warp (``coherent``); sharper ones (the skin touching the glass) are drawn each frame
+WARPABLE_SIGMA_PX = 1.0
+
+
+def _bands(pieces: list[Piece], mapping: TableMapping) -> list[tuple[float, list]]:
+    """The visible pieces by height band, highest first: (blur sigma px, items)."""
     visible = [(p, _band_of(p.h_mm)) for p in pieces]
     visible = [(p, b) for p, b in visible if b >= 0]
     if not visible:
-        return out
+        return []
     ppm = mapping.px_per_mm()
     contours = [c for p, _ in visible for c in (p.poly_mm, *p.holes)]
     sizes = [len(c) for c in contours]
@@ -178,13 +181,37 @@ def hand_layer(pieces: list[Piece], mapping: TableMapping) -> np.ndarray:
     for p, b in visible:
         polys = [next(allpx) for _ in range(1 + len(p.holes))]
         bands.setdefault(b, []).append((polys, p.h_mm, p.refl))
+    out = []
+    for b in sorted(bands, reverse=True):  # highest band first, lower ones composite over
+        items = sorted(bands[b], key=lambda it: -it[1])  # lower pieces paint last
+        out.append((blur_mm(0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])) * ppm, items))
+    return out
+
+
+def hand_layer(
+    pieces: list[Piece], mapping: TableMapping, part: str = "all", over: np.ndarray | None = None
+) -> np.ndarray:
+    """Grey levels the hands add at illumination 1 (float32 image). ``part``: "all",
+    "blurred" (the bands of ``WARPABLE_SIGMA_PX`` or more) or "sharp" (the others,
+    composited over ``over``, the blurred part, in place): "sharp" over "blurred" is
+    "all"."""
+    w, h = mapping.image_px
+    out = np.zeros((h, w), np.float32) if over is None else over
+    bands = _bands(pieces, mapping)
+    if part != "all":
+        keep = (
+            (lambda s: s >= WARPABLE_SIGMA_PX)
+            if part == "blurred"
+            else (lambda s: s < WARPABLE_SIGMA_PX)
+        )
+        bands = [(s, items) for s, items in bands if keep(s)]
+    if not bands:
+        return out
     lo_shape = (-(-h // LOW_RES), -(-w // LOW_RES))
     lo = None
     mask = np.empty((h, w), np.float32)
     val = np.empty((h, w), np.float32)
-    for b in sorted(bands, reverse=True):  # highest band first, lower ones composite over
-        items = sorted(bands[b], key=lambda it: -it[1])  # lower pieces paint last
-        sigma = blur_mm(0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])) * ppm
+    for sigma, items in bands:
         if sigma > SHARP_SIGMA_PX:
             if lo is None:
                 lo = np.zeros(lo_shape, np.float32)

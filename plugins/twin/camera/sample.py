@@ -31,7 +31,7 @@ import numpy as np
 
 from .geometry import TableMapping
 from .gestures import DYNAMIC, GESTURES, STATIC, Take, plan_take, take_pose
-from .hand import HandPose, Subject, hand_pieces, make_subject
+from .hand import HandGeometry, HandPose, Subject, hand_pieces, make_subject
 from .render import Rig, compose, hand_layer
 
 HARD_CASES: tuple[str, ...] = (
@@ -54,12 +54,22 @@ def frame_truth(
     hands: list[tuple[Subject, HandPose]], mapping: TableMapping, label: str, t_s: float
 ) -> tuple[list, dict[str, Any]]:
     """Pieces to render and the per-frame ground truth of the posed hands."""
+    geos = [hand_pieces(subject, pose) for subject, pose in hands]
+    pieces = [p for geo in geos for p in geo.pieces]
+    return pieces, frame_truth_of(geos, hands, mapping, label, t_s)
+
+
+def frame_truth_of(
+    geos: list[HandGeometry],
+    hands: list[tuple[Subject, HandPose]],
+    mapping: TableMapping,
+    label: str,
+    t_s: float,
+) -> dict[str, Any]:
+    """The per-frame ground truth of the posed ``hands`` (``geos``: their pieces)."""
     w, h = mapping.image_px
-    pieces: list = []
     out_hands = []
-    for subject, pose in hands:
-        geo = hand_pieces(subject, pose)
-        pieces += geo.pieces
+    for geo, (subject, pose) in zip(geos, hands, strict=True):
         c_px = mapping.mm_to_px([geo.center_mm])[0]
         fwd = np.array(geo.center_mm) + 50 * np.array(
             [np.cos(np.radians(pose.angle_deg)), np.sin(np.radians(pose.angle_deg))]
@@ -101,7 +111,7 @@ def frame_truth(
         "contacts_px": [c["pos_px"] for hd in out_hands for c in hd["contacts"]],
         "contacts_mm": [c["pos_mm"] for hd in out_hands for c in hd["contacts"]],
     }
-    return pieces, truth
+    return truth
 
 
 def render_frame(
