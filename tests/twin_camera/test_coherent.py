@@ -12,10 +12,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from plugins.gestures.vision import process_frame
 from plugins.twin.camera.coherent import MAX_SHIFT_MM, CoherentFrames, held_hand_check
 from plugins.twin.camera.gestures import STATIC, plan_take, take_pose
 from plugins.twin.camera.hand import make_subject
 from plugins.twin.camera.render import Rig
+
+
+def _contacts(image, background):
+    return [c.pos_px for c in process_frame(image, background).contacts]
+
 
 #: the vision's contacts on a moved render and on a full one: within the jitter the
 #: sensor's noise alone gives two full renders of one pose (~0.1 px)
@@ -25,7 +31,9 @@ CONTACT_GAP_PX = 0.15
 @pytest.mark.parametrize("gesture", STATIC)
 @pytest.mark.parametrize("at", [None, (110.0, 150.0)], ids=["middle", "edge"])
 def test_a_held_hand_s_moved_frames_match_full_renders(gesture, at):
-    got = held_hand_check(gesture, 12, Rig(), seed=STATIC.index(gesture), center_mm=at)
+    got = held_hand_check(
+        gesture, 12, Rig(), seed=STATIC.index(gesture), center_mm=at, contacts_of=_contacts
+    )
     assert got["warped"] == got["frames"] - 1  # one full render, then moved
     assert got["truth_gap_px"] < 1e-9  # the ground truth exactly
     assert got["contact_counts_differ"] == 0

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import machine_info, summarize_s
+from console.plugin_api import Frame, machine_info, summarize_s
 
 from .coherent import held_hand_check
 from .gestures import GESTURES, STATIC, plan_take, take_pose
@@ -64,16 +64,16 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
     per_sample_s = (time.perf_counter() - t0) / n_samples
     # a held hand on the live camera: frames moved from the last full render
     # (``coherent``) against full renders of the same poses, speed and error
-    held = {}
+    held, vision = {}, _vision_contacts(ctx)
     for i, g in enumerate(STATIC):
-        got = held_hand_check(g, 10 if quick else 40, rig, seed=i)
+        got = held_hand_check(g, 10 if quick else 40, rig, seed=i, contacts_of=vision)
         held[g] = {
             "coherent": summarize_s(got["s_coherent"][1:]),  # the first is the full render
             "full": summarize_s(got["s_full"]),
             "grey_error_mean": round(got["grey_error_mean"], 4),
             "grey_error_max": got["grey_error_max"],
             "share_over_2_grey": round(got["share_over_2_grey"], 5),
-            "vision_contact_gap_px": round(got["contact_gap_px"], 3),
+            "vision_contact_gap_px": got["contact_gap_px"],
             "vision_contact_counts_differ": got["contact_counts_differ"],
         }
     cores = os.cpu_count() or 1
@@ -93,3 +93,20 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
         "machine": machine_info(),
         "quick": quick,
     }
+
+
+def _vision_contacts(ctx: Any):
+    """The profile's classifier's contacts in a frame against a background (None
+    without a profile: the held-hand rows then compare the renders only)."""
+    if ctx is None:
+        return None
+    from console.plugin_api.runtime import open_classifier  # lazy: the runtime's import
+
+    clf = open_classifier(ctx.profile, ctx.pm)
+
+    def contacts(image: np.ndarray, background: np.ndarray) -> list:
+        clf.set_background(background)
+        res = clf.process(Frame(image=image, seq=0, t_capture_s=0.0, source="twin"))
+        return [c.pos_px for c in res.contacts]
+
+    return contacts
