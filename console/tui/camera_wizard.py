@@ -73,11 +73,30 @@ class CameraWizardMixin:
         text = break_paths(text, self.side_width("camera-wizard"))  # a path whole
         return f"[red]{escape(text)}[/]" if w.failed else escape(text)
 
-    def wizard_text(self) -> str:
+    #: a finished result that asks for nothing, said in one line (``short_result``): the
+    #: side panel has no room for it whole under newer replies
+    _wizard_short = False
+
+    def short_result(self) -> str:
+        """A finished calibration's result in one line: ``touch calibration: 12 targets,
+        saved (k: again)``."""
+        w = self.wizard
+        head = w.message.split(":", 1)[0].strip() if ":" in w.message else ""
+        if w.failed:
+            said = "failed"
+        else:
+            said = ", ".join(p for p in (head, "saved" if "saved to" in w.message else "") if p)
+        return f"[b]touch calibration[/b]: {escape(said or 'done')} (k: again)"
+
+    def wizard_text(self, short: bool | None = None) -> str:
         """The touch-calibration wizard's step or result and the keys it takes ("" when
-        it has nothing to say)."""
+        it has nothing to say); ``short`` (else as the side panel fits it): a finished
+        result that asks for nothing in one line."""
         if self.calibration is None and self.cal_result is None and not self.cal_message:
             return ""
+        short = self._wizard_short if short is None else short
+        if short and self.calibration is None and not self.unsaved:
+            return self.short_result()
         lines = ["[b]touch calibration[/b]", self.cal_message]
         if self.calibration is not None:
             note = self.wizard.projector_note  # where the targets show (a projector?)

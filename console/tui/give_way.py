@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from textual.content import Content
 from textual.widget import Widget
 
 
@@ -20,22 +21,33 @@ def natural_rows(widget: Widget) -> int:
     return content + widget.styles.gutter.height
 
 
+def text_rows(markup: str, width: int) -> int:
+    """The rows ``markup`` takes wrapped at ``width`` cells (0 before a layout)."""
+    return len(Content.from_markup(markup).wrap(width)) if width > 0 and markup else 0
+
+
 def outer_rows(widgets: Iterable[Widget | None]) -> int:
     """The rows the shown ones of ``widgets`` take now (their margins too)."""
     return sum(w.outer_size.height for w in widgets if w is not None and w.display)
 
 
-def give_way(room: int, kept: int, yielding: Iterable[Widget]) -> bool:
+def give_way(
+    room: int, kept: int, yielding: Iterable[Widget], whole: Iterable[Widget] = ()
+) -> bool:
     """Limit the shown ones of ``yielding`` (the first keeps its rows longest) to the
     ``room`` rows ``kept`` leaves; each has its natural height again when there is room.
+    Those in ``whole`` (a sentence, not a list of lines) show whole or not at all.
     Whether a limit changed (the panel is laid out again)."""
     left = room - kept
     changed = False
+    whole = set(whole)
     for widget in yielding:
         if not widget.display:
             continue
         rows = natural_rows(widget)
         take = max(0, min(rows, left))
+        if widget in whole and take < rows:
+            take = 0
         limit = None if take >= rows else take
         now = widget.styles.max_height
         if (now.value if now is not None else None) != limit:

@@ -23,7 +23,6 @@ import numpy as np
 from textual import work
 from textual.app import ComposeResult
 from textual.containers import Horizontal, Vertical, VerticalScroll
-from textual.geometry import Region
 from textual.widgets import Input, Static
 
 from console.core.errors import UserError
@@ -39,9 +38,9 @@ from console.tui.camera_live import (
     starting_lines,
 )
 from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
+from console.tui.camera_side import CameraSideMixin
 from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
-from console.tui.give_way import give_way, outer_rows
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.plots import HalfBlockImage, downsample
@@ -68,7 +67,7 @@ class SidePanel(VerticalScroll):
             self.call_after_refresh(pane.keep_in_view)
 
 
-class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizontal):
+class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizontal):
     HELP_TEXT = HELP_TEXT
     BINDINGS = BINDINGS
     can_focus = True
@@ -384,67 +383,6 @@ class CameraPane(CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizonta
         (``pinned``: its part above the status line)."""
         found = self._part("camera-info" if pinned else "camera-detail")
         return found.content_size.width if found is not None else 0
-
-    def _scroll_to_chosen(self) -> None:
-        """Scroll the side panel so the chosen setting's row (``▸``) shows: the settings
-        list starts with a row per setting, in ``params()`` order."""
-        scroll, settings = self.query("#camera-scroll"), self.query("#camera-settings")
-        keys = list(self.service.params())
-        key = self.chosen_key()
-        if not scroll or not settings or key not in keys:
-            return
-        y = settings.first().virtual_region.y + keys.index(key)
-        scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
-
-    #: the scrolled part's rows no block above it takes while nothing is typed in: the
-    #: chosen setting's row (``▸``) shows there, whatever the status lines say
-    CHOSEN_ROWS = 1
-    #: when a key last tuned a setting, the status line last said something and the
-    #: wizard's text last changed: the latest of them keeps its rows first
-    _tuned_at = 0.0
-    _spoken_at = 0.0
-    _wizard_at = 0.0
-    _wizard_told: tuple = (id(None), id(None), "")
-
-    def fit_side(self) -> None:
-        """The side panel's field being typed in keeps its rows; then whatever answered
-        the operator last: the chosen setting's row (``CHOSEN_ROWS``: ``-``/``+`` never
-        change a value out of view) when a key tuned last, else the newest reply (the
-        status line or the wizard's text), and a wizard's step or ``S: save`` waiting
-        for a key. The live numbers give way next (the next glance shows them again),
-        then an older status line, then a finished wizard's result."""
-        scroll = self.query("#camera-scroll")
-        if not scroll:
-            return
-        focused = self.app.focused
-        typing = focused if focused is not None and scroll.first() in focused.ancestors else None
-        fields = [*self.query("#camera-recording"), typing]
-        kept = outer_rows(fields)
-        info, wizard, status = (
-            self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
-        )
-        said = max((self._spoken_at, status), (self._wizard_at, wizard), key=lambda t: t[0])
-        tuning = self._tuned_at >= said[0]  # the last key tuned, nothing said since
-        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
-            kept += self.CHOSEN_ROWS
-        asks = self.calibration is not None or self.unsaved
-        first = [] if tuning else [said[1]]
-        if asks and wizard not in first:
-            first.append(wizard)
-        blocks = [*first, info, *(b for b in (status, wizard) if b not in first)]
-        if give_way(self.query_one("#camera-side").content_region.height, kept, blocks):
-            self.call_after_refresh(self.keep_in_view)
-
-    def keep_in_view(self) -> None:
-        """The side panel's widget with the focus (the target field), else the chosen
-        setting, scrolled into view; what informs gives way to it (``fit_side``)."""
-        self.fit_side()
-        focused = self.app.focused
-        scroll = self.query("#camera-scroll")
-        if focused is not None and scroll and scroll.first() in focused.ancestors:
-            scroll.first().scroll_to_widget(focused, animate=False, immediate=True)
-        else:
-            self._scroll_to_chosen()
 
     def _reveal(self) -> None:
         """Show the chosen setting now (a key changed it), scrolled into view."""

@@ -1,0 +1,100 @@
+"""The Camera screen's side panel keeps in view what the operator acts on
+(``CameraSideMixin``): the field being typed in, then whatever answered last (a tuning
+key's ``▸`` row, the newest status line or wizard text, a wizard step waiting for a key);
+the live numbers give way next, then older replies (``console.tui.give_way``). A
+finished calibration's result that would be cut is said in one line instead."""
+
+from __future__ import annotations
+
+from textual.geometry import Region
+
+from console.tui.give_way import give_way, natural_rows, outer_rows, text_rows
+
+
+class CameraSideMixin:
+    """The side panel's give-way order, for ``console.tui.panes.camera.CameraPane``."""
+
+    def _scroll_to_chosen(self) -> None:
+        """Scroll the side panel so the chosen setting's row (``▸``) shows: the settings
+        list starts with a row per setting, in ``params()`` order."""
+        scroll, settings = self.query("#camera-scroll"), self.query("#camera-settings")
+        keys = list(self.service.params())
+        key = self.chosen_key()
+        if not scroll or not settings or key not in keys:
+            return
+        y = settings.first().virtual_region.y + keys.index(key)
+        scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
+
+    #: the scrolled part's rows no block above it takes while nothing is typed in: the
+    #: chosen setting's row (``▸``) shows there, whatever the status lines say
+    CHOSEN_ROWS = 1
+    #: when a key last tuned a setting, the status line last said something and the
+    #: wizard's text last changed: the latest of them keeps its rows first
+    _tuned_at = 0.0
+    _spoken_at = 0.0
+    _wizard_at = 0.0
+    _wizard_told: tuple = (id(None), id(None), "")
+
+    def fit_side(self) -> None:
+        """The side panel's field being typed in keeps its rows; then whatever answered
+        the operator last: the chosen setting's row (``CHOSEN_ROWS``: ``-``/``+`` never
+        change a value out of view) when a key tuned last, else the newest reply (the
+        status line or the wizard's text), and a wizard's step or ``S: save`` waiting
+        for a key. The live numbers give way next (the next glance shows them again),
+        then an older status line, then a finished wizard's result."""
+        scroll = self.query("#camera-scroll")
+        if not scroll:
+            return
+        focused = self.app.focused
+        typing = focused if focused is not None and scroll.first() in focused.ancestors else None
+        fields = [*self.query("#camera-recording"), typing]
+        kept = outer_rows(fields)
+        info, wizard, status = (
+            self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
+        )
+        said = max((self._spoken_at, status), (self._wizard_at, wizard), key=lambda t: t[0])
+        tuning = self._tuned_at >= said[0]  # the last key tuned, nothing said since
+        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
+            kept += self.CHOSEN_ROWS
+        asks = self.calibration is not None or self.unsaved
+        first = [] if tuning else [said[1]]
+        if asks and wizard not in first:
+            first.append(wizard)
+        blocks = [*first, info, *(b for b in (status, wizard) if b not in first)]
+        room = self.query_one("#camera-side").content_region.height
+        if self._shorten_result(room - kept, blocks, wizard, asks):
+            self.call_after_refresh(self.keep_in_view)  # laid out with its new text first
+            return
+        result = [] if asks or self.calibration is not None else [wizard]  # a sentence
+        if give_way(room, kept, blocks, whole=result):
+            self.call_after_refresh(self.keep_in_view)
+
+    def _shorten_result(self, left: int, blocks: list, wizard, asks: bool) -> bool:
+        """A finished result that asks for nothing and would be cut (``give_way``'s
+        share, with its whole text's rows) is said in one line instead, and whole again
+        when there is room: never cut mid-sentence. Whether its text changed."""
+        short = False
+        if wizard.display and not asks and self.calibration is None:
+            full = self.wizard_text(short=False)
+            for b in blocks:
+                rows = text_rows(full, wizard.content_region.width) if b is wizard else None
+                rows = natural_rows(b) if rows is None else rows + wizard.styles.gutter.height
+                if b is wizard:
+                    short = left < rows
+                    break
+                left -= min(rows, max(left, 0))
+        if short == self._wizard_short:
+            return False
+        self._wizard_short = short
+        return self._say("camera-wizard", self.wizard_text())
+
+    def keep_in_view(self) -> None:
+        """The side panel's widget with the focus (the target field), else the chosen
+        setting, scrolled into view; what informs gives way to it (``fit_side``)."""
+        self.fit_side()
+        focused = self.app.focused
+        scroll = self.query("#camera-scroll")
+        if focused is not None and scroll and scroll.first() in focused.ancestors:
+            scroll.first().scroll_to_widget(focused, animate=False, immediate=True)
+        else:
+            self._scroll_to_chosen()
