@@ -20,7 +20,7 @@ from textual.widgets import Static
 
 from console.tui import glue
 
-__all__ = ["ENTRY", "HelpText", "help_text", "paragraphs", "wrap"]
+__all__ = ["ENTRY", "HelpText", "columns", "help_text", "paragraphs", "wrap"]
 
 #: the start of an entry: its key (a word, or a few short ones: ``t / T``, ``w a s d``,
 #: ``n / Analyse``; the fewest that reach a separator, so ``b: build the lookup tables``
@@ -77,6 +77,28 @@ def _joined(out: list[str], raw: str) -> list[str]:
     return [line]
 
 
+def columns(paras: list[str]) -> list[str]:
+    """Runs of two or more entries written one under the other as one table: each key
+    padded to the run's widest (at most ``MAX_HANG`` wide with its gap, a colon kept), so
+    the descriptions start in one column whichever way a screen's help was written
+    (``c / C  contact`` under ``t / T    body``; ``enter:   audition`` under ``arrows:``)."""
+    found = [ENTRY.match(p) if p else None for p in paras]
+    # a key as written: its colon kept (the help shows its words as written)
+    keys = [m.group("key") + m.group("sep").rstrip() if m else None for m in found]
+    keys = [k if k is not None and len(k) + 2 <= MAX_HANG else None for k in keys]
+    out, i = list(paras), 0
+    while i < len(paras):
+        j = i
+        while j < len(paras) and keys[j] is not None:
+            j += 1
+        if j - i >= 2:
+            col = max(len(keys[k]) for k in range(i, j)) + 2
+            for k in range(i, j):
+                out[k] = keys[k].ljust(col) + paras[k][found[k].end() :]
+        i = max(j, i + 1)
+    return out
+
+
 def wrap(paragraph: str, width: int) -> list[tuple[str, str]]:
     """``paragraph`` wrapped to ``width`` columns as ``(key, rest)`` line pieces: the
     first line of an entry has its key apart (shown bold), the others ``("", line)``."""
@@ -118,7 +140,7 @@ def _content(sections: Sequence[tuple[str, str]], width: int) -> Content:
             if lines:
                 lines.append(Content(""))
             lines.append(Content.styled(title, "bold"))
-        for para in paragraphs(body):
+        for para in columns(paragraphs(body)):
             for key, rest in wrap(para, width):
                 lines.append(Content.assemble((key, "bold"), rest) if key else Content(rest))
     return Content("\n").join(lines)

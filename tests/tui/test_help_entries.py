@@ -55,9 +55,18 @@ def test_vibration_help_shows_each_entry_on_its_own_line(plugins, size):
                 for r in screen_lines(app)
             ]
             await wait_for(pilot, lambda: any("build the lookup" in r for r in rows()), 10, "help")
-            shown = rows()
+            shown = [" ".join(r.split()) for r in rows()]  # (the columns' own spaces)
             assert any(r.startswith("x: cancel what runs") for r in shown), shown
             assert any(r.startswith("enter: audition the point") for r in shown), shown
+            # the descriptions of a run of entries start in one column
+            raw = rows()
+            starts = {
+                r.index(w)
+                for r in raw
+                for w in ("cancel what runs", "audition the point", "build the lookup")
+                if w in r
+            }
+            assert len(starts) == 1, [r for r in raw if ":" in r[:12]]
             built = next(r for r in shown if "build the lookup tables" in r)
             assert "x:" not in built, built
 
@@ -74,3 +83,15 @@ def test_an_entry_s_key_is_the_fewest_words_before_its_separator():
     (key, first), *more = wrap(line, 40)
     assert key == "b: " and first.startswith("build the lookup"), (key, first)
     assert more and all(r.startswith("   ") and r[3] != " " for _, r in more), more
+
+
+def test_a_run_of_entries_is_one_table_whatever_its_spacing():
+    """Camera's ``c / C  contact`` under ``t / T    body``, Scenes' ``x  cancel`` under
+    ``enter    start``: the descriptions start in one column; the words stay as written."""
+    from console.tui.help import columns
+
+    got = columns(["t / T    body threshold", "c / C  contact threshold", "v  view", "", "x  y"])
+    assert got[:3] == ["t / T  body threshold", "c / C  contact threshold", "v      view"]
+    assert got[3:] == ["", "x  y"]  # a lone entry stays as written
+    mixed = columns(["enter: audition", "arrows: move"])
+    assert mixed == ["enter:   audition", "arrows:  move"]
