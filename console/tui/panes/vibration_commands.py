@@ -6,7 +6,17 @@ import shlex
 from typing import Any
 
 from console.core.errors import UserError
+from console.core.suggest import did_you_mean
 from console.tui.panes.vibration_words import COMMANDS, KEY_DIRECTIONS, point_word
+
+#: the command line's words (a point id is any number)
+NAMES = ("measure", "import", "load", "cancel", "tables", "hand")
+
+
+def command_meant(word: str) -> str | None:
+    """The command a mistyped word meant (``mesure``: ``measure``), or None (a point
+    id, or nothing like a command)."""
+    return None if word.isdigit() else did_you_mean(word, NAMES)
 
 
 def run_command(pane: Any, text: str) -> bool:
@@ -38,6 +48,8 @@ def run_command(pane: Any, text: str) -> bool:
         if len(words) != 3 or words[2] not in KEY_DIRECTIONS.values():
             raise UserError("hand: write hand POINT left|right|up|down, e.g. hand 51 right")
         pane.action_hand(words[2], point_word(words[1]))
+    elif (meant := command_meant(head)) is not None and not head.isdigit():
+        raise UserError(f"{words[0]!r}: not a command; did you mean {meant!r}? ({COMMANDS})")
     elif len(words) == 1:
         pane.audition(point_word(words[0]))
     elif len(words) == 2:
