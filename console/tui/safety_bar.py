@@ -84,19 +84,22 @@ def describe(
     # the other tables a shell's `haptable estop` latched: named, with where they reset
     # (ctrl+r here resets this table only: the kernel takes a reset from its own console)
     named = ",".join(others)
+    n = len(others)
     ends = [
         f" | also e-stopped: {named} (reset in its console or `haptable reset`)",
         f" | also e-stopped: {named}",
         f" | +e-stop: {named}",
-        f" | +{len(others)} e-stopped",
+        f" | {n} other table{'s' if n > 1 else ''} e-stopped",
+        f" | +{n} e-stopped",
     ]
     variants = [_describe(status, None, names, k)[0] for k in range(_variants(status))]
-    named, counted = ends[:-1], ends[-1:]
-    if status.get("busy"):  # playing: the others' names give way before the live level
+    named, counted = ends[:3], ends[3:]
+    if status.get("busy") or status["gate"]["estopped"]:
+        # playing or e-stopped: the others give way before this table's own words
         fits = [v + e for v in variants for e in ends]
-    else:  # idle: the levels (zero) give way before the names
-        fits = [v + e for e in named for v in variants] + [v + e for v in variants for e in counted]
-    return _fit(fits, width), kind
+    else:  # idle: the levels (zero) give way first, then what the relays switch
+        fits = [v + e for v in variants for e in named] + [v + e for v in variants for e in counted]
+    return _fit([*fits, *variants], width), kind  # no room for the others: not a word cut
 
 
 def still_latched(out) -> str:
@@ -111,7 +114,7 @@ def still_latched(out) -> str:
 
 
 def _variants(status: dict) -> int:
-    return 3 if status["gate"]["estopped"] else 6
+    return 3 if status["gate"]["estopped"] else 6 if status.get("busy") else 7
 
 
 def _describe(
@@ -160,6 +163,8 @@ def _describe(
                 f" ctrl+e E-STOP | outputs {state} | {full} | relays closed: {relays}",
                 f" ctrl+e E-STOP | {state} | {mid} | relays closed: {relays}",
                 f" ^e E-STOP | {state} | {short} | closed: {relays}",
+                # idle: the levels (zero) go before what the relays switch
+                *([] if status["busy"] else [f" ^e E-STOP | {state} | closed: {relays}"]),
                 f" ^e E-STOP | {state} | {short} | closed: {numbers}",
                 # the levels last: what does not fit is cut from them
                 f" ^e E-STOP | {state} | closed: {numbers} | {short}",

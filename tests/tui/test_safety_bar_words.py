@@ -63,3 +63,19 @@ def test_other_tables_e_stopped_never_hide_the_live_level_at_80():
     text, kind = describe(status, 80)
     assert kind == "live" and len(text) <= 80
     assert "piezo +12 V" in text and "e-stopped" in text, text
+
+
+def test_other_tables_latched_never_take_this_tables_words():
+    """A shell's bare `haptable estop` latched two unused tables: at 80 columns the idle
+    bar still names what its closed relays switch (it showed `closed: 1,5` for the other
+    tables' names), and an e-stopped bar never ends in a cut `+2…`."""
+    from console.tui.safety_bar import describe
+
+    names = {1: "PA", 5: "screen"}
+    gate = {"estopped": False, "relays_closed": [1, 5], "level_v": [0.0, 0.0], "estop_reason": ""}
+    idle = {"gate": gate, "busy": False, "latched_elsewhere": ["haptable-lab", "sim-4ch"]}
+    text, _ = describe(idle, 80, names)
+    assert "1,5 (PA screen)" in text and "haptable-lab" in text and len(text) <= 80, text
+    stopped = {**idle, "gate": {**gate, "estopped": True, "estop_reason": "operator e-stop"}}
+    text, _ = describe(stopped, 80, names)
+    assert "operator e-stop" in text and not text.endswith("…") and len(text) <= 80, text
