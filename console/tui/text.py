@@ -32,8 +32,8 @@ def escape(value: Any) -> str:
 
 def literal(value: Any) -> Any:
     """``value`` as a table cell shown as written (a ``str`` becomes plain ``Text``;
-    numbers and renderables pass unchanged)."""
-    return Text(value) if isinstance(value, str) else value
+    numbers and renderables pass unchanged); a cell its column cuts ends in ``…``."""
+    return Text(value, no_wrap=True, overflow="ellipsis") if isinstance(value, str) else value
 
 
 def styled(text: str, style: str) -> Text:

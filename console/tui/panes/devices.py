@@ -190,7 +190,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             enter="test signals",
         )
         yield Static("plugins and what they provide", classes="heading")
-        yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole line")
+        yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole row")
 
     @property
     def focus_target(self):
