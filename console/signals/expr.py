@@ -72,6 +72,29 @@ from console.signals.syntax import (
 _DATA: ContextVar = ContextVar("signal_data", default=None)
 
 
+#: Python's words for a syntax error, in the signal language's (the first that matches)
+SYNTAX_WORDS = (
+    ("forgot a comma", "a comma is missing between two parts (seq(a, b))"),
+    ("was never closed", "a bracket opened here is never closed"),
+    ("unmatched", "a closing bracket here closes nothing"),
+    ("does not match opening", "the brackets do not match"),
+    ("invalid decimal literal", "a number runs into a word (write 250 Hz, with a space)"),
+    ("unexpected eof", "it ends too early (a value or a bracket is missing)"),
+    ("expected an indented block", "it is not one expression"),
+    ("invalid syntax", "this is not where a value, a call or an operator can be"),
+)
+
+
+def syntax_words(msg: str) -> str:
+    """What a syntax error means in a signal (Python's own words never reach the
+    operator: 'invalid syntax. Perhaps you forgot a comma?')."""
+    low = (msg or "").lower()
+    for key, words in SYNTAX_WORDS:
+        if key in low:
+            return words
+    return "it is not a signal expression"
+
+
 def parse(text: str, data=None) -> Node:
     """The signal ``text`` describes, or a one-line ``UserError`` naming the bad part.
     ``data`` (``console.signals.breakpoint_data.LibraryData``) resolves ``@NAME``."""
@@ -104,8 +127,8 @@ def _parse(text: str) -> Node:
         lead = len(text) - len(text.lstrip())  # the column counts in what was typed
         col = f" at column {lead + typed_column(typed, exc.offset)}" if exc.offset else ""
         raise UserError(
-            f"signal {clip(text.strip())!r} does not read{col}: {exc.msg}; write calls like "
-            "sine(250 Hz, 20 V, 1 s) with a unit after every value"
+            f"signal {clip(text.strip())!r} does not read{col}: {syntax_words(exc.msg)}; "
+            "write calls like sine(250 Hz, 20 V, 1 s) with a unit after every value"
         ) from None
     except (RecursionError, MemoryError):
         raise UserError("signal nested too deeply; use seq(...) and repeat(...)") from None

@@ -34,3 +34,18 @@ def test_an_unmatched_paren_is_at_its_column(text):
 def test_a_missing_comma_is_at_the_value_after_it():
     text = "sine(250 Hz 20 V, 1 s)"
     assert _column(text) in (text.index("250") + 1, text.index("20 V") + 1)
+
+
+def test_a_signal_that_does_not_read_is_told_in_the_signal_s_words():
+    """Python's own words ('invalid syntax. Perhaps you forgot a comma?') never reach the
+    operator: each usual slip is named as a signal's (a comma, a bracket, a unit)."""
+    for typed, words in (
+        ("seq(sine(250 Hz, 4 V, 1 s) sine(1 Hz, 1 V, 1 s))", "a comma is missing"),
+        ("sine(250 Hz, 4 V, 1 s", "never closed"),
+        ("sine(250 Hz, 4 V, 1 s))", "closes nothing"),
+        ("sine(250 Hz,, 4 V)", "not where a value"),
+    ):
+        with pytest.raises(UserError) as err:
+            parse(typed)
+        said = str(err.value)
+        assert words in said and "Perhaps" not in said and "invalid syntax" not in said, said
