@@ -73,7 +73,7 @@ FIX = "measure it again or import the vibrometer's file (haptable frf measure, h
 FIX_AT = {
     AT_CLI: FIX,
     AT_CONSOLE: (
-        "m measures the grid again, :import PA=F.uff ... imports the vibrometer's files, "
+        "m measures the grid, :import PA=F.uff ... imports the vibrometer's files, "
         ":load F.npz loads another map"
     ),
 }

@@ -21,6 +21,7 @@ Where no plugin offers what is asked, a ``UserError`` says which plugin to enabl
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -233,7 +234,7 @@ class VibrationService:
             self.session.emit(Stopped(TOPIC, name="measure", reason="cancelled"))
             raise
         vmap = load_map(path)
-        return self.open(vmap, f"map: measured now ({self._source(vmap)})")
+        return self.open(vmap, f"map: measured at {time.strftime('%H:%M')} ({self._source(vmap)})")
 
     def twin_plate_only(self) -> bool:
         """The profile's vibrometer is a simulation (the plate twin) while its outputs

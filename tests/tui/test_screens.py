@@ -218,7 +218,7 @@ def test_vibration_measurement_progress_and_cancel(plugins):
             assert bar.display
             await wait_for(pilot, lambda: pane.session is not None, 120, "measured")
             assert pane.session.vmap.points.size == 84
-            assert "measured now" in str(app.query_one("#vib-status").render())
+            assert "measured at" in str(app.query_one("#vib-status").render())
 
     asyncio.run(scenario())
 

@@ -29,7 +29,7 @@ def test_tab_never_focuses_an_invisible_widget(plugins):
             await wait_for(pilot, lambda: app.focused is pane.focus_target, what="grid focused")
             await pilot.press("m")
             await wait_for(pilot, lambda: pane.session is not None, 120, "measured")
-            await wait_for(pilot, lambda: "measured now" in _status(app), 30, "status")
+            await wait_for(pilot, lambda: "measured at" in _status(app), 30, "status")
             seen = []
             for _ in range(6):
                 await pilot.press("tab")
