@@ -24,7 +24,7 @@ from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
 from console.tui.camera_live import hand_line
-from console.tui.path_field import RECORDING_HINT, recording_field
+from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
@@ -74,6 +74,14 @@ def reader_for(pm: Any, path: str, profile: Any = None) -> Any:
         if reader.reads(path):
             return reader
     return recording_reader(pm)
+
+
+#: which recordings have camera frames to show here (a study trial run without the
+#: camera records its plans only: those show on Scope)
+FRAMES_HINT = (
+    "e.g. a demo's (with [recording] enabled = true in the profile) or a study trial "
+    "that used the camera: <study folder>/P01/recording/trial_0000.h5"
+)
 
 
 def no_frames_fix(run: Any) -> str:
@@ -134,6 +142,7 @@ class RecordingMixin:
     _replay_timer: Any = None
     _replay_shown: tuple | None = None  # (k, view size, mode) drawn
     _replay_typed: str | None = None  # a refused path: the field shows it again
+    _replay_refused: str | None = None  # ... and why it was refused
     _replay_frame: Any = None  # (k, image, decisions) read for the frame to show
 
     def on_mount(self) -> None:
@@ -157,7 +166,11 @@ class RecordingMixin:
         box.value = self._replay_typed or ""
         box.display = True
         box.focus()
-        self.say(f"o: type a recording's path, {RECORDING_HINT}")
+        if self._replay_typed and self._replay_refused:  # what was wrong, while it is fixed
+            what = self._replay_refused.split(";")[0].split(": type")[0]
+            self.say(f"{what}: edit the path, Enter opens it", "warning")
+            return
+        self.say(f"o: type a recording's path, {FRAMES_HINT}")
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "camera-recording":
@@ -182,12 +195,12 @@ class RecordingMixin:
             run = open_run(self.app.ctx.pm, path)
             k0 = (run, 0, run.frame(0), run.decisions(0)) if run.n_frames else None
         except UserError as exc:
-            self._replay_typed = path
-            from_thread(self.app, self.say, f"o: {worded(exc, AT_CONSOLE)}", "warning")
+            self._replay_typed, self._replay_refused = path, f"o: {worded(exc, AT_CONSOLE)}"
+            from_thread(self.app, self.say, self._replay_refused, "warning")
             return
         if k0 is None:
-            self._replay_typed = path
             line = f"o: recording {short_path(run.path)} has no frames: {no_frames_fix(run)}"
+            self._replay_typed, self._replay_refused = path, line
             from_thread(self.app, self.say, line, "warning")
             return
         from_thread(self.app, self._replay_opened, run, k0)
@@ -195,7 +208,7 @@ class RecordingMixin:
     def _replay_opened(self, run: Any, first: tuple) -> None:
         if self.replay is not None:
             self.replay.close()
-        self._replay_typed = None
+        self._replay_typed = self._replay_refused = None
         self.replay, self.replay_k, self.replay_playing = run, 0, False
         self._replay_frame = first[1:]
         self._watch(False)  # the live camera is let go while the recording shows

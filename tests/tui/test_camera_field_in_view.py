@@ -56,7 +56,7 @@ def test_the_recording_field_and_its_reply_show_under_a_calibration_result(plugi
             assert "recording: a .h5 file's path" in shown, shown  # its label whole
             # the example, whole, on the status line above the field
             await wait_for(pilot, lambda: _shows(app, status), 10, "the example in view")
-            assert "(Studies: record trials)" in text_in(app, status), text_in(app, status)
+            assert text_in(app, status).endswith("trial_0000.h5"), text_in(app, status)
             box.value = "/nonexist"
             await pilot.press("enter")
             await wait_for(pilot, lambda: "no such file" in text_in(app, status), 30, "reply")
@@ -68,5 +68,7 @@ def test_the_recording_field_and_its_reply_show_under_a_calibration_result(plugi
             await pilot.press("o")
             await wait_for(pilot, lambda: _shows(app, box), 10, "the field in view again")
             assert box.value == "/nonexist"
+            # what was wrong stays said while the path is fixed
+            assert "no such file" in text_in(app, status), text_in(app, status)
 
     asyncio.run(scenario())
