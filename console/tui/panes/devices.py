@@ -16,6 +16,7 @@ from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Select, Static
 
+from console.config.profile import overrides_path
 from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
@@ -198,6 +199,11 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         key (the doctor's table above it takes no Enter)."""
         return self.query_one("#audio-table", DataTable)
 
+    def on_show(self) -> None:
+        """Shown again: the profile line says what is saved now (another screen's ``u``
+        or ``W`` may have written the settings file meanwhile)."""
+        self._show_profile_line()
+
     def on_mount(self) -> None:
         self._show_profile_line()
         self.query_one("#audio-table", DataTable).add_columns(
@@ -258,7 +264,12 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
 
     def _show_profile_line(self) -> None:
         prof = self._profile()
-        saved = f"; saved settings: {short_path(prof.overrides)}" if prof.overrides else ""
+        # the saved settings' file as it is now (other screens' help points here for
+        # its path; ``u``, ``W``, a pick write it while this console runs)
+        over = overrides_path(prof.name)
+        saved = (
+            f"; saved settings: {short_path(over)}" if over.exists() else "; no saved settings yet"
+        )
         about = (prof.get("profile.description") or "").strip().rstrip(".")
         self.query_one("#profile-line", Static).update(
             f"profile {prof.name} ({short_path(prof.path)}): {about}{saved}"
