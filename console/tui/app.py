@@ -468,8 +468,11 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
 
     def action_reset_estop(self) -> None:
         out = self.session.outputs
+        if out is None:  # a second console, outputs not open: why, and where it resets
+            self.notify(self.session.no_reset_here(), severity="warning")
+            return
         others = still_latched(out)  # other tables: their own consoles reset them
-        if out is not None and not out.estopped:  # said, not silence: the key was heard
+        if not out.estopped:  # said, not silence: the key was heard
             self.notify("no e-stop to reset: the outputs are not e-stopped" + others)
         elif self.session.reset_estop():
             self._own_estop_s = time.monotonic()
