@@ -44,6 +44,12 @@ def _holder(lock_path: Path) -> str:
     return ""
 
 
+def holder_of(profile) -> str:
+    """`` (pid N)``: the console holding ``profile``'s lock, as its lock file says
+    ("" when unknown)."""
+    return _holder(table_for(profile.path).console_lock)
+
+
 class ControlServer:
     """Serves ``ping`` and the console's commands to other processes; refuses (``UserError``)
     when another console of this user already runs the profile."""

@@ -28,6 +28,7 @@ from console.session.events import (
     Started,
     Stopped,
 )
+from console.session.reset_here import no_reset_here
 from console.session.scenes import SceneControl
 
 Subscriber = Callable[[SessionEvent], None]
@@ -58,6 +59,7 @@ class ConsoleSession:
         self.fast = fast
         self.outputs: Any = None
         self.outputs_error = ""
+        self.console_elsewhere = False  # another console runs the profile: no outputs here
         self._holder: str | None = None  # who holds the outputs for a run (``hold_outputs``)
         #: the profile the console's outputs open with: the console's own, or that
         #: profile reloaded after the operator saved another device (``reopen_outputs``)
@@ -168,6 +170,7 @@ class ConsoleSession:
             try:
                 self._control = ControlServer(self.profile, self._control_command)
             except (OSError, UserError) as exc:
+                self.console_elsewhere = isinstance(exc, UserError)  # another holds the lock
                 self.outputs_error = str(exc)
                 self.emit(Stopped("outputs", reason=self.outputs_error))
                 return False
@@ -558,6 +561,11 @@ class ConsoleSession:
                 target=self.demos.stop, args=("e-stopped",), name="haptable-demo-estop", daemon=True
             ).start()
         self.emit(Stopped("estop", reason=reason))
+
+    def no_reset_here(self) -> str:
+        """Why ctrl+r resets nothing while this console holds no outputs (a second
+        console of the profile, outputs still opening or not open), with the fix."""
+        return no_reset_here(self.profile, self.outputs_error, self.console_elsewhere)
 
     def reset_estop(self) -> bool:
         """The operator's reset (ctrl+r): the kernel clears the latch for the console

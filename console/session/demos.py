@@ -297,6 +297,12 @@ class DemoControl:
         sent = fwd is not None and fwd.ready
         return {"demo": name, "scene": run.scene_name, "sent": sent, "state": self.state}
 
+    def projecting(self) -> str | None:
+        """The demo whose scene the projector shows or will show (it started with the
+        projector running: its events go there until it ends), else None."""
+        name, fwd = self.name, self._forward
+        return name if name is not None and fwd is not None else None
+
     def set_target(self, pos_mm: tuple[float, float] | None) -> bool:
         """The operator's finger on the twin the running demo watches (None lifts it);
         False when the demo's camera cannot be touched."""

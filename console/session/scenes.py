@@ -60,7 +60,16 @@ class SceneControl:
     def start(self, name: str, by: str = "the Scenes screen") -> bool:
         """Show scene ``name`` on the projector (starting it) for ``by`` (who holds the
         projector then, as the screens say it). Blocking; a failure is reported as a
-        ``Failed`` event."""
+        ``Failed`` event; refused while a demo shows its own scene there (its scene is
+        never replaced unasked: the demo stops first)."""
+        demo = self.session.demos.projecting()
+        if demo is not None:
+            fix = "s stops it first" if by == "the Scenes screen" else "Scenes (F6): s stops it"
+            why = f"the {demo} demo shows its scene on the projector; {fix}"
+            self.session.fail(
+                "projector", f"scene {name} not started: {why}", name=name, severity="warning"
+            )
+            return False
         self.starting = (name, by)
         try:
             svc = self.ensure()
@@ -96,8 +105,11 @@ class SceneControl:
             st = dict(svc.status())
         except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
             st = {"last_error": str(exc)}
+        feed = self.session.demos.scene_feed()  # a demo's scene shown: the demo holds it
         if starting is not None:
             st["holder"] = starting[1]
+        elif feed is not None and feed.get("sent") and st.get("scene") == feed["scene"]:
+            st["holder"] = f"the {feed['demo']} demo"
         elif self.holder is not None and st.get("scene") == self.holder[0]:
             st["holder"] = self.holder[1]  # another scene (a demo's): not theirs
         return st

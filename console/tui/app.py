@@ -319,8 +319,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         pane = self.pane(tab)
         if self.active_tab != tab or pane is None:
             return None
-        kept = self._left_focus.get(tab)  # where the operator left it (a half-typed line)
-        if kept is not None and kept.is_mounted and kept.focusable and kept.visible:
+        kept = self._left_focus.get(tab)  # where the operator left it
+        if kept is not None and self._can_come_back(kept):
             if isinstance(kept, Input):
                 kept.select_on_focus = False  # back to the line as it was, nothing selected
             return kept
@@ -328,6 +328,16 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
             return pane.focus_target
         except Exception:  # not composed yet
             return None
+
+    def _can_come_back(self, widget: Widget) -> bool:
+        """Whether the focus can go back to ``widget``: still mounted, focusable and
+        shown (its own display and every container's: the focus chain has it)."""
+        if not widget.is_mounted or not widget.focusable:
+            return False
+        try:
+            return widget in widget.screen.focus_chain
+        except Exception:  # noqa: BLE001 - gone meanwhile
+            return False
 
     async def action_show_tab(self, tab: str) -> None:
         panel = self.screen  # a panel on top (F-key): it closes first, or says why not
@@ -342,11 +352,12 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         left, focused = self.active_tab, self.base.focused
         pane = self.pane(left) if left is not None else None
         focused = close_menus(self.base, focused)  # an open menu closes with its screen
-        # only a text field is come back to (a half-typed line): any other widget gives
-        # way to the screen's own on entry (README: F1's sound-card list)
+        # the control the operator left (a half-typed line, the demos list, a button) is
+        # where the screen comes back to; the screen's own widget only on first entry
+        # or when that control is gone or hidden (``_focus_target``)
         if left is not None:
             self._left_focus.pop(left, None)
-        if isinstance(focused, Input) and pane is not None and pane in focused.ancestors_with_self:
+        if focused is not None and pane is not None and pane in focused.ancestors_with_self:
             self._left_focus[left] = focused
         # Drop the focus first: Textual hands the focus of a widget being hidden to a
         # sibling in the same (hidden) pane, and focus in a pane makes it the active tab.
@@ -457,8 +468,11 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
 
     def action_reset_estop(self) -> None:
         out = self.session.outputs
+        if out is None:  # a second console, outputs not open: why, and where it resets
+            self.notify(self.session.no_reset_here(), severity="warning")
+            return
         others = still_latched(out)  # other tables: their own consoles reset them
-        if out is not None and not out.estopped:  # said, not silence: the key was heard
+        if not out.estopped:  # said, not silence: the key was heard
             self.notify("no e-stop to reset: the outputs are not e-stopped" + others)
         elif self.session.reset_estop():
             self._own_estop_s = time.monotonic()

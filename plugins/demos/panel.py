@@ -355,7 +355,8 @@ class ScenesPane(Vertical):
         name = self._estop_demo or lw.last_name.removeprefix("demo ")
         self._estop_demo = ""
         if not lw.busy and name and (_says_estop(lw.text) or lw.text.endswith("e-stopped")):
-            lw.show(f"demo {name}: the e-stop is reset; enter starts it again")
+            again = "" if self._demo_states.get(name, "idle") == "idle" else " again"
+            lw.show(f"demo {name}: the e-stop is reset; enter starts it{again}")
 
     def _show_last_run(self, text: str) -> None:
         """The demo status: how the last run ended and its last numbers (markup)."""

@@ -2,8 +2,8 @@
 Enter or Space does there. On Studies the buttons and check boxes each show their own key
 (``⏎ start``, ``space record trials``) and the arrow buttons, which the arrow keys
 duplicate, are no Tab stops; on Devices every Tab stop shows a key of its own (no stop
-that only scrolls), and coming back to F1 the sound-card list has the focus as README
-says."""
+that only scrolls), the sound-card list has the focus as the screen first shows (README)
+and coming back to F1 the list the operator left has it again."""
 
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ def test_studies_buttons_and_check_boxes_name_themselves_and_arrows_are_no_stops
     asyncio.run(scenario())
 
 
-def test_every_devices_tab_stop_shows_its_own_key_and_f1_focuses_the_sound_cards(plugins):
+def test_every_devices_tab_stop_shows_its_own_key_and_f1_comes_back_to_the_list_left(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=(80, 24)) as pilot:
@@ -75,7 +75,7 @@ def test_every_devices_tab_stop_shows_its_own_key_and_f1_focuses_the_sound_cards
                 own = isinstance(widget, DataTable | Select | Tabs)
                 assert own, f"a Tab stop on {type(widget).__name__} with no key of its own"
                 assert footer.startswith(("⏎ ", "←→ ")), (type(widget).__name__, footer)
-            # the doctor's table focused when leaving: F1 again focuses the sound cards
+            # the doctor's table focused when leaving: F1 again comes back to it
             doctor = app.query_one("#device-table", DataTable)
             doctor.focus()
             await wait_for(pilot, lambda: app.focused is doctor, 10, "the doctor's table")
@@ -85,6 +85,6 @@ def test_every_devices_tab_stop_shows_its_own_key_and_f1_focuses_the_sound_cards
             await pilot.press("f1")
             await wait_for(pilot, lambda: app.active_tab == "devices", 10, "devices")
             await pilot.pause(0.5)
-            assert app.focused is cards, app.focused
+            assert app.focused is doctor, app.focused
 
     asyncio.run(scenario())
