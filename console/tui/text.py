@@ -32,7 +32,12 @@ def escape(value: Any) -> str:
 
 def literal(value: Any) -> Any:
     """``value`` as a table cell shown as written (a ``str`` becomes plain ``Text``;
-    numbers and renderables pass unchanged); a cell its column cuts ends in ``…``."""
+    numbers and renderables pass unchanged)."""
+    return Text(value) if isinstance(value, str) else value
+
+
+def one_line(value: Any) -> Any:
+    """``literal`` for a row one line high: a cell its column cuts ends in ``…``."""
     return Text(value, no_wrap=True, overflow="ellipsis") if isinstance(value, str) else value
 
 
@@ -57,10 +62,16 @@ class LiteralTable(DataTable):
         label = kw.get("label")
         if label is not None:
             kw["label"] = literal(label)
-        return super().add_row(*(literal(c) for c in cells), **kw)
+        cell = one_line if kw.get("height", 1) == 1 else literal  # a cut cell says so
+        return super().add_row(*(cell(c) for c in cells), **kw)
+
+    def _cell(self, row_key: Any) -> Any:
+        row = self.rows.get(row_key)
+        return one_line if row is not None and row.height == 1 else literal
 
     def update_cell(self, row_key: Any, column_key: Any, value: Any, **kw: Any) -> None:
-        super().update_cell(row_key, column_key, literal(value), **kw)
+        super().update_cell(row_key, column_key, self._cell(row_key)(value), **kw)
 
     def update_cell_at(self, coordinate: Any, value: Any, **kw: Any) -> None:
-        super().update_cell_at(coordinate, literal(value), **kw)
+        key = self.coordinate_to_cell_key(coordinate).row_key
+        super().update_cell_at(coordinate, self._cell(key)(value), **kw)
