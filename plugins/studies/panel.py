@@ -495,9 +495,8 @@ class StudiesPane(Vertical):
         if ev.topic == "vibration" and isinstance(ev, Started) and self.running is None:
             self._idle()  # a map now: the hint before s goes
             return
-        if ev.topic == "estop" and isinstance(ev, Started) and self.said[0] == ESTOP_REFUSED:
-            self.said = ("", "information")  # the reset: what the e-stop refused is past
-            self._status(self._status_text)
+        if ev.topic == "estop" and isinstance(ev, Started | Stopped):
+            self._estop_changed(reset=isinstance(ev, Started))
             return
         if ev.topic != TOPIC:
             return
@@ -526,6 +525,17 @@ class StudiesPane(Vertical):
                 self._analysis_failed(ev.message)
                 return
             self.last["error"] = ev.message
+
+    def _estop_changed(self, reset: bool) -> None:
+        """The operator's reset (``reset``): a refusal of ``s`` and the line saying the
+        e-stop stopped the run are past, the reset is said in their place; a new e-stop
+        brings back what it says (``panel_status.estop_reset``)."""
+        if reset and self.said[0] == ESTOP_REFUSED:
+            self.said = ("", "information")
+        if self.running is None and panel_status.estop_reset(self.last, reset):
+            self._show()
+        else:
+            self._status(self._status_text)
 
     def _snapshot(self, d: dict[str, Any]) -> None:
         kind = d.get("kind")
@@ -591,38 +601,10 @@ class StudiesPane(Vertical):
         self.query_one("#study-trials", TrialsTable).add_trial(*panel_status.trial_row(r))
 
     def _analysis(self, d: dict[str, Any]) -> None:
-        self.query_one("#analysis-head", Static).update(d["title"])
-        shown, self._shown = self._shown, (d["title"], repr(d["rows"]), tuple(d["notes"]))
-        self._busy = False
-        if shown == self._shown:  # the same analysis again (after a run and n): as it is
-            return self._view("analysis") if self._show_result else None
-        table = self.query_one("#study-anova", DataTable)
-        table.clear(columns=True)
-        table.add_columns(*d["columns"])
-        for row in d["rows"]:
-            table.add_row(*row)
-        self.notes = list(d["notes"])
-        if not d["rows"]:
-            self.notes.insert(0, "no ANOVA table: the notes say why")
-        self._notes(open_=not d["rows"])  # without a table the notes take its place
-        report = Path(d["report"])
-        out = self.analysed[0] if self.analysed else None
-        where = (
-            f"{report.name} in the folder" if out and same_folder(report.parent, out) else report
-        )
-        self.query_one("#analysis-report", Static).update(f"report: {where}")
-        if self._show_result:
-            self._view("analysis")
+        panel_status.show_analysis(self, d)
 
     def _analysis_failed(self, message: str) -> None:
-        """The analysis failed: its line alone, nothing of an earlier analysis under it."""
-        self.query_one("#analysis-head", Static).update(message)
-        self.query_one("#study-anova", DataTable).clear(columns=True)
-        self.notes, self._shown, self._busy = [], (), False
-        self._notes(open_=False)
-        self.query_one("#analysis-report", Static).update("")
-        if self._show_result:
-            self._view("analysis")
+        panel_status.analysis_failed(self, message)
 
     def _show(self) -> None:
         if self.abort_until is not None and (

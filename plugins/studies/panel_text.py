@@ -138,7 +138,9 @@ def status_lines(
             f"[b]a again within {abort_within_s:g} s aborts {escape(running)}'s run[/b] "
             "(the trial in flight runs again on resume)"
         )
-    if not running and L.get("stopped"):
+    if not running and L.get("reset"):  # the e-stop that stopped it is reset
+        lines.append(escape(L["reset"]))
+    elif not running and L.get("stopped"):
         error = L.get("error")
         ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
         if error and error == L["stopped"]:  # a failure: its reason once, in red
