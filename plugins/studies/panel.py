@@ -46,6 +46,7 @@ from textual.widgets import (
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
 from console.plugin_api.tui import (
+    AskAgain,
     LiteralTable,
     Pace,
     SessionMessage,
@@ -55,7 +56,7 @@ from console.plugin_api.tui import (
     status_said,
 )
 
-from . import adaptive_console, panel_fit, panel_status
+from . import adaptive_console, panel_choice, panel_fit, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
@@ -154,6 +155,7 @@ class StudiesPane(Vertical):
         #: the last key's or button's outcome (text, severity): the status's last line
         self.said: tuple[str, str] = ("", "information")
         self._status_text = ""
+        self.ask = AskAgain(panel_choice.LONG_AGAIN_S)  # s before a long run
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -277,6 +279,8 @@ class StudiesPane(Vertical):
                 "consent": True if self._value("consent") else None,
             },
         }
+        if panel_choice.asks_first(self, self.ask, spec):  # a long run: s again starts it
+            return
         self.control = Control()
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
@@ -315,6 +319,8 @@ class StudiesPane(Vertical):
         """A number field refuses what it does not take as it is typed (one line, for a
         person's run); the line goes once the field is right again."""
         wid = event.input.id or ""
+        if wid in ("participant", "out"):  # another choice: what the folder holds of it
+            return panel_choice.field_changed(self)
         if wid not in NUMBER_FIELDS or self._value("simulate"):  # a simulated one: unused
             return
         refused = field_refusal(wid, event.value)
@@ -457,6 +463,7 @@ class StudiesPane(Vertical):
         if field.value.strip() in defaults:
             field.value = str(default_out(str(event.value)))
         panel_fit.protocol_changed(self, str(event.value))  # its status, now
+        panel_choice.show_choice(self)  # its progress and trials, not the previous one's
 
     def action_answer(self, key: str) -> None:
         self._answer(ANSWERS.get(key, key))
@@ -516,7 +523,8 @@ class StudiesPane(Vertical):
             if ev.reason.startswith("finished"):  # ready for the next participant
                 field = self.query_one("#participant", Input)
                 if field.value.strip() == ev.name:
-                    field.value = next_id(ev.name)
+                    with field.prevent(Input.Changed):  # the status stays the run's
+                        field.value = next_id(ev.name)
             self._show()
             panel_status.analyse_after_run(self, ev.name)  # t shows it at once
         elif isinstance(ev, Failed):
