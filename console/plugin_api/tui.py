@@ -26,6 +26,8 @@ What it offers:
   into the log);
   ``lapse`` and ``lapse_if_held`` (a status line true only for a while, or while a run
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
+- questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
+  first: the same key again within a few seconds does it, ``console.tui.ask_again``)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
   while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
@@ -33,6 +35,7 @@ What it offers:
 
 from __future__ import annotations
 
+from console.tui.ask_again import AskAgain
 from console.tui.charts import Chart, Series
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
@@ -49,6 +52,7 @@ from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
 
 __all__ = [
+    "AskAgain",
     "Chart",
     "Series",
     "ConsoleFooter",

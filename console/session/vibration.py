@@ -20,6 +20,7 @@ Where no plugin offers what is asked, a ``UserError`` says which plugin to enabl
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Callable
@@ -203,6 +204,42 @@ class VibrationService:
         self.current: VibrationSession | None = None
         self.summary = ""
         self._lock = threading.Lock()
+        self._user: str | None = None  # a run playing on the current map (``in_use``)
+
+    # ------------------------------------------------------------------ a run on it
+    @contextlib.contextmanager
+    def in_use(self, who: str):
+        """``with vibration.in_use("P01's study run (Studies screen)"):`` a run plays on
+        the current map: while it does, nothing else replaces it (a measurement, a load,
+        an import are refused, saying who uses it); the run itself may (``by=who``: its
+        map measured or loaded first). One user at a time."""
+        with self._lock:
+            if self._user is not None:
+                raise UserError(f"{self._user} plays on the vibration map: stop it first")
+            self._user = who
+        try:
+            yield who
+        finally:
+            with self._lock:
+                self._user = None
+
+    @property
+    def used_by(self) -> str | None:
+        """Who plays on the current map (``in_use``), else None."""
+        return self._user
+
+    def refusal(self, what: str, by: str | None = None) -> str:
+        """Why ``what`` (``measure``, ``load``, ``import``) may not replace the map now,
+        in the words of a play refused while a run holds the outputs ("" if it may)."""
+        who = self._user
+        if who is None or who == by:
+            return ""
+        return f"{what} refused: {who} plays on this map (stop it there first)"
+
+    def _free(self, what: str, by: str | None) -> None:
+        why = self.refusal(what, by)
+        if why:
+            raise UserError(why)
 
     @property
     def profile(self) -> Any:
@@ -218,10 +255,16 @@ class VibrationService:
         return measured_map_path(self.profile)
 
     def measure(
-        self, progress: Progress | None = None, cancelled: Callable[[], bool] | None = None
+        self,
+        progress: Progress | None = None,
+        cancelled: Callable[[], bool] | None = None,
+        *,
+        by: str | None = None,
     ) -> VibrationSession:
         """Measure the grid again with the profile's vibrometer, keep it as the measured
-        map (the demos use it too) and make it current."""
+        map (the demos use it too) and make it current; refused while a run other than
+        ``by`` plays on the map (``in_use``)."""
+        self._free("measure", by)
         try:
             path = measured_map_file(
                 self.profile,
@@ -234,7 +277,8 @@ class VibrationService:
             self.session.emit(Stopped(TOPIC, name="measure", reason="cancelled"))
             raise
         vmap = load_map(path)
-        return self.open(vmap, f"map: measured at {time.strftime('%H:%M')} ({self._source(vmap)})")
+        when = time.strftime("%H:%M")
+        return self.open(vmap, f"map: measured at {when} ({self._source(vmap)})", by=by)
 
     def twin_plate_only(self) -> bool:
         """The profile's vibrometer is a simulation (the plate twin) while its outputs
@@ -251,19 +295,24 @@ class VibrationService:
             source += "; the TWIN's plate, not this table"
         return source
 
-    def load_cached(self) -> VibrationSession | None:
+    def load_cached(self, *, by: str | None = None) -> VibrationSession | None:
         """The measured map when one is kept (made current), else None. On a real table
         whose only vibrometer is the twin the kept map is the twin's: it is not loaded
-        (``no_map_text`` says so and how to load it anyway)."""
+        (``no_map_text`` says so and how to load it anyway). While a run other than ``by``
+        plays on the map (``in_use``) the current map is the answer, unchanged."""
         if self.twin_plate_only():
             return None
+        if self.refusal("load", by):
+            return self.current
         vmap = kept_measured_map(self.profile)  # another plate's or damaged: deleted, None
         if vmap is None:
             return None
         date = str(vmap.provenance.get("date") or "")[:16].replace("T", " ")
         when = f" of {date} UTC" if date else ""
         return self.open(
-            vmap, f"map: the kept measurement{when} ({self._source(vmap)}; m measures again)"
+            vmap,
+            f"map: the kept measurement{when} ({self._source(vmap)}; m measures again)",
+            by=by,
         )
 
     def measure_takes(self) -> str:
@@ -291,22 +340,34 @@ class VibrationService:
             f"load map.npz; m measures the twin's plate, not this glass{kept}"
         )
 
-    def load(self, path: str | Path, cancelled: Callable[[], bool] | None = None):
-        """A map file made current (``Cancelled`` when cancelled meanwhile)."""
+    def load(
+        self,
+        path: str | Path,
+        cancelled: Callable[[], bool] | None = None,
+        *,
+        by: str | None = None,
+    ):
+        """A map file made current (``Cancelled`` when cancelled meanwhile; refused while
+        a run other than ``by`` plays on the map)."""
+        self._free("load", by)
         vmap = load_map(Path(path))
         if cancelled is not None and cancelled():
             raise Cancelled()
-        return self.open(vmap, f"map: {Path(path).name}")
+        return self.open(vmap, f"map: {Path(path).name}", by=by)
 
     def import_uff(self, specs: list[str], cancelled: Callable[[], bool] | None = None):
-        """UFF measurements (``["PA=a.uff", ...]``) made current."""
+        """UFF measurements (``["PA=a.uff", ...]``) made current (refused while a run
+        plays on the map)."""
+        self._free("import", None)
         vmap = import_uff_files(self.profile, self.plugins, specs)
         if cancelled is not None and cancelled():  # read in one go: the old map stays
             raise Cancelled()
         return self.open(vmap, "map: UFF import")
 
-    def open(self, vmap: Any, label: str) -> VibrationSession:
-        """Make ``vmap`` the console's current map."""
+    def open(self, vmap: Any, label: str, *, by: str | None = None) -> VibrationSession:
+        """Make ``vmap`` the console's current map (refused while a run other than ``by``
+        plays on the current one: ``in_use``)."""
+        self._free("replacing the map", by)
         vs = VibrationSession(self.profile, self.plugins, vmap)
         summary = (
             f"{label}: {len(vmap.excitations)} excitations, {vmap.points.size} points, "

@@ -130,7 +130,10 @@ def run(session: Any, spec: dict[str, Any], control: Any, responder: Any) -> Non
         session.emit(Snapshot(TOPIC, name=pid, data={"kind": kind, **info}))
 
     try:
-        with session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder:
+        with (
+            session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder,
+            console_run.map_held(session, _uses_map(ap.load(spec["study"])), holder),
+        ):
             why = run_adaptive(session, spec, control, responder, emit, holder=holder)
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
@@ -213,8 +216,8 @@ def run_adaptive(
     pid = spec["pid"]
     root = participant_dir(spec["out"], pid)
     vmap = None
-    if proto.stimulus["modality"] == "vibrotactile" and proto.stimulus["reference"] == "dB re 1 um":
-        vmap = console_run.study_map(session, control, emit)
+    if _uses_map(proto):
+        vmap = console_run.study_map(session, control, emit, by=holder)
     setup = make_setup(proto, Limits.from_profile(session.profile), vmap)
     pseed = participant_seed(proto, pid)
     person, new = _participant(spec, proto, root, pseed)
@@ -233,7 +236,7 @@ def run_adaptive(
     views = [track_view(setup, n, p) for n, p in mirror.procs.items()]
     emit("tracks", {"tracks": views})
     if mirror.records:
-        emit("earlier", {"records": [_done_row(r) for r in mirror.records]})
+        emit("earlier", {"records": [done_row(r) for r in mirror.records]})
     emit("progress", {"done": mirror.done, "total": total})
     again = f"; resuming at trial {mirror.done + 1}" if mirror.done else ""
     session.emit(Started(TOPIC, name=pid, detail=f"{proto.title} -> {root}{again}"))
@@ -252,7 +255,7 @@ def run_adaptive(
         else:
             proc.update(rec["correct"])
         mirror.done = rec["trial"] + 1
-        emit("done", {"record": _done_row(rec)})
+        emit("done", {"record": done_row(rec)})
         emit("track", {"track": track_view(setup, rec["track"], proc)})
         emit("progress", {"done": mirror.done, "total": total})
 
@@ -286,7 +289,14 @@ def run_adaptive(
     return f"finished: {state.done} trials; thresholds in {where.format('adaptive_result.json')}"
 
 
-def _done_row(rec: dict[str, Any]) -> dict[str, Any]:
+def _uses_map(proto: Any) -> bool:
+    """Whether the adaptive protocol's levels are set on the vibration map (dB re 1 um)."""
+    s = proto.stimulus
+    return s["modality"] == "vibrotactile" and s["reference"] == "dB re 1 um"
+
+
+def done_row(rec: dict[str, Any]) -> dict[str, Any]:
+    """A logged ``done`` trial as the trials table reads it."""
     return {
         **trial_row(rec),
         "response": rec.get("response"),

@@ -13,6 +13,7 @@ writes the HTML report next to them and reports the headline and the ANOVA table
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 from typing import Any
 
@@ -45,7 +46,10 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
 
     try:
         # the trials are not mixed with other sounds: the screens' plays are refused meanwhile
-        with session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder:
+        with (
+            session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder,
+            map_held(session, protocols.load(spec["study"]).stimulus != "knob", holder),
+        ):
             res = run_study(session, spec, control, responder, emit, holder=holder)
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
@@ -54,6 +58,13 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
         return
     why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
     session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))
+
+
+def map_held(session: Any, uses_map: bool, who: str) -> Any:
+    """A run that plays on the console's vibration map (``uses_map``) holds it: nothing
+    else replaces it meanwhile (the Vibration screen's ``m``, a load or an import are
+    refused, naming ``who``); the run's own ``study_map`` may."""
+    return session.vibration.in_use(who) if uses_map else contextlib.nullcontext()
 
 
 def report_path(out: Path, experiment: str) -> Path:
@@ -114,7 +125,7 @@ def map_hint(session: Any, study: str) -> str:
     return f"{proto.name} needs a vibration map: none yet, s measures the twin's grid first (~10 s)"
 
 
-def study_map(session: Any, control: Control, emit: Any) -> Any:
+def study_map(session: Any, control: Control, emit: Any, by: str | None = None) -> Any:
     """The vibration map a flow study plays on, as ``haptable study run`` gets it: the
     console's current map, else the kept measured map of the profile, else measured now
     with the profile's vibrometer (progress as ``map`` notices; ``a`` cancels). On a real
@@ -130,6 +141,7 @@ def study_map(session: Any, control: Control, emit: Any) -> Any:
             vs = vib.measure(
                 lambda frac, text: emit("map", {"fraction": float(frac), "text": str(text)}),
                 lambda: control.aborted,
+                by=by,
             )
         except Cancelled:
             raise UserError(
@@ -139,8 +151,8 @@ def study_map(session: Any, control: Control, emit: Any) -> Any:
     if isinstance(cur, VibrationMap):
         return cur
     emit("map", {"fraction": 1.0, "text": "loading the kept measured map"})
-    vs = vib.load_cached()  # made current: the Vibration screen shows what the study plays on
-    return vs.vmap if vs is not None else vib.load(cur).vmap
+    vs = vib.load_cached(by=by)  # made current: the Vibration screen shows what it plays on
+    return vs.vmap if vs is not None else vib.load(cur, by=by).vmap
 
 
 def _plain(info: dict[str, Any]) -> dict[str, Any]:
@@ -189,7 +201,7 @@ def run_study(
     stored = stored_participant(spec["out"], spec["pid"], SCREEN)
     vmap = None
     if proto.stimulus != "knob":  # before the plan: a level in dB SL is set on the map
-        vmap = study_map(session, control, emit)
+        vmap = study_map(session, control, emit, by=holder)
     # the participant's level (``[study] level``, e.g. "20 dB SL"), as the CLI resolves it
     base = EffectPlayer(pm, profile, vmap, lambda plan: False).render_base
     prep = prepare(

@@ -46,6 +46,7 @@ from textual.widgets import (
 from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
 from console.plugin_api.tui import (
+    AskAgain,
     LiteralTable,
     Pace,
     SessionMessage,
@@ -55,7 +56,7 @@ from console.plugin_api.tui import (
     status_said,
 )
 
-from . import adaptive_console, panel_fit, panel_status
+from . import adaptive_console, panel_choice, panel_fit, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
@@ -154,6 +155,7 @@ class StudiesPane(Vertical):
         #: the last key's or button's outcome (text, severity): the status's last line
         self.said: tuple[str, str] = ("", "information")
         self._status_text = ""
+        self.ask = AskAgain(panel_choice.LONG_AGAIN_S)  # s before a long run
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -277,6 +279,8 @@ class StudiesPane(Vertical):
                 "consent": True if self._value("consent") else None,
             },
         }
+        if panel_choice.asks_first(self, self.ask, spec):  # a long run: s again starts it
+            return
         self.control = Control()
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
@@ -315,6 +319,8 @@ class StudiesPane(Vertical):
         """A number field refuses what it does not take as it is typed (one line, for a
         person's run); the line goes once the field is right again."""
         wid = event.input.id or ""
+        if wid in ("participant", "out"):  # another choice: what the folder holds of it
+            return panel_choice.field_changed(self)
         if wid not in NUMBER_FIELDS or self._value("simulate"):  # a simulated one: unused
             return
         refused = field_refusal(wid, event.value)
@@ -457,6 +463,7 @@ class StudiesPane(Vertical):
         if field.value.strip() in defaults:
             field.value = str(default_out(str(event.value)))
         panel_fit.protocol_changed(self, str(event.value))  # its status, now
+        panel_choice.show_choice(self)  # its progress and trials, not the previous one's
 
     def action_answer(self, key: str) -> None:
         self._answer(ANSWERS.get(key, key))
@@ -495,9 +502,8 @@ class StudiesPane(Vertical):
         if ev.topic == "vibration" and isinstance(ev, Started) and self.running is None:
             self._idle()  # a map now: the hint before s goes
             return
-        if ev.topic == "estop" and isinstance(ev, Started) and self.said[0] == ESTOP_REFUSED:
-            self.said = ("", "information")  # the reset: what the e-stop refused is past
-            self._status(self._status_text)
+        if ev.topic == "estop" and isinstance(ev, Started | Stopped):
+            self._estop_changed(reset=isinstance(ev, Started))
             return
         if ev.topic != TOPIC:
             return
@@ -517,7 +523,8 @@ class StudiesPane(Vertical):
             if ev.reason.startswith("finished"):  # ready for the next participant
                 field = self.query_one("#participant", Input)
                 if field.value.strip() == ev.name:
-                    field.value = next_id(ev.name)
+                    with field.prevent(Input.Changed):  # the status stays the run's
+                        field.value = next_id(ev.name)
             self._show()
             panel_status.analyse_after_run(self, ev.name)  # t shows it at once
         elif isinstance(ev, Failed):
@@ -526,6 +533,17 @@ class StudiesPane(Vertical):
                 self._analysis_failed(ev.message)
                 return
             self.last["error"] = ev.message
+
+    def _estop_changed(self, reset: bool) -> None:
+        """The operator's reset (``reset``): a refusal of ``s`` and the line saying the
+        e-stop stopped the run are past, the reset is said in their place; a new e-stop
+        brings back what it says (``panel_status.estop_reset``)."""
+        if reset and self.said[0] == ESTOP_REFUSED:
+            self.said = ("", "information")
+        if self.running is None and panel_status.estop_reset(self.last, reset):
+            self._show()
+        else:
+            self._status(self._status_text)
 
     def _snapshot(self, d: dict[str, Any]) -> None:
         kind = d.get("kind")
@@ -591,38 +609,10 @@ class StudiesPane(Vertical):
         self.query_one("#study-trials", TrialsTable).add_trial(*panel_status.trial_row(r))
 
     def _analysis(self, d: dict[str, Any]) -> None:
-        self.query_one("#analysis-head", Static).update(d["title"])
-        shown, self._shown = self._shown, (d["title"], repr(d["rows"]), tuple(d["notes"]))
-        self._busy = False
-        if shown == self._shown:  # the same analysis again (after a run and n): as it is
-            return self._view("analysis") if self._show_result else None
-        table = self.query_one("#study-anova", DataTable)
-        table.clear(columns=True)
-        table.add_columns(*d["columns"])
-        for row in d["rows"]:
-            table.add_row(*row)
-        self.notes = list(d["notes"])
-        if not d["rows"]:
-            self.notes.insert(0, "no ANOVA table: the notes say why")
-        self._notes(open_=not d["rows"])  # without a table the notes take its place
-        report = Path(d["report"])
-        out = self.analysed[0] if self.analysed else None
-        where = (
-            f"{report.name} in the folder" if out and same_folder(report.parent, out) else report
-        )
-        self.query_one("#analysis-report", Static).update(f"report: {where}")
-        if self._show_result:
-            self._view("analysis")
+        panel_status.show_analysis(self, d)
 
     def _analysis_failed(self, message: str) -> None:
-        """The analysis failed: its line alone, nothing of an earlier analysis under it."""
-        self.query_one("#analysis-head", Static).update(message)
-        self.query_one("#study-anova", DataTable).clear(columns=True)
-        self.notes, self._shown, self._busy = [], (), False
-        self._notes(open_=False)
-        self.query_one("#analysis-report", Static).update("")
-        if self._show_result:
-            self._view("analysis")
+        panel_status.analysis_failed(self, message)
 
     def _show(self) -> None:
         if self.abort_until is not None and (

@@ -7,7 +7,10 @@ analysed at once, so ``t`` shows it without ``n`` first."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
+
+from textual.widgets import DataTable, Static
 
 from console.plugin_api import UserError
 from console.plugin_api.tui import Pace, left_words, seconds_left
@@ -44,6 +47,29 @@ def pace_snapshot(pace: Pace, last: dict[str, Any], kind: str, d: dict[str, Any]
     elif kind in ("aborted", "finished"):
         pace.stop()
         last["left"] = ""
+
+
+#: words of a line saying the e-stop is active (stale once the operator reset it)
+ESTOP_ACTIVE = ("e-stop active", "e-stop is active", "e-stop latched", "ctrl+r resets")
+
+
+def estop_reset(last: dict[str, Any], reset: bool) -> bool:
+    """Keep ``last["reset"]`` (the line said in place of how the run stopped) true: the
+    operator's reset (``reset``) of an e-stop that stopped the run says it and where ``s``
+    goes on; a new e-stop takes it away (the stop's own line, saying ctrl+r resets, shows
+    again). Returns whether the status changed."""
+    if not reset:
+        return last.pop("reset", None) is not None
+    said = f"{last.get('stopped', '')} {last.get('error', '')}"
+    if not any(w in said for w in ESTOP_ACTIVE):
+        return False
+    who = last.get("pid") or "the participant"
+    if "total" in last and int(last["done"]) < int(last["total"]):
+        goes_on = f"s resumes {who} at trial {int(last['done']) + 1} of {last['total']}"
+    else:
+        goes_on = f"s starts {who}'s run"
+    last["reset"] = f"e-stop reset: {goes_on}"
+    return True
 
 
 def map_state(last: dict[str, Any], d: dict[str, Any], clock=time.monotonic) -> str:
@@ -92,3 +118,42 @@ def trial_row(r: dict[str, Any]) -> tuple[str, ...]:
         str(r.get("replays", 0)),
         "-" if rt is None else f"{rt:.2f} s",
     )
+
+
+def show_analysis(pane: Any, d: dict[str, Any]) -> None:
+    """An analysis came in (a ``Snapshot`` of kind ``analysis``): its title, the ANOVA
+    table, the notes and the report's path; the same analysis again leaves it as it is
+    (``o``'s choice kept)."""
+    pane.query_one("#analysis-head", Static).update(d["title"])
+    shown, pane._shown = pane._shown, (d["title"], repr(d["rows"]), tuple(d["notes"]))
+    pane._busy = False
+    if shown == pane._shown:  # the same analysis again (after a run and n): as it is
+        if pane._show_result:
+            pane._view("analysis")
+        return
+    table = pane.query_one("#study-anova", DataTable)
+    table.clear(columns=True)
+    table.add_columns(*d["columns"])
+    for row in d["rows"]:
+        table.add_row(*row)
+    pane.notes = list(d["notes"])
+    if not d["rows"]:
+        pane.notes.insert(0, "no ANOVA table: the notes say why")
+    pane._notes(open_=not d["rows"])  # without a table the notes take its place
+    report = Path(d["report"])
+    out = pane.analysed[0] if pane.analysed else None
+    where = f"{report.name} in the folder" if out and same_folder(report.parent, out) else report
+    pane.query_one("#analysis-report", Static).update(f"report: {where}")
+    if pane._show_result:
+        pane._view("analysis")
+
+
+def analysis_failed(pane: Any, message: str) -> None:
+    """The analysis failed: its line alone, nothing of an earlier analysis under it."""
+    pane.query_one("#analysis-head", Static).update(message)
+    pane.query_one("#study-anova", DataTable).clear(columns=True)
+    pane.notes, pane._shown, pane._busy = [], (), False
+    pane._notes(open_=False)
+    pane.query_one("#analysis-report", Static).update("")
+    if pane._show_result:
+        pane._view("analysis")

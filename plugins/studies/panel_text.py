@@ -16,7 +16,8 @@ HELP = (
     "Pick the protocol, the participant and the folder; a person needs age,\n"
     "sex, handedness, hand size and the consent noted (a simulated one not).\n"
     "s / Start     start (or resume: the same participant continues where it\n"
-    "              stopped); refused during an e-stop (ctrl+r resets it)\n"
+    "              stopped); refused during an e-stop (ctrl+r resets it); a run\n"
+    "              over 5 min says its size and time first: s again starts it\n"
     "p             pause after this trial / resume\n"
     "r             replay the stimulus (within the phase's replays)\n"
     "a             abort: a again within 3 s (the trial in flight is repeated\n"
@@ -138,7 +139,9 @@ def status_lines(
             f"[b]a again within {abort_within_s:g} s aborts {escape(running)}'s run[/b] "
             "(the trial in flight runs again on resume)"
         )
-    if not running and L.get("stopped"):
+    if not running and L.get("reset"):  # the e-stop that stopped it is reset
+        lines.append(escape(L["reset"]))
+    elif not running and L.get("stopped"):
         error = L.get("error")
         ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
         if error and error == L["stopped"]:  # a failure: its reason once, in red

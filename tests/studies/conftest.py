@@ -23,6 +23,25 @@ def _abort_confirmed_in_time(monkeypatch):
 
 
 @pytest.fixture(autouse=True)
+def _long_runs_start_at_once(monkeypatch):
+    """A run estimated over ``saved_run.LONG_S`` asks before it starts; a fixed plan's
+    estimate comes from the folder's earlier runs, whose pace is this machine's (a
+    loaded one makes a resumed exp2 "long"): the tests start at once unless they test
+    the question (``long_runs_ask``)."""
+    from plugins.studies import saved_run
+
+    monkeypatch.setattr(saved_run, "LONG_S", float("inf"))
+
+
+@pytest.fixture
+def long_runs_ask(monkeypatch):
+    """The question before a long run as the console asks it (over 5 minutes)."""
+    from plugins.studies import saved_run
+
+    monkeypatch.setattr(saved_run, "LONG_S", 300.0)
+
+
+@pytest.fixture(autouse=True)
 def _quick_key_presses(monkeypatch):
     """The pilot's waits made cheap and its keys reliable (``tests/pilot_harness.py``)."""
     quicken_pilot(monkeypatch)

@@ -30,6 +30,8 @@ def run_command(pane: Any, text: str) -> bool:
     if head == "measure":
         pane.action_measure(text)
         return True
+    if head in ("import", "load") and pane.refuse_replacing(head):
+        return False  # said as an error: the text stays on the line
     if head == "import":
         if len(words) < 2:
             raise UserError("import: give EXC=FILE per excitation, e.g. import PA=pa.uff")

@@ -18,6 +18,7 @@ from console.session.vibration import Cancelled
 from console.tui.lapse import lapse
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_words import (
+    MAP_FREE,
     MEASURE_AGAIN_S,
     MEASURE_ESTOPPED,
     measure_again,
@@ -43,7 +44,10 @@ class VibrationMeasureMixin:
     _accel_hint = ""
 
     def action_measure(self, command: str | None = None) -> None:
-        """``m``: measure the map, refused in the console's words during an e-stop."""
+        """``m``: measure the map, refused in the console's words during an e-stop, and
+        while a run plays on the map (``refuse_replacing``)."""
+        if self.refuse_replacing("measure"):
+            return
         if (self.roving.running or self.roving.wanted()) and not self._estop_active():
             self.roving.measure(command)
             return
@@ -64,6 +68,26 @@ class VibrationMeasureMixin:
         self.roving.say(self._accel_hint)
         self._measuring = stop = self._new_stop("vib-long")  # an e-stop sets it too
         self._measure(stop, command)
+
+    def refuse_replacing(self, what: str) -> bool:
+        """Whether ``what`` (``measure``, ``load``, ``import``) would replace the map a
+        run plays on: then the line says so, as a play refused while a run holds the
+        outputs, until that run ends (``console.session.vibration``: ``in_use``)."""
+        why = self.service.refusal(what)
+        if not why:
+            return False
+        self._measure_asked = -1e9  # a question asked before is void
+        self._error(why)
+        service = self.service
+        lapse(
+            self,
+            lambda: self.status_text,
+            why,
+            self.status,
+            while_true=lambda: service.used_by is not None,
+            then=MAP_FREE,
+        )
+        return True
 
     @work(thread=True, exclusive=True, group="vib-long")
     def _measure(self, stop: threading.Event, command: str | None = None) -> None:

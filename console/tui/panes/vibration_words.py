@@ -45,6 +45,8 @@ MEASURE_ESTOPPED = "measurement stopped by the e-stop; map unchanged; ctrl+r res
 KEY_DIRECTIONS = {"w": "up", "a": "left", "s": "down", "d": "right"}
 #: a play or a table asked before any map is loaded
 NO_MAP = "no vibration map yet: press m to measure, or import one"
+#: the line in place of a refused ``m``, load or import once the run on the map ended
+MAP_FREE = "the run that played on this map has ended: m measures the grid anew"
 #: a play asked while this screen measures the map (its sweeps are what it measures)
 MEASURING_REFUSAL = "refused: the map is being measured (x stops the measurement)"
 

@@ -1,0 +1,93 @@
+"""The Studies screen's choice (protocol, participant, folder) shown as what it is now:
+when one of them changes (no run going on) the progress bar, the status and the trials
+table show that participant's saved run of that protocol in that folder, or nothing yet
+(never the previous choice's); and ``s`` asks first before a long run (``saved_run``)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+from textual.widgets import Input, ProgressBar, Select
+
+from console.plugin_api import UserError
+from console.plugin_api.tui import AskAgain
+
+from . import adaptive_console
+from .adaptive_view import AdaptiveView
+from .panel_status import trial_row
+from .panel_text import default_out
+from .saved_run import run_size, saved
+from .trials_table import TrialsTable
+
+#: seconds within which a second ``s`` starts a long run
+LONG_AGAIN_S = 5.0
+
+
+def chosen(pane: Any) -> tuple[str, str, Path] | None:
+    """(protocol, participant, folder) as the fields hold them; None without a protocol."""
+    study = pane.query_one("#protocol", Select).value
+    if study is Select.BLANK or not study:
+        return None
+    pid = pane.query_one("#participant", Input).value.strip()
+    out = pane.query_one("#out", Input).value.strip()
+    return str(study), pid, Path(out or default_out(str(study))).expanduser()
+
+
+def show_choice(pane: Any) -> None:
+    """The chosen participant's saved run of the chosen protocol in the progress bar,
+    the status and the trials table, or nothing yet (the idle status), unless a run is
+    going on."""
+    choice = chosen(pane)
+    if pane.running is not None or choice is None:
+        return
+    study, pid, out = choice
+    run = saved(out, pid, study)
+    pane.last = {"pid": pid, "done": run.done, "total": run.total} if run else {}
+    bar = pane.query_one("#study-progress", ProgressBar)
+    bar.update(total=max(run.total, 1) if run else 1, progress=run.done if run else 0)
+    table = pane.query_one("#study-trials", TrialsTable)
+    table.clear_trials()
+    adaptive = adaptive_console.is_adaptive(study)
+    for r in run.records if run else []:
+        try:
+            row = trial_row(adaptive_console.done_row(r) if adaptive else r)
+        except (KeyError, TypeError, ValueError):
+            continue  # a line the run did not write so: starting says why
+        table.add_trial(*row)
+    pane.pace.stop()
+    pane.query_one(AdaptiveView).reset()
+    if pane.query_one("#study-plot").display:  # the plot was the previous run's
+        pane._view("trials")
+    pane._idle()
+
+
+def field_changed(pane: Any) -> None:
+    """The participant or the folder typed: the choice shown anew; a line about the
+    choice before (naming another participant) goes."""
+    if pane.running is not None:
+        return
+    choice = chosen(pane)
+    said = pane.said[0]
+    pid = choice[1] if choice else ""
+    about_choice = said.startswith("protocol ") or " has finished " in said
+    if about_choice and not (pid and re.search(rf"(?<!\w){re.escape(pid)}(?!\w)", said)):
+        pane.said = ("", "information")
+    show_choice(pane)
+
+
+def asks_first(pane: Any, ask: AskAgain, spec: dict[str, Any]) -> bool:
+    """Whether ``s`` asks before starting ``spec``'s run: one longer than
+    ``saved_run.LONG_S`` says its size and time, and ``s`` again within
+    ``LONG_AGAIN_S`` (the same choice) starts it."""
+    try:
+        size = run_size(spec["study"], spec["out"], spec["pid"], spec["simulate"])
+    except UserError:
+        return False  # the protocol's own refusal is said as the run starts
+    what = repr((spec["study"], spec["pid"], str(spec["out"]), spec["simulate"]))
+    if not size.long or ask.confirmed(what):
+        return False
+    does = f"starts {spec['study']} with {spec['pid']}: {size.words()}"
+    ask.ask(pane, "s", does, lambda: pane.said[0], pane._say)
+    return True
