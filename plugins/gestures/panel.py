@@ -29,7 +29,6 @@ from console.plugin_api.tui import (
     SafetyBar,
     escape,
     from_thread,
-    lapse,
     said_here,
     short_path,
 )
@@ -60,8 +59,10 @@ _BUTTONS = (
     ("train+eval (t)", "gp-train"),
     ("cancel (x)", "gp-cancel"),
 )
-#: seconds in which a second ``Esc`` (work under way) cancels it and closes the panel
+#: seconds in which a second ``Esc`` (work under way) cancels it
 ESC_AGAIN_S = 3.0
+#: seconds a refusal said while work runs stays under its progress
+REFUSAL_S = 5.0
 #: samples of each gesture training needs: the harmonics and frames are chosen inside
 #: each 2-fold training half, which must hold 2 of each (``selection.select_settings``)
 MIN_PER_GESTURE = 4
@@ -244,7 +245,6 @@ class GesturesPanel(Screen):
     GesturesPanel #gp-files { margin-top: 1; }
     GesturesPanel #gp-result { margin-top: 1; }
     GesturesPanel #gp-work { height: auto; }  /* the estimate's line whole, wrapped */
-    GesturesPanel #gp-work > Label { height: auto; }
     """
     BINDINGS = [
         Binding("s", "synth", "synthesize"),
@@ -520,56 +520,34 @@ class GesturesPanel(Screen):
             self.work.show("nothing to cancel")
 
     def action_back(self) -> None:
-        """``Esc``: back to the Camera screen. With work under way it asks first (a
-        second ``Esc`` within ``ESC_AGAIN_S`` cancels the work and closes the panel) and
-        a cancel is said in the log and on the Camera screen's status line."""
+        """``Esc``: back to the Camera screen. With work under way it asks first, on the
+        work's own line (a second ``Esc`` within ``ESC_AGAIN_S`` cancels the work); the
+        panel stays and shows the cancel, so the next keys are still the panel's."""
         if isinstance(self.focused, Input):
             self.to_buttons()
             return
-        if self.work.busy:
-            asked, self._esc_until = self._esc_until, None
-            if asked is None or time.monotonic() > asked:
-                self._esc_until = time.monotonic() + ESC_AGAIN_S
-                name = self.work.name_running
-                self._result_says(
-                    f"Esc again within {ESC_AGAIN_S:g} s cancels the {name}; x cancels too",
-                    after_s=ESC_AGAIN_S,
-                )
-                return
-            name = self.work.name_running or "work"
-            self.work.cancel()
+        if not self.work.busy:
             self.app.pop_screen()
-            self._tell_camera(f"Gestures: {name} cancelled (Esc){self._kept_after(name)}")
             return
-        self.app.pop_screen()
-
-    @staticmethod
-    def _kept_after(name: str) -> str:
-        """What a cancel of job ``name`` left as it was (": no model was written")."""
-        return _CANCELLED_KEPT["train" if name == "training" else "synth"]
-
-    def _result_says(self, text: str, after_s: float) -> None:
-        """A question on the result line that lapses after ``after_s`` seconds."""
-        line = self.query_one("#gp-result", Static)
-        line.update(text)
-        lapse(self, lambda: str(line.render()), text, line.update, after_s)
-
-    def _tell_camera(self, text: str) -> None:
-        """``text`` on the Camera screen's status line (and so in the log); the log
-        alone when no Camera screen is there."""
-        panes = self.app.base.query("CameraPane")
-        if panes:
-            panes.first().say(text, "warning")
-        else:
-            said_here(self.work, "Gestures", text, "warning")
+        name = self.work.name_running
+        if self.work.cancelling:
+            self.work.hold(f"cancelling the {name}: Esc goes back once it stopped", REFUSAL_S)
+            return
+        asked, self._esc_until = self._esc_until, None
+        if asked is None or time.monotonic() > asked:
+            self._esc_until = time.monotonic() + ESC_AGAIN_S
+            question = f"Esc again within {ESC_AGAIN_S:g} s cancels the {name}; x cancels too"
+            self.work.hold(question, ESC_AGAIN_S)
+            return
+        self.action_cancel()
 
     def leave_for_screen(self) -> bool:
         """An F-key (another screen, ``HapTableApp.action_show_tab``): the panel closes
-        and the screen shows; while work runs here it stays and says why."""
+        and the screen shows; while work runs here it stays and says why (on the work's
+        own line, under its progress)."""
         if self.work.busy:
-            text = f"{self.work.name_running} runs here: x cancels it, then the F-key again"
-            self.query_one("#gp-result", Static).update(text)
-            said_here(self.work, "Gestures", text, "warning")
+            name = self.work.name_running
+            self.work.hold(f"{name} runs here: x cancels it, then the F-key again", REFUSAL_S)
             return False
         self.app.pop_screen()
         return True
