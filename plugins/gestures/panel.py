@@ -35,6 +35,7 @@ from console.plugin_api.tui import (
 
 from .jobs import describe_files, synth_atomic, train_and_evaluate
 from .model import GestureModel
+from .panel_fields import kept_fields
 from .settings import model_file
 from .synth import estimate as synth_estimate
 
@@ -271,26 +272,33 @@ class GesturesPanel(Screen):
         self._result_model: Path | None = None
         #: until when a second Esc cancels the work under way (it asked once)
         self._esc_until: float | None = None
+        #: the fields as typed, by id: kept for the console's run (the next panel's)
+        self.typed = kept_fields(ctx)
 
     def compose(self) -> ComposeResult:
+        typed = self.typed  # what was typed since the console started, else the defaults
         # not a Tab stop of its own (the first Tab from the buttons edits the first
         # field): PageUp/PageDown scroll it, and a focused field scrolls into view
         with VerticalScroll(can_focus=False):
             yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
-                dataset = short_path(data_dir() / "twin")  # a path: kept on focus
+                dataset = typed.get("gp-dataset", short_path(data_dir() / "twin"))
+                # a path: kept on focus
                 yield Input(dataset, id="gp-dataset", compact=True, select_on_focus=False)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
-                yield Input("5", id="gp-subjects", classes="gp-num", compact=True)
+                subjects = typed.get("gp-subjects", "5")
+                yield Input(subjects, id="gp-subjects", classes="gp-num", compact=True)
                 yield Label(" reps")
-                yield Input("40", id="gp-reps", classes="gp-num", compact=True)
+                yield Input(
+                    typed.get("gp-reps", "40"), id="gp-reps", classes="gp-num", compact=True
+                )
                 yield Label(" cv")
-                yield Input("2fold", id="gp-cv", classes="gp-num", compact=True)
+                yield Input(typed.get("gp-cv", "2fold"), id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
                 yield Label("model")
-                model = short_path(self.default_model)
+                model = typed.get("gp-model", short_path(self.default_model))
                 yield Input(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
                 for label, name in _BUTTONS:
@@ -567,8 +575,11 @@ class GesturesPanel(Screen):
         self.to_buttons()  # leaving the field refreshes the files
 
     def on_input_changed(self, event: Input.Changed) -> None:
-        """A synthesis field changed under its size and time: the line says they are
-        for other fields now (what is true), and ``s`` measures again."""
+        """A field typed in is kept for the next time the panel opens; a synthesis field
+        changed under its size and time: the line says they are for other fields now
+        (what is true), and ``s`` measures again."""
+        if event.input.id:
+            self.typed[event.input.id] = event.value
         if event.input.id in _SYNTH_FIELDS and self._synth_asked is not None:
             self._synth_asked = None
             self.work.show(f"{event.input.id[3:]} changed: s says the size and time again")
