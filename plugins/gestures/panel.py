@@ -33,7 +33,7 @@ from console.plugin_api.tui import (
     short_path,
 )
 
-from .jobs import describe_files, synth_atomic, train_and_evaluate
+from .jobs import describe_files, synth_atomic, synth_target, train_and_evaluate
 from .model import GestureModel
 from .panel_fields import kept_fields
 from .settings import model_file
@@ -67,6 +67,20 @@ REFUSAL_S = 5.0
 #: samples of each gesture training needs: the harmonics and frames are chosen inside
 #: each 2-fold training half, which must hold 2 of each (``selection.select_settings``)
 MIN_PER_GESTURE = 4
+
+
+def _does(target: dict[str, Any], ds: Path) -> str:
+    """What a synthesis does to the folder ``ds`` (``synth_target``'s ``target``)."""
+    where = short_path(ds)
+    if not target["replace"]:
+        return f"a new dataset in {where}"
+    if target.get("samples") is None:
+        return f"replaces the synthesized dataset in {where}, not added to"
+    subjects = target["subjects"]
+    return (
+        f"replaces the {target['samples']} samples in {where} ({subjects} "
+        f"{'subject' if subjects == 1 else 'subjects'} x {target['reps']} reps), not added to"
+    )
 
 
 def too_few(info: dict[str, Any], cv: str) -> str:
@@ -108,7 +122,7 @@ def train_refusal(text: str, info: dict[str, Any], cv: str) -> str:
 
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
-    "   first its size and time, then s again to start\n"
+    "   first its size and time and whether it replaces the dataset there, then s again\n"
     "t: train + evaluate (`haptable gestures eval`'s cross-validation, then the model on\n"
     "   every sample, as `haptable gestures train`)\n"
     "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
@@ -264,9 +278,9 @@ class GesturesPanel(Screen):
         super().__init__()
         self.ctx = ctx
         self.default_model = model_file(ctx.profile)
-        #: the synthesis the operator was told the size of: (dataset, subjects, reps) and
-        #: until when ``s`` starts it
-        self._synth_asked: tuple[tuple[Path, int, int], float] | None = None
+        #: the synthesis the operator was told the size of: (dataset, subjects, reps),
+        #: until when ``s`` starts it and what it does to the folder (``synth_target``)
+        self._synth_asked: tuple[tuple[Path, int, int], float, dict] | None = None
         self.files: dict[str, Any] = {}
         #: the model whose training result the result block shows (its one place)
         self._result_model: Path | None = None
@@ -379,8 +393,10 @@ class GesturesPanel(Screen):
             w.update(describe(info, evaluation_below=below))
 
     def action_synth(self) -> None:
-        """``s``: first the size and time (measured on one sample of each kind), then
-        ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis."""
+        """``s``: first the size and time (measured on one sample of each kind) and what
+        becomes of the folder (a new dataset, or the synthesized one there replaced),
+        then ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis,
+        which does what was said (a folder changed since: nothing, and it says so)."""
         try:
             ds, _ = self.paths()
             subjects = count(self.field("subjects"), "subjects", 1, 50)
@@ -396,12 +412,18 @@ class GesturesPanel(Screen):
         if pending is None or pending[0] != asked or time.monotonic() > pending[1]:
             self._estimate(asked)
             return
+        said = pending[2]  # what the question said it does to the folder: it does that
 
         def job(progress, cancelled):
             try:
+                if synth_target(ds) != said:
+                    raise UserError(
+                        f"{ds}: the dataset folder changed since its size and time were "
+                        "said: s says them again"
+                    )
                 return synth_atomic(
-                    ds, subjects, reps, replace=True, workers=1, progress=progress,
-                    cancelled=cancelled,
+                    ds, subjects, reps, replace=said["replace"], workers=1,
+                    progress=progress, cancelled=cancelled,
                 )  # fmt: skip
             except UserError as exc:
                 raise UserError(in_panel(exc, ds)) from exc
@@ -422,16 +444,21 @@ class GesturesPanel(Screen):
         )
 
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
-        _, subjects, reps = asked
+        ds, subjects, reps = asked
 
         def job(progress, cancelled):
+            try:  # a folder it would not write to is said before measuring
+                target = synth_target(ds)
+            except UserError as exc:
+                raise UserError(in_panel(exc, ds)) from exc
             progress(0.1, "measuring one static and one dynamic sample")
-            return synth_estimate(subjects, reps, workers=1)
+            return target, synth_estimate(subjects, reps, workers=1)
 
-        def summary(est) -> str:
-            self._synth_asked = (asked, time.monotonic() + CONFIRM_S)
-            # the key first: a narrow screen cuts the end of the line
-            return f"s again within {CONFIRM_S:.0f} s to start: {est['text']}"
+        def summary(result) -> str:
+            target, est = result
+            self._synth_asked = (asked, time.monotonic() + CONFIRM_S, target)
+            # the key first, then what becomes of the folder: a narrow screen cuts the end
+            return f"s again within {CONFIRM_S:.0f} s to start: {_does(target, ds)}: {est['text']}"
 
         self._clear_result()
         self.work.start("estimate", job, summary)
