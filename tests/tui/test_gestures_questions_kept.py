@@ -43,14 +43,6 @@ def _ticking(reports: list[int]):
     return job
 
 
-async def _tall_files(pilot, panel) -> None:
-    """The files block as tall as a trained model's (its evaluation, procedure and
-    folds): the panel's lower lines are below the fold at 80 x 24."""
-    files = panel.query_one("#gp-files")
-    await wait_for(pilot, lambda: bool(panel.files), 30, "files read")
-    files.update("\n".join(f"files line {i}" for i in range(14)))
-
-
 async def _stays(pilot, app, text: str, reports: list[int], ticks: int = 5) -> None:
     """``text`` stays on the screen while the job reports ``ticks`` more times."""
     until = len(reports) + ticks
@@ -65,7 +57,6 @@ def test_esc_asks_on_the_screen_while_progress_ticks_and_a_cancel_stays(plugins,
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
             panel = await _panel_from_camera(app, pilot)
-            await _tall_files(pilot, panel)
             reports: list[int] = []
             panel.work.start("training", _ticking(reports))
             await wait_for(pilot, lambda: len(reports) > 5, 10, "training reports")
@@ -97,7 +88,6 @@ def test_an_f_keys_refusal_stays_while_progress_ticks(plugins, size, monkeypatch
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
             panel = await _panel_from_camera(app, pilot)
-            await _tall_files(pilot, panel)
             reports: list[int] = []
             panel.work.start("training", _ticking(reports))
             await wait_for(pilot, lambda: len(reports) > 5, 10, "training reports")
