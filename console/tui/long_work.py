@@ -14,6 +14,10 @@ so far) and, once a step reports nothing for a while, how long it has been in it
 line never stands still; ``expect(frac, seconds)`` says how long the current step should
 take (the bar moves towards ``frac`` meanwhile). The line is wrapped on words, a number
 kept with its unit (``console.tui.kept_text``).
+
+A question or refusal said while a job runs (``hold``: "Esc again within 3 s cancels
+the training") has a line of its own under the job's: progress never replaces it; it
+goes when its window ends, when the job ends (that answers it) or with ``release``.
 """
 
 from __future__ import annotations
@@ -24,9 +28,9 @@ from collections.abc import Callable
 from typing import Any, Protocol, runtime_checkable
 
 from textual.app import ComposeResult
-from textual.containers import Horizontal
+from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import Label, ProgressBar
+from textual.widgets import Label, ProgressBar, Static
 from textual.worker import get_current_worker
 
 from console.core.errors import UserError
@@ -37,6 +41,8 @@ from console.tui.util import from_thread
 
 #: a step silent this long (s) says how long it has been in it
 QUIET_S = 2.0
+#: seconds a refusal said while a job runs stays on its line (``hold``)
+NOTE_S = 5.0
 
 Progress = Callable[[float, str], None]
 Job = Callable[[Progress, Callable[[], bool]], Any]
@@ -51,12 +57,14 @@ def stop_check(stop: threading.Event) -> Callable[[], bool]:
     return lambda: stop.is_set() or worker.is_cancelled
 
 
-class LongWork(Horizontal):
+class LongWork(Vertical):
     DEFAULT_CSS = """
-    LongWork { height: 1; }
-    LongWork > ProgressBar { width: auto; margin-right: 1; }
-    LongWork > Label { width: 1fr; }
-    LongWork > Label.error { color: $error; }
+    LongWork { height: auto; }
+    LongWork > .lw-row { height: auto; }
+    LongWork ProgressBar { width: auto; margin-right: 1; }
+    LongWork .lw-line { width: 1fr; height: auto; }
+    LongWork .lw-line.error { color: $error; }
+    LongWork > .lw-note { width: 1fr; height: auto; text-style: bold; }
     """
 
     class Finished(Message):
@@ -86,16 +94,29 @@ class LongWork(Horizontal):
         #: the running job's lines say their own time left (a demo's start clock)
         self._timed_by_job = False
         self._ticker = None
+        #: a question or refusal held on its own line (``hold``) and its lapse timer
+        self.note = ""
+        self._note_timer = None
 
     def compose(self) -> ComposeResult:
         bar = ProgressBar(total=1.0, show_eta=False)
         bar.display = False
-        yield bar
-        yield Label(self.idle_text, markup=False)
+        with Horizontal(classes="lw-row"):
+            yield bar
+            yield Label(self.idle_text, markup=False, classes="lw-line")
+        # ``hold``: a line of its own (a Static: ``query_one(Label)`` is the job's line)
+        note = Static("", markup=False, classes="lw-note")
+        note.display = False
+        yield note
 
     @property
     def busy(self) -> bool:
         return self.name_running is not None
+
+    @property
+    def cancelling(self) -> bool:
+        """A cancel was asked and the job has not stopped yet."""
+        return self.busy and self._stop.is_set()
 
     @property
     def progress(self) -> float | None:
@@ -109,13 +130,44 @@ class LongWork(Horizontal):
         self.text = text
         if not error:
             log_status(screen_name(self, self.name_running or self.last_name or "long work"), text)
-        label = self.query_one(Label)
-        label.update(wrap_kept(text, label.size.width))  # "45 MB" never split
+        label = self.query_one(".lw-line", Label)
         label.set_class(error, "error")
+        self._draw()
         bar = self.query_one(ProgressBar)
         bar.display = frac is not None
         if frac is not None:
             bar.update(total=1.0, progress=frac)
+
+    def _draw(self) -> None:
+        """The line, and the held note on its own line under it."""
+        label = self.query_one(".lw-line", Label)
+        label.update(wrap_kept(self.text, label.size.width))  # "45 MB" never split
+        note = self.query_one(".lw-note", Static)
+        note.display = bool(self.note)
+        note.update(wrap_kept(self.note, note.size.width or self.size.width))
+
+    def hold(self, text: str, seconds: float, severity: str = "warning") -> None:
+        """Say ``text`` (a question, a refusal) on its own line under the job's until
+        ``seconds`` pass, the job ends or ``release``: progress never replaces it. In
+        the log as the screen's ``severity``; a toast when its screen is not in view."""
+        self.note = text
+        if self._note_timer is not None:
+            self._note_timer.stop()
+        self._note_timer = self.set_timer(seconds, lambda: self.release(text))
+        self._draw()
+        where = screen_name(self, self.name_running or self.last_name or "long work")
+        said_here(self, where, text, severity)
+
+    def release(self, text: str | None = None) -> None:
+        """The held note goes (only when it is still ``text``, if given)."""
+        if not self.note or (text is not None and text != self.note):
+            return
+        self.note = ""
+        if self._note_timer is not None:
+            self._note_timer.stop()
+            self._note_timer = None
+        if self.is_attached:
+            self._draw()
 
     def error(self, text: str) -> None:
         """A one-line error on the status line (its one place; in the log too, and a
@@ -139,6 +191,7 @@ class LongWork(Horizontal):
         if self.busy:
             self.say_busy()
             return False
+        self.release()  # new work: an older note is past
         self.name_running = self.last_name = name
         self.outcome = self.result = None
         self._stop = stop = threading.Event()
@@ -157,11 +210,9 @@ class LongWork(Horizontal):
         return True
 
     def say_busy(self) -> None:
-        """A key that would start work while a job runs: its line says so (the screen's
-        own outcome, ``console.tui.said``), the bar where it was."""
-        text = f"{self.name_running} is running: x cancels it"
-        self.show(text, self.progress)
-        said_here(self, screen_name(self, self.name_running or "long work"), text, "warning")
+        """A key that would start work while a job runs: a line of its own under the
+        job's says so for ``NOTE_S`` (``hold``: the job's progress goes on above it)."""
+        self.hold(f"{self.name_running} is running: x cancels it", NOTE_S)
 
     def cancel(self) -> bool:
         """Ask the running job to stop (it stops at its next check).
@@ -171,6 +222,7 @@ class LongWork(Horizontal):
         if not self.busy:
             return False
         self._stop.set()
+        self.release()  # what it asked is answered
         self.show(f"cancelling {self.name_running} ...", self.progress)
         self._report = None  # the line says the cancel until the job stopped
         return True
@@ -183,7 +235,9 @@ class LongWork(Horizontal):
             self._progress(*self._report[:2], at=self._report[2])
 
     def on_resize(self) -> None:
-        self.show(self.text, self.progress, error=self.query_one(Label).has_class("error"))
+        self.show(
+            self.text, self.progress, error=self.query_one(".lw-line", Label).has_class("error")
+        )
 
     def _progress(self, frac: float, text: str, at: float | None = None) -> None:
         """A report of the running job (``frac``, its line): the line with the time left."""
@@ -247,6 +301,7 @@ class LongWork(Horizontal):
         self.outcome, self.result = outcome, result
         if not self.is_attached:
             return
+        self.release()  # the job's end answers what it asked
         if outcome == "failed":
             self.error(text.splitlines()[0] if text else f"{name} failed")
         else:

@@ -81,6 +81,31 @@ def synth_atomic(
     return info
 
 
+def synth_target(out: str | Path) -> dict[str, Any]:
+    """What ``synth_atomic`` into ``out`` does to what is there: ``replace`` False for a
+    missing or empty folder (a new dataset); True for a synthesized one, which it swaps
+    for the new one (never adds to it), with that one's ``samples``, ``subjects`` and
+    ``reps`` (None when unreadable). Any other folder, or a file, is a ``UserError``."""
+    out = Path(out).expanduser()
+    if out.exists() and not out.is_dir():
+        raise UserError(f"{out}: exists and is not a folder; choose another dataset folder")
+    if not out.is_dir() or not any(out.iterdir()):
+        return {"replace": False}
+    if not (out / SYNTH_MARK).is_file():
+        raise UserError(
+            f"{out}: folder is not a synthesized dataset (no {SYNTH_MARK}); "
+            "choose another dataset folder"
+        )
+    info = describe_files(out, None)["dataset"]
+    subjects = info.get("subjects")
+    return {
+        "replace": True,
+        "samples": info.get("samples"),
+        "subjects": len(subjects) if subjects else None,
+        "reps": info.get("reps"),
+    }
+
+
 def train_and_evaluate(
     dataset: str | Path,
     model_out: str | Path,

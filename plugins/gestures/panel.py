@@ -29,13 +29,13 @@ from console.plugin_api.tui import (
     SafetyBar,
     escape,
     from_thread,
-    lapse,
     said_here,
     short_path,
 )
 
-from .jobs import describe_files, synth_atomic, train_and_evaluate
+from .jobs import describe_files, synth_atomic, synth_target, train_and_evaluate
 from .model import GestureModel
+from .panel_fields import kept_fields
 from .settings import model_file
 from .synth import estimate as synth_estimate
 
@@ -60,11 +60,27 @@ _BUTTONS = (
     ("train+eval (t)", "gp-train"),
     ("cancel (x)", "gp-cancel"),
 )
-#: seconds in which a second ``Esc`` (work under way) cancels it and closes the panel
+#: seconds in which a second ``Esc`` (work under way) cancels it
 ESC_AGAIN_S = 3.0
+#: seconds a refusal said while work runs stays under its progress
+REFUSAL_S = 5.0
 #: samples of each gesture training needs: the harmonics and frames are chosen inside
 #: each 2-fold training half, which must hold 2 of each (``selection.select_settings``)
 MIN_PER_GESTURE = 4
+
+
+def _does(target: dict[str, Any], ds: Path) -> str:
+    """What a synthesis does to the folder ``ds`` (``synth_target``'s ``target``)."""
+    where = short_path(ds)
+    if not target["replace"]:
+        return f"a new dataset in {where}"
+    if target.get("samples") is None:
+        return f"replaces the synthesized dataset in {where}, not added to"
+    subjects = target["subjects"]
+    return (
+        f"replaces the {target['samples']} samples in {where} ({subjects} "
+        f"{'subject' if subjects == 1 else 'subjects'} x {target['reps']} reps), not added to"
+    )
 
 
 def too_few(info: dict[str, Any], cv: str) -> str:
@@ -106,7 +122,7 @@ def train_refusal(text: str, info: dict[str, Any], cv: str) -> str:
 
 HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
-    "   first its size and time, then s again to start\n"
+    "   first its size and time and whether it replaces the dataset there, then s again\n"
     "t: train + evaluate (`haptable gestures eval`'s cross-validation, then the model on\n"
     "   every sample, as `haptable gestures train`)\n"
     "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
@@ -244,7 +260,6 @@ class GesturesPanel(Screen):
     GesturesPanel #gp-files { margin-top: 1; }
     GesturesPanel #gp-result { margin-top: 1; }
     GesturesPanel #gp-work { height: auto; }  /* the estimate's line whole, wrapped */
-    GesturesPanel #gp-work > Label { height: auto; }
     """
     BINDINGS = [
         Binding("s", "synth", "synthesize"),
@@ -263,34 +278,41 @@ class GesturesPanel(Screen):
         super().__init__()
         self.ctx = ctx
         self.default_model = model_file(ctx.profile)
-        #: the synthesis the operator was told the size of: (dataset, subjects, reps) and
-        #: until when ``s`` starts it
-        self._synth_asked: tuple[tuple[Path, int, int], float] | None = None
+        #: the synthesis the operator was told the size of: (dataset, subjects, reps),
+        #: until when ``s`` starts it and what it does to the folder (``synth_target``)
+        self._synth_asked: tuple[tuple[Path, int, int], float, dict] | None = None
         self.files: dict[str, Any] = {}
         #: the model whose training result the result block shows (its one place)
         self._result_model: Path | None = None
         #: until when a second Esc cancels the work under way (it asked once)
         self._esc_until: float | None = None
+        #: the fields as typed, by id: kept for the console's run (the next panel's)
+        self.typed = kept_fields(ctx)
 
     def compose(self) -> ComposeResult:
+        typed = self.typed  # what was typed since the console started, else the defaults
         # not a Tab stop of its own (the first Tab from the buttons edits the first
         # field): PageUp/PageDown scroll it, and a focused field scrolls into view
         with VerticalScroll(can_focus=False):
             yield Static("[b]Gestures[/b]: twin datasets, training and evaluation", id="gp-title")
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
-                dataset = short_path(data_dir() / "twin")  # a path: kept on focus
+                dataset = typed.get("gp-dataset", short_path(data_dir() / "twin"))
+                # a path: kept on focus
                 yield Input(dataset, id="gp-dataset", compact=True, select_on_focus=False)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
-                yield Input("5", id="gp-subjects", classes="gp-num", compact=True)
+                subjects = typed.get("gp-subjects", "5")
+                yield Input(subjects, id="gp-subjects", classes="gp-num", compact=True)
                 yield Label(" reps")
-                yield Input("40", id="gp-reps", classes="gp-num", compact=True)
+                yield Input(
+                    typed.get("gp-reps", "40"), id="gp-reps", classes="gp-num", compact=True
+                )
                 yield Label(" cv")
-                yield Input("2fold", id="gp-cv", classes="gp-num", compact=True)
+                yield Input(typed.get("gp-cv", "2fold"), id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
                 yield Label("model")
-                model = short_path(self.default_model)
+                model = typed.get("gp-model", short_path(self.default_model))
                 yield Input(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
                 for label, name in _BUTTONS:
@@ -371,8 +393,10 @@ class GesturesPanel(Screen):
             w.update(describe(info, evaluation_below=below))
 
     def action_synth(self) -> None:
-        """``s``: first the size and time (measured on one sample of each kind), then
-        ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis."""
+        """``s``: first the size and time (measured on one sample of each kind) and what
+        becomes of the folder (a new dataset, or the synthesized one there replaced),
+        then ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis,
+        which does what was said (a folder changed since: nothing, and it says so)."""
         try:
             ds, _ = self.paths()
             subjects = count(self.field("subjects"), "subjects", 1, 50)
@@ -388,12 +412,18 @@ class GesturesPanel(Screen):
         if pending is None or pending[0] != asked or time.monotonic() > pending[1]:
             self._estimate(asked)
             return
+        said = pending[2]  # what the question said it does to the folder: it does that
 
         def job(progress, cancelled):
             try:
+                if synth_target(ds) != said:
+                    raise UserError(
+                        f"{ds}: the dataset folder changed since its size and time were "
+                        "said: s says them again"
+                    )
                 return synth_atomic(
-                    ds, subjects, reps, replace=True, workers=1, progress=progress,
-                    cancelled=cancelled,
+                    ds, subjects, reps, replace=said["replace"], workers=1,
+                    progress=progress, cancelled=cancelled,
                 )  # fmt: skip
             except UserError as exc:
                 raise UserError(in_panel(exc, ds)) from exc
@@ -414,16 +444,21 @@ class GesturesPanel(Screen):
         )
 
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
-        _, subjects, reps = asked
+        ds, subjects, reps = asked
 
         def job(progress, cancelled):
+            try:  # a folder it would not write to is said before measuring
+                target = synth_target(ds)
+            except UserError as exc:
+                raise UserError(in_panel(exc, ds)) from exc
             progress(0.1, "measuring one static and one dynamic sample")
-            return synth_estimate(subjects, reps, workers=1)
+            return target, synth_estimate(subjects, reps, workers=1)
 
-        def summary(est) -> str:
-            self._synth_asked = (asked, time.monotonic() + CONFIRM_S)
-            # the key first: a narrow screen cuts the end of the line
-            return f"s again within {CONFIRM_S:.0f} s to start: {est['text']}"
+        def summary(result) -> str:
+            target, est = result
+            self._synth_asked = (asked, time.monotonic() + CONFIRM_S, target)
+            # the key first, then what becomes of the folder: a narrow screen cuts the end
+            return f"s again within {CONFIRM_S:.0f} s to start: {_does(target, ds)}: {est['text']}"
 
         self._clear_result()
         self.work.start("estimate", job, summary)
@@ -520,56 +555,34 @@ class GesturesPanel(Screen):
             self.work.show("nothing to cancel")
 
     def action_back(self) -> None:
-        """``Esc``: back to the Camera screen. With work under way it asks first (a
-        second ``Esc`` within ``ESC_AGAIN_S`` cancels the work and closes the panel) and
-        a cancel is said in the log and on the Camera screen's status line."""
+        """``Esc``: back to the Camera screen. With work under way it asks first, on the
+        work's own line (a second ``Esc`` within ``ESC_AGAIN_S`` cancels the work); the
+        panel stays and shows the cancel, so the next keys are still the panel's."""
         if isinstance(self.focused, Input):
             self.to_buttons()
             return
-        if self.work.busy:
-            asked, self._esc_until = self._esc_until, None
-            if asked is None or time.monotonic() > asked:
-                self._esc_until = time.monotonic() + ESC_AGAIN_S
-                name = self.work.name_running
-                self._result_says(
-                    f"Esc again within {ESC_AGAIN_S:g} s cancels the {name}; x cancels too",
-                    after_s=ESC_AGAIN_S,
-                )
-                return
-            name = self.work.name_running or "work"
-            self.work.cancel()
+        if not self.work.busy:
             self.app.pop_screen()
-            self._tell_camera(f"Gestures: {name} cancelled (Esc){self._kept_after(name)}")
             return
-        self.app.pop_screen()
-
-    @staticmethod
-    def _kept_after(name: str) -> str:
-        """What a cancel of job ``name`` left as it was (": no model was written")."""
-        return _CANCELLED_KEPT["train" if name == "training" else "synth"]
-
-    def _result_says(self, text: str, after_s: float) -> None:
-        """A question on the result line that lapses after ``after_s`` seconds."""
-        line = self.query_one("#gp-result", Static)
-        line.update(text)
-        lapse(self, lambda: str(line.render()), text, line.update, after_s)
-
-    def _tell_camera(self, text: str) -> None:
-        """``text`` on the Camera screen's status line (and so in the log); the log
-        alone when no Camera screen is there."""
-        panes = self.app.base.query("CameraPane")
-        if panes:
-            panes.first().say(text, "warning")
-        else:
-            said_here(self.work, "Gestures", text, "warning")
+        name = self.work.name_running
+        if self.work.cancelling:
+            self.work.hold(f"cancelling the {name}: Esc goes back once it stopped", REFUSAL_S)
+            return
+        asked, self._esc_until = self._esc_until, None
+        if asked is None or time.monotonic() > asked:
+            self._esc_until = time.monotonic() + ESC_AGAIN_S
+            question = f"Esc again within {ESC_AGAIN_S:g} s cancels the {name}; x cancels too"
+            self.work.hold(question, ESC_AGAIN_S)
+            return
+        self.action_cancel()
 
     def leave_for_screen(self) -> bool:
         """An F-key (another screen, ``HapTableApp.action_show_tab``): the panel closes
-        and the screen shows; while work runs here it stays and says why."""
+        and the screen shows; while work runs here it stays and says why (on the work's
+        own line, under its progress)."""
         if self.work.busy:
-            text = f"{self.work.name_running} runs here: x cancels it, then the F-key again"
-            self.query_one("#gp-result", Static).update(text)
-            said_here(self.work, "Gestures", text, "warning")
+            name = self.work.name_running
+            self.work.hold(f"{name} runs here: x cancels it, then the F-key again", REFUSAL_S)
             return False
         self.app.pop_screen()
         return True
@@ -589,8 +602,11 @@ class GesturesPanel(Screen):
         self.to_buttons()  # leaving the field refreshes the files
 
     def on_input_changed(self, event: Input.Changed) -> None:
-        """A synthesis field changed under its size and time: the line says they are
-        for other fields now (what is true), and ``s`` measures again."""
+        """A field typed in is kept for the next time the panel opens; a synthesis field
+        changed under its size and time: the line says they are for other fields now
+        (what is true), and ``s`` measures again."""
+        if event.input.id:
+            self.typed[event.input.id] = event.value
         if event.input.id in _SYNTH_FIELDS and self._synth_asked is not None:
             self._synth_asked = None
             self.work.show(f"{event.input.id[3:]} changed: s says the size and time again")

@@ -44,8 +44,8 @@ def test_the_footer_shows_e_stop_and_f_keys_and_an_f_key_shows_its_screen(plugin
             release = threading.Event()
             panel.work.start("training", lambda progress, cancelled: release.wait(30))
             await pilot.press("f6")
-            result = app.screen.query_one("#gp-result")
-            await wait_for(pilot, lambda: "x cancels" in text_in(app, result), 30, "refused")
+            work = panel.work  # said under the work's progress
+            await wait_for(pilot, lambda: "x cancels" in text_in(app, work), 30, "refused")
             assert app.screen is panel and app.active_tab == "devices"
             release.set()
             await wait_for(pilot, lambda: not panel.work.busy, 30, "work done")
