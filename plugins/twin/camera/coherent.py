@@ -138,22 +138,23 @@ class CoherentFrames:
         mapping = self.rig.mapping
         if len(hands) == 1 and self._reusable(*hands[0]):
             subject, pose = hands[0]
-            _, k_pose, k_geo, k_blurred = self._kept
+            k_subject, k_pose, k_geo, k_blurred = self._kept
+            if k_blurred is None:  # the hand came to rest: its blurred skin, once
+                k_blurred = hand_layer(k_geo.pieces, mapping, "blurred")
+                self._kept, self._lit = (k_subject, k_pose, k_geo, k_blurred), lit_box(k_blurred)
             geo = moved_geometry(k_geo, k_pose, pose)
             layer = hand_layer(
                 geo.pieces, mapping, "sharp", over=self._warp(k_blurred, k_pose, pose)
             )
             self.warped += 1
             return layer, frame_truth_of([geo], hands, mapping, label, t_s)
+        # a moving hand (or none, or two): rendered in one pass as the twin always was;
+        # its geometry kept, its blurred layer made only if the next frame can use it
         geos = [hand_pieces(s, p) for s, p in hands]
-        pieces = [pc for g in geos for pc in g.pieces]
-        blurred = hand_layer(pieces, mapping, "blurred")
-        self._kept = (*hands[0], geos[0], blurred.copy()) if len(hands) == 1 else None
-        self._lit = lit_box(blurred)
+        self._kept = (*hands[0], geos[0], None) if len(hands) == 1 else None
         self.full += 1
-        return hand_layer(pieces, mapping, "sharp", over=blurred), frame_truth_of(
-            geos, hands, mapping, label, t_s
-        )
+        layer = hand_layer([pc for g in geos for pc in g.pieces], mapping)
+        return layer, frame_truth_of(geos, hands, mapping, label, t_s)
 
     def render(
         self,
