@@ -18,6 +18,20 @@ async def app_processed(app, timeout_s: float = 30.0) -> None:
         await asyncio.wait_for(done.wait(), timeout_s)
 
 
+async def _pressed_or_quit(app, pressing) -> None:
+    """``pressing`` (Textual's key press: it ends waiting for the app's animations) until
+    done, or until the key quit the app: an app that exits with an animation under way
+    never says its animations completed, and the press waited for good (ctrl+q in
+    ``test_signals_quit_unsaved``: the console had quit, the test hung)."""
+    task = asyncio.ensure_future(pressing)
+    while not task.done():
+        if not app.is_running:
+            task.cancel()
+            return
+        await asyncio.wait({task}, timeout=0.05)
+    task.result()
+
+
 def quicken_pilot(monkeypatch) -> None:
     """Pilot waits after each key until the process's CPU time stops advancing, for at
     most 1 s twice. The console's output, camera and worker threads keep the process
@@ -39,8 +53,9 @@ def quicken_pilot(monkeypatch) -> None:
 
     async def press_each_key(self, keys) -> None:
         for key in keys:
-            await press_keys(self, [key])
-            await app_processed(self)
+            await _pressed_or_quit(self, press_keys(self, [key]))
+            if self.is_running:
+                await app_processed(self)
 
     monkeypatch.setattr(textual.app, "wait_for_idle", short_idle)
     monkeypatch.setattr(textual.app.App, "_press_keys", press_each_key)
