@@ -51,15 +51,22 @@ async def _stays(pilot, app, text: str, reports: list[int], ticks: int = 5) -> N
         assert text in _shown(app), _shown(app)
 
 
+async def _training(app, pilot):
+    """The Gestures panel opened from Camera, a training under way reporting its
+    progress: (the panel, its reports so far)."""
+    panel = await _panel_from_camera(app, pilot)
+    reports: list[int] = []
+    panel.work.start("training", _ticking(reports))
+    await wait_for(pilot, lambda: len(reports) > 5, 10, "training reports")
+    return panel, reports
+
+
 @pytest.mark.parametrize("size", SIZES)
 def test_esc_asks_on_the_screen_while_progress_ticks_and_a_cancel_stays(plugins, size, caplog):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
-            panel = await _panel_from_camera(app, pilot)
-            reports: list[int] = []
-            panel.work.start("training", _ticking(reports))
-            await wait_for(pilot, lambda: len(reports) > 5, 10, "training reports")
+            panel, reports = await _training(app, pilot)
             await pilot.press("escape")
             asked = "Esc again within 3 s cancels the training"
             await wait_for(pilot, lambda: asked in _shown(app), 5, f"asked: {_shown(app)}")
@@ -87,10 +94,7 @@ def test_an_f_keys_refusal_stays_while_progress_ticks(plugins, size, monkeypatch
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
-            panel = await _panel_from_camera(app, pilot)
-            reports: list[int] = []
-            panel.work.start("training", _ticking(reports))
-            await wait_for(pilot, lambda: len(reports) > 5, 10, "training reports")
+            panel, reports = await _training(app, pilot)
             await pilot.press("f6")
             refused = "training runs here: x cancels it, then the F-key again"
             await wait_for(pilot, lambda: refused in _shown(app), 5, f"refused: {_shown(app)}")
