@@ -10,7 +10,7 @@ import numpy as np
 
 from console.plugin_api import Frame, machine_info, summarize_s
 
-from .coherent import held_hand_check
+from .coherent_check import held_hand_check, knob_hand_check
 from .gestures import GESTURES, STATIC, plan_take, take_pose
 from .hand import make_subject
 from .render import Rig
@@ -19,7 +19,8 @@ from .sample import render_background, render_frame, render_sample
 
 def run(ctx: Any = None, quick: bool = False) -> dict:
     """Frame render time per gesture (p50/p99), a held hand's frames moved from its
-    last full render against full renders (speed, grey-level error, the vision's contact
+    last full render and the knob demo's turning hand's frames warped from its shape's
+    canvas, each against full renders (speed, CPU, grey-level error, the vision's contact
     gap) and sample render throughput (the twin's share of ``gestures synth``,
     extrapolated to the paper's 2000 samples)."""
     rig = Rig()
@@ -67,15 +68,12 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
     held, vision = {}, _vision_contacts(ctx)
     for i, g in enumerate(STATIC):
         got = held_hand_check(g, 10 if quick else 40, rig, seed=i, contacts_of=vision)
-        held[g] = {
-            "coherent": summarize_s(got["s_coherent"][1:]),  # the first is the full render
-            "full": summarize_s(got["s_full"]),
-            "grey_error_mean": round(got["grey_error_mean"], 4),
-            "grey_error_max": got["grey_error_max"],
-            "share_over_2_grey": round(got["share_over_2_grey"], 5),
-            "vision_contact_gap_px": got["contact_gap_px"],
-            "vision_contact_counts_differ": got["contact_counts_differ"],
-        }
+        held[g] = _check_row(got)
+    # the knob demo's hand turning about the thumb's tip (warped from its shape's canvas)
+    knob = {}
+    for seed in range(1 if quick else 3):
+        got = knob_hand_check(60 if quick else 150, rig, seed=seed, contacts_of=vision)
+        knob[f"seed_{seed}"] = _check_row(got)
     cores = os.cpu_count() or 1
     return {
         "frame_render": summarize_s(all_s),
@@ -83,6 +81,7 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
         "frame_render_cpu": summarize_s(cpu_s),
         "frame_render_empty_table": summarize_s(empty),
         "held_hand_frames": held,
+        "knob_hand_frames": knob,
         "frame_render_per_gesture": per_gesture,
         "sample_render_one_process": {
             "samples": n_samples,
@@ -92,6 +91,26 @@ def run(ctx: Any = None, quick: bool = False) -> dict:
         "load_average_1min": os.getloadavg()[0],
         "machine": machine_info(),
         "quick": quick,
+    }
+
+
+def _check_row(got: dict) -> dict:
+    """A ``coherent_check`` as a bench row: time and CPU (all threads) per frame both ways
+    (warped: the frames that were; full: the reference's frames), and the errors."""
+    warped = got["warped_frames"]
+    return {
+        "warped_frames": len(warped),
+        "frames": got["frames"],
+        "coherent": summarize_s([got["s_coherent"][i] for i in warped]),
+        "full": summarize_s(got["s_full"]),
+        "coherent_cpu": summarize_s([got["cpu_s_coherent"][i] for i in warped]),
+        "full_cpu": summarize_s(got["cpu_s_full"]),
+        "grey_error_mean": round(got["grey_error_mean"], 4),
+        "grey_error_max": got["grey_error_max"],
+        "share_over_2_grey": round(got["share_over_2_grey"], 5),
+        "layer_error_rms": round(got["layer_error_rms"], 4),
+        "vision_contact_gap_px": got["contact_gap_px"],
+        "vision_contact_counts_differ": got["contact_counts_differ"],
     }
 
 

@@ -1,40 +1,49 @@
-"""A live twin camera's frames from the last full render of a hand that only trembled.
+"""A live twin camera's frames of a hand that keeps its shape and only moves rigidly.
 
 A hand held on the glass (a resting hand in a demo, ``P`` on the Camera screen, a
-static gesture) changes from frame to frame by its tremor alone: ``HandPose.moved``, a
-rigid shift of a fraction of a millimetre and a turn of a fraction of a degree. Its
-pieces, contacts and grey levels are those of the last full render moved the same way,
-so ``CoherentFrames`` moves them instead of building the hand again: the pieces and the
-ground truth exactly, the blurred layers of the skin above the glass by an affine warp of
-the camera's pixels; the skin touching the glass (sharp, where the contacts are found)
-is drawn anew at its moved place. The twin keeps a 60 frames a second camera on a 2-core
-machine that also runs the demo.
+static gesture) changes from frame to frame by its tremor alone, and the knob demo's
+fingers turn the hand about the thumb's tip: both are ``HandPose.moved``, rigid moves of
+one shape. Such a hand's pieces, contacts and grey levels are those of the same shape
+moved, so ``CoherentFrames`` moves them instead of building the hand again: the pieces
+and the ground truth exactly; the blurred layers of the skin above the glass by a warp
+of the camera's pixels; the skin touching the glass (sharp, where the contacts are
+found) is drawn anew at its place. The twin keeps a 60 frames a second camera on a
+2-core machine that also runs the demo.
 
-A full render is made whenever anything else changed: the subject, a finger, a height,
-a move of more than ``MAX_SHIFT_MM`` or ``MAX_TURN_DEG`` from the last full render, a
-second hand. The warped layers differ from a full render by the warp's interpolation of
-blurred edges (``haptable bench twin-camera`` reports the error beside the speed).
+A small move (a tremor: ``MAX_SHIFT_MM``, ``MAX_TURN_DEG``) warps the last full render's
+blurred layer by an affine map (drawn on nearly the frame's pixel grid: the closest
+match). A larger one warps the shape's ``HandCanvas``: its blurred skin drawn once in the
+hand's own frame at the camera's scale, put in place by the exact mapping hand frame ->
+table -> camera (a homography, or a per-pixel map when the lens bends the image). A
+frame is rendered in full when the shape is new (a finger, a height, the subject
+changed; two hands). The warped skin differs from a full render by the resampling of
+blurred edges drawn on another pixel grid (a canvas: another orientation), a blur that
+follows the mapping's local scale (a few per cent across the glass), and blurred skin
+just outside the image that a full render leaves out (``haptable bench twin-camera``
+reports the error beside the speed: ``coherent_check``).
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-from dataclasses import replace
+import functools
+from collections import OrderedDict
+from dataclasses import dataclass, replace
 from typing import Any
 
 import cv2
 import numpy as np
 
-from .gestures import plan_take, take_pose
-from .hand import HandGeometry, HandPose, Piece, Subject, hand_pieces, make_subject
-from .render import Rig, compose, hand_layer
-from .sample import STEP_GAIN, STEP_OFFSET, frame_truth_of, render_background, render_frame
+from .geometry import TableMapping
+from .hand import HandGeometry, HandPose, Piece, Subject, hand_pieces
+from .render import LOW_RES, WARPABLE_SIGMA_PX, Rig, band_sigma_px, compose, hand_layer
+from .sample import STEP_GAIN, STEP_OFFSET, frame_truth_of
 
-#: the largest rigid move from the last full render a frame is warped for (a tremor's
-#: few tenths; beyond: the hand moved and is rendered anew)
+#: the largest rigid move from the last full render its layer is warped for (a
+#: tremor's few tenths); beyond (the knob's turn), the shape's canvas is
 MAX_SHIFT_MM = 3.0
 MAX_TURN_DEG = 2.0
+#: shapes whose canvases a camera keeps (a demo loops over one or two)
+KEPT_CANVASES = 4
 
 
 def rigid(pose: HandPose) -> tuple[float, float, float]:
@@ -47,30 +56,39 @@ def shape_of(pose: HandPose) -> HandPose:
     return replace(pose, wrist_mm=(0.0, 0.0), angle_deg=0.0)
 
 
+def _placement(pose: HandPose) -> np.ndarray:
+    """3x3: the hand frame (the pose's shape at the origin) -> table mm for ``pose``."""
+    x, y, t = rigid(pose)
+    c, s = np.cos(np.radians(t)), np.sin(np.radians(t))
+    return np.array([[c, -s, x], [s, c, y], [0.0, 0.0, 1.0]])
+
+
 def motion(a: HandPose, b: HandPose):
     """The rigid motion (mm -> mm) taking pose ``a``'s hand to pose ``b``'s."""
-    (xa, ya, ta), (xb, yb, tb) = rigid(a), rigid(b)
-    d = np.radians(tb - ta)
-    rot = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
-    wa, wb = np.array([xa, ya]), np.array([xb, yb])
+    m = _placement(b) @ np.linalg.inv(_placement(a))
 
     def move(pts: Any) -> np.ndarray:
         p = np.asarray(pts, dtype=float).reshape(-1, 2)
-        return (p - wa) @ rot.T + wb
+        return p @ m[:2, :2].T + m[:2, 2]
 
     return move
 
 
-def moved_geometry(geo: HandGeometry, a: HandPose, b: HandPose) -> HandGeometry:
+def moved_geometry(
+    geo: HandGeometry, a: HandPose, b: HandPose, keep: list[int] | None = None
+) -> HandGeometry:
     """``hand_pieces(subject, b)`` from ``geo = hand_pieces(subject, a)`` when ``b`` is
-    ``a`` moved rigidly (``HandPose.moved``): every point moved the same way."""
+    ``a`` moved rigidly (``HandPose.moved``): every point moved the same way (only the
+    pieces numbered ``keep`` when given)."""
     move = motion(a, b)
-    polys = [c for p in geo.pieces for c in (p.poly_mm, *p.holes)]  # moved at once
-    at = iter(np.split(move(np.vstack(polys)), np.cumsum([len(c) for c in polys])[:-1]))
+    src = geo.pieces if keep is None else [geo.pieces[i] for i in keep]
+    polys = [c for p in src for c in (p.poly_mm, *p.holes)]  # moved at once
     pieces = []
-    for p in geo.pieces:
-        outline = next(at)
-        pieces.append(Piece(outline, p.h_mm, p.refl, tuple(next(at) for _ in p.holes)))
+    if polys:
+        at = iter(np.split(move(np.vstack(polys)), np.cumsum([len(c) for c in polys])[:-1]))
+        for p in src:
+            outline = next(at)
+            pieces.append(Piece(outline, p.h_mm, p.refl, tuple(next(at) for _ in p.holes)))
     contacts = [{**c, "pos_mm": tuple(move(c["pos_mm"])[0])} for c in geo.contacts]
     tips = {f: (*move(t[:2])[0], t[2]) for f, t in geo.tips_mm.items()}
     center = tuple(move(geo.center_mm)[0])
@@ -85,30 +103,163 @@ def lit_box(layer: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 
+@dataclass(frozen=True)
+class CanvasMapping:
+    """Hand-frame mm -> canvas pixels: ``px_per_mm`` (the camera's) from ``origin_mm``;
+    what ``render.hand_layer`` needs of a mapping."""
+
+    origin_mm: tuple[float, float]
+    scale: float
+    image_px: tuple[int, int]
+
+    def px_per_mm(self) -> float:
+        return self.scale
+
+    def mm_to_px(self, pts_mm: Any) -> np.ndarray:
+        p = np.asarray(pts_mm, dtype=np.float64).reshape(-1, 2)
+        return (p - self.origin_mm) * self.scale
+
+    def px_to_frame(self) -> np.ndarray:
+        """3x3: canvas pixels -> hand-frame mm."""
+        (ox, oy), s = self.origin_mm, self.scale
+        return np.array([[1 / s, 0.0, ox], [0.0, 1 / s, oy], [0.0, 0.0, 1.0]])
+
+
+@functools.lru_cache(maxsize=2)
+def _table_mm_of_pixels(mapping: TableMapping) -> np.ndarray:
+    """(h, w, 2) float32: the table point every pixel sees (a bent lens's inverse, once)."""
+    w, h = mapping.image_px
+    yy, xx = np.mgrid[0:h, 0:w]
+    grid = mapping.px_to_mm(np.column_stack([xx.ravel(), yy.ravel()])).reshape(h, w, 2)
+    grid = grid.astype(np.float32)
+    grid.setflags(write=False)
+    return grid
+
+
+class HandCanvas:
+    """One hand shape's blurred skin drawn once in the hand's own frame (the shape at
+    the origin, fingers along +x) at the camera's scale, padded by its blur; ``warp``
+    puts it where a rigid pose of that shape shows in the camera."""
+
+    def __init__(self, subject: Subject, pose: HandPose, mapping: TableMapping) -> None:
+        self.pose = shape_of(pose)
+        self.geo = hand_pieces(subject, self.pose)
+        ppm = mapping.px_per_mm()
+        sigmas = [band_sigma_px(p.h_mm, ppm) for p in self.geo.pieces]
+        #: the pieces drawn anew each frame (the skin touching the glass)
+        self.sharp = [i for i, s in enumerate(sigmas) if s is not None and s < WARPABLE_SIGMA_PX]
+        blurred = [s for s in sigmas if s is not None and s >= WARPABLE_SIGMA_PX]
+        self.layer: np.ndarray | None = None
+        self.canvas: CanvasMapping | None = None
+        if not blurred:
+            return
+        pad_mm = (3 * max(blurred) + 4 * LOW_RES) / ppm  # the blur's reach, both grids
+        pts = np.vstack([p.poly_mm for p in self.geo.pieces])
+        lo, hi = pts.min(axis=0) - pad_mm, pts.max(axis=0) + pad_mm
+        size = np.ceil((hi - lo) * ppm).astype(int) + 1
+        self.canvas = CanvasMapping((float(lo[0]), float(lo[1])), ppm, (int(size[0]), int(size[1])))
+        layer = hand_layer(self.geo.pieces, self.canvas, "blurred")  # type: ignore[arg-type]
+        box = lit_box(layer)
+        if box is not None:
+            x0, y0, x1, y1 = box
+            self.layer, self._box = layer[y0:y1, x0:x1].copy(), box
+
+    def warp(self, pose: HandPose, mapping: TableMapping) -> tuple[np.ndarray, tuple | None]:
+        """(the blurred skin at ``pose`` in the camera's image, float32; the box it was
+        drawn in (x0, y0, x1, y1), None when out of sight)."""
+        w, h = mapping.image_px
+        out = np.zeros((h, w), np.float32)
+        if self.layer is None or self.canvas is None:
+            return out, None
+        bx, by, bx1, by1 = self._box
+        # the kept crop's pixels -> hand frame -> table mm
+        to_table = (
+            _placement(pose)
+            @ self.canvas.px_to_frame()
+            @ np.array([[1.0, 0, bx], [0, 1.0, by], [0, 0, 1.0]])
+        )
+        ch, cw = self.layer.shape
+        t = np.linspace(0.0, 1.0, 9)[:, None]  # the crop's outline (curved under a lens)
+        edge = (
+            np.vstack(
+                [
+                    np.hstack([t * cw, 0 * t]),
+                    np.hstack([t * cw, 0 * t + ch]),
+                    np.hstack([0 * t, t * ch]),
+                    np.hstack([0 * t + cw, t * ch]),
+                ]
+            )
+            - 0.5
+        )
+        mm = edge @ to_table[:2, :2].T + to_table[:2, 2]
+        px = mapping.mm_to_px(mm)
+        (x0, y0), (x1, y1) = np.floor(px.min(axis=0)) - 1, np.ceil(px.max(axis=0)) + 2
+        x0, y0, x1, y1 = max(int(x0), 0), max(int(y0), 0), min(int(x1), w), min(int(y1), h)
+        if x1 <= x0 or y1 <= y0:
+            return out, None
+        if not mapping.distorted:  # one homography: crop -> image
+            m = mapping.homography @ to_table
+            m = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]]) @ m
+            out[y0:y1, x0:x1] = cv2.warpPerspective(
+                self.layer, m, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR, borderValue=0.0
+            )
+        else:  # each pixel's table point back into the crop
+            back = np.linalg.inv(to_table)[:2]
+            at = cv2.transform(_table_mm_of_pixels(mapping)[y0:y1, x0:x1], back)
+            out[y0:y1, x0:x1] = cv2.remap(
+                self.layer,
+                at,
+                None,
+                cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=0.0,
+            )
+        return out, (x0, y0, x1, y1)
+
+
 class CoherentFrames:
-    """``render(hands, t_s, rng, ...)`` as ``sample.render_frame`` does, reusing the
-    last full render of a single hand whose pose moved only rigidly and by little."""
+    """``render(hands, t_s, rng, ...)`` as ``sample.render_frame`` does, for a single hand
+    whose shape the last full render had: a small move (a tremor) warps that render's
+    blurred layer (its grid nearly the frame's: the closest match), a larger one (the
+    knob's turn) the shape's canvas."""
 
     def __init__(self, rig: Rig) -> None:
         self.rig = rig
-        self._kept: tuple[Subject, HandPose, HandGeometry, np.ndarray] | None = None
+        self._kept: tuple[Subject, HandPose, HandGeometry, np.ndarray | None] | None = None
         self._lit: tuple[int, int, int, int] | None = None  # the kept layer's lit box
+        self._canvases: OrderedDict[tuple[Subject, HandPose], HandCanvas] = OrderedDict()
+        self.drawn_box: tuple[int, int, int, int] | None = None  # where the last warp drew
         self.full = 0  # frames rendered in full
         self.warped = 0  # frames moved from the last full render
+        self.turned = 0  # frames warped from a shape's canvas
 
-    def _reusable(self, subject: Subject, pose: HandPose) -> bool:
+    def _same_shape(self, subject: Subject, pose: HandPose) -> bool:
         if self._kept is None:
             return False
         k_subject, k_pose, _, _ = self._kept
-        if k_subject is not subject or shape_of(k_pose) != shape_of(pose):
-            return False
-        (xa, ya, ta), (xb, yb, tb) = rigid(k_pose), rigid(pose)
+        return k_subject == subject and shape_of(k_pose) == shape_of(pose)
+
+    def _small_move(self, pose: HandPose) -> bool:
+        assert self._kept is not None
+        (xa, ya, ta), (xb, yb, tb) = rigid(self._kept[1]), rigid(pose)
         return np.hypot(xb - xa, yb - ya) <= MAX_SHIFT_MM and abs(tb - ta) <= MAX_TURN_DEG
 
+    def _canvas(self, subject: Subject, pose: HandPose) -> HandCanvas:
+        """The kept canvas of this hand's shape (drawn the first time it is asked for)."""
+        key = (subject, shape_of(pose))
+        canvas = self._canvases.get(key)
+        if canvas is not None:
+            self._canvases.move_to_end(key)
+            return canvas
+        canvas = self._canvases[key] = HandCanvas(subject, pose, self.rig.mapping)
+        while len(self._canvases) > KEPT_CANVASES:
+            self._canvases.popitem(last=False)
+        return canvas
+
     def _warp(self, layer: np.ndarray, a: HandPose, b: HandPose) -> np.ndarray:
-        """``layer`` (rendered for pose ``a``) as the camera sees the hand at ``b``: the
-        pixel motion of three points around the wrist (the mapping is smooth: affine
-        over a hand's reach)."""
+        """``layer`` (rendered for pose ``a``) as the camera sees the hand at ``b`` (a
+        small move): the pixel motion of three points around the wrist (the mapping is
+        smooth: affine over a hand's reach)."""
         move = motion(a, b)
         x, y, _ = rigid(a)
         src_mm = np.array([[x, y], [x + 80.0, y], [x, y + 80.0]])
@@ -118,6 +269,7 @@ class CoherentFrames:
         aff = cv2.getAffineTransform(src, dst)
         out = np.zeros_like(layer)
         if self._lit is None:  # nothing above the glass to move
+            self.drawn_box = None
             return out
         # only where the layer is lit, grown by the move (the rest stays dark): the
         # ROI's pixels from the whole layer, its edge replicated (an arm leaving it)
@@ -129,6 +281,7 @@ class CoherentFrames:
         out[y0:y1, x0:x1] = cv2.warpAffine(
             layer, aff, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
         )
+        self.drawn_box = (x0, y0, x1, y1)
         return out
 
     def layer_and_truth(
@@ -136,20 +289,26 @@ class CoherentFrames:
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """The grey levels the hands add (illumination 1) and the frame's ground truth."""
         mapping = self.rig.mapping
-        if len(hands) == 1 and self._reusable(*hands[0]):
+        if len(hands) == 1 and self._same_shape(*hands[0]):
             subject, pose = hands[0]
-            k_subject, k_pose, k_geo, k_blurred = self._kept
-            if k_blurred is None:  # the hand came to rest: its blurred skin, once
-                k_blurred = hand_layer(k_geo.pieces, mapping, "blurred")
-                self._kept, self._lit = (k_subject, k_pose, k_geo, k_blurred), lit_box(k_blurred)
-            geo = moved_geometry(k_geo, k_pose, pose)
-            layer = hand_layer(
-                geo.pieces, mapping, "sharp", over=self._warp(k_blurred, k_pose, pose)
-            )
-            self.warped += 1
+            k_subject, k_pose, k_geo, k_blurred = self._kept  # type: ignore[misc]
+            if self._small_move(pose):
+                if k_blurred is None:  # the hand came to rest: its blurred skin, once
+                    k_blurred = hand_layer(k_geo.pieces, mapping, "blurred")
+                    self._kept = (k_subject, k_pose, k_geo, k_blurred)
+                    self._lit = lit_box(k_blurred)
+                geo = moved_geometry(k_geo, k_pose, pose)
+                blurred = self._warp(k_blurred, k_pose, pose)
+                self.warped += 1
+            else:  # turned or moved further: the shape's canvas
+                canvas = self._canvas(subject, pose)
+                geo = moved_geometry(canvas.geo, canvas.pose, pose, keep=canvas.sharp)
+                blurred, self.drawn_box = canvas.warp(pose, mapping)
+                self.turned += 1
+            layer = hand_layer(geo.pieces, mapping, "sharp", over=blurred)
             return layer, frame_truth_of([geo], hands, mapping, label, t_s)
-        # a moving hand (or none, or two): rendered in one pass as the twin always was;
-        # its geometry kept, its blurred layer made only if the next frame can use it
+        # a new shape (or none, or two hands): rendered in one pass as the twin always
+        # was; its geometry kept, its blurred layer made only if a next frame can use it
         geos = [hand_pieces(s, p) for s, p in hands]
         self._kept = (*hands[0], geos[0], None) if len(hands) == 1 else None
         self.full += 1
@@ -174,65 +333,3 @@ class CoherentFrames:
             layer, self.rig, t_s, rng, step_gain=g, step_offset=o, noise=noise, light=light
         )
         return img, truth
-
-
-#: the contacts a vision finds in a frame against a background: [(x, y) px, ...]
-ContactsOf = Callable[[np.ndarray, np.ndarray], list]
-
-
-def held_hand_check(
-    gesture: str,
-    frames: int,
-    rig: Rig,
-    seed: int = 0,
-    center_mm: tuple | None = None,
-    contacts_of: ContactsOf | None = None,
-) -> dict[str, Any]:
-    """A held hand's tremor frames rendered both ways (``CoherentFrames`` and a full
-    render, the reference) with the same sensor noise: seconds per frame each way, the
-    grey-level error, the ground truth's largest difference and, given a vision
-    (``contacts_of``), the largest gap between the contacts it finds in each frame
-    (``bench twin-camera``, the tests)."""
-    rng = np.random.default_rng(seed)
-    subject = make_subject(f"s{seed % 5 + 1}")
-    take = plan_take(gesture, subject, rng, rig.mapping.table_mm)
-    if center_mm is not None:  # the palm's centre there (a hand near the glass's edge)
-        at = hand_pieces(subject, take_pose(take, 0.0)).center_mm
-        take = replace(take, wrist_mm=tuple(np.add(take.wrist_mm, np.subtract(center_mm, at))))
-    bg = render_background(rig, 0.0, np.random.default_rng(seed + 1))
-    coh = CoherentFrames(rig)
-    t_coh, t_full, err, truth_gap, contact_gap, counts_differ = [], [], [], 0.0, 0.0, 0
-    for k in range(frames):
-        hands = [(subject, take_pose(take, 0.0, rng))]
-        t0 = time.perf_counter()
-        a, ta = coh.render(hands, k / 60, np.random.default_rng(k), label=gesture)
-        t1 = time.perf_counter()
-        b, tb = render_frame(hands, rig, k / 60, np.random.default_rng(k), label=gesture)
-        t_coh.append(t1 - t0)
-        t_full.append(time.perf_counter() - t1)
-        err.append(np.abs(a.astype(np.int16) - b.astype(np.int16)))
-        pa, pb = np.array(ta["contacts_px"]), np.array(tb["contacts_px"])
-        truth_gap = max(truth_gap, float(np.abs(pa - pb).max()) if pa.size else 0.0)
-        if contacts_of is None:
-            continue
-        ca = np.array(contacts_of(a, bg), dtype=float).reshape(-1, 2)
-        cb = np.array(contacts_of(b, bg), dtype=float).reshape(-1, 2)
-        if len(ca) != len(cb):
-            counts_differ += 1
-        elif len(ca):  # each contact's nearest in the other frame
-            d = np.hypot(*(ca[:, None, :] - cb[None, :, :]).transpose(2, 0, 1))
-            contact_gap = max(contact_gap, float(d.min(axis=1).max()), float(d.min(axis=0).max()))
-    e = np.stack(err)
-    return {
-        "frames": frames,
-        "warped": coh.warped,
-        "s_coherent": t_coh,
-        "s_full": t_full,
-        "grey_error_mean": float(e.mean()),
-        "grey_error_max": int(e.max()),
-        "share_over_2_grey": float((e > 2).mean()),
-        "truth_gap_px": truth_gap,
-        "contact_gap_px": contact_gap if contacts_of is not None else None,
-        "contact_counts_differ": counts_differ if contacts_of is not None else None,
-        "lit_box": coh._lit,  # where the kept render's blurred skin lies (x0, y0, x1, y1)
-    }

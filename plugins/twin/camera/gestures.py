@@ -9,6 +9,7 @@ for dynamic gestures motion under way).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -212,7 +213,9 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
     return pose
 
 
+@functools.lru_cache(maxsize=256)
 def _tip(s: Subject, pose: HandPose, finger: str) -> tuple[float, float]:
+    """Where ``finger`` touches (or its tip); cached: a turning hand's pivot, every frame."""
     geo = hand_pieces(s, pose)
     for c in geo.contacts:
         if c["finger"] == finger:

@@ -167,6 +167,15 @@ def _composite(out, mask, val, items, sigma_px, scale) -> None:
 WARPABLE_SIGMA_PX = 1.0
 
 
+def band_sigma_px(h_mm: float, px_per_mm: float) -> float | None:
+    """The blur (Gaussian sigma, pixels) of skin at height ``h_mm`` as drawn: its band's
+    (None: too high to be seen)."""
+    b = _band_of(h_mm)
+    if b < 0:
+        return None
+    return blur_mm(0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])) * px_per_mm
+
+
 def _bands(pieces: list[Piece], mapping: TableMapping) -> list[tuple[float, list]]:
     """The visible pieces by height band, highest first: (blur sigma px, items)."""
     visible = [(p, _band_of(p.h_mm)) for p in pieces]
@@ -184,7 +193,7 @@ def _bands(pieces: list[Piece], mapping: TableMapping) -> list[tuple[float, list
     out = []
     for b in sorted(bands, reverse=True):  # highest band first, lower ones composite over
         items = sorted(bands[b], key=lambda it: -it[1])  # lower pieces paint last
-        out.append((blur_mm(0.5 * (BAND_EDGES_MM[b] + BAND_EDGES_MM[b + 1])) * ppm, items))
+        out.append((band_sigma_px(BAND_EDGES_MM[b], ppm), items))
     return out
 
 
