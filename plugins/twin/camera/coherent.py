@@ -95,6 +95,13 @@ def moved_geometry(
     return HandGeometry(pieces, contacts, geo.palm_contact, center, tips)
 
 
+def sharp_pieces(geo: HandGeometry, px_per_mm: float) -> list[int]:
+    """The numbers of ``geo``'s pieces drawn sharp (the skin touching the glass: drawn
+    anew each frame, the rest is warped)."""
+    sigmas = [band_sigma_px(p.h_mm, px_per_mm) for p in geo.pieces]
+    return [i for i, s in enumerate(sigmas) if s is not None and s < WARPABLE_SIGMA_PX]
+
+
 def lit_box(layer: np.ndarray) -> tuple[int, int, int, int] | None:
     """(x0, y0, x1, y1): the box of ``layer``'s non-zero pixels, None when all dark."""
     cols, rows = np.flatnonzero(layer.any(axis=0)), np.flatnonzero(layer.any(axis=1))
@@ -145,9 +152,8 @@ class HandCanvas:
         self.pose = shape_of(pose)
         self.geo = hand_pieces(subject, self.pose)
         ppm = mapping.px_per_mm()
+        self.sharp = sharp_pieces(self.geo, ppm)  # drawn anew each frame
         sigmas = [band_sigma_px(p.h_mm, ppm) for p in self.geo.pieces]
-        #: the pieces drawn anew each frame (the skin touching the glass)
-        self.sharp = [i for i, s in enumerate(sigmas) if s is not None and s < WARPABLE_SIGMA_PX]
         blurred = [s for s in sigmas if s is not None and s >= WARPABLE_SIGMA_PX]
         self.layer: np.ndarray | None = None
         self.canvas: CanvasMapping | None = None
@@ -226,6 +232,7 @@ class CoherentFrames:
     def __init__(self, rig: Rig) -> None:
         self.rig = rig
         self._kept: tuple[Subject, HandPose, HandGeometry, np.ndarray | None] | None = None
+        self._sharp: list[int] = []  # the kept render's sharp pieces
         self._lit: tuple[int, int, int, int] | None = None  # the kept layer's lit box
         self._canvases: OrderedDict[tuple[Subject, HandPose], HandCanvas] = OrderedDict()
         self.drawn_box: tuple[int, int, int, int] | None = None  # where the last warp drew
@@ -297,7 +304,8 @@ class CoherentFrames:
                     k_blurred = hand_layer(k_geo.pieces, mapping, "blurred")
                     self._kept = (k_subject, k_pose, k_geo, k_blurred)
                     self._lit = lit_box(k_blurred)
-                geo = moved_geometry(k_geo, k_pose, pose)
+                    self._sharp = sharp_pieces(k_geo, mapping.px_per_mm())
+                geo = moved_geometry(k_geo, k_pose, pose, keep=self._sharp)
                 blurred = self._warp(k_blurred, k_pose, pose)
                 self.warped += 1
             else:  # turned or moved further: the shape's canvas
