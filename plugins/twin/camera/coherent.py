@@ -35,7 +35,15 @@ import numpy as np
 
 from .geometry import TableMapping
 from .hand import HandGeometry, HandPose, Piece, Subject, hand_pieces
-from .render import LOW_RES, WARPABLE_SIGMA_PX, Rig, band_sigma_px, compose, hand_layer
+from .render import (
+    LOW_RES,
+    WARPABLE_SIGMA_PX,
+    Rig,
+    band_sigma_px,
+    compose,
+    hand_layer,
+    split_rows,
+)
 from .sample import STEP_GAIN, STEP_OFFSET, frame_truth_of
 
 #: the largest rigid move from the last full render its layer is warped for (a
@@ -85,7 +93,7 @@ def moved_geometry(
     polys = [c for p in src for c in (p.poly_mm, *p.holes)]  # moved at once
     pieces = []
     if polys:
-        at = iter(np.split(move(np.vstack(polys)), np.cumsum([len(c) for c in polys])[:-1]))
+        at = split_rows(move(np.vstack(polys)), [len(c) for c in polys])
         for p in src:
             outline = next(at)
             pieces.append(Piece(outline, p.h_mm, p.refl, tuple(next(at) for _ in p.holes)))

@@ -16,6 +16,7 @@ composited over the bands above it.
 from __future__ import annotations
 
 import functools
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import cv2
@@ -133,12 +134,23 @@ def _band_roi(polys: np.ndarray, pad: float, shape: tuple[int, int]) -> tuple[in
     return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
 
+def split_rows(a: np.ndarray, lens: list[int]) -> Iterator[np.ndarray]:
+    """``a``'s rows in runs of ``lens`` (``np.split`` without its per-piece overhead)."""
+    end = 0
+    for n in lens:
+        yield a[end : end + n]
+        end += n
+
+
 def _composite(out, mask, val, items, sigma_px, scale) -> None:
     """Paint one band's pieces (``items``: [outline, *holes] px, height, reflectance) at ``1/scale``
     resolution, blur, and composite over ``out`` (all three arrays at that resolution)."""
-    polys = [[(c + 0.5) / scale - 0.5 for c in cs] for cs, _, _ in items]
+    contours = [c for cs, _, _ in items for c in cs]  # every piece's, converted at once
+    lens = [len(c) for c in contours]
+    flat = (np.vstack(contours) + 0.5) / scale - 0.5
+    outline = np.repeat([i == 0 for cs, _, _ in items for i in range(len(cs))], lens)
     sigma = sigma_px / scale
-    roi = _band_roi(np.vstack([cs[0] for cs in polys]), 3 * sigma + 2, out.shape)
+    roi = _band_roi(flat[outline], 3 * sigma + 2, out.shape)
     if roi is None:
         return
     x0, y0, x1, y1 = roi
@@ -146,9 +158,10 @@ def _composite(out, mask, val, items, sigma_px, scale) -> None:
     v = val[y0:y1, x0:x1]
     m[:] = 0
     v[:] = 0
-    off = np.array([x0, y0])
-    for cs, (_, hp, refl) in zip(polys, items, strict=True):
-        pts = [np.round((c - off) * 16).astype(np.int32) for c in cs]  # outline, then holes
+    fixed = np.round((flat - np.array([x0, y0])) * 16).astype(np.int32)  # 1/16 px
+    at = split_rows(fixed, lens)
+    for cs, hp, refl in items:
+        pts = [next(at) for _ in cs]  # outline, then holes
         if len(pts) > 1:  # a hole shows what lies above it: clear it first
             cv2.fillPoly(m, pts[1:], 0.0, lineType=cv2.LINE_AA, shift=4)
         cv2.fillPoly(m, pts, 1.0, lineType=cv2.LINE_AA, shift=4)
@@ -185,7 +198,7 @@ def _bands(pieces: list[Piece], mapping: TableMapping) -> list[tuple[float, list
     ppm = mapping.px_per_mm()
     contours = [c for p, _ in visible for c in (p.poly_mm, *p.holes)]
     sizes = [len(c) for c in contours]
-    allpx = iter(np.split(mapping.mm_to_px(np.vstack(contours)), np.cumsum(sizes)[:-1]))
+    allpx = split_rows(mapping.mm_to_px(np.vstack(contours)), sizes)
     bands: dict[int, list[tuple[list[np.ndarray], float, float]]] = {}
     for p, b in visible:
         polys = [next(allpx) for _ in range(1 + len(p.holes))]
