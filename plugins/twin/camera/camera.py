@@ -4,8 +4,9 @@ Scripts (``scripts``) say which hands are where at frame ``k``: the empty table,
 in turn, touches of given points (touch calibration), held hands.
 ``TwinCamera.set_target(pos_mm)`` switches to touching one projected target on demand,
 like an operator reacting to the projector; ``set_targets([...])`` touches several at
-once (one hand each), ``place(gesture, center_mm)`` holds a static hand. A held hand's
-frames move its last full render (``coherent``).
+once (one hand each), ``place(gesture, center_mm)`` holds a static hand. A hand that
+keeps its shape is moved, not built again (``coherent``): a held hand's tremor moves its
+last full render, a turning hand (the knob demo's) its shape's canvas.
 
 Touches land with a realistic error: the contact pad sits a little behind where the
 person aims (``bias_mm`` back along the finger) plus a random scatter (``error_mm``
@@ -104,8 +105,8 @@ class TwinCamera:
         self._stride = 1  # every how many frames of the script's time one is rendered
 
     def _coherent(self) -> CoherentFrames:
-        """The stream's renderer: a held hand's tremor moves its last full render
-        (``coherent``), made anew when the rig changes."""
+        """The stream's renderer: a hand that keeps its shape is moved (``coherent``);
+        made anew when the rig changes."""
         kept = self.__dict__.get("_frames_from")
         if kept is None or kept.rig is not self.rig:
             kept = self._frames_from = CoherentFrames(self.rig)

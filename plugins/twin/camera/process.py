@@ -44,6 +44,10 @@ MSG = struct.Struct("<iqdq")
 #: projector and the tests (nice 0) but not real-time, so a busy machine cannot be starved
 #: by it; the frame loop and the outputs kernel stay above it (FIFO).
 RENDER_NICE = -5
+#: OpenCV's worker threads in the renderer: one. A frame's warps and blurs are too small
+#: to gain from a second core, and waking (and spinning) the pool every frame cost a
+#: quarter of the renderer's CPU on a 2-core machine the demo, kernel and console share.
+RENDER_CV_THREADS = 1
 #: One command's length (a pickled ``(method name, args)`` follows).
 CMD = struct.Struct("<I")
 #: The commands the child applies to its twin (its methods of those names).
@@ -79,6 +83,9 @@ def _child() -> None:
         buf += chunk
         pending = _commands(buf)
     cam = pickle.loads(pending.pop(0))
+    import cv2  # lazy: the renderer's (the twin loaded it); its pool, in this process only
+
+    cv2.setNumThreads(RENDER_CV_THREADS)
     if cam.realtime:  # it stands for a camera, whose frames do not wait for the CPU
         with contextlib.suppress(OSError):  # (where raising the priority is allowed)
             os.setpriority(os.PRIO_PROCESS, 0, RENDER_NICE)
