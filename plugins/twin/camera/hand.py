@@ -299,6 +299,20 @@ def _clip_strip(poly: np.ndarray, v0: float, v1: float) -> np.ndarray:
     return np.asarray(pts, dtype=float).reshape(-1, 2)
 
 
+@functools.lru_cache(maxsize=256)
+def _palm_strips(palm_uv: tuple, n_strip: int) -> tuple[tuple[float, float, np.ndarray], ...]:
+    """The palm outline cut in ``n_strip`` strips along v: (v0, v1, outline); a subject's
+    own, cached (the arrays are read-only)."""
+    palm = np.asarray(palm_uv, dtype=float)
+    edges = np.linspace(palm[:, 1].min() - 1, palm[:, 1].max() + 1, n_strip + 1)
+    out = []
+    for v0, v1 in zip(edges[:-1], edges[1:], strict=True):
+        strip = _clip_strip(palm, v0, v1)
+        strip.setflags(write=False)
+        out.append((v0, v1, strip))
+    return tuple(out)
+
+
 @dataclass
 class HandGeometry:
     pieces: list[Piece]
@@ -329,19 +343,18 @@ def hand_pieces(subject: Subject, pose: HandPose) -> HandGeometry:
     n_arm = 6
     seg = 45.0
     elev = np.tan(np.radians(pose.forearm_elev_deg))
-    for i in range(n_arm):
-        v0, v1 = -i * seg + 12.0, -(i + 1) * seg + 12.0
+    ends = [[0.0, -i * seg + 12.0] for i in range(n_arm + 1)]  # wrist end first
+    r0 = np.array([subject.width_mm * (0.36 + 0.02 * i) for i in range(n_arm)])
+    xy = to_table(ends)
+    for i, poly in enumerate(_capsules(xy[:-1], xy[1:], r0, r0 + 1.5)):
+        v0, v1 = ends[i][1], ends[i + 1][1]
         h = h_w + 6.0 + elev * (-(v0 + v1) / 2)
-        r0 = subject.width_mm * (0.36 + 0.02 * i)
-        poly = _capsule(to_table([[0, v0]])[0], to_table([[0, v1]])[0], r0, r0 + 1.5)
         pieces.append(Piece(poly, max(h, 0.0), 0.85))
 
     # palm: strips along v with the interpolated height
     palm = np.asarray(subject.palm_uv, dtype=float)
     n_strip = 1 if abs(h_w - h_m) < 0.5 else 4
-    edges = np.linspace(palm[:, 1].min() - 1, palm[:, 1].max() + 1, n_strip + 1)
-    for v0, v1 in zip(edges[:-1], edges[1:], strict=True):
-        strip = _clip_strip(palm, v0, v1)
+    for v0, v1, strip in _palm_strips(subject.palm_uv, n_strip):
         if len(strip) >= 3:
             h = float(_palm_height(np.array([(v0 + v1) / 2]), palm_len, (h_w, h_m))[0])
             h = 0.0 if h <= PAD_MM else h
