@@ -4,8 +4,9 @@ canvas. Checked against full renders of the same poses with the same sensor nois
 reference): every static gesture at the glass's middle and near its edge (the forearm
 leaves the image; a palm itself cut by the image's edge leaves contact fragments of a
 few pixels whose centres differ by pixels: not asserted), the knob demo's hand over a
-turn, its gap and the next turn, with and without a bent lens; and a hand that changed
-shape or came with a second hand is rendered in full."""
+turn, its gap and the next turn, with and without a bent lens, a hand dragged or wiped
+across the glass; and a hand that changed shape or came with a second hand is rendered
+in full."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from plugins.twin.camera.coherent import MAX_SHIFT_MM, MAX_TURN_DEG, CoherentFra
 from plugins.twin.camera.coherent_check import (
     KNOB_GAP_FRAMES,
     KNOB_TURN_FRAMES,
+    frames_check,
     held_hand_check,
     knob_hand_check,
 )
@@ -26,6 +28,7 @@ from plugins.twin.camera.geometry import TableMapping
 from plugins.twin.camera.gestures import STATIC, plan_take, take_pose
 from plugins.twin.camera.hand import make_subject
 from plugins.twin.camera.render import Rig
+from plugins.twin.camera.sample import render_background
 
 
 def _contacts(image, background):
@@ -74,6 +77,23 @@ def test_the_knob_demo_s_turning_hand_warped_from_its_canvas_matches_full_render
     assert got["contact_gap_px"] <= CONTACT_GAP_PX, got["contact_gap_px"]
     assert got["grey_error_mean"] < 0.2 and got["share_over_2_grey"] < 0.01, got
     assert got["layer_error_rms"] < LAYER_RMS, got["layer_error_rms"]
+
+
+@pytest.mark.parametrize("gesture", ["drag", "wipe"])
+def test_a_hand_sliding_across_the_glass_warped_from_its_canvas_matches_full_renders(gesture):
+    rig = Rig()
+    rng = np.random.default_rng(0)
+    subject = make_subject("s1")
+    take = plan_take(gesture, subject, rng, rig.mapping.table_mm, duration_s=1.0)
+    bg = render_background(rig, 0.0, np.random.default_rng(1))
+    frames = ((k, [(subject, take_pose(take, k / 60, rng))], gesture) for k in range(30))
+    got = frames_check(frames, rig, bg, _contacts)
+    # the first in full, then moved: from its canvas once it slides millimetres a frame
+    assert got["warped"] + got["turned"] == 29 and got["turned"] >= 25, got["turned"]
+    assert got["truth_gap_px"] < 1e-9
+    assert got["contact_counts_differ"] == 0
+    assert got["contact_gap_px"] <= CONTACT_GAP_PX, got["contact_gap_px"]
+    assert got["grey_error_mean"] < 0.2 and got["share_over_2_grey"] < 0.01, got
 
 
 def _poses():

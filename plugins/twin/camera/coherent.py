@@ -185,7 +185,7 @@ class HandCanvas:
         out = np.zeros((h, w), np.float32)
         if self.layer is None or self.canvas is None:
             return out, None
-        bx, by, bx1, by1 = self._box
+        bx, by = self._box[:2]
         # the kept crop's pixels -> hand frame -> table mm
         to_table = (
             _placement(pose)
