@@ -559,9 +559,14 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         box = self.query_one("#camera-target", Input)
         if event.key == "escape" and box.has_focus:
             event.stop()
-            self._typed = None  # Esc: unchanged, the next U shows the target in use
-            box.display = False
+            refused, self._typed = self._typed, None  # Esc: unchanged, the next U shows
+            box.display = False  # the target in use
             self.focus()
+            name = self._output() if refused is not None else None
+            if name is not None:  # the refusal was of the typed one: not true any more
+                on, where = self.service.sink_state(name)
+                state = "on" if on else "off"
+                self.say(f"{name} target kept: {where} ({state}); the one typed dropped")
         elif event.key == "escape" and self.calibration is not None:
             event.stop()
             self.action_cancel()  # as x: a user leaving the wizard with Esc cancels it
