@@ -33,6 +33,12 @@ REPLAY_ACTIONS = {"plan_step", "replay_live", "gate_events"}
 #: the gate events listed at most (the first ones; the count says how many there are)
 MAX_EVENTS_SHOWN = 40
 LIVE_ONLY = {"freeze", "last_plan", "zoom"}
+#: a recording's keys pressed on the live view: what they would do, said with ``o``
+RECORDING_ONLY = {
+    "e": "e lists a recording's gate events",
+    "left_square_bracket": "[ ] step through a recording's plans",
+    "right_square_bracket": "[ ] step through a recording's plans",
+}
 
 
 def plan_summary(line: dict, t0_s: float | None) -> str:
@@ -156,6 +162,7 @@ class ScopeRecordingMixin:
     #: what ``o`` said (a refusal, "opening ..."): shown instead of the live header until
     #: the operator's next ``o`` or Esc, so that the live tick does not wipe it at once
     said_head: str | None = None
+    _noted = False  # ``said_head`` says what a recording's key does (``RECORDING_ONLY``)
 
     def on_mount(self) -> None:
         box = recording_field("scope-recording")  # labelled: what to type
@@ -198,6 +205,17 @@ class ScopeRecordingMixin:
             self.said_head = None
             box.display = False
             self.focus()
+        elif box.has_focus:
+            return
+        elif self._noted:  # the next key takes away what a recording's key said
+            self._noted, self.said_head = False, None
+            self._redraw()
+        if self.replay is None and not box.has_focus and event.key in RECORDING_ONLY:
+            # not silence: the key is a recording's, and this is the live view
+            event.stop()
+            self._say(f"{RECORDING_ONLY[event.key]}: o opens one (a .h5 file's path)")
+            self._noted = True
+            self._redraw()  # after the view's mode: it is still the live view
 
     def _say(self, text: str) -> None:
         self.said_head = text
