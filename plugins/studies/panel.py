@@ -647,6 +647,11 @@ class StudiesPane(Vertical):
     def on_mount(self) -> None:
         panel_fit.mounted(self)  # its dropdown as wide as the names, its status
 
+    def set_visible(self, shown: bool) -> None:
+        """Shown again: what the folder holds now of the choice (``shown_again``)."""
+        if shown:
+            panel_choice.shown_again(self)
+
     def on_resize(self) -> None:
         panel_fit.fit_protocols(self)  # the first row laid out again at the new width
 
