@@ -70,6 +70,8 @@ def found(rows) -> str:
     return told + ("; the fix column says what to do" if bad else "")
 
 
+#: a device's states that ask nothing of the operator: their rows may take one line
+WORKS = ("ok", "simulated", "not run")
 #: a relay board's probe states in which enter opens nothing (it says why instead)
 UNUSABLE = ("missing", "error")
 
@@ -315,19 +317,37 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         why_w = max(NOTE_MIN, left - fix_w - 2)
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
-        for s in rows:
+        # wrapped here (a row's height known as it is added: the list below it is
+        # scrolled into view at once), a number with its unit on one line, a word too
+        # long for its column ending in "…"; when wrapped rows would push the card in use
+        # out of view on entry, a row that works takes one line (a cut cell: in the log,
+        # Enter says it), a problem's row stays whole (what to do)
+        cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
+        heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
+        if sum(heights) > self._doctor_room():
+            for i, s in enumerate(rows):
+                if s.state in WORKS:
+                    cells[i] = (_cell(s.why, s.kind, why_w), _cell(s.fix, s.kind, fix_w))
+                    heights[i] = 1
+        for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
             )
-            # wrapped here (a row's height known as it is added: the list below it is
-            # scrolled into view at once), a number with its unit on one line, a word
-            # too long for its column ending in "…"
-            why, fix = fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)
-            lines = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
             table.add_row(
                 Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
             )
         self._keep_focused_in_view()  # the rows above a list grew
+
+    def _doctor_room(self) -> int:
+        """The lines the device table's rows may take for the screen to show, from its
+        top, the table's header and the sound-card list down to the card in use (its
+        heading, header, the rows up to it, the blank line before the heading)."""
+        top = self.query_one("#devices-top").outer_size.height
+        cards = list(self.audio_rows.values())
+        in_use = self._in_use()[:2]
+        upto = cards.index(in_use) + 1 if in_use in cards else max(len(cards), 2)
+        height = self.size.height or self.app.size.height - 5
+        return height - top - 1 - (3 + upto)
 
     @on(DataTable.RowSelected, "#device-table")
     def _about_device(self, event: DataTable.RowSelected) -> None:
