@@ -164,6 +164,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self.selftest_done: tuple[bool, str, float] | None = None
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
+        self._doctor_whole = True  # the device table's rows shown whole (``_show``)
 
     def compose(self) -> ComposeResult:
         # the profile line and under it the screen's status line (what a pick or a test
@@ -320,11 +321,13 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # wrapped here (a row's height known as it is added: the list below it is
         # scrolled into view at once), a number with its unit on one line, a word too
         # long for its column ending in "…"; when wrapped rows would push the card in use
-        # out of view on entry, a row that works takes one line (a cut cell: in the log,
-        # Enter says it), a problem's row stays whole (what to do)
+        # out of view (on entry: the card list has the focus), a row that works takes one
+        # line (a cut cell: in the log, Enter says it), a problem's row stays whole (what
+        # to do); the table focused (Tab) shows every row whole
         cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
         heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
-        if sum(heights) > self._doctor_room():
+        self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
+        if not self._doctor_whole:
             for i, s in enumerate(rows):
                 if s.state in WORKS:
                     cells[i] = (_cell(s.why, s.kind, why_w), _cell(s.fix, s.kind, fix_w))
@@ -622,7 +625,11 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self.call_after_refresh(self.call_after_refresh, self._focused_in_view)
 
     def on_descendant_focus(self, event) -> None:
-        """A list taking the focus (the screen's first, Tab) is scrolled into view."""
+        """A list taking the focus (the screen's first, Tab) is scrolled into view; the
+        device table laid out again when it takes or leaves the focus (``_show``)."""
+        doctor = self.query_one("#device-table", DataTable)
+        if self.doctor_rows and doctor.has_focus != self._doctor_whole:
+            self._show(self.doctor_rows[:-1])
         self._keep_focused_in_view()
 
     def _focused_in_view(self) -> None:
