@@ -67,13 +67,26 @@ def selftest_about(
     return about, total_s, est
 
 
-def selftest_row(done: tuple[bool, str, float] | None) -> DeviceStatus:
-    """The Devices doctor's self-test row: the last run here (healthy, line, seconds),
-    or where to run it (``haptable doctor`` runs its quick part; here s runs it)."""
+def selftest_row(
+    done: tuple[bool, str, float] | None, last: dict[str, dict[str, str]] | None = None
+) -> DeviceStatus:
+    """The Devices doctor's self-test row, saying what ran: the full one run here
+    (``done``: healthy, line, seconds), else the last kept (``last``:
+    ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
+    else where to run it (``haptable doctor`` runs its quick part; here s the full one)."""
+    last = last or {}
+    full, quick = last.get("full"), last.get("quick")
+    if done is None and full is not None:  # a full one kept from before
+        why = f"{full['line'].removeprefix('self-test: ')} ({full['by']}, {full['time']})"
+        return DeviceStatus("selftest", "full", full["state"], why, "press s to run it again")
     if done is None:
-        return DeviceStatus(
-            "selftest", "full", "not run", "plays a chirp on every relay path", "press s"
-        )
+        plays = "the full one not run from the console: it plays a chirp on every relay path"
+        if quick is None:
+            why = "not run from the console: it plays a chirp on every relay path"
+            return DeviceStatus("selftest", "full", "not run", why, "press s")
+        said = quick["line"].removeprefix("skipped: ")
+        why = f"quick self-test {quick['state']} ({quick['by']}, {quick['time']}: {said}); {plays}"
+        return DeviceStatus("selftest", "quick", quick["state"], why, "press s (full)")
     ok, line, took_s = done
     why = line.removeprefix("self-test: ")
     return DeviceStatus("selftest", "full", "ok" if ok else "error", why, "" if ok else "see log")

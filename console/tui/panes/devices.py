@@ -21,6 +21,7 @@ from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.selftest_last import note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
@@ -305,7 +306,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             return
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
-        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done)]
+        last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
+        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done, last)]
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
@@ -564,6 +566,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         t0 = time.monotonic()
         from_thread(self.app, self._selftest_ticks, t0, about, total_s)
         ok, line = run_selftest(prof, pm)
+        if ok is not None:  # it ran: kept for the row after a restart
+            note_last(prof.name, "full", "ok" if ok else "error", line, "the console's s")
         took_s = 0.0 if est and est[2] else time.monotonic() - t0  # a map run: no guide
         from_thread(self.app, self._selftest_ended, ok, line, took_s)
 
