@@ -17,6 +17,7 @@ from typing import Any
 
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.core.types import DeviceStatus
+from console.tui.time_left import left_words
 
 NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
 
@@ -65,6 +66,28 @@ def selftest_about(
         about += f", the last run took {last_s:.0f} s"
         total_s = max(total_s, last_s)
     return about, total_s, est
+
+
+def selftest_progress(gone_s: float, total_s: float, est: tuple[float, int, bool] | None) -> str:
+    """The line while the self-test runs, as other long work says it: what it is doing
+    (the twin's map first, then the chirps and the comparison), its seconds so far of
+    those expected and the time left (``selftest_about``'s ``total_s``, ``est``), or
+    that it takes longer than expected, or that its time is unknown."""
+    if est is not None and est[2] and gone_s < TWIN_MAP_S:
+        doing = "measuring the twin's vibration map first"
+    elif est is not None:
+        doing = f"chirping {est[1]} relay paths and comparing what they read"
+    else:
+        doing = "chirping every relay path and comparing what they read"
+    if total_s <= 0:
+        return f"self-test: {doing}; {gone_s:.0f} s so far (its time is unknown)"
+    if gone_s < total_s:
+        left = left_words(total_s - gone_s)
+        return f"self-test: {doing}; {int(gone_s)} s of about {total_s:.0f} s, {left}"
+    return (
+        f"self-test: {doing}; {gone_s:.0f} s, longer than the {total_s:.0f} s expected: "
+        "finishing ..."
+    )
 
 
 def selftest_row(

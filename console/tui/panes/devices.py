@@ -30,7 +30,12 @@ from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
 from console.tui.said import status_said
-from console.tui.selftest_action import run_selftest, selftest_about, selftest_row
+from console.tui.selftest_action import (
+    run_selftest,
+    selftest_about,
+    selftest_progress,
+    selftest_row,
+)
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
 from console.tui.text import LiteralTable
@@ -564,20 +569,19 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         about, total_s, est = selftest_about(prof, pm, last_s)
         self._say(f"self-test ({about}): starting ...")
         t0 = time.monotonic()
-        from_thread(self.app, self._selftest_ticks, t0, about, total_s)
+        from_thread(self.app, self._selftest_ticks, t0, total_s, est)
         ok, line = run_selftest(prof, pm)
         if ok is not None:  # it ran: kept for the row after a restart
             note_last(prof.name, "full", "ok" if ok else "error", line, "the console's s")
         took_s = 0.0 if est and est[2] else time.monotonic() - t0  # a map run: no guide
         from_thread(self.app, self._selftest_ended, ok, line, took_s)
 
-    def _selftest_ticks(self, t0: float, about: str, total_s: float) -> None:
-        """While the self-test runs: the line says its seconds so far of the estimate."""
+    def _selftest_ticks(self, t0: float, total_s: float, est) -> None:
+        """While the self-test runs: the line says what it does and the time left
+        (``selftest_progress``)."""
 
         def tick() -> None:
-            gone_s = time.monotonic() - t0
-            done = f" ({gone_s / total_s:.0%})" if 0 < gone_s < total_s else ""
-            self._show_result(f"self-test ({about}): {gone_s:.0f} s so far{done} ...")
+            self._show_result(selftest_progress(time.monotonic() - t0, total_s, est))
 
         self._selftest_timer = self.set_interval(0.5, tick)
 
