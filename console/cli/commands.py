@@ -21,6 +21,7 @@ from console.core.suggest import suggestion
 from console.runtime.buffer_doctor import describe as describe_buffer
 from console.runtime.buffer_doctor import measure as measure_buffer
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.selftest_last import note_last
 from console.safety import Limits, check_plan
 
 
@@ -129,7 +130,8 @@ def _buffer_part(args, ctx) -> dict | None:
 
 
 def _selftest_part(args, ctx) -> tuple[int, str]:
-    """``haptable selftest --doctor``'s exit status and output (0, "" without one)."""
+    """``haptable selftest --doctor``'s exit status and output (0, "" without one); its
+    outcome kept for the console's Devices row (``console.runtime.selftest_last``)."""
     cmd = ctx.pm.commands.get("selftest")
     if cmd is None:
         return 0, ""
@@ -137,10 +139,17 @@ def _selftest_part(args, ctx) -> tuple[int, str]:
     cmd.configure(p)
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        code = int(
-            cmd.run(p.parse_args(["--doctor"] + (["--json"] if args.json else [])), ctx) or 0
-        )
-    return code, buf.getvalue()
+        code = int(cmd.run(p.parse_args(["--doctor", "--json"]), ctx) or 0)
+    said = buf.getvalue()
+    try:
+        part = json.loads(said)
+        state, lines = str(part["state"]), [str(x) for x in part["lines"]]
+    except (ValueError, KeyError, TypeError):
+        return code, said  # not the report we know: as it printed it
+    note_last(ctx.profile.name, "quick", state, "; ".join(lines), "haptable doctor")
+    if args.json:
+        return code, said
+    return code, "".join(f"  {'selftest':<10} {'quick':<12} {state:<9} {ln}\n" for ln in lines)
 
 
 # ---------------------------------------------------------------------- play

@@ -528,7 +528,8 @@ class SafetyGate:
             states = tuple(bool(c) for c in board.states())
             with self._lock:
                 s.relays = states
-            self._event("switch", f"relays closed: {sorted(closed) or 'none'}")
+            numbers = ",".join(str(c) for c in sorted(closed)) or "none"
+            self._event("switch", f"relays closed: {numbers}")
         except Exception as exc:
             with self._lock:
                 s.switching = False
@@ -554,8 +555,8 @@ class SafetyGate:
             with self._lock:
                 was, s.relays = s.relays, states
             if was != states:  # a relay switch like any other: an event on every driver
-                closed = sorted(i + 1 for i, c in enumerate(states) if c)
-                self._event("switch", f"relays opened by the e-stop; closed: {closed or 'none'}")
+                closed = ",".join(str(i + 1) for i, c in enumerate(states) if c) or "none"
+                self._event("switch", f"relays opened by the e-stop; closed: {closed}")
         except Exception as exc:
             self._event("fault", f"relay board state unreadable: {exc!r}")
 

@@ -438,6 +438,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         """What the outputs show changed (``console.tui.live``): the safety bars and the
         screen shown are redrawn; nothing else runs while the table is idle."""
         self.live.now = (message.status, message.log)
+        self.live.latch = message.latch
         if not self.screen_stack:  # closing
             return
         for bar in list(self.live.bars):
@@ -447,7 +448,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
     def show_bar(self, bar: SafetyBar) -> None:
         """``bar`` with the output state as last read (it draws only what changed)."""
         status, _log = self.live.now
-        bar.show(status, "" if status is not None else self.session.outputs_error)
+        error = "" if status is not None else self.session.outputs_error
+        bar.show(status, error, self.live.latch)
 
     def _pane_show_state(self) -> None:
         """The shown pane's ``show_state(status, log)`` (while the outputs are open)."""

@@ -39,8 +39,9 @@ HELP_TEXT = (
     "The view: Sixel or Kitty graphics where the terminal has them, else half-block\n"
     "(its title says which, and the grey levels shown black and white: the frame's\n"
     'levels are spread over the display\'s). To choose: [console] image = "halfblock",\n'
-    '"sixel" or "kitty" in the profile\'s overrides file (its path: Devices, F1), then\n'
-    "open the console again."
+    '"sixel", "kitty" or "auto" (ask the terminal: the default) in the profile\'s\n'
+    "overrides file (its path: Devices, F1), then open the console again; or open it\n"
+    "again with haptable console --image halfblock (or sixel, kitty, auto) for once."
 )
 # in the order of importance: the footer shows as many as fit (whole: at 80 columns
 # up to k), the line under the view the rest (``KEYS_LINE``), ? lists them all

@@ -20,7 +20,8 @@ from typing import Any, Protocol, runtime_checkable
 from textual.message import Message
 
 from console.core.errors import SafetyRefusal
-from console.kernel.tables import latched_elsewhere
+from console.kernel.shell import reset_command
+from console.kernel.tables import latched_elsewhere, read_latch, table_for
 
 log = logging.getLogger(__name__)
 
@@ -71,12 +72,34 @@ def switches(status: dict | None) -> Any:
 
 class OutputsChanged(Message, bubble=False):
     """The output state a screen shows changed: ``status`` (None: not open) and the
-    relay ``log`` (None: not read, or real hardware)."""
+    relay ``log`` (None: not read, or real hardware); ``latch``: with no outputs open
+    here, the table's e-stop (``own_latch``), else None."""
 
-    def __init__(self, status: dict | None, log: Any) -> None:
+    def __init__(self, status: dict | None, log: Any, latch: dict | None = None) -> None:
         super().__init__()
         self.status = status
         self.log = log
+        self.latch = latch
+
+
+def own_latch(profile_path: str, console_elsewhere: bool) -> dict | None:
+    """The e-stop latched on the table of ``profile_path`` while no outputs are open
+    here (a second console of the profile, outputs lost or failed): ``{"reason",
+    "reset", "short"}``, ``reset`` saying where an operator resets it (in the console
+    holding the outputs when ``console_elsewhere``; ``short``: in fewer words); None when
+    not latched. With outputs open their gate says the e-stop; this console cannot
+    reset it."""
+    table = table_for(profile_path)
+    rec = read_latch(table)
+    if rec is None:
+        return None
+    command = reset_command(table, None)
+    if console_elsewhere:
+        where = f"reset: ctrl+r in the console holding the outputs, or `{command}`"
+        short = "reset in the console holding the outputs"
+    else:
+        where = short = f"reset: `{command}` at a terminal"
+    return {"reason": str(rec.get("reason") or "e-stop"), "reset": where, "short": short}
 
 
 class OutputsWatch:
@@ -96,6 +119,8 @@ class OutputsWatch:
         self._force = False  # the next read is posted even if nothing changed
         self._others: list[str] = []  # the other tables latched (``latched_elsewhere``)
         self._others_t = -1e9  # when they were last read
+        self.latch: dict | None = None  # no outputs here: the table's e-stop (``own_latch``)
+        self._latch_t = -1e9  # when it was last read
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -115,6 +140,7 @@ class OutputsWatch:
         even if what shows is the same (a screen needs it fresh after a request)."""
         self._force = self._force or force
         self._others_t = -1e9  # an e-stop or a reset: the other tables' latches too
+        self._latch_t = -1e9  # and this table's, while no outputs are open here
         self._wake.set()
 
     def _run(self) -> None:
@@ -130,7 +156,10 @@ class OutputsWatch:
         status = self._read()
         if status is not None:  # the other tables' latches, for the bar
             status = {**status, "latched_elsewhere": self._latched_elsewhere(force)}
-        key = status_key(status, self.session.outputs_error or "")
+            self.latch = None
+        else:  # no gate here to ask: the table's latch says whether it is e-stopped
+            self._read_own_latch(force)
+        key = status_key(status, self.session.outputs_error or "") + json.dumps(self.latch)
         self.status = status
         if key == self._key and not force:
             return False
@@ -140,7 +169,7 @@ class OutputsWatch:
         self._key = key
         self.changes += 1
         try:
-            self.target.post_message(OutputsChanged(status, self.log))
+            self.target.post_message(OutputsChanged(status, self.log, self.latch))
         except Exception:  # noqa: BLE001 - the app is closing: nobody to tell
             return False
         return True
@@ -156,6 +185,17 @@ class OutputsWatch:
         except Exception:  # noqa: BLE001 - logged; the watch goes on
             log.exception("reading the outputs' status")
             return None
+
+    def _read_own_latch(self, now: bool) -> None:
+        """``latch`` read again every ``OTHERS_S`` (at once when poked: an e-stop here)."""
+        t = time.monotonic()
+        if now or t - self._latch_t >= OTHERS_S:
+            self._latch_t = t
+            try:
+                s = self.session
+                self.latch = own_latch(str(s.profile.path), s.console_elsewhere)
+            except Exception:  # noqa: BLE001 - logged; the bar shows what it knew
+                log.debug("reading the table's latch", exc_info=True)
 
     def _latched_elsewhere(self, now: bool) -> list[str]:
         """The other shared tables latched (read every ``OTHERS_S``, at once when poked
@@ -186,6 +226,7 @@ class LiveOutputs:
     def __init__(self, session: Any, target: Any) -> None:
         self.watch = OutputsWatch(session, target)
         self.now: tuple[dict | None, Any] = (None, None)
+        self.latch: dict | None = None  # no outputs here: the table's e-stop (``own_latch``)
         self.bars: set[Any] = set()
         self.session = session
 

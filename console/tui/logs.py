@@ -27,6 +27,7 @@ from textual.screen import ModalScreen
 from textual.widgets import RichLog, Static
 
 from console.files import paths
+from console.tui.narrow import ConsoleFooter
 from console.tui.safety_bar import SafetyBar
 from console.tui.util import from_thread
 
@@ -142,6 +143,7 @@ class LogScreen(ModalScreen):
     }
     LogScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
     LogScreen > Static { width: 100%; height: auto; background: $panel; }
+    LogScreen > #log-title { height: 1; background: $panel-darken-1; text-style: bold; }
     """
 
     def __init__(self, lines: list[str]) -> None:
@@ -149,6 +151,9 @@ class LogScreen(ModalScreen):
         self.lines = lines
 
     def compose(self) -> ComposeResult:
+        # the title row, as every screen has one: a notification shows over it (docked
+        # at the top, ``console.tcss``), never over the log's key and file below it
+        yield Static(" HapTable log", id="log-title", markup=False)
         # the key first; a long path wraps rather than cutting the words after it
         yield Static(f" escape closes · the log, also in {log_path()}", markup=False)
         # long lines wrap (a driver's message is read whole, no sideways scrolling);
@@ -156,6 +161,7 @@ class LogScreen(ModalScreen):
         # width (RichLog's default of 78 columns cut 2 at each wrap at 80 columns)
         yield ReflowLog(wrap=True, markup=False, highlight=False, auto_scroll=True, min_width=1)
         yield SafetyBar()  # the output state stays in view (the app keeps it current)
+        yield ConsoleFooter()  # its keys and E-STOP, as on every screen
 
     def on_mount(self) -> None:
         log = self.query_one(ReflowLog)

@@ -113,6 +113,20 @@ def still_latched(out) -> str:
     return f"; still e-stopped: table {each}: ctrl+r in its console, or that command at a terminal"
 
 
+def latched_here(latch: dict, error: str) -> list[str]:
+    """The bar's variants, longest first, for a table e-stopped while this console holds
+    no outputs (``live.own_latch``: its reason and where it resets; ``error``: why the
+    outputs are not open here). E-STOP first, as on every bar; ctrl+r is not offered."""
+    reason, reset, short = latch["reason"], latch["reset"], latch.get("short", latch["reset"])
+    why = f" | not open here: {error}" if error else ""
+    return [
+        f" E-STOP: {reason} | {reset}{why}",
+        f" E-STOP: {reason} | {reset}",
+        f" E-STOP | {reset} | {reason}",
+        f" E-STOP | {short} | {reason}",  # the reason is cut when it must be
+    ]
+
+
 def _variants(status: dict) -> int:
     return 3 if status["gate"]["estopped"] else 6 if status.get("busy") else 7
 
@@ -210,15 +224,19 @@ class SafetyBar(Static):
     def _width(self) -> int | None:
         return self.size.width or self.app.size.width or None
 
-    def show(self, status: dict | None, error: str = "") -> None:
-        """Draw ``status`` (None: the outputs are not open, ``error`` says why). A bare
-        ``show(None)`` (a screen setting its bar up) draws the state the app knows."""
+    def show(self, status: dict | None, error: str = "", latch: dict | None = None) -> None:
+        """Draw ``status`` (None: the outputs are not open, ``error`` says why; ``latch``:
+        the table's e-stop then, ``live.own_latch``). A bare ``show(None)`` (a screen
+        setting its bar up) draws the state the app knows."""
         live = live_of(self.app)
         if status is None and not error and live is not None:
             status = live.now[0]
             error = "" if status is not None else live.error()
-        self._shown = (status, error)
-        if status is None:
+            latch = live.latch if status is None else None
+        self._shown = (status, error, latch)
+        if status is None and latch:
+            text, cls = _fit(latched_here(latch, error), self._width()), "estop"
+        elif status is None:
             why = error or "starting..."
             variants = [
                 f" ctrl+e E-STOP | outputs not open: {why}",

@@ -14,6 +14,7 @@ capability ``ReadsRecordings`` and plans are rendered in a worker."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -26,6 +27,7 @@ from console.core.words import AT_CONSOLE, worded
 from console.tui.charts import Chart, Series
 from console.tui.path_field import recording_field
 from console.tui.recording_view import open_run
+from console.tui.safety_bar import closed_relays, relay_names
 from console.tui.said import log_status
 from console.tui.util import from_thread, short_path
 
@@ -33,6 +35,12 @@ REPLAY_ACTIONS = {"plan_step", "replay_live", "gate_events"}
 #: the gate events listed at most (the first ones; the count says how many there are)
 MAX_EVENTS_SHOWN = 40
 LIVE_ONLY = {"freeze", "last_plan", "zoom"}
+#: a recording's keys pressed on the live view: what they would do, said with ``o``
+RECORDING_ONLY = {
+    "e": "e lists a recording's gate events",
+    "left_square_bracket": "[ ] step through a recording's plans",
+    "right_square_bracket": "[ ] step through a recording's plans",
+}
 
 
 def plan_summary(line: dict, t0_s: float | None) -> str:
@@ -60,9 +68,26 @@ def plan_summary(line: dict, t0_s: float | None) -> str:
     return out
 
 
-def gate_events_lines(events: list[dict], t0_s: float | None) -> str:
+#: a relay switch's message, as the gate words it (``1,5``; before: ``[1, 5]``)
+_SWITCHED = re.compile(r"(closed: )(\[[\d, ]*\]|[\d,]+|none)$")
+
+
+def named_relays(message: str, names: dict[int, str] | None) -> str:
+    """A gate event's message with the relays it closed by number and by what they
+    switch, as the safety bar says them: ``relays closed: 1,5 (PA screen)``."""
+    found = _SWITCHED.search(message)
+    if found is None:
+        return message
+    closed = [int(n) for n in re.findall(r"\d+", found.group(2))]
+    return message[: found.start()] + found.group(1) + closed_relays(closed, names)
+
+
+def gate_events_lines(
+    events: list[dict], t0_s: float | None, names: dict[int, str] | None = None
+) -> str:
     """A recording's gate events, one per line: when (s from the first frame, else the
-    first event), the gate clock, the kind and the message."""
+    first event), the gate clock, the kind and the message (a relay switch's relays
+    named as ``names`` says: ``relay_names``)."""
     # lazy: loaded when this runs, not when the module is imported
     from console.core.gate_log import counts_text
 
@@ -70,7 +95,8 @@ def gate_events_lines(events: list[dict], t0_s: float | None) -> str:
         return "no gate events in this recording (none happened, or it predates them)"
     t0 = t0_s if t0_s is not None else events[0]["t_s"]
     rows = [
-        f"{e['t_s'] - t0:8.3f} s  clock {e['clock']:>10}  {e['kind']:<8} {e['message']}"
+        f"{e['t_s'] - t0:8.3f} s  clock {e['clock']:>10}  {e['kind']:<8} "
+        f"{named_relays(e['message'], names) if e['kind'] == 'switch' else e['message']}"
         for e in events[:MAX_EVENTS_SHOWN]
     ]
     more = len(events) - MAX_EVENTS_SHOWN
@@ -156,6 +182,7 @@ class ScopeRecordingMixin:
     #: what ``o`` said (a refusal, "opening ..."): shown instead of the live header until
     #: the operator's next ``o`` or Esc, so that the live tick does not wipe it at once
     said_head: str | None = None
+    _noted = False  # ``said_head`` says what a recording's key does (``RECORDING_ONLY``)
 
     def on_mount(self) -> None:
         box = recording_field("scope-recording")  # labelled: what to type
@@ -198,6 +225,17 @@ class ScopeRecordingMixin:
             self.said_head = None
             box.display = False
             self.focus()
+        elif box.has_focus:
+            return
+        elif self._noted:  # the next key takes away what a recording's key said
+            self._noted, self.said_head = False, None
+            self._redraw()
+        if self.replay is None and not box.has_focus and event.key in RECORDING_ONLY:
+            # not silence: the key is a recording's, and this is the live view
+            event.stop()
+            self._say(f"{RECORDING_ONLY[event.key]}: o opens one (a .h5 file's path)")
+            self._noted = True
+            self._redraw()  # after the view's mode: it is still the live view
 
     def _say(self, text: str) -> None:
         self.said_head = text
@@ -234,7 +272,8 @@ class ScopeRecordingMixin:
 
     def action_gate_events(self) -> None:
         if self.replay is not None:
-            text = gate_events_lines(self.replay.gate_events(), self._t0())
+            names = relay_names(self.app.ctx.profile)  # what each relay switches
+            text = gate_events_lines(self.replay.gate_events(), self._t0(), names)
             self.query_one("#scope-info", Static).update(text)
 
     def action_replay_live(self) -> None:
@@ -290,12 +329,13 @@ class ScopeRecordingMixin:
             return  # another plan (or the live view) shows meanwhile
         chart = self.query_one("#scope-chart", Chart)
         info = self.query_one("#scope-info", Static)
-        info.update(
-            f"plan {i + 1}: {plan_summary(line, self._t0())}; "
-            f"hash {str(line.get('hash', ''))[:12]}: {said}"
+        head = (
+            f"plan {i + 1}: {plan_summary(line, self._t0())}; hash {str(line.get('hash', ''))[:12]}"
         )
-        if plan is None:
+        if plan is None:  # the chart says why it draws nothing; the summary, once, below
+            info.update(head)
             chart.clear(said)
             return
+        info.update(f"{head}: {said}")
         self.draws += 1
         chart.set_series(plan_series(plan, line), title=f"recorded plan: {line.get('name', '?')}")

@@ -17,6 +17,7 @@ from typing import Any
 
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.core.types import DeviceStatus
+from console.tui.time_left import left_words
 
 NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
 
@@ -67,13 +68,48 @@ def selftest_about(
     return about, total_s, est
 
 
-def selftest_row(done: tuple[bool, str, float] | None) -> DeviceStatus:
-    """The Devices doctor's self-test row: the last run here (healthy, line, seconds),
-    or where to run it (``haptable doctor`` runs its quick part; here s runs it)."""
+def selftest_progress(gone_s: float, total_s: float, est: tuple[float, int, bool] | None) -> str:
+    """The line while the self-test runs, as other long work says it: what it is doing
+    (the twin's map first, then the chirps and the comparison), its seconds so far of
+    those expected and the time left (``selftest_about``'s ``total_s``, ``est``), or
+    that it takes longer than expected, or that its time is unknown."""
+    if est is not None and est[2] and gone_s < TWIN_MAP_S:
+        doing = "measuring the twin's vibration map first"
+    elif est is not None:
+        doing = f"chirping {est[1]} relay paths and comparing what they read"
+    else:
+        doing = "chirping every relay path and comparing what they read"
+    if total_s <= 0:
+        return f"self-test: {doing}; {gone_s:.0f} s so far (its time is unknown)"
+    if gone_s < total_s:
+        left = left_words(total_s - gone_s)
+        return f"self-test: {doing}; {int(gone_s)} s of about {total_s:.0f} s, {left}"
+    return (
+        f"self-test: {doing}; {gone_s:.0f} s, longer than the {total_s:.0f} s expected: "
+        "finishing ..."
+    )
+
+
+def selftest_row(
+    done: tuple[bool, str, float] | None, last: dict[str, dict[str, str]] | None = None
+) -> DeviceStatus:
+    """The Devices doctor's self-test row, saying what ran: the full one run here
+    (``done``: healthy, line, seconds), else the last kept (``last``:
+    ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
+    else where to run it (``haptable doctor`` runs its quick part; here s the full one)."""
+    last = last or {}
+    full, quick = last.get("full"), last.get("quick")
+    if done is None and full is not None:  # a full one kept from before
+        why = f"{full['line'].removeprefix('self-test: ')} ({full['by']}, {full['time']})"
+        return DeviceStatus("selftest", "full", full["state"], why, "press s to run it again")
     if done is None:
-        return DeviceStatus(
-            "selftest", "full", "not run", "plays a chirp on every relay path", "press s"
-        )
+        plays = "the full one not run from the console: it plays a chirp on every relay path"
+        if quick is None:
+            why = "not run from the console: it plays a chirp on every relay path"
+            return DeviceStatus("selftest", "full", "not run", why, "press s")
+        said = quick["line"].removeprefix("skipped: ")
+        why = f"quick self-test {quick['state']} ({quick['by']}, {quick['time']}: {said}); {plays}"
+        return DeviceStatus("selftest", "quick", quick["state"], why, "press s (full)")
     ok, line, took_s = done
     why = line.removeprefix("self-test: ")
     return DeviceStatus("selftest", "full", "ok" if ok else "error", why, "" if ok else "see log")

@@ -42,6 +42,20 @@ def span_words(lo: float, hi: float, fmt: str = ".0f") -> str:
     return f"{lo:{fmt}} to {hi:{fmt}}"
 
 
+def view_levels(view: str, lo: float, hi: float) -> str:
+    """The range a Camera view shows, in its own terms: the camera's grey levels
+    (``grey 8 to 81``); the diff, a difference over the background in grey levels
+    (``diff -1..+31 grey levels over background``); the high-pass, the detail over its
+    blur; the body view, a mask (white: over the body threshold)."""
+    if view == "diff":
+        return f"diff {lo:+.0f}..{hi:+.0f} grey levels over background"
+    if view == "highpass":
+        return f"high-pass {lo:+.0f}..{hi:+.0f} grey levels over its blur"
+    if view == "body":
+        return "body: white over the body threshold"
+    return f"grey {span_words(lo, hi)}"
+
+
 #: a camera control's value in the words of the twin's driver: a multiplier on the light
 TWIN_CONTROL = "x{v:g}"
 #: a real camera driver's control: its raw value (V4L2/UVC units differ per camera), or

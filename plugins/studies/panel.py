@@ -83,7 +83,9 @@ CONFIRM_S = 3.0
 
 
 class StudiesPane(Vertical):
-    can_focus = True
+    #: no Tab stop of its own (it would show nothing focused): its keys work from each of
+    #: its fields and buttons, and ``focus()`` gives the focus to Start
+    can_focus = False
     DEFAULT_CSS = """
     StudiesPane .study-row { height: 1; }
     StudiesPane .study-row Label { width: auto; padding: 0 1 0 0; }
@@ -228,6 +230,12 @@ class StudiesPane(Vertical):
         if action not in ("track", "analyse") or not self.query("#protocol"):
             return True
         return (action == "track") == adaptive_console.is_adaptive(str(self._value("protocol")))
+
+    def focus(self, scroll_visible: bool = True):
+        """The screen's keys (Esc out of a field, a run started): Start takes the focus,
+        the screen's own first stop."""
+        self.query_one("#start", Button).focus(scroll_visible)
+        return self
 
     @property
     def focus_target(self) -> Button:
@@ -646,6 +654,11 @@ class StudiesPane(Vertical):
 
     def on_mount(self) -> None:
         panel_fit.mounted(self)  # its dropdown as wide as the names, its status
+
+    def set_visible(self, shown: bool) -> None:
+        """Shown again: what the folder holds now of the choice (``shown_again``)."""
+        if shown:
+            panel_choice.shown_again(self)
 
     def on_resize(self) -> None:
         panel_fit.fit_protocols(self)  # the first row laid out again at the new width

@@ -16,6 +16,7 @@ from console.plugin_api.tui import AskAgain
 
 from . import adaptive_console
 from .adaptive_view import AdaptiveView
+from .panel_fit import protocol_changed
 from .panel_status import trial_row
 from .panel_text import default_out
 from .saved_run import run_size, saved
@@ -61,6 +62,22 @@ def show_choice(pane: Any) -> None:
     if pane.query_one("#study-plot").display:  # the plot was the previous run's
         pane._view("trials")
     pane._idle()
+
+
+def shown_again(pane: Any) -> None:
+    """The screen shown (again): the choice's saved progress as the folder holds it now
+    (a run saved meanwhile by `haptable study run` in a shell, or by another console),
+    when it is not what shows; unless a run goes on here."""
+    choice = chosen(pane) if pane.is_mounted else None
+    if pane.running is not None or choice is None:
+        return
+    run = saved(choice[2], choice[1], choice[0])
+    now = {"pid": choice[1], "done": run.done, "total": run.total} if run else {}
+    if now != {k: pane.last.get(k) for k in now} or bool(now) != bool(pane.last):
+        said = pane.said[0]
+        if not said or said.startswith("protocol ") or " has finished " in said:
+            protocol_changed(pane, choice[0])  # the line about the choice, as it is now
+        show_choice(pane)
 
 
 def field_changed(pane: Any) -> None:

@@ -94,6 +94,10 @@ def test_a_person_answers_with_the_keys_and_replays_once(
             ):
                 pane.query_one(f"#{wid}").value = v
             pane.query_one("#consent").value = True
+            start = pane.query_one("#start")  # a second click during the first's press
+            await wait_for(
+                pilot, lambda: not start.has_class("-active"), 5, "pressed"
+            )  # is not one
             await pilot.click("#start")
             bar = pane.query_one("#study-progress", ProgressBar)
             for k, key in enumerate(["up", "right", "2", "left", "8", "6"]):  # 2 8 6: keypad

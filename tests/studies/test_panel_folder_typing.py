@@ -21,7 +21,9 @@ def test_typing_in_the_folder_field_adds_to_the_path(double_plugins):
                 before = field.value
                 assert before, wid
                 pane.focus()
-                await wait_for(pilot, lambda: app.focused is pane, 30, "the screen's keys")
+                await wait_for(
+                    pilot, lambda: app.focused is pane.focus_target, 30, "the screen's keys"
+                )
                 field.focus()
                 await wait_for(pilot, lambda f=field: app.focused is f, 30, f"{wid} focused")
                 await pilot.press("x")

@@ -43,7 +43,7 @@ def test_a_without_a_run_and_a_bad_age_say_so_in_one_line(double_plugins, tmp_pa
             said = "age = 'abc': give whole years from 1 to 120"
             await wait_for(pilot, lambda: said in _status(pane), 30, "age refused")
             await pilot.press("escape")
-            await wait_for(pilot, lambda: app.focused is pane, 30, "out of the field")
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, 30, "out of the field")
             assert age.value == "abc"
             await pilot.press("s")  # refused on the key: nothing starts
             await pilot.pause(0.3)

@@ -27,8 +27,8 @@ def test_the_log_names_its_key_and_its_whole_file(plugins, size, tmp_path, monke
             await wait_for(pilot, lambda: isinstance(app.screen, LogScreen), 10, "the log")
             await pilot.pause(0.3)
             rows = [s.text for s in app.screen._compositor.render_strips()]
-            shown = "".join(r.strip() for r in rows[:4])
-            assert "escape closes" in rows[0]
-            assert str(state / "haptable" / "console.log").replace(" ", "") in shown, rows[:4]
+            shown = "".join(r.strip() for r in rows[1:5])  # under the title row
+            assert "escape closes" in rows[1]
+            assert str(state / "haptable" / "console.log").replace(" ", "") in shown, rows[:5]
 
     asyncio.run(scenario())

@@ -47,7 +47,7 @@ from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
-from console.tui.units import span_words
+from console.tui.units import view_levels
 from console.tui.util import from_thread
 from console.tui.wrap_paths import break_paths
 
@@ -286,10 +286,15 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         same = before is not None and same_height(before, text, width)
         return self._say(widget_id, text, layout=not same) and not same
 
-    def _title(self, text: str) -> None:
-        """The view's title: laid out again only when its length changed (the grey
-        levels it names follow the frames; a layout of the screen costs more than the
-        picture's rows)."""
+    def _title(self, head: str, levels: str = "") -> None:
+        """The view's title, ``head`` (the frame, how it is drawn) and its ``levels``
+        (``view_levels``), the levels alone where both do not fit the view's width (at
+        80 columns): laid out again only when its length changed (the grey levels it
+        names follow the frames; a layout of the screen costs more than the picture's
+        rows)."""
+        text = f"{head}, {levels}" if levels else head
+        if levels and len(text) > self.view_area()[0]:
+            text = levels
         before = self._said.get("camera-title")
         self._say("camera-title", text, layout=before is None or len(before) != len(text))
 
@@ -422,7 +427,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
-        self._title(f"IR {w}x{h} as half-block {cols}x{rows}, grey {span_words(lo, hi)}")
+        self._title(f"IR {w}x{h} as half-block {cols}x{rows}", view_levels(self.view, lo, hi))
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
         """The frame as an image of real pixels (textual-image's Sixel or Kitty widget),
@@ -465,7 +470,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
         mode = MODE_NAMES[self.image_mode]
-        self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {span_words(lo, hi)}")
+        self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px", view_levels(self.view, lo, hi))
 
     def _stretch(self) -> GreyStretch:
         """The grey levels shown black and white for the view on screen (each view its
@@ -559,9 +564,14 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         box = self.query_one("#camera-target", Input)
         if event.key == "escape" and box.has_focus:
             event.stop()
-            self._typed = None  # Esc: unchanged, the next U shows the target in use
-            box.display = False
+            refused, self._typed = self._typed, None  # Esc: unchanged, the next U shows
+            box.display = False  # the target in use
             self.focus()
+            name = self._output() if refused is not None else None
+            if name is not None:  # the refusal was of the typed one: not true any more
+                on, where = self.service.sink_state(name)
+                state = "on" if on else "off"
+                self.say(f"{name} target kept: {where} ({state}); the one typed dropped")
         elif event.key == "escape" and self.calibration is not None:
             event.stop()
             self.action_cancel()  # as x: a user leaving the wizard with Esc cancels it

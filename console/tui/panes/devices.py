@@ -21,6 +21,7 @@ from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.selftest_last import note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
@@ -29,7 +30,12 @@ from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
 from console.tui.said import status_said
-from console.tui.selftest_action import run_selftest, selftest_about, selftest_row
+from console.tui.selftest_action import (
+    run_selftest,
+    selftest_about,
+    selftest_progress,
+    selftest_row,
+)
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
 from console.tui.text import LiteralTable
@@ -70,6 +76,8 @@ def found(rows) -> str:
     return told + ("; the fix column says what to do" if bad else "")
 
 
+#: a device's states that ask nothing of the operator: their rows may take one line
+WORKS = ("ok", "simulated", "not run")
 #: a relay board's probe states in which enter opens nothing (it says why instead)
 UNUSABLE = ("missing", "error")
 
@@ -162,6 +170,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self.selftest_done: tuple[bool, str, float] | None = None
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
+        self._doctor_whole = True  # the device table's rows shown whole (``_show``)
 
     def compose(self) -> ComposeResult:
         # the profile line and under it the screen's status line (what a pick or a test
@@ -302,7 +311,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             return
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
-        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done)]
+        last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
+        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done, last)]
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
@@ -315,19 +325,39 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         why_w = max(NOTE_MIN, left - fix_w - 2)
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
-        for s in rows:
+        # wrapped here (a row's height known as it is added: the list below it is
+        # scrolled into view at once), a number with its unit on one line, a word too
+        # long for its column ending in "…"; when wrapped rows would push the card in use
+        # out of view (on entry: the card list has the focus), a row that works takes one
+        # line (a cut cell: in the log, Enter says it), a problem's row stays whole (what
+        # to do); the table focused (Tab) shows every row whole
+        cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
+        heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
+        self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
+        if not self._doctor_whole:
+            for i, s in enumerate(rows):
+                if s.state in WORKS:
+                    cells[i] = (_cell(s.why, s.kind, why_w), _cell(s.fix, s.kind, fix_w))
+                    heights[i] = 1
+        for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
             )
-            # wrapped here (a row's height known as it is added: the list below it is
-            # scrolled into view at once), a number with its unit on one line, a word
-            # too long for its column ending in "…"
-            why, fix = fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)
-            lines = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
             table.add_row(
                 Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
             )
         self._keep_focused_in_view()  # the rows above a list grew
+
+    def _doctor_room(self) -> int:
+        """The lines the device table's rows may take for the screen to show, from its
+        top, the table's header and the sound-card list down to the card in use (its
+        heading, header, the rows up to it, the blank line before the heading)."""
+        top = self.query_one("#devices-top").outer_size.height
+        cards = list(self.audio_rows.values())
+        in_use = self._in_use()[:2]
+        upto = cards.index(in_use) + 1 if in_use in cards else max(len(cards), 2)
+        height = self.size.height or self.app.size.height - 5
+        return height - top - 1 - (3 + upto)
 
     @on(DataTable.RowSelected, "#device-table")
     def _about_device(self, event: DataTable.RowSelected) -> None:
@@ -539,18 +569,19 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         about, total_s, est = selftest_about(prof, pm, last_s)
         self._say(f"self-test ({about}): starting ...")
         t0 = time.monotonic()
-        from_thread(self.app, self._selftest_ticks, t0, about, total_s)
+        from_thread(self.app, self._selftest_ticks, t0, total_s, est)
         ok, line = run_selftest(prof, pm)
+        if ok is not None:  # it ran: kept for the row after a restart
+            note_last(prof.name, "full", "ok" if ok else "error", line, "the console's s")
         took_s = 0.0 if est and est[2] else time.monotonic() - t0  # a map run: no guide
         from_thread(self.app, self._selftest_ended, ok, line, took_s)
 
-    def _selftest_ticks(self, t0: float, about: str, total_s: float) -> None:
-        """While the self-test runs: the line says its seconds so far of the estimate."""
+    def _selftest_ticks(self, t0: float, total_s: float, est) -> None:
+        """While the self-test runs: the line says what it does and the time left
+        (``selftest_progress``)."""
 
         def tick() -> None:
-            gone_s = time.monotonic() - t0
-            done = f" ({gone_s / total_s:.0%})" if 0 < gone_s < total_s else ""
-            self._show_result(f"self-test ({about}): {gone_s:.0f} s so far{done} ...")
+            self._show_result(selftest_progress(time.monotonic() - t0, total_s, est))
 
         self._selftest_timer = self.set_interval(0.5, tick)
 
@@ -602,7 +633,11 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self.call_after_refresh(self.call_after_refresh, self._focused_in_view)
 
     def on_descendant_focus(self, event) -> None:
-        """A list taking the focus (the screen's first, Tab) is scrolled into view."""
+        """A list taking the focus (the screen's first, Tab) is scrolled into view; the
+        device table laid out again when it takes or leaves the focus (``_show``)."""
+        doctor = self.query_one("#device-table", DataTable)
+        if self.doctor_rows and doctor.has_focus != self._doctor_whole:
+            self._show(self.doctor_rows[:-1])
         self._keep_focused_in_view()
 
     def _focused_in_view(self) -> None:

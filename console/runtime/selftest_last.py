@@ -1,0 +1,65 @@
+"""The self-test's last outcome per profile, as `haptable doctor` (its quick part) and
+the console's Devices screen (``s``: the full one) ran it, kept between runs: the
+Devices screen's self-test row says what ran, where and when, never "not run" after a
+doctor's quick part said ok. One JSON file in the profile's state folder: ``{"quick":
+{...}, "full": {...}}``, each ``{"state", "line", "by", "time"}``."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+
+from console.files.paths import profile_state_dir
+
+log = logging.getLogger(__name__)
+
+#: the file, in ``profile_state_dir(<profile>)``
+FILE = "selftest_last.json"
+#: the parts a record keeps
+KINDS = ("quick", "full")
+
+
+def read_last(profile_name: str) -> dict[str, dict[str, str]]:
+    """The kept outcomes (``{}``: none, or a file that cannot be read as ours)."""
+    path = profile_state_dir(profile_name, FILE)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(data, dict):
+        return {}
+    return {
+        k: {f: str(v.get(f, "")) for f in ("state", "line", "by", "time")}
+        for k, v in data.items()
+        if k in KINDS and isinstance(v, dict)
+    }
+
+
+def note_last(profile_name: str, kind: str, state: str, line: str, by: str) -> None:
+    """Keep ``kind``'s outcome (``state``: ok, error, skipped; ``line``: what it said;
+    ``by``: which command ran it). A file that cannot be written is logged, not raised:
+    the test's own report is what counts."""
+    if kind not in KINDS:
+        raise ValueError(f"self-test kind {kind!r}: one of {', '.join(KINDS)}")
+    data = read_last(profile_name)
+    data[kind] = {
+        "state": state,
+        "line": " ".join(str(line).split())[:300],
+        "by": by,
+        "time": time.strftime("%Y-%m-%d %H:%M"),
+    }
+    path = profile_state_dir(profile_name, FILE)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{FILE}.{os.getpid()}")
+        tmp.write_text(json.dumps(data), encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        log.warning("the self-test's outcome not kept in %s: %s", path, exc)
+
+
+def said(rec: dict[str, str]) -> str:
+    """A kept outcome in words: ``ok (haptable doctor, 2026-11-30 18:02)``."""
+    return f"{rec['state']} ({rec['by']}, {rec['time']})"

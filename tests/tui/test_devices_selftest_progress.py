@@ -1,0 +1,62 @@
+"""Devices (F1): while the self-test runs its line says what it is doing and the time
+left, as other long work does (`about 3 s left`), not a bare count of seconds and a
+percentage (a new operator's try: `self-test (5 relay paths, 5 s of chirps): 2 s so far
+(40%) ...` read as unclear)."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+
+import pytest
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+from console.tui.selftest_action import selftest_progress
+
+from .conftest import wait_for
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_the_selftest_says_what_it_does_and_the_time_left(plugins, monkeypatch, size):
+    import console.tui.panes.devices as devices_mod
+
+    gate = threading.Event()
+
+    def slow_selftest(profile, pm):  # the real run plays 5 s of chirps: the UI's part only
+        gate.wait(20)
+        return True, "self-test: all paths healthy (2 s)"
+
+    monkeypatch.setattr(devices_mod, "run_selftest", slow_selftest)
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=size) as pilot:
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
+            await pilot.press("s", "s")  # the first asks
+            await wait_for(pilot, lambda: " left" in pane.result, 10, "the time left")
+            said = pane.result
+            # a fresh twin: its map first (about 10 s), then 5 s of chirps
+            assert said.startswith("self-test: measuring the twin's vibration map first; "), said
+            assert " s of about 15 s, about " in said, said
+            assert "%" not in said, said
+            gate.set()
+            await wait_for(pilot, lambda: "healthy" in pane.result, 10, "the result")
+
+    asyncio.run(scenario())
+
+
+def test_the_progress_line_past_the_estimate_and_without_one():
+    est = (5.0, 5, True)  # a fresh twin: its map first
+    assert selftest_progress(2.0, 15.0, est) == (
+        "self-test: measuring the twin's vibration map first; 2 s of about 15 s, about 13 s left"
+    )
+    assert selftest_progress(16.0, 15.0, est) == (
+        "self-test: chirping 5 relay paths and comparing what they read; 16 s, longer "
+        "than the 15 s expected: finishing ..."
+    )
+    assert selftest_progress(3.0, 0.0, None) == (
+        "self-test: chirping every relay path and comparing what they read; 3 s so far "
+        "(its time is unknown)"
+    )
