@@ -124,12 +124,15 @@ def _tables(profile_arg: str | None) -> list[Table]:
     return known_tables(paths)
 
 
-def estop(profile_arg: str | None, timeout_s: float) -> tuple[list[Reached], list[Table]]:
+def estop(
+    profile_arg: str | None, timeout_s: float, who: str = "haptable estop"
+) -> tuple[list[Reached], list[Table]]:
     """Latch, then e-stop every running kernel at once: what each answered, and every
-    table latched."""
+    table latched. ``who`` names what asked (a console without outputs gives its own
+    words: ``operator e-stop (console)``), the process and terminal added."""
     tables = _tables(profile_arg)
-    reason = f"haptable estop ({whoami()})"
-    record = latch_record(reason, "haptable estop")
+    reason = f"{who} ({whoami()})"
+    record = latch_record(reason, who)
     for t in tables:  # first: a kernel starting now reads it (console.kernel.tables)
         write_latch(t, record)
     results: dict[str, Reached | None] = {}

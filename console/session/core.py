@@ -554,7 +554,7 @@ class ConsoleSession:
             out.estop(reason)
         else:
             with contextlib.suppress(Exception):
-                shell_estop(str(self.profile.path), 2.0)
+                shell_estop(str(self.profile.path), 2.0, who=reason)
         if self.demos.run is not None:
             self.demos.estop(reason)
             threading.Thread(
