@@ -252,10 +252,18 @@ def motion_score(records: Sequence[dict | None], fps: float = REFERENCE_FPS) -> 
 def dynamic_features(
     records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4, fps: float = 60.0
 ) -> np.ndarray:
-    """First-frame static features plus the motion over the first ``n_frames`` frames."""
+    """The static features over the window (``static_features``: the mean of its frames,
+    as the static classifier sees them) with the most fingertips any of its frames shows
+    (fingertips that touch each other merge into one region as a pinch or a pile of
+    fingers starts or ends, and a dim one may be missed in a frame), plus the motion over
+    the first ``n_frames`` frames."""
     recs = list(records[:n_frames])
-    first = next((r for r in recs if r is not None), None)
-    return np.concatenate([record_static(first, n_harmonics), motion_features(recs, fps)])
+    static = static_features(recs, n_harmonics, n_frames)
+    shown = [r for r in recs if r is not None]
+    if shown:
+        count = static_size(n_harmonics) - N_PHYS_STATIC + COUNT_INDEX
+        static[count] = max(physical_static(r)[COUNT_INDEX] for r in shown)
+    return np.concatenate([static, motion_features(recs, fps)])
 
 
 MAX_COUNT_CODE = 5
@@ -294,7 +302,8 @@ def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 
 def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the dynamic classifier sees, from (n, static_size(n_max) + N_MOTION) rows:
-    Fourier magnitudes and touching skin of the first frame (as ``select_static``) and
+    Fourier magnitudes and touching skin over the window (as ``select_static``; the most
+    fingertips a frame shows, ``dynamic_features``) and
     the touching skin's motion in mm (``physical.physical_motion``), and the contacts'
     change of scale (|log|, no unit: it tells a zoom from a rotation on the twin's
     slow-starting gestures, LOSO dynamic 0.933 -> 0.960, and changes no cross-renderer

@@ -26,13 +26,16 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-#: a hand whose touching skin exceeds this (mm^2) lies flat on the glass
-FLAT_MM2 = 2000.0
+#: a hand whose touching skin exceeds this (mm^2) lies flat on the glass: a flat hand
+#: touches with 4000-16000 mm^2 on three renderers; five fingertips whose plateaus clip
+#: under bright light (each taking in the finger just above the glass) reach 2400
+FLAT_MM2 = 3000.0
 #: fingertip-sized regions: within these areas (mm^2) and at least this share of the
-#: largest such region (a curled finger's knuckle brushing the glass is smaller); under
-#: light that clips, a fingertip's plateau takes in the finger just above the glass
-#: (600-1000 mm^2 at x1.3 on the silhouette renderer)
-TIP_MM2 = (40.0, 1500.0)
+#: largest such region (a curled finger's knuckle brushing the glass is smaller); a
+#: light touch, or skin that a camera's optics shrink by a pixel, shows 20-40 mm^2;
+#: under light that clips, a fingertip's plateau takes in the finger just above the
+#: glass (600-1000 mm^2 at x1.3 on the silhouette renderer)
+TIP_MM2 = (20.0, 1500.0)
 TIP_SHARE = 0.3
 #: touching regions followed through the frames: at most this far between frames at
 #: 60 fps (mm)

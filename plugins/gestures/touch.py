@@ -7,7 +7,9 @@ shares, whatever its light falloff: it is the brightest skin around, and it is s
 bright as the hand's brightest block; of those, the core is what is at least
 ``CORE_SHARE`` as bright as the brightest skin within ``CORE_MM`` (a fingertip, not the
 finger rising from it; each pad of a flat hand under its own light), and a core
-touches when an edge on or next to it is steep (``SHARP_PER_MM`` of that level per mm).
+touches when an edge on or next to it is steep (``SHARP_PER_MM`` of that level per mm),
+or nearly as steep and as bright as the frame's sharpest core (a camera out of focus
+softens every contact alike).
 Curled fingers hovering a few mm up, 60-75 % as bright as a fingertip under a slow
 falloff or clipping, are neither.
 
@@ -43,10 +45,14 @@ CORE_MM = 10.0
 #: level per mm (touching skin: 0.22-0.45 on three renderers; curled fingers 9 mm
 #: above the glass: 0.07-0.16)
 SHARP_PER_MM = 0.19
-#: ... or, in a frame where no core is as sharp (a camera out of focus, dim light),
-#: the first of these shares of it that some core reaches: the sharpest cores of the
-#: frame, not the skin above the glass beside them; a frame with one core keeps it
-SOFT_SHARES = (1.0, 0.85, 0.7, 0.6, 0.5)
+#: ... or at least these shares of the sharpest core's edge and brightness among the
+#: hands' cores (a camera out of focus or a blurring diffuser softens every contact's
+#: edge alike: two fingertips touching in one frame differ by at most 1.3x in edge,
+#: 0.16 against 0.21 on a twin defocused by 1 px, and by a few % in brightness; skin
+#: above the glass beside a fingertip is 1.6-2.5x softer and 0.65-0.8 as bright); a
+#: frame with one core keeps it
+RELATIVE_SHARP = 0.55
+RELATIVE_LEVEL = 0.85
 
 
 def default_px_per_mm(width_px: int, height_px: int) -> float:
@@ -81,27 +87,36 @@ def touch_regions(diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float) -
     n, lab, stats, cents = cv2.connectedComponentsWithStats(cv2.bitwise_and(core, on), None, 8)
     if n < 2:
         return np.zeros((0, 3))
-    # steep: an edge rising at least SHARP_PER_MM of that level per mm (|Sobel| is 8 x
-    # the grey levels per px), on or next to a core (or SOFT_SHARES of that)
+    # steep: an edge rising at least SHARP_PER_MM of that level per mm on or next to a
+    # core, or RELATIVE_SHARP of the sharpest core's
     area = stats[:, cv2.CC_STAT_AREA] / (px_per_mm * px_per_mm)
     sharp = area >= MIN_REGION_MM2
     sharp[0] = False
-    if np.count_nonzero(sharp) > 1:  # one core is kept, sharp or soft (below)
-        dx, dy = cv2.spatialGradient(sub)
-        rise = cv2.max(
-            cv2.convertScaleAbs(dx, alpha=px_per_mm / 8.0),
-            cv2.convertScaleAbs(dy, alpha=px_per_mm / 8.0),
-        )
-        big = sharp
-        for share in SOFT_SHARES:
-            need = cv2.convertScaleAbs(near, alpha=share * SHARP_PER_MM)
-            steep = cv2.dilate(cv2.compare(rise, need, cv2.CMP_GE), None)
-            sharp = big & (np.bincount(lab[steep > 0], minlength=n) > 0)
-            if sharp.any():
-                break
+    if np.count_nonzero(sharp) > 1:  # one core is kept, sharp or soft
+        steep, level = core_sharpness(sub, near, lab, n, px_per_mm)
+        best = np.flatnonzero(sharp)[np.argmax(steep[sharp])]
+        soft = (steep >= RELATIVE_SHARP * steep[best]) & (level >= RELATIVE_LEVEL * level[best])
+        sharp &= (steep >= SHARP_PER_MM) | soft
     keep = np.flatnonzero(sharp)
     keep = keep[np.argsort(-area[keep])]
     return np.column_stack([area[keep], cents[keep] + (x0 + bx0, y0 + by0)]).reshape(-1, 3)
+
+
+def core_sharpness(
+    sub: np.ndarray, near: np.ndarray, lab: np.ndarray, n: int, px_per_mm: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per labelled core of ``lab`` ((n,) each): the steepest edge on or next to it, as
+    the share of the brightest skin near that edge (``near``) it rises per mm, and the
+    core's brightest pixel in ``sub``."""
+    dx, dy = cv2.spatialGradient(sub)  # |Sobel| is 8 x the grey levels per px
+    rise = np.maximum(np.abs(dx), np.abs(dy)).astype(np.float32)
+    ratio = cv2.dilate(rise * (px_per_mm / 8.0) / np.maximum(near, 1).astype(np.float32), None)
+    inside = lab > 0
+    best = np.zeros(n, np.float32)
+    np.maximum.at(best, lab[inside], ratio[inside])
+    level = np.zeros(n, np.float32)
+    np.maximum.at(level, lab[inside], sub[inside])
+    return best, level
 
 
 def hand_touch(regions: np.ndarray, palms_px: list, index: int, same_px: float) -> dict:
