@@ -10,7 +10,9 @@ falloff). Over a decision window
 (``physical_motion``): the fingertips (or a flat hand's touching skin) followed
 through the frames, each track's least-squares line less what its own jitter explains
 (``beyond_jitter``): their common shift, largest / smallest / mean displacement, the
-largest raw end-to-end one, turn, arc, change of spacing and radial motion. Motion is
+largest raw end-to-end one, turn, arc, change of spacing, radial motion and how many
+of them moved beyond a tremor. A fingertip is where its far end from the palm is
+(``touch.far_ends``), not its contact's centroid, which a finger pressed flatter moves. Motion is
 scaled to 60 fps (a gesture filmed at 48 fps moves 60/48 as far per frame);
 ``motion_view`` is what the classifiers see of it.
 
@@ -49,7 +51,7 @@ STATIC_NAMES = (
 MOTION_NAMES = (
     "shift_mm", "tracks", "track_dmax_mm", "track_dmin_mm", "track_dmean_mm",
     "track_end_mm", "track_turn_deg", "track_arc_mm", "track_spacing_mm",
-    "track_radial_mm",
+    "track_radial_mm", "tracks_moving",
 )  # fmt: skip
 N_PHYS_STATIC = len(STATIC_NAMES)
 N_PHYS_MOTION = len(MOTION_NAMES)
@@ -267,6 +269,9 @@ def physical_motion(records: Sequence[dict | None], fps: float = REFERENCE_FPS) 
     se_mean = float(np.mean([se for _, se in fits]))
     v[0] = k * beyond_jitter(float(np.linalg.norm(t)), se_mean / math.sqrt(len(fits)))
     v[2], v[3], v[4] = k * disp.max(), k * disp.min(), k * disp.mean()
+    # how many of them moved beyond a tremor (a zoom moves two fingertips while curled
+    # fingers rest on the glass; a spread or pile moves them all)
+    v[10] = min(int(np.count_nonzero(k * disp > TREMOR_MM)), 6)
     v[5] = k * max(float(np.linalg.norm(tr[-1, 1:] - tr[0, 1:])) for tr in tracks)
     if len(tracks) >= 2:
         ra = np.linalg.norm(a - a.mean(0), axis=1)
@@ -305,8 +310,8 @@ def motion_view(m: np.ndarray) -> np.ndarray:
     floor = np.full(N_PHYS_MOTION, TREMOR_MM)
     floor[MOTION_NAMES.index("track_turn_deg")] = TREMOR_DEG
     out = np.log1p(np.maximum(m - floor, 0.0))
-    i = MOTION_NAMES.index("tracks")
-    out[:, i] = m[:, i]
+    for i in (MOTION_NAMES.index("tracks"), MOTION_NAMES.index("tracks_moving")):
+        out[:, i] = m[:, i]
     return out
 
 

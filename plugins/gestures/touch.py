@@ -53,6 +53,17 @@ SHARP_PER_MM = 0.19
 #: frame with one core keeps it
 RELATIVE_SHARP = 0.55
 RELATIVE_LEVEL = 0.85
+#: a fingertip-sized region (up to this, mm^2) is placed from its far end from the
+#: hand's palm: half its width back from that end, across it where its pixels within
+#: ``END_MM`` of the end are (a round contact's centre). A fingertip's contact
+#: grows and shrinks toward the palm (a finger pressed flatter or lighter, the finger
+#: just above the glass clipping under bright light) while its end stays: the
+#: centroid of a resting fingertip stepped 3-5 mm when its contact grew by 40 %
+END_MAX_MM2 = 1500.0
+END_MM = 4.0
+#: ... when that palm is at least this far from the region's centroid (mm): nearer, a
+#: palm too dim to segment whole gives no direction
+END_PALM_MM = 25.0
 
 
 def default_px_per_mm(width_px: int, height_px: int) -> float:
@@ -60,14 +71,18 @@ def default_px_per_mm(width_px: int, height_px: int) -> float:
     return min(width_px / GLASS_MM[0], height_px / GLASS_MM[1])
 
 
-def touch_regions(diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float) -> np.ndarray:
+def touch_regions(
+    diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float, palms_px=None
+) -> np.ndarray:
     """The touching skin of the hands (``body``: their mask, uint8 0/255; ``parts``:
     ``segmentation.Parts``; a fingertip whose finger rises out of the mask, a part of its
     own, counts too) in the difference image ``diff`` (uint8, grey levels above the
     background): pixels above ``TOUCH_SHARE`` of the brightest part's level (a
     hovering palm, however large, is not touching skin while a fingertip touches), their
     bright and sharp cores (see the module's docstring) as regions: (k, 3) area mm^2,
-    x px, y px, largest first."""
+    x px, y px, largest first; with ``palms_px`` (the hands' palms, x y px) a
+    fingertip-sized region's position is its far end from the nearest palm
+    (``far_ends``), else its centroid."""
     x0, y0, x1, y1 = parts.win
     cut = min(max(math.floor(TOUCH_SHARE * float(parts.peak.max())), 1), 254)
     _, on = cv2.threshold(diff[y0:y1, x0:x1], cut, 255, cv2.THRESH_BINARY)
@@ -99,7 +114,38 @@ def touch_regions(diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float) -
         sharp &= (steep >= SHARP_PER_MM) | soft
     keep = np.flatnonzero(sharp)
     keep = keep[np.argsort(-area[keep])]
-    return np.column_stack([area[keep], cents[keep] + (x0 + bx0, y0 + by0)]).reshape(-1, 3)
+    origin = np.array([x0 + bx0, y0 + by0], float)
+    at = cents[keep] + origin
+    if palms_px is not None and len(palms_px):
+        at = far_ends(lab, stats, keep, at, area, origin, palms_px, px_per_mm)
+    return np.column_stack([area[keep], at]).reshape(-1, 3)
+
+
+def far_ends(lab, stats, keep, at, area, origin, palms_px, px_per_mm) -> np.ndarray:
+    """``at`` ((k, 2) px, the regions ``keep`` of ``lab``) with each fingertip-sized
+    region (``END_MAX_MM2``) placed from its far end from the nearest palm along the
+    palm-to-centroid direction (see ``END_MAX_MM2``)."""
+    palms = np.asarray(palms_px, float).reshape(-1, 2)
+    out = at.copy()
+    for row, i in enumerate(keep):
+        if area[i] > END_MAX_MM2:
+            continue
+        d = at[row] - palms
+        j = int(np.argmin((d**2).sum(1)))
+        dist = float(np.hypot(*d[j]))
+        if dist < END_PALM_MM * px_per_mm:
+            continue
+        x, y, w, h = stats[i, :4]
+        ys, xs = np.nonzero(lab[y : y + h, x : x + w] == i)
+        pts = np.column_stack([xs + x, ys + y]).astype(float) + origin
+        u = d[j] / dist
+        along, across = (pts - palms[j]) @ u, (pts - palms[j]) @ np.array([-u[1], u[0]])
+        end = along >= along.max() - END_MM * px_per_mm
+        # the pad's centre: half the region's width back from its far end (a round
+        # contact's centre), never behind its centroid (a contact wider than long)
+        back = max(along.max() - 0.5 * (np.ptp(across) + 1.0), float(along.mean()))
+        out[row] = palms[j] + back * u + float(across[end].mean()) * np.array([-u[1], u[0]])
+    return out
 
 
 def core_sharpness(
@@ -151,7 +197,7 @@ class FrameTouch:
         palms_px: list,
         same_px: float,
     ) -> None:
-        self._inputs: tuple | None = (diff, body, parts, px_per_mm)
+        self._inputs: tuple | None = (diff, body, parts, px_per_mm, palms_px)
         self._palms, self._same_px = list(palms_px), same_px
         self._regions: np.ndarray | None = None
 

@@ -1,0 +1,88 @@
+"""Where a fingertip is: its contact grows and shrinks toward the palm (a finger pressed
+flatter or lighter, the finger just above the glass clipping under bright light) while
+its far end stays. A resting fingertip whose contact grows is not a moving one; a
+sliding one still moves. And which fingertips move: a zoom moves two while curled
+fingers rest on the glass, a spread moves them all."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from plugins.gestures.features import frame_record
+from plugins.gestures.physical import MOTION_NAMES, physical_motion, tips_mm
+from plugins.gestures.vision import VisionParams, process_frame
+
+PPM = 0.86
+PALM = (320, 330)
+
+
+def _finger(tip_mm: float, contact_mm: float, light: float = 1.0):
+    """A frame and its background: a dim hovering hand pointing up, its fingertip's far
+    end ``tip_mm`` above the palm centre, touching the glass over its last
+    ``contact_mm`` (a capsule 12 mm wide)."""
+    rng = np.random.default_rng(3)
+    bg = np.full((480, 640), 30.0)
+    hand = np.zeros_like(bg, np.uint8)
+    cx, cy = PALM
+    cv2.ellipse(hand, (cx, cy), (int(45 * PPM), int(55 * PPM)), 0, 0, 360, 1, -1)
+    cv2.rectangle(hand, (cx - int(30 * PPM), cy), (cx + int(30 * PPM), 479), 1, -1)
+    end = (cx, cy - int(round(tip_mm * PPM)))
+    cv2.line(hand, (cx, cy), end, 1, int(14 * PPM))
+    img = bg + 35.0 * light * cv2.GaussianBlur(hand.astype(float), (0, 0), 3)
+    tip = np.zeros((480 * 4, 640 * 4), np.uint8)  # drawn at 4x for sub-pixel lengths
+    r = 6.0 * PPM * 4
+    top = (end[0] * 4, int(round((cy - tip_mm * PPM) * 4 + r)))
+    bottom = (end[0] * 4, int(round((cy - (tip_mm - contact_mm) * PPM) * 4 + r)))
+    cv2.line(tip, top, bottom, 255, int(2 * r))
+    tip = cv2.resize(tip, (640, 480), interpolation=cv2.INTER_AREA) / 255.0
+    img += 180.0 * light * tip
+    as8 = lambda a: np.clip(a + 0.5, 0, 255).astype(np.uint8)  # noqa: E731
+    return as8(img + rng.normal(0, 1.5, img.shape)), as8(bg + rng.normal(0, 1.5, bg.shape))
+
+
+def _tip_mm(tip_mm: float, contact_mm: float, light: float = 1.0) -> np.ndarray:
+    img, bg = _finger(tip_mm, contact_mm, light)
+    rec = frame_record(process_frame(img, bg, VisionParams()))
+    assert rec is not None
+    tips = tips_mm(rec)
+    assert len(tips) == 1, rec["regions_mm"]
+    return tips[0]
+
+
+@pytest.mark.parametrize("light", [0.7, 1.0, 1.3])
+def test_a_resting_fingertip_pressed_flatter_stays_where_it_is(light):
+    """The contact grows from 2 to 10 mm along the finger (its centroid 4 mm toward the
+    palm): the fingertip's position moves less than 1 mm."""
+    light_touch = _tip_mm(90.0, 2.0, light)
+    pressed = _tip_mm(90.0, 10.0, light)
+    assert np.linalg.norm(pressed - light_touch) < 1.0, (light_touch, pressed)
+
+
+def test_a_sliding_fingertip_still_moves():
+    """The same fingertip slid 6 mm away from the palm moves 6 mm (within 1 mm)."""
+    moved = np.linalg.norm(_tip_mm(96.0, 6.0) - _tip_mm(90.0, 6.0))
+    assert moved == pytest.approx(6.0, abs=1.0)
+
+
+def _recs(tracks_mm: list[list[tuple[float, float]]]) -> list[dict]:
+    """Frame records of fingertips following ``tracks_mm`` (one list of points per tip)."""
+    out = []
+    for f in range(len(tracks_mm[0])):
+        reg = np.array([[120.0, *t[f]] for t in tracks_mm])
+        out.append({"regions_mm": reg, "touch_mm2": 120.0 * len(reg), "solidity": 0.0})
+    return out
+
+
+def test_the_fingertips_that_move_are_counted():
+    """A zoom: thumb and index part by 3 mm a frame each while two curled fingers rest on
+    the glass; a spread: all four part. The count of moving fingertips tells them apart
+    (the twin's zooms with curled fingers touching made spreads read as zooms)."""
+    col = MOTION_NAMES.index("tracks_moving")
+    rest = [[(30.0, 0.0)] * 4, [(45.0, 0.0)] * 4]
+    zoom = [[(0.0, -3.0 * f) for f in range(4)], [(0.0, 20.0 + 3.0 * f) for f in range(4)]]
+    spread = [[(15.0 * i + 2.0 * f * (i - 1.5), 3.0 * f) for f in range(4)] for i in range(4)]
+    assert physical_motion(_recs(zoom + rest))[col] == 2
+    assert physical_motion(_recs(spread))[col] == 4
+    assert physical_motion(_recs(rest))[col] == 0
