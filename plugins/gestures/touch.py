@@ -54,8 +54,9 @@ SHARP_PER_MM = 0.19
 RELATIVE_SHARP = 0.55
 RELATIVE_LEVEL = 0.85
 #: a fingertip-sized region (up to this, mm^2) is placed from its far end from the
-#: hand's palm: half its width back from that end, across it where its pixels within
-#: ``END_MM`` of the end are (a round contact's centre). A fingertip's contact
+#: hand's palm along its own long axis: half its width back from that end, across it
+#: where its pixels within ``END_MM`` of the end are (a round contact's centre). A
+#: fingertip's contact
 #: grows and shrinks toward the palm (a finger pressed flatter or lighter, the finger
 #: just above the glass clipping under bright light) while its end stays: the
 #: centroid of a resting fingertip stepped 3-5 mm when its contact grew by 40 %
@@ -123,8 +124,8 @@ def touch_regions(
 
 def far_ends(lab, stats, keep, at, area, origin, palms_px, px_per_mm) -> np.ndarray:
     """``at`` ((k, 2) px, the regions ``keep`` of ``lab``) with each fingertip-sized
-    region (``END_MAX_MM2``) placed from its far end from the nearest palm along the
-    palm-to-centroid direction (see ``END_MAX_MM2``)."""
+    region (``END_MAX_MM2``) placed from its far end along its long axis, the end away
+    from the nearest palm (see ``END_MAX_MM2``)."""
     palms = np.asarray(palms_px, float).reshape(-1, 2)
     out = at.copy()
     for row, i in enumerate(keep):
@@ -138,13 +139,18 @@ def far_ends(lab, stats, keep, at, area, origin, palms_px, px_per_mm) -> np.ndar
         x, y, w, h = stats[i, :4]
         ys, xs = np.nonzero(lab[y : y + h, x : x + w] == i)
         pts = np.column_stack([xs + x, ys + y]).astype(float) + origin
-        u = d[j] / dist
-        along, across = (pts - palms[j]) @ u, (pts - palms[j]) @ np.array([-u[1], u[0]])
+        # the region's own long axis (a fingertip and the finger just above the glass
+        # beside it), pointing away from the palm
+        rel = pts - at[row]
+        _, vecs = np.linalg.eigh(rel.T @ rel)
+        u = vecs[:, 1] if vecs[:, 1] @ d[j] >= 0 else -vecs[:, 1]
+        v = np.array([-u[1], u[0]])
+        along, across = rel @ u, rel @ v
         end = along >= along.max() - END_MM * px_per_mm
         # the pad's centre: half the region's width back from its far end (a round
         # contact's centre), never behind its centroid (a contact wider than long)
-        back = max(along.max() - 0.5 * (np.ptp(across) + 1.0), float(along.mean()))
-        out[row] = palms[j] + back * u + float(across[end].mean()) * np.array([-u[1], u[0]])
+        back = max(along.max() - 0.5 * (np.ptp(across) + 1.0), 0.0)
+        out[row] = at[row] + back * u + float(across[end].mean()) * v
     return out
 
 

@@ -18,32 +18,35 @@ PPM = 0.86
 PALM = (320, 330)
 
 
-def _finger(tip_mm: float, contact_mm: float, light: float = 1.0):
-    """A frame and its background: a dim hovering hand pointing up, its fingertip's far
-    end ``tip_mm`` above the palm centre, touching the glass over its last
-    ``contact_mm`` (a capsule 12 mm wide)."""
+def _finger(tip_mm: float, contact_mm: float, light: float = 1.0, base_dx_mm: float = 0.0):
+    """A frame and its background: a dim hovering hand, a finger from ``base_dx_mm``
+    beside its palm centre to a fingertip ``tip_mm`` above it, touching the glass over its
+    last ``contact_mm`` (a capsule 12 mm wide)."""
     rng = np.random.default_rng(3)
     bg = np.full((480, 640), 30.0)
     hand = np.zeros_like(bg, np.uint8)
     cx, cy = PALM
     cv2.ellipse(hand, (cx, cy), (int(45 * PPM), int(55 * PPM)), 0, 0, 360, 1, -1)
     cv2.rectangle(hand, (cx - int(30 * PPM), cy), (cx + int(30 * PPM), 479), 1, -1)
-    end = (cx, cy - int(round(tip_mm * PPM)))
-    cv2.line(hand, (cx, cy), end, 1, int(14 * PPM))
+    base = np.array([cx + base_dx_mm * PPM, cy])
+    end = np.array([cx, cy - tip_mm * PPM])
+    cv2.line(hand, tuple(int(v) for v in base), tuple(int(v) for v in end), 1, int(14 * PPM))
     img = bg + 35.0 * light * cv2.GaussianBlur(hand.astype(float), (0, 0), 3)
     tip = np.zeros((480 * 4, 640 * 4), np.uint8)  # drawn at 4x for sub-pixel lengths
-    r = 6.0 * PPM * 4
-    top = (end[0] * 4, int(round((cy - tip_mm * PPM) * 4 + r)))
-    bottom = (end[0] * 4, int(round((cy - (tip_mm - contact_mm) * PPM) * 4 + r)))
-    cv2.line(tip, top, bottom, 255, int(2 * r))
+    r = 6.0 * PPM
+    back = (base - end) / np.linalg.norm(base - end)
+    top, bottom = end + r * back, end + (r + contact_mm * PPM) * back
+    cv2.line(
+        tip, tuple(int(v) for v in top * 4), tuple(int(v) for v in bottom * 4), 255, int(8 * r)
+    )
     tip = cv2.resize(tip, (640, 480), interpolation=cv2.INTER_AREA) / 255.0
     img += 180.0 * light * tip
     as8 = lambda a: np.clip(a + 0.5, 0, 255).astype(np.uint8)  # noqa: E731
     return as8(img + rng.normal(0, 1.5, img.shape)), as8(bg + rng.normal(0, 1.5, bg.shape))
 
 
-def _tip_mm(tip_mm: float, contact_mm: float, light: float = 1.0) -> np.ndarray:
-    img, bg = _finger(tip_mm, contact_mm, light)
+def _tip_mm(tip_mm: float, contact_mm: float, light: float = 1.0, dx: float = 0.0) -> np.ndarray:
+    img, bg = _finger(tip_mm, contact_mm, light, dx)
     rec = frame_record(process_frame(img, bg, VisionParams()))
     assert rec is not None
     tips = tips_mm(rec)
@@ -57,6 +60,16 @@ def test_a_resting_fingertip_pressed_flatter_stays_where_it_is(light):
     palm): the fingertip's position moves less than 1 mm."""
     light_touch = _tip_mm(90.0, 2.0, light)
     pressed = _tip_mm(90.0, 10.0, light)
+    assert np.linalg.norm(pressed - light_touch) < 1.0, (light_touch, pressed)
+
+
+@pytest.mark.parametrize("base_dx_mm", [-60.0, 50.0])
+def test_a_fingertip_on_a_finger_slanted_to_the_palm_stays_where_it_is(base_dx_mm):
+    """A thumb or a finger bent sideways does not point at the palm's centre: its
+    contact grows back along the finger, not toward the palm, and the fingertip stays
+    within 1 mm."""
+    light_touch = _tip_mm(90.0, 2.0, 1.3, base_dx_mm)
+    pressed = _tip_mm(90.0, 12.0, 1.3, base_dx_mm)
     assert np.linalg.norm(pressed - light_touch) < 1.0, (light_touch, pressed)
 
 
