@@ -155,15 +155,27 @@ def _points(rec: dict, flat: bool) -> np.ndarray:
 
 def _tracks(recs: Sequence[dict], gate_mm: float) -> list[np.ndarray]:
     """Touching regions followed through the records, a frame missed here and there:
-    (m, 3) tracks of (frame, x mm, y mm) seen in the first and the last record."""
-    from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
-
+    (m, 3) tracks of (frame, x mm, y mm) seen in the first and the last record: a flat
+    hand's touching skin as a whole (``_flat_track``), else the fingertips, or, when none
+    of them is followed through (fingertips gathered into one region too large for one,
+    as a pile starts under light that clips), every touching region."""
     flat = sum(is_flat(r) for r in recs) * 2 > len(recs)  # one choice for the window
     if flat:
         return _flat_track(recs, gate_mm)
-    tracks = [[(0, *p)] for p in _points(recs[0], flat)]
+    return _follow(recs, tips_mm, gate_mm) or _follow(
+        recs, lambda r: r["regions_mm"][:, 1:], gate_mm
+    )
+
+
+def _follow(recs: Sequence[dict], points, gate_mm: float) -> list[np.ndarray]:
+    """The ``points(rec)`` ((k, 2) mm) of the records matched from frame to frame
+    (least total distance, within ``gate_mm`` per frame): the tracks seen in the first
+    and the last record."""
+    from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
+
+    tracks = [[(0, *p)] for p in points(recs[0])]
     for f, rec in enumerate(recs[1:], start=1):
-        cur = _points(rec, flat)
+        cur = points(rec)
         if not tracks or not len(cur):
             continue
         last = np.array([t[-1][1:] for t in tracks])

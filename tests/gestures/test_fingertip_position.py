@@ -99,3 +99,23 @@ def test_the_fingertips_that_move_are_counted():
     assert physical_motion(_recs(zoom + rest))[col] == 2
     assert physical_motion(_recs(spread))[col] == 4
     assert physical_motion(_recs(rest))[col] == 0
+
+
+def test_fingertips_gathered_into_one_region_that_parts_are_moving():
+    """A pile under light that clips starts as one region of 2200 mm^2 (five fingertips
+    gathered, too large for one) that parts into pieces: no fingertip is followed through
+    the window, and the hand moved (it read as a resting hand, no motion at all)."""
+    blob = {"regions_mm": np.array([[2200.0, 100.0, 100.0]]), "touch_mm2": 2200.0, "solidity": 0.0}
+    parts = [
+        {
+            "regions_mm": np.array(
+                [[1500.0, 100.0 - 4 * f, 100.0 - 4 * f], [700.0, 110.0 + 4 * f, 120.0]]
+            ),
+            "touch_mm2": 2200.0,
+            "solidity": 0.0,
+        }
+        for f in (1, 2, 3)
+    ]
+    m = physical_motion([blob, *parts])
+    assert m[MOTION_NAMES.index("tracks")] == 1
+    assert m[MOTION_NAMES.index("track_dmax_mm")] > 5.0
