@@ -138,14 +138,15 @@ def far_ends(lab, stats, keep, at, area, origin, palms_px, px_per_mm) -> np.ndar
             continue
         x, y, w, h = stats[i, :4]
         ys, xs = np.nonzero(lab[y : y + h, x : x + w] == i)
-        pts = np.column_stack([xs + x, ys + y]).astype(float) + origin
+        rx = xs + (x + origin[0] - at[row, 0])  # pixels about the centroid
+        ry = ys + (y + origin[1] - at[row, 1])
         # the region's own long axis (a fingertip and the finger just above the glass
         # beside it), pointing away from the palm
-        rel = pts - at[row]
-        _, vecs = np.linalg.eigh(rel.T @ rel)
-        u = vecs[:, 1] if vecs[:, 1] @ d[j] >= 0 else -vecs[:, 1]
+        t = 0.5 * math.atan2(2.0 * float(rx @ ry), float(rx @ rx - ry @ ry))
+        u = np.array([math.cos(t), math.sin(t)])
+        u = u if u @ d[j] >= 0 else -u
         v = np.array([-u[1], u[0]])
-        along, across = rel @ u, rel @ v
+        along, across = rx * u[0] + ry * u[1], rx * v[0] + ry * v[1]
         end = along >= along.max() - END_MM * px_per_mm
         # the pad's centre: half the region's width back from its far end (a round
         # contact's centre), never behind its centroid (a contact wider than long)
@@ -164,10 +165,13 @@ def core_sharpness(
     rise = np.maximum(np.abs(dx), np.abs(dy)).astype(np.float32)
     ratio = cv2.dilate(rise * (px_per_mm / 8.0) / np.maximum(near, 1).astype(np.float32), None)
     inside = lab > 0
-    best = np.zeros(n, np.float32)
-    np.maximum.at(best, lab[inside], ratio[inside])
-    level = np.zeros(n, np.float32)
-    np.maximum.at(level, lab[inside], sub[inside])
+    idx = lab[inside]
+    order = np.argsort(idx, kind="stable")  # per label: a sort and a reduce (ufunc.at is slow)
+    idx = idx[order]
+    starts = np.flatnonzero(np.r_[True, idx[1:] != idx[:-1]])
+    best, level = np.zeros(n, np.float32), np.zeros(n, np.float32)
+    best[idx[starts]] = np.maximum.reduceat(ratio[inside][order], starts)
+    level[idx[starts]] = np.maximum.reduceat(sub[inside][order], starts)
     return best, level
 
 
