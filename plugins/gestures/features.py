@@ -26,6 +26,7 @@ from .hand_shape import GRID_RINGS, GRID_SECTORS
 from .physical import (
     COUNT_INDEX,
     FLAT_INDEX,
+    MOTION_NAMES,
     N_PHYS_MOTION,
     N_PHYS_STATIC,
     REFERENCE_FPS,
@@ -322,9 +323,15 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 
 def select_kind(x: np.ndarray) -> np.ndarray:
     """What the static/dynamic classifier sees, from (n, N_MOTION) motion rows: the
-    touching skin's motion in mm (``physical.physical_motion``); motion measured in the
-    hand's own scale depends on how much of its hovering palm is seen."""
-    return motion_view(np.atleast_2d(x)[:, 22:N_MOTION])
+    touching skin's motion in mm (``physical.physical_motion``) but how many tracks moved
+    beyond the tremor floor (a count at a hard threshold: a model trained on fast
+    starts learns "moving means at least one", and slow starts on another table fall
+    below it; it tells gestures apart, not whether there is one); motion measured in
+    the hand's own scale depends on how much of its hovering palm is seen."""
+    return np.delete(motion_view(np.atleast_2d(x)[:, 22:N_MOTION]), _MOVING, axis=1)
+
+
+_MOVING = MOTION_NAMES.index("tracks_moving")
 
 
 def sample_records(

@@ -119,3 +119,20 @@ def test_fingertips_gathered_into_one_region_that_parts_are_moving():
     m = physical_motion([blob, *parts])
     assert m[MOTION_NAMES.index("tracks")] == 1
     assert m[MOTION_NAMES.index("track_dmax_mm")] > 5.0
+
+
+def test_whether_a_hand_moves_is_not_decided_by_the_count_of_moving_tips():
+    """The count of fingertips past the tremor floor tells a zoom from a spread, but not
+    static from dynamic: trained on fast starts it reads as "moving means at least one",
+    and a slow start on another table (2-3 mm by the 4th frame) fell below it (phalanx
+    -> twin dynamic 0.93 -> 0.80). Two motion rows differing only in it look the same to
+    the static-vs-dynamic classifier."""
+    from plugins.gestures.features import N_MOTION, select_kind
+
+    rest = [[(30.0, 0.0)] * 4, [(45.0, 0.0)] * 4]
+    zoom = [[(0.0, -3.0 * f) for f in range(4)], [(0.0, 20.0 + 3.0 * f) for f in range(4)]]
+    row = np.zeros((2, N_MOTION))
+    row[:, N_MOTION - len(MOTION_NAMES) :] = physical_motion(_recs(zoom + rest))
+    row[1, N_MOTION - len(MOTION_NAMES) + MOTION_NAMES.index("tracks_moving")] = 0
+    kind = select_kind(row)
+    assert np.array_equal(kind[0], kind[1])
