@@ -26,6 +26,7 @@ from .hand_shape import GRID_RINGS, GRID_SECTORS
 from .physical import (
     COUNT_INDEX,
     FLAT_INDEX,
+    MOTION_NAMES,
     N_PHYS_MOTION,
     N_PHYS_STATIC,
     REFERENCE_FPS,
@@ -252,10 +253,18 @@ def motion_score(records: Sequence[dict | None], fps: float = REFERENCE_FPS) -> 
 def dynamic_features(
     records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4, fps: float = 60.0
 ) -> np.ndarray:
-    """First-frame static features plus the motion over the first ``n_frames`` frames."""
+    """The static features over the window (``static_features``: the mean of its frames,
+    as the static classifier sees them) with the most fingertips any of its frames shows
+    (fingertips that touch each other merge into one region as a pinch or a pile of
+    fingers starts or ends, and a dim one may be missed in a frame), plus the motion over
+    the first ``n_frames`` frames."""
     recs = list(records[:n_frames])
-    first = next((r for r in recs if r is not None), None)
-    return np.concatenate([record_static(first, n_harmonics), motion_features(recs, fps)])
+    static = static_features(recs, n_harmonics, n_frames)
+    shown = [r for r in recs if r is not None]
+    if shown:
+        count = static_size(n_harmonics) - N_PHYS_STATIC + COUNT_INDEX
+        static[count] = max(physical_static(r)[COUNT_INDEX] for r in shown)
+    return np.concatenate([static, motion_features(recs, fps)])
 
 
 MAX_COUNT_CODE = 5
@@ -294,7 +303,8 @@ def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 
 def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the dynamic classifier sees, from (n, static_size(n_max) + N_MOTION) rows:
-    Fourier magnitudes and touching skin of the first frame (as ``select_static``) and
+    Fourier magnitudes and touching skin over the window (as ``select_static``; the most
+    fingertips a frame shows, ``dynamic_features``) and
     the touching skin's motion in mm (``physical.physical_motion``), and the contacts'
     change of scale (|log|, no unit: it tells a zoom from a rotation on the twin's
     slow-starting gestures, LOSO dynamic 0.933 -> 0.960, and changes no cross-renderer
@@ -313,9 +323,15 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 
 def select_kind(x: np.ndarray) -> np.ndarray:
     """What the static/dynamic classifier sees, from (n, N_MOTION) motion rows: the
-    touching skin's motion in mm (``physical.physical_motion``); motion measured in the
-    hand's own scale depends on how much of its hovering palm is seen."""
-    return motion_view(np.atleast_2d(x)[:, 22:N_MOTION])
+    touching skin's motion in mm (``physical.physical_motion``) but how many tracks moved
+    beyond the tremor floor (a count at a hard threshold: a model trained on fast
+    starts learns "moving means at least one", and slow starts on another table fall
+    below it; it tells gestures apart, not whether there is one); motion measured in
+    the hand's own scale depends on how much of its hovering palm is seen."""
+    return np.delete(motion_view(np.atleast_2d(x)[:, 22:N_MOTION]), _MOVING, axis=1)
+
+
+_MOVING = MOTION_NAMES.index("tracks_moving")
 
 
 def sample_records(

@@ -10,7 +10,9 @@ falloff). Over a decision window
 (``physical_motion``): the fingertips (or a flat hand's touching skin) followed
 through the frames, each track's least-squares line less what its own jitter explains
 (``beyond_jitter``): their common shift, largest / smallest / mean displacement, the
-largest raw end-to-end one, turn, arc, change of spacing and radial motion. Motion is
+largest raw end-to-end one, turn, arc, change of spacing, radial motion and how many
+of them moved beyond a tremor. A fingertip is where its far end from the palm is
+(``touch.far_ends``), not its contact's centroid, which a finger pressed flatter moves. Motion is
 scaled to 60 fps (a gesture filmed at 48 fps moves 60/48 as far per frame);
 ``motion_view`` is what the classifiers see of it.
 
@@ -26,13 +28,16 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-#: a hand whose touching skin exceeds this (mm^2) lies flat on the glass
-FLAT_MM2 = 2000.0
+#: a hand whose touching skin exceeds this (mm^2) lies flat on the glass: a flat hand
+#: touches with 4000-16000 mm^2 on three renderers; five fingertips whose plateaus clip
+#: under bright light (each taking in the finger just above the glass) reach 2400
+FLAT_MM2 = 3000.0
 #: fingertip-sized regions: within these areas (mm^2) and at least this share of the
-#: largest such region (a curled finger's knuckle brushing the glass is smaller); under
-#: light that clips, a fingertip's plateau takes in the finger just above the glass
-#: (600-1000 mm^2 at x1.3 on the silhouette renderer)
-TIP_MM2 = (40.0, 1500.0)
+#: largest such region (a curled finger's knuckle brushing the glass is smaller); a
+#: light touch, or skin that a camera's optics shrink by a pixel, shows 20-40 mm^2;
+#: under light that clips, a fingertip's plateau takes in the finger just above the
+#: glass (600-1000 mm^2 at x1.3 on the silhouette renderer)
+TIP_MM2 = (20.0, 1500.0)
 TIP_SHARE = 0.3
 #: touching regions followed through the frames: at most this far between frames at
 #: 60 fps (mm)
@@ -46,7 +51,7 @@ STATIC_NAMES = (
 MOTION_NAMES = (
     "shift_mm", "tracks", "track_dmax_mm", "track_dmin_mm", "track_dmean_mm",
     "track_end_mm", "track_turn_deg", "track_arc_mm", "track_spacing_mm",
-    "track_radial_mm",
+    "track_radial_mm", "tracks_moving",
 )  # fmt: skip
 N_PHYS_STATIC = len(STATIC_NAMES)
 N_PHYS_MOTION = len(MOTION_NAMES)
@@ -150,15 +155,27 @@ def _points(rec: dict, flat: bool) -> np.ndarray:
 
 def _tracks(recs: Sequence[dict], gate_mm: float) -> list[np.ndarray]:
     """Touching regions followed through the records, a frame missed here and there:
-    (m, 3) tracks of (frame, x mm, y mm) seen in the first and the last record."""
-    from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
-
+    (m, 3) tracks of (frame, x mm, y mm) seen in the first and the last record: a flat
+    hand's touching skin as a whole (``_flat_track``), else the fingertips, or, when none
+    of them is followed through (fingertips gathered into one region too large for one,
+    as a pile starts under light that clips), every touching region."""
     flat = sum(is_flat(r) for r in recs) * 2 > len(recs)  # one choice for the window
     if flat:
         return _flat_track(recs, gate_mm)
-    tracks = [[(0, *p)] for p in _points(recs[0], flat)]
+    return _follow(recs, tips_mm, gate_mm) or _follow(
+        recs, lambda r: r["regions_mm"][:, 1:], gate_mm
+    )
+
+
+def _follow(recs: Sequence[dict], points, gate_mm: float) -> list[np.ndarray]:
+    """The ``points(rec)`` ((k, 2) mm) of the records matched from frame to frame
+    (least total distance, within ``gate_mm`` per frame): the tracks seen in the first
+    and the last record."""
+    from scipy.optimize import linear_sum_assignment  # lazy: scipy is slow to import
+
+    tracks = [[(0, *p)] for p in points(recs[0])]
     for f, rec in enumerate(recs[1:], start=1):
-        cur = _points(rec, flat)
+        cur = points(rec)
         if not tracks or not len(cur):
             continue
         last = np.array([t[-1][1:] for t in tracks])
@@ -264,6 +281,9 @@ def physical_motion(records: Sequence[dict | None], fps: float = REFERENCE_FPS) 
     se_mean = float(np.mean([se for _, se in fits]))
     v[0] = k * beyond_jitter(float(np.linalg.norm(t)), se_mean / math.sqrt(len(fits)))
     v[2], v[3], v[4] = k * disp.max(), k * disp.min(), k * disp.mean()
+    # how many of them moved beyond a tremor (a zoom moves two fingertips while curled
+    # fingers rest on the glass; a spread or pile moves them all)
+    v[10] = min(int(np.count_nonzero(k * disp > TREMOR_MM)), 6)
     v[5] = k * max(float(np.linalg.norm(tr[-1, 1:] - tr[0, 1:])) for tr in tracks)
     if len(tracks) >= 2:
         ra = np.linalg.norm(a - a.mean(0), axis=1)
@@ -302,8 +322,8 @@ def motion_view(m: np.ndarray) -> np.ndarray:
     floor = np.full(N_PHYS_MOTION, TREMOR_MM)
     floor[MOTION_NAMES.index("track_turn_deg")] = TREMOR_DEG
     out = np.log1p(np.maximum(m - floor, 0.0))
-    i = MOTION_NAMES.index("tracks")
-    out[:, i] = m[:, i]
+    for i in (MOTION_NAMES.index("tracks"), MOTION_NAMES.index("tracks_moving")):
+        out[:, i] = m[:, i]
     return out
 
 

@@ -108,3 +108,74 @@ def test_a_pointing_hand_reads_the_same_when_bright_light_grows_its_fingertip():
     grown = {"regions_mm": np.array([[900.0, 50.0, 63.0]]), "touch_mm2": 900.0, "solidity": 0.0}
     assert len(tips_mm(grown)) == 1
     assert np.array_equal(physical_static(small), physical_static(grown))
+
+
+def _two_tips(blur_a_px: float, blur_b_px: float):
+    """A dim hovering hand with two fingertips 40 mm apart on the glass, each blurred by
+    its own defocus (a tilted camera, a diffuser thicker on one side)."""
+    ppm = 0.86
+    rng = np.random.default_rng(1)
+    bg = np.full((480, 640), 30.0)
+    hand = np.zeros_like(bg, np.uint8)
+    cx, cy = 320, 300
+    cv2.ellipse(hand, (cx, cy), (int(45 * ppm), int(55 * ppm)), 0, 0, 360, 1, -1)
+    cv2.rectangle(hand, (cx - int(30 * ppm), cy), (cx + int(30 * ppm), 479), 1, -1)
+    img = bg.copy()
+    for dx, blur in ((-20, blur_a_px), (20, blur_b_px)):
+        x, y = cx + int(dx * ppm), cy - int(90 * ppm)
+        cv2.line(hand, (cx, cy), (x, y), 1, int(14 * ppm))
+        tip = np.zeros_like(bg)
+        cv2.circle(tip, (x, y), int(6 * ppm), 1.0, -1)
+        img += 180.0 * cv2.GaussianBlur(tip, (0, 0), blur)
+    img += 35.0 * cv2.GaussianBlur(hand.astype(float), (0, 0), 3)
+    as8 = lambda a: np.clip(a + 0.5, 0, 255).astype(np.uint8)  # noqa: E731
+    return as8(img + rng.normal(0, 1.5, img.shape)), as8(bg + rng.normal(0, 1.5, bg.shape))
+
+
+@pytest.mark.parametrize("blurs", [(1.0, 1.6), (1.6, 1.0), (1.3, 2.0)])
+def test_two_fingertips_out_of_focus_by_different_amounts_both_touch(blurs):
+    """A defocused camera softens each fingertip's edge below the sharp bar, one more
+    than the other: both are touching skin, as sharp and as bright as each other within
+    what defocus does (a two-finger pose read as one finger in 1 frame in 3 on the
+    randomised twin)."""
+    rec = _record(*_two_tips(*blurs))
+    assert len(tips_mm(rec)) == 2, rec["regions_mm"]
+
+
+def _tips_rec(areas_mm2, spacing_mm: float = 20.0) -> dict:
+    """A frame record of fingertips of ``areas_mm2`` in a row ``spacing_mm`` apart."""
+    reg = np.array([[a, 100.0 + spacing_mm * i, 50.0] for i, a in enumerate(areas_mm2)])
+    return {"regions_mm": reg.reshape(-1, 3), "touch_mm2": float(sum(areas_mm2)), "solidity": 0.0}
+
+
+def test_five_fingertips_grown_by_clipped_light_are_not_a_flat_hand():
+    """Under light that clips, each of five fingertips (a spread or pile) takes in the
+    finger just above the glass (350-700 mm^2 each, 2400 in all): still five fingertips,
+    not a flat hand's touching skin (read as a wipe or a closed hand before)."""
+    rec = _tips_rec([700.0, 500.0, 450.0, 400.0, 350.0])
+    v = physical_static(rec)
+    assert v[COL["flat"]] == 0.0 and v[COL["tips"]] == 5
+
+
+def test_a_light_touch_is_a_fingertip():
+    """A fingertip touching lightly (or skin shrunk by a pixel by the camera's optics)
+    shows 25 mm^2: it is a fingertip, so a drag is one finger moving, not no finger."""
+    assert len(tips_mm(_tips_rec([25.0]))) == 1
+    assert physical_static(_tips_rec([25.0, 28.0]))[COL["tips"]] == 2
+
+
+def test_a_pile_whose_fingertips_start_together_shows_five_fingertips():
+    """Fingertips touching each other merge into one region: a pile that starts with
+    the fingers gathered shows 2 regions in its first frame and 5 once they part. The
+    dynamic classifier sees the 5 (the most the window shows), not the first frame's 2
+    (a pile read as a zoom or a two-finger drag)."""
+    from plugins.gestures.features import N_GRID, desc_size, dynamic_features, select_dynamic
+
+    recs = [_tips_rec([400.0, 150.0], 25.0)] + [_tips_rec([120.0] * 5, 20.0 + f) for f in (1, 2, 3)]
+    for r in recs:
+        r.update(palm_px=np.zeros(2), palm_radius_px=40.0, bright_px=np.zeros(2), angle_deg=0.0,
+                 descriptors=np.zeros(desc_size(2)), grid=np.zeros(N_GRID), fingers=0,
+                 contacts_px=np.zeros((0, 2)), contacts_canon=np.zeros((0, 2)))  # fmt: skip
+    x = select_dynamic(dynamic_features(recs, 2, 4)[None], 2, 2)[0]
+    magnitudes = 2 * 2 - 1  # the classifier's row: magnitudes, then the physical columns
+    assert x[magnitudes + COL["tips"]] == 5
