@@ -225,16 +225,18 @@ def relative_body(
     peak = np.zeros(n)
     for i in seeded:
         peak[i] = float(seed_val[seed_lab == i].max())
-    # each block keeps its part's label, grown by one block so a part's edge pixels
-    # (brighter than their block's mean) keep it too
-    keep = np.where(real, np.arange(n), 0).astype(np.uint16)
-    blocks = cv2.dilate(keep[lab], _BLOCK3).astype(np.int32)
     # the grown parts' box: the parts' boxes, one block wider on each side
     st = stats[seeded]
     c0 = max(int(st[:, cv2.CC_STAT_LEFT].min()) - 1, 0)
     r0 = max(int(st[:, cv2.CC_STAT_TOP].min()) - 1, 0)
     c1 = min(int((st[:, cv2.CC_STAT_LEFT] + st[:, cv2.CC_STAT_WIDTH]).max()) + 1, wb)
     r1 = min(int((st[:, cv2.CC_STAT_TOP] + st[:, cv2.CC_STAT_HEIGHT]).max()) + 1, hb)
+    # each block keeps its part's label, grown by one block so a part's edge pixels
+    # (brighter than their block's mean) keep it too: made in that box only (outside
+    # it every block is two or more from a hand's part: 0)
+    keep = np.where(real, np.arange(n), 0).astype(np.uint16)
+    blocks = np.zeros((hb, wb), np.int32)
+    blocks[r0:r1, c0:c1] = cv2.dilate(keep[lab[r0:r1, c0:c1]], _BLOCK3)
     reach = smooth_px // 2 if smooth_px > 1 else 0
     box = (c0 * b, r0 * b, c1 * b, r1 * b)
     x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
