@@ -30,7 +30,14 @@ from .orientation import Orientation
 from .rules import GestureRules, StillHand
 from .settings import calibration_file, model_file
 from .sketch import DYNAMIC
-from .vision import FrameResult, VisionParams, check_frame, process_frame, vision_params
+from .vision import (
+    FrameResult,
+    VisionParams,
+    check_frame,
+    foreground_window,
+    process_frame,
+    vision_params,
+)
 
 log = logging.getLogger(__name__)
 
@@ -330,15 +337,21 @@ class SvmClassifier:
         o = self.orientation
         if o.identity:
             res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
-            hands = res.masks["foreground"]
-        else:  # positions and views in the turned image, outside the ROI nothing
-            bg = o.apply(bg)
-            img = o.outside_as(o.apply(frame.image), bg)
-            h, w = img.shape
-            params = replace(self.params, width_px=w, height_px=h)
-            res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
-            hands = o.undo(res.masks["foreground"])
-            res = replace(res, masks=res.masks.with_image("camera", img))
+            fg = foreground_window(res.parts)  # the hands' box: no frame-sized mask
+            if fg is None:
+                self.background.update(frame.image, None, res.gain, res.offset)
+            else:
+                self.background.update(frame.image, fg[1], res.gain, res.offset, window=fg[0])
+            frame.stamp("vision", time.monotonic())
+            return res
+        # positions and views in the turned image, outside the ROI nothing
+        bg = o.apply(bg)
+        img = o.outside_as(o.apply(frame.image), bg)
+        h, w = img.shape
+        params = replace(self.params, width_px=w, height_px=h)
+        res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
+        hands = o.undo(res.masks["foreground"])
+        res = replace(res, masks=res.masks.with_image("camera", img))
         self.background.update(frame.image, hands, res.gain, res.offset)
         frame.stamp("vision", time.monotonic())
         return res
