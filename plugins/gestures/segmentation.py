@@ -206,15 +206,21 @@ def relative_body(
     H, W = diff.shape
     b = PART_BLOCK_PX
     hb, wb = H // b, W // b
-    small = cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
     floor = 4.0 * noise / b + 2.0
     low = max(threshold * scale_range[0], floor)
+    seed_level = max(low, SEED_FACTOR * floor)
+    # no block's mean exceeds its brightest pixel: a frame with no pixel at a seed's level
+    # (an empty table: its noise stays below) has no hand's part, and its block means
+    # need not be made
+    if cv2.minMaxLoc(diff)[1] < seed_level:
+        return body, None
+    small = cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
     n, lab, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_16U)
     # a hand's part rises above the lowest threshold and well above the noise (specks of
     # noise and background drift do not): the parts holding such a block, whose
     # brightest block is one of those
-    seed = small >= max(low, SEED_FACTOR * floor)
+    seed = small >= seed_level
     seed_lab, seed_val = lab[seed], small[seed]
     real = np.zeros(n, bool)
     real[seed_lab] = True

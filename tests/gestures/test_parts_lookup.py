@@ -131,3 +131,33 @@ def test_more_than_255_parts_take_the_general_path():
     assert np.array_equal(body, want_body)
     v = (np.arange(len(parts.peak)) % 251).astype(np.uint8)
     assert np.array_equal(parts.image(v, (0, 0, 640, 480)), plain_image(parts, v, (0, 0, 640, 480)))
+
+
+def _patch(level, size=8):
+    diff = np.zeros((480, 640), np.uint8)
+    diff[200 : 200 + size, 300 : 300 + size] = level
+    return diff
+
+
+@pytest.mark.parametrize(
+    ("diff", "has_part"),
+    [
+        (
+            cv2.subtract(
+                sketch.draw([], noise=2.0), sketch.draw([], noise=2.0, rng=np.random.default_rng(1))
+            ),
+            False,
+        ),
+        (_patch(9), True),  # block means at the seed level (8.75 here): a part
+        (_patch(8), False),  # every pixel below it: none, found without the block means
+        (_patch(40, 1), False),  # one bright speck: its block's mean stays low
+    ],
+    ids=["empty table", "at the seed level", "just below", "speck"],
+)
+def test_a_frame_without_a_hand_s_part_agrees_with_the_plain_definition(diff, has_part):
+    body, parts = relative_body(diff, 14.0, 180.0, 1.5)
+    want_body, want = plain_relative_body(diff, 14.0, 180.0, 1.5)
+    assert (parts is not None) == (want is not None) == has_part
+    assert np.array_equal(body, want_body)
+    if has_part:
+        _same_parts(parts, want)
