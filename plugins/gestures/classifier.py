@@ -335,24 +335,20 @@ class SvmClassifier:
             self.background.update(frame.image)
         bg = self.background.u8
         o = self.orientation
+        window = None
         if o.identity:
             res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
-            fg = foreground_window(res.parts)  # the hands' box: no frame-sized mask
-            if fg is None:
-                self.background.update(frame.image, None, res.gain, res.offset)
-            else:
-                self.background.update(frame.image, fg[1], res.gain, res.offset, window=fg[0])
-            frame.stamp("vision", time.monotonic())
-            return res
-        # positions and views in the turned image, outside the ROI nothing
-        bg = o.apply(bg)
-        img = o.outside_as(o.apply(frame.image), bg)
-        h, w = img.shape
-        params = replace(self.params, width_px=w, height_px=h)
-        res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
-        hands = o.undo(res.masks["foreground"])
-        res = replace(res, masks=res.masks.with_image("camera", img))
-        self.background.update(frame.image, hands, res.gain, res.offset)
+            # the hands' mask in their box only (no hand: none), not a frame-sized one
+            window, hands = foreground_window(res.parts) or (None, None)
+        else:  # positions and views in the turned image, outside the ROI nothing
+            bg = o.apply(bg)
+            img = o.outside_as(o.apply(frame.image), bg)
+            h, w = img.shape
+            params = replace(self.params, width_px=w, height_px=h)
+            res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
+            hands = o.undo(res.masks["foreground"])
+            res = replace(res, masks=res.masks.with_image("camera", img))
+        self.background.update(frame.image, hands, res.gain, res.offset, window)
         frame.stamp("vision", time.monotonic())
         return res
 
