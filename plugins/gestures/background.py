@@ -44,10 +44,12 @@ class Background:
         foreground: np.ndarray | None = None,
         gain: float = 1.0,
         offset: float = 0.0,
+        window: tuple[int, int, int, int] | None = None,
     ) -> None:
         """Follow the light (``frame ~ gain * background + offset``, as the frame's fit
         found it), then blend ``frame`` in with weight ``alpha`` except under
-        ``foreground`` (mask)."""
+        ``foreground`` (mask: of the frame, or of ``window`` (x0, y0, x1, y1) only, with
+        no foreground outside it: the same blend, without a frame-sized mask)."""
         if self.image is None:
             self._set(frame.astype(np.float32))
             return
@@ -56,9 +58,22 @@ class Background:
             self.image += np.float32(offset)
         if foreground is None:
             cv2.accumulateWeighted(frame, self.image, self.alpha)
-        else:
+        elif window is None:
             keep = cv2.compare(foreground, 0, cv2.CMP_EQ)
             cv2.accumulateWeighted(frame, self.image, self.alpha, mask=keep)
+        else:
+            x0, y0, x1, y1 = window
+            keep = cv2.compare(foreground, 0, cv2.CMP_EQ)
+            cv2.accumulateWeighted(
+                frame[y0:y1, x0:x1], self.image[y0:y1, x0:x1], self.alpha, mask=keep
+            )
+            h, w = frame.shape[:2]
+            # the rest of the frame: the rows above and below the window, and beside it
+            for ya, yb, xa, xb in ((0, y0, 0, w), (y1, h, 0, w), (y0, y1, 0, x0), (y0, y1, x1, w)):
+                if ya < yb and xa < xb:
+                    cv2.accumulateWeighted(
+                        frame[ya:yb, xa:xb], self.image[ya:yb, xa:xb], self.alpha
+                    )
         cv2.convertScaleAbs(self.image, self.u8)
 
     def as_uint8(self) -> np.ndarray:

@@ -30,7 +30,14 @@ from .orientation import Orientation
 from .rules import GestureRules, StillHand
 from .settings import calibration_file, model_file
 from .sketch import DYNAMIC
-from .vision import FrameResult, VisionParams, check_frame, process_frame, vision_params
+from .vision import (
+    FrameResult,
+    VisionParams,
+    check_frame,
+    foreground_window,
+    process_frame,
+    vision_params,
+)
 
 log = logging.getLogger(__name__)
 
@@ -328,9 +335,11 @@ class SvmClassifier:
             self.background.update(frame.image)
         bg = self.background.u8
         o = self.orientation
+        window = None
         if o.identity:
             res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
-            hands = res.masks["foreground"]
+            # the hands' mask in their box only (no hand: none), not a frame-sized one
+            window, hands = foreground_window(res.parts) or (None, None)
         else:  # positions and views in the turned image, outside the ROI nothing
             bg = o.apply(bg)
             img = o.outside_as(o.apply(frame.image), bg)
@@ -339,7 +348,7 @@ class SvmClassifier:
             res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
             hands = o.undo(res.masks["foreground"])
             res = replace(res, masks=res.masks.with_image("camera", img))
-        self.background.update(frame.image, hands, res.gain, res.offset)
+        self.background.update(frame.image, hands, res.gain, res.offset, window)
         frame.stamp("vision", time.monotonic())
         return res
 

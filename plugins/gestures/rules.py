@@ -74,6 +74,43 @@ class StillHand:
         return self._fired_at
 
 
+class PalmWindow:
+    """The last ``size`` palm positions (x, y) with their times, oldest first, kept in one
+    array: ``mean_since(t0)`` drops those older than ``t0`` and averages the rest, the
+    value ``np.mean`` of the positions' list gives (the same rows in the same order),
+    without stacking up to ``size`` positions again on every frame."""
+
+    def __init__(self, size: int) -> None:
+        self.size = int(size)
+        self._t = np.empty(2 * self.size)
+        self._xy = np.empty((2 * self.size, 2))
+        self._a = self._b = 0  # the kept rows: [a, b)
+
+    def __len__(self) -> int:
+        return self._b - self._a
+
+    def clear(self) -> None:
+        self._a = self._b = 0
+
+    def append(self, t_s: float, xy: Any) -> None:
+        if self._b == len(self._t):  # the end reached: the kept rows move to the front
+            n = self._b - self._a
+            self._t[:n] = self._t[self._a : self._b]
+            self._xy[:n] = self._xy[self._a : self._b]
+            self._a, self._b = 0, n
+        self._t[self._b] = t_s
+        self._xy[self._b] = xy
+        self._b += 1
+        if self._b - self._a > self.size:
+            self._a += 1
+
+    def mean_since(self, t0_s: float) -> np.ndarray:
+        """The mean position of those kept from ``t0_s`` on (NaN when none is)."""
+        while self._a < self._b and self._t[self._a] < t0_s:
+            self._a += 1
+        return self._xy[self._a : self._b].mean(axis=0)
+
+
 class GestureRules:
     """Stage ``classify``: ``work["gesture"]`` for the frame, or ``None`` (see the module).
 
@@ -87,7 +124,7 @@ class GestureRules:
         self.window: deque[VisionResult] = deque(maxlen=WINDOW_FRAMES)
         self._named = False
         self.last: Gesture | None = None
-        self._palms: deque[tuple[float, np.ndarray]] = deque(maxlen=600)
+        self._palms = PalmWindow(600)
 
     def _settle_palm(self, t_s: float, palm: Any) -> tuple[float, float] | None:
         """The mean palm position over the still window (since the tracked hand came to
@@ -97,10 +134,8 @@ class GestureRules:
             return None
         t0 = self.still.since_s()
         t0 = t_s if t0 is None else t0
-        self._palms.append((t_s, np.asarray(palm, float)))
-        while self._palms and self._palms[0][0] < t0:
-            self._palms.popleft()
-        c = np.mean([q for _, q in self._palms], axis=0)
+        self._palms.append(t_s, palm)
+        c = self._palms.mean_since(t0)
         return (float(c[0]), float(c[1]))
 
     def _decide(self, result: VisionResult, t_s: float, work: dict) -> Gesture | None:

@@ -6,6 +6,7 @@ results equal to the whole frame's)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import cv2
@@ -108,6 +109,9 @@ def highpass_window(
 #: block rises this many times above the noise floor
 PART_BLOCK_PX = 4
 SEED_FACTOR = 2.5
+#: the parts' box is found from each part's pixels for up to this many parts (a hand or
+#: two: cheaper than the labelling's statistics), from the statistics for more
+MAX_BOXES_APART = 4
 
 
 @dataclass(frozen=True)
@@ -153,8 +157,11 @@ class Parts:
         """The labels at every pixel of ``win`` (uint8; None if a label exceeds 255)."""
         if "labels" not in self._cache:
             ok = int(self.blocks.max(initial=0)) < 256
+            # contiguous: each look-up over it is a quarter faster than over a strided view
             self._cache["labels"] = (
-                self._upsampled(np.arange(256, dtype=np.uint8), self.win) if ok else None
+                np.ascontiguousarray(self._upsampled(np.arange(256, dtype=np.uint8), self.win))
+                if ok
+                else None
             )
         return self._cache["labels"]
 
@@ -206,16 +213,26 @@ def relative_body(
     H, W = diff.shape
     b = PART_BLOCK_PX
     hb, wb = H // b, W // b
-    small = cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
     floor = 4.0 * noise / b + 2.0
     low = max(threshold * scale_range[0], floor)
+    seed_level = max(low, SEED_FACTOR * floor)
+    # no block's mean exceeds its brightest pixel: a frame with no pixel at a seed's level
+    # (an empty table: its noise stays below) has no hand's part, and its block means
+    # need not be made
+    if cv2.minMaxLoc(diff)[1] < seed_level:
+        return body, None
+    small = cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_16U)
+    n, lab = cv2.connectedComponents(lowm, connectivity=8, ltype=cv2.CV_16U)
     # a hand's part rises above the lowest threshold and well above the noise (specks of
     # noise and background drift do not): the parts holding such a block, whose
-    # brightest block is one of those
-    seed = small >= max(low, SEED_FACTOR * floor)
-    seed_lab, seed_val = lab[seed], small[seed]
+    # brightest block is one of those (small >= seed_level is small >= its ceiling)
+    level = math.ceil(seed_level)
+    pts = cv2.findNonZero(cv2.compare(small, level, cv2.CMP_GE)) if level <= 255 else None
+    if pts is None:
+        return body, None
+    xs, ys = pts.reshape(-1, 2).T
+    seed_lab, seed_val = lab[ys, xs], small[ys, xs]
     real = np.zeros(n, bool)
     real[seed_lab] = True
     real[0] = False
@@ -225,16 +242,16 @@ def relative_body(
     peak = np.zeros(n)
     for i in seeded:
         peak[i] = float(seed_val[seed_lab == i].max())
-    # each block keeps its part's label, grown by one block so a part's edge pixels
-    # (brighter than their block's mean) keep it too
-    keep = np.where(real, np.arange(n), 0).astype(np.uint16)
-    blocks = cv2.dilate(keep[lab], _BLOCK3).astype(np.int32)
     # the grown parts' box: the parts' boxes, one block wider on each side
-    st = stats[seeded]
-    c0 = max(int(st[:, cv2.CC_STAT_LEFT].min()) - 1, 0)
-    r0 = max(int(st[:, cv2.CC_STAT_TOP].min()) - 1, 0)
-    c1 = min(int((st[:, cv2.CC_STAT_LEFT] + st[:, cv2.CC_STAT_WIDTH]).max()) + 1, wb)
-    r1 = min(int((st[:, cv2.CC_STAT_TOP] + st[:, cv2.CC_STAT_HEIGHT]).max()) + 1, hb)
+    c0, r0, c1, r1 = _parts_box(lab, seeded, lowm)
+    c0, r0 = max(c0 - 1, 0), max(r0 - 1, 0)
+    c1, r1 = min(c1 + 1, wb), min(r1 + 1, hb)
+    # each block keeps its part's label, grown by one block so a part's edge pixels
+    # (brighter than their block's mean) keep it too: made in that box only (outside
+    # it every block is two or more from a hand's part: 0)
+    keep = np.where(real, np.arange(n), 0).astype(np.uint16)
+    blocks = np.zeros((hb, wb), np.int32)
+    blocks[r0:r1, c0:c1] = cv2.dilate(keep[lab[r0:r1, c0:c1]], _BLOCK3)
     reach = smooth_px // 2 if smooth_px > 1 else 0
     box = (c0 * b, r0 * b, c1 * b, r1 * b)
     x0, y0, x1, y1 = win = _grow(box, reach, diff.shape)
@@ -254,3 +271,25 @@ def relative_body(
 
 
 _BLOCK3 = np.ones((3, 3), np.uint8)
+
+
+def _parts_box(lab: np.ndarray, seeded: np.ndarray, lowm: np.ndarray) -> tuple[int, int, int, int]:
+    """(c0, r0, c1, r1): the box holding every pixel of the labels ``seeded`` in the
+    label image ``lab`` (of ``lowm``): from each part's pixels (a few parts), else from
+    the labelling's statistics (the same labels)."""
+    if len(seeded) <= MAX_BOXES_APART:
+        boxes = [cv2.boundingRect(cv2.compare(lab, int(i), cv2.CMP_EQ)) for i in seeded]
+        return (
+            min(x for x, _, _, _ in boxes),
+            min(y for _, y, _, _ in boxes),
+            max(x + w for x, _, w, _ in boxes),
+            max(y + h for _, y, _, h in boxes),
+        )
+    _, _, stats, _ = cv2.connectedComponentsWithStats(lowm, connectivity=8, ltype=cv2.CV_16U)
+    st = stats[seeded]
+    return (
+        int(st[:, cv2.CC_STAT_LEFT].min()),
+        int(st[:, cv2.CC_STAT_TOP].min()),
+        int((st[:, cv2.CC_STAT_LEFT] + st[:, cv2.CC_STAT_WIDTH]).max()),
+        int((st[:, cv2.CC_STAT_TOP] + st[:, cv2.CC_STAT_HEIGHT]).max()),
+    )

@@ -157,6 +157,9 @@ class FrameResult:
     #: the hands' touching skin (``touch.FrameTouch``: found when first asked, per hand
     #: in ``hands``' order); None without a hand
     touch: FrameTouch | None = field(default=None, compare=False, repr=False)
+    #: the body's parts (``segmentation.Parts``; None without a hand's part): where the
+    #: foreground lies (``foreground_window``)
+    parts: Parts | None = field(default=None, compare=False, repr=False)
 
     def view(self, name: str) -> np.ndarray | None:
         """The intermediate image ``name`` (``diff``, ``body``, ``highpass``), or ``None``
@@ -362,9 +365,22 @@ def foreground(parts: Parts | None, shape: tuple[int, int]) -> np.ndarray:
     blocks grown by one): what the background must never learn."""
     if parts is None:
         return np.zeros(shape, np.uint8)
+    return parts.image(_foreground_values(parts), (0, 0, shape[1], shape[0]))
+
+
+def foreground_window(parts: Parts | None) -> tuple[tuple[int, int, int, int], np.ndarray] | None:
+    """``foreground`` as the box that holds all of it (``parts.win``: x0, y0, x1, y1) and
+    its mask there; None without a hand's part (no foreground). A frame's background
+    update works on that box only, not on a frame-sized mask."""
+    if parts is None:
+        return None
+    return parts.win, parts.image(_foreground_values(parts), parts.win)
+
+
+def _foreground_values(parts: Parts) -> np.ndarray:
     values = np.full(len(parts.scale), 255, np.uint8)
     values[0] = 0
-    return parts.image(values, (0, 0, shape[1], shape[0]))
+    return values
 
 
 def hands_of(
@@ -501,4 +517,5 @@ def process_frame(
         masks=masks,
         extras=tuple(e for _, e in found),
         touch=touch,
+        parts=parts,
     )

@@ -77,14 +77,14 @@ def test_a_resting_hand_survives_drift_and_a_light_step(filmed):
     assert after == [0, 0, 0]  # no ghost where it rested
 
 
-def _learns_all(self, frame, foreground=None, gain=1.0, offset=0.0):
+def _learns_all(self, frame, foreground=None, gain=1.0, offset=0.0, window=None):
     """A running average everywhere, not following the light's fit."""
     Background.update(self, frame, None, 1.0, 0.0)
 
 
-def _ignores_light(self, frame, foreground=None, gain=1.0, offset=0.0):
+def _ignores_light(self, frame, foreground=None, gain=1.0, offset=0.0, window=None):
     """The running average where no hand is, not following the light's fit."""
-    Background.update(self, frame, foreground, 1.0, 0.0)
+    Background.update(self, frame, foreground, 1.0, 0.0, window)
 
 
 @pytest.mark.parametrize("update", [_learns_all, _ignores_light])
@@ -93,3 +93,22 @@ def test_the_check_fails_for_a_background_that_absorbs_or_lags(filmed, update):
     leaves the background under a resting hand behind it."""
     areas, hands, err, _ = _run(filmed, update)
     assert (hands[-60:] == 0).any() or np.abs(areas[:, 0] / areas[:, 1] - 1).max() > 0.1 or err > 4
+
+
+def test_the_update_on_the_hands_box_equals_the_frame_sized_mask(filmed):
+    """The classifier blends the frame in around the hands' box and under its mask there
+    (``foreground_window``); a frame-sized mask (``view("foreground")``) and no mask at
+    all without a hand give the same background, bit for bit, through drift and the
+    light step."""
+    empty_at_start, frames, _, _, after_frames = filmed
+    clf = SvmClassifier(None, alpha=0.05)
+    clf.set_background(empty_at_start)
+    plain = Background(empty_at_start, 0.05)
+    boxes = 0
+    for frame in [*frames[::7], *frames[STEP_AT - 3 : STEP_AT + 3], *after_frames]:
+        res = clf.process(_fresh(frame))
+        plain.update(frame.image, res.view("foreground"), res.gain, res.offset)
+        np.testing.assert_array_equal(clf.background.image, plain.image)
+        np.testing.assert_array_equal(clf.background.u8, plain.u8)
+        boxes += res.parts is not None
+    assert boxes > 50  # the box's path ran (and the handless frames' after the lift)

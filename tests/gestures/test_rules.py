@@ -4,6 +4,7 @@ the loop already has."""
 
 from __future__ import annotations
 
+from collections import deque
 from types import SimpleNamespace
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 
 from console.core.types import Contact, Frame, Gesture, Hand, HandShape
 from plugins.gestures.classifier import SvmClassifier
-from plugins.gestures.rules import GestureRules, StillHand
+from plugins.gestures.rules import GestureRules, PalmWindow, StillHand
 
 
 def test_still_hand_fires_once_per_placement():
@@ -131,3 +132,30 @@ def test_the_svm_classifier_decides_from_results_without_processing_again():
     assert [f.stamps_s["vision"] for f in frames] == stamps
     empty = SimpleNamespace(hands=(), contacts=())
     assert clf.classify([empty] * 3, 0.0) is None and clf.classify([], 0.0) is None
+
+
+def test_the_palm_window_s_mean_is_the_plain_mean_of_its_positions():
+    """``settle_mm`` (where a palm rests so far) is the mean of the palm positions since
+    the hand came to rest, at most the last 600: the window keeps them in one array (a
+    hand resting for minutes does not stack 600 positions again each frame) and gives
+    the plain list's ``np.mean`` bit for bit, through drops, clears and its array's end."""
+    rng = np.random.default_rng(5)
+    win, plain = PalmWindow(600), deque(maxlen=600)
+    t0, compared = 0.0, 0
+    for k in range(4000):
+        t = k / 60
+        if k % 1500 == 1499:  # the hand lifts
+            win.clear()
+            plain.clear()
+        if k % 700 == 0:  # it comes to rest again: the window starts there
+            t0 = t - rng.uniform(0, 2)
+        xy = rng.normal(300.0, 40.0, 2)
+        win.append(t, xy)
+        plain.append((t, xy))
+        while plain and plain[0][0] < t0:
+            plain.popleft()
+        got = win.mean_since(t0)
+        assert np.array_equal(got, np.mean([q for _, q in plain], axis=0))
+        assert len(win) == len(plain)
+        compared += len(plain) == 600
+    assert compared > 300  # the window was full (and its array's end passed) many times
