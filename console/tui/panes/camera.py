@@ -85,6 +85,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._image_frame = None  # what it shows: (frame, view, target, area)
         self._drawn = None  # what the half-block view shows: (frame, view, target, size)
         self._grey: np.ndarray | None = None  # its grey levels as drawn
+        self._picture_cols = 0  # the picture's width in cells: its title is padded to it
         self._info_stable: tuple | None = None  # (view, settings lines) on the panel
         self._info_at = -1e9  # monotonic time the panel was last written
         self._said: dict[str, str] = {}  # widget id -> the text it shows
@@ -287,9 +288,11 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         return self._say(widget_id, text, layout=not same) and not same
 
     def _title(self, text: str) -> None:
-        """The view's title: laid out again only when its length changed (the grey
-        levels it names follow the frames; a layout of the screen costs more than the
-        picture's rows)."""
+        """The view's title, padded to the picture's width (``_picture_cols``): laid out
+        again only when its length changed (the grey levels it names follow the frames,
+        ``8 to 93`` then ``10 to 107``, a recording's frame number counts up; a layout
+        of the screen costs more than the picture's rows)."""
+        text = text.ljust(self._picture_cols)
         before = self._said.get("camera-title")
         self._say("camera-title", text, layout=before is None or len(before) != len(text))
 
@@ -422,6 +425,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
+        self._picture_cols = cols
         self._title(f"IR {w}x{h} as half-block {cols}x{rows}, grey {span_words(lo, hi)}")
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
@@ -465,6 +469,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
         mode = MODE_NAMES[self.image_mode]
+        self._picture_cols = cols
         self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px, grey {span_words(lo, hi)}")
 
     def _stretch(self) -> GreyStretch:
