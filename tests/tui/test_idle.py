@@ -214,14 +214,15 @@ def test_a_hidden_screen_does_no_per_tick_work(plugins, monkeypatch):
     asyncio.run(scenario())
 
 
-def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypatch):
+@pytest.mark.parametrize("size", SIZES)
+def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypatch, size):
     """The same frame is not converted again; a new frame whose pixels moved by less
     than a grey step (sensor noise) draws nothing; a bright patch redraws only the
-    rows it covers."""
+    rows it covers, and they show it."""
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
-        async with app.run_test(size=(120, 40)) as pilot:
+        async with app.run_test(size=size) as pilot:
             pane = app.pane("camera")
             await wait_for(pilot, lambda: pane.shown is not None, 30, "a picture")
             rng = np.random.default_rng(2)
@@ -251,9 +252,20 @@ def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypat
             bright = base.copy()
             bright[200:260, 100:300] = 255.0  # a hand's palm
             now["frame"] = SimpleNamespace(image=bright)
+            before = [view.render_line(y).text for y in range(pane.shown.size[1])]
+            styles = [list(view.render_line(y)) for y in range(pane.shown.size[1])]
             await wait_for(pilot, lambda: pane.draws > draws, 30, "the palm drawn")
             changed = view.rows_drawn - rows
             assert 0 < changed < pane.shown.size[1] // 2  # its rows, not the picture
+            # the palm's rows (200-260 of 480) are painted anew, the rows far from it not
+            cols, n = pane.shown.size
+            palm = range(200 * n // 480, 260 * n // 480 + 1)
+            now_lines = [list(view.render_line(y)) for y in range(n)]
+            assert all(now_lines[y] != styles[y] for y in palm[1:-1])
+            assert all(
+                now_lines[y] == styles[y] for y in range(n) if abs(y - 230 * n // 480) > n // 4
+            )
+            assert [view.render_line(y).text for y in range(n)] == before  # ▀ cells alike
 
     asyncio.run(scenario())
 
