@@ -125,7 +125,8 @@ def sample(pid: int, seconds: float) -> dict:
     """The CPU of ``pid`` and the processes it started for itself over ``seconds``:
     per-second readings of their sum (% of one core), their median, mean and max, each
     process's share, and the threads of ``pid`` that used the most."""
-    t0, before = time.monotonic(), threads(pid)
+    t0, before, load0 = time.monotonic(), threads(pid), os.getloadavg()[0]
+    own0 = cpu_s(pid)
     mine, apart = process_tree(pid)
     first = _tree_cpu(mine)
     first_apart = _tree_cpu(apart)
@@ -139,6 +140,7 @@ def sample(pid: int, seconds: float) -> dict:
         readings.append(100.0 * used / (now_t - last_t))
         last_t, last = now_t, {**last, **now}
     span = time.monotonic() - t0
+    own = cpu_s(pid) - own0
     per_process = {
         f"{p} {_name(p)}": round(100.0 * (c - first.get(p, 0.0)) / span, 2) for p, c in last.items()
     }
@@ -157,6 +159,10 @@ def sample(pid: int, seconds: float) -> dict:
         "mean_pct": round(statistics.fmean(readings), 2),
         "max_pct": round(max(readings), 2),
         "readings_pct": [round(r, 1) for r in readings],
+        # the console process alone: CPU seconds it used per 10 s (what it did, whatever
+        # else ran on the machine) and the machine's 1-minute load average before, after
+        "console_cpu_s_per_10s": round(10.0 * own / span, 3),
+        "load_avg_1min": [round(load0, 2), round(os.getloadavg()[0], 2)],
         # the console and the processes it started for itself, each (% of one core)
         "processes_pct": per_process,
         # the table's kernel (not counted above: another session, every client's)
@@ -391,6 +397,12 @@ def run(ctx, quick: bool) -> dict:
         "settle_s": SETTLE_S,
         "screens": screens,
         "median_pct": {t: s["median_pct"] for t, s in screens.items()},
+        # the console process alone, CPU seconds per 10 s (tmux only)
+        "console_cpu_s_per_10s": {
+            t: s["console_cpu_s_per_10s"]
+            for t, s in screens.items()
+            if "console_cpu_s_per_10s" in s
+        },
         "goals_pct": {t: _goal(t) for t in screens},
         "meets_goals": all(s["median_pct"] <= _goal(t) for t, s in screens.items()),
         # ctrl+e in the console -> E-STOP on the terminal's safety bar (tmux only)

@@ -40,6 +40,9 @@ def test_the_sum_counts_the_children_but_not_a_session_of_their_own():
         assert any(k.startswith(f"{own} ") for k in got["processes_pct"])
         assert not any(k.startswith(f"{apart} ") for k in got["processes_pct"])
         assert got["kernel_pct"] > 10.0, got
+        # the process alone: the sleeping parent's own seconds, not its child's
+        assert got["console_cpu_s_per_10s"] < 0.5, got
+        assert len(got["load_avg_1min"]) == 2
     finally:
         for pid in (p for p in (own, apart) if p):
             subprocess.run(["kill", str(pid)], check=False)

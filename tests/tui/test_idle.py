@@ -214,14 +214,15 @@ def test_a_hidden_screen_does_no_per_tick_work(plugins, monkeypatch):
     asyncio.run(scenario())
 
 
-def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypatch):
+@pytest.mark.parametrize("size", SIZES)
+def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypatch, size):
     """The same frame is not converted again; a new frame whose pixels moved by less
     than a grey step (sensor noise) draws nothing; a bright patch redraws only the
-    rows it covers."""
+    rows it covers, and they show it."""
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
-        async with app.run_test(size=(120, 40)) as pilot:
+        async with app.run_test(size=size) as pilot:
             pane = app.pane("camera")
             await wait_for(pilot, lambda: pane.shown is not None, 30, "a picture")
             rng = np.random.default_rng(2)
@@ -251,9 +252,20 @@ def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypat
             bright = base.copy()
             bright[200:260, 100:300] = 255.0  # a hand's palm
             now["frame"] = SimpleNamespace(image=bright)
+            before = [view.render_line(y).text for y in range(pane.shown.size[1])]
+            styles = [list(view.render_line(y)) for y in range(pane.shown.size[1])]
             await wait_for(pilot, lambda: pane.draws > draws, 30, "the palm drawn")
             changed = view.rows_drawn - rows
             assert 0 < changed < pane.shown.size[1] // 2  # its rows, not the picture
+            # the palm's rows (200-260 of 480) are painted anew, the rows far from it not
+            cols, n = pane.shown.size
+            palm = range(200 * n // 480, 260 * n // 480 + 1)
+            now_lines = [list(view.render_line(y)) for y in range(n)]
+            assert all(now_lines[y] != styles[y] for y in palm[1:-1])
+            assert all(
+                now_lines[y] == styles[y] for y in range(n) if abs(y - 230 * n // 480) > n // 4
+            )
+            assert [view.render_line(y).text for y in range(n)] == before  # ▀ cells alike
 
     asyncio.run(scenario())
 
@@ -375,5 +387,58 @@ def test_the_camera_s_live_numbers_change_without_laying_the_screen_out(plugins,
             # per change of the hand's lines
             assert len(texts) >= 5, texts
             assert layouts["info"] <= max(4, comings // 2), (comings, laid)
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_camera_title_follows_the_grey_levels_without_laying_the_screen_out(
+    plugins, monkeypatch, size
+):
+    """The view's title names the grey levels shown; as they follow the frames its text
+    grows and shrinks (``grey 3 to 59`` -> ``grey 42 to 219``): each text shows whole,
+    and the screen is not laid out again for it while it fits the picture's width (the
+    title keeps that width; a longer one widens the picture's column)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=size) as pilot:
+            pane = app.pane("camera")
+            await wait_for(pilot, lambda: pane.shown is not None, 30, "a picture")
+
+            def ramp(lo: float, hi: float) -> np.ndarray:  # dark left, bright right
+                return np.tile(np.linspace(lo, hi, 640), (480, 1))
+
+            now = {"frame": SimpleNamespace(image=ramp(2.0, 60.0))}
+            for name in ("snapshot", "to_show"):
+                monkeypatch.setattr(app.session.camera, name, lambda: (now["frame"], {}))
+            pane._stretches.clear()  # the levels set from these frames, not the twin's
+            pane._drawn = None
+            title = app.query_one("#camera-title")
+            dark, bright = re.compile(r"grey \d to \d\d\b"), re.compile(r"grey \d\d to \d\d\d\b")
+            await wait_for(pilot, lambda: dark.search(str(title.render())), 30, "dark levels")
+            layouts = collections.Counter()  # the title's updates that lay the screen out
+            update = title.update
+
+            def counting(*args, layout: bool = True, **kw):
+                layouts["title"] += layout
+                return update(*args, layout=layout, **kw)
+
+            monkeypatch.setattr(title, "update", counting)
+            cols, text, seen = pane.shown.size[0], pane._said["camera-title"].rstrip(), set()
+            needed = 0  # the title's length changed where it is longer than the picture
+            for _ in range(200):  # brighter frames: the levels shown climb to 42 to 219
+                now["frame"] = SimpleNamespace(image=ramp(40.0, 220.0))
+                await pilot.pause(0.1)
+                before, text = text, pane._said["camera-title"].rstrip()
+                needed += len(before) != len(text) and max(len(before), len(text)) > cols
+                assert text in str(title.render()), text  # the whole text shows
+                assert title.size.width >= min(len(text), cols)
+                seen.add(text)
+                if bright.search(text):
+                    break
+            assert bright.search(text), seen
+            assert len({len(t) for t in seen}) >= 2, seen  # the text's length changed
+            assert layouts["title"] == needed, (cols, seen)
 
     asyncio.run(scenario())

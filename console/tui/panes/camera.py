@@ -85,6 +85,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._image_frame = None  # what it shows: (frame, view, target, area)
         self._drawn = None  # what the half-block view shows: (frame, view, target, size)
         self._grey: np.ndarray | None = None  # its grey levels as drawn
+        self._picture_cols = 0  # the picture's width in cells: its title is padded to it
         self._info_stable: tuple | None = None  # (view, settings lines) on the panel
         self._info_at = -1e9  # monotonic time the panel was last written
         self._said: dict[str, str] = {}  # widget id -> the text it shows
@@ -289,12 +290,14 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
     def _title(self, head: str, levels: str = "") -> None:
         """The view's title, ``head`` (the frame, how it is drawn) and its ``levels``
         (``view_levels``), the levels alone where both do not fit the view's width (at
-        80 columns): laid out again only when its length changed (the grey levels it
-        names follow the frames; a layout of the screen costs more than the picture's
-        rows)."""
+        80 columns), padded to the picture's width (``_picture_cols``): laid out again
+        only when its length changed (the grey levels it names follow the frames, ``8 to
+        93`` then ``10 to 107``, a recording's frame number counts up; a layout of the
+        screen costs more than the picture's rows)."""
         text = f"{head}, {levels}" if levels else head
         if levels and len(text) > self.view_area()[0]:
             text = levels
+        text = text.ljust(self._picture_cols)
         before = self._said.get("camera-title")
         self._say("camera-title", text, layout=before is None or len(before) != len(text))
 
@@ -427,6 +430,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         if view.show_picture(picture):  # only the rows that changed are redrawn
             self.draws += 1
         h, w = img.shape[:2]
+        self._picture_cols = cols
         self._title(f"IR {w}x{h} as half-block {cols}x{rows}", view_levels(self.view, lo, hi))
 
     def _draw_graphics(self, frame, img: np.ndarray, work: dict) -> None:
@@ -470,6 +474,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._image.image = PILImage.fromarray(rgb, "RGB")
         h, w = img.shape[:2]
         mode = MODE_NAMES[self.image_mode]
+        self._picture_cols = cols
         self._title(f"IR {w}x{h} via {mode}, {pw}x{ph} px", view_levels(self.view, lo, hi))
 
     def _stretch(self) -> GreyStretch:
