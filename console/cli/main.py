@@ -81,7 +81,13 @@ def _main(argv: list[str]) -> int:
             level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s"
         )
         command = args.command or "console"
-        ctx = Context(getattr(args, "profile_sub", None) or args.profile, plugins)
+        profile = getattr(args, "profile_sub", None) or args.profile
+        if profile or os.environ.get("HAPTABLE_PROFILE"):  # named: found, or refused by
+            # every command (none ignores it; estop and reset never come here: entry.py)
+            from console.files.profile_paths import find_profile
+
+            find_profile(profile)
+        ctx = Context(profile, plugins)
         if command == "console" and args.command is None:
             args = parser.parse_args([*argv, "console"])
         code = int(plugins.commands[command].run(args, ctx) or 0)
