@@ -10,6 +10,7 @@ import warnings
 
 from console.core.errors import EStopLatched, EStopped, UserError
 from console.core.options import Parser, seconds_option
+from console.files.profile_paths import find_profile
 from console.runtime.context import Context
 
 __all__ = ["Context", "build_parser", "main", "one_line", "seconds_option"]
@@ -84,8 +85,6 @@ def _main(argv: list[str]) -> int:
         profile = getattr(args, "profile_sub", None) or args.profile
         if profile or os.environ.get("HAPTABLE_PROFILE"):  # named: found, or refused by
             # every command (none ignores it; estop and reset never come here: entry.py)
-            from console.files.profile_paths import find_profile
-
             find_profile(profile)
         ctx = Context(profile, plugins)
         if command == "console" and args.command is None:

@@ -41,14 +41,34 @@ def friction_stimulus(
 ) -> np.ndarray:
     """Screen voltage of a plain electrovibration stimulus with start/stop ramps."""
     n = max(int(round(duration_s * sample_rate_hz)), 1)
+    x = unit_wave(n, freq_hz, waveform, sample_rate_hz, edge_ms)
+    return (vpp / 2) * x * raised_cosine_ramps(n, int(round(ramp_ms * sample_rate_hz / 1000)))
+
+
+def unit_wave(
+    n: int, freq_hz: float, waveform: str, sample_rate_hz: int, edge_ms: float = 0.5
+) -> np.ndarray:
+    """``n`` samples of a sine or (smoothed-edge) square of amplitude 1, no ramps."""
     ph = 2 * np.pi * freq_hz * np.arange(n) / sample_rate_hz
     if waveform == "sine":
-        x = np.sin(ph)
-    elif waveform == "square":
-        x = smooth_square(ph, edge_ms * 1e-3 * freq_hz)
-    else:
-        raise UserError(f"waveform {waveform!r}: unknown; use sine or square")
-    return (vpp / 2) * x * raised_cosine_ramps(n, int(round(ramp_ms * sample_rate_hz / 1000)))
+        return np.sin(ph)
+    if waveform == "square":
+        return smooth_square(ph, edge_ms * 1e-3 * freq_hz)
+    raise UserError(f"waveform {waveform!r}: unknown; use sine or square")
+
+
+def slew_max_vpp(profile: Any, freq_hz: float, waveform: str = "sine") -> float:
+    """The largest Vpp of a ``waveform`` at ``freq_hz`` that stays inside the screen's
+    slew limit (``Limits.slew_v_per_s("screen")``: [amplifiers] screen_peak_current_ma /
+    [screen] capacitance_nf): the stimulus's steepest step per volt, without its start
+    and stop ramps (they only make it gentler). A sine's is pi f Vpp; a square's is set by
+    its edges (``edge_ms``), whatever the frequency."""
+    fs = audio(profile)["sample_rate_hz"]
+    slew = Limits.from_profile(profile).slew_v_per_s("screen")
+    n = int(round(2.0 / max(freq_hz, 1.0) * fs)) + 2  # two periods
+    x = unit_wave(n, freq_hz, waveform, fs) / 2  # 1 Vpp
+    per_vpp = float(np.abs(np.diff(x)).max(initial=0.0)) * fs
+    return slew / per_vpp if per_vpp > 0 else float("inf")
 
 
 def stimulus_report(

@@ -30,7 +30,12 @@ from console.plugin_api.tui import (
     status_said,
 )
 
+from .effects import slew_max_vpp
+
 FREQ_RANGE_HZ = (10.0, 1000.0)
+SLEW_WHERE = (
+    "(the screen's slew limit: [amplifiers] screen_peak_current_ma, [screen] capacitance_nf)"
+)
 
 
 def clamp_setting(vpp: float, freq_hz: float, max_vpp: float) -> tuple[float, float]:
@@ -180,11 +185,22 @@ class ElectrostaticPane(Vertical):
         self._change(self.vpp, self.freq_hz + step)
 
     def _change(self, vpp: float, freq_hz: float) -> None:
-        """The setting moved toward (``vpp``, ``freq_hz``) inside the limits; a key that
-        cannot move it says which limit stops it on the status line."""
+        """The setting moved toward (``vpp``, ``freq_hz``) inside the limits (the
+        screen's maximum, the frequency range, the slew limit for the waveform); a key
+        that cannot move it says which limit stops it on the status line."""
         new = clamp_setting(vpp, freq_hz, self.max_vpp)
+        why = limit_line(vpp, freq_hz, self.max_vpp, self.max_from)
+        cap = self._slew_cap(new[1], self.waveform)
+        if new[0] > cap:  # over the slew limit: the amplitude stops at it, a frequency stays
+            if new[1] != self.freq_hz:
+                new, why = (self.vpp, self.freq_hz), self._slew_line(new[1], cap, raising="freq")
+            else:
+                new, why = (
+                    (min(self.vpp, float(np.floor(cap))), new[1]),
+                    self._slew_line(new[1], cap, raising="vpp"),
+                )
         if new == (self.vpp, self.freq_hz):
-            self.say(limit_line(vpp, freq_hz, self.max_vpp, self.max_from))
+            self.say(why)
             self._at_limit = True
             return
         if self._at_limit:  # that limit no longer stops anything
@@ -192,8 +208,35 @@ class ElectrostaticPane(Vertical):
         self.vpp, self.freq_hz = new
         self._update_setting()
 
+    def _slew_cap(self, freq_hz: float, waveform: str) -> float:
+        """The largest Vpp the screen's slew limit lets ``waveform`` at ``freq_hz`` play
+        (inf where the profile does not say: the play's own check then answers)."""
+        try:
+            return slew_max_vpp(self.app.ctx.profile, freq_hz, waveform)
+        except (UserError, KeyError, ValueError):
+            return float("inf")
+
+    def _slew_line(self, freq_hz: float, cap: float, raising: str) -> str:
+        """Why the slew limit stops a key, with the key that makes room."""
+        head = f"{np.floor(cap):g} Vpp is the most a {self.waveform} at {freq_hz:g} Hz may have"
+        if raising == "freq":
+            fix = "- lowers the amplitude first"
+        elif self.waveform == "square":
+            fix = "t: a sine is gentler"
+        else:
+            fix = "[ lowers the frequency"
+        return f"{head} {SLEW_WHERE}: {fix}"
+
     def action_waveform(self) -> None:
         self.waveform = "square" if self.waveform == "sine" else "sine"
+        cap = self._slew_cap(self.freq_hz, self.waveform)
+        if self.vpp > cap:  # the square's edges: the amplitude comes down to the limit
+            self.vpp = float(np.floor(cap))
+            self.say(
+                f"{self.waveform}: amplitude lowered to {self.vpp:g} Vpp, the most a "
+                f"{self.waveform} at {self.freq_hz:g} Hz may have {SLEW_WHERE}"
+            )
+            self._at_limit = True
         self._update_setting()
 
     @work(thread=True, exclusive=True, group="es-report")
@@ -225,6 +268,7 @@ class ElectrostaticPane(Vertical):
             p = self.presets[name]
             self.vpp, self.freq_hz = clamp_setting(p["vpp"], p["freq_hz"], self.max_vpp)
             self.waveform = p.get("waveform", "sine")
+            self.vpp = min(self.vpp, float(np.floor(self._slew_cap(self.freq_hz, self.waveform))))
             self._update_setting()
             self.action_play_custom()
         else:
