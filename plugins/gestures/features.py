@@ -332,7 +332,7 @@ def select_kind(x: np.ndarray) -> np.ndarray:
 
 
 #: counts of fingertips that tell gestures apart, not whether there is one
-_COUNTS = [MOTION_NAMES.index("tracks_moving"), MOTION_NAMES.index("tips_untracked")]
+_COUNTS = [MOTION_NAMES.index("tracks_moving"), MOTION_NAMES.index("tips_met")]
 
 
 def sample_records(
