@@ -55,6 +55,9 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     # how gently a motion starts: x the person's own time constant (0: at full speed
     # from the first frame, as a gesture caught already under way)
     "ease": (0.0, 1.3),
+    # how far piled fingertips converge on one point (0: ~20 mm apart, 1: touching,
+    # merging into fewer regions; drawn last, so the draws before it are as they were)
+    "gather": (0.0, 1.0),
 }
 TWIN_KEYS = ("illumination", "noise_sigma", "hand_scale", "hover_scale", "drift_gain")
 IMAGE_KEYS = ("glow_scale", "finger_px", "lobe_gain", "blur_px", "gamma", "post_noise")
@@ -86,6 +89,7 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
     hand: dict[str, Any] = {k: round(_draw(rng, k), 4) for k in HAND_KEYS}
     for k in FINGER_KEYS:
         hand[k] = [round(float(v), 4) for v in rng.uniform(*WIDE_RANGES[k], size=5)]
+    hand["gather"] = round(_draw(rng, "gather"), 4)
     cond["hand"] = hand
     return cond
 
@@ -93,7 +97,7 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
 def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
     """The twin's ``Subject`` (a frozen dataclass) with a wide condition's ``hand`` part:
     finger widths, lengths and rest directions, spread, hover heights, speed, tremor,
-    and how gently motions start."""
+    how gently motions start and how far piled fingertips meet."""
     from dataclasses import replace
 
     turn = np.asarray(hand["finger_turn_deg"]) * [2, 1, 1, 1, 1]  # the thumb varies most
@@ -110,6 +114,7 @@ def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
         speed=hand["speed"],
         tremor_mm=hand["tremor_mm"],
         ease_s=subject.ease_s * hand.get("ease", 1.0),
+        gather=hand.get("gather", 0.0),
     )
 
 
@@ -186,6 +191,8 @@ def in_ranges(cond: dict[str, Any]) -> list[str]:
     flat.update(cond["hand"])
     bad = []
     for key, (lo, hi) in WIDE_RANGES.items():
+        if key not in flat:  # drawn after a set was written (``gather``: 0 then)
+            continue
         v = np.atleast_1d(flat[key])
         if not ((lo - 1e-6 <= v) & (v <= hi + 1e-6)).all():
             bad.append(key)

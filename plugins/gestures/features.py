@@ -328,10 +328,11 @@ def select_kind(x: np.ndarray) -> np.ndarray:
     starts learns "moving means at least one", and slow starts on another table fall
     below it; it tells gestures apart, not whether there is one); motion measured in
     the hand's own scale depends on how much of its hovering palm is seen."""
-    return np.delete(motion_view(np.atleast_2d(x)[:, 22:N_MOTION]), _MOVING, axis=1)
+    return np.delete(motion_view(np.atleast_2d(x)[:, 22:N_MOTION]), _COUNTS, axis=1)
 
 
-_MOVING = MOTION_NAMES.index("tracks_moving")
+#: counts of fingertips that tell gestures apart, not whether there is one
+_COUNTS = [MOTION_NAMES.index("tracks_moving"), MOTION_NAMES.index("tips_met")]
 
 
 def sample_records(

@@ -11,7 +11,9 @@ falloff). Over a decision window
 through the frames, each track's least-squares line less what its own jitter explains
 (``beyond_jitter``): their common shift, largest / smallest / mean displacement, the
 largest raw end-to-end one, turn, arc, change of spacing, radial motion and how many
-of them moved beyond a tremor. A fingertip is where its far end from the palm is
+of them moved beyond a tremor, and how many more or fewer fingertips the last frame shows
+than the first (fingertips that met or parted: a pile's merging into fewer regions). A
+fingertip is where its far end from the palm is
 (``touch.far_ends``), not its contact's centroid, which a finger pressed flatter moves. Motion is
 scaled to 60 fps (a gesture filmed at 48 fps moves 60/48 as far per frame);
 ``motion_view`` is what the classifiers see of it.
@@ -51,7 +53,7 @@ STATIC_NAMES = (
 MOTION_NAMES = (
     "shift_mm", "tracks", "track_dmax_mm", "track_dmin_mm", "track_dmean_mm",
     "track_end_mm", "track_turn_deg", "track_arc_mm", "track_spacing_mm",
-    "track_radial_mm", "tracks_moving",
+    "track_radial_mm", "tracks_moving", "tips_met",
 )  # fmt: skip
 N_PHYS_STATIC = len(STATIC_NAMES)
 N_PHYS_MOTION = len(MOTION_NAMES)
@@ -268,6 +270,11 @@ def physical_motion(records: Sequence[dict | None], fps: float = REFERENCE_FPS) 
     n = len(recs) - 1
     tracks = _tracks(recs, TRACK_GATE_MM / max(k, 0.5))
     v[1] = min(len(tracks), 6)
+    if not any(is_flat(r) for r in recs):
+        # fingertips that met or parted over the window (a pile's tips merging into fewer
+        # regions, a pinch closing): how many more or fewer the last frame shows than the
+        # first (a region seen in a frame between them only is no meeting)
+        v[11] = abs(len(tips_mm(recs[-1])) - len(tips_mm(recs[0])))
     if not tracks:
         return v
     fits = [trend(t[:, 0], t[:, 1:], n) for t in tracks]
@@ -322,7 +329,7 @@ def motion_view(m: np.ndarray) -> np.ndarray:
     floor = np.full(N_PHYS_MOTION, TREMOR_MM)
     floor[MOTION_NAMES.index("track_turn_deg")] = TREMOR_DEG
     out = np.log1p(np.maximum(m - floor, 0.0))
-    for i in (MOTION_NAMES.index("tracks"), MOTION_NAMES.index("tracks_moving")):
+    for i in (MOTION_NAMES.index(k) for k in ("tracks", "tracks_moving", "tips_met")):
         out[:, i] = m[:, i]
     return out
 

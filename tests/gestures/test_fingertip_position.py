@@ -136,3 +136,41 @@ def test_whether_a_hand_moves_is_not_decided_by_the_count_of_moving_tips():
     row[1, N_MOTION - len(MOTION_NAMES) + MOTION_NAMES.index("tracks_moving")] = 0
     kind = select_kind(row)
     assert np.array_equal(kind[0], kind[1])
+
+
+def test_fingertips_that_meet_or_part_within_the_window_are_counted():
+    """A spread that starts with its fingertips piled: two regions (three tips merged
+    into one) part into four, and only the two seen from the first frame are followed,
+    as in a zoom; the two fingertips that parted tell it from a zoom, whose two tips stay
+    two, also when a third region shows in one frame between the first and the last (a
+    knuckle brushing the glass). Neither counts for a flat hand."""
+    col = MOTION_NAMES.index("tips_met")
+    merged = {"regions_mm": np.array([[360.0, 0.0, 0.0], [120.0, 40.0, 0.0]])}
+    parted = [
+        {"regions_mm": np.array([[120.0, -4.0 * f, -6.0], [120.0, 2.0 * f, 6.0],
+                                 [120.0, -5.0, 2.0 * f], [120.0, 40.0 + 2 * f, 0.0]])}
+        for f in (1, 2, 3)
+    ]  # fmt: skip
+    for r in (merged, *parted):
+        r.update(touch_mm2=float(r["regions_mm"][:, 0].sum()), solidity=0.0)
+    zoom = [[(0.0, -3.0 * f) for f in range(4)], [(0.0, 20.0 + 3.0 * f) for f in range(4)]]
+    spread = physical_motion([merged, *parted])
+    assert spread[col] == 2 and spread[MOTION_NAMES.index("tracks")] <= 2
+    assert physical_motion(_recs(zoom))[col] == 0
+    brushed = _recs(zoom)
+    brushed[2]["regions_mm"] = np.vstack([brushed[2]["regions_mm"], [[120.0, 30.0, 30.0]]])
+    assert len(tips_mm(brushed[2])) == 3 and physical_motion(brushed)[col] == 0
+    flat = [dict(r, touch_mm2=6000.0) for r in (merged, *parted)]
+    assert physical_motion(flat)[col] == 0
+
+
+def test_whether_a_hand_moves_is_not_decided_by_fingertips_meeting_or_parting():
+    """The count of fingertips that came or went in the window is a count: the
+    static-vs-dynamic classifier does not see it (a dim fingertip of a resting hand
+    may flicker)."""
+    from plugins.gestures.features import N_MOTION, select_kind
+
+    row = np.zeros((2, N_MOTION))
+    row[1, N_MOTION - len(MOTION_NAMES) + MOTION_NAMES.index("tips_met")] = 3
+    kind = select_kind(row)
+    assert np.array_equal(kind[0], kind[1])

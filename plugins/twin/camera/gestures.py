@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .hand import FingerPose, HandPose, Subject, hand_pieces
+from .hand import FINGERS, FingerPose, HandPose, Subject, hand_pieces
 
 STATIC: tuple[str, ...] = ("one_finger", "two_finger", "l_shape", "closed_hand", "open_hand")
 DYNAMIC: tuple[str, ...] = ("drag", "rotate", "spread_pile", "wipe", "zoom")
@@ -114,13 +114,42 @@ def _pinch_fingers(s: Subject, p: float, j) -> tuple:
     return (thumb, index, c, c, c)
 
 
+def _piled(s: Subject) -> np.ndarray:
+    """Abductions (deg) of a pile: each finger closed in on its neighbours."""
+    opened = np.array((-28.0, -12.0, 0.0, 10.0, 22.0)) * s.spread_deg
+    return opened * 0.1 + [12.0, 0.0, 0.0, 0.0, 0.0]
+
+
+@functools.lru_cache(maxsize=64)
+def _gathered(s: Subject) -> tuple[float, ...]:
+    """Abductions (deg) turning each finger of a pile (``_piled``) so that its tip
+    points at the centroid of the piled tips (found on the hand's own geometry):
+    fingertips brought together until they touch."""
+    piled = _piled(s)
+    flex = (0.0, 70.0, 40.0)
+    pose = HandPose((0.0, 0.0), 90.0, "right", palm_h_mm=(20.0, 15.0),
+                    fingers=tuple(FingerPose(flex, float(a), True) for a in piled))  # fmt: skip
+    tips = {c["finger"]: np.array(c["pos_mm"]) for c in hand_pieces(s, pose).contacts}
+    if len(tips) < 5:
+        return tuple(float(a) for a in piled)
+    base = np.asarray(s.mcp_uv, dtype=float)  # at angle 90 the table's mm are the hand's uv
+    tip = np.array([tips[f] for f in FINGERS])
+    now = np.arctan2(*(tip - base).T)
+    want = np.arctan2(*(tip.mean(axis=0) - base).T)
+    return tuple(float(a) for a in piled + np.degrees(want - now))
+
+
 def _five_fingers(s: Subject, p: float, j) -> tuple:
-    """All five tips touching; ``p`` = 0 piled together .. 1 spread out."""
-    sp = s.spread_deg
+    """All five tips touching; ``p`` = 0 piled together .. 1 spread out. Piled, the
+    tips close in on each other, and on one point as far as ``s.gather`` says."""
+    opened = np.array((-28.0, -12.0, 0.0, 10.0, 22.0)) * s.spread_deg
+    piled = _piled(s)
+    if s.gather > 0:
+        piled = piled + s.gather * (np.array(_gathered(replace(s, gather=0.0))) - piled)
     f = []
-    for k, abd_open in enumerate((-28 * sp, -12 * sp, 0.0, 10 * sp, 22 * sp)):
+    for k in range(5):
         flex = (0.0, _lerp(70, 12, p), _lerp(40, 8, p))
-        abd = _lerp(abd_open * 0.1 + (12 if k == 0 else 0), abd_open, p)
+        abd = _lerp(float(piled[k]), float(opened[k]), p)
         f.append(FingerPose(flex, abd + j[k] * 1.5, True))
     return tuple(f)
 

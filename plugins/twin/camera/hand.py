@@ -45,6 +45,9 @@ class Subject:
     tremor_mm: float  # frame-to-frame jitter
     curvature: float  # typical path bend (1/mm)
     ease_s: float = 0.03  # how gently this person starts a motion (time constant)
+    #: how far this person's piled fingertips converge on one point (0: each finger
+    #: only closes in on its neighbours, tips ~20 mm apart; 1: the tips meet and touch)
+    gather: float = 0.0
 
     @property
     def palm_len_mm(self) -> float:
