@@ -551,13 +551,16 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
     def action_selftest(self) -> None:
-        """``s``: asks first (it plays chirps on every relay path), ``s`` again within
-        3 s runs it; during an e-stop it is refused at once (nothing to ask)."""
+        """``s``: asks first, saying its paths and time (it plays chirps on every relay
+        path), ``s`` again within 3 s runs it; during an e-stop it is refused at once
+        (nothing to ask)."""
         out = self.app.session.outputs
         if (out is not None and out.estopped) or self.ask.confirmed("selftest"):
             self._selftest()
             return
-        does = "runs the self-test: a chirp on every relay path"
+        last_s = self.selftest_done[2] if self.selftest_done else 0.0
+        about = selftest_about(self._profile(), self.app.ctx.pm, last_s)[0]
+        does = f"runs the self-test ({about}): a chirp on every relay path"
         self.ask.ask(self, "s", does, lambda: self.result, self._show_result)
 
     @work(thread=True, exclusive=True, group="test-output")
