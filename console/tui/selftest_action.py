@@ -124,7 +124,10 @@ def run_selftest(profile: Any, pm: Any) -> tuple[bool | None, str]:
     try:
         code, report = _run(profile, pm, ["--json"])
     except (EStopLatched, SafetyRefusal) as exc:
-        return None, f"self-test refused: {exc}"
+        said = " ".join(str(exc).split())
+        if ": stopped: " in said or said.startswith("stopped: "):  # under way: stopped
+            return None, f"self-test stopped before its end ({said})"
+        return None, f"self-test refused: {said}"
     except UserError as exc:
         return False, f"self-test: {exc}"
     except ValueError:

@@ -38,3 +38,31 @@ def test_s_during_an_estop_is_refused_and_the_reset_clears_it(plugins):
             await wait_for(pilot, lambda: _result(app).startswith("e-stop reset"), 10, "reset")
 
     asyncio.run(scenario())
+
+
+def test_an_estop_during_the_self_test_says_stopped_and_the_reset_replaces_it(plugins):
+    """A new operator's try: ctrl+e while the self-test ran left `self-test refused:
+    self-test PC: stopped: operator e-stop (console)` after ctrl+r and on other screens:
+    a test under way is stopped, not refused, and the reset replaces the line."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=False, initial="devices")
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: app.session.outputs is not None, 20, "outputs")
+            await wait_for(pilot, lambda: bool(pane.doctor_rows), 20, "doctor rows")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: "s again" in _result(app), 10, "asked")
+            await pilot.press("s")
+            await wait_for(pilot, lambda: "self-test:" in _result(app), 20, "running")
+            await pilot.pause(1.0)
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: "self-test stopped" in _result(app), 60, "stopped")
+            line = _result(app)
+            assert "refused" not in line, line  # stopped under way
+            assert "ctrl+r resets" in line, line
+            await pilot.press("f2", "f1")  # another screen and back: still true
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: _result(app).startswith("e-stop reset"), 10, "reset")
+
+    asyncio.run(scenario())

@@ -169,6 +169,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         #: the self-test's row: its last run here (None: not run), its seconds then
         self.selftest_done: tuple[bool, str, float] | None = None
         self._selftest_timer = None  # the self-test's progress ticks while it runs
+        self._estopped_at_start = False  # the self-test began during an e-stop (refused)
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
         self._doctor_whole = True  # the device table's rows shown whole (``_show``)
 
@@ -570,6 +571,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         prof, pm = self._profile(), self.app.ctx.pm
         last_s = self.selftest_done[2] if self.selftest_done else 0.0
         about, total_s, est = selftest_about(prof, pm, last_s)
+        out = self.app.session.outputs
+        self._estopped_at_start = out is not None and out.estopped
         self._say(f"self-test ({about}): starting ...")
         t0 = time.monotonic()
         from_thread(self.app, self._selftest_ticks, t0, total_s, est)
@@ -592,7 +595,13 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if self._selftest_timer is not None:
             self._selftest_timer.stop()
             self._selftest_timer = None
-        if ok is None:  # refused (the e-stop): the row keeps the last run's result
+        if ok is None:  # refused or stopped (the e-stop): the row keeps the last result
+            out = self.app.session.outputs
+            if out is not None and out.estopped and not self._estopped_at_start:
+                # under way when the e-stop came: stopped, not refused; the reset's line
+                # replaces this one (``_says_estop``)
+                line = f"self-test stopped by the e-stop before its end; {ESTOP_FIX}, then s"
+                line += " runs it again"
             self._show_result(line, error=True)
             return
         self.selftest_done = (ok, line, took_s)
