@@ -48,24 +48,23 @@ def hang(lines: list[str], width: int) -> list[str]:
 
 def rate_line(cam: dict, rates: dict[str, float] | None) -> str:
     """The camera's and the vision's frames a second, counted over the same seconds
-    (``console.tui.loop_rates``): the line the live block starts with."""
+    (``console.tui.loop_rates``): the line the live block starts with; a camera sending
+    only what the view shows says so on it (5 fps of a twin that can 60 read as slow)."""
     head = f"[b]{escape(cam.get('driver', '?'))}[/b] camera"
     if rates is None:
         return f"{head}: counting frames/s ..."
-    return f"{head} {rates[CAMERA]:.0f} fps, vision {rates[VISION]:.0f} fps"
+    slowed = ""
+    if cam.get("rate_fps") and cam.get("nominal_fps"):  # the view asks for fewer frames
+        slowed = f" (the view's rate; it can {cam['nominal_fps']:.0f})"
+    return f"{head} {rates[CAMERA]:.0f} fps{slowed}, vision {rates[VISION]:.0f} fps"
 
 
 def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
     """What the rates are (``span_s``: the seconds both were counted over), the frames
     lost and where (``st``: the camera service's ``status()``) and the ``view`` shown."""
-    cam, lat = st["camera"], st["latency"] or {}
-    out = [f"both rates: frames in the same last {max(span_s, 1):.0f} s"]
-    if cam.get("rate_fps") and cam.get("nominal_fps"):  # the view asks for fewer
-        out.append(
-            f"view rate: the camera sends what the view shows (it can {cam['nominal_fps']:.0f} fps)"
-        )
+    lat = st["latency"] or {}
     return [
-        *out,
+        f"both rates: frames in the same last {max(span_s, 1):.0f} s",
         # what this loop lost since it started: frames the camera dropped while the
         # loop read it, and frames the processing was too slow for (never the frames
         # that passed while nobody watched)

@@ -489,8 +489,9 @@ def test_the_twin_renders_apart_at_the_view_s_rate_and_closing_ends_it(plugins):
             st = app.session.camera_started.status()["camera"]
             assert st["process"] and st["alive"]
             assert st["rate_fps"] == CameraPane.VIEW_FPS
-            info = app.query_one("#camera-detail")
-            await wait_for(pilot, lambda: "view rate:" in str(info.render()), 10, "rate")
+            info = app.query_one("#camera-info")
+            said = lambda: " ".join(str(info.render()).split())  # noqa: E731
+            await wait_for(pilot, lambda: "the view's rate; it can" in said(), 10, "rate")
             return st["pid"]
 
     pid = asyncio.run(scenario())
