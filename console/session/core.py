@@ -284,11 +284,12 @@ class ConsoleSession:
         return self._holder
 
     def _held_from(self, holder: str | None) -> str:
-        """Why a play from someone other than the outputs' holder is refused ("" if not)."""
+        """Why a play from someone other than the outputs' holder is refused ("" if not);
+        a paused run holds them too (it resumes where it stopped)."""
         who = self._holder
         if who is None or holder == who:
             return ""
-        return f"refused: {who} holds the outputs (pause or stop it first)"
+        return f"refused: {who} holds the outputs, paused or not (stop it first)"
 
     def play_plan(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> bool:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an
