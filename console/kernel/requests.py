@@ -98,7 +98,7 @@ def _not_held(k: Kernel, c: Client, what: str) -> None:
     held = k.holder
     if held is not None and held[0] != c.cid:
         raise SafetyRefusal(
-            f"{what}: refused: {held[1]} holds the outputs (pause or stop it there first)"
+            f"{what}: refused: {held[1]} holds the outputs, paused or not (stop it there first)"
         )
 
 

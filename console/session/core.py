@@ -39,6 +39,8 @@ PLAN_MARGIN_S = 0.02
 STOPPED_TAIL_S = 0.1
 #: how often the kernel's last plan is read, to keep a copy of another sender's plan
 WATCH_PLANS_S = 0.25
+#: a plan stopped mid-play waits this many 50 ms steps for the table's e-stop notice
+ESTOP_NOTICE_WAITS = 10
 
 
 class ConsoleSession:
@@ -284,11 +286,12 @@ class ConsoleSession:
         return self._holder
 
     def _held_from(self, holder: str | None) -> str:
-        """Why a play from someone other than the outputs' holder is refused ("" if not)."""
+        """Why a play from someone other than the outputs' holder is refused ("" if not);
+        a paused run holds them too (it resumes where it stopped)."""
         who = self._holder
         if who is None or holder == who:
             return ""
-        return f"refused: {who} holds the outputs (pause or stop it first)"
+        return f"refused: {who} holds the outputs, paused or not (stop it first)"
 
     def play_plan(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> bool:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an
@@ -316,6 +319,7 @@ class ConsoleSession:
             if holder is None:  # one wording on every screen
                 self.fail("outputs", f"{name}: {ESTOP_REFUSAL}, {ESTOP_FIX}", name="refused")
             return why
+        report = None
         try:
             report = out.play(plan, wait=False)
             with self._lock:
@@ -330,6 +334,10 @@ class ConsoleSession:
             if holder is None:  # a run's own plan: the run says what became of it, once
                 self.fail("outputs", f"{name}: {exc}", name="refused")
             text = str(exc)
+            head = f"{report.name}: stopped: " if report is not None else None
+            stopped = self._stopped_why(out, text, head) if head else ""
+            if stopped:
+                return stopped
             at, end = text.find("e-stop active ("), text.rfind("; reset")
             if at >= 0:  # the kernel's words carry its reason
                 return f"refused: {text[at : end if end > at else None]}, {ESTOP_FIX}"
@@ -337,6 +345,21 @@ class ConsoleSession:
                 return self._estop_why(out)
             return f"refused: {exc}"
         return ""
+
+    @staticmethod
+    def _stopped_why(out: Any, text: str, head: str) -> str:
+        """Why a plan that started was stopped (its report's ``name: stopped: reason``),
+        "" for another failure: by an e-stop (``stopped by the e-stop (reason), ctrl+r
+        resets``; the table's e-stop notice may come just after the plan's report, from
+        another process's ``haptable estop``), else ``stopped: reason``."""
+        if not text.startswith(head):
+            return ""
+        reason = text[len(head) :]
+        for _ in range(ESTOP_NOTICE_WAITS):  # the notice comes within a fraction of a second
+            if out.estopped:
+                return f"stopped by the e-stop ({reason}), {ESTOP_FIX}"
+            threading.Event().wait(0.05)
+        return f"stopped: {reason}"
 
     @staticmethod
     def _estop_why(out: Any) -> str:

@@ -32,7 +32,7 @@ from console.tui.logs import (
     view_handler,
 )
 from console.tui.menus import close_menus
-from console.tui.narrow import ConsoleFooter, fit_tab_bar
+from console.tui.narrow import ConsoleFooter, fit_tab_bar, types_every_key
 from console.tui.palette import SafetyPalette, keys_as_console_help
 from console.tui.panels import LeavesForScreen
 from console.tui.quitting import ConfirmsQuit
@@ -530,9 +530,12 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
     async def _key_everywhere(self, key: str) -> bool:
         """The app's priority keys work wherever the focus is, as the footer promises:
         Textual gives a key a focused text field would type (``?``) to the field, and
-        leaves the binding out. No field of the console takes a ``?``."""
+        leaves the binding out. No field of the console takes a ``?`` but one that says it
+        types every key (``types_every_key``: the Camera screen's TUIO target)."""
         focused = self.focused
         if focused is None or not focused.check_consume_key(key, key_to_character(key)):
+            return False
+        if types_every_key(focused):  # a field that types every character, "?" too
             return False
         for binding in self._bindings.key_to_bindings.get(key, ()):
             if binding.priority and await self.run_action(binding.action, self):

@@ -56,6 +56,16 @@ def fit_tab_bar(tabbed: TabbedContent, titles: dict[str, str], width: int) -> No
             tab.tooltip = None if label == titles[pane_id] else titles[pane_id]
 
 
+class TypesEveryKey:
+    """A text field that types every character, ``?`` included: no app key is taken
+    from it, the footer promises none while it has the focus."""
+
+
+def types_every_key(widget: object) -> bool:
+    """Whether ``widget`` types every character (a ``TypesEveryKey`` field)."""
+    return isinstance(widget, TypesEveryKey)
+
+
 class ConsoleFooter(Footer):
     """The footer: only keys that show whole, in the order the bindings come (the
     screen's own first, as the screen orders them by importance); the keys in
@@ -98,7 +108,11 @@ class ConsoleFooter(Footer):
     def _app_key(self, key: str) -> tuple | None:
         """The app's binding of ``key`` as footer key data: Textual leaves a priority key
         out of the footer when the focused field would type it (``?``), though the app
-        takes it there (``HapTableApp.on_event``)."""
+        takes it there (``HapTableApp.on_event``); None while a field that types every key
+        has the focus (``types_every_key``: the key is typed, no help promised)."""
+        focused = self.screen.focused
+        if focused is not None and types_every_key(focused):
+            return None
         for binding in self.app._bindings.key_to_bindings.get(key, ()):
             if binding.show:
                 return self._key_data(binding, tooltip=binding.tooltip)

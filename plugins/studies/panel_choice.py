@@ -19,7 +19,7 @@ from .adaptive_view import AdaptiveView
 from .panel_fit import protocol_changed
 from .panel_status import trial_row
 from .panel_text import default_out
-from .saved_run import run_size, saved
+from .saved_run import run_size, saved, stimulus_seconds
 from .trials_table import TrialsTable
 
 #: seconds within which a second ``s`` starts a long run
@@ -99,7 +99,8 @@ def asks_first(pane: Any, ask: AskAgain, spec: dict[str, Any]) -> bool:
     ``saved_run.LONG_S`` says its size and time, and ``s`` again within
     ``LONG_AGAIN_S`` (the same choice) starts it."""
     try:
-        size = run_size(spec["study"], spec["out"], spec["pid"], spec["simulate"])
+        stim_s = stimulus_seconds(spec["study"], pane.app.session.profile)
+        size = run_size(spec["study"], spec["out"], spec["pid"], spec["simulate"], stim_s)
     except UserError:
         return False  # the protocol's own refusal is said as the run starts
     what = repr((spec["study"], spec["pid"], str(spec["out"]), spec["simulate"]))

@@ -1,7 +1,7 @@
 """What a results folder holds of one participant's run of one protocol, and how big a
 run is before it starts: the Studies screen shows the first when the protocol, the
 participant or the folder changes (never the previous choice's progress), and asks
-before a long run (``LONG_S``) with the second.
+before a long run (``LONG_S``) with the second (a first run's time from its stimuli).
 
 A fixed plan's run is ``plan.json`` and ``trials.jsonl``; an adaptive one's
 ``adaptive.json`` and ``adaptive_trials.jsonl`` (``adaptive_run``). A run of another
@@ -26,6 +26,8 @@ from .store import RunFiles, participant_dir, progress
 
 #: a run estimated to take longer than this asks first (``s`` again starts it)
 LONG_S = 300.0
+#: the seconds a person is taken to answer a trial in an estimate before any run
+ANSWER_S = 1.0
 #: the earlier runs' trials read for their pace at most (the folder's first ones)
 PACE_FILES = 20
 
@@ -109,8 +111,26 @@ class Size:
         return f"{n}, {about} ({self.basis})" if self.basis else f"{n}, {about}"
 
 
-def run_size(study: str, out: Path, pid: str, simulate: bool) -> Size:
-    """How big ``pid``'s run of ``study`` in ``out`` is before ``s`` starts it."""
+def stimulus_seconds(study: str, profile: Any) -> float | None:
+    """The seconds a trial of the fixed plan ``study`` plays its stimulus on ``profile``
+    (a flow: its two parts and their gap, as the vibrotactile effects render them);
+    None when not known before it runs (the knob: until the selection rests)."""
+    try:
+        stim = protocols.load(study).stimulus
+        if stim not in ("flow", "hand_flow"):
+            return None
+        part_s = float(profile.get("vibrotactile.part_s"))
+        return 2 * part_s + float(profile.get("vibrotactile.gap_ms")) / 1e3
+    except (OSError, UserError, TypeError, ValueError):
+        return None
+
+
+def run_size(
+    study: str, out: Path, pid: str, simulate: bool, stimulus_s: float | None = None
+) -> Size:
+    """How big ``pid``'s run of ``study`` in ``out`` is before ``s`` starts it: a fixed
+    plan's time at the pace of the folder's earlier runs, without any from its stimuli
+    (``stimulus_s`` a trial, ``stimulus_seconds``; a person also answers)."""
     before = saved(out, pid, study)
     done = before.done if before else 0
     if ap.is_adaptive(study):
@@ -120,11 +140,18 @@ def run_size(study: str, out: Path, pid: str, simulate: bool) -> Size:
         stim_s = k * st["interval_s"] + (k - 1) * st["gap_s"]
         if simulate:
             return Size(trials, True, trials * stim_s, f"the stimuli, {stim_s:g} s a trial")
-        answer_s = 1.0
-        basis = f"the stimuli and {answer_s:g} s to answer, {stim_s + answer_s:g} s a trial"
-        return Size(trials, True, trials * (stim_s + answer_s), basis)
+        basis = f"the stimuli and {ANSWER_S:g} s to answer, {stim_s + ANSWER_S:g} s a trial"
+        return Size(trials, True, trials * (stim_s + ANSWER_S), basis)
     trials = max(protocols.load(study).n_trials - done, 0)
     pace = earlier_pace(out, study, simulate)
+    if pace is None and stimulus_s is not None:  # a first run: the stimuli say
+        if simulate:
+            return Size(
+                trials, False, trials * stimulus_s, f"the stimuli, {stimulus_s:g} s a trial"
+            )
+        a_s = ANSWER_S
+        basis = f"the stimuli and {a_s:g} s to answer, {stimulus_s + a_s:g} s a trial"
+        return Size(trials, False, trials * (stimulus_s + a_s), basis)
     if pace is None:
         return Size(trials, False, None, "")
     return Size(trials, False, trials * pace, "at the pace of the earlier runs in the folder")

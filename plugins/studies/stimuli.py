@@ -214,12 +214,15 @@ class LiveKnob:
 def play_on_session(session: Any, holder: str | None = None) -> Callable[[OutputPlan], bool]:
     """``play(plan)`` through the console session (``play_plan``: the gate, the session's
     record of what played), as ``holder`` (the run holding the outputs: ``hold_outputs``);
-    a refusal says why (the e-stop and its reason)."""
+    a refusal says why (the e-stop and its reason), a stimulus stopped while it played
+    says so (``'flow 51->52' stopped by the e-stop (...), ctrl+r resets``)."""
 
     def play(plan: OutputPlan) -> bool:
         why = session.play_plan_why(plan, holder=holder)
         if not why:
             return True
+        if why.startswith("stopped"):  # it started: the e-stop (or a cancel) stopped it
+            raise UserError(f"{plan.name!r} {why}")
         raise UserError(f"the outputs refused {plan.name!r}: {why.removeprefix('refused: ')}")
 
     return play

@@ -55,6 +55,9 @@ def test_a_held_table_refuses_every_other_process_naming_the_run(two):
     run.hold(RUN)
     with pytest.raises(SafetyRefusal, match=r"tone: refused: P02's study run .* holds the outputs"):
         other.play(plan_of())
+    with pytest.raises(SafetyRefusal) as refused:  # a paused run holds them too: no pause advice
+        other.play(plan_of())
+    assert str(refused.value).endswith("holds the outputs, paused or not (stop it there first)")
     with pytest.raises(SafetyRefusal, match="holds the outputs"):
         other.set_relays({1})
     with pytest.raises(SafetyRefusal, match="holds the outputs"):

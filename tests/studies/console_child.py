@@ -27,7 +27,9 @@ async def _console(out: str, map_file: str) -> None:
         pane = app.pane("studies")
         pane.query_one("#protocol").value = "exp2"
         pane.query_one("#out").value = out
-        await pilot.click("#start")
+        await pilot.click("#start")  # 200 trials, about 10 min: it asks first
+        await pilot.pause(0.2)
+        await pilot.click("#start")  # again within the 5 s: it starts
         while True:  # until killed
             await pilot.pause(0.2)
 

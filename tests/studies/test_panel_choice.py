@@ -80,10 +80,16 @@ def test_another_protocol_shows_its_own_state_and_a_long_run_asks(
 
 def test_the_size_of_a_fixed_run_comes_from_the_folder_s_earlier_runs(tmp_path, long_runs_ask):
     """A fixed plan's time is known from the trials its folder's runs took (the same
-    kind of participant); without any only its size is said, and nothing asks."""
+    kind of participant); without any, from its stimuli (a flow: the profile's two parts
+    and their gap; a person also answers), and without those only its size is said."""
     from plugins.studies.saved_run import run_size
 
     assert run_size("exp2", tmp_path, "P01", True).words() == "200 trials"
+    first = run_size("exp2", tmp_path, "P01", True, stimulus_s=3.1)
+    assert first.seconds == 200 * 3.1 and first.long  # 10 min 20 s: it asks first
+    assert first.words() == "200 trials, about 10 min 20 s (the stimuli, 3.1 s a trial)"
+    person = run_size("exp2", tmp_path, "P01", False, stimulus_s=3.1)
+    assert person.seconds == 200 * 4.1
     d = tmp_path / "P01"
     d.mkdir()
     lines = [
@@ -98,6 +104,8 @@ def test_the_size_of_a_fixed_run_comes_from_the_folder_s_earlier_runs(tmp_path, 
         "200 trials, about 6 min 40 s (at the pace of the earlier runs in the folder)"
     )
     assert run_size("exp2", tmp_path, "P02", False).seconds is None  # a person: not known
+    # the folder's pace wins over the stimuli's
+    assert run_size("exp2", tmp_path, "P02", True, stimulus_s=3.1).seconds == 400.0
 
 
 def test_a_saved_run_is_this_protocol_s_only(tmp_path):
@@ -118,3 +126,35 @@ def test_a_saved_run_is_this_protocol_s_only(tmp_path):
     assert saved(tmp_path, "P03", "threshold_electrovibration") is None
     (d / "plan.json").write_text(json.dumps({"experiment": "exp2", "trials": []}))
     assert saved(tmp_path, "P02", "exp1") is None  # exp2's plan: not exp1's
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_a_first_simulated_exp2_run_asks_first(
+    double_plugins, map_file, tmp_path, size, long_runs_ask
+):
+    """Issue 27 (a new-user try): simulated exp2 in an empty folder, one ``s``: the 200
+    trials (about 11 min on the twin) started at once; they ask first as every long run
+    does, their time from the stimuli, and ``s`` again starts them."""
+    from textual.widgets import Static
+
+    async def scenario():
+        app = studies_app(double_plugins)
+        async with app.run_test(size=size) as pilot:
+            pane = await studies_pane(pilot, app, map_file)
+            status = pane.query_one("#study-status", Static)
+            pane.query_one("#protocol").value = "exp2"
+            pane.query_one("#out").value = str(tmp_path)
+            pane.query_one("#participant").value = "P01"
+            pane.query_one("#simulate").value = True
+            pane.focus()
+            await pilot.press("s")
+            await pilot.pause(0.3)
+            said = " ".join(str(status.render()).split())
+            assert pane.running is None and not (tmp_path / "P01" / "plan.json").exists(), said
+            assert "s again within 5 s starts exp2 with P01: 200 trials, about 10 min" in said
+            await pilot.press("s")
+            await wait_for(pilot, lambda: pane.running == "P01", 30, "the run")
+            await pilot.press("a", "a")
+            await wait_for(pilot, lambda: pane.running is None, 30, "the run stopped")
+
+    asyncio.run(scenario())

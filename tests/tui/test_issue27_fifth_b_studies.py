@@ -34,7 +34,7 @@ def test_trials_follow_replay_paused_and_notes_toggle(plugins, map_file, tmp_pat
             pane.query_one("#protocol").value = "exp2"
             pane.query_one("#out").value = str(tmp_path)
             pane.focus()
-            await pilot.press("s")
+            await pilot.press("s", "s")  # exp2's 200 trials (about 10 min) ask first
             bar = pane.query_one("#study-progress", ProgressBar)
             table = pane.query_one("#study-trials", DataTable)
             await wait_for(pilot, lambda: (bar.progress or 0) >= 12, 60, "twelve trials")

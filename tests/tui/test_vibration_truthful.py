@@ -206,7 +206,7 @@ def test_a_play_while_the_map_is_measured_is_refused(plugins, map_file):
                 raise Cancelled
 
             pane.service.measure = held
-            pane.action_measure("measure")  # as `:measure` (no question first)
+            pane.action_measure("measure")  # as `:measure` (no kept map: no question)
             await wait_for(pilot, lambda: pane._measuring is not None, 10, "measuring")
             for key in ("f", "enter"):
                 await pilot.press(key)

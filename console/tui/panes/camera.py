@@ -43,6 +43,7 @@ from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
+from console.tui.narrow import TypesEveryKey
 from console.tui.plots import HalfBlockImage, downsample
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
@@ -55,6 +56,11 @@ from console.tui.wrap_paths import break_paths
 VISION_VIEWS = ("diff", "highpass", "body")
 #: the live rows pinned at the side panel's top with the rates, hands and gesture
 PINNED = ("camera lost", "vision skipped", "hand at", "clipped pixels", "image noise")
+
+
+class TargetField(TypesEveryKey, Input):
+    """The TUIO target (``U``): while it types, every key is typed, ``?`` too, and the
+    footer promises no key (``console.tui.narrow.TypesEveryKey``)."""
 
 
 class SidePanel(VerticalScroll):
@@ -132,7 +138,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             with SidePanel(id="camera-scroll"):
                 yield Static("", id="camera-detail")
                 yield Static("", id="camera-settings")
-                box = Input(
+                box = TargetField(
                     placeholder="host:port, Enter", id="camera-target", select_on_focus=False
                 )
                 box.display = False

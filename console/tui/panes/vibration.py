@@ -568,12 +568,13 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
     def on_input_submitted(self, event: Input.Submitted) -> None:
         """A command typed on the line: a failed one keeps its text there (``:`` comes
         back to it, the cursor at its end), a successful one clears it; an import, a
-        load or a measurement keeps it until its work ends (``_command_done``). A failed
+        load or a measurement keeps it until its work ends (``_command_done``); a
+        ``measure`` that asks first keeps it with the keys (Enter again confirms). A failed
         command keeps the keys on the line (the next keys fix it, they never play from
         the grid); an accepted one gives them back to the grid."""
         event.stop()
         line, text = event.input, event.value.strip()
-        self._command_failed = False
+        self._command_failed = self._command_asks = False
         self._typed = text
         runs_on = False
         try:
@@ -584,7 +585,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             self._typed = None
         if not isinstance(line, CommandLine):
             return
-        if self._command_failed:
+        if self._command_failed or self._command_asks:  # fixed, or confirmed by Enter
             line.failed(text)
             return
         if not runs_on:

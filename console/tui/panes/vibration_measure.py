@@ -1,5 +1,6 @@
 """The Vibration screen's measurement of the map on the twin (``m``, the typed
-``measure``): with a kept map it asks first; it says its progress and the time left, and
+``measure``): with a kept map it asks first (``m`` again, or Enter again on the line
+keeping the typed command); it says its progress and the time left, and
 ``x`` or an e-stop stops it (said as such). With an accelerometer input ``m`` runs the
 roving measurement instead (``console.tui.roving_view``)."""
 
@@ -38,7 +39,8 @@ class VibrationMeasureMixin:
     summary: str
     status_text: str
     _measuring: threading.Event | None
-    _measure_asked = -1e9  # when m last asked before replacing the kept map
+    _measure_asked = -1e9  # when m (or the typed measure) last asked before replacing
+    _command_asks = False  # the typed command asked: its line keeps it for Enter again
     #: the one-line accelerometer hint ``m`` shows without an accelerometer input ("": none);
     #: it goes with the next key or when the measurement ends, whichever comes first
     _accel_hint = ""
@@ -55,9 +57,12 @@ class VibrationMeasureMixin:
             self._error(f"measure {ESTOP_REFUSAL}, {ESTOP_FIX}")
             return
         now = time.monotonic()
-        kept = command is None and self.service.cached_map_path().is_file()
+        kept = self.service.cached_map_path().is_file()
         if kept and now - self._measure_asked > MEASURE_AGAIN_S:  # it would be replaced
-            self._measure_asked, ask = now, measure_again(self.service.measure_takes())
+            again = "m" if command is None else "Enter"  # the typed one waits on its line
+            self._command_asks = command is not None
+            takes = self.service.measure_takes()
+            self._measure_asked, ask = now, measure_again(takes, again)
             self.status(ask)  # the question leaves the line when it lapses
             then, shown = self.summary, lambda: self.status_text  # the map's line after
             lapse(self, shown, ask, self.status, MEASURE_AGAIN_S, then=then)

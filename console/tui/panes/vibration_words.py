@@ -51,12 +51,13 @@ MAP_FREE = "the run that played on this map has ended: m measures the grid anew"
 MEASURING_REFUSAL = "refused: the map is being measured (x stops the measurement)"
 
 
-def measure_again(takes: str) -> str:
-    """What ``m`` with a kept map asks: ``m`` again measures anew, for ``takes`` ("about
-    10 s"; "" when unknown), and replaces the kept map."""
+def measure_again(takes: str, again: str = "m") -> str:
+    """What ``m`` (or the typed ``measure``: ``again`` "Enter") with a kept map asks:
+    ``again`` measures anew, for ``takes`` ("about 10 s"; "" when unknown), and replaces
+    the kept map."""
     how_long = f" ({takes})" if takes else ""
     return (
-        f"m again within {MEASURE_AGAIN_S:.0f} s measures the grid anew{how_long} and "
+        f"{again} again within {MEASURE_AGAIN_S:.0f} s measures the grid anew{how_long} and "
         "replaces the kept map (the demos and studies use it too)"
     )
 

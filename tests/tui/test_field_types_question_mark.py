@@ -1,0 +1,49 @@
+"""Issue 27 (a new-user try at 80 x 24): the Camera screen's TUIO target field (``U``)
+types ``?`` as the README promises (while it types the footer promises no key): the help
+does not open and the footer shows no ``? help``; away from the field ``?`` helps again."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for
+from .test_camera import _first_frame
+
+
+def _footer(app) -> str:
+    from console.tui.narrow import ConsoleFooter
+
+    return " ".join(str(k.render()) for k in app.screen.query_one(ConsoleFooter).children)
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_the_tuio_target_field_types_a_question_mark(plugins, size):
+    from console.tui.app import HelpScreen
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
+        async with app.run_test(size=size) as pilot:
+            await _first_frame(app, pilot)
+            await pilot.press("U")
+            box = app.query_one("#camera-target")
+            await wait_for(pilot, lambda: box.has_focus, 10, "target field")
+            box.value = "host"
+            box.cursor_position = len(box.value)
+            await pilot.pause(0.3)
+            assert "help" not in _footer(app), _footer(app)
+            await pilot.press("question_mark")
+            await pilot.pause(0.3)
+            assert not isinstance(app.screen, HelpScreen), "? opened the help from the field"
+            assert box.value == "host?"
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: not box.has_focus, 10, "field left")
+            await wait_for(pilot, lambda: "help" in _footer(app), 10, "help promised again")
+            await pilot.press("question_mark")
+            await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), 10, "help")
+
+    asyncio.run(scenario())
