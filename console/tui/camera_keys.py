@@ -95,7 +95,7 @@ def key_shown(
     return True
 
 
-#: cameras whose hand ``P`` holds still (``P`` again lets it go)
+#: cameras whose hand ``P`` holds still (``P`` again: its gestures in turn)
 _HELD: set[int] = set()
 
 
@@ -117,6 +117,6 @@ def hold_hand(svc: Any) -> tuple[str, str]:
     cam.place("open_hand", (w / 2, h / 2))
     return (
         f"P: a flat hand held still on the twin's glass at {w / 2:.0f},{h / 2:.0f} mm: "
-        "e measures it; P lets it go",
+        "e measures it; P again: its gestures in turn",
         "information",
     )

@@ -1,7 +1,7 @@
 """Issue 27 (fifth, b): the Camera screen's exposure assistant on the twin at 80 x 24:
 when the twin's hand came and went in the frames measured, ``e`` says so (never "no
 hand" beside a panel showing one) and names ``P``, the key that holds a flat hand still
-on the twin's glass; with it held, ``e`` measures it; ``P`` again lets it go."""
+on the twin's glass; with it held, ``e`` measures it; ``P`` again: its gestures in turn."""
 
 from __future__ import annotations
 
@@ -40,6 +40,8 @@ def test_e_names_the_key_that_holds_a_hand_on_the_twin(plugins, monkeypatch):
             await pilot.press("P")
             await wait_for(pilot, lambda: "held still" in status(), 10, "P")
             assert "e measures it" in status()
+            # what P again does, in the README's words (it said "P lets it go")
+            assert "P again: its gestures in turn" in status(), status()
             await pilot.press("e")
             await wait_for(pilot, lambda: "of 255" in status(), 60, "e measured")
             await pilot.press("P")
