@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import time
 
+from console.files.atomic import write_text_atomic
 from console.files.paths import profile_state_dir
 
 log = logging.getLogger(__name__)
@@ -52,14 +52,6 @@ def note_last(profile_name: str, kind: str, state: str, line: str, by: str) -> N
     }
     path = profile_state_dir(profile_name, FILE)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{FILE}.{os.getpid()}")
-        tmp.write_text(json.dumps(data), encoding="utf-8")
-        os.replace(tmp, path)
+        write_text_atomic(path, json.dumps(data))
     except OSError as exc:
         log.warning("the self-test's outcome not kept in %s: %s", path, exc)
-
-
-def said(rec: dict[str, str]) -> str:
-    """A kept outcome in words: ``ok (haptable doctor, 2026-11-30 18:02)``."""
-    return f"{rec['state']} ({rec['by']}, {rec['time']})"

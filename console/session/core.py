@@ -12,6 +12,7 @@ import contextlib
 import dataclasses
 import os
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -358,7 +359,7 @@ class ConsoleSession:
         for _ in range(ESTOP_NOTICE_WAITS):  # the notice comes within a fraction of a second
             if out.estopped:
                 return f"stopped by the e-stop ({reason}), {ESTOP_FIX}"
-            threading.Event().wait(0.05)
+            time.sleep(0.05)
         return f"stopped: {reason}"
 
     @staticmethod

@@ -17,15 +17,21 @@ def _result(app) -> str:
     return app.pane("devices").result
 
 
+async def _devices_ready(app, pilot):
+    """The Devices pane once the outputs are open and the doctor's rows shown."""
+    pane = app.pane("devices")
+    await wait_for(pilot, lambda: app.session.outputs is not None, 20, "outputs")
+    await wait_for(pilot, lambda: bool(pane.doctor_rows), 20, "doctor rows")
+    return pane
+
+
 def test_s_during_an_estop_is_refused_and_the_reset_clears_it(plugins):
     # the paced table the console shares with the self-test (a fast twin is each
     # process's own: the self-test would open a table of its own)
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="devices")
         async with app.run_test(size=(80, 24)) as pilot:
-            pane = app.pane("devices")
-            await wait_for(pilot, lambda: app.session.outputs is not None, 20, "outputs")
-            await wait_for(pilot, lambda: bool(pane.doctor_rows), 20, "doctor rows")
+            pane = await _devices_ready(app, pilot)
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: app.session.outputs.estopped, 10, "e-stop")
             await pilot.press("s")
@@ -48,9 +54,7 @@ def test_an_estop_during_the_self_test_says_stopped_and_the_reset_replaces_it(pl
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=False, initial="devices")
         async with app.run_test(size=(80, 24)) as pilot:
-            pane = app.pane("devices")
-            await wait_for(pilot, lambda: app.session.outputs is not None, 20, "outputs")
-            await wait_for(pilot, lambda: bool(pane.doctor_rows), 20, "doctor rows")
+            await _devices_ready(app, pilot)
             await pilot.press("s")
             await wait_for(pilot, lambda: "s again" in _result(app), 10, "asked")
             await pilot.press("s")
