@@ -20,6 +20,7 @@ from .panel_fit import protocol_changed
 from .panel_status import trial_row
 from .panel_text import default_out
 from .saved_run import run_size, saved, stimulus_seconds
+from .store import check_id
 from .trials_table import TrialsTable
 
 #: seconds within which a second ``s`` starts a long run
@@ -90,6 +91,15 @@ def field_changed(pane: Any) -> None:
     pid = choice[1] if choice else ""
     about_choice = said.startswith("protocol ") or " has finished " in said
     if about_choice and not (pid and re.search(rf"(?<!\w){re.escape(pid)}(?!\w)", said)):
+        pane.said = ("", "information")
+    was_refused = said.startswith("participant '")
+    try:
+        check_id(pid) if pid else None
+    except UserError as e:  # a name no folder can take: said as typed, s refuses it
+        pane.said = (str(e), "warning")
+        pane._idle()
+        return
+    if was_refused:
         pane.said = ("", "information")
     show_choice(pane)
 

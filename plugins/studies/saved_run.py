@@ -66,8 +66,8 @@ def saved(out: Path, pid: str, study: str) -> Saved | None:
     read: starting says why)."""
     if not pid:
         return None
-    root = participant_dir(out, pid)
     try:
+        root = participant_dir(out, pid)
         if ap.is_adaptive(study):
             proto = ap.load(study)
             run = json.loads((root / "adaptive.json").read_text(encoding="utf-8"))
