@@ -654,4 +654,10 @@ def run_app(ctx, *, fast: bool | None = None, image: str | None = None) -> int:
     finally:
         native.stop()
         release_logs(removed)
-    return 0
+    return exit_status(app)
+
+
+def exit_status(app: App) -> int:
+    """The console's exit status: 0 when the operator quit, 3 (internal error, as the
+    README lists) when it closed on an error (its traceback printed above)."""
+    return 3 if app.return_code else 0
