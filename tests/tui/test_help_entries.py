@@ -10,8 +10,11 @@ import asyncio
 import pytest
 
 from console.cli.main import Context
+from console.tui import app as console_app
 from console.tui.app import HapTableApp
 from console.tui.help import entries, paragraphs
+from console.tui.narrow import TypesEveryKey
+from console.tui.panes.camera import TargetField
 from console.tui.panes.vibration_words import HELP_KEYS
 
 from .conftest import wait_for
@@ -95,3 +98,11 @@ def test_a_run_of_entries_is_one_table_whatever_its_spacing():
     assert got[3:] == ["", "x  y"]  # a lone entry stays as written
     mixed = columns(["enter: audition", "arrows: move"])
     assert mixed == ["enter:   audition", "arrows:  move"]
+
+
+def test_the_help_names_every_field_that_types_a_question_mark():
+    """The help's ``?`` line says where ``?`` types instead (a new operator read 'no field
+    takes a ?' and then saw the TUIO target type it)."""
+    line = next(x for x in console_app.HELP.splitlines() if x.startswith("? "))
+    assert set(TypesEveryKey.__subclasses__()) == {TargetField}
+    assert "TUIO target" in line and "no field" not in line, line
