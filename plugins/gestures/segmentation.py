@@ -141,35 +141,38 @@ class Parts:
             return int(self.blocks[by, bx])
         return 0
 
-    def _upsampled(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
-        """``image`` by nearest-neighbour upsampling of ``values[blocks]`` (any dtype)."""
+    def _upsampled(self, values: np.ndarray | None, box: tuple[int, int, int, int]) -> np.ndarray:
+        """``image`` by nearest-neighbour upsampling of ``values[blocks]`` (any dtype; None:
+        the labels themselves, as uint8, each below 256)."""
         b = PART_BLOCK_PX
         x0, y0, x1, y1 = box
         bx0, by0 = x0 // b, y0 // b
         bx1, by1 = -(-x1 // b), -(-y1 // b)
-        blk = np.full((by1 - by0, bx1 - bx0), values[0], values.dtype)
+        if values is None:
+            blk = np.zeros((by1 - by0, bx1 - bx0), np.uint8)
+        else:
+            blk = np.full((by1 - by0, bx1 - bx0), values[0], values.dtype)
         hb, wb = self.blocks.shape
         sub = self.blocks[by0 : min(by1, hb), bx0 : min(bx1, wb)]
-        blk[: sub.shape[0], : sub.shape[1]] = values[sub]
+        blk[: sub.shape[0], : sub.shape[1]] = sub if values is None else values[sub]
         up = cv2.resize(blk, None, fx=b, fy=b, interpolation=cv2.INTER_NEAREST)
         return up[y0 - by0 * b : y1 - by0 * b, x0 - bx0 * b : x1 - bx0 * b]
 
-    def _labels(self) -> np.ndarray | None:
-        """The labels at every pixel of ``win`` (uint8; None if a label exceeds 255)."""
+    def labels(self) -> np.ndarray | None:
+        """The part at every pixel of ``win`` (uint8, 0 where none; made once per frame
+        and shared: do not write to it), or None if a label exceeds 255."""
         if "labels" not in self._cache:
             ok = int(self.blocks.max(initial=0)) < 256
             # contiguous: each look-up over it is a quarter faster than over a strided view
             self._cache["labels"] = (
-                np.ascontiguousarray(self._upsampled(np.arange(256, dtype=np.uint8), self.win))
-                if ok
-                else None
+                np.ascontiguousarray(self._upsampled(None, self.win)) if ok else None
             )
         return self._cache["labels"]
 
     def image(self, values: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
         """``values[part]`` at every pixel of ``box`` (x0, y0, x1, y1) of the frame, in
         ``values``' dtype (``values[0]`` where no part is)."""
-        labels = self._labels() if values.dtype == np.uint8 else None
+        labels = self.labels() if values.dtype == np.uint8 else None
         if labels is None:
             return self._upsampled(values, box)
         # every block outside ``win`` is no part's: values[0] there
