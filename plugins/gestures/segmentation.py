@@ -277,37 +277,29 @@ def relative_body(
 
 
 _BLOCK3 = np.ones((3, 3), np.uint8)
-_LANES = np.uint32(0x00FF00FF)
+_HALVES = np.uint64(0x0000FFFF0000FFFF)
 
 
 def block_means(diff: np.ndarray) -> np.ndarray:
     """The means of the frame's whole ``PART_BLOCK_PX`` blocks, rounded half to even: what
-    ``cv2.resize`` with ``INTER_AREA`` gives, at half its cost for 4 px blocks of a
-    little-endian frame whose width is a multiple of 4 (each row's 4 pixels of a block
-    read as one 32-bit word and summed two at a time in its 16-bit halves)."""
+    ``cv2.resize`` with ``INTER_AREA`` gives, for two thirds of its cost with 4 px blocks
+    of a little-endian frame whose width is a multiple of 4 (each block's 4 column sums
+    read as one 64-bit word and summed two at a time in its halves)."""
     b = PART_BLOCK_PX
     H, W = diff.shape
     hb, wb = H // b, W // b
     if b != 4 or W % 4 or sys.byteorder != "little" or not diff.flags.c_contiguous:
         return cv2.resize(diff[: hb * b, : wb * b], (wb, hb), interpolation=cv2.INTER_AREA)
-    words = diff[: hb * b].view(np.uint32)  # (rows, wb): a block's row in each word
-    # pixels 0 + 2 and 1 + 3 of each word in its 16-bit halves, summed over the block's 4
-    # rows (at most 1020 each); only block-sized arrays (a frame-sized temporary costs
-    # more in fresh pages than the sums)
-    even = words[0::b] & _LANES
-    odd = words[0::b] >> 8
-    odd &= _LANES
-    tmp = np.empty_like(even)
-    for r in range(1, b):
-        np.bitwise_and(words[r::b], _LANES, out=tmp)
-        even += tmp
-        np.right_shift(words[r::b], 8, out=tmp)
-        tmp &= _LANES
-        odd += tmp
-    even += odd
-    total = even >> 16
-    even &= np.uint32(0xFFFF)
-    total += even  # the block's sum s of 16 pixels
+    rows = diff[: hb * b]
+    cols = np.add(rows[0::b], rows[1::b], dtype=np.uint16)
+    cols += np.add(rows[2::b], rows[3::b], dtype=np.uint16)  # 4 rows' sums, at most 1020
+    words = cols.view(np.uint64)  # (hb, wb): a block's 4 column sums in each word
+    pairs = words & _HALVES  # columns 0 and 2 of each block, each in a 32-bit half
+    words >>= np.uint64(16)
+    words &= _HALVES  # columns 1 and 3
+    pairs += words
+    halves = pairs.view(np.uint32)  # (hb, 2 wb): each block's 0 + 1 and 2 + 3
+    total = halves[:, 0::2] + halves[:, 1::2]  # the block's sum s of 16 pixels
     # s / 16 rounded half to even: (s + 8) // 16, less 1 where s is 16 q + 8 with q even
     tie = (total & np.uint32(31)) == 8
     total += np.uint32(8)
