@@ -370,11 +370,15 @@ def foreground(parts: Parts | None, shape: tuple[int, int]) -> np.ndarray:
 
 def foreground_window(parts: Parts | None) -> tuple[tuple[int, int, int, int], np.ndarray] | None:
     """``foreground`` as the box that holds all of it (``parts.win``: x0, y0, x1, y1) and
-    its mask there; None without a hand's part (no foreground). A frame's background
-    update works on that box only, not on a frame-sized mask."""
+    its mask there (non-zero: foreground; the parts' labels, shared with the frame's other
+    images, when each fits a byte); None without a hand's part (no foreground). A frame's
+    background update works on that box only, not on a frame-sized mask."""
     if parts is None:
         return None
-    return parts.win, parts.image(_foreground_values(parts), parts.win)
+    labels = parts.labels()  # no part's label is 0 and every hand's part's is not
+    if labels is None:
+        labels = parts.image(_foreground_values(parts), parts.win)
+    return parts.win, labels
 
 
 def _foreground_values(parts: Parts) -> np.ndarray:
