@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from console.plugin_api import SafetyRefusal, UserError
+from console.plugin_api import SafetyRefusal, TableBusy, UserError
 
 
 def hold_for_run(outputs: Any, study: str) -> None:
@@ -18,5 +18,7 @@ def hold_for_run(outputs: Any, study: str) -> None:
         return
     try:
         hold(f"a study run of {study} (haptable study run, pid {os.getpid()})")
+    except TableBusy:
+        raise  # another run holds them: the table's state (exit 5), not bad input
     except SafetyRefusal as exc:
         raise UserError(str(exc)) from None
