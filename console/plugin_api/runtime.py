@@ -10,7 +10,8 @@ graph and layer tests see every edge.
 
 What it offers, by where it comes from:
 
-- frame loop and stages: ``FrameLoop``, ``VisionStage``, ``learn_background``,
+- frame loop and stages: ``FrameLoop``, ``PASSED`` (a stage that did nothing this frame),
+  ``VisionStage``, ``learn_background``,
   ``open_camera``, ``open_classifier``, ``vision_loop``, ``Watchdog``
 - latency and timing: ``LatencyMonitor``, ``DEQUEUED``, ``PROCESSING``; jitter probes
   ``start_probe``, ``start_probe_beside``, ``finish_probe``
@@ -46,7 +47,7 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
     from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
     from console.runtime.latency import DEQUEUED, PROCESSING, LatencyMonitor
-    from console.runtime.loop import FrameLoop
+    from console.runtime.loop import PASSED, FrameLoop
     from console.runtime.measured_map import (
         Cancelled,
         kept_measured_map,
@@ -82,7 +83,7 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
 
 #: source module (short name) -> the names it gives the API
 _NAMES: dict[str, tuple[str, ...]] = {
-    "loop": ("FrameLoop",),
+    "loop": ("FrameLoop", "PASSED"),
     "stages": ("VisionStage", "learn_background", "open_camera", "open_classifier", "vision_loop"),
     "watchdog": ("Watchdog",),
     "latency": ("DEQUEUED", "PROCESSING", "LatencyMonitor"),
@@ -124,6 +125,7 @@ __all__ = [
     "Failed",
     "finish_probe",
     "FrameLoop",
+    "PASSED",
     "HEARTBEAT_S",
     "LatencyMonitor",
     "learn_background",
