@@ -17,7 +17,8 @@ What it offers, by where it comes from:
   ``start_probe``, ``start_probe_beside``, ``finish_probe``
 - tracking: ``Tracking``, ``TrackFrame``, ``Announcer``
 - the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``,
-  ``kept_measured_map`` (the kept one only, never measuring)
+  ``kept_measured_map`` (the kept one only, never measuring); a study run's hold on it
+  across processes ``map_held``, ``map_holder``
 - the projector link: ``ProjectorService``, ``ProjectorLaunch``, the wire protocol as
   ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
@@ -48,6 +49,7 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
     from console.runtime.latency import DEQUEUED, PROCESSING, LatencyMonitor
     from console.runtime.loop import PASSED, FrameLoop
+    from console.runtime.map_hold import map_held, map_holder
     from console.runtime.measured_map import (
         Cancelled,
         kept_measured_map,
@@ -90,6 +92,7 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "jitter": ("finish_probe", "start_probe", "start_probe_beside"),
     "tracking": ("Announcer", "TrackFrame", "Tracking"),
     "measured_map": ("Cancelled", "kept_measured_map", "measured_map", "measured_map_file"),
+    "map_hold": ("map_held", "map_holder"),
     "protocol": (
         "HEARTBEAT_S",
         "MAX_SOCKET_PATH",
@@ -132,6 +135,8 @@ __all__ = [
     "MAX_SOCKET_PATH",
     "kept_measured_map",
     "measured_map",
+    "map_held",
+    "map_holder",
     "measured_map_file",
     "MessageReader",
     "inject_twin_faults",
@@ -181,6 +186,8 @@ def _source(source: str) -> ModuleType:
         from console.runtime import tracking as module  # lazy: loads on first use
     elif source == "measured_map":
         from console.runtime import measured_map as module  # lazy: loads on first use
+    elif source == "map_hold":
+        from console.runtime import map_hold as module  # lazy: loads on first use
     elif source == "protocol":
         from console.runtime.projector import protocol as module  # lazy: loads on first use
     elif source == "service":
