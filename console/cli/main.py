@@ -8,7 +8,7 @@ import os
 import sys
 import warnings
 
-from console.core.errors import EStopLatched, EStopped, UserError
+from console.core.errors import EStopLatched, EStopped, TableBusy, UserError
 from console.core.options import Parser, seconds_option
 from console.files.profile_paths import find_profile
 from console.runtime.context import Context
@@ -95,6 +95,11 @@ def _main(argv: list[str]) -> int:
         return code
     except EStopped as exc:
         return _estopped(str(exc))
+    except TableBusy as exc:
+        if ctx is not None and ctx.estopped_by:
+            return _estopped(ctx.estopped_by)
+        print(f"haptable: busy: {one_line(str(exc))}", file=sys.stderr)
+        return TableBusy.EXIT_CODE
     except EStopLatched as exc:
         print(f"haptable: {one_line(str(exc))}", file=sys.stderr)
         return EStopLatched.EXIT_CODE

@@ -255,7 +255,8 @@ class VisionResult(Protocol):
     blobs, on a hand or not), its intermediate images by name (``view(name)``, one of
     the classifier's ``views``; ``None`` when it has no such image) and what it measured
     that an operator tunes against (``readings() -> {name: value}``, e.g. the touching
-    skin's level or pixels the sensor clips; may be empty)."""
+    skin's level, ``touching mm2`` the main hand's skin on the glass (a flat hand's too,
+    which leaves no fingertip contact), or pixels the sensor clips; may be empty)."""
 
     hands: tuple[Hand, ...]
     contacts: tuple[Contact, ...]

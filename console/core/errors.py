@@ -19,6 +19,15 @@ class SafetyRefusal(UserError):
     """The safety gate refused a plan or a relay switch; the message says why."""
 
 
+class TableBusy(SafetyRefusal):
+    """Refused by the table's state, not by the input: another process holds its outputs
+    (a participant's study run, a console opened with other output settings). The same
+    command works once that one lets go; the CLI exits with ``EXIT_CODE``."""
+
+    #: the exit status of a command the table refused because it is busy
+    EXIT_CODE = 5
+
+
 class EStopped(Exception):
     """Another process (`haptable estop`) e-stopped this command's outputs; it stopped."""
 

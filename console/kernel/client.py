@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from console.core.contracts import ParametricStream
-from console.core.errors import EStopLatched, SafetyRefusal, UserError
+from console.core.errors import EStopLatched, SafetyRefusal, TableBusy, UserError
 from console.kernel import wire
 from console.kernel.last_plan import kernel_plan
 from console.kernel.output_settings import refusal, settings_key
@@ -215,7 +215,7 @@ class Outputs:
             self._lost = ""
             if not got.get("ok"):
                 theirs = hello.get("output_settings")  # which keys differ, and the fix
-                raise UserError(refusal(self.table.name, got.get("clients"), theirs, profile))
+                raise TableBusy(refusal(self.table.name, got.get("clients"), theirs, profile))
             self._wait_gone(deadline)
 
     def _wait_gone(self, deadline: float) -> None:
@@ -369,7 +369,7 @@ class Outputs:
             raise SafetyRefusal(f"{op}: the outputs process gave no answer within {timeout_s:g} s")
         h = p.header
         if "error" in h:
-            raise SafetyRefusal(str(h["error"]))
+            raise (TableBusy if h.get("busy") else SafetyRefusal)(str(h["error"]))
         return h, p.arrays
 
     # ------------------------------------------------------------------ plans

@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from console.core.errors import SafetyRefusal
+from console.core.errors import SafetyRefusal, TableBusy
 from console.kernel import wire
 from console.kernel.input_requests import INPUT_REQUESTS
 from console.kernel.output_settings import output_settings, settings_key
@@ -82,7 +82,7 @@ def hold(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     still silences everything."""
     who = str(h.get("who") or c.label())[:200]
     if k.holder is not None and k.holder[0] != c.cid:
-        raise SafetyRefusal(f"refused: {k.holder[1]} holds the outputs; stop it there first")
+        raise TableBusy(f"refused: {k.holder[1]} holds the outputs; stop it there first")
     k.holder = (c.cid, who)
     return {"ok": True}
 
@@ -94,10 +94,10 @@ def unhold(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply
 
 
 def _not_held(k: Kernel, c: Client, what: str) -> None:
-    """``SafetyRefusal`` naming the run when another client holds the outputs."""
+    """``TableBusy`` naming the run when another client holds the outputs."""
     held = k.holder
     if held is not None and held[0] != c.cid:
-        raise SafetyRefusal(
+        raise TableBusy(
             f"{what}: refused: {held[1]} holds the outputs, paused or not (stop it there first)"
         )
 

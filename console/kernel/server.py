@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from console.core.errors import SafetyRefusal, UserError
+from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 from console.kernel import wire
 from console.kernel.line_server import LineServer, peer_cred
@@ -438,6 +438,8 @@ class Kernel:
                     reply = self._handle(c, header, payload)
                 except SafetyRefusal as exc:
                     reply = {"error": str(exc), "refused": True}
+                    if isinstance(exc, TableBusy):  # the table's state, not the request
+                        reply["busy"] = True
                     self.gate.note_refusal(f"{header.get('op')}: {exc}")  # in every recording
                 except (UserError, ValueError, TypeError, KeyError, wire.WireError) as exc:
                     reply = {"error": f"{header.get('op')}: {exc}"}

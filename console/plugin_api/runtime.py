@@ -10,13 +10,15 @@ graph and layer tests see every edge.
 
 What it offers, by where it comes from:
 
-- frame loop and stages: ``FrameLoop``, ``VisionStage``, ``learn_background``,
+- frame loop and stages: ``FrameLoop``, ``PASSED`` (a stage that did nothing this frame),
+  ``VisionStage``, ``learn_background``,
   ``open_camera``, ``open_classifier``, ``vision_loop``, ``Watchdog``
 - latency and timing: ``LatencyMonitor``, ``DEQUEUED``, ``PROCESSING``; jitter probes
   ``start_probe``, ``start_probe_beside``, ``finish_probe``
 - tracking: ``Tracking``, ``TrackFrame``, ``Announcer``
 - the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``,
-  ``kept_measured_map`` (the kept one only, never measuring)
+  ``kept_measured_map`` (the kept one only, never measuring); a study run's hold on it
+  across processes ``map_held``, ``map_holder``
 - the projector link: ``ProjectorService``, ``ProjectorLaunch``, the wire protocol as
   ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
@@ -46,7 +48,8 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
     from console.kernel.private_dir import ensure_private_dir, runtime_dir, write_private
     from console.runtime.jitter import finish_probe, start_probe, start_probe_beside
     from console.runtime.latency import DEQUEUED, PROCESSING, LatencyMonitor
-    from console.runtime.loop import FrameLoop
+    from console.runtime.loop import PASSED, FrameLoop
+    from console.runtime.map_hold import map_held, map_holder
     from console.runtime.measured_map import (
         Cancelled,
         kept_measured_map,
@@ -82,13 +85,14 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
 
 #: source module (short name) -> the names it gives the API
 _NAMES: dict[str, tuple[str, ...]] = {
-    "loop": ("FrameLoop",),
+    "loop": ("FrameLoop", "PASSED"),
     "stages": ("VisionStage", "learn_background", "open_camera", "open_classifier", "vision_loop"),
     "watchdog": ("Watchdog",),
     "latency": ("DEQUEUED", "PROCESSING", "LatencyMonitor"),
     "jitter": ("finish_probe", "start_probe", "start_probe_beside"),
     "tracking": ("Announcer", "TrackFrame", "Tracking"),
     "measured_map": ("Cancelled", "kept_measured_map", "measured_map", "measured_map_file"),
+    "map_hold": ("map_held", "map_holder"),
     "protocol": (
         "HEARTBEAT_S",
         "MAX_SOCKET_PATH",
@@ -124,12 +128,15 @@ __all__ = [
     "Failed",
     "finish_probe",
     "FrameLoop",
+    "PASSED",
     "HEARTBEAT_S",
     "LatencyMonitor",
     "learn_background",
     "MAX_SOCKET_PATH",
     "kept_measured_map",
     "measured_map",
+    "map_held",
+    "map_holder",
     "measured_map_file",
     "MessageReader",
     "inject_twin_faults",
@@ -179,6 +186,8 @@ def _source(source: str) -> ModuleType:
         from console.runtime import tracking as module  # lazy: loads on first use
     elif source == "measured_map":
         from console.runtime import measured_map as module  # lazy: loads on first use
+    elif source == "map_hold":
+        from console.runtime import map_hold as module  # lazy: loads on first use
     elif source == "protocol":
         from console.runtime.projector import protocol as module  # lazy: loads on first use
     elif source == "service":

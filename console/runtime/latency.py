@@ -2,8 +2,10 @@
 
 The frame loop stamps each frame as it passes a stage (``Frame.stamp(stage, t_s)`` on the
 ``time.monotonic()`` clock). ``LatencyMonitor.record(frame)`` turns the stamps into
-per-stage durations (each stamp minus the one before it) and an end-to-end time (first
-stamp to last; ``end_to_end`` only for frames that reached the last stage). ``snapshot()`` is what the console shows: p50/p99/max per stage in
+per-stage durations (each stamp minus the one before it) and an end-to-end time: arrival to
+the output stage's stamp (``scheduled``), only for frames that scheduled output; a loop
+without that stage schedules none and has no end-to-end time (its ``processing`` is what
+a frame cost). ``snapshot()`` is what the console shows: p50/p99/max per stage in
 milliseconds, fps, frames seen and dropped.
 
 Stage names are whatever the loop stamps; the loop uses ``arrival`` (the frame was taken
@@ -26,8 +28,10 @@ from console.core.types import Frame
 ARRIVAL = "arrival"
 #: The processing thread took the frame from the queue (its duration: the queue wait).
 DEQUEUED = "dequeued"
-#: Arrival to the end stage's stamp (default the last stage; the loop uses ``scheduled``),
-#: for frames that reached it: from frame arrival to the first output sample scheduled.
+#: The stage a frame reaches only when its decision scheduled an output sample.
+OUTPUT_STAGE = "scheduled"
+#: Arrival to the end stage's stamp (default ``OUTPUT_STAGE``), for frames that reached
+#: it: from frame arrival to the first output sample scheduled.
 END_TO_END = "end_to_end"
 #: Arrival to the last stamp of every frame (the processing time a frame cost).
 PROCESSING = "processing"
@@ -81,12 +85,16 @@ percentiles_ms = summarize_s
 
 
 class LatencyMonitor:
-    """Per-stage p50/p99 over the last ``size`` frames, fps and drops. Thread-safe."""
+    """Per-stage p50/p99 over the last ``size`` frames, fps and drops. Thread-safe.
+    ``end_stage``: where the end-to-end time ends (default ``OUTPUT_STAGE`` when the loop
+    has it, else none is kept)."""
 
     def __init__(self, stages: Iterable[str], size: int = 1200, end_stage: str | None = None):
         self.order = (ARRIVAL, DEQUEUED, *[s for s in stages if s not in (ARRIVAL, DEQUEUED)])
-        self.end_stage = end_stage or self.order[-1]
-        if self.end_stage not in self.order:
+        # no output stage: no frame schedules output, so none has an end-to-end time
+        default = OUTPUT_STAGE if OUTPUT_STAGE in self.order else None
+        self.end_stage: str | None = end_stage or default
+        if self.end_stage is not None and self.end_stage not in self.order:
             raise ValueError(f"end stage {self.end_stage!r} is not one of {self.order}")
         self.size = int(size)
         self._lock = threading.Lock()
@@ -136,7 +144,7 @@ class LatencyMonitor:
                 self._rings[name].add(x)
             if len(stamped) >= 2 and ARRIVAL in frame.stamps_s:
                 self._rings[PROCESSING].add(stamped[-1] - stamped[0])
-                if self.end_stage in frame.stamps_s:
+                if self.end_stage is not None and self.end_stage in frame.stamps_s:
                     self._rings[END_TO_END].add(
                         frame.stamps_s[self.end_stage] - frame.stamps_s[ARRIVAL]
                     )

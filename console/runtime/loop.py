@@ -9,7 +9,8 @@ A stage is ``(name, fn)``; ``fn(frame, work)`` does its work (``work`` is a dict
 stages of one frame share: the vision result, the gesture, the scene's request ...) and
 the loop stamps ``name`` on the frame when it returns. A stage that returns ``False``
 ends the frame there (nothing to do further down: no hand, no request); its own stamp
-is not set. Sinks (``fn(frame, work)``, e.g. TUIO) run after the stages, untimed.
+is not set. A stage that returns ``PASSED`` did nothing this frame (an output stage that
+scheduled no sample): its stamp is not set and the frame goes on. Sinks (``fn(frame, work)``, e.g. TUIO) run after the stages, untimed.
 
 Nothing here touches the audio path: stages hand output to the scheduler with
 non-blocking calls (``Outputs.play(plan, wait=False)``, a live stream's ``post``). The
@@ -38,6 +39,17 @@ log = logging.getLogger("haptable.loop")
 StageFn = Callable[[Frame, dict], Any]
 Stage = tuple[str, StageFn]
 Sink = Callable[[Frame, dict], None]
+
+
+class _Passed:
+    """The type of ``PASSED``."""
+
+    def __repr__(self) -> str:
+        return "PASSED"
+
+
+#: a stage's answer when it did nothing this frame: not stamped, the frame goes on
+PASSED = _Passed()
 
 
 class FrameQueue:
@@ -230,7 +242,7 @@ class FrameLoop:
                 cpu[name] = time.thread_time() - c0
                 if more is False:
                     break
-                if name not in frame.stamps_s:
+                if more is not PASSED and name not in frame.stamps_s:
                     frame.stamp(name, time.monotonic())
             self.monitor.record(frame, time.thread_time() - cpu0, cpu)
             for sink in self.sinks:

@@ -45,6 +45,7 @@ from console.runtime.stages import (
     open_classifier,
 )
 from console.session.camera_start import LOADING_VISION, OPENING_CAMERA, Starting, preview_loop
+from console.session.demo_history import RunHistory
 from console.session.events import SessionEvent, Started, Stopped
 
 
@@ -64,6 +65,8 @@ class PacedCamera(Protocol):
     def set_rate(self, fps: float | None) -> None: ...
 
 
+#: seconds between two readings of the loop's p50s kept for the Latency screen
+HISTORY_TICK_S = 0.5
 #: how long the vision's build waits for the first frame to be taken by a screen
 FIRST_FRAME_WAIT_S = 2.0
 #: after an exposure or gain change, frames taken this soon are not kept for ``b`` (a
@@ -132,6 +135,10 @@ class CameraService:
         #: Latency screen shows it while no loop runs
         self.last_run: tuple[float, dict] | None = None
         self._loop_started_s = 0.0  # when the running loop started (``time.time()``)
+        #: the loop's p50 per stage every ``HISTORY_TICK_S``, whether or not the Latency
+        #: screen shows; kept when the loop stops (its sparklines, said to be old)
+        self.history = RunHistory()
+        self._history_at = 0.0  # when the last reading was kept (monotonic)
 
     @property
     def running(self) -> bool:
@@ -199,6 +206,7 @@ class CameraService:
             now, st = time.time(), self.status()
             st["ran_s"] = now - self._loop_started_s  # its counts over its whole run
             self.last_run = (now, st)
+            self.history.end()
 
     def wanted_rate(self) -> float | None:
         """The frames a second the camera must deliver: none (0) while the loop is
@@ -245,6 +253,7 @@ class CameraService:
         mon = LatencyMonitor([n for n, _ in stages], size=window)
         self.loop = FrameLoop(self.camera, stages, monitor=mon, queue_size=2, sinks=[self._sink])
         self._open_sinks()
+        self.history.begin("camera")
         self.loop.start()
         self._loop_started_s = time.time()
         self._pace()
@@ -334,6 +343,10 @@ class CameraService:
         with self._lock:
             self.latest = (frame, work)
             self._keep_recent(frame)
+        now, loop = time.monotonic(), self.loop
+        if loop is not None and now - self._history_at >= HISTORY_TICK_S:
+            self._history_at = now
+            self.history.add({"latency": loop.monitor.snapshot()})
         for hook in list(self.frame_hooks):
             hook(frame, work)
 

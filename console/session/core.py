@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from console.core.errors import SafetyRefusal, UserError
+from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.kernel.shell import estop as shell_estop
 from console.runtime.control import ControlServer
 from console.session.demos import DemoControl
@@ -265,13 +265,15 @@ class ConsoleSession:
         holder at a time."""
         with self._lock:
             if self._holder is not None:
-                raise UserError(f"{self._holder} holds the outputs: stop it first")
+                raise TableBusy(f"{self._holder} holds the outputs: stop it first")
             self._holder = who
         out = self.outputs
         try:
             if out is not None:  # other processes too (the table's kernel holds them)
                 try:
                     out.hold(who)
+                except TableBusy:
+                    raise
                 except SafetyRefusal as exc:
                     raise UserError(str(exc)) from None
             yield who

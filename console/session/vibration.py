@@ -35,6 +35,7 @@ from console.core.types import DIRECTIONS
 from console.core.words import AT_CLI, AT_CONSOLE, Placed
 from console.files.vibration_map import load_map as _load
 from console.files.vibration_map import save_map as _save
+from console.runtime.map_hold import map_held, map_holder
 from console.runtime.measured_map import (
     Cancelled,
     kept_measured_map,
@@ -212,26 +213,29 @@ class VibrationService:
         """``with vibration.in_use("P01's study run (Studies screen)"):`` a run plays on
         the current map: while it does, nothing else replaces it (a measurement, a load,
         an import are refused, saying who uses it); the run itself may (``by=who``: its
-        map measured or loaded first). One user at a time."""
+        map measured or loaded first). One user at a time, across processes too
+        (``map_held``: a ``haptable study run`` in a shell holds it the same way)."""
         with self._lock:
             if self._user is not None:
                 raise UserError(f"{self._user} plays on the vibration map: stop it first")
             self._user = who
         try:
-            yield who
+            with map_held(self.profile, who):
+                yield who
         finally:
             with self._lock:
                 self._user = None
 
     @property
     def used_by(self) -> str | None:
-        """Who plays on the current map (``in_use``), else None."""
-        return self._user
+        """Who plays on the current map (``in_use``; a study run in another process:
+        ``map_holder``), else None."""
+        return self._user or map_holder(self.profile)
 
     def refusal(self, what: str, by: str | None = None) -> str:
         """Why ``what`` (``measure``, ``load``, ``import``) may not replace the map now,
         in the words of a play refused while a run holds the outputs ("" if it may)."""
-        who = self._user
+        who = self.used_by
         if who is None or who == by:
             return ""
         return f"{what} refused: {who} plays on this map (stop it there first)"

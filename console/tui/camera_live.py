@@ -74,9 +74,10 @@ def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
     ]
 
 
-def seen_lines(work: dict, problem: str = "") -> list[str]:
+def seen_lines(work: dict, problem: str = "", touch_mm2: float | None = None) -> list[str]:
     """The hands, contacts and gesture of the newest processed frame; ``problem``: why
-    no gesture is named (the classifier's saved model does not fit)."""
+    no gesture is named (the classifier's saved model does not fit); ``touch_mm2``: the
+    main hand's skin on the glass, as the vision measured it (its ``touching mm2``)."""
     hands = work.get("hands", ()) or ()
     g = work.get("gesture")
     named = f"[yellow]gesture: none named: {escape(problem)}[/]" if problem else None
@@ -84,18 +85,26 @@ def seen_lines(work: dict, problem: str = "") -> list[str]:
         f"hands {len(hands)}  contacts {len(work.get('contacts', ()) or ())}",
         named or f"gesture: {g.name if g else '-'}",
     ]
-    lines.extend(hand_line(h) for h in hands[:1])
+    lines.extend(hand_line(h, touch_mm2) for h in hands[:1])
     return lines
 
 
-def hand_line(h: Any) -> str:
-    """A hand's place and its two finger counts, each named: the fingers its outline
-    shows spread and those touching the glass (a flat hand touches with fingers its
-    outline does not show apart)."""
+def hand_line(h: Any, touch_mm2: float | None = None) -> str:
+    """A hand's place, the fingers its outline shows spread and what of it touches the
+    glass: its fingertip contacts and, when the vision measured it (``touch_mm2``), its
+    skin on the glass, so a flat hand (palm and fingers down, no fingertip apart: no
+    contact) reads as touching, not as "0 touching"."""
     pos = f"{h.center_mm[0]:.0f},{h.center_mm[1]:.0f} mm" if h.center_mm else "px only"
     touching = h.contacts  # None: a recording that kept no contacts per hand
     line = f"hand at {pos}: {h.finger_count} fingers spread"
-    return line if touching is None else f"{line}, {len(touching)} touching"
+    if touching is None:
+        return line
+    n = len(touching)
+    if touch_mm2 is None or touch_mm2 <= 0:
+        return f"{line}, {n} touching"
+    if n == 0:  # the vision's contacts are fingertips: a flat hand has none apart
+        return f"{line}, flat, {touch_mm2:.0f} mm2 touching"
+    return f"{line}, {n} touching ({touch_mm2:.0f} mm2)"
 
 
 def reading_lines(readings: dict[str, float]) -> list[str]:
@@ -111,7 +120,7 @@ def reading_lines(readings: dict[str, float]) -> list[str]:
         out.append(f"image noise: {readings['noise']:.3g} grey levels")
     if "gain" in readings:
         out.append(f"table light vs background: x{readings['gain']:.3g}")
-    known = {"clipped px", "noise", "gain", "touch level", "light x"}
+    known = {"clipped px", "noise", "gain", "touch level", "light x", "touching mm2"}
     out += [f"{escape(k)} {v:.3g}" for k, v in readings.items() if k not in known]
     clipped = readings.get("clipped px", 0)
     if clipped > 0:

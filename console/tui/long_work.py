@@ -91,6 +91,7 @@ class LongWork(Vertical):
         #: (fraction, seconds) from ``expect``
         self._report: tuple[float, str, float] | None = None
         self._expect: tuple[float, float] | None = None
+        self._shown = 0.0  # the bar's furthest point in the running job
         #: the running job's lines say their own time left (a demo's start clock)
         self._timed_by_job = False
         self._ticker = None
@@ -196,6 +197,7 @@ class LongWork(Vertical):
         self.outcome = self.result = None
         self._stop = stop = threading.Event()
         self._t0, self._report, self._expect = time.monotonic(), None, None
+        self._shown = 0.0  # the bar's furthest point: it never goes back
         self._timed_by_job = timed_by_job
         if self._ticker is None:
             self._ticker = self.set_interval(1.0, self._tick)
@@ -252,8 +254,10 @@ class LongWork(Vertical):
             shown = frac + (end - frac) * min(quiet / seconds, 0.99)
             rest = seconds_left(now - self._t0, shown)
             left = max(seconds - quiet, 0.0) + (rest or 0.0) * (1 - end) / max(1 - shown, 1e-9)
-            if quiet > seconds:
-                left = None  # later than expected: no number that is wrong
+            if quiet > seconds:  # later than expected: the pace so far, the step's too
+                left = rest
+        # the bar only moves forward (a report below what it showed keeps its place)
+        shown = self._shown = max(shown, self._shown)
         if self._timed_by_job:  # its line has its own clock
             self.show(text, shown)
             return

@@ -61,14 +61,17 @@ def frf_series(
     return series
 
 
-def sparkline(values: Sequence[float], width: int = 20) -> str:
+def sparkline(values: Sequence[float], width: int = 20, *, fill: bool = False) -> str:
     """The last ``width`` values as bar characters scaled to their own range, lowest to
     highest (``''`` if none): values that stay near one level show how they moved, not a
-    solid block, and constant values are a flat low line."""
+    solid block, and constant values are a flat low line. ``fill``: fewer values than
+    ``width`` are stretched over it (each value as many bars, in turn), never a short line."""
     v = np.asarray(list(values)[-width:], float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return ""
+    if fill and v.size < width:
+        v = v[np.arange(width) * v.size // width]
     lo, span = float(v.min()), float(v.max() - v.min())
     if span <= 0:
         return BARS[0] * v.size

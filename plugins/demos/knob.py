@@ -14,6 +14,7 @@ from collections import deque
 from typing import Any
 
 from console.plugin_api import Frame, KnobTrials
+from console.plugin_api.runtime import PASSED
 
 from .scene import SceneLink
 
@@ -109,9 +110,13 @@ class KnobDemo:
             return []
         return [d[2] - d[3] for d in list(rep.detents) if len(d) > 3 and d[3] == d[3]]
 
-    def scheduled_stage(self, frame: Frame, work: dict) -> None:
-        # feed() posted to the stream; its next block (<= one audio block away) plays it
+    def scheduled_stage(self, frame: Frame, work: dict) -> object:
+        """Stamped only when this frame's crossings posted detents to the stream (its next
+        block, <= one audio block away, plays them): end to end counts those frames."""
+        if not work.get("knob", {}).get("crossings"):
+            return PASSED  # nothing scheduled: no output stamp, the scene still runs
         work["scheduled_s"] = time.monotonic()
+        return None
 
     def scene_stage(self, frame: Frame, work: dict) -> None:
         a = work.get("knob", {}).get("angle_deg")

@@ -20,6 +20,7 @@ from .dataset_checks import require_hands
 from .dataset_commands import COMMANDS, open_camera
 from .features import analysis_params
 from .model import GestureModel
+from .progress import ProgressLine, part
 from .selection import evaluate_model
 from .settings import calibration_file, model_file
 from .synth import capture_background
@@ -27,14 +28,18 @@ from .vision import vision_params
 
 __all__ = ["analysis_params", "configure", "run"]
 
+#: the share of ``gestures train``'s line its features take (the fit the rest)
+TRAIN_FEATURES = 0.8
 
-def _dataset_features(ev, args, profile):
-    """The dataset's features (cached unless ``--no-cache``), refused without hands."""
+
+def _dataset_features(ev, args, profile, progress=None):
+    """The dataset's features (cached unless ``--no-cache``), refused without hands;
+    ``progress``: the command's line (default its own, the features its whole)."""
     fs = ev.extract(
         args.dataset,
         analysis_params(profile),
         use_cache=not args.no_cache,
-        progress=_progress(args),
+        progress=progress or _progress(args),
     )
     require_hands(fs, args.dataset)
     return fs
@@ -44,10 +49,10 @@ def _progress(args: argparse.Namespace) -> Callable[[float, str], None] | None:
     if getattr(args, "json", False) or not sys.stderr.isatty():
         return None
 
-    def show(frac: float, msg: str) -> None:
-        print(f"\r{msg}", end="" if frac < 1 else "\n", file=sys.stderr, flush=True)
+    def show(text: str, done: bool) -> None:  # the line's old text cleared
+        print(f"\r{text:<72}", end="\n" if done else "", file=sys.stderr, flush=True)
 
-    return show
+    return ProgressLine(show)
 
 
 def run(args: argparse.Namespace, ctx: Any) -> int:
@@ -81,14 +86,19 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         _print(rep, args.json)
         _warn_clipping(rep["clipping"], args.dataset)
         return 0
-    if cmd == "train":
-        fs = _dataset_features(ev, args, profile)
+    if cmd == "train":  # one line: features 0-80 %, the fit, then saved
+        line = _progress(args)
+        fs = _dataset_features(ev, args, profile, part(line, 0.0, TRAIN_FEATURES))
+        if line is not None:
+            line(TRAIN_FEATURES, "training on every sample")
         model = ev.train(fs, n_harmonics=n_h, n_frames=n_f, max_frames=top, seed=args.seed)
         if args.out is None and profile is None:
             raise UserError("gestures train: give --out MODEL or a valid profile (--profile)")
         out_path = args.out or model_file(profile)
         out_path.parent.mkdir(parents=True, exist_ok=True)
         path = model.save(out_path)
+        if line is not None:
+            line(1.0, "saved")
         out = {
             "model": str(path),
             "samples": int(len(fs.labels)),

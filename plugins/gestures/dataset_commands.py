@@ -17,6 +17,7 @@ from console.plugin_api import UserError, finite_float, integer, positive_int, s
 
 from .cut import configure_cut, run_cut
 from .dataset import GESTURES
+from .progress import ProgressLine
 
 #: bounds of the counts a user gives (a gesture lasts about a second: 600 frames is 10 s
 #: at 60 fps; the paper's set is 5 subjects x 40 repetitions)
@@ -144,9 +145,11 @@ def run_synth(args: argparse.Namespace, ctx: Any = None) -> int:
         gestures = tuple(g.strip() for g in args.gestures.split(",") if g.strip())
     quiet = args.json or not sys.stderr.isatty()
 
-    def progress(frac: float, msg: str) -> None:
+    def show(text: str, done: bool) -> None:
         if not quiet:
-            print(f"\r{msg:<40}", end="", file=sys.stderr, flush=True)
+            print(f"\r{text:<72}", end="", file=sys.stderr, flush=True)
+
+    progress = ProgressLine(show)
 
     # a fresh folder is written beside --out and renamed when complete (an interrupted
     # run leaves nothing); --force adds to an existing folder in place

@@ -168,12 +168,16 @@ class FrameResult:
 
     def readings(self) -> dict[str, float]:
         """What an operator tunes against (``console.core.contracts.VisionResult``): the
-        main hand's touch level and light scale, clipped pixels, the noise and the
-        illumination gain against the background."""
+        main hand's touch level and light scale, its touching skin's area (``touching
+        mm2``: a flat hand touches with its palm and fingers, no fingertip apart, so it
+        has no contact blob), clipped pixels, the noise and the illumination gain
+        against the background."""
         out: dict[str, float] = {}
         if self.extras:
             out["touch level"] = float(self.extras[0]["level"])
             out["light x"] = float(self.extras[0]["light"])
+        if self.touch is not None and self.hands:
+            out["touching mm2"] = float(self.touch.of(0)["area_mm2"])
         out["clipped px"] = float(self.clipped_px)
         out["noise"] = float(self.noise)
         out["gain"] = float(self.gain)

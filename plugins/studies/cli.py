@@ -24,7 +24,7 @@ from console.plugin_api import UserError, load_map
 from . import analyze_cli
 from . import protocol as protocols
 from .analyze_cli import add_parser
-from .hold import hold_for_run
+from .hold import hold_for_run, hold_map_for_run
 from .plan import check_seed_row
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
@@ -132,6 +132,8 @@ def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
         return load_map(args.map.expanduser(), require_all=False)
     # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map
+
+    hold_map_for_run(ctx.profile, args.study)  # held before it is read: no other replaces it
 
     def progress(frac: float, text: str) -> None:
         print(f"\rvibration map: {frac:4.0%} {text}"[:100], end="", file=sys.stderr, flush=True)

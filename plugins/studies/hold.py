@@ -4,10 +4,30 @@ from another shell), and the refusal they get names the run."""
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import os
 from typing import Any
 
-from console.plugin_api import SafetyRefusal, UserError
+from console.plugin_api import SafetyRefusal, TableBusy, UserError
+
+
+def run_words(study: str) -> str:
+    """How another process names this one's study run."""
+    return f"a study run of {study} (haptable study run, pid {os.getpid()})"
+
+
+def hold_map_for_run(profile: Any, study: str) -> None:
+    """Hold ``profile``'s vibration map as the Studies screen's runs hold the console's
+    (``map_held``: the console's Vibration screen refuses to measure, load or import
+    over it, naming this run) until this process ends; ``TableBusy`` (exit 5) while
+    another run holds it."""
+    # lazy: the runtime part loads on first use, not at every haptable start
+    from console.plugin_api.runtime import map_held
+
+    stack = contextlib.ExitStack()
+    stack.enter_context(map_held(profile, run_words(study)))
+    atexit.register(stack.close)
 
 
 def hold_for_run(outputs: Any, study: str) -> None:
@@ -17,6 +37,8 @@ def hold_for_run(outputs: Any, study: str) -> None:
     if hold is None:
         return
     try:
-        hold(f"a study run of {study} (haptable study run, pid {os.getpid()})")
+        hold(run_words(study))
+    except TableBusy:
+        raise  # another run holds them: the table's state (exit 5), not bad input
     except SafetyRefusal as exc:
         raise UserError(str(exc)) from None

@@ -255,3 +255,15 @@ def test_contacts_when_the_contact_threshold_is_below_the_body_one():
     r = process_frame(f, BG, p)
     want = find_contacts(highpass(cv2_blur3(cv2_subtract(f)), 6.0), 25.0)
     assert len(want) >= 2 and r.contacts == tuple(want)
+
+
+def test_a_flat_hand_has_no_fingertip_contact_but_its_touching_skin_is_read():
+    """A flat hand (palm and fingers on the glass) leaves no fingertip blob: the Camera
+    screen reads its touching skin's area instead (``touching mm2``)."""
+    r = process_frame(frame(pose("open_hand")), BG, P)
+    (hand,) = r.hands
+    assert hand.contacts == ()
+    assert r.readings()["touching mm2"] > 1000.0
+    one = process_frame(frame(pose("one_finger")), BG, P)
+    assert 0.0 < one.readings()["touching mm2"] < r.readings()["touching mm2"]
+    assert "touching mm2" not in process_frame(frame(), BG, P).readings()  # no hand

@@ -1,6 +1,7 @@
 """A table's kernel serves every client whose profile has its output settings: camera,
 vision and TUIO settings never lock a shell out; a real output setting that differs is
-refused in one line naming the key and the fix, exit 2 (bad input)."""
+refused in one line naming the key and the fix, exit 5 (the table is busy: another
+console holds its outputs)."""
 
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ def test_a_differing_output_setting_is_named_with_its_fix(profile, plugins):
         got = haptable("play", "sine-PA")
     finally:
         console.close()
-    assert got.returncode == 2, got.stdout + got.stderr
+    assert got.returncode == 5, got.stdout + got.stderr
     line = got.stderr.strip()
     assert "limits.piezo_max_v 250.0 there, 100.0 here" in line, line
     assert "quit it first, or set the same value in this profile" in line, line

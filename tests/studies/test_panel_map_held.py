@@ -68,7 +68,7 @@ def test_m_is_refused_while_a_study_plays_on_the_map(double_plugins, map_file, t
     asyncio.run(scenario())
 
 
-def test_the_service_refuses_to_replace_a_map_in_use(map_file):
+def test_the_service_refuses_to_replace_a_map_in_use(map_file, plugins):
     """The check is the service's (``console.session.vibration``): a screen that skips
     its own is refused too; the run itself may replace it."""
     from types import SimpleNamespace
@@ -77,7 +77,9 @@ def test_the_service_refuses_to_replace_a_map_in_use(map_file):
     from console.session.vibration import VibrationService
 
     events: list = []
-    profile = SimpleNamespace(get=lambda key, default=None: default)
+    from console.config.profile import load_profile
+
+    profile = load_profile("sim", plugins)  # its map's hold is across processes too
     svc = VibrationService(SimpleNamespace(profile=profile, plugins=None, emit=events.append))
     with svc.in_use("P01's study run (Studies screen)") as who:
         with pytest.raises(UserError, match="load refused: P01's study run"):

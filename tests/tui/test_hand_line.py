@@ -27,3 +27,13 @@ def test_a_recorded_hand_says_its_recorded_contacts_or_only_what_was_kept():
     del dec["hands"][0]["contacts"]  # an older recording
     (hand,) = recorded_work(dec)["hands"]
     assert hand_line(hand) == "hand at px only: 4 fingers spread"
+
+
+def test_the_hand_line_says_the_skin_on_the_glass_when_the_vision_measured_it():
+    tip = (SimpleNamespace(id=1),)
+    hand = SimpleNamespace(center_mm=(10.0, 20.0), finger_count=4, contacts=())
+    flat = hand_line(hand, 8500.4)
+    assert flat == "hand at 10,20 mm: 4 fingers spread, flat, 8500 mm2 touching"
+    assert hand_line(hand, 0.0) == "hand at 10,20 mm: 4 fingers spread, 0 touching"
+    pointing = SimpleNamespace(center_mm=(10.0, 20.0), finger_count=1, contacts=tip)
+    assert hand_line(pointing, 120.0).endswith("1 fingers spread, 1 touching (120 mm2)")

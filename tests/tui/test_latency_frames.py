@@ -28,7 +28,7 @@ def test_each_row_says_the_frames_it_counts(plugins):
         async with app.run_test(size=(80, 24)) as pilot:
             await wait_for(pilot, lambda: app.pane("latency") is not None, 30, "latency")
             pane, table = app.pane("latency"), app.query_one("#lat-table")
-            pane._show_rows(table, snap, False)
+            pane._show_rows(table, snap, None)
             await pilot.pause(0.2)
             heads = [str(c.label) for c in table.columns.values()]
             assert heads[:5] == ["stage", "p50 ms", "p99 ms", "max ms", "frames"], heads

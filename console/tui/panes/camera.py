@@ -516,10 +516,10 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         if starting:  # frames shown, the vision not running yet
             head = starting_lines(st, starting)
         else:
-            seen = seen_lines(work, svc.classifier_problem)
-            loop = loop_lines(st, self.view, self._rates.span_s())
             res = work.get("result")
             readings = res.readings() if res is not None else {}
+            seen = seen_lines(work, svc.classifier_problem, readings.get("touching mm2"))
+            loop = loop_lines(st, self.view, self._rates.span_s())
             snap = svc.snapshot()  # touching skin as e measures it (one computation)
             skin = snapshot_reading(*snap) if snap is not None else None
             read = reading_lines(readings)

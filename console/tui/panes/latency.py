@@ -30,11 +30,19 @@ STAGE_LABELS = {
 }
 
 
+def schedules_output(snap: dict) -> bool:
+    """Whether the loop of a monitor snapshot has an output stage (its ``end_stage``; a
+    snapshot that does not say is taken to have one)."""
+    return "end_stage" not in snap or snap["end_stage"] is not None
+
+
 def stage_rows(snap: dict) -> list[tuple[str, dict]]:
-    """(label, {p50, p99, ...}) for each stage present in a monitor snapshot, in order."""
+    """(label, {p50, p99, ...}) for each stage present in a monitor snapshot, in order;
+    no end to end for a loop that schedules no output (it would time nothing)."""
     stages = dict(snap.get("stages", {}))
     stages["capture_to_arrival"] = snap.get("capture_to_arrival", {})
-    stages["end_to_end"] = snap.get("end_to_end", {})
+    if schedules_output(snap):
+        stages["end_to_end"] = snap.get("end_to_end", {})
     rows = []
     for key, label in STAGE_LABELS.items():
         if key in stages:
@@ -47,8 +55,11 @@ def stage_rows(snap: dict) -> list[tuple[str, dict]]:
 
 #: p50 values kept per stage for its sparkline (it shows as many as fit)
 HISTORY = 500
-#: how often the loop's numbers are read while the screen shows (a history point each)
+#: how often the loop's numbers are read while the screen shows
 TICK_S = 0.5
+#: seconds between two p50 readings of a loop's history (the camera service's and the
+#: demo's poll: ``HISTORY_TICK_S``, ``DemoControl``)
+READING_S = {"camera": 0.5, "demo": 0.25}
 #: how long ``m`` runs the camera loop for its numbers
 MEASURE_S = 10.0
 #: a stopped loop's fps when none were counted (never "counting ...": nothing counts)
@@ -126,6 +137,38 @@ def last_camera_head(ended_s: float, now_s: float) -> str:
     )
 
 
+def numbers_key(snap: dict, readings: int, every_s: float, stopped: bool, width: int) -> str:
+    """What the numbers mean, in one paragraph under the table: the columns, the frames
+    end to end counts (or that this loop schedules no output) and the sparklines' span."""
+    frames = snap.get("frames")
+    e2e = (snap.get("end_to_end") or {}).get("n")
+    of = "" if frames is None else f" of the loop's {frames}"
+    counted = "the" if e2e is None else f"the {int(e2e)}{of}"
+    if not schedules_output(snap):
+        end = (
+            "no end to end: this loop schedules no output (the camera loop only sees; "
+            "a demo's schedules it, F6)"
+        )
+    else:
+        end = (
+            f"end to end: a frame's arrival to its first output sample scheduled, only "
+            f"{counted} frames whose decision scheduled one"
+        )
+    span = readings * every_s
+    took = f"{span:.0f} s" if span < 120 else f"{span / 60:.0f} min"
+    history = (
+        f"p50 history: {readings} readings, one each {every_s:g} s over {took}, oldest left"
+        + (", stretched to the width" if readings < width else "")
+        + ("; the loop has stopped: they end there" if stopped else "")
+        if readings
+        else "p50 history: no reading yet"
+    )
+    return (
+        "p50/p99/max: ms a stage took per frame, over the frames its row counts (frames, "
+        f"the last {snap.get('window_frames', 1200)} at most); {end}; {history}"
+    )
+
+
 def _ms(v) -> str:
     return "-" if v is None or v != v else f"{v:.2f}"
 
@@ -144,10 +187,15 @@ class LatencyPane(Vertical):
         "output, end to end): p50, p99 and max in ms over the frames it counts, and a "
         "sparkline of the p50 history. frames: how many frames a row counts, those that "
         "reached its stage (vision: every frame processed; output and end to end: the "
-        "frames that scheduled output), so end to end's p99 can be below another row's. "
-        "The sparkline: a bar per reading (every half second while the screen shows, the newest on the "
-        "right; scaled from its lowest reading to its highest, a steady p50 a flat low line), growing to the screen's width and then scrolling (m's "
-        f"{MEASURE_S:.0f} s: {MEASURE_S / TICK_S:.0f} bars)\n"
+        "frames whose decision scheduled an output sample), so end to end's p99 can be "
+        "below another row's; a loop that schedules no output (the camera loop) has no end "
+        "to end row. The line under the table says what its numbers mean.\n"
+        "The sparkline: the loop's p50 readings, kept by the loop whether or not this "
+        "screen shows (the camera loop's every half second, a demo's every quarter), the "
+        "newest on the right, scaled from its lowest reading to its highest (a steady p50 a "
+        "flat low line), as wide as the screen (fewer readings than columns are stretched "
+        f"over it; m's {MEASURE_S:.0f} s: {MEASURE_S / READING_S['camera']:.0f} readings), "
+        "kept when the loop stops\n"
         "camera  the driver's fps and the frames it dropped; the loop's fps, frames, "
         "frames dropped because processing fell behind, and errors\n"
         "audio   the output latency, underruns (and those cutting into sound), block size "
@@ -186,14 +234,9 @@ class LatencyPane(Vertical):
             return
         yield Static("", id="lat-head")
         yield LiteralTable(id="lat-table", cursor_type="none", show_cursor=False)
+        yield Static("", id="lat-key", markup=False, classes="hint")  # what they mean
         yield Static("", id="lat-audio")
         yield Static("", id="lat-said", markup=False)  # what became of m
-        yield Static(
-            "numbers come from the loop that runs: a demo's (Scenes screen, F6: camera to "
-            "output) or the camera's while the Camera screen had it; m runs the camera loop "
-            f"for {MEASURE_S:.0f} s. The numbers stay when the loop stops.",
-            classes="hint",
-        )
 
     @property
     def focus_target(self):
@@ -306,6 +349,7 @@ class LatencyPane(Vertical):
                 st = run.snapshot()
             except Exception as exc:  # noqa: BLE001 - shown, never raised into the UI
                 st = {"camera": {}, "latency": None, "error": f"demo snapshot: {exc}"}
+            svc = None
             self.source = f"demo {st.get('demo', '?')}"
             what = (
                 f"[b]showing: the {escape(self.source)} loop[/b] (camera -> vision -> classify -> "
@@ -333,6 +377,7 @@ class LatencyPane(Vertical):
         if self.source != self._history_source:  # sparklines: one loop
             self.history.clear()
             self._history_source = self.source
+        runs = self.demo_history() if svc is None else svc.history
         if st.get("error"):
             self._say("lat-head", f"[red]camera: {escape(st['error'])}[/]")
             return
@@ -345,20 +390,24 @@ class LatencyPane(Vertical):
         self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
-        self._show_rows(tables.first(DataTable), snap, run is not None)
+        self._show_rows(tables.first(DataTable), snap, runs)
 
-    def _show_rows(self, table: DataTable, snap: dict, demo: bool, grow: bool = True) -> None:
-        """The stage table of a monitor snapshot; a demo's sparklines are its whole run
-        as the console polled it (``DemoControl.history``), shown here or not; ``grow``
-        False: a stopped loop's numbers, no point added to its sparklines."""
-        runs = self.app.session.demos.history
+    def demo_history(self):
+        """The session's last demo run's history (``RunHistory``)."""
+        return self.app.session.demos.history
+
+    def _show_rows(self, table: DataTable, snap: dict, runs, stopped: bool = False) -> None:
+        """The stage table of a monitor snapshot, its sparklines the loop's whole history
+        as its owner kept it (``RunHistory``: the demo's poll, the camera service's
+        readings), shown here or not and kept when the loop stopped (``stopped``); and
+        under it what the numbers mean."""
         keys = {label: key for key, label in STAGE_LABELS.items()}
         cells = []
         for label, d in stage_rows(snap):
             p50 = d.get("p50_ms")
-            if demo:
+            if runs is not None:
                 self.history[label] = deque(runs.values(keys.get(label, label)), maxlen=HISTORY)
-            elif grow and p50 is not None and p50 == p50:
+            elif p50 is not None and p50 == p50:  # a loop that keeps none: this screen's
                 self.history[label].append(p50)
             n = d.get("n")
             cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms")), _count(n)))
@@ -368,7 +417,12 @@ class LatencyPane(Vertical):
             [max(len(r[i]) for r in [heads, *cells]) for i in range(len(heads))],
             table.cell_padding,
         )
-        self._set_rows(table, [(*r, sparkline(self.history[r[0]], width)) for r in cells])
+        self._set_rows(
+            table, [(*r, sparkline(self.history[r[0]], width, fill=True)) for r in cells]
+        )
+        readings = min(max((len(self.history[r[0]]) for r in cells), default=0), width)
+        every_s = READING_S["demo" if self.source.startswith("demo") else "camera"]
+        self._say("lat-key", numbers_key(snap, readings, every_s, stopped, width))
 
     def _show_last_camera(self, table: DataTable, svc) -> bool:
         """No loop runs: the console's camera loop's last numbers as the camera service
@@ -392,7 +446,7 @@ class LatencyPane(Vertical):
             st.get("camera") or {}, st["latency"], rates, span_s
         )
         self._say("lat-head", last_camera_head(ended_s, time.time()) + "\n" + self._camera)
-        self._show_rows(table, st["latency"], False, grow=False)
+        self._show_rows(table, st["latency"], svc.history, stopped=True)
         return True
 
     def _show_finished_demo(self, table: DataTable) -> bool:
@@ -418,7 +472,7 @@ class LatencyPane(Vertical):
             f"m measures the camera loop for {MEASURE_S:.0f} s, a new demo (F6) shows its own"
         )
         self._say("lat-head", head + "\n" + self._camera)
-        self._show_rows(table, snap["latency"], True)
+        self._show_rows(table, snap["latency"], runs, stopped=True)
         return True
 
     def _stopped_head(self) -> str:
