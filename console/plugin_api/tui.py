@@ -28,6 +28,8 @@ What it offers:
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
   first: the same key again within a few seconds does it, ``console.tui.ask_again``)
+- check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
+  characters, never in shades alone; every check box the console shows is one)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
   while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
@@ -48,6 +50,7 @@ from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
+from console.tui.ticks import Tick
 from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
 
@@ -75,4 +78,5 @@ __all__ = [
     "Pace",
     "left_words",
     "seconds_left",
+    "Tick",
 ]

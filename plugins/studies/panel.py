@@ -34,7 +34,6 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import (
     Button,
-    Checkbox,
     DataTable,
     Input,
     Label,
@@ -50,6 +49,7 @@ from console.plugin_api.tui import (
     LiteralTable,
     Pace,
     SessionMessage,
+    Tick,
     escape,
     said_here,
     show_keys,
@@ -187,8 +187,8 @@ class StudiesPane(Vertical):
             )
             yield Label("participant", markup=False)
             yield typed_field("P01", placeholder="id", id="participant")
-            yield Checkbox("simulated", True, id="simulate", compact=True)
-            yield Checkbox("projector", False, id="projector", compact=True)
+            yield Tick("simulated", True, id="simulate", compact=True)
+            yield Tick("projector", False, id="projector", compact=True)
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
@@ -202,7 +202,7 @@ class StudiesPane(Vertical):
             yield Input(id="hand_width_cm", compact=True)
             yield Label("hand length cm", markup=False)
             yield Input(id="hand_length_cm", compact=True)
-            yield Checkbox("consent noted", False, id="consent", compact=True)
+            yield Tick("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
             yield Button("Start", id="start", variant="primary", compact=True)
             yield Button("Pause", id="pause", compact=True)
