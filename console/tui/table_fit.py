@@ -7,15 +7,16 @@ from __future__ import annotations
 from rich.text import Text
 
 from console.tui.kept_text import wrap_kept
+from console.tui.shorten import cut_words
 
 #: the narrowest a column sized from what is left gets
 NOTE_MIN = 6
 
 
 def clip(text: str, width: int) -> str:
-    """``text`` on one line within ``width`` columns, ending in "…" when cut."""
-    one = " ".join(str(text).split())
-    return one if len(one) <= width else one[: width - 1].rstrip() + "…"
+    """``text`` on one line within ``width`` columns, ending in "…" when cut: after a
+    whole word, no bracket left open (``console.tui.shorten``)."""
+    return cut_words(" ".join(str(text).split()), width)
 
 
 def _word_fits(word: str, width: int) -> str:

@@ -22,6 +22,7 @@ from textual.notifications import Notification, Notifications
 from textual.widgets._toast import Toast, ToastHolder, ToastRack
 
 from console.tui.said import log_said
+from console.tui.shorten import cut_end
 
 __all__ = ["TOAST_FRAME", "NewestToastOnly", "fit_words"]
 
@@ -33,19 +34,13 @@ ELLIPSIS = "…"
 
 def fit_words(text: Content, width: int) -> Content:
     """``text`` (one line) in ``width`` cells: whole when it fits, else up to the end of
-    its last word that leaves room for ``…`` (a first word wider than that is cut)."""
+    its last word that leaves room for ``…`` and closes every bracket it opened
+    (``console.tui.shorten.cut_end``; a first word wider than that is cut)."""
     text = Content(" ").join(text.split("\n")) if "\n" in text.plain else text
     plain = text.plain
     if cell_len(plain) <= width:
         return text
-    room = max(width - 1, 0)
-    end = 0
-    while end < len(plain) and cell_len(plain[: end + 1]) <= room:
-        end += 1
-    if end < len(plain) and not plain[end].isspace():  # mid-word: back to the last space
-        space = plain.rfind(" ", 0, end)
-        if space > 0 and plain[:space].strip():
-            end = space
+    end = cut_end(plain, max(width - 1, 0))  # a whole word, no bracket left open
     return text[:end].rstrip() + ELLIPSIS
 
 
