@@ -11,7 +11,7 @@ import re
 
 from rich.cells import cell_len
 
-__all__ = ["balanced", "cut_end", "cut_words", "top_level_seps"]
+__all__ = ["balanced", "cut_chars", "cut_end", "cut_words", "top_level_seps"]
 
 OPENS = "([{"
 CLOSES = ")]}"
@@ -85,3 +85,16 @@ def cut_words(text: str, width: int, ellipsis: str = ELLIPSIS) -> str:
         return text
     end = cut_end(text, max(width - cell_len(ellipsis), 0))
     return text[:end].rstrip() + ellipsis
+
+
+def cut_chars(text: str, width: int, ellipsis: str = ELLIPSIS) -> str:
+    """``text`` whole when it fits ``width`` cells, else cut where the width ends (a
+    narrow table cell keeps the letters it can: ``1 ou…``) ending in ``ellipsis``, but
+    before a bracket the cut would leave open, when that keeps some text."""
+    if cell_len(text) <= width:
+        return text
+    head = text[: max(width - cell_len(ellipsis), 0)]
+    left_open = _unclosed(head)
+    if left_open and text[: left_open[0]].strip():
+        head = text[: left_open[0]]
+    return head.rstrip(" ,;:-|") + ellipsis

@@ -37,7 +37,7 @@ from console.tui.selftest_action import (
     selftest_row,
 )
 from console.tui.session_messages import SessionMessage
-from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
+from console.tui.table_fit import NOTE_MIN, clip, fit_cell, fit_lines, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -64,6 +64,24 @@ def _cell(text: str, where: str, width: int = CELL_MAX) -> Text:
 
 
 _LOGGED: set[tuple[str, str]] = set()
+
+#: the lines a device row neither working nor a problem (a skipped self-test) takes at
+#: most while the rows whole would push the card in use out of view
+ROW_LINES = 2
+#: a device row in one of these states stays whole (it says what to do)
+PROBLEMS = ("error", "missing")
+
+
+def _cell_lines(text: str, where: str, width: int, lines: int) -> Text:
+    """``_cell`` in up to ``lines`` lines (``fit_lines``), a cut text logged whole."""
+    if lines <= 1:
+        return _cell(text, where, width)
+    shown = fit_lines(text, width, lines)
+    if not shown.plain.endswith("…") or (where, text) in _LOGGED:
+        return shown
+    _LOGGED.add((where, text))
+    log.info("%s: %s", where, text)
+    return shown
 
 
 def found(rows) -> str:
@@ -330,16 +348,21 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # scrolled into view at once), a number with its unit on one line, a word too
         # long for its column ending in "…"; when wrapped rows would push the card in use
         # out of view (on entry: the card list has the focus), a row that works takes one
-        # line (a cut cell: in the log, Enter says it), a problem's row stays whole (what
-        # to do); the table focused (Tab) shows every row whole
+        # line, a problem's row stays whole (what to do), any other row two lines at
+        # most (cut after a word: in the log, Enter says it; a doctor's skipped
+        # self-test took ten lines and the screen opened scrolled down); the table
+        # focused (Tab) shows every row whole
         cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
         heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
         self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
-        if not self._doctor_whole:
+        if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
             for i, s in enumerate(rows):
-                if s.state in WORKS:
-                    cells[i] = (_cell(s.why, s.kind, why_w), _cell(s.fix, s.kind, fix_w))
-                    heights[i] = 1
+                most = 1 if s.state in WORKS else ROW_LINES
+                if s.state not in PROBLEMS and heights[i] > most:
+                    why = _cell_lines(s.why, f"{s.kind} {s.name}", why_w, most)
+                    fix = _cell_lines(s.fix, f"{s.kind} {s.name}", fix_w, most)
+                    cells[i] = (why, fix)
+                    heights[i] = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
         for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
