@@ -11,7 +11,7 @@ import re
 
 from rich.cells import cell_len
 
-__all__ = ["balanced", "cut_chars", "cut_end", "cut_words", "top_level_seps"]
+__all__ = ["balanced", "closers", "cut_chars", "cut_end", "cut_words", "top_level_seps"]
 
 OPENS = "([{"
 CLOSES = ")]}"
@@ -98,3 +98,9 @@ def cut_chars(text: str, width: int, ellipsis: str = ELLIPSIS) -> str:
     if left_open and text[: left_open[0]].strip():
         head = text[: left_open[0]]
     return head.rstrip(" ,;:-|") + ellipsis
+
+
+def closers(head: str) -> str:
+    """What closes the brackets ``head`` leaves open, innermost first: a head cut inside
+    a bracket ends ``…)`` and stays balanced."""
+    return "".join(CLOSES[OPENS.index(head[i])] for i in reversed(_unclosed(head)))

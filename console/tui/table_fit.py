@@ -7,7 +7,7 @@ from __future__ import annotations
 from rich.text import Text
 
 from console.tui.kept_text import wrap_kept
-from console.tui.shorten import cut_chars, cut_words
+from console.tui.shorten import closers, cut_chars, cut_words
 
 #: the narrowest a column sized from what is left gets
 NOTE_MIN = 6
@@ -44,14 +44,17 @@ def fit_cell(text: str, width: int) -> Text:
 
 def fit_lines(text: str, width: int, lines: int) -> Text:
     """``text`` wrapped as ``fit_cell`` does in at most ``lines`` lines: what does not
-    fit is cut after a whole word, no bracket left open, ending in "…"."""
+    fit is cut after a whole word, ending in "…" (and what closes a bracket it cut)."""
     wrapped = fit_cell(text, width)
-    rows = wrapped.plain.split("\n")
-    if len(rows) <= lines:
+    if len(wrapped.plain.split("\n")) <= lines:
         return wrapped
-    head = rows[: lines - 1]
-    rest = " ".join(" ".join(rows[lines - 1 :]).split())
-    return Text("\n".join([*head, cut_words(rest, width)]))
+    words = str(text).split()
+    for k in range(len(words) - 1, 0, -1):  # whole words dropped from the end
+        head = " ".join(words[:k]).rstrip(",;:-")
+        shorter = fit_cell(f"{head}…{closers(head)}", width)  # a bracket cut: "…)"
+        if len(shorter.plain.split("\n")) <= lines:
+            return shorter
+    return Text(cut_words(" ".join(words), width))
 
 
 def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:

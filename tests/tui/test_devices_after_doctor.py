@@ -14,6 +14,7 @@ from textual.widgets import DataTable
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.shorten import balanced
 
 from .conftest import wait_for
 from .test_camera_layout import screen_lines
@@ -49,6 +50,9 @@ def test_devices_after_a_shell_doctor_opens_on_its_top(plugins, size):
             if size[0] == 80:  # too many lines whole: a line or two each
                 heights = [table.rows[k].height for k in table.rows]
                 assert max(heights) <= 2, heights
+                # shortened after a whole word, its bracket closed: "(haptable doctor…)"
+                why = str(table.get_row_at(table.row_count - 1)[3])
+                assert balanced(why) and why.endswith("…)"), why
             # the self-test row, shortened: Enter says it whole
             table.focus()
             await pilot.pause(0.2)  # focused: its rows laid out whole again
