@@ -59,6 +59,7 @@ from console.plugin_api.tui import (
 from . import adaptive_console, panel_choice, panel_fit, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
+from .answer_hold import HeldAnswer
 from .console_run import TOPIC, map_hint, run_analysis
 from .panel_text import (
     HELP,
@@ -82,7 +83,7 @@ ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
 CONFIRM_S = 3.0
 
 
-class StudiesPane(Vertical):
+class StudiesPane(HeldAnswer, Vertical):
     #: no Tab stop of its own (it would show nothing focused): its keys work from each of
     #: its fields and buttons, and ``focus()`` gives the focus to Start
     can_focus = False
@@ -154,22 +155,10 @@ class StudiesPane(Vertical):
         self._busy = False  # an analysis under way
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
-        #: the last key's or button's outcome (text, severity): the status's last line,
-        #: and when it was said (monotonic s: it holds the line ``ANSWER_HOLD_S`` at least)
-        self._said: tuple[str, str] = ("", "information")
-        self.said_at = 0.0
+        #: the last key's or button's outcome (text, severity): the status's last line
+        self.said = ("", "information")
         self._status_text = ""
         self.ask = AskAgain(panel_choice.LONG_AGAIN_S)  # s before a long run
-
-    @property
-    def said(self) -> tuple[str, str]:
-        """The last key's or button's outcome (text, severity)."""
-        return self._said
-
-    @said.setter
-    def said(self, value: tuple[str, str]) -> None:
-        self._said = value
-        self.said_at = time.monotonic()
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -575,6 +564,8 @@ class StudiesPane(Vertical):
         age_s = time.monotonic() - self.said_at
         if panel_status.said_lapses(self.said, kind, age_s):  # the run moved on: past
             self.said = ("", "information")
+        elif panel_status.said_lapses(self.said, kind, panel_status.ANSWER_HOLD_S):
+            self._past_after_hold(panel_status.ANSWER_HOLD_S - age_s)  # moved on meanwhile
         panel_status.pace_snapshot(self.pace, self.last, kind, d)
         if kind == "progress":
             bar = self.query_one("#study-progress", ProgressBar)
