@@ -29,7 +29,8 @@ What it offers:
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
   first: the same key again within a few seconds does it, ``console.tui.ask_again``)
 - shortening: ``cut_words`` / ``cut_end`` (text within a width, cut after a whole word
-  and never inside a bracket it would leave open), ``top_level_seps`` (where a line
+  and never inside a bracket it would leave open), ``cut_chars`` (the same for a narrow
+  cell, mid-word where it must), ``top_level_seps`` (where a line
   parts into fields outside brackets): ``console.tui.shorten``
 - check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
   characters, never in shades alone; every check box the console shows is one)
@@ -52,7 +53,7 @@ from console.tui.path_field import PathInput, middle_ellipsis
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
-from console.tui.shorten import cut_end, cut_words, top_level_seps
+from console.tui.shorten import cut_chars, cut_end, cut_words, top_level_seps
 from console.tui.text import LiteralTable, escape
 from console.tui.ticks import Tick
 from console.tui.time_left import Pace, left_words, seconds_left
@@ -83,6 +84,7 @@ __all__ = [
     "left_words",
     "seconds_left",
     "Tick",
+    "cut_chars",
     "cut_end",
     "cut_words",
     "top_level_seps",

@@ -1,8 +1,8 @@
 """A line shortened for its width is cut after a whole word and never inside a bracket
 whose end it drops: Scenes' last-run line once read ``knob loop stopped 4 s  …  limit
 250 ms) - ctrl+r resets`` (a field dropped from inside the bracket). The one mechanism
-(``console.tui.shorten``) serves the Scenes status, the toasts, the safety bar and table
-cells; checked at every width from 20 to 120 columns and on the screen at 80 x 24 and
+(``console.tui.shorten``) serves the Scenes status, the toasts, the safety bar, table
+cells and the Studies trials' column; checked at every width from 20 to 120 columns and on the screen at 80 x 24 and
 120 x 40."""
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from console.tui.table_fit import clip
 from console.tui.toasts import fit_words
 from plugins.demos.panel import fit_fields
 from plugins.demos.status import status_lines
+from plugins.studies.panel_text import clip as study_clip
 
 from .conftest import wait_for
 from .test_camera_layout import SIZES, screen_lines
@@ -49,6 +50,8 @@ def test_every_shortening_keeps_its_brackets_whole(width):
     assert balanced(cell) and len(cell) <= width, (width, cell)
     bar = _fit([PLAIN], width)
     assert balanced(bar) and len(bar) <= width, (width, bar)
+    trial = study_clip("exp2 training left to right (right hand)", width // 3)
+    assert balanced(trial) and len(trial) <= max(width // 3, 1), (width, trial)
 
 
 @pytest.mark.parametrize("size", SIZES, ids=["80x24", "120x40"])
