@@ -28,6 +28,12 @@ What it offers:
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
   first: the same key again within a few seconds does it, ``console.tui.ask_again``)
+- shortening: ``cut_words`` / ``cut_end`` (text within a width, cut after a whole word
+  and never inside a bracket it would leave open), ``cut_chars`` (the same for a narrow
+  cell, mid-word where it must), ``top_level_seps`` (where a line
+  parts into fields outside brackets): ``console.tui.shorten``
+- check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
+  characters, never in shades alone; every check box the console shows is one)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
   while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
@@ -47,7 +53,9 @@ from console.tui.path_field import PathInput, middle_ellipsis
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
+from console.tui.shorten import cut_chars, cut_end, cut_words, top_level_seps
 from console.tui.text import LiteralTable, escape
+from console.tui.ticks import Tick
 from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
 
@@ -75,4 +83,9 @@ __all__ = [
     "Pace",
     "left_words",
     "seconds_left",
+    "Tick",
+    "cut_chars",
+    "cut_end",
+    "cut_words",
+    "top_level_seps",
 ]

@@ -16,7 +16,7 @@ from textual.containers import VerticalScroll
 from textual.keys import key_to_character
 from textual.screen import ModalScreen
 from textual.widget import Widget
-from textual.widgets import Header, Input, TabbedContent, TabPane
+from textual.widgets import Input, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Started, Stopped
@@ -39,6 +39,7 @@ from console.tui.quitting import ConfirmsQuit
 from console.tui.safety_bar import SafetyBar, still_latched
 from console.tui.session_log import log_event
 from console.tui.session_messages import SessionMessage
+from console.tui.title_row import TitleHeader
 from console.tui.toasts import NewestToastOnly
 from console.tui.typed import TypedHistory
 from console.tui.util import short_path
@@ -192,7 +193,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
-        yield Header()
+        yield TitleHeader()  # its title keeps the room a toast leaves
         with ScreenTabs(initial=self.initial, id="tabs"):
             for tab, (title, _key, _reg) in self.tabs.items():
                 with TabPane(title, id=tab):

@@ -29,6 +29,7 @@ from textual.widgets import RichLog, Static
 from console.files import paths
 from console.tui.narrow import ConsoleFooter
 from console.tui.safety_bar import SafetyBar
+from console.tui.title_row import TitleRow
 from console.tui.util import from_thread
 
 #: the lines the log view keeps (the file keeps everything)
@@ -153,7 +154,7 @@ class LogScreen(ModalScreen):
     def compose(self) -> ComposeResult:
         # the title row, as every screen has one: a notification shows over it (docked
         # at the top, ``console.tcss``), never over the log's key and file below it
-        yield Static(" HapTable log", id="log-title", markup=False)
+        yield TitleRow(" HapTable log", id="log-title")  # whole words beside a toast
         # the key first; a long path wraps rather than cutting the words after it
         yield Static(f" escape closes · the log, also in {log_path()}", markup=False)
         # long lines wrap (a driver's message is read whole, no sideways scrolling);

@@ -14,6 +14,7 @@ from textual.widgets import Static
 from console.kernel.shell import reset_command
 from console.kernel.tables import latched_others
 from console.tui.live import live_of
+from console.tui.shorten import balanced
 
 
 def _fit(variants: list[str], width: int | None) -> str:
@@ -29,11 +30,14 @@ def _fit(variants: list[str], width: int | None) -> str:
 
 def _cut_words(text: str, width: int) -> str:
     """``text`` within ``width`` columns, whole words dropped from its end (``…`` says
-    words went); a field left empty goes with its ``|``. Never a word cut."""
+    words went); a field left empty goes with its ``|``. Never a word cut, never a
+    bracket left open (``console.tui.shorten``)."""
     words = text.split(" ")
     while len(words) > 1:
         words.pop()
         head = " ".join(words).rstrip()
+        if not balanced(head.replace("…", "")):  # never a bracket left half
+            continue
         if head.endswith("|"):  # the whole last field went: its separator too
             head = head[:-1].rstrip()
             if len(head) <= width:

@@ -1,21 +1,22 @@
 """A table's columns sized to the width it has: a cell within its column, on one line
-ending in "…" when cut (``clip``), or wrapped inside its row (``fit_cell``), never cut at
-the screen's edge mid-word; the widths of the last columns shared (``share``)."""
+ending in "…" when cut (``clip``), or wrapped inside its row (``fit_cell``; in a few lines
+at most: ``fit_lines``), never cut at the screen's edge mid-word; the widths of the last columns shared (``share``)."""
 
 from __future__ import annotations
 
 from rich.text import Text
 
 from console.tui.kept_text import wrap_kept
+from console.tui.shorten import closers, cut_chars, cut_words
 
 #: the narrowest a column sized from what is left gets
 NOTE_MIN = 6
 
 
 def clip(text: str, width: int) -> str:
-    """``text`` on one line within ``width`` columns, ending in "…" when cut."""
-    one = " ".join(str(text).split())
-    return one if len(one) <= width else one[: width - 1].rstrip() + "…"
+    """``text`` on one line within ``width`` columns, ending in "…" when cut, no bracket
+    left open (``console.tui.shorten``)."""
+    return cut_chars(" ".join(str(text).split()), width)
 
 
 def _word_fits(word: str, width: int) -> str:
@@ -39,6 +40,21 @@ def fit_cell(text: str, width: int) -> Text:
     a path broken after a "/"), a word too long for a line ending in "…"."""
     words = [_word_fits(w, width) for w in str(text).split()]
     return wrap_kept(" ".join(words), width)
+
+
+def fit_lines(text: str, width: int, lines: int) -> Text:
+    """``text`` wrapped as ``fit_cell`` does in at most ``lines`` lines: what does not
+    fit is cut after a whole word, ending in "…" (and what closes a bracket it cut)."""
+    wrapped = fit_cell(text, width)
+    if len(wrapped.plain.split("\n")) <= lines:
+        return wrapped
+    words = str(text).split()
+    for k in range(len(words) - 1, 0, -1):  # whole words dropped from the end
+        head = " ".join(words[:k]).rstrip(",;:-")
+        shorter = fit_cell(f"{head}…{closers(head)}", width)  # a bracket cut: "…)"
+        if len(shorter.plain.split("\n")) <= lines:
+            return shorter
+    return Text(cut_words(" ".join(words), width))
 
 
 def share(left: int, needs: tuple[int, int]) -> tuple[int, int]:

@@ -8,7 +8,8 @@ own (``console.tcss`` shows the last holder only): an older toast went on showin
 beside the newer one, and an e-stop's outlived the reset that followed. Here a new
 notification first removes the older ones and their holders. Textual's own cut
 (``text-overflow: ellipsis``) falls mid-word: the message is fitted to the row here, at
-a word, when it comes and again when the terminal's width changes."""
+a word, when it comes and again when the terminal's width changes; the title beside it
+keeps the room it leaves, whole or cut after a word (``console.tui.title_row``)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,8 @@ from textual.notifications import Notification, Notifications
 from textual.widgets._toast import Toast, ToastHolder, ToastRack
 
 from console.tui.said import log_said
+from console.tui.shorten import cut_end
+from console.tui.title_row import fit_titles
 
 __all__ = ["TOAST_FRAME", "NewestToastOnly", "fit_words"]
 
@@ -33,19 +36,13 @@ ELLIPSIS = "…"
 
 def fit_words(text: Content, width: int) -> Content:
     """``text`` (one line) in ``width`` cells: whole when it fits, else up to the end of
-    its last word that leaves room for ``…`` (a first word wider than that is cut)."""
+    its last word that leaves room for ``…`` and closes every bracket it opened
+    (``console.tui.shorten.cut_end``; a first word wider than that is cut)."""
     text = Content(" ").join(text.split("\n")) if "\n" in text.plain else text
     plain = text.plain
     if cell_len(plain) <= width:
         return text
-    room = max(width - 1, 0)
-    end = 0
-    while end < len(plain) and cell_len(plain[: end + 1]) <= room:
-        end += 1
-    if end < len(plain) and not plain[end].isspace():  # mid-word: back to the last space
-        space = plain.rfind(" ", 0, end)
-        if space > 0 and plain[:space].strip():
-            end = space
+    end = cut_end(plain, max(width - 1, 0))  # a whole word, no bracket left open
     return text[:end].rstrip() + ELLIPSIS
 
 
@@ -53,6 +50,9 @@ class NewestToastOnly:
     """The app's ``notify``: literal text (profile keys keep their ``[brackets]``:
     ``console/tui/text.py``), in the log too, the newest replacing every older one,
     its toast fitted to the title row at a word (the notification keeps it whole)."""
+
+    #: the column where the toast shown begins on the title row (None: no toast)
+    toast_x: int | None = None
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written; ``markup=True`` for a template with its
@@ -95,6 +95,30 @@ class NewestToastOnly:
         for note in self._notifications:
             shown.add(self._fitted(note))
         rack.show(shown)
+        self._titles_beside([*shown])
+
+    def _unnotify(self, notification: Notification, refresh: bool = True) -> None:
+        """Textual's; the last toast gone, the title row's title whole again."""
+        super()._unnotify(notification, refresh)
+        if not self._notifications:
+            self._titles_beside([])
+
+    def _titles_beside(self, shown: list[Notification]) -> None:
+        """Where the toast shown (the last of ``shown``) begins on the title row
+        (``toast_x``), and the titles laid out beside it (``console.tui.title_row``)."""
+        if shown:
+            text = Content.from_markup(shown[-1].message) if shown[-1].markup else None
+            plain = text.plain if text is not None else shown[-1].message
+            toast_x: int | None = max(self.size.width - cell_len(plain) - TOAST_FRAME, 0)
+        else:
+            toast_x = None
+        if toast_x == self.toast_x:
+            return
+        self.toast_x = toast_x
+        try:
+            fit_titles(self.screen)
+        except ScreenStackError:
+            return
 
     async def _on_resize(self, event) -> None:
         """The toast shown cut again for the new width."""
@@ -105,6 +129,8 @@ class NewestToastOnly:
             if note is not None:
                 toast._notification = self._fitted(note)
                 toast.refresh(layout=True)
+        self.toast_x = None  # the titles laid out again for the new width
+        self._titles_beside([toast._notification for toast in self.screen.query(Toast)])
 
     def _fitted(self, note: Notification) -> Notification:
         """A copy of ``note`` whose text fits the title row, cut at a word."""

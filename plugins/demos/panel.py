@@ -12,7 +12,6 @@ demo started elsewhere shows here too. ``s`` or the e-stop stops a demo, so does
 
 from __future__ import annotations
 
-import re
 import textwrap
 import time
 from typing import Any
@@ -29,12 +28,14 @@ from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stop
 from console.plugin_api.tui import (
     LongWork,
     SessionMessage,
+    cut_end,
     escape,
     lapse,
     middle_ellipsis,
     said_here,
     short_path,
     status_said,
+    top_level_seps,
 )
 
 from .projector_line import status_text
@@ -88,9 +89,10 @@ def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width:
 
 def fit_fields(markup: str, width: int) -> Text:
     """``markup``'s lines within ``width``: a longer line drops whole fields (parted by
-    two spaces, a comma or a semicolon), its middle ones first (its last one, the end
-    to end latency or the drop counts, stays), "…" where they were; a number is never
-    cut."""
+    two spaces, a comma or a semicolon outside brackets), its middle ones first (its
+    last one, the end to end latency or the drop counts, stays), "…" where they were;
+    a line of one field is cut after a word (``console.tui.shorten``): a number is never
+    cut, a bracket never left half."""
     out = Text()
     for i, line in enumerate(markup.split("\n")):
         out.append("\n" if i else "")
@@ -102,19 +104,20 @@ def _shorter(text: Text, width: int) -> Text:
     """``text`` within ``width`` by dropping whole fields (``fit_fields``)."""
     if text.cell_len <= width:
         return text
-    seps = [(m.start(), m.end()) for m in re.finditer(r"  |, |; ", text.plain)]
-    if not seps:
-        return text  # one field: the ellipsis cuts it
-    tail = text[seps[-1][1] :]
-    for start, _end in reversed(seps[:-1]):  # the head, "…", the last field
-        shorter = text[:start] + Text("  …  ") + tail
-        if shorter.cell_len <= width:
-            return shorter
-    for start, _end in reversed(seps):  # the head alone
-        shorter = text[:start] + Text(" …")
-        if shorter.cell_len <= width:
-            return shorter
-    return text
+    # fields parted outside brackets only: a dropped field never takes half a bracket
+    seps = top_level_seps(text.plain, r"  |, |; ")
+    if seps:
+        tail = text[seps[-1][1] :]
+        for start, _end in reversed(seps[:-1]):  # the head, "…", the last field
+            shorter = text[:start] + Text("  …  ") + tail
+            if shorter.cell_len <= width:
+                return shorter
+        for start, _end in reversed(seps):  # the head alone
+            shorter = text[:start] + Text(" …")
+            if shorter.cell_len <= width:
+                return shorter
+    # one field, or a first field too long: cut after a whole word, outside brackets
+    return text[: cut_end(text.plain, width - 1)] + Text("…")
 
 
 class ScenesPane(Vertical):

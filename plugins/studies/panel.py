@@ -34,7 +34,6 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import (
     Button,
-    Checkbox,
     DataTable,
     Input,
     Label,
@@ -50,6 +49,7 @@ from console.plugin_api.tui import (
     LiteralTable,
     Pace,
     SessionMessage,
+    Tick,
     escape,
     said_here,
     show_keys,
@@ -59,6 +59,7 @@ from console.plugin_api.tui import (
 from . import adaptive_console, panel_choice, panel_fit, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
+from .answer_hold import HeldAnswer
 from .console_run import TOPIC, map_hint, run_analysis
 from .panel_text import (
     HELP,
@@ -82,7 +83,7 @@ ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
 CONFIRM_S = 3.0
 
 
-class StudiesPane(Vertical):
+class StudiesPane(HeldAnswer, Vertical):
     #: no Tab stop of its own (it would show nothing focused): its keys work from each of
     #: its fields and buttons, and ``focus()`` gives the focus to Start
     can_focus = False
@@ -155,7 +156,7 @@ class StudiesPane(Vertical):
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
         #: the last key's or button's outcome (text, severity): the status's last line
-        self.said: tuple[str, str] = ("", "information")
+        self.said = ("", "information")
         self._status_text = ""
         self.ask = AskAgain(panel_choice.LONG_AGAIN_S)  # s before a long run
 
@@ -175,8 +176,8 @@ class StudiesPane(Vertical):
             )
             yield Label("participant", markup=False)
             yield typed_field("P01", placeholder="id", id="participant")
-            yield Checkbox("simulated", True, id="simulate", compact=True)
-            yield Checkbox("projector", False, id="projector", compact=True)
+            yield Tick("simulated", True, id="simulate", compact=True)
+            yield Tick("projector", False, id="projector", compact=True)
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
@@ -190,7 +191,7 @@ class StudiesPane(Vertical):
             yield Input(id="hand_width_cm", compact=True)
             yield Label("hand length cm", markup=False)
             yield Input(id="hand_length_cm", compact=True)
-            yield Checkbox("consent noted", False, id="consent", compact=True)
+            yield Tick("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
             yield Button("Start", id="start", variant="primary", compact=True)
             yield Button("Pause", id="pause", compact=True)
@@ -560,8 +561,11 @@ class StudiesPane(Vertical):
             return
         if kind in adaptive_console.PLOT_KINDS:
             self.query_one(AdaptiveView).snapshot(d)
-        if panel_status.said_lapses(self.said, kind):  # the run moved on: the key's past
+        age_s = time.monotonic() - self.said_at
+        if panel_status.said_lapses(self.said, kind, age_s):  # the run moved on: past
             self.said = ("", "information")
+        elif panel_status.said_lapses(self.said, kind, panel_status.ANSWER_HOLD_S):
+            self._past_after_hold(panel_status.ANSWER_HOLD_S - age_s)  # moved on meanwhile
         panel_status.pace_snapshot(self.pace, self.last, kind, d)
         if kind == "progress":
             bar = self.query_one("#study-progress", ProgressBar)

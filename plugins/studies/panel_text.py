@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from console.plugin_api import data_dir
-from console.plugin_api.tui import escape
+from console.plugin_api.tui import cut_chars, escape
 
 #: the Studies screen's help (``?``): plain text, keys first (``console.tui.help``)
 HELP = (
@@ -63,8 +63,9 @@ def trial_text(t: dict[str, Any]) -> str:
 
 
 def clip(text: str, width: int) -> str:
-    """``text`` within ``width`` columns, ending in ``…`` when cut."""
-    return text if len(text) <= width else text[: width - 1].rstrip() + "…"
+    """``text`` within ``width`` columns, ending in ``…`` when cut, never inside a
+    bracket it would leave open (``(right hand`` goes whole)."""
+    return cut_chars(text, width)
 
 
 def same_folder(a: Path, b: Path) -> bool:

@@ -8,9 +8,9 @@ from __future__ import annotations
 from typing import Any
 
 from textual.containers import Horizontal
-from textual.widgets import Checkbox, Input, Label
+from textual.widgets import Input, Label
 
-from console.plugin_api.tui import PathInput
+from console.plugin_api.tui import PathInput, Tick
 
 from .trial_recording import RECORD
 
@@ -32,7 +32,7 @@ def folder_row(out: str, profile: Any) -> Horizontal:
         PathInput(
             out, placeholder="where the results go", id="out", compact=True, select_on_focus=False
         ),
-        Checkbox(
+        Tick(
             "record trials",
             bool(profile.get("recording.study_trials")),
             id=RECORD,

@@ -29,8 +29,11 @@ def test_time_left_outcomes_lapse_and_analysis_at_once(
     from textual.widgets import ProgressBar
 
     from plugins.studies import panel as studies_panel
+    from plugins.studies import panel_status
 
     monkeypatch.setattr(studies_panel, "CONFIRM_S", 1.0)
+    # a key's answer holds the line 5 s at least: short here, the four trials end sooner
+    monkeypatch.setattr(panel_status, "ANSWER_HOLD_S", 0.3)
     protocol = tmp_path / "exp2-four.toml"
     protocol.write_text(FOUR_TRIALS)
 

@@ -60,3 +60,40 @@ def test_the_progress_line_past_the_estimate_and_without_one():
         "self-test: chirping every relay path and comparing what they read; 3 s so far "
         "(its time is unknown)"
     )
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_a_keys_answer_holds_the_line_against_the_selftest_ticks(plugins, monkeypatch, size):
+    """``d`` while the self-test runs: its answer stays on the line ``NOTE_S`` (a tick
+    every 0.5 s replaced it before it was read), then the progress comes back."""
+    import console.tui.panes.devices as devices_mod
+    from console.tui.long_work import NOTE_S
+
+    gate = threading.Event()
+
+    def slow_selftest(profile, pm):
+        gate.wait(20)
+        return True, "self-test: all paths healthy (2 s)"
+
+    monkeypatch.setattr(devices_mod, "run_selftest", slow_selftest)
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=size) as pilot:
+            pane = app.pane("devices")
+            await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
+            await pilot.press("s", "s")
+            await wait_for(pilot, lambda: " left" in pane.result, 10, "the time left")
+            await pilot.press("d")
+            await wait_for(pilot, lambda: "re-checked at" in pane.result, 10, "d's answer")
+            await pilot.pause(1.2)  # the ticks (every 0.5 s) go on meanwhile
+            assert "re-checked at" in pane.result, pane.result
+            pane._selftest_tick()  # one more, at once
+            assert "re-checked at" in pane.result, pane.result
+            pane._answered_at -= NOTE_S + 0.1  # held long enough
+            pane._selftest_tick()
+            assert " left" in pane.result, pane.result
+            gate.set()
+            await wait_for(pilot, lambda: "healthy" in pane.result, 10, "the result")
+
+    asyncio.run(scenario())

@@ -4,9 +4,9 @@ reopened with them), a named test signal through the gate, and every plugin."""
 
 from __future__ import annotations
 
-import logging
 import math
 import time
+from typing import Any
 
 from rich.markup import escape
 from rich.text import Text
@@ -25,10 +25,12 @@ from console.runtime.selftest_last import note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
+from console.tui.device_cells import PROBLEMS, ROW_LINES, cell, cell_lines
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
+from console.tui.long_work import NOTE_S
 from console.tui.said import status_said
 from console.tui.selftest_action import (
     run_selftest,
@@ -37,33 +39,15 @@ from console.tui.selftest_action import (
     selftest_row,
 )
 from console.tui.session_messages import SessionMessage
-from console.tui.table_fit import NOTE_MIN, clip, fit_cell, need, share, widths
+from console.tui.table_fit import NOTE_MIN, fit_cell, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
-log = logging.getLogger(__name__)
-
-#: the widest a table cell gets on this screen (a longer text ends in "…": the whole
-#: text is in the log, ctrl+l, and enter on the row says it)
-CELL_MAX = 36
 #: the plugins table's description column at least (at 80 columns: the table fits)
 PLUGIN_DESC_MAX = 24
 #: the sound-card table's device column at most (the note takes what the other columns
 #: leave of the screen's width)
 DEVICE_MAX = 23
-
-
-def _cell(text: str, where: str, width: int = CELL_MAX) -> Text:
-    """A table cell within ``width``; a cut text is logged whole (``where`` says
-    whose), so the log (ctrl+l) has what the cell could not show."""
-    shown = clip(text, width)
-    if shown != " ".join(str(text).split()) and (where, text) not in _LOGGED:
-        _LOGGED.add((where, text))  # once: listing again does not repeat it
-        log.info("%s: %s", where, text)
-    return Text(shown)
-
-
-_LOGGED: set[tuple[str, str]] = set()
 
 
 def found(rows) -> str:
@@ -169,6 +153,9 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         #: the self-test's row: its last run here (None: not run), its seconds then
         self.selftest_done: tuple[bool, str, float] | None = None
         self._selftest_timer = None  # the self-test's progress ticks while it runs
+        #: the self-test's start (monotonic s), seconds expected and estimate, for ticks
+        self._selftest_clock: tuple[float, float, Any] = (0.0, 0.0, None)
+        self._answered_at = 0.0  # when a key last answered while the self-test runs
         self._estopped_at_start = False  # the self-test began during an e-stop (refused)
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
         self._doctor_whole = True  # the device table's rows shown whole (``_show``)
@@ -244,7 +231,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         for kind, name, reg in regs:
             key = f"{kind}\x00{name}"
             self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
-            about = _cell(reg.description, f"{kind} {name}", width)
+            about = cell(reg.description, f"{kind} {name}", width)
             plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
 
     def _table_width(self) -> int:
@@ -330,16 +317,21 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # scrolled into view at once), a number with its unit on one line, a word too
         # long for its column ending in "…"; when wrapped rows would push the card in use
         # out of view (on entry: the card list has the focus), a row that works takes one
-        # line (a cut cell: in the log, Enter says it), a problem's row stays whole (what
-        # to do); the table focused (Tab) shows every row whole
+        # line, a problem's row stays whole (what to do), any other row two lines at
+        # most (cut after a word: in the log, Enter says it; a doctor's skipped
+        # self-test took ten lines and the screen opened scrolled down); the table
+        # focused (Tab) shows every row whole
         cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
         heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
         self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
-        if not self._doctor_whole:
+        if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
             for i, s in enumerate(rows):
-                if s.state in WORKS:
-                    cells[i] = (_cell(s.why, s.kind, why_w), _cell(s.fix, s.kind, fix_w))
-                    heights[i] = 1
+                most = 1 if s.state in WORKS else ROW_LINES
+                if s.state not in PROBLEMS and heights[i] > most:
+                    why = cell_lines(s.why, f"{s.kind} {s.name}", why_w, most)
+                    fix = cell_lines(s.fix, f"{s.kind} {s.name}", fix_w, most)
+                    cells[i] = (why, fix)
+                    heights[i] = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
         for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
@@ -396,7 +388,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             self.audio_rows[key] = (d.driver, "")
             if d.lists:  # it lists its devices and found none: nothing to open
                 self.no_device_rows[key] = f"{d.driver}: {d.problem}"
-            none = _cell(f"none: {d.problem}", f"sound card driver {d.driver}", device_w)
+            none = cell(f"none: {d.problem}", f"sound card driver {d.driver}", device_w)
             mark = "●" if d.driver == drv else ""
             return key, [mark, Text(d.driver), none, "", "", ""], ("", "")
         key = f"{dev.driver}\x00{dev.name}"
@@ -407,8 +399,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             [
                 "●" if used else "",
                 Text(dev.driver),
-                _cell(dev.name, f"sound card {dev.driver}", device_w),
-                _cell(dev.host_api, f"sound card {dev.name}: host API", 12),
+                cell(dev.name, f"sound card {dev.driver}", device_w),
+                cell(dev.host_api, f"sound card {dev.name}: host API", 12),
                 str(dev.output_channels),
                 _latency(dev.low_latency_s, dev.high_latency_s),
             ],
@@ -474,7 +466,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self._listed = shown
         note_w = self._note_width(table, [cells for _key, cells, _note in rows], heads[:-1])
         full = [
-            (key, [*cells, _cell(note, where, note_w) if note else ""])
+            (key, [*cells, cell(note, where, note_w) if note else ""])
             for key, cells, (note, where) in rows
         ]
         # each column as wide as its widest cell, given: the header is drawn with the rows'
@@ -513,8 +505,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
                 "●" if name == relay_drv else "",
                 Text(name),
                 Text(status.state),
-                _cell(status.why, f"relay board {name}", finds_w),
-                _cell(description, f"relay board {name}: description", desc_w),
+                cell(status.why, f"relay board {name}", finds_w),
+                cell(description, f"relay board {name}: description", desc_w),
                 key=key,
             )
 
@@ -586,10 +578,17 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         """While the self-test runs: the line says what it does and the time left
         (``selftest_progress``)."""
 
-        def tick() -> None:
-            self._show_result(selftest_progress(time.monotonic() - t0, total_s, est))
+        self._selftest_clock = (t0, total_s, est)
+        self._answered_at = 0.0
+        self._selftest_timer = self.set_interval(0.5, self._selftest_tick)
 
-        self._selftest_timer = self.set_interval(0.5, tick)
+    def _selftest_tick(self) -> None:
+        """The self-test's progress on the line, unless a key answered on it less than
+        ``NOTE_S`` ago (a tick every 0.5 s took ``d``'s answer before it was read)."""
+        if time.monotonic() - self._answered_at < NOTE_S:
+            return
+        t0, total_s, est = self._selftest_clock
+        self._show_result(selftest_progress(time.monotonic() - t0, total_s, est), tick=True)
 
     def _selftest_ended(self, ok: bool | None, line: str, took_s: float) -> None:
         if self._selftest_timer is not None:
@@ -609,11 +608,16 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if self.doctor_rows:  # its row in the devices table says it too
             self._show(self.doctor_rows[:-1])
 
-    def _show_result(self, text: str, error: bool = False, severity: str = "") -> None:
+    def _show_result(
+        self, text: str, error: bool = False, severity: str = "", tick: bool = False
+    ) -> None:
         """The screen's status line, the newest message replacing it: docked at the
         top of the screen, in view wherever the list is scrolled (a pick on a row far
         down says what it did where it is seen); an error or a refusal (``severity``
-        ``warning``) is in the log too."""
+        ``warning``) is in the log too. While the self-test runs, a message that is not
+        its ``tick`` holds the line ``NOTE_S`` against the ticks."""
+        if not tick and self._selftest_timer is not None:
+            self._answered_at = time.monotonic()
         severity = "error" if error else severity
         self.result = text
         found = self.query("#devices-result")

@@ -16,6 +16,7 @@ from console.tui.safety_bar import relay_names
 from console.tui.said import said_here
 from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
+from console.tui.ticks import OnOff
 from console.tui.util import from_thread
 
 
@@ -142,7 +143,7 @@ class RelaysPane(VerticalScroll):
                 label.styles.width = width
                 yield label
                 # its own keys first in the footer while it has the focus
-                yield show_keys(Switch(value=False, id=f"relay-{ch}"), enter="toggle")
+                yield show_keys(OnOff(value=False, id=f"relay-{ch}"), enter="toggle")
                 yield Static("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
         yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)

@@ -1,0 +1,65 @@
+"""Devices (F1) after `haptable doctor` ran in a shell, at 80 x 24 and 120 x 40: the
+screen opens on its top (the profile line, the device table's header) with the card in
+use in view, each device row a line or two (the doctor's skipped quick self-test wrapped
+over ten lines and pushed the screen down to the `realtime memory` row), and the row's
+hint whole (`press s (full)`, once cut `press s (full …`); Enter on a shortened row says
+it whole (a new operator's try)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from textual.widgets import DataTable
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+from console.tui.shorten import balanced
+
+from .conftest import wait_for
+from .test_camera_layout import screen_lines
+from .test_devices_selftest_what_ran import _haptable
+
+
+def _has(app, *words: str) -> bool:
+    return any(all(w in line for w in words) for line in screen_lines(app))
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_devices_after_a_shell_doctor_opens_on_its_top(plugins, size):
+    doctor = _haptable("doctor")  # no baseline yet: its quick self-test skipped, said why
+    assert "selftest   quick        skipped" in doctor.stdout, doctor.stdout
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with app.run_test(size=size) as pilot:
+            audio = app.query_one("#audio-table", DataTable)
+            table = app.query_one("#device-table", DataTable)
+            await wait_for(pilot, lambda: audio.row_count >= 2, 30, "sound cards listed")
+            await wait_for(pilot, lambda: table.row_count >= 7, 30, "the devices checked")
+            await wait_for(pilot, lambda: _has(app, "●", "twin"), 10, "the card in use")
+            await pilot.pause(0.5)  # laid out
+            shown = screen_lines(app)
+            assert app.pane("devices").scroll_y == 0, "\n".join(shown)
+            assert _has(app, "profile sim"), "\n".join(shown)
+            assert _has(app, "device", "driver", "state", "why"), "\n".join(shown)
+            assert _has(app, "selftest", "quick", "skipped"), "\n".join(shown)
+            assert _has(app, "press s (full)"), "\n".join(shown)
+            hints = [line for line in shown if "press s" in line]
+            assert hints and all("press s (full)" in line for line in hints), hints
+            if size[0] == 80:  # too many lines whole: a line or two each
+                heights = [table.rows[k].height for k in table.rows]
+                assert max(heights) <= 2, heights
+                # shortened after a whole word, its bracket closed: "(haptable doctor…)"
+                why = str(table.get_row_at(table.row_count - 1)[3])
+                assert balanced(why) and why.endswith("…)"), why
+            # the self-test row, shortened: Enter says it whole
+            table.focus()
+            await pilot.pause(0.2)  # focused: its rows laid out whole again
+            table.move_cursor(row=table.row_count - 1)
+            await pilot.pause(0.1)
+            await pilot.press("enter")
+            said = " ".join(str(app.query_one("#devices-result").render()).split())
+            assert "on a healthy table to keep one" in said, said
+
+    asyncio.run(scenario())
