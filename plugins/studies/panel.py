@@ -154,10 +154,22 @@ class StudiesPane(Vertical):
         self._busy = False  # an analysis under way
         #: until when (monotonic s) a second ``a`` aborts the run; None: not asked
         self.abort_until: float | None = None
-        #: the last key's or button's outcome (text, severity): the status's last line
-        self.said: tuple[str, str] = ("", "information")
+        #: the last key's or button's outcome (text, severity): the status's last line,
+        #: and when it was said (monotonic s: it holds the line ``ANSWER_HOLD_S`` at least)
+        self._said: tuple[str, str] = ("", "information")
+        self.said_at = 0.0
         self._status_text = ""
         self.ask = AskAgain(panel_choice.LONG_AGAIN_S)  # s before a long run
+
+    @property
+    def said(self) -> tuple[str, str]:
+        """The last key's or button's outcome (text, severity)."""
+        return self._said
+
+    @said.setter
+    def said(self, value: tuple[str, str]) -> None:
+        self._said = value
+        self.said_at = time.monotonic()
 
     def compose(self) -> ComposeResult:
         names = protocols.available()
@@ -560,7 +572,8 @@ class StudiesPane(Vertical):
             return
         if kind in adaptive_console.PLOT_KINDS:
             self.query_one(AdaptiveView).snapshot(d)
-        if panel_status.said_lapses(self.said, kind):  # the run moved on: the key's past
+        age_s = time.monotonic() - self.said_at
+        if panel_status.said_lapses(self.said, kind, age_s):  # the run moved on: past
             self.said = ("", "information")
         panel_status.pace_snapshot(self.pace, self.last, kind, d)
         if kind == "progress":

@@ -1,6 +1,7 @@
 """What the Studies screen's status says as a run goes on, kept true (issue 27): the
 experimenter's last key's outcome lasts until the run's state moves on (a trial starts,
-the pause takes hold, the run ends) or another key speaks; the count of trials done
+the pause takes hold, the run ends), not before it held the line for ``ANSWER_HOLD_S``,
+or another key speaks; the count of trials done
 says the time left at the pace since the run (re)started; a run that stopped is
 analysed at once, so ``t`` shows it without ``n`` first."""
 
@@ -23,12 +24,17 @@ from .panel_text import NUMBER_FIELDS, same_folder, trial_text
 STATE_KINDS = frozenset({"start", "paused", "aborted", "finished", "questionnaire", "rate"})
 
 
-def said_lapses(said: tuple[str, str], kind: str) -> bool:
-    """Whether a snapshot ``kind`` makes the key's outcome ``said`` past: the run's
-    state moved on (an error stays until the next key; a field's refusal stays until
-    the field is right)."""
+#: seconds a key's outcome holds the status line at least: a simulated run's next trial
+#: starts within milliseconds, and its progress took ``r``'s answer before anyone read it
+ANSWER_HOLD_S = 5.0
+
+
+def said_lapses(said: tuple[str, str], kind: str, age_s: float) -> bool:
+    """Whether a snapshot ``kind`` makes the key's outcome ``said`` (said ``age_s`` ago)
+    past: the run's state moved on once it has held the line ``ANSWER_HOLD_S`` (an
+    error stays until the next key; a field's refusal stays until the field is right)."""
     text, severity = said
-    if not text or severity == "error" or kind not in STATE_KINDS:
+    if not text or severity == "error" or kind not in STATE_KINDS or age_s < ANSWER_HOLD_S:
         return False
     return not any(text.startswith(f"{label} = ") for label, *_ in NUMBER_FIELDS.values())
 

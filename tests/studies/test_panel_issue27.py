@@ -7,6 +7,8 @@ from __future__ import annotations
 import asyncio
 import json
 
+import pytest
+
 from console.cli.main import main
 
 from . import synth_runs as sr
@@ -69,18 +71,49 @@ def test_abort_asks_first(double_plugins, map_file, tmp_path, monkeypatch):
     asyncio.run(scenario())
 
 
-def test_replay_in_a_simulated_run_says_why_not(double_plugins, map_file, tmp_path):
+def _says_no_replay(pane) -> bool:
+    status = str(pane.query_one("#study-status").render())
+    return "simulated" in status and "replay" in status
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_replay_in_a_simulated_run_says_why_not(double_plugins, map_file, tmp_path, size):
     async def scenario():
         app = _app(double_plugins)
-        async with app.run_test(size=(80, 24)) as pilot:
+        async with app.run_test(size=size) as pilot:
             pane = await _running(pilot, app, map_file, tmp_path)
             await pilot.press("r")
-            await pilot.pause(0.1)
-            # the screen's own key: its status says it, no toast (console.tui.said)
-            status = str(pane.query_one("#study-status").render())
-            assert "simulated" in status and "replay" in status, status
+            # the screen's own key: its status says it, no toast (console.tui.said); a
+            # bounded wait (a loaded machine draws late), the same assertion
+            await wait_for(pilot, lambda: _says_no_replay(pane), 5, "r's answer")
             said = [n.message for n in app._notifications]
             assert not any("simulated" in m for m in said), said
+            pane.control.abort("test over")
+            await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_a_keys_answer_outlasts_the_runs_next_trial(double_plugins, map_file, tmp_path, size):
+    """A simulated run's next trial starts within milliseconds of ``r``: its answer holds
+    the status line for ``ANSWER_HOLD_S`` (progress never replaces it sooner), then
+    the run's state moving on takes it."""
+    from plugins.studies import panel_status
+
+    async def scenario():
+        app = _app(double_plugins)
+        async with app.run_test(size=size) as pilot:
+            pane = await _running(pilot, app, map_file, tmp_path)
+            await pilot.press("r")
+            trial = pane.last.get("trial") or {}
+            pane._snapshot({"kind": "start", "trial": trial})  # a trial starts at once
+            pane._snapshot({"kind": "progress", "done": 3, "total": 200})
+            assert _says_no_replay(pane), str(pane.query_one("#study-status").render())
+            # held long enough: the next trial's start takes it
+            pane.said_at -= panel_status.ANSWER_HOLD_S + 0.1
+            pane._snapshot({"kind": "start", "trial": trial})
+            assert not _says_no_replay(pane)
             pane.control.abort("test over")
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
 
