@@ -17,6 +17,7 @@ from typing import Any
 
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.core.types import DeviceStatus
+from console.session.events import ESTOP_FIX, estop_refusal
 from console.tui.time_left import left_words
 
 NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
@@ -123,10 +124,15 @@ def run_selftest(profile: Any, pm: Any) -> tuple[bool | None, str]:
         return False, NO_PLUGIN
     try:
         code, report = _run(profile, pm, ["--json"])
-    except (EStopLatched, SafetyRefusal) as exc:
+    except EStopLatched as exc:  # the console's words: its key first, not the CLI's
+        return None, f"self-test {estop_refusal(exc.why)}"
+    except SafetyRefusal as exc:
         said = " ".join(str(exc).split())
         if ": stopped: " in said or said.startswith("stopped: "):  # under way: stopped
             return None, f"self-test stopped before its end ({said})"
+        at, end = said.find("e-stop active ("), said.rfind("; reset")
+        if at >= 0:  # the kernel's "reset it first": the console's key instead
+            return None, f"self-test refused: {said[at : end if end > at else None]}, {ESTOP_FIX}"
         return None, f"self-test refused: {said}"
     except UserError as exc:
         return False, f"self-test: {exc}"

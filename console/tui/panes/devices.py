@@ -22,7 +22,7 @@ from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.runtime.selftest_last import note_last, read_last
-from console.session.events import ESTOP_FIX, Started, Stopped
+from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
 from console.tui.device_picks import DevicePicksMixin
@@ -556,7 +556,10 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         path), ``s`` again within 3 s runs it; during an e-stop it is refused at once
         (nothing to ask)."""
         out = self.app.session.outputs
-        if (out is not None and out.estopped) or self.ask.confirmed("selftest"):
+        if out is not None and out.estopped:  # nothing to ask: the console's key first
+            self._show_result(f"self-test {estop_refusal(out.estop_reason or '')}", error=True)
+            return
+        if self.ask.confirmed("selftest"):
             self._selftest()
             return
         last_s = self.selftest_done[2] if self.selftest_done else 0.0
