@@ -92,12 +92,25 @@ def selftest_progress(gone_s: float, total_s: float, est: tuple[float, int, bool
 
 
 def selftest_row(
-    done: tuple[bool, str, float] | None, last: dict[str, dict[str, str]] | None = None
+    done: tuple[bool, str, float] | None,
+    last: dict[str, dict[str, str]] | None = None,
+    stopped: str = "",
 ) -> DeviceStatus:
     """The Devices doctor's self-test row, saying what ran: the full one run here
     (``done``: healthy, line, seconds), else the last kept (``last``:
     ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
-    else where to run it (``haptable doctor`` runs its quick part; here s the full one)."""
+    else where to run it (``haptable doctor`` runs its quick part; here s the full one).
+    ``stopped``: the last run here was stopped before its end (when, by what): the row
+    says so first, the last whole run's outcome after it (it is no longer the news)."""
+    if stopped:
+        before = selftest_row(done, last)
+        was = (
+            f"; the last whole one: {before.state} {before.why}"
+            if before.state != "not run"
+            else ""
+        )
+        why = f"the last run stopped before its end ({stopped}){was}"
+        return DeviceStatus("selftest", "full", "stopped", why, "s runs it again (ctrl+r first)")
     last = last or {}
     full, quick = last.get("full"), last.get("quick")
     if done is None and full is not None:  # a full one kept from before
