@@ -56,7 +56,7 @@ from console.plugin_api.tui import (
     status_said,
 )
 
-from . import adaptive_console, panel_choice, panel_fit, panel_status
+from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .console_run import TOPIC, map_hint, run_analysis
@@ -118,7 +118,8 @@ class StudiesPane(Vertical):
     BINDINGS = [
         Binding("s", "start", "start"),
         Binding("p", "pause", "pause"),
-        Binding("r", "replay", "replay", show=False),
+        Binding("p", "resume", "resume"),  # in its place while paused (``check_action``)
+        Binding("r", "replay", "replay"),
         Binding("a", "abort", "abort"),
         Binding("n", "analyse", "analyse"),
         Binding("t", "toggle_view", "view"),
@@ -237,8 +238,11 @@ class StudiesPane(Vertical):
         yield AdaptiveView(id="study-plot")
 
     def check_action(self, action: str, parameters: tuple) -> bool:
-        """At 80 columns the footer has room for ``]`` (an adaptive protocol's tracks) or
-        ``n`` (a fixed plan's analysis; an adaptive protocol has none)."""
+        """``p`` says what it does now (``pause``, or ``resume`` while paused). At 80
+        columns the footer has room for ``]`` (an adaptive protocol's tracks) or ``n``
+        (a fixed plan's analysis; an adaptive protocol has none)."""
+        if action in ("pause", "resume"):
+            return panel_run_keys.p_does(self) == action
         if action not in ("track", "analyse") or not self.query("#protocol"):
             return True
         return (action == "track") == adaptive_console.is_adaptive(str(self._value("protocol")))
@@ -355,36 +359,14 @@ class StudiesPane(Vertical):
             self.focus()
 
     def action_pause(self) -> None:
-        c = self.control
-        if c is None or self.running is None:
-            self._say("p: no study running to pause (s starts one)", "warning")
-            return
-        if c.paused:
-            c.resume()
-            if self.last.get("state", "").startswith("paused"):
-                self.last["state"] = "resuming"
-            self.said = ("resumed", "information")
-        else:
-            c.pause()
-            self.said = ("pausing after this trial (p resumes)", "information")
-        self._show()
+        panel_run_keys.pause(self)
+
+    def action_resume(self) -> None:
+        """``p`` while paused (the footer says ``p resume``)."""
+        panel_run_keys.pause(self)
 
     def action_replay(self) -> None:
-        """``r``: replay the stimulus waiting for an answer, or say why not (one line)."""
-        waiting = bool(self.asking and "trial" in self.asking)
-        if self.running is None:
-            self._say("r: no study running, nothing to replay", "warning")
-        elif self.control is not None and self.control.paused and not waiting:
-            self._say("r: paused, no stimulus waits for an answer (p resumes)", "warning")
-        elif self.responder is None:
-            self._say(
-                "r: a simulated participant answers by itself and asks for no replay", "warning"
-            )
-        elif waiting:
-            self.responder.put(Answer(replay=True))
-            self._say("r: replaying the stimulus")
-        else:
-            self._say("r: no stimulus is waiting for an answer", "warning")
+        panel_run_keys.replay(self)
 
     def action_abort(self) -> None:
         """``a`` (or Abort): the first asks on the status line, a second within
@@ -529,11 +511,13 @@ class StudiesPane(Vertical):
             return
         if isinstance(ev, Started):
             self.running = self.last["pid"] = ev.name
+            self.refresh_bindings()  # p pauses it
             self._status(f"{escape(ev.name)}: {escape(ev.detail)}")
         elif isinstance(ev, Snapshot):
             self._snapshot(ev.data)
         elif isinstance(ev, Stopped):
             self.running = None
+            self.refresh_bindings()  # p: pause, nothing paused any more
             self.asking = None
             self.abort_until = None
             self.last["pid"] = ev.name
