@@ -37,6 +37,11 @@ class EStopped(Exception):
 
 class EStopLatched(UserError):
     """The table's e-stop is latched: nothing plays until an operator resets it (a
-    command that would open its outputs refuses in one line)."""
+    command that would open its outputs refuses in one line). ``why``: the latch's
+    reason alone, for a console to word the refusal with its own key."""
 
     EXIT_CODE = 4
+
+    def __init__(self, message: str, why: str = "") -> None:
+        super().__init__(message)
+        self.why = why

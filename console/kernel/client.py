@@ -157,7 +157,11 @@ class Outputs:
         latched = hello.get("latched")
         if (latched or self._estopped) and not allow_latched:
             self.close()
-            raise EStopLatched(latched_line(table, latched or self._estop_reason))
+            why = latched or self._estop_reason
+            raise EStopLatched(
+                latched_line(table, why),
+                describe_latch(why) if isinstance(why, dict) else str(why),
+            )
         self.memory_locked = False
         self.memory_note = ""
 

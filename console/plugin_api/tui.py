@@ -25,7 +25,8 @@ What it offers:
   ``status_said`` (whatever a status line now says: an error as ``said_here``, news
   into the log);
   ``lapse`` and ``lapse_if_held`` (a status line true only for a while, or while a run
-  holds the outputs, leaves the line when that ends: ``console.tui.lapse``)
+  holds the outputs, leaves the line when that ends: ``console.tui.lapse``), and
+  ``lapse_on_change`` (a line about a state goes when the state changes)
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
   first: the same key again within a few seconds does it, ``console.tui.ask_again``)
 - shortening: ``cut_words`` / ``cut_end`` (text within a width, cut after a whole word
@@ -45,7 +46,7 @@ from console.tui.ask_again import AskAgain
 from console.tui.charts import Chart, Series
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse, lapse_if_held
+from console.tui.lapse import lapse, lapse_if_held, lapse_on_change
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.panels import LeavesForScreen
@@ -75,6 +76,7 @@ __all__ = [
     "status_said",
     "lapse",
     "lapse_if_held",
+    "lapse_on_change",
     "show_keys",
     "from_thread",
     "short_path",

@@ -28,6 +28,7 @@ from console.session.events import (
     SessionEvent,
     Started,
     Stopped,
+    estop_refusal,
 )
 from console.session.reset_here import no_reset_here
 from console.session.scenes import SceneControl
@@ -367,12 +368,7 @@ class ConsoleSession:
     @staticmethod
     def _estop_why(out: Any) -> str:
         """An e-stop's refusal in one line: its reason and the key that resets it."""
-        reason = out.estop_reason or ""
-        return (
-            f"{ESTOP_REFUSAL} ({reason}), {ESTOP_FIX}"
-            if reason
-            else f"{ESTOP_REFUSAL}, {ESTOP_FIX}"
-        )
+        return estop_refusal(out.estop_reason or "")
 
     def play(self, plan: Any, *, on_started: Callable[[], None] | None = None) -> PlayOutcome:
         """Play ``plan`` through the safety gate and wait for what became of it

@@ -78,3 +78,11 @@ class PlayOutcome:
 #: clear such refusals when the e-stop is reset)
 ESTOP_REFUSAL = "refused: e-stop active"
 ESTOP_FIX = "ctrl+r resets"
+
+
+def estop_refusal(reason: str = "") -> str:
+    """A request the e-stop refused, in the console's words, its key first (the CLI's
+    words name `haptable reset`: ``console.kernel.client.latched_line``):
+    ``refused: e-stop active (operator e-stop (console)), ctrl+r resets``."""
+    reason = " ".join(reason.split())
+    return f"{ESTOP_REFUSAL} ({reason}), {ESTOP_FIX}" if reason else f"{ESTOP_REFUSAL}, {ESTOP_FIX}"

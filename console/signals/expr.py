@@ -66,10 +66,14 @@ from console.signals.syntax import (
     number,
     show,
     typed_column,
+    unit_column,
+    unit_fix,
 )
 
 #: the ``data`` of the ``parse`` running (``@NAME`` references), for this call only
 _DATA: ContextVar = ContextVar("signal_data", default=None)
+#: the text being parsed as typed, its leading blanks and as marked (columns in messages)
+_TEXT: ContextVar[tuple[str, int, str]] = ContextVar("signal_text", default=("", 0, ""))
 
 
 #: Python's words for a syntax error, in the signal language's (the first that matches)
@@ -98,11 +102,12 @@ def syntax_words(msg: str) -> str:
 def parse(text: str, data=None) -> Node:
     """The signal ``text`` describes, or a one-line ``UserError`` naming the bad part.
     ``data`` (``console.signals.breakpoint_data.LibraryData``) resolves ``@NAME``."""
-    token = _DATA.set(data)
+    token, text_token = _DATA.set(data), _TEXT.set(("", 0, ""))
     try:
         return _parse(text)
     finally:
         _DATA.reset(token)
+        _TEXT.reset(text_token)
 
 
 def _parse(text: str) -> Node:
@@ -133,6 +138,7 @@ def _parse(text: str) -> Node:
     except (RecursionError, MemoryError):
         raise UserError("signal nested too deeply; use seq(...) and repeat(...)") from None
     keep_source(tree, marked)
+    _TEXT.set((typed, len(text) - len(text.lstrip()), marked))
     value = _eval(tree.body, 0)
     if not isinstance(value, Node):
         raise UserError(
@@ -275,6 +281,8 @@ def _call(node: ast.Call, depth: int):
     name = node.func.id
     if name == UNIT_FN:
         value = number(node.args[0].value, part)  # the regex only marks plain numbers
+        if node.args[1].value not in UNITS:
+            raise UserError(_unit_said(node, unit_fix(node.args[1].value)))
         dim, factor = UNITS[node.args[1].value]
         return Quantity(float(value) * factor, dim, part)
     if name == DATA_FN:  # the mark of @NAME (the regex only marks names)
@@ -325,6 +333,7 @@ def _bind(name: str, spec, node: ast.Call, depth: int, part: str) -> dict:
                 raise UserError(f"{part}: missing {pname}; {usage}")
             out[pname] = None if default == "" else default
             continue
+        _known_unit(given[pname], f"{name}'s {pname}", dim)
         v = _eval(given[pname], depth + 1)
         if pname == "amplitude":
             out["_volts"] = not (isinstance(v, Quantity) and v.dim in ("ratio", "dB"))
@@ -352,8 +361,46 @@ def _value(v, dim: str, pname: str, part: str, node: ast.AST):
         raise UserError(
             f"{part}: {pname} {v.text} is {DIM_NAMES.get(v.dim, v.dim)}, expected "
             f"{DIM_NAMES[dim]} (in {', '.join(u for u, (d, _f) in UNITS.items() if d == dim)})"
+            f"{_at(node).replace(' at', ',', 1)}"
         )
     return v.value
+
+
+def _is_unit(node: ast.AST) -> bool:
+    return (
+        isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == UNIT_FN
+    )
+
+
+def _known_unit(node: ast.AST, wants: str, dim: str) -> None:
+    """A value's unit the language does not know, named with what the value takes
+    (``sine's frequency takes Hz or kHz``); the rest is checked once it is a value."""
+    if _is_unit(node) and dim in ("Hz", "V", "s") and node.args[1].value not in UNITS:
+        dims = ("V", "ratio", "dB") if dim == "V" else (dim,)
+        raise UserError(_unit_said(node, unit_fix(node.args[1].value, wants, dims)))
+
+
+def _unit_said(node: ast.Call, fix: str) -> str:
+    """``unit 'hz' at column 10 (250 hz): write Hz; ...``: the unit's column as typed."""
+    typed, lead, _marked = _TEXT.get()
+    col = _column(node)
+    at = f" at column {lead + unit_column(typed, col)}" if col else ""
+    return f"unit {node.args[1].value!r}{at} ({show(node)}): {fix}"
+
+
+def _column(node: ast.AST) -> int | None:
+    """Where ``node`` starts in the text as typed (1-based, without its leading blanks)."""
+    typed, _lead, marked = _TEXT.get()
+    if not typed or not isinstance(node, ast.expr):
+        return None
+    start = len(marked.encode("utf-8")[: node.col_offset].decode("utf-8", "replace"))
+    return typed_column(typed, start + 1)
+
+
+def _at(node: ast.AST) -> str:
+    """`` at column N``: where ``node`` starts in the text as typed."""
+    col = _column(node)
+    return f" at column {_TEXT.get()[1] + col}" if col else ""
 
 
 def _need(ok: bool, part: str, message: str) -> None:

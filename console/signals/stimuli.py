@@ -67,7 +67,8 @@ DURATION_S: dict[str, float] = {
 
 
 #: Former names, still played (scripts and notes use them); each stimulus has one name,
-#: the one listed, the same as the signal library's (``screen-180``).
+#: the one listed, the signal library's where it has the same signal (``screen-180``,
+#: ``sweep``; its ``tone-250`` is the ``sine-P..`` tone without a patch).
 ALIASES: dict[str, str] = {"screen-180hz": "screen-180"}
 
 

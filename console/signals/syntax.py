@@ -10,6 +10,7 @@ characters, no comments, a gain within +-``MAX_DB`` dB, ``MAX_SIGNS`` signs in a
 from __future__ import annotations
 
 import ast
+import keyword
 import math
 import re
 from dataclasses import dataclass
@@ -46,7 +47,13 @@ UNITS: dict[str, tuple[str, float]] = {
 }
 UNIT_FN = "_unit_"
 _NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
-_QUANTITY = re.compile(rf"(?<![\w.])({_NUMBER})\s*(kHz|Hz|Vpp|mV|V|ms|us|s|%|dB)(?![\w])", re.ASCII)
+#: a number and the word after it: a unit, known or not (``250 hz``, ``0.5 sec``, ``250 kV``
+#: are marked too, so a wrong unit is named as one, never read as a missing comma); a word
+#: followed by ``(`` is a call, not a unit
+_QUANTITY = re.compile(
+    rf"(?<![\w.])((?>{_NUMBER}))\s*(%|[A-Za-z\u00b5\u03bc][A-Za-z0-9]*)(?![\w\u00b5\u03bc])(?!\s*\()",
+    re.ASCII,
+)
 DIM_NAMES = {"Hz": "a frequency", "V": "a voltage", "s": "a duration", "ratio": "a ratio"}
 EXAMPLE_UNIT = {"Hz": "Hz", "V": "V", "s": "s"}
 
@@ -91,7 +98,46 @@ def mark_units(text: str) -> str:
 def _mark(m: re.Match[str]) -> str:
     if m.group(3) is not None:
         return f'{DATA_FN}("{m.group(3)}")'
+    if keyword.iskeyword(m.group(2)):  # ``1 if ...``: Python's, refused as not a signal
+        return m.group(0)
     return f'{UNIT_FN}({m.group(1)}, "{m.group(2)}")'
+
+
+#: how else a unit is written -> the signal language's spelling
+_ALIASES = {
+    "sec": "s", "secs": "s", "second": "s", "seconds": "s",
+    "msec": "ms", "msecs": "ms", "millisecond": "ms", "milliseconds": "ms",
+    "usec": "us", "usecs": "us", "\u00b5s": "us", "\u03bcs": "us", "microsecond": "us",
+    "microseconds": "us", "hertz": "Hz", "volt": "V", "volts": "V", "millivolt": "mV",
+    "millivolts": "mV", "pct": "%", "percent": "%", "db": "dB",
+}  # fmt: skip
+_BY_CASE = {u.casefold(): u for u in UNITS}
+
+
+def units_of(*dims: str) -> str:
+    """The units values of ``dims`` are written in: ``Hz or kHz``, ``s, ms or us``."""
+    names = [u for u, (d, _f) in UNITS.items() if d in dims]
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
+
+
+def unit_fix(word: str, wants: str = "", dims: tuple[str, ...] = ()) -> str:
+    """What to write instead of ``word``, a unit the signal language does not know:
+    its spelling here (``hz``: ``write Hz``), else that it is none, and what the value
+    takes (``wants``, e.g. ``sine's frequency``, in ``dims``: ``takes Hz or kHz``)."""
+    known = _ALIASES.get(word) or _ALIASES.get(word.casefold()) or _BY_CASE.get(word.casefold())
+    takes = f"; {wants} takes {units_of(*dims)}" if wants else ""
+    if known and (not dims or UNITS[known][0] in dims):
+        return f"write {known}{takes}"
+    if known:
+        return f"{known} is {DIM_NAMES.get(UNITS[known][0], 'a gain')}{takes}"
+    every = "; ".join(units_of(d) for d in ("Hz", "V", "s")) + "; % or dB"
+    return f"not a unit of the signal language{takes or f' (units: {every})'}"
+
+
+def unit_column(text: str, col: int) -> int:
+    """The 1-based column of the unit of the quantity that starts at ``col`` of ``text``."""
+    m = _QUANTITY.match(text, col - 1)
+    return m.start(2) + 1 if m else col
 
 
 def typed_column(text: str, marked_col: int) -> int:

@@ -33,7 +33,7 @@ from console.tui.logs import (
 )
 from console.tui.menus import close_menus
 from console.tui.narrow import ConsoleFooter, fit_tab_bar, types_every_key
-from console.tui.palette import SafetyPalette, keys_as_console_help
+from console.tui.palette import SafetyPalette, console_system_commands
 from console.tui.panels import LeavesForScreen
 from console.tui.quitting import ConfirmsQuit
 from console.tui.safety_bar import SafetyBar, still_latched
@@ -587,7 +587,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
             self.push_screen(SafetyPalette(id="--command-palette"))
 
     def get_system_commands(self, screen):
-        yield from keys_as_console_help(super().get_system_commands(screen), self.action_help)
+        yield from console_system_commands(super().get_system_commands(screen), self.action_help)
         yield SystemCommand(
             "Log", "the console's log and driver messages (ctrl+l)", self.action_log
         )

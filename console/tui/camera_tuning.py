@@ -10,6 +10,7 @@ from textual import work
 
 from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
+from console.tui.lapse import lapse_on_change
 from console.tui.text import escape
 from console.tui.units import control_words
 from console.tui.util import from_thread, short_path
@@ -71,7 +72,20 @@ class CameraTuningMixin:
         except UserError as exc:
             from_thread(self.app, self.say, f"W: {exc}", "warning")
             return
-        from_thread(self.app, self.say, f"vision settings kept in {short_path(path)}")
+        from_thread(self.app, self._said_kept, short_path(path))
+
+    def _said_kept(self, where: str) -> None:
+        """``vision settings kept in ...``: true until a setting changes (``t``, ``h``,
+        ``+`` ...): the line then says they changed since, not a save they no longer are."""
+        svc = self.service
+        self.say(f"vision settings kept in {where}")
+        shown = self._status_shown
+        then = f"vision settings changed since kept in {where}: W keeps these"
+
+        def tuning() -> tuple:
+            return svc.params(), svc.control_values()
+
+        lapse_on_change(self, shown, shown(), self.say, tuning, then=then)
 
     def settings_lines(self, svc) -> list[str]:
         """The side panel's settings (``▸`` the chosen one), switches and keys."""

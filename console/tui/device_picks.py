@@ -14,6 +14,7 @@ from textual.widgets import DataTable
 from console.config.profile import load_profile, overrides_path, save_overrides
 from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
+from console.tui.lapse import lapse_on_change
 from console.tui.util import from_thread, short_path
 
 
@@ -82,9 +83,20 @@ class DevicePicksMixin:
                 "then press l",
                 severity="warning",
             )
+            self._while_on_row(event.data_table, key)
             return
         if self._asked(event, key, what := f"relay board {driver!r}"):
             self._apply({"relays.driver": driver}, what)
+
+    def _while_on_row(self, table: DataTable, key: str) -> None:
+        """The line just said about row ``key`` of ``table`` (a board that cannot be
+        opened) goes once the operator moves on (the cursor leaves the row, the list its
+        focus: another list or screen) or a listing (``l``) finds the board otherwise."""
+
+        def where() -> tuple:
+            return table.has_focus, table.cursor_row, self.unusable_boards.get(key)
+
+        lapse_on_change(self, lambda: self.result, self.result, self._show_result, where)
 
     def _asked(self, event: DataTable.RowSelected, key: str, what: str) -> bool:
         """Whether Enter on row ``key`` uses ``what`` now: the one in use (●) changes

@@ -1,13 +1,15 @@
 """A status line says what is true now: a line that is true only for a while leaves it
 when that while ends.
 
-Two kinds of such lines, one mechanism (``lapse``):
+Three kinds of such lines, one mechanism (``lapse``):
 
 - a question with a time limit ("m again within 5 s ..."): it lapses ``after_s`` seconds
   after it was asked;
 - a line true only while a condition holds ("refused: P01's study run holds the
   outputs"): re-checked every ``every_s`` seconds while it is shown (and only then: a
-  line no longer shown stops the checks), it lapses once the condition is false.
+  line no longer shown stops the checks), it lapses once the condition is false;
+- a line about a state ("vision settings kept in ...", "subjects 'abc': give a whole
+  number"): it lapses once that state changes (``lapse_on_change``).
 
 When it lapses, and only if the line still shows the same text (a newer message keeps
 its line), ``replace`` puts what is true now in its place ("" clears it).
@@ -55,6 +57,22 @@ def lapse(
     if ends_s is not None and while_true is not None:
         step = min(every_s, after_s)
     timer = owner.set_interval(step, check)
+
+
+def lapse_on_change(
+    owner: Widget,
+    shown: Callable[[], str],
+    text: str,
+    replace: Callable[[str], None],
+    state: Callable[[], object],
+    then: str = "",
+) -> None:
+    """A line ``text`` about a state (``state()``, compared with ``==``: settings, a
+    field's verdict, the row a cursor is on) lapses once that state is no longer what it
+    was when the line was said: ``replace(then)`` says what is true then ("vision
+    settings kept in ..." after a setting changed, a field's refusal once it reads)."""
+    was = state()
+    lapse(owner, shown, text, replace, while_true=lambda: state() == was, then=then)
 
 
 HELD_ENDED = "the run that held the outputs has ended: plays work again"

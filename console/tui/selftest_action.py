@@ -17,6 +17,7 @@ from typing import Any
 
 from console.core.errors import EStopLatched, SafetyRefusal, UserError
 from console.core.types import DeviceStatus
+from console.session.events import ESTOP_FIX, estop_refusal
 from console.tui.time_left import left_words
 
 NO_PLUGIN = "self-test: no plugin offers it (the vibrotactile plugin does)"
@@ -91,12 +92,25 @@ def selftest_progress(gone_s: float, total_s: float, est: tuple[float, int, bool
 
 
 def selftest_row(
-    done: tuple[bool, str, float] | None, last: dict[str, dict[str, str]] | None = None
+    done: tuple[bool, str, float] | None,
+    last: dict[str, dict[str, str]] | None = None,
+    stopped: str = "",
 ) -> DeviceStatus:
     """The Devices doctor's self-test row, saying what ran: the full one run here
     (``done``: healthy, line, seconds), else the last kept (``last``:
     ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
-    else where to run it (``haptable doctor`` runs its quick part; here s the full one)."""
+    else where to run it (``haptable doctor`` runs its quick part; here s the full one).
+    ``stopped``: the last run here was stopped before its end (when, by what): the row
+    says so first, the last whole run's outcome after it (it is no longer the news)."""
+    if stopped:
+        before = selftest_row(done, last)
+        was = (
+            f"; the last whole one: {before.state} {before.why}"
+            if before.state != "not run"
+            else ""
+        )
+        why = f"the last run stopped before its end ({stopped}){was}"
+        return DeviceStatus("selftest", "full", "stopped", why, "s runs it again (ctrl+r first)")
     last = last or {}
     full, quick = last.get("full"), last.get("quick")
     if done is None and full is not None:  # a full one kept from before
@@ -123,10 +137,15 @@ def run_selftest(profile: Any, pm: Any) -> tuple[bool | None, str]:
         return False, NO_PLUGIN
     try:
         code, report = _run(profile, pm, ["--json"])
-    except (EStopLatched, SafetyRefusal) as exc:
+    except EStopLatched as exc:  # the console's words: its key first, not the CLI's
+        return None, f"self-test {estop_refusal(exc.why)}"
+    except SafetyRefusal as exc:
         said = " ".join(str(exc).split())
         if ": stopped: " in said or said.startswith("stopped: "):  # under way: stopped
             return None, f"self-test stopped before its end ({said})"
+        at, end = said.find("e-stop active ("), said.rfind("; reset")
+        if at >= 0:  # the kernel's "reset it first": the console's key instead
+            return None, f"self-test refused: {said[at : end if end > at else None]}, {ESTOP_FIX}"
         return None, f"self-test refused: {said}"
     except UserError as exc:
         return False, f"self-test: {exc}"

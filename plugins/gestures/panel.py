@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +30,7 @@ from console.plugin_api.tui import (
     SafetyBar,
     escape,
     from_thread,
+    lapse_on_change,
     said_here,
     short_path,
 )
@@ -370,11 +372,33 @@ class GesturesPanel(Screen):
         return Path(ds).expanduser(), Path(model).expanduser()
 
     # ------------------------------------------------------------------ actions
+    def refuse(self, exc: UserError, fields: Callable[[], object]) -> None:
+        """A field's refusal on the work line, true while ``fields()`` refuses the same:
+        once the fields read (or refuse otherwise) the line says that instead."""
+        text = str(exc)
+        self.work.error(text)
+
+        def verdict() -> str:
+            try:
+                fields()
+            except UserError as now:
+                return str(now)
+            return ""
+
+        def now_true(_then: str) -> None:
+            said = verdict()
+            if said:
+                self.refuse(UserError(said), fields)
+            else:
+                self.work.show(self.work.idle_text)
+
+        lapse_on_change(self, lambda: self.work.text, text, now_true, verdict)
+
     def action_refresh(self) -> None:
         try:
             ds, model = self.paths()
         except UserError as exc:
-            self.work.error(str(exc))
+            self.refuse(exc, self.paths)
             return
         self.query_one("#gp-files", Static).update("reading the files ...")
         self.run_worker(lambda: self._describe(ds, model), thread=True, group="gp-files")
@@ -398,11 +422,9 @@ class GesturesPanel(Screen):
         then ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis,
         which does what was said (a folder changed since: nothing, and it says so)."""
         try:
-            ds, _ = self.paths()
-            subjects = count(self.field("subjects"), "subjects", 1, 50)
-            reps = count(self.field("reps"), "reps", 1, 500)
+            ds, subjects, reps = self._synth_fields()
         except UserError as exc:
-            self.work.error(str(exc))
+            self.refuse(exc, self._synth_fields)
             return
         if self.work.busy:  # its own line says it (console.tui.said: one place)
             self.work.say_busy()
@@ -443,6 +465,12 @@ class GesturesPanel(Screen):
             cancelled_says=_CANCELLED_KEPT["synth"],
         )
 
+    def _synth_fields(self) -> tuple[Path, int, int]:
+        """(dataset, subjects, reps) as typed, or a ``UserError`` naming the field."""
+        ds, _ = self.paths()
+        subjects = count(self.field("subjects"), "subjects", 1, 50)
+        return ds, subjects, count(self.field("reps"), "reps", 1, 500)
+
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
         ds, subjects, reps = asked
 
@@ -466,12 +494,9 @@ class GesturesPanel(Screen):
     def action_train(self) -> None:
         self._synth_asked = None  # another action: the estimate's s-again lapses
         try:
-            ds, model = self.paths()
-            cv = self.field("cv").strip().lower()
-            if cv not in ("2fold", "loso"):
-                raise UserError(f"cv {cv!r}: use 2fold (as in the paper) or loso")
+            ds, model, cv = self._train_fields()
         except UserError as exc:
-            self.work.error(str(exc))
+            self.refuse(exc, self._train_fields)
             return
         if not ds.is_dir():
             self.work.error(f"dataset {short_path(ds)}: none yet, s synthesizes one")
@@ -508,6 +533,14 @@ class GesturesPanel(Screen):
         self._clear_result()
         t0 = time.monotonic()
         self.work.start("training", job, summary, cancelled_says=_CANCELLED_KEPT["train"])
+
+    def _train_fields(self) -> tuple[Path, Path, str]:
+        """(dataset, model, cv) as typed, or a ``UserError`` naming the field."""
+        ds, model = self.paths()
+        cv = self.field("cv").strip().lower()
+        if cv not in ("2fold", "loso"):
+            raise UserError(f"cv {cv!r}: use 2fold (as in the paper) or loso")
+        return ds, model, cv
 
     def _final_fit_paced(self, progress):
         """``progress`` that, at the fit on every sample (a step with no report of its

@@ -56,7 +56,7 @@ from console.plugin_api.tui import (
     status_said,
 )
 
-from . import adaptive_console, panel_choice, panel_fit, panel_status
+from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .answer_hold import HeldAnswer
@@ -119,9 +119,12 @@ class StudiesPane(HeldAnswer, Vertical):
     BINDINGS = [
         Binding("s", "start", "start"),
         Binding("p", "pause", "pause"),
-        Binding("r", "replay", "replay", show=False),
+        Binding("p", "resume", "resume"),  # in its place while paused (``check_action``)
+        Binding("r", "replay", "replay"),  # in the footer while a run goes
+        Binding("r", "replay_idle", show=False),  # else (``check_action``): says why not
         Binding("a", "abort", "abort"),
-        Binding("n", "analyse", "analyse"),
+        Binding("n", "analyse", "analyse"),  # in the footer while no run goes
+        Binding("n", "analyse_in_run", show=False),
         Binding("t", "toggle_view", "view"),
         Binding("o", "toggle_notes", "notes", show=False),
         Binding("left_square_bracket", "track(-1)", "track", show=False),
@@ -226,10 +229,19 @@ class StudiesPane(HeldAnswer, Vertical):
         yield AdaptiveView(id="study-plot")
 
     def check_action(self, action: str, parameters: tuple) -> bool:
-        """At 80 columns the footer has room for ``]`` (an adaptive protocol's tracks) or
-        ``n`` (a fixed plan's analysis; an adaptive protocol has none)."""
-        if action not in ("track", "analyse") or not self.query("#protocol"):
+        """``p`` says what it does now (``pause``, or ``resume`` while paused). At 80
+        columns the footer has room for ``]`` (an adaptive protocol's tracks) or ``n``
+        (a fixed plan's analysis; an adaptive protocol has none), and for ``r`` (while a
+        run goes) or ``n`` (while none does)."""
+        if action in ("pause", "resume"):
+            return panel_run_keys.p_does(self) == action
+        running = self.running is not None
+        if action in ("replay", "replay_idle"):  # r where it replays, else quietly
+            return running == (action == "replay")
+        if action not in ("track", "analyse", "analyse_in_run") or not self.query("#protocol"):
             return True
+        if action != "track" and running == (action == "analyse"):
+            return False  # n in the footer while no run goes (r takes its place)
         return (action == "track") == adaptive_console.is_adaptive(str(self._value("protocol")))
 
     def focus(self, scroll_visible: bool = True):
@@ -344,36 +356,18 @@ class StudiesPane(HeldAnswer, Vertical):
             self.focus()
 
     def action_pause(self) -> None:
-        c = self.control
-        if c is None or self.running is None:
-            self._say("p: no study running to pause (s starts one)", "warning")
-            return
-        if c.paused:
-            c.resume()
-            if self.last.get("state", "").startswith("paused"):
-                self.last["state"] = "resuming"
-            self.said = ("resumed", "information")
-        else:
-            c.pause()
-            self.said = ("pausing after this trial (p resumes)", "information")
-        self._show()
+        panel_run_keys.pause(self)
+
+    def action_resume(self) -> None:
+        """``p`` while paused (the footer says ``p resume``)."""
+        panel_run_keys.pause(self)
 
     def action_replay(self) -> None:
-        """``r``: replay the stimulus waiting for an answer, or say why not (one line)."""
-        waiting = bool(self.asking and "trial" in self.asking)
-        if self.running is None:
-            self._say("r: no study running, nothing to replay", "warning")
-        elif self.control is not None and self.control.paused and not waiting:
-            self._say("r: paused, no stimulus waits for an answer (p resumes)", "warning")
-        elif self.responder is None:
-            self._say(
-                "r: a simulated participant answers by itself and asks for no replay", "warning"
-            )
-        elif waiting:
-            self.responder.put(Answer(replay=True))
-            self._say("r: replaying the stimulus")
-        else:
-            self._say("r: no stimulus is waiting for an answer", "warning")
+        panel_run_keys.replay(self)
+
+    def action_replay_idle(self) -> None:
+        """``r`` while no run goes (not in the footer): says there is nothing to replay."""
+        panel_run_keys.replay(self)
 
     def action_abort(self) -> None:
         """``a`` (or Abort): the first asks on the status line, a second within
@@ -391,6 +385,10 @@ class StudiesPane(HeldAnswer, Vertical):
         self.abort_until, self.said = now + CONFIRM_S, ("", "information")  # the question
         self._show()
         self.set_timer(CONFIRM_S + 0.05, self._show)  # the question goes when it expires
+
+    def action_analyse_in_run(self) -> None:
+        """``n`` while a run goes (not in the footer: ``r`` is)."""
+        self.action_analyse()
 
     def action_analyse(self) -> None:
         study = self._value("protocol")
@@ -518,11 +516,13 @@ class StudiesPane(HeldAnswer, Vertical):
             return
         if isinstance(ev, Started):
             self.running = self.last["pid"] = ev.name
+            self.refresh_bindings()  # p pauses it
             self._status(f"{escape(ev.name)}: {escape(ev.detail)}")
         elif isinstance(ev, Snapshot):
             self._snapshot(ev.data)
         elif isinstance(ev, Stopped):
             self.running = None
+            self.refresh_bindings()  # p: pause, nothing paused any more
             self.asking = None
             self.abort_until = None
             self.last["pid"] = ev.name

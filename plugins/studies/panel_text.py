@@ -145,6 +145,7 @@ def status_lines(
     elif not running and L.get("stopped"):
         error = L.get("error")
         ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
+        ended = f"{who}'s run {ended}"  # whose, on the line itself (the head may scroll)
         if error and error == L["stopped"]:  # a failure: its reason once, in red
             lines.append(f"[red]{escape(ended)}: {escape(error)}[/]")
         else:

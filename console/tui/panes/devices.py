@@ -22,7 +22,7 @@ from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
 from console.runtime.selftest_last import note_last, read_last
-from console.session.events import ESTOP_FIX, Started, Stopped
+from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
 from console.tui.device_cells import PROBLEMS, ROW_LINES, cell, cell_lines
@@ -152,6 +152,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self.doctor_rows: list[DeviceStatus] = []  # the doctor's rows, as shown
         #: the self-test's row: its last run here (None: not run), its seconds then
         self.selftest_done: tuple[bool, str, float] | None = None
+        #: the last run here stopped before its end: when and by what ("" : it was not)
+        self.selftest_stopped = ""
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         #: the self-test's start (monotonic s), seconds expected and estimate, for ticks
         self._selftest_clock: tuple[float, float, Any] = (0.0, 0.0, None)
@@ -300,7 +302,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
-        self.doctor_rows = rows = [*rows, selftest_row(self.selftest_done, last)]
+        row = selftest_row(self.selftest_done, last, self.selftest_stopped)
+        self.doctor_rows = rows = [*rows, row]
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
@@ -548,7 +551,10 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         path), ``s`` again within 3 s runs it; during an e-stop it is refused at once
         (nothing to ask)."""
         out = self.app.session.outputs
-        if (out is not None and out.estopped) or self.ask.confirmed("selftest"):
+        if out is not None and out.estopped:  # nothing to ask: the console's key first
+            self._show_result(f"self-test {estop_refusal(out.estop_reason or '')}", error=True)
+            return
+        if self.ask.confirmed("selftest"):
             self._selftest()
             return
         last_s = self.selftest_done[2] if self.selftest_done else 0.0
@@ -594,16 +600,22 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if self._selftest_timer is not None:
             self._selftest_timer.stop()
             self._selftest_timer = None
-        if ok is None:  # refused or stopped (the e-stop): the row keeps the last result
+        if ok is None:  # refused (the row keeps the last result) or stopped under way
             out = self.app.session.outputs
+            at = time.strftime("%H:%M:%S")
             if out is not None and out.estopped and not self._estopped_at_start:
                 # under way when the e-stop came: stopped, not refused; the reset's line
                 # replaces this one (``_says_estop``)
                 line = f"self-test stopped by the e-stop before its end; {ESTOP_FIX}, then s"
                 line += " runs it again"
+                self.selftest_stopped = f"by the e-stop at {at}"
+            elif line.startswith("self-test stopped"):
+                self.selftest_stopped = f"at {at}: {line.split('(', 1)[-1].rstrip(')')}"
+            if self.selftest_stopped and self.doctor_rows:  # the row says it too: its
+                self._show(self.doctor_rows[:-1])  # last outcome is not this run's
             self._show_result(line, error=True)
             return
-        self.selftest_done = (ok, line, took_s)
+        self.selftest_done, self.selftest_stopped = (ok, line, took_s), ""
         self._show_result(line, error=not ok)
         if self.doctor_rows:  # its row in the devices table says it too
             self._show(self.doctor_rows[:-1])
