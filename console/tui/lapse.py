@@ -10,7 +10,9 @@ Two kinds of such lines, one mechanism (``lapse``):
   line no longer shown stops the checks), it lapses once the condition is false.
 
 When it lapses, and only if the line still shows the same text (a newer message keeps
-its line), ``replace`` puts what is true now in its place ("" clears it).
+its line), ``replace`` puts what is true now in its place ("" clears it). A question is
+scrolled into view as it is asked (``question_in_view``): a screen left scrolled down
+and shown again by the key that asks (the palette's "Measure vibration map") hid it.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import time
 from collections.abc import Callable
 
 from textual.widget import Widget
+from textual.widgets import Static
 
 #: how often a conditional line is re-checked while it is shown
 RECHECK_S = 0.5
@@ -51,10 +54,27 @@ def lapse(
             timer.stop()
             replace(then)
 
+    if while_true is None:  # a question: the operator answers what they see
+        owner.call_after_refresh(question_in_view, owner, text)
     step = every_s if while_true is not None else after_s
     if ends_s is not None and while_true is not None:
         step = min(every_s, after_s)
     timer = owner.set_interval(step, check)
+
+
+def question_in_view(owner: Widget, text: str, tries: int = 20) -> None:
+    """The line under ``owner`` that shows ``text`` (its words, however wrapped) scrolled
+    into view in every container that scrolls it; ``owner`` not laid out on screen yet
+    (a screen being switched to): once it is, within ``tries`` refreshes."""
+    if not owner.region:
+        if tries > 0:
+            owner.call_after_refresh(question_in_view, owner, text, tries - 1)
+        return
+    words = " ".join(text.split())
+    for line in owner.query(Static):
+        if line.display and words in " ".join(str(line.content).split()):
+            line.scroll_visible(animate=False, immediate=True)
+            return
 
 
 HELD_ENDED = "the run that held the outputs has ended: plays work again"
