@@ -31,7 +31,7 @@ from console.tui.logs import (
     release_logs,
     view_handler,
 )
-from console.tui.menus import close_menus
+from console.tui.menus import close_menus, menu_above
 from console.tui.narrow import ConsoleFooter, fit_tab_bar, types_every_key
 from console.tui.palette import SafetyPalette, console_system_commands
 from console.tui.panels import LeavesForScreen
@@ -208,6 +208,13 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         # Textual hands the focus of a widget being hidden to a sibling, which can be in
         # the same hidden pane: each move of the focus is checked (no polling)
         self.watch(self.screen, "focused", self._keep_focus_visible, init=False)
+        # an open menu takes the focus: it ends above the safety bar (``console.tui.menus``)
+        self.watch(
+            self.screen,
+            "focused",
+            lambda f: menu_above(f, self.base.query_one(SafetyBar)),
+            init=False,
+        )
         # after the first paint: the outputs' imports and threads must not delay it
         self.call_after_refresh(self._open_outputs)
         self.live.watch.start()  # the bar and the screens hear of changes only

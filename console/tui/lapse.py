@@ -12,7 +12,9 @@ Three kinds of such lines, one mechanism (``lapse``):
   number"): it lapses once that state changes (``lapse_on_change``).
 
 When it lapses, and only if the line still shows the same text (a newer message keeps
-its line), ``replace`` puts what is true now in its place ("" clears it).
+its line), ``replace`` puts what is true now in its place ("" clears it). A question is
+scrolled into view as it is asked (``question_in_view``): a screen left scrolled down
+and shown again by the key that asks (the palette's "Measure vibration map") hid it.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import time
 from collections.abc import Callable
 
 from textual.widget import Widget
+from textual.widgets import Static
 
 #: how often a conditional line is re-checked while it is shown
 RECHECK_S = 0.5
@@ -53,6 +56,8 @@ def lapse(
             timer.stop()
             replace(then)
 
+    if while_true is None:  # a question: the operator answers what they see
+        owner.call_after_refresh(question_in_view, owner, text)
     step = every_s if while_true is not None else after_s
     if ends_s is not None and while_true is not None:
         step = min(every_s, after_s)
@@ -73,6 +78,21 @@ def lapse_on_change(
     settings kept in ..." after a setting changed, a field's refusal once it reads)."""
     was = state()
     lapse(owner, shown, text, replace, while_true=lambda: state() == was, then=then)
+
+
+def question_in_view(owner: Widget, text: str, tries: int = 20) -> None:
+    """The line under ``owner`` that shows ``text`` (its words, however wrapped) scrolled
+    into view in every container that scrolls it; ``owner`` not laid out on screen yet
+    (a screen being switched to): once it is, within ``tries`` refreshes."""
+    if not owner.region:
+        if tries > 0:
+            owner.call_after_refresh(question_in_view, owner, text, tries - 1)
+        return
+    words = " ".join(text.split())
+    for line in owner.query(Static):
+        if line.display and words in " ".join(str(line.content).split()):
+            line.scroll_visible(animate=False, immediate=True)
+            return
 
 
 HELD_ENDED = "the run that held the outputs has ended: plays work again"

@@ -129,6 +129,7 @@ class ElectrostaticPane(Vertical):
             "t: waveform   p: play the setting",
             markup=False,
             classes="hint",
+            id="es-keys",
         )
         yield Static("", id="es-status", markup=False)
 
@@ -343,6 +344,28 @@ class ElectrostaticPane(Vertical):
             status_said(found.first(Static), "Electrostatic", text, "error" if error else "")
             # a refusal because a run holds the outputs leaves the line when the run ends
             lapse_if_held(self, self.app.session, lambda: self.status_text, text, self.say)
+            self.call_after_refresh(self._status_whole)
+
+    #: the rows the list and the setting take at most (the list's border included)
+    TOP_ROWS = 16
+    #: ... and the list alone
+    LIST_ROWS = 14
+
+    def _status_whole(self) -> None:
+        """The status line keeps its rows whole (a long e-stop reason ends with its fix,
+        ``close other programs before resetting``): the list and the setting above it
+        give way, down to 3 rows (the list scrolls within itself, its highlighted item
+        in view), and take their rows back once the line is shorter."""
+        found = self.query("#es-top")
+        if not found:
+            return
+        below = sum(self.query_one(f"#es-{n}").outer_size.height for n in ("keys", "status"))
+        rows = max(3, min(self.TOP_ROWS, self.size.height - below))
+        found.first().styles.max_height = rows
+        self.query_one("#es-list").styles.max_height = min(rows, self.LIST_ROWS)
+
+    def on_resize(self, _event) -> None:
+        self.call_after_refresh(self._status_whole)
 
     def on_session_message(self, message: SessionMessage) -> None:
         """A reset clears what the line said the e-stop did (a refusal, a stopped play)."""
