@@ -14,10 +14,13 @@ also tested on its held-out subject under the shifted light (split by whether to
 skin clips at the sensor's maximum); leave-one-condition-out and light transfer between
 sessions; LOSO accuracy against the frames a decision is made from and against the
 Fourier harmonics; 2-fold accuracy against added image noise; cross-renderer transfer
-(``renderer_transfer.cross_renderer``: trained on the twin with domain randomisation,
-tested on the phalanx renderer at x0.7, x1.0 and x1.3 light, and back; per decision
-window of 2 to 6 frames, with the test set's clipped share; rendered in memory, 2
-subjects x 2 repetitions with ``--quick``, else 3 x 3).
+(``renderer_transfer.cross_renderer``: trained on a domain-randomised set of the twin,
+5 subjects x 10 repetitions as ``synth --randomise`` makes them, tested on the phalanx
+and silhouette renderers at x0.7, x1.0 and x1.3 light, and trained on the phalanx
+renderer the same way, tested on the twin and the silhouette renderer; per decision
+window of 2 to 6 frames, with the test set's clipped share and the time it took;
+rendered in memory on every core, test sets 3 subjects x 6 repetitions; with
+``--quick`` 2 x 3 and 2 x 2).
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from .background import illumination, subtract
 from .dataset import load_dataset
 from .feature_set import FeatureSet
 from .features import N_HARMONICS_MAX, record_features, sample_records
-from .renderer_transfer import cross_renderer
+from .renderer_transfer import TEST_SIZE, TRAIN_SIZE, cross_renderer
 from .segmentation import relative_body
 from .selection import condition_report
 from .sketch import STATIC
@@ -204,7 +207,10 @@ def run_benchmark(ctx, quick: bool) -> dict:
                 by_noise.append({"noise_sigma": sigma, **_noisy_accuracy(sub, params, sigma)})
             conds = {s.name: s.meta for s in samples}
             by_condition = condition_report(fs, conds)
-            cross = cross_renderer(2 if quick else 3, 2 if quick else 3)
+            cross = cross_renderer(
+                (2, 3) if quick else TRAIN_SIZE, (2, 2) if quick else TEST_SIZE,
+                workers=os.cpu_count() or 1,
+            )  # fmt: skip
     finally:
         cv2.setNumThreads(threads)
     return {

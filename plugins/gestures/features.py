@@ -324,15 +324,18 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 def select_kind(x: np.ndarray) -> np.ndarray:
     """What the static/dynamic classifier sees, from (n, N_MOTION) motion rows: the
     touching skin's motion in mm (``physical.physical_motion``) but how many tracks moved
-    beyond the tremor floor (a count at a hard threshold: a model trained on fast
-    starts learns "moving means at least one", and slow starts on another table fall
-    below it; it tells gestures apart, not whether there is one); motion measured in
+    beyond the tremor floor and the ranks of the fingertips' displacements (a count at a
+    hard threshold: a model trained on fast starts learns "moving means at least one",
+    and slow starts on another table fall below it; they tell gestures apart, not
+    whether there is one); motion measured in
     the hand's own scale depends on how much of its hovering palm is seen."""
     return np.delete(motion_view(np.atleast_2d(x)[:, 22:N_MOTION]), _COUNTS, axis=1)
 
 
-#: counts of fingertips that tell gestures apart, not whether there is one
-_COUNTS = [MOTION_NAMES.index("tracks_moving"), MOTION_NAMES.index("tips_met")]
+#: counts and ranks of fingertips that tell gestures apart, not whether there is one
+_COUNTS = [
+    MOTION_NAMES.index(k) for k in ("tracks_moving", "tips_met", "track_d2_mm", "track_d3_mm")
+]
 
 
 def sample_records(

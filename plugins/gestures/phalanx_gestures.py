@@ -4,7 +4,11 @@ Static gestures: a resting hand with a small tremor. Dynamic ones: the motion ov
 frames (drag: one finger sliding; rotate: thumb and index turning about their midpoint;
 spread_pile: five tips spreading or gathering; wipe: a flat hand sweeping; zoom: thumb
 and index moving apart or together). Every take draws its place, approach side, speed,
-direction and a little pose jitter from a generator.
+direction and a little pose jitter from a generator. Two more of a take's ways are left
+at their plain values unless given (domain randomisation): ``ease_s`` starts its motion
+from rest, reaching its speed with that time constant (``eased_s``), as a person starting
+a gesture slowly does; ``pivot`` is where a rotate turns about, along the line from the
+thumb's tip (0) to the index's (1; 0.5 the midpoint, the plain take).
 """
 
 from __future__ import annotations
@@ -39,6 +43,16 @@ class Take:
     direction: float  # deg (drag, wipe) or +-1 (rotate, zoom, spread_pile)
     start: float  # starting pose fraction (zoom, spread_pile)
     jitter: tuple[float, ...]
+    ease_s: float = 0.0  # time constant of the start from rest (0: full speed at once)
+    pivot: float = 0.5  # a rotate's pivot from the thumb's tip (0) to the index's (1)
+
+
+def eased_s(t_s: float, ease_s: float) -> float:
+    """Motion time at ``t_s`` of a start from rest whose velocity grows as
+    ``1 - exp(-t / ease_s)`` (its integral; ``t_s`` itself for ``ease_s`` 0)."""
+    if ease_s <= 0:
+        return t_s
+    return t_s - ease_s * (1.0 - math.exp(-t_s / ease_s))
 
 
 def _curled(j: float) -> Finger:
@@ -172,7 +186,7 @@ def take_poses(take: Take, subject: Subject, n: int, rng: np.random.Generator) -
     k = PX_PER_MM * s.size
     poses = []
     for i in range(n):
-        t = i / FPS
+        t = eased_s(i / FPS, take.ease_s)
         if g in STATIC:
             palm, fingers = static_pose(g, s, j)
             pose = Pose(tuple(c0), take.angle_deg, palm, fingers)
@@ -190,7 +204,8 @@ def take_poses(take: Take, subject: Subject, n: int, rng: np.random.Generator) -
         elif g == "rotate":
             fingers = pinch(0.75 + 0.1 * j[2], j)
             pose = Pose(tuple(c0), take.angle_deg, (22.0 + 3 * j[0]) * s.hover, fingers)
-            pivot = 0.5 * (_tip_px(pose, s, 0) + _tip_px(pose, s, 1))
+            thumb, index = _tip_px(pose, s, 0), _tip_px(pose, s, 1)
+            pivot = thumb + take.pivot * (index - thumb)
             w = take.direction * take.speed * t
             pose = replace(
                 pose,
@@ -212,4 +227,4 @@ def tremble(pose: Pose, s: Subject, k: float, rng: np.random.Generator) -> Pose:
     return Pose(tuple(c), pose.angle_deg + float(rng.normal(0, 0.25)), pose.palm_mm, fingers)
 
 
-__all__ = ["DYNAMIC", "STATIC", "Take", "plan_take", "take_poses"]
+__all__ = ["DYNAMIC", "STATIC", "Take", "eased_s", "plan_take", "take_poses"]

@@ -15,6 +15,7 @@ import json
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
@@ -61,10 +62,14 @@ def render_sample(
     *,
     n_frames: int | None = None,
     light_scale: float = 1.0,
+    ease_s: float = 0.0,
+    pivot: float = 0.5,
 ) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(frames, background, truth) of one performance."""
+    """(frames, background, truth) of one performance; ``ease_s``: its motion starts
+    from rest with this time constant (``phalanx_gestures.eased_s``); ``pivot``: a
+    rotate's, from the thumb's tip (0) to the index's (1)."""
     n = n_frames or (STATIC_FRAMES if gesture in STATIC else DYNAMIC_FRAMES)
-    take = plan_take(gesture, subject, rng)
+    take = replace(plan_take(gesture, subject, rng), ease_s=ease_s, pivot=pivot)
     poses = take_poses(take, subject, n, rng)
     frames = render(poses, subject, optics, light_scale, rng)
     bg = background(optics, light_scale, rng)

@@ -7,7 +7,9 @@ the independent phalanx renderer), for cross-renderer checks without writing a d
 clipped share of touching skin in ``meta["clipped_share"]``. ``randomise``: domain
 randomisation as ``synth --randomise`` draws it (``augment.wide_condition``: light
 x0.5-1.6 clipping at 255, LED lobes, defocus, gamma, read noise, hand size and finger
-widths, hover heights); the phalanx renderer gets the light and the image-level part.
+widths, hover heights, how gently a motion starts); the phalanx renderer gets the light,
+the image-level part, the slow starts (``PHALANX_EASE_S`` x the condition's ``ease``)
+and a rotate's pivot anywhere from the thumb's tip to the index's (``phalanx_style``).
 Seeded per sample: the same seed at x0.7, x1.0 and x1.3 gives the same performances.
 """
 
@@ -30,6 +32,21 @@ from .vision import VisionParams
 RENDERERS = ("twin", "phalanx", "silhouette")
 #: frames per sample (a decision is made from the first 2 .. 6)
 N_FRAMES = 6
+#: a randomised phalanx take's start from rest: this time constant (s) x the wide
+#: condition's ``ease`` (0-1.3): 0-65 ms, a little beyond the twin's people (15-50 ms x
+#: 0.7-1.3); without it every phalanx motion is at full speed from the first frame and a
+#: model trained on them reads the twin's slow starts as static (dynamic 0.84 at 4 frames)
+PHALANX_EASE_S = 0.05
+_STYLE_KEY = 5381
+
+
+def phalanx_style(seed: int, subject: int, gesture: int, rep: int, ease: float) -> dict:
+    """A randomised phalanx take's motion style: ``ease_s`` (``PHALANX_EASE_S`` x the wide
+    condition's ``ease``) and a rotate's ``pivot`` (0 thumb .. 1 index, uniform: people
+    turn about the thumb, as the paper's knob gesture, or about the middle), drawn from
+    its own seed so the takes' other draws stay as they were."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, subject, gesture, rep, _STYLE_KEY]))
+    return {"ease_s": PHALANX_EASE_S * float(ease), "pivot": float(rng.uniform(0.0, 1.0))}
 
 
 def _twin_samples(
@@ -95,13 +112,14 @@ def _phalanx_samples(
                 rng = np.random.default_rng(
                     np.random.SeedSequence([seed, si, gi, rep, _SAMPLE_KEY])
                 )
-                light = light_scale
+                light, style = light_scale, {}
                 cond = None
                 if randomise:
                     cond = wide_condition(seed + 1, si, gi, rep)
                     light = cond["illumination"] * light_scale
+                    style = phalanx_style(seed, si, gi, rep, cond["hand"]["ease"])
                 frames, bg, _ = render_sample(
-                    gesture, subject, optics, rng, n_frames=N_FRAMES, light_scale=light
+                    gesture, subject, optics, rng, n_frames=N_FRAMES, light_scale=light, **style
                 )
                 if cond is not None:
                     frames, bg = augment_sample(frames, bg, cond["augment"], rng)
