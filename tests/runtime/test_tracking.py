@@ -127,3 +127,36 @@ def test_bench_tracking_sees_one_hand_and_two_fingertips(profile, plugins):
     # the tracked centre is steadier than the palm centre it replaces for tracking
     assert rest["tracked_centre_step"]["p99_mm"] < rest["palm_centre_step"]["p50_mm"] + 1.0
     assert out["tracker"]["n"] == out["frames"] > 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_plain_float_tracker_gives_the_numpy_tracker_s_ids_and_positions(seed):
+    # points that wander, cross, vanish for a while and appear: every frame's ids and
+    # every live track the same; positions bit for bit, speeds' changes to the last bits
+    from .plain_tracking import PlainIdTracker
+
+    rng = np.random.default_rng(seed)
+    tr, ref = IdTracker(25.0, grace_frames=3), PlainIdTracker(25.0, 3, 0.5, 0.1)
+    pos = rng.uniform(0, 300, (5, 2))
+    vel = rng.normal(0, 600, (5, 2))
+    paths = 0
+    for k in range(400):
+        t_s = k / 60 + rng.uniform(0, 0.004)  # frame-rate jitter
+        pos += vel / 60 + rng.normal(0, 1.5, (5, 2))
+        shown = rng.random(5) < 0.8
+        pts, angs = pos[shown], rng.uniform(-np.pi, np.pi, shown.sum())
+        got, want = tr.update(t_s, pts, angs), ref.update(t_s, pts, angs)
+        paths += len(got) > 1 and len(tr.tracks) > 1
+        assert [t.id for t in got] == [t.id for t in want]
+        assert sorted(tr.tracks) == sorted(ref.tracks)
+        for a in tr.tracks.values():
+            b = ref.tracks[a.id]
+            assert (a.x, a.y, a.vx, a.vy) == (*b.pos, *b.vel)
+            assert (a.angle, a.rot_vel, a.rot_accel, a.missed) == (
+                b.angle,
+                b.rot_vel,
+                b.rot_accel,
+                b.missed,
+            )
+            assert a.accel == pytest.approx(b.accel, rel=1e-12, abs=1e-9)
+    assert paths > 100  # most frames assign several points among several tracks
