@@ -20,6 +20,7 @@ ids. ``Announcer`` says when a gesture starts (once per hand track and name).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
@@ -80,6 +81,24 @@ def _points(pts: Sequence[Sequence[float]]) -> list[tuple[float, float]]:
     return [(float(p[0]), float(p[1])) for p in pts]
 
 
+def _fewest(d: list[list[float]], live: list[Track], gate: float) -> dict[int, Track]:
+    """``linear_sum_assignment``'s pairing of a few points (rows of ``d``) and tracks
+    (columns), out-of-gate distances costing 1e9, found by trying every one-to-one
+    pairing of the smaller side (at most 3 x 3: six, instead of the solver's call and its
+    arrays); only pairs within the gate are kept."""
+    n, m = len(d), len(d[0])
+    cost = [[v if v <= gate else 1e9 for v in row] for row in d]
+    if n <= m:
+        pairs = [tuple(enumerate(cols)) for cols in itertools.permutations(range(m), n)]
+    else:
+        pairs = [
+            tuple((i, j) for j, i in enumerate(rows))
+            for rows in itertools.permutations(range(n), m)
+        ]
+    best = min(pairs, key=lambda ps: sum(cost[i][j] for i, j in ps))
+    return {i: live[j] for i, j in best if d[i][j] <= gate}
+
+
 class IdTracker:
     """Tracks with ids for points (Hungarian assignment on predicted positions).
 
@@ -137,17 +156,13 @@ class IdTracker:
     def _match(
         self, t_s: float, xy: list[tuple[float, float]], live: list[Track]
     ) -> dict[int, Track]:
-        """Point index -> its track: the least total distance to the tracks' predictions
-        (a track or a point alone: the nearest), within the gate."""
+        """Point index -> its track: the least total distance to the tracks' predictions,
+        within the gate."""
         pred = [tr.predict(t_s) for tr in live]
         d = [[math.hypot(x - px, y - py) for px, py in pred] for x, y in xy]
         gate = self.gate
-        if len(xy) == 1:  # one point: the nearest track
-            j = min(range(len(live)), key=d[0].__getitem__)
-            return {0: live[j]} if d[0][j] <= gate else {}
-        if len(live) == 1:  # one track: the nearest point
-            i = min(range(len(xy)), key=lambda k: d[k][0])
-            return {i: live[0]} if d[i][0] <= gate else {}
+        if len(xy) <= 3 and len(live) <= 3:  # a few: every pairing tried
+            return _fewest(d, live, gate)
         dist = np.array(d)
         cost = np.where(dist <= gate, dist, 1e9)  # out of the gate: only if forced
         rows, cols = linear_sum_assignment(cost)

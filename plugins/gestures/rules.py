@@ -159,7 +159,8 @@ class GestureRules:
         palm = pos
         tracks = work.get("tracks")  # stillness of the tracked centre: the palm's can jump
         if hand is not None and tracks is not None and tracks.in_mm and tracks.hand_tracks:
-            pos = tuple(tracks.hand_tracks[0].pos)
+            tr = tracks.hand_tracks[0]
+            pos = (tr.x, tr.y)
         rest = self.still.update(t, pos)
         settle = self._settle_palm(t, palm)
         if settle is not None:
