@@ -200,6 +200,29 @@ def relative_body(
     smooth_px: int = 5,
     scale_range: tuple[float, float] = (0.3, 2.0),
 ) -> tuple[np.ndarray, Parts | None]:
+    """``body_parts``' mask as the whole frame's (uint8 0/255, 0 outside the parts'
+    window) and the parts."""
+    inside, parts = body_parts(diff, threshold, reference, noise, smooth_px, scale_range)
+    return full_body(inside, parts, diff.shape), parts
+
+
+def full_body(inside: np.ndarray | None, parts: Parts | None, shape: tuple[int, int]) -> np.ndarray:
+    """The frame-sized body mask from ``body_parts``' mask of the parts' window."""
+    body = np.zeros(shape, np.uint8)
+    if parts is not None:
+        x0, y0, x1, y1 = parts.win
+        body[y0:y1, x0:x1] = inside
+    return body
+
+
+def body_parts(
+    diff: np.ndarray,
+    threshold: float,
+    reference: float,
+    noise: float,
+    smooth_px: int = 5,
+    scale_range: tuple[float, float] = (0.3, 2.0),
+) -> tuple[np.ndarray | None, Parts | None]:
     """Hands and forearms with a threshold that follows each part's own light.
 
     The parts are found on the difference image's 4 x 4 block means (cheap, and their
@@ -213,8 +236,8 @@ def relative_body(
     spots, vignetting), so the parts of a hand above the glass keep their extent under
     another light.
 
-    The full-size mask (uint8 0/255) and the parts (None: no hand's part)."""
-    body = np.zeros_like(diff)
+    The mask (uint8 0/255) of the parts' window ``parts.win`` (the body is 0 outside it:
+    no frame-sized mask is made) and the parts; (None, None) without a hand's part."""
     H, W = diff.shape
     b = PART_BLOCK_PX
     hb, wb = H // b, W // b
@@ -225,7 +248,7 @@ def relative_body(
     # (an empty table: its noise stays below) has no hand's part, and its block means
     # need not be made
     if cv2.minMaxLoc(diff)[1] < seed_level:
-        return body, None
+        return None, None
     small = block_means(diff)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)
     n, lab = cv2.connectedComponents(lowm, connectivity=8, ltype=cv2.CV_16U)
@@ -234,7 +257,7 @@ def relative_body(
     # brightest block is one of those (small >= seed_level is small >= its ceiling)
     level = math.ceil(seed_level)
     if level > 255:
-        return body, None
+        return None, None
     seeds = small >= level
     seed_lab = lab[seeds]
     real = np.zeros(n, bool)
@@ -242,7 +265,7 @@ def relative_body(
     real[0] = False
     seeded = np.flatnonzero(real)
     if len(seeded) == 0:
-        return body, None
+        return None, None
     # each part's brightest block (one of its seeds) and the grown parts' box: the parts'
     # boxes, one block wider on each side
     peak = np.zeros(n)
@@ -274,8 +297,7 @@ def relative_body(
     thr[0] = 255
     parts = Parts(win, blocks, scale, peak)
     limit = parts.image(np.minimum(thr, 255).astype(np.uint8), win)
-    body[y0:y1, x0:x1] = cv2.compare(sm, limit, cv2.CMP_GT)
-    return body, parts
+    return cv2.compare(sm, limit, cv2.CMP_GT), parts
 
 
 _BLOCK3 = np.ones((3, 3), np.uint8)

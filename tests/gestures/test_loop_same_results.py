@@ -27,7 +27,7 @@ from plugins.gestures.background import Background
 from plugins.gestures.features import frame_record
 from plugins.recording.decisions import frame_decisions
 
-from .plain_vision import plain_relative_body
+from .plain_vision import plain_body_parts
 from .test_frame_seen_once import NamingModel
 
 #: a resting pose, a slide and a two-finger grip, an empty table before each
@@ -74,7 +74,7 @@ def plain_centroid(contour_px):
 
 
 def _plain(monkeypatch) -> None:
-    monkeypatch.setattr(vision, "relative_body", plain_relative_body)
+    monkeypatch.setattr(vision, "body_parts", plain_body_parts)
     monkeypatch.setattr(rules, "PalmWindow", PlainPalms)
     monkeypatch.setattr(tracking, "outline_centroid", plain_centroid)
     update = Background.update
