@@ -230,6 +230,23 @@ class TrackFrame:
         return min(d)[1]
 
 
+def _renamed(c: Contact, new_id: int) -> Contact:
+    """``dataclasses.replace(c, id=new_id)``; a ``Contact``'s fields written out (a third
+    of ``replace``'s cost, which looks the fields up on every call)."""
+    if type(c) is Contact:
+        return Contact(new_id, c.pos_px, c.pos_mm, c.area_px)
+    return replace(c, id=new_id)
+
+
+def _with_contacts(h: Hand, contacts: tuple[Contact, ...]) -> Hand:
+    """``dataclasses.replace(h, contacts=contacts)``, a ``Hand``'s fields written out."""
+    if type(h) is Hand:
+        return Hand(
+            h.contour_px, h.center_px, h.radius_px, h.angle_deg, h.shape, contacts, h.center_mm
+        )
+    return replace(h, contacts=contacts)
+
+
 class Tracking:
     """Hands and contacts followed with ids (unique across both).
 
@@ -271,10 +288,10 @@ class Tracking:
         htr = self.hands.update(t_s, hpts, [math.radians(h.angle_deg) for h in hands])
         cmm = [c.pos_mm if in_mm and c.pos_mm is not None else c.pos_px for c in contacts]
         ctr = self.contacts.update(t_s, cmm)
-        renamed = {id(c): replace(c, id=tr.id) for c, tr in zip(contacts, ctr, strict=True)}
+        renamed = {id(c): _renamed(c, tr.id) for c, tr in zip(contacts, ctr, strict=True)}
         by_px = {c.pos_px: renamed[id(c)] for c in contacts}  # a hand's contacts are
         hands_out = [  # the frame's blobs (the same pixel position), renamed alike
-            replace(h, contacts=tuple(by_px.get(c.pos_px, c) for c in h.contacts))
+            _with_contacts(h, tuple(by_px.get(c.pos_px, c) for c in h.contacts))
             if h.contacts
             else h
             for h in hands

@@ -108,7 +108,11 @@ class PalmWindow:
         """The mean position of those kept from ``t0_s`` on (NaN when none is)."""
         while self._a < self._b and self._t[self._a] < t0_s:
             self._a += 1
-        return self._xy[self._a : self._b].mean(axis=0)
+        n = self._b - self._a
+        if n == 0:
+            return np.full(2, np.nan)
+        # np.mean's sum and division by the count, without its wrapper's cost
+        return np.add.reduce(self._xy[self._a : self._b], axis=0) / n
 
 
 class GestureRules:

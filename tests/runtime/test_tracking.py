@@ -2,12 +2,21 @@
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
+
 import cv2
 import numpy as np
 import pytest
 
 from console.core.types import Contact, Gesture, Hand, HandShape
-from console.runtime.tracking import Announcer, IdTracker, Tracking, outline_centroid
+from console.runtime.tracking import (
+    Announcer,
+    IdTracker,
+    Tracking,
+    _renamed,
+    _with_contacts,
+    outline_centroid,
+)
 
 
 def test_crossing_points_keep_their_ids_where_greedy_matching_swaps_them():
@@ -160,3 +169,16 @@ def test_the_plain_float_tracker_gives_the_numpy_tracker_s_ids_and_positions(see
             )
             assert a.accel == pytest.approx(b.accel, rel=1e-12, abs=1e-9)
     assert paths > 100  # most frames assign several points among several tracks
+
+
+@pytest.mark.parametrize("cls", [Contact, Hand])
+def test_renaming_keeps_every_field_of_a_contact_and_a_hand(cls):
+    # the renamed copies are written field by field: a field added to the class and
+    # not copied fails here
+    obj = cls(**{f.name: object() for f in fields(cls)})
+    if cls is Contact:
+        got, want = _renamed(obj, 9), replace(obj, id=9)
+    else:
+        got, want = _with_contacts(obj, ("c",)), replace(obj, contacts=("c",))
+    assert type(got) is cls
+    assert all(getattr(got, f.name) is getattr(want, f.name) for f in fields(cls))
