@@ -161,6 +161,8 @@ class IdTracker:
         pred = [tr.predict(t_s) for tr in live]
         d = [[math.hypot(x - px, y - py) for px, py in pred] for x, y in xy]
         gate = self.gate
+        if len(d) == 1 and len(live) == 1:  # one and one: the solver's answer
+            return {0: live[0]} if d[0][0] <= gate else {}
         if len(xy) <= 3 and len(live) <= 3:  # a few: every pairing tried
             return _fewest(d, live, gate)
         dist = np.array(d)
