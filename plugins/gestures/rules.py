@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,14 +59,16 @@ class StillHand:
                 self.reset()
             return None
         self._absent_since = None
-        p = np.asarray(pos_mm, dtype=float)
+        x, y = float(pos_mm[0]), float(pos_mm[1])  # plain floats: a few per frame
         if self._fired_at is not None:
-            if np.hypot(*(p - self._fired_at)) <= self.moved_mm:
+            if math.hypot(x - self._fired_at[0], y - self._fired_at[1]) <= self.moved_mm:
                 return None
             self.reset()
-        if self._hist and np.hypot(*(p - self._hist[0][1])) > self.still_mm:
-            self._hist.clear()  # moving: start over from here
-        self._hist.append((t_s, p))
+        if self._hist:
+            x0, y0 = self._hist[0][1]
+            if math.hypot(x - x0, y - y0) > self.still_mm:
+                self._hist.clear()  # moving: start over from here
+        self._hist.append((t_s, (x, y)))
         if t_s - self._hist[0][0] < self.still_s:
             return None
         pts = np.array([q for _, q in self._hist])
