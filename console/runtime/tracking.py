@@ -190,14 +190,15 @@ def outline_centroid(contour_px: np.ndarray) -> tuple[float, float] | None:
     c = np.asarray(contour_px, float).reshape(-1, 2)
     if len(c) < 3:
         return None
-    x, y = c[:, 0], c[:, 1]
-    # each point's successor (np.roll(x, -1), a tenth of its time on an outline)
-    xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
-    cross = x * yn - xn * y
+    cn = np.concatenate((c[1:], c[:1]))  # each point's successor
+    cross = c[:, 0] * cn[:, 1] - cn[:, 0] * c[:, 1]
     a = cross.sum() / 2.0
     if abs(a) < 1e-9:
         return None
-    return float(((x + xn) * cross).sum() / (6 * a)), float(((y + yn) * cross).sum() / (6 * a))
+    # both moments in one product; on a pixel outline (integers) every sum is exact, so
+    # any order of summing gives the same bits
+    mx, my = (cross @ (c + cn)).tolist()
+    return mx / (6 * a), my / (6 * a)
 
 
 @dataclass(frozen=True)
