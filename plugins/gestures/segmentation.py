@@ -41,21 +41,18 @@ def above_box(
     image: np.ndarray, threshold: float, within: tuple[int, int, int, int] | None = None
 ) -> tuple[int, int, int, int] | None:
     """``(x0, y0, x1, y1)``: the bounding box of the pixels above ``threshold`` (the test
-    ``cv2.threshold`` makes), looked for in the box ``within`` only if given; None if
-    there are none."""
+    ``cv2.threshold`` makes) of an 8-bit ``image``, looked for in the box ``within`` only
+    if given; None if there are none."""
     ox, oy = 0, 0
     if within is not None:
         ox, oy, x1, y1 = within
         image = image[oy:y1, ox:x1]
-    # columns holding such a pixel, then the rows in that band (no mask image written)
-    # cv2.threshold compares with floor(threshold) on 8-bit images, as do integers here
-    cols = np.flatnonzero(image.max(axis=0) > threshold)
-    if len(cols) == 0:
+    # the mask's box: two OpenCV passes, half the time of numpy's column and row maxima
+    _, above = cv2.threshold(image, threshold, 255, cv2.THRESH_BINARY)
+    x, y, w, h = cv2.boundingRect(above)
+    if w == 0:
         return None
-    x0, x1 = int(cols[0]), int(cols[-1]) + 1
-    rows = np.flatnonzero(image[:, x0:x1].max(axis=1) > threshold)
-    y0, y1 = int(rows[0]), int(rows[-1]) + 1
-    return x0 + ox, y0 + oy, x1 + ox, y1 + oy
+    return x + ox, y + oy, x + w + ox, y + h + oy
 
 
 def _grow(box: tuple[int, int, int, int], by_px: int, shape: tuple[int, int]):
