@@ -146,11 +146,14 @@ class GestureRules:
         return (float(c[0]), float(c[1]))
 
     def _decide(self, result: VisionResult, t_s: float, work: dict) -> Gesture | None:
-        """Keep the frame's vision result; once per placement, the model's gesture from
-        the first ``n_frames`` results (``work["named"]`` on that frame)."""
-        self.window.append(result)
+        """Once per placement, the model's gesture from its first ``n_frames`` vision
+        results (``work["named"]`` on that frame); a result is kept only until then (none
+        without a model): each holds its frame's images."""
         n = self.clf.n_frames  # 0: no trained model
-        if n <= 0 or self._named or len(self.window) < n:
+        if n <= 0 or self._named:  # nothing to decide: no result kept (nor its images)
+            return None
+        self.window.append(result)
+        if len(self.window) < n:
             return None
         self._named = True
         named = self.clf.classify(list(self.window), t_s)
