@@ -38,11 +38,13 @@ def corners_homography(
     )
     dst = np.array([(0, 0), (w, 0), (w, h), (0, h)], np.float64)
     hm = cv2.getPerspectiveTransform(src.astype(np.float32), dst.astype(np.float32))
-    hm = hm.astype(np.float64)
+    hmt = hm.astype(np.float64).T
 
     def to_mm(pts_px: np.ndarray) -> np.ndarray:
         p = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2)
-        q = np.column_stack([p, np.ones(len(p))]) @ hm.T
+        q = np.ones((len(p), 3))  # homogeneous points (x, y, 1), filled in place
+        q[:, :2] = p
+        q = q @ hmt
         return q[:, :2] / q[:, 2:3]
 
     return to_mm

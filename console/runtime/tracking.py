@@ -20,9 +20,10 @@ ids. ``Announcer`` says when a gesture starts (once per hand track and name).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -34,14 +35,18 @@ ToMm = Callable[[np.ndarray], np.ndarray]
 
 @dataclass
 class Track:
-    """One followed object: ``id``, smoothed ``pos`` and ``vel`` (units per second),
-    ``angle`` (rad) and ``rot_vel``; ``accel``/``rot_accel`` the last changes of speed
-    and rotation speed per second; ``missed`` frames since last seen."""
+    """One followed object: ``id``, smoothed position ``x``, ``y`` and velocity ``vx``,
+    ``vy`` (units per second; ``pos`` and ``vel`` as arrays), ``angle`` (rad) and
+    ``rot_vel``; ``accel``/``rot_accel`` the last changes of speed and rotation speed per
+    second; ``missed`` frames since last seen. Plain floats: a frame's few tracks cost
+    microseconds, not the tens numpy's per-call overhead on 2-element arrays takes."""
 
     id: int
-    pos: np.ndarray
+    x: float
+    y: float
     t_s: float
-    vel: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    vx: float = 0.0
+    vy: float = 0.0
     angle: float = 0.0
     rot_vel: float = 0.0
     accel: float = 0.0
@@ -50,11 +55,48 @@ class Track:
     frames: int = 1
 
     @property
-    def speed(self) -> float:
-        return float(np.hypot(*self.vel))
+    def pos(self) -> np.ndarray:
+        """The position as a new array ``[x, y]``."""
+        return np.array((self.x, self.y))
 
-    def predict(self, t_s: float) -> np.ndarray:
-        return self.pos + self.vel * max(t_s - self.t_s, 0.0)
+    @property
+    def vel(self) -> np.ndarray:
+        """The velocity as a new array ``[vx, vy]``."""
+        return np.array((self.vx, self.vy))
+
+    @property
+    def speed(self) -> float:
+        return math.hypot(self.vx, self.vy)
+
+    def predict(self, t_s: float) -> tuple[float, float]:
+        """The position expected at ``t_s`` (constant velocity; never backwards)."""
+        dt = max(t_s - self.t_s, 0.0)
+        return self.x + self.vx * dt, self.y + self.vy * dt
+
+
+def _points(pts: Sequence[Sequence[float]]) -> list[tuple[float, float]]:
+    """``pts`` as (x, y) float pairs (an (n, 2) array, or any sequence of pairs)."""
+    if isinstance(pts, np.ndarray):
+        return [(a, b) for a, b in np.asarray(pts, float).reshape(-1, 2).tolist()]
+    return [(float(p[0]), float(p[1])) for p in pts]
+
+
+def _fewest(d: list[list[float]], live: list[Track], gate: float) -> dict[int, Track]:
+    """``linear_sum_assignment``'s pairing of a few points (rows of ``d``) and tracks
+    (columns), out-of-gate distances costing 1e9, found by trying every one-to-one
+    pairing of the smaller side (at most 3 x 3: six, instead of the solver's call and its
+    arrays); only pairs within the gate are kept."""
+    n, m = len(d), len(d[0])
+    cost = [[v if v <= gate else 1e9 for v in row] for row in d]
+    if n <= m:
+        pairs = [tuple(enumerate(cols)) for cols in itertools.permutations(range(m), n)]
+    else:
+        pairs = [
+            tuple((i, j) for j, i in enumerate(rows))
+            for rows in itertools.permutations(range(n), m)
+        ]
+    best = min(pairs, key=lambda ps: sum(cost[i][j] for i, j in ps))
+    return {i: live[j] for i, j in best if d[i][j] <= gate}
 
 
 class IdTracker:
@@ -90,26 +132,18 @@ class IdTracker:
     ) -> list[Track]:
         """Assign ``pts`` to tracks (a new id for a point no track claims); returns the
         points' tracks in order. Tracks unseen for more than ``grace_frames`` die."""
-        pts_a = np.asarray(pts, float).reshape(-1, 2)
-        angs = [0.0] * len(pts_a) if angles is None else [float(a) for a in angles]
+        xy = _points(pts)
+        angs = [0.0] * len(xy) if angles is None else [float(a) for a in angles]
         live = list(self.tracks.values())
-        match: dict[int, Track] = {}
-        if live and len(pts_a):
-            pred = np.array([tr.predict(t_s) for tr in live])
-            d = np.hypot(*(pts_a[:, None, :] - pred[None, :, :]).transpose(2, 0, 1))
-            cost = np.where(d <= self.gate, d, 1e9)  # out of the gate: only if forced
-            rows, cols = linear_sum_assignment(cost)
-            match = {
-                int(i): live[j] for i, j in zip(rows, cols, strict=True) if d[i, j] <= self.gate
-            }
+        match = self._match(t_s, xy, live) if live and xy else {}
         out: list[Track] = []
-        for i, p in enumerate(pts_a):
+        for i, (x, y) in enumerate(xy):
             tr = match.get(i)
             if tr is None:
-                tr = Track(self._ids(), p.copy(), t_s, angle=angs[i])
+                tr = Track(self._ids(), x, y, t_s, angle=angs[i])
                 self.tracks[tr.id] = tr
             else:
-                self._correct(tr, t_s, p, angs[i])
+                self._correct(tr, t_s, x, y, angs[i])
             out.append(tr)
         seen = {tr.id for tr in out}
         for tid, tr in list(self.tracks.items()):
@@ -119,13 +153,31 @@ class IdTracker:
                     del self.tracks[tid]
         return out
 
-    def _correct(self, tr: Track, t_s: float, p: np.ndarray, angle: float) -> None:
+    def _match(
+        self, t_s: float, xy: list[tuple[float, float]], live: list[Track]
+    ) -> dict[int, Track]:
+        """Point index -> its track: the least total distance to the tracks' predictions,
+        within the gate."""
+        pred = [tr.predict(t_s) for tr in live]
+        d = [[math.hypot(x - px, y - py) for px, py in pred] for x, y in xy]
+        gate = self.gate
+        if len(d) == 1 and len(live) == 1:  # one and one: the solver's answer
+            return {0: live[0]} if d[0][0] <= gate else {}
+        if len(xy) <= 3 and len(live) <= 3:  # a few: every pairing tried
+            return _fewest(d, live, gate)
+        dist = np.array(d)
+        cost = np.where(dist <= gate, dist, 1e9)  # out of the gate: only if forced
+        rows, cols = linear_sum_assignment(cost)
+        return {int(i): live[j] for i, j in zip(rows, cols, strict=True) if dist[i, j] <= gate}
+
+    def _correct(self, tr: Track, t_s: float, x: float, y: float, angle: float) -> None:
         dt = max(t_s - tr.t_s, 1e-6)
         speed0 = tr.speed
-        pred = tr.pos + tr.vel * dt
-        r = p - pred
-        tr.pos = pred + self.alpha * r
-        tr.vel = tr.vel + (self.beta / dt) * r
+        px, py = tr.x + tr.vx * dt, tr.y + tr.vy * dt
+        rx, ry = x - px, y - py
+        a, g = self.alpha, self.beta / dt
+        tr.x, tr.y = px + a * rx, py + a * ry
+        tr.vx, tr.vy = tr.vx + g * rx, tr.vy + g * ry
         tr.accel = (tr.speed - speed0) / dt
         rv = math.remainder(angle - tr.angle, 2 * math.pi) / dt
         tr.rot_accel = (rv - tr.rot_vel) / dt
@@ -138,14 +190,15 @@ def outline_centroid(contour_px: np.ndarray) -> tuple[float, float] | None:
     c = np.asarray(contour_px, float).reshape(-1, 2)
     if len(c) < 3:
         return None
-    x, y = c[:, 0], c[:, 1]
-    # each point's successor (np.roll(x, -1), a tenth of its time on an outline)
-    xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
-    cross = x * yn - xn * y
+    cn = np.concatenate((c[1:], c[:1]))  # each point's successor
+    cross = c[:, 0] * cn[:, 1] - cn[:, 0] * c[:, 1]
     a = cross.sum() / 2.0
     if abs(a) < 1e-9:
         return None
-    return float(((x + xn) * cross).sum() / (6 * a)), float(((y + yn) * cross).sum() / (6 * a))
+    # both moments in one product; on a pixel outline (integers) every sum is exact, so
+    # any order of summing gives the same bits
+    mx, my = (cross @ (c + cn)).tolist()
+    return mx / (6 * a), my / (6 * a)
 
 
 @dataclass(frozen=True)
@@ -175,8 +228,26 @@ class TrackFrame:
         if not self.live_hands:
             return -1
         p = hand.center_mm if self.in_mm and hand.center_mm is not None else hand.center_px
-        d = [(float(np.hypot(*(tr.pos - np.asarray(p, float)))), tr.id) for tr in self.live_hands]
+        px, py = float(p[0]), float(p[1])
+        d = [(math.hypot(tr.x - px, tr.y - py), tr.id) for tr in self.live_hands]
         return min(d)[1]
+
+
+def _renamed(c: Contact, new_id: int) -> Contact:
+    """``dataclasses.replace(c, id=new_id)``; a ``Contact``'s fields written out (a third
+    of ``replace``'s cost, which looks the fields up on every call)."""
+    if type(c) is Contact:
+        return Contact(new_id, c.pos_px, c.pos_mm, c.area_px)
+    return replace(c, id=new_id)
+
+
+def _with_contacts(h: Hand, contacts: tuple[Contact, ...]) -> Hand:
+    """``dataclasses.replace(h, contacts=contacts)``, a ``Hand``'s fields written out."""
+    if type(h) is Hand:
+        return Hand(
+            h.contour_px, h.center_px, h.radius_px, h.angle_deg, h.shape, contacts, h.center_mm
+        )
+    return replace(h, contacts=contacts)
 
 
 class Tracking:
@@ -220,10 +291,10 @@ class Tracking:
         htr = self.hands.update(t_s, hpts, [math.radians(h.angle_deg) for h in hands])
         cmm = [c.pos_mm if in_mm and c.pos_mm is not None else c.pos_px for c in contacts]
         ctr = self.contacts.update(t_s, cmm)
-        renamed = {id(c): replace(c, id=tr.id) for c, tr in zip(contacts, ctr, strict=True)}
+        renamed = {id(c): _renamed(c, tr.id) for c, tr in zip(contacts, ctr, strict=True)}
         by_px = {c.pos_px: renamed[id(c)] for c in contacts}  # a hand's contacts are
         hands_out = [  # the frame's blobs (the same pixel position), renamed alike
-            replace(h, contacts=tuple(by_px.get(c.pos_px, c) for c in h.contacts))
+            _with_contacts(h, tuple(by_px.get(c.pos_px, c) for c in h.contacts))
             if h.contacts
             else h
             for h in hands

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,14 +59,16 @@ class StillHand:
                 self.reset()
             return None
         self._absent_since = None
-        p = np.asarray(pos_mm, dtype=float)
+        x, y = float(pos_mm[0]), float(pos_mm[1])  # plain floats: a few per frame
         if self._fired_at is not None:
-            if np.hypot(*(p - self._fired_at)) <= self.moved_mm:
+            if math.hypot(x - self._fired_at[0], y - self._fired_at[1]) <= self.moved_mm:
                 return None
             self.reset()
-        if self._hist and np.hypot(*(p - self._hist[0][1])) > self.still_mm:
-            self._hist.clear()  # moving: start over from here
-        self._hist.append((t_s, p))
+        if self._hist:
+            x0, y0 = self._hist[0][1]
+            if math.hypot(x - x0, y - y0) > self.still_mm:
+                self._hist.clear()  # moving: start over from here
+        self._hist.append((t_s, (x, y)))
         if t_s - self._hist[0][0] < self.still_s:
             return None
         pts = np.array([q for _, q in self._hist])
@@ -108,7 +111,11 @@ class PalmWindow:
         """The mean position of those kept from ``t0_s`` on (NaN when none is)."""
         while self._a < self._b and self._t[self._a] < t0_s:
             self._a += 1
-        return self._xy[self._a : self._b].mean(axis=0)
+        n = self._b - self._a
+        if n == 0:
+            return np.full(2, np.nan)
+        # np.mean's sum and division by the count, without its wrapper's cost
+        return np.add.reduce(self._xy[self._a : self._b], axis=0) / n
 
 
 class GestureRules:
@@ -139,11 +146,14 @@ class GestureRules:
         return (float(c[0]), float(c[1]))
 
     def _decide(self, result: VisionResult, t_s: float, work: dict) -> Gesture | None:
-        """Keep the frame's vision result; once per placement, the model's gesture from
-        the first ``n_frames`` results (``work["named"]`` on that frame)."""
-        self.window.append(result)
+        """Once per placement, the model's gesture from its first ``n_frames`` vision
+        results (``work["named"]`` on that frame); a result is kept only until then (none
+        without a model): each holds its frame's images."""
         n = self.clf.n_frames  # 0: no trained model
-        if n <= 0 or self._named or len(self.window) < n:
+        if n <= 0 or self._named:  # nothing to decide: no result kept (nor its images)
+            return None
+        self.window.append(result)
+        if len(self.window) < n:
             return None
         self._named = True
         named = self.clf.classify(list(self.window), t_s)
@@ -159,7 +169,8 @@ class GestureRules:
         palm = pos
         tracks = work.get("tracks")  # stillness of the tracked centre: the palm's can jump
         if hand is not None and tracks is not None and tracks.in_mm and tracks.hand_tracks:
-            pos = tuple(tracks.hand_tracks[0].pos)
+            tr = tracks.hand_tracks[0]
+            pos = (tr.x, tr.y)
         rest = self.still.update(t, pos)
         settle = self._settle_palm(t, palm)
         if settle is not None:

@@ -75,7 +75,7 @@ def default_px_per_mm(width_px: int, height_px: int) -> float:
 def touch_regions(
     diff: np.ndarray, body: np.ndarray, parts, px_per_mm: float, palms_px=None
 ) -> np.ndarray:
-    """The touching skin of the hands (``body``: their mask, uint8 0/255; ``parts``:
+    """The touching skin of the hands (``body``: their mask in ``parts.win``, uint8 0/255; ``parts``:
     ``segmentation.Parts``; a fingertip whose finger rises out of the mask, a part of its
     own, counts too) in the difference image ``diff`` (uint8, grey levels above the
     background): pixels above ``TOUCH_SHARE`` of the brightest part's level (a
@@ -87,7 +87,7 @@ def touch_regions(
     x0, y0, x1, y1 = parts.win
     cut = min(max(math.floor(TOUCH_SHARE * float(parts.peak.max())), 1), 254)
     _, on = cv2.threshold(diff[y0:y1, x0:x1], cut, 255, cv2.THRESH_BINARY)
-    on = cv2.bitwise_and(on, body[y0:y1, x0:x1])
+    on = cv2.bitwise_and(on, body)
     bx, by, bw, bh = cv2.boundingRect(on)  # the regions only: a small part of the hands
     if bw == 0:
         return np.zeros((0, 3))

@@ -58,10 +58,11 @@ from .hand_shape import (
 )
 from .segmentation import (
     Parts,
+    body_parts,
     contact_window,
     frame_highpass,
+    full_body,
     highpass_window,
-    relative_body,
 )
 from .touch import SAME_HAND_MM, FrameTouch, default_px_per_mm
 
@@ -145,7 +146,7 @@ class FrameResult:
     #: pixels of the hands' touching skin (at least half their part's level, or clipped):
     #: ``clipped_px`` over this is the clipped share (``clipped_share``); 0 unless some clip
     touching_px: int = 0
-    #: "diff", "body", "highpass" and "foreground" (the last two computed on first
+    #: "diff", "body", "highpass" and "foreground" (the last three computed on first
     #: access) with ``keep_masks``
     masks: Mapping[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
     #: per hand (same order as ``hands``): palm_radius_px, palm_px, bright_px (the
@@ -241,18 +242,18 @@ def check_frame(image: object, shape: tuple[int, int] | None = (480, 640)) -> np
 # --------------------------------------------------------------------------- one frame
 def analyse_hand(
     contour: np.ndarray,
-    full_mask: np.ndarray,
+    shape: tuple[int, int],
     params: VisionParams,
     diff: np.ndarray | None = None,
     contacts: list[Contact] | None = None,
     to_mm=None,
 ) -> tuple[Hand, dict] | None:
-    """Everything about one hand (its largest piece's contour from ``cv2.findContours``;
-    ``contacts``: the hand's own): the ``Hand`` and its extras (see
-    ``FrameResult.extras``)."""
+    """Everything about one hand (its largest piece's contour from ``cv2.findContours``
+    in a frame of ``shape``; ``contacts``: the hand's own): the ``Hand`` and its extras
+    (see ``FrameResult.extras``)."""
     x0, y0, w, h = cv2.boundingRect(contour)
     pad = 2
-    H, W = full_mask.shape
+    H, W = shape
     xa, ya = max(x0 - pad, 0), max(y0 - pad, 0)
     xb, yb = min(x0 + w + pad, W), min(y0 + h + pad, H)
     roi = np.zeros((yb - ya, xb - xa), np.uint8)
@@ -325,14 +326,15 @@ def clipped_share(frame: np.ndarray, touching: np.ndarray) -> tuple[int, int]:
 
 
 def touching_mask(img: np.ndarray, diff: np.ndarray, body: np.ndarray, parts: Parts) -> np.ndarray:
-    """The hands' touching skin inside ``parts.win``: body pixels at least half their
-    part's level above the background, or at the sensor's maximum."""
+    """The hands' touching skin inside ``parts.win``: body pixels (``body``: the body's
+    mask there) at least half their part's level above the background, or at the
+    sensor's maximum."""
     x0, y0, x1, y1 = win = parts.win
     half = np.floor(np.minimum(0.5 * parts.peak, 255)).astype(np.uint8)
     half[0] = 255
     bright = cv2.compare(diff[y0:y1, x0:x1], parts.image(half, win), cv2.CMP_GE)
     hot = cv2.compare(img[y0:y1, x0:x1], 254, cv2.CMP_GT)
-    return cv2.bitwise_and(cv2.bitwise_or(bright, hot), body[y0:y1, x0:x1])
+    return cv2.bitwise_and(cv2.bitwise_or(bright, hot), body)
 
 
 def part_contacts(
@@ -399,7 +401,8 @@ def hands_of(
     max_area_px: float,
     same_px: float = 0.0,
 ) -> list[tuple[np.ndarray, list[Contact], int]]:
-    """The hands in a body mask: per part (``relative_body``: everything of a hand
+    """The hands in the body's mask of the parts' window (``body``: ``parts.win``'s): per
+    part (``relative_body``: everything of a hand
     above the lowest threshold), its largest piece's contour when its area is within
     the bounds (all its pieces together), the contacts that lie in that part, and the
     part's label. A hand whose fingertips touch while the fingers above them rise out of
@@ -409,9 +412,7 @@ def hands_of(
     if parts is None:
         return []
     x0, y0, x1, y1 = parts.win
-    contours, _ = cv2.findContours(
-        body[y0:y1, x0:x1], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
-    )
+    contours, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0))
     largest: dict[int, tuple[float, np.ndarray]] = {}
     total: dict[int, float] = {}  # all of a part's pieces: fingertips under a dim palm too
     for c in contours:
@@ -472,7 +473,7 @@ def process_frame(
     noise_body = 4.0 * noise / max(p.smooth_px, 1) + 2.0
     noise_contact = 4.0 * noise / 3.0 + 2.0
     lo_s, hi_s = SCALE_RANGE if p.contact_level > 0 else (1.0, 1.0)
-    body, parts = relative_body(
+    body, parts = body_parts(  # the mask of the parts' window only
         diff, p.body_threshold, p.contact_level or 1.0, noise_body, p.smooth_px, (lo_s, hi_s)
     )
     # contacts only around the pixels above the lowest contact threshold (the rest of the
@@ -485,7 +486,7 @@ def process_frame(
     ppm = p.scale_px_per_mm
     same_px = SAME_HAND_MM * ppm
     for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area, same_px):
-        got = analyse_hand(main, body, p, diff, mine, to_mm)
+        got = analyse_hand(main, img.shape, p, diff, mine, to_mm)
         if got is not None:
             got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))
             found.append(got)
@@ -507,8 +508,9 @@ def process_frame(
     if keep_masks:  # the whole high-pass image only if someone looks at it
         sigma = p.highpass_sigma_px
         masks = Masks(
-            {"diff": diff, "body": body},
+            {"diff": diff},
             {
+                "body": functools.partial(full_body, body, parts, img.shape),
                 "highpass": functools.partial(frame_highpass, diff, sigma),
                 "foreground": functools.partial(foreground, parts, img.shape),
             },

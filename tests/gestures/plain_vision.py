@@ -57,3 +57,12 @@ def plain_relative_body(diff, threshold, reference, noise, smooth_px=5, scale_ra
     sm = cv2.blur(diff, (smooth_px, smooth_px)) if smooth_px > 1 else diff
     limit = plain_image(parts, np.minimum(thr, 255), (0, 0, W, H))
     return np.where(sm > limit, 255, 0).astype(np.uint8), parts
+
+
+def plain_body_parts(diff, threshold, reference, noise, smooth_px=5, scale_range=(0.3, 2.0)):
+    """``body_parts`` from ``plain_relative_body``: its mask cut to the parts' window."""
+    body, parts = plain_relative_body(diff, threshold, reference, noise, smooth_px, scale_range)
+    if parts is None:
+        return None, None
+    x0, y0, x1, y1 = parts.win
+    return body[y0:y1, x0:x1], parts

@@ -106,6 +106,22 @@ def test_gesture_rules_name_a_placement_once_and_report_rest_and_grip():
     assert len(clf.calls) == 2 and clf.calls[1][1] == 23 / 60
 
 
+@pytest.mark.parametrize("n_frames", [0, 3])
+def test_no_vision_result_is_kept_past_the_decision_nor_without_a_model(n_frames):
+    # each result holds its frame's images: the loop's memory (and the frames that free
+    # them) should not hold six frames a placement for nothing
+    clf = FakeModelClassifier()
+    clf.n_frames = n_frames
+    st = GestureRules(clf)
+    kept = []
+    for k in range(12):
+        hand = _hand((200.0, 100.0))
+        st(Frame(np.zeros((2, 2), np.uint8), k, k / 60), {"hand": hand, "result": object()})
+        kept.append(len(st.window))
+    assert kept == ([0] * 12 if n_frames == 0 else [1, 2, 3] + [3] * 9)
+    assert len(clf.calls) == (n_frames > 0)
+
+
 def test_the_svm_classifier_decides_from_results_without_processing_again():
     """``classify(window, t_s)`` takes ``process``'s results: no frame goes through the
     vision again, none is stamped again; no model or no hand: ``None``."""

@@ -2,12 +2,21 @@
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
+
 import cv2
 import numpy as np
 import pytest
 
 from console.core.types import Contact, Gesture, Hand, HandShape
-from console.runtime.tracking import Announcer, IdTracker, Tracking, outline_centroid
+from console.runtime.tracking import (
+    Announcer,
+    IdTracker,
+    Tracking,
+    _renamed,
+    _with_contacts,
+    outline_centroid,
+)
 
 
 def test_crossing_points_keep_their_ids_where_greedy_matching_swaps_them():
@@ -127,3 +136,66 @@ def test_bench_tracking_sees_one_hand_and_two_fingertips(profile, plugins):
     # the tracked centre is steadier than the palm centre it replaces for tracking
     assert rest["tracked_centre_step"]["p99_mm"] < rest["palm_centre_step"]["p50_mm"] + 1.0
     assert out["tracker"]["n"] == out["frames"] > 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_plain_float_tracker_gives_the_numpy_tracker_s_ids_and_positions(seed):
+    # points that wander, cross, vanish for a while and appear: every frame's ids and
+    # every live track the same; positions bit for bit, speeds' changes to the last bits
+    from .plain_tracking import PlainIdTracker
+
+    rng = np.random.default_rng(seed)
+    tr, ref = IdTracker(25.0, grace_frames=3), PlainIdTracker(25.0, 3, 0.5, 0.1)
+    pos = rng.uniform(0, 300, (5, 2))
+    vel = rng.normal(0, 600, (5, 2))
+    paths = 0
+    for k in range(400):
+        t_s = k / 60 + rng.uniform(0, 0.004)  # frame-rate jitter
+        pos += vel / 60 + rng.normal(0, 1.5, (5, 2))
+        shown = rng.random(5) < 0.8
+        pts, angs = pos[shown], rng.uniform(-np.pi, np.pi, shown.sum())
+        got, want = tr.update(t_s, pts, angs), ref.update(t_s, pts, angs)
+        paths += len(got) > 1 and len(tr.tracks) > 1
+        assert [t.id for t in got] == [t.id for t in want]
+        assert sorted(tr.tracks) == sorted(ref.tracks)
+        for a in tr.tracks.values():
+            b = ref.tracks[a.id]
+            assert (a.x, a.y, a.vx, a.vy) == (*b.pos, *b.vel)
+            assert (a.angle, a.rot_vel, a.rot_accel, a.missed) == (
+                b.angle,
+                b.rot_vel,
+                b.rot_accel,
+                b.missed,
+            )
+            assert a.accel == pytest.approx(b.accel, rel=1e-12, abs=1e-9)
+    assert paths > 100  # most frames assign several points among several tracks
+
+
+@pytest.mark.parametrize("cls", [Contact, Hand])
+def test_renaming_keeps_every_field_of_a_contact_and_a_hand(cls):
+    # the renamed copies are written field by field: a field added to the class and
+    # not copied fails here
+    obj = cls(**{f.name: object() for f in fields(cls)})
+    if cls is Contact:
+        got, want = _renamed(obj, 9), replace(obj, id=9)
+    else:
+        got, want = _with_contacts(obj, ("c",)), replace(obj, contacts=("c",))
+    assert type(got) is cls
+    assert all(getattr(got, f.name) is getattr(want, f.name) for f in fields(cls))
+
+
+def test_a_pixel_outline_s_centroid_is_the_plain_shoelace_s_bit_for_bit():
+    # on integer pixels every sum is exact: the moments' one product gives the bits of
+    # the plain shoelace sums (np.roll), which the frame loop's decisions keep
+    rng = np.random.default_rng(3)
+    for k in range(300):
+        n = int(rng.integers(3, 1200))
+        ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+        r = rng.uniform(5, 300, n)
+        c = np.rint(np.c_[320 + r * np.cos(ang), 240 + r * np.sin(ang)])[:: 1 if k % 2 else -1]
+        x, y = c[:, 0], c[:, 1]
+        xn, yn = np.roll(x, -1), np.roll(y, -1)
+        cross = x * yn - xn * y
+        a = cross.sum() / 2.0
+        want = (((x + xn) * cross).sum() / (6 * a), ((y + yn) * cross).sum() / (6 * a))
+        assert outline_centroid(c) == want
