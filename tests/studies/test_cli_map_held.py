@@ -39,6 +39,10 @@ def _shell_run(out: Path) -> subprocess.Popen:
         env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        # Ctrl-C reaches it as it reaches a command typed at a terminal: a test worker
+        # that ignores SIGINT passes that on, and an early one was lost (a CI run waited
+        # 30 s for the run to end by itself)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
 
 
