@@ -240,10 +240,14 @@ def test_the_camera_view_converts_and_draws_only_what_changed(plugins, monkeypat
             pane._drawn = None
             view = app.query_one("#camera-view", HalfBlockView)
             await wait_for(pilot, lambda: view.picture is pane.shown, 10, "drawn")
-            await pilot.pause(0.3)
-            draws, rows = pane.draws, view.rows_drawn
-            shown = pane.shown
-            await pilot.pause(0.5)  # the same frame: not converted again
+            # the same frame: not converted again once the grey levels have settled on
+            # it (on a loaded machine they may still follow it for a few redraws)
+            for _ in range(20):
+                await pilot.pause(0.3)
+                draws, rows, shown = pane.draws, view.rows_drawn, pane.shown
+                await pilot.pause(0.5)
+                if pane.shown is shown and pane.draws == draws:
+                    break
             assert pane.shown is shown and pane.draws == draws
             for _ in range(6):  # new frames, noise only
                 now["frame"] = SimpleNamespace(image=base + rng.normal(0.0, 0.5, base.shape))
@@ -425,7 +429,8 @@ def test_the_camera_title_follows_the_grey_levels_without_laying_the_screen_out(
                 return update(*args, layout=layout, **kw)
 
             monkeypatch.setattr(title, "update", counting)
-            cols, text, seen = pane.shown.size[0], pane._said["camera-title"].rstrip(), set()
+            cols, text = pane.shown.size[0], pane._said["camera-title"].rstrip()
+            seen = {text}  # the dark levels; a loaded machine may step to the bright at once
             needed = 0  # the title's length changed where it is longer than the picture
             for _ in range(200):  # brighter frames: the levels shown climb to 42 to 219
                 now["frame"] = SimpleNamespace(image=ramp(40.0, 220.0))
