@@ -67,9 +67,12 @@ def test_a_status_line_leaves_what_the_vision_measures_whole(plugins, size, key,
             # the reply whole, every word of it (none given way to the live numbers)
             assert text_in(app, status) == " ".join(str(status.content).split()), side
             assert "…" not in text_in(app, status), side
-            # no end of a skin line without its start
+            # no end of a skin line without its start, nor the skin lines without the
+            # first of them (``W``, ``e``: only their last rows were left in view)
             if any(f in side for f in FRAGMENTS):
                 assert "touch level" in side, side
+            if "touch level" in side:
+                assert "touching skin at" in side, side
             _info_rows_cut_whole(app)
             assert "camera lost" in side and "hand at" in side, side  # the live numbers
             if size == (120, 40):  # room for all of it
