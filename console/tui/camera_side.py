@@ -1,14 +1,38 @@
 """The Camera screen's side panel keeps in view what the operator acts on
 (``CameraSideMixin``): the field being typed in, then whatever answered last (a tuning
 key's ``▸`` row, the newest status line or wizard text, a wizard step waiting for a key);
-the live numbers give way next, then older replies (``console.tui.give_way``). A
-finished calibration's result that would be cut is said in one line instead."""
+the live numbers give way next, by whole lines, then older replies and what the vision
+measures (``console.tui.give_way``). A finished calibration's result that would be cut
+is said in one line instead."""
 
 from __future__ import annotations
 
 from textual.geometry import Region
 
+from console.tui.camera_live import HANG
 from console.tui.give_way import give_way, natural_rows, outer_rows, text_rows
+
+
+def whole_lines(block, rows: int) -> int:
+    """The rows of ``block`` shown when it gives way to ``rows`` or fewer: the live
+    numbers end after a whole line (each cut with its continuation indented,
+    ``camera_live.hang``), a line whose continuation would be cut going with it (never
+    ``skin 189 above touch level 180:`` without what it says of the light)."""
+    if block.id not in ("camera-info", "camera-measures"):
+        return rows
+    lines = str(block.content).split("\n")
+    while 0 < rows < len(lines) and lines[rows].startswith(HANG):
+        rows -= 1
+    return rows
+
+
+def blank_end(block) -> int:
+    """The blank rows ending the live numbers (kept so that a hand's lines coming and
+    going lay nothing out again): the first rows to give way, to anything."""
+    if block.id != "camera-info":
+        return 0
+    text = str(block.content)
+    return len(text) - len(text.rstrip("\n")) if text.strip() else 0
 
 
 class CameraSideMixin:
@@ -40,8 +64,11 @@ class CameraSideMixin:
         the operator last: the chosen setting's row (``CHOSEN_ROWS``: ``-``/``+`` never
         change a value out of view) when a key tuned last, else the newest reply (the
         status line or the wizard's text), and a wizard's step or ``S: save`` waiting
-        for a key. The live numbers give way next (the next glance shows them again),
-        then an older status line, then a finished wizard's result."""
+        for a key: none of them shortened (a field's reply, a question, a result to act
+        on keep every word). The live numbers give way next, then an older status line,
+        then what the vision measures of touching skin, then a finished wizard's result
+        (whole or in one line, ``_shorten_result``); the live blocks only by whole lines
+        from their end (``whole_lines``), never leaving a fragment of a line."""
         scroll = self.query("#camera-scroll")
         if not scroll:
             return
@@ -49,8 +76,8 @@ class CameraSideMixin:
         typing = focused if focused is not None and scroll.first() in focused.ancestors else None
         fields = [*self.query("#camera-recording"), typing]
         kept = outer_rows(fields)
-        info, wizard, status = (
-            self.query_one(f"#camera-{n}") for n in ("info", "wizard", "status")
+        info, measures, wizard, status = (
+            self.query_one(f"#camera-{n}") for n in ("info", "measures", "wizard", "status")
         )
         said = max((self._spoken_at, status), (self._wizard_at, wizard), key=lambda t: t[0])
         tuning = self._tuned_at >= said[0]  # the last key tuned, nothing said since
@@ -60,13 +87,14 @@ class CameraSideMixin:
         first = [] if tuning else [said[1]]
         if asks and wizard not in first:
             first.append(wizard)
-        blocks = [*first, info, *(b for b in (status, wizard) if b not in first)]
+        later = [b for b in (status, measures, wizard) if b not in first]
+        blocks = [*first, info, *later]
         room = self.query_one("#camera-side").content_region.height
         if self._shorten_result(room - kept, blocks, wizard, asks):
             self.call_after_refresh(self.keep_in_view)  # laid out with its new text first
             return
         result = [] if asks or self.calibration is not None else [wizard]  # a sentence
-        if give_way(room, kept, blocks, whole=result):
+        if give_way(room, kept, blocks, whole=result, ends=whole_lines, spare=blank_end):
             self.call_after_refresh(self.keep_in_view)
 
     def _shorten_result(self, left: int, blocks: list, wizard, asks: bool) -> bool:
@@ -78,7 +106,11 @@ class CameraSideMixin:
             full = self.wizard_text(short=False)
             for b in blocks:
                 rows = text_rows(full, wizard.content_region.width) if b is wizard else None
-                rows = natural_rows(b) if rows is None else rows + wizard.styles.gutter.height
+                rows = (
+                    natural_rows(b) - blank_end(b)
+                    if rows is None
+                    else rows + wizard.styles.gutter.height
+                )
                 if b is wizard:
                     short = left < rows
                     break

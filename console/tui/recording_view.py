@@ -351,6 +351,7 @@ class RecordingMixin:
         if plan:
             lines.append(f"plan: {escape(str(plan.get('name', '?')))}")
         self._say("camera-info", "\n".join(lines))
+        self._say("camera-measures", "")  # the live camera's, not the recording's
         self._say(
             "camera-settings",
             "\n".join(

@@ -110,8 +110,8 @@ def test_skin_stands_against_the_touch_level_at_120x40(plugins):
             )
             await pilot.press("P")  # the twin holds a flat hand on the glass
 
-            def info() -> str:
-                return words_on(app, "#camera-detail")
+            def info() -> str:  # pinned under the live numbers (new operator's finding 2)
+                return words_on(app, "#camera-measures")
 
             await wait_for(pilot, lambda: "touch level" in info(), 30, "skin vs touch level")
             level = app.session.camera.params()["contact_level"]
@@ -122,7 +122,7 @@ def test_skin_stands_against_the_touch_level_at_120x40(plugins):
             assert said == round(level) and side == ("above" if skin >= said else "below")
             assert "the light allows touches" in info() or "touches may be missed" in info()
             assert "touching skin at" in info() and "of 255" in info(), info()
-            _no_orphans(await _laid_out_rows(pilot, app, "#camera-detail"))
+            _no_orphans(await _laid_out_rows(pilot, app, "#camera-measures"))
             await pilot.press("P")
 
     asyncio.run(scenario())

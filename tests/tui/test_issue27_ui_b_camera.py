@@ -81,7 +81,7 @@ def test_camera_save_key_path_exposure_and_background(plugins, monkeypatch):
             # the twin holds a flat hand still: the live block and e agree on its level
             svc = app.session.camera_started
             await pilot.press("P")
-            panel = "#camera-detail"
+            panel = "#camera-measures"  # pinned under the live numbers (finding 2)
             await wait_for(pilot, lambda: _skin(words_on(app, panel)), 30, "skin on panel")
             await pilot.press("e")
             await wait_for(pilot, lambda: "of 255" in _status(app), 60, "e measured")

@@ -123,6 +123,9 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             # the live numbers (rates, hands, contacts, gesture): pinned above the status
             # line, never scrolled away by it (the rest of them scroll, ``camera-detail``)
             yield Static("", id="camera-info")
+            # what the vision measures of touching skin, under them: it gives way to a
+            # reply by whole lines, before the live numbers do (``camera_side``)
+            yield Static("", id="camera-measures")
             # the wizard's step or result (with the key it asks for) next, above the
             # status and what scrolls: in view while it has something to say, whatever
             # the status's length at 80 x 24
@@ -149,6 +152,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
     #camera-status { height: auto; padding: 0 0 1 1; }
     #camera-status.error { color: $error; }
     #camera-info { height: auto; }
+    #camera-measures { height: auto; }
     #camera-detail { width: 1fr; padding-left: 1; }
     """
 
@@ -362,6 +366,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._info_stable = None  # the numbers are written again when the camera is back
         self._rates = SameWindow()
         self._say("camera-info", escape(why))
+        self._say("camera-measures", "")
         self._say("camera-detail", "")
 
     def _show_info(self, svc, work: dict) -> None:
@@ -372,13 +377,14 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         stable = (self.view, settings, wizard)
         if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
             return  # the live numbers (percentiles of the frame ...) not even computed
-        head, live = self.live_lines(svc, work)
+        head, measures, live = self._live_parts(svc, work)
         self._info_stable, self._info_at = stable, now
         # the live block keeps the most lines it had (a hand's lines come and go): what
         # lies below it (the settings, the target field) stays where it is
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
         self._say_kept("camera-info", "\n".join(head), self._info_width(pinned=True))
+        self._say_kept("camera-measures", "\n".join(measures), self._info_width(pinned=True))
         moved = self._say_kept("camera-detail", info, self._info_width())
         moved |= self._say("camera-settings", "\n".join(settings))
         found = self._part("camera-wizard")
@@ -511,7 +517,13 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
 
     def live_lines(self, svc, work: dict) -> tuple[list[str], list[str]]:
         """The side panel's live numbers: (pinned at its top, the rest)."""
-        st, live = self._loop_status(svc), []
+        head, measures, live = self._live_parts(svc, work)
+        return [*head, *measures], live
+
+    def _live_parts(self, svc, work: dict) -> tuple[list[str], list[str], list[str]]:
+        """The live numbers pinned at the side panel's top, what the vision measures of
+        touching skin pinned under them, the rest (scrolled), each wrapped to its width."""
+        st, live, measures = self._loop_status(svc), [], []
         starting = svc.starting.line()
         if starting:  # frames shown, the vision not running yet
             head = starting_lines(st, starting)
@@ -524,17 +536,22 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             skin = snapshot_reading(*snap) if snap is not None else None
             read = reading_lines(readings)
             # pinned above the status line and the wizard (at 80x24 they would push the
-            # scrolled part out of view): the frames lost, the hand, clipped pixels, noise
+            # scrolled part out of view): the frames lost, the hand, clipped pixels, noise;
+            # under them what the vision measures of touching skin (a status line scrolled
+            # it away, leaving the ends of its wrapped lines in view)
             pinned = [ln for ln in loop if ln.startswith(PINNED)] + seen[2:]
             pinned += [ln for ln in read if ln.startswith(PINNED)]
+            measures = skin_lines(readings, svc.params().get("contact_level"), skin)
             head = [rate_line(st["camera"], st.get("rates")), *seen[:2], *pinned]
             live = [ln for ln in loop + read if ln not in pinned]
-            live += skin_lines(readings, svc.params().get("contact_level"), skin)
+        width = self._info_width(pinned=True) or self.SIDE_COLS - 2
         live = hang(live, self._info_width() or self.SIDE_COLS - 3)
-        head = hang(head, self._info_width(pinned=True) or self.SIDE_COLS - 2)
+        head = hang(head, width)
         if not starting:  # as many rows as it had, wrapped (a hand's rows come and go):
             self._head_rows = max(self._head_rows, len(head))  # nothing below moves, and
-            head += [""] * (self._head_rows - len(head))  # no layout redone for them
+            head += [""] * (self._head_rows - len(head))  # no layout redone for them; the
+            # blank rows are the first to give way (``camera_side.blank_end``)
+        return head, hang(measures, width), live
         return head, live
 
     def _output(self) -> str | None:
