@@ -58,6 +58,12 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     # how far piled fingertips converge on one point (0: ~20 mm apart, 1: touching,
     # merging into fewer regions; drawn last, so the draws before it are as they were)
     "gather": (0.0, 1.0),
+    # what a rotate turns about: 0 the thumb's touch .. 1 the index's (people turn a knob
+    # about the thumb or two fingertips about their middle; drawn after ``gather``)
+    "pivot": (0.0, 1.0),
+    # how still a zoom keeps its fingertips' middle: 0 the hand stays (the thumb sweeps),
+    # 1 both tips move, as much each way
+    "zoom_still": (0.0, 1.0),
 }
 TWIN_KEYS = ("illumination", "noise_sigma", "hand_scale", "hover_scale", "drift_gain")
 IMAGE_KEYS = ("glow_scale", "finger_px", "lobe_gain", "blur_px", "gamma", "post_noise")
@@ -90,6 +96,8 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
     for k in FINGER_KEYS:
         hand[k] = [round(float(v), 4) for v in rng.uniform(*WIDE_RANGES[k], size=5)]
     hand["gather"] = round(_draw(rng, "gather"), 4)
+    hand["pivot"] = round(_draw(rng, "pivot"), 4)
+    hand["zoom_still"] = round(_draw(rng, "zoom_still"), 4)
     cond["hand"] = hand
     return cond
 
@@ -97,7 +105,8 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
 def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
     """The twin's ``Subject`` (a frozen dataclass) with a wide condition's ``hand`` part:
     finger widths, lengths and rest directions, spread, hover heights, speed, tremor,
-    how gently motions start and how far piled fingertips meet."""
+    how gently motions start, how far piled fingertips meet, what a rotate turns
+    about and how still a zoom keeps its fingertips' middle."""
     from dataclasses import replace
 
     turn = np.asarray(hand["finger_turn_deg"]) * [2, 1, 1, 1, 1]  # the thumb varies most
@@ -115,6 +124,8 @@ def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
         tremor_mm=hand["tremor_mm"],
         ease_s=subject.ease_s * hand.get("ease", 1.0),
         gather=hand.get("gather", 0.0),
+        pivot=hand.get("pivot", 0.0),
+        zoom_still=hand.get("zoom_still", 0.0),
     )
 
 

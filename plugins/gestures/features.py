@@ -254,16 +254,18 @@ def dynamic_features(
     records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4, fps: float = 60.0
 ) -> np.ndarray:
     """The static features over the window (``static_features``: the mean of its frames,
-    as the static classifier sees them) with the most fingertips any of its frames shows
+    as the static classifier sees them) with the most fingertips two of its frames show
     (fingertips that touch each other merge into one region as a pinch or a pile of
-    fingers starts or ends, and a dim one may be missed in a frame), plus the motion over
-    the first ``n_frames`` frames."""
+    fingers starts or ends, and a dim one may be missed in a frame; a region flickering
+    into one frame is no fingertip; with two frames, the more of them), plus the motion
+    over the first ``n_frames`` frames."""
     recs = list(records[:n_frames])
     static = static_features(recs, n_harmonics, n_frames)
     shown = [r for r in recs if r is not None]
     if shown:
         count = static_size(n_harmonics) - N_PHYS_STATIC + COUNT_INDEX
-        static[count] = max(physical_static(r)[COUNT_INDEX] for r in shown)
+        counts = sorted(physical_static(r)[COUNT_INDEX] for r in shown)
+        static[count] = counts[-2] if len(counts) >= 3 else counts[-1]
     return np.concatenate([static, motion_features(recs, fps)])
 
 
@@ -304,7 +306,7 @@ def select_static(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
 def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
     """What the dynamic classifier sees, from (n, static_size(n_max) + N_MOTION) rows:
     Fourier magnitudes and touching skin over the window (as ``select_static``; the most
-    fingertips a frame shows, ``dynamic_features``) and
+    fingertips two frames show, ``dynamic_features``) and
     the touching skin's motion in mm (``physical.physical_motion``), and the contacts'
     change of scale (|log|, no unit: it tells a zoom from a rotation on the twin's
     slow-starting gestures, LOSO dynamic 0.933 -> 0.960, and changes no cross-renderer

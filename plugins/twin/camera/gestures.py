@@ -114,6 +114,11 @@ def _pinch_fingers(s: Subject, p: float, j) -> tuple:
     return (thumb, index, c, c, c)
 
 
+def _pinch_middle(s: Subject, pose: HandPose) -> np.ndarray:
+    """The middle of the thumb's and the index's touch (mm)."""
+    return (np.array(_tip(s, pose, "thumb")) + np.array(_tip(s, pose, "index"))) / 2
+
+
 def _piled(s: Subject) -> np.ndarray:
     """Abductions (deg) of a pile: each finger closed in on its neighbours."""
     opened = np.array((-28.0, -12.0, 0.0, 10.0, 22.0)) * s.spread_deg
@@ -214,7 +219,8 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         thumb = FingerPose((10, 15, 10), -15 + 4 * j[1], True)
         fingers = (thumb, _point(j[2], -6), c, c, c)
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=fingers)
-        pivot = np.array(_tip(s, pose, "thumb"))
+        thumb_at = np.array(_tip(s, pose, "thumb"))
+        pivot = thumb_at + s.pivot * (np.array(_tip(s, pose, "index")) - thumb_at)
         w = take.direction * _sweep(take.rate * tm, SWEEP["rotate"])
         pose = _rotate_about(pose, pivot, w)
     elif g == "zoom":
@@ -222,6 +228,11 @@ def take_pose(take: Take, t_s: float, rng: np.random.Generator | None = None) ->
         p = _reflect01(p0 + take.direction * take.rate * tm)
         hp = 0.7 * s.palm_lift_mm
         pose = replace(base, palm_h_mm=(hp + 5, hp), fingers=_pinch_fingers(s, p, j))
+        if s.zoom_still > 0:  # the hand follows the tips' middle back to where it began
+            start = replace(pose, fingers=_pinch_fingers(s, _reflect01(p0), j))
+            pose = pose.moved(
+                tuple(s.zoom_still * (_pinch_middle(s, start) - _pinch_middle(s, pose)))
+            )
     elif g == "spread_pile":
         p0 = 0.1 + 0.08 * j[0] if take.variant == "spread" else 0.9 + 0.08 * j[0]
         p = _reflect01(p0 + take.direction * take.rate * tm)

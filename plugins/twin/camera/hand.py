@@ -48,6 +48,12 @@ class Subject:
     #: how far this person's piled fingertips converge on one point (0: each finger
     #: only closes in on its neighbours, tips ~20 mm apart; 1: the tips meet and touch)
     gather: float = 0.0
+    #: where this person turns a rotate about: 0 the thumb's touch (the paper's knob), 1
+    #: the index's; between them, both fingertips move (a rotate about their middle)
+    pivot: float = 0.0
+    #: how still a zoom's fingertips keep their middle (0: the hand stays and the thumb
+    #: sweeps, the index a third as far; 1: the hand follows so both tips move, as much each way)
+    zoom_still: float = 0.0
 
     @property
     def palm_len_mm(self) -> float:
