@@ -109,6 +109,17 @@ RELAY_HEADS = ("", "driver", "probe", "what it finds", "description")
 RESET = "e-stop reset"
 
 
+def _wrapped(rows, left: int) -> tuple[int, int, list[tuple[Text, Text]], list[int]]:
+    """(why width, fix width, each row's why and fix wrapped, each row's lines) for the
+    device table's last two columns within ``left``: the fix whole first (it says what to
+    do), a longer text wrapped inside its cell."""
+    fix_w = min(need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
+    why_w = max(NOTE_MIN, left - fix_w - 2)
+    cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
+    heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
+    return why_w, fix_w, cells, heights
+
+
 def _says_estop(line: str) -> bool:
     """Whether ``line`` says the e-stop is active (stale once the operator reset it)."""
     words = ("e-stop active", "e-stop is active", "e-stop latched", "ctrl+r resets")
@@ -307,13 +318,21 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
-        for head in ("device", "driver", "state"):
-            table.add_column(head)
+        heads = ("device", "driver", "state")
+        # each first column as wide as its widest word, given, not left to the table: an
+        # auto width grows as rows come and the rows drawn before kept the narrower one
+        # (``simul``/``ated``, the fix cut at the screen's edge: ``press s (full``)
+        for head, width in zip(heads, widths(heads, firsts), strict=True):
+            table.add_column(head, width=width)
         # why and fix share what the first columns leave, the fix whole first (it says
         # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
-        left = self._note_width(table, firsts, ("device", "driver", "state"))
-        fix_w = min(need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
-        why_w = max(NOTE_MIN, left - fix_w - 2)
+        left = self._note_width(table, firsts, heads)
+        why_w, fix_w, cells, heights = _wrapped(rows, left)
+        if table.has_focus and sum(heights) + 1 > self.scrollable_content_region.height:
+            # whole rows taller than the screen: the table scrolls, its scrollbar takes
+            # columns the fix had (``press s (full`` cut under it)
+            gutter = table.styles.scrollbar_size_vertical
+            why_w, fix_w, cells, heights = _wrapped(rows, max(NOTE_MIN, left - gutter))
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
         # wrapped here (a row's height known as it is added: the list below it is
@@ -324,8 +343,6 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # most (cut after a word: in the log, Enter says it; a doctor's skipped
         # self-test took ten lines and the screen opened scrolled down); the table
         # focused (Tab) shows every row whole
-        cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
-        heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
         self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
         if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
             for i, s in enumerate(rows):
