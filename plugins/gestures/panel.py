@@ -27,6 +27,7 @@ from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
     LongWork,
+    PathField,
     SafetyBar,
     escape,
     from_thread,
@@ -300,8 +301,8 @@ class GesturesPanel(Screen):
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
                 dataset = typed.get("gp-dataset", short_path(data_dir() / "twin"))
-                # a path: kept on focus
-                yield Input(dataset, id="gp-dataset", compact=True, select_on_focus=False)
+                # a path: kept on focus, every key typed (``?`` too)
+                yield PathField(dataset, id="gp-dataset", compact=True, select_on_focus=False)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 subjects = typed.get("gp-subjects", "5")
@@ -315,7 +316,7 @@ class GesturesPanel(Screen):
             with Horizontal(classes="gp-row"):
                 yield Label("model")
                 model = typed.get("gp-model", short_path(self.default_model))
-                yield Input(model, id="gp-model", compact=True, select_on_focus=False)
+                yield PathField(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
                 for label, name in _BUTTONS:
                     button = Button(label, id=name, compact=True)
