@@ -37,6 +37,25 @@ def middle_ellipsis(path: str, width: int) -> str:
     return f"{path[: width - 1 - len(end)]}{ELLIPSIS}{end}"
 
 
+def whole_names(path: str, width: int) -> str | None:
+    """``path`` in at most ``width`` cells cut only between its names: whole when it fits,
+    else its first names and its last one whole with ``…`` for those between
+    (``/tmp/…/demo-8098-flow-1.json``); None when its last name alone does not fit (a
+    caller then gives it a line of its own). ``middle_ellipsis`` cuts inside names."""
+    if cell_len(path) <= width:
+        return path
+    head, sep, name = path.rpartition("/")
+    if not sep or cell_len(name) + 2 > width:
+        return None
+    kept = ""
+    for part in head.split("/"):
+        longer = f"{kept}{part}/"
+        if cell_len(longer) + cell_len(ELLIPSIS) + 1 + cell_len(name) > width:
+            break
+        kept = longer
+    return f"{kept}{ELLIPSIS}/{name}"
+
+
 class PathField(TypesEveryKey, Input):
     """An ``Input`` that takes a path or an address: every key typed, ``?`` included (the
     footer then promises no key: ``console.tui.narrow.TypesEveryKey``)."""
