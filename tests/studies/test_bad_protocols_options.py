@@ -142,6 +142,12 @@ OPTIONS = [
         ["--participant", "P01\n"],
         r"participant 'P01\\n': use letters",
     ),
+    (
+        "participant-dot-dot",  # a second new operator's try: the real fault, not the list
+        None,
+        ["--participant", ".."],
+        r"participant '\.\.': start with a letter or digit, not '\.' \('\.' and '\.\.' name",
+    ),
     # beyond the issue
     ("seed-10^30", None, ["--seed", "1" + "0" * 30], r"--seed 1000+: give a whole number from 0"),
     ("seed-1.5", None, ["--seed", "1.5"], r"--seed '1.5': give a whole number"),
