@@ -185,11 +185,7 @@ class TouchCalibration:
         r = result.report()
         with self._lock:
             self.result = result
-            self.report_text = (
-                f"{r['pairs']} targets: reprojection error {r['rms_mm']:.2f} mm rms, "
-                f"{r['max_mm']:.2f} mm max (leave-one-out {r['loo_rms_mm']:.2f} mm); "
-                f"outliers {r['outliers'] or 'none'}."
-            )
+            self.report_text = report_words(r)
             self.message = f"{self.report_text} {SAVE_KEY}"
         self._project("stop")
         self.session.emit(Snapshot(TOPIC, data=dict(r)))
@@ -286,3 +282,17 @@ def _mm_to_px(cam: Any, pos_mm: Any) -> tuple[float, float] | None:
         return None
     px = cam.mm_to_px((float(pos_mm[0]), float(pos_mm[1])))
     return None if px is None else (float(px[0]), float(px[1]))
+
+
+def report_words(r: dict) -> str:
+    """A calibration's result (``report()``) in words that do not read as a
+    contradiction (``0.00 mm rms ... (leave-one-out 3.55 mm)``): the leave-one-out error
+    first, as what to expect of a new touch (each target predicted by the fit without
+    it: the number to trust), then the fit's residual on the targets it was fitted to
+    (near 0 when the correction bends to pass through them)."""
+    return (
+        f"{r['pairs']} targets: expect {r['loo_rms_mm']:.2f} mm rms on a new touch "
+        "(leave-one-out: each target predicted without it; trust this); fit residual "
+        f"{r['rms_mm']:.2f} mm rms, {r['max_mm']:.2f} mm max on the targets themselves; "
+        f"outliers {r['outliers'] or 'none'}."
+    )

@@ -34,6 +34,7 @@ from console.core.contracts import (
     TunablesInProfile,
 )
 from console.core.errors import UserError
+from console.core.schema import host_problem
 from console.core.types import TunableRange
 from console.core.words import AT_CONSOLE, worded
 from console.runtime.latency import LatencyMonitor
@@ -567,13 +568,18 @@ class CameraService:
 
 def target_problems(host: str, port: str) -> list[str]:
     """What is wrong with a "host:port" target's two halves, in words ([] when nothing):
-    a port outside 1-65535, an IPv4 address with a number outside 0-255."""
+    a port outside 1-65535, an IPv4 address with a number outside 0-255, a host the
+    profile's own check refuses (``host_problem``: a space, no host name). Every check the
+    setting meets when saved is made here first, so a refusal names the typed host, never
+    the overrides file it was not written to."""
     problems = []
     parts = host.split(".")
     if all(p.isdigit() for p in parts):  # digits and dots: an IPv4 address
         if len(parts) != 4:
             problems.append(f"{host} is not an IPv4 address (four numbers 0-255)")
         problems += [f"{p} is not 0-255 in an IPv4 address" for p in parts if int(p) > 255][:1]
+    elif (why := host_problem(host)) is not None:
+        problems.append(f"host {host!r} {why}")
     if not port.isdigit():
         problems.append(f"port {port!r} is not a number 1-65535")
     elif not 1 <= int(port) <= 65535:

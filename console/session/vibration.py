@@ -322,11 +322,17 @@ class VibrationService:
     def measure_takes(self) -> str:
         """How long ``measure`` takes, in words ("about 10 s" with the plate twin as the
         vibrometer), "" when unknown (a real vibrometer's run depends on its settings)."""
+        takes_s = self.measure_s()
+        return f"about {takes_s:g} s" if takes_s is not None else ""
+
+    def measure_s(self) -> float | None:
+        """``measure_takes`` in seconds, None when unknown: the progress's time left
+        before its pace tells (``with_time_left``'s ``expected_s``)."""
         try:
             twin = self.plugins.simulated("vibrometer", self.profile)
         except Exception:  # noqa: BLE001 - a profile without a vibrometer: not known
             twin = False
-        return f"about {TWIN_MEASURE_S} s" if twin else ""
+        return float(TWIN_MEASURE_S) if twin else None
 
     def no_map_text(self) -> str:
         """Why there is no current map, and what to do (the Vibration screen shows it)."""

@@ -50,7 +50,7 @@ HELP = """\
 ctrl+e  E-STOP: silence both outputs and open every relay (any screen, any field)
 ctrl+r  reset the e-stop (outputs stay silent until something plays)
 {tabs}
-?       this help, wherever the focus is (fields take no ?, but for the Camera screen's TUIO target, whose footer then shows no ? help); ? or escape closes it
+?       this help, wherever the focus is, but in a field that takes a path or an address, which types it (a recording's path, the TUIO target, the Studies folder, the Gestures dataset and model: the footer then shows no ? help); ? or escape closes it
 ctrl+z  in a text field: undo its last change (a key that replaced the line too)
 ctrl+p  command palette    ctrl+q  quit (q too, outside a text field; while a demo, long work or a study run would stop, press it again)
 ctrl+l  the log: the console's messages and what drivers wrote to stderr
@@ -539,7 +539,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         """The app's priority keys work wherever the focus is, as the footer promises:
         Textual gives a key a focused text field would type (``?``) to the field, and
         leaves the binding out. No field of the console takes a ``?`` but one that says it
-        types every key (``types_every_key``: the Camera screen's TUIO target)."""
+        types every key (``types_every_key``: a field taking a path or an address)."""
         focused = self.focused
         if focused is None or not focused.check_consume_key(key, key_to_character(key)):
             return False

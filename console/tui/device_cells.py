@@ -7,7 +7,7 @@ import logging
 
 from rich.text import Text
 
-from console.tui.table_fit import clip, fit_lines
+from console.tui.table_fit import NOTE_MIN, clip, fit_cell, fit_lines, need
 
 log = logging.getLogger("console.tui.panes.devices")
 
@@ -45,3 +45,14 @@ def cell_lines(text: str, where: str, width: int, lines: int) -> Text:
     _LOGGED.add((where, text))
     log.info("%s: %s", where, text)
     return shown
+
+
+def wrapped_rows(rows, left: int) -> tuple[int, int, list[tuple[Text, Text]], list[int]]:
+    """(why width, fix width, each row's why and fix wrapped, each row's lines) for the
+    device table's last two columns within ``left``: the fix whole first (it says what to
+    do), a longer text wrapped inside its cell."""
+    fix_w = min(need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
+    why_w = max(NOTE_MIN, left - fix_w - 2)
+    cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
+    heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
+    return why_w, fix_w, cells, heights

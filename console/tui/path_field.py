@@ -4,7 +4,9 @@ never cut at the field's edge (the Studies folder read ``.../studies/jnd_am`` ag
 next control at 80 columns); with the focus it is the path as typed. ``recording_field``:
 the field ``o`` opens on the Camera and Scope screens: a recording's path, with a label
 on its border saying what to type (its placeholder alone read like a value), and its
-keys on the border's other side (a hint cut at 80 columns lost them)."""
+keys on the border's other side (a hint cut at 80 columns lost them). Every field that
+takes a path is a ``PathField``: it types every key, ``?`` too (a path may hold one; the
+recording field opened the help on it while the TUIO target typed it)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,8 @@ from rich.cells import cell_len
 from rich.text import Text
 from textual.strip import Strip
 from textual.widgets import Input
+
+from console.tui.narrow import TypesEveryKey
 
 ELLIPSIS = "…"
 
@@ -33,7 +37,31 @@ def middle_ellipsis(path: str, width: int) -> str:
     return f"{path[: width - 1 - len(end)]}{ELLIPSIS}{end}"
 
 
-class PathInput(Input):
+def whole_names(path: str, width: int) -> str | None:
+    """``path`` in at most ``width`` cells cut only between its names: whole when it fits,
+    else its first names and its last one whole with ``…`` for those between
+    (``/tmp/…/demo-8098-flow-1.json``); None when its last name alone does not fit (a
+    caller then gives it a line of its own). ``middle_ellipsis`` cuts inside names."""
+    if cell_len(path) <= width:
+        return path
+    head, sep, name = path.rpartition("/")
+    if not sep or cell_len(name) + 2 > width:
+        return None
+    kept = ""
+    for part in head.split("/"):
+        longer = f"{kept}{part}/"
+        if cell_len(longer) + cell_len(ELLIPSIS) + 1 + cell_len(name) > width:
+            break
+        kept = longer
+    return f"{kept}{ELLIPSIS}/{name}"
+
+
+class PathField(TypesEveryKey, Input):
+    """An ``Input`` that takes a path or an address: every key typed, ``?`` included (the
+    footer then promises no key: ``console.tui.narrow.TypesEveryKey``)."""
+
+
+class PathInput(PathField):
     """An ``Input`` holding a path: without the focus a path too long for it shows with
     ``…`` in its middle (``middle_ellipsis``); with the focus, as typed, to edit."""
 
@@ -60,12 +88,12 @@ RECORDING_HINT = "e.g. <study folder>/P01/recording/trial_0000.h5 (Studies: reco
 RECORDING_KEYS = "Enter opens  Esc back"
 
 
-def recording_field(widget_id: str, hint: str = RECORDING_HINT) -> Input:
+def recording_field(widget_id: str, hint: str = RECORDING_HINT) -> PathField:
     """A hidden path field labelled ``RECORDING_LABEL`` (``o`` shows it), ``hint`` in it
     while it is empty (a narrow field says ``RECORDING_HINT`` on its screen's status
     line instead: cut in the field, it read ``e.g. <study``); focusing it selects
     nothing (a typed key would replace the path)."""
-    box = Input(placeholder=hint, id=widget_id, select_on_focus=False)
+    box = PathField(placeholder=hint, id=widget_id, select_on_focus=False)
     box.border_title = RECORDING_LABEL
     box.border_subtitle = RECORDING_KEYS
     box.display = False

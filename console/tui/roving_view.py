@@ -21,7 +21,6 @@ from typing import Any
 
 from textual.widgets import Static
 
-from console.config.profile import overrides_path
 from console.core.audio_inputs import find_input, input_specs
 from console.core.contracts import RovingSensorMaps
 from console.core.errors import SafetyRefusal, UserError
@@ -44,12 +43,13 @@ ADD_ACCELEROMETER = (
 )
 
 
-def add_accelerometer_text(profile: Any) -> str:
+def add_accelerometer_text(_profile: Any) -> str:
     """What the screen says when ``m`` measures without an accelerometer input, in one
-    line (at 80 columns it must not push the grid down for the rest of the session): the
-    profile's overrides file is where to add one (the operator's settings; a shipped
-    profile stays as shipped); ``?`` says what to add (``ADD_ACCELEROMETER``)."""
-    return f"vibrometer measures; accelerometer: ? and {overrides_path(profile.name).name}"
+    line of words (at 80 columns it must not push the grid down for the rest of the
+    session; a new operator could not read ``accelerometer: ? and overrides.toml``): what
+    measures, and that ``?`` says how to add one (``ADD_ACCELEROMETER``: the lines and
+    the profile's overrides file, ``overrides_path``, where they go)."""
+    return "measuring with the vibrometer; ? says how to add an accelerometer input"
 
 
 def has_accelerometer(profile: Any) -> bool:

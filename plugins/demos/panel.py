@@ -36,6 +36,7 @@ from console.plugin_api.tui import (
     short_path,
     status_said,
     top_level_seps,
+    whole_names,
 )
 
 from .projector_line import status_text
@@ -538,10 +539,15 @@ class ScenesPane(Vertical):
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
             text = "\n".join(status_lines(snap))
             log = (demos.last_final or {}).get("twin_log")
-            if log:  # one line, its path fitted (two rows were cut at 80 x 24)
-                label = "the twin's outputs received: "
-                room = self.app.size.width - 2 - len(label)
-                text += f"\n{label}{escape(middle_ellipsis(short_path(log), room))}"
+            if log:  # one line, its path cut between whole names (two rows were cut
+                # at 80 x 24; a name cut inside read as a wrong path): a line of its
+                # own when its file name does not fit after the label
+                label, width = "the twin's outputs received: ", self.app.size.width - 2
+                path = short_path(log)
+                shown = whole_names(path, width - len(label))
+                if shown is None:
+                    label, shown = label.rstrip() + "\n", whole_names(path, width)
+                text += f"\n{label}{escape(shown or middle_ellipsis(path, width))}"
             head = f"{how}; an e-stop came after" if after else how
             head = "\n".join(textwrap.wrap(f"last run ({head}):", self.app.size.width - 2))
             self._show_last_run(f"{escape(head)}\n{text}")

@@ -19,7 +19,7 @@ from typing import Any
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
-from textual.screen import Screen
+from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Static
 
 from console.plugin_api import AT_CONSOLE, UserError, load_profile, worded
@@ -27,6 +27,7 @@ from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
     LongWork,
+    PathField,
     SafetyBar,
     escape,
     from_thread,
@@ -247,11 +248,22 @@ def fold_lines(res: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-class GesturesPanel(Screen):
-    """Datasets and training of the gesture classifier."""
+#: the rows of the screen below left in view: its title row and its tab bar (two rows)
+TOP_ROWS = 3
+
+
+class GesturesPanel(ModalScreen):
+    """Datasets and training of the gesture classifier, over the screen it opened on
+    below that screen's title row and tab bar (``TOP_ROWS``), which stay in view: where a
+    notification shows and which screen this is on (a new operator found them covered)."""
 
     HELP_TEXT = HELP
-    DEFAULT_CSS = """
+    DEFAULT_CSS = (
+        (
+            "GesturesPanel { background: $background 0%; }\n"  # the screen below shows
+            f"GesturesPanel > VerticalScroll {{ margin-top: {TOP_ROWS}; background: $background; }}"
+        )
+        + """
     GesturesPanel > VerticalScroll { height: 1fr; padding: 0 1; }
     GesturesPanel .gp-row { height: 1; }
     GesturesPanel .gp-row > Label { width: 10; }
@@ -263,6 +275,7 @@ class GesturesPanel(Screen):
     GesturesPanel #gp-result { margin-top: 1; }
     GesturesPanel #gp-work { height: auto; }  /* the estimate's line whole, wrapped */
     """
+    )
     BINDINGS = [
         Binding("s", "synth", "synthesize"),
         Binding("t", "train", "train+eval"),
@@ -300,8 +313,8 @@ class GesturesPanel(Screen):
             with Horizontal(classes="gp-row"):
                 yield Label("dataset")
                 dataset = typed.get("gp-dataset", short_path(data_dir() / "twin"))
-                # a path: kept on focus
-                yield Input(dataset, id="gp-dataset", compact=True, select_on_focus=False)
+                # a path: kept on focus, every key typed (``?`` too)
+                yield PathField(dataset, id="gp-dataset", compact=True, select_on_focus=False)
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 subjects = typed.get("gp-subjects", "5")
@@ -315,7 +328,7 @@ class GesturesPanel(Screen):
             with Horizontal(classes="gp-row"):
                 yield Label("model")
                 model = typed.get("gp-model", short_path(self.default_model))
-                yield Input(model, id="gp-model", compact=True, select_on_focus=False)
+                yield PathField(model, id="gp-model", compact=True, select_on_focus=False)
             with Horizontal(id="gp-buttons"):
                 for label, name in _BUTTONS:
                     button = Button(label, id=name, compact=True)

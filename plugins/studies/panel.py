@@ -68,6 +68,7 @@ from .panel_text import (
     field_refusal,
     next_id,
     same_folder,
+    space_held,
     status_lines,
 )
 from .record_switch import RECORD, folder_row, typed_field
@@ -216,13 +217,13 @@ class StudiesPane(HeldAnswer, Vertical):
                 yield answer
         yield ProgressBar(total=1, show_eta=False, id="study-progress")
         yield Static(IDLE, id="study-status")
-        table = TrialsTable(id="study-trials", cursor_type="row")
+        table = show_keys(TrialsTable(id="study-trials", cursor_type="row"), down="trials")
         for column in ("trial", "what", "response", "correct", "replays", "time"):
             table.add_column(column, key=column)
         yield table
         with Vertical(id="study-analysis"):
             yield Static("", id="analysis-head", markup=False)
-            yield LiteralTable(id="study-anova", cursor_type="row")
+            yield show_keys(LiteralTable(id="study-anova", cursor_type="row"), down="analysis")
             with VerticalScroll(id="analysis-notes-box"):
                 yield Static("", id="analysis-notes", markup=False)
             yield Static("", id="analysis-report", markup=False)
@@ -655,6 +656,9 @@ class StudiesPane(HeldAnswer, Vertical):
         self.said = (text, severity)
         status_said(self, "Studies", text, severity)  # news logged, an error toasted if hidden
         self._status(self._status_text)
+
+    def on_tick_space_held(self, event: Tick.SpaceHeld) -> None:
+        self._say(space_held(event.tick.words), "warning")  # where the focus is
 
     def on_mount(self) -> None:
         panel_fit.mounted(self)  # its dropdown as wide as the names, its status

@@ -153,3 +153,11 @@ def status_lines(
             if error:
                 lines.append(f"[red]{escape(error)}[/]")
     return lines
+
+
+def space_held(tick_words: str) -> str:
+    """What a space held by a check box says (``Tick.SpaceHeld``): where the focus is."""
+    return (
+        f"space not taken: the focus is on the '{tick_words}' check box, not a text field "
+        "(Tab moves to the next field; space alone ticks it)"
+    )

@@ -45,12 +45,22 @@ class Participant:
 
 
 def check_id(pid: str) -> str:
-    if not isinstance(pid, str) or not _ID.fullmatch(pid):
-        raise UserError(
-            f"participant {pid!r}: use letters, digits, '_', '-' or '.' (e.g. P01), "
-            "at most 64 characters"
+    """``pid`` as a participant's folder name, else one line with the rule it breaks:
+    the characters, the first one (``.``, ``..`` and ``-x`` name no folder of their own
+    or read as an option) or the length."""
+    if isinstance(pid, str) and _ID.fullmatch(pid):
+        return pid
+    text = pid if isinstance(pid, str) else ""
+    if len(text) > 64:
+        why = f"at most 64 characters (it has {len(text)})"
+    elif text and re.fullmatch(r"[A-Za-z0-9_.-]+", text):
+        why = (
+            f"start with a letter or digit, not {text[0]!r} ('.' and '..' name no folder "
+            "of their own; e.g. P01)"
         )
-    return pid
+    else:
+        why = "use letters, digits, '_', '-' or '.' (e.g. P01), starting with a letter or digit"
+    raise UserError(f"participant {pid!r}: {why}")
 
 
 def make_participant(

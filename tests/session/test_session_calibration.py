@@ -101,7 +101,8 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
     assert wizard.active is None and wizard.result is not None
     r = wizard.result.report()
     assert r["pairs"] == 6 and r["rms_mm"] < 1e-6  # an exact affine view
-    assert "reprojection error" in wizard.message
+    assert "on a new touch (leave-one-out" in wizard.message and "trust this" in wizard.message
+    assert "fit residual 0.00 mm rms" in wizard.message  # said as the fit's, not the error
     assert session.camera.frame_hooks == []  # unhooked
     assert cam.target is None
 
@@ -119,7 +120,7 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
     assert isinstance(events[-1], Stopped) and events[-1].name == "saved"
     # saved: the line says so (issue 27), no longer asking for S as if unsaved
     assert "S: save" not in wizard.message and wizard.message.endswith(f"saved to {path}")
-    assert "reprojection error" in wizard.message
+    assert "fit residual" in wizard.message
     wizard.save(tmp_path / "cal.json")  # again: one "saved to", the newest
     assert wizard.message.count("saved to") == 1
 
@@ -165,3 +166,17 @@ def test_target_in_the_camera_image_when_the_camera_knows_its_mapping(profile):
     assert wizard.target_px() is None  # this camera knows no mapping
     cam.px_of = _px
     assert wizard.target_px() == pytest.approx(_px(wizard.target_mm()))
+
+
+def test_the_result_says_which_number_to_trust():
+    """A second new operator's try: `0.00 mm rms, 0.00 mm max (leave-one-out 3.55 mm)`
+    read as a contradiction. The leave-one-out error comes first as what a new touch
+    may expect, the fit's residual after it named as such."""
+    from console.session.calibration import report_words  # lazy: beside the wizard's
+
+    said = report_words(
+        {"pairs": 12, "rms_mm": 0.0, "max_mm": 0.0, "loo_rms_mm": 3.55, "outliers": []}
+    )
+    assert said.startswith("12 targets: expect 3.55 mm rms on a new touch"), said
+    assert "trust this" in said and "reprojection error" not in said, said
+    assert said.index("3.55") < said.index("fit residual 0.00 mm rms, 0.00 mm max"), said

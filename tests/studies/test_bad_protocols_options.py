@@ -142,6 +142,12 @@ OPTIONS = [
         ["--participant", "P01\n"],
         r"participant 'P01\\n': use letters",
     ),
+    (
+        "participant-dot-dot",  # a second new operator's try: the real fault, not the list
+        None,
+        ["--participant", ".."],
+        r"participant '\.\.': start with a letter or digit, not '\.' \('\.' and '\.\.' name",
+    ),
     # beyond the issue
     ("seed-10^30", None, ["--seed", "1" + "0" * 30], r"--seed 1000+: give a whole number from 0"),
     ("seed-1.5", None, ["--seed", "1.5"], r"--seed '1.5': give a whole number"),
@@ -183,7 +189,22 @@ def test_a_resume_with_another_seed_or_row_is_refused(tmp_path, small_exp2):
 
 
 def test_participant_ids_are_whole_matches(tmp_path, small_exp2):
-    for bad in ("P01\n", "P01\r", "P01 ", "", ".P01", "P" * 65, "P01/..", "P０1"):
+    for bad in ("P01\n", "P01\r", "P01 ", "", "P01/..", "P０1"):
         with pytest.raises(UserError, match="use letters, digits"):
             prepare(str(small_exp2), bad, tmp_path / "out", simulate=True)
+    with pytest.raises(UserError, match=r"at most 64 characters \(it has 65\)"):
+        prepare(str(small_exp2), "P" * 65, tmp_path / "out", simulate=True)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("bad", ["..", ".", ".P01", "-P01", "_P01"])
+def test_a_participant_id_of_allowed_characters_says_its_real_fault(tmp_path, small_exp2, bad):
+    """``..`` uses only the allowed characters: the refusal names what it breaks (its
+    first character; ``.``/``..`` name no folder of their own), not the character list
+    it satisfies (a new operator's try)."""
+    with pytest.raises(UserError) as refused:
+        prepare(str(small_exp2), bad, tmp_path / "out", simulate=True)
+    said = str(refused.value)
+    assert f"participant {bad!r}: start with a letter or digit, not {bad[0]!r}" in said, said
+    assert "name no folder of their own" in said and "use letters" not in said, said
     assert not (tmp_path / "out").exists()

@@ -122,7 +122,7 @@ def test_touch_calibration_wizard_on_the_twin(plugins):
             # points themselves exactly)
             assert 0.5 < r["loo_rms_mm"] < 8.0
             assert r["rms_mm"] <= r["loo_rms_mm"]
-            assert "reprojection error" in pane.cal_message
+            assert "on a new touch (leave-one-out" in pane.cal_message
             await pilot.press("S")
             # in the profile's state directory, never in the repository's profiles/
             path = paths.profile_state_dir("sim", "touch_calibration.json")

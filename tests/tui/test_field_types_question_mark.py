@@ -47,3 +47,32 @@ def test_the_tuio_target_field_types_a_question_mark(plugins, size):
             await wait_for(pilot, lambda: isinstance(app.screen, HelpScreen), 10, "help")
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+@pytest.mark.parametrize(
+    ("screen", "field"), [("scope", "#scope-recording"), ("camera", "#camera-recording")]
+)
+def test_every_path_field_types_a_question_mark(plugins, size, screen, field):
+    """A second new operator's try: the recording field (`o` on Scope and Camera) opened
+    the help on `?` while the TUIO target typed it, so a path holding `?` could not be
+    typed. Every field taking a path types every key, its footer promising no `? help`."""
+    from console.tui.app import HelpScreen
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial=screen)
+        async with app.run_test(size=size) as pilot:
+            if screen == "camera":
+                await _first_frame(app, pilot)
+            else:
+                await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
+            await pilot.press("o")
+            box = app.query_one(field)
+            await wait_for(pilot, lambda: box.has_focus, 10, "recording field")
+            await pilot.press("a", "question_mark", "b")
+            await pilot.pause(0.3)
+            assert not isinstance(app.screen, HelpScreen), "? opened the help from the field"
+            assert box.value.endswith("a?b"), box.value
+            assert "help" not in _footer(app), _footer(app)
+
+    asyncio.run(scenario())

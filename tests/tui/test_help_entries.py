@@ -16,6 +16,7 @@ from console.tui.help import entries, paragraphs
 from console.tui.narrow import TypesEveryKey
 from console.tui.panes.camera import TargetField
 from console.tui.panes.vibration_words import HELP_KEYS
+from console.tui.path_field import PathField
 
 from .conftest import wait_for
 from .test_camera_layout import SIZES, screen_lines
@@ -104,5 +105,8 @@ def test_the_help_names_every_field_that_types_a_question_mark():
     """The help's ``?`` line says where ``?`` types instead (a new operator read 'no field
     takes a ?' and then saw the TUIO target type it)."""
     line = next(x for x in console_app.HELP.splitlines() if x.startswith("? "))
-    assert set(TypesEveryKey.__subclasses__()) == {TargetField}
-    assert "TUIO target" in line and "no field" not in line, line
+    assert set(TypesEveryKey.__subclasses__()) == {TargetField, PathField}
+    assert {sub.__name__ for sub in PathField.__subclasses__()} == {"PathInput"}
+    for field in ("recording", "TUIO target", "Studies folder", "Gestures dataset and model"):
+        assert field in line, (field, line)
+    assert "a path or an address" in line and "no field" not in line, line

@@ -66,10 +66,11 @@ def test_only_an_accelerometer_input_starts_the_roving_run(tmp_path):
     assert not has_accelerometer(_Prof({"loop": loop}))
     assert not has_accelerometer(_Prof({}))
     # without one, m measures as before and the screen says how to add one, and where
-    text = add_accelerometer_text(_Prof({}))  # one line, naming the file; ? says it whole
-    assert "accelerometer: ?" in text and len(text) < 78
+    text = add_accelerometer_text(_Prof({}))  # one line of words; ? says it whole
+    assert text == "measuring with the vibrometer; ? says how to add an accelerometer input"
+    assert len(text) < 78 and "accelerometer: ?" not in text  # a second operator's try
     assert "add [audio_inputs.accel] channel = 1, kind = 'accelerometer'" in ADD_ACCELEROMETER
-    assert text.endswith("overrides.toml")  # the operator's file, not the shipped one
+    assert "overrides.toml" in ADD_ACCELEROMETER  # the operator's file, not the shipped one
     kept = tmp_path / "measured-map-0123.npz"
     assert roving_map_path(kept) == tmp_path / "roving-map-0123.npz"
 
@@ -143,3 +144,21 @@ def test_a_dummy_without_the_sensor_s_mass_is_one_line_naming_the_keys():
         eff._dummy_mass_g({"name": "accel", "dummy_mass_g": 14.0})
     msg = str(e.value)
     assert "\n" not in msg and "[audio_inputs.accel] dummy_mass_g = 14 needs mass_g" in msg
+
+
+def test_the_measurement_says_a_time_left_from_its_first_step(monkeypatch):
+    """A second new operator's try: the measurement's progress had no time left (the
+    pace needs a second and a few percent); the expected seconds say it until then."""
+    from console.tui.panes import vibration_words as W  # lazy: beside the roving tests
+
+    now = [100.0]
+    monkeypatch.setattr(W.time, "monotonic", lambda: now[0])
+    said: list[str] = []
+    progress = W.with_time_left(lambda _f, msg: said.append(msg), expected_s=10.0)
+    progress(0.0, "starting")
+    now[0] += 3.0
+    progress(0.01, "step 1/8")
+    assert said == ["starting; about 10 s left", "step 1/8; about 7 s left"], said
+    bare: list[str] = []
+    W.with_time_left(lambda _f, msg: bare.append(msg))(0.0, "starting")
+    assert bare == ["starting"]  # nothing expected: nothing guessed

@@ -14,6 +14,7 @@ from console.cli.main import Context
 from console.plugin_api.runtime import Started
 from console.session.demos import twin_log_path
 from console.tui.app import HapTableApp
+from console.tui.util import short_path
 
 from .conftest import wait_for
 from .test_camera_layout import SIZES, screen_lines
@@ -55,6 +56,23 @@ def test_the_twin_log_line_shows_after_a_stopped_demo(plugins, size):
             await wait_for(pilot, lambda: "last run (stopped" in shown(), 30, "the last run")
             await pilot.pause(0.3)
             assert "twin" in shown() and Path(log).name in shown(), shown()
+            # cut between whole names only (a second new operator's try read
+            # `/tmp/newuser…/demo-…json`, names cut inside)
+            line = next(ln for ln in screen_lines(app) if Path(log).name in ln)
+            token = next(w for w in line.split() if Path(log).name in w)
+            names = set(str(log).split("/")) | set(short_path(str(log)).split("/"))
+            cut = [n for n in token.split("/") if n not in names and n != "…"]
+            assert not cut, (cut, line)
             assert "no resting hand" in shown(), shown()  # the run's numbers above it too
 
     asyncio.run(scenario())
+
+
+def test_whole_names_cuts_a_path_between_its_names_only():
+    from console.tui.path_field import whole_names  # lazy: beside the screen's test
+
+    path = "/tmp/newuser-abc123/state/haptable/demo-8098-flow-20261130-124113.json"
+    assert whole_names(path, len(path)) == path
+    assert whole_names(path, 49) == "/tmp/…/demo-8098-flow-20261130-124113.json"
+    assert whole_names(path, 60) == "/tmp/newuser-abc123/…/demo-8098-flow-20261130-124113.json"
+    assert whole_names(path, 30) is None  # its file's name alone does not fit

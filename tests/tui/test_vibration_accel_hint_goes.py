@@ -17,7 +17,7 @@ from .conftest import wait_for
 from .test_camera_layout import screen_lines
 from .test_screens import _ready
 
-HINT = "vibrometer measures; accelerometer:"
+HINT = "measuring with the vibrometer; ? says how to add an accelerometer input"
 
 
 def _shown(app) -> bool:

@@ -150,3 +150,24 @@ def test_m_asks_before_replacing_the_kept_map(plugins):
             await wait_for(pilot, lambda: asked, what="the second m measures")
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_every_word_that_is_no_point_is_named_on_the_line(plugins, map_file, size):
+    """A second new operator's try: `:999 abc` named only 'abc'; `:load` of a path with
+    a space did not say to quote it."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=size) as pilot:
+            await _ready(app, pilot)
+            await _load_map(app, pilot, map_file)
+            await command(app, pilot, "999 abc")
+            await wait_for(pilot, lambda: "abc" in _status(app), 10, "refused")
+            assert "point 999 is off the grid" in _status(app), _status(app)
+            assert "'abc' is no point id" in _status(app), _status(app)
+            await command(app, pilot, "load /tmp/no such/x.npz")
+            await wait_for(pilot, lambda: "quote" in _status(app), 10, "refused")
+            assert app.session.played == []
+
+    asyncio.run(scenario())

@@ -25,7 +25,7 @@ from console.runtime.selftest_last import note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
-from console.tui.device_cells import PROBLEMS, ROW_LINES, cell, cell_lines
+from console.tui.device_cells import PROBLEMS, ROW_LINES, cell, cell_lines, wrapped_rows
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
@@ -39,7 +39,7 @@ from console.tui.selftest_action import (
     selftest_row,
 )
 from console.tui.session_messages import SessionMessage
-from console.tui.table_fit import NOTE_MIN, fit_cell, need, share, widths
+from console.tui.table_fit import NOTE_MIN, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
@@ -109,6 +109,10 @@ RELAY_HEADS = ("", "driver", "probe", "what it finds", "description")
 RESET = "e-stop reset"
 
 
+#: the test signal's heading: how one is chosen and what ``t`` does with it
+TEST_SIGNAL_HEADING = "test signal (Tab here, enter lists them; t plays the chosen one)"
+
+
 def _says_estop(line: str) -> bool:
     """Whether ``line`` says the e-stop is active (stale once the operator reset it)."""
     words = ("e-stop active", "e-stop is active", "e-stop latched", "ctrl+r resets")
@@ -123,7 +127,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         "enter    on a sound card or relay board row: enter again within 3 s uses it (saved\n"
         "         to the profile's override file; the outputs reopen with it); on the one\n"
         "         in use (●): nothing changes\n"
-        "t        play the chosen test signal through the gate on the outputs now open\n"
+        "t        play the chosen test signal through the gate on the outputs now open (choose\n"
+        "         it under 'test signal': Tab to the drop-down, enter lists the signals)\n"
         "l        list the sound cards and relay boards again\n"
         "d        re-check the profile's devices (doctor)\n"
         "s        self-test: s again within 3 s chirps every relay path, compares with\n"
@@ -179,7 +184,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         yield show_keys(LiteralTable(id="audio-table", cursor_type="row"), enter="use")
         yield Static("relay board (enter uses it)", classes="heading")
         yield show_keys(LiteralTable(id="relay-table", cursor_type="row"), enter="use")
-        yield Static("test signal (t plays it through the gate)", classes="heading")
+        # how to choose one, where it is chosen (a new operator found only sine-PA played)
+        yield Static(TEST_SIGNAL_HEADING, classes="heading")
         yield show_keys(
             Select(
                 [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
@@ -307,13 +313,21 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
         firsts = [[s.kind, s.name, s.state] for s in rows]
-        for head in ("device", "driver", "state"):
-            table.add_column(head)
+        heads = ("device", "driver", "state")
+        # each first column as wide as its widest word, given, not left to the table: an
+        # auto width grows as rows come and the rows drawn before kept the narrower one
+        # (``simul``/``ated``, the fix cut at the screen's edge: ``press s (full``)
+        for head, width in zip(heads, widths(heads, firsts), strict=True):
+            table.add_column(head, width=width)
         # why and fix share what the first columns leave, the fix whole first (it says
         # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
-        left = self._note_width(table, firsts, ("device", "driver", "state"))
-        fix_w = min(need("fix", [s.fix for s in rows]), max(left // 2, NOTE_MIN))
-        why_w = max(NOTE_MIN, left - fix_w - 2)
+        left = self._note_width(table, firsts, heads)
+        why_w, fix_w, cells, heights = wrapped_rows(rows, left)
+        if table.has_focus and sum(heights) + 1 > self.scrollable_content_region.height:
+            # whole rows taller than the screen: the table scrolls, its scrollbar takes
+            # columns the fix had (``press s (full`` cut under it)
+            gutter = table.styles.scrollbar_size_vertical
+            why_w, fix_w, cells, heights = wrapped_rows(rows, max(NOTE_MIN, left - gutter))
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
         # wrapped here (a row's height known as it is added: the list below it is
@@ -324,8 +338,6 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # most (cut after a word: in the log, Enter says it; a doctor's skipped
         # self-test took ten lines and the screen opened scrolled down); the table
         # focused (Tab) shows every row whole
-        cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
-        heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
         self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
         if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
             for i, s in enumerate(rows):

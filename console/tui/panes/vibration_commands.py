@@ -39,7 +39,10 @@ def run_command(pane: Any, text: str) -> bool:
         return True
     if head == "load":
         if len(words) != 2:
-            raise UserError("load: give one vibration map file (.npz)")
+            raise UserError(
+                f"load: give one vibration map file (.npz), not {len(words) - 1} words; "
+                "quote a path with spaces: load '/tmp/my maps/x.npz'"
+            )
         pane._load(words[1], pane._new_stop("vib-long"), text)
         return True
     if head == "cancel":
@@ -53,9 +56,22 @@ def run_command(pane: Any, text: str) -> bool:
     elif (meant := command_meant(head)) is not None and not head.isdigit():
         raise UserError(f"{words[0]!r}: not a command; did you mean {meant!r}? ({COMMANDS})")
     elif len(words) == 1:
-        pane.audition(point_word(words[0]))
+        pane.audition(*point_words(words, pane.cell_of))
     elif len(words) == 2:
-        pane.flow(point_word(words[0]), point_word(words[1]))
+        pane.flow(*point_words(words, pane.cell_of))
     else:
         raise UserError(f"{text!r}: not a command; {COMMANDS}")
     return False
+
+
+def point_words(words: list[str], cell_of: dict) -> list[int]:
+    """The point ids typed, or, when a word is no number, one line naming every word
+    that is no point: those and a number off the grid alike (``:999 abc`` named only
+    ``'abc'``)."""
+    bad = [f"{w!r} is no point id" for w in words if not w.lstrip("-").isdigit()]
+    nums = [int(w) for w in words if w.lstrip("-").isdigit()]
+    if not bad:  # numbers: the pane names one off the grid (``point_problem``)
+        return [point_word(w) for w in words]
+    bad += [f"point {n} is off the grid" for n in nums if cell_of and n not in cell_of]
+    grid = f"the grid has points {min(cell_of)}-{max(cell_of)}" if cell_of else "e.g. 51"
+    raise UserError(f"{'; '.join(bad)} ({grid})")

@@ -103,10 +103,11 @@ class VibrationMeasureMixin:
         def cancelled() -> bool:
             return stopped() or self._estop_active()
 
-        @with_time_left
-        def progress(frac: float, msg: str) -> None:
+        def shown(frac: float, msg: str) -> None:
             if not cancelled():
                 from_thread(self.app, self._measure_progress, stop, f"measuring: {msg}", frac)
+
+        progress = with_time_left(shown, self.service.measure_s())  # a time left at once
 
         try:
             self._show_map(self.service.measure(progress, cancelled))

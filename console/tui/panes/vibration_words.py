@@ -62,10 +62,14 @@ def measure_again(takes: str, again: str = "m") -> str:
     )
 
 
-def with_time_left(progress: Callable[[float, str], Any]) -> Callable[[float, str], Any]:
+def with_time_left(
+    progress: Callable[[float, str], Any], expected_s: float | None = None
+) -> Callable[[float, str], Any]:
     """``progress(fraction, text)`` that says the time left after ``text`` ("step 4/8;
     about 6 s left", ``console.tui.time_left``), at the pace since its first call (the
-    work counted from there: a first call past 0 does not skew it)."""
+    work counted from there: a first call past 0 does not skew it); until that pace
+    tells, from ``expected_s`` (the work's expected seconds) when given, so the line says
+    a time left from its first step ("starting; about 10 s left")."""
     first: list[float] = []  # when and at which fraction it was first called
 
     def said(frac: float, msg: str) -> Any:
@@ -74,7 +78,10 @@ def with_time_left(progress: Callable[[float, str], Any]) -> Callable[[float, st
             first.extend((now, frac))
         t0, f0 = first
         done = (frac - f0) / (1.0 - f0) if f0 < 1.0 else 0.0
-        left = left_words(seconds_left(now - t0, done))
+        left_s = seconds_left(now - t0, done)
+        if left_s is None and expected_s is not None and now - t0 < expected_s:
+            left_s = expected_s - (now - t0)
+        left = left_words(left_s)
         return progress(frac, f"{msg}; {left}" if left else msg)
 
     return said
