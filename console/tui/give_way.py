@@ -38,17 +38,19 @@ def give_way(
     ``room`` rows ``kept`` leaves; each has its natural height again when there is room.
     Those in ``whole`` (a sentence, not a list of lines) show whole or not at all.
     Whether a limit changed (the panel is laid out again)."""
-    left = room - kept
+    shown = [w for w in yielding if w.display]
+    # a shown block keeps its padding's rows however far it is limited (a limit of 0
+    # still shows them): those are taken first, then the text's rows in order
+    left = room - kept - sum(w.styles.gutter.height for w in shown)
     changed = False
     whole = set(whole)
-    for widget in yielding:
-        if not widget.display:
-            continue
-        rows = natural_rows(widget)
+    for widget in shown:
+        gutter = widget.styles.gutter.height
+        rows = natural_rows(widget) - gutter
         take = max(0, min(rows, left))
         if widget in whole and take < rows:
             take = 0
-        limit = None if take >= rows else take
+        limit = None if take >= rows else take + gutter
         now = widget.styles.max_height
         if (now.value if now is not None else None) != limit:
             widget.styles.max_height = limit
