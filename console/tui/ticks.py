@@ -23,7 +23,16 @@ def on_off_mark(value: bool) -> str:
 
 
 class Tick(Checkbox):
-    """A check box drawn ``[x] label`` / ``[ ] label`` (ticked in bold)."""
+    """A check box drawn ``[x] label`` / ``[ ] label`` (ticked in bold). Its mark reads
+    in both states: Textual draws an unticked button in ``$panel-darken-2`` on
+    ``$panel`` (black on dark navy, colour 16 on 17 in a 256-colour terminal: a new
+    operator could not read ``[ ]``); here unticked is the label's own colour, ticked
+    the success colour, both on the panel."""
+
+    DEFAULT_CSS = """
+    Tick > .toggle--button { color: $foreground; background: $panel; }
+    Tick.-on > .toggle--button { color: $text-success; background: $panel; }
+    """
 
     @property
     def _button(self) -> Content:
