@@ -302,7 +302,9 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
-        row = selftest_row(self.selftest_done, last, self.selftest_stopped)
+        out = self.app.session.outputs
+        estopped = out is not None and out.estopped
+        row = selftest_row(self.selftest_done, last, self.selftest_stopped, estopped)
         self.doctor_rows = rows = [*rows, row]
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
@@ -648,6 +650,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         e-stop refused is past; it says the reset instead. A new e-stop (``Stopped``)
         replaces a line saying the reset: it is latched again."""
         ev = message.event
+        if ev.topic == "estop" and self.selftest_stopped and self.doctor_rows:
+            self._show(self.doctor_rows[:-1])  # the stopped run's row: ctrl+r first or not
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
             self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
         elif isinstance(ev, Stopped) and ev.topic == "estop" and self.result.startswith(RESET):
