@@ -18,6 +18,7 @@ import asyncio
 import pytest
 
 from console.cli.main import Context
+from console.runtime.selftest_last import read_last
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -153,6 +154,16 @@ def test_devices_selftest_row_says_a_run_the_estop_stopped(plugins, size):
                 pilot, lambda: _selftest_row(app).endswith("| s runs it again"), 10, "fresh"
             )
             assert _selftest_row(app).startswith("stopped the last run stopped before its end")
+            assert read_last("sim")["stopped"]["line"].startswith("by the e-stop at ")
+
+        # a restart: the stopped run is still said first (kept in the state folder)
+        again = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with again.run_test(size=size) as pilot:
+            pane = again.pane("devices")
+            await wait_for(pilot, lambda: bool(pane.doctor_rows), 30, "doctor rows")
+            row = _selftest_row(again)
+            assert row.startswith("stopped the last run stopped before its end (by the e-stop")
+            assert row.endswith("| s runs it again"), row
 
     asyncio.run(scenario())
 
