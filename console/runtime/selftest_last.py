@@ -17,8 +17,9 @@ log = logging.getLogger(__name__)
 
 #: the file, in ``profile_state_dir(<profile>)``
 FILE = "selftest_last.json"
-#: the parts a record keeps
-KINDS = ("quick", "full")
+#: the parts a record keeps (``stopped``: the console's last full run, stopped before its
+#: end, e.g. by the e-stop; said first on the row until a full run ends)
+KINDS = ("quick", "full", "stopped")
 
 
 def read_last(profile_name: str) -> dict[str, dict[str, str]]:
@@ -50,6 +51,17 @@ def note_last(profile_name: str, kind: str, state: str, line: str, by: str) -> N
         "by": by,
         "time": time.strftime("%Y-%m-%d %H:%M"),
     }
+    _write(profile_name, data)
+
+
+def forget_last(profile_name: str, kind: str) -> None:
+    """``kind``'s record gone (a stopped run once a full one has ended)."""
+    data = read_last(profile_name)
+    if data.pop(kind, None) is not None:
+        _write(profile_name, data)
+
+
+def _write(profile_name: str, data: dict) -> None:
     path = profile_state_dir(profile_name, FILE)
     try:
         write_text_atomic(path, json.dumps(data))

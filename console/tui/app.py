@@ -83,8 +83,10 @@ def _keys_help(tabs: dict) -> str:
     return keys + pad + titles
 
 
-#: An e-stop or reset event this soon after the console's own ctrl+e / ctrl+r is its own
-#: (already said); later ones came from elsewhere and get a toast.
+#: An e-stop this soon after the console's own ctrl+e, or a reset this soon after its own
+#: ctrl+r, is its own (already said); any other came from elsewhere and gets a toast (an
+#: e-stop from a shell just after a ctrl+r was taken for the reset's own and swallowed,
+#: the reset's toast staying up).
 OWN_ESTOP_S = 3.0
 
 
@@ -152,7 +154,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         #: (``console.tui.irview``; ``run_app`` asks the terminal before it starts)
         self.image_mode = image
         self.session = ConsoleSession(ctx, fast=fast)
-        self._own_estop_s = -1e9  # when this console's ctrl+e / ctrl+r last acted
+        #: when this console's ctrl+e (``Stopped``) and ctrl+r (``Started``) last acted
+        self._own_estop_s: dict[type, float] = {}
         self.session.subscribe(self._session_event)
         self.tabs = panel_tabs(ctx.pm)  # the screens, from the panel registrations
         self._bind_tabs()
@@ -414,7 +417,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
             self.notify(f"{title}: {ev.message}", severity=ev.severity, timeout=8)
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
             self.live.watch.poke()  # lost: the bar at once, not at the next read
-        if ev.topic == "estop" and time.monotonic() - self._own_estop_s > OWN_ESTOP_S:
+        own = time.monotonic() - self._own_estop_s.get(type(ev), -1e9) <= OWN_ESTOP_S
+        if ev.topic == "estop" and not own:
             # from elsewhere (a shell's `haptable estop`, a demo's watchdog, a fault): a
             # toast and the log, as the console's own ctrl+e and ctrl+r are
             if isinstance(ev, Stopped):
@@ -472,7 +476,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         self.session.estop(reason)
 
     def action_estop(self) -> None:
-        self._own_estop_s = time.monotonic()
+        # a reset's echo still to come is not this console's any more, and vice versa
+        self._own_estop_s = {Stopped: time.monotonic()}
         self.estop("operator e-stop (console)")
         self.notify("E-STOP: outputs silenced, relays open", severity="error")
 
@@ -485,7 +490,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         if not out.estopped:  # said, not silence: the key was heard
             self.notify("no e-stop to reset: the outputs are not e-stopped" + others)
         elif self.session.reset_estop():
-            self._own_estop_s = time.monotonic()
+            self._own_estop_s = {Started: time.monotonic()}  # a later e-stop is new
             self.notify("e-stop reset: outputs stay silent until something plays" + others)
 
     async def on_event(self, event: events.Event) -> None:

@@ -24,6 +24,7 @@ from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
 from console.tui.camera_live import hand_line
+from console.tui.checked_field import refused, taken
 from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
@@ -175,9 +176,7 @@ class RecordingMixin:
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "camera-recording":
             return
-        event.stop()
-        event.input.display = False
-        self.focus()
+        event.stop()  # open, as typed, until the file opens (``checked_field``)
         self.say(f"o: opening {escape(event.value.strip())} ...")
         self._open_replay(event.value)
 
@@ -196,19 +195,25 @@ class RecordingMixin:
             k0 = (run, 0, run.frame(0), run.decisions(0)) if run.n_frames else None
         except UserError as exc:
             self._replay_typed, self._replay_refused = path, f"o: {worded(exc, AT_CONSOLE)}"
-            from_thread(self.app, self.say, self._replay_refused, "warning")
+            from_thread(self.app, self._replay_refused_said, self._replay_refused)
             return
         if k0 is None:
             line = f"o: recording {short_path(run.path)} has no frames: {no_frames_fix(run)}"
             self._replay_typed, self._replay_refused = path, line
-            from_thread(self.app, self.say, line, "warning")
+            from_thread(self.app, self._replay_refused_said, line)
             return
         from_thread(self.app, self._replay_opened, run, k0)
+
+    def _replay_refused_said(self, line: str) -> None:
+        """A refused path: said, its field kept open as typed to correct it."""
+        refused(self.query_one("#camera-recording", Input), self)
+        self.say(line, "warning")
 
     def _replay_opened(self, run: Any, first: tuple) -> None:
         if self.replay is not None:
             self.replay.close()
         self._replay_typed = self._replay_refused = None
+        taken(self.query_one("#camera-recording", Input), self)
         self.replay, self.replay_k, self.replay_playing = run, 0, False
         self._replay_frame = first[1:]
         self._watch(False)  # the live camera is let go while the recording shows

@@ -25,6 +25,7 @@ from textual.widgets import Input, Static
 from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.tui.charts import Chart, Series
+from console.tui.checked_field import refused, taken
 from console.tui.path_field import recording_field
 from console.tui.recording_view import open_run
 from console.tui.safety_bar import closed_relays, relay_names
@@ -212,9 +213,7 @@ class ScopeRecordingMixin:
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "scope-recording":
             return
-        event.stop()
-        event.input.display = False
-        self.focus()
+        event.stop()  # open, as typed, until the file opens (``checked_field``)
         self._say(f"o: opening {event.value.strip()} ...")
         self._open_replay(event.value)
 
@@ -251,15 +250,21 @@ class ScopeRecordingMixin:
             other = [p for p in run.plans() if p.get("kind") != "plan"]
         except UserError as exc:
             self._replay_typed = path
-            from_thread(self.app, self._say, f"o: {worded(exc, AT_CONSOLE)}")
+            from_thread(self.app, self._replay_refused, f"o: {worded(exc, AT_CONSOLE)}")
             return
         from_thread(self.app, self._replay_opened, run, plans, other)
+
+    def _replay_refused(self, line: str) -> None:
+        """A refused path: said, its field kept open as typed to correct it."""
+        refused(self.query_one("#scope-recording", Input), self)
+        self._say(line)
 
     def _replay_opened(self, run: Any, plans: list, other: list) -> None:
         self.said_head = None
         if self.replay is not None:
             self.replay.close()
         self._replay_typed = None
+        taken(self.query_one("#scope-recording", Input), self)
         self.replay, self.replay_plans, self.replay_i = run, plans, 0
         self._other = other
         self.refresh_bindings()

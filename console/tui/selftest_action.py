@@ -91,17 +91,25 @@ def selftest_progress(gone_s: float, total_s: float, est: tuple[float, int, bool
     )
 
 
+#: the quick part's advice at a shell; in the console its ``s`` runs the same full test
+#: (a healthy first run keeps its baseline, as the command's does)
+CLI_RUN = "run `haptable selftest`"
+
+
 def selftest_row(
     done: tuple[bool, str, float] | None,
     last: dict[str, dict[str, str]] | None = None,
     stopped: str = "",
+    estopped: bool = False,
 ) -> DeviceStatus:
     """The Devices doctor's self-test row, saying what ran: the full one run here
     (``done``: healthy, line, seconds), else the last kept (``last``:
     ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
     else where to run it (``haptable doctor`` runs its quick part; here s the full one).
     ``stopped``: the last run here was stopped before its end (when, by what): the row
-    says so first, the last whole run's outcome after it (it is no longer the news)."""
+    says so first, the last whole run's outcome after it (it is no longer the news), and
+    its fix asks for ctrl+r first only while the table is ``estopped``. The quick part's
+    CLI advice (run `haptable selftest` ...) is said with the console's key."""
     if stopped:
         before = selftest_row(done, last)
         was = (
@@ -110,7 +118,8 @@ def selftest_row(
             else ""
         )
         why = f"the last run stopped before its end ({stopped}){was}"
-        return DeviceStatus("selftest", "full", "stopped", why, "s runs it again (ctrl+r first)")
+        fix = "s runs it again" + (" (ctrl+r first)" if estopped else "")
+        return DeviceStatus("selftest", "full", "stopped", why, fix)
     last = last or {}
     full, quick = last.get("full"), last.get("quick")
     if done is None and full is not None:  # a full one kept from before
@@ -121,7 +130,7 @@ def selftest_row(
         if quick is None:
             why = "not run from the console: it plays a chirp on every relay path"
             return DeviceStatus("selftest", "full", "not run", why, "press s")
-        said = quick["line"].removeprefix("skipped: ")
+        said = quick["line"].removeprefix("skipped: ").replace(CLI_RUN, "press s")
         why = f"quick self-test {quick['state']} ({quick['by']}, {quick['time']}: {said}); {plays}"
         return DeviceStatus("selftest", "quick", quick["state"], why, "press s (full)")
     ok, line, took_s = done

@@ -30,12 +30,21 @@ def on_off_mark(value: bool) -> str:
 
 
 class Tick(Checkbox):
-    """A check box drawn ``[x] label`` / ``[ ] label`` (ticked in bold).
+    """A check box drawn ``[x] label`` / ``[ ] label`` (ticked in bold). Its mark reads
+    in both states: Textual draws an unticked button in ``$panel-darken-2`` on
+    ``$panel`` (black on dark navy, colour 16 on 17 in a 256-colour terminal: a new
+    operator could not read ``[ ]``); here unticked is the label's own colour, ticked
+    the success colour, both on the panel.
 
     A space typed within ``TYPING_S`` of a character typed at it is a word's space (the
     operator believes a text field has the focus: a name's space unticked "simulated")
     and leaves it as it is; it posts ``Tick.SpaceHeld`` for the screen to say where the
     focus is. A space on its own ticks as always."""
+
+    DEFAULT_CSS = """
+    Tick > .toggle--button { color: $foreground; background: $panel; }
+    Tick.-on > .toggle--button { color: $text-success; background: $panel; }
+    """
 
     class SpaceHeld(Message):
         """A space taken for a word's, not a tick: ``tick`` has the focus."""

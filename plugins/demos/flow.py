@@ -148,6 +148,11 @@ class FlowDemo:
         #: the last flows, refusals and errors (bounded: a demo runs as long as it is used)
         self.events: deque[dict] = deque(maxlen=512)
         self.events_total = 0
+        #: flows handed to the outputs (refusals and places without a flow are events,
+        #: not plays), and of those the ones played after their plan was computed off
+        #: the frame loop: no frame's decision scheduled them (Latency's frames omit them)
+        self.played_total = 0
+        self.played_late = 0
         self._lock = threading.Lock()
         self._report = None  # the plan playing now
         self._pending: threading.Thread | None = None
@@ -499,6 +504,8 @@ class FlowDemo:
         else:
             ev["from_mm"] = list(pair["from_mm"])
             ev["to_mm"] = list(pair["to_mm"])
+        self.played_total += 1
+        self.played_late += late_s > 0
         self._log_event(ev)
         if self.scene is not None:
             self.link.emit({"type": "playing", "on": True})

@@ -174,7 +174,8 @@ def demo_state(demo: Any) -> dict:
     return {
         "flow": {
             "direction": demo.current_direction(),
-            "flows": demo.events_total,
+            "flows": demo.played_total,  # plays only (Scenes: "N played")
+            "flows_late": demo.played_late,
             "last": evs,
             "preparing": demo.preparation(),
         }

@@ -172,6 +172,8 @@ def _hand_line(hand: dict[str, Any]) -> str:
 
 def _flow_text(f: dict[str, Any], stopping: bool = False) -> str:
     text = escape(f"flow {f.get('direction')}: {f.get('flows', 0)} played")
+    if f.get("flows_late"):  # planned off the loop: Latency's frames do not count them
+        text += f" ({int(f['flows_late'])} once planned, not in Latency's frames)"
     last = [e for e in f.get("last", []) if e.get("parts")]
     if last:
         e = last[-1]

@@ -32,6 +32,9 @@ from console.plugin_api.tui import (
 
 from .effects import slew_max_vpp
 
+#: an e-stop's fix, as the console's lines say it (``console.session.events.ESTOP_FIX``)
+ESTOP_FIX = "ctrl+r resets"
+
 FREQ_RANGE_HZ = (10.0, 1000.0)
 SLEW_WHERE = (
     "(the screen's slew limit: [amplifiers] screen_peak_current_ma, [screen] capacitance_nf)"
@@ -238,6 +241,8 @@ class ElectrostaticPane(Vertical):
                 f"{self.waveform} at {self.freq_hz:g} Hz may have {SLEW_WHERE}"
             )
             self._at_limit = True
+        elif self._at_limit:  # what the line said of the other waveform's limit is past
+            self.say("")
         self._update_setting()
 
     @work(thread=True, exclusive=True, group="es-report")
@@ -320,6 +325,8 @@ class ElectrostaticPane(Vertical):
         else:
             text, error = f"{what}: stopped by {outcome.stopped}", True
         by_estop = outcome.estop_refused or outcome.stopped.startswith("the e-stop")
+        if by_estop and "ctrl+r" not in text:  # the fix, as every e-stop line says it
+            text += f"; {ESTOP_FIX}, then p plays"
         from_thread(self.app, self._about, plan, text, error, by_estop)
 
     def _asking(self, plan, what: str) -> None:

@@ -75,7 +75,7 @@ def test_b_and_a_bad_tuio_target_are_said_on_the_status_line(plugins):
             app.focused.value = "nowhere"
             await pilot.press("enter")
             await wait_for(pilot, lambda: "host:port" in _status(app), 30, "bad target")
-            assert "U again" in _status(app), _status(app)
+            assert "correct it, Enter" in _status(app), _status(app)  # its field open
             assert not any("background" in t or "host:port" in t for t in _toasts(app)), _toasts(
                 app
             )

@@ -1,6 +1,6 @@
 """The Camera screen (F2) keeps the chosen vision setting's row (``▸``) in view at 80 x 24
 and 120 x 40 whatever the status lines above it hold: after a calibration's result with
-its saved path and a refused TUIO target, every ``]`` / ``[`` shows the chosen row, and
+its saved path and a refused TUIO switch, every ``]`` / ``[`` shows the chosen row, and
 every ``-`` / ``+`` shows it with its new value (the README and ``?`` promise so: ``+``
 never changes a value the operator cannot see)."""
 
@@ -11,6 +11,7 @@ import asyncio
 import pytest
 
 from console.cli.main import Context
+from console.core.errors import UserError
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for, words_on
@@ -24,12 +25,18 @@ def _row(app, key: str) -> str | None:
 
 
 async def _refused_target(app, pilot) -> None:
-    """``U``, a target that is no address: its refusal on the status line."""
-    await pilot.press("U")
-    box = app.query_one("#camera-target")
-    await wait_for(pilot, lambda: box.has_focus, 10, "target field")
-    box.value = "256.1.1.1:99999"
-    await pilot.press("enter")
+    """``u`` refused with a long TUIO error on the status line, the keys still the
+    screen's (a refused ``U`` target keeps its field open instead: ``checked_field``)."""
+    svc = app.session.camera_started
+
+    def refuse(name, on, target=None):
+        raise UserError(
+            "tuio target '256.1.1.1:99999': 256 is not 0-255 in an IPv4 address; "
+            "port 99999 is not 1-65535"
+        )
+
+    svc.set_sink = refuse
+    await pilot.press("u")
     said = lambda: words_on(app, "#camera-status")  # noqa: E731
     await wait_for(pilot, lambda: "port 99999" in said(), 10, "the refusal")
     await wait_for(pilot, lambda: app.focused is app.pane("camera"), 10, "the keys back")

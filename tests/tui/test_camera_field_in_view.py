@@ -1,7 +1,8 @@
 """The Camera screen (F2) keeps the field being typed in and its reply in view, at
 80 x 24 and 120 x 40, whatever the side panel holds above them: after a calibration's
 result and a kept-settings line, ``o``'s recording field shows whole with its label and
-example, and the reply to a path that is not there shows whole; the result gives way."""
+example, and the reply to a path that is not there shows whole, under the field kept
+open as typed; the result gives way."""
 
 from __future__ import annotations
 
@@ -63,8 +64,12 @@ def test_the_recording_field_and_its_reply_show_under_a_calibration_result(plugi
             await wait_for(pilot, lambda: _shows(app, status), 10, "the reply whole")
             said = text_in(app, status)
             assert said.endswith("one per trial)"), said
-            assert app.focused is pane
-            # the field again: the path as typed, in view, the reply's rows given back
+            # the field stays open with the path as typed, both it and the reply in view
+            assert app.focused is box and box.value == "/nonexist"
+            await wait_for(pilot, lambda: _shows(app, box), 10, "the field still in view")
+            # closed and opened again: the path as typed, in view, the reply's rows given back
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: app.focused is pane, 10, "closed")
             await pilot.press("o")
             await wait_for(pilot, lambda: _shows(app, box), 10, "the field in view again")
             assert box.value == "/nonexist"

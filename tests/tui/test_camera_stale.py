@@ -92,11 +92,11 @@ def test_a_refused_tuio_target_comes_back_as_typed_and_the_footer_promises_no_ke
             assert "[ ]" not in footer and "calibrate" not in footer, footer
             app.focused.value = "nowhere"
             await pilot.press("enter")
-            await wait_for(pilot, lambda: "U again" in _status(app), 30, "refused")
-            await wait_for(pilot, lambda: "- +" in screen_lines(app)[-1], 30, "keys back")
-            await pilot.press("U")
-            await wait_for(pilot, lambda: isinstance(app.focused, Input), 30, "the field")
-            assert app.focused.value == "nowhere"
+            await wait_for(pilot, lambda: "correct it, Enter" in _status(app), 30, "refused")
+            # the field stays open as typed (``checked_field``); the footer still
+            # promises none of the screen's keys
+            assert isinstance(app.focused, Input) and app.focused.value == "nowhere"
+            assert "- +" not in screen_lines(app)[-1], screen_lines(app)[-1]
 
     asyncio.run(scenario())
 

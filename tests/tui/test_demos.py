@@ -280,10 +280,12 @@ def test_the_operators_finger_on_the_twin_gets_the_flow_where_it_rests(flow_ctx)
             assert run.snapshot()["camera"].get("process")
 
             def new_flow_near(n_before: int, where) -> bool:
-                """A flow after the first ``n_before`` events, under a hand resting near
-                ``where`` (the hand's centre is some cm from its fingertip)."""
+                """A flow after the first ``n_before`` played, under a hand resting near
+                ``where`` (the hand's centre is some cm from its fingertip); ``flows``
+                counts plays only, ``last`` holds refusals too."""
                 f = run.snapshot()["flow"]
-                new = [e for e in f["last"][-(f["flows"] - n_before) :] if e.get("parts")]
+                plays = [e for e in f["last"] if e.get("parts")]
+                new = plays[-(f["flows"] - n_before) :]
                 return f["flows"] > n_before and any(
                     np.hypot(*(np.array(e["rest_mm"]) - where)) < 80 for e in new
                 )

@@ -18,6 +18,7 @@ import asyncio
 import pytest
 
 from console.cli.main import Context
+from console.runtime.selftest_last import read_last
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -145,5 +146,35 @@ def test_devices_selftest_row_says_a_run_the_estop_stopped(plugins, size):
             row = _selftest_row(app)
             assert row.startswith("stopped the last run stopped before its end (by the e-stop"), row
             assert "the last whole one: ok all paths healthy" in row, row
+            assert row.endswith("| s runs it again (ctrl+r first)"), row
+            # reset: the row's fix no longer asks for ctrl+r (a new operator's try: stale)
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, 20, "reset")
+            await wait_for(
+                pilot, lambda: _selftest_row(app).endswith("| s runs it again"), 10, "fresh"
+            )
+            assert _selftest_row(app).startswith("stopped the last run stopped before its end")
+            assert read_last("sim")["stopped"]["line"].startswith("by the e-stop at ")
+
+        # a restart: the stopped run is still said first (kept in the state folder)
+        again = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
+        async with again.run_test(size=size) as pilot:
+            pane = again.pane("devices")
+            await wait_for(pilot, lambda: bool(pane.doctor_rows), 30, "doctor rows")
+            row = _selftest_row(again)
+            assert row.startswith("stopped the last run stopped before its end (by the e-stop")
+            assert row.endswith("| s runs it again"), row
 
     asyncio.run(scenario())
+
+
+def test_the_quick_parts_advice_names_the_consoles_key():
+    """`haptable doctor`'s skipped quick part advises the CLI (`run `haptable selftest`
+    on a healthy table`); the console's row names its own key."""
+    from console.tui.selftest_action import selftest_row
+
+    line = "skipped: no baseline yet: run `haptable selftest` on a healthy table to keep one"
+    last = {"quick": {"state": "skipped", "line": line, "by": "haptable doctor", "time": "t"}}
+    row = selftest_row(None, last)
+    assert "press s on a healthy table to keep one" in row.why, row.why
+    assert "haptable selftest" not in row.why, row.why

@@ -77,3 +77,39 @@ def test_relay_switches_say_on_or_off(plugins, size):
             await wait_for(pilot, lambda: "[on ]" in row(), 10, "relay 3 on")
 
     asyncio.run(scenario())
+
+
+def _luminance(rgb) -> float:
+    """WCAG relative luminance of an (r, g, b) colour."""
+    lin = [(c / 255) / 12.92 if c <= 10 else ((c / 255 + 0.055) / 1.055) ** 2.4 for c in rgb]
+    return 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+
+
+def _mark_contrasts(app, mark: str) -> list[float]:
+    """The WCAG contrast of each ``mark`` drawn on the screen, its colour on its ground."""
+    found = []
+    for strip in app.screen._compositor.render_strips():
+        for seg in strip:
+            if mark in seg.text and seg.style is not None and seg.style.color is not None:
+                fg = seg.style.color.get_truecolor()
+                bg = seg.style.bgcolor.get_truecolor()
+                lum = sorted((_luminance(fg), _luminance(bg)), reverse=True)
+                found.append((lum[0] + 0.05) / (lum[1] + 0.05))
+    return found
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["80x24", "120x40"])
+def test_ticked_and_unticked_marks_read_on_their_ground(plugins, size):
+    """A new operator could not read ``[ ]`` (black on dark navy, colour 16 on 17); both
+    marks have at least WCAG's 4.5:1 contrast."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
+        async with app.run_test(size=size) as pilot:
+            await wait_for(pilot, lambda: "record trials" in _shown(app), 30, "the box")
+            await pilot.pause(0.2)
+            for mark in ("[ ]", "[x]"):
+                contrasts = _mark_contrasts(app, mark)
+                assert contrasts and min(contrasts) >= 4.5, (mark, contrasts)
+
+    asyncio.run(scenario())

@@ -41,6 +41,7 @@ from console.tui.camera_picture import blob_labels, overlay_pixels, same_height,
 from console.tui.camera_side import CameraSideMixin
 from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
+from console.tui.checked_field import refused, taken
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.narrow import TypesEveryKey
@@ -383,9 +384,12 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         # lies below it (the settings, the target field) stays where it is
         self._info_rows = max(self._info_rows, len(live))
         info = "\n".join([*live, *[""] * (self._info_rows - len(live))])
-        self._say_kept("camera-info", "\n".join(head), self._info_width(pinned=True))
-        self._say_kept("camera-measures", "\n".join(measures), self._info_width(pinned=True))
-        moved = self._say_kept("camera-detail", info, self._info_width())
+        # its rows grown (a wrapped line): what is typed and its reply keep theirs again
+        moved = self._say_kept("camera-info", "\n".join(head), self._info_width(pinned=True))
+        moved |= self._say_kept(
+            "camera-measures", "\n".join(measures), self._info_width(pinned=True)
+        )
+        moved |= self._say_kept("camera-detail", info, self._info_width())
         moved |= self._say("camera-settings", "\n".join(settings))
         found = self._part("camera-wizard")
         if found is not None:
@@ -581,9 +585,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "camera-target":
             return
-        event.stop()
-        event.input.display = False
-        self.focus()
+        event.stop()  # open, as typed, until the target is taken (``checked_field``)
         name = self._output()
         if name is not None:
             self._switch(name, self.service.sink_state(name)[0], event.value)
@@ -629,14 +631,23 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         try:
             self.service.set_sink(name, on, target)
         except UserError as exc:
-            again = "U" if target is not None else "u"
             self._typed = target  # U shows what was typed, to be corrected
-            from_thread(self.app, self.say, f"{exc} ({again} again to retry)", "warning")
+            from_thread(self.app, self._switch_refused, str(exc), target is not None)
             return
         self._typed = None
+        if target is not None:  # taken: its field closes
+            from_thread(self.app, lambda: taken(self.query_one("#camera-target", Input), self))
         on, where = self.service.sink_state(name)  # the file: ? help, profile overrides
         said = f"{name} {'on' if on else 'off'} -> {where} (kept for the profile)"
         from_thread(self.app, self.say, said)
+
+    def _switch_refused(self, why: str, typed: bool) -> None:
+        """A refused switch said; a refused target's field kept open as typed."""
+        if not typed:
+            self.say(f"{why} (u again to retry)", "warning")
+            return
+        refused(self.query_one("#camera-target", Input), self)
+        self.say(f"{why} (correct it, Enter; Esc keeps the one in use)", "warning")
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)

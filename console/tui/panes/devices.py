@@ -21,7 +21,7 @@ from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
 from console.runtime.doctor import diagnose, realtime_status, scheduling_status
-from console.runtime.selftest_last import note_last, read_last
+from console.runtime.selftest_last import forget_last, note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
@@ -308,7 +308,12 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
-        row = selftest_row(self.selftest_done, last, self.selftest_stopped)
+        out = self.app.session.outputs
+        estopped = out is not None and out.estopped
+        # a run stopped here, or in an earlier session of the console (kept in the file)
+        kept = last.get("stopped")
+        stopped = self.selftest_stopped or (f"{kept['line']}, {kept['time']}" if kept else "")
+        row = selftest_row(self.selftest_done, last, stopped, estopped)
         self.doctor_rows = rows = [*rows, row]
         table = self.query_one("#device-table", DataTable)
         table.clear(columns=True)
@@ -609,6 +614,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         self._show_result(selftest_progress(time.monotonic() - t0, total_s, est), tick=True)
 
     def _selftest_ended(self, ok: bool | None, line: str, took_s: float) -> None:
+        prof_name = self._profile().name
         if self._selftest_timer is not None:
             self._selftest_timer.stop()
             self._selftest_timer = None
@@ -623,11 +629,14 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
                 self.selftest_stopped = f"by the e-stop at {at}"
             elif line.startswith("self-test stopped"):
                 self.selftest_stopped = f"at {at}: {line.split('(', 1)[-1].rstrip(')')}"
+            if self.selftest_stopped:  # kept for the row after a restart
+                note_last(prof_name, "stopped", "stopped", self.selftest_stopped, "the console's s")
             if self.selftest_stopped and self.doctor_rows:  # the row says it too: its
                 self._show(self.doctor_rows[:-1])  # last outcome is not this run's
             self._show_result(line, error=True)
             return
         self.selftest_done, self.selftest_stopped = (ok, line, took_s), ""
+        forget_last(prof_name, "stopped")  # a whole run ended: the stopped one is past
         self._show_result(line, error=not ok)
         if self.doctor_rows:  # its row in the devices table says it too
             self._show(self.doctor_rows[:-1])
@@ -660,6 +669,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         e-stop refused is past; it says the reset instead. A new e-stop (``Stopped``)
         replaces a line saying the reset: it is latched again."""
         ev = message.event
+        if ev.topic == "estop" and self.doctor_rows:  # a stopped run's row (this session's
+            self._show(self.doctor_rows[:-1])  # or kept): ctrl+r first or not
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
             self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
         elif isinstance(ev, Stopped) and ev.topic == "estop" and self.result.startswith(RESET):

@@ -233,10 +233,12 @@ class LatencyPane(Vertical):
             )
             return
         yield Static("", id="lat-head")
+        # what became of m, under the head: in view at 80 x 24 however many rows the
+        # table below has (under the table, a demo's rows pushed it off the screen)
+        yield Static("", id="lat-said", markup=False)
         yield LiteralTable(id="lat-table", cursor_type="none", show_cursor=False)
         yield Static("", id="lat-key", markup=False, classes="hint")  # what they mean
         yield Static("", id="lat-audio")
-        yield Static("", id="lat-said", markup=False)  # what became of m
 
     @property
     def focus_target(self):
@@ -268,12 +270,12 @@ class LatencyPane(Vertical):
         run = self.demo_run()
         if run is not None:  # a demo's loop is what shows; it runs anyway
             who = self.source if self.source.startswith("demo ") else "a demo"  # as shown
-            self._tell(f"m: {who} runs; its own loop is measured above (F6, s stops it)", who)
+            self._tell(f"m: {who} runs; its own loop is measured below (F6, s stops it)", who)
             return
         now = time.monotonic()
         if self._measure_until is not None and now < self._measure_until:  # not restarted
             left = self._measure_until - now
-            self._tell(f"m: measuring already, {left:.0f} s left (its numbers above)", "camera")
+            self._tell(f"m: measuring already, {left:.0f} s left (its numbers below)", "camera")
             return
         self._tell("", "")
         self._measure_until = now + MEASURE_S
