@@ -279,6 +279,8 @@ def main(argv: list[str]) -> int:
             return 0 if ok else 1
         reached, tables = estop(profile, timeout)
     except UserError as exc:
+        if "estop" in argv:  # a mistyped profile or option: every table stops first
+            return _estop_every_table(exc)
         print(f"haptable: error: {exc}", file=sys.stderr)
         return 2
     live = [r for r in reached if not r.stale]
@@ -308,6 +310,25 @@ def main(argv: list[str]) -> int:
                 "`haptable reset` resets every one"
             )
     return 1 if unconfirmed else 0
+
+
+def _estop_every_table(why: UserError) -> int:
+    """``haptable estop`` typed with a mistake (a profile that is not found, an option
+    it does not take): every table is e-stopped and latched as without ``--profile``,
+    then the mistake is said; exit 2."""
+    reached, tables = estop(None, 2.0)
+    for r in reached:
+        print(f"e-stop: {r.line()}")
+    if not [r for r in reached if not r.stale]:
+        print("e-stop: no outputs open")
+    for t in tables:
+        print(f"e-stop: table {t.name} latched until an operator resets it")
+    print(
+        f"haptable: error: {' '.join(str(why).split())}; every table was e-stopped instead "
+        "(`haptable reset` resets them)",
+        file=sys.stderr,
+    )
+    return 2
 
 
 if __name__ == "__main__":

@@ -4,10 +4,12 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
+from typing import Any
 
 from rich.text import Text
 
-from console.tui.table_fit import NOTE_MIN, clip, fit_cell, fit_lines, need
+from console.tui.table_fit import NOTE_MIN, clip, fit_cell, fit_lines, need, widths
 
 log = logging.getLogger("console.tui.panes.devices")
 
@@ -56,3 +58,17 @@ def wrapped_rows(rows, left: int) -> tuple[int, int, list[tuple[Text, Text]], li
     cells = [(fit_cell(s.why, why_w), fit_cell(s.fix, fix_w)) for s in rows]
     heights = [max(len(w.plain.split("\n")), len(f.plain.split("\n"))) for w, f in cells]
     return why_w, fix_w, cells, heights
+
+
+def note_width(table: Any, rows: list[list], table_width: int, heads: Sequence = ()) -> int:
+    """What the note column can show, cut with … (``note_room``, at least ``NOTE_MIN``)."""
+    return max(NOTE_MIN, note_room(table, rows, table_width, heads))
+
+
+def note_room(table: Any, rows: list[list], table_width: int, heads: Sequence = ()) -> int:
+    """``table_width`` less the other columns (each as wide as its widest cell or header
+    ``heads``, default the table's, plus its padding) and the note's own padding: below
+    ``NOTE_MIN`` when the other columns take too much."""
+    heads = heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
+    used = sum(w + 2 for w in widths(heads, rows))
+    return table_width - used - 2

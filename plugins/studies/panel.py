@@ -126,10 +126,10 @@ class StudiesPane(HeldAnswer, Vertical):
         Binding("a", "abort", "abort"),
         Binding("n", "analyse", "analyse"),  # in the footer while no run goes
         Binding("n", "analyse_in_run", show=False),
+        Binding("left_square_bracket", "track(-1)", "track", show=False),
+        Binding("right_square_bracket", "track(1)", "track"),  # before t: an adaptive run's
         Binding("t", "toggle_view", "view"),
         Binding("o", "toggle_notes", "notes", show=False),
-        Binding("left_square_bracket", "track(-1)", "track", show=False),
-        Binding("right_square_bracket", "track(1)", "track"),
         Binding("escape", "leave_field", show=False),
         Binding("up", "answer('up')", show=False),
         Binding("down", "answer('down')", show=False),

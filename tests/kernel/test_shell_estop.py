@@ -509,3 +509,21 @@ def test_the_demo_hosts_copy_beside_the_env_log_never_follows_a_symlink(
     host.write_logs()
     assert (tmp_path / "mine.json").exists()
     assert victim.read_text() == "keep"
+
+
+@pytest.mark.parametrize(
+    "argv", [["--profile", "nosuch", "estop"], ["estop", "--profile", "profiles/sim.tom"]]
+)
+def test_estop_with_a_mistyped_profile_stops_every_table_then_says_so(shared, capsys, argv):
+    """A mistyped profile must not leave a table playing (a new operator's
+    `haptable --profile nosuch estop` stopped nothing): every table is e-stopped and
+    latched, then the mistake is said; exit 2."""
+    from console.kernel.shell import main as shell_main  # what `haptable estop` runs
+
+    code = shell_main(argv)
+    captured = capsys.readouterr()
+    assert code == 2, captured
+    assert "every table was e-stopped instead" in captured.err, captured.err
+    assert "not found" in captured.err, captured.err
+    assert "confirmed silent" in captured.out, captured.out
+    assert shared.wait_safe(2) and shared.status()["gate"]["estopped"]

@@ -25,7 +25,15 @@ from console.runtime.selftest_last import forget_last, note_last, read_last
 from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
-from console.tui.device_cells import PROBLEMS, ROW_LINES, cell, cell_lines, wrapped_rows
+from console.tui.device_cells import (
+    PROBLEMS,
+    ROW_LINES,
+    cell,
+    cell_lines,
+    note_room,
+    note_width,
+    wrapped_rows,
+)
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
@@ -326,7 +334,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             table.add_column(head, width=width)
         # why and fix share what the first columns leave, the fix whole first (it says
         # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
-        left = self._note_width(table, firsts, heads)
+        left = note_width(table, firsts, self._table_width(), heads)
         why_w, fix_w, cells, heights = wrapped_rows(rows, left)
         if table.has_focus and sum(heights) + 1 > self.scrollable_content_region.height:
             # whole rows taller than the screen: the table scrolls, its scrollbar takes
@@ -427,21 +435,6 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             (_note(dev), f"sound card {dev.name}: note"),
         )
 
-    def _note_width(self, table: DataTable, rows: list[list], heads: tuple = ()) -> int:
-        """What the note column can show, cut with … (``_note_room``, at least
-        ``NOTE_MIN``)."""
-        return max(NOTE_MIN, self._note_room(table, rows, heads))
-
-    def _note_room(self, table: DataTable, rows: list[list], heads: tuple = ()) -> int:
-        """The table's width less the other columns (each as wide as its widest cell or
-        header ``heads``, default the table's, plus its padding) and the note's own
-        padding: below ``NOTE_MIN`` when the other columns take too much."""
-        heads = (
-            heads or [str(c.label) for c in table.columns.values()][: len(rows[0]) if rows else 0]
-        )
-        used = sum(w + 2 for w in widths(heads, rows))
-        return self._table_width() - used - 2
-
     def _first_usable(self, rows) -> int:
         """The row the sound-card cursor starts on: the card in use (●), else the first
         Enter can use (a driver that found no card is no place to start)."""
@@ -465,7 +458,9 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         # a narrow screen: the device's name gives up what the note needs (a long name,
         # JACK's, would push the table past the screen's edge)
         heads = [str(c.label) for c in table.columns.values()]
-        over = NOTE_MIN - self._note_room(table, [c for _k, c, _n in rows], heads[:-1])
+        over = NOTE_MIN - note_room(
+            table, [c for _k, c, _n in rows], self._table_width(), heads[:-1]
+        )
         if over > 0:
             device_w = max(NOTE_MIN, DEVICE_MAX - over)
             self.audio_rows.clear()
@@ -484,7 +479,9 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if shown == self._listed:  # the same listing: the tables stay as they are (a
             return  # rebuilt table lays its columns out again at its next idle)
         self._listed = shown
-        note_w = self._note_width(table, [cells for _key, cells, _note in rows], heads[:-1])
+        note_w = note_width(
+            table, [cells for _key, cells, _note in rows], self._table_width(), heads[:-1]
+        )
         full = [
             (key, [*cells, cell(note, where, note_w) if note else ""])
             for key, cells, (note, where) in rows
@@ -506,7 +503,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         firsts = [["●", name, status.state] for name, _d, status in relays]
         # what it finds and the description share what the first columns leave
         finds_w, desc_w = share(
-            self._note_width(rtable, firsts, RELAY_HEADS[:3]),
+            note_width(rtable, firsts, self._table_width(), RELAY_HEADS[:3]),
             (
                 need("what it finds", [st.why for _n, _d, st in relays]),
                 need("description", [d for _n, d, _s in relays]),
