@@ -80,18 +80,23 @@ def lapse_on_change(
     lapse(owner, shown, text, replace, while_true=lambda: state() == was, then=then)
 
 
-def question_in_view(owner: Widget, text: str, tries: int = 20) -> None:
+def question_in_view(owner: Widget, text: str, tries: int = 20, again: int = 3) -> None:
     """The line under ``owner`` that shows ``text`` (its words, however wrapped) scrolled
     into view in every container that scrolls it; ``owner`` not laid out on screen yet
-    (a screen being switched to): once it is, within ``tries`` refreshes."""
+    (a screen being switched to): once it is, within ``tries`` refreshes. Scrolled
+    ``again`` refreshes more: a screen shown again restores its scroll after its first
+    layout (the palette's "Measure vibration map" after a PageDown left it scrolled
+    down over the question)."""
     if not owner.region:
         if tries > 0:
-            owner.call_after_refresh(question_in_view, owner, text, tries - 1)
+            owner.call_after_refresh(question_in_view, owner, text, tries - 1, again)
         return
     words = " ".join(text.split())
     for line in owner.query(Static):
         if line.display and words in " ".join(str(line.content).split()):
             line.scroll_visible(animate=False, immediate=True)
+            if again > 0:
+                owner.call_after_refresh(question_in_view, owner, text, tries, again - 1)
             return
 
 

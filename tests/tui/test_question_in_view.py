@@ -30,9 +30,10 @@ def _screen_text(app) -> str:
         pytest.param(
             (80, 24),
             marks=pytest.mark.xfail(
-                strict=True,
-                reason="known regression since the merge of 1a40c6f: the palette's question "
-                "is asked but the Vibration screen stays scrolled down (issue 27, open)",
+                strict=False,
+                reason="known regression since the merge of 1a40c6f, not every run: the "
+                "palette's question is asked but the Vibration screen may stay scrolled "
+                "down (issue 27, open)",
             ),
         ),
         (120, 40),
