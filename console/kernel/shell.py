@@ -298,12 +298,7 @@ def main(argv: list[str]) -> int:
             )
         )
     else:
-        for r in reached:
-            print(f"e-stop: {r.line()}")
-        if not live:
-            print("e-stop: no outputs open")
-        for t in tables:  # each latched: what an operator types to reset it
-            print(f"e-stop: table {t.name} latched until an operator resets it: `{resets[t.key]}`")
+        _say_estopped(reached, tables, resets)
         if len(tables) > 1:
             print(
                 "e-stop: ctrl+r in a table's console resets that table only; "
@@ -312,17 +307,22 @@ def main(argv: list[str]) -> int:
     return 1 if unconfirmed else 0
 
 
+def _say_estopped(reached: list[Reached], tables: list[Table], resets: dict) -> None:
+    """What each table answered, and each one latched with what resets it."""
+    for r in reached:
+        print(f"e-stop: {r.line()}")
+    if not [r for r in reached if not r.stale]:
+        print("e-stop: no outputs open")
+    for t in tables:  # each latched: what an operator types to reset it
+        print(f"e-stop: table {t.name} latched until an operator resets it: `{resets[t.key]}`")
+
+
 def _estop_every_table(why: UserError) -> int:
     """``haptable estop`` typed with a mistake (a profile that is not found, an option
     it does not take): every table is e-stopped and latched as without ``--profile``,
     then the mistake is said; exit 2."""
     reached, tables = estop(None, 2.0)
-    for r in reached:
-        print(f"e-stop: {r.line()}")
-    if not [r for r in reached if not r.stale]:
-        print("e-stop: no outputs open")
-    for t in tables:
-        print(f"e-stop: table {t.name} latched until an operator resets it")
+    _say_estopped(reached, tables, {t.key: reset_command(t, None) for t in tables})
     print(
         f"haptable: error: {' '.join(str(why).split())}; every table was e-stopped instead "
         "(`haptable reset` resets them)",
