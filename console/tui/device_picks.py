@@ -40,8 +40,10 @@ class DevicePicksMixin:
     plugin_rows: dict[str, str]
 
     def on_data_table_row_selected(self, event: DataTable.RowSelected) -> None:
-        """Enter on a row of the sound cards, the relay boards or the plugins."""
+        """Enter on a row of the devices, the sound cards, the relay boards or the
+        plugins."""
         picks = {
+            "device-table": self._about_device,
             "audio-table": self._pick_audio,
             "relay-table": self._pick_relays,
             "plugin-table": self._about_plugin,

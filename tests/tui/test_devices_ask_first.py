@@ -14,7 +14,7 @@ from console.cli.main import Context
 from console.config.plugins import load_plugins
 from console.config.profile import overrides_path
 from console.tui.app import HapTableApp
-from console.tui.panes import devices as devices_mod
+from console.tui.panes import devices_selftest as devices_mod
 
 from .conftest import wait_for, words_on
 from .test_camera import _first_frame

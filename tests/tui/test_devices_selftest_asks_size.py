@@ -11,7 +11,7 @@ import pytest
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
-from console.tui.panes import devices as devices_mod
+from console.tui.panes import devices_selftest as devices_mod
 from console.tui.selftest_action import selftest_estimate
 
 from .conftest import wait_for, words_on

@@ -19,7 +19,7 @@ from .conftest import wait_for
 
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 def test_the_selftest_says_what_it_does_and_the_time_left(plugins, monkeypatch, size):
-    import console.tui.panes.devices as devices_mod
+    import console.tui.panes.devices_selftest as devices_mod
 
     gate = threading.Event()
 
@@ -66,7 +66,7 @@ def test_the_progress_line_past_the_estimate_and_without_one():
 def test_a_keys_answer_holds_the_line_against_the_selftest_ticks(plugins, monkeypatch, size):
     """``d`` while the self-test runs: its answer stays on the line ``NOTE_S`` (a tick
     every 0.5 s replaced it before it was read), then the progress comes back."""
-    import console.tui.panes.devices as devices_mod
+    import console.tui.panes.devices_selftest as devices_mod
     from console.tui.long_work import NOTE_S
 
     gate = threading.Event()

@@ -72,7 +72,7 @@ def _footer(app) -> str:
 
 
 def test_new_operator_at_80x24(plugins, monkeypatch):
-    import console.tui.panes.devices as devices_mod
+    import console.tui.panes.devices_selftest as devices_mod
     import console.tui.panes.vibration as vibration_mod
     import console.tui.panes.vibration_measure as vibration_measure_mod
 

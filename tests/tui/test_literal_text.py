@@ -120,7 +120,7 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
     from console.core.types import DeviceStatus
     from console.runtime import doctor
     from console.tui.logs import NotifyHandler
-    from console.tui.panes import devices
+    from console.tui.panes import devices_doctor as devices
     from console.tui.safety_bar import SafetyBar
 
     real = doctor.diagnose

@@ -8,9 +8,8 @@ import math
 import time
 from typing import Any
 
-from rich.markup import escape
 from rich.text import Text
-from textual import on, work
+from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
@@ -20,56 +19,32 @@ from console.config.profile import overrides_path
 from console.core.errors import UserError
 from console.core.types import DeviceStatus
 from console.runtime.devices import output_devices, relay_boards
-from console.runtime.doctor import diagnose, realtime_status, scheduling_status
-from console.runtime.selftest_last import forget_last, note_last, read_last
-from console.session.events import ESTOP_FIX, Started, Stopped, estop_refusal
+from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
 from console.tui.device_cells import (
-    PROBLEMS,
-    ROW_LINES,
     cell,
-    cell_lines,
     note_room,
     note_width,
-    wrapped_rows,
 )
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
-from console.tui.long_work import NOTE_S
+from console.tui.panes.devices_doctor import DevicesDoctorMixin
+from console.tui.panes.devices_plugins import fill_plugins
+from console.tui.panes.devices_selftest import DevicesSelftestMixin
 from console.tui.said import status_said
-from console.tui.selftest_action import (
-    run_selftest,
-    selftest_about,
-    selftest_progress,
-    selftest_row,
-)
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
 
-#: the plugins table's description column at least (at 80 columns: the table fits)
-PLUGIN_DESC_MAX = 24
 #: the sound-card table's device column at most (the note takes what the other columns
 #: leave of the screen's width)
 DEVICE_MAX = 23
 
 
-def found(rows) -> str:
-    """What a doctor check found, counted by state ("4 simulated, 1 missing")."""
-    counts: dict[str, int] = {}
-    for s in rows:
-        counts[s.state] = counts.get(s.state, 0) + 1
-    told = ", ".join(f"{n} {state}" for state, n in counts.items()) or "no devices"
-    bad = any(state in ("missing", "error") for state in counts)
-    return told + ("; the fix column says what to do" if bad else "")
-
-
-#: a device's states that ask nothing of the operator: their rows may take one line
-WORKS = ("ok", "simulated", "not run")
 #: a relay board's probe states in which enter opens nothing (it says why instead)
 UNUSABLE = ("missing", "error")
 
@@ -127,7 +102,7 @@ def _says_estop(line: str) -> bool:
     return any(w in line for w in words)
 
 
-class DevicesPane(DevicePicksMixin, VerticalScroll):
+class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, VerticalScroll):
     #: no Tab stop of its own (it would only scroll, naming no key): the focused list
     #: scrolls into view, and the screen's keys work from each of them
     can_focus = False
@@ -229,26 +204,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
 
     def _fill_plugins(self) -> None:
         """The plugins table, its description sized to the width the table has."""
-        ctx = self.app.ctx
-        plug = self.query_one("#plugin-table", DataTable)
-        plug.clear(columns=True)
-        plug.add_columns("kind", "name", "plugin", "description")
-        regs = [
-            (kind, name, reg)
-            for kind, by_name in sorted(ctx.pm.registrations.items())
-            for name, reg in sorted(by_name.items())
-            if reg.tab is None  # a screen of the console: its tab shows it
-        ]
-        # the description takes what the other columns leave of the screen (each column
-        # has a cell of padding either side), at least PLUGIN_DESC_MAX
-        cells = [(kind, name, reg.plugin) for kind, name, reg in regs]
-        others = sum(max(map(len, col), default=0) + 2 for col in zip(*cells, strict=True))
-        width = max(PLUGIN_DESC_MAX, self._table_width() - others - 4)
-        for kind, name, reg in regs:
-            key = f"{kind}\x00{name}"
-            self.plugin_rows[key] = f"{kind} {name} ({reg.plugin}): {reg.description}"
-            about = cell(reg.description, f"{kind} {name}", width)
-            plug.add_row(Text(kind), Text(name), Text(reg.plugin), about, key=key)
+        table = self.query_one("#plugin-table", DataTable)
+        self.plugin_rows = fill_plugins(table, self.app.ctx.pm, self._table_width())
 
     def _table_width(self) -> int:
         """The width every table has: the screen's less its scrollbar's gutter (kept
@@ -292,101 +249,6 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
     def _in_use(self) -> tuple[str, str, str]:
         prof = self._profile()
         return prof.get("audio.driver"), prof.get("audio.device") or "", prof.get("relays.driver")
-
-    # ------------------------------------------------------------------ doctor
-    @work(thread=True, exclusive=True, group="doctor")
-    def action_doctor(self, said: bool = False) -> None:
-        """Re-check the profile's devices; ``said`` (the key d): the status line says
-        it is checking, then what the check found."""
-        try:
-            app = self.app
-            prof = self._profile()
-        except RuntimeError:  # Textual's NoActiveAppError: the console closed before this ran
-            return
-        if said:
-            self._say("re-checking the profile's devices ...")
-        # the same checks as `haptable doctor`; its quick self-test plays: here s runs it
-        rows = [*diagnose(prof, app.ctx.pm), realtime_status(prof, app.ctx.pm)]
-        rows += [scheduling_status(prof, app.ctx.pm)]
-        from_thread(app, self._show, rows, said)
-
-    def _show(self, rows, said: bool = False) -> None:
-        if not self.query("#device-table"):  # a worker finishing while the console closes
-            return
-        if said:
-            self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
-        last = read_last(self._profile().name)  # `haptable doctor`'s quick part too
-        out = self.app.session.outputs
-        estopped = out is not None and out.estopped
-        # a run stopped here, or in an earlier session of the console (kept in the file)
-        kept = last.get("stopped")
-        stopped = self.selftest_stopped or (f"{kept['line']}, {kept['time']}" if kept else "")
-        row = selftest_row(self.selftest_done, last, stopped, estopped)
-        self.doctor_rows = rows = [*rows, row]
-        table = self.query_one("#device-table", DataTable)
-        table.clear(columns=True)
-        firsts = [[s.kind, s.name, s.state] for s in rows]
-        heads = ("device", "driver", "state")
-        # each first column as wide as its widest word, given, not left to the table: an
-        # auto width grows as rows come and the rows drawn before kept the narrower one
-        # (``simul``/``ated``, the fix cut at the screen's edge: ``press s (full``)
-        for head, width in zip(heads, widths(heads, firsts), strict=True):
-            table.add_column(head, width=width)
-        # why and fix share what the first columns leave, the fix whole first (it says
-        # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
-        left = note_width(table, firsts, self._table_width(), heads)
-        why_w, fix_w, cells, heights = wrapped_rows(rows, left)
-        if table.has_focus and sum(heights) + 1 > self.scrollable_content_region.height:
-            # whole rows taller than the screen: the table scrolls, its scrollbar takes
-            # columns the fix had (``press s (full`` cut under it)
-            gutter = table.styles.scrollbar_size_vertical
-            why_w, fix_w, cells, heights = wrapped_rows(rows, max(NOTE_MIN, left - gutter))
-        table.add_column("why", width=why_w)
-        table.add_column("fix", width=fix_w)
-        # wrapped here (a row's height known as it is added: the list below it is
-        # scrolled into view at once), a number with its unit on one line, a word too
-        # long for its column ending in "…"; when wrapped rows would push the card in use
-        # out of view (on entry: the card list has the focus), a row that works takes one
-        # line, a problem's row stays whole (what to do), any other row two lines at
-        # most (cut after a word: in the log, Enter says it; a doctor's skipped
-        # self-test took ten lines and the screen opened scrolled down); the table
-        # focused (Tab) shows every row whole
-        self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
-        if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
-            for i, s in enumerate(rows):
-                most = 1 if s.state in WORKS else ROW_LINES
-                if s.state not in PROBLEMS and heights[i] > most:
-                    why = cell_lines(s.why, f"{s.kind} {s.name}", why_w, most)
-                    fix = cell_lines(s.fix, f"{s.kind} {s.name}", fix_w, most)
-                    cells[i] = (why, fix)
-                    heights[i] = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
-        for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
-            state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
-                s.state, f"[red]{escape(s.state)}[/]"
-            )
-            table.add_row(
-                Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
-            )
-        self._keep_focused_in_view()  # the rows above a list grew
-
-    def _doctor_room(self) -> int:
-        """The lines the device table's rows may take for the screen to show, from its
-        top, the table's header and the sound-card list down to the card in use (its
-        heading, header, the rows up to it, the blank line before the heading)."""
-        top = self.query_one("#devices-top").outer_size.height
-        cards = list(self.audio_rows.values())
-        in_use = self._in_use()[:2]
-        upto = cards.index(in_use) + 1 if in_use in cards else max(len(cards), 2)
-        height = self.size.height or self.app.size.height - 5
-        return height - top - 1 - (3 + upto)
-
-    @on(DataTable.RowSelected, "#device-table")
-    def _about_device(self, event: DataTable.RowSelected) -> None:
-        """Enter on a device's row: its whole line on the status line."""
-        if 0 <= event.cursor_row < len(self.doctor_rows):
-            s = self.doctor_rows[event.cursor_row]
-            fix = f"; fix: {s.fix}" if s.fix else ""
-            self._show_result(f"{s.kind} {s.name}: {s.state}: {s.why}{fix}")
 
     # ------------------------------------------------------------------ listing
     @work(thread=True, exclusive=True, group="devices")
@@ -559,84 +421,6 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
             else ", ".join(f"{ch} {v:.1f} V peak" for ch, v in trace.peak_v().items())
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
-
-    def action_selftest(self) -> None:
-        """``s``: asks first, saying its paths and time (it plays chirps on every relay
-        path), ``s`` again within 3 s runs it; during an e-stop it is refused at once
-        (nothing to ask)."""
-        out = self.app.session.outputs
-        if out is not None and out.estopped:  # nothing to ask: the console's key first
-            self._show_result(f"self-test {estop_refusal(out.estop_reason or '')}", error=True)
-            return
-        if self.ask.confirmed("selftest"):
-            self._selftest()
-            return
-        last_s = self.selftest_done[2] if self.selftest_done else 0.0
-        about = selftest_about(self._profile(), self.app.ctx.pm, last_s)[0]
-        does = f"runs the self-test ({about}): a chirp on every relay path"
-        self.ask.ask(self, "s", does, lambda: self.result, self._show_result)
-
-    @work(thread=True, exclusive=True, group="test-output")
-    def _selftest(self) -> None:
-        """Every relay path chirped and compared (``console.tui.selftest_action``): the
-        line says how long it takes before it starts, then how far it is."""
-        prof, pm = self._profile(), self.app.ctx.pm
-        last_s = self.selftest_done[2] if self.selftest_done else 0.0
-        about, total_s, est = selftest_about(prof, pm, last_s)
-        out = self.app.session.outputs
-        self._estopped_at_start = out is not None and out.estopped
-        self._say(f"self-test ({about}): starting ...")
-        t0 = time.monotonic()
-        from_thread(self.app, self._selftest_ticks, t0, total_s, est)
-        ok, line = run_selftest(prof, pm)
-        if ok is not None:  # it ran: kept for the row after a restart
-            note_last(prof.name, "full", "ok" if ok else "error", line, "the console's s")
-        took_s = 0.0 if est and est[2] else time.monotonic() - t0  # a map run: no guide
-        from_thread(self.app, self._selftest_ended, ok, line, took_s)
-
-    def _selftest_ticks(self, t0: float, total_s: float, est) -> None:
-        """While the self-test runs: the line says what it does and the time left
-        (``selftest_progress``)."""
-
-        self._selftest_clock = (t0, total_s, est)
-        self._answered_at = 0.0
-        self._selftest_timer = self.set_interval(0.5, self._selftest_tick)
-
-    def _selftest_tick(self) -> None:
-        """The self-test's progress on the line, unless a key answered on it less than
-        ``NOTE_S`` ago (a tick every 0.5 s took ``d``'s answer before it was read)."""
-        if time.monotonic() - self._answered_at < NOTE_S:
-            return
-        t0, total_s, est = self._selftest_clock
-        self._show_result(selftest_progress(time.monotonic() - t0, total_s, est), tick=True)
-
-    def _selftest_ended(self, ok: bool | None, line: str, took_s: float) -> None:
-        prof_name = self._profile().name
-        if self._selftest_timer is not None:
-            self._selftest_timer.stop()
-            self._selftest_timer = None
-        if ok is None:  # refused (the row keeps the last result) or stopped under way
-            out = self.app.session.outputs
-            at = time.strftime("%H:%M:%S")
-            if out is not None and out.estopped and not self._estopped_at_start:
-                # under way when the e-stop came: stopped, not refused; the reset's line
-                # replaces this one (``_says_estop``)
-                line = f"self-test stopped by the e-stop before its end; {ESTOP_FIX}, then s"
-                line += " runs it again"
-                self.selftest_stopped = f"by the e-stop at {at}"
-            elif line.startswith("self-test stopped"):
-                self.selftest_stopped = f"at {at}: {line.split('(', 1)[-1].rstrip(')')}"
-            if self.selftest_stopped:  # kept for the row after a restart
-                note_last(prof_name, "stopped", "stopped", self.selftest_stopped, "the console's s")
-            if self.selftest_stopped and self.doctor_rows:  # the row says it too: its
-                self._show(self.doctor_rows[:-1])  # last outcome is not this run's
-            self._show_result(line, error=True)
-            return
-        self.selftest_done, self.selftest_stopped = (ok, line, took_s), ""
-        forget_last(prof_name, "stopped")  # a whole run ended: the stopped one is past
-        self._show_result(line, error=not ok)
-        if self.doctor_rows:  # its row in the devices table says it too
-            self._show(self.doctor_rows[:-1])
 
     def _show_result(
         self, text: str, error: bool = False, severity: str = "", tick: bool = False
