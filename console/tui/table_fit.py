@@ -1,22 +1,24 @@
 """A table's columns sized to the width it has: a cell within its column, on one line
-ending in "…" when cut (``clip``), or wrapped inside its row (``fit_cell``; in a few lines
-at most: ``fit_lines``), never cut at the screen's edge mid-word; the widths of the last columns shared (``share``)."""
+ending in "…" after a whole word when cut (``clip``), or wrapped inside its row
+(``fit_cell``; in a few lines at most: ``fit_lines``), never cut at the screen's edge
+mid-word; the widths of the last columns shared (``share``)."""
 
 from __future__ import annotations
 
 from rich.text import Text
 
 from console.tui.kept_text import wrap_kept
-from console.tui.shorten import closers, cut_chars, cut_words
+from console.tui.shorten import closers, cut_words
 
 #: the narrowest a column sized from what is left gets
 NOTE_MIN = 6
 
 
 def clip(text: str, width: int) -> str:
-    """``text`` on one line within ``width`` columns, ending in "…" when cut, no bracket
-    left open (``console.tui.shorten``)."""
-    return cut_chars(" ".join(str(text).split()), width)
+    """``text`` on one line within ``width`` columns, ending in "…" when cut after a
+    whole word (a first word wider than the column cut where it must), no bracket left
+    open (``console.tui.shorten``): ``no Yocto-MaxiCoupler…``, never ``… onl…``."""
+    return cut_words(" ".join(str(text).split()), width)
 
 
 def _word_fits(word: str, width: int) -> str:
