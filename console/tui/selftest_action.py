@@ -47,6 +47,20 @@ def selftest_estimate(profile: Any, pm: Any) -> tuple[float, int, bool] | None:
         return None  # an older plugin without --estimate, or no estimate: said as such
 
 
+def quick_skipped(profile: Any, pm: Any) -> str:
+    """`haptable doctor`'s quick part's line when it skips on ``profile`` (``skipped: no
+    baseline yet: ...``), nothing played; "" when it would run, or no plugin can say."""
+    if pm.commands.get("selftest") is None:
+        return ""
+    try:
+        _code, got = _run(profile, pm, ["--doctor", "--estimate", "--json"])
+    except (UserError, SafetyRefusal, ValueError, KeyError, TypeError, SystemExit):
+        return ""  # an older plugin: the row says what was kept, or not run
+    if not isinstance(got, dict) or got.get("state") != "skipped":
+        return ""
+    return "; ".join(str(x) for x in got.get("lines") or ()) or "skipped"
+
+
 #: about how long the twin's vibration map takes to measure (the Vibration screen's m)
 TWIN_MAP_S = 10.0
 
@@ -101,17 +115,20 @@ def selftest_row(
     last: dict[str, dict[str, str]] | None = None,
     stopped: str = "",
     estopped: bool = False,
+    skips: str = "",
 ) -> DeviceStatus:
     """The Devices doctor's self-test row, saying what ran: the full one run here
     (``done``: healthy, line, seconds), else the last kept (``last``:
     ``console.runtime.selftest_last``: `haptable doctor`'s quick part, a full one before),
-    else where to run it (``haptable doctor`` runs its quick part; here s the full one).
+    else what `haptable doctor`'s quick part says now when it skips (``skips``: its line,
+    ``quick_skipped``: the same word and reason), else where to run it (``haptable
+    doctor`` runs its quick part; here s the full one).
     ``stopped``: the last run here was stopped before its end (when, by what): the row
     says so first, the last whole run's outcome after it (it is no longer the news), and
     its fix asks for ctrl+r first only while the table is ``estopped``. The quick part's
     CLI advice (run `haptable selftest` ...) is said with the console's key."""
     if stopped:
-        before = selftest_row(done, last)
+        before = selftest_row(done, last, skips=skips)
         was = (
             f"; the last whole one: {before.state} {before.why}"
             if before.state != "not run"
@@ -127,6 +144,10 @@ def selftest_row(
         return DeviceStatus("selftest", "full", full["state"], why, "press s to run it again")
     if done is None:
         plays = "the full one not run from the console: it plays a chirp on every relay path"
+        if quick is None and skips:  # as `haptable doctor` would say it now
+            said = skips.removeprefix("skipped: ").replace(CLI_RUN, "press s")
+            why = f"quick self-test skipped ({said}); {plays}"
+            return DeviceStatus("selftest", "quick", "skipped", why, "press s (full)")
         if quick is None:
             why = "not run from the console: it plays a chirp on every relay path"
             return DeviceStatus("selftest", "full", "not run", why, "press s")

@@ -142,6 +142,8 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         self.selftest_done: tuple[bool, str, float] | None = None
         #: the last run here stopped before its end: when and by what ("" : it was not)
         self.selftest_stopped = ""
+        #: `haptable doctor`'s quick part's line when it skips now ("": it would run)
+        self.quick_skips = ""
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         #: the self-test's start (monotonic s), seconds expected and estimate, for ticks
         self._selftest_clock: tuple[float, float, Any] = (0.0, 0.0, None)

@@ -21,6 +21,7 @@ from console.tui.device_cells import (
     note_width,
     wrapped_rows,
 )
+from console.tui.selftest_action import quick_skipped
 from console.tui.table_fit import NOTE_MIN, widths
 from console.tui.util import from_thread
 
@@ -47,6 +48,7 @@ class DevicesDoctorMixin:
     doctor_rows: list[DeviceStatus]
     audio_rows: dict[str, tuple[str, str]]
     _doctor_whole: bool
+    quick_skips: str
 
     @work(thread=True, exclusive=True, group="doctor")
     def action_doctor(self, said: bool = False) -> None:
@@ -59,14 +61,19 @@ class DevicesDoctorMixin:
             return
         if said:
             self._say("re-checking the profile's devices ...")
-        # the same checks as `haptable doctor`; its quick self-test plays: here s runs it
+        # the same checks as `haptable doctor`; its quick self-test plays: here s runs
+        # the full one, and the row says the quick part's skip as doctor would
         rows = [*diagnose(prof, app.ctx.pm), realtime_status(prof, app.ctx.pm)]
         rows += [scheduling_status(prof, app.ctx.pm)]
-        from_thread(app, self._show, rows, said)
+        from_thread(app, self._show, rows, said, quick_skipped(prof, app.ctx.pm))
 
-    def _show(self, rows, said: bool = False) -> None:
+    def _show(self, rows, said: bool = False, skips: str | None = None) -> None:
+        """The device table of ``rows`` and the self-test's row; ``skips``: the doctor's
+        quick part's skip as checked now (None: as last checked)."""
         if not self.query("#device-table"):  # a worker finishing while the console closes
             return
+        if skips is not None:
+            self.quick_skips = skips
         if said:
             self._show_result(f"devices re-checked at {time.strftime('%H:%M:%S')}: {found(rows)}")
         self.doctor_rows = rows = [*rows, self._selftest_status()]

@@ -21,6 +21,7 @@ from console.tui.selftest_action import (
     selftest_progress,
     selftest_row,
 )
+from console.tui.selftest_stopped import kept_stopped, stopped_when
 from console.tui.util import from_thread
 
 
@@ -36,6 +37,8 @@ class DevicesSelftestMixin:
     selftest_done: tuple[bool, str, float] | None
     #: the last run here stopped before its end: when and by what ("" : it was not)
     selftest_stopped: str
+    #: `haptable doctor`'s quick part's line when it skips now ("": it would run)
+    quick_skips: str
 
     def _selftest_status(self) -> DeviceStatus:
         """The self-test's row of the device table now (``selftest_row``): its run here,
@@ -45,8 +48,8 @@ class DevicesSelftestMixin:
         out = self.app.session.outputs
         estopped = out is not None and out.estopped
         kept = last.get("stopped")
-        stopped = self.selftest_stopped or (f"{kept['line']}, {kept['time']}" if kept else "")
-        return selftest_row(self.selftest_done, last, stopped, estopped)
+        stopped = self.selftest_stopped or (kept_stopped(kept) if kept else "")
+        return selftest_row(self.selftest_done, last, stopped, estopped, self.quick_skips)
 
     def action_selftest(self) -> None:
         """``s``: asks first, saying its paths and time (it plays chirps on every relay
@@ -105,17 +108,18 @@ class DevicesSelftestMixin:
             self._selftest_timer = None
         if ok is None:  # refused (the row keeps the last result) or stopped under way
             out = self.app.session.outputs
-            at = time.strftime("%H:%M:%S")
+            at, what = time.strftime("%H:%M:%S"), ""
             if out is not None and out.estopped and not self._estopped_at_start:
                 # under way when the e-stop came: stopped, not refused; the reset's line
                 # replaces this one (``_says_estop``)
                 line = f"self-test stopped by the e-stop before its end; {ESTOP_FIX}, then s"
                 line += " runs it again"
-                self.selftest_stopped = f"by the e-stop at {at}"
+                what = "by the e-stop"
             elif line.startswith("self-test stopped"):
-                self.selftest_stopped = f"at {at}: {line.split('(', 1)[-1].rstrip(')')}"
-            if self.selftest_stopped:  # kept for the row after a restart
-                note_last(prof_name, "stopped", "stopped", self.selftest_stopped, "the console's s")
+                what = line.split("(", 1)[-1].rstrip(")")
+            if what:  # kept for the row after a restart (its time kept beside it)
+                self.selftest_stopped = stopped_when(what, at)
+                note_last(prof_name, "stopped", "stopped", what, "the console's s")
             if self.selftest_stopped and self.doctor_rows:  # the row says it too: its
                 self._show(self.doctor_rows[:-1])  # last outcome is not this run's
             self._show_result(line, error=True)

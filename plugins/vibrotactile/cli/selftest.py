@@ -3,7 +3,8 @@ baseline, or the stored vibration map on a table without one (``--against-map``:
 ``plugins.vibrotactile.selftest``, ``selftest_map``); ``--sensor amp_monitor``: the
 amplifiers' monitors instead of the accelerometer (``selftest_monitor``). Each finding
 one line with its fix, exit 1 on a fault. ``doctor_part(ctx)`` is the quick part
-``haptable doctor`` runs."""
+``haptable doctor`` runs (``--doctor --estimate``: whether it would skip and why, nothing
+played: the console's Devices row says it as doctor would)."""
 
 from __future__ import annotations
 
@@ -156,7 +157,7 @@ def selftest_report(
 
 def run_selftest_cmd(args, ctx) -> int:
     if args.doctor:
-        d = doctor_part(ctx)
+        d = doctor_part(ctx, play=not args.estimate)
         if args.json:
             print(json.dumps(d))
         else:
@@ -230,18 +231,30 @@ def _map_first(ctx, args) -> bool:
     return kept_measured_map(ctx.profile) is None
 
 
-def doctor_part(ctx: Any) -> dict:
-    """The quick self-test for ``haptable doctor``: state ok | error | skipped, the lines."""
-    why = skipped_why(ctx.profile)
+def doctor_skipped(profile: Any) -> str | None:
+    """Why ``haptable doctor``'s quick part skips on ``profile`` (no sensor, no baseline
+    yet), or None: it would run."""
+    why = skipped_why(profile)
     if why:
-        return {"state": "skipped", "lines": [f"skipped: {why}"]}
-    # lazy: the test's module loads only when run
+        return why
+    # lazy: the test's module loads only when asked
     from plugins.vibrotactile.selftest import baseline_path
 
-    monitor = sensor_of(ctx.profile, None) == "amp_monitor"  # it needs no baseline
-    if not monitor and not baseline_path(ctx.profile).exists():
-        why = "no baseline yet: run `haptable selftest` on a healthy table to keep one"
+    monitor = sensor_of(profile, None) == "amp_monitor"  # it needs no baseline
+    if not monitor and not baseline_path(profile).exists():
+        return "no baseline yet: run `haptable selftest` on a healthy table to keep one"
+    return None
+
+
+def doctor_part(ctx: Any, play: bool = True) -> dict:
+    """The quick self-test for ``haptable doctor``: state ok | error | skipped, the lines;
+    ``play`` False (``--doctor --estimate``: the console's Devices row): nothing plays,
+    state skipped with why, else ``not run`` (it would run)."""
+    why = doctor_skipped(ctx.profile)
+    if why:
         return {"state": "skipped", "lines": [f"skipped: {why}"]}
+    if not play:
+        return {"state": "not run", "lines": []}
     twin = ctx.profile.get("audio.driver") == "twin"
     try:
         r = selftest_report(ctx, quick=True, fast=True if twin else None)
