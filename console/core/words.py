@@ -21,6 +21,11 @@ AT_CLI = "cli"
 AT_CONSOLE = "console"
 PLACES = (AT_CLI, AT_CONSOLE)
 
+#: how Scenes and Latency both name the outputs a demo played once their plan was
+#: computed off the frame loop (no frame's decision scheduled them: Latency's end to end
+#: counts none of them; a demo snapshot's ``off_loop``)
+OFF_LOOP = "planned outside the frame loop"
+
 
 class Placed(UserError):
     """A ``UserError`` whose fix depends on where it shows: ``what`` happened, and

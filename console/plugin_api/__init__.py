@@ -15,7 +15,8 @@ What this module offers, by where it comes from:
 - errors: ``UserError``, ``SafetyRefusal``, ``TableBusy`` (refused: another process holds
   the outputs); a message's fix where the user is
   (``console.core.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
-  ``AT_CONSOLE``, ``listing``, ``counted``
+  ``AT_CONSOLE``, ``listing``, ``counted``; ``OFF_LOOP``, the words for plays planned
+  outside the frame loop (Scenes and Latency say them alike)
 - the values that cross plugin boundaries (``console.core.types``): ``Frame``, ``Hand`` (its
   ``HandShape``),
   ``Contact``, ``Gesture``, ``GestureScript``, ``GestureStep``, ``OutputPlan`` (its
@@ -131,7 +132,7 @@ from console.core.types import (
     TunableRange,
     patches_of,
 )
-from console.core.words import AT_CLI, AT_CONSOLE, Placed, counted, listing, worded
+from console.core.words import AT_CLI, AT_CONSOLE, OFF_LOOP, Placed, counted, listing, worded
 from console.files.atomic import append_json_line, write_text_atomic
 from console.files.cache_files import cached_arrays, entry_path, input_hash
 from console.files.file_read import parse_toml_text, read_bytes_capped
@@ -176,6 +177,7 @@ __all__ = [
     "listing",
     "counted",
     "worded",
+    "OFF_LOOP",
     # values (console.core.types)
     "DIRECTIONS",
     "DIRECTIONS_MM",

@@ -153,6 +153,9 @@ class FlowDemo:
         #: the frame loop: no frame's decision scheduled them (Latency's frames omit them)
         self.played_total = 0
         self.played_late = 0
+        #: the planning seconds of the last of those (the wait from the decision to the
+        #: plan: Latency's ``planned off loop`` row)
+        self.late_plan_s: deque[float] = deque(maxlen=512)
         self._lock = threading.Lock()
         self._report = None  # the plan playing now
         self._pending: threading.Thread | None = None
@@ -505,7 +508,9 @@ class FlowDemo:
             ev["from_mm"] = list(pair["from_mm"])
             ev["to_mm"] = list(pair["to_mm"])
         self.played_total += 1
-        self.played_late += late_s > 0
+        if late_s > 0:
+            self.played_late += 1
+            self.late_plan_s.append(late_s)
         self._log_event(ev)
         if self.scene is not None:
             self.link.emit({"type": "playing", "on": True})

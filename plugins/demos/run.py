@@ -171,6 +171,7 @@ def demo_state(demo: Any) -> dict:
             }
         }
     evs = [{k: v for k, v in e.items() if k != "report"} for e in list(demo.events)[-10:]]
+    late = list(demo.late_plan_s)
     return {
         "flow": {
             "direction": demo.current_direction(),
@@ -178,7 +179,14 @@ def demo_state(demo: Any) -> dict:
             "flows_late": demo.played_late,
             "last": evs,
             "preparing": demo.preparation(),
-        }
+        },
+        # the plays planned outside the frame loop, which no frame's decision scheduled
+        # (Latency's end to end counts none of them): how many, their planning time
+        "off_loop": {
+            "n": demo.played_late,
+            "what": "flow",
+            "planning_ms": summarize_s(late) if late else None,
+        },
     }
 
 

@@ -11,7 +11,7 @@ from typing import Any
 
 from textual.markup import escape as _escape
 
-from console.plugin_api import counted
+from console.plugin_api import OFF_LOOP, counted
 
 #: the scene each demo drives on the projector (``SceneLink`` in flow.py and knob.py)
 DEMO_SCENES = {"flow": "flow_hand", "knob": "knob"}
@@ -172,8 +172,8 @@ def _hand_line(hand: dict[str, Any]) -> str:
 
 def _flow_text(f: dict[str, Any], stopping: bool = False) -> str:
     text = escape(f"flow {f.get('direction')}: {f.get('flows', 0)} played")
-    if f.get("flows_late"):  # planned off the loop: Latency's frames do not count them
-        text += f" ({int(f['flows_late'])} once planned, not in Latency's frames)"
+    if f.get("flows_late"):  # Latency's own row counts them (``off_loop``), not its frames
+        text += f" ({int(f['flows_late'])} {OFF_LOOP}, not in Latency's end to end)"
     last = [e for e in f.get("last", []) if e.get("parts")]
     if last:
         e = last[-1]

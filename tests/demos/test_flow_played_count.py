@@ -10,6 +10,7 @@ import threading
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from console.core.types import OutputPlan, Segment
 from console.signals.waveforms import tone
@@ -41,4 +42,6 @@ def test_only_plays_count_and_late_ones_are_said(profile, plugins):
     state = demo_state(demo)["flow"]
     assert state["flows"] == 2 and state["flows_late"] == 1, state
     text = _flow_text(state)
-    assert "2 played (1 once planned, not in Latency's frames)" in text, text
+    assert "2 played (1 planned outside the frame loop, not in Latency's end to end)" in text
+    off = demo_state(demo)["off_loop"]  # Latency's row of them: how many, their planning
+    assert off["n"] == 1 and off["planning_ms"]["max_ms"] == pytest.approx(300.0), off

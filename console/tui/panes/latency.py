@@ -11,6 +11,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
 
+from console.core.words import OFF_LOOP, counted
 from console.tui.camera_picture import same_height
 from console.tui.loop_rates import CAMERA, VISION, WINDOW_S, SameWindow, frame_counts
 from console.tui.plots import sparkline
@@ -51,6 +52,41 @@ def stage_rows(snap: dict) -> list[tuple[str, dict]]:
         if key not in STAGE_LABELS:
             rows.append((key, val or {}))
     return rows
+
+
+#: the row of the outputs a demo played once planned outside the frame loop (a demo
+#: snapshot's ``off_loop``): their planning time, how many (Scenes counts them alike)
+OFF_LOOP_ROW = "planned off loop"
+
+
+def off_loop_row(off: dict | None) -> tuple[str, ...] | None:
+    """(label, p50, p99, max of the planning ms, how many) of a demo snapshot's
+    ``off_loop`` (``n`` outputs, each a ``what``, played once planned outside the frame
+    loop; ``planning_ms``: ``p50_ms``/``p99_ms``/``max_ms`` or None: the flow demo's,
+    ``plugins.demos.run.demo_state``); None when the demo plans nothing outside it."""
+    if not off:
+        return None
+    d = off.get("planning_ms") or {}
+    return (
+        OFF_LOOP_ROW,
+        _ms(d.get("p50_ms")),
+        _ms(d.get("p99_ms")),
+        _ms(d.get("max_ms")),
+        _count(off.get("n", 0)),
+    )
+
+
+def off_loop_words(off: dict | None) -> str:
+    """What the off-loop row counts, for the line under the table ("" without one)."""
+    if not off:
+        return ""
+    n = int(off.get("n") or 0)
+    what = counted(n, str(off.get("what") or "output"))
+    return (
+        f"; {OFF_LOOP_ROW}: {what} {OFF_LOOP} (as Scenes counts them), the ms from the "
+        "decision to the plan: no frame's decision scheduled them, so end to end counts "
+        "none of them"
+    )
 
 
 #: p50 values kept per stage for its sparkline (it shows as many as fit)
@@ -137,13 +173,17 @@ def last_camera_head(ended_s: float, now_s: float) -> str:
     )
 
 
-def numbers_key(snap: dict, readings: int, every_s: float, stopped: bool, width: int) -> str:
+def numbers_key(
+    snap: dict, readings: int, every_s: float, stopped: bool, width: int, off: dict | None = None
+) -> str:
     """What the numbers mean, in one paragraph under the table: the columns, the frames
-    end to end counts (or that this loop schedules no output) and the sparklines' span."""
+    end to end counts (or that this loop schedules no output), the outputs planned
+    outside the frame loop (``off``: a demo snapshot's ``off_loop``) and the sparklines'
+    span."""
     frames = snap.get("frames")
     e2e = (snap.get("end_to_end") or {}).get("n")
     of = "" if frames is None else f" of the loop's {frames}"
-    counted = "the" if e2e is None else f"the {int(e2e)}{of}"
+    frames_counted = "the" if e2e is None else f"the {int(e2e)}{of}"
     if not schedules_output(snap):
         end = (
             "no end to end: this loop schedules no output (the camera loop only sees; "
@@ -152,7 +192,7 @@ def numbers_key(snap: dict, readings: int, every_s: float, stopped: bool, width:
     else:
         end = (
             f"end to end: a frame's arrival to its first output sample scheduled, only "
-            f"{counted} frames whose decision scheduled one"
+            f"{frames_counted} frames whose decision scheduled one{off_loop_words(off)}"
         )
     span = readings * every_s
     took = f"{span:.0f} s" if span < 120 else f"{span / 60:.0f} min"
@@ -189,7 +229,10 @@ class LatencyPane(Vertical):
         "reached its stage (vision: every frame processed; output and end to end: the "
         "frames whose decision scheduled an output sample), so end to end's p99 can be "
         "below another row's; a loop that schedules no output (the camera loop) has no end "
-        "to end row. The line under the table says what its numbers mean.\n"
+        "to end row. A demo that plans an output outside its frame loop (the flow, when "
+        "no plan was ready) has a row 'planned off loop': how many (as Scenes counts "
+        "them) and their planning ms; no frame's decision scheduled them, so end to end "
+        "counts none. The line under the table says what its numbers mean.\n"
         "The sparkline: the loop's p50 readings, kept by the loop whether or not this "
         "screen shows (the camera loop's every half second, a demo's every quarter), the "
         "newest on the right, scaled from its lowest reading to its highest (a steady p50 a "
@@ -392,17 +435,20 @@ class LatencyPane(Vertical):
         self._say("lat-head", what + "\n" + self._camera)
         if not snap:
             return
-        self._show_rows(tables.first(DataTable), snap, runs)
+        self._show_rows(tables.first(DataTable), snap, runs, off=st.get("off_loop"))
 
     def demo_history(self):
         """The session's last demo run's history (``RunHistory``)."""
         return self.app.session.demos.history
 
-    def _show_rows(self, table: DataTable, snap: dict, runs, stopped: bool = False) -> None:
+    def _show_rows(
+        self, table: DataTable, snap: dict, runs, stopped: bool = False, off: dict | None = None
+    ) -> None:
         """The stage table of a monitor snapshot, its sparklines the loop's whole history
         as its owner kept it (``RunHistory``: the demo's poll, the camera service's
-        readings), shown here or not and kept when the loop stopped (``stopped``); and
-        under it what the numbers mean."""
+        readings), shown here or not and kept when the loop stopped (``stopped``); the
+        outputs a demo planned outside its loop (``off``: its snapshot's ``off_loop``) on
+        a row of their own; and under it what the numbers mean."""
         keys = {label: key for key, label in STAGE_LABELS.items()}
         cells = []
         for label, d in stage_rows(snap):
@@ -414,17 +460,17 @@ class LatencyPane(Vertical):
             n = d.get("n")
             cells.append((label, _ms(p50), _ms(d.get("p99_ms")), _ms(d.get("max_ms")), _count(n)))
         heads = ("stage", "p50 ms", "p99 ms", "max ms", "frames")
+        late = [r for r in [off_loop_row(off)] if r]
         width = spark_width(
             table.size.width or self.size.width,
-            [max(len(r[i]) for r in [heads, *cells]) for i in range(len(heads))],
+            [max(len(r[i]) for r in [heads, *cells, *late]) for i in range(len(heads))],
             table.cell_padding,
         )
-        self._set_rows(
-            table, [(*r, sparkline(self.history[r[0]], width, fill=True)) for r in cells]
-        )
+        rows = [(*r, sparkline(self.history[r[0]], width, fill=True)) for r in cells]
+        self._set_rows(table, rows + [(*r, "") for r in late])  # it keeps no p50 history
         readings = min(max((len(self.history[r[0]]) for r in cells), default=0), width)
         every_s = READING_S["demo" if self.source.startswith("demo") else "camera"]
-        self._say("lat-key", numbers_key(snap, readings, every_s, stopped, width))
+        self._say("lat-key", numbers_key(snap, readings, every_s, stopped, width, off))
 
     def _show_last_camera(self, table: DataTable, svc) -> bool:
         """No loop runs: the console's camera loop's last numbers as the camera service
@@ -474,7 +520,7 @@ class LatencyPane(Vertical):
             f"m measures the camera loop for {MEASURE_S:.0f} s, a new demo (F6) shows its own"
         )
         self._say("lat-head", head + "\n" + self._camera)
-        self._show_rows(table, snap["latency"], runs, stopped=True)
+        self._show_rows(table, snap["latency"], runs, stopped=True, off=snap.get("off_loop"))
         return True
 
     def _stopped_head(self) -> str:
