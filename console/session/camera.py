@@ -45,6 +45,7 @@ from console.runtime.stages import (
     open_camera,
     open_classifier,
 )
+from console.session.background_check import InView, in_view
 from console.session.camera_start import LOADING_VISION, OPENING_CAMERA, Starting, preview_loop
 from console.session.demo_history import RunHistory
 from console.session.events import SessionEvent, Started, Stopped
@@ -119,6 +120,8 @@ class CameraService:
         self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
+        #: the vision's (hands, contacts) in each of ``recent`` (None: not processed)
+        self.recent_seen: deque[tuple[int, int] | None] = deque(maxlen=15)
         #: frames taken before this (monotonic s, the camera's clock) are not ``recent``:
         #: the exposure or gain changed, and a background is learned under one setting
         self._recent_from_s = 0.0
@@ -307,7 +310,7 @@ class CameraService:
         """A frame while the vision is prepared: shown, passed to no frame hook."""
         with self._lock:
             self._preview = (frame, work)
-            self._keep_recent(frame)
+            self._keep_recent(frame, None)
 
     def _apart(self) -> bool:
         """``[runtime] twin_camera_process`` (on when the profile does not say)."""
@@ -343,7 +346,7 @@ class CameraService:
     def _sink(self, frame, work: dict) -> None:
         with self._lock:
             self.latest = (frame, work)
-            self._keep_recent(frame)
+            self._keep_recent(frame, work)
         now, loop = time.monotonic(), self.loop
         if loop is not None and now - self._history_at >= HISTORY_TICK_S:
             self._history_at = now
@@ -351,11 +354,14 @@ class CameraService:
         for hook in list(self.frame_hooks):
             hook(frame, work)
 
-    def _keep_recent(self, frame) -> None:
-        """Add ``frame`` to ``recent`` unless it was taken before the controls changed
-        (call with ``_lock`` held)."""
+    def _keep_recent(self, frame, work: dict | None) -> None:
+        """Add ``frame`` to ``recent`` (and the hands and contacts of its ``work`` to
+        ``recent_seen``) unless it was taken before the controls changed (call with
+        ``_lock`` held)."""
         if frame.t_capture_s >= self._recent_from_s:
             self.recent.append(frame.image)
+            seen = None if work is None else (work.get("hands"), work.get("contacts"))
+            self.recent_seen.append(None if seen is None else tuple(len(x or ()) for x in seen))
 
     def snapshot(self) -> tuple[Any, dict] | None:
         """The newest processed frame and its ``work`` (None before the vision runs)."""
@@ -404,6 +410,13 @@ class CameraService:
         if not frames or self.classifier is None:
             return None
         return np.median(np.stack(frames), axis=0).astype(np.float32)
+
+    def hand_in_view(self, median: np.ndarray | None = None) -> InView:
+        """A hand in the recent frames (``background_check.in_view``): what ``b``
+        asks about before it learns them (``median``: theirs, when known)."""
+        with self._lock:
+            frames, seen = list(self.recent), list(self.recent_seen)
+        return in_view(frames, seen, median)
 
     def capture_background(self, image: np.ndarray | None = None) -> int:
         """Background = ``image`` or the per-pixel median of the recent frames (show the
@@ -468,6 +481,7 @@ class CameraService:
         cam.set_control(name, value)
         with self._lock:  # the frames so far were taken under the old setting
             self.recent.clear()
+            self.recent_seen.clear()
             self._recent_from_s = time.monotonic() + CONTROL_SETTLE_S
 
     def save_tuning(self) -> Path:
