@@ -29,6 +29,7 @@ import numpy as np
 
 from console.core.contracts import (
     AdjustableCamera,
+    OrderedTunables,
     ReportsProblem,
     SwitchableSink,
     TunablesInProfile,
@@ -122,6 +123,9 @@ class CameraService:
         self.recent: deque[np.ndarray] = deque(maxlen=15)
         #: the vision's (hands, contacts) in each of ``recent`` (None: not processed)
         self.recent_seen: deque[tuple[int, int] | None] = deque(maxlen=15)
+        #: the settings as the profile has them (as the vision started, or as last kept
+        #: by ``save_tuning``): what ``reset_params`` puts back
+        self.profile_params: dict[str, float] = {}
         #: frames taken before this (monotonic s, the camera's clock) are not ``recent``:
         #: the exposure or gain changed, and a background is learned under one setting
         self._recent_from_s = 0.0
@@ -252,6 +256,8 @@ class CameraService:
             return
         finally:
             self.starting.set("")
+        for key, value in self.params().items():  # the first values seen: the profile's
+            self.profile_params.setdefault(key, value)
         stages = base_stages(self.classifier)
         window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
         mon = LatencyMonitor([n for n, _ in stages], size=window)
@@ -462,7 +468,46 @@ class CameraService:
 
     def set_param(self, key: str, value: float) -> None:
         """Change a vision threshold or a camera control (kept in its range); the next
-        frame uses it."""
+        frame uses it. A step that would break the order the classifier's thresholds
+        keep (``OrderedTunables``) is refused: a ``UserError`` saying why."""
+        rng = self.param_ranges().get(key)
+        if rng is None:
+            return
+        why = self._out_of_order(key, rng.clamp(value))
+        if why:
+            raise UserError(why)
+        self._set(key, value)
+
+    def _out_of_order(self, key: str, value: float) -> str:
+        """Why ``key`` = ``value`` breaks the thresholds' order ("" when it does not, or
+        when it moves a setting back towards it)."""
+        clf, now = self.classifier, self.params()
+        if not isinstance(clf, OrderedTunables) or key not in now:
+            return ""
+        for lo, hi, why in clf.tunable_order():
+            if lo not in now or hi not in now:
+                continue
+            if key == lo and now[hi] > 0 and value >= now[hi] and value > now[lo]:
+                return f"{lo} stays {now[lo]:g}: it must stay below {hi} {now[hi]:g} ({why})"
+            if key == hi and 0 < value <= now[lo] and value < now[hi]:
+                return f"{hi} stays {now[hi]:g}: it must stay above {lo} {now[lo]:g} ({why})"
+        return ""
+
+    def changed_params(self) -> dict[str, tuple[float, float]]:
+        """The settings changed from the profile's: {name: (now, the profile's)}."""
+        now = self.params()
+        return {k: (now[k], v) for k, v in self.profile_params.items() if k in now and now[k] != v}
+
+    def reset_params(self) -> list[str]:
+        """Every setting back as the profile has it (``profile_params``); the names
+        changed."""
+        changed = list(self.changed_params())
+        for key in changed:
+            self._set(key, self.profile_params[key])
+        return changed
+
+    def _set(self, key: str, value: float) -> None:
+        """``key`` = ``value`` kept in its range: the classifier's or the camera's."""
         rng = self.param_ranges().get(key)
         if rng is None:
             return
@@ -483,6 +528,17 @@ class CameraService:
             self.recent.clear()
             self.recent_seen.clear()
             self._recent_from_s = time.monotonic() + CONTROL_SETTLE_S
+
+    def tuning_saved(self) -> bool:
+        """Whether the profile's overrides file keeps vision settings (``save_tuning``
+        replaces them)."""
+        # lazy: the overrides file is read only when W asks (as save_tuning writes it)
+        from console.config.profile import overrides_keep
+
+        clf, cam = self.classifier, self._adjustable()
+        keys = list(clf.tunable_keys().values()) if isinstance(clf, TunablesInProfile) else []
+        keys += list(cam.control_keys().values()) if cam is not None else []
+        return bool(keys) and overrides_keep(self.profile, keys)
 
     def save_tuning(self) -> Path:
         """Keep the tuned thresholds for the next start: written to the profile's override
@@ -506,7 +562,9 @@ class CameraService:
         if cam is not None:
             ckeys = cam.control_keys()
             values.update({ckeys[k]: v for k, v in cam.control_values().items() if k in ckeys})
-        return save_overrides(self.profile, values, self.plugins)
+        path = save_overrides(self.profile, values, self.plugins)
+        self.profile_params.update(self.params())  # the profile's now
+        return path
 
     # ------------------------------------------------------------------ output switches
     def switches(self) -> dict[str, Any]:

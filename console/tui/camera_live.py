@@ -72,10 +72,17 @@ def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
     ]
 
 
-def seen_lines(work: dict, problem: str = "", touch_mm2: float | None = None) -> list[str]:
+def seen_lines(
+    work: dict,
+    problem: str = "",
+    touch_mm2: float | None = None,
+    changed: dict[str, tuple[float, float]] | None = None,
+) -> list[str]:
     """The hands, contacts and gesture of the newest processed frame; ``problem``: why
     no gesture is named (the classifier's saved model does not fit); ``touch_mm2``: the
-    main hand's skin on the glass, as the vision measured it (its ``touching mm2``)."""
+    main hand's skin on the glass, as the vision measured it (its ``touching mm2``);
+    ``changed``: the settings changed from the profile's, named when no hand is seen
+    (``changed_hint``)."""
     hands = work.get("hands", ()) or ()
     g = work.get("gesture")
     named = f"[yellow]gesture: none named: {escape(problem)}[/]" if problem else None
@@ -84,7 +91,27 @@ def seen_lines(work: dict, problem: str = "", touch_mm2: float | None = None) ->
         named or f"gesture: {g.name if g else '-'}",
     ]
     lines.extend(hand_line(h, touch_mm2) for h in hands[:1])
+    if not hands and changed:
+        lines.append(changed_hint(changed))
     return lines
+
+
+#: the most changed settings ``changed_hint`` names
+HINTED = 3
+
+
+def changed_hint(changed: dict[str, tuple[float, float]]) -> str:
+    """``hands 0`` with settings changed from the profile's: which (the farthest moved
+    first), any of them may hide a hand, and the key that puts them back."""
+
+    def moved(item: tuple[str, tuple[float, float]]) -> float:
+        now, was = item[1]
+        return abs(now - was) / max(abs(was), 1.0)
+
+    named = sorted(changed.items(), key=moved, reverse=True)[:HINTED]
+    said = ", ".join(f"{k} {now:g} (profile {was:g})" for k, (now, was) in named)
+    more = f" and {len(changed) - HINTED} more" if len(changed) > HINTED else ""
+    return f"[yellow]changed, may hide a hand: {escape(said)}{more}; R: the profile's[/]"
 
 
 def hand_line(h: Any, touch_mm2: float | None = None) -> str:
