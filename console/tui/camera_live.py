@@ -178,10 +178,8 @@ def skin_lines(readings: dict[str, float], contact_level: float | None, skin: Re
     (what ``e`` measures, of the sensor's 255: clipping) and over the empty table (what
     the thresholds see); then what that means for touches (``touch_relation``)."""
     level = readings.get("touch level") if contact_level is not None else None
-    if skin is None and level is None:
-        return []
-    if level is None:
-        return [skin_at(skin)]  # in the image: of the sensor's 255
+    if level is None or contact_level is None:  # in the image only: of the sensor's 255
+        return [skin_at(skin)] if skin is not None else []
     over = f"{level:.0f} over the empty table"
     head = f"{skin_at(skin)} in the image, {over}" if skin is not None else f"touching skin {over}"
     light = readings.get("light x", 1.0)

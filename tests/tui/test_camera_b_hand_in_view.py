@@ -70,3 +70,15 @@ def test_b_asks_first_while_the_twins_moving_hand_is_in_view(plugins, size, monk
             assert "as asked" in _status(app)
 
     asyncio.run(scenario())
+
+
+def test_the_twins_empty_table_is_no_hand(plugins, profile):
+    """The hard case the maximum adds: 15 noisy frames of the twin's empty table (its
+    vignetting, sensor noise) hold no blob in their per-pixel maximum."""
+    cam = plugins.build("camera", "twin", profile)
+    try:
+        rng = np.random.default_rng(0)
+        frames = [cam.render_background(0.1 * i, rng) for i in range(15)]
+    finally:
+        cam.close()
+    assert not in_view(frames, [(0, 0)] * 15).any()
