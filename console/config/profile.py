@@ -299,6 +299,22 @@ def overrides_path(profile_name: str) -> Path:
     return paths.profile_config_dir(profile_name, OVERRIDES_FILE)
 
 
+def overrides_keep(profile: Profile, keys: list[str]) -> bool:
+    """Whether ``profile``'s overrides file keeps any of ``keys`` (``"vision.x"``): a
+    save would replace them. A missing or unreadable file keeps none."""
+    try:
+        raw = parse_toml(overrides_path(profile.name))
+    except (OSError, UserError):
+        return False
+    for dotted in keys:
+        node: Any = raw
+        for part in dotted.split("."):
+            node = node.get(part) if isinstance(node, dict) else None
+        if node is not None:
+            return True
+    return False
+
+
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     """``over`` merged into ``base`` table by table (``over``'s values win)."""
     out = dict(base)

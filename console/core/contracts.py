@@ -15,7 +15,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   RendersBackground, SimulatedCamera (acts out GestureScripts)
     classifier    Classifier (gestures, per-frame vision, tunables, background);
                   TouchCalibrating (the touch-calibration wizard's session);
-                  TunablesInProfile (the profile keys its tunables are kept under)
+                  TunablesInProfile (the profile keys its tunables are kept under),
+                  OrderedTunables (the order its tunables keep)
     effect        Effect; StreamingEffect, TableEffect, MapImporter, PointEffect,
                   FlowEffect, FlowPatchDrives, HandFlowEffect, HandFlowGeometry,
                   PrecomputedHandFlows, Conditions, Presets; RovingSensorMaps (roving_contracts)
@@ -54,6 +55,8 @@ from console.core.roving_contracts import RovingSensorMaps as RovingSensorMaps
 # the frame sinks' and panels' contracts: here too, where every kind's contract is found
 from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory
 from console.core.sink_contracts import SwitchableSink as SwitchableSink
+from console.core.tuning_contracts import OrderedTunables as OrderedTunables
+from console.core.tuning_contracts import TunablesInProfile as TunablesInProfile
 from console.core.types import (
     Contact,
     Frame,
@@ -360,14 +363,6 @@ class ReportsProblem(Protocol):
     gesture is named)."""
 
     problem: Exception | None
-
-
-@runtime_checkable
-class TunablesInProfile(Protocol):
-    """A classifier whose tunables are profile settings, so the console can keep the
-    operator's tuning for the next start: ``tunable_keys() -> {tunable: "section.key"}``."""
-
-    def tunable_keys(self) -> dict[str, str]: ...
 
 
 # --------------------------------------------------------------------------- effects

@@ -29,6 +29,7 @@ import numpy as np
 
 from console.core.contracts import (
     AdjustableCamera,
+    OrderedTunables,
     ReportsProblem,
     SwitchableSink,
     TunablesInProfile,
@@ -45,6 +46,7 @@ from console.runtime.stages import (
     open_camera,
     open_classifier,
 )
+from console.session.background_check import InView, in_view
 from console.session.camera_start import LOADING_VISION, OPENING_CAMERA, Starting, preview_loop
 from console.session.demo_history import RunHistory
 from console.session.events import SessionEvent, Started, Stopped
@@ -119,6 +121,11 @@ class CameraService:
         self._start_lock = threading.Lock()  # two screens may start it at once
         self.latest: tuple[Any, dict] | None = None
         self.recent: deque[np.ndarray] = deque(maxlen=15)
+        #: the vision's (hands, contacts) in each of ``recent`` (None: not processed)
+        self.recent_seen: deque[tuple[int, int] | None] = deque(maxlen=15)
+        #: the settings as the profile has them (as the vision started, or as last kept
+        #: by ``save_tuning``): what ``reset_params`` puts back
+        self.profile_params: dict[str, float] = {}
         #: frames taken before this (monotonic s, the camera's clock) are not ``recent``:
         #: the exposure or gain changed, and a background is learned under one setting
         self._recent_from_s = 0.0
@@ -249,6 +256,8 @@ class CameraService:
             return
         finally:
             self.starting.set("")
+        for key, value in self.params().items():  # the first values seen: the profile's
+            self.profile_params.setdefault(key, value)
         stages = base_stages(self.classifier)
         window = int(self.profile.get("runtime.latency_window_frames", 1200) or 1200)
         mon = LatencyMonitor([n for n, _ in stages], size=window)
@@ -307,7 +316,7 @@ class CameraService:
         """A frame while the vision is prepared: shown, passed to no frame hook."""
         with self._lock:
             self._preview = (frame, work)
-            self._keep_recent(frame)
+            self._keep_recent(frame, None)
 
     def _apart(self) -> bool:
         """``[runtime] twin_camera_process`` (on when the profile does not say)."""
@@ -343,7 +352,7 @@ class CameraService:
     def _sink(self, frame, work: dict) -> None:
         with self._lock:
             self.latest = (frame, work)
-            self._keep_recent(frame)
+            self._keep_recent(frame, work)
         now, loop = time.monotonic(), self.loop
         if loop is not None and now - self._history_at >= HISTORY_TICK_S:
             self._history_at = now
@@ -351,11 +360,14 @@ class CameraService:
         for hook in list(self.frame_hooks):
             hook(frame, work)
 
-    def _keep_recent(self, frame) -> None:
-        """Add ``frame`` to ``recent`` unless it was taken before the controls changed
-        (call with ``_lock`` held)."""
+    def _keep_recent(self, frame, work: dict | None) -> None:
+        """Add ``frame`` to ``recent`` (and the hands and contacts of its ``work`` to
+        ``recent_seen``) unless it was taken before the controls changed (call with
+        ``_lock`` held)."""
         if frame.t_capture_s >= self._recent_from_s:
             self.recent.append(frame.image)
+            seen = None if work is None else (work.get("hands"), work.get("contacts"))
+            self.recent_seen.append(None if seen is None else tuple(len(x or ()) for x in seen))
 
     def snapshot(self) -> tuple[Any, dict] | None:
         """The newest processed frame and its ``work`` (None before the vision runs)."""
@@ -405,6 +417,13 @@ class CameraService:
             return None
         return np.median(np.stack(frames), axis=0).astype(np.float32)
 
+    def hand_in_view(self, median: np.ndarray | None = None) -> InView:
+        """A hand in the recent frames (``background_check.in_view``): what ``b``
+        asks about before it learns them (``median``: theirs, when known)."""
+        with self._lock:
+            frames, seen = list(self.recent), list(self.recent_seen)
+        return in_view(frames, seen, median)
+
     def capture_background(self, image: np.ndarray | None = None) -> int:
         """Background = ``image`` or the per-pixel median of the recent frames (show the
         empty table); the number of recent frames (0: none yet)."""
@@ -449,7 +468,46 @@ class CameraService:
 
     def set_param(self, key: str, value: float) -> None:
         """Change a vision threshold or a camera control (kept in its range); the next
-        frame uses it."""
+        frame uses it. A step that would break the order the classifier's thresholds
+        keep (``OrderedTunables``) is refused: a ``UserError`` saying why."""
+        rng = self.param_ranges().get(key)
+        if rng is None:
+            return
+        why = self._out_of_order(key, rng.clamp(value))
+        if why:
+            raise UserError(why)
+        self._set(key, value)
+
+    def _out_of_order(self, key: str, value: float) -> str:
+        """Why ``key`` = ``value`` breaks the thresholds' order ("" when it does not, or
+        when it moves a setting back towards it)."""
+        clf, now = self.classifier, self.params()
+        if not isinstance(clf, OrderedTunables) or key not in now:
+            return ""
+        for lo, hi, why in clf.tunable_order():
+            if lo not in now or hi not in now:
+                continue
+            if key == lo and now[hi] > 0 and value >= now[hi] and value > now[lo]:
+                return f"{lo} stays {now[lo]:g}: it must stay below {hi} {now[hi]:g} ({why})"
+            if key == hi and 0 < value <= now[lo] and value < now[hi]:
+                return f"{hi} stays {now[hi]:g}: it must stay above {lo} {now[lo]:g} ({why})"
+        return ""
+
+    def changed_params(self) -> dict[str, tuple[float, float]]:
+        """The settings changed from the profile's: {name: (now, the profile's)}."""
+        now = self.params()
+        return {k: (now[k], v) for k, v in self.profile_params.items() if k in now and now[k] != v}
+
+    def reset_params(self) -> list[str]:
+        """Every setting back as the profile has it (``profile_params``); the names
+        changed."""
+        changed = list(self.changed_params())
+        for key in changed:
+            self._set(key, self.profile_params[key])
+        return changed
+
+    def _set(self, key: str, value: float) -> None:
+        """``key`` = ``value`` kept in its range: the classifier's or the camera's."""
         rng = self.param_ranges().get(key)
         if rng is None:
             return
@@ -468,7 +526,19 @@ class CameraService:
         cam.set_control(name, value)
         with self._lock:  # the frames so far were taken under the old setting
             self.recent.clear()
+            self.recent_seen.clear()
             self._recent_from_s = time.monotonic() + CONTROL_SETTLE_S
+
+    def tuning_saved(self) -> bool:
+        """Whether the profile's overrides file keeps vision settings (``save_tuning``
+        replaces them)."""
+        # lazy: the overrides file is read only when W asks (as save_tuning writes it)
+        from console.config.profile import overrides_keep
+
+        clf, cam = self.classifier, self._adjustable()
+        keys = list(clf.tunable_keys().values()) if isinstance(clf, TunablesInProfile) else []
+        keys += list(cam.control_keys().values()) if cam is not None else []
+        return bool(keys) and overrides_keep(self.profile, keys)
 
     def save_tuning(self) -> Path:
         """Keep the tuned thresholds for the next start: written to the profile's override
@@ -492,7 +562,9 @@ class CameraService:
         if cam is not None:
             ckeys = cam.control_keys()
             values.update({ckeys[k]: v for k, v in cam.control_values().items() if k in ckeys})
-        return save_overrides(self.profile, values, self.plugins)
+        path = save_overrides(self.profile, values, self.plugins)
+        self.profile_params.update(self.params())  # the profile's now
+        return path
 
     # ------------------------------------------------------------------ output switches
     def switches(self) -> dict[str, Any]:

@@ -21,13 +21,16 @@ HELP_TEXT = (
     "[ / ]    choose a setting (thresholds, smoothing, blob sizes, background, rotation,\n"
     "         mirror, region of interest; exposure and gain where the driver takes them)\n"
     "- / +    change the chosen setting by one step (t/T c/C h/H choose theirs too):\n"
-    "         its row (▸) shows the new value and stays in view\n"
+    "         its row (▸) shows the new value and stays in view; the thresholds keep\n"
+    "         their order (body below contact below contact_level): a step past it is\n"
+    "         refused, saying why\n"
+    "R        every vision setting back as the profile has it (as started, or as W kept)\n"
     "e        exposure assistant: with a flat hand on the glass, steps the exposure (then\n"
     "         gain) down until touching skin is below 255; x stops (values as before)\n"
     "P        the twin: hold a flat hand still on its glass (for e) / P again: its\n"
     "         gestures in turn again\n"
     "W        keep every vision setting for this profile (its overrides file): W\n"
-    "         again within 3 s, as it replaces the saved ones\n"
+    "         again within 3 s (it asks first; it replaces the saved ones, if any)\n"
     "k        touch calibration: touch each target; n skips one; x cancels; S saves\n"
     "g        gestures panel: datasets, training and evaluation\n"
     "u        TUIO (or another switchable output) on / off, kept for the profile\n"
@@ -64,6 +67,7 @@ BINDINGS = [
     Binding("e", "exposure", "exposure"),
     Binding("o", "open_recording", "recording"),
     Binding("P", "hold_hand", "hold hand", show=False),
+    Binding("R", "reset_tuning", "profile's settings", show=False),
     Binding("T", "tune('body_threshold', 1)", "body", key_display="t T"),
     Binding("C", "tune('contact_threshold', 1)", "contact", key_display="c C"),
     Binding("H", "tune('highpass_sigma_px', 1)", "high-pass", key_display="h H"),

@@ -1,7 +1,7 @@
 """The Camera screen's live block as plain functions: each line says what it counts in
 an operator's words (the camera's rate, the frames the vision processed, the frames lost
-and where, the hands and contacts seen), touching skin's brightness next to the touch
-level its thresholds are given for with the relation between them, and every line cut to
+and where, the hands and contacts seen), touching skin's brightness (one line: in the image, of 255, and
+over the empty table) and one sentence on what it means for touches, and every line cut to
 the panel's width with its continuation indented (a wrapped line never leaves a fragment
 that reads as a line of its own)."""
 
@@ -19,8 +19,6 @@ from console.tui.text import escape
 HANG = "  "
 #: a markup tag (``[b]``, ``[/b]``, ``[red]``, ``[/]``), not an escaped bracket
 TAG = re.compile(r"(?<!\\)\[/?[a-z ]*\]")
-#: what the skin and touch level numbers are counted in
-UNITS = "both in grey over the background"
 
 
 def _cells(text: str) -> int:
@@ -74,10 +72,17 @@ def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
     ]
 
 
-def seen_lines(work: dict, problem: str = "", touch_mm2: float | None = None) -> list[str]:
+def seen_lines(
+    work: dict,
+    problem: str = "",
+    touch_mm2: float | None = None,
+    changed: dict[str, tuple[float, float]] | None = None,
+) -> list[str]:
     """The hands, contacts and gesture of the newest processed frame; ``problem``: why
     no gesture is named (the classifier's saved model does not fit); ``touch_mm2``: the
-    main hand's skin on the glass, as the vision measured it (its ``touching mm2``)."""
+    main hand's skin on the glass, as the vision measured it (its ``touching mm2``);
+    ``changed``: the settings changed from the profile's, named when no hand is seen
+    (``changed_hint``)."""
     hands = work.get("hands", ()) or ()
     g = work.get("gesture")
     named = f"[yellow]gesture: none named: {escape(problem)}[/]" if problem else None
@@ -86,7 +91,27 @@ def seen_lines(work: dict, problem: str = "", touch_mm2: float | None = None) ->
         named or f"gesture: {g.name if g else '-'}",
     ]
     lines.extend(hand_line(h, touch_mm2) for h in hands[:1])
+    if not hands and changed:
+        lines.append(changed_hint(changed))
     return lines
+
+
+#: the most changed settings ``changed_hint`` names
+HINTED = 3
+
+
+def changed_hint(changed: dict[str, tuple[float, float]]) -> str:
+    """``hands 0`` with settings changed from the profile's: which (the farthest moved
+    first), any of them may hide a hand, and the key that puts them back."""
+
+    def moved(item: tuple[str, tuple[float, float]]) -> float:
+        now, was = item[1]
+        return abs(now - was) / max(abs(was), 1.0)
+
+    named = sorted(changed.items(), key=moved, reverse=True)[:HINTED]
+    said = ", ".join(f"{k} {now:g} (profile {was:g})" for k, (now, was) in named)
+    more = f" and {len(changed) - HINTED} more" if len(changed) > HINTED else ""
+    return f"[yellow]changed, may hide a hand: {escape(said)}{more}; R: the profile's[/]"
 
 
 def hand_line(h: Any, touch_mm2: float | None = None) -> str:
@@ -131,35 +156,34 @@ def reading_lines(readings: dict[str, float]) -> list[str]:
 
 
 def touch_relation(level: float, contact_level: float, light: float, noise: float) -> str:
-    """Touching skin's level against the touch level its thresholds are given for
-    (``contact_level``; both grey levels over the background, ``UNITS``), and whether
-    the light lets the vision see touches (it says nothing of touches being there): it
-    does while the light scale (level over touch level) stays at ``MIN_LIGHT`` or more
-    and the skin well above the noise (``exposure_assist``'s rule); the fix when not."""
+    """One sentence on what touching skin's brightness over the empty table (``level``)
+    means for touches: whether the light lets the vision see them (it says nothing of
+    touches being there), as a share of the brightness its thresholds are set for
+    (``contact_level``): they follow the light down to ``MIN_LIGHT`` of it, with the
+    skin well above the noise (``exposure_assist``'s rule); the fix when not. Two rows
+    of the side panel when all is well (at 80 x 24 a status line leaves it no more)."""
     if contact_level <= 0:
-        return f"skin {level:.0f} (fixed thresholds: contact_level 0)"
-    side = "above" if level >= contact_level else "below"
-    head = f"skin {level:.0f} {side} touch level {contact_level:.0f}"
-    if light < MIN_LIGHT or level < MIN_SNR * max(noise, 1.0):
-        return (
-            f"{head}: too dark, touches may be missed: e (exposure assistant), or "
-            "contact_level lower ([ ] to it, -)"
-        )
-    if side == "below":  # the thresholds scale with the light down to MIN_LIGHT of it
-        return f"{head}, over {MIN_LIGHT:g}x of it: the light allows touches; e gives more margin"
-    return f"{head}: the light allows touches"
+        return "touches: fixed thresholds (contact_level 0): the light does not scale them"
+    share = f"{light:.0%} of contact_level {contact_level:.0f}"
+    fix = "e (exposure assistant), or contact_level lower ([ ] to it, -)"
+    if light < MIN_LIGHT:
+        return f"touches: too dark, may be missed ({share}, under {MIN_LIGHT:.0%}): {fix}"
+    if level < MIN_SNR * max(noise, 1.0):
+        return f"touches: too faint over the image noise, may be missed: {fix}"
+    return f"touches: bright enough to be seen ({share})"
 
 
 def skin_lines(readings: dict[str, float], contact_level: float | None, skin: Reading | None):
-    """Touching skin: its brightness in the image (what ``e`` measures, of the sensor's
-    255) and over the background against the touch level (``touch_relation``)."""
-    out = []
-    if skin is not None:
-        out.append(skin_at(skin))  # in the image: of the sensor's 255
-    if "touch level" in readings and contact_level is not None:
-        level, light = readings["touch level"], readings.get("light x", 1.0)
-        out += [touch_relation(level, contact_level, light, readings.get("noise", 0.0)), UNITS]
-    return out
+    """Touching skin in one line, its two numbers each said: its brightness in the image
+    (what ``e`` measures, of the sensor's 255: clipping) and over the empty table (what
+    the thresholds see); then what that means for touches (``touch_relation``)."""
+    level = readings.get("touch level") if contact_level is not None else None
+    if level is None or contact_level is None:  # in the image only: of the sensor's 255
+        return [skin_at(skin)] if skin is not None else []
+    over = f"{level:.0f} over the empty table"
+    head = f"{skin_at(skin)} in the image, {over}" if skin is not None else f"touching skin {over}"
+    light = readings.get("light x", 1.0)
+    return [head, touch_relation(level, contact_level, light, readings.get("noise", 0.0))]
 
 
 def starting_lines(st: dict, starting: str) -> list[str]:

@@ -17,7 +17,7 @@ def whole_lines(block, rows: int) -> int:
     """The rows of ``block`` shown when it gives way to ``rows`` or fewer: the live
     numbers end after a whole line (each cut with its continuation indented,
     ``camera_live.hang``), a line whose continuation would be cut going with it (never
-    ``skin 189 above touch level 180:`` without what it says of the light)."""
+    ``touches: bright enough`` without the rest of its sentence)."""
     if block.id not in ("camera-info", "camera-measures"):
         return rows
     lines = str(block.content).split("\n")

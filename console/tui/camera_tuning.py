@@ -1,6 +1,8 @@
 """The Camera screen's vision settings: ``[``/``]`` choose one, ``-``/``+`` (and the
-direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback; ``W``
-keeps them all for the profile (``W`` again within 3 s: it asks first)."""
+direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback (a step
+that would break the thresholds' order is refused, saying why); ``R`` puts every one
+back as the profile has it; ``W`` keeps them all for the profile (``W`` again within
+3 s: it asks first, naming the saved ones it replaces)."""
 
 from __future__ import annotations
 
@@ -14,6 +16,9 @@ from console.tui.lapse import lapse_on_change
 from console.tui.text import escape
 from console.tui.units import control_words
 from console.tui.util import from_thread, short_path
+
+#: the reset key's words where a setting is refused or may hide the hand
+RESET = "R: the profile's settings"
 
 
 class CameraTuningMixin:
@@ -33,8 +38,25 @@ class CameraTuningMixin:
         cur, rng = svc.params().get(key), svc.param_ranges().get(key)
         if cur is None or rng is None:
             return
-        svc.set_param(key, cur + sign * rng.step)
         self.chosen = list(svc.params()).index(key)
+        try:
+            svc.set_param(key, cur + sign * rng.step)
+        except UserError as exc:  # the thresholds' order: said, with the way back (the
+            self._reveal()  # reply after the row: it keeps its rows first, ``fit_side``)
+            self.say(f"{exc}; {RESET}", "warning")
+            return
+        self._reveal()
+
+    def action_reset_tuning(self) -> None:
+        """``R``: every setting back as the profile has it (as the vision started, or as
+        ``W`` last kept them)."""
+        if self._borrowed("R"):
+            return
+        changed = self.service.reset_params()
+        if changed:
+            self.say(f"R: {', '.join(changed)} back as the profile has them")
+        else:
+            self.say("R: every setting is as the profile has it")
         self._reveal()
 
     def chosen_key(self) -> str | None:
@@ -62,7 +84,9 @@ class CameraTuningMixin:
         if self._keep_asked.confirmed("keep"):
             self._save_tuning()
             return
-        does = "keeps these vision settings for the profile (the saved ones replaced)"
+        does = "keeps these vision settings for the profile"
+        if self.service.tuning_saved():  # only when some were saved before
+            does += " (the saved ones replaced)"
         self._keep_asked.ask(self, "W", does, self._status_shown, self.say)
 
     @work(thread=True, exclusive=True, group="camera-tuning")
@@ -100,7 +124,11 @@ class CameraTuningMixin:
             lines.append(f"exposure, gain: not set by the {escape(cam.get('driver', '?'))} driver")
         else:
             lines.append("e: exposure assistant")
-        lines += ["b: capture background", "[ ] - +: tune  W: keep settings"]
+        lines += [
+            "b: capture background",
+            "[ ] - +: tune  W: keep settings",
+            "R: the profile's settings",
+        ]
         for name in svc.switches():
             on, target = svc.sink_state(name)
             lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")

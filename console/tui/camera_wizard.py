@@ -2,8 +2,9 @@
 ``CameraPane``): the wizard lives in the session (``console.session.calibration``), the
 screen shows its step or result and forwards its keys; ``S`` is in the footer while a
 result waits to be saved. ``b`` takes the background from the recent frames, unless a
-hand (a bright blob) would be learnt with it: then it asks to take the hands off and
-press ``b`` again (``b`` twice within ``BACKGROUND_AGAIN_S`` keeps it anyway)."""
+hand is in any of them (the vision counted one, or a bright blob: held still or passing
+through, ``console.session.background_check``): then it asks to take the hands off and
+press ``b`` again (``b`` twice within ``BACKGROUND_AGAIN_S`` takes it anyway)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import time
 from typing import Any
 
 from console.core.errors import UserError
-from console.session.background_check import bright_blobs, describe_blobs
+from console.session.background_check import describe_in_view
 from console.session.calibration import SAVE_KEY, TOPIC
 from console.session.events import Failed
 from console.tui.lapse import lapse
@@ -20,7 +21,7 @@ from console.tui.text import escape
 from console.tui.util import short_path
 from console.tui.wrap_paths import break_paths
 
-#: a second ``b`` within this many seconds keeps a background with a bright blob in it
+#: a second ``b`` within this many seconds takes a background with a hand in view
 BACKGROUND_AGAIN_S = 3.0
 
 
@@ -144,9 +145,9 @@ class CameraWizardMixin:
         return str(found.first().content) if found else ""
 
     def action_background(self) -> None:
-        """``b``: the background from the recent frames; a bright blob in it (a hand
-        held on the glass) is named and the background kept as it was, unless ``b`` is
-        pressed again within ``BACKGROUND_AGAIN_S``."""
+        """``b``: the background from the recent frames; a hand in any of them (counted
+        by the vision, or a bright blob) is named and the background kept as it was,
+        unless ``b`` is pressed again within ``BACKGROUND_AGAIN_S``."""
         if self._borrowed("b"):
             return
         svc = self.service
@@ -156,13 +157,13 @@ class CameraWizardMixin:
             return
         now = time.monotonic()
         again = now - self._background_asked <= BACKGROUND_AGAIN_S
-        blobs = [] if again else bright_blobs(image)
-        if blobs:
+        found = None if again else svc.hand_in_view(image)
+        if found is not None and found.any():
             self._background_asked = now
             self.say(
-                f"b: {describe_blobs(blobs)} in the frames: a hand on the glass? The "
-                "background is as before: take your hands off the glass, then b "
-                f"(b again within {BACKGROUND_AGAIN_S:g} s keeps it anyway)",
+                f"b: {describe_in_view(found)}: the background is as before: take your "
+                f"hands off the glass, then b (b again within {BACKGROUND_AGAIN_S:g} s "
+                "takes it anyway)",
                 "warning",
             )
             # the question leaves the line when its window ends (``console.tui.lapse``)

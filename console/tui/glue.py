@@ -1,6 +1,8 @@
 """A number stays on the line of its unit and of its label: ``0 s``, ``(1 s)``, ``fps
 54.08``, ``2.72 mm`` never break across a line wrap (an operator read ``... 0`` / ``s`` at
-80 columns). One rule, ``stays_together``, applied where the console's text is wrapped:
+80 columns); a key stays with the word it names: ``S: save``, ``x: cancel`` (a
+calibration's result read ``S:`` / ``save``). One rule, ``stays_together``, applied
+where the console's text is wrapped:
 
 - by Textual (every ``Static``, ``Label``, the log): its lines are cut between the words
   Rich's ``divide_line`` finds; ``install`` makes those words glue-aware (a glued pair is
@@ -32,15 +34,19 @@ LABEL = re.compile(
     r"(?:fps|rms|max|min|mean|median|peak|p\d{1,2}|gain|exposure|error|latency|level)[:=]?",
     re.IGNORECASE,
 )
+#: a key and its colon before the word it names (``S: save``, ``Esc: back``, ``F6: Scenes``)
+KEY = re.compile(r"(?:[A-Za-z]|Esc|Enter|Tab|Space|F\d{1,2}|ctrl\+[a-z])[:]")
 #: a glued group longer than this breaks as words do (a line is never overfull for it)
 MAX_GLUED = 24
 
 
 def stays_together(left: str, right: str) -> bool:
     """Whether the words ``left`` and ``right`` (a space apart) stay on one line: a
-    number and its unit, a label and its number."""
+    number and its unit, a label and its number, a key and the word it names."""
     if NUMBER.fullmatch(left):
         return bool(UNIT.fullmatch(right))
+    if KEY.fullmatch(left):
+        return bool(right)
     return bool(LABEL.fullmatch(left)) and bool(NUMBER.match(right))
 
 

@@ -167,6 +167,13 @@ TUNABLES: dict[str, TunableRange] = {
     "roi_right_px": TunableRange(0.0, 4096.0, 8.0),
     "roi_bottom_px": TunableRange(0.0, 4096.0, 8.0),
 }
+#: the order the thresholds keep (``contracts.OrderedTunables``): a hand's body is cut
+#: dimmer than its contacts, and a contact's high-pass detail stays below the touching
+#: skin's brightness the thresholds are set for (else no hand or no contact is found)
+ORDER = (
+    ("body_threshold", "contact_threshold", "a body is dimmer than its contacts"),
+    ("contact_threshold", "contact_level", "a contact is a part of touching skin"),
+)
 #: the tunables of the camera's mounting and region of interest (not ``VisionParams``)
 ORIENTATION_TUNABLES = (
     "rotate_deg",
@@ -207,8 +214,8 @@ def _orientation_values(o: Orientation) -> dict[str, int]:
 
 
 class SvmClassifier:
-    """The ``svm`` classifier plugin (a ``console.core.contracts.Classifier`` and
-    ``TouchCalibrating``): ``process(frame)`` once per frame, then ``classify(window,
+    """The ``svm`` classifier plugin (a ``console.core.contracts.Classifier``,
+    ``TouchCalibrating`` and ``OrderedTunables``): ``process(frame)`` once per frame, then ``classify(window,
     t_s) -> Gesture | None`` from those frames' results; ``gesture_stage()`` is the loop's
     ``classify`` stage (``rules.GestureRules``).
 
@@ -300,6 +307,10 @@ class SvmClassifier:
 
     def tunable_ranges(self) -> dict[str, TunableRange]:
         return dict(TUNABLES)
+
+    def tunable_order(self) -> tuple[tuple[str, str, str], ...]:
+        """The thresholds' order (``ORDER``, ``contracts.OrderedTunables``)."""
+        return ORDER
 
     def tunable_keys(self) -> dict[str, str]:
         """The profile keys the thresholds are read from (``[vision]``)."""

@@ -24,7 +24,7 @@ CAPABILITIES = {
         contracts.SimulatedCamera,
         contracts.RendersBackground,
     ),
-    ("classifier", "svm"): (contracts.TouchCalibrating,),
+    ("classifier", "svm"): (contracts.TouchCalibrating, contracts.OrderedTunables),
     ("effect", "point"): (contracts.PointEffect,),
     ("effect", "flow"): (contracts.FlowEffect, contracts.TableEffect, contracts.MapImporter),
     ("effect", "hand_flow"): (contracts.HandFlowEffect, contracts.PrecomputedHandFlows),

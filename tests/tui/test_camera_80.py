@@ -68,8 +68,8 @@ def test_b_and_a_bad_tuio_target_are_said_on_the_status_line(plugins):
         app = _app(plugins)
         async with app.run_test(size=SIZE) as pilot:
             await _first_frame(app, pilot)
-            await pilot.press("b")
-            await wait_for(pilot, lambda: "background captured" in _status(app), 30, "b")
+            await pilot.press("b")  # the twin's hand in view: b asks first
+            await wait_for(pilot, lambda: "background" in _status(app), 30, "b")
             await pilot.press("U")
             await wait_for(pilot, lambda: isinstance(app.focused, Input), 30, "the field")
             app.focused.value = "nowhere"

@@ -1,5 +1,5 @@
 """Camera (F2): a status line never takes the place of what the vision measures of
-touching skin (``touching skin at N of 255``, ``skin ... touch level 180: ...``). After
+touching skin (``touching skin at N of 255 ...``, ``touches: ...``). After
 ``b``, ``W``, ``o`` or ``e`` the status took their rows and left ends of their wrapped lines
 in view (``margin``, ``both in grey over the background``: new operator's report, finding
 2). Those lines are now pinned with the live numbers above the status; the status (a
@@ -41,8 +41,14 @@ REPLIES = [
     ("o", "recording's path"),
     ("e", "of 255"),
 ]
-#: the ends of the skin lines' wrapped rows, read alone as lines of their own
-FRAGMENTS = ("both in grey", "margin", "allows touches", "may be missed")
+#: the ends of the skin lines' wrapped rows, read alone as lines of their own: each
+#: with the start of its line (the skin's, the touches')
+FRAGMENTS = {
+    "over the empty table": "touching skin at",
+    "of contact_level": "touches:",
+    "enough to be seen": "touches:",
+    "may be missed": "touches:",
+}
 
 
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
@@ -53,7 +59,7 @@ def test_a_status_line_leaves_what_the_vision_measures_whole(plugins, size, key,
         async with app.run_test(size=size) as pilot:
             await _first_frame(app, pilot)
             await pilot.press("P")  # the twin's flat hand held still on the glass
-            await wait_for(pilot, lambda: "touch level" in _side(app), 30, "skin measured")
+            await wait_for(pilot, lambda: "touches:" in _side(app), 30, "skin measured")
             await pilot.press(key)
             status = app.query_one("#camera-status")
 
@@ -69,14 +75,14 @@ def test_a_status_line_leaves_what_the_vision_measures_whole(plugins, size, key,
             assert "…" not in text_in(app, status), side
             # no end of a skin line without its start, nor the skin lines without the
             # first of them (``W``, ``e``: only their last rows were left in view)
-            if any(f in side for f in FRAGMENTS):
-                assert "touch level" in side, side
-            if "touch level" in side:
+            for end, start in FRAGMENTS.items():
+                assert end not in side or start in side, side
+            if "touches:" in side:
                 assert "touching skin at" in side, side
             _info_rows_cut_whole(app)
             assert "camera lost" in side and "hand at" in side, side  # the live numbers
             if size == (120, 40):  # room for all of it
-                assert "touching skin at" in side and "touch level 180" in side, side
-                assert "both in grey over the background" in side, side
+                assert "touching skin at" in side and "contact_level 180" in side, side
+                assert "over the empty table" in side, side
 
     asyncio.run(scenario())

@@ -51,10 +51,11 @@ def test_rates_are_counted_over_the_same_window():
 
 def test_touch_line_says_what_is_true_and_what_to_do():
     below = touch_relation(169, 180, 169 / 180, 3)
-    assert "below touch level 180" in below and "touches are seen" not in below, below
-    assert "light allows touches" in below and "e " in below, below
+    # whether the light lets touches be seen, not that touches are there
+    assert "94% of contact_level 180" in below and "touches are seen" not in below, below
+    assert "bright enough to be seen" in below, below
     dark = touch_relation(80, 180, 80 / 180, 3)
-    assert "touches may be missed" in dark and "e (exposure assistant)" in dark, dark
+    assert "too dark, may be missed" in dark and "e (exposure assistant)" in dark, dark
     assert "contact_level lower" in dark, dark
 
 

@@ -1,7 +1,7 @@
 """Issue 27, the last new-user try, Camera (F2) at 80 x 24: a finished calibration's
 ``S`` is in the footer and the saved path breaks only after a ``/``; the exposure
 assistant's status line and the live block give touching skin's level from the same
-measurement; ``b`` with a hand held on the glass names the bright blob and keeps the
+measurement; ``b`` with a hand held on the glass says a hand is in view and keeps the
 background as it was until ``b`` is pressed again."""
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def test_camera_save_key_path_exposure_and_background(plugins, monkeypatch):
             await wait_for(pilot, held, 30, "the held hand in the recent frames")
             await pilot.press("b")
             await wait_for(pilot, lambda: "b again" in _status(app), 30, "b warns")
-            assert "bright blob" in _status(app), _status(app)
+            assert "a hand is in view" in _status(app), _status(app)
             assert bright_blobs(svc.classifier.background.image) == []  # as it was
             await pilot.press("b")  # again: kept as asked
             await wait_for(pilot, lambda: "background captured" in _status(app), 30, "kept")

@@ -534,7 +534,8 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         else:
             res = work.get("result")
             readings = res.readings() if res is not None else {}
-            seen = seen_lines(work, svc.classifier_problem, readings.get("touching mm2"))
+            changed = svc.changed_params()  # hands 0: the settings that may hide one
+            seen = seen_lines(work, svc.classifier_problem, readings.get("touching mm2"), changed)
             loop = loop_lines(st, self.view, self._rates.span_s())
             snap = svc.snapshot()  # touching skin as e measures it (one computation)
             skin = snapshot_reading(*snap) if snap is not None else None
