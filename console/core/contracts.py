@@ -579,7 +579,9 @@ class ProjectorFactory(Protocol):
 @runtime_checkable
 class Demo(Protocol):
     """A running demo: ``stop()`` (safe twice), ``snapshot() -> dict`` (camera, latency,
-    watchdog and demo state as JSON values), ``scene_name`` (the scene to project),
+    watchdog and demo state as JSON values; ``off_loop``, when present, the outputs played
+    once planned outside the frame loop: ``n`` and their planning ms, which Latency and
+    Scenes count apart), ``scene_name`` (the scene to project),
     ``camera`` (a ``TouchableCamera`` when the operator can touch it) and
     ``status_lines(snapshot) -> list[str]``: what the operator reads of a snapshot
     (Textual markup), so the console never decodes a demo's keys."""
