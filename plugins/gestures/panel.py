@@ -36,7 +36,14 @@ from console.plugin_api.tui import (
     short_path,
 )
 
-from .jobs import describe_files, synth_atomic, synth_target, train_and_evaluate
+from .jobs import (
+    dataset_refusal,
+    describe_files,
+    model_refusal,
+    synth_atomic,
+    synth_target,
+    train_and_evaluate,
+)
 from .model import GestureModel
 from .panel_fields import kept_fields
 from .settings import model_file
@@ -192,10 +199,10 @@ def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
     the model's evaluation is the result block's (said there, once)."""
     d, m = info.get("dataset", {}), info.get("model", {})
     lines = [f"[b]dataset[/b] {escape(short_path(d.get('path', '?')))}"]
-    if not d.get("exists"):
-        lines.append("  none yet: s synthesizes one from the camera twin")
-    elif "error" in d:
+    if "error" in d:  # a refusal first: s and t say the same
         lines.append(f"  [red]{escape(in_panel(d['error'], Path(d.get('path', '?'))))}[/]")
+    elif not d.get("exists"):
+        lines.append("  none yet: s synthesizes one from the camera twin")
     else:
         subj = d["subjects"]
         lines.append(
@@ -206,10 +213,10 @@ def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
             )
         )
     lines.append(f"[b]model[/b] {escape(short_path(m.get('path', '?')))}")
-    if not m.get("exists"):
-        lines.append("  none yet: t trains and evaluates one")
-    elif "error" in m:
+    if "error" in m:
         lines.append(f"  [red]{escape(in_panel(m['error'], Path(m.get('path', '?'))))}[/]")
+    elif not m.get("exists"):
+        lines.append("  none yet: t trains and evaluates one")
     else:
         ev = m.get("evaluation") or {}
         lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
@@ -511,8 +518,12 @@ class GesturesPanel(ModalScreen):
         except UserError as exc:
             self.refuse(exc, self._train_fields)
             return
-        if not ds.is_dir():
-            self.work.error(f"dataset {short_path(ds)}: none yet, s synthesizes one")
+        refused = dataset_refusal(ds) or model_refusal(model)  # as the files block says
+        if refused or not ds.is_dir():
+            self.work.error(
+                in_panel(refused, ds, model)
+                or f"dataset {short_path(ds)}: none yet, s synthesizes one"
+            )
             return
         known = self.files.get("dataset", {})  # the files block's: too small is said now
         known = known if _same(known.get("path"), ds) else {}
