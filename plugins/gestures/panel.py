@@ -27,6 +27,7 @@ from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
     LongWork,
+    NumberField,
     PathField,
     SafetyBar,
     escape,
@@ -325,11 +326,11 @@ class GesturesPanel(ModalScreen):
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 subjects = typed.get("gp-subjects", "5")
-                yield Input(subjects, id="gp-subjects", classes="gp-num", compact=True)
+                num = {"classes": "gp-num", "compact": True}
+                # each as wide as its longest number: what it shows is what s checks
+                yield NumberField(subjects, lo=1, hi=50, id="gp-subjects", **num)
                 yield Label(" reps")
-                yield Input(
-                    typed.get("gp-reps", "40"), id="gp-reps", classes="gp-num", compact=True
-                )
+                yield NumberField(typed.get("gp-reps", "40"), lo=1, hi=500, id="gp-reps", **num)
                 yield Label(" cv")
                 yield Input(typed.get("gp-cv", "2fold"), id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
@@ -488,8 +489,12 @@ class GesturesPanel(ModalScreen):
     def _synth_fields(self) -> tuple[Path, int, int]:
         """(dataset, subjects, reps) as typed, or a ``UserError`` naming the field."""
         ds, _ = self.paths()
-        subjects = count(self.field("subjects"), "subjects", 1, 50)
-        return ds, subjects, count(self.field("reps"), "reps", 1, 500)
+        return ds, self.number("subjects"), self.number("reps")
+
+    def number(self, name: str) -> int:
+        """The whole number in field ``name``, checked against the field's own range."""
+        f = self.query_one(f"#gp-{name}", NumberField)
+        return count(f.value, name, int(f.lo), int(f.hi))
 
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
         ds, subjects, reps = asked

@@ -69,6 +69,7 @@ from .panel_text import (
     default_out,
     field_refusal,
     next_id,
+    number_field,
     same_folder,
     space_held,
     status_lines,
@@ -182,16 +183,16 @@ class StudiesPane(HeldAnswer, Vertical):
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
-            yield Input(id="age", compact=True)
+            yield number_field("age")
             yield Label("sex", markup=False)
             yield Input(id="sex", compact=True)
             yield Label("handedness", markup=False)
             yield Input(id="handedness", compact=True)
         with Horizontal(id="study-hand", classes="study-row"):
             yield Label("hand width cm", markup=False)
-            yield Input(id="hand_width_cm", compact=True)
+            yield number_field("hand_width_cm")
             yield Label("hand length cm", markup=False)
-            yield Input(id="hand_length_cm", compact=True)
+            yield number_field("hand_length_cm")
             yield Tick("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
             yield Button("Start", id="start", variant="primary", compact=True)
