@@ -213,6 +213,11 @@ class AdaptiveView(Vertical):
             self.current = self.order.index(track)
         self.draw()
 
+    def run_stopped(self) -> None:
+        """The run stopped: no line says where it is any more (a pick stays shown)."""
+        self.running = self.trial = None
+        self.draw()
+
     def where_run_is(self) -> str:
         """The line saying where the run is, while a track it is not on is picked."""
         v = self.tracks.get(self.running or "")

@@ -527,6 +527,7 @@ class StudiesPane(HeldAnswer, Vertical):
             self.abort_until = None
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
+            self.query_one(AdaptiveView).run_stopped()  # "the run is on ..." no more
             if self.said[1] != "error":  # "resumed", "pausing ...": the run's, past now
                 self.said = ("", "information")
             if ev.reason.startswith("finished"):  # ready for the next participant

@@ -12,8 +12,10 @@ import asyncio
 import pytest
 
 from console.cli.main import Context
+from console.plugin_api.runtime import Stopped
+from console.plugin_api.tui import SessionMessage
 from console.tui.app import HapTableApp
-from plugins.studies.adaptive_console import trial_row
+from plugins.studies.adaptive_console import TOPIC, trial_row
 
 from .conftest import wait_for, words_on
 from .test_camera_layout import SIZES, text_in
@@ -94,6 +96,13 @@ def test_the_plot_follows_the_trial_in_play_and_says_where_the_run_is(plugins, s
             pane._snapshot(_start(12, "sine_400Hz"))
             await pilot.pause(0.2)
             assert text_in(app, head).startswith("sine_400Hz (6/7)"), text_in(app, head)
-            pane.running = None
+            # a pick when the run stops: no line says where it is any more
+            await pilot.press("left_square_bracket")
+            await pilot.pause(0.2)
+            assert "the run is on sine_400Hz" in text_in(app, head), text_in(app, head)
+            pane.on_session_message(SessionMessage(Stopped(TOPIC, name="P01", reason="aborted")))
+            await pilot.pause(0.2)
+            assert text_in(app, head).startswith("sine_250Hz (5/7)"), text_in(app, head)
+            assert "the run is on" not in text_in(app, head), text_in(app, head)
 
     asyncio.run(scenario())
