@@ -34,6 +34,12 @@ What it offers:
   and never inside a bracket it would leave open), ``cut_chars`` (the same for a narrow
   cell, mid-word where it must), ``top_level_seps`` (where a line
   parts into fields outside brackets): ``console.tui.shorten``
+- drop-downs: ``Choice`` (a ``Select`` offering its options only, no blank entry: every
+  drop-down the console shows is one) and ``chosen`` (a ``Select``'s value as text, ""
+  for none: ``console.tui.choice``)
+- number fields: ``NumberField`` (a field for a number from ``lo`` to ``hi``: it takes at
+  most the characters of the longest such number and shows them whole, so what it
+  shows is what its check reads: ``console.tui.number_field``)
 - check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
   characters, never in shades alone; every check box the console shows is one)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
@@ -45,11 +51,13 @@ from __future__ import annotations
 
 from console.tui.ask_again import AskAgain
 from console.tui.charts import Chart, Series
+from console.tui.choice import Choice, chosen
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse, lapse_if_held, lapse_on_change
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
+from console.tui.number_field import NumberField
 from console.tui.panels import LeavesForScreen
 from console.tui.path_field import PathField, PathInput, middle_ellipsis, whole_names
 from console.tui.safety_bar import SafetyBar
@@ -64,12 +72,15 @@ from console.tui.util import from_thread, short_path
 __all__ = [
     "AskAgain",
     "Chart",
+    "Choice",
+    "chosen",
     "Series",
     "ConsoleFooter",
     "LeavesForScreen",
     "KeptText",
     "LiteralTable",
     "LongWork",
+    "NumberField",
     "SafetyBar",
     "SessionMessage",
     "escape",

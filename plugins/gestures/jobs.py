@@ -26,6 +26,21 @@ from .synth import synth
 SYNTH_MARK = "synth.json"  # a folder with this file was made by the twin (replaceable)
 
 
+def dataset_refusal(path: Path) -> str:
+    """Why ``path`` cannot be a dataset folder (something else is there), or "": the
+    one account synthesis, training and the panel's files block give."""
+    if path.exists() and not path.is_dir():
+        return f"{path}: exists and is not a folder; choose another dataset folder"
+    return ""
+
+
+def model_refusal(path: Path) -> str:
+    """Why ``path`` cannot be a model file (a folder is there), or ""."""
+    if path.is_dir():
+        return f"{path}: is a folder; give a model file such as gestures.skops"
+    return ""
+
+
 def _tree_bytes(root: Path) -> int:
     return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
 
@@ -51,8 +66,8 @@ def synth_atomic(
     out = Path(out).expanduser()
     if subjects < 1 or reps < 1:
         raise UserError(f"subjects {subjects}, reps {reps}: both must be at least 1")
-    if out.exists() and not out.is_dir():
-        raise UserError(f"{out}: exists and is not a folder; choose another dataset folder")
+    if dataset_refusal(out):
+        raise UserError(dataset_refusal(out))
     old_set = out.is_dir() and any(out.iterdir())
     if old_set and not (replace and (out / SYNTH_MARK).is_file()):
         why = "is not a synthesized dataset (no synth.json)" if replace else "is not empty"
@@ -87,8 +102,8 @@ def synth_target(out: str | Path) -> dict[str, Any]:
     for the new one (never adds to it), with that one's ``samples``, ``subjects`` and
     ``reps`` (None when unreadable). Any other folder, or a file, is a ``UserError``."""
     out = Path(out).expanduser()
-    if out.exists() and not out.is_dir():
-        raise UserError(f"{out}: exists and is not a folder; choose another dataset folder")
+    if dataset_refusal(out):
+        raise UserError(dataset_refusal(out))
     if not out.is_dir() or not any(out.iterdir()):
         return {"replace": False}
     if not (out / SYNTH_MARK).is_file():
@@ -128,8 +143,8 @@ def train_and_evaluate(
     from . import evaluate as ev  # lazy: OpenCV, scikit-learn (dataset_commands loads jobs)
 
     dataset, model_out = Path(dataset).expanduser(), Path(model_out).expanduser()
-    if model_out.is_dir():
-        raise UserError(f"{model_out}: is a folder; give a model file such as gestures.skops")
+    if model_refusal(model_out):
+        raise UserError(model_refusal(model_out))
     fs, rep = ev.evaluation(  # the same procedure as `haptable gestures eval`
         dataset,
         profile,
@@ -168,7 +183,9 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
     if dataset is not None:
         d = Path(dataset).expanduser()
         info: dict[str, Any] = {"path": str(d), "exists": d.is_dir()}
-        if d.is_dir():
+        if dataset_refusal(d):  # said as s and t say it, never "none yet"
+            info["error"] = dataset_refusal(d)
+        elif d.is_dir():
             try:
                 samples = load_dataset(d)
                 reps: dict[tuple[str, str], int] = {}
@@ -187,7 +204,9 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
     if model is not None:
         m = Path(model).expanduser()
         info = {"path": str(m), "exists": m.is_file()}
-        if m.is_file():
+        if model_refusal(m):
+            info["error"] = model_refusal(m)
+        elif m.is_file():
             info["bytes"] = m.stat().st_size
             try:
                 from .model import read_settings  # lazy: OpenCV (the sketches)

@@ -27,6 +27,7 @@ from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
     LongWork,
+    NumberField,
     PathField,
     SafetyBar,
     escape,
@@ -36,7 +37,14 @@ from console.plugin_api.tui import (
     short_path,
 )
 
-from .jobs import describe_files, synth_atomic, synth_target, train_and_evaluate
+from .jobs import (
+    dataset_refusal,
+    describe_files,
+    model_refusal,
+    synth_atomic,
+    synth_target,
+    train_and_evaluate,
+)
 from .model import GestureModel
 from .panel_fields import kept_fields
 from .settings import model_file
@@ -192,10 +200,10 @@ def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
     the model's evaluation is the result block's (said there, once)."""
     d, m = info.get("dataset", {}), info.get("model", {})
     lines = [f"[b]dataset[/b] {escape(short_path(d.get('path', '?')))}"]
-    if not d.get("exists"):
-        lines.append("  none yet: s synthesizes one from the camera twin")
-    elif "error" in d:
+    if "error" in d:  # a refusal first: s and t say the same
         lines.append(f"  [red]{escape(in_panel(d['error'], Path(d.get('path', '?'))))}[/]")
+    elif not d.get("exists"):
+        lines.append("  none yet: s synthesizes one from the camera twin")
     else:
         subj = d["subjects"]
         lines.append(
@@ -206,10 +214,10 @@ def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
             )
         )
     lines.append(f"[b]model[/b] {escape(short_path(m.get('path', '?')))}")
-    if not m.get("exists"):
-        lines.append("  none yet: t trains and evaluates one")
-    elif "error" in m:
+    if "error" in m:
         lines.append(f"  [red]{escape(in_panel(m['error'], Path(m.get('path', '?'))))}[/]")
+    elif not m.get("exists"):
+        lines.append("  none yet: t trains and evaluates one")
     else:
         ev = m.get("evaluation") or {}
         lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
@@ -318,11 +326,11 @@ class GesturesPanel(ModalScreen):
             with Horizontal(classes="gp-row"):
                 yield Label("subjects")
                 subjects = typed.get("gp-subjects", "5")
-                yield Input(subjects, id="gp-subjects", classes="gp-num", compact=True)
+                num = {"classes": "gp-num", "compact": True}
+                # each as wide as its longest number: what it shows is what s checks
+                yield NumberField(subjects, lo=1, hi=50, id="gp-subjects", **num)
                 yield Label(" reps")
-                yield Input(
-                    typed.get("gp-reps", "40"), id="gp-reps", classes="gp-num", compact=True
-                )
+                yield NumberField(typed.get("gp-reps", "40"), lo=1, hi=500, id="gp-reps", **num)
                 yield Label(" cv")
                 yield Input(typed.get("gp-cv", "2fold"), id="gp-cv", classes="gp-num", compact=True)
             with Horizontal(classes="gp-row"):
@@ -481,8 +489,12 @@ class GesturesPanel(ModalScreen):
     def _synth_fields(self) -> tuple[Path, int, int]:
         """(dataset, subjects, reps) as typed, or a ``UserError`` naming the field."""
         ds, _ = self.paths()
-        subjects = count(self.field("subjects"), "subjects", 1, 50)
-        return ds, subjects, count(self.field("reps"), "reps", 1, 500)
+        return ds, self.number("subjects"), self.number("reps")
+
+    def number(self, name: str) -> int:
+        """The whole number in field ``name``, checked against the field's own range."""
+        f = self.query_one(f"#gp-{name}", NumberField)
+        return count(f.value, name, int(f.lo), int(f.hi))
 
     def _estimate(self, asked: tuple[Path, int, int]) -> None:
         ds, subjects, reps = asked
@@ -511,8 +523,12 @@ class GesturesPanel(ModalScreen):
         except UserError as exc:
             self.refuse(exc, self._train_fields)
             return
-        if not ds.is_dir():
-            self.work.error(f"dataset {short_path(ds)}: none yet, s synthesizes one")
+        refused = dataset_refusal(ds) or model_refusal(model)  # as the files block says
+        if refused or not ds.is_dir():
+            self.work.error(
+                in_panel(refused, ds, model)
+                or f"dataset {short_path(ds)}: none yet, s synthesizes one"
+            )
             return
         known = self.files.get("dataset", {})  # the files block's: too small is said now
         known = known if _same(known.get("path"), ds) else {}

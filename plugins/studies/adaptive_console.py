@@ -50,8 +50,8 @@ from .store import RunFiles, load_participant, make_participant, participant_dir
 from .words import SCREEN
 
 TOPIC = console_run.TOPIC
-#: the Snapshot kinds the plot draws
-PLOT_KINDS = ("tracks", "track")
+#: the Snapshot kinds the plot draws (``start`` / ``paused``: the track the run plays)
+PLOT_KINDS = ("tracks", "track", "start", "paused")
 
 
 def is_adaptive(study: str) -> bool:

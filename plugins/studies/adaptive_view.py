@@ -6,8 +6,10 @@ posterior's mean and 95 % interval). For QUEST+ on a wide screen (>= ``WIDE`` co
 the posterior's marginal over threshold is drawn beside it.
 
 Presentation only: ``snapshot(d)`` takes what ``adaptive_console`` reports (``tracks``:
-all of them, ``track``: the one just answered) and redraws then, never on a timer. The
-plot follows the track of the newest trial until ``[`` / ``]`` (``cycle``) picks one.
+all of them, ``track``: the one just answered, ``start`` / ``paused``: the trial in play
+or next) and redraws then, never on a timer. The plot follows the track of the trial in
+play (the one the status names) until ``[`` / ``]`` (``cycle``) picks one; then a second
+line says where the run is (its track and trial), whole at 80 columns.
 """
 
 from __future__ import annotations
@@ -137,7 +139,7 @@ class AdaptiveView(Vertical):
 
     DEFAULT_CSS = """
     AdaptiveView { height: 1fr; display: none; }
-    AdaptiveView #adaptive-head { height: 1; text-wrap: nowrap; text-overflow: ellipsis; }
+    AdaptiveView #adaptive-head { height: auto; text-wrap: nowrap; text-overflow: ellipsis; }
     AdaptiveView #adaptive-charts { height: 1fr; }
     AdaptiveView #adaptive-posterior { width: 40%; display: none; }
     """
@@ -149,7 +151,8 @@ class AdaptiveView(Vertical):
         self.current = 0
         self.follow = True  # the newest trial's track, until [ or ] picks one
         self.picked: str | None = None  # the track [ or ] picked (kept over a resume)
-        self.running: str | None = None  # the newest trial's track
+        self.running: str | None = None  # the track of the trial in play (else answered)
+        self.trial: int | None = None  # the number of the trial in play (1 = the first)
 
     def compose(self) -> ComposeResult:
         yield Static("", id="adaptive-head", markup=False)
@@ -170,11 +173,18 @@ class AdaptiveView(Vertical):
         """A new run: nothing drawn until its tracks come."""
         self.tracks, self.order, self.current = {}, [], 0
         self.follow, self.running = self.picked is None, None  # a pick stays until [ ]
+        self.trial = None
         self.query_one("#adaptive-head", Static).update("")
         self.query_one(LevelsChart).clear("waiting for the run's tracks")
 
     def snapshot(self, d: dict[str, Any]) -> None:
-        """``tracks`` (all of them) or ``track`` (one, just answered): redraw."""
+        """``tracks`` (all of them), ``track`` (one, just answered) or ``start`` /
+        ``paused`` (the trial in play or next, ``trial_row``'s): redraw."""
+        if d.get("kind") in ("start", "paused"):
+            t = d.get("trial")
+            if isinstance(t, dict) and t.get("phase") in self.tracks:
+                self._in_play(str(t["phase"]), int(t["index"]) + 1)
+            return
         if d.get("kind") == "tracks":
             self.tracks = {v["track"]: v for v in d["tracks"]}
             self.order = list(self.tracks)
@@ -195,6 +205,27 @@ class AdaptiveView(Vertical):
                 return  # another track than the one picked: the plot stays on it
         self.draw()
 
+    def _in_play(self, track: str, trial: int) -> None:
+        """The run plays (or stands before) ``trial`` of ``track``: followed, or said on
+        the line above a track picked."""
+        self.running, self.trial = track, trial
+        if self.follow:
+            self.current = self.order.index(track)
+        self.draw()
+
+    def run_stopped(self) -> None:
+        """The run stopped: no line says where it is any more (a pick stays shown)."""
+        self.running = self.trial = None
+        self.draw()
+
+    def where_run_is(self) -> str:
+        """The line saying where the run is, while a track it is not on is picked."""
+        v = self.tracks.get(self.running or "")
+        if self.follow or v is None or self.running == self.order[self.current]:
+            return ""
+        trial = f", trial {self.trial}" if self.trial else ""
+        return f"picked with [ ]: the run is on {track_title(v)}{trial} ([ ] back to it)"
+
     def cycle(self, step: int) -> str:
         """``[`` / ``]``: the previous / next track (the plot stops following the newest
         trial); returns what to say when there is none."""
@@ -212,9 +243,8 @@ class AdaptiveView(Vertical):
         if not self.order:
             return
         v = self.tracks[self.order[self.current]]
-        head = head_text(v)
-        if not self.follow and self.running and self.running != v["track"]:
-            head += f"; picked with [ ]: the run is on {self.running} ([ ] to it follows it)"
+        where = self.where_run_is()
+        head = head_text(v) + (f"\n{where}" if where else "")
         self.query_one("#adaptive-head", Static).update(head)
         self.query_one(LevelsChart).show(v)
         post = self.query_one("#adaptive-posterior", Chart)

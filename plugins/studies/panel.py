@@ -46,10 +46,12 @@ from console.plugin_api import UserError
 from console.plugin_api.runtime import Failed, Snapshot, Started, Stopped
 from console.plugin_api.tui import (
     AskAgain,
+    Choice,
     LiteralTable,
     Pace,
     SessionMessage,
     Tick,
+    chosen,
     escape,
     said_here,
     show_keys,
@@ -67,6 +69,7 @@ from .panel_text import (
     default_out,
     field_refusal,
     next_id,
+    number_field,
     same_folder,
     space_held,
     status_lines,
@@ -170,12 +173,7 @@ class StudiesPane(HeldAnswer, Vertical):
         with Horizontal(id="study-form", classes="study-row"):
             yield Label("protocol", markup=False)
             yield show_keys(  # its Enter in the footer while it has the focus
-                Select(
-                    [(n, n) for n in names],
-                    value=names[0] if names else Select.BLANK,
-                    id="protocol",
-                    compact=True,
-                ),
+                Choice([(n, n) for n in names], id="protocol", compact=True),  # no blank
                 enter="protocols",
             )
             yield Label("participant", markup=False)
@@ -185,16 +183,16 @@ class StudiesPane(HeldAnswer, Vertical):
         yield folder_row(str(default_out(str(names[0]) if names else "")), self.app.session.profile)
         with Horizontal(id="study-person", classes="study-row"):
             yield Label("age", markup=False)
-            yield Input(id="age", compact=True)
+            yield number_field("age")
             yield Label("sex", markup=False)
             yield Input(id="sex", compact=True)
             yield Label("handedness", markup=False)
             yield Input(id="handedness", compact=True)
         with Horizontal(id="study-hand", classes="study-row"):
             yield Label("hand width cm", markup=False)
-            yield Input(id="hand_width_cm", compact=True)
+            yield number_field("hand_width_cm")
             yield Label("hand length cm", markup=False)
-            yield Input(id="hand_length_cm", compact=True)
+            yield number_field("hand_length_cm")
             yield Tick("consent noted", False, id="consent", compact=True)
         with Horizontal(id="study-buttons"):
             yield Button("Start", id="start", variant="primary", compact=True)
@@ -243,7 +241,7 @@ class StudiesPane(HeldAnswer, Vertical):
             return True
         if action != "track" and running == (action == "analyse"):
             return False  # n in the footer while no run goes (r takes its place)
-        return (action == "track") == adaptive_console.is_adaptive(str(self._value("protocol")))
+        return (action == "track") == adaptive_console.is_adaptive(self._value("protocol"))
 
     def focus(self, scroll_visible: bool = True):
         """The screen's keys (Esc out of a field, a run started): Start takes the focus,
@@ -257,8 +255,9 @@ class StudiesPane(HeldAnswer, Vertical):
         return self.query_one("#start", Button)
 
     def _value(self, wid: str) -> Any:
+        """A field's value; the protocol's as text ("" with none: ``chosen``)."""
         w = self.query_one(f"#{wid}")
-        return w.value
+        return chosen(w.value) if isinstance(w, Select) else w.value
 
     def on_button_pressed(self, event: Button.Pressed) -> None:
         bid = event.button.id or ""
@@ -277,8 +276,8 @@ class StudiesPane(HeldAnswer, Vertical):
             # refused on the key: a run would only write a start and its interruption
             self._say(ESTOP_REFUSED, "error")
             return
-        study = self._value("protocol")
-        if study is Select.BLANK or not study:
+        study = self._value("protocol")  # "" with none (``_value``)
+        if not study:
             self._say("no protocol in studies/", "error")
             return
         refused = "" if self._value("simulate") else self._bad_number()  # a person's only
@@ -392,8 +391,8 @@ class StudiesPane(HeldAnswer, Vertical):
         self.action_analyse()
 
     def action_analyse(self) -> None:
-        study = self._value("protocol")
-        if study is Select.BLANK or not study:
+        study = self._value("protocol")  # "" with none (``_value``)
+        if not study:
             self._say("no protocol in studies/", "error")
             return
         try:
@@ -463,7 +462,7 @@ class StudiesPane(HeldAnswer, Vertical):
 
     def on_select_changed(self, event: Select.Changed) -> None:
         """A new protocol: its own default folder, unless the folder was typed."""
-        if event.select.id != "protocol" or event.value is Select.BLANK:
+        if event.select.id != "protocol" or not chosen(event.value):
             return
         self.refresh_bindings()  # ] or n in the footer (check_action)
         field = self.query_one("#out", Input)
@@ -528,6 +527,7 @@ class StudiesPane(HeldAnswer, Vertical):
             self.abort_until = None
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
+            self.query_one(AdaptiveView).run_stopped()  # "the run is on ..." no more
             if self.said[1] != "error":  # "resumed", "pausing ...": the run's, past now
                 self.said = ("", "information")
             if ev.reason.startswith("finished"):  # ready for the next participant
@@ -683,8 +683,8 @@ class StudiesPane(HeldAnswer, Vertical):
 
     def _map_hint(self) -> str:
         """The status's line about the vibration map the chosen protocol needs, or ""."""
-        study = self._value("protocol")
-        if study is Select.BLANK or not study:
+        study = self._value("protocol")  # "" with none (``_value``)
+        if not study:
             return ""
         hint = map_hint(self.app.session, str(study))
         return f"\n[yellow]{escape(hint)}[/]" if hint else ""

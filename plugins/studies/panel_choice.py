@@ -13,6 +13,7 @@ from textual.widgets import Input, ProgressBar, Select
 
 from console.plugin_api import UserError
 from console.plugin_api.tui import AskAgain
+from console.plugin_api.tui import chosen as text_of
 
 from . import adaptive_console
 from .adaptive_view import AdaptiveView
@@ -29,8 +30,8 @@ LONG_AGAIN_S = 5.0
 
 def chosen(pane: Any) -> tuple[str, str, Path] | None:
     """(protocol, participant, folder) as the fields hold them; None without a protocol."""
-    study = pane.query_one("#protocol", Select).value
-    if study is Select.BLANK or not study:
+    study = text_of(pane.query_one("#protocol", Select).value)
+    if not study:
         return None
     pid = pane.query_one("#participant", Input).value.strip()
     out = pane.query_one("#out", Input).value.strip()

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from console.plugin_api import data_dir
-from console.plugin_api.tui import cut_chars, escape
+from console.plugin_api.tui import NumberField, cut_chars, escape
 
 #: the Studies screen's help (``?``): plain text, keys first (``console.tui.help``)
 HELP = (
@@ -82,6 +82,13 @@ NUMBER_FIELDS = {
     "hand_width_cm": ("hand width cm", 3, 30, False),
     "hand_length_cm": ("hand length cm", 5, 40, False),
 }
+
+
+def number_field(field: str) -> NumberField:
+    """The participant's number ``field``: it takes the range its check reads
+    (``NUMBER_FIELDS``), its longest number shown whole."""
+    _, lo, hi, whole = NUMBER_FIELDS[field]
+    return NumberField(id=field, lo=lo, hi=hi, whole=whole, compact=True)
 
 
 def field_refusal(field: str, value: str) -> str:

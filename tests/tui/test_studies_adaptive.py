@@ -64,6 +64,9 @@ def test_adaptive_run_plotted_live_at_80x24(plugins, tmp_path):
             assert plot.display and not pane.query_one("#study-trials").display
             head = words_on(app, "#adaptive-head")
             assert "Hz (" in head and "/8 trials" in head, head
+            # the plot follows the trial in play: its track drawn once it has an answer
+            axes = lambda: "level (dB)" in text_in(app, plot)  # noqa: E731
+            await wait_for(pilot, axes, 60, "a track with an answer in play")
             shown = text_in(app, plot)
             assert "level (dB)" in shown and "trial of the track" in shown, shown
             status = words_on(app, "#study-status")

@@ -13,7 +13,7 @@ from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
-from textual.widgets import DataTable, Select, Static
+from textual.widgets import DataTable, Static
 
 from console.config.profile import overrides_path
 from console.core.errors import UserError
@@ -22,6 +22,7 @@ from console.runtime.devices import output_devices, relay_boards
 from console.session.events import ESTOP_FIX, Started, Stopped
 from console.signals.stimuli import STIMULI, make_stimulus
 from console.tui.ask_again import AskAgain
+from console.tui.choice import Choice, chosen
 from console.tui.device_cells import (
     cell,
     note_room,
@@ -172,10 +173,9 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         # how to choose one, where it is chosen (a new operator found only sine-PA played)
         yield Static(TEST_SIGNAL_HEADING, classes="heading")
         yield show_keys(
-            Select(
+            Choice(
                 [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
                 value="sine-PA",
-                allow_blank=False,
                 id="stimulus",
             ),
             enter="test signals",
@@ -395,7 +395,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
     @work(thread=True, exclusive=True, group="test-output")
     def action_test_output(self) -> None:
 
-        name = from_thread(self.app, lambda: self.query_one("#stimulus", Select).value)
+        name = from_thread(self.app, lambda: chosen(self.query_one("#stimulus", Choice).value))
         session = self.app.session
         prof = self._profile()
         try:
