@@ -507,7 +507,8 @@ def process_frame(
             clipped, touching = clipped_share(
                 img[y0:y1, x0:x1], touching_mask(img, diff, body, parts)
             )
-    found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
+    if len(found) > 1:  # largest first (a sort of one hand would still measure its area)
+        found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     touch = None
     if found:  # the touching skin, each region to the hand whose palm is nearest
         palms = [e["palm_px"] for _, e in found]
