@@ -140,7 +140,7 @@ class IdTracker:
         angs = [0.0] * len(xy) if angles is None else [float(a) for a in angles]
         return self._update(t_s, xy, angs)
 
-    def _update(self, t_s: float, xy: list[tuple[float, float]], angs: list[float]) -> list[Track]:
+    def _update(self, t_s: float, xy: Sequence[Sequence[float]], angs: list[float]) -> list[Track]:
         """``update`` of (x, y) float pairs and their angles."""
         tracks = self.tracks
         match = self._match(t_s, xy, list(tracks.values())) if tracks and xy else {}
@@ -167,11 +167,12 @@ class IdTracker:
                     del self.tracks[tid]
 
     def _match(
-        self, t_s: float, xy: list[tuple[float, float]], live: list[Track]
+        self, t_s: float, xy: Sequence[Sequence[float]], live: list[Track]
     ) -> dict[int, Track]:
         """Point index -> its track: the least total distance to the tracks' predictions,
         within the gate."""
-        pred = [tr.predict(t_s) for tr in live]
+        # each track's ``predict(t_s)``, written out (a call less per track)
+        pred = [(tr.x + tr.vx * (dt := max(t_s - tr.t_s, 0.0)), tr.y + tr.vy * dt) for tr in live]
         d = [[math.hypot(x - px, y - py) for px, py in pred] for x, y in xy]
         gate = self.gate
         if len(d) == 1 and len(live) == 1:  # one and one: the solver's answer
@@ -185,13 +186,13 @@ class IdTracker:
 
     def _correct(self, tr: Track, t_s: float, x: float, y: float, angle: float) -> None:
         dt = max(t_s - tr.t_s, 1e-6)
-        speed0 = tr.speed
-        px, py = tr.x + tr.vx * dt, tr.y + tr.vy * dt
+        vx, vy = tr.vx, tr.vy
+        px, py = tr.x + vx * dt, tr.y + vy * dt
         rx, ry = x - px, y - py
         a, g = self.alpha, self.beta / dt
         tr.x, tr.y = px + a * rx, py + a * ry
-        tr.vx, tr.vy = tr.vx + g * rx, tr.vy + g * ry
-        tr.accel = (tr.speed - speed0) / dt
+        tr.vx, tr.vy = vx2, vy2 = vx + g * rx, vy + g * ry
+        tr.accel = (math.hypot(vx2, vy2) - math.hypot(vx, vy)) / dt  # the speed's change
         rv = math.remainder(angle - tr.angle, 2 * math.pi) / dt
         tr.rot_accel = (rv - tr.rot_vel) / dt
         tr.angle, tr.rot_vel = angle, rv
@@ -286,7 +287,7 @@ class Tracking:
             contact_gate_mm, grace_frames=contact_grace_frames, alpha=0.7, ids=counter.__next__
         )
 
-    def _hand_points(self, hands: Sequence[Hand]) -> tuple[list[tuple[float, float]], bool]:
+    def _hand_points(self, hands: Sequence[Hand]) -> tuple[list[list[float]], bool]:
         if not hands:
             return [], True
         if self.to_mm is not None:
@@ -299,7 +300,7 @@ class Tracking:
             pts, in_mm = [h.center_mm for h in hands], True
         else:
             pts, in_mm = [h.center_px for h in hands], False
-        return [(a, b) for a, b in np.asarray(pts, float).reshape(-1, 2).tolist()], in_mm
+        return np.asarray(pts, float).reshape(-1, 2).tolist(), in_mm  # [x, y] pairs
 
     def update(self, t_s: float, hands: Sequence[Hand], contacts: Sequence[Contact]) -> TrackFrame:
         hand_tracks, contact_tracks = self.hands, self.contacts
