@@ -96,6 +96,8 @@ def run(folder: str, out: str, rounds: int, passes: int, trees: list[str]) -> No
     """``rounds`` x (fresh processes, a warm-up pass, ``passes`` passes) per demo."""
     if len(trees) != 2:
         raise SystemExit("lockstep: two checkouts, REF and NEW")
+    # each process starts in its checkout: the paths from here
+    folder, trees = os.path.abspath(folder), [os.path.abspath(t) for t in trees]
     res = {"load_start": os.getloadavg(), "trees": trees, "rounds": rounds, "passes": passes}
     res["cpu"] = _cpu()
     for demo in DEMOS:
