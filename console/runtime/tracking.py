@@ -88,6 +88,10 @@ def _fewest(d: list[list[float]], live: list[Track], gate: float) -> dict[int, T
     arrays); only pairs within the gate are kept."""
     n, m = len(d), len(d[0])
     cost = [[v if v <= gate else 1e9 for v in row] for row in d]
+    if n == m == 2:  # two and two (a grip's fingertips): straight unless crossing is less
+        (a, b), (c, e) = cost
+        best = ((0, 1), (1, 0)) if b + c < a + e else ((0, 0), (1, 1))
+        return {i: live[j] for i, j in best if d[i][j] <= gate}
     if n <= m:
         pairs = [tuple(enumerate(cols)) for cols in itertools.permutations(range(m), n)]
     else:
@@ -134,31 +138,41 @@ class IdTracker:
         points' tracks in order. Tracks unseen for more than ``grace_frames`` die."""
         xy = _points(pts)
         angs = [0.0] * len(xy) if angles is None else [float(a) for a in angles]
-        live = list(self.tracks.values())
-        match = self._match(t_s, xy, live) if live and xy else {}
+        return self._update(t_s, xy, angs)
+
+    def _update(self, t_s: float, xy: Sequence[Sequence[float]], angs: list[float]) -> list[Track]:
+        """``update`` of (x, y) float pairs and their angles."""
+        tracks = self.tracks
+        match = self._match(t_s, xy, list(tracks.values())) if tracks and xy else {}
         out: list[Track] = []
         for i, (x, y) in enumerate(xy):
             tr = match.get(i)
             if tr is None:
                 tr = Track(self._ids(), x, y, t_s, angle=angs[i])
-                self.tracks[tr.id] = tr
+                tracks[tr.id] = tr
             else:
                 self._correct(tr, t_s, x, y, angs[i])
             out.append(tr)
-        seen = {tr.id for tr in out}
+        if len(tracks) > len(out):  # some track went unseen (each seen one is in out once)
+            self.coast({tr.id for tr in out})
+        return out
+
+    def coast(self, seen: set[int] | frozenset[int] = frozenset()) -> None:
+        """A frame in which the tracks not in ``seen`` went unseen: each coasts one
+        frame more, or dies after ``grace_frames``."""
         for tid, tr in list(self.tracks.items()):
             if tid not in seen:
                 tr.missed += 1
                 if tr.missed > self.grace:
                     del self.tracks[tid]
-        return out
 
     def _match(
-        self, t_s: float, xy: list[tuple[float, float]], live: list[Track]
+        self, t_s: float, xy: Sequence[Sequence[float]], live: list[Track]
     ) -> dict[int, Track]:
         """Point index -> its track: the least total distance to the tracks' predictions,
         within the gate."""
-        pred = [tr.predict(t_s) for tr in live]
+        # each track's ``predict(t_s)``, written out (a call less per track)
+        pred = [(tr.x + tr.vx * (dt := max(t_s - tr.t_s, 0.0)), tr.y + tr.vy * dt) for tr in live]
         d = [[math.hypot(x - px, y - py) for px, py in pred] for x, y in xy]
         gate = self.gate
         if len(d) == 1 and len(live) == 1:  # one and one: the solver's answer
@@ -172,13 +186,13 @@ class IdTracker:
 
     def _correct(self, tr: Track, t_s: float, x: float, y: float, angle: float) -> None:
         dt = max(t_s - tr.t_s, 1e-6)
-        speed0 = tr.speed
-        px, py = tr.x + tr.vx * dt, tr.y + tr.vy * dt
+        vx, vy = tr.vx, tr.vy
+        px, py = tr.x + vx * dt, tr.y + vy * dt
         rx, ry = x - px, y - py
         a, g = self.alpha, self.beta / dt
         tr.x, tr.y = px + a * rx, py + a * ry
-        tr.vx, tr.vy = tr.vx + g * rx, tr.vy + g * ry
-        tr.accel = (tr.speed - speed0) / dt
+        tr.vx, tr.vy = vx2, vy2 = vx + g * rx, vy + g * ry
+        tr.accel = (math.hypot(vx2, vy2) - math.hypot(vx, vy)) / dt  # the speed's change
         rv = math.remainder(angle - tr.angle, 2 * math.pi) / dt
         tr.rot_accel = (rv - tr.rot_vel) / dt
         tr.angle, tr.rot_vel = angle, rv
@@ -273,24 +287,39 @@ class Tracking:
             contact_gate_mm, grace_frames=contact_grace_frames, alpha=0.7, ids=counter.__next__
         )
 
-    def _hand_points(self, hands: Sequence[Hand]) -> tuple[np.ndarray, bool]:
+    def _hand_points(self, hands: Sequence[Hand]) -> tuple[list[list[float]], bool]:
         if not hands:
-            return np.zeros((0, 2)), True
+            return [], True
         if self.to_mm is not None:
             px = []
             for h in hands:
                 c = outline_centroid(h.contour_px)
                 px.append(c if c is not None else h.center_px)
-            return np.asarray(self.to_mm(np.asarray(px, float)), float).reshape(-1, 2), True
-        if all(h.center_mm is not None for h in hands):
-            return np.array([h.center_mm for h in hands], float), True
-        return np.array([h.center_px for h in hands], float), False
+            pts, in_mm = self.to_mm(np.asarray(px, float)), True
+        elif all(h.center_mm is not None for h in hands):
+            pts, in_mm = [h.center_mm for h in hands], True
+        else:
+            pts, in_mm = [h.center_px for h in hands], False
+        return np.asarray(pts, float).reshape(-1, 2).tolist(), in_mm  # [x, y] pairs
 
     def update(self, t_s: float, hands: Sequence[Hand], contacts: Sequence[Contact]) -> TrackFrame:
+        hand_tracks, contact_tracks = self.hands, self.contacts
+        if not hands and not contacts:  # the empty table: the live tracks coast
+            hand_tracks.coast()
+            contact_tracks.coast()
+            live_h, live_c = (
+                tuple(hand_tracks.tracks.values()),
+                tuple(contact_tracks.tracks.values()),
+            )
+            return TrackFrame(t_s, (), (), (), (), live_h, live_c, True)
         hpts, in_mm = self._hand_points(hands)
-        htr = self.hands.update(t_s, hpts, [math.radians(h.angle_deg) for h in hands])
-        cmm = [c.pos_mm if in_mm and c.pos_mm is not None else c.pos_px for c in contacts]
-        ctr = self.contacts.update(t_s, cmm)
+        htr = hand_tracks._update(t_s, hpts, [math.radians(h.angle_deg) for h in hands])
+        if contacts:
+            cmm = [c.pos_mm if in_mm and c.pos_mm is not None else c.pos_px for c in contacts]
+            ctr = contact_tracks.update(t_s, cmm)
+        else:
+            contact_tracks.coast()
+            ctr = []
         renamed = {id(c): _renamed(c, tr.id) for c, tr in zip(contacts, ctr, strict=True)}
         by_px = {c.pos_px: renamed[id(c)] for c in contacts}  # a hand's contacts are
         hands_out = [  # the frame's blobs (the same pixel position), renamed alike
@@ -305,8 +334,8 @@ class Tracking:
             tuple(renamed[id(c)] for c in contacts),
             tuple(htr),
             tuple(ctr),
-            tuple(self.hands.tracks.values()),
-            tuple(self.contacts.tracks.values()),
+            tuple(hand_tracks.tracks.values()),
+            tuple(contact_tracks.tracks.values()),
             in_mm,
         )
 

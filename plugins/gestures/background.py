@@ -87,12 +87,18 @@ def _median(a: np.ndarray) -> float:
     the time on the few thousand samples the per-frame fits use (a partition about two
     indices takes numpy's slow path, six times slower on fresh data than about one: the
     lower middle of an even count is the largest element left of the upper one)."""
+    return _median_of_scratch(a.copy())
+
+
+def _median_of_scratch(a: np.ndarray) -> float:
+    """``_median`` of an array the caller will not read again: partitioned in place
+    (``np.partition`` is a copy partitioned so: the same element, the same bits)."""
     n = a.size
     k = n // 2
-    p = np.partition(a, k)
+    a.partition(k)
     if n % 2:
-        return float(p[k])
-    return 0.5 * (float(p[:k].max()) + float(p[k]))
+        return float(a[k])
+    return 0.5 * (float(np.maximum.reduce(a[:k])) + float(a[k]))
 
 
 def brightness_gain(frame: np.ndarray, background: np.ndarray, step: int = 8) -> float:
@@ -102,7 +108,7 @@ def brightness_gain(frame: np.ndarray, background: np.ndarray, step: int = 8) ->
     ok = b > 4
     if not np.any(ok):
         return 1.0
-    return _median(f[ok] / b[ok])
+    return _median_of_scratch(f[ok] / b[ok])
 
 
 def illumination(
@@ -126,13 +132,14 @@ def illumination(
         db = bk - mb
         var = float(np.dot(db, db)) / n
         if var < 4.0:  # too little contrast in the background for a line: an offset
-            gain, offset = 1.0, _median(fk - bk)
+            gain, offset = 1.0, _median_of_scratch(fk - bk)
         else:
             gain = float(np.dot(db, fk - mf)) / n / var
             offset = mf - gain * mb
         res = f - (gain * b + offset)
-        med = _median(res)
-        mad = _median(np.abs(res - med))
+        med = _median(res)  # res is read again: partitioned in a copy
+        dev = res - med
+        mad = _median_of_scratch(np.abs(dev, out=dev))
         if it < 2:
             keep = res <= med + 2.0 * mad + 1.0
             fk, bk = f[keep], b[keep]

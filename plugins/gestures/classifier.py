@@ -243,6 +243,8 @@ class SvmClassifier:
         self.params = replace(params or VisionParams(), n_harmonics=N_HARMONICS_MAX)
         self.to_mm = to_mm
         self.background = Background(background, alpha)
+        #: the last frame had a hand's part: the next likely has one (``process_frame``)
+        self._had_hand = False
 
     @classmethod
     def from_profile(cls, profile) -> SvmClassifier:
@@ -347,8 +349,11 @@ class SvmClassifier:
         bg = self.background.u8
         o = self.orientation
         window = None
+        likely = self._had_hand
         if o.identity:
-            res = process_frame(frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True)
+            res = process_frame(
+                frame.image, bg, self.params, to_mm=self.to_mm, keep_masks=True, hand_likely=likely
+            )
             # the hands' mask in their box only (no hand: none), not a frame-sized one
             window, hands = foreground_window(res.parts) or (None, None)
         else:  # positions and views in the turned image, outside the ROI nothing
@@ -356,9 +361,12 @@ class SvmClassifier:
             img = o.outside_as(o.apply(frame.image), bg)
             h, w = img.shape
             params = replace(self.params, width_px=w, height_px=h)
-            res = process_frame(img, bg, params, to_mm=self.to_mm, keep_masks=True)
+            res = process_frame(
+                img, bg, params, to_mm=self.to_mm, keep_masks=True, hand_likely=likely
+            )
             hands = o.undo(res.masks["foreground"])
             res = replace(res, masks=res.masks.with_image("camera", img))
+        self._had_hand = res.parts is not None
         self.background.update(frame.image, hands, res.gain, res.offset, window)
         frame.stamp("vision", time.monotonic())
         return res

@@ -219,6 +219,8 @@ def body_parts(
     noise: float,
     smooth_px: int = 5,
     scale_range: tuple[float, float] = (0.3, 2.0),
+    *,
+    hand_likely: bool = False,
 ) -> tuple[np.ndarray | None, Parts | None]:
     """Hands and forearms with a threshold that follows each part's own light.
 
@@ -234,7 +236,9 @@ def body_parts(
     another light.
 
     The mask (uint8 0/255) of the parts' window ``parts.win`` (the body is 0 outside it:
-    no frame-sized mask is made) and the parts; (None, None) without a hand's part."""
+    no frame-sized mask is made) and the parts; (None, None) without a hand's part.
+    ``hand_likely`` (the frame before had a hand's part) skips the empty table's shortcut,
+    a pass over the frame for its brightest pixel: the same result either way."""
     H, W = diff.shape
     b = PART_BLOCK_PX
     hb, wb = H // b, W // b
@@ -243,8 +247,8 @@ def body_parts(
     seed_level = max(low, SEED_FACTOR * floor)
     # no block's mean exceeds its brightest pixel: a frame with no pixel at a seed's level
     # (an empty table: its noise stays below) has no hand's part, and its block means
-    # need not be made
-    if cv2.minMaxLoc(diff)[1] < seed_level:
+    # need not be made (made, they would hold no seed: the same answer below)
+    if not hand_likely and cv2.minMaxLoc(diff)[1] < seed_level:
         return None, None
     small = block_means(diff)
     _, lowm = cv2.threshold(small, low, 255, cv2.THRESH_BINARY)

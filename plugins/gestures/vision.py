@@ -450,8 +450,10 @@ def process_frame(
     *,
     to_mm=None,
     keep_masks: bool = False,
+    hand_likely: bool = False,
 ) -> FrameResult:
-    """Run the whole pipeline on one frame against a background image (uint8 or float)."""
+    """Run the whole pipeline on one frame against a background image (uint8 or float).
+    ``hand_likely``: the frame before had a hand (``body_parts``' hint; the same result)."""
     p = params or VisionParams()
     img = check_frame(image, p.shape)
     bg = np.asarray(background)
@@ -474,7 +476,13 @@ def process_frame(
     noise_contact = 4.0 * noise / 3.0 + 2.0
     lo_s, hi_s = SCALE_RANGE if p.contact_level > 0 else (1.0, 1.0)
     body, parts = body_parts(  # the mask of the parts' window only
-        diff, p.body_threshold, p.contact_level or 1.0, noise_body, p.smooth_px, (lo_s, hi_s)
+        diff,
+        p.body_threshold,
+        p.contact_level or 1.0,
+        noise_body,
+        p.smooth_px,
+        (lo_s, hi_s),
+        hand_likely=hand_likely,
     )
     # contacts only around the pixels above the lowest contact threshold (the rest of the
     # frame cannot reach it through the smoothing), each part at its own threshold
@@ -499,7 +507,8 @@ def process_frame(
             clipped, touching = clipped_share(
                 img[y0:y1, x0:x1], touching_mask(img, diff, body, parts)
             )
-    found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
+    if len(found) > 1:  # largest first (a sort of one hand would still measure its area)
+        found.sort(key=lambda he: -cv2.contourArea(he[0].contour_px.astype(np.float32)))
     touch = None
     if found:  # the touching skin, each region to the hand whose palm is nearest
         palms = [e["palm_px"] for _, e in found]

@@ -59,8 +59,11 @@ def plain_relative_body(diff, threshold, reference, noise, smooth_px=5, scale_ra
     return np.where(sm > limit, 255, 0).astype(np.uint8), parts
 
 
-def plain_body_parts(diff, threshold, reference, noise, smooth_px=5, scale_range=(0.3, 2.0)):
-    """``body_parts`` from ``plain_relative_body``: its mask cut to the parts' window."""
+def plain_body_parts(
+    diff, threshold, reference, noise, smooth_px=5, scale_range=(0.3, 2.0), hand_likely=False
+):
+    """``body_parts`` from ``plain_relative_body``: its mask cut to the parts' window
+    (``hand_likely``, a shortcut's hint, changes nothing here)."""
     body, parts = plain_relative_body(diff, threshold, reference, noise, smooth_px, scale_range)
     if parts is None:
         return None, None

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from plugins.gestures import sketch
-from plugins.gestures.segmentation import relative_body
+from plugins.gestures.segmentation import body_parts, full_body, relative_body
 from plugins.twin.camera.camera import TwinCamera
 from plugins.twin.camera.render import Rig
 
@@ -53,6 +53,7 @@ def test_hands_parts_and_thresholds_equal_the_plain_definition(k):
     assert parts is not None
     _same_parts(parts, want)
     assert np.array_equal(body, want_body)
+    _same_with_a_hand_likely(diff, want_body, want)
     H, W = diff.shape
     x0, y0, x1, y1 = parts.win
     values = np.arange(len(parts.peak)) % 200 + 7
@@ -112,3 +113,13 @@ def test_a_frame_without_a_hand_s_part_agrees_with_the_plain_definition(diff, ha
     assert np.array_equal(body, want_body)
     if has_part:
         _same_parts(parts, want)
+    _same_with_a_hand_likely(diff, want_body, want)
+
+
+def _same_with_a_hand_likely(diff, want_body, want):
+    # the hint (the frame before had a hand) skips the empty table's shortcut only
+    inside, got = body_parts(diff, 14.0, 180.0, 1.5, hand_likely=True)
+    assert (got is None) == (want is None)
+    assert np.array_equal(full_body(inside, got, diff.shape), want_body)
+    if got is not None:
+        _same_parts(got, want)

@@ -130,6 +130,21 @@ def test_fast_median_is_numpys_median(n):
         assert _median(a) == pytest.approx(float(np.median(a)), abs=1e-6)
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 10, 2133, 2134])
+def test_the_median_partitioned_in_place_has_the_copy_s_bits(n):
+    # the fits' scratch arrays are partitioned in place: the same element as in
+    # np.partition's copy, the same bits; a caller's array is left as it was
+    from plugins.gestures.background import _median, _median_of_scratch
+
+    rng = np.random.default_rng(n)
+    for a in (rng.normal(0, 5, n).astype(np.float32), np.round(rng.normal(0, 5, n))):
+        k, kept = n // 2, a.copy()
+        p = np.partition(a, k)
+        want = float(p[k]) if n % 2 else 0.5 * (float(p[:k].max()) + float(p[k]))
+        assert _median(a) == want and np.array_equal(a, kept)
+        assert _median_of_scratch(a.copy()) == want
+
+
 def test_background_capture_and_slow_update():
     rng = np.random.default_rng(1)
     frames = [np.clip(BG + rng.normal(0, 3, BG.shape), 0, 255).astype(np.uint8) for _ in range(9)]

@@ -13,6 +13,7 @@ from console.runtime.tracking import (
     Announcer,
     IdTracker,
     Tracking,
+    _fewest,
     _renamed,
     _with_contacts,
     outline_centroid,
@@ -199,3 +200,47 @@ def test_a_pixel_outline_s_centroid_is_the_plain_shoelace_s_bit_for_bit():
         a = cross.sum() / 2.0
         want = (((x + xn) * cross).sum() / (6 * a), ((y + yn) * cross).sum() / (6 * a))
         assert outline_centroid(c) == want
+
+
+def test_empty_frames_age_the_live_tracks_as_frames_with_nothing_seen():
+    # the empty table's frames skip the matching (the tracks only coast): each live
+    # track's misses, deaths after its grace and ids as a frame of nothing seen has them
+    square = [[100, 100], [200, 100], [200, 200], [100, 200]]
+    c = Contact(0, (120.0, 110.0), (240.0, 220.0))
+    seen = ([_hand(square, (150.0, 150.0), (c,))], [c])
+    fast, ref = Tracking(to_mm=lambda px: np.asarray(px, float)), Tracking()
+    ref.to_mm = fast.to_mm
+    frames = [seen] * 3 + [((), ())] * 2 + [seen] + [((), ())] * 9 + [seen]
+    for k, (hands, contacts) in enumerate(frames):
+        got = fast.update(k / 60, hands, contacts)
+        # the general path: the trackers' update with no points
+        ref_h = ref.hands.update(k / 60, np.zeros((0, 2)), []) if not hands else None
+        want = ref.update(k / 60, hands, contacts) if hands else None
+        if want is None:
+            ref.contacts.update(k / 60, [])
+            assert got.hands == got.contacts == got.hand_tracks == got.contact_tracks == ()
+            assert ref_h == [] and got.in_mm
+        else:
+            assert [t.id for t in got.hand_tracks] == [t.id for t in want.hand_tracks]
+        for a, b in ((fast.hands, ref.hands), (fast.contacts, ref.contacts)):
+            assert [(t.id, t.missed, t.x, t.y) for t in a.tracks.values()] == [
+                (t.id, t.missed, t.x, t.y) for t in b.tracks.values()
+            ]
+    assert got.hand_tracks[0].id > 1  # the first hand's track died in the long gap
+
+
+def test_two_points_and_two_tracks_pair_as_trying_both_pairings_does():
+    # the 2 x 2 case is decided by one comparison: the pairing of the least total cost
+    # (out of the gate 1e9), the straight one on a tie, as min over both pairings has it
+    import itertools
+
+    rng = np.random.default_rng(5)
+    live = ["a", "b"]
+    for _ in range(2000):
+        d = rng.choice([0.0, 3.0, 5.0, 8.0, 25.0, 40.0], (2, 2)).tolist()
+        cost = [[v if v <= 20.0 else 1e9 for v in row] for row in d]
+        best = min(
+            (tuple(enumerate(cols)) for cols in itertools.permutations(range(2), 2)),
+            key=lambda ps: sum(cost[i][j] for i, j in ps),
+        )
+        assert _fewest(d, live, 20.0) == {i: live[j] for i, j in best if d[i][j] <= 20.0}
