@@ -9,7 +9,8 @@ replies and events (e-stops, resets, each plan's first sample and segments).
 
 ``fast=True`` (or ``private=True``, paced) runs a *private* twin table of this process's
 own (see ``console.kernel.tables``): benches and tests that reset their own e-stops use
-one, never the operator's table. A table whose e-stop is latched refuses to open
+one, never the operator's table. ``on_table=True``: that twin plays a command on the
+profile's table (a simulated study run), whose e-stop stops it as it stops the table. A table whose e-stop is latched refuses to open
 (``EStopLatched``) unless ``allow_latched`` (the console opens into the e-stop and shows
 it). A profile with other settings than the running kernel's replaces it when that
 kernel has no other client, else is refused in one line.
@@ -119,6 +120,7 @@ class Outputs:
         private: bool | None = None,
         allow_latched: bool = False,
         role: str = "client",
+        on_table: bool = False,
     ) -> None:
         self.profile = profile
         self._plugins = plugins
@@ -130,7 +132,10 @@ class Outputs:
         if private is None:
             private = self.fast  # a fast-forward twin is always a process's own
         if table is None:
-            table = private_table(profile.name) if private else table_for(profile.path)
+            shared = table_for(profile.path)
+            table = (
+                private_table(profile.name, of=shared if on_table else None) if private else shared
+            )
         self.table = table
         self.role = role
         self._closed = False

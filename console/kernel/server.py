@@ -34,17 +34,19 @@ from typing import Any
 from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 from console.kernel import wire
-from console.kernel.line_server import LineServer, peer_cred
+from console.kernel.line_server import LineServer, peer_cred, request
 from console.kernel.operator import reset_refusal
 from console.kernel.private_dir import open_private, pid_alive, write_private
 from console.kernel.requests import PLAYS_KEPT, REQUESTS
 from console.kernel.tables import (
+    TWIN_OF,
     Table,
     clear_latch,
     describe_latch,
     latch_record,
     read_latch,
     table_at,
+    twins_of,
     write_latch,
 )
 
@@ -150,7 +152,7 @@ class Kernel:
         def before_start(gate: Any) -> None:
             gate.add_listener(self._on_gate_event)
             with self._gate_lock:  # an e-stop from the control socket until now latched it
-                latched = read_latch(t)
+                latched = read_latch(t) or (t.shared and read_latch(t.shared))
                 if latched is not None:
                     gate.estop(describe_latch(latched), quiet=True)
                 self.gate = gate
@@ -252,7 +254,7 @@ class Kernel:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(self.table.info_path)
         if self.table.private:  # nothing of it is needed again
-            for name in ("kernel.log", "estop.json", "console.lock", "kernel.lock"):
+            for name in ("kernel.log", "estop.json", "console.lock", "kernel.lock", TWIN_OF):
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(self.table.dir / name)
             with contextlib.suppress(OSError):
@@ -275,6 +277,7 @@ class Kernel:
             if ev.kind in ("estop", "fault") and not self._quit.is_set():
                 with contextlib.suppress(Exception):  # never lose the broadcast to a disk
                     write_latch(self.table, latch_record(ev.message, "kernel"))
+                self._estop_twins(ev.message)
             msg = {
                 "op": "gate",
                 "kind": ev.kind,
@@ -285,6 +288,19 @@ class Kernel:
             }
             for c in self.client_list():
                 self._send_event(c, msg)
+
+    def _estop_twins(self, reason: str) -> None:
+        """E-stop the private twins playing on this table (``twins_of``), after its latch
+        is written (a twin opening now reads it), each on its own thread."""
+
+        def one(twin: Table) -> None:
+            with contextlib.suppress(Exception):  # a twin that ended is stopped already
+                request(twin.control_sock, f"estop {reason}"[:250], timeout_s=ESTOP_WAIT_S + 1)
+
+        for twin in twins_of(self.table):
+            threading.Thread(
+                target=one, args=(twin,), name="haptable-twin-estop", daemon=True
+            ).start()
 
     def client_list(self) -> list[Client]:
         with self._clients_lock:

@@ -16,10 +16,11 @@ import json
 import re
 import signal
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, load_map
+from console.plugin_api import EStopped, UserError, load_map
 
 from . import analyze_cli
 from . import protocol as protocols
@@ -133,7 +134,9 @@ def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
     # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map
 
-    hold_map_for_run(ctx.profile, args.study)  # held before it is read: no other replaces it
+    hold_map_for_run(
+        ctx.profile, args.study, args.simulate
+    )  # held before it is read: no other replaces it
 
     def progress(frac: float, text: str) -> None:
         print(f"\rvibration map: {frac:4.0%} {text}"[:100], end="", file=sys.stderr, flush=True)
@@ -188,6 +191,41 @@ class _Count:
         return f"{self.done}/{self.total}" + (f", {words}" if words else "")
 
 
+def estop_reason(outputs: Any) -> str | None:
+    """Why the table's e-stop stopped these outputs (None: it did not). Its event may come
+    after the stimulus it cut ended (two threads of the kernel): the kernel is asked."""
+    if outputs.estopped_by:
+        return outputs.estopped_by
+    try:
+        gate = outputs.status()["gate"]
+    except Exception:  # noqa: BLE001 - outputs gone: the e-stop's event says it, or nothing
+        return outputs.estopped_by
+    return (outputs.estopped_by or gate["estop_reason"]) if gate["estopped"] else None
+
+
+@contextlib.contextmanager
+def says_estopped(flight: dict[str, Any], *, quiet: bool = False) -> Iterator[None]:
+    """A run the table's e-stop stopped (``EStopped``, exit 4, from ``ctx.outputs``: its
+    interrupt can no longer come here) says the trial it stopped and how to go on."""
+    try:
+        yield
+    except EStopped:
+        if flight.get("pid") and not quiet:
+            print(estopped_line(flight["pid"], flight.get("trial"), flight["count"]), flush=True)
+        raise
+
+
+def estopped_line(pid: str, trial: int | None, count: _Count) -> str:
+    """What a run the table's e-stop stopped says: the trial it stopped and how to go on."""
+    at = f"trial {trial}" if trial else "the run"
+    again = f"resumes at trial {trial}" if trial else "resumes"
+    return (
+        f"{pid}: {at} stopped by the e-stop ({count.done}/{count.total} trials done); "
+        f"once an operator resets it (ctrl+r in the console, or `haptable reset` at a "
+        f"terminal) the same command {again}"
+    )
+
+
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         return analyze_cli.run(args)
@@ -239,7 +277,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         control.abort("Ctrl-C")
 
     summaries = []
-    with ctx.outputs(fast=True if args.simulate else None) as outputs:
+    flight: dict[str, Any] = {}  # the participant and trial under way
+    with (
+        says_estopped(flight, quiet=args.json),
+        ctx.outputs(fast=True if args.simulate else None) as outputs,
+    ):
         hold_for_run(outputs, args.study)
         signal.signal(signal.SIGINT, on_int)
         try:
@@ -283,7 +325,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                 count = _Count(len(st.done), st.total if args.trials is None else
                                min(st.total, len(st.done) + args.trials))  # fmt: skip
 
+                flight.update(pid=pid, count=count, trial=None)
+
                 def say(kind: str, info: dict[str, Any], count=count) -> None:
+                    if kind == "start":
+                        flight["trial"] = info["trial"]["index"] + 1
                     line = _line(kind, info)
                     if kind == "done":
                         line = line and f"{line}  [{count.one_more()}]"
@@ -299,16 +345,22 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     again = resume_text(prep.plan, prep.files.events())
                     if again:
                         print(f"{pid}: {again}", flush=True)
-                res = run_plan(
-                    files,
-                    prep.plan,
-                    prep.participant,
-                    player=player,
-                    responder=responder,
-                    control=control,
-                    notify=say,
-                    limit=args.trials,
-                )
+                try:
+                    res = run_plan(
+                        files,
+                        prep.plan,
+                        prep.participant,
+                        player=player,
+                        responder=responder,
+                        control=control,
+                        notify=say,
+                        limit=args.trials,
+                    )
+                except UserError as exc:
+                    why = estop_reason(outputs)  # the table's e-stop cut a stimulus
+                    if why is None:
+                        raise
+                    raise EStopped(why) from exc
                 summaries.append({"participant": pid, "dir": str(prep.files.root), **res})
                 if not args.json:
                     print(
