@@ -16,7 +16,6 @@ import json
 import re
 import signal
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +26,7 @@ from . import protocol as protocols
 from .analyze_cli import add_parser
 from .hold import hold_for_run, hold_map_for_run
 from .plan import check_seed_row
+from .run_estop import estop_reason, says_estopped
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
 from .store import progress as store_progress
@@ -191,41 +191,6 @@ class _Count:
         return f"{self.done}/{self.total}" + (f", {words}" if words else "")
 
 
-def estop_reason(outputs: Any) -> str | None:
-    """Why the table's e-stop stopped these outputs (None: it did not). Its event may come
-    after the stimulus it cut ended (two threads of the kernel): the kernel is asked."""
-    if outputs.estopped_by:
-        return outputs.estopped_by
-    try:
-        gate = outputs.status()["gate"]
-    except Exception:  # noqa: BLE001 - outputs gone: the e-stop's event says it, or nothing
-        return outputs.estopped_by
-    return (outputs.estopped_by or gate["estop_reason"]) if gate["estopped"] else None
-
-
-@contextlib.contextmanager
-def says_estopped(flight: dict[str, Any], *, quiet: bool = False) -> Iterator[None]:
-    """A run the table's e-stop stopped (``EStopped``, exit 4, from ``ctx.outputs``: its
-    interrupt can no longer come here) says the trial it stopped and how to go on."""
-    try:
-        yield
-    except EStopped:
-        if flight.get("pid") and not quiet:
-            print(estopped_line(flight["pid"], flight.get("trial"), flight["count"]), flush=True)
-        raise
-
-
-def estopped_line(pid: str, trial: int | None, count: _Count) -> str:
-    """What a run the table's e-stop stopped says: the trial it stopped and how to go on."""
-    at = f"trial {trial}" if trial else "the run"
-    again = f"resumes at trial {trial}" if trial else "resumes"
-    return (
-        f"{pid}: {at} stopped by the e-stop ({count.done}/{count.total} trials done); "
-        f"once an operator resets it (ctrl+r in the console, or `haptable reset` at a "
-        f"terminal) the same command {again}"
-    )
-
-
 def run(args: argparse.Namespace, ctx: Any) -> int:
     if args.study_cmd in ("analyze", "analyse"):  # either spelling (the screen's is analyse)
         return analyze_cli.run(args)
@@ -325,7 +290,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                 count = _Count(len(st.done), st.total if args.trials is None else
                                min(st.total, len(st.done) + args.trials))  # fmt: skip
 
-                flight.update(pid=pid, count=count, trial=None)
+                flight.update(pid=pid, trial=None, done=lambda c=count: f"{c.done}/{c.total}")
 
                 def say(kind: str, info: dict[str, Any], count=count) -> None:
                     if kind == "start":

@@ -165,3 +165,37 @@ def test_the_console_s_ctrl_e_stops_a_shell_s_simulated_run(plugins, tmp_path, s
         run.finish(1)
     _stopped_as_said(run, code, tmp_path / "runs")
     assert "operator e-stop (console)" in run.err, run.err
+
+
+def test_a_shell_estop_stops_a_simulated_adaptive_run_saying_where_it_resumes(tmp_path):
+    out = tmp_path / "thr"
+    args = ["study", "run", "threshold_electrovibration", "--participant", "P01"]
+    args += ["--out", str(out), "--simulate"]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "console.cli.entry", *args],
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
+    reader.start()
+    try:
+        t_end = time.monotonic() + 90
+        while sum(ln.startswith("  P01 trial ") for ln in list(lines)) < 3:
+            assert proc.poll() is None and time.monotonic() < t_end, lines[-3:]
+            time.sleep(0.05)
+        assert _haptable("--profile", "sim", "estop").returncode == 0
+        code = proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+    reader.join(5)
+    err = proc.stderr.read()
+    assert code == EXIT_ESTOPPED, (code, lines[-3:], err)
+    said = [ln for ln in lines if "stopped by the e-stop" in ln]
+    assert said and "the same command resumes at trial " in said[-1], lines[-3:]
+    assert "haptable: e-stopped by haptable estop" in err, err
