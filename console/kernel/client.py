@@ -153,6 +153,7 @@ class Outputs:
         self._teller = Teller()
         self.listeners = self._teller.listeners  # ``add_listener``'s
         self.estopped_by: str | None = None  # why an e-stop came while these were open
+        self._reset_t = 0.0  # when the kernel's last reset began (its clock: ``_on_gate``)
         self.record: TwinRecord | None = None  # kept by ``close(keep_record=True)``
         self._sock, hello = self._connect(profile)
         self.kernel_pid = int(hello.get("kernel_pid", 0))
@@ -254,6 +255,7 @@ class Outputs:
                 elif op == "gate":
                     self._on_gate(header)
                 elif op == "reset":
+                    self._reset_t = max(self._reset_t, _finite(header.get("t")) or 0.0)
                     self._estopped, self._estop_reason = False, ""
                     self._tell("reset", str(header.get("message", "")))
                 elif op in ("bye", "error"):
@@ -290,7 +292,8 @@ class Outputs:
 
     def _on_gate(self, h: dict[str, Any]) -> None:
         kind, message = str(h.get("kind")), str(h.get("message", ""))
-        if kind == "estop":
+        past = (_finite(h.get("t")) or 0.0) < self._reset_t  # a reset came after it
+        if kind == "estop" and not past:  # told all the same: it stopped what played
             self._estopped = True
             self._estop_reason = self._estop_reason or message
         elif kind == "reset":  # the kernel's own "reset" op says it, with who and when:
@@ -537,6 +540,7 @@ class Outputs:
         console, `haptable reset` at a terminal, or a private table's owner);
         ``SafetyRefusal`` with the line that says so otherwise."""
         h, _ = self._call("reset", who=who or command_line())
+        self._reset_t = max(self._reset_t, _finite(h.get("t")) or 0.0)
         self._estopped, self._estop_reason = False, ""
         return str(h.get("message", ""))
 

@@ -108,6 +108,10 @@ class Kernel:
         self._gate_lock = threading.Lock()  # the gate appears; an early e-stop latches
         self._quit = threading.Event()
         self._last_client_s = time.monotonic()
+        #: when (monotonic, this host's) the last reset began: an e-stop's event from
+        #: before it, handed on after it (a loaded event thread), is past: it latches
+        #: nothing again and clients keep the reset's state (they compare its ``t``)
+        self.reset_t = 0.0
         self.control: LineServer | None = None
         self._listener: socket.socket | None = None
         self.outputs: Any = None  # console.kernel.table.TableOutputs
@@ -275,8 +279,9 @@ class Kernel:
             if ev is None:
                 return
             if ev.kind in ("estop", "fault") and not self._quit.is_set():
-                with contextlib.suppress(Exception):  # never lose the broadcast to a disk
-                    write_latch(self.table, latch_record(ev.message, "kernel"))
+                if ev.t_s >= self.reset_t:  # not undone by a reset since (``reset_t``)
+                    with contextlib.suppress(Exception):  # never lose the broadcast to a disk
+                        write_latch(self.table, latch_record(ev.message, "kernel"))
                 self._estop_twins(ev.message)
             msg = {
                 "op": "gate",
@@ -348,6 +353,7 @@ class Kernel:
         latched = read_latch(self.table)
         if latched is None and not self.gate.estopped:
             return "ok: not e-stopped"
+        t = self.reset_t = time.monotonic()  # before the latch goes (``reset_t``)
         try:
             latched = clear_latch(self.table) or latched  # every e-stop it removed
         except OSError as exc:
@@ -358,7 +364,7 @@ class Kernel:
         note = f"e-stop reset by {who[:120]} at {when} (was: {was})"
         log.warning("%s", note)
         for c in self.client_list():
-            self._send_event(c, {"op": "reset", "message": note})
+            self._send_event(c, {"op": "reset", "message": note, "t": t})
         return f"ok: {note}"
 
     def _control(self, line: str, peer_pid: int) -> str:
