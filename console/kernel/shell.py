@@ -3,8 +3,9 @@
 ``haptable estop`` latches the e-stop of every table it names first (``--profile``: that
 one; none: every table that ran since the runtime directory was made and every profile
 found by name), then e-stops each running kernel at once (its control socket: ``estop``),
-the private twins playing on those tables among them (``twins_of``), each with the same deadline, and prints one line per table, then one per table latched
-with the command that resets it (``reset_command``). A table whose kernel is not
+the private twins playing on those tables among them (``twins_of``), each with the same
+deadline, and prints one line per table, then one per table latched with the command
+that resets it (``reset_command``). A table whose kernel is not
 running stays latched: the next command that opens it refuses, the console opens into
 the e-stop. No numpy, no plugins, no profile parsing on this path: it must be instant.
 
