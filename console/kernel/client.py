@@ -155,6 +155,7 @@ class Outputs:
         self.estopped_by: str | None = None  # why an e-stop came while these were open
         self._reset_t = 0.0  # when the kernel's last reset began (its clock: ``_on_gate``)
         self.record: TwinRecord | None = None  # kept by ``close(keep_record=True)``
+        self._opened_t = time.monotonic()  # an e-stop reset before this is none of ours
         self._sock, hello = self._connect(profile)
         self.kernel_pid = int(hello.get("kernel_pid", 0))
         self.client_id, self.last_plan = int(hello.get("client", 0)), None  # ``scope``
@@ -292,8 +293,11 @@ class Outputs:
 
     def _on_gate(self, h: dict[str, Any]) -> None:
         kind, message = str(h.get("kind")), str(h.get("message", ""))
-        past = (_finite(h.get("t")) or 0.0) < self._reset_t  # a reset came after it
-        if kind == "estop" and not past:  # told all the same: it stopped what played
+        t = _finite(h.get("t")) or 0.0
+        past = t < self._reset_t  # a reset came after it: told, it stopped what played
+        if kind == "estop" and past and t < self._opened_t:
+            return  # reset before these opened: they played nothing it stopped
+        if kind == "estop" and not past:
             self._estopped = True
             self._estop_reason = self._estop_reason or message
         elif kind == "reset":  # the kernel's own "reset" op says it, with who and when:

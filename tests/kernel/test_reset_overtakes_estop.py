@@ -31,6 +31,14 @@ def test_a_client_keeps_the_reset_s_state_over_the_estop_s_late_event(profile, p
         assert not out.estopped
         out._on_gate(_gate_event(before))  # handed on after the reset
         assert not out.estopped and out.estop_reason == ""
+        t_end = time.monotonic() + 5  # told on the listeners' thread
+        while ("estop", "operator e-stop (console)") not in told and time.monotonic() < t_end:
+            time.sleep(0.01)
+        assert ("estop", "operator e-stop (console)") in told  # it stopped what played
+        with open_outputs(profile, plugins, fast=True) as later:  # opened after the reset
+            later._reset_t = out._reset_t  # as the kernel's reset event told it
+            later._on_gate(_gate_event(before))
+            assert not later.estopped and later.estopped_by is None  # none of its business
         out._on_gate(_gate_event(time.monotonic() + 1e-3, "haptable estop"))  # a new one
         assert out.estopped and out.estop_reason == "haptable estop"
 
