@@ -9,7 +9,8 @@ replies and events (e-stops, resets, each plan's first sample and segments).
 
 ``fast=True`` (or ``private=True``, paced) runs a *private* twin table of this process's
 own (see ``console.kernel.tables``): benches and tests that reset their own e-stops use
-one, never the operator's table. A table whose e-stop is latched refuses to open
+one, never the operator's table. ``on_table=True``: that twin plays a command on the
+profile's table (a simulated study run), whose e-stop stops it as it stops the table. A table whose e-stop is latched refuses to open
 (``EStopLatched``) unless ``allow_latched`` (the console opens into the e-stop and shows
 it). A profile with other settings than the running kernel's replaces it when that
 kernel has no other client, else is refused in one line.
@@ -119,6 +120,7 @@ class Outputs:
         private: bool | None = None,
         allow_latched: bool = False,
         role: str = "client",
+        on_table: bool = False,
     ) -> None:
         self.profile = profile
         self._plugins = plugins
@@ -130,7 +132,10 @@ class Outputs:
         if private is None:
             private = self.fast  # a fast-forward twin is always a process's own
         if table is None:
-            table = private_table(profile.name) if private else table_for(profile.path)
+            shared = table_for(profile.path)
+            table = (
+                private_table(profile.name, of=shared if on_table else None) if private else shared
+            )
         self.table = table
         self.role = role
         self._closed = False
@@ -148,7 +153,9 @@ class Outputs:
         self._teller = Teller()
         self.listeners = self._teller.listeners  # ``add_listener``'s
         self.estopped_by: str | None = None  # why an e-stop came while these were open
+        self._reset_t = 0.0  # when the kernel's last reset began (its clock: ``_on_gate``)
         self.record: TwinRecord | None = None  # kept by ``close(keep_record=True)``
+        self._opened_t = time.monotonic()  # an e-stop reset before this is none of ours
         self._sock, hello = self._connect(profile)
         self.kernel_pid = int(hello.get("kernel_pid", 0))
         self.client_id, self.last_plan = int(hello.get("client", 0)), None  # ``scope``
@@ -249,6 +256,7 @@ class Outputs:
                 elif op == "gate":
                     self._on_gate(header)
                 elif op == "reset":
+                    self._reset_t = max(self._reset_t, _finite(header.get("t")) or 0.0)
                     self._estopped, self._estop_reason = False, ""
                     self._tell("reset", str(header.get("message", "")))
                 elif op in ("bye", "error"):
@@ -285,7 +293,11 @@ class Outputs:
 
     def _on_gate(self, h: dict[str, Any]) -> None:
         kind, message = str(h.get("kind")), str(h.get("message", ""))
-        if kind == "estop":
+        t = _finite(h.get("t")) or 0.0
+        past = t < self._reset_t  # a reset came after it: told, it stopped what played
+        if kind == "estop" and past and t < self._opened_t:
+            return  # reset before these opened: they played nothing it stopped
+        if kind == "estop" and not past:
             self._estopped = True
             self._estop_reason = self._estop_reason or message
         elif kind == "reset":  # the kernel's own "reset" op says it, with who and when:
@@ -532,6 +544,7 @@ class Outputs:
         console, `haptable reset` at a terminal, or a private table's owner);
         ``SafetyRefusal`` with the line that says so otherwise."""
         h, _ = self._call("reset", who=who or command_line())
+        self._reset_t = max(self._reset_t, _finite(h.get("t")) or 0.0)
         self._estopped, self._estop_reason = False, ""
         return str(h.get("message", ""))
 

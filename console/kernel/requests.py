@@ -220,7 +220,7 @@ def reset(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """An operator's only (``console.kernel.operator``); anyone else gets the line why."""
     line = k.reset(c.pid, str(h.get("who") or c.label())[:200], via_terminal=False)
     if line.startswith("ok"):
-        return {"ok": True, "message": line[4:]}
+        return {"ok": True, "message": line[4:], "t": k.reset_t}
     return {"error": line, "refused": True}
 
 

@@ -34,17 +34,19 @@ from typing import Any
 from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.core.realtime import KERNEL_PRIORITY, realtime_priority
 from console.kernel import wire
-from console.kernel.line_server import LineServer, peer_cred
+from console.kernel.line_server import LineServer, peer_cred, request
 from console.kernel.operator import reset_refusal
 from console.kernel.private_dir import open_private, pid_alive, write_private
 from console.kernel.requests import PLAYS_KEPT, REQUESTS
 from console.kernel.tables import (
+    TWIN_OF,
     Table,
     clear_latch,
     describe_latch,
     latch_record,
     read_latch,
     table_at,
+    twins_of,
     write_latch,
 )
 
@@ -106,6 +108,10 @@ class Kernel:
         self._gate_lock = threading.Lock()  # the gate appears; an early e-stop latches
         self._quit = threading.Event()
         self._last_client_s = time.monotonic()
+        #: when (monotonic, this host's) the last reset began: an e-stop's event from
+        #: before it, handed on after it (a loaded event thread), is past: it latches
+        #: nothing again and clients keep the reset's state (they compare its ``t``)
+        self.reset_t = 0.0
         self.control: LineServer | None = None
         self._listener: socket.socket | None = None
         self.outputs: Any = None  # console.kernel.table.TableOutputs
@@ -150,7 +156,7 @@ class Kernel:
         def before_start(gate: Any) -> None:
             gate.add_listener(self._on_gate_event)
             with self._gate_lock:  # an e-stop from the control socket until now latched it
-                latched = read_latch(t)
+                latched = read_latch(t) or (t.shared and read_latch(t.shared))
                 if latched is not None:
                     gate.estop(describe_latch(latched), quiet=True)
                 self.gate = gate
@@ -252,7 +258,7 @@ class Kernel:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(self.table.info_path)
         if self.table.private:  # nothing of it is needed again
-            for name in ("kernel.log", "estop.json", "console.lock", "kernel.lock"):
+            for name in ("kernel.log", "estop.json", "console.lock", "kernel.lock", TWIN_OF):
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(self.table.dir / name)
             with contextlib.suppress(OSError):
@@ -273,8 +279,10 @@ class Kernel:
             if ev is None:
                 return
             if ev.kind in ("estop", "fault") and not self._quit.is_set():
-                with contextlib.suppress(Exception):  # never lose the broadcast to a disk
-                    write_latch(self.table, latch_record(ev.message, "kernel"))
+                if ev.t_s >= self.reset_t:  # not undone by a reset since (``reset_t``)
+                    with contextlib.suppress(Exception):  # never lose the broadcast to a disk
+                        write_latch(self.table, latch_record(ev.message, "kernel"))
+                self._estop_twins(ev.message)
             msg = {
                 "op": "gate",
                 "kind": ev.kind,
@@ -285,6 +293,19 @@ class Kernel:
             }
             for c in self.client_list():
                 self._send_event(c, msg)
+
+    def _estop_twins(self, reason: str) -> None:
+        """E-stop the private twins playing on this table (``twins_of``), after its latch
+        is written (a twin opening now reads it), each on its own thread."""
+
+        def one(twin: Table) -> None:
+            with contextlib.suppress(Exception):  # a twin that ended is stopped already
+                request(twin.control_sock, f"estop {reason}"[:250], timeout_s=ESTOP_WAIT_S + 1)
+
+        for twin in twins_of(self.table):
+            threading.Thread(
+                target=one, args=(twin,), name="haptable-twin-estop", daemon=True
+            ).start()
 
     def client_list(self) -> list[Client]:
         with self._clients_lock:
@@ -332,6 +353,7 @@ class Kernel:
         latched = read_latch(self.table)
         if latched is None and not self.gate.estopped:
             return "ok: not e-stopped"
+        t = self.reset_t = time.monotonic()  # before the latch goes (``reset_t``)
         try:
             latched = clear_latch(self.table) or latched  # every e-stop it removed
         except OSError as exc:
@@ -342,7 +364,7 @@ class Kernel:
         note = f"e-stop reset by {who[:120]} at {when} (was: {was})"
         log.warning("%s", note)
         for c in self.client_list():
-            self._send_event(c, {"op": "reset", "message": note})
+            self._send_event(c, {"op": "reset", "message": note, "t": t})
         return f"ok: {note}"
 
     def _control(self, line: str, peer_pid: int) -> str:

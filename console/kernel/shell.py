@@ -3,8 +3,9 @@
 ``haptable estop`` latches the e-stop of every table it names first (``--profile``: that
 one; none: every table that ran since the runtime directory was made and every profile
 found by name), then e-stops each running kernel at once (its control socket: ``estop``),
-each with the same deadline, and prints one line per table, then one per table latched
-with the command that resets it (``reset_command``). A table whose kernel is not
+the private twins playing on those tables among them (``twins_of``), each with the same
+deadline, and prints one line per table, then one per table latched with the command
+that resets it (``reset_command``). A table whose kernel is not
 running stays latched: the next command that opens it refuses, the console opens into
 the e-stop. No numpy, no plugins, no profile parsing on this path: it must be instant.
 
@@ -19,13 +20,13 @@ Exit status: 0 done, 1 an e-stop not confirmed (or a reset refused), 2 bad input
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
 import shlex
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass
 
 from console.core.errors import UserError
 from console.core.suggest import suggestion
@@ -41,11 +42,12 @@ from console.kernel.tables import (
     read_latch,
     table_for,
     table_key,
+    twins_of,
     write_latch,
 )
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class Reached:
     """What one table's kernel answered to the e-stop."""
 
@@ -90,6 +92,15 @@ def _reach(table: Table, reason: str, timeout_s: float) -> Reached | None:
     sock = table.control_sock
     if not sock.exists():
         return None
+    if table.of:  # a private twin playing on it (a simulated study run)
+        return dataclasses.replace(
+            _reach_kernel(table, reason, timeout_s), table=f"{table.name}'s twin"
+        )
+    return _reach_kernel(table, reason, timeout_s)
+
+
+def _reach_kernel(table: Table, reason: str, timeout_s: float) -> Reached:
+    sock = table.control_sock
     try:
         reply, pid = request(sock, f"estop {reason}"[:250], timeout_s=timeout_s)
     except (ConnectionRefusedError, FileNotFoundError):
@@ -140,14 +151,15 @@ def estop(
     def one(t: Table) -> None:
         results[t.key] = _reach(t, reason, timeout_s)
 
-    threads = [threading.Thread(target=one, args=(t,), daemon=True) for t in tables]
+    kernels = [*tables, *(w for t in tables for w in twins_of(t))]  # after the latches
+    threads = [threading.Thread(target=one, args=(t,), daemon=True) for t in kernels]
     for th in threads:
         th.start()
     t_end = time.monotonic() + timeout_s + 0.5
     for th in threads:
         th.join(max(0.0, t_end - time.monotonic()))
     reached = []
-    for t in tables:
+    for t in kernels:
         if t.key not in results and t.control_sock.exists():
             reached.append(Reached(t.name, -1, False, f"no answer within {timeout_s:g} s"))
         elif results.get(t.key) is not None:
@@ -290,7 +302,7 @@ def main(argv: list[str]) -> int:
         print(
             json.dumps(
                 {
-                    "tables": [asdict(r) for r in reached],
+                    "tables": [dataclasses.asdict(r) for r in reached],
                     "confirmed": not unconfirmed,
                     "latched": [t.key for t in tables],
                     "reset": resets,

@@ -16,7 +16,12 @@ for every process that loads that file. Its kernel keeps its files in
 
 A *private* table (``runtime_dir()/private/<key>/``) is a twin of one process's own (the
 bench's safety fuzz, tests): a bare `haptable estop` never reaches it and its owner may
-reset it; it never drives hardware.
+reset it; it never drives hardware. A private twin that plays a command *on* a shared
+table (``haptable study run --simulate``: ``private_table(of=table)``, its ``twin-of``
+file naming the table, written before its kernel starts) is stopped by that table's
+e-stop as the table's own kernel is: its kernel reads the table's latch too when it
+opens, and `haptable estop` and the table's kernel e-stop it (``twins_of``) after
+latching the table. The operator's e-stop always wins; only its owner resets the twin.
 
 The latch is written before the kernel's e-stop returns and read by a kernel before it
 opens anything, so an e-stop sent while no kernel runs is remembered: `haptable estop`
@@ -37,12 +42,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from console.kernel.private_dir import ensure_private_dir, open_private, runtime_dir
+from console.kernel.private_dir import (
+    ensure_private_dir,
+    open_private,
+    runtime_dir,
+    write_private,
+)
 
 #: a latch record is a few lines; anything larger is not ours
 MAX_LATCH_BYTES = 16 * 1024
 #: the e-stops a latch keeps after its first (the newest; ``count`` says how many came)
 MAX_LATER = 12
+#: a private twin's file naming the shared table it plays on (``private_table(of=)``)
+TWIN_OF = "twin-of"
 
 
 def table_key(profile_path: str | os.PathLike) -> str:
@@ -57,11 +69,13 @@ def table_key(profile_path: str | os.PathLike) -> str:
 @dataclass(frozen=True)
 class Table:
     """Where one table's kernel keeps its files (``dir``); ``private``: a twin of one
-    process (see the module's doc)."""
+    process; ``of``: the key of the shared table such a twin plays on (see the module's
+    doc)."""
 
     key: str
     dir: Path
     private: bool = False
+    of: str = ""
 
     @property
     def kernel_sock(self) -> Path:
@@ -89,8 +103,13 @@ class Table:
 
     @property
     def name(self) -> str:
-        """The profile's name as the key starts with it."""
-        return self.key.rsplit("-", 1)[0]
+        """The profile's name as the key starts with it (a twin on a table: the table's)."""
+        return (self.of or self.key).rsplit("-", 1)[0]
+
+    @property
+    def shared(self) -> Table | None:
+        """The shared table a private twin plays on (None: it plays on none)."""
+        return Table(self.of, tables_root() / self.of) if self.of else None
 
     def ensure(self) -> Table:
         """Create the directory (0700, checked like the runtime directory)."""
@@ -115,20 +134,48 @@ def table_for(profile_path: str | os.PathLike) -> Table:
 _private_seq = 0
 
 
-def private_table(label: str = "twin") -> Table:
-    """A new private twin table of this process (see the module's doc)."""
+def private_table(label: str = "twin", of: Table | None = None) -> Table:
+    """A new private twin table of this process; ``of``: the shared table it plays on,
+    whose e-stop stops it (see the module's doc)."""
     global _private_seq
     _private_seq += 1
     safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in label)[:20]
     key = f"{safe}-{os.getpid()}-{_private_seq}"
     root = ensure_private_dir(runtime_dir() / "private")
-    return Table(key, root / key, private=True)
+    table = Table(key, root / key, private=True, of=of.key if of is not None else "")
+    if of is not None:  # before its kernel binds its control socket: an e-stop finds it
+        write_private(table.ensure().dir / TWIN_OF, of.key)
+    return table
 
 
 def table_at(directory: str | os.PathLike) -> Table:
     """The table whose files are in ``directory`` (a demo process joins its console's)."""
     d = Path(directory)
-    return Table(d.name, d, private=d.parent.name == "private")
+    private = d.parent.name == "private"
+    return Table(d.name, d, private=private, of=_twin_of(d) if private else "")
+
+
+def twins_of(table: Table) -> list[Table]:
+    """The private twins playing on the shared ``table`` whose kernel has a control
+    socket (alive or stale): its e-stop e-stops them too."""
+    if table.private:
+        return []
+    try:
+        dirs = sorted((runtime_dir() / "private").iterdir())
+    except OSError:
+        return []
+    return [
+        Table(d.name, d, private=True, of=table.key)
+        for d in dirs
+        if (d / "control.sock").exists() and _twin_of(d) == table.key
+    ]
+
+
+def _twin_of(d: Path) -> str:
+    """The key a private twin's ``twin-of`` file names ("" when none or not ours)."""
+    raw = _read_text(d / TWIN_OF)
+    ok = raw and len(raw) <= 200 and all(c.isalnum() or c in "-_." for c in raw)
+    return raw if ok else ""
 
 
 def running_tables() -> list[Table]:
@@ -332,7 +379,27 @@ def clear_latch(table: Table) -> dict[str, Any] | None:
     return rec
 
 
+def _read_text(p: Path) -> str:
+    """A small file's text ("" when none or not ours)."""
+    raw = _read_raw(p)
+    try:
+        return raw.decode("utf-8").strip() if raw is not None else ""
+    except UnicodeDecodeError:
+        return ""
+
+
 def _read_json(p: Path) -> Any:
+    raw = _read_raw(p)
+    if raw is None:
+        return None
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        return None
+
+
+def _read_raw(p: Path) -> bytes | None:
+    """A small regular file's bytes, never through a symlink (None: none, or too big)."""
     try:
         fd = os.open(p, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
     except OSError:
@@ -347,12 +414,7 @@ def _read_json(p: Path) -> Any:
         return None
     finally:
         os.close(fd)
-    if len(raw) > MAX_LATCH_BYTES:
-        return None
-    try:
-        return json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        return None
+    return None if len(raw) > MAX_LATCH_BYTES else raw
 
 
 def _sync_dir(d: Path) -> None:

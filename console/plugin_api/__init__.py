@@ -13,7 +13,7 @@ and takes the root of any other plugin package):
 What this module offers, by where it comes from:
 
 - errors: ``UserError``, ``SafetyRefusal``, ``TableBusy`` (refused: another process holds
-  the outputs); a message's fix where the user is
+  the outputs), ``EStopped`` (the table's e-stop stopped the command: exit 4); a message's fix where the user is
   (``console.core.words``): ``Placed`` (a fix per place), ``worded``, ``AT_CLI``,
   ``AT_CONSOLE``, ``listing``, ``counted``; ``OFF_LOOP``, the words for plays planned
   outside the frame loop (Scenes and Latency say them alike)
@@ -80,7 +80,7 @@ from console.core.contracts import (
 )
 from console.core.device_buffer import buffer_latency_s as device_buffer_latency_s
 from console.core.device_buffer import buffer_periods as device_buffer_periods
-from console.core.errors import SafetyRefusal, TableBusy, UserError
+from console.core.errors import EStopped, SafetyRefusal, TableBusy, UserError
 from console.core.gate_log import DATASET as GATE_EVENTS
 from console.core.gate_log import EVENT_DTYPE as GATE_EVENT_DTYPE
 from console.core.gate_log import GateLog
@@ -165,6 +165,7 @@ from console.signals.waveforms import MAX_PLAN_S, check_duration, plan_samples, 
 
 __all__ = [
     # errors, and their fix where the user is
+    "EStopped",
     "SafetyRefusal",
     "TableBusy",
     "UserError",

@@ -37,7 +37,9 @@ class Context:
 
         A table whose e-stop is latched refuses to open (``EStopLatched``, one line). An
         e-stop from elsewhere (`haptable estop`, the console) ends the command: whatever
-        it was doing is interrupted and ``EStopped`` leaves (exit status 4). With
+        it was doing is interrupted and ``EStopped`` leaves (exit status 4). ``fast``
+        outputs (a private twin: a simulated study run) play on the profile's table all
+        the same: its latch refuses them and its e-stop ends them. With
         ``$HAPTABLE_TWIN_LOG`` set, the twin's log is written there on leaving."""
         # lazy: keeps `haptable` startup light
         import os
@@ -46,7 +48,7 @@ class Context:
         from console.runtime.remote_stop import RemoteStop
         from console.runtime.twin_log import ENV, write_env_twin_log
 
-        out = open_outputs(self.profile, self.pm, fast=fast)
+        out = open_outputs(self.profile, self.pm, fast=fast, on_table=True)
         stop = None
         try:
             stop = RemoteStop(out)  # from here its interrupt may come

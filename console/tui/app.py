@@ -418,11 +418,11 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         if ev.topic in ("estop", "outputs"):  # an e-stop, a reset, outputs opened or
             self.live.watch.poke()  # lost: the bar at once, not at the next read
         own = time.monotonic() - self._own_estop_s.get(type(ev), -1e9) <= OWN_ESTOP_S
-        if ev.topic == "estop" and not own:
+        if ev.topic == "estop" and not own and self._still_so(ev):
             # from elsewhere (a shell's `haptable estop`, a demo's watchdog, a fault): a
             # toast and the log, as the console's own ctrl+e and ctrl+r are
             if isinstance(ev, Stopped):
-                self.notify(f"E-STOP: {ev.reason}", severity="error", timeout=12)
+                self.notify(f"E-STOP: {ev.reason}", severity="error", timeout=12, estop=True)
             elif isinstance(ev, Started):
                 self.notify(f"e-stop reset: {ev.detail}".rstrip(": "))
         if not self.screen_stack:
@@ -433,6 +433,13 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
             active = self.active_tab  # screen showing it starts its loop again
             if active is not None:
                 self._set_visible(active)
+
+    def _still_so(self, ev: SessionEvent) -> bool:
+        """An e-stop's or a reset's event says the table's state now: one overtaken by a
+        later e-stop or reset (ctrl+e's echo after the ctrl+r typed with it) is past,
+        its notification would outlive the state it says (the log has it)."""
+        out = self.session.outputs
+        return out is None or out.estopped == isinstance(ev, Stopped)
 
     def _says_it(self, ev: Failed) -> bool:
         """One error, one place (``console.tui.said``): a failure that is the outcome of
@@ -479,7 +486,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         # a reset's echo still to come is not this console's any more, and vice versa
         self._own_estop_s = {Stopped: time.monotonic()}
         self.estop("operator e-stop (console)")
-        self.notify("E-STOP: outputs silenced, relays open", severity="error")
+        self.notify("E-STOP: outputs silenced, relays open", severity="error", estop=True)
 
     def action_reset_estop(self) -> None:
         out = self.session.outputs

@@ -3,7 +3,8 @@
 The rule (README, "The console"): the outcome of a screen's own action (a key, a
 command, a button, the work it started) is said on that screen's status line; a toast
 is for what happens elsewhere or later (another screen's work, a driver, the e-stop key,
-a screen's result that comes while the operator looks at another screen).
+a screen's result that comes while the operator looks at another screen), but never over
+the e-stop's own notification (a hidden screen's echo of the e-stop is in the log only).
 
 Whatever the console says, on a status line or as a toast, is also a record of logger
 ``haptable.console`` (the log view, ``ctrl+l``, and ``console.log``): a failure seen
@@ -101,7 +102,8 @@ def screen_name(widget: DOMNode, default: str) -> str:
 @runtime_checkable
 class ShowsWidgets(Protocol):
     """An app that knows whether the operator sees a widget's screen now
-    (``HapTableApp.shows``)."""
+    (``HapTableApp.shows``); its ``notify`` takes ``hidden_screen=True`` for a hidden
+    screen's status (``console.tui.toasts.NewestToastOnly``)."""
 
     def shows(self, widget: Any) -> bool: ...
 
@@ -118,8 +120,11 @@ def said_here(widget: Any, where: str, text: str, severity: str = "error") -> No
     finished after they moved on)."""
     log_said(f"status {where}", text, severity)
     _remember(where, " ".join(str(text).split()), None, repeat_ok=True)
-    if not shows_now(widget):
-        widget.app.notify(f"{where}: {text}", severity=severity, timeout=8, logged=True)
+    if not shows_now(widget):  # never over the e-stop's own (``console.tui.toasts``)
+        app = widget.app
+        app.notify(
+            f"{where}: {text}", severity=severity, timeout=8, logged=True, hidden_screen=True
+        )
 
 
 def status_said(widget: Any, where: str, text: str, severity: str = "information") -> None:

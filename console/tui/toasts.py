@@ -13,6 +13,7 @@ keeps the room it leaves, whole or cut after a word (``console.tui.title_row``).
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 from rich.cells import cell_len
@@ -53,16 +54,27 @@ class NewestToastOnly:
 
     #: the column where the toast shown begins on the title row (None: no toast)
     toast_x: int | None = None
+    #: until when (monotonic) the e-stop's notification is the one shown
+    _estop_until: float = 0.0
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written; ``markup=True`` for a template with its
         values escaped. Every toast is in the log too (``ctrl+l``: ``console.tui.said``);
         ``logged=True``: it is there already (a log record or a status line shown as a
-        toast). A ``title`` goes before the message on its one row."""
+        toast). A ``title`` goes before the message on its one row. ``estop=True``: the
+        e-stop's own; while it shows, a hidden screen's status (``hidden_screen=True``:
+        its echo of the e-stop, say) goes to the log only, never over it; any other
+        notification replaces it (the reset's)."""
         title = kw.pop("title", "")
+        estop, hidden = kw.pop("estop", False), kw.pop("hidden_screen", False)
         if not kw.pop("logged", False):
             said = f"{title}: {message}" if title else message
             log_said("toast", said, kw.get("severity", "information"))
+        now = time.monotonic()
+        if hidden and now < self._estop_until:
+            return
+        timeout = kw.get("timeout") or self.NOTIFICATION_TIMEOUT
+        self._estop_until = now + timeout if estop else 0.0
         if title:
             message = f"{Content(title).markup}: {message}" if markup else f"{title}: {message}"
         super().notify(message, markup=markup, **kw)

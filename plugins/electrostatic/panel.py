@@ -351,7 +351,8 @@ class ElectrostaticPane(Vertical):
             status_said(found.first(Static), "Electrostatic", text, "error" if error else "")
             # a refusal because a run holds the outputs leaves the line when the run ends
             lapse_if_held(self, self.app.session, lambda: self.status_text, text, self.say)
-            self.call_after_refresh(self._status_whole)
+            # once the line has its new rows: it is laid out on the refresh after this one
+            self.call_after_refresh(self.call_after_refresh, self._status_whole)
 
     #: the rows the list and the setting take at most (the list's border included)
     TOP_ROWS = 16

@@ -23,7 +23,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import Limits, UserError, append_json_line
+from console.plugin_api import EStopped, Limits, UserError, append_json_line
 
 from . import adaptive_protocol as ap
 from .adaptive_observer import draw
@@ -41,6 +41,7 @@ from .hold import hold_for_run
 from .plan import participant_seed
 from .quest import QuestTrack
 from .records import MAX_SEED
+from .run_estop import estop_reason, says_estopped
 from .runner import Aborted, Control
 from .start import PARTICIPANT_KEYS, simulated_participant
 from .stimuli import play_on
@@ -190,8 +191,12 @@ def run(
     old = signal.getsignal(signal.SIGINT)
     signal.signal(signal.SIGINT, lambda s, f: control.abort("Ctrl-C"))
     summaries = []
+    flight: dict[str, Any] = {}  # the participant and trial under way
     try:
-        with ctx.outputs(fast=True if args.simulate else None) as outputs:
+        with (
+            says_estopped(flight, quiet=args.json),
+            ctx.outputs(fast=True if args.simulate else None) as outputs,
+        ):
             hold_for_run(outputs, args.study)
             for pid in ids:
                 root = participant_dir(args.out, pid)
@@ -233,7 +238,11 @@ def run(
                     else _person_answer(proto.procedure["task"])
                 )
 
+                flight.update(pid=pid, trial=None, done=None)
+
                 def say(rec: dict[str, Any], pid: str = pid) -> None:
+                    n = rec["trial"] + 1
+                    flight.update(trial=n + 1, done=lambda n=n: str(n))
                     if not (args.quiet or args.json):
                         ok = "correct" if rec["correct"] else "wrong"
                         shown = ok if rec["simulated"] else "answered"
@@ -265,6 +274,11 @@ def run(
                 except Aborted:
                     aborted = True
                     state = None
+                except UserError as exc:
+                    why = estop_reason(outputs)  # the table's e-stop cut a stimulus
+                    if why is None:
+                        raise
+                    raise EStopped(why) from exc
                 finished = state is not None and not state.running()
                 summary: dict[str, Any] = {
                     "participant": pid,

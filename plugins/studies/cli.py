@@ -19,13 +19,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, load_map
+from console.plugin_api import EStopped, UserError, load_map
 
 from . import analyze_cli
 from . import protocol as protocols
 from .analyze_cli import add_parser
 from .hold import hold_for_run, hold_map_for_run
 from .plan import check_seed_row
+from .run_estop import estop_reason, says_estopped
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
 from .store import check_id, resume_text
 from .store import progress as store_progress
@@ -133,7 +134,9 @@ def _vmap(args: argparse.Namespace, ctx: Any) -> Any:
     # lazy: the runtime part loads on first use, not at every haptable start
     from console.plugin_api.runtime import measured_map
 
-    hold_map_for_run(ctx.profile, args.study)  # held before it is read: no other replaces it
+    hold_map_for_run(
+        ctx.profile, args.study, args.simulate
+    )  # held before it is read: no other replaces it
 
     def progress(frac: float, text: str) -> None:
         print(f"\rvibration map: {frac:4.0%} {text}"[:100], end="", file=sys.stderr, flush=True)
@@ -239,7 +242,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         control.abort("Ctrl-C")
 
     summaries = []
-    with ctx.outputs(fast=True if args.simulate else None) as outputs:
+    flight: dict[str, Any] = {}  # the participant and trial under way
+    with (
+        says_estopped(flight, quiet=args.json),
+        ctx.outputs(fast=True if args.simulate else None) as outputs,
+    ):
         hold_for_run(outputs, args.study)
         signal.signal(signal.SIGINT, on_int)
         try:
@@ -283,7 +290,11 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                 count = _Count(len(st.done), st.total if args.trials is None else
                                min(st.total, len(st.done) + args.trials))  # fmt: skip
 
+                flight.update(pid=pid, trial=None, done=lambda c=count: f"{c.done}/{c.total}")
+
                 def say(kind: str, info: dict[str, Any], count=count) -> None:
+                    if kind == "start":
+                        flight["trial"] = info["trial"]["index"] + 1
                     line = _line(kind, info)
                     if kind == "done":
                         line = line and f"{line}  [{count.one_more()}]"
@@ -299,16 +310,22 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
                     again = resume_text(prep.plan, prep.files.events())
                     if again:
                         print(f"{pid}: {again}", flush=True)
-                res = run_plan(
-                    files,
-                    prep.plan,
-                    prep.participant,
-                    player=player,
-                    responder=responder,
-                    control=control,
-                    notify=say,
-                    limit=args.trials,
-                )
+                try:
+                    res = run_plan(
+                        files,
+                        prep.plan,
+                        prep.participant,
+                        player=player,
+                        responder=responder,
+                        control=control,
+                        notify=say,
+                        limit=args.trials,
+                    )
+                except UserError as exc:
+                    why = estop_reason(outputs)  # the table's e-stop cut a stimulus
+                    if why is None:
+                        raise
+                    raise EStopped(why) from exc
                 summaries.append({"participant": pid, "dir": str(prep.files.root), **res})
                 if not args.json:
                     print(

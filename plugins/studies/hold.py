@@ -12,12 +12,17 @@ from typing import Any
 from console.plugin_api import SafetyRefusal, TableBusy, UserError
 
 
-def run_words(study: str) -> str:
-    """How another process names this one's study run."""
+def run_words(study: str, simulated: bool = False) -> str:
+    """How another process names this one's study run (a simulated one plays on a twin
+    of the table, which the table's e-stop stops all the same)."""
+    if simulated:
+        return (
+            f"a simulated study run of {study} (haptable study run --simulate, pid {os.getpid()})"
+        )
     return f"a study run of {study} (haptable study run, pid {os.getpid()})"
 
 
-def hold_map_for_run(profile: Any, study: str) -> None:
+def hold_map_for_run(profile: Any, study: str, simulated: bool = False) -> None:
     """Hold ``profile``'s vibration map as the Studies screen's runs hold the console's
     (``map_held``: the console's Vibration screen refuses to measure, load or import
     over it, naming this run) until this process ends; ``TableBusy`` (exit 5) while
@@ -26,7 +31,7 @@ def hold_map_for_run(profile: Any, study: str) -> None:
     from console.plugin_api.runtime import map_held
 
     stack = contextlib.ExitStack()
-    stack.enter_context(map_held(profile, run_words(study)))
+    stack.enter_context(map_held(profile, run_words(study, simulated)))
     atexit.register(stack.close)
 
 

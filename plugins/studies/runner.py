@@ -231,6 +231,9 @@ def _run_trial(
     except Aborted:
         files.append({**base, "event": "interrupted", "reason": control.reason, "t": time.time()})
         raise
+    except KeyboardInterrupt:  # the e-stop's (console.runtime.remote_stop): runs again
+        files.append({**base, "event": "interrupted", "reason": "stopped", "t": time.time()})
+        raise
     except Exception as exc:
         files.append({**base, "event": "interrupted", "reason": str(exc), "t": time.time()})
         what = "" if isinstance(exc, UserError) else "failed: "

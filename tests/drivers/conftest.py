@@ -182,9 +182,13 @@ def _jack_output_present(sd: Any) -> bool:
 
 
 def _server_up(name: str) -> bool:
-    done = subprocess.run(
-        [_jack_tool("jack_lsp"), "-s", name], capture_output=True, text=True, timeout=10
-    )
+    """The server answers with its ports (a ``jack_lsp`` past its timeout: not yet)."""
+    try:
+        done = subprocess.run(
+            [_jack_tool("jack_lsp"), "-s", name], capture_output=True, text=True, timeout=10
+        )
+    except subprocess.TimeoutExpired:  # a loaded machine: asked again until the deadline
+        return False
     return done.returncode == 0 and "system:playback_1" in done.stdout
 
 
@@ -206,12 +210,15 @@ def start_jackd(name: str, log_path: Path) -> JackServer:
             start_new_session=True,
         )
     server = JackServer(name, proc, log_path)
-    deadline = time.monotonic() + 15.0
-    while not _server_up(name):
-        if proc.poll() is not None or time.monotonic() > deadline:
-            stop_jackd(server)
-            raise AssertionError(f"jackd did not come up; its log:\n{server.log()}")
-        time.sleep(0.2)
+    try:
+        deadline = time.monotonic() + 15.0
+        while not _server_up(name):
+            if proc.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"jackd did not come up; its log:\n{server.log()}")
+            time.sleep(0.2)
+    except BaseException:  # no fixture holds it yet: stopped here, never left running
+        stop_jackd(server)
+        raise
     return server
 
 
@@ -269,11 +276,20 @@ def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer
                 os.environ[k] = v
 
 
+#: the watcher of ``_stop_after_us``: this process gone (or a zombie), jackd is asked to
+#: stop, and killed if it has not within 15 s (a client it waits for, ``-t 10000``)
+_WATCH = (
+    "while kill -0 $0 2>/dev/null && ! grep -qs '^State:[[:space:]]*Z' /proc/$0/status; "
+    "do sleep 0.5; done; kill $1 2>/dev/null; "
+    "n=0; while kill -0 $1 2>/dev/null && [ $n -lt 30 ]; do sleep 0.5; n=$((n+1)); done; "
+    "kill -9 $1 2>/dev/null"
+)
+
+
 def _stop_after_us(server: JackServer) -> None:
     """Stop ``server`` once this process has exited (a watcher in a session of its own)."""
     subprocess.Popen(
-        ["sh", "-c", "while kill -0 $0 2>/dev/null; do sleep 0.5; done; kill $1", str(os.getpid()),
-         str(server.process.pid)],
+        ["sh", "-c", _WATCH, str(os.getpid()), str(server.process.pid)],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

@@ -62,7 +62,7 @@ def test_a_shell_s_study_run_holds_the_console_s_map(plugins, tmp_path, size):
     proc = _shell_run(tmp_path / "a")
     try:
         who = _held(profile, proc)
-        assert who.startswith("a study run of exp1 (haptable study run, pid ")
+        assert who.startswith("a simulated study run of exp1 (haptable study run --simulate, pid ")
         got = haptable(
             "study",
             "run",
