@@ -15,6 +15,7 @@ from console.session.background_check import bright_blobs, describe_blobs
 from console.session.calibration import SAVE_KEY, TOPIC
 from console.session.events import Failed
 from console.tui.lapse import lapse
+from console.tui.question_hold import answered
 from console.tui.said import log_said, shows_now
 from console.tui.text import escape
 from console.tui.util import short_path
@@ -147,6 +148,7 @@ class CameraWizardMixin:
         """``b``: the background from the recent frames; a bright blob in it (a hand
         held on the glass) is named and the background kept as it was, unless ``b`` is
         pressed again within ``BACKGROUND_AGAIN_S``."""
+        answered(self)  # b again answers its question (or b asks anew)
         if self._borrowed("b"):
             return
         svc = self.service

@@ -12,7 +12,10 @@ Three kinds of such lines, one mechanism (``lapse``):
   number"): it lapses once that state changes (``lapse_on_change``).
 
 When it lapses, and only if the line still shows the same text (a newer message keeps
-its line), ``replace`` puts what is true now in its place ("" clears it). A question is
+its line), ``replace`` puts what is true now in its place ("" clears it). A question
+holds its line until it lapses or is answered (``console.tui.question_hold``: ``replace``
+is its screen's status setter, marked ``@waits_for_question``; a line said meanwhile
+waits and shows then, in place of ``then``). A question is
 scrolled into view as it is asked (``question_in_view``): a screen left scrolled down
 and shown again by the key that asks (the palette's "Measure vibration map") hid it.
 """
@@ -24,6 +27,8 @@ from collections.abc import Callable
 
 from textual.widget import Widget
 from textual.widgets import Static
+
+from console.tui.question_hold import answered, hold, release, waits
 
 #: how often a conditional line is re-checked while it is shown
 RECHECK_S = 0.5
@@ -46,22 +51,51 @@ def lapse(
     if after_s is None and while_true is None:
         raise ValueError("lapse needs after_s or while_true")
     ends_s = None if after_s is None else time.monotonic() + after_s
+    question = while_true is None
+    if question and not waits(replace):
+        raise TypeError(
+            f"{replace!r} says a timed question: mark it "
+            "@waits_for_question (console.tui.question_hold) so that it holds its line"
+        )
 
     def check() -> None:
-        if shown() != text:  # a newer message took the line: nothing to do
+        if shown() != text:  # a newer message took the line (an answer): nothing to do
             timer.stop()
+            if question:
+                release(owner, text)
             return
         over = ends_s is not None and time.monotonic() >= ends_s
         if over or (while_true is not None and not while_true()):
             timer.stop()
-            replace(then)
+            waited = release(owner, text) if question else None
+            if waited is not None and waited.later is not None:
+                waited.later()  # the newest line said meanwhile: true now
+            else:
+                replace(then)
 
-    if while_true is None:  # a question: the operator answers what they see
+    if question:  # the operator answers what they see: it holds the line, in view
+        hold(owner, text)
         owner.call_after_refresh(question_in_view, owner, text)
     step = every_s if while_true is not None else after_s
     if ends_s is not None and while_true is not None:
         step = min(every_s, after_s)
     timer = owner.set_interval(step, check)
+
+
+def ask(
+    owner: Widget,
+    shown: Callable[[], str],
+    text: str,
+    say: Callable[[str], None],
+    after_s: float,
+    then: str = "",
+) -> None:
+    """Ask the timed question ``text`` on ``owner``'s line with ``say`` (its status setter,
+    marked ``@waits_for_question``): a question asked before is answered (over), this one
+    holds the line for ``after_s`` seconds, then ``then`` (or a line said meanwhile)."""
+    answered(owner)
+    say(text)
+    lapse(owner, shown, text, say, after_s, then=then)
 
 
 def lapse_on_change(

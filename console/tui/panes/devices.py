@@ -39,6 +39,7 @@ from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
 from console.tui.long_work import NOTE_S
+from console.tui.question_hold import waits_for_question
 from console.tui.said import status_said
 from console.tui.selftest_action import (
     run_selftest,
@@ -256,9 +257,8 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         return self.scrollable_content_region.width or self.app.size.width - 2
 
     def on_resize(self, event) -> None:
-        """The terminal's width changed (tmux resized, a window dragged): every table
-        laid out again within it (a table wider than the screen scrolls sideways and
-        cuts its first column)."""
+        """The terminal's width changed (tmux resized, a window dragged): every table laid
+        out again within it (a table wider than the screen scrolls, cutting its first)."""
         width = self._table_width()
         if width == self._laid_out:
             return
@@ -562,8 +562,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
 
     def action_selftest(self) -> None:
         """``s``: asks first, saying its paths and time (it plays chirps on every relay
-        path), ``s`` again within 3 s runs it; during an e-stop it is refused at once
-        (nothing to ask)."""
+        path), ``s`` again within 3 s runs it; refused at once during an e-stop."""
         out = self.app.session.outputs
         if out is not None and out.estopped:  # nothing to ask: the console's key first
             self._show_result(f"self-test {estop_refusal(out.estop_reason or '')}", error=True)
@@ -638,6 +637,7 @@ class DevicesPane(DevicePicksMixin, VerticalScroll):
         if self.doctor_rows:  # its row in the devices table says it too
             self._show(self.doctor_rows[:-1])
 
+    @waits_for_question
     def _show_result(
         self, text: str, error: bool = False, severity: str = "", tick: bool = False
     ) -> None:

@@ -33,6 +33,7 @@ from console.tui.charts import Chart, Series
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse
 from console.tui.list_keys import KeyedList
+from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import status_said
 from console.tui.util import from_thread
 
@@ -183,6 +184,7 @@ class SignalsPane(Vertical):
             self.reload_library()
 
     # ------------------------------------------------------------------ helpers
+    @waits_for_question
     def status(self, text: str, error: bool = False) -> None:
         line = " ".join(str(text).split())
         self._estop_said = error and ("e-stop" in line)  # a reset replaces it
@@ -481,6 +483,7 @@ class SignalsPane(Vertical):
         e = self.entries.get(event.option.id or "")
         if e is None:
             return
+        answered(self)  # Enter again answers its question; another asks anew
         asked, self._load = self._load, None
         over = self.unsaved() and self._fields()[0] != e.expr.strip()
         if over and asked != e.name:
@@ -489,7 +492,7 @@ class SignalsPane(Vertical):
                 f"enter again within {LOAD_AGAIN_S:g} s loads {e.name} over your unsaved "
                 "expression (ctrl+z then brings it back)"
             )
-            self.status(text)
+            self.status(text)  # the question holds the line until it lapses
             then = "your unsaved expression stays in the fields: ctrl+s saves it"
             lapse(self, lambda: self._status_line, text, self._load_lapsed, LOAD_AGAIN_S, then=then)
             return
@@ -505,6 +508,7 @@ class SignalsPane(Vertical):
         self._replace = None
         self.show_preview()
 
+    @waits_for_question
     def _load_lapsed(self, then: str) -> None:
         self._load = None
         self.status(then)
