@@ -73,6 +73,7 @@ class SignalsPane(Vertical):
         "Type a signal on the top line, a name and where it plays (PA, PA,PC, PALL, "
         "screen).\n"
         "enter    show its waveform and spectrum (before anything plays)\n"
+        "escape   leave a field for the library (what was typed stays; Tab goes back)\n"
         "ctrl+o   play it through the safety gate (ctrl+e e-stops as everywhere)\n"
         "ctrl+s   save it under its name in the profile's library (twice replaces)\n"
         "ctrl+t   multiply it by the gate's minimum ramp (you see it in the expression)\n"
@@ -107,6 +108,7 @@ class SignalsPane(Vertical):
         Binding("ctrl+s", "save_saved", "saved"),
         Binding("ctrl+t", "add_ramp", "add ramp"),
         Binding("ctrl+z", "undo", "undo", show=False),
+        Binding("escape", "leave_field", "leave field", show=False),  # the hint says it
     ]
 
     def __init__(self, **kw) -> None:
@@ -271,7 +273,15 @@ class SignalsPane(Vertical):
         return entry is not None and not entry.builtin and entry.expr.strip() == expr
 
     def _hint(self, saved: bool = False) -> str:
-        return f" enter plot  ^o play  ^s {'saved' if saved else 'save'}  ? help"
+        # Esc said where the operator types (a new one did not know how to leave the
+        # field); ? help is in the footer
+        return f" enter plot ^o play ^s {'saved' if saved else 'save'}  esc leave"
+
+    def action_leave_field(self) -> None:
+        """Esc in a field: the library takes the focus (the screen's keys, ``q`` too);
+        what was typed stays."""
+        if isinstance(self.app.focused, Input):
+            self.query_one("#sig-library", KeyedList).focus()
 
     def _show_saved(self) -> None:
         """The save key's label as it is true now (a change makes it ``save`` again)."""
