@@ -65,6 +65,13 @@ def scale_for(profile, level: str | None, *, capped: bool = True):
 
 
 def _format(path: Path, given: str | None) -> str:
+    """The format of ``path``: ``given`` (``--format``), else from its suffix; a folder
+    is said to be one (its empty suffix told nothing), with what to give instead."""
+    if path.is_dir():
+        raise UserError(
+            f"{path} is a folder, not a file: give the .ahap or .haptic file to import "
+            f"(e.g. {path / 'pattern.ahap'})"
+        )
     if given:
         return given
     fmt = FORMATS.get(path.suffix.lower())

@@ -29,7 +29,10 @@ What it offers:
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``), and
   ``lapse_on_change`` (a line about a state goes when the state changes)
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
-  first: the same key again within a few seconds does it, ``console.tui.ask_again``)
+  first: the same key again within a few seconds does it, ``console.tui.ask_again``);
+  a timed question holds its status line until it lapses or is answered: the screen's
+  status setter is marked ``waits_for_question``, ``answered`` frees the line
+  (``console.tui.question_hold``)
 - shortening: ``cut_words`` / ``cut_end`` (text within a width, cut after a whole word
   and never inside a bracket it would leave open), ``cut_chars`` (the same for a narrow
   cell, mid-word where it must), ``top_level_seps`` (where a line
@@ -60,6 +63,7 @@ from console.tui.narrow import ConsoleFooter
 from console.tui.number_field import NumberField
 from console.tui.panels import LeavesForScreen
 from console.tui.path_field import PathField, PathInput, middle_ellipsis, whole_names
+from console.tui.question_hold import answered, waits_for_question
 from console.tui.safety_bar import SafetyBar
 from console.tui.said import said_here, status_said
 from console.tui.session_messages import SessionMessage
@@ -89,6 +93,8 @@ __all__ = [
     "lapse",
     "lapse_if_held",
     "lapse_on_change",
+    "answered",
+    "waits_for_question",
     "show_keys",
     "from_thread",
     "short_path",

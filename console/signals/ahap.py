@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from console.core.plain_numbers import plain_s
 from console.signals.haptic_files import (
     EDGE_S,
     MAX_TIME_S,
@@ -129,7 +130,7 @@ def _control(path: Path, c: dict, kind: str, at: str, controls: dict, dropped: d
         need(path, cp, dict, w, '{"Time": 0.1, "ParameterValue": 0.5}')
         tj = num(path, cp, "Time", w, 0.0, MAX_TIME_S)
         if tj < last:
-            raise bad(path, f"{w}.Time", f"{tj:g} s comes before the point above",
+            raise bad(path, f"{w}.Time", f"{plain_s(tj)} comes before the point above",
                       "give control points in time order")  # fmt: skip
         out.append((tj, num(path, cp, "ParameterValue", w, lo, hi)))
         last = tj

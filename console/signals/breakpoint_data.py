@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.files.atomic import write_text_atomic
 from console.files.file_read import read_bytes_capped
 from console.files.json_lines import decode, parse_json
@@ -170,7 +171,7 @@ def _curve(path: Path, key: str, c: Any) -> dict[str, np.ndarray]:
     steps = np.diff(t)
     if np.any(steps <= 0 if key != "bursts" else steps < 0):
         i = int(np.argmax(steps <= 0 if key != "bursts" else steps < 0)) + 1
-        raise _bad(path, f"{key}.t_s[{i}]", f"{t[i]:g} s is not after the time before it")
+        raise _bad(path, f"{key}.t_s[{i}]", f"{plain_s(t[i])} is not after the time before it")
     return arrays
 
 

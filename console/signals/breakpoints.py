@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.signals.design import Node, _below_nyquist
 from console.signals.syntax import Quantity
 
@@ -199,8 +200,8 @@ def _times(values: list, part: str, usage: str) -> tuple[float, ...]:
     for i in range(1, len(times)):
         if not times[i] > times[i - 1]:
             raise UserError(
-                f"{part}: time {i + 1} ({times[i]:g} s) is not after time {i} "
-                f"({times[i - 1]:g} s); give strictly increasing times"
+                f"{part}: time {i + 1} ({plain_s(times[i])}) is not after time {i} "
+                f"({plain_s(times[i - 1])}); give strictly increasing times"
             )
     return tuple(times)
 

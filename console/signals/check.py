@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.signals.design import Chirp, Gain, Lowpass, Mix, Node, Noise, Seq, Silence, Wave
 from console.signals.waveforms import check_duration
 
@@ -88,7 +89,7 @@ def never_plays(node: Node, limits: Limits) -> str | None:
     try:
         check_duration(d, limits.max_plan_samples / fs, "the signal")
         if round(d * fs) < 2:
-            return f"{d:g} s is shorter than two samples at {fs} Hz; give it a length"
+            return f"{plain_s(d)} is shorter than two samples at {fs} Hz; give it a length"
         lo, hi = volt_range(node, fs)
     except UserError as exc:
         return str(exc)

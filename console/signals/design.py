@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.core.types import EXCITATIONS, PATCHES, OutputPlan, Segment, patches_of
 from console.signals.waveforms import MAX_PLAN_S, plan_samples, ramp_envelope
 
@@ -160,7 +161,7 @@ class ADSR(Node):
         if na + nd + nr > n:
             raise UserError(
                 f"{self.text or 'adsr'}: attack + decay + release = "
-                f"{(na + nd + nr) / fs:g} s is longer than the {n / fs:g} s it shapes; "
+                f"{plain_s((na + nd + nr) / fs)} is longer than the {plain_s(n / fs)} it shapes; "
                 "shorten the envelope or lengthen the signal"
             )
         s = self.sustain
@@ -190,8 +191,8 @@ class Ramp(Node):
         r = round(self.ramp_s * fs)
         if 2 * r > n:
             raise UserError(
-                f"{self.text or 'ramp'}: two {self.ramp_s:g} s ramps do not fit in "
-                f"{n / fs:g} s; shorten the ramp"
+                f"{self.text or 'ramp'}: two {plain_s(self.ramp_s)} ramps do not fit in "
+                f"{plain_s(n / fs)}; shorten the ramp"
             )
         return ramp_envelope(n, r)
 
@@ -347,11 +348,11 @@ def render(node: Node, fs: int, *, max_s: float = MAX_PLAN_S, what: str = "signa
     plan_samples(d, fs, max_s=max_s, what=what)  # refused here, before any allocation
     n = node.n_samples(fs) or 0
     if n < 2:
-        raise UserError(f"{what}: {d:g} s is shorter than two samples; give it a length")
+        raise UserError(f"{what}: {plain_s(d)} is shorter than two samples; give it a length")
     y = node.render(fs, n)
     bad = np.flatnonzero(~np.isfinite(y))
     if bad.size:
-        raise UserError(f"{what}: not a number at {bad[0] / fs:.4g} s; check its values")
+        raise UserError(f"{what}: not a number at {plain_s(bad[0] / fs, 4)}; check its values")
     return y
 
 

@@ -29,6 +29,7 @@ import ast
 from contextvars import ContextVar
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.core.suggest import suggestion
 from console.signals import breakpoints
 from console.signals.design import (
@@ -412,7 +413,7 @@ def _build(name: str, a: dict, part: str) -> Node:
     for key in ("duration", "attack", "decay", "release", "ramp"):
         d = a.get(key)
         if d is not None:
-            _need(d >= 0, part, f"{key} {d:g} s is negative; give a length of 0 s or more")
+            _need(d >= 0, part, f"{key} {plain_s(d)} is negative; give a length of 0 s or more")
     if a.get("duration") is not None and name not in ("silence",):
         _need(a["duration"] > 0, part, "duration 0 s; give a positive length")
     if name in ("sine", "square", "saw", "triangle"):

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 from console.files.file_read import read_bytes_capped
 from console.files.json_lines import decode, parse_json
 from console.signals.syntax import MAX_EXPR_CHARS
@@ -344,7 +345,7 @@ def _burst_rows(p: Pattern, scale: Scale) -> list[tuple[float, float, float, flo
         f = float(scale.hz(sharp))
         d = scale.burst_s(f)
         if t0 < at - 1e-9:
-            p.dropped.append(f"transient at {t0:g} s (overlaps the burst before)")
+            p.dropped.append(f"transient at {plain_s(t0)} (overlaps the burst before)")
             continue
         k = _end_factor(t0, d, p.t_s[-1], scale.ramp_s)
         if k < 1.0 and not any(x.startswith("bursts lowered") for x in p.mapped):

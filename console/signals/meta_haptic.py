@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from console.core.plain_numbers import plain_s
 from console.signals.haptic_files import (
     MAX_TIME_S,
     Exported,
@@ -58,7 +59,7 @@ def _points(path: Path, env: dict, key: str, value: str, required: bool) -> list
         need(path, p, dict, f"{where}[{i}]", f'{{"time": 0.1, "{value}": 0.5}}')
         t = num(path, p, "time", f"{where}[{i}]", 0.0, MAX_TIME_S)
         if t < last:
-            raise bad(path, f"{where}[{i}].time", f"{t:g} s comes before the breakpoint above",
+            raise bad(path, f"{where}[{i}].time", f"{plain_s(t)} comes before the breakpoint above",
                       "give breakpoints in time order")  # fmt: skip
         num(path, p, value, f"{where}[{i}]", 0.0, 1.0)
         last = t
@@ -96,8 +97,8 @@ def read(path: str | Path) -> Pattern:
                                num(path, e, "frequency", w, 0.0, 1.0)))  # fmt: skip
     if freq_pts and freq_pts[-1]["time"] > amp_pts[-1]["time"]:
         raise bad(path, f"signals.continuous.envelopes.frequency[{len(freq_pts) - 1}].time",
-                  f"{freq_pts[-1]['time']:g} s is after the amplitude envelope's end "
-                  f"({amp_pts[-1]['time']:g} s)", "end the frequency envelope by then")  # fmt: skip
+                  f"{plain_s(freq_pts[-1]['time'])} is after the amplitude envelope's end "
+                  f"({plain_s(amp_pts[-1]['time'])})", "end the frequency envelope by then")  # fmt: skip
     ta, va = strictly([p["time"] for p in amp_pts], [p["amplitude"] for p in amp_pts])
     tf, vf = strictly([p["time"] for p in freq_pts], [p["frequency"] for p in freq_pts])
     end = max(ta[-1], (tf[-1] if tf else 0.0), max((t for t, _a, _f in transients), default=0))

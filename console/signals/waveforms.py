@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from console.core.errors import UserError
+from console.core.plain_numbers import plain_s
 
 #: The longest plan any profile may allow (``[limits] max_plan_s`` is at most this).
 MAX_PLAN_S = 3600.0
@@ -25,7 +26,7 @@ def check_duration(total_s: float, max_s: float, what: str) -> float:
         raise UserError(f"{what}: duration {total_s!r} s; give a finite, positive length")
     if total_s > max_s:
         raise UserError(
-            f"{what}: {total_s:.4g} s is longer than [limits] max_plan_s = {max_s:g} s; "
+            f"{what}: {plain_s(total_s, 4)} is longer than [limits] max_plan_s = {plain_s(max_s)}; "
             "shorten it (or raise max_plan_s in the profile)"
         )
     return float(total_s)

@@ -12,15 +12,13 @@ from textual import events, work
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.command import CommandPalette
-from textual.containers import VerticalScroll
 from textual.keys import key_to_character
-from textual.screen import ModalScreen
 from textual.widget import Widget
 from textual.widgets import Input, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Started, Stopped
-from console.tui.help import HelpText
+from console.tui.help_screen import HelpScreen
 from console.tui.key_hold import KeyHold
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
 from console.tui.logs import (
@@ -50,7 +48,7 @@ HELP = """\
 ctrl+e  E-STOP: silence both outputs and open every relay (any screen, any field)
 ctrl+r  reset the e-stop (outputs stay silent until something plays)
 {tabs}
-?       this help, wherever the focus is, but in a field that takes a path or an address, which types it (a recording's path, the TUIO target, the Studies folder, the Gestures dataset and model: the footer then shows no ? help); ? or escape closes it
+?       this help, wherever the focus is, but in a field that takes a path or an address, which types it (a recording's path, the TUIO target, the Studies folder, the Gestures dataset and model, Vibration's : command line: the footer then shows no ? help); ? or escape closes it, arrows and PgUp/PgDn scroll it
 ctrl+z  in a text field: undo its last change (a key that replaced the line too)
 ctrl+p  command palette    ctrl+q  quit (q too, outside a text field; while a demo, long work or a study run would stop, press it again)
 ctrl+l  the log: the console's messages and what drivers wrote to stderr
@@ -101,33 +99,6 @@ class ScreenTabs(TabbedContent):
         """Every tab shows at any width (``console.tui.narrow``)."""
         titles = {tab: title for tab, (title, _key, _reg) in self.app.tabs.items()}
         fit_tab_bar(self, titles, event.size.width)
-
-
-class HelpScreen(ModalScreen):
-    """The console's keys and the screen's own help, as written and wrapped to the
-    terminal (``console.tui.help``). ``?`` (the app's, from any field) closes it too."""
-
-    BINDINGS = [("escape,q,question_mark", "dismiss", "close")]
-    DEFAULT_CSS = """
-    HelpScreen { align: center middle; }
-    HelpScreen > SafetyBar { dock: bottom; margin-bottom: 1; }  /* where the main one is */
-    HelpScreen > VerticalScroll { width: 90; max-width: 100%; height: auto; max-height: 90%;
-        border: thick $accent; background: $panel; padding: 0 1; }
-    """
-
-    def __init__(self, sections: list[tuple[str, str]]) -> None:
-        super().__init__()
-        self.sections = sections  # (title, text as written)
-
-    def compose(self) -> ComposeResult:
-        with VerticalScroll():
-            yield HelpText(self.sections, id="help-text")
-        yield SafetyBar()  # the output state stays in view (the app keeps it current)
-
-    def leave_for_screen(self) -> bool:
-        """An F-key closes the help to show its screen (``LeavesForScreen``)."""
-        self.dismiss()
-        return True
 
 
 class HapTableApp(ConfirmsQuit, NewestToastOnly, App):

@@ -13,7 +13,8 @@ from collections.abc import Callable
 
 from textual.widget import Widget
 
-from console.tui.lapse import lapse
+from console.tui.lapse import ask
+from console.tui.question_hold import answered
 
 #: seconds within which the same key again does what it asked about
 AGAIN_S = 3.0
@@ -26,10 +27,13 @@ class AskAgain:
     def __init__(self, within_s: float = AGAIN_S) -> None:
         self.within_s = within_s
         self._asked: tuple[str, float] | None = None
+        self._owner: Widget | None = None  # whose line the question holds
 
     def confirmed(self, what: str) -> bool:
         asked, now = self._asked, time.monotonic()
         self._asked = None
+        if self._owner is not None:  # answered, or asked anew: the line is free
+            answered(self._owner)
         if asked is not None and asked[0] == what and now - asked[1] <= self.within_s:
             return True
         self._asked = (what, now)
@@ -45,8 +49,9 @@ class AskAgain:
         then: str = "",
     ) -> str:
         """Say ``<key> again within N s <does>`` with ``say``; it lapses after N s (``then``
-        in its place, if the line still shows it). Returns the question."""
+        in its place, if the line still shows it); it holds the line until then or until
+        ``confirmed`` (``console.tui.question_hold``). Returns the question."""
         text = f"{key} again within {self.within_s:g} s {does}"
-        say(text)
-        lapse(owner, shown, text, say, self.within_s, then=then)
+        self._owner = owner
+        ask(owner, shown, text, say, self.within_s, then=then)
         return text

@@ -16,6 +16,7 @@ from console.session.background_check import describe_in_view
 from console.session.calibration import SAVE_KEY, TOPIC
 from console.session.events import Failed
 from console.tui.lapse import lapse
+from console.tui.question_hold import answered
 from console.tui.said import log_said, shows_now
 from console.tui.text import escape
 from console.tui.util import short_path
@@ -148,6 +149,7 @@ class CameraWizardMixin:
         """``b``: the background from the recent frames; a hand in any of them (counted
         by the vision, or a bright blob) is named and the background kept as it was,
         unless ``b`` is pressed again within ``BACKGROUND_AGAIN_S``."""
+        answered(self)  # b again answers its question (or b asks anew)
         if self._borrowed("b"):
             return
         svc = self.service

@@ -9,7 +9,10 @@ is left alone); when it failed the line takes the keys back. The line never sele
 to what is there, it never replaces it. ``ctrl+u`` clears the whole line (wherever the
 cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back).
 An empty line shows its hint as a hint (dim, italic), after a ``:`` prompt that stays
-whatever the line holds (``prompted``): never mistaken for a typed command.
+whatever the line holds (``prompted``): never mistaken for a typed command. The line
+takes paths (Vibration's ``load F.npz``, ``import PA=F.uff``): it is a ``PathField``,
+typing every key, ``?`` too (``?`` opened the help from ``load /tmp/a?b``); Esc, then
+``?``, shows the help.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ from textual.binding import Binding
 from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import Input, Label
+
+from console.tui.path_field import PathField
 
 __all__ = ["CommandLine", "prompted"]
 
@@ -37,7 +42,7 @@ def prompted(line: CommandLine) -> CommandPrompt:
     return CommandPrompt(Label(": ", classes="command-prompt", markup=False), line)
 
 
-class CommandLine(Input):
+class CommandLine(PathField):
     """The ``:`` line. The screen handles ``CommandLine.Submitted`` (an ``Input``
     message) and calls ``succeeded(text)`` or ``failed(text)``; it keeps the focus on
     the line after a failure and handles ``CommandLine.Left`` (escape)."""

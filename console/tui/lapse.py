@@ -12,18 +12,25 @@ Three kinds of such lines, one mechanism (``lapse``):
   number"): it lapses once that state changes (``lapse_on_change``).
 
 When it lapses, and only if the line still shows the same text (a newer message keeps
-its line), ``replace`` puts what is true now in its place ("" clears it). A question is
-scrolled into view as it is asked (``question_in_view``): a screen left scrolled down
-and shown again by the key that asks (the palette's "Measure vibration map") hid it.
+its line), ``replace`` puts what is true now in its place ("" clears it). A question
+holds its line until it lapses or is answered (``console.tui.question_hold``: ``replace``
+is its screen's status setter, marked ``@waits_for_question``; a line said meanwhile
+waits and shows then, in place of ``then``). A question is
+kept in view while it is asked (``question_in_view``: after every layout of its screen):
+a screen left scrolled down and shown again by the key that asks (the palette's
+"Measure vibration map") hid it.
 """
 
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Callable
 
 from textual.widget import Widget
 from textual.widgets import Static
+
+from console.tui.question_hold import answered, held, hold, release, waits
 
 #: how often a conditional line is re-checked while it is shown
 RECHECK_S = 0.5
@@ -46,22 +53,51 @@ def lapse(
     if after_s is None and while_true is None:
         raise ValueError("lapse needs after_s or while_true")
     ends_s = None if after_s is None else time.monotonic() + after_s
+    question = while_true is None
+    if question and not waits(replace):
+        raise TypeError(
+            f"{replace!r} says a timed question: mark it "
+            "@waits_for_question (console.tui.question_hold) so that it holds its line"
+        )
 
     def check() -> None:
-        if shown() != text:  # a newer message took the line: nothing to do
+        if shown() != text:  # a newer message took the line (an answer): nothing to do
             timer.stop()
+            if question:
+                release(owner, text)
             return
         over = ends_s is not None and time.monotonic() >= ends_s
         if over or (while_true is not None and not while_true()):
             timer.stop()
-            replace(then)
+            waited = release(owner, text) if question else None
+            if waited is not None and waited.later is not None:
+                waited.later()  # the newest line said meanwhile: true now
+            else:
+                replace(then)
 
-    if while_true is None:  # a question: the operator answers what they see
-        owner.call_after_refresh(question_in_view, owner, text)
+    if question:  # the operator answers what they see: it holds the line, in view
+        hold(owner, text)
+        question_in_view(owner, text)
     step = every_s if while_true is not None else after_s
     if ends_s is not None and while_true is not None:
         step = min(every_s, after_s)
     timer = owner.set_interval(step, check)
+
+
+def ask(
+    owner: Widget,
+    shown: Callable[[], str],
+    text: str,
+    say: Callable[[str], None],
+    after_s: float,
+    then: str = "",
+) -> None:
+    """Ask the timed question ``text`` on ``owner``'s line with ``say`` (its status setter,
+    marked ``@waits_for_question``): a question asked before is answered (over), this one
+    holds the line for ``after_s`` seconds, then ``then`` (or a line said meanwhile)."""
+    answered(owner)
+    say(text)
+    lapse(owner, shown, text, say, after_s, then=then)
 
 
 def lapse_on_change(
@@ -80,24 +116,60 @@ def lapse_on_change(
     lapse(owner, shown, text, replace, while_true=lambda: state() == was, then=then)
 
 
-def question_in_view(owner: Widget, text: str, tries: int = 20, again: int = 3) -> None:
-    """The line under ``owner`` that shows ``text`` (its words, however wrapped) scrolled
-    into view in every container that scrolls it; ``owner`` not laid out on screen yet
-    (a screen being switched to): once it is, within ``tries`` refreshes. Scrolled
-    ``again`` refreshes more: a screen shown again restores its scroll after its first
-    layout (the palette's "Measure vibration map" after a PageDown left it scrolled
-    down over the question)."""
-    if not owner.region:
-        if tries > 0:
-            owner.call_after_refresh(question_in_view, owner, text, tries - 1, again)
-        return
+#: the line each question being kept in view is on, and a token for that question
+_KEEPING: weakref.WeakKeyDictionary[Widget, object] = weakref.WeakKeyDictionary()
+
+
+def question_in_view(owner: Widget, text: str, tries: int = 1) -> None:
+    """The line under ``owner`` that shows the question ``text`` (its words, however
+    wrapped) scrolled into view in every container that scrolls it, after every layout
+    of its screen that leaves none of it in view, while the question holds its line
+    (``console.tui.question_hold``).
+    After a layout, not after a count of refreshes: a screen shown again by the key that
+    asks (the palette's "Measure vibration map", run while the palette still closes) is
+    laid out only once it is the current screen again, however many refreshes that
+    takes on a loaded machine, and it keeps the scroll it was left with until then."""
     words = " ".join(text.split())
-    for line in owner.query(Static):
-        if line.display and words in " ".join(str(line.content).split()):
-            line.scroll_visible(animate=False, immediate=True)
-            if again > 0:
-                owner.call_after_refresh(question_in_view, owner, text, tries, again - 1)
+    line = next(
+        (w for w in owner.query(Static) if w.display and words in " ".join(str(w.content).split())),
+        None,
+    )
+    if line is None:  # not drawn yet: once more after the next refresh
+        if tries > 0:
+            owner.call_after_refresh(question_in_view, owner, text, tries - 1)
+        return
+    screen = owner.screen
+    signal = screen.screen_layout_refresh_signal
+    mine = _KEEPING[line] = object()  # the line's newest question: an older one stops
+
+    def keep(_screen: object = None) -> None:
+        if _KEEPING.get(line) is not mine:
             return
+        now = held(owner)
+        if now is None or now.text != words or not line.is_attached:
+            del _KEEPING[line]
+            signal.unsubscribe(line)  # answered, lapsed or gone: the operator scrolls
+            return
+        if screen.is_current and owner.region and out_of_view(line):  # shown, laid out
+            line.scroll_visible(animate=False, immediate=True)
+
+    signal.unsubscribe(line)
+    signal.subscribe(line, keep)
+    keep()
+
+
+def out_of_view(line: Widget) -> bool:
+    """Whether none of ``line`` shows: laid out, it lies outside what a container around
+    it shows (a line partly in view, as one taller than its box, is left where it is;
+    one not laid out yet waits for its layout)."""
+    region = line.region
+    return bool(region) and any(
+        isinstance(box, Widget)
+        and box.is_scrollable
+        and bool(box.region)
+        and not box.scrollable_content_region.overlaps(region)
+        for box in line.ancestors
+    )
 
 
 HELD_ENDED = "the run that held the outputs has ended: plays work again"

@@ -28,6 +28,7 @@ from console.plugin_api.runtime import Failed, Progress, Snapshot, Started, Stop
 from console.plugin_api.tui import (
     LongWork,
     SessionMessage,
+    answered,
     cut_end,
     escape,
     lapse,
@@ -36,6 +37,7 @@ from console.plugin_api.tui import (
     short_path,
     status_said,
     top_level_seps,
+    waits_for_question,
     whole_names,
 )
 
@@ -262,6 +264,7 @@ class ScenesPane(Vertical):
         if t.row_count:
             self._start(t.coordinate_to_cell_key(t.cursor_coordinate).row_key.value)
 
+    @waits_for_question
     def _say(self, text: str, severity: str = "information") -> None:
         """What became of this screen's own demo key, on the demos' line."""
         self.query_one("#demo-work", LongWork).show(text, error=severity == "error")
@@ -276,8 +279,7 @@ class ScenesPane(Vertical):
         self.app.session.scenes.start(name)  # Started / Failed come back as messages
 
     def says(self, ev: Any) -> bool:
-        """A scene this screen started that failed: its projector line says it (no
-        toast of the console's too)."""
+        """A scene this screen started that failed: its projector line says it (no toast)."""
         return isinstance(ev, Failed) and ev.topic == "projector" and ev.name == self._asked_scene
 
     def action_stop(self) -> None:
@@ -295,6 +297,7 @@ class ScenesPane(Vertical):
     def action_close_projector(self) -> None:
         """``k``: close the projector; while it shows a scene (a demo's, or one enter
         started) only when ``k`` comes again within ``CLOSE_AGAIN_S`` (the line asks)."""
+        answered(self)  # k again: its question (if it asked) is answered
         st, feed = self.app.session.scenes.status(), self.demos.scene_feed()
         scene = (st or {}).get("scene")
         now = time.monotonic()
@@ -445,8 +448,7 @@ class ScenesPane(Vertical):
         self._show_last_run(f"{escape(name)} cancelling: its start stops now")
 
     def _now_running(self, name: str) -> None:
-        """The demo runs: the start's progress and "starting" line go (its numbers come
-        with its first snapshot)."""
+        """The demo runs: the start's progress and "starting" line go (numbers follow)."""
         lw = self.query_one("#demo-work", LongWork)
         if lw.progress is not None:
             lw.show(f"demo {name} running: s stops it")

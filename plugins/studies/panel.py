@@ -56,6 +56,7 @@ from console.plugin_api.tui import (
     said_here,
     show_keys,
     status_said,
+    waits_for_question,
 )
 
 from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status
@@ -650,6 +651,7 @@ class StudiesPane(HeldAnswer, Vertical):
             text += f"\n{escape(said)}"
         self.query_one("#study-status", Static).update(text)
 
+    @waits_for_question
     def _say(self, text: str, severity: str = "information") -> None:
         """The outcome of the experimenter's own key or button, on this screen's status
         (its one place: logged, a toast only while the screen is not in view)."""

@@ -27,3 +27,13 @@ def test_a_folder_is_not_told_to_fix_its_json(tmp_path, capsys):
     assert main(["signals", "import", str(d)]) == 2
     line = capsys.readouterr().err.strip()
     assert "a folder" in line and "JSON" not in line
+
+
+def test_a_folder_without_a_suffix_is_said_to_be_a_folder(tmp_path, capsys):
+    """A new operator's try: ``haptable signals import /tmp`` said ``cannot tell the
+    format from the suffix ''``; it is a folder: the line says so and what to give."""
+    capsys.readouterr()
+    assert main(["signals", "import", str(tmp_path)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "is a folder" in line and "suffix ''" not in line, line
+    assert ".ahap" in line and ".haptic" in line, line

@@ -76,3 +76,26 @@ def test_every_path_field_types_a_question_mark(plugins, size, screen, field):
             assert "help" not in _footer(app), _footer(app)
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_the_vibration_command_line_types_a_question_mark(plugins, size):
+    """A new operator's try: ``:`` then ``load /tmp/a?b`` on Vibration opened the help
+    and the line kept ``load /tmp/a``; the line takes paths (``load F.npz``, ``import
+    PA=F.uff``): it types every key, its footer promising no ``? help``."""
+    from console.tui.app import HelpScreen
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=size) as pilot:
+            await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
+            await pilot.press("colon")
+            box = app.query_one("#vib-cmd")
+            await wait_for(pilot, lambda: box.has_focus, 10, "command line")
+            await pilot.press(*"load /tmp/a", "question_mark", "b")
+            await pilot.pause(0.3)
+            assert not isinstance(app.screen, HelpScreen), "? opened the help from the line"
+            assert box.value == "load /tmp/a?b", box.value
+            assert "help" not in _footer(app), _footer(app)
+
+    asyncio.run(scenario())

@@ -106,7 +106,8 @@ def test_the_help_names_every_field_that_types_a_question_mark():
     takes a ?' and then saw the TUIO target type it)."""
     line = next(x for x in console_app.HELP.splitlines() if x.startswith("? "))
     assert set(TypesEveryKey.__subclasses__()) == {TargetField, PathField}
-    assert {sub.__name__ for sub in PathField.__subclasses__()} == {"PathInput"}
-    for field in ("recording", "TUIO target", "Studies folder", "Gestures dataset and model"):
+    assert {sub.__name__ for sub in PathField.__subclasses__()} == {"PathInput", "CommandLine"}
+    fields = ("recording", "TUIO target", "Studies folder", "Gestures dataset and model")
+    for field in (*fields, "Vibration's : command line"):
         assert field in line, (field, line)
     assert "a path or an address" in line and "no field" not in line, line

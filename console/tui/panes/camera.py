@@ -46,6 +46,7 @@ from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.narrow import TypesEveryKey
 from console.tui.plots import HalfBlockImage, downsample
+from console.tui.question_hold import waits_for_question
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
 from console.tui.text import escape
@@ -167,6 +168,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self.query_one("#camera-main").styles.max_width = self.view_area()[0]
 
     # ------------------------------------------------------------------ status line
+    @waits_for_question
     def say(self, text: str, severity: str = "information") -> None:
         """``text`` on the screen's status line ("" clears it): the outcome of its own
         keys, in the log too (a toast only when the screen is not in view)."""

@@ -32,6 +32,7 @@ from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
+from console.tui.question_hold import waits_for_question
 from console.tui.panes.devices_doctor import DevicesDoctorMixin
 from console.tui.panes.devices_plugins import fill_plugins
 from console.tui.panes.devices_selftest import DevicesSelftestMixin
@@ -424,6 +425,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
+    @waits_for_question
     def _show_result(
         self, text: str, error: bool = False, severity: str = "", tick: bool = False
     ) -> None:

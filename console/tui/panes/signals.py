@@ -33,6 +33,7 @@ from console.tui.charts import Chart, Series
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse
 from console.tui.list_keys import KeyedList
+from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import status_said
 from console.tui.util import from_thread
 
@@ -72,6 +73,7 @@ class SignalsPane(Vertical):
         "Type a signal on the top line, a name and where it plays (PA, PA,PC, PALL, "
         "screen).\n"
         "enter    show its waveform and spectrum (before anything plays)\n"
+        "escape   leave a field for the library (what was typed stays; Tab goes back)\n"
         "ctrl+o   play it through the safety gate (ctrl+e e-stops as everywhere)\n"
         "ctrl+s   save it under its name in the profile's library (twice replaces)\n"
         "ctrl+t   multiply it by the gate's minimum ramp (you see it in the expression)\n"
@@ -106,6 +108,7 @@ class SignalsPane(Vertical):
         Binding("ctrl+s", "save_saved", "saved"),
         Binding("ctrl+t", "add_ramp", "add ramp"),
         Binding("ctrl+z", "undo", "undo", show=False),
+        Binding("escape", "leave_field", "leave field", show=False),  # the hint says it
     ]
 
     def __init__(self, **kw) -> None:
@@ -183,6 +186,7 @@ class SignalsPane(Vertical):
             self.reload_library()
 
     # ------------------------------------------------------------------ helpers
+    @waits_for_question
     def status(self, text: str, error: bool = False) -> None:
         line = " ".join(str(text).split())
         self._estop_said = error and ("e-stop" in line)  # a reset replaces it
@@ -269,7 +273,15 @@ class SignalsPane(Vertical):
         return entry is not None and not entry.builtin and entry.expr.strip() == expr
 
     def _hint(self, saved: bool = False) -> str:
-        return f" enter plot  ^o play  ^s {'saved' if saved else 'save'}  ? help"
+        # Esc said where the operator types (a new one did not know how to leave the
+        # field); ? help is in the footer
+        return f" enter plot ^o play ^s {'saved' if saved else 'save'}  esc leave"
+
+    def action_leave_field(self) -> None:
+        """Esc in a field: the library takes the focus (the screen's keys, ``q`` too);
+        what was typed stays."""
+        if isinstance(self.app.focused, Input):
+            self.query_one("#sig-library", KeyedList).focus()
 
     def _show_saved(self) -> None:
         """The save key's label as it is true now (a change makes it ``save`` again)."""
@@ -481,6 +493,7 @@ class SignalsPane(Vertical):
         e = self.entries.get(event.option.id or "")
         if e is None:
             return
+        answered(self)  # Enter again answers its question; another asks anew
         asked, self._load = self._load, None
         over = self.unsaved() and self._fields()[0] != e.expr.strip()
         if over and asked != e.name:
@@ -489,7 +502,7 @@ class SignalsPane(Vertical):
                 f"enter again within {LOAD_AGAIN_S:g} s loads {e.name} over your unsaved "
                 "expression (ctrl+z then brings it back)"
             )
-            self.status(text)
+            self.status(text)  # the question holds the line until it lapses
             then = "your unsaved expression stays in the fields: ctrl+s saves it"
             lapse(self, lambda: self._status_line, text, self._load_lapsed, LOAD_AGAIN_S, then=then)
             return
@@ -505,6 +518,7 @@ class SignalsPane(Vertical):
         self._replace = None
         self.show_preview()
 
+    @waits_for_question
     def _load_lapsed(self, then: str) -> None:
         self._load = None
         self.status(then)

@@ -45,6 +45,7 @@ from console.tui.panes.vibration_words import (
     with_time_left,
 )
 from console.tui.plots import frf_series
+from console.tui.question_hold import waits_for_question
 from console.tui.roving_view import RovingView
 from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
@@ -189,6 +190,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             for c, txt in enumerate(self._row_cells(r)):
                 grid.update_cell(str(r), str(c), txt)
 
+    @waits_for_question
     def status(self, text: str, progress: float | None = None, error: bool = False) -> None:
         self.status_text = text
         if not self.query("#vib-status"):  # a worker finishing while the console closes

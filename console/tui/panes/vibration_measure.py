@@ -16,7 +16,7 @@ from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL
 from console.session.vibration import Cancelled
-from console.tui.lapse import lapse
+from console.tui.lapse import ask, lapse
 from console.tui.long_work import stop_check
 from console.tui.panes.vibration_words import (
     MAP_FREE,
@@ -25,6 +25,7 @@ from console.tui.panes.vibration_words import (
     measure_again,
     with_time_left,
 )
+from console.tui.question_hold import answered
 from console.tui.roving_view import RovingView, add_accelerometer_text
 from console.tui.util import from_thread
 
@@ -47,7 +48,9 @@ class VibrationMeasureMixin:
 
     def action_measure(self, command: str | None = None) -> None:
         """``m``: measure the map, refused in the console's words during an e-stop, and
-        while a run plays on the map (``refuse_replacing``)."""
+        while a run plays on the map (``refuse_replacing``). Pressed while it asks:
+        the question is answered (its line is free for what ``m`` does now)."""
+        answered(self)
         if self.refuse_replacing("measure"):
             return
         if (self.roving.running or self.roving.wanted()) and not self._estop_active():
@@ -62,10 +65,10 @@ class VibrationMeasureMixin:
             again = "m" if command is None else "Enter"  # the typed one waits on its line
             self._command_asks = command is not None
             takes = self.service.measure_takes()
-            self._measure_asked, ask = now, measure_again(takes, again)
-            self.status(ask)  # the question leaves the line when it lapses
+            self._measure_asked, asked = now, measure_again(takes, again)
             then, shown = self.summary, lambda: self.status_text  # the map's line after
-            lapse(self, shown, ask, self.status, MEASURE_AGAIN_S, then=then)
+            # the question holds the line until it lapses (or m answers it)
+            ask(self, shown, asked, self.status, MEASURE_AGAIN_S, then=then)
             return
         self._measure_asked = -1e9
         self.status("measuring ...", 0.0)

@@ -1,0 +1,53 @@
+"""A timed question stays on its status line until it lapses or is answered (a new
+operator's try at 80 x 24, Vibration: ``f``, then ``m`` with a kept map; the flow's
+``played ...`` replaced the question 3 s later while its 5 s still ran, and a second
+``m`` replaced the map with no question on screen). Lines said meanwhile wait: they are
+in the log at once and the newest shows when the question lapses
+(``console.tui.lapse``)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+import pytest
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for, words_on
+from .test_screens import _load_map, _ready
+
+ASKED = "m again within 5 s measures the grid anew"
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_vibration_question_outlasts_a_play_said_meanwhile(plugins, map_file, size, caplog):
+    caplog.set_level(logging.INFO, "haptable.console")
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=size) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            kept = app.session.vibration.cached_map_path()
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            kept.write_bytes(b"")  # a kept map exists: m asks before replacing it
+            await pilot.press("escape")  # back to the grid
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "grid")
+            await pilot.press("enter", "right", "enter")  # two points: f plays between
+            await wait_for(pilot, lambda: len(pane.selected) == 2, 10, "two points")
+            await pilot.pause(0.5)
+            await pilot.press("m")
+            await wait_for(pilot, lambda: ASKED in words_on(app, "#vib-status"), 10, "asked")
+            await pilot.press("f")  # its play ends while the question still counts
+            played = lambda: "status Vibration: played flow" in caplog.text  # noqa: E731
+            await wait_for(pilot, played, 10, "the play said (in the log)")
+            await pilot.pause(0.2)
+            assert ASKED in words_on(app, "#vib-status"), "the question left its line early"
+            await wait_for(
+                pilot, lambda: "played flow" in words_on(app, "#vib-status"), 10, "after"
+            )
+            assert "again within" not in words_on(app, "#vib-status")
+
+    asyncio.run(scenario())
