@@ -140,6 +140,7 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         self.live = LiveOutputs(self.session, self)
         self.typed = TypedHistory(self)  # ctrl+z in a text field (``console.tui.typed``)
         self.key_hold = KeyHold(self)  # keys behind a screen switch wait for its focus
+        self.last_key_s = -1e9  # when the operator last pressed a key (``on_event``)
 
     def _bind_tabs(self) -> None:
         """A key per tab; the footer shows them all as one key, ``f1-f10 screens``, on
@@ -475,6 +476,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         if self.key_hold.hold(event):  # typed behind a screen switch (``console.tui.key_hold``)
             return
         key = isinstance(event, events.Key) and not event.is_forwarded
+        if key:
+            self.last_key_s = time.monotonic()  # a key's answer toasts past a question
         if key and await self.confirm_quit(event):  # q again: wherever the focus is
             return
         if key and await self._key_everywhere(event.key):

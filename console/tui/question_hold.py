@@ -7,13 +7,15 @@ what it asked about. So while a question holds a screen's line (``hold``, done b
 ``console.tui.lapse.lapse`` for every question), that screen's status setter (marked
 ``@waits_for_question``) does not show other lines: each is logged at once (the log
 view, ``ctrl+l``) and the newest is shown when the question lapses, in place of the
-line the question would leave. ``answered`` (the key again, or a new question) lets
-the line go at once.
+line the question would leave. A line answering a key the operator just pressed (not
+the question's own key) is also shown at once as a toast: no key goes unanswered.
+``answered`` (the key again, or a new question) lets the line go at once.
 """
 
 from __future__ import annotations
 
 import functools
+import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -80,10 +82,37 @@ def waits_for_question(setter: F) -> F:
         now.later = lambda: setter(self, text, *args, **kw)
         where = screen_name(self, type(self).__name__)
         log_said(f"status {where}", f"{text} (shown once its question lapses)", "information")
+        if _answers_a_key(self):  # the operator's key is answered now, the question kept
+            self.app.notify(str(text), severity=_severity(args, kw), timeout=KEY_TOAST_S)
         return None
 
     _WAITING.add(guarded)
     return guarded  # type: ignore[return-value]
+
+
+#: a line said this soon after a key answers that key: shown as a toast at once while a
+#: question holds the line (the operator pressed another key: it must say something)
+KEY_ANSWER_S = 0.5
+KEY_TOAST_S = 5.0
+
+
+def _answers_a_key(owner: Any) -> bool:
+    try:
+        last = float(owner.app.last_key_s)  # HapTableApp's (``on_event``)
+    except Exception:  # not mounted, or a test's bare app: no key to answer
+        return False
+    return time.monotonic() - last <= KEY_ANSWER_S
+
+
+def _severity(args: tuple[Any, ...], kw: dict[str, Any]) -> str:
+    """The toast's severity from a status setter's arguments (``error=True``,
+    ``severity=`` or a severity word given after the text)."""
+    if kw.get("error") or (args and args[0] is True):
+        return "error"
+    for v in (kw.get("severity"), *args):
+        if isinstance(v, str) and v in ("error", "warning", "information"):
+            return v
+    return "information"
 
 
 def waits(setter: Callable[..., Any]) -> bool:

@@ -51,3 +51,36 @@ def test_vibration_question_outlasts_a_play_said_meanwhile(plugins, map_file, si
             assert "again within" not in words_on(app, "#vib-status")
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_another_key_pressed_during_a_question_is_answered_at_once(plugins, map_file, size):
+    """The question keeps the line, and the other key's answer is not kept back for
+    the question's 5 s: it shows at once as a toast (a key must say something)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
+        async with app.run_test(size=size) as pilot:
+            await _ready(app, pilot)
+            pane = await _load_map(app, pilot, map_file)
+            kept = app.session.vibration.cached_map_path()
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            kept.write_bytes(b"")
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "grid")
+            await pilot.press("enter", "right", "enter")
+            await wait_for(pilot, lambda: len(pane.selected) == 2, 10, "two points")
+            await pilot.pause(0.5)
+            await pilot.press("m")
+            await wait_for(pilot, lambda: ASKED in words_on(app, "#vib-status"), 10, "asked")
+            before = len(app._notifications)
+            await pilot.press("f")
+
+            def toasts() -> list[str]:
+                shown = list(app._notifications)[before:]
+                return [n.message for n in shown if "flow" in n.message]
+
+            await wait_for(pilot, lambda: bool(toasts()), 3, "f's answer as a toast")
+            assert ASKED in words_on(app, "#vib-status"), "the question left its line"
+
+    asyncio.run(scenario())

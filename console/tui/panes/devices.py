@@ -32,10 +32,10 @@ from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse_if_held
-from console.tui.question_hold import waits_for_question
 from console.tui.panes.devices_doctor import DevicesDoctorMixin
 from console.tui.panes.devices_plugins import fill_plugins
 from console.tui.panes.devices_selftest import DevicesSelftestMixin
+from console.tui.question_hold import waits_for_question
 from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, need, share, widths
