@@ -111,7 +111,7 @@ def changed_hint(changed: dict[str, tuple[float, float]]) -> str:
     named = sorted(changed.items(), key=moved, reverse=True)[:HINTED]
     said = ", ".join(f"{k} {now:g} (profile {was:g})" for k, (now, was) in named)
     more = f" and {len(changed) - HINTED} more" if len(changed) > HINTED else ""
-    return f"[yellow]changed, may hide a hand: {escape(said)}{more}; R: the profile's[/]"
+    return f"[yellow]changed, may hide a hand: {escape(said + more)}; R: the profile's[/]"
 
 
 def hand_line(h: Any, touch_mm2: float | None = None) -> str:
