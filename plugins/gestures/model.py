@@ -36,7 +36,8 @@ MODEL_FORMAT = "haptable-gestures/9"  # 3: touching skin in mm; 4: touching = sh
 #: the most two of its frames show (a region flickering into one frame is none); 9: pieces of
 #: a fingertip joined, the static fingertip count and spacings the window's median, each
 #: track's jitter pooled over the hand's tracks, the motion's shares of shift, arc and spacing
-#: change (for the dynamic classifier)
+#: change, the fingertips that met or parted from what two frames at each end show (for the
+#: dynamic classifier)
 
 #: Types a saved model may contain; anything else refuses to load.
 TRUSTED_TYPES = (

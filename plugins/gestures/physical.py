@@ -329,9 +329,11 @@ def physical_motion(records: Sequence[dict | None], fps: float = REFERENCE_FPS) 
     v[1] = min(len(tracks), 6)
     if not any(is_flat(r) for r in recs):
         # fingertips that met or parted over the window (a pile's tips merging into fewer
-        # regions, a pinch closing): how many more or fewer the last frame shows than the
-        # first (a region seen in a frame between them only is no meeting)
-        v[11] = abs(len(tips_mm(recs[-1])) - len(tips_mm(recs[0])))
+        # regions, a pinch closing): how many more or fewer the window's last two frames
+        # both show than its first two (a region seen in one frame only, a knuckle
+        # brushing the glass, is no fingertip)
+        counts = [len(tips_mm(r)) for r in recs]
+        v[11] = abs(min(counts[-2:]) - min(counts[:2]))
     if not tracks:
         return v
     fits = pooled([trend(t[:, 0], t[:, 1:], n) for t in tracks], tracks, n)

@@ -100,3 +100,14 @@ def test_the_dynamic_classifier_sees_a_zoom_alike_at_any_speed():
     rows[0, -len(MOTION_NAMES) :] = fast
     view = select_dynamic(rows, 0, N_HARMONICS_MAX)[0]
     assert any(np.allclose(view[i : i + 3], sh[1]) for i in range(len(view) - 2))
+
+
+def test_a_knuckle_brushing_the_glass_in_the_last_frame_is_no_meeting_of_fingertips():
+    """A zoom's two fingertips parting; a curled finger's knuckle touches the glass 40 mm
+    away in the window's last frame only: no fingertips met or parted (a model trained
+    where only piles change their count read such zooms as piles)."""
+    recs = [_rec([(100.0 - 20 - 2 * f, 100.0), (100.0 + 20 + 2 * f, 100.0)]) for f in range(4)]
+    recs[3] = _rec([(74.0, 100.0), (126.0, 100.0), (100.0, 140.0)])
+    assert physical_motion(recs)[MOTION_NAMES.index("tips_met")] == 0
+    pile = [_rec([(100.0 + 25 * i, 100.0) for i in range(n)]) for n in (5, 5, 3, 3)]
+    assert physical_motion(pile)[MOTION_NAMES.index("tips_met")] == 2
