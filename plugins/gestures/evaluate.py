@@ -40,7 +40,7 @@ from .reports import clipping, fold_report, report, sample_clipped_share
 from .selection import INNER_FOLDS, candidates, select_settings
 from .vision import VisionParams
 
-FEATURES_VERSION = 12  # bump when features change: old caches are ignored
+FEATURES_VERSION = 13  # bump when features change: old caches are ignored
 #: the modules whose code makes the features: their source is part of the cache key, so a
 #: change to any of them is never answered with features the old code computed
 FEATURE_MODULES = (

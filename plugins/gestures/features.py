@@ -30,6 +30,8 @@ from .physical import (
     N_PHYS_MOTION,
     N_PHYS_STATIC,
     REFERENCE_FPS,
+    TIP_COLUMNS,
+    motion_shares,
     motion_view,
     physical_motion,
     physical_record,
@@ -148,11 +150,17 @@ def record_static(rec: dict | None, n_harmonics: int) -> np.ndarray:
 
 
 def static_features(records: Sequence[dict | None], n_harmonics: int, n_frames: int = 4):
-    """Mean static features over the first ``n_frames`` frames that show a hand."""
+    """Mean static features over the first ``n_frames`` frames that show a hand; the
+    fingertips' count and spacings their median over those frames (a region flickering
+    into one frame of four, a knuckle brushing the glass, is no fingertip)."""
     recs = [r for r in records[:n_frames] if r is not None]
     if not recs:
         return record_static(None, n_harmonics)
-    return np.mean([record_static(r, n_harmonics) for r in recs], axis=0)
+    rows = np.array([record_static(r, n_harmonics) for r in recs])
+    out = rows.mean(axis=0)
+    tips = static_size(n_harmonics) - N_PHYS_STATIC + np.array(TIP_COLUMNS)
+    out[tips] = np.median(rows[:, tips], axis=0)
+    return out
 
 
 def _match(a: np.ndarray, b: np.ndarray, gate: float) -> list[tuple[int, int]]:
@@ -317,6 +325,7 @@ def select_dynamic(x: np.ndarray, n: int, n_max: int) -> np.ndarray:
         [
             select_static(x[:, :size], n, n_max),
             motion_view(x[:, size + 22 : size + N_MOTION]),
+            motion_shares(x[:, size + 22 : size + N_MOTION]),
             x[:, size + ZOOM_INDEX : size + ZOOM_INDEX + 1],
         ],
         axis=1,

@@ -27,13 +27,17 @@ GESTURES = STATIC + DYNAMIC
 SVC_GRID = {"svc__C": [1.0, 10.0, 100.0], "svc__gamma": ["scale", 0.003, 0.03]}
 #: the saved model's format; /2: one decision window (``n_frames``) for the static,
 #: kind and dynamic features, the contact count as a category
-MODEL_FORMAT = "haptable-gestures/8"  # 3: touching skin in mm; 4: touching = sharp (touch.py);
+MODEL_FORMAT = "haptable-gestures/9"  # 3: touching skin in mm; 4: touching = sharp (touch.py);
 #: 5: soft contacts as sharp as the frame's sharpest touch, flat from 3000 mm^2, tips from 20
 #: mm^2, the window's fingertip count for dynamic gestures, fingertips at their far end, the
 #: moving fingertips counted (for the dynamic classifier); 6: the fingertips that met or
 #: parted over the window counted (for the dynamic classifier); 7: the second and third largest
 #: fingertip displacements (for the dynamic classifier); 8: the window's fingertip count is
-#: the most two of its frames show (a region flickering into one frame is none)
+#: the most two of its frames show (a region flickering into one frame is none); 9: pieces of
+#: a fingertip joined, the static fingertip count and spacings the window's median, each
+#: track's jitter pooled over the hand's tracks, the motion's shares of shift, arc and spacing
+#: change, the fingertips that met or parted from what two frames at each end show (for the
+#: dynamic classifier)
 
 #: Types a saved model may contain; anything else refuses to load.
 TRUSTED_TYPES = (

@@ -6,10 +6,11 @@ skin's area, its largest region and its outline's solidity (closed against sprea
 fingers); for one above it, the number of fingertip-sized regions and the spacing of
 the two largest of them and of all (not their size, which light that clips grows; and
 no outline feature, as how much of a hovering palm is seen depends on the light's
-falloff). Over a decision window
+falloff); pieces of one fingertip closer than a finger's width are one (``merge_pieces``).
+Over a decision window
 (``physical_motion``): the fingertips (or a flat hand's touching skin) followed
-through the frames, each track's least-squares line less what its own jitter explains
-(``beyond_jitter``): their common shift, largest / smallest / mean displacement, the
+through the frames, each track's least-squares line less what the hand's jitter
+explains (``beyond_jitter``; the tracks' residuals pooled, ``pooled``): their common shift, largest / smallest / mean displacement, the
 largest raw end-to-end one, turn, arc, change of spacing, radial motion and how many
 of them moved beyond a tremor, how many more or fewer fingertips the last frame shows
 than the first (fingertips that met or parted: a pile's merging into fewer regions), and
@@ -19,7 +20,8 @@ the tremor floor the count of moving tracks is taken at, and their ranks still t
 fingertip is where its far end from the palm is
 (``touch.far_ends``), not its contact's centroid, which a finger pressed flatter moves. Motion is
 scaled to 60 fps (a gesture filmed at 48 fps moves 60/48 as far per frame);
-``motion_view`` is what the classifiers see of it.
+``motion_view`` is what the classifiers see of it, and ``motion_shares`` how a motion
+divides among shift, arc and change of spacing (its kind at any speed).
 
 The hand's scale never enters: lengths are in mm through the frame's ``px_per_mm``
 (``touch.default_px_per_mm`` or the camera's calibration).
@@ -64,6 +66,8 @@ N_PHYS_MOTION = len(MOTION_NAMES)
 #: category too) and of the flat flag
 COUNT_INDEX = 2
 FLAT_INDEX = 5
+#: the fingertips' columns of ``physical_static`` (their count and spacings)
+TIP_COLUMNS = (2, 3, 4)
 
 
 def physical_record(hand, extras: dict, touch: dict) -> dict:
@@ -109,9 +113,39 @@ def _spacings(xy: np.ndarray) -> np.ndarray:
     return d[np.triu_indices(len(xy), 1)]
 
 
+#: touching regions whose centres are closer than this (mm) are one fingertip seen in
+#: pieces: two fingertips side by side are a finger's width apart (14-20 mm; the twin's
+#: two_finger 23 mm and more), a fingertip split by a dim band or by its own clipped
+#: plateau shows pieces 5 mm apart
+TIP_APART_MM = 10.0
+
+
+def merge_pieces(reg: np.ndarray, apart_mm: float = TIP_APART_MM) -> np.ndarray:
+    """(k, 3) regions (area mm^2, x mm, y mm), largest first, with those whose centres
+    are closer than ``apart_mm`` to a larger one joined into it (areas summed, the
+    centre area-weighted)."""
+    if len(reg) < 2:
+        return reg
+    d = np.sqrt(((reg[:, None, 1:] - reg[None, :, 1:]) ** 2).sum(-1))
+    if not (d[np.triu_indices(len(reg), 1)] < apart_mm).any():
+        return reg  # the usual frame: nothing to join
+    order = np.argsort(-reg[:, 0], kind="stable")
+    kept: list[list[int]] = []
+    for i in order:
+        for group in kept:
+            if d[group[0], i] < apart_mm:
+                group.append(int(i))
+                break
+        else:
+            kept.append([int(i)])
+    out = np.array([[reg[g, 0].sum(), *(reg[g, 0] @ reg[g, 1:] / reg[g, 0].sum())] for g in kept])
+    return out[np.argsort(-out[:, 0], kind="stable")]
+
+
 def tips_mm(rec: dict) -> np.ndarray:
-    """(k, 2) mm: the fingertip-sized touching regions of a frame record, largest first."""
-    reg = rec["regions_mm"]
+    """(k, 2) mm: the fingertip-sized touching regions of a frame record, largest first
+    (pieces of one fingertip joined: ``merge_pieces``)."""
+    reg = merge_pieces(rec["regions_mm"])
     a = reg[:, 0]
     ok = (a >= TIP_MM2[0]) & (a <= TIP_MM2[1])
     if ok.any():
@@ -254,6 +288,26 @@ def trend(f: np.ndarray, y: np.ndarray, n: int) -> tuple[np.ndarray, float]:
     return coef[0] * n, sigma * n / math.sqrt(sxx)
 
 
+def pooled(fits: list, tracks: list[np.ndarray], n: int) -> list:
+    """The tracks' fits (``trend``) with each standard error from the jitter all of them
+    show about their lines (their residuals pooled): one hand's fingertips tremble
+    alike, and a track's own two or three residuals may by chance show next to none."""
+    ss = dof = 0.0
+    sxx = []
+    for (_, se), t in zip(fits, tracks, strict=True):
+        f = t[:, 0]
+        sx = float(((f - f.mean()) ** 2).sum())
+        sxx.append(sx)
+        if len(f) >= 3 and n > 0:
+            ss += (se * math.sqrt(sx) / n) ** 2 * (len(f) - 2)
+            dof += len(f) - 2
+    if dof == 0:
+        return fits
+    sigma = math.sqrt(ss / dof)
+    return [(c, sigma * n / math.sqrt(sx) if sx > 0 else 0.0) for (c, _), sx in
+            zip(fits, sxx, strict=True)]  # fmt: skip
+
+
 def beyond_jitter(change: float, se: float) -> float:
     """A fitted change less what the window's own jitter explains (``JITTER_Z``
     standard errors): a trembling hand's random steps shrink to 0, a steady motion
@@ -275,12 +329,14 @@ def physical_motion(records: Sequence[dict | None], fps: float = REFERENCE_FPS) 
     v[1] = min(len(tracks), 6)
     if not any(is_flat(r) for r in recs):
         # fingertips that met or parted over the window (a pile's tips merging into fewer
-        # regions, a pinch closing): how many more or fewer the last frame shows than the
-        # first (a region seen in a frame between them only is no meeting)
-        v[11] = abs(len(tips_mm(recs[-1])) - len(tips_mm(recs[0])))
+        # regions, a pinch closing): how many more or fewer the window's last two frames
+        # both show than its first two (a region seen in one frame only, a knuckle
+        # brushing the glass, is no fingertip)
+        counts = [len(tips_mm(r)) for r in recs]
+        v[11] = abs(min(counts[-2:]) - min(counts[:2]))
     if not tracks:
         return v
-    fits = [trend(t[:, 0], t[:, 1:], n) for t in tracks]
+    fits = pooled([trend(t[:, 0], t[:, 1:], n) for t in tracks], tracks, n)
     a = np.array([t[0, 1:] if len(t) < 3 else t[:, 1:].mean(0) for t in tracks])
     moved = np.array([f[0].ravel() for f in fits])
     a = a - moved * (np.array([t[:, 0].mean() for t in tracks]) / max(n, 1))[:, None]
@@ -346,6 +402,22 @@ def motion_view(m: np.ndarray) -> np.ndarray:
     for i in (MOTION_NAMES.index(k) for k in ("tracks", "tracks_moving", "tips_met")):
         out[:, i] = m[:, i]
     return out
+
+
+#: the parts of a motion whose shares tell its kind: common shift, arc, change of spacing
+SHARE_PARTS = ("shift_mm", "track_arc_mm", "track_spacing_mm")
+#: below this (mm at 60 fps) a motion's shares fade to 0 (a trembling hand has no kind)
+SHARE_SOFT_MM = 1.0
+
+
+def motion_shares(m: np.ndarray) -> np.ndarray:
+    """(n, 3): how a motion divides among ``SHARE_PARTS`` (each over their sum plus
+    ``SHARE_SOFT_MM``): the same for a zoom at any speed (its spacing's share near 1), a
+    rotate (the arc's) or a drag (the shift's), where the lengths themselves depend on
+    how fast the people of the training set moved."""
+    m = np.atleast_2d(np.asarray(m, float))
+    parts = np.abs(m[:, [MOTION_NAMES.index(k) for k in SHARE_PARTS]])
+    return parts / (parts.sum(axis=1, keepdims=True) + SHARE_SOFT_MM)
 
 
 def physical_score(motion: np.ndarray) -> float:

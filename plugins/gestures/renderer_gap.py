@@ -13,7 +13,7 @@ import numpy as np
 
 from .feature_set import FeatureSet, columns
 from .features import MAX_COUNT_CODE, desc_indices
-from .physical import MOTION_NAMES, STATIC_NAMES
+from .physical import MOTION_NAMES, SHARE_PARTS, STATIC_NAMES
 from .renderer_sets import is_static
 
 
@@ -28,7 +28,8 @@ def feature_names(n_harmonics: int, n_max: int = 16) -> tuple[list[str], list[st
     counts = [f"count={k}" for k in range(MAX_COUNT_CODE + 1)]
     fourier = _harmonic_names(n_harmonics, n_max)
     static = [*fourier, *STATIC_NAMES, *counts]
-    return static, [*static, *MOTION_NAMES, "contact_zoom_log"]
+    shares = [f"{name}_share" for name in SHARE_PARTS]
+    return static, [*static, *MOTION_NAMES, *shares, "contact_zoom_log"]
 
 
 def ks_statistic(a: np.ndarray, b: np.ndarray) -> float:

@@ -143,12 +143,13 @@ def test_fingertips_that_meet_or_part_within_the_window_are_counted():
     into one) part into four, and only the two seen from the first frame are followed,
     as in a zoom; the two fingertips that parted tell it from a zoom, whose two tips stay
     two, also when a third region shows in one frame between the first and the last (a
-    knuckle brushing the glass). Neither counts for a flat hand."""
+    knuckle brushing the glass). Neither counts for a flat hand. (Parted fingertips are a
+    finger's width apart: regions closer than ``TIP_APART_MM`` are one fingertip.)"""
     col = MOTION_NAMES.index("tips_met")
     merged = {"regions_mm": np.array([[360.0, 0.0, 0.0], [120.0, 40.0, 0.0]])}
     parted = [
-        {"regions_mm": np.array([[120.0, -4.0 * f, -6.0], [120.0, 2.0 * f, 6.0],
-                                 [120.0, -5.0, 2.0 * f], [120.0, 40.0 + 2 * f, 0.0]])}
+        {"regions_mm": np.array([[120.0, -8.0 - 4.0 * f, -8.0], [120.0, 8.0 + 2.0 * f, 8.0],
+                                 [120.0, -8.0, 10.0 + 2.0 * f], [120.0, 40.0 + 2 * f, 0.0]])}
         for f in (1, 2, 3)
     ]  # fmt: skip
     for r in (merged, *parted):
