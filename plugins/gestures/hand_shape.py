@@ -262,10 +262,13 @@ def canonical_silhouette(
     palm_radius: float,
     angle_deg: float,
     params: VisionParams,
+    outline: np.ndarray | None = None,
 ) -> np.ndarray | None:
     """The hand rotated about the palm centre so the wrist points down, forearm cut off
     ``wrist_cut`` palm radii below the centre: its largest outer contour (N, 2) float in
-    a frame whose origin is the palm centre. None if nothing is left."""
+    a frame whose origin is the palm centre. None if nothing is left. ``outline``: points
+    (N, 2) in ``mask``'s pixels whose box holds every pixel of the mask (its contour),
+    to rotate less of the square (default: the mask's corners)."""
     h, w = mask.shape
     corners = np.array([[0, 0], [w, 0], [0, h], [w, h]], np.float64) - np.asarray(center)
     half = int(math.ceil(float(np.hypot(corners[:, 0], corners[:, 1]).max()))) + 2
@@ -276,10 +279,23 @@ def canonical_silhouette(
     cut = int(round(half + params.wrist_cut * palm_radius))
     if cut <= 0:
         return None
-    # only the rows above the cut are made (each output pixel depends on its own
-    # position alone, so they are the top rows of the whole rotated square)
-    rot = cv2.warpAffine(mask, m, (size, min(cut, size)), flags=cv2.INTER_NEAREST)
-    contours, _ = cv2.findContours(rot, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    # where the mask's pixels land: a set pixel is within 1 px of its source's image,
+    # which is inside the outline's, so 3 px more each side holds every pixel set
+    if outline is None:
+        outline = np.array([[0, 0], [w - 1, 0], [0, h - 1], [w - 1, h - 1]], np.float64)
+    at = cv2.transform(np.asarray(outline, np.float64).reshape(-1, 1, 2), m)
+    bx, by, bw, bh = cv2.boundingRect(at.astype(np.float32))
+    x0, y0 = max(bx - 3, 0), max(by - 3, 0)
+    x1, y1 = min(bx + bw + 3, size), min(by + bh + 3, size, cut)
+    if y1 <= y0 or x1 <= x0:
+        return None
+    # only the square's top left up to that box's far edges is made (each output pixel
+    # depends on its own position alone, so they are those pixels of the whole rotated
+    # square), and its outline looked for in that box alone (all else is 0)
+    rot = cv2.warpAffine(mask, m, (x1, y1), flags=cv2.INTER_NEAREST)
+    contours, _ = cv2.findContours(
+        rot[y0:, x0:], cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
+    )
     if not contours:
         return None
     c = max(contours, key=cv2.contourArea)
