@@ -106,22 +106,32 @@ def bright_centroid(mask: np.ndarray, diff: np.ndarray) -> tuple[float, float] |
     return m1["m10"] / m1["m00"], m1["m01"] / m1["m00"]
 
 
+def mask_moments(mask: np.ndarray) -> tuple[float, float, float]:
+    """``m00``, ``m10`` and ``m01`` of a 0/255 mask, those of ``cv2.moments(mask,
+    binaryImage=True)`` (whole numbers: exact either way), from its column and row sums,
+    for a fifth of the cost."""
+    cols = cv2.reduce(mask, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    rows = cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    m10 = int(cols @ np.arange(len(cols)))
+    return int(cols.sum()) / 255, m10 / 255, int(rows @ np.arange(len(rows))) / 255
+
+
 def brightness_axis(
     mask: np.ndarray,
     diff: np.ndarray,
     min_shift_px: float = 1.0,
     bright: tuple[float, float] | None = None,
 ) -> float | None:
-    """Direction (rad) from the brightness-weighted centroid of a hand to its plain
-    centroid: towards the dimmer forearm. None if the two nearly coincide."""
-    m0 = cv2.moments(mask, binaryImage=True)
-    if m0["m00"] <= 0:
+    """Direction (rad) from the brightness-weighted centroid of a hand (``mask``: 0/255)
+    to its plain centroid: towards the dimmer forearm. None if the two nearly coincide."""
+    m00, m10, m01 = mask_moments(mask)
+    if m00 <= 0:
         return None
     b = bright if bright is not None else bright_centroid(mask, diff)
     if b is None:
         return None
-    dx = m0["m10"] / m0["m00"] - b[0]
-    dy = m0["m01"] / m0["m00"] - b[1]
+    dx = m10 / m00 - b[0]
+    dy = m01 / m00 - b[1]
     if math.hypot(dx, dy) < min_shift_px:
         return None
     return math.atan2(dy, dx)
