@@ -269,10 +269,11 @@ def analyse_hand(
         bright = bright_centroid(roi, diff[ya:yb, xa:xb])
         hint = brightness_axis(roi, diff[ya:yb, xa:xb], 0.1 * pr, bright)
     bright_px = center if bright is None else (bright[0] + xa, bright[1] + ya)
-    arc = wrist_arc(roi, (pcx, pcy), pr, params, pts - (xa, ya), (xa, ya), (H, W), hint)
+    local = pts - (xa, ya)  # the outline in the crop's pixels
+    arc = wrist_arc(roi, (pcx, pcy), pr, params, local, (xa, ya), (H, W), hint)
     angle = canonical_angle_deg(arc.mid_rad)
     roi_center = (pcx, pcy)
-    sil = canonical_silhouette(roi, roi_center, pr, angle, params)
+    sil = canonical_silhouette(roi, roi_center, pr, angle, params, local)
     if sil is None or len(sil) < 3:
         return None
     (ecx, ecy), er = cv2.minEnclosingCircle(sil.astype(np.float32))
