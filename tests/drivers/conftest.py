@@ -192,6 +192,15 @@ def _server_up(name: str) -> bool:
     return done.returncode == 0 and "system:playback_1" in done.stdout
 
 
+def server_name(kind: str) -> str:
+    """A test server's name: one per kind and test worker, never a pid. JACK's registry
+    of servers (``/dev/shm/jack-shm-registry``) has 8 slots; a server killed (the
+    vanishing-device test kills one on purpose) leaves its slot taken until a server of
+    the same name starts again, so names made from pids filled it ("Too many servers
+    already active") run after run on the same machine."""
+    return f"haptable-{kind}-{os.environ.get('PYTEST_XDIST_WORKER', 'main')}"
+
+
 def start_jackd(name: str, log_path: Path) -> JackServer:
     """Start ``jackd -n NAME --no-realtime -d dummy`` and wait until it answers."""
     jackd = shutil.which("jackd")
@@ -252,7 +261,7 @@ def jackd_factory(tmp_path: Path) -> Iterator[Any]:
 def jack_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JackServer]:
     """A ``jackd`` dummy server at 48 kHz / 256 frames for the session (see module doc)."""
     sd = _portaudio()
-    name = f"haptable-test-{os.getpid()}"
+    name = server_name("test")
     server = start_jackd(name, tmp_path_factory.mktemp("jack") / "jackd.log")
     saved = {k: os.environ.get(k) for k in ("JACK_DEFAULT_SERVER", "JACK_NO_START_SERVER")}
     os.environ["JACK_DEFAULT_SERVER"] = name  # PortAudio's libjack client reads these

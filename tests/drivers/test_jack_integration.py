@@ -184,7 +184,9 @@ def test_jack_server_dying_mid_stream_is_lost_and_stop_returns(jackd_factory, tm
     import sys
 
     _ = pytest.importorskip("sounddevice", exc_type=OSError)
-    name = f"haptable-vanish-{os.getpid()}"
+    from .conftest import server_name
+
+    name = server_name("vanish")
     server = jackd_factory(name)
     env = dict(os.environ, JACK_DEFAULT_SERVER=name, JACK_NO_START_SERVER="1")
     env["JACKD_PID"] = str(server.process.pid)

@@ -47,7 +47,7 @@ def _gone(name: str, timeout_s: float = 10.0) -> bool:
 
 @pytest.mark.skipif(shutil.which("jackd") is None, reason="jackd not found: apt-get install jackd2")
 def test_a_jackd_whose_wait_fails_is_stopped(monkeypatch, tmp_path):
-    name = f"haptable-test-fixture-{os.getpid()}"
+    name = jack.server_name("start")
 
     def hung(server_name: str) -> bool:
         raise subprocess.TimeoutExpired(["jack_lsp", "-s", server_name], 10)
@@ -66,7 +66,7 @@ def test_a_jackd_whose_wait_fails_is_stopped(monkeypatch, tmp_path):
 def test_a_jack_lsp_that_times_out_is_asked_again(monkeypatch, tmp_path):
     """One ``jack_lsp`` past its timeout (a loaded machine) is a server not up yet: the
     wait goes on until its deadline, and the server comes up."""
-    name = f"haptable-test-again-{os.getpid()}"
+    name = jack.server_name("start")
     real, calls = subprocess.run, []
 
     def slow_once(args, **kw):
