@@ -221,6 +221,7 @@ def body_parts(
     scale_range: tuple[float, float] = (0.3, 2.0),
     *,
     hand_likely: bool = False,
+    seed_factor: float = SEED_FACTOR,
 ) -> tuple[np.ndarray | None, Parts | None]:
     """Hands and forearms with a threshold that follows each part's own light.
 
@@ -228,7 +229,7 @@ def body_parts(
     noise is a quarter of a pixel's): connected regions above the lowest threshold any
     part can have (``threshold`` x the smallest scale, and at least 4 sigma of the block
     noise, ``noise`` being a pixel's). A part whose brightest block rises well above the
-    noise (``SEED_FACTOR`` x that floor) is a hand's; its scale is that brightness over
+    noise (``seed_factor`` x that floor) is a hand's; its scale is that brightness over
     ``reference``, kept within ``scale_range``. Each part is then cut at full resolution
     (``smooth_px`` box mean) at ``threshold`` x its scale. Touching skin is a part's
     brightest; it rises and falls with the IR light reaching that hand (LED power, hot
@@ -238,13 +239,14 @@ def body_parts(
     The mask (uint8 0/255) of the parts' window ``parts.win`` (the body is 0 outside it:
     no frame-sized mask is made) and the parts; (None, None) without a hand's part.
     ``hand_likely`` (the frame before had a hand's part) skips the empty table's shortcut,
-    a pass over the frame for its brightest pixel: the same result either way."""
+    a pass over the frame for its brightest pixel: the same result either way.
+    ``seed_factor``: how far above the noise floor a part's brightest block must rise."""
     H, W = diff.shape
     b = PART_BLOCK_PX
     hb, wb = H // b, W // b
     floor = 4.0 * noise / b + 2.0
     low = max(threshold * scale_range[0], floor)
-    seed_level = max(low, SEED_FACTOR * floor)
+    seed_level = max(low, seed_factor * floor)
     # no block's mean exceeds its brightest pixel: a frame with no pixel at a seed's level
     # (an empty table: its noise stays below) has no hand's part, and its block means
     # need not be made (made, they would hold no seed: the same answer below)

@@ -69,6 +69,9 @@ from .touch import SAME_HAND_MM, FrameTouch, default_px_per_mm
 #: the range a hand's light may scale the thresholds by (a hand dimmer than 0.3 of the
 #: reference is mostly noise; brighter than 2x, the sensor clips)
 SCALE_RANGE = (0.3, 2.0)
+#: seeds nearer the noise floor (``segmentation.SEED_FACTOR``: 2.5) for a frame whose
+#: parts hold no hand: a hovering hand's palm under dim light (``process_frame``)
+DIM_SEED_FACTOR = 1.5
 
 
 @dataclass(frozen=True)
@@ -490,11 +493,25 @@ def process_frame(
     contacts = []
     if parts is not None:
         contacts = part_contacts(diff, parts, p, noise_contact, hi_s, to_mm)
-    found = []
     max_area = p.max_hand_fraction * img.shape[0] * img.shape[1]
     ppm = p.scale_px_per_mm
     same_px = SAME_HAND_MM * ppm
-    for main, mine, part in hands_of(body, parts, contacts, p.min_hand_area_px, max_area, same_px):
+    hands = hands_of(body, parts, contacts, p.min_hand_area_px, max_area, same_px)
+    if not hands and parts is not None:
+        # parts, but none the size of a hand: a pointing hand hovers far dimmer than the
+        # fingertip it touches with, and under dim light its palm's brightest block may
+        # fall just short of a seed (its fingertip alone is left, too small for a hand);
+        # look again with seeds nearer the noise floor (only frames that found no hand
+        # pay for it: a frame with a hand, or an empty table, never does)
+        body2, parts2 = body_parts(
+            diff, p.body_threshold, p.contact_level or 1.0, noise_body, p.smooth_px,
+            (lo_s, hi_s), hand_likely=True, seed_factor=DIM_SEED_FACTOR,
+        )  # fmt: skip
+        hands = hands_of(body2, parts2, contacts, p.min_hand_area_px, max_area, same_px)
+        if hands:
+            body, parts = body2, parts2
+    found = []
+    for main, mine, part in hands:
         got = analyse_hand(main, img.shape, p, diff, mine, to_mm)
         if got is not None:
             got[1].update(level=float(parts.peak[part]), light=float(parts.scale[part]))

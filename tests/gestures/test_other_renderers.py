@@ -2,7 +2,7 @@
 across them: a fingertip seen in two pieces is one fingertip; a region flickering into
 one frame of a held pose is none; a resting hand's fingers that tremble each their own
 way do not move it; a zoom is a zoom at any speed (a model trained on slow zooms read
-another renderer's fast ones as rotates)."""
+another renderer's fast ones as rotates); a pointing hand under dim light is found."""
 
 from __future__ import annotations
 
@@ -111,3 +111,18 @@ def test_a_knuckle_brushing_the_glass_in_the_last_frame_is_no_meeting_of_fingert
     assert physical_motion(recs)[MOTION_NAMES.index("tips_met")] == 0
     pile = [_rec([(100.0 + 25 * i, 100.0) for i in range(n)]) for n in (5, 5, 3, 3)]
     assert physical_motion(pile)[MOTION_NAMES.index("tips_met")] == 2
+
+
+def test_a_pointing_hand_under_dim_light_is_found_in_every_frame():
+    """The phalanx renderer's one_finger at x0.7 light: the hovering hand's brightest
+    block falls just short of a seed in most frames, and its fingertip alone is too small
+    for a hand; the hand is found in each of its frames, in the same place."""
+    from plugins.gestures.features import frame_record
+    from plugins.gestures.renderer_sets import _phalanx_samples
+    from plugins.gestures.vision import VisionParams, process_frame
+
+    _, _, frames, bg, _ = next(_phalanx_samples(1, 1, 97, 0.7, False, ("one_finger",)))
+    recs = [frame_record(process_frame(img, bg, VisionParams())) for img in frames[:4]]
+    assert all(r is not None for r in recs)
+    palms = np.array([r["palm_px"] for r in recs])
+    assert np.ptp(palms, axis=0).max() < 15.0
