@@ -2,7 +2,7 @@
 held the vibration map but not the table: the console's Vibration screen refused ``m``
 naming the run, yet Enter played point 51. As the README says, the run holds the table's
 outputs: every console action that plays (Vibration's Enter, Devices' ``t``, a demo's
-start) is refused while it runs, naming it (its command and pid), one check for all."""
+start, a relay's toggle) is refused while it runs, naming it (its command and pid), one check for all."""
 
 from __future__ import annotations
 
@@ -52,6 +52,14 @@ def test_a_shell_s_study_run_holds_the_console_s_plays(plugins, tmp_path, size):
             await wait_for(pilot, lambda: "refused" in devices.result, 20, "t refused")
             assert who in " ".join(devices.result.split()), devices.result
             assert len(app.session.played) == played
+            await pilot.press("f4")  # a relay setting is refused too, naming the run
+            await wait_for(pilot, lambda: app.pane("relays") is not None, 20, "relays")
+            await pilot.pause(0.3)
+            await pilot.press("2")
+            row = app.query_one("#interlock-2")
+            await wait_for(pilot, lambda: "refused" in str(row.render()), 10, "2 refused")
+            assert who in " ".join(str(row.render()).split())
+            assert 2 not in app.session.outputs.operator_relays()
 
     try:
         asyncio.run(scenario())

@@ -291,6 +291,10 @@ class RelaysPane(VerticalScroll):
             self._estop_refused.add(ch)
             self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
             return
+        held = self.app.session.held_why()  # a study run holds the table: not switched
+        if held:
+            self._done(ch, held.removeprefix("refused: "))
+            return
         self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
         self.pending[ch] = closed
         self._redraw()
