@@ -291,6 +291,15 @@ def last_plan(k: Kernel) -> dict[str, Any] | None:
     return None
 
 
+def playing(k: Kernel) -> dict[str, Any] | None:
+    """The play the gate passes now, whoever asked (None: none): its name and who sent
+    it (``command``, ``pid``), for a relay routed its way to say by whom."""
+    for words, rep in reversed(list(k.plays)):
+        if not rep.done.is_set():  # routing its relays, or passing its samples
+            return {key: words[key] for key in ("name", "pid", "command", "client")}
+    return None
+
+
 def retire(k: Kernel, c: Client, h: dict[str, Any], payload: bytearray) -> Reply:
     """A client with other settings takes the table, if nobody else uses it."""
     others = [o.label() for o in k.client_list() if o is not c]

@@ -37,7 +37,7 @@ from console.kernel import wire
 from console.kernel.line_server import LineServer, peer_cred, request
 from console.kernel.operator import reset_refusal
 from console.kernel.private_dir import open_private, pid_alive, write_private
-from console.kernel.requests import PLAYS_KEPT, REQUESTS
+from console.kernel.requests import PLAYS_KEPT, REQUESTS, playing
 from console.kernel.tables import (
     TWIN_OF,
     Table,
@@ -576,6 +576,7 @@ class Kernel:
                 "fast": self.fast,
                 "clients": [c.label() for c in self.client_list()],
                 "holder": self.holder[1] if self.holder else None,
+                "playing": playing(self),  # whose plan routes the relays now
                 "plans_checked": sch.plans_checked,
                 "requests": {
                     op: {"n": n, "mean_ms": round(t / n * 1e3, 3), "max_ms": round(m * 1e3, 3)}

@@ -18,7 +18,8 @@ What it offers, by where it comes from:
 - tracking: ``Tracking``, ``TrackFrame``, ``Announcer``
 - the measured vibration map: ``measured_map``, ``measured_map_file``, ``Cancelled``,
   ``kept_measured_map`` (the kept one only, never measuring); a study run's hold on it
-  across processes ``map_held``, ``map_holder``
+  across processes ``map_held``, ``map_holder``; a run's hold on the table's outputs
+  ``table_held``, ``table_holder``
 - the projector link: ``ProjectorService``, ``ProjectorLaunch``, the wire protocol as
   ``projector_protocol`` and its names ``encode``, ``MessageReader``, ``ProtocolError``,
   ``probe``, ``default_socket_path``, ``socket_path_for``, ``prepare_socket_dir``,
@@ -79,6 +80,7 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
         open_classifier,
         vision_loop,
     )
+    from console.runtime.table_hold import table_held, table_holder
     from console.runtime.tracking import Announcer, TrackFrame, Tracking
     from console.runtime.watchdog import Watchdog
     from console.session.events import Failed, Progress, Snapshot, Started, Stopped
@@ -93,6 +95,7 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "tracking": ("Announcer", "TrackFrame", "Tracking"),
     "measured_map": ("Cancelled", "kept_measured_map", "measured_map", "measured_map_file"),
     "map_hold": ("map_held", "map_holder"),
+    "table_hold": ("table_held", "table_holder"),
     "protocol": (
         "HEARTBEAT_S",
         "MAX_SOCKET_PATH",
@@ -137,6 +140,8 @@ __all__ = [
     "measured_map",
     "map_held",
     "map_holder",
+    "table_held",
+    "table_holder",
     "measured_map_file",
     "MessageReader",
     "inject_twin_faults",
@@ -188,6 +193,8 @@ def _source(source: str) -> ModuleType:
         from console.runtime import measured_map as module  # lazy: loads on first use
     elif source == "map_hold":
         from console.runtime import map_hold as module  # lazy: loads on first use
+    elif source == "table_hold":
+        from console.runtime import table_hold as module  # lazy: loads on first use
     elif source == "protocol":
         from console.runtime.projector import protocol as module  # lazy: loads on first use
     elif source == "service":

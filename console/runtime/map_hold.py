@@ -9,15 +9,12 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
-import os
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from console.core.errors import TableBusy
-from console.kernel.private_dir import pid_alive, runtime_dir, write_private
+from console.kernel.private_dir import runtime_dir
 from console.runtime.measured_map import measured_map_path
+from console.runtime.table_hold import held_in, holder_in
 
 
 def hold_file(profile: Any) -> Path:
@@ -28,29 +25,13 @@ def hold_file(profile: Any) -> Path:
 
 def map_holder(profile: Any) -> str | None:
     """Who, in another live process, holds ``profile``'s map (else None)."""
-    try:
-        held = json.loads(hold_file(profile).read_text(encoding="utf-8"))
-        pid = int(held["pid"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    if pid == os.getpid() or not pid_alive(pid):
-        return None
-    return str(held.get("who") or f"process {pid}")
+    return holder_in(hold_file(profile))
 
 
-@contextlib.contextmanager
-def map_held(profile: Any, who: str) -> Iterator[str]:
+def map_held(profile: Any, who: str) -> contextlib.AbstractContextManager[str]:
     """``with map_held(profile, "P01's study run (...)")``: hold ``profile``'s map for
     this process's run (``TableBusy`` naming the other run when another process holds
     it); let go at the end, whatever ended the run."""
-    other = map_holder(profile)
-    if other is not None:
-        raise TableBusy(f"{other} plays on the vibration map: stop it there first")
-    path = hold_file(profile)
-    write_private(path, json.dumps({"pid": os.getpid(), "who": who}))
-    try:
-        yield who
-    finally:
-        with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
-            if json.loads(path.read_text(encoding="utf-8"))["pid"] == os.getpid():
-                path.unlink()
+    return held_in(
+        hold_file(profile), who, "{other} plays on the vibration map: stop it there first"
+    )

@@ -19,6 +19,7 @@ from typing import Any
 from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.kernel.shell import estop as shell_estop
 from console.runtime.control import ControlServer
+from console.runtime.table_hold import table_held, table_holder
 from console.session.demos import DemoControl
 from console.session.events import (
     ESTOP_FIX,
@@ -270,14 +271,15 @@ class ConsoleSession:
             self._holder = who
         out = self.outputs
         try:
-            if out is not None:  # other processes too (the table's kernel holds them)
-                try:
-                    out.hold(who)
-                except TableBusy:
-                    raise
-                except SafetyRefusal as exc:
-                    raise UserError(str(exc)) from None
-            yield who
+            with table_held(self.profile, who):  # a shell's run holds it: TableBusy
+                if out is not None:  # other processes too (the table's kernel holds them)
+                    try:
+                        out.hold(who)
+                    except TableBusy:
+                        raise
+                    except SafetyRefusal as exc:
+                        raise UserError(str(exc)) from None
+                yield who
         finally:
             if out is not None:
                 out.unhold()
@@ -286,16 +288,22 @@ class ConsoleSession:
 
     @property
     def outputs_holder(self) -> str | None:
-        """Who holds the outputs for a run (``hold_outputs``), else None."""
-        return self._holder
+        """Who holds the outputs for a run: this console's (``hold_outputs``) or, in
+        another process, a study run from a shell (``table_holder``: pid and command;
+        one on its own twin too), else None."""
+        return self._holder or table_holder(self.profile)
 
-    def _held_from(self, holder: str | None) -> str:
-        """Why a play from someone other than the outputs' holder is refused ("" if not);
-        a paused run holds them too (it resumes where it stopped)."""
-        who = self._holder
+    def held_why(self, holder: str | None = None) -> str:
+        """Why a play from someone other than the outputs' holder is refused ("" if not):
+        the one check before every play, audition, test signal and demo; a paused run
+        holds them too (it resumes where it stopped)."""
+        who = self.outputs_holder
         if who is None or holder == who:
             return ""
-        return f"refused: {who} holds the outputs, paused or not (stop it first)"
+        there = "" if who == self._holder else " there"
+        return f"refused: {who} holds the outputs, paused or not (stop it{there} first)"
+
+    _held_from = held_why
 
     def play_plan(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> bool:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an

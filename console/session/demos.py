@@ -106,6 +106,9 @@ class DemoControl:
             raise UserError(f"demo {name}: outputs not open ({s.outputs_error or 'starting'})")
         if out.estopped:
             raise UserError(f"demo {name}: the e-stop is active; ctrl+r resets it")
+        held = s.held_why()
+        if held:  # a study run holds the table (this console's, or a shell's)
+            raise UserError(f"demo {name}: {held}")
 
     def start(
         self,

@@ -197,7 +197,7 @@ def run(
             says_estopped(flight, quiet=args.json),
             ctx.outputs(fast=True if args.simulate else None) as outputs,
         ):
-            hold_for_run(outputs, args.study)
+            hold_for_run(outputs, args.study, args.simulate)
             for pid in ids:
                 root = participant_dir(args.out, pid)
                 pseed = participant_seed(proto, pid) if seed is None else seed

@@ -24,7 +24,7 @@ from console.plugin_api import EStopped, UserError, load_map
 from . import analyze_cli
 from . import protocol as protocols
 from .analyze_cli import add_parser
-from .hold import hold_for_run, hold_map_for_run
+from .hold import hold_for_run, hold_map_for_run, hold_table_for_run
 from .plan import check_seed_row
 from .run_estop import estop_reason, says_estopped
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
@@ -217,6 +217,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         from .adaptive_cli import run as run_adaptive  # lazy: as above
 
         ids = _ids(args)
+        hold_table_for_run(ctx.profile, args.study, args.simulate)  # from its start: no mixing
         return run_adaptive(args, ctx, ids, whole(args.seed, "--seed"), _details, _vmap)
     if args.trials is not None and args.trials < 1:
         raise UserError(f"--trials {args.trials}: give at least 1")
@@ -224,6 +225,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
     seed, row = whole(args.seed, "--seed"), whole(args.row, "--row")
     check_seed_row(proto, seed, row)
     ids = _ids(args)
+    hold_table_for_run(ctx.profile, args.study, args.simulate)  # from its start: no mixing
     obs = observer(ctx.pm, ctx.profile) if args.simulate and proto.stimulus != "knob" else None
     if proto.stimulus == "knob" and not args.simulate:
         raise UserError(
@@ -247,7 +249,7 @@ def run(args: argparse.Namespace, ctx: Any) -> int:
         says_estopped(flight, quiet=args.json),
         ctx.outputs(fast=True if args.simulate else None) as outputs,
     ):
-        hold_for_run(outputs, args.study)
+        hold_for_run(outputs, args.study, args.simulate)
         signal.signal(signal.SIGINT, on_int)
         try:
             for pid in ids:

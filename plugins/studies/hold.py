@@ -35,14 +35,29 @@ def hold_map_for_run(profile: Any, study: str, simulated: bool = False) -> None:
     atexit.register(stack.close)
 
 
-def hold_for_run(outputs: Any, study: str) -> None:
+def hold_table_for_run(profile: Any, study: str, simulated: bool = False) -> None:
+    """Hold ``profile``'s table for this process's study run until it ends, from its
+    start (before its map is read): the console of the profile plays nothing meanwhile
+    (``table_held``: every play, audition, test signal and demo is refused naming this
+    run), a simulated run on its own twin too; ``TableBusy`` (exit 5) while another run
+    holds it."""
+    # lazy: the runtime part loads on first use, not at every haptable start
+    from console.plugin_api.runtime import table_held
+
+    stack = contextlib.ExitStack()
+    stack.enter_context(table_held(profile, run_words(study, simulated)))
+    atexit.register(stack.close)
+
+
+def hold_for_run(outputs: Any, study: str, simulated: bool = False) -> None:
     """Hold ``outputs`` (the table's kernel client) for this process's study run until it
-    leaves; outputs without a kernel (nothing else plays through them) need no hold."""
+    leaves: other processes' plays refused; outputs without a kernel (nothing else plays
+    through them) need no such hold."""
     hold = getattr(outputs, "hold", None)
     if hold is None:
         return
     try:
-        hold(run_words(study))
+        hold(run_words(study, simulated))
     except TableBusy:
         raise  # another run holds them: the table's state (exit 5), not bad input
     except SafetyRefusal as exc:

@@ -74,7 +74,7 @@ def test_a_shell_s_study_run_holds_the_console_s_map(plugins, tmp_path, size):
             str(tmp_path / "b"),
         )
         assert got.returncode == 5, got.stdout + got.stderr  # the table is busy
-        assert f"haptable: busy: {who} plays on the vibration map" in got.stderr, got.stderr
+        assert f"haptable: busy: {who} holds the outputs" in got.stderr, got.stderr
 
         async def scenario():
             app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")

@@ -101,7 +101,7 @@ def test_interlock_says_why_a_toggle_waits_or_is_refused():
     assert "e-stop" in interlock(1, _status(estopped=True), {}, {})
     assert "refused" in interlock(1, _status(estopped=True), {1: True}, {})
     waits = interlock(2, _status(busy=True), {2: True}, {})
-    assert "waits to close" in waits and "when it ends" in waits
+    assert "waits to close until the stimulus ends" in waits
     assert "guard gap" in interlock(2, _status(), {2: False}, {})
     assert "refused: board failed" in interlock(3, _status(), {}, {3: "board failed"})
     assert "ready" in interlock(4, _status(), {}, {})

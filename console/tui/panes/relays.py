@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -27,12 +29,40 @@ def interlock(
     refused: dict[int, str],
     opened: set[int] | frozenset[int] = frozenset(),
 ) -> str:
-    """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``), then
-    why it can or cannot switch now; ``opened``: relays the operator had closed and an
-    e-stop opened (said until the operator toggles them or they close again)."""
+    """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``; while
+    a stimulus routes it otherwise than the operator's setting, whose plan: ``closed by
+    haptable play sweep (pid N)``), then why it can or cannot switch now;
+    ``opened``: relays the operator had closed and an e-stop opened (said until the
+    operator toggles them or they close again)."""
     gate = status["gate"]
-    state = "closed" if ch in gate.get("relays_closed", ()) else "open"
-    return f"{state} - {_why(ch, state, status, pending, refused, opened)}"
+    closed = ch in gate.get("relays_closed", ())
+    state = "closed" if closed else "open"
+    routed = status["busy"] and not gate["estopped"] and closed != (ch in operator_setting(status))
+    head = f"{state} by {escape(routing_words(status))}" if routed else state
+    return f"{head} - {_why(ch, state, status, pending, refused, opened, routed)}"
+
+
+def operator_setting(status: dict) -> frozenset[int]:
+    """The relays the operator's own setting closes (a stimulus's routing aside); the
+    gate's as they are when the outputs do not say."""
+    return frozenset(status.get("operator_relays", status["gate"].get("relays_closed", ())))
+
+
+def routing_words(status: dict) -> str:
+    """Whose plan routes the relays now: ``haptable play sweep (pid 4242)``, this
+    console's ``point 51 (this console)``; ``a stimulus`` when the outputs do not say."""
+    p = (status.get("kernel") or {}).get("playing")
+    if not p:
+        return "a stimulus"
+    if int(p.get("pid") or 0) == os.getpid():
+        return f"{p.get('name') or 'a plan'} (this console)"
+    return f"{p.get('command') or p.get('name') or 'a process'} (pid {p.get('pid')})"
+
+
+def playing_name(status: dict) -> str:
+    """The name of the plan that plays now (``sweep``), ``the stimulus`` when unknown."""
+    p = (status.get("kernel") or {}).get("playing")
+    return str(p.get("name") or "the stimulus") if p else "the stimulus"
 
 
 def _why(
@@ -42,23 +72,28 @@ def _why(
     pending: dict[int, bool],
     refused: dict[int, str],
     opened: set[int] | frozenset[int],
+    routed: bool = False,
 ) -> str:
-    """Why relay ``ch`` can or cannot switch now (markup)."""
+    """Why relay ``ch`` can or cannot switch now (markup); ``routed``: the row's state
+    already names the stimulus routing it."""
     if status["gate"]["estopped"]:  # every relay is held open; refused: the one pressed
         said = ESTOP_REFUSAL if ch in refused or ch in pending else "e-stop active"
         return f"[red]{escape(said)} ({escape(ESTOP_FIX)})[/]"
     if ch in pending:
         want = "close" if pending[ch] else "open"
-        if status["busy"]:
-            return (
-                f"[yellow]waits to {escape(want)}: a stimulus routes the relays now; yours come back "
-                f"when it ends[/]"
-            )
+        if status["busy"]:  # the stimulus named once on the row: its state or here
+            what = "it" if routed else escape(playing_name(status))
+            return f"[yellow]yours waits to {escape(want)} until {what} ends[/]"
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
     if ch in opened and state == "open":
         return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
+    if status["busy"]:
+        if routed:
+            mine = "closed" if ch in operator_setting(status) else "open"
+            return f"[yellow]yours: {mine}[/]"  # back when it ends (the screen's hint)
+        return f"[yellow]as yours; a toggle waits for {escape(playing_name(status))} to end[/]"
     return "[green]ready[/] (switches only in silence)"
 
 
@@ -183,12 +218,12 @@ class RelaysPane(VerticalScroll):
         calls it when the output state changed); only what changed is redrawn."""
         if self._table is None:
             return  # not mounted yet: ``on_mount`` draws the state then
-        closed = set(status["gate"]["relays_closed"])
+        mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
         for ch, (sw, state) in self._rows.items():
-            if ch not in self.pending and sw.value != (ch in closed):
+            if ch not in self.pending and sw.value != (ch in mine):
                 with sw.prevent(Switch.Changed):
-                    sw.value = ch in closed
+                    sw.value = ch in mine
             text = interlock(ch, status, self.pending, self.refused, self._opened)
             if self._said.get(ch) != text:
                 self._said[ch] = text
@@ -255,6 +290,10 @@ class RelaysPane(VerticalScroll):
             reason = out.estop_reason
             self._estop_refused.add(ch)
             self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
+            return
+        held = self.app.session.held_why()  # a study run holds the table: not switched
+        if held:
+            self._done(ch, held.removeprefix("refused: "))
             return
         self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
         self.pending[ch] = closed
