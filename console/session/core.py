@@ -286,14 +286,25 @@ class ConsoleSession:
 
     @property
     def outputs_holder(self) -> str | None:
-        """Who holds the outputs for a run (``hold_outputs``), else None."""
-        return self._holder
+        """Who holds the outputs for a run (``hold_outputs``) or a demo (starting,
+        running or stopping: its process streams to them), else None."""
+        return self._holder or self._demo_holder()
+
+    def _demo_holder(self) -> str | None:
+        name = self.demos.name
+        return None if name is None else f"the {name} demo"
 
     def _held_from(self, holder: str | None) -> str:
         """Why a play from someone other than the outputs' holder is refused ("" if not);
-        a paused run holds them too (it resumes where it stopped)."""
+        a paused run holds them too (it resumes where it stopped), and so does a demo
+        (its live stream leaves no silence to play in: the play would wait, unheard)."""
         who = self._holder
-        if who is None or holder == who:
+        if who is None:
+            demo = self._demo_holder()
+            if demo is None:
+                return ""
+            return f"refused: {demo} holds the outputs (s on Scenes, F6, stops it)"
+        if holder == who:
             return ""
         return f"refused: {who} holds the outputs, paused or not (stop it first)"
 
