@@ -29,6 +29,7 @@ from console.session.events import (
     Started,
     Stopped,
     estop_refusal,
+    stop_reason,
 )
 from console.session.reset_here import no_reset_here
 from console.session.scenes import SceneControl
@@ -423,7 +424,7 @@ class ConsoleSession:
             on_started()  # it started and ended between two looks: in that order
         if not report.error and len(report.segment_end) >= len(report.segment_start) > 0:
             return PlayOutcome(name, started=True, played=True)
-        estopped = out.estopped or "e-stop" in report.error
+        estopped = out.estopped or "e-stop" in report.error or self._estop_came(out, report)
         if not started:
             if estopped:
                 return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
@@ -433,7 +434,20 @@ class ConsoleSession:
             return PlayOutcome(
                 name, started=True, stopped=f"the e-stop ({why})" if why else "the e-stop"
             )
-        return PlayOutcome(name, started=True, stopped=report.error or "stopped")
+        return PlayOutcome(name, started=True, stopped=stop_reason(report.error))
+
+    @staticmethod
+    def _estop_came(out: Any, report: Any) -> bool:
+        """A play the kernel stopped (``stopped: REASON``) by an e-stop from another
+        process (``haptable estop``): the latch reaches this client a moment later."""
+        import time
+
+        if not report.error.startswith("stopped"):
+            return False
+        deadline = time.monotonic() + 1.0
+        while not out.estopped and time.monotonic() < deadline:
+            time.sleep(0.02)
+        return bool(out.estopped)
 
     def scope(self, seconds: float | None = 0.1) -> Any:
         """The last ``seconds`` (all kept: None) of what the gate handed the driver, per

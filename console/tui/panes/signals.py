@@ -444,7 +444,7 @@ class SignalsPane(Vertical):
                 error=True,
             )
         else:
-            self.status(f"{name} stopped: {outcome.stopped}", error=True)
+            self.status(f"{name} {outcome.how_it_stopped}", error=True)
 
     def says(self, ev) -> bool:
         """A refusal of this screen's play: its status line says it (``_played``), no
