@@ -46,6 +46,10 @@ WATCH_PLANS_S = 0.25
 ESTOP_NOTICE_WAITS = 10
 
 
+#: how the operator stops a demo holding the outputs, as a refusal names it
+DEMO_STOP = "s on Scenes, F6, stops it"
+
+
 class ConsoleSession:
     """What one operator's console runs: ``ctx`` gives the profile (``ctx.profile``) and the
     plugins (``ctx.pm``); ``fast`` runs the twin's outputs unpaced (tests).
@@ -268,6 +272,9 @@ class ConsoleSession:
         with self._lock:
             if self._holder is not None:
                 raise TableBusy(f"{self._holder} holds the outputs: stop it first")
+            demo = self._demo_holder()
+            if demo is not None:  # its stream leaves the run's plays no silence
+                raise TableBusy(f"{demo} holds the outputs ({DEMO_STOP})")
             self._holder = who
         out = self.outputs
         try:
@@ -304,7 +311,7 @@ class ConsoleSession:
             demo = self._demo_holder()
             if demo is None:
                 return ""
-            return f"refused: {demo} holds the outputs (s on Scenes, F6, stops it)"
+            return f"refused: {demo} holds the outputs ({DEMO_STOP})"
         if holder == who:
             return ""
         return f"refused: {who} holds the outputs, paused or not (stop it first)"
