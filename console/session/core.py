@@ -30,6 +30,7 @@ from console.session.events import (
     Started,
     Stopped,
     estop_refusal,
+    stop_reason,
 )
 from console.session.reset_here import no_reset_here
 from console.session.scenes import SceneControl
@@ -44,6 +45,10 @@ STOPPED_TAIL_S = 0.1
 WATCH_PLANS_S = 0.25
 #: a plan stopped mid-play waits this many 50 ms steps for the table's e-stop notice
 ESTOP_NOTICE_WAITS = 10
+
+
+#: how the operator stops a demo holding the outputs, as a refusal names it
+DEMO_STOP = "s on Scenes, F6, stops it"
 
 
 class ConsoleSession:
@@ -268,6 +273,9 @@ class ConsoleSession:
         with self._lock:
             if self._holder is not None:
                 raise TableBusy(f"{self._holder} holds the outputs: stop it first")
+            demo = self._demo_holder()
+            if demo is not None:  # its stream leaves the run's plays no silence
+                raise TableBusy(f"{demo} holds the outputs ({DEMO_STOP})")
             self._holder = who
         out = self.outputs
         try:
@@ -290,15 +298,26 @@ class ConsoleSession:
     def outputs_holder(self) -> str | None:
         """Who holds the outputs for a run: this console's (``hold_outputs``) or, in
         another process, a study run from a shell (``table_holder``: pid and command;
-        one on its own twin too), else None."""
-        return self._holder or table_holder(self.profile)
+        one on its own twin too), or a demo (starting, running or stopping: its process
+        streams to them), else None."""
+        return self._holder or table_holder(self.profile) or self._demo_holder()
+
+    def _demo_holder(self) -> str | None:
+        name = self.demos.name
+        return None if name is None else f"the {name} demo"
 
     def held_why(self, holder: str | None = None) -> str:
         """Why a play from someone other than the outputs' holder is refused ("" if not):
         the one check before every play, audition, test signal and demo; a paused run
-        holds them too (it resumes where it stopped)."""
-        who = self.outputs_holder
-        if who is None or holder == who:
+        holds them too (it resumes where it stopped), and so does a demo (its live
+        stream leaves no silence to play in: the play would wait, unheard)."""
+        who = self._holder or table_holder(self.profile)
+        if who is None:
+            demo = self._demo_holder()
+            if demo is None:
+                return ""
+            return f"refused: {demo} holds the outputs ({DEMO_STOP})"
+        if holder == who:
             return ""
         there = "" if who == self._holder else " there"
         return f"refused: {who} holds the outputs, paused or not (stop it{there} first)"
@@ -420,7 +439,7 @@ class ConsoleSession:
             on_started()  # it started and ended between two looks: in that order
         if not report.error and len(report.segment_end) >= len(report.segment_start) > 0:
             return PlayOutcome(name, started=True, played=True)
-        estopped = out.estopped or "e-stop" in report.error
+        estopped = out.estopped or "e-stop" in report.error or self._estop_came(out, report)
         if not started:
             if estopped:
                 return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
@@ -430,7 +449,20 @@ class ConsoleSession:
             return PlayOutcome(
                 name, started=True, stopped=f"the e-stop ({why})" if why else "the e-stop"
             )
-        return PlayOutcome(name, started=True, stopped=report.error or "stopped")
+        return PlayOutcome(name, started=True, stopped=stop_reason(report.error))
+
+    @staticmethod
+    def _estop_came(out: Any, report: Any) -> bool:
+        """A play the kernel stopped (``stopped: REASON``) by an e-stop from another
+        process (``haptable estop``): the latch reaches this client a moment later."""
+        import time
+
+        if not report.error.startswith("stopped"):
+            return False
+        deadline = time.monotonic() + 1.0
+        while not out.estopped and time.monotonic() < deadline:
+            time.sleep(0.02)
+        return bool(out.estopped)
 
     def scope(self, seconds: float | None = 0.1) -> Any:
         """The last ``seconds`` (all kept: None) of what the gate handed the driver, per

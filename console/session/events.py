@@ -73,6 +73,29 @@ class PlayOutcome:
     def estop_refused(self) -> bool:
         return self.refused.startswith(ESTOP_REFUSAL)
 
+    @property
+    def how_it_stopped(self) -> str:
+        """How a started play ended early, as a line says it: ``stopped by the e-stop
+        (...)``, ``stopped: no end reported in time`` or ``stopped``; one ``stopped``,
+        however the reason came worded (the kernel's ``stopped: REASON``)."""
+        why = stop_reason(self.stopped)
+        if not why:
+            return "stopped"
+        return f"stopped by {why}" if why.startswith("the ") else f"stopped: {why}"
+
+
+def stop_reason(text: str) -> str:
+    """``text`` without the ``stopped:``/``stopped by`` it may already start with (a
+    reason composed twice said "stopped by stopped: haptable estop")."""
+    why = text.strip()
+    while True:
+        for head in ("stopped:", "stopped by ", "stopped"):
+            if why.startswith(head):
+                why = why[len(head) :].strip()
+                break
+        else:
+            return why
+
 
 #: how a request refused before it started because of the e-stop is worded (screens
 #: clear such refusals when the e-stop is reset)

@@ -50,7 +50,7 @@ ctrl+r  reset the e-stop (outputs stay silent until something plays)
 {tabs}
 ?       this help, wherever the focus is, but in a field that takes a path or an address, which types it (a recording's path, the TUIO target, the Studies folder, the Gestures dataset and model, Vibration's : command line: the footer then shows no ? help); ? or escape closes it, arrows and PgUp/PgDn scroll it
 ctrl+z  in a text field: undo its last change (a key that replaced the line too)
-ctrl+p  command palette    ctrl+q  quit (q too, outside a text field; while a demo, long work or a study run would stop, press it again)
+ctrl+p  command palette    ctrl+q  quit (q too, outside a text field; while a demo, long work or a study run would stop, press it again within 3 s)
 ctrl+l  the log: the console's messages and what drivers wrote to stderr
 
 Relays switch only in silence: a toggle waits until both channels have been silent \

@@ -37,6 +37,8 @@ UNITS = frozenset(
         "N",
         "um",
         "um/V",
+        "µm",
+        "µm/V",
         "nm",
         "px",
         "deg",

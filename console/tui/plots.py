@@ -46,7 +46,7 @@ def frf_series(
         k = int(np.flatnonzero(keep)[np.argmin(np.abs(f[keep] - mark_hz))])
     series = []
     for s, name in enumerate(names):
-        label = name if k is None else f"{name} {m[s, k]:.3g} um/V"
+        label = name if k is None else f"{name} {m[s, k]:.3g} µm/V"
         series.append(Series(label, f, np.where(keep, m[s], np.nan)))
     if mark_hz is not None:
         top = float(m[:, keep].max())

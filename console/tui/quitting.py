@@ -82,7 +82,7 @@ class ConfirmsQuit:
             said = [f"it stops {', '.join(busy)}"] if busy else []
             said += [f"it loses {', '.join(lost)}"] if lost else []
             self.notify(
-                f"q again to quit: {'; '.join(said)}",
+                f"q again within {self.QUIT_CONFIRM_S:g} s to quit: {'; '.join(said)}",
                 severity="warning",
                 timeout=self.QUIT_CONFIRM_S,
             )

@@ -307,10 +307,11 @@ class ElectrostaticPane(Vertical):
             f"knob {condition}: a canned rotation, {plan.duration_s:.1f} s, "
             f"{plan.meta.get('crossings', 0)} detents"
             + (": no haptic feedback in this condition, the outputs stay at 0 V" if silent else ""),
+            again=f"enter plays knob {condition} again",
         )
 
     # ------------------------------------------------------------------ status
-    def _play(self, plan, what: str) -> None:
+    def _play(self, plan, what: str, again: str = "p plays") -> None:
         """In a worker: ask the outputs to play ``plan``; the status line says asking,
         then playing when the outputs report its start, then what became of it
         (``ConsoleSession.play``), never ahead of it."""
@@ -323,10 +324,10 @@ class ElectrostaticPane(Vertical):
         elif outcome.refused:
             text, error = f"{what}: {outcome.refused}", True
         else:
-            text, error = f"{what}: stopped by {outcome.stopped}", True
+            text, error = f"{what}: {outcome.how_it_stopped}", True
         by_estop = outcome.estop_refused or outcome.stopped.startswith("the e-stop")
         if by_estop and "ctrl+r" not in text:  # the fix, as every e-stop line says it
-            text += f"; {ESTOP_FIX}, then p plays"
+            text += f"; {ESTOP_FIX}, then {again}"  # the key that plays it again
         from_thread(self.app, self._about, plan, text, error, by_estop)
 
     def _asking(self, plan, what: str) -> None:

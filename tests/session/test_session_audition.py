@@ -107,3 +107,24 @@ def test_a_run_holding_the_outputs_refuses_the_screens_plays_and_says_who(sessio
         assert np.abs(session.outputs.recording()[n:, 0]).max() > 1.0
     assert session.outputs_holder is None
     assert session.play(tone).played
+
+
+def test_a_demo_holds_the_outputs_as_a_run_does(session):
+    """While a demo runs (its process streams to the outputs) a screen's play is refused
+    at once naming it and how to stop it, and no run may take the outputs (its plays
+    waited for a silence the demo's stream never leaves)."""
+    from console.core.errors import UserError
+    from console.session.audition import audition_plan
+
+    tone = audition_plan(session.profile, EXPR, parse_target("PA"), "tone")
+    session.demos.name = "knob"  # as DemoControl.start sets it
+    try:
+        outcome = session.play(tone)
+        assert not outcome.started
+        assert "the knob demo holds the outputs" in outcome.refused
+        assert "s on Scenes" in outcome.refused
+        with pytest.raises(UserError, match="knob demo holds"), session.hold_outputs("P01"):
+            pass
+    finally:
+        session.demos.name = None
+    assert session.play(tone).played

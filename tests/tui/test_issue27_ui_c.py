@@ -64,7 +64,7 @@ def test_frf_legend_names_its_unit():
 
     f = np.linspace(0.0, 600.0, 61)
     series = frf_series(f, np.ones((2, 61)) * 0.104, ["PA", "PB"], mark_hz=250.0)
-    assert series[0].label == "PA 0.104 um/V", series[0].label
+    assert series[0].label == "PA 0.104 µm/V", series[0].label
 
 
 def _footer(app) -> str:

@@ -20,8 +20,8 @@ def test_frf_series_mark_the_chosen_frequency_with_each_excitations_value():
     mags = np.vstack([1 / (1 + ((f - f0) / 5) ** 2) for f0 in (100, 200, 300)])
     series = frf_series(f, mags, ("PA", "PB", "PALL"), mark_hz=200.0)
     labels = [s.label for s in series]  # each value with its unit
-    assert labels == ["PA 0.00249 um/V", "PB 1 um/V", "PALL 0.00249 um/V", "plays at 200 Hz"]
-    np.testing.assert_array_equal(series[1].y, mags[1])  # um/V as measured: the chart does dB
+    assert labels == ["PA 0.00249 µm/V", "PB 1 µm/V", "PALL 0.00249 µm/V", "plays at 200 Hz"]
+    np.testing.assert_array_equal(series[1].y, mags[1])  # µm/V as measured: the chart does dB
     mark = series[-1]
     assert list(mark.x) == [200.0, 200.0] and mark.y[1] == 1.0 and mark.y[0] == 1e-3
 
@@ -35,11 +35,11 @@ def test_frf_series_never_draw_masked_bins_or_bins_above_the_band():
     masked = f < 10
     (pa,) = frf_series(f, mags, ("PA",), masked=masked, band_hz=90.0)
     assert np.isnan(pa.y[:10]).all() and np.isnan(pa.y[91:]).all()
-    chart = Chart(x_unit="Hz", y_label="|H|", y_unit="um/V", db_y=True)
+    chart = Chart(x_unit="Hz", y_label="|H|", y_unit="µm/V", db_y=True)
     chart.series = (pa,)
     ((label, x, y),) = chart.drawn(columns=200)
     assert label == "PA" and x.min() == 10 and x.max() == 90 and np.all(y == 0.0)  # 0 dB
-    assert "|H| (dB re 1 um/V)" in chart.summary()
+    assert "|H| (dB re 1 µm/V)" in chart.summary()
     assert frf_series(f, mags, ("PA",), masked=np.ones(101, bool)) == []
 
 

@@ -140,7 +140,7 @@ def test_vibration_audition_flow_and_hand_flow(plugins, map_file):
             freq = point.meta["frequency_hz"]
             plot = app.query_one("#frf-plot").summary()
             assert f"plays at {freq:g} Hz" in plot and "PALL" in plot and "point 51" in plot
-            assert "frequency (Hz)" in plot and "|H| (dB re 1 um/V)" in plot
+            assert "frequency (Hz)" in plot and "|H| (dB re 1 µm/V)" in plot
             # second point, then the flow both ways
             pane.move_cursor(52)
             await pilot.press("enter")

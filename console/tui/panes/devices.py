@@ -414,7 +414,9 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
             plan, on_started=lambda: self._say(f"{name}: playing on {where!r} ...")
         )
         if not outcome.played:  # the line says what became of it, from the outcome
-            why = outcome.refused or f"stopped by {outcome.stopped}"
+            why = outcome.refused or outcome.how_it_stopped
+            if outcome.stopped.startswith("the e-stop"):  # its fix, as every e-stop line
+                why += f"; {ESTOP_FIX}, then t plays"
             self._say(f"{name} on {where!r}: {why}", error=True)
             return
         trace = session.scope(plan.duration_s + 0.5)

@@ -18,6 +18,7 @@ from console.config.signal_library import (
     BUILTIN,
     Entry,
     add_signal,
+    check_name,
     library_data,
     library_path,
     read_library,
@@ -56,6 +57,18 @@ def wave_title(plotted: Target | None, typed: str) -> str:
         same = False
     shown = "screen" if plotted.screen else plotted.label
     return f"waveform on {shown}" if same else f"waveform on {shown} (enter: {typed.strip()})"
+
+
+def name_refusal(name: str) -> str:
+    """Why ctrl+o refuses the name field's ``name`` ("" when empty, a built-in's or a
+    name ctrl+s would take): it is what the line calls the play."""
+    if not name or name in BUILTIN:
+        return ""
+    try:
+        check_name(name)
+    except UserError as exc:
+        return f"{exc}; ctrl+o plays the top line's signal once the name is one or empty"
+    return ""
 
 
 @dataclass(frozen=True)
@@ -366,6 +379,14 @@ class SignalsPane(Vertical):
 
     # ------------------------------------------------------------------ play, save, load
     def action_play(self) -> None:
+        """ctrl+o plays the top line's signal; a name field that holds no name (a signal
+        typed there) is refused as ctrl+s refuses it: the line never names what does not
+        play."""
+        why = name_refusal(self._fields()[1])
+        if why:
+            self._playing = ""
+            self.status(why, error=True)
+            return
         self.show_preview(then_play=True)
 
     def _audition(self, p: Preview, name: str) -> None:
@@ -423,7 +444,7 @@ class SignalsPane(Vertical):
                 error=True,
             )
         else:
-            self.status(f"{name} stopped: {outcome.stopped}", error=True)
+            self.status(f"{name} {outcome.how_it_stopped}", error=True)
 
     def says(self, ev) -> bool:
         """A refusal of this screen's play: its status line says it (``_played``), no

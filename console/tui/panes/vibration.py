@@ -110,7 +110,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             x_label="frequency",
             x_unit="Hz",
             y_label="|H|",
-            y_unit="um/V",
+            y_unit="µm/V",
             db_y=True,
             db_ref=1.0,
             id="frf-plot",

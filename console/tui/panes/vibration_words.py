@@ -128,7 +128,7 @@ def table_entry(e: dict) -> str:
         return str(e.get("note", "no entry"))
     c = e.get("contrast_db")
     return (
-        f"{e['max_difference_um_per_v']:.4g} um/V at {e['frequency_hz']:g} Hz with "
+        f"{e['max_difference_um_per_v']:.4g} µm/V at {e['frequency_hz']:g} Hz with "
         f"{e['actuator']}" + ("" if c is None else f", contrast {c:.1f} dB")
     )
 
@@ -182,7 +182,7 @@ def info_text(s: Any, sel: list[int]) -> tuple[str, float | None]:
         lines.append(
             f"[b]point {n:d}[/b] ({x:.0f}, {y:.0f} mm): plays {mark:g} Hz with "
             f"{escape(who)}, {plan.meta['amplitude_v']:.1f} V "
-            f"({plan.meta['um_per_v']:.3g} um/V)"
+            f"({plan.meta['um_per_v']:.3g} µm/V)"
         )
     except UserError as exc:
         mark = None
