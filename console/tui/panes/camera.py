@@ -108,6 +108,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
+        self._failed: list[str] = []  # why the switchable outputs failed to open, as said
         self._assisting = None  # the exposure assistant's cancel event while it runs
         self._busy = (False, False, False)  # (calibrating, assisting, unsaved): the footer
         self._rates = SameWindow()  # the camera's and the vision's fps, one window
@@ -377,6 +378,11 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         """The side panel: at once when a setting or the wizard changed (a key), else
         the loop's live numbers at most every ``INFO_PERIOD_S``."""
         settings, wizard = self.settings_lines(svc), self.wizard_text()
+        failed = [svc.sink_problem(n) for n in svc.switches() if svc.sink_problem(n)]
+        if failed != self._failed:  # a sender that failed to open: said once, as it fails
+            self._failed = failed
+            if failed:
+                self.say(failed[0], "warning")
         now = time.monotonic()
         stable = (self.view, settings, wizard)
         if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
