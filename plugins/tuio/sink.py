@@ -78,7 +78,7 @@ class SenderFactory:
     keys = {"enabled": "tuio.enabled", "host": "tuio.host", "port": "tuio.port"}
 
     #: the Camera screen's keys that fix the target, named in a refusal
-    fix = "U on the Camera screen sets host:port; u turns TUIO off"
+    fix = "on Camera, U sets host:port, u turns TUIO off"
 
     def __call__(self, profile: Any, *, force: bool = False):
         return make_sender(profile, force=force, fix=self.fix)

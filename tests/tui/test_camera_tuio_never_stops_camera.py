@@ -59,9 +59,9 @@ def test_a_tuio_sender_that_fails_at_start_leaves_the_camera_running(plugins, si
             await wait_for(pilot, lambda: svc.running, 20, "camera loop running")
             side = lambda: words_on(app, "#camera-settings")  # noqa: E731
             await wait_for(pilot, lambda: "tuio: failed -> nohost.invalid" in side(), 10, "tuio")
-            assert "U on the Camera screen sets" in side(), side()
+            assert "U sets host:port" in side(), side()
             said = words_on(app, "#camera-status")  # in view at 80x24, the panel scrolled or not
-            assert "nohost.invalid" in said and "U on the Camera screen" in said, said
+            assert "nohost.invalid" in said and "U sets host:port" in said, said
             assert "--host" not in side(), side()
             await pilot.press("U")
             box = app.query_one("#camera-target")
