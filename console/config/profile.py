@@ -15,6 +15,8 @@ itself: it is merged over the profile at load and validated exactly like it
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import os
 import tomllib
 from dataclasses import dataclass, field
@@ -378,3 +380,15 @@ def save_overrides(profile: Profile, settings: dict[str, Any], plugins: Plugins)
             "check the config directory is writable ($HAPTABLE_CONFIG_DIR)"
         ) from None
     return path
+
+
+def with_settings(profile: Profile, settings: dict[str, Any]) -> Profile:
+    """``profile`` with the dotted ``settings`` set (a trial: nothing is written)."""
+    data = copy.deepcopy(profile.data)
+    for dotted, value in settings.items():
+        *path, last = dotted.split(".")
+        node = data
+        for part in path:
+            node = node.setdefault(part, {})
+        node[last] = value
+    return dataclasses.replace(profile, data=data)

@@ -115,6 +115,8 @@ class CameraService:
         self.classifier = None
         self.loop = None
         self.error = ""
+        #: switchable sink name -> why it could not be opened (``sink_problem``)
+        self.sink_errors: dict[str, str] = {}
         #: why the classifier names no gesture though a model is set ("": none)
         self.classifier_problem = ""
         self._lock = threading.Lock()
@@ -582,12 +584,16 @@ class CameraService:
         target = f"{self.profile.get(keys['host'])}:{self.profile.get(keys['port'])}"
         return name in self._sinks, target
 
+    def sink_problem(self, name: str) -> str:
+        """Why sink ``name``, on in the profile, could not be opened ("": it was not)."""
+        return self.sink_errors.get(name, "")
+
     def set_sink(self, name: str, on: bool, target: str | None = None) -> Path:
         """Switch sink ``name`` on or off (and point it at ``target`` "host:port"), saved
         to the profile's overrides file (the next start has it); a running loop feeds it
         from the next frame. Returns the file. Bad ``target``: a ``UserError``."""
         # lazy: pluggy loads only when tunables are saved
-        from console.config.profile import load_profile, save_overrides
+        from console.config.profile import load_profile, save_overrides, with_settings
 
         factory = self.switches().get(name)
         if factory is None:
@@ -596,9 +602,18 @@ class CameraService:
         settings: dict[str, Any] = {keys["enabled"]: bool(on)}
         if target is not None:
             settings[keys["host"]], settings[keys["port"]] = parse_target(name, target)
-        path = save_overrides(self.profile, settings, self.plugins)
-        self.profile = load_profile(self.profile.path, self.plugins)
-        self._close_sink(name)
+        self._close_sink(name)  # its port free for the trial (a WebSocket server)
+        try:  # a target it cannot send to: refused, nothing written, the old one kept
+            if on or target is not None:
+                trial = factory(with_settings(self.profile, {**settings, keys["enabled"]: True}))
+                if trial is not None:
+                    trial.close()
+            path = save_overrides(self.profile, settings, self.plugins)
+            self.profile = load_profile(self.profile.path, self.plugins)
+        except UserError:
+            if self.running:
+                self._open_sinks()
+            raise
         if self.running:
             self._open_sinks()
         return path
@@ -607,12 +622,18 @@ class CameraService:
         """Open the switchable sinks the profile turns on (those not open yet)."""
         for name, factory in self.switches().items():
             if name not in self._sinks:
-                sink = factory(self.profile)
+                self.sink_errors.pop(name, None)
+                try:  # a sender that fails never stops the camera: its line says why
+                    sink = factory(self.profile)
+                except UserError as exc:
+                    self.sink_errors[name] = str(exc)
+                    continue
                 if sink is not None:
                     self._sinks[name] = sink
                     self.frame_hooks.append(sink)
 
     def _close_sink(self, name: str) -> None:
+        self.sink_errors.pop(name, None)
         sink = self._sinks.pop(name, None)
         if sink is not None:
             self.frame_hooks.remove(sink)

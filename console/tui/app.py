@@ -18,6 +18,7 @@ from textual.widgets import Input, TabbedContent, TabPane
 
 from console.session import ConsoleSession
 from console.session.events import Failed, SessionEvent, Started, Stopped
+from console.tui.field_open import run_at_once
 from console.tui.help_screen import HelpScreen
 from console.tui.key_hold import KeyHold
 from console.tui.live import Hides, LiveOutputs, OutputsChanged, ShowsState
@@ -481,6 +482,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         if key and await self.confirm_quit(event):  # q again: wherever the focus is
             return
         if key and await self._key_everywhere(event.key):
+            return
+        if key and await run_at_once(self, event.key):  # o, U: the keys behind are the field's
             return
         if key and await self._field_key_in_order(event.key):
             return

@@ -25,6 +25,7 @@ from console.core.recording_contracts import ReadsRecordings
 from console.core.words import AT_CONSOLE, worded
 from console.tui.camera_live import hand_line
 from console.tui.checked_field import refused, taken
+from console.tui.field_open import opens_field, show_field
 from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
@@ -162,11 +163,11 @@ class RecordingMixin:
             return self.replay is not None
         return not (self.replay is not None and action in LIVE_ONLY)
 
+    @opens_field
     def action_open_recording(self) -> None:
         box = self.query_one("#camera-recording", Input)
         box.value = self._replay_typed or ""
-        box.display = True
-        box.focus()
+        show_field(box)
         if self._replay_typed and self._replay_refused:  # what was wrong, while it is fixed
             what = self._replay_refused.split(";")[0].split(": type")[0]
             self.say(f"{what}: edit the path, Enter opens it", "warning")

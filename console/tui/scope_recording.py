@@ -26,6 +26,7 @@ from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.tui.charts import Chart, Series
 from console.tui.checked_field import refused, taken
+from console.tui.field_open import opens_field, show_field
 from console.tui.path_field import recording_field
 from console.tui.recording_view import open_run
 from console.tui.safety_bar import closed_relays, relay_names
@@ -203,12 +204,12 @@ class ScopeRecordingMixin:
     def on_descendant_blur(self, _event) -> None:
         self.refresh_bindings()
 
+    @opens_field
     def action_open_recording(self) -> None:
         self.said_head = None
         box = self.query_one("#scope-recording", Input)
         box.value = self._replay_typed or ""
-        box.display = True
-        box.focus()
+        show_field(box)
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
         if event.input.id != "scope-recording":

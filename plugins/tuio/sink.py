@@ -11,8 +11,18 @@ from .sender import TuioSender
 from .sender2 import Tuio2Sender, Tuio11OverWebSocket
 from .settings import FIELDS
 
+#: where the ``haptable tuio`` command's user fixes the target
+CLI_FIX = "--host/--port or [tuio] host/port"
 
-def make_sender(profile: Any, *, host: str | None = None, port: int | None = None, force=False):
+
+def make_sender(
+    profile: Any,
+    *,
+    host: str | None = None,
+    port: int | None = None,
+    force=False,
+    fix: str = CLI_FIX,
+):
     """A TUIO frame sink for the profile, or ``None`` when ``[tuio] enabled`` is false
     (``force`` sends anyway, e.g. ``haptable tuio``): ``[tuio] version`` 1.1 or 2.0, over
     ``transport`` ``udp`` (to host:port) or ``websocket`` (a server on host:ws_port)."""
@@ -24,7 +34,7 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
     if not ok or not check(FIELDS["port"], port)[0]:
         raise UserError(
             f"TUIO target {host!r}:{port}: give a host name or IP address and a port from 1 "
-            "to 65535 (--host/--port or [tuio] host/port)"
+            f"to 65535 ({fix})"
         )
     version = str(profile.get("tuio.version") or "1.1")
     transport = str(profile.get("tuio.transport") or "udp")
@@ -57,7 +67,7 @@ def make_sender(profile: Any, *, host: str | None = None, port: int | None = Non
             server.close()
         raise UserError(
             f"TUIO host {host!r}: cannot send there ({exc.strerror or exc}); give a host name "
-            "this computer resolves or an IP address (--host or [tuio] host)"
+            f"this computer resolves or an IP address ({fix})"
         ) from None
 
 
@@ -67,5 +77,8 @@ class SenderFactory:
 
     keys = {"enabled": "tuio.enabled", "host": "tuio.host", "port": "tuio.port"}
 
+    #: the Camera screen's keys that fix the target, named in a refusal
+    fix = "on Camera, U sets host:port, u turns TUIO off"
+
     def __call__(self, profile: Any, *, force: bool = False):
-        return make_sender(profile, force=force)
+        return make_sender(profile, force=force, fix=self.fix)

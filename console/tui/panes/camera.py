@@ -42,6 +42,7 @@ from console.tui.camera_side import CameraSideMixin
 from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.checked_field import refused, taken
+from console.tui.field_open import opens_field, show_field
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.narrow import TypesEveryKey
@@ -107,6 +108,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
+        self._failed: list[str] = []  # why the switchable outputs failed to open, as said
         self._assisting = None  # the exposure assistant's cancel event while it runs
         self._busy = (False, False, False)  # (calibrating, assisting, unsaved): the footer
         self._rates = SameWindow()  # the camera's and the vision's fps, one window
@@ -376,6 +378,11 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         """The side panel: at once when a setting or the wizard changed (a key), else
         the loop's live numbers at most every ``INFO_PERIOD_S``."""
         settings, wizard = self.settings_lines(svc), self.wizard_text()
+        failed = [svc.sink_problem(n) for n in svc.switches() if svc.sink_problem(n)]
+        if failed != self._failed:  # a sender that failed to open: said once, as it fails
+            self._failed = failed
+            if failed:
+                self.say(failed[0], "warning")
         now = time.monotonic()
         stable = (self.view, settings, wizard)
         if stable == self._info_stable and now - self._info_at < self.INFO_PERIOD_S:
@@ -567,13 +574,18 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             self.say("no switchable output: the tuio plugin is not loaded", "warning")
         return names[0] if names else None
 
+    def _wanted(self, name: str) -> bool:
+        """Whether output ``name`` is on (sending, or failed to open: ``sink_problem``)."""
+        return self.service.sink_state(name)[0] or bool(self.service.sink_problem(name))
+
     def action_toggle_output(self) -> None:
         if self._borrowed("u"):
             return
         name = self._output()
         if name is not None:
-            self._switch(name, not self.service.sink_state(name)[0], None)
+            self._switch(name, not self._wanted(name), None)
 
+    @opens_field
     def action_edit_target(self) -> None:
         name = None if self._borrowed("U") else self._output()
         if name is None:
@@ -581,8 +593,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         box = self.query_one("#camera-target", Input)
         # a refused target comes back as typed, to be corrected (else the one in use)
         box.value = self._typed if self._typed is not None else self.service.sink_state(name)[1]
-        box.display = True
-        box.focus()  # the side panel scrolls to it (Textual scrolls to the focused widget)
+        show_field(box)  # the side panel scrolls to it (Textual scrolls to the focused widget)
         self.call_after_refresh(box.scroll_visible, animate=False, immediate=True)
 
     def on_input_submitted(self, event: Input.Submitted) -> None:
@@ -591,7 +602,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         event.stop()  # open, as typed, until the target is taken (``checked_field``)
         name = self._output()
         if name is not None:
-            self._switch(name, self.service.sink_state(name)[0], event.value)
+            self._switch(name, self._wanted(name), event.value)
 
     def on_key(self, event) -> None:
         box = self.query_one("#camera-target", Input)
