@@ -283,11 +283,30 @@ class Parser(argparse.ArgumentParser):
     def parse_args(self, args=None, namespace=None):  # type: ignore[override]
         """Unrecognized arguments are told by the sub-command they were given to: its
         options are suggested, its ``--help`` named (``haptable doctor --help``)."""
+        words = list(sys.argv[1:] if args is None else args)
+        unknown = self._unknown_before_command(words)
+        if unknown:  # else its value is read as the command (``invalid choice: 'sim'``)
+            self.error(f"unrecognized arguments: {unknown}")
         ns, extras = self.parse_known_args(args, namespace)
         if extras:
             words = list(sys.argv[1:] if args is None else args)
             self._named_sub(words).error(f"unrecognized arguments: {' '.join(extras)}")
         return ns
+
+    def _unknown_before_command(self, words: list[str]) -> str:
+        """The first ``--option`` before the command's name that is none of this
+        parser's (nor a prefix of one), "" when none or the parser has no commands."""
+        subs = [a for a in self._actions if isinstance(a, argparse._SubParsersAction)]
+        if not subs:
+            return ""
+        own = {o for a in self._actions for o in a.option_strings}
+        for w in words:
+            if w == "--" or w in subs[0].choices:
+                return ""
+            name = w.split("=")[0]
+            if w.startswith("--") and not any(o.startswith(name) for o in own):
+                return w
+        return ""
 
     def _named_sub(self, words: list[str]) -> argparse.ArgumentParser:
         """The deepest sub-command parser ``words`` name (this parser without one)."""

@@ -40,9 +40,9 @@ What it offers:
 - drop-downs: ``Choice`` (a ``Select`` offering its options only, no blank entry: every
   drop-down the console shows is one) and ``chosen`` (a ``Select``'s value as text, ""
   for none: ``console.tui.choice``)
-- number fields: ``NumberField`` (a field for a number from ``lo`` to ``hi``: it takes at
-  most the characters of the longest such number and shows them whole, so what it
-  shows is what its check reads: ``console.tui.number_field``)
+- number fields: ``NumberField`` (a field for a number from ``lo`` to ``hi``: as wide as
+  the longest such number, it keeps every character typed, a longer text scrolling in
+  it, and its check quotes what it holds: ``console.tui.number_field``)
 - check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
   characters, never in shades alone; every check box the console shows is one)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer

@@ -56,14 +56,17 @@ class CameraSideMixin:
     #: wizard's text last changed: the latest of them keeps its rows first
     _tuned_at = 0.0
     _spoken_at = 0.0
+    #: when the status line last answered a tuning key (a refused step, ``W``, ``R``)
+    _answer_at = -1.0
     _wizard_at = 0.0
     _wizard_told: tuple = (id(None), id(None), "")
 
     def fit_side(self) -> None:
         """The side panel's field being typed in keeps its rows; then whatever answered
         the operator last: the chosen setting's row (``CHOSEN_ROWS``: ``-``/``+`` never
-        change a value out of view) when a key tuned last, else the newest reply (the
-        status line or the wizard's text), and a wizard's step or ``S: save`` waiting
+        change a value out of view) when a key tuned last or the newest reply answers a
+        tuning key (a refused step, ``W``: the row beside it); the newest reply (the
+        status line or the wizard's text) unless a key tuned since; a wizard's step or ``S: save`` waiting
         for a key: none of them shortened (a field's reply, a question, a result to act
         on keep every word). The live numbers give way next, then an older status line,
         then what the vision measures of touching skin, then a finished wizard's result
@@ -81,7 +84,9 @@ class CameraSideMixin:
         )
         said = max((self._spoken_at, status), (self._wizard_at, wizard), key=lambda t: t[0])
         tuning = self._tuned_at >= said[0]  # the last key tuned, nothing said since
-        if tuning and not any(f is not None and f.display for f in fields) and self.replay is None:
+        answers = said[1] is status and self._answer_at == self._spoken_at  # about the row
+        typed = any(f is not None and f.display for f in fields)
+        if (tuning or answers) and not typed and self.replay is None:
             kept += self.CHOSEN_ROWS
         asks = self.calibration is not None or self.unsaved
         first = [] if tuning else [said[1]]

@@ -13,6 +13,7 @@ from textual import work
 from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
 from console.tui.lapse import lapse_on_change
+from console.tui.question_hold import waits_for_question
 from console.tui.text import escape
 from console.tui.units import control_words
 from console.tui.util import from_thread, short_path
@@ -42,8 +43,8 @@ class CameraTuningMixin:
         try:
             svc.set_param(key, cur + sign * rng.step)
         except UserError as exc:  # the thresholds' order: said, with the way back (the
-            self._reveal()  # reply after the row: it keeps its rows first, ``fit_side``)
-            self.say(f"{exc}; {RESET}", "warning")
+            self._reveal()  # reply after the row: both keep their rows, ``fit_side``)
+            self.say_tuning(f"{exc}; {RESET}", "warning")
             return
         self._reveal()
 
@@ -54,10 +55,17 @@ class CameraTuningMixin:
             return
         changed = self.service.reset_params()
         if changed:
-            self.say(f"R: {', '.join(changed)} back as the profile has them")
+            self.say_tuning(f"R: {', '.join(changed)} back as the profile has them")
         else:
-            self.say("R: every setting is as the profile has it")
+            self.say_tuning("R: every setting is as the profile has it")
         self._reveal()
+
+    @waits_for_question
+    def say_tuning(self, text: str, severity: str = "information") -> None:
+        """``text`` on the status line, answering a tuning key: the chosen setting's row
+        stays in view beside it (``fit_side``: ``_answer_at``)."""
+        self.say(text, severity)
+        self._answer_at = self._spoken_at
 
     def chosen_key(self) -> str | None:
         keys = list(self.service.params())
@@ -87,14 +95,14 @@ class CameraTuningMixin:
         does = "keeps these vision settings for the profile"
         if self.service.tuning_saved():  # only when some were saved before
             does += " (the saved ones replaced)"
-        self._keep_asked.ask(self, "W", does, self._status_shown, self.say)
+        self._keep_asked.ask(self, "W", does, self._status_shown, self.say_tuning)
 
     @work(thread=True, exclusive=True, group="camera-tuning")
     def _save_tuning(self) -> None:
         try:
             path = self.service.save_tuning()
         except UserError as exc:
-            from_thread(self.app, self.say, f"W: {exc}", "warning")
+            from_thread(self.app, self.say_tuning, f"W: {exc}", "warning")
             return
         from_thread(self.app, self._said_kept, short_path(path))
 
@@ -102,7 +110,7 @@ class CameraTuningMixin:
         """``vision settings kept in ...``: true until a setting changes (``t``, ``h``,
         ``+`` ...): the line then says they changed since, not a save they no longer are."""
         svc = self.service
-        self.say(f"vision settings kept in {where}")
+        self.say_tuning(f"vision settings kept in {where}")
         shown = self._status_shown
         then = f"vision settings changed since kept in {where}: W keeps these"
 

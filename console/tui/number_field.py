@@ -1,9 +1,9 @@
-"""Number fields that show whole what their check reads: ``NumberField`` takes at most
-the characters of the longest number its range allows (``max_length``) and is at least
-that wide plus the cursor's cell, so the text shown is the text checked (a new operator
-typed ``99999999`` in Gestures' 8-column reps field, saw ``9999999`` and read a refusal
-of ``'99999999'``). Its check uses the field's own ``lo`` .. ``hi``: the limit typed
-against and the limit said are one."""
+"""Number fields that keep every character typed: ``NumberField`` is at least as wide as
+the longest number its range allows (``longest``) plus the cursor's cell, and a longer
+text scrolls in it, never cut (a field that took at most ``longest`` characters turned a
+typed ``abc`` into ``ab`` and ``99999999999`` into ``999`` without a word). Its check
+uses the field's own ``lo`` .. ``hi`` and quotes the whole text the field holds: the
+limit typed against and the limit said are one."""
 
 from __future__ import annotations
 
@@ -22,8 +22,8 @@ def number_length(lo: float, hi: float, whole: bool = True, decimals: int = 2) -
 
 
 class NumberField(Input):
-    """A text field for a number from ``lo`` to ``hi``: any characters typed (a refusal
-    names what it takes), at most ``number_length`` of them, all in view."""
+    """A text field for a number from ``lo`` to ``hi``: any characters typed, as many as
+    typed (a refusal quotes them and names what it takes), its longest number in view."""
 
     def __init__(
         self,
@@ -36,10 +36,12 @@ class NumberField(Input):
         **kw: Any,
     ) -> None:
         self.lo, self.hi, self.whole = lo, hi, whole
-        kw["max_length"] = number_length(lo, hi, whole, decimals)
+        #: characters of the longest number the field takes (its width, with the cursor)
+        self.longest = number_length(lo, hi, whole, decimals)
+        kw.pop("max_length", None)  # what is typed is kept: the check refuses, quoting it
         super().__init__(value, **kw)
 
     def on_mount(self) -> None:
-        """As wide as its longest text and the cursor's cell, whatever the screen's CSS
-        says (a narrower one scrolled the text's start out of view)."""
-        self.styles.min_width = self.max_length + 1 + self.styles.gutter.width
+        """As wide as its longest number and the cursor's cell, whatever the screen's CSS
+        says (a narrower one scrolled a number's start out of view)."""
+        self.styles.min_width = self.longest + 1 + self.styles.gutter.width

@@ -77,6 +77,11 @@ class TitleRow(Static):
         super().__init__(text, markup=False, **kw)
         self.whole = text
 
+    def on_mount(self) -> None:
+        """Laid out beside a toast already up (the log opened under one read
+        ``Hap▌ e-stop reset…``): the app fits titles only when its toast changes."""
+        self.call_after_refresh(self.refit)
+
     def refit(self) -> None:
         """The title cut again for the toast shown now."""
         toast_x = self.app.toast_x  # the console's app (NewestToastOnly)

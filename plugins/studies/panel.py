@@ -352,8 +352,8 @@ class StudiesPane(HeldAnswer, Vertical):
             self._say("")
 
     def action_leave_field(self) -> None:
-        """Escape: out of a text field, back to the screen's keys (the text stays)."""
-        if isinstance(self.app.focused, Input):
+        """Escape: out of a text field or the closed drop-down, to Start (text stays)."""
+        if isinstance(self.app.focused, (Input, Select)):
             self.focus()
 
     def action_pause(self) -> None:

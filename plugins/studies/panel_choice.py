@@ -24,6 +24,9 @@ from .saved_run import run_size, saved, stimulus_seconds
 from .store import check_id
 from .trials_table import TrialsTable
 
+#: how the line refusing a folder that is a file begins
+FILE_SAID = "folder:"
+
 #: seconds within which a second ``s`` starts a long run
 LONG_AGAIN_S = 5.0
 
@@ -84,7 +87,8 @@ def shown_again(pane: Any) -> None:
 
 def field_changed(pane: Any) -> None:
     """The participant or the folder typed: the choice shown anew; a line about the
-    choice before (naming another participant) goes."""
+    choice before (naming another participant) goes; a folder that is a file is refused
+    as typed (Enter too), before ``s``."""
     if pane.running is not None:
         return
     choice = chosen(pane)
@@ -100,9 +104,12 @@ def field_changed(pane: Any) -> None:
         pane.said = (str(e), "warning")
         pane._idle()
         return
-    if was_refused:
+    if was_refused or said.startswith(FILE_SAID):
         pane.said = ("", "information")
-    show_choice(pane)
+    out = choice[2] if choice else None
+    if out is not None and out.exists() and not out.is_dir():  # said as typed, not at s
+        pane.said = (f"{FILE_SAID} {out} is a file, not a folder: type a folder", "warning")
+    show_choice(pane)  # a file holds no run: nothing of the folder before stays shown
 
 
 def asks_first(pane: Any, ask: AskAgain, spec: dict[str, Any]) -> bool:

@@ -39,3 +39,30 @@ def test_esc_leaves_a_signals_field_keeping_its_text(plugins, size, field):
             ), "the hint is cut"
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_tab_from_the_library_goes_back_to_the_field_esc_left(plugins, size):
+    """README and ``?``: Esc leaves a field for the library, "Tab goes back" (it went to
+    the tab bar)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=size) as pilot:
+            await _ready(app, pilot)
+            box = app.query_one("#sig-name", Input)
+            box.focus()
+            await wait_for(pilot, lambda: box.has_focus, 10, "field focused")
+            await pilot.press("escape")
+            await wait_for(pilot, lambda: app.focused is app.query_one("#sig-library"), 5, "lib")
+            await pilot.press("tab")
+            await pilot.pause(0.2)
+            assert app.focused is box, app.focused
+            library = app.query_one("#sig-library")
+            library.focus()  # not from a field: Tab moves on as it always does
+            await wait_for(pilot, lambda: library.has_focus, 5, "the library")
+            await pilot.press("tab")
+            await pilot.pause(0.2)
+            assert app.focused is not library and app.focused is not box, app.focused
+
+    asyncio.run(scenario())

@@ -12,6 +12,7 @@ from textual.widgets._toast import Toast
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.logs import LogScreen
 
 from .conftest import wait_for
 from .test_screens import _ready
@@ -82,5 +83,25 @@ def test_the_log_title_keeps_whole_words_beside_a_toast(plugins, size):
                 app.notify(text + " " + "x" * (size[0] - 20 - len(text)), timeout=30)
                 await pilot.pause(0.2)
                 _whole_words_of(_title_part(app), "HapTable log")
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_the_log_opened_under_a_toast_keeps_whole_words(plugins, size):
+    """A toast up before ctrl+l: the log's title row is laid out beside it at once (it
+    read ``Hap▌ e-stop reset…``)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="relays")
+        async with app.run_test(size=size, notifications=True) as pilot:
+            await _ready(app, pilot)
+            text = "e-stop reset: outputs may play again " + "x" * (size[0] - 50)
+            app.notify(text, timeout=30)
+            await wait_for(pilot, lambda: "e-stop reset" in _top(app), 5, "the toast")
+            await pilot.press("ctrl+l")
+            await wait_for(pilot, lambda: isinstance(app.screen, LogScreen), 5, "the log")
+            await pilot.pause(0.3)
+            _whole_words_of(_title_part(app), "HapTable log")
 
     asyncio.run(scenario())

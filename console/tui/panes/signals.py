@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from rich.text import Text
 from textual import work
+from textual.actions import SkipAction
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
@@ -80,6 +81,16 @@ class Preview:
     summary: Summary
 
 
+class _Library(KeyedList):
+    """The signal library's list: Tab goes back to the field Esc left (``SignalsPane``)."""
+
+    BINDINGS = [Binding("tab", "back_to_field", "back to the field", show=False)]
+
+    def action_back_to_field(self) -> None:
+        pane = next(a for a in self.ancestors if isinstance(a, SignalsPane))
+        pane.action_back_to_field()
+
+
 class SignalsPane(Vertical):
     # one line per entry or paragraph: the help screen wraps it (console/tui/help.py)
     HELP_TEXT = (
@@ -140,6 +151,7 @@ class SignalsPane(Vertical):
         self._load: str | None = None  # a signal enter asked to load over unsaved work
         self._overwritten: tuple[str, str] | None = None  # (expr, name) ctrl+z brings back
         self._loaded_note = ""  # what the next preview's line says first ("loaded ...")
+        self._left: Input | None = None  # the field Esc left for the library: Tab's
 
     def compose(self) -> ComposeResult:
         yield Input(
@@ -166,7 +178,7 @@ class SignalsPane(Vertical):
         yield KeptText("", id="sig-status", markup=False)  # "0.5 s" never split
         with Horizontal(id="sig-main"):
             # enter and delete in the footer while the library has the focus
-            yield KeyedList(
+            yield _Library(
                 keys={"enter": "load", "delete": "remove"},
                 on_delete=self._delete_pressed,
                 id="sig-library",
@@ -292,9 +304,18 @@ class SignalsPane(Vertical):
 
     def action_leave_field(self) -> None:
         """Esc in a field: the library takes the focus (the screen's keys, ``q`` too);
-        what was typed stays."""
+        what was typed stays; Tab from the library goes back to it."""
         if isinstance(self.app.focused, Input):
+            self._left = self.app.focused
             self.query_one("#sig-library", KeyedList).focus()
+
+    def action_back_to_field(self) -> None:
+        """Tab in the library after Esc left a field: that field again (README: "Tab
+        goes back"); else Tab moves on as it always does."""
+        left, self._left = self._left, None
+        if left is None or not left.is_mounted:
+            raise SkipAction()
+        left.focus()
 
     def _show_saved(self) -> None:
         """The save key's label as it is true now (a change makes it ``save`` again)."""

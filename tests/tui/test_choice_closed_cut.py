@@ -1,0 +1,36 @@
+"""A closed drop-down narrower than its chosen name ends the name with ``…`` at 80 x 24
+and 120 x 40: Studies' (F10) protocol drop-down showed ``threshold_vib ▼`` at 80 x 24,
+a name cut mid-word with nothing saying so."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from textual.widgets import Select
+
+from console.cli.main import Context
+from console.tui.app import HapTableApp
+
+from .conftest import wait_for, words_on
+from .test_camera_layout import SIZES, screen_lines
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["80x24", "120x40"])
+def test_the_closed_protocol_drop_down_is_whole_or_ends_in_an_ellipsis(plugins, size):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
+        async with app.run_test(size=size) as pilot:
+            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
+            pane = app.pane("studies")
+            status = lambda: words_on(app, "#study-status")  # noqa: E731
+            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
+            select = pane.query_one("#protocol", Select)
+            select.value = "threshold_vibrotactile"
+            await pilot.pause(0.3)
+            r = select.region
+            shown = screen_lines(app)[r.y][r.x : r.right].replace("▼", "").strip()
+            name = "threshold_vibrotactile"
+            assert shown == name or (shown.endswith("…") and name.startswith(shown[:-1])), shown
+
+    asyncio.run(scenario())
