@@ -403,8 +403,8 @@ class SignalsPane(Vertical):
         """ctrl+o plays the top line's signal; a name field that holds no name (a signal
         typed there) is refused as ctrl+s refuses it: the line never names what does not
         play."""
-        why = name_refusal(self._fields()[1])
-        if why:
+        why = name_refusal(self._fields()[1]) or self.app.session.held_why()
+        if why:  # a demo or a run holding the outputs: said before the signal is drawn
             self._playing = ""
             self.status(why, error=True)
             return
