@@ -300,6 +300,8 @@ class Parser(argparse.ArgumentParser):
         if not subs:
             return ""
         own = {o for a in self._actions for o in a.option_strings}
+        # a command's own option given before it is told where it goes (``parse_known``)
+        own |= {o for p in subs[0].choices.values() for a in p._actions for o in a.option_strings}
         for w in words:
             if w == "--" or w in subs[0].choices:
                 return ""

@@ -140,7 +140,9 @@ class CameraTuningMixin:
         for name in svc.switches():
             on, target = svc.sink_state(name)
             if problem := svc.sink_problem(name):  # on in the profile, not sending: why
-                lines.append(f"{name}: [red]failed[/] -> {escape(target)}: {escape(problem)}")
+                lines.append(
+                    f"{escape(name)}: [red]failed[/] -> {escape(target)}: {escape(problem)}"
+                )
                 continue
             lines.append(f"{name}: {'[green]on[/]' if on else 'off'} -> {escape(target)} (u/U)")
         if not self.wizard_text():  # else the wizard's block says where it stands

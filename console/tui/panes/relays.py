@@ -82,8 +82,8 @@ def _why(
     if ch in pending:
         want = "close" if pending[ch] else "open"
         if status["busy"]:  # the stimulus named once on the row: its state or here
-            what = "it" if routed else escape(playing_name(status))
-            return f"[yellow]yours waits to {escape(want)} until {what} ends[/]"
+            what = "it" if routed else playing_name(status)
+            return f"[yellow]yours waits to {escape(want)} until {escape(what)} ends[/]"
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
@@ -92,7 +92,7 @@ def _why(
     if status["busy"]:
         if routed:
             mine = "closed" if ch in operator_setting(status) else "open"
-            return f"[yellow]yours: {mine}[/]"  # back when it ends (the screen's hint)
+            return f"[yellow]yours: {escape(mine)}[/]"  # back when it ends (the hint says)
         return f"[yellow]as yours; a toggle waits for {escape(playing_name(status))} to end[/]"
     return "[green]ready[/] (switches only in silence)"
 
