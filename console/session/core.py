@@ -322,8 +322,6 @@ class ConsoleSession:
         there = "" if who == self._holder else " there"
         return f"refused: {who} holds the outputs, paused or not (stop it{there} first)"
 
-    _held_from = held_why
-
     def play_plan(self, plan: Any, *, wait: bool = True, holder: str | None = None) -> bool:
         """Play ``plan`` through the safety gate (blocking when ``wait``). A refusal or an
         error is reported as a ``Failed`` event; returns True when it played (or queued).
@@ -341,7 +339,7 @@ class ConsoleSession:
             why = f"outputs not open: {self.outputs_error or 'starting'}"
             self.fail("outputs", why)
             return why
-        held = self._held_from(holder)
+        held = self.held_why(holder)
         if held:
             self.fail("outputs", f"{name}: {held}", name="refused")
             return held
@@ -412,7 +410,7 @@ class ConsoleSession:
             return PlayOutcome(name, refused=f"refused: outputs not open ({why})")
         if out.estopped:
             return PlayOutcome(name, refused=f"{ESTOP_REFUSAL}, {ESTOP_FIX}")
-        held = self._held_from(None)
+        held = self.held_why(None)
         if held:
             return PlayOutcome(name, refused=held)
         try:
@@ -601,7 +599,7 @@ class ConsoleSession:
         except UserError as exc:
             self.fail("signals", str(exc), name=name)
             return False
-        held = self._held_from(None)
+        held = self.held_why(None)
         if held:
             self.fail("signals", f"{name}: {held}", name=name)
             return False
