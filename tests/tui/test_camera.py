@@ -390,7 +390,8 @@ def test_tuio_is_switched_and_pointed_from_the_camera_screen_and_kept(plugins):
             box.value = f"127.0.0.1:{port}"
             await pilot.press("enter")
             await wait_for(pilot, lambda: svc.sink_state("tuio")[1] == f"127.0.0.1:{port}")
-            assert not box.display
+            # the field closes once its answer is said, a refresh after the sender moved
+            await wait_for(pilot, lambda: not box.display, 10, "the field closed")
             await pilot.press("u")
             await wait_for(pilot, lambda: svc.sink_state("tuio")[0], 10, "tuio on")
             await wait_for(pilot, lambda: f"tuio: on -> 127.0.0.1:{port}" in str(info.render()), 10)
