@@ -6,10 +6,11 @@ to the live view.
 
 A recording keeps each plan's parameters (``meta``), the hash of its samples and the
 kernel's clocks, not the samples: a plan is drawn re-rendered from its recorded
-parameters through the same renderer (a flow under a hand: the effect offering
-``HandFlowEffect`` on the console's map, else the kept measured map the demos use), and
-the hash says whether the re-rendered samples are bit for bit those played. A plan of a
-kind with no renderer here is shown as its summary only. The file is read through the
+parameters through the effect that rendered it (``RENDERERS``: every flow the console
+plays, under a hand or between two points, at the part volts recorded) on the map the
+run kept (``KeepsItsMap``: a study's trial), else the console's, else the kept measured
+map the demos use, and the hash says whether the re-rendered samples are bit for bit
+those played. A plan of a kind with no renderer here is shown as its summary only. The file is read through the
 capability ``ReadsRecordings`` and plans are rendered in a worker."""
 
 from __future__ import annotations
