@@ -74,3 +74,29 @@ def test_scope_draws_a_study_flow_recording(plugins, flow_trial, size):
                 assert name in shown, shown
 
     asyncio.run(scenario())
+
+
+def test_a_demos_two_point_flow_is_rendered_again_as_the_demo_rendered_it(
+    plugins, profile, map_file
+):
+    """The flow demo's flow between two resting fingers (kind ``two_point``, points in
+    mm between the grid's) re-renders through the same effect, bit for bit."""
+    from types import SimpleNamespace
+
+    from console.core.plan_watch import plan_record
+    from console.plugin_api import FlowEffect, load_map
+    from console.tui.scope_recording import rerender
+    from plugins.demos.adapters import TwoPointFlows
+
+    vmap = load_map(map_file, require_all=False)
+    effect = plugins.provider("effect", FlowEffect, profile, plugin_hint="vibrotactile")
+    (x0, y0), (x1, y1) = vmap.points_mm[0], vmap.points_mm[-1]
+    a_mm, b_mm = (x0 + 13.3, y0 + 7.1), (x1 - 11.2, y1 - 5.4)
+    line = plan_record(TwoPointFlows(effect, map_file).plan(a_mm, b_mm))
+    assert line["meta"]["kind"] == "two_point"
+    run = SimpleNamespace(vibration_map=lambda: vmap)
+    session = SimpleNamespace(
+        profile=profile, plugins=plugins, vibration=SimpleNamespace(current=None)
+    )
+    plan, said = rerender(session, line, run)
+    assert plan is not None and "bit for bit" in said, said
