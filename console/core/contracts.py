@@ -32,7 +32,8 @@ Capabilities at a glance (kind: the contract, then the optional capabilities)::
                   in the profile: the Camera screen turns it on and off)
     panel         PanelFactory -> Panel
     observer      SimulatedObserver (a simulated study participant)
-    recording_reader  RecordingReader (a recorded run in a format of its own: a study trial)
+    recording_reader  RecordingReader (a recorded run in a format of its own: a study trial;
+                  KeepsItsMap: the map its plans were rendered on, re-rendered on Scope)
 
 Values that cross (frames, gestures, plans ...) are the dataclasses of
 ``console.core.types``; only behaviour is typed here.
@@ -46,6 +47,7 @@ from typing import Any, Literal, Protocol, TypedDict, runtime_checkable
 import numpy as np
 
 from console.core.recording_contracts import BeginsRun as BeginsRun
+from console.core.recording_contracts import KeepsItsMap as KeepsItsMap
 from console.core.recording_contracts import ReadsRecordings as ReadsRecordings
 from console.core.recording_contracts import RecordedRun as RecordedRun
 from console.core.recording_contracts import RecordingReader

@@ -19,7 +19,8 @@ class RecordedRun(Protocol):
     ``kind``; a plan's ``name``, ``hash``, ``duration_s``, ``segments``, ``meta`` and
     the kernel's clocks: not its samples, re-rendered from ``meta`` where shown),
     ``gate_events()`` (the kernel's own events: ``t_s``, ``clock``, ``kind``, ``message``;
-    ``console.core.gate_log``), ``close()``."""
+    ``console.core.gate_log``), ``close()``. A run that keeps the vibration map its
+    plans were rendered on offers ``KeepsItsMap`` too."""
 
     path: Any
     n_frames: int
@@ -35,6 +36,15 @@ class RecordedRun(Protocol):
     def gate_events(self) -> list[dict]: ...
 
     def close(self) -> None: ...
+
+
+@runtime_checkable
+class KeepsItsMap(Protocol):
+    """A recorded run that keeps the vibration map its plans were rendered on (a
+    study's trial): ``vibration_map()`` (None when it is missing); the Scope re-renders
+    its plans on it."""
+
+    def vibration_map(self) -> Any: ...
 
 
 @runtime_checkable

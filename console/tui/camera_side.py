@@ -8,6 +8,7 @@ is said in one line instead."""
 from __future__ import annotations
 
 from textual.geometry import Region
+from textual.widgets import Static
 
 from console.tui.camera_live import HANG
 from console.tui.give_way import give_way, natural_rows, outer_rows, text_rows
@@ -33,6 +34,24 @@ def blank_end(block) -> int:
         return 0
     text = str(block.content)
     return len(text) - len(text.rstrip("\n")) if text.strip() else 0
+
+
+class LiveLines(Static):
+    """A block of the side panel's live lines, which the pane wraps itself
+    (``camera_live.hang``): when its width changes (the picture beside it took another
+    width: a first frame, a resized terminal) they are wrapped again at once for the
+    width they are shown at, never wrapped a second time by Textual (a word alone on a
+    row, the continuation's indent lost)."""
+
+    _width = 0
+
+    def on_resize(self, event) -> None:
+        if event.size.width == self._width:
+            return
+        self._width = event.size.width
+        pane = next((a for a in self.ancestors if isinstance(a, CameraSideMixin)), None)
+        if pane is not None and pane.visible_now:
+            pane.rewrap()
 
 
 class CameraSideMixin:
@@ -124,6 +143,11 @@ class CameraSideMixin:
             return False
         self._wizard_short = short
         return self._say("camera-wizard", self.wizard_text())
+
+    def rewrap(self) -> None:
+        """The live lines written again now, wrapped for the panel's width as it is."""
+        self._info_stable = None
+        self.redraw()
 
     def keep_in_view(self) -> None:
         """The side panel's widget with the focus (the target field), else the chosen

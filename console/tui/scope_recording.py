@@ -6,10 +6,11 @@ to the live view.
 
 A recording keeps each plan's parameters (``meta``), the hash of its samples and the
 kernel's clocks, not the samples: a plan is drawn re-rendered from its recorded
-parameters through the same renderer (a flow under a hand: the effect offering
-``HandFlowEffect`` on the console's map, else the kept measured map the demos use), and
-the hash says whether the re-rendered samples are bit for bit those played. A plan of a
-kind with no renderer here is shown as its summary only. The file is read through the
+parameters through the effect that rendered it (``RENDERERS``: every flow the console
+plays, under a hand or between two points, at the part volts recorded) on the map the
+run kept (``KeepsItsMap``: a study's trial), else the console's, else the kept measured
+map the demos use, and the hash says whether the re-rendered samples are bit for bit
+those played. A plan of a kind with no renderer here is shown as its summary only. The file is read through the
 capability ``ReadsRecordings`` and plans are rendered in a worker."""
 
 from __future__ import annotations
@@ -106,9 +107,62 @@ def gate_events_lines(
     return "\n".join([f"{counts_text(events)}:", *rows, *tail])
 
 
-def rerender(session: Any, line: dict) -> tuple[Any, str]:
+def grid_point(vmap: Any, pos_mm: Any) -> Any:
+    """The grid number of ``vmap``'s point at ``pos_mm`` (a flow between grid points
+    renders from their numbers, as a study's does), else ``pos_mm`` as (x, y)."""
+    xy = np.asarray(pos_mm, float)
+    hits = np.flatnonzero(np.all(np.asarray(vmap.points_mm) == xy, axis=1))
+    return int(vmap.points[hits[0]]) if hits.size else (float(xy[0]), float(xy[1]))
+
+
+def _hand_flow(vs: Any, meta: dict, name: str) -> Any:
+    """A flow under a hand, as the flow demo and Scenes render it."""
+    # lazy: loaded when this runs, not when the module is imported
+    from console.core import contracts
+
+    eff = vs.effect(contracts.HandFlowEffect)
+    return eff.render_hand_flow(tuple(meta["center_mm"]), meta["direction"], vs.vmap)
+
+
+def _two_point(vs: Any, meta: dict, name: str) -> Any:
+    """A flow between two points (a study's flow, the flow demo's two resting fingers),
+    through the registered ``FlowEffect`` as they render it."""
+    # lazy: loaded when this runs, not when the module is imported
+    from console.core import contracts
+
+    eff = vs.effect(contracts.FlowEffect)
+    a, b = (grid_point(vs.vmap, meta[k]) for k in ("from_mm", "to_mm"))
+    return eff.render(from_point=a, to_point=b, vmap=vs.vmap, name=name)
+
+
+#: how each kind of recorded plan is rendered again (its ``meta["kind"]``): every kind of
+#: flow the console plays, through the effect that rendered it
+RENDERERS = {"hand_flow": _hand_flow, "flow": _two_point, "two_point": _two_point}
+
+
+def at_recorded_volts(plan: Any, meta: dict) -> Any:
+    """``plan`` with each part's segment at the volts its recorded ``parts`` say (a
+    study plays a flow at the participant's level: its parts scaled from the effect's)."""
+    import dataclasses  # lazy: only for a plan played at another level
+
+    want, have = meta.get("parts") or [], plan.meta.get("parts") or []
+    if len(want) != len(plan.segments) or len(have) != len(want):
+        return plan
+    segs = []
+    for seg, h, w in zip(plan.segments, have, want, strict=True):
+        k = float(w.get("amplitude_v", 0)) / float(h.get("amplitude_v", 0) or 1)
+        if k == 1.0:
+            segs.append(seg)
+            continue
+        patch_v = {p: np.asarray(v) * k for p, v in seg.patch_v.items()}
+        segs.append(dataclasses.replace(seg, piezo_v=np.asarray(seg.piezo_v) * k, patch_v=patch_v))
+    return dataclasses.replace(plan, segments=tuple(segs))
+
+
+def rerender(session: Any, line: dict, run: Any = None) -> tuple[Any, str]:
     """(the plan re-rendered from ``line``'s parameters, what its hash says), or
-    (``None``, why not). Blocking: a worker's."""
+    (``None``, why not): on the map ``run`` was recorded with when it keeps one (a
+    study's trial), else the console's. Blocking: a worker's."""
     # lazy: loaded when this runs, not when the module is imported
     from console.core import contracts
     from console.core.plan_watch import plan_hash
@@ -116,11 +170,14 @@ def rerender(session: Any, line: dict) -> tuple[Any, str]:
     from console.session.vibration import VibrationSession
 
     meta = line.get("meta") or {}
-    if meta.get("kind") != "hand_flow":
+    render = RENDERERS.get(meta.get("kind"))
+    if render is None:
         kind = meta.get("kind") or "unnamed"
         return None, f"no renderer here for a plan of kind {kind}: its summary only"
+    own = run.vibration_map() if isinstance(run, contracts.KeepsItsMap) else None
+    maps = [] if own is None else [own]
     vib = session.vibration
-    maps = [] if vib.current is None else [vib.current.vmap]
+    maps += [] if vib.current is None else [vib.current.vmap]
     try:
         kept = kept_measured_map(session.profile)
     except UserError:
@@ -131,9 +188,7 @@ def rerender(session: Any, line: dict) -> tuple[Any, str]:
     first = None
     for vmap in maps:
         vs = VibrationSession(session.profile, session.plugins, vmap)
-        plan = vs.effect(contracts.HandFlowEffect).render_hand_flow(
-            tuple(meta["center_mm"]), meta["direction"], vs.vmap
-        )
+        plan = at_recorded_volts(render(vs, meta, str(line.get("name", ""))), meta)
         if plan_hash(plan) == line.get("hash"):
             return plan, "re-rendered: the samples played, bit for bit (hash checked)"
         first = first or plan
@@ -325,7 +380,7 @@ class ScopeRecordingMixin:
     @work(thread=True, exclusive=True, group="scope-replay-render")
     def _render_plan(self, i: int, line: dict) -> None:
         try:
-            plan, said = rerender(self.app.session, line)
+            plan, said = rerender(self.app.session, line, self.replay)
         except (UserError, KeyError, TypeError, ValueError) as exc:
             plan, said = None, f"not re-rendered: {exc}"
         from_thread(self.app, self._rendered, i, line, plan, said)

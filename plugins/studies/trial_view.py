@@ -11,9 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from console.plugin_api import GATE_EVENTS, UserError, read_gate_events
+from console.plugin_api import GATE_EVENTS, UserError, load_map, read_gate_events
 
-from .trial_recording import FORMAT, FORMAT_VERSION
+from .trial_recording import FORMAT, FORMAT_VERSION, MAP_FILE
 
 FIX = "type a trial file of a study run with 'record trials' (recording/trial_NNNN.h5)"
 
@@ -24,7 +24,8 @@ def _text(value: Any) -> str:
 
 class StudyTrialRun:
     """An open trial file: its frames (none when the trial did not see the camera), no
-    per-frame decisions, its plans (``outputs``) and gate events; ``close()`` when done."""
+    per-frame decisions, its plans (``outputs``), the map they were rendered on, and
+    gate events; ``close()`` when done."""
 
     def __init__(self, path: Path, f: Any) -> None:
         self.path, self.f = path, f
@@ -45,6 +46,12 @@ class StudyTrialRun:
 
     def plans(self) -> list[dict]:
         return list(self._plans)
+
+    def vibration_map(self) -> Any:
+        """The vibration map the trial's plans were rendered on (``recording/map.npz``
+        beside it, as ``haptable replay`` takes it), None without one."""
+        path = self.path.parent / MAP_FILE
+        return load_map(path, require_all=False) if path.is_file() else None
 
     def gate_events(self) -> list[dict]:
         return read_gate_events(self.f[GATE_EVENTS][:]) if GATE_EVENTS in self.f else []

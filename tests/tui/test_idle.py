@@ -402,7 +402,8 @@ def test_the_camera_title_follows_the_grey_levels_without_laying_the_screen_out(
     """The view's title names the grey levels shown; as they follow the frames its text
     grows and shrinks (``grey 3 to 59`` -> ``grey 42 to 219``): each text shows whole,
     and the screen is not laid out again for it while it fits the picture's width (the
-    title keeps that width; a longer one widens the picture's column)."""
+    title keeps that width: a longer one says the levels alone, cut to it, never
+    widening the picture's column)."""
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")

@@ -38,7 +38,7 @@ from console.tui.camera_live import (
     starting_lines,
 )
 from console.tui.camera_picture import blob_labels, overlay_pixels, same_height, wrap_markup
-from console.tui.camera_side import CameraSideMixin
+from console.tui.camera_side import CameraSideMixin, LiveLines
 from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.checked_field import refused, taken
@@ -50,6 +50,7 @@ from console.tui.plots import HalfBlockImage, downsample
 from console.tui.question_hold import waits_for_question
 from console.tui.recording_view import RecordingMixin
 from console.tui.said import said_here
+from console.tui.shorten import cut_words
 from console.tui.text import escape
 from console.tui.units import view_levels
 from console.tui.util import from_thread
@@ -126,10 +127,10 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         with Vertical(id="camera-side"):
             # the live numbers (rates, hands, contacts, gesture): pinned above the status
             # line, never scrolled away by it (the rest of them scroll, ``camera-detail``)
-            yield Static("", id="camera-info")
+            yield LiveLines("", id="camera-info")
             # what the vision measures of touching skin, under them: it gives way to a
             # reply by whole lines, before the live numbers do (``camera_side``)
-            yield Static("", id="camera-measures")
+            yield LiveLines("", id="camera-measures")
             # the wizard's step or result (with the key it asks for) next, above the
             # status and what scrolls: in view while it has something to say, whatever
             # the status's length at 80 x 24
@@ -143,7 +144,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             # what does not fit the screen's height scrolls; the chosen setting (▸) and the
             # target field are scrolled into view when they change or take the focus
             with SidePanel(id="camera-scroll"):
-                yield Static("", id="camera-detail")
+                yield LiveLines("", id="camera-detail")
                 yield Static("", id="camera-settings")
                 box = TargetField(
                     placeholder="host:port, Enter", id="camera-target", select_on_focus=False
@@ -304,15 +305,16 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
 
     def _title(self, head: str, levels: str = "") -> None:
         """The view's title, ``head`` (the frame, how it is drawn) and its ``levels``
-        (``view_levels``), the levels alone where both do not fit the view's width (at
-        80 columns), padded to the picture's width (``_picture_cols``): laid out again
-        only when its length changed (the grey levels it names follow the frames, ``8 to
-        93`` then ``10 to 107``, a recording's frame number counts up; a layout of the
-        screen costs more than the picture's rows)."""
+        (``view_levels``), the levels alone where both do not fit the picture's width
+        (``_picture_cols``; at 80 columns), cut after a word where even they do not, and
+        padded to it: the view's column is its picture's width, whatever the title says
+        (``grey 10 to 110`` took a column from the side panel, re-wrapping its lines).
+        Laid out again only when its length changed (a layout costs more than a picture)."""
+        width = self._picture_cols or self.view_area()[0]
         text = f"{head}, {levels}" if levels else head
-        if levels and len(text) > self.view_area()[0]:
+        if levels and len(text) > width:
             text = levels
-        text = text.ljust(self._picture_cols)
+        text = cut_words(text, width).ljust(width)
         before = self._said.get("camera-title")
         self._say("camera-title", text, layout=before is None or len(before) != len(text))
 
@@ -566,7 +568,6 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
             head += [""] * (self._head_rows - len(head))  # no layout redone for them; the
             # blank rows are the first to give way (``camera_side.blank_end``)
         return head, hang(measures, width), live
-        return head, live
 
     def _output(self) -> str | None:
         names = list(self.service.switches())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 
+from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -95,6 +96,11 @@ def _why(
             return f"[yellow]yours: {escape(mine)}[/]"  # back when it ends (the hint says)
         return f"[yellow]as yours; a toggle waits for {escape(playing_name(status))} to end[/]"
     return "[green]ready[/] (switches only in silence)"
+
+
+def cells(markup: str) -> int:
+    """The cells a row's ``markup`` takes on one line (its tags take none)."""
+    return Text.from_markup(markup).cell_len
 
 
 def since_start(clock: int, sample_rate_hz: float) -> str:
@@ -225,9 +231,14 @@ class RelaysPane(VerticalScroll):
                 with sw.prevent(Switch.Changed):
                     sw.value = ch in mine
             text = interlock(ch, status, self.pending, self.refused, self._opened)
-            if self._said.get(ch) != text:
+            before = self._said.get(ch)
+            if before != text:
                 self._said[ch] = text
-                state.update(text, layout=False)  # one line each
+                # laid out again unless both texts take one row: a refusal naming the run
+                # that holds the outputs wraps under itself, never cut at the row's edge
+                width = state.content_size.width
+                one_row = before is not None and max(cells(before), cells(text)) <= width
+                state.update(text, layout=not one_row)
         if log is not None and len(log) != self._log_len:
             self._log_len = len(log)
             self._table.clear()
