@@ -83,7 +83,10 @@ class NewestToastOnly:
         """The newest notification alone: the older ones forgotten and their holders
         removed (their region drawn again: nothing of them stays on the title row)."""
         self._notifications.clear()
-        holders = self.screen.query(ToastHolder)
+        try:
+            holders = self.screen.query(ToastHolder)
+        except ScreenStackError:  # the console closing: no screen left to show it on
+            return
         for holder in holders:
             holder.remove()
         if holders:  # the whole title row drawn again: no cell of the old toast stays

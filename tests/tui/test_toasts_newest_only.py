@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 
+from textual.notifications import Notification
 from textual.widgets._toast import Toast, ToastHolder
 
 from console.cli.main import Context
@@ -88,3 +89,14 @@ def test_an_estop_right_after_a_reset_shows_alone(plugins):
             assert len(app.screen.query(ToastHolder)) == 1, top
 
     asyncio.run(scenario())
+
+
+def test_a_notification_while_the_console_closes_is_dropped(plugins):
+    """A status said while the console closes (a demo's last word after ``q``) finds no
+    screen: it is dropped, not raised from the message loop (one pilot run failed so:
+    'No screens on stack')."""
+    from textual.notifications import Notify
+
+    app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
+    app._on_notify(Notify(Notification("demo stopped", "", "information", 3)))
+    assert not app._notifications
