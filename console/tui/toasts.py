@@ -117,7 +117,8 @@ class NewestToastOnly:
 
     def _titles_beside(self, shown: list[Notification]) -> None:
         """Where the toast shown (the last of ``shown``) begins on the title row
-        (``toast_x``), and the titles laid out beside it (``console.tui.title_row``)."""
+        (``toast_x``), and the titles of every screen in the stack laid out beside it
+        (``console.tui.title_row``)."""
         if shown:
             text = Content.from_markup(shown[-1].message) if shown[-1].markup else None
             plain = text.plain if text is not None else shown[-1].message
@@ -127,10 +128,10 @@ class NewestToastOnly:
         if toast_x == self.toast_x:
             return
         self.toast_x = toast_x
-        try:
-            fit_titles(self.screen)
-        except ScreenStackError:
-            return
+        # every screen's: one in front of the console's (the log) when the toast went
+        # left the console's title cut beside a toast no longer there
+        for screen in self.screen_stack:
+            fit_titles(screen)
 
     async def _on_resize(self, event) -> None:
         """The toast shown cut again for the new width."""
