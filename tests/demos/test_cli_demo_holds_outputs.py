@@ -227,3 +227,27 @@ def test_a_map_measurement_from_a_shell_holds_the_table(plugins, tmp_path):
         proc.send_signal(signal.SIGINT)
         _ended(proc, 60)
     assert table_holder(profile) is None
+
+
+def test_the_console_s_demo_holds_the_table_for_a_shell(plugins, tmp_path):
+    """The other way round: while the console runs a demo, a shell's demo or study run is
+    refused (busy, exit 5) naming it, as the console refuses theirs."""
+    from ..tui.test_demos import _start
+
+    profile = load_profile("sim", plugins)
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _start(app, pilot, "knob")
+            who = f"the knob demo (the console's, pid {os.getpid()})"
+            demo = await asyncio.to_thread(haptable, "demo", "flow", "--seconds", "1")
+            assert demo.returncode == 5, demo.stderr
+            assert f"busy: {who} holds the outputs" in demo.stderr, demo.stderr
+            run = ("study", "run", "exp1", "--participant", "P09", "--simulate")
+            study = await asyncio.to_thread(haptable, *run, "--out", str(tmp_path / "s"))
+            assert study.returncode == 5 and who in study.stderr, study.stderr
+            await asyncio.to_thread(app.session.demos.stop)
+            assert not table_hold_file(profile).exists()
+
+    asyncio.run(scenario())
