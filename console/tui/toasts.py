@@ -54,8 +54,9 @@ class NewestToastOnly:
 
     #: the column where the toast shown begins on the title row (None: no toast)
     toast_x: int | None = None
-    #: until when (monotonic) the e-stop's notification is the one shown
-    _estop_until: float = 0.0
+    #: until when (monotonic) the e-stop's notification, or a timed question's, is the
+    #: one shown (a hidden screen's status goes to the log meanwhile)
+    _held_until: float = 0.0
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written; ``markup=True`` for a template with its
@@ -64,17 +65,19 @@ class NewestToastOnly:
         toast). A ``title`` goes before the message on its one row. ``estop=True``: the
         e-stop's own; while it shows, a hidden screen's status (``hidden_screen=True``:
         its echo of the e-stop, say) goes to the log only, never over it; any other
-        notification replaces it (the reset's)."""
+        notification replaces it (the reset's). ``question=True``: a timed question
+        ("q again within 3 s to quit ..."), held the same way while it is asked."""
         title = kw.pop("title", "")
         estop, hidden = kw.pop("estop", False), kw.pop("hidden_screen", False)
+        estop = kw.pop("question", False) or estop
         if not kw.pop("logged", False):
             said = f"{title}: {message}" if title else message
             log_said("toast", said, kw.get("severity", "information"))
         now = time.monotonic()
-        if hidden and now < self._estop_until:
+        if hidden and now < self._held_until:
             return
         timeout = kw.get("timeout") or self.NOTIFICATION_TIMEOUT
-        self._estop_until = now + timeout if estop else 0.0
+        self._held_until = now + timeout if estop else 0.0
         if title:
             message = f"{Content(title).markup}: {message}" if markup else f"{title}: {message}"
         super().notify(message, markup=markup, **kw)
