@@ -229,6 +229,21 @@ def _pinned_dirs(pinned_root, monkeypatch):
 
 
 @pytest.fixture(autouse=True)
+def _no_question_written_over():
+    """No timed question's line is written over behind its hold in any test: every
+    setter that can replace a question waits for it (``console.tui.question_hold``)."""
+
+    def overwritten() -> list:  # a test with no screen has none
+        return getattr(sys.modules.get("console.tui.question_hold"), "OVERWRITTEN", [])
+
+    overwritten().clear()
+    yield
+    found = list(overwritten())
+    overwritten().clear()
+    assert not found, f"a question written over past its hold (where, question, line): {found}"
+
+
+@pytest.fixture(autouse=True)
 def _private_runtime(tmp_path_factory, monkeypatch):
     """A private runtime dir per test, short whatever pytest's base temp is (sockets in
     it must fit the 107 bytes of a Unix socket address: pytest's own run counters grow)."""

@@ -165,6 +165,11 @@ def configure_play(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fast", action="store_true", help="twin: fast-forward instead of real time")
 
 
+#: a play this long or shorter holds no table: the console's keys wait for its end
+#: (Relays says which play they wait for); a longer one holds it (``Context.outputs``)
+SHORT_PLAY_S = 5.0
+
+
 def write_plan_wav(plan, path: str, limits) -> None:
     """Write a checked plan as the sound card would play it (gaps not included), 16-bit,
     a channel per ``[audio] channels`` name (the bus: stereo, piezo left)."""
@@ -191,7 +196,9 @@ def play_and_report(
     if dry_run:
         print(f"{plan.name}: {plan.duration_s:.2f} s, {len(plan.segments)} segment(s): accepted")
         return 0
-    with ctx.outputs(fast=fast) as outputs:
+    # a long plan holds the table as a demo does (the console refuses its plays at once,
+    # naming it); a short one is over before a key waiting for it is missed
+    with ctx.outputs(fast=fast, hold=plan.duration_s > SHORT_PLAY_S) as outputs:
         start = int(outputs.status()["gate"]["clock"])  # the table's earlier switches: not ours
         play_or_estopped(outputs, plan)
         print(f"played {plan.name}: {plan.duration_s:.2f} s in {len(plan.segments)} segment(s)")

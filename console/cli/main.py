@@ -86,7 +86,7 @@ def _main(argv: list[str]) -> int:
         if profile or os.environ.get("HAPTABLE_PROFILE"):  # named: found, or refused by
             # every command (none ignores it; estop and reset never come here: entry.py)
             find_profile(profile)
-        ctx = Context(profile, plugins)
+        ctx = Context(profile, plugins, argv)
         if command == "console" and args.command is None:
             args = parser.parse_args([*argv, "console"])
         code = int(plugins.commands[command].run(args, ctx) or 0)

@@ -652,8 +652,11 @@ def main(blob: bytes | None = None) -> int:
         kernel.shutdown("could not start")
         return 3
     kernel.guard_relays(blob)
-    out.write("ready\n")
-    out.close()
+    # the command that started it may have left (ctrl+c while it started): the table
+    # serves the others all the same, no e-stop for a reader gone
+    with contextlib.suppress(BrokenPipeError):
+        out.write("ready\n")
+        out.close()
     try:
         kernel.serve()
     finally:

@@ -19,7 +19,7 @@ from typing import Any
 from console.core.errors import SafetyRefusal, TableBusy, UserError
 from console.kernel.shell import estop as shell_estop
 from console.runtime.control import ControlServer
-from console.runtime.table_hold import table_held, table_holder
+from console.runtime.table_hold import table_held, table_holder, table_stop_words
 from console.session.demos import DemoControl
 from console.session.events import (
     ESTOP_FIX,
@@ -319,6 +319,9 @@ class ConsoleSession:
             return f"refused: {demo} holds the outputs ({DEMO_STOP})"
         if holder == who:
             return ""
+        stop = "" if who == self._holder else table_stop_words(self.profile)
+        if stop:  # a shell's command: how to stop it, as it says
+            return f"refused: {who} holds the outputs ({stop})"
         there = "" if who == self._holder else " there"
         return f"refused: {who} holds the outputs, paused or not (stop it{there} first)"
 

@@ -8,6 +8,10 @@ events to the projector; ``stop()`` stops it, shows black if it showed its scene
 takes the camera back. It reports events with topic ``demo``: ``Started`` (``detail``:
 starting, running, stopping), ``Progress`` while it prepares, ``Snapshot`` (``poll()``),
 ``Stopped`` (``reason``: stopped, cancelled, e-stopped, an error ...) and ``Failed``. Blocking calls run on the caller's thread: screens call them from workers.
+
+From its start to its end a demo holds the profile's table for other processes
+(``console.runtime.table_hold``): a shell's study run, demo or long play is refused
+naming it, as the console's plays are refused while one of theirs runs.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from typing import Any
 from console.core.errors import UserError
 from console.kernel.private_dir import runtime_dir
 from console.runtime.demo_process import DemoCancelled, DemoProcess
+from console.runtime.table_hold import table_held
 from console.session.demo_history import RunHistory
 from console.session.events import Progress, Snapshot, Started, Stopped
 
@@ -91,6 +96,7 @@ class DemoControl:
         self._lock = threading.Lock()
         self._stop_lock = threading.Lock()
         self._stopping: Any = None  # the run a stop is under way for
+        self._table = contextlib.ExitStack()  # the table held for other processes
 
     # ------------------------------------------------------------------ start
     def check_start(self, name: str) -> None:
@@ -122,6 +128,9 @@ class DemoControl:
         s = self.session
         with self._lock:
             self.check_start(name)
+            who = f"the {name} demo (the console's, pid {os.getpid()})"
+            # a shell's command that took the table since the check: TableBusy names it
+            self._table.enter_context(table_held(s.profile, who, "s on Scenes (F6) stops it"))
             self.name, self.state = name, "starting"
             self.last_snapshot = self.last_final = None  # this run's, not the last one's
             self.history.begin(name)
@@ -252,6 +261,7 @@ class DemoControl:
         self.history.end()
         with self._lock:
             self.run, self.name, self.state = None, None, reason
+            self._table.close()  # other processes may play again
         self.session.emit(Stopped("demo", name, reason=reason))
 
     # ------------------------------------------------------------------ state

@@ -30,7 +30,7 @@ from collections.abc import Callable
 from textual.widget import Widget
 from textual.widgets import Static
 
-from console.tui.question_hold import answered, held, hold, release, waits
+from console.tui.question_hold import answered, held, hold, release, waits, wrote_over
 
 #: how often a conditional line is re-checked while it is shown
 RECHECK_S = 0.5
@@ -63,8 +63,8 @@ def lapse(
     def check() -> None:
         if shown() != text:  # a newer message took the line (an answer): nothing to do
             timer.stop()
-            if question:
-                release(owner, text)
+            if question and release(owner, text) is not None:  # not answered: written over
+                wrote_over(owner, text, shown())
             return
         over = ends_s is not None and time.monotonic() >= ends_s
         if over or (while_true is not None and not while_true()):

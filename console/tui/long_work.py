@@ -18,6 +18,12 @@ kept with its unit (``console.tui.kept_text``).
 A question or refusal said while a job runs (``hold``: "Esc again within 3 s cancels
 the training") has a line of its own under the job's: progress never replaces it; it
 goes when its window ends, when the job ends (that answers it) or with ``release``.
+
+A timed question on the work's own line (``ask``, or a job whose summary asks:
+``start(..., asks_s=...)``, "s again within 20 s to start ...") holds that line as every
+screen's question does (``console.tui.question_hold``: ``show`` is the line's one setter
+and waits for it): a line said meanwhile, a demo's progress too, shows once it lapses;
+new work answers it.
 """
 
 from __future__ import annotations
@@ -35,6 +41,8 @@ from textual.worker import get_current_worker
 
 from console.core.errors import UserError
 from console.tui.kept_text import wrap_kept
+from console.tui.lapse import ask
+from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import log_status, said_here, screen_name
 from console.tui.time_left import left_words, seconds_left
 from console.tui.util import from_thread
@@ -98,6 +106,7 @@ class LongWork(Vertical):
         #: a question or refusal held on its own line (``hold``) and its lapse timer
         self.note = ""
         self._note_timer = None
+        self._asks: tuple[float, str] | None = None  # the running job's summary asks
 
     def compose(self) -> ComposeResult:
         bar = ProgressBar(total=1.0, show_eta=False)
@@ -125,6 +134,7 @@ class LongWork(Vertical):
         bar = self.query_one(ProgressBar)
         return float(bar.progress) if bar.display else None
 
+    @waits_for_question
     def show(self, text: str, frac: float | None = None, *, error: bool = False) -> None:
         """Status line (and the bar at ``frac``; hidden with None); its news in the log
         (an error by ``error``; its ticks not: ``console.tui.said.log_status``)."""
@@ -138,6 +148,11 @@ class LongWork(Vertical):
         bar.display = frac is not None
         if frac is not None:
             bar.update(total=1.0, progress=frac)
+
+    def ask(self, text: str, after_s: float, then: str = "") -> None:
+        """Ask the timed question ``text`` on the work's line: it holds the line
+        ``after_s`` seconds (a line said meanwhile shows then, else ``then``)."""
+        ask(self, lambda: self.text, text, self.show, after_s, then)
 
     def _draw(self) -> None:
         """The line, and the held note on its own line under it."""
@@ -184,14 +199,19 @@ class LongWork(Vertical):
         *,
         cancelled_says: str = "",
         timed_by_job: bool = False,
+        asks_s: float | None = None,
+        lapsed: str = "",
     ) -> bool:
         """Run ``job`` in a thread worker; False (and a notice) when one already runs.
         ``cancelled_says``: what a cancel left as it was, said once after "NAME cancelled"
         (": no model was written"); ``timed_by_job``: the job's lines say their time
-        left themselves (one estimate on the line, not two)."""
+        left themselves (one estimate on the line, not two); ``asks_s``: the summary is
+        a timed question (``ask``), holding the line that long, then ``lapsed``."""
         if self.busy:
             self.say_busy()
             return False
+        answered(self)  # new work answers a question on its line
+        self._asks = (asks_s, lapsed) if asks_s is not None else None
         self.release()  # new work: an older note is past
         self.name_running = self.last_name = name
         self.outcome = self.result = None
@@ -306,8 +326,11 @@ class LongWork(Vertical):
         if not self.is_attached:
             return
         self.release()  # the job's end answers what it asked
+        asks, self._asks = self._asks, None
         if outcome == "failed":
             self.error(text.splitlines()[0] if text else f"{name} failed")
+        elif asks is not None and outcome == "done":
+            self.ask(text, *asks)
         else:
             self.show(text)
         self.post_message(self.Finished(self, name, outcome, result))

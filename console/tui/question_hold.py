@@ -10,6 +10,11 @@ view, ``ctrl+l``) and the newest is shown when the question lapses, in place of 
 line the question would leave. A line answering a key the operator just pressed (not
 the question's own key) is also shown at once as a toast: no key goes unanswered.
 ``answered`` (the key again, or a new question) lets the line go at once.
+
+A line written over its question by a path that does not wait (a widget's own setter
+called directly, not the marked one) is a bug: the question vanished while its key
+still acts. ``lapse`` notices it (the line changed while the question still held it)
+and reports it (``wrote_over``: an error in the log, and ``OVERWRITTEN`` for tests).
 """
 
 from __future__ import annotations
@@ -61,6 +66,26 @@ def release(owner: object, text: str | None = None) -> Held | None:
         return None
     del _HOLDS[owner]
     return now
+
+
+#: questions written over behind their hold: (where, the question, the line that replaced
+#: it), newest last (tests check it stays empty)
+OVERWRITTEN: list[tuple[str, str, str]] = []
+
+
+def wrote_over(owner: object, question: str, line: str) -> None:
+    """``owner``'s question ``question`` was replaced by ``line`` on its status line by a
+    setter that does not wait for it (not marked ``@waits_for_question``): said as an
+    error in the log, kept in ``OVERWRITTEN``."""
+    where = screen_name(owner, type(owner).__name__)
+    OVERWRITTEN.append((where, _words(question), _words(line)))
+    del OVERWRITTEN[:-20]
+    log_said(
+        f"status {where}",
+        f"a line replaced the question {_words(question)!r} before it lapsed, past its "
+        f"hold (its setter is not marked @waits_for_question): {_words(line)!r}",
+        "error",
+    )
 
 
 def answered(owner: object) -> None:

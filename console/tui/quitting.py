@@ -85,6 +85,7 @@ class ConfirmsQuit:
                 f"q again within {self.QUIT_CONFIRM_S:g} s to quit: {'; '.join(said)}",
                 severity="warning",
                 timeout=self.QUIT_CONFIRM_S,
+                question=True,  # a hidden screen's status never replaces it meanwhile
             )
             return
         # the session closes while the screen still shows (the projector and the camera

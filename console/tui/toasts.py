@@ -54,8 +54,9 @@ class NewestToastOnly:
 
     #: the column where the toast shown begins on the title row (None: no toast)
     toast_x: int | None = None
-    #: until when (monotonic) the e-stop's notification is the one shown
-    _estop_until: float = 0.0
+    #: until when (monotonic) the e-stop's notification, or a timed question's, is the
+    #: one shown (a hidden screen's status goes to the log meanwhile)
+    _held_until: float = 0.0
 
     def notify(self, message: str, *, markup: bool = False, **kw) -> None:
         """A notification shown as written; ``markup=True`` for a template with its
@@ -64,17 +65,19 @@ class NewestToastOnly:
         toast). A ``title`` goes before the message on its one row. ``estop=True``: the
         e-stop's own; while it shows, a hidden screen's status (``hidden_screen=True``:
         its echo of the e-stop, say) goes to the log only, never over it; any other
-        notification replaces it (the reset's)."""
+        notification replaces it (the reset's). ``question=True``: a timed question
+        ("q again within 3 s to quit ..."), held the same way while it is asked."""
         title = kw.pop("title", "")
         estop, hidden = kw.pop("estop", False), kw.pop("hidden_screen", False)
+        estop = kw.pop("question", False) or estop
         if not kw.pop("logged", False):
             said = f"{title}: {message}" if title else message
             log_said("toast", said, kw.get("severity", "information"))
         now = time.monotonic()
-        if hidden and now < self._estop_until:
+        if hidden and now < self._held_until:
             return
         timeout = kw.get("timeout") or self.NOTIFICATION_TIMEOUT
-        self._estop_until = now + timeout if estop else 0.0
+        self._held_until = now + timeout if estop else 0.0
         if title:
             message = f"{Content(title).markup}: {message}" if markup else f"{title}: {message}"
         super().notify(message, markup=markup, **kw)
@@ -120,7 +123,8 @@ class NewestToastOnly:
 
     def _titles_beside(self, shown: list[Notification]) -> None:
         """Where the toast shown (the last of ``shown``) begins on the title row
-        (``toast_x``), and the titles laid out beside it (``console.tui.title_row``)."""
+        (``toast_x``), and the titles of every screen in the stack laid out beside it
+        (``console.tui.title_row``)."""
         if shown:
             text = Content.from_markup(shown[-1].message) if shown[-1].markup else None
             plain = text.plain if text is not None else shown[-1].message
@@ -130,10 +134,10 @@ class NewestToastOnly:
         if toast_x == self.toast_x:
             return
         self.toast_x = toast_x
-        try:
-            fit_titles(self.screen)
-        except ScreenStackError:
-            return
+        # every screen's: one in front of the console's (the log) when the toast went
+        # left the console's title cut beside a toast no longer there
+        for screen in self.screen_stack:
+            fit_titles(screen)
 
     async def _on_resize(self, event) -> None:
         """The toast shown cut again for the new width."""

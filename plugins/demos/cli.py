@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from dataclasses import replace
@@ -91,7 +92,8 @@ def run(args, ctx) -> int:
         return 0
     start = ctx.pm.get("demo", args.demo).factory  # the registered demo (this plugin's)
     profile = ctx.profile if args.record is None else _recording_to(ctx, args.record)
-    with ctx.outputs(fast=False) as out:
+    who = f"the {args.demo} demo (haptable demo {args.demo}, pid {os.getpid()})"
+    with ctx.outputs(fast=False, who=who) as out:  # the console plays nothing meanwhile
         run_ = start(
             profile,
             ctx.pm,

@@ -31,7 +31,6 @@ from console.plugin_api.tui import (
     answered,
     cut_end,
     escape,
-    lapse,
     middle_ellipsis,
     said_here,
     short_path,
@@ -297,20 +296,21 @@ class ScenesPane(Vertical):
     def action_close_projector(self) -> None:
         """``k``: close the projector; while it shows a scene (a demo's, or one enter
         started) only when ``k`` comes again within ``CLOSE_AGAIN_S`` (the line asks)."""
-        answered(self)  # k again: its question (if it asked) is answered
+        work = self.query_one("#demo-work", LongWork)
+        answered(work)  # k again: its question (if it asked) is answered
         st, feed = self.app.session.scenes.status(), self.demos.scene_feed()
         scene = (st or {}).get("scene")
         now = time.monotonic()
         if st is not None and (scene or feed) and now - self._close_asked > CLOSE_AGAIN_S:
             self._close_asked = now
             what = f"the {feed['demo']} demo's scene" if feed else f"scene {scene}"
-            work = self.query_one("#demo-work", LongWork)
             before = work.text  # true again once the question lapses
             asked = f"k again within {CLOSE_AGAIN_S:g} s closes the projector (it shows {what})"
-            self._say(asked)
+            status_said(self, "Scenes", asked, "information")  # logged as the line's news
             kept = f"the projector stays open (it shows {what})"
             then = before if before and "again within" not in before else kept
-            lapse(self, lambda: work.text, asked, self._say, CLOSE_AGAIN_S, then=then)
+            # on the work's own line, held there: a demo's progress waits for it
+            work.ask(asked, CLOSE_AGAIN_S, then=then)
             return
         self._close_asked = -1e9
         self._close_projector()

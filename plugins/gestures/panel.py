@@ -30,6 +30,7 @@ from console.plugin_api.tui import (
     NumberField,
     PathField,
     SafetyBar,
+    answered,
     escape,
     from_thread,
     lapse_on_change,
@@ -52,6 +53,8 @@ from .synth import estimate as synth_estimate
 
 #: seconds in which a second ``s`` starts the synthesis whose size was shown
 CONFIRM_S = 20.0
+#: the work's line once that question lapsed
+ESTIMATE_LAPSED = "the estimate lapsed: s says the size and time again"
 #: the final fit on every sample against one cross-validation fold's training (which
 #: fits (k-1)/k of the samples): measured on the twin (2fold, 1 subject x 10 x 4 and x 6,
 #: a loaded 2-core machine) the final fit took 0.7, 1.1, 1.6 and 7.7 x a fold's mean
@@ -442,6 +445,8 @@ class GesturesPanel(ModalScreen):
         becomes of the folder (a new dataset, or the synthesized one there replaced),
         then ``s`` again within ``CONFIRM_S`` seconds, same fields, starts the synthesis,
         which does what was said (a folder changed since: nothing, and it says so)."""
+        pending = self._synth_asked
+        self._drop_question()  # s again answers it (or asks anew)
         try:
             ds, subjects, reps = self._synth_fields()
         except UserError as exc:
@@ -451,7 +456,6 @@ class GesturesPanel(ModalScreen):
             self.work.say_busy()
             return
         asked = (ds, subjects, reps)
-        pending, self._synth_asked = self._synth_asked, None
         if pending is None or pending[0] != asked or time.monotonic() > pending[1]:
             self._estimate(asked)
             return
@@ -514,10 +518,17 @@ class GesturesPanel(ModalScreen):
             return f"s again within {CONFIRM_S:.0f} s to start: {_does(target, ds)}: {est['text']}"
 
         self._clear_result()
-        self.work.start("estimate", job, summary)
+        # the question holds the work's line for its 20 s (a line said meanwhile waits)
+        self.work.start("estimate", job, summary, asks_s=CONFIRM_S, lapsed=ESTIMATE_LAPSED)
+
+    def _drop_question(self) -> None:
+        """The synthesis's question is void (answered, another action, a field changed):
+        ``s`` measures again, and the work's line is free at once."""
+        self._synth_asked = None
+        answered(self.work)
 
     def action_train(self) -> None:
-        self._synth_asked = None  # another action: the estimate's s-again lapses
+        self._drop_question()  # another action: the estimate's s-again lapses
         try:
             ds, model, cv = self._train_fields()
         except UserError as exc:
@@ -612,7 +623,7 @@ class GesturesPanel(ModalScreen):
         return "the Camera screen's classifier uses it now"
 
     def action_cancel(self) -> None:
-        self._synth_asked = None
+        self._drop_question()
         if not self.work.cancel():
             self.work.show("nothing to cancel")
 
@@ -670,15 +681,8 @@ class GesturesPanel(ModalScreen):
         if event.input.id:
             self.typed[event.input.id] = event.value
         if event.input.id in _SYNTH_FIELDS and self._synth_asked is not None:
-            self._synth_asked = None
+            self._drop_question()
             self.work.show(f"{event.input.id[3:]} changed: s says the size and time again")
-
-    def _estimate_lapsed(self) -> None:
-        """The time for ``s`` again ran out: the line no longer offers it."""
-        asked = self._synth_asked
-        if asked is not None and time.monotonic() > asked[1] and not self.work.busy:
-            self._synth_asked = None
-            self.work.show("the estimate lapsed: s says the size and time again")
 
     def on_input_blurred(self, event: Input.Blurred) -> None:
         if event.input.id in ("gp-dataset", "gp-model"):
@@ -693,6 +697,4 @@ class GesturesPanel(ModalScreen):
                 text += "\n" + self.use_model(event.result["loaded"])
             self._result_model = Path(event.result["model"])
             self.query_one("#gp-result", Static).update(text)
-        elif event.outcome == "done" and event.name == "estimate":
-            self.set_timer(CONFIRM_S + 0.1, self._estimate_lapsed)
         self.action_refresh()

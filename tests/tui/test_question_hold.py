@@ -84,3 +84,23 @@ def test_a_question_on_a_setter_that_does_not_wait_is_refused():
                 lapse(pane, lambda: pane.line, "x again within 1 s", pane.say_plainly, 1.0)
 
     asyncio.run(scenario())
+
+
+def test_a_line_written_over_its_question_past_its_hold_is_reported():
+    """A setter that does not wait, writing the question's line directly, is a bug
+    every test catches (``OVERWRITTEN``, checked after each test by the conftest)."""
+    from console.tui.question_hold import OVERWRITTEN
+
+    async def scenario():
+        app = Console()
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = app.query_one(Pane)
+            ask(pane, lambda: pane.line, "k again within 0.3 s closes it", pane.say, 0.3, "open")
+            pane.say_plainly("played flow 1->2")  # past the hold
+            await wait_for(pilot, lambda: bool(OVERWRITTEN), 5, "reported")
+            assert OVERWRITTEN == [
+                ("Pane", "k again within 0.3 s closes it", "played flow 1->2")
+            ], OVERWRITTEN
+            OVERWRITTEN.clear()  # reported: this test's own, on purpose
+
+    asyncio.run(scenario())

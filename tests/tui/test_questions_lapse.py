@@ -1,7 +1,8 @@
 """A question with a time limit ("X again within N s ...") leaves its line when its
 window ends (``console.tui.lapse``), at 80 x 24: Scenes' ``k`` with a scene shown and
 Camera's ``b`` with a hand on the glass; and every such question in the console and its
-plugins is one that lapses (a timer or ``lapse`` where it is asked)."""
+plugins is one that lapses and holds its line while asked (``lapse`` or ``ask`` where it is
+asked: ``console.tui.question_hold``; a timer of its own let other lines replace it)."""
 
 from __future__ import annotations
 
@@ -28,8 +29,10 @@ def _lapses(path: Path) -> bool:
     words does (``vibration_words`` asks, ``vibration`` lapses it)."""
 
     def lapses(text: str) -> bool:
-        asks = "from console.tui.lapse import ask" in text  # lapse's own question
-        return "lapse(" in text or "set_timer(" in text or asks
+        # lapse's own question, or a work line's (``LongWork.ask``, a summary that asks):
+        # each holds its line (``console.tui.question_hold``); a timer of its own does not
+        asks = "from console.tui.lapse import ask" in text or "asks_s=" in text
+        return "lapse(" in text or ".ask(" in text or asks
 
     if lapses(path.read_text()):
         return True

@@ -218,6 +218,10 @@ def _count(n) -> str:
     return "-" if n is None else str(int(n))
 
 
+#: ``_said_for`` of the line about ``m`` while a demo starts or stops (then its name)
+STARTING = "starting or stopping: "
+
+
 class LatencyPane(Vertical):
     HELP_TEXT = (
         "How fast the table answers: the numbers of the loop that runs now, a demo's "
@@ -315,6 +319,14 @@ class LatencyPane(Vertical):
             who = self.source if self.source.startswith("demo ") else "a demo"  # as shown
             self._tell(f"m: {who} runs; its own loop is measured below (F6, s stops it)", who)
             return
+        demos = self.app.session.demos
+        if demos.name is not None:  # starting or stopping: it has the camera
+            if demos.state == "starting":
+                text = "its own loop shows here once it runs (F6, x cancels it)"
+            else:
+                text = "m again once it stopped measures the camera loop"
+            self._tell(f"m: demo {demos.name} is {demos.state}; {text}", STARTING + demos.name)
+            return
         now = time.monotonic()
         if self._measure_until is not None and now < self._measure_until:  # not restarted
             left = self._measure_until - now
@@ -330,6 +342,18 @@ class LatencyPane(Vertical):
         self._say("lat-said", text)
         if text:
             said_here(self, "Latency", text, "information")
+
+    def _told_past(self, shown: str | None) -> bool:
+        """Whether the line about ``m`` is no longer true: the loop it named is not the
+        one ``shown``, or the demo it said was starting or stopping no longer is."""
+        told = self._said_for
+        if told.startswith(STARTING):
+            demos = self.app.session.demos
+            return (demos.name, demos.state) not in (
+                (told[len(STARTING) :], "starting"),
+                (told[len(STARTING) :], "stopping"),
+            )
+        return bool(told) and told != shown
 
     def _measure_done(self) -> None:
         self._measure_until = None
@@ -405,7 +429,7 @@ class LatencyPane(Vertical):
                 self._measure_done()
             svc = self.app.session.camera_started
             if svc is None or not (svc.running or self._measure_until is not None):
-                if self._said_for:  # the demo m was told of has stopped
+                if self._told_past(None):  # the demo m was told of has stopped
                     self._tell("", "")
                 table = tables.first(DataTable)
                 if not (self._show_last_camera(table, svc) or self._show_finished_demo(table)):
@@ -417,7 +441,7 @@ class LatencyPane(Vertical):
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
             if left is not None:
                 what += f", measuring: {max(0.0, left - time.monotonic()):.0f} s left"
-        if self._said_for and self._said_for != self.source:  # what m was told is past
+        if self._told_past(self.source):  # what m was told is past
             self._tell("", "")
         if self.source != self._history_source:  # sparklines: one loop
             self.history.clear()

@@ -125,7 +125,11 @@ def measure_roving(args, ctx) -> int:
         check_masses(args.sensor_mass_g, dummy_g)
         real_g = sensor.get("mass_g")  # the twin's sensor; on a table the one stated
         sensor["mass_g"] = float(args.sensor_mass_g)
-    with open_outputs(ctx.profile, ctx.pm, fast=True if args.fast else None) as out:
+    # the map's measurement holds the table: the console's plays would be measured too
+    with (
+        ctx.holding_table(),
+        open_outputs(ctx.profile, ctx.pm, fast=True if args.fast else None) as out,
+    ):
         run = RovingRun(
             out,
             args.out,
