@@ -26,7 +26,7 @@ def test_the_title_comes_back_after_a_toast_that_ended_behind_the_log(plugins, s
             await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
             title = "HapTable — HapTable twin - profiles/sim.toml"
             await wait_for(pilot, lambda: title in screen_lines(app)[0], 10, "the title")
-            app.notify("e-stop reset: outputs stay silent until something plays " * 2, timeout=1.5)
+            app.notify("e-stop reset: outputs stay silent until something plays " * 2, timeout=4)
             await wait_for(pilot, lambda: title not in screen_lines(app)[0], 10, "cut by it")
             await pilot.press("ctrl+l")  # the log in front while the toast ends
             await wait_for(pilot, lambda: app.screen is not app.base, 10, "the log")
