@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 
 from console.cli.main import Context
+from console.config.profile import overrides_path
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
@@ -24,7 +25,8 @@ def test_the_profile_line_names_the_settings_file_before_and_after_a_save(plugin
             await pilot.press("f2")
             await wait_for(pilot, lambda: app.pane("camera").service is not None, 20, "camera")
             await pilot.press("u")  # TUIO on, kept for the profile: the file is written
-            await pilot.pause(0.5)
+            # once the sender answered (it is tried first; slower on a loaded machine)
+            await wait_for(pilot, overrides_path("sim").exists, 20, "the file written")
             await pilot.press("f1")
             await wait_for(pilot, lambda: "saved settings:" in _line(app), 10, "saved")
             assert "overrides.toml" in _line(app), _line(app)
