@@ -78,10 +78,8 @@ class Profile:
 
 
 def _where(path: Path) -> str:
-    try:
-        return str(path.relative_to(Path.cwd()))
-    except ValueError:
-        return str(path)
+    """``path`` in a message: ``console.files.paths.shown_path``."""
+    return paths.shown_path(path)
 
 
 def _fmt(value: Any) -> str:

@@ -86,3 +86,24 @@ def profile_state_dir(profile_name: str, *parts: str) -> Path:
     """What the console produces for one profile and keeps (calibrations, trained models):
     ``state_dir(<profile name>, ...)``."""
     return state_dir(_profile_part(profile_name), *parts)
+
+
+def shown_path(p: str | os.PathLike) -> str:
+    """``p`` as a message or a screen shows it: as given when relative or starting with
+    ``~`` (what was typed, read where it was typed); under the home folder as ``~/...``;
+    else absolute. Never made relative to the working folder: ``home/.config/...`` read
+    from another folder, or by a person who never typed it, names nothing they know."""
+    raw = os.fspath(p)
+    path = Path(raw)
+    if not raw or raw.startswith("~") or not path.is_absolute():
+        return raw
+    home = Path.home()
+    if home != Path(home.anchor):  # a home of / would put ~ before every path
+        for h in dict.fromkeys((home, home.resolve())):
+            for q in dict.fromkeys((path, path.resolve())):
+                try:
+                    rest = q.relative_to(h)
+                except ValueError:
+                    continue
+                return "~" if not rest.parts else f"~/{rest}"
+    return raw

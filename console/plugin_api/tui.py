@@ -16,7 +16,7 @@ What it offers:
 - time left: ``Pace`` (counts done over time: the seconds the rest takes) and
   ``left_words`` ("about 1 min 10 s left": ``console.tui.time_left``), ``seconds_left``
   (from the time so far and the fraction done)
-- paths: ``short_path`` (a path as shown: relative to the working folder, else with ``~``),
+- paths: ``short_path`` (a path as shown: under the home folder with ``~``, else absolute),
   ``PathField`` (a field taking a path or an address: it types every key, ``?`` too),
   ``PathInput`` (a ``PathField`` that, too long for it, shows ``…`` in its middle
   while it has no focus), ``whole_names`` (a path in a given width cut between whole

@@ -125,7 +125,7 @@ def _parse(text: str) -> Node:
         if fn in text:
             raise UserError(f"{fn!r} is not part of the signal syntax; write values as 250 Hz")
     typed = text.strip()
-    check_text(typed)
+    check_text(typed, len(text) - len(text.lstrip()))
     marked = mark_units(typed)
     try:
         tree = ast.parse(marked, mode="eval")

@@ -190,25 +190,51 @@ def clip(text: str, limit: int = 120) -> str:
     return text if len(text) <= limit else text[: limit - 20] + f"... ({len(text)} characters)"
 
 
-def check_text(text: str) -> None:
-    """Refuse what Python's grammar would take but a signal must not hold: characters
-    that are not printable (control codes, a byte that was not UTF-8), comments, numbers
-    too long to be meant. Runs before ``ast.parse`` so nothing big is ever built."""
-    for col, c in enumerate(text, 1):
+#: the signs the signal language writes with, beside letters, digits and blanks
+SIGNS = "(),.+-*%=@"
+#: what to write instead of a character the language does not use (the first group
+#: holding it); any other: ``_ANY_FIX``
+_CHAR_FIXES = (
+    ("[]{}", "group with ( ) and write a value as it is: 250 Hz, not [250] Hz"),
+    (";:", "separate values and parts with a comma: sine(250 Hz, 20 V, 1 s), seq(a, b)"),
+    ("'\"`\u2018\u2019\u201c\u201d", "write values and names without quotes"),
+    ("\u00d7\u00b7\u2217\u22c5", "multiply with *"),
+    ("\u2212\u2013\u2014\u2010\u2011", "write the minus as -"),
+    ("/|&^<>\u00f7", "only +, - and * combine signals; for a gain write x * 50 % or x * -6 dB"),
+    ("#", "put a note in the description instead"),
+)
+_ANY_FIX = "write calls like sine(250 Hz, 20 V, 1 s) * ramp(10 ms)"
+
+
+def _used(c: str) -> bool:
+    """Whether the signal language writes with ``c``: a letter (a word's: a name or a
+    unit, ``\u00b5s`` too), a digit, a blank or one of ``SIGNS``."""
+    return c in SIGNS or c in " \t" or (c.isascii() and c.isdigit()) or c.isidentifier()
+
+
+def check_text(text: str, lead: int = 0) -> None:
+    """Refuse what Python's grammar would take, or misread, but a signal must not hold:
+    characters that are not printable (control codes, a byte that was not UTF-8), any
+    the language does not write with (one rule: ``[`` was read as a missing comma, ``#``
+    as a comment), numbers too long to be meant. Runs before ``ast.parse`` so nothing
+    big is ever built. ``lead``: blanks typed before ``text`` (columns count them)."""
+    for col, c in enumerate(text, lead + 1):
         if not c.isprintable() and c != "\t":
             raise UserError(
                 f"signal has {c!r} at column {col}, not a printable character (a control "
                 "code, or a byte that is not UTF-8); retype the signal without it"
             )
-    if "#" in text:
-        raise UserError(
-            f"'#' at column {text.index('#') + 1} is not part of the signal syntax; put a note "
-            "in the description instead"
-        )
+    for col, c in enumerate(text, lead + 1):
+        if not _used(c):
+            fix = next((f for chars, f in _CHAR_FIXES if c in chars), _ANY_FIX)
+            raise UserError(
+                f"{c!r} at column {col} is not part of the signal syntax (it writes with "
+                f"letters, digits and {' '.join(SIGNS)}); {fix}"
+            )
     for m in _NUMBER_TOKEN.finditer(text):
         if len(m.group()) > MAX_NUMBER_CHARS:
             raise UserError(
-                f"number {m.group()[:12]}... at column {m.start() + 1} is {len(m.group())} "
+                f"number {m.group()[:12]}... at column {lead + m.start() + 1} is {len(m.group())} "
                 f"characters long (at most {MAX_NUMBER_CHARS}); write it shorter, e.g. 2.5e3"
             )
 

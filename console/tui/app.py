@@ -94,6 +94,10 @@ class ScreenTabs(TabbedContent):
     a widget taking the focus in a hidden screen must not switch back to it."""
 
     def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        # Textual calls TabbedContent's own handler after this one (it switched to the
+        # focused widget's tab) unless the default is prevented: a focus given late to
+        # the screen left (F10 F1 in one write) took the console back there
+        event.prevent_default()
         event.stop()
 
     def on_resize(self, event: events.Resize) -> None:
@@ -273,8 +277,15 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
                 self.key_hold.release()
                 return
             if self.screen is self.base:  # a modal on top keeps its focus
-                target.focus()
+                # after the keys queued meanwhile (as ``focus()``), if still wanted: a
+                # later F-key in the same write has switched on (``_give_focus``)
+                self.call_later(self._give_focus, tab, target)
         self.set_timer(0.03, self._apply_focus)
+
+    def _give_focus(self, tab: str, target: Widget) -> None:
+        """``target`` focused if its screen ``tab`` still shows on the main screen."""
+        if self.screen_stack and self.screen is self.base and self.active_tab == tab:
+            self.base.set_focus(target)
 
     def switching(self, screen) -> bool:
         """Whether ``screen`` (the main one) switches, the focus not given yet (the footer

@@ -6,7 +6,8 @@ app, after the keys typed behind it were handed to the widget that had the focus
 ``/tmp/x`` ran as the screen's keys (``e``, ``u``, ``t`` ...). An action marked
 ``@opens_field`` runs when its key arrives (``run_at_once``, from the app's ``on_event``),
 and shows its field with ``show_field``, which gives it the focus at once (``focus()``
-waits for the keys already queued): the keys behind it are the field's.
+waits for the keys already queued): the keys behind it are the field's, replacing
+what the field opened with (selected).
 """
 
 from __future__ import annotations
@@ -37,9 +38,13 @@ def _opener(node: Any, action: str) -> bool:
 
 
 def show_field(field: Input) -> None:
-    """``field`` shown with the focus given now, not after the keys queued meanwhile."""
+    """``field`` shown with the focus given now, not after the keys queued meanwhile, and
+    what it opens with (the value in use, a refused one as typed) selected, as in a
+    dialog's prefilled field: a key typed replaces it, an arrow keeps it to edit (the
+    cursor at its end had ``U`` then a target make ``127.0.0.1:3333host:port``)."""
     field.display = True
     field.screen.set_focus(field)
+    field.select_all()
 
 
 async def run_at_once(app: Any, key: str) -> bool:

@@ -4,21 +4,15 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
+
+from console.files.paths import shown_path
 
 
 def short_path(p: str | os.PathLike) -> str:
-    """``p`` relative to the working folder when inside it, else with ``~``, else as is."""
-    path = Path(p)
-    try:
-        return str(path.resolve().relative_to(Path.cwd().resolve()))
-    except ValueError:
-        pass
-    try:
-        return "~/" + str(path.resolve().relative_to(Path.home().resolve()))
-    except ValueError:
-        return str(path)
+    """``p`` as the screens show it: ``console.files.paths.shown_path`` (``~/...`` under
+    the home folder, else absolute; a relative path as typed)."""
+    return shown_path(p)
 
 
 def from_thread(app: Any, fn: Callable[..., Any], *args: Any, **kw: Any) -> Any:

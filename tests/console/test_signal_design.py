@@ -142,8 +142,10 @@ def test_summary_numbers():
         ("sine(250 Hz, 1 s, 40 V)", "amplitude 1 s is a duration, expected a voltage"),
         ("sine(250 Hz, 40 V, 1 s) * 0.5", "for a gain write"),
         ("sin(250 Hz, 4 V, 1 s)", "did you mean 'sine'"),
-        ("__import__('os').system('true')", "call one of sine, square"),
-        ("__import__('os')", "unknown function '__import__'"),
+        # a quote is no character of the language: named before any name is looked up
+        ("__import__('os').system('true')", '"\'" at column 12 is not part of the signal'),
+        ("__import__('os')", '"\'" at column 12 is not part of the signal syntax'),
+        ("__import__(os)", "unknown function '__import__'"),
         ("sine(250 Hz, 4 V, 1 s).real", "not part of the signal syntax"),
         ("open", "'open' is not part of the signal syntax"),
         ("sine(250 Hz, 4 V, 1 s", "does not read"),

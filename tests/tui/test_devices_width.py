@@ -10,7 +10,9 @@ import asyncio
 
 from textual.widgets import DataTable
 
+from console.config.profile import PROJECT_PROFILES
 from console.core.types import DeviceStatus
+from console.files.paths import shown_path
 from console.runtime.context import Context
 from console.tui.app import HapTableApp
 
@@ -108,11 +110,14 @@ def test_the_profile_line_and_the_failure_under_it_are_seen_on_entry_at_80x24(pl
             await wait_for(pilot, lambda: app.focused is cards, 10, "the cards focused")
             await pilot.pause(0.5)
             top = "\n".join(screen_lines(app)[3:8])
-            assert "profile sim (profiles/sim.toml)" in top, top
+            # the profile's path as every message shows it: never relative to the
+            # working folder (``shown_path``), whole however it wraps
+            shown = f"profile sim ({shown_path(PROJECT_PROFILES / 'sim.toml')})"
+            assert shown in " ".join(" ".join(top.split("\n")).split()), top
             pane._show_result("sound card 'x' did not open: no such card", error=True)
             await pilot.pause(0.5)
             lines = screen_lines(app)
-            at = [i for i, line in enumerate(lines) if "profile sim (profiles/" in line]
+            at = [i for i, line in enumerate(lines) if "profile sim (" in line]
             failed = [i for i, line in enumerate(lines) if "did not open" in line]
             assert at and failed and at[0] < failed[0], "\n".join(lines)
             assert app.focused is cards and "twin" in "\n".join(lines), "\n".join(lines)

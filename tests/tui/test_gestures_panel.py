@@ -6,6 +6,7 @@ progress bar and a summary, training cancelled
 from __future__ import annotations
 
 import asyncio
+from pathlib import Path
 
 from textual.widgets import Input
 
@@ -101,10 +102,13 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
     asyncio.run(scenario())
 
 
-def test_gestures_panel_at_80x24(snap_compare):
+def test_gestures_panel_at_80x24(snap_compare, monkeypatch):
     """The panel at the smallest supported terminal, after a bad repetition count (stable
-    plugins and relative paths, so the picture does not depend on the machine)."""
+    plugins and relative paths, so the picture does not depend on the machine: the
+    project's profile reads ``~/profiles/sim.toml``, its folder the home)."""
     from console.config.plugins import load_plugins
+
+    monkeypatch.setenv("HOME", str(Path(__file__).resolve().parents[2]))
 
     names = ("twin", "twin.camera", "twin.plate", "gestures")
     plugins = load_plugins(builtins={n: f"plugins.{n}" for n in names})

@@ -43,3 +43,23 @@ def test_a_wrong_unit_is_named_where_it_was_typed(plugins, size):
                 assert "comma" not in _status(app)
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_a_character_outside_the_language_is_named_where_it_was_typed(plugins, size):
+    """Issue 27, fifth new-user try: ``sine([250] Hz, 40 V, 0.5 s)`` was told a comma was
+    missing at column 6 (``console.signals.syntax.check_text``: one rule for them all)."""
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=size) as pilot:
+            expr = app.query_one("#sig-expr", Input)
+            await wait_for(pilot, lambda: app.focused is expr, 10, "expression focused")
+            expr.value = "sine([250] Hz, 40 V, 0.5 s)"
+            await pilot.press("enter")
+            says = "'[' at column 6 is not part of the signal syntax"
+            await wait_for(pilot, lambda: says in _status(app), 10, "the bracket named")
+            assert "not [250] Hz" in _status(app), _status(app)  # the fix, whole
+            assert "comma" not in _status(app)
+
+    asyncio.run(scenario())

@@ -9,6 +9,7 @@ import difflib
 import html
 import pickle
 import re
+from pathlib import Path
 
 import pytest
 from pytest_textual_snapshot import node_to_report_path
@@ -20,6 +21,15 @@ from console.tui.app import HapTableApp
 from .conftest import command, wait_for
 
 SIZE = (80, 24)
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(autouse=True)
+def _home_is_the_project(monkeypatch):
+    """The project's own files read ``~/profiles/...`` wherever it was checked out (a
+    path shows under ``~`` or absolute, never relative to the working folder:
+    ``console.files.paths.shown_path``): the pictures do not depend on the machine."""
+    monkeypatch.setenv("HOME", str(ROOT))
 
 
 def _app(initial: str, *extra: str) -> HapTableApp:
