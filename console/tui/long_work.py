@@ -44,7 +44,7 @@ from console.tui.kept_text import wrap_kept
 from console.tui.lapse import ask
 from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import log_status, said_here, screen_name
-from console.tui.time_left import left_words, seconds_left
+from console.tui.time_left import Steady, left_words, seconds_left
 from console.tui.util import from_thread
 
 #: a step silent this long (s) says how long it has been in it
@@ -100,6 +100,7 @@ class LongWork(Vertical):
         self._report: tuple[float, str, float] | None = None
         self._expect: tuple[float, float] | None = None
         self._shown = 0.0  # the bar's furthest point in the running job
+        self._left = Steady()  # the time left shown: steady between reports
         #: the running job's lines say their own time left (a demo's start clock)
         self._timed_by_job = False
         self._ticker = None
@@ -218,6 +219,7 @@ class LongWork(Vertical):
         self._stop = stop = threading.Event()
         self._t0, self._report, self._expect = time.monotonic(), None, None
         self._shown = 0.0  # the bar's furthest point: it never goes back
+        self._left.reset()
         self._timed_by_job = timed_by_job
         if self._ticker is None:
             self._ticker = self.set_interval(1.0, self._tick)
@@ -264,7 +266,8 @@ class LongWork(Vertical):
     def _progress(self, frac: float, text: str, at: float | None = None) -> None:
         """A report of the running job (``frac``, its line): the line with the time left."""
         now = time.monotonic()
-        if at is None:  # a new report: the last one's expectation is past
+        report = at is None
+        if report:  # a new report: the last one's expectation is past
             self._expect, at = None, now
         self._report = (frac, text, at)
         shown, left = frac, seconds_left(now - self._t0, frac)
@@ -276,6 +279,7 @@ class LongWork(Vertical):
             left = max(seconds - quiet, 0.0) + (rest or 0.0) * (1 - end) / max(1 - shown, 1e-9)
             if quiet > seconds:  # later than expected: the pace so far, the step's too
                 left = rest
+        left = self._left.left(left, report)  # counts down; rises by noise at reports only
         # the bar only moves forward (a report below what it showed keeps its place)
         shown = self._shown = max(shown, self._shown)
         if self._timed_by_job:  # its line has its own clock

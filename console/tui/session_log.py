@@ -38,6 +38,8 @@ def event_line(ev: SessionEvent) -> tuple[str, str] | None:
     if isinstance(ev, Stopped):
         if (ev.topic, ev.reason) in QUIET_STOPS:
             return None
+        if ev.reason.startswith("refused: "):  # it never started: nothing stopped
+            return f"{ev.topic}{name} {ev.reason}", "information"
         return f"{ev.topic}{name} stopped: {ev.reason or 'ended'}", "information"
     return None
 

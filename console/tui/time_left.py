@@ -61,3 +61,39 @@ class Pace:
         if n <= 0 or total <= 0:
             return None
         return (self.clock() - self.t0) / n * max(total - done, 0)
+
+
+#: how far a time left may rise at a new report over its countdown: seconds, or share
+RISE_S, RISE_SHARE = 1.0, 0.1
+
+
+class Steady:
+    """A time left as the operator reads it, steady: between reports of progress it
+    counts down (the rate over the run so far said it; the clock alone is no news), and
+    at a report it may rise over that countdown only by noise (``RISE_S`` or
+    ``RISE_SHARE`` of it), so a slower stretch raises it gradually, never in jumps at
+    every tick ("7 s, 9 s, 10 s left" at 28 to 38 %); once the countdown ran out (the
+    work is later than said) the estimate stands."""
+
+    def __init__(self, clock=time.monotonic) -> None:
+        self.clock = clock
+        self.value: float | None = None
+        self.at = 0.0
+
+    def reset(self) -> None:
+        self.value = None
+
+    def left(self, estimate: float | None, report: bool) -> float | None:
+        """The time left to show now for ``estimate`` (None: unknown); ``report``: the
+        work reported progress now (else a tick of the clock)."""
+        now = self.clock()
+        if self.value is None or estimate is None:
+            self.value, self.at = estimate, now
+            return estimate
+        down = self.value - (now - self.at)
+        if down <= 0.0:  # later than it said: the estimate (the pace so far) is the truth
+            self.value, self.at = estimate, now
+            return estimate
+        rise = max(RISE_S, RISE_SHARE * down) if report else 0.0
+        self.value, self.at = min(estimate, down + rise), now
+        return self.value

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -142,6 +143,7 @@ def train_and_evaluate(
     Nothing is written when cancelled."""
     from . import evaluate as ev  # lazy: OpenCV, scikit-learn (dataset_commands loads jobs)
 
+    t0 = time.monotonic()
     dataset, model_out = Path(dataset).expanduser(), Path(model_out).expanduser()
     if model_refusal(model_out):
         raise UserError(model_refusal(model_out))
@@ -169,6 +171,7 @@ def train_and_evaluate(
         cancelled=cancelled,
     )
     step(progress, cancelled, 0.97, "saving the model")
+    model.meta["train_s"] = round(time.monotonic() - t0, 1)  # the next t says its time
     model_out.parent.mkdir(parents=True, exist_ok=True)
     path = model.save(model_out)
     step(progress, None, 1.0, "saved")
@@ -215,6 +218,7 @@ def describe_files(dataset: str | Path | None, model: str | Path | None) -> dict
                 info["n_samples"] = meta.get("n_samples")
                 info["evaluation"] = meta.get("evaluation")
                 info["trained_on"] = meta.get("trained_on")
+                info["train_s"] = meta.get("train_s")
             except UserError as exc:
                 info["error"] = worded(exc, AT_CONSOLE)
         out["model"] = info

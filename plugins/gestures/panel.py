@@ -46,10 +46,12 @@ from .jobs import (
     synth_target,
     train_and_evaluate,
 )
+from .live_model import use_model
 from .model import GestureModel
 from .panel_fields import kept_fields
 from .settings import model_file
 from .synth import estimate as synth_estimate
+from .train_ask import train_confirmed
 
 #: seconds in which a second ``s`` starts the synthesis whose size was shown
 CONFIRM_S = 20.0
@@ -138,7 +140,7 @@ HELP = (
     "s: synthesize a twin dataset (subjects x 10 gestures x reps) into the dataset folder:\n"
     "   first its size and time and whether it replaces the dataset there, then s again\n"
     "t: train + evaluate (`haptable gestures eval`'s cross-validation, then the model on\n"
-    "   every sample, as `haptable gestures train`)\n"
+    "   every sample, as `haptable gestures train`): first its size and time, then t again\n"
     "x: cancel (nothing half-written stays)   r: refresh   escape: back\n"
     "tab: edit the fields (enter returns here)   left/right: between the buttons\n"
     "PageUp/PageDown: scroll the panel"
@@ -307,6 +309,7 @@ class GesturesPanel(ModalScreen):
         #: the synthesis the operator was told the size of: (dataset, subjects, reps),
         #: until when ``s`` starts it and what it does to the folder (``synth_target``)
         self._synth_asked: tuple[tuple[Path, int, int], float, dict] | None = None
+        self._train_asked: tuple[object, float] | None = None  # the same for t
         self.files: dict[str, Any] = {}
         #: the model whose training result the result block shows (its one place)
         self._result_model: Path | None = None
@@ -396,11 +399,16 @@ class GesturesPanel(ModalScreen):
         return Path(ds).expanduser(), Path(model).expanduser()
 
     # ------------------------------------------------------------------ actions
-    def refuse(self, exc: UserError, fields: Callable[[], object]) -> None:
-        """A field's refusal on the work line, true while ``fields()`` refuses the same:
-        once the fields read (or refuse otherwise) the line says that instead."""
+    def refuse(
+        self, exc: UserError | str, fields: Callable[[], object] = tuple, said: bool = False
+    ) -> None:
+        """A refusal on the work line (``said``: shown already, a job's) is about the
+        fields as they are: once one changes it goes, and what ``fields()`` says of them
+        then (another refusal, or the idle line) shows: one rule for the fields' checks
+        and the work's (``s`` with a folder it would not write to)."""
         text = str(exc)
-        self.work.error(text)
+        if not said:
+            self.work.error(text)
 
         def verdict() -> str:
             try:
@@ -416,7 +424,8 @@ class GesturesPanel(ModalScreen):
             else:
                 self.work.show(self.work.idle_text)
 
-        lapse_on_change(self, lambda: self.work.text, text, now_true, verdict)
+        values = lambda: tuple(f.value for f in self.query(Input))  # noqa: E731
+        lapse_on_change(self, lambda: self.work.text, text, now_true, values)
 
     def action_refresh(self) -> None:
         try:
@@ -455,6 +464,7 @@ class GesturesPanel(ModalScreen):
         if self.work.busy:  # its own line says it (console.tui.said: one place)
             self.work.say_busy()
             return
+        self._train_asked = None  # another action: t's question lapses
         asked = (ds, subjects, reps)
         if pending is None or pending[0] != asked or time.monotonic() > pending[1]:
             self._estimate(asked)
@@ -536,15 +546,15 @@ class GesturesPanel(ModalScreen):
             return
         refused = dataset_refusal(ds) or model_refusal(model)  # as the files block says
         if refused or not ds.is_dir():
-            self.work.error(
-                in_panel(refused, ds, model)
-                or f"dataset {short_path(ds)}: none yet, s synthesizes one"
-            )
+            none = f"dataset {short_path(ds)}: none yet, s synthesizes one"
+            self.refuse(in_panel(refused, ds, model) or none, self._train_fields)
             return
         known = self.files.get("dataset", {})  # the files block's: too small is said now
         known = known if _same(known.get("path"), ds) else {}
         if too_few(known, cv):
-            self.work.error(too_few(known, cv))
+            self.refuse(too_few(known, cv), self._train_fields)
+            return
+        if not train_confirmed(self, (ds, model, cv), known, CONFIRM_S):  # size, time first
             return
         live = model.resolve() == Path(self.default_model).resolve()
 
@@ -610,18 +620,6 @@ class GesturesPanel(ModalScreen):
         self._result_model = None
         self.query_one("#gp-result", Static).update("")
 
-    def use_model(self, model) -> str:
-        """Hand a model trained to the profile's ``[gestures] model`` to the console's
-        running classifier (this plugin's own ``svm``); says what happened."""
-        svc = self.app.session.camera_started
-        clf = getattr(svc, "classifier", None)
-        if clf is None or not hasattr(clf, "model"):
-            return "the console's classifier loads it when the camera starts"
-        clf.model = model
-        clf.problem = None  # a model that did not fit is replaced
-        svc.classifier_problem = ""
-        return "the Camera screen's classifier uses it now"
-
     def action_cancel(self) -> None:
         self._drop_question()
         if not self.work.cancel():
@@ -680,6 +678,7 @@ class GesturesPanel(ModalScreen):
         (what is true), and ``s`` measures again."""
         if event.input.id:
             self.typed[event.input.id] = event.value
+            self._train_asked = None  # t's question was about the fields before
         if event.input.id in _SYNTH_FIELDS and self._synth_asked is not None:
             self._drop_question()
             self.work.show(f"{event.input.id[3:]} changed: s says the size and time again")
@@ -691,10 +690,12 @@ class GesturesPanel(ModalScreen):
     def on_long_work_finished(self, event: LongWork.Finished) -> None:
         if event.outcome == "cancelled":  # x: the work line says it; the log keeps it
             said_here(self.work, "Gestures", self.work.text, "warning")
+        elif event.outcome == "failed":  # about the fields it ran with: goes as they change
+            self.refuse(self.work.text, said=True)
         if event.outcome == "done" and isinstance(event.result, dict) and "folds" in event.result:
             text = fold_lines(event.result)
             if "loaded" in event.result:
-                text += "\n" + self.use_model(event.result["loaded"])
+                text += "\n" + use_model(self.app.session, event.result["loaded"])
             self._result_model = Path(event.result["model"])
             self.query_one("#gp-result", Static).update(text)
         self.action_refresh()

@@ -138,6 +138,7 @@ def run(session: Any, spec: dict[str, Any], control: Any, responder: Any) -> Non
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, why, name=pid)
+        why = console_run.stop_reason(why, control)
     session.emit(Stopped(TOPIC, name=pid, reason=why))
 
 
@@ -240,6 +241,7 @@ def run_adaptive(
     emit("progress", {"done": mirror.done, "total": total})
     again = f"; resuming at trial {mirror.done + 1}" if mirror.done else ""
     session.emit(Started(TOPIC, name=pid, detail=f"{proto.title} -> {root}{again}"))
+    control.started = True
     play, log_event = screen_recorded(session, spec, root, setup, vmap, pseed, holder)
 
     def played(plan: Any) -> bool:

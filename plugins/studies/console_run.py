@@ -54,10 +54,19 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, why, name=pid)
-        session.emit(Stopped(TOPIC, name=pid, reason=why))
+        session.emit(Stopped(TOPIC, name=pid, reason=stop_reason(why, control)))
         return
     why = "finished" if res["finished"] else ("aborted" if res["aborted"] else "stopped")
     session.emit(Stopped(TOPIC, name=pid, reason=f"{why}: {res['done']}/{res['total']} done"))
+
+
+def stop_reason(why: str, control: Any) -> str:
+    """Why a run ended that failed with ``why``: ``refused: why`` when it never reached
+    its plan (``control.started``): no run began, so none stopped (the log and the
+    screen say a refusal, and the participant's saved progress stays as it was)."""
+    if getattr(control, "started", True) or why.startswith("refused"):
+        return why
+    return f"refused: {why}"
 
 
 def map_held(session: Any, uses_map: bool, who: str) -> Any:
@@ -271,6 +280,7 @@ def run_study(
             emit("earlier", {"records": earlier})
         detail = f"{proto.title} -> {prep.files.root}" + (f"; {again}" if again else "")
         session.emit(Started(TOPIC, name=spec["pid"], detail=detail))
+        control.started = True
         return run_plan(
             files,
             prep.plan,

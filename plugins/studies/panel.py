@@ -59,7 +59,7 @@ from console.plugin_api.tui import (
     waits_for_question,
 )
 
-from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status
+from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status, refusals
 from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .answer_hold import HeldAnswer
@@ -306,7 +306,7 @@ class StudiesPane(HeldAnswer, Vertical):
         self.control = Control()
         self.responder = None if spec["simulate"] else QueueResponder()
         self.running = spec["pid"]
-        self.last = {"pid": spec["pid"]}
+        refusals.begin(self, spec["pid"])  # what shows stays until the run reports
         try:
             self.responses = adaptive_console.responses_of(str(study))
         except UserError as exc:
@@ -314,8 +314,6 @@ class StudiesPane(HeldAnswer, Vertical):
             self._say(str(exc), "error")
             return
         self.said = ("", "information")  # a new run: the last key's outcome is history
-        self.query_one("#study-trials", TrialsTable).clear_trials()
-        self.query_one("#study-progress", ProgressBar).update(total=1, progress=0)
         self.run_out, self.run_study = spec["out"], spec["study"]
         self.pace.stop()  # the pace of this run, from its first count
         if self.analysed is not None and same_folder(self.analysed[0], spec["out"]):
@@ -346,8 +344,8 @@ class StudiesPane(HeldAnswer, Vertical):
         if wid not in NUMBER_FIELDS or self._value("simulate"):  # a simulated one: unused
             return
         refused = field_refusal(wid, event.value)
-        if refused:
-            self._say(refused, "warning")
+        if refused:  # true while the field holds it
+            self._say(refused, "warning", about=lambda: self._value(wid))
         elif self.said[0].startswith(f"{NUMBER_FIELDS[wid][0]} = "):
             self._say("")
 
@@ -516,6 +514,7 @@ class StudiesPane(HeldAnswer, Vertical):
         if ev.topic != TOPIC:
             return
         if isinstance(ev, Started):
+            refusals.run_began(self)
             self.running = self.last["pid"] = ev.name
             self.refresh_bindings()  # p pauses it
             self._status(f"{escape(ev.name)}: {escape(ev.detail)}")
@@ -526,6 +525,8 @@ class StudiesPane(HeldAnswer, Vertical):
             self.refresh_bindings()  # p: pause, nothing paused any more
             self.asking = None
             self.abort_until = None
+            if ev.reason.startswith("refused: "):  # it never began: shown as it was
+                return refusals.refused(self, ev.name, ev.reason)
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
             self.query_one(AdaptiveView).run_stopped()  # "the run is on ..." no more
@@ -561,6 +562,7 @@ class StudiesPane(HeldAnswer, Vertical):
         if kind == "analysis":
             self._analysis(d)
             return
+        refusals.run_began(self)  # the bar and the trials are the run's now
         if kind in adaptive_console.PLOT_KINDS:
             self.query_one(AdaptiveView).snapshot(d)
         age_s = time.monotonic() - self.said_at
@@ -652,12 +654,14 @@ class StudiesPane(HeldAnswer, Vertical):
         self.query_one("#study-status", Static).update(text)
 
     @waits_for_question
-    def _say(self, text: str, severity: str = "information") -> None:
-        """The outcome of the experimenter's own key or button, on this screen's status
-        (its one place: logged, a toast only while the screen is not in view)."""
+    def _say(self, text: str, severity: str = "information", about: Any = None) -> None:
+        """The outcome of the experimenter's key or button on the status (logged, a toast
+        while the screen is hidden); a refusal lapses as its ``about`` changes (``tie``)."""
         self.said = (text, severity)
         status_said(self, "Studies", text, severity)  # news logged, an error toasted if hidden
         self._status(self._status_text)
+        if text and severity != "information":
+            refusals.tie(self, text, about)
 
     def on_tick_space_held(self, event: Tick.SpaceHeld) -> None:
         self._say(space_held(event.tick.words), "warning")  # where the focus is

@@ -151,10 +151,11 @@ def status_lines(
         lines.append(escape(L["reset"]))
     elif not running and L.get("stopped"):
         error = L.get("error")
-        ended = "stopped" if "total" in L else "refused"  # no plan reached: not run
-        ended = f"{who}'s run {ended}"  # whose, on the line itself (the head may scroll)
+        refused = L["stopped"].startswith("refused: ") or "total" not in L  # not run
+        ended = f"{who}'s run {'refused' if refused else 'stopped'}"  # whose, on the line
         if error and error == L["stopped"]:  # a failure: its reason once, in red
-            lines.append(f"[red]{escape(ended)}: {escape(error)}[/]")
+            why = error.removeprefix("refused: ")
+            lines.append(f"[red]{escape(ended)}: {escape(why)}[/]")
         else:
             lines.append(f"{escape(ended)}: {escape(L['stopped'])}")
             if error:

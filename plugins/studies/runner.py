@@ -50,6 +50,8 @@ class Control:
         self._paused = threading.Event()
         self._aborted = threading.Event()
         self.reason = ""
+        #: the run reached its plan (its ``Started`` said): a stop before it is a refusal
+        self.started = False
 
     @property
     def paused(self) -> bool:

@@ -30,6 +30,8 @@ LONG_S = 300.0
 ANSWER_S = 1.0
 #: the earlier runs' trials read for their pace at most (the folder's first ones)
 PACE_FILES = 20
+#: a trial that took less than this share of its stimuli's time was fast-forwarded
+REAL_TIME_SHARE = 0.9
 
 
 @dataclass
@@ -97,6 +99,8 @@ class Size:
     at_most: bool
     seconds: float | None
     basis: str
+    #: ``seconds`` is a floor (the stimuli alone), not a pace measured
+    at_least: bool = False
 
     @property
     def long(self) -> bool:
@@ -108,6 +112,8 @@ class Size:
         if self.seconds is None:
             return n
         about = left_words(self.seconds).removesuffix(" left")
+        if self.at_least:
+            about = "at least " + about.removeprefix("about ")
         return f"{n}, {about} ({self.basis})" if self.basis else f"{n}, {about}"
 
 
@@ -143,23 +149,28 @@ def run_size(
         basis = f"the stimuli and {ANSWER_S:g} s to answer, {stim_s + ANSWER_S:g} s a trial"
         return Size(trials, True, trials * (stim_s + ANSWER_S), basis)
     trials = max(protocols.load(study).n_trials - done, 0)
-    pace = earlier_pace(out, study, simulate)
+    pace = earlier_pace(out, study, simulate, stimulus_s)
     if pace is None and stimulus_s is not None:  # a first run: the stimuli say
-        if simulate:
-            return Size(
-                trials, False, trials * stimulus_s, f"the stimuli, {stimulus_s:g} s a trial"
-            )
+        if simulate:  # the console plays them in real time; its rendering adds to them
+            basis = f"its stimuli play in real time, {stimulus_s:g} s a trial"
+            return Size(trials, False, trials * stimulus_s, basis, at_least=True)
         a_s = ANSWER_S
         basis = f"the stimuli and {a_s:g} s to answer, {stimulus_s + a_s:g} s a trial"
         return Size(trials, False, trials * (stimulus_s + a_s), basis)
     if pace is None:
         return Size(trials, False, None, "")
-    return Size(trials, False, trials * pace, "at the pace of the earlier runs in the folder")
+    basis = f"at the pace of the earlier runs in the folder, {pace:.1f} s a trial"
+    return Size(trials, False, trials * pace, basis)
 
 
-def earlier_pace(out: Path, study: str, simulate: bool) -> float | None:
+def earlier_pace(
+    out: Path, study: str, simulate: bool, stimulus_s: float | None = None
+) -> float | None:
     """The median seconds a trial took in the folder's earlier runs of ``study`` (by
-    participants as simulated as this one), None without any."""
+    participants as simulated as this one), None without any. A trial shorter than
+    its stimuli (``stimulus_s``) did not play them in real time as the console does (a
+    shell's ``haptable study run --simulate`` fast-forwards the twin): not this run's
+    pace, not counted."""
     try:
         name = protocols.load(study).name
         paths = sorted(Path(out).expanduser().glob("*/trials.jsonl"))[:PACE_FILES]
@@ -177,6 +188,8 @@ def earlier_pace(out: Path, study: str, simulate: bool) -> float | None:
             if bool(e.get("simulated")) != simulate:
                 continue
             t0, t1 = e.get("t_start"), e.get("t_end")
-            if isinstance(t0, int | float) and isinstance(t1, int | float) and t1 >= t0:
+            if not (isinstance(t0, int | float) and isinstance(t1, int | float) and t1 >= t0):
+                continue
+            if stimulus_s is None or t1 - t0 >= REAL_TIME_SHARE * stimulus_s:
                 took.append(float(t1) - float(t0))
     return statistics.median(took) if took else None

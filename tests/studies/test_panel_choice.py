@@ -87,7 +87,9 @@ def test_the_size_of_a_fixed_run_comes_from_the_folder_s_earlier_runs(tmp_path, 
     assert run_size("exp2", tmp_path, "P01", True).words() == "200 trials"
     first = run_size("exp2", tmp_path, "P01", True, stimulus_s=3.1)
     assert first.seconds == 200 * 3.1 and first.long  # 10 min 20 s: it asks first
-    assert first.words() == "200 trials, about 10 min 20 s (the stimuli, 3.1 s a trial)"
+    assert first.words() == (
+        "200 trials, at least 10 min 20 s (its stimuli play in real time, 3.1 s a trial)"
+    )
     person = run_size("exp2", tmp_path, "P01", False, stimulus_s=3.1)
     assert person.seconds == 200 * 4.1
     d = tmp_path / "P01"
@@ -101,11 +103,41 @@ def test_the_size_of_a_fixed_run_comes_from_the_folder_s_earlier_runs(tmp_path, 
     size = run_size("exp2", tmp_path, "P02", True)
     assert size.seconds == 400.0 and size.long
     assert size.words() == (
-        "200 trials, about 6 min 40 s (at the pace of the earlier runs in the folder)"
+        "200 trials, about 6 min 40 s (at the pace of the earlier runs in the folder, 2.0 s "
+        "a trial)"
     )
     assert run_size("exp2", tmp_path, "P02", False).seconds is None  # a person: not known
-    # the folder's pace wins over the stimuli's
-    assert run_size("exp2", tmp_path, "P02", True, stimulus_s=3.1).seconds == 400.0
+    # the folder's pace wins over the stimuli's (its trials as long as them at least)
+    assert run_size("exp2", tmp_path, "P02", True, stimulus_s=2.1).seconds == 400.0
+
+
+def test_a_simulated_run_s_time_is_the_console_s_pace(tmp_path):
+    """Issue 27: exp2 simulated said "200 trials, about 10 min (3 s a trial)" while the
+    shell's simulated exp1 ran 0.5 s a trial. The shell's ``--simulate`` fast-forwards
+    the twin; the console plays the stimuli in real time (3.1 to 4.6 s a trial measured
+    on the twin), so the stimuli are the run's floor ("at least"), and trials shorter
+    than their stimuli (a fast-forwarded run in the folder) are not the console's pace."""
+    from plugins.studies.saved_run import run_size
+
+    def trials(pid: str, took_s: float) -> None:
+        d = tmp_path / pid
+        d.mkdir()
+        lines = [
+            {"event": "done", "experiment": "exp2", "trial": i, "simulated": True}
+            | {"t_start": 100.0 + 5 * i, "t_end": 100.0 + took_s + 5 * i}
+            for i in range(5)
+        ]
+        (d / "trials.jsonl").write_text("".join(json.dumps(x) + "\n" for x in lines))
+
+    trials("P07", 0.5)  # a shell's fast-forwarded run in the same folder
+    size = run_size("exp2", tmp_path, "P01", True, stimulus_s=3.0)
+    assert size.seconds == 600.0 and size.at_least, size
+    assert size.words().startswith("200 trials, at least 10 min"), size.words()
+    trials("P08", 4.0)
+    trials("P09", 4.0)  # the console's runs: their pace is this run's
+    size = run_size("exp2", tmp_path, "P01", True, stimulus_s=3.0)
+    assert size.seconds == 800.0 and not size.at_least, size
+    assert "about 13 min 20 s" in size.words(), size.words()
 
 
 def test_a_saved_run_is_this_protocol_s_only(tmp_path):
@@ -151,7 +183,7 @@ def test_a_first_simulated_exp2_run_asks_first(
             await pilot.pause(0.3)
             said = " ".join(str(status.render()).split())
             assert pane.running is None and not (tmp_path / "P01" / "plan.json").exists(), said
-            assert "s again within 5 s starts exp2 with P01: 200 trials, about 10 min" in said
+            assert "s again within 5 s starts exp2 with P01: 200 trials, at least 10 min" in said
             await pilot.press("s")
             await wait_for(pilot, lambda: pane.running == "P01", 30, "the run")
             await pilot.press("a", "a")

@@ -69,6 +69,12 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
             assert "4 reps" in str(files.render())
             assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
 
+            # t first says the training's size and its time (issue 27: it started at once,
+            # 20 s for 60 samples unsaid): no training of this model timed yet
+            await pilot.press("t")
+            assert not work.busy, work.text
+            assert "t again within 20 s to train: 2fold on 40 samples" in work.text, work.text
+            assert "its time said as it runs" in work.text, work.text
             # training cancelled: says so, no model file, no temporary left behind
             await pilot.press("t", "x")
             await wait_for(pilot, lambda: work.outcome is not None, 180, "training stopped")
@@ -77,7 +83,7 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
             assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
 
             # training to the end: accuracy per fold, the model in the files block
-            await pilot.press("t")
+            await pilot.press("t", "t")
             await wait_for(pilot, lambda: work.outcome is not None, 300, "training done")
             assert work.outcome == "done", work.text
             res = panel.query_one("#gp-result")
@@ -89,6 +95,10 @@ def test_gestures_panel_synth_train_cancel_and_bad_input(plugins, tmp_path, one_
             await wait_for(pilot, lambda: "result below" in str(files.render()), 10, "files")
             assert "fold 1" not in str(files.render()) and "below" in work.text
             assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures.skops", "set"]
+            # the next t says its time at the pace this training took
+            await pilot.press("t")
+            assert "on 40 samples" in work.text and "the last training's pace" in work.text
+            assert " s a sample)" in work.text and not work.busy, work.text
 
             # the e-stop works here too, and the panel's safety bar shows it
             await pilot.press("ctrl+e")

@@ -65,7 +65,7 @@ def test_panel_and_cli_evaluate_alike(plugins, dataset, tmp_path, capsys, one_mo
             panel.query_one("#gp-dataset", Input).value = str(dataset)
             panel.query_one("#gp-model", Input).value = str(model)
             panel.query_one("#gp-cv", Input).value = "2fold"
-            await pilot.press("t")
+            await pilot.press("t", "t")  # the second starts what the first said
             work = panel.work
             await wait_for(pilot, lambda: work.outcome is not None, 300, "training done")
             assert work.outcome == "done", work.text

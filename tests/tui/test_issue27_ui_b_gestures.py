@@ -104,7 +104,7 @@ def test_training_paced_said_once_and_estimate_lapses(plugins, tmp_path, monkeyp
             await pilot.pause(0.1)
             assert "s again" not in work.text and "reps changed" in work.text, work.text
             # training: the final fit moves the bar past 90 % and says the time left
-            await pilot.press("t")
+            await pilot.press("t", "t")  # the first says its size and time
             seen: list[str] = []
 
             def moved() -> bool:
