@@ -22,7 +22,7 @@ from textual.containers import Horizontal, VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Static
 
-from console.plugin_api import AT_CONSOLE, UserError, load_profile, worded
+from console.plugin_api import UserError, load_profile
 from console.plugin_api import data_dir as console_data_dir
 from console.plugin_api.tui import (
     ConsoleFooter,
@@ -31,7 +31,6 @@ from console.plugin_api.tui import (
     PathField,
     SafetyBar,
     answered,
-    escape,
     from_thread,
     lapse_on_change,
     said_here,
@@ -49,6 +48,7 @@ from .jobs import (
 from .live_model import use_model
 from .model import GestureModel
 from .panel_fields import kept_fields
+from .panel_text import describe, fold_lines, in_panel, mb
 from .settings import model_file
 from .synth import estimate as synth_estimate
 from .train_ask import train_confirmed
@@ -160,14 +160,6 @@ def saved_profile(ctx: Any) -> Any:
     return load_profile(prof.path, ctx.pm)
 
 
-def _mb(n: int | None) -> str:
-    return "?" if n is None else f"{n / 1e6:.1f} MB"
-
-
-def _pct(x: float | None) -> str:
-    return "-" if x is None else f"{100 * x:.1f} %"
-
-
 def _same(a: Path | str | None, b: Path | str | None) -> bool:
     """The same file, as typed or resolved."""
     if a is None or b is None:
@@ -187,78 +179,6 @@ def count(text: str, what: str, lo: int = 1, hi: int = 1000) -> int:
     if n is None or not lo <= n <= hi:
         raise UserError(f"{what} {text.strip()!r}: give a whole number from {lo} to {hi}")
     return n
-
-
-def in_panel(exc: BaseException | str, *shown: Path) -> str:
-    """A message of the plugin as the panel says it: worded for the console (its fix
-    names this panel's keys: ``console.core.words``) with its paths written as the
-    panel writes them (``short_path``)."""
-    text = exc if isinstance(exc, str) else worded(exc, AT_CONSOLE)
-    for path in shown:
-        for form in {str(path), str(path.expanduser()), str(path.expanduser().resolve())}:
-            text = text.replace(form, short_path(path))
-    return text
-
-
-def describe(info: dict[str, Any], evaluation_below: bool = False) -> str:
-    """The files block of the panel from ``jobs.describe_files``; ``evaluation_below``:
-    the model's evaluation is the result block's (said there, once)."""
-    d, m = info.get("dataset", {}), info.get("model", {})
-    lines = [f"[b]dataset[/b] {escape(short_path(d.get('path', '?')))}"]
-    if "error" in d:  # a refusal first: s and t say the same
-        lines.append(f"  [red]{escape(in_panel(d['error'], Path(d.get('path', '?'))))}[/]")
-    elif not d.get("exists"):
-        lines.append("  none yet: s synthesizes one from the camera twin")
-    else:
-        subj = d["subjects"]
-        lines.append(
-            escape(
-                f"  {d['samples']} samples, {_mb(d.get('bytes'))}: {len(subj)} subject(s) "
-                f"({', '.join(subj[:6])}{' ...' if len(subj) > 6 else ''}), "
-                f"{d['gestures']} gestures, {d['reps']} reps"
-            )
-        )
-    lines.append(f"[b]model[/b] {escape(short_path(m.get('path', '?')))}")
-    if "error" in m:
-        lines.append(f"  [red]{escape(in_panel(m['error'], Path(m.get('path', '?'))))}[/]")
-    elif not m.get("exists"):
-        lines.append("  none yet: t trains and evaluates one")
-    else:
-        ev = m.get("evaluation") or {}
-        lines.append(escape(f"  {_mb(m.get('bytes'))}, trained on {m.get('n_samples')} samples"))
-        if ev and evaluation_below:
-            lines.append("  its evaluation: the result below")
-        elif ev:
-            lines.append(
-                escape(
-                    f"  {ev.get('cv')}: static {_pct(ev.get('static_accuracy'))}, "
-                    f"dynamic {_pct(ev.get('dynamic_accuracy'))}; folds "
-                    + ", ".join(_pct(f["accuracy"]) for f in ev.get("folds", []))
-                )
-            )
-            lines.append(escape(f"  {ev.get('procedure', 'procedure not recorded')}"))
-        else:
-            lines.append("  no evaluation in its metadata (trained by the CLI)")
-    return "\n".join(lines)
-
-
-def fold_lines(res: dict[str, Any]) -> str:
-    """The result block after training: accuracy per fold and overall."""
-    lines = [
-        f"[b]{escape(res['cv'])}[/b] on {escape(res['n_samples'])} samples: static "
-        f"{escape(_pct(res['static_accuracy']))}, dynamic {escape(_pct(res['dynamic_accuracy']))}",
-        escape(f"  {res.get('procedure', '?')} (as `haptable gestures eval`)"),
-    ]
-    for i, f in enumerate(res["folds"], 1):
-        who = f" (subject {f['subject']})" if "subject" in f else ""
-        lines.append(
-            escape(
-                f"  fold {i}{who}: {_pct(f['accuracy'])} of {f['n_test']} "
-                f"(static {_pct(f['static_accuracy'])}, dynamic {_pct(f['dynamic_accuracy'])})"
-            )
-        )
-    lines.append(escape(f"model saved to {short_path(res['model'])} ({_mb(res['bytes'])})"))
-    return "\n".join(lines)
 
 
 #: the rows of the screen below left in view: its title row and its tab bar (two rows)
@@ -488,7 +408,7 @@ class GesturesPanel(ModalScreen):
         def summary(info) -> str:
             return (
                 f"synthesized {info['samples']} samples ({len(info['subjects'])} x "
-                f"{len(info['gestures'])} x {info['reps']}), {_mb(info['bytes'])}, "
+                f"{len(info['gestures'])} x {info['reps']}), {mb(info['bytes'])}, "
                 f"{info['seconds']:.1f} s"
             )
 
