@@ -14,6 +14,7 @@ from textual.widgets import DataTable, Label, Static, Switch
 from console.core.channels import ChannelLayout
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.tui.focus_keys import show_keys
+from console.tui.kept_text import KeptText, keep
 from console.tui.live import live_of
 from console.tui.safety_bar import relay_names
 from console.tui.said import said_here
@@ -56,8 +57,9 @@ def routing_words(status: dict) -> str:
     if not p:
         return "a stimulus"
     if int(p.get("pid") or 0) == os.getpid():
-        return f"{p.get('name') or 'a plan'} (this console)"
-    return f"{p.get('command') or p.get('name') or 'a process'} (pid {p.get('pid')})"
+        return f"{p.get('name') or 'a plan'} {keep('(this', 'console)')}"
+    who = p.get("command") or p.get("name") or "a process"
+    return f"{who} {keep('(pid', str(p.get('pid')) + ')')}"  # the pid never parted
 
 
 def playing_name(status: dict) -> str:
@@ -93,7 +95,7 @@ def _why(
     if status["busy"]:
         if routed:
             mine = "closed" if ch in operator_setting(status) else "open"
-            return f"[yellow]yours: {escape(mine)}[/]"  # back when it ends (the hint says)
+            return f"[yellow]{escape(keep('yours:', mine))}[/]"  # kept whole; back when it ends
         return f"[yellow]as yours; a toggle waits for {escape(playing_name(status))} to end[/]"
     return "[green]ready[/] (switches only in silence)"
 
@@ -185,7 +187,8 @@ class RelaysPane(VerticalScroll):
                 yield label
                 # its own keys first in the footer while it has the focus
                 yield show_keys(OnOff(value=False, id=f"relay-{ch}"), enter="toggle")
-                yield Static("", id=f"interlock-{ch}", classes="interlock")
+                # wraps under itself, never parting "yours: open" or "(pid 4242)"
+                yield KeptText("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
         yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)
 
