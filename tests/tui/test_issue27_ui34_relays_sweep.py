@@ -1,7 +1,9 @@
 """Relays (F4) while ``haptable play sweep`` runs in a shell (issue 27, "visible and
 truthful"): at 80 columns a routed row showed ``closed by haptable play sweep (pid N) -
 yours:`` and the operator's setting was cut off without an ellipsis (wrapped, ``open``
-alone under it once the pane scrolls). Pilot at 80x24 and 120x40, the sweep a subprocess."""
+alone under it once the pane scrolls); pressing 3 while the sweep played left its bracket
+``[off]`` until the sweep ended although the setting is the operator's (the row says it
+waits). Pilot at 80x24 and 120x40, the sweep a subprocess."""
 
 from __future__ import annotations
 
@@ -86,5 +88,26 @@ def test_routed_rows_show_who_closed_it_and_your_setting_whole(plugins, size):
                 assert any("yours: open" in ln for ln in lines), lines
                 row = app.query_one(f"#interlock-{ch}")
                 assert row.region.right <= app.screen.region.right, row.region
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+def test_a_toggle_during_the_sweep_sets_the_bracket_at_once(plugins, size):
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins))
+        async with app.run_test(size=size) as pilot, _sweeping(app, pilot) as proc:
+            await pilot.press("3")
+            await pilot.pause(0.2)
+            # the operator's setting at once; the row says the switch waits
+            assert _on(app, 3), _seen(app, 3)
+            assert "waits" in _seen(app, 3) and "sweep" in _seen(app, 3), _seen(app, 3)
+            await pilot.pause(0.5)
+            assert _on(app, 3), _seen(app, 3)  # no status read takes it back
+            await asyncio.to_thread(proc.wait, 30)
+            await wait_for(pilot, lambda: _seen(app, 3).startswith("closed"), 10, "closed")
+            assert _on(app, 3)
+            await wait_for(pilot, lambda: _seen(app, 2).startswith("open"), 10, "2 open")
+            assert not _on(app, 2)
 
     asyncio.run(scenario())

@@ -230,9 +230,12 @@ class RelaysPane(VerticalScroll):
         mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
         for ch, (sw, state) in self._rows.items():
-            if ch not in self.pending and sw.value != (ch in mine):
+            # a toggle waiting (for a stimulus to end, for silence) is the operator's
+            # setting already: its bracket says it at once, the row says it waits
+            on = self.pending.get(ch, ch in mine)
+            if sw.value != on:
                 with sw.prevent(Switch.Changed):
-                    sw.value = ch in mine
+                    sw.value = on
             text = interlock(ch, status, self.pending, self.refused, self._opened)
             before = self._said.get(ch)
             if before != text:
