@@ -62,6 +62,13 @@ def routing_words(status: dict) -> str:
     return f"{who} {keep('(pid', str(p.get('pid')) + ')')}"  # the pid never parted
 
 
+def held_words(status: dict) -> str:
+    """Who holds the outputs and how to end it ("" when none does), as the session's
+    check says (``ConsoleSession.held_why``, the one a toggle makes; the output watch
+    puts it in ``status``)."""
+    return str(status.get("held") or "").removeprefix("refused: ")
+
+
 def playing_name(status: dict) -> str:
     """The name of the plan that plays now (``sweep``), ``the stimulus`` when unknown."""
     p = (status.get("kernel") or {}).get("playing")
@@ -90,6 +97,9 @@ def _why(
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
+    if held_words(status):  # the toggle's own check refuses it: no key to advise
+        e_stop = "the e-stop opened it; " if ch in opened and state == "open" else ""
+        return f"[red]{escape(e_stop)}held: toggles refused (see above)[/]"
     if ch in opened and state == "open":
         return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
     if status["busy"]:
@@ -159,6 +169,7 @@ class RelaysPane(VerticalScroll):
         self.pending: dict[int, bool] = {}
         self.refused: dict[int, str] = {}
         self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
+        self._held_refused: set[int] = set()  # ... a hold caused (its end clears them)
         self._operator: frozenset[int] = frozenset()  # the operator's setting, last read
         self._mine: set[int] = set()  # ... and as the toggles here set it (a read can race)
         self._reset = True  # no e-stop since the last reset (a status read before the
@@ -178,6 +189,8 @@ class RelaysPane(VerticalScroll):
             "when it ends; during an e-stop a toggle is refused and never runs later.",
             classes="hint",
         )
+        # who holds the outputs and how to end it, once above the rows (they say "held")
+        yield KeptText("", id="relays-held", markup=False)
         channels = range(1, int(prof.get("relays.channels")) + 1)
         width = max(len(self._relay_label(ch)) for ch in channels) + 1  # the names align
         for ch in channels:
@@ -229,6 +242,7 @@ class RelaysPane(VerticalScroll):
             return  # not mounted yet: ``on_mount`` draws the state then
         mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
+        self._show_held(held_words(status))
         for ch, (sw, state) in self._rows.items():
             # a toggle waiting (for a stimulus to end, for silence) is the operator's
             # setting already: its bracket says it at once, the row says it waits
@@ -252,6 +266,19 @@ class RelaysPane(VerticalScroll):
             outputs = ChannelLayout.from_profile(self.app.ctx.profile).names
             for row in log_rows(log[-50:], fs, self._names, outputs):
                 self._table.add_row(*row)
+
+    def _show_held(self, held: str) -> None:
+        """The line above the rows: who holds the outputs and how to end it (hidden when
+        none does; what the hold refused goes with it); redrawn only when that changed."""
+        if not held:  # what the hold refused is no longer so
+            for ch in self._held_refused:
+                self.refused.pop(ch, None)
+            self._held_refused.clear()
+        line = self.query_one("#relays-held", KeptText)
+        text = f"relay toggles refused: {held}" if held else ""
+        if line.kept != text:
+            line.update(text)
+            line.display = bool(held)
 
     def _note_operator(self, status: dict) -> None:
         """Keep the operator's own setting as last read outside an e-stop (what an e-stop
@@ -300,6 +327,7 @@ class RelaysPane(VerticalScroll):
     def request(self, ch: int, closed: bool) -> None:
         self.refused.pop(ch, None)
         self._estop_refused.discard(ch)
+        self._held_refused.discard(ch)
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key itself: the worker may run only after a quick reset, and
@@ -310,6 +338,7 @@ class RelaysPane(VerticalScroll):
             return
         held = self.app.session.held_why()  # a study run holds the table: not switched
         if held:
+            self._held_refused.add(ch)  # said until the hold ends
             self._done(ch, held.removeprefix("refused: "))
             return
         self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
