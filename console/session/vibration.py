@@ -335,7 +335,11 @@ class VibrationService:
         return float(TWIN_MEASURE_S) if twin else None
 
     def no_map_text(self) -> str:
-        """Why there is no current map, and what to do (the Vibration screen shows it)."""
+        """Why there is no current map, and what to do (the Vibration screen shows it);
+        while a run holds the map, what ``m`` says (its own check): no key it refuses."""
+        held = self.refusal("measure")
+        if held:
+            return f"no vibration map here, and none made now: {held}"
         if not self.twin_plate_only():
             takes = self.measure_takes()
             return (

@@ -9,6 +9,7 @@ from textual.binding import Binding
 
 from console.core.contracts import SimulatedCamera
 from console.tui.recording_keys import REPLAY_BINDINGS
+from console.tui.refused_keys import RefusedKeys
 
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
 KEYS_LINE = "g gestures  u U TUIO  b background  W keep"
@@ -80,6 +81,81 @@ BINDINGS = [
     Binding("S", "save_calibration", "save cal.", show=False),
     Binding("x", "cancel", "cancel", show=False),
 ]
+
+
+#: the actions that need the camera: refused while a demo holds it (the footer dims them)
+NEEDS_CAMERA = frozenset(
+    {
+        "tune",
+        "tune_chosen",
+        "choose",
+        "view",
+        "reset_tuning",
+        "save_tuning",
+        "calibrate",
+        "skip_target",
+        "save_calibration",
+        "background",
+        "toggle_output",
+        "edit_target",
+        "exposure",
+        "hold_hand",
+    }
+)
+
+
+def camera_held(holder: str) -> str:
+    """Why a key that needs the camera is refused while ``holder`` (a demo) has it."""
+    return f"{holder} holds the camera (stop it on Scenes, F6)"
+
+
+class CameraRefusals(RefusedKeys):
+    """The Camera screen's refused keys (``console.tui.refused_keys``): those that need
+    the camera while a demo holds it (``service.borrower``); its status line (``say``)
+    says why, the footer dims them."""
+
+    service: Any
+    _refused_for: str | None = None  # the holder the status line names
+
+    def _borrowed(self, key: str) -> bool:
+        """Whether a demo holds the camera (the line then says ``key`` is refused, why)."""
+        holder = self.service.borrower
+        if holder is None:
+            return False
+        self._refused_for = holder
+        self.say(f"{key} refused: {camera_held(holder)}", "warning")  # type: ignore[attr-defined]
+        return True
+
+    def _refusal_still_true(self) -> None:
+        """The refusal on the status line is cleared when the camera is back."""
+        if self._refused_for is not None and self.service.borrower != self._refused_for:
+            self._refused_for = None
+            self.say("")  # type: ignore[attr-defined]
+
+    def check_action(self, action: str, parameters: tuple) -> bool | None:
+        """While the target field has the focus every key of this screen types into it:
+        the footer promises none of them (nor n, x while nothing takes them); a key
+        refused now shows dimmed (a demo has the camera)."""
+        found = self.query("#camera-target")  # type: ignore[attr-defined]
+        busy = self._keys_state()
+        typing = found and found.first().has_focus
+        shown = self.replay_allows(action) and not typing  # type: ignore[attr-defined]
+        return shown and key_shown(action, parameters, *busy) and self.key_dimmed(action)
+
+    def _keys_state(self) -> tuple[bool, bool, bool]:
+        """(calibrating, assisting, a calibration waits for S): the footer's keys."""
+        s: Any = self
+        return (s.calibration is not None, s._assisting is not None, s.unsaved)
+
+    def key_refusal(self, action: str) -> str:
+        holder = self.service.borrower
+        return camera_held(holder) if holder is not None and action in NEEDS_CAMERA else ""
+
+    def refusal_state(self) -> Any:
+        return self.service.borrower
+
+    def say_refused(self, key: str, why: str) -> None:
+        self._borrowed(key)  # type: ignore[attr-defined]  # the one wording, the line kept
 
 
 def key_shown(

@@ -3,6 +3,9 @@ waveform``, ``+ -: amplitude``), a number and its unit (``0.0 V peak``, ``64
 samples``). Textual wraps at any space, so at 80 columns a hint ended in ``t:`` with
 ``waveform`` alone on the next line.
 
+Words joined by a no-break space (``NBSP``: ``yours:\u00a0open``, ``(pid\u00a04242)``)
+are one group too: the writer says what must not part.
+
 ``kept_breaks`` finds where a line may break; ``wrap_kept`` wraps a Rich ``Text`` (its
 styles kept) at those places only; ``KeptText`` is a ``Static`` that does it at its
 width, whatever the terminal's size.
@@ -78,8 +81,15 @@ KEY_MAX = 7
 #: a key's item (``m: measure``, ``b: build the lookup tables``) at most this long is
 #: kept on one line
 ITEM_MAX = 28
+#: a no-break space: the words either side of it stay on one line (``keep``)
+NBSP = "\u00a0"
 _NUMBER = re.compile(r"^[(~≈<>≤≥+\-−]?\d[\d.,]*$")
-_WORD = re.compile(r"\S+")
+_WORD = re.compile(r"(?:[^\s]|\u00a0)+")  # a no-break space is inside a word
+
+
+def keep(*words: str) -> str:
+    """``words`` joined by no-break spaces: ``KeptText`` never breaks between them."""
+    return NBSP.join(words)
 
 
 def _is_key(tok: str) -> bool:

@@ -121,6 +121,8 @@ class OutputsWatch:
         self._others_t = -1e9  # when they were last read
         self.latch: dict | None = None  # no outputs here: the table's e-stop (``own_latch``)
         self._latch_t = -1e9  # when it was last read
+        self._held_why = ""  # why a play is refused now (``_held``), as last read
+        self._held_t: float | None = None  # when
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -141,6 +143,7 @@ class OutputsWatch:
         self._force = self._force or force
         self._others_t = -1e9  # an e-stop or a reset: the other tables' latches too
         self._latch_t = -1e9  # and this table's, while no outputs are open here
+        self._held_t = None  # and who holds the outputs (a run started or ended)
         self._wake.set()
 
     def _run(self) -> None:
@@ -154,8 +157,12 @@ class OutputsWatch:
         self.polls += 1
         force, self._force = self._force, False
         status = self._read()
-        if status is not None:  # the other tables' latches, for the bar
-            status = {**status, "latched_elsewhere": self._latched_elsewhere(force)}
+        if status is not None:  # the other tables' latches, for the bar; who holds them
+            status = {
+                **status,
+                "latched_elsewhere": self._latched_elsewhere(force),
+                "held": self._held(force),
+            }
             self.latch = None
         else:  # no gate here to ask: the table's latch says whether it is e-stopped
             self._read_own_latch(force)
@@ -209,6 +216,18 @@ class OutputsWatch:
             except Exception:  # noqa: BLE001 - logged; the bar shows what it knew
                 log.debug("reading the other tables' latches", exc_info=True)
         return self._others
+
+    def _held(self, now: bool) -> str:
+        """Why a play or a relay toggle is refused now, the session's one check
+        (``held_why``: a run or a demo holds the outputs; "" when none does), read with
+        the other tables' latches (every ``OTHERS_S``, at once when poked)."""
+        if now or self._held_t is None or time.monotonic() - self._held_t >= OTHERS_S:
+            self._held_t = time.monotonic()
+            try:
+                self._held_why = self.session.held_why()
+            except Exception:  # noqa: BLE001 - logged; the screens show what they knew
+                log.debug("reading who holds the outputs", exc_info=True)
+        return self._held_why
 
     def _read_log(self) -> Any:
         out = self.session.outputs

@@ -27,7 +27,7 @@ from textual.widgets import Input, Static
 
 from console.core.errors import UserError
 from console.runtime.exposure_assist import assist_service, snapshot_reading
-from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, hold_hand, key_shown
+from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, CameraRefusals, hold_hand
 from console.tui.camera_live import (
     hang,
     loop_lines,
@@ -77,7 +77,14 @@ class SidePanel(VerticalScroll):
             self.call_after_refresh(pane.keep_in_view)
 
 
-class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, RecordingMixin, Horizontal):
+class CameraPane(
+    CameraSideMixin,
+    CameraWizardMixin,
+    CameraTuningMixin,
+    RecordingMixin,
+    CameraRefusals,
+    Horizontal,
+):
     HELP_TEXT = HELP_TEXT
     BINDINGS = BINDINGS
     can_focus = True
@@ -106,7 +113,6 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         self._info_rows = 0  # the most lines the live block had
         self._head_rows = 0  # the most lines its pinned part had
         self._parts: dict[str, Any] = {}  # widget id -> widget (``_part``)
-        self._refused_for: str | None = None  # the borrower the status line names
         self._said_at: tuple | None = None  # the wizard's state when the status was said
         self._typed: str | None = None  # a TUIO target refused: the field shows it again
         self._failed: list[str] = []  # why the switchable outputs failed to open, as said
@@ -197,21 +203,6 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
     def _status_still_true(self) -> None:
         """The line cleared once the calibration started, ended or was cancelled."""
         if self._said_at is not None and self._said_at != self._wizard_state():
-            self.say("")
-
-    def _borrowed(self, key: str) -> bool:
-        """Whether a demo holds the camera (the line then says ``key`` is refused, why)."""
-        holder = self.service.borrower
-        if holder is None:
-            return False
-        self._refused_for = holder
-        self.say(f"{key} refused: {holder} holds the camera (stop it on Scenes, F6)", "warning")
-        return True
-
-    def _refusal_still_true(self) -> None:
-        """The refusal on the status line is cleared when the camera is back."""
-        if self._refused_for is not None and self.service.borrower != self._refused_for:
-            self._refused_for = None
             self.say("")
 
     @property
@@ -341,6 +332,7 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         if self._busy != (busy := self._keys_state()):
             self._busy = busy  # the footer shows the wizard's keys while it runs
             self.refresh_bindings()
+        self.refusals_changed()  # a demo took the camera / gave it back: keys dimmed
         if svc.error:
             self._message(f"[red]camera: {escape(svc.error)}[/]")
             self._no_live_numbers("no live numbers: the camera is not running")
@@ -607,6 +599,8 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
 
     def on_key(self, event) -> None:
         box = self.query_one("#camera-target", Input)
+        if not box.has_focus and self.answer_refused(event):  # a dimmed key says why
+            return
         if event.key == "escape" and box.has_focus:
             event.stop()
             refused, self._typed = self._typed, None  # Esc: unchanged, the next U shows
@@ -620,18 +614,6 @@ class CameraPane(CameraSideMixin, CameraWizardMixin, CameraTuningMixin, Recordin
         elif event.key == "escape" and self.calibration is not None:
             event.stop()
             self.action_cancel()  # as x: a user leaving the wizard with Esc cancels it
-
-    def check_action(self, action: str, parameters: tuple) -> bool | None:
-        """While the target field has the focus every key of this screen types into it:
-        the footer promises none of them (nor n, x while nothing takes them)."""
-        found = self.query("#camera-target")
-        busy = self._keys_state()  # as it is now
-        typing = found and found.first().has_focus
-        return self.replay_allows(action) and not typing and key_shown(action, parameters, *busy)
-
-    def _keys_state(self) -> tuple[bool, bool, bool]:
-        """(calibrating, assisting, a calibration waits for S): the footer's keys."""
-        return (self.calibration is not None, self._assisting is not None, self.unsaved)
 
     def on_descendant_focus(self, _event) -> None:
         self.refresh_bindings()

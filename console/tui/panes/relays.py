@@ -14,6 +14,7 @@ from textual.widgets import DataTable, Label, Static, Switch
 from console.core.channels import ChannelLayout
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL, Started, Stopped
 from console.tui.focus_keys import show_keys
+from console.tui.kept_text import KeptText, keep
 from console.tui.live import live_of
 from console.tui.safety_bar import relay_names
 from console.tui.said import said_here
@@ -56,8 +57,16 @@ def routing_words(status: dict) -> str:
     if not p:
         return "a stimulus"
     if int(p.get("pid") or 0) == os.getpid():
-        return f"{p.get('name') or 'a plan'} (this console)"
-    return f"{p.get('command') or p.get('name') or 'a process'} (pid {p.get('pid')})"
+        return f"{p.get('name') or 'a plan'} {keep('(this', 'console)')}"
+    who = p.get("command") or p.get("name") or "a process"
+    return f"{who} {keep('(pid', str(p.get('pid')) + ')')}"  # the pid never parted
+
+
+def held_words(status: dict) -> str:
+    """Who holds the outputs and how to end it ("" when none does), as the session's
+    check says (``ConsoleSession.held_why``, the one a toggle makes; the output watch
+    puts it in ``status``)."""
+    return str(status.get("held") or "").removeprefix("refused: ")
 
 
 def playing_name(status: dict) -> str:
@@ -88,12 +97,15 @@ def _why(
         return f"[yellow]waits to {escape(want)}: outputs must be silent for the guard gap first[/]"
     if ch in refused:
         return f"[red]refused: {escape(refused[ch])}[/]"
+    if held_words(status):  # the toggle's own check refuses it: no key to advise
+        e_stop = "the e-stop opened it; " if ch in opened and state == "open" else ""
+        return f"[red]{escape(e_stop)}held: toggles refused (see above)[/]"
     if ch in opened and state == "open":
         return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
     if status["busy"]:
         if routed:
             mine = "closed" if ch in operator_setting(status) else "open"
-            return f"[yellow]yours: {escape(mine)}[/]"  # back when it ends (the hint says)
+            return f"[yellow]{escape(keep('yours:', mine))}[/]"  # kept whole; back when it ends
         return f"[yellow]as yours; a toggle waits for {escape(playing_name(status))} to end[/]"
     return "[green]ready[/] (switches only in silence)"
 
@@ -157,6 +169,7 @@ class RelaysPane(VerticalScroll):
         self.pending: dict[int, bool] = {}
         self.refused: dict[int, str] = {}
         self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
+        self._held_refused: set[int] = set()  # ... a hold caused (its end clears them)
         self._operator: frozenset[int] = frozenset()  # the operator's setting, last read
         self._mine: set[int] = set()  # ... and as the toggles here set it (a read can race)
         self._reset = True  # no e-stop since the last reset (a status read before the
@@ -176,6 +189,8 @@ class RelaysPane(VerticalScroll):
             "when it ends; during an e-stop a toggle is refused and never runs later.",
             classes="hint",
         )
+        # who holds the outputs and how to end it, once above the rows (they say "held")
+        yield KeptText("", id="relays-held", markup=False)
         channels = range(1, int(prof.get("relays.channels")) + 1)
         width = max(len(self._relay_label(ch)) for ch in channels) + 1  # the names align
         for ch in channels:
@@ -185,7 +200,8 @@ class RelaysPane(VerticalScroll):
                 yield label
                 # its own keys first in the footer while it has the focus
                 yield show_keys(OnOff(value=False, id=f"relay-{ch}"), enter="toggle")
-                yield Static("", id=f"interlock-{ch}", classes="interlock")
+                # wraps under itself, never parting "yours: open" or "(pid 4242)"
+                yield KeptText("", id=f"interlock-{ch}", classes="interlock")
         yield Static("switch log (newest first)", classes="heading")
         yield LiteralTable(id="relaylog", cursor_type="row", show_cursor=False)
 
@@ -226,10 +242,14 @@ class RelaysPane(VerticalScroll):
             return  # not mounted yet: ``on_mount`` draws the state then
         mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
+        self._show_held(held_words(status))
         for ch, (sw, state) in self._rows.items():
-            if ch not in self.pending and sw.value != (ch in mine):
+            # a toggle waiting (for a stimulus to end, for silence) is the operator's
+            # setting already: its bracket says it at once, the row says it waits
+            on = self.pending.get(ch, ch in mine)
+            if sw.value != on:
                 with sw.prevent(Switch.Changed):
-                    sw.value = ch in mine
+                    sw.value = on
             text = interlock(ch, status, self.pending, self.refused, self._opened)
             before = self._said.get(ch)
             if before != text:
@@ -246,6 +266,19 @@ class RelaysPane(VerticalScroll):
             outputs = ChannelLayout.from_profile(self.app.ctx.profile).names
             for row in log_rows(log[-50:], fs, self._names, outputs):
                 self._table.add_row(*row)
+
+    def _show_held(self, held: str) -> None:
+        """The line above the rows: who holds the outputs and how to end it (hidden when
+        none does; what the hold refused goes with it); redrawn only when that changed."""
+        if not held:  # what the hold refused is no longer so
+            for ch in self._held_refused:
+                self.refused.pop(ch, None)
+            self._held_refused.clear()
+        line = self.query_one("#relays-held", KeptText)
+        text = f"relay toggles refused: {held}" if held else ""
+        if line.kept != text:
+            line.update(text)
+            line.display = bool(held)
 
     def _note_operator(self, status: dict) -> None:
         """Keep the operator's own setting as last read outside an e-stop (what an e-stop
@@ -294,6 +327,7 @@ class RelaysPane(VerticalScroll):
     def request(self, ch: int, closed: bool) -> None:
         self.refused.pop(ch, None)
         self._estop_refused.discard(ch)
+        self._held_refused.discard(ch)
         out = self.app.session.outputs
         if out is not None and out.estopped:
             # refused on the key itself: the worker may run only after a quick reset, and
@@ -304,6 +338,7 @@ class RelaysPane(VerticalScroll):
             return
         held = self.app.session.held_why()  # a study run holds the table: not switched
         if held:
+            self._held_refused.add(ch)  # said until the hold ends
             self._done(ch, held.removeprefix("refused: "))
             return
         self._opened.discard(ch)  # the operator's own toggle: the row says its outcome

@@ -80,6 +80,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         self.session = None
         self.summary = ""
         self.status_text = ""
+        self._no_map: str | None = None  # the no-map line as said (``show_state``)
         self.selected: list[int] = []
         self.rows = 7
         self.cols = 12
@@ -268,9 +269,22 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             from_thread(self.app, self._error, worded(exc, AT_CONSOLE))
             return
         if session is None:
-            from_thread(self.app, self.status, self.service.no_map_text())
+            from_thread(self.app, self._no_map_said, self.service.no_map_text())
             return
         self._show_map(session)
+
+    def show_state(self, _status: dict, _log) -> None:
+        """The output state changed (a run in a shell began or ended holding the map):
+        the no-map line, while it shows, says again what ``m`` would do now."""
+        if self.session is None and self.status_text == self._no_map:
+            text = self.service.no_map_text()
+            if text != self._no_map:
+                self._no_map = text
+                self.status(text)
+
+    def _no_map_said(self, text: str) -> None:
+        self._no_map = text
+        self.status(text)
 
     def _show_map(self, session) -> None:
         """In a worker: show the session's new current map; its lookup tables are built
