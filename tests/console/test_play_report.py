@@ -13,7 +13,7 @@ from console.signals.stimuli import make_stimulus
 def test_play_lists_only_its_own_relay_switches(profile, outputs, capsys):
     fs = int(profile.get("audio.sample_rate_hz"))
     plan = make_stimulus("sine-PA", fs, float(profile.get("limits.max_plan_s")))
-    ctx = SimpleNamespace(profile=profile, outputs=lambda fast=False: nullcontext(outputs))
+    ctx = SimpleNamespace(profile=profile, outputs=lambda fast=False, **kw: nullcontext(outputs))
     play_and_report(ctx, plan, fast=True)
     first = [x for x in capsys.readouterr().out.splitlines() if x.startswith("  relay")]
     assert first, "the first play switched relays"

@@ -10,6 +10,7 @@ the profile's [twin_faults]."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 from types import SimpleNamespace
 
@@ -42,7 +43,11 @@ def table(tmp_path_factory):
             "twin_inputs": {"seed": seed},
             "selftest": {"baseline": str(base), **selftest},
         }
-        return SimpleNamespace(profile=dataclasses.replace(prof, data=data), pm=pm)
+        return SimpleNamespace(
+            profile=dataclasses.replace(prof, data=data),
+            pm=pm,
+            holding_table=lambda who=None: contextlib.nullcontext(),  # the hold: tested apart
+        )
 
     ctx = make()
     with open_outputs(ctx.profile, pm, fast=True) as out:
