@@ -88,6 +88,14 @@ def profile_state_dir(profile_name: str, *parts: str) -> Path:
     return state_dir(_profile_part(profile_name), *parts)
 
 
+def _resolved(p: Path) -> Path:
+    """``p.resolve()``, or ``p`` where it cannot be (a symlink loop, a folder gone)."""
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):
+        return p
+
+
 def shown_path(p: str | os.PathLike) -> str:
     """``p`` as a message or a screen shows it: as given when relative or starting with
     ``~`` (what was typed, read where it was typed); under the home folder as ``~/...``;
@@ -99,8 +107,8 @@ def shown_path(p: str | os.PathLike) -> str:
         return raw
     home = Path.home()
     if home != Path(home.anchor):  # a home of / would put ~ before every path
-        for h in dict.fromkeys((home, home.resolve())):
-            for q in dict.fromkeys((path, path.resolve())):
+        for h in dict.fromkeys((home, _resolved(home))):
+            for q in dict.fromkeys((path, _resolved(path))):
                 try:
                     rest = q.relative_to(h)
                 except ValueError:

@@ -226,7 +226,7 @@ def test_g_opens_the_gestures_panel_and_a_model_trained_there_is_used(
             ):
                 panel.query_one(f"#gp-{name}", Input).value = value
             work = panel.work
-            await pilot.press("t")
+            await pilot.press("t", "t")  # t asks first, t again trains
             await wait_for(pilot, lambda: work.outcome is not None, 300, "trained")
             assert work.outcome == "done", work.text
             res = panel.query_one("#gp-result")

@@ -24,7 +24,7 @@ def test_the_title_comes_back_after_a_toast_that_ended_behind_the_log(plugins, s
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=size, notifications=True) as pilot:
             await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs")
-            title = "HapTable — HapTable twin - profiles/sim.toml"
+            title = f"{app.title} — {app.sub_title}"  # as the header shows them
             await wait_for(pilot, lambda: title in screen_lines(app)[0], 10, "the title")
             app.notify("e-stop reset: outputs stay silent until something plays " * 2, timeout=4)
             await wait_for(pilot, lambda: title not in screen_lines(app)[0], 10, "cut by it")
