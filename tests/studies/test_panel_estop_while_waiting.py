@@ -27,9 +27,9 @@ def _status(pane) -> str:
     return str(pane.query_one("#study-status").render())
 
 
-async def _waiting(pilot, app, pane, out) -> None:
-    """A person's exp1 run of P01 started and waiting for the first answer."""
-    pane.query_one("#protocol").value = "exp1"
+async def _waiting(pilot, app, pane, out, protocol: str = "exp1") -> None:
+    """A person's run of P01 (exp1) started and waiting for the first answer."""
+    pane.query_one("#protocol").value = protocol
     pane.query_one("#out").value = str(out)
     pane.query_one("#simulate").value = False
     for wid, v in DETAILS:
@@ -77,5 +77,25 @@ def test_the_estop_stops_a_run_waiting_for_an_answer(
                 await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: not app.session.outputs.estopped, 10, "reset")
             await wait_for(pilot, lambda: "s resumes P01 at trial 1" in _status(pane), 10)
+
+    asyncio.run(scenario())
+
+
+def test_the_estop_stops_an_adaptive_run_waiting_for_an_answer(double_plugins, map_file, tmp_path):
+    """An adaptive protocol's run (its own runner) stops the same way."""
+
+    async def scenario():
+        app = studies_app(double_plugins)
+        async with app.run_test(size=(80, 24)) as pilot:
+            pane = await studies_pane(pilot, app, map_file)
+            pane.query_one("#protocol").value = "threshold_vibrotactile"
+            await pilot.pause(0.2)
+            await _waiting(pilot, app, pane, tmp_path, protocol="threshold_vibrotactile")
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: pane.running is None, 10, "the run stopped")
+            assert "stopped by the e-stop" in pane.last["stopped"], pane.last
+            assert "stopped by the e-stop" in _status(pane), _status(pane)
+            await pilot.press("ctrl+r")
+            await wait_for(pilot, lambda: not app.session.outputs.estopped, 10, "reset")
 
     asyncio.run(scenario())
