@@ -153,9 +153,10 @@ class ConsoleSession:
             return self._vibration
 
     # ------------------------------------------------------------------ observers
-    def subscribe(self, fn: Subscriber) -> None:
-        """Call ``fn(event)`` for everything the session reports (from any thread)."""
+    def subscribe(self, fn: Subscriber) -> Callable[[], None]:
+        """Call ``fn(event)`` for all the session reports (any thread); returns its undo."""
         self._subscribers.append(fn)
+        return lambda: self._subscribers.remove(fn)
 
     def emit(self, event: SessionEvent) -> None:
         for fn in list(self._subscribers):
@@ -544,8 +545,7 @@ class ConsoleSession:
 
     def last_plan_trace(self) -> tuple[Any, Any] | None:
         """(PlayReport, ScopeTrace) of the last played plan as the gate passed it, read
-        when it ended (kept after the scope's ring moved on); None while it plays or when
-        none was kept."""
+        when it ended (kept after the scope's ring moved on); None while it plays or none."""
         with self._lock:
             kept = self._last_trace
             last = self._last_play

@@ -44,6 +44,7 @@ from .adaptive_run import (
 )
 from .plan import participant_seed
 from .quest import QuestTrack
+from .run_estop import estop_aborts
 from .runner import Aborted, Answer
 from .start import PARTICIPANT_KEYS, simulated_participant
 from .store import RunFiles, load_participant, make_participant, participant_dir, save_participant
@@ -131,10 +132,13 @@ def run(session: Any, spec: dict[str, Any], control: Any, responder: Any) -> Non
 
     try:
         with (
+            estop_aborts(session, control) as estop,
             session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder,
             console_run.map_held(session, _uses_map(ap.load(spec["study"])), holder),
         ):
             why = run_adaptive(session, spec, control, responder, emit, holder=holder)
+            if why.startswith("aborted") and estop.reason:  # said as the e-stop's stop
+                raise UserError(estop.reason + why.removeprefix("aborted"))
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, why, name=pid)

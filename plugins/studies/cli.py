@@ -28,7 +28,7 @@ from .hold import hold_for_run, hold_map_for_run, hold_table_for_run
 from .plan import check_seed_row
 from .run_estop import estop_reason, says_estopped
 from .start import PARTICIPANT_KEYS, prepare, stored_participant
-from .store import check_id, resume_text
+from .store import check_detail, check_id, resume_text
 from .store import progress as store_progress
 
 MAX_PARTICIPANTS = 500
@@ -101,6 +101,9 @@ def _ids(args: argparse.Namespace) -> list[str]:
 
 
 def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
+    """The participant's details: the options' (checked at once), the missing ones asked
+    at a terminal, each answer checked as typed (the option's rule and words) and asked
+    again until it is taken; no consent noted ends the run before its first trial."""
     d = {
         "age": args.age,
         "sex": args.sex,
@@ -109,23 +112,35 @@ def _details(args: argparse.Namespace, pid: str) -> dict[str, Any]:
         "hand_length_cm": args.hand_length_cm,
         "consent": True if args.consent else None,
     }
+    for k, v in d.items():
+        if k != "consent" and v is not None:
+            d[k] = check_detail(pid, k, v)  # a bad option: said before anything is asked
     missing = [k for k in PARTICIPANT_KEYS if d[k] is None]
     if missing and not sys.stdin.isatty():
         opts = ", ".join("--" + k.replace("_", "-") for k in missing)
         raise UserError(f"participant {pid}: give {opts} (or run at a terminal to be asked)")
     for k in missing:
+        d[k] = _ask(pid, k)
+    return d
+
+
+def _ask(pid: str, k: str) -> Any:
+    """One detail typed at the terminal, asked again (saying why) until it is taken."""
+    while True:
         try:
             if k == "consent":
                 ans = input(f"{pid}: informed consent noted? [y/N] ").strip().lower()
-                d[k] = True if ans in ("y", "yes") else None
-            else:
-                d[k] = input(f"{pid}: {k.replace('_', ' ')}: ").strip()
+                return True if ans in ("y", "yes") else None
+            typed = input(f"{pid}: {k.replace('_', ' ')}: ").strip()
         except EOFError:
             raise UserError(
                 f"participant {pid}: input ended before {k.replace('_', ' ')} was given; give "
                 "it as --" + k.replace("_", "-") + " or answer at a terminal"
             ) from None
-    return d
+        try:
+            return check_detail(pid, k, typed)
+        except UserError as exc:
+            print(f"{exc}; type it again", file=sys.stderr, flush=True)
 
 
 def _vmap(args: argparse.Namespace, ctx: Any) -> Any:

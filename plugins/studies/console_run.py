@@ -23,6 +23,7 @@ from console.plugin_api.runtime import Cancelled, Snapshot, Started, Stopped
 from . import protocol as protocols
 from .projected import ProjectedAnswers
 from .responders import ObserverResponder, observer
+from .run_estop import estop_aborts, estopped_words
 from .runner import Control, run_plan
 from .sensation import resolver
 from .start import prepare, stored_participant
@@ -38,8 +39,11 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
     """Run ``spec`` (the screen's choices) and report it through the session (blocking:
     the screen's worker thread). Any failure is one line (``Failed``), then ``Stopped``."""
     pid = spec["pid"]
+    flight: dict[str, Any] = {}  # the trial under way (from 1), for the e-stop's words
 
     def emit(kind: str, info: dict[str, Any]) -> None:
+        if kind == "start":
+            flight["trial"] = info["trial"]["index"] + 1
         session.emit(Snapshot(TOPIC, name=pid, data={"kind": kind, **_plain(info)}))
         if kind == "waiting" and responder is not None:
             session.emit(Snapshot(TOPIC, name=pid, data={"kind": "ask", **_plain(info)}))
@@ -47,10 +51,13 @@ def run(session: Any, spec: dict[str, Any], control: Control, responder: Any) ->
     try:
         # the trials are not mixed with other sounds: the screens' plays are refused meanwhile
         with (
+            estop_aborts(session, control) as estop,
             session.hold_outputs(f"{pid}'s study run (Studies screen)") as holder,
             map_held(session, protocols.load(spec["study"]).stimulus != "knob", holder),
         ):
             res = run_study(session, spec, control, responder, emit, holder=holder)
+            if res["aborted"] and estop.reason:  # said as a stimulus the e-stop stopped
+                raise UserError(estopped_words(estop.reason, flight.get("trial")))
     except Exception as exc:  # noqa: BLE001 - one line for the operator, never a traceback
         why = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
         session.fail(TOPIC, why, name=pid)

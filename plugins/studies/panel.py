@@ -77,7 +77,7 @@ from .panel_text import (
 )
 from .record_switch import RECORD, folder_row, typed_field
 from .responders import QueueResponder, parse_key
-from .runner import Answer, Control
+from .runner import Control
 from .trials_table import TrialsTable
 
 ANSWERS = {"up": "up", "down": "down", "left": "left", "right": "right"}
@@ -472,23 +472,19 @@ class StudiesPane(HeldAnswer, Vertical):
         panel_choice.show_choice(self)  # its progress and trials, not the previous one's
 
     def action_answer(self, key: str) -> None:
-        self._answer(ANSWERS.get(key, key))
+        self._answer(ANSWERS.get(key, key), key)
 
     def action_digit(self, k: int) -> None:
-        if self.asking and "item" in self.asking:
-            if 1 <= k <= int(self.asking.get("scale", 7)) and self.responder is not None:
-                self.asking = None  # one score per item: the next item asks again
-                self.responder.put(int(k))
+        item = bool(self.asking and "item" in self.asking)
+        if item and 1 <= k <= int(self.asking.get("scale", 7)) and self.responder is not None:
+            self.asking = None  # one score per item: the next item asks again
+            self.responder.put(int(k))
             return
         a = parse_key(str(k), self.responses)  # a keypad: 8 2 4 6 (exp2), 1 2 (exp1)
-        if a is not None and a.response:
-            self._answer(a.response)
+        self._answer(a.response if a is not None and a.response else None, str(k))
 
-    def _answer(self, value: str) -> None:
-        if self.responder is None or not self.asking or "trial" not in self.asking:
-            return
-        self.asking = None  # one answer per stimulus
-        self.responder.put(Answer(response=value))
+    def _answer(self, value: str | None, key: str = "") -> None:
+        panel_run_keys.answer(self, value, key or value or "?")  # or says why not
 
     @work(thread=True, exclusive=True, group="study", exit_on_error=False)
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:

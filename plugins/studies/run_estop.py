@@ -10,6 +10,43 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 from console.plugin_api import EStopped
+from console.plugin_api.runtime import Stopped
+
+#: the e-stop's abort reason: its key in the console (``console.session.events``)
+ESTOP_STOPPED = "stopped by the e-stop ({why}), ctrl+r resets"
+
+
+class EStopWatch:
+    """Aborts a console run (its ``control``) at the table's e-stop, whatever the run
+    waits for (an answer, a score, a pause): the session's e-stop event (``Stopped``,
+    topic ``estop``) is observed, not the latch, which a reset typed at once clears
+    before the run would look. ``reason``: the abort's words once it came ("" before)."""
+
+    def __init__(self, control: Any) -> None:
+        self.control = control
+        self.reason = ""
+
+    def __call__(self, event: Any) -> None:
+        if event.topic == "estop" and isinstance(event, Stopped) and not self.reason:
+            self.reason = ESTOP_STOPPED.format(why=" ".join(str(event.reason).split()))
+            self.control.abort(self.reason)
+
+
+def estopped_words(reason: str, trial: int | None) -> str:
+    """A console run the e-stop stopped, as a stimulus it stopped says it: the trial."""
+    return f"trial {trial}: {reason}" if trial else reason
+
+
+@contextlib.contextmanager
+def estop_aborts(session: Any, control: Any) -> Iterator[EStopWatch]:
+    """While the block runs, the table's e-stop aborts ``control`` (``EStopWatch``)."""
+    watch = EStopWatch(control)
+    stop_watching = session.subscribe(watch)
+    try:
+        yield watch
+    finally:
+        if callable(stop_watching):
+            stop_watching()
 
 
 def estop_reason(outputs: Any) -> str | None:

@@ -63,6 +63,38 @@ def check_id(pid: str) -> str:
     raise UserError(f"participant {pid!r}: {why}")
 
 
+#: a participant's number fields: (lowest, highest)
+DETAIL_RANGES = {"age": (1, 120), "hand_width_cm": (3, 30), "hand_length_cm": (5, 40)}
+
+
+def check_detail(pid: str, name: str, v: Any, words: Words = CLI) -> Any:
+    """One of the participant's details (``age``, ``sex``, ``handedness``,
+    ``hand_width_cm``, ``hand_length_cm``) as stored, or one line naming the field (as
+    ``words`` calls it) and the rule (``UserError``): the check of ``make_participant``,
+    also for each answer typed at a prompt."""
+    label = words.fields.get(name, name)
+    shown = f"{label} {v}" if label.startswith("--") else f"{label} = {v!r}"
+    if name in ("sex", "handedness"):
+        options = SEXES if name == "sex" else HANDEDNESS
+        k = str(v).strip().lower()
+        hits = [o for o in options if o == k] or [o for o in options if o.startswith(k)]
+        if len(hits) != 1:
+            raise UserError(f"participant {pid}: {shown}: use one of {', '.join(options)}")
+        return hits[0]
+    lo, hi = DETAIL_RANGES[name]
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        x = math.nan
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise UserError(f"participant {pid}: {shown}: give a number from {lo:g} to {hi:g}")
+    if name != "age":
+        return x
+    if x != int(x):
+        raise UserError(f"participant {pid}: {shown}: give whole years")
+    return int(x)
+
+
 def make_participant(
     pid: str,
     *,
@@ -92,35 +124,11 @@ def make_participant(
             f"{'it' if len(names) == 1 else 'them'}{also} before the first trial"
         )
 
-    def said(name: str, v: Any) -> str:
-        label = words.fields.get(name, name)
-        return f"{label} {v}" if label.startswith("--") else f"{label} = {v!r}"
-
-    def num(name: str, v: Any, lo: float, hi: float) -> float:
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            x = math.nan
-        if not (math.isfinite(x) and lo <= x <= hi):
-            raise UserError(
-                f"participant {pid}: {said(name, v)}: give a number from {lo:g} to {hi:g}"
-            )
-        return x
-
-    def choice(name: str, v: Any, options: tuple[str, ...]) -> str:
-        k = str(v).strip().lower()
-        hits = [o for o in options if o == k] or [o for o in options if o.startswith(k)]
-        if len(hits) != 1:
-            raise UserError(f"participant {pid}: {said(name, v)}: use one of {', '.join(options)}")
-        return hits[0]
-
-    a = num("age", age, 1, 120)
-    if a != int(a):
-        raise UserError(f"participant {pid}: {said('age', age)}: give whole years")
-    sex = choice("sex", sex, SEXES)
-    handedness = choice("handedness", handedness, HANDEDNESS)
-    w = num("hand_width_cm", hand_width_cm, 3, 30)
-    length = num("hand_length_cm", hand_length_cm, 5, 40)
+    age = check_detail(pid, "age", age, words)
+    sex = check_detail(pid, "sex", sex, words)
+    handedness = check_detail(pid, "handedness", handedness, words)
+    w = check_detail(pid, "hand_width_cm", hand_width_cm, words)
+    length = check_detail(pid, "hand_length_cm", hand_length_cm, words)
     if consent is not True:
         raise UserError(
             f"participant {pid}: consent not noted; note the participant's informed consent "
@@ -128,7 +136,7 @@ def make_participant(
         )
     return Participant(
         pid,
-        int(a),
+        age,
         sex,
         handedness,
         w,
