@@ -50,8 +50,12 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     "spread": (0.7, 1.7),  # how far open poses spread the fingers (the person's style)
     "lift_mm": (5.0, 25.0),  # curled fingers' height above the glass
     "palm_lift_mm": (18.0, 55.0),  # palm height in pointing poses
-    "speed": (0.6, 1.6),  # gesture speed factor
-    "tremor_mm": (0.1, 1.6),  # frame-to-frame jitter (tremor and centroid noise)
+    # gesture speed factor: how far a gesture moves over its frames (a quick zoom's
+    # fingertips ~6.5 mm in 4 frames at x1.8)
+    "speed": (0.6, 1.8),
+    # frame-to-frame jitter (tremor and centroid noise), up to a real hand's ~2 mm at
+    # the fingertip (physiological tremor, 8-12 Hz: a few frames one way at 60 fps)
+    "tremor_mm": (0.1, 2.0),
     # how gently a motion starts: x the person's own time constant (0: at full speed
     # from the first frame, as a gesture caught already under way)
     "ease": (0.0, 1.3),

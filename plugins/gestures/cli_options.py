@@ -100,5 +100,5 @@ def _randomise(p: argparse.ArgumentParser) -> None:
         const="wide",
         help="domain randomisation: a condition per sample over wide ranges (light x0.5-1.6 "
         "with clipping, LED lobes, noise, hand size, finger widths, hover, glow, defocus, "
-        "gamma, frame rate, shutter)",
+        "gamma, frame rate, shutter, tremor up to 2 mm, gesture speed x0.6-1.8)",
     )
