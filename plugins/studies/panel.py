@@ -525,6 +525,8 @@ class StudiesPane(HeldAnswer, Vertical):
                 return refusals.refused(self, ev.name, ev.reason)
             self.last["pid"] = ev.name
             self.last["stopped"] = ev.reason
+            out = self.app.session.outputs  # an e-stop reset before its stop came: said
+            panel_status.estop_reset(self.last, out is not None and not out.estopped)
             self.query_one(AdaptiveView).run_stopped()  # "the run is on ..." no more
             if self.said[1] != "error":  # "resumed", "pausing ...": the run's, past now
                 self.said = ("", "information")
