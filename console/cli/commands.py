@@ -20,7 +20,12 @@ from console.core.options import minutes, seconds
 from console.core.suggest import suggestion
 from console.runtime.buffer_doctor import describe as describe_buffer
 from console.runtime.buffer_doctor import measure as measure_buffer
-from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.doctor import (
+    classifier_status,
+    diagnose,
+    realtime_status,
+    scheduling_status,
+)
 from console.runtime.selftest_last import note_last
 from console.safety import Limits, check_plan
 
@@ -75,6 +80,7 @@ def configure_doctor(p: argparse.ArgumentParser) -> None:
 def run_doctor(args, ctx) -> int:
     statuses = [
         *diagnose(ctx.profile, ctx.pm),
+        *filter(None, [classifier_status(ctx.profile, ctx.pm)]),
         realtime_status(ctx.profile, ctx.pm),
         scheduling_status(ctx.profile, ctx.pm),
     ]

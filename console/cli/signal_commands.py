@@ -2,8 +2,9 @@
 
 haptable signals list
 haptable signals show NAME|'EXPR'
-haptable signals play NAME|'EXPR' --patch PA[,PC] | --screen [--dry-run] [--fast]
-haptable signals add NAME 'EXPR' [--description TEXT] [--replace]
+haptable signals play NAME|'EXPR' [--patch PA[,PC] | --screen] [--dry-run] [--fast]
+    (a library signal meant for a channel plays there; another is refused)
+haptable signals add NAME 'EXPR' [--description TEXT] [--target PA|screen] [--replace]
 haptable signals rm NAME
 haptable signals import FILE.ahap|FILE.haptic [--name N] [--level 40 V]
 haptable signals export NAME --format ahap|haptic -o FILE
@@ -29,7 +30,7 @@ from console.config.signal_library import (
 )
 from console.core.errors import UserError
 from console.safety import Limits
-from console.signals.design import parse_target, render, summarize
+from console.signals.design import Target, parse_target, render, summarize
 from console.signals.expr import parse
 
 
@@ -46,8 +47,10 @@ def configure(p: argparse.ArgumentParser) -> None:
     show.add_argument("--json", action="store_true")
     play = sub.add_parser("play", help="play through the safety gate on patches or the screen")
     play.add_argument("signal", help="a library name or an expression")
-    where = play.add_mutually_exclusive_group(required=True)
-    where.add_argument("--patch", help="PA, PA,PC, PALL ...")
+    where = play.add_mutually_exclusive_group()
+    where.add_argument(
+        "--patch", help="PA, PA,PC, PALL ... (default: the channel the signal is meant for)"
+    )
     where.add_argument("--screen", action="store_true", help="the electrovibration screen")
     play.add_argument("--dry-run", action="store_true", help="check it, do not play it")
     play.add_argument("--fast", action="store_true", help="twin: fast-forward")
@@ -56,6 +59,9 @@ def configure(p: argparse.ArgumentParser) -> None:
     add.add_argument("name")
     add.add_argument("expr")
     add.add_argument("--description", default="")
+    add.add_argument(
+        "--target", default="", help="the channel it is meant for: PA, PA,PC, PALL or screen"
+    )
     add.add_argument("--replace", action="store_true", help="replace a signal of that name")
     rm = sub.add_parser("rm", help="remove a saved signal")
     rm.add_argument("name")
@@ -69,7 +75,13 @@ def _list(path: Path, as_json: bool) -> int:
     problems = list(lib.problems.values())
     if as_json:
         rows = [
-            {"name": e.name, "expr": e.expr, "description": e.description, "builtin": e.builtin}
+            {
+                "name": e.name,
+                "expr": e.expr,
+                "description": e.description,
+                "builtin": e.builtin,
+                "target": e.target,
+            }
             for e in lib.entries.values()
         ]
         print(json.dumps({"file": str(path), "signals": rows, "problems": problems}, indent=2))
@@ -77,7 +89,7 @@ def _list(path: Path, as_json: bool) -> int:
         print(f"library: {path}" + ("" if path.exists() else " (none saved yet)"))
         width = max(len(n) for n in lib.entries)
         for e in lib.entries.values():
-            tag = " [built-in]" if e.builtin else ""
+            tag = (f" [on {e.target}]" if e.target else "") + (" [built-in]" if e.builtin else "")
             print(f"  {e.name:<{width}}  {e.expr}{tag}")
             if e.description:
                 print(f"  {'':<{width}}  {e.description}")
@@ -94,6 +106,25 @@ def _resolve(ctx, text: str) -> tuple[str, str]:
     return text, get_signal(path, text).expr
 
 
+def _play_target(args, ctx, name: str) -> Target:
+    """Where ``signals play`` plays: the channel a library signal is meant for (its
+    ``target``), refused when ``--patch`` or ``--screen`` names another; an expression
+    or a signal meant for none needs one of them."""
+    given = "screen" if args.screen else args.patch
+    entry = None if name == "expression" else get_signal(library_path(ctx.profile.name), name)
+    meant = entry.target if entry is not None else ""
+    if not given and not meant:
+        raise UserError(f"{name}: give where it plays, --patch PA (PA,PC, PALL) or --screen")
+    target = parse_target(given or meant)
+    if meant and target != parse_target(meant):
+        flag = "--screen" if meant == "screen" else f"--patch {meant}"
+        raise UserError(
+            f"{name} is meant for {meant}, not {target.label}: play it with {flag} (or "
+            "leave both out), or save a copy with --target for the other channel"
+        )
+    return target
+
+
 def run(args, ctx) -> int:
     path = library_path(ctx.profile.name)
     action = args.action
@@ -102,7 +133,13 @@ def run(args, ctx) -> int:
     if action == "add":
         limits = Limits.from_profile(ctx.profile)
         e = add_signal(
-            path, args.name, args.expr, args.description, replace=args.replace, limits=limits
+            path,
+            args.name,
+            args.expr,
+            args.description,
+            replace=args.replace,
+            limits=limits,
+            target=args.target,
         )
         print(f"saved {e.name} in {path}")
         return 0
@@ -137,7 +174,7 @@ def run(args, ctx) -> int:
         # lazy: keeps `haptable` startup light
         from console.session.audition import audition_plan
 
-        target = parse_target("screen" if args.screen else args.patch)
+        target = _play_target(args, ctx, name)
         plan = audition_plan(ctx.profile, node, target, name)
         return play_and_report(ctx, plan, fast=args.fast, out=args.out, dry_run=args.dry_run)
     raise UserError(f"unknown action {action!r}")  # pragma: no cover - argparse refuses it

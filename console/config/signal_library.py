@@ -5,6 +5,7 @@ signals offered read-only.
     [signals.pulse]
     expr = "seq(sine(250 Hz, 40 V, 0.5 s) * adsr(10 ms, 50 ms, 0.7, 100 ms), silence(0.2 s)) * 3"
     description = "three 250 Hz pulses"
+    target = "PA,PC"       # optional: the channel it is meant for (patches or screen)
 
 The file is read bounded (``console.files.file_read``: a regular file of at most 1 MB, so a
 FIFO or ``/dev/zero`` in its place is one line, not a hang) and validated like a profile,
@@ -34,6 +35,7 @@ from console.files.file_read import read_toml_capped
 from console.files.paths import profile_config_dir
 from console.signals.breakpoint_data import LibraryData
 from console.signals.check import never_plays
+from console.signals.design import parse_target
 from console.signals.expr import parse
 from console.signals.syntax import clip
 
@@ -42,16 +44,20 @@ if TYPE_CHECKING:
 
 FILE_NAME = "signals.toml"
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,39}$")
-ENTRY_KEYS = ("expr", "description")
+ENTRY_KEYS = ("expr", "description", "target")
 MAX_DESCRIPTION = 200
 
 
 @dataclass(frozen=True)
 class Entry:
+    """A library signal; ``target`` is the channel it is meant for (``screen``, ``PA``,
+    ``PA,PC`` ...: loading it sets the console's target field), "" when any."""
+
     name: str
     expr: str
     description: str = ""
     builtin: bool = False
+    target: str = ""
 
 
 #: Offered read-only: the chain's test tones as signals (``haptable play`` has them as plans).
@@ -69,6 +75,7 @@ BUILTIN: dict[str, Entry] = {
             "sine(180 Hz, 100 Vpp, 1 s) * ramp(20 ms)",
             "180 Hz, 100 Vpp, 1 s (the screen's test tone)",
             True,
+            "screen",
         ),
         Entry(
             "sweep",
@@ -133,6 +140,16 @@ def library_data(path: Path) -> LibraryData:
     return LibraryData(path)
 
 
+def check_target(text: str) -> str:
+    """A signal's declared target as the target field writes it (``screen``, ``PA,PC``),
+    "" for none; ``UserError`` when it names no channel."""
+    if text == "":
+        return ""
+    if not isinstance(text, str):
+        raise UserError(f"target = {_show(text)}: give patches (PA, PA,PC, PALL) or screen")
+    return parse_target(text).label
+
+
 def _entry(name: str, entry: Any, data: LibraryData | None = None) -> Entry:
     """The entry ``[signals.NAME]`` holds, or a ``UserError`` saying what is wrong."""
     check_name(name)
@@ -155,7 +172,11 @@ def _entry(name: str, entry: Any, data: LibraryData | None = None) -> Entry:
         raise UserError(f"expr = {_show(expr)}: {exc}") from None
     desc = entry.get("description", "")
     check_description(desc)
-    return Entry(name, expr, desc)
+    try:
+        target = check_target(entry.get("target", ""))
+    except UserError as exc:
+        raise UserError(f"target = {_show(entry.get('target'))}: {exc}") from None
+    return Entry(name, expr, desc, target=target)
 
 
 def read_library(path: Path) -> Library:
@@ -229,25 +250,33 @@ def add_signal(
     *,
     replace: bool = False,
     limits: Limits | None = None,
+    target: str = "",
 ) -> Entry:
-    """Save ``name`` = ``expr`` keeping every other entry (those that do not validate
-    too). ``expr`` must parse and, with ``limits``, be able to play on some target."""
+    """Save ``name`` = ``expr`` (meant for ``target``, "" for any channel) keeping every
+    other entry (those that do not validate too). ``expr`` must parse and, with
+    ``limits``, be able to play on some target."""
     check_name(name)
     check_description(description)
+    target = check_target(target)
     node = parse(expr, data=library_data(path))
     if limits is not None and (why := never_plays(node, limits)) is not None:
         raise UserError(f"signal {name!r} can never play on this table: {why}; nothing saved")
     with signal_file.locked(path):
         lib = read_library(path)
         old = lib.raw.get(name)
-        if old is not None and not replace and (name in lib.problems or old.get("expr") != expr):
+        same = old is not None and old.get("expr") == expr and old.get("target", "") == target
+        if old is not None and not replace and (name in lib.problems or not same):
             raise UserError(
                 f"signal {name!r} is already in {_where(path)}; choose another name or "
                 "replace it (--replace)"
             )
-        entry = {"expr": expr, **({"description": description} if description else {})}
+        entry = {
+            "expr": expr,
+            **({"description": description} if description else {}),
+            **({"target": target} if target else {}),
+        }
         signal_file.write(path, dict(sorted({**lib.raw, name: entry}.items())))
-    return Entry(name, expr, description)
+    return Entry(name, expr, description, target=target)
 
 
 def remove_signal(path: Path, name: str) -> Any:

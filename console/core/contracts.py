@@ -53,6 +53,7 @@ from console.core.recording_contracts import RecordedRun as RecordedRun
 from console.core.recording_contracts import RecordingReader
 from console.core.recording_contracts import WatchesOutputs as WatchesOutputs
 from console.core.roving_contracts import RovingSensorMaps as RovingSensorMaps
+from console.core.sink_contracts import AdvisesInField as AdvisesInField
 
 # the frame sinks' and panels' contracts: here too, where every kind's contract is found
 from console.core.sink_contracts import FrameSink, FrameSinkFactory, Panel, PanelFactory

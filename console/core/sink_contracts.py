@@ -32,9 +32,20 @@ class FrameSinkFactory(Protocol):
 class SwitchableSink(FrameSinkFactory, Protocol):
     """A frame-sink factory the console switches on and off and points at a host:port
     (the Camera screen; saved per profile): ``keys`` names its profile keys,
-    ``{"enabled": "<section>.enabled", "host": ..., "port": ...}``."""
+    ``{"enabled": "<section>.enabled", "host": ..., "port": ...}``; optionally
+    ``AdvisesInField``."""
 
     keys: dict[str, str]
+
+
+@runtime_checkable
+class AdvisesInField(Protocol):
+    """A switchable sink whose refusals advise the screen's keys (``fix``), with that
+    advice as it works while its target field types every key (``fix_in_field``): the
+    screen says the one true where the focus is."""
+
+    fix: str
+    fix_in_field: str
 
 
 @runtime_checkable

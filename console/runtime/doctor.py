@@ -1,5 +1,6 @@
 """What `haptable doctor` and the Devices screen report: one status per device the profile
-uses, and whether the audio thread may lock its memory and run with real-time priority."""
+uses, and whether the audio thread may lock its memory and run with real-time priority;
+`haptable doctor` adds the classifier's files (``classifier_status``)."""
 
 from __future__ import annotations
 
@@ -49,6 +50,33 @@ def diagnose(profile, plugins) -> list[DeviceStatus]:
                 )
             )
     return out
+
+
+def classifier_status(profile, plugins) -> DeviceStatus | None:
+    """The profile's classifier by its registration's probe (the svm one reads the touch
+    calibration as the camera will); None when it has no probe."""
+    name = profile.get("gestures.classifier") or "svm"
+    reg = plugins.of("classifier").get(name)
+    if reg is None:
+        return DeviceStatus(
+            "gestures",
+            name,
+            "error",
+            "classifier not registered",
+            "install the plugin that provides it, or fix [gestures] classifier",
+        )
+    if reg.probe is None:
+        return None
+    try:
+        return dataclasses.replace(reg.probe(profile), kind="gestures", name=name)
+    except Exception as exc:
+        return DeviceStatus(
+            "gestures",
+            name,
+            "error",
+            f"probe failed: {exc}",
+            f"report this to the {reg.plugin} plugin",
+        )
 
 
 def realtime_status(profile, plugins) -> DeviceStatus:

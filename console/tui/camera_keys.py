@@ -7,9 +7,24 @@ from typing import Any
 
 from textual.binding import Binding
 
-from console.core.contracts import SimulatedCamera
+from console.core.contracts import AdvisesInField, SimulatedCamera
 from console.tui.recording_keys import REPLAY_BINDINGS
 from console.tui.refused_keys import RefusedKeys
+
+#: the TUIO target field's label (what it takes) and its keys, on its borders as the
+#: recording field (``o``) has them
+TARGET_LABEL = "TUIO target: host:port"
+TARGET_KEYS = "Enter sets  Esc back"
+
+
+def advice_in_field(why: str, factory: Any) -> tuple[str, bool]:
+    """A switchable sink's refusal ``why`` as it reads while its target field is open:
+    the screen's keys it advises (``fix``) replaced by what works from the field
+    (``fix_in_field``); True when it was (the advice then says how to leave the field)."""
+    if isinstance(factory, AdvisesInField) and factory.fix and factory.fix in why:
+        return why.replace(factory.fix, factory.fix_in_field), True
+    return why, False
+
 
 #: the keys under the view: what the footer leaves out at 80 columns (its keys come first)
 KEYS_LINE = "g gestures  u U TUIO  b background  W keep"

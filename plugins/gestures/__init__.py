@@ -42,10 +42,16 @@ def haptable_register_classifiers(register: Any) -> None:
 
         return SvmClassifier.from_profile(profile)
 
+    def probe(profile: Any) -> Any:
+        from .probe import probe as svm_probe  # lazy: OpenCV, SciPy
+
+        return svm_probe(profile)
+
     register(
         "svm",
         classifier,
         description="Fourier-descriptor + contact-trajectory SVMs (static: 1 pose, dynamic: 4 frames)",
+        probe=probe,
     )
 
 

@@ -126,10 +126,11 @@ class Calibration:
             centers = np.asarray(d["centers_px"], dtype=np.float64).reshape(-1, 2)
             resid = np.asarray(d["residuals_mm"], dtype=np.float64).reshape(-1, 2)
             inliers = np.asarray(d["inliers"], dtype=bool).reshape(-1)
-            if not len(resid) == len(inliers) == len(centers):
+            if not len(resid) == len(centers) == int(inliers.sum()):
                 raise ValueError(
                     f"{len(centers)} centers_px, {len(resid)} residuals_mm and "
-                    f"{len(inliers)} inliers: one of each per target"
+                    f"{int(inliers.sum())} inliers (of {len(inliers)} targets): one "
+                    "center and one residual per inlier"
                 )
             if not (np.all(np.isfinite(centers)) and np.all(np.isfinite(resid))):
                 raise ValueError("centers_px or residuals_mm hold values that are not finite")
@@ -165,10 +166,12 @@ class Calibration:
         """Write the calibration (its folder made first; written then renamed, so a reader
         never sees half a file); ``UserError`` naming the file when it cannot be."""
         p = Path(path)
+        d = self.to_json()
+        self.from_json(d, str(p))  # never write what ``load`` would refuse
         tmp = p.with_name(f".{p.name}.partial")
         try:
             p.parent.mkdir(parents=True, exist_ok=True)
-            tmp.write_text(json.dumps(self.to_json(), indent=1), encoding="utf-8")
+            tmp.write_text(json.dumps(d, indent=1), encoding="utf-8")
             tmp.replace(p)
         except OSError as exc:
             with contextlib.suppress(OSError):

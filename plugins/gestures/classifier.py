@@ -14,7 +14,7 @@ import numpy as np
 from console.plugin_api import Frame, Gesture, TunableRange, UserError
 
 from .background import Background
-from .calibration import Calibration, CalibrationSession, target_grid
+from .calibration import CalibrationSession, target_grid
 from .dataset import read_sample
 from .features import (
     N_HARMONICS_MAX,
@@ -27,8 +27,9 @@ from .features import (
 )
 from .model import GESTURES, GestureModel
 from .orientation import Orientation
+from .probe import read_calibration
 from .rules import GestureRules, StillHand
-from .settings import calibration_file, model_file
+from .settings import model_file
 from .sketch import DYNAMIC
 from .vision import (
     FrameResult,
@@ -256,10 +257,8 @@ class SvmClassifier:
             except UserError as exc:  # the vision runs on; the gestures wait for a model
                 problem = exc
                 log.warning("gesture model not used: %s", exc)
-        to_mm = None
-        cal = calibration_file(profile)
-        if Path(cal).is_file():
-            to_mm = Calibration.load(cal).px_to_mm
+        cal = read_calibration(profile)  # as `haptable doctor` reads it (``probe``)
+        to_mm = None if cal is None else cal.px_to_mm
         threads = int(profile.get("vision.opencv_threads"))
         # process-wide: the frame loop's vision is what OpenCV runs most; set once:
         # resizing the pool under a running parallel loop in another thread is not safe

@@ -79,6 +79,8 @@ class SenderFactory:
 
     #: the Camera screen's keys that fix the target, named in a refusal
     fix = "on Camera, U sets host:port, u turns TUIO off"
+    #: the same advice said while the target field (U) is open: there u is typed
+    fix_in_field = "correct host:port, Enter; or Esc, then u turns TUIO off"
 
     def __call__(self, profile: Any, *, force: bool = False):
         return make_sender(profile, force=force, fix=self.fix)

@@ -16,7 +16,8 @@ def test_doctor_json_reports_each_device(capsys):
     data = json.loads(capsys.readouterr().out)
     rt = {d["name"]: d for d in data["devices"] if d["kind"] == "realtime"}
     kinds = {d["kind"]: d for d in data["devices"] if d["kind"] != "realtime"}
-    assert set(kinds) == {"audio", "relays", "camera", "vibrometer"}
+    assert set(kinds) == {"audio", "relays", "camera", "vibrometer", "gestures"}
+    assert kinds.pop("gestures")["state"] == "ok"  # no touch calibration yet: pixels
     assert all(d["state"] == "simulated" for d in kinds.values()) and data["ok"]
     assert set(rt) == {"memory", "scheduling"}
     assert all(d["state"] == "ok" for d in rt.values())  # the twin plays without (it says so)

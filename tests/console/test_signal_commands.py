@@ -27,6 +27,7 @@ def test_list_show_add_rm(capsys):
         "expr": PULSE,
         "description": "three pulses",
         "builtin": False,
+        "target": "",  # meant for no channel: --patch or --screen says where it plays
     }
     assert main(["signals", "show", "pulse"]) == 0
     out = capsys.readouterr().out

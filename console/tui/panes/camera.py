@@ -27,7 +27,16 @@ from textual.widgets import Input, Static
 
 from console.core.errors import UserError
 from console.runtime.exposure_assist import assist_service, snapshot_reading
-from console.tui.camera_keys import BINDINGS, HELP_TEXT, KEYS_LINE, CameraRefusals, hold_hand
+from console.tui.camera_keys import (
+    BINDINGS,
+    HELP_TEXT,
+    KEYS_LINE,
+    TARGET_KEYS,
+    TARGET_LABEL,
+    CameraRefusals,
+    advice_in_field,
+    hold_hand,
+)
 from console.tui.camera_live import (
     hang,
     loop_lines,
@@ -155,6 +164,7 @@ class CameraPane(
                 box = TargetField(
                     placeholder="host:port, Enter", id="camera-target", select_on_focus=False
                 )
+                box.border_title, box.border_subtitle = TARGET_LABEL, TARGET_KEYS
                 box.display = False
                 yield box
 
@@ -644,7 +654,11 @@ class CameraPane(
             self.say(f"{why} (u again to retry)", "warning")
             return
         refused(self.query_one("#camera-target", Input), self)
-        self.say(f"{why} (correct it, Enter; Esc keeps the one in use)", "warning")
+        factory = self.service.switches().get(self._output() or "")
+        why, advised = advice_in_field(why, factory)
+        self.say(
+            why if advised else f"{why} (correct it, Enter; Esc keeps the one in use)", "warning"
+        )
 
     def action_view(self) -> None:
         views = ("camera", *VISION_VIEWS)

@@ -20,6 +20,7 @@ from console.config.signal_library import (
     Entry,
     add_signal,
     check_name,
+    check_target,
     library_data,
     library_path,
     read_library,
@@ -149,7 +150,8 @@ class SignalsPane(Vertical):
         self._status_line = ""  # what the status line says now
         self._refusal: str | None = None  # why the last preview failed (plots empty)
         self._load: str | None = None  # a signal enter asked to load over unsaved work
-        self._overwritten: tuple[str, str] | None = None  # (expr, name) ctrl+z brings back
+        #: (expr, name, target) a load replaced: ctrl+z brings them back
+        self._overwritten: tuple[str, str, str] | None = None
         self._loaded_note = ""  # what the next preview's line says first ("loaded ...")
         self._left: Input | None = None  # the field Esc left for the library: Tab's
 
@@ -293,9 +295,22 @@ class SignalsPane(Vertical):
         not a built-in): the footer and the hint say ``saved``, else ``save``."""
         if not self.is_mounted or not self.query("#sig-name"):
             return False
-        expr, name, _target = self._fields()
+        expr, name, target = self._fields()
         entry = self.entries.get(name)
-        return entry is not None and not entry.builtin and entry.expr.strip() == expr
+        return entry is not None and not entry.builtin and self._as_in(entry, expr, target)
+
+    @staticmethod
+    def _as_in(entry: Entry, expr: str, target: str) -> bool:
+        """Whether ``expr`` on ``target`` is the library signal ``entry`` as it is (its
+        declared channel too: a changed target is an edit, as a changed expression)."""
+        if entry.expr.strip() != expr.strip():
+            return False
+        if not entry.target:
+            return True
+        try:
+            return parse_target(target) == parse_target(entry.target)
+        except UserError:
+            return False
 
     def _hint(self, saved: bool = False) -> str:
         # Esc said where the operator types (a new one did not know how to leave the
@@ -354,9 +369,8 @@ class SignalsPane(Vertical):
             from_thread(self.app, self._refused, gen, str(exc))
             return
         p = Preview(expr, target, fs, x, summarize(x, fs))
-        from_thread(
-            self.app, self._show, gen, p, self.play_label(expr, name) if then_play else None
-        )
+        label = self.play_label(expr, name, target_text) if then_play else None
+        from_thread(self.app, self._show, gen, p, label)
 
     def _refused(self, gen: int, message: str) -> None:
         if gen != self._gen:
@@ -390,11 +404,12 @@ class SignalsPane(Vertical):
         if play_name is not None:
             self._audition(p, play_name or "designed")
 
-    def play_label(self, expr: str, name: str) -> str:
-        """What a play of ``expr`` is called: the name field's signal when ``expr`` is its
-        saved expression, else the designed signal (the name a save would give it)."""
+    def play_label(self, expr: str, name: str, target: str = "") -> str:
+        """What a play of ``expr`` on ``target`` is called: the name field's signal when
+        they are its saved expression and declared channel, else the designed signal (the
+        name a save would give it)."""
         entry = self.entries.get(name)
-        if entry is not None and entry.expr.strip() == expr.strip():
+        if entry is not None and self._as_in(entry, expr, target):
             return name
         return f"designed ({name} edited)" if entry is not None else name or "designed"
 
@@ -491,22 +506,32 @@ class SignalsPane(Vertical):
         self.show_preview()
 
     def action_save(self) -> None:
-        expr, name, _target = self._fields()
+        expr, name, target = self._fields()
         lib = self.entries
         replace = self._replace == name
-        if name in lib and not lib[name].builtin and lib[name].expr != expr and not replace:
+        if (
+            name in lib
+            and not lib[name].builtin
+            and not self._as_in(lib[name], expr, target)
+            and not replace
+        ):
             self._replace = name
             self.status(f"{name} is already saved: ctrl+s again replaces it", error=True)
             return
+        try:  # saved with the channel the target field names (loading it sets it back)
+            meant = check_target(target)
+        except UserError:  # the line says it is kept for no channel
+            meant = ""
         try:
             limits = Limits.from_profile(self.app.ctx.profile)
-            add_signal(self.library_file, name, expr, replace=True, limits=limits)
+            add_signal(self.library_file, name, expr, replace=True, limits=limits, target=meant)
         except UserError as exc:
             self.status(str(exc), error=True)
             return
         self._replace = None
         self.reload_library(select=name)
-        self.status(f"saved {name} in {self.library_file}")
+        where = f"for {meant}" if meant else f"for no channel ({target!r} names none)"
+        self.status(f"saved {name} {where} in {self.library_file}")
         self._show_saved()
         # the saved signal is plotted (the plots said "no signal" since an error), where
         # the target field says; a target that plots nowhere keeps the saved line
@@ -514,7 +539,7 @@ class SignalsPane(Vertical):
             parse_target(self._fields()[2])
         except UserError:
             return
-        self._loaded_note = f"saved {name} in {self.library_file}"
+        self._loaded_note = f"saved {name} {where} in {self.library_file}"
         self.show_preview()
 
     def unsaved(self) -> bool:
@@ -549,12 +574,17 @@ class SignalsPane(Vertical):
             lapse(self, lambda: self._status_line, text, self._load_lapsed, LOAD_AGAIN_S, then=then)
             return
         if over:
-            self._overwritten = self._fields()[:2]
+            self._overwritten = self._fields()
             self._removed = None  # ctrl+z brings back the most recent: the expression
-        self._loaded_note = f"loaded {e.name}" + (
-            " over your expression (ctrl+z brings it back)" if over else ""
+        self._loaded_note = (
+            f"loaded {e.name}"
+            + (f" on {e.target} (the channel it is meant for)" if e.target else "")
+            + (" over your expression (ctrl+z brings it back)" if over else "")
         )
-        for wid, text in (("#sig-expr", e.expr), ("#sig-name", e.name)):
+        fields = [("#sig-expr", e.expr), ("#sig-name", e.name)]
+        if e.target:  # the channel it is meant for: the field shows where it plays
+            fields.append(("#sig-target", e.target))
+        for wid, text in fields:
             box = self.query_one(wid, Input)
             box.value, box.cursor_position = text, len(text)
         self._replace = None
@@ -604,8 +634,8 @@ class SignalsPane(Vertical):
             self.app.action_undo()
             return
         if self._overwritten is not None:  # the expression a load replaced
-            (expr, name), self._overwritten = self._overwritten, None
-            for wid, text in (("#sig-expr", expr), ("#sig-name", name)):
+            fields, self._overwritten = self._overwritten, None
+            for wid, text in zip(("#sig-expr", "#sig-name", "#sig-target"), fields, strict=True):
                 box = self.query_one(wid, Input)
                 box.value, box.cursor_position = text, len(text)
             self._loaded_note = "your expression is back"
