@@ -149,7 +149,6 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         #: the self-test's start (monotonic s), seconds expected and estimate, for ticks
         self._selftest_clock: tuple[float, float, Any] = (0.0, 0.0, None)
-        self._answered_at = 0.0  # when a key last answered while the self-test runs
         self._estopped_at_start = False  # the self-test began during an e-stop (refused)
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
         self._doctor_whole = True  # the device table's rows shown whole (``_show``)
@@ -427,7 +426,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    @waits_for_question
+    @waits_for_question(progress="tick")
     def _show_result(
         self, text: str, error: bool = False, severity: str = "", tick: bool = False
     ) -> None:
@@ -435,9 +434,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         top of the screen, in view wherever the list is scrolled (a pick on a row far
         down says what it did where it is seen); an error or a refusal (``severity``
         ``warning``) is in the log too. While the self-test runs, a message that is not
-        its ``tick`` holds the line ``NOTE_S`` against the ticks."""
-        if not tick and self._selftest_timer is not None:
-            self._answered_at = time.monotonic()
+        its ``tick`` holds the line ``NOTE_S`` against the ticks (``question_hold``)."""
         severity = "error" if error else severity
         self.result = text
         found = self.query("#devices-result")
