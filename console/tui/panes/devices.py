@@ -457,10 +457,20 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
             self._show(self.doctor_rows[:-1])  # or kept): ctrl+r first or not
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
             self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
-        elif isinstance(ev, Stopped) and ev.topic == "estop" and self.result.startswith(RESET):
+        elif (
+            isinstance(ev, Stopped)
+            and ev.topic == "estop"
+            and self.result.startswith(RESET)
+            and self._estop_latched()  # a late echo of an e-stop reset since says nothing
+        ):
             # latched again: the line saying the reset is no longer true
             why = " ".join(ev.reason.split())
             self._show_result(f"e-stop active{': ' + why if why else ''}; {ESTOP_FIX}", True)
+
+    def _estop_latched(self) -> bool:
+        """Whether the outputs' e-stop is latched now (not only when a message said so)."""
+        out = self.app.session.outputs
+        return out is None or bool(out.estopped)
 
     def _keep_focused_in_view(self) -> None:
         """``_focused_in_view`` once a table's new rows are laid out (the table sizes
