@@ -31,7 +31,7 @@ from console.tui.device_cells import (
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse_if_held
+from console.tui.lapse import HELD_ENDED, lapse, lapse_if_held
 from console.tui.panes.devices_doctor import DevicesDoctorMixin
 from console.tui.panes.devices_plugins import fill_plugins
 from console.tui.panes.devices_selftest import DevicesSelftestMixin
@@ -92,6 +92,8 @@ RELAY_HEADS = ("", "driver", "probe", "what it finds", "description")
 
 #: how the line says the operator reset the e-stop (a new e-stop replaces it)
 RESET = "e-stop reset"
+#: seconds the reset's line stays: news of the reset, not a state (it went stale)
+RESET_NEWS_S = 60.0
 
 
 #: the test signal's heading: how one is chosen and what ``t`` does with it
@@ -451,16 +453,26 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
     def on_session_message(self, message: SessionMessage) -> None:
         """The operator's reset (``Started`` on topic ``estop``): a line saying what the
         e-stop refused is past; it says the reset instead. A new e-stop (``Stopped``)
-        replaces a line saying the reset: it is latched again."""
+        replaces a line saying the reset or that plays work again: it is latched again."""
         ev = message.event
         if ev.topic == "estop" and self.doctor_rows:  # a stopped run's row (this session's
             self._show(self.doctor_rows[:-1])  # or kept): ctrl+r first or not
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
-            self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
+            said = f"{RESET}: t plays the test signal, enter picks a row"
+            self._show_result(said)
+            # news of the reset: it leaves the line after a while (still true: it says so)
+            lapse(
+                self,
+                lambda: self.result,
+                said,
+                self._show_result,
+                RESET_NEWS_S,
+                while_true=lambda: True,
+            )
         elif (
             isinstance(ev, Stopped)
             and ev.topic == "estop"
-            and self.result.startswith(RESET)
+            and (self.result.startswith(RESET) or self.result == HELD_ENDED)
             and self._estop_latched()  # a late echo of an e-stop reset since says nothing
         ):
             # latched again: the line saying the reset is no longer true
