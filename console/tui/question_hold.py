@@ -14,8 +14,8 @@ the question's own key) is also shown at once as a toast: no key goes unanswered
 A line that is not progress (a key's answer, a refusal, news) holds the line the same
 way against progress (a setter marked ``@waits_for_question(progress="frac")``: a call
 giving that argument is a tick of work) for ``NOTE_S``: the newest tick waits and shows
-when the hold ends; a key pressed after the line (the operator moved on) or ``answered``
-(new work) ends it. A measurement's progress never takes a refusal before it was read.
+when the hold ends; a key pressed after the line (the operator moved on), new work's
+first line (its progress at 0) or ``answered`` ends it. A measurement's progress never takes a refusal before it was read.
 
 A line written over its question by a path that does not wait (a widget's own setter
 called directly, not the marked one) is a bug: the question vanished while its key
@@ -101,7 +101,7 @@ def answered(owner: object) -> None:
     """The operator answered ``owner``'s question (its key again, or another question
     asked): the line is free now; a line that waited is dropped (it is in the log)."""
     release(owner)
-    _SAID.pop(owner, None)  # new work: its progress is what the line is for
+    _said_ends(owner)  # new work: its progress is what the line is for
 
 
 #: seconds a line that is not progress holds its status line against progress
@@ -122,15 +122,14 @@ class Said:
 _SAID: weakref.WeakKeyDictionary[Any, Said] = weakref.WeakKeyDictionary()
 
 
-def _is_tick(setter: Callable[..., Any], progress: str, args: tuple, kw: dict) -> bool:
-    """Whether a call of ``setter`` gives its ``progress`` argument (a tick of work)."""
+def _tick(setter: Callable[..., Any], progress: str, args: tuple, kw: dict) -> Any:
+    """A call of ``setter``'s ``progress`` argument (None, False: not a tick of work)."""
     if not progress:
-        return False
+        return None
     try:
-        value = inspect.signature(setter).bind(None, "", *args, **kw).arguments.get(progress)
+        return inspect.signature(setter).bind(None, "", *args, **kw).arguments.get(progress)
     except TypeError:
-        return False
-    return value is not None and value is not False
+        return None
 
 
 def _tick_waits(owner: Any, text: str, show: Callable[[], None]) -> bool:
@@ -147,6 +146,13 @@ def _tick_waits(owner: Any, text: str, show: Callable[[], None]) -> bool:
     if said.timer is None and isinstance(owner, MessagePump):
         said.timer = owner.set_timer(left + 0.05, lambda: _tick_shown(owner, said))
     return True
+
+
+def _said_ends(owner: Any) -> None:
+    """``owner``'s line held against progress no more (its waiting tick dropped)."""
+    old = _SAID.pop(owner, None)
+    if old is not None and old.timer is not None:
+        old.timer.stop()
 
 
 def _tick_shown(owner: Any, said: Said) -> None:
@@ -177,14 +183,16 @@ def waits_for_question(setter: F | None = None, *, progress: str = "") -> Any:
     @functools.wraps(setter)
     def guarded(self: Any, text: str, *args: Any, **kw: Any) -> Any:
         now = held(self)
-        tick = _is_tick(setter, progress, args, kw)
+        value = _tick(setter, progress, args, kw)
+        tick = value is not None and value is not False
+        if tick and not isinstance(value, bool) and value == 0:  # new work starts: its line
+            _said_ends(self)  # (a build the answer's load began, a job started)
+            tick = False
         if now is None or _words(text) == now.text:
             if tick and _tick_waits(self, text, lambda: setter(self, text, *args, **kw)):
                 return None
-            if not tick and progress and _words(text):
-                old = _SAID.pop(self, None)
-                if old is not None and old.timer is not None:
-                    old.timer.stop()
+            if (value is None or value is False) and progress and _words(text):
+                _said_ends(self)
                 _SAID[self] = Said(_words(text), time.monotonic())
             return setter(self, text, *args, **kw)
         now.later = lambda: setter(self, text, *args, **kw)
