@@ -115,7 +115,9 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
         # the footer's keys work wherever the focus is: no text field takes a "?"
         Binding("question_mark", "help", "help", priority=True),
         Binding("ctrl+z", "undo", "undo", show=False),  # a text field's last change
-        Binding("ctrl+l", "log", "log", show=False),
+        # the log at once, as the screens' keys: an F-key typed right behind it (one
+        # write) is taken after it, closing it, never before it (the log left on top)
+        Binding("ctrl+l", "log", "log", show=False, priority=True),
         Binding("q", "quit", "quit", show=False),
     ]
 
@@ -583,7 +585,8 @@ class HapTableApp(ConfirmsQuit, NewestToastOnly, App):
     def action_log(self) -> None:
         """The log view: the console's records and what drivers wrote to stderr."""
 
-        if isinstance(self.screen, LogScreen):
+        if isinstance(self.screen, LogScreen):  # ctrl+l again closes it
+            self.screen.dismiss()
             return
         handler = view_handler()
         self.push_screen(LogScreen(list(handler.lines) if handler is not None else []))

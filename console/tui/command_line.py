@@ -7,7 +7,8 @@ command whose work runs on (an import, a load) keeps its text until that work sa
 ended (``succeeded``/``failed`` with the text it was given: a line typed over meanwhile
 is left alone); when it failed the line takes the keys back. The line never selects its text on focus: a key typed after ``:`` adds
 to what is there, it never replaces it. ``ctrl+u`` clears the whole line (wherever the
-cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back).
+cursor is); ``escape`` leaves it (``CommandLine.Left``: the screen gives its keys back),
+a failed command left unedited cleared with it.
 An empty line shows its hint as a hint (dim, italic), after a ``:`` prompt that stays
 whatever the line holds (``prompted``): never mistaken for a typed command. The line
 takes paths (Vibration's ``load F.npz``, ``import PA=F.uff``): it is a ``PathField``,
@@ -118,5 +119,9 @@ class CommandLine(PathField):
         self.delete(0, len(self.value))
 
     def action_leave(self) -> None:
-        """``escape``: the screen takes its keys back."""
+        """``escape``: the screen takes its keys back; a failed command left as it was
+        kept goes with it (given up: it stayed for the rest of the session)."""
+        if self._kept is not None and self.value == self._kept:
+            self._kept = None
+            self.value = ""
         self.post_message(self.Left(self))

@@ -42,15 +42,13 @@ from textual.worker import get_current_worker
 from console.core.errors import UserError
 from console.tui.kept_text import wrap_kept
 from console.tui.lapse import ask
-from console.tui.question_hold import answered, waits_for_question
+from console.tui.question_hold import NOTE_S, answered, waits_for_question
 from console.tui.said import log_status, said_here, screen_name
 from console.tui.time_left import Steady, left_words, seconds_left
 from console.tui.util import from_thread
 
 #: a step silent this long (s) says how long it has been in it
 QUIET_S = 2.0
-#: seconds a refusal said while a job runs stays on its line (``hold``)
-NOTE_S = 5.0
 
 Progress = Callable[[float, str], None]
 Job = Callable[[Progress, Callable[[], bool]], Any]
@@ -135,7 +133,7 @@ class LongWork(Vertical):
         bar = self.query_one(ProgressBar)
         return float(bar.progress) if bar.display else None
 
-    @waits_for_question
+    @waits_for_question(progress="frac")
     def show(self, text: str, frac: float | None = None, *, error: bool = False) -> None:
         """Status line (and the bar at ``frac``; hidden with None); its news in the log
         (an error by ``error``; its ticks not: ``console.tui.said.log_status``)."""

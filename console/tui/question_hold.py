@@ -11,6 +11,12 @@ line the question would leave. A line answering a key the operator just pressed 
 the question's own key) is also shown at once as a toast: no key goes unanswered.
 ``answered`` (the key again, or a new question) lets the line go at once.
 
+A line that is not progress (a key's answer, a refusal, news) holds the line the same
+way against progress (a setter marked ``@waits_for_question(progress="frac")``: a call
+giving that argument is a tick of work) for ``NOTE_S``: the newest tick waits and shows
+when the hold ends; a key pressed after the line (the operator moved on), new work's
+first line (its progress at 0) or ``answered`` ends it. A measurement's progress never takes a refusal before it was read.
+
 A line written over its question by a path that does not wait (a widget's own setter
 called directly, not the marked one) is a bug: the question vanished while its key
 still acts. ``lapse`` notices it (the line changed while the question still held it)
@@ -20,12 +26,15 @@ and reports it (``wrote_over``: an error in the log, and ``OVERWRITTEN`` for tes
 from __future__ import annotations
 
 import functools
+import inspect
 import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import MethodType
 from typing import Any, TypeVar
+
+from textual.message_pump import MessagePump
 
 from console.tui.said import log_said, screen_name
 
@@ -92,17 +101,99 @@ def answered(owner: object) -> None:
     """The operator answered ``owner``'s question (its key again, or another question
     asked): the line is free now; a line that waited is dropped (it is in the log)."""
     release(owner)
+    _said_ends(owner)  # new work: its progress is what the line is for
 
 
-def waits_for_question(setter: F) -> F:
+#: seconds a line that is not progress holds its status line against progress
+NOTE_S = 5.0
+
+
+@dataclass
+class Said:
+    """The last line said on a screen that is not progress, when, and the newest tick
+    of progress waiting for its ``NOTE_S`` to end."""
+
+    text: str
+    at: float
+    later: Callable[[], None] | None = None
+    timer: Any = None
+
+
+_SAID: weakref.WeakKeyDictionary[Any, Said] = weakref.WeakKeyDictionary()
+
+
+def _tick(setter: Callable[..., Any], progress: str, args: tuple, kw: dict) -> Any:
+    """A call of ``setter``'s ``progress`` argument (None, False: not a tick of work)."""
+    if not progress:
+        return None
+    try:
+        return inspect.signature(setter).bind(None, "", *args, **kw).arguments.get(progress)
+    except TypeError:
+        return None
+
+
+def _tick_waits(owner: Any, text: str, show: Callable[[], None]) -> bool:
+    """A tick of progress ``text`` for ``owner``'s line: True (it waits, the newest
+    shown when the hold ends) while a line that is not progress holds it."""
+    said = _SAID.get(owner)
+    if said is None or _words(text) == said.text:
+        return False
+    left = NOTE_S - (time.monotonic() - said.at)
+    if left <= 0 or _key_since(owner, said.at):  # read, or the operator moved on
+        _SAID.pop(owner, None)
+        return False
+    said.later = show
+    if said.timer is None and isinstance(owner, MessagePump):
+        said.timer = owner.set_timer(left + 0.05, lambda: _tick_shown(owner, said))
+    return True
+
+
+def _said_ends(owner: Any) -> None:
+    """``owner``'s line held against progress no more (its waiting tick dropped)."""
+    old = _SAID.pop(owner, None)
+    if old is not None and old.timer is not None:
+        old.timer.stop()
+
+
+def _tick_shown(owner: Any, said: Said) -> None:
+    """``said``'s hold ended: the newest tick that waited shows (if nothing replaced
+    ``said`` meanwhile)."""
+    if _SAID.get(owner) is not said:
+        return
+    del _SAID[owner]
+    if said.later is not None and held(owner) is None:
+        said.later()
+
+
+def _key_since(owner: Any, at: float) -> bool:
+    try:
+        return float(owner.app.last_key_s) > at
+    except Exception:  # not mounted, or a test's bare app: no key
+        return False
+
+
+def waits_for_question(setter: F | None = None, *, progress: str = "") -> Any:
     """Mark a screen's status setter ``setter(self, text, ...)``: while a question
     holds ``self``'s line, another ``text`` is logged now and shown when it lapses (the
-    newest only); the question's own text passes."""
+    newest only); the question's own text passes. ``progress`` names its argument that
+    makes a call a tick of work: a tick waits ``NOTE_S`` behind a line that is not one."""
+    if setter is None:
+        return lambda f: waits_for_question(f, progress=progress)
 
     @functools.wraps(setter)
     def guarded(self: Any, text: str, *args: Any, **kw: Any) -> Any:
         now = held(self)
+        value = _tick(setter, progress, args, kw)
+        tick = value is not None and value is not False
+        if tick and not isinstance(value, bool) and value == 0:  # new work starts: its line
+            _said_ends(self)  # (a build the answer's load began, a job started)
+            tick = False
         if now is None or _words(text) == now.text:
+            if tick and _tick_waits(self, text, lambda: setter(self, text, *args, **kw)):
+                return None
+            if (value is None or value is False) and progress and _words(text):
+                _said_ends(self)
+                _SAID[self] = Said(_words(text), time.monotonic())
             return setter(self, text, *args, **kw)
         now.later = lambda: setter(self, text, *args, **kw)
         where = screen_name(self, type(self).__name__)
@@ -112,7 +203,7 @@ def waits_for_question(setter: F) -> F:
         return None
 
     _WAITING.add(guarded)
-    return guarded  # type: ignore[return-value]
+    return guarded
 
 
 #: a line said this soon after a key answers that key: shown as a toast at once while a

@@ -11,12 +11,29 @@ import threading
 import time
 from typing import Any
 
+from rich.cells import cell_len
 from textual import events
 
 from console.tui.long_work import KeepsTypedWork, LongWork, RunsWork
+from console.tui.said import log_said
+from console.tui.toasts import TOAST_FRAME
 
 #: the keys that quit (the app's ``q``, Textual's ``ctrl+q``)
 QUIT_KEYS = frozenset({"q", "ctrl+q"})
+
+
+def quit_question(head: str, busy: list[str], lost: list[str], room: int) -> tuple[str, str]:
+    """The quit question in ``room`` columns and whole: ``head`` ("q again within 3 s
+    quits"), then what it loses with its fix (first: what the operator can still keep),
+    then what it stops; the parts that do not fit left for the log (``N more: ctrl+l``)."""
+    parts = [f"losing {what}" for what in lost] + [f"stopping {what}" for what in busy]
+    whole = f"{head}, {'; '.join(parts)}"
+    for n in range(len(parts), 0, -1):
+        left = len(parts) - n
+        text = f"{head}, {'; '.join(parts[:n])}" + (f"; {left} more: ctrl+l" if left else "")
+        if cell_len(text) <= room:
+            return text, whole
+    return f"{head}, {parts[0]}", whole
 
 
 class ConfirmsQuit:
@@ -79,13 +96,15 @@ class ConfirmsQuit:
         now = time.monotonic()
         if (busy or lost) and now - self._quit_asked > self.QUIT_CONFIRM_S:
             self._quit_asked = now
-            said = [f"it stops {', '.join(busy)}"] if busy else []
-            said += [f"it loses {', '.join(lost)}"] if lost else []
+            head = f"q again within {self.QUIT_CONFIRM_S:g} s quits"
+            shown, whole = quit_question(head, busy, lost, self.size.width - TOAST_FRAME)
+            log_said("toast", whole, "warning")  # whole in the log, fitted on the row
             self.notify(
-                f"q again within {self.QUIT_CONFIRM_S:g} s to quit: {'; '.join(said)}",
+                shown,
                 severity="warning",
                 timeout=self.QUIT_CONFIRM_S,
                 question=True,  # a hidden screen's status never replaces it meanwhile
+                logged=True,
             )
             return
         # the session closes while the screen still shows (the projector and the camera

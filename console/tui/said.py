@@ -4,7 +4,8 @@ The rule (README, "The console"): the outcome of a screen's own action (a key, a
 command, a button, the work it started) is said on that screen's status line; a toast
 is for what happens elsewhere or later (another screen's work, a driver, the e-stop key,
 a screen's result that comes while the operator looks at another screen), but never over
-the e-stop's own notification (a hidden screen's echo of the e-stop is in the log only).
+the e-stop's own notification (a hidden screen's echo of the e-stop or its reset is in the
+log only, whenever it comes: ``echoes_estop``).
 
 Whatever the console says, on a status line or as a toast, is also a record of logger
 ``haptable.console`` (the log view, ``ctrl+l``, and ``console.log``): a failure seen
@@ -35,6 +36,7 @@ __all__ = [
     "screen_name",
     "shows_now",
     "said_here",
+    "echoes_estop",
     "status_said",
 ]
 
@@ -120,11 +122,19 @@ def said_here(widget: Any, where: str, text: str, severity: str = "error") -> No
     finished after they moved on)."""
     log_said(f"status {where}", text, severity)
     _remember(where, " ".join(str(text).split()), None, repeat_ok=True)
-    if not shows_now(widget):  # never over the e-stop's own (``console.tui.toasts``)
+    if not shows_now(widget) and not echoes_estop(text):  # the e-stop's own says it
         app = widget.app
         app.notify(
             f"{where}: {text}", severity=severity, timeout=8, logged=True, hidden_screen=True
         )
+
+
+def echoes_estop(text: str) -> bool:
+    """Whether a screen's line ``text`` speaks of the e-stop or its reset: from a hidden
+    screen it is an echo of the e-stop's own notification (or the reset's) and goes to
+    the log only, whenever it comes (one after the reset said a latched e-stop on the
+    title row under an idle safety bar)."""
+    return "e-stop" in str(text).lower()
 
 
 def status_said(widget: Any, where: str, text: str, severity: str = "information") -> None:

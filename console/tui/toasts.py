@@ -66,7 +66,7 @@ class NewestToastOnly:
         e-stop's own; while it shows, a hidden screen's status (``hidden_screen=True``:
         its echo of the e-stop, say) goes to the log only, never over it; any other
         notification replaces it (the reset's). ``question=True``: a timed question
-        ("q again within 3 s to quit ..."), held the same way while it is asked."""
+        ("q again within 3 s quits, ..."), held the same way while it is asked."""
         title = kw.pop("title", "")
         estop, hidden = kw.pop("estop", False), kw.pop("hidden_screen", False)
         estop = kw.pop("question", False) or estop

@@ -16,7 +16,6 @@ import textwrap
 import time
 from typing import Any
 
-from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -29,19 +28,18 @@ from console.plugin_api.tui import (
     LongWork,
     SessionMessage,
     answered,
-    cut_end,
     escape,
     middle_ellipsis,
     said_here,
     short_path,
     status_said,
-    top_level_seps,
     waits_for_question,
     whole_names,
 )
 
 from .projector_line import status_text
 from .status import estop_text, status_lines
+from .status_fit import fit_fields, log_lines
 from .tables import DemoTable, SceneTable
 
 #: ``k`` closes a projector showing a scene only when pressed again within this
@@ -87,39 +85,6 @@ def fill_wrapped(table: DataTable, columns: list[str], rows: list[tuple], width:
         table.add_row(*cells, key=key, height=None)
     if table.row_count:
         table.move_cursor(row=min(at, table.row_count - 1))
-
-
-def fit_fields(markup: str, width: int) -> Text:
-    """``markup``'s lines within ``width``: a longer line drops whole fields (parted by
-    two spaces, a comma or a semicolon outside brackets), its middle ones first (its
-    last one, the end to end latency or the drop counts, stays), "…" where they were;
-    a line of one field is cut after a word (``console.tui.shorten``): a number is never
-    cut, a bracket never left half."""
-    out = Text()
-    for i, line in enumerate(markup.split("\n")):
-        out.append("\n" if i else "")
-        out.append_text(_shorter(Text.from_markup(line), width))
-    return out
-
-
-def _shorter(text: Text, width: int) -> Text:
-    """``text`` within ``width`` by dropping whole fields (``fit_fields``)."""
-    if text.cell_len <= width:
-        return text
-    # fields parted outside brackets only: a dropped field never takes half a bracket
-    seps = top_level_seps(text.plain, r"  |, |; ")
-    if seps:
-        tail = text[seps[-1][1] :]
-        for start, _end in reversed(seps[:-1]):  # the head, "…", the last field
-            shorter = text[:start] + Text("  …  ") + tail
-            if shorter.cell_len <= width:
-                return shorter
-        for start, _end in reversed(seps):  # the head alone
-            shorter = text[:start] + Text(" …")
-            if shorter.cell_len <= width:
-                return shorter
-    # one field, or a first field too long: cut after a whole word, outside brackets
-    return text[: cut_end(text.plain, width - 1)] + Text("…")
 
 
 class ScenesPane(Vertical):
@@ -373,10 +338,14 @@ class ScenesPane(Vertical):
     def _put_status(self, text: str) -> None:
         """The demo status (markup), each line fitted to the screen (``fit_fields``);
         redrawn only when it changed."""
-        said = (text, self.app.size.width)
+        said = (text, self.app.size.width, self.app.size.height)
         if said != self._status_said:
+            if self._status_said is None or self._status_said[0] != text:
+                log_lines(self, "Scenes demo", text)  # every line whole in the log
             self._status_said = said
-            self.query_one("#demo-status", Static).update(fit_fields(text, said[1] - 2))
+            rows = max(0, said[2] - 24)  # rows beyond 80 x 24's: long lines wrap there
+            fitted = fit_fields(text, said[1] - 2, rows)
+            self.query_one("#demo-status", Static).update(fitted)
 
     def start_demo(self, name: str) -> bool:
         """Start demo ``name`` in its own process (the session's work, in a worker)."""

@@ -69,7 +69,8 @@ def test_a_keys_answer_holds_the_line_against_the_selftest_ticks(plugins, monkey
     """``d`` while the self-test runs: its answer stays on the line ``NOTE_S`` (a tick
     every 0.5 s replaced it before it was read), then the progress comes back."""
     import console.tui.panes.devices_selftest as devices_mod
-    from console.tui.long_work import NOTE_S
+    from console.tui import question_hold
+    from console.tui.question_hold import NOTE_S
 
     gate = threading.Event()
 
@@ -92,7 +93,7 @@ def test_a_keys_answer_holds_the_line_against_the_selftest_ticks(plugins, monkey
             assert "re-checked at" in pane.result, pane.result
             pane._selftest_tick()  # one more, at once
             assert "re-checked at" in pane.result, pane.result
-            pane._answered_at -= NOTE_S + 0.1  # held long enough
+            question_hold._SAID[pane].at -= NOTE_S + 0.1  # held long enough
             pane._selftest_tick()
             assert " left" in pane.result, pane.result
             gate.set()

@@ -23,7 +23,7 @@ def test_q_asks_again_while_work_runs_and_quits_at_once_otherwise(plugins):
             await pilot.pause(0.3)
             assert app.is_running  # the first q asked
             shown = [str(n.message) for n in app._notifications]
-            assert any("q again within 3 s to quit: it stops P01's study run" in m for m in shown)
+            assert any("q again within 3 s quits, stopping P01's study run" in m for m in shown)
             await pilot.press("q")
             await wait_for(pilot, lambda: not app.is_running, 10, "quit on the second q")
 

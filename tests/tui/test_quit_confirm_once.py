@@ -26,7 +26,7 @@ def test_the_quit_prompt_names_a_starting_demo_once(plugins, monkeypatch):
             await pilot.press("q")
             await pilot.pause(0.3)
             shown = [str(n.message) for n in app._notifications]
-            assert "q again within 3 s to quit: it stops the flow demo" in shown, shown
+            assert "q again within 3 s quits, stopping the flow demo" in shown, shown
             monkeypatch.setattr(demos, "run", None)  # nothing left to stop on the way out
             monkeypatch.setattr(work, "name_running", None)
 

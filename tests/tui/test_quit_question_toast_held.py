@@ -27,7 +27,7 @@ def test_a_hidden_screen_s_status_waits_while_q_asks(plugins):
             expr.value = ""
             await _type(pilot, TYPED)
             await pilot.press("ctrl+q")
-            asked = "q again within 3 s to quit"
+            asked = "q again within 3 s quits"
             shown = lambda: " ".join(str(n.message) for n in app._notifications)  # noqa: E731
             await wait_for(pilot, lambda: asked in shown(), 5, "asks")
             app.ensure_pane("scenes")

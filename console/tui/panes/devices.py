@@ -31,7 +31,7 @@ from console.tui.device_cells import (
 from console.tui.device_picks import DevicePicksMixin
 from console.tui.focus_keys import show_keys
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse_if_held
+from console.tui.lapse import HELD_ENDED, lapse, lapse_if_held
 from console.tui.panes.devices_doctor import DevicesDoctorMixin
 from console.tui.panes.devices_plugins import fill_plugins
 from console.tui.panes.devices_selftest import DevicesSelftestMixin
@@ -92,6 +92,8 @@ RELAY_HEADS = ("", "driver", "probe", "what it finds", "description")
 
 #: how the line says the operator reset the e-stop (a new e-stop replaces it)
 RESET = "e-stop reset"
+#: seconds the reset's line stays: news of the reset, not a state (it went stale)
+RESET_NEWS_S = 60.0
 
 
 #: the test signal's heading: how one is chosen and what ``t`` does with it
@@ -149,7 +151,6 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         self._selftest_timer = None  # the self-test's progress ticks while it runs
         #: the self-test's start (monotonic s), seconds expected and estimate, for ticks
         self._selftest_clock: tuple[float, float, Any] = (0.0, 0.0, None)
-        self._answered_at = 0.0  # when a key last answered while the self-test runs
         self._estopped_at_start = False  # the self-test began during an e-stop (refused)
         self.ask = AskAgain()  # a pick and the self-test: their key again does it
         self._doctor_whole = True  # the device table's rows shown whole (``_show``)
@@ -427,7 +428,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         )
         self._say(f"{name} played on {where!r} through the gate: {peaks}")
 
-    @waits_for_question
+    @waits_for_question(progress="tick")
     def _show_result(
         self, text: str, error: bool = False, severity: str = "", tick: bool = False
     ) -> None:
@@ -435,9 +436,7 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         top of the screen, in view wherever the list is scrolled (a pick on a row far
         down says what it did where it is seen); an error or a refusal (``severity``
         ``warning``) is in the log too. While the self-test runs, a message that is not
-        its ``tick`` holds the line ``NOTE_S`` against the ticks."""
-        if not tick and self._selftest_timer is not None:
-            self._answered_at = time.monotonic()
+        its ``tick`` holds the line ``NOTE_S`` against the ticks (``question_hold``)."""
         severity = "error" if error else severity
         self.result = text
         found = self.query("#devices-result")
@@ -454,16 +453,36 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
     def on_session_message(self, message: SessionMessage) -> None:
         """The operator's reset (``Started`` on topic ``estop``): a line saying what the
         e-stop refused is past; it says the reset instead. A new e-stop (``Stopped``)
-        replaces a line saying the reset: it is latched again."""
+        replaces a line saying the reset or that plays work again: it is latched again."""
         ev = message.event
         if ev.topic == "estop" and self.doctor_rows:  # a stopped run's row (this session's
             self._show(self.doctor_rows[:-1])  # or kept): ctrl+r first or not
         if isinstance(ev, Started) and ev.topic == "estop" and _says_estop(self.result):
-            self._show_result(f"{RESET}: t plays the test signal, enter picks a row")
-        elif isinstance(ev, Stopped) and ev.topic == "estop" and self.result.startswith(RESET):
+            said = f"{RESET}: t plays the test signal, enter picks a row"
+            self._show_result(said)
+            # news of the reset: it leaves the line after a while (still true: it says so)
+            lapse(
+                self,
+                lambda: self.result,
+                said,
+                self._show_result,
+                RESET_NEWS_S,
+                while_true=lambda: True,
+            )
+        elif (
+            isinstance(ev, Stopped)
+            and ev.topic == "estop"
+            and (self.result.startswith(RESET) or self.result == HELD_ENDED)
+            and self._estop_latched()  # a late echo of an e-stop reset since says nothing
+        ):
             # latched again: the line saying the reset is no longer true
             why = " ".join(ev.reason.split())
             self._show_result(f"e-stop active{': ' + why if why else ''}; {ESTOP_FIX}", True)
+
+    def _estop_latched(self) -> bool:
+        """Whether the outputs' e-stop is latched now (not only when a message said so)."""
+        out = self.app.session.outputs
+        return out is None or bool(out.estopped)
 
     def _keep_focused_in_view(self) -> None:
         """``_focused_in_view`` once a table's new rows are laid out (the table sizes

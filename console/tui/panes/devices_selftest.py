@@ -14,7 +14,6 @@ from console.core.types import DeviceStatus
 from console.runtime.selftest_last import forget_last, note_last, read_last
 from console.session.events import ESTOP_FIX, estop_refusal
 from console.tui.ask_again import AskAgain
-from console.tui.long_work import NOTE_S
 from console.tui.selftest_action import (
     run_selftest,
     selftest_about,
@@ -90,14 +89,11 @@ class DevicesSelftestMixin:
         (``selftest_progress``)."""
 
         self._selftest_clock = (t0, total_s, est)
-        self._answered_at = 0.0
         self._selftest_timer = self.set_interval(0.5, self._selftest_tick)
 
     def _selftest_tick(self) -> None:
-        """The self-test's progress on the line, unless a key answered on it less than
-        ``NOTE_S`` ago (a tick every 0.5 s took ``d``'s answer before it was read)."""
-        if time.monotonic() - self._answered_at < NOTE_S:
-            return
+        """The self-test's progress on the line (a key's answer holds it ``NOTE_S``
+        against the ticks: ``console.tui.question_hold``)."""
         t0, total_s, est = self._selftest_clock
         self._show_result(selftest_progress(time.monotonic() - t0, total_s, est), tick=True)
 

@@ -551,7 +551,7 @@ class SignalsPane(Vertical):
 
     def unsaved_work(self) -> str:
         """What quitting would lose (``console.tui.long_work.KeepsTypedWork``)."""
-        return "your unsaved signal (ctrl+s on Signals saves it)" if self.unsaved() else ""
+        return "your signal (ctrl+s on Signals saves it)" if self.unsaved() else ""
 
     def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
         """Enter on a library signal loads it into the fields; over an unsaved

@@ -191,7 +191,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             for c, txt in enumerate(self._row_cells(r)):
                 grid.update_cell(str(r), str(c), txt)
 
-    @waits_for_question
+    @waits_for_question(progress="progress")
     def status(self, text: str, progress: float | None = None, error: bool = False) -> None:
         self.status_text = text
         if not self.query("#vib-status"):  # a worker finishing while the console closes
