@@ -68,6 +68,17 @@ WIDE_RANGES: dict[str, tuple[float, float]] = {
     # how still a zoom keeps its fingertips' middle: 0 the hand stays (the thumb sweeps),
     # 1 both tips move, as much each way
     "zoom_still": (0.0, 1.0),
+    # how tightly a closed flat hand closes: its thumb's direction from the plain pose's
+    # (deg; - standing off the index, + pressed in; the fingers lie against each other,
+    # so their rest directions' turns do not apply): the outline's solidity 0.76-0.94,
+    # as the other renderers' closed hands (0.76-0.93; the thumb's turn alone had taken
+    # it down to 0.72, among their open hands'); drawn last
+    "closed_thumb_deg": (-6.0, 16.0),
+    # how far an open flat hand spreads its fingers (x the plain pose's; instead of
+    # ``spread``, which the other open poses keep): down to a hand barely opened, its
+    # outline's solidity up to 0.72-0.75 as the other renderers' open hands' (0.55-0.76;
+    # with ``spread`` the twin's stayed under 0.70); drawn last
+    "open_spread": (0.4, 1.7),
 }
 TWIN_KEYS = ("illumination", "noise_sigma", "hand_scale", "hover_scale", "drift_gain")
 IMAGE_KEYS = ("glow_scale", "finger_px", "lobe_gain", "blur_px", "gamma", "post_noise")
@@ -102,6 +113,8 @@ def wide_condition(seed: int, subject: int, gesture: int, rep: int) -> dict[str,
     hand["gather"] = round(_draw(rng, "gather"), 4)
     hand["pivot"] = round(_draw(rng, "pivot"), 4)
     hand["zoom_still"] = round(_draw(rng, "zoom_still"), 4)
+    hand["closed_thumb_deg"] = round(_draw(rng, "closed_thumb_deg"), 4)
+    hand["open_spread"] = round(_draw(rng, "open_spread"), 4)
     cond["hand"] = hand
     return cond
 
@@ -110,7 +123,9 @@ def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
     """The twin's ``Subject`` (a frozen dataclass) with a wide condition's ``hand`` part:
     finger widths, lengths and rest directions, spread, hover heights, speed, tremor,
     how gently motions start, how far piled fingertips meet, what a rotate turns
-    about and how still a zoom keeps its fingertips' middle."""
+    about, how still a zoom keeps its fingertips' middle and how tightly a closed
+    hand closes (``closed_turn_deg``: the fingers' turns undone, the thumb's draw) and
+    how far an open flat hand spreads."""
     from dataclasses import replace
 
     turn = np.asarray(hand["finger_turn_deg"]) * [2, 1, 1, 1, 1]  # the thumb varies most
@@ -130,7 +145,19 @@ def wide_subject(subject: Any, hand: dict[str, Any]) -> Any:
         gather=hand.get("gather", 0.0),
         pivot=hand.get("pivot", 0.0),
         zoom_still=hand.get("zoom_still", 0.0),
+        closed_turn_deg=_closed_turn(turn, hand),
+        open_spread=hand.get("open_spread"),
     )
+
+
+def _closed_turn(turn: np.ndarray, hand: dict[str, Any]) -> tuple[float, ...]:
+    """``Subject.closed_turn_deg`` of a wide condition's ``hand``: a closed hand's fingers
+    lie against each other whatever their rest directions (each finger's ``turn``
+    undone) and its thumb is as far off the index as ``closed_thumb_deg`` says; a
+    ``hand`` drawn before that key keeps the turns (as it was rendered)."""
+    if "closed_thumb_deg" not in hand:
+        return (0.0,) * len(turn)
+    return tuple((-turn + np.eye(len(turn))[0] * hand["closed_thumb_deg"]).tolist())
 
 
 def twin_profile(cond: dict[str, Any]) -> dict[str, Any]:

@@ -82,14 +82,12 @@ def static_pose(gesture: str, s: Subject, j: tuple[float, ...]) -> tuple:
             _curled(s, j[4]),
         )
     if gesture == "closed_hand":
-        return (0.0, 0.0), (
-            _flat(22 + 3 * j[1]),
-            _flat(5 + j[2]),
-            _flat(0.0),
-            _flat(-4 + j[3]),
-            _flat(-10 + j[4]),
+        closed = (22 + 3 * j[1], 5 + j[2], 0.0, -4 + j[3], -10 + j[4])
+        return (0.0, 0.0), tuple(
+            _flat(a + t) for a, t in zip(closed, s.closed_turn_deg, strict=True)
         )
     if gesture == "open_hand":
+        sp = s.spread_deg if s.open_spread is None else s.open_spread
         return (0.0, 0.0), (
             _flat(-25 * sp + 6 * j[1]),
             _flat(-12 * sp + 4 * j[2]),

@@ -54,6 +54,12 @@ class Subject:
     #: how still a zoom's fingertips keep their middle (0: the hand stays and the thumb
     #: sweeps, the index a third as far; 1: the hand follows so both tips move, as much each way)
     zoom_still: float = 0.0
+    #: added to each finger's direction in a closed hand (deg, thumb .. little; the
+    #: thumb's + pressed in against the index, - standing off it: how tightly this
+    #: person closes a flat hand)
+    closed_turn_deg: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    #: how far this person spreads an open flat hand's fingers (None: ``spread_deg``)
+    open_spread: float | None = None
 
     @property
     def palm_len_mm(self) -> float:
