@@ -303,6 +303,8 @@ class Outputs:
         elif kind == "reset":  # the kernel's own "reset" op says it, with who and when:
             self._estopped, self._estop_reason = False, ""  # one reset, told once
             return
+        if past and kind == "estop":  # the log's line after the reset's says it is past
+            message = f"{message}; reset since"
         self._tell(kind, message)
 
     def _on_job(self, h: dict[str, Any]) -> None:
@@ -332,6 +334,8 @@ class Outputs:
         elif what == "done":
             with self._lock:
                 self._reports.pop(int(h.get("job", 0)), None)
+            if h.get("estop") and self.estopped_by is None:  # before the e-stop's own event:
+                self.estopped_by = str(h["estop"])  # a command says it was e-stopped
             rep.finish(str(h.get("error") or ""))
 
     def _register(self, job: int | None, name: str) -> PlayReport:

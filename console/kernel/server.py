@@ -112,6 +112,10 @@ class Kernel:
         #: before it, handed on after it (a loaded event thread), is past: it latches
         #: nothing again and clients keep the reset's state (they compare its ``t``)
         self.reset_t = 0.0
+        #: the latch file and the gate's e-stop change together under it: an e-stop sets
+        #: both, a reset clears both, the event thread's latch write checks ``reset_t``
+        #: and writes in one step (a reset between the two left a latch the gate had not)
+        self._latch_lock = threading.Lock()
         self.control: LineServer | None = None
         self._listener: socket.socket | None = None
         self.outputs: Any = None  # console.kernel.table.TableOutputs
@@ -279,9 +283,10 @@ class Kernel:
             if ev is None:
                 return
             if ev.kind in ("estop", "fault") and not self._quit.is_set():
-                if ev.t_s >= self.reset_t:  # not undone by a reset since (``reset_t``)
-                    with contextlib.suppress(Exception):  # never lose the broadcast to a disk
-                        write_latch(self.table, latch_record(ev.message, "kernel"))
+                with self._latch_lock:  # not undone by a reset since (``reset_t``)
+                    if ev.t_s >= self.reset_t:
+                        with contextlib.suppress(Exception):  # never lose the broadcast
+                            write_latch(self.table, latch_record(ev.message, "kernel"))
                 self._estop_twins(ev.message)
             msg = {
                 "op": "gate",
@@ -318,9 +323,10 @@ class Kernel:
         t0 = time.monotonic()
         clients = [c.label() for c in self.client_list()]  # before they leave
         gate = self.gate
-        gate.estop(reason)
-        with contextlib.suppress(Exception):
-            write_latch(self.table, latch_record(reason, by))
+        with self._latch_lock:
+            gate.estop(reason)
+            with contextlib.suppress(Exception):
+                write_latch(self.table, latch_record(reason, by))
         opened = gate.wait_safe(ESTOP_WAIT_S)
         st = gate.status()
         level = tuple(float(v) for v in st["level_v"])
@@ -350,16 +356,17 @@ class Kernel:
         )
         if refusal:
             return refusal
-        latched = read_latch(self.table)
-        if latched is None and not self.gate.estopped:
-            return "ok: not e-stopped"
-        t = self.reset_t = time.monotonic()  # before the latch goes (``reset_t``)
-        try:
-            latched = clear_latch(self.table) or latched  # every e-stop it removed
-        except OSError as exc:
-            return f"refused: the latch {self.table.latch_path} cannot be removed ({exc})"
-        was = describe_latch(latched) if latched else self.gate.estop_reason
-        self.gate.reset()
+        with self._latch_lock:  # a latch write under way ends first (``_latch_lock``)
+            latched = read_latch(self.table)
+            if latched is None and not self.gate.estopped:
+                return "ok: not e-stopped"
+            t = self.reset_t = time.monotonic()  # before the latch goes (``reset_t``)
+            try:
+                latched = clear_latch(self.table) or latched  # every e-stop it removed
+            except OSError as exc:
+                return f"refused: the latch {self.table.latch_path} cannot be removed ({exc})"
+            was = describe_latch(latched) if latched else self.gate.estop_reason
+            self.gate.reset()
         when = time.strftime("%H:%M:%S")
         note = f"e-stop reset by {who[:120]} at {when} (was: {was})"
         log.warning("%s", note)
@@ -535,6 +542,9 @@ class Kernel:
                 msg["detents"] = [list(d) for d in report.detents[-16:]]
             elif what == "done":
                 msg["error"] = report.error
+                gate = self.gate  # cut by an e-stop: said with it (its event may come later)
+                if report.error and gate is not None and gate.estopped:
+                    msg["estop"] = str(gate.estop_reason)
                 c.jobs.pop(job_id, None)
                 c.streams.pop(job_id, None)
             self._send_event(c, msg)
