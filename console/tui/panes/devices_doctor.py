@@ -1,5 +1,6 @@
-"""The Devices screen's device table: the same checks as `haptable doctor` (the
-profile's devices, real-time memory and scheduling) and the self-test's row, a long why
+"""The Devices screen's device table: `haptable doctor`'s own checks
+(``console.runtime.doctor.checks``: the profile's devices, the classifier's files,
+real-time memory and scheduling) and the self-test's row, a long why
 or fix wrapped inside its row; Enter on a row says it whole."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from textual import work
 from textual.widgets import DataTable
 
 from console.core.types import DeviceStatus
-from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.doctor import checks
 from console.tui.device_cells import (
     PROBLEMS,
     ROW_LINES,
@@ -61,10 +62,9 @@ class DevicesDoctorMixin:
             return
         if said:
             self._say("re-checking the profile's devices ...")
-        # the same checks as `haptable doctor`; its quick self-test plays: here s runs
-        # the full one, and the row says the quick part's skip as doctor would
-        rows = [*diagnose(prof, app.ctx.pm), realtime_status(prof, app.ctx.pm)]
-        rows += [scheduling_status(prof, app.ctx.pm)]
+        # `haptable doctor`'s own checks; its quick self-test plays: here s runs the
+        # full one, and the row says the quick part's skip as doctor would
+        rows = checks(prof, app.ctx.pm)
         from_thread(app, self._show, rows, said, quick_skipped(prof, app.ctx.pm))
 
     def _show(self, rows, said: bool = False, skips: str | None = None) -> None:
