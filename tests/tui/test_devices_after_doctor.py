@@ -40,18 +40,32 @@ def _fix_cells(shown: list[str]) -> list[str]:
     return [c for c in cells if c]
 
 
+def shell_doctor_skips() -> None:
+    """`haptable doctor` run in a shell: no baseline yet, its quick self-test skipped
+    and said why."""
+    doctor = _haptable("doctor")
+    assert "selftest   quick        skipped   skipped: no baseline yet" in doctor.stdout, (
+        doctor.stdout
+    )
+
+
+async def devices_listed(app, pilot, cards: int = 2) -> DataTable:
+    """The device table once ``cards`` sound cards are listed and the devices checked."""
+    audio = app.query_one("#audio-table", DataTable)
+    table = app.query_one("#device-table", DataTable)
+    await wait_for(pilot, lambda: audio.row_count >= cards, 30, "sound cards listed")
+    await wait_for(pilot, lambda: table.row_count >= 7, 30, "the devices checked")
+    return table
+
+
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 def test_devices_after_a_shell_doctor_opens_on_its_top(plugins, size):
-    doctor = _haptable("doctor")  # no baseline yet: its quick self-test skipped, said why
-    assert "selftest   quick        skipped" in doctor.stdout, doctor.stdout
+    shell_doctor_skips()
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=size) as pilot:
-            audio = app.query_one("#audio-table", DataTable)
-            table = app.query_one("#device-table", DataTable)
-            await wait_for(pilot, lambda: audio.row_count >= 2, 30, "sound cards listed")
-            await wait_for(pilot, lambda: table.row_count >= 7, 30, "the devices checked")
+            table = await devices_listed(app, pilot)
             await wait_for(pilot, lambda: _has(app, "●", "twin"), 10, "the card in use")
             await pilot.pause(0.5)  # laid out
             shown = screen_lines(app)

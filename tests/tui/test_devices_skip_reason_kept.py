@@ -11,7 +11,6 @@ from __future__ import annotations
 import asyncio
 
 import pytest
-from textual.widgets import DataTable
 
 from console.cli.main import Context
 from console.core.types import OutputDevice
@@ -20,7 +19,7 @@ from console.tui.app import HapTableApp
 
 from .conftest import wait_for
 from .test_camera_layout import screen_lines
-from .test_devices_selftest_what_ran import _haptable
+from .test_devices_after_doctor import devices_listed, shell_doctor_skips
 
 REASON = "no baseline yet: press s on a healthy table to keep one"
 
@@ -61,16 +60,12 @@ def _lab_cards(monkeypatch, count: int) -> None:
 def test_the_skip_reason_stays_in_view_after_a_shell_doctor(plugins, monkeypatch, size, cards):
     if cards:
         _lab_cards(monkeypatch, cards)
-    doctor = _haptable("doctor")  # no baseline yet: its quick self-test skipped, said why
-    assert "skipped: no baseline yet" in doctor.stdout, doctor.stdout
+    shell_doctor_skips()
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=size) as pilot:
-            audio = app.query_one("#audio-table", DataTable)
-            table = app.query_one("#device-table", DataTable)
-            await wait_for(pilot, lambda: audio.row_count >= max(2, 1 + cards), 30, "cards listed")
-            await wait_for(pilot, lambda: table.row_count >= 7, 30, "the devices checked")
+            table = await devices_listed(app, pilot, max(2, 1 + cards))
             if cards:  # d re-checks, with the long list known: the rows shortened
                 await pilot.press("d")
                 said = lambda: "re-checked" in app.pane("devices").result  # noqa: E731
