@@ -20,12 +20,7 @@ from console.core.options import minutes, seconds
 from console.core.suggest import suggestion
 from console.runtime.buffer_doctor import describe as describe_buffer
 from console.runtime.buffer_doctor import measure as measure_buffer
-from console.runtime.doctor import (
-    classifier_status,
-    diagnose,
-    realtime_status,
-    scheduling_status,
-)
+from console.runtime.doctor import checks
 from console.runtime.selftest_last import note_last
 from console.safety import Limits, check_plan
 
@@ -78,12 +73,7 @@ def configure_doctor(p: argparse.ArgumentParser) -> None:
 
 
 def run_doctor(args, ctx) -> int:
-    statuses = [
-        *diagnose(ctx.profile, ctx.pm),
-        *filter(None, [classifier_status(ctx.profile, ctx.pm)]),
-        realtime_status(ctx.profile, ctx.pm),
-        scheduling_status(ctx.profile, ctx.pm),
-    ]
+    statuses = checks(ctx.profile, ctx.pm)
     bad = [s for s in statuses if s.state in ("missing", "error")]
     code, part = _selftest_part(args, ctx)  # the self-test's quick part, when a plugin has one
     buffer = _buffer_part(args, ctx)

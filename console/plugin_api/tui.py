@@ -46,7 +46,8 @@ What it offers:
 - check boxes: ``Tick`` (a ``Checkbox`` drawn ``[x]`` / ``[ ]``: its state reads in
   characters, never in shades alone; every check box the console shows is one)
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
-  while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
+  while it has the focus: ``console.tui.focus_keys``); ``name_field`` (a field named
+  first in the footer while it has the focus, with what Enter and Esc do there); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
 """
 
@@ -55,7 +56,7 @@ from __future__ import annotations
 from console.tui.ask_again import AskAgain
 from console.tui.charts import Chart, Series
 from console.tui.choice import Choice, chosen
-from console.tui.focus_keys import show_keys
+from console.tui.focus_keys import name_field, show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse, lapse_if_held, lapse_on_change
 from console.tui.long_work import LongWork
@@ -96,6 +97,7 @@ __all__ = [
     "answered",
     "waits_for_question",
     "show_keys",
+    "name_field",
     "from_thread",
     "short_path",
     "PathField",

@@ -1,6 +1,6 @@
-"""What `haptable doctor` and the Devices screen report: one status per device the profile
-uses, and whether the audio thread may lock its memory and run with real-time priority;
-`haptable doctor` adds the classifier's files (``classifier_status``)."""
+"""What `haptable doctor` and the Devices screen report (``checks``, one list for both):
+one status per device the profile uses, the classifier's files (``classifier_status``),
+and whether the audio thread may lock its memory and run with real-time priority."""
 
 from __future__ import annotations
 
@@ -77,6 +77,18 @@ def classifier_status(profile, plugins) -> DeviceStatus | None:
             f"probe failed: {exc}",
             f"report this to the {reg.plugin} plugin",
         )
+
+
+def checks(profile, plugins) -> list[DeviceStatus]:
+    """Every check of `haptable doctor`, in its order: the devices, the classifier's files
+    (when its plugin has a probe), real-time memory and scheduling. The Devices screen
+    (F1) shows these rows: a check added here shows on both."""
+    return [
+        *diagnose(profile, plugins),
+        *filter(None, [classifier_status(profile, plugins)]),
+        realtime_status(profile, plugins),
+        scheduling_status(profile, plugins),
+    ]
 
 
 def realtime_status(profile, plugins) -> DeviceStatus:

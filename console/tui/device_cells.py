@@ -9,6 +9,7 @@ from typing import Any
 
 from rich.text import Text
 
+from console.tui.shorten import lead
 from console.tui.table_fit import NOTE_MIN, clip, fit_cell, fit_lines, need, widths
 
 log = logging.getLogger("console.tui.panes.devices")
@@ -47,6 +48,14 @@ def cell_lines(text: str, where: str, width: int, lines: int) -> Text:
     _LOGGED.add((where, text))
     log.info("%s: %s", where, text)
     return shown
+
+
+def reason_lines(why: str, width: int) -> int:
+    """The lines a row's why takes within ``width`` up to the end of its reason (its
+    first clause, ``console.tui.shorten.lead``) and the "…" after it: a shortened row
+    gives way to its reason, never cut inside it (what the operator acts on)."""
+    head = lead(" ".join(str(why).split()))
+    return len(fit_cell(f"{head}…", width).plain.split("\n"))
 
 
 def wrapped_rows(rows, left: int) -> tuple[int, int, list[tuple[Text, Text]], list[int]]:

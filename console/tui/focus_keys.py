@@ -6,11 +6,18 @@ the footer, so a new operator on a list sees the screen's keys but not the one t
 answers to. ``show_keys(widget, enter="use it")`` shows the widget's own binding of a key
 with the screen's word for it, on this widget only: the footer lists the focused widget's
 keys before the screen's, so they come first while the list has the focus.
+
+A field (a text field, a drop-down) says which one has the focus: ``name_field(widget,
+"participant id", enter="next field", escape="leave")`` puts ``participant id:`` first in
+the footer while it has the focus, then what those keys do there (keys the field or its
+screen answers), as Camera's fields say theirs on their border and Signals' in its hint.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TypeVar
+from weakref import WeakKeyDictionary
 
 from textual.widget import Widget
 from textual.widgets import Button, Select
@@ -28,6 +35,26 @@ def show_keys(widget: Widget, **words: str) -> Widget:
             raise ValueError(f"{type(widget).__name__} has no {key!r} key to show")
         by_key[key] = [replace(b, description=word, show=True) for b in bound]
     return widget
+
+
+W = TypeVar("W", bound=Widget)
+
+#: the fields named in the footer: (name, (key, word) ...)
+_NAMED: WeakKeyDictionary[Widget, tuple[str, tuple[tuple[str, str], ...]]] = WeakKeyDictionary()
+
+
+def name_field(widget: W, name: str, **words: str) -> W:
+    """``widget`` named first in the footer while it has the focus (``name:``), then
+    what the keys ``words`` do there (``enter="next field"``, ``escape="leave"``: keys
+    the widget or its screen answers; one the widget shows itself is not said twice);
+    returns ``widget``."""
+    _NAMED[widget] = (name, tuple(words.items()))
+    return widget
+
+
+def field_words(widget: Widget | None) -> tuple[str, tuple[tuple[str, str], ...]] | None:
+    """(name, (key, word) ...) of a field ``name_field`` named, else None."""
+    return None if widget is None else _NAMED.get(widget)
 
 
 def shown_words(widget: Widget) -> dict[str, str]:

@@ -12,7 +12,7 @@ from textual.binding import Binding
 from textual.widgets import Footer, TabbedContent, Tabs
 from textual.widgets._footer import FooterKey
 
-from console.tui.focus_keys import own_key
+from console.tui.focus_keys import field_words, own_key, shown_words
 
 ELLIPSIS = "…"
 
@@ -155,6 +155,9 @@ class ConsoleFooter(Footer):
                 if merged and own is not None and binding.description == own[1]:
                     data = (data[0], f"{own_display}/{data[1]}", *data[2:])
                 keys.append(data)
+        named = field_words(focused)
+        if named is not None:  # a field: its name first, then what its keys do there
+            keys = self._named_first(keys, named, shown_words(focused))
         shown = {k[0] for k in keys}
         keys += [k for a in self._always() if a not in shown and (k := self._app_key(a))]
         if self.show_command_palette and self.app.ENABLE_COMMAND_PALETTE:
@@ -178,6 +181,20 @@ class ConsoleFooter(Footer):
             if k[-1] and self._width(k, compact) <= room:
                 kept.append(k)
         return (compact, tuple(k for k in keys if k in kept))
+
+    def _named_first(self, keys: list[tuple], named: tuple, own: dict[str, str]) -> list:
+        """``keys`` with a named field's name first (``participant id:``, clicked: its
+        first key), its own shown keys after it, then the words of its other keys."""
+        name, words = named
+        at = max((i + 1 for i, k in enumerate(keys) if k[0] in own), default=0)
+        extra = [
+            (key, self.app.get_key_display(Binding(key, "")), word, "", False, "", False)
+            for key, word in words
+            if key not in own
+        ]
+        first = words[0][0] if words else "tab"
+        head = (first, f"{name}:", "", "", False, "", False)
+        return [head, *keys[:at], *extra, *keys[at:]]
 
     def compose(self):
         compact, keys = self._shown = self._wanted()

@@ -164,7 +164,9 @@ def selftest_row(
             why = "not run from the console: it plays a chirp on every relay path"
             return DeviceStatus("selftest", "full", "not run", why, "press s")
         said = quick["line"].removeprefix("skipped: ").replace(CLI_RUN, "press s")
-        why = f"quick self-test {quick['state']} ({quick['by']}, {quick['time']}: {said}); {plays}"
+        # its reason first (the clause a shortened row keeps whole), who and when after
+        when = f"{quick['by']} at {quick['time']}"
+        why = f"quick self-test {quick['state']} ({said}); {when}; {plays}"
         return DeviceStatus("selftest", "quick", quick["state"], why, "press s (full)")
     ok, line, took_s = done
     why = line.removeprefix("self-test: ")

@@ -11,7 +11,15 @@ import re
 
 from rich.cells import cell_len
 
-__all__ = ["balanced", "closers", "cut_chars", "cut_end", "cut_words", "top_level_seps"]
+__all__ = [
+    "balanced",
+    "closers",
+    "cut_chars",
+    "cut_end",
+    "cut_words",
+    "lead",
+    "top_level_seps",
+]
 
 OPENS = "([{"
 CLOSES = ")]}"
@@ -57,6 +65,14 @@ def top_level_seps(plain: str, pattern: str) -> list[tuple[int, int]]:
     may be parted into fields without leaving half a bracket on either side."""
     depth = _depths(plain)
     return [(m.start(), m.end()) for m in re.finditer(pattern, plain) if depth[m.start()] == 0]
+
+
+def lead(plain: str) -> str:
+    """The first clause of ``plain``, up to its first ``;`` outside a bracket: where a
+    line says its reason (``quick self-test skipped (no baseline yet: ...)``), which a
+    shortened line keeps whole (the rest gives way to it)."""
+    seps = top_level_seps(plain, r";")
+    return plain[: seps[0][0]] if seps else plain
 
 
 def cut_end(plain: str, room: int) -> int:

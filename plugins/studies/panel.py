@@ -64,6 +64,7 @@ from . import protocol as protocols
 from .adaptive_view import AdaptiveView, next_view
 from .answer_hold import HeldAnswer
 from .console_run import TOPIC, map_hint, run_analysis
+from .panel_fields import FieldKeys
 from .panel_text import (
     HELP,
     NUMBER_FIELDS,
@@ -88,7 +89,7 @@ ESTOP_REFUSED = "refused: e-stop active, ctrl+r resets"
 CONFIRM_S = 3.0
 
 
-class StudiesPane(HeldAnswer, Vertical):
+class StudiesPane(HeldAnswer, FieldKeys, Vertical):
     #: no Tab stop of its own (it would show nothing focused): its keys work from each of
     #: its fields and buttons, and ``focus()`` gives the focus to Start
     can_focus = False

@@ -32,6 +32,7 @@ HELP = (
     "              left to right / right to left (experiment 1)\n"
     "1..7          a questionnaire score (up to 9 on a protocol's longer\n"
     "              scale); an adaptive trial: the interval (1..3)\n"
+    "enter         in a text field: the next one (the footer names the field)\n"
     "escape        leave a text field (what was typed stays)\n"
     "A flow study (exp1, exp2) plays on the console's vibration map: with\n"
     "none loaded or kept, s measures the twin's grid first."

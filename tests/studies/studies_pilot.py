@@ -42,3 +42,26 @@ async def pick_protocol(pilot, pane, path, out):
     await pilot.pause(0.2)
     sel.value = str(path)
     pane.query_one("#out").value = str(out)
+
+
+async def exp1_trial_done(pilot, pane, out) -> None:
+    """exp1 into the folder ``out`` started with ``s`` from the screen's keys (Start
+    focused), waited for until its first trial is done."""
+    pane.query_one("#protocol").value = "exp1"
+    pane.query_one("#out").value = str(out)
+    pane.focus()
+    await pilot.press("s")
+    await wait_for(pilot, lambda: pane.last.get("done", 0) >= 1, what="a trial done")
+
+
+def study_status(app) -> str:
+    """The Studies status's words, joined by single spaces."""
+    return " ".join(str(app.query_one("#study-status").render()).split())
+
+
+async def studies_idle(app, pilot):
+    """The Studies pane once its status says no study is running (its fields filled in):
+    the pane."""
+    await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
+    await wait_for(pilot, lambda: "no study running" in study_status(app), 30, "idle")
+    return app.pane("studies")

@@ -9,7 +9,7 @@ import asyncio
 
 import pytest
 
-from .studies_pilot import studies_app, studies_pane, wait_for
+from .studies_pilot import exp1_trial_done, studies_app, studies_pane, wait_for
 
 
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)])
@@ -21,11 +21,7 @@ def test_the_reset_replaces_the_line_the_e_stop_left(double_plugins, map_file, t
         async with app.run_test(size=size) as pilot:
             pane = await studies_pane(pilot, app, map_file)
             status = pane.query_one("#study-status", Static)
-            pane.query_one("#protocol").value = "exp1"
-            pane.query_one("#out").value = str(tmp_path)
-            pane.focus()
-            await pilot.press("s")
-            await wait_for(pilot, lambda: pane.last.get("done", 0) >= 1, what="a trial done")
+            await exp1_trial_done(pilot, pane, tmp_path)
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: pane.running is None, what="the run stopped")
             await wait_for(pilot, lambda: "ctrl+r resets" in str(status.render()), 10)

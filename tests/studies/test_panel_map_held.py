@@ -11,7 +11,7 @@ import pytest
 
 from console.tui.command_line import CommandLine
 
-from .studies_pilot import studies_app, studies_pane, wait_for
+from .studies_pilot import exp1_trial_done, studies_app, studies_pane, wait_for
 
 REFUSED = (
     "measure refused: P01's study run (Studies screen) plays on this map (stop it there first)"
@@ -39,11 +39,7 @@ def test_m_is_refused_while_a_study_plays_on_the_map(double_plugins, map_file, t
             measured: list[int] = []
             real = vib.measure
             vib.measure = lambda *a, **kw: measured.append(1) or real(*a, **kw)
-            pane.query_one("#protocol").value = "exp1"
-            pane.query_one("#out").value = str(tmp_path)
-            pane.focus()
-            await pilot.press("s")
-            await wait_for(pilot, lambda: pane.last.get("done", 0) >= 1, what="a trial done")
+            await exp1_trial_done(pilot, pane, tmp_path)
             used = vib.current
             await pilot.press("f3")
             await wait_for(pilot, lambda: app.pane("vibration") is not None, what="Vibration")

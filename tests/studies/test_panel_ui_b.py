@@ -42,10 +42,10 @@ def test_time_left_outcomes_lapse_and_analysis_at_once(
         async with app.run_test(size=(80, 24)) as pilot:
             pane = await studies_pane(pilot, app, map_file)
             await pick_protocol(pilot, pane, protocol, tmp_path / "runs")
-            # the protocol list focused: its own key (Enter) first in the footer
+            # the protocol list focused: named, its own key (Enter) first in the footer
             pane.query_one("#protocol").focus()
             await wait_for(pilot, lambda: "protocols" in _footer(app), 30, "footer")
-            assert _footer(app).split()[:2] == ["⏎", "protocols"], _footer(app)
+            assert _footer(app).split()[:3] == ["protocol:", "⏎", "protocols"], _footer(app)
             pane.focus()
             status = pane.query_one("#study-status")
 

@@ -15,30 +15,22 @@ from console.tui.app import HapTableApp
 
 from .conftest import wait_for, words_on
 from .test_camera import _first_frame
+from .test_camera_tuio_target import target_entered
 
 SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 
 
 @SIZES
 def test_an_unresolvable_tuio_host_is_refused_as_typed_and_not_written(plugins, size):
-    from console.config.profile import overrides_path  # lazy: the pilot's profile dir
-
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
-            await _first_frame(app, pilot)
-            written = overrides_path("sim")
-            before = written.read_bytes() if written.exists() else None
-            await pilot.press("U")
-            box = app.query_one("#camera-target")
-            await wait_for(pilot, lambda: box.has_focus, 10, "target field")
-            box.value = "bad.invalid:3333"
-            await pilot.press("enter")
+            box, unwritten = await target_entered(app, pilot, "bad.invalid:3333")
             said = lambda: words_on(app, "#camera-status")  # noqa: E731
             await wait_for(pilot, lambda: "bad.invalid" in said(), 10, "refused")
             assert "--host" not in said(), said()
             assert box.display and box.value == "bad.invalid:3333"
-            assert (written.read_bytes() if written.exists() else None) == before
+            assert unwritten()
 
     asyncio.run(scenario())
 

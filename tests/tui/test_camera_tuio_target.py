@@ -14,6 +14,22 @@ from .conftest import wait_for, words_on
 from .test_camera import _first_frame
 
 
+async def target_entered(app, pilot, value: str) -> tuple:
+    """Camera's first frame, then ``U``, ``value`` typed in the target field and Enter:
+    (the field, whether the profile's overrides file is as it was before)."""
+    from console.config.profile import overrides_path  # lazy: the pilot's profile dir
+
+    await _first_frame(app, pilot)
+    written = overrides_path("sim")
+    before = written.read_bytes() if written.exists() else None
+    await pilot.press("U")
+    box = app.query_one("#camera-target")
+    await wait_for(pilot, lambda: box.has_focus, 10, "target field")
+    box.value = value
+    await pilot.press("enter")
+    return box, lambda: (written.read_bytes() if written.exists() else None) == before
+
+
 def test_a_bad_tuio_target_says_what_is_wrong_with_it(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
@@ -39,19 +55,11 @@ def test_a_refused_tuio_host_names_the_typed_field_not_the_overrides_file(plugin
     `.../overrides.toml: [tuio] host = "a b/c": holds a space`, naming a file that was
     not written. The typed host is checked as the profile checks it before anything is
     saved: the line names what was typed and nothing is written."""
-    from console.config.profile import overrides_path  # lazy: the pilot's profile dir
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="camera")
         async with app.run_test(size=size) as pilot:
-            await _first_frame(app, pilot)
-            written = overrides_path("sim")
-            before = written.read_bytes() if written.exists() else None
-            await pilot.press("U")
-            box = app.query_one("#camera-target")
-            await wait_for(pilot, lambda: box.has_focus, 10, "target field")
-            box.value = "a b/c:3333"
-            await pilot.press("enter")
+            box, unwritten = await target_entered(app, pilot, "a b/c:3333")
 
             def said() -> str:
                 return words_on(app, "#camera-status")
@@ -59,6 +67,6 @@ def test_a_refused_tuio_host_names_the_typed_field_not_the_overrides_file(plugin
             await wait_for(pilot, lambda: "a b/c" in said(), 10, "refused")
             assert "host 'a b/c' holds a space" in said(), said()
             assert "overrides" not in said() and "[tuio]" not in said(), said()
-            assert (written.read_bytes() if written.exists() else None) == before
+            assert unwritten()
 
     asyncio.run(scenario())

@@ -12,7 +12,7 @@ from textual.widgets import Select
 from console.cli.main import Context
 from console.tui.app import HapTableApp
 
-from .conftest import wait_for, words_on
+from ..studies.studies_pilot import studies_idle
 from .test_camera_layout import SIZES, screen_lines
 
 
@@ -21,10 +21,7 @@ def test_the_closed_protocol_drop_down_is_whole_or_ends_in_an_ellipsis(plugins, 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=size) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
-            status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
+            pane = await studies_idle(app, pilot)
             select = pane.query_one("#protocol", Select)
             select.value = "threshold_vibrotactile"
             await pilot.pause(0.3)

@@ -58,6 +58,9 @@ def test_the_device_table_reads_whole_from_its_first_frame(plugins, size):
                 seen += _faults(screen_lines(app))
                 await pilot.pause(0.05)
             assert not seen, "\n".join(dict.fromkeys(seen))
+            table.move_cursor(row=table.row_count - 1)  # at 80 x 24 below the others
+            await pilot.pause(0.2)
+            assert not _faults(screen_lines(app)), "\n".join(screen_lines(app))
             fix = [ln for ln in _device_lines(screen_lines(app)) if ln.startswith(" selftest")]
             assert fix and all("press s" in ln for ln in fix), fix
 

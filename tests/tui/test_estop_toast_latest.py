@@ -24,6 +24,7 @@ from console.tui.app import HapTableApp
 
 from .conftest import spy_notifications, wait_for
 from .test_screens import _ready
+from .test_stale_lines import estop_refused_reset
 
 SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 
@@ -71,15 +72,8 @@ def test_the_estop_s_notification_stays_over_a_hidden_screen_s_status(plugins, s
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         said = spy_notifications(app)
         async with app.run_test(size=size, notifications=True) as pilot:
-            await _ready(app, pilot)
-            devices = app.pane("devices")
             # Devices says the e-stop and then its reset on its own line
-            await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stopped")
-            await pilot.press("t")
-            await wait_for(pilot, lambda: "refused" in devices.result, 20, "t refused")
-            await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: devices.result.startswith("e-stop reset"), 20, "")
+            devices = await estop_refused_reset(app, pilot)
             await pilot.press(key)  # another screen
             await pilot.pause(0.5)
             await pilot.press("ctrl+e")

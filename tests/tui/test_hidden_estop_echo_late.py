@@ -17,6 +17,7 @@ from console.tui.session_messages import SessionMessage
 
 from .conftest import spy_notifications, wait_for
 from .test_screens import _ready
+from .test_stale_lines import estop_refused_reset
 
 
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
@@ -59,14 +60,7 @@ def test_a_late_estop_message_leaves_devices_saying_the_reset(plugins, size):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            devices = app.pane("devices")
-            await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stopped")
-            await pilot.press("t")
-            await wait_for(pilot, lambda: "refused" in devices.result, 20, "t refused")
-            await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: devices.result.startswith("e-stop reset"), 20, "reset")
+            devices = await estop_refused_reset(app, pilot)
             devices.on_session_message(
                 SessionMessage(Stopped("estop", reason="operator e-stop (console)"))
             )

@@ -13,6 +13,7 @@ from plugins.studies.adaptive_console import trial_row
 from plugins.studies.adaptive_view import AdaptiveView
 from plugins.studies.trials_table import TrialsTable
 
+from ..studies.studies_pilot import studies_idle
 from .conftest import wait_for, words_on
 
 
@@ -47,10 +48,8 @@ def test_status_plot_names_picked_track_and_time_column_at_120(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
+            pane = await studies_idle(app, pilot)
             status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
             # a refusal about the protocol before stays no longer than that protocol
             pane._say("exp1 needs a vibration map: measure one on Vibration (F3)", "error")
             assert "exp1 needs a vibration map" in status()

@@ -12,7 +12,8 @@ from console.cli.main import Context
 from console.tui.app import HapTableApp
 from plugins.studies import protocol as protocols
 
-from .conftest import wait_for, words_on
+from ..studies.studies_pilot import studies_idle
+from .conftest import wait_for
 
 ROWS = ("#study-form", "#study-folder", "#study-buttons")
 
@@ -33,9 +34,7 @@ def test_a_resize_re_lays_the_top_rows(plugins):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=(120, 40)) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
+            await studies_idle(app, pilot)
             select = app.query_one("#protocol", Select)
             assert select.region.width >= longest and not _outside(app, 120)
             await pilot.resize_terminal(80, 24)

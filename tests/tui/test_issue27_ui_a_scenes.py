@@ -25,6 +25,22 @@ KNOB_SHOWN = {
 }
 
 
+async def knob_shown_scenes(app, pilot, monkeypatch, feed: dict | None = None) -> tuple:
+    """Scenes with the projector showing the knob scene (its status as ``KNOB_SHOWN``,
+    closing it noted, the demo's ``feed``), the focus on the screen: (pane, its work
+    line, the closes noted)."""
+    await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes")
+    pane, session = app.pane("scenes"), app.session
+    closed: list[int] = []
+    monkeypatch.setattr(session.scenes, "status", lambda: dict(KNOB_SHOWN))
+    monkeypatch.setattr(session.scenes, "close_projector", lambda: closed.append(1))
+    monkeypatch.setattr(session.demos, "scene_feed", lambda: feed)
+    work = app.query_one("#demo-work")
+    focused = lambda: app.focused is not None and pane in app.focused.ancestors_with_self  # noqa: E731
+    await wait_for(pilot, focused, 10, "the focus on Scenes")
+    return pane, work, closed
+
+
 def test_the_feed_says_what_the_demo_does_now():
     demos = DemoControl(SimpleNamespace())
     demos.run = SimpleNamespace(scene_name="knob", stopped=False)
@@ -41,19 +57,9 @@ def test_close_asks_again_and_lines_stay_true_at_80x24(plugins, monkeypatch):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes")
-            pane, session = app.pane("scenes"), app.session
-            closed = []
-            monkeypatch.setattr(session.scenes, "status", lambda: dict(KNOB_SHOWN))
-            monkeypatch.setattr(session.scenes, "close_projector", lambda: closed.append(1))
             feed = {"demo": "knob", "scene": "knob", "sent": True, "state": "running"}
-            monkeypatch.setattr(session.demos, "scene_feed", lambda: feed)
-            work = app.query_one("#demo-work")
-
-            def focus_here() -> bool:  # the screen's keys apply from its focus
-                return app.focused is not None and pane in app.focused.ancestors_with_self
-
-            await wait_for(pilot, focus_here, 10, "the focus on Scenes")
+            pane, work, closed = await knob_shown_scenes(app, pilot, monkeypatch, feed)
+            session = app.session
             await pilot.press("k")
             asked = f"k again within {CLOSE_AGAIN_S:g} s"
             await wait_for(pilot, lambda: asked in text_in(app, work), 10, "k asks again")

@@ -120,7 +120,6 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
     from console.core.types import DeviceStatus
     from console.runtime import doctor
     from console.tui.logs import NotifyHandler
-    from console.tui.panes import devices_doctor as devices
     from console.tui.safety_bar import SafetyBar
 
     real = doctor.diagnose
@@ -129,13 +128,12 @@ def test_brackets_show_on_the_screens(plugins, monkeypatch):
         why = "[audio] device = 'x': no stereo output matches"
         return [*real(profile, pm), DeviceStatus("audio", "cardx", "missing", why, "fix [b]")]
 
-    # where the Devices screen looks it up (patching ``doctor`` alone reaches it only
-    # when the screen's module is imported after the patch: a test run alone)
-    monkeypatch.setattr(devices, "diagnose", diagnose)
+    # the Devices screen shows doctor's own checks (``doctor.checks`` looks it up here)
+    monkeypatch.setattr(doctor, "diagnose", diagnose)
 
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
-        async with app.run_test(size=(220, 50), notifications=True) as pilot:
+        async with app.run_test(size=(220, 52), notifications=True) as pilot:
             handler = NotifyHandler(app)
             logging.getLogger().addHandler(handler)
             try:

@@ -16,6 +16,7 @@ from console.plugin_api.tui import NumberField
 from console.tui.app import HapTableApp
 from console.tui.number_field import number_length
 
+from ..studies.studies_pilot import studies_idle
 from .conftest import wait_for, words_on
 from .test_camera_layout import SIZES, screen_lines
 
@@ -81,10 +82,8 @@ def test_studies_age_keeps_what_is_typed(plugins, size):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=size) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
+            pane = await studies_idle(app, pilot)
             status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
             pane.query_one("#simulate").value = False  # a person's details are checked
             field = pane.query_one("#age", Input)
             await _type(pilot, field, "1234567")

@@ -16,7 +16,7 @@ from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for, words_on
-from .test_screens import _load_map, _ready
+from .test_screens import kept_map_grid, two_points_asked
 
 ASKED = "m again within 5 s measures the grid anew"
 
@@ -28,18 +28,8 @@ def test_vibration_question_outlasts_a_play_said_meanwhile(plugins, map_file, si
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            pane = await _load_map(app, pilot, map_file)
-            kept = app.session.vibration.cached_map_path()
-            kept.parent.mkdir(parents=True, exist_ok=True)
-            kept.write_bytes(b"")  # a kept map exists: m asks before replacing it
-            await pilot.press("escape")  # back to the grid
-            await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "grid")
-            await pilot.press("enter", "right", "enter")  # two points: f plays between
-            await wait_for(pilot, lambda: len(pane.selected) == 2, 10, "two points")
-            await pilot.pause(0.5)
-            await pilot.press("m")
-            await wait_for(pilot, lambda: ASKED in words_on(app, "#vib-status"), 10, "asked")
+            pane = await kept_map_grid(app, pilot, map_file)
+            await two_points_asked(app, pilot, pane, ASKED)
             await pilot.press("f")  # its play ends while the question still counts
             played = lambda: "status Vibration: played flow" in caplog.text  # noqa: E731
             await wait_for(pilot, played, 10, "the play said (in the log)")
@@ -61,18 +51,8 @@ def test_another_key_pressed_during_a_question_is_answered_at_once(plugins, map_
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            pane = await _load_map(app, pilot, map_file)
-            kept = app.session.vibration.cached_map_path()
-            kept.parent.mkdir(parents=True, exist_ok=True)
-            kept.write_bytes(b"")
-            await pilot.press("escape")
-            await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "grid")
-            await pilot.press("enter", "right", "enter")
-            await wait_for(pilot, lambda: len(pane.selected) == 2, 10, "two points")
-            await pilot.pause(0.5)
-            await pilot.press("m")
-            await wait_for(pilot, lambda: ASKED in words_on(app, "#vib-status"), 10, "asked")
+            pane = await kept_map_grid(app, pilot, map_file)
+            await two_points_asked(app, pilot, pane, ASKED)
             before = len(app._notifications)
             await pilot.press("f")
 

@@ -14,7 +14,7 @@ from console.cli.main import Context
 from console.tui.app import HapTableApp
 
 from .conftest import wait_for
-from .test_screens import _load_map, _ready
+from .test_screens import kept_map_grid, scrolled_then_relays
 
 
 def _screen_text(app) -> str:
@@ -29,18 +29,8 @@ def test_the_measure_question_is_in_view_after_coming_back_scrolled(plugins, map
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            pane = await _load_map(app, pilot, map_file)
-            kept = app.session.vibration.cached_map_path()
-            kept.parent.mkdir(parents=True, exist_ok=True)
-            kept.write_bytes(b"")  # a kept map exists: m asks before replacing it
-            await pilot.press("escape")  # back to the grid
-            await pilot.pause(0.3)
-            await pilot.press("pagedown", "pagedown")
-            if pane.max_scroll_y > 0:  # at 120 x 40 the screen fits: nothing to scroll
-                await wait_for(pilot, lambda: pane.scroll_y > 0, 10, "scrolled down")
-            await pilot.press("f4")
-            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays", 10)
+            pane = await kept_map_grid(app, pilot, map_file)
+            await scrolled_then_relays(app, pilot, pane)
             await pilot.press("ctrl+p")
             await wait_for(pilot, lambda: type(app.screen).__name__ == "SafetyPalette")
             await pilot.press(*"Measure vibration")
@@ -66,18 +56,8 @@ def test_a_question_is_in_view_when_its_screen_is_laid_out_late(plugins, map_fil
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="vibration")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            pane = await _load_map(app, pilot, map_file)
-            kept = app.session.vibration.cached_map_path()
-            kept.parent.mkdir(parents=True, exist_ok=True)
-            kept.write_bytes(b"")  # a kept map exists: m asks before replacing it
-            await pilot.press("escape")  # back to the grid
-            await pilot.pause(0.3)
-            await pilot.press("pagedown", "pagedown")
-            if pane.max_scroll_y > 0:  # at 120 x 40 the screen fits: nothing to scroll
-                await wait_for(pilot, lambda: pane.scroll_y > 0, 10, "scrolled down")
-            await pilot.press("f4")
-            await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays", 10)
+            pane = await kept_map_grid(app, pilot, map_file)
+            await scrolled_then_relays(app, pilot, pane)
             bar = app.screen.query_one("SafetyBar")
             busy = app.set_interval(0.01, bar.refresh)  # refreshes go by meanwhile
             pane.action_measure()  # asked before its screen is laid out again

@@ -17,7 +17,7 @@ from console.tui.app import HapTableApp
 
 from .conftest import wait_for
 from .test_camera_layout import text_in
-from .test_issue27_ui_a_scenes import KNOB_SHOWN
+from .test_issue27_ui_a_scenes import knob_shown_scenes
 
 
 def test_scenes_k_question_holds_against_a_demo_s_progress(plugins, monkeypatch):
@@ -28,15 +28,7 @@ def test_scenes_k_question_holds_against_a_demo_s_progress(plugins, monkeypatch)
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes")
-            pane, session = app.pane("scenes"), app.session
-            closed = []
-            monkeypatch.setattr(session.scenes, "status", lambda: dict(KNOB_SHOWN))
-            monkeypatch.setattr(session.scenes, "close_projector", lambda: closed.append(1))
-            monkeypatch.setattr(session.demos, "scene_feed", lambda: None)
-            work = app.query_one("#demo-work")
-            focused = lambda: app.focused is not None and pane in app.focused.ancestors_with_self  # noqa: E731
-            await wait_for(pilot, focused, 10, "the focus on Scenes")
+            _pane, work, closed = await knob_shown_scenes(app, pilot, monkeypatch)
             await pilot.press("k")
             asked = "k again within 1.5 s closes the projector"
             await wait_for(pilot, lambda: asked in text_in(app, work), 10, "asks")

@@ -18,7 +18,7 @@ from console.tui.app import HapTableApp
 
 from .conftest import wait_for
 from .test_camera_layout import _first_frame, text_in
-from .test_issue27_ui_a_scenes import KNOB_SHOWN
+from .test_issue27_ui_a_scenes import knob_shown_scenes
 
 ROOT = Path(__file__).resolve().parents[2]
 ASKS = re.compile(r"f\"[^\"]*again within \{")
@@ -60,15 +60,7 @@ def test_scenes_k_question_lapses(plugins, monkeypatch):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="scenes")
         async with app.run_test(size=(80, 24)) as pilot:
-            await wait_for(pilot, lambda: app.pane("scenes") is not None, what="scenes")
-            pane, session = app.pane("scenes"), app.session
-            closed = []
-            monkeypatch.setattr(session.scenes, "status", lambda: dict(KNOB_SHOWN))
-            monkeypatch.setattr(session.scenes, "close_projector", lambda: closed.append(1))
-            monkeypatch.setattr(session.demos, "scene_feed", lambda: None)
-            work = app.query_one("#demo-work")
-            focused = lambda: app.focused is not None and pane in app.focused.ancestors_with_self  # noqa: E731
-            await wait_for(pilot, focused, 10, "the focus on Scenes")
+            _pane, work, closed = await knob_shown_scenes(app, pilot, monkeypatch)
             await pilot.press("k")
             await wait_for(pilot, lambda: "k again within 1 s" in text_in(app, work), 10, "asks")
             await wait_for(pilot, lambda: "again within" not in text_in(app, work), 10, "lapsed")

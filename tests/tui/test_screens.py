@@ -15,7 +15,7 @@ from console.core.types import patches_of
 from console.tui.app import HapTableApp
 from console.tui.safety_bar import SafetyBar
 
-from .conftest import command, segment_in, wait_for
+from .conftest import command, segment_in, wait_for, words_on
 
 
 def _app(plugins, initial="devices", fast=True):
@@ -38,6 +38,39 @@ async def _load_map(app, pilot, map_file):
     await command(app, pilot, f"load {map_file}")  # typed once the line has the focus
     await wait_for(pilot, lambda: pane.session is not None, 30, "map loaded")
     return pane
+
+
+async def kept_map_grid(app, pilot, map_file):
+    """Vibration with ``map_file`` loaded and a kept map on disk (``m`` asks before
+    replacing it), back on its grid (Esc): the pane."""
+    await _ready(app, pilot)
+    pane = await _load_map(app, pilot, map_file)
+    kept = app.session.vibration.cached_map_path()
+    kept.parent.mkdir(parents=True, exist_ok=True)
+    kept.write_bytes(b"")  # a kept map exists: m asks before replacing it
+    await pilot.press("escape")  # back to the grid
+    return pane
+
+
+async def scrolled_then_relays(app, pilot, pane) -> None:
+    """Vibration scrolled down (PageDown twice, where it scrolls), then Relays (F4)."""
+    await pilot.pause(0.3)
+    await pilot.press("pagedown", "pagedown")
+    if pane.max_scroll_y > 0:  # at 120 x 40 the screen fits: nothing to scroll
+        await wait_for(pilot, lambda: pane.scroll_y > 0, 10, "scrolled down")
+    await pilot.press("f4")
+    await wait_for(pilot, lambda: app.query_one("#tabs").active == "relays", 10)
+
+
+async def two_points_asked(app, pilot, pane, asked: str) -> None:
+    """On the grid: two points picked (``f`` plays between them), then ``m`` asked
+    (``asked`` on the status line)."""
+    await wait_for(pilot, lambda: app.focused is pane.focus_target, 10, "grid")
+    await pilot.press("enter", "right", "enter")  # two points: f plays between
+    await wait_for(pilot, lambda: len(pane.selected) == 2, 10, "two points")
+    await pilot.pause(0.5)
+    await pilot.press("m")
+    await wait_for(pilot, lambda: asked in words_on(app, "#vib-status"), 10, "asked")
 
 
 def _played_in_recording(out, plan) -> float:

@@ -17,6 +17,7 @@ from console.tui.app import HapTableApp
 
 from .conftest import wait_for
 from .test_demos import _start
+from .test_signals_truthful_lines import _pane as _pane_lines
 
 PLAYS = "saw(100 Hz, 5 V, 2 s) * ramp(10 ms)"
 TYPED_AS_NAME = "sine(100 Hz, 30 V, 5 s) * ramp(10 ms)"
@@ -31,17 +32,7 @@ def test_an_expression_in_the_name_field_is_refused_not_announced(plugins, size)
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
         async with app.run_test(size=size) as pilot:
-            pane = app.pane("signals")
-            await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
-            await wait_for(pilot, lambda: bool(pane.entries), 10, "library")
-            lines: list[str] = []
-            said = pane.status
-
-            def status(text: str, error: bool = False) -> None:
-                lines.append(" ".join(str(text).split()))
-                said(text, error)
-
-            pane.status = status
+            _pane, lines = await _pane_lines(app, pilot)
             app.query_one("#sig-expr", Input).value = PLAYS
             app.query_one("#sig-name", Input).value = TYPED_AS_NAME
             await pilot.press("ctrl+o")

@@ -21,6 +21,8 @@ GOOD = "sine(300 Hz, 10 V, 0.2 s) * ramp(5 ms)"
 
 
 async def _pane(app, pilot):
+    """Signals once the outputs are open and its library listed: (the pane, every line
+    its status says from now on, in order)."""
     pane = app.pane("signals")
     await wait_for(pilot, lambda: app.session.outputs is not None, 30, "outputs open")
     await wait_for(pilot, lambda: bool(pane.entries), 10, "library")

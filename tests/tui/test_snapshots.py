@@ -77,7 +77,7 @@ async def _settle(app, pilot) -> None:
 
 
 def test_devices(snap):
-    app = _app("devices")
+    app = _app("devices", "gestures")  # the sim profile's classifier: its doctor row
 
     async def run_before(pilot):
         await _settle(app, pilot)

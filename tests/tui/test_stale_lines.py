@@ -21,6 +21,20 @@ from .test_screens import _ready
 SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 
 
+async def estop_refused_reset(app, pilot):
+    """Devices after ctrl+e, ``t`` refused during the e-stop and ctrl+r: its line says
+    the reset. The pane."""
+    await _ready(app, pilot)
+    devices = app.pane("devices")
+    await pilot.press("ctrl+e")
+    await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stopped")
+    await pilot.press("t")
+    await wait_for(pilot, lambda: "refused" in devices.result, 20, "t refused")
+    await pilot.press("ctrl+r")
+    await wait_for(pilot, lambda: devices.result.startswith("e-stop reset"), 20, "reset")
+    return devices
+
+
 @SIZES
 def test_plays_work_again_goes_with_an_estop(plugins, size):
     async def scenario():
@@ -43,14 +57,7 @@ def test_the_reset_s_line_goes_after_a_while(plugins, size, monkeypatch):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         async with app.run_test(size=size) as pilot:
-            await _ready(app, pilot)
-            devices = app.pane("devices")
-            await pilot.press("ctrl+e")
-            await wait_for(pilot, lambda: app.session.outputs.estopped, 20, "e-stopped")
-            await pilot.press("t")
-            await wait_for(pilot, lambda: "refused" in devices.result, 20, "t refused")
-            await pilot.press("ctrl+r")
-            await wait_for(pilot, lambda: devices.result.startswith("e-stop reset"), 20, "reset")
+            devices = await estop_refused_reset(app, pilot)
             await wait_for(pilot, lambda: "e-stop reset" not in devices.result, 5, "gone")
 
     asyncio.run(scenario())

@@ -11,7 +11,8 @@ from textual.widgets import Select
 from console.cli.main import Context
 from console.tui.app import HapTableApp
 
-from .conftest import wait_for, words_on
+from ..studies.studies_pilot import studies_idle
+from .conftest import wait_for
 from .test_camera_layout import SIZES
 
 
@@ -20,10 +21,7 @@ def test_esc_on_the_protocol_drop_down_focuses_start(plugins, size):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=size) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
-            status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
+            pane = await studies_idle(app, pilot)
             select = pane.query_one("#protocol", Select)
             select.focus()
             await wait_for(pilot, lambda: select.has_focus, 5, "the drop-down")

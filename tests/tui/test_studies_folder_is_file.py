@@ -12,6 +12,7 @@ from textual.widgets import Input
 from console.cli.main import Context
 from console.tui.app import HapTableApp
 
+from ..studies.studies_pilot import studies_idle
 from .conftest import wait_for, words_on
 from .test_camera_layout import SIZES
 
@@ -24,10 +25,8 @@ def test_a_folder_that_is_a_file_is_refused_at_enter(plugins, size, tmp_path):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=size) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
+            pane = await studies_idle(app, pilot)
             status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
             field = pane.query_one("#out", Input)
             field.focus()
             await wait_for(pilot, lambda: field.has_focus, 5, "the folder field")

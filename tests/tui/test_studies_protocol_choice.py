@@ -14,6 +14,7 @@ from console.cli.main import Context
 from console.tui.app import HapTableApp
 from plugins.studies import protocol as protocols
 
+from ..studies.studies_pilot import studies_idle
 from .conftest import wait_for, words_on
 from .test_camera_layout import SIZES
 
@@ -25,10 +26,8 @@ def test_protocol_list_has_no_blank_choice_and_the_folder_follows(plugins, size)
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="studies")
         async with app.run_test(size=size) as pilot:
-            await wait_for(pilot, lambda: app.pane("studies") is not None, 30, "studies")
-            pane = app.pane("studies")
+            pane = await studies_idle(app, pilot)
             status = lambda: words_on(app, "#study-status")  # noqa: E731
-            await wait_for(pilot, lambda: "no study running" in status(), 30, "idle")
             select = pane.query_one("#protocol", Select)
             select.focus()
             await pilot.press("enter")  # the list open

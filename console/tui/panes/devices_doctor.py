@@ -1,5 +1,6 @@
-"""The Devices screen's device table: the same checks as `haptable doctor` (the
-profile's devices, real-time memory and scheduling) and the self-test's row, a long why
+"""The Devices screen's device table: `haptable doctor`'s own checks
+(``console.runtime.doctor.checks``: the profile's devices, the classifier's files,
+real-time memory and scheduling) and the self-test's row, a long why
 or fix wrapped inside its row; Enter on a row says it whole."""
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from textual import work
 from textual.widgets import DataTable
 
 from console.core.types import DeviceStatus
-from console.runtime.doctor import diagnose, realtime_status, scheduling_status
+from console.runtime.doctor import checks
 from console.tui.device_cells import (
     PROBLEMS,
     ROW_LINES,
     cell_lines,
     note_width,
+    reason_lines,
     wrapped_rows,
 )
 from console.tui.selftest_action import quick_skipped
@@ -61,10 +63,9 @@ class DevicesDoctorMixin:
             return
         if said:
             self._say("re-checking the profile's devices ...")
-        # the same checks as `haptable doctor`; its quick self-test plays: here s runs
-        # the full one, and the row says the quick part's skip as doctor would
-        rows = [*diagnose(prof, app.ctx.pm), realtime_status(prof, app.ctx.pm)]
-        rows += [scheduling_status(prof, app.ctx.pm)]
+        # `haptable doctor`'s own checks; its quick self-test plays: here s runs the
+        # full one, and the row says the quick part's skip as doctor would
+        rows = checks(prof, app.ctx.pm)
         from_thread(app, self._show, rows, said, quick_skipped(prof, app.ctx.pm))
 
     def _show(self, rows, said: bool = False, skips: str | None = None) -> None:
@@ -89,31 +90,17 @@ class DevicesDoctorMixin:
         # why and fix share what the first columns leave, the fix whole first (it says
         # what to do); a longer text wraps inside its cell: the row grows, nothing is cut
         left = note_width(table, firsts, self._table_width(), heads)
-        why_w, fix_w, cells, heights = wrapped_rows(rows, left)
-        if table.has_focus and sum(heights) + 1 > self.scrollable_content_region.height:
-            # whole rows taller than the screen: the table scrolls, its scrollbar takes
-            # columns the fix had (``press s (full`` cut under it)
+        why_w, fix_w, cells, heights = self._fit_rows(rows, left, table.has_focus)
+        top = self.query_one("#devices-top").outer_size.height  # docked: always there
+        if sum(heights) + 1 > self.scrollable_content_region.height - top:
+            # rows taller than the screen under its top lines (whole, or a problem's and
+            # a reason's kept whole): the table scrolls, its scrollbar takes columns the
+            # fix had (``press s (full`` cut under it)
             gutter = table.styles.scrollbar_size_vertical
-            why_w, fix_w, cells, heights = wrapped_rows(rows, max(NOTE_MIN, left - gutter))
+            left = max(NOTE_MIN, left - gutter)
+            why_w, fix_w, cells, heights = self._fit_rows(rows, left, table.has_focus)
         table.add_column("why", width=why_w)
         table.add_column("fix", width=fix_w)
-        # wrapped here (a row's height known as it is added: the list below it is
-        # scrolled into view at once), a number with its unit on one line, a word too
-        # long for its column ending in "…"; when wrapped rows would push the card in use
-        # out of view (on entry: the card list has the focus), a row that works takes one
-        # line, a problem's row stays whole (what to do), any other row two lines at
-        # most (cut after a word: in the log, Enter says it; a doctor's skipped
-        # self-test took ten lines and the screen opened scrolled down); the table
-        # focused (Tab) shows every row whole
-        self._doctor_whole = table.has_focus or sum(heights) <= self._doctor_room()
-        if not self._doctor_whole:  # works: one line; a problem: whole; else two at most
-            for i, s in enumerate(rows):
-                most = 1 if s.state in WORKS else ROW_LINES
-                if s.state not in PROBLEMS and heights[i] > most:
-                    why = cell_lines(s.why, f"{s.kind} {s.name}", why_w, most)
-                    fix = cell_lines(s.fix, f"{s.kind} {s.name}", fix_w, most)
-                    cells[i] = (why, fix)
-                    heights[i] = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
         for s, (why, fix), lines in zip(rows, cells, heights, strict=True):
             state = {"ok": "[green]ok[/]", "simulated": "[cyan]simulated[/]"}.get(
                 s.state, f"[red]{escape(s.state)}[/]"
@@ -122,6 +109,33 @@ class DevicesDoctorMixin:
                 Text(s.kind), Text(s.name), Text.from_markup(state), why, fix, height=lines
             )
         self._keep_focused_in_view()  # the rows above a list grew
+
+    def _fit_rows(self, rows, left: int, whole: bool):
+        """(why width, fix width, cells, heights) of ``rows`` within ``left`` columns:
+        whole when ``whole`` (the table focused) or when they leave the card in use in
+        view (``_doctor_room``), else shortened (below)."""
+        why_w, fix_w, cells, heights = wrapped_rows(rows, left)
+        # wrapped here (a row's height known as it is added: the list below it is
+        # scrolled into view at once), a number with its unit on one line, a word too
+        # long for its column ending in "…"; when wrapped rows would push the card in use
+        # out of view (on entry: the card list has the focus), a row that works takes one
+        # line, a problem's row stays whole (what to do), any other row two lines at
+        # most or those its reason takes, cut after it (a word: in the log, Enter says
+        # it; a doctor's skipped self-test took ten lines and the screen opened scrolled
+        # down; cut to two it read ``skipped (haptable doctor…)``, its reason gone); the
+        # table focused (Tab) shows every row whole
+        self._doctor_whole = whole or sum(heights) <= self._doctor_room()
+        if self._doctor_whole:
+            return why_w, fix_w, cells, heights
+        for i, s in enumerate(rows):  # works: one line; a problem: whole; else two at
+            # most, or the lines its reason takes, cut after it
+            most = 1 if s.state in WORKS else max(ROW_LINES, reason_lines(s.why, why_w))
+            if s.state not in PROBLEMS and heights[i] > most:
+                why = cell_lines(s.why, f"{s.kind} {s.name}", why_w, most)
+                fix = cell_lines(s.fix, f"{s.kind} {s.name}", fix_w, most)
+                cells[i] = (why, fix)
+                heights[i] = max(len(why.plain.split("\n")), len(fix.plain.split("\n")))
+        return why_w, fix_w, cells, heights
 
     def _doctor_room(self) -> int:
         """The lines the device table's rows may take for the screen to show, from its
