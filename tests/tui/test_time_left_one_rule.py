@@ -84,3 +84,46 @@ def test_no_progress_line_makes_its_own_time_left_words():
                     if HAND_MADE.search(seg):
                         found.append(f"{path.relative_to(REPO)}:{node.lineno}: {seg}")
     assert not found, "say it with console.core.time_left:\n" + "\n".join(found)
+
+
+def _walk_says_no_rise(say, steps) -> list[int]:
+    """``say(t, fraction)`` at each (t, fraction): the seconds its words say, checked to
+    never rise."""
+    secs = []
+    for t, frac in steps:
+        m = LEFT.search(say(t, frac))
+        if m:
+            secs.append(int(m.group(1)))
+    assert secs and all(b <= a for a, b in zip(secs, secs[1:], strict=False)), secs
+    return secs
+
+
+SLOWING = [(6.0, 0.38)] + [(6.0 + k, 0.38 + 0.02 * k) for k in range(1, 13)]
+
+
+def test_the_studies_map_step_never_rises_as_its_pace_slows():
+    from plugins.studies.panel_status import map_state
+
+    now, last = [0.0], {}
+    map_state(last, {"fraction": 0.0, "text": "measuring"}, clock=lambda: now[0])
+
+    def say(t, frac):
+        now[0] = t
+        return map_state(last, {"fraction": frac, "text": "measuring"}, clock=lambda: now[0])
+
+    _walk_says_no_rise(say, SLOWING)
+
+
+def test_a_demo_start_counts_down_in_the_same_words(tmp_path):
+    from console.runtime.start_clock import StartClock
+
+    now = [0.0]
+    clock = StartClock("flow", path=tmp_path / "starts.json", now=lambda: now[0])
+
+    def say(t, _frac):
+        now[0] = t
+        text = clock.fraction_text("opening the camera")[1]
+        assert "about " in text, text
+        return text
+
+    _walk_says_no_rise(say, [(t * 0.7, 0.0) for t in range(15)])
