@@ -48,6 +48,9 @@ What it offers:
 - keys: ``show_keys`` (a list's or table's own keys, Enter first, shown in the footer
   while it has the focus: ``console.tui.focus_keys``); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
+- workers: ``work`` (Textual's ``@work``) and ``run_worker``, under the console's rule
+  for a failure nobody expected (``console.tui.workers``: said on the screen, the
+  outputs stopped, the console goes on)
 """
 
 from __future__ import annotations
@@ -72,6 +75,7 @@ from console.tui.text import LiteralTable, escape
 from console.tui.ticks import Tick
 from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
+from console.tui.workers import run_worker, work
 
 __all__ = [
     "AskAgain",
@@ -110,4 +114,6 @@ __all__ = [
     "cut_end",
     "cut_words",
     "top_level_seps",
+    "work",
+    "run_worker",
 ]

@@ -16,7 +16,6 @@ import textwrap
 import time
 from typing import Any
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical
@@ -35,6 +34,7 @@ from console.plugin_api.tui import (
     status_said,
     waits_for_question,
     whole_names,
+    work,
 )
 
 from .projector_line import status_text

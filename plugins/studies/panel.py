@@ -28,7 +28,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
@@ -57,6 +56,7 @@ from console.plugin_api.tui import (
     show_keys,
     status_said,
     waits_for_question,
+    work,
 )
 
 from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status, refusals

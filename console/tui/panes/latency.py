@@ -6,7 +6,6 @@ from __future__ import annotations
 import time
 from collections import defaultdict, deque
 
-from textual import work
 from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
@@ -19,6 +18,7 @@ from console.tui.said import said_here
 from console.tui.text import LiteralTable, escape
 from console.tui.time_left import left_words
 from console.tui.units import block_words
+from console.tui.workers import work
 
 #: the stages the issue names, in order, and where their numbers come from
 STAGE_LABELS = {
@@ -360,7 +360,7 @@ class LatencyPane(Vertical):
         self._measure_until = None
         self._watch(False)
 
-    @work(thread=True, exclusive=True, group="camera")
+    @work(thread=True, exclusive=True, group="camera", what="measuring the camera loop")
     def _watch(self, on: bool) -> None:
         self.app.session.camera.watch(self, on)
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import threading
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
@@ -51,6 +50,7 @@ from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 class VibrationPane(VibrationMeasureMixin, VerticalScroll):
