@@ -231,7 +231,6 @@ class LongWork(Vertical):
             name=name,
             group=f"long-work-{id(self)}",
             thread=True,
-            exit_on_error=False,
         )
         return True
 

@@ -48,8 +48,10 @@ def failed_line(what: str, exc: BaseException) -> str:
 
 
 def _what(fn: Callable[..., Any]) -> str:
-    """A worker function's name as the line says it (``_build_tables``: build tables)."""
-    return fn.__name__.strip("_").removesuffix("_worker").replace("_", " ") or "work"
+    """A worker function's name as the line says it (``_build_tables``: build tables,
+    ``action_doctor``: doctor)."""
+    name = fn.__name__.strip("_").removeprefix("action_").removesuffix("_worker")
+    return name.replace("_", " ") or "work"
 
 
 def contain(app: Any, what: str, exc: BaseException) -> str:

@@ -428,7 +428,7 @@ class ScenesPane(Vertical):
         """A demo starting: its status block has no numbers yet (its progress shows)."""
         self._show_last_run(f"{escape(name)} starting: its numbers show here once it runs")
 
-    @work(thread=True, group="demo-stop", exit_on_error=False)
+    @work(thread=True, group="demo-stop", what="stopping the demo")
     def _stop_worker(self, reason: str) -> None:
         self.demos.stop(reason)  # Stopped comes back as a message
 

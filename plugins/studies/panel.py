@@ -486,11 +486,11 @@ class StudiesPane(HeldAnswer, Vertical):
     def _answer(self, value: str | None, key: str = "") -> None:
         panel_run_keys.answer(self, value, key or value or "?")  # or says why not
 
-    @work(thread=True, exclusive=True, group="study", exit_on_error=False)
+    @work(thread=True, exclusive=True, group="study", what="the study run")
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
         adaptive_console.run(self.app.session, spec, control, responder)
 
-    @work(thread=True, exclusive=True, group="study-analysis", exit_on_error=False)
+    @work(thread=True, exclusive=True, group="study-analysis", what="the analysis")
     def _analyse(self, out: Path, experiment: str) -> None:
         run_analysis(self.app.session, out, experiment)
 

@@ -505,7 +505,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         self._now_playing = ask
         self._play_worker(ask, make, select)
 
-    @work(thread=True, group="vib-plan", exit_on_error=False)
+    @work(thread=True, group="vib-plan")
     def _play_worker(self, ask: Ask, make, select: list[int] | None) -> None:
         """Make the plan, ask the outputs to play it and show what became of it: the
         line says "asking", then "playing" when the outputs report its start, then how
