@@ -27,6 +27,8 @@ What this module offers, by where it comes from:
   ``HandFlowGeometry``, ``KnobTrials``,
   ``PrecomputedHandFlows``, ``Presets``, ``SimulatedCamera``, ``SimulatedObserver``,
   ``VisionResult``
+- the time left by the console's one rule (``console.core.time_left``): ``JobLeft`` (one
+  job's, steady), ``left_words`` ("about 1 min 10 s left")
 - the hook marker: ``hookimpl`` (the hooks are documented in ``console.core.hookspecs``)
 - plugin manager and profile: ``Plugins``, ``PanelTab``, ``load_plugins``, ``Profile``,
   ``load_profile``, ``profile_file``, ``save_overrides`` (the profile's overrides file)
@@ -111,6 +113,7 @@ from console.core.plan_watch import (
 from console.core.realtime import realtime_priority, support_priority
 from console.core.schema import KINDS, Field, check, path_problem
 from console.core.stall_witness import ORIGINS, StallWitness
+from console.core.time_left import JobLeft, left_words
 from console.core.types import (
     DIRECTIONS,
     DIRECTIONS_MM,
@@ -164,6 +167,9 @@ from console.signals.stream_synth import (
 from console.signals.waveforms import MAX_PLAN_S, check_duration, plan_samples, tone
 
 __all__ = [
+    # the time left, by the console's one rule (``console.core.time_left``)
+    "JobLeft",
+    "left_words",
     # errors, and their fix where the user is
     "EStopped",
     "SafetyRefusal",

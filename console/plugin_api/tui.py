@@ -49,6 +49,9 @@ What it offers:
   while it has the focus: ``console.tui.focus_keys``); ``name_field`` (a field named
   first in the footer while it has the focus, with what Enter and Esc do there); ``KeptText`` (a line of keys and
   their words wrapped without splitting a key from its word, a number from its unit)
+- workers: ``work`` (Textual's ``@work``) and ``run_worker``, under the console's rule
+  for a failure nobody expected (``console.tui.workers``: said on the screen, the
+  outputs stopped, the console goes on)
 """
 
 from __future__ import annotations
@@ -73,6 +76,7 @@ from console.tui.text import LiteralTable, escape
 from console.tui.ticks import Tick
 from console.tui.time_left import Pace, left_words, seconds_left
 from console.tui.util import from_thread, short_path
+from console.tui.workers import run_worker, work
 
 __all__ = [
     "AskAgain",
@@ -112,4 +116,6 @@ __all__ = [
     "cut_end",
     "cut_words",
     "top_level_seps",
+    "work",
+    "run_worker",
 ]

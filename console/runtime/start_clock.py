@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 import time
 from collections.abc import Callable
 from pathlib import Path
 
+from console.core.time_left import left_words
 from console.files.paths import cache_dir
 
 #: the expected start when this machine has not started the demo yet (twin, 2 cores)
@@ -73,7 +73,7 @@ class StartClock:
         """The time left as the operator reads it."""
         left = self.expected_s - self.elapsed_s()
         if left > 0:  # short: the line shares 80 columns with the bar
-            return f"~{math.ceil(left)} s left" + ("" if self.learned else " (a guess)")
+            return left_words(left) + ("" if self.learned else " (a guess)")
         than = "the last start" if self.learned else "guessed"
         return f"longer than {than} ({self.expected_s:.0f} s)"
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 
-from textual import events, work
+from textual import events
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.command import CommandPalette
@@ -42,6 +42,7 @@ from console.tui.title_row import TitleHeader
 from console.tui.toasts import NewestToastOnly
 from console.tui.typed import TypedHistory
 from console.tui.util import short_path
+from console.tui.workers import work
 
 #: the console's keys, as the help shows them (plain text: ``console.tui.help``; one
 #: line per entry, wrapped by the help screen); ``{tabs}``: the screens' keys

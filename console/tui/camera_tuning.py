@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from textual import work
-
 from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
 from console.tui.lapse import lapse_on_change
@@ -17,6 +15,7 @@ from console.tui.question_hold import waits_for_question
 from console.tui.text import escape
 from console.tui.units import control_words
 from console.tui.util import from_thread, short_path
+from console.tui.workers import work
 
 #: the reset key's words where a setting is refused or may hide the hand
 RESET = "R: the profile's settings"

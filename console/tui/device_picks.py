@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from textual import work
 from textual.widgets import DataTable
 
 from console.config.profile import load_profile, overrides_path, save_overrides
@@ -16,6 +15,7 @@ from console.core.errors import UserError
 from console.tui.ask_again import AskAgain
 from console.tui.lapse import lapse_on_change
 from console.tui.util import from_thread, short_path
+from console.tui.workers import work
 
 
 def _restore(path, text: str | None) -> None:

@@ -37,6 +37,10 @@ LOG_VIEW_LINES = 1000
 NATIVE_LOGGER = "haptable.native"
 
 
+#: the logger of details the log file keeps and the log view leaves out (tracebacks)
+DETAILS_LOGGER = "haptable.console.details"
+
+
 def log_path() -> Path:
     """``console.log`` in the state directory (``~/.local/state/haptable/console.log``)."""
     return paths.state_dir("console.log")
@@ -70,7 +74,8 @@ class NotifyHandler(logging.Handler):
 
 class ViewHandler(logging.Handler):
     """Every record (INFO and above) as a line for the log view: kept in ``lines`` and
-    written to the open ``LogScreen`` (from any thread)."""
+    written to the open ``LogScreen`` (from any thread); a record of ``DETAILS_LOGGER``
+    (a failed worker's traceback: ``console.tui.workers``) is the log file's alone."""
 
     def __init__(self, app) -> None:
         super().__init__(logging.INFO)
@@ -79,6 +84,8 @@ class ViewHandler(logging.Handler):
         self.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
 
     def emit(self, record: logging.LogRecord) -> None:
+        if record.name == DETAILS_LOGGER:  # a traceback: the log file's alone
+            return
         try:
             line = self.format(record)
         except Exception:

@@ -5,7 +5,9 @@ A job is a plain function ``job(progress, cancelled) -> result``: it calls
 ``progress(frac, msg)`` (0..1) as it goes and polls ``cancelled()``, raising any
 exception to stop when that returns True. ``LongWork.start`` runs it; the status line
 shows the progress, then ``summary(result)``, "NAME cancelled" or the error as one red
-line (a ``UserError`` as written, anything else as ``NAME failed: ...``); the bar shows
+line (a ``UserError`` as written, anything else by the console's rule for a bug,
+``console.tui.workers``: ``NAME failed: Type: message (details in ...)``, the outputs
+stopped); the bar shows
 only while a job runs. When it ends,
 ``LongWork.Finished`` is posted to the parents with the outcome.
 
@@ -46,6 +48,7 @@ from console.tui.question_hold import NOTE_S, answered, waits_for_question
 from console.tui.said import log_status, said_here, screen_name
 from console.tui.time_left import Steady, left_words, seconds_left
 from console.tui.util import from_thread
+from console.tui.workers import contain, run_worker
 
 #: a step silent this long (s) says how long it has been in it
 QUIET_S = 2.0
@@ -222,12 +225,12 @@ class LongWork(Vertical):
         if self._ticker is None:
             self._ticker = self.set_interval(1.0, self._tick)
         self.show(f"{name} ...", 0.0)
-        self.run_worker(
+        run_worker(
+            self,
             lambda: self._run(name, job, summary, stop, cancelled_says),
             name=name,
             group=f"long-work-{id(self)}",
             thread=True,
-            exit_on_error=False,
         )
         return True
 
@@ -309,8 +312,8 @@ class LongWork(Vertical):
                 self._call(self._end, name, "cancelled", None, f"{name} cancelled{cancelled_says}")
             elif isinstance(exc, UserError):
                 self._call(self._end, name, "failed", exc, str(exc))
-            else:
-                self._call(self._end, name, "failed", exc, f"{name} failed: {exc}")
+            else:  # a bug: the console's rule (outputs stopped, traceback logged)
+                self._call(self._end, name, "failed", exc, contain(self.app, name, exc))
             return
         text = summary(result) if summary is not None else f"{name} done"
         self._call(self._end, name, "done", result, text)

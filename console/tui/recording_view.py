@@ -17,7 +17,6 @@ from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
-from textual import work
 from textual.widgets import Input
 
 from console.core.errors import UserError
@@ -30,6 +29,7 @@ from console.tui.path_field import recording_field
 from console.tui.recording_keys import REPLAY_KEYS_LINE
 from console.tui.text import escape
 from console.tui.util import from_thread, short_path
+from console.tui.workers import work
 
 #: a playing recording shows a new frame at most this often (as the live view draws)
 PLAY_PERIOD_S = 0.2

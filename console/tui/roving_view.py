@@ -27,6 +27,7 @@ from console.core.errors import SafetyRefusal, UserError
 from console.session.vibration import Cancelled
 from console.tui.long_work import stop_check
 from console.tui.util import from_thread
+from console.tui.workers import run_worker
 
 #: the projector scene showing where the sensor goes
 SCENE = "roving_sensor"
@@ -187,7 +188,14 @@ class RovingView:
         self._placed.clear()
         pane.status("roving measurement: starting ...", 0.0)
         self.say("roving sensor: finding the points kept ...")
-        pane.run_worker(lambda: self._work(stop), thread=True, exclusive=True, group="vib-long")
+        run_worker(
+            pane,
+            lambda: self._work(stop),
+            what="roving measurement",
+            thread=True,
+            exclusive=True,
+            group="vib-long",
+        )
 
     def stop(self) -> None:
         """Esc (x too, through the pane's stop flags): stop a run under way."""

@@ -19,7 +19,6 @@ import re
 from typing import Any
 
 import numpy as np
-from textual import work
 from textual.binding import Binding
 from textual.widgets import Input, Static
 
@@ -33,6 +32,7 @@ from console.tui.recording_view import open_run
 from console.tui.safety_bar import closed_relays, relay_names
 from console.tui.said import log_status
 from console.tui.util import from_thread, short_path
+from console.tui.workers import work
 
 REPLAY_ACTIONS = {"plan_step", "replay_live", "gate_events"}
 #: the gate events listed at most (the first ones; the count says how many there are)

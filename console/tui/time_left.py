@@ -1,99 +1,26 @@
-"""The time a long piece of work still needs, from how fast it went so far, in words
-("about 1 min 10 s left"): the Studies screen's run and every ``LongWork`` job say it
-beside their progress (a count alone, "33/50", said nothing of when it ends)."""
+"""The console's time-left rule for the TUI: ``console.core.time_left`` (pure, shared
+with the runtime and plugins), under the name the screens import."""
 
-from __future__ import annotations
+from console.core.time_left import (
+    MIN_ELAPSED_S,
+    MIN_FRACTION,
+    RISE_S,
+    RISE_SHARE,
+    JobLeft,
+    Pace,
+    Steady,
+    left_words,
+    seconds_left,
+)
 
-import math
-import time
-
-#: no estimate before this much of the work is done, nor before this many seconds
-MIN_FRACTION = 0.02
-MIN_ELAPSED_S = 1.0
-
-
-def seconds_left(elapsed_s: float, fraction: float) -> float | None:
-    """At a constant rate: ``elapsed_s`` for ``fraction`` of the work, so the rest takes
-    ``elapsed_s * (1 - fraction) / fraction``; None while too little is done to tell."""
-    if math.isnan(fraction) or fraction < MIN_FRACTION or elapsed_s < MIN_ELAPSED_S:
-        return None
-    return max(0.0, elapsed_s * (1.0 - min(fraction, 1.0)) / fraction)
-
-
-def left_words(seconds: float | None) -> str:
-    """``seconds`` as the operator reads it: "about 40 s left", "about 3 min 20 s left"
-    (rounded up to 5 s past a minute, to 10 s past ten minutes), "" when unknown."""
-    if seconds is None or not math.isfinite(seconds):
-        return ""
-    if seconds < 1.0:
-        return "less than 1 s left"
-    if seconds < 60:
-        return f"about {math.ceil(seconds)} s left"
-    step = 5 if seconds < 600 else 10
-    s = int(math.ceil(seconds / step) * step)
-    m, s = divmod(s, 60)
-    if m >= 60:
-        return f"about {m // 60} h {m % 60} min left"
-    return f"about {m} min {s} s left" if s else f"about {m} min left"
-
-
-class Pace:
-    """Counts of done work over time, for the time left: ``start(done)`` when the work
-    (re)starts (a resume, after a pause: the wait is not work), ``left(done, total)`` the
-    seconds the rest takes at the pace since then (None until one more is done)."""
-
-    def __init__(self, clock=time.monotonic) -> None:
-        self.clock = clock
-        self.t0: float | None = None
-        self.done0 = 0
-
-    def start(self, done: int) -> None:
-        self.t0, self.done0 = self.clock(), done
-
-    def stop(self) -> None:
-        self.t0 = None
-
-    def left(self, done: int, total: int) -> float | None:
-        if self.t0 is None:
-            self.start(done)
-            return None
-        n = done - self.done0
-        if n <= 0 or total <= 0:
-            return None
-        return (self.clock() - self.t0) / n * max(total - done, 0)
-
-
-#: how far a time left may rise at a new report over its countdown: seconds, or share
-RISE_S, RISE_SHARE = 1.0, 0.1
-
-
-class Steady:
-    """A time left as the operator reads it, steady: between reports of progress it
-    counts down (the rate over the run so far said it; the clock alone is no news), and
-    at a report it may rise over that countdown only by noise (``RISE_S`` or
-    ``RISE_SHARE`` of it), so a slower stretch raises it gradually, never in jumps at
-    every tick ("7 s, 9 s, 10 s left" at 28 to 38 %); once the countdown ran out (the
-    work is later than said) the estimate stands."""
-
-    def __init__(self, clock=time.monotonic) -> None:
-        self.clock = clock
-        self.value: float | None = None
-        self.at = 0.0
-
-    def reset(self) -> None:
-        self.value = None
-
-    def left(self, estimate: float | None, report: bool) -> float | None:
-        """The time left to show now for ``estimate`` (None: unknown); ``report``: the
-        work reported progress now (else a tick of the clock)."""
-        now = self.clock()
-        if self.value is None or estimate is None:
-            self.value, self.at = estimate, now
-            return estimate
-        down = self.value - (now - self.at)
-        if down <= 0.0:  # later than it said: the estimate (the pace so far) is the truth
-            self.value, self.at = estimate, now
-            return estimate
-        rise = max(RISE_S, RISE_SHARE * down) if report else 0.0
-        self.value, self.at = min(estimate, down + rise), now
-        return self.value
+__all__ = [
+    "MIN_ELAPSED_S",
+    "MIN_FRACTION",
+    "RISE_S",
+    "RISE_SHARE",
+    "JobLeft",
+    "Pace",
+    "Steady",
+    "left_words",
+    "seconds_left",
+]

@@ -25,7 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from console.plugin_api import DIRECTIONS_MM, Frame, SafetyRefusal, UserError
+from console.plugin_api import DIRECTIONS_MM, Frame, JobLeft, SafetyRefusal, UserError
 
 from .adapters import summary_parts
 from .scene import SceneLink
@@ -236,12 +236,17 @@ class FlowDemo:
 
     def _prep_step(self, what: str, done: int, total: int) -> None:
         """``preparing``: what, done/total, and the seconds left at this step's pace."""
-        now = time.monotonic()
         with self._lock:
             prev = self.preparing
-            t0 = prev["t0"] if prev is not None and prev["what"] == what else now
-            left = (now - t0) / done * (total - done) if done and now > t0 else None
-            self.preparing = {"what": what, "done": done, "total": total, "t0": t0, "left_s": left}
+            job = prev["job"] if prev is not None and prev["what"] == what else JobLeft()
+            left = job.left(done / total if total else 0.0)  # the console's one rule
+            self.preparing = {
+                "what": what,
+                "done": done,
+                "total": total,
+                "job": job,
+                "left_s": left,
+            }
         if self._progress is not None:
             self._progress(done, total, what)
 
@@ -249,7 +254,7 @@ class FlowDemo:
         """What is prepared behind the demo now (None: nothing, all done)."""
         with self._lock:
             p = self.preparing
-        return None if p is None else {k: v for k, v in p.items() if k != "t0"}
+        return None if p is None else {k: v for k, v in p.items() if k != "job"}
 
     #: how long ``stop`` gives the preparation to end: it is told (``_running``) and
     #: cancels at its next progress call (an atlas build asks it while its workers

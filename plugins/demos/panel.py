@@ -16,7 +16,6 @@ import textwrap
 import time
 from typing import Any
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical
@@ -35,6 +34,7 @@ from console.plugin_api.tui import (
     status_said,
     waits_for_question,
     whole_names,
+    work,
 )
 
 from .projector_line import status_text
@@ -428,7 +428,7 @@ class ScenesPane(Vertical):
         """A demo starting: its status block has no numbers yet (its progress shows)."""
         self._show_last_run(f"{escape(name)} starting: its numbers show here once it runs")
 
-    @work(thread=True, group="demo-stop", exit_on_error=False)
+    @work(thread=True, group="demo-stop", what="stopping the demo")
     def _stop_worker(self, reason: str) -> None:
         self.demos.stop(reason)  # Stopped comes back as a message
 

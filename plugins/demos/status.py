@@ -11,7 +11,7 @@ from typing import Any
 
 from textual.markup import escape as _escape
 
-from console.plugin_api import OFF_LOOP, counted
+from console.plugin_api import OFF_LOOP, counted, left_words
 
 #: the scene each demo drives on the projector (``SceneLink`` in flow.py and knob.py)
 DEMO_SCENES = {"flow": "flow_hand", "knob": "knob"}
@@ -198,13 +198,8 @@ def preparing_text(prep: dict[str, Any]) -> str:
     """What the flow demo prepares behind itself, how far, and the time left."""
     done, total = int(prep.get("done", 0)), int(prep.get("total", 0)) or 1
     left = prep.get("left_s")
-    eta = "estimating the time left" if left is None else f"about {_duration(left)} left"
+    eta = "estimating the time left" if left is None else left_words(left)
     return (
         f"preparing {prep.get('what', '?')}: {100 * done // total} % ({done}/{total}), "
         f"{eta}; a hand elsewhere gets its flow planned when asked (1-3 s)"
     )
-
-
-def _duration(s: float) -> str:
-    s = max(0.0, float(s))
-    return f"{s:.0f} s" if s < 90 else f"{s / 60:.0f} min"

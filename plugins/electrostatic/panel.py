@@ -11,7 +11,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
@@ -28,6 +27,7 @@ from console.plugin_api.tui import (
     lapse_if_held,
     show_keys,
     status_said,
+    work,
 )
 
 from .effects import slew_max_vpp

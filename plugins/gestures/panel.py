@@ -33,6 +33,7 @@ from console.plugin_api.tui import (
     answered,
     from_thread,
     lapse_on_change,
+    run_worker,
     said_here,
     short_path,
 )
@@ -354,7 +355,13 @@ class GesturesPanel(ModalScreen):
             self.refuse(exc, self.paths)
             return
         self.query_one("#gp-files", Static).update("reading the files ...")
-        self.run_worker(lambda: self._describe(ds, model), thread=True, group="gp-files")
+        run_worker(
+            self,
+            lambda: self._describe(ds, model),
+            what="reading the files",
+            thread=True,
+            group="gp-files",
+        )
 
     def _describe(self, ds: Path, model: Path) -> None:
         info = describe_files(ds, model)

@@ -28,7 +28,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
@@ -57,6 +56,7 @@ from console.plugin_api.tui import (
     show_keys,
     status_said,
     waits_for_question,
+    work,
 )
 
 from . import adaptive_console, panel_choice, panel_fit, panel_run_keys, panel_status, refusals
@@ -487,11 +487,11 @@ class StudiesPane(HeldAnswer, FieldKeys, Vertical):
     def _answer(self, value: str | None, key: str = "") -> None:
         panel_run_keys.answer(self, value, key or value or "?")  # or says why not
 
-    @work(thread=True, exclusive=True, group="study", exit_on_error=False)
+    @work(thread=True, exclusive=True, group="study", what="the study run")
     def _run(self, spec: dict[str, Any], control: Control, responder: Any) -> None:
         adaptive_console.run(self.app.session, spec, control, responder)
 
-    @work(thread=True, exclusive=True, group="study-analysis", exit_on_error=False)
+    @work(thread=True, exclusive=True, group="study-analysis", what="the analysis")
     def _analyse(self, out: Path, experiment: str) -> None:
         run_analysis(self.app.session, out, experiment)
 

@@ -13,8 +13,8 @@ from typing import Any
 
 from textual.widgets import DataTable, Static
 
-from console.plugin_api import UserError
-from console.plugin_api.tui import Pace, left_words, seconds_left
+from console.plugin_api import JobLeft, UserError
+from console.plugin_api.tui import Pace, left_words
 
 from . import adaptive_console
 from . import protocol as protocols
@@ -83,10 +83,13 @@ def map_state(last: dict[str, Any], d: dict[str, Any], clock=time.monotonic) -> 
     the fraction done) with the time it still needs at its pace so far, as the other long
     steps say it ("about 8 s left"); its clock starts when the step reports no progress
     yet (the measurement's start)."""
-    fraction, now = float(d.get("fraction") or 0.0), clock()
-    if fraction <= 0.0 or last.get("map_t0") is None:
-        last["map_t0"] = now
-    left = "" if fraction >= 1.0 else left_words(seconds_left(now - last["map_t0"], fraction))
+    fraction = float(d.get("fraction") or 0.0)
+    if fraction <= 0.0 or last.get("map_job") is None:
+        last["map_job"] = JobLeft(clock=clock)  # the console's one rule: steady
+    job: JobLeft = last["map_job"]
+    report = fraction != last.get("map_fraction")  # else a poll: the clock only
+    last["map_fraction"] = fraction
+    left = "" if fraction >= 1.0 else job.words(fraction if report else None)
     text = f"vibration map: {d.get('text', '')}"
     return f"{text}, {left}" if left else text
 

@@ -28,12 +28,12 @@ def test_the_start_moves_forward_with_the_time_left_and_learns_the_last_start(tm
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and len(set(fracs)) == len(fracs)  # forward, every time
     assert fracs[-1] < 1.0  # full only once it runs
-    assert "~12 s left (a guess)" in seen[0][1] and "~6 s left" in seen[2][1]
+    assert "about 12 s left (a guess)" in seen[0][1] and "about 6 s left" in seen[2][1]
     assert "longer than guessed (12 s)" in seen[4][1]
     now.t = 105.0  # this start took 5 s: the next one expects that
     clock.done()
     again = StartClock("flow", path=path, now=now)
-    assert again.expected_s == 5.0 and again.left_text() == "~5 s left"
+    assert again.expected_s == 5.0 and again.left_text() == "about 5 s left"
     now.t += 2.5
     assert abs(again.fraction() - start_clock.AT_EXPECTED / 2) < 1e-9
     assert clock.fraction(floor=0.97) == 0.97  # the demo's own preparation counts

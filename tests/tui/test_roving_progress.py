@@ -152,7 +152,7 @@ def test_the_measurement_says_a_time_left_from_its_first_step(monkeypatch):
     from console.tui.panes import vibration_words as W  # lazy: beside the roving tests
 
     now = [100.0]
-    monkeypatch.setattr(W.time, "monotonic", lambda: now[0])
+    monkeypatch.setattr("console.core.time_left.time.monotonic", lambda: now[0])
     said: list[str] = []
     progress = W.with_time_left(lambda _f, msg: said.append(msg), expected_s=10.0)
     progress(0.0, "starting")

@@ -20,7 +20,6 @@ import time
 from typing import Any
 
 import numpy as np
-from textual import work
 from textual.app import ComposeResult
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Input, Static
@@ -63,6 +62,7 @@ from console.tui.shorten import cut_words
 from console.tui.text import escape
 from console.tui.units import view_levels
 from console.tui.util import from_thread
+from console.tui.workers import work
 from console.tui.wrap_paths import break_paths
 
 #: the views the camera screen cycles through after the camera image (``VisionResult.view``)

@@ -9,7 +9,6 @@ import time
 from typing import Any
 
 from rich.text import Text
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
@@ -41,6 +40,7 @@ from console.tui.session_messages import SessionMessage
 from console.tui.table_fit import NOTE_MIN, need, share, widths
 from console.tui.text import LiteralTable
 from console.tui.util import from_thread, short_path
+from console.tui.workers import work
 
 #: the sound-card table's device column at most (the note takes what the other columns
 #: leave of the screen's width)

@@ -10,7 +10,6 @@ from typing import Any
 
 from rich.markup import escape
 from rich.text import Text
-from textual import work
 from textual.widgets import DataTable
 
 from console.core.types import DeviceStatus
@@ -26,6 +25,7 @@ from console.tui.device_cells import (
 from console.tui.selftest_action import quick_skipped
 from console.tui.table_fit import NOTE_MIN, widths
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 def found(rows) -> str:

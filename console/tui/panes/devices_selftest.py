@@ -8,8 +8,6 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from textual import work
-
 from console.core.types import DeviceStatus
 from console.runtime.selftest_last import forget_last, note_last, read_last
 from console.session.events import ESTOP_FIX, estop_refusal
@@ -22,6 +20,7 @@ from console.tui.selftest_action import (
 )
 from console.tui.selftest_stopped import kept_stopped, stopped_when
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 class DevicesSelftestMixin:

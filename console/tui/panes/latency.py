@@ -6,7 +6,6 @@ from __future__ import annotations
 import time
 from collections import defaultdict, deque
 
-from textual import work
 from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import DataTable, Static
@@ -17,7 +16,9 @@ from console.tui.loop_rates import CAMERA, VISION, WINDOW_S, SameWindow, frame_c
 from console.tui.plots import sparkline
 from console.tui.said import said_here
 from console.tui.text import LiteralTable, escape
+from console.tui.time_left import left_words
 from console.tui.units import block_words
+from console.tui.workers import work
 
 #: the stages the issue names, in order, and where their numbers come from
 STAGE_LABELS = {
@@ -329,8 +330,8 @@ class LatencyPane(Vertical):
             return
         now = time.monotonic()
         if self._measure_until is not None and now < self._measure_until:  # not restarted
-            left = self._measure_until - now
-            self._tell(f"m: measuring already, {left:.0f} s left (its numbers below)", "camera")
+            # its time left is said once, on the line above (one job, one estimate)
+            self._tell("m: measuring already (its time left above, its numbers below)", "camera")
             return
         self._tell("", "")
         self._measure_until = now + MEASURE_S
@@ -359,7 +360,7 @@ class LatencyPane(Vertical):
         self._measure_until = None
         self._watch(False)
 
-    @work(thread=True, exclusive=True, group="camera")
+    @work(thread=True, exclusive=True, group="camera", what="measuring the camera loop")
     def _watch(self, on: bool) -> None:
         self.app.session.camera.watch(self, on)
 
@@ -440,7 +441,7 @@ class LatencyPane(Vertical):
             left = self._measure_until
             what = "[b]showing: the console's camera loop[/b] (vision, classify; no demo running)"
             if left is not None:
-                what += f", measuring: {max(0.0, left - time.monotonic()):.0f} s left"
+                what += f", measuring: {left_words(max(0.0, left - time.monotonic()))}"
         if self._told_past(self.source):  # what m was told is past
             self._tell("", "")
         if self.source != self._history_source:  # sparklines: one loop

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 
 from rich.text import Text
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
@@ -22,6 +21,7 @@ from console.tui.session_messages import SessionMessage
 from console.tui.text import LiteralTable, escape
 from console.tui.ticks import OnOff
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 def interlock(

@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from rich.text import Text
-from textual import work
 from textual.actions import SkipAction
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -39,6 +38,7 @@ from console.tui.list_keys import KeyedList
 from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import status_said
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 DEFAULT_EXPR = BUILTIN["tone-250"].expr
 #: the spectrum shows this many dB below its peak

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import threading
 
-from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
@@ -51,6 +50,7 @@ from console.tui.said import status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 class VibrationPane(VibrationMeasureMixin, VerticalScroll):
@@ -505,7 +505,7 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         self._now_playing = ask
         self._play_worker(ask, make, select)
 
-    @work(thread=True, group="vib-plan", exit_on_error=False)
+    @work(thread=True, group="vib-plan")
     def _play_worker(self, ask: Ask, make, select: list[int] | None) -> None:
         """Make the plan, ask the outputs to play it and show what became of it: the
         line says "asking", then "playing" when the outputs report its start, then how

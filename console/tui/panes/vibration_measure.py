@@ -10,8 +10,6 @@ import threading
 import time
 from typing import Any
 
-from textual import work
-
 from console.core.errors import UserError
 from console.core.words import AT_CONSOLE, worded
 from console.session.events import ESTOP_FIX, ESTOP_REFUSAL
@@ -28,6 +26,7 @@ from console.tui.panes.vibration_words import (
 from console.tui.question_hold import answered
 from console.tui.roving_view import RovingView, add_accelerometer_text
 from console.tui.util import from_thread
+from console.tui.workers import work
 
 
 class VibrationMeasureMixin:
@@ -97,7 +96,7 @@ class VibrationMeasureMixin:
         )
         return True
 
-    @work(thread=True, exclusive=True, group="vib-long")
+    @work(thread=True, exclusive=True, group="vib-long", what="the measurement")
     def _measure(self, stop: threading.Event, command: str | None = None) -> None:
         """The measurement; x or an e-stop stops it (the e-stop polled here as well: it
         stops at once even before its message reaches the screen)."""

@@ -4,7 +4,6 @@ the info panel of the selected points."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -12,7 +11,7 @@ from typing import Any
 from console.core.errors import UserError
 from console.tui.roving_view import ADD_ACCELEROMETER
 from console.tui.text import escape
-from console.tui.time_left import left_words, seconds_left
+from console.tui.time_left import JobLeft
 
 #: the ``:`` line's commands, one name each: its hint and the help show this line
 COMMANDS = "51; 51 52; hand 51 up; measure; tables; cancel; import PA=F.uff; load F.npz"
@@ -66,22 +65,13 @@ def with_time_left(
     progress: Callable[[float, str], Any], expected_s: float | None = None
 ) -> Callable[[float, str], Any]:
     """``progress(fraction, text)`` that says the time left after ``text`` ("step 4/8;
-    about 6 s left", ``console.tui.time_left``), at the pace since its first call (the
-    work counted from there: a first call past 0 does not skew it); until that pace
-    tells, from ``expected_s`` (the work's expected seconds) when given, so the line says
-    a time left from its first step ("starting; about 10 s left")."""
-    first: list[float] = []  # when and at which fraction it was first called
+    about 6 s left") by the console's one rule (``console.tui.time_left.JobLeft``: the
+    pace since its first call, ``expected_s`` until that pace tells, counting down and
+    never jumping up as the pace slows)."""
+    job = JobLeft(expected_s)
 
     def said(frac: float, msg: str) -> Any:
-        now = time.monotonic()
-        if not first:
-            first.extend((now, frac))
-        t0, f0 = first
-        done = (frac - f0) / (1.0 - f0) if f0 < 1.0 else 0.0
-        left_s = seconds_left(now - t0, done)
-        if left_s is None and expected_s is not None and now - t0 < expected_s:
-            left_s = expected_s - (now - t0)
-        left = left_words(left_s)
+        left = job.words(frac)
         return progress(frac, f"{msg}; {left}" if left else msg)
 
     return said
