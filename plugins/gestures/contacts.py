@@ -37,9 +37,11 @@ def find_contacts(
         x0, y0, w, h = cv2.boundingRect(g)
         if max(w, h) - 4 > max_size_px:  # the dilation adds 2 px each side
             continue
-        sel = np.zeros((h, w), np.uint8)
-        cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
-        sub = m[y0 : y0 + h, x0 : x0 + w] & sel
+        sub = m[y0 : y0 + h, x0 : x0 + w]
+        if len(groups) > 1:  # the group's own pixels (alone, every one in its box is)
+            sel = np.zeros((h, w), np.uint8)
+            cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
+            sub = sub & sel
         area = int(cv2.countNonZero(sub))
         if area < min_area_px or area > max_area_px:
             continue
