@@ -1,6 +1,6 @@
-"""A blob alone in the high-pass window is measured without drawing its outline (issue
-28's cost): every pixel above the threshold in its box is its own. The contacts are
-those of the outline-masked measure, bit for bit, alone or with others."""
+"""A blob whose box no other blob's box meets is measured without drawing its outline
+(issue 28's cost): every pixel above the threshold in its box is its own. The contacts
+are those of the outline-masked measure, bit for bit, apart or close together."""
 
 from __future__ import annotations
 
@@ -56,3 +56,27 @@ def test_contacts_alone_or_together_are_the_outline_masked_ones(n_blobs, monkeyp
     assert want  # some found
     if n_blobs == 1:
         assert not drawn  # a blob alone: no outline drawn
+
+
+def test_blobs_whose_boxes_meet_are_told_apart_by_their_outlines(monkeypatch):
+    drawn = []
+    draw = cv2.drawContours
+    monkeypatch.setattr(cv2, "drawContours", lambda *a, **k: drawn.append(1) or draw(*a, **k))
+    hp = np.zeros((120, 160), np.uint8)
+    for c in ((30, 30), (120, 90)):  # apart: no outline drawn
+        cv2.circle(hp, c, 5, 200, -1)
+    want = plain_find_contacts(hp, 30.0)
+    drawn.clear()
+    assert contacts.find_contacts(hp, 30.0) == want
+    assert len(want) == 2 and not drawn
+    # an L-shaped blob's box holds a fingertip's dilated box, the fingertip's pixels not
+    # the L's
+    hp[:] = 0
+    hp[40:44, 25:60] = 120
+    hp[20:44, 56:60] = 120
+    cv2.circle(hp, (40, 28), 3, 250, -1)
+    want = plain_find_contacts(hp, 30.0)
+    assert len(want) == 2
+    drawn.clear()
+    assert contacts.find_contacts(hp, 30.0) == want
+    assert drawn
