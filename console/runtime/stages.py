@@ -24,11 +24,18 @@ from console.core.types import Frame, Hand
 from console.runtime.latency import LatencyMonitor
 from console.runtime.loop import FrameLoop
 
+#: up to this many points, ``corners_homography``'s mapping is worked in Python floats: a
+#: third of the matrix product's cost (its arrays and BLAS call) for the few points a frame
+#: maps; the product's rounding differs from it by a few units in the last place (and the
+#: product's own bits change with the number of points it is given)
+SMALL_BATCH = 8
+
 
 def corners_homography(
     corners_px: list[float], table_mm: tuple[float, float], scale: tuple[float, float] = (1, 1)
 ):
-    """px -> mm from the four glass corners' pixels (order (0,0) (W,0) (W,H) (0,H))."""
+    """px -> mm from the four glass corners' pixels (order (0,0) (W,0) (W,H) (0,H)): an
+    (n, 2) array of the points' mm."""
     import cv2
 
     w, h = table_mm
@@ -39,9 +46,18 @@ def corners_homography(
     dst = np.array([(0, 0), (w, 0), (w, h), (0, h)], np.float64)
     hm = cv2.getPerspectiveTransform(src.astype(np.float32), dst.astype(np.float32))
     hmt = hm.astype(np.float64).T
+    (ax, ay, a1), (bx, by, b1), (wx, wy, w1) = hm.astype(np.float64).tolist()
 
     def to_mm(pts_px: np.ndarray) -> np.ndarray:
         p = np.asarray(pts_px, dtype=np.float64).reshape(-1, 2)
+        if len(p) <= SMALL_BATCH:  # a frame's hands and fingertips: plain floats
+            return np.array(
+                [
+                    ((x * ax + y * ay + a1) / w, (x * bx + y * by + b1) / w)
+                    for x, y in p.tolist()
+                    for w in (x * wx + y * wy + w1,)
+                ]
+            ).reshape(-1, 2)
         q = np.ones((len(p), 3))  # homogeneous points (x, y, 1), filled in place
         q[:, :2] = p
         q = q @ hmt

@@ -117,11 +117,13 @@ def illumination(
     """``(gain, offset, noise)`` with ``frame ~ gain * background + offset`` over the
     empty parts of the table: a least-squares line on a pixel grid, refitted twice on the
     pixels whose residual is not far above the median (hands, brighter than predicted,
-    drop out). ``noise`` is the residuals' robust standard deviation (1.4826 MAD), the
-    noise of the difference image."""
+    drop out; a refit on the pixels of the fit before would be that fit: not made).
+    ``noise`` is the residuals' robust standard deviation (1.4826 MAD), the noise of the
+    difference image."""
     f = frame[::step, ::step].astype(np.float32).ravel()
     b = background[::step, ::step].astype(np.float32).ravel()
     fk, bk = f, b  # the first fit uses every pixel
+    used = None  # the pixels the fit used (None: all)
     gain, offset, mad = 1.0, 0.0, 0.0
     for it in range(3):
         n = len(fk)
@@ -142,6 +144,9 @@ def illumination(
         mad = _median_of_scratch(np.abs(dev, out=dev))
         if it < 2:
             keep = res <= med + 2.0 * mad + 1.0
+            if keep.all() if used is None else np.array_equal(keep, used):
+                break  # the same pixels again: the next fit would be this one, bit for bit
+            used = keep
             fk, bk = f[keep], b[keep]
     noise = 1.4826 * mad
     if not (0.2 < gain < 5.0):

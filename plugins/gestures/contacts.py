@@ -32,14 +32,20 @@ def find_contacts(
         _, m = cv2.threshold(hp, threshold, 255, cv2.THRESH_BINARY)
     md = cv2.dilate(m, _DISK5)
     groups, _ = cv2.findContours(md, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    boxes = [cv2.boundingRect(g) for g in groups]
     out: list[Contact] = []
-    for g in groups:
-        x0, y0, w, h = cv2.boundingRect(g)
+    for i, (g, (x0, y0, w, h)) in enumerate(zip(groups, boxes, strict=True)):
         if max(w, h) - 4 > max_size_px:  # the dilation adds 2 px each side
             continue
-        sel = np.zeros((h, w), np.uint8)
-        cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
-        sub = m[y0 : y0 + h, x0 : x0 + w] & sel
+        sub = m[y0 : y0 + h, x0 : x0 + w]
+        if any(  # the group's own pixels: its box's, unless another group's box meets it
+            xa < x0 + w and x0 < xa + wa and ya < y0 + h and y0 < ya + ha
+            for j, (xa, ya, wa, ha) in enumerate(boxes)
+            if j != i
+        ):
+            sel = np.zeros((h, w), np.uint8)
+            cv2.drawContours(sel, [g], -1, 1, thickness=cv2.FILLED, offset=(-x0, -y0))
+            sub = sub & sel
         area = int(cv2.countNonZero(sub))
         if area < min_area_px or area > max_area_px:
             continue

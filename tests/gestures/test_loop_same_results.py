@@ -171,3 +171,42 @@ def test_the_loop_gives_the_plain_eager_loop_s_results_and_decides_from_few_fram
     # hand each), never on a frame before it was read
     assert not any(early)
     assert made_in_loop == {"shape": 9, "touch": 9}
+
+
+def test_the_table_mapping_s_plain_floats_give_the_matrix_product_s_decisions(
+    profile, plugins, monkeypatch
+):
+    # a frame's few points are mapped to mm in Python floats, not through the matrix
+    # product (a few units in the last place apart): the loop decides the same (its
+    # mm within 1e-9), from the same features bit for bit
+    import console.runtime.stages as stages
+
+    got = _run(profile, plugins, plain=True)
+    with monkeypatch.context() as m:
+        m.setattr(stages, "SMALL_BATCH", 0)  # every batch through the product
+        want = _run(profile, plugins, plain=True)
+    assert got[0] != want[0]  # the last places of the mm do differ
+    for a, b in zip(got[0], want[0], strict=True):  # contacts, hands, gestures, palm
+        _assert_close(json.loads(a), json.loads(b))
+    assert got[2] == want[2] and sum(got[2]) == 3
+    assert sum(r is not None for r in got[1]) > 30
+    for a, b in zip(got[1], want[1], strict=True):
+        np.testing.assert_equal(a, b)  # every feature, bit for bit
+    np.testing.assert_array_equal(got[3], want[3])
+
+
+def _assert_close(a, b) -> None:
+    """The same decisions: names, ids and counts equal, numbers within 1e-9."""
+    assert type(a) is type(b)
+    if isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for k in a:
+            _assert_close(a[k], b[k])
+    elif isinstance(a, list):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            _assert_close(x, y)
+    elif isinstance(a, float):
+        assert a == pytest.approx(b, rel=1e-9, abs=1e-9)
+    else:
+        assert a == b
