@@ -8,7 +8,8 @@ The walk: F1..F10 and the Gestures panel (Camera, ``g``); on each, Tab round the
 chain, then the keys that open a field (Camera ``o`` and ``U``, Vibration ``:``, Scope
 ``o``). Wherever a text field, a number field or a drop-down has the focus it is on
 screen and the footer's first words are its name (``target:``), then what Enter does
-there (and Esc, in a text field). Every field a screen holds is reached one way or the
+there (and Esc, in a text field), E-STOP kept (a path field, which types every key, ``?``
+too, dropped it from the Gestures panel's footer). Every field a screen holds is reached one way or the
 other: a new field not named here fails the walk."""
 
 from __future__ import annotations
@@ -90,6 +91,8 @@ def _problems(seen: dict) -> list[str]:
             bad.append(f"{where} {wid}: footer {footer!r} does not start with {name!r}:")
         elif "⏎ " not in footer or (text and "esc " not in footer):
             bad.append(f"{where} {wid}: footer {footer!r} says no Enter / Esc")
+        if "^e E-STOP" not in footer:  # it acts in every field: the footer says so
+            bad.append(f"{where} {wid}: footer {footer!r} lost E-STOP")
         if not visible:
             bad.append(f"{where} {wid}: focused but not on screen")
     return bad
