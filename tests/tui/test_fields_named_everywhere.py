@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
 from textual.widgets import Input, Select
 
 from console.cli.main import Context
 from console.tui.app import HapTableApp
+from console.tui.focus_keys import name_field
 from plugins.studies.panel_fields import FIELD_NAMES as STUDIES_NAMES
 
 from .conftest import wait_for
@@ -68,7 +70,11 @@ async def _look(app, pilot, seen: dict, where: str) -> None:
     focused = app.focused
     if not isinstance(focused, Input | Select) or focused.id in seen:
         return
-    await pilot.pause(0.3)  # the footer rebuilds after a refresh
+    name = NAMES.get(focused.id, "")
+    for _ in range(50):  # the footer rebuilds, the screen scrolls, after a refresh
+        await pilot.pause(0.1)
+        if _visible(app, focused) and _footer(app).startswith(f"{name}: "):
+            break
     seen[focused.id] = (where, _footer(app), _visible(app, focused), isinstance(focused, Input))
 
 
@@ -91,6 +97,8 @@ def _problems(seen: dict) -> list[str]:
             bad.append(f"{where} {wid}: footer {footer!r} does not start with {name!r}:")
         elif "⏎ " not in footer or (text and "esc " not in footer):
             bad.append(f"{where} {wid}: footer {footer!r} says no Enter / Esc")
+        if footer.split().count("esc") > 1:  # one key, one word (not esc buttons esc back)
+            bad.append(f"{where} {wid}: footer {footer!r} says Esc twice")
         if "^e E-STOP" not in footer:  # it acts in every field: the footer says so
             bad.append(f"{where} {wid}: footer {footer!r} lost E-STOP")
         if not visible:
@@ -98,12 +106,13 @@ def _problems(seen: dict) -> list[str]:
     return bad
 
 
-def test_every_field_of_every_screen_is_named_first_in_the_footer_and_in_view(plugins):
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_every_field_of_every_screen_is_named_first_in_the_footer_and_in_view(plugins, size):
     async def scenario():
         app = HapTableApp(Context("sim", plugins), fast=True, initial="devices")
         seen: dict[str, tuple] = {}
         missed: list[str] = []
-        async with app.run_test(size=(80, 24)) as pilot:
+        async with app.run_test(size=size) as pilot:
             for tab in list(app.tabs):
                 key = app.tabs[tab][1]
                 await pilot.press(key)
@@ -133,5 +142,28 @@ def test_every_field_of_every_screen_is_named_first_in_the_footer_and_in_view(pl
             missed += [f"gestures {f}" for f in _fields(panel, panel) - set(seen)]
         problems = _problems(seen) + [f"{m}: reached neither by Tab nor a key" for m in missed]
         assert not problems, "\n".join(problems)
+
+    asyncio.run(scenario())
+
+
+def test_a_long_field_name_wins_over_help_and_screens_never_over_e_stop(plugins):
+    """Where a field's name and words do not fit beside the keys every screen shows, the
+    name stays: ``? help`` and ``f1-f10 screens`` give way (``?`` lists every key), E-STOP
+    never does. Before, those three were kept whatever the width and the name went."""
+    long_name = "the channel this signal is meant for (PA, PA,PC or screen)"
+
+    async def scenario():
+        app = HapTableApp(Context("sim", plugins), fast=True, initial="signals")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await wait_for(pilot, lambda: app.pane("signals") is not None, 30, "signals")
+            target = app.query_one("#sig-target", Input)
+            name_field(target, long_name, enter="plot", escape="leave")
+            target.focus()
+            await wait_for(pilot, lambda: app.focused is target, 10, "the target")
+            await wait_for(pilot, lambda: _footer(app).startswith(long_name), 10, "the name")
+            footer = _footer(app)
+            assert "^e E-STOP" in footer, footer
+            assert "⏎ plot" in footer, footer
+            assert "^o play" not in footer, footer  # the screen's own keys went first
 
     asyncio.run(scenario())
