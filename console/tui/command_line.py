@@ -23,6 +23,7 @@ from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import Input, Label
 
+from console.tui.focus_keys import name_field
 from console.tui.path_field import PathField
 
 __all__ = ["CommandLine", "prompted"]
@@ -74,6 +75,7 @@ class CommandLine(PathField):
         kw.setdefault("select_on_focus", False)
         kw.setdefault("compact", True)
         super().__init__(**kw)
+        name_field(self, "command", enter="run", escape="leave")  # first in the footer
 
     def open(self) -> None:
         """``:``: the line takes the focus at once, the cursor after what it holds. At

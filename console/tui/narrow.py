@@ -5,6 +5,7 @@ E-STOP and ``?`` (the help, which lists every key) always among them."""
 
 from __future__ import annotations
 
+import re
 from typing import Protocol, runtime_checkable
 
 from rich.cells import cell_len
@@ -66,12 +67,19 @@ def types_every_key(widget: object) -> bool:
     return isinstance(widget, TypesEveryKey)
 
 
+def typed_key(key: str) -> bool:
+    """Whether a text field types ``key`` (``question_mark``), not a control or function
+    key (``ctrl+e``, ``f1``)."""
+    return not re.match(r"(ctrl|alt|shift|super|meta)\+|f\d+$|escape$|tab$", key)
+
+
 class ConsoleFooter(Footer):
     """The footer: only keys that show whole, in the order the bindings come (the
     screen's own first, as the screen orders them by importance); the keys in
     ``ALWAYS`` (E-STOP, the help) and the screens' key (``f1-f10 screens``: the app's
-    ``screens_key``) are kept whatever the width, on every screen alike; the command
-    palette's only where there is room. Compact below ``COMPACT_BELOW`` columns.
+    ``screens_key``) are kept whatever the width, on every screen alike (while a named
+    field has the focus, E-STOP, then the field's name and words: help and screens go
+    first where they do not all fit); the command palette's only where there is room. Compact below ``COMPACT_BELOW`` columns.
 
     It follows a screen switch at once, however busy the console is (a demo running):
     the keys are worked out as data first and the footer is built again only when they
@@ -108,10 +116,11 @@ class ConsoleFooter(Footer):
     def _app_key(self, key: str) -> tuple | None:
         """The app's binding of ``key`` as footer key data: Textual leaves a priority key
         out of the footer when the focused field would type it (``?``), though the app
-        takes it there (``HapTableApp.on_event``); None while a field that types every key
-        has the focus (``types_every_key``: the key is typed, no help promised)."""
+        takes it there (``HapTableApp.on_event``); None for a key a field that types every
+        key types while it has the focus (``types_every_key``: ``?`` is typed, no help
+        promised; E-STOP and the F-keys still act there and show)."""
         focused = self.screen.focused
-        if focused is not None and types_every_key(focused):
+        if focused is not None and types_every_key(focused) and typed_key(key):
             return None
         for binding in self.app._bindings.key_to_bindings.get(key, ()):
             if binding.show:
@@ -156,8 +165,9 @@ class ConsoleFooter(Footer):
                     data = (data[0], f"{own_display}/{data[1]}", *data[2:])
                 keys.append(data)
         named = field_words(focused)
+        field: list[tuple] = []  # a named field's name and words: kept before generic keys
         if named is not None:  # a field: its name first, then what its keys do there
-            keys = self._named_first(keys, named, shown_words(focused))
+            keys, field = self._named_first(keys, named, shown_words(focused))
         shown = {k[0] for k in keys}
         keys += [k for a in self._always() if a not in shown and (k := self._app_key(a))]
         if self.show_command_palette and self.app.ENABLE_COMMAND_PALETTE:
@@ -171,8 +181,15 @@ class ConsoleFooter(Footer):
             return (compact, tuple(keys))
         always = self._always()
         rest = [k for k in keys if not k[-1]]
-        kept = [k for k in rest if k[0] in always]
+        # the ALWAYS keys whatever the width; with a named field only E-STOP so, then the
+        # field's name and words, then the others (help, screens) if they fit, then the
+        # screen's own keys in order
+        kept = [k for k in rest if k[0] in (always[:1] if field else always)]
         room = width - sum(self._width(k, compact) for k in kept)
+        for k in [*field, *(k for k in rest if k[0] in always)]:
+            if k not in kept and self._width(k, compact) <= room:
+                kept.append(k)
+                room -= self._width(k, compact)
         for k in rest:
             if k not in kept and self._width(k, compact) <= room:
                 kept.append(k)
@@ -182,10 +199,16 @@ class ConsoleFooter(Footer):
                 kept.append(k)
         return (compact, tuple(k for k in keys if k in kept))
 
-    def _named_first(self, keys: list[tuple], named: tuple, own: dict[str, str]) -> list:
-        """``keys`` with a named field's name first (``participant id:``, clicked: its
-        first key), its own shown keys after it, then the words of its other keys."""
+    def _named_first(
+        self, keys: list[tuple], named: tuple, own: dict[str, str]
+    ) -> tuple[list[tuple], list[tuple]]:
+        """(``keys`` with a named field's name first (``participant id:``, clicked: its
+        first key), its own shown keys after it, then the words of its other keys, a
+        screen's key the field's words say otherwise left out (Gestures' ``esc back``
+        goes back to the buttons from a field: ``esc buttons``); the name and words)."""
         name, words = named
+        said = {key for key, _word in words}
+        keys = [k for k in keys if k[0] not in said or k[0] in own]
         at = max((i + 1 for i, k in enumerate(keys) if k[0] in own), default=0)
         extra = [
             (key, self.app.get_key_display(Binding(key, "")), word, "", False, "", False)
@@ -194,7 +217,7 @@ class ConsoleFooter(Footer):
         ]
         first = words[0][0] if words else "tab"
         head = (first, f"{name}:", "", "", False, "", False)
-        return [head, *keys[:at], *extra, *keys[at:]]
+        return [head, *keys[:at], *extra, *keys[at:]], [head, *extra]
 
     def compose(self):
         compact, keys = self._shown = self._wanted()

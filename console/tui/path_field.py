@@ -15,6 +15,7 @@ from rich.text import Text
 from textual.strip import Strip
 from textual.widgets import Input
 
+from console.tui.focus_keys import name_field
 from console.tui.narrow import TypesEveryKey
 
 ELLIPSIS = "…"
@@ -97,4 +98,4 @@ def recording_field(widget_id: str, hint: str = RECORDING_HINT) -> PathField:
     box.border_title = RECORDING_LABEL
     box.border_subtitle = RECORDING_KEYS
     box.display = False
-    return box
+    return name_field(box, "recording", enter="open", escape="back")  # as its border says

@@ -33,6 +33,7 @@ from console.plugin_api.tui import (
     answered,
     from_thread,
     lapse_on_change,
+    name_field,
     run_worker,
     said_here,
     short_path,
@@ -277,6 +278,9 @@ class GesturesPanel(ModalScreen):
 
     def on_mount(self) -> None:
         self.query_one(SafetyBar).show(None)
+        for field in self.query(Input):  # named first in the footer while focused
+            # Enter and Esc both go back to the buttons (on_input_submitted, action_back)
+            name_field(field, field.id.removeprefix("gp-"), enter="buttons", escape="buttons")
         self.to_buttons()
         self.action_refresh()
 

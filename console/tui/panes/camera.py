@@ -51,6 +51,7 @@ from console.tui.camera_tuning import CameraTuningMixin
 from console.tui.camera_wizard import CameraWizardMixin
 from console.tui.checked_field import refused, taken
 from console.tui.field_open import opens_field, show_field
+from console.tui.focus_keys import name_field
 from console.tui.halfblock_view import GreyStretch, HalfBlockView
 from console.tui.loop_rates import SameWindow, frame_counts
 from console.tui.narrow import TypesEveryKey
@@ -166,7 +167,7 @@ class CameraPane(
                 )
                 box.border_title, box.border_subtitle = TARGET_LABEL, TARGET_KEYS
                 box.display = False
-                yield box
+                yield name_field(box, "TUIO target", enter="set", escape="back")
 
     DEFAULT_CSS = """
     #camera-keys { dock: bottom; height: 1; color: $text-muted; }

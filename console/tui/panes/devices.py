@@ -28,7 +28,7 @@ from console.tui.device_cells import (
     note_width,
 )
 from console.tui.device_picks import DevicePicksMixin
-from console.tui.focus_keys import show_keys
+from console.tui.focus_keys import name_field, show_keys
 from console.tui.kept_text import KeptText
 from console.tui.lapse import HELD_ENDED, lapse, lapse_if_held
 from console.tui.panes.devices_doctor import DevicesDoctorMixin
@@ -174,13 +174,16 @@ class DevicesPane(DevicesDoctorMixin, DevicesSelftestMixin, DevicePicksMixin, Ve
         yield show_keys(LiteralTable(id="relay-table", cursor_type="row"), enter="use")
         # how to choose one, where it is chosen (a new operator found only sine-PA played)
         yield Static(TEST_SIGNAL_HEADING, classes="heading")
-        yield show_keys(
-            Choice(
-                [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
-                value="sine-PA",
-                id="stimulus",
+        yield name_field(
+            show_keys(
+                Choice(
+                    [(f"{name}: {desc}", name) for name, (desc, _) in STIMULI.items()],
+                    value="sine-PA",
+                    id="stimulus",
+                ),
+                enter="test signals",
             ),
-            enter="test signals",
+            "test signal",
         )
         yield Static("plugins and what they provide", classes="heading")
         yield show_keys(LiteralTable(id="plugin-table", cursor_type="row"), enter="whole row")

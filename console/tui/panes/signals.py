@@ -32,6 +32,7 @@ from console.session.events import ESTOP_FIX, Failed, PlayOutcome, Started
 from console.signals.design import Summary, Target, parse_target, render, spectrum, summarize
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
+from console.tui.focus_keys import name_field
 from console.tui.kept_text import KeptText
 from console.tui.lapse import lapse
 from console.tui.list_keys import KeyedList
@@ -71,6 +72,12 @@ def name_refusal(name: str) -> str:
     except UserError as exc:
         return f"{exc}; ctrl+o plays the top line's signal once the name is one or empty"
     return ""
+
+
+def _named(field: Input, name: str) -> Input:
+    """A field named in the footer: Enter plots (``on_input_submitted``), Esc leaves for
+    the library (``action_leave_field``)."""
+    return name_field(field, name, enter="plot", escape="leave")
 
 
 @dataclass(frozen=True)
@@ -156,25 +163,36 @@ class SignalsPane(Vertical):
         self._left: Input | None = None  # the field Esc left for the library: Tab's
 
     def compose(self) -> ComposeResult:
-        yield Input(
-            DEFAULT_EXPR,
-            placeholder="sine(250 Hz, 20 V, 1 s) * ramp(10 ms)",
-            id="sig-expr",
-            compact=True,
-            select_on_focus=False,  # typed work: the focus keeps it, a key types into it
+        # each field named first in the footer while it has the focus (a new operator
+        # typed " * 2" into the target, taking it for the expression)
+        yield _named(
+            Input(
+                DEFAULT_EXPR,
+                placeholder="sine(250 Hz, 20 V, 1 s) * ramp(10 ms)",
+                id="sig-expr",
+                compact=True,
+                select_on_focus=False,  # typed work: the focus keeps it, a key types into it
+            ),
+            "expression",
         )
         with Horizontal(id="sig-row"):
             yield Label("name ")
-            yield Input(
-                "", placeholder="(to save)", id="sig-name", compact=True, select_on_focus=False
+            yield _named(
+                Input(
+                    "", placeholder="(to save)", id="sig-name", compact=True, select_on_focus=False
+                ),
+                "name",
             )
             yield Label(" on ")
-            yield Input(
-                "PA",
-                placeholder="PA,PC|screen",
-                id="sig-target",
-                compact=True,
-                select_on_focus=False,
+            yield _named(
+                Input(
+                    "PA",
+                    placeholder="PA,PC|screen",
+                    id="sig-target",
+                    compact=True,
+                    select_on_focus=False,
+                ),
+                "target",
             )
             yield Static(self._hint(), classes="hint", id="sig-hint")
         yield KeptText("", id="sig-status", markup=False)  # "0.5 s" never split
