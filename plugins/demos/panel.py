@@ -231,8 +231,11 @@ class ScenesPane(Vertical):
     @waits_for_question
     def _say(self, text: str, severity: str = "information") -> None:
         """What became of this screen's own demo key, on the demos' line."""
-        self.query_one("#demo-work", LongWork).show(text, error=severity == "error")
-        status_said(self, "Scenes", text, severity)  # news logged, an error toasted if hidden
+        lw = self.query_one("#demo-work", LongWork)
+        if severity == "error":
+            lw.error(text)  # logged once, toasted if hidden
+        else:
+            lw.show(text, severity=severity)  # news logged once, at its level
 
     def _start(self, name: str) -> None:
         self._asked_scene, self._scene_error = name, ""
