@@ -98,6 +98,17 @@ class CameraSideMixin:
         if want != top:
             scroll.scroll_to(y=want, animate=False, immediate=True)
 
+    def row_in_view(self, key: str) -> bool:
+        """Whether setting ``key``'s row (``▸`` when chosen) shows in the side panel now
+        (a tuning key changes no value out of view)."""
+        scroll, settings = self.query("#camera-scroll"), self.query("#camera-settings")
+        keys = list(self.service.params())
+        if not scroll or not settings or key not in keys:
+            return True
+        y = settings.first().virtual_region.y + keys.index(key)
+        top, rows = int(scroll.first().scroll_y), scroll.first().scrollable_content_region.height
+        return top <= y < top + rows
+
     #: the scrolled part's rows no block above it takes while nothing is typed in: the
     #: chosen setting's row (``▸``) shows there, whatever the status lines say
     CHOSEN_ROWS = 1
