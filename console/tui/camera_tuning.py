@@ -12,6 +12,7 @@ from typing import Any
 from textual import work
 
 from console.core.errors import UserError
+from console.core.words import listing
 from console.tui.ask_again import AskAgain
 from console.tui.lapse import lapse_on_change
 from console.tui.question_hold import waits_for_question
@@ -60,7 +61,8 @@ class CameraTuningMixin:
             return
         changed = self.service.reset_params()
         if changed:
-            self.say_tuning(f"R: {', '.join(changed)} back as the profile has them")
+            them = "it" if len(changed) == 1 else "them"
+            self.say_tuning(f"R: {listing(changed)} back as the profile has {them}")
         else:
             self.say_tuning("R: every setting is as the profile has it")
         self._reveal()
