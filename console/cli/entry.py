@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import Any, TextIO
+from collections.abc import Iterable
+from typing import BinaryIO, TextIO
 
 #: options that may come before the command
 _GLOBAL = {"-p": 1, "--profile": 1, "-v": 0, "--verbose": 0}
@@ -53,8 +54,31 @@ class PipeSafe:
         os.dup2(null, self._stream.fileno())  # the buffered rest flushes into nothing
         os.close(null)
 
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._stream, name)
+    # what the commands ask of stdout besides (``print``'s ``file`` a stream as any)
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def isatty(self) -> bool:
+        return self._stream.isatty()
+
+    def fileno(self) -> int:
+        return self._stream.fileno()
+
+    def writable(self) -> bool:
+        return True
+
+    @property
+    def encoding(self) -> str:
+        return self._stream.encoding
+
+    @property
+    def errors(self) -> str | None:
+        return self._stream.errors
+
+    @property
+    def buffer(self) -> BinaryIO:
+        return self._stream.buffer  # bytes written there: the command's own to guard
 
 
 def main(argv: list[str] | None = None) -> int:
