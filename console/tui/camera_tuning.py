@@ -1,7 +1,8 @@
 """The Camera screen's vision settings: ``[``/``]`` choose one, ``-``/``+`` (and the
 direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback (a step
-that would break the thresholds' order is refused, saying why; a setting whose row is
-out of view is not changed: its row is shown and the line says the key again changes it); ``R`` puts every one
+that would break the thresholds' order is refused, saying why; ``-``/``+`` change no
+setting whose row is out of view: its row is shown and the line says the key again
+changes it); ``R`` puts every one
 back as the profile has it; ``W`` keeps them all for the profile (``W`` again within
 3 s: it asks first, naming the saved ones it replaces)."""
 
@@ -42,10 +43,6 @@ class CameraTuningMixin:
         if cur is None or rng is None:
             return
         self.chosen = list(svc.params()).index(key)
-        if not self.row_in_view(key):  # never a value changed out of view
-            self._reveal()
-            self.say_tuning(f"{key} not changed: its row was out of view (▸); again changes it")
-            return
         try:
             svc.set_param(key, cur + sign * rng.step)
         except UserError as exc:  # the thresholds' order: said, with the way back (the
@@ -85,9 +82,17 @@ class CameraTuningMixin:
             self._reveal()
 
     def action_tune_chosen(self, sign: int) -> None:
+        """``-``/``+``: the chosen setting by one step, only while its row (``▸``) is in
+        view: else the row is shown and the line says the key again changes it (the
+        direct keys, ``t/T c/C h/H``, name their setting: they change it anyway)."""
         key = self.chosen_key()
-        if key is not None:
-            self.action_tune(key, sign)
+        if key is None:
+            return
+        if not self.row_in_view(key):  # never a value changed out of view
+            self._reveal()
+            self.say_tuning(f"{key} not changed: its row was out of view (▸); again changes it")
+            return
+        self.action_tune(key, sign)
 
     def action_save_tuning(self) -> None:
         """``W``: asks first (it overwrites the vision settings saved for the profile);

@@ -43,15 +43,17 @@ def test_plus_changes_no_setting_out_of_view(plugins, size):
             shown = f"▸ {key}" in text_in(app, settings)
             assert not shown or size[1] > 24, text_in(app, settings)
             await pilot.press("plus")
-            await pilot.pause(0.5)
+            status = app.query_one("#camera-status")
             if not shown:  # not changed out of view: shown now, the line says so
+                await wait_for(pilot, lambda: "again" in text_in(app, status), 10, "the line")
                 assert svc.params()[key] == before, "changed while its row was hidden"
-                status = text_in(app, app.query_one("#camera-status"))
-                assert key in status and "again" in status, status
+                assert key in text_in(app, status), text_in(app, status)
+                await wait_for(
+                    pilot, lambda: f"▸ {key}" in text_in(app, settings), 10, "the row shown"
+                )
                 await pilot.press("plus")
-                await pilot.pause(0.5)
-            assert f"▸ {key}" in text_in(app, settings), text_in(app, settings)
-            assert svc.params()[key] > before
+            await wait_for(pilot, lambda: svc.params()[key] > before, 10, "changed")
+            await wait_for(pilot, lambda: f"▸ {key}" in text_in(app, settings), 10, "▸ in view")
             assert "S: save" in text_in(app, wizard), "the result gave way"
 
     asyncio.run(scenario())
