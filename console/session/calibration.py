@@ -205,7 +205,7 @@ class TouchCalibration:
         self.result.save(dest)
         with self._lock:  # the key it asked for is done: the line says so, not "S: save"
             self.message = f"{self.report_text} saved to {dest}"
-        self.session.emit(Stopped(TOPIC, name="saved", reason=str(dest)))
+        self.session.emit(Stopped(TOPIC, reason=f"saved: {dest}"))  # the log's line
         return dest
 
     # ------------------------------------------------------------------ helpers

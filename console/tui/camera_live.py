@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from console.core.words import counted
 from console.runtime.exposure_assist import MIN_LIGHT, MIN_SNR, Reading, skin_at
 from console.tui import glue
 from console.tui.loop_rates import CAMERA, VISION
@@ -66,8 +67,8 @@ def loop_lines(st: dict, view: str, span_s: float) -> list[str]:
         # what this loop lost since it started: frames the camera dropped while the
         # loop read it, and frames the processing was too slow for (never the frames
         # that passed while nobody watched)
-        f"camera lost {escape(lat.get('dropped_camera', 0))} frames",
-        f"vision skipped {escape(lat.get('dropped_queue', 0))} frames (busy)",
+        f"camera lost {counted(int(lat.get('dropped_camera', 0)), 'frame')}",
+        f"vision skipped {counted(int(lat.get('dropped_queue', 0)), 'frame')} (busy)",
         f"view: {view} (v: the next)",
     ]
 

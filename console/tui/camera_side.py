@@ -27,6 +27,24 @@ def whole_lines(block, rows: int) -> int:
     return rows
 
 
+def whole_top(lines: list[str], top: int, keep: int, height: int) -> int:
+    """The scroll offset for the scrolled part, scrolled to ``top``, that starts with a
+    whole one of its ``lines`` (each wrapped with its continuation indented,
+    ``camera_live.hang``): at ``top`` inside a line, up to that line's head when row
+    ``keep`` (the ``▸`` row, the field) stays in view in ``height`` rows, else down
+    past the line (never ``  last 3 s`` without ``both rates: frames in the same``)."""
+    if not 0 < top < len(lines) or not lines[top].startswith(HANG):
+        return top
+    head = top
+    while head > 0 and lines[head].startswith(HANG):
+        head -= 1
+    if keep < head + height:
+        return head
+    while top < len(lines) and lines[top].startswith(HANG):
+        top += 1
+    return top
+
+
 def blank_end(block) -> int:
     """The blank rows ending the live numbers (kept so that a hand's lines coming and
     going lay nothing out again): the first rows to give way, to anything."""
@@ -67,6 +85,29 @@ class CameraSideMixin:
             return
         y = settings.first().virtual_region.y + keys.index(key)
         scroll.first().scroll_to_region(Region(0, y, 1, 1), animate=False, immediate=True)
+        self._start_whole(y)
+
+    def _start_whole(self, keep: int) -> None:
+        """The scrolled part starts with a whole line of the live numbers (``whole_top``),
+        row ``keep`` still in view."""
+        scroll, detail = self.query_one("#camera-scroll"), self.query_one("#camera-detail")
+        lines = str(detail.content).split("\n")
+        at = detail.virtual_region.y
+        top = int(scroll.scroll_y)
+        want = at + whole_top(lines, top - at, keep - at, scroll.scrollable_content_region.height)
+        if want != top:
+            scroll.scroll_to(y=want, animate=False, immediate=True)
+
+    def row_in_view(self, key: str) -> bool:
+        """Whether setting ``key``'s row (``▸`` when chosen) shows in the side panel now
+        (a tuning key changes no value out of view)."""
+        scroll, settings = self.query("#camera-scroll"), self.query("#camera-settings")
+        keys = list(self.service.params())
+        if not scroll or not settings or key not in keys:
+            return True
+        y = settings.first().virtual_region.y + keys.index(key)
+        top, rows = int(scroll.first().scroll_y), scroll.first().scrollable_content_region.height
+        return top <= y < top + rows
 
     #: the scrolled part's rows no block above it takes while nothing is typed in: the
     #: chosen setting's row (``▸``) shows there, whatever the status lines say
@@ -157,5 +198,6 @@ class CameraSideMixin:
         scroll = self.query("#camera-scroll")
         if focused is not None and scroll and scroll.first() in focused.ancestors:
             scroll.first().scroll_to_widget(focused, animate=False, immediate=True)
+            self._start_whole(focused.virtual_region.y)
         else:
             self._scroll_to_chosen()

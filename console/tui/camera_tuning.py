@@ -1,6 +1,8 @@
 """The Camera screen's vision settings: ``[``/``]`` choose one, ``-``/``+`` (and the
 direct keys ``t/T c/C h/H``) change it by one step, its row being the feedback (a step
-that would break the thresholds' order is refused, saying why); ``R`` puts every one
+that would break the thresholds' order is refused, saying why; ``-``/``+`` change no
+setting whose row is out of view: its row is shown and the line says the key again
+changes it); ``R`` puts every one
 back as the profile has it; ``W`` keeps them all for the profile (``W`` again within
 3 s: it asks first, naming the saved ones it replaces)."""
 
@@ -9,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from console.core.errors import UserError
+from console.core.words import listing
 from console.tui.ask_again import AskAgain
 from console.tui.lapse import lapse_on_change
 from console.tui.question_hold import waits_for_question
@@ -54,7 +57,8 @@ class CameraTuningMixin:
             return
         changed = self.service.reset_params()
         if changed:
-            self.say_tuning(f"R: {', '.join(changed)} back as the profile has them")
+            them = "it" if len(changed) == 1 else "them"
+            self.say_tuning(f"R: {listing(changed)} back as the profile has {them}")
         else:
             self.say_tuning("R: every setting is as the profile has it")
         self._reveal()
@@ -77,9 +81,17 @@ class CameraTuningMixin:
             self._reveal()
 
     def action_tune_chosen(self, sign: int) -> None:
+        """``-``/``+``: the chosen setting by one step, only while its row (``▸``) is in
+        view: else the row is shown and the line says the key again changes it (the
+        direct keys, ``t/T c/C h/H``, name their setting: they change it anyway)."""
         key = self.chosen_key()
-        if key is not None:
-            self.action_tune(key, sign)
+        if key is None:
+            return
+        if not self.row_in_view(key):  # never a value changed out of view
+            self._reveal()
+            self.say_tuning(f"{key} not changed: its row was out of view (▸); again changes it")
+            return
+        self.action_tune(key, sign)
 
     def action_save_tuning(self) -> None:
         """``W``: asks first (it overwrites the vision settings saved for the profile);

@@ -12,6 +12,7 @@ import time
 from typing import Any
 
 from console.core.errors import UserError
+from console.core.words import counted
 from console.session.background_check import describe_in_view
 from console.session.calibration import SAVE_KEY, TOPIC
 from console.session.events import Failed
@@ -81,14 +82,18 @@ class CameraWizardMixin:
 
     def short_result(self) -> str:
         """A finished calibration's result in one line: ``touch calibration: 12 targets,
-        saved (k: again)``."""
+        saved to ~/.config/.../touch_calibration.json (k: again)`` (where: as the log)."""
         w = self.wizard
         head = w.message.split(":", 1)[0].strip() if ":" in w.message else ""
         if w.failed:
             said = "failed"
         else:
-            said = ", ".join(p for p in (head, "saved" if "saved to" in w.message else "") if p)
-        return f"[b]touch calibration[/b]: {escape(said or 'done')} (k: again)"
+            saved = ""
+            if "saved to " in w.message:
+                saved = "saved to " + short_path(w.message.rsplit("saved to ", 1)[1].strip())
+            said = ", ".join(p for p in (head, saved) if p)
+        said = break_paths(said or "done", self.side_width("camera-wizard"))  # a path whole
+        return f"[b]touch calibration[/b]: {escape(said)} (k: again)"
 
     def wizard_text(self, short: bool | None = None) -> str:
         """The touch-calibration wizard's step or result and the keys it takes ("" when
@@ -175,4 +180,7 @@ class CameraWizardMixin:
             return
         self._background_asked = -1e9
         n = svc.capture_background(image)
-        self.say(f"background captured from {n} frames" + (" (kept as asked)" if again else ""))
+        self.say(
+            f"background captured from {counted(n, 'frame')}"
+            + (" (kept as asked)" if again else "")
+        )

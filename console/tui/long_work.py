@@ -45,7 +45,7 @@ from console.core.errors import UserError
 from console.tui.kept_text import wrap_kept
 from console.tui.lapse import ask
 from console.tui.question_hold import NOTE_S, answered, waits_for_question
-from console.tui.said import log_status, said_here, screen_name
+from console.tui.said import said_here, screen_name, status_said
 from console.tui.time_left import Steady, left_words, seconds_left
 from console.tui.util import from_thread
 from console.tui.workers import contain, run_worker
@@ -137,12 +137,21 @@ class LongWork(Vertical):
         return float(bar.progress) if bar.display else None
 
     @waits_for_question(progress="frac")
-    def show(self, text: str, frac: float | None = None, *, error: bool = False) -> None:
+    def show(
+        self,
+        text: str,
+        frac: float | None = None,
+        *,
+        error: bool = False,
+        severity: str = "information",
+    ) -> None:
         """Status line (and the bar at ``frac``; hidden with None); its news in the log
-        (an error by ``error``; its ticks not: ``console.tui.said.log_status``)."""
+        once, at ``severity`` (``console.tui.said.status_said``: its ticks not; a
+        warning toasted when the screen is hidden); an error by ``error``."""
         self.text = text
         if not error:
-            log_status(screen_name(self, self.name_running or self.last_name or "long work"), text)
+            where = screen_name(self, self.name_running or self.last_name or "long work")
+            status_said(self, where, text, severity)
         label = self.query_one(".lw-line", Label)
         label.set_class(error, "error")
         self._draw()

@@ -21,7 +21,7 @@ from textual.widgets import Input
 
 from console.core.errors import UserError
 from console.core.recording_contracts import ReadsRecordings
-from console.core.words import AT_CONSOLE, worded
+from console.core.words import AT_CONSOLE, counted, worded
 from console.tui.camera_live import hand_line
 from console.tui.checked_field import refused, taken
 from console.tui.field_open import opens_field, show_field
@@ -221,7 +221,9 @@ class RecordingMixin:
         self._keys_line(REPLAY_KEYS_LINE)
         self.refresh_bindings()
         name = getattr(run.path, "name", run.path)
-        self.say(f"{escape(str(name))}: {run.n_frames} frames; space plays, Esc: live camera")
+        self.say(
+            f"{escape(str(name))}: {counted(run.n_frames, 'frame')}; space plays, Esc: live camera"
+        )
         self.replay_draw()
 
     def action_replay_play(self) -> None:

@@ -11,10 +11,13 @@ Whatever the console says, on a status line or as a toast, is also a record of l
 ``haptable.console`` (the log view, ``ctrl+l``, and ``console.log``): a failure seen
 once is still there after its line was replaced or its toast went. Such records are
 marked ``on_screen``: ``console.tui.logs.NotifyHandler`` never shows them again.
-A status line's every new message is logged (``log_status``: what the operator read, in
-order, to reconstruct a session), but not its ticks: a line that differs from the last
-one logged for its screen in its numbers only (``measuring 34 %, 12 s left``) is logged
-again only after ``PROGRESS_S``.
+A status line's every new message is logged once, when it changes (``log_status``: what
+the operator read, in order, to reconstruct a session): the line standing when a screen
+shows again (or redraws) is not news and is never logged again; nor are its ticks: a
+line that differs from the last one logged for its screen in its numbers only
+(``measuring 34 %, 12 s left``) is logged again only after ``PROGRESS_S``. One event
+is one record at one level: a line said as a warning or an error (``said_here``) is not
+also logged as information.
 """
 
 from __future__ import annotations
@@ -58,15 +61,15 @@ def log_said(where: str, text: str, severity: str = "error") -> None:
 #: is progress: logged again after this many seconds (a tick of work, not news)
 PROGRESS_S = 30.0
 _NUMBER = re.compile(r"\d+(?:[.,]\d+)*")
-_last_status: dict[str, tuple[str, float]] = {}  # where -> (shape, when logged)
+_last_status: dict[str, tuple[str, str, float]] = {}  # where -> (line, shape, when logged)
 _status_lock = threading.Lock()
 
 
 def log_status(where: str, text: str, now: float | None = None) -> bool:
     """A screen's status line, now ``text``, into the log as information (``status
     Vibration: point 51 played``), unless it is the last line logged for ``where`` again
-    or that line with other numbers, within ``PROGRESS_S`` (a redraw or a tick). Returns
-    whether it was logged."""
+    (at any time: a redraw, the screen shown again) or that line with other numbers
+    within ``PROGRESS_S`` (a tick). Returns whether it was logged."""
     line = " ".join(str(text).split())
     if not line:
         return False
@@ -77,15 +80,19 @@ def log_status(where: str, text: str, now: float | None = None) -> bool:
 
 
 def _remember(where: str, line: str, now: float | None, repeat_ok: bool) -> bool:
-    """``line`` as the last one logged for ``where``; False (nothing changed) when it
-    repeats the last one, numbers aside, within ``PROGRESS_S`` and not ``repeat_ok``."""
+    """``line`` as the last one logged for ``where``; False (nothing changed) unless
+    ``repeat_ok`` when it is the last one again, or that one with other numbers within
+    ``PROGRESS_S``."""
     now = time.monotonic() if now is None else now
     shape = _NUMBER.sub("#", line)
     with _status_lock:
         last = _last_status.get(where)
-        if not repeat_ok and last is not None and last[0] == shape and now - last[1] < PROGRESS_S:
+        same = last is not None and (
+            last[0] == line or (last[1] == shape and now - last[2] < PROGRESS_S)
+        )
+        if same and not repeat_ok:
             return False
-        _last_status[where] = (shape, now)
+        _last_status[where] = (line, shape, now)
     return True
 
 

@@ -15,6 +15,9 @@ __all__ = ["event_line", "log_event"]
 
 #: the camera stopping for this reason follows the screens: not news
 QUIET_STOPS = {("camera", "nobody watches")}
+#: a ``Stopped`` reason saying what became of the work, not that it stopped: logged as
+#: it is (``calibration saved: PATH``; refused: it never started)
+OUTCOMES = ("refused: ", "saved: ")
 #: the same line again this soon is one event heard twice (an e-stop latched by the
 #: console is reported by the session and again by the table's kernel)
 ECHO_S = 2.0
@@ -38,7 +41,7 @@ def event_line(ev: SessionEvent) -> tuple[str, str] | None:
     if isinstance(ev, Stopped):
         if (ev.topic, ev.reason) in QUIET_STOPS:
             return None
-        if ev.reason.startswith("refused: "):  # it never started: nothing stopped
+        if ev.reason.startswith(OUTCOMES):  # not a stop: what became of it
             return f"{ev.topic}{name} {ev.reason}", "information"
         return f"{ev.topic}{name} stopped: {ev.reason or 'ended'}", "information"
     return None

@@ -12,7 +12,6 @@ demo started elsewhere shows here too. ``s`` or the e-stop stops a demo, so does
 
 from __future__ import annotations
 
-import textwrap
 import time
 from typing import Any
 
@@ -28,15 +27,13 @@ from console.plugin_api.tui import (
     SessionMessage,
     answered,
     escape,
-    middle_ellipsis,
     said_here,
-    short_path,
     status_said,
     waits_for_question,
-    whole_names,
     work,
 )
 
+from .last_run import LOG_WIDTH, Layout, last_run, never_ran, without_lines
 from .projector_line import status_text
 from .status import estop_text, status_lines
 from .status_fit import fit_fields, log_lines
@@ -154,7 +151,9 @@ class ScenesPane(Vertical):
         self._close_asked = -1e9  # when k asked to be pressed again (monotonic s)
         self._shown = False  # the screen is in view (else a snapshot waits: ``_held``)
         self._held: dict | None = None  # the newest snapshot that came while hidden
-        self._status_said: tuple | None = None  # (the demo status, the width) as shown
+        self._status_said: tuple | None = None  # (the demo status, the size) as shown
+        self._status_at: Layout = lambda _width: ""  # the demo status for a width
+        self._status_logged = ""  # ... as the log has it (whole)
 
     @property
     def demos(self) -> Any:
@@ -215,6 +214,7 @@ class ScenesPane(Vertical):
 
     def on_resize(self, event) -> None:
         self._fill_tables(event.size.width + 2)
+        self._fit_status()
 
     def on_data_table_row_selected(self, event: DataTable.RowSelected) -> None:
         event.stop()
@@ -231,8 +231,11 @@ class ScenesPane(Vertical):
     @waits_for_question
     def _say(self, text: str, severity: str = "information") -> None:
         """What became of this screen's own demo key, on the demos' line."""
-        self.query_one("#demo-work", LongWork).show(text, error=severity == "error")
-        status_said(self, "Scenes", text, severity)  # news logged, an error toasted if hidden
+        lw = self.query_one("#demo-work", LongWork)
+        if severity == "error":
+            lw.error(text)  # logged once, toasted if hidden
+        else:
+            lw.show(text, severity=severity)  # news logged once, at its level
 
     def _start(self, name: str) -> None:
         self._asked_scene, self._scene_error = name, ""
@@ -317,8 +320,7 @@ class ScenesPane(Vertical):
             if state == "e-stopped":
                 self._set_cell(name, "stopped")
         if any(w in self._last_run for w in ESTOP_ACTIVE):  # the last run's error said it
-            kept = [ln for ln in self._last_run.split("\n") if not _says_estop(ln)]
-            self._show_last_run("\n".join(kept))
+            self._show_last_run(without_lines(self._status_at, _says_estop))
         lw = self.query_one("#demo-work", LongWork)
         after, self._after_stop = self._after_stop, ""
         if after and not lw.busy and lw.text.startswith(after):  # the stop came first
@@ -330,22 +332,33 @@ class ScenesPane(Vertical):
             again = "" if self._demo_states.get(name, "idle") == "idle" else " again"
             lw.show(f"demo {name}: the e-stop is reset; enter starts it{again}")
 
-    def _show_last_run(self, text: str) -> None:
-        """The demo status: how the last run ended and its last numbers (markup)."""
-        self._last_run = text
+    def _show_last_run(self, text: str | Layout) -> None:
+        """The demo status: how the last run ended and its last numbers (markup, or
+        markup for a width: ``last_run``)."""
         self._put_status(text)
+        self._last_run = self._status_at(self.app.size.width)
 
-    def _put_status(self, text: str) -> None:
-        """The demo status (markup), each line fitted to the screen (``fit_fields``);
-        redrawn only when it changed."""
-        said = (text, self.app.size.width, self.app.size.height)
-        if said != self._status_said:
-            if self._status_said is None or self._status_said[0] != text:
-                log_lines(self, "Scenes demo", text)  # every line whole in the log
-            self._status_said = said
-            rows = max(0, said[2] - 24)  # rows beyond 80 x 24's: long lines wrap there
-            fitted = fit_fields(text, said[1] - 2, rows)
-            self.query_one("#demo-status", Static).update(fitted)
+    def _put_status(self, text: str | Layout) -> None:
+        """The demo status (markup, or markup for a width), laid out for the screen's
+        width now and again whenever it changes (``_fit_status``)."""
+        self._status_at = text if callable(text) else (lambda _width, t=text: t)
+        self._fit_status()
+
+    def _fit_status(self) -> None:
+        """The demo status for the screen's size, each line fitted (``fit_fields``);
+        redrawn only when it changed; in the log whole, once."""
+        width, height = self.app.size
+        text = self._status_at(width)
+        said = (text, width, height)
+        if said == self._status_said:
+            return
+        whole = self._status_at(LOG_WIDTH)
+        if whole != self._status_logged:
+            self._status_logged = whole
+            log_lines(self, "Scenes demo", whole)  # every line whole in the log
+        self._status_said = said
+        rows = max(0, height - 24)  # rows beyond 80 x 24's: long lines wrap there
+        self.query_one("#demo-status", Static).update(fit_fields(text, width - 2, rows))
 
     def start_demo(self, name: str) -> bool:
         """Start demo ``name`` in its own process (the session's work, in a worker)."""
@@ -504,24 +517,12 @@ class ScenesPane(Vertical):
             # a cancelled or failed start has its own line above: no second one here
             own_line = reason in ("failed", "cancelled")
             said = f"{name}: no numbers, it never ran" if own_line else f"{name} {how}"
-            said = textwrap.wrap(said, self.app.size.width - 2)
-            self._show_last_run(escape("\n".join(said)))
+            self._show_last_run(never_ran(said))
         else:
             snap = {**demos.last_snapshot, "running": False, "hand": None}  # its last numbers
-            text = "\n".join(status_lines(snap))
-            log = (demos.last_final or {}).get("twin_log")
-            if log:  # one line, its path cut between whole names (two rows were cut
-                # at 80 x 24; a name cut inside read as a wrong path): a line of its
-                # own when its file name does not fit after the label
-                label, width = "the twin's outputs received: ", self.app.size.width - 2
-                path = short_path(log)
-                shown = whole_names(path, width - len(label))
-                if shown is None:
-                    label, shown = label.rstrip() + "\n", whole_names(path, width)
-                text += f"\n{label}{escape(shown or middle_ellipsis(path, width))}"
             head = f"{how}; an e-stop came after" if after else how
-            head = "\n".join(textwrap.wrap(f"last run ({head}):", self.app.size.width - 2))
-            self._show_last_run(f"{escape(head)}\n{text}")
+            log = (demos.last_final or {}).get("twin_log")
+            self._show_last_run(last_run(head, "\n".join(status_lines(snap)), log))
         self.demo_name = None
         lw = self.query_one("#demo-work", LongWork)
         if reason == "e-stopped":
@@ -646,6 +647,8 @@ class ScenesPane(Vertical):
         """Shown: the projector line is read every ``PROJECTOR_TICK_S`` and the newest
         snapshot that came meanwhile drawn; hidden: no timer, no snapshot drawn."""
         self._shown = visible
+        if visible:  # laid out for the size now (resized while hidden)
+            self._fit_status()
         held, self._held = self._held, None
         if visible and held is not None:
             self._show_snapshot(held)

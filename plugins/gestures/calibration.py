@@ -27,7 +27,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from console.plugin_api import UserError
+from console.plugin_api import UserError, counted
 
 from .dataset import read_json
 from .vision import VisionParams, process_frame
@@ -429,7 +429,7 @@ class CalibrationSession:
         done = [i for i, t in enumerate(self.touches_px) if t is not None]
         if len(done) < 4:
             raise UserError(
-                f"touch calibration: {len(done)} targets touched; touch at least 4 (all recommended)"
+                f"touch calibration: {counted(len(done), 'target')} touched; touch at least 4 (all recommended)"
             )
         px = np.array([self.touches_px[i] for i in done])
         return calibrate(px, self.targets_mm[done], **kw)

@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, gate_events_text
+from console.plugin_api import UserError, counted, gate_events_text
 from console.plugin_api.runtime import FrameLoop, VisionStage, open_classifier
 
 from .camera import ReplayCamera
@@ -68,9 +68,10 @@ def replay(path: str | Path, profile: Any, plugins: Any) -> tuple[bool, str]:
         n_g, _ = _events(recorded)
         n_p = sum(p.get("kind") == "plan" for p in rec.plans())
         dropped = rec.stats["dropped"]
-        tail = f"; {dropped} frames were dropped while recording" if dropped else ""
+        were = "was" if dropped == 1 else "were"
+        tail = f"; {counted(dropped, 'frame')} {were} dropped while recording" if dropped else ""
         return True, (
-            f"replay: {rec.n_frames} frames, {n_g} gestures the same; {n_p} plans "
+            f"replay: {counted(rec.n_frames, 'frame')}, {n_g} gestures the same; {n_p} plans "
             f"recorded (not re-planned), {gate_events_text(rec.gate_events())}{tail}"
         )
 
@@ -84,7 +85,7 @@ def _versions_note(rec: Recording) -> str:
     note = f" (versions differ: {', '.join(diff)})" if diff else " (same versions)"
     if len(rec.dropped_seq):
         note += (
-            f"; the recorder dropped {len(rec.dropped_seq)} frames, the first {rec.dropped_seq[0]}"
+            f"; the recorder dropped {counted(len(rec.dropped_seq), 'frame')}, the first {rec.dropped_seq[0]}"
             ": the run saw them, the replay cannot"
         )
     return note

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from console.plugin_api import UserError, gate_events_text
+from console.plugin_api import UserError, counted, gate_events_text
 
 from .camera import ReplayCamera
 from .decisions import compare, frame_decisions
@@ -105,7 +105,8 @@ def replay_demo(path: str | Path, ctx: Any) -> tuple[bool, str]:
             return False, f"replay: first difference at {diff}" + _versions_note(rec)
         n_g, _ = _events([rec.decisions(k) for k in range(rec.n_frames)])
         dropped = rec.stats["dropped"]
-        tail = f"; {dropped} frames were dropped while recording" if dropped else ""
+        were = "was" if dropped == 1 else "were"
+        tail = f"; {counted(dropped, 'frame')} {were} dropped while recording" if dropped else ""
         return True, (
             f"replay: {sink.frames} frames, {n_g} gestures and {len(sink.plans)} plans the "
             f"same ({name} demo); {gate_events_text(rec.gate_events())} recorded{tail}"

@@ -117,7 +117,7 @@ def test_wizard_runs_from_the_session_and_saves(profile, tmp_path):
     assert wizard.message.endswith("S: save")  # the key the result asks for
     path = wizard.save(tmp_path / "cal.json")
     assert json.loads(path.read_text())["format"].startswith("haptable-touch-calibration")
-    assert isinstance(events[-1], Stopped) and events[-1].name == "saved"
+    assert isinstance(events[-1], Stopped) and events[-1].reason == f"saved: {path}"
     # saved: the line says so (issue 27), no longer asking for S as if unsaved
     assert "S: save" not in wizard.message and wizard.message.endswith(f"saved to {path}")
     assert "fit residual" in wizard.message

@@ -14,6 +14,15 @@ def _quick_key_presses(monkeypatch):
     quicken_pilot(monkeypatch)
 
 
+@pytest.fixture(autouse=True)
+def _new_console_log(monkeypatch):
+    """Each test's console logs its status lines anew: a line is logged once, when it
+    changes (``console.tui.said``), in one console, not once in the test process."""
+    from console.tui import said
+
+    monkeypatch.setattr(said, "_last_status", {})
+
+
 @pytest.fixture(scope="session")
 def map_file(tmp_path_factory):
     """An analytic (simply supported plate) vibration map of the sim grid, as a file."""

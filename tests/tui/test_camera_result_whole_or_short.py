@@ -1,6 +1,6 @@
 """Camera (F2) at 80 x 24 and 120 x 40: a finished, saved calibration's result is shown
 whole or, when newer replies take the side panel's rows, in one line (``touch
-calibration: 12 targets, saved (k: again)``) or not at all, never cut mid-sentence (after ``u`` the
+calibration: 12 targets, saved to ~/.../touch_calibration.json (k: again)``) or not at all, never cut mid-sentence (after ``u`` the
 block ended ``none. saved to`` with no path; after ``o`` only its heading was left)."""
 
 from __future__ import annotations

@@ -132,9 +132,9 @@ def camera_line(
     else:
         frames = cam.get("frames")
         head = f"[b]camera[/b] {escape(cam.get('driver', ''))}".rstrip() + f": {escape(no_fps)}"
-        head += "" if frames is None else f", {escape(frames)} frames delivered"
-    return f"{head}, {escape(cam.get('dropped', 0))} frames dropped by the camera" + (
-        f"; loop {snap['frames']} frames, "
+        head += "" if frames is None else f", {counted(int(frames), 'frame')} delivered"
+    return f"{head}, {counted(int(cam.get('dropped', 0)), 'frame')} dropped by the camera" + (
+        f"; loop {counted(snap['frames'], 'frame')}, "
         f"{snap['dropped_queue']} dropped (processing behind), {snap['errors']} errors"
         if snap
         else ""
