@@ -30,18 +30,24 @@ def interlock(
     pending: dict[int, bool],
     refused: dict[int, str],
     opened: set[int] | frozenset[int] = frozenset(),
+    behind: int | None = None,
 ) -> str:
     """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``; while
     a stimulus routes it otherwise than the operator's setting, whose plan: ``closed by
     haptable play sweep (pid N)``), then why it can or cannot switch now;
     ``opened``: relays the operator had closed and an e-stop opened (said until the
-    operator toggles them or they close again)."""
+    operator toggles them or they close again); ``behind``: the relay whose switch
+    ``ch``'s queued toggle waits for (keys in a burst switch one at a time, in order)."""
     gate = status["gate"]
     closed = ch in gate.get("relays_closed", ())
     state = "closed" if closed else "open"
     routed = status["busy"] and not gate["estopped"] and closed != (ch in operator_setting(status))
     head = f"{state} by {escape(routing_words(status))}" if routed else state
-    return f"{head} - {_why(ch, state, status, pending, refused, opened, routed)}"
+    why = _why(ch, state, status, pending, refused, opened, routed)
+    if behind is not None and ch in pending and not gate["estopped"] and behind != ch:
+        want = "close" if pending[ch] else "open"
+        why = f"[yellow]waits to {want} after relay {behind}'s switch[/]"
+    return f"{head} - {why}"
 
 
 def operator_setting(status: dict) -> frozenset[int]:
@@ -166,7 +172,11 @@ class RelaysPane(VerticalScroll):
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
-        self.pending: dict[int, bool] = {}
+        self.pending: dict[int, bool] = {}  # relay -> its newest toggle not yet done
+        # the toggles not yet done, in the order pressed: the first one is switching, the
+        # others wait for it (one switch at a time, each from the setting the one before
+        # left: a burst of keys is never lost)
+        self._queue: list[tuple[int, bool]] = []
         self.refused: dict[int, str] = {}
         self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
         self._held_refused: set[int] = set()  # ... a hold caused (its end clears them)
@@ -250,7 +260,8 @@ class RelaysPane(VerticalScroll):
             if sw.value != on:
                 with sw.prevent(Switch.Changed):
                     sw.value = on
-            text = interlock(ch, status, self.pending, self.refused, self._opened)
+            behind = self._queue[0][0] if self._queue else None
+            text = interlock(ch, status, self.pending, self.refused, self._opened, behind)
             before = self._said.get(ch)
             if before != text:
                 self._said[ch] = text
@@ -304,7 +315,8 @@ class RelaysPane(VerticalScroll):
         out = self.app.session.outputs
         if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
             return
-        closed = ch in out.operator_relays()  # the operator's own setting
+        # the operator's own setting, as the toggles still queued will leave it
+        closed = self.pending.get(ch, ch in out.operator_relays())
         self.request(ch, not closed)
 
     def on_session_message(self, message: SessionMessage) -> None:
@@ -315,6 +327,7 @@ class RelaysPane(VerticalScroll):
         if ev.topic != "estop":
             return
         if isinstance(ev, Stopped):
+            self._refuse_queued()
             self._opened |= self._operator | self._mine
             self._operator, self._mine, self._reset = frozenset(), set(), False
         elif isinstance(ev, Started):
@@ -334,17 +347,34 @@ class RelaysPane(VerticalScroll):
             # would then switch a relay the operator asked for during the e-stop
             reason = out.estop_reason
             self._estop_refused.add(ch)
-            self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
+            self._refuse(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
             return
         held = self.app.session.held_why()  # a study run holds the table: not switched
         if held:
             self._held_refused.add(ch)  # said until the hold ends
-            self._done(ch, held.removeprefix("refused: "))
+            self._refuse(ch, held.removeprefix("refused: "))
             return
         self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
-        self.pending[ch] = closed
+        self._queue.append((ch, closed))
+        self._pending_now()
         self._redraw()
-        self._switch(ch, closed)
+        if len(self._queue) == 1:  # none switching: at once; else after those before it
+            self._switch(ch, closed)
+
+    def _pending_now(self) -> None:
+        """Each relay's newest toggle not yet done (what its switch shows already)."""
+        self.pending = dict(self._queue)
+
+    def _refuse_queued(self) -> None:
+        """An e-stop: the toggles waiting behind the one switching are refused (never
+        run after a reset); the one switching says its own outcome."""
+        out = self.app.session.outputs
+        reason = out.estop_reason if out is not None else ""
+        for ch, _ in self._queue[1:]:
+            self._estop_refused.add(ch)
+            self.refused[ch] = f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}"
+        self._queue[1:] = []
+        self._pending_now()
 
     @work(thread=True, group="relays")
     def _switch(self, ch: int, closed: bool) -> None:
@@ -362,10 +392,25 @@ class RelaysPane(VerticalScroll):
             from_thread(self.app, self._done, ch, str(exc))
 
     def _done(self, ch: int, error: str) -> None:
-        want = self.pending.pop(ch, None)
+        """Relay ``ch``'s switch ended (``error``: why it was refused): the next toggle
+        queued behind it switches now."""
+        want = None
+        if self._queue and self._queue[0][0] == ch:
+            want = self._queue.pop(0)[1]
+        out = self.app.session.outputs
+        if out is not None and out.estopped:
+            self._refuse_queued()
+        self._pending_now()
         if not error and want is not None:  # the operator's setting now has it so
             (self._mine.add if want else self._mine.discard)(ch)
-        if error:  # the relay's row says it (its one place), the log keeps it
+        if self._queue:
+            self._switch(*self._queue[0])
+        self._refuse(ch, error)
+
+    def _refuse(self, ch: int, error: str) -> None:
+        """Relay ``ch``'s toggle refused (``error``; "" when it switched): its row says
+        why (its one place), the log keeps it; the rows redrawn."""
+        if error:
             self.refused[ch] = error
             said_here(self, "Relays", f"relay {ch}: {error}")
         live = live_of(self.app)
