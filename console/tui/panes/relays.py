@@ -248,8 +248,8 @@ class RelaysPane(VerticalScroll):
     def show_state(self, status: dict, log) -> None:
         """The switches, each relay's interlock and the log as ``status`` says (the app
         calls it when the output state changed); only what changed is redrawn."""
-        if self._table is None:
-            return  # not mounted yet: ``on_mount`` draws the state then
+        if self._table is None or not self._table.is_attached:
+            return  # not mounted yet (``on_mount`` draws the state then), or closing
         mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
         self._show_held(held_words(status))
