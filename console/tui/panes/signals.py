@@ -518,11 +518,9 @@ class SignalsPane(Vertical):
             self._replace = name
             self.status(f"{name} is already saved: ctrl+s again replaces it", error=True)
             return
-        try:  # saved with the channel the target field names (loading it sets it back)
+        try:  # saved with the channel the target field names (loading it sets it back),
+            # checked as ctrl+o and the CLI check it: a target naming none is refused
             meant = check_target(target)
-        except UserError:  # the line says it is kept for no channel
-            meant = ""
-        try:
             limits = Limits.from_profile(self.app.ctx.profile)
             add_signal(self.library_file, name, expr, replace=True, limits=limits, target=meant)
         except UserError as exc:
@@ -530,14 +528,12 @@ class SignalsPane(Vertical):
             return
         self._replace = None
         self.reload_library(select=name)
-        where = f"for {meant}" if meant else f"for no channel ({target!r} names none)"
+        where = f"for {meant}" if meant else "for any channel"
         self.status(f"saved {name} {where} in {self.library_file}")
         self._show_saved()
         # the saved signal is plotted (the plots said "no signal" since an error), where
-        # the target field says; a target that plots nowhere keeps the saved line
-        try:
-            parse_target(self._fields()[2])
-        except UserError:
+        # the target field says; an empty field plots nowhere and keeps the saved line
+        if not meant:
             return
         self._loaded_note = f"saved {name} {where} in {self.library_file}"
         self.show_preview()
