@@ -33,7 +33,7 @@ from console.signals.design import Summary, Target, parse_target, render, spectr
 from console.signals.expr import parse
 from console.tui.charts import Chart, Series
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse
+from console.tui.lapse import lapse, lapse_if_held
 from console.tui.list_keys import KeyedList
 from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import status_said
@@ -223,6 +223,8 @@ class SignalsPane(Vertical):
         self._status_line = line
         # in the log too; an error as a toast when this screen is not in view
         status_said(w, "Signals", line, "error" if error else "information")
+        if error:  # a refusal because a run holds the outputs goes when the hold ends
+            lapse_if_held(self, self.app.session, lambda: self._status_line, line, self.status)
         if self.preview is None:
             self._show_no_signal()
 
