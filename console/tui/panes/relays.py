@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -29,14 +30,14 @@ def interlock(
     status: dict,
     pending: dict[int, bool],
     refused: dict[int, str],
-    opened: set[int] | frozenset[int] = frozenset(),
+    opened: Opened = frozenset(),
     behind: int | None = None,
 ) -> str:
     """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``; while
     a stimulus routes it otherwise than the operator's setting, whose plan: ``closed by
     haptable play sweep (pid N)``), then why it can or cannot switch now;
-    ``opened``: relays the operator had closed and an e-stop opened (said until the
-    operator toggles them or they close again); ``behind``: the relay whose switch
+    ``opened``: relays an e-stop opened (said until the operator toggles them or they
+    close again), each with who had closed it ("" or a set: the operator's setting); ``behind``: the relay whose switch
     ``ch``'s queued toggle waits for (keys in a burst switch one at a time, in order)."""
     gate = status["gate"]
     closed = ch in gate.get("relays_closed", ())
@@ -48,6 +49,25 @@ def interlock(
         want = "close" if pending[ch] else "open"
         why = f"[yellow]waits to {want} after relay {behind}'s switch[/]"
     return f"{head} - {why}"
+
+
+#: relays an e-stop opened: who had closed each ("": the operator's own setting)
+Opened = Mapping[int, str] | set[int] | frozenset[int]
+
+
+def closer(opened: Opened, ch: int) -> str:
+    """Who had closed relay ``ch`` that an e-stop opened ("": the operator's setting)."""
+    return opened.get(ch, "") if isinstance(opened, Mapping) else ""
+
+
+def closers(status: dict) -> dict[int, str]:
+    """Each relay closed now and who closed it: "" for the operator's own setting, else
+    the plan routing it (``trial 7 (this console)``, ``a stimulus`` when unknown)."""
+    mine = operator_setting(status)
+    return {
+        ch: "" if ch in mine else routing_words(status)
+        for ch in status["gate"].get("relays_closed", ())
+    }
 
 
 def operator_setting(status: dict) -> frozenset[int]:
@@ -87,7 +107,7 @@ def _why(
     status: dict,
     pending: dict[int, bool],
     refused: dict[int, str],
-    opened: set[int] | frozenset[int],
+    opened: Opened,
     routed: bool = False,
 ) -> str:
     """Why relay ``ch`` can or cannot switch now (markup); ``routed``: the row's state
@@ -107,6 +127,10 @@ def _why(
         e_stop = "the e-stop opened it; " if ch in opened and state == "open" else ""
         return f"[red]{escape(e_stop)}held: toggles refused (see above)[/]"
     if ch in opened and state == "open":
+        who = closer(opened, ch)
+        if who:  # a plan's routing closed it, not the operator: no key brings it back
+            said = f"{who} closed it, the e-stop opened it; {keep('yours:', 'open')}"
+            return f"[yellow]{escape(said)}[/]"
         return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
     if status["busy"]:
         if routed:
@@ -184,7 +208,8 @@ class RelaysPane(VerticalScroll):
         self._mine: set[int] = set()  # ... and as the toggles here set it (a read can race)
         self._reset = True  # no e-stop since the last reset (a status read before the
         # e-stop can arrive after it: it says nothing about the operator's setting then)
-        self._opened: set[int] = set()  # ... of it, what an e-stop opened (said on its row)
+        self._opened: dict[int, str] = {}  # what an e-stop opened, who had closed it
+        self._closed_by: dict[int, str] = {}  # the relays closed, who closed them, last read
         self._names: dict[int, str] = {}  # what each relay switches, as the profile says
         self._log_len = -1
         self._rows: dict[int, tuple[Switch, Static]] = {}  # channel -> its switch, state
@@ -297,7 +322,10 @@ class RelaysPane(VerticalScroll):
         if not self._reset or status["gate"]["estopped"] or "operator_relays" not in status:
             return
         self._operator = frozenset(status["operator_relays"])
-        self._opened -= self._operator
+        self._closed_by = closers(status)
+        for ch in list(self._opened):  # closed again (the operator's, or a plan's again)
+            if ch in self._operator or (self._opened[ch] and ch in self._closed_by):
+                del self._opened[ch]
 
     def _redraw(self) -> None:
         """Draw with the output state as the app last read it (a request or its result
@@ -328,7 +356,9 @@ class RelaysPane(VerticalScroll):
             return
         if isinstance(ev, Stopped):
             self._refuse_queued()
-            self._opened |= self._operator | self._mine
+            # who had closed what it opens: a plan's routing, or the operator's setting
+            self._opened.update(self._closed_by)
+            self._opened.update(dict.fromkeys(self._operator | self._mine, ""))
             self._operator, self._mine, self._reset = frozenset(), set(), False
         elif isinstance(ev, Started):
             self._reset = True
@@ -354,7 +384,7 @@ class RelaysPane(VerticalScroll):
             self._held_refused.add(ch)  # said until the hold ends
             self._refuse(ch, held.removeprefix("refused: "))
             return
-        self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
+        self._opened.pop(ch, None)  # the operator's own toggle: the row says its outcome
         self._queue.append((ch, closed))
         self._pending_now()
         self._redraw()
