@@ -27,7 +27,8 @@ What it offers:
   into the log);
   ``lapse`` and ``lapse_if_held`` (a status line true only for a while, or while a run
   holds the outputs, leaves the line when that ends: ``console.tui.lapse``), and
-  ``lapse_on_change`` (a line about a state goes when the state changes)
+  ``lapse_on_change`` (a line about a state goes when the state changes), ``outputs_held``
+  (whether a run or a demo holds the outputs now: the check those lines follow)
 - questions: ``AskAgain`` (a key that acts at once on something long or lasting asks
   first: the same key again within a few seconds does it, ``console.tui.ask_again``);
   a timed question holds its status line until it lapses or is answered: the screen's
@@ -61,7 +62,7 @@ from console.tui.charts import Chart, Series
 from console.tui.choice import Choice, chosen
 from console.tui.focus_keys import name_field, show_keys
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse, lapse_if_held, lapse_on_change
+from console.tui.lapse import lapse, lapse_if_held, lapse_on_change, outputs_held
 from console.tui.long_work import LongWork
 from console.tui.narrow import ConsoleFooter
 from console.tui.number_field import NumberField
@@ -97,6 +98,7 @@ __all__ = [
     "status_said",
     "lapse",
     "lapse_if_held",
+    "outputs_held",
     "lapse_on_change",
     "answered",
     "waits_for_question",

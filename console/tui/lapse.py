@@ -175,18 +175,26 @@ def out_of_view(line: Widget) -> bool:
 HELD_ENDED = "the run that held the outputs has ended: plays work again"
 
 
+def outputs_held(session) -> bool:
+    """Whether a run or a demo holds the outputs now: the session's one check
+    (``ConsoleSession.held_why``, read now, not as the output watch last read it), the
+    one Relays' line above its rows follows (it goes when the hold ends)."""
+    return bool(session.held_why())
+
+
 def lapse_if_held(
     owner: Widget, session, shown: Callable[[], str], text: str, replace: Callable[[str], None]
 ) -> None:
     """A refusal ``text`` because a run holds the outputs ("... holds the outputs")
-    lapses when the run lets them go (``session.outputs_holder`` None again): the line
+    lapses when the run lets them go (``outputs_held`` false, the check Relays' line
+    follows; at the first check if it was over by the time the line showed): the line
     then says plays work again. Any other text: nothing to do."""
-    if "holds the outputs" in text and session.outputs_holder is not None:
+    if "holds the outputs" in text:
         lapse(
             owner,
             shown,
             text,
             replace,
             then=HELD_ENDED,
-            while_true=lambda: session.outputs_holder is not None,
+            while_true=lambda: outputs_held(session),
         )

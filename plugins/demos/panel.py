@@ -27,6 +27,7 @@ from console.plugin_api.tui import (
     SessionMessage,
     answered,
     escape,
+    lapse_if_held,
     said_here,
     status_said,
     waits_for_question,
@@ -370,6 +371,8 @@ class ScenesPane(Vertical):
         except UserError as exc:
             self._estop_demo = name
             lw.error(str(exc))
+            # refused because a run holds the outputs: said until that run ends
+            lapse_if_held(self, self.app.session, lambda: lw.text, str(exc), lw.show)
             return False
         demos = self.demos
         lw.start(

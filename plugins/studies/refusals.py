@@ -16,7 +16,7 @@ from typing import Any
 
 from textual.widgets import Checkbox, Input, ProgressBar, Select
 
-from console.plugin_api.tui import lapse
+from console.plugin_api.tui import lapse, outputs_held
 
 from .panel_choice import show_choice
 from .trials_table import TrialsTable
@@ -43,10 +43,10 @@ def tie(
     line = shown or (lambda: pane.said[0])
     was = state()
     session = pane.app.session
-    held = "holds the outputs" in text and session.outputs_holder is not None
+    held = "holds the outputs" in text  # said until the hold ends (as Relays' line)
 
     def still() -> bool:
-        return state() == was and (not held or session.outputs_holder is not None)
+        return state() == was and (not held or outputs_held(session))
 
     def gone(_then: str) -> None:
         if shown is None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -29,19 +30,44 @@ def interlock(
     status: dict,
     pending: dict[int, bool],
     refused: dict[int, str],
-    opened: set[int] | frozenset[int] = frozenset(),
+    opened: Opened = frozenset(),
+    behind: int | None = None,
 ) -> str:
     """Relay ``ch``'s row: its state as the gate reports it (``closed`` / ``open``; while
     a stimulus routes it otherwise than the operator's setting, whose plan: ``closed by
     haptable play sweep (pid N)``), then why it can or cannot switch now;
-    ``opened``: relays the operator had closed and an e-stop opened (said until the
-    operator toggles them or they close again)."""
+    ``opened``: relays an e-stop opened (said until the operator toggles them or they
+    close again), each with who had closed it ("" or a set: the operator's setting); ``behind``: the relay whose switch
+    ``ch``'s queued toggle waits for (keys in a burst switch one at a time, in order)."""
     gate = status["gate"]
     closed = ch in gate.get("relays_closed", ())
     state = "closed" if closed else "open"
     routed = status["busy"] and not gate["estopped"] and closed != (ch in operator_setting(status))
     head = f"{state} by {escape(routing_words(status))}" if routed else state
-    return f"{head} - {_why(ch, state, status, pending, refused, opened, routed)}"
+    why = _why(ch, state, status, pending, refused, opened, routed)
+    if behind is not None and ch in pending and not gate["estopped"] and behind != ch:
+        want = "close" if pending[ch] else "open"
+        why = f"[yellow]waits to {want} after relay {behind}'s switch[/]"
+    return f"{head} - {why}"
+
+
+#: relays an e-stop opened: who had closed each ("": the operator's own setting)
+Opened = Mapping[int, str] | set[int] | frozenset[int]
+
+
+def closer(opened: Opened, ch: int) -> str:
+    """Who had closed relay ``ch`` that an e-stop opened ("": the operator's setting)."""
+    return opened.get(ch, "") if isinstance(opened, Mapping) else ""
+
+
+def closers(status: dict) -> dict[int, str]:
+    """Each relay closed now and who closed it: "" for the operator's own setting, else
+    the plan routing it (``trial 7 (this console)``, ``a stimulus`` when unknown)."""
+    mine = operator_setting(status)
+    return {
+        ch: "" if ch in mine else routing_words(status)
+        for ch in status["gate"].get("relays_closed", ())
+    }
 
 
 def operator_setting(status: dict) -> frozenset[int]:
@@ -81,7 +107,7 @@ def _why(
     status: dict,
     pending: dict[int, bool],
     refused: dict[int, str],
-    opened: set[int] | frozenset[int],
+    opened: Opened,
     routed: bool = False,
 ) -> str:
     """Why relay ``ch`` can or cannot switch now (markup); ``routed``: the row's state
@@ -101,6 +127,10 @@ def _why(
         e_stop = "the e-stop opened it; " if ch in opened and state == "open" else ""
         return f"[red]{escape(e_stop)}held: toggles refused (see above)[/]"
     if ch in opened and state == "open":
+        who = closer(opened, ch)
+        if who:  # a plan's routing closed it, not the operator: no key brings it back
+            said = f"{who} closed it, the e-stop opened it; {keep('yours:', 'open')}"
+            return f"[yellow]{escape(said)}[/]"
         return f"[yellow]the e-stop opened it; press {escape(str(ch))} to close again[/]"
     if status["busy"]:
         if routed:
@@ -166,7 +196,11 @@ class RelaysPane(VerticalScroll):
 
     def __init__(self, **kw) -> None:
         super().__init__(**kw)
-        self.pending: dict[int, bool] = {}
+        self.pending: dict[int, bool] = {}  # relay -> its newest toggle not yet done
+        # the toggles not yet done, in the order pressed: the first one is switching, the
+        # others wait for it (one switch at a time, each from the setting the one before
+        # left: a burst of keys is never lost)
+        self._queue: list[tuple[int, bool]] = []
         self.refused: dict[int, str] = {}
         self._estop_refused: set[int] = set()  # refusals the e-stop caused (a reset clears)
         self._held_refused: set[int] = set()  # ... a hold caused (its end clears them)
@@ -174,7 +208,8 @@ class RelaysPane(VerticalScroll):
         self._mine: set[int] = set()  # ... and as the toggles here set it (a read can race)
         self._reset = True  # no e-stop since the last reset (a status read before the
         # e-stop can arrive after it: it says nothing about the operator's setting then)
-        self._opened: set[int] = set()  # ... of it, what an e-stop opened (said on its row)
+        self._opened: dict[int, str] = {}  # what an e-stop opened, who had closed it
+        self._closed_by: dict[int, str] = {}  # the relays closed, who closed them, last read
         self._names: dict[int, str] = {}  # what each relay switches, as the profile says
         self._log_len = -1
         self._rows: dict[int, tuple[Switch, Static]] = {}  # channel -> its switch, state
@@ -238,8 +273,8 @@ class RelaysPane(VerticalScroll):
     def show_state(self, status: dict, log) -> None:
         """The switches, each relay's interlock and the log as ``status`` says (the app
         calls it when the output state changed); only what changed is redrawn."""
-        if self._table is None:
-            return  # not mounted yet: ``on_mount`` draws the state then
+        if self._table is None or not self._table.is_attached:
+            return  # not mounted yet (``on_mount`` draws the state then), or closing
         mine = operator_setting(status)  # the brackets: the operator's, not the routing
         self._note_operator(status)
         self._show_held(held_words(status))
@@ -250,7 +285,8 @@ class RelaysPane(VerticalScroll):
             if sw.value != on:
                 with sw.prevent(Switch.Changed):
                     sw.value = on
-            text = interlock(ch, status, self.pending, self.refused, self._opened)
+            behind = self._queue[0][0] if self._queue else None
+            text = interlock(ch, status, self.pending, self.refused, self._opened, behind)
             before = self._said.get(ch)
             if before != text:
                 self._said[ch] = text
@@ -286,7 +322,10 @@ class RelaysPane(VerticalScroll):
         if not self._reset or status["gate"]["estopped"] or "operator_relays" not in status:
             return
         self._operator = frozenset(status["operator_relays"])
-        self._opened -= self._operator
+        self._closed_by = closers(status)
+        for ch in list(self._opened):  # closed again (the operator's, or a plan's again)
+            if ch in self._operator or (self._opened[ch] and ch in self._closed_by):
+                del self._opened[ch]
 
     def _redraw(self) -> None:
         """Draw with the output state as the app last read it (a request or its result
@@ -304,7 +343,8 @@ class RelaysPane(VerticalScroll):
         out = self.app.session.outputs
         if out is None or ch > int(self.app.ctx.profile.get("relays.channels")):
             return
-        closed = ch in out.operator_relays()  # the operator's own setting
+        # the operator's own setting, as the toggles still queued will leave it
+        closed = self.pending.get(ch, ch in out.operator_relays())
         self.request(ch, not closed)
 
     def on_session_message(self, message: SessionMessage) -> None:
@@ -315,7 +355,10 @@ class RelaysPane(VerticalScroll):
         if ev.topic != "estop":
             return
         if isinstance(ev, Stopped):
-            self._opened |= self._operator | self._mine
+            self._refuse_queued()
+            # who had closed what it opens: a plan's routing, or the operator's setting
+            self._opened.update(self._closed_by)
+            self._opened.update(dict.fromkeys(self._operator | self._mine, ""))
             self._operator, self._mine, self._reset = frozenset(), set(), False
         elif isinstance(ev, Started):
             self._reset = True
@@ -334,17 +377,34 @@ class RelaysPane(VerticalScroll):
             # would then switch a relay the operator asked for during the e-stop
             reason = out.estop_reason
             self._estop_refused.add(ch)
-            self._done(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
+            self._refuse(ch, f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}")
             return
         held = self.app.session.held_why()  # a study run holds the table: not switched
         if held:
             self._held_refused.add(ch)  # said until the hold ends
-            self._done(ch, held.removeprefix("refused: "))
+            self._refuse(ch, held.removeprefix("refused: "))
             return
-        self._opened.discard(ch)  # the operator's own toggle: the row says its outcome
-        self.pending[ch] = closed
+        self._opened.pop(ch, None)  # the operator's own toggle: the row says its outcome
+        self._queue.append((ch, closed))
+        self._pending_now()
         self._redraw()
-        self._switch(ch, closed)
+        if len(self._queue) == 1:  # none switching: at once; else after those before it
+            self._switch(ch, closed)
+
+    def _pending_now(self) -> None:
+        """Each relay's newest toggle not yet done (what its switch shows already)."""
+        self.pending = dict(self._queue)
+
+    def _refuse_queued(self) -> None:
+        """An e-stop: the toggles waiting behind the one switching are refused (never
+        run after a reset); the one switching says its own outcome."""
+        out = self.app.session.outputs
+        reason = out.estop_reason if out is not None else ""
+        for ch, _ in self._queue[1:]:
+            self._estop_refused.add(ch)
+            self.refused[ch] = f"e-stop active ({reason}): relays stay open; {ESTOP_FIX}"
+        self._queue[1:] = []
+        self._pending_now()
 
     @work(thread=True, group="relays")
     def _switch(self, ch: int, closed: bool) -> None:
@@ -362,10 +422,25 @@ class RelaysPane(VerticalScroll):
             from_thread(self.app, self._done, ch, str(exc))
 
     def _done(self, ch: int, error: str) -> None:
-        want = self.pending.pop(ch, None)
+        """Relay ``ch``'s switch ended (``error``: why it was refused): the next toggle
+        queued behind it switches now."""
+        want = None
+        if self._queue and self._queue[0][0] == ch:
+            want = self._queue.pop(0)[1]
+        out = self.app.session.outputs
+        if out is not None and out.estopped:
+            self._refuse_queued()
+        self._pending_now()
         if not error and want is not None:  # the operator's setting now has it so
             (self._mine.add if want else self._mine.discard)(ch)
-        if error:  # the relay's row says it (its one place), the log keeps it
+        if self._queue:
+            self._switch(*self._queue[0])
+        self._refuse(ch, error)
+
+    def _refuse(self, ch: int, error: str) -> None:
+        """Relay ``ch``'s toggle refused (``error``; "" when it switched): its row says
+        why (its one place), the log keeps it; the rows redrawn."""
+        if error:
             self.refused[ch] = error
             said_here(self, "Relays", f"relay {ch}: {error}")
         live = live_of(self.app)

@@ -34,7 +34,7 @@ from console.signals.expr import parse
 from console.tui.charts import Chart, Series
 from console.tui.focus_keys import name_field
 from console.tui.kept_text import KeptText
-from console.tui.lapse import lapse
+from console.tui.lapse import lapse, lapse_if_held
 from console.tui.list_keys import KeyedList
 from console.tui.question_hold import answered, waits_for_question
 from console.tui.said import status_said
@@ -241,6 +241,8 @@ class SignalsPane(Vertical):
         self._status_line = line
         # in the log too; an error as a toast when this screen is not in view
         status_said(w, "Signals", line, "error" if error else "information")
+        if error:  # a refusal because a run holds the outputs goes when the hold ends
+            lapse_if_held(self, self.app.session, lambda: self._status_line, line, self.status)
         if self.preview is None:
             self._show_no_signal()
 
@@ -536,11 +538,9 @@ class SignalsPane(Vertical):
             self._replace = name
             self.status(f"{name} is already saved: ctrl+s again replaces it", error=True)
             return
-        try:  # saved with the channel the target field names (loading it sets it back)
+        try:  # saved with the channel the target field names (loading it sets it back),
+            # checked as ctrl+o and the CLI check it: a target naming none is refused
             meant = check_target(target)
-        except UserError:  # the line says it is kept for no channel
-            meant = ""
-        try:
             limits = Limits.from_profile(self.app.ctx.profile)
             add_signal(self.library_file, name, expr, replace=True, limits=limits, target=meant)
         except UserError as exc:
@@ -548,14 +548,12 @@ class SignalsPane(Vertical):
             return
         self._replace = None
         self.reload_library(select=name)
-        where = f"for {meant}" if meant else f"for no channel ({target!r} names none)"
+        where = f"for {meant}" if meant else "for any channel"
         self.status(f"saved {name} {where} in {self.library_file}")
         self._show_saved()
         # the saved signal is plotted (the plots said "no signal" since an error), where
-        # the target field says; a target that plots nowhere keeps the saved line
-        try:
-            parse_target(self._fields()[2])
-        except UserError:
+        # the target field says; an empty field plots nowhere and keeps the saved line
+        if not meant:
             return
         self._loaded_note = f"saved {name} {where} in {self.library_file}"
         self.show_preview()

@@ -552,6 +552,8 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         if outcome.played:
             if mine:
                 self.status(f"played {plan.name}: {describe_plan(plan)}")
+            else:  # a play asked meanwhile (Enter during a flow) took the line
+                self._ended_before(f"played {plan.name}: {describe_plan(plan)}")
         elif outcome.refused:
             self.status(said := f"{plan.name} {outcome.refused}", error=True)
             lapse_if_held(self, self.app.session, lambda: self.status_text, said, self.status)
@@ -559,6 +561,17 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
             self._estopped(ask, estop_reason(outcome.stopped))
         else:
             self.status(f"{plan.name} stopped: {outcome.stopped}", error=True)
+
+    def _ended_before(self, text: str) -> None:
+        """How a play ended that a newer one, asked while it played, took the line from:
+        said on the line (so logged) with what plays next, until that one starts; once
+        it plays, its line stays and this one is said within it."""
+        newer = self._now_playing
+        if newer is None or not newer.started or newer.plan is None:
+            after = f"; {newer.what} plays next" if newer is not None else ""
+            self.status(text + after)
+            return
+        self.status(f"playing {newer.plan.name}: {describe_plan(newer.plan)} (before it, {text})")
 
     def _estopped(self, ask: Ask, reason: str) -> None:
         """An e-stop silenced ``ask``'s plan while it played: the line says so once,
