@@ -47,7 +47,7 @@ def interlock(
     why = _why(ch, state, status, pending, refused, opened, routed)
     if behind is not None and ch in pending and not gate["estopped"] and behind != ch:
         want = "close" if pending[ch] else "open"
-        why = f"[yellow]waits to {want} after relay {behind}'s switch[/]"
+        why = f"[yellow]waits to {escape(want)} after relay {escape(str(behind))}'s switch[/]"
     return f"{head} - {why}"
 
 
