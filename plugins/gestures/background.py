@@ -5,6 +5,8 @@ offset of a frame against it (a sudden illumination change), and the difference 
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -19,18 +21,46 @@ class Background:
     ``alpha`` where no hand is (the table's slow local changes). A resting hand is never
     blended in: its whole extent down to the lowest threshold is left out. ``image`` is
     the float background; ``u8`` its rounded 8-bit copy (what each frame is compared
-    with)."""
+    with).
+
+    The light is followed lazily: the float image is kept as ``G * base + O`` with two
+    scalars, a frame's gain and offset change only them, and the running average blends
+    the frame into ``base`` with a weight that keeps the sum ``(1 - alpha) * image +
+    alpha * frame`` (the hand's pixels, left out, are mapped to the new scalars in the
+    hand's box only). No pass over the float image follows the light; ``u8`` is made
+    from ``base`` and the scalars in the pass that rounds it. The scalars are folded
+    into ``base`` once they drift far from 1 and 0 (``FOLD_GAIN``, ``FOLD_OFFSET``)."""
+
+    #: fold the scalars into the image when |log G| or |O| (grey levels) is larger
+    FOLD_GAIN = 0.05
+    FOLD_OFFSET = 16.0
 
     def __init__(self, image: np.ndarray | None = None, alpha: float = 0.02) -> None:
         self.alpha = float(alpha)
-        self.image: np.ndarray | None = None
+        self._base: np.ndarray | None = None
+        self._g, self._o = 1.0, 0.0
         self.u8: np.ndarray | None = None
+        self._scratch: np.ndarray | None = None  # the hand's box, mapped to new scalars
         if image is not None:
             self._set(np.asarray(image).astype(np.float32))
 
+    @property
+    def image(self) -> np.ndarray | None:
+        """The float background (``None`` before the first frame or capture); with the
+        light's scalars pending, a new array (the image itself when there are none)."""
+        if self._base is None or (self._g == 1.0 and self._o == 0.0):
+            return self._base
+        return self._base * np.float32(self._g) + np.float32(self._o)
+
     def _set(self, image: np.ndarray) -> None:
-        self.image = image
+        self._base, self._g, self._o = image, 1.0, 0.0
         self.u8 = cv2.convertScaleAbs(image)  # rounded and clipped to 0..255
+
+    def _fold(self) -> None:
+        """The scalars into the image: ``base = G * base + O`` (G = 1, O = 0 after)."""
+        self._base *= np.float32(self._g)
+        self._base += np.float32(self._o)
+        self._g, self._o = 1.0, 0.0
 
     def capture(self, frames: list[np.ndarray]) -> None:
         """Set the background to the per-pixel median of ``frames`` (an empty table)."""
@@ -50,34 +80,59 @@ class Background:
         found it), then blend ``frame`` in with weight ``alpha`` except under
         ``foreground`` (mask: of the frame, or of ``window`` (x0, y0, x1, y1) only, with
         no foreground outside it: the same blend, without a frame-sized mask)."""
-        if self.image is None:
+        if self._base is None:
             self._set(frame.astype(np.float32))
             return
-        if gain != 1.0 or offset != 0.0:
-            self.image *= np.float32(gain)
-            self.image += np.float32(offset)
+        a, base = self.alpha, self._base
+        g = float(gain) * self._g  # the light: image = g * base + o
+        o = float(gain) * self._o + float(offset)
+        # the blend: (1 - a) * (g * base + o) + a * frame = g2 * base2 + o2
+        g2, o2 = a + (1.0 - a) * g, (1.0 - a) * o
+        w = a / g2
         if foreground is None:
-            cv2.accumulateWeighted(frame, self.image, self.alpha)
-        elif window is None:
-            keep = cv2.compare(foreground, 0, cv2.CMP_EQ)
-            cv2.accumulateWeighted(frame, self.image, self.alpha, mask=keep)
+            cv2.accumulateWeighted(frame, base, w)
         else:
-            x0, y0, x1, y1 = window
+            h, wd = frame.shape[:2]
+            x0, y0, x1, y1 = window or (0, 0, wd, h)
             keep = cv2.compare(foreground, 0, cv2.CMP_EQ)
-            cv2.accumulateWeighted(
-                frame[y0:y1, x0:x1], self.image[y0:y1, x0:x1], self.alpha, mask=keep
-            )
-            h, w = frame.shape[:2]
+            inner = base[y0:y1, x0:x1]
+            cv2.accumulateWeighted(frame[y0:y1, x0:x1], inner, w, mask=keep)
             # the rest of the frame: the rows above and below the window, and beside it
-            for ya, yb, xa, xb in ((0, y0, 0, w), (y1, h, 0, w), (y0, y1, 0, x0), (y0, y1, x1, w)):
+            for ya, yb, xa, xb in (
+                (0, y0, 0, wd),
+                (y1, h, 0, wd),
+                (y0, y1, 0, x0),
+                (y0, y1, x1, wd),
+            ):
                 if ya < yb and xa < xb:
-                    cv2.accumulateWeighted(
-                        frame[ya:yb, xa:xb], self.image[ya:yb, xa:xb], self.alpha
-                    )
-        cv2.convertScaleAbs(self.image, self.u8)
+                    cv2.accumulateWeighted(frame[ya:yb, xa:xb], base[ya:yb, xa:xb], w)
+            if g != g2 or o != o2:  # under the hand the image stays: (g * base + a * o) / g2
+                hand = foreground if foreground.dtype == np.uint8 else cv2.bitwise_not(keep)
+                self._keep_under(inner, hand, g, o, g2)
+        self._g, self._o = g2, o2
+        if abs(math.log(g2)) > self.FOLD_GAIN or abs(o2) > self.FOLD_OFFSET:
+            self._fold()
+        cv2.convertScaleAbs(base, self.u8, alpha=self._g, beta=self._o)
+
+    def _keep_under(
+        self, inner: np.ndarray, hand: np.ndarray, g: float, o: float, g2: float
+    ) -> None:
+        """``inner = (g * inner + alpha * o) / g2`` under ``hand``: a running average
+        towards the constant ``o / (1 - g)`` with weight ``alpha * (1 - g) / g2`` (one
+        masked pass; ``g2 = alpha + (1 - alpha) * g``)."""
+        a = self.alpha
+        if self._scratch is None or self._scratch.shape != self._base.shape:
+            self._scratch = np.empty_like(self._base)
+        t = self._scratch[: inner.shape[0], : inner.shape[1]]
+        if g == 1.0:  # g2 = 1: the offset's share only
+            t.fill(a * o)
+            cv2.add(inner, t, dst=inner, mask=hand)
+            return
+        t.fill(o / (1.0 - g))
+        cv2.accumulateWeighted(t, inner, a * (1.0 - g) / g2, mask=hand)
 
     def as_uint8(self) -> np.ndarray:
-        if self.image is None:
+        if self._base is None:
             raise UserError("background: none captured yet; capture the empty table first")
         return self.u8.copy()
 

@@ -343,7 +343,7 @@ class SvmClassifier:
         """One frame through the pipeline (the background learns where no hand is); the
         result is a ``console.core.contracts.VisionResult`` (``view(name)`` of ``views``)."""
         check_frame(frame.image, self.params.shape)
-        if self.background.image is None:
+        if self.background.u8 is None:
             self.background.update(frame.image)
         bg = self.background.u8
         o = self.orientation
