@@ -83,7 +83,15 @@ if TYPE_CHECKING:  # the same names, for type checkers (loaded lazily below)
     from console.runtime.table_hold import table_held, table_holder
     from console.runtime.tracking import Announcer, TrackFrame, Tracking
     from console.runtime.watchdog import Watchdog
-    from console.session.events import Failed, Progress, Snapshot, Started, Stopped
+    from console.session.events import (
+        ESTOP_FIX,
+        ESTOP_REFUSAL,
+        Failed,
+        Progress,
+        Snapshot,
+        Started,
+        Stopped,
+    )
 
 #: source module (short name) -> the names it gives the API
 _NAMES: dict[str, tuple[str, ...]] = {
@@ -114,7 +122,15 @@ _NAMES: dict[str, tuple[str, ...]] = {
     "client": ("open_outputs",),
     "capture": ("Capture", "capture", "inject_twin_faults", "move_sensor", "read_inputs"),
     "private_dir": ("ensure_private_dir", "runtime_dir", "write_private"),
-    "events": ("Failed", "Progress", "Snapshot", "Started", "Stopped"),
+    "events": (
+        "ESTOP_FIX",
+        "ESTOP_REFUSAL",
+        "Failed",
+        "Progress",
+        "Snapshot",
+        "Started",
+        "Stopped",
+    ),
 }
 _SOURCE_OF = {name: source for source, names in _NAMES.items() for name in names}
 
@@ -128,6 +144,8 @@ __all__ = [
     "DEQUEUED",
     "encode",
     "ensure_private_dir",
+    "ESTOP_FIX",
+    "ESTOP_REFUSAL",
     "Failed",
     "finish_probe",
     "FrameLoop",

@@ -223,6 +223,12 @@ def play_on_session(session: Any, holder: str | None = None) -> Callable[[Output
             return True
         if why.startswith("stopped"):  # it started: the e-stop (or a cancel) stopped it
             raise UserError(f"{plan.name!r} {why}")
+        from console.plugin_api.runtime import ESTOP_FIX, ESTOP_REFUSAL  # lazy: on a refusal
+
+        if why.startswith(ESTOP_REFUSAL):  # the e-stop came between two trials: it stopped
+            # the run as it stops a trial (a shell's `haptable estop` reads as ctrl+e)
+            cause = why.removeprefix(ESTOP_REFUSAL).removesuffix(f", {ESTOP_FIX}").strip()
+            raise UserError(f"stopped by the e-stop {cause} before {plan.name!r}, {ESTOP_FIX}")
         raise UserError(f"the outputs refused {plan.name!r}: {why.removeprefix('refused: ')}")
 
     return play

@@ -34,9 +34,10 @@ def test_the_sum_counts_the_children_but_not_a_session_of_their_own():
         assert apart in other
         time.sleep(0.5)
         got = sample(parent.pid, 2.0)
-        # the parent sleeps: what it costs is its busy child's (a core, less under load),
-        # the session leader's is beside it
-        assert got["median_pct"] > 10.0, got
+        # the parent sleeps: what it costs is its busy child's (a core, less under load:
+        # 6 % at load 7.4 on 2 cores; the parent alone reads 0.0), the session leader's
+        # is beside it
+        assert got["median_pct"] > 2.0, got
         assert any(k.startswith(f"{own} ") for k in got["processes_pct"])
         assert not any(k.startswith(f"{apart} ") for k in got["processes_pct"])
         assert got["kernel_pct"] > 10.0, got

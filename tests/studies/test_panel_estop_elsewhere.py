@@ -39,3 +39,24 @@ def test_a_shell_s_estop_reads_as_the_console_s(double_plugins, map_file, tmp_pa
             assert f"e-stop reset: s resumes P01 at trial {done + 1} of 50" in text, text
 
     asyncio.run(scenario())
+
+
+def test_an_estop_between_two_trials_reads_as_one_that_stopped_a_trial():
+    """On a loaded machine the shell's e-stop came after a stimulus had ended: the next
+    trial's play was refused and the run said `the outputs refused 'flow 52->51': e-stop
+    active (...)`; it says the e-stop stopped the run, naming the stimulus once."""
+    from types import SimpleNamespace
+
+    from console.core.errors import UserError
+    from plugins.studies.stimuli import play_on_session
+
+    why = "refused: e-stop active (haptable estop (pid 4242, user on pts/3)), ctrl+r resets"
+    session = SimpleNamespace(play_plan_why=lambda plan, holder=None: why)
+    with pytest.raises(UserError) as err:
+        play_on_session(session)(SimpleNamespace(name="flow 52->51"))
+    text = str(err.value)
+    assert "refused" not in text, text
+    assert text == (
+        "stopped by the e-stop (haptable estop (pid 4242, user on pts/3)) before "
+        "'flow 52->51', ctrl+r resets"
+    ), text
