@@ -46,7 +46,7 @@ from console.tui.panes.vibration_words import (
 from console.tui.plots import frf_series
 from console.tui.question_hold import waits_for_question
 from console.tui.roving_view import RovingView
-from console.tui.said import status_said
+from console.tui.said import log_status, status_said
 from console.tui.session_messages import SessionMessage
 from console.tui.text import styled
 from console.tui.util import from_thread
@@ -567,7 +567,10 @@ class VibrationPane(VibrationMeasureMixin, VerticalScroll):
         said on the line (so logged) with what plays next, until that one starts; once
         it plays, its line stays and this one is said within it."""
         newer = self._now_playing
-        if newer is None or not newer.started or newer.plan is None:
+        if newer is None:  # not a play: an error or a command's answer has the line
+            log_status("Vibration", text)  # it stays; the log says how the play ended
+            return
+        if not newer.started or newer.plan is None:
             after = f"; {newer.what} plays next" if newer is not None else ""
             self.status(text + after)
             return
